@@ -112,6 +112,7 @@ WORD_CONFIG = data.StructLayout({
     "nenw": 1,          # word ends with nE, nW
     "lc": 1,            # word carries the 6-bit sign-of-life counter after nE/nW
     "crc": Crc,         # Crc code
+    "gray": 1,          # the data field is Gray-coded: reported as binary
 })
 
 

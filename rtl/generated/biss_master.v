@@ -15,11 +15,11 @@
 
 (* top =  1  *)
 (* generator = "Amaranth" *)
-module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_end_check, cfg_quiet_time, cfg_noise_limit, cfg_delay_tolerance, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_crc_width, cfg_w0_crc_poly, cfg_w0_crc_start
-, cfg_w0_crc_inverted, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_crc_width, cfg_w1_crc_poly, cfg_w1_crc_start, cfg_w1_crc_inverted, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, ca_wbuf_addr, ca_wbuf_data, ca_wbuf_en
-, ca_rbuf_addr, ca_rbuf_en, clk, rst, ma, busy, config_error, overrun, done, valid, status, timestamp, line_delay, cds, noise_events, delay_settled, settled_delay, delay_spread, word0_position, word0_ne, word0_nw
-, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, ca_rbuf_data, ca_busy, ca_done, ca_status, ca_bytes_done, count_crc_word0, count_crc_word1, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low
-, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_noisy_line, count_delay_jump, count_noise_event, count_ca_crc4_error, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo);
+module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_end_check, cfg_quiet_time, cfg_noise_limit, cfg_delay_tolerance, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_crc_width, cfg_w0_crc_poly
+, cfg_w0_crc_start, cfg_w0_crc_inverted, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_crc_width, cfg_w1_crc_poly, cfg_w1_crc_start, cfg_w1_crc_inverted, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, ca_wbuf_addr
+, ca_wbuf_data, ca_wbuf_en, ca_rbuf_addr, ca_rbuf_en, clk, rst, ma, busy, config_error, overrun, done, valid, status, timestamp, line_delay, cds, noise_events, delay_settled, settled_delay, delay_spread, word0_position
+, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, ca_rbuf_data, ca_busy, ca_done, ca_status, ca_bytes_done, count_crc_word0, count_crc_word1, count_no_ack, count_no_start
+, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_noisy_line, count_delay_jump, count_noise_event, count_ca_crc4_error, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$5  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -44,25 +44,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$8 ;
   wire \$9 ;
   wire abort;
-  wire \abort$112 ;
-  wire \abort$289 ;
+  wire \abort$114 ;
+  wire \abort$291 ;
   input abort_cycle;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$144 ;
+  wire \ack_expired$146 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$165 ;
+  wire [23:0] \ack_limit$167 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$318 ;
+  wire \bit$320 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$142 ;
+  wire \break_over$144 ;
   wire [23:0] break_time;
   output busy;
   wire busy;
-  wire \busy$120 ;
-  wire \busy$293 ;
+  wire \busy$122 ;
+  wire \busy$295 ;
   input ca_abort;
   wire ca_abort;
   input [6:0] ca_address;
@@ -104,12 +104,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$296 ;
+  wire \cdm$298 ;
   wire cdm_cycle;
   output cds;
   wire cds;
-  wire \cds$269 ;
-  wire [250:0] cfg;
+  wire \cds$271 ;
+  wire [252:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -122,7 +122,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
   wire [23:0] \cfg.timeout_limit ;
-  wire [9:0] \cfg.w0 ;
+  wire [10:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -130,6 +130,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w0.crc ;
   wire [5:0] \cfg.w0.data_bits ;
+  wire \cfg.w0.gray ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
   wire [37:0] \cfg.w0_crc ;
@@ -137,7 +138,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \cfg.w0_crc.poly ;
   wire [15:0] \cfg.w0_crc.start ;
   wire [4:0] \cfg.w0_crc.width ;
-  wire [9:0] \cfg.w1 ;
+  wire [10:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -145,6 +146,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w1.crc ;
   wire [5:0] \cfg.w1.data_bits ;
+  wire \cfg.w1.gray ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
   wire [37:0] \cfg.w1_crc ;
@@ -194,6 +196,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [4:0] cfg_w0_crc_width;
   input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
+  input cfg_w0_gray;
+  wire cfg_w0_gray;
   input cfg_w0_lc;
   wire cfg_w0_lc;
   input cfg_w0_nenw;
@@ -217,17 +221,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [5:0] cfg_w1_data_bits;
   input cfg_w1_enable;
   wire cfg_w1_enable;
+  input cfg_w1_gray;
+  wire cfg_w1_gray;
   input cfg_w1_lc;
   wire cfg_w1_lc;
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
   wire check;
-  wire \check$223 ;
+  wire \check$225 ;
   wire clean;
-  wire \clean$228 ;
+  wire \clean$230 ;
   wire clear;
-  wire \clear$189 ;
-  wire \clear$311 ;
+  wire \clear$191 ;
+  wire \clear$313 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -302,33 +308,33 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$240 ;
+  wire [39:0] \cpw_top$242 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$253 ;
+  wire [1:0] \crc_ok$255 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$236 ;
-  wire [37:0] \crcs$236[0] ;
-  wire \crcs$236[0].inverted ;
-  wire [15:0] \crcs$236[0].poly ;
-  wire [15:0] \crcs$236[0].start ;
-  wire [4:0] \crcs$236[0].width ;
-  wire [37:0] \crcs$236[1] ;
-  wire \crcs$236[1].inverted ;
-  wire [15:0] \crcs$236[1].poly ;
-  wire [15:0] \crcs$236[1].start ;
-  wire [4:0] \crcs$236[1].width ;
-  wire [75:0] \crcs$237 ;
-  wire [37:0] \crcs$237[0] ;
-  wire \crcs$237[0].inverted ;
-  wire [15:0] \crcs$237[0].poly ;
-  wire [15:0] \crcs$237[0].start ;
-  wire [4:0] \crcs$237[0].width ;
-  wire [37:0] \crcs$237[1] ;
-  wire \crcs$237[1].inverted ;
-  wire [15:0] \crcs$237[1].poly ;
-  wire [15:0] \crcs$237[1].start ;
-  wire [4:0] \crcs$237[1].width ;
+  wire [75:0] \crcs$238 ;
+  wire [37:0] \crcs$238[0] ;
+  wire \crcs$238[0].inverted ;
+  wire [15:0] \crcs$238[0].poly ;
+  wire [15:0] \crcs$238[0].start ;
+  wire [4:0] \crcs$238[0].width ;
+  wire [37:0] \crcs$238[1] ;
+  wire \crcs$238[1].inverted ;
+  wire [15:0] \crcs$238[1].poly ;
+  wire [15:0] \crcs$238[1].start ;
+  wire [4:0] \crcs$238[1].width ;
+  wire [75:0] \crcs$239 ;
+  wire [37:0] \crcs$239[0] ;
+  wire \crcs$239[0].inverted ;
+  wire [15:0] \crcs$239[0].poly ;
+  wire [15:0] \crcs$239[0].start ;
+  wire [4:0] \crcs$239[0].width ;
+  wire [37:0] \crcs$239[1] ;
+  wire \crcs$239[1].inverted ;
+  wire [15:0] \crcs$239[1].poly ;
+  wire [15:0] \crcs$239[1].start ;
+  wire [4:0] \crcs$239[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -339,7 +345,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  wire [250:0] cycle;
+  wire [252:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -352,7 +358,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
   wire [23:0] \cycle.timeout_limit ;
-  wire [9:0] \cycle.w0 ;
+  wire [10:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -360,6 +366,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w0.crc ;
   wire [5:0] \cycle.w0.data_bits ;
+  wire \cycle.w0.gray ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
   wire [37:0] \cycle.w0_crc ;
@@ -367,7 +374,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \cycle.w0_crc.poly ;
   wire [15:0] \cycle.w0_crc.start ;
   wire [4:0] \cycle.w0_crc.width ;
-  wire [9:0] \cycle.w1 ;
+  wire [10:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -375,6 +382,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w1.crc ;
   wire [5:0] \cycle.w1.data_bits ;
+  wire \cycle.w1.gray ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
   wire [37:0] \cycle.w1_crc ;
@@ -390,13 +398,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$171 ;
-  wire [12:0] \delay$222 ;
+  wire [12:0] \delay$173 ;
+  wire [12:0] \delay$224 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$173 ;
+  wire [11:0] \delay_limit$175 ;
   wire delay_over;
-  wire \delay_over$152 ;
+  wire \delay_over$154 ;
   output delay_settled;
   wire delay_settled;
   output [7:0] delay_spread;
@@ -404,41 +412,41 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [16:0] delay_tolerance;
   output done;
   wire done;
-  wire \done$130 ;
-  wire \done$294 ;
-  wire \done$314 ;
+  wire \done$132 ;
+  wire \done$296 ;
+  wire \done$316 ;
   wire doubtful;
   wire early;
-  wire \early$128 ;
+  wire \early$130 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$306 ;
-  wire \events$306.aborted ;
-  wire \events$306.ca_aborted ;
-  wire \events$306.ca_crc4_error ;
-  wire \events$306.ca_data_fault ;
-  wire \events$306.ca_no_answer ;
-  wire \events$306.ca_refused ;
-  wire \events$306.crc_word0 ;
-  wire \events$306.crc_word1 ;
-  wire \events$306.delay_jump ;
-  wire \events$306.delay_range ;
-  wire \events$306.lc_repeat ;
-  wire \events$306.lc_skip ;
-  wire \events$306.lc_zero ;
-  wire \events$306.no_ack ;
-  wire \events$306.no_start ;
-  wire \events$306.no_stop ;
-  wire \events$306.noise_event ;
-  wire \events$306.noisy_line ;
-  wire \events$306.overrun ;
-  wire \events$306.slo_stuck_low ;
-  wire \events$306.spw_mismatch ;
+  wire [20:0] \events$308 ;
+  wire \events$308.aborted ;
+  wire \events$308.ca_aborted ;
+  wire \events$308.ca_crc4_error ;
+  wire \events$308.ca_data_fault ;
+  wire \events$308.ca_no_answer ;
+  wire \events$308.ca_refused ;
+  wire \events$308.crc_word0 ;
+  wire \events$308.crc_word1 ;
+  wire \events$308.delay_jump ;
+  wire \events$308.delay_range ;
+  wire \events$308.lc_repeat ;
+  wire \events$308.lc_skip ;
+  wire \events$308.lc_zero ;
+  wire \events$308.no_ack ;
+  wire \events$308.no_start ;
+  wire \events$308.no_stop ;
+  wire \events$308.noise_event ;
+  wire \events$308.noisy_line ;
+  wire \events$308.overrun ;
+  wire \events$308.slo_stuck_low ;
+  wire \events$308.spw_mismatch ;
   wire fault;
-  wire \fault$249 ;
+  wire \fault$251 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -472,7 +480,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$251 ;
+  wire [3:0] \fault_status$253 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -482,7 +490,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$283 ;
+  wire \first_rise$285 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -532,42 +540,42 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire frame_ok;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$195 ;
+  wire [15:0] \half_period$197 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$102 ;
-  wire \idle$108 ;
+  wire \idle$104 ;
+  wire \idle$110 ;
   wire in_clock;
-  wire \in_clock$159 ;
+  wire \in_clock$161 ;
   wire jump;
   output [5:0] lc;
   wire [5:0] lc;
-  wire [5:0] \lc$199 ;
-  wire [5:0] \lc$200 ;
+  wire [5:0] \lc$201 ;
+  wire [5:0] \lc$202 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$202 ;
+  wire [5:0] \lc_next$204 ;
   output lc_repeat;
   wire lc_repeat;
-  wire \lc_repeat$274 ;
+  wire \lc_repeat$276 ;
   wire lc_repeat_seen;
   output lc_skip;
   wire lc_skip;
-  wire \lc_skip$275 ;
+  wire \lc_skip$277 ;
   wire lc_skip_seen;
   output lc_zero;
   wire lc_zero;
-  wire \lc_zero$276 ;
+  wire \lc_zero$278 ;
   wire lc_zero_seen;
   wire learn;
   wire level;
-  wire \level$211 ;
+  wire \level$213 ;
   wire [3:0] limit;
   output [12:0] line_delay;
   wire [12:0] line_delay;
-  wire [250:0] live;
+  wire [252:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -580,7 +588,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
   wire [23:0] \live.timeout_limit ;
-  wire [9:0] \live.w0 ;
+  wire [10:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -588,6 +596,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w0.crc ;
   wire [5:0] \live.w0.data_bits ;
+  wire \live.w0.gray ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
   wire [37:0] \live.w0_crc ;
@@ -595,7 +604,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \live.w0_crc.poly ;
   wire [15:0] \live.w0_crc.start ;
   wire [4:0] \live.w0_crc.width ;
-  wire [9:0] \live.w1 ;
+  wire [10:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -603,6 +612,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w1.crc ;
   wire [5:0] \live.w1.data_bits ;
+  wire \live.w1.gray ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
   wire [37:0] \live.w1_crc ;
@@ -613,13 +623,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$126 ;
+  wire \locked$128 ;
   output ma;
   wire ma;
-  wire \ma$313 ;
+  wire \ma$315 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$154 ;
+  wire \ma_busy$156 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -627,28 +637,28 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$146 ;
+  wire \no_start_expired$148 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$169 ;
+  wire [24:0] \no_start_limit$171 ;
   wire noise;
   output [3:0] noise_events;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$230 ;
+  wire \noisy$232 ;
   wire [1:0] nw;
   wire ok;
   output overrun;
   wire overrun;
-  wire \overrun$309 ;
+  wire \overrun$311 ;
   wire [23:0] period;
   input periodic;
   wire periodic;
-  wire \periodic$104 ;
+  wire \periodic$106 ;
   wire quiet;
-  wire \quiet$178 ;
+  wire \quiet$180 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$180 ;
+  wire \quiet_live$182 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   wire [3:0] rbuf_addr;
@@ -658,35 +668,35 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$261 ;
+  wire \report$263 ;
   wire report_delay;
-  wire \report_delay$264 ;
+  wire \report_delay$266 ;
   wire report_frame;
-  wire \report_frame$248 ;
-  wire \report_frame$262 ;
+  wire \report_frame$250 ;
+  wire \report_frame$264 ;
   wire request;
-  wire \request$111 ;
-  wire [17:0] \request$285 ;
-  wire [6:0] \request$285.address ;
-  wire [6:0] \request$285.count ;
-  wire [2:0] \request$285.slave_id ;
-  wire \request$285.write ;
+  wire \request$113 ;
+  wire [17:0] \request$287 ;
+  wire [6:0] \request$287.address ;
+  wire [6:0] \request$287.count ;
+  wire [2:0] \request$287.slave_id ;
+  wire \request$287.write ;
   wire restart;
-  wire \restart$215 ;
+  wire \restart$217 ;
   wire restart_timer;
   wire [9:0] result;
-  wire [186:0] \result$316 ;
-  wire \result$316.cds ;
-  wire \result$316.delay_settled ;
-  wire [7:0] \result$316.delay_spread ;
-  wire [5:0] \result$316.lc ;
-  wire \result$316.lc_repeat ;
-  wire \result$316.lc_skip ;
-  wire \result$316.lc_zero ;
-  wire [12:0] \result$316.line_delay ;
-  wire [3:0] \result$316.noise_events ;
-  wire [12:0] \result$316.settled_delay ;
-  wire \result$316.spw_mismatch ;
+  wire [186:0] \result$318 ;
+  wire \result$318.cds ;
+  wire \result$318.delay_settled ;
+  wire [7:0] \result$318.delay_spread ;
+  wire [5:0] \result$318.lc ;
+  wire \result$318.lc_repeat ;
+  wire \result$318.lc_skip ;
+  wire \result$318.lc_zero ;
+  wire [12:0] \result$318.line_delay ;
+  wire [3:0] \result$318.noise_events ;
+  wire [12:0] \result$318.settled_delay ;
+  wire \result$318.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -703,18 +713,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$316.status ;
-  wire [31:0] \result$316.timestamp ;
-  wire [57:0] \result$316.word0 ;
-  wire \result$316.word0.crc_ok ;
-  wire \result$316.word0.ne ;
-  wire \result$316.word0.nw ;
-  wire [54:0] \result$316.word0.position ;
-  wire [42:0] \result$316.word1 ;
-  wire \result$316.word1.crc_ok ;
-  wire \result$316.word1.ne ;
-  wire \result$316.word1.nw ;
-  wire [39:0] \result$316.word1.position ;
+  wire [3:0] \result$318.status ;
+  wire [31:0] \result$318.timestamp ;
+  wire [57:0] \result$318.word0 ;
+  wire \result$318.word0.crc_ok ;
+  wire \result$318.word0.ne ;
+  wire \result$318.word0.nw ;
+  wire [54:0] \result$318.word0.position ;
+  wire [42:0] \result$318.word1 ;
+  wire \result$318.word1.crc_ok ;
+  wire \result$318.word1.ne ;
+  wire \result$318.word1.nw ;
+  wire [39:0] \result$318.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -726,47 +736,47 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$208 ;
+  wire \resync$210 ;
   wire [15:0] rises;
-  wire [15:0] \rises$188 ;
+  wire [15:0] \rises$190 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$317 ;
+  wire \sample$319 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   output [12:0] settled_delay;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$272 ;
+  wire [12:0] \settled_delay$274 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$109 ;
-  wire \slo$117 ;
-  wire \slo$153 ;
+  wire \slo$111 ;
+  wire \slo$119 ;
+  wire \slo$155 ;
   wire slo_stuck;
-  wire \slo_stuck$148 ;
+  wire \slo_stuck$150 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$150 ;
+  wire \slo_stuck_live$152 ;
   wire slots_full;
-  wire \slots_full$134 ;
+  wire \slots_full$136 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   output spw_mismatch;
   wire spw_mismatch;
-  wire \spw_mismatch$281 ;
+  wire \spw_mismatch$283 ;
   input start;
   wire start;
-  wire \start$103 ;
-  wire \start$288 ;
+  wire \start$105 ;
+  wire \start$290 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$186 ;
+  wire [15:0] \start_slot$188 ;
   wire started;
-  wire \started$132 ;
-  wire \started$184 ;
+  wire \started$134 ;
+  wire \started$186 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -802,23 +812,23 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$268 ;
+  wire [3:0] \status$270 ;
   wire stop_bit;
-  wire \stop_bit$138 ;
+  wire \stop_bit$140 ;
   wire stopped;
-  wire \stopped$136 ;
+  wire \stopped$138 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$167 ;
+  wire [23:0] \timeout_limit$169 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   output [31:0] timestamp;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$244 ;
+  wire [7:0] \tolerance$246 ;
   output valid;
   wire valid;
-  wire \valid$265 ;
-  wire \valid$266 ;
+  wire \valid$267 ;
+  wire \valid$268 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -844,31 +854,33 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [39:0] word1_position;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$198 ;
+  wire [1:0] \word_count$200 ;
   wire [1:0] word_crc_ok;
-  wire [19:0] words;
-  wire [19:0] \words$234 ;
-  wire [9:0] \words$234[0] ;
+  wire [21:0] words;
+  wire [21:0] \words$236 ;
+  wire [10:0] \words$236[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$234[0].crc ;
-  wire [5:0] \words$234[0].data_bits ;
-  wire \words$234[0].lc ;
-  wire \words$234[0].nenw ;
-  wire [9:0] \words$234[1] ;
+  wire [1:0] \words$236[0].crc ;
+  wire [5:0] \words$236[0].data_bits ;
+  wire \words$236[0].gray ;
+  wire \words$236[0].lc ;
+  wire \words$236[0].nenw ;
+  wire [10:0] \words$236[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$234[1].crc ;
-  wire [5:0] \words$234[1].data_bits ;
-  wire \words$234[1].lc ;
-  wire \words$234[1].nenw ;
-  wire [9:0] \words[0] ;
+  wire [1:0] \words$236[1].crc ;
+  wire [5:0] \words$236[1].data_bits ;
+  wire \words$236[1].gray ;
+  wire \words$236[1].lc ;
+  wire \words$236[1].nenw ;
+  wire [10:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -876,9 +888,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
+  wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [9:0] \words[1] ;
+  wire [10:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -886,18 +899,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
+  wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
-  assign \periodic$104  = periodic | ca_busy;
+  assign \periodic$106  = periodic | ca_busy;
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$223  = started & \$1 ;
-  assign \$2  = learn & \spw_mismatch$281 ;
-  assign \$3  = \status$268  == 4'hd;
+  assign \check$225  = started & \$1 ;
+  assign \$2  = learn & \spw_mismatch$283 ;
+  assign \$3  = \status$270  == 4'hd;
   assign \$4  = learn & \$3 ;
-  assign \$5  = \status$268  == 4'he;
+  assign \$5  = \status$270  == 4'he;
   assign \$6  = learn & \$5 ;
   assign \$7  = result[2:0] == 1'h1;
   assign \$8  = ca_done & \$7 ;
@@ -911,8 +925,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$16  = ca_done & \$15 ;
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$189 ;
-  assign \$18  = \sample$317  & \$17 ;
+  assign \$17  = ~ \clear$191 ;
+  assign \$18  = \sample$319  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -946,7 +960,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$215 ),
+    .fault(\restart$217 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -963,14 +977,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$189 ),
+    .receiver_clear(\clear$191 ),
     .report_delay(report_delay),
     .report_frame(learn),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$117 ),
+    .slo(\slo$119 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -984,12 +998,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clear(clear_counters),
     .clk(clk),
     .counts(counts),
-    .events(\events$306 ),
+    .events(\events$308 ),
     .rst(rst)
   );
   \biss_master.decoder  decoder (
     .\bit (\bit ),
-    .cds(\cds$269 ),
+    .cds(\cds$271 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
@@ -997,11 +1011,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .data0(data0),
     .data1(spw),
     .done(frame_done),
-    .lc(\lc$199 ),
+    .lc(\lc$201 ),
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$189 ),
+    .receiver_clear(\clear$191 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -1013,7 +1027,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .words(words)
   );
   \biss_master.delay_check  delay_check (
-    .check(\check$223 ),
+    .check(\check$225 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -1023,7 +1037,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .rearm(rearm),
     .rst(rst),
     .settled(settled),
-    .settled_delay(\settled_delay$272 ),
+    .settled_delay(\settled_delay$274 ),
     .spread(spread),
     .\tolerance$8 (tolerance)
   );
@@ -1032,10 +1046,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$117 ),
+    .level(\slo$119 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$215 ),
+    .restart(\restart$217 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -1043,7 +1057,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   \biss_master.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$154 ),
+    .\clocking (\ma_busy$156 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -1055,7 +1069,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .second_rise(ma_arm)
   );
   \biss_master.ma_stop  ma_stop (
-    .clear(\clear$189 ),
+    .clear(\clear$191 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -1063,8 +1077,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .rst(rst),
     .start_slot(start_slot),
     .\started$11 (started),
-    .w1_enable(cycle[193]),
-    .words(\words$234 )
+    .w1_enable(cycle[194]),
+    .words(\words$236 )
   );
   \biss_master.register_access  register_access (
     .abort(ca_abort),
@@ -1073,13 +1087,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
-    .frame_cds(\cds$269 ),
+    .frame_cds(\cds$271 ),
     .frame_end(report),
-    .frame_ok(\valid$265 ),
+    .frame_ok(\valid$267 ),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(ca_rbuf_en),
-    .request(\request$285 ),
+    .request(\request$287 ),
     .result(result),
     .rst(rst),
     .start(ca_start),
@@ -1092,24 +1106,24 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report(report),
     .report_delay(report_delay),
     .report_frame(learn),
-    .result(\result$316 ),
+    .result(\result$318 ),
     .rst(rst),
-    .valid(\valid$265 ),
+    .valid(\valid$267 ),
     .valid_out(valid)
   );
   \biss_master.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$318 ),
+    .\bit (\bit$320 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$117 ),
+    .level(\slo$119 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$189 ),
+    .receiver_clear(\clear$191 ),
     .rst(rst),
-    .sample(\sample$317 ),
+    .sample(\sample$319 ),
     .slo(slo)
   );
   \biss_master.scheduler  scheduler (
@@ -1118,7 +1132,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .idle(idle),
     .overrun(overrun),
     .period(cfg_request_period),
-    .periodic(\periodic$104 ),
+    .periodic(\periodic$106 ),
     .request(request),
     .rst(rst),
     .start(start)
@@ -1127,22 +1141,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .check(check),
     .clk(clk),
     .is_zero(lc_zero_seen),
-    .lc(\lc$199 ),
+    .lc(\lc$201 ),
     .load(load),
-    .\port$1521$0 (\bit ),
+    .\port$1527$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master.spw_check  spw_check (
-    .bits(cycle[199:194]),
+    .bits(cycle[200:195]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[250:243])
+    .\tolerance$8 (cycle[252:245])
   );
   \biss_master.time_base  time_base (
     .clk(clk),
@@ -1161,7 +1175,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$154 ),
+    .ma_busy(\ma_busy$156 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -1170,7 +1184,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$117 ),
+    .slo(\slo$119 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -1183,23 +1197,23 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$215 ),
+    .fault(\restart$217 ),
     .fault_status(fault_status),
     .lc_check(check),
-    .lc_repeat(\lc_repeat$274 ),
+    .lc_repeat(\lc_repeat$276 ),
     .lc_repeat_seen(lc_repeat_seen),
-    .lc_skip(\lc_skip$275 ),
+    .lc_skip(\lc_skip$277 ),
     .lc_skip_seen(lc_skip_seen),
-    .lc_zero(\lc_zero$276 ),
+    .lc_zero(\lc_zero$278 ),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$989$0 (\$22 ),
+    .\port$995$0 (\$22 ),
     .report(report),
     .report_frame(learn),
     .spw_match(spw_match),
-    .spw_mismatch(\spw_mismatch$281 ),
-    .status(\status$268 ),
-    .valid(\valid$265 )
+    .spw_mismatch(\spw_mismatch$283 ),
+    .status(\status$270 ),
+    .valid(\valid$267 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
@@ -1210,7 +1224,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$20  = \bit$318 ;
+    \$20  = \bit$320 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -1222,142 +1236,142 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
       \$21  = 1'h0;
     end
   end
-  assign \idle$102  = idle;
-  assign \start$103  = start;
+  assign \idle$104  = idle;
+  assign \start$105  = start;
   assign frames = ca_busy;
   assign period = cfg_request_period;
   assign abort = abort_cycle;
-  assign \idle$108  = idle;
-  assign \slo$109  = slo;
-  assign \request$111  = request;
-  assign \abort$112  = abort_cycle;
+  assign \idle$110  = idle;
+  assign \slo$111  = slo;
+  assign \request$113  = request;
+  assign \abort$114  = abort_cycle;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$117 ;
-  assign \busy$120  = ma_busy;
+  assign level = \slo$119 ;
+  assign \busy$122  = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$126  = locked;
-  assign \early$128  = early;
-  assign \done$130  = frame_done;
-  assign \started$132  = started;
-  assign \slots_full$134  = slots_full;
-  assign \stopped$136  = stopped;
-  assign \stop_bit$138  = stop_bit;
+  assign \locked$128  = locked;
+  assign \early$130  = early;
+  assign \done$132  = frame_done;
+  assign \started$134  = started;
+  assign \slots_full$136  = slots_full;
+  assign \stopped$138  = stopped;
+  assign \stop_bit$140  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$142  = break_over;
-  assign \ack_expired$144  = ack_expired;
-  assign \no_start_expired$146  = no_start_expired;
-  assign \slo_stuck$148  = slo_stuck;
-  assign \slo_stuck_live$150  = slo_stuck_live;
-  assign \delay_over$152  = delay_over;
-  assign \slo$153  = \slo$117 ;
-  assign \clocking  = \ma_busy$154 ;
+  assign \break_over$144  = break_over;
+  assign \ack_expired$146  = ack_expired;
+  assign \no_start_expired$148  = no_start_expired;
+  assign \slo_stuck$150  = slo_stuck;
+  assign \slo_stuck_live$152  = slo_stuck_live;
+  assign \delay_over$154  = delay_over;
+  assign \slo$155  = \slo$119 ;
+  assign \clocking  = \ma_busy$156 ;
   assign timer_clear = clear;
-  assign \in_clock$159  = in_clock;
+  assign \in_clock$161  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$165  = ack_limit;
-  assign \timeout_limit$167  = timeout_limit;
-  assign \no_start_limit$169  = no_start_limit;
-  assign \delay$171  = delay;
-  assign \delay_limit$173  = delay_limit;
+  assign \ack_limit$167  = ack_limit;
+  assign \timeout_limit$169  = timeout_limit;
+  assign \no_start_limit$171  = no_start_limit;
+  assign \delay$173  = delay;
+  assign \delay_limit$175  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$178  = quiet;
-  assign \quiet_live$180  = quiet_live;
+  assign \quiet$180  = quiet;
+  assign \quiet_live$182  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$184  = started;
-  assign \start_slot$186  = start_slot;
-  assign \rises$188  = rises;
-  assign receiver_clear = \clear$189 ;
+  assign \started$186  = started;
+  assign \start_slot$188  = start_slot;
+  assign \rises$190  = rises;
+  assign receiver_clear = \clear$191 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$195  = cycle[15:0];
+  assign \half_period$197  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$198  = word_count;
-  assign \lc$200  = \lc$199 ;
-  assign lc_next = { \lc$199 [4:0], \bit  };
-  assign \lc_next$202  = { \lc$199 [4:0], \bit  };
+  assign \word_count$200  = word_count;
+  assign \lc$202  = \lc$201 ;
+  assign lc_next = { \lc$201 [4:0], \bit  };
+  assign \lc_next$204  = { \lc$201 [4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$208  = resync;
+  assign \resync$210  = resync;
   assign waiting = watch;
-  assign \level$211  = \slo$117 ;
+  assign \level$213  = \slo$119 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$215 ;
+  assign fault = \restart$217 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$222  = delay;
+  assign \delay$224  = delay;
   assign report_frame = learn;
-  assign \clean$228  = clean;
-  assign \noisy$230  = noisy;
+  assign \clean$230  = clean;
+  assign \noisy$232  = noisy;
   assign jump = delay_jump;
-  assign \crcs$236  = crcs;
-  assign \crcs$237  = crcs;
-  assign w1_enable = cycle[193];
-  assign \cpw_top$240  = cpw_top;
+  assign \crcs$238  = crcs;
+  assign \crcs$239  = crcs;
+  assign w1_enable = cycle[194];
+  assign \cpw_top$242  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[199:194];
-  assign \tolerance$244  = cycle[250:243];
+  assign bits = cycle[200:195];
+  assign \tolerance$246  = cycle[252:245];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$248  = learn;
-  assign \fault$249  = \restart$215 ;
-  assign \fault_status$251  = fault_status;
-  assign \crc_ok$253  = crc_ok;
+  assign \report_frame$250  = learn;
+  assign \fault$251  = \restart$217 ;
+  assign \fault_status$253  = fault_status;
+  assign \crc_ok$255  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$261  = report;
-  assign \report_frame$262  = learn;
-  assign \report_delay$264  = report_delay;
-  assign \valid$266  = \valid$265 ;
+  assign \report$263  = report;
+  assign \report_frame$264  = learn;
+  assign \report_delay$266  = report_delay;
+  assign \valid$268  = \valid$267 ;
   assign word_crc_ok = { \$22 , crc_ok[0] };
-  assign \first_rise$283  = first_rise;
-  assign \start$288  = ca_start;
-  assign \abort$289  = ca_abort;
+  assign \first_rise$285  = first_rise;
+  assign \start$290  = ca_start;
+  assign \abort$291  = ca_abort;
   assign rbuf_addr = ca_rbuf_addr;
   assign rbuf_en = ca_rbuf_en;
   assign rbuf_data = ca_rbuf_data;
-  assign \busy$293  = ca_busy;
-  assign \done$294  = ca_done;
-  assign \cdm$296  = cdm;
+  assign \busy$295  = ca_busy;
+  assign \done$296  = ca_done;
+  assign \cdm$298  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_ok = \valid$265 ;
-  assign frame_cds = \cds$269 ;
+  assign frame_ok = \valid$267 ;
+  assign frame_cds = \cds$271 ;
   assign cdm_cycle = frame_cdm;
-  assign \overrun$309  = overrun;
-  assign \clear$311  = clear_counters;
-  assign \ma$313  = ma;
-  assign \done$314  = done;
+  assign \overrun$311  = overrun;
+  assign \clear$313  = clear_counters;
+  assign \ma$315  = ma;
+  assign \done$316  = done;
   assign valid_out = valid;
-  assign status = \result$316 [3:0];
-  assign timestamp = \result$316 [35:4];
-  assign line_delay = \result$316 [48:36];
-  assign cds = \result$316 [49];
-  assign noise_events = \result$316 [53:50];
-  assign delay_settled = \result$316 [54];
-  assign settled_delay = \result$316 [67:55];
-  assign delay_spread = \result$316 [75:68];
-  assign word0_position = \result$316 [130:76];
-  assign word0_ne = \result$316 [131];
-  assign word0_nw = \result$316 [132];
-  assign word0_crc_ok = \result$316 [133];
-  assign word1_position = \result$316 [173:134];
-  assign word1_ne = \result$316 [174];
-  assign word1_nw = \result$316 [175];
-  assign word1_crc_ok = \result$316 [176];
-  assign lc = \result$316 [182:177];
-  assign lc_repeat = \result$316 [183];
-  assign lc_skip = \result$316 [184];
-  assign lc_zero = \result$316 [185];
-  assign spw_mismatch = \result$316 [186];
+  assign status = \result$318 [3:0];
+  assign timestamp = \result$318 [35:4];
+  assign line_delay = \result$318 [48:36];
+  assign cds = \result$318 [49];
+  assign noise_events = \result$318 [53:50];
+  assign delay_settled = \result$318 [54];
+  assign settled_delay = \result$318 [67:55];
+  assign delay_spread = \result$318 [75:68];
+  assign word0_position = \result$318 [130:76];
+  assign word0_ne = \result$318 [131];
+  assign word0_nw = \result$318 [132];
+  assign word0_crc_ok = \result$318 [133];
+  assign word1_position = \result$318 [173:134];
+  assign word1_ne = \result$318 [174];
+  assign word1_nw = \result$318 [175];
+  assign word1_crc_ok = \result$318 [176];
+  assign lc = \result$318 [182:177];
+  assign lc_repeat = \result$318 [183];
+  assign lc_skip = \result$318 [184];
+  assign lc_zero = \result$318 [185];
+  assign spw_mismatch = \result$318 [186];
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
   assign count_crc_word0 = counts[15:0];
@@ -1391,29 +1405,31 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[154:145];
+  assign \live.w0  = live[155:145];
   assign \live.w0.data_bits  = live[150:145];
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
-  assign \live.w0_crc  = live[192:155];
-  assign \live.w0_crc.width  = live[159:155];
-  assign \live.w0_crc.poly  = live[175:160];
-  assign \live.w0_crc.start  = live[191:176];
-  assign \live.w0_crc.inverted  = live[192];
-  assign \live.w1_enable  = live[193];
-  assign \live.w1  = live[203:194];
-  assign \live.w1.data_bits  = live[199:194];
-  assign \live.w1.nenw  = live[200];
-  assign \live.w1.lc  = live[201];
-  assign \live.w1.crc  = live[203:202];
-  assign \live.w1_crc  = live[241:204];
-  assign \live.w1_crc.width  = live[208:204];
-  assign \live.w1_crc.poly  = live[224:209];
-  assign \live.w1_crc.start  = live[240:225];
-  assign \live.w1_crc.inverted  = live[241];
-  assign \live.spw_check  = live[242];
-  assign \live.spw_tolerance  = live[250:243];
+  assign \live.w0.gray  = live[155];
+  assign \live.w0_crc  = live[193:156];
+  assign \live.w0_crc.width  = live[160:156];
+  assign \live.w0_crc.poly  = live[176:161];
+  assign \live.w0_crc.start  = live[192:177];
+  assign \live.w0_crc.inverted  = live[193];
+  assign \live.w1_enable  = live[194];
+  assign \live.w1  = live[205:195];
+  assign \live.w1.data_bits  = live[200:195];
+  assign \live.w1.nenw  = live[201];
+  assign \live.w1.lc  = live[202];
+  assign \live.w1.crc  = live[204:203];
+  assign \live.w1.gray  = live[205];
+  assign \live.w1_crc  = live[243:206];
+  assign \live.w1_crc.width  = live[210:206];
+  assign \live.w1_crc.poly  = live[226:211];
+  assign \live.w1_crc.start  = live[242:227];
+  assign \live.w1_crc.inverted  = live[243];
+  assign \live.spw_check  = live[244];
+  assign \live.spw_tolerance  = live[252:245];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -1424,49 +1440,55 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[154:145];
+  assign \cycle.w0  = cycle[155:145];
   assign \cycle.w0.data_bits  = cycle[150:145];
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0_crc  = cycle[192:155];
-  assign \cycle.w0_crc.width  = cycle[159:155];
-  assign \cycle.w0_crc.poly  = cycle[175:160];
-  assign \cycle.w0_crc.start  = cycle[191:176];
-  assign \cycle.w0_crc.inverted  = cycle[192];
-  assign \cycle.w1_enable  = cycle[193];
-  assign \cycle.w1  = cycle[203:194];
-  assign \cycle.w1.data_bits  = cycle[199:194];
-  assign \cycle.w1.nenw  = cycle[200];
-  assign \cycle.w1.lc  = cycle[201];
-  assign \cycle.w1.crc  = cycle[203:202];
-  assign \cycle.w1_crc  = cycle[241:204];
-  assign \cycle.w1_crc.width  = cycle[208:204];
-  assign \cycle.w1_crc.poly  = cycle[224:209];
-  assign \cycle.w1_crc.start  = cycle[240:225];
-  assign \cycle.w1_crc.inverted  = cycle[241];
-  assign \cycle.spw_check  = cycle[242];
-  assign \cycle.spw_tolerance  = cycle[250:243];
-  assign \words[0]  = words[9:0];
+  assign \cycle.w0.gray  = cycle[155];
+  assign \cycle.w0_crc  = cycle[193:156];
+  assign \cycle.w0_crc.width  = cycle[160:156];
+  assign \cycle.w0_crc.poly  = cycle[176:161];
+  assign \cycle.w0_crc.start  = cycle[192:177];
+  assign \cycle.w0_crc.inverted  = cycle[193];
+  assign \cycle.w1_enable  = cycle[194];
+  assign \cycle.w1  = cycle[205:195];
+  assign \cycle.w1.data_bits  = cycle[200:195];
+  assign \cycle.w1.nenw  = cycle[201];
+  assign \cycle.w1.lc  = cycle[202];
+  assign \cycle.w1.crc  = cycle[204:203];
+  assign \cycle.w1.gray  = cycle[205];
+  assign \cycle.w1_crc  = cycle[243:206];
+  assign \cycle.w1_crc.width  = cycle[210:206];
+  assign \cycle.w1_crc.poly  = cycle[226:211];
+  assign \cycle.w1_crc.start  = cycle[242:227];
+  assign \cycle.w1_crc.inverted  = cycle[243];
+  assign \cycle.spw_check  = cycle[244];
+  assign \cycle.spw_tolerance  = cycle[252:245];
+  assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
-  assign \words[1]  = words[19:10];
-  assign \words[1].data_bits  = words[15:10];
-  assign \words[1].nenw  = words[16];
-  assign \words[1].lc  = words[17];
-  assign \words[1].crc  = words[19:18];
-  assign \words$234[0]  = \words$234 [9:0];
-  assign \words$234[0].data_bits  = \words$234 [5:0];
-  assign \words$234[0].nenw  = \words$234 [6];
-  assign \words$234[0].lc  = \words$234 [7];
-  assign \words$234[0].crc  = \words$234 [9:8];
-  assign \words$234[1]  = \words$234 [19:10];
-  assign \words$234[1].data_bits  = \words$234 [15:10];
-  assign \words$234[1].nenw  = \words$234 [16];
-  assign \words$234[1].lc  = \words$234 [17];
-  assign \words$234[1].crc  = \words$234 [19:18];
+  assign \words[0].gray  = words[10];
+  assign \words[1]  = words[21:11];
+  assign \words[1].data_bits  = words[16:11];
+  assign \words[1].nenw  = words[17];
+  assign \words[1].lc  = words[18];
+  assign \words[1].crc  = words[20:19];
+  assign \words[1].gray  = words[21];
+  assign \words$236[0]  = \words$236 [10:0];
+  assign \words$236[0].data_bits  = \words$236 [5:0];
+  assign \words$236[0].nenw  = \words$236 [6];
+  assign \words$236[0].lc  = \words$236 [7];
+  assign \words$236[0].crc  = \words$236 [9:8];
+  assign \words$236[0].gray  = \words$236 [10];
+  assign \words$236[1]  = \words$236 [21:11];
+  assign \words$236[1].data_bits  = \words$236 [16:11];
+  assign \words$236[1].nenw  = \words$236 [17];
+  assign \words$236[1].lc  = \words$236 [18];
+  assign \words$236[1].crc  = \words$236 [20:19];
+  assign \words$236[1].gray  = \words$236 [21];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -1477,26 +1499,26 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$236[0]  = crcs[37:0];
-  assign \crcs$236[0].width  = crcs[4:0];
-  assign \crcs$236[0].poly  = crcs[20:5];
-  assign \crcs$236[0].start  = crcs[36:21];
-  assign \crcs$236[0].inverted  = crcs[37];
-  assign \crcs$236[1]  = crcs[75:38];
-  assign \crcs$236[1].width  = crcs[42:38];
-  assign \crcs$236[1].poly  = crcs[58:43];
-  assign \crcs$236[1].start  = crcs[74:59];
-  assign \crcs$236[1].inverted  = crcs[75];
-  assign \crcs$237[0]  = crcs[37:0];
-  assign \crcs$237[0].width  = crcs[4:0];
-  assign \crcs$237[0].poly  = crcs[20:5];
-  assign \crcs$237[0].start  = crcs[36:21];
-  assign \crcs$237[0].inverted  = crcs[37];
-  assign \crcs$237[1]  = crcs[75:38];
-  assign \crcs$237[1].width  = crcs[42:38];
-  assign \crcs$237[1].poly  = crcs[58:43];
-  assign \crcs$237[1].start  = crcs[74:59];
-  assign \crcs$237[1].inverted  = crcs[75];
+  assign \crcs$238[0]  = crcs[37:0];
+  assign \crcs$238[0].width  = crcs[4:0];
+  assign \crcs$238[0].poly  = crcs[20:5];
+  assign \crcs$238[0].start  = crcs[36:21];
+  assign \crcs$238[0].inverted  = crcs[37];
+  assign \crcs$238[1]  = crcs[75:38];
+  assign \crcs$238[1].width  = crcs[42:38];
+  assign \crcs$238[1].poly  = crcs[58:43];
+  assign \crcs$238[1].start  = crcs[74:59];
+  assign \crcs$238[1].inverted  = crcs[75];
+  assign \crcs$239[0]  = crcs[37:0];
+  assign \crcs$239[0].width  = crcs[4:0];
+  assign \crcs$239[0].poly  = crcs[20:5];
+  assign \crcs$239[0].start  = crcs[36:21];
+  assign \crcs$239[0].inverted  = crcs[37];
+  assign \crcs$239[1]  = crcs[75:38];
+  assign \crcs$239[1].width  = crcs[42:38];
+  assign \crcs$239[1].poly  = crcs[58:43];
+  assign \crcs$239[1].start  = crcs[74:59];
+  assign \crcs$239[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -1507,29 +1529,31 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \cfg.quiet_time  = cycle[136:125];
   assign \cfg.noise_limit  = cycle[140:137];
   assign \cfg.delay_tolerance  = cycle[144:141];
-  assign \cfg.w0  = cycle[154:145];
+  assign \cfg.w0  = cycle[155:145];
   assign \cfg.w0.data_bits  = cycle[150:145];
   assign \cfg.w0.nenw  = cycle[151];
   assign \cfg.w0.lc  = cycle[152];
   assign \cfg.w0.crc  = cycle[154:153];
-  assign \cfg.w0_crc  = cycle[192:155];
-  assign \cfg.w0_crc.width  = cycle[159:155];
-  assign \cfg.w0_crc.poly  = cycle[175:160];
-  assign \cfg.w0_crc.start  = cycle[191:176];
-  assign \cfg.w0_crc.inverted  = cycle[192];
-  assign \cfg.w1_enable  = cycle[193];
-  assign \cfg.w1  = cycle[203:194];
-  assign \cfg.w1.data_bits  = cycle[199:194];
-  assign \cfg.w1.nenw  = cycle[200];
-  assign \cfg.w1.lc  = cycle[201];
-  assign \cfg.w1.crc  = cycle[203:202];
-  assign \cfg.w1_crc  = cycle[241:204];
-  assign \cfg.w1_crc.width  = cycle[208:204];
-  assign \cfg.w1_crc.poly  = cycle[224:209];
-  assign \cfg.w1_crc.start  = cycle[240:225];
-  assign \cfg.w1_crc.inverted  = cycle[241];
-  assign \cfg.spw_check  = cycle[242];
-  assign \cfg.spw_tolerance  = cycle[250:243];
+  assign \cfg.w0.gray  = cycle[155];
+  assign \cfg.w0_crc  = cycle[193:156];
+  assign \cfg.w0_crc.width  = cycle[160:156];
+  assign \cfg.w0_crc.poly  = cycle[176:161];
+  assign \cfg.w0_crc.start  = cycle[192:177];
+  assign \cfg.w0_crc.inverted  = cycle[193];
+  assign \cfg.w1_enable  = cycle[194];
+  assign \cfg.w1  = cycle[205:195];
+  assign \cfg.w1.data_bits  = cycle[200:195];
+  assign \cfg.w1.nenw  = cycle[201];
+  assign \cfg.w1.lc  = cycle[202];
+  assign \cfg.w1.crc  = cycle[204:203];
+  assign \cfg.w1.gray  = cycle[205];
+  assign \cfg.w1_crc  = cycle[243:206];
+  assign \cfg.w1_crc.width  = cycle[210:206];
+  assign \cfg.w1_crc.poly  = cycle[226:211];
+  assign \cfg.w1_crc.start  = cycle[242:227];
+  assign \cfg.w1_crc.inverted  = cycle[243];
+  assign \cfg.spw_check  = cycle[244];
+  assign \cfg.spw_tolerance  = cycle[252:245];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -1553,36 +1577,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$285.slave_id  = \request$285 [2:0];
-  assign \request$285.address  = \request$285 [9:3];
-  assign \request$285.count  = \request$285 [16:10];
-  assign \request$285.write  = \request$285 [17];
+  assign \request$287.slave_id  = \request$287 [2:0];
+  assign \request$287.address  = \request$287 [9:3];
+  assign \request$287.count  = \request$287 [16:10];
+  assign \request$287.write  = \request$287 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$306.crc_word0  = \events$306 [0];
-  assign \events$306.crc_word1  = \events$306 [1];
-  assign \events$306.no_ack  = \events$306 [2];
-  assign \events$306.no_start  = \events$306 [3];
-  assign \events$306.delay_range  = \events$306 [4];
-  assign \events$306.slo_stuck_low  = \events$306 [5];
-  assign \events$306.lc_repeat  = \events$306 [6];
-  assign \events$306.lc_skip  = \events$306 [7];
-  assign \events$306.lc_zero  = \events$306 [8];
-  assign \events$306.spw_mismatch  = \events$306 [9];
-  assign \events$306.overrun  = \events$306 [10];
-  assign \events$306.aborted  = \events$306 [11];
-  assign \events$306.no_stop  = \events$306 [12];
-  assign \events$306.noisy_line  = \events$306 [13];
-  assign \events$306.delay_jump  = \events$306 [14];
-  assign \events$306.noise_event  = \events$306 [15];
-  assign \events$306.ca_crc4_error  = \events$306 [16];
-  assign \events$306.ca_no_answer  = \events$306 [17];
-  assign \events$306.ca_refused  = \events$306 [18];
-  assign \events$306.ca_aborted  = \events$306 [19];
-  assign \events$306.ca_data_fault  = \events$306 [20];
+  assign \events$308.crc_word0  = \events$308 [0];
+  assign \events$308.crc_word1  = \events$308 [1];
+  assign \events$308.no_ack  = \events$308 [2];
+  assign \events$308.no_start  = \events$308 [3];
+  assign \events$308.delay_range  = \events$308 [4];
+  assign \events$308.slo_stuck_low  = \events$308 [5];
+  assign \events$308.lc_repeat  = \events$308 [6];
+  assign \events$308.lc_skip  = \events$308 [7];
+  assign \events$308.lc_zero  = \events$308 [8];
+  assign \events$308.spw_mismatch  = \events$308 [9];
+  assign \events$308.overrun  = \events$308 [10];
+  assign \events$308.aborted  = \events$308 [11];
+  assign \events$308.no_stop  = \events$308 [12];
+  assign \events$308.noisy_line  = \events$308 [13];
+  assign \events$308.delay_jump  = \events$308 [14];
+  assign \events$308.noise_event  = \events$308 [15];
+  assign \events$308.ca_crc4_error  = \events$308 [16];
+  assign \events$308.ca_no_answer  = \events$308 [17];
+  assign \events$308.ca_refused  = \events$308 [18];
+  assign \events$308.ca_aborted  = \events$308 [19];
+  assign \events$308.ca_data_fault  = \events$308 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -1611,59 +1635,59 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$316.status  = \result$316 [3:0];
-  assign \result$316.timestamp  = \result$316 [35:4];
-  assign \result$316.line_delay  = \result$316 [48:36];
-  assign \result$316.cds  = \result$316 [49];
-  assign \result$316.noise_events  = \result$316 [53:50];
-  assign \result$316.delay_settled  = \result$316 [54];
-  assign \result$316.settled_delay  = \result$316 [67:55];
-  assign \result$316.delay_spread  = \result$316 [75:68];
-  assign \result$316.word0  = \result$316 [133:76];
-  assign \result$316.word0.position  = \result$316 [130:76];
-  assign \result$316.word0.ne  = \result$316 [131];
-  assign \result$316.word0.nw  = \result$316 [132];
-  assign \result$316.word0.crc_ok  = \result$316 [133];
-  assign \result$316.word1  = \result$316 [176:134];
-  assign \result$316.word1.position  = \result$316 [173:134];
-  assign \result$316.word1.ne  = \result$316 [174];
-  assign \result$316.word1.nw  = \result$316 [175];
-  assign \result$316.word1.crc_ok  = \result$316 [176];
-  assign \result$316.lc  = \result$316 [182:177];
-  assign \result$316.lc_repeat  = \result$316 [183];
-  assign \result$316.lc_skip  = \result$316 [184];
-  assign \result$316.lc_zero  = \result$316 [185];
-  assign \result$316.spw_mismatch  = \result$316 [186];
-  assign \events$306 [20] = \$16 ;
-  assign \events$306 [19] = \$14 ;
-  assign \events$306 [18] = \$12 ;
-  assign \events$306 [17] = \$10 ;
-  assign \events$306 [16] = \$8 ;
-  assign \events$306 [15] = \event ;
-  assign \events$306 [14] = \$6 ;
-  assign \events$306 [13] = \$4 ;
-  assign \events$306 [12] = faults[6];
-  assign \events$306 [11] = faults[4];
-  assign \events$306 [10] = overrun;
-  assign \events$306 [9] = \$2 ;
-  assign \events$306 [8] = \lc_zero$276 ;
-  assign \events$306 [7] = \lc_skip$275 ;
-  assign \events$306 [6] = \lc_repeat$274 ;
-  assign \events$306 [5] = faults[3];
-  assign \events$306 [4] = faults[2];
-  assign \events$306 [3] = faults[1];
-  assign \events$306 [2] = faults[0];
-  assign \events$306 [1] = crc_error[1];
-  assign \events$306 [0] = crc_error[0];
+  assign \result$318.status  = \result$318 [3:0];
+  assign \result$318.timestamp  = \result$318 [35:4];
+  assign \result$318.line_delay  = \result$318 [48:36];
+  assign \result$318.cds  = \result$318 [49];
+  assign \result$318.noise_events  = \result$318 [53:50];
+  assign \result$318.delay_settled  = \result$318 [54];
+  assign \result$318.settled_delay  = \result$318 [67:55];
+  assign \result$318.delay_spread  = \result$318 [75:68];
+  assign \result$318.word0  = \result$318 [133:76];
+  assign \result$318.word0.position  = \result$318 [130:76];
+  assign \result$318.word0.ne  = \result$318 [131];
+  assign \result$318.word0.nw  = \result$318 [132];
+  assign \result$318.word0.crc_ok  = \result$318 [133];
+  assign \result$318.word1  = \result$318 [176:134];
+  assign \result$318.word1.position  = \result$318 [173:134];
+  assign \result$318.word1.ne  = \result$318 [174];
+  assign \result$318.word1.nw  = \result$318 [175];
+  assign \result$318.word1.crc_ok  = \result$318 [176];
+  assign \result$318.lc  = \result$318 [182:177];
+  assign \result$318.lc_repeat  = \result$318 [183];
+  assign \result$318.lc_skip  = \result$318 [184];
+  assign \result$318.lc_zero  = \result$318 [185];
+  assign \result$318.spw_mismatch  = \result$318 [186];
+  assign \events$308 [20] = \$16 ;
+  assign \events$308 [19] = \$14 ;
+  assign \events$308 [18] = \$12 ;
+  assign \events$308 [17] = \$10 ;
+  assign \events$308 [16] = \$8 ;
+  assign \events$308 [15] = \event ;
+  assign \events$308 [14] = \$6 ;
+  assign \events$308 [13] = \$4 ;
+  assign \events$308 [12] = faults[6];
+  assign \events$308 [11] = faults[4];
+  assign \events$308 [10] = overrun;
+  assign \events$308 [9] = \$2 ;
+  assign \events$308 [8] = \lc_zero$278 ;
+  assign \events$308 [7] = \lc_skip$277 ;
+  assign \events$308 [6] = \lc_repeat$276 ;
+  assign \events$308 [5] = faults[3];
+  assign \events$308 [4] = faults[2];
+  assign \events$308 [3] = faults[1];
+  assign \events$308 [2] = faults[0];
+  assign \events$308 [1] = crc_error[1];
+  assign \events$308 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$285 [17] = ca_write;
-  assign \request$285 [16:10] = ca_count;
-  assign \request$285 [9:3] = ca_address;
-  assign \request$285 [2:0] = ca_slave_id;
+  assign \request$287 [17] = ca_write;
+  assign \request$287 [16:10] = ca_count;
+  assign \request$287 [9:3] = ca_address;
+  assign \request$287 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[186] = \spw_mismatch$281 ;
+  assign frame[186] = \spw_mismatch$283 ;
   assign frame[176] = \$22 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
@@ -1672,36 +1696,38 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign frame[132] = nw[0];
   assign frame[131] = ne[0];
   assign frame[130:76] = data0;
-  assign frame[185] = \lc_zero$276 ;
-  assign frame[184] = \lc_skip$275 ;
-  assign frame[183] = \lc_repeat$274 ;
-  assign frame[182:177] = \lc$199 ;
+  assign frame[185] = \lc_zero$278 ;
+  assign frame[184] = \lc_skip$277 ;
+  assign frame[183] = \lc_repeat$276 ;
+  assign frame[182:177] = \lc$201 ;
   assign frame[75:68] = spread;
-  assign frame[67:55] = \settled_delay$272 ;
+  assign frame[67:55] = \settled_delay$274 ;
   assign frame[54] = settled;
   assign frame[53:50] = events;
-  assign frame[49] = \cds$269 ;
+  assign frame[49] = \cds$271 ;
   assign frame[48:36] = delay;
-  assign frame[3:0] = \status$268 ;
-  assign \words$234 [19:10] = cycle[203:194];
-  assign \words$234 [9:0] = cycle[154:145];
-  assign words[19:10] = cycle[203:194];
-  assign words[9:0] = cycle[154:145];
-  assign live[250:243] = cfg_spw_tolerance;
-  assign live[242] = cfg_spw_check;
-  assign live[241] = cfg_w1_crc_inverted;
-  assign live[240:225] = cfg_w1_crc_start;
-  assign live[224:209] = cfg_w1_crc_poly;
-  assign live[208:204] = cfg_w1_crc_width;
-  assign live[203:202] = cfg_w1_crc;
-  assign live[201] = cfg_w1_lc;
-  assign live[200] = cfg_w1_nenw;
-  assign live[199:194] = cfg_w1_data_bits;
-  assign live[193] = cfg_w1_enable;
-  assign live[192] = cfg_w0_crc_inverted;
-  assign live[191:176] = cfg_w0_crc_start;
-  assign live[175:160] = cfg_w0_crc_poly;
-  assign live[159:155] = cfg_w0_crc_width;
+  assign frame[3:0] = \status$270 ;
+  assign \words$236 [21:11] = cycle[205:195];
+  assign \words$236 [10:0] = cycle[155:145];
+  assign words[21:11] = cycle[205:195];
+  assign words[10:0] = cycle[155:145];
+  assign live[252:245] = cfg_spw_tolerance;
+  assign live[244] = cfg_spw_check;
+  assign live[243] = cfg_w1_crc_inverted;
+  assign live[242:227] = cfg_w1_crc_start;
+  assign live[226:211] = cfg_w1_crc_poly;
+  assign live[210:206] = cfg_w1_crc_width;
+  assign live[205] = cfg_w1_gray;
+  assign live[204:203] = cfg_w1_crc;
+  assign live[202] = cfg_w1_lc;
+  assign live[201] = cfg_w1_nenw;
+  assign live[200:195] = cfg_w1_data_bits;
+  assign live[194] = cfg_w1_enable;
+  assign live[193] = cfg_w0_crc_inverted;
+  assign live[192:177] = cfg_w0_crc_start;
+  assign live[176:161] = cfg_w0_crc_poly;
+  assign live[160:156] = cfg_w0_crc_width;
+  assign live[155] = cfg_w0_gray;
   assign live[154:153] = cfg_w0_crc;
   assign live[152] = cfg_w0_lc;
   assign live[151] = cfg_w0_nenw;
@@ -1777,7 +1803,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire [24:0] \$58 ;
   reg \$59 ;
   wire \$6 ;
-  reg [250:0] \$60 ;
+  reg [252:0] \$60 ;
   reg [23:0] \$61 ;
   reg [23:0] \$62 ;
   reg [11:0] \$63 ;
@@ -1804,8 +1830,8 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  output [250:0] cycle;
-  reg [250:0] cycle = 251'h000000000000000000000000000000000000000000000000000000000000000;
+  output [252:0] cycle;
+  reg [252:0] cycle = 253'h0000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -1818,7 +1844,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
   wire [23:0] \cycle.timeout_limit ;
-  wire [9:0] \cycle.w0 ;
+  wire [10:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -1826,6 +1852,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w0.crc ;
   wire [5:0] \cycle.w0.data_bits ;
+  wire \cycle.w0.gray ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
   wire [37:0] \cycle.w0_crc ;
@@ -1833,7 +1860,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire [15:0] \cycle.w0_crc.poly ;
   wire [15:0] \cycle.w0_crc.start ;
   wire [4:0] \cycle.w0_crc.width ;
-  wire [9:0] \cycle.w1 ;
+  wire [10:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -1841,6 +1868,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w1.crc ;
   wire [5:0] \cycle.w1.data_bits ;
+  wire \cycle.w1.gray ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
   wire [37:0] \cycle.w1_crc ;
@@ -1855,8 +1883,8 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [250:0] live;
-  wire [250:0] live;
+  input [252:0] live;
+  wire [252:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -1869,7 +1897,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
   wire [23:0] \live.timeout_limit ;
-  wire [9:0] \live.w0 ;
+  wire [10:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -1877,6 +1905,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w0.crc ;
   wire [5:0] \live.w0.data_bits ;
+  wire \live.w0.gray ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
   wire [37:0] \live.w0_crc ;
@@ -1884,7 +1913,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire [15:0] \live.w0_crc.poly ;
   wire [15:0] \live.w0_crc.start ;
   wire [4:0] \live.w0_crc.width ;
-  wire [9:0] \live.w1 ;
+  wire [10:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -1892,6 +1921,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w1.crc ;
   wire [5:0] \live.w1.data_bits ;
+  wire \live.w1.gray ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
   wire [37:0] \live.w1_crc ;
@@ -1915,14 +1945,14 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
-  assign \$36  = live[193] & live[152];
-  assign \$37  = \$36  & live[201];
+  assign \$36  = live[194] & live[152];
+  assign \$37  = \$36  & live[202];
   assign \$38  = ~ \$37 ;
   assign \$39  = \$35  & \$38 ;
-  assign \$40  = ~ live[242];
-  assign \$41  = live[199:194] <= live[150:145];
-  assign \$42  = live[193] & \$41 ;
-  assign \$43  = | live[203:202];
+  assign \$40  = ~ live[244];
+  assign \$41  = live[200:195] <= live[150:145];
+  assign \$42  = live[194] & \$41 ;
+  assign \$43  = | live[204:203];
   assign \$44  = \$42  & \$43 ;
   assign \$45  = \$40  | \$44 ;
   assign \$46  = \$39  & \$45 ;
@@ -1938,7 +1968,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$56  = \$55  ? 4'h2 : live[144:141];
   assign \$57  = live[15:0] + \$56 ;
   assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[193];
+  assign word_count = 1'h1 + cycle[194];
   always @(posedge clk)
     ok <= \$59 ;
   always @(posedge clk)
@@ -1967,26 +1997,26 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$8  = live[154:153] == 2'h2;
   assign \$9  = \$7  | \$8 ;
   assign \$10  = live[154:153] == 2'h3;
-  assign \$11  = | live[159:155];
+  assign \$11  = | live[160:156];
   assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[159:155] <= 5'h10;
+  assign \$13  = live[160:156] <= 5'h10;
   assign \$14  = \$12  & \$13 ;
   assign \$15  = \$9  | \$14 ;
   assign \$16  = \$4  & \$15 ;
   assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[193];
-  assign \$19  = | live[199:194];
-  assign \$20  = live[199:194] <= 6'h28;
+  assign \$18  = ~ live[194];
+  assign \$19  = | live[200:195];
+  assign \$20  = live[200:195] <= 6'h28;
   assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[203:202];
-  assign \$23  = live[203:202] == 1'h1;
+  assign \$22  = ! live[204:203];
+  assign \$23  = live[204:203] == 1'h1;
   assign \$24  = \$22  | \$23 ;
-  assign \$25  = live[203:202] == 2'h2;
+  assign \$25  = live[204:203] == 2'h2;
   assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[203:202] == 2'h3;
-  assign \$28  = | live[208:204];
+  assign \$27  = live[204:203] == 2'h3;
+  assign \$28  = | live[210:206];
   assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[208:204] <= 5'h10;
+  assign \$30  = live[210:206] <= 5'h10;
   assign \$31  = \$29  & \$30 ;
   assign \$32  = \$26  | \$31 ;
   always @* begin
@@ -2003,7 +2033,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
       \$60  = live;
     end
     if (rst) begin
-      \$60  = 251'h000000000000000000000000000000000000000000000000000000000000000;
+      \$60  = 253'h0000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
@@ -2077,12 +2107,12 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
             \$66 [37] = 1'h1;
           end
         2'h3:
-            \$66 [37:0] = live[192:155];
+            \$66 [37:0] = live[193:156];
         default:
             \$66 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
-      casez (live[203:202])
+      casez (live[204:203])
         2'h1:
           begin
             \$66 [42:38] = 5'h06;
@@ -2098,7 +2128,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
             \$66 [75] = 1'h1;
           end
         2'h3:
-            \$66 [75:38] = live[241:204];
+            \$66 [75:38] = live[243:206];
         default:
             \$66 [75:38] = 38'h0000000000;
       endcase
@@ -2124,29 +2154,31 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[154:145];
+  assign \live.w0  = live[155:145];
   assign \live.w0.data_bits  = live[150:145];
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
-  assign \live.w0_crc  = live[192:155];
-  assign \live.w0_crc.width  = live[159:155];
-  assign \live.w0_crc.poly  = live[175:160];
-  assign \live.w0_crc.start  = live[191:176];
-  assign \live.w0_crc.inverted  = live[192];
-  assign \live.w1_enable  = live[193];
-  assign \live.w1  = live[203:194];
-  assign \live.w1.data_bits  = live[199:194];
-  assign \live.w1.nenw  = live[200];
-  assign \live.w1.lc  = live[201];
-  assign \live.w1.crc  = live[203:202];
-  assign \live.w1_crc  = live[241:204];
-  assign \live.w1_crc.width  = live[208:204];
-  assign \live.w1_crc.poly  = live[224:209];
-  assign \live.w1_crc.start  = live[240:225];
-  assign \live.w1_crc.inverted  = live[241];
-  assign \live.spw_check  = live[242];
-  assign \live.spw_tolerance  = live[250:243];
+  assign \live.w0.gray  = live[155];
+  assign \live.w0_crc  = live[193:156];
+  assign \live.w0_crc.width  = live[160:156];
+  assign \live.w0_crc.poly  = live[176:161];
+  assign \live.w0_crc.start  = live[192:177];
+  assign \live.w0_crc.inverted  = live[193];
+  assign \live.w1_enable  = live[194];
+  assign \live.w1  = live[205:195];
+  assign \live.w1.data_bits  = live[200:195];
+  assign \live.w1.nenw  = live[201];
+  assign \live.w1.lc  = live[202];
+  assign \live.w1.crc  = live[204:203];
+  assign \live.w1.gray  = live[205];
+  assign \live.w1_crc  = live[243:206];
+  assign \live.w1_crc.width  = live[210:206];
+  assign \live.w1_crc.poly  = live[226:211];
+  assign \live.w1_crc.start  = live[242:227];
+  assign \live.w1_crc.inverted  = live[243];
+  assign \live.spw_check  = live[244];
+  assign \live.spw_tolerance  = live[252:245];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -2157,29 +2189,31 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[154:145];
+  assign \cycle.w0  = cycle[155:145];
   assign \cycle.w0.data_bits  = cycle[150:145];
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0_crc  = cycle[192:155];
-  assign \cycle.w0_crc.width  = cycle[159:155];
-  assign \cycle.w0_crc.poly  = cycle[175:160];
-  assign \cycle.w0_crc.start  = cycle[191:176];
-  assign \cycle.w0_crc.inverted  = cycle[192];
-  assign \cycle.w1_enable  = cycle[193];
-  assign \cycle.w1  = cycle[203:194];
-  assign \cycle.w1.data_bits  = cycle[199:194];
-  assign \cycle.w1.nenw  = cycle[200];
-  assign \cycle.w1.lc  = cycle[201];
-  assign \cycle.w1.crc  = cycle[203:202];
-  assign \cycle.w1_crc  = cycle[241:204];
-  assign \cycle.w1_crc.width  = cycle[208:204];
-  assign \cycle.w1_crc.poly  = cycle[224:209];
-  assign \cycle.w1_crc.start  = cycle[240:225];
-  assign \cycle.w1_crc.inverted  = cycle[241];
-  assign \cycle.spw_check  = cycle[242];
-  assign \cycle.spw_tolerance  = cycle[250:243];
+  assign \cycle.w0.gray  = cycle[155];
+  assign \cycle.w0_crc  = cycle[193:156];
+  assign \cycle.w0_crc.width  = cycle[160:156];
+  assign \cycle.w0_crc.poly  = cycle[176:161];
+  assign \cycle.w0_crc.start  = cycle[192:177];
+  assign \cycle.w0_crc.inverted  = cycle[193];
+  assign \cycle.w1_enable  = cycle[194];
+  assign \cycle.w1  = cycle[205:195];
+  assign \cycle.w1.data_bits  = cycle[200:195];
+  assign \cycle.w1.nenw  = cycle[201];
+  assign \cycle.w1.lc  = cycle[202];
+  assign \cycle.w1.crc  = cycle[204:203];
+  assign \cycle.w1.gray  = cycle[205];
+  assign \cycle.w1_crc  = cycle[243:206];
+  assign \cycle.w1_crc.width  = cycle[210:206];
+  assign \cycle.w1_crc.poly  = cycle[226:211];
+  assign \cycle.w1_crc.start  = cycle[242:227];
+  assign \cycle.w1_crc.inverted  = cycle[243];
+  assign \cycle.spw_check  = cycle[244];
+  assign \cycle.spw_tolerance  = cycle[252:245];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -5181,27 +5215,33 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
-  reg [15:0] \$100 ;
-  reg \$101 ;
-  reg \$102 ;
-  reg [15:0] \$103 ;
-  reg [2:0] \$104 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  reg \$104 ;
   reg \$105 ;
-  reg [6:0] \$106 ;
+  reg [15:0] \$106 ;
   reg \$107 ;
   reg \$108 ;
-  reg \$109 ;
+  reg [15:0] \$109 ;
   wire [1:0] \$11 ;
-  reg \$110 ;
+  reg [2:0] \$110 ;
   reg \$111 ;
-  reg \$112 ;
-  reg [54:0] \$113 ;
-  reg [1:0] \$114 ;
-  reg [1:0] \$115 ;
-  reg [39:0] \$116 ;
-  reg [5:0] \$117 ;
-  reg [39:0] \$118 ;
+  reg [6:0] \$112 ;
+  reg \$113 ;
+  reg \$114 ;
+  reg \$115 ;
+  reg \$116 ;
+  reg \$117 ;
+  reg \$118 ;
+  reg [54:0] \$119 ;
   wire [6:0] \$12 ;
+  reg [1:0] \$120 ;
+  reg [1:0] \$121 ;
+  reg [39:0] \$122 ;
+  reg [5:0] \$123 ;
+  reg [39:0] \$124 ;
   wire \$13 ;
   reg [3:0] \$14 ;
   wire [6:0] \$15 ;
@@ -5288,15 +5328,15 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$89 ;
   wire [7:0] \$9 ;
   wire \$90 ;
-  wire [6:0] \$91 ;
+  wire \$91 ;
   wire \$92 ;
   wire \$93 ;
   wire \$94 ;
   wire \$95 ;
   wire \$96 ;
-  wire \$97 ;
-  reg \$98 ;
-  reg \$99 ;
+  wire [6:0] \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   input \bit ;
   wire \bit ;
   wire \bit$51 ;
@@ -5394,9 +5434,9 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \word$54 ;
   input [1:0] word_count;
   wire [1:0] word_count;
-  input [19:0] words;
-  wire [19:0] words;
-  wire [9:0] \words[0] ;
+  input [21:0] words;
+  wire [21:0] words;
+  wire [10:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -5404,9 +5444,10 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
+  wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [9:0] \words[1] ;
+  wire [10:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -5414,6 +5455,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
+  wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
   assign \$1  = words[5:0] + 1'h1;
@@ -5429,17 +5471,17 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   assign \$15  = words[5:0] + \$14 ;
   assign \$16  = | \$15 ;
   assign \$17  = \$13  & \$16 ;
-  assign \$18  = words[15:10] + 1'h1;
-  assign \$19  = words[15:10] + 7'h7f;
-  assign \$21  = words[15:10] + \$20 ;
-  assign \$23  = words[15:10] + \$22 ;
+  assign \$18  = words[16:11] + 1'h1;
+  assign \$19  = words[16:11] + 7'h7f;
+  assign \$21  = words[16:11] + \$20 ;
+  assign \$23  = words[16:11] + \$22 ;
   assign \$25  = \$24  + crcs[42:38];
-  assign \$26  = words[15:10] + \$25 [6:0];
-  assign \$27  = | words[15:10];
-  assign \$28  = words[16] ? 2'h2 : 2'h0;
-  assign \$29  = words[15:10] + \$28 ;
+  assign \$26  = words[16:11] + \$25 [6:0];
+  assign \$27  = | words[16:11];
+  assign \$28  = words[17] ? 2'h2 : 2'h0;
+  assign \$29  = words[16:11] + \$28 ;
   assign \$30  = ! \$29 ;
-  assign \$32  = words[15:10] + \$31 ;
+  assign \$32  = words[16:11] + \$31 ;
   assign \$33  = | \$32 ;
   assign \$34  = \$30  & \$33 ;
   assign \$35  = ~ slots_full;
@@ -5447,7 +5489,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   assign \$37  = slots + 1'h1;
   assign \$38  = slots == 16'hfffe;
   assign \$39  = sample & \bit ;
-  assign \$40  = | words[15:10];
+  assign \$40  = | words[16:11];
   assign \$41  = idx + 1'h1;
   assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
   assign \$43  = idx != \$42 ;
@@ -5474,39 +5516,45 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   assign \$64  = ! word;
   assign \$65  = in_word & \$64 ;
   assign \$66  = \$65  & in_data;
-  assign \$67  = ~ words[6];
-  assign \$68  = ! word;
-  assign \$69  = in_word & \$68 ;
-  assign \$70  = idx == words[5:0];
-  assign \$71  = \$69  & \$70 ;
-  assign \$72  = ! word;
-  assign \$73  = in_word & \$72 ;
-  assign \$74  = idx == w0_data_end_p1;
-  assign \$75  = \$73  & \$74 ;
-  assign \$77  = in_word & \$76 ;
-  assign \$78  = \$77  & in_data;
-  assign \$79  = ~ words[16];
-  assign \$81  = in_word & \$80 ;
-  assign \$82  = idx == words[15:10];
-  assign \$83  = \$81  & \$82 ;
+  assign \$67  = words[10] & data0[0];
+  assign \$68  = \bit  ^ \$67 ;
+  assign \$69  = ~ words[6];
+  assign \$70  = ! word;
+  assign \$71  = in_word & \$70 ;
+  assign \$72  = idx == words[5:0];
+  assign \$73  = \$71  & \$72 ;
+  assign \$74  = ! word;
+  assign \$75  = in_word & \$74 ;
+  assign \$76  = idx == w0_data_end_p1;
+  assign \$77  = \$75  & \$76 ;
+  assign \$79  = in_word & \$78 ;
+  assign \$80  = \$79  & in_data;
+  assign \$81  = words[21] & data1[0];
+  assign \$82  = \bit  ^ \$81 ;
+  assign \$83  = ~ words[17];
   assign \$85  = in_word & \$84 ;
-  assign \$86  = idx == w1_data_end_p1;
+  assign \$86  = idx == words[16:11];
   assign \$87  = \$85  & \$86 ;
-  assign \$88  = in_word & in_top;
+  assign \$89  = in_word & \$88 ;
+  assign \$90  = idx == w1_data_end_p1;
+  assign \$91  = \$89  & \$90 ;
+  assign \$92  = in_word & in_top;
+  assign \$93  = words[10] & data0[0];
+  assign \$94  = \bit  ^ \$93 ;
   assign lc_load = in_word & in_lc;
-  assign \$89  = ! idx;
-  assign first = in_word & \$89 ;
-  assign \$90  = ~ in_crc;
-  assign \cover  = in_word & \$90 ;
+  assign \$95  = ! idx;
+  assign first = in_word & \$95 ;
+  assign \$96  = ~ in_crc;
+  assign \cover  = in_word & \$96 ;
   assign check = in_word & in_crc;
-  assign \$91  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$92  = idx == \$91 ;
-  assign last = in_word & \$92 ;
-  assign \$93  = ! decoder_fsm_state;
-  assign \$94  = decoder_fsm_state == 1'h1;
-  assign \$95  = decoder_fsm_state == 2'h2;
-  assign \$96  = decoder_fsm_state == 2'h3;
-  assign \$97  = decoder_fsm_state == 3'h4;
+  assign \$97  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$98  = idx == \$97 ;
+  assign last = in_word & \$98 ;
+  assign \$99  = ! decoder_fsm_state;
+  assign \$100  = decoder_fsm_state == 1'h1;
+  assign \$101  = decoder_fsm_state == 2'h2;
+  assign \$102  = decoder_fsm_state == 2'h3;
+  assign \$103  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -5536,47 +5584,47 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   always @(posedge clk)
     w1_lc_at0 <= \$34 ;
   always @(posedge clk)
-    done <= \$98 ;
+    done <= \$104 ;
   always @(posedge clk)
-    stopped <= \$99 ;
+    stopped <= \$105 ;
   always @(posedge clk)
-    slots <= \$100 ;
+    slots <= \$106 ;
   always @(posedge clk)
-    slots_full <= \$101 ;
+    slots_full <= \$107 ;
   always @(posedge clk)
-    started <= \$102 ;
+    started <= \$108 ;
   always @(posedge clk)
-    start_slot <= \$103 ;
+    start_slot <= \$109 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$104 ;
+    decoder_fsm_state <= \$110 ;
   always @(posedge clk)
-    cds <= \$105 ;
+    cds <= \$111 ;
   always @(posedge clk)
-    idx <= \$106 ;
+    idx <= \$112 ;
   always @(posedge clk)
-    in_data <= \$107 ;
+    in_data <= \$113 ;
   always @(posedge clk)
-    in_lc <= \$108 ;
+    in_lc <= \$114 ;
   always @(posedge clk)
-    in_crc <= \$109 ;
+    in_crc <= \$115 ;
   always @(posedge clk)
-    in_top <= \$110 ;
+    in_top <= \$116 ;
   always @(posedge clk)
-    word <= \$111 ;
+    word <= \$117 ;
   always @(posedge clk)
-    stop_bit <= \$112 ;
+    stop_bit <= \$118 ;
   always @(posedge clk)
-    data0 <= \$113 ;
+    data0 <= \$119 ;
   always @(posedge clk)
-    ne <= \$114 ;
+    ne <= \$120 ;
   always @(posedge clk)
-    nw <= \$115 ;
+    nw <= \$121 ;
   always @(posedge clk)
-    data1 <= \$116 ;
+    data1 <= \$122 ;
   always @(posedge clk)
-    lc <= \$117 ;
+    lc <= \$123 ;
   always @(posedge clk)
-    cpw_top <= \$118 ;
+    cpw_top <= \$124 ;
   \biss_master.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
@@ -5645,7 +5693,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[16])
+    casez (words[17])
       1'h0:
           \$20  = 7'h7f;
       1'h1:
@@ -5655,7 +5703,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17:16])
+    casez (words[18:17])
       2'h0:
           \$22  = 7'h7f;
       2'h1:
@@ -5669,7 +5717,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17:16])
+    casez (words[18:17])
       2'h0:
           \$24  = 7'h7f;
       2'h1:
@@ -5683,7 +5731,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17:16])
+    casez (words[18:17])
       2'h0:
           \$31  = 4'h0;
       2'h1:
@@ -5696,7 +5744,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$98  = 1'h0;
+    \$104  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -5706,21 +5754,21 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$98  = 1'h1;
+                \$104  = 1'h1;
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$98  = 1'h0;
+      \$104  = 1'h0;
     end
     if (rst) begin
-      \$98  = 1'h0;
+      \$104  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$99  = 1'h0;
+    \$105  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -5730,115 +5778,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
           /* empty */;
       3'h3:
           if (sample) begin
-            \$99  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$99  = 1'h0;
-    end
-    if (rst) begin
-      \$99  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$100  = slots;
-    if (\$36 ) begin
-      \$100  = \$37 [15:0];
-    end
-    if (receiver_clear) begin
-      \$100  = 16'h0000;
-    end
-    if (rst) begin
-      \$100  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$101  = slots_full;
-    if (\$36 ) begin
-      \$101  = \$38 ;
-    end
-    if (receiver_clear) begin
-      \$101  = 1'h0;
-    end
-    if (rst) begin
-      \$101  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$102  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$102  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$102  = 1'h0;
-    end
-    if (rst) begin
-      \$102  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$103  = start_slot;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$103  = slots;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$103  = 16'h0000;
-    end
-    if (rst) begin
-      \$103  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$104  = decoder_fsm_state;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$104  = 3'h1;
-          end
-      3'h1:
-          if (sample) begin
-            \$104  = 3'h2;
-          end
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$104  = 3'h3;
-              end
-            end
-          end
-      3'h3:
-          if (sample) begin
-            \$104  = 3'h4;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$104  = 3'h0;
-    end
-    if (rst) begin
-      \$104  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$105  = cds;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$105  = \bit ;
+            \$105  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -5850,47 +5790,23 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$106  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$106  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$106  = \$41 [6:0];
-            if (\$60 ) begin
-              \$106  = 7'h00;
-            end
-          end
-    endcase
+    \$106  = slots;
+    if (\$36 ) begin
+      \$106  = \$37 [15:0];
+    end
     if (receiver_clear) begin
-      \$106  = 7'h00;
+      \$106  = 16'h0000;
     end
     if (rst) begin
-      \$106  = 7'h00;
+      \$106  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$107  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$107  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$107  = \$44 ;
-            if (\$60 ) begin
-              \$107  = w1_data_at0;
-            end
-          end
-    endcase
+    \$107  = slots_full;
+    if (\$36 ) begin
+      \$107  = \$38 ;
+    end
     if (receiver_clear) begin
       \$107  = 1'h0;
     end
@@ -5900,20 +5816,11 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$108  = in_lc;
+    \$108  = started;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$108  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$108  = \$50 ;
-            if (\$60 ) begin
-              \$108  = w1_lc_at0;
-            end
+          if (\$39 ) begin
+            \$108  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -5925,60 +5832,201 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$109  = in_crc;
+    \$109  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$109  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            \$109  = \$56 ;
+          if (\$39 ) begin
+            \$109  = slots;
           end
     endcase
     if (receiver_clear) begin
-      \$109  = 1'h0;
+      \$109  = 16'h0000;
     end
     if (rst) begin
-      \$109  = 1'h0;
+      \$109  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$110  = in_top;
+    \$110  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$110  = 3'h1;
+          end
+      3'h1:
+          if (sample) begin
+            \$110  = 3'h2;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$110  = 3'h3;
+              end
+            end
+          end
+      3'h3:
+          if (sample) begin
+            \$110  = 3'h4;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$110  = 3'h0;
+    end
+    if (rst) begin
+      \$110  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$111  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$110  = \$40 ;
+            \$111  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$111  = 1'h0;
+    end
+    if (rst) begin
+      \$111  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$112  = idx;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$112  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$110  = \$58 ;
+            \$112  = \$41 [6:0];
             if (\$60 ) begin
-              \$110  = 1'h0;
+              \$112  = 7'h00;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$110  = 1'h0;
+      \$112  = 7'h00;
     end
     if (rst) begin
-      \$110  = 1'h0;
+      \$112  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$111  = word;
+    \$113  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$111  = 1'h0;
+            \$113  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$113  = \$44 ;
+            if (\$60 ) begin
+              \$113  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$113  = 1'h0;
+    end
+    if (rst) begin
+      \$113  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$114  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$114  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$114  = \$50 ;
+            if (\$60 ) begin
+              \$114  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$114  = 1'h0;
+    end
+    if (rst) begin
+      \$114  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$115  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$115  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$115  = \$56 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$115  = 1'h0;
+    end
+    if (rst) begin
+      \$115  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$116  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$116  = \$40 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$116  = \$58 ;
+            if (\$60 ) begin
+              \$116  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$116  = 1'h0;
+    end
+    if (rst) begin
+      \$116  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$117  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$117  = 1'h0;
           end
       3'h2:
           if (sample) begin
@@ -5986,21 +6034,21 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
               (* full_case = 32'd1 *)
               if (\$62 ) begin
               end else begin
-                \$111  = \$63 [0];
+                \$117  = \$63 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$111  = 1'h0;
+      \$117  = 1'h0;
     end
     if (rst) begin
-      \$111  = 1'h0;
+      \$117  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$112  = stop_bit;
+    \$118  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -6010,108 +6058,108 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
           /* empty */;
       3'h3:
           if (sample) begin
-            \$112  = \bit ;
+            \$118  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$112  = 1'h0;
+      \$118  = 1'h0;
     end
     if (rst) begin
-      \$112  = 1'h0;
+      \$118  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$113  = data0;
+    \$119  = data0;
     if (\$66 ) begin
-      \$113  = { data0[53:0], \bit  };
+      \$119  = { data0[53:0], \$68  };
     end
     if (receiver_clear) begin
-      \$113  = 55'h00000000000000;
+      \$119  = 55'h00000000000000;
     end
     if (rst) begin
-      \$113  = 55'h00000000000000;
+      \$119  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$114  = ne;
-    if (\$67 ) begin
-      \$114 [0] = 1'h1;
-    end else if (\$71 ) begin
-      \$114 [0] = \bit ;
+    \$120  = ne;
+    if (\$69 ) begin
+      \$120 [0] = 1'h1;
+    end else if (\$73 ) begin
+      \$120 [0] = \bit ;
     end
-    if (\$79 ) begin
-      \$114 [1] = 1'h1;
-    end else if (\$83 ) begin
-      \$114 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$114  = 2'h0;
-    end
-    if (rst) begin
-      \$114  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$115  = nw;
-    if (\$67 ) begin
-      \$115 [0] = 1'h1;
-    end else if (\$71 ) begin
-    end else if (\$75 ) begin
-      \$115 [0] = \bit ;
-    end
-    if (\$79 ) begin
-      \$115 [1] = 1'h1;
-    end else if (\$83 ) begin
+    if (\$83 ) begin
+      \$120 [1] = 1'h1;
     end else if (\$87 ) begin
-      \$115 [1] = \bit ;
+      \$120 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$115  = 2'h0;
+      \$120  = 2'h0;
     end
     if (rst) begin
-      \$115  = 2'h0;
+      \$120  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$116  = data1;
-    if (\$78 ) begin
-      \$116  = { data1[38:0], \bit  };
+    \$121  = nw;
+    if (\$69 ) begin
+      \$121 [0] = 1'h1;
+    end else if (\$73 ) begin
+    end else if (\$77 ) begin
+      \$121 [0] = \bit ;
+    end
+    if (\$83 ) begin
+      \$121 [1] = 1'h1;
+    end else if (\$87 ) begin
+    end else if (\$91 ) begin
+      \$121 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$116  = 40'h0000000000;
+      \$121  = 2'h0;
     end
     if (rst) begin
-      \$116  = 40'h0000000000;
+      \$121  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$117  = lc;
+    \$122  = data1;
+    if (\$80 ) begin
+      \$122  = { data1[38:0], \$82  };
+    end
+    if (receiver_clear) begin
+      \$122  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$122  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$123  = lc;
     if (lc_load) begin
-      \$117  = { lc[4:0], \bit  };
+      \$123  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$117  = 6'h00;
+      \$123  = 6'h00;
     end
     if (rst) begin
-      \$117  = 6'h00;
+      \$123  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$118  = cpw_top;
-    if (\$88 ) begin
-      \$118  = { cpw_top[38:0], \bit  };
+    \$124  = cpw_top;
+    if (\$92 ) begin
+      \$124  = { cpw_top[38:0], \$94  };
     end
     if (receiver_clear) begin
-      \$118  = 40'h0000000000;
+      \$124  = 40'h0000000000;
     end
     if (rst) begin
-      \$118  = 40'h0000000000;
+      \$124  = 40'h0000000000;
     end
   end
   always @* begin
@@ -6131,16 +6179,18 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   assign \bit$51  = \bit ;
   assign ok = crc_ok;
   assign \word$54  = word;
-  assign \words[0]  = words[9:0];
+  assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
-  assign \words[1]  = words[19:10];
-  assign \words[1].data_bits  = words[15:10];
-  assign \words[1].nenw  = words[16];
-  assign \words[1].lc  = words[17];
-  assign \words[1].crc  = words[19:18];
+  assign \words[0].gray  = words[10];
+  assign \words[1]  = words[21:11];
+  assign \words[1].data_bits  = words[16:11];
+  assign \words[1].nenw  = words[17];
+  assign \words[1].lc  = words[18];
+  assign \words[1].crc  = words[20:19];
+  assign \words[1].gray  = words[21];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -6161,9 +6211,9 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   assign \crcs$46[1].poly  = crcs[58:43];
   assign \crcs$46[1].start  = crcs[74:59];
   assign \crcs$46[1].inverted  = crcs[75];
-  assign \$76  = word;
-  assign \$80  = word;
+  assign \$78  = word;
   assign \$84  = word;
+  assign \$88  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -7397,9 +7447,9 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
   wire w1_enable;
   reg [7:0] word0_len = 8'h00;
   reg [7:0] word1_len = 8'h00;
-  input [19:0] words;
-  wire [19:0] words;
-  wire [9:0] \words[0] ;
+  input [21:0] words;
+  wire [21:0] words;
+  wire [10:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -7407,9 +7457,10 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
+  wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [9:0] \words[1] ;
+  wire [10:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -7417,6 +7468,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
+  wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
   assign \$2  = \$1  + crcs[4:0];
@@ -7429,7 +7481,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
   assign \$9  = ~ clear;
   assign \$10  = \$8  & \$9 ;
   assign \$12  = \$11  + crcs[42:38];
-  assign \$13  = words[15:10] + \$12 [7:0];
+  assign \$13  = words[16:11] + \$12 [7:0];
   always @(posedge clk)
     word0_len <= \$14 ;
   always @(posedge clk)
@@ -7459,7 +7511,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17:16])
+    casez (words[18:17])
       2'h0:
           \$11  = 8'h00;
       2'h1:
@@ -7512,16 +7564,18 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
       \$19  = 8'h00;
     end
   end
-  assign \words[0]  = words[9:0];
+  assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
-  assign \words[1]  = words[19:10];
-  assign \words[1].data_bits  = words[15:10];
-  assign \words[1].nenw  = words[16];
-  assign \words[1].lc  = words[17];
-  assign \words[1].crc  = words[19:18];
+  assign \words[0].gray  = words[10];
+  assign \words[1]  = words[21:11];
+  assign \words[1].data_bits  = words[16:11];
+  assign \words[1].nenw  = words[17];
+  assign \words[1].lc  = words[18];
+  assign \words[1].crc  = words[20:19];
+  assign \words[1].gray  = words[21];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -10714,7 +10768,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1521$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1527$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -10756,8 +10810,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1521$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1521$0 ;
-  wire \port$1521$0 ;
+  input \port$1527$0 ;
+  wire \port$1527$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -10771,9 +10825,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1521$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1521$0  };
-  assign \$2  = { lc[4:0], \port$1521$0  } == last;
-  assign \$3  = { lc[4:0], \port$1521$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1527$0  };
+  assign \$2  = { lc[4:0], \port$1527$0  } == last;
+  assign \$3  = { lc[4:0], \port$1527$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -10883,7 +10937,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1521$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1521$0  };
+  assign lc_next = { lc[4:0], \port$1527$0  };
   assign zero = is_zero;
 endmodule
 
@@ -11439,7 +11493,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$989$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master.verdict (lc_skip_seen, noisy, \port$995$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
@@ -11481,8 +11535,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$989$0 , lc_check, lc_rep
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [250:0] cfg;
-  wire [250:0] cfg;
+  input [252:0] cfg;
+  wire [252:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -11495,7 +11549,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$989$0 , lc_check, lc_rep
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
   wire [23:0] \cfg.timeout_limit ;
-  wire [9:0] \cfg.w0 ;
+  wire [10:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -11503,6 +11557,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$989$0 , lc_check, lc_rep
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w0.crc ;
   wire [5:0] \cfg.w0.data_bits ;
+  wire \cfg.w0.gray ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
   wire [37:0] \cfg.w0_crc ;
@@ -11510,7 +11565,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$989$0 , lc_check, lc_rep
   wire [15:0] \cfg.w0_crc.poly ;
   wire [15:0] \cfg.w0_crc.start ;
   wire [4:0] \cfg.w0_crc.width ;
-  wire [9:0] \cfg.w1 ;
+  wire [10:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -11518,6 +11573,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$989$0 , lc_check, lc_rep
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w1.crc ;
   wire [5:0] \cfg.w1.data_bits ;
+  wire \cfg.w1.gray ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
   wire [37:0] \cfg.w1_crc ;
@@ -11589,8 +11645,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$989$0 , lc_check, lc_rep
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$989$0 ;
-  wire \port$989$0 ;
+  output \port$995$0 ;
+  wire \port$995$0 ;
   output report;
   wire report;
   input report_frame;
@@ -11620,9 +11676,9 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$989$0 , lc_check, lc_rep
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[193];
+  assign \$1  = ~ cfg[194];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[193] & cfg[201];
+  assign \$3  = cfg[194] & cfg[202];
   assign \$4  = cfg[152] | \$3 ;
   assign \$5  = report_frame & \$4 ;
   assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
@@ -11630,7 +11686,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$989$0 , lc_check, lc_rep
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[242] & cfg[193];
+  assign \$7  = cfg[244] & cfg[194];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
@@ -11649,7 +11705,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$989$0 , lc_check, lc_rep
   assign \$19  = crc_ok[0] & \$2 ;
   assign \$20  = ~ \$19 ;
   assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[193] & cfg[201];
+  assign \$22  = cfg[194] & cfg[202];
   assign \$23  = cfg[152] | \$22 ;
   assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
   assign \$25  = \$23  & \$24 ;
@@ -11696,7 +11752,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$989$0 , lc_check, lc_rep
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$989$0  = \$2 ;
+  assign \port$995$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -11707,27 +11763,29 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$989$0 , lc_check, lc_rep
   assign \cfg.quiet_time  = cfg[136:125];
   assign \cfg.noise_limit  = cfg[140:137];
   assign \cfg.delay_tolerance  = cfg[144:141];
-  assign \cfg.w0  = cfg[154:145];
+  assign \cfg.w0  = cfg[155:145];
   assign \cfg.w0.data_bits  = cfg[150:145];
   assign \cfg.w0.nenw  = cfg[151];
   assign \cfg.w0.lc  = cfg[152];
   assign \cfg.w0.crc  = cfg[154:153];
-  assign \cfg.w0_crc  = cfg[192:155];
-  assign \cfg.w0_crc.width  = cfg[159:155];
-  assign \cfg.w0_crc.poly  = cfg[175:160];
-  assign \cfg.w0_crc.start  = cfg[191:176];
-  assign \cfg.w0_crc.inverted  = cfg[192];
-  assign \cfg.w1_enable  = cfg[193];
-  assign \cfg.w1  = cfg[203:194];
-  assign \cfg.w1.data_bits  = cfg[199:194];
-  assign \cfg.w1.nenw  = cfg[200];
-  assign \cfg.w1.lc  = cfg[201];
-  assign \cfg.w1.crc  = cfg[203:202];
-  assign \cfg.w1_crc  = cfg[241:204];
-  assign \cfg.w1_crc.width  = cfg[208:204];
-  assign \cfg.w1_crc.poly  = cfg[224:209];
-  assign \cfg.w1_crc.start  = cfg[240:225];
-  assign \cfg.w1_crc.inverted  = cfg[241];
-  assign \cfg.spw_check  = cfg[242];
-  assign \cfg.spw_tolerance  = cfg[250:243];
+  assign \cfg.w0.gray  = cfg[155];
+  assign \cfg.w0_crc  = cfg[193:156];
+  assign \cfg.w0_crc.width  = cfg[160:156];
+  assign \cfg.w0_crc.poly  = cfg[176:161];
+  assign \cfg.w0_crc.start  = cfg[192:177];
+  assign \cfg.w0_crc.inverted  = cfg[193];
+  assign \cfg.w1_enable  = cfg[194];
+  assign \cfg.w1  = cfg[205:195];
+  assign \cfg.w1.data_bits  = cfg[200:195];
+  assign \cfg.w1.nenw  = cfg[201];
+  assign \cfg.w1.lc  = cfg[202];
+  assign \cfg.w1.crc  = cfg[204:203];
+  assign \cfg.w1.gray  = cfg[205];
+  assign \cfg.w1_crc  = cfg[243:206];
+  assign \cfg.w1_crc.width  = cfg[210:206];
+  assign \cfg.w1_crc.poly  = cfg[226:211];
+  assign \cfg.w1_crc.start  = cfg[242:227];
+  assign \cfg.w1_crc.inverted  = cfg[243];
+  assign \cfg.spw_check  = cfg[244];
+  assign \cfg.spw_tolerance  = cfg[252:245];
 endmodule

@@ -86,6 +86,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire [15:0] ch0__cfg_w0_crc_start;
   wire [4:0] ch0__cfg_w0_crc_width;
   wire [5:0] ch0__cfg_w0_data_bits;
+  wire ch0__cfg_w0_gray;
   wire ch0__cfg_w0_lc;
   wire ch0__cfg_w0_nenw;
   wire [1:0] ch0__cfg_w1_crc;
@@ -95,6 +96,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire [4:0] ch0__cfg_w1_crc_width;
   wire [5:0] ch0__cfg_w1_data_bits;
   wire ch0__cfg_w1_enable;
+  wire ch0__cfg_w1_gray;
   wire ch0__cfg_w1_lc;
   wire ch0__cfg_w1_nenw;
   wire ch0__clear_counters;
@@ -193,6 +195,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire [15:0] ch1__cfg_w0_crc_start;
   wire [4:0] ch1__cfg_w0_crc_width;
   wire [5:0] ch1__cfg_w0_data_bits;
+  wire ch1__cfg_w0_gray;
   wire ch1__cfg_w0_lc;
   wire ch1__cfg_w0_nenw;
   wire [1:0] ch1__cfg_w1_crc;
@@ -202,6 +205,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire [4:0] ch1__cfg_w1_crc_width;
   wire [5:0] ch1__cfg_w1_data_bits;
   wire ch1__cfg_w1_enable;
+  wire ch1__cfg_w1_gray;
   wire ch1__cfg_w1_lc;
   wire ch1__cfg_w1_nenw;
   wire ch1__clear_counters;
@@ -264,232 +268,236 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$451 ;
+  wire [1:0] \irq$459 ;
   wire ma;
-  wire \ma$447 ;
+  wire \ma$455 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$240 ;
+  wire \regs__abort_cycle$244 ;
   wire regs__busy;
-  wire \regs__busy$243 ;
+  wire \regs__busy$247 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$244 ;
+  wire \regs__ca_abort$248 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$246 ;
+  wire [6:0] \regs__ca_address$250 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$249 ;
+  wire \regs__ca_busy$253 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$251 ;
+  wire [6:0] \regs__ca_bytes_done$255 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$252 ;
+  wire [6:0] \regs__ca_count$256 ;
   wire regs__ca_done;
-  wire \regs__ca_done$255 ;
+  wire \regs__ca_done$259 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$256 ;
+  wire [3:0] \regs__ca_rbuf_addr$260 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$259 ;
+  wire [31:0] \regs__ca_rbuf_data$263 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$260 ;
+  wire \regs__ca_rbuf_en$264 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$262 ;
+  wire [2:0] \regs__ca_slave_id$266 ;
   wire regs__ca_start;
-  wire \regs__ca_start$264 ;
+  wire \regs__ca_start$268 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$267 ;
+  wire [2:0] \regs__ca_status$271 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$268 ;
+  wire [3:0] \regs__ca_wbuf_addr$272 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$270 ;
+  wire [31:0] \regs__ca_wbuf_data$274 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$272 ;
+  wire [3:0] \regs__ca_wbuf_en$276 ;
   wire regs__ca_write;
-  wire \regs__ca_write$274 ;
+  wire \regs__ca_write$278 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$277 ;
+  wire \regs__cap_counters$281 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$279 ;
+  wire [5:0] \regs__cap_data_bits_w0$283 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$281 ;
+  wire [5:0] \regs__cap_data_bits_w1$285 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$283 ;
+  wire \regs__cap_register_access$287 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$285 ;
+  wire [5:0] \regs__cap_timer_width$289 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$287 ;
+  wire \regs__cap_timestamp$291 ;
   wire regs__cds;
-  wire \regs__cds$289 ;
+  wire \regs__cds$293 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$290 ;
+  wire [23:0] \regs__cfg_ack_limit$294 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$292 ;
+  wire [23:0] \regs__cfg_break_time$296 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$294 ;
+  wire [11:0] \regs__cfg_delay_limit$298 ;
   wire [3:0] regs__cfg_delay_tolerance;
-  wire [3:0] \regs__cfg_delay_tolerance$296 ;
+  wire [3:0] \regs__cfg_delay_tolerance$300 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$298 ;
+  wire \regs__cfg_end_check$302 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$300 ;
+  wire [15:0] \regs__cfg_ma_half_period$304 ;
   wire [3:0] regs__cfg_noise_limit;
-  wire [3:0] \regs__cfg_noise_limit$302 ;
+  wire [3:0] \regs__cfg_noise_limit$306 ;
   wire [11:0] regs__cfg_quiet_time;
-  wire [11:0] \regs__cfg_quiet_time$304 ;
+  wire [11:0] \regs__cfg_quiet_time$308 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$306 ;
+  wire [23:0] \regs__cfg_request_period$310 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$308 ;
+  wire \regs__cfg_spw_check$312 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$310 ;
+  wire [7:0] \regs__cfg_spw_tolerance$314 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$312 ;
+  wire [23:0] \regs__cfg_timeout_limit$316 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$314 ;
+  wire [1:0] \regs__cfg_w0_crc$318 ;
   wire regs__cfg_w0_crc_inverted;
-  wire \regs__cfg_w0_crc_inverted$316 ;
+  wire \regs__cfg_w0_crc_inverted$320 ;
   wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] \regs__cfg_w0_crc_poly$318 ;
+  wire [15:0] \regs__cfg_w0_crc_poly$322 ;
   wire [15:0] regs__cfg_w0_crc_start;
-  wire [15:0] \regs__cfg_w0_crc_start$320 ;
+  wire [15:0] \regs__cfg_w0_crc_start$324 ;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [4:0] \regs__cfg_w0_crc_width$322 ;
+  wire [4:0] \regs__cfg_w0_crc_width$326 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$324 ;
+  wire [5:0] \regs__cfg_w0_data_bits$328 ;
+  wire regs__cfg_w0_gray;
+  wire \regs__cfg_w0_gray$330 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$326 ;
+  wire \regs__cfg_w0_lc$332 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$328 ;
+  wire \regs__cfg_w0_nenw$334 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$330 ;
+  wire [1:0] \regs__cfg_w1_crc$336 ;
   wire regs__cfg_w1_crc_inverted;
-  wire \regs__cfg_w1_crc_inverted$332 ;
+  wire \regs__cfg_w1_crc_inverted$338 ;
   wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] \regs__cfg_w1_crc_poly$334 ;
+  wire [15:0] \regs__cfg_w1_crc_poly$340 ;
   wire [15:0] regs__cfg_w1_crc_start;
-  wire [15:0] \regs__cfg_w1_crc_start$336 ;
+  wire [15:0] \regs__cfg_w1_crc_start$342 ;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [4:0] \regs__cfg_w1_crc_width$338 ;
+  wire [4:0] \regs__cfg_w1_crc_width$344 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$340 ;
+  wire [5:0] \regs__cfg_w1_data_bits$346 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$342 ;
+  wire \regs__cfg_w1_enable$348 ;
+  wire regs__cfg_w1_gray;
+  wire \regs__cfg_w1_gray$350 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$344 ;
+  wire \regs__cfg_w1_lc$352 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$346 ;
+  wire \regs__cfg_w1_nenw$354 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$348 ;
+  wire \regs__clear_counters$356 ;
   wire regs__config_error;
-  wire \regs__config_error$351 ;
+  wire \regs__config_error$359 ;
   wire [15:0] regs__count_aborted;
-  wire [15:0] \regs__count_aborted$353 ;
+  wire [15:0] \regs__count_aborted$361 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$355 ;
+  wire [15:0] \regs__count_ca_aborted$363 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$357 ;
+  wire [15:0] \regs__count_ca_crc4_error$365 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$359 ;
+  wire [15:0] \regs__count_ca_data_fault$367 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$361 ;
+  wire [15:0] \regs__count_ca_no_answer$369 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$363 ;
+  wire [15:0] \regs__count_ca_refused$371 ;
   wire [15:0] regs__count_crc_word0;
-  wire [15:0] \regs__count_crc_word0$365 ;
+  wire [15:0] \regs__count_crc_word0$373 ;
   wire [15:0] regs__count_crc_word1;
-  wire [15:0] \regs__count_crc_word1$367 ;
+  wire [15:0] \regs__count_crc_word1$375 ;
   wire [15:0] regs__count_delay_jump;
-  wire [15:0] \regs__count_delay_jump$369 ;
+  wire [15:0] \regs__count_delay_jump$377 ;
   wire [15:0] regs__count_delay_range;
-  wire [15:0] \regs__count_delay_range$371 ;
+  wire [15:0] \regs__count_delay_range$379 ;
   wire [15:0] regs__count_lc_repeat;
-  wire [15:0] \regs__count_lc_repeat$373 ;
+  wire [15:0] \regs__count_lc_repeat$381 ;
   wire [15:0] regs__count_lc_skip;
-  wire [15:0] \regs__count_lc_skip$375 ;
+  wire [15:0] \regs__count_lc_skip$383 ;
   wire [15:0] regs__count_lc_zero;
-  wire [15:0] \regs__count_lc_zero$377 ;
+  wire [15:0] \regs__count_lc_zero$385 ;
   wire [15:0] regs__count_no_ack;
-  wire [15:0] \regs__count_no_ack$379 ;
+  wire [15:0] \regs__count_no_ack$387 ;
   wire [15:0] regs__count_no_start;
-  wire [15:0] \regs__count_no_start$381 ;
+  wire [15:0] \regs__count_no_start$389 ;
   wire [15:0] regs__count_no_stop;
-  wire [15:0] \regs__count_no_stop$383 ;
+  wire [15:0] \regs__count_no_stop$391 ;
   wire [15:0] regs__count_noise_event;
-  wire [15:0] \regs__count_noise_event$385 ;
+  wire [15:0] \regs__count_noise_event$393 ;
   wire [15:0] regs__count_noisy_line;
-  wire [15:0] \regs__count_noisy_line$387 ;
+  wire [15:0] \regs__count_noisy_line$395 ;
   wire [15:0] regs__count_overrun;
-  wire [15:0] \regs__count_overrun$389 ;
+  wire [15:0] \regs__count_overrun$397 ;
   wire [15:0] regs__count_slo_stuck_low;
-  wire [15:0] \regs__count_slo_stuck_low$391 ;
+  wire [15:0] \regs__count_slo_stuck_low$399 ;
   wire [15:0] regs__count_spw_mismatch;
-  wire [15:0] \regs__count_spw_mismatch$393 ;
+  wire [15:0] \regs__count_spw_mismatch$401 ;
   wire regs__delay_settled;
-  wire \regs__delay_settled$395 ;
+  wire \regs__delay_settled$403 ;
   wire [7:0] regs__delay_spread;
-  wire [7:0] \regs__delay_spread$397 ;
+  wire [7:0] \regs__delay_spread$405 ;
   wire regs__done;
-  wire \regs__done$399 ;
+  wire \regs__done$407 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$401 ;
+  wire [15:0] \regs__done_count$409 ;
   wire regs__frame_error;
-  wire \regs__frame_error$403 ;
+  wire \regs__frame_error$411 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$405 ;
+  wire [5:0] \regs__lc$413 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$407 ;
+  wire \regs__lc_repeat$415 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$409 ;
+  wire \regs__lc_skip$417 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$411 ;
+  wire \regs__lc_zero$419 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$413 ;
+  wire [12:0] \regs__line_delay$421 ;
   wire [3:0] regs__noise_events;
-  wire [3:0] \regs__noise_events$415 ;
+  wire [3:0] \regs__noise_events$423 ;
   wire regs__periodic;
-  wire \regs__periodic$416 ;
+  wire \regs__periodic$424 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__r_load;
   wire [12:0] regs__settled_delay;
-  wire [12:0] \regs__settled_delay$419 ;
+  wire [12:0] \regs__settled_delay$427 ;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$421 ;
+  wire \regs__spw_mismatch$429 ;
   wire regs__start;
-  wire \regs__start$422 ;
+  wire \regs__start$430 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$425 ;
+  wire [3:0] \regs__status$433 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$427 ;
+  wire [31:0] \regs__timestamp$435 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$428 ;
+  wire \regs__trigger_enable$436 ;
   wire [10:0] regs__w_addr;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$431 ;
+  wire \regs__word0_crc_ok$439 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$433 ;
+  wire \regs__word0_ne$441 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$435 ;
+  wire \regs__word0_nw$443 ;
   wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$437 ;
+  wire [54:0] \regs__word0_position$445 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$439 ;
+  wire \regs__word1_crc_ok$447 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$441 ;
+  wire \regs__word1_ne$449 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$443 ;
+  wire \regs__word1_nw$451 ;
   wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$445 ;
+  wire [39:0] \regs__word1_position$453 ;
   input rst;
   wire rst;
   wire slo;
-  wire \slo$448 ;
+  wire \slo$456 ;
   input trigger;
   wire trigger;
-  wire \trigger$237 ;
+  wire \trigger$241 ;
   wire \trigger$28 ;
-  wire \trigger$446 ;
+  wire \trigger$454 ;
   reg trigger_in = 1'h0;
   wire uart__rx;
   wire uart__tx;
@@ -529,7 +537,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch0_ca_request_address(regs__ca_address),
     .ch0_ca_request_count(regs__ca_count),
     .ch0_ca_request_slave_id(regs__ca_slave_id),
-    .\ch0_ca_request_write$101 (regs__ca_write),
+    .\ch0_ca_request_write$103 (regs__ca_write),
     .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
     .ch0_cfg_break_break_time(regs__cfg_break_time),
     .ch0_cfg_checks_delay_tolerance(regs__cfg_delay_tolerance),
@@ -552,11 +560,13 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch0_cfg_timeout_timeout_limit(regs__cfg_timeout_limit),
     .ch0_cfg_words_w0_crc(regs__cfg_w0_crc),
     .ch0_cfg_words_w0_data_bits(regs__cfg_w0_data_bits),
+    .ch0_cfg_words_w0_gray(regs__cfg_w0_gray),
     .ch0_cfg_words_w0_lc(regs__cfg_w0_lc),
     .ch0_cfg_words_w0_nenw(regs__cfg_w0_nenw),
     .ch0_cfg_words_w1_crc(regs__cfg_w1_crc),
     .ch0_cfg_words_w1_data_bits(regs__cfg_w1_data_bits),
     .ch0_cfg_words_w1_enable(regs__cfg_w1_enable),
+    .ch0_cfg_words_w1_gray(regs__cfg_w1_gray),
     .ch0_cfg_words_w1_lc(regs__cfg_w1_lc),
     .ch0_cfg_words_w1_nenw(regs__cfg_w1_nenw),
     .ch0_ctrl_abort(regs__abort_cycle),
@@ -569,61 +579,63 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$260 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$272 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$264 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$276 ),
     .ch1__config_error(ch1__config_error),
     .ch1__done(ch1__done),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_error(ch1__frame_error),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$244 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$264 ),
-    .ch1_ca_request_address(\regs__ca_address$246 ),
-    .ch1_ca_request_count(\regs__ca_count$252 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$262 ),
-    .\ch1_ca_request_write$301 (\regs__ca_write$274 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$290 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$292 ),
-    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$296 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$298 ),
-    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$302 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$308 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$310 ),
-    .ch1_cfg_crc0_inverted(\regs__cfg_w0_crc_inverted$316 ),
-    .ch1_cfg_crc0_poly(\regs__cfg_w0_crc_poly$318 ),
-    .ch1_cfg_crc0_start_start(\regs__cfg_w0_crc_start$320 ),
-    .ch1_cfg_crc0_width(\regs__cfg_w0_crc_width$322 ),
-    .ch1_cfg_crc1_inverted(\regs__cfg_w1_crc_inverted$332 ),
-    .ch1_cfg_crc1_poly(\regs__cfg_w1_crc_poly$334 ),
-    .ch1_cfg_crc1_start_start(\regs__cfg_w1_crc_start$336 ),
-    .ch1_cfg_crc1_width(\regs__cfg_w1_crc_width$338 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$294 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$300 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$306 ),
-    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$304 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$312 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$314 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$324 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$326 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$328 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$330 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$340 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$342 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$344 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$346 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$240 ),
-    .ch1_ctrl_clear_counters(\regs__clear_counters$348 ),
-    .ch1_ctrl_periodic(\regs__periodic$416 ),
-    .ch1_ctrl_start(\regs__start$422 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$428 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$248 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$268 ),
+    .ch1_ca_request_address(\regs__ca_address$250 ),
+    .ch1_ca_request_count(\regs__ca_count$256 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$266 ),
+    .\ch1_ca_request_write$305 (\regs__ca_write$278 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$294 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$296 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$300 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$302 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$306 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$312 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$314 ),
+    .ch1_cfg_crc0_inverted(\regs__cfg_w0_crc_inverted$320 ),
+    .ch1_cfg_crc0_poly(\regs__cfg_w0_crc_poly$322 ),
+    .ch1_cfg_crc0_start_start(\regs__cfg_w0_crc_start$324 ),
+    .ch1_cfg_crc0_width(\regs__cfg_w0_crc_width$326 ),
+    .ch1_cfg_crc1_inverted(\regs__cfg_w1_crc_inverted$338 ),
+    .ch1_cfg_crc1_poly(\regs__cfg_w1_crc_poly$340 ),
+    .ch1_cfg_crc1_start_start(\regs__cfg_w1_crc_start$342 ),
+    .ch1_cfg_crc1_width(\regs__cfg_w1_crc_width$344 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$298 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$304 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$310 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$308 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$316 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$318 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$328 ),
+    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$330 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$332 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$334 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$336 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$346 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$348 ),
+    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$350 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$352 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$354 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$244 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$356 ),
+    .ch1_ctrl_periodic(\regs__periodic$424 ),
+    .ch1_ctrl_start(\regs__start$430 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$436 ),
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$5310$0 (\$8 ),
-    .\port$5323$0 (\$9 ),
-    .\port$5455$0 (\$10 ),
-    .\port$5861$0 (\$11 ),
-    .\port$5874$0 (\$12 ),
-    .\port$6006$0 (\$13 ),
+    .\port$5342$0 (\$8 ),
+    .\port$5355$0 (\$9 ),
+    .\port$5487$0 (\$10 ),
+    .\port$5893$0 (\$11 ),
+    .\port$5906$0 (\$12 ),
+    .\port$6038$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -670,6 +682,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .cfg_w0_crc_start(regs__cfg_w0_crc_start),
     .cfg_w0_crc_width(regs__cfg_w0_crc_width),
     .cfg_w0_data_bits(regs__cfg_w0_data_bits),
+    .cfg_w0_gray(regs__cfg_w0_gray),
     .cfg_w0_lc(regs__cfg_w0_lc),
     .cfg_w0_nenw(regs__cfg_w0_nenw),
     .cfg_w1_crc(regs__cfg_w1_crc),
@@ -679,15 +692,16 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .cfg_w1_crc_width(regs__cfg_w1_crc_width),
     .cfg_w1_data_bits(regs__cfg_w1_data_bits),
     .cfg_w1_enable(regs__cfg_w1_enable),
+    .cfg_w1_gray(regs__cfg_w1_gray),
     .cfg_w1_lc(regs__cfg_w1_lc),
     .cfg_w1_nenw(regs__cfg_w1_nenw),
     .clear_counters(regs__clear_counters),
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$5310$0 (\$8 ),
-    .\port$5323$0 (\$9 ),
-    .\port$5455$0 (\$10 ),
+    .\port$5342$0 (\$8 ),
+    .\port$5355$0 (\$9 ),
+    .\port$5487$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -701,57 +715,59 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$195 (\trigger$28 )
+    .\trigger$199 (\trigger$28 )
   );
   \biss_master_uart.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$244 ),
-    .ca_address(\regs__ca_address$246 ),
-    .ca_count(\regs__ca_count$252 ),
+    .ca_abort(\regs__ca_abort$248 ),
+    .ca_address(\regs__ca_address$250 ),
+    .ca_count(\regs__ca_count$256 ),
     .ca_rbuf_addr(bus__r_addr[3:0]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$260 ),
-    .ca_slave_id(\regs__ca_slave_id$262 ),
-    .ca_start(\regs__ca_start$264 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$264 ),
+    .ca_slave_id(\regs__ca_slave_id$266 ),
+    .ca_start(\regs__ca_start$268 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$272 ),
-    .ca_write(\regs__ca_write$274 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$290 ),
-    .cfg_break_time(\regs__cfg_break_time$292 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$294 ),
-    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$296 ),
-    .cfg_end_check(\regs__cfg_end_check$298 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$300 ),
-    .cfg_noise_limit(\regs__cfg_noise_limit$302 ),
-    .cfg_quiet_time(\regs__cfg_quiet_time$304 ),
-    .cfg_request_period(\regs__cfg_request_period$306 ),
-    .cfg_spw_check(\regs__cfg_spw_check$308 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$310 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$312 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$314 ),
-    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$316 ),
-    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$318 ),
-    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$320 ),
-    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$322 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$324 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$326 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$328 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$330 ),
-    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$332 ),
-    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$334 ),
-    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$336 ),
-    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$338 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$340 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$342 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$344 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$346 ),
-    .clear_counters(\regs__clear_counters$348 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$276 ),
+    .ca_write(\regs__ca_write$278 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$294 ),
+    .cfg_break_time(\regs__cfg_break_time$296 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$298 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$300 ),
+    .cfg_end_check(\regs__cfg_end_check$302 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$304 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$306 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$308 ),
+    .cfg_request_period(\regs__cfg_request_period$310 ),
+    .cfg_spw_check(\regs__cfg_spw_check$312 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$314 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$316 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$318 ),
+    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$320 ),
+    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$322 ),
+    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$324 ),
+    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$326 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$328 ),
+    .cfg_w0_gray(\regs__cfg_w0_gray$330 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$332 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$334 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$336 ),
+    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$338 ),
+    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$340 ),
+    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$342 ),
+    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$344 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$346 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$348 ),
+    .cfg_w1_gray(\regs__cfg_w1_gray$350 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$352 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$354 ),
+    .clear_counters(\regs__clear_counters$356 ),
     .clk(clk),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$416 ),
-    .\port$5861$0 (\$11 ),
-    .\port$5874$0 (\$12 ),
-    .\port$6006$0 (\$13 ),
-    .regs__abort_cycle(\regs__abort_cycle$240 ),
+    .periodic(\regs__periodic$424 ),
+    .\port$5893$0 (\$11 ),
+    .\port$5906$0 (\$12 ),
+    .\port$6038$0 (\$13 ),
+    .regs__abort_cycle(\regs__abort_cycle$244 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -760,11 +776,11 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .regs__done(ch1__done),
     .regs__done_count(ch1__done_count),
     .regs__frame_error(ch1__frame_error),
-    .regs__trigger_enable(\regs__trigger_enable$428 ),
+    .regs__trigger_enable(\regs__trigger_enable$436 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$422 ),
-    .\trigger$195 (\trigger$28 )
+    .start(\regs__start$430 ),
+    .\trigger$199 (\trigger$28 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
@@ -844,6 +860,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign ch0__cfg_w0_crc_start = regs__cfg_w0_crc_start;
   assign ch0__cfg_w0_crc_width = regs__cfg_w0_crc_width;
   assign ch0__cfg_w0_data_bits = regs__cfg_w0_data_bits;
+  assign ch0__cfg_w0_gray = regs__cfg_w0_gray;
   assign ch0__cfg_w0_lc = regs__cfg_w0_lc;
   assign ch0__cfg_w0_nenw = regs__cfg_w0_nenw;
   assign ch0__cfg_w1_crc = regs__cfg_w1_crc;
@@ -853,6 +870,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign ch0__cfg_w1_crc_width = regs__cfg_w1_crc_width;
   assign ch0__cfg_w1_data_bits = regs__cfg_w1_data_bits;
   assign ch0__cfg_w1_enable = regs__cfg_w1_enable;
+  assign ch0__cfg_w1_gray = regs__cfg_w1_gray;
   assign ch0__cfg_w1_lc = regs__cfg_w1_lc;
   assign ch0__cfg_w1_nenw = regs__cfg_w1_nenw;
   assign ch0__clear_counters = regs__clear_counters;
@@ -945,180 +963,182 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign regs__word1_nw = \$8 [175];
   assign ch0__word1_position = \$8 [173:134];
   assign regs__word1_position = \$8 [173:134];
-  assign \trigger$237  = \trigger$28 ;
+  assign \trigger$241  = \trigger$28 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign ch1__abort_cycle = \regs__abort_cycle$240 ;
-  assign \regs__busy$243  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$244 ;
-  assign ch1__ca_address = \regs__ca_address$246 ;
-  assign \regs__ca_busy$249  = ch1__ca_busy;
+  assign ch1__abort_cycle = \regs__abort_cycle$244 ;
+  assign \regs__busy$247  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$248 ;
+  assign ch1__ca_address = \regs__ca_address$250 ;
+  assign \regs__ca_busy$253  = ch1__ca_busy;
   assign ch1__ca_bytes_done = \$13 [9:3];
-  assign \regs__ca_bytes_done$251  = \$13 [9:3];
-  assign ch1__ca_count = \regs__ca_count$252 ;
-  assign \regs__ca_done$255  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$256  = bus__r_addr[3:0];
+  assign \regs__ca_bytes_done$255  = \$13 [9:3];
+  assign ch1__ca_count = \regs__ca_count$256 ;
+  assign \regs__ca_done$259  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$260  = bus__r_addr[3:0];
   assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
-  assign \regs__ca_rbuf_data$259  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$260 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$262 ;
-  assign ch1__ca_start = \regs__ca_start$264 ;
+  assign \regs__ca_rbuf_data$263  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$264 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$266 ;
+  assign ch1__ca_start = \regs__ca_start$268 ;
   assign ch1__ca_status = \$13 [2:0];
-  assign \regs__ca_status$267  = \$13 [2:0];
-  assign \regs__ca_wbuf_addr$268  = regs__ca_wbuf_addr;
+  assign \regs__ca_status$271  = \$13 [2:0];
+  assign \regs__ca_wbuf_addr$272  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$270  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$274  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$272 ;
-  assign ch1__ca_write = \regs__ca_write$274 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$276 ;
+  assign ch1__ca_write = \regs__ca_write$278 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$277  = 1'h1;
+  assign \regs__cap_counters$281  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$279  = 6'h37;
+  assign \regs__cap_data_bits_w0$283  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$281  = 6'h28;
+  assign \regs__cap_data_bits_w1$285  = 6'h28;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$283  = 1'h1;
+  assign \regs__cap_register_access$287  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$285  = 6'h18;
+  assign \regs__cap_timer_width$289  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$287  = 1'h1;
+  assign \regs__cap_timestamp$291  = 1'h1;
   assign ch1__cds = \$11 [49];
-  assign \regs__cds$289  = \$11 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$290 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$292 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$294 ;
-  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$296 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$298 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$300 ;
-  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$302 ;
-  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$304 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$306 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$308 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$310 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$312 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$314 ;
-  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$316 ;
-  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$318 ;
-  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$320 ;
-  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$322 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$324 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$326 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$328 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$330 ;
-  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$332 ;
-  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$334 ;
-  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$336 ;
-  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$338 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$340 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$342 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$344 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$346 ;
-  assign ch1__clear_counters = \regs__clear_counters$348 ;
-  assign \regs__config_error$351  = ch1__config_error;
+  assign \regs__cds$293  = \$11 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$294 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$296 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$298 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$300 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$302 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$304 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$306 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$308 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$310 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$312 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$314 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$316 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$318 ;
+  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$320 ;
+  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$322 ;
+  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$324 ;
+  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$326 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$328 ;
+  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$330 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$332 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$334 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$336 ;
+  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$338 ;
+  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$340 ;
+  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$342 ;
+  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$344 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$346 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$348 ;
+  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$350 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$352 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$354 ;
+  assign ch1__clear_counters = \regs__clear_counters$356 ;
+  assign \regs__config_error$359  = ch1__config_error;
   assign ch1__count_aborted = \$12 [191:176];
-  assign \regs__count_aborted$353  = \$12 [191:176];
+  assign \regs__count_aborted$361  = \$12 [191:176];
   assign ch1__count_ca_aborted = \$12 [319:304];
-  assign \regs__count_ca_aborted$355  = \$12 [319:304];
+  assign \regs__count_ca_aborted$363  = \$12 [319:304];
   assign ch1__count_ca_crc4_error = \$12 [271:256];
-  assign \regs__count_ca_crc4_error$357  = \$12 [271:256];
+  assign \regs__count_ca_crc4_error$365  = \$12 [271:256];
   assign ch1__count_ca_data_fault = \$12 [335:320];
-  assign \regs__count_ca_data_fault$359  = \$12 [335:320];
+  assign \regs__count_ca_data_fault$367  = \$12 [335:320];
   assign ch1__count_ca_no_answer = \$12 [287:272];
-  assign \regs__count_ca_no_answer$361  = \$12 [287:272];
+  assign \regs__count_ca_no_answer$369  = \$12 [287:272];
   assign ch1__count_ca_refused = \$12 [303:288];
-  assign \regs__count_ca_refused$363  = \$12 [303:288];
+  assign \regs__count_ca_refused$371  = \$12 [303:288];
   assign ch1__count_crc_word0 = \$12 [15:0];
-  assign \regs__count_crc_word0$365  = \$12 [15:0];
+  assign \regs__count_crc_word0$373  = \$12 [15:0];
   assign ch1__count_crc_word1 = \$12 [31:16];
-  assign \regs__count_crc_word1$367  = \$12 [31:16];
+  assign \regs__count_crc_word1$375  = \$12 [31:16];
   assign ch1__count_delay_jump = \$12 [239:224];
-  assign \regs__count_delay_jump$369  = \$12 [239:224];
+  assign \regs__count_delay_jump$377  = \$12 [239:224];
   assign ch1__count_delay_range = \$12 [79:64];
-  assign \regs__count_delay_range$371  = \$12 [79:64];
+  assign \regs__count_delay_range$379  = \$12 [79:64];
   assign ch1__count_lc_repeat = \$12 [111:96];
-  assign \regs__count_lc_repeat$373  = \$12 [111:96];
+  assign \regs__count_lc_repeat$381  = \$12 [111:96];
   assign ch1__count_lc_skip = \$12 [127:112];
-  assign \regs__count_lc_skip$375  = \$12 [127:112];
+  assign \regs__count_lc_skip$383  = \$12 [127:112];
   assign ch1__count_lc_zero = \$12 [143:128];
-  assign \regs__count_lc_zero$377  = \$12 [143:128];
+  assign \regs__count_lc_zero$385  = \$12 [143:128];
   assign ch1__count_no_ack = \$12 [47:32];
-  assign \regs__count_no_ack$379  = \$12 [47:32];
+  assign \regs__count_no_ack$387  = \$12 [47:32];
   assign ch1__count_no_start = \$12 [63:48];
-  assign \regs__count_no_start$381  = \$12 [63:48];
+  assign \regs__count_no_start$389  = \$12 [63:48];
   assign ch1__count_no_stop = \$12 [207:192];
-  assign \regs__count_no_stop$383  = \$12 [207:192];
+  assign \regs__count_no_stop$391  = \$12 [207:192];
   assign ch1__count_noise_event = \$12 [255:240];
-  assign \regs__count_noise_event$385  = \$12 [255:240];
+  assign \regs__count_noise_event$393  = \$12 [255:240];
   assign ch1__count_noisy_line = \$12 [223:208];
-  assign \regs__count_noisy_line$387  = \$12 [223:208];
+  assign \regs__count_noisy_line$395  = \$12 [223:208];
   assign ch1__count_overrun = \$12 [175:160];
-  assign \regs__count_overrun$389  = \$12 [175:160];
+  assign \regs__count_overrun$397  = \$12 [175:160];
   assign ch1__count_slo_stuck_low = \$12 [95:80];
-  assign \regs__count_slo_stuck_low$391  = \$12 [95:80];
+  assign \regs__count_slo_stuck_low$399  = \$12 [95:80];
   assign ch1__count_spw_mismatch = \$12 [159:144];
-  assign \regs__count_spw_mismatch$393  = \$12 [159:144];
+  assign \regs__count_spw_mismatch$401  = \$12 [159:144];
   assign ch1__delay_settled = \$11 [54];
-  assign \regs__delay_settled$395  = \$11 [54];
+  assign \regs__delay_settled$403  = \$11 [54];
   assign ch1__delay_spread = \$11 [75:68];
-  assign \regs__delay_spread$397  = \$11 [75:68];
-  assign \regs__done$399  = ch1__done;
-  assign \regs__done_count$401  = ch1__done_count;
-  assign \regs__frame_error$403  = ch1__frame_error;
+  assign \regs__delay_spread$405  = \$11 [75:68];
+  assign \regs__done$407  = ch1__done;
+  assign \regs__done_count$409  = ch1__done_count;
+  assign \regs__frame_error$411  = ch1__frame_error;
   assign ch1__lc = \$11 [182:177];
-  assign \regs__lc$405  = \$11 [182:177];
+  assign \regs__lc$413  = \$11 [182:177];
   assign ch1__lc_repeat = \$11 [183];
-  assign \regs__lc_repeat$407  = \$11 [183];
+  assign \regs__lc_repeat$415  = \$11 [183];
   assign ch1__lc_skip = \$11 [184];
-  assign \regs__lc_skip$409  = \$11 [184];
+  assign \regs__lc_skip$417  = \$11 [184];
   assign ch1__lc_zero = \$11 [185];
-  assign \regs__lc_zero$411  = \$11 [185];
+  assign \regs__lc_zero$419  = \$11 [185];
   assign ch1__line_delay = \$11 [48:36];
-  assign \regs__line_delay$413  = \$11 [48:36];
+  assign \regs__line_delay$421  = \$11 [48:36];
   assign ch1__noise_events = \$11 [53:50];
-  assign \regs__noise_events$415  = \$11 [53:50];
-  assign ch1__periodic = \regs__periodic$416 ;
+  assign \regs__noise_events$423  = \$11 [53:50];
+  assign ch1__periodic = \regs__periodic$424 ;
   assign ch1__settled_delay = \$11 [67:55];
-  assign \regs__settled_delay$419  = \$11 [67:55];
+  assign \regs__settled_delay$427  = \$11 [67:55];
   assign ch1__spw_mismatch = \$11 [186];
-  assign \regs__spw_mismatch$421  = \$11 [186];
-  assign ch1__start = \regs__start$422 ;
+  assign \regs__spw_mismatch$429  = \$11 [186];
+  assign ch1__start = \regs__start$430 ;
   assign ch1__status = \$11 [3:0];
-  assign \regs__status$425  = \$11 [3:0];
+  assign \regs__status$433  = \$11 [3:0];
   assign ch1__timestamp = \$11 [35:4];
-  assign \regs__timestamp$427  = \$11 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$428 ;
+  assign \regs__timestamp$435  = \$11 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$436 ;
   assign ch1__word0_crc_ok = \$11 [133];
-  assign \regs__word0_crc_ok$431  = \$11 [133];
+  assign \regs__word0_crc_ok$439  = \$11 [133];
   assign ch1__word0_ne = \$11 [131];
-  assign \regs__word0_ne$433  = \$11 [131];
+  assign \regs__word0_ne$441  = \$11 [131];
   assign ch1__word0_nw = \$11 [132];
-  assign \regs__word0_nw$435  = \$11 [132];
+  assign \regs__word0_nw$443  = \$11 [132];
   assign ch1__word0_position = \$11 [130:76];
-  assign \regs__word0_position$437  = \$11 [130:76];
+  assign \regs__word0_position$445  = \$11 [130:76];
   assign ch1__word1_crc_ok = \$11 [176];
-  assign \regs__word1_crc_ok$439  = \$11 [176];
+  assign \regs__word1_crc_ok$447  = \$11 [176];
   assign ch1__word1_ne = \$11 [174];
-  assign \regs__word1_ne$441  = \$11 [174];
+  assign \regs__word1_ne$449  = \$11 [174];
   assign ch1__word1_nw = \$11 [175];
-  assign \regs__word1_nw$443  = \$11 [175];
+  assign \regs__word1_nw$451  = \$11 [175];
   assign ch1__word1_position = \$11 [173:134];
-  assign \regs__word1_position$445  = \$11 [173:134];
-  assign \trigger$446  = \trigger$28 ;
-  assign \ma$447  = ch1_ma;
-  assign \slo$448  = ch1_slo;
+  assign \regs__word1_position$453  = \$11 [173:134];
+  assign \trigger$454  = \trigger$28 ;
+  assign \ma$455  = ch1_ma;
+  assign \slo$456  = ch1_slo;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$7 , \$6  };
-  assign \irq$451  = { \$7 , \$6  };
+  assign \irq$459  = { \$7 , \$6  };
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__ca_busy, ch1__ca_rbuf_data, bus__w_en, bus__r_en, bus__r_load
 , bus__w_addr, bus__w_data, bus__r_addr, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc
-, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_poly, ch0_cfg_crc0_width, ch0_cfg_crc0_inverted, ch0_cfg_crc0_start_start, ch0_cfg_crc1_poly, ch0_cfg_crc1_width, ch0_cfg_crc1_inverted, ch0_cfg_crc1_start_start, ch0_ca_request_slave_id, ch0_ca_request_address
-, ch0_ca_request_count, \ch0_ca_request_write$101 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw
-, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_poly, ch1_cfg_crc0_width, ch1_cfg_crc0_inverted, ch1_cfg_crc0_start_start, ch1_cfg_crc1_poly, ch1_cfg_crc1_width, ch1_cfg_crc1_inverted, ch1_cfg_crc1_start_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$301 
-, ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$5310$0 , \port$5323$0 , ch0__ca_done, \port$5455$0 , ch1__done_count, ch1__done, \port$5861$0 , \port$5874$0 , ch1__ca_done, \port$6006$0 , clk);
+, ch0_cfg_words_w0_gray, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_poly, ch0_cfg_crc0_width, ch0_cfg_crc0_inverted, ch0_cfg_crc0_start_start, ch0_cfg_crc1_poly, ch0_cfg_crc1_width, ch0_cfg_crc1_inverted, ch0_cfg_crc1_start_start
+, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$103 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc
+, ch1_cfg_words_w0_gray, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_poly, ch1_cfg_crc0_width, ch1_cfg_crc0_inverted, ch1_cfg_crc0_start_start, ch1_cfg_crc1_poly, ch1_cfg_crc1_width, ch1_cfg_crc1_inverted, ch1_cfg_crc1_start_start
+, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$5342$0 , \port$5355$0 , ch0__ca_done, \port$5487$0 , ch1__done_count, ch1__done, \port$5893$0 , \port$5906$0 , ch1__ca_done, \port$6038$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -1153,9 +1173,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire \$126 ;
   wire \$127 ;
   wire \$128 ;
-  wire [31:0] \$129 ;
+  wire \$129 ;
   wire [31:0] \$13 ;
-  wire [31:0] \$130 ;
+  wire \$130 ;
   wire [31:0] \$131 ;
   wire [31:0] \$132 ;
   wire [31:0] \$133 ;
@@ -1242,9 +1262,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire [31:0] \$206 ;
   wire [31:0] \$207 ;
   wire [31:0] \$208 ;
-  wire \$209 ;
+  wire [31:0] \$209 ;
   wire \$21 ;
-  wire \$210 ;
+  wire [31:0] \$210 ;
   wire \$211 ;
   wire \$212 ;
   wire \$213 ;
@@ -1366,10 +1386,10 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire \$318 ;
   wire \$319 ;
   wire \$32 ;
-  wire [31:0] \$320 ;
-  wire [31:0] \$321 ;
-  wire [31:0] \$322 ;
-  wire [31:0] \$323 ;
+  wire \$320 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
   wire [31:0] \$324 ;
   wire [31:0] \$325 ;
   wire [31:0] \$326 ;
@@ -1455,10 +1475,10 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire [31:0] \$399 ;
   wire \$4 ;
   wire \$40 ;
-  wire \$400 ;
-  wire \$401 ;
-  wire \$402 ;
-  wire \$403 ;
+  wire [31:0] \$400 ;
+  wire [31:0] \$401 ;
+  wire [31:0] \$402 ;
+  wire [31:0] \$403 ;
   wire \$404 ;
   wire \$405 ;
   wire \$406 ;
@@ -1567,26 +1587,26 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire \$5 ;
   wire \$50 ;
   wire \$500 ;
-  wire [31:0] \$501 ;
-  wire [31:0] \$502 ;
-  reg \$503 ;
-  reg [10:0] \$504 ;
-  reg [31:0] \$505 ;
-  reg [3:0] \$506 ;
-  reg [31:0] \$507 ;
-  reg [3:0] \$508 ;
-  reg \$509 ;
+  wire \$501 ;
+  wire \$502 ;
+  wire \$503 ;
+  wire \$504 ;
+  wire [31:0] \$505 ;
+  wire [31:0] \$506 ;
+  reg \$507 ;
+  reg [10:0] \$508 ;
+  reg [31:0] \$509 ;
   wire \$51 ;
-  reg \$510 ;
-  reg \$511 ;
-  reg \$512 ;
+  reg [3:0] \$510 ;
+  reg [31:0] \$511 ;
+  reg [3:0] \$512 ;
   reg \$513 ;
   reg \$514 ;
-  reg [31:0] \$515 ;
+  reg \$515 ;
   reg \$516 ;
   reg \$517 ;
   reg \$518 ;
-  reg \$519 ;
+  reg [31:0] \$519 ;
   wire \$52 ;
   reg \$520 ;
   reg \$521 ;
@@ -1597,44 +1617,44 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg \$526 ;
   reg \$527 ;
   reg \$528 ;
-  reg [15:0] \$529 ;
+  reg \$529 ;
   wire \$53 ;
-  reg [11:0] \$530 ;
+  reg \$530 ;
   reg \$531 ;
-  reg [23:0] \$532 ;
-  reg \$533 ;
-  reg [23:0] \$534 ;
+  reg \$532 ;
+  reg [15:0] \$533 ;
+  reg [11:0] \$534 ;
   reg \$535 ;
   reg [23:0] \$536 ;
   reg \$537 ;
   reg [23:0] \$538 ;
   reg \$539 ;
   wire \$54 ;
-  reg [5:0] \$540 ;
+  reg [23:0] \$540 ;
   reg \$541 ;
-  reg \$542 ;
-  reg [1:0] \$543 ;
+  reg [23:0] \$542 ;
+  reg \$543 ;
   reg [5:0] \$544 ;
   reg \$545 ;
   reg \$546 ;
   reg [1:0] \$547 ;
   reg \$548 ;
-  reg \$549 ;
+  reg [5:0] \$549 ;
   wire \$55 ;
   reg \$550 ;
   reg \$551 ;
-  reg [7:0] \$552 ;
-  reg [3:0] \$553 ;
-  reg [3:0] \$554 ;
+  reg [1:0] \$552 ;
+  reg \$553 ;
+  reg \$554 ;
   reg \$555 ;
-  reg [11:0] \$556 ;
+  reg \$556 ;
   reg \$557 ;
-  reg [15:0] \$558 ;
-  reg [4:0] \$559 ;
+  reg [7:0] \$558 ;
+  reg [3:0] \$559 ;
   wire \$56 ;
-  reg \$560 ;
+  reg [3:0] \$560 ;
   reg \$561 ;
-  reg [15:0] \$562 ;
+  reg [11:0] \$562 ;
   reg \$563 ;
   reg [15:0] \$564 ;
   reg [4:0] \$565 ;
@@ -1643,15 +1663,15 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg [15:0] \$568 ;
   reg \$569 ;
   wire \$57 ;
-  reg [2:0] \$570 ;
-  reg [6:0] \$571 ;
-  reg [6:0] \$572 ;
+  reg [15:0] \$570 ;
+  reg [4:0] \$571 ;
+  reg \$572 ;
   reg \$573 ;
-  reg \$574 ;
+  reg [15:0] \$574 ;
   reg \$575 ;
-  reg \$576 ;
-  reg \$577 ;
-  reg \$578 ;
+  reg [2:0] \$576 ;
+  reg [6:0] \$577 ;
+  reg [6:0] \$578 ;
   reg \$579 ;
   wire \$58 ;
   reg \$580 ;
@@ -1693,41 +1713,41 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg \$612 ;
   reg \$613 ;
   reg \$614 ;
-  reg [3:0] \$615 ;
+  reg \$615 ;
   reg \$616 ;
   reg \$617 ;
   reg \$618 ;
   reg \$619 ;
   wire \$62 ;
   reg \$620 ;
-  reg \$621 ;
+  reg [3:0] \$621 ;
   reg \$622 ;
   reg \$623 ;
   reg \$624 ;
   reg \$625 ;
   reg \$626 ;
-  reg [5:0] \$627 ;
-  reg [15:0] \$628 ;
-  reg [12:0] \$629 ;
+  reg \$627 ;
+  reg \$628 ;
+  reg \$629 ;
   wire \$63 ;
-  reg [31:0] \$630 ;
-  reg [22:0] \$631 ;
-  reg [31:0] \$632 ;
-  reg [7:0] \$633 ;
-  reg [31:0] \$634 ;
-  reg [3:0] \$635 ;
-  reg \$636 ;
-  reg [7:0] \$637 ;
-  reg [12:0] \$638 ;
-  reg \$639 ;
+  reg \$630 ;
+  reg \$631 ;
+  reg \$632 ;
+  reg [5:0] \$633 ;
+  reg [15:0] \$634 ;
+  reg [12:0] \$635 ;
+  reg [31:0] \$636 ;
+  reg [22:0] \$637 ;
+  reg [31:0] \$638 ;
+  reg [7:0] \$639 ;
   wire \$64 ;
   reg [31:0] \$640 ;
-  reg \$641 ;
+  reg [3:0] \$641 ;
   reg \$642 ;
-  reg \$643 ;
-  reg \$644 ;
+  reg [7:0] \$643 ;
+  reg [12:0] \$644 ;
   reg \$645 ;
-  reg \$646 ;
+  reg [31:0] \$646 ;
   reg \$647 ;
   reg \$648 ;
   reg \$649 ;
@@ -1736,64 +1756,64 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg \$651 ;
   reg \$652 ;
   reg \$653 ;
-  reg [15:0] \$654 ;
-  reg [11:0] \$655 ;
+  reg \$654 ;
+  reg \$655 ;
   reg \$656 ;
-  reg [23:0] \$657 ;
+  reg \$657 ;
   reg \$658 ;
-  reg [23:0] \$659 ;
+  reg \$659 ;
   wire \$66 ;
-  reg \$660 ;
-  reg [23:0] \$661 ;
+  reg [15:0] \$660 ;
+  reg [11:0] \$661 ;
   reg \$662 ;
   reg [23:0] \$663 ;
   reg \$664 ;
-  reg [5:0] \$665 ;
+  reg [23:0] \$665 ;
   reg \$666 ;
-  reg \$667 ;
-  reg [1:0] \$668 ;
-  reg [5:0] \$669 ;
+  reg [23:0] \$667 ;
+  reg \$668 ;
+  reg [23:0] \$669 ;
   wire \$67 ;
   reg \$670 ;
-  reg \$671 ;
-  reg [1:0] \$672 ;
+  reg [5:0] \$671 ;
+  reg \$672 ;
   reg \$673 ;
-  reg \$674 ;
+  reg [1:0] \$674 ;
   reg \$675 ;
-  reg \$676 ;
-  reg [7:0] \$677 ;
-  reg [3:0] \$678 ;
-  reg [3:0] \$679 ;
+  reg [5:0] \$676 ;
+  reg \$677 ;
+  reg \$678 ;
+  reg [1:0] \$679 ;
   wire \$68 ;
   reg \$680 ;
-  reg [11:0] \$681 ;
+  reg \$681 ;
   reg \$682 ;
-  reg [15:0] \$683 ;
-  reg [4:0] \$684 ;
-  reg \$685 ;
-  reg \$686 ;
-  reg [15:0] \$687 ;
+  reg \$683 ;
+  reg \$684 ;
+  reg [7:0] \$685 ;
+  reg [3:0] \$686 ;
+  reg [3:0] \$687 ;
   reg \$688 ;
-  reg [15:0] \$689 ;
+  reg [11:0] \$689 ;
   wire \$69 ;
-  reg [4:0] \$690 ;
-  reg \$691 ;
-  reg \$692 ;
-  reg [15:0] \$693 ;
+  reg \$690 ;
+  reg [15:0] \$691 ;
+  reg [4:0] \$692 ;
+  reg \$693 ;
   reg \$694 ;
-  reg [2:0] \$695 ;
-  reg [6:0] \$696 ;
-  reg [6:0] \$697 ;
-  reg \$698 ;
+  reg [15:0] \$695 ;
+  reg \$696 ;
+  reg [15:0] \$697 ;
+  reg [4:0] \$698 ;
   reg \$699 ;
   wire \$7 ;
   wire \$70 ;
   reg \$700 ;
-  reg \$701 ;
+  reg [15:0] \$701 ;
   reg \$702 ;
-  reg \$703 ;
-  reg \$704 ;
-  reg \$705 ;
+  reg [2:0] \$703 ;
+  reg [6:0] \$704 ;
+  reg [6:0] \$705 ;
   reg \$706 ;
   reg \$707 ;
   reg \$708 ;
@@ -1832,7 +1852,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg \$738 ;
   reg \$739 ;
   wire \$74 ;
-  reg [3:0] \$740 ;
+  reg \$740 ;
   reg \$741 ;
   reg \$742 ;
   reg \$743 ;
@@ -1840,27 +1860,35 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg \$745 ;
   reg \$746 ;
   reg \$747 ;
-  reg \$748 ;
+  reg [3:0] \$748 ;
   reg \$749 ;
   wire \$75 ;
   reg \$750 ;
   reg \$751 ;
-  reg [5:0] \$752 ;
-  reg [15:0] \$753 ;
-  reg [12:0] \$754 ;
-  reg [31:0] \$755 ;
-  reg [22:0] \$756 ;
-  reg [31:0] \$757 ;
-  reg [7:0] \$758 ;
-  reg [31:0] \$759 ;
+  reg \$752 ;
+  reg \$753 ;
+  reg \$754 ;
+  reg \$755 ;
+  reg \$756 ;
+  reg \$757 ;
+  reg \$758 ;
+  reg \$759 ;
   wire \$76 ;
-  reg [3:0] \$760 ;
-  reg \$761 ;
-  reg [7:0] \$762 ;
-  reg [12:0] \$763 ;
-  reg \$764 ;
+  reg [5:0] \$760 ;
+  reg [15:0] \$761 ;
+  reg [12:0] \$762 ;
+  reg [31:0] \$763 ;
+  reg [22:0] \$764 ;
   reg [31:0] \$765 ;
+  reg [7:0] \$766 ;
+  reg [31:0] \$767 ;
+  reg [3:0] \$768 ;
+  reg \$769 ;
   wire \$77 ;
+  reg [7:0] \$770 ;
+  reg [12:0] \$771 ;
+  reg \$772 ;
+  reg [31:0] \$773 ;
   wire \$78 ;
   wire \$79 ;
   wire [31:0] \$8 ;
@@ -1977,6 +2005,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   (* init = 6'h00 *)
   wire [5:0] ch0__cfg_w0_data_bits;
   (* init = 1'h0 *)
+  wire ch0__cfg_w0_gray;
+  (* init = 1'h0 *)
   wire ch0__cfg_w0_lc;
   (* init = 1'h0 *)
   wire ch0__cfg_w0_nenw;
@@ -1994,6 +2024,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire [5:0] ch0__cfg_w1_data_bits;
   (* init = 1'h0 *)
   wire ch0__cfg_w1_enable;
+  (* init = 1'h0 *)
+  wire ch0__cfg_w1_gray;
   (* init = 1'h0 *)
   wire ch0__cfg_w1_lc;
   (* init = 1'h0 *)
@@ -2071,8 +2103,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   output [2:0] ch0_ca_request_slave_id;
   reg [2:0] ch0_ca_request_slave_id = 3'h0;
   wire ch0_ca_request_write;
-  output \ch0_ca_request_write$101 ;
-  reg \ch0_ca_request_write$101  = 1'h0;
+  output \ch0_ca_request_write$103 ;
+  reg \ch0_ca_request_write$103  = 1'h0;
   wire ch0_ca_state_write;
   wire ch0_caps_write;
   output [23:0] ch0_cfg_ack_ack_limit;
@@ -2142,6 +2174,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg [1:0] ch0_cfg_words_w0_crc = 2'h0;
   output [5:0] ch0_cfg_words_w0_data_bits;
   reg [5:0] ch0_cfg_words_w0_data_bits = 6'h00;
+  output ch0_cfg_words_w0_gray;
+  reg ch0_cfg_words_w0_gray = 1'h0;
   output ch0_cfg_words_w0_lc;
   reg ch0_cfg_words_w0_lc = 1'h0;
   output ch0_cfg_words_w0_nenw;
@@ -2152,6 +2186,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg [5:0] ch0_cfg_words_w1_data_bits = 6'h00;
   output ch0_cfg_words_w1_enable;
   reg ch0_cfg_words_w1_enable = 1'h0;
+  output ch0_cfg_words_w1_gray;
+  reg ch0_cfg_words_w1_gray = 1'h0;
   output ch0_cfg_words_w1_lc;
   reg ch0_cfg_words_w1_lc = 1'h0;
   output ch0_cfg_words_w1_nenw;
@@ -2337,6 +2373,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   (* init = 6'h00 *)
   wire [5:0] ch1__cfg_w0_data_bits;
   (* init = 1'h0 *)
+  wire ch1__cfg_w0_gray;
+  (* init = 1'h0 *)
   wire ch1__cfg_w0_lc;
   (* init = 1'h0 *)
   wire ch1__cfg_w0_nenw;
@@ -2354,6 +2392,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire [5:0] ch1__cfg_w1_data_bits;
   (* init = 1'h0 *)
   wire ch1__cfg_w1_enable;
+  (* init = 1'h0 *)
+  wire ch1__cfg_w1_gray;
   (* init = 1'h0 *)
   wire ch1__cfg_w1_lc;
   (* init = 1'h0 *)
@@ -2431,8 +2471,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$301 ;
-  reg \ch1_ca_request_write$301  = 1'h0;
+  output \ch1_ca_request_write$305 ;
+  reg \ch1_ca_request_write$305  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_write;
   output [23:0] ch1_cfg_ack_ack_limit;
@@ -2502,6 +2542,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg [1:0] ch1_cfg_words_w0_crc = 2'h0;
   output [5:0] ch1_cfg_words_w0_data_bits;
   reg [5:0] ch1_cfg_words_w0_data_bits = 6'h00;
+  output ch1_cfg_words_w0_gray;
+  reg ch1_cfg_words_w0_gray = 1'h0;
   output ch1_cfg_words_w0_lc;
   reg ch1_cfg_words_w0_lc = 1'h0;
   output ch1_cfg_words_w0_nenw;
@@ -2512,6 +2554,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg [5:0] ch1_cfg_words_w1_data_bits = 6'h00;
   output ch1_cfg_words_w1_enable;
   reg ch1_cfg_words_w1_enable = 1'h0;
+  output ch1_cfg_words_w1_gray;
+  reg ch1_cfg_words_w1_gray = 1'h0;
   output ch1_cfg_words_w1_lc;
   reg ch1_cfg_words_w1_lc = 1'h0;
   output ch1_cfg_words_w1_nenw;
@@ -2644,18 +2688,18 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$5310$0 ;
-  wire [186:0] \port$5310$0 ;
-  input [335:0] \port$5323$0 ;
-  wire [335:0] \port$5323$0 ;
-  input [9:0] \port$5455$0 ;
-  wire [9:0] \port$5455$0 ;
-  input [186:0] \port$5861$0 ;
-  wire [186:0] \port$5861$0 ;
-  input [335:0] \port$5874$0 ;
-  wire [335:0] \port$5874$0 ;
-  input [9:0] \port$6006$0 ;
-  wire [9:0] \port$6006$0 ;
+  input [186:0] \port$5342$0 ;
+  wire [186:0] \port$5342$0 ;
+  input [335:0] \port$5355$0 ;
+  wire [335:0] \port$5355$0 ;
+  input [9:0] \port$5487$0 ;
+  wire [9:0] \port$5487$0 ;
+  input [186:0] \port$5893$0 ;
+  wire [186:0] \port$5893$0 ;
+  input [335:0] \port$5906$0 ;
+  wire [335:0] \port$5906$0 ;
+  input [9:0] \port$6038$0 ;
+  wire [9:0] \port$6038$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2663,880 +2707,900 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg [31:0] write_data = 32'd0;
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
-  assign \$235  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$236  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$237  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$238  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$239  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$240  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$241  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$242  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$243  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$227  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$228  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$229  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$230  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$231  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$232  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$233  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$234  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$235  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$236  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$237  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$238  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$239  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$240  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$241  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$242  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$243  = ch1_cfg_timeout_config_write & config_write_strb[2];
   assign \$244  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$245  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$246  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$247  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$248  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$249  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$250  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$251  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$252  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$253  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$254  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$255  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$256  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$257  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$258  = ch1_cfg_crc0_config_write & config_write_strb[0];
-  assign \$259  = ch1_cfg_crc0_config_write & config_write_strb[1];
-  assign \$260  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$261  = ch1_cfg_crc0_config_write & config_write_strb[3];
-  assign \$262  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$263  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$264  = ch1_cfg_crc1_config_write & config_write_strb[0];
-  assign \$265  = ch1_cfg_crc1_config_write & config_write_strb[1];
-  assign \$266  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$267  = ch1_cfg_crc1_config_write & config_write_strb[3];
-  assign \$268  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$269  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$270  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$271  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$272  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$273  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$274  = write_data[0] & write_strb[0];
-  assign \$275  = ch1_ca_ctrl_write ? \$274  : 1'h0;
-  assign \$276  = write_data[1] & write_strb[0];
-  assign \$277  = ch1_ca_ctrl_write ? \$276  : 1'h0;
-  assign \$278  = bus__r_addr == 9'h100;
-  assign \$279  = bus__r_addr == 9'h101;
-  assign \$280  = bus__r_addr == 9'h102;
-  assign \$281  = bus__r_addr == 9'h104;
-  assign \$282  = bus__r_addr == 9'h105;
-  assign \$283  = bus__r_addr == 9'h108;
-  assign \$284  = bus__r_addr == 9'h109;
-  assign \$285  = bus__r_addr == 9'h10a;
-  assign \$286  = bus__r_addr == 9'h10b;
-  assign \$287  = bus__r_addr == 9'h10c;
-  assign \$288  = bus__r_addr == 9'h10d;
-  assign \$289  = bus__r_addr == 9'h10e;
-  assign \$290  = bus__r_addr == 9'h10f;
-  assign \$291  = bus__r_addr == 9'h110;
-  assign \$292  = bus__r_addr == 9'h111;
-  assign \$293  = bus__r_addr == 9'h112;
-  assign \$294  = bus__r_addr == 9'h113;
-  assign \$295  = bus__r_addr == 9'h114;
-  assign \$296  = bus__r_addr == 9'h115;
-  assign \$297  = bus__r_addr == 9'h116;
-  assign \$298  = bus__r_addr == 9'h117;
-  assign \$299  = bus__r_addr == 9'h118;
-  assign \$300  = bus__r_addr == 9'h119;
-  assign \$301  = bus__r_addr == 9'h11a;
-  assign \$302  = bus__r_addr == 9'h11b;
-  assign \$303  = bus__r_addr == 9'h11c;
-  assign \$304  = bus__r_addr == 9'h11d;
-  assign \$305  = bus__r_addr == 9'h11e;
-  assign \$306  = bus__r_addr == 9'h11f;
-  assign \$307  = bus__r_addr == 9'h120;
-  assign \$308  = bus__r_addr == 9'h121;
-  assign \$309  = bus__r_addr == 9'h122;
-  assign \$310  = bus__r_addr == 9'h123;
-  assign \$311  = bus__r_addr == 9'h140;
-  assign \$312  = bus__r_addr == 9'h141;
-  assign \$313  = bus__r_addr == 9'h142;
-  assign \$314  = bus__r_addr == 9'h143;
-  assign \$315  = bus__r_addr == 9'h144;
-  assign \$316  = bus__r_addr == 9'h145;
-  assign \$317  = ch1_read_select_110 & bus__r_load;
-  assign \$318  = bus__r_addr[10:4] == 5'h16;
-  assign \$319  = bus__r_en & \$318 ;
-  assign \$320  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$322  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$323  = \$321  | \$322 ;
-  assign \$324  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
-  assign \$325  = \$323  | \$324 ;
-  assign \$326  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$245  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$246  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$247  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$248  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$249  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$250  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$251  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$252  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$253  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$254  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$255  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$256  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$257  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$258  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$259  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$260  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$261  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$262  = ch1_cfg_crc0_config_write & config_write_strb[0];
+  assign \$263  = ch1_cfg_crc0_config_write & config_write_strb[1];
+  assign \$264  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$265  = ch1_cfg_crc0_config_write & config_write_strb[3];
+  assign \$266  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$267  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$268  = ch1_cfg_crc1_config_write & config_write_strb[0];
+  assign \$269  = ch1_cfg_crc1_config_write & config_write_strb[1];
+  assign \$270  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$271  = ch1_cfg_crc1_config_write & config_write_strb[3];
+  assign \$272  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$273  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$274  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$275  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$276  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$277  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$278  = write_data[0] & write_strb[0];
+  assign \$279  = ch1_ca_ctrl_write ? \$278  : 1'h0;
+  assign \$280  = write_data[1] & write_strb[0];
+  assign \$281  = ch1_ca_ctrl_write ? \$280  : 1'h0;
+  assign \$282  = bus__r_addr == 9'h100;
+  assign \$283  = bus__r_addr == 9'h101;
+  assign \$284  = bus__r_addr == 9'h102;
+  assign \$285  = bus__r_addr == 9'h104;
+  assign \$286  = bus__r_addr == 9'h105;
+  assign \$287  = bus__r_addr == 9'h108;
+  assign \$288  = bus__r_addr == 9'h109;
+  assign \$289  = bus__r_addr == 9'h10a;
+  assign \$290  = bus__r_addr == 9'h10b;
+  assign \$291  = bus__r_addr == 9'h10c;
+  assign \$292  = bus__r_addr == 9'h10d;
+  assign \$293  = bus__r_addr == 9'h10e;
+  assign \$294  = bus__r_addr == 9'h10f;
+  assign \$295  = bus__r_addr == 9'h110;
+  assign \$296  = bus__r_addr == 9'h111;
+  assign \$297  = bus__r_addr == 9'h112;
+  assign \$298  = bus__r_addr == 9'h113;
+  assign \$299  = bus__r_addr == 9'h114;
+  assign \$300  = bus__r_addr == 9'h115;
+  assign \$301  = bus__r_addr == 9'h116;
+  assign \$302  = bus__r_addr == 9'h117;
+  assign \$303  = bus__r_addr == 9'h118;
+  assign \$304  = bus__r_addr == 9'h119;
+  assign \$305  = bus__r_addr == 9'h11a;
+  assign \$306  = bus__r_addr == 9'h11b;
+  assign \$307  = bus__r_addr == 9'h11c;
+  assign \$308  = bus__r_addr == 9'h11d;
+  assign \$309  = bus__r_addr == 9'h11e;
+  assign \$310  = bus__r_addr == 9'h11f;
+  assign \$311  = bus__r_addr == 9'h120;
+  assign \$312  = bus__r_addr == 9'h121;
+  assign \$313  = bus__r_addr == 9'h122;
+  assign \$314  = bus__r_addr == 9'h123;
+  assign \$315  = bus__r_addr == 9'h140;
+  assign \$316  = bus__r_addr == 9'h141;
+  assign \$317  = bus__r_addr == 9'h142;
+  assign \$318  = bus__r_addr == 9'h143;
+  assign \$319  = bus__r_addr == 9'h144;
+  assign \$320  = bus__r_addr == 9'h145;
+  assign \$321  = ch1_read_select_110 & bus__r_load;
+  assign \$322  = bus__r_addr[10:4] == 5'h16;
+  assign \$323  = bus__r_en & \$322 ;
+  assign \$324  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$326  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
   assign \$327  = \$325  | \$326 ;
-  assign \$328  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
+  assign \$328  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
   assign \$329  = \$327  | \$328 ;
-  assign \$330  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
+  assign \$330  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$331  = \$329  | \$330 ;
-  assign \$332  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
+  assign \$332  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
   assign \$333  = \$331  | \$332 ;
-  assign \$334  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
+  assign \$334  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
   assign \$335  = \$333  | \$334 ;
-  assign \$336  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
+  assign \$336  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
   assign \$337  = \$335  | \$336 ;
-  assign \$338  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$338  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
   assign \$339  = \$337  | \$338 ;
-  assign \$340  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 5'h00, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 6'h00, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
+  assign \$340  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
   assign \$341  = \$339  | \$340 ;
-  assign \$342  = ch1_read_select_10e ? { 8'h00, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
+  assign \$342  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
   assign \$343  = \$341  | \$342 ;
-  assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
+  assign \$344  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 4'h0, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 5'h00, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$5861$0 [182:177], 4'h0, \port$5861$0 [186:183], 1'h0, \port$5861$0 [176:174], 1'h0, \port$5861$0 [133:131], 3'h0, \port$5861$0 [49], \port$5861$0 [3:0] } : 32'd0;
+  assign \$346  = ch1_read_select_10e ? { 8'h00, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
   assign \$347  = \$345  | \$346 ;
-  assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$348  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$349  = \$347  | \$348 ;
-  assign \$350  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$350  = ch1_read_select_110 ? { 2'h0, \port$5893$0 [182:177], 4'h0, \port$5893$0 [186:183], 1'h0, \port$5893$0 [176:174], 1'h0, \port$5893$0 [133:131], 3'h0, \port$5893$0 [49], \port$5893$0 [3:0] } : 32'd0;
   assign \$351  = \$349  | \$350 ;
-  assign \$352  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$352  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$353  = \$351  | \$352 ;
-  assign \$354  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$354  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
   assign \$355  = \$353  | \$354 ;
-  assign \$356  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$356  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
   assign \$357  = \$355  | \$356 ;
-  assign \$358  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$358  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
   assign \$359  = \$357  | \$358 ;
-  assign \$360  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
+  assign \$360  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
   assign \$361  = \$359  | \$360 ;
-  assign \$362  = ch1_read_select_118 ? \port$5874$0 [31:0] : 32'd0;
+  assign \$362  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$363  = \$361  | \$362 ;
-  assign \$364  = ch1_read_select_119 ? \port$5874$0 [63:32] : 32'd0;
+  assign \$364  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$365  = \$363  | \$364 ;
-  assign \$366  = ch1_read_select_11a ? \port$5874$0 [95:64] : 32'd0;
+  assign \$366  = ch1_read_select_118 ? \port$5906$0 [31:0] : 32'd0;
   assign \$367  = \$365  | \$366 ;
-  assign \$368  = ch1_read_select_11b ? \port$5874$0 [127:96] : 32'd0;
+  assign \$368  = ch1_read_select_119 ? \port$5906$0 [63:32] : 32'd0;
   assign \$369  = \$367  | \$368 ;
-  assign \$370  = ch1_read_select_11c ? \port$5874$0 [159:128] : 32'd0;
+  assign \$370  = ch1_read_select_11a ? \port$5906$0 [95:64] : 32'd0;
   assign \$371  = \$369  | \$370 ;
-  assign \$372  = ch1_read_select_11d ? \port$5874$0 [191:160] : 32'd0;
+  assign \$372  = ch1_read_select_11b ? \port$5906$0 [127:96] : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$374  = ch1_read_select_11e ? \port$5874$0 [223:192] : 32'd0;
+  assign \$374  = ch1_read_select_11c ? \port$5906$0 [159:128] : 32'd0;
   assign \$375  = \$373  | \$374 ;
-  assign \$376  = ch1_read_select_11f ? \port$5874$0 [255:224] : 32'd0;
+  assign \$376  = ch1_read_select_11d ? \port$5906$0 [191:160] : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_inverted, 3'h0, ch1_cfg_crc0_width, ch1_cfg_crc0_poly } : 32'd0;
+  assign \$378  = ch1_read_select_11e ? \port$5906$0 [223:192] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_start } : 32'd0;
+  assign \$380  = ch1_read_select_11f ? \port$5906$0 [255:224] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_inverted, 3'h0, ch1_cfg_crc1_width, ch1_cfg_crc1_poly } : 32'd0;
+  assign \$382  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_inverted, 3'h0, ch1_cfg_crc0_width, ch1_cfg_crc0_poly } : 32'd0;
   assign \$383  = \$381  | \$382 ;
-  assign \$384  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_start } : 32'd0;
+  assign \$384  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_start } : 32'd0;
   assign \$385  = \$383  | \$384 ;
-  assign \$386  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$301 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$386  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_inverted, 3'h0, ch1_cfg_crc1_width, ch1_cfg_crc1_poly } : 32'd0;
   assign \$387  = \$385  | \$386 ;
-  assign \$390  = ch1_read_select_142 ? { 17'h00000, \port$6006$0 [9:3], 1'h0, \port$6006$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$388  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_start } : 32'd0;
+  assign \$389  = \$387  | \$388 ;
+  assign \$390  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$391  = \$389  | \$390 ;
-  assign \$392  = ch1_read_select_143 ? \port$5874$0 [287:256] : 32'd0;
-  assign \$393  = \$391  | \$392 ;
-  assign \$394  = ch1_read_select_144 ? \port$5874$0 [319:288] : 32'd0;
+  assign \$394  = ch1_read_select_142 ? { 17'h00000, \port$6038$0 [9:3], 1'h0, \port$6038$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$395  = \$393  | \$394 ;
-  assign \$396  = ch1_read_select_145 ? { 16'h0000, \port$5874$0 [335:320] } : 32'd0;
+  assign \$396  = ch1_read_select_143 ? \port$5906$0 [287:256] : 32'd0;
   assign \$397  = \$395  | \$396 ;
-  assign \$398  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$398  = ch1_read_select_144 ? \port$5906$0 [319:288] : 32'd0;
   assign \$399  = \$397  | \$398 ;
-  assign \$400  = ! write_addr;
-  assign g_id_write = write_en & \$400 ;
-  assign \$401  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$401 ;
-  assign \$402  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$402 ;
-  assign \$403  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$403 ;
-  assign \$404  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$404 ;
-  assign \$405  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$405 ;
-  assign \$406  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$406 ;
-  assign \$407  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$407 ;
-  assign \$408  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$408 ;
-  assign \$409  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$409 ;
-  assign \$410  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$410 ;
-  assign \$411  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$411 ;
-  assign \$412  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$412 ;
-  assign \$413  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$413 ;
-  assign \$414  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$414 ;
-  assign \$415  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$415 ;
-  assign \$416  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$416 ;
-  assign \$417  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$417 ;
-  assign \$418  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$418 ;
-  assign \$419  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$419 ;
-  assign \$420  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$420 ;
-  assign \$421  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$421 ;
-  assign \$422  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$422 ;
-  assign \$423  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$423 ;
-  assign \$424  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$424 ;
-  assign \$425  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$425 ;
-  assign \$426  = write_addr == 8'h98;
-  assign ch0_count_crc_write = write_en & \$426 ;
-  assign \$427  = write_addr == 8'h99;
-  assign ch0_count_ack_write = write_en & \$427 ;
-  assign \$428  = write_addr == 8'h9a;
-  assign ch0_count_line_write = write_en & \$428 ;
-  assign \$429  = write_addr == 8'h9b;
-  assign ch0_count_lc_write = write_en & \$429 ;
-  assign \$430  = write_addr == 8'h9c;
-  assign ch0_count_check_write = write_en & \$430 ;
-  assign \$431  = write_addr == 8'h9d;
-  assign ch0_count_cycle_write = write_en & \$431 ;
-  assign \$432  = write_addr == 8'h9e;
-  assign ch0_count_stop_write = write_en & \$432 ;
-  assign \$433  = write_addr == 8'h9f;
-  assign ch0_count_noise_write = write_en & \$433 ;
-  assign \$434  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$434 ;
-  assign \$435  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$435 ;
-  assign \$436  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$436 ;
-  assign \$437  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$437 ;
-  assign \$438  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$438 ;
-  assign \$439  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$439 ;
-  assign \$440  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$440 ;
-  assign \$441  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$441 ;
-  assign \$442  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$442 ;
-  assign \$443  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$443 ;
-  assign \$444  = write_addr[10:4] == 4'hd;
-  assign \$445  = write_en & \$444 ;
-  assign ch0__ca_wbuf_en = \$445  ? write_strb : 4'h0;
-  assign \$446  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$446 ;
-  assign \$447  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$449  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$451  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$452 , \$450 , \$448  };
-  assign \$453  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$453 ;
-  assign \$454  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$454 ;
-  assign \$455  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$455 ;
-  assign \$456  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$456 ;
-  assign \$457  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$457 ;
-  assign \$458  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$458 ;
-  assign \$459  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$459 ;
-  assign \$460  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$460 ;
-  assign \$461  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$461 ;
-  assign \$462  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$462 ;
-  assign \$463  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$463 ;
-  assign \$464  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$464 ;
-  assign \$465  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$465 ;
-  assign \$466  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$466 ;
-  assign \$467  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$467 ;
-  assign \$468  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$468 ;
-  assign \$469  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$469 ;
-  assign \$470  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$470 ;
-  assign \$471  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$471 ;
-  assign \$472  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$472 ;
-  assign \$473  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$473 ;
-  assign \$474  = write_addr == 9'h118;
-  assign ch1_count_crc_write = write_en & \$474 ;
-  assign \$475  = write_addr == 9'h119;
-  assign ch1_count_ack_write = write_en & \$475 ;
-  assign \$476  = write_addr == 9'h11a;
-  assign ch1_count_line_write = write_en & \$476 ;
-  assign \$477  = write_addr == 9'h11b;
-  assign ch1_count_lc_write = write_en & \$477 ;
-  assign \$478  = write_addr == 9'h11c;
-  assign ch1_count_check_write = write_en & \$478 ;
-  assign \$479  = write_addr == 9'h11d;
-  assign ch1_count_cycle_write = write_en & \$479 ;
-  assign \$480  = write_addr == 9'h11e;
-  assign ch1_count_stop_write = write_en & \$480 ;
-  assign \$481  = write_addr == 9'h11f;
-  assign ch1_count_noise_write = write_en & \$481 ;
-  assign \$482  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$482 ;
-  assign \$483  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$483 ;
-  assign \$484  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$484 ;
-  assign \$485  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$485 ;
-  assign \$486  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$486 ;
-  assign \$487  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$487 ;
-  assign \$488  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$488 ;
-  assign \$489  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$489 ;
-  assign \$490  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$490 ;
-  assign \$491  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$491 ;
-  assign \$492  = write_addr[10:4] == 5'h15;
-  assign \$493  = write_en & \$492 ;
-  assign ch1__ca_wbuf_en = \$493  ? write_strb : 4'h0;
-  assign \$494  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$494 ;
-  assign \$495  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$497  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$499  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$500 , \$498 , \$496  };
-  assign \$502  = \$501  | ch0_read_data;
-  assign bus__r_data = \$502  | ch1_read_data;
+  assign \$400  = ch1_read_select_145 ? { 16'h0000, \port$5906$0 [335:320] } : 32'd0;
+  assign \$401  = \$399  | \$400 ;
+  assign \$402  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$403  = \$401  | \$402 ;
+  assign \$404  = ! write_addr;
+  assign g_id_write = write_en & \$404 ;
+  assign \$405  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$405 ;
+  assign \$406  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$406 ;
+  assign \$407  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$407 ;
+  assign \$408  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$408 ;
+  assign \$409  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$409 ;
+  assign \$410  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$410 ;
+  assign \$411  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$411 ;
+  assign \$412  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$412 ;
+  assign \$413  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$413 ;
+  assign \$414  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$414 ;
+  assign \$415  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$415 ;
+  assign \$416  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$416 ;
+  assign \$417  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$417 ;
+  assign \$418  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$418 ;
+  assign \$419  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$419 ;
+  assign \$420  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$420 ;
+  assign \$421  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$421 ;
+  assign \$422  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$422 ;
+  assign \$423  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$423 ;
+  assign \$424  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$424 ;
+  assign \$425  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$425 ;
+  assign \$426  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$426 ;
+  assign \$427  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$427 ;
+  assign \$428  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$428 ;
+  assign \$429  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$429 ;
+  assign \$430  = write_addr == 8'h98;
+  assign ch0_count_crc_write = write_en & \$430 ;
+  assign \$431  = write_addr == 8'h99;
+  assign ch0_count_ack_write = write_en & \$431 ;
+  assign \$432  = write_addr == 8'h9a;
+  assign ch0_count_line_write = write_en & \$432 ;
+  assign \$433  = write_addr == 8'h9b;
+  assign ch0_count_lc_write = write_en & \$433 ;
+  assign \$434  = write_addr == 8'h9c;
+  assign ch0_count_check_write = write_en & \$434 ;
+  assign \$435  = write_addr == 8'h9d;
+  assign ch0_count_cycle_write = write_en & \$435 ;
+  assign \$436  = write_addr == 8'h9e;
+  assign ch0_count_stop_write = write_en & \$436 ;
+  assign \$437  = write_addr == 8'h9f;
+  assign ch0_count_noise_write = write_en & \$437 ;
+  assign \$438  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$438 ;
+  assign \$439  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$439 ;
+  assign \$440  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$440 ;
+  assign \$441  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$441 ;
+  assign \$442  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$442 ;
+  assign \$443  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$443 ;
+  assign \$444  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$444 ;
+  assign \$445  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$445 ;
+  assign \$446  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$446 ;
+  assign \$447  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$447 ;
+  assign \$448  = write_addr[10:4] == 4'hd;
+  assign \$449  = write_en & \$448 ;
+  assign ch0__ca_wbuf_en = \$449  ? write_strb : 4'h0;
+  assign \$450  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$450 ;
+  assign \$451  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$453  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$455  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$456 , \$454 , \$452  };
+  assign \$457  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$457 ;
+  assign \$458  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$458 ;
+  assign \$459  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$459 ;
+  assign \$460  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$460 ;
+  assign \$461  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$461 ;
+  assign \$462  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$462 ;
+  assign \$463  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$463 ;
+  assign \$464  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$464 ;
+  assign \$465  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$465 ;
+  assign \$466  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$466 ;
+  assign \$467  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$467 ;
+  assign \$468  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$468 ;
+  assign \$469  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$469 ;
+  assign \$470  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$470 ;
+  assign \$471  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$471 ;
+  assign \$472  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$472 ;
+  assign \$473  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$473 ;
+  assign \$474  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$474 ;
+  assign \$475  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$475 ;
+  assign \$476  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$476 ;
+  assign \$477  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$477 ;
+  assign \$478  = write_addr == 9'h118;
+  assign ch1_count_crc_write = write_en & \$478 ;
+  assign \$479  = write_addr == 9'h119;
+  assign ch1_count_ack_write = write_en & \$479 ;
+  assign \$480  = write_addr == 9'h11a;
+  assign ch1_count_line_write = write_en & \$480 ;
+  assign \$481  = write_addr == 9'h11b;
+  assign ch1_count_lc_write = write_en & \$481 ;
+  assign \$482  = write_addr == 9'h11c;
+  assign ch1_count_check_write = write_en & \$482 ;
+  assign \$483  = write_addr == 9'h11d;
+  assign ch1_count_cycle_write = write_en & \$483 ;
+  assign \$484  = write_addr == 9'h11e;
+  assign ch1_count_stop_write = write_en & \$484 ;
+  assign \$485  = write_addr == 9'h11f;
+  assign ch1_count_noise_write = write_en & \$485 ;
+  assign \$486  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$486 ;
+  assign \$487  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$487 ;
+  assign \$488  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$488 ;
+  assign \$489  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$489 ;
+  assign \$490  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$490 ;
+  assign \$491  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$491 ;
+  assign \$492  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$492 ;
+  assign \$493  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$493 ;
+  assign \$494  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$494 ;
+  assign \$495  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$495 ;
+  assign \$496  = write_addr[10:4] == 5'h15;
+  assign \$497  = write_en & \$496 ;
+  assign ch1__ca_wbuf_en = \$497  ? write_strb : 4'h0;
+  assign \$498  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$498 ;
+  assign \$499  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$501  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$503  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$504 , \$502 , \$500  };
+  assign \$506  = \$505  | ch0_read_data;
+  assign bus__r_data = \$506  | ch1_read_data;
   always @(posedge clk)
-    write_en <= \$503 ;
+    write_en <= \$507 ;
   always @(posedge clk)
-    write_addr <= \$504 ;
+    write_addr <= \$508 ;
   always @(posedge clk)
-    write_data <= \$505 ;
+    write_data <= \$509 ;
   always @(posedge clk)
-    write_strb <= \$506 ;
+    write_strb <= \$510 ;
   always @(posedge clk)
-    config_write_data <= \$507 ;
+    config_write_data <= \$511 ;
   always @(posedge clk)
-    config_write_strb <= \$508 ;
+    config_write_strb <= \$512 ;
   always @(posedge clk)
-    g_trigger_start <= \$509 ;
+    g_trigger_start <= \$513 ;
   always @(posedge clk)
-    g_read_select_0 <= \$510 ;
+    g_read_select_0 <= \$514 ;
   always @(posedge clk)
-    g_read_select_1 <= \$511 ;
+    g_read_select_1 <= \$515 ;
   always @(posedge clk)
-    g_read_select_2 <= \$512 ;
+    g_read_select_2 <= \$516 ;
   always @(posedge clk)
-    g_read_select_3 <= \$513 ;
+    g_read_select_3 <= \$517 ;
   always @(posedge clk)
-    g_read_select_4 <= \$514 ;
+    g_read_select_4 <= \$518 ;
   always @(posedge clk)
-    g_read_data <= \$515 ;
+    g_read_data <= \$519 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$516 ;
+    ch0_ctrl_start <= \$520 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$517 ;
+    ch0_ctrl_abort <= \$521 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$518 ;
+    ch0_ctrl_clear_counters <= \$522 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$519 ;
+    ch0_ctrl_periodic <= \$523 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$520 ;
+    ch0_ctrl_trigger_enable <= \$524 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$521 ;
+    ch0_irq_status_done <= \$525 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$522 ;
+    ch0_irq_status_error <= \$526 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$523 ;
+    ch0_irq_status_access_done <= \$527 ;
   always @(posedge clk)
-    ch0_irq_enable_config_write <= \$524 ;
+    ch0_irq_enable_config_write <= \$528 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$525 ;
+    ch0_irq_enable_done <= \$529 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$526 ;
+    ch0_irq_enable_error <= \$530 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$527 ;
+    ch0_irq_enable_access_done <= \$531 ;
   always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$528 ;
+    ch0_cfg_ma_config_write <= \$532 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$529 ;
+    ch0_cfg_ma_ma_half_period <= \$533 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$530 ;
+    ch0_cfg_ma_delay_limit <= \$534 ;
   always @(posedge clk)
-    ch0_cfg_period_config_write <= \$531 ;
+    ch0_cfg_period_config_write <= \$535 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$532 ;
+    ch0_cfg_period_request_period <= \$536 ;
   always @(posedge clk)
-    ch0_cfg_break_config_write <= \$533 ;
+    ch0_cfg_break_config_write <= \$537 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$534 ;
+    ch0_cfg_break_break_time <= \$538 ;
   always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$535 ;
+    ch0_cfg_ack_config_write <= \$539 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$536 ;
+    ch0_cfg_ack_ack_limit <= \$540 ;
   always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$537 ;
+    ch0_cfg_timeout_config_write <= \$541 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$538 ;
+    ch0_cfg_timeout_timeout_limit <= \$542 ;
   always @(posedge clk)
-    ch0_cfg_words_config_write <= \$539 ;
+    ch0_cfg_words_config_write <= \$543 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$540 ;
+    ch0_cfg_words_w0_data_bits <= \$544 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$541 ;
+    ch0_cfg_words_w0_nenw <= \$545 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$542 ;
+    ch0_cfg_words_w0_lc <= \$546 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$543 ;
+    ch0_cfg_words_w0_crc <= \$547 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$544 ;
+    ch0_cfg_words_w0_gray <= \$548 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$545 ;
+    ch0_cfg_words_w1_data_bits <= \$549 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$546 ;
+    ch0_cfg_words_w1_nenw <= \$550 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$547 ;
+    ch0_cfg_words_w1_lc <= \$551 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$548 ;
+    ch0_cfg_words_w1_crc <= \$552 ;
   always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$549 ;
+    ch0_cfg_words_w1_gray <= \$553 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$550 ;
+    ch0_cfg_words_w1_enable <= \$554 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$551 ;
+    ch0_cfg_checks_config_write <= \$555 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$552 ;
+    ch0_cfg_checks_end_check <= \$556 ;
   always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$553 ;
+    ch0_cfg_checks_spw_check <= \$557 ;
   always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$554 ;
+    ch0_cfg_checks_spw_tolerance <= \$558 ;
   always @(posedge clk)
-    ch0_cfg_quiet_config_write <= \$555 ;
+    ch0_cfg_checks_noise_limit <= \$559 ;
   always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$556 ;
+    ch0_cfg_checks_delay_tolerance <= \$560 ;
   always @(posedge clk)
-    ch0_cfg_crc0_config_write <= \$557 ;
+    ch0_cfg_quiet_config_write <= \$561 ;
   always @(posedge clk)
-    ch0_cfg_crc0_poly <= \$558 ;
+    ch0_cfg_quiet_quiet_time <= \$562 ;
   always @(posedge clk)
-    ch0_cfg_crc0_width <= \$559 ;
+    ch0_cfg_crc0_config_write <= \$563 ;
   always @(posedge clk)
-    ch0_cfg_crc0_inverted <= \$560 ;
+    ch0_cfg_crc0_poly <= \$564 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_config_write <= \$561 ;
+    ch0_cfg_crc0_width <= \$565 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_start <= \$562 ;
+    ch0_cfg_crc0_inverted <= \$566 ;
   always @(posedge clk)
-    ch0_cfg_crc1_config_write <= \$563 ;
+    ch0_cfg_crc0_start_config_write <= \$567 ;
   always @(posedge clk)
-    ch0_cfg_crc1_poly <= \$564 ;
+    ch0_cfg_crc0_start_start <= \$568 ;
   always @(posedge clk)
-    ch0_cfg_crc1_width <= \$565 ;
+    ch0_cfg_crc1_config_write <= \$569 ;
   always @(posedge clk)
-    ch0_cfg_crc1_inverted <= \$566 ;
+    ch0_cfg_crc1_poly <= \$570 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_config_write <= \$567 ;
+    ch0_cfg_crc1_width <= \$571 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_start <= \$568 ;
+    ch0_cfg_crc1_inverted <= \$572 ;
   always @(posedge clk)
-    ch0_ca_request_config_write <= \$569 ;
+    ch0_cfg_crc1_start_config_write <= \$573 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$570 ;
+    ch0_cfg_crc1_start_start <= \$574 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$571 ;
+    ch0_ca_request_config_write <= \$575 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$572 ;
+    ch0_ca_request_slave_id <= \$576 ;
   always @(posedge clk)
-    \ch0_ca_request_write$101  <= \$573 ;
+    ch0_ca_request_address <= \$577 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$574 ;
+    ch0_ca_request_count <= \$578 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$575 ;
+    \ch0_ca_request_write$103  <= \$579 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$576 ;
+    ch0_ca_ctrl_start <= \$580 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$577 ;
+    ch0_ca_ctrl_abort <= \$581 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$578 ;
+    ch0_read_select_80 <= \$582 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$579 ;
+    ch0_read_select_81 <= \$583 ;
   always @(posedge clk)
-    ch0_read_select_85 <= \$580 ;
+    ch0_read_select_82 <= \$584 ;
   always @(posedge clk)
-    ch0_read_select_88 <= \$581 ;
+    ch0_read_select_84 <= \$585 ;
   always @(posedge clk)
-    ch0_read_select_89 <= \$582 ;
+    ch0_read_select_85 <= \$586 ;
   always @(posedge clk)
-    ch0_read_select_8a <= \$583 ;
+    ch0_read_select_88 <= \$587 ;
   always @(posedge clk)
-    ch0_read_select_8b <= \$584 ;
+    ch0_read_select_89 <= \$588 ;
   always @(posedge clk)
-    ch0_read_select_8c <= \$585 ;
+    ch0_read_select_8a <= \$589 ;
   always @(posedge clk)
-    ch0_read_select_8d <= \$586 ;
+    ch0_read_select_8b <= \$590 ;
   always @(posedge clk)
-    ch0_read_select_8e <= \$587 ;
+    ch0_read_select_8c <= \$591 ;
   always @(posedge clk)
-    ch0_read_select_8f <= \$588 ;
+    ch0_read_select_8d <= \$592 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$589 ;
+    ch0_read_select_8e <= \$593 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$590 ;
+    ch0_read_select_8f <= \$594 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$591 ;
+    ch0_read_select_90 <= \$595 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$592 ;
+    ch0_read_select_91 <= \$596 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$593 ;
+    ch0_read_select_92 <= \$597 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$594 ;
+    ch0_read_select_93 <= \$598 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$595 ;
+    ch0_read_select_94 <= \$599 ;
   always @(posedge clk)
-    ch0_read_select_97 <= \$596 ;
+    ch0_read_select_95 <= \$600 ;
   always @(posedge clk)
-    ch0_read_select_98 <= \$597 ;
+    ch0_read_select_96 <= \$601 ;
   always @(posedge clk)
-    ch0_read_select_99 <= \$598 ;
+    ch0_read_select_97 <= \$602 ;
   always @(posedge clk)
-    ch0_read_select_9a <= \$599 ;
+    ch0_read_select_98 <= \$603 ;
   always @(posedge clk)
-    ch0_read_select_9b <= \$600 ;
+    ch0_read_select_99 <= \$604 ;
   always @(posedge clk)
-    ch0_read_select_9c <= \$601 ;
+    ch0_read_select_9a <= \$605 ;
   always @(posedge clk)
-    ch0_read_select_9d <= \$602 ;
+    ch0_read_select_9b <= \$606 ;
   always @(posedge clk)
-    ch0_read_select_9e <= \$603 ;
+    ch0_read_select_9c <= \$607 ;
   always @(posedge clk)
-    ch0_read_select_9f <= \$604 ;
+    ch0_read_select_9d <= \$608 ;
   always @(posedge clk)
-    ch0_read_select_a0 <= \$605 ;
+    ch0_read_select_9e <= \$609 ;
   always @(posedge clk)
-    ch0_read_select_a1 <= \$606 ;
+    ch0_read_select_9f <= \$610 ;
   always @(posedge clk)
-    ch0_read_select_a2 <= \$607 ;
+    ch0_read_select_a0 <= \$611 ;
   always @(posedge clk)
-    ch0_read_select_a3 <= \$608 ;
+    ch0_read_select_a1 <= \$612 ;
   always @(posedge clk)
-    ch0_read_select_c0 <= \$609 ;
+    ch0_read_select_a2 <= \$613 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$610 ;
+    ch0_read_select_a3 <= \$614 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$611 ;
+    ch0_read_select_c0 <= \$615 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$612 ;
+    ch0_read_select_c1 <= \$616 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$613 ;
+    ch0_read_select_c2 <= \$617 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$614 ;
+    ch0_read_select_c3 <= \$618 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$615 ;
+    ch0_read_select_c4 <= \$619 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$616 ;
+    ch0_read_select_c5 <= \$620 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$617 ;
+    ch0_result_status_status_snapshot <= \$621 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$618 ;
+    ch0_result_status_cds_snapshot <= \$622 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$619 ;
+    ch0_result_status_w0_ne_snapshot <= \$623 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$620 ;
+    ch0_result_status_w0_nw_snapshot <= \$624 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$621 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$625 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$622 ;
+    ch0_result_status_w1_ne_snapshot <= \$626 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$623 ;
+    ch0_result_status_w1_nw_snapshot <= \$627 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$624 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$628 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$625 ;
+    ch0_result_status_lc_repeat_snapshot <= \$629 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$626 ;
+    ch0_result_status_lc_skip_snapshot <= \$630 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$627 ;
+    ch0_result_status_lc_zero_snapshot <= \$631 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$628 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$632 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$629 ;
+    ch0_result_status_lc_snapshot <= \$633 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$630 ;
+    ch0_result_seq_seq_snapshot <= \$634 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$631 ;
+    ch0_result_seq_line_delay_snapshot <= \$635 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$632 ;
+    ch0_result_w0_lo_data_snapshot <= \$636 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$633 ;
+    ch0_result_w0_hi_data_snapshot <= \$637 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$634 ;
+    ch0_result_w1_lo_data_snapshot <= \$638 ;
   always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$635 ;
+    ch0_result_w1_hi_data_snapshot <= \$639 ;
   always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$636 ;
+    ch0_result_timestamp_time_snapshot <= \$640 ;
   always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$637 ;
+    ch0_result_line_noise_events_snapshot <= \$641 ;
   always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$638 ;
+    ch0_result_line_delay_settled_snapshot <= \$642 ;
   always @(posedge clk)
-    ch0_window0_read <= \$639 ;
+    ch0_result_line_delay_spread_snapshot <= \$643 ;
   always @(posedge clk)
-    ch0_read_data <= \$640 ;
+    ch0_result_line_settled_delay_snapshot <= \$644 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$641 ;
+    ch0_window0_read <= \$645 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$642 ;
+    ch0_read_data <= \$646 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$643 ;
+    ch1_ctrl_start <= \$647 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$644 ;
+    ch1_ctrl_abort <= \$648 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$645 ;
+    ch1_ctrl_clear_counters <= \$649 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$646 ;
+    ch1_ctrl_periodic <= \$650 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$647 ;
+    ch1_ctrl_trigger_enable <= \$651 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$648 ;
+    ch1_irq_status_done <= \$652 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$649 ;
+    ch1_irq_status_error <= \$653 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$650 ;
+    ch1_irq_status_access_done <= \$654 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$651 ;
+    ch1_irq_enable_config_write <= \$655 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$652 ;
+    ch1_irq_enable_done <= \$656 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$653 ;
+    ch1_irq_enable_error <= \$657 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$654 ;
+    ch1_irq_enable_access_done <= \$658 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$655 ;
+    ch1_cfg_ma_config_write <= \$659 ;
   always @(posedge clk)
-    ch1_cfg_period_config_write <= \$656 ;
+    ch1_cfg_ma_ma_half_period <= \$660 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$657 ;
+    ch1_cfg_ma_delay_limit <= \$661 ;
   always @(posedge clk)
-    ch1_cfg_break_config_write <= \$658 ;
+    ch1_cfg_period_config_write <= \$662 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$659 ;
+    ch1_cfg_period_request_period <= \$663 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$660 ;
+    ch1_cfg_break_config_write <= \$664 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$661 ;
+    ch1_cfg_break_break_time <= \$665 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$662 ;
+    ch1_cfg_ack_config_write <= \$666 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$663 ;
+    ch1_cfg_ack_ack_limit <= \$667 ;
   always @(posedge clk)
-    ch1_cfg_words_config_write <= \$664 ;
+    ch1_cfg_timeout_config_write <= \$668 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$665 ;
+    ch1_cfg_timeout_timeout_limit <= \$669 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$666 ;
+    ch1_cfg_words_config_write <= \$670 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$667 ;
+    ch1_cfg_words_w0_data_bits <= \$671 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$668 ;
+    ch1_cfg_words_w0_nenw <= \$672 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$669 ;
+    ch1_cfg_words_w0_lc <= \$673 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$670 ;
+    ch1_cfg_words_w0_crc <= \$674 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$671 ;
+    ch1_cfg_words_w0_gray <= \$675 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$672 ;
+    ch1_cfg_words_w1_data_bits <= \$676 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$673 ;
+    ch1_cfg_words_w1_nenw <= \$677 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$674 ;
+    ch1_cfg_words_w1_lc <= \$678 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$675 ;
+    ch1_cfg_words_w1_crc <= \$679 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$676 ;
+    ch1_cfg_words_w1_gray <= \$680 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$677 ;
+    ch1_cfg_words_w1_enable <= \$681 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$678 ;
+    ch1_cfg_checks_config_write <= \$682 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$679 ;
+    ch1_cfg_checks_end_check <= \$683 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_write <= \$680 ;
+    ch1_cfg_checks_spw_check <= \$684 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$681 ;
+    ch1_cfg_checks_spw_tolerance <= \$685 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_write <= \$682 ;
+    ch1_cfg_checks_noise_limit <= \$686 ;
   always @(posedge clk)
-    ch1_cfg_crc0_poly <= \$683 ;
+    ch1_cfg_checks_delay_tolerance <= \$687 ;
   always @(posedge clk)
-    ch1_cfg_crc0_width <= \$684 ;
+    ch1_cfg_quiet_config_write <= \$688 ;
   always @(posedge clk)
-    ch1_cfg_crc0_inverted <= \$685 ;
+    ch1_cfg_quiet_quiet_time <= \$689 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_write <= \$686 ;
+    ch1_cfg_crc0_config_write <= \$690 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_start <= \$687 ;
+    ch1_cfg_crc0_poly <= \$691 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_write <= \$688 ;
+    ch1_cfg_crc0_width <= \$692 ;
   always @(posedge clk)
-    ch1_cfg_crc1_poly <= \$689 ;
+    ch1_cfg_crc0_inverted <= \$693 ;
   always @(posedge clk)
-    ch1_cfg_crc1_width <= \$690 ;
+    ch1_cfg_crc0_start_config_write <= \$694 ;
   always @(posedge clk)
-    ch1_cfg_crc1_inverted <= \$691 ;
+    ch1_cfg_crc0_start_start <= \$695 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_write <= \$692 ;
+    ch1_cfg_crc1_config_write <= \$696 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_start <= \$693 ;
+    ch1_cfg_crc1_poly <= \$697 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$694 ;
+    ch1_cfg_crc1_width <= \$698 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$695 ;
+    ch1_cfg_crc1_inverted <= \$699 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$696 ;
+    ch1_cfg_crc1_start_config_write <= \$700 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$697 ;
+    ch1_cfg_crc1_start_start <= \$701 ;
   always @(posedge clk)
-    \ch1_ca_request_write$301  <= \$698 ;
+    ch1_ca_request_config_write <= \$702 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$699 ;
+    ch1_ca_request_slave_id <= \$703 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$700 ;
+    ch1_ca_request_address <= \$704 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$701 ;
+    ch1_ca_request_count <= \$705 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$702 ;
+    \ch1_ca_request_write$305  <= \$706 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$703 ;
+    ch1_ca_ctrl_start <= \$707 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$704 ;
+    ch1_ca_ctrl_abort <= \$708 ;
   always @(posedge clk)
-    ch1_read_select_105 <= \$705 ;
+    ch1_read_select_100 <= \$709 ;
   always @(posedge clk)
-    ch1_read_select_108 <= \$706 ;
+    ch1_read_select_101 <= \$710 ;
   always @(posedge clk)
-    ch1_read_select_109 <= \$707 ;
+    ch1_read_select_102 <= \$711 ;
   always @(posedge clk)
-    ch1_read_select_10a <= \$708 ;
+    ch1_read_select_104 <= \$712 ;
   always @(posedge clk)
-    ch1_read_select_10b <= \$709 ;
+    ch1_read_select_105 <= \$713 ;
   always @(posedge clk)
-    ch1_read_select_10c <= \$710 ;
+    ch1_read_select_108 <= \$714 ;
   always @(posedge clk)
-    ch1_read_select_10d <= \$711 ;
+    ch1_read_select_109 <= \$715 ;
   always @(posedge clk)
-    ch1_read_select_10e <= \$712 ;
+    ch1_read_select_10a <= \$716 ;
   always @(posedge clk)
-    ch1_read_select_10f <= \$713 ;
+    ch1_read_select_10b <= \$717 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$714 ;
+    ch1_read_select_10c <= \$718 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$715 ;
+    ch1_read_select_10d <= \$719 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$716 ;
+    ch1_read_select_10e <= \$720 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$717 ;
+    ch1_read_select_10f <= \$721 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$718 ;
+    ch1_read_select_110 <= \$722 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$719 ;
+    ch1_read_select_111 <= \$723 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$720 ;
+    ch1_read_select_112 <= \$724 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$721 ;
+    ch1_read_select_113 <= \$725 ;
   always @(posedge clk)
-    ch1_read_select_118 <= \$722 ;
+    ch1_read_select_114 <= \$726 ;
   always @(posedge clk)
-    ch1_read_select_119 <= \$723 ;
+    ch1_read_select_115 <= \$727 ;
   always @(posedge clk)
-    ch1_read_select_11a <= \$724 ;
+    ch1_read_select_116 <= \$728 ;
   always @(posedge clk)
-    ch1_read_select_11b <= \$725 ;
+    ch1_read_select_117 <= \$729 ;
   always @(posedge clk)
-    ch1_read_select_11c <= \$726 ;
+    ch1_read_select_118 <= \$730 ;
   always @(posedge clk)
-    ch1_read_select_11d <= \$727 ;
+    ch1_read_select_119 <= \$731 ;
   always @(posedge clk)
-    ch1_read_select_11e <= \$728 ;
+    ch1_read_select_11a <= \$732 ;
   always @(posedge clk)
-    ch1_read_select_11f <= \$729 ;
+    ch1_read_select_11b <= \$733 ;
   always @(posedge clk)
-    ch1_read_select_120 <= \$730 ;
+    ch1_read_select_11c <= \$734 ;
   always @(posedge clk)
-    ch1_read_select_121 <= \$731 ;
+    ch1_read_select_11d <= \$735 ;
   always @(posedge clk)
-    ch1_read_select_122 <= \$732 ;
+    ch1_read_select_11e <= \$736 ;
   always @(posedge clk)
-    ch1_read_select_123 <= \$733 ;
+    ch1_read_select_11f <= \$737 ;
   always @(posedge clk)
-    ch1_read_select_140 <= \$734 ;
+    ch1_read_select_120 <= \$738 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$735 ;
+    ch1_read_select_121 <= \$739 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$736 ;
+    ch1_read_select_122 <= \$740 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$737 ;
+    ch1_read_select_123 <= \$741 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$738 ;
+    ch1_read_select_140 <= \$742 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$739 ;
+    ch1_read_select_141 <= \$743 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$740 ;
+    ch1_read_select_142 <= \$744 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$741 ;
+    ch1_read_select_143 <= \$745 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$742 ;
+    ch1_read_select_144 <= \$746 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$743 ;
+    ch1_read_select_145 <= \$747 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$744 ;
+    ch1_result_status_status_snapshot <= \$748 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$745 ;
+    ch1_result_status_cds_snapshot <= \$749 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$746 ;
+    ch1_result_status_w0_ne_snapshot <= \$750 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$747 ;
+    ch1_result_status_w0_nw_snapshot <= \$751 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$748 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$752 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$749 ;
+    ch1_result_status_w1_ne_snapshot <= \$753 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$750 ;
+    ch1_result_status_w1_nw_snapshot <= \$754 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$751 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$755 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$752 ;
+    ch1_result_status_lc_repeat_snapshot <= \$756 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$753 ;
+    ch1_result_status_lc_skip_snapshot <= \$757 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$754 ;
+    ch1_result_status_lc_zero_snapshot <= \$758 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$755 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$759 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$756 ;
+    ch1_result_status_lc_snapshot <= \$760 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$757 ;
+    ch1_result_seq_seq_snapshot <= \$761 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$758 ;
+    ch1_result_seq_line_delay_snapshot <= \$762 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$759 ;
+    ch1_result_w0_lo_data_snapshot <= \$763 ;
   always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$760 ;
+    ch1_result_w0_hi_data_snapshot <= \$764 ;
   always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$761 ;
+    ch1_result_w1_lo_data_snapshot <= \$765 ;
   always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$762 ;
+    ch1_result_w1_hi_data_snapshot <= \$766 ;
   always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$763 ;
+    ch1_result_timestamp_time_snapshot <= \$767 ;
   always @(posedge clk)
-    ch1_window0_read <= \$764 ;
+    ch1_result_line_noise_events_snapshot <= \$768 ;
   always @(posedge clk)
-    ch1_read_data <= \$765 ;
+    ch1_result_line_delay_settled_snapshot <= \$769 ;
+  always @(posedge clk)
+    ch1_result_line_delay_spread_snapshot <= \$770 ;
+  always @(posedge clk)
+    ch1_result_line_settled_delay_snapshot <= \$771 ;
+  always @(posedge clk)
+    ch1_window0_read <= \$772 ;
+  always @(posedge clk)
+    ch1_read_data <= \$773 ;
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__r_addr;
@@ -3588,292 +3652,244 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$52  = ch0_cfg_words_config_write & config_write_strb[0];
   assign \$53  = ch0_cfg_words_config_write & config_write_strb[0];
   assign \$54  = ch0_cfg_words_config_write & config_write_strb[1];
-  assign \$55  = ch0_cfg_words_config_write & config_write_strb[2];
+  assign \$55  = ch0_cfg_words_config_write & config_write_strb[1];
   assign \$56  = ch0_cfg_words_config_write & config_write_strb[2];
   assign \$57  = ch0_cfg_words_config_write & config_write_strb[2];
-  assign \$58  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$58  = ch0_cfg_words_config_write & config_write_strb[2];
   assign \$59  = ch0_cfg_words_config_write & config_write_strb[3];
-  assign \$60  = ch0_cfg_checks_config_write & config_write_strb[0];
-  assign \$61  = ch0_cfg_checks_config_write & config_write_strb[0];
-  assign \$62  = ch0_cfg_checks_config_write & config_write_strb[1];
-  assign \$63  = ch0_cfg_checks_config_write & config_write_strb[2];
-  assign \$64  = ch0_cfg_checks_config_write & config_write_strb[2];
-  assign \$65  = ch0_cfg_quiet_config_write & config_write_strb[0];
-  assign \$66  = ch0_cfg_quiet_config_write & config_write_strb[1];
-  assign \$67  = ch0_cfg_crc0_config_write & config_write_strb[0];
-  assign \$68  = ch0_cfg_crc0_config_write & config_write_strb[1];
-  assign \$69  = ch0_cfg_crc0_config_write & config_write_strb[2];
-  assign \$70  = ch0_cfg_crc0_config_write & config_write_strb[3];
-  assign \$71  = ch0_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$72  = ch0_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$73  = ch0_cfg_crc1_config_write & config_write_strb[0];
-  assign \$74  = ch0_cfg_crc1_config_write & config_write_strb[1];
-  assign \$75  = ch0_cfg_crc1_config_write & config_write_strb[2];
-  assign \$76  = ch0_cfg_crc1_config_write & config_write_strb[3];
-  assign \$77  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$78  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$79  = ch0_ca_request_config_write & config_write_strb[0];
-  assign \$80  = ch0_ca_request_config_write & config_write_strb[1];
-  assign \$81  = ch0_ca_request_config_write & config_write_strb[2];
-  assign \$82  = ch0_ca_request_config_write & config_write_strb[3];
-  assign \$83  = write_data[0] & write_strb[0];
-  assign \$84  = ch0_ca_ctrl_write ? \$83  : 1'h0;
-  assign \$85  = write_data[1] & write_strb[0];
+  assign \$60  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$61  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$62  = ch0_cfg_checks_config_write & config_write_strb[0];
+  assign \$63  = ch0_cfg_checks_config_write & config_write_strb[0];
+  assign \$64  = ch0_cfg_checks_config_write & config_write_strb[1];
+  assign \$65  = ch0_cfg_checks_config_write & config_write_strb[2];
+  assign \$66  = ch0_cfg_checks_config_write & config_write_strb[2];
+  assign \$67  = ch0_cfg_quiet_config_write & config_write_strb[0];
+  assign \$68  = ch0_cfg_quiet_config_write & config_write_strb[1];
+  assign \$69  = ch0_cfg_crc0_config_write & config_write_strb[0];
+  assign \$70  = ch0_cfg_crc0_config_write & config_write_strb[1];
+  assign \$71  = ch0_cfg_crc0_config_write & config_write_strb[2];
+  assign \$72  = ch0_cfg_crc0_config_write & config_write_strb[3];
+  assign \$73  = ch0_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$74  = ch0_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$75  = ch0_cfg_crc1_config_write & config_write_strb[0];
+  assign \$76  = ch0_cfg_crc1_config_write & config_write_strb[1];
+  assign \$77  = ch0_cfg_crc1_config_write & config_write_strb[2];
+  assign \$78  = ch0_cfg_crc1_config_write & config_write_strb[3];
+  assign \$79  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$80  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$81  = ch0_ca_request_config_write & config_write_strb[0];
+  assign \$82  = ch0_ca_request_config_write & config_write_strb[1];
+  assign \$83  = ch0_ca_request_config_write & config_write_strb[2];
+  assign \$84  = ch0_ca_request_config_write & config_write_strb[3];
+  assign \$85  = write_data[0] & write_strb[0];
   assign \$86  = ch0_ca_ctrl_write ? \$85  : 1'h0;
-  assign \$87  = bus__r_addr == 8'h80;
-  assign \$88  = bus__r_addr == 8'h81;
-  assign \$89  = bus__r_addr == 8'h82;
-  assign \$90  = bus__r_addr == 8'h84;
-  assign \$91  = bus__r_addr == 8'h85;
-  assign \$92  = bus__r_addr == 8'h88;
-  assign \$93  = bus__r_addr == 8'h89;
-  assign \$94  = bus__r_addr == 8'h8a;
-  assign \$95  = bus__r_addr == 8'h8b;
-  assign \$96  = bus__r_addr == 8'h8c;
-  assign \$97  = bus__r_addr == 8'h8d;
-  assign \$98  = bus__r_addr == 8'h8e;
-  assign \$99  = bus__r_addr == 8'h8f;
-  assign \$100  = bus__r_addr == 8'h90;
-  assign \$101  = bus__r_addr == 8'h91;
-  assign \$102  = bus__r_addr == 8'h92;
-  assign \$103  = bus__r_addr == 8'h93;
-  assign \$104  = bus__r_addr == 8'h94;
-  assign \$105  = bus__r_addr == 8'h95;
-  assign \$106  = bus__r_addr == 8'h96;
-  assign \$107  = bus__r_addr == 8'h97;
-  assign \$108  = bus__r_addr == 8'h98;
-  assign \$109  = bus__r_addr == 8'h99;
-  assign \$110  = bus__r_addr == 8'h9a;
-  assign \$111  = bus__r_addr == 8'h9b;
-  assign \$112  = bus__r_addr == 8'h9c;
-  assign \$113  = bus__r_addr == 8'h9d;
-  assign \$114  = bus__r_addr == 8'h9e;
-  assign \$115  = bus__r_addr == 8'h9f;
-  assign \$116  = bus__r_addr == 8'ha0;
-  assign \$117  = bus__r_addr == 8'ha1;
-  assign \$118  = bus__r_addr == 8'ha2;
-  assign \$119  = bus__r_addr == 8'ha3;
-  assign \$120  = bus__r_addr == 8'hc0;
-  assign \$121  = bus__r_addr == 8'hc1;
-  assign \$122  = bus__r_addr == 8'hc2;
-  assign \$123  = bus__r_addr == 8'hc3;
-  assign \$124  = bus__r_addr == 8'hc4;
-  assign \$125  = bus__r_addr == 8'hc5;
-  assign \$126  = ch0_read_select_90 & bus__r_load;
-  assign \$127  = bus__r_addr[10:4] == 4'he;
-  assign \$128  = bus__r_en & \$127 ;
-  assign \$129  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$131  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$132  = \$130  | \$131 ;
-  assign \$133  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
+  assign \$87  = write_data[1] & write_strb[0];
+  assign \$88  = ch0_ca_ctrl_write ? \$87  : 1'h0;
+  assign \$89  = bus__r_addr == 8'h80;
+  assign \$90  = bus__r_addr == 8'h81;
+  assign \$91  = bus__r_addr == 8'h82;
+  assign \$92  = bus__r_addr == 8'h84;
+  assign \$93  = bus__r_addr == 8'h85;
+  assign \$94  = bus__r_addr == 8'h88;
+  assign \$95  = bus__r_addr == 8'h89;
+  assign \$96  = bus__r_addr == 8'h8a;
+  assign \$97  = bus__r_addr == 8'h8b;
+  assign \$98  = bus__r_addr == 8'h8c;
+  assign \$99  = bus__r_addr == 8'h8d;
+  assign \$100  = bus__r_addr == 8'h8e;
+  assign \$101  = bus__r_addr == 8'h8f;
+  assign \$102  = bus__r_addr == 8'h90;
+  assign \$103  = bus__r_addr == 8'h91;
+  assign \$104  = bus__r_addr == 8'h92;
+  assign \$105  = bus__r_addr == 8'h93;
+  assign \$106  = bus__r_addr == 8'h94;
+  assign \$107  = bus__r_addr == 8'h95;
+  assign \$108  = bus__r_addr == 8'h96;
+  assign \$109  = bus__r_addr == 8'h97;
+  assign \$110  = bus__r_addr == 8'h98;
+  assign \$111  = bus__r_addr == 8'h99;
+  assign \$112  = bus__r_addr == 8'h9a;
+  assign \$113  = bus__r_addr == 8'h9b;
+  assign \$114  = bus__r_addr == 8'h9c;
+  assign \$115  = bus__r_addr == 8'h9d;
+  assign \$116  = bus__r_addr == 8'h9e;
+  assign \$117  = bus__r_addr == 8'h9f;
+  assign \$118  = bus__r_addr == 8'ha0;
+  assign \$119  = bus__r_addr == 8'ha1;
+  assign \$120  = bus__r_addr == 8'ha2;
+  assign \$121  = bus__r_addr == 8'ha3;
+  assign \$122  = bus__r_addr == 8'hc0;
+  assign \$123  = bus__r_addr == 8'hc1;
+  assign \$124  = bus__r_addr == 8'hc2;
+  assign \$125  = bus__r_addr == 8'hc3;
+  assign \$126  = bus__r_addr == 8'hc4;
+  assign \$127  = bus__r_addr == 8'hc5;
+  assign \$128  = ch0_read_select_90 & bus__r_load;
+  assign \$129  = bus__r_addr[10:4] == 4'he;
+  assign \$130  = bus__r_en & \$129 ;
+  assign \$131  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$133  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
   assign \$134  = \$132  | \$133 ;
-  assign \$135  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$135  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
   assign \$136  = \$134  | \$135 ;
-  assign \$137  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
+  assign \$137  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$138  = \$136  | \$137 ;
-  assign \$139  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
+  assign \$139  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
   assign \$140  = \$138  | \$139 ;
-  assign \$141  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
+  assign \$141  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
   assign \$142  = \$140  | \$141 ;
-  assign \$143  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
+  assign \$143  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
   assign \$144  = \$142  | \$143 ;
-  assign \$145  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
+  assign \$145  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
   assign \$146  = \$144  | \$145 ;
-  assign \$147  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$147  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
   assign \$148  = \$146  | \$147 ;
-  assign \$149  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 5'h00, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 6'h00, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
+  assign \$149  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
   assign \$150  = \$148  | \$149 ;
-  assign \$151  = ch0_read_select_8e ? { 8'h00, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
+  assign \$151  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 4'h0, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 5'h00, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
   assign \$152  = \$150  | \$151 ;
-  assign \$153  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
+  assign \$153  = ch0_read_select_8e ? { 8'h00, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
   assign \$154  = \$152  | \$153 ;
-  assign \$155  = ch0_read_select_90 ? { 2'h0, \port$5310$0 [182:177], 4'h0, \port$5310$0 [186:183], 1'h0, \port$5310$0 [176:174], 1'h0, \port$5310$0 [133:131], 3'h0, \port$5310$0 [49], \port$5310$0 [3:0] } : 32'd0;
+  assign \$155  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$156  = \$154  | \$155 ;
-  assign \$157  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$157  = ch0_read_select_90 ? { 2'h0, \port$5342$0 [182:177], 4'h0, \port$5342$0 [186:183], 1'h0, \port$5342$0 [176:174], 1'h0, \port$5342$0 [133:131], 3'h0, \port$5342$0 [49], \port$5342$0 [3:0] } : 32'd0;
   assign \$158  = \$156  | \$157 ;
-  assign \$159  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$159  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$161  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$163  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$163  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
   assign \$164  = \$162  | \$163 ;
-  assign \$165  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$165  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
   assign \$166  = \$164  | \$165 ;
-  assign \$167  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$167  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
   assign \$168  = \$166  | \$167 ;
-  assign \$169  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
+  assign \$169  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
   assign \$170  = \$168  | \$169 ;
-  assign \$171  = ch0_read_select_98 ? \port$5323$0 [31:0] : 32'd0;
+  assign \$171  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$172  = \$170  | \$171 ;
-  assign \$173  = ch0_read_select_99 ? \port$5323$0 [63:32] : 32'd0;
+  assign \$173  = ch0_read_select_98 ? \port$5355$0 [31:0] : 32'd0;
   assign \$174  = \$172  | \$173 ;
-  assign \$175  = ch0_read_select_9a ? \port$5323$0 [95:64] : 32'd0;
+  assign \$175  = ch0_read_select_99 ? \port$5355$0 [63:32] : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_9b ? \port$5323$0 [127:96] : 32'd0;
+  assign \$177  = ch0_read_select_9a ? \port$5355$0 [95:64] : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_9c ? \port$5323$0 [159:128] : 32'd0;
+  assign \$179  = ch0_read_select_9b ? \port$5355$0 [127:96] : 32'd0;
   assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_9d ? \port$5323$0 [191:160] : 32'd0;
+  assign \$181  = ch0_read_select_9c ? \port$5355$0 [159:128] : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_9e ? \port$5323$0 [223:192] : 32'd0;
+  assign \$183  = ch0_read_select_9d ? \port$5355$0 [191:160] : 32'd0;
   assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_9f ? \port$5323$0 [255:224] : 32'd0;
+  assign \$185  = ch0_read_select_9e ? \port$5355$0 [223:192] : 32'd0;
   assign \$186  = \$184  | \$185 ;
-  assign \$187  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_inverted, 3'h0, ch0_cfg_crc0_width, ch0_cfg_crc0_poly } : 32'd0;
+  assign \$187  = ch0_read_select_9f ? \port$5355$0 [255:224] : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$189  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_start } : 32'd0;
+  assign \$189  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_inverted, 3'h0, ch0_cfg_crc0_width, ch0_cfg_crc0_poly } : 32'd0;
   assign \$190  = \$188  | \$189 ;
-  assign \$191  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_inverted, 3'h0, ch0_cfg_crc1_width, ch0_cfg_crc1_poly } : 32'd0;
+  assign \$191  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_start } : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_start } : 32'd0;
+  assign \$193  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_inverted, 3'h0, ch0_cfg_crc1_width, ch0_cfg_crc1_poly } : 32'd0;
   assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$101 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$195  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_start } : 32'd0;
   assign \$196  = \$194  | \$195 ;
-  assign \$199  = ch0_read_select_c2 ? { 17'h00000, \port$5455$0 [9:3], 1'h0, \port$5455$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$200  = \$198  | \$199 ;
-  assign \$201  = ch0_read_select_c3 ? \port$5323$0 [287:256] : 32'd0;
+  assign \$197  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$103 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$198  = \$196  | \$197 ;
+  assign \$201  = ch0_read_select_c2 ? { 17'h00000, \port$5487$0 [9:3], 1'h0, \port$5487$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$202  = \$200  | \$201 ;
-  assign \$203  = ch0_read_select_c4 ? \port$5323$0 [319:288] : 32'd0;
+  assign \$203  = ch0_read_select_c3 ? \port$5355$0 [287:256] : 32'd0;
   assign \$204  = \$202  | \$203 ;
-  assign \$205  = ch0_read_select_c5 ? { 16'h0000, \port$5323$0 [335:320] } : 32'd0;
+  assign \$205  = ch0_read_select_c4 ? \port$5355$0 [319:288] : 32'd0;
   assign \$206  = \$204  | \$205 ;
-  assign \$207  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$207  = ch0_read_select_c5 ? { 16'h0000, \port$5355$0 [335:320] } : 32'd0;
   assign \$208  = \$206  | \$207 ;
-  assign \$209  = write_data[0] & write_strb[0];
-  assign \$210  = ch1_ctrl_write ? \$209  : 1'h0;
-  assign \$211  = write_data[1] & write_strb[0];
+  assign \$209  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$210  = \$208  | \$209 ;
+  assign \$211  = write_data[0] & write_strb[0];
   assign \$212  = ch1_ctrl_write ? \$211  : 1'h0;
-  assign \$213  = write_data[2] & write_strb[0];
+  assign \$213  = write_data[1] & write_strb[0];
   assign \$214  = ch1_ctrl_write ? \$213  : 1'h0;
-  assign \$215  = ch1_ctrl_write & write_strb[1];
-  assign \$216  = ch1_ctrl_write & write_strb[1];
-  assign \$217  = write_data[0] & write_strb[0];
-  assign \$218  = ch1_irq_status_write ? \$217  : 1'h0;
-  assign \$219  = write_data[1] & write_strb[0];
+  assign \$215  = write_data[2] & write_strb[0];
+  assign \$216  = ch1_ctrl_write ? \$215  : 1'h0;
+  assign \$217  = ch1_ctrl_write & write_strb[1];
+  assign \$218  = ch1_ctrl_write & write_strb[1];
+  assign \$219  = write_data[0] & write_strb[0];
   assign \$220  = ch1_irq_status_write ? \$219  : 1'h0;
-  assign \$221  = write_data[2] & write_strb[0];
+  assign \$221  = write_data[1] & write_strb[0];
   assign \$222  = ch1_irq_status_write ? \$221  : 1'h0;
-  assign \$223  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$224  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$223  = write_data[2] & write_strb[0];
+  assign \$224  = ch1_irq_status_write ? \$223  : 1'h0;
   assign \$225  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$226  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$227  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$228  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$229  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$230  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$231  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$232  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$233  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$234  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$226  = ch1_irq_enable_config_write & config_write_strb[0];
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$503  = bus__w_en;
+    \$507  = bus__w_en;
     if (rst) begin
-      \$503  = 1'h0;
+      \$507  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$504  = write_addr;
+    \$508  = write_addr;
     if (bus__w_en) begin
-      \$504  = bus__w_addr;
+      \$508  = bus__w_addr;
     end
     if (rst) begin
-      \$504  = 11'h000;
+      \$508  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$505  = write_data;
+    \$509  = write_data;
     if (bus__w_en) begin
-      \$505  = bus__w_data;
+      \$509  = bus__w_data;
     end
     if (rst) begin
-      \$505  = 32'd0;
+      \$509  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$506  = write_strb;
+    \$510  = write_strb;
     if (bus__w_en) begin
-      \$506  = 4'hf;
+      \$510  = 4'hf;
     end
     if (rst) begin
-      \$506  = 4'h0;
+      \$510  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$507  = config_write_data;
+    \$511  = config_write_data;
     if (write_en) begin
-      \$507  = write_data;
+      \$511  = write_data;
     end
     if (rst) begin
-      \$507  = 32'd0;
+      \$511  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$508  = config_write_strb;
+    \$512  = config_write_strb;
     if (write_en) begin
-      \$508  = write_strb;
+      \$512  = write_strb;
     end
     if (rst) begin
-      \$508  = 4'h0;
+      \$512  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$509  = \$2 ;
-    if (rst) begin
-      \$509  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$510  = g_read_select_0;
-    if (bus__r_en) begin
-      \$510  = \$3 ;
-    end
-    if (rst) begin
-      \$510  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$511  = g_read_select_1;
-    if (bus__r_en) begin
-      \$511  = \$4 ;
-    end
-    if (rst) begin
-      \$511  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$512  = g_read_select_2;
-    if (bus__r_en) begin
-      \$512  = \$5 ;
-    end
-    if (rst) begin
-      \$512  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$513  = g_read_select_3;
-    if (bus__r_en) begin
-      \$513  = \$6 ;
-    end
+    \$513  = \$2 ;
     if (rst) begin
       \$513  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$514  = g_read_select_4;
+    \$514  = g_read_select_0;
     if (bus__r_en) begin
-      \$514  = \$7 ;
+      \$514  = \$3 ;
     end
     if (rst) begin
       \$514  = 1'h0;
@@ -3881,86 +3897,80 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$515  = g_read_data;
-    if (bus__r_load) begin
-      \$515  = \$17 ;
+    \$515  = g_read_select_1;
+    if (bus__r_en) begin
+      \$515  = \$4 ;
     end
     if (rst) begin
-      \$515  = 32'd0;
+      \$515  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$516  = \$19 ;
+    \$516  = g_read_select_2;
+    if (bus__r_en) begin
+      \$516  = \$5 ;
+    end
     if (rst) begin
       \$516  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$517  = \$21 ;
+    \$517  = g_read_select_3;
+    if (bus__r_en) begin
+      \$517  = \$6 ;
+    end
     if (rst) begin
       \$517  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$518  = \$23 ;
+    \$518  = g_read_select_4;
+    if (bus__r_en) begin
+      \$518  = \$7 ;
+    end
     if (rst) begin
       \$518  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$519  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$519  = write_data[8];
+    \$519  = g_read_data;
+    if (bus__r_load) begin
+      \$519  = \$17 ;
     end
     if (rst) begin
-      \$519  = 1'h0;
+      \$519  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$520  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$520  = write_data[9];
-    end
+    \$520  = \$19 ;
     if (rst) begin
       \$520  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$521  = ch0_irq_status_done;
-    if (ch0__done) begin
-      \$521  = 1'h1;
-    end else if (\$27 ) begin
-      \$521  = 1'h0;
-    end
+    \$521  = \$21 ;
     if (rst) begin
       \$521  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$522  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$522  = 1'h1;
-    end else if (\$29 ) begin
-      \$522  = 1'h0;
-    end
+    \$522  = \$23 ;
     if (rst) begin
       \$522  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$523  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$523  = 1'h1;
-    end else if (\$31 ) begin
-      \$523  = 1'h0;
+    \$523  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$523  = write_data[8];
     end
     if (rst) begin
       \$523  = 1'h0;
@@ -3968,16 +3978,21 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$524  = ch0_irq_enable_write;
+    \$524  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$524  = write_data[9];
+    end
     if (rst) begin
       \$524  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$525  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$525  = config_write_data[0];
+    \$525  = ch0_irq_status_done;
+    if (ch0__done) begin
+      \$525  = 1'h1;
+    end else if (\$27 ) begin
+      \$525  = 1'h0;
     end
     if (rst) begin
       \$525  = 1'h0;
@@ -3985,9 +4000,11 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$526  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$526  = config_write_data[1];
+    \$526  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$526  = 1'h1;
+    end else if (\$29 ) begin
+      \$526  = 1'h0;
     end
     if (rst) begin
       \$526  = 1'h0;
@@ -3995,9 +4012,11 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$527  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$527  = config_write_data[2];
+    \$527  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$527  = 1'h1;
+    end else if (\$31 ) begin
+      \$527  = 1'h0;
     end
     if (rst) begin
       \$527  = 1'h0;
@@ -4005,100 +4024,91 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$528  = ch0_cfg_ma_write;
+    \$528  = ch0_irq_enable_write;
     if (rst) begin
       \$528  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$529  = ch0_cfg_ma_ma_half_period;
-    if (\$35 ) begin
-      \$529 [7:0] = config_write_data[7:0];
-    end
-    if (\$36 ) begin
-      \$529 [15:8] = config_write_data[15:8];
+    \$529  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$529  = config_write_data[0];
     end
     if (rst) begin
-      \$529  = 16'h0000;
+      \$529  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$530  = ch0_cfg_ma_delay_limit;
-    if (\$37 ) begin
-      \$530 [7:0] = config_write_data[23:16];
-    end
-    if (\$38 ) begin
-      \$530 [11:8] = config_write_data[27:24];
+    \$530  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$530  = config_write_data[1];
     end
     if (rst) begin
-      \$530  = 12'h000;
+      \$530  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$531  = ch0_cfg_period_write;
+    \$531  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$531  = config_write_data[2];
+    end
     if (rst) begin
       \$531  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$532  = ch0_cfg_period_request_period;
-    if (\$39 ) begin
-      \$532 [7:0] = config_write_data[7:0];
-    end
-    if (\$40 ) begin
-      \$532 [15:8] = config_write_data[15:8];
-    end
-    if (\$41 ) begin
-      \$532 [23:16] = config_write_data[23:16];
-    end
+    \$532  = ch0_cfg_ma_write;
     if (rst) begin
-      \$532  = 24'h000000;
+      \$532  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$533  = ch0_cfg_break_write;
+    \$533  = ch0_cfg_ma_ma_half_period;
+    if (\$35 ) begin
+      \$533 [7:0] = config_write_data[7:0];
+    end
+    if (\$36 ) begin
+      \$533 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$533  = 1'h0;
+      \$533  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$534  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
-      \$534 [7:0] = config_write_data[7:0];
+    \$534  = ch0_cfg_ma_delay_limit;
+    if (\$37 ) begin
+      \$534 [7:0] = config_write_data[23:16];
     end
-    if (\$43 ) begin
-      \$534 [15:8] = config_write_data[15:8];
-    end
-    if (\$44 ) begin
-      \$534 [23:16] = config_write_data[23:16];
+    if (\$38 ) begin
+      \$534 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$534  = 24'h000000;
+      \$534  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$535  = ch0_cfg_ack_write;
+    \$535  = ch0_cfg_period_write;
     if (rst) begin
       \$535  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$536  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
+    \$536  = ch0_cfg_period_request_period;
+    if (\$39 ) begin
       \$536 [7:0] = config_write_data[7:0];
     end
-    if (\$46 ) begin
+    if (\$40 ) begin
       \$536 [15:8] = config_write_data[15:8];
     end
-    if (\$47 ) begin
+    if (\$41 ) begin
       \$536 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -4107,21 +4117,21 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$537  = ch0_cfg_timeout_write;
+    \$537  = ch0_cfg_break_write;
     if (rst) begin
       \$537  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$538  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
+    \$538  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
       \$538 [7:0] = config_write_data[7:0];
     end
-    if (\$49 ) begin
+    if (\$43 ) begin
       \$538 [15:8] = config_write_data[15:8];
     end
-    if (\$50 ) begin
+    if (\$44 ) begin
       \$538 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -4130,56 +4140,62 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$539  = ch0_cfg_words_write;
+    \$539  = ch0_cfg_ack_write;
     if (rst) begin
       \$539  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$540  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$540  = config_write_data[5:0];
+    \$540  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
+      \$540 [7:0] = config_write_data[7:0];
+    end
+    if (\$46 ) begin
+      \$540 [15:8] = config_write_data[15:8];
+    end
+    if (\$47 ) begin
+      \$540 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$540  = 6'h00;
+      \$540  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$541  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$541  = config_write_data[6];
-    end
+    \$541  = ch0_cfg_timeout_write;
     if (rst) begin
       \$541  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$542  = ch0_cfg_words_w0_lc;
-    if (\$53 ) begin
-      \$542  = config_write_data[7];
+    \$542  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
+      \$542 [7:0] = config_write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$542 [15:8] = config_write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$542 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$542  = 1'h0;
+      \$542  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$543  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$543  = config_write_data[9:8];
-    end
+    \$543  = ch0_cfg_words_write;
     if (rst) begin
-      \$543  = 2'h0;
+      \$543  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$544  = ch0_cfg_words_w1_data_bits;
-    if (\$55 ) begin
-      \$544  = config_write_data[21:16];
+    \$544  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$544  = config_write_data[5:0];
     end
     if (rst) begin
       \$544  = 6'h00;
@@ -4187,9 +4203,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$545  = ch0_cfg_words_w1_nenw;
-    if (\$56 ) begin
-      \$545  = config_write_data[22];
+    \$545  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$545  = config_write_data[6];
     end
     if (rst) begin
       \$545  = 1'h0;
@@ -4197,9 +4213,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$546  = ch0_cfg_words_w1_lc;
-    if (\$57 ) begin
-      \$546  = config_write_data[23];
+    \$546  = ch0_cfg_words_w0_lc;
+    if (\$53 ) begin
+      \$546  = config_write_data[7];
     end
     if (rst) begin
       \$546  = 1'h0;
@@ -4207,9 +4223,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$547  = ch0_cfg_words_w1_crc;
-    if (\$58 ) begin
-      \$547  = config_write_data[25:24];
+    \$547  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$547  = config_write_data[9:8];
     end
     if (rst) begin
       \$547  = 2'h0;
@@ -4217,9 +4233,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$548  = ch0_cfg_words_w1_enable;
-    if (\$59 ) begin
-      \$548  = config_write_data[31];
+    \$548  = ch0_cfg_words_w0_gray;
+    if (\$55 ) begin
+      \$548  = config_write_data[10];
     end
     if (rst) begin
       \$548  = 1'h0;
@@ -4227,16 +4243,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$549  = ch0_cfg_checks_write;
+    \$549  = ch0_cfg_words_w1_data_bits;
+    if (\$56 ) begin
+      \$549  = config_write_data[21:16];
+    end
     if (rst) begin
-      \$549  = 1'h0;
+      \$549  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$550  = ch0_cfg_checks_end_check;
-    if (\$60 ) begin
-      \$550  = config_write_data[0];
+    \$550  = ch0_cfg_words_w1_nenw;
+    if (\$57 ) begin
+      \$550  = config_write_data[22];
     end
     if (rst) begin
       \$550  = 1'h0;
@@ -4244,9 +4263,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$551  = ch0_cfg_checks_spw_check;
-    if (\$61 ) begin
-      \$551  = config_write_data[1];
+    \$551  = ch0_cfg_words_w1_lc;
+    if (\$58 ) begin
+      \$551  = config_write_data[23];
     end
     if (rst) begin
       \$551  = 1'h0;
@@ -4254,128 +4273,125 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$552  = ch0_cfg_checks_spw_tolerance;
-    if (\$62 ) begin
-      \$552  = config_write_data[15:8];
+    \$552  = ch0_cfg_words_w1_crc;
+    if (\$59 ) begin
+      \$552  = config_write_data[25:24];
     end
     if (rst) begin
-      \$552  = 8'h00;
+      \$552  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$553  = ch0_cfg_checks_noise_limit;
-    if (\$63 ) begin
-      \$553  = config_write_data[19:16];
+    \$553  = ch0_cfg_words_w1_gray;
+    if (\$60 ) begin
+      \$553  = config_write_data[26];
     end
     if (rst) begin
-      \$553  = 4'h0;
+      \$553  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$554  = ch0_cfg_checks_delay_tolerance;
-    if (\$64 ) begin
-      \$554  = config_write_data[23:20];
+    \$554  = ch0_cfg_words_w1_enable;
+    if (\$61 ) begin
+      \$554  = config_write_data[31];
     end
     if (rst) begin
-      \$554  = 4'h0;
+      \$554  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$555  = ch0_cfg_quiet_write;
+    \$555  = ch0_cfg_checks_write;
     if (rst) begin
       \$555  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$556  = ch0_cfg_quiet_quiet_time;
-    if (\$65 ) begin
-      \$556 [7:0] = config_write_data[7:0];
-    end
-    if (\$66 ) begin
-      \$556 [11:8] = config_write_data[11:8];
+    \$556  = ch0_cfg_checks_end_check;
+    if (\$62 ) begin
+      \$556  = config_write_data[0];
     end
     if (rst) begin
-      \$556  = 12'h000;
+      \$556  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$557  = ch0_cfg_crc0_write;
+    \$557  = ch0_cfg_checks_spw_check;
+    if (\$63 ) begin
+      \$557  = config_write_data[1];
+    end
     if (rst) begin
       \$557  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$558  = ch0_cfg_crc0_poly;
-    if (\$67 ) begin
-      \$558 [7:0] = config_write_data[7:0];
-    end
-    if (\$68 ) begin
-      \$558 [15:8] = config_write_data[15:8];
+    \$558  = ch0_cfg_checks_spw_tolerance;
+    if (\$64 ) begin
+      \$558  = config_write_data[15:8];
     end
     if (rst) begin
-      \$558  = 16'h0000;
+      \$558  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$559  = ch0_cfg_crc0_width;
-    if (\$69 ) begin
-      \$559  = config_write_data[20:16];
+    \$559  = ch0_cfg_checks_noise_limit;
+    if (\$65 ) begin
+      \$559  = config_write_data[19:16];
     end
     if (rst) begin
-      \$559  = 5'h00;
+      \$559  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$560  = ch0_cfg_crc0_inverted;
-    if (\$70 ) begin
-      \$560  = config_write_data[24];
+    \$560  = ch0_cfg_checks_delay_tolerance;
+    if (\$66 ) begin
+      \$560  = config_write_data[23:20];
     end
     if (rst) begin
-      \$560  = 1'h0;
+      \$560  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$561  = ch0_cfg_crc0_start_write;
+    \$561  = ch0_cfg_quiet_write;
     if (rst) begin
       \$561  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$562  = ch0_cfg_crc0_start_start;
-    if (\$71 ) begin
+    \$562  = ch0_cfg_quiet_quiet_time;
+    if (\$67 ) begin
       \$562 [7:0] = config_write_data[7:0];
     end
-    if (\$72 ) begin
-      \$562 [15:8] = config_write_data[15:8];
+    if (\$68 ) begin
+      \$562 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$562  = 16'h0000;
+      \$562  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$563  = ch0_cfg_crc1_write;
+    \$563  = ch0_cfg_crc0_write;
     if (rst) begin
       \$563  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$564  = ch0_cfg_crc1_poly;
-    if (\$73 ) begin
+    \$564  = ch0_cfg_crc0_poly;
+    if (\$69 ) begin
       \$564 [7:0] = config_write_data[7:0];
     end
-    if (\$74 ) begin
+    if (\$70 ) begin
       \$564 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
@@ -4384,8 +4400,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$565  = ch0_cfg_crc1_width;
-    if (\$75 ) begin
+    \$565  = ch0_cfg_crc0_width;
+    if (\$71 ) begin
       \$565  = config_write_data[20:16];
     end
     if (rst) begin
@@ -4394,8 +4410,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$566  = ch0_cfg_crc1_inverted;
-    if (\$76 ) begin
+    \$566  = ch0_cfg_crc0_inverted;
+    if (\$72 ) begin
       \$566  = config_write_data[24];
     end
     if (rst) begin
@@ -4404,18 +4420,18 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$567  = ch0_cfg_crc1_start_write;
+    \$567  = ch0_cfg_crc0_start_write;
     if (rst) begin
       \$567  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$568  = ch0_cfg_crc1_start_start;
-    if (\$77 ) begin
+    \$568  = ch0_cfg_crc0_start_start;
+    if (\$73 ) begin
       \$568 [7:0] = config_write_data[7:0];
     end
-    if (\$78 ) begin
+    if (\$74 ) begin
       \$568 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
@@ -4424,100 +4440,106 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$569  = ch0_ca_request_write;
+    \$569  = ch0_cfg_crc1_write;
     if (rst) begin
       \$569  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$570  = ch0_ca_request_slave_id;
-    if (\$79 ) begin
-      \$570  = config_write_data[2:0];
+    \$570  = ch0_cfg_crc1_poly;
+    if (\$75 ) begin
+      \$570 [7:0] = config_write_data[7:0];
+    end
+    if (\$76 ) begin
+      \$570 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$570  = 3'h0;
+      \$570  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$571  = ch0_ca_request_address;
-    if (\$80 ) begin
-      \$571  = config_write_data[14:8];
+    \$571  = ch0_cfg_crc1_width;
+    if (\$77 ) begin
+      \$571  = config_write_data[20:16];
     end
     if (rst) begin
-      \$571  = 7'h00;
+      \$571  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$572  = ch0_ca_request_count;
-    if (\$81 ) begin
-      \$572  = config_write_data[22:16];
+    \$572  = ch0_cfg_crc1_inverted;
+    if (\$78 ) begin
+      \$572  = config_write_data[24];
     end
     if (rst) begin
-      \$572  = 7'h00;
+      \$572  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$573  = \ch0_ca_request_write$101 ;
-    if (\$82 ) begin
-      \$573  = config_write_data[24];
-    end
+    \$573  = ch0_cfg_crc1_start_write;
     if (rst) begin
       \$573  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$574  = \$84 ;
+    \$574  = ch0_cfg_crc1_start_start;
+    if (\$79 ) begin
+      \$574 [7:0] = config_write_data[7:0];
+    end
+    if (\$80 ) begin
+      \$574 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$574  = 1'h0;
+      \$574  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$575  = \$86 ;
+    \$575  = ch0_ca_request_write;
     if (rst) begin
       \$575  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$576  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$576  = \$87 ;
+    \$576  = ch0_ca_request_slave_id;
+    if (\$81 ) begin
+      \$576  = config_write_data[2:0];
     end
     if (rst) begin
-      \$576  = 1'h0;
+      \$576  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$577  = ch0_read_select_81;
-    if (bus__r_en) begin
-      \$577  = \$88 ;
+    \$577  = ch0_ca_request_address;
+    if (\$82 ) begin
+      \$577  = config_write_data[14:8];
     end
     if (rst) begin
-      \$577  = 1'h0;
+      \$577  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$578  = ch0_read_select_82;
-    if (bus__r_en) begin
-      \$578  = \$89 ;
+    \$578  = ch0_ca_request_count;
+    if (\$83 ) begin
+      \$578  = config_write_data[22:16];
     end
     if (rst) begin
-      \$578  = 1'h0;
+      \$578  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$579  = ch0_read_select_84;
-    if (bus__r_en) begin
-      \$579  = \$90 ;
+    \$579  = \ch0_ca_request_write$103 ;
+    if (\$84 ) begin
+      \$579  = config_write_data[24];
     end
     if (rst) begin
       \$579  = 1'h0;
@@ -4525,29 +4547,23 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$580  = ch0_read_select_85;
-    if (bus__r_en) begin
-      \$580  = \$91 ;
-    end
+    \$580  = \$86 ;
     if (rst) begin
       \$580  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$581  = ch0_read_select_88;
-    if (bus__r_en) begin
-      \$581  = \$92 ;
-    end
+    \$581  = \$88 ;
     if (rst) begin
       \$581  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$582  = ch0_read_select_89;
+    \$582  = ch0_read_select_80;
     if (bus__r_en) begin
-      \$582  = \$93 ;
+      \$582  = \$89 ;
     end
     if (rst) begin
       \$582  = 1'h0;
@@ -4555,9 +4571,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$583  = ch0_read_select_8a;
+    \$583  = ch0_read_select_81;
     if (bus__r_en) begin
-      \$583  = \$94 ;
+      \$583  = \$90 ;
     end
     if (rst) begin
       \$583  = 1'h0;
@@ -4565,9 +4581,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$584  = ch0_read_select_8b;
+    \$584  = ch0_read_select_82;
     if (bus__r_en) begin
-      \$584  = \$95 ;
+      \$584  = \$91 ;
     end
     if (rst) begin
       \$584  = 1'h0;
@@ -4575,9 +4591,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$585  = ch0_read_select_8c;
+    \$585  = ch0_read_select_84;
     if (bus__r_en) begin
-      \$585  = \$96 ;
+      \$585  = \$92 ;
     end
     if (rst) begin
       \$585  = 1'h0;
@@ -4585,9 +4601,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$586  = ch0_read_select_8d;
+    \$586  = ch0_read_select_85;
     if (bus__r_en) begin
-      \$586  = \$97 ;
+      \$586  = \$93 ;
     end
     if (rst) begin
       \$586  = 1'h0;
@@ -4595,9 +4611,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$587  = ch0_read_select_8e;
+    \$587  = ch0_read_select_88;
     if (bus__r_en) begin
-      \$587  = \$98 ;
+      \$587  = \$94 ;
     end
     if (rst) begin
       \$587  = 1'h0;
@@ -4605,9 +4621,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$588  = ch0_read_select_8f;
+    \$588  = ch0_read_select_89;
     if (bus__r_en) begin
-      \$588  = \$99 ;
+      \$588  = \$95 ;
     end
     if (rst) begin
       \$588  = 1'h0;
@@ -4615,9 +4631,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$589  = ch0_read_select_90;
+    \$589  = ch0_read_select_8a;
     if (bus__r_en) begin
-      \$589  = \$100 ;
+      \$589  = \$96 ;
     end
     if (rst) begin
       \$589  = 1'h0;
@@ -4625,9 +4641,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$590  = ch0_read_select_91;
+    \$590  = ch0_read_select_8b;
     if (bus__r_en) begin
-      \$590  = \$101 ;
+      \$590  = \$97 ;
     end
     if (rst) begin
       \$590  = 1'h0;
@@ -4635,9 +4651,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$591  = ch0_read_select_92;
+    \$591  = ch0_read_select_8c;
     if (bus__r_en) begin
-      \$591  = \$102 ;
+      \$591  = \$98 ;
     end
     if (rst) begin
       \$591  = 1'h0;
@@ -4645,9 +4661,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$592  = ch0_read_select_93;
+    \$592  = ch0_read_select_8d;
     if (bus__r_en) begin
-      \$592  = \$103 ;
+      \$592  = \$99 ;
     end
     if (rst) begin
       \$592  = 1'h0;
@@ -4655,9 +4671,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$593  = ch0_read_select_94;
+    \$593  = ch0_read_select_8e;
     if (bus__r_en) begin
-      \$593  = \$104 ;
+      \$593  = \$100 ;
     end
     if (rst) begin
       \$593  = 1'h0;
@@ -4665,9 +4681,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$594  = ch0_read_select_95;
+    \$594  = ch0_read_select_8f;
     if (bus__r_en) begin
-      \$594  = \$105 ;
+      \$594  = \$101 ;
     end
     if (rst) begin
       \$594  = 1'h0;
@@ -4675,9 +4691,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$595  = ch0_read_select_96;
+    \$595  = ch0_read_select_90;
     if (bus__r_en) begin
-      \$595  = \$106 ;
+      \$595  = \$102 ;
     end
     if (rst) begin
       \$595  = 1'h0;
@@ -4685,9 +4701,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$596  = ch0_read_select_97;
+    \$596  = ch0_read_select_91;
     if (bus__r_en) begin
-      \$596  = \$107 ;
+      \$596  = \$103 ;
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -4695,9 +4711,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$597  = ch0_read_select_98;
+    \$597  = ch0_read_select_92;
     if (bus__r_en) begin
-      \$597  = \$108 ;
+      \$597  = \$104 ;
     end
     if (rst) begin
       \$597  = 1'h0;
@@ -4705,9 +4721,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$598  = ch0_read_select_99;
+    \$598  = ch0_read_select_93;
     if (bus__r_en) begin
-      \$598  = \$109 ;
+      \$598  = \$105 ;
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -4715,9 +4731,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$599  = ch0_read_select_9a;
+    \$599  = ch0_read_select_94;
     if (bus__r_en) begin
-      \$599  = \$110 ;
+      \$599  = \$106 ;
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -4725,9 +4741,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$600  = ch0_read_select_9b;
+    \$600  = ch0_read_select_95;
     if (bus__r_en) begin
-      \$600  = \$111 ;
+      \$600  = \$107 ;
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -4735,9 +4751,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$601  = ch0_read_select_9c;
+    \$601  = ch0_read_select_96;
     if (bus__r_en) begin
-      \$601  = \$112 ;
+      \$601  = \$108 ;
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -4745,9 +4761,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$602  = ch0_read_select_9d;
+    \$602  = ch0_read_select_97;
     if (bus__r_en) begin
-      \$602  = \$113 ;
+      \$602  = \$109 ;
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -4755,9 +4771,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$603  = ch0_read_select_9e;
+    \$603  = ch0_read_select_98;
     if (bus__r_en) begin
-      \$603  = \$114 ;
+      \$603  = \$110 ;
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -4765,9 +4781,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$604  = ch0_read_select_9f;
+    \$604  = ch0_read_select_99;
     if (bus__r_en) begin
-      \$604  = \$115 ;
+      \$604  = \$111 ;
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -4775,9 +4791,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$605  = ch0_read_select_a0;
+    \$605  = ch0_read_select_9a;
     if (bus__r_en) begin
-      \$605  = \$116 ;
+      \$605  = \$112 ;
     end
     if (rst) begin
       \$605  = 1'h0;
@@ -4785,9 +4801,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$606  = ch0_read_select_a1;
+    \$606  = ch0_read_select_9b;
     if (bus__r_en) begin
-      \$606  = \$117 ;
+      \$606  = \$113 ;
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -4795,9 +4811,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$607  = ch0_read_select_a2;
+    \$607  = ch0_read_select_9c;
     if (bus__r_en) begin
-      \$607  = \$118 ;
+      \$607  = \$114 ;
     end
     if (rst) begin
       \$607  = 1'h0;
@@ -4805,9 +4821,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$608  = ch0_read_select_a3;
+    \$608  = ch0_read_select_9d;
     if (bus__r_en) begin
-      \$608  = \$119 ;
+      \$608  = \$115 ;
     end
     if (rst) begin
       \$608  = 1'h0;
@@ -4815,9 +4831,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$609  = ch0_read_select_c0;
+    \$609  = ch0_read_select_9e;
     if (bus__r_en) begin
-      \$609  = \$120 ;
+      \$609  = \$116 ;
     end
     if (rst) begin
       \$609  = 1'h0;
@@ -4825,9 +4841,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$610  = ch0_read_select_c1;
+    \$610  = ch0_read_select_9f;
     if (bus__r_en) begin
-      \$610  = \$121 ;
+      \$610  = \$117 ;
     end
     if (rst) begin
       \$610  = 1'h0;
@@ -4835,9 +4851,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$611  = ch0_read_select_c2;
+    \$611  = ch0_read_select_a0;
     if (bus__r_en) begin
-      \$611  = \$122 ;
+      \$611  = \$118 ;
     end
     if (rst) begin
       \$611  = 1'h0;
@@ -4845,9 +4861,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$612  = ch0_read_select_c3;
+    \$612  = ch0_read_select_a1;
     if (bus__r_en) begin
-      \$612  = \$123 ;
+      \$612  = \$119 ;
     end
     if (rst) begin
       \$612  = 1'h0;
@@ -4855,9 +4871,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$613  = ch0_read_select_c4;
+    \$613  = ch0_read_select_a2;
     if (bus__r_en) begin
-      \$613  = \$124 ;
+      \$613  = \$120 ;
     end
     if (rst) begin
       \$613  = 1'h0;
@@ -4865,9 +4881,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$614  = ch0_read_select_c5;
+    \$614  = ch0_read_select_a3;
     if (bus__r_en) begin
-      \$614  = \$125 ;
+      \$614  = \$121 ;
     end
     if (rst) begin
       \$614  = 1'h0;
@@ -4875,19 +4891,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$615  = ch0_result_status_status_snapshot;
-    if (\$126 ) begin
-      \$615  = \port$5310$0 [3:0];
+    \$615  = ch0_read_select_c0;
+    if (bus__r_en) begin
+      \$615  = \$122 ;
     end
     if (rst) begin
-      \$615  = 4'h0;
+      \$615  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$616  = ch0_result_status_cds_snapshot;
-    if (\$126 ) begin
-      \$616  = \port$5310$0 [49];
+    \$616  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$616  = \$123 ;
     end
     if (rst) begin
       \$616  = 1'h0;
@@ -4895,9 +4911,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$617  = ch0_result_status_w0_ne_snapshot;
-    if (\$126 ) begin
-      \$617  = \port$5310$0 [131];
+    \$617  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$617  = \$124 ;
     end
     if (rst) begin
       \$617  = 1'h0;
@@ -4905,9 +4921,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$618  = ch0_result_status_w0_nw_snapshot;
-    if (\$126 ) begin
-      \$618  = \port$5310$0 [132];
+    \$618  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$618  = \$125 ;
     end
     if (rst) begin
       \$618  = 1'h0;
@@ -4915,9 +4931,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$619  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$126 ) begin
-      \$619  = \port$5310$0 [133];
+    \$619  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$619  = \$126 ;
     end
     if (rst) begin
       \$619  = 1'h0;
@@ -4925,9 +4941,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$620  = ch0_result_status_w1_ne_snapshot;
-    if (\$126 ) begin
-      \$620  = \port$5310$0 [174];
+    \$620  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$620  = \$127 ;
     end
     if (rst) begin
       \$620  = 1'h0;
@@ -4935,19 +4951,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$621  = ch0_result_status_w1_nw_snapshot;
-    if (\$126 ) begin
-      \$621  = \port$5310$0 [175];
+    \$621  = ch0_result_status_status_snapshot;
+    if (\$128 ) begin
+      \$621  = \port$5342$0 [3:0];
     end
     if (rst) begin
-      \$621  = 1'h0;
+      \$621  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$622  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$126 ) begin
-      \$622  = \port$5310$0 [176];
+    \$622  = ch0_result_status_cds_snapshot;
+    if (\$128 ) begin
+      \$622  = \port$5342$0 [49];
     end
     if (rst) begin
       \$622  = 1'h0;
@@ -4955,9 +4971,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$623  = ch0_result_status_lc_repeat_snapshot;
-    if (\$126 ) begin
-      \$623  = \port$5310$0 [183];
+    \$623  = ch0_result_status_w0_ne_snapshot;
+    if (\$128 ) begin
+      \$623  = \port$5342$0 [131];
     end
     if (rst) begin
       \$623  = 1'h0;
@@ -4965,9 +4981,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$624  = ch0_result_status_lc_skip_snapshot;
-    if (\$126 ) begin
-      \$624  = \port$5310$0 [184];
+    \$624  = ch0_result_status_w0_nw_snapshot;
+    if (\$128 ) begin
+      \$624  = \port$5342$0 [132];
     end
     if (rst) begin
       \$624  = 1'h0;
@@ -4975,9 +4991,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$625  = ch0_result_status_lc_zero_snapshot;
-    if (\$126 ) begin
-      \$625  = \port$5310$0 [185];
+    \$625  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$128 ) begin
+      \$625  = \port$5342$0 [133];
     end
     if (rst) begin
       \$625  = 1'h0;
@@ -4985,9 +5001,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$626  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$126 ) begin
-      \$626  = \port$5310$0 [186];
+    \$626  = ch0_result_status_w1_ne_snapshot;
+    if (\$128 ) begin
+      \$626  = \port$5342$0 [174];
     end
     if (rst) begin
       \$626  = 1'h0;
@@ -4995,139 +5011,139 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$627  = ch0_result_status_lc_snapshot;
-    if (\$126 ) begin
-      \$627  = \port$5310$0 [182:177];
+    \$627  = ch0_result_status_w1_nw_snapshot;
+    if (\$128 ) begin
+      \$627  = \port$5342$0 [175];
     end
     if (rst) begin
-      \$627  = 6'h00;
+      \$627  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$628  = ch0_result_seq_seq_snapshot;
-    if (\$126 ) begin
-      \$628  = ch0__done_count;
+    \$628  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$128 ) begin
+      \$628  = \port$5342$0 [176];
     end
     if (rst) begin
-      \$628  = 16'h0000;
+      \$628  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$629  = ch0_result_seq_line_delay_snapshot;
-    if (\$126 ) begin
-      \$629  = \port$5310$0 [48:36];
+    \$629  = ch0_result_status_lc_repeat_snapshot;
+    if (\$128 ) begin
+      \$629  = \port$5342$0 [183];
     end
     if (rst) begin
-      \$629  = 13'h0000;
+      \$629  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$630  = ch0_result_w0_lo_data_snapshot;
-    if (\$126 ) begin
-      \$630  = \port$5310$0 [107:76];
+    \$630  = ch0_result_status_lc_skip_snapshot;
+    if (\$128 ) begin
+      \$630  = \port$5342$0 [184];
     end
     if (rst) begin
-      \$630  = 32'd0;
+      \$630  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$631  = ch0_result_w0_hi_data_snapshot;
-    if (\$126 ) begin
-      \$631  = \port$5310$0 [130:108];
+    \$631  = ch0_result_status_lc_zero_snapshot;
+    if (\$128 ) begin
+      \$631  = \port$5342$0 [185];
     end
     if (rst) begin
-      \$631  = 23'h000000;
+      \$631  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$632  = ch0_result_w1_lo_data_snapshot;
-    if (\$126 ) begin
-      \$632  = \port$5310$0 [165:134];
+    \$632  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$128 ) begin
+      \$632  = \port$5342$0 [186];
     end
     if (rst) begin
-      \$632  = 32'd0;
+      \$632  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$633  = ch0_result_w1_hi_data_snapshot;
-    if (\$126 ) begin
-      \$633  = \port$5310$0 [173:166];
+    \$633  = ch0_result_status_lc_snapshot;
+    if (\$128 ) begin
+      \$633  = \port$5342$0 [182:177];
     end
     if (rst) begin
-      \$633  = 8'h00;
+      \$633  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$634  = ch0_result_timestamp_time_snapshot;
-    if (\$126 ) begin
-      \$634  = \port$5310$0 [35:4];
+    \$634  = ch0_result_seq_seq_snapshot;
+    if (\$128 ) begin
+      \$634  = ch0__done_count;
     end
     if (rst) begin
-      \$634  = 32'd0;
+      \$634  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$635  = ch0_result_line_noise_events_snapshot;
-    if (\$126 ) begin
-      \$635  = \port$5310$0 [53:50];
+    \$635  = ch0_result_seq_line_delay_snapshot;
+    if (\$128 ) begin
+      \$635  = \port$5342$0 [48:36];
     end
     if (rst) begin
-      \$635  = 4'h0;
+      \$635  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$636  = ch0_result_line_delay_settled_snapshot;
-    if (\$126 ) begin
-      \$636  = \port$5310$0 [54];
+    \$636  = ch0_result_w0_lo_data_snapshot;
+    if (\$128 ) begin
+      \$636  = \port$5342$0 [107:76];
     end
     if (rst) begin
-      \$636  = 1'h0;
+      \$636  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$637  = ch0_result_line_delay_spread_snapshot;
-    if (\$126 ) begin
-      \$637  = \port$5310$0 [75:68];
+    \$637  = ch0_result_w0_hi_data_snapshot;
+    if (\$128 ) begin
+      \$637  = \port$5342$0 [130:108];
     end
     if (rst) begin
-      \$637  = 8'h00;
+      \$637  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$638  = ch0_result_line_settled_delay_snapshot;
-    if (\$126 ) begin
-      \$638  = \port$5310$0 [67:55];
+    \$638  = ch0_result_w1_lo_data_snapshot;
+    if (\$128 ) begin
+      \$638  = \port$5342$0 [165:134];
     end
     if (rst) begin
-      \$638  = 13'h0000;
+      \$638  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$639  = ch0_window0_read;
-    if (bus__r_en) begin
-      \$639  = \$128 ;
+    \$639  = ch0_result_w1_hi_data_snapshot;
+    if (\$128 ) begin
+      \$639  = \port$5342$0 [173:166];
     end
     if (rst) begin
-      \$639  = 1'h0;
+      \$639  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$640  = ch0_read_data;
-    if (bus__r_load) begin
-      \$640  = \$208 ;
+    \$640  = ch0_result_timestamp_time_snapshot;
+    if (\$128 ) begin
+      \$640  = \port$5342$0 [35:4];
     end
     if (rst) begin
       \$640  = 32'd0;
@@ -5135,40 +5151,49 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$641  = \$210 ;
+    \$641  = ch0_result_line_noise_events_snapshot;
+    if (\$128 ) begin
+      \$641  = \port$5342$0 [53:50];
+    end
     if (rst) begin
-      \$641  = 1'h0;
+      \$641  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$642  = \$212 ;
+    \$642  = ch0_result_line_delay_settled_snapshot;
+    if (\$128 ) begin
+      \$642  = \port$5342$0 [54];
+    end
     if (rst) begin
       \$642  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$643  = \$214 ;
+    \$643  = ch0_result_line_delay_spread_snapshot;
+    if (\$128 ) begin
+      \$643  = \port$5342$0 [75:68];
+    end
     if (rst) begin
-      \$643  = 1'h0;
+      \$643  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$644  = ch1_ctrl_periodic;
-    if (\$215 ) begin
-      \$644  = write_data[8];
+    \$644  = ch0_result_line_settled_delay_snapshot;
+    if (\$128 ) begin
+      \$644  = \port$5342$0 [67:55];
     end
     if (rst) begin
-      \$644  = 1'h0;
+      \$644  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$645  = ch1_ctrl_trigger_enable;
-    if (\$216 ) begin
-      \$645  = write_data[9];
+    \$645  = ch0_window0_read;
+    if (bus__r_en) begin
+      \$645  = \$130 ;
     end
     if (rst) begin
       \$645  = 1'h0;
@@ -5176,52 +5201,40 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$646  = ch1_irq_status_done;
-    if (ch1__done) begin
-      \$646  = 1'h1;
-    end else if (\$218 ) begin
-      \$646  = 1'h0;
+    \$646  = ch0_read_data;
+    if (bus__r_load) begin
+      \$646  = \$210 ;
     end
     if (rst) begin
-      \$646  = 1'h0;
+      \$646  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$647  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$647  = 1'h1;
-    end else if (\$220 ) begin
-      \$647  = 1'h0;
-    end
+    \$647  = \$212 ;
     if (rst) begin
       \$647  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$648  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$648  = 1'h1;
-    end else if (\$222 ) begin
-      \$648  = 1'h0;
-    end
+    \$648  = \$214 ;
     if (rst) begin
       \$648  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$649  = ch1_irq_enable_write;
+    \$649  = \$216 ;
     if (rst) begin
       \$649  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$650  = ch1_irq_enable_done;
-    if (\$223 ) begin
-      \$650  = config_write_data[0];
+    \$650  = ch1_ctrl_periodic;
+    if (\$217 ) begin
+      \$650  = write_data[8];
     end
     if (rst) begin
       \$650  = 1'h0;
@@ -5229,9 +5242,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$651  = ch1_irq_enable_error;
-    if (\$224 ) begin
-      \$651  = config_write_data[1];
+    \$651  = ch1_ctrl_trigger_enable;
+    if (\$218 ) begin
+      \$651  = write_data[9];
     end
     if (rst) begin
       \$651  = 1'h0;
@@ -5239,9 +5252,11 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$652  = ch1_irq_enable_access_done;
-    if (\$225 ) begin
-      \$652  = config_write_data[2];
+    \$652  = ch1_irq_status_done;
+    if (ch1__done) begin
+      \$652  = 1'h1;
+    end else if (\$220 ) begin
+      \$652  = 1'h0;
     end
     if (rst) begin
       \$652  = 1'h0;
@@ -5249,123 +5264,115 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$653  = ch1_cfg_ma_write;
+    \$653  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$653  = 1'h1;
+    end else if (\$222 ) begin
+      \$653  = 1'h0;
+    end
     if (rst) begin
       \$653  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$654  = ch1_cfg_ma_ma_half_period;
-    if (\$226 ) begin
-      \$654 [7:0] = config_write_data[7:0];
-    end
-    if (\$227 ) begin
-      \$654 [15:8] = config_write_data[15:8];
+    \$654  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$654  = 1'h1;
+    end else if (\$224 ) begin
+      \$654  = 1'h0;
     end
     if (rst) begin
-      \$654  = 16'h0000;
+      \$654  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$655  = ch1_cfg_ma_delay_limit;
-    if (\$228 ) begin
-      \$655 [7:0] = config_write_data[23:16];
-    end
-    if (\$229 ) begin
-      \$655 [11:8] = config_write_data[27:24];
-    end
+    \$655  = ch1_irq_enable_write;
     if (rst) begin
-      \$655  = 12'h000;
+      \$655  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$656  = ch1_cfg_period_write;
+    \$656  = ch1_irq_enable_done;
+    if (\$225 ) begin
+      \$656  = config_write_data[0];
+    end
     if (rst) begin
       \$656  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$657  = ch1_cfg_period_request_period;
-    if (\$230 ) begin
-      \$657 [7:0] = config_write_data[7:0];
-    end
-    if (\$231 ) begin
-      \$657 [15:8] = config_write_data[15:8];
-    end
-    if (\$232 ) begin
-      \$657 [23:16] = config_write_data[23:16];
+    \$657  = ch1_irq_enable_error;
+    if (\$226 ) begin
+      \$657  = config_write_data[1];
     end
     if (rst) begin
-      \$657  = 24'h000000;
+      \$657  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$658  = ch1_cfg_break_write;
+    \$658  = ch1_irq_enable_access_done;
+    if (\$227 ) begin
+      \$658  = config_write_data[2];
+    end
     if (rst) begin
       \$658  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$659  = ch1_cfg_break_break_time;
-    if (\$233 ) begin
-      \$659 [7:0] = config_write_data[7:0];
-    end
-    if (\$234 ) begin
-      \$659 [15:8] = config_write_data[15:8];
-    end
-    if (\$235 ) begin
-      \$659 [23:16] = config_write_data[23:16];
-    end
+    \$659  = ch1_cfg_ma_write;
     if (rst) begin
-      \$659  = 24'h000000;
+      \$659  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$660  = ch1_cfg_ack_write;
+    \$660  = ch1_cfg_ma_ma_half_period;
+    if (\$228 ) begin
+      \$660 [7:0] = config_write_data[7:0];
+    end
+    if (\$229 ) begin
+      \$660 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$660  = 1'h0;
+      \$660  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$661  = ch1_cfg_ack_ack_limit;
-    if (\$236 ) begin
-      \$661 [7:0] = config_write_data[7:0];
+    \$661  = ch1_cfg_ma_delay_limit;
+    if (\$230 ) begin
+      \$661 [7:0] = config_write_data[23:16];
     end
-    if (\$237 ) begin
-      \$661 [15:8] = config_write_data[15:8];
-    end
-    if (\$238 ) begin
-      \$661 [23:16] = config_write_data[23:16];
+    if (\$231 ) begin
+      \$661 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$661  = 24'h000000;
+      \$661  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$662  = ch1_cfg_timeout_write;
+    \$662  = ch1_cfg_period_write;
     if (rst) begin
       \$662  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$663  = ch1_cfg_timeout_timeout_limit;
-    if (\$239 ) begin
+    \$663  = ch1_cfg_period_request_period;
+    if (\$232 ) begin
       \$663 [7:0] = config_write_data[7:0];
     end
-    if (\$240 ) begin
+    if (\$233 ) begin
       \$663 [15:8] = config_write_data[15:8];
     end
-    if (\$241 ) begin
+    if (\$234 ) begin
       \$663 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -5374,96 +5381,105 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$664  = ch1_cfg_words_write;
+    \$664  = ch1_cfg_break_write;
     if (rst) begin
       \$664  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$665  = ch1_cfg_words_w0_data_bits;
-    if (\$242 ) begin
-      \$665  = config_write_data[5:0];
+    \$665  = ch1_cfg_break_break_time;
+    if (\$235 ) begin
+      \$665 [7:0] = config_write_data[7:0];
+    end
+    if (\$236 ) begin
+      \$665 [15:8] = config_write_data[15:8];
+    end
+    if (\$237 ) begin
+      \$665 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$665  = 6'h00;
+      \$665  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$666  = ch1_cfg_words_w0_nenw;
-    if (\$243 ) begin
-      \$666  = config_write_data[6];
-    end
+    \$666  = ch1_cfg_ack_write;
     if (rst) begin
       \$666  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$667  = ch1_cfg_words_w0_lc;
-    if (\$244 ) begin
-      \$667  = config_write_data[7];
+    \$667  = ch1_cfg_ack_ack_limit;
+    if (\$238 ) begin
+      \$667 [7:0] = config_write_data[7:0];
+    end
+    if (\$239 ) begin
+      \$667 [15:8] = config_write_data[15:8];
+    end
+    if (\$240 ) begin
+      \$667 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$667  = 1'h0;
+      \$667  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$668  = ch1_cfg_words_w0_crc;
-    if (\$245 ) begin
-      \$668  = config_write_data[9:8];
-    end
+    \$668  = ch1_cfg_timeout_write;
     if (rst) begin
-      \$668  = 2'h0;
+      \$668  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$669  = ch1_cfg_words_w1_data_bits;
-    if (\$246 ) begin
-      \$669  = config_write_data[21:16];
+    \$669  = ch1_cfg_timeout_timeout_limit;
+    if (\$241 ) begin
+      \$669 [7:0] = config_write_data[7:0];
+    end
+    if (\$242 ) begin
+      \$669 [15:8] = config_write_data[15:8];
+    end
+    if (\$243 ) begin
+      \$669 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$669  = 6'h00;
+      \$669  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$670  = ch1_cfg_words_w1_nenw;
-    if (\$247 ) begin
-      \$670  = config_write_data[22];
-    end
+    \$670  = ch1_cfg_words_write;
     if (rst) begin
       \$670  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$671  = ch1_cfg_words_w1_lc;
-    if (\$248 ) begin
-      \$671  = config_write_data[23];
+    \$671  = ch1_cfg_words_w0_data_bits;
+    if (\$244 ) begin
+      \$671  = config_write_data[5:0];
     end
     if (rst) begin
-      \$671  = 1'h0;
+      \$671  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$672  = ch1_cfg_words_w1_crc;
-    if (\$249 ) begin
-      \$672  = config_write_data[25:24];
+    \$672  = ch1_cfg_words_w0_nenw;
+    if (\$245 ) begin
+      \$672  = config_write_data[6];
     end
     if (rst) begin
-      \$672  = 2'h0;
+      \$672  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$673  = ch1_cfg_words_w1_enable;
-    if (\$250 ) begin
-      \$673  = config_write_data[31];
+    \$673  = ch1_cfg_words_w0_lc;
+    if (\$246 ) begin
+      \$673  = config_write_data[7];
     end
     if (rst) begin
       \$673  = 1'h0;
@@ -5471,16 +5487,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$674  = ch1_cfg_checks_write;
+    \$674  = ch1_cfg_words_w0_crc;
+    if (\$247 ) begin
+      \$674  = config_write_data[9:8];
+    end
     if (rst) begin
-      \$674  = 1'h0;
+      \$674  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$675  = ch1_cfg_checks_end_check;
-    if (\$251 ) begin
-      \$675  = config_write_data[0];
+    \$675  = ch1_cfg_words_w0_gray;
+    if (\$248 ) begin
+      \$675  = config_write_data[10];
     end
     if (rst) begin
       \$675  = 1'h0;
@@ -5488,300 +5507,303 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$676  = ch1_cfg_checks_spw_check;
+    \$676  = ch1_cfg_words_w1_data_bits;
+    if (\$249 ) begin
+      \$676  = config_write_data[21:16];
+    end
+    if (rst) begin
+      \$676  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$677  = ch1_cfg_words_w1_nenw;
+    if (\$250 ) begin
+      \$677  = config_write_data[22];
+    end
+    if (rst) begin
+      \$677  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$678  = ch1_cfg_words_w1_lc;
+    if (\$251 ) begin
+      \$678  = config_write_data[23];
+    end
+    if (rst) begin
+      \$678  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$679  = ch1_cfg_words_w1_crc;
     if (\$252 ) begin
-      \$676  = config_write_data[1];
+      \$679  = config_write_data[25:24];
     end
     if (rst) begin
-      \$676  = 1'h0;
+      \$679  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$677  = ch1_cfg_checks_spw_tolerance;
+    \$680  = ch1_cfg_words_w1_gray;
     if (\$253 ) begin
-      \$677  = config_write_data[15:8];
+      \$680  = config_write_data[26];
     end
-    if (rst) begin
-      \$677  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$678  = ch1_cfg_checks_noise_limit;
-    if (\$254 ) begin
-      \$678  = config_write_data[19:16];
-    end
-    if (rst) begin
-      \$678  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$679  = ch1_cfg_checks_delay_tolerance;
-    if (\$255 ) begin
-      \$679  = config_write_data[23:20];
-    end
-    if (rst) begin
-      \$679  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$680  = ch1_cfg_quiet_write;
     if (rst) begin
       \$680  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$681  = ch1_cfg_quiet_quiet_time;
-    if (\$256 ) begin
-      \$681 [7:0] = config_write_data[7:0];
-    end
-    if (\$257 ) begin
-      \$681 [11:8] = config_write_data[11:8];
+    \$681  = ch1_cfg_words_w1_enable;
+    if (\$254 ) begin
+      \$681  = config_write_data[31];
     end
     if (rst) begin
-      \$681  = 12'h000;
+      \$681  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$682  = ch1_cfg_crc0_write;
+    \$682  = ch1_cfg_checks_write;
     if (rst) begin
       \$682  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$683  = ch1_cfg_crc0_poly;
+    \$683  = ch1_cfg_checks_end_check;
+    if (\$255 ) begin
+      \$683  = config_write_data[0];
+    end
+    if (rst) begin
+      \$683  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$684  = ch1_cfg_checks_spw_check;
+    if (\$256 ) begin
+      \$684  = config_write_data[1];
+    end
+    if (rst) begin
+      \$684  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$685  = ch1_cfg_checks_spw_tolerance;
+    if (\$257 ) begin
+      \$685  = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$685  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$686  = ch1_cfg_checks_noise_limit;
     if (\$258 ) begin
-      \$683 [7:0] = config_write_data[7:0];
+      \$686  = config_write_data[19:16];
     end
+    if (rst) begin
+      \$686  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$687  = ch1_cfg_checks_delay_tolerance;
     if (\$259 ) begin
-      \$683 [15:8] = config_write_data[15:8];
+      \$687  = config_write_data[23:20];
     end
     if (rst) begin
-      \$683  = 16'h0000;
+      \$687  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$684  = ch1_cfg_crc0_width;
-    if (\$260 ) begin
-      \$684  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$684  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$685  = ch1_cfg_crc0_inverted;
-    if (\$261 ) begin
-      \$685  = config_write_data[24];
-    end
-    if (rst) begin
-      \$685  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$686  = ch1_cfg_crc0_start_write;
-    if (rst) begin
-      \$686  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$687  = ch1_cfg_crc0_start_start;
-    if (\$262 ) begin
-      \$687 [7:0] = config_write_data[7:0];
-    end
-    if (\$263 ) begin
-      \$687 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$687  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$688  = ch1_cfg_crc1_write;
+    \$688  = ch1_cfg_quiet_write;
     if (rst) begin
       \$688  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$689  = ch1_cfg_crc1_poly;
-    if (\$264 ) begin
+    \$689  = ch1_cfg_quiet_quiet_time;
+    if (\$260 ) begin
       \$689 [7:0] = config_write_data[7:0];
     end
+    if (\$261 ) begin
+      \$689 [11:8] = config_write_data[11:8];
+    end
+    if (rst) begin
+      \$689  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$690  = ch1_cfg_crc0_write;
+    if (rst) begin
+      \$690  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$691  = ch1_cfg_crc0_poly;
+    if (\$262 ) begin
+      \$691 [7:0] = config_write_data[7:0];
+    end
+    if (\$263 ) begin
+      \$691 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$691  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$692  = ch1_cfg_crc0_width;
+    if (\$264 ) begin
+      \$692  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$692  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$693  = ch1_cfg_crc0_inverted;
     if (\$265 ) begin
-      \$689 [15:8] = config_write_data[15:8];
+      \$693  = config_write_data[24];
     end
     if (rst) begin
-      \$689  = 16'h0000;
+      \$693  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$690  = ch1_cfg_crc1_width;
-    if (\$266 ) begin
-      \$690  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$690  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$691  = ch1_cfg_crc1_inverted;
-    if (\$267 ) begin
-      \$691  = config_write_data[24];
-    end
-    if (rst) begin
-      \$691  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$692  = ch1_cfg_crc1_start_write;
-    if (rst) begin
-      \$692  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$693  = ch1_cfg_crc1_start_start;
-    if (\$268 ) begin
-      \$693 [7:0] = config_write_data[7:0];
-    end
-    if (\$269 ) begin
-      \$693 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$693  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$694  = ch1_ca_request_write;
+    \$694  = ch1_cfg_crc0_start_write;
     if (rst) begin
       \$694  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$695  = ch1_ca_request_slave_id;
+    \$695  = ch1_cfg_crc0_start_start;
+    if (\$266 ) begin
+      \$695 [7:0] = config_write_data[7:0];
+    end
+    if (\$267 ) begin
+      \$695 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$695  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$696  = ch1_cfg_crc1_write;
+    if (rst) begin
+      \$696  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$697  = ch1_cfg_crc1_poly;
+    if (\$268 ) begin
+      \$697 [7:0] = config_write_data[7:0];
+    end
+    if (\$269 ) begin
+      \$697 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$697  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$698  = ch1_cfg_crc1_width;
     if (\$270 ) begin
-      \$695  = config_write_data[2:0];
+      \$698  = config_write_data[20:16];
     end
     if (rst) begin
-      \$695  = 3'h0;
+      \$698  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$696  = ch1_ca_request_address;
+    \$699  = ch1_cfg_crc1_inverted;
     if (\$271 ) begin
-      \$696  = config_write_data[14:8];
+      \$699  = config_write_data[24];
     end
-    if (rst) begin
-      \$696  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$697  = ch1_ca_request_count;
-    if (\$272 ) begin
-      \$697  = config_write_data[22:16];
-    end
-    if (rst) begin
-      \$697  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$698  = \ch1_ca_request_write$301 ;
-    if (\$273 ) begin
-      \$698  = config_write_data[24];
-    end
-    if (rst) begin
-      \$698  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$699  = \$275 ;
     if (rst) begin
       \$699  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$700  = \$277 ;
+    \$700  = ch1_cfg_crc1_start_write;
     if (rst) begin
       \$700  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$701  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$701  = \$278 ;
+    \$701  = ch1_cfg_crc1_start_start;
+    if (\$272 ) begin
+      \$701 [7:0] = config_write_data[7:0];
+    end
+    if (\$273 ) begin
+      \$701 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$701  = 1'h0;
+      \$701  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$702  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$702  = \$279 ;
-    end
+    \$702  = ch1_ca_request_write;
     if (rst) begin
       \$702  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$703  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$703  = \$280 ;
+    \$703  = ch1_ca_request_slave_id;
+    if (\$274 ) begin
+      \$703  = config_write_data[2:0];
     end
     if (rst) begin
-      \$703  = 1'h0;
+      \$703  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$704  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$704  = \$281 ;
+    \$704  = ch1_ca_request_address;
+    if (\$275 ) begin
+      \$704  = config_write_data[14:8];
     end
     if (rst) begin
-      \$704  = 1'h0;
+      \$704  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$705  = ch1_read_select_105;
-    if (bus__r_en) begin
-      \$705  = \$282 ;
+    \$705  = ch1_ca_request_count;
+    if (\$276 ) begin
+      \$705  = config_write_data[22:16];
     end
     if (rst) begin
-      \$705  = 1'h0;
+      \$705  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$706  = ch1_read_select_108;
-    if (bus__r_en) begin
-      \$706  = \$283 ;
+    \$706  = \ch1_ca_request_write$305 ;
+    if (\$277 ) begin
+      \$706  = config_write_data[24];
     end
     if (rst) begin
       \$706  = 1'h0;
@@ -5789,29 +5811,23 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$707  = ch1_read_select_109;
-    if (bus__r_en) begin
-      \$707  = \$284 ;
-    end
+    \$707  = \$279 ;
     if (rst) begin
       \$707  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$708  = ch1_read_select_10a;
-    if (bus__r_en) begin
-      \$708  = \$285 ;
-    end
+    \$708  = \$281 ;
     if (rst) begin
       \$708  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$709  = ch1_read_select_10b;
+    \$709  = ch1_read_select_100;
     if (bus__r_en) begin
-      \$709  = \$286 ;
+      \$709  = \$282 ;
     end
     if (rst) begin
       \$709  = 1'h0;
@@ -5819,9 +5835,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$710  = ch1_read_select_10c;
+    \$710  = ch1_read_select_101;
     if (bus__r_en) begin
-      \$710  = \$287 ;
+      \$710  = \$283 ;
     end
     if (rst) begin
       \$710  = 1'h0;
@@ -5829,9 +5845,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$711  = ch1_read_select_10d;
+    \$711  = ch1_read_select_102;
     if (bus__r_en) begin
-      \$711  = \$288 ;
+      \$711  = \$284 ;
     end
     if (rst) begin
       \$711  = 1'h0;
@@ -5839,9 +5855,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$712  = ch1_read_select_10e;
+    \$712  = ch1_read_select_104;
     if (bus__r_en) begin
-      \$712  = \$289 ;
+      \$712  = \$285 ;
     end
     if (rst) begin
       \$712  = 1'h0;
@@ -5849,9 +5865,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$713  = ch1_read_select_10f;
+    \$713  = ch1_read_select_105;
     if (bus__r_en) begin
-      \$713  = \$290 ;
+      \$713  = \$286 ;
     end
     if (rst) begin
       \$713  = 1'h0;
@@ -5859,9 +5875,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$714  = ch1_read_select_110;
+    \$714  = ch1_read_select_108;
     if (bus__r_en) begin
-      \$714  = \$291 ;
+      \$714  = \$287 ;
     end
     if (rst) begin
       \$714  = 1'h0;
@@ -5869,9 +5885,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$715  = ch1_read_select_111;
+    \$715  = ch1_read_select_109;
     if (bus__r_en) begin
-      \$715  = \$292 ;
+      \$715  = \$288 ;
     end
     if (rst) begin
       \$715  = 1'h0;
@@ -5879,9 +5895,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$716  = ch1_read_select_112;
+    \$716  = ch1_read_select_10a;
     if (bus__r_en) begin
-      \$716  = \$293 ;
+      \$716  = \$289 ;
     end
     if (rst) begin
       \$716  = 1'h0;
@@ -5889,9 +5905,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$717  = ch1_read_select_113;
+    \$717  = ch1_read_select_10b;
     if (bus__r_en) begin
-      \$717  = \$294 ;
+      \$717  = \$290 ;
     end
     if (rst) begin
       \$717  = 1'h0;
@@ -5899,9 +5915,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$718  = ch1_read_select_114;
+    \$718  = ch1_read_select_10c;
     if (bus__r_en) begin
-      \$718  = \$295 ;
+      \$718  = \$291 ;
     end
     if (rst) begin
       \$718  = 1'h0;
@@ -5909,9 +5925,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$719  = ch1_read_select_115;
+    \$719  = ch1_read_select_10d;
     if (bus__r_en) begin
-      \$719  = \$296 ;
+      \$719  = \$292 ;
     end
     if (rst) begin
       \$719  = 1'h0;
@@ -5919,9 +5935,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$720  = ch1_read_select_116;
+    \$720  = ch1_read_select_10e;
     if (bus__r_en) begin
-      \$720  = \$297 ;
+      \$720  = \$293 ;
     end
     if (rst) begin
       \$720  = 1'h0;
@@ -5929,9 +5945,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$721  = ch1_read_select_117;
+    \$721  = ch1_read_select_10f;
     if (bus__r_en) begin
-      \$721  = \$298 ;
+      \$721  = \$294 ;
     end
     if (rst) begin
       \$721  = 1'h0;
@@ -5939,9 +5955,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$722  = ch1_read_select_118;
+    \$722  = ch1_read_select_110;
     if (bus__r_en) begin
-      \$722  = \$299 ;
+      \$722  = \$295 ;
     end
     if (rst) begin
       \$722  = 1'h0;
@@ -5949,9 +5965,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$723  = ch1_read_select_119;
+    \$723  = ch1_read_select_111;
     if (bus__r_en) begin
-      \$723  = \$300 ;
+      \$723  = \$296 ;
     end
     if (rst) begin
       \$723  = 1'h0;
@@ -5959,9 +5975,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$724  = ch1_read_select_11a;
+    \$724  = ch1_read_select_112;
     if (bus__r_en) begin
-      \$724  = \$301 ;
+      \$724  = \$297 ;
     end
     if (rst) begin
       \$724  = 1'h0;
@@ -5969,9 +5985,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$725  = ch1_read_select_11b;
+    \$725  = ch1_read_select_113;
     if (bus__r_en) begin
-      \$725  = \$302 ;
+      \$725  = \$298 ;
     end
     if (rst) begin
       \$725  = 1'h0;
@@ -5979,9 +5995,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$726  = ch1_read_select_11c;
+    \$726  = ch1_read_select_114;
     if (bus__r_en) begin
-      \$726  = \$303 ;
+      \$726  = \$299 ;
     end
     if (rst) begin
       \$726  = 1'h0;
@@ -5989,9 +6005,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$727  = ch1_read_select_11d;
+    \$727  = ch1_read_select_115;
     if (bus__r_en) begin
-      \$727  = \$304 ;
+      \$727  = \$300 ;
     end
     if (rst) begin
       \$727  = 1'h0;
@@ -5999,9 +6015,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$728  = ch1_read_select_11e;
+    \$728  = ch1_read_select_116;
     if (bus__r_en) begin
-      \$728  = \$305 ;
+      \$728  = \$301 ;
     end
     if (rst) begin
       \$728  = 1'h0;
@@ -6009,9 +6025,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$729  = ch1_read_select_11f;
+    \$729  = ch1_read_select_117;
     if (bus__r_en) begin
-      \$729  = \$306 ;
+      \$729  = \$302 ;
     end
     if (rst) begin
       \$729  = 1'h0;
@@ -6019,9 +6035,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$730  = ch1_read_select_120;
+    \$730  = ch1_read_select_118;
     if (bus__r_en) begin
-      \$730  = \$307 ;
+      \$730  = \$303 ;
     end
     if (rst) begin
       \$730  = 1'h0;
@@ -6029,9 +6045,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$731  = ch1_read_select_121;
+    \$731  = ch1_read_select_119;
     if (bus__r_en) begin
-      \$731  = \$308 ;
+      \$731  = \$304 ;
     end
     if (rst) begin
       \$731  = 1'h0;
@@ -6039,9 +6055,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$732  = ch1_read_select_122;
+    \$732  = ch1_read_select_11a;
     if (bus__r_en) begin
-      \$732  = \$309 ;
+      \$732  = \$305 ;
     end
     if (rst) begin
       \$732  = 1'h0;
@@ -6049,9 +6065,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$733  = ch1_read_select_123;
+    \$733  = ch1_read_select_11b;
     if (bus__r_en) begin
-      \$733  = \$310 ;
+      \$733  = \$306 ;
     end
     if (rst) begin
       \$733  = 1'h0;
@@ -6059,9 +6075,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$734  = ch1_read_select_140;
+    \$734  = ch1_read_select_11c;
     if (bus__r_en) begin
-      \$734  = \$311 ;
+      \$734  = \$307 ;
     end
     if (rst) begin
       \$734  = 1'h0;
@@ -6069,9 +6085,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$735  = ch1_read_select_141;
+    \$735  = ch1_read_select_11d;
     if (bus__r_en) begin
-      \$735  = \$312 ;
+      \$735  = \$308 ;
     end
     if (rst) begin
       \$735  = 1'h0;
@@ -6079,9 +6095,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$736  = ch1_read_select_142;
+    \$736  = ch1_read_select_11e;
     if (bus__r_en) begin
-      \$736  = \$313 ;
+      \$736  = \$309 ;
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6089,9 +6105,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$737  = ch1_read_select_143;
+    \$737  = ch1_read_select_11f;
     if (bus__r_en) begin
-      \$737  = \$314 ;
+      \$737  = \$310 ;
     end
     if (rst) begin
       \$737  = 1'h0;
@@ -6099,9 +6115,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$738  = ch1_read_select_144;
+    \$738  = ch1_read_select_120;
     if (bus__r_en) begin
-      \$738  = \$315 ;
+      \$738  = \$311 ;
     end
     if (rst) begin
       \$738  = 1'h0;
@@ -6109,9 +6125,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$739  = ch1_read_select_145;
+    \$739  = ch1_read_select_121;
     if (bus__r_en) begin
-      \$739  = \$316 ;
+      \$739  = \$312 ;
     end
     if (rst) begin
       \$739  = 1'h0;
@@ -6119,19 +6135,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$740  = ch1_result_status_status_snapshot;
-    if (\$317 ) begin
-      \$740  = \port$5861$0 [3:0];
+    \$740  = ch1_read_select_122;
+    if (bus__r_en) begin
+      \$740  = \$313 ;
     end
     if (rst) begin
-      \$740  = 4'h0;
+      \$740  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$741  = ch1_result_status_cds_snapshot;
-    if (\$317 ) begin
-      \$741  = \port$5861$0 [49];
+    \$741  = ch1_read_select_123;
+    if (bus__r_en) begin
+      \$741  = \$314 ;
     end
     if (rst) begin
       \$741  = 1'h0;
@@ -6139,9 +6155,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$742  = ch1_result_status_w0_ne_snapshot;
-    if (\$317 ) begin
-      \$742  = \port$5861$0 [131];
+    \$742  = ch1_read_select_140;
+    if (bus__r_en) begin
+      \$742  = \$315 ;
     end
     if (rst) begin
       \$742  = 1'h0;
@@ -6149,9 +6165,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$743  = ch1_result_status_w0_nw_snapshot;
-    if (\$317 ) begin
-      \$743  = \port$5861$0 [132];
+    \$743  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$743  = \$316 ;
     end
     if (rst) begin
       \$743  = 1'h0;
@@ -6159,9 +6175,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$744  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$317 ) begin
-      \$744  = \port$5861$0 [133];
+    \$744  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$744  = \$317 ;
     end
     if (rst) begin
       \$744  = 1'h0;
@@ -6169,9 +6185,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$745  = ch1_result_status_w1_ne_snapshot;
-    if (\$317 ) begin
-      \$745  = \port$5861$0 [174];
+    \$745  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$745  = \$318 ;
     end
     if (rst) begin
       \$745  = 1'h0;
@@ -6179,9 +6195,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$746  = ch1_result_status_w1_nw_snapshot;
-    if (\$317 ) begin
-      \$746  = \port$5861$0 [175];
+    \$746  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$746  = \$319 ;
     end
     if (rst) begin
       \$746  = 1'h0;
@@ -6189,9 +6205,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$747  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$317 ) begin
-      \$747  = \port$5861$0 [176];
+    \$747  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$747  = \$320 ;
     end
     if (rst) begin
       \$747  = 1'h0;
@@ -6199,19 +6215,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$748  = ch1_result_status_lc_repeat_snapshot;
-    if (\$317 ) begin
-      \$748  = \port$5861$0 [183];
+    \$748  = ch1_result_status_status_snapshot;
+    if (\$321 ) begin
+      \$748  = \port$5893$0 [3:0];
     end
     if (rst) begin
-      \$748  = 1'h0;
+      \$748  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$749  = ch1_result_status_lc_skip_snapshot;
-    if (\$317 ) begin
-      \$749  = \port$5861$0 [184];
+    \$749  = ch1_result_status_cds_snapshot;
+    if (\$321 ) begin
+      \$749  = \port$5893$0 [49];
     end
     if (rst) begin
       \$749  = 1'h0;
@@ -6219,9 +6235,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$750  = ch1_result_status_lc_zero_snapshot;
-    if (\$317 ) begin
-      \$750  = \port$5861$0 [185];
+    \$750  = ch1_result_status_w0_ne_snapshot;
+    if (\$321 ) begin
+      \$750  = \port$5893$0 [131];
     end
     if (rst) begin
       \$750  = 1'h0;
@@ -6229,9 +6245,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$751  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$317 ) begin
-      \$751  = \port$5861$0 [186];
+    \$751  = ch1_result_status_w0_nw_snapshot;
+    if (\$321 ) begin
+      \$751  = \port$5893$0 [132];
     end
     if (rst) begin
       \$751  = 1'h0;
@@ -6239,247 +6255,327 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$752  = ch1_result_status_lc_snapshot;
-    if (\$317 ) begin
-      \$752  = \port$5861$0 [182:177];
+    \$752  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$321 ) begin
+      \$752  = \port$5893$0 [133];
     end
     if (rst) begin
-      \$752  = 6'h00;
+      \$752  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$753  = ch1_result_seq_seq_snapshot;
-    if (\$317 ) begin
-      \$753  = ch1__done_count;
+    \$753  = ch1_result_status_w1_ne_snapshot;
+    if (\$321 ) begin
+      \$753  = \port$5893$0 [174];
     end
     if (rst) begin
-      \$753  = 16'h0000;
+      \$753  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$754  = ch1_result_seq_line_delay_snapshot;
-    if (\$317 ) begin
-      \$754  = \port$5861$0 [48:36];
+    \$754  = ch1_result_status_w1_nw_snapshot;
+    if (\$321 ) begin
+      \$754  = \port$5893$0 [175];
     end
     if (rst) begin
-      \$754  = 13'h0000;
+      \$754  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$755  = ch1_result_w0_lo_data_snapshot;
-    if (\$317 ) begin
-      \$755  = \port$5861$0 [107:76];
+    \$755  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$321 ) begin
+      \$755  = \port$5893$0 [176];
     end
     if (rst) begin
-      \$755  = 32'd0;
+      \$755  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$756  = ch1_result_w0_hi_data_snapshot;
-    if (\$317 ) begin
-      \$756  = \port$5861$0 [130:108];
+    \$756  = ch1_result_status_lc_repeat_snapshot;
+    if (\$321 ) begin
+      \$756  = \port$5893$0 [183];
     end
     if (rst) begin
-      \$756  = 23'h000000;
+      \$756  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$757  = ch1_result_w1_lo_data_snapshot;
-    if (\$317 ) begin
-      \$757  = \port$5861$0 [165:134];
+    \$757  = ch1_result_status_lc_skip_snapshot;
+    if (\$321 ) begin
+      \$757  = \port$5893$0 [184];
     end
     if (rst) begin
-      \$757  = 32'd0;
+      \$757  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$758  = ch1_result_w1_hi_data_snapshot;
-    if (\$317 ) begin
-      \$758  = \port$5861$0 [173:166];
+    \$758  = ch1_result_status_lc_zero_snapshot;
+    if (\$321 ) begin
+      \$758  = \port$5893$0 [185];
     end
     if (rst) begin
-      \$758  = 8'h00;
+      \$758  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$759  = ch1_result_timestamp_time_snapshot;
-    if (\$317 ) begin
-      \$759  = \port$5861$0 [35:4];
+    \$759  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$321 ) begin
+      \$759  = \port$5893$0 [186];
     end
     if (rst) begin
-      \$759  = 32'd0;
+      \$759  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$760  = ch1_result_line_noise_events_snapshot;
-    if (\$317 ) begin
-      \$760  = \port$5861$0 [53:50];
+    \$760  = ch1_result_status_lc_snapshot;
+    if (\$321 ) begin
+      \$760  = \port$5893$0 [182:177];
     end
     if (rst) begin
-      \$760  = 4'h0;
+      \$760  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$761  = ch1_result_line_delay_settled_snapshot;
-    if (\$317 ) begin
-      \$761  = \port$5861$0 [54];
+    \$761  = ch1_result_seq_seq_snapshot;
+    if (\$321 ) begin
+      \$761  = ch1__done_count;
     end
     if (rst) begin
-      \$761  = 1'h0;
+      \$761  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$762  = ch1_result_line_delay_spread_snapshot;
-    if (\$317 ) begin
-      \$762  = \port$5861$0 [75:68];
+    \$762  = ch1_result_seq_line_delay_snapshot;
+    if (\$321 ) begin
+      \$762  = \port$5893$0 [48:36];
     end
     if (rst) begin
-      \$762  = 8'h00;
+      \$762  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$763  = ch1_result_line_settled_delay_snapshot;
-    if (\$317 ) begin
-      \$763  = \port$5861$0 [67:55];
+    \$763  = ch1_result_w0_lo_data_snapshot;
+    if (\$321 ) begin
+      \$763  = \port$5893$0 [107:76];
     end
     if (rst) begin
-      \$763  = 13'h0000;
+      \$763  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$764  = ch1_window0_read;
-    if (bus__r_en) begin
-      \$764  = \$319 ;
+    \$764  = ch1_result_w0_hi_data_snapshot;
+    if (\$321 ) begin
+      \$764  = \port$5893$0 [130:108];
     end
     if (rst) begin
-      \$764  = 1'h0;
+      \$764  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$765  = ch1_read_data;
-    if (bus__r_load) begin
-      \$765  = \$399 ;
+    \$765  = ch1_result_w1_lo_data_snapshot;
+    if (\$321 ) begin
+      \$765  = \port$5893$0 [165:134];
     end
     if (rst) begin
       \$765  = 32'd0;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$766  = ch1_result_w1_hi_data_snapshot;
+    if (\$321 ) begin
+      \$766  = \port$5893$0 [173:166];
+    end
+    if (rst) begin
+      \$766  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$767  = ch1_result_timestamp_time_snapshot;
+    if (\$321 ) begin
+      \$767  = \port$5893$0 [35:4];
+    end
+    if (rst) begin
+      \$767  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$768  = ch1_result_line_noise_events_snapshot;
+    if (\$321 ) begin
+      \$768  = \port$5893$0 [53:50];
+    end
+    if (rst) begin
+      \$768  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$769  = ch1_result_line_delay_settled_snapshot;
+    if (\$321 ) begin
+      \$769  = \port$5893$0 [54];
+    end
+    if (rst) begin
+      \$769  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$770  = ch1_result_line_delay_spread_snapshot;
+    if (\$321 ) begin
+      \$770  = \port$5893$0 [75:68];
+    end
+    if (rst) begin
+      \$770  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$771  = ch1_result_line_settled_delay_snapshot;
+    if (\$321 ) begin
+      \$771  = \port$5893$0 [67:55];
+    end
+    if (rst) begin
+      \$771  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$772  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$772  = \$323 ;
+    end
+    if (rst) begin
+      \$772  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$773  = ch1_read_data;
+    if (bus__r_load) begin
+      \$773  = \$403 ;
+    end
+    if (rst) begin
+      \$773  = 32'd0;
+    end
+  end
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$5310$0 [3:0];
-  assign ch0__cds = \port$5310$0 [49];
-  assign ch0__word0_ne = \port$5310$0 [131];
-  assign ch0__word0_nw = \port$5310$0 [132];
-  assign ch0__word0_crc_ok = \port$5310$0 [133];
-  assign ch0__word1_ne = \port$5310$0 [174];
-  assign ch0__word1_nw = \port$5310$0 [175];
-  assign ch0__word1_crc_ok = \port$5310$0 [176];
-  assign ch0__lc_repeat = \port$5310$0 [183];
-  assign ch0__lc_skip = \port$5310$0 [184];
-  assign ch0__lc_zero = \port$5310$0 [185];
-  assign ch0__spw_mismatch = \port$5310$0 [186];
-  assign ch0__lc = \port$5310$0 [182:177];
-  assign ch0__line_delay = \port$5310$0 [48:36];
-  assign ch0__word0_position = \port$5310$0 [130:76];
-  assign ch0__word1_position = \port$5310$0 [173:134];
-  assign ch0__timestamp = \port$5310$0 [35:4];
-  assign ch0__noise_events = \port$5310$0 [53:50];
-  assign ch0__delay_settled = \port$5310$0 [54];
-  assign ch0__delay_spread = \port$5310$0 [75:68];
-  assign ch0__settled_delay = \port$5310$0 [67:55];
+  assign ch0__status = \port$5342$0 [3:0];
+  assign ch0__cds = \port$5342$0 [49];
+  assign ch0__word0_ne = \port$5342$0 [131];
+  assign ch0__word0_nw = \port$5342$0 [132];
+  assign ch0__word0_crc_ok = \port$5342$0 [133];
+  assign ch0__word1_ne = \port$5342$0 [174];
+  assign ch0__word1_nw = \port$5342$0 [175];
+  assign ch0__word1_crc_ok = \port$5342$0 [176];
+  assign ch0__lc_repeat = \port$5342$0 [183];
+  assign ch0__lc_skip = \port$5342$0 [184];
+  assign ch0__lc_zero = \port$5342$0 [185];
+  assign ch0__spw_mismatch = \port$5342$0 [186];
+  assign ch0__lc = \port$5342$0 [182:177];
+  assign ch0__line_delay = \port$5342$0 [48:36];
+  assign ch0__word0_position = \port$5342$0 [130:76];
+  assign ch0__word1_position = \port$5342$0 [173:134];
+  assign ch0__timestamp = \port$5342$0 [35:4];
+  assign ch0__noise_events = \port$5342$0 [53:50];
+  assign ch0__delay_settled = \port$5342$0 [54];
+  assign ch0__delay_spread = \port$5342$0 [75:68];
+  assign ch0__settled_delay = \port$5342$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$5323$0 [15:0];
-  assign ch0__count_crc_word1 = \port$5323$0 [31:16];
-  assign ch0__count_no_ack = \port$5323$0 [47:32];
-  assign ch0__count_no_start = \port$5323$0 [63:48];
-  assign ch0__count_delay_range = \port$5323$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$5323$0 [95:80];
-  assign ch0__count_lc_repeat = \port$5323$0 [111:96];
-  assign ch0__count_lc_skip = \port$5323$0 [127:112];
-  assign ch0__count_lc_zero = \port$5323$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$5323$0 [159:144];
-  assign ch0__count_overrun = \port$5323$0 [175:160];
-  assign ch0__count_aborted = \port$5323$0 [191:176];
-  assign ch0__count_no_stop = \port$5323$0 [207:192];
-  assign ch0__count_noisy_line = \port$5323$0 [223:208];
-  assign ch0__count_delay_jump = \port$5323$0 [239:224];
-  assign ch0__count_noise_event = \port$5323$0 [255:240];
-  assign ch0__ca_status = \port$5455$0 [2:0];
-  assign ch0__ca_bytes_done = \port$5455$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$5323$0 [271:256];
-  assign ch0__count_ca_no_answer = \port$5323$0 [287:272];
-  assign ch0__count_ca_refused = \port$5323$0 [303:288];
-  assign ch0__count_ca_aborted = \port$5323$0 [319:304];
-  assign ch0__count_ca_data_fault = \port$5323$0 [335:320];
-  assign ch1__status = \port$5861$0 [3:0];
-  assign ch1__cds = \port$5861$0 [49];
-  assign ch1__word0_ne = \port$5861$0 [131];
-  assign ch1__word0_nw = \port$5861$0 [132];
-  assign ch1__word0_crc_ok = \port$5861$0 [133];
-  assign ch1__word1_ne = \port$5861$0 [174];
-  assign ch1__word1_nw = \port$5861$0 [175];
-  assign ch1__word1_crc_ok = \port$5861$0 [176];
-  assign ch1__lc_repeat = \port$5861$0 [183];
-  assign ch1__lc_skip = \port$5861$0 [184];
-  assign ch1__lc_zero = \port$5861$0 [185];
-  assign ch1__spw_mismatch = \port$5861$0 [186];
-  assign ch1__lc = \port$5861$0 [182:177];
-  assign ch1__line_delay = \port$5861$0 [48:36];
-  assign ch1__word0_position = \port$5861$0 [130:76];
-  assign ch1__word1_position = \port$5861$0 [173:134];
-  assign ch1__timestamp = \port$5861$0 [35:4];
-  assign ch1__noise_events = \port$5861$0 [53:50];
-  assign ch1__delay_settled = \port$5861$0 [54];
-  assign ch1__delay_spread = \port$5861$0 [75:68];
-  assign ch1__settled_delay = \port$5861$0 [67:55];
+  assign ch0__count_crc_word0 = \port$5355$0 [15:0];
+  assign ch0__count_crc_word1 = \port$5355$0 [31:16];
+  assign ch0__count_no_ack = \port$5355$0 [47:32];
+  assign ch0__count_no_start = \port$5355$0 [63:48];
+  assign ch0__count_delay_range = \port$5355$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$5355$0 [95:80];
+  assign ch0__count_lc_repeat = \port$5355$0 [111:96];
+  assign ch0__count_lc_skip = \port$5355$0 [127:112];
+  assign ch0__count_lc_zero = \port$5355$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$5355$0 [159:144];
+  assign ch0__count_overrun = \port$5355$0 [175:160];
+  assign ch0__count_aborted = \port$5355$0 [191:176];
+  assign ch0__count_no_stop = \port$5355$0 [207:192];
+  assign ch0__count_noisy_line = \port$5355$0 [223:208];
+  assign ch0__count_delay_jump = \port$5355$0 [239:224];
+  assign ch0__count_noise_event = \port$5355$0 [255:240];
+  assign ch0__ca_status = \port$5487$0 [2:0];
+  assign ch0__ca_bytes_done = \port$5487$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$5355$0 [271:256];
+  assign ch0__count_ca_no_answer = \port$5355$0 [287:272];
+  assign ch0__count_ca_refused = \port$5355$0 [303:288];
+  assign ch0__count_ca_aborted = \port$5355$0 [319:304];
+  assign ch0__count_ca_data_fault = \port$5355$0 [335:320];
+  assign ch1__status = \port$5893$0 [3:0];
+  assign ch1__cds = \port$5893$0 [49];
+  assign ch1__word0_ne = \port$5893$0 [131];
+  assign ch1__word0_nw = \port$5893$0 [132];
+  assign ch1__word0_crc_ok = \port$5893$0 [133];
+  assign ch1__word1_ne = \port$5893$0 [174];
+  assign ch1__word1_nw = \port$5893$0 [175];
+  assign ch1__word1_crc_ok = \port$5893$0 [176];
+  assign ch1__lc_repeat = \port$5893$0 [183];
+  assign ch1__lc_skip = \port$5893$0 [184];
+  assign ch1__lc_zero = \port$5893$0 [185];
+  assign ch1__spw_mismatch = \port$5893$0 [186];
+  assign ch1__lc = \port$5893$0 [182:177];
+  assign ch1__line_delay = \port$5893$0 [48:36];
+  assign ch1__word0_position = \port$5893$0 [130:76];
+  assign ch1__word1_position = \port$5893$0 [173:134];
+  assign ch1__timestamp = \port$5893$0 [35:4];
+  assign ch1__noise_events = \port$5893$0 [53:50];
+  assign ch1__delay_settled = \port$5893$0 [54];
+  assign ch1__delay_spread = \port$5893$0 [75:68];
+  assign ch1__settled_delay = \port$5893$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$5874$0 [15:0];
-  assign ch1__count_crc_word1 = \port$5874$0 [31:16];
-  assign ch1__count_no_ack = \port$5874$0 [47:32];
-  assign ch1__count_no_start = \port$5874$0 [63:48];
-  assign ch1__count_delay_range = \port$5874$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$5874$0 [95:80];
-  assign ch1__count_lc_repeat = \port$5874$0 [111:96];
-  assign ch1__count_lc_skip = \port$5874$0 [127:112];
-  assign ch1__count_lc_zero = \port$5874$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$5874$0 [159:144];
-  assign ch1__count_overrun = \port$5874$0 [175:160];
-  assign ch1__count_aborted = \port$5874$0 [191:176];
-  assign ch1__count_no_stop = \port$5874$0 [207:192];
-  assign ch1__count_noisy_line = \port$5874$0 [223:208];
-  assign ch1__count_delay_jump = \port$5874$0 [239:224];
-  assign ch1__count_noise_event = \port$5874$0 [255:240];
-  assign ch1__ca_status = \port$6006$0 [2:0];
-  assign ch1__ca_bytes_done = \port$6006$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$5874$0 [271:256];
-  assign ch1__count_ca_no_answer = \port$5874$0 [287:272];
-  assign ch1__count_ca_refused = \port$5874$0 [303:288];
-  assign ch1__count_ca_aborted = \port$5874$0 [319:304];
-  assign ch1__count_ca_data_fault = \port$5874$0 [335:320];
+  assign ch1__count_crc_word0 = \port$5906$0 [15:0];
+  assign ch1__count_crc_word1 = \port$5906$0 [31:16];
+  assign ch1__count_no_ack = \port$5906$0 [47:32];
+  assign ch1__count_no_start = \port$5906$0 [63:48];
+  assign ch1__count_delay_range = \port$5906$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$5906$0 [95:80];
+  assign ch1__count_lc_repeat = \port$5906$0 [111:96];
+  assign ch1__count_lc_skip = \port$5906$0 [127:112];
+  assign ch1__count_lc_zero = \port$5906$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$5906$0 [159:144];
+  assign ch1__count_overrun = \port$5906$0 [175:160];
+  assign ch1__count_aborted = \port$5906$0 [191:176];
+  assign ch1__count_no_stop = \port$5906$0 [207:192];
+  assign ch1__count_noisy_line = \port$5906$0 [223:208];
+  assign ch1__count_delay_jump = \port$5906$0 [239:224];
+  assign ch1__count_noise_event = \port$5906$0 [255:240];
+  assign ch1__ca_status = \port$6038$0 [2:0];
+  assign ch1__ca_bytes_done = \port$6038$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$5906$0 [271:256];
+  assign ch1__count_ca_no_answer = \port$5906$0 [287:272];
+  assign ch1__count_ca_refused = \port$5906$0 [303:288];
+  assign ch1__count_ca_aborted = \port$5906$0 [319:304];
+  assign ch1__count_ca_data_fault = \port$5906$0 [335:320];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -6496,10 +6592,12 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign ch0__cfg_w0_nenw = ch0_cfg_words_w0_nenw;
   assign ch0__cfg_w0_lc = ch0_cfg_words_w0_lc;
   assign ch0__cfg_w0_crc = ch0_cfg_words_w0_crc;
+  assign ch0__cfg_w0_gray = ch0_cfg_words_w0_gray;
   assign ch0__cfg_w1_data_bits = ch0_cfg_words_w1_data_bits;
   assign ch0__cfg_w1_nenw = ch0_cfg_words_w1_nenw;
   assign ch0__cfg_w1_lc = ch0_cfg_words_w1_lc;
   assign ch0__cfg_w1_crc = ch0_cfg_words_w1_crc;
+  assign ch0__cfg_w1_gray = ch0_cfg_words_w1_gray;
   assign ch0__cfg_w1_enable = ch0_cfg_words_w1_enable;
   assign ch0__cfg_end_check = ch0_cfg_checks_end_check;
   assign ch0__cfg_spw_check = ch0_cfg_checks_spw_check;
@@ -6518,7 +6616,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign ch0__ca_slave_id = ch0_ca_request_slave_id;
   assign ch0__ca_address = ch0_ca_request_address;
   assign ch0__ca_count = ch0_ca_request_count;
-  assign ch0__ca_write = \ch0_ca_request_write$101 ;
+  assign ch0__ca_write = \ch0_ca_request_write$103 ;
   assign ch0__ca_start = ch0_ca_ctrl_start;
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
@@ -6538,10 +6636,12 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign ch1__cfg_w0_nenw = ch1_cfg_words_w0_nenw;
   assign ch1__cfg_w0_lc = ch1_cfg_words_w0_lc;
   assign ch1__cfg_w0_crc = ch1_cfg_words_w0_crc;
+  assign ch1__cfg_w0_gray = ch1_cfg_words_w0_gray;
   assign ch1__cfg_w1_data_bits = ch1_cfg_words_w1_data_bits;
   assign ch1__cfg_w1_nenw = ch1_cfg_words_w1_nenw;
   assign ch1__cfg_w1_lc = ch1_cfg_words_w1_lc;
   assign ch1__cfg_w1_crc = ch1_cfg_words_w1_crc;
+  assign ch1__cfg_w1_gray = ch1_cfg_words_w1_gray;
   assign ch1__cfg_w1_enable = ch1_cfg_words_w1_enable;
   assign ch1__cfg_end_check = ch1_cfg_checks_end_check;
   assign ch1__cfg_spw_check = ch1_cfg_checks_spw_check;
@@ -6560,7 +6660,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$301 ;
+  assign ch1__ca_write = \ch1_ca_request_write$305 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
@@ -6571,20 +6671,20 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$448  = \$447 ;
-  assign \$450  = \$449 ;
   assign \$452  = \$451 ;
-  assign \$496  = \$495 ;
-  assign \$498  = \$497 ;
+  assign \$454  = \$453 ;
+  assign \$456  = \$455 ;
   assign \$500  = \$499 ;
-  assign \$130  = \$129 ;
-  assign \$197  = 32'd0;
-  assign \$198  = \$196 ;
-  assign \$321  = \$320 ;
-  assign \$388  = 32'd0;
-  assign \$389  = \$387 ;
+  assign \$502  = \$501 ;
+  assign \$504  = \$503 ;
+  assign \$132  = \$131 ;
+  assign \$199  = 32'd0;
+  assign \$200  = \$198 ;
+  assign \$325  = \$324 ;
+  assign \$392  = 32'd0;
+  assign \$393  = \$391 ;
   assign g_irq = 1'h0;
-  assign \$501  = g_read_data;
+  assign \$505  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -8736,9 +8836,10 @@ module \biss_master_uart.bus.transmitter (rst, ready, tx, data, valid, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted
-, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5310$0 , \port$5323$0 , regs__ca_done, \port$5455$0 , slo);
+module \biss_master_uart.ch0 (clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly
+, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5342$0 , \port$5355$0 , regs__ca_done, \port$5487$0 , slo
+);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -8826,6 +8927,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire [4:0] cfg_w0_crc_width;
   input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
+  input cfg_w0_gray;
+  wire cfg_w0_gray;
   input cfg_w0_lc;
   wire cfg_w0_lc;
   input cfg_w0_nenw;
@@ -8849,6 +8952,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire [5:0] cfg_w1_data_bits;
   input cfg_w1_enable;
   wire cfg_w1_enable;
+  input cfg_w1_gray;
+  wire cfg_w1_gray;
   input cfg_w1_lc;
   wire cfg_w1_lc;
   input cfg_w1_nenw;
@@ -8889,16 +8994,16 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$198 ;
+  wire \ma$202 ;
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$5310$0 ;
-  wire [186:0] \port$5310$0 ;
-  output [335:0] \port$5323$0 ;
-  wire [335:0] \port$5323$0 ;
-  output [9:0] \port$5455$0 ;
-  wire [9:0] \port$5455$0 ;
+  output [186:0] \port$5342$0 ;
+  wire [186:0] \port$5342$0 ;
+  output [335:0] \port$5355$0 ;
+  wire [335:0] \port$5355$0 ;
+  output [9:0] \port$5487$0 ;
+  wire [9:0] \port$5487$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -8952,6 +9057,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire [15:0] regs__cfg_w0_crc_start;
   wire [4:0] regs__cfg_w0_crc_width;
   wire [5:0] regs__cfg_w0_data_bits;
+  wire regs__cfg_w0_gray;
   wire regs__cfg_w0_lc;
   wire regs__cfg_w0_nenw;
   (* enum_base_type = "Crc" *)
@@ -8966,6 +9072,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire [4:0] regs__cfg_w1_crc_width;
   wire [5:0] regs__cfg_w1_data_bits;
   wire regs__cfg_w1_enable;
+  wire regs__cfg_w1_gray;
   wire regs__cfg_w1_lc;
   wire regs__cfg_w1_nenw;
   wire regs__clear_counters;
@@ -9027,7 +9134,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$200 ;
+  wire \slo$204 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -9050,8 +9157,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$195 ;
-  wire \trigger$195 ;
+  input \trigger$199 ;
+  wire \trigger$199 ;
   wire valid;
   wire word0_crc_ok;
   wire word0_ne;
@@ -9061,7 +9168,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
-  assign trigger = \trigger$195  & regs__trigger_enable;
+  assign trigger = \trigger$199  & regs__trigger_enable;
   assign \$2  = regs__done_count + 1'h1;
   always @(posedge clk)
     abort_cycle <= \$3 ;
@@ -9071,8 +9178,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__frame_error = regs__done & \$1 ;
   \biss_master_uart.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$234 (ca_abort),
-    .\busy$288 (regs__busy),
+    .\abort$236 (ca_abort),
+    .\busy$290 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -9100,6 +9207,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
     .cfg_w0_crc_start(cfg_w0_crc_start),
     .cfg_w0_crc_width(cfg_w0_crc_width),
     .cfg_w0_data_bits(cfg_w0_data_bits),
+    .cfg_w0_gray(cfg_w0_gray),
     .cfg_w0_lc(cfg_w0_lc),
     .cfg_w0_nenw(cfg_w0_nenw),
     .cfg_w1_crc(cfg_w1_crc),
@@ -9109,26 +9217,27 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
     .cfg_w1_crc_width(cfg_w1_crc_width),
     .cfg_w1_data_bits(cfg_w1_data_bits),
     .cfg_w1_enable(cfg_w1_enable),
+    .cfg_w1_gray(cfg_w1_gray),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$262 (clear_counters),
+    .\clear$264 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$6 ),
-    .\done$291 (regs__done),
+    .\done$293 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
-    .\periodic$35 (periodic),
+    .\periodic$37 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$7 ),
-    .\result$296 (\$5 ),
+    .\result$298 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$232 (ca_start),
+    .\start$234 (ca_start),
     .trigger(trigger),
-    .\valid$293 (valid)
+    .\valid$295 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
@@ -9170,10 +9279,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__cfg_w0_nenw = cfg_w0_nenw;
   assign regs__cfg_w0_lc = cfg_w0_lc;
   assign regs__cfg_w0_crc = cfg_w0_crc;
+  assign regs__cfg_w0_gray = cfg_w0_gray;
   assign regs__cfg_w1_data_bits = cfg_w1_data_bits;
   assign regs__cfg_w1_nenw = cfg_w1_nenw;
   assign regs__cfg_w1_lc = cfg_w1_lc;
   assign regs__cfg_w1_crc = cfg_w1_crc;
+  assign regs__cfg_w1_gray = cfg_w1_gray;
   assign regs__cfg_w1_enable = cfg_w1_enable;
   assign regs__cfg_end_check = cfg_end_check;
   assign regs__cfg_spw_check = cfg_spw_check;
@@ -9290,17 +9401,17 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$198  = ma;
-  assign \slo$200  = slo;
-  assign \port$5310$0  = \$5 ;
-  assign \port$5323$0  = \$6 ;
-  assign \port$5455$0  = \$7 ;
+  assign \ma$202  = ma;
+  assign \slo$204  = slo;
+  assign \port$5342$0  = \$5 ;
+  assign \port$5355$0  = \$6 ;
+  assign \port$5487$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$288 , config_error, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$262 , \periodic$35 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width
-, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$232 , \abort$234 , abort, ma, \done$291 , \valid$293 , \result$296 , counts, ca_done, result, slo);
+module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$290 , config_error, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$264 , \periodic$37 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start
+, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$234 , \abort$236 , abort, ma, \done$293 , \valid$295 , \result$298 , counts, ca_done, result, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -9326,25 +9437,25 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$234 ;
-  wire \abort$234 ;
-  wire \abort$47 ;
+  input \abort$236 ;
+  wire \abort$236 ;
+  wire \abort$49 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$79 ;
+  wire \ack_expired$81 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$100 ;
+  wire [23:0] \ack_limit$102 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$320 ;
+  wire \bit$322 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$77 ;
+  wire \break_over$79 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$243 ;
-  output \busy$288 ;
-  wire \busy$288 ;
+  wire \busy$245 ;
+  output \busy$290 ;
+  wire \busy$290 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -9379,11 +9490,11 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$247 ;
+  wire \cdm$249 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$299 ;
-  wire [250:0] cfg;
+  wire \cds$301 ;
+  wire [252:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -9396,7 +9507,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
   wire [23:0] \cfg.timeout_limit ;
-  wire [9:0] \cfg.w0 ;
+  wire [10:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -9404,6 +9515,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w0.crc ;
   wire [5:0] \cfg.w0.data_bits ;
+  wire \cfg.w0.gray ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
   wire [37:0] \cfg.w0_crc ;
@@ -9411,7 +9523,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [15:0] \cfg.w0_crc.poly ;
   wire [15:0] \cfg.w0_crc.start ;
   wire [4:0] \cfg.w0_crc.width ;
-  wire [9:0] \cfg.w1 ;
+  wire [10:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -9419,6 +9531,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w1.crc ;
   wire [5:0] \cfg.w1.data_bits ;
+  wire \cfg.w1.gray ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
   wire [37:0] \cfg.w1_crc ;
@@ -9468,6 +9581,8 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [4:0] cfg_w0_crc_width;
   input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
+  input cfg_w0_gray;
+  wire cfg_w0_gray;
   input cfg_w0_lc;
   wire cfg_w0_lc;
   input cfg_w0_nenw;
@@ -9491,18 +9606,20 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [5:0] cfg_w1_data_bits;
   input cfg_w1_enable;
   wire cfg_w1_enable;
+  input cfg_w1_gray;
+  wire cfg_w1_gray;
   input cfg_w1_lc;
   wire cfg_w1_lc;
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
   wire check;
-  wire \check$158 ;
+  wire \check$160 ;
   wire clean;
-  wire \clean$163 ;
+  wire \clean$165 ;
   wire clear;
-  wire \clear$124 ;
-  input \clear$262 ;
-  wire \clear$262 ;
+  wire \clear$126 ;
+  input \clear$264 ;
+  wire \clear$264 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -9556,33 +9673,33 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$175 ;
+  wire [39:0] \cpw_top$177 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$188 ;
+  wire [1:0] \crc_ok$190 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$171 ;
-  wire [37:0] \crcs$171[0] ;
-  wire \crcs$171[0].inverted ;
-  wire [15:0] \crcs$171[0].poly ;
-  wire [15:0] \crcs$171[0].start ;
-  wire [4:0] \crcs$171[0].width ;
-  wire [37:0] \crcs$171[1] ;
-  wire \crcs$171[1].inverted ;
-  wire [15:0] \crcs$171[1].poly ;
-  wire [15:0] \crcs$171[1].start ;
-  wire [4:0] \crcs$171[1].width ;
-  wire [75:0] \crcs$172 ;
-  wire [37:0] \crcs$172[0] ;
-  wire \crcs$172[0].inverted ;
-  wire [15:0] \crcs$172[0].poly ;
-  wire [15:0] \crcs$172[0].start ;
-  wire [4:0] \crcs$172[0].width ;
-  wire [37:0] \crcs$172[1] ;
-  wire \crcs$172[1].inverted ;
-  wire [15:0] \crcs$172[1].poly ;
-  wire [15:0] \crcs$172[1].start ;
-  wire [4:0] \crcs$172[1].width ;
+  wire [75:0] \crcs$173 ;
+  wire [37:0] \crcs$173[0] ;
+  wire \crcs$173[0].inverted ;
+  wire [15:0] \crcs$173[0].poly ;
+  wire [15:0] \crcs$173[0].start ;
+  wire [4:0] \crcs$173[0].width ;
+  wire [37:0] \crcs$173[1] ;
+  wire \crcs$173[1].inverted ;
+  wire [15:0] \crcs$173[1].poly ;
+  wire [15:0] \crcs$173[1].start ;
+  wire [4:0] \crcs$173[1].width ;
+  wire [75:0] \crcs$174 ;
+  wire [37:0] \crcs$174[0] ;
+  wire \crcs$174[0].inverted ;
+  wire [15:0] \crcs$174[0].poly ;
+  wire [15:0] \crcs$174[0].start ;
+  wire [4:0] \crcs$174[0].width ;
+  wire [37:0] \crcs$174[1] ;
+  wire \crcs$174[1].inverted ;
+  wire [15:0] \crcs$174[1].poly ;
+  wire [15:0] \crcs$174[1].start ;
+  wire [4:0] \crcs$174[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -9593,7 +9710,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  wire [250:0] cycle;
+  wire [252:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -9606,7 +9723,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
   wire [23:0] \cycle.timeout_limit ;
-  wire [9:0] \cycle.w0 ;
+  wire [10:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -9614,6 +9731,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w0.crc ;
   wire [5:0] \cycle.w0.data_bits ;
+  wire \cycle.w0.gray ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
   wire [37:0] \cycle.w0_crc ;
@@ -9621,7 +9739,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [15:0] \cycle.w0_crc.poly ;
   wire [15:0] \cycle.w0_crc.start ;
   wire [4:0] \cycle.w0_crc.width ;
-  wire [9:0] \cycle.w1 ;
+  wire [10:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -9629,6 +9747,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w1.crc ;
   wire [5:0] \cycle.w1.data_bits ;
+  wire \cycle.w1.gray ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
   wire [37:0] \cycle.w1_crc ;
@@ -9644,53 +9763,53 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$106 ;
-  wire [12:0] \delay$157 ;
+  wire [12:0] \delay$108 ;
+  wire [12:0] \delay$159 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$108 ;
+  wire [11:0] \delay_limit$110 ;
   wire delay_over;
-  wire \delay_over$87 ;
+  wire \delay_over$89 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$245 ;
-  output \done$291 ;
-  wire \done$291 ;
-  wire \done$292 ;
+  wire \done$247 ;
+  output \done$293 ;
+  wire \done$293 ;
+  wire \done$294 ;
   wire doubtful;
   wire early;
-  wire \early$63 ;
+  wire \early$65 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$257 ;
-  wire \events$257.aborted ;
-  wire \events$257.ca_aborted ;
-  wire \events$257.ca_crc4_error ;
-  wire \events$257.ca_data_fault ;
-  wire \events$257.ca_no_answer ;
-  wire \events$257.ca_refused ;
-  wire \events$257.crc_word0 ;
-  wire \events$257.crc_word1 ;
-  wire \events$257.delay_jump ;
-  wire \events$257.delay_range ;
-  wire \events$257.lc_repeat ;
-  wire \events$257.lc_skip ;
-  wire \events$257.lc_zero ;
-  wire \events$257.no_ack ;
-  wire \events$257.no_start ;
-  wire \events$257.no_stop ;
-  wire \events$257.noise_event ;
-  wire \events$257.noisy_line ;
-  wire \events$257.overrun ;
-  wire \events$257.slo_stuck_low ;
-  wire \events$257.spw_mismatch ;
+  wire [20:0] \events$259 ;
+  wire \events$259.aborted ;
+  wire \events$259.ca_aborted ;
+  wire \events$259.ca_crc4_error ;
+  wire \events$259.ca_data_fault ;
+  wire \events$259.ca_no_answer ;
+  wire \events$259.ca_refused ;
+  wire \events$259.crc_word0 ;
+  wire \events$259.crc_word1 ;
+  wire \events$259.delay_jump ;
+  wire \events$259.delay_range ;
+  wire \events$259.lc_repeat ;
+  wire \events$259.lc_skip ;
+  wire \events$259.lc_zero ;
+  wire \events$259.no_ack ;
+  wire \events$259.no_start ;
+  wire \events$259.no_stop ;
+  wire \events$259.noise_event ;
+  wire \events$259.noisy_line ;
+  wire \events$259.overrun ;
+  wire \events$259.slo_stuck_low ;
+  wire \events$259.spw_mismatch ;
   wire fault;
-  wire \fault$184 ;
+  wire \fault$186 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -9724,7 +9843,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$186 ;
+  wire [3:0] \fault_status$188 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -9734,7 +9853,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$218 ;
+  wire \first_rise$220 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -9785,37 +9904,37 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$130 ;
+  wire [15:0] \half_period$132 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$31 ;
-  wire \idle$40 ;
+  wire \idle$33 ;
+  wire \idle$42 ;
   wire in_clock;
-  wire \in_clock$94 ;
+  wire \in_clock$96 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$135 ;
-  wire [5:0] \lc$312 ;
+  wire [5:0] \lc$137 ;
+  wire [5:0] \lc$314 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$137 ;
+  wire [5:0] \lc_next$139 ;
   wire lc_repeat;
-  wire \lc_repeat$313 ;
+  wire \lc_repeat$315 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$314 ;
+  wire \lc_skip$316 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$315 ;
+  wire \lc_zero$317 ;
   wire lc_zero_seen;
   wire learn;
   wire level;
-  wire \level$146 ;
+  wire \level$148 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [250:0] live;
+  wire [252:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -9828,7 +9947,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
   wire [23:0] \live.timeout_limit ;
-  wire [9:0] \live.w0 ;
+  wire [10:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -9836,6 +9955,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w0.crc ;
   wire [5:0] \live.w0.data_bits ;
+  wire \live.w0.gray ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
   wire [37:0] \live.w0_crc ;
@@ -9843,7 +9963,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [15:0] \live.w0_crc.poly ;
   wire [15:0] \live.w0_crc.start ;
   wire [4:0] \live.w0_crc.width ;
-  wire [9:0] \live.w1 ;
+  wire [10:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -9851,6 +9971,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w1.crc ;
   wire [5:0] \live.w1.data_bits ;
+  wire \live.w1.gray ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
   wire [37:0] \live.w1_crc ;
@@ -9861,13 +9982,13 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$61 ;
+  wire \locked$63 ;
   output ma;
   wire ma;
-  wire \ma$287 ;
+  wire \ma$289 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$89 ;
+  wire \ma_busy$91 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -9875,26 +9996,26 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$81 ;
+  wire \no_start_expired$83 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$104 ;
+  wire [24:0] \no_start_limit$106 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$165 ;
+  wire \noisy$167 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$290 ;
+  wire \overrun$292 ;
   wire [23:0] period;
   wire periodic;
-  input \periodic$35 ;
-  wire \periodic$35 ;
+  input \periodic$37 ;
+  wire \periodic$37 ;
   wire quiet;
-  wire \quiet$113 ;
+  wire \quiet$115 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$115 ;
+  wire \quiet_live$117 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -9906,37 +10027,37 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$196 ;
+  wire \report$198 ;
   wire report_delay;
-  wire \report_delay$199 ;
+  wire \report_delay$201 ;
   wire report_frame;
-  wire \report_frame$183 ;
-  wire \report_frame$197 ;
+  wire \report_frame$185 ;
+  wire \report_frame$199 ;
   wire request;
-  wire [17:0] \request$220 ;
-  wire [6:0] \request$220.address ;
-  wire [6:0] \request$220.count ;
-  wire [2:0] \request$220.slave_id ;
-  wire \request$220.write ;
-  wire \request$46 ;
+  wire [17:0] \request$222 ;
+  wire [6:0] \request$222.address ;
+  wire [6:0] \request$222.count ;
+  wire [2:0] \request$222.slave_id ;
+  wire \request$222.write ;
+  wire \request$48 ;
   wire restart;
-  wire \restart$150 ;
+  wire \restart$152 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$296 ;
-  wire [186:0] \result$296 ;
-  wire \result$296.cds ;
-  wire \result$296.delay_settled ;
-  wire [7:0] \result$296.delay_spread ;
-  wire [5:0] \result$296.lc ;
-  wire \result$296.lc_repeat ;
-  wire \result$296.lc_skip ;
-  wire \result$296.lc_zero ;
-  wire [12:0] \result$296.line_delay ;
-  wire [3:0] \result$296.noise_events ;
-  wire [12:0] \result$296.settled_delay ;
-  wire \result$296.spw_mismatch ;
+  output [186:0] \result$298 ;
+  wire [186:0] \result$298 ;
+  wire \result$298.cds ;
+  wire \result$298.delay_settled ;
+  wire [7:0] \result$298.delay_spread ;
+  wire [5:0] \result$298.lc ;
+  wire \result$298.lc_repeat ;
+  wire \result$298.lc_skip ;
+  wire \result$298.lc_zero ;
+  wire [12:0] \result$298.line_delay ;
+  wire [3:0] \result$298.noise_events ;
+  wire [12:0] \result$298.settled_delay ;
+  wire \result$298.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -9953,18 +10074,18 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$296.status ;
-  wire [31:0] \result$296.timestamp ;
-  wire [57:0] \result$296.word0 ;
-  wire \result$296.word0.crc_ok ;
-  wire \result$296.word0.ne ;
-  wire \result$296.word0.nw ;
-  wire [54:0] \result$296.word0.position ;
-  wire [42:0] \result$296.word1 ;
-  wire \result$296.word1.crc_ok ;
-  wire \result$296.word1.ne ;
-  wire \result$296.word1.nw ;
-  wire [39:0] \result$296.word1.position ;
+  wire [3:0] \result$298.status ;
+  wire [31:0] \result$298.timestamp ;
+  wire [57:0] \result$298.word0 ;
+  wire \result$298.word0.crc_ok ;
+  wire \result$298.word0.ne ;
+  wire \result$298.word0.nw ;
+  wire [54:0] \result$298.word0.position ;
+  wire [42:0] \result$298.word1 ;
+  wire \result$298.word1.crc_ok ;
+  wire \result$298.word1.ne ;
+  wire \result$298.word1.nw ;
+  wire [39:0] \result$298.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -9976,46 +10097,46 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$143 ;
+  wire \resync$145 ;
   wire [15:0] rises;
-  wire [15:0] \rises$123 ;
+  wire [15:0] \rises$125 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$319 ;
+  wire \sample$321 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$302 ;
+  wire [12:0] \settled_delay$304 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$42 ;
-  wire \slo$52 ;
-  wire \slo$88 ;
+  wire \slo$44 ;
+  wire \slo$54 ;
+  wire \slo$90 ;
   wire slo_stuck;
-  wire \slo_stuck$83 ;
+  wire \slo_stuck$85 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$85 ;
+  wire \slo_stuck_live$87 ;
   wire slots_full;
-  wire \slots_full$69 ;
+  wire \slots_full$71 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$316 ;
+  wire \spw_mismatch$318 ;
   input start;
   wire start;
-  input \start$232 ;
-  wire \start$232 ;
-  wire \start$33 ;
+  input \start$234 ;
+  wire \start$234 ;
+  wire \start$35 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$121 ;
+  wire [15:0] \start_slot$123 ;
   wire started;
-  wire \started$119 ;
-  wire \started$67 ;
+  wire \started$121 ;
+  wire \started$69 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -10050,25 +10171,25 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$295 ;
+  wire [3:0] \status$297 ;
   wire stop_bit;
-  wire \stop_bit$73 ;
+  wire \stop_bit$75 ;
   wire stopped;
-  wire \stopped$71 ;
+  wire \stopped$73 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$102 ;
+  wire [23:0] \timeout_limit$104 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$179 ;
+  wire [7:0] \tolerance$181 ;
   input trigger;
   wire trigger;
-  wire \trigger$44 ;
+  wire \trigger$46 ;
   wire valid;
-  wire \valid$201 ;
-  output \valid$293 ;
-  wire \valid$293 ;
+  wire \valid$203 ;
+  output \valid$295 ;
+  wire \valid$295 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -10086,31 +10207,33 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$133 ;
+  wire [1:0] \word_count$135 ;
   wire [1:0] word_crc_ok;
-  wire [19:0] words;
-  wire [19:0] \words$169 ;
-  wire [9:0] \words$169[0] ;
+  wire [21:0] words;
+  wire [21:0] \words$171 ;
+  wire [10:0] \words$171[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$169[0].crc ;
-  wire [5:0] \words$169[0].data_bits ;
-  wire \words$169[0].lc ;
-  wire \words$169[0].nenw ;
-  wire [9:0] \words$169[1] ;
+  wire [1:0] \words$171[0].crc ;
+  wire [5:0] \words$171[0].data_bits ;
+  wire \words$171[0].gray ;
+  wire \words$171[0].lc ;
+  wire \words$171[0].nenw ;
+  wire [10:0] \words$171[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$169[1].crc ;
-  wire [5:0] \words$169[1].data_bits ;
-  wire \words$169[1].lc ;
-  wire \words$169[1].nenw ;
-  wire [9:0] \words[0] ;
+  wire [1:0] \words$171[1].crc ;
+  wire [5:0] \words$171[1].data_bits ;
+  wire \words$171[1].gray ;
+  wire \words$171[1].lc ;
+  wire \words$171[1].nenw ;
+  wire [10:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -10118,9 +10241,10 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
+  wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [9:0] \words[1] ;
+  wire [10:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -10128,14 +10252,15 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
+  wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
-  assign periodic = \periodic$35  | frames;
+  assign periodic = \periodic$37  | frames;
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$158  = started & \$1 ;
+  assign \check$160  = started & \$1 ;
   assign \$2  = learn & spw_mismatch;
   assign \$3  = status == 4'hd;
   assign \$4  = learn & \$3 ;
@@ -10151,10 +10276,10 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \$14  = ca_done & \$13 ;
   assign \$15  = result[2:0] == 3'h5;
   assign \$16  = ca_done & \$15 ;
-  assign \busy$288  = ~ idle;
+  assign \busy$290  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$124 ;
-  assign \$18  = \sample$319  & \$17 ;
+  assign \$17  = ~ \clear$126 ;
+  assign \$18  = \sample$321  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -10188,7 +10313,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$150 ),
+    .fault(\restart$152 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -10205,14 +10330,14 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$124 ),
+    .receiver_clear(\clear$126 ),
     .report_delay(report_delay),
     .report_frame(learn),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$52 ),
+    .slo(\slo$54 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -10223,10 +10348,10 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .waiting(watch)
   );
   \biss_master_uart.ch0.core.counters  counters (
-    .clear(\clear$262 ),
+    .clear(\clear$264 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$257 ),
+    .events(\events$259 ),
     .rst(rst)
   );
   \biss_master_uart.ch0.core.decoder  decoder (
@@ -10243,7 +10368,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$124 ),
+    .receiver_clear(\clear$126 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -10255,7 +10380,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .words(words)
   );
   \biss_master_uart.ch0.core.delay_check  delay_check (
-    .check(\check$158 ),
+    .check(\check$160 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -10274,10 +10399,10 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$52 ),
+    .level(\slo$54 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$150 ),
+    .restart(\restart$152 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -10285,7 +10410,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   \biss_master_uart.ch0.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$89 ),
+    .\clocking (\ma_busy$91 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -10297,7 +10422,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .second_rise(ma_arm)
   );
   \biss_master_uart.ch0.core.ma_stop  ma_stop (
-    .clear(\clear$124 ),
+    .clear(\clear$126 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -10305,11 +10430,11 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .rst(rst),
     .start_slot(start_slot),
     .\started$11 (started),
-    .w1_enable(cycle[193]),
-    .words(\words$169 )
+    .w1_enable(cycle[194]),
+    .words(\words$171 )
   );
   \biss_master_uart.ch0.core.register_access  register_access (
-    .abort(\abort$234 ),
+    .abort(\abort$236 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -10321,37 +10446,37 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$220 ),
+    .request(\request$222 ),
     .result(result),
     .rst(rst),
-    .start(\start$232 ),
+    .start(\start$234 ),
     .wbuf(wbuf)
   );
   \biss_master_uart.ch0.core.results  results (
     .clk(clk),
-    .done(\done$291 ),
+    .done(\done$293 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(learn),
-    .result(\result$296 ),
+    .result(\result$298 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$293 )
+    .valid_out(\valid$295 )
   );
   \biss_master_uart.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$320 ),
+    .\bit (\bit$322 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$52 ),
+    .level(\slo$54 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$124 ),
+    .receiver_clear(\clear$126 ),
     .rst(rst),
-    .sample(\sample$319 ),
+    .sample(\sample$321 ),
     .slo(slo)
   );
   \biss_master_uart.ch0.core.scheduler  scheduler (
@@ -10372,20 +10497,20 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4979$0 (\bit ),
+    .\port$5011$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_uart.ch0.core.spw_check  spw_check (
-    .bits(cycle[199:194]),
+    .bits(cycle[200:195]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[250:243])
+    .\tolerance$8 (cycle[252:245])
   );
   \biss_master_uart.ch0.core.time_base  time_base (
     .clk(clk),
@@ -10404,7 +10529,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$89 ),
+    .ma_busy(\ma_busy$91 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -10413,7 +10538,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$52 ),
+    .slo(\slo$54 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -10426,7 +10551,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$150 ),
+    .fault(\restart$152 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -10436,7 +10561,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$2303$0 (\$22 ),
+    .\port$2321$0 (\$22 ),
     .report(report),
     .report_frame(learn),
     .spw_match(spw_match),
@@ -10453,7 +10578,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
-    \$20  = \bit$320 ;
+    \$20  = \bit$322 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -10465,120 +10590,120 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
       \$21  = 1'h0;
     end
   end
-  assign \idle$31  = idle;
-  assign \start$33  = start;
+  assign \idle$33  = idle;
+  assign \start$35  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$40  = idle;
-  assign \slo$42  = slo;
-  assign \trigger$44  = trigger;
-  assign \request$46  = request;
-  assign \abort$47  = abort;
+  assign \idle$42  = idle;
+  assign \slo$44  = slo;
+  assign \trigger$46  = trigger;
+  assign \request$48  = request;
+  assign \abort$49  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$52 ;
+  assign level = \slo$54 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$61  = locked;
-  assign \early$63  = early;
+  assign \locked$63  = locked;
+  assign \early$65  = early;
   assign done = frame_done;
-  assign \started$67  = started;
-  assign \slots_full$69  = slots_full;
-  assign \stopped$71  = stopped;
-  assign \stop_bit$73  = stop_bit;
+  assign \started$69  = started;
+  assign \slots_full$71  = slots_full;
+  assign \stopped$73  = stopped;
+  assign \stop_bit$75  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$77  = break_over;
-  assign \ack_expired$79  = ack_expired;
-  assign \no_start_expired$81  = no_start_expired;
-  assign \slo_stuck$83  = slo_stuck;
-  assign \slo_stuck_live$85  = slo_stuck_live;
-  assign \delay_over$87  = delay_over;
-  assign \slo$88  = \slo$52 ;
-  assign \clocking  = \ma_busy$89 ;
+  assign \break_over$79  = break_over;
+  assign \ack_expired$81  = ack_expired;
+  assign \no_start_expired$83  = no_start_expired;
+  assign \slo_stuck$85  = slo_stuck;
+  assign \slo_stuck_live$87  = slo_stuck_live;
+  assign \delay_over$89  = delay_over;
+  assign \slo$90  = \slo$54 ;
+  assign \clocking  = \ma_busy$91 ;
   assign timer_clear = clear;
-  assign \in_clock$94  = in_clock;
+  assign \in_clock$96  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$100  = ack_limit;
-  assign \timeout_limit$102  = timeout_limit;
-  assign \no_start_limit$104  = no_start_limit;
-  assign \delay$106  = delay;
-  assign \delay_limit$108  = delay_limit;
+  assign \ack_limit$102  = ack_limit;
+  assign \timeout_limit$104  = timeout_limit;
+  assign \no_start_limit$106  = no_start_limit;
+  assign \delay$108  = delay;
+  assign \delay_limit$110  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$113  = quiet;
-  assign \quiet_live$115  = quiet_live;
+  assign \quiet$115  = quiet;
+  assign \quiet_live$117  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$119  = started;
-  assign \start_slot$121  = start_slot;
-  assign \rises$123  = rises;
-  assign receiver_clear = \clear$124 ;
+  assign \started$121  = started;
+  assign \start_slot$123  = start_slot;
+  assign \rises$125  = rises;
+  assign receiver_clear = \clear$126 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$130  = cycle[15:0];
+  assign \half_period$132  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$133  = word_count;
-  assign \lc$135  = lc;
+  assign \word_count$135  = word_count;
+  assign \lc$137  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$137  = { lc[4:0], \bit  };
+  assign \lc_next$139  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$143  = resync;
+  assign \resync$145  = resync;
   assign waiting = watch;
-  assign \level$146  = \slo$52 ;
+  assign \level$148  = \slo$54 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$150 ;
+  assign fault = \restart$152 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$157  = delay;
+  assign \delay$159  = delay;
   assign report_frame = learn;
-  assign \clean$163  = clean;
-  assign \noisy$165  = noisy;
+  assign \clean$165  = clean;
+  assign \noisy$167  = noisy;
   assign jump = delay_jump;
-  assign \crcs$171  = crcs;
-  assign \crcs$172  = crcs;
-  assign w1_enable = cycle[193];
-  assign \cpw_top$175  = cpw_top;
+  assign \crcs$173  = crcs;
+  assign \crcs$174  = crcs;
+  assign w1_enable = cycle[194];
+  assign \cpw_top$177  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[199:194];
-  assign \tolerance$179  = cycle[250:243];
+  assign bits = cycle[200:195];
+  assign \tolerance$181  = cycle[252:245];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$183  = learn;
-  assign \fault$184  = \restart$150 ;
-  assign \fault_status$186  = fault_status;
-  assign \crc_ok$188  = crc_ok;
+  assign \report_frame$185  = learn;
+  assign \fault$186  = \restart$152 ;
+  assign \fault_status$188  = fault_status;
+  assign \crc_ok$190  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$196  = report;
-  assign \report_frame$197  = learn;
-  assign \report_delay$199  = report_delay;
-  assign \valid$201  = valid;
+  assign \report$198  = report;
+  assign \report_frame$199  = learn;
+  assign \report_delay$201  = report_delay;
+  assign \valid$203  = valid;
   assign word_crc_ok = { \$22 , crc_ok[0] };
-  assign \first_rise$218  = first_rise;
+  assign \first_rise$220  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$232 ;
-  assign ca_abort = \abort$234 ;
+  assign ca_start = \start$234 ;
+  assign ca_abort = \abort$236 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$243  = frames;
-  assign \done$245  = ca_done;
-  assign \cdm$247  = cdm;
+  assign \busy$245  = frames;
+  assign \done$247  = ca_done;
+  assign \cdm$249  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$262 ;
+  assign clear_counters = \clear$264 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -10600,31 +10725,31 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign count_ca_refused = counts[303:288];
   assign count_ca_aborted = counts[319:304];
   assign count_ca_data_fault = counts[335:320];
-  assign \ma$287  = ma;
-  assign \overrun$290  = overrun;
-  assign \done$292  = \done$291 ;
-  assign valid_out = \valid$293 ;
-  assign \status$295  = \result$296 [3:0];
-  assign timestamp = \result$296 [35:4];
-  assign line_delay = \result$296 [48:36];
-  assign \cds$299  = \result$296 [49];
-  assign noise_events = \result$296 [53:50];
-  assign delay_settled = \result$296 [54];
-  assign \settled_delay$302  = \result$296 [67:55];
-  assign delay_spread = \result$296 [75:68];
-  assign word0_position = \result$296 [130:76];
-  assign word0_ne = \result$296 [131];
-  assign word0_nw = \result$296 [132];
-  assign word0_crc_ok = \result$296 [133];
-  assign word1_position = \result$296 [173:134];
-  assign word1_ne = \result$296 [174];
-  assign word1_nw = \result$296 [175];
-  assign word1_crc_ok = \result$296 [176];
-  assign \lc$312  = \result$296 [182:177];
-  assign \lc_repeat$313  = \result$296 [183];
-  assign \lc_skip$314  = \result$296 [184];
-  assign \lc_zero$315  = \result$296 [185];
-  assign \spw_mismatch$316  = \result$296 [186];
+  assign \ma$289  = ma;
+  assign \overrun$292  = overrun;
+  assign \done$294  = \done$293 ;
+  assign valid_out = \valid$295 ;
+  assign \status$297  = \result$298 [3:0];
+  assign timestamp = \result$298 [35:4];
+  assign line_delay = \result$298 [48:36];
+  assign \cds$301  = \result$298 [49];
+  assign noise_events = \result$298 [53:50];
+  assign delay_settled = \result$298 [54];
+  assign \settled_delay$304  = \result$298 [67:55];
+  assign delay_spread = \result$298 [75:68];
+  assign word0_position = \result$298 [130:76];
+  assign word0_ne = \result$298 [131];
+  assign word0_nw = \result$298 [132];
+  assign word0_crc_ok = \result$298 [133];
+  assign word1_position = \result$298 [173:134];
+  assign word1_ne = \result$298 [174];
+  assign word1_nw = \result$298 [175];
+  assign word1_crc_ok = \result$298 [176];
+  assign \lc$314  = \result$298 [182:177];
+  assign \lc_repeat$315  = \result$298 [183];
+  assign \lc_skip$316  = \result$298 [184];
+  assign \lc_zero$317  = \result$298 [185];
+  assign \spw_mismatch$318  = \result$298 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -10635,29 +10760,31 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[154:145];
+  assign \live.w0  = live[155:145];
   assign \live.w0.data_bits  = live[150:145];
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
-  assign \live.w0_crc  = live[192:155];
-  assign \live.w0_crc.width  = live[159:155];
-  assign \live.w0_crc.poly  = live[175:160];
-  assign \live.w0_crc.start  = live[191:176];
-  assign \live.w0_crc.inverted  = live[192];
-  assign \live.w1_enable  = live[193];
-  assign \live.w1  = live[203:194];
-  assign \live.w1.data_bits  = live[199:194];
-  assign \live.w1.nenw  = live[200];
-  assign \live.w1.lc  = live[201];
-  assign \live.w1.crc  = live[203:202];
-  assign \live.w1_crc  = live[241:204];
-  assign \live.w1_crc.width  = live[208:204];
-  assign \live.w1_crc.poly  = live[224:209];
-  assign \live.w1_crc.start  = live[240:225];
-  assign \live.w1_crc.inverted  = live[241];
-  assign \live.spw_check  = live[242];
-  assign \live.spw_tolerance  = live[250:243];
+  assign \live.w0.gray  = live[155];
+  assign \live.w0_crc  = live[193:156];
+  assign \live.w0_crc.width  = live[160:156];
+  assign \live.w0_crc.poly  = live[176:161];
+  assign \live.w0_crc.start  = live[192:177];
+  assign \live.w0_crc.inverted  = live[193];
+  assign \live.w1_enable  = live[194];
+  assign \live.w1  = live[205:195];
+  assign \live.w1.data_bits  = live[200:195];
+  assign \live.w1.nenw  = live[201];
+  assign \live.w1.lc  = live[202];
+  assign \live.w1.crc  = live[204:203];
+  assign \live.w1.gray  = live[205];
+  assign \live.w1_crc  = live[243:206];
+  assign \live.w1_crc.width  = live[210:206];
+  assign \live.w1_crc.poly  = live[226:211];
+  assign \live.w1_crc.start  = live[242:227];
+  assign \live.w1_crc.inverted  = live[243];
+  assign \live.spw_check  = live[244];
+  assign \live.spw_tolerance  = live[252:245];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -10668,49 +10795,55 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[154:145];
+  assign \cycle.w0  = cycle[155:145];
   assign \cycle.w0.data_bits  = cycle[150:145];
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0_crc  = cycle[192:155];
-  assign \cycle.w0_crc.width  = cycle[159:155];
-  assign \cycle.w0_crc.poly  = cycle[175:160];
-  assign \cycle.w0_crc.start  = cycle[191:176];
-  assign \cycle.w0_crc.inverted  = cycle[192];
-  assign \cycle.w1_enable  = cycle[193];
-  assign \cycle.w1  = cycle[203:194];
-  assign \cycle.w1.data_bits  = cycle[199:194];
-  assign \cycle.w1.nenw  = cycle[200];
-  assign \cycle.w1.lc  = cycle[201];
-  assign \cycle.w1.crc  = cycle[203:202];
-  assign \cycle.w1_crc  = cycle[241:204];
-  assign \cycle.w1_crc.width  = cycle[208:204];
-  assign \cycle.w1_crc.poly  = cycle[224:209];
-  assign \cycle.w1_crc.start  = cycle[240:225];
-  assign \cycle.w1_crc.inverted  = cycle[241];
-  assign \cycle.spw_check  = cycle[242];
-  assign \cycle.spw_tolerance  = cycle[250:243];
-  assign \words[0]  = words[9:0];
+  assign \cycle.w0.gray  = cycle[155];
+  assign \cycle.w0_crc  = cycle[193:156];
+  assign \cycle.w0_crc.width  = cycle[160:156];
+  assign \cycle.w0_crc.poly  = cycle[176:161];
+  assign \cycle.w0_crc.start  = cycle[192:177];
+  assign \cycle.w0_crc.inverted  = cycle[193];
+  assign \cycle.w1_enable  = cycle[194];
+  assign \cycle.w1  = cycle[205:195];
+  assign \cycle.w1.data_bits  = cycle[200:195];
+  assign \cycle.w1.nenw  = cycle[201];
+  assign \cycle.w1.lc  = cycle[202];
+  assign \cycle.w1.crc  = cycle[204:203];
+  assign \cycle.w1.gray  = cycle[205];
+  assign \cycle.w1_crc  = cycle[243:206];
+  assign \cycle.w1_crc.width  = cycle[210:206];
+  assign \cycle.w1_crc.poly  = cycle[226:211];
+  assign \cycle.w1_crc.start  = cycle[242:227];
+  assign \cycle.w1_crc.inverted  = cycle[243];
+  assign \cycle.spw_check  = cycle[244];
+  assign \cycle.spw_tolerance  = cycle[252:245];
+  assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
-  assign \words[1]  = words[19:10];
-  assign \words[1].data_bits  = words[15:10];
-  assign \words[1].nenw  = words[16];
-  assign \words[1].lc  = words[17];
-  assign \words[1].crc  = words[19:18];
-  assign \words$169[0]  = \words$169 [9:0];
-  assign \words$169[0].data_bits  = \words$169 [5:0];
-  assign \words$169[0].nenw  = \words$169 [6];
-  assign \words$169[0].lc  = \words$169 [7];
-  assign \words$169[0].crc  = \words$169 [9:8];
-  assign \words$169[1]  = \words$169 [19:10];
-  assign \words$169[1].data_bits  = \words$169 [15:10];
-  assign \words$169[1].nenw  = \words$169 [16];
-  assign \words$169[1].lc  = \words$169 [17];
-  assign \words$169[1].crc  = \words$169 [19:18];
+  assign \words[0].gray  = words[10];
+  assign \words[1]  = words[21:11];
+  assign \words[1].data_bits  = words[16:11];
+  assign \words[1].nenw  = words[17];
+  assign \words[1].lc  = words[18];
+  assign \words[1].crc  = words[20:19];
+  assign \words[1].gray  = words[21];
+  assign \words$171[0]  = \words$171 [10:0];
+  assign \words$171[0].data_bits  = \words$171 [5:0];
+  assign \words$171[0].nenw  = \words$171 [6];
+  assign \words$171[0].lc  = \words$171 [7];
+  assign \words$171[0].crc  = \words$171 [9:8];
+  assign \words$171[0].gray  = \words$171 [10];
+  assign \words$171[1]  = \words$171 [21:11];
+  assign \words$171[1].data_bits  = \words$171 [16:11];
+  assign \words$171[1].nenw  = \words$171 [17];
+  assign \words$171[1].lc  = \words$171 [18];
+  assign \words$171[1].crc  = \words$171 [20:19];
+  assign \words$171[1].gray  = \words$171 [21];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -10721,26 +10854,26 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$171[0]  = crcs[37:0];
-  assign \crcs$171[0].width  = crcs[4:0];
-  assign \crcs$171[0].poly  = crcs[20:5];
-  assign \crcs$171[0].start  = crcs[36:21];
-  assign \crcs$171[0].inverted  = crcs[37];
-  assign \crcs$171[1]  = crcs[75:38];
-  assign \crcs$171[1].width  = crcs[42:38];
-  assign \crcs$171[1].poly  = crcs[58:43];
-  assign \crcs$171[1].start  = crcs[74:59];
-  assign \crcs$171[1].inverted  = crcs[75];
-  assign \crcs$172[0]  = crcs[37:0];
-  assign \crcs$172[0].width  = crcs[4:0];
-  assign \crcs$172[0].poly  = crcs[20:5];
-  assign \crcs$172[0].start  = crcs[36:21];
-  assign \crcs$172[0].inverted  = crcs[37];
-  assign \crcs$172[1]  = crcs[75:38];
-  assign \crcs$172[1].width  = crcs[42:38];
-  assign \crcs$172[1].poly  = crcs[58:43];
-  assign \crcs$172[1].start  = crcs[74:59];
-  assign \crcs$172[1].inverted  = crcs[75];
+  assign \crcs$173[0]  = crcs[37:0];
+  assign \crcs$173[0].width  = crcs[4:0];
+  assign \crcs$173[0].poly  = crcs[20:5];
+  assign \crcs$173[0].start  = crcs[36:21];
+  assign \crcs$173[0].inverted  = crcs[37];
+  assign \crcs$173[1]  = crcs[75:38];
+  assign \crcs$173[1].width  = crcs[42:38];
+  assign \crcs$173[1].poly  = crcs[58:43];
+  assign \crcs$173[1].start  = crcs[74:59];
+  assign \crcs$173[1].inverted  = crcs[75];
+  assign \crcs$174[0]  = crcs[37:0];
+  assign \crcs$174[0].width  = crcs[4:0];
+  assign \crcs$174[0].poly  = crcs[20:5];
+  assign \crcs$174[0].start  = crcs[36:21];
+  assign \crcs$174[0].inverted  = crcs[37];
+  assign \crcs$174[1]  = crcs[75:38];
+  assign \crcs$174[1].width  = crcs[42:38];
+  assign \crcs$174[1].poly  = crcs[58:43];
+  assign \crcs$174[1].start  = crcs[74:59];
+  assign \crcs$174[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -10751,29 +10884,31 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \cfg.quiet_time  = cycle[136:125];
   assign \cfg.noise_limit  = cycle[140:137];
   assign \cfg.delay_tolerance  = cycle[144:141];
-  assign \cfg.w0  = cycle[154:145];
+  assign \cfg.w0  = cycle[155:145];
   assign \cfg.w0.data_bits  = cycle[150:145];
   assign \cfg.w0.nenw  = cycle[151];
   assign \cfg.w0.lc  = cycle[152];
   assign \cfg.w0.crc  = cycle[154:153];
-  assign \cfg.w0_crc  = cycle[192:155];
-  assign \cfg.w0_crc.width  = cycle[159:155];
-  assign \cfg.w0_crc.poly  = cycle[175:160];
-  assign \cfg.w0_crc.start  = cycle[191:176];
-  assign \cfg.w0_crc.inverted  = cycle[192];
-  assign \cfg.w1_enable  = cycle[193];
-  assign \cfg.w1  = cycle[203:194];
-  assign \cfg.w1.data_bits  = cycle[199:194];
-  assign \cfg.w1.nenw  = cycle[200];
-  assign \cfg.w1.lc  = cycle[201];
-  assign \cfg.w1.crc  = cycle[203:202];
-  assign \cfg.w1_crc  = cycle[241:204];
-  assign \cfg.w1_crc.width  = cycle[208:204];
-  assign \cfg.w1_crc.poly  = cycle[224:209];
-  assign \cfg.w1_crc.start  = cycle[240:225];
-  assign \cfg.w1_crc.inverted  = cycle[241];
-  assign \cfg.spw_check  = cycle[242];
-  assign \cfg.spw_tolerance  = cycle[250:243];
+  assign \cfg.w0.gray  = cycle[155];
+  assign \cfg.w0_crc  = cycle[193:156];
+  assign \cfg.w0_crc.width  = cycle[160:156];
+  assign \cfg.w0_crc.poly  = cycle[176:161];
+  assign \cfg.w0_crc.start  = cycle[192:177];
+  assign \cfg.w0_crc.inverted  = cycle[193];
+  assign \cfg.w1_enable  = cycle[194];
+  assign \cfg.w1  = cycle[205:195];
+  assign \cfg.w1.data_bits  = cycle[200:195];
+  assign \cfg.w1.nenw  = cycle[201];
+  assign \cfg.w1.lc  = cycle[202];
+  assign \cfg.w1.crc  = cycle[204:203];
+  assign \cfg.w1.gray  = cycle[205];
+  assign \cfg.w1_crc  = cycle[243:206];
+  assign \cfg.w1_crc.width  = cycle[210:206];
+  assign \cfg.w1_crc.poly  = cycle[226:211];
+  assign \cfg.w1_crc.start  = cycle[242:227];
+  assign \cfg.w1_crc.inverted  = cycle[243];
+  assign \cfg.spw_check  = cycle[244];
+  assign \cfg.spw_tolerance  = cycle[252:245];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -10797,36 +10932,36 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$220.slave_id  = \request$220 [2:0];
-  assign \request$220.address  = \request$220 [9:3];
-  assign \request$220.count  = \request$220 [16:10];
-  assign \request$220.write  = \request$220 [17];
+  assign \request$222.slave_id  = \request$222 [2:0];
+  assign \request$222.address  = \request$222 [9:3];
+  assign \request$222.count  = \request$222 [16:10];
+  assign \request$222.write  = \request$222 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$257.crc_word0  = \events$257 [0];
-  assign \events$257.crc_word1  = \events$257 [1];
-  assign \events$257.no_ack  = \events$257 [2];
-  assign \events$257.no_start  = \events$257 [3];
-  assign \events$257.delay_range  = \events$257 [4];
-  assign \events$257.slo_stuck_low  = \events$257 [5];
-  assign \events$257.lc_repeat  = \events$257 [6];
-  assign \events$257.lc_skip  = \events$257 [7];
-  assign \events$257.lc_zero  = \events$257 [8];
-  assign \events$257.spw_mismatch  = \events$257 [9];
-  assign \events$257.overrun  = \events$257 [10];
-  assign \events$257.aborted  = \events$257 [11];
-  assign \events$257.no_stop  = \events$257 [12];
-  assign \events$257.noisy_line  = \events$257 [13];
-  assign \events$257.delay_jump  = \events$257 [14];
-  assign \events$257.noise_event  = \events$257 [15];
-  assign \events$257.ca_crc4_error  = \events$257 [16];
-  assign \events$257.ca_no_answer  = \events$257 [17];
-  assign \events$257.ca_refused  = \events$257 [18];
-  assign \events$257.ca_aborted  = \events$257 [19];
-  assign \events$257.ca_data_fault  = \events$257 [20];
+  assign \events$259.crc_word0  = \events$259 [0];
+  assign \events$259.crc_word1  = \events$259 [1];
+  assign \events$259.no_ack  = \events$259 [2];
+  assign \events$259.no_start  = \events$259 [3];
+  assign \events$259.delay_range  = \events$259 [4];
+  assign \events$259.slo_stuck_low  = \events$259 [5];
+  assign \events$259.lc_repeat  = \events$259 [6];
+  assign \events$259.lc_skip  = \events$259 [7];
+  assign \events$259.lc_zero  = \events$259 [8];
+  assign \events$259.spw_mismatch  = \events$259 [9];
+  assign \events$259.overrun  = \events$259 [10];
+  assign \events$259.aborted  = \events$259 [11];
+  assign \events$259.no_stop  = \events$259 [12];
+  assign \events$259.noisy_line  = \events$259 [13];
+  assign \events$259.delay_jump  = \events$259 [14];
+  assign \events$259.noise_event  = \events$259 [15];
+  assign \events$259.ca_crc4_error  = \events$259 [16];
+  assign \events$259.ca_no_answer  = \events$259 [17];
+  assign \events$259.ca_refused  = \events$259 [18];
+  assign \events$259.ca_aborted  = \events$259 [19];
+  assign \events$259.ca_data_fault  = \events$259 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -10855,57 +10990,57 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$296.status  = \result$296 [3:0];
-  assign \result$296.timestamp  = \result$296 [35:4];
-  assign \result$296.line_delay  = \result$296 [48:36];
-  assign \result$296.cds  = \result$296 [49];
-  assign \result$296.noise_events  = \result$296 [53:50];
-  assign \result$296.delay_settled  = \result$296 [54];
-  assign \result$296.settled_delay  = \result$296 [67:55];
-  assign \result$296.delay_spread  = \result$296 [75:68];
-  assign \result$296.word0  = \result$296 [133:76];
-  assign \result$296.word0.position  = \result$296 [130:76];
-  assign \result$296.word0.ne  = \result$296 [131];
-  assign \result$296.word0.nw  = \result$296 [132];
-  assign \result$296.word0.crc_ok  = \result$296 [133];
-  assign \result$296.word1  = \result$296 [176:134];
-  assign \result$296.word1.position  = \result$296 [173:134];
-  assign \result$296.word1.ne  = \result$296 [174];
-  assign \result$296.word1.nw  = \result$296 [175];
-  assign \result$296.word1.crc_ok  = \result$296 [176];
-  assign \result$296.lc  = \result$296 [182:177];
-  assign \result$296.lc_repeat  = \result$296 [183];
-  assign \result$296.lc_skip  = \result$296 [184];
-  assign \result$296.lc_zero  = \result$296 [185];
-  assign \result$296.spw_mismatch  = \result$296 [186];
-  assign \events$257 [20] = \$16 ;
-  assign \events$257 [19] = \$14 ;
-  assign \events$257 [18] = \$12 ;
-  assign \events$257 [17] = \$10 ;
-  assign \events$257 [16] = \$8 ;
-  assign \events$257 [15] = \event ;
-  assign \events$257 [14] = \$6 ;
-  assign \events$257 [13] = \$4 ;
-  assign \events$257 [12] = faults[6];
-  assign \events$257 [11] = faults[4];
-  assign \events$257 [10] = overrun;
-  assign \events$257 [9] = \$2 ;
-  assign \events$257 [8] = lc_zero;
-  assign \events$257 [7] = lc_skip;
-  assign \events$257 [6] = lc_repeat;
-  assign \events$257 [5] = faults[3];
-  assign \events$257 [4] = faults[2];
-  assign \events$257 [3] = faults[1];
-  assign \events$257 [2] = faults[0];
-  assign \events$257 [1] = crc_error[1];
-  assign \events$257 [0] = crc_error[0];
+  assign \result$298.status  = \result$298 [3:0];
+  assign \result$298.timestamp  = \result$298 [35:4];
+  assign \result$298.line_delay  = \result$298 [48:36];
+  assign \result$298.cds  = \result$298 [49];
+  assign \result$298.noise_events  = \result$298 [53:50];
+  assign \result$298.delay_settled  = \result$298 [54];
+  assign \result$298.settled_delay  = \result$298 [67:55];
+  assign \result$298.delay_spread  = \result$298 [75:68];
+  assign \result$298.word0  = \result$298 [133:76];
+  assign \result$298.word0.position  = \result$298 [130:76];
+  assign \result$298.word0.ne  = \result$298 [131];
+  assign \result$298.word0.nw  = \result$298 [132];
+  assign \result$298.word0.crc_ok  = \result$298 [133];
+  assign \result$298.word1  = \result$298 [176:134];
+  assign \result$298.word1.position  = \result$298 [173:134];
+  assign \result$298.word1.ne  = \result$298 [174];
+  assign \result$298.word1.nw  = \result$298 [175];
+  assign \result$298.word1.crc_ok  = \result$298 [176];
+  assign \result$298.lc  = \result$298 [182:177];
+  assign \result$298.lc_repeat  = \result$298 [183];
+  assign \result$298.lc_skip  = \result$298 [184];
+  assign \result$298.lc_zero  = \result$298 [185];
+  assign \result$298.spw_mismatch  = \result$298 [186];
+  assign \events$259 [20] = \$16 ;
+  assign \events$259 [19] = \$14 ;
+  assign \events$259 [18] = \$12 ;
+  assign \events$259 [17] = \$10 ;
+  assign \events$259 [16] = \$8 ;
+  assign \events$259 [15] = \event ;
+  assign \events$259 [14] = \$6 ;
+  assign \events$259 [13] = \$4 ;
+  assign \events$259 [12] = faults[6];
+  assign \events$259 [11] = faults[4];
+  assign \events$259 [10] = overrun;
+  assign \events$259 [9] = \$2 ;
+  assign \events$259 [8] = lc_zero;
+  assign \events$259 [7] = lc_skip;
+  assign \events$259 [6] = lc_repeat;
+  assign \events$259 [5] = faults[3];
+  assign \events$259 [4] = faults[2];
+  assign \events$259 [3] = faults[1];
+  assign \events$259 [2] = faults[0];
+  assign \events$259 [1] = crc_error[1];
+  assign \events$259 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$220 [17] = ca_write;
-  assign \request$220 [16:10] = ca_count;
-  assign \request$220 [9:3] = ca_address;
-  assign \request$220 [2:0] = ca_slave_id;
+  assign \request$222 [17] = ca_write;
+  assign \request$222 [16:10] = ca_count;
+  assign \request$222 [9:3] = ca_address;
+  assign \request$222 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$22 ;
@@ -10927,25 +11062,27 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$169 [19:10] = cycle[203:194];
-  assign \words$169 [9:0] = cycle[154:145];
-  assign words[19:10] = cycle[203:194];
-  assign words[9:0] = cycle[154:145];
-  assign live[250:243] = cfg_spw_tolerance;
-  assign live[242] = cfg_spw_check;
-  assign live[241] = cfg_w1_crc_inverted;
-  assign live[240:225] = cfg_w1_crc_start;
-  assign live[224:209] = cfg_w1_crc_poly;
-  assign live[208:204] = cfg_w1_crc_width;
-  assign live[203:202] = cfg_w1_crc;
-  assign live[201] = cfg_w1_lc;
-  assign live[200] = cfg_w1_nenw;
-  assign live[199:194] = cfg_w1_data_bits;
-  assign live[193] = cfg_w1_enable;
-  assign live[192] = cfg_w0_crc_inverted;
-  assign live[191:176] = cfg_w0_crc_start;
-  assign live[175:160] = cfg_w0_crc_poly;
-  assign live[159:155] = cfg_w0_crc_width;
+  assign \words$171 [21:11] = cycle[205:195];
+  assign \words$171 [10:0] = cycle[155:145];
+  assign words[21:11] = cycle[205:195];
+  assign words[10:0] = cycle[155:145];
+  assign live[252:245] = cfg_spw_tolerance;
+  assign live[244] = cfg_spw_check;
+  assign live[243] = cfg_w1_crc_inverted;
+  assign live[242:227] = cfg_w1_crc_start;
+  assign live[226:211] = cfg_w1_crc_poly;
+  assign live[210:206] = cfg_w1_crc_width;
+  assign live[205] = cfg_w1_gray;
+  assign live[204:203] = cfg_w1_crc;
+  assign live[202] = cfg_w1_lc;
+  assign live[201] = cfg_w1_nenw;
+  assign live[200:195] = cfg_w1_data_bits;
+  assign live[194] = cfg_w1_enable;
+  assign live[193] = cfg_w0_crc_inverted;
+  assign live[192:177] = cfg_w0_crc_start;
+  assign live[176:161] = cfg_w0_crc_poly;
+  assign live[160:156] = cfg_w0_crc_width;
+  assign live[155] = cfg_w0_gray;
   assign live[154:153] = cfg_w0_crc;
   assign live[152] = cfg_w0_lc;
   assign live[151] = cfg_w0_nenw;
@@ -11021,7 +11158,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire [24:0] \$58 ;
   reg \$59 ;
   wire \$6 ;
-  reg [250:0] \$60 ;
+  reg [252:0] \$60 ;
   reg [23:0] \$61 ;
   reg [23:0] \$62 ;
   reg [11:0] \$63 ;
@@ -11048,8 +11185,8 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  output [250:0] cycle;
-  reg [250:0] cycle = 251'h000000000000000000000000000000000000000000000000000000000000000;
+  output [252:0] cycle;
+  reg [252:0] cycle = 253'h0000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -11062,7 +11199,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
   wire [23:0] \cycle.timeout_limit ;
-  wire [9:0] \cycle.w0 ;
+  wire [10:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -11070,6 +11207,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w0.crc ;
   wire [5:0] \cycle.w0.data_bits ;
+  wire \cycle.w0.gray ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
   wire [37:0] \cycle.w0_crc ;
@@ -11077,7 +11215,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire [15:0] \cycle.w0_crc.poly ;
   wire [15:0] \cycle.w0_crc.start ;
   wire [4:0] \cycle.w0_crc.width ;
-  wire [9:0] \cycle.w1 ;
+  wire [10:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -11085,6 +11223,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w1.crc ;
   wire [5:0] \cycle.w1.data_bits ;
+  wire \cycle.w1.gray ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
   wire [37:0] \cycle.w1_crc ;
@@ -11099,8 +11238,8 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [250:0] live;
-  wire [250:0] live;
+  input [252:0] live;
+  wire [252:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -11113,7 +11252,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
   wire [23:0] \live.timeout_limit ;
-  wire [9:0] \live.w0 ;
+  wire [10:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -11121,6 +11260,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w0.crc ;
   wire [5:0] \live.w0.data_bits ;
+  wire \live.w0.gray ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
   wire [37:0] \live.w0_crc ;
@@ -11128,7 +11268,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire [15:0] \live.w0_crc.poly ;
   wire [15:0] \live.w0_crc.start ;
   wire [4:0] \live.w0_crc.width ;
-  wire [9:0] \live.w1 ;
+  wire [10:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -11136,6 +11276,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w1.crc ;
   wire [5:0] \live.w1.data_bits ;
+  wire \live.w1.gray ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
   wire [37:0] \live.w1_crc ;
@@ -11159,14 +11300,14 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
-  assign \$36  = live[193] & live[152];
-  assign \$37  = \$36  & live[201];
+  assign \$36  = live[194] & live[152];
+  assign \$37  = \$36  & live[202];
   assign \$38  = ~ \$37 ;
   assign \$39  = \$35  & \$38 ;
-  assign \$40  = ~ live[242];
-  assign \$41  = live[199:194] <= live[150:145];
-  assign \$42  = live[193] & \$41 ;
-  assign \$43  = | live[203:202];
+  assign \$40  = ~ live[244];
+  assign \$41  = live[200:195] <= live[150:145];
+  assign \$42  = live[194] & \$41 ;
+  assign \$43  = | live[204:203];
   assign \$44  = \$42  & \$43 ;
   assign \$45  = \$40  | \$44 ;
   assign \$46  = \$39  & \$45 ;
@@ -11182,7 +11323,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$56  = \$55  ? 4'h2 : live[144:141];
   assign \$57  = live[15:0] + \$56 ;
   assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[193];
+  assign word_count = 1'h1 + cycle[194];
   always @(posedge clk)
     ok <= \$59 ;
   always @(posedge clk)
@@ -11211,26 +11352,26 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$8  = live[154:153] == 2'h2;
   assign \$9  = \$7  | \$8 ;
   assign \$10  = live[154:153] == 2'h3;
-  assign \$11  = | live[159:155];
+  assign \$11  = | live[160:156];
   assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[159:155] <= 5'h10;
+  assign \$13  = live[160:156] <= 5'h10;
   assign \$14  = \$12  & \$13 ;
   assign \$15  = \$9  | \$14 ;
   assign \$16  = \$4  & \$15 ;
   assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[193];
-  assign \$19  = | live[199:194];
-  assign \$20  = live[199:194] <= 6'h28;
+  assign \$18  = ~ live[194];
+  assign \$19  = | live[200:195];
+  assign \$20  = live[200:195] <= 6'h28;
   assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[203:202];
-  assign \$23  = live[203:202] == 1'h1;
+  assign \$22  = ! live[204:203];
+  assign \$23  = live[204:203] == 1'h1;
   assign \$24  = \$22  | \$23 ;
-  assign \$25  = live[203:202] == 2'h2;
+  assign \$25  = live[204:203] == 2'h2;
   assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[203:202] == 2'h3;
-  assign \$28  = | live[208:204];
+  assign \$27  = live[204:203] == 2'h3;
+  assign \$28  = | live[210:206];
   assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[208:204] <= 5'h10;
+  assign \$30  = live[210:206] <= 5'h10;
   assign \$31  = \$29  & \$30 ;
   assign \$32  = \$26  | \$31 ;
   always @* begin
@@ -11247,7 +11388,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
       \$60  = live;
     end
     if (rst) begin
-      \$60  = 251'h000000000000000000000000000000000000000000000000000000000000000;
+      \$60  = 253'h0000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
@@ -11321,12 +11462,12 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
             \$66 [37] = 1'h1;
           end
         2'h3:
-            \$66 [37:0] = live[192:155];
+            \$66 [37:0] = live[193:156];
         default:
             \$66 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
-      casez (live[203:202])
+      casez (live[204:203])
         2'h1:
           begin
             \$66 [42:38] = 5'h06;
@@ -11342,7 +11483,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
             \$66 [75] = 1'h1;
           end
         2'h3:
-            \$66 [75:38] = live[241:204];
+            \$66 [75:38] = live[243:206];
         default:
             \$66 [75:38] = 38'h0000000000;
       endcase
@@ -11368,29 +11509,31 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[154:145];
+  assign \live.w0  = live[155:145];
   assign \live.w0.data_bits  = live[150:145];
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
-  assign \live.w0_crc  = live[192:155];
-  assign \live.w0_crc.width  = live[159:155];
-  assign \live.w0_crc.poly  = live[175:160];
-  assign \live.w0_crc.start  = live[191:176];
-  assign \live.w0_crc.inverted  = live[192];
-  assign \live.w1_enable  = live[193];
-  assign \live.w1  = live[203:194];
-  assign \live.w1.data_bits  = live[199:194];
-  assign \live.w1.nenw  = live[200];
-  assign \live.w1.lc  = live[201];
-  assign \live.w1.crc  = live[203:202];
-  assign \live.w1_crc  = live[241:204];
-  assign \live.w1_crc.width  = live[208:204];
-  assign \live.w1_crc.poly  = live[224:209];
-  assign \live.w1_crc.start  = live[240:225];
-  assign \live.w1_crc.inverted  = live[241];
-  assign \live.spw_check  = live[242];
-  assign \live.spw_tolerance  = live[250:243];
+  assign \live.w0.gray  = live[155];
+  assign \live.w0_crc  = live[193:156];
+  assign \live.w0_crc.width  = live[160:156];
+  assign \live.w0_crc.poly  = live[176:161];
+  assign \live.w0_crc.start  = live[192:177];
+  assign \live.w0_crc.inverted  = live[193];
+  assign \live.w1_enable  = live[194];
+  assign \live.w1  = live[205:195];
+  assign \live.w1.data_bits  = live[200:195];
+  assign \live.w1.nenw  = live[201];
+  assign \live.w1.lc  = live[202];
+  assign \live.w1.crc  = live[204:203];
+  assign \live.w1.gray  = live[205];
+  assign \live.w1_crc  = live[243:206];
+  assign \live.w1_crc.width  = live[210:206];
+  assign \live.w1_crc.poly  = live[226:211];
+  assign \live.w1_crc.start  = live[242:227];
+  assign \live.w1_crc.inverted  = live[243];
+  assign \live.spw_check  = live[244];
+  assign \live.spw_tolerance  = live[252:245];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -11401,29 +11544,31 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[154:145];
+  assign \cycle.w0  = cycle[155:145];
   assign \cycle.w0.data_bits  = cycle[150:145];
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0_crc  = cycle[192:155];
-  assign \cycle.w0_crc.width  = cycle[159:155];
-  assign \cycle.w0_crc.poly  = cycle[175:160];
-  assign \cycle.w0_crc.start  = cycle[191:176];
-  assign \cycle.w0_crc.inverted  = cycle[192];
-  assign \cycle.w1_enable  = cycle[193];
-  assign \cycle.w1  = cycle[203:194];
-  assign \cycle.w1.data_bits  = cycle[199:194];
-  assign \cycle.w1.nenw  = cycle[200];
-  assign \cycle.w1.lc  = cycle[201];
-  assign \cycle.w1.crc  = cycle[203:202];
-  assign \cycle.w1_crc  = cycle[241:204];
-  assign \cycle.w1_crc.width  = cycle[208:204];
-  assign \cycle.w1_crc.poly  = cycle[224:209];
-  assign \cycle.w1_crc.start  = cycle[240:225];
-  assign \cycle.w1_crc.inverted  = cycle[241];
-  assign \cycle.spw_check  = cycle[242];
-  assign \cycle.spw_tolerance  = cycle[250:243];
+  assign \cycle.w0.gray  = cycle[155];
+  assign \cycle.w0_crc  = cycle[193:156];
+  assign \cycle.w0_crc.width  = cycle[160:156];
+  assign \cycle.w0_crc.poly  = cycle[176:161];
+  assign \cycle.w0_crc.start  = cycle[192:177];
+  assign \cycle.w0_crc.inverted  = cycle[193];
+  assign \cycle.w1_enable  = cycle[194];
+  assign \cycle.w1  = cycle[205:195];
+  assign \cycle.w1.data_bits  = cycle[200:195];
+  assign \cycle.w1.nenw  = cycle[201];
+  assign \cycle.w1.lc  = cycle[202];
+  assign \cycle.w1.crc  = cycle[204:203];
+  assign \cycle.w1.gray  = cycle[205];
+  assign \cycle.w1_crc  = cycle[243:206];
+  assign \cycle.w1_crc.width  = cycle[210:206];
+  assign \cycle.w1_crc.poly  = cycle[226:211];
+  assign \cycle.w1_crc.start  = cycle[242:227];
+  assign \cycle.w1_crc.inverted  = cycle[243];
+  assign \cycle.spw_check  = cycle[244];
+  assign \cycle.spw_tolerance  = cycle[252:245];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -14425,27 +14570,33 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
-  reg [15:0] \$100 ;
-  reg \$101 ;
-  reg \$102 ;
-  reg [15:0] \$103 ;
-  reg [2:0] \$104 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  reg \$104 ;
   reg \$105 ;
-  reg [6:0] \$106 ;
+  reg [15:0] \$106 ;
   reg \$107 ;
   reg \$108 ;
-  reg \$109 ;
+  reg [15:0] \$109 ;
   wire [1:0] \$11 ;
-  reg \$110 ;
+  reg [2:0] \$110 ;
   reg \$111 ;
-  reg \$112 ;
-  reg [54:0] \$113 ;
-  reg [1:0] \$114 ;
-  reg [1:0] \$115 ;
-  reg [39:0] \$116 ;
-  reg [5:0] \$117 ;
-  reg [39:0] \$118 ;
+  reg [6:0] \$112 ;
+  reg \$113 ;
+  reg \$114 ;
+  reg \$115 ;
+  reg \$116 ;
+  reg \$117 ;
+  reg \$118 ;
+  reg [54:0] \$119 ;
   wire [6:0] \$12 ;
+  reg [1:0] \$120 ;
+  reg [1:0] \$121 ;
+  reg [39:0] \$122 ;
+  reg [5:0] \$123 ;
+  reg [39:0] \$124 ;
   wire \$13 ;
   reg [3:0] \$14 ;
   wire [6:0] \$15 ;
@@ -14532,15 +14683,15 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$89 ;
   wire [7:0] \$9 ;
   wire \$90 ;
-  wire [6:0] \$91 ;
+  wire \$91 ;
   wire \$92 ;
   wire \$93 ;
   wire \$94 ;
   wire \$95 ;
   wire \$96 ;
-  wire \$97 ;
-  reg \$98 ;
-  reg \$99 ;
+  wire [6:0] \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   input \bit ;
   wire \bit ;
   wire \bit$51 ;
@@ -14638,9 +14789,9 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \word$54 ;
   input [1:0] word_count;
   wire [1:0] word_count;
-  input [19:0] words;
-  wire [19:0] words;
-  wire [9:0] \words[0] ;
+  input [21:0] words;
+  wire [21:0] words;
+  wire [10:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -14648,9 +14799,10 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
+  wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [9:0] \words[1] ;
+  wire [10:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -14658,6 +14810,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
+  wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
   assign \$1  = words[5:0] + 1'h1;
@@ -14673,17 +14826,17 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$15  = words[5:0] + \$14 ;
   assign \$16  = | \$15 ;
   assign \$17  = \$13  & \$16 ;
-  assign \$18  = words[15:10] + 1'h1;
-  assign \$19  = words[15:10] + 7'h7f;
-  assign \$21  = words[15:10] + \$20 ;
-  assign \$23  = words[15:10] + \$22 ;
+  assign \$18  = words[16:11] + 1'h1;
+  assign \$19  = words[16:11] + 7'h7f;
+  assign \$21  = words[16:11] + \$20 ;
+  assign \$23  = words[16:11] + \$22 ;
   assign \$25  = \$24  + crcs[42:38];
-  assign \$26  = words[15:10] + \$25 [6:0];
-  assign \$27  = | words[15:10];
-  assign \$28  = words[16] ? 2'h2 : 2'h0;
-  assign \$29  = words[15:10] + \$28 ;
+  assign \$26  = words[16:11] + \$25 [6:0];
+  assign \$27  = | words[16:11];
+  assign \$28  = words[17] ? 2'h2 : 2'h0;
+  assign \$29  = words[16:11] + \$28 ;
   assign \$30  = ! \$29 ;
-  assign \$32  = words[15:10] + \$31 ;
+  assign \$32  = words[16:11] + \$31 ;
   assign \$33  = | \$32 ;
   assign \$34  = \$30  & \$33 ;
   assign \$35  = ~ slots_full;
@@ -14691,7 +14844,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$37  = slots + 1'h1;
   assign \$38  = slots == 16'hfffe;
   assign \$39  = sample & \bit ;
-  assign \$40  = | words[15:10];
+  assign \$40  = | words[16:11];
   assign \$41  = idx + 1'h1;
   assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
   assign \$43  = idx != \$42 ;
@@ -14718,39 +14871,45 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$64  = ! word;
   assign \$65  = in_word & \$64 ;
   assign \$66  = \$65  & in_data;
-  assign \$67  = ~ words[6];
-  assign \$68  = ! word;
-  assign \$69  = in_word & \$68 ;
-  assign \$70  = idx == words[5:0];
-  assign \$71  = \$69  & \$70 ;
-  assign \$72  = ! word;
-  assign \$73  = in_word & \$72 ;
-  assign \$74  = idx == w0_data_end_p1;
-  assign \$75  = \$73  & \$74 ;
-  assign \$77  = in_word & \$76 ;
-  assign \$78  = \$77  & in_data;
-  assign \$79  = ~ words[16];
-  assign \$81  = in_word & \$80 ;
-  assign \$82  = idx == words[15:10];
-  assign \$83  = \$81  & \$82 ;
+  assign \$67  = words[10] & data0[0];
+  assign \$68  = \bit  ^ \$67 ;
+  assign \$69  = ~ words[6];
+  assign \$70  = ! word;
+  assign \$71  = in_word & \$70 ;
+  assign \$72  = idx == words[5:0];
+  assign \$73  = \$71  & \$72 ;
+  assign \$74  = ! word;
+  assign \$75  = in_word & \$74 ;
+  assign \$76  = idx == w0_data_end_p1;
+  assign \$77  = \$75  & \$76 ;
+  assign \$79  = in_word & \$78 ;
+  assign \$80  = \$79  & in_data;
+  assign \$81  = words[21] & data1[0];
+  assign \$82  = \bit  ^ \$81 ;
+  assign \$83  = ~ words[17];
   assign \$85  = in_word & \$84 ;
-  assign \$86  = idx == w1_data_end_p1;
+  assign \$86  = idx == words[16:11];
   assign \$87  = \$85  & \$86 ;
-  assign \$88  = in_word & in_top;
+  assign \$89  = in_word & \$88 ;
+  assign \$90  = idx == w1_data_end_p1;
+  assign \$91  = \$89  & \$90 ;
+  assign \$92  = in_word & in_top;
+  assign \$93  = words[10] & data0[0];
+  assign \$94  = \bit  ^ \$93 ;
   assign lc_load = in_word & in_lc;
-  assign \$89  = ! idx;
-  assign first = in_word & \$89 ;
-  assign \$90  = ~ in_crc;
-  assign \cover  = in_word & \$90 ;
+  assign \$95  = ! idx;
+  assign first = in_word & \$95 ;
+  assign \$96  = ~ in_crc;
+  assign \cover  = in_word & \$96 ;
   assign check = in_word & in_crc;
-  assign \$91  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$92  = idx == \$91 ;
-  assign last = in_word & \$92 ;
-  assign \$93  = ! decoder_fsm_state;
-  assign \$94  = decoder_fsm_state == 1'h1;
-  assign \$95  = decoder_fsm_state == 2'h2;
-  assign \$96  = decoder_fsm_state == 2'h3;
-  assign \$97  = decoder_fsm_state == 3'h4;
+  assign \$97  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$98  = idx == \$97 ;
+  assign last = in_word & \$98 ;
+  assign \$99  = ! decoder_fsm_state;
+  assign \$100  = decoder_fsm_state == 1'h1;
+  assign \$101  = decoder_fsm_state == 2'h2;
+  assign \$102  = decoder_fsm_state == 2'h3;
+  assign \$103  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -14780,47 +14939,47 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   always @(posedge clk)
     w1_lc_at0 <= \$34 ;
   always @(posedge clk)
-    done <= \$98 ;
+    done <= \$104 ;
   always @(posedge clk)
-    stopped <= \$99 ;
+    stopped <= \$105 ;
   always @(posedge clk)
-    slots <= \$100 ;
+    slots <= \$106 ;
   always @(posedge clk)
-    slots_full <= \$101 ;
+    slots_full <= \$107 ;
   always @(posedge clk)
-    started <= \$102 ;
+    started <= \$108 ;
   always @(posedge clk)
-    start_slot <= \$103 ;
+    start_slot <= \$109 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$104 ;
+    decoder_fsm_state <= \$110 ;
   always @(posedge clk)
-    cds <= \$105 ;
+    cds <= \$111 ;
   always @(posedge clk)
-    idx <= \$106 ;
+    idx <= \$112 ;
   always @(posedge clk)
-    in_data <= \$107 ;
+    in_data <= \$113 ;
   always @(posedge clk)
-    in_lc <= \$108 ;
+    in_lc <= \$114 ;
   always @(posedge clk)
-    in_crc <= \$109 ;
+    in_crc <= \$115 ;
   always @(posedge clk)
-    in_top <= \$110 ;
+    in_top <= \$116 ;
   always @(posedge clk)
-    word <= \$111 ;
+    word <= \$117 ;
   always @(posedge clk)
-    stop_bit <= \$112 ;
+    stop_bit <= \$118 ;
   always @(posedge clk)
-    data0 <= \$113 ;
+    data0 <= \$119 ;
   always @(posedge clk)
-    ne <= \$114 ;
+    ne <= \$120 ;
   always @(posedge clk)
-    nw <= \$115 ;
+    nw <= \$121 ;
   always @(posedge clk)
-    data1 <= \$116 ;
+    data1 <= \$122 ;
   always @(posedge clk)
-    lc <= \$117 ;
+    lc <= \$123 ;
   always @(posedge clk)
-    cpw_top <= \$118 ;
+    cpw_top <= \$124 ;
   \biss_master_uart.ch0.core.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
@@ -14889,7 +15048,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[16])
+    casez (words[17])
       1'h0:
           \$20  = 7'h7f;
       1'h1:
@@ -14899,7 +15058,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17:16])
+    casez (words[18:17])
       2'h0:
           \$22  = 7'h7f;
       2'h1:
@@ -14913,7 +15072,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17:16])
+    casez (words[18:17])
       2'h0:
           \$24  = 7'h7f;
       2'h1:
@@ -14927,7 +15086,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17:16])
+    casez (words[18:17])
       2'h0:
           \$31  = 4'h0;
       2'h1:
@@ -14940,7 +15099,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$98  = 1'h0;
+    \$104  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -14950,21 +15109,21 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$98  = 1'h1;
+                \$104  = 1'h1;
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$98  = 1'h0;
+      \$104  = 1'h0;
     end
     if (rst) begin
-      \$98  = 1'h0;
+      \$104  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$99  = 1'h0;
+    \$105  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -14974,115 +15133,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
           /* empty */;
       3'h3:
           if (sample) begin
-            \$99  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$99  = 1'h0;
-    end
-    if (rst) begin
-      \$99  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$100  = slots;
-    if (\$36 ) begin
-      \$100  = \$37 [15:0];
-    end
-    if (receiver_clear) begin
-      \$100  = 16'h0000;
-    end
-    if (rst) begin
-      \$100  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$101  = slots_full;
-    if (\$36 ) begin
-      \$101  = \$38 ;
-    end
-    if (receiver_clear) begin
-      \$101  = 1'h0;
-    end
-    if (rst) begin
-      \$101  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$102  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$102  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$102  = 1'h0;
-    end
-    if (rst) begin
-      \$102  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$103  = start_slot;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$103  = slots;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$103  = 16'h0000;
-    end
-    if (rst) begin
-      \$103  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$104  = decoder_fsm_state;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$104  = 3'h1;
-          end
-      3'h1:
-          if (sample) begin
-            \$104  = 3'h2;
-          end
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$104  = 3'h3;
-              end
-            end
-          end
-      3'h3:
-          if (sample) begin
-            \$104  = 3'h4;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$104  = 3'h0;
-    end
-    if (rst) begin
-      \$104  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$105  = cds;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$105  = \bit ;
+            \$105  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -15094,47 +15145,23 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$106  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$106  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$106  = \$41 [6:0];
-            if (\$60 ) begin
-              \$106  = 7'h00;
-            end
-          end
-    endcase
+    \$106  = slots;
+    if (\$36 ) begin
+      \$106  = \$37 [15:0];
+    end
     if (receiver_clear) begin
-      \$106  = 7'h00;
+      \$106  = 16'h0000;
     end
     if (rst) begin
-      \$106  = 7'h00;
+      \$106  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$107  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$107  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$107  = \$44 ;
-            if (\$60 ) begin
-              \$107  = w1_data_at0;
-            end
-          end
-    endcase
+    \$107  = slots_full;
+    if (\$36 ) begin
+      \$107  = \$38 ;
+    end
     if (receiver_clear) begin
       \$107  = 1'h0;
     end
@@ -15144,20 +15171,11 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$108  = in_lc;
+    \$108  = started;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$108  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$108  = \$50 ;
-            if (\$60 ) begin
-              \$108  = w1_lc_at0;
-            end
+          if (\$39 ) begin
+            \$108  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -15169,60 +15187,201 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$109  = in_crc;
+    \$109  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$109  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            \$109  = \$56 ;
+          if (\$39 ) begin
+            \$109  = slots;
           end
     endcase
     if (receiver_clear) begin
-      \$109  = 1'h0;
+      \$109  = 16'h0000;
     end
     if (rst) begin
-      \$109  = 1'h0;
+      \$109  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$110  = in_top;
+    \$110  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$110  = 3'h1;
+          end
+      3'h1:
+          if (sample) begin
+            \$110  = 3'h2;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$110  = 3'h3;
+              end
+            end
+          end
+      3'h3:
+          if (sample) begin
+            \$110  = 3'h4;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$110  = 3'h0;
+    end
+    if (rst) begin
+      \$110  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$111  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$110  = \$40 ;
+            \$111  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$111  = 1'h0;
+    end
+    if (rst) begin
+      \$111  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$112  = idx;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$112  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$110  = \$58 ;
+            \$112  = \$41 [6:0];
             if (\$60 ) begin
-              \$110  = 1'h0;
+              \$112  = 7'h00;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$110  = 1'h0;
+      \$112  = 7'h00;
     end
     if (rst) begin
-      \$110  = 1'h0;
+      \$112  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$111  = word;
+    \$113  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$111  = 1'h0;
+            \$113  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$113  = \$44 ;
+            if (\$60 ) begin
+              \$113  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$113  = 1'h0;
+    end
+    if (rst) begin
+      \$113  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$114  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$114  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$114  = \$50 ;
+            if (\$60 ) begin
+              \$114  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$114  = 1'h0;
+    end
+    if (rst) begin
+      \$114  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$115  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$115  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$115  = \$56 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$115  = 1'h0;
+    end
+    if (rst) begin
+      \$115  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$116  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$116  = \$40 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$116  = \$58 ;
+            if (\$60 ) begin
+              \$116  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$116  = 1'h0;
+    end
+    if (rst) begin
+      \$116  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$117  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$117  = 1'h0;
           end
       3'h2:
           if (sample) begin
@@ -15230,21 +15389,21 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
               (* full_case = 32'd1 *)
               if (\$62 ) begin
               end else begin
-                \$111  = \$63 [0];
+                \$117  = \$63 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$111  = 1'h0;
+      \$117  = 1'h0;
     end
     if (rst) begin
-      \$111  = 1'h0;
+      \$117  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$112  = stop_bit;
+    \$118  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -15254,108 +15413,108 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
           /* empty */;
       3'h3:
           if (sample) begin
-            \$112  = \bit ;
+            \$118  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$112  = 1'h0;
+      \$118  = 1'h0;
     end
     if (rst) begin
-      \$112  = 1'h0;
+      \$118  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$113  = data0;
+    \$119  = data0;
     if (\$66 ) begin
-      \$113  = { data0[53:0], \bit  };
+      \$119  = { data0[53:0], \$68  };
     end
     if (receiver_clear) begin
-      \$113  = 55'h00000000000000;
+      \$119  = 55'h00000000000000;
     end
     if (rst) begin
-      \$113  = 55'h00000000000000;
+      \$119  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$114  = ne;
-    if (\$67 ) begin
-      \$114 [0] = 1'h1;
-    end else if (\$71 ) begin
-      \$114 [0] = \bit ;
+    \$120  = ne;
+    if (\$69 ) begin
+      \$120 [0] = 1'h1;
+    end else if (\$73 ) begin
+      \$120 [0] = \bit ;
     end
-    if (\$79 ) begin
-      \$114 [1] = 1'h1;
-    end else if (\$83 ) begin
-      \$114 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$114  = 2'h0;
-    end
-    if (rst) begin
-      \$114  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$115  = nw;
-    if (\$67 ) begin
-      \$115 [0] = 1'h1;
-    end else if (\$71 ) begin
-    end else if (\$75 ) begin
-      \$115 [0] = \bit ;
-    end
-    if (\$79 ) begin
-      \$115 [1] = 1'h1;
-    end else if (\$83 ) begin
+    if (\$83 ) begin
+      \$120 [1] = 1'h1;
     end else if (\$87 ) begin
-      \$115 [1] = \bit ;
+      \$120 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$115  = 2'h0;
+      \$120  = 2'h0;
     end
     if (rst) begin
-      \$115  = 2'h0;
+      \$120  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$116  = data1;
-    if (\$78 ) begin
-      \$116  = { data1[38:0], \bit  };
+    \$121  = nw;
+    if (\$69 ) begin
+      \$121 [0] = 1'h1;
+    end else if (\$73 ) begin
+    end else if (\$77 ) begin
+      \$121 [0] = \bit ;
+    end
+    if (\$83 ) begin
+      \$121 [1] = 1'h1;
+    end else if (\$87 ) begin
+    end else if (\$91 ) begin
+      \$121 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$116  = 40'h0000000000;
+      \$121  = 2'h0;
     end
     if (rst) begin
-      \$116  = 40'h0000000000;
+      \$121  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$117  = lc;
+    \$122  = data1;
+    if (\$80 ) begin
+      \$122  = { data1[38:0], \$82  };
+    end
+    if (receiver_clear) begin
+      \$122  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$122  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    \$123  = lc;
     if (lc_load) begin
-      \$117  = { lc[4:0], \bit  };
+      \$123  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$117  = 6'h00;
+      \$123  = 6'h00;
     end
     if (rst) begin
-      \$117  = 6'h00;
+      \$123  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$118  = cpw_top;
-    if (\$88 ) begin
-      \$118  = { cpw_top[38:0], \bit  };
+    \$124  = cpw_top;
+    if (\$92 ) begin
+      \$124  = { cpw_top[38:0], \$94  };
     end
     if (receiver_clear) begin
-      \$118  = 40'h0000000000;
+      \$124  = 40'h0000000000;
     end
     if (rst) begin
-      \$118  = 40'h0000000000;
+      \$124  = 40'h0000000000;
     end
   end
   always @* begin
@@ -15375,16 +15534,18 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \bit$51  = \bit ;
   assign ok = crc_ok;
   assign \word$54  = word;
-  assign \words[0]  = words[9:0];
+  assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
-  assign \words[1]  = words[19:10];
-  assign \words[1].data_bits  = words[15:10];
-  assign \words[1].nenw  = words[16];
-  assign \words[1].lc  = words[17];
-  assign \words[1].crc  = words[19:18];
+  assign \words[0].gray  = words[10];
+  assign \words[1]  = words[21:11];
+  assign \words[1].data_bits  = words[16:11];
+  assign \words[1].nenw  = words[17];
+  assign \words[1].lc  = words[18];
+  assign \words[1].crc  = words[20:19];
+  assign \words[1].gray  = words[21];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -15405,9 +15566,9 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \crcs$46[1].poly  = crcs[58:43];
   assign \crcs$46[1].start  = crcs[74:59];
   assign \crcs$46[1].inverted  = crcs[75];
-  assign \$76  = word;
-  assign \$80  = word;
+  assign \$78  = word;
   assign \$84  = word;
+  assign \$88  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -16641,9 +16802,9 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   wire w1_enable;
   reg [7:0] word0_len = 8'h00;
   reg [7:0] word1_len = 8'h00;
-  input [19:0] words;
-  wire [19:0] words;
-  wire [9:0] \words[0] ;
+  input [21:0] words;
+  wire [21:0] words;
+  wire [10:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -16651,9 +16812,10 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
+  wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [9:0] \words[1] ;
+  wire [10:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -16661,6 +16823,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
+  wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
   assign \$2  = \$1  + crcs[4:0];
@@ -16673,7 +16836,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   assign \$9  = ~ clear;
   assign \$10  = \$8  & \$9 ;
   assign \$12  = \$11  + crcs[42:38];
-  assign \$13  = words[15:10] + \$12 [7:0];
+  assign \$13  = words[16:11] + \$12 [7:0];
   always @(posedge clk)
     word0_len <= \$14 ;
   always @(posedge clk)
@@ -16703,7 +16866,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17:16])
+    casez (words[18:17])
       2'h0:
           \$11  = 8'h00;
       2'h1:
@@ -16756,16 +16919,18 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
       \$19  = 8'h00;
     end
   end
-  assign \words[0]  = words[9:0];
+  assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
-  assign \words[1]  = words[19:10];
-  assign \words[1].data_bits  = words[15:10];
-  assign \words[1].nenw  = words[16];
-  assign \words[1].lc  = words[17];
-  assign \words[1].crc  = words[19:18];
+  assign \words[0].gray  = words[10];
+  assign \words[1]  = words[21:11];
+  assign \words[1].data_bits  = words[16:11];
+  assign \words[1].nenw  = words[17];
+  assign \words[1].lc  = words[18];
+  assign \words[1].crc  = words[20:19];
+  assign \words[1].gray  = words[21];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -19958,7 +20123,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4979$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$5011$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -20000,8 +20165,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4979$0 ;
-  wire \port$4979$0 ;
+  input \port$5011$0 ;
+  wire \port$5011$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -20015,9 +20180,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4979$0  };
-  assign \$2  = { lc[4:0], \port$4979$0  } == last;
-  assign \$3  = { lc[4:0], \port$4979$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5011$0  };
+  assign \$2  = { lc[4:0], \port$5011$0  } == last;
+  assign \$3  = { lc[4:0], \port$5011$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -20127,7 +20292,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4979$0  };
+  assign lc_next = { lc[4:0], \port$5011$0  };
   assign zero = is_zero;
 endmodule
 
@@ -20683,7 +20848,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2303$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2321$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
@@ -20725,8 +20890,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2303$0 , l
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [250:0] cfg;
-  wire [250:0] cfg;
+  input [252:0] cfg;
+  wire [252:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -20739,7 +20904,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2303$0 , l
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
   wire [23:0] \cfg.timeout_limit ;
-  wire [9:0] \cfg.w0 ;
+  wire [10:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -20747,6 +20912,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2303$0 , l
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w0.crc ;
   wire [5:0] \cfg.w0.data_bits ;
+  wire \cfg.w0.gray ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
   wire [37:0] \cfg.w0_crc ;
@@ -20754,7 +20920,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2303$0 , l
   wire [15:0] \cfg.w0_crc.poly ;
   wire [15:0] \cfg.w0_crc.start ;
   wire [4:0] \cfg.w0_crc.width ;
-  wire [9:0] \cfg.w1 ;
+  wire [10:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -20762,6 +20928,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2303$0 , l
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w1.crc ;
   wire [5:0] \cfg.w1.data_bits ;
+  wire \cfg.w1.gray ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
   wire [37:0] \cfg.w1_crc ;
@@ -20833,8 +21000,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2303$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$2303$0 ;
-  wire \port$2303$0 ;
+  output \port$2321$0 ;
+  wire \port$2321$0 ;
   output report;
   wire report;
   input report_frame;
@@ -20864,9 +21031,9 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2303$0 , l
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[193];
+  assign \$1  = ~ cfg[194];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[193] & cfg[201];
+  assign \$3  = cfg[194] & cfg[202];
   assign \$4  = cfg[152] | \$3 ;
   assign \$5  = report_frame & \$4 ;
   assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
@@ -20874,7 +21041,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2303$0 , l
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[242] & cfg[193];
+  assign \$7  = cfg[244] & cfg[194];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
@@ -20893,7 +21060,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2303$0 , l
   assign \$19  = crc_ok[0] & \$2 ;
   assign \$20  = ~ \$19 ;
   assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[193] & cfg[201];
+  assign \$22  = cfg[194] & cfg[202];
   assign \$23  = cfg[152] | \$22 ;
   assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
   assign \$25  = \$23  & \$24 ;
@@ -20940,7 +21107,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2303$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2303$0  = \$2 ;
+  assign \port$2321$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -20951,35 +21118,38 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2303$0 , l
   assign \cfg.quiet_time  = cfg[136:125];
   assign \cfg.noise_limit  = cfg[140:137];
   assign \cfg.delay_tolerance  = cfg[144:141];
-  assign \cfg.w0  = cfg[154:145];
+  assign \cfg.w0  = cfg[155:145];
   assign \cfg.w0.data_bits  = cfg[150:145];
   assign \cfg.w0.nenw  = cfg[151];
   assign \cfg.w0.lc  = cfg[152];
   assign \cfg.w0.crc  = cfg[154:153];
-  assign \cfg.w0_crc  = cfg[192:155];
-  assign \cfg.w0_crc.width  = cfg[159:155];
-  assign \cfg.w0_crc.poly  = cfg[175:160];
-  assign \cfg.w0_crc.start  = cfg[191:176];
-  assign \cfg.w0_crc.inverted  = cfg[192];
-  assign \cfg.w1_enable  = cfg[193];
-  assign \cfg.w1  = cfg[203:194];
-  assign \cfg.w1.data_bits  = cfg[199:194];
-  assign \cfg.w1.nenw  = cfg[200];
-  assign \cfg.w1.lc  = cfg[201];
-  assign \cfg.w1.crc  = cfg[203:202];
-  assign \cfg.w1_crc  = cfg[241:204];
-  assign \cfg.w1_crc.width  = cfg[208:204];
-  assign \cfg.w1_crc.poly  = cfg[224:209];
-  assign \cfg.w1_crc.start  = cfg[240:225];
-  assign \cfg.w1_crc.inverted  = cfg[241];
-  assign \cfg.spw_check  = cfg[242];
-  assign \cfg.spw_tolerance  = cfg[250:243];
+  assign \cfg.w0.gray  = cfg[155];
+  assign \cfg.w0_crc  = cfg[193:156];
+  assign \cfg.w0_crc.width  = cfg[160:156];
+  assign \cfg.w0_crc.poly  = cfg[176:161];
+  assign \cfg.w0_crc.start  = cfg[192:177];
+  assign \cfg.w0_crc.inverted  = cfg[193];
+  assign \cfg.w1_enable  = cfg[194];
+  assign \cfg.w1  = cfg[205:195];
+  assign \cfg.w1.data_bits  = cfg[200:195];
+  assign \cfg.w1.nenw  = cfg[201];
+  assign \cfg.w1.lc  = cfg[202];
+  assign \cfg.w1.crc  = cfg[204:203];
+  assign \cfg.w1.gray  = cfg[205];
+  assign \cfg.w1_crc  = cfg[243:206];
+  assign \cfg.w1_crc.width  = cfg[210:206];
+  assign \cfg.w1_crc.poly  = cfg[226:211];
+  assign \cfg.w1_crc.start  = cfg[242:227];
+  assign \cfg.w1_crc.inverted  = cfg[243];
+  assign \cfg.spw_check  = cfg[244];
+  assign \cfg.spw_tolerance  = cfg[252:245];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted
-, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5861$0 , \port$5874$0 , regs__ca_done, \port$6006$0 , slo);
+module \biss_master_uart.ch1 (clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly
+, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5893$0 , \port$5906$0 , regs__ca_done, \port$6038$0 , slo
+);
   reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -21067,6 +21237,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire [4:0] cfg_w0_crc_width;
   input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
+  input cfg_w0_gray;
+  wire cfg_w0_gray;
   input cfg_w0_lc;
   wire cfg_w0_lc;
   input cfg_w0_nenw;
@@ -21090,6 +21262,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire [5:0] cfg_w1_data_bits;
   input cfg_w1_enable;
   wire cfg_w1_enable;
+  input cfg_w1_gray;
+  wire cfg_w1_gray;
   input cfg_w1_lc;
   wire cfg_w1_lc;
   input cfg_w1_nenw;
@@ -21130,16 +21304,16 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$198 ;
+  wire \ma$202 ;
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$5861$0 ;
-  wire [186:0] \port$5861$0 ;
-  output [335:0] \port$5874$0 ;
-  wire [335:0] \port$5874$0 ;
-  output [9:0] \port$6006$0 ;
-  wire [9:0] \port$6006$0 ;
+  output [186:0] \port$5893$0 ;
+  wire [186:0] \port$5893$0 ;
+  output [335:0] \port$5906$0 ;
+  wire [335:0] \port$5906$0 ;
+  output [9:0] \port$6038$0 ;
+  wire [9:0] \port$6038$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -21193,6 +21367,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire [15:0] regs__cfg_w0_crc_start;
   wire [4:0] regs__cfg_w0_crc_width;
   wire [5:0] regs__cfg_w0_data_bits;
+  wire regs__cfg_w0_gray;
   wire regs__cfg_w0_lc;
   wire regs__cfg_w0_nenw;
   (* enum_base_type = "Crc" *)
@@ -21207,6 +21382,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire [4:0] regs__cfg_w1_crc_width;
   wire [5:0] regs__cfg_w1_data_bits;
   wire regs__cfg_w1_enable;
+  wire regs__cfg_w1_gray;
   wire regs__cfg_w1_lc;
   wire regs__cfg_w1_nenw;
   wire regs__clear_counters;
@@ -21268,7 +21444,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$200 ;
+  wire \slo$204 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -21291,8 +21467,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$195 ;
-  wire \trigger$195 ;
+  input \trigger$199 ;
+  wire \trigger$199 ;
   wire valid;
   wire word0_crc_ok;
   wire word0_ne;
@@ -21302,7 +21478,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
-  assign trigger = \trigger$195  & regs__trigger_enable;
+  assign trigger = \trigger$199  & regs__trigger_enable;
   assign \$2  = regs__done_count + 1'h1;
   always @(posedge clk)
     abort_cycle <= \$3 ;
@@ -21312,8 +21488,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__frame_error = regs__done & \$1 ;
   \biss_master_uart.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$234 (ca_abort),
-    .\busy$288 (regs__busy),
+    .\abort$236 (ca_abort),
+    .\busy$290 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -21341,6 +21517,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
     .cfg_w0_crc_start(cfg_w0_crc_start),
     .cfg_w0_crc_width(cfg_w0_crc_width),
     .cfg_w0_data_bits(cfg_w0_data_bits),
+    .cfg_w0_gray(cfg_w0_gray),
     .cfg_w0_lc(cfg_w0_lc),
     .cfg_w0_nenw(cfg_w0_nenw),
     .cfg_w1_crc(cfg_w1_crc),
@@ -21350,26 +21527,27 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
     .cfg_w1_crc_width(cfg_w1_crc_width),
     .cfg_w1_data_bits(cfg_w1_data_bits),
     .cfg_w1_enable(cfg_w1_enable),
+    .cfg_w1_gray(cfg_w1_gray),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$262 (clear_counters),
+    .\clear$264 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$6 ),
-    .\done$291 (regs__done),
+    .\done$293 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
-    .\periodic$35 (periodic),
+    .\periodic$37 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$7 ),
-    .\result$296 (\$5 ),
+    .\result$298 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$232 (ca_start),
+    .\start$234 (ca_start),
     .trigger(trigger),
-    .\valid$293 (valid)
+    .\valid$295 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
@@ -21411,10 +21589,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__cfg_w0_nenw = cfg_w0_nenw;
   assign regs__cfg_w0_lc = cfg_w0_lc;
   assign regs__cfg_w0_crc = cfg_w0_crc;
+  assign regs__cfg_w0_gray = cfg_w0_gray;
   assign regs__cfg_w1_data_bits = cfg_w1_data_bits;
   assign regs__cfg_w1_nenw = cfg_w1_nenw;
   assign regs__cfg_w1_lc = cfg_w1_lc;
   assign regs__cfg_w1_crc = cfg_w1_crc;
+  assign regs__cfg_w1_gray = cfg_w1_gray;
   assign regs__cfg_w1_enable = cfg_w1_enable;
   assign regs__cfg_end_check = cfg_end_check;
   assign regs__cfg_spw_check = cfg_spw_check;
@@ -21531,17 +21711,17 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$198  = ma;
-  assign \slo$200  = slo;
-  assign \port$5861$0  = \$5 ;
-  assign \port$5874$0  = \$6 ;
-  assign \port$6006$0  = \$7 ;
+  assign \ma$202  = ma;
+  assign \slo$204  = slo;
+  assign \port$5893$0  = \$5 ;
+  assign \port$5906$0  = \$6 ;
+  assign \port$6038$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$288 , config_error, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$262 , \periodic$35 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width
-, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$232 , \abort$234 , abort, ma, \done$291 , \valid$293 , \result$296 , counts, ca_done, result, slo);
+module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$290 , config_error, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$264 , \periodic$37 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start
+, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$234 , \abort$236 , abort, ma, \done$293 , \valid$295 , \result$298 , counts, ca_done, result, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -21567,25 +21747,25 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \$9 ;
   input abort;
   wire abort;
-  input \abort$234 ;
-  wire \abort$234 ;
-  wire \abort$47 ;
+  input \abort$236 ;
+  wire \abort$236 ;
+  wire \abort$49 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$79 ;
+  wire \ack_expired$81 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$100 ;
+  wire [23:0] \ack_limit$102 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$320 ;
+  wire \bit$322 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$77 ;
+  wire \break_over$79 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$243 ;
-  output \busy$288 ;
-  wire \busy$288 ;
+  wire \busy$245 ;
+  output \busy$290 ;
+  wire \busy$290 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -21620,11 +21800,11 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$247 ;
+  wire \cdm$249 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$299 ;
-  wire [250:0] cfg;
+  wire \cds$301 ;
+  wire [252:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -21637,7 +21817,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
   wire [23:0] \cfg.timeout_limit ;
-  wire [9:0] \cfg.w0 ;
+  wire [10:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -21645,6 +21825,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w0.crc ;
   wire [5:0] \cfg.w0.data_bits ;
+  wire \cfg.w0.gray ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
   wire [37:0] \cfg.w0_crc ;
@@ -21652,7 +21833,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [15:0] \cfg.w0_crc.poly ;
   wire [15:0] \cfg.w0_crc.start ;
   wire [4:0] \cfg.w0_crc.width ;
-  wire [9:0] \cfg.w1 ;
+  wire [10:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -21660,6 +21841,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w1.crc ;
   wire [5:0] \cfg.w1.data_bits ;
+  wire \cfg.w1.gray ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
   wire [37:0] \cfg.w1_crc ;
@@ -21709,6 +21891,8 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [4:0] cfg_w0_crc_width;
   input [5:0] cfg_w0_data_bits;
   wire [5:0] cfg_w0_data_bits;
+  input cfg_w0_gray;
+  wire cfg_w0_gray;
   input cfg_w0_lc;
   wire cfg_w0_lc;
   input cfg_w0_nenw;
@@ -21732,18 +21916,20 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [5:0] cfg_w1_data_bits;
   input cfg_w1_enable;
   wire cfg_w1_enable;
+  input cfg_w1_gray;
+  wire cfg_w1_gray;
   input cfg_w1_lc;
   wire cfg_w1_lc;
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
   wire check;
-  wire \check$158 ;
+  wire \check$160 ;
   wire clean;
-  wire \clean$163 ;
+  wire \clean$165 ;
   wire clear;
-  wire \clear$124 ;
-  input \clear$262 ;
-  wire \clear$262 ;
+  wire \clear$126 ;
+  input \clear$264 ;
+  wire \clear$264 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -21797,33 +21983,33 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$175 ;
+  wire [39:0] \cpw_top$177 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$188 ;
+  wire [1:0] \crc_ok$190 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$171 ;
-  wire [37:0] \crcs$171[0] ;
-  wire \crcs$171[0].inverted ;
-  wire [15:0] \crcs$171[0].poly ;
-  wire [15:0] \crcs$171[0].start ;
-  wire [4:0] \crcs$171[0].width ;
-  wire [37:0] \crcs$171[1] ;
-  wire \crcs$171[1].inverted ;
-  wire [15:0] \crcs$171[1].poly ;
-  wire [15:0] \crcs$171[1].start ;
-  wire [4:0] \crcs$171[1].width ;
-  wire [75:0] \crcs$172 ;
-  wire [37:0] \crcs$172[0] ;
-  wire \crcs$172[0].inverted ;
-  wire [15:0] \crcs$172[0].poly ;
-  wire [15:0] \crcs$172[0].start ;
-  wire [4:0] \crcs$172[0].width ;
-  wire [37:0] \crcs$172[1] ;
-  wire \crcs$172[1].inverted ;
-  wire [15:0] \crcs$172[1].poly ;
-  wire [15:0] \crcs$172[1].start ;
-  wire [4:0] \crcs$172[1].width ;
+  wire [75:0] \crcs$173 ;
+  wire [37:0] \crcs$173[0] ;
+  wire \crcs$173[0].inverted ;
+  wire [15:0] \crcs$173[0].poly ;
+  wire [15:0] \crcs$173[0].start ;
+  wire [4:0] \crcs$173[0].width ;
+  wire [37:0] \crcs$173[1] ;
+  wire \crcs$173[1].inverted ;
+  wire [15:0] \crcs$173[1].poly ;
+  wire [15:0] \crcs$173[1].start ;
+  wire [4:0] \crcs$173[1].width ;
+  wire [75:0] \crcs$174 ;
+  wire [37:0] \crcs$174[0] ;
+  wire \crcs$174[0].inverted ;
+  wire [15:0] \crcs$174[0].poly ;
+  wire [15:0] \crcs$174[0].start ;
+  wire [4:0] \crcs$174[0].width ;
+  wire [37:0] \crcs$174[1] ;
+  wire \crcs$174[1].inverted ;
+  wire [15:0] \crcs$174[1].poly ;
+  wire [15:0] \crcs$174[1].start ;
+  wire [4:0] \crcs$174[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -21834,7 +22020,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  wire [250:0] cycle;
+  wire [252:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -21847,7 +22033,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
   wire [23:0] \cycle.timeout_limit ;
-  wire [9:0] \cycle.w0 ;
+  wire [10:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -21855,6 +22041,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w0.crc ;
   wire [5:0] \cycle.w0.data_bits ;
+  wire \cycle.w0.gray ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
   wire [37:0] \cycle.w0_crc ;
@@ -21862,7 +22049,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [15:0] \cycle.w0_crc.poly ;
   wire [15:0] \cycle.w0_crc.start ;
   wire [4:0] \cycle.w0_crc.width ;
-  wire [9:0] \cycle.w1 ;
+  wire [10:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -21870,6 +22057,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w1.crc ;
   wire [5:0] \cycle.w1.data_bits ;
+  wire \cycle.w1.gray ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
   wire [37:0] \cycle.w1_crc ;
@@ -21885,53 +22073,53 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$106 ;
-  wire [12:0] \delay$157 ;
+  wire [12:0] \delay$108 ;
+  wire [12:0] \delay$159 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$108 ;
+  wire [11:0] \delay_limit$110 ;
   wire delay_over;
-  wire \delay_over$87 ;
+  wire \delay_over$89 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$245 ;
-  output \done$291 ;
-  wire \done$291 ;
-  wire \done$292 ;
+  wire \done$247 ;
+  output \done$293 ;
+  wire \done$293 ;
+  wire \done$294 ;
   wire doubtful;
   wire early;
-  wire \early$63 ;
+  wire \early$65 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$257 ;
-  wire \events$257.aborted ;
-  wire \events$257.ca_aborted ;
-  wire \events$257.ca_crc4_error ;
-  wire \events$257.ca_data_fault ;
-  wire \events$257.ca_no_answer ;
-  wire \events$257.ca_refused ;
-  wire \events$257.crc_word0 ;
-  wire \events$257.crc_word1 ;
-  wire \events$257.delay_jump ;
-  wire \events$257.delay_range ;
-  wire \events$257.lc_repeat ;
-  wire \events$257.lc_skip ;
-  wire \events$257.lc_zero ;
-  wire \events$257.no_ack ;
-  wire \events$257.no_start ;
-  wire \events$257.no_stop ;
-  wire \events$257.noise_event ;
-  wire \events$257.noisy_line ;
-  wire \events$257.overrun ;
-  wire \events$257.slo_stuck_low ;
-  wire \events$257.spw_mismatch ;
+  wire [20:0] \events$259 ;
+  wire \events$259.aborted ;
+  wire \events$259.ca_aborted ;
+  wire \events$259.ca_crc4_error ;
+  wire \events$259.ca_data_fault ;
+  wire \events$259.ca_no_answer ;
+  wire \events$259.ca_refused ;
+  wire \events$259.crc_word0 ;
+  wire \events$259.crc_word1 ;
+  wire \events$259.delay_jump ;
+  wire \events$259.delay_range ;
+  wire \events$259.lc_repeat ;
+  wire \events$259.lc_skip ;
+  wire \events$259.lc_zero ;
+  wire \events$259.no_ack ;
+  wire \events$259.no_start ;
+  wire \events$259.no_stop ;
+  wire \events$259.noise_event ;
+  wire \events$259.noisy_line ;
+  wire \events$259.overrun ;
+  wire \events$259.slo_stuck_low ;
+  wire \events$259.spw_mismatch ;
   wire fault;
-  wire \fault$184 ;
+  wire \fault$186 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -21965,7 +22153,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$186 ;
+  wire [3:0] \fault_status$188 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -21975,7 +22163,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$218 ;
+  wire \first_rise$220 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -22026,37 +22214,37 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$130 ;
+  wire [15:0] \half_period$132 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$31 ;
-  wire \idle$40 ;
+  wire \idle$33 ;
+  wire \idle$42 ;
   wire in_clock;
-  wire \in_clock$94 ;
+  wire \in_clock$96 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$135 ;
-  wire [5:0] \lc$312 ;
+  wire [5:0] \lc$137 ;
+  wire [5:0] \lc$314 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$137 ;
+  wire [5:0] \lc_next$139 ;
   wire lc_repeat;
-  wire \lc_repeat$313 ;
+  wire \lc_repeat$315 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$314 ;
+  wire \lc_skip$316 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$315 ;
+  wire \lc_zero$317 ;
   wire lc_zero_seen;
   wire learn;
   wire level;
-  wire \level$146 ;
+  wire \level$148 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [250:0] live;
+  wire [252:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -22069,7 +22257,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
   wire [23:0] \live.timeout_limit ;
-  wire [9:0] \live.w0 ;
+  wire [10:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -22077,6 +22265,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w0.crc ;
   wire [5:0] \live.w0.data_bits ;
+  wire \live.w0.gray ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
   wire [37:0] \live.w0_crc ;
@@ -22084,7 +22273,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [15:0] \live.w0_crc.poly ;
   wire [15:0] \live.w0_crc.start ;
   wire [4:0] \live.w0_crc.width ;
-  wire [9:0] \live.w1 ;
+  wire [10:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -22092,6 +22281,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w1.crc ;
   wire [5:0] \live.w1.data_bits ;
+  wire \live.w1.gray ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
   wire [37:0] \live.w1_crc ;
@@ -22102,13 +22292,13 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$61 ;
+  wire \locked$63 ;
   output ma;
   wire ma;
-  wire \ma$287 ;
+  wire \ma$289 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$89 ;
+  wire \ma_busy$91 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -22116,26 +22306,26 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$81 ;
+  wire \no_start_expired$83 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$104 ;
+  wire [24:0] \no_start_limit$106 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$165 ;
+  wire \noisy$167 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$290 ;
+  wire \overrun$292 ;
   wire [23:0] period;
   wire periodic;
-  input \periodic$35 ;
-  wire \periodic$35 ;
+  input \periodic$37 ;
+  wire \periodic$37 ;
   wire quiet;
-  wire \quiet$113 ;
+  wire \quiet$115 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$115 ;
+  wire \quiet_live$117 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -22147,37 +22337,37 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$196 ;
+  wire \report$198 ;
   wire report_delay;
-  wire \report_delay$199 ;
+  wire \report_delay$201 ;
   wire report_frame;
-  wire \report_frame$183 ;
-  wire \report_frame$197 ;
+  wire \report_frame$185 ;
+  wire \report_frame$199 ;
   wire request;
-  wire [17:0] \request$220 ;
-  wire [6:0] \request$220.address ;
-  wire [6:0] \request$220.count ;
-  wire [2:0] \request$220.slave_id ;
-  wire \request$220.write ;
-  wire \request$46 ;
+  wire [17:0] \request$222 ;
+  wire [6:0] \request$222.address ;
+  wire [6:0] \request$222.count ;
+  wire [2:0] \request$222.slave_id ;
+  wire \request$222.write ;
+  wire \request$48 ;
   wire restart;
-  wire \restart$150 ;
+  wire \restart$152 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$296 ;
-  wire [186:0] \result$296 ;
-  wire \result$296.cds ;
-  wire \result$296.delay_settled ;
-  wire [7:0] \result$296.delay_spread ;
-  wire [5:0] \result$296.lc ;
-  wire \result$296.lc_repeat ;
-  wire \result$296.lc_skip ;
-  wire \result$296.lc_zero ;
-  wire [12:0] \result$296.line_delay ;
-  wire [3:0] \result$296.noise_events ;
-  wire [12:0] \result$296.settled_delay ;
-  wire \result$296.spw_mismatch ;
+  output [186:0] \result$298 ;
+  wire [186:0] \result$298 ;
+  wire \result$298.cds ;
+  wire \result$298.delay_settled ;
+  wire [7:0] \result$298.delay_spread ;
+  wire [5:0] \result$298.lc ;
+  wire \result$298.lc_repeat ;
+  wire \result$298.lc_skip ;
+  wire \result$298.lc_zero ;
+  wire [12:0] \result$298.line_delay ;
+  wire [3:0] \result$298.noise_events ;
+  wire [12:0] \result$298.settled_delay ;
+  wire \result$298.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -22194,18 +22384,18 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$296.status ;
-  wire [31:0] \result$296.timestamp ;
-  wire [57:0] \result$296.word0 ;
-  wire \result$296.word0.crc_ok ;
-  wire \result$296.word0.ne ;
-  wire \result$296.word0.nw ;
-  wire [54:0] \result$296.word0.position ;
-  wire [42:0] \result$296.word1 ;
-  wire \result$296.word1.crc_ok ;
-  wire \result$296.word1.ne ;
-  wire \result$296.word1.nw ;
-  wire [39:0] \result$296.word1.position ;
+  wire [3:0] \result$298.status ;
+  wire [31:0] \result$298.timestamp ;
+  wire [57:0] \result$298.word0 ;
+  wire \result$298.word0.crc_ok ;
+  wire \result$298.word0.ne ;
+  wire \result$298.word0.nw ;
+  wire [54:0] \result$298.word0.position ;
+  wire [42:0] \result$298.word1 ;
+  wire \result$298.word1.crc_ok ;
+  wire \result$298.word1.ne ;
+  wire \result$298.word1.nw ;
+  wire [39:0] \result$298.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -22217,46 +22407,46 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$143 ;
+  wire \resync$145 ;
   wire [15:0] rises;
-  wire [15:0] \rises$123 ;
+  wire [15:0] \rises$125 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$319 ;
+  wire \sample$321 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$302 ;
+  wire [12:0] \settled_delay$304 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$42 ;
-  wire \slo$52 ;
-  wire \slo$88 ;
+  wire \slo$44 ;
+  wire \slo$54 ;
+  wire \slo$90 ;
   wire slo_stuck;
-  wire \slo_stuck$83 ;
+  wire \slo_stuck$85 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$85 ;
+  wire \slo_stuck_live$87 ;
   wire slots_full;
-  wire \slots_full$69 ;
+  wire \slots_full$71 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$316 ;
+  wire \spw_mismatch$318 ;
   input start;
   wire start;
-  input \start$232 ;
-  wire \start$232 ;
-  wire \start$33 ;
+  input \start$234 ;
+  wire \start$234 ;
+  wire \start$35 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$121 ;
+  wire [15:0] \start_slot$123 ;
   wire started;
-  wire \started$119 ;
-  wire \started$67 ;
+  wire \started$121 ;
+  wire \started$69 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -22291,25 +22481,25 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$295 ;
+  wire [3:0] \status$297 ;
   wire stop_bit;
-  wire \stop_bit$73 ;
+  wire \stop_bit$75 ;
   wire stopped;
-  wire \stopped$71 ;
+  wire \stopped$73 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$102 ;
+  wire [23:0] \timeout_limit$104 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$179 ;
+  wire [7:0] \tolerance$181 ;
   input trigger;
   wire trigger;
-  wire \trigger$44 ;
+  wire \trigger$46 ;
   wire valid;
-  wire \valid$201 ;
-  output \valid$293 ;
-  wire \valid$293 ;
+  wire \valid$203 ;
+  output \valid$295 ;
+  wire \valid$295 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -22327,31 +22517,33 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$133 ;
+  wire [1:0] \word_count$135 ;
   wire [1:0] word_crc_ok;
-  wire [19:0] words;
-  wire [19:0] \words$169 ;
-  wire [9:0] \words$169[0] ;
+  wire [21:0] words;
+  wire [21:0] \words$171 ;
+  wire [10:0] \words$171[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$169[0].crc ;
-  wire [5:0] \words$169[0].data_bits ;
-  wire \words$169[0].lc ;
-  wire \words$169[0].nenw ;
-  wire [9:0] \words$169[1] ;
+  wire [1:0] \words$171[0].crc ;
+  wire [5:0] \words$171[0].data_bits ;
+  wire \words$171[0].gray ;
+  wire \words$171[0].lc ;
+  wire \words$171[0].nenw ;
+  wire [10:0] \words$171[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$169[1].crc ;
-  wire [5:0] \words$169[1].data_bits ;
-  wire \words$169[1].lc ;
-  wire \words$169[1].nenw ;
-  wire [9:0] \words[0] ;
+  wire [1:0] \words$171[1].crc ;
+  wire [5:0] \words$171[1].data_bits ;
+  wire \words$171[1].gray ;
+  wire \words$171[1].lc ;
+  wire \words$171[1].nenw ;
+  wire [10:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -22359,9 +22551,10 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
+  wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [9:0] \words[1] ;
+  wire [10:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -22369,14 +22562,15 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
+  wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire zero;
-  assign periodic = \periodic$35  | frames;
+  assign periodic = \periodic$37  | frames;
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$158  = started & \$1 ;
+  assign \check$160  = started & \$1 ;
   assign \$2  = learn & spw_mismatch;
   assign \$3  = status == 4'hd;
   assign \$4  = learn & \$3 ;
@@ -22392,10 +22586,10 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \$14  = ca_done & \$13 ;
   assign \$15  = result[2:0] == 3'h5;
   assign \$16  = ca_done & \$15 ;
-  assign \busy$288  = ~ idle;
+  assign \busy$290  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$124 ;
-  assign \$18  = \sample$319  & \$17 ;
+  assign \$17  = ~ \clear$126 ;
+  assign \$18  = \sample$321  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -22429,7 +22623,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$150 ),
+    .fault(\restart$152 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -22446,14 +22640,14 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$124 ),
+    .receiver_clear(\clear$126 ),
     .report_delay(report_delay),
     .report_frame(learn),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$52 ),
+    .slo(\slo$54 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -22464,10 +22658,10 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .waiting(watch)
   );
   \biss_master_uart.ch1.core.counters  counters (
-    .clear(\clear$262 ),
+    .clear(\clear$264 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$257 ),
+    .events(\events$259 ),
     .rst(rst)
   );
   \biss_master_uart.ch1.core.decoder  decoder (
@@ -22484,7 +22678,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$124 ),
+    .receiver_clear(\clear$126 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -22496,7 +22690,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .words(words)
   );
   \biss_master_uart.ch1.core.delay_check  delay_check (
-    .check(\check$158 ),
+    .check(\check$160 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -22515,10 +22709,10 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$52 ),
+    .level(\slo$54 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$150 ),
+    .restart(\restart$152 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -22526,7 +22720,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   \biss_master_uart.ch1.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$89 ),
+    .\clocking (\ma_busy$91 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -22538,7 +22732,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .second_rise(ma_arm)
   );
   \biss_master_uart.ch1.core.ma_stop  ma_stop (
-    .clear(\clear$124 ),
+    .clear(\clear$126 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -22546,11 +22740,11 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .rst(rst),
     .start_slot(start_slot),
     .\started$11 (started),
-    .w1_enable(cycle[193]),
-    .words(\words$169 )
+    .w1_enable(cycle[194]),
+    .words(\words$171 )
   );
   \biss_master_uart.ch1.core.register_access  register_access (
-    .abort(\abort$234 ),
+    .abort(\abort$236 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -22562,37 +22756,37 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$220 ),
+    .request(\request$222 ),
     .result(result),
     .rst(rst),
-    .start(\start$232 ),
+    .start(\start$234 ),
     .wbuf(wbuf)
   );
   \biss_master_uart.ch1.core.results  results (
     .clk(clk),
-    .done(\done$291 ),
+    .done(\done$293 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(learn),
-    .result(\result$296 ),
+    .result(\result$298 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$293 )
+    .valid_out(\valid$295 )
   );
   \biss_master_uart.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$320 ),
+    .\bit (\bit$322 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$52 ),
+    .level(\slo$54 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$124 ),
+    .receiver_clear(\clear$126 ),
     .rst(rst),
-    .sample(\sample$319 ),
+    .sample(\sample$321 ),
     .slo(slo)
   );
   \biss_master_uart.ch1.core.scheduler  scheduler (
@@ -22613,20 +22807,20 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$5530$0 (\bit ),
+    .\port$5562$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_uart.ch1.core.spw_check  spw_check (
-    .bits(cycle[199:194]),
+    .bits(cycle[200:195]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[250:243])
+    .\tolerance$8 (cycle[252:245])
   );
   \biss_master_uart.ch1.core.time_base  time_base (
     .clk(clk),
@@ -22645,7 +22839,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$89 ),
+    .ma_busy(\ma_busy$91 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -22654,7 +22848,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$52 ),
+    .slo(\slo$54 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -22667,7 +22861,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$150 ),
+    .fault(\restart$152 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -22677,7 +22871,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$3817$0 (\$22 ),
+    .\port$3841$0 (\$22 ),
     .report(report),
     .report_frame(learn),
     .spw_match(spw_match),
@@ -22694,7 +22888,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
-    \$20  = \bit$320 ;
+    \$20  = \bit$322 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -22706,120 +22900,120 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
       \$21  = 1'h0;
     end
   end
-  assign \idle$31  = idle;
-  assign \start$33  = start;
+  assign \idle$33  = idle;
+  assign \start$35  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$40  = idle;
-  assign \slo$42  = slo;
-  assign \trigger$44  = trigger;
-  assign \request$46  = request;
-  assign \abort$47  = abort;
+  assign \idle$42  = idle;
+  assign \slo$44  = slo;
+  assign \trigger$46  = trigger;
+  assign \request$48  = request;
+  assign \abort$49  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$52 ;
+  assign level = \slo$54 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$61  = locked;
-  assign \early$63  = early;
+  assign \locked$63  = locked;
+  assign \early$65  = early;
   assign done = frame_done;
-  assign \started$67  = started;
-  assign \slots_full$69  = slots_full;
-  assign \stopped$71  = stopped;
-  assign \stop_bit$73  = stop_bit;
+  assign \started$69  = started;
+  assign \slots_full$71  = slots_full;
+  assign \stopped$73  = stopped;
+  assign \stop_bit$75  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$77  = break_over;
-  assign \ack_expired$79  = ack_expired;
-  assign \no_start_expired$81  = no_start_expired;
-  assign \slo_stuck$83  = slo_stuck;
-  assign \slo_stuck_live$85  = slo_stuck_live;
-  assign \delay_over$87  = delay_over;
-  assign \slo$88  = \slo$52 ;
-  assign \clocking  = \ma_busy$89 ;
+  assign \break_over$79  = break_over;
+  assign \ack_expired$81  = ack_expired;
+  assign \no_start_expired$83  = no_start_expired;
+  assign \slo_stuck$85  = slo_stuck;
+  assign \slo_stuck_live$87  = slo_stuck_live;
+  assign \delay_over$89  = delay_over;
+  assign \slo$90  = \slo$54 ;
+  assign \clocking  = \ma_busy$91 ;
   assign timer_clear = clear;
-  assign \in_clock$94  = in_clock;
+  assign \in_clock$96  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$100  = ack_limit;
-  assign \timeout_limit$102  = timeout_limit;
-  assign \no_start_limit$104  = no_start_limit;
-  assign \delay$106  = delay;
-  assign \delay_limit$108  = delay_limit;
+  assign \ack_limit$102  = ack_limit;
+  assign \timeout_limit$104  = timeout_limit;
+  assign \no_start_limit$106  = no_start_limit;
+  assign \delay$108  = delay;
+  assign \delay_limit$110  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$113  = quiet;
-  assign \quiet_live$115  = quiet_live;
+  assign \quiet$115  = quiet;
+  assign \quiet_live$117  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$119  = started;
-  assign \start_slot$121  = start_slot;
-  assign \rises$123  = rises;
-  assign receiver_clear = \clear$124 ;
+  assign \started$121  = started;
+  assign \start_slot$123  = start_slot;
+  assign \rises$125  = rises;
+  assign receiver_clear = \clear$126 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$130  = cycle[15:0];
+  assign \half_period$132  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$133  = word_count;
-  assign \lc$135  = lc;
+  assign \word_count$135  = word_count;
+  assign \lc$137  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$137  = { lc[4:0], \bit  };
+  assign \lc_next$139  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$143  = resync;
+  assign \resync$145  = resync;
   assign waiting = watch;
-  assign \level$146  = \slo$52 ;
+  assign \level$148  = \slo$54 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$150 ;
+  assign fault = \restart$152 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$157  = delay;
+  assign \delay$159  = delay;
   assign report_frame = learn;
-  assign \clean$163  = clean;
-  assign \noisy$165  = noisy;
+  assign \clean$165  = clean;
+  assign \noisy$167  = noisy;
   assign jump = delay_jump;
-  assign \crcs$171  = crcs;
-  assign \crcs$172  = crcs;
-  assign w1_enable = cycle[193];
-  assign \cpw_top$175  = cpw_top;
+  assign \crcs$173  = crcs;
+  assign \crcs$174  = crcs;
+  assign w1_enable = cycle[194];
+  assign \cpw_top$177  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[199:194];
-  assign \tolerance$179  = cycle[250:243];
+  assign bits = cycle[200:195];
+  assign \tolerance$181  = cycle[252:245];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$183  = learn;
-  assign \fault$184  = \restart$150 ;
-  assign \fault_status$186  = fault_status;
-  assign \crc_ok$188  = crc_ok;
+  assign \report_frame$185  = learn;
+  assign \fault$186  = \restart$152 ;
+  assign \fault_status$188  = fault_status;
+  assign \crc_ok$190  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$196  = report;
-  assign \report_frame$197  = learn;
-  assign \report_delay$199  = report_delay;
-  assign \valid$201  = valid;
+  assign \report$198  = report;
+  assign \report_frame$199  = learn;
+  assign \report_delay$201  = report_delay;
+  assign \valid$203  = valid;
   assign word_crc_ok = { \$22 , crc_ok[0] };
-  assign \first_rise$218  = first_rise;
+  assign \first_rise$220  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$232 ;
-  assign ca_abort = \abort$234 ;
+  assign ca_start = \start$234 ;
+  assign ca_abort = \abort$236 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$243  = frames;
-  assign \done$245  = ca_done;
-  assign \cdm$247  = cdm;
+  assign \busy$245  = frames;
+  assign \done$247  = ca_done;
+  assign \cdm$249  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$262 ;
+  assign clear_counters = \clear$264 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -22841,31 +23035,31 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign count_ca_refused = counts[303:288];
   assign count_ca_aborted = counts[319:304];
   assign count_ca_data_fault = counts[335:320];
-  assign \ma$287  = ma;
-  assign \overrun$290  = overrun;
-  assign \done$292  = \done$291 ;
-  assign valid_out = \valid$293 ;
-  assign \status$295  = \result$296 [3:0];
-  assign timestamp = \result$296 [35:4];
-  assign line_delay = \result$296 [48:36];
-  assign \cds$299  = \result$296 [49];
-  assign noise_events = \result$296 [53:50];
-  assign delay_settled = \result$296 [54];
-  assign \settled_delay$302  = \result$296 [67:55];
-  assign delay_spread = \result$296 [75:68];
-  assign word0_position = \result$296 [130:76];
-  assign word0_ne = \result$296 [131];
-  assign word0_nw = \result$296 [132];
-  assign word0_crc_ok = \result$296 [133];
-  assign word1_position = \result$296 [173:134];
-  assign word1_ne = \result$296 [174];
-  assign word1_nw = \result$296 [175];
-  assign word1_crc_ok = \result$296 [176];
-  assign \lc$312  = \result$296 [182:177];
-  assign \lc_repeat$313  = \result$296 [183];
-  assign \lc_skip$314  = \result$296 [184];
-  assign \lc_zero$315  = \result$296 [185];
-  assign \spw_mismatch$316  = \result$296 [186];
+  assign \ma$289  = ma;
+  assign \overrun$292  = overrun;
+  assign \done$294  = \done$293 ;
+  assign valid_out = \valid$295 ;
+  assign \status$297  = \result$298 [3:0];
+  assign timestamp = \result$298 [35:4];
+  assign line_delay = \result$298 [48:36];
+  assign \cds$301  = \result$298 [49];
+  assign noise_events = \result$298 [53:50];
+  assign delay_settled = \result$298 [54];
+  assign \settled_delay$304  = \result$298 [67:55];
+  assign delay_spread = \result$298 [75:68];
+  assign word0_position = \result$298 [130:76];
+  assign word0_ne = \result$298 [131];
+  assign word0_nw = \result$298 [132];
+  assign word0_crc_ok = \result$298 [133];
+  assign word1_position = \result$298 [173:134];
+  assign word1_ne = \result$298 [174];
+  assign word1_nw = \result$298 [175];
+  assign word1_crc_ok = \result$298 [176];
+  assign \lc$314  = \result$298 [182:177];
+  assign \lc_repeat$315  = \result$298 [183];
+  assign \lc_skip$316  = \result$298 [184];
+  assign \lc_zero$317  = \result$298 [185];
+  assign \spw_mismatch$318  = \result$298 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -22876,29 +23070,31 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[154:145];
+  assign \live.w0  = live[155:145];
   assign \live.w0.data_bits  = live[150:145];
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
-  assign \live.w0_crc  = live[192:155];
-  assign \live.w0_crc.width  = live[159:155];
-  assign \live.w0_crc.poly  = live[175:160];
-  assign \live.w0_crc.start  = live[191:176];
-  assign \live.w0_crc.inverted  = live[192];
-  assign \live.w1_enable  = live[193];
-  assign \live.w1  = live[203:194];
-  assign \live.w1.data_bits  = live[199:194];
-  assign \live.w1.nenw  = live[200];
-  assign \live.w1.lc  = live[201];
-  assign \live.w1.crc  = live[203:202];
-  assign \live.w1_crc  = live[241:204];
-  assign \live.w1_crc.width  = live[208:204];
-  assign \live.w1_crc.poly  = live[224:209];
-  assign \live.w1_crc.start  = live[240:225];
-  assign \live.w1_crc.inverted  = live[241];
-  assign \live.spw_check  = live[242];
-  assign \live.spw_tolerance  = live[250:243];
+  assign \live.w0.gray  = live[155];
+  assign \live.w0_crc  = live[193:156];
+  assign \live.w0_crc.width  = live[160:156];
+  assign \live.w0_crc.poly  = live[176:161];
+  assign \live.w0_crc.start  = live[192:177];
+  assign \live.w0_crc.inverted  = live[193];
+  assign \live.w1_enable  = live[194];
+  assign \live.w1  = live[205:195];
+  assign \live.w1.data_bits  = live[200:195];
+  assign \live.w1.nenw  = live[201];
+  assign \live.w1.lc  = live[202];
+  assign \live.w1.crc  = live[204:203];
+  assign \live.w1.gray  = live[205];
+  assign \live.w1_crc  = live[243:206];
+  assign \live.w1_crc.width  = live[210:206];
+  assign \live.w1_crc.poly  = live[226:211];
+  assign \live.w1_crc.start  = live[242:227];
+  assign \live.w1_crc.inverted  = live[243];
+  assign \live.spw_check  = live[244];
+  assign \live.spw_tolerance  = live[252:245];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -22909,49 +23105,55 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[154:145];
+  assign \cycle.w0  = cycle[155:145];
   assign \cycle.w0.data_bits  = cycle[150:145];
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0_crc  = cycle[192:155];
-  assign \cycle.w0_crc.width  = cycle[159:155];
-  assign \cycle.w0_crc.poly  = cycle[175:160];
-  assign \cycle.w0_crc.start  = cycle[191:176];
-  assign \cycle.w0_crc.inverted  = cycle[192];
-  assign \cycle.w1_enable  = cycle[193];
-  assign \cycle.w1  = cycle[203:194];
-  assign \cycle.w1.data_bits  = cycle[199:194];
-  assign \cycle.w1.nenw  = cycle[200];
-  assign \cycle.w1.lc  = cycle[201];
-  assign \cycle.w1.crc  = cycle[203:202];
-  assign \cycle.w1_crc  = cycle[241:204];
-  assign \cycle.w1_crc.width  = cycle[208:204];
-  assign \cycle.w1_crc.poly  = cycle[224:209];
-  assign \cycle.w1_crc.start  = cycle[240:225];
-  assign \cycle.w1_crc.inverted  = cycle[241];
-  assign \cycle.spw_check  = cycle[242];
-  assign \cycle.spw_tolerance  = cycle[250:243];
-  assign \words[0]  = words[9:0];
+  assign \cycle.w0.gray  = cycle[155];
+  assign \cycle.w0_crc  = cycle[193:156];
+  assign \cycle.w0_crc.width  = cycle[160:156];
+  assign \cycle.w0_crc.poly  = cycle[176:161];
+  assign \cycle.w0_crc.start  = cycle[192:177];
+  assign \cycle.w0_crc.inverted  = cycle[193];
+  assign \cycle.w1_enable  = cycle[194];
+  assign \cycle.w1  = cycle[205:195];
+  assign \cycle.w1.data_bits  = cycle[200:195];
+  assign \cycle.w1.nenw  = cycle[201];
+  assign \cycle.w1.lc  = cycle[202];
+  assign \cycle.w1.crc  = cycle[204:203];
+  assign \cycle.w1.gray  = cycle[205];
+  assign \cycle.w1_crc  = cycle[243:206];
+  assign \cycle.w1_crc.width  = cycle[210:206];
+  assign \cycle.w1_crc.poly  = cycle[226:211];
+  assign \cycle.w1_crc.start  = cycle[242:227];
+  assign \cycle.w1_crc.inverted  = cycle[243];
+  assign \cycle.spw_check  = cycle[244];
+  assign \cycle.spw_tolerance  = cycle[252:245];
+  assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
-  assign \words[1]  = words[19:10];
-  assign \words[1].data_bits  = words[15:10];
-  assign \words[1].nenw  = words[16];
-  assign \words[1].lc  = words[17];
-  assign \words[1].crc  = words[19:18];
-  assign \words$169[0]  = \words$169 [9:0];
-  assign \words$169[0].data_bits  = \words$169 [5:0];
-  assign \words$169[0].nenw  = \words$169 [6];
-  assign \words$169[0].lc  = \words$169 [7];
-  assign \words$169[0].crc  = \words$169 [9:8];
-  assign \words$169[1]  = \words$169 [19:10];
-  assign \words$169[1].data_bits  = \words$169 [15:10];
-  assign \words$169[1].nenw  = \words$169 [16];
-  assign \words$169[1].lc  = \words$169 [17];
-  assign \words$169[1].crc  = \words$169 [19:18];
+  assign \words[0].gray  = words[10];
+  assign \words[1]  = words[21:11];
+  assign \words[1].data_bits  = words[16:11];
+  assign \words[1].nenw  = words[17];
+  assign \words[1].lc  = words[18];
+  assign \words[1].crc  = words[20:19];
+  assign \words[1].gray  = words[21];
+  assign \words$171[0]  = \words$171 [10:0];
+  assign \words$171[0].data_bits  = \words$171 [5:0];
+  assign \words$171[0].nenw  = \words$171 [6];
+  assign \words$171[0].lc  = \words$171 [7];
+  assign \words$171[0].crc  = \words$171 [9:8];
+  assign \words$171[0].gray  = \words$171 [10];
+  assign \words$171[1]  = \words$171 [21:11];
+  assign \words$171[1].data_bits  = \words$171 [16:11];
+  assign \words$171[1].nenw  = \words$171 [17];
+  assign \words$171[1].lc  = \words$171 [18];
+  assign \words$171[1].crc  = \words$171 [20:19];
+  assign \words$171[1].gray  = \words$171 [21];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -22962,26 +23164,26 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$171[0]  = crcs[37:0];
-  assign \crcs$171[0].width  = crcs[4:0];
-  assign \crcs$171[0].poly  = crcs[20:5];
-  assign \crcs$171[0].start  = crcs[36:21];
-  assign \crcs$171[0].inverted  = crcs[37];
-  assign \crcs$171[1]  = crcs[75:38];
-  assign \crcs$171[1].width  = crcs[42:38];
-  assign \crcs$171[1].poly  = crcs[58:43];
-  assign \crcs$171[1].start  = crcs[74:59];
-  assign \crcs$171[1].inverted  = crcs[75];
-  assign \crcs$172[0]  = crcs[37:0];
-  assign \crcs$172[0].width  = crcs[4:0];
-  assign \crcs$172[0].poly  = crcs[20:5];
-  assign \crcs$172[0].start  = crcs[36:21];
-  assign \crcs$172[0].inverted  = crcs[37];
-  assign \crcs$172[1]  = crcs[75:38];
-  assign \crcs$172[1].width  = crcs[42:38];
-  assign \crcs$172[1].poly  = crcs[58:43];
-  assign \crcs$172[1].start  = crcs[74:59];
-  assign \crcs$172[1].inverted  = crcs[75];
+  assign \crcs$173[0]  = crcs[37:0];
+  assign \crcs$173[0].width  = crcs[4:0];
+  assign \crcs$173[0].poly  = crcs[20:5];
+  assign \crcs$173[0].start  = crcs[36:21];
+  assign \crcs$173[0].inverted  = crcs[37];
+  assign \crcs$173[1]  = crcs[75:38];
+  assign \crcs$173[1].width  = crcs[42:38];
+  assign \crcs$173[1].poly  = crcs[58:43];
+  assign \crcs$173[1].start  = crcs[74:59];
+  assign \crcs$173[1].inverted  = crcs[75];
+  assign \crcs$174[0]  = crcs[37:0];
+  assign \crcs$174[0].width  = crcs[4:0];
+  assign \crcs$174[0].poly  = crcs[20:5];
+  assign \crcs$174[0].start  = crcs[36:21];
+  assign \crcs$174[0].inverted  = crcs[37];
+  assign \crcs$174[1]  = crcs[75:38];
+  assign \crcs$174[1].width  = crcs[42:38];
+  assign \crcs$174[1].poly  = crcs[58:43];
+  assign \crcs$174[1].start  = crcs[74:59];
+  assign \crcs$174[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -22992,29 +23194,31 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \cfg.quiet_time  = cycle[136:125];
   assign \cfg.noise_limit  = cycle[140:137];
   assign \cfg.delay_tolerance  = cycle[144:141];
-  assign \cfg.w0  = cycle[154:145];
+  assign \cfg.w0  = cycle[155:145];
   assign \cfg.w0.data_bits  = cycle[150:145];
   assign \cfg.w0.nenw  = cycle[151];
   assign \cfg.w0.lc  = cycle[152];
   assign \cfg.w0.crc  = cycle[154:153];
-  assign \cfg.w0_crc  = cycle[192:155];
-  assign \cfg.w0_crc.width  = cycle[159:155];
-  assign \cfg.w0_crc.poly  = cycle[175:160];
-  assign \cfg.w0_crc.start  = cycle[191:176];
-  assign \cfg.w0_crc.inverted  = cycle[192];
-  assign \cfg.w1_enable  = cycle[193];
-  assign \cfg.w1  = cycle[203:194];
-  assign \cfg.w1.data_bits  = cycle[199:194];
-  assign \cfg.w1.nenw  = cycle[200];
-  assign \cfg.w1.lc  = cycle[201];
-  assign \cfg.w1.crc  = cycle[203:202];
-  assign \cfg.w1_crc  = cycle[241:204];
-  assign \cfg.w1_crc.width  = cycle[208:204];
-  assign \cfg.w1_crc.poly  = cycle[224:209];
-  assign \cfg.w1_crc.start  = cycle[240:225];
-  assign \cfg.w1_crc.inverted  = cycle[241];
-  assign \cfg.spw_check  = cycle[242];
-  assign \cfg.spw_tolerance  = cycle[250:243];
+  assign \cfg.w0.gray  = cycle[155];
+  assign \cfg.w0_crc  = cycle[193:156];
+  assign \cfg.w0_crc.width  = cycle[160:156];
+  assign \cfg.w0_crc.poly  = cycle[176:161];
+  assign \cfg.w0_crc.start  = cycle[192:177];
+  assign \cfg.w0_crc.inverted  = cycle[193];
+  assign \cfg.w1_enable  = cycle[194];
+  assign \cfg.w1  = cycle[205:195];
+  assign \cfg.w1.data_bits  = cycle[200:195];
+  assign \cfg.w1.nenw  = cycle[201];
+  assign \cfg.w1.lc  = cycle[202];
+  assign \cfg.w1.crc  = cycle[204:203];
+  assign \cfg.w1.gray  = cycle[205];
+  assign \cfg.w1_crc  = cycle[243:206];
+  assign \cfg.w1_crc.width  = cycle[210:206];
+  assign \cfg.w1_crc.poly  = cycle[226:211];
+  assign \cfg.w1_crc.start  = cycle[242:227];
+  assign \cfg.w1_crc.inverted  = cycle[243];
+  assign \cfg.spw_check  = cycle[244];
+  assign \cfg.spw_tolerance  = cycle[252:245];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -23038,36 +23242,36 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$220.slave_id  = \request$220 [2:0];
-  assign \request$220.address  = \request$220 [9:3];
-  assign \request$220.count  = \request$220 [16:10];
-  assign \request$220.write  = \request$220 [17];
+  assign \request$222.slave_id  = \request$222 [2:0];
+  assign \request$222.address  = \request$222 [9:3];
+  assign \request$222.count  = \request$222 [16:10];
+  assign \request$222.write  = \request$222 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$257.crc_word0  = \events$257 [0];
-  assign \events$257.crc_word1  = \events$257 [1];
-  assign \events$257.no_ack  = \events$257 [2];
-  assign \events$257.no_start  = \events$257 [3];
-  assign \events$257.delay_range  = \events$257 [4];
-  assign \events$257.slo_stuck_low  = \events$257 [5];
-  assign \events$257.lc_repeat  = \events$257 [6];
-  assign \events$257.lc_skip  = \events$257 [7];
-  assign \events$257.lc_zero  = \events$257 [8];
-  assign \events$257.spw_mismatch  = \events$257 [9];
-  assign \events$257.overrun  = \events$257 [10];
-  assign \events$257.aborted  = \events$257 [11];
-  assign \events$257.no_stop  = \events$257 [12];
-  assign \events$257.noisy_line  = \events$257 [13];
-  assign \events$257.delay_jump  = \events$257 [14];
-  assign \events$257.noise_event  = \events$257 [15];
-  assign \events$257.ca_crc4_error  = \events$257 [16];
-  assign \events$257.ca_no_answer  = \events$257 [17];
-  assign \events$257.ca_refused  = \events$257 [18];
-  assign \events$257.ca_aborted  = \events$257 [19];
-  assign \events$257.ca_data_fault  = \events$257 [20];
+  assign \events$259.crc_word0  = \events$259 [0];
+  assign \events$259.crc_word1  = \events$259 [1];
+  assign \events$259.no_ack  = \events$259 [2];
+  assign \events$259.no_start  = \events$259 [3];
+  assign \events$259.delay_range  = \events$259 [4];
+  assign \events$259.slo_stuck_low  = \events$259 [5];
+  assign \events$259.lc_repeat  = \events$259 [6];
+  assign \events$259.lc_skip  = \events$259 [7];
+  assign \events$259.lc_zero  = \events$259 [8];
+  assign \events$259.spw_mismatch  = \events$259 [9];
+  assign \events$259.overrun  = \events$259 [10];
+  assign \events$259.aborted  = \events$259 [11];
+  assign \events$259.no_stop  = \events$259 [12];
+  assign \events$259.noisy_line  = \events$259 [13];
+  assign \events$259.delay_jump  = \events$259 [14];
+  assign \events$259.noise_event  = \events$259 [15];
+  assign \events$259.ca_crc4_error  = \events$259 [16];
+  assign \events$259.ca_no_answer  = \events$259 [17];
+  assign \events$259.ca_refused  = \events$259 [18];
+  assign \events$259.ca_aborted  = \events$259 [19];
+  assign \events$259.ca_data_fault  = \events$259 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -23096,57 +23300,57 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$296.status  = \result$296 [3:0];
-  assign \result$296.timestamp  = \result$296 [35:4];
-  assign \result$296.line_delay  = \result$296 [48:36];
-  assign \result$296.cds  = \result$296 [49];
-  assign \result$296.noise_events  = \result$296 [53:50];
-  assign \result$296.delay_settled  = \result$296 [54];
-  assign \result$296.settled_delay  = \result$296 [67:55];
-  assign \result$296.delay_spread  = \result$296 [75:68];
-  assign \result$296.word0  = \result$296 [133:76];
-  assign \result$296.word0.position  = \result$296 [130:76];
-  assign \result$296.word0.ne  = \result$296 [131];
-  assign \result$296.word0.nw  = \result$296 [132];
-  assign \result$296.word0.crc_ok  = \result$296 [133];
-  assign \result$296.word1  = \result$296 [176:134];
-  assign \result$296.word1.position  = \result$296 [173:134];
-  assign \result$296.word1.ne  = \result$296 [174];
-  assign \result$296.word1.nw  = \result$296 [175];
-  assign \result$296.word1.crc_ok  = \result$296 [176];
-  assign \result$296.lc  = \result$296 [182:177];
-  assign \result$296.lc_repeat  = \result$296 [183];
-  assign \result$296.lc_skip  = \result$296 [184];
-  assign \result$296.lc_zero  = \result$296 [185];
-  assign \result$296.spw_mismatch  = \result$296 [186];
-  assign \events$257 [20] = \$16 ;
-  assign \events$257 [19] = \$14 ;
-  assign \events$257 [18] = \$12 ;
-  assign \events$257 [17] = \$10 ;
-  assign \events$257 [16] = \$8 ;
-  assign \events$257 [15] = \event ;
-  assign \events$257 [14] = \$6 ;
-  assign \events$257 [13] = \$4 ;
-  assign \events$257 [12] = faults[6];
-  assign \events$257 [11] = faults[4];
-  assign \events$257 [10] = overrun;
-  assign \events$257 [9] = \$2 ;
-  assign \events$257 [8] = lc_zero;
-  assign \events$257 [7] = lc_skip;
-  assign \events$257 [6] = lc_repeat;
-  assign \events$257 [5] = faults[3];
-  assign \events$257 [4] = faults[2];
-  assign \events$257 [3] = faults[1];
-  assign \events$257 [2] = faults[0];
-  assign \events$257 [1] = crc_error[1];
-  assign \events$257 [0] = crc_error[0];
+  assign \result$298.status  = \result$298 [3:0];
+  assign \result$298.timestamp  = \result$298 [35:4];
+  assign \result$298.line_delay  = \result$298 [48:36];
+  assign \result$298.cds  = \result$298 [49];
+  assign \result$298.noise_events  = \result$298 [53:50];
+  assign \result$298.delay_settled  = \result$298 [54];
+  assign \result$298.settled_delay  = \result$298 [67:55];
+  assign \result$298.delay_spread  = \result$298 [75:68];
+  assign \result$298.word0  = \result$298 [133:76];
+  assign \result$298.word0.position  = \result$298 [130:76];
+  assign \result$298.word0.ne  = \result$298 [131];
+  assign \result$298.word0.nw  = \result$298 [132];
+  assign \result$298.word0.crc_ok  = \result$298 [133];
+  assign \result$298.word1  = \result$298 [176:134];
+  assign \result$298.word1.position  = \result$298 [173:134];
+  assign \result$298.word1.ne  = \result$298 [174];
+  assign \result$298.word1.nw  = \result$298 [175];
+  assign \result$298.word1.crc_ok  = \result$298 [176];
+  assign \result$298.lc  = \result$298 [182:177];
+  assign \result$298.lc_repeat  = \result$298 [183];
+  assign \result$298.lc_skip  = \result$298 [184];
+  assign \result$298.lc_zero  = \result$298 [185];
+  assign \result$298.spw_mismatch  = \result$298 [186];
+  assign \events$259 [20] = \$16 ;
+  assign \events$259 [19] = \$14 ;
+  assign \events$259 [18] = \$12 ;
+  assign \events$259 [17] = \$10 ;
+  assign \events$259 [16] = \$8 ;
+  assign \events$259 [15] = \event ;
+  assign \events$259 [14] = \$6 ;
+  assign \events$259 [13] = \$4 ;
+  assign \events$259 [12] = faults[6];
+  assign \events$259 [11] = faults[4];
+  assign \events$259 [10] = overrun;
+  assign \events$259 [9] = \$2 ;
+  assign \events$259 [8] = lc_zero;
+  assign \events$259 [7] = lc_skip;
+  assign \events$259 [6] = lc_repeat;
+  assign \events$259 [5] = faults[3];
+  assign \events$259 [4] = faults[2];
+  assign \events$259 [3] = faults[1];
+  assign \events$259 [2] = faults[0];
+  assign \events$259 [1] = crc_error[1];
+  assign \events$259 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$220 [17] = ca_write;
-  assign \request$220 [16:10] = ca_count;
-  assign \request$220 [9:3] = ca_address;
-  assign \request$220 [2:0] = ca_slave_id;
+  assign \request$222 [17] = ca_write;
+  assign \request$222 [16:10] = ca_count;
+  assign \request$222 [9:3] = ca_address;
+  assign \request$222 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$22 ;
@@ -23168,25 +23372,27 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$169 [19:10] = cycle[203:194];
-  assign \words$169 [9:0] = cycle[154:145];
-  assign words[19:10] = cycle[203:194];
-  assign words[9:0] = cycle[154:145];
-  assign live[250:243] = cfg_spw_tolerance;
-  assign live[242] = cfg_spw_check;
-  assign live[241] = cfg_w1_crc_inverted;
-  assign live[240:225] = cfg_w1_crc_start;
-  assign live[224:209] = cfg_w1_crc_poly;
-  assign live[208:204] = cfg_w1_crc_width;
-  assign live[203:202] = cfg_w1_crc;
-  assign live[201] = cfg_w1_lc;
-  assign live[200] = cfg_w1_nenw;
-  assign live[199:194] = cfg_w1_data_bits;
-  assign live[193] = cfg_w1_enable;
-  assign live[192] = cfg_w0_crc_inverted;
-  assign live[191:176] = cfg_w0_crc_start;
-  assign live[175:160] = cfg_w0_crc_poly;
-  assign live[159:155] = cfg_w0_crc_width;
+  assign \words$171 [21:11] = cycle[205:195];
+  assign \words$171 [10:0] = cycle[155:145];
+  assign words[21:11] = cycle[205:195];
+  assign words[10:0] = cycle[155:145];
+  assign live[252:245] = cfg_spw_tolerance;
+  assign live[244] = cfg_spw_check;
+  assign live[243] = cfg_w1_crc_inverted;
+  assign live[242:227] = cfg_w1_crc_start;
+  assign live[226:211] = cfg_w1_crc_poly;
+  assign live[210:206] = cfg_w1_crc_width;
+  assign live[205] = cfg_w1_gray;
+  assign live[204:203] = cfg_w1_crc;
+  assign live[202] = cfg_w1_lc;
+  assign live[201] = cfg_w1_nenw;
+  assign live[200:195] = cfg_w1_data_bits;
+  assign live[194] = cfg_w1_enable;
+  assign live[193] = cfg_w0_crc_inverted;
+  assign live[192:177] = cfg_w0_crc_start;
+  assign live[176:161] = cfg_w0_crc_poly;
+  assign live[160:156] = cfg_w0_crc_width;
+  assign live[155] = cfg_w0_gray;
   assign live[154:153] = cfg_w0_crc;
   assign live[152] = cfg_w0_lc;
   assign live[151] = cfg_w0_nenw;
@@ -23262,7 +23468,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire [24:0] \$58 ;
   reg \$59 ;
   wire \$6 ;
-  reg [250:0] \$60 ;
+  reg [252:0] \$60 ;
   reg [23:0] \$61 ;
   reg [23:0] \$62 ;
   reg [11:0] \$63 ;
@@ -23289,8 +23495,8 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  output [250:0] cycle;
-  reg [250:0] cycle = 251'h000000000000000000000000000000000000000000000000000000000000000;
+  output [252:0] cycle;
+  reg [252:0] cycle = 253'h0000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -23303,7 +23509,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
   wire [23:0] \cycle.timeout_limit ;
-  wire [9:0] \cycle.w0 ;
+  wire [10:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -23311,6 +23517,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w0.crc ;
   wire [5:0] \cycle.w0.data_bits ;
+  wire \cycle.w0.gray ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
   wire [37:0] \cycle.w0_crc ;
@@ -23318,7 +23525,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire [15:0] \cycle.w0_crc.poly ;
   wire [15:0] \cycle.w0_crc.start ;
   wire [4:0] \cycle.w0_crc.width ;
-  wire [9:0] \cycle.w1 ;
+  wire [10:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -23326,6 +23533,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cycle.w1.crc ;
   wire [5:0] \cycle.w1.data_bits ;
+  wire \cycle.w1.gray ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
   wire [37:0] \cycle.w1_crc ;
@@ -23340,8 +23548,8 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [250:0] live;
-  wire [250:0] live;
+  input [252:0] live;
+  wire [252:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -23354,7 +23562,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
   wire [23:0] \live.timeout_limit ;
-  wire [9:0] \live.w0 ;
+  wire [10:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -23362,6 +23570,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w0.crc ;
   wire [5:0] \live.w0.data_bits ;
+  wire \live.w0.gray ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
   wire [37:0] \live.w0_crc ;
@@ -23369,7 +23578,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire [15:0] \live.w0_crc.poly ;
   wire [15:0] \live.w0_crc.start ;
   wire [4:0] \live.w0_crc.width ;
-  wire [9:0] \live.w1 ;
+  wire [10:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -23377,6 +23586,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \live.w1.crc ;
   wire [5:0] \live.w1.data_bits ;
+  wire \live.w1.gray ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
   wire [37:0] \live.w1_crc ;
@@ -23400,14 +23610,14 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
-  assign \$36  = live[193] & live[152];
-  assign \$37  = \$36  & live[201];
+  assign \$36  = live[194] & live[152];
+  assign \$37  = \$36  & live[202];
   assign \$38  = ~ \$37 ;
   assign \$39  = \$35  & \$38 ;
-  assign \$40  = ~ live[242];
-  assign \$41  = live[199:194] <= live[150:145];
-  assign \$42  = live[193] & \$41 ;
-  assign \$43  = | live[203:202];
+  assign \$40  = ~ live[244];
+  assign \$41  = live[200:195] <= live[150:145];
+  assign \$42  = live[194] & \$41 ;
+  assign \$43  = | live[204:203];
   assign \$44  = \$42  & \$43 ;
   assign \$45  = \$40  | \$44 ;
   assign \$46  = \$39  & \$45 ;
@@ -23423,7 +23633,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$56  = \$55  ? 4'h2 : live[144:141];
   assign \$57  = live[15:0] + \$56 ;
   assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[193];
+  assign word_count = 1'h1 + cycle[194];
   always @(posedge clk)
     ok <= \$59 ;
   always @(posedge clk)
@@ -23452,26 +23662,26 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$8  = live[154:153] == 2'h2;
   assign \$9  = \$7  | \$8 ;
   assign \$10  = live[154:153] == 2'h3;
-  assign \$11  = | live[159:155];
+  assign \$11  = | live[160:156];
   assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[159:155] <= 5'h10;
+  assign \$13  = live[160:156] <= 5'h10;
   assign \$14  = \$12  & \$13 ;
   assign \$15  = \$9  | \$14 ;
   assign \$16  = \$4  & \$15 ;
   assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[193];
-  assign \$19  = | live[199:194];
-  assign \$20  = live[199:194] <= 6'h28;
+  assign \$18  = ~ live[194];
+  assign \$19  = | live[200:195];
+  assign \$20  = live[200:195] <= 6'h28;
   assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[203:202];
-  assign \$23  = live[203:202] == 1'h1;
+  assign \$22  = ! live[204:203];
+  assign \$23  = live[204:203] == 1'h1;
   assign \$24  = \$22  | \$23 ;
-  assign \$25  = live[203:202] == 2'h2;
+  assign \$25  = live[204:203] == 2'h2;
   assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[203:202] == 2'h3;
-  assign \$28  = | live[208:204];
+  assign \$27  = live[204:203] == 2'h3;
+  assign \$28  = | live[210:206];
   assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[208:204] <= 5'h10;
+  assign \$30  = live[210:206] <= 5'h10;
   assign \$31  = \$29  & \$30 ;
   assign \$32  = \$26  | \$31 ;
   always @* begin
@@ -23488,7 +23698,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
       \$60  = live;
     end
     if (rst) begin
-      \$60  = 251'h000000000000000000000000000000000000000000000000000000000000000;
+      \$60  = 253'h0000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
@@ -23562,12 +23772,12 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
             \$66 [37] = 1'h1;
           end
         2'h3:
-            \$66 [37:0] = live[192:155];
+            \$66 [37:0] = live[193:156];
         default:
             \$66 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
-      casez (live[203:202])
+      casez (live[204:203])
         2'h1:
           begin
             \$66 [42:38] = 5'h06;
@@ -23583,7 +23793,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
             \$66 [75] = 1'h1;
           end
         2'h3:
-            \$66 [75:38] = live[241:204];
+            \$66 [75:38] = live[243:206];
         default:
             \$66 [75:38] = 38'h0000000000;
       endcase
@@ -23609,29 +23819,31 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[154:145];
+  assign \live.w0  = live[155:145];
   assign \live.w0.data_bits  = live[150:145];
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
-  assign \live.w0_crc  = live[192:155];
-  assign \live.w0_crc.width  = live[159:155];
-  assign \live.w0_crc.poly  = live[175:160];
-  assign \live.w0_crc.start  = live[191:176];
-  assign \live.w0_crc.inverted  = live[192];
-  assign \live.w1_enable  = live[193];
-  assign \live.w1  = live[203:194];
-  assign \live.w1.data_bits  = live[199:194];
-  assign \live.w1.nenw  = live[200];
-  assign \live.w1.lc  = live[201];
-  assign \live.w1.crc  = live[203:202];
-  assign \live.w1_crc  = live[241:204];
-  assign \live.w1_crc.width  = live[208:204];
-  assign \live.w1_crc.poly  = live[224:209];
-  assign \live.w1_crc.start  = live[240:225];
-  assign \live.w1_crc.inverted  = live[241];
-  assign \live.spw_check  = live[242];
-  assign \live.spw_tolerance  = live[250:243];
+  assign \live.w0.gray  = live[155];
+  assign \live.w0_crc  = live[193:156];
+  assign \live.w0_crc.width  = live[160:156];
+  assign \live.w0_crc.poly  = live[176:161];
+  assign \live.w0_crc.start  = live[192:177];
+  assign \live.w0_crc.inverted  = live[193];
+  assign \live.w1_enable  = live[194];
+  assign \live.w1  = live[205:195];
+  assign \live.w1.data_bits  = live[200:195];
+  assign \live.w1.nenw  = live[201];
+  assign \live.w1.lc  = live[202];
+  assign \live.w1.crc  = live[204:203];
+  assign \live.w1.gray  = live[205];
+  assign \live.w1_crc  = live[243:206];
+  assign \live.w1_crc.width  = live[210:206];
+  assign \live.w1_crc.poly  = live[226:211];
+  assign \live.w1_crc.start  = live[242:227];
+  assign \live.w1_crc.inverted  = live[243];
+  assign \live.spw_check  = live[244];
+  assign \live.spw_tolerance  = live[252:245];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -23642,29 +23854,31 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[154:145];
+  assign \cycle.w0  = cycle[155:145];
   assign \cycle.w0.data_bits  = cycle[150:145];
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0_crc  = cycle[192:155];
-  assign \cycle.w0_crc.width  = cycle[159:155];
-  assign \cycle.w0_crc.poly  = cycle[175:160];
-  assign \cycle.w0_crc.start  = cycle[191:176];
-  assign \cycle.w0_crc.inverted  = cycle[192];
-  assign \cycle.w1_enable  = cycle[193];
-  assign \cycle.w1  = cycle[203:194];
-  assign \cycle.w1.data_bits  = cycle[199:194];
-  assign \cycle.w1.nenw  = cycle[200];
-  assign \cycle.w1.lc  = cycle[201];
-  assign \cycle.w1.crc  = cycle[203:202];
-  assign \cycle.w1_crc  = cycle[241:204];
-  assign \cycle.w1_crc.width  = cycle[208:204];
-  assign \cycle.w1_crc.poly  = cycle[224:209];
-  assign \cycle.w1_crc.start  = cycle[240:225];
-  assign \cycle.w1_crc.inverted  = cycle[241];
-  assign \cycle.spw_check  = cycle[242];
-  assign \cycle.spw_tolerance  = cycle[250:243];
+  assign \cycle.w0.gray  = cycle[155];
+  assign \cycle.w0_crc  = cycle[193:156];
+  assign \cycle.w0_crc.width  = cycle[160:156];
+  assign \cycle.w0_crc.poly  = cycle[176:161];
+  assign \cycle.w0_crc.start  = cycle[192:177];
+  assign \cycle.w0_crc.inverted  = cycle[193];
+  assign \cycle.w1_enable  = cycle[194];
+  assign \cycle.w1  = cycle[205:195];
+  assign \cycle.w1.data_bits  = cycle[200:195];
+  assign \cycle.w1.nenw  = cycle[201];
+  assign \cycle.w1.lc  = cycle[202];
+  assign \cycle.w1.crc  = cycle[204:203];
+  assign \cycle.w1.gray  = cycle[205];
+  assign \cycle.w1_crc  = cycle[243:206];
+  assign \cycle.w1_crc.width  = cycle[210:206];
+  assign \cycle.w1_crc.poly  = cycle[226:211];
+  assign \cycle.w1_crc.start  = cycle[242:227];
+  assign \cycle.w1_crc.inverted  = cycle[243];
+  assign \cycle.spw_check  = cycle[244];
+  assign \cycle.spw_tolerance  = cycle[252:245];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -26666,27 +26880,33 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
-  reg [15:0] \$100 ;
-  reg \$101 ;
-  reg \$102 ;
-  reg [15:0] \$103 ;
-  reg [2:0] \$104 ;
+  wire \$100 ;
+  wire \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  reg \$104 ;
   reg \$105 ;
-  reg [6:0] \$106 ;
+  reg [15:0] \$106 ;
   reg \$107 ;
   reg \$108 ;
-  reg \$109 ;
+  reg [15:0] \$109 ;
   wire [1:0] \$11 ;
-  reg \$110 ;
+  reg [2:0] \$110 ;
   reg \$111 ;
-  reg \$112 ;
-  reg [54:0] \$113 ;
-  reg [1:0] \$114 ;
-  reg [1:0] \$115 ;
-  reg [39:0] \$116 ;
-  reg [5:0] \$117 ;
-  reg [39:0] \$118 ;
+  reg [6:0] \$112 ;
+  reg \$113 ;
+  reg \$114 ;
+  reg \$115 ;
+  reg \$116 ;
+  reg \$117 ;
+  reg \$118 ;
+  reg [54:0] \$119 ;
   wire [6:0] \$12 ;
+  reg [1:0] \$120 ;
+  reg [1:0] \$121 ;
+  reg [39:0] \$122 ;
+  reg [5:0] \$123 ;
+  reg [39:0] \$124 ;
   wire \$13 ;
   reg [3:0] \$14 ;
   wire [6:0] \$15 ;
@@ -26773,15 +26993,15 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$89 ;
   wire [7:0] \$9 ;
   wire \$90 ;
-  wire [6:0] \$91 ;
+  wire \$91 ;
   wire \$92 ;
   wire \$93 ;
   wire \$94 ;
   wire \$95 ;
   wire \$96 ;
-  wire \$97 ;
-  reg \$98 ;
-  reg \$99 ;
+  wire [6:0] \$97 ;
+  wire \$98 ;
+  wire \$99 ;
   input \bit ;
   wire \bit ;
   wire \bit$51 ;
@@ -26879,9 +27099,9 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \word$54 ;
   input [1:0] word_count;
   wire [1:0] word_count;
-  input [19:0] words;
-  wire [19:0] words;
-  wire [9:0] \words[0] ;
+  input [21:0] words;
+  wire [21:0] words;
+  wire [10:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -26889,9 +27109,10 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
+  wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [9:0] \words[1] ;
+  wire [10:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -26899,6 +27120,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
+  wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
   assign \$1  = words[5:0] + 1'h1;
@@ -26914,17 +27136,17 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$15  = words[5:0] + \$14 ;
   assign \$16  = | \$15 ;
   assign \$17  = \$13  & \$16 ;
-  assign \$18  = words[15:10] + 1'h1;
-  assign \$19  = words[15:10] + 7'h7f;
-  assign \$21  = words[15:10] + \$20 ;
-  assign \$23  = words[15:10] + \$22 ;
+  assign \$18  = words[16:11] + 1'h1;
+  assign \$19  = words[16:11] + 7'h7f;
+  assign \$21  = words[16:11] + \$20 ;
+  assign \$23  = words[16:11] + \$22 ;
   assign \$25  = \$24  + crcs[42:38];
-  assign \$26  = words[15:10] + \$25 [6:0];
-  assign \$27  = | words[15:10];
-  assign \$28  = words[16] ? 2'h2 : 2'h0;
-  assign \$29  = words[15:10] + \$28 ;
+  assign \$26  = words[16:11] + \$25 [6:0];
+  assign \$27  = | words[16:11];
+  assign \$28  = words[17] ? 2'h2 : 2'h0;
+  assign \$29  = words[16:11] + \$28 ;
   assign \$30  = ! \$29 ;
-  assign \$32  = words[15:10] + \$31 ;
+  assign \$32  = words[16:11] + \$31 ;
   assign \$33  = | \$32 ;
   assign \$34  = \$30  & \$33 ;
   assign \$35  = ~ slots_full;
@@ -26932,7 +27154,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$37  = slots + 1'h1;
   assign \$38  = slots == 16'hfffe;
   assign \$39  = sample & \bit ;
-  assign \$40  = | words[15:10];
+  assign \$40  = | words[16:11];
   assign \$41  = idx + 1'h1;
   assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
   assign \$43  = idx != \$42 ;
@@ -26959,39 +27181,45 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$64  = ! word;
   assign \$65  = in_word & \$64 ;
   assign \$66  = \$65  & in_data;
-  assign \$67  = ~ words[6];
-  assign \$68  = ! word;
-  assign \$69  = in_word & \$68 ;
-  assign \$70  = idx == words[5:0];
-  assign \$71  = \$69  & \$70 ;
-  assign \$72  = ! word;
-  assign \$73  = in_word & \$72 ;
-  assign \$74  = idx == w0_data_end_p1;
-  assign \$75  = \$73  & \$74 ;
-  assign \$77  = in_word & \$76 ;
-  assign \$78  = \$77  & in_data;
-  assign \$79  = ~ words[16];
-  assign \$81  = in_word & \$80 ;
-  assign \$82  = idx == words[15:10];
-  assign \$83  = \$81  & \$82 ;
+  assign \$67  = words[10] & data0[0];
+  assign \$68  = \bit  ^ \$67 ;
+  assign \$69  = ~ words[6];
+  assign \$70  = ! word;
+  assign \$71  = in_word & \$70 ;
+  assign \$72  = idx == words[5:0];
+  assign \$73  = \$71  & \$72 ;
+  assign \$74  = ! word;
+  assign \$75  = in_word & \$74 ;
+  assign \$76  = idx == w0_data_end_p1;
+  assign \$77  = \$75  & \$76 ;
+  assign \$79  = in_word & \$78 ;
+  assign \$80  = \$79  & in_data;
+  assign \$81  = words[21] & data1[0];
+  assign \$82  = \bit  ^ \$81 ;
+  assign \$83  = ~ words[17];
   assign \$85  = in_word & \$84 ;
-  assign \$86  = idx == w1_data_end_p1;
+  assign \$86  = idx == words[16:11];
   assign \$87  = \$85  & \$86 ;
-  assign \$88  = in_word & in_top;
+  assign \$89  = in_word & \$88 ;
+  assign \$90  = idx == w1_data_end_p1;
+  assign \$91  = \$89  & \$90 ;
+  assign \$92  = in_word & in_top;
+  assign \$93  = words[10] & data0[0];
+  assign \$94  = \bit  ^ \$93 ;
   assign lc_load = in_word & in_lc;
-  assign \$89  = ! idx;
-  assign first = in_word & \$89 ;
-  assign \$90  = ~ in_crc;
-  assign \cover  = in_word & \$90 ;
+  assign \$95  = ! idx;
+  assign first = in_word & \$95 ;
+  assign \$96  = ~ in_crc;
+  assign \cover  = in_word & \$96 ;
   assign check = in_word & in_crc;
-  assign \$91  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$92  = idx == \$91 ;
-  assign last = in_word & \$92 ;
-  assign \$93  = ! decoder_fsm_state;
-  assign \$94  = decoder_fsm_state == 1'h1;
-  assign \$95  = decoder_fsm_state == 2'h2;
-  assign \$96  = decoder_fsm_state == 2'h3;
-  assign \$97  = decoder_fsm_state == 3'h4;
+  assign \$97  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$98  = idx == \$97 ;
+  assign last = in_word & \$98 ;
+  assign \$99  = ! decoder_fsm_state;
+  assign \$100  = decoder_fsm_state == 1'h1;
+  assign \$101  = decoder_fsm_state == 2'h2;
+  assign \$102  = decoder_fsm_state == 2'h3;
+  assign \$103  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -27021,47 +27249,47 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   always @(posedge clk)
     w1_lc_at0 <= \$34 ;
   always @(posedge clk)
-    done <= \$98 ;
+    done <= \$104 ;
   always @(posedge clk)
-    stopped <= \$99 ;
+    stopped <= \$105 ;
   always @(posedge clk)
-    slots <= \$100 ;
+    slots <= \$106 ;
   always @(posedge clk)
-    slots_full <= \$101 ;
+    slots_full <= \$107 ;
   always @(posedge clk)
-    started <= \$102 ;
+    started <= \$108 ;
   always @(posedge clk)
-    start_slot <= \$103 ;
+    start_slot <= \$109 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$104 ;
+    decoder_fsm_state <= \$110 ;
   always @(posedge clk)
-    cds <= \$105 ;
+    cds <= \$111 ;
   always @(posedge clk)
-    idx <= \$106 ;
+    idx <= \$112 ;
   always @(posedge clk)
-    in_data <= \$107 ;
+    in_data <= \$113 ;
   always @(posedge clk)
-    in_lc <= \$108 ;
+    in_lc <= \$114 ;
   always @(posedge clk)
-    in_crc <= \$109 ;
+    in_crc <= \$115 ;
   always @(posedge clk)
-    in_top <= \$110 ;
+    in_top <= \$116 ;
   always @(posedge clk)
-    word <= \$111 ;
+    word <= \$117 ;
   always @(posedge clk)
-    stop_bit <= \$112 ;
+    stop_bit <= \$118 ;
   always @(posedge clk)
-    data0 <= \$113 ;
+    data0 <= \$119 ;
   always @(posedge clk)
-    ne <= \$114 ;
+    ne <= \$120 ;
   always @(posedge clk)
-    nw <= \$115 ;
+    nw <= \$121 ;
   always @(posedge clk)
-    data1 <= \$116 ;
+    data1 <= \$122 ;
   always @(posedge clk)
-    lc <= \$117 ;
+    lc <= \$123 ;
   always @(posedge clk)
-    cpw_top <= \$118 ;
+    cpw_top <= \$124 ;
   \biss_master_uart.ch1.core.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
@@ -27130,7 +27358,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[16])
+    casez (words[17])
       1'h0:
           \$20  = 7'h7f;
       1'h1:
@@ -27140,7 +27368,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17:16])
+    casez (words[18:17])
       2'h0:
           \$22  = 7'h7f;
       2'h1:
@@ -27154,7 +27382,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17:16])
+    casez (words[18:17])
       2'h0:
           \$24  = 7'h7f;
       2'h1:
@@ -27168,7 +27396,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17:16])
+    casez (words[18:17])
       2'h0:
           \$31  = 4'h0;
       2'h1:
@@ -27181,7 +27409,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$98  = 1'h0;
+    \$104  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -27191,21 +27419,21 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$98  = 1'h1;
+                \$104  = 1'h1;
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$98  = 1'h0;
+      \$104  = 1'h0;
     end
     if (rst) begin
-      \$98  = 1'h0;
+      \$104  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$99  = 1'h0;
+    \$105  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -27215,115 +27443,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
           /* empty */;
       3'h3:
           if (sample) begin
-            \$99  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$99  = 1'h0;
-    end
-    if (rst) begin
-      \$99  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$100  = slots;
-    if (\$36 ) begin
-      \$100  = \$37 [15:0];
-    end
-    if (receiver_clear) begin
-      \$100  = 16'h0000;
-    end
-    if (rst) begin
-      \$100  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$101  = slots_full;
-    if (\$36 ) begin
-      \$101  = \$38 ;
-    end
-    if (receiver_clear) begin
-      \$101  = 1'h0;
-    end
-    if (rst) begin
-      \$101  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$102  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$102  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$102  = 1'h0;
-    end
-    if (rst) begin
-      \$102  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$103  = start_slot;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$103  = slots;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$103  = 16'h0000;
-    end
-    if (rst) begin
-      \$103  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$104  = decoder_fsm_state;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$104  = 3'h1;
-          end
-      3'h1:
-          if (sample) begin
-            \$104  = 3'h2;
-          end
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$104  = 3'h3;
-              end
-            end
-          end
-      3'h3:
-          if (sample) begin
-            \$104  = 3'h4;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$104  = 3'h0;
-    end
-    if (rst) begin
-      \$104  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$105  = cds;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$105  = \bit ;
+            \$105  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -27335,47 +27455,23 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$106  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$106  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$106  = \$41 [6:0];
-            if (\$60 ) begin
-              \$106  = 7'h00;
-            end
-          end
-    endcase
+    \$106  = slots;
+    if (\$36 ) begin
+      \$106  = \$37 [15:0];
+    end
     if (receiver_clear) begin
-      \$106  = 7'h00;
+      \$106  = 16'h0000;
     end
     if (rst) begin
-      \$106  = 7'h00;
+      \$106  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$107  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$107  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$107  = \$44 ;
-            if (\$60 ) begin
-              \$107  = w1_data_at0;
-            end
-          end
-    endcase
+    \$107  = slots_full;
+    if (\$36 ) begin
+      \$107  = \$38 ;
+    end
     if (receiver_clear) begin
       \$107  = 1'h0;
     end
@@ -27385,20 +27481,11 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$108  = in_lc;
+    \$108  = started;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$108  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$108  = \$50 ;
-            if (\$60 ) begin
-              \$108  = w1_lc_at0;
-            end
+          if (\$39 ) begin
+            \$108  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -27410,60 +27497,201 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$109  = in_crc;
+    \$109  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$109  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            \$109  = \$56 ;
+          if (\$39 ) begin
+            \$109  = slots;
           end
     endcase
     if (receiver_clear) begin
-      \$109  = 1'h0;
+      \$109  = 16'h0000;
     end
     if (rst) begin
-      \$109  = 1'h0;
+      \$109  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$110  = in_top;
+    \$110  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$110  = 3'h1;
+          end
+      3'h1:
+          if (sample) begin
+            \$110  = 3'h2;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$110  = 3'h3;
+              end
+            end
+          end
+      3'h3:
+          if (sample) begin
+            \$110  = 3'h4;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$110  = 3'h0;
+    end
+    if (rst) begin
+      \$110  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    \$111  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$110  = \$40 ;
+            \$111  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$111  = 1'h0;
+    end
+    if (rst) begin
+      \$111  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    \$112  = idx;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$112  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$110  = \$58 ;
+            \$112  = \$41 [6:0];
             if (\$60 ) begin
-              \$110  = 1'h0;
+              \$112  = 7'h00;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$110  = 1'h0;
+      \$112  = 7'h00;
     end
     if (rst) begin
-      \$110  = 1'h0;
+      \$112  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$111  = word;
+    \$113  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$111  = 1'h0;
+            \$113  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$113  = \$44 ;
+            if (\$60 ) begin
+              \$113  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$113  = 1'h0;
+    end
+    if (rst) begin
+      \$113  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    \$114  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$114  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$114  = \$50 ;
+            if (\$60 ) begin
+              \$114  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$114  = 1'h0;
+    end
+    if (rst) begin
+      \$114  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    \$115  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$115  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$115  = \$56 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$115  = 1'h0;
+    end
+    if (rst) begin
+      \$115  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    \$116  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$116  = \$40 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$116  = \$58 ;
+            if (\$60 ) begin
+              \$116  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$116  = 1'h0;
+    end
+    if (rst) begin
+      \$116  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    \$117  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$117  = 1'h0;
           end
       3'h2:
           if (sample) begin
@@ -27471,21 +27699,21 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
               (* full_case = 32'd1 *)
               if (\$62 ) begin
               end else begin
-                \$111  = \$63 [0];
+                \$117  = \$63 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$111  = 1'h0;
+      \$117  = 1'h0;
     end
     if (rst) begin
-      \$111  = 1'h0;
+      \$117  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$112  = stop_bit;
+    \$118  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -27495,108 +27723,108 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
           /* empty */;
       3'h3:
           if (sample) begin
-            \$112  = \bit ;
+            \$118  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$112  = 1'h0;
+      \$118  = 1'h0;
     end
     if (rst) begin
-      \$112  = 1'h0;
+      \$118  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$113  = data0;
+    \$119  = data0;
     if (\$66 ) begin
-      \$113  = { data0[53:0], \bit  };
+      \$119  = { data0[53:0], \$68  };
     end
     if (receiver_clear) begin
-      \$113  = 55'h00000000000000;
+      \$119  = 55'h00000000000000;
     end
     if (rst) begin
-      \$113  = 55'h00000000000000;
+      \$119  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$114  = ne;
-    if (\$67 ) begin
-      \$114 [0] = 1'h1;
-    end else if (\$71 ) begin
-      \$114 [0] = \bit ;
+    \$120  = ne;
+    if (\$69 ) begin
+      \$120 [0] = 1'h1;
+    end else if (\$73 ) begin
+      \$120 [0] = \bit ;
     end
-    if (\$79 ) begin
-      \$114 [1] = 1'h1;
-    end else if (\$83 ) begin
-      \$114 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$114  = 2'h0;
-    end
-    if (rst) begin
-      \$114  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$115  = nw;
-    if (\$67 ) begin
-      \$115 [0] = 1'h1;
-    end else if (\$71 ) begin
-    end else if (\$75 ) begin
-      \$115 [0] = \bit ;
-    end
-    if (\$79 ) begin
-      \$115 [1] = 1'h1;
-    end else if (\$83 ) begin
+    if (\$83 ) begin
+      \$120 [1] = 1'h1;
     end else if (\$87 ) begin
-      \$115 [1] = \bit ;
+      \$120 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$115  = 2'h0;
+      \$120  = 2'h0;
     end
     if (rst) begin
-      \$115  = 2'h0;
+      \$120  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$116  = data1;
-    if (\$78 ) begin
-      \$116  = { data1[38:0], \bit  };
+    \$121  = nw;
+    if (\$69 ) begin
+      \$121 [0] = 1'h1;
+    end else if (\$73 ) begin
+    end else if (\$77 ) begin
+      \$121 [0] = \bit ;
+    end
+    if (\$83 ) begin
+      \$121 [1] = 1'h1;
+    end else if (\$87 ) begin
+    end else if (\$91 ) begin
+      \$121 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$116  = 40'h0000000000;
+      \$121  = 2'h0;
     end
     if (rst) begin
-      \$116  = 40'h0000000000;
+      \$121  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$117  = lc;
+    \$122  = data1;
+    if (\$80 ) begin
+      \$122  = { data1[38:0], \$82  };
+    end
+    if (receiver_clear) begin
+      \$122  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$122  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    \$123  = lc;
     if (lc_load) begin
-      \$117  = { lc[4:0], \bit  };
+      \$123  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$117  = 6'h00;
+      \$123  = 6'h00;
     end
     if (rst) begin
-      \$117  = 6'h00;
+      \$123  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$118  = cpw_top;
-    if (\$88 ) begin
-      \$118  = { cpw_top[38:0], \bit  };
+    \$124  = cpw_top;
+    if (\$92 ) begin
+      \$124  = { cpw_top[38:0], \$94  };
     end
     if (receiver_clear) begin
-      \$118  = 40'h0000000000;
+      \$124  = 40'h0000000000;
     end
     if (rst) begin
-      \$118  = 40'h0000000000;
+      \$124  = 40'h0000000000;
     end
   end
   always @* begin
@@ -27616,16 +27844,18 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \bit$51  = \bit ;
   assign ok = crc_ok;
   assign \word$54  = word;
-  assign \words[0]  = words[9:0];
+  assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
-  assign \words[1]  = words[19:10];
-  assign \words[1].data_bits  = words[15:10];
-  assign \words[1].nenw  = words[16];
-  assign \words[1].lc  = words[17];
-  assign \words[1].crc  = words[19:18];
+  assign \words[0].gray  = words[10];
+  assign \words[1]  = words[21:11];
+  assign \words[1].data_bits  = words[16:11];
+  assign \words[1].nenw  = words[17];
+  assign \words[1].lc  = words[18];
+  assign \words[1].crc  = words[20:19];
+  assign \words[1].gray  = words[21];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -27646,9 +27876,9 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \crcs$46[1].poly  = crcs[58:43];
   assign \crcs$46[1].start  = crcs[74:59];
   assign \crcs$46[1].inverted  = crcs[75];
-  assign \$76  = word;
-  assign \$80  = word;
+  assign \$78  = word;
   assign \$84  = word;
+  assign \$88  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -28882,9 +29112,9 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   wire w1_enable;
   reg [7:0] word0_len = 8'h00;
   reg [7:0] word1_len = 8'h00;
-  input [19:0] words;
-  wire [19:0] words;
-  wire [9:0] \words[0] ;
+  input [21:0] words;
+  wire [21:0] words;
+  wire [10:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -28892,9 +29122,10 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[0].crc ;
   wire [5:0] \words[0].data_bits ;
+  wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [9:0] \words[1] ;
+  wire [10:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -28902,6 +29133,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \words[1].crc ;
   wire [5:0] \words[1].data_bits ;
+  wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
   assign \$2  = \$1  + crcs[4:0];
@@ -28914,7 +29146,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   assign \$9  = ~ clear;
   assign \$10  = \$8  & \$9 ;
   assign \$12  = \$11  + crcs[42:38];
-  assign \$13  = words[15:10] + \$12 [7:0];
+  assign \$13  = words[16:11] + \$12 [7:0];
   always @(posedge clk)
     word0_len <= \$14 ;
   always @(posedge clk)
@@ -28944,7 +29176,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17:16])
+    casez (words[18:17])
       2'h0:
           \$11  = 8'h00;
       2'h1:
@@ -28997,16 +29229,18 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
       \$19  = 8'h00;
     end
   end
-  assign \words[0]  = words[9:0];
+  assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
-  assign \words[1]  = words[19:10];
-  assign \words[1].data_bits  = words[15:10];
-  assign \words[1].nenw  = words[16];
-  assign \words[1].lc  = words[17];
-  assign \words[1].crc  = words[19:18];
+  assign \words[0].gray  = words[10];
+  assign \words[1]  = words[21:11];
+  assign \words[1].data_bits  = words[16:11];
+  assign \words[1].nenw  = words[17];
+  assign \words[1].lc  = words[18];
+  assign \words[1].crc  = words[20:19];
+  assign \words[1].gray  = words[21];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -32199,7 +32433,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$5530$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$5562$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -32241,8 +32475,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5530$0 ;
-  wire \port$5530$0 ;
+  input \port$5562$0 ;
+  wire \port$5562$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -32256,9 +32490,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5530$0  };
-  assign \$2  = { lc[4:0], \port$5530$0  } == last;
-  assign \$3  = { lc[4:0], \port$5530$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5562$0  };
+  assign \$2  = { lc[4:0], \port$5562$0  } == last;
+  assign \$3  = { lc[4:0], \port$5562$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -32368,7 +32602,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5530$0  };
+  assign lc_next = { lc[4:0], \port$5562$0  };
   assign zero = is_zero;
 endmodule
 
@@ -32924,7 +33158,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3841$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$119  = 0;
   wire \$1 ;
@@ -32966,8 +33200,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , l
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [250:0] cfg;
-  wire [250:0] cfg;
+  input [252:0] cfg;
+  wire [252:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -32980,7 +33214,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , l
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
   wire [23:0] \cfg.timeout_limit ;
-  wire [9:0] \cfg.w0 ;
+  wire [10:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -32988,6 +33222,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , l
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w0.crc ;
   wire [5:0] \cfg.w0.data_bits ;
+  wire \cfg.w0.gray ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
   wire [37:0] \cfg.w0_crc ;
@@ -32995,7 +33230,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , l
   wire [15:0] \cfg.w0_crc.poly ;
   wire [15:0] \cfg.w0_crc.start ;
   wire [4:0] \cfg.w0_crc.width ;
-  wire [9:0] \cfg.w1 ;
+  wire [10:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -33003,6 +33238,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , l
   (* enum_value_11 = "CUSTOM" *)
   wire [1:0] \cfg.w1.crc ;
   wire [5:0] \cfg.w1.data_bits ;
+  wire \cfg.w1.gray ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
   wire [37:0] \cfg.w1_crc ;
@@ -33074,8 +33310,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$3817$0 ;
-  wire \port$3817$0 ;
+  output \port$3841$0 ;
+  wire \port$3841$0 ;
   output report;
   wire report;
   input report_frame;
@@ -33105,9 +33341,9 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , l
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[193];
+  assign \$1  = ~ cfg[194];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[193] & cfg[201];
+  assign \$3  = cfg[194] & cfg[202];
   assign \$4  = cfg[152] | \$3 ;
   assign \$5  = report_frame & \$4 ;
   assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
@@ -33115,7 +33351,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , l
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[242] & cfg[193];
+  assign \$7  = cfg[244] & cfg[194];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
@@ -33134,7 +33370,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , l
   assign \$19  = crc_ok[0] & \$2 ;
   assign \$20  = ~ \$19 ;
   assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[193] & cfg[201];
+  assign \$22  = cfg[194] & cfg[202];
   assign \$23  = cfg[152] | \$22 ;
   assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
   assign \$25  = \$23  & \$24 ;
@@ -33181,7 +33417,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3817$0  = \$2 ;
+  assign \port$3841$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -33192,27 +33428,29 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , l
   assign \cfg.quiet_time  = cfg[136:125];
   assign \cfg.noise_limit  = cfg[140:137];
   assign \cfg.delay_tolerance  = cfg[144:141];
-  assign \cfg.w0  = cfg[154:145];
+  assign \cfg.w0  = cfg[155:145];
   assign \cfg.w0.data_bits  = cfg[150:145];
   assign \cfg.w0.nenw  = cfg[151];
   assign \cfg.w0.lc  = cfg[152];
   assign \cfg.w0.crc  = cfg[154:153];
-  assign \cfg.w0_crc  = cfg[192:155];
-  assign \cfg.w0_crc.width  = cfg[159:155];
-  assign \cfg.w0_crc.poly  = cfg[175:160];
-  assign \cfg.w0_crc.start  = cfg[191:176];
-  assign \cfg.w0_crc.inverted  = cfg[192];
-  assign \cfg.w1_enable  = cfg[193];
-  assign \cfg.w1  = cfg[203:194];
-  assign \cfg.w1.data_bits  = cfg[199:194];
-  assign \cfg.w1.nenw  = cfg[200];
-  assign \cfg.w1.lc  = cfg[201];
-  assign \cfg.w1.crc  = cfg[203:202];
-  assign \cfg.w1_crc  = cfg[241:204];
-  assign \cfg.w1_crc.width  = cfg[208:204];
-  assign \cfg.w1_crc.poly  = cfg[224:209];
-  assign \cfg.w1_crc.start  = cfg[240:225];
-  assign \cfg.w1_crc.inverted  = cfg[241];
-  assign \cfg.spw_check  = cfg[242];
-  assign \cfg.spw_tolerance  = cfg[250:243];
+  assign \cfg.w0.gray  = cfg[155];
+  assign \cfg.w0_crc  = cfg[193:156];
+  assign \cfg.w0_crc.width  = cfg[160:156];
+  assign \cfg.w0_crc.poly  = cfg[176:161];
+  assign \cfg.w0_crc.start  = cfg[192:177];
+  assign \cfg.w0_crc.inverted  = cfg[193];
+  assign \cfg.w1_enable  = cfg[194];
+  assign \cfg.w1  = cfg[205:195];
+  assign \cfg.w1.data_bits  = cfg[200:195];
+  assign \cfg.w1.nenw  = cfg[201];
+  assign \cfg.w1.lc  = cfg[202];
+  assign \cfg.w1.crc  = cfg[204:203];
+  assign \cfg.w1.gray  = cfg[205];
+  assign \cfg.w1_crc  = cfg[243:206];
+  assign \cfg.w1_crc.width  = cfg[210:206];
+  assign \cfg.w1_crc.poly  = cfg[226:211];
+  assign \cfg.w1_crc.start  = cfg[242:227];
+  assign \cfg.w1_crc.inverted  = cfg[243];
+  assign \cfg.spw_check  = cfg[244];
+  assign \cfg.spw_tolerance  = cfg[252:245];
 endmodule

@@ -28,7 +28,7 @@ CFG_PORTS = ["cfg_ma_half_period", "cfg_request_period", "cfg_break_time", "cfg_
              "cfg_timeout_limit", "cfg_delay_limit", "cfg_end_check", "cfg_quiet_time",
              "cfg_noise_limit", "cfg_delay_tolerance", "cfg_w1_enable", "cfg_spw_check",
              "cfg_spw_tolerance"] + [f"cfg_w{w}_{f}" for w in range(2)
-                                     for f in ("data_bits", "nenw", "lc", "crc")]
+                                     for f in ("data_bits", "nenw", "lc", "crc", "gray")]
 #: A word's custom CRC (cfg_wN_crc = 3), in builds with custom CRCs.
 CUSTOM_CRC_PORTS = [f"cfg_w{w}_crc_{f}" for w in range(2) for f in ("width", "poly", "start", "inverted")]
 
@@ -179,7 +179,8 @@ class Testbench:
             word = fmt.words[w] if w < len(fmt.words) else frames.WordFormat(1)
             code, custom = crc_config(word.crc)
             ports.update({f"cfg_w{w}_data_bits": word.data_bits, f"cfg_w{w}_nenw": int(word.nenw),
-                          f"cfg_w{w}_lc": int(word.lc), f"cfg_w{w}_crc": code})
+                          f"cfg_w{w}_lc": int(word.lc), f"cfg_w{w}_crc": code,
+                          f"cfg_w{w}_gray": int(word.gray)})
             if self.has_custom_crc:
                 ports.update({f"cfg_w{w}_crc_{k}": v for k, v in custom.items()})
             else:

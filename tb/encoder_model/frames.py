@@ -59,6 +59,7 @@ class WordFormat:
     nenw: bool = True
     lc: bool = False
     crc: object = CRC6      # CRC_NONE, CRC6, CRC16 or a CustomCrc
+    gray: bool = False      # the position is sent Gray-coded (the CRC covers the bits as sent)
 
     def __post_init__(self):
         if not 1 <= self.data_bits <= DATA_BITS_MAX:
@@ -169,7 +170,8 @@ def word_bits(fmt, value, *, crc_xor=0):
     ``crc_xor`` corrupts the sent CRC (used by :class:`FrameFaults`).
     """
     _check_field("position", value.position, fmt.data_bits)
-    bits = int_to_bits(value.position, fmt.data_bits)
+    sent = to_gray(value.position) if fmt.gray else value.position
+    bits = int_to_bits(sent, fmt.data_bits)
     if fmt.nenw:
         _check_field("ne", value.ne, 1)
         _check_field("nw", value.nw, 1)
@@ -187,6 +189,21 @@ def word_bits(fmt, value, *, crc_xor=0):
         return bits
     _check_field("crc_xor", crc_xor, fmt.crc_bits)
     return bits + int_to_bits(_crc_func(fmt.crc)(bits) ^ crc_xor, fmt.crc_bits)
+
+
+def to_gray(n):
+    """The reflected binary (Gray) code of ``n``: neighbouring values differ in one bit."""
+    return n ^ (n >> 1)
+
+
+def from_gray(g):
+    """The binary value of the Gray code ``g``: each binary bit is the XOR of the Gray bits at
+    and above it."""
+    n, g = g, g >> 1
+    while g:
+        n ^= g
+        g >>= 1
+    return n
 
 
 def build_frame(fmt, words, faults=None):
@@ -229,7 +246,8 @@ def parse_frame(fmt, bits):
     words = []
     for wfmt in fmt.words:
         covered = take(wfmt.data_bits)
-        word = {"position": bits_to_int(covered), "ne": None, "nw": None, "lc": None,
+        position = bits_to_int(covered)
+        word = {"position": from_gray(position) if wfmt.gray else position, "ne": None, "nw": None, "lc": None,
                 "crc": None, "crc_ok": True}
         if wfmt.nenw:
             nenw = take(facts.NE_NW_BITS)

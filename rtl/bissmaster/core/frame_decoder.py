@@ -35,7 +35,8 @@ class FrameDecoder(wiring.Component):
 
     Slots arrive from :class:`~bissmaster.core.slo_sampler.SloSampler`, slot 0 being the first Ack
     slot. Low slots are Ack; the first high slot is Start; then CDS; then each word's data
-    (MSB first, right-justified in ``data``), nE, nW, LC and CRC. One more slot, the stop bit,
+    (MSB first, right-justified in ``data``; a word set ``gray`` is Gray-decoded as it
+    arrives), nE, nW, LC and CRC. One more slot, the stop bit,
     ends the frame: the encoder's timeout has begun, so the master may look for SLO high again.
 
     One :class:`~bissmaster.core.crc_engine.CrcEngine` checks every word's CRC in turn, each
@@ -187,11 +188,18 @@ class FrameDecoder(wiring.Component):
                 pass
 
         # Route each bit of a word to its field.
+        # Gray-coded data: each binary bit is the received bit xor the binary bit before it
+        # (MSB first), which is the register's bit 0 (0 before the first: the decoder is reset
+        # between cycles). The CRC engine gets the bits as sent.
+        decoded = []
+        for w in range(p.words):
+            data_w = getattr(self, f"data{w}")
+            decoded.append(self.bit ^ (self.words[w].gray & data_w[0]))
         for w in range(p.words):
             this_word = in_word & (word == w)
             data_w = getattr(self, f"data{w}")
             with m.If(this_word & in_data):
-                m.d.sync += data_w.eq(Cat(self.bit, data_w))
+                m.d.sync += data_w.eq(Cat(decoded[w], data_w))
             # A word without nE/nW reads as "no error, no warning" (both high).
             with m.If(~self.words[w].nenw):
                 m.d.sync += [self.ne[w].eq(1), self.nw[w].eq(1)]
@@ -208,7 +216,7 @@ class FrameDecoder(wiring.Component):
         if p.words == 2:
             # Word 0's leading bits, as many as word 1 has: the CPW with its extra low bits dropped.
             with m.If(in_word & in_top):
-                m.d.sync += self.cpw_top.eq(Cat(self.bit, self.cpw_top))
+                m.d.sync += self.cpw_top.eq(Cat(decoded[0], self.cpw_top))
 
         # One CRC engine for every word in turn, fed each bit of the word (data and the CRC).
         m.submodules.crc = engine = CrcEngine(p.words)

@@ -20,7 +20,7 @@ def _cfg(wf):
     if wf is None:
         return {"data_bits": 0, "nenw": 0, "lc": 0, "crc": 0}
     return {"data_bits": wf.data_bits, "nenw": int(wf.nenw), "lc": int(wf.lc),
-            "crc": crc_config(wf.crc)[0]}
+            "crc": crc_config(wf.crc)[0], "gray": int(wf.gray)}
 
 
 def _crc(wf):
@@ -103,6 +103,11 @@ DECODER_CASES = {
                            2, FrameFaults(cds=1), None),
     "evolute_36_one_word_hw": (MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),)),
                                PRESETS["evolute_36"], 1, None, None),
+    # Gray-coded words: reported in binary, the CPW's top bits too (the SPW check's input).
+    "gray_two_words": (MasterParams(), FrameFormat("gray", (
+        WordFormat(36, gray=True), WordFormat(28, lc=True, crc=CRC16, gray=True))), 1, None, None),
+    "gray_word0_only_55": (MasterParams(), FrameFormat("gray55", (WordFormat(55, gray=True),)),
+                           2, None, WordFormat(20, gray=True)),
     # Custom CRCs: each word its own width, polynomial, start value and inversion.
     "custom_crc_two_words": (MasterParams(), CUSTOM_TWO, 2, None, None),
     "custom_crc16_start_one_word_hw": (

@@ -306,3 +306,22 @@ def test_source_single_word_does_not_touch_counter():
     assert values == [WordValue(99)]
     assert not parse_frame(PRESETS["evolute_26"], bits)["crc_ok"]
     assert src.sign_of_life.next() == 1
+
+
+def test_gray_code_published_sequence_and_round_trip():
+    """The reflected binary code of 0..15 as tabulated (Gray's patent; OEIS A003188), and
+    from_gray its inverse."""
+    from encoder_model.frames import from_gray, to_gray
+    assert [to_gray(n) for n in range(16)] == [0, 1, 3, 2, 6, 7, 5, 4, 12, 13, 15, 14, 10, 11, 9, 8]
+    rng = random.Random(2600)
+    for n in [0, 1, 2**55 - 1] + [rng.getrandbits(55) for _ in range(200)]:
+        assert from_gray(to_gray(n)) == n
+        assert bin(to_gray(n) ^ to_gray(n + 1)).count("1") == 1
+
+
+def test_gray_word_sends_gray_and_parses_binary():
+    fmt = FrameFormat("g", (WordFormat(13, gray=True),))
+    bits = build_frame(fmt, [WordValue(0b1000000000000, 1, 1)])
+    assert bits[2:15] == [1, 1] + [0] * 11             # 4096 -> Gray 0b1100000000000
+    assert parse_frame(fmt, bits)["words"][0]["position"] == 4096
+    assert parse_frame(fmt, bits)["crc_ok"]
