@@ -285,6 +285,13 @@ class BissMaster(wiring.Component):
         off = 2**LINE_CHECK_WIDTH - 1
         started_before = Signal()
         m.d.sync += started_before.eq(b.decoder.started)
+        # The round trip is learned one clock after the report (registered: the verdict's
+        # ``clean`` comes from the noise judgement through the whole verdict, too long a path
+        # in front of the delay check's enables). The frame's results are latched at the
+        # report either way, from the state before the learn; the delay and the tolerance hold
+        # for that clock (the next cycle's configuration and receiver clear come later).
+        learn, clean = Signal(), Signal()
+        m.d.sync += [learn.eq(b.controller.report_frame), clean.eq(b.verdict.clean)]
         m.d.comb += [
             b.line_noise.watch.eq(b.controller.waiting),
             b.line_noise.level.eq(b.sampler.level),
@@ -298,8 +305,8 @@ class BissMaster(wiring.Component):
             b.delay_check.rearm.eq(self.cfg_delay_tolerance == off),
             b.delay_check.delay.eq(b.sampler.delay),
             b.delay_check.check.eq(b.decoder.started & ~started_before),
-            b.delay_check.learn.eq(b.controller.report_frame),
-            b.delay_check.clean.eq(b.verdict.clean),
+            b.delay_check.learn.eq(learn),
+            b.delay_check.clean.eq(clean),
             b.verdict.noisy.eq(b.line_noise.noisy),
             b.verdict.delay_jump.eq(b.delay_check.jump),
         ]

@@ -35,7 +35,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$2 ;
   reg \$20 ;
   reg \$21 ;
-  wire \$22 ;
+  reg \$22 ;
+  reg \$23 ;
+  wire \$24 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -43,9 +45,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
+  (* init = 1'h0 *)
+  wire \$signal ;
   wire abort;
   wire \abort$114 ;
-  wire \abort$291 ;
+  wire \abort$292 ;
   input abort_cycle;
   wire abort_cycle;
   wire ack_expired;
@@ -54,7 +58,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [23:0] \ack_limit$167 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$320 ;
+  wire \bit$321 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$144 ;
@@ -62,7 +66,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output busy;
   wire busy;
   wire \busy$122 ;
-  wire \busy$295 ;
+  wire \busy$296 ;
   input ca_abort;
   wire ca_abort;
   input [6:0] ca_address;
@@ -104,11 +108,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$298 ;
+  wire \cdm$299 ;
   wire cdm_cycle;
   output cds;
   wire cds;
-  wire \cds$271 ;
+  wire \cds$272 ;
   wire [252:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -229,11 +233,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire cfg_w1_nenw;
   wire check;
   wire \check$225 ;
-  wire clean;
+  reg clean = 1'h0;
+  (* init = 1'h0 *)
   wire \clean$230 ;
+  wire \clean$322 ;
   wire clear;
   wire \clear$191 ;
-  wire \clear$313 ;
+  wire \clear$314 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -311,7 +317,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [39:0] \cpw_top$242 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$255 ;
+  wire [1:0] \crc_ok$256 ;
   wire [75:0] crcs;
   wire [75:0] \crcs$238 ;
   wire [37:0] \crcs$238[0] ;
@@ -413,8 +419,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output done;
   wire done;
   wire \done$132 ;
-  wire \done$296 ;
-  wire \done$316 ;
+  wire \done$297 ;
+  wire \done$317 ;
   wire doubtful;
   wire early;
   wire \early$130 ;
@@ -423,30 +429,30 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$308 ;
-  wire \events$308.aborted ;
-  wire \events$308.ca_aborted ;
-  wire \events$308.ca_crc4_error ;
-  wire \events$308.ca_data_fault ;
-  wire \events$308.ca_no_answer ;
-  wire \events$308.ca_refused ;
-  wire \events$308.crc_word0 ;
-  wire \events$308.crc_word1 ;
-  wire \events$308.delay_jump ;
-  wire \events$308.delay_range ;
-  wire \events$308.lc_repeat ;
-  wire \events$308.lc_skip ;
-  wire \events$308.lc_zero ;
-  wire \events$308.no_ack ;
-  wire \events$308.no_start ;
-  wire \events$308.no_stop ;
-  wire \events$308.noise_event ;
-  wire \events$308.noisy_line ;
-  wire \events$308.overrun ;
-  wire \events$308.slo_stuck_low ;
-  wire \events$308.spw_mismatch ;
+  wire [20:0] \events$309 ;
+  wire \events$309.aborted ;
+  wire \events$309.ca_aborted ;
+  wire \events$309.ca_crc4_error ;
+  wire \events$309.ca_data_fault ;
+  wire \events$309.ca_no_answer ;
+  wire \events$309.ca_refused ;
+  wire \events$309.crc_word0 ;
+  wire \events$309.crc_word1 ;
+  wire \events$309.delay_jump ;
+  wire \events$309.delay_range ;
+  wire \events$309.lc_repeat ;
+  wire \events$309.lc_skip ;
+  wire \events$309.lc_zero ;
+  wire \events$309.no_ack ;
+  wire \events$309.no_start ;
+  wire \events$309.no_stop ;
+  wire \events$309.noise_event ;
+  wire \events$309.noisy_line ;
+  wire \events$309.overrun ;
+  wire \events$309.slo_stuck_low ;
+  wire \events$309.spw_mismatch ;
   wire fault;
-  wire \fault$251 ;
+  wire \fault$252 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -480,7 +486,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$253 ;
+  wire [3:0] \fault_status$254 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -490,7 +496,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$285 ;
+  wire \first_rise$286 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -559,17 +565,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [5:0] \lc_next$204 ;
   output lc_repeat;
   wire lc_repeat;
-  wire \lc_repeat$276 ;
+  wire \lc_repeat$277 ;
   wire lc_repeat_seen;
   output lc_skip;
   wire lc_skip;
-  wire \lc_skip$277 ;
+  wire \lc_skip$278 ;
   wire lc_skip_seen;
   output lc_zero;
   wire lc_zero;
-  wire \lc_zero$278 ;
+  wire \lc_zero$279 ;
   wire lc_zero_seen;
-  wire learn;
+  reg learn = 1'h0;
   wire level;
   wire \level$213 ;
   wire [3:0] limit;
@@ -626,7 +632,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \locked$128 ;
   output ma;
   wire ma;
-  wire \ma$315 ;
+  wire \ma$316 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$156 ;
@@ -649,7 +655,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire ok;
   output overrun;
   wire overrun;
-  wire \overrun$311 ;
+  wire \overrun$312 ;
   wire [23:0] period;
   input periodic;
   wire periodic;
@@ -668,35 +674,35 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$263 ;
+  wire \report$264 ;
   wire report_delay;
-  wire \report_delay$266 ;
+  wire \report_delay$267 ;
   wire report_frame;
-  wire \report_frame$250 ;
-  wire \report_frame$264 ;
+  wire \report_frame$251 ;
+  wire \report_frame$265 ;
   wire request;
   wire \request$113 ;
-  wire [17:0] \request$287 ;
-  wire [6:0] \request$287.address ;
-  wire [6:0] \request$287.count ;
-  wire [2:0] \request$287.slave_id ;
-  wire \request$287.write ;
+  wire [17:0] \request$288 ;
+  wire [6:0] \request$288.address ;
+  wire [6:0] \request$288.count ;
+  wire [2:0] \request$288.slave_id ;
+  wire \request$288.write ;
   wire restart;
   wire \restart$217 ;
   wire restart_timer;
   wire [9:0] result;
-  wire [186:0] \result$318 ;
-  wire \result$318.cds ;
-  wire \result$318.delay_settled ;
-  wire [7:0] \result$318.delay_spread ;
-  wire [5:0] \result$318.lc ;
-  wire \result$318.lc_repeat ;
-  wire \result$318.lc_skip ;
-  wire \result$318.lc_zero ;
-  wire [12:0] \result$318.line_delay ;
-  wire [3:0] \result$318.noise_events ;
-  wire [12:0] \result$318.settled_delay ;
-  wire \result$318.spw_mismatch ;
+  wire [186:0] \result$319 ;
+  wire \result$319.cds ;
+  wire \result$319.delay_settled ;
+  wire [7:0] \result$319.delay_spread ;
+  wire [5:0] \result$319.lc ;
+  wire \result$319.lc_repeat ;
+  wire \result$319.lc_skip ;
+  wire \result$319.lc_zero ;
+  wire [12:0] \result$319.line_delay ;
+  wire [3:0] \result$319.noise_events ;
+  wire [12:0] \result$319.settled_delay ;
+  wire \result$319.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -713,18 +719,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$318.status ;
-  wire [31:0] \result$318.timestamp ;
-  wire [57:0] \result$318.word0 ;
-  wire \result$318.word0.crc_ok ;
-  wire \result$318.word0.ne ;
-  wire \result$318.word0.nw ;
-  wire [54:0] \result$318.word0.position ;
-  wire [42:0] \result$318.word1 ;
-  wire \result$318.word1.crc_ok ;
-  wire \result$318.word1.ne ;
-  wire \result$318.word1.nw ;
-  wire [39:0] \result$318.word1.position ;
+  wire [3:0] \result$319.status ;
+  wire [31:0] \result$319.timestamp ;
+  wire [57:0] \result$319.word0 ;
+  wire \result$319.word0.crc_ok ;
+  wire \result$319.word0.ne ;
+  wire \result$319.word0.nw ;
+  wire [54:0] \result$319.word0.position ;
+  wire [42:0] \result$319.word1 ;
+  wire \result$319.word1.crc_ok ;
+  wire \result$319.word1.ne ;
+  wire \result$319.word1.nw ;
+  wire [39:0] \result$319.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -743,13 +749,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$319 ;
+  wire \sample$320 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   output [12:0] settled_delay;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$274 ;
+  wire [12:0] \settled_delay$275 ;
   wire skip;
   input slo;
   wire slo;
@@ -767,11 +773,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire spw_match;
   output spw_mismatch;
   wire spw_mismatch;
-  wire \spw_mismatch$283 ;
+  wire \spw_mismatch$284 ;
   input start;
   wire start;
   wire \start$105 ;
-  wire \start$290 ;
+  wire \start$291 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$188 ;
   wire started;
@@ -812,7 +818,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$270 ;
+  wire [3:0] \status$271 ;
   wire stop_bit;
   wire \stop_bit$140 ;
   wire stopped;
@@ -827,8 +833,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [7:0] \tolerance$246 ;
   output valid;
   wire valid;
-  wire \valid$267 ;
   wire \valid$268 ;
+  wire \valid$269 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -908,11 +914,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
   assign \check$225  = started & \$1 ;
-  assign \$2  = learn & \spw_mismatch$283 ;
-  assign \$3  = \status$270  == 4'hd;
-  assign \$4  = learn & \$3 ;
-  assign \$5  = \status$270  == 4'he;
-  assign \$6  = learn & \$5 ;
+  assign \$2  = report_frame & \spw_mismatch$284 ;
+  assign \$3  = \status$271  == 4'hd;
+  assign \$4  = report_frame & \$3 ;
+  assign \$5  = \status$271  == 4'he;
+  assign \$6  = report_frame & \$5 ;
   assign \$7  = result[2:0] == 1'h1;
   assign \$8  = ca_done & \$7 ;
   assign \$9  = result[2:0] == 2'h2;
@@ -926,13 +932,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
   assign \$17  = ~ \clear$191 ;
-  assign \$18  = \sample$319  & \$17 ;
+  assign \$18  = \sample$320  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
     \bit  <= \$20 ;
   always @(posedge clk)
     started_before <= \$21 ;
+  always @(posedge clk)
+    learn <= \$22 ;
+  always @(posedge clk)
+    clean <= \$23 ;
   \biss_master.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -979,7 +989,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .quiet_live(quiet_live),
     .receiver_clear(\clear$191 ),
     .report_delay(report_delay),
-    .report_frame(learn),
+    .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
@@ -998,12 +1008,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clear(clear_counters),
     .clk(clk),
     .counts(counts),
-    .events(\events$308 ),
+    .events(\events$309 ),
     .rst(rst)
   );
   \biss_master.decoder  decoder (
     .\bit (\bit ),
-    .cds(\cds$271 ),
+    .cds(\cds$272 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
@@ -1037,7 +1047,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .rearm(rearm),
     .rst(rst),
     .settled(settled),
-    .settled_delay(\settled_delay$274 ),
+    .settled_delay(\settled_delay$275 ),
     .spread(spread),
     .\tolerance$8 (tolerance)
   );
@@ -1087,13 +1097,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
-    .frame_cds(\cds$271 ),
+    .frame_cds(\cds$272 ),
     .frame_end(report),
-    .frame_ok(\valid$267 ),
+    .frame_ok(\valid$268 ),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(ca_rbuf_en),
-    .request(\request$287 ),
+    .request(\request$288 ),
     .result(result),
     .rst(rst),
     .start(ca_start),
@@ -1105,15 +1115,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
-    .report_frame(learn),
-    .result(\result$318 ),
+    .report_frame(report_frame),
+    .result(\result$319 ),
     .rst(rst),
-    .valid(\valid$267 ),
+    .valid(\valid$268 ),
     .valid_out(valid)
   );
   \biss_master.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$320 ),
+    .\bit (\bit$321 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -1123,7 +1133,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .noise(sampler_noise),
     .receiver_clear(\clear$191 ),
     .rst(rst),
-    .sample(\sample$319 ),
+    .sample(\sample$320 ),
     .slo(slo)
   );
   \biss_master.scheduler  scheduler (
@@ -1143,7 +1153,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$201 ),
     .load(load),
-    .\port$1527$0 (\bit ),
+    .\port$1515$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1192,7 +1202,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.verdict  verdict (
     .cfg(cycle),
-    .clean(clean),
+    .clean(\clean$322 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
@@ -1200,20 +1210,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .fault(\restart$217 ),
     .fault_status(fault_status),
     .lc_check(check),
-    .lc_repeat(\lc_repeat$276 ),
+    .lc_repeat(\lc_repeat$277 ),
     .lc_repeat_seen(lc_repeat_seen),
-    .lc_skip(\lc_skip$277 ),
+    .lc_skip(\lc_skip$278 ),
     .lc_skip_seen(lc_skip_seen),
-    .lc_zero(\lc_zero$278 ),
+    .lc_zero(\lc_zero$279 ),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$995$0 (\$22 ),
+    .\port$983$0 (\$24 ),
     .report(report),
-    .report_frame(learn),
+    .report_frame(report_frame),
     .spw_match(spw_match),
-    .spw_mismatch(\spw_mismatch$283 ),
-    .status(\status$270 ),
-    .valid(\valid$267 )
+    .spw_mismatch(\spw_mismatch$284 ),
+    .status(\status$271 ),
+    .valid(\valid$268 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
@@ -1224,7 +1234,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$20  = \bit$320 ;
+    \$20  = \bit$321 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -1234,6 +1244,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     \$21  = started;
     if (rst) begin
       \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
+    \$22  = report_frame;
+    if (rst) begin
+      \$22  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
+    \$23  = \clean$322 ;
+    if (rst) begin
+      \$23  = 1'h0;
     end
   end
   assign \idle$104  = idle;
@@ -1306,7 +1330,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
   assign \delay$224  = delay;
-  assign report_frame = learn;
+  assign \$signal  = learn;
   assign \clean$230  = clean;
   assign \noisy$232  = noisy;
   assign jump = delay_jump;
@@ -1319,59 +1343,59 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \tolerance$246  = cycle[252:245];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$250  = learn;
-  assign \fault$251  = \restart$217 ;
-  assign \fault_status$253  = fault_status;
-  assign \crc_ok$255  = crc_ok;
+  assign \report_frame$251  = report_frame;
+  assign \fault$252  = \restart$217 ;
+  assign \fault_status$254  = fault_status;
+  assign \crc_ok$256  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$263  = report;
-  assign \report_frame$264  = learn;
-  assign \report_delay$266  = report_delay;
-  assign \valid$268  = \valid$267 ;
-  assign word_crc_ok = { \$22 , crc_ok[0] };
-  assign \first_rise$285  = first_rise;
-  assign \start$290  = ca_start;
-  assign \abort$291  = ca_abort;
+  assign \report$264  = report;
+  assign \report_frame$265  = report_frame;
+  assign \report_delay$267  = report_delay;
+  assign \valid$269  = \valid$268 ;
+  assign word_crc_ok = { \$24 , crc_ok[0] };
+  assign \first_rise$286  = first_rise;
+  assign \start$291  = ca_start;
+  assign \abort$292  = ca_abort;
   assign rbuf_addr = ca_rbuf_addr;
   assign rbuf_en = ca_rbuf_en;
   assign rbuf_data = ca_rbuf_data;
-  assign \busy$295  = ca_busy;
-  assign \done$296  = ca_done;
-  assign \cdm$298  = cdm;
+  assign \busy$296  = ca_busy;
+  assign \done$297  = ca_done;
+  assign \cdm$299  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_ok = \valid$267 ;
-  assign frame_cds = \cds$271 ;
+  assign frame_ok = \valid$268 ;
+  assign frame_cds = \cds$272 ;
   assign cdm_cycle = frame_cdm;
-  assign \overrun$311  = overrun;
-  assign \clear$313  = clear_counters;
-  assign \ma$315  = ma;
-  assign \done$316  = done;
+  assign \overrun$312  = overrun;
+  assign \clear$314  = clear_counters;
+  assign \ma$316  = ma;
+  assign \done$317  = done;
   assign valid_out = valid;
-  assign status = \result$318 [3:0];
-  assign timestamp = \result$318 [35:4];
-  assign line_delay = \result$318 [48:36];
-  assign cds = \result$318 [49];
-  assign noise_events = \result$318 [53:50];
-  assign delay_settled = \result$318 [54];
-  assign settled_delay = \result$318 [67:55];
-  assign delay_spread = \result$318 [75:68];
-  assign word0_position = \result$318 [130:76];
-  assign word0_ne = \result$318 [131];
-  assign word0_nw = \result$318 [132];
-  assign word0_crc_ok = \result$318 [133];
-  assign word1_position = \result$318 [173:134];
-  assign word1_ne = \result$318 [174];
-  assign word1_nw = \result$318 [175];
-  assign word1_crc_ok = \result$318 [176];
-  assign lc = \result$318 [182:177];
-  assign lc_repeat = \result$318 [183];
-  assign lc_skip = \result$318 [184];
-  assign lc_zero = \result$318 [185];
-  assign spw_mismatch = \result$318 [186];
+  assign status = \result$319 [3:0];
+  assign timestamp = \result$319 [35:4];
+  assign line_delay = \result$319 [48:36];
+  assign cds = \result$319 [49];
+  assign noise_events = \result$319 [53:50];
+  assign delay_settled = \result$319 [54];
+  assign settled_delay = \result$319 [67:55];
+  assign delay_spread = \result$319 [75:68];
+  assign word0_position = \result$319 [130:76];
+  assign word0_ne = \result$319 [131];
+  assign word0_nw = \result$319 [132];
+  assign word0_crc_ok = \result$319 [133];
+  assign word1_position = \result$319 [173:134];
+  assign word1_ne = \result$319 [174];
+  assign word1_nw = \result$319 [175];
+  assign word1_crc_ok = \result$319 [176];
+  assign lc = \result$319 [182:177];
+  assign lc_repeat = \result$319 [183];
+  assign lc_skip = \result$319 [184];
+  assign lc_zero = \result$319 [185];
+  assign spw_mismatch = \result$319 [186];
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
   assign count_crc_word0 = counts[15:0];
@@ -1577,36 +1601,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$287.slave_id  = \request$287 [2:0];
-  assign \request$287.address  = \request$287 [9:3];
-  assign \request$287.count  = \request$287 [16:10];
-  assign \request$287.write  = \request$287 [17];
+  assign \request$288.slave_id  = \request$288 [2:0];
+  assign \request$288.address  = \request$288 [9:3];
+  assign \request$288.count  = \request$288 [16:10];
+  assign \request$288.write  = \request$288 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$308.crc_word0  = \events$308 [0];
-  assign \events$308.crc_word1  = \events$308 [1];
-  assign \events$308.no_ack  = \events$308 [2];
-  assign \events$308.no_start  = \events$308 [3];
-  assign \events$308.delay_range  = \events$308 [4];
-  assign \events$308.slo_stuck_low  = \events$308 [5];
-  assign \events$308.lc_repeat  = \events$308 [6];
-  assign \events$308.lc_skip  = \events$308 [7];
-  assign \events$308.lc_zero  = \events$308 [8];
-  assign \events$308.spw_mismatch  = \events$308 [9];
-  assign \events$308.overrun  = \events$308 [10];
-  assign \events$308.aborted  = \events$308 [11];
-  assign \events$308.no_stop  = \events$308 [12];
-  assign \events$308.noisy_line  = \events$308 [13];
-  assign \events$308.delay_jump  = \events$308 [14];
-  assign \events$308.noise_event  = \events$308 [15];
-  assign \events$308.ca_crc4_error  = \events$308 [16];
-  assign \events$308.ca_no_answer  = \events$308 [17];
-  assign \events$308.ca_refused  = \events$308 [18];
-  assign \events$308.ca_aborted  = \events$308 [19];
-  assign \events$308.ca_data_fault  = \events$308 [20];
+  assign \events$309.crc_word0  = \events$309 [0];
+  assign \events$309.crc_word1  = \events$309 [1];
+  assign \events$309.no_ack  = \events$309 [2];
+  assign \events$309.no_start  = \events$309 [3];
+  assign \events$309.delay_range  = \events$309 [4];
+  assign \events$309.slo_stuck_low  = \events$309 [5];
+  assign \events$309.lc_repeat  = \events$309 [6];
+  assign \events$309.lc_skip  = \events$309 [7];
+  assign \events$309.lc_zero  = \events$309 [8];
+  assign \events$309.spw_mismatch  = \events$309 [9];
+  assign \events$309.overrun  = \events$309 [10];
+  assign \events$309.aborted  = \events$309 [11];
+  assign \events$309.no_stop  = \events$309 [12];
+  assign \events$309.noisy_line  = \events$309 [13];
+  assign \events$309.delay_jump  = \events$309 [14];
+  assign \events$309.noise_event  = \events$309 [15];
+  assign \events$309.ca_crc4_error  = \events$309 [16];
+  assign \events$309.ca_no_answer  = \events$309 [17];
+  assign \events$309.ca_refused  = \events$309 [18];
+  assign \events$309.ca_aborted  = \events$309 [19];
+  assign \events$309.ca_data_fault  = \events$309 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -1635,60 +1659,60 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$318.status  = \result$318 [3:0];
-  assign \result$318.timestamp  = \result$318 [35:4];
-  assign \result$318.line_delay  = \result$318 [48:36];
-  assign \result$318.cds  = \result$318 [49];
-  assign \result$318.noise_events  = \result$318 [53:50];
-  assign \result$318.delay_settled  = \result$318 [54];
-  assign \result$318.settled_delay  = \result$318 [67:55];
-  assign \result$318.delay_spread  = \result$318 [75:68];
-  assign \result$318.word0  = \result$318 [133:76];
-  assign \result$318.word0.position  = \result$318 [130:76];
-  assign \result$318.word0.ne  = \result$318 [131];
-  assign \result$318.word0.nw  = \result$318 [132];
-  assign \result$318.word0.crc_ok  = \result$318 [133];
-  assign \result$318.word1  = \result$318 [176:134];
-  assign \result$318.word1.position  = \result$318 [173:134];
-  assign \result$318.word1.ne  = \result$318 [174];
-  assign \result$318.word1.nw  = \result$318 [175];
-  assign \result$318.word1.crc_ok  = \result$318 [176];
-  assign \result$318.lc  = \result$318 [182:177];
-  assign \result$318.lc_repeat  = \result$318 [183];
-  assign \result$318.lc_skip  = \result$318 [184];
-  assign \result$318.lc_zero  = \result$318 [185];
-  assign \result$318.spw_mismatch  = \result$318 [186];
-  assign \events$308 [20] = \$16 ;
-  assign \events$308 [19] = \$14 ;
-  assign \events$308 [18] = \$12 ;
-  assign \events$308 [17] = \$10 ;
-  assign \events$308 [16] = \$8 ;
-  assign \events$308 [15] = \event ;
-  assign \events$308 [14] = \$6 ;
-  assign \events$308 [13] = \$4 ;
-  assign \events$308 [12] = faults[6];
-  assign \events$308 [11] = faults[4];
-  assign \events$308 [10] = overrun;
-  assign \events$308 [9] = \$2 ;
-  assign \events$308 [8] = \lc_zero$278 ;
-  assign \events$308 [7] = \lc_skip$277 ;
-  assign \events$308 [6] = \lc_repeat$276 ;
-  assign \events$308 [5] = faults[3];
-  assign \events$308 [4] = faults[2];
-  assign \events$308 [3] = faults[1];
-  assign \events$308 [2] = faults[0];
-  assign \events$308 [1] = crc_error[1];
-  assign \events$308 [0] = crc_error[0];
+  assign \result$319.status  = \result$319 [3:0];
+  assign \result$319.timestamp  = \result$319 [35:4];
+  assign \result$319.line_delay  = \result$319 [48:36];
+  assign \result$319.cds  = \result$319 [49];
+  assign \result$319.noise_events  = \result$319 [53:50];
+  assign \result$319.delay_settled  = \result$319 [54];
+  assign \result$319.settled_delay  = \result$319 [67:55];
+  assign \result$319.delay_spread  = \result$319 [75:68];
+  assign \result$319.word0  = \result$319 [133:76];
+  assign \result$319.word0.position  = \result$319 [130:76];
+  assign \result$319.word0.ne  = \result$319 [131];
+  assign \result$319.word0.nw  = \result$319 [132];
+  assign \result$319.word0.crc_ok  = \result$319 [133];
+  assign \result$319.word1  = \result$319 [176:134];
+  assign \result$319.word1.position  = \result$319 [173:134];
+  assign \result$319.word1.ne  = \result$319 [174];
+  assign \result$319.word1.nw  = \result$319 [175];
+  assign \result$319.word1.crc_ok  = \result$319 [176];
+  assign \result$319.lc  = \result$319 [182:177];
+  assign \result$319.lc_repeat  = \result$319 [183];
+  assign \result$319.lc_skip  = \result$319 [184];
+  assign \result$319.lc_zero  = \result$319 [185];
+  assign \result$319.spw_mismatch  = \result$319 [186];
+  assign \events$309 [20] = \$16 ;
+  assign \events$309 [19] = \$14 ;
+  assign \events$309 [18] = \$12 ;
+  assign \events$309 [17] = \$10 ;
+  assign \events$309 [16] = \$8 ;
+  assign \events$309 [15] = \event ;
+  assign \events$309 [14] = \$6 ;
+  assign \events$309 [13] = \$4 ;
+  assign \events$309 [12] = faults[6];
+  assign \events$309 [11] = faults[4];
+  assign \events$309 [10] = overrun;
+  assign \events$309 [9] = \$2 ;
+  assign \events$309 [8] = \lc_zero$279 ;
+  assign \events$309 [7] = \lc_skip$278 ;
+  assign \events$309 [6] = \lc_repeat$277 ;
+  assign \events$309 [5] = faults[3];
+  assign \events$309 [4] = faults[2];
+  assign \events$309 [3] = faults[1];
+  assign \events$309 [2] = faults[0];
+  assign \events$309 [1] = crc_error[1];
+  assign \events$309 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$287 [17] = ca_write;
-  assign \request$287 [16:10] = ca_count;
-  assign \request$287 [9:3] = ca_address;
-  assign \request$287 [2:0] = ca_slave_id;
+  assign \request$288 [17] = ca_write;
+  assign \request$288 [16:10] = ca_count;
+  assign \request$288 [9:3] = ca_address;
+  assign \request$288 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[186] = \spw_mismatch$283 ;
-  assign frame[176] = \$22 ;
+  assign frame[186] = \spw_mismatch$284 ;
+  assign frame[176] = \$24 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
   assign frame[173:134] = spw;
@@ -1696,17 +1720,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign frame[132] = nw[0];
   assign frame[131] = ne[0];
   assign frame[130:76] = data0;
-  assign frame[185] = \lc_zero$278 ;
-  assign frame[184] = \lc_skip$277 ;
-  assign frame[183] = \lc_repeat$276 ;
+  assign frame[185] = \lc_zero$279 ;
+  assign frame[184] = \lc_skip$278 ;
+  assign frame[183] = \lc_repeat$277 ;
   assign frame[182:177] = \lc$201 ;
   assign frame[75:68] = spread;
-  assign frame[67:55] = \settled_delay$274 ;
+  assign frame[67:55] = \settled_delay$275 ;
   assign frame[54] = settled;
   assign frame[53:50] = events;
-  assign frame[49] = \cds$271 ;
+  assign frame[49] = \cds$272 ;
   assign frame[48:36] = delay;
-  assign frame[3:0] = \status$270 ;
+  assign frame[3:0] = \status$271 ;
   assign \words$236 [21:11] = cycle[205:195];
   assign \words$236 [10:0] = cycle[155:145];
   assign words[21:11] = cycle[205:195];
@@ -5216,32 +5240,36 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
-  wire \$101 ;
-  wire \$102 ;
+  wire [1:0] \$101 ;
+  wire [1:0] \$102 ;
   wire \$103 ;
-  reg \$104 ;
-  reg \$105 ;
-  reg [15:0] \$106 ;
-  reg \$107 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
   reg \$108 ;
-  reg [15:0] \$109 ;
+  reg \$109 ;
   wire [1:0] \$11 ;
-  reg [2:0] \$110 ;
+  reg [15:0] \$110 ;
   reg \$111 ;
-  reg [6:0] \$112 ;
-  reg \$113 ;
-  reg \$114 ;
+  reg \$112 ;
+  reg [15:0] \$113 ;
+  reg [2:0] \$114 ;
   reg \$115 ;
-  reg \$116 ;
+  reg [6:0] \$116 ;
   reg \$117 ;
   reg \$118 ;
-  reg [54:0] \$119 ;
+  reg \$119 ;
   wire [6:0] \$12 ;
-  reg [1:0] \$120 ;
-  reg [1:0] \$121 ;
-  reg [39:0] \$122 ;
-  reg [5:0] \$123 ;
-  reg [39:0] \$124 ;
+  reg \$120 ;
+  reg \$121 ;
+  reg \$122 ;
+  reg [54:0] \$123 ;
+  reg [1:0] \$124 ;
+  reg [1:0] \$125 ;
+  reg [39:0] \$126 ;
+  reg [5:0] \$127 ;
+  reg [39:0] \$128 ;
   wire \$13 ;
   reg [3:0] \$14 ;
   wire [6:0] \$15 ;
@@ -5332,14 +5360,15 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$92 ;
   wire \$93 ;
   wire \$94 ;
-  wire \$95 ;
+  wire [6:0] \$95 ;
   wire \$96 ;
-  wire [6:0] \$97 ;
+  wire \$97 ;
   wire \$98 ;
-  wire \$99 ;
+  wire [6:0] \$99 ;
+  reg at_cds;
   input \bit ;
   wire \bit ;
-  wire \bit$51 ;
+  wire \bit$52 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -5352,17 +5381,17 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire [1:0] crc_ok;
   input [75:0] crcs;
   wire [75:0] crcs;
-  wire [75:0] \crcs$46 ;
-  wire [37:0] \crcs$46[0] ;
-  wire \crcs$46[0].inverted ;
-  wire [15:0] \crcs$46[0].poly ;
-  wire [15:0] \crcs$46[0].start ;
-  wire [4:0] \crcs$46[0].width ;
-  wire [37:0] \crcs$46[1] ;
-  wire \crcs$46[1].inverted ;
-  wire [15:0] \crcs$46[1].poly ;
-  wire [15:0] \crcs$46[1].start ;
-  wire [4:0] \crcs$46[1].width ;
+  wire [75:0] \crcs$47 ;
+  wire [37:0] \crcs$47[0] ;
+  wire \crcs$47[0].inverted ;
+  wire [15:0] \crcs$47[0].poly ;
+  wire [15:0] \crcs$47[0].start ;
+  wire [4:0] \crcs$47[0].width ;
+  wire [37:0] \crcs$47[1] ;
+  wire \crcs$47[1].inverted ;
+  wire [15:0] \crcs$47[1].poly ;
+  wire [15:0] \crcs$47[1].start ;
+  wire [4:0] \crcs$47[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -5380,7 +5409,6 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   reg [2:0] decoder_fsm_state = 3'h0;
   output done;
   reg done = 1'h0;
-  wire first;
   reg [6:0] idx = 7'h00;
   reg in_crc = 1'h0;
   reg in_data = 1'h0;
@@ -5393,6 +5421,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   output lc_load;
   wire lc_load;
   wire [5:0] lc_next;
+  wire load;
+  wire load_word;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
@@ -5431,7 +5461,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
   (* init = 1'h0 *)
-  wire \word$54 ;
+  wire \word$55 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [21:0] words;
@@ -5542,19 +5572,23 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   assign \$93  = words[10] & data0[0];
   assign \$94  = \bit  ^ \$93 ;
   assign lc_load = in_word & in_lc;
-  assign \$95  = ! idx;
-  assign first = in_word & \$95 ;
-  assign \$96  = ~ in_crc;
-  assign \cover  = in_word & \$96 ;
+  assign \$95  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$96  = idx == \$95 ;
+  assign \$97  = in_word & \$96 ;
+  assign load = at_cds | \$97 ;
+  assign \$98  = ~ in_crc;
+  assign \cover  = in_word & \$98 ;
   assign check = in_word & in_crc;
-  assign \$97  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$98  = idx == \$97 ;
-  assign last = in_word & \$98 ;
-  assign \$99  = ! decoder_fsm_state;
-  assign \$100  = decoder_fsm_state == 1'h1;
-  assign \$101  = decoder_fsm_state == 2'h2;
-  assign \$102  = decoder_fsm_state == 2'h3;
-  assign \$103  = decoder_fsm_state == 3'h4;
+  assign \$99  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$100  = idx == \$99 ;
+  assign last = in_word & \$100 ;
+  assign \$101  = word + 1'h1;
+  assign \$102  = at_cds ? 2'h0 : \$101 ;
+  assign \$103  = ! decoder_fsm_state;
+  assign \$104  = decoder_fsm_state == 1'h1;
+  assign \$105  = decoder_fsm_state == 2'h2;
+  assign \$106  = decoder_fsm_state == 2'h3;
+  assign \$107  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -5584,55 +5618,56 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   always @(posedge clk)
     w1_lc_at0 <= \$34 ;
   always @(posedge clk)
-    done <= \$104 ;
+    done <= \$108 ;
   always @(posedge clk)
-    stopped <= \$105 ;
+    stopped <= \$109 ;
   always @(posedge clk)
-    slots <= \$106 ;
+    slots <= \$110 ;
   always @(posedge clk)
-    slots_full <= \$107 ;
+    slots_full <= \$111 ;
   always @(posedge clk)
-    started <= \$108 ;
+    started <= \$112 ;
   always @(posedge clk)
-    start_slot <= \$109 ;
+    start_slot <= \$113 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$110 ;
+    decoder_fsm_state <= \$114 ;
   always @(posedge clk)
-    cds <= \$111 ;
+    cds <= \$115 ;
   always @(posedge clk)
-    idx <= \$112 ;
+    idx <= \$116 ;
   always @(posedge clk)
-    in_data <= \$113 ;
+    in_data <= \$117 ;
   always @(posedge clk)
-    in_lc <= \$114 ;
+    in_lc <= \$118 ;
   always @(posedge clk)
-    in_crc <= \$115 ;
+    in_crc <= \$119 ;
   always @(posedge clk)
-    in_top <= \$116 ;
+    in_top <= \$120 ;
   always @(posedge clk)
-    word <= \$117 ;
+    word <= \$121 ;
   always @(posedge clk)
-    stop_bit <= \$118 ;
+    stop_bit <= \$122 ;
   always @(posedge clk)
-    data0 <= \$119 ;
+    data0 <= \$123 ;
   always @(posedge clk)
-    ne <= \$120 ;
+    ne <= \$124 ;
   always @(posedge clk)
-    nw <= \$121 ;
+    nw <= \$125 ;
   always @(posedge clk)
-    data1 <= \$122 ;
+    data1 <= \$126 ;
   always @(posedge clk)
-    lc <= \$123 ;
+    lc <= \$127 ;
   always @(posedge clk)
-    cpw_top <= \$124 ;
+    cpw_top <= \$128 ;
   \biss_master.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
     .clk(clk),
     .\cover (\cover ),
     .crcs(crcs),
-    .first(first),
     .last(last),
+    .load(load),
+    .load_word(\$102 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst),
@@ -5744,7 +5779,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$104  = 1'h0;
+    \$108  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -5754,73 +5789,9 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$104  = 1'h1;
+                \$108  = 1'h1;
               end
             end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$104  = 1'h0;
-    end
-    if (rst) begin
-      \$104  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$105  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$105  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$105  = 1'h0;
-    end
-    if (rst) begin
-      \$105  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$106  = slots;
-    if (\$36 ) begin
-      \$106  = \$37 [15:0];
-    end
-    if (receiver_clear) begin
-      \$106  = 16'h0000;
-    end
-    if (rst) begin
-      \$106  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$107  = slots_full;
-    if (\$36 ) begin
-      \$107  = \$38 ;
-    end
-    if (receiver_clear) begin
-      \$107  = 1'h0;
-    end
-    if (rst) begin
-      \$107  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$108  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$108  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -5832,158 +5803,125 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$109  = start_slot;
+    \$109  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$39 ) begin
-            \$109  = slots;
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$109  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$109  = 16'h0000;
+      \$109  = 1'h0;
     end
     if (rst) begin
-      \$109  = 16'h0000;
+      \$109  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$110  = decoder_fsm_state;
+    \$110  = slots;
+    if (\$36 ) begin
+      \$110  = \$37 [15:0];
+    end
+    if (receiver_clear) begin
+      \$110  = 16'h0000;
+    end
+    if (rst) begin
+      \$110  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$111  = slots_full;
+    if (\$36 ) begin
+      \$111  = \$38 ;
+    end
+    if (receiver_clear) begin
+      \$111  = 1'h0;
+    end
+    if (rst) begin
+      \$111  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$112  = started;
     casez (decoder_fsm_state)
       3'h0:
           if (\$39 ) begin
-            \$110  = 3'h1;
+            \$112  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$112  = 1'h0;
+    end
+    if (rst) begin
+      \$112  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$113  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$113  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$113  = 16'h0000;
+    end
+    if (rst) begin
+      \$113  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$114  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$114  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            \$110  = 3'h2;
+            \$114  = 3'h2;
           end
       3'h2:
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$110  = 3'h3;
+                \$114  = 3'h3;
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$110  = 3'h4;
+            \$114  = 3'h4;
           end
     endcase
     if (receiver_clear) begin
-      \$110  = 3'h0;
+      \$114  = 3'h0;
     end
     if (rst) begin
-      \$110  = 3'h0;
+      \$114  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$111  = cds;
+    \$115  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$111  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$111  = 1'h0;
-    end
-    if (rst) begin
-      \$111  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$112  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$112  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$112  = \$41 [6:0];
-            if (\$60 ) begin
-              \$112  = 7'h00;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$112  = 7'h00;
-    end
-    if (rst) begin
-      \$112  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$113  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$113  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$113  = \$44 ;
-            if (\$60 ) begin
-              \$113  = w1_data_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$113  = 1'h0;
-    end
-    if (rst) begin
-      \$113  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$114  = in_lc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$114  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$114  = \$50 ;
-            if (\$60 ) begin
-              \$114  = w1_lc_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$114  = 1'h0;
-    end
-    if (rst) begin
-      \$114  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$115  = in_crc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$115  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            \$115  = \$56 ;
+            \$115  = \bit ;
           end
     endcase
     if (receiver_clear) begin
@@ -5995,38 +5933,135 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$116  = in_top;
+    \$116  = idx;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$116  = \$40 ;
+            \$116  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$116  = \$58 ;
+            \$116  = \$41 [6:0];
             if (\$60 ) begin
-              \$116  = 1'h0;
+              \$116  = 7'h00;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$116  = 1'h0;
+      \$116  = 7'h00;
     end
     if (rst) begin
-      \$116  = 1'h0;
+      \$116  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$117  = word;
+    \$117  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$117  = 1'h0;
+            \$117  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$117  = \$44 ;
+            if (\$60 ) begin
+              \$117  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$117  = 1'h0;
+    end
+    if (rst) begin
+      \$117  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$118  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$118  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$118  = \$50 ;
+            if (\$60 ) begin
+              \$118  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$118  = 1'h0;
+    end
+    if (rst) begin
+      \$118  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$119  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$119  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$119  = \$56 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$119  = 1'h0;
+    end
+    if (rst) begin
+      \$119  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$120  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$120  = \$40 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$120  = \$58 ;
+            if (\$60 ) begin
+              \$120  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$120  = 1'h0;
+    end
+    if (rst) begin
+      \$120  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$121  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$121  = 1'h0;
           end
       3'h2:
           if (sample) begin
@@ -6034,21 +6069,21 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
               (* full_case = 32'd1 *)
               if (\$62 ) begin
               end else begin
-                \$117  = \$63 [0];
+                \$121  = \$63 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$117  = 1'h0;
+      \$121  = 1'h0;
     end
     if (rst) begin
-      \$117  = 1'h0;
+      \$121  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$118  = stop_bit;
+    \$122  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -6058,109 +6093,119 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
           /* empty */;
       3'h3:
           if (sample) begin
-            \$118  = \bit ;
+            \$122  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$118  = 1'h0;
+      \$122  = 1'h0;
     end
     if (rst) begin
-      \$118  = 1'h0;
+      \$122  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$119  = data0;
+    \$123  = data0;
     if (\$66 ) begin
-      \$119  = { data0[53:0], \$68  };
+      \$123  = { data0[53:0], \$68  };
     end
     if (receiver_clear) begin
-      \$119  = 55'h00000000000000;
+      \$123  = 55'h00000000000000;
     end
     if (rst) begin
-      \$119  = 55'h00000000000000;
+      \$123  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$120  = ne;
+    \$124  = ne;
     if (\$69 ) begin
-      \$120 [0] = 1'h1;
+      \$124 [0] = 1'h1;
     end else if (\$73 ) begin
-      \$120 [0] = \bit ;
+      \$124 [0] = \bit ;
     end
     if (\$83 ) begin
-      \$120 [1] = 1'h1;
+      \$124 [1] = 1'h1;
     end else if (\$87 ) begin
-      \$120 [1] = \bit ;
+      \$124 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$120  = 2'h0;
+      \$124  = 2'h0;
     end
     if (rst) begin
-      \$120  = 2'h0;
+      \$124  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$121  = nw;
+    \$125  = nw;
     if (\$69 ) begin
-      \$121 [0] = 1'h1;
+      \$125 [0] = 1'h1;
     end else if (\$73 ) begin
     end else if (\$77 ) begin
-      \$121 [0] = \bit ;
+      \$125 [0] = \bit ;
     end
     if (\$83 ) begin
-      \$121 [1] = 1'h1;
+      \$125 [1] = 1'h1;
     end else if (\$87 ) begin
     end else if (\$91 ) begin
-      \$121 [1] = \bit ;
+      \$125 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$121  = 2'h0;
+      \$125  = 2'h0;
     end
     if (rst) begin
-      \$121  = 2'h0;
+      \$125  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$122  = data1;
+    \$126  = data1;
     if (\$80 ) begin
-      \$122  = { data1[38:0], \$82  };
+      \$126  = { data1[38:0], \$82  };
     end
     if (receiver_clear) begin
-      \$122  = 40'h0000000000;
+      \$126  = 40'h0000000000;
     end
     if (rst) begin
-      \$122  = 40'h0000000000;
+      \$126  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$123  = lc;
+    \$127  = lc;
     if (lc_load) begin
-      \$123  = { lc[4:0], \bit  };
+      \$127  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$123  = 6'h00;
+      \$127  = 6'h00;
     end
     if (rst) begin
-      \$123  = 6'h00;
+      \$127  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$124  = cpw_top;
+    \$128  = cpw_top;
     if (\$92 ) begin
-      \$124  = { cpw_top[38:0], \$94  };
+      \$128  = { cpw_top[38:0], \$94  };
     end
     if (receiver_clear) begin
-      \$124  = 40'h0000000000;
+      \$128  = 40'h0000000000;
     end
     if (rst) begin
-      \$124  = 40'h0000000000;
+      \$128  = 40'h0000000000;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    at_cds = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          at_cds = sample;
+    endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
@@ -6175,10 +6220,11 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     endcase
   end
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$46  = crcs;
-  assign \bit$51  = \bit ;
+  assign \crcs$47  = crcs;
+  assign \bit$52  = \bit ;
   assign ok = crc_ok;
-  assign \word$54  = word;
+  assign \word$55  = word;
+  assign load_word = \$102 [0];
   assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -6201,74 +6247,59 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$46[0]  = crcs[37:0];
-  assign \crcs$46[0].width  = crcs[4:0];
-  assign \crcs$46[0].poly  = crcs[20:5];
-  assign \crcs$46[0].start  = crcs[36:21];
-  assign \crcs$46[0].inverted  = crcs[37];
-  assign \crcs$46[1]  = crcs[75:38];
-  assign \crcs$46[1].width  = crcs[42:38];
-  assign \crcs$46[1].poly  = crcs[58:43];
-  assign \crcs$46[1].start  = crcs[74:59];
-  assign \crcs$46[1].inverted  = crcs[75];
+  assign \crcs$47[0]  = crcs[37:0];
+  assign \crcs$47[0].width  = crcs[4:0];
+  assign \crcs$47[0].poly  = crcs[20:5];
+  assign \crcs$47[0].start  = crcs[36:21];
+  assign \crcs$47[0].inverted  = crcs[37];
+  assign \crcs$47[1]  = crcs[75:38];
+  assign \crcs$47[1].width  = crcs[42:38];
+  assign \crcs$47[1].poly  = crcs[58:43];
+  assign \crcs$47[1].start  = crcs[74:59];
+  assign \crcs$47[1].inverted  = crcs[75];
   assign \$78  = word;
   assign \$84  = word;
   assign \$88  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.crc (rst, first, \cover , check, last, \bit , crcs, receiver_clear, word, ok, clk);
+module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bit , crcs, receiver_clear, word, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   reg [15:0] \$1 ;
-  wire [15:0] \$10 ;
-  reg [15:0] \$11 ;
-  wire [15:0] \$12 ;
+  wire \$10 ;
+  reg \$11 ;
+  wire \$12 ;
   wire \$13 ;
   wire \$14 ;
-  reg [15:0] \$15 ;
-  wire [15:0] \$16 ;
-  reg [4:0] \$17 ;
+  wire \$15 ;
+  reg [4:0] \$16 ;
+  wire \$17 ;
   wire \$18 ;
-  wire \$19 ;
-  wire [15:0] \$2 ;
-  reg \$20 ;
+  reg \$19 ;
+  reg [4:0] \$2 ;
+  wire \$20 ;
   wire \$21 ;
   wire \$22 ;
   wire \$23 ;
   wire \$24 ;
-  wire \$25 ;
-  reg [15:0] \$26 ;
-  wire [15:0] \$27 ;
-  reg [4:0] \$28 ;
+  reg [4:0] \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  reg \$28 ;
   wire \$29 ;
-  reg [15:0] \$3 ;
+  wire \$3 ;
   wire \$30 ;
-  reg \$31 ;
+  wire \$31 ;
   wire \$32 ;
-  wire \$33 ;
-  wire \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
-  reg [15:0] \$38 ;
-  wire [15:0] \$39 ;
-  wire [15:0] \$4 ;
-  reg [4:0] \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  reg \$43 ;
-  wire \$44 ;
-  wire \$45 ;
-  wire \$46 ;
-  wire \$47 ;
-  reg [15:0] \$48 ;
-  reg \$49 ;
-  reg [4:0] \$5 ;
-  reg [1:0] \$50 ;
-  wire \$6 ;
-  wire \$7 ;
-  reg [15:0] \$8 ;
-  wire [15:0] \$9 ;
+  reg [15:0] \$33 ;
+  reg \$34 ;
+  reg [1:0] \$35 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  wire [15:0] \$6 ;
+  wire [15:0] \$7 ;
+  reg [4:0] \$8 ;
+  wire \$9 ;
   input \bit ;
   wire \bit ;
   input check;
@@ -6289,10 +6320,12 @@ module \biss_master.decoder.crc (rst, first, \cover , check, last, \bit , crcs, 
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  input first;
-  wire first;
   input last;
   wire last;
+  input load;
+  wire load;
+  input load_word;
+  wire load_word;
   reg mismatch = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
@@ -6303,79 +6336,38 @@ module \biss_master.decoder.crc (rst, first, \cover , check, last, \bit , crcs, 
   wire rst;
   input word;
   wire word;
+  assign \$3  = { \reg , 1'h0 } >> \$2 ;
+  assign \$4  = \$3  ^ \bit ;
+  assign \$6  = \$4  ? \$5  : 16'h0000;
+  assign \$7  = { \reg [14:0], 1'h0 } ^ \$6 ;
+  assign \$9  = { \reg , 1'h0 } >> \$8 ;
+  assign \$10  = \bit  ^ \$9 ;
+  assign \$12  = \$10  ^ \$11 ;
+  assign \$13  = check & \$12 ;
+  assign \$14  = mismatch | \$13 ;
+  assign \$15  = ! word;
+  assign \$17  = { \reg , 1'h0 } >> \$16 ;
+  assign \$18  = \bit  ^ \$17 ;
+  assign \$20  = \$18  ^ \$19 ;
+  assign \$21  = check & \$20 ;
+  assign \$22  = mismatch | \$21 ;
+  assign \$23  = ~ \$22 ;
+  assign \$26  = { \reg , 1'h0 } >> \$25 ;
+  assign \$27  = \bit  ^ \$26 ;
+  assign \$29  = \$27  ^ \$28 ;
+  assign \$30  = check & \$29 ;
+  assign \$31  = mismatch | \$30 ;
+  assign \$32  = ~ \$31 ;
   always @(posedge clk)
-    mismatch <= \$49 ;
+    \reg  <= \$33 ;
   always @(posedge clk)
-    ok <= \$50 ;
-  assign \$2  = first ? \$1  : \reg ;
-  assign \$4  = first ? \$3  : \reg ;
-  assign \$6  = { \$4 , 1'h0 } >> \$5 ;
-  assign \$7  = \$6  ^ \bit ;
-  assign \$9  = \$7  ? \$8  : 16'h0000;
-  assign \$10  = { \$2 [14:0], 1'h0 } ^ \$9 ;
-  assign \$12  = first ? \$11  : \reg ;
-  assign \$13  = \cover  | check;
-  assign \$14  = first ? 1'h0 : mismatch;
-  assign \$16  = first ? \$15  : \reg ;
-  assign \$18  = { \$16 , 1'h0 } >> \$17 ;
-  assign \$19  = \bit  ^ \$18 ;
-  assign \$21  = \$19  ^ \$20 ;
-  assign \$22  = check & \$21 ;
-  assign \$23  = \$14  | \$22 ;
-  assign \$24  = ! word;
-  assign \$25  = first ? 1'h0 : mismatch;
-  assign \$27  = first ? \$26  : \reg ;
-  assign \$29  = { \$27 , 1'h0 } >> \$28 ;
-  assign \$30  = \bit  ^ \$29 ;
-  assign \$32  = \$30  ^ \$31 ;
-  assign \$33  = check & \$32 ;
-  assign \$34  = \$25  | \$33 ;
-  assign \$35  = ~ \$34 ;
-  assign \$37  = first ? 1'h0 : mismatch;
-  assign \$39  = first ? \$38  : \reg ;
-  assign \$41  = { \$39 , 1'h0 } >> \$40 ;
-  assign \$42  = \bit  ^ \$41 ;
-  assign \$44  = \$42  ^ \$43 ;
-  assign \$45  = check & \$44 ;
-  assign \$46  = \$37  | \$45 ;
-  assign \$47  = ~ \$46 ;
+    mismatch <= \$34 ;
   always @(posedge clk)
-    \reg  <= \$48 ;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$49  = mismatch;
-    if (\$13 ) begin
-      \$49  = \$23 ;
-    end
-    if (receiver_clear) begin
-      \$49  = 1'h0;
-    end
-    if (rst) begin
-      \$49  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$50  = ok;
-    if (last) begin
-      if (\$24 ) begin
-        \$50 [0] = \$35 ;
-      end
-      if (\$36 ) begin
-        \$50 [1] = \$47 ;
-      end
-    end
-    if (receiver_clear) begin
-      \$50  = 2'h3;
-    end
-    if (rst) begin
-      \$50  = 2'h3;
-    end
-  end
+    ok <= \$35 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (load_word)
       1'h0:
           \$1  = crcs[36:21];
       1'h1:
@@ -6387,9 +6379,9 @@ module \biss_master.decoder.crc (rst, first, \cover , check, last, \bit , crcs, 
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$3  = crcs[36:21];
+          \$2  = crcs[4:0];
       1'h1:
-          \$3  = crcs[74:59];
+          \$2  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -6397,9 +6389,9 @@ module \biss_master.decoder.crc (rst, first, \cover , check, last, \bit , crcs, 
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$5  = crcs[4:0];
+          \$5  = crcs[20:5];
       1'h1:
-          \$5  = crcs[42:38];
+          \$5  = crcs[58:43];
     endcase
   end
   always @* begin
@@ -6407,9 +6399,9 @@ module \biss_master.decoder.crc (rst, first, \cover , check, last, \bit , crcs, 
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$8  = crcs[20:5];
+          \$8  = crcs[4:0];
       1'h1:
-          \$8  = crcs[58:43];
+          \$8  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -6417,9 +6409,9 @@ module \biss_master.decoder.crc (rst, first, \cover , check, last, \bit , crcs, 
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$11  = crcs[36:21];
+          \$11  = crcs[37];
       1'h1:
-          \$11  = crcs[74:59];
+          \$11  = crcs[75];
     endcase
   end
   always @* begin
@@ -6427,9 +6419,9 @@ module \biss_master.decoder.crc (rst, first, \cover , check, last, \bit , crcs, 
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$15  = crcs[36:21];
+          \$16  = crcs[4:0];
       1'h1:
-          \$15  = crcs[74:59];
+          \$16  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -6437,9 +6429,9 @@ module \biss_master.decoder.crc (rst, first, \cover , check, last, \bit , crcs, 
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$17  = crcs[4:0];
+          \$19  = crcs[37];
       1'h1:
-          \$17  = crcs[42:38];
+          \$19  = crcs[75];
     endcase
   end
   always @* begin
@@ -6447,9 +6439,9 @@ module \biss_master.decoder.crc (rst, first, \cover , check, last, \bit , crcs, 
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$20  = crcs[37];
+          \$25  = crcs[4:0];
       1'h1:
-          \$20  = crcs[75];
+          \$25  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -6457,74 +6449,60 @@ module \biss_master.decoder.crc (rst, first, \cover , check, last, \bit , crcs, 
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$26  = crcs[36:21];
+          \$28  = crcs[37];
       1'h1:
-          \$26  = crcs[74:59];
+          \$28  = crcs[75];
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$28  = crcs[4:0];
-      1'h1:
-          \$28  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$31  = crcs[37];
-      1'h1:
-          \$31  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$38  = crcs[36:21];
-      1'h1:
-          \$38  = crcs[74:59];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$40  = crcs[4:0];
-      1'h1:
-          \$40  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$43  = crcs[37];
-      1'h1:
-          \$43  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$48  = \reg ;
-    if (\cover ) begin
-      \$48  = \$10 ;
+    \$33  = \reg ;
+    if (load) begin
+      \$33  = \$1 ;
+    end else if (\cover ) begin
+      \$33  = \$7 ;
     end else if (check) begin
-      \$48  = { \$12 [14:0], 1'h0 };
+      \$33  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$48  = 16'h0000;
+      \$33  = 16'h0000;
     end
     if (rst) begin
-      \$48  = 16'h0000;
+      \$33  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$34  = mismatch;
+    if (load) begin
+      \$34  = 1'h0;
+    end else if (\cover ) begin
+    end else if (check) begin
+      \$34  = \$14 ;
+    end
+    if (receiver_clear) begin
+      \$34  = 1'h0;
+    end
+    if (rst) begin
+      \$34  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$35  = ok;
+    if (last) begin
+      if (\$15 ) begin
+        \$35 [0] = \$23 ;
+      end
+      if (\$24 ) begin
+        \$35 [1] = \$32 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$35  = 2'h3;
+    end
+    if (rst) begin
+      \$35  = 2'h3;
     end
   end
   assign \crcs[0]  = crcs[37:0];
@@ -6537,11 +6515,11 @@ module \biss_master.decoder.crc (rst, first, \cover , check, last, \bit , crcs, 
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \$36  = word;
+  assign \$24  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.delay_check (rst, enable, rearm, check, clean, \tolerance$8 , learn, delay, jump, spread, settled_delay, settled, clk);
+module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
@@ -10768,7 +10746,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1527$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1515$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -10810,8 +10788,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1527$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1527$0 ;
-  wire \port$1527$0 ;
+  input \port$1515$0 ;
+  wire \port$1515$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -10825,9 +10803,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1527$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1527$0  };
-  assign \$2  = { lc[4:0], \port$1527$0  } == last;
-  assign \$3  = { lc[4:0], \port$1527$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1515$0  };
+  assign \$2  = { lc[4:0], \port$1515$0  } == last;
+  assign \$3  = { lc[4:0], \port$1515$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -10937,7 +10915,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1527$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1527$0  };
+  assign lc_next = { lc[4:0], \port$1515$0  };
   assign zero = is_zero;
 endmodule
 
@@ -11493,7 +11471,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$995$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master.verdict (lc_skip_seen, noisy, \port$983$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
@@ -11645,8 +11623,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$995$0 , lc_check, lc_rep
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$995$0 ;
-  wire \port$995$0 ;
+  output \port$983$0 ;
+  wire \port$983$0 ;
   output report;
   wire report;
   input report_frame;
@@ -11752,7 +11730,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$995$0 , lc_check, lc_rep
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$995$0  = \$2 ;
+  assign \port$983$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -675,12 +675,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$4844$0 (\$8 ),
-    .\port$4857$0 (\$9 ),
-    .\port$4989$0 (\$10 ),
-    .\port$5395$0 (\$11 ),
-    .\port$5408$0 (\$12 ),
-    .\port$5540$0 (\$13 ),
+    .\port$4825$0 (\$8 ),
+    .\port$4838$0 (\$9 ),
+    .\port$4970$0 (\$10 ),
+    .\port$5381$0 (\$11 ),
+    .\port$5394$0 (\$12 ),
+    .\port$5526$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -756,9 +756,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$4844$0 (\$8 ),
-    .\port$4857$0 (\$9 ),
-    .\port$4989$0 (\$10 ),
+    .\port$4825$0 (\$8 ),
+    .\port$4838$0 (\$9 ),
+    .\port$4970$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -821,9 +821,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$454 ),
-    .\port$5395$0 (\$11 ),
-    .\port$5408$0 (\$12 ),
-    .\port$5540$0 (\$13 ),
+    .\port$5381$0 (\$11 ),
+    .\port$5394$0 (\$12 ),
+    .\port$5526$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$274 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1213,7 +1213,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_poly, ch0_cfg_crc0_width, ch0_cfg_crc0_inverted, ch0_cfg_crc0_start_start, ch0_cfg_crc1_poly, ch0_cfg_crc1_width, ch0_cfg_crc1_inverted
 , ch0_cfg_crc1_start_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$103 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc
 , ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_poly, ch1_cfg_crc0_width, ch1_cfg_crc0_inverted, ch1_cfg_crc0_start_start, ch1_cfg_crc1_poly, ch1_cfg_crc1_width, ch1_cfg_crc1_inverted
-, ch1_cfg_crc1_start_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4844$0 , \port$4857$0 , ch0__ca_done, \port$4989$0 , ch1__done_count, ch1__done, \port$5395$0 , \port$5408$0 , ch1__ca_done, \port$5540$0 , bus__r_addr);
+, ch1_cfg_crc1_start_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4825$0 , \port$4838$0 , ch0__ca_done, \port$4970$0 , ch1__done_count, ch1__done, \port$5381$0 , \port$5394$0 , ch1__ca_done, \port$5526$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2764,18 +2764,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$4844$0 ;
-  wire [186:0] \port$4844$0 ;
-  input [335:0] \port$4857$0 ;
-  wire [335:0] \port$4857$0 ;
-  input [9:0] \port$4989$0 ;
-  wire [9:0] \port$4989$0 ;
-  input [186:0] \port$5395$0 ;
-  wire [186:0] \port$5395$0 ;
-  input [335:0] \port$5408$0 ;
-  wire [335:0] \port$5408$0 ;
-  input [9:0] \port$5540$0 ;
-  wire [9:0] \port$5540$0 ;
+  input [186:0] \port$4825$0 ;
+  wire [186:0] \port$4825$0 ;
+  input [335:0] \port$4838$0 ;
+  wire [335:0] \port$4838$0 ;
+  input [9:0] \port$4970$0 ;
+  wire [9:0] \port$4970$0 ;
+  input [186:0] \port$5381$0 ;
+  wire [186:0] \port$5381$0 ;
+  input [335:0] \port$5394$0 ;
+  wire [335:0] \port$5394$0 ;
+  input [9:0] \port$5526$0 ;
+  wire [9:0] \port$5526$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2905,7 +2905,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$347  = \$345  | \$346 ;
   assign \$348  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$349  = \$347  | \$348 ;
-  assign \$350  = ch1_read_select_110 ? { 2'h0, \port$5395$0 [182:177], 4'h0, \port$5395$0 [186:183], 1'h0, \port$5395$0 [176:174], 1'h0, \port$5395$0 [133:131], 3'h0, \port$5395$0 [49], \port$5395$0 [3:0] } : 32'd0;
+  assign \$350  = ch1_read_select_110 ? { 2'h0, \port$5381$0 [182:177], 4'h0, \port$5381$0 [186:183], 1'h0, \port$5381$0 [176:174], 1'h0, \port$5381$0 [133:131], 3'h0, \port$5381$0 [49], \port$5381$0 [3:0] } : 32'd0;
   assign \$351  = \$349  | \$350 ;
   assign \$352  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$353  = \$351  | \$352 ;
@@ -2921,21 +2921,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$363  = \$361  | \$362 ;
   assign \$364  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$365  = \$363  | \$364 ;
-  assign \$366  = ch1_read_select_118 ? \port$5408$0 [31:0] : 32'd0;
+  assign \$366  = ch1_read_select_118 ? \port$5394$0 [31:0] : 32'd0;
   assign \$367  = \$365  | \$366 ;
-  assign \$368  = ch1_read_select_119 ? \port$5408$0 [63:32] : 32'd0;
+  assign \$368  = ch1_read_select_119 ? \port$5394$0 [63:32] : 32'd0;
   assign \$369  = \$367  | \$368 ;
-  assign \$370  = ch1_read_select_11a ? \port$5408$0 [95:64] : 32'd0;
+  assign \$370  = ch1_read_select_11a ? \port$5394$0 [95:64] : 32'd0;
   assign \$371  = \$369  | \$370 ;
-  assign \$372  = ch1_read_select_11b ? \port$5408$0 [127:96] : 32'd0;
+  assign \$372  = ch1_read_select_11b ? \port$5394$0 [127:96] : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$374  = ch1_read_select_11c ? \port$5408$0 [159:128] : 32'd0;
+  assign \$374  = ch1_read_select_11c ? \port$5394$0 [159:128] : 32'd0;
   assign \$375  = \$373  | \$374 ;
-  assign \$376  = ch1_read_select_11d ? \port$5408$0 [191:160] : 32'd0;
+  assign \$376  = ch1_read_select_11d ? \port$5394$0 [191:160] : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_11e ? \port$5408$0 [223:192] : 32'd0;
+  assign \$378  = ch1_read_select_11e ? \port$5394$0 [223:192] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_11f ? \port$5408$0 [255:224] : 32'd0;
+  assign \$380  = ch1_read_select_11f ? \port$5394$0 [255:224] : 32'd0;
   assign \$381  = \$379  | \$380 ;
   assign \$382  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_inverted, 3'h0, ch1_cfg_crc0_width, ch1_cfg_crc0_poly } : 32'd0;
   assign \$383  = \$381  | \$382 ;
@@ -2947,13 +2947,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$389  = \$387  | \$388 ;
   assign \$390  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$391  = \$389  | \$390 ;
-  assign \$394  = ch1_read_select_142 ? { 17'h00000, \port$5540$0 [9:3], 1'h0, \port$5540$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$394  = ch1_read_select_142 ? { 17'h00000, \port$5526$0 [9:3], 1'h0, \port$5526$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$395  = \$393  | \$394 ;
-  assign \$396  = ch1_read_select_143 ? \port$5408$0 [287:256] : 32'd0;
+  assign \$396  = ch1_read_select_143 ? \port$5394$0 [287:256] : 32'd0;
   assign \$397  = \$395  | \$396 ;
-  assign \$398  = ch1_read_select_144 ? \port$5408$0 [319:288] : 32'd0;
+  assign \$398  = ch1_read_select_144 ? \port$5394$0 [319:288] : 32'd0;
   assign \$399  = \$397  | \$398 ;
-  assign \$400  = ch1_read_select_145 ? { 16'h0000, \port$5408$0 [335:320] } : 32'd0;
+  assign \$400  = ch1_read_select_145 ? { 16'h0000, \port$5394$0 [335:320] } : 32'd0;
   assign \$401  = \$399  | \$400 ;
   assign \$402  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
   assign \$403  = \$401  | \$402 ;
@@ -3829,7 +3829,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$154  = \$152  | \$153 ;
   assign \$155  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$156  = \$154  | \$155 ;
-  assign \$157  = ch0_read_select_90 ? { 2'h0, \port$4844$0 [182:177], 4'h0, \port$4844$0 [186:183], 1'h0, \port$4844$0 [176:174], 1'h0, \port$4844$0 [133:131], 3'h0, \port$4844$0 [49], \port$4844$0 [3:0] } : 32'd0;
+  assign \$157  = ch0_read_select_90 ? { 2'h0, \port$4825$0 [182:177], 4'h0, \port$4825$0 [186:183], 1'h0, \port$4825$0 [176:174], 1'h0, \port$4825$0 [133:131], 3'h0, \port$4825$0 [49], \port$4825$0 [3:0] } : 32'd0;
   assign \$158  = \$156  | \$157 ;
   assign \$159  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$160  = \$158  | \$159 ;
@@ -3845,21 +3845,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$170  = \$168  | \$169 ;
   assign \$171  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$172  = \$170  | \$171 ;
-  assign \$173  = ch0_read_select_98 ? \port$4857$0 [31:0] : 32'd0;
+  assign \$173  = ch0_read_select_98 ? \port$4838$0 [31:0] : 32'd0;
   assign \$174  = \$172  | \$173 ;
-  assign \$175  = ch0_read_select_99 ? \port$4857$0 [63:32] : 32'd0;
+  assign \$175  = ch0_read_select_99 ? \port$4838$0 [63:32] : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_9a ? \port$4857$0 [95:64] : 32'd0;
+  assign \$177  = ch0_read_select_9a ? \port$4838$0 [95:64] : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_9b ? \port$4857$0 [127:96] : 32'd0;
+  assign \$179  = ch0_read_select_9b ? \port$4838$0 [127:96] : 32'd0;
   assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_9c ? \port$4857$0 [159:128] : 32'd0;
+  assign \$181  = ch0_read_select_9c ? \port$4838$0 [159:128] : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_9d ? \port$4857$0 [191:160] : 32'd0;
+  assign \$183  = ch0_read_select_9d ? \port$4838$0 [191:160] : 32'd0;
   assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_9e ? \port$4857$0 [223:192] : 32'd0;
+  assign \$185  = ch0_read_select_9e ? \port$4838$0 [223:192] : 32'd0;
   assign \$186  = \$184  | \$185 ;
-  assign \$187  = ch0_read_select_9f ? \port$4857$0 [255:224] : 32'd0;
+  assign \$187  = ch0_read_select_9f ? \port$4838$0 [255:224] : 32'd0;
   assign \$188  = \$186  | \$187 ;
   assign \$189  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_inverted, 3'h0, ch0_cfg_crc0_width, ch0_cfg_crc0_poly } : 32'd0;
   assign \$190  = \$188  | \$189 ;
@@ -3871,13 +3871,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$196  = \$194  | \$195 ;
   assign \$197  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$103 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$198  = \$196  | \$197 ;
-  assign \$201  = ch0_read_select_c2 ? { 17'h00000, \port$4989$0 [9:3], 1'h0, \port$4989$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$201  = ch0_read_select_c2 ? { 17'h00000, \port$4970$0 [9:3], 1'h0, \port$4970$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$202  = \$200  | \$201 ;
-  assign \$203  = ch0_read_select_c3 ? \port$4857$0 [287:256] : 32'd0;
+  assign \$203  = ch0_read_select_c3 ? \port$4838$0 [287:256] : 32'd0;
   assign \$204  = \$202  | \$203 ;
-  assign \$205  = ch0_read_select_c4 ? \port$4857$0 [319:288] : 32'd0;
+  assign \$205  = ch0_read_select_c4 ? \port$4838$0 [319:288] : 32'd0;
   assign \$206  = \$204  | \$205 ;
-  assign \$207  = ch0_read_select_c5 ? { 16'h0000, \port$4857$0 [335:320] } : 32'd0;
+  assign \$207  = ch0_read_select_c5 ? { 16'h0000, \port$4838$0 [335:320] } : 32'd0;
   assign \$208  = \$206  | \$207 ;
   assign \$209  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$210  = \$208  | \$209 ;
@@ -5029,7 +5029,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$621  = ch0_result_status_status_snapshot;
     if (\$128 ) begin
-      \$621  = \port$4844$0 [3:0];
+      \$621  = \port$4825$0 [3:0];
     end
     if (rst) begin
       \$621  = 4'h0;
@@ -5039,7 +5039,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$622  = ch0_result_status_cds_snapshot;
     if (\$128 ) begin
-      \$622  = \port$4844$0 [49];
+      \$622  = \port$4825$0 [49];
     end
     if (rst) begin
       \$622  = 1'h0;
@@ -5049,7 +5049,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$623  = ch0_result_status_w0_ne_snapshot;
     if (\$128 ) begin
-      \$623  = \port$4844$0 [131];
+      \$623  = \port$4825$0 [131];
     end
     if (rst) begin
       \$623  = 1'h0;
@@ -5059,7 +5059,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$624  = ch0_result_status_w0_nw_snapshot;
     if (\$128 ) begin
-      \$624  = \port$4844$0 [132];
+      \$624  = \port$4825$0 [132];
     end
     if (rst) begin
       \$624  = 1'h0;
@@ -5069,7 +5069,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$625  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$128 ) begin
-      \$625  = \port$4844$0 [133];
+      \$625  = \port$4825$0 [133];
     end
     if (rst) begin
       \$625  = 1'h0;
@@ -5079,7 +5079,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$626  = ch0_result_status_w1_ne_snapshot;
     if (\$128 ) begin
-      \$626  = \port$4844$0 [174];
+      \$626  = \port$4825$0 [174];
     end
     if (rst) begin
       \$626  = 1'h0;
@@ -5089,7 +5089,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$627  = ch0_result_status_w1_nw_snapshot;
     if (\$128 ) begin
-      \$627  = \port$4844$0 [175];
+      \$627  = \port$4825$0 [175];
     end
     if (rst) begin
       \$627  = 1'h0;
@@ -5099,7 +5099,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$628  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$128 ) begin
-      \$628  = \port$4844$0 [176];
+      \$628  = \port$4825$0 [176];
     end
     if (rst) begin
       \$628  = 1'h0;
@@ -5109,7 +5109,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$629  = ch0_result_status_lc_repeat_snapshot;
     if (\$128 ) begin
-      \$629  = \port$4844$0 [183];
+      \$629  = \port$4825$0 [183];
     end
     if (rst) begin
       \$629  = 1'h0;
@@ -5119,7 +5119,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$630  = ch0_result_status_lc_skip_snapshot;
     if (\$128 ) begin
-      \$630  = \port$4844$0 [184];
+      \$630  = \port$4825$0 [184];
     end
     if (rst) begin
       \$630  = 1'h0;
@@ -5129,7 +5129,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$631  = ch0_result_status_lc_zero_snapshot;
     if (\$128 ) begin
-      \$631  = \port$4844$0 [185];
+      \$631  = \port$4825$0 [185];
     end
     if (rst) begin
       \$631  = 1'h0;
@@ -5139,7 +5139,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$632  = ch0_result_status_spw_mismatch_snapshot;
     if (\$128 ) begin
-      \$632  = \port$4844$0 [186];
+      \$632  = \port$4825$0 [186];
     end
     if (rst) begin
       \$632  = 1'h0;
@@ -5149,7 +5149,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$633  = ch0_result_status_lc_snapshot;
     if (\$128 ) begin
-      \$633  = \port$4844$0 [182:177];
+      \$633  = \port$4825$0 [182:177];
     end
     if (rst) begin
       \$633  = 6'h00;
@@ -5169,7 +5169,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$635  = ch0_result_seq_line_delay_snapshot;
     if (\$128 ) begin
-      \$635  = \port$4844$0 [48:36];
+      \$635  = \port$4825$0 [48:36];
     end
     if (rst) begin
       \$635  = 13'h0000;
@@ -5179,7 +5179,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$636  = ch0_result_w0_lo_data_snapshot;
     if (\$128 ) begin
-      \$636  = \port$4844$0 [107:76];
+      \$636  = \port$4825$0 [107:76];
     end
     if (rst) begin
       \$636  = 32'd0;
@@ -5189,7 +5189,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$637  = ch0_result_w0_hi_data_snapshot;
     if (\$128 ) begin
-      \$637  = \port$4844$0 [130:108];
+      \$637  = \port$4825$0 [130:108];
     end
     if (rst) begin
       \$637  = 23'h000000;
@@ -5199,7 +5199,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$638  = ch0_result_w1_lo_data_snapshot;
     if (\$128 ) begin
-      \$638  = \port$4844$0 [165:134];
+      \$638  = \port$4825$0 [165:134];
     end
     if (rst) begin
       \$638  = 32'd0;
@@ -5209,7 +5209,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$639  = ch0_result_w1_hi_data_snapshot;
     if (\$128 ) begin
-      \$639  = \port$4844$0 [173:166];
+      \$639  = \port$4825$0 [173:166];
     end
     if (rst) begin
       \$639  = 8'h00;
@@ -5219,7 +5219,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$640  = ch0_result_timestamp_time_snapshot;
     if (\$128 ) begin
-      \$640  = \port$4844$0 [35:4];
+      \$640  = \port$4825$0 [35:4];
     end
     if (rst) begin
       \$640  = 32'd0;
@@ -5229,7 +5229,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$641  = ch0_result_line_noise_events_snapshot;
     if (\$128 ) begin
-      \$641  = \port$4844$0 [53:50];
+      \$641  = \port$4825$0 [53:50];
     end
     if (rst) begin
       \$641  = 4'h0;
@@ -5239,7 +5239,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$642  = ch0_result_line_delay_settled_snapshot;
     if (\$128 ) begin
-      \$642  = \port$4844$0 [54];
+      \$642  = \port$4825$0 [54];
     end
     if (rst) begin
       \$642  = 1'h0;
@@ -5249,7 +5249,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$643  = ch0_result_line_delay_spread_snapshot;
     if (\$128 ) begin
-      \$643  = \port$4844$0 [75:68];
+      \$643  = \port$4825$0 [75:68];
     end
     if (rst) begin
       \$643  = 8'h00;
@@ -5259,7 +5259,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$644  = ch0_result_line_settled_delay_snapshot;
     if (\$128 ) begin
-      \$644  = \port$4844$0 [67:55];
+      \$644  = \port$4825$0 [67:55];
     end
     if (rst) begin
       \$644  = 13'h0000;
@@ -6293,7 +6293,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$748  = ch1_result_status_status_snapshot;
     if (\$321 ) begin
-      \$748  = \port$5395$0 [3:0];
+      \$748  = \port$5381$0 [3:0];
     end
     if (rst) begin
       \$748  = 4'h0;
@@ -6303,7 +6303,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$749  = ch1_result_status_cds_snapshot;
     if (\$321 ) begin
-      \$749  = \port$5395$0 [49];
+      \$749  = \port$5381$0 [49];
     end
     if (rst) begin
       \$749  = 1'h0;
@@ -6313,7 +6313,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$750  = ch1_result_status_w0_ne_snapshot;
     if (\$321 ) begin
-      \$750  = \port$5395$0 [131];
+      \$750  = \port$5381$0 [131];
     end
     if (rst) begin
       \$750  = 1'h0;
@@ -6323,7 +6323,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$751  = ch1_result_status_w0_nw_snapshot;
     if (\$321 ) begin
-      \$751  = \port$5395$0 [132];
+      \$751  = \port$5381$0 [132];
     end
     if (rst) begin
       \$751  = 1'h0;
@@ -6333,7 +6333,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$752  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$321 ) begin
-      \$752  = \port$5395$0 [133];
+      \$752  = \port$5381$0 [133];
     end
     if (rst) begin
       \$752  = 1'h0;
@@ -6343,7 +6343,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$753  = ch1_result_status_w1_ne_snapshot;
     if (\$321 ) begin
-      \$753  = \port$5395$0 [174];
+      \$753  = \port$5381$0 [174];
     end
     if (rst) begin
       \$753  = 1'h0;
@@ -6353,7 +6353,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$754  = ch1_result_status_w1_nw_snapshot;
     if (\$321 ) begin
-      \$754  = \port$5395$0 [175];
+      \$754  = \port$5381$0 [175];
     end
     if (rst) begin
       \$754  = 1'h0;
@@ -6363,7 +6363,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$755  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$321 ) begin
-      \$755  = \port$5395$0 [176];
+      \$755  = \port$5381$0 [176];
     end
     if (rst) begin
       \$755  = 1'h0;
@@ -6373,7 +6373,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$756  = ch1_result_status_lc_repeat_snapshot;
     if (\$321 ) begin
-      \$756  = \port$5395$0 [183];
+      \$756  = \port$5381$0 [183];
     end
     if (rst) begin
       \$756  = 1'h0;
@@ -6383,7 +6383,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$757  = ch1_result_status_lc_skip_snapshot;
     if (\$321 ) begin
-      \$757  = \port$5395$0 [184];
+      \$757  = \port$5381$0 [184];
     end
     if (rst) begin
       \$757  = 1'h0;
@@ -6393,7 +6393,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$758  = ch1_result_status_lc_zero_snapshot;
     if (\$321 ) begin
-      \$758  = \port$5395$0 [185];
+      \$758  = \port$5381$0 [185];
     end
     if (rst) begin
       \$758  = 1'h0;
@@ -6403,7 +6403,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$759  = ch1_result_status_spw_mismatch_snapshot;
     if (\$321 ) begin
-      \$759  = \port$5395$0 [186];
+      \$759  = \port$5381$0 [186];
     end
     if (rst) begin
       \$759  = 1'h0;
@@ -6413,7 +6413,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$760  = ch1_result_status_lc_snapshot;
     if (\$321 ) begin
-      \$760  = \port$5395$0 [182:177];
+      \$760  = \port$5381$0 [182:177];
     end
     if (rst) begin
       \$760  = 6'h00;
@@ -6433,7 +6433,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$762  = ch1_result_seq_line_delay_snapshot;
     if (\$321 ) begin
-      \$762  = \port$5395$0 [48:36];
+      \$762  = \port$5381$0 [48:36];
     end
     if (rst) begin
       \$762  = 13'h0000;
@@ -6443,7 +6443,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$763  = ch1_result_w0_lo_data_snapshot;
     if (\$321 ) begin
-      \$763  = \port$5395$0 [107:76];
+      \$763  = \port$5381$0 [107:76];
     end
     if (rst) begin
       \$763  = 32'd0;
@@ -6453,7 +6453,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$764  = ch1_result_w0_hi_data_snapshot;
     if (\$321 ) begin
-      \$764  = \port$5395$0 [130:108];
+      \$764  = \port$5381$0 [130:108];
     end
     if (rst) begin
       \$764  = 23'h000000;
@@ -6463,7 +6463,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$765  = ch1_result_w1_lo_data_snapshot;
     if (\$321 ) begin
-      \$765  = \port$5395$0 [165:134];
+      \$765  = \port$5381$0 [165:134];
     end
     if (rst) begin
       \$765  = 32'd0;
@@ -6473,7 +6473,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$766  = ch1_result_w1_hi_data_snapshot;
     if (\$321 ) begin
-      \$766  = \port$5395$0 [173:166];
+      \$766  = \port$5381$0 [173:166];
     end
     if (rst) begin
       \$766  = 8'h00;
@@ -6483,7 +6483,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$767  = ch1_result_timestamp_time_snapshot;
     if (\$321 ) begin
-      \$767  = \port$5395$0 [35:4];
+      \$767  = \port$5381$0 [35:4];
     end
     if (rst) begin
       \$767  = 32'd0;
@@ -6493,7 +6493,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$768  = ch1_result_line_noise_events_snapshot;
     if (\$321 ) begin
-      \$768  = \port$5395$0 [53:50];
+      \$768  = \port$5381$0 [53:50];
     end
     if (rst) begin
       \$768  = 4'h0;
@@ -6503,7 +6503,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$769  = ch1_result_line_delay_settled_snapshot;
     if (\$321 ) begin
-      \$769  = \port$5395$0 [54];
+      \$769  = \port$5381$0 [54];
     end
     if (rst) begin
       \$769  = 1'h0;
@@ -6513,7 +6513,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$770  = ch1_result_line_delay_spread_snapshot;
     if (\$321 ) begin
-      \$770  = \port$5395$0 [75:68];
+      \$770  = \port$5381$0 [75:68];
     end
     if (rst) begin
       \$770  = 8'h00;
@@ -6523,7 +6523,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$771  = ch1_result_line_settled_delay_snapshot;
     if (\$321 ) begin
-      \$771  = \port$5395$0 [67:55];
+      \$771  = \port$5381$0 [67:55];
     end
     if (rst) begin
       \$771  = 13'h0000;
@@ -6551,106 +6551,106 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$4844$0 [3:0];
-  assign ch0__cds = \port$4844$0 [49];
-  assign ch0__word0_ne = \port$4844$0 [131];
-  assign ch0__word0_nw = \port$4844$0 [132];
-  assign ch0__word0_crc_ok = \port$4844$0 [133];
-  assign ch0__word1_ne = \port$4844$0 [174];
-  assign ch0__word1_nw = \port$4844$0 [175];
-  assign ch0__word1_crc_ok = \port$4844$0 [176];
-  assign ch0__lc_repeat = \port$4844$0 [183];
-  assign ch0__lc_skip = \port$4844$0 [184];
-  assign ch0__lc_zero = \port$4844$0 [185];
-  assign ch0__spw_mismatch = \port$4844$0 [186];
-  assign ch0__lc = \port$4844$0 [182:177];
-  assign ch0__line_delay = \port$4844$0 [48:36];
-  assign ch0__word0_position = \port$4844$0 [130:76];
-  assign ch0__word1_position = \port$4844$0 [173:134];
-  assign ch0__timestamp = \port$4844$0 [35:4];
-  assign ch0__noise_events = \port$4844$0 [53:50];
-  assign ch0__delay_settled = \port$4844$0 [54];
-  assign ch0__delay_spread = \port$4844$0 [75:68];
-  assign ch0__settled_delay = \port$4844$0 [67:55];
+  assign ch0__status = \port$4825$0 [3:0];
+  assign ch0__cds = \port$4825$0 [49];
+  assign ch0__word0_ne = \port$4825$0 [131];
+  assign ch0__word0_nw = \port$4825$0 [132];
+  assign ch0__word0_crc_ok = \port$4825$0 [133];
+  assign ch0__word1_ne = \port$4825$0 [174];
+  assign ch0__word1_nw = \port$4825$0 [175];
+  assign ch0__word1_crc_ok = \port$4825$0 [176];
+  assign ch0__lc_repeat = \port$4825$0 [183];
+  assign ch0__lc_skip = \port$4825$0 [184];
+  assign ch0__lc_zero = \port$4825$0 [185];
+  assign ch0__spw_mismatch = \port$4825$0 [186];
+  assign ch0__lc = \port$4825$0 [182:177];
+  assign ch0__line_delay = \port$4825$0 [48:36];
+  assign ch0__word0_position = \port$4825$0 [130:76];
+  assign ch0__word1_position = \port$4825$0 [173:134];
+  assign ch0__timestamp = \port$4825$0 [35:4];
+  assign ch0__noise_events = \port$4825$0 [53:50];
+  assign ch0__delay_settled = \port$4825$0 [54];
+  assign ch0__delay_spread = \port$4825$0 [75:68];
+  assign ch0__settled_delay = \port$4825$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$4857$0 [15:0];
-  assign ch0__count_crc_word1 = \port$4857$0 [31:16];
-  assign ch0__count_no_ack = \port$4857$0 [47:32];
-  assign ch0__count_no_start = \port$4857$0 [63:48];
-  assign ch0__count_delay_range = \port$4857$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$4857$0 [95:80];
-  assign ch0__count_lc_repeat = \port$4857$0 [111:96];
-  assign ch0__count_lc_skip = \port$4857$0 [127:112];
-  assign ch0__count_lc_zero = \port$4857$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$4857$0 [159:144];
-  assign ch0__count_overrun = \port$4857$0 [175:160];
-  assign ch0__count_aborted = \port$4857$0 [191:176];
-  assign ch0__count_no_stop = \port$4857$0 [207:192];
-  assign ch0__count_noisy_line = \port$4857$0 [223:208];
-  assign ch0__count_delay_jump = \port$4857$0 [239:224];
-  assign ch0__count_noise_event = \port$4857$0 [255:240];
-  assign ch0__ca_status = \port$4989$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4989$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$4857$0 [271:256];
-  assign ch0__count_ca_no_answer = \port$4857$0 [287:272];
-  assign ch0__count_ca_refused = \port$4857$0 [303:288];
-  assign ch0__count_ca_aborted = \port$4857$0 [319:304];
-  assign ch0__count_ca_data_fault = \port$4857$0 [335:320];
-  assign ch1__status = \port$5395$0 [3:0];
-  assign ch1__cds = \port$5395$0 [49];
-  assign ch1__word0_ne = \port$5395$0 [131];
-  assign ch1__word0_nw = \port$5395$0 [132];
-  assign ch1__word0_crc_ok = \port$5395$0 [133];
-  assign ch1__word1_ne = \port$5395$0 [174];
-  assign ch1__word1_nw = \port$5395$0 [175];
-  assign ch1__word1_crc_ok = \port$5395$0 [176];
-  assign ch1__lc_repeat = \port$5395$0 [183];
-  assign ch1__lc_skip = \port$5395$0 [184];
-  assign ch1__lc_zero = \port$5395$0 [185];
-  assign ch1__spw_mismatch = \port$5395$0 [186];
-  assign ch1__lc = \port$5395$0 [182:177];
-  assign ch1__line_delay = \port$5395$0 [48:36];
-  assign ch1__word0_position = \port$5395$0 [130:76];
-  assign ch1__word1_position = \port$5395$0 [173:134];
-  assign ch1__timestamp = \port$5395$0 [35:4];
-  assign ch1__noise_events = \port$5395$0 [53:50];
-  assign ch1__delay_settled = \port$5395$0 [54];
-  assign ch1__delay_spread = \port$5395$0 [75:68];
-  assign ch1__settled_delay = \port$5395$0 [67:55];
+  assign ch0__count_crc_word0 = \port$4838$0 [15:0];
+  assign ch0__count_crc_word1 = \port$4838$0 [31:16];
+  assign ch0__count_no_ack = \port$4838$0 [47:32];
+  assign ch0__count_no_start = \port$4838$0 [63:48];
+  assign ch0__count_delay_range = \port$4838$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$4838$0 [95:80];
+  assign ch0__count_lc_repeat = \port$4838$0 [111:96];
+  assign ch0__count_lc_skip = \port$4838$0 [127:112];
+  assign ch0__count_lc_zero = \port$4838$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$4838$0 [159:144];
+  assign ch0__count_overrun = \port$4838$0 [175:160];
+  assign ch0__count_aborted = \port$4838$0 [191:176];
+  assign ch0__count_no_stop = \port$4838$0 [207:192];
+  assign ch0__count_noisy_line = \port$4838$0 [223:208];
+  assign ch0__count_delay_jump = \port$4838$0 [239:224];
+  assign ch0__count_noise_event = \port$4838$0 [255:240];
+  assign ch0__ca_status = \port$4970$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4970$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$4838$0 [271:256];
+  assign ch0__count_ca_no_answer = \port$4838$0 [287:272];
+  assign ch0__count_ca_refused = \port$4838$0 [303:288];
+  assign ch0__count_ca_aborted = \port$4838$0 [319:304];
+  assign ch0__count_ca_data_fault = \port$4838$0 [335:320];
+  assign ch1__status = \port$5381$0 [3:0];
+  assign ch1__cds = \port$5381$0 [49];
+  assign ch1__word0_ne = \port$5381$0 [131];
+  assign ch1__word0_nw = \port$5381$0 [132];
+  assign ch1__word0_crc_ok = \port$5381$0 [133];
+  assign ch1__word1_ne = \port$5381$0 [174];
+  assign ch1__word1_nw = \port$5381$0 [175];
+  assign ch1__word1_crc_ok = \port$5381$0 [176];
+  assign ch1__lc_repeat = \port$5381$0 [183];
+  assign ch1__lc_skip = \port$5381$0 [184];
+  assign ch1__lc_zero = \port$5381$0 [185];
+  assign ch1__spw_mismatch = \port$5381$0 [186];
+  assign ch1__lc = \port$5381$0 [182:177];
+  assign ch1__line_delay = \port$5381$0 [48:36];
+  assign ch1__word0_position = \port$5381$0 [130:76];
+  assign ch1__word1_position = \port$5381$0 [173:134];
+  assign ch1__timestamp = \port$5381$0 [35:4];
+  assign ch1__noise_events = \port$5381$0 [53:50];
+  assign ch1__delay_settled = \port$5381$0 [54];
+  assign ch1__delay_spread = \port$5381$0 [75:68];
+  assign ch1__settled_delay = \port$5381$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$5408$0 [15:0];
-  assign ch1__count_crc_word1 = \port$5408$0 [31:16];
-  assign ch1__count_no_ack = \port$5408$0 [47:32];
-  assign ch1__count_no_start = \port$5408$0 [63:48];
-  assign ch1__count_delay_range = \port$5408$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$5408$0 [95:80];
-  assign ch1__count_lc_repeat = \port$5408$0 [111:96];
-  assign ch1__count_lc_skip = \port$5408$0 [127:112];
-  assign ch1__count_lc_zero = \port$5408$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$5408$0 [159:144];
-  assign ch1__count_overrun = \port$5408$0 [175:160];
-  assign ch1__count_aborted = \port$5408$0 [191:176];
-  assign ch1__count_no_stop = \port$5408$0 [207:192];
-  assign ch1__count_noisy_line = \port$5408$0 [223:208];
-  assign ch1__count_delay_jump = \port$5408$0 [239:224];
-  assign ch1__count_noise_event = \port$5408$0 [255:240];
-  assign ch1__ca_status = \port$5540$0 [2:0];
-  assign ch1__ca_bytes_done = \port$5540$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$5408$0 [271:256];
-  assign ch1__count_ca_no_answer = \port$5408$0 [287:272];
-  assign ch1__count_ca_refused = \port$5408$0 [303:288];
-  assign ch1__count_ca_aborted = \port$5408$0 [319:304];
-  assign ch1__count_ca_data_fault = \port$5408$0 [335:320];
+  assign ch1__count_crc_word0 = \port$5394$0 [15:0];
+  assign ch1__count_crc_word1 = \port$5394$0 [31:16];
+  assign ch1__count_no_ack = \port$5394$0 [47:32];
+  assign ch1__count_no_start = \port$5394$0 [63:48];
+  assign ch1__count_delay_range = \port$5394$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$5394$0 [95:80];
+  assign ch1__count_lc_repeat = \port$5394$0 [111:96];
+  assign ch1__count_lc_skip = \port$5394$0 [127:112];
+  assign ch1__count_lc_zero = \port$5394$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$5394$0 [159:144];
+  assign ch1__count_overrun = \port$5394$0 [175:160];
+  assign ch1__count_aborted = \port$5394$0 [191:176];
+  assign ch1__count_no_stop = \port$5394$0 [207:192];
+  assign ch1__count_noisy_line = \port$5394$0 [223:208];
+  assign ch1__count_delay_jump = \port$5394$0 [239:224];
+  assign ch1__count_noise_event = \port$5394$0 [255:240];
+  assign ch1__ca_status = \port$5526$0 [2:0];
+  assign ch1__ca_bytes_done = \port$5526$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$5394$0 [271:256];
+  assign ch1__count_ca_no_answer = \port$5394$0 [287:272];
+  assign ch1__count_ca_refused = \port$5394$0 [303:288];
+  assign ch1__count_ca_aborted = \port$5394$0 [319:304];
+  assign ch1__count_ca_data_fault = \port$5394$0 [335:320];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -7009,7 +7009,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly
-, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$4844$0 , \port$4857$0 , regs__ca_done, \port$4989$0 , ca_rbuf_addr
+, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$4825$0 , \port$4838$0 , regs__ca_done, \port$4970$0 , ca_rbuf_addr
 );
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
@@ -7169,12 +7169,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$4844$0 ;
-  wire [186:0] \port$4844$0 ;
-  output [335:0] \port$4857$0 ;
-  wire [335:0] \port$4857$0 ;
-  output [9:0] \port$4989$0 ;
-  wire [9:0] \port$4989$0 ;
+  output [186:0] \port$4825$0 ;
+  wire [186:0] \port$4825$0 ;
+  output [335:0] \port$4838$0 ;
+  wire [335:0] \port$4838$0 ;
+  output [9:0] \port$4970$0 ;
+  wire [9:0] \port$4970$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -7349,8 +7349,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_
   assign regs__frame_error = regs__done & \$1 ;
   \biss_master_axil.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$236 (ca_abort),
-    .\busy$290 (regs__busy),
+    .\abort$237 (ca_abort),
+    .\busy$291 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -7391,24 +7391,24 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_
     .cfg_w1_gray(cfg_w1_gray),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$264 (clear_counters),
+    .\clear$265 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$6 ),
-    .\done$293 (regs__done),
+    .\done$294 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$37 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$7 ),
-    .\result$298 (\$5 ),
+    .\result$299 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$234 (ca_start),
+    .\start$235 (ca_start),
     .trigger(trigger),
-    .\valid$295 (valid)
+    .\valid$296 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
@@ -7574,15 +7574,15 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$202  = ma;
   assign \slo$204  = slo;
-  assign \port$4844$0  = \$5 ;
-  assign \port$4857$0  = \$6 ;
-  assign \port$4989$0  = \$7 ;
+  assign \port$4825$0  = \$5 ;
+  assign \port$4838$0  = \$6 ;
+  assign \port$4970$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$290 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$264 , \periodic$37 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$291 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$265 , \periodic$37 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
 , cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start
-, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$234 , \abort$236 , abort, ma, \done$293 , \valid$295 , \result$298 , counts, ca_done, result, rbuf_addr);
+, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$235 , \abort$237 , abort, ma, \done$294 , \valid$296 , \result$299 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -7598,7 +7598,9 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$2 ;
   reg \$20 ;
   reg \$21 ;
-  wire \$22 ;
+  reg \$22 ;
+  reg \$23 ;
+  wire \$24 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -7606,10 +7608,12 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
+  (* init = 1'h0 *)
+  wire \$signal ;
   input abort;
   wire abort;
-  input \abort$236 ;
-  wire \abort$236 ;
+  input \abort$237 ;
+  wire \abort$237 ;
   wire \abort$49 ;
   wire abort_cycle;
   wire ack_expired;
@@ -7618,15 +7622,15 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [23:0] \ack_limit$102 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$322 ;
+  wire \bit$323 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$79 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$245 ;
-  output \busy$290 ;
-  wire \busy$290 ;
+  wire \busy$246 ;
+  output \busy$291 ;
+  wire \busy$291 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -7661,10 +7665,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$249 ;
+  wire \cdm$250 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$301 ;
+  wire \cds$302 ;
   wire [252:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -7785,12 +7789,14 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire cfg_w1_nenw;
   wire check;
   wire \check$160 ;
-  wire clean;
+  reg clean = 1'h0;
+  (* init = 1'h0 *)
   wire \clean$165 ;
+  wire \clean$324 ;
   wire clear;
   wire \clear$126 ;
-  input \clear$264 ;
-  wire \clear$264 ;
+  input \clear$265 ;
+  wire \clear$265 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -7847,7 +7853,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [39:0] \cpw_top$177 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$190 ;
+  wire [1:0] \crc_ok$191 ;
   wire [75:0] crcs;
   wire [75:0] \crcs$173 ;
   wire [37:0] \crcs$173[0] ;
@@ -7945,10 +7951,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$247 ;
-  output \done$293 ;
-  wire \done$293 ;
+  wire \done$248 ;
+  output \done$294 ;
   wire \done$294 ;
+  wire \done$295 ;
   wire doubtful;
   wire early;
   wire \early$65 ;
@@ -7957,30 +7963,30 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$259 ;
-  wire \events$259.aborted ;
-  wire \events$259.ca_aborted ;
-  wire \events$259.ca_crc4_error ;
-  wire \events$259.ca_data_fault ;
-  wire \events$259.ca_no_answer ;
-  wire \events$259.ca_refused ;
-  wire \events$259.crc_word0 ;
-  wire \events$259.crc_word1 ;
-  wire \events$259.delay_jump ;
-  wire \events$259.delay_range ;
-  wire \events$259.lc_repeat ;
-  wire \events$259.lc_skip ;
-  wire \events$259.lc_zero ;
-  wire \events$259.no_ack ;
-  wire \events$259.no_start ;
-  wire \events$259.no_stop ;
-  wire \events$259.noise_event ;
-  wire \events$259.noisy_line ;
-  wire \events$259.overrun ;
-  wire \events$259.slo_stuck_low ;
-  wire \events$259.spw_mismatch ;
+  wire [20:0] \events$260 ;
+  wire \events$260.aborted ;
+  wire \events$260.ca_aborted ;
+  wire \events$260.ca_crc4_error ;
+  wire \events$260.ca_data_fault ;
+  wire \events$260.ca_no_answer ;
+  wire \events$260.ca_refused ;
+  wire \events$260.crc_word0 ;
+  wire \events$260.crc_word1 ;
+  wire \events$260.delay_jump ;
+  wire \events$260.delay_range ;
+  wire \events$260.lc_repeat ;
+  wire \events$260.lc_skip ;
+  wire \events$260.lc_zero ;
+  wire \events$260.no_ack ;
+  wire \events$260.no_start ;
+  wire \events$260.no_stop ;
+  wire \events$260.noise_event ;
+  wire \events$260.noisy_line ;
+  wire \events$260.overrun ;
+  wire \events$260.slo_stuck_low ;
+  wire \events$260.spw_mismatch ;
   wire fault;
-  wire \fault$186 ;
+  wire \fault$187 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -8014,7 +8020,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$188 ;
+  wire [3:0] \fault_status$189 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -8024,7 +8030,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$220 ;
+  wire \first_rise$221 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -8086,21 +8092,21 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$137 ;
-  wire [5:0] \lc$314 ;
+  wire [5:0] \lc$315 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$139 ;
   wire lc_repeat;
-  wire \lc_repeat$315 ;
+  wire \lc_repeat$316 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$316 ;
+  wire \lc_skip$317 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$317 ;
+  wire \lc_zero$318 ;
   wire lc_zero_seen;
-  wire learn;
+  reg learn = 1'h0;
   wire level;
   wire \level$148 ;
   wire [3:0] limit;
@@ -8156,7 +8162,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \locked$63 ;
   output ma;
   wire ma;
-  wire \ma$289 ;
+  wire \ma$290 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$91 ;
@@ -8177,7 +8183,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$292 ;
+  wire \overrun$293 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$37 ;
@@ -8198,37 +8204,37 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$198 ;
+  wire \report$199 ;
   wire report_delay;
-  wire \report_delay$201 ;
+  wire \report_delay$202 ;
   wire report_frame;
-  wire \report_frame$185 ;
-  wire \report_frame$199 ;
+  wire \report_frame$186 ;
+  wire \report_frame$200 ;
   wire request;
-  wire [17:0] \request$222 ;
-  wire [6:0] \request$222.address ;
-  wire [6:0] \request$222.count ;
-  wire [2:0] \request$222.slave_id ;
-  wire \request$222.write ;
+  wire [17:0] \request$223 ;
+  wire [6:0] \request$223.address ;
+  wire [6:0] \request$223.count ;
+  wire [2:0] \request$223.slave_id ;
+  wire \request$223.write ;
   wire \request$48 ;
   wire restart;
   wire \restart$152 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$298 ;
-  wire [186:0] \result$298 ;
-  wire \result$298.cds ;
-  wire \result$298.delay_settled ;
-  wire [7:0] \result$298.delay_spread ;
-  wire [5:0] \result$298.lc ;
-  wire \result$298.lc_repeat ;
-  wire \result$298.lc_skip ;
-  wire \result$298.lc_zero ;
-  wire [12:0] \result$298.line_delay ;
-  wire [3:0] \result$298.noise_events ;
-  wire [12:0] \result$298.settled_delay ;
-  wire \result$298.spw_mismatch ;
+  output [186:0] \result$299 ;
+  wire [186:0] \result$299 ;
+  wire \result$299.cds ;
+  wire \result$299.delay_settled ;
+  wire [7:0] \result$299.delay_spread ;
+  wire [5:0] \result$299.lc ;
+  wire \result$299.lc_repeat ;
+  wire \result$299.lc_skip ;
+  wire \result$299.lc_zero ;
+  wire [12:0] \result$299.line_delay ;
+  wire [3:0] \result$299.noise_events ;
+  wire [12:0] \result$299.settled_delay ;
+  wire \result$299.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -8245,18 +8251,18 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$298.status ;
-  wire [31:0] \result$298.timestamp ;
-  wire [57:0] \result$298.word0 ;
-  wire \result$298.word0.crc_ok ;
-  wire \result$298.word0.ne ;
-  wire \result$298.word0.nw ;
-  wire [54:0] \result$298.word0.position ;
-  wire [42:0] \result$298.word1 ;
-  wire \result$298.word1.crc_ok ;
-  wire \result$298.word1.ne ;
-  wire \result$298.word1.nw ;
-  wire [39:0] \result$298.word1.position ;
+  wire [3:0] \result$299.status ;
+  wire [31:0] \result$299.timestamp ;
+  wire [57:0] \result$299.word0 ;
+  wire \result$299.word0.crc_ok ;
+  wire \result$299.word0.ne ;
+  wire \result$299.word0.nw ;
+  wire [54:0] \result$299.word0.position ;
+  wire [42:0] \result$299.word1 ;
+  wire \result$299.word1.crc_ok ;
+  wire \result$299.word1.ne ;
+  wire \result$299.word1.nw ;
+  wire [39:0] \result$299.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -8275,12 +8281,12 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$321 ;
+  wire \sample$322 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$304 ;
+  wire [12:0] \settled_delay$305 ;
   wire skip;
   input slo;
   wire slo;
@@ -8297,11 +8303,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$318 ;
+  wire \spw_mismatch$319 ;
   input start;
   wire start;
-  input \start$234 ;
-  wire \start$234 ;
+  input \start$235 ;
+  wire \start$235 ;
   wire \start$35 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$123 ;
@@ -8342,7 +8348,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$297 ;
+  wire [3:0] \status$298 ;
   wire stop_bit;
   wire \stop_bit$75 ;
   wire stopped;
@@ -8358,9 +8364,9 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire trigger;
   wire \trigger$46 ;
   wire valid;
-  wire \valid$203 ;
-  output \valid$295 ;
-  wire \valid$295 ;
+  wire \valid$204 ;
+  output \valid$296 ;
+  wire \valid$296 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -8432,11 +8438,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
   assign \check$160  = started & \$1 ;
-  assign \$2  = learn & spw_mismatch;
+  assign \$2  = report_frame & spw_mismatch;
   assign \$3  = status == 4'hd;
-  assign \$4  = learn & \$3 ;
+  assign \$4  = report_frame & \$3 ;
   assign \$5  = status == 4'he;
-  assign \$6  = learn & \$5 ;
+  assign \$6  = report_frame & \$5 ;
   assign \$7  = result[2:0] == 1'h1;
   assign \$8  = ca_done & \$7 ;
   assign \$9  = result[2:0] == 2'h2;
@@ -8447,16 +8453,20 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \$14  = ca_done & \$13 ;
   assign \$15  = result[2:0] == 3'h5;
   assign \$16  = ca_done & \$15 ;
-  assign \busy$290  = ~ idle;
+  assign \busy$291  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$17  = ~ \clear$126 ;
-  assign \$18  = \sample$321  & \$17 ;
+  assign \$18  = \sample$322  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
     \bit  <= \$20 ;
   always @(posedge clk)
     started_before <= \$21 ;
+  always @(posedge clk)
+    learn <= \$22 ;
+  always @(posedge clk)
+    clean <= \$23 ;
   \biss_master_axil.ch0.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -8503,7 +8513,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .quiet_live(quiet_live),
     .receiver_clear(\clear$126 ),
     .report_delay(report_delay),
-    .report_frame(learn),
+    .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
@@ -8519,10 +8529,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .waiting(watch)
   );
   \biss_master_axil.ch0.core.counters  counters (
-    .clear(\clear$264 ),
+    .clear(\clear$265 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$259 ),
+    .events(\events$260 ),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.decoder  decoder (
@@ -8605,7 +8615,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .words(\words$171 )
   );
   \biss_master_axil.ch0.core.register_access  register_access (
-    .abort(\abort$236 ),
+    .abort(\abort$237 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -8617,27 +8627,27 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$222 ),
+    .request(\request$223 ),
     .result(result),
     .rst(rst),
-    .start(\start$234 ),
+    .start(\start$235 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch0.core.results  results (
     .clk(clk),
-    .done(\done$293 ),
+    .done(\done$294 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
-    .report_frame(learn),
-    .result(\result$298 ),
+    .report_frame(report_frame),
+    .result(\result$299 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$295 )
+    .valid_out(\valid$296 )
   );
   \biss_master_axil.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$322 ),
+    .\bit (\bit$323 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -8647,7 +8657,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .noise(sampler_noise),
     .receiver_clear(\clear$126 ),
     .rst(rst),
-    .sample(\sample$321 ),
+    .sample(\sample$322 ),
     .slo(slo)
   );
   \biss_master_axil.ch0.core.scheduler  scheduler (
@@ -8668,7 +8678,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4513$0 (\bit ),
+    .\port$4489$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -8717,7 +8727,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   );
   \biss_master_axil.ch0.core.verdict  verdict (
     .cfg(cycle),
-    .clean(clean),
+    .clean(\clean$324 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
@@ -8732,9 +8742,9 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$1895$0 (\$22 ),
+    .\port$1883$0 (\$24 ),
     .report(report),
-    .report_frame(learn),
+    .report_frame(report_frame),
     .spw_match(spw_match),
     .spw_mismatch(spw_mismatch),
     .status(status),
@@ -8749,7 +8759,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$20  = \bit$322 ;
+    \$20  = \bit$323 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -8759,6 +8769,20 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     \$21  = started;
     if (rst) begin
       \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$22  = report_frame;
+    if (rst) begin
+      \$22  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$23  = \clean$324 ;
+    if (rst) begin
+      \$23  = 1'h0;
     end
   end
   assign \idle$33  = idle;
@@ -8831,7 +8855,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
   assign \delay$159  = delay;
-  assign report_frame = learn;
+  assign \$signal  = learn;
   assign \clean$165  = clean;
   assign \noisy$167  = noisy;
   assign jump = delay_jump;
@@ -8844,37 +8868,37 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \tolerance$181  = cycle[252:245];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$185  = learn;
-  assign \fault$186  = \restart$152 ;
-  assign \fault_status$188  = fault_status;
-  assign \crc_ok$190  = crc_ok;
+  assign \report_frame$186  = report_frame;
+  assign \fault$187  = \restart$152 ;
+  assign \fault_status$189  = fault_status;
+  assign \crc_ok$191  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$198  = report;
-  assign \report_frame$199  = learn;
-  assign \report_delay$201  = report_delay;
-  assign \valid$203  = valid;
-  assign word_crc_ok = { \$22 , crc_ok[0] };
-  assign \first_rise$220  = first_rise;
+  assign \report$199  = report;
+  assign \report_frame$200  = report_frame;
+  assign \report_delay$202  = report_delay;
+  assign \valid$204  = valid;
+  assign word_crc_ok = { \$24 , crc_ok[0] };
+  assign \first_rise$221  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$234 ;
-  assign ca_abort = \abort$236 ;
+  assign ca_start = \start$235 ;
+  assign ca_abort = \abort$237 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$245  = frames;
-  assign \done$247  = ca_done;
-  assign \cdm$249  = cdm;
+  assign \busy$246  = frames;
+  assign \done$248  = ca_done;
+  assign \cdm$250  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$264 ;
+  assign clear_counters = \clear$265 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -8896,31 +8920,31 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign count_ca_refused = counts[303:288];
   assign count_ca_aborted = counts[319:304];
   assign count_ca_data_fault = counts[335:320];
-  assign \ma$289  = ma;
-  assign \overrun$292  = overrun;
-  assign \done$294  = \done$293 ;
-  assign valid_out = \valid$295 ;
-  assign \status$297  = \result$298 [3:0];
-  assign timestamp = \result$298 [35:4];
-  assign line_delay = \result$298 [48:36];
-  assign \cds$301  = \result$298 [49];
-  assign noise_events = \result$298 [53:50];
-  assign delay_settled = \result$298 [54];
-  assign \settled_delay$304  = \result$298 [67:55];
-  assign delay_spread = \result$298 [75:68];
-  assign word0_position = \result$298 [130:76];
-  assign word0_ne = \result$298 [131];
-  assign word0_nw = \result$298 [132];
-  assign word0_crc_ok = \result$298 [133];
-  assign word1_position = \result$298 [173:134];
-  assign word1_ne = \result$298 [174];
-  assign word1_nw = \result$298 [175];
-  assign word1_crc_ok = \result$298 [176];
-  assign \lc$314  = \result$298 [182:177];
-  assign \lc_repeat$315  = \result$298 [183];
-  assign \lc_skip$316  = \result$298 [184];
-  assign \lc_zero$317  = \result$298 [185];
-  assign \spw_mismatch$318  = \result$298 [186];
+  assign \ma$290  = ma;
+  assign \overrun$293  = overrun;
+  assign \done$295  = \done$294 ;
+  assign valid_out = \valid$296 ;
+  assign \status$298  = \result$299 [3:0];
+  assign timestamp = \result$299 [35:4];
+  assign line_delay = \result$299 [48:36];
+  assign \cds$302  = \result$299 [49];
+  assign noise_events = \result$299 [53:50];
+  assign delay_settled = \result$299 [54];
+  assign \settled_delay$305  = \result$299 [67:55];
+  assign delay_spread = \result$299 [75:68];
+  assign word0_position = \result$299 [130:76];
+  assign word0_ne = \result$299 [131];
+  assign word0_nw = \result$299 [132];
+  assign word0_crc_ok = \result$299 [133];
+  assign word1_position = \result$299 [173:134];
+  assign word1_ne = \result$299 [174];
+  assign word1_nw = \result$299 [175];
+  assign word1_crc_ok = \result$299 [176];
+  assign \lc$315  = \result$299 [182:177];
+  assign \lc_repeat$316  = \result$299 [183];
+  assign \lc_skip$317  = \result$299 [184];
+  assign \lc_zero$318  = \result$299 [185];
+  assign \spw_mismatch$319  = \result$299 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -9103,36 +9127,36 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$222.slave_id  = \request$222 [2:0];
-  assign \request$222.address  = \request$222 [9:3];
-  assign \request$222.count  = \request$222 [16:10];
-  assign \request$222.write  = \request$222 [17];
+  assign \request$223.slave_id  = \request$223 [2:0];
+  assign \request$223.address  = \request$223 [9:3];
+  assign \request$223.count  = \request$223 [16:10];
+  assign \request$223.write  = \request$223 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$259.crc_word0  = \events$259 [0];
-  assign \events$259.crc_word1  = \events$259 [1];
-  assign \events$259.no_ack  = \events$259 [2];
-  assign \events$259.no_start  = \events$259 [3];
-  assign \events$259.delay_range  = \events$259 [4];
-  assign \events$259.slo_stuck_low  = \events$259 [5];
-  assign \events$259.lc_repeat  = \events$259 [6];
-  assign \events$259.lc_skip  = \events$259 [7];
-  assign \events$259.lc_zero  = \events$259 [8];
-  assign \events$259.spw_mismatch  = \events$259 [9];
-  assign \events$259.overrun  = \events$259 [10];
-  assign \events$259.aborted  = \events$259 [11];
-  assign \events$259.no_stop  = \events$259 [12];
-  assign \events$259.noisy_line  = \events$259 [13];
-  assign \events$259.delay_jump  = \events$259 [14];
-  assign \events$259.noise_event  = \events$259 [15];
-  assign \events$259.ca_crc4_error  = \events$259 [16];
-  assign \events$259.ca_no_answer  = \events$259 [17];
-  assign \events$259.ca_refused  = \events$259 [18];
-  assign \events$259.ca_aborted  = \events$259 [19];
-  assign \events$259.ca_data_fault  = \events$259 [20];
+  assign \events$260.crc_word0  = \events$260 [0];
+  assign \events$260.crc_word1  = \events$260 [1];
+  assign \events$260.no_ack  = \events$260 [2];
+  assign \events$260.no_start  = \events$260 [3];
+  assign \events$260.delay_range  = \events$260 [4];
+  assign \events$260.slo_stuck_low  = \events$260 [5];
+  assign \events$260.lc_repeat  = \events$260 [6];
+  assign \events$260.lc_skip  = \events$260 [7];
+  assign \events$260.lc_zero  = \events$260 [8];
+  assign \events$260.spw_mismatch  = \events$260 [9];
+  assign \events$260.overrun  = \events$260 [10];
+  assign \events$260.aborted  = \events$260 [11];
+  assign \events$260.no_stop  = \events$260 [12];
+  assign \events$260.noisy_line  = \events$260 [13];
+  assign \events$260.delay_jump  = \events$260 [14];
+  assign \events$260.noise_event  = \events$260 [15];
+  assign \events$260.ca_crc4_error  = \events$260 [16];
+  assign \events$260.ca_no_answer  = \events$260 [17];
+  assign \events$260.ca_refused  = \events$260 [18];
+  assign \events$260.ca_aborted  = \events$260 [19];
+  assign \events$260.ca_data_fault  = \events$260 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -9161,60 +9185,60 @@ module \biss_master_axil.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$298.status  = \result$298 [3:0];
-  assign \result$298.timestamp  = \result$298 [35:4];
-  assign \result$298.line_delay  = \result$298 [48:36];
-  assign \result$298.cds  = \result$298 [49];
-  assign \result$298.noise_events  = \result$298 [53:50];
-  assign \result$298.delay_settled  = \result$298 [54];
-  assign \result$298.settled_delay  = \result$298 [67:55];
-  assign \result$298.delay_spread  = \result$298 [75:68];
-  assign \result$298.word0  = \result$298 [133:76];
-  assign \result$298.word0.position  = \result$298 [130:76];
-  assign \result$298.word0.ne  = \result$298 [131];
-  assign \result$298.word0.nw  = \result$298 [132];
-  assign \result$298.word0.crc_ok  = \result$298 [133];
-  assign \result$298.word1  = \result$298 [176:134];
-  assign \result$298.word1.position  = \result$298 [173:134];
-  assign \result$298.word1.ne  = \result$298 [174];
-  assign \result$298.word1.nw  = \result$298 [175];
-  assign \result$298.word1.crc_ok  = \result$298 [176];
-  assign \result$298.lc  = \result$298 [182:177];
-  assign \result$298.lc_repeat  = \result$298 [183];
-  assign \result$298.lc_skip  = \result$298 [184];
-  assign \result$298.lc_zero  = \result$298 [185];
-  assign \result$298.spw_mismatch  = \result$298 [186];
-  assign \events$259 [20] = \$16 ;
-  assign \events$259 [19] = \$14 ;
-  assign \events$259 [18] = \$12 ;
-  assign \events$259 [17] = \$10 ;
-  assign \events$259 [16] = \$8 ;
-  assign \events$259 [15] = \event ;
-  assign \events$259 [14] = \$6 ;
-  assign \events$259 [13] = \$4 ;
-  assign \events$259 [12] = faults[6];
-  assign \events$259 [11] = faults[4];
-  assign \events$259 [10] = overrun;
-  assign \events$259 [9] = \$2 ;
-  assign \events$259 [8] = lc_zero;
-  assign \events$259 [7] = lc_skip;
-  assign \events$259 [6] = lc_repeat;
-  assign \events$259 [5] = faults[3];
-  assign \events$259 [4] = faults[2];
-  assign \events$259 [3] = faults[1];
-  assign \events$259 [2] = faults[0];
-  assign \events$259 [1] = crc_error[1];
-  assign \events$259 [0] = crc_error[0];
+  assign \result$299.status  = \result$299 [3:0];
+  assign \result$299.timestamp  = \result$299 [35:4];
+  assign \result$299.line_delay  = \result$299 [48:36];
+  assign \result$299.cds  = \result$299 [49];
+  assign \result$299.noise_events  = \result$299 [53:50];
+  assign \result$299.delay_settled  = \result$299 [54];
+  assign \result$299.settled_delay  = \result$299 [67:55];
+  assign \result$299.delay_spread  = \result$299 [75:68];
+  assign \result$299.word0  = \result$299 [133:76];
+  assign \result$299.word0.position  = \result$299 [130:76];
+  assign \result$299.word0.ne  = \result$299 [131];
+  assign \result$299.word0.nw  = \result$299 [132];
+  assign \result$299.word0.crc_ok  = \result$299 [133];
+  assign \result$299.word1  = \result$299 [176:134];
+  assign \result$299.word1.position  = \result$299 [173:134];
+  assign \result$299.word1.ne  = \result$299 [174];
+  assign \result$299.word1.nw  = \result$299 [175];
+  assign \result$299.word1.crc_ok  = \result$299 [176];
+  assign \result$299.lc  = \result$299 [182:177];
+  assign \result$299.lc_repeat  = \result$299 [183];
+  assign \result$299.lc_skip  = \result$299 [184];
+  assign \result$299.lc_zero  = \result$299 [185];
+  assign \result$299.spw_mismatch  = \result$299 [186];
+  assign \events$260 [20] = \$16 ;
+  assign \events$260 [19] = \$14 ;
+  assign \events$260 [18] = \$12 ;
+  assign \events$260 [17] = \$10 ;
+  assign \events$260 [16] = \$8 ;
+  assign \events$260 [15] = \event ;
+  assign \events$260 [14] = \$6 ;
+  assign \events$260 [13] = \$4 ;
+  assign \events$260 [12] = faults[6];
+  assign \events$260 [11] = faults[4];
+  assign \events$260 [10] = overrun;
+  assign \events$260 [9] = \$2 ;
+  assign \events$260 [8] = lc_zero;
+  assign \events$260 [7] = lc_skip;
+  assign \events$260 [6] = lc_repeat;
+  assign \events$260 [5] = faults[3];
+  assign \events$260 [4] = faults[2];
+  assign \events$260 [3] = faults[1];
+  assign \events$260 [2] = faults[0];
+  assign \events$260 [1] = crc_error[1];
+  assign \events$260 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$222 [17] = ca_write;
-  assign \request$222 [16:10] = ca_count;
-  assign \request$222 [9:3] = ca_address;
-  assign \request$222 [2:0] = ca_slave_id;
+  assign \request$223 [17] = ca_write;
+  assign \request$223 [16:10] = ca_count;
+  assign \request$223 [9:3] = ca_address;
+  assign \request$223 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
-  assign frame[176] = \$22 ;
+  assign frame[176] = \$24 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
   assign frame[173:134] = spw;
@@ -12742,32 +12766,36 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
-  wire \$101 ;
-  wire \$102 ;
+  wire [1:0] \$101 ;
+  wire [1:0] \$102 ;
   wire \$103 ;
-  reg \$104 ;
-  reg \$105 ;
-  reg [15:0] \$106 ;
-  reg \$107 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
   reg \$108 ;
-  reg [15:0] \$109 ;
+  reg \$109 ;
   wire [1:0] \$11 ;
-  reg [2:0] \$110 ;
+  reg [15:0] \$110 ;
   reg \$111 ;
-  reg [6:0] \$112 ;
-  reg \$113 ;
-  reg \$114 ;
+  reg \$112 ;
+  reg [15:0] \$113 ;
+  reg [2:0] \$114 ;
   reg \$115 ;
-  reg \$116 ;
+  reg [6:0] \$116 ;
   reg \$117 ;
   reg \$118 ;
-  reg [54:0] \$119 ;
+  reg \$119 ;
   wire [6:0] \$12 ;
-  reg [1:0] \$120 ;
-  reg [1:0] \$121 ;
-  reg [39:0] \$122 ;
-  reg [5:0] \$123 ;
-  reg [39:0] \$124 ;
+  reg \$120 ;
+  reg \$121 ;
+  reg \$122 ;
+  reg [54:0] \$123 ;
+  reg [1:0] \$124 ;
+  reg [1:0] \$125 ;
+  reg [39:0] \$126 ;
+  reg [5:0] \$127 ;
+  reg [39:0] \$128 ;
   wire \$13 ;
   reg [3:0] \$14 ;
   wire [6:0] \$15 ;
@@ -12858,14 +12886,15 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$92 ;
   wire \$93 ;
   wire \$94 ;
-  wire \$95 ;
+  wire [6:0] \$95 ;
   wire \$96 ;
-  wire [6:0] \$97 ;
+  wire \$97 ;
   wire \$98 ;
-  wire \$99 ;
+  wire [6:0] \$99 ;
+  reg at_cds;
   input \bit ;
   wire \bit ;
-  wire \bit$51 ;
+  wire \bit$52 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -12878,17 +12907,17 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire [1:0] crc_ok;
   input [75:0] crcs;
   wire [75:0] crcs;
-  wire [75:0] \crcs$46 ;
-  wire [37:0] \crcs$46[0] ;
-  wire \crcs$46[0].inverted ;
-  wire [15:0] \crcs$46[0].poly ;
-  wire [15:0] \crcs$46[0].start ;
-  wire [4:0] \crcs$46[0].width ;
-  wire [37:0] \crcs$46[1] ;
-  wire \crcs$46[1].inverted ;
-  wire [15:0] \crcs$46[1].poly ;
-  wire [15:0] \crcs$46[1].start ;
-  wire [4:0] \crcs$46[1].width ;
+  wire [75:0] \crcs$47 ;
+  wire [37:0] \crcs$47[0] ;
+  wire \crcs$47[0].inverted ;
+  wire [15:0] \crcs$47[0].poly ;
+  wire [15:0] \crcs$47[0].start ;
+  wire [4:0] \crcs$47[0].width ;
+  wire [37:0] \crcs$47[1] ;
+  wire \crcs$47[1].inverted ;
+  wire [15:0] \crcs$47[1].poly ;
+  wire [15:0] \crcs$47[1].start ;
+  wire [4:0] \crcs$47[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -12906,7 +12935,6 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg [2:0] decoder_fsm_state = 3'h0;
   output done;
   reg done = 1'h0;
-  wire first;
   reg [6:0] idx = 7'h00;
   reg in_crc = 1'h0;
   reg in_data = 1'h0;
@@ -12919,6 +12947,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   output lc_load;
   wire lc_load;
   wire [5:0] lc_next;
+  wire load;
+  wire load_word;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
@@ -12957,7 +12987,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
   (* init = 1'h0 *)
-  wire \word$54 ;
+  wire \word$55 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [21:0] words;
@@ -13068,19 +13098,23 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$93  = words[10] & data0[0];
   assign \$94  = \bit  ^ \$93 ;
   assign lc_load = in_word & in_lc;
-  assign \$95  = ! idx;
-  assign first = in_word & \$95 ;
-  assign \$96  = ~ in_crc;
-  assign \cover  = in_word & \$96 ;
+  assign \$95  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$96  = idx == \$95 ;
+  assign \$97  = in_word & \$96 ;
+  assign load = at_cds | \$97 ;
+  assign \$98  = ~ in_crc;
+  assign \cover  = in_word & \$98 ;
   assign check = in_word & in_crc;
-  assign \$97  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$98  = idx == \$97 ;
-  assign last = in_word & \$98 ;
-  assign \$99  = ! decoder_fsm_state;
-  assign \$100  = decoder_fsm_state == 1'h1;
-  assign \$101  = decoder_fsm_state == 2'h2;
-  assign \$102  = decoder_fsm_state == 2'h3;
-  assign \$103  = decoder_fsm_state == 3'h4;
+  assign \$99  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$100  = idx == \$99 ;
+  assign last = in_word & \$100 ;
+  assign \$101  = word + 1'h1;
+  assign \$102  = at_cds ? 2'h0 : \$101 ;
+  assign \$103  = ! decoder_fsm_state;
+  assign \$104  = decoder_fsm_state == 1'h1;
+  assign \$105  = decoder_fsm_state == 2'h2;
+  assign \$106  = decoder_fsm_state == 2'h3;
+  assign \$107  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -13110,55 +13144,56 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   always @(posedge clk)
     w1_lc_at0 <= \$34 ;
   always @(posedge clk)
-    done <= \$104 ;
+    done <= \$108 ;
   always @(posedge clk)
-    stopped <= \$105 ;
+    stopped <= \$109 ;
   always @(posedge clk)
-    slots <= \$106 ;
+    slots <= \$110 ;
   always @(posedge clk)
-    slots_full <= \$107 ;
+    slots_full <= \$111 ;
   always @(posedge clk)
-    started <= \$108 ;
+    started <= \$112 ;
   always @(posedge clk)
-    start_slot <= \$109 ;
+    start_slot <= \$113 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$110 ;
+    decoder_fsm_state <= \$114 ;
   always @(posedge clk)
-    cds <= \$111 ;
+    cds <= \$115 ;
   always @(posedge clk)
-    idx <= \$112 ;
+    idx <= \$116 ;
   always @(posedge clk)
-    in_data <= \$113 ;
+    in_data <= \$117 ;
   always @(posedge clk)
-    in_lc <= \$114 ;
+    in_lc <= \$118 ;
   always @(posedge clk)
-    in_crc <= \$115 ;
+    in_crc <= \$119 ;
   always @(posedge clk)
-    in_top <= \$116 ;
+    in_top <= \$120 ;
   always @(posedge clk)
-    word <= \$117 ;
+    word <= \$121 ;
   always @(posedge clk)
-    stop_bit <= \$118 ;
+    stop_bit <= \$122 ;
   always @(posedge clk)
-    data0 <= \$119 ;
+    data0 <= \$123 ;
   always @(posedge clk)
-    ne <= \$120 ;
+    ne <= \$124 ;
   always @(posedge clk)
-    nw <= \$121 ;
+    nw <= \$125 ;
   always @(posedge clk)
-    data1 <= \$122 ;
+    data1 <= \$126 ;
   always @(posedge clk)
-    lc <= \$123 ;
+    lc <= \$127 ;
   always @(posedge clk)
-    cpw_top <= \$124 ;
+    cpw_top <= \$128 ;
   \biss_master_axil.ch0.core.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
     .clk(clk),
     .\cover (\cover ),
     .crcs(crcs),
-    .first(first),
     .last(last),
+    .load(load),
+    .load_word(\$102 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst),
@@ -13270,7 +13305,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$104  = 1'h0;
+    \$108  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -13280,73 +13315,9 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$104  = 1'h1;
+                \$108  = 1'h1;
               end
             end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$104  = 1'h0;
-    end
-    if (rst) begin
-      \$104  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$105  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$105  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$105  = 1'h0;
-    end
-    if (rst) begin
-      \$105  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$106  = slots;
-    if (\$36 ) begin
-      \$106  = \$37 [15:0];
-    end
-    if (receiver_clear) begin
-      \$106  = 16'h0000;
-    end
-    if (rst) begin
-      \$106  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$107  = slots_full;
-    if (\$36 ) begin
-      \$107  = \$38 ;
-    end
-    if (receiver_clear) begin
-      \$107  = 1'h0;
-    end
-    if (rst) begin
-      \$107  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$108  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$108  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -13358,158 +13329,125 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$109  = start_slot;
+    \$109  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$39 ) begin
-            \$109  = slots;
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$109  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$109  = 16'h0000;
+      \$109  = 1'h0;
     end
     if (rst) begin
-      \$109  = 16'h0000;
+      \$109  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$110  = decoder_fsm_state;
+    \$110  = slots;
+    if (\$36 ) begin
+      \$110  = \$37 [15:0];
+    end
+    if (receiver_clear) begin
+      \$110  = 16'h0000;
+    end
+    if (rst) begin
+      \$110  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$111  = slots_full;
+    if (\$36 ) begin
+      \$111  = \$38 ;
+    end
+    if (receiver_clear) begin
+      \$111  = 1'h0;
+    end
+    if (rst) begin
+      \$111  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$112  = started;
     casez (decoder_fsm_state)
       3'h0:
           if (\$39 ) begin
-            \$110  = 3'h1;
+            \$112  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$112  = 1'h0;
+    end
+    if (rst) begin
+      \$112  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$113  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$113  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$113  = 16'h0000;
+    end
+    if (rst) begin
+      \$113  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$114  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$114  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            \$110  = 3'h2;
+            \$114  = 3'h2;
           end
       3'h2:
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$110  = 3'h3;
+                \$114  = 3'h3;
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$110  = 3'h4;
+            \$114  = 3'h4;
           end
     endcase
     if (receiver_clear) begin
-      \$110  = 3'h0;
+      \$114  = 3'h0;
     end
     if (rst) begin
-      \$110  = 3'h0;
+      \$114  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$111  = cds;
+    \$115  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$111  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$111  = 1'h0;
-    end
-    if (rst) begin
-      \$111  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$112  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$112  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$112  = \$41 [6:0];
-            if (\$60 ) begin
-              \$112  = 7'h00;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$112  = 7'h00;
-    end
-    if (rst) begin
-      \$112  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$113  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$113  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$113  = \$44 ;
-            if (\$60 ) begin
-              \$113  = w1_data_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$113  = 1'h0;
-    end
-    if (rst) begin
-      \$113  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$114  = in_lc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$114  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$114  = \$50 ;
-            if (\$60 ) begin
-              \$114  = w1_lc_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$114  = 1'h0;
-    end
-    if (rst) begin
-      \$114  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$115  = in_crc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$115  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            \$115  = \$56 ;
+            \$115  = \bit ;
           end
     endcase
     if (receiver_clear) begin
@@ -13521,38 +13459,135 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$116  = in_top;
+    \$116  = idx;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$116  = \$40 ;
+            \$116  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$116  = \$58 ;
+            \$116  = \$41 [6:0];
             if (\$60 ) begin
-              \$116  = 1'h0;
+              \$116  = 7'h00;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$116  = 1'h0;
+      \$116  = 7'h00;
     end
     if (rst) begin
-      \$116  = 1'h0;
+      \$116  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$117  = word;
+    \$117  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$117  = 1'h0;
+            \$117  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$117  = \$44 ;
+            if (\$60 ) begin
+              \$117  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$117  = 1'h0;
+    end
+    if (rst) begin
+      \$117  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$118  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$118  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$118  = \$50 ;
+            if (\$60 ) begin
+              \$118  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$118  = 1'h0;
+    end
+    if (rst) begin
+      \$118  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$119  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$119  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$119  = \$56 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$119  = 1'h0;
+    end
+    if (rst) begin
+      \$119  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$120  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$120  = \$40 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$120  = \$58 ;
+            if (\$60 ) begin
+              \$120  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$120  = 1'h0;
+    end
+    if (rst) begin
+      \$120  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$121  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$121  = 1'h0;
           end
       3'h2:
           if (sample) begin
@@ -13560,21 +13595,21 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
               (* full_case = 32'd1 *)
               if (\$62 ) begin
               end else begin
-                \$117  = \$63 [0];
+                \$121  = \$63 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$117  = 1'h0;
+      \$121  = 1'h0;
     end
     if (rst) begin
-      \$117  = 1'h0;
+      \$121  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$118  = stop_bit;
+    \$122  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -13584,109 +13619,119 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
           /* empty */;
       3'h3:
           if (sample) begin
-            \$118  = \bit ;
+            \$122  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$118  = 1'h0;
+      \$122  = 1'h0;
     end
     if (rst) begin
-      \$118  = 1'h0;
+      \$122  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$119  = data0;
+    \$123  = data0;
     if (\$66 ) begin
-      \$119  = { data0[53:0], \$68  };
+      \$123  = { data0[53:0], \$68  };
     end
     if (receiver_clear) begin
-      \$119  = 55'h00000000000000;
+      \$123  = 55'h00000000000000;
     end
     if (rst) begin
-      \$119  = 55'h00000000000000;
+      \$123  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$120  = ne;
+    \$124  = ne;
     if (\$69 ) begin
-      \$120 [0] = 1'h1;
+      \$124 [0] = 1'h1;
     end else if (\$73 ) begin
-      \$120 [0] = \bit ;
+      \$124 [0] = \bit ;
     end
     if (\$83 ) begin
-      \$120 [1] = 1'h1;
+      \$124 [1] = 1'h1;
     end else if (\$87 ) begin
-      \$120 [1] = \bit ;
+      \$124 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$120  = 2'h0;
+      \$124  = 2'h0;
     end
     if (rst) begin
-      \$120  = 2'h0;
+      \$124  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$121  = nw;
+    \$125  = nw;
     if (\$69 ) begin
-      \$121 [0] = 1'h1;
+      \$125 [0] = 1'h1;
     end else if (\$73 ) begin
     end else if (\$77 ) begin
-      \$121 [0] = \bit ;
+      \$125 [0] = \bit ;
     end
     if (\$83 ) begin
-      \$121 [1] = 1'h1;
+      \$125 [1] = 1'h1;
     end else if (\$87 ) begin
     end else if (\$91 ) begin
-      \$121 [1] = \bit ;
+      \$125 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$121  = 2'h0;
+      \$125  = 2'h0;
     end
     if (rst) begin
-      \$121  = 2'h0;
+      \$125  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$122  = data1;
+    \$126  = data1;
     if (\$80 ) begin
-      \$122  = { data1[38:0], \$82  };
+      \$126  = { data1[38:0], \$82  };
     end
     if (receiver_clear) begin
-      \$122  = 40'h0000000000;
+      \$126  = 40'h0000000000;
     end
     if (rst) begin
-      \$122  = 40'h0000000000;
+      \$126  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$123  = lc;
+    \$127  = lc;
     if (lc_load) begin
-      \$123  = { lc[4:0], \bit  };
+      \$127  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$123  = 6'h00;
+      \$127  = 6'h00;
     end
     if (rst) begin
-      \$123  = 6'h00;
+      \$127  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$124  = cpw_top;
+    \$128  = cpw_top;
     if (\$92 ) begin
-      \$124  = { cpw_top[38:0], \$94  };
+      \$128  = { cpw_top[38:0], \$94  };
     end
     if (receiver_clear) begin
-      \$124  = 40'h0000000000;
+      \$128  = 40'h0000000000;
     end
     if (rst) begin
-      \$124  = 40'h0000000000;
+      \$128  = 40'h0000000000;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    at_cds = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          at_cds = sample;
+    endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
@@ -13701,10 +13746,11 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$46  = crcs;
-  assign \bit$51  = \bit ;
+  assign \crcs$47  = crcs;
+  assign \bit$52  = \bit ;
   assign ok = crc_ok;
-  assign \word$54  = word;
+  assign \word$55  = word;
+  assign load_word = \$102 [0];
   assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -13727,74 +13773,59 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$46[0]  = crcs[37:0];
-  assign \crcs$46[0].width  = crcs[4:0];
-  assign \crcs$46[0].poly  = crcs[20:5];
-  assign \crcs$46[0].start  = crcs[36:21];
-  assign \crcs$46[0].inverted  = crcs[37];
-  assign \crcs$46[1]  = crcs[75:38];
-  assign \crcs$46[1].width  = crcs[42:38];
-  assign \crcs$46[1].poly  = crcs[58:43];
-  assign \crcs$46[1].start  = crcs[74:59];
-  assign \crcs$46[1].inverted  = crcs[75];
+  assign \crcs$47[0]  = crcs[37:0];
+  assign \crcs$47[0].width  = crcs[4:0];
+  assign \crcs$47[0].poly  = crcs[20:5];
+  assign \crcs$47[0].start  = crcs[36:21];
+  assign \crcs$47[0].inverted  = crcs[37];
+  assign \crcs$47[1]  = crcs[75:38];
+  assign \crcs$47[1].width  = crcs[42:38];
+  assign \crcs$47[1].poly  = crcs[58:43];
+  assign \crcs$47[1].start  = crcs[74:59];
+  assign \crcs$47[1].inverted  = crcs[75];
   assign \$78  = word;
   assign \$84  = word;
   assign \$88  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder.crc (rst, first, \cover , check, last, \bit , crcs, receiver_clear, word, ok, clk);
+module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, load_word, \bit , crcs, receiver_clear, word, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   reg [15:0] \$1 ;
-  wire [15:0] \$10 ;
-  reg [15:0] \$11 ;
-  wire [15:0] \$12 ;
+  wire \$10 ;
+  reg \$11 ;
+  wire \$12 ;
   wire \$13 ;
   wire \$14 ;
-  reg [15:0] \$15 ;
-  wire [15:0] \$16 ;
-  reg [4:0] \$17 ;
+  wire \$15 ;
+  reg [4:0] \$16 ;
+  wire \$17 ;
   wire \$18 ;
-  wire \$19 ;
-  wire [15:0] \$2 ;
-  reg \$20 ;
+  reg \$19 ;
+  reg [4:0] \$2 ;
+  wire \$20 ;
   wire \$21 ;
   wire \$22 ;
   wire \$23 ;
   wire \$24 ;
-  wire \$25 ;
-  reg [15:0] \$26 ;
-  wire [15:0] \$27 ;
-  reg [4:0] \$28 ;
+  reg [4:0] \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  reg \$28 ;
   wire \$29 ;
-  reg [15:0] \$3 ;
+  wire \$3 ;
   wire \$30 ;
-  reg \$31 ;
+  wire \$31 ;
   wire \$32 ;
-  wire \$33 ;
-  wire \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
-  reg [15:0] \$38 ;
-  wire [15:0] \$39 ;
-  wire [15:0] \$4 ;
-  reg [4:0] \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  reg \$43 ;
-  wire \$44 ;
-  wire \$45 ;
-  wire \$46 ;
-  wire \$47 ;
-  reg [15:0] \$48 ;
-  reg \$49 ;
-  reg [4:0] \$5 ;
-  reg [1:0] \$50 ;
-  wire \$6 ;
-  wire \$7 ;
-  reg [15:0] \$8 ;
-  wire [15:0] \$9 ;
+  reg [15:0] \$33 ;
+  reg \$34 ;
+  reg [1:0] \$35 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  wire [15:0] \$6 ;
+  wire [15:0] \$7 ;
+  reg [4:0] \$8 ;
+  wire \$9 ;
   input \bit ;
   wire \bit ;
   input check;
@@ -13815,10 +13846,12 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, first, \cover , check, last,
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  input first;
-  wire first;
   input last;
   wire last;
+  input load;
+  wire load;
+  input load_word;
+  wire load_word;
   reg mismatch = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
@@ -13829,79 +13862,38 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, first, \cover , check, last,
   wire rst;
   input word;
   wire word;
+  assign \$3  = { \reg , 1'h0 } >> \$2 ;
+  assign \$4  = \$3  ^ \bit ;
+  assign \$6  = \$4  ? \$5  : 16'h0000;
+  assign \$7  = { \reg [14:0], 1'h0 } ^ \$6 ;
+  assign \$9  = { \reg , 1'h0 } >> \$8 ;
+  assign \$10  = \bit  ^ \$9 ;
+  assign \$12  = \$10  ^ \$11 ;
+  assign \$13  = check & \$12 ;
+  assign \$14  = mismatch | \$13 ;
+  assign \$15  = ! word;
+  assign \$17  = { \reg , 1'h0 } >> \$16 ;
+  assign \$18  = \bit  ^ \$17 ;
+  assign \$20  = \$18  ^ \$19 ;
+  assign \$21  = check & \$20 ;
+  assign \$22  = mismatch | \$21 ;
+  assign \$23  = ~ \$22 ;
+  assign \$26  = { \reg , 1'h0 } >> \$25 ;
+  assign \$27  = \bit  ^ \$26 ;
+  assign \$29  = \$27  ^ \$28 ;
+  assign \$30  = check & \$29 ;
+  assign \$31  = mismatch | \$30 ;
+  assign \$32  = ~ \$31 ;
   always @(posedge clk)
-    mismatch <= \$49 ;
+    \reg  <= \$33 ;
   always @(posedge clk)
-    ok <= \$50 ;
-  assign \$2  = first ? \$1  : \reg ;
-  assign \$4  = first ? \$3  : \reg ;
-  assign \$6  = { \$4 , 1'h0 } >> \$5 ;
-  assign \$7  = \$6  ^ \bit ;
-  assign \$9  = \$7  ? \$8  : 16'h0000;
-  assign \$10  = { \$2 [14:0], 1'h0 } ^ \$9 ;
-  assign \$12  = first ? \$11  : \reg ;
-  assign \$13  = \cover  | check;
-  assign \$14  = first ? 1'h0 : mismatch;
-  assign \$16  = first ? \$15  : \reg ;
-  assign \$18  = { \$16 , 1'h0 } >> \$17 ;
-  assign \$19  = \bit  ^ \$18 ;
-  assign \$21  = \$19  ^ \$20 ;
-  assign \$22  = check & \$21 ;
-  assign \$23  = \$14  | \$22 ;
-  assign \$24  = ! word;
-  assign \$25  = first ? 1'h0 : mismatch;
-  assign \$27  = first ? \$26  : \reg ;
-  assign \$29  = { \$27 , 1'h0 } >> \$28 ;
-  assign \$30  = \bit  ^ \$29 ;
-  assign \$32  = \$30  ^ \$31 ;
-  assign \$33  = check & \$32 ;
-  assign \$34  = \$25  | \$33 ;
-  assign \$35  = ~ \$34 ;
-  assign \$37  = first ? 1'h0 : mismatch;
-  assign \$39  = first ? \$38  : \reg ;
-  assign \$41  = { \$39 , 1'h0 } >> \$40 ;
-  assign \$42  = \bit  ^ \$41 ;
-  assign \$44  = \$42  ^ \$43 ;
-  assign \$45  = check & \$44 ;
-  assign \$46  = \$37  | \$45 ;
-  assign \$47  = ~ \$46 ;
+    mismatch <= \$34 ;
   always @(posedge clk)
-    \reg  <= \$48 ;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    \$49  = mismatch;
-    if (\$13 ) begin
-      \$49  = \$23 ;
-    end
-    if (receiver_clear) begin
-      \$49  = 1'h0;
-    end
-    if (rst) begin
-      \$49  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    \$50  = ok;
-    if (last) begin
-      if (\$24 ) begin
-        \$50 [0] = \$35 ;
-      end
-      if (\$36 ) begin
-        \$50 [1] = \$47 ;
-      end
-    end
-    if (receiver_clear) begin
-      \$50  = 2'h3;
-    end
-    if (rst) begin
-      \$50  = 2'h3;
-    end
-  end
+    ok <= \$35 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (load_word)
       1'h0:
           \$1  = crcs[36:21];
       1'h1:
@@ -13913,9 +13905,9 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$3  = crcs[36:21];
+          \$2  = crcs[4:0];
       1'h1:
-          \$3  = crcs[74:59];
+          \$2  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -13923,9 +13915,9 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$5  = crcs[4:0];
+          \$5  = crcs[20:5];
       1'h1:
-          \$5  = crcs[42:38];
+          \$5  = crcs[58:43];
     endcase
   end
   always @* begin
@@ -13933,9 +13925,9 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$8  = crcs[20:5];
+          \$8  = crcs[4:0];
       1'h1:
-          \$8  = crcs[58:43];
+          \$8  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -13943,9 +13935,9 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$11  = crcs[36:21];
+          \$11  = crcs[37];
       1'h1:
-          \$11  = crcs[74:59];
+          \$11  = crcs[75];
     endcase
   end
   always @* begin
@@ -13953,9 +13945,9 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$15  = crcs[36:21];
+          \$16  = crcs[4:0];
       1'h1:
-          \$15  = crcs[74:59];
+          \$16  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -13963,9 +13955,9 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$17  = crcs[4:0];
+          \$19  = crcs[37];
       1'h1:
-          \$17  = crcs[42:38];
+          \$19  = crcs[75];
     endcase
   end
   always @* begin
@@ -13973,9 +13965,9 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$20  = crcs[37];
+          \$25  = crcs[4:0];
       1'h1:
-          \$20  = crcs[75];
+          \$25  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -13983,74 +13975,60 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$26  = crcs[36:21];
+          \$28  = crcs[37];
       1'h1:
-          \$26  = crcs[74:59];
+          \$28  = crcs[75];
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$28  = crcs[4:0];
-      1'h1:
-          \$28  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$31  = crcs[37];
-      1'h1:
-          \$31  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$38  = crcs[36:21];
-      1'h1:
-          \$38  = crcs[74:59];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$40  = crcs[4:0];
-      1'h1:
-          \$40  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$43  = crcs[37];
-      1'h1:
-          \$43  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    \$48  = \reg ;
-    if (\cover ) begin
-      \$48  = \$10 ;
+    \$33  = \reg ;
+    if (load) begin
+      \$33  = \$1 ;
+    end else if (\cover ) begin
+      \$33  = \$7 ;
     end else if (check) begin
-      \$48  = { \$12 [14:0], 1'h0 };
+      \$33  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$48  = 16'h0000;
+      \$33  = 16'h0000;
     end
     if (rst) begin
-      \$48  = 16'h0000;
+      \$33  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    \$34  = mismatch;
+    if (load) begin
+      \$34  = 1'h0;
+    end else if (\cover ) begin
+    end else if (check) begin
+      \$34  = \$14 ;
+    end
+    if (receiver_clear) begin
+      \$34  = 1'h0;
+    end
+    if (rst) begin
+      \$34  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    \$35  = ok;
+    if (last) begin
+      if (\$15 ) begin
+        \$35 [0] = \$23 ;
+      end
+      if (\$24 ) begin
+        \$35 [1] = \$32 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$35  = 2'h3;
+    end
+    if (rst) begin
+      \$35  = 2'h3;
     end
   end
   assign \crcs[0]  = crcs[37:0];
@@ -14063,11 +14041,11 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, first, \cover , check, last,
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \$36  = word;
+  assign \$24  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, clean, \tolerance$8 , learn, delay, jump, spread, settled_delay, settled, clk);
+module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
@@ -18294,7 +18272,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4513$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4489$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -18336,8 +18314,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4513$0 ;
-  wire \port$4513$0 ;
+  input \port$4489$0 ;
+  wire \port$4489$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -18351,9 +18329,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4513$0  };
-  assign \$2  = { lc[4:0], \port$4513$0  } == last;
-  assign \$3  = { lc[4:0], \port$4513$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4489$0  };
+  assign \$2  = { lc[4:0], \port$4489$0  } == last;
+  assign \$3  = { lc[4:0], \port$4489$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -18463,7 +18441,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4513$0  };
+  assign lc_next = { lc[4:0], \port$4489$0  };
   assign zero = is_zero;
 endmodule
 
@@ -19019,7 +18997,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1895$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1883$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
@@ -19171,8 +19149,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1895$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$1895$0 ;
-  wire \port$1895$0 ;
+  output \port$1883$0 ;
+  wire \port$1883$0 ;
   output report;
   wire report;
   input report_frame;
@@ -19278,7 +19256,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$1895$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1895$0  = \$2 ;
+  assign \port$1883$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -19319,7 +19297,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly
-, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5395$0 , \port$5408$0 , regs__ca_done, \port$5540$0 , ca_rbuf_addr
+, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5381$0 , \port$5394$0 , regs__ca_done, \port$5526$0 , ca_rbuf_addr
 );
   reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire \$1 ;
@@ -19479,12 +19457,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$5395$0 ;
-  wire [186:0] \port$5395$0 ;
-  output [335:0] \port$5408$0 ;
-  wire [335:0] \port$5408$0 ;
-  output [9:0] \port$5540$0 ;
-  wire [9:0] \port$5540$0 ;
+  output [186:0] \port$5381$0 ;
+  wire [186:0] \port$5381$0 ;
+  output [335:0] \port$5394$0 ;
+  wire [335:0] \port$5394$0 ;
+  output [9:0] \port$5526$0 ;
+  wire [9:0] \port$5526$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -19659,8 +19637,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_
   assign regs__frame_error = regs__done & \$1 ;
   \biss_master_axil.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$236 (ca_abort),
-    .\busy$290 (regs__busy),
+    .\abort$237 (ca_abort),
+    .\busy$291 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -19701,24 +19679,24 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_
     .cfg_w1_gray(cfg_w1_gray),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$264 (clear_counters),
+    .\clear$265 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$6 ),
-    .\done$293 (regs__done),
+    .\done$294 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$37 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$7 ),
-    .\result$298 (\$5 ),
+    .\result$299 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$234 (ca_start),
+    .\start$235 (ca_start),
     .trigger(trigger),
-    .\valid$295 (valid)
+    .\valid$296 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
@@ -19884,15 +19862,15 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$202  = ma;
   assign \slo$204  = slo;
-  assign \port$5395$0  = \$5 ;
-  assign \port$5408$0  = \$6 ;
-  assign \port$5540$0  = \$7 ;
+  assign \port$5381$0  = \$5 ;
+  assign \port$5394$0  = \$6 ;
+  assign \port$5526$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$290 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$264 , \periodic$37 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$291 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$265 , \periodic$37 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
 , cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start
-, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$234 , \abort$236 , abort, ma, \done$293 , \valid$295 , \result$298 , counts, ca_done, result, rbuf_addr);
+, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$235 , \abort$237 , abort, ma, \done$294 , \valid$296 , \result$299 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -19908,7 +19886,9 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$2 ;
   reg \$20 ;
   reg \$21 ;
-  wire \$22 ;
+  reg \$22 ;
+  reg \$23 ;
+  wire \$24 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -19916,10 +19896,12 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
+  (* init = 1'h0 *)
+  wire \$signal ;
   input abort;
   wire abort;
-  input \abort$236 ;
-  wire \abort$236 ;
+  input \abort$237 ;
+  wire \abort$237 ;
   wire \abort$49 ;
   wire abort_cycle;
   wire ack_expired;
@@ -19928,15 +19910,15 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [23:0] \ack_limit$102 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$322 ;
+  wire \bit$323 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$79 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$245 ;
-  output \busy$290 ;
-  wire \busy$290 ;
+  wire \busy$246 ;
+  output \busy$291 ;
+  wire \busy$291 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -19971,10 +19953,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$249 ;
+  wire \cdm$250 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$301 ;
+  wire \cds$302 ;
   wire [252:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -20095,12 +20077,14 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire cfg_w1_nenw;
   wire check;
   wire \check$160 ;
-  wire clean;
+  reg clean = 1'h0;
+  (* init = 1'h0 *)
   wire \clean$165 ;
+  wire \clean$324 ;
   wire clear;
   wire \clear$126 ;
-  input \clear$264 ;
-  wire \clear$264 ;
+  input \clear$265 ;
+  wire \clear$265 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -20157,7 +20141,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [39:0] \cpw_top$177 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$190 ;
+  wire [1:0] \crc_ok$191 ;
   wire [75:0] crcs;
   wire [75:0] \crcs$173 ;
   wire [37:0] \crcs$173[0] ;
@@ -20255,10 +20239,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$247 ;
-  output \done$293 ;
-  wire \done$293 ;
+  wire \done$248 ;
+  output \done$294 ;
   wire \done$294 ;
+  wire \done$295 ;
   wire doubtful;
   wire early;
   wire \early$65 ;
@@ -20267,30 +20251,30 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$259 ;
-  wire \events$259.aborted ;
-  wire \events$259.ca_aborted ;
-  wire \events$259.ca_crc4_error ;
-  wire \events$259.ca_data_fault ;
-  wire \events$259.ca_no_answer ;
-  wire \events$259.ca_refused ;
-  wire \events$259.crc_word0 ;
-  wire \events$259.crc_word1 ;
-  wire \events$259.delay_jump ;
-  wire \events$259.delay_range ;
-  wire \events$259.lc_repeat ;
-  wire \events$259.lc_skip ;
-  wire \events$259.lc_zero ;
-  wire \events$259.no_ack ;
-  wire \events$259.no_start ;
-  wire \events$259.no_stop ;
-  wire \events$259.noise_event ;
-  wire \events$259.noisy_line ;
-  wire \events$259.overrun ;
-  wire \events$259.slo_stuck_low ;
-  wire \events$259.spw_mismatch ;
+  wire [20:0] \events$260 ;
+  wire \events$260.aborted ;
+  wire \events$260.ca_aborted ;
+  wire \events$260.ca_crc4_error ;
+  wire \events$260.ca_data_fault ;
+  wire \events$260.ca_no_answer ;
+  wire \events$260.ca_refused ;
+  wire \events$260.crc_word0 ;
+  wire \events$260.crc_word1 ;
+  wire \events$260.delay_jump ;
+  wire \events$260.delay_range ;
+  wire \events$260.lc_repeat ;
+  wire \events$260.lc_skip ;
+  wire \events$260.lc_zero ;
+  wire \events$260.no_ack ;
+  wire \events$260.no_start ;
+  wire \events$260.no_stop ;
+  wire \events$260.noise_event ;
+  wire \events$260.noisy_line ;
+  wire \events$260.overrun ;
+  wire \events$260.slo_stuck_low ;
+  wire \events$260.spw_mismatch ;
   wire fault;
-  wire \fault$186 ;
+  wire \fault$187 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -20324,7 +20308,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$188 ;
+  wire [3:0] \fault_status$189 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -20334,7 +20318,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$220 ;
+  wire \first_rise$221 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -20396,21 +20380,21 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$137 ;
-  wire [5:0] \lc$314 ;
+  wire [5:0] \lc$315 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$139 ;
   wire lc_repeat;
-  wire \lc_repeat$315 ;
+  wire \lc_repeat$316 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$316 ;
+  wire \lc_skip$317 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$317 ;
+  wire \lc_zero$318 ;
   wire lc_zero_seen;
-  wire learn;
+  reg learn = 1'h0;
   wire level;
   wire \level$148 ;
   wire [3:0] limit;
@@ -20466,7 +20450,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire \locked$63 ;
   output ma;
   wire ma;
-  wire \ma$289 ;
+  wire \ma$290 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$91 ;
@@ -20487,7 +20471,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$292 ;
+  wire \overrun$293 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$37 ;
@@ -20508,37 +20492,37 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$198 ;
+  wire \report$199 ;
   wire report_delay;
-  wire \report_delay$201 ;
+  wire \report_delay$202 ;
   wire report_frame;
-  wire \report_frame$185 ;
-  wire \report_frame$199 ;
+  wire \report_frame$186 ;
+  wire \report_frame$200 ;
   wire request;
-  wire [17:0] \request$222 ;
-  wire [6:0] \request$222.address ;
-  wire [6:0] \request$222.count ;
-  wire [2:0] \request$222.slave_id ;
-  wire \request$222.write ;
+  wire [17:0] \request$223 ;
+  wire [6:0] \request$223.address ;
+  wire [6:0] \request$223.count ;
+  wire [2:0] \request$223.slave_id ;
+  wire \request$223.write ;
   wire \request$48 ;
   wire restart;
   wire \restart$152 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$298 ;
-  wire [186:0] \result$298 ;
-  wire \result$298.cds ;
-  wire \result$298.delay_settled ;
-  wire [7:0] \result$298.delay_spread ;
-  wire [5:0] \result$298.lc ;
-  wire \result$298.lc_repeat ;
-  wire \result$298.lc_skip ;
-  wire \result$298.lc_zero ;
-  wire [12:0] \result$298.line_delay ;
-  wire [3:0] \result$298.noise_events ;
-  wire [12:0] \result$298.settled_delay ;
-  wire \result$298.spw_mismatch ;
+  output [186:0] \result$299 ;
+  wire [186:0] \result$299 ;
+  wire \result$299.cds ;
+  wire \result$299.delay_settled ;
+  wire [7:0] \result$299.delay_spread ;
+  wire [5:0] \result$299.lc ;
+  wire \result$299.lc_repeat ;
+  wire \result$299.lc_skip ;
+  wire \result$299.lc_zero ;
+  wire [12:0] \result$299.line_delay ;
+  wire [3:0] \result$299.noise_events ;
+  wire [12:0] \result$299.settled_delay ;
+  wire \result$299.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -20555,18 +20539,18 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$298.status ;
-  wire [31:0] \result$298.timestamp ;
-  wire [57:0] \result$298.word0 ;
-  wire \result$298.word0.crc_ok ;
-  wire \result$298.word0.ne ;
-  wire \result$298.word0.nw ;
-  wire [54:0] \result$298.word0.position ;
-  wire [42:0] \result$298.word1 ;
-  wire \result$298.word1.crc_ok ;
-  wire \result$298.word1.ne ;
-  wire \result$298.word1.nw ;
-  wire [39:0] \result$298.word1.position ;
+  wire [3:0] \result$299.status ;
+  wire [31:0] \result$299.timestamp ;
+  wire [57:0] \result$299.word0 ;
+  wire \result$299.word0.crc_ok ;
+  wire \result$299.word0.ne ;
+  wire \result$299.word0.nw ;
+  wire [54:0] \result$299.word0.position ;
+  wire [42:0] \result$299.word1 ;
+  wire \result$299.word1.crc_ok ;
+  wire \result$299.word1.ne ;
+  wire \result$299.word1.nw ;
+  wire [39:0] \result$299.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -20585,12 +20569,12 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$321 ;
+  wire \sample$322 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$304 ;
+  wire [12:0] \settled_delay$305 ;
   wire skip;
   input slo;
   wire slo;
@@ -20607,11 +20591,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$318 ;
+  wire \spw_mismatch$319 ;
   input start;
   wire start;
-  input \start$234 ;
-  wire \start$234 ;
+  input \start$235 ;
+  wire \start$235 ;
   wire \start$35 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$123 ;
@@ -20652,7 +20636,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$297 ;
+  wire [3:0] \status$298 ;
   wire stop_bit;
   wire \stop_bit$75 ;
   wire stopped;
@@ -20668,9 +20652,9 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   wire trigger;
   wire \trigger$46 ;
   wire valid;
-  wire \valid$203 ;
-  output \valid$295 ;
-  wire \valid$295 ;
+  wire \valid$204 ;
+  output \valid$296 ;
+  wire \valid$296 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -20742,11 +20726,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
   assign \check$160  = started & \$1 ;
-  assign \$2  = learn & spw_mismatch;
+  assign \$2  = report_frame & spw_mismatch;
   assign \$3  = status == 4'hd;
-  assign \$4  = learn & \$3 ;
+  assign \$4  = report_frame & \$3 ;
   assign \$5  = status == 4'he;
-  assign \$6  = learn & \$5 ;
+  assign \$6  = report_frame & \$5 ;
   assign \$7  = result[2:0] == 1'h1;
   assign \$8  = ca_done & \$7 ;
   assign \$9  = result[2:0] == 2'h2;
@@ -20757,16 +20741,20 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \$14  = ca_done & \$13 ;
   assign \$15  = result[2:0] == 3'h5;
   assign \$16  = ca_done & \$15 ;
-  assign \busy$290  = ~ idle;
+  assign \busy$291  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$17  = ~ \clear$126 ;
-  assign \$18  = \sample$321  & \$17 ;
+  assign \$18  = \sample$322  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
     \bit  <= \$20 ;
   always @(posedge clk)
     started_before <= \$21 ;
+  always @(posedge clk)
+    learn <= \$22 ;
+  always @(posedge clk)
+    clean <= \$23 ;
   \biss_master_axil.ch1.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -20813,7 +20801,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .quiet_live(quiet_live),
     .receiver_clear(\clear$126 ),
     .report_delay(report_delay),
-    .report_frame(learn),
+    .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
@@ -20829,10 +20817,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .waiting(watch)
   );
   \biss_master_axil.ch1.core.counters  counters (
-    .clear(\clear$264 ),
+    .clear(\clear$265 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$259 ),
+    .events(\events$260 ),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.decoder  decoder (
@@ -20915,7 +20903,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .words(\words$171 )
   );
   \biss_master_axil.ch1.core.register_access  register_access (
-    .abort(\abort$236 ),
+    .abort(\abort$237 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -20927,27 +20915,27 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$222 ),
+    .request(\request$223 ),
     .result(result),
     .rst(rst),
-    .start(\start$234 ),
+    .start(\start$235 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch1.core.results  results (
     .clk(clk),
-    .done(\done$293 ),
+    .done(\done$294 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
-    .report_frame(learn),
-    .result(\result$298 ),
+    .report_frame(report_frame),
+    .result(\result$299 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$295 )
+    .valid_out(\valid$296 )
   );
   \biss_master_axil.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$322 ),
+    .\bit (\bit$323 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -20957,7 +20945,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .noise(sampler_noise),
     .receiver_clear(\clear$126 ),
     .rst(rst),
-    .sample(\sample$321 ),
+    .sample(\sample$322 ),
     .slo(slo)
   );
   \biss_master_axil.ch1.core.scheduler  scheduler (
@@ -20978,7 +20966,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$5064$0 (\bit ),
+    .\port$5045$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -21027,7 +21015,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   );
   \biss_master_axil.ch1.core.verdict  verdict (
     .cfg(cycle),
-    .clean(clean),
+    .clean(\clean$324 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
@@ -21042,9 +21030,9 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$3415$0 (\$22 ),
+    .\port$3391$0 (\$24 ),
     .report(report),
-    .report_frame(learn),
+    .report_frame(report_frame),
     .spw_match(spw_match),
     .spw_mismatch(spw_mismatch),
     .status(status),
@@ -21059,7 +21047,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$20  = \bit$322 ;
+    \$20  = \bit$323 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -21069,6 +21057,20 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
     \$21  = started;
     if (rst) begin
       \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$22  = report_frame;
+    if (rst) begin
+      \$22  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$23  = \clean$324 ;
+    if (rst) begin
+      \$23  = 1'h0;
     end
   end
   assign \idle$33  = idle;
@@ -21141,7 +21143,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
   assign \delay$159  = delay;
-  assign report_frame = learn;
+  assign \$signal  = learn;
   assign \clean$165  = clean;
   assign \noisy$167  = noisy;
   assign jump = delay_jump;
@@ -21154,37 +21156,37 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \tolerance$181  = cycle[252:245];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$185  = learn;
-  assign \fault$186  = \restart$152 ;
-  assign \fault_status$188  = fault_status;
-  assign \crc_ok$190  = crc_ok;
+  assign \report_frame$186  = report_frame;
+  assign \fault$187  = \restart$152 ;
+  assign \fault_status$189  = fault_status;
+  assign \crc_ok$191  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$198  = report;
-  assign \report_frame$199  = learn;
-  assign \report_delay$201  = report_delay;
-  assign \valid$203  = valid;
-  assign word_crc_ok = { \$22 , crc_ok[0] };
-  assign \first_rise$220  = first_rise;
+  assign \report$199  = report;
+  assign \report_frame$200  = report_frame;
+  assign \report_delay$202  = report_delay;
+  assign \valid$204  = valid;
+  assign word_crc_ok = { \$24 , crc_ok[0] };
+  assign \first_rise$221  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$234 ;
-  assign ca_abort = \abort$236 ;
+  assign ca_start = \start$235 ;
+  assign ca_abort = \abort$237 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$245  = frames;
-  assign \done$247  = ca_done;
-  assign \cdm$249  = cdm;
+  assign \busy$246  = frames;
+  assign \done$248  = ca_done;
+  assign \cdm$250  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$264 ;
+  assign clear_counters = \clear$265 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -21206,31 +21208,31 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign count_ca_refused = counts[303:288];
   assign count_ca_aborted = counts[319:304];
   assign count_ca_data_fault = counts[335:320];
-  assign \ma$289  = ma;
-  assign \overrun$292  = overrun;
-  assign \done$294  = \done$293 ;
-  assign valid_out = \valid$295 ;
-  assign \status$297  = \result$298 [3:0];
-  assign timestamp = \result$298 [35:4];
-  assign line_delay = \result$298 [48:36];
-  assign \cds$301  = \result$298 [49];
-  assign noise_events = \result$298 [53:50];
-  assign delay_settled = \result$298 [54];
-  assign \settled_delay$304  = \result$298 [67:55];
-  assign delay_spread = \result$298 [75:68];
-  assign word0_position = \result$298 [130:76];
-  assign word0_ne = \result$298 [131];
-  assign word0_nw = \result$298 [132];
-  assign word0_crc_ok = \result$298 [133];
-  assign word1_position = \result$298 [173:134];
-  assign word1_ne = \result$298 [174];
-  assign word1_nw = \result$298 [175];
-  assign word1_crc_ok = \result$298 [176];
-  assign \lc$314  = \result$298 [182:177];
-  assign \lc_repeat$315  = \result$298 [183];
-  assign \lc_skip$316  = \result$298 [184];
-  assign \lc_zero$317  = \result$298 [185];
-  assign \spw_mismatch$318  = \result$298 [186];
+  assign \ma$290  = ma;
+  assign \overrun$293  = overrun;
+  assign \done$295  = \done$294 ;
+  assign valid_out = \valid$296 ;
+  assign \status$298  = \result$299 [3:0];
+  assign timestamp = \result$299 [35:4];
+  assign line_delay = \result$299 [48:36];
+  assign \cds$302  = \result$299 [49];
+  assign noise_events = \result$299 [53:50];
+  assign delay_settled = \result$299 [54];
+  assign \settled_delay$305  = \result$299 [67:55];
+  assign delay_spread = \result$299 [75:68];
+  assign word0_position = \result$299 [130:76];
+  assign word0_ne = \result$299 [131];
+  assign word0_nw = \result$299 [132];
+  assign word0_crc_ok = \result$299 [133];
+  assign word1_position = \result$299 [173:134];
+  assign word1_ne = \result$299 [174];
+  assign word1_nw = \result$299 [175];
+  assign word1_crc_ok = \result$299 [176];
+  assign \lc$315  = \result$299 [182:177];
+  assign \lc_repeat$316  = \result$299 [183];
+  assign \lc_skip$317  = \result$299 [184];
+  assign \lc_zero$318  = \result$299 [185];
+  assign \spw_mismatch$319  = \result$299 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -21413,36 +21415,36 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$222.slave_id  = \request$222 [2:0];
-  assign \request$222.address  = \request$222 [9:3];
-  assign \request$222.count  = \request$222 [16:10];
-  assign \request$222.write  = \request$222 [17];
+  assign \request$223.slave_id  = \request$223 [2:0];
+  assign \request$223.address  = \request$223 [9:3];
+  assign \request$223.count  = \request$223 [16:10];
+  assign \request$223.write  = \request$223 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$259.crc_word0  = \events$259 [0];
-  assign \events$259.crc_word1  = \events$259 [1];
-  assign \events$259.no_ack  = \events$259 [2];
-  assign \events$259.no_start  = \events$259 [3];
-  assign \events$259.delay_range  = \events$259 [4];
-  assign \events$259.slo_stuck_low  = \events$259 [5];
-  assign \events$259.lc_repeat  = \events$259 [6];
-  assign \events$259.lc_skip  = \events$259 [7];
-  assign \events$259.lc_zero  = \events$259 [8];
-  assign \events$259.spw_mismatch  = \events$259 [9];
-  assign \events$259.overrun  = \events$259 [10];
-  assign \events$259.aborted  = \events$259 [11];
-  assign \events$259.no_stop  = \events$259 [12];
-  assign \events$259.noisy_line  = \events$259 [13];
-  assign \events$259.delay_jump  = \events$259 [14];
-  assign \events$259.noise_event  = \events$259 [15];
-  assign \events$259.ca_crc4_error  = \events$259 [16];
-  assign \events$259.ca_no_answer  = \events$259 [17];
-  assign \events$259.ca_refused  = \events$259 [18];
-  assign \events$259.ca_aborted  = \events$259 [19];
-  assign \events$259.ca_data_fault  = \events$259 [20];
+  assign \events$260.crc_word0  = \events$260 [0];
+  assign \events$260.crc_word1  = \events$260 [1];
+  assign \events$260.no_ack  = \events$260 [2];
+  assign \events$260.no_start  = \events$260 [3];
+  assign \events$260.delay_range  = \events$260 [4];
+  assign \events$260.slo_stuck_low  = \events$260 [5];
+  assign \events$260.lc_repeat  = \events$260 [6];
+  assign \events$260.lc_skip  = \events$260 [7];
+  assign \events$260.lc_zero  = \events$260 [8];
+  assign \events$260.spw_mismatch  = \events$260 [9];
+  assign \events$260.overrun  = \events$260 [10];
+  assign \events$260.aborted  = \events$260 [11];
+  assign \events$260.no_stop  = \events$260 [12];
+  assign \events$260.noisy_line  = \events$260 [13];
+  assign \events$260.delay_jump  = \events$260 [14];
+  assign \events$260.noise_event  = \events$260 [15];
+  assign \events$260.ca_crc4_error  = \events$260 [16];
+  assign \events$260.ca_no_answer  = \events$260 [17];
+  assign \events$260.ca_refused  = \events$260 [18];
+  assign \events$260.ca_aborted  = \events$260 [19];
+  assign \events$260.ca_data_fault  = \events$260 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -21471,60 +21473,60 @@ module \biss_master_axil.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, 
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$298.status  = \result$298 [3:0];
-  assign \result$298.timestamp  = \result$298 [35:4];
-  assign \result$298.line_delay  = \result$298 [48:36];
-  assign \result$298.cds  = \result$298 [49];
-  assign \result$298.noise_events  = \result$298 [53:50];
-  assign \result$298.delay_settled  = \result$298 [54];
-  assign \result$298.settled_delay  = \result$298 [67:55];
-  assign \result$298.delay_spread  = \result$298 [75:68];
-  assign \result$298.word0  = \result$298 [133:76];
-  assign \result$298.word0.position  = \result$298 [130:76];
-  assign \result$298.word0.ne  = \result$298 [131];
-  assign \result$298.word0.nw  = \result$298 [132];
-  assign \result$298.word0.crc_ok  = \result$298 [133];
-  assign \result$298.word1  = \result$298 [176:134];
-  assign \result$298.word1.position  = \result$298 [173:134];
-  assign \result$298.word1.ne  = \result$298 [174];
-  assign \result$298.word1.nw  = \result$298 [175];
-  assign \result$298.word1.crc_ok  = \result$298 [176];
-  assign \result$298.lc  = \result$298 [182:177];
-  assign \result$298.lc_repeat  = \result$298 [183];
-  assign \result$298.lc_skip  = \result$298 [184];
-  assign \result$298.lc_zero  = \result$298 [185];
-  assign \result$298.spw_mismatch  = \result$298 [186];
-  assign \events$259 [20] = \$16 ;
-  assign \events$259 [19] = \$14 ;
-  assign \events$259 [18] = \$12 ;
-  assign \events$259 [17] = \$10 ;
-  assign \events$259 [16] = \$8 ;
-  assign \events$259 [15] = \event ;
-  assign \events$259 [14] = \$6 ;
-  assign \events$259 [13] = \$4 ;
-  assign \events$259 [12] = faults[6];
-  assign \events$259 [11] = faults[4];
-  assign \events$259 [10] = overrun;
-  assign \events$259 [9] = \$2 ;
-  assign \events$259 [8] = lc_zero;
-  assign \events$259 [7] = lc_skip;
-  assign \events$259 [6] = lc_repeat;
-  assign \events$259 [5] = faults[3];
-  assign \events$259 [4] = faults[2];
-  assign \events$259 [3] = faults[1];
-  assign \events$259 [2] = faults[0];
-  assign \events$259 [1] = crc_error[1];
-  assign \events$259 [0] = crc_error[0];
+  assign \result$299.status  = \result$299 [3:0];
+  assign \result$299.timestamp  = \result$299 [35:4];
+  assign \result$299.line_delay  = \result$299 [48:36];
+  assign \result$299.cds  = \result$299 [49];
+  assign \result$299.noise_events  = \result$299 [53:50];
+  assign \result$299.delay_settled  = \result$299 [54];
+  assign \result$299.settled_delay  = \result$299 [67:55];
+  assign \result$299.delay_spread  = \result$299 [75:68];
+  assign \result$299.word0  = \result$299 [133:76];
+  assign \result$299.word0.position  = \result$299 [130:76];
+  assign \result$299.word0.ne  = \result$299 [131];
+  assign \result$299.word0.nw  = \result$299 [132];
+  assign \result$299.word0.crc_ok  = \result$299 [133];
+  assign \result$299.word1  = \result$299 [176:134];
+  assign \result$299.word1.position  = \result$299 [173:134];
+  assign \result$299.word1.ne  = \result$299 [174];
+  assign \result$299.word1.nw  = \result$299 [175];
+  assign \result$299.word1.crc_ok  = \result$299 [176];
+  assign \result$299.lc  = \result$299 [182:177];
+  assign \result$299.lc_repeat  = \result$299 [183];
+  assign \result$299.lc_skip  = \result$299 [184];
+  assign \result$299.lc_zero  = \result$299 [185];
+  assign \result$299.spw_mismatch  = \result$299 [186];
+  assign \events$260 [20] = \$16 ;
+  assign \events$260 [19] = \$14 ;
+  assign \events$260 [18] = \$12 ;
+  assign \events$260 [17] = \$10 ;
+  assign \events$260 [16] = \$8 ;
+  assign \events$260 [15] = \event ;
+  assign \events$260 [14] = \$6 ;
+  assign \events$260 [13] = \$4 ;
+  assign \events$260 [12] = faults[6];
+  assign \events$260 [11] = faults[4];
+  assign \events$260 [10] = overrun;
+  assign \events$260 [9] = \$2 ;
+  assign \events$260 [8] = lc_zero;
+  assign \events$260 [7] = lc_skip;
+  assign \events$260 [6] = lc_repeat;
+  assign \events$260 [5] = faults[3];
+  assign \events$260 [4] = faults[2];
+  assign \events$260 [3] = faults[1];
+  assign \events$260 [2] = faults[0];
+  assign \events$260 [1] = crc_error[1];
+  assign \events$260 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$222 [17] = ca_write;
-  assign \request$222 [16:10] = ca_count;
-  assign \request$222 [9:3] = ca_address;
-  assign \request$222 [2:0] = ca_slave_id;
+  assign \request$223 [17] = ca_write;
+  assign \request$223 [16:10] = ca_count;
+  assign \request$223 [9:3] = ca_address;
+  assign \request$223 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
-  assign frame[176] = \$22 ;
+  assign frame[176] = \$24 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
   assign frame[173:134] = spw;
@@ -25052,32 +25054,36 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
-  wire \$101 ;
-  wire \$102 ;
+  wire [1:0] \$101 ;
+  wire [1:0] \$102 ;
   wire \$103 ;
-  reg \$104 ;
-  reg \$105 ;
-  reg [15:0] \$106 ;
-  reg \$107 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
   reg \$108 ;
-  reg [15:0] \$109 ;
+  reg \$109 ;
   wire [1:0] \$11 ;
-  reg [2:0] \$110 ;
+  reg [15:0] \$110 ;
   reg \$111 ;
-  reg [6:0] \$112 ;
-  reg \$113 ;
-  reg \$114 ;
+  reg \$112 ;
+  reg [15:0] \$113 ;
+  reg [2:0] \$114 ;
   reg \$115 ;
-  reg \$116 ;
+  reg [6:0] \$116 ;
   reg \$117 ;
   reg \$118 ;
-  reg [54:0] \$119 ;
+  reg \$119 ;
   wire [6:0] \$12 ;
-  reg [1:0] \$120 ;
-  reg [1:0] \$121 ;
-  reg [39:0] \$122 ;
-  reg [5:0] \$123 ;
-  reg [39:0] \$124 ;
+  reg \$120 ;
+  reg \$121 ;
+  reg \$122 ;
+  reg [54:0] \$123 ;
+  reg [1:0] \$124 ;
+  reg [1:0] \$125 ;
+  reg [39:0] \$126 ;
+  reg [5:0] \$127 ;
+  reg [39:0] \$128 ;
   wire \$13 ;
   reg [3:0] \$14 ;
   wire [6:0] \$15 ;
@@ -25168,14 +25174,15 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$92 ;
   wire \$93 ;
   wire \$94 ;
-  wire \$95 ;
+  wire [6:0] \$95 ;
   wire \$96 ;
-  wire [6:0] \$97 ;
+  wire \$97 ;
   wire \$98 ;
-  wire \$99 ;
+  wire [6:0] \$99 ;
+  reg at_cds;
   input \bit ;
   wire \bit ;
-  wire \bit$51 ;
+  wire \bit$52 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -25188,17 +25195,17 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire [1:0] crc_ok;
   input [75:0] crcs;
   wire [75:0] crcs;
-  wire [75:0] \crcs$46 ;
-  wire [37:0] \crcs$46[0] ;
-  wire \crcs$46[0].inverted ;
-  wire [15:0] \crcs$46[0].poly ;
-  wire [15:0] \crcs$46[0].start ;
-  wire [4:0] \crcs$46[0].width ;
-  wire [37:0] \crcs$46[1] ;
-  wire \crcs$46[1].inverted ;
-  wire [15:0] \crcs$46[1].poly ;
-  wire [15:0] \crcs$46[1].start ;
-  wire [4:0] \crcs$46[1].width ;
+  wire [75:0] \crcs$47 ;
+  wire [37:0] \crcs$47[0] ;
+  wire \crcs$47[0].inverted ;
+  wire [15:0] \crcs$47[0].poly ;
+  wire [15:0] \crcs$47[0].start ;
+  wire [4:0] \crcs$47[0].width ;
+  wire [37:0] \crcs$47[1] ;
+  wire \crcs$47[1].inverted ;
+  wire [15:0] \crcs$47[1].poly ;
+  wire [15:0] \crcs$47[1].start ;
+  wire [4:0] \crcs$47[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -25216,7 +25223,6 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg [2:0] decoder_fsm_state = 3'h0;
   output done;
   reg done = 1'h0;
-  wire first;
   reg [6:0] idx = 7'h00;
   reg in_crc = 1'h0;
   reg in_data = 1'h0;
@@ -25229,6 +25235,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   output lc_load;
   wire lc_load;
   wire [5:0] lc_next;
+  wire load;
+  wire load_word;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
@@ -25267,7 +25275,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
   (* init = 1'h0 *)
-  wire \word$54 ;
+  wire \word$55 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [21:0] words;
@@ -25378,19 +25386,23 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$93  = words[10] & data0[0];
   assign \$94  = \bit  ^ \$93 ;
   assign lc_load = in_word & in_lc;
-  assign \$95  = ! idx;
-  assign first = in_word & \$95 ;
-  assign \$96  = ~ in_crc;
-  assign \cover  = in_word & \$96 ;
+  assign \$95  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$96  = idx == \$95 ;
+  assign \$97  = in_word & \$96 ;
+  assign load = at_cds | \$97 ;
+  assign \$98  = ~ in_crc;
+  assign \cover  = in_word & \$98 ;
   assign check = in_word & in_crc;
-  assign \$97  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$98  = idx == \$97 ;
-  assign last = in_word & \$98 ;
-  assign \$99  = ! decoder_fsm_state;
-  assign \$100  = decoder_fsm_state == 1'h1;
-  assign \$101  = decoder_fsm_state == 2'h2;
-  assign \$102  = decoder_fsm_state == 2'h3;
-  assign \$103  = decoder_fsm_state == 3'h4;
+  assign \$99  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$100  = idx == \$99 ;
+  assign last = in_word & \$100 ;
+  assign \$101  = word + 1'h1;
+  assign \$102  = at_cds ? 2'h0 : \$101 ;
+  assign \$103  = ! decoder_fsm_state;
+  assign \$104  = decoder_fsm_state == 1'h1;
+  assign \$105  = decoder_fsm_state == 2'h2;
+  assign \$106  = decoder_fsm_state == 2'h3;
+  assign \$107  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -25420,55 +25432,56 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   always @(posedge clk)
     w1_lc_at0 <= \$34 ;
   always @(posedge clk)
-    done <= \$104 ;
+    done <= \$108 ;
   always @(posedge clk)
-    stopped <= \$105 ;
+    stopped <= \$109 ;
   always @(posedge clk)
-    slots <= \$106 ;
+    slots <= \$110 ;
   always @(posedge clk)
-    slots_full <= \$107 ;
+    slots_full <= \$111 ;
   always @(posedge clk)
-    started <= \$108 ;
+    started <= \$112 ;
   always @(posedge clk)
-    start_slot <= \$109 ;
+    start_slot <= \$113 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$110 ;
+    decoder_fsm_state <= \$114 ;
   always @(posedge clk)
-    cds <= \$111 ;
+    cds <= \$115 ;
   always @(posedge clk)
-    idx <= \$112 ;
+    idx <= \$116 ;
   always @(posedge clk)
-    in_data <= \$113 ;
+    in_data <= \$117 ;
   always @(posedge clk)
-    in_lc <= \$114 ;
+    in_lc <= \$118 ;
   always @(posedge clk)
-    in_crc <= \$115 ;
+    in_crc <= \$119 ;
   always @(posedge clk)
-    in_top <= \$116 ;
+    in_top <= \$120 ;
   always @(posedge clk)
-    word <= \$117 ;
+    word <= \$121 ;
   always @(posedge clk)
-    stop_bit <= \$118 ;
+    stop_bit <= \$122 ;
   always @(posedge clk)
-    data0 <= \$119 ;
+    data0 <= \$123 ;
   always @(posedge clk)
-    ne <= \$120 ;
+    ne <= \$124 ;
   always @(posedge clk)
-    nw <= \$121 ;
+    nw <= \$125 ;
   always @(posedge clk)
-    data1 <= \$122 ;
+    data1 <= \$126 ;
   always @(posedge clk)
-    lc <= \$123 ;
+    lc <= \$127 ;
   always @(posedge clk)
-    cpw_top <= \$124 ;
+    cpw_top <= \$128 ;
   \biss_master_axil.ch1.core.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
     .clk(clk),
     .\cover (\cover ),
     .crcs(crcs),
-    .first(first),
     .last(last),
+    .load(load),
+    .load_word(\$102 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst),
@@ -25580,7 +25593,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$104  = 1'h0;
+    \$108  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -25590,73 +25603,9 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$104  = 1'h1;
+                \$108  = 1'h1;
               end
             end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$104  = 1'h0;
-    end
-    if (rst) begin
-      \$104  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$105  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$105  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$105  = 1'h0;
-    end
-    if (rst) begin
-      \$105  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$106  = slots;
-    if (\$36 ) begin
-      \$106  = \$37 [15:0];
-    end
-    if (receiver_clear) begin
-      \$106  = 16'h0000;
-    end
-    if (rst) begin
-      \$106  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$107  = slots_full;
-    if (\$36 ) begin
-      \$107  = \$38 ;
-    end
-    if (receiver_clear) begin
-      \$107  = 1'h0;
-    end
-    if (rst) begin
-      \$107  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$108  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$108  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -25668,158 +25617,125 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$109  = start_slot;
+    \$109  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$39 ) begin
-            \$109  = slots;
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$109  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$109  = 16'h0000;
+      \$109  = 1'h0;
     end
     if (rst) begin
-      \$109  = 16'h0000;
+      \$109  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$110  = decoder_fsm_state;
+    \$110  = slots;
+    if (\$36 ) begin
+      \$110  = \$37 [15:0];
+    end
+    if (receiver_clear) begin
+      \$110  = 16'h0000;
+    end
+    if (rst) begin
+      \$110  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$111  = slots_full;
+    if (\$36 ) begin
+      \$111  = \$38 ;
+    end
+    if (receiver_clear) begin
+      \$111  = 1'h0;
+    end
+    if (rst) begin
+      \$111  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$112  = started;
     casez (decoder_fsm_state)
       3'h0:
           if (\$39 ) begin
-            \$110  = 3'h1;
+            \$112  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$112  = 1'h0;
+    end
+    if (rst) begin
+      \$112  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$113  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$113  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$113  = 16'h0000;
+    end
+    if (rst) begin
+      \$113  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$114  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$114  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            \$110  = 3'h2;
+            \$114  = 3'h2;
           end
       3'h2:
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$110  = 3'h3;
+                \$114  = 3'h3;
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$110  = 3'h4;
+            \$114  = 3'h4;
           end
     endcase
     if (receiver_clear) begin
-      \$110  = 3'h0;
+      \$114  = 3'h0;
     end
     if (rst) begin
-      \$110  = 3'h0;
+      \$114  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$111  = cds;
+    \$115  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$111  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$111  = 1'h0;
-    end
-    if (rst) begin
-      \$111  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$112  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$112  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$112  = \$41 [6:0];
-            if (\$60 ) begin
-              \$112  = 7'h00;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$112  = 7'h00;
-    end
-    if (rst) begin
-      \$112  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$113  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$113  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$113  = \$44 ;
-            if (\$60 ) begin
-              \$113  = w1_data_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$113  = 1'h0;
-    end
-    if (rst) begin
-      \$113  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$114  = in_lc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$114  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$114  = \$50 ;
-            if (\$60 ) begin
-              \$114  = w1_lc_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$114  = 1'h0;
-    end
-    if (rst) begin
-      \$114  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$115  = in_crc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$115  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            \$115  = \$56 ;
+            \$115  = \bit ;
           end
     endcase
     if (receiver_clear) begin
@@ -25831,38 +25747,135 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$116  = in_top;
+    \$116  = idx;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$116  = \$40 ;
+            \$116  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$116  = \$58 ;
+            \$116  = \$41 [6:0];
             if (\$60 ) begin
-              \$116  = 1'h0;
+              \$116  = 7'h00;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$116  = 1'h0;
+      \$116  = 7'h00;
     end
     if (rst) begin
-      \$116  = 1'h0;
+      \$116  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$117  = word;
+    \$117  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$117  = 1'h0;
+            \$117  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$117  = \$44 ;
+            if (\$60 ) begin
+              \$117  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$117  = 1'h0;
+    end
+    if (rst) begin
+      \$117  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$118  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$118  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$118  = \$50 ;
+            if (\$60 ) begin
+              \$118  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$118  = 1'h0;
+    end
+    if (rst) begin
+      \$118  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$119  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$119  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$119  = \$56 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$119  = 1'h0;
+    end
+    if (rst) begin
+      \$119  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$120  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$120  = \$40 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$120  = \$58 ;
+            if (\$60 ) begin
+              \$120  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$120  = 1'h0;
+    end
+    if (rst) begin
+      \$120  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$121  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$121  = 1'h0;
           end
       3'h2:
           if (sample) begin
@@ -25870,21 +25883,21 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
               (* full_case = 32'd1 *)
               if (\$62 ) begin
               end else begin
-                \$117  = \$63 [0];
+                \$121  = \$63 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$117  = 1'h0;
+      \$121  = 1'h0;
     end
     if (rst) begin
-      \$117  = 1'h0;
+      \$121  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$118  = stop_bit;
+    \$122  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -25894,109 +25907,119 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
           /* empty */;
       3'h3:
           if (sample) begin
-            \$118  = \bit ;
+            \$122  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$118  = 1'h0;
+      \$122  = 1'h0;
     end
     if (rst) begin
-      \$118  = 1'h0;
+      \$122  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$119  = data0;
+    \$123  = data0;
     if (\$66 ) begin
-      \$119  = { data0[53:0], \$68  };
+      \$123  = { data0[53:0], \$68  };
     end
     if (receiver_clear) begin
-      \$119  = 55'h00000000000000;
+      \$123  = 55'h00000000000000;
     end
     if (rst) begin
-      \$119  = 55'h00000000000000;
+      \$123  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$120  = ne;
+    \$124  = ne;
     if (\$69 ) begin
-      \$120 [0] = 1'h1;
+      \$124 [0] = 1'h1;
     end else if (\$73 ) begin
-      \$120 [0] = \bit ;
+      \$124 [0] = \bit ;
     end
     if (\$83 ) begin
-      \$120 [1] = 1'h1;
+      \$124 [1] = 1'h1;
     end else if (\$87 ) begin
-      \$120 [1] = \bit ;
+      \$124 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$120  = 2'h0;
+      \$124  = 2'h0;
     end
     if (rst) begin
-      \$120  = 2'h0;
+      \$124  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$121  = nw;
+    \$125  = nw;
     if (\$69 ) begin
-      \$121 [0] = 1'h1;
+      \$125 [0] = 1'h1;
     end else if (\$73 ) begin
     end else if (\$77 ) begin
-      \$121 [0] = \bit ;
+      \$125 [0] = \bit ;
     end
     if (\$83 ) begin
-      \$121 [1] = 1'h1;
+      \$125 [1] = 1'h1;
     end else if (\$87 ) begin
     end else if (\$91 ) begin
-      \$121 [1] = \bit ;
+      \$125 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$121  = 2'h0;
+      \$125  = 2'h0;
     end
     if (rst) begin
-      \$121  = 2'h0;
+      \$125  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$122  = data1;
+    \$126  = data1;
     if (\$80 ) begin
-      \$122  = { data1[38:0], \$82  };
+      \$126  = { data1[38:0], \$82  };
     end
     if (receiver_clear) begin
-      \$122  = 40'h0000000000;
+      \$126  = 40'h0000000000;
     end
     if (rst) begin
-      \$122  = 40'h0000000000;
+      \$126  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$123  = lc;
+    \$127  = lc;
     if (lc_load) begin
-      \$123  = { lc[4:0], \bit  };
+      \$127  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$123  = 6'h00;
+      \$127  = 6'h00;
     end
     if (rst) begin
-      \$123  = 6'h00;
+      \$127  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$124  = cpw_top;
+    \$128  = cpw_top;
     if (\$92 ) begin
-      \$124  = { cpw_top[38:0], \$94  };
+      \$128  = { cpw_top[38:0], \$94  };
     end
     if (receiver_clear) begin
-      \$124  = 40'h0000000000;
+      \$128  = 40'h0000000000;
     end
     if (rst) begin
-      \$124  = 40'h0000000000;
+      \$128  = 40'h0000000000;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    at_cds = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          at_cds = sample;
+    endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
@@ -26011,10 +26034,11 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$46  = crcs;
-  assign \bit$51  = \bit ;
+  assign \crcs$47  = crcs;
+  assign \bit$52  = \bit ;
   assign ok = crc_ok;
-  assign \word$54  = word;
+  assign \word$55  = word;
+  assign load_word = \$102 [0];
   assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -26037,74 +26061,59 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$46[0]  = crcs[37:0];
-  assign \crcs$46[0].width  = crcs[4:0];
-  assign \crcs$46[0].poly  = crcs[20:5];
-  assign \crcs$46[0].start  = crcs[36:21];
-  assign \crcs$46[0].inverted  = crcs[37];
-  assign \crcs$46[1]  = crcs[75:38];
-  assign \crcs$46[1].width  = crcs[42:38];
-  assign \crcs$46[1].poly  = crcs[58:43];
-  assign \crcs$46[1].start  = crcs[74:59];
-  assign \crcs$46[1].inverted  = crcs[75];
+  assign \crcs$47[0]  = crcs[37:0];
+  assign \crcs$47[0].width  = crcs[4:0];
+  assign \crcs$47[0].poly  = crcs[20:5];
+  assign \crcs$47[0].start  = crcs[36:21];
+  assign \crcs$47[0].inverted  = crcs[37];
+  assign \crcs$47[1]  = crcs[75:38];
+  assign \crcs$47[1].width  = crcs[42:38];
+  assign \crcs$47[1].poly  = crcs[58:43];
+  assign \crcs$47[1].start  = crcs[74:59];
+  assign \crcs$47[1].inverted  = crcs[75];
   assign \$78  = word;
   assign \$84  = word;
   assign \$88  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder.crc (rst, first, \cover , check, last, \bit , crcs, receiver_clear, word, ok, clk);
+module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, load_word, \bit , crcs, receiver_clear, word, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
   reg [15:0] \$1 ;
-  wire [15:0] \$10 ;
-  reg [15:0] \$11 ;
-  wire [15:0] \$12 ;
+  wire \$10 ;
+  reg \$11 ;
+  wire \$12 ;
   wire \$13 ;
   wire \$14 ;
-  reg [15:0] \$15 ;
-  wire [15:0] \$16 ;
-  reg [4:0] \$17 ;
+  wire \$15 ;
+  reg [4:0] \$16 ;
+  wire \$17 ;
   wire \$18 ;
-  wire \$19 ;
-  wire [15:0] \$2 ;
-  reg \$20 ;
+  reg \$19 ;
+  reg [4:0] \$2 ;
+  wire \$20 ;
   wire \$21 ;
   wire \$22 ;
   wire \$23 ;
   wire \$24 ;
-  wire \$25 ;
-  reg [15:0] \$26 ;
-  wire [15:0] \$27 ;
-  reg [4:0] \$28 ;
+  reg [4:0] \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  reg \$28 ;
   wire \$29 ;
-  reg [15:0] \$3 ;
+  wire \$3 ;
   wire \$30 ;
-  reg \$31 ;
+  wire \$31 ;
   wire \$32 ;
-  wire \$33 ;
-  wire \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
-  reg [15:0] \$38 ;
-  wire [15:0] \$39 ;
-  wire [15:0] \$4 ;
-  reg [4:0] \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  reg \$43 ;
-  wire \$44 ;
-  wire \$45 ;
-  wire \$46 ;
-  wire \$47 ;
-  reg [15:0] \$48 ;
-  reg \$49 ;
-  reg [4:0] \$5 ;
-  reg [1:0] \$50 ;
-  wire \$6 ;
-  wire \$7 ;
-  reg [15:0] \$8 ;
-  wire [15:0] \$9 ;
+  reg [15:0] \$33 ;
+  reg \$34 ;
+  reg [1:0] \$35 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  wire [15:0] \$6 ;
+  wire [15:0] \$7 ;
+  reg [4:0] \$8 ;
+  wire \$9 ;
   input \bit ;
   wire \bit ;
   input check;
@@ -26125,10 +26134,12 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, first, \cover , check, last,
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  input first;
-  wire first;
   input last;
   wire last;
+  input load;
+  wire load;
+  input load_word;
+  wire load_word;
   reg mismatch = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
@@ -26139,79 +26150,38 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, first, \cover , check, last,
   wire rst;
   input word;
   wire word;
+  assign \$3  = { \reg , 1'h0 } >> \$2 ;
+  assign \$4  = \$3  ^ \bit ;
+  assign \$6  = \$4  ? \$5  : 16'h0000;
+  assign \$7  = { \reg [14:0], 1'h0 } ^ \$6 ;
+  assign \$9  = { \reg , 1'h0 } >> \$8 ;
+  assign \$10  = \bit  ^ \$9 ;
+  assign \$12  = \$10  ^ \$11 ;
+  assign \$13  = check & \$12 ;
+  assign \$14  = mismatch | \$13 ;
+  assign \$15  = ! word;
+  assign \$17  = { \reg , 1'h0 } >> \$16 ;
+  assign \$18  = \bit  ^ \$17 ;
+  assign \$20  = \$18  ^ \$19 ;
+  assign \$21  = check & \$20 ;
+  assign \$22  = mismatch | \$21 ;
+  assign \$23  = ~ \$22 ;
+  assign \$26  = { \reg , 1'h0 } >> \$25 ;
+  assign \$27  = \bit  ^ \$26 ;
+  assign \$29  = \$27  ^ \$28 ;
+  assign \$30  = check & \$29 ;
+  assign \$31  = mismatch | \$30 ;
+  assign \$32  = ~ \$31 ;
   always @(posedge clk)
-    mismatch <= \$49 ;
+    \reg  <= \$33 ;
   always @(posedge clk)
-    ok <= \$50 ;
-  assign \$2  = first ? \$1  : \reg ;
-  assign \$4  = first ? \$3  : \reg ;
-  assign \$6  = { \$4 , 1'h0 } >> \$5 ;
-  assign \$7  = \$6  ^ \bit ;
-  assign \$9  = \$7  ? \$8  : 16'h0000;
-  assign \$10  = { \$2 [14:0], 1'h0 } ^ \$9 ;
-  assign \$12  = first ? \$11  : \reg ;
-  assign \$13  = \cover  | check;
-  assign \$14  = first ? 1'h0 : mismatch;
-  assign \$16  = first ? \$15  : \reg ;
-  assign \$18  = { \$16 , 1'h0 } >> \$17 ;
-  assign \$19  = \bit  ^ \$18 ;
-  assign \$21  = \$19  ^ \$20 ;
-  assign \$22  = check & \$21 ;
-  assign \$23  = \$14  | \$22 ;
-  assign \$24  = ! word;
-  assign \$25  = first ? 1'h0 : mismatch;
-  assign \$27  = first ? \$26  : \reg ;
-  assign \$29  = { \$27 , 1'h0 } >> \$28 ;
-  assign \$30  = \bit  ^ \$29 ;
-  assign \$32  = \$30  ^ \$31 ;
-  assign \$33  = check & \$32 ;
-  assign \$34  = \$25  | \$33 ;
-  assign \$35  = ~ \$34 ;
-  assign \$37  = first ? 1'h0 : mismatch;
-  assign \$39  = first ? \$38  : \reg ;
-  assign \$41  = { \$39 , 1'h0 } >> \$40 ;
-  assign \$42  = \bit  ^ \$41 ;
-  assign \$44  = \$42  ^ \$43 ;
-  assign \$45  = check & \$44 ;
-  assign \$46  = \$37  | \$45 ;
-  assign \$47  = ~ \$46 ;
+    mismatch <= \$34 ;
   always @(posedge clk)
-    \reg  <= \$48 ;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$49  = mismatch;
-    if (\$13 ) begin
-      \$49  = \$23 ;
-    end
-    if (receiver_clear) begin
-      \$49  = 1'h0;
-    end
-    if (rst) begin
-      \$49  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$50  = ok;
-    if (last) begin
-      if (\$24 ) begin
-        \$50 [0] = \$35 ;
-      end
-      if (\$36 ) begin
-        \$50 [1] = \$47 ;
-      end
-    end
-    if (receiver_clear) begin
-      \$50  = 2'h3;
-    end
-    if (rst) begin
-      \$50  = 2'h3;
-    end
-  end
+    ok <= \$35 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (load_word)
       1'h0:
           \$1  = crcs[36:21];
       1'h1:
@@ -26223,9 +26193,9 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$3  = crcs[36:21];
+          \$2  = crcs[4:0];
       1'h1:
-          \$3  = crcs[74:59];
+          \$2  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -26233,9 +26203,9 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$5  = crcs[4:0];
+          \$5  = crcs[20:5];
       1'h1:
-          \$5  = crcs[42:38];
+          \$5  = crcs[58:43];
     endcase
   end
   always @* begin
@@ -26243,9 +26213,9 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$8  = crcs[20:5];
+          \$8  = crcs[4:0];
       1'h1:
-          \$8  = crcs[58:43];
+          \$8  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -26253,9 +26223,9 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$11  = crcs[36:21];
+          \$11  = crcs[37];
       1'h1:
-          \$11  = crcs[74:59];
+          \$11  = crcs[75];
     endcase
   end
   always @* begin
@@ -26263,9 +26233,9 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$15  = crcs[36:21];
+          \$16  = crcs[4:0];
       1'h1:
-          \$15  = crcs[74:59];
+          \$16  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -26273,9 +26243,9 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$17  = crcs[4:0];
+          \$19  = crcs[37];
       1'h1:
-          \$17  = crcs[42:38];
+          \$19  = crcs[75];
     endcase
   end
   always @* begin
@@ -26283,9 +26253,9 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$20  = crcs[37];
+          \$25  = crcs[4:0];
       1'h1:
-          \$20  = crcs[75];
+          \$25  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -26293,74 +26263,60 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, first, \cover , check, last,
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$26  = crcs[36:21];
+          \$28  = crcs[37];
       1'h1:
-          \$26  = crcs[74:59];
+          \$28  = crcs[75];
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$28  = crcs[4:0];
-      1'h1:
-          \$28  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$31  = crcs[37];
-      1'h1:
-          \$31  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$38  = crcs[36:21];
-      1'h1:
-          \$38  = crcs[74:59];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$40  = crcs[4:0];
-      1'h1:
-          \$40  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$43  = crcs[37];
-      1'h1:
-          \$43  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$48  = \reg ;
-    if (\cover ) begin
-      \$48  = \$10 ;
+    \$33  = \reg ;
+    if (load) begin
+      \$33  = \$1 ;
+    end else if (\cover ) begin
+      \$33  = \$7 ;
     end else if (check) begin
-      \$48  = { \$12 [14:0], 1'h0 };
+      \$33  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$48  = 16'h0000;
+      \$33  = 16'h0000;
     end
     if (rst) begin
-      \$48  = 16'h0000;
+      \$33  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$34  = mismatch;
+    if (load) begin
+      \$34  = 1'h0;
+    end else if (\cover ) begin
+    end else if (check) begin
+      \$34  = \$14 ;
+    end
+    if (receiver_clear) begin
+      \$34  = 1'h0;
+    end
+    if (rst) begin
+      \$34  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$35  = ok;
+    if (last) begin
+      if (\$15 ) begin
+        \$35 [0] = \$23 ;
+      end
+      if (\$24 ) begin
+        \$35 [1] = \$32 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$35  = 2'h3;
+    end
+    if (rst) begin
+      \$35  = 2'h3;
     end
   end
   assign \crcs[0]  = crcs[37:0];
@@ -26373,11 +26329,11 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, first, \cover , check, last,
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \$36  = word;
+  assign \$24  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, clean, \tolerance$8 , learn, delay, jump, spread, settled_delay, settled, clk);
+module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
@@ -30604,7 +30560,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$5064$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$5045$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -30646,8 +30602,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5064$0 ;
-  wire \port$5064$0 ;
+  input \port$5045$0 ;
+  wire \port$5045$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -30661,9 +30617,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5064$0  };
-  assign \$2  = { lc[4:0], \port$5064$0  } == last;
-  assign \$3  = { lc[4:0], \port$5064$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5045$0  };
+  assign \$2  = { lc[4:0], \port$5045$0  } == last;
+  assign \$3  = { lc[4:0], \port$5045$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -30773,7 +30729,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5064$0  };
+  assign lc_next = { lc[4:0], \port$5045$0  };
   assign zero = is_zero;
 endmodule
 
@@ -31329,7 +31285,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3415$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3391$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
   wire \$1 ;
@@ -31481,8 +31437,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3415$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$3415$0 ;
-  wire \port$3415$0 ;
+  output \port$3391$0 ;
+  wire \port$3391$0 ;
   output report;
   wire report;
   input report_frame;
@@ -31588,7 +31544,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$3415$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3415$0  = \$2 ;
+  assign \port$3391$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -649,12 +649,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$4815$0 (\$8 ),
-    .\port$4828$0 (\$9 ),
-    .\port$4960$0 (\$10 ),
-    .\port$5366$0 (\$11 ),
-    .\port$5379$0 (\$12 ),
-    .\port$5511$0 (\$13 ),
+    .\port$4796$0 (\$8 ),
+    .\port$4809$0 (\$9 ),
+    .\port$4941$0 (\$10 ),
+    .\port$5352$0 (\$11 ),
+    .\port$5365$0 (\$12 ),
+    .\port$5497$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -721,9 +721,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$4815$0 (\$8 ),
-    .\port$4828$0 (\$9 ),
-    .\port$4960$0 (\$10 ),
+    .\port$4796$0 (\$8 ),
+    .\port$4809$0 (\$9 ),
+    .\port$4941$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -786,9 +786,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$438 ),
-    .\port$5366$0 (\$11 ),
-    .\port$5379$0 (\$12 ),
-    .\port$5511$0 (\$13 ),
+    .\port$5352$0 (\$11 ),
+    .\port$5365$0 (\$12 ),
+    .\port$5497$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$258 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1171,7 +1171,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch0_cfg_words_w0_gray, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_poly, ch0_cfg_crc0_width, ch0_cfg_crc0_inverted, ch0_cfg_crc0_start_start, ch0_cfg_crc1_poly, ch0_cfg_crc1_width, ch0_cfg_crc1_inverted, ch0_cfg_crc1_start_start
 , ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$103 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc
 , ch1_cfg_words_w0_gray, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_poly, ch1_cfg_crc0_width, ch1_cfg_crc0_inverted, ch1_cfg_crc0_start_start, ch1_cfg_crc1_poly, ch1_cfg_crc1_width, ch1_cfg_crc1_inverted, ch1_cfg_crc1_start_start
-, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4815$0 , \port$4828$0 , ch0__ca_done, \port$4960$0 , ch1__done_count, ch1__done, \port$5366$0 , \port$5379$0 , ch1__ca_done, \port$5511$0 , bus__w_addr);
+, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4796$0 , \port$4809$0 , ch0__ca_done, \port$4941$0 , ch1__done_count, ch1__done, \port$5352$0 , \port$5365$0 , ch1__ca_done, \port$5497$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2721,18 +2721,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$4815$0 ;
-  wire [186:0] \port$4815$0 ;
-  input [335:0] \port$4828$0 ;
-  wire [335:0] \port$4828$0 ;
-  input [9:0] \port$4960$0 ;
-  wire [9:0] \port$4960$0 ;
-  input [186:0] \port$5366$0 ;
-  wire [186:0] \port$5366$0 ;
-  input [335:0] \port$5379$0 ;
-  wire [335:0] \port$5379$0 ;
-  input [9:0] \port$5511$0 ;
-  wire [9:0] \port$5511$0 ;
+  input [186:0] \port$4796$0 ;
+  wire [186:0] \port$4796$0 ;
+  input [335:0] \port$4809$0 ;
+  wire [335:0] \port$4809$0 ;
+  input [9:0] \port$4941$0 ;
+  wire [9:0] \port$4941$0 ;
+  input [186:0] \port$5352$0 ;
+  wire [186:0] \port$5352$0 ;
+  input [335:0] \port$5365$0 ;
+  wire [335:0] \port$5365$0 ;
+  input [9:0] \port$5497$0 ;
+  wire [9:0] \port$5497$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2862,7 +2862,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$347  = \$345  | \$346 ;
   assign \$348  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$349  = \$347  | \$348 ;
-  assign \$350  = ch1_read_select_110 ? { 2'h0, \port$5366$0 [182:177], 4'h0, \port$5366$0 [186:183], 1'h0, \port$5366$0 [176:174], 1'h0, \port$5366$0 [133:131], 3'h0, \port$5366$0 [49], \port$5366$0 [3:0] } : 32'd0;
+  assign \$350  = ch1_read_select_110 ? { 2'h0, \port$5352$0 [182:177], 4'h0, \port$5352$0 [186:183], 1'h0, \port$5352$0 [176:174], 1'h0, \port$5352$0 [133:131], 3'h0, \port$5352$0 [49], \port$5352$0 [3:0] } : 32'd0;
   assign \$351  = \$349  | \$350 ;
   assign \$352  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$353  = \$351  | \$352 ;
@@ -2878,21 +2878,21 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$363  = \$361  | \$362 ;
   assign \$364  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$365  = \$363  | \$364 ;
-  assign \$366  = ch1_read_select_118 ? \port$5379$0 [31:0] : 32'd0;
+  assign \$366  = ch1_read_select_118 ? \port$5365$0 [31:0] : 32'd0;
   assign \$367  = \$365  | \$366 ;
-  assign \$368  = ch1_read_select_119 ? \port$5379$0 [63:32] : 32'd0;
+  assign \$368  = ch1_read_select_119 ? \port$5365$0 [63:32] : 32'd0;
   assign \$369  = \$367  | \$368 ;
-  assign \$370  = ch1_read_select_11a ? \port$5379$0 [95:64] : 32'd0;
+  assign \$370  = ch1_read_select_11a ? \port$5365$0 [95:64] : 32'd0;
   assign \$371  = \$369  | \$370 ;
-  assign \$372  = ch1_read_select_11b ? \port$5379$0 [127:96] : 32'd0;
+  assign \$372  = ch1_read_select_11b ? \port$5365$0 [127:96] : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$374  = ch1_read_select_11c ? \port$5379$0 [159:128] : 32'd0;
+  assign \$374  = ch1_read_select_11c ? \port$5365$0 [159:128] : 32'd0;
   assign \$375  = \$373  | \$374 ;
-  assign \$376  = ch1_read_select_11d ? \port$5379$0 [191:160] : 32'd0;
+  assign \$376  = ch1_read_select_11d ? \port$5365$0 [191:160] : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_11e ? \port$5379$0 [223:192] : 32'd0;
+  assign \$378  = ch1_read_select_11e ? \port$5365$0 [223:192] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_11f ? \port$5379$0 [255:224] : 32'd0;
+  assign \$380  = ch1_read_select_11f ? \port$5365$0 [255:224] : 32'd0;
   assign \$381  = \$379  | \$380 ;
   assign \$382  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_inverted, 3'h0, ch1_cfg_crc0_width, ch1_cfg_crc0_poly } : 32'd0;
   assign \$383  = \$381  | \$382 ;
@@ -2904,13 +2904,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$389  = \$387  | \$388 ;
   assign \$390  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$391  = \$389  | \$390 ;
-  assign \$394  = ch1_read_select_142 ? { 17'h00000, \port$5511$0 [9:3], 1'h0, \port$5511$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$394  = ch1_read_select_142 ? { 17'h00000, \port$5497$0 [9:3], 1'h0, \port$5497$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$395  = \$393  | \$394 ;
-  assign \$396  = ch1_read_select_143 ? \port$5379$0 [287:256] : 32'd0;
+  assign \$396  = ch1_read_select_143 ? \port$5365$0 [287:256] : 32'd0;
   assign \$397  = \$395  | \$396 ;
-  assign \$398  = ch1_read_select_144 ? \port$5379$0 [319:288] : 32'd0;
+  assign \$398  = ch1_read_select_144 ? \port$5365$0 [319:288] : 32'd0;
   assign \$399  = \$397  | \$398 ;
-  assign \$400  = ch1_read_select_145 ? { 16'h0000, \port$5379$0 [335:320] } : 32'd0;
+  assign \$400  = ch1_read_select_145 ? { 16'h0000, \port$5365$0 [335:320] } : 32'd0;
   assign \$401  = \$399  | \$400 ;
   assign \$402  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
   assign \$403  = \$401  | \$402 ;
@@ -3786,7 +3786,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$154  = \$152  | \$153 ;
   assign \$155  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$156  = \$154  | \$155 ;
-  assign \$157  = ch0_read_select_90 ? { 2'h0, \port$4815$0 [182:177], 4'h0, \port$4815$0 [186:183], 1'h0, \port$4815$0 [176:174], 1'h0, \port$4815$0 [133:131], 3'h0, \port$4815$0 [49], \port$4815$0 [3:0] } : 32'd0;
+  assign \$157  = ch0_read_select_90 ? { 2'h0, \port$4796$0 [182:177], 4'h0, \port$4796$0 [186:183], 1'h0, \port$4796$0 [176:174], 1'h0, \port$4796$0 [133:131], 3'h0, \port$4796$0 [49], \port$4796$0 [3:0] } : 32'd0;
   assign \$158  = \$156  | \$157 ;
   assign \$159  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$160  = \$158  | \$159 ;
@@ -3802,21 +3802,21 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$170  = \$168  | \$169 ;
   assign \$171  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$172  = \$170  | \$171 ;
-  assign \$173  = ch0_read_select_98 ? \port$4828$0 [31:0] : 32'd0;
+  assign \$173  = ch0_read_select_98 ? \port$4809$0 [31:0] : 32'd0;
   assign \$174  = \$172  | \$173 ;
-  assign \$175  = ch0_read_select_99 ? \port$4828$0 [63:32] : 32'd0;
+  assign \$175  = ch0_read_select_99 ? \port$4809$0 [63:32] : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_9a ? \port$4828$0 [95:64] : 32'd0;
+  assign \$177  = ch0_read_select_9a ? \port$4809$0 [95:64] : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_9b ? \port$4828$0 [127:96] : 32'd0;
+  assign \$179  = ch0_read_select_9b ? \port$4809$0 [127:96] : 32'd0;
   assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_9c ? \port$4828$0 [159:128] : 32'd0;
+  assign \$181  = ch0_read_select_9c ? \port$4809$0 [159:128] : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_9d ? \port$4828$0 [191:160] : 32'd0;
+  assign \$183  = ch0_read_select_9d ? \port$4809$0 [191:160] : 32'd0;
   assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_9e ? \port$4828$0 [223:192] : 32'd0;
+  assign \$185  = ch0_read_select_9e ? \port$4809$0 [223:192] : 32'd0;
   assign \$186  = \$184  | \$185 ;
-  assign \$187  = ch0_read_select_9f ? \port$4828$0 [255:224] : 32'd0;
+  assign \$187  = ch0_read_select_9f ? \port$4809$0 [255:224] : 32'd0;
   assign \$188  = \$186  | \$187 ;
   assign \$189  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_inverted, 3'h0, ch0_cfg_crc0_width, ch0_cfg_crc0_poly } : 32'd0;
   assign \$190  = \$188  | \$189 ;
@@ -3828,13 +3828,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$196  = \$194  | \$195 ;
   assign \$197  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$103 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$198  = \$196  | \$197 ;
-  assign \$201  = ch0_read_select_c2 ? { 17'h00000, \port$4960$0 [9:3], 1'h0, \port$4960$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$201  = ch0_read_select_c2 ? { 17'h00000, \port$4941$0 [9:3], 1'h0, \port$4941$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$202  = \$200  | \$201 ;
-  assign \$203  = ch0_read_select_c3 ? \port$4828$0 [287:256] : 32'd0;
+  assign \$203  = ch0_read_select_c3 ? \port$4809$0 [287:256] : 32'd0;
   assign \$204  = \$202  | \$203 ;
-  assign \$205  = ch0_read_select_c4 ? \port$4828$0 [319:288] : 32'd0;
+  assign \$205  = ch0_read_select_c4 ? \port$4809$0 [319:288] : 32'd0;
   assign \$206  = \$204  | \$205 ;
-  assign \$207  = ch0_read_select_c5 ? { 16'h0000, \port$4828$0 [335:320] } : 32'd0;
+  assign \$207  = ch0_read_select_c5 ? { 16'h0000, \port$4809$0 [335:320] } : 32'd0;
   assign \$208  = \$206  | \$207 ;
   assign \$209  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$210  = \$208  | \$209 ;
@@ -4986,7 +4986,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$621  = ch0_result_status_status_snapshot;
     if (\$128 ) begin
-      \$621  = \port$4815$0 [3:0];
+      \$621  = \port$4796$0 [3:0];
     end
     if (rst) begin
       \$621  = 4'h0;
@@ -4996,7 +4996,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$622  = ch0_result_status_cds_snapshot;
     if (\$128 ) begin
-      \$622  = \port$4815$0 [49];
+      \$622  = \port$4796$0 [49];
     end
     if (rst) begin
       \$622  = 1'h0;
@@ -5006,7 +5006,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$623  = ch0_result_status_w0_ne_snapshot;
     if (\$128 ) begin
-      \$623  = \port$4815$0 [131];
+      \$623  = \port$4796$0 [131];
     end
     if (rst) begin
       \$623  = 1'h0;
@@ -5016,7 +5016,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$624  = ch0_result_status_w0_nw_snapshot;
     if (\$128 ) begin
-      \$624  = \port$4815$0 [132];
+      \$624  = \port$4796$0 [132];
     end
     if (rst) begin
       \$624  = 1'h0;
@@ -5026,7 +5026,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$625  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$128 ) begin
-      \$625  = \port$4815$0 [133];
+      \$625  = \port$4796$0 [133];
     end
     if (rst) begin
       \$625  = 1'h0;
@@ -5036,7 +5036,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$626  = ch0_result_status_w1_ne_snapshot;
     if (\$128 ) begin
-      \$626  = \port$4815$0 [174];
+      \$626  = \port$4796$0 [174];
     end
     if (rst) begin
       \$626  = 1'h0;
@@ -5046,7 +5046,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$627  = ch0_result_status_w1_nw_snapshot;
     if (\$128 ) begin
-      \$627  = \port$4815$0 [175];
+      \$627  = \port$4796$0 [175];
     end
     if (rst) begin
       \$627  = 1'h0;
@@ -5056,7 +5056,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$628  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$128 ) begin
-      \$628  = \port$4815$0 [176];
+      \$628  = \port$4796$0 [176];
     end
     if (rst) begin
       \$628  = 1'h0;
@@ -5066,7 +5066,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$629  = ch0_result_status_lc_repeat_snapshot;
     if (\$128 ) begin
-      \$629  = \port$4815$0 [183];
+      \$629  = \port$4796$0 [183];
     end
     if (rst) begin
       \$629  = 1'h0;
@@ -5076,7 +5076,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$630  = ch0_result_status_lc_skip_snapshot;
     if (\$128 ) begin
-      \$630  = \port$4815$0 [184];
+      \$630  = \port$4796$0 [184];
     end
     if (rst) begin
       \$630  = 1'h0;
@@ -5086,7 +5086,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$631  = ch0_result_status_lc_zero_snapshot;
     if (\$128 ) begin
-      \$631  = \port$4815$0 [185];
+      \$631  = \port$4796$0 [185];
     end
     if (rst) begin
       \$631  = 1'h0;
@@ -5096,7 +5096,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$632  = ch0_result_status_spw_mismatch_snapshot;
     if (\$128 ) begin
-      \$632  = \port$4815$0 [186];
+      \$632  = \port$4796$0 [186];
     end
     if (rst) begin
       \$632  = 1'h0;
@@ -5106,7 +5106,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$633  = ch0_result_status_lc_snapshot;
     if (\$128 ) begin
-      \$633  = \port$4815$0 [182:177];
+      \$633  = \port$4796$0 [182:177];
     end
     if (rst) begin
       \$633  = 6'h00;
@@ -5126,7 +5126,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$635  = ch0_result_seq_line_delay_snapshot;
     if (\$128 ) begin
-      \$635  = \port$4815$0 [48:36];
+      \$635  = \port$4796$0 [48:36];
     end
     if (rst) begin
       \$635  = 13'h0000;
@@ -5136,7 +5136,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$636  = ch0_result_w0_lo_data_snapshot;
     if (\$128 ) begin
-      \$636  = \port$4815$0 [107:76];
+      \$636  = \port$4796$0 [107:76];
     end
     if (rst) begin
       \$636  = 32'd0;
@@ -5146,7 +5146,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$637  = ch0_result_w0_hi_data_snapshot;
     if (\$128 ) begin
-      \$637  = \port$4815$0 [130:108];
+      \$637  = \port$4796$0 [130:108];
     end
     if (rst) begin
       \$637  = 23'h000000;
@@ -5156,7 +5156,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$638  = ch0_result_w1_lo_data_snapshot;
     if (\$128 ) begin
-      \$638  = \port$4815$0 [165:134];
+      \$638  = \port$4796$0 [165:134];
     end
     if (rst) begin
       \$638  = 32'd0;
@@ -5166,7 +5166,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$639  = ch0_result_w1_hi_data_snapshot;
     if (\$128 ) begin
-      \$639  = \port$4815$0 [173:166];
+      \$639  = \port$4796$0 [173:166];
     end
     if (rst) begin
       \$639  = 8'h00;
@@ -5176,7 +5176,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$640  = ch0_result_timestamp_time_snapshot;
     if (\$128 ) begin
-      \$640  = \port$4815$0 [35:4];
+      \$640  = \port$4796$0 [35:4];
     end
     if (rst) begin
       \$640  = 32'd0;
@@ -5186,7 +5186,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$641  = ch0_result_line_noise_events_snapshot;
     if (\$128 ) begin
-      \$641  = \port$4815$0 [53:50];
+      \$641  = \port$4796$0 [53:50];
     end
     if (rst) begin
       \$641  = 4'h0;
@@ -5196,7 +5196,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$642  = ch0_result_line_delay_settled_snapshot;
     if (\$128 ) begin
-      \$642  = \port$4815$0 [54];
+      \$642  = \port$4796$0 [54];
     end
     if (rst) begin
       \$642  = 1'h0;
@@ -5206,7 +5206,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$643  = ch0_result_line_delay_spread_snapshot;
     if (\$128 ) begin
-      \$643  = \port$4815$0 [75:68];
+      \$643  = \port$4796$0 [75:68];
     end
     if (rst) begin
       \$643  = 8'h00;
@@ -5216,7 +5216,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$644  = ch0_result_line_settled_delay_snapshot;
     if (\$128 ) begin
-      \$644  = \port$4815$0 [67:55];
+      \$644  = \port$4796$0 [67:55];
     end
     if (rst) begin
       \$644  = 13'h0000;
@@ -6250,7 +6250,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$748  = ch1_result_status_status_snapshot;
     if (\$321 ) begin
-      \$748  = \port$5366$0 [3:0];
+      \$748  = \port$5352$0 [3:0];
     end
     if (rst) begin
       \$748  = 4'h0;
@@ -6260,7 +6260,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$749  = ch1_result_status_cds_snapshot;
     if (\$321 ) begin
-      \$749  = \port$5366$0 [49];
+      \$749  = \port$5352$0 [49];
     end
     if (rst) begin
       \$749  = 1'h0;
@@ -6270,7 +6270,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$750  = ch1_result_status_w0_ne_snapshot;
     if (\$321 ) begin
-      \$750  = \port$5366$0 [131];
+      \$750  = \port$5352$0 [131];
     end
     if (rst) begin
       \$750  = 1'h0;
@@ -6280,7 +6280,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$751  = ch1_result_status_w0_nw_snapshot;
     if (\$321 ) begin
-      \$751  = \port$5366$0 [132];
+      \$751  = \port$5352$0 [132];
     end
     if (rst) begin
       \$751  = 1'h0;
@@ -6290,7 +6290,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$752  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$321 ) begin
-      \$752  = \port$5366$0 [133];
+      \$752  = \port$5352$0 [133];
     end
     if (rst) begin
       \$752  = 1'h0;
@@ -6300,7 +6300,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$753  = ch1_result_status_w1_ne_snapshot;
     if (\$321 ) begin
-      \$753  = \port$5366$0 [174];
+      \$753  = \port$5352$0 [174];
     end
     if (rst) begin
       \$753  = 1'h0;
@@ -6310,7 +6310,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$754  = ch1_result_status_w1_nw_snapshot;
     if (\$321 ) begin
-      \$754  = \port$5366$0 [175];
+      \$754  = \port$5352$0 [175];
     end
     if (rst) begin
       \$754  = 1'h0;
@@ -6320,7 +6320,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$755  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$321 ) begin
-      \$755  = \port$5366$0 [176];
+      \$755  = \port$5352$0 [176];
     end
     if (rst) begin
       \$755  = 1'h0;
@@ -6330,7 +6330,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$756  = ch1_result_status_lc_repeat_snapshot;
     if (\$321 ) begin
-      \$756  = \port$5366$0 [183];
+      \$756  = \port$5352$0 [183];
     end
     if (rst) begin
       \$756  = 1'h0;
@@ -6340,7 +6340,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$757  = ch1_result_status_lc_skip_snapshot;
     if (\$321 ) begin
-      \$757  = \port$5366$0 [184];
+      \$757  = \port$5352$0 [184];
     end
     if (rst) begin
       \$757  = 1'h0;
@@ -6350,7 +6350,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$758  = ch1_result_status_lc_zero_snapshot;
     if (\$321 ) begin
-      \$758  = \port$5366$0 [185];
+      \$758  = \port$5352$0 [185];
     end
     if (rst) begin
       \$758  = 1'h0;
@@ -6360,7 +6360,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$759  = ch1_result_status_spw_mismatch_snapshot;
     if (\$321 ) begin
-      \$759  = \port$5366$0 [186];
+      \$759  = \port$5352$0 [186];
     end
     if (rst) begin
       \$759  = 1'h0;
@@ -6370,7 +6370,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$760  = ch1_result_status_lc_snapshot;
     if (\$321 ) begin
-      \$760  = \port$5366$0 [182:177];
+      \$760  = \port$5352$0 [182:177];
     end
     if (rst) begin
       \$760  = 6'h00;
@@ -6390,7 +6390,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$762  = ch1_result_seq_line_delay_snapshot;
     if (\$321 ) begin
-      \$762  = \port$5366$0 [48:36];
+      \$762  = \port$5352$0 [48:36];
     end
     if (rst) begin
       \$762  = 13'h0000;
@@ -6400,7 +6400,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$763  = ch1_result_w0_lo_data_snapshot;
     if (\$321 ) begin
-      \$763  = \port$5366$0 [107:76];
+      \$763  = \port$5352$0 [107:76];
     end
     if (rst) begin
       \$763  = 32'd0;
@@ -6410,7 +6410,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$764  = ch1_result_w0_hi_data_snapshot;
     if (\$321 ) begin
-      \$764  = \port$5366$0 [130:108];
+      \$764  = \port$5352$0 [130:108];
     end
     if (rst) begin
       \$764  = 23'h000000;
@@ -6420,7 +6420,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$765  = ch1_result_w1_lo_data_snapshot;
     if (\$321 ) begin
-      \$765  = \port$5366$0 [165:134];
+      \$765  = \port$5352$0 [165:134];
     end
     if (rst) begin
       \$765  = 32'd0;
@@ -6430,7 +6430,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$766  = ch1_result_w1_hi_data_snapshot;
     if (\$321 ) begin
-      \$766  = \port$5366$0 [173:166];
+      \$766  = \port$5352$0 [173:166];
     end
     if (rst) begin
       \$766  = 8'h00;
@@ -6440,7 +6440,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$767  = ch1_result_timestamp_time_snapshot;
     if (\$321 ) begin
-      \$767  = \port$5366$0 [35:4];
+      \$767  = \port$5352$0 [35:4];
     end
     if (rst) begin
       \$767  = 32'd0;
@@ -6450,7 +6450,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$768  = ch1_result_line_noise_events_snapshot;
     if (\$321 ) begin
-      \$768  = \port$5366$0 [53:50];
+      \$768  = \port$5352$0 [53:50];
     end
     if (rst) begin
       \$768  = 4'h0;
@@ -6460,7 +6460,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$769  = ch1_result_line_delay_settled_snapshot;
     if (\$321 ) begin
-      \$769  = \port$5366$0 [54];
+      \$769  = \port$5352$0 [54];
     end
     if (rst) begin
       \$769  = 1'h0;
@@ -6470,7 +6470,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$770  = ch1_result_line_delay_spread_snapshot;
     if (\$321 ) begin
-      \$770  = \port$5366$0 [75:68];
+      \$770  = \port$5352$0 [75:68];
     end
     if (rst) begin
       \$770  = 8'h00;
@@ -6480,7 +6480,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$771  = ch1_result_line_settled_delay_snapshot;
     if (\$321 ) begin
-      \$771  = \port$5366$0 [67:55];
+      \$771  = \port$5352$0 [67:55];
     end
     if (rst) begin
       \$771  = 13'h0000;
@@ -6509,106 +6509,106 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$4815$0 [3:0];
-  assign ch0__cds = \port$4815$0 [49];
-  assign ch0__word0_ne = \port$4815$0 [131];
-  assign ch0__word0_nw = \port$4815$0 [132];
-  assign ch0__word0_crc_ok = \port$4815$0 [133];
-  assign ch0__word1_ne = \port$4815$0 [174];
-  assign ch0__word1_nw = \port$4815$0 [175];
-  assign ch0__word1_crc_ok = \port$4815$0 [176];
-  assign ch0__lc_repeat = \port$4815$0 [183];
-  assign ch0__lc_skip = \port$4815$0 [184];
-  assign ch0__lc_zero = \port$4815$0 [185];
-  assign ch0__spw_mismatch = \port$4815$0 [186];
-  assign ch0__lc = \port$4815$0 [182:177];
-  assign ch0__line_delay = \port$4815$0 [48:36];
-  assign ch0__word0_position = \port$4815$0 [130:76];
-  assign ch0__word1_position = \port$4815$0 [173:134];
-  assign ch0__timestamp = \port$4815$0 [35:4];
-  assign ch0__noise_events = \port$4815$0 [53:50];
-  assign ch0__delay_settled = \port$4815$0 [54];
-  assign ch0__delay_spread = \port$4815$0 [75:68];
-  assign ch0__settled_delay = \port$4815$0 [67:55];
+  assign ch0__status = \port$4796$0 [3:0];
+  assign ch0__cds = \port$4796$0 [49];
+  assign ch0__word0_ne = \port$4796$0 [131];
+  assign ch0__word0_nw = \port$4796$0 [132];
+  assign ch0__word0_crc_ok = \port$4796$0 [133];
+  assign ch0__word1_ne = \port$4796$0 [174];
+  assign ch0__word1_nw = \port$4796$0 [175];
+  assign ch0__word1_crc_ok = \port$4796$0 [176];
+  assign ch0__lc_repeat = \port$4796$0 [183];
+  assign ch0__lc_skip = \port$4796$0 [184];
+  assign ch0__lc_zero = \port$4796$0 [185];
+  assign ch0__spw_mismatch = \port$4796$0 [186];
+  assign ch0__lc = \port$4796$0 [182:177];
+  assign ch0__line_delay = \port$4796$0 [48:36];
+  assign ch0__word0_position = \port$4796$0 [130:76];
+  assign ch0__word1_position = \port$4796$0 [173:134];
+  assign ch0__timestamp = \port$4796$0 [35:4];
+  assign ch0__noise_events = \port$4796$0 [53:50];
+  assign ch0__delay_settled = \port$4796$0 [54];
+  assign ch0__delay_spread = \port$4796$0 [75:68];
+  assign ch0__settled_delay = \port$4796$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$4828$0 [15:0];
-  assign ch0__count_crc_word1 = \port$4828$0 [31:16];
-  assign ch0__count_no_ack = \port$4828$0 [47:32];
-  assign ch0__count_no_start = \port$4828$0 [63:48];
-  assign ch0__count_delay_range = \port$4828$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$4828$0 [95:80];
-  assign ch0__count_lc_repeat = \port$4828$0 [111:96];
-  assign ch0__count_lc_skip = \port$4828$0 [127:112];
-  assign ch0__count_lc_zero = \port$4828$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$4828$0 [159:144];
-  assign ch0__count_overrun = \port$4828$0 [175:160];
-  assign ch0__count_aborted = \port$4828$0 [191:176];
-  assign ch0__count_no_stop = \port$4828$0 [207:192];
-  assign ch0__count_noisy_line = \port$4828$0 [223:208];
-  assign ch0__count_delay_jump = \port$4828$0 [239:224];
-  assign ch0__count_noise_event = \port$4828$0 [255:240];
-  assign ch0__ca_status = \port$4960$0 [2:0];
-  assign ch0__ca_bytes_done = \port$4960$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$4828$0 [271:256];
-  assign ch0__count_ca_no_answer = \port$4828$0 [287:272];
-  assign ch0__count_ca_refused = \port$4828$0 [303:288];
-  assign ch0__count_ca_aborted = \port$4828$0 [319:304];
-  assign ch0__count_ca_data_fault = \port$4828$0 [335:320];
-  assign ch1__status = \port$5366$0 [3:0];
-  assign ch1__cds = \port$5366$0 [49];
-  assign ch1__word0_ne = \port$5366$0 [131];
-  assign ch1__word0_nw = \port$5366$0 [132];
-  assign ch1__word0_crc_ok = \port$5366$0 [133];
-  assign ch1__word1_ne = \port$5366$0 [174];
-  assign ch1__word1_nw = \port$5366$0 [175];
-  assign ch1__word1_crc_ok = \port$5366$0 [176];
-  assign ch1__lc_repeat = \port$5366$0 [183];
-  assign ch1__lc_skip = \port$5366$0 [184];
-  assign ch1__lc_zero = \port$5366$0 [185];
-  assign ch1__spw_mismatch = \port$5366$0 [186];
-  assign ch1__lc = \port$5366$0 [182:177];
-  assign ch1__line_delay = \port$5366$0 [48:36];
-  assign ch1__word0_position = \port$5366$0 [130:76];
-  assign ch1__word1_position = \port$5366$0 [173:134];
-  assign ch1__timestamp = \port$5366$0 [35:4];
-  assign ch1__noise_events = \port$5366$0 [53:50];
-  assign ch1__delay_settled = \port$5366$0 [54];
-  assign ch1__delay_spread = \port$5366$0 [75:68];
-  assign ch1__settled_delay = \port$5366$0 [67:55];
+  assign ch0__count_crc_word0 = \port$4809$0 [15:0];
+  assign ch0__count_crc_word1 = \port$4809$0 [31:16];
+  assign ch0__count_no_ack = \port$4809$0 [47:32];
+  assign ch0__count_no_start = \port$4809$0 [63:48];
+  assign ch0__count_delay_range = \port$4809$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$4809$0 [95:80];
+  assign ch0__count_lc_repeat = \port$4809$0 [111:96];
+  assign ch0__count_lc_skip = \port$4809$0 [127:112];
+  assign ch0__count_lc_zero = \port$4809$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$4809$0 [159:144];
+  assign ch0__count_overrun = \port$4809$0 [175:160];
+  assign ch0__count_aborted = \port$4809$0 [191:176];
+  assign ch0__count_no_stop = \port$4809$0 [207:192];
+  assign ch0__count_noisy_line = \port$4809$0 [223:208];
+  assign ch0__count_delay_jump = \port$4809$0 [239:224];
+  assign ch0__count_noise_event = \port$4809$0 [255:240];
+  assign ch0__ca_status = \port$4941$0 [2:0];
+  assign ch0__ca_bytes_done = \port$4941$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$4809$0 [271:256];
+  assign ch0__count_ca_no_answer = \port$4809$0 [287:272];
+  assign ch0__count_ca_refused = \port$4809$0 [303:288];
+  assign ch0__count_ca_aborted = \port$4809$0 [319:304];
+  assign ch0__count_ca_data_fault = \port$4809$0 [335:320];
+  assign ch1__status = \port$5352$0 [3:0];
+  assign ch1__cds = \port$5352$0 [49];
+  assign ch1__word0_ne = \port$5352$0 [131];
+  assign ch1__word0_nw = \port$5352$0 [132];
+  assign ch1__word0_crc_ok = \port$5352$0 [133];
+  assign ch1__word1_ne = \port$5352$0 [174];
+  assign ch1__word1_nw = \port$5352$0 [175];
+  assign ch1__word1_crc_ok = \port$5352$0 [176];
+  assign ch1__lc_repeat = \port$5352$0 [183];
+  assign ch1__lc_skip = \port$5352$0 [184];
+  assign ch1__lc_zero = \port$5352$0 [185];
+  assign ch1__spw_mismatch = \port$5352$0 [186];
+  assign ch1__lc = \port$5352$0 [182:177];
+  assign ch1__line_delay = \port$5352$0 [48:36];
+  assign ch1__word0_position = \port$5352$0 [130:76];
+  assign ch1__word1_position = \port$5352$0 [173:134];
+  assign ch1__timestamp = \port$5352$0 [35:4];
+  assign ch1__noise_events = \port$5352$0 [53:50];
+  assign ch1__delay_settled = \port$5352$0 [54];
+  assign ch1__delay_spread = \port$5352$0 [75:68];
+  assign ch1__settled_delay = \port$5352$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$5379$0 [15:0];
-  assign ch1__count_crc_word1 = \port$5379$0 [31:16];
-  assign ch1__count_no_ack = \port$5379$0 [47:32];
-  assign ch1__count_no_start = \port$5379$0 [63:48];
-  assign ch1__count_delay_range = \port$5379$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$5379$0 [95:80];
-  assign ch1__count_lc_repeat = \port$5379$0 [111:96];
-  assign ch1__count_lc_skip = \port$5379$0 [127:112];
-  assign ch1__count_lc_zero = \port$5379$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$5379$0 [159:144];
-  assign ch1__count_overrun = \port$5379$0 [175:160];
-  assign ch1__count_aborted = \port$5379$0 [191:176];
-  assign ch1__count_no_stop = \port$5379$0 [207:192];
-  assign ch1__count_noisy_line = \port$5379$0 [223:208];
-  assign ch1__count_delay_jump = \port$5379$0 [239:224];
-  assign ch1__count_noise_event = \port$5379$0 [255:240];
-  assign ch1__ca_status = \port$5511$0 [2:0];
-  assign ch1__ca_bytes_done = \port$5511$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$5379$0 [271:256];
-  assign ch1__count_ca_no_answer = \port$5379$0 [287:272];
-  assign ch1__count_ca_refused = \port$5379$0 [303:288];
-  assign ch1__count_ca_aborted = \port$5379$0 [319:304];
-  assign ch1__count_ca_data_fault = \port$5379$0 [335:320];
+  assign ch1__count_crc_word0 = \port$5365$0 [15:0];
+  assign ch1__count_crc_word1 = \port$5365$0 [31:16];
+  assign ch1__count_no_ack = \port$5365$0 [47:32];
+  assign ch1__count_no_start = \port$5365$0 [63:48];
+  assign ch1__count_delay_range = \port$5365$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$5365$0 [95:80];
+  assign ch1__count_lc_repeat = \port$5365$0 [111:96];
+  assign ch1__count_lc_skip = \port$5365$0 [127:112];
+  assign ch1__count_lc_zero = \port$5365$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$5365$0 [159:144];
+  assign ch1__count_overrun = \port$5365$0 [175:160];
+  assign ch1__count_aborted = \port$5365$0 [191:176];
+  assign ch1__count_no_stop = \port$5365$0 [207:192];
+  assign ch1__count_noisy_line = \port$5365$0 [223:208];
+  assign ch1__count_delay_jump = \port$5365$0 [239:224];
+  assign ch1__count_noise_event = \port$5365$0 [255:240];
+  assign ch1__ca_status = \port$5497$0 [2:0];
+  assign ch1__ca_bytes_done = \port$5497$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$5365$0 [271:256];
+  assign ch1__count_ca_no_answer = \port$5365$0 [287:272];
+  assign ch1__count_ca_refused = \port$5365$0 [303:288];
+  assign ch1__count_ca_aborted = \port$5365$0 [319:304];
+  assign ch1__count_ca_data_fault = \port$5365$0 [335:320];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -6837,7 +6837,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly
-, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$4815$0 , \port$4828$0 , regs__ca_done, \port$4960$0 , ca_rbuf_addr
+, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$4796$0 , \port$4809$0 , regs__ca_done, \port$4941$0 , ca_rbuf_addr
 );
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
@@ -6997,12 +6997,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$4815$0 ;
-  wire [186:0] \port$4815$0 ;
-  output [335:0] \port$4828$0 ;
-  wire [335:0] \port$4828$0 ;
-  output [9:0] \port$4960$0 ;
-  wire [9:0] \port$4960$0 ;
+  output [186:0] \port$4796$0 ;
+  wire [186:0] \port$4796$0 ;
+  output [335:0] \port$4809$0 ;
+  wire [335:0] \port$4809$0 ;
+  output [9:0] \port$4941$0 ;
+  wire [9:0] \port$4941$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -7177,8 +7177,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   assign regs__frame_error = regs__done & \$1 ;
   \biss_master_wb.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$236 (ca_abort),
-    .\busy$290 (regs__busy),
+    .\abort$237 (ca_abort),
+    .\busy$291 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -7219,24 +7219,24 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
     .cfg_w1_gray(cfg_w1_gray),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$264 (clear_counters),
+    .\clear$265 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$6 ),
-    .\done$293 (regs__done),
+    .\done$294 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$37 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$7 ),
-    .\result$298 (\$5 ),
+    .\result$299 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$234 (ca_start),
+    .\start$235 (ca_start),
     .trigger(trigger),
-    .\valid$295 (valid)
+    .\valid$296 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
@@ -7402,15 +7402,15 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$202  = ma;
   assign \slo$204  = slo;
-  assign \port$4815$0  = \$5 ;
-  assign \port$4828$0  = \$6 ;
-  assign \port$4960$0  = \$7 ;
+  assign \port$4796$0  = \$5 ;
+  assign \port$4809$0  = \$6 ;
+  assign \port$4941$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$290 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$264 , \periodic$37 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$291 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$265 , \periodic$37 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
 , cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start
-, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$234 , \abort$236 , abort, ma, \done$293 , \valid$295 , \result$298 , counts, ca_done, result, rbuf_addr);
+, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$235 , \abort$237 , abort, ma, \done$294 , \valid$296 , \result$299 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -7426,7 +7426,9 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \$2 ;
   reg \$20 ;
   reg \$21 ;
-  wire \$22 ;
+  reg \$22 ;
+  reg \$23 ;
+  wire \$24 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -7434,10 +7436,12 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
+  (* init = 1'h0 *)
+  wire \$signal ;
   input abort;
   wire abort;
-  input \abort$236 ;
-  wire \abort$236 ;
+  input \abort$237 ;
+  wire \abort$237 ;
   wire \abort$49 ;
   wire abort_cycle;
   wire ack_expired;
@@ -7446,15 +7450,15 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire [23:0] \ack_limit$102 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$322 ;
+  wire \bit$323 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$79 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$245 ;
-  output \busy$290 ;
-  wire \busy$290 ;
+  wire \busy$246 ;
+  output \busy$291 ;
+  wire \busy$291 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -7489,10 +7493,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$249 ;
+  wire \cdm$250 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$301 ;
+  wire \cds$302 ;
   wire [252:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -7613,12 +7617,14 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire cfg_w1_nenw;
   wire check;
   wire \check$160 ;
-  wire clean;
+  reg clean = 1'h0;
+  (* init = 1'h0 *)
   wire \clean$165 ;
+  wire \clean$324 ;
   wire clear;
   wire \clear$126 ;
-  input \clear$264 ;
-  wire \clear$264 ;
+  input \clear$265 ;
+  wire \clear$265 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -7675,7 +7681,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire [39:0] \cpw_top$177 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$190 ;
+  wire [1:0] \crc_ok$191 ;
   wire [75:0] crcs;
   wire [75:0] \crcs$173 ;
   wire [37:0] \crcs$173[0] ;
@@ -7773,10 +7779,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$247 ;
-  output \done$293 ;
-  wire \done$293 ;
+  wire \done$248 ;
+  output \done$294 ;
   wire \done$294 ;
+  wire \done$295 ;
   wire doubtful;
   wire early;
   wire \early$65 ;
@@ -7785,30 +7791,30 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$259 ;
-  wire \events$259.aborted ;
-  wire \events$259.ca_aborted ;
-  wire \events$259.ca_crc4_error ;
-  wire \events$259.ca_data_fault ;
-  wire \events$259.ca_no_answer ;
-  wire \events$259.ca_refused ;
-  wire \events$259.crc_word0 ;
-  wire \events$259.crc_word1 ;
-  wire \events$259.delay_jump ;
-  wire \events$259.delay_range ;
-  wire \events$259.lc_repeat ;
-  wire \events$259.lc_skip ;
-  wire \events$259.lc_zero ;
-  wire \events$259.no_ack ;
-  wire \events$259.no_start ;
-  wire \events$259.no_stop ;
-  wire \events$259.noise_event ;
-  wire \events$259.noisy_line ;
-  wire \events$259.overrun ;
-  wire \events$259.slo_stuck_low ;
-  wire \events$259.spw_mismatch ;
+  wire [20:0] \events$260 ;
+  wire \events$260.aborted ;
+  wire \events$260.ca_aborted ;
+  wire \events$260.ca_crc4_error ;
+  wire \events$260.ca_data_fault ;
+  wire \events$260.ca_no_answer ;
+  wire \events$260.ca_refused ;
+  wire \events$260.crc_word0 ;
+  wire \events$260.crc_word1 ;
+  wire \events$260.delay_jump ;
+  wire \events$260.delay_range ;
+  wire \events$260.lc_repeat ;
+  wire \events$260.lc_skip ;
+  wire \events$260.lc_zero ;
+  wire \events$260.no_ack ;
+  wire \events$260.no_start ;
+  wire \events$260.no_stop ;
+  wire \events$260.noise_event ;
+  wire \events$260.noisy_line ;
+  wire \events$260.overrun ;
+  wire \events$260.slo_stuck_low ;
+  wire \events$260.spw_mismatch ;
   wire fault;
-  wire \fault$186 ;
+  wire \fault$187 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -7842,7 +7848,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$188 ;
+  wire [3:0] \fault_status$189 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -7852,7 +7858,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$220 ;
+  wire \first_rise$221 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -7914,21 +7920,21 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$137 ;
-  wire [5:0] \lc$314 ;
+  wire [5:0] \lc$315 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$139 ;
   wire lc_repeat;
-  wire \lc_repeat$315 ;
+  wire \lc_repeat$316 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$316 ;
+  wire \lc_skip$317 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$317 ;
+  wire \lc_zero$318 ;
   wire lc_zero_seen;
-  wire learn;
+  reg learn = 1'h0;
   wire level;
   wire \level$148 ;
   wire [3:0] limit;
@@ -7984,7 +7990,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \locked$63 ;
   output ma;
   wire ma;
-  wire \ma$289 ;
+  wire \ma$290 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$91 ;
@@ -8005,7 +8011,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$292 ;
+  wire \overrun$293 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$37 ;
@@ -8026,37 +8032,37 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$198 ;
+  wire \report$199 ;
   wire report_delay;
-  wire \report_delay$201 ;
+  wire \report_delay$202 ;
   wire report_frame;
-  wire \report_frame$185 ;
-  wire \report_frame$199 ;
+  wire \report_frame$186 ;
+  wire \report_frame$200 ;
   wire request;
-  wire [17:0] \request$222 ;
-  wire [6:0] \request$222.address ;
-  wire [6:0] \request$222.count ;
-  wire [2:0] \request$222.slave_id ;
-  wire \request$222.write ;
+  wire [17:0] \request$223 ;
+  wire [6:0] \request$223.address ;
+  wire [6:0] \request$223.count ;
+  wire [2:0] \request$223.slave_id ;
+  wire \request$223.write ;
   wire \request$48 ;
   wire restart;
   wire \restart$152 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$298 ;
-  wire [186:0] \result$298 ;
-  wire \result$298.cds ;
-  wire \result$298.delay_settled ;
-  wire [7:0] \result$298.delay_spread ;
-  wire [5:0] \result$298.lc ;
-  wire \result$298.lc_repeat ;
-  wire \result$298.lc_skip ;
-  wire \result$298.lc_zero ;
-  wire [12:0] \result$298.line_delay ;
-  wire [3:0] \result$298.noise_events ;
-  wire [12:0] \result$298.settled_delay ;
-  wire \result$298.spw_mismatch ;
+  output [186:0] \result$299 ;
+  wire [186:0] \result$299 ;
+  wire \result$299.cds ;
+  wire \result$299.delay_settled ;
+  wire [7:0] \result$299.delay_spread ;
+  wire [5:0] \result$299.lc ;
+  wire \result$299.lc_repeat ;
+  wire \result$299.lc_skip ;
+  wire \result$299.lc_zero ;
+  wire [12:0] \result$299.line_delay ;
+  wire [3:0] \result$299.noise_events ;
+  wire [12:0] \result$299.settled_delay ;
+  wire \result$299.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -8073,18 +8079,18 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$298.status ;
-  wire [31:0] \result$298.timestamp ;
-  wire [57:0] \result$298.word0 ;
-  wire \result$298.word0.crc_ok ;
-  wire \result$298.word0.ne ;
-  wire \result$298.word0.nw ;
-  wire [54:0] \result$298.word0.position ;
-  wire [42:0] \result$298.word1 ;
-  wire \result$298.word1.crc_ok ;
-  wire \result$298.word1.ne ;
-  wire \result$298.word1.nw ;
-  wire [39:0] \result$298.word1.position ;
+  wire [3:0] \result$299.status ;
+  wire [31:0] \result$299.timestamp ;
+  wire [57:0] \result$299.word0 ;
+  wire \result$299.word0.crc_ok ;
+  wire \result$299.word0.ne ;
+  wire \result$299.word0.nw ;
+  wire [54:0] \result$299.word0.position ;
+  wire [42:0] \result$299.word1 ;
+  wire \result$299.word1.crc_ok ;
+  wire \result$299.word1.ne ;
+  wire \result$299.word1.nw ;
+  wire [39:0] \result$299.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -8103,12 +8109,12 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$321 ;
+  wire \sample$322 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$304 ;
+  wire [12:0] \settled_delay$305 ;
   wire skip;
   input slo;
   wire slo;
@@ -8125,11 +8131,11 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$318 ;
+  wire \spw_mismatch$319 ;
   input start;
   wire start;
-  input \start$234 ;
-  wire \start$234 ;
+  input \start$235 ;
+  wire \start$235 ;
   wire \start$35 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$123 ;
@@ -8170,7 +8176,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$297 ;
+  wire [3:0] \status$298 ;
   wire stop_bit;
   wire \stop_bit$75 ;
   wire stopped;
@@ -8186,9 +8192,9 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire trigger;
   wire \trigger$46 ;
   wire valid;
-  wire \valid$203 ;
-  output \valid$295 ;
-  wire \valid$295 ;
+  wire \valid$204 ;
+  output \valid$296 ;
+  wire \valid$296 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -8260,11 +8266,11 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
   assign \check$160  = started & \$1 ;
-  assign \$2  = learn & spw_mismatch;
+  assign \$2  = report_frame & spw_mismatch;
   assign \$3  = status == 4'hd;
-  assign \$4  = learn & \$3 ;
+  assign \$4  = report_frame & \$3 ;
   assign \$5  = status == 4'he;
-  assign \$6  = learn & \$5 ;
+  assign \$6  = report_frame & \$5 ;
   assign \$7  = result[2:0] == 1'h1;
   assign \$8  = ca_done & \$7 ;
   assign \$9  = result[2:0] == 2'h2;
@@ -8275,16 +8281,20 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \$14  = ca_done & \$13 ;
   assign \$15  = result[2:0] == 3'h5;
   assign \$16  = ca_done & \$15 ;
-  assign \busy$290  = ~ idle;
+  assign \busy$291  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$17  = ~ \clear$126 ;
-  assign \$18  = \sample$321  & \$17 ;
+  assign \$18  = \sample$322  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
     \bit  <= \$20 ;
   always @(posedge clk)
     started_before <= \$21 ;
+  always @(posedge clk)
+    learn <= \$22 ;
+  always @(posedge clk)
+    clean <= \$23 ;
   \biss_master_wb.ch0.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -8331,7 +8341,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .quiet_live(quiet_live),
     .receiver_clear(\clear$126 ),
     .report_delay(report_delay),
-    .report_frame(learn),
+    .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
@@ -8347,10 +8357,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .waiting(watch)
   );
   \biss_master_wb.ch0.core.counters  counters (
-    .clear(\clear$264 ),
+    .clear(\clear$265 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$259 ),
+    .events(\events$260 ),
     .rst(rst)
   );
   \biss_master_wb.ch0.core.decoder  decoder (
@@ -8433,7 +8443,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .words(\words$171 )
   );
   \biss_master_wb.ch0.core.register_access  register_access (
-    .abort(\abort$236 ),
+    .abort(\abort$237 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -8445,27 +8455,27 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$222 ),
+    .request(\request$223 ),
     .result(result),
     .rst(rst),
-    .start(\start$234 ),
+    .start(\start$235 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch0.core.results  results (
     .clk(clk),
-    .done(\done$293 ),
+    .done(\done$294 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
-    .report_frame(learn),
-    .result(\result$298 ),
+    .report_frame(report_frame),
+    .result(\result$299 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$295 )
+    .valid_out(\valid$296 )
   );
   \biss_master_wb.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$322 ),
+    .\bit (\bit$323 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -8475,7 +8485,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .noise(sampler_noise),
     .receiver_clear(\clear$126 ),
     .rst(rst),
-    .sample(\sample$321 ),
+    .sample(\sample$322 ),
     .slo(slo)
   );
   \biss_master_wb.ch0.core.scheduler  scheduler (
@@ -8496,7 +8506,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4484$0 (\bit ),
+    .\port$4460$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -8545,7 +8555,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   );
   \biss_master_wb.ch0.core.verdict  verdict (
     .cfg(cycle),
-    .clean(clean),
+    .clean(\clean$324 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
@@ -8560,9 +8570,9 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$1878$0 (\$22 ),
+    .\port$1866$0 (\$24 ),
     .report(report),
-    .report_frame(learn),
+    .report_frame(report_frame),
     .spw_match(spw_match),
     .spw_mismatch(spw_mismatch),
     .status(status),
@@ -8577,7 +8587,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$20  = \bit$322 ;
+    \$20  = \bit$323 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -8587,6 +8597,20 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     \$21  = started;
     if (rst) begin
       \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$22  = report_frame;
+    if (rst) begin
+      \$22  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$23  = \clean$324 ;
+    if (rst) begin
+      \$23  = 1'h0;
     end
   end
   assign \idle$33  = idle;
@@ -8659,7 +8683,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
   assign \delay$159  = delay;
-  assign report_frame = learn;
+  assign \$signal  = learn;
   assign \clean$165  = clean;
   assign \noisy$167  = noisy;
   assign jump = delay_jump;
@@ -8672,37 +8696,37 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \tolerance$181  = cycle[252:245];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$185  = learn;
-  assign \fault$186  = \restart$152 ;
-  assign \fault_status$188  = fault_status;
-  assign \crc_ok$190  = crc_ok;
+  assign \report_frame$186  = report_frame;
+  assign \fault$187  = \restart$152 ;
+  assign \fault_status$189  = fault_status;
+  assign \crc_ok$191  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$198  = report;
-  assign \report_frame$199  = learn;
-  assign \report_delay$201  = report_delay;
-  assign \valid$203  = valid;
-  assign word_crc_ok = { \$22 , crc_ok[0] };
-  assign \first_rise$220  = first_rise;
+  assign \report$199  = report;
+  assign \report_frame$200  = report_frame;
+  assign \report_delay$202  = report_delay;
+  assign \valid$204  = valid;
+  assign word_crc_ok = { \$24 , crc_ok[0] };
+  assign \first_rise$221  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$234 ;
-  assign ca_abort = \abort$236 ;
+  assign ca_start = \start$235 ;
+  assign ca_abort = \abort$237 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$245  = frames;
-  assign \done$247  = ca_done;
-  assign \cdm$249  = cdm;
+  assign \busy$246  = frames;
+  assign \done$248  = ca_done;
+  assign \cdm$250  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$264 ;
+  assign clear_counters = \clear$265 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -8724,31 +8748,31 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign count_ca_refused = counts[303:288];
   assign count_ca_aborted = counts[319:304];
   assign count_ca_data_fault = counts[335:320];
-  assign \ma$289  = ma;
-  assign \overrun$292  = overrun;
-  assign \done$294  = \done$293 ;
-  assign valid_out = \valid$295 ;
-  assign \status$297  = \result$298 [3:0];
-  assign timestamp = \result$298 [35:4];
-  assign line_delay = \result$298 [48:36];
-  assign \cds$301  = \result$298 [49];
-  assign noise_events = \result$298 [53:50];
-  assign delay_settled = \result$298 [54];
-  assign \settled_delay$304  = \result$298 [67:55];
-  assign delay_spread = \result$298 [75:68];
-  assign word0_position = \result$298 [130:76];
-  assign word0_ne = \result$298 [131];
-  assign word0_nw = \result$298 [132];
-  assign word0_crc_ok = \result$298 [133];
-  assign word1_position = \result$298 [173:134];
-  assign word1_ne = \result$298 [174];
-  assign word1_nw = \result$298 [175];
-  assign word1_crc_ok = \result$298 [176];
-  assign \lc$314  = \result$298 [182:177];
-  assign \lc_repeat$315  = \result$298 [183];
-  assign \lc_skip$316  = \result$298 [184];
-  assign \lc_zero$317  = \result$298 [185];
-  assign \spw_mismatch$318  = \result$298 [186];
+  assign \ma$290  = ma;
+  assign \overrun$293  = overrun;
+  assign \done$295  = \done$294 ;
+  assign valid_out = \valid$296 ;
+  assign \status$298  = \result$299 [3:0];
+  assign timestamp = \result$299 [35:4];
+  assign line_delay = \result$299 [48:36];
+  assign \cds$302  = \result$299 [49];
+  assign noise_events = \result$299 [53:50];
+  assign delay_settled = \result$299 [54];
+  assign \settled_delay$305  = \result$299 [67:55];
+  assign delay_spread = \result$299 [75:68];
+  assign word0_position = \result$299 [130:76];
+  assign word0_ne = \result$299 [131];
+  assign word0_nw = \result$299 [132];
+  assign word0_crc_ok = \result$299 [133];
+  assign word1_position = \result$299 [173:134];
+  assign word1_ne = \result$299 [174];
+  assign word1_nw = \result$299 [175];
+  assign word1_crc_ok = \result$299 [176];
+  assign \lc$315  = \result$299 [182:177];
+  assign \lc_repeat$316  = \result$299 [183];
+  assign \lc_skip$317  = \result$299 [184];
+  assign \lc_zero$318  = \result$299 [185];
+  assign \spw_mismatch$319  = \result$299 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -8931,36 +8955,36 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$222.slave_id  = \request$222 [2:0];
-  assign \request$222.address  = \request$222 [9:3];
-  assign \request$222.count  = \request$222 [16:10];
-  assign \request$222.write  = \request$222 [17];
+  assign \request$223.slave_id  = \request$223 [2:0];
+  assign \request$223.address  = \request$223 [9:3];
+  assign \request$223.count  = \request$223 [16:10];
+  assign \request$223.write  = \request$223 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$259.crc_word0  = \events$259 [0];
-  assign \events$259.crc_word1  = \events$259 [1];
-  assign \events$259.no_ack  = \events$259 [2];
-  assign \events$259.no_start  = \events$259 [3];
-  assign \events$259.delay_range  = \events$259 [4];
-  assign \events$259.slo_stuck_low  = \events$259 [5];
-  assign \events$259.lc_repeat  = \events$259 [6];
-  assign \events$259.lc_skip  = \events$259 [7];
-  assign \events$259.lc_zero  = \events$259 [8];
-  assign \events$259.spw_mismatch  = \events$259 [9];
-  assign \events$259.overrun  = \events$259 [10];
-  assign \events$259.aborted  = \events$259 [11];
-  assign \events$259.no_stop  = \events$259 [12];
-  assign \events$259.noisy_line  = \events$259 [13];
-  assign \events$259.delay_jump  = \events$259 [14];
-  assign \events$259.noise_event  = \events$259 [15];
-  assign \events$259.ca_crc4_error  = \events$259 [16];
-  assign \events$259.ca_no_answer  = \events$259 [17];
-  assign \events$259.ca_refused  = \events$259 [18];
-  assign \events$259.ca_aborted  = \events$259 [19];
-  assign \events$259.ca_data_fault  = \events$259 [20];
+  assign \events$260.crc_word0  = \events$260 [0];
+  assign \events$260.crc_word1  = \events$260 [1];
+  assign \events$260.no_ack  = \events$260 [2];
+  assign \events$260.no_start  = \events$260 [3];
+  assign \events$260.delay_range  = \events$260 [4];
+  assign \events$260.slo_stuck_low  = \events$260 [5];
+  assign \events$260.lc_repeat  = \events$260 [6];
+  assign \events$260.lc_skip  = \events$260 [7];
+  assign \events$260.lc_zero  = \events$260 [8];
+  assign \events$260.spw_mismatch  = \events$260 [9];
+  assign \events$260.overrun  = \events$260 [10];
+  assign \events$260.aborted  = \events$260 [11];
+  assign \events$260.no_stop  = \events$260 [12];
+  assign \events$260.noisy_line  = \events$260 [13];
+  assign \events$260.delay_jump  = \events$260 [14];
+  assign \events$260.noise_event  = \events$260 [15];
+  assign \events$260.ca_crc4_error  = \events$260 [16];
+  assign \events$260.ca_no_answer  = \events$260 [17];
+  assign \events$260.ca_refused  = \events$260 [18];
+  assign \events$260.ca_aborted  = \events$260 [19];
+  assign \events$260.ca_data_fault  = \events$260 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -8989,60 +9013,60 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$298.status  = \result$298 [3:0];
-  assign \result$298.timestamp  = \result$298 [35:4];
-  assign \result$298.line_delay  = \result$298 [48:36];
-  assign \result$298.cds  = \result$298 [49];
-  assign \result$298.noise_events  = \result$298 [53:50];
-  assign \result$298.delay_settled  = \result$298 [54];
-  assign \result$298.settled_delay  = \result$298 [67:55];
-  assign \result$298.delay_spread  = \result$298 [75:68];
-  assign \result$298.word0  = \result$298 [133:76];
-  assign \result$298.word0.position  = \result$298 [130:76];
-  assign \result$298.word0.ne  = \result$298 [131];
-  assign \result$298.word0.nw  = \result$298 [132];
-  assign \result$298.word0.crc_ok  = \result$298 [133];
-  assign \result$298.word1  = \result$298 [176:134];
-  assign \result$298.word1.position  = \result$298 [173:134];
-  assign \result$298.word1.ne  = \result$298 [174];
-  assign \result$298.word1.nw  = \result$298 [175];
-  assign \result$298.word1.crc_ok  = \result$298 [176];
-  assign \result$298.lc  = \result$298 [182:177];
-  assign \result$298.lc_repeat  = \result$298 [183];
-  assign \result$298.lc_skip  = \result$298 [184];
-  assign \result$298.lc_zero  = \result$298 [185];
-  assign \result$298.spw_mismatch  = \result$298 [186];
-  assign \events$259 [20] = \$16 ;
-  assign \events$259 [19] = \$14 ;
-  assign \events$259 [18] = \$12 ;
-  assign \events$259 [17] = \$10 ;
-  assign \events$259 [16] = \$8 ;
-  assign \events$259 [15] = \event ;
-  assign \events$259 [14] = \$6 ;
-  assign \events$259 [13] = \$4 ;
-  assign \events$259 [12] = faults[6];
-  assign \events$259 [11] = faults[4];
-  assign \events$259 [10] = overrun;
-  assign \events$259 [9] = \$2 ;
-  assign \events$259 [8] = lc_zero;
-  assign \events$259 [7] = lc_skip;
-  assign \events$259 [6] = lc_repeat;
-  assign \events$259 [5] = faults[3];
-  assign \events$259 [4] = faults[2];
-  assign \events$259 [3] = faults[1];
-  assign \events$259 [2] = faults[0];
-  assign \events$259 [1] = crc_error[1];
-  assign \events$259 [0] = crc_error[0];
+  assign \result$299.status  = \result$299 [3:0];
+  assign \result$299.timestamp  = \result$299 [35:4];
+  assign \result$299.line_delay  = \result$299 [48:36];
+  assign \result$299.cds  = \result$299 [49];
+  assign \result$299.noise_events  = \result$299 [53:50];
+  assign \result$299.delay_settled  = \result$299 [54];
+  assign \result$299.settled_delay  = \result$299 [67:55];
+  assign \result$299.delay_spread  = \result$299 [75:68];
+  assign \result$299.word0  = \result$299 [133:76];
+  assign \result$299.word0.position  = \result$299 [130:76];
+  assign \result$299.word0.ne  = \result$299 [131];
+  assign \result$299.word0.nw  = \result$299 [132];
+  assign \result$299.word0.crc_ok  = \result$299 [133];
+  assign \result$299.word1  = \result$299 [176:134];
+  assign \result$299.word1.position  = \result$299 [173:134];
+  assign \result$299.word1.ne  = \result$299 [174];
+  assign \result$299.word1.nw  = \result$299 [175];
+  assign \result$299.word1.crc_ok  = \result$299 [176];
+  assign \result$299.lc  = \result$299 [182:177];
+  assign \result$299.lc_repeat  = \result$299 [183];
+  assign \result$299.lc_skip  = \result$299 [184];
+  assign \result$299.lc_zero  = \result$299 [185];
+  assign \result$299.spw_mismatch  = \result$299 [186];
+  assign \events$260 [20] = \$16 ;
+  assign \events$260 [19] = \$14 ;
+  assign \events$260 [18] = \$12 ;
+  assign \events$260 [17] = \$10 ;
+  assign \events$260 [16] = \$8 ;
+  assign \events$260 [15] = \event ;
+  assign \events$260 [14] = \$6 ;
+  assign \events$260 [13] = \$4 ;
+  assign \events$260 [12] = faults[6];
+  assign \events$260 [11] = faults[4];
+  assign \events$260 [10] = overrun;
+  assign \events$260 [9] = \$2 ;
+  assign \events$260 [8] = lc_zero;
+  assign \events$260 [7] = lc_skip;
+  assign \events$260 [6] = lc_repeat;
+  assign \events$260 [5] = faults[3];
+  assign \events$260 [4] = faults[2];
+  assign \events$260 [3] = faults[1];
+  assign \events$260 [2] = faults[0];
+  assign \events$260 [1] = crc_error[1];
+  assign \events$260 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$222 [17] = ca_write;
-  assign \request$222 [16:10] = ca_count;
-  assign \request$222 [9:3] = ca_address;
-  assign \request$222 [2:0] = ca_slave_id;
+  assign \request$223 [17] = ca_write;
+  assign \request$223 [16:10] = ca_count;
+  assign \request$223 [9:3] = ca_address;
+  assign \request$223 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
-  assign frame[176] = \$22 ;
+  assign frame[176] = \$24 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
   assign frame[173:134] = spw;
@@ -12570,32 +12594,36 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
-  wire \$101 ;
-  wire \$102 ;
+  wire [1:0] \$101 ;
+  wire [1:0] \$102 ;
   wire \$103 ;
-  reg \$104 ;
-  reg \$105 ;
-  reg [15:0] \$106 ;
-  reg \$107 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
   reg \$108 ;
-  reg [15:0] \$109 ;
+  reg \$109 ;
   wire [1:0] \$11 ;
-  reg [2:0] \$110 ;
+  reg [15:0] \$110 ;
   reg \$111 ;
-  reg [6:0] \$112 ;
-  reg \$113 ;
-  reg \$114 ;
+  reg \$112 ;
+  reg [15:0] \$113 ;
+  reg [2:0] \$114 ;
   reg \$115 ;
-  reg \$116 ;
+  reg [6:0] \$116 ;
   reg \$117 ;
   reg \$118 ;
-  reg [54:0] \$119 ;
+  reg \$119 ;
   wire [6:0] \$12 ;
-  reg [1:0] \$120 ;
-  reg [1:0] \$121 ;
-  reg [39:0] \$122 ;
-  reg [5:0] \$123 ;
-  reg [39:0] \$124 ;
+  reg \$120 ;
+  reg \$121 ;
+  reg \$122 ;
+  reg [54:0] \$123 ;
+  reg [1:0] \$124 ;
+  reg [1:0] \$125 ;
+  reg [39:0] \$126 ;
+  reg [5:0] \$127 ;
+  reg [39:0] \$128 ;
   wire \$13 ;
   reg [3:0] \$14 ;
   wire [6:0] \$15 ;
@@ -12686,14 +12714,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   wire \$92 ;
   wire \$93 ;
   wire \$94 ;
-  wire \$95 ;
+  wire [6:0] \$95 ;
   wire \$96 ;
-  wire [6:0] \$97 ;
+  wire \$97 ;
   wire \$98 ;
-  wire \$99 ;
+  wire [6:0] \$99 ;
+  reg at_cds;
   input \bit ;
   wire \bit ;
-  wire \bit$51 ;
+  wire \bit$52 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -12706,17 +12735,17 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   wire [1:0] crc_ok;
   input [75:0] crcs;
   wire [75:0] crcs;
-  wire [75:0] \crcs$46 ;
-  wire [37:0] \crcs$46[0] ;
-  wire \crcs$46[0].inverted ;
-  wire [15:0] \crcs$46[0].poly ;
-  wire [15:0] \crcs$46[0].start ;
-  wire [4:0] \crcs$46[0].width ;
-  wire [37:0] \crcs$46[1] ;
-  wire \crcs$46[1].inverted ;
-  wire [15:0] \crcs$46[1].poly ;
-  wire [15:0] \crcs$46[1].start ;
-  wire [4:0] \crcs$46[1].width ;
+  wire [75:0] \crcs$47 ;
+  wire [37:0] \crcs$47[0] ;
+  wire \crcs$47[0].inverted ;
+  wire [15:0] \crcs$47[0].poly ;
+  wire [15:0] \crcs$47[0].start ;
+  wire [4:0] \crcs$47[0].width ;
+  wire [37:0] \crcs$47[1] ;
+  wire \crcs$47[1].inverted ;
+  wire [15:0] \crcs$47[1].poly ;
+  wire [15:0] \crcs$47[1].start ;
+  wire [4:0] \crcs$47[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -12734,7 +12763,6 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   reg [2:0] decoder_fsm_state = 3'h0;
   output done;
   reg done = 1'h0;
-  wire first;
   reg [6:0] idx = 7'h00;
   reg in_crc = 1'h0;
   reg in_data = 1'h0;
@@ -12747,6 +12775,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   output lc_load;
   wire lc_load;
   wire [5:0] lc_next;
+  wire load;
+  wire load_word;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
@@ -12785,7 +12815,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
   (* init = 1'h0 *)
-  wire \word$54 ;
+  wire \word$55 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [21:0] words;
@@ -12896,19 +12926,23 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   assign \$93  = words[10] & data0[0];
   assign \$94  = \bit  ^ \$93 ;
   assign lc_load = in_word & in_lc;
-  assign \$95  = ! idx;
-  assign first = in_word & \$95 ;
-  assign \$96  = ~ in_crc;
-  assign \cover  = in_word & \$96 ;
+  assign \$95  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$96  = idx == \$95 ;
+  assign \$97  = in_word & \$96 ;
+  assign load = at_cds | \$97 ;
+  assign \$98  = ~ in_crc;
+  assign \cover  = in_word & \$98 ;
   assign check = in_word & in_crc;
-  assign \$97  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$98  = idx == \$97 ;
-  assign last = in_word & \$98 ;
-  assign \$99  = ! decoder_fsm_state;
-  assign \$100  = decoder_fsm_state == 1'h1;
-  assign \$101  = decoder_fsm_state == 2'h2;
-  assign \$102  = decoder_fsm_state == 2'h3;
-  assign \$103  = decoder_fsm_state == 3'h4;
+  assign \$99  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$100  = idx == \$99 ;
+  assign last = in_word & \$100 ;
+  assign \$101  = word + 1'h1;
+  assign \$102  = at_cds ? 2'h0 : \$101 ;
+  assign \$103  = ! decoder_fsm_state;
+  assign \$104  = decoder_fsm_state == 1'h1;
+  assign \$105  = decoder_fsm_state == 2'h2;
+  assign \$106  = decoder_fsm_state == 2'h3;
+  assign \$107  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -12938,55 +12972,56 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   always @(posedge clk)
     w1_lc_at0 <= \$34 ;
   always @(posedge clk)
-    done <= \$104 ;
+    done <= \$108 ;
   always @(posedge clk)
-    stopped <= \$105 ;
+    stopped <= \$109 ;
   always @(posedge clk)
-    slots <= \$106 ;
+    slots <= \$110 ;
   always @(posedge clk)
-    slots_full <= \$107 ;
+    slots_full <= \$111 ;
   always @(posedge clk)
-    started <= \$108 ;
+    started <= \$112 ;
   always @(posedge clk)
-    start_slot <= \$109 ;
+    start_slot <= \$113 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$110 ;
+    decoder_fsm_state <= \$114 ;
   always @(posedge clk)
-    cds <= \$111 ;
+    cds <= \$115 ;
   always @(posedge clk)
-    idx <= \$112 ;
+    idx <= \$116 ;
   always @(posedge clk)
-    in_data <= \$113 ;
+    in_data <= \$117 ;
   always @(posedge clk)
-    in_lc <= \$114 ;
+    in_lc <= \$118 ;
   always @(posedge clk)
-    in_crc <= \$115 ;
+    in_crc <= \$119 ;
   always @(posedge clk)
-    in_top <= \$116 ;
+    in_top <= \$120 ;
   always @(posedge clk)
-    word <= \$117 ;
+    word <= \$121 ;
   always @(posedge clk)
-    stop_bit <= \$118 ;
+    stop_bit <= \$122 ;
   always @(posedge clk)
-    data0 <= \$119 ;
+    data0 <= \$123 ;
   always @(posedge clk)
-    ne <= \$120 ;
+    ne <= \$124 ;
   always @(posedge clk)
-    nw <= \$121 ;
+    nw <= \$125 ;
   always @(posedge clk)
-    data1 <= \$122 ;
+    data1 <= \$126 ;
   always @(posedge clk)
-    lc <= \$123 ;
+    lc <= \$127 ;
   always @(posedge clk)
-    cpw_top <= \$124 ;
+    cpw_top <= \$128 ;
   \biss_master_wb.ch0.core.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
     .clk(clk),
     .\cover (\cover ),
     .crcs(crcs),
-    .first(first),
     .last(last),
+    .load(load),
+    .load_word(\$102 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst),
@@ -13098,7 +13133,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$104  = 1'h0;
+    \$108  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -13108,73 +13143,9 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$104  = 1'h1;
+                \$108  = 1'h1;
               end
             end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$104  = 1'h0;
-    end
-    if (rst) begin
-      \$104  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$105  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$105  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$105  = 1'h0;
-    end
-    if (rst) begin
-      \$105  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$106  = slots;
-    if (\$36 ) begin
-      \$106  = \$37 [15:0];
-    end
-    if (receiver_clear) begin
-      \$106  = 16'h0000;
-    end
-    if (rst) begin
-      \$106  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$107  = slots_full;
-    if (\$36 ) begin
-      \$107  = \$38 ;
-    end
-    if (receiver_clear) begin
-      \$107  = 1'h0;
-    end
-    if (rst) begin
-      \$107  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$108  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$108  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -13186,158 +13157,125 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$109  = start_slot;
+    \$109  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$39 ) begin
-            \$109  = slots;
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$109  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$109  = 16'h0000;
+      \$109  = 1'h0;
     end
     if (rst) begin
-      \$109  = 16'h0000;
+      \$109  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$110  = decoder_fsm_state;
+    \$110  = slots;
+    if (\$36 ) begin
+      \$110  = \$37 [15:0];
+    end
+    if (receiver_clear) begin
+      \$110  = 16'h0000;
+    end
+    if (rst) begin
+      \$110  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$111  = slots_full;
+    if (\$36 ) begin
+      \$111  = \$38 ;
+    end
+    if (receiver_clear) begin
+      \$111  = 1'h0;
+    end
+    if (rst) begin
+      \$111  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$112  = started;
     casez (decoder_fsm_state)
       3'h0:
           if (\$39 ) begin
-            \$110  = 3'h1;
+            \$112  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$112  = 1'h0;
+    end
+    if (rst) begin
+      \$112  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$113  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$113  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$113  = 16'h0000;
+    end
+    if (rst) begin
+      \$113  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$114  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$114  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            \$110  = 3'h2;
+            \$114  = 3'h2;
           end
       3'h2:
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$110  = 3'h3;
+                \$114  = 3'h3;
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$110  = 3'h4;
+            \$114  = 3'h4;
           end
     endcase
     if (receiver_clear) begin
-      \$110  = 3'h0;
+      \$114  = 3'h0;
     end
     if (rst) begin
-      \$110  = 3'h0;
+      \$114  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$111  = cds;
+    \$115  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$111  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$111  = 1'h0;
-    end
-    if (rst) begin
-      \$111  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$112  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$112  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$112  = \$41 [6:0];
-            if (\$60 ) begin
-              \$112  = 7'h00;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$112  = 7'h00;
-    end
-    if (rst) begin
-      \$112  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$113  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$113  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$113  = \$44 ;
-            if (\$60 ) begin
-              \$113  = w1_data_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$113  = 1'h0;
-    end
-    if (rst) begin
-      \$113  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$114  = in_lc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$114  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$114  = \$50 ;
-            if (\$60 ) begin
-              \$114  = w1_lc_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$114  = 1'h0;
-    end
-    if (rst) begin
-      \$114  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$115  = in_crc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$115  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            \$115  = \$56 ;
+            \$115  = \bit ;
           end
     endcase
     if (receiver_clear) begin
@@ -13349,38 +13287,135 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$116  = in_top;
+    \$116  = idx;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$116  = \$40 ;
+            \$116  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$116  = \$58 ;
+            \$116  = \$41 [6:0];
             if (\$60 ) begin
-              \$116  = 1'h0;
+              \$116  = 7'h00;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$116  = 1'h0;
+      \$116  = 7'h00;
     end
     if (rst) begin
-      \$116  = 1'h0;
+      \$116  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$117  = word;
+    \$117  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$117  = 1'h0;
+            \$117  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$117  = \$44 ;
+            if (\$60 ) begin
+              \$117  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$117  = 1'h0;
+    end
+    if (rst) begin
+      \$117  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$118  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$118  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$118  = \$50 ;
+            if (\$60 ) begin
+              \$118  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$118  = 1'h0;
+    end
+    if (rst) begin
+      \$118  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$119  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$119  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$119  = \$56 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$119  = 1'h0;
+    end
+    if (rst) begin
+      \$119  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$120  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$120  = \$40 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$120  = \$58 ;
+            if (\$60 ) begin
+              \$120  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$120  = 1'h0;
+    end
+    if (rst) begin
+      \$120  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$121  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$121  = 1'h0;
           end
       3'h2:
           if (sample) begin
@@ -13388,21 +13423,21 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
               (* full_case = 32'd1 *)
               if (\$62 ) begin
               end else begin
-                \$117  = \$63 [0];
+                \$121  = \$63 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$117  = 1'h0;
+      \$121  = 1'h0;
     end
     if (rst) begin
-      \$117  = 1'h0;
+      \$121  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$118  = stop_bit;
+    \$122  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -13412,109 +13447,119 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
           /* empty */;
       3'h3:
           if (sample) begin
-            \$118  = \bit ;
+            \$122  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$118  = 1'h0;
+      \$122  = 1'h0;
     end
     if (rst) begin
-      \$118  = 1'h0;
+      \$122  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$119  = data0;
+    \$123  = data0;
     if (\$66 ) begin
-      \$119  = { data0[53:0], \$68  };
+      \$123  = { data0[53:0], \$68  };
     end
     if (receiver_clear) begin
-      \$119  = 55'h00000000000000;
+      \$123  = 55'h00000000000000;
     end
     if (rst) begin
-      \$119  = 55'h00000000000000;
+      \$123  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$120  = ne;
+    \$124  = ne;
     if (\$69 ) begin
-      \$120 [0] = 1'h1;
+      \$124 [0] = 1'h1;
     end else if (\$73 ) begin
-      \$120 [0] = \bit ;
+      \$124 [0] = \bit ;
     end
     if (\$83 ) begin
-      \$120 [1] = 1'h1;
+      \$124 [1] = 1'h1;
     end else if (\$87 ) begin
-      \$120 [1] = \bit ;
+      \$124 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$120  = 2'h0;
+      \$124  = 2'h0;
     end
     if (rst) begin
-      \$120  = 2'h0;
+      \$124  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$121  = nw;
+    \$125  = nw;
     if (\$69 ) begin
-      \$121 [0] = 1'h1;
+      \$125 [0] = 1'h1;
     end else if (\$73 ) begin
     end else if (\$77 ) begin
-      \$121 [0] = \bit ;
+      \$125 [0] = \bit ;
     end
     if (\$83 ) begin
-      \$121 [1] = 1'h1;
+      \$125 [1] = 1'h1;
     end else if (\$87 ) begin
     end else if (\$91 ) begin
-      \$121 [1] = \bit ;
+      \$125 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$121  = 2'h0;
+      \$125  = 2'h0;
     end
     if (rst) begin
-      \$121  = 2'h0;
+      \$125  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$122  = data1;
+    \$126  = data1;
     if (\$80 ) begin
-      \$122  = { data1[38:0], \$82  };
+      \$126  = { data1[38:0], \$82  };
     end
     if (receiver_clear) begin
-      \$122  = 40'h0000000000;
+      \$126  = 40'h0000000000;
     end
     if (rst) begin
-      \$122  = 40'h0000000000;
+      \$126  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$123  = lc;
+    \$127  = lc;
     if (lc_load) begin
-      \$123  = { lc[4:0], \bit  };
+      \$127  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$123  = 6'h00;
+      \$127  = 6'h00;
     end
     if (rst) begin
-      \$123  = 6'h00;
+      \$127  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$124  = cpw_top;
+    \$128  = cpw_top;
     if (\$92 ) begin
-      \$124  = { cpw_top[38:0], \$94  };
+      \$128  = { cpw_top[38:0], \$94  };
     end
     if (receiver_clear) begin
-      \$124  = 40'h0000000000;
+      \$128  = 40'h0000000000;
     end
     if (rst) begin
-      \$124  = 40'h0000000000;
+      \$128  = 40'h0000000000;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    at_cds = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          at_cds = sample;
+    endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
@@ -13529,10 +13574,11 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$46  = crcs;
-  assign \bit$51  = \bit ;
+  assign \crcs$47  = crcs;
+  assign \bit$52  = \bit ;
   assign ok = crc_ok;
-  assign \word$54  = word;
+  assign \word$55  = word;
+  assign load_word = \$102 [0];
   assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -13555,74 +13601,59 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$46[0]  = crcs[37:0];
-  assign \crcs$46[0].width  = crcs[4:0];
-  assign \crcs$46[0].poly  = crcs[20:5];
-  assign \crcs$46[0].start  = crcs[36:21];
-  assign \crcs$46[0].inverted  = crcs[37];
-  assign \crcs$46[1]  = crcs[75:38];
-  assign \crcs$46[1].width  = crcs[42:38];
-  assign \crcs$46[1].poly  = crcs[58:43];
-  assign \crcs$46[1].start  = crcs[74:59];
-  assign \crcs$46[1].inverted  = crcs[75];
+  assign \crcs$47[0]  = crcs[37:0];
+  assign \crcs$47[0].width  = crcs[4:0];
+  assign \crcs$47[0].poly  = crcs[20:5];
+  assign \crcs$47[0].start  = crcs[36:21];
+  assign \crcs$47[0].inverted  = crcs[37];
+  assign \crcs$47[1]  = crcs[75:38];
+  assign \crcs$47[1].width  = crcs[42:38];
+  assign \crcs$47[1].poly  = crcs[58:43];
+  assign \crcs$47[1].start  = crcs[74:59];
+  assign \crcs$47[1].inverted  = crcs[75];
   assign \$78  = word;
   assign \$84  = word;
   assign \$88  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder.crc (rst, first, \cover , check, last, \bit , crcs, receiver_clear, word, ok, clk);
+module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, load_word, \bit , crcs, receiver_clear, word, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   reg [15:0] \$1 ;
-  wire [15:0] \$10 ;
-  reg [15:0] \$11 ;
-  wire [15:0] \$12 ;
+  wire \$10 ;
+  reg \$11 ;
+  wire \$12 ;
   wire \$13 ;
   wire \$14 ;
-  reg [15:0] \$15 ;
-  wire [15:0] \$16 ;
-  reg [4:0] \$17 ;
+  wire \$15 ;
+  reg [4:0] \$16 ;
+  wire \$17 ;
   wire \$18 ;
-  wire \$19 ;
-  wire [15:0] \$2 ;
-  reg \$20 ;
+  reg \$19 ;
+  reg [4:0] \$2 ;
+  wire \$20 ;
   wire \$21 ;
   wire \$22 ;
   wire \$23 ;
   wire \$24 ;
-  wire \$25 ;
-  reg [15:0] \$26 ;
-  wire [15:0] \$27 ;
-  reg [4:0] \$28 ;
+  reg [4:0] \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  reg \$28 ;
   wire \$29 ;
-  reg [15:0] \$3 ;
+  wire \$3 ;
   wire \$30 ;
-  reg \$31 ;
+  wire \$31 ;
   wire \$32 ;
-  wire \$33 ;
-  wire \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
-  reg [15:0] \$38 ;
-  wire [15:0] \$39 ;
-  wire [15:0] \$4 ;
-  reg [4:0] \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  reg \$43 ;
-  wire \$44 ;
-  wire \$45 ;
-  wire \$46 ;
-  wire \$47 ;
-  reg [15:0] \$48 ;
-  reg \$49 ;
-  reg [4:0] \$5 ;
-  reg [1:0] \$50 ;
-  wire \$6 ;
-  wire \$7 ;
-  reg [15:0] \$8 ;
-  wire [15:0] \$9 ;
+  reg [15:0] \$33 ;
+  reg \$34 ;
+  reg [1:0] \$35 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  wire [15:0] \$6 ;
+  wire [15:0] \$7 ;
+  reg [4:0] \$8 ;
+  wire \$9 ;
   input \bit ;
   wire \bit ;
   input check;
@@ -13643,10 +13674,12 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, first, \cover , check, last, \
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  input first;
-  wire first;
   input last;
   wire last;
+  input load;
+  wire load;
+  input load_word;
+  wire load_word;
   reg mismatch = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
@@ -13657,79 +13690,38 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, first, \cover , check, last, \
   wire rst;
   input word;
   wire word;
+  assign \$3  = { \reg , 1'h0 } >> \$2 ;
+  assign \$4  = \$3  ^ \bit ;
+  assign \$6  = \$4  ? \$5  : 16'h0000;
+  assign \$7  = { \reg [14:0], 1'h0 } ^ \$6 ;
+  assign \$9  = { \reg , 1'h0 } >> \$8 ;
+  assign \$10  = \bit  ^ \$9 ;
+  assign \$12  = \$10  ^ \$11 ;
+  assign \$13  = check & \$12 ;
+  assign \$14  = mismatch | \$13 ;
+  assign \$15  = ! word;
+  assign \$17  = { \reg , 1'h0 } >> \$16 ;
+  assign \$18  = \bit  ^ \$17 ;
+  assign \$20  = \$18  ^ \$19 ;
+  assign \$21  = check & \$20 ;
+  assign \$22  = mismatch | \$21 ;
+  assign \$23  = ~ \$22 ;
+  assign \$26  = { \reg , 1'h0 } >> \$25 ;
+  assign \$27  = \bit  ^ \$26 ;
+  assign \$29  = \$27  ^ \$28 ;
+  assign \$30  = check & \$29 ;
+  assign \$31  = mismatch | \$30 ;
+  assign \$32  = ~ \$31 ;
   always @(posedge clk)
-    mismatch <= \$49 ;
+    \reg  <= \$33 ;
   always @(posedge clk)
-    ok <= \$50 ;
-  assign \$2  = first ? \$1  : \reg ;
-  assign \$4  = first ? \$3  : \reg ;
-  assign \$6  = { \$4 , 1'h0 } >> \$5 ;
-  assign \$7  = \$6  ^ \bit ;
-  assign \$9  = \$7  ? \$8  : 16'h0000;
-  assign \$10  = { \$2 [14:0], 1'h0 } ^ \$9 ;
-  assign \$12  = first ? \$11  : \reg ;
-  assign \$13  = \cover  | check;
-  assign \$14  = first ? 1'h0 : mismatch;
-  assign \$16  = first ? \$15  : \reg ;
-  assign \$18  = { \$16 , 1'h0 } >> \$17 ;
-  assign \$19  = \bit  ^ \$18 ;
-  assign \$21  = \$19  ^ \$20 ;
-  assign \$22  = check & \$21 ;
-  assign \$23  = \$14  | \$22 ;
-  assign \$24  = ! word;
-  assign \$25  = first ? 1'h0 : mismatch;
-  assign \$27  = first ? \$26  : \reg ;
-  assign \$29  = { \$27 , 1'h0 } >> \$28 ;
-  assign \$30  = \bit  ^ \$29 ;
-  assign \$32  = \$30  ^ \$31 ;
-  assign \$33  = check & \$32 ;
-  assign \$34  = \$25  | \$33 ;
-  assign \$35  = ~ \$34 ;
-  assign \$37  = first ? 1'h0 : mismatch;
-  assign \$39  = first ? \$38  : \reg ;
-  assign \$41  = { \$39 , 1'h0 } >> \$40 ;
-  assign \$42  = \bit  ^ \$41 ;
-  assign \$44  = \$42  ^ \$43 ;
-  assign \$45  = check & \$44 ;
-  assign \$46  = \$37  | \$45 ;
-  assign \$47  = ~ \$46 ;
+    mismatch <= \$34 ;
   always @(posedge clk)
-    \reg  <= \$48 ;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    \$49  = mismatch;
-    if (\$13 ) begin
-      \$49  = \$23 ;
-    end
-    if (receiver_clear) begin
-      \$49  = 1'h0;
-    end
-    if (rst) begin
-      \$49  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    \$50  = ok;
-    if (last) begin
-      if (\$24 ) begin
-        \$50 [0] = \$35 ;
-      end
-      if (\$36 ) begin
-        \$50 [1] = \$47 ;
-      end
-    end
-    if (receiver_clear) begin
-      \$50  = 2'h3;
-    end
-    if (rst) begin
-      \$50  = 2'h3;
-    end
-  end
+    ok <= \$35 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (load_word)
       1'h0:
           \$1  = crcs[36:21];
       1'h1:
@@ -13741,9 +13733,9 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$3  = crcs[36:21];
+          \$2  = crcs[4:0];
       1'h1:
-          \$3  = crcs[74:59];
+          \$2  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -13751,9 +13743,9 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$5  = crcs[4:0];
+          \$5  = crcs[20:5];
       1'h1:
-          \$5  = crcs[42:38];
+          \$5  = crcs[58:43];
     endcase
   end
   always @* begin
@@ -13761,9 +13753,9 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$8  = crcs[20:5];
+          \$8  = crcs[4:0];
       1'h1:
-          \$8  = crcs[58:43];
+          \$8  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -13771,9 +13763,9 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$11  = crcs[36:21];
+          \$11  = crcs[37];
       1'h1:
-          \$11  = crcs[74:59];
+          \$11  = crcs[75];
     endcase
   end
   always @* begin
@@ -13781,9 +13773,9 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$15  = crcs[36:21];
+          \$16  = crcs[4:0];
       1'h1:
-          \$15  = crcs[74:59];
+          \$16  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -13791,9 +13783,9 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$17  = crcs[4:0];
+          \$19  = crcs[37];
       1'h1:
-          \$17  = crcs[42:38];
+          \$19  = crcs[75];
     endcase
   end
   always @* begin
@@ -13801,9 +13793,9 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$20  = crcs[37];
+          \$25  = crcs[4:0];
       1'h1:
-          \$20  = crcs[75];
+          \$25  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -13811,74 +13803,60 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$26  = crcs[36:21];
+          \$28  = crcs[37];
       1'h1:
-          \$26  = crcs[74:59];
+          \$28  = crcs[75];
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$28  = crcs[4:0];
-      1'h1:
-          \$28  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$31  = crcs[37];
-      1'h1:
-          \$31  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$38  = crcs[36:21];
-      1'h1:
-          \$38  = crcs[74:59];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$40  = crcs[4:0];
-      1'h1:
-          \$40  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$43  = crcs[37];
-      1'h1:
-          \$43  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    \$48  = \reg ;
-    if (\cover ) begin
-      \$48  = \$10 ;
+    \$33  = \reg ;
+    if (load) begin
+      \$33  = \$1 ;
+    end else if (\cover ) begin
+      \$33  = \$7 ;
     end else if (check) begin
-      \$48  = { \$12 [14:0], 1'h0 };
+      \$33  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$48  = 16'h0000;
+      \$33  = 16'h0000;
     end
     if (rst) begin
-      \$48  = 16'h0000;
+      \$33  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    \$34  = mismatch;
+    if (load) begin
+      \$34  = 1'h0;
+    end else if (\cover ) begin
+    end else if (check) begin
+      \$34  = \$14 ;
+    end
+    if (receiver_clear) begin
+      \$34  = 1'h0;
+    end
+    if (rst) begin
+      \$34  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    \$35  = ok;
+    if (last) begin
+      if (\$15 ) begin
+        \$35 [0] = \$23 ;
+      end
+      if (\$24 ) begin
+        \$35 [1] = \$32 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$35  = 2'h3;
+    end
+    if (rst) begin
+      \$35  = 2'h3;
     end
   end
   assign \crcs[0]  = crcs[37:0];
@@ -13891,11 +13869,11 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, first, \cover , check, last, \
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \$36  = word;
+  assign \$24  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.delay_check (rst, enable, rearm, check, clean, \tolerance$8 , learn, delay, jump, spread, settled_delay, settled, clk);
+module \biss_master_wb.ch0.core.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
@@ -18122,7 +18100,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4484$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4460$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -18164,8 +18142,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4484$0 ;
-  wire \port$4484$0 ;
+  input \port$4460$0 ;
+  wire \port$4460$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -18179,9 +18157,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4484$0  };
-  assign \$2  = { lc[4:0], \port$4484$0  } == last;
-  assign \$3  = { lc[4:0], \port$4484$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$4460$0  };
+  assign \$2  = { lc[4:0], \port$4460$0  } == last;
+  assign \$3  = { lc[4:0], \port$4460$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -18291,7 +18269,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4484$0  };
+  assign lc_next = { lc[4:0], \port$4460$0  };
   assign zero = is_zero;
 endmodule
 
@@ -18847,7 +18825,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1878$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1866$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
@@ -18999,8 +18977,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1878$0 , lc_
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$1878$0 ;
-  wire \port$1878$0 ;
+  output \port$1866$0 ;
+  wire \port$1866$0 ;
   output report;
   wire report;
   input report_frame;
@@ -19106,7 +19084,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1878$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1878$0  = \$2 ;
+  assign \port$1866$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -19147,7 +19125,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly
-, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5366$0 , \port$5379$0 , regs__ca_done, \port$5511$0 , ca_rbuf_addr
+, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5352$0 , \port$5365$0 , regs__ca_done, \port$5497$0 , ca_rbuf_addr
 );
   reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire \$1 ;
@@ -19307,12 +19285,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$5366$0 ;
-  wire [186:0] \port$5366$0 ;
-  output [335:0] \port$5379$0 ;
-  wire [335:0] \port$5379$0 ;
-  output [9:0] \port$5511$0 ;
-  wire [9:0] \port$5511$0 ;
+  output [186:0] \port$5352$0 ;
+  wire [186:0] \port$5352$0 ;
+  output [335:0] \port$5365$0 ;
+  wire [335:0] \port$5365$0 ;
+  output [9:0] \port$5497$0 ;
+  wire [9:0] \port$5497$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -19487,8 +19465,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   assign regs__frame_error = regs__done & \$1 ;
   \biss_master_wb.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$236 (ca_abort),
-    .\busy$290 (regs__busy),
+    .\abort$237 (ca_abort),
+    .\busy$291 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -19529,24 +19507,24 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
     .cfg_w1_gray(cfg_w1_gray),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$264 (clear_counters),
+    .\clear$265 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$6 ),
-    .\done$293 (regs__done),
+    .\done$294 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$37 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$7 ),
-    .\result$298 (\$5 ),
+    .\result$299 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$234 (ca_start),
+    .\start$235 (ca_start),
     .trigger(trigger),
-    .\valid$295 (valid)
+    .\valid$296 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
@@ -19712,15 +19690,15 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$202  = ma;
   assign \slo$204  = slo;
-  assign \port$5366$0  = \$5 ;
-  assign \port$5379$0  = \$6 ;
-  assign \port$5511$0  = \$7 ;
+  assign \port$5352$0  = \$5 ;
+  assign \port$5365$0  = \$6 ;
+  assign \port$5497$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$290 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$264 , \periodic$37 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$291 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$265 , \periodic$37 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
 , cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start
-, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$234 , \abort$236 , abort, ma, \done$293 , \valid$295 , \result$298 , counts, ca_done, result, rbuf_addr);
+, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$235 , \abort$237 , abort, ma, \done$294 , \valid$296 , \result$299 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -19736,7 +19714,9 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \$2 ;
   reg \$20 ;
   reg \$21 ;
-  wire \$22 ;
+  reg \$22 ;
+  reg \$23 ;
+  wire \$24 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -19744,10 +19724,12 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
+  (* init = 1'h0 *)
+  wire \$signal ;
   input abort;
   wire abort;
-  input \abort$236 ;
-  wire \abort$236 ;
+  input \abort$237 ;
+  wire \abort$237 ;
   wire \abort$49 ;
   wire abort_cycle;
   wire ack_expired;
@@ -19756,15 +19738,15 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire [23:0] \ack_limit$102 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$322 ;
+  wire \bit$323 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$79 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$245 ;
-  output \busy$290 ;
-  wire \busy$290 ;
+  wire \busy$246 ;
+  output \busy$291 ;
+  wire \busy$291 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -19799,10 +19781,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$249 ;
+  wire \cdm$250 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$301 ;
+  wire \cds$302 ;
   wire [252:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -19923,12 +19905,14 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire cfg_w1_nenw;
   wire check;
   wire \check$160 ;
-  wire clean;
+  reg clean = 1'h0;
+  (* init = 1'h0 *)
   wire \clean$165 ;
+  wire \clean$324 ;
   wire clear;
   wire \clear$126 ;
-  input \clear$264 ;
-  wire \clear$264 ;
+  input \clear$265 ;
+  wire \clear$265 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -19985,7 +19969,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire [39:0] \cpw_top$177 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$190 ;
+  wire [1:0] \crc_ok$191 ;
   wire [75:0] crcs;
   wire [75:0] \crcs$173 ;
   wire [37:0] \crcs$173[0] ;
@@ -20083,10 +20067,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$247 ;
-  output \done$293 ;
-  wire \done$293 ;
+  wire \done$248 ;
+  output \done$294 ;
   wire \done$294 ;
+  wire \done$295 ;
   wire doubtful;
   wire early;
   wire \early$65 ;
@@ -20095,30 +20079,30 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$259 ;
-  wire \events$259.aborted ;
-  wire \events$259.ca_aborted ;
-  wire \events$259.ca_crc4_error ;
-  wire \events$259.ca_data_fault ;
-  wire \events$259.ca_no_answer ;
-  wire \events$259.ca_refused ;
-  wire \events$259.crc_word0 ;
-  wire \events$259.crc_word1 ;
-  wire \events$259.delay_jump ;
-  wire \events$259.delay_range ;
-  wire \events$259.lc_repeat ;
-  wire \events$259.lc_skip ;
-  wire \events$259.lc_zero ;
-  wire \events$259.no_ack ;
-  wire \events$259.no_start ;
-  wire \events$259.no_stop ;
-  wire \events$259.noise_event ;
-  wire \events$259.noisy_line ;
-  wire \events$259.overrun ;
-  wire \events$259.slo_stuck_low ;
-  wire \events$259.spw_mismatch ;
+  wire [20:0] \events$260 ;
+  wire \events$260.aborted ;
+  wire \events$260.ca_aborted ;
+  wire \events$260.ca_crc4_error ;
+  wire \events$260.ca_data_fault ;
+  wire \events$260.ca_no_answer ;
+  wire \events$260.ca_refused ;
+  wire \events$260.crc_word0 ;
+  wire \events$260.crc_word1 ;
+  wire \events$260.delay_jump ;
+  wire \events$260.delay_range ;
+  wire \events$260.lc_repeat ;
+  wire \events$260.lc_skip ;
+  wire \events$260.lc_zero ;
+  wire \events$260.no_ack ;
+  wire \events$260.no_start ;
+  wire \events$260.no_stop ;
+  wire \events$260.noise_event ;
+  wire \events$260.noisy_line ;
+  wire \events$260.overrun ;
+  wire \events$260.slo_stuck_low ;
+  wire \events$260.spw_mismatch ;
   wire fault;
-  wire \fault$186 ;
+  wire \fault$187 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -20152,7 +20136,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$188 ;
+  wire [3:0] \fault_status$189 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -20162,7 +20146,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$220 ;
+  wire \first_rise$221 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -20224,21 +20208,21 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$137 ;
-  wire [5:0] \lc$314 ;
+  wire [5:0] \lc$315 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$139 ;
   wire lc_repeat;
-  wire \lc_repeat$315 ;
+  wire \lc_repeat$316 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$316 ;
+  wire \lc_skip$317 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$317 ;
+  wire \lc_zero$318 ;
   wire lc_zero_seen;
-  wire learn;
+  reg learn = 1'h0;
   wire level;
   wire \level$148 ;
   wire [3:0] limit;
@@ -20294,7 +20278,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \locked$63 ;
   output ma;
   wire ma;
-  wire \ma$289 ;
+  wire \ma$290 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$91 ;
@@ -20315,7 +20299,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$292 ;
+  wire \overrun$293 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$37 ;
@@ -20336,37 +20320,37 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$198 ;
+  wire \report$199 ;
   wire report_delay;
-  wire \report_delay$201 ;
+  wire \report_delay$202 ;
   wire report_frame;
-  wire \report_frame$185 ;
-  wire \report_frame$199 ;
+  wire \report_frame$186 ;
+  wire \report_frame$200 ;
   wire request;
-  wire [17:0] \request$222 ;
-  wire [6:0] \request$222.address ;
-  wire [6:0] \request$222.count ;
-  wire [2:0] \request$222.slave_id ;
-  wire \request$222.write ;
+  wire [17:0] \request$223 ;
+  wire [6:0] \request$223.address ;
+  wire [6:0] \request$223.count ;
+  wire [2:0] \request$223.slave_id ;
+  wire \request$223.write ;
   wire \request$48 ;
   wire restart;
   wire \restart$152 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$298 ;
-  wire [186:0] \result$298 ;
-  wire \result$298.cds ;
-  wire \result$298.delay_settled ;
-  wire [7:0] \result$298.delay_spread ;
-  wire [5:0] \result$298.lc ;
-  wire \result$298.lc_repeat ;
-  wire \result$298.lc_skip ;
-  wire \result$298.lc_zero ;
-  wire [12:0] \result$298.line_delay ;
-  wire [3:0] \result$298.noise_events ;
-  wire [12:0] \result$298.settled_delay ;
-  wire \result$298.spw_mismatch ;
+  output [186:0] \result$299 ;
+  wire [186:0] \result$299 ;
+  wire \result$299.cds ;
+  wire \result$299.delay_settled ;
+  wire [7:0] \result$299.delay_spread ;
+  wire [5:0] \result$299.lc ;
+  wire \result$299.lc_repeat ;
+  wire \result$299.lc_skip ;
+  wire \result$299.lc_zero ;
+  wire [12:0] \result$299.line_delay ;
+  wire [3:0] \result$299.noise_events ;
+  wire [12:0] \result$299.settled_delay ;
+  wire \result$299.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -20383,18 +20367,18 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$298.status ;
-  wire [31:0] \result$298.timestamp ;
-  wire [57:0] \result$298.word0 ;
-  wire \result$298.word0.crc_ok ;
-  wire \result$298.word0.ne ;
-  wire \result$298.word0.nw ;
-  wire [54:0] \result$298.word0.position ;
-  wire [42:0] \result$298.word1 ;
-  wire \result$298.word1.crc_ok ;
-  wire \result$298.word1.ne ;
-  wire \result$298.word1.nw ;
-  wire [39:0] \result$298.word1.position ;
+  wire [3:0] \result$299.status ;
+  wire [31:0] \result$299.timestamp ;
+  wire [57:0] \result$299.word0 ;
+  wire \result$299.word0.crc_ok ;
+  wire \result$299.word0.ne ;
+  wire \result$299.word0.nw ;
+  wire [54:0] \result$299.word0.position ;
+  wire [42:0] \result$299.word1 ;
+  wire \result$299.word1.crc_ok ;
+  wire \result$299.word1.ne ;
+  wire \result$299.word1.nw ;
+  wire [39:0] \result$299.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -20413,12 +20397,12 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$321 ;
+  wire \sample$322 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$304 ;
+  wire [12:0] \settled_delay$305 ;
   wire skip;
   input slo;
   wire slo;
@@ -20435,11 +20419,11 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$318 ;
+  wire \spw_mismatch$319 ;
   input start;
   wire start;
-  input \start$234 ;
-  wire \start$234 ;
+  input \start$235 ;
+  wire \start$235 ;
   wire \start$35 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$123 ;
@@ -20480,7 +20464,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$297 ;
+  wire [3:0] \status$298 ;
   wire stop_bit;
   wire \stop_bit$75 ;
   wire stopped;
@@ -20496,9 +20480,9 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire trigger;
   wire \trigger$46 ;
   wire valid;
-  wire \valid$203 ;
-  output \valid$295 ;
-  wire \valid$295 ;
+  wire \valid$204 ;
+  output \valid$296 ;
+  wire \valid$296 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -20570,11 +20554,11 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
   assign \check$160  = started & \$1 ;
-  assign \$2  = learn & spw_mismatch;
+  assign \$2  = report_frame & spw_mismatch;
   assign \$3  = status == 4'hd;
-  assign \$4  = learn & \$3 ;
+  assign \$4  = report_frame & \$3 ;
   assign \$5  = status == 4'he;
-  assign \$6  = learn & \$5 ;
+  assign \$6  = report_frame & \$5 ;
   assign \$7  = result[2:0] == 1'h1;
   assign \$8  = ca_done & \$7 ;
   assign \$9  = result[2:0] == 2'h2;
@@ -20585,16 +20569,20 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \$14  = ca_done & \$13 ;
   assign \$15  = result[2:0] == 3'h5;
   assign \$16  = ca_done & \$15 ;
-  assign \busy$290  = ~ idle;
+  assign \busy$291  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$17  = ~ \clear$126 ;
-  assign \$18  = \sample$321  & \$17 ;
+  assign \$18  = \sample$322  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
     \bit  <= \$20 ;
   always @(posedge clk)
     started_before <= \$21 ;
+  always @(posedge clk)
+    learn <= \$22 ;
+  always @(posedge clk)
+    clean <= \$23 ;
   \biss_master_wb.ch1.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -20641,7 +20629,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .quiet_live(quiet_live),
     .receiver_clear(\clear$126 ),
     .report_delay(report_delay),
-    .report_frame(learn),
+    .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
@@ -20657,10 +20645,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .waiting(watch)
   );
   \biss_master_wb.ch1.core.counters  counters (
-    .clear(\clear$264 ),
+    .clear(\clear$265 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$259 ),
+    .events(\events$260 ),
     .rst(rst)
   );
   \biss_master_wb.ch1.core.decoder  decoder (
@@ -20743,7 +20731,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .words(\words$171 )
   );
   \biss_master_wb.ch1.core.register_access  register_access (
-    .abort(\abort$236 ),
+    .abort(\abort$237 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -20755,27 +20743,27 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$222 ),
+    .request(\request$223 ),
     .result(result),
     .rst(rst),
-    .start(\start$234 ),
+    .start(\start$235 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch1.core.results  results (
     .clk(clk),
-    .done(\done$293 ),
+    .done(\done$294 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
-    .report_frame(learn),
-    .result(\result$298 ),
+    .report_frame(report_frame),
+    .result(\result$299 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$295 )
+    .valid_out(\valid$296 )
   );
   \biss_master_wb.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$322 ),
+    .\bit (\bit$323 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -20785,7 +20773,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .noise(sampler_noise),
     .receiver_clear(\clear$126 ),
     .rst(rst),
-    .sample(\sample$321 ),
+    .sample(\sample$322 ),
     .slo(slo)
   );
   \biss_master_wb.ch1.core.scheduler  scheduler (
@@ -20806,7 +20794,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$5035$0 (\bit ),
+    .\port$5016$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -20855,7 +20843,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   );
   \biss_master_wb.ch1.core.verdict  verdict (
     .cfg(cycle),
-    .clean(clean),
+    .clean(\clean$324 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
@@ -20870,9 +20858,9 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$3398$0 (\$22 ),
+    .\port$3374$0 (\$24 ),
     .report(report),
-    .report_frame(learn),
+    .report_frame(report_frame),
     .spw_match(spw_match),
     .spw_mismatch(spw_mismatch),
     .status(status),
@@ -20887,7 +20875,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$20  = \bit$322 ;
+    \$20  = \bit$323 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -20897,6 +20885,20 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     \$21  = started;
     if (rst) begin
       \$21  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$22  = report_frame;
+    if (rst) begin
+      \$22  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$23  = \clean$324 ;
+    if (rst) begin
+      \$23  = 1'h0;
     end
   end
   assign \idle$33  = idle;
@@ -20969,7 +20971,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
   assign \delay$159  = delay;
-  assign report_frame = learn;
+  assign \$signal  = learn;
   assign \clean$165  = clean;
   assign \noisy$167  = noisy;
   assign jump = delay_jump;
@@ -20982,37 +20984,37 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \tolerance$181  = cycle[252:245];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$185  = learn;
-  assign \fault$186  = \restart$152 ;
-  assign \fault_status$188  = fault_status;
-  assign \crc_ok$190  = crc_ok;
+  assign \report_frame$186  = report_frame;
+  assign \fault$187  = \restart$152 ;
+  assign \fault_status$189  = fault_status;
+  assign \crc_ok$191  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$198  = report;
-  assign \report_frame$199  = learn;
-  assign \report_delay$201  = report_delay;
-  assign \valid$203  = valid;
-  assign word_crc_ok = { \$22 , crc_ok[0] };
-  assign \first_rise$220  = first_rise;
+  assign \report$199  = report;
+  assign \report_frame$200  = report_frame;
+  assign \report_delay$202  = report_delay;
+  assign \valid$204  = valid;
+  assign word_crc_ok = { \$24 , crc_ok[0] };
+  assign \first_rise$221  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$234 ;
-  assign ca_abort = \abort$236 ;
+  assign ca_start = \start$235 ;
+  assign ca_abort = \abort$237 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$245  = frames;
-  assign \done$247  = ca_done;
-  assign \cdm$249  = cdm;
+  assign \busy$246  = frames;
+  assign \done$248  = ca_done;
+  assign \cdm$250  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$264 ;
+  assign clear_counters = \clear$265 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -21034,31 +21036,31 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign count_ca_refused = counts[303:288];
   assign count_ca_aborted = counts[319:304];
   assign count_ca_data_fault = counts[335:320];
-  assign \ma$289  = ma;
-  assign \overrun$292  = overrun;
-  assign \done$294  = \done$293 ;
-  assign valid_out = \valid$295 ;
-  assign \status$297  = \result$298 [3:0];
-  assign timestamp = \result$298 [35:4];
-  assign line_delay = \result$298 [48:36];
-  assign \cds$301  = \result$298 [49];
-  assign noise_events = \result$298 [53:50];
-  assign delay_settled = \result$298 [54];
-  assign \settled_delay$304  = \result$298 [67:55];
-  assign delay_spread = \result$298 [75:68];
-  assign word0_position = \result$298 [130:76];
-  assign word0_ne = \result$298 [131];
-  assign word0_nw = \result$298 [132];
-  assign word0_crc_ok = \result$298 [133];
-  assign word1_position = \result$298 [173:134];
-  assign word1_ne = \result$298 [174];
-  assign word1_nw = \result$298 [175];
-  assign word1_crc_ok = \result$298 [176];
-  assign \lc$314  = \result$298 [182:177];
-  assign \lc_repeat$315  = \result$298 [183];
-  assign \lc_skip$316  = \result$298 [184];
-  assign \lc_zero$317  = \result$298 [185];
-  assign \spw_mismatch$318  = \result$298 [186];
+  assign \ma$290  = ma;
+  assign \overrun$293  = overrun;
+  assign \done$295  = \done$294 ;
+  assign valid_out = \valid$296 ;
+  assign \status$298  = \result$299 [3:0];
+  assign timestamp = \result$299 [35:4];
+  assign line_delay = \result$299 [48:36];
+  assign \cds$302  = \result$299 [49];
+  assign noise_events = \result$299 [53:50];
+  assign delay_settled = \result$299 [54];
+  assign \settled_delay$305  = \result$299 [67:55];
+  assign delay_spread = \result$299 [75:68];
+  assign word0_position = \result$299 [130:76];
+  assign word0_ne = \result$299 [131];
+  assign word0_nw = \result$299 [132];
+  assign word0_crc_ok = \result$299 [133];
+  assign word1_position = \result$299 [173:134];
+  assign word1_ne = \result$299 [174];
+  assign word1_nw = \result$299 [175];
+  assign word1_crc_ok = \result$299 [176];
+  assign \lc$315  = \result$299 [182:177];
+  assign \lc_repeat$316  = \result$299 [183];
+  assign \lc_skip$317  = \result$299 [184];
+  assign \lc_zero$318  = \result$299 [185];
+  assign \spw_mismatch$319  = \result$299 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -21241,36 +21243,36 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$222.slave_id  = \request$222 [2:0];
-  assign \request$222.address  = \request$222 [9:3];
-  assign \request$222.count  = \request$222 [16:10];
-  assign \request$222.write  = \request$222 [17];
+  assign \request$223.slave_id  = \request$223 [2:0];
+  assign \request$223.address  = \request$223 [9:3];
+  assign \request$223.count  = \request$223 [16:10];
+  assign \request$223.write  = \request$223 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$259.crc_word0  = \events$259 [0];
-  assign \events$259.crc_word1  = \events$259 [1];
-  assign \events$259.no_ack  = \events$259 [2];
-  assign \events$259.no_start  = \events$259 [3];
-  assign \events$259.delay_range  = \events$259 [4];
-  assign \events$259.slo_stuck_low  = \events$259 [5];
-  assign \events$259.lc_repeat  = \events$259 [6];
-  assign \events$259.lc_skip  = \events$259 [7];
-  assign \events$259.lc_zero  = \events$259 [8];
-  assign \events$259.spw_mismatch  = \events$259 [9];
-  assign \events$259.overrun  = \events$259 [10];
-  assign \events$259.aborted  = \events$259 [11];
-  assign \events$259.no_stop  = \events$259 [12];
-  assign \events$259.noisy_line  = \events$259 [13];
-  assign \events$259.delay_jump  = \events$259 [14];
-  assign \events$259.noise_event  = \events$259 [15];
-  assign \events$259.ca_crc4_error  = \events$259 [16];
-  assign \events$259.ca_no_answer  = \events$259 [17];
-  assign \events$259.ca_refused  = \events$259 [18];
-  assign \events$259.ca_aborted  = \events$259 [19];
-  assign \events$259.ca_data_fault  = \events$259 [20];
+  assign \events$260.crc_word0  = \events$260 [0];
+  assign \events$260.crc_word1  = \events$260 [1];
+  assign \events$260.no_ack  = \events$260 [2];
+  assign \events$260.no_start  = \events$260 [3];
+  assign \events$260.delay_range  = \events$260 [4];
+  assign \events$260.slo_stuck_low  = \events$260 [5];
+  assign \events$260.lc_repeat  = \events$260 [6];
+  assign \events$260.lc_skip  = \events$260 [7];
+  assign \events$260.lc_zero  = \events$260 [8];
+  assign \events$260.spw_mismatch  = \events$260 [9];
+  assign \events$260.overrun  = \events$260 [10];
+  assign \events$260.aborted  = \events$260 [11];
+  assign \events$260.no_stop  = \events$260 [12];
+  assign \events$260.noisy_line  = \events$260 [13];
+  assign \events$260.delay_jump  = \events$260 [14];
+  assign \events$260.noise_event  = \events$260 [15];
+  assign \events$260.ca_crc4_error  = \events$260 [16];
+  assign \events$260.ca_no_answer  = \events$260 [17];
+  assign \events$260.ca_refused  = \events$260 [18];
+  assign \events$260.ca_aborted  = \events$260 [19];
+  assign \events$260.ca_data_fault  = \events$260 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -21299,60 +21301,60 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$298.status  = \result$298 [3:0];
-  assign \result$298.timestamp  = \result$298 [35:4];
-  assign \result$298.line_delay  = \result$298 [48:36];
-  assign \result$298.cds  = \result$298 [49];
-  assign \result$298.noise_events  = \result$298 [53:50];
-  assign \result$298.delay_settled  = \result$298 [54];
-  assign \result$298.settled_delay  = \result$298 [67:55];
-  assign \result$298.delay_spread  = \result$298 [75:68];
-  assign \result$298.word0  = \result$298 [133:76];
-  assign \result$298.word0.position  = \result$298 [130:76];
-  assign \result$298.word0.ne  = \result$298 [131];
-  assign \result$298.word0.nw  = \result$298 [132];
-  assign \result$298.word0.crc_ok  = \result$298 [133];
-  assign \result$298.word1  = \result$298 [176:134];
-  assign \result$298.word1.position  = \result$298 [173:134];
-  assign \result$298.word1.ne  = \result$298 [174];
-  assign \result$298.word1.nw  = \result$298 [175];
-  assign \result$298.word1.crc_ok  = \result$298 [176];
-  assign \result$298.lc  = \result$298 [182:177];
-  assign \result$298.lc_repeat  = \result$298 [183];
-  assign \result$298.lc_skip  = \result$298 [184];
-  assign \result$298.lc_zero  = \result$298 [185];
-  assign \result$298.spw_mismatch  = \result$298 [186];
-  assign \events$259 [20] = \$16 ;
-  assign \events$259 [19] = \$14 ;
-  assign \events$259 [18] = \$12 ;
-  assign \events$259 [17] = \$10 ;
-  assign \events$259 [16] = \$8 ;
-  assign \events$259 [15] = \event ;
-  assign \events$259 [14] = \$6 ;
-  assign \events$259 [13] = \$4 ;
-  assign \events$259 [12] = faults[6];
-  assign \events$259 [11] = faults[4];
-  assign \events$259 [10] = overrun;
-  assign \events$259 [9] = \$2 ;
-  assign \events$259 [8] = lc_zero;
-  assign \events$259 [7] = lc_skip;
-  assign \events$259 [6] = lc_repeat;
-  assign \events$259 [5] = faults[3];
-  assign \events$259 [4] = faults[2];
-  assign \events$259 [3] = faults[1];
-  assign \events$259 [2] = faults[0];
-  assign \events$259 [1] = crc_error[1];
-  assign \events$259 [0] = crc_error[0];
+  assign \result$299.status  = \result$299 [3:0];
+  assign \result$299.timestamp  = \result$299 [35:4];
+  assign \result$299.line_delay  = \result$299 [48:36];
+  assign \result$299.cds  = \result$299 [49];
+  assign \result$299.noise_events  = \result$299 [53:50];
+  assign \result$299.delay_settled  = \result$299 [54];
+  assign \result$299.settled_delay  = \result$299 [67:55];
+  assign \result$299.delay_spread  = \result$299 [75:68];
+  assign \result$299.word0  = \result$299 [133:76];
+  assign \result$299.word0.position  = \result$299 [130:76];
+  assign \result$299.word0.ne  = \result$299 [131];
+  assign \result$299.word0.nw  = \result$299 [132];
+  assign \result$299.word0.crc_ok  = \result$299 [133];
+  assign \result$299.word1  = \result$299 [176:134];
+  assign \result$299.word1.position  = \result$299 [173:134];
+  assign \result$299.word1.ne  = \result$299 [174];
+  assign \result$299.word1.nw  = \result$299 [175];
+  assign \result$299.word1.crc_ok  = \result$299 [176];
+  assign \result$299.lc  = \result$299 [182:177];
+  assign \result$299.lc_repeat  = \result$299 [183];
+  assign \result$299.lc_skip  = \result$299 [184];
+  assign \result$299.lc_zero  = \result$299 [185];
+  assign \result$299.spw_mismatch  = \result$299 [186];
+  assign \events$260 [20] = \$16 ;
+  assign \events$260 [19] = \$14 ;
+  assign \events$260 [18] = \$12 ;
+  assign \events$260 [17] = \$10 ;
+  assign \events$260 [16] = \$8 ;
+  assign \events$260 [15] = \event ;
+  assign \events$260 [14] = \$6 ;
+  assign \events$260 [13] = \$4 ;
+  assign \events$260 [12] = faults[6];
+  assign \events$260 [11] = faults[4];
+  assign \events$260 [10] = overrun;
+  assign \events$260 [9] = \$2 ;
+  assign \events$260 [8] = lc_zero;
+  assign \events$260 [7] = lc_skip;
+  assign \events$260 [6] = lc_repeat;
+  assign \events$260 [5] = faults[3];
+  assign \events$260 [4] = faults[2];
+  assign \events$260 [3] = faults[1];
+  assign \events$260 [2] = faults[0];
+  assign \events$260 [1] = crc_error[1];
+  assign \events$260 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$222 [17] = ca_write;
-  assign \request$222 [16:10] = ca_count;
-  assign \request$222 [9:3] = ca_address;
-  assign \request$222 [2:0] = ca_slave_id;
+  assign \request$223 [17] = ca_write;
+  assign \request$223 [16:10] = ca_count;
+  assign \request$223 [9:3] = ca_address;
+  assign \request$223 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
-  assign frame[176] = \$22 ;
+  assign frame[176] = \$24 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
   assign frame[173:134] = spw;
@@ -24880,32 +24882,36 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
-  wire \$101 ;
-  wire \$102 ;
+  wire [1:0] \$101 ;
+  wire [1:0] \$102 ;
   wire \$103 ;
-  reg \$104 ;
-  reg \$105 ;
-  reg [15:0] \$106 ;
-  reg \$107 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
   reg \$108 ;
-  reg [15:0] \$109 ;
+  reg \$109 ;
   wire [1:0] \$11 ;
-  reg [2:0] \$110 ;
+  reg [15:0] \$110 ;
   reg \$111 ;
-  reg [6:0] \$112 ;
-  reg \$113 ;
-  reg \$114 ;
+  reg \$112 ;
+  reg [15:0] \$113 ;
+  reg [2:0] \$114 ;
   reg \$115 ;
-  reg \$116 ;
+  reg [6:0] \$116 ;
   reg \$117 ;
   reg \$118 ;
-  reg [54:0] \$119 ;
+  reg \$119 ;
   wire [6:0] \$12 ;
-  reg [1:0] \$120 ;
-  reg [1:0] \$121 ;
-  reg [39:0] \$122 ;
-  reg [5:0] \$123 ;
-  reg [39:0] \$124 ;
+  reg \$120 ;
+  reg \$121 ;
+  reg \$122 ;
+  reg [54:0] \$123 ;
+  reg [1:0] \$124 ;
+  reg [1:0] \$125 ;
+  reg [39:0] \$126 ;
+  reg [5:0] \$127 ;
+  reg [39:0] \$128 ;
   wire \$13 ;
   reg [3:0] \$14 ;
   wire [6:0] \$15 ;
@@ -24996,14 +25002,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   wire \$92 ;
   wire \$93 ;
   wire \$94 ;
-  wire \$95 ;
+  wire [6:0] \$95 ;
   wire \$96 ;
-  wire [6:0] \$97 ;
+  wire \$97 ;
   wire \$98 ;
-  wire \$99 ;
+  wire [6:0] \$99 ;
+  reg at_cds;
   input \bit ;
   wire \bit ;
-  wire \bit$51 ;
+  wire \bit$52 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -25016,17 +25023,17 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   wire [1:0] crc_ok;
   input [75:0] crcs;
   wire [75:0] crcs;
-  wire [75:0] \crcs$46 ;
-  wire [37:0] \crcs$46[0] ;
-  wire \crcs$46[0].inverted ;
-  wire [15:0] \crcs$46[0].poly ;
-  wire [15:0] \crcs$46[0].start ;
-  wire [4:0] \crcs$46[0].width ;
-  wire [37:0] \crcs$46[1] ;
-  wire \crcs$46[1].inverted ;
-  wire [15:0] \crcs$46[1].poly ;
-  wire [15:0] \crcs$46[1].start ;
-  wire [4:0] \crcs$46[1].width ;
+  wire [75:0] \crcs$47 ;
+  wire [37:0] \crcs$47[0] ;
+  wire \crcs$47[0].inverted ;
+  wire [15:0] \crcs$47[0].poly ;
+  wire [15:0] \crcs$47[0].start ;
+  wire [4:0] \crcs$47[0].width ;
+  wire [37:0] \crcs$47[1] ;
+  wire \crcs$47[1].inverted ;
+  wire [15:0] \crcs$47[1].poly ;
+  wire [15:0] \crcs$47[1].start ;
+  wire [4:0] \crcs$47[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -25044,7 +25051,6 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   reg [2:0] decoder_fsm_state = 3'h0;
   output done;
   reg done = 1'h0;
-  wire first;
   reg [6:0] idx = 7'h00;
   reg in_crc = 1'h0;
   reg in_data = 1'h0;
@@ -25057,6 +25063,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   output lc_load;
   wire lc_load;
   wire [5:0] lc_next;
+  wire load;
+  wire load_word;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
@@ -25095,7 +25103,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
   (* init = 1'h0 *)
-  wire \word$54 ;
+  wire \word$55 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [21:0] words;
@@ -25206,19 +25214,23 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   assign \$93  = words[10] & data0[0];
   assign \$94  = \bit  ^ \$93 ;
   assign lc_load = in_word & in_lc;
-  assign \$95  = ! idx;
-  assign first = in_word & \$95 ;
-  assign \$96  = ~ in_crc;
-  assign \cover  = in_word & \$96 ;
+  assign \$95  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$96  = idx == \$95 ;
+  assign \$97  = in_word & \$96 ;
+  assign load = at_cds | \$97 ;
+  assign \$98  = ~ in_crc;
+  assign \cover  = in_word & \$98 ;
   assign check = in_word & in_crc;
-  assign \$97  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$98  = idx == \$97 ;
-  assign last = in_word & \$98 ;
-  assign \$99  = ! decoder_fsm_state;
-  assign \$100  = decoder_fsm_state == 1'h1;
-  assign \$101  = decoder_fsm_state == 2'h2;
-  assign \$102  = decoder_fsm_state == 2'h3;
-  assign \$103  = decoder_fsm_state == 3'h4;
+  assign \$99  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$100  = idx == \$99 ;
+  assign last = in_word & \$100 ;
+  assign \$101  = word + 1'h1;
+  assign \$102  = at_cds ? 2'h0 : \$101 ;
+  assign \$103  = ! decoder_fsm_state;
+  assign \$104  = decoder_fsm_state == 1'h1;
+  assign \$105  = decoder_fsm_state == 2'h2;
+  assign \$106  = decoder_fsm_state == 2'h3;
+  assign \$107  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -25248,55 +25260,56 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   always @(posedge clk)
     w1_lc_at0 <= \$34 ;
   always @(posedge clk)
-    done <= \$104 ;
+    done <= \$108 ;
   always @(posedge clk)
-    stopped <= \$105 ;
+    stopped <= \$109 ;
   always @(posedge clk)
-    slots <= \$106 ;
+    slots <= \$110 ;
   always @(posedge clk)
-    slots_full <= \$107 ;
+    slots_full <= \$111 ;
   always @(posedge clk)
-    started <= \$108 ;
+    started <= \$112 ;
   always @(posedge clk)
-    start_slot <= \$109 ;
+    start_slot <= \$113 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$110 ;
+    decoder_fsm_state <= \$114 ;
   always @(posedge clk)
-    cds <= \$111 ;
+    cds <= \$115 ;
   always @(posedge clk)
-    idx <= \$112 ;
+    idx <= \$116 ;
   always @(posedge clk)
-    in_data <= \$113 ;
+    in_data <= \$117 ;
   always @(posedge clk)
-    in_lc <= \$114 ;
+    in_lc <= \$118 ;
   always @(posedge clk)
-    in_crc <= \$115 ;
+    in_crc <= \$119 ;
   always @(posedge clk)
-    in_top <= \$116 ;
+    in_top <= \$120 ;
   always @(posedge clk)
-    word <= \$117 ;
+    word <= \$121 ;
   always @(posedge clk)
-    stop_bit <= \$118 ;
+    stop_bit <= \$122 ;
   always @(posedge clk)
-    data0 <= \$119 ;
+    data0 <= \$123 ;
   always @(posedge clk)
-    ne <= \$120 ;
+    ne <= \$124 ;
   always @(posedge clk)
-    nw <= \$121 ;
+    nw <= \$125 ;
   always @(posedge clk)
-    data1 <= \$122 ;
+    data1 <= \$126 ;
   always @(posedge clk)
-    lc <= \$123 ;
+    lc <= \$127 ;
   always @(posedge clk)
-    cpw_top <= \$124 ;
+    cpw_top <= \$128 ;
   \biss_master_wb.ch1.core.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
     .clk(clk),
     .\cover (\cover ),
     .crcs(crcs),
-    .first(first),
     .last(last),
+    .load(load),
+    .load_word(\$102 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst),
@@ -25408,7 +25421,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$104  = 1'h0;
+    \$108  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -25418,73 +25431,9 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$104  = 1'h1;
+                \$108  = 1'h1;
               end
             end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$104  = 1'h0;
-    end
-    if (rst) begin
-      \$104  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$105  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$105  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$105  = 1'h0;
-    end
-    if (rst) begin
-      \$105  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$106  = slots;
-    if (\$36 ) begin
-      \$106  = \$37 [15:0];
-    end
-    if (receiver_clear) begin
-      \$106  = 16'h0000;
-    end
-    if (rst) begin
-      \$106  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$107  = slots_full;
-    if (\$36 ) begin
-      \$107  = \$38 ;
-    end
-    if (receiver_clear) begin
-      \$107  = 1'h0;
-    end
-    if (rst) begin
-      \$107  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$108  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$108  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -25496,158 +25445,125 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$109  = start_slot;
+    \$109  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
-          if (\$39 ) begin
-            \$109  = slots;
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$109  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$109  = 16'h0000;
+      \$109  = 1'h0;
     end
     if (rst) begin
-      \$109  = 16'h0000;
+      \$109  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$110  = decoder_fsm_state;
+    \$110  = slots;
+    if (\$36 ) begin
+      \$110  = \$37 [15:0];
+    end
+    if (receiver_clear) begin
+      \$110  = 16'h0000;
+    end
+    if (rst) begin
+      \$110  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$111  = slots_full;
+    if (\$36 ) begin
+      \$111  = \$38 ;
+    end
+    if (receiver_clear) begin
+      \$111  = 1'h0;
+    end
+    if (rst) begin
+      \$111  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$112  = started;
     casez (decoder_fsm_state)
       3'h0:
           if (\$39 ) begin
-            \$110  = 3'h1;
+            \$112  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$112  = 1'h0;
+    end
+    if (rst) begin
+      \$112  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$113  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$113  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$113  = 16'h0000;
+    end
+    if (rst) begin
+      \$113  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$114  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$114  = 3'h1;
           end
       3'h1:
           if (sample) begin
-            \$110  = 3'h2;
+            \$114  = 3'h2;
           end
       3'h2:
           if (sample) begin
             if (\$60 ) begin
               if (\$62 ) begin
-                \$110  = 3'h3;
+                \$114  = 3'h3;
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$110  = 3'h4;
+            \$114  = 3'h4;
           end
     endcase
     if (receiver_clear) begin
-      \$110  = 3'h0;
+      \$114  = 3'h0;
     end
     if (rst) begin
-      \$110  = 3'h0;
+      \$114  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$111  = cds;
+    \$115  = cds;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$111  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$111  = 1'h0;
-    end
-    if (rst) begin
-      \$111  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$112  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$112  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$112  = \$41 [6:0];
-            if (\$60 ) begin
-              \$112  = 7'h00;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$112  = 7'h00;
-    end
-    if (rst) begin
-      \$112  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$113  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$113  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$113  = \$44 ;
-            if (\$60 ) begin
-              \$113  = w1_data_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$113  = 1'h0;
-    end
-    if (rst) begin
-      \$113  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$114  = in_lc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$114  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$114  = \$50 ;
-            if (\$60 ) begin
-              \$114  = w1_lc_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$114  = 1'h0;
-    end
-    if (rst) begin
-      \$114  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$115  = in_crc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$115  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            \$115  = \$56 ;
+            \$115  = \bit ;
           end
     endcase
     if (receiver_clear) begin
@@ -25659,38 +25575,135 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$116  = in_top;
+    \$116  = idx;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$116  = \$40 ;
+            \$116  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$116  = \$58 ;
+            \$116  = \$41 [6:0];
             if (\$60 ) begin
-              \$116  = 1'h0;
+              \$116  = 7'h00;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$116  = 1'h0;
+      \$116  = 7'h00;
     end
     if (rst) begin
-      \$116  = 1'h0;
+      \$116  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$117  = word;
+    \$117  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$117  = 1'h0;
+            \$117  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$117  = \$44 ;
+            if (\$60 ) begin
+              \$117  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$117  = 1'h0;
+    end
+    if (rst) begin
+      \$117  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$118  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$118  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$118  = \$50 ;
+            if (\$60 ) begin
+              \$118  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$118  = 1'h0;
+    end
+    if (rst) begin
+      \$118  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$119  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$119  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$119  = \$56 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$119  = 1'h0;
+    end
+    if (rst) begin
+      \$119  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$120  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$120  = \$40 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$120  = \$58 ;
+            if (\$60 ) begin
+              \$120  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$120  = 1'h0;
+    end
+    if (rst) begin
+      \$120  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$121  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$121  = 1'h0;
           end
       3'h2:
           if (sample) begin
@@ -25698,21 +25711,21 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
               (* full_case = 32'd1 *)
               if (\$62 ) begin
               end else begin
-                \$117  = \$63 [0];
+                \$121  = \$63 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$117  = 1'h0;
+      \$121  = 1'h0;
     end
     if (rst) begin
-      \$117  = 1'h0;
+      \$121  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$118  = stop_bit;
+    \$122  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -25722,109 +25735,119 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
           /* empty */;
       3'h3:
           if (sample) begin
-            \$118  = \bit ;
+            \$122  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$118  = 1'h0;
+      \$122  = 1'h0;
     end
     if (rst) begin
-      \$118  = 1'h0;
+      \$122  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$119  = data0;
+    \$123  = data0;
     if (\$66 ) begin
-      \$119  = { data0[53:0], \$68  };
+      \$123  = { data0[53:0], \$68  };
     end
     if (receiver_clear) begin
-      \$119  = 55'h00000000000000;
+      \$123  = 55'h00000000000000;
     end
     if (rst) begin
-      \$119  = 55'h00000000000000;
+      \$123  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$120  = ne;
+    \$124  = ne;
     if (\$69 ) begin
-      \$120 [0] = 1'h1;
+      \$124 [0] = 1'h1;
     end else if (\$73 ) begin
-      \$120 [0] = \bit ;
+      \$124 [0] = \bit ;
     end
     if (\$83 ) begin
-      \$120 [1] = 1'h1;
+      \$124 [1] = 1'h1;
     end else if (\$87 ) begin
-      \$120 [1] = \bit ;
+      \$124 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$120  = 2'h0;
+      \$124  = 2'h0;
     end
     if (rst) begin
-      \$120  = 2'h0;
+      \$124  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$121  = nw;
+    \$125  = nw;
     if (\$69 ) begin
-      \$121 [0] = 1'h1;
+      \$125 [0] = 1'h1;
     end else if (\$73 ) begin
     end else if (\$77 ) begin
-      \$121 [0] = \bit ;
+      \$125 [0] = \bit ;
     end
     if (\$83 ) begin
-      \$121 [1] = 1'h1;
+      \$125 [1] = 1'h1;
     end else if (\$87 ) begin
     end else if (\$91 ) begin
-      \$121 [1] = \bit ;
+      \$125 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$121  = 2'h0;
+      \$125  = 2'h0;
     end
     if (rst) begin
-      \$121  = 2'h0;
+      \$125  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$122  = data1;
+    \$126  = data1;
     if (\$80 ) begin
-      \$122  = { data1[38:0], \$82  };
+      \$126  = { data1[38:0], \$82  };
     end
     if (receiver_clear) begin
-      \$122  = 40'h0000000000;
+      \$126  = 40'h0000000000;
     end
     if (rst) begin
-      \$122  = 40'h0000000000;
+      \$126  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$123  = lc;
+    \$127  = lc;
     if (lc_load) begin
-      \$123  = { lc[4:0], \bit  };
+      \$127  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$123  = 6'h00;
+      \$127  = 6'h00;
     end
     if (rst) begin
-      \$123  = 6'h00;
+      \$127  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$124  = cpw_top;
+    \$128  = cpw_top;
     if (\$92 ) begin
-      \$124  = { cpw_top[38:0], \$94  };
+      \$128  = { cpw_top[38:0], \$94  };
     end
     if (receiver_clear) begin
-      \$124  = 40'h0000000000;
+      \$128  = 40'h0000000000;
     end
     if (rst) begin
-      \$124  = 40'h0000000000;
+      \$128  = 40'h0000000000;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    at_cds = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          at_cds = sample;
+    endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
@@ -25839,10 +25862,11 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     endcase
   end
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$46  = crcs;
-  assign \bit$51  = \bit ;
+  assign \crcs$47  = crcs;
+  assign \bit$52  = \bit ;
   assign ok = crc_ok;
-  assign \word$54  = word;
+  assign \word$55  = word;
+  assign load_word = \$102 [0];
   assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -25865,74 +25889,59 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$46[0]  = crcs[37:0];
-  assign \crcs$46[0].width  = crcs[4:0];
-  assign \crcs$46[0].poly  = crcs[20:5];
-  assign \crcs$46[0].start  = crcs[36:21];
-  assign \crcs$46[0].inverted  = crcs[37];
-  assign \crcs$46[1]  = crcs[75:38];
-  assign \crcs$46[1].width  = crcs[42:38];
-  assign \crcs$46[1].poly  = crcs[58:43];
-  assign \crcs$46[1].start  = crcs[74:59];
-  assign \crcs$46[1].inverted  = crcs[75];
+  assign \crcs$47[0]  = crcs[37:0];
+  assign \crcs$47[0].width  = crcs[4:0];
+  assign \crcs$47[0].poly  = crcs[20:5];
+  assign \crcs$47[0].start  = crcs[36:21];
+  assign \crcs$47[0].inverted  = crcs[37];
+  assign \crcs$47[1]  = crcs[75:38];
+  assign \crcs$47[1].width  = crcs[42:38];
+  assign \crcs$47[1].poly  = crcs[58:43];
+  assign \crcs$47[1].start  = crcs[74:59];
+  assign \crcs$47[1].inverted  = crcs[75];
   assign \$78  = word;
   assign \$84  = word;
   assign \$88  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder.crc (rst, first, \cover , check, last, \bit , crcs, receiver_clear, word, ok, clk);
+module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, load_word, \bit , crcs, receiver_clear, word, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
   reg [15:0] \$1 ;
-  wire [15:0] \$10 ;
-  reg [15:0] \$11 ;
-  wire [15:0] \$12 ;
+  wire \$10 ;
+  reg \$11 ;
+  wire \$12 ;
   wire \$13 ;
   wire \$14 ;
-  reg [15:0] \$15 ;
-  wire [15:0] \$16 ;
-  reg [4:0] \$17 ;
+  wire \$15 ;
+  reg [4:0] \$16 ;
+  wire \$17 ;
   wire \$18 ;
-  wire \$19 ;
-  wire [15:0] \$2 ;
-  reg \$20 ;
+  reg \$19 ;
+  reg [4:0] \$2 ;
+  wire \$20 ;
   wire \$21 ;
   wire \$22 ;
   wire \$23 ;
   wire \$24 ;
-  wire \$25 ;
-  reg [15:0] \$26 ;
-  wire [15:0] \$27 ;
-  reg [4:0] \$28 ;
+  reg [4:0] \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  reg \$28 ;
   wire \$29 ;
-  reg [15:0] \$3 ;
+  wire \$3 ;
   wire \$30 ;
-  reg \$31 ;
+  wire \$31 ;
   wire \$32 ;
-  wire \$33 ;
-  wire \$34 ;
-  wire \$35 ;
-  wire \$36 ;
-  wire \$37 ;
-  reg [15:0] \$38 ;
-  wire [15:0] \$39 ;
-  wire [15:0] \$4 ;
-  reg [4:0] \$40 ;
-  wire \$41 ;
-  wire \$42 ;
-  reg \$43 ;
-  wire \$44 ;
-  wire \$45 ;
-  wire \$46 ;
-  wire \$47 ;
-  reg [15:0] \$48 ;
-  reg \$49 ;
-  reg [4:0] \$5 ;
-  reg [1:0] \$50 ;
-  wire \$6 ;
-  wire \$7 ;
-  reg [15:0] \$8 ;
-  wire [15:0] \$9 ;
+  reg [15:0] \$33 ;
+  reg \$34 ;
+  reg [1:0] \$35 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  wire [15:0] \$6 ;
+  wire [15:0] \$7 ;
+  reg [4:0] \$8 ;
+  wire \$9 ;
   input \bit ;
   wire \bit ;
   input check;
@@ -25953,10 +25962,12 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, first, \cover , check, last, \
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  input first;
-  wire first;
   input last;
   wire last;
+  input load;
+  wire load;
+  input load_word;
+  wire load_word;
   reg mismatch = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
@@ -25967,79 +25978,38 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, first, \cover , check, last, \
   wire rst;
   input word;
   wire word;
+  assign \$3  = { \reg , 1'h0 } >> \$2 ;
+  assign \$4  = \$3  ^ \bit ;
+  assign \$6  = \$4  ? \$5  : 16'h0000;
+  assign \$7  = { \reg [14:0], 1'h0 } ^ \$6 ;
+  assign \$9  = { \reg , 1'h0 } >> \$8 ;
+  assign \$10  = \bit  ^ \$9 ;
+  assign \$12  = \$10  ^ \$11 ;
+  assign \$13  = check & \$12 ;
+  assign \$14  = mismatch | \$13 ;
+  assign \$15  = ! word;
+  assign \$17  = { \reg , 1'h0 } >> \$16 ;
+  assign \$18  = \bit  ^ \$17 ;
+  assign \$20  = \$18  ^ \$19 ;
+  assign \$21  = check & \$20 ;
+  assign \$22  = mismatch | \$21 ;
+  assign \$23  = ~ \$22 ;
+  assign \$26  = { \reg , 1'h0 } >> \$25 ;
+  assign \$27  = \bit  ^ \$26 ;
+  assign \$29  = \$27  ^ \$28 ;
+  assign \$30  = check & \$29 ;
+  assign \$31  = mismatch | \$30 ;
+  assign \$32  = ~ \$31 ;
   always @(posedge clk)
-    mismatch <= \$49 ;
+    \reg  <= \$33 ;
   always @(posedge clk)
-    ok <= \$50 ;
-  assign \$2  = first ? \$1  : \reg ;
-  assign \$4  = first ? \$3  : \reg ;
-  assign \$6  = { \$4 , 1'h0 } >> \$5 ;
-  assign \$7  = \$6  ^ \bit ;
-  assign \$9  = \$7  ? \$8  : 16'h0000;
-  assign \$10  = { \$2 [14:0], 1'h0 } ^ \$9 ;
-  assign \$12  = first ? \$11  : \reg ;
-  assign \$13  = \cover  | check;
-  assign \$14  = first ? 1'h0 : mismatch;
-  assign \$16  = first ? \$15  : \reg ;
-  assign \$18  = { \$16 , 1'h0 } >> \$17 ;
-  assign \$19  = \bit  ^ \$18 ;
-  assign \$21  = \$19  ^ \$20 ;
-  assign \$22  = check & \$21 ;
-  assign \$23  = \$14  | \$22 ;
-  assign \$24  = ! word;
-  assign \$25  = first ? 1'h0 : mismatch;
-  assign \$27  = first ? \$26  : \reg ;
-  assign \$29  = { \$27 , 1'h0 } >> \$28 ;
-  assign \$30  = \bit  ^ \$29 ;
-  assign \$32  = \$30  ^ \$31 ;
-  assign \$33  = check & \$32 ;
-  assign \$34  = \$25  | \$33 ;
-  assign \$35  = ~ \$34 ;
-  assign \$37  = first ? 1'h0 : mismatch;
-  assign \$39  = first ? \$38  : \reg ;
-  assign \$41  = { \$39 , 1'h0 } >> \$40 ;
-  assign \$42  = \bit  ^ \$41 ;
-  assign \$44  = \$42  ^ \$43 ;
-  assign \$45  = check & \$44 ;
-  assign \$46  = \$37  | \$45 ;
-  assign \$47  = ~ \$46 ;
+    mismatch <= \$34 ;
   always @(posedge clk)
-    \reg  <= \$48 ;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$49  = mismatch;
-    if (\$13 ) begin
-      \$49  = \$23 ;
-    end
-    if (receiver_clear) begin
-      \$49  = 1'h0;
-    end
-    if (rst) begin
-      \$49  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$50  = ok;
-    if (last) begin
-      if (\$24 ) begin
-        \$50 [0] = \$35 ;
-      end
-      if (\$36 ) begin
-        \$50 [1] = \$47 ;
-      end
-    end
-    if (receiver_clear) begin
-      \$50  = 2'h3;
-    end
-    if (rst) begin
-      \$50  = 2'h3;
-    end
-  end
+    ok <= \$35 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (load_word)
       1'h0:
           \$1  = crcs[36:21];
       1'h1:
@@ -26051,9 +26021,9 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$3  = crcs[36:21];
+          \$2  = crcs[4:0];
       1'h1:
-          \$3  = crcs[74:59];
+          \$2  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -26061,9 +26031,9 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$5  = crcs[4:0];
+          \$5  = crcs[20:5];
       1'h1:
-          \$5  = crcs[42:38];
+          \$5  = crcs[58:43];
     endcase
   end
   always @* begin
@@ -26071,9 +26041,9 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$8  = crcs[20:5];
+          \$8  = crcs[4:0];
       1'h1:
-          \$8  = crcs[58:43];
+          \$8  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -26081,9 +26051,9 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$11  = crcs[36:21];
+          \$11  = crcs[37];
       1'h1:
-          \$11  = crcs[74:59];
+          \$11  = crcs[75];
     endcase
   end
   always @* begin
@@ -26091,9 +26061,9 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$15  = crcs[36:21];
+          \$16  = crcs[4:0];
       1'h1:
-          \$15  = crcs[74:59];
+          \$16  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -26101,9 +26071,9 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$17  = crcs[4:0];
+          \$19  = crcs[37];
       1'h1:
-          \$17  = crcs[42:38];
+          \$19  = crcs[75];
     endcase
   end
   always @* begin
@@ -26111,9 +26081,9 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$20  = crcs[37];
+          \$25  = crcs[4:0];
       1'h1:
-          \$20  = crcs[75];
+          \$25  = crcs[42:38];
     endcase
   end
   always @* begin
@@ -26121,74 +26091,60 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, first, \cover , check, last, \
     (* full_case = 32'd1 *)
     casez (word)
       1'h0:
-          \$26  = crcs[36:21];
+          \$28  = crcs[37];
       1'h1:
-          \$26  = crcs[74:59];
+          \$28  = crcs[75];
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$28  = crcs[4:0];
-      1'h1:
-          \$28  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$31  = crcs[37];
-      1'h1:
-          \$31  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$38  = crcs[36:21];
-      1'h1:
-          \$38  = crcs[74:59];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$40  = crcs[4:0];
-      1'h1:
-          \$40  = crcs[42:38];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    (* full_case = 32'd1 *)
-    casez (word)
-      1'h0:
-          \$43  = crcs[37];
-      1'h1:
-          \$43  = crcs[75];
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$48  = \reg ;
-    if (\cover ) begin
-      \$48  = \$10 ;
+    \$33  = \reg ;
+    if (load) begin
+      \$33  = \$1 ;
+    end else if (\cover ) begin
+      \$33  = \$7 ;
     end else if (check) begin
-      \$48  = { \$12 [14:0], 1'h0 };
+      \$33  = { \reg [14:0], 1'h0 };
     end
     if (receiver_clear) begin
-      \$48  = 16'h0000;
+      \$33  = 16'h0000;
     end
     if (rst) begin
-      \$48  = 16'h0000;
+      \$33  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$34  = mismatch;
+    if (load) begin
+      \$34  = 1'h0;
+    end else if (\cover ) begin
+    end else if (check) begin
+      \$34  = \$14 ;
+    end
+    if (receiver_clear) begin
+      \$34  = 1'h0;
+    end
+    if (rst) begin
+      \$34  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$35  = ok;
+    if (last) begin
+      if (\$15 ) begin
+        \$35 [0] = \$23 ;
+      end
+      if (\$24 ) begin
+        \$35 [1] = \$32 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$35  = 2'h3;
+    end
+    if (rst) begin
+      \$35  = 2'h3;
     end
   end
   assign \crcs[0]  = crcs[37:0];
@@ -26201,11 +26157,11 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, first, \cover , check, last, \
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \$36  = word;
+  assign \$24  = word;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.delay_check (rst, enable, rearm, check, clean, \tolerance$8 , learn, delay, jump, spread, settled_delay, settled, clk);
+module \biss_master_wb.ch1.core.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
@@ -30432,7 +30388,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$5035$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$5016$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -30474,8 +30430,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5035$0 ;
-  wire \port$5035$0 ;
+  input \port$5016$0 ;
+  wire \port$5016$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -30489,9 +30445,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5035$0  };
-  assign \$2  = { lc[4:0], \port$5035$0  } == last;
-  assign \$3  = { lc[4:0], \port$5035$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5016$0  };
+  assign \$2  = { lc[4:0], \port$5016$0  } == last;
+  assign \$3  = { lc[4:0], \port$5016$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -30601,7 +30557,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5035$0  };
+  assign lc_next = { lc[4:0], \port$5016$0  };
   assign zero = is_zero;
 endmodule
 
@@ -31157,7 +31113,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3398$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3374$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
   wire \$1 ;
@@ -31309,8 +31265,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3398$0 , lc_
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$3398$0 ;
-  wire \port$3398$0 ;
+  output \port$3374$0 ;
+  wire \port$3374$0 ;
   output report;
   wire report;
   input report_frame;
@@ -31416,7 +31372,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3398$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3398$0  = \$2 ;
+  assign \port$3374$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

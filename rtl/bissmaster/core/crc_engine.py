@@ -11,7 +11,7 @@ class CrcEngine(wiring.Component):
     """Checks each data word against the CRC that follows it, one received bit per clock.
 
     The words of a frame follow each other on the line, so one bit-serial engine serves them
-    all: at a word's first bit it starts again from that word's settings (``crcs[word]``,
+    all: before a word's first bit (``load``) it starts again from that word's settings (``crcs[word]``,
     :data:`~bissmaster.params.CRC_SETTINGS`: width 0..16, register polynomial, start value,
     inversion), which is what lets any word have any CRC at no cost per word.
 
@@ -35,8 +35,12 @@ class CrcEngine(wiring.Component):
         Each word's CRC, held for the cycle (Configuration.crcs).
     word : In(range(words))
         The word the current bit belongs to (builds of more than one word).
-    first : In(1)
-        The bit is its word's first: start from the word's start value.
+    load : In(1)
+        Load word ``load_word``'s start value (before that word's first bit: with the CDS
+        bit, and with the last bit of the word before, which it overrides in the register but
+        not in that word's verdict).
+    load_word : In(range(words))
+        The word ``load`` prepares (builds of more than one word).
     cover : In(1)
         The bit is covered by the CRC (every bit of the word before the CRC field).
     check : In(1)
@@ -53,8 +57,8 @@ class CrcEngine(wiring.Component):
         self._words = words
         super().__init__({
             "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
-            **({"word": In(range(words))} if words > 1 else {}),
-            "first": In(1),
+            **({"word": In(range(words)), "load_word": In(range(words))} if words > 1 else {}),
+            "load": In(1),
             "cover": In(1),
             "check": In(1),
             "last": In(1),
@@ -67,24 +71,27 @@ class CrcEngine(wiring.Component):
         n = self._words
         word = self.word if n > 1 else C(0, 1)
         crc = self.crcs[0] if n == 1 else Array(self.crcs[w] for w in range(n))[word]
+        load_word = self.load_word if n > 1 else C(0, 1)
+        load_crc = self.crcs[0] if n == 1 else Array(self.crcs[w] for w in range(n))[load_word]
 
         reg = Signal(CRC_MAX_WIDTH)
         mismatch = Signal()
-        source = Mux(self.first, crc.start, reg)
         # The MSB of a ``width``-bit register: bit width - 1, i.e. bit ``width`` of the
-        # register with a 0 below it (width 0 reads that 0 and is never used).
-        msb = Cat(C(0, 1), source).bit_select(crc.width, 1)
-        shifted = Cat(C(0, 1), source[:-1])
+        # register with a 0 below it (width 0 reads that 0 and is never used). The register is
+        # loaded with the start value before the word's first bit, so this wide select runs
+        # on flip-flops only; the control that follows the sampler picks late.
+        msb = Cat(C(0, 1), reg).bit_select(crc.width, 1)
+        shifted = Cat(C(0, 1), reg[:-1])
         feedback = msb ^ self.bit
         wrong = self.check & (self.bit ^ msb ^ crc.inverted)
-        seen = Mux(self.first, 0, mismatch) | wrong
+        seen = mismatch | wrong
 
-        with m.If(self.cover):
+        with m.If(self.load):
+            m.d.sync += [reg.eq(load_crc.start), mismatch.eq(0)]
+        with m.Elif(self.cover):
             m.d.sync += reg.eq(shifted ^ Mux(feedback, crc.poly, 0))
         with m.Elif(self.check):
-            m.d.sync += reg.eq(shifted)
-        with m.If(self.cover | self.check):
-            m.d.sync += mismatch.eq(seen)
+            m.d.sync += [reg.eq(shifted), mismatch.eq(seen)]
         with m.If(self.last):
             for w in range(n):
                 with m.If(word == w):

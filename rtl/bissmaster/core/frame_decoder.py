@@ -136,6 +136,7 @@ class FrameDecoder(wiring.Component):
         in_lc = Signal()        # nenw_end <= idx < lc_end of this word
         in_top = Signal()       # word 0 and idx < data_bits of word 1 (cpw_top)
         in_crc = Signal()       # lc_end <= idx: the word's received CRC bits
+        at_cds = Signal()       # the CDS bit is sampled: word 0 begins next
         in_word = Signal()
         m.d.sync += [self.done.eq(0), self.stopped.eq(0)]
 
@@ -148,6 +149,7 @@ class FrameDecoder(wiring.Component):
                     m.d.sync += [self.started.eq(1), self.start_slot.eq(self.slots)]
                     m.next = "CDS"
             with m.State("CDS"):
+                m.d.comb += at_cds.eq(self.sample)
                 with m.If(self.sample):
                     m.d.sync += [self.cds.eq(self.bit), idx.eq(0),
                                  in_data.eq(ends[0]["data_at0"]), in_lc.eq(ends[0]["lc_at0"]),
@@ -222,7 +224,7 @@ class FrameDecoder(wiring.Component):
         m.submodules.crc = engine = CrcEngine(p.words)
         m.d.comb += [
             engine.crcs.eq(self.crcs),
-            engine.first.eq(in_word & (idx == 0)),
+            engine.load.eq(at_cds | (in_word & (idx == word_end_m1))),
             engine.cover.eq(in_word & ~in_crc),
             engine.check.eq(in_word & in_crc),
             engine.last.eq(in_word & (idx == word_end_m1)),
@@ -230,6 +232,6 @@ class FrameDecoder(wiring.Component):
             self.crc_ok.eq(engine.ok),
         ]
         if p.words > 1:
-            m.d.comb += engine.word.eq(word)
+            m.d.comb += [engine.word.eq(word), engine.load_word.eq(Mux(at_cds, 0, word + 1))]
 
         return m

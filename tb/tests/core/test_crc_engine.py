@@ -45,42 +45,70 @@ def _settings(width, poly, start, inverted):
 
 
 def _run(words, jobs, seed):
-    """Each job is (word index, settings, covered bits, received CRC bits). The bits come one
+    """Each job is (word index, settings, covered bits, received CRC bits). The engine loads
+    the job's word before its first bit, either in a clock of its own or with the last bit
+    of the job before (as the decoder does after CDS and between words); the bits come one
     per 1..3 clocks with junk between; ``crcs`` holds every word's settings from the job on.
-    Returns per job (ok[word] the clock after its last bit, ok[word] two idle clocks later)."""
+    Returns per job (ok[word] the clock after its last bit, ok[word] two clocks later)."""
     rng = random.Random(seed)
     dut = CrcEngine(words)
     crcs = [_settings(0, 0, 0, 0)] * words
     results = []
 
     async def tb(ctx):
-        for word, settings, covered, received in jobs:
-            crcs[word] = settings
-            ctx.set(dut.crcs, crcs)
+        def drive(**values):
+            for name in ("load", "cover", "check", "last"):
+                ctx.set(getattr(dut, name), values.get(name, 0))
+            ctx.set(dut.bit, values.get("bit", rng.randrange(2)))
             if words > 1:
-                ctx.set(dut.word, word)
+                ctx.set(dut.word, values.get("word", rng.randrange(words)))
+                ctx.set(dut.load_word, values.get("load_word", rng.randrange(words)))
+
+        pending = None          # the last bit of the job before, held back to share a clock
+        for word, settings, covered, received in jobs:
+            # Sharing a clock needs another word: each word's settings hold through it.
+            if pending is not None and pending["word"] != word and rng.random() < 0.7:
+                crcs[word] = settings
+                ctx.set(dut.crcs, crcs)
+                drive(**pending, load=1, load_word=word)
+                await ctx.tick()
+                results.append(await _verdict(ctx, pending["word"]))
+            else:
+                if pending is not None:
+                    drive(**pending)
+                    await ctx.tick()
+                    results.append(await _verdict(ctx, pending["word"]))
+                crcs[word] = settings
+                ctx.set(dut.crcs, crcs)
+                drive(load=1, load_word=word)
+                await ctx.tick()
             bits = [(b, 1, 0) for b in covered] + [(b, 0, 1) for b in received]
             for i, (b, cover, check) in enumerate(bits):
+                step = {"bit": b, "cover": cover, "check": check, "last": 1, "word": word}
+                if i == len(bits) - 1:
+                    pending = step
+                    break
                 for _ in range(rng.randrange(3)):
-                    ctx.set(dut.first, 0)
-                    ctx.set(dut.cover, 0)
-                    ctx.set(dut.check, 0)
-                    ctx.set(dut.last, 0)
-                    ctx.set(dut.bit, rng.randrange(2))
+                    drive(word=word)
                     await ctx.tick()
-                ctx.set(dut.first, int(i == 0))
-                ctx.set(dut.cover, cover)
-                ctx.set(dut.check, check)
-                ctx.set(dut.last, int(i == len(bits) - 1))
-                ctx.set(dut.bit, b)
+                drive(**dict(step, last=0))
                 await ctx.tick()
-            for signal in (dut.first, dut.cover, dut.check, dut.last):
-                ctx.set(signal, 0)
-            ctx.set(dut.bit, rng.randrange(2))
-            now = (ctx.get(dut.ok) >> word) & 1
-            await ctx.tick()
-            await ctx.tick()
-            results.append((now, (ctx.get(dut.ok) >> word) & 1))
+        drive(**pending)
+        await ctx.tick()
+        results.append(await _verdict(ctx, pending["word"]))
+
+    async def _verdict(ctx, word):
+        # In the clock after the last bit; then two clocks of nothing (junk on bit).
+        now = (ctx.get(dut.ok) >> word) & 1
+        drive_idle(ctx)
+        await ctx.tick()
+        await ctx.tick()
+        return now, (ctx.get(dut.ok) >> word) & 1
+
+    def drive_idle(ctx):
+        for name in ("load", "cover", "check", "last"):
+            ctx.set(getattr(dut, name), 0)
+        ctx.set(dut.bit, rng.randrange(2))
 
     simulate(dut, tb)
     return results
@@ -160,14 +188,20 @@ def test_crc_engine_width_0_word_is_good_and_other_verdicts_hold():
         for word, bits in ((0, [(b, 1, 0) for b in covered] + [(b, 0, 1) for b in bad]),
                            (1, [(b, 1, 0) for b in covered])):
             ctx.set(dut.word, word)
+            ctx.set(dut.load, 1)
+            ctx.set(dut.load_word, word)
+            ctx.set(dut.cover, 0)
+            ctx.set(dut.check, 0)
+            ctx.set(dut.last, 0)
+            await ctx.tick()
+            ctx.set(dut.load, 0)
             for i, (b, cover, check) in enumerate(bits):
-                ctx.set(dut.first, int(i == 0))
                 ctx.set(dut.cover, cover)
                 ctx.set(dut.check, check)
                 ctx.set(dut.last, int(i == len(bits) - 1))
                 ctx.set(dut.bit, b)
                 await ctx.tick()
-            for signal in (dut.first, dut.cover, dut.check, dut.last):
+            for signal in (dut.cover, dut.check, dut.last):
                 ctx.set(signal, 0)
             await ctx.tick()
             seen.append(ctx.get(dut.ok))
