@@ -962,6 +962,12 @@ async def noisy_request(c, row, allowed, fault="noise", note=True):
         row["encoder_answered"] += int(answered)
         row["valid_right"] += int(res.valid and not wrong)
         row["valid_wrong"] += int(wrong)
+        # What a rule "no valid frame right after a doubtful one" would cost and catch: the
+        # valid frames whose cycle before (in this row) was not OK.
+        if res.valid and row.get("previous_status", "OK") != "OK":
+            row["valid_wrong_after_doubt" if wrong else "valid_right_after_doubt"] = row.get(
+                "valid_wrong_after_doubt" if wrong else "valid_right_after_doubt", 0) + 1
+        row["previous_status"] = name
         if wrong:
             row["wrong_line_delays"].append(res.fields["line_delay"])
             if len(row["wrong_examples"]) < 10:
@@ -1003,6 +1009,7 @@ async def noisy_rows(c, row, noise, cycles):
 
 def finish_noise_rows(c, rows):
     for key, row in rows.items():
+        row.pop("previous_status", None)
         row["valid_wrong_rate_95"] = upper_bound_95(row["valid_wrong"], row["cycles"])
         c.stats[f"noise_valid_wrong, {key}"] = row["valid_wrong"]
 
