@@ -5415,6 +5415,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
+  (* init = 1'h0 *)
+  wire index;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -5422,7 +5424,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire lc_load;
   wire [5:0] lc_next;
   wire load;
-  wire load_word;
+  wire load_index;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
@@ -5460,8 +5462,6 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   reg [6:0] w1_nenw_end_m1 = 7'h00;
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
-  (* init = 1'h0 *)
-  wire \word$55 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [21:0] words;
@@ -5665,13 +5665,13 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     .clk(clk),
     .\cover (\cover ),
     .crcs(crcs),
+    .index(word),
     .last(last),
     .load(load),
-    .load_word(\$102 [0]),
+    .load_index(\$102 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
-    .rst(rst),
-    .word(word)
+    .rst(rst)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
@@ -6223,8 +6223,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   assign \crcs$47  = crcs;
   assign \bit$52  = \bit ;
   assign ok = crc_ok;
-  assign \word$55  = word;
-  assign load_word = \$102 [0];
+  assign index = word;
+  assign load_index = \$102 [0];
   assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -6263,7 +6263,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bit , crcs, receiver_clear, word, ok, clk);
+module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
@@ -6320,12 +6320,14 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bi
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
+  input index;
+  wire index;
   input last;
   wire last;
   input load;
   wire load;
-  input load_word;
-  wire load_word;
+  input load_index;
+  wire load_index;
   reg mismatch = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
@@ -6334,8 +6336,6 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bi
   reg [15:0] \reg  = 16'h0000;
   input rst;
   wire rst;
-  input word;
-  wire word;
   assign \$3  = { \reg , 1'h0 } >> \$2 ;
   assign \$4  = \$3  ^ \bit ;
   assign \$6  = \$4  ? \$5  : 16'h0000;
@@ -6345,7 +6345,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bi
   assign \$12  = \$10  ^ \$11 ;
   assign \$13  = check & \$12 ;
   assign \$14  = mismatch | \$13 ;
-  assign \$15  = ! word;
+  assign \$15  = ! index;
   assign \$17  = { \reg , 1'h0 } >> \$16 ;
   assign \$18  = \bit  ^ \$17 ;
   assign \$20  = \$18  ^ \$19 ;
@@ -6367,7 +6367,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bi
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez (load_word)
+    casez (load_index)
       1'h0:
           \$1  = crcs[36:21];
       1'h1:
@@ -6377,7 +6377,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bi
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$2  = crcs[4:0];
       1'h1:
@@ -6387,7 +6387,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bi
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$5  = crcs[20:5];
       1'h1:
@@ -6397,7 +6397,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bi
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$8  = crcs[4:0];
       1'h1:
@@ -6407,7 +6407,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bi
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$11  = crcs[37];
       1'h1:
@@ -6417,7 +6417,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bi
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$16  = crcs[4:0];
       1'h1:
@@ -6427,7 +6427,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bi
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$19  = crcs[37];
       1'h1:
@@ -6437,7 +6437,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bi
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$25  = crcs[4:0];
       1'h1:
@@ -6447,7 +6447,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bi
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$28  = crcs[37];
       1'h1:
@@ -6515,7 +6515,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_word, \bi
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \$24  = word;
+  assign \$24  = index;
 endmodule
 
 (* generator = "Amaranth" *)

@@ -12941,6 +12941,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
+  (* init = 1'h0 *)
+  wire index;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -12948,7 +12950,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire lc_load;
   wire [5:0] lc_next;
   wire load;
-  wire load_word;
+  wire load_index;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
@@ -12986,8 +12988,6 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg [6:0] w1_nenw_end_m1 = 7'h00;
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
-  (* init = 1'h0 *)
-  wire \word$55 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [21:0] words;
@@ -13191,13 +13191,13 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     .clk(clk),
     .\cover (\cover ),
     .crcs(crcs),
+    .index(word),
     .last(last),
     .load(load),
-    .load_word(\$102 [0]),
+    .load_index(\$102 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
-    .rst(rst),
-    .word(word)
+    .rst(rst)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
@@ -13749,8 +13749,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \crcs$47  = crcs;
   assign \bit$52  = \bit ;
   assign ok = crc_ok;
-  assign \word$55  = word;
-  assign load_word = \$102 [0];
+  assign index = word;
+  assign load_index = \$102 [0];
   assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -13789,7 +13789,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, load_word, \bit , crcs, receiver_clear, word, ok, clk);
+module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
@@ -13846,12 +13846,14 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
+  input index;
+  wire index;
   input last;
   wire last;
   input load;
   wire load;
-  input load_word;
-  wire load_word;
+  input load_index;
+  wire load_index;
   reg mismatch = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
@@ -13860,8 +13862,6 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   reg [15:0] \reg  = 16'h0000;
   input rst;
   wire rst;
-  input word;
-  wire word;
   assign \$3  = { \reg , 1'h0 } >> \$2 ;
   assign \$4  = \$3  ^ \bit ;
   assign \$6  = \$4  ? \$5  : 16'h0000;
@@ -13871,7 +13871,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   assign \$12  = \$10  ^ \$11 ;
   assign \$13  = check & \$12 ;
   assign \$14  = mismatch | \$13 ;
-  assign \$15  = ! word;
+  assign \$15  = ! index;
   assign \$17  = { \reg , 1'h0 } >> \$16 ;
   assign \$18  = \bit  ^ \$17 ;
   assign \$20  = \$18  ^ \$19 ;
@@ -13893,7 +13893,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (load_word)
+    casez (load_index)
       1'h0:
           \$1  = crcs[36:21];
       1'h1:
@@ -13903,7 +13903,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$2  = crcs[4:0];
       1'h1:
@@ -13913,7 +13913,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$5  = crcs[20:5];
       1'h1:
@@ -13923,7 +13923,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$8  = crcs[4:0];
       1'h1:
@@ -13933,7 +13933,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$11  = crcs[37];
       1'h1:
@@ -13943,7 +13943,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$16  = crcs[4:0];
       1'h1:
@@ -13953,7 +13953,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$19  = crcs[37];
       1'h1:
@@ -13963,7 +13963,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$25  = crcs[4:0];
       1'h1:
@@ -13973,7 +13973,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$28  = crcs[37];
       1'h1:
@@ -14041,7 +14041,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \$24  = word;
+  assign \$24  = index;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -25229,6 +25229,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
+  (* init = 1'h0 *)
+  wire index;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -25236,7 +25238,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire lc_load;
   wire [5:0] lc_next;
   wire load;
-  wire load_word;
+  wire load_index;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
@@ -25274,8 +25276,6 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg [6:0] w1_nenw_end_m1 = 7'h00;
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
-  (* init = 1'h0 *)
-  wire \word$55 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [21:0] words;
@@ -25479,13 +25479,13 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     .clk(clk),
     .\cover (\cover ),
     .crcs(crcs),
+    .index(word),
     .last(last),
     .load(load),
-    .load_word(\$102 [0]),
+    .load_index(\$102 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
-    .rst(rst),
-    .word(word)
+    .rst(rst)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
@@ -26037,8 +26037,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \crcs$47  = crcs;
   assign \bit$52  = \bit ;
   assign ok = crc_ok;
-  assign \word$55  = word;
-  assign load_word = \$102 [0];
+  assign index = word;
+  assign load_index = \$102 [0];
   assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -26077,7 +26077,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, load_word, \bit , crcs, receiver_clear, word, ok, clk);
+module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
@@ -26134,12 +26134,14 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
+  input index;
+  wire index;
   input last;
   wire last;
   input load;
   wire load;
-  input load_word;
-  wire load_word;
+  input load_index;
+  wire load_index;
   reg mismatch = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
@@ -26148,8 +26150,6 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   reg [15:0] \reg  = 16'h0000;
   input rst;
   wire rst;
-  input word;
-  wire word;
   assign \$3  = { \reg , 1'h0 } >> \$2 ;
   assign \$4  = \$3  ^ \bit ;
   assign \$6  = \$4  ? \$5  : 16'h0000;
@@ -26159,7 +26159,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   assign \$12  = \$10  ^ \$11 ;
   assign \$13  = check & \$12 ;
   assign \$14  = mismatch | \$13 ;
-  assign \$15  = ! word;
+  assign \$15  = ! index;
   assign \$17  = { \reg , 1'h0 } >> \$16 ;
   assign \$18  = \bit  ^ \$17 ;
   assign \$20  = \$18  ^ \$19 ;
@@ -26181,7 +26181,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (load_word)
+    casez (load_index)
       1'h0:
           \$1  = crcs[36:21];
       1'h1:
@@ -26191,7 +26191,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$2  = crcs[4:0];
       1'h1:
@@ -26201,7 +26201,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$5  = crcs[20:5];
       1'h1:
@@ -26211,7 +26211,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$8  = crcs[4:0];
       1'h1:
@@ -26221,7 +26221,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$11  = crcs[37];
       1'h1:
@@ -26231,7 +26231,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$16  = crcs[4:0];
       1'h1:
@@ -26241,7 +26241,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$19  = crcs[37];
       1'h1:
@@ -26251,7 +26251,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$25  = crcs[4:0];
       1'h1:
@@ -26261,7 +26261,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$28  = crcs[37];
       1'h1:
@@ -26329,7 +26329,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \$24  = word;
+  assign \$24  = index;
 endmodule
 
 (* generator = "Amaranth" *)

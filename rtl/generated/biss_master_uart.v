@@ -14770,6 +14770,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
+  (* init = 1'h0 *)
+  wire index;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -14777,7 +14779,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire lc_load;
   wire [5:0] lc_next;
   wire load;
-  wire load_word;
+  wire load_index;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
@@ -14815,8 +14817,6 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg [6:0] w1_nenw_end_m1 = 7'h00;
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
-  (* init = 1'h0 *)
-  wire \word$55 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [21:0] words;
@@ -15020,13 +15020,13 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     .clk(clk),
     .\cover (\cover ),
     .crcs(crcs),
+    .index(word),
     .last(last),
     .load(load),
-    .load_word(\$102 [0]),
+    .load_index(\$102 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
-    .rst(rst),
-    .word(word)
+    .rst(rst)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
@@ -15578,8 +15578,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \crcs$47  = crcs;
   assign \bit$52  = \bit ;
   assign ok = crc_ok;
-  assign \word$55  = word;
-  assign load_word = \$102 [0];
+  assign index = word;
+  assign load_index = \$102 [0];
   assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -15618,7 +15618,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, load_word, \bit , crcs, receiver_clear, word, ok, clk);
+module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
@@ -15675,12 +15675,14 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
+  input index;
+  wire index;
   input last;
   wire last;
   input load;
   wire load;
-  input load_word;
-  wire load_word;
+  input load_index;
+  wire load_index;
   reg mismatch = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
@@ -15689,8 +15691,6 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   reg [15:0] \reg  = 16'h0000;
   input rst;
   wire rst;
-  input word;
-  wire word;
   assign \$3  = { \reg , 1'h0 } >> \$2 ;
   assign \$4  = \$3  ^ \bit ;
   assign \$6  = \$4  ? \$5  : 16'h0000;
@@ -15700,7 +15700,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   assign \$12  = \$10  ^ \$11 ;
   assign \$13  = check & \$12 ;
   assign \$14  = mismatch | \$13 ;
-  assign \$15  = ! word;
+  assign \$15  = ! index;
   assign \$17  = { \reg , 1'h0 } >> \$16 ;
   assign \$18  = \bit  ^ \$17 ;
   assign \$20  = \$18  ^ \$19 ;
@@ -15722,7 +15722,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
-    casez (load_word)
+    casez (load_index)
       1'h0:
           \$1  = crcs[36:21];
       1'h1:
@@ -15732,7 +15732,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$2  = crcs[4:0];
       1'h1:
@@ -15742,7 +15742,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$5  = crcs[20:5];
       1'h1:
@@ -15752,7 +15752,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$8  = crcs[4:0];
       1'h1:
@@ -15762,7 +15762,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$11  = crcs[37];
       1'h1:
@@ -15772,7 +15772,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$16  = crcs[4:0];
       1'h1:
@@ -15782,7 +15782,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$19  = crcs[37];
       1'h1:
@@ -15792,7 +15792,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$25  = crcs[4:0];
       1'h1:
@@ -15802,7 +15802,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$28  = crcs[37];
       1'h1:
@@ -15870,7 +15870,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \$24  = word;
+  assign \$24  = index;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -27058,6 +27058,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
+  (* init = 1'h0 *)
+  wire index;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -27065,7 +27067,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire lc_load;
   wire [5:0] lc_next;
   wire load;
-  wire load_word;
+  wire load_index;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
@@ -27103,8 +27105,6 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg [6:0] w1_nenw_end_m1 = 7'h00;
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
-  (* init = 1'h0 *)
-  wire \word$55 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [21:0] words;
@@ -27308,13 +27308,13 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     .clk(clk),
     .\cover (\cover ),
     .crcs(crcs),
+    .index(word),
     .last(last),
     .load(load),
-    .load_word(\$102 [0]),
+    .load_index(\$102 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
-    .rst(rst),
-    .word(word)
+    .rst(rst)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
@@ -27866,8 +27866,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \crcs$47  = crcs;
   assign \bit$52  = \bit ;
   assign ok = crc_ok;
-  assign \word$55  = word;
-  assign load_word = \$102 [0];
+  assign index = word;
+  assign load_index = \$102 [0];
   assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -27906,7 +27906,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, load_word, \bit , crcs, receiver_clear, word, ok, clk);
+module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
@@ -27963,12 +27963,14 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
+  input index;
+  wire index;
   input last;
   wire last;
   input load;
   wire load;
-  input load_word;
-  wire load_word;
+  input load_index;
+  wire load_index;
   reg mismatch = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
@@ -27977,8 +27979,6 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   reg [15:0] \reg  = 16'h0000;
   input rst;
   wire rst;
-  input word;
-  wire word;
   assign \$3  = { \reg , 1'h0 } >> \$2 ;
   assign \$4  = \$3  ^ \bit ;
   assign \$6  = \$4  ? \$5  : 16'h0000;
@@ -27988,7 +27988,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   assign \$12  = \$10  ^ \$11 ;
   assign \$13  = check & \$12 ;
   assign \$14  = mismatch | \$13 ;
-  assign \$15  = ! word;
+  assign \$15  = ! index;
   assign \$17  = { \reg , 1'h0 } >> \$16 ;
   assign \$18  = \bit  ^ \$17 ;
   assign \$20  = \$18  ^ \$19 ;
@@ -28010,7 +28010,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
-    casez (load_word)
+    casez (load_index)
       1'h0:
           \$1  = crcs[36:21];
       1'h1:
@@ -28020,7 +28020,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$2  = crcs[4:0];
       1'h1:
@@ -28030,7 +28030,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$5  = crcs[20:5];
       1'h1:
@@ -28040,7 +28040,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$8  = crcs[4:0];
       1'h1:
@@ -28050,7 +28050,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$11  = crcs[37];
       1'h1:
@@ -28060,7 +28060,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$16  = crcs[4:0];
       1'h1:
@@ -28070,7 +28070,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$19  = crcs[37];
       1'h1:
@@ -28080,7 +28080,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$25  = crcs[4:0];
       1'h1:
@@ -28090,7 +28090,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$28  = crcs[37];
       1'h1:
@@ -28158,7 +28158,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \$24  = word;
+  assign \$24  = index;
 endmodule
 
 (* generator = "Amaranth" *)

@@ -12769,6 +12769,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
+  (* init = 1'h0 *)
+  wire index;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -12776,7 +12778,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   wire lc_load;
   wire [5:0] lc_next;
   wire load;
-  wire load_word;
+  wire load_index;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
@@ -12814,8 +12816,6 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   reg [6:0] w1_nenw_end_m1 = 7'h00;
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
-  (* init = 1'h0 *)
-  wire \word$55 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [21:0] words;
@@ -13019,13 +13019,13 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     .clk(clk),
     .\cover (\cover ),
     .crcs(crcs),
+    .index(word),
     .last(last),
     .load(load),
-    .load_word(\$102 [0]),
+    .load_index(\$102 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
-    .rst(rst),
-    .word(word)
+    .rst(rst)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
@@ -13577,8 +13577,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   assign \crcs$47  = crcs;
   assign \bit$52  = \bit ;
   assign ok = crc_ok;
-  assign \word$55  = word;
-  assign load_word = \$102 [0];
+  assign index = word;
+  assign load_index = \$102 [0];
   assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -13617,7 +13617,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, load_word, \bit , crcs, receiver_clear, word, ok, clk);
+module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
@@ -13674,12 +13674,14 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
+  input index;
+  wire index;
   input last;
   wire last;
   input load;
   wire load;
-  input load_word;
-  wire load_word;
+  input load_index;
+  wire load_index;
   reg mismatch = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
@@ -13688,8 +13690,6 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   reg [15:0] \reg  = 16'h0000;
   input rst;
   wire rst;
-  input word;
-  wire word;
   assign \$3  = { \reg , 1'h0 } >> \$2 ;
   assign \$4  = \$3  ^ \bit ;
   assign \$6  = \$4  ? \$5  : 16'h0000;
@@ -13699,7 +13699,7 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   assign \$12  = \$10  ^ \$11 ;
   assign \$13  = check & \$12 ;
   assign \$14  = mismatch | \$13 ;
-  assign \$15  = ! word;
+  assign \$15  = ! index;
   assign \$17  = { \reg , 1'h0 } >> \$16 ;
   assign \$18  = \bit  ^ \$17 ;
   assign \$20  = \$18  ^ \$19 ;
@@ -13721,7 +13721,7 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (load_word)
+    casez (load_index)
       1'h0:
           \$1  = crcs[36:21];
       1'h1:
@@ -13731,7 +13731,7 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$2  = crcs[4:0];
       1'h1:
@@ -13741,7 +13741,7 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$5  = crcs[20:5];
       1'h1:
@@ -13751,7 +13751,7 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$8  = crcs[4:0];
       1'h1:
@@ -13761,7 +13761,7 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$11  = crcs[37];
       1'h1:
@@ -13771,7 +13771,7 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$16  = crcs[4:0];
       1'h1:
@@ -13781,7 +13781,7 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$19  = crcs[37];
       1'h1:
@@ -13791,7 +13791,7 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$25  = crcs[4:0];
       1'h1:
@@ -13801,7 +13801,7 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$28  = crcs[37];
       1'h1:
@@ -13869,7 +13869,7 @@ module \biss_master_wb.ch0.core.decoder.crc (rst, load, \cover , check, last, lo
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \$24  = word;
+  assign \$24  = index;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -25057,6 +25057,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
+  (* init = 1'h0 *)
+  wire index;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -25064,7 +25066,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   wire lc_load;
   wire [5:0] lc_next;
   wire load;
-  wire load_word;
+  wire load_index;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
@@ -25102,8 +25104,6 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   reg [6:0] w1_nenw_end_m1 = 7'h00;
   reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
-  (* init = 1'h0 *)
-  wire \word$55 ;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [21:0] words;
@@ -25307,13 +25307,13 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     .clk(clk),
     .\cover (\cover ),
     .crcs(crcs),
+    .index(word),
     .last(last),
     .load(load),
-    .load_word(\$102 [0]),
+    .load_index(\$102 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
-    .rst(rst),
-    .word(word)
+    .rst(rst)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
@@ -25865,8 +25865,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   assign \crcs$47  = crcs;
   assign \bit$52  = \bit ;
   assign ok = crc_ok;
-  assign \word$55  = word;
-  assign load_word = \$102 [0];
+  assign index = word;
+  assign load_index = \$102 [0];
   assign \words[0]  = words[10:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -25905,7 +25905,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, load_word, \bit , crcs, receiver_clear, word, ok, clk);
+module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
@@ -25962,12 +25962,14 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
+  input index;
+  wire index;
   input last;
   wire last;
   input load;
   wire load;
-  input load_word;
-  wire load_word;
+  input load_index;
+  wire load_index;
   reg mismatch = 1'h0;
   output [1:0] ok;
   reg [1:0] ok = 2'h3;
@@ -25976,8 +25978,6 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   reg [15:0] \reg  = 16'h0000;
   input rst;
   wire rst;
-  input word;
-  wire word;
   assign \$3  = { \reg , 1'h0 } >> \$2 ;
   assign \$4  = \$3  ^ \bit ;
   assign \$6  = \$4  ? \$5  : 16'h0000;
@@ -25987,7 +25987,7 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   assign \$12  = \$10  ^ \$11 ;
   assign \$13  = check & \$12 ;
   assign \$14  = mismatch | \$13 ;
-  assign \$15  = ! word;
+  assign \$15  = ! index;
   assign \$17  = { \reg , 1'h0 } >> \$16 ;
   assign \$18  = \bit  ^ \$17 ;
   assign \$20  = \$18  ^ \$19 ;
@@ -26009,7 +26009,7 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (load_word)
+    casez (load_index)
       1'h0:
           \$1  = crcs[36:21];
       1'h1:
@@ -26019,7 +26019,7 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$2  = crcs[4:0];
       1'h1:
@@ -26029,7 +26029,7 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$5  = crcs[20:5];
       1'h1:
@@ -26039,7 +26039,7 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$8  = crcs[4:0];
       1'h1:
@@ -26049,7 +26049,7 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$11  = crcs[37];
       1'h1:
@@ -26059,7 +26059,7 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$16  = crcs[4:0];
       1'h1:
@@ -26069,7 +26069,7 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$19  = crcs[37];
       1'h1:
@@ -26079,7 +26079,7 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$25  = crcs[4:0];
       1'h1:
@@ -26089,7 +26089,7 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
-    casez (word)
+    casez (index)
       1'h0:
           \$28  = crcs[37];
       1'h1:
@@ -26157,7 +26157,7 @@ module \biss_master_wb.ch1.core.decoder.crc (rst, load, \cover , check, last, lo
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \$24  = word;
+  assign \$24  = index;
 endmodule
 
 (* generator = "Amaranth" *)

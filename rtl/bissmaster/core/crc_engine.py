@@ -11,9 +11,10 @@ class CrcEngine(wiring.Component):
     """Checks each data word against the CRC that follows it, one received bit per clock.
 
     The words of a frame follow each other on the line, so one bit-serial engine serves them
-    all: before a word's first bit (``load``) it starts again from that word's settings (``crcs[word]``,
-    :data:`~bissmaster.params.CRC_SETTINGS`: width 0..16, register polynomial, start value,
-    inversion), which is what lets any word have any CRC at no cost per word.
+    all: before a word's first bit (``load``) it starts again from that word's settings
+    (``crcs[index]``, :data:`~bissmaster.params.CRC_SETTINGS`: width 0..16, register
+    polynomial, start value, inversion), which is what lets any word have any CRC at no cost
+    per word.
 
     Every bit of the word *before* its CRC field (``cover``: data, nE, nW, LC) goes through
     the textbook shift register (MSB first, not reflected): feedback = register MSB xor bit,
@@ -33,20 +34,20 @@ class CrcEngine(wiring.Component):
     ----------
     crcs : In(ArrayLayout(CRC_SETTINGS, words))
         Each word's CRC, held for the cycle (Configuration.crcs).
-    word : In(range(words))
+    index : In(range(words))
         The word the current bit belongs to (builds of more than one word).
     load : In(1)
-        Load word ``load_word``'s start value (before that word's first bit: with the CDS
+        Load word ``load_index``'s start value (before that word's first bit: with the CDS
         bit, and with the last bit of the word before, which it overrides in the register but
         not in that word's verdict).
-    load_word : In(range(words))
+    load_index : In(range(words))
         The word ``load`` prepares (builds of more than one word).
     cover : In(1)
         The bit is covered by the CRC (every bit of the word before the CRC field).
     check : In(1)
         The bit is one of the word's received CRC bits.
     last : In(1)
-        The bit is its word's last: register the verdict in ``ok[word]``.
+        The bit is its word's last: register the verdict in ``ok[index]``.
     bit : In(1)
         The received bit (only read with ``cover`` or ``check``).
     ok : Out(words)
@@ -57,7 +58,7 @@ class CrcEngine(wiring.Component):
         self._words = words
         super().__init__({
             "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
-            **({"word": In(range(words)), "load_word": In(range(words))} if words > 1 else {}),
+            **({"index": In(range(words)), "load_index": In(range(words))} if words > 1 else {}),
             "load": In(1),
             "cover": In(1),
             "check": In(1),
@@ -69,9 +70,9 @@ class CrcEngine(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         n = self._words
-        word = self.word if n > 1 else C(0, 1)
+        word = self.index if n > 1 else C(0, 1)
         crc = self.crcs[0] if n == 1 else Array(self.crcs[w] for w in range(n))[word]
-        load_word = self.load_word if n > 1 else C(0, 1)
+        load_word = self.load_index if n > 1 else C(0, 1)
         load_crc = self.crcs[0] if n == 1 else Array(self.crcs[w] for w in range(n))[load_word]
 
         reg = Signal(CRC_MAX_WIDTH)

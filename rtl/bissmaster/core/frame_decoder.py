@@ -232,6 +232,6 @@ class FrameDecoder(wiring.Component):
             self.crc_ok.eq(engine.ok),
         ]
         if p.words > 1:
-            m.d.comb += [engine.word.eq(word), engine.load_word.eq(Mux(at_cds, 0, word + 1))]
+            m.d.comb += [engine.index.eq(word), engine.load_index.eq(Mux(at_cds, 0, word + 1))]
 
         return m

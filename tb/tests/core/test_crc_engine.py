@@ -61,8 +61,8 @@ def _run(words, jobs, seed):
                 ctx.set(getattr(dut, name), values.get(name, 0))
             ctx.set(dut.bit, values.get("bit", rng.randrange(2)))
             if words > 1:
-                ctx.set(dut.word, values.get("word", rng.randrange(words)))
-                ctx.set(dut.load_word, values.get("load_word", rng.randrange(words)))
+                ctx.set(dut.index, values.get("word", rng.randrange(words)))
+                ctx.set(dut.load_index, values.get("load_word", rng.randrange(words)))
 
         pending = None          # the last bit of the job before, held back to share a clock
         for word, settings, covered, received in jobs:
@@ -187,9 +187,9 @@ def test_crc_engine_width_0_word_is_good_and_other_verdicts_hold():
         ctx.set(dut.crcs, [_settings(6, 0x03, 0, 1), _settings(0, 0, 0, 0)])
         for word, bits in ((0, [(b, 1, 0) for b in covered] + [(b, 0, 1) for b in bad]),
                            (1, [(b, 1, 0) for b in covered])):
-            ctx.set(dut.word, word)
+            ctx.set(dut.index, word)
             ctx.set(dut.load, 1)
-            ctx.set(dut.load_word, word)
+            ctx.set(dut.load_index, word)
             ctx.set(dut.cover, 0)
             ctx.set(dut.check, 0)
             ctx.set(dut.last, 0)
