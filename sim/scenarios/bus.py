@@ -691,6 +691,69 @@ HOST_TOOL_CABLE_M = 50
 HOST_TOOL_COUNTS_PER_S = 2e9
 
 
+def host_tool(tb):
+    """The host tool itself (``bissmaster``: bissmaster.host.cli.main, in a bridge thread over
+    the simulated UART of ``tb``, with the build's baud rate and inter-byte timeout, the
+    model's clock, no USB latency): ``await tool(*argv)`` -> (exit code, stdout, stderr), each
+    run logged."""
+    import io
+
+    from cocotb.task import bridge
+
+    from bissmaster.host import cli         # the host software under test
+    from sim.shared.uart import BAUD, TIMEOUT_BITS
+    common = ["--baud", str(BAUD), "--timeout-bits", str(TIMEOUT_BITS),
+              "--clock-hz", str(CLK_HZ), "--latency", "2e-6"]
+
+    async def tool(*argv):
+        out, err = io.StringIO(), io.StringIO()
+        code = await bridge(cli.main)(list(argv) + common, transport=tb.bus.transport,
+                                      stdout=out, stderr=err)
+        tb.dut._log.info("bissmaster %s -> %d\n%s%s", " ".join(argv), code, out.getvalue(),
+                         err.getvalue())
+        return code, out.getvalue(), err.getvalue()
+    return tool
+
+
+def turning(fmt):
+    """A position function: word 0 of ``fmt`` counting up at HOST_TOOL_COUNTS_PER_S."""
+    return lambda t: int(t * HOST_TOOL_COUNTS_PER_S) % 2**fmt.words[0].data_bits
+
+
+def sent_frames(tb, ch=0, since=0):
+    """The frames channel ``ch``'s encoder sent, in order from the ``since``-th:
+    (timestamp, the words as parsed by the encoder model)."""
+    chan = tb.channels[ch]
+    return [(t, frames.parse_frame(chan.fmt, chan.sent[t])["words"])
+            for t in sorted(chan.sent)[since:]]
+
+
+def read_rows(out):
+    """`bissmaster read`'s table (not on a terminal): its rows after the header, in columns."""
+    return [line.split() for line in out.splitlines()[1:]]
+
+
+def check_read_rows(rows, sent):
+    """Each row of `read` (one channel) against the frame sent for it, in order: status OK,
+    word 0's position and nE/nW as sent, CRC ok; with two words, word 1's the same and its
+    sign of life."""
+    assert len(rows) == len(sent), (rows, len(sent))
+    for row, (_, words) in zip(rows, sent):
+        w0 = words[0]
+        assert row[1] == "0" and row[3] == "OK", row
+        assert (int(row[4]), int(row[5]), int(row[6]), row[7]) == \
+            (w0["position"], w0["ne"], w0["nw"], "ok"), (row, words)
+        if len(words) == 2:
+            w1 = words[1]
+            assert (int(row[8]), int(row[9]), int(row[10]), row[11], int(row[12])) == \
+                (w1["position"], w1["ne"], w1["nw"], "ok", w1["lc"]), (row, words)
+
+
+def printed_counters(out):
+    """`bissmaster counters` (one channel): {name: value}."""
+    return {line.split()[0]: int(line.split()[1]) for line in out.splitlines()[1:]}
+
+
 @cocotb.test()
 @only_on_buses("uart")
 @long_on_icarus
@@ -706,29 +769,9 @@ async def uart_host_tool_read_and_counters(dut):
     import csv
     import io
 
-    from cocotb.task import bridge
-
-    from bissmaster.host import cli         # the host software under test
-    from sim.shared.uart import BAUD, TIMEOUT_BITS
     tb = BusTestbench(dut, seed=14)
-    await tb.start([BISS_C], [Cable(length_m=HOST_TOOL_CABLE_M)],
-                   [lambda t: int(t * HOST_TOOL_COUNTS_PER_S) % 2**BISS_C.words[0].data_bits])
-    transport = tb.bus.transport
-    common = ["--baud", str(BAUD), "--timeout-bits", str(TIMEOUT_BITS),
-              "--clock-hz", str(CLK_HZ), "--latency", "2e-6"]
-
-    async def tool(*argv):
-        out, err = io.StringIO(), io.StringIO()
-        code = await bridge(cli.main)(list(argv) + common, transport=transport, stdout=out,
-                                      stderr=err)
-        dut._log.info("bissmaster %s -> %d\n%s%s", " ".join(argv), code, out.getvalue(),
-                      err.getvalue())
-        return code, out.getvalue(), err.getvalue()
-
-    def sent_frames():
-        chan = tb.channels[0]
-        return [(t, frames.parse_frame(BISS_C, chan.sent[t])["words"][0])
-                for t in sorted(chan.sent)]
+    await tb.start([BISS_C], [Cable(length_m=HOST_TOOL_CABLE_M)], [turning(BISS_C)])
+    tool = host_tool(tb)
 
     code, _, err = await tool("config", "--preset", BISS_C.name, "--ma-hz", "2.5e6")
     assert code == 0, err
@@ -741,23 +784,19 @@ async def uart_host_tool_read_and_counters(dut):
 
     code, out, err = await tool("read", "--count", "3", "--rate", "5000")
     assert code == 0, err
-    rows = [line.split() for line in out.splitlines()[1:]]
-    sent = sent_frames()
-    assert len(rows) == len(sent) == 3, (rows, len(sent))
-    for row, (_, frame) in zip(rows, sent):
-        assert row[1] == "0" and row[3] == "OK", row
-        assert int(row[4]) == frame["position"], (row, frame)
-        assert (int(row[5]), int(row[6]), row[7]) == (frame["ne"], frame["nw"], "ok"), row
+    rows = read_rows(out)
+    assert len(rows) == 3
+    check_read_rows(rows, sent_frames(tb))
     assert [int(r[2]) for r in rows] == [1, 2, 3], "result.seq: one cycle per sample"
     assert (await tb.read_fields("ctrl", 0))["trigger_enable"] == 0, "left as it was"
 
     code, out, err = await tool("log", "--count", "10", "--rate", "5000")
     assert code == 0, err
     logged = list(csv.DictReader(io.StringIO(out)))
-    sent = sent_frames()[3:]
+    sent = sent_frames(tb, since=3)
     assert len(logged) == len(sent) == 10
     round_trip = tb.channels[0].spec.cable.round_trip_s()
-    for row, (timestamp, frame) in zip(logged, sent):
+    for row, (timestamp, (frame,)) in zip(logged, sent):
         assert (row["status"], int(row["timestamp"])) == ("OK", timestamp), row
         assert (int(row["position"]), int(row["ne"]), int(row["nw"]), int(row["crc_ok"])) == \
             (frame["position"], frame["ne"], frame["nw"], 1), (row, frame)
@@ -769,7 +808,7 @@ async def uart_host_tool_read_and_counters(dut):
 
     code, out, err = await tool("counters")
     assert code == 0, err
-    counts = {line.split()[0]: int(line.split()[1]) for line in out.splitlines()[1:]}
+    counts = printed_counters(out)
     assert len(counts) == 21 and not any(counts.values()), counts
 
 
@@ -783,25 +822,10 @@ async def uart_host_tool_registers(dut):
     (the hex line), registers 0x40..0x43 read (bank select, EDS pointer, profile ID: the
     model's bytes), a write to the read-only profile ID refused (exit 7, REFUSED, nothing
     written); the engine's counters then show the one refusal."""
-    import io
-
-    from cocotb.task import bridge
-
-    from bissmaster.host import cli         # the host software under test
-    from sim.shared.uart import BAUD, TIMEOUT_BITS
     eds, registers, spec = bp3_channel()
     tb = BusTestbench(dut, seed=15)
     await tb.start([spec])
-    common = ["--baud", str(BAUD), "--timeout-bits", str(TIMEOUT_BITS),
-              "--clock-hz", str(CLK_HZ), "--latency", "2e-6"]
-
-    async def tool(*argv):
-        out, err = io.StringIO(), io.StringIO()
-        code = await bridge(cli.main)(list(argv) + common, transport=tb.bus.transport,
-                                      stdout=out, stderr=err)
-        dut._log.info("bissmaster %s -> %d\n%s%s", " ".join(argv), code, out.getvalue(),
-                      err.getvalue())
-        return code, out.getvalue(), err.getvalue()
+    tool = host_tool(tb)
 
     code, _, err = await tool("config", "--preset", f"biss-c-{BP3_DL_POS}", "--ma-hz",
                               str(BP3_MA_HZ))
@@ -825,7 +849,7 @@ async def uart_host_tool_registers(dut):
     assert code == 7 and "REFUSED" in err, (code, err)
     assert registers.read(0x42) == before
     code, out, err = await tool("counters")
-    counts = {line.split()[0]: int(line.split()[1]) for line in out.splitlines()[1:]}
+    counts = printed_counters(out)
     assert counts["ca_refused"] == 1 and sum(counts.values()) == 1, counts
 
 
@@ -838,25 +862,10 @@ async def uart_host_tool_identify(dut):
     EDS fields printed as the model holds them, the bank select restored, the channel then
     configured from the EDS (the model's DL_POS, nE/nW, CRC-6), and `read` gives the positions
     the encoder sent."""
-    import io
-
-    from cocotb.task import bridge
-
-    from bissmaster.host import cli         # the host software under test
-    from sim.shared.uart import BAUD, TIMEOUT_BITS
     eds, registers, spec = bp3_channel()
     tb = BusTestbench(dut, seed=16)
     await tb.start([spec])
-    common = ["--baud", str(BAUD), "--timeout-bits", str(TIMEOUT_BITS),
-              "--clock-hz", str(CLK_HZ), "--latency", "2e-6"]
-
-    async def tool(*argv):
-        out, err = io.StringIO(), io.StringIO()
-        code = await bridge(cli.main)(list(argv) + common, transport=tb.bus.transport,
-                                      stdout=out, stderr=err)
-        dut._log.info("bissmaster %s -> %d\n%s%s", " ".join(argv), code, out.getvalue(),
-                      err.getvalue())
-        return code, out.getvalue(), err.getvalue()
+    tool = host_tool(tb)
 
     await tb.encoders_ready()
     if "icarus" in cocotb.SIM_NAME.lower():
@@ -889,3 +898,209 @@ async def uart_host_tool_identify(dut):
         assert row[3] == "OK", row
     last = frames.parse_frame(chan.fmt, chan.sent[max(chan.sent)])["words"][0]
     assert int(rows[-1][4]) == last["position"], (rows, last)
+
+
+@cocotb.test()
+@only_on_buses("uart")
+@long_on_icarus
+async def uart_host_tool_safety(dut):
+    """`bissmaster config --preset resolute_fs_rsh` and `read` over the simulated UART on
+    biss_master_uart against a RESOLUTE FS (BiSS Safety) encoder model on channel 0: the
+    preset writes both words (CPW: 36 bits, nE/nW, CRC-6; SPW: 28 bits, nE/nW, sign of life,
+    CRC-16) and the SPW check; `read` prints per frame status OK, both words as the encoder
+    sent them (positions, nE/nW, CRC ok, the SPW's sign of life), exit 0."""
+    tb = BusTestbench(dut, seed=17)
+    await tb.start([SAFETY])
+    tool = host_tool(tb)
+    code, _, err = await tool("config", "--preset", SAFETY.name, "--ma-hz", "5e6")
+    assert code == 0, err
+    words = await tb.read_fields("cfg_words", 0)
+    cpw, spw = SAFETY.words
+    assert (words["w0_data_bits"], words["w0_nenw"], words["w0_lc"], words["w0_crc"]) == \
+        (cpw.data_bits, 1, 0, CRC_CODE[cpw.crc]), words
+    assert (words["w1_enable"], words["w1_data_bits"], words["w1_nenw"], words["w1_lc"],
+            words["w1_crc"]) == (1, spw.data_bits, 1, 1, CRC_CODE[spw.crc]), words
+    assert (await tb.read_fields("cfg_checks", 0))["spw_check"] == 1
+    await tb.encoders_ready()
+    code, out, err = await tool("read", "--count", "3", "--rate", "5000")
+    assert code == 0, err
+    assert out.splitlines()[0].split() == [
+        "time_s", "ch", "seq", "status", "position", "nE", "nW", "crc", "word1", "nE1", "nW1",
+        "crc1", "lc", "delay", "delay_ns"], out
+    rows = read_rows(out)
+    assert len(rows) == 3
+    check_read_rows(rows, sent_frames(tb))
+    assert all(len(words) == 2 for _, words in sent_frames(tb))
+
+
+@cocotb.test()
+@only_on_buses("uart")
+@long_on_icarus
+async def uart_host_tool_plot(dut):
+    """`bissmaster plot` over the simulated UART on biss_master_uart (a BiSS C encoder turning
+    over 50 m of cable): the PNG written in the build folder (bissmaster_plot.png) is a PNG of
+    800 x 900 pixels (docs/bench.md) and more than 10 kB; the figure it was drawn from has its
+    three axes: the positions plotted are those the encoder sent, in order; a line delay per
+    sample in the histogram; the status panel titled "5 of 5 results OK"; exit 0."""
+    import contextlib
+    import os
+    import struct
+    from unittest import mock
+
+    from bissmaster.host import cli         # the host software under test (its figure)
+    tb = BusTestbench(dut, seed=18)
+    await tb.start([BISS_C], [Cable(length_m=HOST_TOOL_CABLE_M)], [turning(BISS_C)])
+    tool = host_tool(tb)
+    await tb.configure(0, BISS_C, 5e6)      # (`config --preset`: the scenarios above)
+    await tb.encoders_ready()
+    drawn, draw = [], cli.make_figure
+
+    def make_figure(*args, **kw):           # the tool's own figure, kept to look at
+        drawn.append(draw(*args, **kw))
+        return drawn[-1]
+    count = 5
+    with contextlib.suppress(FileNotFoundError):
+        os.remove("bissmaster_plot.png")        # (an earlier run's)
+    with mock.patch.object(cli, "make_figure", make_figure):
+        code, out, err = await tool("plot", "--count", str(count), "--rate", "5000",
+                                    "-o", "bissmaster_plot.png")
+    assert code == 0, err
+    assert f"{count} results plotted to bissmaster_plot.png" in out, out
+    with open("bissmaster_plot.png", "rb") as f:
+        data = f.read()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and data[12:16] == b"IHDR", data[:16]
+    assert struct.unpack(">II", data[16:24]) == (800, 900) and len(data) > 10_000, len(data)
+    (fig,) = drawn
+    pos, hist, errs = fig.axes
+    assert (pos.get_xlabel(), pos.get_ylabel()) == ("time (s)", "position (counts)")
+    assert (hist.get_xlabel(), hist.get_ylabel()) == ("line delay (ns)", "samples")
+    assert (errs.get_xlabel(), errs.get_ylabel()) == ("status", "samples not OK")
+    (line,) = pos.get_lines()
+    sent = sent_frames(tb)
+    assert len(sent) == count
+    assert list(line.get_ydata()) == [words[0]["position"] for _, words in sent]
+    assert sum(p.get_height() for p in hist.patches) == count
+    assert errs.get_title() == f"{count} of {count} results OK"
+
+
+#: Opcodes of the UART bridge's requests (docs/uart_bridge.md, the low four bits of byte 1).
+WRITE_OPCODE, READ_BURST_OPCODE = 0x2, 0x3
+
+
+@cocotb.test()
+@only_on_buses("uart")
+@long_on_icarus
+async def uart_host_tool_garbled_link(dut):
+    """`bissmaster read --count 2` over a damaged simulated UART on biss_master_uart (a BiSS C
+    encoder). First, in the second sample, the software trigger's WRITE loses a byte on the way
+    to the bridge, and then a bit of the position (result.w0_lo) is flipped in the answer to
+    the result burst: the tool retries each once (each request is seen again, unchanged, on the
+    line), prints exactly the positions the encoder sent, exit 0. Then the second sample's
+    trigger is damaged on every attempt (its CRC byte flipped: the bridge answers BAD_CRC):
+    exit 5 with "garbled link" on stderr, the first sample's row right, none for the second,
+    no frame requested by the damaged trigger, ctrl put back as it was."""
+    tb = BusTestbench(dut, seed=19)
+    await tb.start([BISS_C])
+    transport = tb.bus.transport
+    tool = host_tool(tb)
+    await tb.configure(0, BISS_C, 5e6)
+    await tb.encoders_ready()
+    trigger, position = tb.addr("trigger"), tb.addr("result.w0_lo", 0)
+    sent_before = 0
+
+    async def read(damage_trigger, damage_answer=None):
+        """`read --count 2`; ``damage_trigger(n, data)``: the n-th trigger WRITE written (0,
+        1, ...: retries count); ``damage_answer(k)``: a damage for byte k of the answer to the
+        first result burst after the second trigger (None: none). Returns the exit code, the
+        rows, stderr, every request as the tool wrote it, the frames sent meanwhile."""
+        nonlocal sent_before
+        written, triggers, armed = [], [], []
+
+        def hook(data):
+            written.append(data)
+            opcode, address = data[1] & 0xF, int.from_bytes(data[2:4], "little")
+            if opcode == WRITE_OPCODE and address == trigger:
+                triggers.append(data)
+                return damage_trigger(len(triggers) - 1, data)
+            if opcode == READ_BURST_OPCODE and len(triggers) >= 2 and damage_answer \
+                    and not armed:
+                k = 3 + position - address          # SYNC, command, status, the words
+                assert 3 <= k < 3 + 4 * data[4], "the burst holds the position"
+                transport.responses = _answer_byte(transport, k, damage_answer)
+                armed.append(data)
+            return data
+        transport.requests = hook
+        try:
+            code, out, err = await tool("read", "--count", "2", "--rate", "5000")
+        finally:
+            transport.requests = transport.responses = None
+        sent = sent_frames(tb, since=sent_before)
+        sent_before += len(sent)
+        return code, read_rows(out), err, written, sent
+
+    def repeats(written):
+        """Requests written again unchanged (a retry: a new request has the next tag)."""
+        return sum(a == b for a, b in zip(written, written[1:]))
+
+    # One byte lost in a request, one bit flipped in an answer: each retried once.
+    flips = []
+
+    def flip(byte):
+        flips.append(byte)
+        return bytes([byte ^ 0x10])
+    code, rows, err, written, sent = await read(
+        lambda n, data: data[:3] + data[4:] if n == 1 else data, flip)
+    assert code == 0, err
+    assert len(flips) == 1, "no result burst after the second trigger"
+    assert repeats(written) == 2, [w.hex() for w in written]
+    check_read_rows(rows, sent)
+    assert len(rows) == 2
+
+    # A request damaged on every attempt: the tool gives up on the link (exit 5).
+    attempts = 4                                        # --retries 3 (the default) + 1
+    code, rows, err, written, sent = await read(
+        lambda n, data: data[:-1] + bytes([data[-1] ^ 0x01]) if n >= 1 else data)
+    assert code == 5 and "garbled link" in err and "BAD_CRC" in err, (code, err)
+    assert repeats(written) == attempts - 1, [w.hex() for w in written]
+    assert len(rows) == len(sent) == 1, (rows, sent)
+    check_read_rows(rows, sent)
+    assert (await tb.read_fields("ctrl", 0))["trigger_enable"] == 0, "ctrl put back"
+
+
+@cocotb.test()
+@only_on_buses("uart")
+@long_on_icarus
+async def uart_host_tool_unplugged_encoder(dut):
+    """`bissmaster read` and `counters` over the simulated UART on biss_master_uart with the
+    BiSS C encoder's cable unplugged (SLO held high at the master): `read` prints
+    NO_ACK for every sample, no frame fields, and exits 6 (docs/bench.md: the encoder does
+    not answer) with the count on stderr; `counters` shows no_ack equal to the samples taken
+    (and count_ack.no_ack read from the RDL's address agrees). Plugged back in, `read` gives
+    the encoder's position again, exit 0."""
+    tb = BusTestbench(dut, seed=20)
+    await tb.start([BISS_C])
+    tool = host_tool(tb)
+    await tb.configure(0, BISS_C, 5e6)
+    await tb.encoders_ready()
+    encoder = tb.channels[0].encoder
+    encoder.force_slo(1)                    # unplugged: the receiver's fail-safe reads high
+    count = 3
+    code, out, err = await tool("read", "--count", str(count), "--rate", "5000")
+    assert "NO_ACK" in STATUS
+    assert code == 6, (code, err)
+    assert f"NO_ACK {count}" in err and "does not answer" in err, err
+    rows = read_rows(out)
+    assert len(rows) == count
+    for row in rows:
+        assert row[3] == "NO_ACK" and row[4:8] == ["-"] * 4, row
+    code, out, err = await tool("counters")
+    assert code == 0, err
+    counts = printed_counters(out)
+    assert counts["no_ack"] == count and sum(counts.values()) == count, counts
+    assert (await tb.read_fields("count_ack", 0))["no_ack"] == count
+
+    encoder.force_slo(None)
+    await tb.encoders_ready()
+    code, out, err = await tool("read", "--count", "1", "--rate", "5000")
+    assert code == 0, err
+    check_read_rows(read_rows(out), sent_frames(tb)[-1:])
