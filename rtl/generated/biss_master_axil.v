@@ -590,14 +590,14 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch0_cfg_checks_noise_limit(regs__cfg_noise_limit),
     .ch0_cfg_checks_spw_check(regs__cfg_spw_check),
     .ch0_cfg_checks_spw_tolerance(regs__cfg_spw_tolerance),
-    .ch0_cfg_crc0_inverted(regs__cfg_w0_crc_inverted),
-    .ch0_cfg_crc0_poly(regs__cfg_w0_crc_poly),
-    .ch0_cfg_crc0_start_start(regs__cfg_w0_crc_start),
-    .ch0_cfg_crc0_width(regs__cfg_w0_crc_width),
-    .ch0_cfg_crc1_inverted(regs__cfg_w1_crc_inverted),
-    .ch0_cfg_crc1_poly(regs__cfg_w1_crc_poly),
-    .ch0_cfg_crc1_start_start(regs__cfg_w1_crc_start),
-    .ch0_cfg_crc1_width(regs__cfg_w1_crc_width),
+    .ch0_cfg_crc0_start_w0_crc_start(regs__cfg_w0_crc_start),
+    .ch0_cfg_crc0_w0_crc_inverted(regs__cfg_w0_crc_inverted),
+    .ch0_cfg_crc0_w0_crc_poly(regs__cfg_w0_crc_poly),
+    .ch0_cfg_crc0_w0_crc_width(regs__cfg_w0_crc_width),
+    .ch0_cfg_crc1_start_w1_crc_start(regs__cfg_w1_crc_start),
+    .ch0_cfg_crc1_w1_crc_inverted(regs__cfg_w1_crc_inverted),
+    .ch0_cfg_crc1_w1_crc_poly(regs__cfg_w1_crc_poly),
+    .ch0_cfg_crc1_w1_crc_width(regs__cfg_w1_crc_width),
     .ch0_cfg_ma_delay_limit(regs__cfg_delay_limit),
     .ch0_cfg_ma_ma_half_period(regs__cfg_ma_half_period),
     .ch0_cfg_period_request_period(regs__cfg_request_period),
@@ -643,14 +643,14 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$336 ),
     .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$342 ),
     .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$344 ),
-    .ch1_cfg_crc0_inverted(\regs__cfg_w0_crc_inverted$350 ),
-    .ch1_cfg_crc0_poly(\regs__cfg_w0_crc_poly$352 ),
-    .ch1_cfg_crc0_start_start(\regs__cfg_w0_crc_start$354 ),
-    .ch1_cfg_crc0_width(\regs__cfg_w0_crc_width$356 ),
-    .ch1_cfg_crc1_inverted(\regs__cfg_w1_crc_inverted$368 ),
-    .ch1_cfg_crc1_poly(\regs__cfg_w1_crc_poly$370 ),
-    .ch1_cfg_crc1_start_start(\regs__cfg_w1_crc_start$372 ),
-    .ch1_cfg_crc1_width(\regs__cfg_w1_crc_width$374 ),
+    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$354 ),
+    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$350 ),
+    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$352 ),
+    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$356 ),
+    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$372 ),
+    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$368 ),
+    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$370 ),
+    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$374 ),
     .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$328 ),
     .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$334 ),
     .ch1_cfg_period_request_period(\regs__cfg_request_period$340 ),
@@ -1210,10 +1210,10 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__ca_busy
 , ch1__ca_rbuf_data, bus__w_addr, bus__w_data, bus__w_strb, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc
-, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_poly, ch0_cfg_crc0_width, ch0_cfg_crc0_inverted, ch0_cfg_crc0_start_start, ch0_cfg_crc1_poly, ch0_cfg_crc1_width, ch0_cfg_crc1_inverted
-, ch0_cfg_crc1_start_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$103 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc
-, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_poly, ch1_cfg_crc0_width, ch1_cfg_crc0_inverted, ch1_cfg_crc0_start_start, ch1_cfg_crc1_poly, ch1_cfg_crc1_width, ch1_cfg_crc1_inverted
-, ch1_cfg_crc1_start_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4825$0 , \port$4838$0 , ch0__ca_done, \port$4970$0 , ch1__done_count, ch1__done, \port$5381$0 , \port$5394$0 , ch1__ca_done, \port$5526$0 , bus__r_addr);
+, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted
+, ch0_cfg_crc1_start_w1_crc_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$103 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc
+, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted
+, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4825$0 , \port$4838$0 , ch0__ca_done, \port$4970$0 , ch1__done_count, ch1__done, \port$5381$0 , \port$5394$0 , ch1__ca_done, \port$5526$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2204,28 +2204,28 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg [7:0] ch0_cfg_checks_spw_tolerance = 8'h00;
   wire ch0_cfg_checks_write;
   reg ch0_cfg_crc0_config_write = 1'h0;
-  output ch0_cfg_crc0_inverted;
-  reg ch0_cfg_crc0_inverted = 1'h0;
-  output [15:0] ch0_cfg_crc0_poly;
-  reg [15:0] ch0_cfg_crc0_poly = 16'h0000;
   reg ch0_cfg_crc0_start_config_write = 1'h0;
-  output [15:0] ch0_cfg_crc0_start_start;
-  reg [15:0] ch0_cfg_crc0_start_start = 16'h0000;
+  output [15:0] ch0_cfg_crc0_start_w0_crc_start;
+  reg [15:0] ch0_cfg_crc0_start_w0_crc_start = 16'h0000;
   wire ch0_cfg_crc0_start_write;
-  output [4:0] ch0_cfg_crc0_width;
-  reg [4:0] ch0_cfg_crc0_width = 5'h00;
+  output ch0_cfg_crc0_w0_crc_inverted;
+  reg ch0_cfg_crc0_w0_crc_inverted = 1'h0;
+  output [15:0] ch0_cfg_crc0_w0_crc_poly;
+  reg [15:0] ch0_cfg_crc0_w0_crc_poly = 16'h0000;
+  output [4:0] ch0_cfg_crc0_w0_crc_width;
+  reg [4:0] ch0_cfg_crc0_w0_crc_width = 5'h00;
   wire ch0_cfg_crc0_write;
   reg ch0_cfg_crc1_config_write = 1'h0;
-  output ch0_cfg_crc1_inverted;
-  reg ch0_cfg_crc1_inverted = 1'h0;
-  output [15:0] ch0_cfg_crc1_poly;
-  reg [15:0] ch0_cfg_crc1_poly = 16'h0000;
   reg ch0_cfg_crc1_start_config_write = 1'h0;
-  output [15:0] ch0_cfg_crc1_start_start;
-  reg [15:0] ch0_cfg_crc1_start_start = 16'h0000;
+  output [15:0] ch0_cfg_crc1_start_w1_crc_start;
+  reg [15:0] ch0_cfg_crc1_start_w1_crc_start = 16'h0000;
   wire ch0_cfg_crc1_start_write;
-  output [4:0] ch0_cfg_crc1_width;
-  reg [4:0] ch0_cfg_crc1_width = 5'h00;
+  output ch0_cfg_crc1_w1_crc_inverted;
+  reg ch0_cfg_crc1_w1_crc_inverted = 1'h0;
+  output [15:0] ch0_cfg_crc1_w1_crc_poly;
+  reg [15:0] ch0_cfg_crc1_w1_crc_poly = 16'h0000;
+  output [4:0] ch0_cfg_crc1_w1_crc_width;
+  reg [4:0] ch0_cfg_crc1_w1_crc_width = 5'h00;
   wire ch0_cfg_crc1_write;
   reg ch0_cfg_ma_config_write = 1'h0;
   output [11:0] ch0_cfg_ma_delay_limit;
@@ -2572,28 +2572,28 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg [7:0] ch1_cfg_checks_spw_tolerance = 8'h00;
   wire ch1_cfg_checks_write;
   reg ch1_cfg_crc0_config_write = 1'h0;
-  output ch1_cfg_crc0_inverted;
-  reg ch1_cfg_crc0_inverted = 1'h0;
-  output [15:0] ch1_cfg_crc0_poly;
-  reg [15:0] ch1_cfg_crc0_poly = 16'h0000;
   reg ch1_cfg_crc0_start_config_write = 1'h0;
-  output [15:0] ch1_cfg_crc0_start_start;
-  reg [15:0] ch1_cfg_crc0_start_start = 16'h0000;
+  output [15:0] ch1_cfg_crc0_start_w0_crc_start;
+  reg [15:0] ch1_cfg_crc0_start_w0_crc_start = 16'h0000;
   wire ch1_cfg_crc0_start_write;
-  output [4:0] ch1_cfg_crc0_width;
-  reg [4:0] ch1_cfg_crc0_width = 5'h00;
+  output ch1_cfg_crc0_w0_crc_inverted;
+  reg ch1_cfg_crc0_w0_crc_inverted = 1'h0;
+  output [15:0] ch1_cfg_crc0_w0_crc_poly;
+  reg [15:0] ch1_cfg_crc0_w0_crc_poly = 16'h0000;
+  output [4:0] ch1_cfg_crc0_w0_crc_width;
+  reg [4:0] ch1_cfg_crc0_w0_crc_width = 5'h00;
   wire ch1_cfg_crc0_write;
   reg ch1_cfg_crc1_config_write = 1'h0;
-  output ch1_cfg_crc1_inverted;
-  reg ch1_cfg_crc1_inverted = 1'h0;
-  output [15:0] ch1_cfg_crc1_poly;
-  reg [15:0] ch1_cfg_crc1_poly = 16'h0000;
   reg ch1_cfg_crc1_start_config_write = 1'h0;
-  output [15:0] ch1_cfg_crc1_start_start;
-  reg [15:0] ch1_cfg_crc1_start_start = 16'h0000;
+  output [15:0] ch1_cfg_crc1_start_w1_crc_start;
+  reg [15:0] ch1_cfg_crc1_start_w1_crc_start = 16'h0000;
   wire ch1_cfg_crc1_start_write;
-  output [4:0] ch1_cfg_crc1_width;
-  reg [4:0] ch1_cfg_crc1_width = 5'h00;
+  output ch1_cfg_crc1_w1_crc_inverted;
+  reg ch1_cfg_crc1_w1_crc_inverted = 1'h0;
+  output [15:0] ch1_cfg_crc1_w1_crc_poly;
+  reg [15:0] ch1_cfg_crc1_w1_crc_poly = 16'h0000;
+  output [4:0] ch1_cfg_crc1_w1_crc_width;
+  reg [4:0] ch1_cfg_crc1_w1_crc_width = 5'h00;
   wire ch1_cfg_crc1_write;
   reg ch1_cfg_ma_config_write = 1'h0;
   output [11:0] ch1_cfg_ma_delay_limit;
@@ -2937,13 +2937,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$379  = \$377  | \$378 ;
   assign \$380  = ch1_read_select_11f ? \port$5394$0 [255:224] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_inverted, 3'h0, ch1_cfg_crc0_width, ch1_cfg_crc0_poly } : 32'd0;
+  assign \$382  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$383  = \$381  | \$382 ;
-  assign \$384  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_start } : 32'd0;
+  assign \$384  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
   assign \$385  = \$383  | \$384 ;
-  assign \$386  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_inverted, 3'h0, ch1_cfg_crc1_width, ch1_cfg_crc1_poly } : 32'd0;
+  assign \$386  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
   assign \$387  = \$385  | \$386 ;
-  assign \$388  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_start } : 32'd0;
+  assign \$388  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
   assign \$389  = \$387  | \$388 ;
   assign \$390  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$391  = \$389  | \$390 ;
@@ -3258,27 +3258,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   always @(posedge clk)
     ch0_cfg_crc0_config_write <= \$563 ;
   always @(posedge clk)
-    ch0_cfg_crc0_poly <= \$564 ;
+    ch0_cfg_crc0_w0_crc_poly <= \$564 ;
   always @(posedge clk)
-    ch0_cfg_crc0_width <= \$565 ;
+    ch0_cfg_crc0_w0_crc_width <= \$565 ;
   always @(posedge clk)
-    ch0_cfg_crc0_inverted <= \$566 ;
+    ch0_cfg_crc0_w0_crc_inverted <= \$566 ;
   always @(posedge clk)
     ch0_cfg_crc0_start_config_write <= \$567 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_start <= \$568 ;
+    ch0_cfg_crc0_start_w0_crc_start <= \$568 ;
   always @(posedge clk)
     ch0_cfg_crc1_config_write <= \$569 ;
   always @(posedge clk)
-    ch0_cfg_crc1_poly <= \$570 ;
+    ch0_cfg_crc1_w1_crc_poly <= \$570 ;
   always @(posedge clk)
-    ch0_cfg_crc1_width <= \$571 ;
+    ch0_cfg_crc1_w1_crc_width <= \$571 ;
   always @(posedge clk)
-    ch0_cfg_crc1_inverted <= \$572 ;
+    ch0_cfg_crc1_w1_crc_inverted <= \$572 ;
   always @(posedge clk)
     ch0_cfg_crc1_start_config_write <= \$573 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_start <= \$574 ;
+    ch0_cfg_crc1_start_w1_crc_start <= \$574 ;
   always @(posedge clk)
     ch0_ca_request_config_write <= \$575 ;
   always @(posedge clk)
@@ -3512,27 +3512,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   always @(posedge clk)
     ch1_cfg_crc0_config_write <= \$690 ;
   always @(posedge clk)
-    ch1_cfg_crc0_poly <= \$691 ;
+    ch1_cfg_crc0_w0_crc_poly <= \$691 ;
   always @(posedge clk)
-    ch1_cfg_crc0_width <= \$692 ;
+    ch1_cfg_crc0_w0_crc_width <= \$692 ;
   always @(posedge clk)
-    ch1_cfg_crc0_inverted <= \$693 ;
+    ch1_cfg_crc0_w0_crc_inverted <= \$693 ;
   always @(posedge clk)
     ch1_cfg_crc0_start_config_write <= \$694 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_start <= \$695 ;
+    ch1_cfg_crc0_start_w0_crc_start <= \$695 ;
   always @(posedge clk)
     ch1_cfg_crc1_config_write <= \$696 ;
   always @(posedge clk)
-    ch1_cfg_crc1_poly <= \$697 ;
+    ch1_cfg_crc1_w1_crc_poly <= \$697 ;
   always @(posedge clk)
-    ch1_cfg_crc1_width <= \$698 ;
+    ch1_cfg_crc1_w1_crc_width <= \$698 ;
   always @(posedge clk)
-    ch1_cfg_crc1_inverted <= \$699 ;
+    ch1_cfg_crc1_w1_crc_inverted <= \$699 ;
   always @(posedge clk)
     ch1_cfg_crc1_start_config_write <= \$700 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_start <= \$701 ;
+    ch1_cfg_crc1_start_w1_crc_start <= \$701 ;
   always @(posedge clk)
     ch1_ca_request_config_write <= \$702 ;
   always @(posedge clk)
@@ -3861,13 +3861,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$186  = \$184  | \$185 ;
   assign \$187  = ch0_read_select_9f ? \port$4838$0 [255:224] : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$189  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_inverted, 3'h0, ch0_cfg_crc0_width, ch0_cfg_crc0_poly } : 32'd0;
+  assign \$189  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$190  = \$188  | \$189 ;
-  assign \$191  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_start } : 32'd0;
+  assign \$191  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_inverted, 3'h0, ch0_cfg_crc1_width, ch0_cfg_crc1_poly } : 32'd0;
+  assign \$193  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
   assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_start } : 32'd0;
+  assign \$195  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
   assign \$196  = \$194  | \$195 ;
   assign \$197  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$103 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$198  = \$196  | \$197 ;
@@ -4463,7 +4463,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$564  = ch0_cfg_crc0_poly;
+    \$564  = ch0_cfg_crc0_w0_crc_poly;
     if (\$69 ) begin
       \$564 [7:0] = config_write_data[7:0];
     end
@@ -4476,7 +4476,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$565  = ch0_cfg_crc0_width;
+    \$565  = ch0_cfg_crc0_w0_crc_width;
     if (\$71 ) begin
       \$565  = config_write_data[20:16];
     end
@@ -4486,7 +4486,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$566  = ch0_cfg_crc0_inverted;
+    \$566  = ch0_cfg_crc0_w0_crc_inverted;
     if (\$72 ) begin
       \$566  = config_write_data[24];
     end
@@ -4503,7 +4503,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$568  = ch0_cfg_crc0_start_start;
+    \$568  = ch0_cfg_crc0_start_w0_crc_start;
     if (\$73 ) begin
       \$568 [7:0] = config_write_data[7:0];
     end
@@ -4523,7 +4523,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$570  = ch0_cfg_crc1_poly;
+    \$570  = ch0_cfg_crc1_w1_crc_poly;
     if (\$75 ) begin
       \$570 [7:0] = config_write_data[7:0];
     end
@@ -4536,7 +4536,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$571  = ch0_cfg_crc1_width;
+    \$571  = ch0_cfg_crc1_w1_crc_width;
     if (\$77 ) begin
       \$571  = config_write_data[20:16];
     end
@@ -4546,7 +4546,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$572  = ch0_cfg_crc1_inverted;
+    \$572  = ch0_cfg_crc1_w1_crc_inverted;
     if (\$78 ) begin
       \$572  = config_write_data[24];
     end
@@ -4563,7 +4563,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$574  = ch0_cfg_crc1_start_start;
+    \$574  = ch0_cfg_crc1_start_w1_crc_start;
     if (\$79 ) begin
       \$574 [7:0] = config_write_data[7:0];
     end
@@ -5727,7 +5727,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$691  = ch1_cfg_crc0_poly;
+    \$691  = ch1_cfg_crc0_w0_crc_poly;
     if (\$262 ) begin
       \$691 [7:0] = config_write_data[7:0];
     end
@@ -5740,7 +5740,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$692  = ch1_cfg_crc0_width;
+    \$692  = ch1_cfg_crc0_w0_crc_width;
     if (\$264 ) begin
       \$692  = config_write_data[20:16];
     end
@@ -5750,7 +5750,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$693  = ch1_cfg_crc0_inverted;
+    \$693  = ch1_cfg_crc0_w0_crc_inverted;
     if (\$265 ) begin
       \$693  = config_write_data[24];
     end
@@ -5767,7 +5767,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$695  = ch1_cfg_crc0_start_start;
+    \$695  = ch1_cfg_crc0_start_w0_crc_start;
     if (\$266 ) begin
       \$695 [7:0] = config_write_data[7:0];
     end
@@ -5787,7 +5787,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$697  = ch1_cfg_crc1_poly;
+    \$697  = ch1_cfg_crc1_w1_crc_poly;
     if (\$268 ) begin
       \$697 [7:0] = config_write_data[7:0];
     end
@@ -5800,7 +5800,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$698  = ch1_cfg_crc1_width;
+    \$698  = ch1_cfg_crc1_w1_crc_width;
     if (\$270 ) begin
       \$698  = config_write_data[20:16];
     end
@@ -5810,7 +5810,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$699  = ch1_cfg_crc1_inverted;
+    \$699  = ch1_cfg_crc1_w1_crc_inverted;
     if (\$271 ) begin
       \$699  = config_write_data[24];
     end
@@ -5827,7 +5827,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$701  = ch1_cfg_crc1_start_start;
+    \$701  = ch1_cfg_crc1_start_w1_crc_start;
     if (\$272 ) begin
       \$701 [7:0] = config_write_data[7:0];
     end
@@ -6680,14 +6680,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__cfg_noise_limit = ch0_cfg_checks_noise_limit;
   assign ch0__cfg_delay_tolerance = ch0_cfg_checks_delay_tolerance;
   assign ch0__cfg_quiet_time = ch0_cfg_quiet_quiet_time;
-  assign ch0__cfg_w0_crc_poly = ch0_cfg_crc0_poly;
-  assign ch0__cfg_w0_crc_width = ch0_cfg_crc0_width;
-  assign ch0__cfg_w0_crc_inverted = ch0_cfg_crc0_inverted;
-  assign ch0__cfg_w0_crc_start = ch0_cfg_crc0_start_start;
-  assign ch0__cfg_w1_crc_poly = ch0_cfg_crc1_poly;
-  assign ch0__cfg_w1_crc_width = ch0_cfg_crc1_width;
-  assign ch0__cfg_w1_crc_inverted = ch0_cfg_crc1_inverted;
-  assign ch0__cfg_w1_crc_start = ch0_cfg_crc1_start_start;
+  assign ch0__cfg_w0_crc_poly = ch0_cfg_crc0_w0_crc_poly;
+  assign ch0__cfg_w0_crc_width = ch0_cfg_crc0_w0_crc_width;
+  assign ch0__cfg_w0_crc_inverted = ch0_cfg_crc0_w0_crc_inverted;
+  assign ch0__cfg_w0_crc_start = ch0_cfg_crc0_start_w0_crc_start;
+  assign ch0__cfg_w1_crc_poly = ch0_cfg_crc1_w1_crc_poly;
+  assign ch0__cfg_w1_crc_width = ch0_cfg_crc1_w1_crc_width;
+  assign ch0__cfg_w1_crc_inverted = ch0_cfg_crc1_w1_crc_inverted;
+  assign ch0__cfg_w1_crc_start = ch0_cfg_crc1_start_w1_crc_start;
   assign ch0__ca_slave_id = ch0_ca_request_slave_id;
   assign ch0__ca_address = ch0_ca_request_address;
   assign ch0__ca_count = ch0_ca_request_count;
@@ -6724,14 +6724,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__cfg_noise_limit = ch1_cfg_checks_noise_limit;
   assign ch1__cfg_delay_tolerance = ch1_cfg_checks_delay_tolerance;
   assign ch1__cfg_quiet_time = ch1_cfg_quiet_quiet_time;
-  assign ch1__cfg_w0_crc_poly = ch1_cfg_crc0_poly;
-  assign ch1__cfg_w0_crc_width = ch1_cfg_crc0_width;
-  assign ch1__cfg_w0_crc_inverted = ch1_cfg_crc0_inverted;
-  assign ch1__cfg_w0_crc_start = ch1_cfg_crc0_start_start;
-  assign ch1__cfg_w1_crc_poly = ch1_cfg_crc1_poly;
-  assign ch1__cfg_w1_crc_width = ch1_cfg_crc1_width;
-  assign ch1__cfg_w1_crc_inverted = ch1_cfg_crc1_inverted;
-  assign ch1__cfg_w1_crc_start = ch1_cfg_crc1_start_start;
+  assign ch1__cfg_w0_crc_poly = ch1_cfg_crc0_w0_crc_poly;
+  assign ch1__cfg_w0_crc_width = ch1_cfg_crc0_w0_crc_width;
+  assign ch1__cfg_w0_crc_inverted = ch1_cfg_crc0_w0_crc_inverted;
+  assign ch1__cfg_w0_crc_start = ch1_cfg_crc0_start_w0_crc_start;
+  assign ch1__cfg_w1_crc_poly = ch1_cfg_crc1_w1_crc_poly;
+  assign ch1__cfg_w1_crc_width = ch1_cfg_crc1_w1_crc_width;
+  assign ch1__cfg_w1_crc_inverted = ch1_cfg_crc1_w1_crc_inverted;
+  assign ch1__cfg_w1_crc_start = ch1_cfg_crc1_start_w1_crc_start;
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;

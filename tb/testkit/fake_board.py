@@ -95,7 +95,8 @@ class RegisterModel:
     def cfg(self, ch):
         out = {}
         for path in ("cfg_ma", "cfg_period", "cfg_break", "cfg_ack", "cfg_timeout",
-                     "cfg_words", "cfg_checks"):
+                     "cfg_words", "cfg_checks", "cfg_crc0", "cfg_crc0_start", "cfg_crc1",
+                     "cfg_crc1_start"):
             out.update(self.fields(path, ch, self.stored(path, ch)))
         return out
 
@@ -247,7 +248,8 @@ class RegisterModel:
     def configure(self, ch, **values):
         """Set configuration (and ctrl) fields directly: the test's own setup."""
         for path in ("cfg_ma", "cfg_period", "cfg_break", "cfg_ack", "cfg_timeout",
-                     "cfg_words", "cfg_checks", "ctrl"):
+                     "cfg_words", "cfg_checks", "cfg_crc0", "cfg_crc0_start", "cfg_crc1",
+                     "cfg_crc1_start", "ctrl"):
             mine = {k: v for k, v in values.items() if k in MAP.channel[path].fields}
             if mine:
                 a = MAP.address(path, ch)

@@ -212,10 +212,10 @@ class Board:
     # -- Configuration ------------------------------------------------------------------------
     def config(self, ch):
         """Every configuration field of channel ``ch``, ``{field: value}``."""
-        words = self.read_block(regmap.CONFIG_REGISTERS, ch)
         settings = {}
-        for register, word in zip(regmap.CONFIG_REGISTERS, words):
-            settings.update(regmap.get(register, word))
+        for run in regmap.CONFIG_RUNS:
+            for register, word in zip(run, self.read_block(run, ch)):
+                settings.update(regmap.get(register, word))
         return settings
 
     def configure(self, ch, settings):

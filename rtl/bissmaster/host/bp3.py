@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 from .. import protocol
 from ..layouts import config_ports
-from ..params import Crc, MasterParams
+from ..params import CRC_MAX_WIDTH, Crc, MasterParams
 
 __all__ = [
     "Bp3Error", "NotBp3Error", "FieldRangeError", "ChecksumError", "InconsistentFieldsError",
@@ -391,21 +391,33 @@ _CORE_CRCS = {
 
 
 def _data_crc(eds, params):
+    """Word 0's CRC settings for the CRC that CPOLY and CSTART name: ``{path: value}``. CRC-6
+    0x43 with start 0 is the named CRC-6 (code 1), as before custom CRCs existed; any other
+    polynomial of degree 1..16 with a start value that fits is a custom CRC (code 3), sent
+    inverted as every BiSS CRC is (section 6)."""
     if eds.cpoly == 0:
         raise UnsupportedEncoderError(f"{_where('CPOLY')} = 0: no CRC; a BP3 data channel has "
                                       f"one, and the core will not read positions unchecked")
-    kind = _CORE_CRCS.get(eds.crc_polynomial)
-    if kind is None:
+    polynomial = eds.crc_polynomial                     # with its top term and x^0
+    width = polynomial.bit_length() - 1
+    kind = _CORE_CRCS.get(polynomial) if eds.cstart == protocol.CRC_INIT else None
+    if kind is not None and kind in params.word_crcs[0]:
+        return {("w0", "crc"): kind}        # the custom settings are not read with it
+    if not params.custom_crc:
         raise UnsupportedEncoderError(
-            f"{_where('CPOLY')} = 0x{eds.cpoly:X} (polynomial 0x{eds.crc_polynomial:X}): the core "
-            f"checks only " + ", ".join(f"0x{p:X}" for p in _CORE_CRCS))
-    if eds.cstart != protocol.CRC_INIT:
-        raise UnsupportedEncoderError(f"{_where('CSTART')} = 0x{eds.cstart:X}: the core's CRCs "
-                                      f"start at 0x{protocol.CRC_INIT:X}")
-    if kind not in params.word_crcs[0]:
-        raise UnsupportedEncoderError(f"the encoder sends {kind.name}, but this build checks "
-                                      f"word 0 with {[k.name for k in params.word_crcs[0]]} only")
-    return kind
+            f"{_where('CPOLY')} = 0x{eds.cpoly:X}, {_where('CSTART')} = 0x{eds.cstart:X} "
+            f"(polynomial 0x{polynomial:X}): this build has no custom CRCs and checks word 0 "
+            f"with {[k.name for k in params.word_crcs[0]]} only")
+    if not 1 <= width <= CRC_MAX_WIDTH:
+        raise UnsupportedEncoderError(
+            f"{_where('CPOLY')} = 0x{eds.cpoly:X} (polynomial 0x{polynomial:X}): a CRC of "
+            f"{width} bits; the core checks CRCs of 1..{CRC_MAX_WIDTH} bits")
+    if eds.cstart >> width:
+        raise UnsupportedEncoderError(f"{_where('CSTART')} = 0x{eds.cstart:X}: wider than the "
+                                      f"{width}-bit CRC")
+    return {("w0", "crc"): Crc.CUSTOM, ("w0_crc", "width"): width,
+            ("w0_crc", "poly"): polynomial & ((1 << width) - 1),
+            ("w0_crc", "start"): eds.cstart, ("w0_crc", "inverted"): 1}
 
 
 def _port_values(settings, params):
@@ -420,7 +432,8 @@ def derive_config(eds, *, params=None):
     """The core's data-channel settings for a BP3 encoder.
 
     A BP3 Standard Encoder (C = 0) sends one word: DL_POS = DL - 2 position bits, nE, nW, and
-    the CRC that CPOLY and CSTART name. Word 0 is set to read it; a two-word build gets word 1
+    the CRC that CPOLY and CSTART name (CRC-6 0x43 from 0: the named CRC-6; any other: a
+    custom CRC, ``cfg_w0_crc`` = 3 and the ``cfg_w0_crc_*`` settings). Word 0 is set to read it; a two-word build gets word 1
     and the SPW check switched off. Settings the EDS does not determine (MA clock, time limits,
     ``cfg_end_check``) are not returned.
 
@@ -442,8 +455,8 @@ def derive_config(eds, *, params=None):
     UnsupportedEncoderError
         C = 1 (a BiSS Safety encoder: the EDS does not describe its words; configure them from
         its datasheet), feedback bits other than nE then nW, DL_POS of 0 or longer than the
-        build's word 0, no CRC, a CRC polynomial or start value the core does not have, or a
-        CRC this build does not include.
+        build's word 0, no CRC, a CRC wider than 16 bits or a start value wider than it, or
+        (in a build without custom CRCs) a CRC other than the build's named ones.
     """
     params = MasterParams() if params is None else params
     if not isinstance(eds, Bp3Eds):
@@ -468,7 +481,8 @@ def derive_config(eds, *, params=None):
         ("w0", "data_bits"): bits,
         ("w0", "nenw"): 1,
         ("w0", "lc"): 0,
-        ("w0", "crc"): _data_crc(eds, params),
+        ("w0", "gray"): 0,                  # BP3 positions are binary
+        **_data_crc(eds, params),
     }
     if params.words == 2:
         settings.update({("w1_enable",): 0, ("spw_check",): 0})

@@ -749,6 +749,11 @@ def show_config(board, ch, clock_hz, out):
         "w0_crc": regmap.CRC_NAMES.get(cfg["w0_crc"], "invalid"),
         "w1_crc": regmap.CRC_NAMES.get(cfg["w1_crc"], "invalid"),
     }
+    for w in (0, 1):
+        if cfg[f"w{w}_crc"] == regmap.CRC_CODES["custom"]:
+            notes[f"w{w}_crc"] = (f"custom: {cfg[f'w{w}_crc_width']} bits, polynomial "
+                                  f"0x{cfg[f'w{w}_crc_poly']:X}, start 0x{cfg[f'w{w}_crc_start']:X}, "
+                                  + ("sent inverted" if cfg[f"w{w}_crc_inverted"] else "sent plain"))
     for key in ("break_time", "ack_limit", "timeout_limit"):
         if cfg[key]:
             notes[key] = f"{cfg[key] / clock_hz * 1e6:.1f} us"

@@ -60,6 +60,10 @@ CHANNEL = {
     "count_cycle": 0x074,
     "count_stop": 0x078,
     "count_noise": 0x07C,
+    "cfg_crc0": 0x080,
+    "cfg_crc0_start": 0x084,
+    "cfg_crc1": 0x088,
+    "cfg_crc1_start": 0x08C,
     "ca.request": 0x100,
     "ca.ctrl": 0x104,
     "ca.state": 0x108,
@@ -93,11 +97,15 @@ FIELDS = {
     "cfg_ack": {"ack_limit": (0, 24)},
     "cfg_timeout": {"timeout_limit": (0, 24)},
     "cfg_words": {"w0_data_bits": (0, 6), "w0_nenw": (6, 1), "w0_lc": (7, 1), "w0_crc": (8, 2),
-                  "w1_data_bits": (16, 6), "w1_nenw": (22, 1), "w1_lc": (23, 1),
-                  "w1_crc": (24, 2), "w1_enable": (31, 1)},
+                  "w0_gray": (10, 1), "w1_data_bits": (16, 6), "w1_nenw": (22, 1), "w1_lc": (23, 1),
+                  "w1_crc": (24, 2), "w1_gray": (26, 1), "w1_enable": (31, 1)},
     "cfg_checks": {"end_check": (0, 1), "spw_check": (1, 1), "spw_tolerance": (8, 8),
                    "noise_limit": (16, 4), "delay_tolerance": (20, 4)},
     "cfg_quiet": {"quiet_time": (0, 12)},
+    "cfg_crc0": {"w0_crc_poly": (0, 16), "w0_crc_width": (16, 5), "w0_crc_inverted": (24, 1)},
+    "cfg_crc0_start": {"w0_crc_start": (0, 16)},
+    "cfg_crc1": {"w1_crc_poly": (0, 16), "w1_crc_width": (16, 5), "w1_crc_inverted": (24, 1)},
+    "cfg_crc1_start": {"w1_crc_start": (0, 16)},
     "result.status": {"status": (0, 4), "cds": (4, 1), "w0_ne": (8, 1), "w0_nw": (9, 1),
                       "w0_crc_ok": (10, 1), "w1_ne": (12, 1), "w1_nw": (13, 1),
                       "w1_crc_ok": (14, 1), "lc_repeat": (16, 1), "lc_skip": (17, 1),
@@ -126,9 +134,12 @@ FIELDS = {
     "ca.count_data_fault": {"data_fault": (0, 16)},
 }
 
-#: The configuration registers, in address order (the eight ``cfg_*`` of a channel).
-CONFIG_REGISTERS = ("cfg_ma", "cfg_period", "cfg_break", "cfg_ack", "cfg_timeout",
-                    "cfg_words", "cfg_checks", "cfg_quiet")
+#: The configuration registers, in address order: two runs of consecutive registers (one
+#: READ_BURST each), the eight at 0x020 and each word's custom CRC at 0x080.
+CONFIG_RUNS = (("cfg_ma", "cfg_period", "cfg_break", "cfg_ack", "cfg_timeout",
+                "cfg_words", "cfg_checks", "cfg_quiet"),
+               ("cfg_crc0", "cfg_crc0_start", "cfg_crc1", "cfg_crc1_start"))
+CONFIG_REGISTERS = CONFIG_RUNS[0] + CONFIG_RUNS[1]
 #: The result block, in address order: one READ_BURST of these reads one snapshot (the first,
 #: result.status, takes it).
 RESULT_REGISTERS = ("result.status", "result.seq", "result.w0_lo", "result.w0_hi",
@@ -162,7 +173,7 @@ CA_STATUS = {"OK": 0, "CRC4_ERROR": 1, "NO_ANSWER": 2, "REFUSED": 3, "ABORTED": 
 CA_STATUS_NAME = {code: name for name, code in CA_STATUS.items()}
 
 #: ``cfg_wN_crc`` codes.
-CRC_CODES = {"none": 0, "crc6": 1, "crc16": 2}
+CRC_CODES = {"none": 0, "crc6": 1, "crc16": 2, "custom": 3}
 CRC_NAMES = {code: name for name, code in CRC_CODES.items()}
 
 #: Encoder register addresses over the control channel: 0..0x7F, 1..64 in one access.

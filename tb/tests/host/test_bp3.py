@@ -195,7 +195,7 @@ def test_derive_config_default_build(position_bits):
     # README port table: cfg_wN_data_bits, cfg_wN_nenw, cfg_wN_lc, cfg_wN_crc (1 = CRC-6).
     assert config == {
         "cfg_w0_data_bits": position_bits, "cfg_w0_nenw": 1, "cfg_w0_lc": 0,
-        "cfg_w0_crc": CRC_CODE["crc6"], "cfg_w1_enable": 0, "cfg_spw_check": 0,
+        "cfg_w0_crc": CRC_CODE["crc6"], "cfg_w0_gray": 0, "cfg_w1_enable": 0, "cfg_spw_check": 0,
     }
     assert all(type(v) is int for v in config.values())
 
@@ -217,7 +217,8 @@ def test_derived_names_are_ports_of_the_build(preset, params):
 def test_derive_config_one_word_build():
     params = MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),))
     assert bp3.derive_config(_eds(DL=38), params=params) == {
-        "cfg_w0_data_bits": 36, "cfg_w0_nenw": 1, "cfg_w0_lc": 0, "cfg_w0_crc": CRC_CODE["crc6"]}
+        "cfg_w0_data_bits": 36, "cfg_w0_nenw": 1, "cfg_w0_lc": 0, "cfg_w0_crc": CRC_CODE["crc6"],
+        "cfg_w0_gray": 0}
     with pytest.raises(bp3.UnsupportedEncoderError, match="1..36"):
         bp3.derive_config(_eds(DL=39), params=params)
 
@@ -227,16 +228,38 @@ def test_derive_config_crc16_polynomial_maps_to_crc16():
     assert bp3.derive_config(_eds(CPOLY=0xC86C))["cfg_w0_crc"] == CRC_CODE["crc16"]
 
 
+#: CRCs a BP3 EDS may name besides CRC-6 0x43 from 0, with the settings of a custom CRC worked
+#: out by hand from the EDS rule (CPOLY = the polynomial without x^0, shifted down one bit;
+#: docs/protocol.md section 7): (CPOLY, CSTART) -> (width, register polynomial, start).
+CUSTOM_FROM_EDS = [
+    ((0x8810, 0xFFFF), (16, 0x1021, 0xFFFF)),   # x^16 + x^12 + x^5 + 1 (0x11021), start 0xFFFF
+    ((0x97, 0x00), (8, 0x2F, 0x00)),            # iC-MB4's 8-bit 0x12F
+    ((0x22, 0x00), (6, 0x05, 0x00)),            # 0x45: another 6-bit polynomial
+    ((0x21, 0x01), (6, 0x03, 0x01)),            # CRC-6 0x43 but starting at 1
+    ((0x5, 0x3), (3, 0x3, 0x3)),                # iC-MB4's 3-bit 0xB, start 3
+]
+
+
+@pytest.mark.parametrize("cpoly_cstart, settings", CUSTOM_FROM_EDS)
+def test_derive_config_other_crcs_become_custom(cpoly_cstart, settings):
+    cpoly, cstart = cpoly_cstart
+    width, poly, start = settings
+    config = bp3.derive_config(_eds(CPOLY=cpoly, CSTART=cstart))
+    assert config["cfg_w0_crc"] == CRC_CODE["custom"]
+    assert (config["cfg_w0_crc_width"], config["cfg_w0_crc_poly"], config["cfg_w0_crc_start"],
+            config["cfg_w0_crc_inverted"]) == (width, poly, start, 1)
+
+
 @pytest.mark.parametrize("overrides, params, match", [
     ({"BP_ID": 0x63, "DL": 0x30}, None, "C = 1"),             # BiSS Safety encoder: refused
     ({"DL": 2}, None, "DL_POS = 0"),
     ({"FB1": 2, "FB2": 1}, None, "nE then nW"),
     ({"FB2": 1}, None, "nE then nW"),
     ({"CPOLY": 0}, None, "no CRC"),
-    ({"CPOLY": 0x22}, None, "0x45"),
-    ({"CPOLY": 0x21 << 1}, None, "0x85"),
-    ({"CSTART": 1}, None, "CSTART"),
-    ({}, MasterParams(word_crcs=((Crc.CRC16,), (Crc.CRC16,))), "CRC6"),
+    ({"CPOLY": 0x10000}, None, "17 bits"),                  # x^17 + x^0: wider than 16 bits
+    ({"CSTART": 0x40}, None, "CSTART"),                     # 7 bits for a 6-bit CRC
+    ({"CPOLY": 0x22}, MasterParams(custom_crc=False), "no custom CRCs"),
+    ({}, MasterParams(word_crcs=((Crc.CRC16,), (Crc.CRC16,)), custom_crc=False), "CRC16"),
 ])
 def test_derive_config_refuses(overrides, params, match):
     with pytest.raises(bp3.UnsupportedEncoderError, match=match):
@@ -276,7 +299,8 @@ class FakeEncoder:
 COMMON_PART = bytes(range(0x80, 0xC0))      # whatever the common EDS part holds
 
 EXPECTED_CONFIG = {"cfg_w0_data_bits": 26, "cfg_w0_nenw": 1, "cfg_w0_lc": 0,
-                   "cfg_w0_crc": CRC_CODE["crc6"], "cfg_w1_enable": 0, "cfg_spw_check": 0}
+                   "cfg_w0_crc": CRC_CODE["crc6"], "cfg_w0_gray": 0, "cfg_w1_enable": 0,
+                   "cfg_spw_check": 0}
 
 
 def test_identify_default_offset_reads_the_bank_after_the_pointer():
@@ -385,7 +409,7 @@ def test_identify_slave_id_and_params_passed_through():
     params = MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),))
     found = bp3.identify(enc.read_registers, enc.write_register, slave_id=5, params=params)
     assert found.config == {"cfg_w0_data_bits": 36, "cfg_w0_nenw": 1, "cfg_w0_lc": 0,
-                            "cfg_w0_crc": CRC_CODE["crc6"]}
+                            "cfg_w0_crc": CRC_CODE["crc6"], "cfg_w0_gray": 0}
 
 
 def test_identify_bank_beyond_0xff():

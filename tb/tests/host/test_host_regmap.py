@@ -45,15 +45,16 @@ def test_every_field_is_the_rdl_one():
 def test_constants_and_register_groups():
     assert MAP.globals["id"].fields["id"].reset == regmap.ID_VALUE
     assert MAP.globals["version"].fields["major"].reset == regmap.MAP_MAJOR
-    for group, prefix in ((regmap.CONFIG_REGISTERS, "cfg_"), (regmap.RESULT_REGISTERS, "result."),
-                          (regmap.COUNTER_REGISTERS, "count_"),
-                          (regmap.CA_COUNTER_REGISTERS, "ca.count_")):
+    for runs, prefix in ((regmap.CONFIG_RUNS, "cfg_"), ((regmap.RESULT_REGISTERS,), "result."),
+                         ((regmap.COUNTER_REGISTERS,), "count_"),
+                         ((regmap.CA_COUNTER_REGISTERS,), "ca.count_")):
         rdl = sorted((p for p in MAP.channel if p.startswith(prefix)),
                      key=lambda p: MAP.channel[p].offset)
-        assert list(group) == rdl, prefix
-        offsets = [MAP.channel[p].offset for p in group]
-        assert offsets == list(range(offsets[0], offsets[0] + 4 * len(group), 4)), \
-            f"{prefix}: one READ_BURST needs consecutive registers"
+        assert [r for run in runs for r in run] == rdl, prefix
+        for run in runs:
+            offsets = [MAP.channel[p].offset for p in run]
+            assert offsets == list(range(offsets[0], offsets[0] + 4 * len(run), 4)), \
+                f"{prefix}: one READ_BURST needs consecutive registers"
     # 64 bytes per access, registers 0x00..0x7F: the request fields' widths.
     req = MAP.channel["ca.request"].fields
     assert regmap.ENCODER_REGISTERS == 1 << req["address"].width
