@@ -109,6 +109,64 @@ async def driver_reads_two_presets(dut):
     dut._log.info("seq per channel %s, %d bus transactions", seqs, drv.transactions)
 
 
+#: Encoders with other CRCs and Gray positions (issue 26): channel 0 a Gray-coded 32-bit word
+#: with CRC-16/IBM-3740 (0x1021 from 0xFFFF, sent plain), channel 1 a 26-bit word with
+#: iC-MB4's 8-bit CRC (0x12F, start 0, inverted).
+CUSTOM_FORMATS = (
+    frames.FrameFormat("gray32_crc16_ibm3740", (frames.WordFormat(
+        32, gray=True, crc=frames.CustomCrc(16, 0x1021, 0xFFFF, False)),)),
+    frames.FrameFormat("icmb4_crc8_26", (frames.WordFormat(26, crc=frames.CustomCrc(8, 0x2F)),)),
+)
+
+
+@cocotb.test()
+async def driver_custom_crcs_and_gray(dut):
+    """The C driver sets each channel's word to its encoder's CRC (a custom one written field
+    by field; iC-MB4's 8-bit one by biss_crc_named) and Gray decoding: the registers hold
+    them, and every position read is the one the encoder sent; the same channel set to the
+    named CRC-6 instead gets CRC errors only."""
+    tb = BusTestbench(dut, seed=26)
+    await tb.start(CUSTOM_FORMATS)
+    drv = CDriver(os.environ["BISS_DRIVER_LIB"], tb.bus)
+    chans = [await drv.channel(n) for n in range(CHANNELS)]
+    for ch, fmt in zip(chans, CUSTOM_FORMATS):
+        cfg = Config()
+        await drv.check("biss_config_from_preset", byref(cfg), b"resolute_c_26", int(CLK_HZ),
+                        5_000_000)
+        word, want = cfg.word[0], fmt.words[0]
+        word.data_bits, word.gray = want.data_bits, want.gray
+        if ch.index == 0:
+            word.crc, word.crc_width, word.crc_poly = CRC_CODE["custom"], 16, 0x1021
+            word.crc_start, word.crc_inverted = 0xFFFF, False
+        else:
+            await drv.check("biss_crc_named", byref(word), 8)
+        await drv.check("biss_configure", byref(ch), byref(cfg))
+        crc = await tb.read_fields("cfg_crc0", ch.index)
+        start = await tb.read_fields("cfg_crc0_start", ch.index)
+        assert (crc["w0_crc_width"], crc["w0_crc_poly"], start["w0_crc_start"],
+                crc["w0_crc_inverted"]) == (want.crc.width, want.crc.poly, want.crc.start,
+                                            int(want.crc.inverted))
+        assert (await tb.read_fields("cfg_words", ch.index))["w0_gray"] == int(want.gray)
+    await tb.encoders_ready()
+    for _ in range(3):
+        for n, ch in enumerate(chans):
+            tb.check_result(n, await sample(drv, ch))
+    # Channel 0 with the right CRC but start 0 instead of 0xFFFF: over words of one length the
+    # two CRCs always differ (by the start values' difference times x^n, never a multiple of
+    # the polynomial), so every frame is a CRC error whatever the position. (A wrong
+    # polynomial of the same width would pass one frame in 2^width.)
+    cfg = Config()
+    await drv.check("biss_config_from_preset", byref(cfg), b"resolute_c_26", int(CLK_HZ),
+                    5_000_000)
+    word = cfg.word[0]
+    word.data_bits, word.gray, word.crc, word.crc_width = 32, True, CRC_CODE["custom"], 16
+    word.crc_poly, word.crc_start, word.crc_inverted = 0x1021, 0x0000, False
+    await drv.check("biss_configure", byref(chans[0]), byref(cfg))
+    got = [await sample(drv, chans[0]) for _ in range(4)]
+    for res in got:
+        assert res["status"] == STATUS["CRC_ERROR_WORD0"] and not res["w0_crc_ok"], res
+
+
 @cocotb.test()
 async def driver_trigger_samples_both_axes_at_once(dut):
     """biss_set_trigger_enable on both channels, one biss_trigger: both start in the same

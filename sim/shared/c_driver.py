@@ -33,7 +33,9 @@ class Channel(Structure):
 
 
 class WordFormat(Structure):
-    _fields_ = [("data_bits", c_uint8), ("crc", c_uint8), ("nenw", c_bool), ("lc", c_bool)]
+    _fields_ = [("data_bits", c_uint8), ("crc", c_uint8), ("nenw", c_bool), ("lc", c_bool),
+                ("gray", c_bool), ("crc_inverted", c_bool), ("crc_width", c_uint8),
+                ("crc_poly", c_uint16), ("crc_start", c_uint16)]
 
 
 class Config(Structure):
@@ -119,6 +121,7 @@ PROTOTYPES = {
     "biss_config_from_preset": (c_int, [_P(Config), c_char_p, c_uint32, c_uint32]),
     "biss_config_check": (c_int, [_P(Channel), _P(Config)]),
     "biss_configure": (c_int, [_P(Channel), _P(Config)]),
+    "biss_crc_named": (c_int, [_P(WordFormat), c_uint]),
     "biss_configure_preset": (c_int, [_P(Channel), c_char_p, c_uint32, c_uint32]),
     "biss_start": (c_int, [_P(Channel)]),
     "biss_abort": (c_int, [_P(Channel)]),

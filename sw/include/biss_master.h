@@ -46,7 +46,8 @@ typedef enum {
     BISS_ERR_MA_RATE = -6,          /* MA rate outside 80 kHz .. 10 MHz, or clock 0 */
     BISS_ERR_MA_HALF_PERIOD = -7,   /* MA half period < 2 clocks or wider than its field */
     BISS_ERR_DATA_BITS = -8,        /* a word's data bits 0 or above what the channel has */
-    BISS_ERR_CRC = -9,              /* CRC kind not NONE, CRC6 or CRC16 */
+    BISS_ERR_CRC = -9,              /* CRC kind above CUSTOM, or a custom CRC of width 0 or
+                                       above 16, or a polynomial / start value wider than it */
     BISS_ERR_LC = -10,              /* both words carry the LC */
     BISS_ERR_WORD1 = -11,           /* word 1 enabled on a one-word channel */
     BISS_ERR_SPW_CHECK = -12,       /* SPW check without word 1, word 1 wider than word 0, or
@@ -148,14 +149,27 @@ biss_err_t biss_channel_init(biss_channel_t *ch, const biss_bus_t *bus, unsigned
 
 /* -- Configuration ---------------------------------------------------------------------- */
 
-typedef enum { BISS_CRC_NONE = 0, BISS_CRC6 = 1, BISS_CRC16 = 2 } biss_crc_t;
+/* A word's CRC: none, BiSS's CRC-6 (0x43) or CRC-16 (0x190D9), or the word's own (custom:
+ * crc_width, crc_poly, crc_start, crc_inverted; docs/ports.md, "Custom CRCs"). */
+typedef enum { BISS_CRC_NONE = 0, BISS_CRC6 = 1, BISS_CRC16 = 2, BISS_CRC_CUSTOM = 3 } biss_crc_t;
 
 typedef struct {
     uint8_t data_bits;              /* position / data bits, 1 .. caps */
     uint8_t crc;                    /* biss_crc_t */
     bool nenw;                      /* the word ends with nE, nW */
     bool lc;                        /* the word carries the 6-bit LC (sign of life) */
+    /* Added with custom CRCs and Gray (0 = as before, so older initializers keep working): */
+    bool gray;                      /* the data field is Gray-coded on the line (read in binary) */
+    bool crc_inverted;              /* BISS_CRC_CUSTOM: the CRC is sent complemented */
+    uint8_t crc_width;              /* BISS_CRC_CUSTOM: 1 .. 16 bits */
+    uint16_t crc_poly;              /* BISS_CRC_CUSTOM: register polynomial, top term dropped */
+    uint16_t crc_start;             /* BISS_CRC_CUSTOM: register value before the first bit */
 } biss_word_format_t;
+
+/* Set `w`'s CRC to the one iC-MB4 names by its length (3: 0xB, 4: 0x13, 5: 0x25, 6: 0x43,
+ * 7: 0x89, 8: 0x12F, 16: 0x190D9; start 0, sent inverted) as a custom CRC; BISS_ERR_CRC for
+ * another width or a NULL `w`. */
+biss_err_t biss_crc_named(biss_word_format_t *w, unsigned width);
 
 /* Every runtime setting of a channel (docs/ports.md, Configuration). Times are in clocks of
  * the bus top's clock; 0 selects the core's default where docs/ports.md gives one. */

@@ -158,9 +158,9 @@ biss_err_t biss_channel_init(biss_channel_t *ch, const biss_bus_t *bus, unsigned
 /* -- Presets ----------------------------------------------------------------------------- */
 
 /* Word 0 of every preset: position, nE nW, CRC-6. BiSS Safety's SPW: nE nW, LC, CRC-16. */
-#define CPW(bits) { (bits), BISS_CRC6, true, false }
-#define SPW(bits) { (bits), BISS_CRC16, true, true }
-#define NO_WORD { 0, BISS_CRC_NONE, false, false }
+#define CPW(bits) { (bits), BISS_CRC6, true, false, false, false, 0, 0, 0 }
+#define SPW(bits) { (bits), BISS_CRC16, true, true, false, false, 0, 0, 0 }
+#define NO_WORD { 0, BISS_CRC_NONE, false, false, false, false, 0, 0, 0 }
 #define BISS_C(name, bits) { name, 1, { CPW(bits), NO_WORD }, false, 0 }
 /* The SPW check accepts one SPW LSB of distance: CPW and SPW are separate conversions. */
 #define SAFETY(name, cpw, spw) { name, 2, { CPW(cpw), SPW(spw) }, true, 1 }
@@ -252,9 +252,44 @@ static biss_err_t check_word(const biss_word_format_t *w, unsigned max_bits, uns
 {
     if (w->data_bits == 0 || !fits(w->data_bits, max_bits) || !fits(w->data_bits, field_max))
         return BISS_ERR_DATA_BITS;
-    if (!fits(w->crc, BISS_CRC16))
+    if (!fits(w->crc, BISS_CRC_CUSTOM))
+        return BISS_ERR_CRC;
+    if (w->crc == BISS_CRC_CUSTOM
+        && (w->crc_width == 0 || !fits(w->crc_width, MAX(CH(CFG_CRC0__W0_CRC_WIDTH)))
+            || !fits(w->crc_width, 16u)
+            || (uint32_t)w->crc_poly >> w->crc_width != 0
+            || (uint32_t)w->crc_start >> w->crc_width != 0))
         return BISS_ERR_CRC;
     return BISS_OK;
+}
+
+biss_err_t biss_crc_named(biss_word_format_t *w, unsigned width)
+{
+    /* iC-MB4's CRCs by length, with their top term (docs/protocol.md, section 6). */
+    static const uint32_t named[17] = { 0, 0, 0, 0xBu, 0x13u, 0x25u, 0x43u, 0x89u, 0x12Fu,
+                                        0, 0, 0, 0, 0, 0, 0, 0x190D9u };
+    if (w == NULL || width > 16 || named[width] == 0)
+        return BISS_ERR_CRC;
+    w->crc = BISS_CRC_CUSTOM;
+    w->crc_width = (uint8_t)width;
+    w->crc_poly = (uint16_t)(named[width] & ((1u << width) - 1u));
+    w->crc_start = 0;
+    w->crc_inverted = true;
+    return BISS_OK;
+}
+
+/* A word's custom CRC registers (cfg_crcN, cfg_crcN_start): 0 when the word has another. */
+static uint32_t crc_reg(const biss_word_format_t *w)
+{
+    if (w->crc != BISS_CRC_CUSTOM)
+        return 0;
+    return PUT(w->crc_poly, CH(CFG_CRC0__W0_CRC_POLY)) | PUT(w->crc_width, CH(CFG_CRC0__W0_CRC_WIDTH))
+         | PUT(w->crc_inverted, CH(CFG_CRC0__W0_CRC_INVERTED));
+}
+
+static uint32_t crc_start_reg(const biss_word_format_t *w)
+{
+    return w->crc == BISS_CRC_CUSTOM ? PUT(w->crc_start, CH(CFG_CRC0_START__W0_CRC_START)) : 0;
 }
 
 static bool time_fits(const biss_channel_t *ch, uint32_t value, uint32_t field_max)
@@ -321,12 +356,18 @@ biss_err_t biss_configure(biss_channel_t *ch, const biss_config_t *cfg)
     ch_wr(ch, CHANNEL_OFF(cfg_ack), PUT(cfg->ack_limit, CH(CFG_ACK__ACK_LIMIT)));
     ch_wr(ch, CHANNEL_OFF(cfg_timeout), PUT(cfg->timeout_limit, CH(CFG_TIMEOUT__TIMEOUT_LIMIT)));
     words = PUT(w0->data_bits, CH(CFG_WORDS__W0_DATA_BITS)) | PUT(w0->nenw, CH(CFG_WORDS__W0_NENW))
-          | PUT(w0->lc, CH(CFG_WORDS__W0_LC)) | PUT(w0->crc, CH(CFG_WORDS__W0_CRC));
+          | PUT(w0->lc, CH(CFG_WORDS__W0_LC)) | PUT(w0->crc, CH(CFG_WORDS__W0_CRC))
+          | PUT(w0->gray, CH(CFG_WORDS__W0_GRAY));
     if (cfg->word1_enable)
         words |= PUT(1, CH(CFG_WORDS__W1_ENABLE))
                | PUT(w1->data_bits, CH(CFG_WORDS__W1_DATA_BITS))
                | PUT(w1->nenw, CH(CFG_WORDS__W1_NENW)) | PUT(w1->lc, CH(CFG_WORDS__W1_LC))
-               | PUT(w1->crc, CH(CFG_WORDS__W1_CRC));
+               | PUT(w1->crc, CH(CFG_WORDS__W1_CRC)) | PUT(w1->gray, CH(CFG_WORDS__W1_GRAY));
+    /* The custom CRCs first: the core latches every setting when a cycle starts. */
+    ch_wr(ch, CHANNEL_OFF(cfg_crc0), crc_reg(w0));
+    ch_wr(ch, CHANNEL_OFF(cfg_crc0_start), crc_start_reg(w0));
+    ch_wr(ch, CHANNEL_OFF(cfg_crc1), cfg->word1_enable ? crc_reg(w1) : 0);
+    ch_wr(ch, CHANNEL_OFF(cfg_crc1_start), cfg->word1_enable ? crc_start_reg(w1) : 0);
     ch_wr(ch, CHANNEL_OFF(cfg_words), words);
     ch_wr(ch, CHANNEL_OFF(cfg_checks), PUT(cfg->end_check, CH(CFG_CHECKS__END_CHECK))
                                      | PUT(cfg->spw_check, CH(CFG_CHECKS__SPW_CHECK))
@@ -837,6 +878,7 @@ biss_err_t biss_bp3_config(const biss_bp3_eds_t *eds, biss_config_t *cfg)
     static const biss_word_format_t no_word;
     biss_bp3_id_t id;
     uint32_t poly;
+    unsigned width;
     uint8_t crc;
     biss_err_t err;
     if (eds == NULL || cfg == NULL)
@@ -845,15 +887,30 @@ biss_err_t biss_bp3_config(const biss_bp3_eds_t *eds, biss_config_t *cfg)
     if (err != BISS_OK)
         return err;
     if (id.crc_mode != 0 || eds->fb1 != BP3_FB_NE || eds->fb2 != BP3_FB_NW ||
-        id.position_bits == 0 || eds->cpoly == 0 || eds->cstart != 0)
+        id.position_bits == 0 || eds->cpoly == 0)
         return BISS_ERR_UNSUPPORTED;
-    poly = eds->cpoly > 0x7FFFFFFFu ? 0 : (eds->cpoly << 1 | 1u);
-    if (poly == POLY_CRC6)
+    /* CPOLY is the polynomial without x^0, shifted down one bit (docs/protocol.md, section 7):
+     * degree 1 .. 16 and a start value that fits are a custom CRC; CRC-6 0x43 and CRC-16
+     * 0x190D9 from 0 the named ones, as before custom CRCs. */
+    if (eds->cpoly >= 0x10000u)
+        return BISS_ERR_UNSUPPORTED;                    /* a CRC wider than 16 bits */
+    poly = eds->cpoly << 1 | 1u;
+    for (width = 16; (poly >> width) == 0; width--)
+        ;
+    if ((eds->cstart >> width) != 0)
+        return BISS_ERR_UNSUPPORTED;
+    cfg->word[0] = no_word;
+    if (poly == POLY_CRC6 && eds->cstart == 0)
         crc = BISS_CRC6;
-    else if (poly == POLY_CRC16)
+    else if (poly == POLY_CRC16 && eds->cstart == 0)
         crc = BISS_CRC16;
-    else
-        return BISS_ERR_UNSUPPORTED;
+    else {
+        crc = BISS_CRC_CUSTOM;
+        cfg->word[0].crc_width = (uint8_t)width;
+        cfg->word[0].crc_poly = (uint16_t)(poly & ((1u << width) - 1u));
+        cfg->word[0].crc_start = (uint16_t)eds->cstart;
+        cfg->word[0].crc_inverted = true;
+    }
     cfg->word[0].data_bits = id.position_bits;
     cfg->word[0].crc = crc;
     cfg->word[0].nenw = true;

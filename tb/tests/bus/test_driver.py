@@ -232,8 +232,14 @@ def test_profile_id_decode(lib, r42, r43, want):
     ({"dl": 57}, ("BISS_OK", 55, CRC_CODE["crc6"])),
     ({"cpoly": 0x190D9 >> 1}, ("BISS_OK", 26, CRC_CODE["crc16"])),
     ({"cpoly": 0}, ("BISS_ERR_UNSUPPORTED",)),                  # no CRC
-    ({"cpoly": 0x30}, ("BISS_ERR_UNSUPPORTED",)),               # another polynomial
-    ({"cstart": 1}, ("BISS_ERR_UNSUPPORTED",)),
+    # Other CRCs are custom ones: (width, register polynomial, start), worked out by hand from
+    # CPOLY = the polynomial without x^0 shifted down one bit (docs/protocol.md, section 7).
+    ({"cpoly": 0x30}, ("BISS_OK", 26, CRC_CODE["custom"], (6, 0x21, 0))),   # 0x61
+    ({"cstart": 1}, ("BISS_OK", 26, CRC_CODE["custom"], (6, 0x03, 1))),     # 0x43 from 1
+    ({"cpoly": 0x8810, "cstart": 0xFFFF},
+     ("BISS_OK", 26, CRC_CODE["custom"], (16, 0x1021, 0xFFFF))),          # 0x11021
+    ({"cpoly": 0x10000}, ("BISS_ERR_UNSUPPORTED",)),            # 17 bits
+    ({"cstart": 0x40}, ("BISS_ERR_UNSUPPORTED",)),              # start wider than 6 bits
     ({"fb1": 2, "fb2": 1}, ("BISS_ERR_UNSUPPORTED",)),          # nW before nE
     ({"bp_id": 0x63}, ("BISS_ERR_UNSUPPORTED",)),               # C = 1: BiSS Safety
     ({"dl": 2}, ("BISS_ERR_UNSUPPORTED",)),                     # DL_POS 0
@@ -253,10 +259,29 @@ def test_bp3_config_from_the_eds(lib, changes, want):
         assert (got,) == want
         return
     w0 = cfg.word[0]
-    assert (got, w0.data_bits, w0.crc) == want
+    assert (got, w0.data_bits, w0.crc) == want[:3]
+    if w0.crc == CRC_CODE["custom"]:
+        assert (w0.crc_width, w0.crc_poly, w0.crc_start, w0.crc_inverted) == (*want[3], True)
     assert (w0.nenw, w0.lc, cfg.word1_enable, cfg.spw_check, cfg.word[1].data_bits) == \
         (True, False, False, False, 0)
     assert (cfg.ma_half_period, cfg.break_time, cfg.ack_limit) == before
+
+
+#: iC-MB4's CRCs by length with their top term (issue 26 / docs/protocol.md section 6).
+ICMB4_CRCS = {3: 0xB, 4: 0x13, 5: 0x25, 6: 0x43, 7: 0x89, 8: 0x12F, 16: 0x190D9}
+
+
+@pytest.mark.parametrize("width", range(0, 18))
+def test_crc_named_gives_icmb4s_crcs(lib, width):
+    word = c_driver.WordFormat(data_bits=20)
+    err = lib.biss_error_name(lib.biss_crc_named(byref(word), width)).decode()
+    if width not in ICMB4_CRCS:
+        assert err == "BISS_ERR_CRC"
+        return
+    assert err == "BISS_OK"
+    top = ICMB4_CRCS[width]
+    assert (word.crc, word.crc_width, word.crc_poly | 1 << width, word.crc_start,
+            word.crc_inverted) == (CRC_CODE["custom"], width, top, 0, True)
 
 
 # -- Register access against a bus of this test's own (no simulator) --------------------------
