@@ -116,8 +116,7 @@ class RegisterModel:
         if ch is None:
             return {"id": ID, "version": (1 << 16) | 1, "channels": self.n}.get(path, 0)
         if path == "state":
-            return self.pack("state", busy=0,
-                             config_error=int(self.cfg(ch)["ma_half_period"] < 2))
+            return self.pack("state", busy=0, config_error=int(self.config_error(ch)))
         if path == "caps":
             return self.pack("caps", **self.caps)
         if path.startswith("result."):
@@ -244,6 +243,19 @@ class RegisterModel:
         self.words[a] = self.pack("ca.state", busy=0, status=CA_STATUS[status],
                                   bytes_done=done)
         self._irq(ch, access_done=1)
+
+    #: docs/ports.md: a custom CRC (code 3) runs 1..16 bits; code 3 with another width is
+    #: invalid (word 1: when enabled).
+    CUSTOM_CODE, CUSTOM_WIDTHS = 3, range(1, 17)
+
+    def config_error(self, ch):
+        """The rules of docs/ports.md this model keeps: an MA half period of 2 or more, and a
+        custom CRC (code 3) of 1..16 bits on word 0 and on word 1 when enabled."""
+        cfg = self.cfg(ch)
+        words = (0, 1) if cfg["w1_enable"] else (0,)
+        return cfg["ma_half_period"] < 2 or any(
+            cfg[f"w{w}_crc"] == self.CUSTOM_CODE and cfg[f"w{w}_crc_width"] not in
+            self.CUSTOM_WIDTHS for w in words)
 
     def configure(self, ch, **values):
         """Set configuration (and ctrl) fields directly: the test's own setup."""

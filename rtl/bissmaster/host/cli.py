@@ -127,6 +127,16 @@ def _setting(text):
     return name.strip(), _int(value.strip())
 
 
+def _crc_choice(word):
+    """The argparse type of ``--wN-crc``: word ``word``'s CRC fields (presets.crc_settings)."""
+    def parse(text):
+        try:
+            return presets.crc_settings(word, text)
+        except ValueError as e:
+            raise argparse.ArgumentTypeError(str(e)) from None
+    return parse
+
+
 def build_parser():
     common = argparse.ArgumentParser(add_help=False)
     g = common.add_argument_group("board")
@@ -225,6 +235,10 @@ def build_parser():
     p.add_argument("--set", type=_setting, action="append", default=[], metavar="NAME=VALUE",
                    help="a configuration field (cfg_* of docs/registers.md), or periodic / "
                         "trigger_enable of ctrl; repeatable")
+    for w in (0, 1):
+        p.add_argument(f"--w{w}-crc", type=_crc_choice(w), metavar="CRC",
+                       help=f"word {w}'s CRC: {presets.CRC_SYNTAX}; after --preset, before "
+                            f"--set")
     p.add_argument("--list-presets", action="store_true")
     p.set_defaults(func=cmd_config)
     return parser
@@ -695,6 +709,8 @@ def cmd_config(board, args, out, err):
                     raise CapabilityError(
                         f"preset {args.preset}: word {w} has {settings[f'w{w}_data_bits']} bits, "
                         f"channel {ch} reads up to {caps[f'data_bits_w{w}']}")
+    for crc in (args.w0_crc, args.w1_crc):
+        settings.update(crc or {})
     for name, value in args.set:
         if name in CTRL_SETTINGS:
             ctrl[name] = value

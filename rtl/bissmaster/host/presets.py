@@ -93,3 +93,72 @@ def describe(name):
             flags = " nE nW" * word["nenw"] + " LC" * word["lc"]
             parts.append(f"word {n} {word['data_bits']} bits{flags} {word['crc'].upper()}")
     return ", ".join(parts)
+
+
+# -- A word's CRC by name (config --w0-crc / --w1-crc) ----------------------------------------
+
+#: iC-MB4's named CRCs by width: the polynomial with its top term (docs/protocol.md, section
+#: 6). Each starts at 0 and is sent inverted; 6 and 16 are BiSS's CRC-6 and CRC-16.
+ICMB4_CRCS = {3: 0xB, 4: 0x13, 5: 0x25, 6: 0x43, 7: 0x89, 8: 0x12F, 16: 0x190D9}
+#: The widest custom CRC: the register polynomial's field (cfg_crc0.w0_crc_poly).
+CUSTOM_CRC_MAX_WIDTH = regmap.FIELDS["cfg_crc0"]["w0_crc_poly"][1]
+#: How a CRC is named on the command line (docs/bench.md, Host tool).
+CRC_SYNTAX = ("none | crc6 | crc16 | icmb4-N (N " + "/".join(map(str, ICMB4_CRCS)) + ") | "
+              "custom:WIDTH,POLY[,START[,inverted|plain]]")
+_CUSTOM_SENT = {"inverted": 1, "plain": 0}
+
+
+def _number(text, what):
+    try:
+        return int(text, 0)
+    except ValueError:
+        raise ValueError(f"{what} is not a number: {text!r}") from None
+
+
+def _custom_crc(args):
+    """(width, poly, start, inverted) of ``WIDTH,POLY[,START[,inverted|plain]]``; ValueError
+    for what the core cannot run: width 1..16, poly and start below 2**width."""
+    parts = [p.strip() for p in args.split(",")]
+    if not 2 <= len(parts) <= 4:
+        raise ValueError(f"custom:{args}: give WIDTH,POLY[,START[,inverted|plain]]")
+    width = _number(parts[0], "WIDTH")
+    poly = _number(parts[1], "POLY")
+    start = _number(parts[2], "START") if len(parts) > 2 else 0
+    sent = parts[3] if len(parts) > 3 else "inverted"
+    if not 1 <= width <= CUSTOM_CRC_MAX_WIDTH:
+        raise ValueError(f"custom CRC width {width}: the core runs 1..{CUSTOM_CRC_MAX_WIDTH} bits")
+    for name, value in (("POLY", poly), ("START", start)):
+        if not 0 <= value < 1 << width:
+            raise ValueError(f"custom CRC {name} {value:#x} does not fit {width} bits (POLY is "
+                             f"the polynomial without its top term: x^8+x^2+x+1 is 0x07)")
+    if sent not in _CUSTOM_SENT:
+        raise ValueError(f"custom CRC: {sent!r} is neither 'inverted' nor 'plain'")
+    return width, poly, start, _CUSTOM_SENT[sent]
+
+
+def crc_settings(word, spec):
+    """Word ``word``'s CRC fields (``{field: value}``: ``wN_crc`` and the four ``wN_crc_*``)
+    for a CRC named as :data:`CRC_SYNTAX` says: ``none``, ``crc6``, ``crc16`` (the custom
+    settings 0), ``icmb4-N`` (iC-MB4's CRC of N bits as a custom CRC) or ``custom:...``.
+    ValueError, with the syntax, for anything else."""
+    spec = spec.strip().lower()
+    kind, _, args = spec.partition(":")
+    custom = (0, 0, 0, 0)
+    if spec in ("none", "crc6", "crc16"):
+        code = regmap.CRC_CODES[spec]
+    elif spec.startswith("icmb4-"):
+        width = _number(spec[len("icmb4-"):], "icmb4-N")
+        if width not in ICMB4_CRCS:
+            raise ValueError(f"iC-MB4 names no CRC of {width} bits (widths: "
+                             f"{', '.join(map(str, ICMB4_CRCS))})")
+        code = regmap.CRC_CODES["custom"]
+        custom = (width, ICMB4_CRCS[width] & ((1 << width) - 1), 0, 1)
+    elif kind == "custom" and args:
+        code = regmap.CRC_CODES["custom"]
+        custom = _custom_crc(args)
+    else:
+        raise ValueError(f"not a CRC: {spec!r}; give {CRC_SYNTAX}")
+    settings = {f"w{word}_crc": code}
+    settings.update({f"w{word}_crc_{k}": v
+                     for k, v in zip(("width", "poly", "start", "inverted"), custom)})
+    return settings

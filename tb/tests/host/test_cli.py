@@ -470,6 +470,82 @@ def test_config_refusals():
     assert code == EXIT["bad argument"] and "reads up to 26" in err
 
 
+def _crc(model, w=0):
+    """Word w's CRC as the model's registers hold it: (code, width, poly, start, inverted)."""
+    cfg = model.cfg(0)
+    return tuple(cfg[f"w{w}_crc{k}"] for k in ("", "_width", "_poly", "_start", "_inverted"))
+
+
+def test_config_sets_a_words_crc():
+    """--wN-crc: a named CRC (custom settings 0), iC-MB4's CRC of a width, or custom:WIDTH,
+    POLY[,START[,inverted|plain]] (docs/bench.md); config then shows the custom CRC. The
+    expected register values are worked out here: iC-MB4's 8-bit 0x12F is 0x2F without its
+    top term; x^16 + x^12 + x^5 + 1 is 0x1021."""
+    bridge = biss_c_board(bits=26, ma_half_period=50)
+    model = bridge.model
+    code, out, err = run(["config", "--w0-crc", "custom:16,0x1021,0xFFFF,plain"], bridge)
+    assert code == EXIT["ok"], err
+    assert _crc(model) == (3, 16, 0x1021, 0xFFFF, 0)
+    assert "custom: 16 bits, polynomial 0x1021, start 0xFFFF, sent plain" in out
+    code, out, err = run(["config", "--w0-crc", "icmb4-8"], bridge)
+    assert code == EXIT["ok"], err
+    assert _crc(model) == (3, 8, 0x2F, 0, 1)
+    assert "custom: 8 bits, polynomial 0x2F, start 0x0, sent inverted" in out
+    code, out, err = run(["config", "--w0-crc", "custom:5,0x15"], bridge)   # start 0, inverted
+    assert (code, _crc(model)) == (EXIT["ok"], (3, 5, 0x15, 0, 1)), err
+    code, out, err = run(["config", "--w0-crc", "CRC6"], bridge)
+    assert code == EXIT["ok"], err
+    assert _crc(model) == (1, 0, 0, 0, 0)
+    assert "w0_crc                 1  crc6" in out
+    # After --preset, before --set; word 1 too.
+    code, out, err = run(["config", "--preset", "resolute_fs_rsh", "--w1-crc", "icmb4-16",
+                          "--w0-crc", "icmb4-3", "--set", "w0_crc_start=5"], bridge)
+    assert code == EXIT["ok"], err
+    assert _crc(model, 0) == (3, 3, 0x3, 5, 1)
+    assert _crc(model, 1) == (3, 16, 0x90D9, 0, 1)
+    assert model.cfg(0)["w1_data_bits"] == 28
+
+
+@pytest.mark.parametrize("spec, text", [
+    ("custom:17,0x1", "1..16"),
+    ("custom:0,0x0", "1..16"),
+    ("custom:8,0x107", "does not fit 8 bits"),
+    ("custom:8,0x07,0x100", "START 0x100 does not fit"),
+    ("custom:8,0x07,0,maybe", "'inverted' nor 'plain'"),
+    ("custom:8", "WIDTH,POLY"),
+    ("custom:x,1", "not a number"),
+    ("icmb4-9", "iC-MB4 names no CRC of 9 bits"),
+    ("crc7", "not a CRC"),
+])
+def test_config_refuses_a_bad_crc(spec, text):
+    bridge = biss_c_board()
+    before = bridge.model.cfg(0)
+    code, _, err = run(["config", "--w0-crc", spec], bridge)
+    assert code == EXIT["bad argument"], err
+    assert text in err and "usage:" in err, err
+    assert bridge.model.cfg(0) == before
+
+
+def test_config_with_a_custom_crc_the_core_refuses():
+    """A custom CRC made invalid by --set (width 0 with code 3: BAD_CONFIG, docs/ports.md)."""
+    bridge = biss_c_board()
+    code, _, err = run(["config", "--w0-crc", "icmb4-8", "--set", "w0_crc_width=0"], bridge)
+    assert code == EXIT["bad argument"] and "refuses" in err
+
+
+def test_identify_apply_writes_a_custom_crc():
+    """An EDS naming x^16 + x^12 + x^5 + 1 (CPOLY 0x8810: the polynomial 0x11021 without x^0,
+    shifted down) from 0xFFFF: identify shows it, --apply writes code 3 and the CRC."""
+    bridge, _ = bp3_board(Bp3Eds(DL_POS, cpoly=0x8810, cstart=0xFFFF))
+    code, out, err = run(["identify", "--apply", "--eds-offset", "0"], bridge)
+    assert code == EXIT["ok"], err
+    assert "CRC polynomial 0x11021" in out
+    assert _crc(bridge.model) == (3, 16, 0x1021, 0xFFFF, 1)
+    assert bridge.model.cfg(0)["w0_data_bits"] == DL_POS
+    code, out, err = run(["config"], bridge)
+    assert "custom: 16 bits, polynomial 0x1021, start 0xFFFF, sent inverted" in out
+
+
 def test_list_presets_needs_no_board():
     code, out, _ = run(["config", "--list-presets"])
     assert code == EXIT["ok"]
