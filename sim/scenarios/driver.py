@@ -120,6 +120,7 @@ CUSTOM_FORMATS = (
 
 
 @cocotb.test()
+@long_on_icarus
 async def driver_custom_crcs_and_gray(dut):
     """The C driver sets each channel's word to its encoder's CRC (a custom one written field
     by field; iC-MB4's 8-bit one by biss_crc_named) and Gray decoding: the registers hold

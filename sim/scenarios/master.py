@@ -147,6 +147,7 @@ CUSTOM_CRC_FORMATS = [
 
 
 @cocotb.test()
+@long_on_icarus
 async def custom_crcs(dut):
     """Custom CRCs per word (cfg_wN_crc = 3 and the cfg_wN_crc_* ports): frames of each format
     at three MA rates over 50 m are OK with every field right; a flipped bit in each word is
@@ -206,6 +207,7 @@ GRAY_FORMATS = [
 
 
 @cocotb.test()
+@long_on_icarus
 async def gray_positions(dut):
     """Gray-coded words are reported in binary, every field right, at three MA rates, with
     the positions moving through many values (the SPW check compares the decoded words); a
