@@ -1153,7 +1153,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$201 ),
     .load(load),
-    .\port$1515$0 (\bit ),
+    .\port$1561$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1217,7 +1217,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero(\lc_zero$279 ),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$983$0 (\$24 ),
+    .\port$1029$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -9686,30 +9686,76 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   wire \$101 ;
   wire \$102 ;
   wire \$103 ;
-  reg \$104 ;
-  reg [12:0] \$105 ;
-  reg [16:0] \$106 ;
-  reg \$107 ;
-  reg \$108 ;
-  reg \$109 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
   wire \$11 ;
-  reg [12:0] \$110 ;
-  reg \$111 ;
-  reg \$112 ;
-  reg \$113 ;
-  reg [1:0] \$114 ;
-  reg [16:0] \$115 ;
-  reg \$116 ;
-  reg \$117 ;
-  reg \$118 ;
-  reg \$119 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
-  reg [12:0] \$120 ;
-  reg [1:0] \$121 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   wire \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  reg \$146 ;
+  reg [12:0] \$147 ;
+  reg [16:0] \$148 ;
+  reg \$149 ;
   wire \$15 ;
+  reg \$150 ;
+  reg \$151 ;
+  reg \$152 ;
+  reg \$153 ;
+  reg \$154 ;
+  reg \$155 ;
+  reg [12:0] \$156 ;
+  reg \$157 ;
+  reg \$158 ;
+  reg \$159 ;
   wire \$16 ;
+  reg [1:0] \$160 ;
+  reg [16:0] \$161 ;
+  reg \$162 ;
+  reg \$163 ;
+  reg \$164 ;
+  reg \$165 ;
+  reg [12:0] \$166 ;
+  reg [1:0] \$167 ;
   wire \$17 ;
   wire \$18 ;
   wire \$19 ;
@@ -9720,26 +9766,26 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   wire \$23 ;
   wire \$24 ;
   wire \$25 ;
-  wire [13:0] \$26 ;
-  wire [17:0] \$27 ;
+  wire \$26 ;
+  wire \$27 ;
   wire \$28 ;
   wire \$29 ;
   wire \$3 ;
   wire \$30 ;
   wire \$31 ;
-  wire [12:0] \$32 ;
+  wire \$32 ;
   wire \$33 ;
   wire \$34 ;
-  wire [13:0] \$35 ;
-  wire [13:0] \$36 ;
-  wire [16:0] \$37 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
   wire \$38 ;
-  wire [13:0] \$39 ;
+  wire \$39 ;
   wire [16:0] \$4 ;
-  wire [13:0] \$40 ;
+  wire \$40 ;
   wire \$41 ;
-  wire [13:0] \$42 ;
-  wire [17:0] \$43 ;
+  wire \$42 ;
+  wire \$43 ;
   wire \$44 ;
   wire \$45 ;
   wire \$46 ;
@@ -9762,26 +9808,26 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   wire \$61 ;
   wire \$62 ;
   wire \$63 ;
-  wire \$64 ;
-  wire \$65 ;
+  wire [13:0] \$64 ;
+  wire [17:0] \$65 ;
   wire \$66 ;
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
   wire \$7 ;
-  wire \$70 ;
+  wire [12:0] \$70 ;
   wire \$71 ;
   wire \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  wire \$75 ;
+  wire [13:0] \$73 ;
+  wire [13:0] \$74 ;
+  wire [16:0] \$75 ;
   wire \$76 ;
-  wire \$77 ;
-  wire \$78 ;
+  wire [13:0] \$77 ;
+  wire [13:0] \$78 ;
   wire \$79 ;
   wire [13:0] \$8 ;
-  wire \$80 ;
-  wire \$81 ;
+  wire [13:0] \$80 ;
+  wire [17:0] \$81 ;
   wire \$82 ;
   wire \$83 ;
   wire \$84 ;
@@ -9805,8 +9851,10 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   wire arm;
   output \bit ;
   wire \bit ;
+  reg centre;
   input clk;
   wire clk;
+  reg crowded = 1'h0;
   reg decided;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
@@ -9829,6 +9877,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   output noise;
   wire noise;
   reg odd = 1'h0;
+  reg one_edge = 1'h0;
   reg [16:0] period_load = 17'h00000;
   reg [1:0] phase = 2'h0;
   input receiver_clear;
@@ -9844,7 +9893,9 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
+  reg strobed = 1'h0;
   reg tail_odd = 1'h0;
+  reg two_edges = 1'h0;
   reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
   reg vote2 = 1'h0;
@@ -9860,103 +9911,145 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   assign \$8  = mid_delay + 1'h1;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = ~ single;
-  assign \$12  = decided & \$11 ;
-  assign \$13  = vote1 & vote2;
-  assign \$14  = vote1 & level;
-  assign \$15  = \$13  | \$14 ;
-  assign \$16  = vote2 & level;
-  assign \$17  = \$15  | \$16 ;
-  assign \$18  = vote1 & vote2;
-  assign \$19  = vote1 & level;
-  assign \$20  = \$18  | \$19 ;
-  assign \$21  = vote2 & level;
-  assign \$22  = \$20  | \$21 ;
-  assign \$23  = level != \$22 ;
-  assign \$24  = ~ level;
-  assign \$25  = elapsed != 13'h1fff;
-  assign \$26  = elapsed + 1'h1;
-  assign \$27  = slot_left - 1'h1;
-  assign \$28  = slot_left == 1'h1;
-  assign \$29  = ~ level;
-  assign \$30  = slo_prev & \$29 ;
-  assign \$31  = elapsed == 13'h1fff;
-  assign \$32  = \$31  ? 13'h1fff : mid_delay;
-  assign \$33  = ! mid_slot;
-  assign \$34  = elapsed == 13'h1fff;
-  assign \$35  = elapsed - 1'h1;
-  assign \$36  = \$34  ? 14'h1fff : \$35 ;
-  assign \$37  = half_period - 2'h2;
-  assign \$38  = elapsed == 13'h1fff;
-  assign \$39  = elapsed - 1'h1;
-  assign \$40  = \$38  ? 14'h1fff : \$39 ;
-  assign \$41  = elapsed != 13'h1fff;
-  assign \$42  = elapsed + 1'h1;
-  assign \$43  = slot_left - 1'h1;
-  assign \$44  = slot_left == 1'h1;
-  assign \$45  = ! phase;
-  assign \$46  = first_slot & \$45 ;
-  assign \$47  = \$46  & level;
-  assign \$48  = ~ single;
-  assign \$49  = decided & first_slot;
-  assign \$50  = vote1 & vote2;
-  assign \$51  = vote1 & level;
-  assign \$52  = \$50  | \$51 ;
-  assign \$53  = vote2 & level;
-  assign \$54  = \$52  | \$53 ;
-  assign \$55  = single ? level : \$54 ;
-  assign \$56  = ~ first_slot;
-  assign \$57  = decided & \$56 ;
-  assign \$58  = vote1 & vote2;
-  assign \$59  = vote1 & level;
-  assign \$60  = \$58  | \$59 ;
-  assign \$61  = vote2 & level;
-  assign \$62  = \$60  | \$61 ;
-  assign \bit  = single ? level : \$62 ;
-  assign \$63  = ~ single;
-  assign \$64  = decided & \$63 ;
-  assign \$65  = vote1 == level;
-  assign \$66  = vote2 != level;
-  assign \$67  = \$65  & \$66 ;
-  assign \$68  = vote1 & vote2;
-  assign \$69  = vote1 & level;
-  assign \$70  = \$68  | \$69 ;
-  assign \$71  = vote2 & level;
-  assign \$72  = \$70  | \$71 ;
-  assign \$73  = vote1 != \$72 ;
-  assign \$74  = vote1 & vote2;
-  assign \$75  = vote1 & level;
-  assign \$76  = \$74  | \$75 ;
-  assign \$77  = vote2 & level;
-  assign \$78  = \$76  | \$77 ;
-  assign \$79  = last == \$78 ;
-  assign \$80  = \$73  & \$79 ;
-  assign \$81  = \$67  | \$80 ;
-  assign \$82  = vote1 & vote2;
-  assign \$83  = vote1 & level;
-  assign \$84  = \$82  | \$83 ;
-  assign \$85  = vote2 & level;
-  assign \$86  = \$84  | \$85 ;
-  assign \$87  = last == \$86 ;
-  assign \$88  = tail_odd & \$87 ;
-  assign \$89  = \$81  | \$88 ;
-  assign \$90  = \$64  & \$89 ;
-  assign noise = dropped | \$90 ;
-  assign \$91  = ! phase;
-  assign \$92  = first_slot & \$91 ;
-  assign \$93  = \$92  & level;
-  assign \$94  = decided & first_slot;
-  assign \$95  = vote1 & vote2;
-  assign \$96  = vote1 & level;
-  assign \$97  = \$95  | \$96 ;
-  assign \$98  = vote2 & level;
-  assign \$99  = \$97  | \$98 ;
-  assign \$100  = single ? level : \$99 ;
-  assign \$101  = ! sampler_fsm_state;
-  assign \$102  = sampler_fsm_state == 1'h1;
-  assign \$103  = sampler_fsm_state == 2'h2;
+  assign \$11  = level != slo_prev;
+  assign \$12  = one_edge & \$11 ;
+  assign \$13  = two_edges | \$12 ;
+  assign \$14  = level != slo_prev;
+  assign \$15  = one_edge | \$14 ;
+  assign \$16  = level != slo_prev;
+  assign \$17  = one_edge & \$16 ;
+  assign \$18  = two_edges | \$17 ;
+  assign \$19  = ~ single;
+  assign \$20  = decided & \$19 ;
+  assign \$21  = vote1 & vote2;
+  assign \$22  = vote1 & level;
+  assign \$23  = \$21  | \$22 ;
+  assign \$24  = vote2 & level;
+  assign \$25  = \$23  | \$24 ;
+  assign \$26  = vote1 & vote2;
+  assign \$27  = vote1 & level;
+  assign \$28  = \$26  | \$27 ;
+  assign \$29  = vote2 & level;
+  assign \$30  = \$28  | \$29 ;
+  assign \$31  = level != \$30 ;
+  assign \$32  = ~ single;
+  assign \$33  = decided & \$32 ;
+  assign \$34  = vote1 == level;
+  assign \$35  = vote2 != level;
+  assign \$36  = \$34  & \$35 ;
+  assign \$37  = vote1 & vote2;
+  assign \$38  = vote1 & level;
+  assign \$39  = \$37  | \$38 ;
+  assign \$40  = vote2 & level;
+  assign \$41  = \$39  | \$40 ;
+  assign \$42  = vote1 != \$41 ;
+  assign \$43  = vote1 & vote2;
+  assign \$44  = vote1 & level;
+  assign \$45  = \$43  | \$44 ;
+  assign \$46  = vote2 & level;
+  assign \$47  = \$45  | \$46 ;
+  assign \$48  = last == \$47 ;
+  assign \$49  = \$42  & \$48 ;
+  assign \$50  = \$36  | \$49 ;
+  assign \$51  = vote1 & vote2;
+  assign \$52  = vote1 & level;
+  assign \$53  = \$51  | \$52 ;
+  assign \$54  = vote2 & level;
+  assign \$55  = \$53  | \$54 ;
+  assign \$56  = last == \$55 ;
+  assign \$57  = tail_odd & \$56 ;
+  assign \$58  = \$50  | \$57 ;
+  assign \$59  = \$58  | crowded;
+  assign \$60  = ~ strobed;
+  assign \$61  = \$59  & \$60 ;
+  assign \$62  = ~ level;
+  assign \$63  = elapsed != 13'h1fff;
+  assign \$64  = elapsed + 1'h1;
+  assign \$65  = slot_left - 1'h1;
+  assign \$66  = slot_left == 1'h1;
+  assign \$67  = ~ level;
+  assign \$68  = slo_prev & \$67 ;
+  assign \$69  = elapsed == 13'h1fff;
+  assign \$70  = \$69  ? 13'h1fff : mid_delay;
+  assign \$71  = ! mid_slot;
+  assign \$72  = elapsed == 13'h1fff;
+  assign \$73  = elapsed - 1'h1;
+  assign \$74  = \$72  ? 14'h1fff : \$73 ;
+  assign \$75  = half_period - 2'h2;
+  assign \$76  = elapsed == 13'h1fff;
+  assign \$77  = elapsed - 1'h1;
+  assign \$78  = \$76  ? 14'h1fff : \$77 ;
+  assign \$79  = elapsed != 13'h1fff;
+  assign \$80  = elapsed + 1'h1;
+  assign \$81  = slot_left - 1'h1;
+  assign \$82  = slot_left == 1'h1;
+  assign \$83  = ! phase;
+  assign \$84  = first_slot & \$83 ;
+  assign \$85  = \$84  & level;
+  assign \$86  = ~ single;
+  assign \$87  = decided & first_slot;
+  assign \$88  = vote1 & vote2;
+  assign \$89  = vote1 & level;
+  assign \$90  = \$88  | \$89 ;
+  assign \$91  = vote2 & level;
+  assign \$92  = \$90  | \$91 ;
+  assign \$93  = single ? level : \$92 ;
+  assign \$94  = ~ first_slot;
+  assign \$95  = decided & \$94 ;
+  assign \$96  = vote1 & vote2;
+  assign \$97  = vote1 & level;
+  assign \$98  = \$96  | \$97 ;
+  assign \$99  = vote2 & level;
+  assign \$100  = \$98  | \$99 ;
+  assign \bit  = single ? level : \$100 ;
+  assign \$101  = ~ single;
+  assign \$102  = decided & \$101 ;
+  assign \$103  = vote1 == level;
+  assign \$104  = vote2 != level;
+  assign \$105  = \$103  & \$104 ;
+  assign \$106  = vote1 & vote2;
+  assign \$107  = vote1 & level;
+  assign \$108  = \$106  | \$107 ;
+  assign \$109  = vote2 & level;
+  assign \$110  = \$108  | \$109 ;
+  assign \$111  = vote1 != \$110 ;
+  assign \$112  = vote1 & vote2;
+  assign \$113  = vote1 & level;
+  assign \$114  = \$112  | \$113 ;
+  assign \$115  = vote2 & level;
+  assign \$116  = \$114  | \$115 ;
+  assign \$117  = last == \$116 ;
+  assign \$118  = \$111  & \$117 ;
+  assign \$119  = \$105  | \$118 ;
+  assign \$120  = vote1 & vote2;
+  assign \$121  = vote1 & level;
+  assign \$122  = \$120  | \$121 ;
+  assign \$123  = vote2 & level;
+  assign \$124  = \$122  | \$123 ;
+  assign \$125  = last == \$124 ;
+  assign \$126  = tail_odd & \$125 ;
+  assign \$127  = \$119  | \$126 ;
+  assign \$128  = \$127  | crowded;
+  assign \$129  = \$102  & \$128 ;
+  assign \$130  = ~ strobed;
+  assign \$131  = \$129  & \$130 ;
+  assign noise = dropped | \$131 ;
+  assign \$132  = ! phase;
+  assign \$133  = first_slot & \$132 ;
+  assign \$134  = \$133  & level;
+  assign \$135  = ~ single;
+  assign \$136  = decided & first_slot;
+  assign \$137  = vote1 & vote2;
+  assign \$138  = vote1 & level;
+  assign \$139  = \$137  | \$138 ;
+  assign \$140  = vote2 & level;
+  assign \$141  = \$139  | \$140 ;
+  assign \$142  = single ? level : \$141 ;
+  assign \$143  = ! sampler_fsm_state;
+  assign \$144  = sampler_fsm_state == 1'h1;
+  assign \$145  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$104 ;
+    slo_prev <= \$146 ;
   always @(posedge clk)
     vote <= \$2 ;
   always @(posedge clk)
@@ -9970,39 +10063,47 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   always @(posedge clk)
     period_load <= { first_load, 1'h1 };
   always @(posedge clk)
-    mid_delay <= \$105 ;
+    mid_delay <= \$147 ;
   always @(posedge clk)
-    mid_slot <= \$106 ;
+    mid_slot <= \$148 ;
   always @(posedge clk)
-    odd <= \$107 ;
+    odd <= \$149 ;
   always @(posedge clk)
-    last <= \$108 ;
+    one_edge <= \$150 ;
   always @(posedge clk)
-    tail_odd <= \$109 ;
+    two_edges <= \$151 ;
   always @(posedge clk)
-    elapsed <= \$110 ;
+    crowded <= \$152 ;
   always @(posedge clk)
-    early <= \$111 ;
+    last <= \$153 ;
   always @(posedge clk)
-    locked <= \$112 ;
+    tail_odd <= \$154 ;
   always @(posedge clk)
-    gap <= \$113 ;
+    strobed <= \$155 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$114 ;
+    elapsed <= \$156 ;
   always @(posedge clk)
-    slot_left <= \$115 ;
+    early <= \$157 ;
   always @(posedge clk)
-    slot_zero <= \$116 ;
+    locked <= \$158 ;
   always @(posedge clk)
-    vote1 <= \$117 ;
+    gap <= \$159 ;
   always @(posedge clk)
-    vote2 <= \$118 ;
+    sampler_fsm_state <= \$160 ;
   always @(posedge clk)
-    first_slot <= \$119 ;
+    slot_left <= \$161 ;
   always @(posedge clk)
-    delay <= \$120 ;
+    slot_zero <= \$162 ;
   always @(posedge clk)
-    phase <= \$121 ;
+    vote1 <= \$163 ;
+  always @(posedge clk)
+    vote2 <= \$164 ;
+  always @(posedge clk)
+    first_slot <= \$165 ;
+  always @(posedge clk)
+    delay <= \$166 ;
+  always @(posedge clk)
+    phase <= \$167 ;
   \biss_master.sampler.sync  sync (
     .clk(clk),
     .receiver_clear(receiver_clear),
@@ -10012,482 +10113,570 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$104  = level;
+    \$146  = level;
     if (receiver_clear) begin
-      \$104  = 1'h1;
+      \$146  = 1'h1;
     end
     if (rst) begin
-      \$104  = 1'h1;
+      \$146  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$105  = mid_delay;
+    \$147  = mid_delay;
     if (odd) begin
-      \$105  = \$8 [12:0];
+      \$147  = \$8 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$105  = \$40 [12:0];
+              \$147  = \$78 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$105  = 13'h0000;
+      \$147  = 13'h0000;
     end
     if (rst) begin
-      \$105  = 13'h0000;
+      \$147  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$106  = mid_slot;
+    \$148  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$106  = \$9 [16:0];
+      \$148  = \$9 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$106  = \$37 ;
+              \$148  = \$75 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$106  = 17'h00000;
+      \$148  = 17'h00000;
     end
     if (rst) begin
-      \$106  = 17'h00000;
+      \$148  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$107  = \$10 ;
+    \$149  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$107  = 1'h1;
+              \$149  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$107  = 1'h0;
+      \$149  = 1'h0;
     end
     if (rst) begin
-      \$107  = 1'h0;
+      \$149  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$108  = last;
-    if (\$12 ) begin
-      \$108  = \$17 ;
+    (* full_case = 32'd1 *)
+    if (centre) begin
+      \$150  = 1'h0;
+    end else begin
+      \$150  = \$15 ;
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$108  = 1'h0;
+          if (\$68 ) begin
+            \$150  = 1'h0;
           end
     endcase
     if (receiver_clear) begin
-      \$108  = 1'h0;
+      \$150  = 1'h0;
     end
     if (rst) begin
-      \$108  = 1'h0;
+      \$150  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$109  = tail_odd;
-    if (\$12 ) begin
-      \$109  = \$23 ;
+    (* full_case = 32'd1 *)
+    if (centre) begin
+      \$151  = 1'h0;
+    end else begin
+      \$151  = \$18 ;
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$109  = 1'h0;
+          if (\$68 ) begin
+            \$151  = 1'h0;
           end
     endcase
     if (receiver_clear) begin
-      \$109  = 1'h0;
+      \$151  = 1'h0;
     end
     if (rst) begin
-      \$109  = 1'h0;
+      \$151  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$110  = elapsed;
+    \$152  = crowded;
+    if (centre) begin
+      \$152  = \$13 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$68 ) begin
+            \$152  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$152  = 1'h0;
+    end
+    if (rst) begin
+      \$152  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    \$153  = last;
+    if (\$20 ) begin
+      \$153  = \$25 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$68 ) begin
+            \$153  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$153  = 1'h0;
+    end
+    if (rst) begin
+      \$153  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    \$154  = tail_odd;
+    if (\$20 ) begin
+      \$154  = \$31 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$68 ) begin
+            \$154  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$154  = 1'h0;
+    end
+    if (rst) begin
+      \$154  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    \$155  = strobed;
+    if (\$33 ) begin
+      \$155  = \$61 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$68 ) begin
+            \$155  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$155  = 1'h0;
+    end
+    if (rst) begin
+      \$155  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    \$156  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$110  = 13'h0001;
+            \$156  = 13'h0001;
           end
       2'h1:
-          if (\$25 ) begin
-            \$110  = \$26 [12:0];
+          if (\$63 ) begin
+            \$156  = \$64 [12:0];
           end
       2'h2:
-          if (\$41 ) begin
-            \$110  = \$42 [12:0];
+          if (\$79 ) begin
+            \$156  = \$80 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$110  = 13'h0000;
+      \$156  = 13'h0000;
     end
     if (rst) begin
-      \$110  = 13'h0000;
+      \$156  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$111  = early;
+    \$157  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$111  = \$24 ;
+            \$157  = \$62 ;
           end
     endcase
     if (receiver_clear) begin
-      \$111  = 1'h0;
+      \$157  = 1'h0;
     end
     if (rst) begin
-      \$111  = 1'h0;
+      \$157  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$112  = locked;
+    \$158  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$112  = 1'h0;
+            \$158  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$49 ) begin
+          if (\$87 ) begin
             (* full_case = 32'd1 *)
-            if (\$55 ) begin
+            if (\$93 ) begin
             end else begin
-              \$112  = 1'h1;
+              \$158  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$112  = 1'h0;
+      \$158  = 1'h0;
     end
     if (rst) begin
-      \$112  = 1'h0;
+      \$158  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$113  = gap;
+    \$159  = gap;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$113  = 1'h0;
+            \$159  = 1'h0;
           end
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$113  = 1'h0;
+              \$159  = 1'h0;
             end
           end
-          if (\$30 ) begin
-            \$113  = 1'h0;
+          if (\$68 ) begin
+            \$159  = 1'h0;
           end
         end
       2'h2:
-          if (\$47 ) begin
-            \$113  = \$48 ;
+          if (\$85 ) begin
+            \$159  = \$86 ;
           end
     endcase
     if (receiver_clear) begin
-      \$113  = 1'h0;
+      \$159  = 1'h0;
     end
     if (rst) begin
-      \$113  = 1'h0;
+      \$159  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$114  = sampler_fsm_state;
+    \$160  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$114  = 2'h1;
+            \$160  = 2'h1;
           end
       2'h1:
-          if (\$30 ) begin
-            \$114  = 2'h2;
+          if (\$68 ) begin
+            \$160  = 2'h2;
           end
       2'h2:
         begin
-          if (\$47 ) begin
-            \$114  = 2'h1;
+          if (\$85 ) begin
+            \$160  = 2'h1;
           end
-          if (\$49 ) begin
-            if (\$55 ) begin
-              \$114  = 2'h1;
+          if (\$87 ) begin
+            if (\$93 ) begin
+              \$160  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$114  = 2'h0;
+      \$160  = 2'h0;
     end
     if (rst) begin
-      \$114  = 2'h0;
+      \$160  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$115  = slot_left;
+    \$161  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$115  = \$27 [16:0];
+            \$161  = \$65 [16:0];
           end
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$115  = mid_slot;
+              \$161  = mid_slot;
             end else begin
-              \$115  = { 1'h0, first_load };
+              \$161  = { 1'h0, first_load };
             end
           end
         end
       2'h2:
         begin
-          \$115  = \$43 [16:0];
-          if (\$47 ) begin
-            \$115  = { 2'h0, vote_load };
+          \$161  = \$81 [16:0];
+          if (\$85 ) begin
+            \$161  = { 2'h0, vote_load };
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$115  = period_load;
+                    \$161  = period_load;
                   end else begin
-                    \$115  = { 2'h0, vote_load };
+                    \$161  = { 2'h0, vote_load };
                   end
               2'h1:
-                  \$115  = { 2'h0, vote_load };
+                  \$161  = { 2'h0, vote_load };
               default:
-                  \$115  = period_load;
+                  \$161  = period_load;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$115  = 17'h00000;
+      \$161  = 17'h00000;
     end
     if (rst) begin
-      \$115  = 17'h00000;
+      \$161  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$116  = slot_zero;
+    \$162  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$116  = \$28 ;
+            \$162  = \$66 ;
           end
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$116  = \$33 ;
+              \$162  = \$71 ;
             end else begin
-              \$116  = 1'h0;
+              \$162  = 1'h0;
             end
           end
         end
       2'h2:
         begin
-          \$116  = \$44 ;
-          if (\$47 ) begin
-            \$116  = vote_one;
+          \$162  = \$82 ;
+          if (\$85 ) begin
+            \$162  = vote_one;
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$116  = 1'h0;
+                    \$162  = 1'h0;
                   end else begin
-                    \$116  = vote_one;
+                    \$162  = vote_one;
                   end
               2'h1:
-                  \$116  = vote_one;
+                  \$162  = vote_one;
               default:
-                  \$116  = 1'h0;
+                  \$162  = 1'h0;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$116  = 1'h1;
+      \$162  = 1'h1;
     end
     if (rst) begin
-      \$116  = 1'h1;
+      \$162  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$117  = vote1;
+    \$163  = vote1;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$117  = 1'h0;
+          if (\$68 ) begin
+            \$163  = 1'h0;
           end
       2'h2:
-          if (\$47 ) begin
+          if (\$85 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$117  = level;
+                    \$163  = level;
                   end
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$117  = 1'h0;
+      \$163  = 1'h0;
     end
     if (rst) begin
-      \$117  = 1'h0;
+      \$163  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$118  = vote2;
+    \$164  = vote2;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$118  = 1'h0;
+          if (\$68 ) begin
+            \$164  = 1'h0;
           end
       2'h2:
-          if (\$47 ) begin
+          if (\$85 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  \$118  = level;
+                  \$164  = level;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$118  = 1'h0;
+      \$164  = 1'h0;
     end
     if (rst) begin
-      \$118  = 1'h0;
+      \$164  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$119  = first_slot;
+    \$165  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$119  = 1'h1;
+          if (\$68 ) begin
+            \$165  = 1'h1;
           end
       2'h2:
-          if (\$49 ) begin
+          if (\$87 ) begin
             (* full_case = 32'd1 *)
-            if (\$55 ) begin
+            if (\$93 ) begin
             end else begin
-              \$119  = 1'h0;
+              \$165  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$119  = 1'h0;
+      \$165  = 1'h0;
     end
     if (rst) begin
-      \$119  = 1'h0;
+      \$165  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$120  = delay;
+    \$166  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$120  = \$32 ;
+              \$166  = \$70 ;
             end else begin
-              \$120  = \$36 [12:0];
+              \$166  = \$74 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$120  = 13'h0000;
+      \$166  = 13'h0000;
     end
     if (rst) begin
-      \$120  = 13'h0000;
+      \$166  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$121  = phase;
+    \$167  = phase;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$121  = 2'h1;
+              \$167  = 2'h1;
             end else begin
-              \$121  = 2'h0;
+              \$167  = 2'h0;
             end
           end
       2'h2:
-          if (\$47 ) begin
+          if (\$85 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -10495,34 +10684,34 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$121  = 2'h1;
+                    \$167  = 2'h1;
                   end
               2'h1:
-                  \$121  = 2'h2;
+                  \$167  = 2'h2;
               default:
-                  \$121  = 2'h0;
+                  \$167  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$121  = 2'h0;
+      \$167  = 2'h0;
     end
     if (rst) begin
-      \$121  = 2'h0;
+      \$167  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    sample = \$57 ;
+    sample = \$95 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           /* empty */;
       2'h2:
-          if (\$94 ) begin
+          if (\$136 ) begin
             (* full_case = 32'd1 *)
-            if (\$100 ) begin
+            if (\$142 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -10539,11 +10728,11 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
           /* empty */;
       2'h2:
         begin
-          if (\$93 ) begin
+          if (\$134 ) begin
             dropped = 1'h1;
           end
-          if (\$94 ) begin
-            if (\$100 ) begin
+          if (\$136 ) begin
+            if (\$142 ) begin
               dropped = 1'h1;
             end
           end
@@ -10559,7 +10748,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
       2'h1:
           /* empty */;
       2'h2:
-          if (\$93 ) begin
+          if (\$134 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -10571,6 +10760,26 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
                   /* empty */;
               default:
                   decided = 1'h1;
+            endcase
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    centre = 1'h0;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          /* empty */;
+      2'h2:
+          if (\$134 ) begin
+          end else if (slot_zero) begin
+            casez (phase)
+              2'h0:
+                  /* empty */;
+              2'h1:
+                  centre = \$135 ;
             endcase
           end
     endcase
@@ -10746,7 +10955,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1515$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1561$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -10788,8 +10997,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1515$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1515$0 ;
-  wire \port$1515$0 ;
+  input \port$1561$0 ;
+  wire \port$1561$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -10803,9 +11012,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1515$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1515$0  };
-  assign \$2  = { lc[4:0], \port$1515$0  } == last;
-  assign \$3  = { lc[4:0], \port$1515$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$1561$0  };
+  assign \$2  = { lc[4:0], \port$1561$0  } == last;
+  assign \$3  = { lc[4:0], \port$1561$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -10915,7 +11124,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1515$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1515$0  };
+  assign lc_next = { lc[4:0], \port$1561$0  };
   assign zero = is_zero;
 endmodule
 
@@ -11471,7 +11680,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$983$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1029$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
@@ -11623,8 +11832,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$983$0 , lc_check, lc_rep
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$983$0 ;
-  wire \port$983$0 ;
+  output \port$1029$0 ;
+  wire \port$1029$0 ;
   output report;
   wire report;
   input report_frame;
@@ -11730,7 +11939,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$983$0 , lc_check, lc_rep
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$983$0  = \$2 ;
+  assign \port$1029$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -630,12 +630,12 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$5323$0 (\$8 ),
-    .\port$5336$0 (\$9 ),
-    .\port$5468$0 (\$10 ),
-    .\port$5879$0 (\$11 ),
-    .\port$5892$0 (\$12 ),
-    .\port$6024$0 (\$13 ),
+    .\port$5424$0 (\$8 ),
+    .\port$5437$0 (\$9 ),
+    .\port$5569$0 (\$10 ),
+    .\port$5989$0 (\$11 ),
+    .\port$6002$0 (\$12 ),
+    .\port$6134$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -699,9 +699,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$5323$0 (\$8 ),
-    .\port$5336$0 (\$9 ),
-    .\port$5468$0 (\$10 ),
+    .\port$5424$0 (\$8 ),
+    .\port$5437$0 (\$9 ),
+    .\port$5569$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -764,9 +764,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$424 ),
-    .\port$5879$0 (\$11 ),
-    .\port$5892$0 (\$12 ),
-    .\port$6024$0 (\$13 ),
+    .\port$5989$0 (\$11 ),
+    .\port$6002$0 (\$12 ),
+    .\port$6134$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$244 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1138,7 +1138,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
 , ch0_cfg_words_w0_gray, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start
 , ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$103 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc
 , ch1_cfg_words_w0_gray, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start
-, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$5323$0 , \port$5336$0 , ch0__ca_done, \port$5468$0 , ch1__done_count, ch1__done, \port$5879$0 , \port$5892$0 , ch1__ca_done, \port$6024$0 , clk);
+, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$5424$0 , \port$5437$0 , ch0__ca_done, \port$5569$0 , ch1__done_count, ch1__done, \port$5989$0 , \port$6002$0 , ch1__ca_done, \port$6134$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2688,18 +2688,18 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$5323$0 ;
-  wire [186:0] \port$5323$0 ;
-  input [335:0] \port$5336$0 ;
-  wire [335:0] \port$5336$0 ;
-  input [9:0] \port$5468$0 ;
-  wire [9:0] \port$5468$0 ;
-  input [186:0] \port$5879$0 ;
-  wire [186:0] \port$5879$0 ;
-  input [335:0] \port$5892$0 ;
-  wire [335:0] \port$5892$0 ;
-  input [9:0] \port$6024$0 ;
-  wire [9:0] \port$6024$0 ;
+  input [186:0] \port$5424$0 ;
+  wire [186:0] \port$5424$0 ;
+  input [335:0] \port$5437$0 ;
+  wire [335:0] \port$5437$0 ;
+  input [9:0] \port$5569$0 ;
+  wire [9:0] \port$5569$0 ;
+  input [186:0] \port$5989$0 ;
+  wire [186:0] \port$5989$0 ;
+  input [335:0] \port$6002$0 ;
+  wire [335:0] \port$6002$0 ;
+  input [9:0] \port$6134$0 ;
+  wire [9:0] \port$6134$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2829,7 +2829,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$347  = \$345  | \$346 ;
   assign \$348  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$349  = \$347  | \$348 ;
-  assign \$350  = ch1_read_select_110 ? { 2'h0, \port$5879$0 [182:177], 4'h0, \port$5879$0 [186:183], 1'h0, \port$5879$0 [176:174], 1'h0, \port$5879$0 [133:131], 3'h0, \port$5879$0 [49], \port$5879$0 [3:0] } : 32'd0;
+  assign \$350  = ch1_read_select_110 ? { 2'h0, \port$5989$0 [182:177], 4'h0, \port$5989$0 [186:183], 1'h0, \port$5989$0 [176:174], 1'h0, \port$5989$0 [133:131], 3'h0, \port$5989$0 [49], \port$5989$0 [3:0] } : 32'd0;
   assign \$351  = \$349  | \$350 ;
   assign \$352  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$353  = \$351  | \$352 ;
@@ -2845,21 +2845,21 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$363  = \$361  | \$362 ;
   assign \$364  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$365  = \$363  | \$364 ;
-  assign \$366  = ch1_read_select_118 ? \port$5892$0 [31:0] : 32'd0;
+  assign \$366  = ch1_read_select_118 ? \port$6002$0 [31:0] : 32'd0;
   assign \$367  = \$365  | \$366 ;
-  assign \$368  = ch1_read_select_119 ? \port$5892$0 [63:32] : 32'd0;
+  assign \$368  = ch1_read_select_119 ? \port$6002$0 [63:32] : 32'd0;
   assign \$369  = \$367  | \$368 ;
-  assign \$370  = ch1_read_select_11a ? \port$5892$0 [95:64] : 32'd0;
+  assign \$370  = ch1_read_select_11a ? \port$6002$0 [95:64] : 32'd0;
   assign \$371  = \$369  | \$370 ;
-  assign \$372  = ch1_read_select_11b ? \port$5892$0 [127:96] : 32'd0;
+  assign \$372  = ch1_read_select_11b ? \port$6002$0 [127:96] : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$374  = ch1_read_select_11c ? \port$5892$0 [159:128] : 32'd0;
+  assign \$374  = ch1_read_select_11c ? \port$6002$0 [159:128] : 32'd0;
   assign \$375  = \$373  | \$374 ;
-  assign \$376  = ch1_read_select_11d ? \port$5892$0 [191:160] : 32'd0;
+  assign \$376  = ch1_read_select_11d ? \port$6002$0 [191:160] : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_11e ? \port$5892$0 [223:192] : 32'd0;
+  assign \$378  = ch1_read_select_11e ? \port$6002$0 [223:192] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_11f ? \port$5892$0 [255:224] : 32'd0;
+  assign \$380  = ch1_read_select_11f ? \port$6002$0 [255:224] : 32'd0;
   assign \$381  = \$379  | \$380 ;
   assign \$382  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$383  = \$381  | \$382 ;
@@ -2871,13 +2871,13 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$389  = \$387  | \$388 ;
   assign \$390  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$391  = \$389  | \$390 ;
-  assign \$394  = ch1_read_select_142 ? { 17'h00000, \port$6024$0 [9:3], 1'h0, \port$6024$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$394  = ch1_read_select_142 ? { 17'h00000, \port$6134$0 [9:3], 1'h0, \port$6134$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$395  = \$393  | \$394 ;
-  assign \$396  = ch1_read_select_143 ? \port$5892$0 [287:256] : 32'd0;
+  assign \$396  = ch1_read_select_143 ? \port$6002$0 [287:256] : 32'd0;
   assign \$397  = \$395  | \$396 ;
-  assign \$398  = ch1_read_select_144 ? \port$5892$0 [319:288] : 32'd0;
+  assign \$398  = ch1_read_select_144 ? \port$6002$0 [319:288] : 32'd0;
   assign \$399  = \$397  | \$398 ;
-  assign \$400  = ch1_read_select_145 ? { 16'h0000, \port$5892$0 [335:320] } : 32'd0;
+  assign \$400  = ch1_read_select_145 ? { 16'h0000, \port$6002$0 [335:320] } : 32'd0;
   assign \$401  = \$399  | \$400 ;
   assign \$402  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
   assign \$403  = \$401  | \$402 ;
@@ -3753,7 +3753,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$154  = \$152  | \$153 ;
   assign \$155  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$156  = \$154  | \$155 ;
-  assign \$157  = ch0_read_select_90 ? { 2'h0, \port$5323$0 [182:177], 4'h0, \port$5323$0 [186:183], 1'h0, \port$5323$0 [176:174], 1'h0, \port$5323$0 [133:131], 3'h0, \port$5323$0 [49], \port$5323$0 [3:0] } : 32'd0;
+  assign \$157  = ch0_read_select_90 ? { 2'h0, \port$5424$0 [182:177], 4'h0, \port$5424$0 [186:183], 1'h0, \port$5424$0 [176:174], 1'h0, \port$5424$0 [133:131], 3'h0, \port$5424$0 [49], \port$5424$0 [3:0] } : 32'd0;
   assign \$158  = \$156  | \$157 ;
   assign \$159  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$160  = \$158  | \$159 ;
@@ -3769,21 +3769,21 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$170  = \$168  | \$169 ;
   assign \$171  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$172  = \$170  | \$171 ;
-  assign \$173  = ch0_read_select_98 ? \port$5336$0 [31:0] : 32'd0;
+  assign \$173  = ch0_read_select_98 ? \port$5437$0 [31:0] : 32'd0;
   assign \$174  = \$172  | \$173 ;
-  assign \$175  = ch0_read_select_99 ? \port$5336$0 [63:32] : 32'd0;
+  assign \$175  = ch0_read_select_99 ? \port$5437$0 [63:32] : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_9a ? \port$5336$0 [95:64] : 32'd0;
+  assign \$177  = ch0_read_select_9a ? \port$5437$0 [95:64] : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_9b ? \port$5336$0 [127:96] : 32'd0;
+  assign \$179  = ch0_read_select_9b ? \port$5437$0 [127:96] : 32'd0;
   assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_9c ? \port$5336$0 [159:128] : 32'd0;
+  assign \$181  = ch0_read_select_9c ? \port$5437$0 [159:128] : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_9d ? \port$5336$0 [191:160] : 32'd0;
+  assign \$183  = ch0_read_select_9d ? \port$5437$0 [191:160] : 32'd0;
   assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_9e ? \port$5336$0 [223:192] : 32'd0;
+  assign \$185  = ch0_read_select_9e ? \port$5437$0 [223:192] : 32'd0;
   assign \$186  = \$184  | \$185 ;
-  assign \$187  = ch0_read_select_9f ? \port$5336$0 [255:224] : 32'd0;
+  assign \$187  = ch0_read_select_9f ? \port$5437$0 [255:224] : 32'd0;
   assign \$188  = \$186  | \$187 ;
   assign \$189  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$190  = \$188  | \$189 ;
@@ -3795,13 +3795,13 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$196  = \$194  | \$195 ;
   assign \$197  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$103 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$198  = \$196  | \$197 ;
-  assign \$201  = ch0_read_select_c2 ? { 17'h00000, \port$5468$0 [9:3], 1'h0, \port$5468$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$201  = ch0_read_select_c2 ? { 17'h00000, \port$5569$0 [9:3], 1'h0, \port$5569$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$202  = \$200  | \$201 ;
-  assign \$203  = ch0_read_select_c3 ? \port$5336$0 [287:256] : 32'd0;
+  assign \$203  = ch0_read_select_c3 ? \port$5437$0 [287:256] : 32'd0;
   assign \$204  = \$202  | \$203 ;
-  assign \$205  = ch0_read_select_c4 ? \port$5336$0 [319:288] : 32'd0;
+  assign \$205  = ch0_read_select_c4 ? \port$5437$0 [319:288] : 32'd0;
   assign \$206  = \$204  | \$205 ;
-  assign \$207  = ch0_read_select_c5 ? { 16'h0000, \port$5336$0 [335:320] } : 32'd0;
+  assign \$207  = ch0_read_select_c5 ? { 16'h0000, \port$5437$0 [335:320] } : 32'd0;
   assign \$208  = \$206  | \$207 ;
   assign \$209  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$210  = \$208  | \$209 ;
@@ -4953,7 +4953,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$621  = ch0_result_status_status_snapshot;
     if (\$128 ) begin
-      \$621  = \port$5323$0 [3:0];
+      \$621  = \port$5424$0 [3:0];
     end
     if (rst) begin
       \$621  = 4'h0;
@@ -4963,7 +4963,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$622  = ch0_result_status_cds_snapshot;
     if (\$128 ) begin
-      \$622  = \port$5323$0 [49];
+      \$622  = \port$5424$0 [49];
     end
     if (rst) begin
       \$622  = 1'h0;
@@ -4973,7 +4973,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$623  = ch0_result_status_w0_ne_snapshot;
     if (\$128 ) begin
-      \$623  = \port$5323$0 [131];
+      \$623  = \port$5424$0 [131];
     end
     if (rst) begin
       \$623  = 1'h0;
@@ -4983,7 +4983,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$624  = ch0_result_status_w0_nw_snapshot;
     if (\$128 ) begin
-      \$624  = \port$5323$0 [132];
+      \$624  = \port$5424$0 [132];
     end
     if (rst) begin
       \$624  = 1'h0;
@@ -4993,7 +4993,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$625  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$128 ) begin
-      \$625  = \port$5323$0 [133];
+      \$625  = \port$5424$0 [133];
     end
     if (rst) begin
       \$625  = 1'h0;
@@ -5003,7 +5003,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$626  = ch0_result_status_w1_ne_snapshot;
     if (\$128 ) begin
-      \$626  = \port$5323$0 [174];
+      \$626  = \port$5424$0 [174];
     end
     if (rst) begin
       \$626  = 1'h0;
@@ -5013,7 +5013,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$627  = ch0_result_status_w1_nw_snapshot;
     if (\$128 ) begin
-      \$627  = \port$5323$0 [175];
+      \$627  = \port$5424$0 [175];
     end
     if (rst) begin
       \$627  = 1'h0;
@@ -5023,7 +5023,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$628  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$128 ) begin
-      \$628  = \port$5323$0 [176];
+      \$628  = \port$5424$0 [176];
     end
     if (rst) begin
       \$628  = 1'h0;
@@ -5033,7 +5033,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$629  = ch0_result_status_lc_repeat_snapshot;
     if (\$128 ) begin
-      \$629  = \port$5323$0 [183];
+      \$629  = \port$5424$0 [183];
     end
     if (rst) begin
       \$629  = 1'h0;
@@ -5043,7 +5043,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$630  = ch0_result_status_lc_skip_snapshot;
     if (\$128 ) begin
-      \$630  = \port$5323$0 [184];
+      \$630  = \port$5424$0 [184];
     end
     if (rst) begin
       \$630  = 1'h0;
@@ -5053,7 +5053,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$631  = ch0_result_status_lc_zero_snapshot;
     if (\$128 ) begin
-      \$631  = \port$5323$0 [185];
+      \$631  = \port$5424$0 [185];
     end
     if (rst) begin
       \$631  = 1'h0;
@@ -5063,7 +5063,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$632  = ch0_result_status_spw_mismatch_snapshot;
     if (\$128 ) begin
-      \$632  = \port$5323$0 [186];
+      \$632  = \port$5424$0 [186];
     end
     if (rst) begin
       \$632  = 1'h0;
@@ -5073,7 +5073,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$633  = ch0_result_status_lc_snapshot;
     if (\$128 ) begin
-      \$633  = \port$5323$0 [182:177];
+      \$633  = \port$5424$0 [182:177];
     end
     if (rst) begin
       \$633  = 6'h00;
@@ -5093,7 +5093,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$635  = ch0_result_seq_line_delay_snapshot;
     if (\$128 ) begin
-      \$635  = \port$5323$0 [48:36];
+      \$635  = \port$5424$0 [48:36];
     end
     if (rst) begin
       \$635  = 13'h0000;
@@ -5103,7 +5103,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$636  = ch0_result_w0_lo_data_snapshot;
     if (\$128 ) begin
-      \$636  = \port$5323$0 [107:76];
+      \$636  = \port$5424$0 [107:76];
     end
     if (rst) begin
       \$636  = 32'd0;
@@ -5113,7 +5113,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$637  = ch0_result_w0_hi_data_snapshot;
     if (\$128 ) begin
-      \$637  = \port$5323$0 [130:108];
+      \$637  = \port$5424$0 [130:108];
     end
     if (rst) begin
       \$637  = 23'h000000;
@@ -5123,7 +5123,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$638  = ch0_result_w1_lo_data_snapshot;
     if (\$128 ) begin
-      \$638  = \port$5323$0 [165:134];
+      \$638  = \port$5424$0 [165:134];
     end
     if (rst) begin
       \$638  = 32'd0;
@@ -5133,7 +5133,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$639  = ch0_result_w1_hi_data_snapshot;
     if (\$128 ) begin
-      \$639  = \port$5323$0 [173:166];
+      \$639  = \port$5424$0 [173:166];
     end
     if (rst) begin
       \$639  = 8'h00;
@@ -5143,7 +5143,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$640  = ch0_result_timestamp_time_snapshot;
     if (\$128 ) begin
-      \$640  = \port$5323$0 [35:4];
+      \$640  = \port$5424$0 [35:4];
     end
     if (rst) begin
       \$640  = 32'd0;
@@ -5153,7 +5153,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$641  = ch0_result_line_noise_events_snapshot;
     if (\$128 ) begin
-      \$641  = \port$5323$0 [53:50];
+      \$641  = \port$5424$0 [53:50];
     end
     if (rst) begin
       \$641  = 4'h0;
@@ -5163,7 +5163,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$642  = ch0_result_line_delay_settled_snapshot;
     if (\$128 ) begin
-      \$642  = \port$5323$0 [54];
+      \$642  = \port$5424$0 [54];
     end
     if (rst) begin
       \$642  = 1'h0;
@@ -5173,7 +5173,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$643  = ch0_result_line_delay_spread_snapshot;
     if (\$128 ) begin
-      \$643  = \port$5323$0 [75:68];
+      \$643  = \port$5424$0 [75:68];
     end
     if (rst) begin
       \$643  = 8'h00;
@@ -5183,7 +5183,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$644  = ch0_result_line_settled_delay_snapshot;
     if (\$128 ) begin
-      \$644  = \port$5323$0 [67:55];
+      \$644  = \port$5424$0 [67:55];
     end
     if (rst) begin
       \$644  = 13'h0000;
@@ -6217,7 +6217,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$748  = ch1_result_status_status_snapshot;
     if (\$321 ) begin
-      \$748  = \port$5879$0 [3:0];
+      \$748  = \port$5989$0 [3:0];
     end
     if (rst) begin
       \$748  = 4'h0;
@@ -6227,7 +6227,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$749  = ch1_result_status_cds_snapshot;
     if (\$321 ) begin
-      \$749  = \port$5879$0 [49];
+      \$749  = \port$5989$0 [49];
     end
     if (rst) begin
       \$749  = 1'h0;
@@ -6237,7 +6237,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$750  = ch1_result_status_w0_ne_snapshot;
     if (\$321 ) begin
-      \$750  = \port$5879$0 [131];
+      \$750  = \port$5989$0 [131];
     end
     if (rst) begin
       \$750  = 1'h0;
@@ -6247,7 +6247,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$751  = ch1_result_status_w0_nw_snapshot;
     if (\$321 ) begin
-      \$751  = \port$5879$0 [132];
+      \$751  = \port$5989$0 [132];
     end
     if (rst) begin
       \$751  = 1'h0;
@@ -6257,7 +6257,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$752  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$321 ) begin
-      \$752  = \port$5879$0 [133];
+      \$752  = \port$5989$0 [133];
     end
     if (rst) begin
       \$752  = 1'h0;
@@ -6267,7 +6267,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$753  = ch1_result_status_w1_ne_snapshot;
     if (\$321 ) begin
-      \$753  = \port$5879$0 [174];
+      \$753  = \port$5989$0 [174];
     end
     if (rst) begin
       \$753  = 1'h0;
@@ -6277,7 +6277,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$754  = ch1_result_status_w1_nw_snapshot;
     if (\$321 ) begin
-      \$754  = \port$5879$0 [175];
+      \$754  = \port$5989$0 [175];
     end
     if (rst) begin
       \$754  = 1'h0;
@@ -6287,7 +6287,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$755  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$321 ) begin
-      \$755  = \port$5879$0 [176];
+      \$755  = \port$5989$0 [176];
     end
     if (rst) begin
       \$755  = 1'h0;
@@ -6297,7 +6297,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$756  = ch1_result_status_lc_repeat_snapshot;
     if (\$321 ) begin
-      \$756  = \port$5879$0 [183];
+      \$756  = \port$5989$0 [183];
     end
     if (rst) begin
       \$756  = 1'h0;
@@ -6307,7 +6307,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$757  = ch1_result_status_lc_skip_snapshot;
     if (\$321 ) begin
-      \$757  = \port$5879$0 [184];
+      \$757  = \port$5989$0 [184];
     end
     if (rst) begin
       \$757  = 1'h0;
@@ -6317,7 +6317,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$758  = ch1_result_status_lc_zero_snapshot;
     if (\$321 ) begin
-      \$758  = \port$5879$0 [185];
+      \$758  = \port$5989$0 [185];
     end
     if (rst) begin
       \$758  = 1'h0;
@@ -6327,7 +6327,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$759  = ch1_result_status_spw_mismatch_snapshot;
     if (\$321 ) begin
-      \$759  = \port$5879$0 [186];
+      \$759  = \port$5989$0 [186];
     end
     if (rst) begin
       \$759  = 1'h0;
@@ -6337,7 +6337,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$760  = ch1_result_status_lc_snapshot;
     if (\$321 ) begin
-      \$760  = \port$5879$0 [182:177];
+      \$760  = \port$5989$0 [182:177];
     end
     if (rst) begin
       \$760  = 6'h00;
@@ -6357,7 +6357,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$762  = ch1_result_seq_line_delay_snapshot;
     if (\$321 ) begin
-      \$762  = \port$5879$0 [48:36];
+      \$762  = \port$5989$0 [48:36];
     end
     if (rst) begin
       \$762  = 13'h0000;
@@ -6367,7 +6367,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$763  = ch1_result_w0_lo_data_snapshot;
     if (\$321 ) begin
-      \$763  = \port$5879$0 [107:76];
+      \$763  = \port$5989$0 [107:76];
     end
     if (rst) begin
       \$763  = 32'd0;
@@ -6377,7 +6377,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$764  = ch1_result_w0_hi_data_snapshot;
     if (\$321 ) begin
-      \$764  = \port$5879$0 [130:108];
+      \$764  = \port$5989$0 [130:108];
     end
     if (rst) begin
       \$764  = 23'h000000;
@@ -6387,7 +6387,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$765  = ch1_result_w1_lo_data_snapshot;
     if (\$321 ) begin
-      \$765  = \port$5879$0 [165:134];
+      \$765  = \port$5989$0 [165:134];
     end
     if (rst) begin
       \$765  = 32'd0;
@@ -6397,7 +6397,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$766  = ch1_result_w1_hi_data_snapshot;
     if (\$321 ) begin
-      \$766  = \port$5879$0 [173:166];
+      \$766  = \port$5989$0 [173:166];
     end
     if (rst) begin
       \$766  = 8'h00;
@@ -6407,7 +6407,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$767  = ch1_result_timestamp_time_snapshot;
     if (\$321 ) begin
-      \$767  = \port$5879$0 [35:4];
+      \$767  = \port$5989$0 [35:4];
     end
     if (rst) begin
       \$767  = 32'd0;
@@ -6417,7 +6417,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$768  = ch1_result_line_noise_events_snapshot;
     if (\$321 ) begin
-      \$768  = \port$5879$0 [53:50];
+      \$768  = \port$5989$0 [53:50];
     end
     if (rst) begin
       \$768  = 4'h0;
@@ -6427,7 +6427,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$769  = ch1_result_line_delay_settled_snapshot;
     if (\$321 ) begin
-      \$769  = \port$5879$0 [54];
+      \$769  = \port$5989$0 [54];
     end
     if (rst) begin
       \$769  = 1'h0;
@@ -6437,7 +6437,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$770  = ch1_result_line_delay_spread_snapshot;
     if (\$321 ) begin
-      \$770  = \port$5879$0 [75:68];
+      \$770  = \port$5989$0 [75:68];
     end
     if (rst) begin
       \$770  = 8'h00;
@@ -6447,7 +6447,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$771  = ch1_result_line_settled_delay_snapshot;
     if (\$321 ) begin
-      \$771  = \port$5879$0 [67:55];
+      \$771  = \port$5989$0 [67:55];
     end
     if (rst) begin
       \$771  = 13'h0000;
@@ -6476,106 +6476,106 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$5323$0 [3:0];
-  assign ch0__cds = \port$5323$0 [49];
-  assign ch0__word0_ne = \port$5323$0 [131];
-  assign ch0__word0_nw = \port$5323$0 [132];
-  assign ch0__word0_crc_ok = \port$5323$0 [133];
-  assign ch0__word1_ne = \port$5323$0 [174];
-  assign ch0__word1_nw = \port$5323$0 [175];
-  assign ch0__word1_crc_ok = \port$5323$0 [176];
-  assign ch0__lc_repeat = \port$5323$0 [183];
-  assign ch0__lc_skip = \port$5323$0 [184];
-  assign ch0__lc_zero = \port$5323$0 [185];
-  assign ch0__spw_mismatch = \port$5323$0 [186];
-  assign ch0__lc = \port$5323$0 [182:177];
-  assign ch0__line_delay = \port$5323$0 [48:36];
-  assign ch0__word0_position = \port$5323$0 [130:76];
-  assign ch0__word1_position = \port$5323$0 [173:134];
-  assign ch0__timestamp = \port$5323$0 [35:4];
-  assign ch0__noise_events = \port$5323$0 [53:50];
-  assign ch0__delay_settled = \port$5323$0 [54];
-  assign ch0__delay_spread = \port$5323$0 [75:68];
-  assign ch0__settled_delay = \port$5323$0 [67:55];
+  assign ch0__status = \port$5424$0 [3:0];
+  assign ch0__cds = \port$5424$0 [49];
+  assign ch0__word0_ne = \port$5424$0 [131];
+  assign ch0__word0_nw = \port$5424$0 [132];
+  assign ch0__word0_crc_ok = \port$5424$0 [133];
+  assign ch0__word1_ne = \port$5424$0 [174];
+  assign ch0__word1_nw = \port$5424$0 [175];
+  assign ch0__word1_crc_ok = \port$5424$0 [176];
+  assign ch0__lc_repeat = \port$5424$0 [183];
+  assign ch0__lc_skip = \port$5424$0 [184];
+  assign ch0__lc_zero = \port$5424$0 [185];
+  assign ch0__spw_mismatch = \port$5424$0 [186];
+  assign ch0__lc = \port$5424$0 [182:177];
+  assign ch0__line_delay = \port$5424$0 [48:36];
+  assign ch0__word0_position = \port$5424$0 [130:76];
+  assign ch0__word1_position = \port$5424$0 [173:134];
+  assign ch0__timestamp = \port$5424$0 [35:4];
+  assign ch0__noise_events = \port$5424$0 [53:50];
+  assign ch0__delay_settled = \port$5424$0 [54];
+  assign ch0__delay_spread = \port$5424$0 [75:68];
+  assign ch0__settled_delay = \port$5424$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$5336$0 [15:0];
-  assign ch0__count_crc_word1 = \port$5336$0 [31:16];
-  assign ch0__count_no_ack = \port$5336$0 [47:32];
-  assign ch0__count_no_start = \port$5336$0 [63:48];
-  assign ch0__count_delay_range = \port$5336$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$5336$0 [95:80];
-  assign ch0__count_lc_repeat = \port$5336$0 [111:96];
-  assign ch0__count_lc_skip = \port$5336$0 [127:112];
-  assign ch0__count_lc_zero = \port$5336$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$5336$0 [159:144];
-  assign ch0__count_overrun = \port$5336$0 [175:160];
-  assign ch0__count_aborted = \port$5336$0 [191:176];
-  assign ch0__count_no_stop = \port$5336$0 [207:192];
-  assign ch0__count_noisy_line = \port$5336$0 [223:208];
-  assign ch0__count_delay_jump = \port$5336$0 [239:224];
-  assign ch0__count_noise_event = \port$5336$0 [255:240];
-  assign ch0__ca_status = \port$5468$0 [2:0];
-  assign ch0__ca_bytes_done = \port$5468$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$5336$0 [271:256];
-  assign ch0__count_ca_no_answer = \port$5336$0 [287:272];
-  assign ch0__count_ca_refused = \port$5336$0 [303:288];
-  assign ch0__count_ca_aborted = \port$5336$0 [319:304];
-  assign ch0__count_ca_data_fault = \port$5336$0 [335:320];
-  assign ch1__status = \port$5879$0 [3:0];
-  assign ch1__cds = \port$5879$0 [49];
-  assign ch1__word0_ne = \port$5879$0 [131];
-  assign ch1__word0_nw = \port$5879$0 [132];
-  assign ch1__word0_crc_ok = \port$5879$0 [133];
-  assign ch1__word1_ne = \port$5879$0 [174];
-  assign ch1__word1_nw = \port$5879$0 [175];
-  assign ch1__word1_crc_ok = \port$5879$0 [176];
-  assign ch1__lc_repeat = \port$5879$0 [183];
-  assign ch1__lc_skip = \port$5879$0 [184];
-  assign ch1__lc_zero = \port$5879$0 [185];
-  assign ch1__spw_mismatch = \port$5879$0 [186];
-  assign ch1__lc = \port$5879$0 [182:177];
-  assign ch1__line_delay = \port$5879$0 [48:36];
-  assign ch1__word0_position = \port$5879$0 [130:76];
-  assign ch1__word1_position = \port$5879$0 [173:134];
-  assign ch1__timestamp = \port$5879$0 [35:4];
-  assign ch1__noise_events = \port$5879$0 [53:50];
-  assign ch1__delay_settled = \port$5879$0 [54];
-  assign ch1__delay_spread = \port$5879$0 [75:68];
-  assign ch1__settled_delay = \port$5879$0 [67:55];
+  assign ch0__count_crc_word0 = \port$5437$0 [15:0];
+  assign ch0__count_crc_word1 = \port$5437$0 [31:16];
+  assign ch0__count_no_ack = \port$5437$0 [47:32];
+  assign ch0__count_no_start = \port$5437$0 [63:48];
+  assign ch0__count_delay_range = \port$5437$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$5437$0 [95:80];
+  assign ch0__count_lc_repeat = \port$5437$0 [111:96];
+  assign ch0__count_lc_skip = \port$5437$0 [127:112];
+  assign ch0__count_lc_zero = \port$5437$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$5437$0 [159:144];
+  assign ch0__count_overrun = \port$5437$0 [175:160];
+  assign ch0__count_aborted = \port$5437$0 [191:176];
+  assign ch0__count_no_stop = \port$5437$0 [207:192];
+  assign ch0__count_noisy_line = \port$5437$0 [223:208];
+  assign ch0__count_delay_jump = \port$5437$0 [239:224];
+  assign ch0__count_noise_event = \port$5437$0 [255:240];
+  assign ch0__ca_status = \port$5569$0 [2:0];
+  assign ch0__ca_bytes_done = \port$5569$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$5437$0 [271:256];
+  assign ch0__count_ca_no_answer = \port$5437$0 [287:272];
+  assign ch0__count_ca_refused = \port$5437$0 [303:288];
+  assign ch0__count_ca_aborted = \port$5437$0 [319:304];
+  assign ch0__count_ca_data_fault = \port$5437$0 [335:320];
+  assign ch1__status = \port$5989$0 [3:0];
+  assign ch1__cds = \port$5989$0 [49];
+  assign ch1__word0_ne = \port$5989$0 [131];
+  assign ch1__word0_nw = \port$5989$0 [132];
+  assign ch1__word0_crc_ok = \port$5989$0 [133];
+  assign ch1__word1_ne = \port$5989$0 [174];
+  assign ch1__word1_nw = \port$5989$0 [175];
+  assign ch1__word1_crc_ok = \port$5989$0 [176];
+  assign ch1__lc_repeat = \port$5989$0 [183];
+  assign ch1__lc_skip = \port$5989$0 [184];
+  assign ch1__lc_zero = \port$5989$0 [185];
+  assign ch1__spw_mismatch = \port$5989$0 [186];
+  assign ch1__lc = \port$5989$0 [182:177];
+  assign ch1__line_delay = \port$5989$0 [48:36];
+  assign ch1__word0_position = \port$5989$0 [130:76];
+  assign ch1__word1_position = \port$5989$0 [173:134];
+  assign ch1__timestamp = \port$5989$0 [35:4];
+  assign ch1__noise_events = \port$5989$0 [53:50];
+  assign ch1__delay_settled = \port$5989$0 [54];
+  assign ch1__delay_spread = \port$5989$0 [75:68];
+  assign ch1__settled_delay = \port$5989$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$5892$0 [15:0];
-  assign ch1__count_crc_word1 = \port$5892$0 [31:16];
-  assign ch1__count_no_ack = \port$5892$0 [47:32];
-  assign ch1__count_no_start = \port$5892$0 [63:48];
-  assign ch1__count_delay_range = \port$5892$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$5892$0 [95:80];
-  assign ch1__count_lc_repeat = \port$5892$0 [111:96];
-  assign ch1__count_lc_skip = \port$5892$0 [127:112];
-  assign ch1__count_lc_zero = \port$5892$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$5892$0 [159:144];
-  assign ch1__count_overrun = \port$5892$0 [175:160];
-  assign ch1__count_aborted = \port$5892$0 [191:176];
-  assign ch1__count_no_stop = \port$5892$0 [207:192];
-  assign ch1__count_noisy_line = \port$5892$0 [223:208];
-  assign ch1__count_delay_jump = \port$5892$0 [239:224];
-  assign ch1__count_noise_event = \port$5892$0 [255:240];
-  assign ch1__ca_status = \port$6024$0 [2:0];
-  assign ch1__ca_bytes_done = \port$6024$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$5892$0 [271:256];
-  assign ch1__count_ca_no_answer = \port$5892$0 [287:272];
-  assign ch1__count_ca_refused = \port$5892$0 [303:288];
-  assign ch1__count_ca_aborted = \port$5892$0 [319:304];
-  assign ch1__count_ca_data_fault = \port$5892$0 [335:320];
+  assign ch1__count_crc_word0 = \port$6002$0 [15:0];
+  assign ch1__count_crc_word1 = \port$6002$0 [31:16];
+  assign ch1__count_no_ack = \port$6002$0 [47:32];
+  assign ch1__count_no_start = \port$6002$0 [63:48];
+  assign ch1__count_delay_range = \port$6002$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$6002$0 [95:80];
+  assign ch1__count_lc_repeat = \port$6002$0 [111:96];
+  assign ch1__count_lc_skip = \port$6002$0 [127:112];
+  assign ch1__count_lc_zero = \port$6002$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$6002$0 [159:144];
+  assign ch1__count_overrun = \port$6002$0 [175:160];
+  assign ch1__count_aborted = \port$6002$0 [191:176];
+  assign ch1__count_no_stop = \port$6002$0 [207:192];
+  assign ch1__count_noisy_line = \port$6002$0 [223:208];
+  assign ch1__count_delay_jump = \port$6002$0 [239:224];
+  assign ch1__count_noise_event = \port$6002$0 [255:240];
+  assign ch1__ca_status = \port$6134$0 [2:0];
+  assign ch1__ca_bytes_done = \port$6134$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$6002$0 [271:256];
+  assign ch1__count_ca_no_answer = \port$6002$0 [287:272];
+  assign ch1__count_ca_refused = \port$6002$0 [303:288];
+  assign ch1__count_ca_aborted = \port$6002$0 [319:304];
+  assign ch1__count_ca_data_fault = \port$6002$0 [335:320];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -8838,7 +8838,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0 (clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly
-, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5323$0 , \port$5336$0 , regs__ca_done, \port$5468$0 , slo
+, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5424$0 , \port$5437$0 , regs__ca_done, \port$5569$0 , slo
 );
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
@@ -8998,12 +8998,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en, r
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$5323$0 ;
-  wire [186:0] \port$5323$0 ;
-  output [335:0] \port$5336$0 ;
-  wire [335:0] \port$5336$0 ;
-  output [9:0] \port$5468$0 ;
-  wire [9:0] \port$5468$0 ;
+  output [186:0] \port$5424$0 ;
+  wire [186:0] \port$5424$0 ;
+  output [335:0] \port$5437$0 ;
+  wire [335:0] \port$5437$0 ;
+  output [9:0] \port$5569$0 ;
+  wire [9:0] \port$5569$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -9403,9 +9403,9 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$202  = ma;
   assign \slo$204  = slo;
-  assign \port$5323$0  = \$5 ;
-  assign \port$5336$0  = \$6 ;
-  assign \port$5468$0  = \$7 ;
+  assign \port$5424$0  = \$5 ;
+  assign \port$5437$0  = \$6 ;
+  assign \port$5569$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -10507,7 +10507,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4987$0 (\bit ),
+    .\port$5079$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -10571,7 +10571,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$2309$0 (\$24 ),
+    .\port$2355$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -19041,30 +19041,76 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   wire \$101 ;
   wire \$102 ;
   wire \$103 ;
-  reg \$104 ;
-  reg [12:0] \$105 ;
-  reg [16:0] \$106 ;
-  reg \$107 ;
-  reg \$108 ;
-  reg \$109 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
   wire \$11 ;
-  reg [12:0] \$110 ;
-  reg \$111 ;
-  reg \$112 ;
-  reg \$113 ;
-  reg [1:0] \$114 ;
-  reg [16:0] \$115 ;
-  reg \$116 ;
-  reg \$117 ;
-  reg \$118 ;
-  reg \$119 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
-  reg [12:0] \$120 ;
-  reg [1:0] \$121 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   wire \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  reg \$146 ;
+  reg [12:0] \$147 ;
+  reg [16:0] \$148 ;
+  reg \$149 ;
   wire \$15 ;
+  reg \$150 ;
+  reg \$151 ;
+  reg \$152 ;
+  reg \$153 ;
+  reg \$154 ;
+  reg \$155 ;
+  reg [12:0] \$156 ;
+  reg \$157 ;
+  reg \$158 ;
+  reg \$159 ;
   wire \$16 ;
+  reg [1:0] \$160 ;
+  reg [16:0] \$161 ;
+  reg \$162 ;
+  reg \$163 ;
+  reg \$164 ;
+  reg \$165 ;
+  reg [12:0] \$166 ;
+  reg [1:0] \$167 ;
   wire \$17 ;
   wire \$18 ;
   wire \$19 ;
@@ -19075,26 +19121,26 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   wire \$23 ;
   wire \$24 ;
   wire \$25 ;
-  wire [13:0] \$26 ;
-  wire [17:0] \$27 ;
+  wire \$26 ;
+  wire \$27 ;
   wire \$28 ;
   wire \$29 ;
   wire \$3 ;
   wire \$30 ;
   wire \$31 ;
-  wire [12:0] \$32 ;
+  wire \$32 ;
   wire \$33 ;
   wire \$34 ;
-  wire [13:0] \$35 ;
-  wire [13:0] \$36 ;
-  wire [16:0] \$37 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
   wire \$38 ;
-  wire [13:0] \$39 ;
+  wire \$39 ;
   wire [16:0] \$4 ;
-  wire [13:0] \$40 ;
+  wire \$40 ;
   wire \$41 ;
-  wire [13:0] \$42 ;
-  wire [17:0] \$43 ;
+  wire \$42 ;
+  wire \$43 ;
   wire \$44 ;
   wire \$45 ;
   wire \$46 ;
@@ -19117,26 +19163,26 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   wire \$61 ;
   wire \$62 ;
   wire \$63 ;
-  wire \$64 ;
-  wire \$65 ;
+  wire [13:0] \$64 ;
+  wire [17:0] \$65 ;
   wire \$66 ;
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
   wire \$7 ;
-  wire \$70 ;
+  wire [12:0] \$70 ;
   wire \$71 ;
   wire \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  wire \$75 ;
+  wire [13:0] \$73 ;
+  wire [13:0] \$74 ;
+  wire [16:0] \$75 ;
   wire \$76 ;
-  wire \$77 ;
-  wire \$78 ;
+  wire [13:0] \$77 ;
+  wire [13:0] \$78 ;
   wire \$79 ;
   wire [13:0] \$8 ;
-  wire \$80 ;
-  wire \$81 ;
+  wire [13:0] \$80 ;
+  wire [17:0] \$81 ;
   wire \$82 ;
   wire \$83 ;
   wire \$84 ;
@@ -19160,8 +19206,10 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   wire arm;
   output \bit ;
   wire \bit ;
+  reg centre;
   input clk;
   wire clk;
+  reg crowded = 1'h0;
   reg decided;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
@@ -19184,6 +19232,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   output noise;
   wire noise;
   reg odd = 1'h0;
+  reg one_edge = 1'h0;
   reg [16:0] period_load = 17'h00000;
   reg [1:0] phase = 2'h0;
   input receiver_clear;
@@ -19199,7 +19248,9 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
+  reg strobed = 1'h0;
   reg tail_odd = 1'h0;
+  reg two_edges = 1'h0;
   reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
   reg vote2 = 1'h0;
@@ -19215,103 +19266,145 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   assign \$8  = mid_delay + 1'h1;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = ~ single;
-  assign \$12  = decided & \$11 ;
-  assign \$13  = vote1 & vote2;
-  assign \$14  = vote1 & level;
-  assign \$15  = \$13  | \$14 ;
-  assign \$16  = vote2 & level;
-  assign \$17  = \$15  | \$16 ;
-  assign \$18  = vote1 & vote2;
-  assign \$19  = vote1 & level;
-  assign \$20  = \$18  | \$19 ;
-  assign \$21  = vote2 & level;
-  assign \$22  = \$20  | \$21 ;
-  assign \$23  = level != \$22 ;
-  assign \$24  = ~ level;
-  assign \$25  = elapsed != 13'h1fff;
-  assign \$26  = elapsed + 1'h1;
-  assign \$27  = slot_left - 1'h1;
-  assign \$28  = slot_left == 1'h1;
-  assign \$29  = ~ level;
-  assign \$30  = slo_prev & \$29 ;
-  assign \$31  = elapsed == 13'h1fff;
-  assign \$32  = \$31  ? 13'h1fff : mid_delay;
-  assign \$33  = ! mid_slot;
-  assign \$34  = elapsed == 13'h1fff;
-  assign \$35  = elapsed - 1'h1;
-  assign \$36  = \$34  ? 14'h1fff : \$35 ;
-  assign \$37  = half_period - 2'h2;
-  assign \$38  = elapsed == 13'h1fff;
-  assign \$39  = elapsed - 1'h1;
-  assign \$40  = \$38  ? 14'h1fff : \$39 ;
-  assign \$41  = elapsed != 13'h1fff;
-  assign \$42  = elapsed + 1'h1;
-  assign \$43  = slot_left - 1'h1;
-  assign \$44  = slot_left == 1'h1;
-  assign \$45  = ! phase;
-  assign \$46  = first_slot & \$45 ;
-  assign \$47  = \$46  & level;
-  assign \$48  = ~ single;
-  assign \$49  = decided & first_slot;
-  assign \$50  = vote1 & vote2;
-  assign \$51  = vote1 & level;
-  assign \$52  = \$50  | \$51 ;
-  assign \$53  = vote2 & level;
-  assign \$54  = \$52  | \$53 ;
-  assign \$55  = single ? level : \$54 ;
-  assign \$56  = ~ first_slot;
-  assign \$57  = decided & \$56 ;
-  assign \$58  = vote1 & vote2;
-  assign \$59  = vote1 & level;
-  assign \$60  = \$58  | \$59 ;
-  assign \$61  = vote2 & level;
-  assign \$62  = \$60  | \$61 ;
-  assign \bit  = single ? level : \$62 ;
-  assign \$63  = ~ single;
-  assign \$64  = decided & \$63 ;
-  assign \$65  = vote1 == level;
-  assign \$66  = vote2 != level;
-  assign \$67  = \$65  & \$66 ;
-  assign \$68  = vote1 & vote2;
-  assign \$69  = vote1 & level;
-  assign \$70  = \$68  | \$69 ;
-  assign \$71  = vote2 & level;
-  assign \$72  = \$70  | \$71 ;
-  assign \$73  = vote1 != \$72 ;
-  assign \$74  = vote1 & vote2;
-  assign \$75  = vote1 & level;
-  assign \$76  = \$74  | \$75 ;
-  assign \$77  = vote2 & level;
-  assign \$78  = \$76  | \$77 ;
-  assign \$79  = last == \$78 ;
-  assign \$80  = \$73  & \$79 ;
-  assign \$81  = \$67  | \$80 ;
-  assign \$82  = vote1 & vote2;
-  assign \$83  = vote1 & level;
-  assign \$84  = \$82  | \$83 ;
-  assign \$85  = vote2 & level;
-  assign \$86  = \$84  | \$85 ;
-  assign \$87  = last == \$86 ;
-  assign \$88  = tail_odd & \$87 ;
-  assign \$89  = \$81  | \$88 ;
-  assign \$90  = \$64  & \$89 ;
-  assign noise = dropped | \$90 ;
-  assign \$91  = ! phase;
-  assign \$92  = first_slot & \$91 ;
-  assign \$93  = \$92  & level;
-  assign \$94  = decided & first_slot;
-  assign \$95  = vote1 & vote2;
-  assign \$96  = vote1 & level;
-  assign \$97  = \$95  | \$96 ;
-  assign \$98  = vote2 & level;
-  assign \$99  = \$97  | \$98 ;
-  assign \$100  = single ? level : \$99 ;
-  assign \$101  = ! sampler_fsm_state;
-  assign \$102  = sampler_fsm_state == 1'h1;
-  assign \$103  = sampler_fsm_state == 2'h2;
+  assign \$11  = level != slo_prev;
+  assign \$12  = one_edge & \$11 ;
+  assign \$13  = two_edges | \$12 ;
+  assign \$14  = level != slo_prev;
+  assign \$15  = one_edge | \$14 ;
+  assign \$16  = level != slo_prev;
+  assign \$17  = one_edge & \$16 ;
+  assign \$18  = two_edges | \$17 ;
+  assign \$19  = ~ single;
+  assign \$20  = decided & \$19 ;
+  assign \$21  = vote1 & vote2;
+  assign \$22  = vote1 & level;
+  assign \$23  = \$21  | \$22 ;
+  assign \$24  = vote2 & level;
+  assign \$25  = \$23  | \$24 ;
+  assign \$26  = vote1 & vote2;
+  assign \$27  = vote1 & level;
+  assign \$28  = \$26  | \$27 ;
+  assign \$29  = vote2 & level;
+  assign \$30  = \$28  | \$29 ;
+  assign \$31  = level != \$30 ;
+  assign \$32  = ~ single;
+  assign \$33  = decided & \$32 ;
+  assign \$34  = vote1 == level;
+  assign \$35  = vote2 != level;
+  assign \$36  = \$34  & \$35 ;
+  assign \$37  = vote1 & vote2;
+  assign \$38  = vote1 & level;
+  assign \$39  = \$37  | \$38 ;
+  assign \$40  = vote2 & level;
+  assign \$41  = \$39  | \$40 ;
+  assign \$42  = vote1 != \$41 ;
+  assign \$43  = vote1 & vote2;
+  assign \$44  = vote1 & level;
+  assign \$45  = \$43  | \$44 ;
+  assign \$46  = vote2 & level;
+  assign \$47  = \$45  | \$46 ;
+  assign \$48  = last == \$47 ;
+  assign \$49  = \$42  & \$48 ;
+  assign \$50  = \$36  | \$49 ;
+  assign \$51  = vote1 & vote2;
+  assign \$52  = vote1 & level;
+  assign \$53  = \$51  | \$52 ;
+  assign \$54  = vote2 & level;
+  assign \$55  = \$53  | \$54 ;
+  assign \$56  = last == \$55 ;
+  assign \$57  = tail_odd & \$56 ;
+  assign \$58  = \$50  | \$57 ;
+  assign \$59  = \$58  | crowded;
+  assign \$60  = ~ strobed;
+  assign \$61  = \$59  & \$60 ;
+  assign \$62  = ~ level;
+  assign \$63  = elapsed != 13'h1fff;
+  assign \$64  = elapsed + 1'h1;
+  assign \$65  = slot_left - 1'h1;
+  assign \$66  = slot_left == 1'h1;
+  assign \$67  = ~ level;
+  assign \$68  = slo_prev & \$67 ;
+  assign \$69  = elapsed == 13'h1fff;
+  assign \$70  = \$69  ? 13'h1fff : mid_delay;
+  assign \$71  = ! mid_slot;
+  assign \$72  = elapsed == 13'h1fff;
+  assign \$73  = elapsed - 1'h1;
+  assign \$74  = \$72  ? 14'h1fff : \$73 ;
+  assign \$75  = half_period - 2'h2;
+  assign \$76  = elapsed == 13'h1fff;
+  assign \$77  = elapsed - 1'h1;
+  assign \$78  = \$76  ? 14'h1fff : \$77 ;
+  assign \$79  = elapsed != 13'h1fff;
+  assign \$80  = elapsed + 1'h1;
+  assign \$81  = slot_left - 1'h1;
+  assign \$82  = slot_left == 1'h1;
+  assign \$83  = ! phase;
+  assign \$84  = first_slot & \$83 ;
+  assign \$85  = \$84  & level;
+  assign \$86  = ~ single;
+  assign \$87  = decided & first_slot;
+  assign \$88  = vote1 & vote2;
+  assign \$89  = vote1 & level;
+  assign \$90  = \$88  | \$89 ;
+  assign \$91  = vote2 & level;
+  assign \$92  = \$90  | \$91 ;
+  assign \$93  = single ? level : \$92 ;
+  assign \$94  = ~ first_slot;
+  assign \$95  = decided & \$94 ;
+  assign \$96  = vote1 & vote2;
+  assign \$97  = vote1 & level;
+  assign \$98  = \$96  | \$97 ;
+  assign \$99  = vote2 & level;
+  assign \$100  = \$98  | \$99 ;
+  assign \bit  = single ? level : \$100 ;
+  assign \$101  = ~ single;
+  assign \$102  = decided & \$101 ;
+  assign \$103  = vote1 == level;
+  assign \$104  = vote2 != level;
+  assign \$105  = \$103  & \$104 ;
+  assign \$106  = vote1 & vote2;
+  assign \$107  = vote1 & level;
+  assign \$108  = \$106  | \$107 ;
+  assign \$109  = vote2 & level;
+  assign \$110  = \$108  | \$109 ;
+  assign \$111  = vote1 != \$110 ;
+  assign \$112  = vote1 & vote2;
+  assign \$113  = vote1 & level;
+  assign \$114  = \$112  | \$113 ;
+  assign \$115  = vote2 & level;
+  assign \$116  = \$114  | \$115 ;
+  assign \$117  = last == \$116 ;
+  assign \$118  = \$111  & \$117 ;
+  assign \$119  = \$105  | \$118 ;
+  assign \$120  = vote1 & vote2;
+  assign \$121  = vote1 & level;
+  assign \$122  = \$120  | \$121 ;
+  assign \$123  = vote2 & level;
+  assign \$124  = \$122  | \$123 ;
+  assign \$125  = last == \$124 ;
+  assign \$126  = tail_odd & \$125 ;
+  assign \$127  = \$119  | \$126 ;
+  assign \$128  = \$127  | crowded;
+  assign \$129  = \$102  & \$128 ;
+  assign \$130  = ~ strobed;
+  assign \$131  = \$129  & \$130 ;
+  assign noise = dropped | \$131 ;
+  assign \$132  = ! phase;
+  assign \$133  = first_slot & \$132 ;
+  assign \$134  = \$133  & level;
+  assign \$135  = ~ single;
+  assign \$136  = decided & first_slot;
+  assign \$137  = vote1 & vote2;
+  assign \$138  = vote1 & level;
+  assign \$139  = \$137  | \$138 ;
+  assign \$140  = vote2 & level;
+  assign \$141  = \$139  | \$140 ;
+  assign \$142  = single ? level : \$141 ;
+  assign \$143  = ! sampler_fsm_state;
+  assign \$144  = sampler_fsm_state == 1'h1;
+  assign \$145  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$104 ;
+    slo_prev <= \$146 ;
   always @(posedge clk)
     vote <= \$2 ;
   always @(posedge clk)
@@ -19325,39 +19418,47 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   always @(posedge clk)
     period_load <= { first_load, 1'h1 };
   always @(posedge clk)
-    mid_delay <= \$105 ;
+    mid_delay <= \$147 ;
   always @(posedge clk)
-    mid_slot <= \$106 ;
+    mid_slot <= \$148 ;
   always @(posedge clk)
-    odd <= \$107 ;
+    odd <= \$149 ;
   always @(posedge clk)
-    last <= \$108 ;
+    one_edge <= \$150 ;
   always @(posedge clk)
-    tail_odd <= \$109 ;
+    two_edges <= \$151 ;
   always @(posedge clk)
-    elapsed <= \$110 ;
+    crowded <= \$152 ;
   always @(posedge clk)
-    early <= \$111 ;
+    last <= \$153 ;
   always @(posedge clk)
-    locked <= \$112 ;
+    tail_odd <= \$154 ;
   always @(posedge clk)
-    gap <= \$113 ;
+    strobed <= \$155 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$114 ;
+    elapsed <= \$156 ;
   always @(posedge clk)
-    slot_left <= \$115 ;
+    early <= \$157 ;
   always @(posedge clk)
-    slot_zero <= \$116 ;
+    locked <= \$158 ;
   always @(posedge clk)
-    vote1 <= \$117 ;
+    gap <= \$159 ;
   always @(posedge clk)
-    vote2 <= \$118 ;
+    sampler_fsm_state <= \$160 ;
   always @(posedge clk)
-    first_slot <= \$119 ;
+    slot_left <= \$161 ;
   always @(posedge clk)
-    delay <= \$120 ;
+    slot_zero <= \$162 ;
   always @(posedge clk)
-    phase <= \$121 ;
+    vote1 <= \$163 ;
+  always @(posedge clk)
+    vote2 <= \$164 ;
+  always @(posedge clk)
+    first_slot <= \$165 ;
+  always @(posedge clk)
+    delay <= \$166 ;
+  always @(posedge clk)
+    phase <= \$167 ;
   \biss_master_uart.ch0.core.sampler.sync  sync (
     .clk(clk),
     .receiver_clear(receiver_clear),
@@ -19367,482 +19468,570 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$104  = level;
+    \$146  = level;
     if (receiver_clear) begin
-      \$104  = 1'h1;
+      \$146  = 1'h1;
     end
     if (rst) begin
-      \$104  = 1'h1;
+      \$146  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$105  = mid_delay;
+    \$147  = mid_delay;
     if (odd) begin
-      \$105  = \$8 [12:0];
+      \$147  = \$8 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$105  = \$40 [12:0];
+              \$147  = \$78 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$105  = 13'h0000;
+      \$147  = 13'h0000;
     end
     if (rst) begin
-      \$105  = 13'h0000;
+      \$147  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$106  = mid_slot;
+    \$148  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$106  = \$9 [16:0];
+      \$148  = \$9 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$106  = \$37 ;
+              \$148  = \$75 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$106  = 17'h00000;
+      \$148  = 17'h00000;
     end
     if (rst) begin
-      \$106  = 17'h00000;
+      \$148  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$107  = \$10 ;
+    \$149  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$107  = 1'h1;
+              \$149  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$107  = 1'h0;
+      \$149  = 1'h0;
     end
     if (rst) begin
-      \$107  = 1'h0;
+      \$149  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$108  = last;
-    if (\$12 ) begin
-      \$108  = \$17 ;
+    (* full_case = 32'd1 *)
+    if (centre) begin
+      \$150  = 1'h0;
+    end else begin
+      \$150  = \$15 ;
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$108  = 1'h0;
+          if (\$68 ) begin
+            \$150  = 1'h0;
           end
     endcase
     if (receiver_clear) begin
-      \$108  = 1'h0;
+      \$150  = 1'h0;
     end
     if (rst) begin
-      \$108  = 1'h0;
+      \$150  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$109  = tail_odd;
-    if (\$12 ) begin
-      \$109  = \$23 ;
+    (* full_case = 32'd1 *)
+    if (centre) begin
+      \$151  = 1'h0;
+    end else begin
+      \$151  = \$18 ;
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$109  = 1'h0;
+          if (\$68 ) begin
+            \$151  = 1'h0;
           end
     endcase
     if (receiver_clear) begin
-      \$109  = 1'h0;
+      \$151  = 1'h0;
     end
     if (rst) begin
-      \$109  = 1'h0;
+      \$151  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$110  = elapsed;
+    \$152  = crowded;
+    if (centre) begin
+      \$152  = \$13 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$68 ) begin
+            \$152  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$152  = 1'h0;
+    end
+    if (rst) begin
+      \$152  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$153  = last;
+    if (\$20 ) begin
+      \$153  = \$25 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$68 ) begin
+            \$153  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$153  = 1'h0;
+    end
+    if (rst) begin
+      \$153  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$154  = tail_odd;
+    if (\$20 ) begin
+      \$154  = \$31 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$68 ) begin
+            \$154  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$154  = 1'h0;
+    end
+    if (rst) begin
+      \$154  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$155  = strobed;
+    if (\$33 ) begin
+      \$155  = \$61 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$68 ) begin
+            \$155  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$155  = 1'h0;
+    end
+    if (rst) begin
+      \$155  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$156  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$110  = 13'h0001;
+            \$156  = 13'h0001;
           end
       2'h1:
-          if (\$25 ) begin
-            \$110  = \$26 [12:0];
+          if (\$63 ) begin
+            \$156  = \$64 [12:0];
           end
       2'h2:
-          if (\$41 ) begin
-            \$110  = \$42 [12:0];
+          if (\$79 ) begin
+            \$156  = \$80 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$110  = 13'h0000;
+      \$156  = 13'h0000;
     end
     if (rst) begin
-      \$110  = 13'h0000;
+      \$156  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$111  = early;
+    \$157  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$111  = \$24 ;
+            \$157  = \$62 ;
           end
     endcase
     if (receiver_clear) begin
-      \$111  = 1'h0;
+      \$157  = 1'h0;
     end
     if (rst) begin
-      \$111  = 1'h0;
+      \$157  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$112  = locked;
+    \$158  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$112  = 1'h0;
+            \$158  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$49 ) begin
+          if (\$87 ) begin
             (* full_case = 32'd1 *)
-            if (\$55 ) begin
+            if (\$93 ) begin
             end else begin
-              \$112  = 1'h1;
+              \$158  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$112  = 1'h0;
+      \$158  = 1'h0;
     end
     if (rst) begin
-      \$112  = 1'h0;
+      \$158  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$113  = gap;
+    \$159  = gap;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$113  = 1'h0;
+            \$159  = 1'h0;
           end
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$113  = 1'h0;
+              \$159  = 1'h0;
             end
           end
-          if (\$30 ) begin
-            \$113  = 1'h0;
+          if (\$68 ) begin
+            \$159  = 1'h0;
           end
         end
       2'h2:
-          if (\$47 ) begin
-            \$113  = \$48 ;
+          if (\$85 ) begin
+            \$159  = \$86 ;
           end
     endcase
     if (receiver_clear) begin
-      \$113  = 1'h0;
+      \$159  = 1'h0;
     end
     if (rst) begin
-      \$113  = 1'h0;
+      \$159  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$114  = sampler_fsm_state;
+    \$160  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$114  = 2'h1;
+            \$160  = 2'h1;
           end
       2'h1:
-          if (\$30 ) begin
-            \$114  = 2'h2;
+          if (\$68 ) begin
+            \$160  = 2'h2;
           end
       2'h2:
         begin
-          if (\$47 ) begin
-            \$114  = 2'h1;
+          if (\$85 ) begin
+            \$160  = 2'h1;
           end
-          if (\$49 ) begin
-            if (\$55 ) begin
-              \$114  = 2'h1;
+          if (\$87 ) begin
+            if (\$93 ) begin
+              \$160  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$114  = 2'h0;
+      \$160  = 2'h0;
     end
     if (rst) begin
-      \$114  = 2'h0;
+      \$160  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$115  = slot_left;
+    \$161  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$115  = \$27 [16:0];
+            \$161  = \$65 [16:0];
           end
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$115  = mid_slot;
+              \$161  = mid_slot;
             end else begin
-              \$115  = { 1'h0, first_load };
+              \$161  = { 1'h0, first_load };
             end
           end
         end
       2'h2:
         begin
-          \$115  = \$43 [16:0];
-          if (\$47 ) begin
-            \$115  = { 2'h0, vote_load };
+          \$161  = \$81 [16:0];
+          if (\$85 ) begin
+            \$161  = { 2'h0, vote_load };
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$115  = period_load;
+                    \$161  = period_load;
                   end else begin
-                    \$115  = { 2'h0, vote_load };
+                    \$161  = { 2'h0, vote_load };
                   end
               2'h1:
-                  \$115  = { 2'h0, vote_load };
+                  \$161  = { 2'h0, vote_load };
               default:
-                  \$115  = period_load;
+                  \$161  = period_load;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$115  = 17'h00000;
+      \$161  = 17'h00000;
     end
     if (rst) begin
-      \$115  = 17'h00000;
+      \$161  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$116  = slot_zero;
+    \$162  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$116  = \$28 ;
+            \$162  = \$66 ;
           end
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$116  = \$33 ;
+              \$162  = \$71 ;
             end else begin
-              \$116  = 1'h0;
+              \$162  = 1'h0;
             end
           end
         end
       2'h2:
         begin
-          \$116  = \$44 ;
-          if (\$47 ) begin
-            \$116  = vote_one;
+          \$162  = \$82 ;
+          if (\$85 ) begin
+            \$162  = vote_one;
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$116  = 1'h0;
+                    \$162  = 1'h0;
                   end else begin
-                    \$116  = vote_one;
+                    \$162  = vote_one;
                   end
               2'h1:
-                  \$116  = vote_one;
+                  \$162  = vote_one;
               default:
-                  \$116  = 1'h0;
+                  \$162  = 1'h0;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$116  = 1'h1;
+      \$162  = 1'h1;
     end
     if (rst) begin
-      \$116  = 1'h1;
+      \$162  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$117  = vote1;
+    \$163  = vote1;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$117  = 1'h0;
+          if (\$68 ) begin
+            \$163  = 1'h0;
           end
       2'h2:
-          if (\$47 ) begin
+          if (\$85 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$117  = level;
+                    \$163  = level;
                   end
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$117  = 1'h0;
+      \$163  = 1'h0;
     end
     if (rst) begin
-      \$117  = 1'h0;
+      \$163  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$118  = vote2;
+    \$164  = vote2;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$118  = 1'h0;
+          if (\$68 ) begin
+            \$164  = 1'h0;
           end
       2'h2:
-          if (\$47 ) begin
+          if (\$85 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  \$118  = level;
+                  \$164  = level;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$118  = 1'h0;
+      \$164  = 1'h0;
     end
     if (rst) begin
-      \$118  = 1'h0;
+      \$164  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$119  = first_slot;
+    \$165  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$119  = 1'h1;
+          if (\$68 ) begin
+            \$165  = 1'h1;
           end
       2'h2:
-          if (\$49 ) begin
+          if (\$87 ) begin
             (* full_case = 32'd1 *)
-            if (\$55 ) begin
+            if (\$93 ) begin
             end else begin
-              \$119  = 1'h0;
+              \$165  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$119  = 1'h0;
+      \$165  = 1'h0;
     end
     if (rst) begin
-      \$119  = 1'h0;
+      \$165  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$120  = delay;
+    \$166  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$120  = \$32 ;
+              \$166  = \$70 ;
             end else begin
-              \$120  = \$36 [12:0];
+              \$166  = \$74 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$120  = 13'h0000;
+      \$166  = 13'h0000;
     end
     if (rst) begin
-      \$120  = 13'h0000;
+      \$166  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$121  = phase;
+    \$167  = phase;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$121  = 2'h1;
+              \$167  = 2'h1;
             end else begin
-              \$121  = 2'h0;
+              \$167  = 2'h0;
             end
           end
       2'h2:
-          if (\$47 ) begin
+          if (\$85 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -19850,34 +20039,34 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$121  = 2'h1;
+                    \$167  = 2'h1;
                   end
               2'h1:
-                  \$121  = 2'h2;
+                  \$167  = 2'h2;
               default:
-                  \$121  = 2'h0;
+                  \$167  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$121  = 2'h0;
+      \$167  = 2'h0;
     end
     if (rst) begin
-      \$121  = 2'h0;
+      \$167  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    sample = \$57 ;
+    sample = \$95 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           /* empty */;
       2'h2:
-          if (\$94 ) begin
+          if (\$136 ) begin
             (* full_case = 32'd1 *)
-            if (\$100 ) begin
+            if (\$142 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -19894,11 +20083,11 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
           /* empty */;
       2'h2:
         begin
-          if (\$93 ) begin
+          if (\$134 ) begin
             dropped = 1'h1;
           end
-          if (\$94 ) begin
-            if (\$100 ) begin
+          if (\$136 ) begin
+            if (\$142 ) begin
               dropped = 1'h1;
             end
           end
@@ -19914,7 +20103,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
       2'h1:
           /* empty */;
       2'h2:
-          if (\$93 ) begin
+          if (\$134 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -19926,6 +20115,26 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
                   /* empty */;
               default:
                   decided = 1'h1;
+            endcase
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    centre = 1'h0;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          /* empty */;
+      2'h2:
+          if (\$134 ) begin
+          end else if (slot_zero) begin
+            casez (phase)
+              2'h0:
+                  /* empty */;
+              2'h1:
+                  centre = \$135 ;
             endcase
           end
     endcase
@@ -20101,7 +20310,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4987$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$5079$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -20143,8 +20352,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4987$0 ;
-  wire \port$4987$0 ;
+  input \port$5079$0 ;
+  wire \port$5079$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -20158,9 +20367,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4987$0  };
-  assign \$2  = { lc[4:0], \port$4987$0  } == last;
-  assign \$3  = { lc[4:0], \port$4987$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5079$0  };
+  assign \$2  = { lc[4:0], \port$5079$0  } == last;
+  assign \$3  = { lc[4:0], \port$5079$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -20270,7 +20479,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4987$0  };
+  assign lc_next = { lc[4:0], \port$5079$0  };
   assign zero = is_zero;
 endmodule
 
@@ -20826,7 +21035,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2309$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2355$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
@@ -20978,8 +21187,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2309$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$2309$0 ;
-  wire \port$2309$0 ;
+  output \port$2355$0 ;
+  wire \port$2355$0 ;
   output report;
   wire report;
   input report_frame;
@@ -21085,7 +21294,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2309$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2309$0  = \$2 ;
+  assign \port$2355$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -21126,7 +21335,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1 (clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly
-, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5879$0 , \port$5892$0 , regs__ca_done, \port$6024$0 , slo
+, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5989$0 , \port$6002$0 , regs__ca_done, \port$6134$0 , slo
 );
   reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire \$1 ;
@@ -21286,12 +21495,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en, r
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$5879$0 ;
-  wire [186:0] \port$5879$0 ;
-  output [335:0] \port$5892$0 ;
-  wire [335:0] \port$5892$0 ;
-  output [9:0] \port$6024$0 ;
-  wire [9:0] \port$6024$0 ;
+  output [186:0] \port$5989$0 ;
+  wire [186:0] \port$5989$0 ;
+  output [335:0] \port$6002$0 ;
+  wire [335:0] \port$6002$0 ;
+  output [9:0] \port$6134$0 ;
+  wire [9:0] \port$6134$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -21691,9 +21900,9 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$202  = ma;
   assign \slo$204  = slo;
-  assign \port$5879$0  = \$5 ;
-  assign \port$5892$0  = \$6 ;
-  assign \port$6024$0  = \$7 ;
+  assign \port$5989$0  = \$5 ;
+  assign \port$6002$0  = \$6 ;
+  assign \port$6134$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -22795,7 +23004,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$5543$0 (\bit ),
+    .\port$5644$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -22859,7 +23068,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$3817$0 (\$24 ),
+    .\port$3909$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -31329,30 +31538,76 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   wire \$101 ;
   wire \$102 ;
   wire \$103 ;
-  reg \$104 ;
-  reg [12:0] \$105 ;
-  reg [16:0] \$106 ;
-  reg \$107 ;
-  reg \$108 ;
-  reg \$109 ;
+  wire \$104 ;
+  wire \$105 ;
+  wire \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
   wire \$11 ;
-  reg [12:0] \$110 ;
-  reg \$111 ;
-  reg \$112 ;
-  reg \$113 ;
-  reg [1:0] \$114 ;
-  reg [16:0] \$115 ;
-  reg \$116 ;
-  reg \$117 ;
-  reg \$118 ;
-  reg \$119 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire \$12 ;
-  reg [12:0] \$120 ;
-  reg [1:0] \$121 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   wire \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  reg \$146 ;
+  reg [12:0] \$147 ;
+  reg [16:0] \$148 ;
+  reg \$149 ;
   wire \$15 ;
+  reg \$150 ;
+  reg \$151 ;
+  reg \$152 ;
+  reg \$153 ;
+  reg \$154 ;
+  reg \$155 ;
+  reg [12:0] \$156 ;
+  reg \$157 ;
+  reg \$158 ;
+  reg \$159 ;
   wire \$16 ;
+  reg [1:0] \$160 ;
+  reg [16:0] \$161 ;
+  reg \$162 ;
+  reg \$163 ;
+  reg \$164 ;
+  reg \$165 ;
+  reg [12:0] \$166 ;
+  reg [1:0] \$167 ;
   wire \$17 ;
   wire \$18 ;
   wire \$19 ;
@@ -31363,26 +31618,26 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   wire \$23 ;
   wire \$24 ;
   wire \$25 ;
-  wire [13:0] \$26 ;
-  wire [17:0] \$27 ;
+  wire \$26 ;
+  wire \$27 ;
   wire \$28 ;
   wire \$29 ;
   wire \$3 ;
   wire \$30 ;
   wire \$31 ;
-  wire [12:0] \$32 ;
+  wire \$32 ;
   wire \$33 ;
   wire \$34 ;
-  wire [13:0] \$35 ;
-  wire [13:0] \$36 ;
-  wire [16:0] \$37 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
   wire \$38 ;
-  wire [13:0] \$39 ;
+  wire \$39 ;
   wire [16:0] \$4 ;
-  wire [13:0] \$40 ;
+  wire \$40 ;
   wire \$41 ;
-  wire [13:0] \$42 ;
-  wire [17:0] \$43 ;
+  wire \$42 ;
+  wire \$43 ;
   wire \$44 ;
   wire \$45 ;
   wire \$46 ;
@@ -31405,26 +31660,26 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   wire \$61 ;
   wire \$62 ;
   wire \$63 ;
-  wire \$64 ;
-  wire \$65 ;
+  wire [13:0] \$64 ;
+  wire [17:0] \$65 ;
   wire \$66 ;
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
   wire \$7 ;
-  wire \$70 ;
+  wire [12:0] \$70 ;
   wire \$71 ;
   wire \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  wire \$75 ;
+  wire [13:0] \$73 ;
+  wire [13:0] \$74 ;
+  wire [16:0] \$75 ;
   wire \$76 ;
-  wire \$77 ;
-  wire \$78 ;
+  wire [13:0] \$77 ;
+  wire [13:0] \$78 ;
   wire \$79 ;
   wire [13:0] \$8 ;
-  wire \$80 ;
-  wire \$81 ;
+  wire [13:0] \$80 ;
+  wire [17:0] \$81 ;
   wire \$82 ;
   wire \$83 ;
   wire \$84 ;
@@ -31448,8 +31703,10 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   wire arm;
   output \bit ;
   wire \bit ;
+  reg centre;
   input clk;
   wire clk;
+  reg crowded = 1'h0;
   reg decided;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
@@ -31472,6 +31729,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   output noise;
   wire noise;
   reg odd = 1'h0;
+  reg one_edge = 1'h0;
   reg [16:0] period_load = 17'h00000;
   reg [1:0] phase = 2'h0;
   input receiver_clear;
@@ -31487,7 +31745,9 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
+  reg strobed = 1'h0;
   reg tail_odd = 1'h0;
+  reg two_edges = 1'h0;
   reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
   reg vote2 = 1'h0;
@@ -31503,103 +31763,145 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   assign \$8  = mid_delay + 1'h1;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = ~ single;
-  assign \$12  = decided & \$11 ;
-  assign \$13  = vote1 & vote2;
-  assign \$14  = vote1 & level;
-  assign \$15  = \$13  | \$14 ;
-  assign \$16  = vote2 & level;
-  assign \$17  = \$15  | \$16 ;
-  assign \$18  = vote1 & vote2;
-  assign \$19  = vote1 & level;
-  assign \$20  = \$18  | \$19 ;
-  assign \$21  = vote2 & level;
-  assign \$22  = \$20  | \$21 ;
-  assign \$23  = level != \$22 ;
-  assign \$24  = ~ level;
-  assign \$25  = elapsed != 13'h1fff;
-  assign \$26  = elapsed + 1'h1;
-  assign \$27  = slot_left - 1'h1;
-  assign \$28  = slot_left == 1'h1;
-  assign \$29  = ~ level;
-  assign \$30  = slo_prev & \$29 ;
-  assign \$31  = elapsed == 13'h1fff;
-  assign \$32  = \$31  ? 13'h1fff : mid_delay;
-  assign \$33  = ! mid_slot;
-  assign \$34  = elapsed == 13'h1fff;
-  assign \$35  = elapsed - 1'h1;
-  assign \$36  = \$34  ? 14'h1fff : \$35 ;
-  assign \$37  = half_period - 2'h2;
-  assign \$38  = elapsed == 13'h1fff;
-  assign \$39  = elapsed - 1'h1;
-  assign \$40  = \$38  ? 14'h1fff : \$39 ;
-  assign \$41  = elapsed != 13'h1fff;
-  assign \$42  = elapsed + 1'h1;
-  assign \$43  = slot_left - 1'h1;
-  assign \$44  = slot_left == 1'h1;
-  assign \$45  = ! phase;
-  assign \$46  = first_slot & \$45 ;
-  assign \$47  = \$46  & level;
-  assign \$48  = ~ single;
-  assign \$49  = decided & first_slot;
-  assign \$50  = vote1 & vote2;
-  assign \$51  = vote1 & level;
-  assign \$52  = \$50  | \$51 ;
-  assign \$53  = vote2 & level;
-  assign \$54  = \$52  | \$53 ;
-  assign \$55  = single ? level : \$54 ;
-  assign \$56  = ~ first_slot;
-  assign \$57  = decided & \$56 ;
-  assign \$58  = vote1 & vote2;
-  assign \$59  = vote1 & level;
-  assign \$60  = \$58  | \$59 ;
-  assign \$61  = vote2 & level;
-  assign \$62  = \$60  | \$61 ;
-  assign \bit  = single ? level : \$62 ;
-  assign \$63  = ~ single;
-  assign \$64  = decided & \$63 ;
-  assign \$65  = vote1 == level;
-  assign \$66  = vote2 != level;
-  assign \$67  = \$65  & \$66 ;
-  assign \$68  = vote1 & vote2;
-  assign \$69  = vote1 & level;
-  assign \$70  = \$68  | \$69 ;
-  assign \$71  = vote2 & level;
-  assign \$72  = \$70  | \$71 ;
-  assign \$73  = vote1 != \$72 ;
-  assign \$74  = vote1 & vote2;
-  assign \$75  = vote1 & level;
-  assign \$76  = \$74  | \$75 ;
-  assign \$77  = vote2 & level;
-  assign \$78  = \$76  | \$77 ;
-  assign \$79  = last == \$78 ;
-  assign \$80  = \$73  & \$79 ;
-  assign \$81  = \$67  | \$80 ;
-  assign \$82  = vote1 & vote2;
-  assign \$83  = vote1 & level;
-  assign \$84  = \$82  | \$83 ;
-  assign \$85  = vote2 & level;
-  assign \$86  = \$84  | \$85 ;
-  assign \$87  = last == \$86 ;
-  assign \$88  = tail_odd & \$87 ;
-  assign \$89  = \$81  | \$88 ;
-  assign \$90  = \$64  & \$89 ;
-  assign noise = dropped | \$90 ;
-  assign \$91  = ! phase;
-  assign \$92  = first_slot & \$91 ;
-  assign \$93  = \$92  & level;
-  assign \$94  = decided & first_slot;
-  assign \$95  = vote1 & vote2;
-  assign \$96  = vote1 & level;
-  assign \$97  = \$95  | \$96 ;
-  assign \$98  = vote2 & level;
-  assign \$99  = \$97  | \$98 ;
-  assign \$100  = single ? level : \$99 ;
-  assign \$101  = ! sampler_fsm_state;
-  assign \$102  = sampler_fsm_state == 1'h1;
-  assign \$103  = sampler_fsm_state == 2'h2;
+  assign \$11  = level != slo_prev;
+  assign \$12  = one_edge & \$11 ;
+  assign \$13  = two_edges | \$12 ;
+  assign \$14  = level != slo_prev;
+  assign \$15  = one_edge | \$14 ;
+  assign \$16  = level != slo_prev;
+  assign \$17  = one_edge & \$16 ;
+  assign \$18  = two_edges | \$17 ;
+  assign \$19  = ~ single;
+  assign \$20  = decided & \$19 ;
+  assign \$21  = vote1 & vote2;
+  assign \$22  = vote1 & level;
+  assign \$23  = \$21  | \$22 ;
+  assign \$24  = vote2 & level;
+  assign \$25  = \$23  | \$24 ;
+  assign \$26  = vote1 & vote2;
+  assign \$27  = vote1 & level;
+  assign \$28  = \$26  | \$27 ;
+  assign \$29  = vote2 & level;
+  assign \$30  = \$28  | \$29 ;
+  assign \$31  = level != \$30 ;
+  assign \$32  = ~ single;
+  assign \$33  = decided & \$32 ;
+  assign \$34  = vote1 == level;
+  assign \$35  = vote2 != level;
+  assign \$36  = \$34  & \$35 ;
+  assign \$37  = vote1 & vote2;
+  assign \$38  = vote1 & level;
+  assign \$39  = \$37  | \$38 ;
+  assign \$40  = vote2 & level;
+  assign \$41  = \$39  | \$40 ;
+  assign \$42  = vote1 != \$41 ;
+  assign \$43  = vote1 & vote2;
+  assign \$44  = vote1 & level;
+  assign \$45  = \$43  | \$44 ;
+  assign \$46  = vote2 & level;
+  assign \$47  = \$45  | \$46 ;
+  assign \$48  = last == \$47 ;
+  assign \$49  = \$42  & \$48 ;
+  assign \$50  = \$36  | \$49 ;
+  assign \$51  = vote1 & vote2;
+  assign \$52  = vote1 & level;
+  assign \$53  = \$51  | \$52 ;
+  assign \$54  = vote2 & level;
+  assign \$55  = \$53  | \$54 ;
+  assign \$56  = last == \$55 ;
+  assign \$57  = tail_odd & \$56 ;
+  assign \$58  = \$50  | \$57 ;
+  assign \$59  = \$58  | crowded;
+  assign \$60  = ~ strobed;
+  assign \$61  = \$59  & \$60 ;
+  assign \$62  = ~ level;
+  assign \$63  = elapsed != 13'h1fff;
+  assign \$64  = elapsed + 1'h1;
+  assign \$65  = slot_left - 1'h1;
+  assign \$66  = slot_left == 1'h1;
+  assign \$67  = ~ level;
+  assign \$68  = slo_prev & \$67 ;
+  assign \$69  = elapsed == 13'h1fff;
+  assign \$70  = \$69  ? 13'h1fff : mid_delay;
+  assign \$71  = ! mid_slot;
+  assign \$72  = elapsed == 13'h1fff;
+  assign \$73  = elapsed - 1'h1;
+  assign \$74  = \$72  ? 14'h1fff : \$73 ;
+  assign \$75  = half_period - 2'h2;
+  assign \$76  = elapsed == 13'h1fff;
+  assign \$77  = elapsed - 1'h1;
+  assign \$78  = \$76  ? 14'h1fff : \$77 ;
+  assign \$79  = elapsed != 13'h1fff;
+  assign \$80  = elapsed + 1'h1;
+  assign \$81  = slot_left - 1'h1;
+  assign \$82  = slot_left == 1'h1;
+  assign \$83  = ! phase;
+  assign \$84  = first_slot & \$83 ;
+  assign \$85  = \$84  & level;
+  assign \$86  = ~ single;
+  assign \$87  = decided & first_slot;
+  assign \$88  = vote1 & vote2;
+  assign \$89  = vote1 & level;
+  assign \$90  = \$88  | \$89 ;
+  assign \$91  = vote2 & level;
+  assign \$92  = \$90  | \$91 ;
+  assign \$93  = single ? level : \$92 ;
+  assign \$94  = ~ first_slot;
+  assign \$95  = decided & \$94 ;
+  assign \$96  = vote1 & vote2;
+  assign \$97  = vote1 & level;
+  assign \$98  = \$96  | \$97 ;
+  assign \$99  = vote2 & level;
+  assign \$100  = \$98  | \$99 ;
+  assign \bit  = single ? level : \$100 ;
+  assign \$101  = ~ single;
+  assign \$102  = decided & \$101 ;
+  assign \$103  = vote1 == level;
+  assign \$104  = vote2 != level;
+  assign \$105  = \$103  & \$104 ;
+  assign \$106  = vote1 & vote2;
+  assign \$107  = vote1 & level;
+  assign \$108  = \$106  | \$107 ;
+  assign \$109  = vote2 & level;
+  assign \$110  = \$108  | \$109 ;
+  assign \$111  = vote1 != \$110 ;
+  assign \$112  = vote1 & vote2;
+  assign \$113  = vote1 & level;
+  assign \$114  = \$112  | \$113 ;
+  assign \$115  = vote2 & level;
+  assign \$116  = \$114  | \$115 ;
+  assign \$117  = last == \$116 ;
+  assign \$118  = \$111  & \$117 ;
+  assign \$119  = \$105  | \$118 ;
+  assign \$120  = vote1 & vote2;
+  assign \$121  = vote1 & level;
+  assign \$122  = \$120  | \$121 ;
+  assign \$123  = vote2 & level;
+  assign \$124  = \$122  | \$123 ;
+  assign \$125  = last == \$124 ;
+  assign \$126  = tail_odd & \$125 ;
+  assign \$127  = \$119  | \$126 ;
+  assign \$128  = \$127  | crowded;
+  assign \$129  = \$102  & \$128 ;
+  assign \$130  = ~ strobed;
+  assign \$131  = \$129  & \$130 ;
+  assign noise = dropped | \$131 ;
+  assign \$132  = ! phase;
+  assign \$133  = first_slot & \$132 ;
+  assign \$134  = \$133  & level;
+  assign \$135  = ~ single;
+  assign \$136  = decided & first_slot;
+  assign \$137  = vote1 & vote2;
+  assign \$138  = vote1 & level;
+  assign \$139  = \$137  | \$138 ;
+  assign \$140  = vote2 & level;
+  assign \$141  = \$139  | \$140 ;
+  assign \$142  = single ? level : \$141 ;
+  assign \$143  = ! sampler_fsm_state;
+  assign \$144  = sampler_fsm_state == 1'h1;
+  assign \$145  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$104 ;
+    slo_prev <= \$146 ;
   always @(posedge clk)
     vote <= \$2 ;
   always @(posedge clk)
@@ -31613,39 +31915,47 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   always @(posedge clk)
     period_load <= { first_load, 1'h1 };
   always @(posedge clk)
-    mid_delay <= \$105 ;
+    mid_delay <= \$147 ;
   always @(posedge clk)
-    mid_slot <= \$106 ;
+    mid_slot <= \$148 ;
   always @(posedge clk)
-    odd <= \$107 ;
+    odd <= \$149 ;
   always @(posedge clk)
-    last <= \$108 ;
+    one_edge <= \$150 ;
   always @(posedge clk)
-    tail_odd <= \$109 ;
+    two_edges <= \$151 ;
   always @(posedge clk)
-    elapsed <= \$110 ;
+    crowded <= \$152 ;
   always @(posedge clk)
-    early <= \$111 ;
+    last <= \$153 ;
   always @(posedge clk)
-    locked <= \$112 ;
+    tail_odd <= \$154 ;
   always @(posedge clk)
-    gap <= \$113 ;
+    strobed <= \$155 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$114 ;
+    elapsed <= \$156 ;
   always @(posedge clk)
-    slot_left <= \$115 ;
+    early <= \$157 ;
   always @(posedge clk)
-    slot_zero <= \$116 ;
+    locked <= \$158 ;
   always @(posedge clk)
-    vote1 <= \$117 ;
+    gap <= \$159 ;
   always @(posedge clk)
-    vote2 <= \$118 ;
+    sampler_fsm_state <= \$160 ;
   always @(posedge clk)
-    first_slot <= \$119 ;
+    slot_left <= \$161 ;
   always @(posedge clk)
-    delay <= \$120 ;
+    slot_zero <= \$162 ;
   always @(posedge clk)
-    phase <= \$121 ;
+    vote1 <= \$163 ;
+  always @(posedge clk)
+    vote2 <= \$164 ;
+  always @(posedge clk)
+    first_slot <= \$165 ;
+  always @(posedge clk)
+    delay <= \$166 ;
+  always @(posedge clk)
+    phase <= \$167 ;
   \biss_master_uart.ch1.core.sampler.sync  sync (
     .clk(clk),
     .receiver_clear(receiver_clear),
@@ -31655,482 +31965,570 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$104  = level;
+    \$146  = level;
     if (receiver_clear) begin
-      \$104  = 1'h1;
+      \$146  = 1'h1;
     end
     if (rst) begin
-      \$104  = 1'h1;
+      \$146  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$105  = mid_delay;
+    \$147  = mid_delay;
     if (odd) begin
-      \$105  = \$8 [12:0];
+      \$147  = \$8 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$105  = \$40 [12:0];
+              \$147  = \$78 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$105  = 13'h0000;
+      \$147  = 13'h0000;
     end
     if (rst) begin
-      \$105  = 13'h0000;
+      \$147  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$106  = mid_slot;
+    \$148  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$106  = \$9 [16:0];
+      \$148  = \$9 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$106  = \$37 ;
+              \$148  = \$75 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$106  = 17'h00000;
+      \$148  = 17'h00000;
     end
     if (rst) begin
-      \$106  = 17'h00000;
+      \$148  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$107  = \$10 ;
+    \$149  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$107  = 1'h1;
+              \$149  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$107  = 1'h0;
+      \$149  = 1'h0;
     end
     if (rst) begin
-      \$107  = 1'h0;
+      \$149  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$108  = last;
-    if (\$12 ) begin
-      \$108  = \$17 ;
+    (* full_case = 32'd1 *)
+    if (centre) begin
+      \$150  = 1'h0;
+    end else begin
+      \$150  = \$15 ;
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$108  = 1'h0;
+          if (\$68 ) begin
+            \$150  = 1'h0;
           end
     endcase
     if (receiver_clear) begin
-      \$108  = 1'h0;
+      \$150  = 1'h0;
     end
     if (rst) begin
-      \$108  = 1'h0;
+      \$150  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$109  = tail_odd;
-    if (\$12 ) begin
-      \$109  = \$23 ;
+    (* full_case = 32'd1 *)
+    if (centre) begin
+      \$151  = 1'h0;
+    end else begin
+      \$151  = \$18 ;
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$109  = 1'h0;
+          if (\$68 ) begin
+            \$151  = 1'h0;
           end
     endcase
     if (receiver_clear) begin
-      \$109  = 1'h0;
+      \$151  = 1'h0;
     end
     if (rst) begin
-      \$109  = 1'h0;
+      \$151  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$110  = elapsed;
+    \$152  = crowded;
+    if (centre) begin
+      \$152  = \$13 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$68 ) begin
+            \$152  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$152  = 1'h0;
+    end
+    if (rst) begin
+      \$152  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    \$153  = last;
+    if (\$20 ) begin
+      \$153  = \$25 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$68 ) begin
+            \$153  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$153  = 1'h0;
+    end
+    if (rst) begin
+      \$153  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    \$154  = tail_odd;
+    if (\$20 ) begin
+      \$154  = \$31 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$68 ) begin
+            \$154  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$154  = 1'h0;
+    end
+    if (rst) begin
+      \$154  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    \$155  = strobed;
+    if (\$33 ) begin
+      \$155  = \$61 ;
+    end
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$68 ) begin
+            \$155  = 1'h0;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$155  = 1'h0;
+    end
+    if (rst) begin
+      \$155  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    \$156  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$110  = 13'h0001;
+            \$156  = 13'h0001;
           end
       2'h1:
-          if (\$25 ) begin
-            \$110  = \$26 [12:0];
+          if (\$63 ) begin
+            \$156  = \$64 [12:0];
           end
       2'h2:
-          if (\$41 ) begin
-            \$110  = \$42 [12:0];
+          if (\$79 ) begin
+            \$156  = \$80 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$110  = 13'h0000;
+      \$156  = 13'h0000;
     end
     if (rst) begin
-      \$110  = 13'h0000;
+      \$156  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$111  = early;
+    \$157  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$111  = \$24 ;
+            \$157  = \$62 ;
           end
     endcase
     if (receiver_clear) begin
-      \$111  = 1'h0;
+      \$157  = 1'h0;
     end
     if (rst) begin
-      \$111  = 1'h0;
+      \$157  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$112  = locked;
+    \$158  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$112  = 1'h0;
+            \$158  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$49 ) begin
+          if (\$87 ) begin
             (* full_case = 32'd1 *)
-            if (\$55 ) begin
+            if (\$93 ) begin
             end else begin
-              \$112  = 1'h1;
+              \$158  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$112  = 1'h0;
+      \$158  = 1'h0;
     end
     if (rst) begin
-      \$112  = 1'h0;
+      \$158  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$113  = gap;
+    \$159  = gap;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$113  = 1'h0;
+            \$159  = 1'h0;
           end
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$113  = 1'h0;
+              \$159  = 1'h0;
             end
           end
-          if (\$30 ) begin
-            \$113  = 1'h0;
+          if (\$68 ) begin
+            \$159  = 1'h0;
           end
         end
       2'h2:
-          if (\$47 ) begin
-            \$113  = \$48 ;
+          if (\$85 ) begin
+            \$159  = \$86 ;
           end
     endcase
     if (receiver_clear) begin
-      \$113  = 1'h0;
+      \$159  = 1'h0;
     end
     if (rst) begin
-      \$113  = 1'h0;
+      \$159  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$114  = sampler_fsm_state;
+    \$160  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$114  = 2'h1;
+            \$160  = 2'h1;
           end
       2'h1:
-          if (\$30 ) begin
-            \$114  = 2'h2;
+          if (\$68 ) begin
+            \$160  = 2'h2;
           end
       2'h2:
         begin
-          if (\$47 ) begin
-            \$114  = 2'h1;
+          if (\$85 ) begin
+            \$160  = 2'h1;
           end
-          if (\$49 ) begin
-            if (\$55 ) begin
-              \$114  = 2'h1;
+          if (\$87 ) begin
+            if (\$93 ) begin
+              \$160  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$114  = 2'h0;
+      \$160  = 2'h0;
     end
     if (rst) begin
-      \$114  = 2'h0;
+      \$160  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$115  = slot_left;
+    \$161  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$115  = \$27 [16:0];
+            \$161  = \$65 [16:0];
           end
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$115  = mid_slot;
+              \$161  = mid_slot;
             end else begin
-              \$115  = { 1'h0, first_load };
+              \$161  = { 1'h0, first_load };
             end
           end
         end
       2'h2:
         begin
-          \$115  = \$43 [16:0];
-          if (\$47 ) begin
-            \$115  = { 2'h0, vote_load };
+          \$161  = \$81 [16:0];
+          if (\$85 ) begin
+            \$161  = { 2'h0, vote_load };
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$115  = period_load;
+                    \$161  = period_load;
                   end else begin
-                    \$115  = { 2'h0, vote_load };
+                    \$161  = { 2'h0, vote_load };
                   end
               2'h1:
-                  \$115  = { 2'h0, vote_load };
+                  \$161  = { 2'h0, vote_load };
               default:
-                  \$115  = period_load;
+                  \$161  = period_load;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$115  = 17'h00000;
+      \$161  = 17'h00000;
     end
     if (rst) begin
-      \$115  = 17'h00000;
+      \$161  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$116  = slot_zero;
+    \$162  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$116  = \$28 ;
+            \$162  = \$66 ;
           end
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$116  = \$33 ;
+              \$162  = \$71 ;
             end else begin
-              \$116  = 1'h0;
+              \$162  = 1'h0;
             end
           end
         end
       2'h2:
         begin
-          \$116  = \$44 ;
-          if (\$47 ) begin
-            \$116  = vote_one;
+          \$162  = \$82 ;
+          if (\$85 ) begin
+            \$162  = vote_one;
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$116  = 1'h0;
+                    \$162  = 1'h0;
                   end else begin
-                    \$116  = vote_one;
+                    \$162  = vote_one;
                   end
               2'h1:
-                  \$116  = vote_one;
+                  \$162  = vote_one;
               default:
-                  \$116  = 1'h0;
+                  \$162  = 1'h0;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$116  = 1'h1;
+      \$162  = 1'h1;
     end
     if (rst) begin
-      \$116  = 1'h1;
+      \$162  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$117  = vote1;
+    \$163  = vote1;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$117  = 1'h0;
+          if (\$68 ) begin
+            \$163  = 1'h0;
           end
       2'h2:
-          if (\$47 ) begin
+          if (\$85 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$117  = level;
+                    \$163  = level;
                   end
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$117  = 1'h0;
+      \$163  = 1'h0;
     end
     if (rst) begin
-      \$117  = 1'h0;
+      \$163  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$118  = vote2;
+    \$164  = vote2;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$118  = 1'h0;
+          if (\$68 ) begin
+            \$164  = 1'h0;
           end
       2'h2:
-          if (\$47 ) begin
+          if (\$85 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  \$118  = level;
+                  \$164  = level;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$118  = 1'h0;
+      \$164  = 1'h0;
     end
     if (rst) begin
-      \$118  = 1'h0;
+      \$164  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$119  = first_slot;
+    \$165  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
-            \$119  = 1'h1;
+          if (\$68 ) begin
+            \$165  = 1'h1;
           end
       2'h2:
-          if (\$49 ) begin
+          if (\$87 ) begin
             (* full_case = 32'd1 *)
-            if (\$55 ) begin
+            if (\$93 ) begin
             end else begin
-              \$119  = 1'h0;
+              \$165  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$119  = 1'h0;
+      \$165  = 1'h0;
     end
     if (rst) begin
-      \$119  = 1'h0;
+      \$165  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$120  = delay;
+    \$166  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$120  = \$32 ;
+              \$166  = \$70 ;
             end else begin
-              \$120  = \$36 [12:0];
+              \$166  = \$74 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$120  = 13'h0000;
+      \$166  = 13'h0000;
     end
     if (rst) begin
-      \$120  = 13'h0000;
+      \$166  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$121  = phase;
+    \$167  = phase;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$30 ) begin
+          if (\$68 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$121  = 2'h1;
+              \$167  = 2'h1;
             end else begin
-              \$121  = 2'h0;
+              \$167  = 2'h0;
             end
           end
       2'h2:
-          if (\$47 ) begin
+          if (\$85 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -32138,34 +32536,34 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$121  = 2'h1;
+                    \$167  = 2'h1;
                   end
               2'h1:
-                  \$121  = 2'h2;
+                  \$167  = 2'h2;
               default:
-                  \$121  = 2'h0;
+                  \$167  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$121  = 2'h0;
+      \$167  = 2'h0;
     end
     if (rst) begin
-      \$121  = 2'h0;
+      \$167  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    sample = \$57 ;
+    sample = \$95 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           /* empty */;
       2'h2:
-          if (\$94 ) begin
+          if (\$136 ) begin
             (* full_case = 32'd1 *)
-            if (\$100 ) begin
+            if (\$142 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -32182,11 +32580,11 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
           /* empty */;
       2'h2:
         begin
-          if (\$93 ) begin
+          if (\$134 ) begin
             dropped = 1'h1;
           end
-          if (\$94 ) begin
-            if (\$100 ) begin
+          if (\$136 ) begin
+            if (\$142 ) begin
               dropped = 1'h1;
             end
           end
@@ -32202,7 +32600,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
       2'h1:
           /* empty */;
       2'h2:
-          if (\$93 ) begin
+          if (\$134 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -32214,6 +32612,26 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
                   /* empty */;
               default:
                   decided = 1'h1;
+            endcase
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    centre = 1'h0;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          /* empty */;
+      2'h2:
+          if (\$134 ) begin
+          end else if (slot_zero) begin
+            casez (phase)
+              2'h0:
+                  /* empty */;
+              2'h1:
+                  centre = \$135 ;
             endcase
           end
     endcase
@@ -32389,7 +32807,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$5543$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$5644$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -32431,8 +32849,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5543$0 ;
-  wire \port$5543$0 ;
+  input \port$5644$0 ;
+  wire \port$5644$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -32446,9 +32864,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5543$0  };
-  assign \$2  = { lc[4:0], \port$5543$0  } == last;
-  assign \$3  = { lc[4:0], \port$5543$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5644$0  };
+  assign \$2  = { lc[4:0], \port$5644$0  } == last;
+  assign \$3  = { lc[4:0], \port$5644$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -32558,7 +32976,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5543$0  };
+  assign lc_next = { lc[4:0], \port$5644$0  };
   assign zero = is_zero;
 endmodule
 
@@ -33114,7 +33532,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3909$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$119  = 0;
   wire \$1 ;
@@ -33266,8 +33684,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$3817$0 ;
-  wire \port$3817$0 ;
+  output \port$3909$0 ;
+  wire \port$3909$0 ;
   output report;
   wire report;
   input report_frame;
@@ -33373,7 +33791,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$3817$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3817$0  = \$2 ;
+  assign \port$3909$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

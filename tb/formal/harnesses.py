@@ -27,7 +27,7 @@ through public fragment attributes (``flow.Internals``).
 from dataclasses import dataclass
 
 from amaranth.hdl import (Assert, Assume, C, Cat, ClockDomain, Cover, Elaboratable, Module, Mux,
-                          Signal, Value)
+                          Signal, Value, signed)
 from amaranth.lib import wiring
 
 import protocol_facts as facts
@@ -832,6 +832,78 @@ class SamplerImmunityHarness(Harness):
                            "every decided slot as sent")
         # Not vacuous: the whole frame is decided.
         m.d.comb += Cover((decided == self.slots) & (hp == self.hp_max) & (g_len == v))
+        return m
+
+
+class SamplerCleanLineHarness(Harness):
+    """SloSampler alone, the no-false-alarm property of its noise strobe: a clean, jittered line.
+
+    SLO is high, falls at a free clock (the Ack edge) and then holds free slot values (slot 0
+    low, the Ack) and high after the last; every change after the edge (into slot k, and the
+    rise after the last slot) comes a free offset from its nominal clock, anywhere from the
+    slot before's third vote to the next slot's first vote (v - hp .. hp - v clocks, a quarter
+    period each way at an even half period: the jitter the protocol allows); the half period
+    is a free constant from 3 to ``hp_max``. Properties: ``noise`` never strobes (none of the
+    documented patterns, the two-edges-between-centres rule included, fires on a clean line)
+    and every decided slot is as sent. Mutation ``"glitch"``: the line inverted for one free
+    clock as well; the solver must find a strobe (the property is not vacuous).
+    """
+
+    def __init__(self, delay_width, hp_max=4, slots=4, mutation=None):
+        super().__init__(delay_width=delay_width, hp_max=hp_max, slots=slots,
+                         mutation=mutation)
+
+    def elaborate(self, platform):
+        m = self._module()
+        dut = SloSampler(self.delay_width, synchronizer=False)
+        m.submodules.dut = dut
+
+        hp = self.any_const(m, 4, "half_period")
+        v = _vote_spacing(hp)
+        edge = self.any_const(m, 5, "edge")                 # clocks from arm to the Ack edge
+        values = self.any_const(m, self.slots, "slots")     # slot k's level, slot 0 low
+        offsets = [self.any_const(m, signed(5), f"offset{k}") for k in range(1, self.slots + 1)]
+        m.d.comb += [Assume((hp >= 3) & (hp <= self.hp_max)), Assume(edge >= 2),
+                     Assume(~values[0])]
+        for o in offsets:
+            m.d.comb += Assume((o >= v - hp) & (o <= hp - v))
+
+        t = Signal(8)
+        with m.If(t != 255):
+            m.d.sync += t.eq(t + 1)
+        m.d.comb += [dut.arm.eq(t == 1), dut.half_period.eq(hp)]
+        since_edge = Signal(signed(10))
+        m.d.comb += since_edge.eq(t - 1 - edge)
+        # The slot on the line: the number of (jittered) boundaries passed since the edge.
+        slot = Signal(range(self.slots + 1))
+        m.d.comb += slot.eq(sum((since_edge >= 2 * hp * k + o).as_unsigned()
+                                for k, o in enumerate(offsets, start=1)))
+        line = Signal()
+        with m.If(since_edge < 0):
+            m.d.comb += line.eq(1)
+        with m.Elif(slot < self.slots):
+            m.d.comb += line.eq(values.bit_select(slot, 1))
+        with m.Else():
+            m.d.comb += line.eq(1)
+        if self.mutation == "glitch":
+            g_at = self.any_const(m, 8, "glitch_at")
+            m.d.comb += dut.slo.eq(line ^ (t == g_at))
+        else:
+            m.d.comb += dut.slo.eq(line)
+
+        decided = Signal(range(self.slots + 2))
+        with m.If(dut.sample & (decided < self.slots)):
+            m.d.sync += decided.eq(decided + 1)
+        m.d.comb += [
+            Assert(~dut.noise, "no noise strobe on a clean line"),
+            Assert(~dut.sample | (decided >= self.slots)
+                   | (dut.bit == values.bit_select(decided, 1)), "every decided slot as sent"),
+            # Not vacuous: the whole frame decided at the largest half period with a change
+            # at each extreme.
+            Cover((decided == self.slots) & (hp == self.hp_max)
+                  & (offsets[0] == v - hp) & (offsets[1] == hp - v)
+                  & (values[1] != values[0]) & (values[2] != values[1])),
+        ]
         return m
 
 

@@ -25,7 +25,7 @@ from formal import flow
 from formal.harnesses import (DecoderCrcHarness, LivenessLimits, MaClockHarness,
                               MasterCrcHarness, MasterLivenessHarness, MasterMaHarness,
                               RegisterAccessEndsHarness, SamplerHarness,
-                              SamplerImmunityHarness)
+                              SamplerImmunityHarness, SamplerCleanLineHarness)
 
 # -- Parameter sets ------------------------------------------------------------------------------
 #: The shipped default build: two words (55 and 40 data bits), both CRCs on each, 24-bit timers.
@@ -117,6 +117,14 @@ CHECKS = [
     Check("sampler_immunity", "d", "cover", 60, lambda: SamplerImmunityHarness(8), True),
     Check("sampler_immunity_long", "d", "mutation", 60,
           lambda: SamplerImmunityHarness(8, mutation="long"), True),
+    # (d) A clean line with the jitter the votes allow never strobes ``noise`` (issue 28).
+    Check("sampler_clean_line_small", "d", "BMC", 44,
+          lambda: SamplerCleanLineHarness(8, hp_max=4, slots=3), True),
+    Check("sampler_clean_line", "d", "BMC", 70, lambda: SamplerCleanLineHarness(8, hp_max=5), False),
+    Check("sampler_clean_line", "d", "cover", 70, lambda: SamplerCleanLineHarness(8, hp_max=5),
+          True),
+    Check("sampler_clean_line_glitch", "d", "mutation", 70,
+          lambda: SamplerCleanLineHarness(8, hp_max=5, mutation="glitch"), True),
     # (c) a frame with a CRC error is never reported valid ---------------------------------------
     Check("decoder_crc_default", "c", "k-induction", 2, lambda: DecoderCrcHarness(DEFAULT), True),
     Check("decoder_crc_default", "c", "cover", 30, lambda: DecoderCrcHarness(DEFAULT), True),

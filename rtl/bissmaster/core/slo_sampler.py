@@ -60,10 +60,16 @@ class SloSampler(wiring.Component):
     strobes for each pattern no clean line gives: the centre vote against the two outer ones;
     the first vote against the decision while the slot before was decided the same; the third
     vote against the decision while the slot after is decided the same (strobed with the slot
-    after's decision); and an edge the sampler dropped (slot 0 decided high, or SLO high again
-    before slot 0's first vote). A glitch shorter than ``v`` that lands between two votes, or
-    noise edges only near the slots' boundaries, give no strobe: ``noise`` sees part of the
-    noise, never a clean line. No strobes at a half period of 2 (one sample per slot).
+    after's decision); two edges between two slot centres (after one slot's centre vote, or
+    after the Ack edge, up to and including the next slot's centre vote: a clean line read
+    right changes at most once there, however far jitter moves its edges; strobed with that
+    slot's decision); and an
+    edge the sampler dropped (slot 0 decided high, or SLO high again before slot 0's first
+    vote). A slot's pattern strobes only if the slot before did not strobe: one glitch across
+    a slot centre can break that slot's votes and crowd the next span, and counts once (a run
+    of n odd slots strobes ceil(n / 2) times). Noise whose every edge lands near a slot boundary where the data does not change
+    gives no strobe: it looks like data. ``noise`` sees part of the noise, never a clean line.
+    No vote or edge strobes at a half period of 2 (one sample per slot).
 
     **Area.** The slot timer only counts down to zero and reloads, from four values kept as
     reset-less registers (edge to first vote, vote to vote, third vote to the next slot's first,
@@ -98,7 +104,7 @@ class SloSampler(wiring.Component):
         Strobe: ``bit`` is the decision of the next slot (``v`` clocks after its centre).
     bit : Out(1)
     noise : Out(1)
-        Strobe: a vote pattern or an edge no clean line gives (see *Noise*).
+        Strobe: a vote pattern or edges no clean line gives (see *Noise*).
     """
 
     def __init__(self, delay_width, *, synchronizer=True):
@@ -198,9 +204,36 @@ class SloSampler(wiring.Component):
         centre_odd = (vote1 == slo) & (vote2 != slo)
         head_odd = (vote1 != majority) & (last == majority)
         tail_late = tail_odd & (last == majority)
+        # Two edges between two slot centres: a clean line changes at most once there (near
+        # the slots' boundary; an edge that crossed a centre would have changed a decision).
+        # The span runs from the clock after one slot's centre vote (after the Ack edge, for
+        # slot 0) to the next slot's centre vote, that clock included (the vote sees the new
+        # level); it is judged there (``crowded``) and strobed with that slot's decision.
+        # ``one_edge`` / ``two_edges``: one / two edges in the span so far. Jitter moves an
+        # edge anywhere between the centres without a strobe: the check tolerates what the
+        # votes do.
+        edge = slo != slo_prev
+        centre = Signal()                           # the centre vote is taken in this clock
+        one_edge = Signal()
+        two_edges = Signal()
+        crowded = Signal()
+        with m.If(centre):
+            m.d.sync += [one_edge.eq(0), two_edges.eq(0),
+                         crowded.eq(two_edges | one_edge & edge)]
+        with m.Else():
+            m.d.sync += [one_edge.eq(one_edge | edge), two_edges.eq(two_edges | one_edge & edge)]
         with m.If(decided & ~single):
             m.d.sync += [last.eq(majority), tail_odd.eq(slo != majority)]
-        m.d.comb += self.noise.eq(dropped | decided & ~single & (centre_odd | head_odd | tail_late))
+        # One disturbance, one strobe: a glitch across a slot centre breaks that slot's votes
+        # and may crowd the next span too (its second edge beside a data edge), so a slot's
+        # strobe is dropped when the slot before strobed (a run of n odd slots strobes
+        # ceil(n / 2) times: a noisy line still strobes often; with ``cfg_noise_limit`` = 1 a
+        # lone glitch costs nothing).
+        odd_slot = centre_odd | head_odd | tail_late | crowded
+        strobed = Signal()                          # the last decision strobed
+        with m.If(decided & ~single):
+            m.d.sync += strobed.eq(odd_slot & ~strobed)
+        m.d.comb += self.noise.eq(dropped | decided & ~single & odd_slot & ~strobed)
 
         with m.FSM(name="sampler_fsm"):
             with m.State("IDLE"):
@@ -231,6 +264,10 @@ class SloSampler(wiring.Component):
                         gap.eq(0),
                         last.eq(0),
                         tail_odd.eq(0),
+                        one_edge.eq(0),
+                        two_edges.eq(0),
+                        crowded.eq(0),
+                        strobed.eq(0),
                     ]
                     with m.If(gap):
                         # One glitch right at the edge, a short low before it or a short high
@@ -276,6 +313,7 @@ class SloSampler(wiring.Component):
                                 m.d.sync += [vote1.eq(slo), phase.eq(1)]
                                 load(vote_load, vote_one)
                         with m.Case(1):
+                            m.d.comb += centre.eq(~single)
                             m.d.sync += [vote2.eq(slo), phase.eq(2)]
                             load(vote_load, vote_one)
                         with m.Default():

@@ -435,17 +435,20 @@ class JitteredEncoder(DelayedEncoder):
 @pytest.mark.parametrize("hp", (3, 4, 5, 8, 10))
 def test_slo_sampler_a_clean_jittered_line_never_strobes_noise(hp):
     """A clean line changes at most once between two slot centres: every change moved anywhere
-    from just after the slot before's third vote to the next slot's first vote (offsets v - hp
-    + 1 .. hp - v) leaves every decision right and ``noise`` low: no false alarm at any jitter
-    the votes tolerate."""
+    from the slot before's third vote (its clock: the vote sees the new level) to the next
+    slot's first vote (offsets v - hp .. hp - v: a quarter period each way, the jitter the
+    protocol allows, when hp is even) leaves every decision right and ``noise`` low: no false
+    alarm at any jitter the votes tolerate."""
     v = vote_spacing(hp)
     rng = random.Random(2800 + hp)
     scenarios = []
     for _ in range(60):
         slots = _random_slots(rng, 20)
-        offsets = [0] + [rng.randint(v - hp + 1, hp - v) for _ in range(len(slots))]
-        if rng.random() < 0.3:        # every change at one extreme
-            offsets = [0] + [rng.choice((v - hp + 1, hp - v))] * len(slots)
+        offsets = [0] + [rng.randint(v - hp, hp - v) for _ in range(len(slots))]
+        if rng.random() < 0.3:        # every change at one extreme, or alternating extremes
+            ends = [v - hp, hp - v]
+            offsets = [0] + ([rng.choice(ends)] * len(slots) if rng.random() < 0.5
+                             else [ends[k % 2] for k in range(len(slots))])
         enc = JitteredEncoder(hp, rng.randint(1, 30), slots, offsets)
         scenarios.append((enc, enc.d + 2 * hp * (len(slots) + 3)))
     for (enc, _), (strobes, bits) in zip(scenarios, _noise_sim(hp, scenarios)):
@@ -455,7 +458,9 @@ def test_slo_sampler_a_clean_jittered_line_never_strobes_noise(hp):
 
 def _noise_reference(enc, hp, n_slots):
     """The documented rules, applied to the votes the line gives (the edge taken as found):
-    the decision cycles of the slots whose votes form a pattern no clean line gives."""
+    the decision cycles of the slots whose votes form a pattern no clean line gives, or before
+    whose centre (since the centre before, or the Ack edge) the line changed twice; a slot
+    whose slot before strobed does not strobe."""
     v = vote_spacing(hp)
     votes, decisions = [], []
     for k in range(n_slots):
@@ -470,7 +475,14 @@ def _noise_reference(enc, hp, n_slots):
         odd = (first == third != centre) or (first != dec and last == dec)
         if k and votes[k - 1][2] != decisions[k - 1] and dec == decisions[k - 1]:
             odd = True
-        if odd:
+        # Two changes of the line between two slot centres: after the centre before (after
+        # the Ack edge, for slot 0) up to and including this slot's centre.
+        start = enc.d if k == 0 else enc.d + hp + 2 * hp * (k - 1)
+        centre = enc.d + hp + 2 * hp * k
+        if sum(enc.level(c) != enc.level(c - 1) for c in range(start + 1, centre + 1)) >= 2:
+            odd = True
+        # One strobe per disturbance: a slot strobes only if the slot before did not.
+        if odd and not (strobes and strobes[-1] == enc.d + hp + 2 * hp * (k - 1) + v):
             strobes.append(enc.d + hp + 2 * hp * k + v)
     return strobes
 
@@ -519,3 +531,60 @@ def test_slo_sampler_a_dropped_edge_strobes_noise(hp):
     for (enc, _), (strobes, bits) in zip(scenarios, _noise_sim(hp, scenarios)):
         assert strobes and strobes[0] < d, enc.glitches
         assert bits[:len(GLITCH_SLOTS)] == GLITCH_SLOTS
+
+
+@pytest.mark.parametrize("hp", (5, 8, 10))
+def test_slo_sampler_a_glitch_between_two_votes_strobes_noise(hp):
+    """A glitch that touches no vote (one clock, between a slot's first vote and its centre)
+    changes no decision, and no vote pattern shows it; but the line changed twice between two
+    slot centres, which a clean line never does: ``noise`` strobes in that slot's decision
+    clock, in every slot of the frame."""
+    v = vote_spacing(hp)
+    d = 9
+    slots = GLITCH_SLOTS
+    scenarios = []
+    for k in range(len(slots)):
+        centre = d + hp + 2 * hp * k
+        scenarios.append((GlitchedEncoder(hp, d, slots, centre - 1, 1), d + 2 * hp * (len(slots) + 2)))
+    for k, ((enc, _), (strobes, bits)) in enumerate(zip(scenarios, _noise_sim(hp, scenarios))):
+        assert bits[:len(slots)] == slots, (hp, k)
+        assert strobes == [d + hp + 2 * hp * k + v], (hp, k, strobes)
+
+
+@pytest.mark.parametrize("hp", (3, 5, 10))
+def test_slo_sampler_a_clean_line_read_right_never_strobes_noise(hp):
+    """Beyond the votes' margin: every change moved by up to hp - 1 clocks either way (up to
+    half a period, so that two changes may squeeze a slot). Wherever the sampler still decides
+    every slot right, ``noise`` stays low: the patterns it strobes for need noise, not just
+    far-moved edges."""
+    rng = random.Random(2820 + hp)
+    scenarios = []
+    for _ in range(80):
+        slots = _random_slots(rng, 16)
+        offsets = [0] + [rng.randint(1 - hp, hp - 1) for _ in range(len(slots))]
+        enc = JitteredEncoder(hp, rng.randint(1, 30), slots, offsets)
+        scenarios.append((enc, enc.d + 2 * hp * (len(slots) + 3)))
+    read_right = 0
+    for (enc, _), (strobes, bits) in zip(scenarios, _noise_sim(hp, scenarios)):
+        if bits[:len(enc.slots)] == enc.slots:
+            read_right += 1
+            assert strobes == [], (enc.slots, enc.offsets)
+    assert read_right >= 10
+
+
+@pytest.mark.parametrize("hp", (5, 8))
+def test_slo_sampler_noise_in_consecutive_slots_strobes_every_other_slot(hp):
+    """One strobe per disturbance: glitches on the centre votes of n consecutive slots (each
+    slot's votes broken) strobe ceil(n / 2) times, in the 1st, 3rd, ... of them; a noisy line
+    still strobes often, a lone glitch across two slots once."""
+    v = vote_spacing(hp)
+    d = 9
+    slots = [0, 0] + [1] * 10        # no data edge after Start: no span crowded by one
+    for first, n in ((2, 1), (2, 2), (3, 5), (1, 8)):
+        enc = DelayedEncoder(hp, d, slots)
+        centres = {d + hp + 2 * hp * k for k in range(first, first + n)}
+        enc.level = (lambda base: lambda c: base(c) ^ int(c in centres))(enc.level)
+        [(strobes, bits)] = _noise_sim(hp, [(enc, d + 2 * hp * (len(slots) + 2))])
+        assert bits[:len(slots)] == slots
+        assert strobes == [d + hp + 2 * hp * k + v for k in range(first, first + n, 2)], \
+            (hp, first, n, strobes)
