@@ -28,7 +28,8 @@ MA_RATES = ["250k", "1M", "2.5M", "5M", "10M"]
 #: Round trip in MA bit periods: the sampler's hard cases are "less than one bit" and "many".
 DELAY_RANGES = ["<0.5 bit", "0.5-2 bits", "2-8 bits", ">8 bits"]
 FAULTS = ["none", "crc_1bit", "crc_2bit", "crc_3to5bit", "crc_burst", "slo_stuck_low",
-          "slo_stuck_high", "unplug", "glitch", "jitter", "delay_change", "abort",
+          "slo_stuck_high", "unplug", "glitch", "jitter", "jitter_beyond_votes", "delay_change",
+          "abort",
           "no_response", "ack_forever", "timeout_stuck", "lc_repeat", "lc_skip", "lc_zero",
           "lc_random", "spw_offset", "bad_config", "config_change", "after_glitch", "noise",
           "cable_step", "glitch_cost"]
@@ -54,6 +55,9 @@ LEGAL = {
     # at +/-25 % the eye closes in the worst case: a rare bit error, caught by the CRC, or on
     # the stop bit NO_STOP (end check; the soak found one, see LINE_ALLOWED)
     "jitter": _LATE + _FRAME_ERR + ["NO_STOP"],
+    # an edge jittered onto a slot's centre vote (campaigns.jitter_beyond_votes): the votes
+    # may split, and the noise check may say so
+    "jitter_beyond_votes": _LATE + _FRAME_ERR + ["NO_STOP", "NOISY_LINE"],
     "delay_change": _LATE + ["DELAY_RANGE"],
     "abort": ["ABORTED"] + _LATE,                  # _LATE: the abort came after the verdict
     "no_response": ["NO_ACK"],

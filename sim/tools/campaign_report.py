@@ -152,22 +152,27 @@ def false_alarm_table(runs):
         for key, r in run["false_alarm_table"].items():
             row = rows.setdefault(r["ma_mhz"], {"blocks": 0, "frames": 0, "relaxed_frames": 0,
                                                 "statuses": Counter(), "delay_spread_max": 0,
-                                                "jitter_ns": r["jitter_ns"]})
+                                                "jitter_ns": r["jitter_ns"], "beyond": 0,
+                                                "beyond_statuses": Counter()})
             for k in ("blocks", "frames", "relaxed_frames"):
                 row[k] += r[k]
             row["statuses"].update(r["statuses"])
+            row["beyond"] += r.get("beyond_votes", 0)
+            row["beyond_statuses"].update(r.get("beyond_votes_statuses", {}))
             row["delay_spread_max"] = max(row["delay_spread_max"], r["delay_spread_max"])
     out = ["| MA (MHz) | jitter per edge | blocks | frames | at a relaxed rate | **NOISY_LINE** "
-           "| **DELAY_JUMP** | other statuses | round-trip spread in a block (clocks, max) |",
-           "|---:|---:|---:|---:|---:|---:|---:|---|---:|"]
+           "| **DELAY_JUMP** | other statuses | an edge on a slot centre: frames (not OK) "
+           "| round-trip spread in a block (clocks, max) |",
+           "|---:|---:|---:|---:|---:|---:|---:|---|---|---:|"]
     for mhz in sorted(rows):
         r = rows[mhz]
         st = r["statuses"]
         other = ", ".join(f"{k} {v}" for k, v in sorted(st.items())
                           if k not in ("NOISY_LINE", "DELAY_JUMP"))
+        beyond = ", ".join(f"{k} {v}" for k, v in sorted(r["beyond_statuses"].items()))
         out.append(f"| {mhz:g} | +/-{r['jitter_ns']:g} ns | {r['blocks']} | {r['frames']} | "
                    f"{r['relaxed_frames']} | **{st['NOISY_LINE']}** | **{st['DELAY_JUMP']}** | "
-                   f"{other} | {r['delay_spread_max']} |")
+                   f"{other} | {r['beyond']} ({beyond or 'none'}) | {r['delay_spread_max']} |")
     return out
 
 
