@@ -2,7 +2,7 @@
 cycles, and MA clock by clock around every CDM = 1 hold.
 
 The encoder is the limits bench's (tb/testkit/limits_bench.py) with the control side of
-test_register_access.py's slave: the CDS slot of every frame is the slave's answer, and the
+the test side's slave (tb/testkit/control_slave.py): the CDS slot of every frame is the slave's answer, and the
 slave reads the CDM as the inverted MA level in the clock its timeout ends (docs/protocol.md, section 10).
 Expected timing from docs/timing.md ("CDM"): MA falls where the next period would have begun
 (m = last rise + hp), rises 3 clocks after the SLO pin is high again (2 synchronizer clocks,
@@ -10,31 +10,10 @@ then the MaClock register), stays high one half period, and the next cycle's fir
 hp + 4 clocks after that rise at the earliest.
 """
 
-from dataclasses import dataclass, field
-
-from testkit.limits_bench import FRAME, Encoder, base_config, simulate
-from test_register_access import OK, Slave
+from testkit.control_slave import OK, RELEASE, ROUND_TRIP, ControlEncoder, Slave
+from testkit.limits_bench import FRAME, base_config, simulate
 
 HP = 2
-RELEASE = 6             # the encoder's timeout ends this many clocks after MA stopped
-ROUND_TRIP = 3
-
-
-@dataclass
-class ControlEncoder(Encoder):
-    slave: object = None
-    timeout_ends: list = field(default_factory=list)     # (clock, MA level there)
-
-    def step(self, ma):
-        if self._idle and self._ma_prev and not ma:      # a new frame: its CDS slot
-            self.bits = list(self.bits)
-            self.bits[1] = self.slave.cds()
-        was_idle = self._idle
-        out = super().step(ma)
-        if not was_idle and self._idle:                  # the timeout ends: CDM = not MA
-            self.timeout_ends.append((self._t, ma))
-            self.slave.take(1 - ma)
-        return out
 
 
 def _read(address, regs, clocks):

@@ -548,8 +548,7 @@ def test_reset_mid_frame_is_power_up(reset_at, n_rst, ma, busy):
 
 
 def _access_encoder():
-    from test_cdm_master import RELEASE, ROUND_TRIP, ControlEncoder
-    from test_register_access import Slave
+    from testkit.control_slave import RELEASE, ROUND_TRIP, ControlEncoder, Slave
     return ControlEncoder(hp=HP, bits=list(FRAME), ack_slots=1, round_trip=ROUND_TRIP,
                           release=RELEASE, slave=Slave({0x42: 0x62}), timeout=20)
 
