@@ -763,118 +763,44 @@ class SamplerHarness(Harness):
         return m
 
 
-class SamplerImmunityHarness(Harness):
-    """SloSampler alone, the noise-immunity property: an ideal encoder line with one glitch.
-
-    SLO is high, falls at a free clock (the Ack edge) and then holds free slot values (slot 0
-    low, the Ack), each one MA period long, the half period a free constant from 3 to
-    ``hp_max``; over it, one glitch inverts the line for a free number of clocks from 1 to the
-    vote spacing v (hp // 2), starting at any clock. Property: every slot the sampler decides
-    is decided as the encoder sent it (so no Start is faked and the frame never shifts), unless
-    the glitch made SLO low at the arming clock (``early``: the master's DELAY_RANGE fault).
-    Mutation ``"long"``: a glitch of v + 1
-    clocks; the solver must find a wrong decision.
-    """
+class _SamplerFrameHarness(Harness):
+    """Base of the harnesses that drive SloSampler alone with an encoder's frame: the sampler
+    armed in clock 1, the half period a free constant from 3 to ``hp_max``, SLO high, falling
+    at a free clock (the Ack edge, 2 or more clocks after arming), then ``slots`` free slot
+    values (slot 0 low, the Ack) of one MA period each, and high after them."""
 
     def __init__(self, delay_width, hp_max=4, slots=4, mutation=None):
         super().__init__(delay_width=delay_width, hp_max=hp_max, slots=slots,
                          mutation=mutation)
 
-    def elaborate(self, platform):
-        m = self._module()
+    def _frame(self, m, jitter=False):
+        """The sampler and its line: (dut, hp, v, values, t, line, offsets). ``jitter``: every
+        change after the edge (into slot k, and the rise after the last) comes its own free
+        offset (``offsets[k - 1]``) of v - hp .. hp - v clocks from its nominal clock;
+        otherwise all offsets are 0. The harness drives ``dut.slo`` from ``line``."""
         dut = SloSampler(self.delay_width, synchronizer=False)
         m.submodules.dut = dut
-
         hp = self.any_const(m, 4, "half_period")
         v = _vote_spacing(hp)
         edge = self.any_const(m, 5, "edge")                 # clocks from arm to the Ack edge
         values = self.any_const(m, self.slots, "slots")     # slot k's level, slot 0 low
-        g_start = self.any_const(m, 8, "glitch_start")
-        g_len = self.any_const(m, 4, "glitch_len")
-        longest = v + 1 if self.mutation == "long" else v
-        m.d.comb += [
-            Assume((hp >= 3) & (hp <= self.hp_max)),
-            Assume(edge >= 2),
-            Assume(~values[0]),
-            Assume((g_len >= 1) & (g_len <= longest)),
-        ]
-
-        # The harness's clock: arm in clock 1.
-        t = Signal(8)
-        with m.If(t != 255):
-            m.d.sync += t.eq(t + 1)
-        m.d.comb += [dut.arm.eq(t == 1), dut.half_period.eq(hp)]
-        # The ideal line: high before the edge, then slot k for 2 * hp clocks each, high after.
-        since_edge = (t - 1 - edge)[:8]
-        slot = Signal(range(self.slots + 2))
-        m.d.comb += slot.eq(self.slots + 1)                 # past the frame
-        for k in reversed(range(self.slots)):
-            with m.If((since_edge < 2 * hp * (k + 1))):
-                m.d.comb += slot.eq(k)
-        ideal = Signal()
-        with m.If(t < 1 + edge):
-            m.d.comb += ideal.eq(1)
-        with m.Elif(slot < self.slots):
-            m.d.comb += ideal.eq(values.bit_select(slot, 1))
-        with m.Else():
-            m.d.comb += ideal.eq(1)
-        glitch = (t >= g_start) & (t < g_start + g_len)
-        m.d.comb += dut.slo.eq(ideal ^ glitch)
-
-        # Every decision is the sent slot value, in order.
-        decided = Signal(range(self.slots + 2))
-        with m.If(dut.sample & (decided < self.slots)):
-            m.d.sync += decided.eq(decided + 1)
-        # (A glitch over the arming clock makes SLO low there: ``early``, which the master
-        # reports as DELAY_RANGE, a fault; the sampler's decisions are then not used.)
-        m.d.comb += Assert(~dut.sample | dut.early | (decided >= self.slots)
-                           | (dut.bit == values.bit_select(decided, 1)),
-                           "every decided slot as sent")
-        # Not vacuous: the whole frame is decided.
-        m.d.comb += Cover((decided == self.slots) & (hp == self.hp_max) & (g_len == v))
-        return m
-
-
-class SamplerCleanLineHarness(Harness):
-    """SloSampler alone, the no-false-alarm property of its noise strobe: a clean, jittered line.
-
-    SLO is high, falls at a free clock (the Ack edge) and then holds free slot values (slot 0
-    low, the Ack) and high after the last; every change after the edge (into slot k, and the
-    rise after the last slot) comes a free offset from its nominal clock, anywhere from the
-    slot before's third vote to the next slot's first vote (v - hp .. hp - v clocks, a quarter
-    period each way at an even half period: the jitter the protocol allows); the half period
-    is a free constant from 3 to ``hp_max``. Properties: ``noise`` never strobes (none of the
-    documented patterns, the two-edges-between-centres rule included, fires on a clean line)
-    and every decided slot is as sent. Mutation ``"glitch"``: the line inverted for one free
-    clock as well; the solver must find a strobe (the property is not vacuous).
-    """
-
-    def __init__(self, delay_width, hp_max=4, slots=4, mutation=None):
-        super().__init__(delay_width=delay_width, hp_max=hp_max, slots=slots,
-                         mutation=mutation)
-
-    def elaborate(self, platform):
-        m = self._module()
-        dut = SloSampler(self.delay_width, synchronizer=False)
-        m.submodules.dut = dut
-
-        hp = self.any_const(m, 4, "half_period")
-        v = _vote_spacing(hp)
-        edge = self.any_const(m, 5, "edge")                 # clocks from arm to the Ack edge
-        values = self.any_const(m, self.slots, "slots")     # slot k's level, slot 0 low
-        offsets = [self.any_const(m, signed(5), f"offset{k}") for k in range(1, self.slots + 1)]
         m.d.comb += [Assume((hp >= 3) & (hp <= self.hp_max)), Assume(edge >= 2),
                      Assume(~values[0])]
-        for o in offsets:
-            m.d.comb += Assume((o >= v - hp) & (o <= hp - v))
+        if jitter:
+            offsets = [self.any_const(m, signed(5), f"offset{k}")
+                       for k in range(1, self.slots + 1)]
+            for o in offsets:
+                m.d.comb += Assume((o >= v - hp) & (o <= hp - v))
+        else:
+            offsets = [0] * self.slots
 
-        t = Signal(8)
+        t = Signal(8)                                       # the harness's clock: arm in 1
         with m.If(t != 255):
             m.d.sync += t.eq(t + 1)
         m.d.comb += [dut.arm.eq(t == 1), dut.half_period.eq(hp)]
         since_edge = Signal(signed(10))
         m.d.comb += since_edge.eq(t - 1 - edge)
-        # The slot on the line: the number of (jittered) boundaries passed since the edge.
+        # The slot on the line: the number of (shifted) boundaries passed since the edge.
         slot = Signal(range(self.slots + 1))
         m.d.comb += slot.eq(sum((since_edge >= 2 * hp * k + o).as_unsigned()
                                 for k, o in enumerate(offsets, start=1)))
@@ -885,15 +811,72 @@ class SamplerCleanLineHarness(Harness):
             m.d.comb += line.eq(values.bit_select(slot, 1))
         with m.Else():
             m.d.comb += line.eq(1)
+        return dut, hp, v, values, t, line, offsets
+
+    def _decided(self, m, dut):
+        """How many slots the sampler has decided (up to ``slots``)."""
+        decided = Signal(range(self.slots + 2))
+        with m.If(dut.sample & (decided < self.slots)):
+            m.d.sync += decided.eq(decided + 1)
+        return decided
+
+
+class SamplerImmunityHarness(_SamplerFrameHarness):
+    """SloSampler alone, the noise-immunity property: an ideal encoder line with one glitch.
+
+    The frame of :class:`_SamplerFrameHarness` (half period 3 .. ``hp_max``), without jitter;
+    over it, one glitch inverts the line for a free number of clocks from 1 to the vote
+    spacing v (hp // 2), starting at any clock. Property: every slot the sampler decides is
+    decided as the encoder sent it (so no Start is faked and the frame never shifts), unless
+    the glitch made SLO low at the arming clock (``early``: the master's DELAY_RANGE fault).
+    Mutation ``"long"``: a glitch of v + 1 clocks; the solver must find a wrong decision.
+    """
+
+    def elaborate(self, platform):
+        m = self._module()
+        dut, hp, v, values, t, line, _ = self._frame(m)
+        g_start = self.any_const(m, 8, "glitch_start")
+        g_len = self.any_const(m, 4, "glitch_len")
+        longest = v + 1 if self.mutation == "long" else v
+        m.d.comb += Assume((g_len >= 1) & (g_len <= longest))
+        glitch = (t >= g_start) & (t < g_start + g_len)
+        m.d.comb += dut.slo.eq(line ^ glitch)
+
+        # Every decision is the sent slot value, in order.
+        decided = self._decided(m, dut)
+        # (A glitch over the arming clock makes SLO low there: ``early``, which the master
+        # reports as DELAY_RANGE, a fault; the sampler's decisions are then not used.)
+        m.d.comb += Assert(~dut.sample | dut.early | (decided >= self.slots)
+                           | (dut.bit == values.bit_select(decided, 1)),
+                           "every decided slot as sent")
+        # Not vacuous: the whole frame is decided.
+        m.d.comb += Cover((decided == self.slots) & (hp == self.hp_max) & (g_len == v))
+        return m
+
+
+class SamplerCleanLineHarness(_SamplerFrameHarness):
+    """SloSampler alone, the no-false-alarm property of its noise strobe: a clean, jittered line.
+
+    The frame of :class:`_SamplerFrameHarness` (half period 3 .. ``hp_max``) with every change
+    after the edge (into slot k, and the rise after the last slot) a free offset from its
+    nominal clock, anywhere from the slot before's third vote to the next slot's first vote
+    (v - hp .. hp - v clocks, a quarter period each way at an even half period: the jitter the
+    protocol allows). Properties: ``noise`` never strobes (none of the documented patterns,
+    the two-edges-between-centres rule included, fires on a clean line) and every decided slot
+    is as sent. Mutation ``"glitch"``: the line inverted for one free clock as well; the
+    solver must find a strobe (the property is not vacuous).
+    """
+
+    def elaborate(self, platform):
+        m = self._module()
+        dut, hp, v, values, t, line, offsets = self._frame(m, jitter=True)
         if self.mutation == "glitch":
             g_at = self.any_const(m, 8, "glitch_at")
             m.d.comb += dut.slo.eq(line ^ (t == g_at))
         else:
             m.d.comb += dut.slo.eq(line)
 
-        decided = Signal(range(self.slots + 2))
-        with m.If(dut.sample & (decided < self.slots)):
-            m.d.sync += decided.eq(decided + 1)
+        decided = self._decided(m, dut)
         m.d.comb += [
             Assert(~dut.noise, "no noise strobe on a clean line"),
             Assert(~dut.sample | (decided >= self.slots)

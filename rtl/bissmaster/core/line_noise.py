@@ -10,10 +10,10 @@ from ..params import LINE_CHECK_WIDTH as NOISE_COUNT_WIDTH    # the counts satur
 class LineNoise(wiring.Component):
     """Counts noise events and judges a frame by them (issue 28; docs/ports.md, *Noise*).
 
-    A noise event is a strobe of ``sampler_noise`` (a vote pattern, a second edge between two
-    decisions or an Ack edge no clean line gives:
-    :class:`~bissmaster.core.slo_sampler.SloSampler`) or a fall of SLO while the master waits (``watch``: IDLE and WAIT_READY, with MA stopped and the encoder's timeout over or
-    running: a clean encoder's SLO then only rises, once). The count runs from the end of the
+    A noise event is a strobe of ``sampler_noise`` (a vote pattern, two edges between two slot
+    centres or an Ack edge no clean line gives: :class:`~bissmaster.core.slo_sampler.SloSampler`)
+    or a fall of SLO while the master waits (``watch``: IDLE and WAIT_READY, with MA stopped
+    and the encoder's timeout over or running: a clean encoder's SLO then only rises, once). The count runs from the end of the
     cycle before (its frame's end, ``close``, the decoder's ``done``; or its fault,
     ``restart``) to this frame's end: each frame is judged by the line since the cycle before
     it, so a fault (which has its own status) costs no second frame. It saturates at 15.

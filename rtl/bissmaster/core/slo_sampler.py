@@ -63,13 +63,13 @@ class SloSampler(wiring.Component):
     after's decision); two edges between two slot centres (after one slot's centre vote, or
     after the Ack edge, up to and including the next slot's centre vote: a clean line read
     right changes at most once there, however far jitter moves its edges; strobed with that
-    slot's decision); and an
-    edge the sampler dropped (slot 0 decided high, or SLO high again before slot 0's first
-    vote). A slot's pattern strobes only if the slot before did not strobe: one glitch across
-    a slot centre can break that slot's votes and crowd the next span, and counts once (a run
-    of n odd slots strobes ceil(n / 2) times). Noise whose every edge lands near a slot boundary where the data does not change
-    gives no strobe: it looks like data. ``noise`` sees part of the noise, never a clean line.
-    No vote or edge strobes at a half period of 2 (one sample per slot).
+    slot's decision); and an edge the sampler dropped (slot 0 decided high, or SLO high again
+    before slot 0's first vote). A slot's pattern strobes only if the slot before did not
+    strobe: one glitch across a slot centre can break that slot's votes and crowd the next
+    span, and counts once (a run of n odd slots strobes ceil(n / 2) times). A noise edge that
+    lands in a span without a data edge and off the votes gives no strobe: it looks like data.
+    ``noise`` sees part of the noise, never a clean line. No vote or edge strobes at a half
+    period of 2 (one sample per slot).
 
     **Area.** The slot timer only counts down to zero and reloads, from four values kept as
     reset-less registers (edge to first vote, vote to vote, third vote to the next slot's first,
