@@ -113,6 +113,7 @@ WORD_CONFIG = data.StructLayout({
     "lc": 1,            # word carries the 6-bit sign-of-life counter after nE/nW
     "crc": Crc,         # Crc code
     "gray": 1,          # the data field is Gray-coded: reported as binary
+    "signed": 1,        # the data field is two's complement: sign-extended to the port's width
 })
 
 

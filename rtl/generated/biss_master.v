@@ -15,11 +15,11 @@
 
 (* top =  1  *)
 (* generator = "Amaranth" *)
-module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_end_check, cfg_quiet_time, cfg_noise_limit, cfg_delay_tolerance, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_crc_width, cfg_w0_crc_poly
-, cfg_w0_crc_start, cfg_w0_crc_inverted, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_crc_width, cfg_w1_crc_poly, cfg_w1_crc_start, cfg_w1_crc_inverted, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, ca_wbuf_addr
-, ca_wbuf_data, ca_wbuf_en, ca_rbuf_addr, ca_rbuf_en, clk, rst, ma, busy, config_error, overrun, done, valid, status, timestamp, line_delay, cds, noise_events, delay_settled, settled_delay, delay_spread, word0_position
-, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, ca_rbuf_data, ca_busy, ca_done, ca_status, ca_bytes_done, count_crc_word0, count_crc_word1, count_no_ack, count_no_start
-, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_noisy_line, count_delay_jump, count_noise_event, count_ca_crc4_error, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo);
+module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_end_check, cfg_quiet_time, cfg_noise_limit, cfg_delay_tolerance, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w0_crc_width
+, cfg_w0_crc_poly, cfg_w0_crc_start, cfg_w0_crc_inverted, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_crc_width, cfg_w1_crc_poly, cfg_w1_crc_start, cfg_w1_crc_inverted, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start
+, ca_abort, ca_wbuf_addr, ca_wbuf_data, ca_wbuf_en, ca_rbuf_addr, ca_rbuf_en, clk, rst, ma, busy, config_error, overrun, done, valid, status, timestamp, line_delay, cds, noise_events, delay_settled, settled_delay
+, delay_spread, word0_position, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, ca_rbuf_data, ca_busy, ca_done, ca_status, ca_bytes_done, count_crc_word0, count_crc_word1
+, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_noisy_line, count_delay_jump, count_noise_event, count_ca_crc4_error, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$5  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -48,25 +48,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* init = 1'h0 *)
   wire \$signal ;
   wire abort;
-  wire \abort$114 ;
-  wire \abort$292 ;
+  wire \abort$116 ;
+  wire \abort$294 ;
   input abort_cycle;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$146 ;
+  wire \ack_expired$148 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$167 ;
+  wire [23:0] \ack_limit$169 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$321 ;
+  wire \bit$323 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$144 ;
+  wire \break_over$146 ;
   wire [23:0] break_time;
   output busy;
   wire busy;
-  wire \busy$122 ;
-  wire \busy$296 ;
+  wire \busy$124 ;
+  wire \busy$298 ;
   input ca_abort;
   wire ca_abort;
   input [6:0] ca_address;
@@ -108,12 +108,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$299 ;
+  wire \cdm$301 ;
   wire cdm_cycle;
   output cds;
   wire cds;
-  wire \cds$272 ;
-  wire [252:0] cfg;
+  wire \cds$274 ;
+  wire [254:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -126,7 +126,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
   wire [23:0] \cfg.timeout_limit ;
-  wire [10:0] \cfg.w0 ;
+  wire [11:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -137,12 +137,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \cfg.w0.gray ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
+  wire \cfg.w0.signed ;
   wire [37:0] \cfg.w0_crc ;
   wire \cfg.w0_crc.inverted ;
   wire [15:0] \cfg.w0_crc.poly ;
   wire [15:0] \cfg.w0_crc.start ;
   wire [4:0] \cfg.w0_crc.width ;
-  wire [10:0] \cfg.w1 ;
+  wire [11:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -153,6 +154,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \cfg.w1.gray ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
+  wire \cfg.w1.signed ;
   wire [37:0] \cfg.w1_crc ;
   wire \cfg.w1_crc.inverted ;
   wire [15:0] \cfg.w1_crc.poly ;
@@ -206,6 +208,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire cfg_w0_lc;
   input cfg_w0_nenw;
   wire cfg_w0_nenw;
+  input cfg_w0_signed;
+  wire cfg_w0_signed;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -231,15 +235,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire cfg_w1_lc;
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
+  input cfg_w1_signed;
+  wire cfg_w1_signed;
   wire check;
-  wire \check$225 ;
+  wire \check$227 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$230 ;
-  wire \clean$322 ;
+  wire \clean$232 ;
+  wire \clean$324 ;
   wire clear;
-  wire \clear$191 ;
-  wire \clear$314 ;
+  wire \clear$193 ;
+  wire \clear$316 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -314,33 +320,33 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$242 ;
+  wire [39:0] \cpw_top$244 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$256 ;
+  wire [1:0] \crc_ok$258 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$238 ;
-  wire [37:0] \crcs$238[0] ;
-  wire \crcs$238[0].inverted ;
-  wire [15:0] \crcs$238[0].poly ;
-  wire [15:0] \crcs$238[0].start ;
-  wire [4:0] \crcs$238[0].width ;
-  wire [37:0] \crcs$238[1] ;
-  wire \crcs$238[1].inverted ;
-  wire [15:0] \crcs$238[1].poly ;
-  wire [15:0] \crcs$238[1].start ;
-  wire [4:0] \crcs$238[1].width ;
-  wire [75:0] \crcs$239 ;
-  wire [37:0] \crcs$239[0] ;
-  wire \crcs$239[0].inverted ;
-  wire [15:0] \crcs$239[0].poly ;
-  wire [15:0] \crcs$239[0].start ;
-  wire [4:0] \crcs$239[0].width ;
-  wire [37:0] \crcs$239[1] ;
-  wire \crcs$239[1].inverted ;
-  wire [15:0] \crcs$239[1].poly ;
-  wire [15:0] \crcs$239[1].start ;
-  wire [4:0] \crcs$239[1].width ;
+  wire [75:0] \crcs$240 ;
+  wire [37:0] \crcs$240[0] ;
+  wire \crcs$240[0].inverted ;
+  wire [15:0] \crcs$240[0].poly ;
+  wire [15:0] \crcs$240[0].start ;
+  wire [4:0] \crcs$240[0].width ;
+  wire [37:0] \crcs$240[1] ;
+  wire \crcs$240[1].inverted ;
+  wire [15:0] \crcs$240[1].poly ;
+  wire [15:0] \crcs$240[1].start ;
+  wire [4:0] \crcs$240[1].width ;
+  wire [75:0] \crcs$241 ;
+  wire [37:0] \crcs$241[0] ;
+  wire \crcs$241[0].inverted ;
+  wire [15:0] \crcs$241[0].poly ;
+  wire [15:0] \crcs$241[0].start ;
+  wire [4:0] \crcs$241[0].width ;
+  wire [37:0] \crcs$241[1] ;
+  wire \crcs$241[1].inverted ;
+  wire [15:0] \crcs$241[1].poly ;
+  wire [15:0] \crcs$241[1].start ;
+  wire [4:0] \crcs$241[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -351,7 +357,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  wire [252:0] cycle;
+  wire [254:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -364,7 +370,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
   wire [23:0] \cycle.timeout_limit ;
-  wire [10:0] \cycle.w0 ;
+  wire [11:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -375,12 +381,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \cycle.w0.gray ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
+  wire \cycle.w0.signed ;
   wire [37:0] \cycle.w0_crc ;
   wire \cycle.w0_crc.inverted ;
   wire [15:0] \cycle.w0_crc.poly ;
   wire [15:0] \cycle.w0_crc.start ;
   wire [4:0] \cycle.w0_crc.width ;
-  wire [10:0] \cycle.w1 ;
+  wire [11:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -391,6 +398,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \cycle.w1.gray ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
+  wire \cycle.w1.signed ;
   wire [37:0] \cycle.w1_crc ;
   wire \cycle.w1_crc.inverted ;
   wire [15:0] \cycle.w1_crc.poly ;
@@ -404,13 +412,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$173 ;
-  wire [12:0] \delay$224 ;
+  wire [12:0] \delay$175 ;
+  wire [12:0] \delay$226 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$175 ;
+  wire [11:0] \delay_limit$177 ;
   wire delay_over;
-  wire \delay_over$154 ;
+  wire \delay_over$156 ;
   output delay_settled;
   wire delay_settled;
   output [7:0] delay_spread;
@@ -418,41 +426,41 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [16:0] delay_tolerance;
   output done;
   wire done;
-  wire \done$132 ;
-  wire \done$297 ;
-  wire \done$317 ;
+  wire \done$134 ;
+  wire \done$299 ;
+  wire \done$319 ;
   wire doubtful;
   wire early;
-  wire \early$130 ;
+  wire \early$132 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$309 ;
-  wire \events$309.aborted ;
-  wire \events$309.ca_aborted ;
-  wire \events$309.ca_crc4_error ;
-  wire \events$309.ca_data_fault ;
-  wire \events$309.ca_no_answer ;
-  wire \events$309.ca_refused ;
-  wire \events$309.crc_word0 ;
-  wire \events$309.crc_word1 ;
-  wire \events$309.delay_jump ;
-  wire \events$309.delay_range ;
-  wire \events$309.lc_repeat ;
-  wire \events$309.lc_skip ;
-  wire \events$309.lc_zero ;
-  wire \events$309.no_ack ;
-  wire \events$309.no_start ;
-  wire \events$309.no_stop ;
-  wire \events$309.noise_event ;
-  wire \events$309.noisy_line ;
-  wire \events$309.overrun ;
-  wire \events$309.slo_stuck_low ;
-  wire \events$309.spw_mismatch ;
+  wire [20:0] \events$311 ;
+  wire \events$311.aborted ;
+  wire \events$311.ca_aborted ;
+  wire \events$311.ca_crc4_error ;
+  wire \events$311.ca_data_fault ;
+  wire \events$311.ca_no_answer ;
+  wire \events$311.ca_refused ;
+  wire \events$311.crc_word0 ;
+  wire \events$311.crc_word1 ;
+  wire \events$311.delay_jump ;
+  wire \events$311.delay_range ;
+  wire \events$311.lc_repeat ;
+  wire \events$311.lc_skip ;
+  wire \events$311.lc_zero ;
+  wire \events$311.no_ack ;
+  wire \events$311.no_start ;
+  wire \events$311.no_stop ;
+  wire \events$311.noise_event ;
+  wire \events$311.noisy_line ;
+  wire \events$311.overrun ;
+  wire \events$311.slo_stuck_low ;
+  wire \events$311.spw_mismatch ;
   wire fault;
-  wire \fault$252 ;
+  wire \fault$254 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -486,7 +494,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$254 ;
+  wire [3:0] \fault_status$256 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -496,7 +504,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$286 ;
+  wire \first_rise$288 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -546,42 +554,42 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire frame_ok;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$197 ;
+  wire [15:0] \half_period$199 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$104 ;
-  wire \idle$110 ;
+  wire \idle$106 ;
+  wire \idle$112 ;
   wire in_clock;
-  wire \in_clock$161 ;
+  wire \in_clock$163 ;
   wire jump;
   output [5:0] lc;
   wire [5:0] lc;
-  wire [5:0] \lc$201 ;
-  wire [5:0] \lc$202 ;
+  wire [5:0] \lc$203 ;
+  wire [5:0] \lc$204 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$204 ;
+  wire [5:0] \lc_next$206 ;
   output lc_repeat;
   wire lc_repeat;
-  wire \lc_repeat$277 ;
+  wire \lc_repeat$279 ;
   wire lc_repeat_seen;
   output lc_skip;
   wire lc_skip;
-  wire \lc_skip$278 ;
+  wire \lc_skip$280 ;
   wire lc_skip_seen;
   output lc_zero;
   wire lc_zero;
-  wire \lc_zero$279 ;
+  wire \lc_zero$281 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$213 ;
+  wire \level$215 ;
   wire [3:0] limit;
   output [12:0] line_delay;
   wire [12:0] line_delay;
-  wire [252:0] live;
+  wire [254:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -594,7 +602,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
   wire [23:0] \live.timeout_limit ;
-  wire [10:0] \live.w0 ;
+  wire [11:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -605,12 +613,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \live.w0.gray ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
+  wire \live.w0.signed ;
   wire [37:0] \live.w0_crc ;
   wire \live.w0_crc.inverted ;
   wire [15:0] \live.w0_crc.poly ;
   wire [15:0] \live.w0_crc.start ;
   wire [4:0] \live.w0_crc.width ;
-  wire [10:0] \live.w1 ;
+  wire [11:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -621,6 +630,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \live.w1.gray ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
+  wire \live.w1.signed ;
   wire [37:0] \live.w1_crc ;
   wire \live.w1_crc.inverted ;
   wire [15:0] \live.w1_crc.poly ;
@@ -629,13 +639,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$128 ;
+  wire \locked$130 ;
   output ma;
   wire ma;
-  wire \ma$316 ;
+  wire \ma$318 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$156 ;
+  wire \ma_busy$158 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -643,28 +653,28 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$148 ;
+  wire \no_start_expired$150 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$171 ;
+  wire [24:0] \no_start_limit$173 ;
   wire noise;
   output [3:0] noise_events;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$232 ;
+  wire \noisy$234 ;
   wire [1:0] nw;
   wire ok;
   output overrun;
   wire overrun;
-  wire \overrun$312 ;
+  wire \overrun$314 ;
   wire [23:0] period;
   input periodic;
   wire periodic;
-  wire \periodic$106 ;
+  wire \periodic$108 ;
   wire quiet;
-  wire \quiet$180 ;
+  wire \quiet$182 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$182 ;
+  wire \quiet_live$184 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   wire [3:0] rbuf_addr;
@@ -674,35 +684,35 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$264 ;
+  wire \report$266 ;
   wire report_delay;
-  wire \report_delay$267 ;
+  wire \report_delay$269 ;
   wire report_frame;
-  wire \report_frame$251 ;
-  wire \report_frame$265 ;
+  wire \report_frame$253 ;
+  wire \report_frame$267 ;
   wire request;
-  wire \request$113 ;
-  wire [17:0] \request$288 ;
-  wire [6:0] \request$288.address ;
-  wire [6:0] \request$288.count ;
-  wire [2:0] \request$288.slave_id ;
-  wire \request$288.write ;
+  wire \request$115 ;
+  wire [17:0] \request$290 ;
+  wire [6:0] \request$290.address ;
+  wire [6:0] \request$290.count ;
+  wire [2:0] \request$290.slave_id ;
+  wire \request$290.write ;
   wire restart;
-  wire \restart$217 ;
+  wire \restart$219 ;
   wire restart_timer;
   wire [9:0] result;
-  wire [186:0] \result$319 ;
-  wire \result$319.cds ;
-  wire \result$319.delay_settled ;
-  wire [7:0] \result$319.delay_spread ;
-  wire [5:0] \result$319.lc ;
-  wire \result$319.lc_repeat ;
-  wire \result$319.lc_skip ;
-  wire \result$319.lc_zero ;
-  wire [12:0] \result$319.line_delay ;
-  wire [3:0] \result$319.noise_events ;
-  wire [12:0] \result$319.settled_delay ;
-  wire \result$319.spw_mismatch ;
+  wire [186:0] \result$321 ;
+  wire \result$321.cds ;
+  wire \result$321.delay_settled ;
+  wire [7:0] \result$321.delay_spread ;
+  wire [5:0] \result$321.lc ;
+  wire \result$321.lc_repeat ;
+  wire \result$321.lc_skip ;
+  wire \result$321.lc_zero ;
+  wire [12:0] \result$321.line_delay ;
+  wire [3:0] \result$321.noise_events ;
+  wire [12:0] \result$321.settled_delay ;
+  wire \result$321.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -719,18 +729,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$319.status ;
-  wire [31:0] \result$319.timestamp ;
-  wire [57:0] \result$319.word0 ;
-  wire \result$319.word0.crc_ok ;
-  wire \result$319.word0.ne ;
-  wire \result$319.word0.nw ;
-  wire [54:0] \result$319.word0.position ;
-  wire [42:0] \result$319.word1 ;
-  wire \result$319.word1.crc_ok ;
-  wire \result$319.word1.ne ;
-  wire \result$319.word1.nw ;
-  wire [39:0] \result$319.word1.position ;
+  wire [3:0] \result$321.status ;
+  wire [31:0] \result$321.timestamp ;
+  wire [57:0] \result$321.word0 ;
+  wire \result$321.word0.crc_ok ;
+  wire \result$321.word0.ne ;
+  wire \result$321.word0.nw ;
+  wire [54:0] \result$321.word0.position ;
+  wire [42:0] \result$321.word1 ;
+  wire \result$321.word1.crc_ok ;
+  wire \result$321.word1.ne ;
+  wire \result$321.word1.nw ;
+  wire [39:0] \result$321.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -742,47 +752,47 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$210 ;
+  wire \resync$212 ;
   wire [15:0] rises;
-  wire [15:0] \rises$190 ;
+  wire [15:0] \rises$192 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$320 ;
+  wire \sample$322 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   output [12:0] settled_delay;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$275 ;
+  wire [12:0] \settled_delay$277 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$111 ;
-  wire \slo$119 ;
-  wire \slo$155 ;
+  wire \slo$113 ;
+  wire \slo$121 ;
+  wire \slo$157 ;
   wire slo_stuck;
-  wire \slo_stuck$150 ;
+  wire \slo_stuck$152 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$152 ;
+  wire \slo_stuck_live$154 ;
   wire slots_full;
-  wire \slots_full$136 ;
+  wire \slots_full$138 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   output spw_mismatch;
   wire spw_mismatch;
-  wire \spw_mismatch$284 ;
+  wire \spw_mismatch$286 ;
   input start;
   wire start;
-  wire \start$105 ;
-  wire \start$291 ;
+  wire \start$107 ;
+  wire \start$293 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$188 ;
+  wire [15:0] \start_slot$190 ;
   wire started;
-  wire \started$134 ;
-  wire \started$186 ;
+  wire \started$136 ;
+  wire \started$188 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -818,23 +828,23 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$271 ;
+  wire [3:0] \status$273 ;
   wire stop_bit;
-  wire \stop_bit$140 ;
+  wire \stop_bit$142 ;
   wire stopped;
-  wire \stopped$138 ;
+  wire \stopped$140 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$169 ;
+  wire [23:0] \timeout_limit$171 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   output [31:0] timestamp;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$246 ;
+  wire [7:0] \tolerance$248 ;
   output valid;
   wire valid;
-  wire \valid$268 ;
-  wire \valid$269 ;
+  wire \valid$270 ;
+  wire \valid$271 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -860,33 +870,35 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [39:0] word1_position;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$200 ;
+  wire [1:0] \word_count$202 ;
   wire [1:0] word_crc_ok;
-  wire [21:0] words;
-  wire [21:0] \words$236 ;
-  wire [10:0] \words$236[0] ;
+  wire [23:0] words;
+  wire [23:0] \words$238 ;
+  wire [11:0] \words$238[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$236[0].crc ;
-  wire [5:0] \words$236[0].data_bits ;
-  wire \words$236[0].gray ;
-  wire \words$236[0].lc ;
-  wire \words$236[0].nenw ;
-  wire [10:0] \words$236[1] ;
+  wire [1:0] \words$238[0].crc ;
+  wire [5:0] \words$238[0].data_bits ;
+  wire \words$238[0].gray ;
+  wire \words$238[0].lc ;
+  wire \words$238[0].nenw ;
+  wire \words$238[0].signed ;
+  wire [11:0] \words$238[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$236[1].crc ;
-  wire [5:0] \words$236[1].data_bits ;
-  wire \words$236[1].gray ;
-  wire \words$236[1].lc ;
-  wire \words$236[1].nenw ;
-  wire [10:0] \words[0] ;
+  wire [1:0] \words$238[1].crc ;
+  wire [5:0] \words$238[1].data_bits ;
+  wire \words$238[1].gray ;
+  wire \words$238[1].lc ;
+  wire \words$238[1].nenw ;
+  wire \words$238[1].signed ;
+  wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -897,7 +909,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [10:0] \words[1] ;
+  wire \words[0].signed ;
+  wire [11:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -908,16 +921,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
+  wire \words[1].signed ;
   wire zero;
-  assign \periodic$106  = periodic | ca_busy;
+  assign \periodic$108  = periodic | ca_busy;
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$225  = started & \$1 ;
-  assign \$2  = report_frame & \spw_mismatch$284 ;
-  assign \$3  = \status$271  == 4'hd;
+  assign \check$227  = started & \$1 ;
+  assign \$2  = report_frame & \spw_mismatch$286 ;
+  assign \$3  = \status$273  == 4'hd;
   assign \$4  = report_frame & \$3 ;
-  assign \$5  = \status$271  == 4'he;
+  assign \$5  = \status$273  == 4'he;
   assign \$6  = report_frame & \$5 ;
   assign \$7  = result[2:0] == 1'h1;
   assign \$8  = ca_done & \$7 ;
@@ -931,8 +945,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$16  = ca_done & \$15 ;
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$191 ;
-  assign \$18  = \sample$320  & \$17 ;
+  assign \$17  = ~ \clear$193 ;
+  assign \$18  = \sample$322  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -970,7 +984,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$217 ),
+    .fault(\restart$219 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -987,14 +1001,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$191 ),
+    .receiver_clear(\clear$193 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$119 ),
+    .slo(\slo$121 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -1008,12 +1022,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clear(clear_counters),
     .clk(clk),
     .counts(counts),
-    .events(\events$309 ),
+    .events(\events$311 ),
     .rst(rst)
   );
   \biss_master.decoder  decoder (
     .\bit (\bit ),
-    .cds(\cds$272 ),
+    .cds(\cds$274 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
@@ -1021,11 +1035,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .data0(data0),
     .data1(spw),
     .done(frame_done),
-    .lc(\lc$201 ),
+    .lc(\lc$203 ),
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$191 ),
+    .receiver_clear(\clear$193 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -1037,7 +1051,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .words(words)
   );
   \biss_master.delay_check  delay_check (
-    .check(\check$225 ),
+    .check(\check$227 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -1047,7 +1061,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .rearm(rearm),
     .rst(rst),
     .settled(settled),
-    .settled_delay(\settled_delay$275 ),
+    .settled_delay(\settled_delay$277 ),
     .spread(spread),
     .\tolerance$8 (tolerance)
   );
@@ -1056,10 +1070,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$119 ),
+    .level(\slo$121 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$217 ),
+    .restart(\restart$219 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -1067,7 +1081,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   \biss_master.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$156 ),
+    .\clocking (\ma_busy$158 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -1079,7 +1093,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .second_rise(ma_arm)
   );
   \biss_master.ma_stop  ma_stop (
-    .clear(\clear$191 ),
+    .clear(\clear$193 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -1087,8 +1101,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .rst(rst),
     .start_slot(start_slot),
     .\started$11 (started),
-    .w1_enable(cycle[194]),
-    .words(\words$236 )
+    .w1_enable(cycle[195]),
+    .words(\words$238 )
   );
   \biss_master.register_access  register_access (
     .abort(ca_abort),
@@ -1097,13 +1111,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
-    .frame_cds(\cds$272 ),
+    .frame_cds(\cds$274 ),
     .frame_end(report),
-    .frame_ok(\valid$268 ),
+    .frame_ok(\valid$270 ),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(ca_rbuf_en),
-    .request(\request$288 ),
+    .request(\request$290 ),
     .result(result),
     .rst(rst),
     .start(ca_start),
@@ -1116,24 +1130,24 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$319 ),
+    .result(\result$321 ),
     .rst(rst),
-    .valid(\valid$268 ),
+    .valid(\valid$270 ),
     .valid_out(valid)
   );
   \biss_master.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$321 ),
+    .\bit (\bit$323 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$119 ),
+    .level(\slo$121 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$191 ),
+    .receiver_clear(\clear$193 ),
     .rst(rst),
-    .sample(\sample$320 ),
+    .sample(\sample$322 ),
     .slo(slo)
   );
   \biss_master.scheduler  scheduler (
@@ -1142,7 +1156,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .idle(idle),
     .overrun(overrun),
     .period(cfg_request_period),
-    .periodic(\periodic$106 ),
+    .periodic(\periodic$108 ),
     .request(request),
     .rst(rst),
     .start(start)
@@ -1151,22 +1165,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .check(check),
     .clk(clk),
     .is_zero(lc_zero_seen),
-    .lc(\lc$201 ),
+    .lc(\lc$203 ),
     .load(load),
-    .\port$1561$0 (\bit ),
+    .\port$2038$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master.spw_check  spw_check (
-    .bits(cycle[200:195]),
+    .bits(cycle[201:196]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[252:245])
+    .\tolerance$8 (cycle[254:247])
   );
   \biss_master.time_base  time_base (
     .clk(clk),
@@ -1185,7 +1199,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$156 ),
+    .ma_busy(\ma_busy$158 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -1194,7 +1208,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$119 ),
+    .slo(\slo$121 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -1202,28 +1216,28 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$322 ),
+    .clean(\clean$324 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$217 ),
+    .fault(\restart$219 ),
     .fault_status(fault_status),
     .lc_check(check),
-    .lc_repeat(\lc_repeat$277 ),
+    .lc_repeat(\lc_repeat$279 ),
     .lc_repeat_seen(lc_repeat_seen),
-    .lc_skip(\lc_skip$278 ),
+    .lc_skip(\lc_skip$280 ),
     .lc_skip_seen(lc_skip_seen),
-    .lc_zero(\lc_zero$279 ),
+    .lc_zero(\lc_zero$281 ),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$1029$0 (\$24 ),
+    .\port$1506$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
-    .spw_mismatch(\spw_mismatch$284 ),
-    .status(\status$271 ),
-    .valid(\valid$268 )
+    .spw_mismatch(\spw_mismatch$286 ),
+    .status(\status$273 ),
+    .valid(\valid$270 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
@@ -1234,7 +1248,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$20  = \bit$321 ;
+    \$20  = \bit$323 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -1255,147 +1269,147 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$23  = \clean$322 ;
+    \$23  = \clean$324 ;
     if (rst) begin
       \$23  = 1'h0;
     end
   end
-  assign \idle$104  = idle;
-  assign \start$105  = start;
+  assign \idle$106  = idle;
+  assign \start$107  = start;
   assign frames = ca_busy;
   assign period = cfg_request_period;
   assign abort = abort_cycle;
-  assign \idle$110  = idle;
-  assign \slo$111  = slo;
-  assign \request$113  = request;
-  assign \abort$114  = abort_cycle;
+  assign \idle$112  = idle;
+  assign \slo$113  = slo;
+  assign \request$115  = request;
+  assign \abort$116  = abort_cycle;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$119 ;
-  assign \busy$122  = ma_busy;
+  assign level = \slo$121 ;
+  assign \busy$124  = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$128  = locked;
-  assign \early$130  = early;
-  assign \done$132  = frame_done;
-  assign \started$134  = started;
-  assign \slots_full$136  = slots_full;
-  assign \stopped$138  = stopped;
-  assign \stop_bit$140  = stop_bit;
+  assign \locked$130  = locked;
+  assign \early$132  = early;
+  assign \done$134  = frame_done;
+  assign \started$136  = started;
+  assign \slots_full$138  = slots_full;
+  assign \stopped$140  = stopped;
+  assign \stop_bit$142  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$144  = break_over;
-  assign \ack_expired$146  = ack_expired;
-  assign \no_start_expired$148  = no_start_expired;
-  assign \slo_stuck$150  = slo_stuck;
-  assign \slo_stuck_live$152  = slo_stuck_live;
-  assign \delay_over$154  = delay_over;
-  assign \slo$155  = \slo$119 ;
-  assign \clocking  = \ma_busy$156 ;
+  assign \break_over$146  = break_over;
+  assign \ack_expired$148  = ack_expired;
+  assign \no_start_expired$150  = no_start_expired;
+  assign \slo_stuck$152  = slo_stuck;
+  assign \slo_stuck_live$154  = slo_stuck_live;
+  assign \delay_over$156  = delay_over;
+  assign \slo$157  = \slo$121 ;
+  assign \clocking  = \ma_busy$158 ;
   assign timer_clear = clear;
-  assign \in_clock$161  = in_clock;
+  assign \in_clock$163  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$167  = ack_limit;
-  assign \timeout_limit$169  = timeout_limit;
-  assign \no_start_limit$171  = no_start_limit;
-  assign \delay$173  = delay;
-  assign \delay_limit$175  = delay_limit;
+  assign \ack_limit$169  = ack_limit;
+  assign \timeout_limit$171  = timeout_limit;
+  assign \no_start_limit$173  = no_start_limit;
+  assign \delay$175  = delay;
+  assign \delay_limit$177  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$180  = quiet;
-  assign \quiet_live$182  = quiet_live;
+  assign \quiet$182  = quiet;
+  assign \quiet_live$184  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$186  = started;
-  assign \start_slot$188  = start_slot;
-  assign \rises$190  = rises;
-  assign receiver_clear = \clear$191 ;
+  assign \started$188  = started;
+  assign \start_slot$190  = start_slot;
+  assign \rises$192  = rises;
+  assign receiver_clear = \clear$193 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$197  = cycle[15:0];
+  assign \half_period$199  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$200  = word_count;
-  assign \lc$202  = \lc$201 ;
-  assign lc_next = { \lc$201 [4:0], \bit  };
-  assign \lc_next$204  = { \lc$201 [4:0], \bit  };
+  assign \word_count$202  = word_count;
+  assign \lc$204  = \lc$203 ;
+  assign lc_next = { \lc$203 [4:0], \bit  };
+  assign \lc_next$206  = { \lc$203 [4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$210  = resync;
+  assign \resync$212  = resync;
   assign waiting = watch;
-  assign \level$213  = \slo$119 ;
+  assign \level$215  = \slo$121 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$217 ;
+  assign fault = \restart$219 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$224  = delay;
+  assign \delay$226  = delay;
   assign \$signal  = learn;
-  assign \clean$230  = clean;
-  assign \noisy$232  = noisy;
+  assign \clean$232  = clean;
+  assign \noisy$234  = noisy;
   assign jump = delay_jump;
-  assign \crcs$238  = crcs;
-  assign \crcs$239  = crcs;
-  assign w1_enable = cycle[194];
-  assign \cpw_top$242  = cpw_top;
+  assign \crcs$240  = crcs;
+  assign \crcs$241  = crcs;
+  assign w1_enable = cycle[195];
+  assign \cpw_top$244  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[200:195];
-  assign \tolerance$246  = cycle[252:245];
+  assign bits = cycle[201:196];
+  assign \tolerance$248  = cycle[254:247];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$251  = report_frame;
-  assign \fault$252  = \restart$217 ;
-  assign \fault_status$254  = fault_status;
-  assign \crc_ok$256  = crc_ok;
+  assign \report_frame$253  = report_frame;
+  assign \fault$254  = \restart$219 ;
+  assign \fault_status$256  = fault_status;
+  assign \crc_ok$258  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$264  = report;
-  assign \report_frame$265  = report_frame;
-  assign \report_delay$267  = report_delay;
-  assign \valid$269  = \valid$268 ;
+  assign \report$266  = report;
+  assign \report_frame$267  = report_frame;
+  assign \report_delay$269  = report_delay;
+  assign \valid$271  = \valid$270 ;
   assign word_crc_ok = { \$24 , crc_ok[0] };
-  assign \first_rise$286  = first_rise;
-  assign \start$291  = ca_start;
-  assign \abort$292  = ca_abort;
+  assign \first_rise$288  = first_rise;
+  assign \start$293  = ca_start;
+  assign \abort$294  = ca_abort;
   assign rbuf_addr = ca_rbuf_addr;
   assign rbuf_en = ca_rbuf_en;
   assign rbuf_data = ca_rbuf_data;
-  assign \busy$296  = ca_busy;
-  assign \done$297  = ca_done;
-  assign \cdm$299  = cdm;
+  assign \busy$298  = ca_busy;
+  assign \done$299  = ca_done;
+  assign \cdm$301  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_ok = \valid$268 ;
-  assign frame_cds = \cds$272 ;
+  assign frame_ok = \valid$270 ;
+  assign frame_cds = \cds$274 ;
   assign cdm_cycle = frame_cdm;
-  assign \overrun$312  = overrun;
-  assign \clear$314  = clear_counters;
-  assign \ma$316  = ma;
-  assign \done$317  = done;
+  assign \overrun$314  = overrun;
+  assign \clear$316  = clear_counters;
+  assign \ma$318  = ma;
+  assign \done$319  = done;
   assign valid_out = valid;
-  assign status = \result$319 [3:0];
-  assign timestamp = \result$319 [35:4];
-  assign line_delay = \result$319 [48:36];
-  assign cds = \result$319 [49];
-  assign noise_events = \result$319 [53:50];
-  assign delay_settled = \result$319 [54];
-  assign settled_delay = \result$319 [67:55];
-  assign delay_spread = \result$319 [75:68];
-  assign word0_position = \result$319 [130:76];
-  assign word0_ne = \result$319 [131];
-  assign word0_nw = \result$319 [132];
-  assign word0_crc_ok = \result$319 [133];
-  assign word1_position = \result$319 [173:134];
-  assign word1_ne = \result$319 [174];
-  assign word1_nw = \result$319 [175];
-  assign word1_crc_ok = \result$319 [176];
-  assign lc = \result$319 [182:177];
-  assign lc_repeat = \result$319 [183];
-  assign lc_skip = \result$319 [184];
-  assign lc_zero = \result$319 [185];
-  assign spw_mismatch = \result$319 [186];
+  assign status = \result$321 [3:0];
+  assign timestamp = \result$321 [35:4];
+  assign line_delay = \result$321 [48:36];
+  assign cds = \result$321 [49];
+  assign noise_events = \result$321 [53:50];
+  assign delay_settled = \result$321 [54];
+  assign settled_delay = \result$321 [67:55];
+  assign delay_spread = \result$321 [75:68];
+  assign word0_position = \result$321 [130:76];
+  assign word0_ne = \result$321 [131];
+  assign word0_nw = \result$321 [132];
+  assign word0_crc_ok = \result$321 [133];
+  assign word1_position = \result$321 [173:134];
+  assign word1_ne = \result$321 [174];
+  assign word1_nw = \result$321 [175];
+  assign word1_crc_ok = \result$321 [176];
+  assign lc = \result$321 [182:177];
+  assign lc_repeat = \result$321 [183];
+  assign lc_skip = \result$321 [184];
+  assign lc_zero = \result$321 [185];
+  assign spw_mismatch = \result$321 [186];
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
   assign count_crc_word0 = counts[15:0];
@@ -1429,31 +1443,33 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[155:145];
+  assign \live.w0  = live[156:145];
   assign \live.w0.data_bits  = live[150:145];
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
   assign \live.w0.gray  = live[155];
-  assign \live.w0_crc  = live[193:156];
-  assign \live.w0_crc.width  = live[160:156];
-  assign \live.w0_crc.poly  = live[176:161];
-  assign \live.w0_crc.start  = live[192:177];
-  assign \live.w0_crc.inverted  = live[193];
-  assign \live.w1_enable  = live[194];
-  assign \live.w1  = live[205:195];
-  assign \live.w1.data_bits  = live[200:195];
-  assign \live.w1.nenw  = live[201];
-  assign \live.w1.lc  = live[202];
-  assign \live.w1.crc  = live[204:203];
-  assign \live.w1.gray  = live[205];
-  assign \live.w1_crc  = live[243:206];
-  assign \live.w1_crc.width  = live[210:206];
-  assign \live.w1_crc.poly  = live[226:211];
-  assign \live.w1_crc.start  = live[242:227];
-  assign \live.w1_crc.inverted  = live[243];
-  assign \live.spw_check  = live[244];
-  assign \live.spw_tolerance  = live[252:245];
+  assign \live.w0.signed  = live[156];
+  assign \live.w0_crc  = live[194:157];
+  assign \live.w0_crc.width  = live[161:157];
+  assign \live.w0_crc.poly  = live[177:162];
+  assign \live.w0_crc.start  = live[193:178];
+  assign \live.w0_crc.inverted  = live[194];
+  assign \live.w1_enable  = live[195];
+  assign \live.w1  = live[207:196];
+  assign \live.w1.data_bits  = live[201:196];
+  assign \live.w1.nenw  = live[202];
+  assign \live.w1.lc  = live[203];
+  assign \live.w1.crc  = live[205:204];
+  assign \live.w1.gray  = live[206];
+  assign \live.w1.signed  = live[207];
+  assign \live.w1_crc  = live[245:208];
+  assign \live.w1_crc.width  = live[212:208];
+  assign \live.w1_crc.poly  = live[228:213];
+  assign \live.w1_crc.start  = live[244:229];
+  assign \live.w1_crc.inverted  = live[245];
+  assign \live.spw_check  = live[246];
+  assign \live.spw_tolerance  = live[254:247];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -1464,55 +1480,61 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[155:145];
+  assign \cycle.w0  = cycle[156:145];
   assign \cycle.w0.data_bits  = cycle[150:145];
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
   assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0_crc  = cycle[193:156];
-  assign \cycle.w0_crc.width  = cycle[160:156];
-  assign \cycle.w0_crc.poly  = cycle[176:161];
-  assign \cycle.w0_crc.start  = cycle[192:177];
-  assign \cycle.w0_crc.inverted  = cycle[193];
-  assign \cycle.w1_enable  = cycle[194];
-  assign \cycle.w1  = cycle[205:195];
-  assign \cycle.w1.data_bits  = cycle[200:195];
-  assign \cycle.w1.nenw  = cycle[201];
-  assign \cycle.w1.lc  = cycle[202];
-  assign \cycle.w1.crc  = cycle[204:203];
-  assign \cycle.w1.gray  = cycle[205];
-  assign \cycle.w1_crc  = cycle[243:206];
-  assign \cycle.w1_crc.width  = cycle[210:206];
-  assign \cycle.w1_crc.poly  = cycle[226:211];
-  assign \cycle.w1_crc.start  = cycle[242:227];
-  assign \cycle.w1_crc.inverted  = cycle[243];
-  assign \cycle.spw_check  = cycle[244];
-  assign \cycle.spw_tolerance  = cycle[252:245];
-  assign \words[0]  = words[10:0];
+  assign \cycle.w0.signed  = cycle[156];
+  assign \cycle.w0_crc  = cycle[194:157];
+  assign \cycle.w0_crc.width  = cycle[161:157];
+  assign \cycle.w0_crc.poly  = cycle[177:162];
+  assign \cycle.w0_crc.start  = cycle[193:178];
+  assign \cycle.w0_crc.inverted  = cycle[194];
+  assign \cycle.w1_enable  = cycle[195];
+  assign \cycle.w1  = cycle[207:196];
+  assign \cycle.w1.data_bits  = cycle[201:196];
+  assign \cycle.w1.nenw  = cycle[202];
+  assign \cycle.w1.lc  = cycle[203];
+  assign \cycle.w1.crc  = cycle[205:204];
+  assign \cycle.w1.gray  = cycle[206];
+  assign \cycle.w1.signed  = cycle[207];
+  assign \cycle.w1_crc  = cycle[245:208];
+  assign \cycle.w1_crc.width  = cycle[212:208];
+  assign \cycle.w1_crc.poly  = cycle[228:213];
+  assign \cycle.w1_crc.start  = cycle[244:229];
+  assign \cycle.w1_crc.inverted  = cycle[245];
+  assign \cycle.spw_check  = cycle[246];
+  assign \cycle.spw_tolerance  = cycle[254:247];
+  assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
   assign \words[0].gray  = words[10];
-  assign \words[1]  = words[21:11];
-  assign \words[1].data_bits  = words[16:11];
-  assign \words[1].nenw  = words[17];
-  assign \words[1].lc  = words[18];
-  assign \words[1].crc  = words[20:19];
-  assign \words[1].gray  = words[21];
-  assign \words$236[0]  = \words$236 [10:0];
-  assign \words$236[0].data_bits  = \words$236 [5:0];
-  assign \words$236[0].nenw  = \words$236 [6];
-  assign \words$236[0].lc  = \words$236 [7];
-  assign \words$236[0].crc  = \words$236 [9:8];
-  assign \words$236[0].gray  = \words$236 [10];
-  assign \words$236[1]  = \words$236 [21:11];
-  assign \words$236[1].data_bits  = \words$236 [16:11];
-  assign \words$236[1].nenw  = \words$236 [17];
-  assign \words$236[1].lc  = \words$236 [18];
-  assign \words$236[1].crc  = \words$236 [20:19];
-  assign \words$236[1].gray  = \words$236 [21];
+  assign \words[0].signed  = words[11];
+  assign \words[1]  = words[23:12];
+  assign \words[1].data_bits  = words[17:12];
+  assign \words[1].nenw  = words[18];
+  assign \words[1].lc  = words[19];
+  assign \words[1].crc  = words[21:20];
+  assign \words[1].gray  = words[22];
+  assign \words[1].signed  = words[23];
+  assign \words$238[0]  = \words$238 [11:0];
+  assign \words$238[0].data_bits  = \words$238 [5:0];
+  assign \words$238[0].nenw  = \words$238 [6];
+  assign \words$238[0].lc  = \words$238 [7];
+  assign \words$238[0].crc  = \words$238 [9:8];
+  assign \words$238[0].gray  = \words$238 [10];
+  assign \words$238[0].signed  = \words$238 [11];
+  assign \words$238[1]  = \words$238 [23:12];
+  assign \words$238[1].data_bits  = \words$238 [17:12];
+  assign \words$238[1].nenw  = \words$238 [18];
+  assign \words$238[1].lc  = \words$238 [19];
+  assign \words$238[1].crc  = \words$238 [21:20];
+  assign \words$238[1].gray  = \words$238 [22];
+  assign \words$238[1].signed  = \words$238 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -1523,26 +1545,26 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$238[0]  = crcs[37:0];
-  assign \crcs$238[0].width  = crcs[4:0];
-  assign \crcs$238[0].poly  = crcs[20:5];
-  assign \crcs$238[0].start  = crcs[36:21];
-  assign \crcs$238[0].inverted  = crcs[37];
-  assign \crcs$238[1]  = crcs[75:38];
-  assign \crcs$238[1].width  = crcs[42:38];
-  assign \crcs$238[1].poly  = crcs[58:43];
-  assign \crcs$238[1].start  = crcs[74:59];
-  assign \crcs$238[1].inverted  = crcs[75];
-  assign \crcs$239[0]  = crcs[37:0];
-  assign \crcs$239[0].width  = crcs[4:0];
-  assign \crcs$239[0].poly  = crcs[20:5];
-  assign \crcs$239[0].start  = crcs[36:21];
-  assign \crcs$239[0].inverted  = crcs[37];
-  assign \crcs$239[1]  = crcs[75:38];
-  assign \crcs$239[1].width  = crcs[42:38];
-  assign \crcs$239[1].poly  = crcs[58:43];
-  assign \crcs$239[1].start  = crcs[74:59];
-  assign \crcs$239[1].inverted  = crcs[75];
+  assign \crcs$240[0]  = crcs[37:0];
+  assign \crcs$240[0].width  = crcs[4:0];
+  assign \crcs$240[0].poly  = crcs[20:5];
+  assign \crcs$240[0].start  = crcs[36:21];
+  assign \crcs$240[0].inverted  = crcs[37];
+  assign \crcs$240[1]  = crcs[75:38];
+  assign \crcs$240[1].width  = crcs[42:38];
+  assign \crcs$240[1].poly  = crcs[58:43];
+  assign \crcs$240[1].start  = crcs[74:59];
+  assign \crcs$240[1].inverted  = crcs[75];
+  assign \crcs$241[0]  = crcs[37:0];
+  assign \crcs$241[0].width  = crcs[4:0];
+  assign \crcs$241[0].poly  = crcs[20:5];
+  assign \crcs$241[0].start  = crcs[36:21];
+  assign \crcs$241[0].inverted  = crcs[37];
+  assign \crcs$241[1]  = crcs[75:38];
+  assign \crcs$241[1].width  = crcs[42:38];
+  assign \crcs$241[1].poly  = crcs[58:43];
+  assign \crcs$241[1].start  = crcs[74:59];
+  assign \crcs$241[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -1553,31 +1575,33 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \cfg.quiet_time  = cycle[136:125];
   assign \cfg.noise_limit  = cycle[140:137];
   assign \cfg.delay_tolerance  = cycle[144:141];
-  assign \cfg.w0  = cycle[155:145];
+  assign \cfg.w0  = cycle[156:145];
   assign \cfg.w0.data_bits  = cycle[150:145];
   assign \cfg.w0.nenw  = cycle[151];
   assign \cfg.w0.lc  = cycle[152];
   assign \cfg.w0.crc  = cycle[154:153];
   assign \cfg.w0.gray  = cycle[155];
-  assign \cfg.w0_crc  = cycle[193:156];
-  assign \cfg.w0_crc.width  = cycle[160:156];
-  assign \cfg.w0_crc.poly  = cycle[176:161];
-  assign \cfg.w0_crc.start  = cycle[192:177];
-  assign \cfg.w0_crc.inverted  = cycle[193];
-  assign \cfg.w1_enable  = cycle[194];
-  assign \cfg.w1  = cycle[205:195];
-  assign \cfg.w1.data_bits  = cycle[200:195];
-  assign \cfg.w1.nenw  = cycle[201];
-  assign \cfg.w1.lc  = cycle[202];
-  assign \cfg.w1.crc  = cycle[204:203];
-  assign \cfg.w1.gray  = cycle[205];
-  assign \cfg.w1_crc  = cycle[243:206];
-  assign \cfg.w1_crc.width  = cycle[210:206];
-  assign \cfg.w1_crc.poly  = cycle[226:211];
-  assign \cfg.w1_crc.start  = cycle[242:227];
-  assign \cfg.w1_crc.inverted  = cycle[243];
-  assign \cfg.spw_check  = cycle[244];
-  assign \cfg.spw_tolerance  = cycle[252:245];
+  assign \cfg.w0.signed  = cycle[156];
+  assign \cfg.w0_crc  = cycle[194:157];
+  assign \cfg.w0_crc.width  = cycle[161:157];
+  assign \cfg.w0_crc.poly  = cycle[177:162];
+  assign \cfg.w0_crc.start  = cycle[193:178];
+  assign \cfg.w0_crc.inverted  = cycle[194];
+  assign \cfg.w1_enable  = cycle[195];
+  assign \cfg.w1  = cycle[207:196];
+  assign \cfg.w1.data_bits  = cycle[201:196];
+  assign \cfg.w1.nenw  = cycle[202];
+  assign \cfg.w1.lc  = cycle[203];
+  assign \cfg.w1.crc  = cycle[205:204];
+  assign \cfg.w1.gray  = cycle[206];
+  assign \cfg.w1.signed  = cycle[207];
+  assign \cfg.w1_crc  = cycle[245:208];
+  assign \cfg.w1_crc.width  = cycle[212:208];
+  assign \cfg.w1_crc.poly  = cycle[228:213];
+  assign \cfg.w1_crc.start  = cycle[244:229];
+  assign \cfg.w1_crc.inverted  = cycle[245];
+  assign \cfg.spw_check  = cycle[246];
+  assign \cfg.spw_tolerance  = cycle[254:247];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -1601,36 +1625,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$288.slave_id  = \request$288 [2:0];
-  assign \request$288.address  = \request$288 [9:3];
-  assign \request$288.count  = \request$288 [16:10];
-  assign \request$288.write  = \request$288 [17];
+  assign \request$290.slave_id  = \request$290 [2:0];
+  assign \request$290.address  = \request$290 [9:3];
+  assign \request$290.count  = \request$290 [16:10];
+  assign \request$290.write  = \request$290 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$309.crc_word0  = \events$309 [0];
-  assign \events$309.crc_word1  = \events$309 [1];
-  assign \events$309.no_ack  = \events$309 [2];
-  assign \events$309.no_start  = \events$309 [3];
-  assign \events$309.delay_range  = \events$309 [4];
-  assign \events$309.slo_stuck_low  = \events$309 [5];
-  assign \events$309.lc_repeat  = \events$309 [6];
-  assign \events$309.lc_skip  = \events$309 [7];
-  assign \events$309.lc_zero  = \events$309 [8];
-  assign \events$309.spw_mismatch  = \events$309 [9];
-  assign \events$309.overrun  = \events$309 [10];
-  assign \events$309.aborted  = \events$309 [11];
-  assign \events$309.no_stop  = \events$309 [12];
-  assign \events$309.noisy_line  = \events$309 [13];
-  assign \events$309.delay_jump  = \events$309 [14];
-  assign \events$309.noise_event  = \events$309 [15];
-  assign \events$309.ca_crc4_error  = \events$309 [16];
-  assign \events$309.ca_no_answer  = \events$309 [17];
-  assign \events$309.ca_refused  = \events$309 [18];
-  assign \events$309.ca_aborted  = \events$309 [19];
-  assign \events$309.ca_data_fault  = \events$309 [20];
+  assign \events$311.crc_word0  = \events$311 [0];
+  assign \events$311.crc_word1  = \events$311 [1];
+  assign \events$311.no_ack  = \events$311 [2];
+  assign \events$311.no_start  = \events$311 [3];
+  assign \events$311.delay_range  = \events$311 [4];
+  assign \events$311.slo_stuck_low  = \events$311 [5];
+  assign \events$311.lc_repeat  = \events$311 [6];
+  assign \events$311.lc_skip  = \events$311 [7];
+  assign \events$311.lc_zero  = \events$311 [8];
+  assign \events$311.spw_mismatch  = \events$311 [9];
+  assign \events$311.overrun  = \events$311 [10];
+  assign \events$311.aborted  = \events$311 [11];
+  assign \events$311.no_stop  = \events$311 [12];
+  assign \events$311.noisy_line  = \events$311 [13];
+  assign \events$311.delay_jump  = \events$311 [14];
+  assign \events$311.noise_event  = \events$311 [15];
+  assign \events$311.ca_crc4_error  = \events$311 [16];
+  assign \events$311.ca_no_answer  = \events$311 [17];
+  assign \events$311.ca_refused  = \events$311 [18];
+  assign \events$311.ca_aborted  = \events$311 [19];
+  assign \events$311.ca_data_fault  = \events$311 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -1659,59 +1683,59 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$319.status  = \result$319 [3:0];
-  assign \result$319.timestamp  = \result$319 [35:4];
-  assign \result$319.line_delay  = \result$319 [48:36];
-  assign \result$319.cds  = \result$319 [49];
-  assign \result$319.noise_events  = \result$319 [53:50];
-  assign \result$319.delay_settled  = \result$319 [54];
-  assign \result$319.settled_delay  = \result$319 [67:55];
-  assign \result$319.delay_spread  = \result$319 [75:68];
-  assign \result$319.word0  = \result$319 [133:76];
-  assign \result$319.word0.position  = \result$319 [130:76];
-  assign \result$319.word0.ne  = \result$319 [131];
-  assign \result$319.word0.nw  = \result$319 [132];
-  assign \result$319.word0.crc_ok  = \result$319 [133];
-  assign \result$319.word1  = \result$319 [176:134];
-  assign \result$319.word1.position  = \result$319 [173:134];
-  assign \result$319.word1.ne  = \result$319 [174];
-  assign \result$319.word1.nw  = \result$319 [175];
-  assign \result$319.word1.crc_ok  = \result$319 [176];
-  assign \result$319.lc  = \result$319 [182:177];
-  assign \result$319.lc_repeat  = \result$319 [183];
-  assign \result$319.lc_skip  = \result$319 [184];
-  assign \result$319.lc_zero  = \result$319 [185];
-  assign \result$319.spw_mismatch  = \result$319 [186];
-  assign \events$309 [20] = \$16 ;
-  assign \events$309 [19] = \$14 ;
-  assign \events$309 [18] = \$12 ;
-  assign \events$309 [17] = \$10 ;
-  assign \events$309 [16] = \$8 ;
-  assign \events$309 [15] = \event ;
-  assign \events$309 [14] = \$6 ;
-  assign \events$309 [13] = \$4 ;
-  assign \events$309 [12] = faults[6];
-  assign \events$309 [11] = faults[4];
-  assign \events$309 [10] = overrun;
-  assign \events$309 [9] = \$2 ;
-  assign \events$309 [8] = \lc_zero$279 ;
-  assign \events$309 [7] = \lc_skip$278 ;
-  assign \events$309 [6] = \lc_repeat$277 ;
-  assign \events$309 [5] = faults[3];
-  assign \events$309 [4] = faults[2];
-  assign \events$309 [3] = faults[1];
-  assign \events$309 [2] = faults[0];
-  assign \events$309 [1] = crc_error[1];
-  assign \events$309 [0] = crc_error[0];
+  assign \result$321.status  = \result$321 [3:0];
+  assign \result$321.timestamp  = \result$321 [35:4];
+  assign \result$321.line_delay  = \result$321 [48:36];
+  assign \result$321.cds  = \result$321 [49];
+  assign \result$321.noise_events  = \result$321 [53:50];
+  assign \result$321.delay_settled  = \result$321 [54];
+  assign \result$321.settled_delay  = \result$321 [67:55];
+  assign \result$321.delay_spread  = \result$321 [75:68];
+  assign \result$321.word0  = \result$321 [133:76];
+  assign \result$321.word0.position  = \result$321 [130:76];
+  assign \result$321.word0.ne  = \result$321 [131];
+  assign \result$321.word0.nw  = \result$321 [132];
+  assign \result$321.word0.crc_ok  = \result$321 [133];
+  assign \result$321.word1  = \result$321 [176:134];
+  assign \result$321.word1.position  = \result$321 [173:134];
+  assign \result$321.word1.ne  = \result$321 [174];
+  assign \result$321.word1.nw  = \result$321 [175];
+  assign \result$321.word1.crc_ok  = \result$321 [176];
+  assign \result$321.lc  = \result$321 [182:177];
+  assign \result$321.lc_repeat  = \result$321 [183];
+  assign \result$321.lc_skip  = \result$321 [184];
+  assign \result$321.lc_zero  = \result$321 [185];
+  assign \result$321.spw_mismatch  = \result$321 [186];
+  assign \events$311 [20] = \$16 ;
+  assign \events$311 [19] = \$14 ;
+  assign \events$311 [18] = \$12 ;
+  assign \events$311 [17] = \$10 ;
+  assign \events$311 [16] = \$8 ;
+  assign \events$311 [15] = \event ;
+  assign \events$311 [14] = \$6 ;
+  assign \events$311 [13] = \$4 ;
+  assign \events$311 [12] = faults[6];
+  assign \events$311 [11] = faults[4];
+  assign \events$311 [10] = overrun;
+  assign \events$311 [9] = \$2 ;
+  assign \events$311 [8] = \lc_zero$281 ;
+  assign \events$311 [7] = \lc_skip$280 ;
+  assign \events$311 [6] = \lc_repeat$279 ;
+  assign \events$311 [5] = faults[3];
+  assign \events$311 [4] = faults[2];
+  assign \events$311 [3] = faults[1];
+  assign \events$311 [2] = faults[0];
+  assign \events$311 [1] = crc_error[1];
+  assign \events$311 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$288 [17] = ca_write;
-  assign \request$288 [16:10] = ca_count;
-  assign \request$288 [9:3] = ca_address;
-  assign \request$288 [2:0] = ca_slave_id;
+  assign \request$290 [17] = ca_write;
+  assign \request$290 [16:10] = ca_count;
+  assign \request$290 [9:3] = ca_address;
+  assign \request$290 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[186] = \spw_mismatch$284 ;
+  assign frame[186] = \spw_mismatch$286 ;
   assign frame[176] = \$24 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
@@ -1720,37 +1744,39 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign frame[132] = nw[0];
   assign frame[131] = ne[0];
   assign frame[130:76] = data0;
-  assign frame[185] = \lc_zero$279 ;
-  assign frame[184] = \lc_skip$278 ;
-  assign frame[183] = \lc_repeat$277 ;
-  assign frame[182:177] = \lc$201 ;
+  assign frame[185] = \lc_zero$281 ;
+  assign frame[184] = \lc_skip$280 ;
+  assign frame[183] = \lc_repeat$279 ;
+  assign frame[182:177] = \lc$203 ;
   assign frame[75:68] = spread;
-  assign frame[67:55] = \settled_delay$275 ;
+  assign frame[67:55] = \settled_delay$277 ;
   assign frame[54] = settled;
   assign frame[53:50] = events;
-  assign frame[49] = \cds$272 ;
+  assign frame[49] = \cds$274 ;
   assign frame[48:36] = delay;
-  assign frame[3:0] = \status$271 ;
-  assign \words$236 [21:11] = cycle[205:195];
-  assign \words$236 [10:0] = cycle[155:145];
-  assign words[21:11] = cycle[205:195];
-  assign words[10:0] = cycle[155:145];
-  assign live[252:245] = cfg_spw_tolerance;
-  assign live[244] = cfg_spw_check;
-  assign live[243] = cfg_w1_crc_inverted;
-  assign live[242:227] = cfg_w1_crc_start;
-  assign live[226:211] = cfg_w1_crc_poly;
-  assign live[210:206] = cfg_w1_crc_width;
-  assign live[205] = cfg_w1_gray;
-  assign live[204:203] = cfg_w1_crc;
-  assign live[202] = cfg_w1_lc;
-  assign live[201] = cfg_w1_nenw;
-  assign live[200:195] = cfg_w1_data_bits;
-  assign live[194] = cfg_w1_enable;
-  assign live[193] = cfg_w0_crc_inverted;
-  assign live[192:177] = cfg_w0_crc_start;
-  assign live[176:161] = cfg_w0_crc_poly;
-  assign live[160:156] = cfg_w0_crc_width;
+  assign frame[3:0] = \status$273 ;
+  assign \words$238 [23:12] = cycle[207:196];
+  assign \words$238 [11:0] = cycle[156:145];
+  assign words[23:12] = cycle[207:196];
+  assign words[11:0] = cycle[156:145];
+  assign live[254:247] = cfg_spw_tolerance;
+  assign live[246] = cfg_spw_check;
+  assign live[245] = cfg_w1_crc_inverted;
+  assign live[244:229] = cfg_w1_crc_start;
+  assign live[228:213] = cfg_w1_crc_poly;
+  assign live[212:208] = cfg_w1_crc_width;
+  assign live[207] = cfg_w1_signed;
+  assign live[206] = cfg_w1_gray;
+  assign live[205:204] = cfg_w1_crc;
+  assign live[203] = cfg_w1_lc;
+  assign live[202] = cfg_w1_nenw;
+  assign live[201:196] = cfg_w1_data_bits;
+  assign live[195] = cfg_w1_enable;
+  assign live[194] = cfg_w0_crc_inverted;
+  assign live[193:178] = cfg_w0_crc_start;
+  assign live[177:162] = cfg_w0_crc_poly;
+  assign live[161:157] = cfg_w0_crc_width;
+  assign live[156] = cfg_w0_signed;
   assign live[155] = cfg_w0_gray;
   assign live[154:153] = cfg_w0_crc;
   assign live[152] = cfg_w0_lc;
@@ -1827,7 +1853,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire [24:0] \$58 ;
   reg \$59 ;
   wire \$6 ;
-  reg [252:0] \$60 ;
+  reg [254:0] \$60 ;
   reg [23:0] \$61 ;
   reg [23:0] \$62 ;
   reg [11:0] \$63 ;
@@ -1854,8 +1880,8 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  output [252:0] cycle;
-  reg [252:0] cycle = 253'h0000000000000000000000000000000000000000000000000000000000000000;
+  output [254:0] cycle;
+  reg [254:0] cycle = 255'h0000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -1868,7 +1894,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
   wire [23:0] \cycle.timeout_limit ;
-  wire [10:0] \cycle.w0 ;
+  wire [11:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -1879,12 +1905,13 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \cycle.w0.gray ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
+  wire \cycle.w0.signed ;
   wire [37:0] \cycle.w0_crc ;
   wire \cycle.w0_crc.inverted ;
   wire [15:0] \cycle.w0_crc.poly ;
   wire [15:0] \cycle.w0_crc.start ;
   wire [4:0] \cycle.w0_crc.width ;
-  wire [10:0] \cycle.w1 ;
+  wire [11:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -1895,6 +1922,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \cycle.w1.gray ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
+  wire \cycle.w1.signed ;
   wire [37:0] \cycle.w1_crc ;
   wire \cycle.w1_crc.inverted ;
   wire [15:0] \cycle.w1_crc.poly ;
@@ -1907,8 +1935,8 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [252:0] live;
-  wire [252:0] live;
+  input [254:0] live;
+  wire [254:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -1921,7 +1949,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
   wire [23:0] \live.timeout_limit ;
-  wire [10:0] \live.w0 ;
+  wire [11:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -1932,12 +1960,13 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \live.w0.gray ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
+  wire \live.w0.signed ;
   wire [37:0] \live.w0_crc ;
   wire \live.w0_crc.inverted ;
   wire [15:0] \live.w0_crc.poly ;
   wire [15:0] \live.w0_crc.start ;
   wire [4:0] \live.w0_crc.width ;
-  wire [10:0] \live.w1 ;
+  wire [11:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -1948,6 +1977,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \live.w1.gray ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
+  wire \live.w1.signed ;
   wire [37:0] \live.w1_crc ;
   wire \live.w1_crc.inverted ;
   wire [15:0] \live.w1_crc.poly ;
@@ -1969,14 +1999,14 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
-  assign \$36  = live[194] & live[152];
-  assign \$37  = \$36  & live[202];
+  assign \$36  = live[195] & live[152];
+  assign \$37  = \$36  & live[203];
   assign \$38  = ~ \$37 ;
   assign \$39  = \$35  & \$38 ;
-  assign \$40  = ~ live[244];
-  assign \$41  = live[200:195] <= live[150:145];
-  assign \$42  = live[194] & \$41 ;
-  assign \$43  = | live[204:203];
+  assign \$40  = ~ live[246];
+  assign \$41  = live[201:196] <= live[150:145];
+  assign \$42  = live[195] & \$41 ;
+  assign \$43  = | live[205:204];
   assign \$44  = \$42  & \$43 ;
   assign \$45  = \$40  | \$44 ;
   assign \$46  = \$39  & \$45 ;
@@ -1992,7 +2022,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$56  = \$55  ? 4'h2 : live[144:141];
   assign \$57  = live[15:0] + \$56 ;
   assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[194];
+  assign word_count = 1'h1 + cycle[195];
   always @(posedge clk)
     ok <= \$59 ;
   always @(posedge clk)
@@ -2021,26 +2051,26 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$8  = live[154:153] == 2'h2;
   assign \$9  = \$7  | \$8 ;
   assign \$10  = live[154:153] == 2'h3;
-  assign \$11  = | live[160:156];
+  assign \$11  = | live[161:157];
   assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[160:156] <= 5'h10;
+  assign \$13  = live[161:157] <= 5'h10;
   assign \$14  = \$12  & \$13 ;
   assign \$15  = \$9  | \$14 ;
   assign \$16  = \$4  & \$15 ;
   assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[194];
-  assign \$19  = | live[200:195];
-  assign \$20  = live[200:195] <= 6'h28;
+  assign \$18  = ~ live[195];
+  assign \$19  = | live[201:196];
+  assign \$20  = live[201:196] <= 6'h28;
   assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[204:203];
-  assign \$23  = live[204:203] == 1'h1;
+  assign \$22  = ! live[205:204];
+  assign \$23  = live[205:204] == 1'h1;
   assign \$24  = \$22  | \$23 ;
-  assign \$25  = live[204:203] == 2'h2;
+  assign \$25  = live[205:204] == 2'h2;
   assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[204:203] == 2'h3;
-  assign \$28  = | live[210:206];
+  assign \$27  = live[205:204] == 2'h3;
+  assign \$28  = | live[212:208];
   assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[210:206] <= 5'h10;
+  assign \$30  = live[212:208] <= 5'h10;
   assign \$31  = \$29  & \$30 ;
   assign \$32  = \$26  | \$31 ;
   always @* begin
@@ -2057,7 +2087,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
       \$60  = live;
     end
     if (rst) begin
-      \$60  = 253'h0000000000000000000000000000000000000000000000000000000000000000;
+      \$60  = 255'h0000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
@@ -2131,12 +2161,12 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
             \$66 [37] = 1'h1;
           end
         2'h3:
-            \$66 [37:0] = live[193:156];
+            \$66 [37:0] = live[194:157];
         default:
             \$66 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
-      casez (live[204:203])
+      casez (live[205:204])
         2'h1:
           begin
             \$66 [42:38] = 5'h06;
@@ -2152,7 +2182,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
             \$66 [75] = 1'h1;
           end
         2'h3:
-            \$66 [75:38] = live[243:206];
+            \$66 [75:38] = live[245:208];
         default:
             \$66 [75:38] = 38'h0000000000;
       endcase
@@ -2178,31 +2208,33 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[155:145];
+  assign \live.w0  = live[156:145];
   assign \live.w0.data_bits  = live[150:145];
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
   assign \live.w0.gray  = live[155];
-  assign \live.w0_crc  = live[193:156];
-  assign \live.w0_crc.width  = live[160:156];
-  assign \live.w0_crc.poly  = live[176:161];
-  assign \live.w0_crc.start  = live[192:177];
-  assign \live.w0_crc.inverted  = live[193];
-  assign \live.w1_enable  = live[194];
-  assign \live.w1  = live[205:195];
-  assign \live.w1.data_bits  = live[200:195];
-  assign \live.w1.nenw  = live[201];
-  assign \live.w1.lc  = live[202];
-  assign \live.w1.crc  = live[204:203];
-  assign \live.w1.gray  = live[205];
-  assign \live.w1_crc  = live[243:206];
-  assign \live.w1_crc.width  = live[210:206];
-  assign \live.w1_crc.poly  = live[226:211];
-  assign \live.w1_crc.start  = live[242:227];
-  assign \live.w1_crc.inverted  = live[243];
-  assign \live.spw_check  = live[244];
-  assign \live.spw_tolerance  = live[252:245];
+  assign \live.w0.signed  = live[156];
+  assign \live.w0_crc  = live[194:157];
+  assign \live.w0_crc.width  = live[161:157];
+  assign \live.w0_crc.poly  = live[177:162];
+  assign \live.w0_crc.start  = live[193:178];
+  assign \live.w0_crc.inverted  = live[194];
+  assign \live.w1_enable  = live[195];
+  assign \live.w1  = live[207:196];
+  assign \live.w1.data_bits  = live[201:196];
+  assign \live.w1.nenw  = live[202];
+  assign \live.w1.lc  = live[203];
+  assign \live.w1.crc  = live[205:204];
+  assign \live.w1.gray  = live[206];
+  assign \live.w1.signed  = live[207];
+  assign \live.w1_crc  = live[245:208];
+  assign \live.w1_crc.width  = live[212:208];
+  assign \live.w1_crc.poly  = live[228:213];
+  assign \live.w1_crc.start  = live[244:229];
+  assign \live.w1_crc.inverted  = live[245];
+  assign \live.spw_check  = live[246];
+  assign \live.spw_tolerance  = live[254:247];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -2213,31 +2245,33 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[155:145];
+  assign \cycle.w0  = cycle[156:145];
   assign \cycle.w0.data_bits  = cycle[150:145];
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
   assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0_crc  = cycle[193:156];
-  assign \cycle.w0_crc.width  = cycle[160:156];
-  assign \cycle.w0_crc.poly  = cycle[176:161];
-  assign \cycle.w0_crc.start  = cycle[192:177];
-  assign \cycle.w0_crc.inverted  = cycle[193];
-  assign \cycle.w1_enable  = cycle[194];
-  assign \cycle.w1  = cycle[205:195];
-  assign \cycle.w1.data_bits  = cycle[200:195];
-  assign \cycle.w1.nenw  = cycle[201];
-  assign \cycle.w1.lc  = cycle[202];
-  assign \cycle.w1.crc  = cycle[204:203];
-  assign \cycle.w1.gray  = cycle[205];
-  assign \cycle.w1_crc  = cycle[243:206];
-  assign \cycle.w1_crc.width  = cycle[210:206];
-  assign \cycle.w1_crc.poly  = cycle[226:211];
-  assign \cycle.w1_crc.start  = cycle[242:227];
-  assign \cycle.w1_crc.inverted  = cycle[243];
-  assign \cycle.spw_check  = cycle[244];
-  assign \cycle.spw_tolerance  = cycle[252:245];
+  assign \cycle.w0.signed  = cycle[156];
+  assign \cycle.w0_crc  = cycle[194:157];
+  assign \cycle.w0_crc.width  = cycle[161:157];
+  assign \cycle.w0_crc.poly  = cycle[177:162];
+  assign \cycle.w0_crc.start  = cycle[193:178];
+  assign \cycle.w0_crc.inverted  = cycle[194];
+  assign \cycle.w1_enable  = cycle[195];
+  assign \cycle.w1  = cycle[207:196];
+  assign \cycle.w1.data_bits  = cycle[201:196];
+  assign \cycle.w1.nenw  = cycle[202];
+  assign \cycle.w1.lc  = cycle[203];
+  assign \cycle.w1.crc  = cycle[205:204];
+  assign \cycle.w1.gray  = cycle[206];
+  assign \cycle.w1.signed  = cycle[207];
+  assign \cycle.w1_crc  = cycle[245:208];
+  assign \cycle.w1_crc.width  = cycle[212:208];
+  assign \cycle.w1_crc.poly  = cycle[228:213];
+  assign \cycle.w1_crc.start  = cycle[244:229];
+  assign \cycle.w1_crc.inverted  = cycle[245];
+  assign \cycle.spw_check  = cycle[246];
+  assign \cycle.spw_tolerance  = cycle[254:247];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -5240,89 +5274,566 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
-  wire [1:0] \$101 ;
-  wire [1:0] \$102 ;
+  wire \$101 ;
+  wire \$102 ;
   wire \$103 ;
   wire \$104 ;
   wire \$105 ;
   wire \$106 ;
   wire \$107 ;
-  reg \$108 ;
-  reg \$109 ;
+  wire \$108 ;
+  wire \$109 ;
   wire [1:0] \$11 ;
-  reg [15:0] \$110 ;
-  reg \$111 ;
-  reg \$112 ;
-  reg [15:0] \$113 ;
-  reg [2:0] \$114 ;
-  reg \$115 ;
-  reg [6:0] \$116 ;
-  reg \$117 ;
-  reg \$118 ;
-  reg \$119 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire [6:0] \$12 ;
-  reg \$120 ;
-  reg \$121 ;
-  reg \$122 ;
-  reg [54:0] \$123 ;
-  reg [1:0] \$124 ;
-  reg [1:0] \$125 ;
-  reg [39:0] \$126 ;
-  reg [5:0] \$127 ;
-  reg [39:0] \$128 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   reg [3:0] \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire [6:0] \$15 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
   wire \$16 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire \$17 ;
+  wire \$170 ;
+  wire \$171 ;
+  wire \$172 ;
+  wire \$173 ;
+  wire \$174 ;
+  wire \$175 ;
+  wire \$176 ;
+  wire \$177 ;
+  wire \$178 ;
+  wire \$179 ;
   wire [6:0] \$18 ;
+  wire \$180 ;
+  wire \$181 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
+  wire \$189 ;
   wire [7:0] \$19 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire \$198 ;
+  wire \$199 ;
   wire [7:0] \$2 ;
   reg [6:0] \$20 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire [7:0] \$21 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
+  wire \$213 ;
+  wire \$214 ;
+  wire \$215 ;
+  wire \$216 ;
+  wire \$217 ;
+  wire \$218 ;
+  wire \$219 ;
   reg [6:0] \$22 ;
+  wire \$220 ;
+  wire \$221 ;
+  wire \$222 ;
+  wire \$223 ;
+  wire \$224 ;
+  wire \$225 ;
+  wire \$226 ;
+  wire \$227 ;
+  wire \$228 ;
+  wire \$229 ;
   wire [7:0] \$23 ;
+  wire \$230 ;
+  wire \$231 ;
+  wire \$232 ;
+  wire \$233 ;
+  wire \$234 ;
+  wire \$235 ;
+  wire \$236 ;
+  wire \$237 ;
+  wire \$238 ;
+  wire \$239 ;
   reg [6:0] \$24 ;
+  wire \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  wire \$243 ;
+  wire \$244 ;
+  wire \$245 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
   wire [7:0] \$25 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
   wire [7:0] \$26 ;
+  wire \$260 ;
+  wire \$261 ;
+  wire \$262 ;
+  wire \$263 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire \$269 ;
   wire \$27 ;
+  wire \$270 ;
+  wire \$271 ;
+  wire \$272 ;
+  wire \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
   wire [1:0] \$28 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
   wire [6:0] \$29 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   reg [6:0] \$3 ;
   wire \$30 ;
+  wire \$300 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
   reg [3:0] \$31 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
   wire [6:0] \$32 ;
+  wire \$320 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
   wire \$33 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  wire \$337 ;
+  wire \$338 ;
+  wire \$339 ;
   wire \$34 ;
+  wire \$340 ;
+  wire \$341 ;
+  wire \$342 ;
+  wire \$343 ;
+  wire [54:0] \$344 ;
+  wire \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire \$349 ;
   wire \$35 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire \$352 ;
+  wire \$353 ;
+  wire \$354 ;
+  wire \$355 ;
+  wire \$356 ;
+  wire \$357 ;
+  wire \$358 ;
+  wire \$359 ;
   wire \$36 ;
+  wire \$360 ;
+  wire \$361 ;
+  wire \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
   wire [16:0] \$37 ;
+  wire \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire \$378 ;
+  wire \$379 ;
   wire \$38 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
   wire \$39 ;
+  wire \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire \$394 ;
+  wire \$395 ;
+  wire \$396 ;
+  wire \$397 ;
+  wire \$398 ;
+  wire \$399 ;
   wire [7:0] \$4 ;
   wire \$40 ;
+  wire \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  wire \$403 ;
+  wire \$404 ;
+  wire \$405 ;
+  wire \$406 ;
+  wire \$407 ;
+  wire \$408 ;
+  wire \$409 ;
   wire [7:0] \$41 ;
+  wire \$410 ;
+  wire \$411 ;
+  wire \$412 ;
+  wire \$413 ;
+  wire \$414 ;
+  wire \$415 ;
+  wire \$416 ;
+  wire \$417 ;
+  wire \$418 ;
+  wire \$419 ;
   wire [6:0] \$42 ;
+  wire \$420 ;
+  wire \$421 ;
+  wire \$422 ;
+  wire \$423 ;
+  wire \$424 ;
+  wire \$425 ;
+  wire \$426 ;
+  wire \$427 ;
+  wire \$428 ;
+  wire \$429 ;
   wire \$43 ;
+  wire \$430 ;
+  wire \$431 ;
+  wire \$432 ;
+  wire \$433 ;
+  wire \$434 ;
+  wire \$435 ;
+  wire \$436 ;
+  wire \$437 ;
+  wire \$438 ;
+  wire \$439 ;
   wire \$44 ;
+  wire \$440 ;
+  wire \$441 ;
+  wire \$442 ;
+  wire \$443 ;
+  wire \$444 ;
+  wire \$445 ;
+  wire \$446 ;
+  wire \$447 ;
+  wire \$448 ;
+  wire \$449 ;
   wire [6:0] \$45 ;
+  wire \$450 ;
+  wire \$451 ;
+  wire \$452 ;
+  wire \$453 ;
+  wire \$454 ;
+  wire \$455 ;
+  wire \$456 ;
+  wire \$457 ;
+  wire \$458 ;
+  wire \$459 ;
   wire \$46 ;
+  wire \$460 ;
+  wire \$461 ;
+  wire \$462 ;
+  wire \$463 ;
+  wire \$464 ;
+  wire \$465 ;
+  wire \$466 ;
+  wire \$467 ;
+  wire \$468 ;
+  wire \$469 ;
   wire \$47 ;
+  wire \$470 ;
+  wire \$471 ;
+  wire \$472 ;
+  wire \$473 ;
+  wire \$474 ;
+  wire \$475 ;
+  wire \$476 ;
+  wire \$477 ;
+  wire \$478 ;
+  wire \$479 ;
   wire [6:0] \$48 ;
+  wire \$480 ;
+  wire \$481 ;
+  wire \$482 ;
+  wire \$483 ;
+  wire \$484 ;
+  wire \$485 ;
+  wire \$486 ;
+  wire \$487 ;
+  wire \$488 ;
+  wire \$489 ;
   wire \$49 ;
+  wire \$490 ;
+  wire \$491 ;
+  wire \$492 ;
+  wire \$493 ;
+  wire \$494 ;
+  wire \$495 ;
+  wire \$496 ;
+  wire \$497 ;
+  wire \$498 ;
+  wire \$499 ;
   reg [6:0] \$5 ;
   wire \$50 ;
+  wire \$500 ;
+  wire \$501 ;
+  wire \$502 ;
+  wire \$503 ;
+  wire \$504 ;
+  wire \$505 ;
+  wire \$506 ;
+  wire \$507 ;
+  wire \$508 ;
+  wire \$509 ;
   wire [6:0] \$51 ;
+  wire \$510 ;
+  wire \$511 ;
+  wire \$512 ;
+  wire \$513 ;
+  wire \$514 ;
+  wire \$515 ;
+  wire \$516 ;
+  wire \$517 ;
+  wire \$518 ;
+  wire \$519 ;
   wire \$52 ;
+  wire \$520 ;
+  wire \$521 ;
+  wire \$522 ;
+  wire \$523 ;
+  wire \$524 ;
+  wire \$525 ;
+  wire \$526 ;
+  wire \$527 ;
+  wire \$528 ;
+  wire \$529 ;
   wire \$53 ;
+  wire \$530 ;
+  wire \$531 ;
+  wire \$532 ;
+  wire \$533 ;
+  wire \$534 ;
+  wire \$535 ;
+  wire \$536 ;
+  wire \$537 ;
+  wire \$538 ;
+  wire \$539 ;
   wire [6:0] \$54 ;
+  wire \$540 ;
+  wire \$541 ;
+  wire \$542 ;
+  wire \$543 ;
+  wire \$544 ;
+  wire \$545 ;
+  wire \$546 ;
+  wire \$547 ;
+  wire \$548 ;
+  wire \$549 ;
   wire \$55 ;
+  wire \$550 ;
+  wire \$551 ;
+  wire \$552 ;
+  wire \$553 ;
+  wire \$554 ;
+  wire \$555 ;
+  wire \$556 ;
+  wire \$557 ;
+  wire \$558 ;
+  wire [39:0] \$559 ;
   wire \$56 ;
+  wire \$560 ;
+  wire \$561 ;
+  wire \$562 ;
+  wire \$563 ;
+  wire \$564 ;
+  wire \$565 ;
+  wire \$566 ;
+  wire \$567 ;
+  wire \$568 ;
+  wire \$569 ;
   wire \$57 ;
+  wire \$570 ;
+  wire \$571 ;
+  wire [6:0] \$572 ;
+  wire \$573 ;
+  wire \$574 ;
+  wire \$575 ;
+  wire [6:0] \$576 ;
+  wire \$577 ;
+  wire [1:0] \$578 ;
+  wire [1:0] \$579 ;
   wire \$58 ;
+  wire \$580 ;
+  wire \$581 ;
+  wire \$582 ;
+  wire \$583 ;
+  wire \$584 ;
+  reg \$585 ;
+  reg \$586 ;
+  reg [15:0] \$587 ;
+  reg \$588 ;
+  reg \$589 ;
   wire [6:0] \$59 ;
+  reg [15:0] \$590 ;
+  reg [2:0] \$591 ;
+  reg \$592 ;
+  reg [6:0] \$593 ;
+  reg \$594 ;
+  reg \$595 ;
+  reg \$596 ;
+  reg \$597 ;
+  reg \$598 ;
+  reg \$599 ;
   wire [7:0] \$6 ;
   wire \$60 ;
+  reg [54:0] \$600 ;
+  reg [1:0] \$601 ;
+  reg [1:0] \$602 ;
+  reg [39:0] \$603 ;
+  reg [5:0] \$604 ;
+  reg [39:0] \$605 ;
   wire [2:0] \$61 ;
   wire \$62 ;
   wire [1:0] \$63 ;
@@ -5360,11 +5871,11 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$92 ;
   wire \$93 ;
   wire \$94 ;
-  wire [6:0] \$95 ;
+  wire \$95 ;
   wire \$96 ;
   wire \$97 ;
   wire \$98 ;
-  wire [6:0] \$99 ;
+  wire \$99 ;
   reg at_cds;
   input \bit ;
   wire \bit ;
@@ -5464,9 +5975,9 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   reg word = 1'h0;
   input [1:0] word_count;
   wire [1:0] word_count;
-  input [21:0] words;
-  wire [21:0] words;
-  wire [10:0] \words[0] ;
+  input [23:0] words;
+  wire [23:0] words;
+  wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -5477,7 +5988,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [10:0] \words[1] ;
+  wire \words[0].signed ;
+  wire [11:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -5488,107 +6000,200 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
-  assign \$1  = words[5:0] + 1'h1;
-  assign \$2  = words[5:0] + 7'h7f;
-  assign \$4  = words[5:0] + \$3 ;
-  assign \$6  = words[5:0] + \$5 ;
-  assign \$8  = \$7  + crcs[4:0];
-  assign \$9  = words[5:0] + \$8 [6:0];
-  assign \$10  = | words[5:0];
-  assign \$11  = words[6] ? 2'h2 : 2'h0;
-  assign \$12  = words[5:0] + \$11 ;
-  assign \$13  = ! \$12 ;
-  assign \$15  = words[5:0] + \$14 ;
-  assign \$16  = | \$15 ;
-  assign \$17  = \$13  & \$16 ;
-  assign \$18  = words[16:11] + 1'h1;
-  assign \$19  = words[16:11] + 7'h7f;
-  assign \$21  = words[16:11] + \$20 ;
-  assign \$23  = words[16:11] + \$22 ;
-  assign \$25  = \$24  + crcs[42:38];
-  assign \$26  = words[16:11] + \$25 [6:0];
-  assign \$27  = | words[16:11];
-  assign \$28  = words[17] ? 2'h2 : 2'h0;
-  assign \$29  = words[16:11] + \$28 ;
-  assign \$30  = ! \$29 ;
-  assign \$32  = words[16:11] + \$31 ;
-  assign \$33  = | \$32 ;
-  assign \$34  = \$30  & \$33 ;
-  assign \$35  = ~ slots_full;
-  assign \$36  = sample & \$35 ;
-  assign \$37  = slots + 1'h1;
-  assign \$38  = slots == 16'hfffe;
-  assign \$39  = sample & \bit ;
-  assign \$40  = | words[16:11];
-  assign \$41  = idx + 1'h1;
-  assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
-  assign \$43  = idx != \$42 ;
-  assign \$44  = in_data & \$43 ;
-  assign \$45  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
-  assign \$46  = idx == \$45 ;
-  assign \$47  = in_lc | \$46 ;
-  assign \$48  = word ? w1_lc_end_m1 : w0_lc_end_m1;
-  assign \$49  = idx != \$48 ;
-  assign \$50  = \$47  & \$49 ;
-  assign \$51  = word ? w1_lc_end_m1 : w0_lc_end_m1;
-  assign \$52  = idx == \$51 ;
-  assign \$53  = in_crc | \$52 ;
-  assign \$54  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$55  = idx != \$54 ;
-  assign \$56  = \$53  & \$55 ;
-  assign \$57  = idx != w1_data_end_m1;
-  assign \$58  = in_top & \$57 ;
-  assign \$59  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$60  = idx == \$59 ;
-  assign \$61  = word_count - 1'h1;
-  assign \$62  = word == \$61 ;
-  assign \$63  = word + 1'h1;
-  assign \$64  = ! word;
-  assign \$65  = in_word & \$64 ;
-  assign \$66  = \$65  & in_data;
-  assign \$67  = words[10] & data0[0];
-  assign \$68  = \bit  ^ \$67 ;
-  assign \$69  = ~ words[6];
-  assign \$70  = ! word;
-  assign \$71  = in_word & \$70 ;
-  assign \$72  = idx == words[5:0];
-  assign \$73  = \$71  & \$72 ;
-  assign \$74  = ! word;
-  assign \$75  = in_word & \$74 ;
-  assign \$76  = idx == w0_data_end_p1;
-  assign \$77  = \$75  & \$76 ;
-  assign \$79  = in_word & \$78 ;
-  assign \$80  = \$79  & in_data;
-  assign \$81  = words[21] & data1[0];
-  assign \$82  = \bit  ^ \$81 ;
-  assign \$83  = ~ words[17];
-  assign \$85  = in_word & \$84 ;
-  assign \$86  = idx == words[16:11];
-  assign \$87  = \$85  & \$86 ;
-  assign \$89  = in_word & \$88 ;
-  assign \$90  = idx == w1_data_end_p1;
-  assign \$91  = \$89  & \$90 ;
-  assign \$92  = in_word & in_top;
-  assign \$93  = words[10] & data0[0];
-  assign \$94  = \bit  ^ \$93 ;
+  wire \words[1].signed ;
+  assign \$395  = words[23] & \$394 ;
+  assign \$396  = words[22] & data1[0];
+  assign \$397  = \bit  ^ \$396 ;
+  assign \$398  = \$395  & \$397 ;
+  assign \$399  = ! idx;
+  assign \$400  = words[23] & \$399 ;
+  assign \$401  = words[22] & data1[0];
+  assign \$402  = \bit  ^ \$401 ;
+  assign \$403  = \$400  & \$402 ;
+  assign \$404  = ! idx;
+  assign \$405  = words[23] & \$404 ;
+  assign \$406  = words[22] & data1[0];
+  assign \$407  = \bit  ^ \$406 ;
+  assign \$408  = \$405  & \$407 ;
+  assign \$409  = ! idx;
+  assign \$410  = words[23] & \$409 ;
+  assign \$411  = words[22] & data1[0];
+  assign \$412  = \bit  ^ \$411 ;
+  assign \$413  = \$410  & \$412 ;
+  assign \$414  = ! idx;
+  assign \$415  = words[23] & \$414 ;
+  assign \$416  = words[22] & data1[0];
+  assign \$417  = \bit  ^ \$416 ;
+  assign \$418  = \$415  & \$417 ;
+  assign \$419  = ! idx;
+  assign \$420  = words[23] & \$419 ;
+  assign \$421  = words[22] & data1[0];
+  assign \$422  = \bit  ^ \$421 ;
+  assign \$423  = \$420  & \$422 ;
+  assign \$424  = ! idx;
+  assign \$425  = words[23] & \$424 ;
+  assign \$426  = words[22] & data1[0];
+  assign \$427  = \bit  ^ \$426 ;
+  assign \$428  = \$425  & \$427 ;
+  assign \$429  = ! idx;
+  assign \$430  = words[23] & \$429 ;
+  assign \$431  = words[22] & data1[0];
+  assign \$432  = \bit  ^ \$431 ;
+  assign \$433  = \$430  & \$432 ;
+  assign \$434  = ! idx;
+  assign \$435  = words[23] & \$434 ;
+  assign \$436  = words[22] & data1[0];
+  assign \$437  = \bit  ^ \$436 ;
+  assign \$438  = \$435  & \$437 ;
+  assign \$439  = ! idx;
+  assign \$440  = words[23] & \$439 ;
+  assign \$441  = words[22] & data1[0];
+  assign \$442  = \bit  ^ \$441 ;
+  assign \$443  = \$440  & \$442 ;
+  assign \$444  = ! idx;
+  assign \$445  = words[23] & \$444 ;
+  assign \$446  = words[22] & data1[0];
+  assign \$447  = \bit  ^ \$446 ;
+  assign \$448  = \$445  & \$447 ;
+  assign \$449  = ! idx;
+  assign \$450  = words[23] & \$449 ;
+  assign \$451  = words[22] & data1[0];
+  assign \$452  = \bit  ^ \$451 ;
+  assign \$453  = \$450  & \$452 ;
+  assign \$454  = ! idx;
+  assign \$455  = words[23] & \$454 ;
+  assign \$456  = words[22] & data1[0];
+  assign \$457  = \bit  ^ \$456 ;
+  assign \$458  = \$455  & \$457 ;
+  assign \$459  = ! idx;
+  assign \$460  = words[23] & \$459 ;
+  assign \$461  = words[22] & data1[0];
+  assign \$462  = \bit  ^ \$461 ;
+  assign \$463  = \$460  & \$462 ;
+  assign \$464  = ! idx;
+  assign \$465  = words[23] & \$464 ;
+  assign \$466  = words[22] & data1[0];
+  assign \$467  = \bit  ^ \$466 ;
+  assign \$468  = \$465  & \$467 ;
+  assign \$469  = ! idx;
+  assign \$470  = words[23] & \$469 ;
+  assign \$471  = words[22] & data1[0];
+  assign \$472  = \bit  ^ \$471 ;
+  assign \$473  = \$470  & \$472 ;
+  assign \$474  = ! idx;
+  assign \$475  = words[23] & \$474 ;
+  assign \$476  = words[22] & data1[0];
+  assign \$477  = \bit  ^ \$476 ;
+  assign \$478  = \$475  & \$477 ;
+  assign \$479  = ! idx;
+  assign \$480  = words[23] & \$479 ;
+  assign \$481  = words[22] & data1[0];
+  assign \$482  = \bit  ^ \$481 ;
+  assign \$483  = \$480  & \$482 ;
+  assign \$484  = ! idx;
+  assign \$485  = words[23] & \$484 ;
+  assign \$486  = words[22] & data1[0];
+  assign \$487  = \bit  ^ \$486 ;
+  assign \$488  = \$485  & \$487 ;
+  assign \$489  = ! idx;
+  assign \$490  = words[23] & \$489 ;
+  assign \$491  = words[22] & data1[0];
+  assign \$492  = \bit  ^ \$491 ;
+  assign \$493  = \$490  & \$492 ;
+  assign \$494  = ! idx;
+  assign \$495  = words[23] & \$494 ;
+  assign \$496  = words[22] & data1[0];
+  assign \$497  = \bit  ^ \$496 ;
+  assign \$498  = \$495  & \$497 ;
+  assign \$499  = ! idx;
+  assign \$500  = words[23] & \$499 ;
+  assign \$501  = words[22] & data1[0];
+  assign \$502  = \bit  ^ \$501 ;
+  assign \$503  = \$500  & \$502 ;
+  assign \$504  = ! idx;
+  assign \$505  = words[23] & \$504 ;
+  assign \$506  = words[22] & data1[0];
+  assign \$507  = \bit  ^ \$506 ;
+  assign \$508  = \$505  & \$507 ;
+  assign \$509  = ! idx;
+  assign \$510  = words[23] & \$509 ;
+  assign \$511  = words[22] & data1[0];
+  assign \$512  = \bit  ^ \$511 ;
+  assign \$513  = \$510  & \$512 ;
+  assign \$514  = ! idx;
+  assign \$515  = words[23] & \$514 ;
+  assign \$516  = words[22] & data1[0];
+  assign \$517  = \bit  ^ \$516 ;
+  assign \$518  = \$515  & \$517 ;
+  assign \$519  = ! idx;
+  assign \$520  = words[23] & \$519 ;
+  assign \$521  = words[22] & data1[0];
+  assign \$522  = \bit  ^ \$521 ;
+  assign \$523  = \$520  & \$522 ;
+  assign \$524  = ! idx;
+  assign \$525  = words[23] & \$524 ;
+  assign \$526  = words[22] & data1[0];
+  assign \$527  = \bit  ^ \$526 ;
+  assign \$528  = \$525  & \$527 ;
+  assign \$529  = ! idx;
+  assign \$530  = words[23] & \$529 ;
+  assign \$531  = words[22] & data1[0];
+  assign \$532  = \bit  ^ \$531 ;
+  assign \$533  = \$530  & \$532 ;
+  assign \$534  = ! idx;
+  assign \$535  = words[23] & \$534 ;
+  assign \$536  = words[22] & data1[0];
+  assign \$537  = \bit  ^ \$536 ;
+  assign \$538  = \$535  & \$537 ;
+  assign \$539  = ! idx;
+  assign \$540  = words[23] & \$539 ;
+  assign \$541  = words[22] & data1[0];
+  assign \$542  = \bit  ^ \$541 ;
+  assign \$543  = \$540  & \$542 ;
+  assign \$544  = ! idx;
+  assign \$545  = words[23] & \$544 ;
+  assign \$546  = words[22] & data1[0];
+  assign \$547  = \bit  ^ \$546 ;
+  assign \$548  = \$545  & \$547 ;
+  assign \$549  = ! idx;
+  assign \$550  = words[23] & \$549 ;
+  assign \$551  = words[22] & data1[0];
+  assign \$552  = \bit  ^ \$551 ;
+  assign \$553  = \$550  & \$552 ;
+  assign \$554  = ! idx;
+  assign \$555  = words[23] & \$554 ;
+  assign \$556  = words[22] & data1[0];
+  assign \$557  = \bit  ^ \$556 ;
+  assign \$558  = \$555  & \$557 ;
+  assign \$559  = { data1[38:0], \$358  } | { \$558 , \$553 , \$548 , \$543 , \$538 , \$533 , \$528 , \$523 , \$518 , \$513 , \$508 , \$503 , \$498 , \$493 , \$488 , \$483 , \$478 , \$473 , \$468 , \$463 , \$458 , \$453 , \$448 , \$443 , \$438 , \$433 , \$428 , \$423 , \$418 , \$413 , \$408 , \$403 , \$398 , \$393 , \$388 , \$383 , \$378 , \$373 , \$368 , \$363  };
+  assign \$560  = ~ words[18];
+  assign \$562  = in_word & \$561 ;
+  assign \$563  = idx == words[17:12];
+  assign \$564  = \$562  & \$563 ;
+  assign \$566  = in_word & \$565 ;
+  assign \$567  = idx == w1_data_end_p1;
+  assign \$568  = \$566  & \$567 ;
+  assign \$569  = in_word & in_top;
+  assign \$570  = words[10] & data0[0];
+  assign \$571  = \bit  ^ \$570 ;
   assign lc_load = in_word & in_lc;
-  assign \$95  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$96  = idx == \$95 ;
-  assign \$97  = in_word & \$96 ;
-  assign load = at_cds | \$97 ;
-  assign \$98  = ~ in_crc;
-  assign \cover  = in_word & \$98 ;
+  assign \$572  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$573  = idx == \$572 ;
+  assign \$574  = in_word & \$573 ;
+  assign load = at_cds | \$574 ;
+  assign \$575  = ~ in_crc;
+  assign \cover  = in_word & \$575 ;
   assign check = in_word & in_crc;
-  assign \$99  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$100  = idx == \$99 ;
-  assign last = in_word & \$100 ;
-  assign \$101  = word + 1'h1;
-  assign \$102  = at_cds ? 2'h0 : \$101 ;
-  assign \$103  = ! decoder_fsm_state;
-  assign \$104  = decoder_fsm_state == 1'h1;
-  assign \$105  = decoder_fsm_state == 2'h2;
-  assign \$106  = decoder_fsm_state == 2'h3;
-  assign \$107  = decoder_fsm_state == 3'h4;
+  assign \$576  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$577  = idx == \$576 ;
+  assign last = in_word & \$577 ;
+  assign \$578  = word + 1'h1;
+  assign \$579  = at_cds ? 2'h0 : \$578 ;
+  assign \$580  = ! decoder_fsm_state;
+  assign \$581  = decoder_fsm_state == 1'h1;
+  assign \$582  = decoder_fsm_state == 2'h2;
+  assign \$583  = decoder_fsm_state == 2'h3;
+  assign \$584  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -5618,47 +6223,432 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   always @(posedge clk)
     w1_lc_at0 <= \$34 ;
   always @(posedge clk)
-    done <= \$108 ;
+    done <= \$585 ;
   always @(posedge clk)
-    stopped <= \$109 ;
+    stopped <= \$586 ;
   always @(posedge clk)
-    slots <= \$110 ;
+    slots <= \$587 ;
   always @(posedge clk)
-    slots_full <= \$111 ;
+    slots_full <= \$588 ;
   always @(posedge clk)
-    started <= \$112 ;
+    started <= \$589 ;
   always @(posedge clk)
-    start_slot <= \$113 ;
+    start_slot <= \$590 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$114 ;
+    decoder_fsm_state <= \$591 ;
   always @(posedge clk)
-    cds <= \$115 ;
+    cds <= \$592 ;
   always @(posedge clk)
-    idx <= \$116 ;
+    idx <= \$593 ;
   always @(posedge clk)
-    in_data <= \$117 ;
+    in_data <= \$594 ;
   always @(posedge clk)
-    in_lc <= \$118 ;
+    in_lc <= \$595 ;
   always @(posedge clk)
-    in_crc <= \$119 ;
+    in_crc <= \$596 ;
   always @(posedge clk)
-    in_top <= \$120 ;
+    in_top <= \$597 ;
   always @(posedge clk)
-    word <= \$121 ;
+    word <= \$598 ;
   always @(posedge clk)
-    stop_bit <= \$122 ;
+    stop_bit <= \$599 ;
   always @(posedge clk)
-    data0 <= \$123 ;
+    data0 <= \$600 ;
   always @(posedge clk)
-    ne <= \$124 ;
+    ne <= \$601 ;
   always @(posedge clk)
-    nw <= \$125 ;
+    nw <= \$602 ;
   always @(posedge clk)
-    data1 <= \$126 ;
+    data1 <= \$603 ;
   always @(posedge clk)
-    lc <= \$127 ;
+    lc <= \$604 ;
   always @(posedge clk)
-    cpw_top <= \$128 ;
+    cpw_top <= \$605 ;
+  assign \$1  = words[5:0] + 1'h1;
+  assign \$2  = words[5:0] + 7'h7f;
+  assign \$4  = words[5:0] + \$3 ;
+  assign \$6  = words[5:0] + \$5 ;
+  assign \$8  = \$7  + crcs[4:0];
+  assign \$9  = words[5:0] + \$8 [6:0];
+  assign \$10  = | words[5:0];
+  assign \$11  = words[6] ? 2'h2 : 2'h0;
+  assign \$12  = words[5:0] + \$11 ;
+  assign \$13  = ! \$12 ;
+  assign \$15  = words[5:0] + \$14 ;
+  assign \$16  = | \$15 ;
+  assign \$17  = \$13  & \$16 ;
+  assign \$18  = words[17:12] + 1'h1;
+  assign \$19  = words[17:12] + 7'h7f;
+  assign \$21  = words[17:12] + \$20 ;
+  assign \$23  = words[17:12] + \$22 ;
+  assign \$25  = \$24  + crcs[42:38];
+  assign \$26  = words[17:12] + \$25 [6:0];
+  assign \$27  = | words[17:12];
+  assign \$28  = words[18] ? 2'h2 : 2'h0;
+  assign \$29  = words[17:12] + \$28 ;
+  assign \$30  = ! \$29 ;
+  assign \$32  = words[17:12] + \$31 ;
+  assign \$33  = | \$32 ;
+  assign \$34  = \$30  & \$33 ;
+  assign \$35  = ~ slots_full;
+  assign \$36  = sample & \$35 ;
+  assign \$37  = slots + 1'h1;
+  assign \$38  = slots == 16'hfffe;
+  assign \$39  = sample & \bit ;
+  assign \$40  = | words[17:12];
+  assign \$41  = idx + 1'h1;
+  assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
+  assign \$43  = idx != \$42 ;
+  assign \$44  = in_data & \$43 ;
+  assign \$45  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
+  assign \$46  = idx == \$45 ;
+  assign \$47  = in_lc | \$46 ;
+  assign \$48  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$49  = idx != \$48 ;
+  assign \$50  = \$47  & \$49 ;
+  assign \$51  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$52  = idx == \$51 ;
+  assign \$53  = in_crc | \$52 ;
+  assign \$54  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$55  = idx != \$54 ;
+  assign \$56  = \$53  & \$55 ;
+  assign \$57  = idx != w1_data_end_m1;
+  assign \$58  = in_top & \$57 ;
+  assign \$59  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$60  = idx == \$59 ;
+  assign \$61  = word_count - 1'h1;
+  assign \$62  = word == \$61 ;
+  assign \$63  = word + 1'h1;
+  assign \$64  = ! word;
+  assign \$65  = in_word & \$64 ;
+  assign \$66  = \$65  & in_data;
+  assign \$67  = words[10] & data0[0];
+  assign \$68  = \bit  ^ \$67 ;
+  assign \$69  = ! idx;
+  assign \$70  = words[11] & \$69 ;
+  assign \$71  = words[10] & data0[0];
+  assign \$72  = \bit  ^ \$71 ;
+  assign \$73  = \$70  & \$72 ;
+  assign \$74  = ! idx;
+  assign \$75  = words[11] & \$74 ;
+  assign \$76  = words[10] & data0[0];
+  assign \$77  = \bit  ^ \$76 ;
+  assign \$78  = \$75  & \$77 ;
+  assign \$79  = ! idx;
+  assign \$80  = words[11] & \$79 ;
+  assign \$81  = words[10] & data0[0];
+  assign \$82  = \bit  ^ \$81 ;
+  assign \$83  = \$80  & \$82 ;
+  assign \$84  = ! idx;
+  assign \$85  = words[11] & \$84 ;
+  assign \$86  = words[10] & data0[0];
+  assign \$87  = \bit  ^ \$86 ;
+  assign \$88  = \$85  & \$87 ;
+  assign \$89  = ! idx;
+  assign \$90  = words[11] & \$89 ;
+  assign \$91  = words[10] & data0[0];
+  assign \$92  = \bit  ^ \$91 ;
+  assign \$93  = \$90  & \$92 ;
+  assign \$94  = ! idx;
+  assign \$95  = words[11] & \$94 ;
+  assign \$96  = words[10] & data0[0];
+  assign \$97  = \bit  ^ \$96 ;
+  assign \$98  = \$95  & \$97 ;
+  assign \$99  = ! idx;
+  assign \$100  = words[11] & \$99 ;
+  assign \$101  = words[10] & data0[0];
+  assign \$102  = \bit  ^ \$101 ;
+  assign \$103  = \$100  & \$102 ;
+  assign \$104  = ! idx;
+  assign \$105  = words[11] & \$104 ;
+  assign \$106  = words[10] & data0[0];
+  assign \$107  = \bit  ^ \$106 ;
+  assign \$108  = \$105  & \$107 ;
+  assign \$109  = ! idx;
+  assign \$110  = words[11] & \$109 ;
+  assign \$111  = words[10] & data0[0];
+  assign \$112  = \bit  ^ \$111 ;
+  assign \$113  = \$110  & \$112 ;
+  assign \$114  = ! idx;
+  assign \$115  = words[11] & \$114 ;
+  assign \$116  = words[10] & data0[0];
+  assign \$117  = \bit  ^ \$116 ;
+  assign \$118  = \$115  & \$117 ;
+  assign \$119  = ! idx;
+  assign \$120  = words[11] & \$119 ;
+  assign \$121  = words[10] & data0[0];
+  assign \$122  = \bit  ^ \$121 ;
+  assign \$123  = \$120  & \$122 ;
+  assign \$124  = ! idx;
+  assign \$125  = words[11] & \$124 ;
+  assign \$126  = words[10] & data0[0];
+  assign \$127  = \bit  ^ \$126 ;
+  assign \$128  = \$125  & \$127 ;
+  assign \$129  = ! idx;
+  assign \$130  = words[11] & \$129 ;
+  assign \$131  = words[10] & data0[0];
+  assign \$132  = \bit  ^ \$131 ;
+  assign \$133  = \$130  & \$132 ;
+  assign \$134  = ! idx;
+  assign \$135  = words[11] & \$134 ;
+  assign \$136  = words[10] & data0[0];
+  assign \$137  = \bit  ^ \$136 ;
+  assign \$138  = \$135  & \$137 ;
+  assign \$139  = ! idx;
+  assign \$140  = words[11] & \$139 ;
+  assign \$141  = words[10] & data0[0];
+  assign \$142  = \bit  ^ \$141 ;
+  assign \$143  = \$140  & \$142 ;
+  assign \$144  = ! idx;
+  assign \$145  = words[11] & \$144 ;
+  assign \$146  = words[10] & data0[0];
+  assign \$147  = \bit  ^ \$146 ;
+  assign \$148  = \$145  & \$147 ;
+  assign \$149  = ! idx;
+  assign \$150  = words[11] & \$149 ;
+  assign \$151  = words[10] & data0[0];
+  assign \$152  = \bit  ^ \$151 ;
+  assign \$153  = \$150  & \$152 ;
+  assign \$154  = ! idx;
+  assign \$155  = words[11] & \$154 ;
+  assign \$156  = words[10] & data0[0];
+  assign \$157  = \bit  ^ \$156 ;
+  assign \$158  = \$155  & \$157 ;
+  assign \$159  = ! idx;
+  assign \$160  = words[11] & \$159 ;
+  assign \$161  = words[10] & data0[0];
+  assign \$162  = \bit  ^ \$161 ;
+  assign \$163  = \$160  & \$162 ;
+  assign \$164  = ! idx;
+  assign \$165  = words[11] & \$164 ;
+  assign \$166  = words[10] & data0[0];
+  assign \$167  = \bit  ^ \$166 ;
+  assign \$168  = \$165  & \$167 ;
+  assign \$169  = ! idx;
+  assign \$170  = words[11] & \$169 ;
+  assign \$171  = words[10] & data0[0];
+  assign \$172  = \bit  ^ \$171 ;
+  assign \$173  = \$170  & \$172 ;
+  assign \$174  = ! idx;
+  assign \$175  = words[11] & \$174 ;
+  assign \$176  = words[10] & data0[0];
+  assign \$177  = \bit  ^ \$176 ;
+  assign \$178  = \$175  & \$177 ;
+  assign \$179  = ! idx;
+  assign \$180  = words[11] & \$179 ;
+  assign \$181  = words[10] & data0[0];
+  assign \$182  = \bit  ^ \$181 ;
+  assign \$183  = \$180  & \$182 ;
+  assign \$184  = ! idx;
+  assign \$185  = words[11] & \$184 ;
+  assign \$186  = words[10] & data0[0];
+  assign \$187  = \bit  ^ \$186 ;
+  assign \$188  = \$185  & \$187 ;
+  assign \$189  = ! idx;
+  assign \$190  = words[11] & \$189 ;
+  assign \$191  = words[10] & data0[0];
+  assign \$192  = \bit  ^ \$191 ;
+  assign \$193  = \$190  & \$192 ;
+  assign \$194  = ! idx;
+  assign \$195  = words[11] & \$194 ;
+  assign \$196  = words[10] & data0[0];
+  assign \$197  = \bit  ^ \$196 ;
+  assign \$198  = \$195  & \$197 ;
+  assign \$199  = ! idx;
+  assign \$200  = words[11] & \$199 ;
+  assign \$201  = words[10] & data0[0];
+  assign \$202  = \bit  ^ \$201 ;
+  assign \$203  = \$200  & \$202 ;
+  assign \$204  = ! idx;
+  assign \$205  = words[11] & \$204 ;
+  assign \$206  = words[10] & data0[0];
+  assign \$207  = \bit  ^ \$206 ;
+  assign \$208  = \$205  & \$207 ;
+  assign \$209  = ! idx;
+  assign \$210  = words[11] & \$209 ;
+  assign \$211  = words[10] & data0[0];
+  assign \$212  = \bit  ^ \$211 ;
+  assign \$213  = \$210  & \$212 ;
+  assign \$214  = ! idx;
+  assign \$215  = words[11] & \$214 ;
+  assign \$216  = words[10] & data0[0];
+  assign \$217  = \bit  ^ \$216 ;
+  assign \$218  = \$215  & \$217 ;
+  assign \$219  = ! idx;
+  assign \$220  = words[11] & \$219 ;
+  assign \$221  = words[10] & data0[0];
+  assign \$222  = \bit  ^ \$221 ;
+  assign \$223  = \$220  & \$222 ;
+  assign \$224  = ! idx;
+  assign \$225  = words[11] & \$224 ;
+  assign \$226  = words[10] & data0[0];
+  assign \$227  = \bit  ^ \$226 ;
+  assign \$228  = \$225  & \$227 ;
+  assign \$229  = ! idx;
+  assign \$230  = words[11] & \$229 ;
+  assign \$231  = words[10] & data0[0];
+  assign \$232  = \bit  ^ \$231 ;
+  assign \$233  = \$230  & \$232 ;
+  assign \$234  = ! idx;
+  assign \$235  = words[11] & \$234 ;
+  assign \$236  = words[10] & data0[0];
+  assign \$237  = \bit  ^ \$236 ;
+  assign \$238  = \$235  & \$237 ;
+  assign \$239  = ! idx;
+  assign \$240  = words[11] & \$239 ;
+  assign \$241  = words[10] & data0[0];
+  assign \$242  = \bit  ^ \$241 ;
+  assign \$243  = \$240  & \$242 ;
+  assign \$244  = ! idx;
+  assign \$245  = words[11] & \$244 ;
+  assign \$246  = words[10] & data0[0];
+  assign \$247  = \bit  ^ \$246 ;
+  assign \$248  = \$245  & \$247 ;
+  assign \$249  = ! idx;
+  assign \$250  = words[11] & \$249 ;
+  assign \$251  = words[10] & data0[0];
+  assign \$252  = \bit  ^ \$251 ;
+  assign \$253  = \$250  & \$252 ;
+  assign \$254  = ! idx;
+  assign \$255  = words[11] & \$254 ;
+  assign \$256  = words[10] & data0[0];
+  assign \$257  = \bit  ^ \$256 ;
+  assign \$258  = \$255  & \$257 ;
+  assign \$259  = ! idx;
+  assign \$260  = words[11] & \$259 ;
+  assign \$261  = words[10] & data0[0];
+  assign \$262  = \bit  ^ \$261 ;
+  assign \$263  = \$260  & \$262 ;
+  assign \$264  = ! idx;
+  assign \$265  = words[11] & \$264 ;
+  assign \$266  = words[10] & data0[0];
+  assign \$267  = \bit  ^ \$266 ;
+  assign \$268  = \$265  & \$267 ;
+  assign \$269  = ! idx;
+  assign \$270  = words[11] & \$269 ;
+  assign \$271  = words[10] & data0[0];
+  assign \$272  = \bit  ^ \$271 ;
+  assign \$273  = \$270  & \$272 ;
+  assign \$274  = ! idx;
+  assign \$275  = words[11] & \$274 ;
+  assign \$276  = words[10] & data0[0];
+  assign \$277  = \bit  ^ \$276 ;
+  assign \$278  = \$275  & \$277 ;
+  assign \$279  = ! idx;
+  assign \$280  = words[11] & \$279 ;
+  assign \$281  = words[10] & data0[0];
+  assign \$282  = \bit  ^ \$281 ;
+  assign \$283  = \$280  & \$282 ;
+  assign \$284  = ! idx;
+  assign \$285  = words[11] & \$284 ;
+  assign \$286  = words[10] & data0[0];
+  assign \$287  = \bit  ^ \$286 ;
+  assign \$288  = \$285  & \$287 ;
+  assign \$289  = ! idx;
+  assign \$290  = words[11] & \$289 ;
+  assign \$291  = words[10] & data0[0];
+  assign \$292  = \bit  ^ \$291 ;
+  assign \$293  = \$290  & \$292 ;
+  assign \$294  = ! idx;
+  assign \$295  = words[11] & \$294 ;
+  assign \$296  = words[10] & data0[0];
+  assign \$297  = \bit  ^ \$296 ;
+  assign \$298  = \$295  & \$297 ;
+  assign \$299  = ! idx;
+  assign \$300  = words[11] & \$299 ;
+  assign \$301  = words[10] & data0[0];
+  assign \$302  = \bit  ^ \$301 ;
+  assign \$303  = \$300  & \$302 ;
+  assign \$304  = ! idx;
+  assign \$305  = words[11] & \$304 ;
+  assign \$306  = words[10] & data0[0];
+  assign \$307  = \bit  ^ \$306 ;
+  assign \$308  = \$305  & \$307 ;
+  assign \$309  = ! idx;
+  assign \$310  = words[11] & \$309 ;
+  assign \$311  = words[10] & data0[0];
+  assign \$312  = \bit  ^ \$311 ;
+  assign \$313  = \$310  & \$312 ;
+  assign \$314  = ! idx;
+  assign \$315  = words[11] & \$314 ;
+  assign \$316  = words[10] & data0[0];
+  assign \$317  = \bit  ^ \$316 ;
+  assign \$318  = \$315  & \$317 ;
+  assign \$319  = ! idx;
+  assign \$320  = words[11] & \$319 ;
+  assign \$321  = words[10] & data0[0];
+  assign \$322  = \bit  ^ \$321 ;
+  assign \$323  = \$320  & \$322 ;
+  assign \$324  = ! idx;
+  assign \$325  = words[11] & \$324 ;
+  assign \$326  = words[10] & data0[0];
+  assign \$327  = \bit  ^ \$326 ;
+  assign \$328  = \$325  & \$327 ;
+  assign \$329  = ! idx;
+  assign \$330  = words[11] & \$329 ;
+  assign \$331  = words[10] & data0[0];
+  assign \$332  = \bit  ^ \$331 ;
+  assign \$333  = \$330  & \$332 ;
+  assign \$334  = ! idx;
+  assign \$335  = words[11] & \$334 ;
+  assign \$336  = words[10] & data0[0];
+  assign \$337  = \bit  ^ \$336 ;
+  assign \$338  = \$335  & \$337 ;
+  assign \$339  = ! idx;
+  assign \$340  = words[11] & \$339 ;
+  assign \$341  = words[10] & data0[0];
+  assign \$342  = \bit  ^ \$341 ;
+  assign \$343  = \$340  & \$342 ;
+  assign \$344  = { data0[53:0], \$68  } | { \$343 , \$338 , \$333 , \$328 , \$323 , \$318 , \$313 , \$308 , \$303 , \$298 , \$293 , \$288 , \$283 , \$278 , \$273 , \$268 , \$263 , \$258 , \$253 , \$248 , \$243 , \$238 , \$233 , \$228 , \$223 , \$218 , \$213 , \$208 , \$203 , \$198 , \$193 , \$188 , \$183 , \$178 , \$173 , \$168 , \$163 , \$158 , \$153 , \$148 , \$143 , \$138 , \$133 , \$128 , \$123 , \$118 , \$113 , \$108 , \$103 , \$98 , \$93 , \$88 , \$83 , \$78 , \$73  };
+  assign \$345  = ~ words[6];
+  assign \$346  = ! word;
+  assign \$347  = in_word & \$346 ;
+  assign \$348  = idx == words[5:0];
+  assign \$349  = \$347  & \$348 ;
+  assign \$350  = ! word;
+  assign \$351  = in_word & \$350 ;
+  assign \$352  = idx == w0_data_end_p1;
+  assign \$353  = \$351  & \$352 ;
+  assign \$355  = in_word & \$354 ;
+  assign \$356  = \$355  & in_data;
+  assign \$357  = words[22] & data1[0];
+  assign \$358  = \bit  ^ \$357 ;
+  assign \$359  = ! idx;
+  assign \$360  = words[23] & \$359 ;
+  assign \$361  = words[22] & data1[0];
+  assign \$362  = \bit  ^ \$361 ;
+  assign \$363  = \$360  & \$362 ;
+  assign \$364  = ! idx;
+  assign \$365  = words[23] & \$364 ;
+  assign \$366  = words[22] & data1[0];
+  assign \$367  = \bit  ^ \$366 ;
+  assign \$368  = \$365  & \$367 ;
+  assign \$369  = ! idx;
+  assign \$370  = words[23] & \$369 ;
+  assign \$371  = words[22] & data1[0];
+  assign \$372  = \bit  ^ \$371 ;
+  assign \$373  = \$370  & \$372 ;
+  assign \$374  = ! idx;
+  assign \$375  = words[23] & \$374 ;
+  assign \$376  = words[22] & data1[0];
+  assign \$377  = \bit  ^ \$376 ;
+  assign \$378  = \$375  & \$377 ;
+  assign \$379  = ! idx;
+  assign \$380  = words[23] & \$379 ;
+  assign \$381  = words[22] & data1[0];
+  assign \$382  = \bit  ^ \$381 ;
+  assign \$383  = \$380  & \$382 ;
+  assign \$384  = ! idx;
+  assign \$385  = words[23] & \$384 ;
+  assign \$386  = words[22] & data1[0];
+  assign \$387  = \bit  ^ \$386 ;
+  assign \$388  = \$385  & \$387 ;
+  assign \$389  = ! idx;
+  assign \$390  = words[23] & \$389 ;
+  assign \$391  = words[22] & data1[0];
+  assign \$392  = \bit  ^ \$391 ;
+  assign \$393  = \$390  & \$392 ;
+  assign \$394  = ! idx;
   \biss_master.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
@@ -5668,11 +6658,453 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     .index(word),
     .last(last),
     .load(load),
-    .load_index(\$102 [0]),
+    .load_index(\$579 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst)
   );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$585  = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$585  = 1'h1;
+              end
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$585  = 1'h0;
+    end
+    if (rst) begin
+      \$585  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$586  = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$586  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$586  = 1'h0;
+    end
+    if (rst) begin
+      \$586  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$587  = slots;
+    if (\$36 ) begin
+      \$587  = \$37 [15:0];
+    end
+    if (receiver_clear) begin
+      \$587  = 16'h0000;
+    end
+    if (rst) begin
+      \$587  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$588  = slots_full;
+    if (\$36 ) begin
+      \$588  = \$38 ;
+    end
+    if (receiver_clear) begin
+      \$588  = 1'h0;
+    end
+    if (rst) begin
+      \$588  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$589  = started;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$589  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$589  = 1'h0;
+    end
+    if (rst) begin
+      \$589  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$590  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$590  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$590  = 16'h0000;
+    end
+    if (rst) begin
+      \$590  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$591  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$591  = 3'h1;
+          end
+      3'h1:
+          if (sample) begin
+            \$591  = 3'h2;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$591  = 3'h3;
+              end
+            end
+          end
+      3'h3:
+          if (sample) begin
+            \$591  = 3'h4;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$591  = 3'h0;
+    end
+    if (rst) begin
+      \$591  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$592  = cds;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$592  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$592  = 1'h0;
+    end
+    if (rst) begin
+      \$592  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$593  = idx;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$593  = 7'h00;
+          end
+      3'h2:
+          if (sample) begin
+            \$593  = \$41 [6:0];
+            if (\$60 ) begin
+              \$593  = 7'h00;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$593  = 7'h00;
+    end
+    if (rst) begin
+      \$593  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$594  = in_data;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$594  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$594  = \$44 ;
+            if (\$60 ) begin
+              \$594  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$594  = 1'h0;
+    end
+    if (rst) begin
+      \$594  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$595  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$595  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$595  = \$50 ;
+            if (\$60 ) begin
+              \$595  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$595  = 1'h0;
+    end
+    if (rst) begin
+      \$595  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$596  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$596  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$596  = \$56 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$596  = 1'h0;
+    end
+    if (rst) begin
+      \$596  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$597  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$597  = \$40 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$597  = \$58 ;
+            if (\$60 ) begin
+              \$597  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$597  = 1'h0;
+    end
+    if (rst) begin
+      \$597  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$598  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$598  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
+              (* full_case = 32'd1 *)
+              if (\$62 ) begin
+              end else begin
+                \$598  = \$63 [0];
+              end
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$598  = 1'h0;
+    end
+    if (rst) begin
+      \$598  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$599  = stop_bit;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$599  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$599  = 1'h0;
+    end
+    if (rst) begin
+      \$599  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$600  = data0;
+    if (\$66 ) begin
+      \$600  = \$344 ;
+    end
+    if (receiver_clear) begin
+      \$600  = 55'h00000000000000;
+    end
+    if (rst) begin
+      \$600  = 55'h00000000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$601  = ne;
+    if (\$345 ) begin
+      \$601 [0] = 1'h1;
+    end else if (\$349 ) begin
+      \$601 [0] = \bit ;
+    end
+    if (\$560 ) begin
+      \$601 [1] = 1'h1;
+    end else if (\$564 ) begin
+      \$601 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$601  = 2'h0;
+    end
+    if (rst) begin
+      \$601  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$602  = nw;
+    if (\$345 ) begin
+      \$602 [0] = 1'h1;
+    end else if (\$349 ) begin
+    end else if (\$353 ) begin
+      \$602 [0] = \bit ;
+    end
+    if (\$560 ) begin
+      \$602 [1] = 1'h1;
+    end else if (\$564 ) begin
+    end else if (\$568 ) begin
+      \$602 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$602  = 2'h0;
+    end
+    if (rst) begin
+      \$602  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$603  = data1;
+    if (\$356 ) begin
+      \$603  = \$559 ;
+    end
+    if (receiver_clear) begin
+      \$603  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$603  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$604  = lc;
+    if (lc_load) begin
+      \$604  = { lc[4:0], \bit  };
+    end
+    if (receiver_clear) begin
+      \$604  = 6'h00;
+    end
+    if (rst) begin
+      \$604  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$605  = cpw_top;
+    if (\$569 ) begin
+      \$605  = { cpw_top[38:0], \$571  };
+    end
+    if (receiver_clear) begin
+      \$605  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$605  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    at_cds = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          at_cds = sample;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    in_word = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          in_word = sample;
+    endcase
+  end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
@@ -5728,7 +7160,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17])
+    casez (words[18])
       1'h0:
           \$20  = 7'h7f;
       1'h1:
@@ -5738,7 +7170,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18:17])
+    casez (words[19:18])
       2'h0:
           \$22  = 7'h7f;
       2'h1:
@@ -5752,7 +7184,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18:17])
+    casez (words[19:18])
       2'h0:
           \$24  = 7'h7f;
       2'h1:
@@ -5766,7 +7198,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18:17])
+    casez (words[19:18])
       2'h0:
           \$31  = 4'h0;
       2'h1:
@@ -5777,466 +7209,26 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
           \$31  = 4'h8;
     endcase
   end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$108  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$108  = 1'h1;
-              end
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$108  = 1'h0;
-    end
-    if (rst) begin
-      \$108  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$109  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$109  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$109  = 1'h0;
-    end
-    if (rst) begin
-      \$109  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$110  = slots;
-    if (\$36 ) begin
-      \$110  = \$37 [15:0];
-    end
-    if (receiver_clear) begin
-      \$110  = 16'h0000;
-    end
-    if (rst) begin
-      \$110  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$111  = slots_full;
-    if (\$36 ) begin
-      \$111  = \$38 ;
-    end
-    if (receiver_clear) begin
-      \$111  = 1'h0;
-    end
-    if (rst) begin
-      \$111  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$112  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$112  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$112  = 1'h0;
-    end
-    if (rst) begin
-      \$112  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$113  = start_slot;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$113  = slots;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$113  = 16'h0000;
-    end
-    if (rst) begin
-      \$113  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$114  = decoder_fsm_state;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$114  = 3'h1;
-          end
-      3'h1:
-          if (sample) begin
-            \$114  = 3'h2;
-          end
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$114  = 3'h3;
-              end
-            end
-          end
-      3'h3:
-          if (sample) begin
-            \$114  = 3'h4;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$114  = 3'h0;
-    end
-    if (rst) begin
-      \$114  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$115  = cds;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$115  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$115  = 1'h0;
-    end
-    if (rst) begin
-      \$115  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$116  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$116  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$116  = \$41 [6:0];
-            if (\$60 ) begin
-              \$116  = 7'h00;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$116  = 7'h00;
-    end
-    if (rst) begin
-      \$116  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$117  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$117  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$117  = \$44 ;
-            if (\$60 ) begin
-              \$117  = w1_data_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$117  = 1'h0;
-    end
-    if (rst) begin
-      \$117  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$118  = in_lc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$118  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$118  = \$50 ;
-            if (\$60 ) begin
-              \$118  = w1_lc_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$118  = 1'h0;
-    end
-    if (rst) begin
-      \$118  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$119  = in_crc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$119  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            \$119  = \$56 ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$119  = 1'h0;
-    end
-    if (rst) begin
-      \$119  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$120  = in_top;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$120  = \$40 ;
-          end
-      3'h2:
-          if (sample) begin
-            \$120  = \$58 ;
-            if (\$60 ) begin
-              \$120  = 1'h0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$120  = 1'h0;
-    end
-    if (rst) begin
-      \$120  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$121  = word;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$121  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              (* full_case = 32'd1 *)
-              if (\$62 ) begin
-              end else begin
-                \$121  = \$63 [0];
-              end
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$121  = 1'h0;
-    end
-    if (rst) begin
-      \$121  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$122  = stop_bit;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$122  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$122  = 1'h0;
-    end
-    if (rst) begin
-      \$122  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$123  = data0;
-    if (\$66 ) begin
-      \$123  = { data0[53:0], \$68  };
-    end
-    if (receiver_clear) begin
-      \$123  = 55'h00000000000000;
-    end
-    if (rst) begin
-      \$123  = 55'h00000000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$124  = ne;
-    if (\$69 ) begin
-      \$124 [0] = 1'h1;
-    end else if (\$73 ) begin
-      \$124 [0] = \bit ;
-    end
-    if (\$83 ) begin
-      \$124 [1] = 1'h1;
-    end else if (\$87 ) begin
-      \$124 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$124  = 2'h0;
-    end
-    if (rst) begin
-      \$124  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$125  = nw;
-    if (\$69 ) begin
-      \$125 [0] = 1'h1;
-    end else if (\$73 ) begin
-    end else if (\$77 ) begin
-      \$125 [0] = \bit ;
-    end
-    if (\$83 ) begin
-      \$125 [1] = 1'h1;
-    end else if (\$87 ) begin
-    end else if (\$91 ) begin
-      \$125 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$125  = 2'h0;
-    end
-    if (rst) begin
-      \$125  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$126  = data1;
-    if (\$80 ) begin
-      \$126  = { data1[38:0], \$82  };
-    end
-    if (receiver_clear) begin
-      \$126  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$126  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$127  = lc;
-    if (lc_load) begin
-      \$127  = { lc[4:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$127  = 6'h00;
-    end
-    if (rst) begin
-      \$127  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    \$128  = cpw_top;
-    if (\$92 ) begin
-      \$128  = { cpw_top[38:0], \$94  };
-    end
-    if (receiver_clear) begin
-      \$128  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$128  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    at_cds = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          at_cds = sample;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
-    in_word = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          in_word = sample;
-    endcase
-  end
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$47  = crcs;
   assign \bit$52  = \bit ;
   assign ok = crc_ok;
   assign index = word;
-  assign load_index = \$102 [0];
-  assign \words[0]  = words[10:0];
+  assign load_index = \$579 [0];
+  assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
   assign \words[0].gray  = words[10];
-  assign \words[1]  = words[21:11];
-  assign \words[1].data_bits  = words[16:11];
-  assign \words[1].nenw  = words[17];
-  assign \words[1].lc  = words[18];
-  assign \words[1].crc  = words[20:19];
-  assign \words[1].gray  = words[21];
+  assign \words[0].signed  = words[11];
+  assign \words[1]  = words[23:12];
+  assign \words[1].data_bits  = words[17:12];
+  assign \words[1].nenw  = words[18];
+  assign \words[1].lc  = words[19];
+  assign \words[1].crc  = words[21:20];
+  assign \words[1].gray  = words[22];
+  assign \words[1].signed  = words[23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -6257,9 +7249,9 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   assign \crcs$47[1].poly  = crcs[58:43];
   assign \crcs$47[1].start  = crcs[74:59];
   assign \crcs$47[1].inverted  = crcs[75];
-  assign \$78  = word;
-  assign \$84  = word;
-  assign \$88  = word;
+  assign \$354  = word;
+  assign \$561  = word;
+  assign \$565  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -7425,9 +8417,9 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
   wire w1_enable;
   reg [7:0] word0_len = 8'h00;
   reg [7:0] word1_len = 8'h00;
-  input [21:0] words;
-  wire [21:0] words;
-  wire [10:0] \words[0] ;
+  input [23:0] words;
+  wire [23:0] words;
+  wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -7438,7 +8430,8 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
   wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [10:0] \words[1] ;
+  wire \words[0].signed ;
+  wire [11:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -7449,6 +8442,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
   wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
+  wire \words[1].signed ;
   assign \$2  = \$1  + crcs[4:0];
   assign \$3  = words[5:0] + \$2 [7:0];
   assign \$4  = w1_enable ? word1_len : 8'h00;
@@ -7459,7 +8453,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
   assign \$9  = ~ clear;
   assign \$10  = \$8  & \$9 ;
   assign \$12  = \$11  + crcs[42:38];
-  assign \$13  = words[16:11] + \$12 [7:0];
+  assign \$13  = words[17:12] + \$12 [7:0];
   always @(posedge clk)
     word0_len <= \$14 ;
   always @(posedge clk)
@@ -7489,7 +8483,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18:17])
+    casez (words[19:18])
       2'h0:
           \$11  = 8'h00;
       2'h1:
@@ -7542,18 +8536,20 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
       \$19  = 8'h00;
     end
   end
-  assign \words[0]  = words[10:0];
+  assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
   assign \words[0].gray  = words[10];
-  assign \words[1]  = words[21:11];
-  assign \words[1].data_bits  = words[16:11];
-  assign \words[1].nenw  = words[17];
-  assign \words[1].lc  = words[18];
-  assign \words[1].crc  = words[20:19];
-  assign \words[1].gray  = words[21];
+  assign \words[0].signed  = words[11];
+  assign \words[1]  = words[23:12];
+  assign \words[1].data_bits  = words[17:12];
+  assign \words[1].nenw  = words[18];
+  assign \words[1].lc  = words[19];
+  assign \words[1].crc  = words[21:20];
+  assign \words[1].gray  = words[22];
+  assign \words[1].signed  = words[23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -10955,7 +11951,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1561$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2038$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -10997,8 +11993,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1561$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$1561$0 ;
-  wire \port$1561$0 ;
+  input \port$2038$0 ;
+  wire \port$2038$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -11012,9 +12008,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1561$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$1561$0  };
-  assign \$2  = { lc[4:0], \port$1561$0  } == last;
-  assign \$3  = { lc[4:0], \port$1561$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2038$0  };
+  assign \$2  = { lc[4:0], \port$2038$0  } == last;
+  assign \$3  = { lc[4:0], \port$2038$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -11124,7 +12120,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$1561$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$1561$0  };
+  assign lc_next = { lc[4:0], \port$2038$0  };
   assign zero = is_zero;
 endmodule
 
@@ -11680,7 +12676,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1029$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1506$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
@@ -11722,8 +12718,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1029$0 , lc_check, lc_re
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [252:0] cfg;
-  wire [252:0] cfg;
+  input [254:0] cfg;
+  wire [254:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -11736,7 +12732,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1029$0 , lc_check, lc_re
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
   wire [23:0] \cfg.timeout_limit ;
-  wire [10:0] \cfg.w0 ;
+  wire [11:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -11747,12 +12743,13 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1029$0 , lc_check, lc_re
   wire \cfg.w0.gray ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
+  wire \cfg.w0.signed ;
   wire [37:0] \cfg.w0_crc ;
   wire \cfg.w0_crc.inverted ;
   wire [15:0] \cfg.w0_crc.poly ;
   wire [15:0] \cfg.w0_crc.start ;
   wire [4:0] \cfg.w0_crc.width ;
-  wire [10:0] \cfg.w1 ;
+  wire [11:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -11763,6 +12760,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1029$0 , lc_check, lc_re
   wire \cfg.w1.gray ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
+  wire \cfg.w1.signed ;
   wire [37:0] \cfg.w1_crc ;
   wire \cfg.w1_crc.inverted ;
   wire [15:0] \cfg.w1_crc.poly ;
@@ -11832,8 +12830,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1029$0 , lc_check, lc_re
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$1029$0 ;
-  wire \port$1029$0 ;
+  output \port$1506$0 ;
+  wire \port$1506$0 ;
   output report;
   wire report;
   input report_frame;
@@ -11863,9 +12861,9 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1029$0 , lc_check, lc_re
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[194];
+  assign \$1  = ~ cfg[195];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[194] & cfg[202];
+  assign \$3  = cfg[195] & cfg[203];
   assign \$4  = cfg[152] | \$3 ;
   assign \$5  = report_frame & \$4 ;
   assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
@@ -11873,7 +12871,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1029$0 , lc_check, lc_re
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[244] & cfg[194];
+  assign \$7  = cfg[246] & cfg[195];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
@@ -11892,7 +12890,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1029$0 , lc_check, lc_re
   assign \$19  = crc_ok[0] & \$2 ;
   assign \$20  = ~ \$19 ;
   assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[194] & cfg[202];
+  assign \$22  = cfg[195] & cfg[203];
   assign \$23  = cfg[152] | \$22 ;
   assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
   assign \$25  = \$23  & \$24 ;
@@ -11939,7 +12937,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1029$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1029$0  = \$2 ;
+  assign \port$1506$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -11950,29 +12948,31 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1029$0 , lc_check, lc_re
   assign \cfg.quiet_time  = cfg[136:125];
   assign \cfg.noise_limit  = cfg[140:137];
   assign \cfg.delay_tolerance  = cfg[144:141];
-  assign \cfg.w0  = cfg[155:145];
+  assign \cfg.w0  = cfg[156:145];
   assign \cfg.w0.data_bits  = cfg[150:145];
   assign \cfg.w0.nenw  = cfg[151];
   assign \cfg.w0.lc  = cfg[152];
   assign \cfg.w0.crc  = cfg[154:153];
   assign \cfg.w0.gray  = cfg[155];
-  assign \cfg.w0_crc  = cfg[193:156];
-  assign \cfg.w0_crc.width  = cfg[160:156];
-  assign \cfg.w0_crc.poly  = cfg[176:161];
-  assign \cfg.w0_crc.start  = cfg[192:177];
-  assign \cfg.w0_crc.inverted  = cfg[193];
-  assign \cfg.w1_enable  = cfg[194];
-  assign \cfg.w1  = cfg[205:195];
-  assign \cfg.w1.data_bits  = cfg[200:195];
-  assign \cfg.w1.nenw  = cfg[201];
-  assign \cfg.w1.lc  = cfg[202];
-  assign \cfg.w1.crc  = cfg[204:203];
-  assign \cfg.w1.gray  = cfg[205];
-  assign \cfg.w1_crc  = cfg[243:206];
-  assign \cfg.w1_crc.width  = cfg[210:206];
-  assign \cfg.w1_crc.poly  = cfg[226:211];
-  assign \cfg.w1_crc.start  = cfg[242:227];
-  assign \cfg.w1_crc.inverted  = cfg[243];
-  assign \cfg.spw_check  = cfg[244];
-  assign \cfg.spw_tolerance  = cfg[252:245];
+  assign \cfg.w0.signed  = cfg[156];
+  assign \cfg.w0_crc  = cfg[194:157];
+  assign \cfg.w0_crc.width  = cfg[161:157];
+  assign \cfg.w0_crc.poly  = cfg[177:162];
+  assign \cfg.w0_crc.start  = cfg[193:178];
+  assign \cfg.w0_crc.inverted  = cfg[194];
+  assign \cfg.w1_enable  = cfg[195];
+  assign \cfg.w1  = cfg[207:196];
+  assign \cfg.w1.data_bits  = cfg[201:196];
+  assign \cfg.w1.nenw  = cfg[202];
+  assign \cfg.w1.lc  = cfg[203];
+  assign \cfg.w1.crc  = cfg[205:204];
+  assign \cfg.w1.gray  = cfg[206];
+  assign \cfg.w1.signed  = cfg[207];
+  assign \cfg.w1_crc  = cfg[245:208];
+  assign \cfg.w1_crc.width  = cfg[212:208];
+  assign \cfg.w1_crc.poly  = cfg[228:213];
+  assign \cfg.w1_crc.start  = cfg[244:229];
+  assign \cfg.w1_crc.inverted  = cfg[245];
+  assign \cfg.spw_check  = cfg[246];
+  assign \cfg.spw_tolerance  = cfg[254:247];
 endmodule

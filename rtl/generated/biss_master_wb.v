@@ -87,6 +87,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch0__cfg_w0_gray;
   wire ch0__cfg_w0_lc;
   wire ch0__cfg_w0_nenw;
+  wire ch0__cfg_w0_signed;
   wire [1:0] ch0__cfg_w1_crc;
   wire ch0__cfg_w1_crc_inverted;
   wire [15:0] ch0__cfg_w1_crc_poly;
@@ -97,6 +98,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch0__cfg_w1_gray;
   wire ch0__cfg_w1_lc;
   wire ch0__cfg_w1_nenw;
+  wire ch0__cfg_w1_signed;
   wire ch0__clear_counters;
   wire ch0__config_error;
   wire [15:0] ch0__count_aborted;
@@ -196,6 +198,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch1__cfg_w0_gray;
   wire ch1__cfg_w0_lc;
   wire ch1__cfg_w0_nenw;
+  wire ch1__cfg_w0_signed;
   wire [1:0] ch1__cfg_w1_crc;
   wire ch1__cfg_w1_crc_inverted;
   wire [15:0] ch1__cfg_w1_crc_poly;
@@ -206,6 +209,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch1__cfg_w1_gray;
   wire ch1__cfg_w1_lc;
   wire ch1__cfg_w1_nenw;
+  wire ch1__cfg_w1_signed;
   wire ch1__clear_counters;
   wire ch1__config_error;
   wire [15:0] ch1__count_aborted;
@@ -266,236 +270,240 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$473 ;
+  wire [1:0] \irq$481 ;
   wire ma;
-  wire \ma$469 ;
+  wire \ma$477 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$258 ;
+  wire \regs__abort_cycle$262 ;
   wire regs__busy;
-  wire \regs__busy$261 ;
+  wire \regs__busy$265 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$262 ;
+  wire \regs__ca_abort$266 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$264 ;
+  wire [6:0] \regs__ca_address$268 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$267 ;
+  wire \regs__ca_busy$271 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$269 ;
+  wire [6:0] \regs__ca_bytes_done$273 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$270 ;
+  wire [6:0] \regs__ca_count$274 ;
   wire regs__ca_done;
-  wire \regs__ca_done$273 ;
+  wire \regs__ca_done$277 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$274 ;
+  wire [3:0] \regs__ca_rbuf_addr$278 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$277 ;
+  wire [31:0] \regs__ca_rbuf_data$281 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$278 ;
+  wire \regs__ca_rbuf_en$282 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$280 ;
+  wire [2:0] \regs__ca_slave_id$284 ;
   wire regs__ca_start;
-  wire \regs__ca_start$282 ;
+  wire \regs__ca_start$286 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$285 ;
+  wire [2:0] \regs__ca_status$289 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$286 ;
+  wire [3:0] \regs__ca_wbuf_addr$290 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$288 ;
+  wire [31:0] \regs__ca_wbuf_data$292 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$290 ;
+  wire [3:0] \regs__ca_wbuf_en$294 ;
   wire regs__ca_write;
-  wire \regs__ca_write$292 ;
+  wire \regs__ca_write$296 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$295 ;
+  wire \regs__cap_counters$299 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$297 ;
+  wire [5:0] \regs__cap_data_bits_w0$301 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$299 ;
+  wire [5:0] \regs__cap_data_bits_w1$303 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$301 ;
+  wire \regs__cap_register_access$305 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$303 ;
+  wire [5:0] \regs__cap_timer_width$307 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$305 ;
+  wire \regs__cap_timestamp$309 ;
   wire regs__cds;
-  wire \regs__cds$307 ;
+  wire \regs__cds$311 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$308 ;
+  wire [23:0] \regs__cfg_ack_limit$312 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$310 ;
+  wire [23:0] \regs__cfg_break_time$314 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$312 ;
+  wire [11:0] \regs__cfg_delay_limit$316 ;
   wire [3:0] regs__cfg_delay_tolerance;
-  wire [3:0] \regs__cfg_delay_tolerance$314 ;
+  wire [3:0] \regs__cfg_delay_tolerance$318 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$316 ;
+  wire \regs__cfg_end_check$320 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$318 ;
+  wire [15:0] \regs__cfg_ma_half_period$322 ;
   wire [3:0] regs__cfg_noise_limit;
-  wire [3:0] \regs__cfg_noise_limit$320 ;
+  wire [3:0] \regs__cfg_noise_limit$324 ;
   wire [11:0] regs__cfg_quiet_time;
-  wire [11:0] \regs__cfg_quiet_time$322 ;
+  wire [11:0] \regs__cfg_quiet_time$326 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$324 ;
+  wire [23:0] \regs__cfg_request_period$328 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$326 ;
+  wire \regs__cfg_spw_check$330 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$328 ;
+  wire [7:0] \regs__cfg_spw_tolerance$332 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$330 ;
+  wire [23:0] \regs__cfg_timeout_limit$334 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$332 ;
+  wire [1:0] \regs__cfg_w0_crc$336 ;
   wire regs__cfg_w0_crc_inverted;
-  wire \regs__cfg_w0_crc_inverted$334 ;
+  wire \regs__cfg_w0_crc_inverted$338 ;
   wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] \regs__cfg_w0_crc_poly$336 ;
+  wire [15:0] \regs__cfg_w0_crc_poly$340 ;
   wire [15:0] regs__cfg_w0_crc_start;
-  wire [15:0] \regs__cfg_w0_crc_start$338 ;
+  wire [15:0] \regs__cfg_w0_crc_start$342 ;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [4:0] \regs__cfg_w0_crc_width$340 ;
+  wire [4:0] \regs__cfg_w0_crc_width$344 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$342 ;
+  wire [5:0] \regs__cfg_w0_data_bits$346 ;
   wire regs__cfg_w0_gray;
-  wire \regs__cfg_w0_gray$344 ;
+  wire \regs__cfg_w0_gray$348 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$346 ;
+  wire \regs__cfg_w0_lc$350 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$348 ;
+  wire \regs__cfg_w0_nenw$352 ;
+  wire regs__cfg_w0_signed;
+  wire \regs__cfg_w0_signed$354 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$350 ;
+  wire [1:0] \regs__cfg_w1_crc$356 ;
   wire regs__cfg_w1_crc_inverted;
-  wire \regs__cfg_w1_crc_inverted$352 ;
+  wire \regs__cfg_w1_crc_inverted$358 ;
   wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] \regs__cfg_w1_crc_poly$354 ;
+  wire [15:0] \regs__cfg_w1_crc_poly$360 ;
   wire [15:0] regs__cfg_w1_crc_start;
-  wire [15:0] \regs__cfg_w1_crc_start$356 ;
+  wire [15:0] \regs__cfg_w1_crc_start$362 ;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [4:0] \regs__cfg_w1_crc_width$358 ;
+  wire [4:0] \regs__cfg_w1_crc_width$364 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$360 ;
+  wire [5:0] \regs__cfg_w1_data_bits$366 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$362 ;
+  wire \regs__cfg_w1_enable$368 ;
   wire regs__cfg_w1_gray;
-  wire \regs__cfg_w1_gray$364 ;
+  wire \regs__cfg_w1_gray$370 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$366 ;
+  wire \regs__cfg_w1_lc$372 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$368 ;
+  wire \regs__cfg_w1_nenw$374 ;
+  wire regs__cfg_w1_signed;
+  wire \regs__cfg_w1_signed$376 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$370 ;
+  wire \regs__clear_counters$378 ;
   wire regs__config_error;
-  wire \regs__config_error$373 ;
+  wire \regs__config_error$381 ;
   wire [15:0] regs__count_aborted;
-  wire [15:0] \regs__count_aborted$375 ;
+  wire [15:0] \regs__count_aborted$383 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$377 ;
+  wire [15:0] \regs__count_ca_aborted$385 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$379 ;
+  wire [15:0] \regs__count_ca_crc4_error$387 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$381 ;
+  wire [15:0] \regs__count_ca_data_fault$389 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$383 ;
+  wire [15:0] \regs__count_ca_no_answer$391 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$385 ;
+  wire [15:0] \regs__count_ca_refused$393 ;
   wire [15:0] regs__count_crc_word0;
-  wire [15:0] \regs__count_crc_word0$387 ;
+  wire [15:0] \regs__count_crc_word0$395 ;
   wire [15:0] regs__count_crc_word1;
-  wire [15:0] \regs__count_crc_word1$389 ;
+  wire [15:0] \regs__count_crc_word1$397 ;
   wire [15:0] regs__count_delay_jump;
-  wire [15:0] \regs__count_delay_jump$391 ;
+  wire [15:0] \regs__count_delay_jump$399 ;
   wire [15:0] regs__count_delay_range;
-  wire [15:0] \regs__count_delay_range$393 ;
+  wire [15:0] \regs__count_delay_range$401 ;
   wire [15:0] regs__count_lc_repeat;
-  wire [15:0] \regs__count_lc_repeat$395 ;
+  wire [15:0] \regs__count_lc_repeat$403 ;
   wire [15:0] regs__count_lc_skip;
-  wire [15:0] \regs__count_lc_skip$397 ;
+  wire [15:0] \regs__count_lc_skip$405 ;
   wire [15:0] regs__count_lc_zero;
-  wire [15:0] \regs__count_lc_zero$399 ;
+  wire [15:0] \regs__count_lc_zero$407 ;
   wire [15:0] regs__count_no_ack;
-  wire [15:0] \regs__count_no_ack$401 ;
+  wire [15:0] \regs__count_no_ack$409 ;
   wire [15:0] regs__count_no_start;
-  wire [15:0] \regs__count_no_start$403 ;
+  wire [15:0] \regs__count_no_start$411 ;
   wire [15:0] regs__count_no_stop;
-  wire [15:0] \regs__count_no_stop$405 ;
+  wire [15:0] \regs__count_no_stop$413 ;
   wire [15:0] regs__count_noise_event;
-  wire [15:0] \regs__count_noise_event$407 ;
+  wire [15:0] \regs__count_noise_event$415 ;
   wire [15:0] regs__count_noisy_line;
-  wire [15:0] \regs__count_noisy_line$409 ;
+  wire [15:0] \regs__count_noisy_line$417 ;
   wire [15:0] regs__count_overrun;
-  wire [15:0] \regs__count_overrun$411 ;
+  wire [15:0] \regs__count_overrun$419 ;
   wire [15:0] regs__count_slo_stuck_low;
-  wire [15:0] \regs__count_slo_stuck_low$413 ;
+  wire [15:0] \regs__count_slo_stuck_low$421 ;
   wire [15:0] regs__count_spw_mismatch;
-  wire [15:0] \regs__count_spw_mismatch$415 ;
+  wire [15:0] \regs__count_spw_mismatch$423 ;
   wire regs__delay_settled;
-  wire \regs__delay_settled$417 ;
+  wire \regs__delay_settled$425 ;
   wire [7:0] regs__delay_spread;
-  wire [7:0] \regs__delay_spread$419 ;
+  wire [7:0] \regs__delay_spread$427 ;
   wire regs__done;
-  wire \regs__done$421 ;
+  wire \regs__done$429 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$423 ;
+  wire [15:0] \regs__done_count$431 ;
   wire regs__frame_error;
-  wire \regs__frame_error$425 ;
+  wire \regs__frame_error$433 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$427 ;
+  wire [5:0] \regs__lc$435 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$429 ;
+  wire \regs__lc_repeat$437 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$431 ;
+  wire \regs__lc_skip$439 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$433 ;
+  wire \regs__lc_zero$441 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$435 ;
+  wire [12:0] \regs__line_delay$443 ;
   wire [3:0] regs__noise_events;
-  wire [3:0] \regs__noise_events$437 ;
+  wire [3:0] \regs__noise_events$445 ;
   wire regs__periodic;
-  wire \regs__periodic$438 ;
+  wire \regs__periodic$446 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__r_load;
   wire [12:0] regs__settled_delay;
-  wire [12:0] \regs__settled_delay$441 ;
+  wire [12:0] \regs__settled_delay$449 ;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$443 ;
+  wire \regs__spw_mismatch$451 ;
   wire regs__start;
-  wire \regs__start$444 ;
+  wire \regs__start$452 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$447 ;
+  wire [3:0] \regs__status$455 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$449 ;
+  wire [31:0] \regs__timestamp$457 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$450 ;
+  wire \regs__trigger_enable$458 ;
   wire [10:0] regs__w_addr;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$453 ;
+  wire \regs__word0_crc_ok$461 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$455 ;
+  wire \regs__word0_ne$463 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$457 ;
+  wire \regs__word0_nw$465 ;
   wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$459 ;
+  wire [54:0] \regs__word0_position$467 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$461 ;
+  wire \regs__word1_crc_ok$469 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$463 ;
+  wire \regs__word1_ne$471 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$465 ;
+  wire \regs__word1_nw$473 ;
   wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$467 ;
+  wire [39:0] \regs__word1_position$475 ;
   input rst;
   wire rst;
   wire slo;
-  wire \slo$470 ;
+  wire \slo$478 ;
   input trigger;
   wire trigger;
-  wire \trigger$255 ;
+  wire \trigger$259 ;
   wire \trigger$42 ;
-  wire \trigger$468 ;
+  wire \trigger$476 ;
   reg trigger_in = 1'h0;
   wire wb__ack;
   wire [10:0] wb__adr;
@@ -556,7 +564,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch0_ca_request_address(regs__ca_address),
     .ch0_ca_request_count(regs__ca_count),
     .ch0_ca_request_slave_id(regs__ca_slave_id),
-    .\ch0_ca_request_write$103 (regs__ca_write),
+    .\ch0_ca_request_write$105 (regs__ca_write),
     .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
     .ch0_cfg_break_break_time(regs__cfg_break_time),
     .ch0_cfg_checks_delay_tolerance(regs__cfg_delay_tolerance),
@@ -582,12 +590,14 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch0_cfg_words_w0_gray(regs__cfg_w0_gray),
     .ch0_cfg_words_w0_lc(regs__cfg_w0_lc),
     .ch0_cfg_words_w0_nenw(regs__cfg_w0_nenw),
+    .ch0_cfg_words_w0_signed(regs__cfg_w0_signed),
     .ch0_cfg_words_w1_crc(regs__cfg_w1_crc),
     .ch0_cfg_words_w1_data_bits(regs__cfg_w1_data_bits),
     .ch0_cfg_words_w1_enable(regs__cfg_w1_enable),
     .ch0_cfg_words_w1_gray(regs__cfg_w1_gray),
     .ch0_cfg_words_w1_lc(regs__cfg_w1_lc),
     .ch0_cfg_words_w1_nenw(regs__cfg_w1_nenw),
+    .ch0_cfg_words_w1_signed(regs__cfg_w1_signed),
     .ch0_ctrl_abort(regs__abort_cycle),
     .ch0_ctrl_clear_counters(regs__clear_counters),
     .ch0_ctrl_periodic(regs__periodic),
@@ -598,63 +608,65 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$278 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$290 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$282 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$294 ),
     .ch1__config_error(ch1__config_error),
     .ch1__done(ch1__done),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_error(ch1__frame_error),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$262 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$282 ),
-    .ch1_ca_request_address(\regs__ca_address$264 ),
-    .ch1_ca_request_count(\regs__ca_count$270 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$280 ),
-    .\ch1_ca_request_write$305 (\regs__ca_write$292 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$308 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$310 ),
-    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$314 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$316 ),
-    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$320 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$326 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$328 ),
-    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$338 ),
-    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$334 ),
-    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$336 ),
-    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$340 ),
-    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$356 ),
-    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$352 ),
-    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$354 ),
-    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$358 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$312 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$318 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$324 ),
-    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$322 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$330 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$332 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$342 ),
-    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$344 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$346 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$348 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$350 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$360 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$362 ),
-    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$364 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$366 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$368 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$258 ),
-    .ch1_ctrl_clear_counters(\regs__clear_counters$370 ),
-    .ch1_ctrl_periodic(\regs__periodic$438 ),
-    .ch1_ctrl_start(\regs__start$444 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$450 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$266 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$286 ),
+    .ch1_ca_request_address(\regs__ca_address$268 ),
+    .ch1_ca_request_count(\regs__ca_count$274 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$284 ),
+    .\ch1_ca_request_write$309 (\regs__ca_write$296 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$312 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$314 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$318 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$320 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$324 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$330 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$332 ),
+    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$342 ),
+    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$338 ),
+    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$340 ),
+    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$344 ),
+    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$362 ),
+    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$358 ),
+    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$360 ),
+    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$364 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$316 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$322 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$328 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$326 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$334 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$336 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$346 ),
+    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$348 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$350 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$352 ),
+    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$354 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$356 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$366 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$368 ),
+    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$370 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$372 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$374 ),
+    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$376 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$262 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$378 ),
+    .ch1_ctrl_periodic(\regs__periodic$446 ),
+    .ch1_ctrl_start(\regs__start$452 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$458 ),
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$4897$0 (\$8 ),
-    .\port$4910$0 (\$9 ),
-    .\port$5042$0 (\$10 ),
-    .\port$5462$0 (\$11 ),
-    .\port$5475$0 (\$12 ),
-    .\port$5607$0 (\$13 ),
+    .\port$5871$0 (\$8 ),
+    .\port$5884$0 (\$9 ),
+    .\port$6016$0 (\$10 ),
+    .\port$6436$0 (\$11 ),
+    .\port$6449$0 (\$12 ),
+    .\port$6581$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -707,6 +719,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .cfg_w0_gray(regs__cfg_w0_gray),
     .cfg_w0_lc(regs__cfg_w0_lc),
     .cfg_w0_nenw(regs__cfg_w0_nenw),
+    .cfg_w0_signed(regs__cfg_w0_signed),
     .cfg_w1_crc(regs__cfg_w1_crc),
     .cfg_w1_crc_inverted(regs__cfg_w1_crc_inverted),
     .cfg_w1_crc_poly(regs__cfg_w1_crc_poly),
@@ -717,13 +730,14 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .cfg_w1_gray(regs__cfg_w1_gray),
     .cfg_w1_lc(regs__cfg_w1_lc),
     .cfg_w1_nenw(regs__cfg_w1_nenw),
+    .cfg_w1_signed(regs__cfg_w1_signed),
     .clear_counters(regs__clear_counters),
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$4897$0 (\$8 ),
-    .\port$4910$0 (\$9 ),
-    .\port$5042$0 (\$10 ),
+    .\port$5871$0 (\$8 ),
+    .\port$5884$0 (\$9 ),
+    .\port$6016$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -737,59 +751,61 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$199 (\trigger$42 )
+    .\trigger$203 (\trigger$42 )
   );
   \biss_master_wb.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$262 ),
-    .ca_address(\regs__ca_address$264 ),
-    .ca_count(\regs__ca_count$270 ),
+    .ca_abort(\regs__ca_abort$266 ),
+    .ca_address(\regs__ca_address$268 ),
+    .ca_count(\regs__ca_count$274 ),
     .ca_rbuf_addr(wb_adr[3:0]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$278 ),
-    .ca_slave_id(\regs__ca_slave_id$280 ),
-    .ca_start(\regs__ca_start$282 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$282 ),
+    .ca_slave_id(\regs__ca_slave_id$284 ),
+    .ca_start(\regs__ca_start$286 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$290 ),
-    .ca_write(\regs__ca_write$292 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$308 ),
-    .cfg_break_time(\regs__cfg_break_time$310 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$312 ),
-    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$314 ),
-    .cfg_end_check(\regs__cfg_end_check$316 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$318 ),
-    .cfg_noise_limit(\regs__cfg_noise_limit$320 ),
-    .cfg_quiet_time(\regs__cfg_quiet_time$322 ),
-    .cfg_request_period(\regs__cfg_request_period$324 ),
-    .cfg_spw_check(\regs__cfg_spw_check$326 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$328 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$330 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$332 ),
-    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$334 ),
-    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$336 ),
-    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$338 ),
-    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$340 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$342 ),
-    .cfg_w0_gray(\regs__cfg_w0_gray$344 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$346 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$348 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$350 ),
-    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$352 ),
-    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$354 ),
-    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$356 ),
-    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$358 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$360 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$362 ),
-    .cfg_w1_gray(\regs__cfg_w1_gray$364 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$366 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$368 ),
-    .clear_counters(\regs__clear_counters$370 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$294 ),
+    .ca_write(\regs__ca_write$296 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$312 ),
+    .cfg_break_time(\regs__cfg_break_time$314 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$316 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$318 ),
+    .cfg_end_check(\regs__cfg_end_check$320 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$322 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$324 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$326 ),
+    .cfg_request_period(\regs__cfg_request_period$328 ),
+    .cfg_spw_check(\regs__cfg_spw_check$330 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$332 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$334 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$336 ),
+    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$338 ),
+    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$340 ),
+    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$342 ),
+    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$344 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$346 ),
+    .cfg_w0_gray(\regs__cfg_w0_gray$348 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$350 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$352 ),
+    .cfg_w0_signed(\regs__cfg_w0_signed$354 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$356 ),
+    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$358 ),
+    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$360 ),
+    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$362 ),
+    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$364 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$366 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$368 ),
+    .cfg_w1_gray(\regs__cfg_w1_gray$370 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$372 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$374 ),
+    .cfg_w1_signed(\regs__cfg_w1_signed$376 ),
+    .clear_counters(\regs__clear_counters$378 ),
     .clk(clk),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$438 ),
-    .\port$5462$0 (\$11 ),
-    .\port$5475$0 (\$12 ),
-    .\port$5607$0 (\$13 ),
-    .regs__abort_cycle(\regs__abort_cycle$258 ),
+    .periodic(\regs__periodic$446 ),
+    .\port$6436$0 (\$11 ),
+    .\port$6449$0 (\$12 ),
+    .\port$6581$0 (\$13 ),
+    .regs__abort_cycle(\regs__abort_cycle$262 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -798,11 +814,11 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .regs__done(ch1__done),
     .regs__done_count(ch1__done_count),
     .regs__frame_error(ch1__frame_error),
-    .regs__trigger_enable(\regs__trigger_enable$450 ),
+    .regs__trigger_enable(\regs__trigger_enable$458 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$444 ),
-    .\trigger$199 (\trigger$42 )
+    .start(\regs__start$452 ),
+    .\trigger$203 (\trigger$42 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
@@ -896,6 +912,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign ch0__cfg_w0_gray = regs__cfg_w0_gray;
   assign ch0__cfg_w0_lc = regs__cfg_w0_lc;
   assign ch0__cfg_w0_nenw = regs__cfg_w0_nenw;
+  assign ch0__cfg_w0_signed = regs__cfg_w0_signed;
   assign ch0__cfg_w1_crc = regs__cfg_w1_crc;
   assign ch0__cfg_w1_crc_inverted = regs__cfg_w1_crc_inverted;
   assign ch0__cfg_w1_crc_poly = regs__cfg_w1_crc_poly;
@@ -906,6 +923,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign ch0__cfg_w1_gray = regs__cfg_w1_gray;
   assign ch0__cfg_w1_lc = regs__cfg_w1_lc;
   assign ch0__cfg_w1_nenw = regs__cfg_w1_nenw;
+  assign ch0__cfg_w1_signed = regs__cfg_w1_signed;
   assign ch0__clear_counters = regs__clear_counters;
   assign regs__config_error = ch0__config_error;
   assign ch0__count_aborted = \$9 [191:176];
@@ -996,182 +1014,185 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign regs__word1_nw = \$8 [175];
   assign ch0__word1_position = \$8 [173:134];
   assign regs__word1_position = \$8 [173:134];
-  assign \trigger$255  = \trigger$42 ;
+  assign \trigger$259  = \trigger$42 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign ch1__abort_cycle = \regs__abort_cycle$258 ;
-  assign \regs__busy$261  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$262 ;
-  assign ch1__ca_address = \regs__ca_address$264 ;
-  assign \regs__ca_busy$267  = ch1__ca_busy;
+  assign ch1__abort_cycle = \regs__abort_cycle$262 ;
+  assign \regs__busy$265  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$266 ;
+  assign ch1__ca_address = \regs__ca_address$268 ;
+  assign \regs__ca_busy$271  = ch1__ca_busy;
   assign ch1__ca_bytes_done = \$13 [9:3];
-  assign \regs__ca_bytes_done$269  = \$13 [9:3];
-  assign ch1__ca_count = \regs__ca_count$270 ;
-  assign \regs__ca_done$273  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$274  = wb_adr[3:0];
+  assign \regs__ca_bytes_done$273  = \$13 [9:3];
+  assign ch1__ca_count = \regs__ca_count$274 ;
+  assign \regs__ca_done$277  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$278  = wb_adr[3:0];
   assign ch1__ca_rbuf_addr = wb_adr[3:0];
-  assign \regs__ca_rbuf_data$277  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$278 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$280 ;
-  assign ch1__ca_start = \regs__ca_start$282 ;
+  assign \regs__ca_rbuf_data$281  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$282 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$284 ;
+  assign ch1__ca_start = \regs__ca_start$286 ;
   assign ch1__ca_status = \$13 [2:0];
-  assign \regs__ca_status$285  = \$13 [2:0];
-  assign \regs__ca_wbuf_addr$286  = regs__ca_wbuf_addr;
+  assign \regs__ca_status$289  = \$13 [2:0];
+  assign \regs__ca_wbuf_addr$290  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$288  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$292  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$290 ;
-  assign ch1__ca_write = \regs__ca_write$292 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$294 ;
+  assign ch1__ca_write = \regs__ca_write$296 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$295  = 1'h1;
+  assign \regs__cap_counters$299  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$297  = 6'h37;
+  assign \regs__cap_data_bits_w0$301  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$299  = 6'h28;
+  assign \regs__cap_data_bits_w1$303  = 6'h28;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$301  = 1'h1;
+  assign \regs__cap_register_access$305  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$303  = 6'h18;
+  assign \regs__cap_timer_width$307  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$305  = 1'h1;
+  assign \regs__cap_timestamp$309  = 1'h1;
   assign ch1__cds = \$11 [49];
-  assign \regs__cds$307  = \$11 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$308 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$310 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$312 ;
-  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$314 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$316 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$318 ;
-  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$320 ;
-  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$322 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$324 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$326 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$328 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$330 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$332 ;
-  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$334 ;
-  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$336 ;
-  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$338 ;
-  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$340 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$342 ;
-  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$344 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$346 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$348 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$350 ;
-  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$352 ;
-  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$354 ;
-  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$356 ;
-  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$358 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$360 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$362 ;
-  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$364 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$366 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$368 ;
-  assign ch1__clear_counters = \regs__clear_counters$370 ;
-  assign \regs__config_error$373  = ch1__config_error;
+  assign \regs__cds$311  = \$11 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$312 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$314 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$316 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$318 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$320 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$322 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$324 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$326 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$328 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$330 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$332 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$334 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$336 ;
+  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$338 ;
+  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$340 ;
+  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$342 ;
+  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$344 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$346 ;
+  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$348 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$350 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$352 ;
+  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$354 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$356 ;
+  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$358 ;
+  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$360 ;
+  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$362 ;
+  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$364 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$366 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$368 ;
+  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$370 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$372 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$374 ;
+  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$376 ;
+  assign ch1__clear_counters = \regs__clear_counters$378 ;
+  assign \regs__config_error$381  = ch1__config_error;
   assign ch1__count_aborted = \$12 [191:176];
-  assign \regs__count_aborted$375  = \$12 [191:176];
+  assign \regs__count_aborted$383  = \$12 [191:176];
   assign ch1__count_ca_aborted = \$12 [319:304];
-  assign \regs__count_ca_aborted$377  = \$12 [319:304];
+  assign \regs__count_ca_aborted$385  = \$12 [319:304];
   assign ch1__count_ca_crc4_error = \$12 [271:256];
-  assign \regs__count_ca_crc4_error$379  = \$12 [271:256];
+  assign \regs__count_ca_crc4_error$387  = \$12 [271:256];
   assign ch1__count_ca_data_fault = \$12 [335:320];
-  assign \regs__count_ca_data_fault$381  = \$12 [335:320];
+  assign \regs__count_ca_data_fault$389  = \$12 [335:320];
   assign ch1__count_ca_no_answer = \$12 [287:272];
-  assign \regs__count_ca_no_answer$383  = \$12 [287:272];
+  assign \regs__count_ca_no_answer$391  = \$12 [287:272];
   assign ch1__count_ca_refused = \$12 [303:288];
-  assign \regs__count_ca_refused$385  = \$12 [303:288];
+  assign \regs__count_ca_refused$393  = \$12 [303:288];
   assign ch1__count_crc_word0 = \$12 [15:0];
-  assign \regs__count_crc_word0$387  = \$12 [15:0];
+  assign \regs__count_crc_word0$395  = \$12 [15:0];
   assign ch1__count_crc_word1 = \$12 [31:16];
-  assign \regs__count_crc_word1$389  = \$12 [31:16];
+  assign \regs__count_crc_word1$397  = \$12 [31:16];
   assign ch1__count_delay_jump = \$12 [239:224];
-  assign \regs__count_delay_jump$391  = \$12 [239:224];
+  assign \regs__count_delay_jump$399  = \$12 [239:224];
   assign ch1__count_delay_range = \$12 [79:64];
-  assign \regs__count_delay_range$393  = \$12 [79:64];
+  assign \regs__count_delay_range$401  = \$12 [79:64];
   assign ch1__count_lc_repeat = \$12 [111:96];
-  assign \regs__count_lc_repeat$395  = \$12 [111:96];
+  assign \regs__count_lc_repeat$403  = \$12 [111:96];
   assign ch1__count_lc_skip = \$12 [127:112];
-  assign \regs__count_lc_skip$397  = \$12 [127:112];
+  assign \regs__count_lc_skip$405  = \$12 [127:112];
   assign ch1__count_lc_zero = \$12 [143:128];
-  assign \regs__count_lc_zero$399  = \$12 [143:128];
+  assign \regs__count_lc_zero$407  = \$12 [143:128];
   assign ch1__count_no_ack = \$12 [47:32];
-  assign \regs__count_no_ack$401  = \$12 [47:32];
+  assign \regs__count_no_ack$409  = \$12 [47:32];
   assign ch1__count_no_start = \$12 [63:48];
-  assign \regs__count_no_start$403  = \$12 [63:48];
+  assign \regs__count_no_start$411  = \$12 [63:48];
   assign ch1__count_no_stop = \$12 [207:192];
-  assign \regs__count_no_stop$405  = \$12 [207:192];
+  assign \regs__count_no_stop$413  = \$12 [207:192];
   assign ch1__count_noise_event = \$12 [255:240];
-  assign \regs__count_noise_event$407  = \$12 [255:240];
+  assign \regs__count_noise_event$415  = \$12 [255:240];
   assign ch1__count_noisy_line = \$12 [223:208];
-  assign \regs__count_noisy_line$409  = \$12 [223:208];
+  assign \regs__count_noisy_line$417  = \$12 [223:208];
   assign ch1__count_overrun = \$12 [175:160];
-  assign \regs__count_overrun$411  = \$12 [175:160];
+  assign \regs__count_overrun$419  = \$12 [175:160];
   assign ch1__count_slo_stuck_low = \$12 [95:80];
-  assign \regs__count_slo_stuck_low$413  = \$12 [95:80];
+  assign \regs__count_slo_stuck_low$421  = \$12 [95:80];
   assign ch1__count_spw_mismatch = \$12 [159:144];
-  assign \regs__count_spw_mismatch$415  = \$12 [159:144];
+  assign \regs__count_spw_mismatch$423  = \$12 [159:144];
   assign ch1__delay_settled = \$11 [54];
-  assign \regs__delay_settled$417  = \$11 [54];
+  assign \regs__delay_settled$425  = \$11 [54];
   assign ch1__delay_spread = \$11 [75:68];
-  assign \regs__delay_spread$419  = \$11 [75:68];
-  assign \regs__done$421  = ch1__done;
-  assign \regs__done_count$423  = ch1__done_count;
-  assign \regs__frame_error$425  = ch1__frame_error;
+  assign \regs__delay_spread$427  = \$11 [75:68];
+  assign \regs__done$429  = ch1__done;
+  assign \regs__done_count$431  = ch1__done_count;
+  assign \regs__frame_error$433  = ch1__frame_error;
   assign ch1__lc = \$11 [182:177];
-  assign \regs__lc$427  = \$11 [182:177];
+  assign \regs__lc$435  = \$11 [182:177];
   assign ch1__lc_repeat = \$11 [183];
-  assign \regs__lc_repeat$429  = \$11 [183];
+  assign \regs__lc_repeat$437  = \$11 [183];
   assign ch1__lc_skip = \$11 [184];
-  assign \regs__lc_skip$431  = \$11 [184];
+  assign \regs__lc_skip$439  = \$11 [184];
   assign ch1__lc_zero = \$11 [185];
-  assign \regs__lc_zero$433  = \$11 [185];
+  assign \regs__lc_zero$441  = \$11 [185];
   assign ch1__line_delay = \$11 [48:36];
-  assign \regs__line_delay$435  = \$11 [48:36];
+  assign \regs__line_delay$443  = \$11 [48:36];
   assign ch1__noise_events = \$11 [53:50];
-  assign \regs__noise_events$437  = \$11 [53:50];
-  assign ch1__periodic = \regs__periodic$438 ;
+  assign \regs__noise_events$445  = \$11 [53:50];
+  assign ch1__periodic = \regs__periodic$446 ;
   assign ch1__settled_delay = \$11 [67:55];
-  assign \regs__settled_delay$441  = \$11 [67:55];
+  assign \regs__settled_delay$449  = \$11 [67:55];
   assign ch1__spw_mismatch = \$11 [186];
-  assign \regs__spw_mismatch$443  = \$11 [186];
-  assign ch1__start = \regs__start$444 ;
+  assign \regs__spw_mismatch$451  = \$11 [186];
+  assign ch1__start = \regs__start$452 ;
   assign ch1__status = \$11 [3:0];
-  assign \regs__status$447  = \$11 [3:0];
+  assign \regs__status$455  = \$11 [3:0];
   assign ch1__timestamp = \$11 [35:4];
-  assign \regs__timestamp$449  = \$11 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$450 ;
+  assign \regs__timestamp$457  = \$11 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$458 ;
   assign ch1__word0_crc_ok = \$11 [133];
-  assign \regs__word0_crc_ok$453  = \$11 [133];
+  assign \regs__word0_crc_ok$461  = \$11 [133];
   assign ch1__word0_ne = \$11 [131];
-  assign \regs__word0_ne$455  = \$11 [131];
+  assign \regs__word0_ne$463  = \$11 [131];
   assign ch1__word0_nw = \$11 [132];
-  assign \regs__word0_nw$457  = \$11 [132];
+  assign \regs__word0_nw$465  = \$11 [132];
   assign ch1__word0_position = \$11 [130:76];
-  assign \regs__word0_position$459  = \$11 [130:76];
+  assign \regs__word0_position$467  = \$11 [130:76];
   assign ch1__word1_crc_ok = \$11 [176];
-  assign \regs__word1_crc_ok$461  = \$11 [176];
+  assign \regs__word1_crc_ok$469  = \$11 [176];
   assign ch1__word1_ne = \$11 [174];
-  assign \regs__word1_ne$463  = \$11 [174];
+  assign \regs__word1_ne$471  = \$11 [174];
   assign ch1__word1_nw = \$11 [175];
-  assign \regs__word1_nw$465  = \$11 [175];
+  assign \regs__word1_nw$473  = \$11 [175];
   assign ch1__word1_position = \$11 [173:134];
-  assign \regs__word1_position$467  = \$11 [173:134];
-  assign \trigger$468  = \trigger$42 ;
-  assign \ma$469  = ch1_ma;
-  assign \slo$470  = ch1_slo;
+  assign \regs__word1_position$475  = \$11 [173:134];
+  assign \trigger$476  = \trigger$42 ;
+  assign \ma$477  = ch1_ma;
+  assign \slo$478  = ch1_slo;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$7 , \$6  };
-  assign \irq$473  = { \$7 , \$6  };
+  assign \irq$481  = { \$7 , \$6  };
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus__w_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error
 , ch1__ca_busy, ch1__ca_rbuf_data, bus__r_load, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc
-, ch0_cfg_words_w0_gray, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start
-, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$103 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc
-, ch1_cfg_words_w0_gray, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start
-, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$4897$0 , \port$4910$0 , ch0__ca_done, \port$5042$0 , ch1__done_count, ch1__done, \port$5462$0 , \port$5475$0 , ch1__ca_done, \port$5607$0 , bus__w_addr);
+, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width
+, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$105 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw
+, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start
+, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$309 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$5871$0 , \port$5884$0 , ch0__ca_done, \port$6016$0 , ch1__done_count, ch1__done, \port$6436$0 , \port$6449$0 , ch1__ca_done
+, \port$6581$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -1209,8 +1230,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$129 ;
   wire [31:0] \$13 ;
   wire \$130 ;
-  wire [31:0] \$131 ;
-  wire [31:0] \$132 ;
+  wire \$131 ;
+  wire \$132 ;
   wire [31:0] \$133 ;
   wire [31:0] \$134 ;
   wire [31:0] \$135 ;
@@ -1298,8 +1319,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [31:0] \$209 ;
   wire \$21 ;
   wire [31:0] \$210 ;
-  wire \$211 ;
-  wire \$212 ;
+  wire [31:0] \$211 ;
+  wire [31:0] \$212 ;
   wire \$213 ;
   wire \$214 ;
   wire \$215 ;
@@ -1423,10 +1444,10 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$321 ;
   wire \$322 ;
   wire \$323 ;
-  wire [31:0] \$324 ;
-  wire [31:0] \$325 ;
-  wire [31:0] \$326 ;
-  wire [31:0] \$327 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
   wire [31:0] \$328 ;
   wire [31:0] \$329 ;
   wire \$33 ;
@@ -1512,10 +1533,10 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [31:0] \$401 ;
   wire [31:0] \$402 ;
   wire [31:0] \$403 ;
-  wire \$404 ;
-  wire \$405 ;
-  wire \$406 ;
-  wire \$407 ;
+  wire [31:0] \$404 ;
+  wire [31:0] \$405 ;
+  wire [31:0] \$406 ;
+  wire [31:0] \$407 ;
   wire \$408 ;
   wire \$409 ;
   wire \$41 ;
@@ -1624,27 +1645,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$502 ;
   wire \$503 ;
   wire \$504 ;
-  wire [31:0] \$505 ;
-  wire [31:0] \$506 ;
-  reg \$507 ;
-  reg [10:0] \$508 ;
-  reg [31:0] \$509 ;
+  wire \$505 ;
+  wire \$506 ;
+  wire \$507 ;
+  wire \$508 ;
+  wire [31:0] \$509 ;
   wire \$51 ;
-  reg [3:0] \$510 ;
-  reg [31:0] \$511 ;
-  reg [3:0] \$512 ;
-  reg \$513 ;
-  reg \$514 ;
-  reg \$515 ;
-  reg \$516 ;
+  wire [31:0] \$510 ;
+  reg \$511 ;
+  reg [10:0] \$512 ;
+  reg [31:0] \$513 ;
+  reg [3:0] \$514 ;
+  reg [31:0] \$515 ;
+  reg [3:0] \$516 ;
   reg \$517 ;
   reg \$518 ;
-  reg [31:0] \$519 ;
+  reg \$519 ;
   wire \$52 ;
   reg \$520 ;
   reg \$521 ;
   reg \$522 ;
-  reg \$523 ;
+  reg [31:0] \$523 ;
   reg \$524 ;
   reg \$525 ;
   reg \$526 ;
@@ -1655,45 +1676,45 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$530 ;
   reg \$531 ;
   reg \$532 ;
-  reg [15:0] \$533 ;
-  reg [11:0] \$534 ;
+  reg \$533 ;
+  reg \$534 ;
   reg \$535 ;
-  reg [23:0] \$536 ;
-  reg \$537 ;
-  reg [23:0] \$538 ;
+  reg \$536 ;
+  reg [15:0] \$537 ;
+  reg [11:0] \$538 ;
   reg \$539 ;
   wire \$54 ;
   reg [23:0] \$540 ;
   reg \$541 ;
   reg [23:0] \$542 ;
   reg \$543 ;
-  reg [5:0] \$544 ;
+  reg [23:0] \$544 ;
   reg \$545 ;
-  reg \$546 ;
-  reg [1:0] \$547 ;
-  reg \$548 ;
-  reg [5:0] \$549 ;
+  reg [23:0] \$546 ;
+  reg \$547 ;
+  reg [5:0] \$548 ;
+  reg \$549 ;
   wire \$55 ;
   reg \$550 ;
-  reg \$551 ;
-  reg [1:0] \$552 ;
+  reg [1:0] \$551 ;
+  reg \$552 ;
   reg \$553 ;
-  reg \$554 ;
+  reg [5:0] \$554 ;
   reg \$555 ;
   reg \$556 ;
-  reg \$557 ;
-  reg [7:0] \$558 ;
-  reg [3:0] \$559 ;
+  reg [1:0] \$557 ;
+  reg \$558 ;
+  reg \$559 ;
   wire \$56 ;
-  reg [3:0] \$560 ;
+  reg \$560 ;
   reg \$561 ;
-  reg [11:0] \$562 ;
+  reg \$562 ;
   reg \$563 ;
-  reg [15:0] \$564 ;
-  reg [4:0] \$565 ;
-  reg \$566 ;
+  reg [7:0] \$564 ;
+  reg [3:0] \$565 ;
+  reg [3:0] \$566 ;
   reg \$567 ;
-  reg [15:0] \$568 ;
+  reg [11:0] \$568 ;
   reg \$569 ;
   wire \$57 ;
   reg [15:0] \$570 ;
@@ -1702,16 +1723,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$573 ;
   reg [15:0] \$574 ;
   reg \$575 ;
-  reg [2:0] \$576 ;
-  reg [6:0] \$577 ;
-  reg [6:0] \$578 ;
+  reg [15:0] \$576 ;
+  reg [4:0] \$577 ;
+  reg \$578 ;
   reg \$579 ;
   wire \$58 ;
-  reg \$580 ;
+  reg [15:0] \$580 ;
   reg \$581 ;
-  reg \$582 ;
-  reg \$583 ;
-  reg \$584 ;
+  reg [2:0] \$582 ;
+  reg [6:0] \$583 ;
+  reg [6:0] \$584 ;
   reg \$585 ;
   reg \$586 ;
   reg \$587 ;
@@ -1753,41 +1774,41 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$619 ;
   wire \$62 ;
   reg \$620 ;
-  reg [3:0] \$621 ;
+  reg \$621 ;
   reg \$622 ;
   reg \$623 ;
   reg \$624 ;
   reg \$625 ;
   reg \$626 ;
-  reg \$627 ;
+  reg [3:0] \$627 ;
   reg \$628 ;
   reg \$629 ;
   wire \$63 ;
   reg \$630 ;
   reg \$631 ;
   reg \$632 ;
-  reg [5:0] \$633 ;
-  reg [15:0] \$634 ;
-  reg [12:0] \$635 ;
-  reg [31:0] \$636 ;
-  reg [22:0] \$637 ;
-  reg [31:0] \$638 ;
-  reg [7:0] \$639 ;
+  reg \$633 ;
+  reg \$634 ;
+  reg \$635 ;
+  reg \$636 ;
+  reg \$637 ;
+  reg \$638 ;
+  reg [5:0] \$639 ;
   wire \$64 ;
-  reg [31:0] \$640 ;
-  reg [3:0] \$641 ;
-  reg \$642 ;
-  reg [7:0] \$643 ;
-  reg [12:0] \$644 ;
-  reg \$645 ;
+  reg [15:0] \$640 ;
+  reg [12:0] \$641 ;
+  reg [31:0] \$642 ;
+  reg [22:0] \$643 ;
+  reg [31:0] \$644 ;
+  reg [7:0] \$645 ;
   reg [31:0] \$646 ;
-  reg \$647 ;
+  reg [3:0] \$647 ;
   reg \$648 ;
-  reg \$649 ;
+  reg [7:0] \$649 ;
   wire \$65 ;
-  reg \$650 ;
+  reg [12:0] \$650 ;
   reg \$651 ;
-  reg \$652 ;
+  reg [31:0] \$652 ;
   reg \$653 ;
   reg \$654 ;
   reg \$655 ;
@@ -1796,66 +1817,66 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$658 ;
   reg \$659 ;
   wire \$66 ;
-  reg [15:0] \$660 ;
-  reg [11:0] \$661 ;
+  reg \$660 ;
+  reg \$661 ;
   reg \$662 ;
-  reg [23:0] \$663 ;
+  reg \$663 ;
   reg \$664 ;
-  reg [23:0] \$665 ;
-  reg \$666 ;
-  reg [23:0] \$667 ;
+  reg \$665 ;
+  reg [15:0] \$666 ;
+  reg [11:0] \$667 ;
   reg \$668 ;
   reg [23:0] \$669 ;
   wire \$67 ;
   reg \$670 ;
-  reg [5:0] \$671 ;
+  reg [23:0] \$671 ;
   reg \$672 ;
-  reg \$673 ;
-  reg [1:0] \$674 ;
-  reg \$675 ;
-  reg [5:0] \$676 ;
-  reg \$677 ;
+  reg [23:0] \$673 ;
+  reg \$674 ;
+  reg [23:0] \$675 ;
+  reg \$676 ;
+  reg [5:0] \$677 ;
   reg \$678 ;
-  reg [1:0] \$679 ;
+  reg \$679 ;
   wire \$68 ;
-  reg \$680 ;
+  reg [1:0] \$680 ;
   reg \$681 ;
   reg \$682 ;
-  reg \$683 ;
+  reg [5:0] \$683 ;
   reg \$684 ;
-  reg [7:0] \$685 ;
-  reg [3:0] \$686 ;
-  reg [3:0] \$687 ;
+  reg \$685 ;
+  reg [1:0] \$686 ;
+  reg \$687 ;
   reg \$688 ;
-  reg [11:0] \$689 ;
+  reg \$689 ;
   wire \$69 ;
   reg \$690 ;
-  reg [15:0] \$691 ;
-  reg [4:0] \$692 ;
-  reg \$693 ;
-  reg \$694 ;
-  reg [15:0] \$695 ;
+  reg \$691 ;
+  reg \$692 ;
+  reg [7:0] \$693 ;
+  reg [3:0] \$694 ;
+  reg [3:0] \$695 ;
   reg \$696 ;
-  reg [15:0] \$697 ;
-  reg [4:0] \$698 ;
-  reg \$699 ;
+  reg [11:0] \$697 ;
+  reg \$698 ;
+  reg [15:0] \$699 ;
   wire \$7 ;
   wire \$70 ;
-  reg \$700 ;
-  reg [15:0] \$701 ;
+  reg [4:0] \$700 ;
+  reg \$701 ;
   reg \$702 ;
-  reg [2:0] \$703 ;
-  reg [6:0] \$704 ;
-  reg [6:0] \$705 ;
-  reg \$706 ;
+  reg [15:0] \$703 ;
+  reg \$704 ;
+  reg [15:0] \$705 ;
+  reg [4:0] \$706 ;
   reg \$707 ;
   reg \$708 ;
-  reg \$709 ;
+  reg [15:0] \$709 ;
   wire \$71 ;
   reg \$710 ;
-  reg \$711 ;
-  reg \$712 ;
-  reg \$713 ;
+  reg [2:0] \$711 ;
+  reg [6:0] \$712 ;
+  reg [6:0] \$713 ;
   reg \$714 ;
   reg \$715 ;
   reg \$716 ;
@@ -1893,7 +1914,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$745 ;
   reg \$746 ;
   reg \$747 ;
-  reg [3:0] \$748 ;
+  reg \$748 ;
   reg \$749 ;
   wire \$75 ;
   reg \$750 ;
@@ -1902,27 +1923,35 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$753 ;
   reg \$754 ;
   reg \$755 ;
-  reg \$756 ;
+  reg [3:0] \$756 ;
   reg \$757 ;
   reg \$758 ;
   reg \$759 ;
   wire \$76 ;
-  reg [5:0] \$760 ;
-  reg [15:0] \$761 ;
-  reg [12:0] \$762 ;
-  reg [31:0] \$763 ;
-  reg [22:0] \$764 ;
-  reg [31:0] \$765 ;
-  reg [7:0] \$766 ;
-  reg [31:0] \$767 ;
-  reg [3:0] \$768 ;
-  reg \$769 ;
+  reg \$760 ;
+  reg \$761 ;
+  reg \$762 ;
+  reg \$763 ;
+  reg \$764 ;
+  reg \$765 ;
+  reg \$766 ;
+  reg \$767 ;
+  reg [5:0] \$768 ;
+  reg [15:0] \$769 ;
   wire \$77 ;
-  reg [7:0] \$770 ;
-  reg [12:0] \$771 ;
-  reg \$772 ;
+  reg [12:0] \$770 ;
+  reg [31:0] \$771 ;
+  reg [22:0] \$772 ;
   reg [31:0] \$773 ;
+  reg [7:0] \$774 ;
+  reg [31:0] \$775 ;
+  reg [3:0] \$776 ;
+  reg \$777 ;
+  reg [7:0] \$778 ;
+  reg [12:0] \$779 ;
   wire \$78 ;
+  reg \$780 ;
+  reg [31:0] \$781 ;
   wire \$79 ;
   wire [31:0] \$8 ;
   wire \$80 ;
@@ -2043,6 +2072,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0__cfg_w0_lc;
   (* init = 1'h0 *)
   wire ch0__cfg_w0_nenw;
+  (* init = 1'h0 *)
+  wire ch0__cfg_w0_signed;
   (* init = 2'h0 *)
   wire [1:0] ch0__cfg_w1_crc;
   (* init = 1'h0 *)
@@ -2063,6 +2094,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0__cfg_w1_lc;
   (* init = 1'h0 *)
   wire ch0__cfg_w1_nenw;
+  (* init = 1'h0 *)
+  wire ch0__cfg_w1_signed;
   (* init = 1'h0 *)
   wire ch0__clear_counters;
   input ch0__config_error;
@@ -2136,8 +2169,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [2:0] ch0_ca_request_slave_id;
   reg [2:0] ch0_ca_request_slave_id = 3'h0;
   wire ch0_ca_request_write;
-  output \ch0_ca_request_write$103 ;
-  reg \ch0_ca_request_write$103  = 1'h0;
+  output \ch0_ca_request_write$105 ;
+  reg \ch0_ca_request_write$105  = 1'h0;
   wire ch0_ca_state_write;
   wire ch0_caps_write;
   output [23:0] ch0_cfg_ack_ack_limit;
@@ -2213,6 +2246,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch0_cfg_words_w0_lc = 1'h0;
   output ch0_cfg_words_w0_nenw;
   reg ch0_cfg_words_w0_nenw = 1'h0;
+  output ch0_cfg_words_w0_signed;
+  reg ch0_cfg_words_w0_signed = 1'h0;
   output [1:0] ch0_cfg_words_w1_crc;
   reg [1:0] ch0_cfg_words_w1_crc = 2'h0;
   output [5:0] ch0_cfg_words_w1_data_bits;
@@ -2225,6 +2260,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch0_cfg_words_w1_lc = 1'h0;
   output ch0_cfg_words_w1_nenw;
   reg ch0_cfg_words_w1_nenw = 1'h0;
+  output ch0_cfg_words_w1_signed;
+  reg ch0_cfg_words_w1_signed = 1'h0;
   wire ch0_cfg_words_write;
   wire ch0_count_ack_write;
   wire ch0_count_check_write;
@@ -2411,6 +2448,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1__cfg_w0_lc;
   (* init = 1'h0 *)
   wire ch1__cfg_w0_nenw;
+  (* init = 1'h0 *)
+  wire ch1__cfg_w0_signed;
   (* init = 2'h0 *)
   wire [1:0] ch1__cfg_w1_crc;
   (* init = 1'h0 *)
@@ -2431,6 +2470,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1__cfg_w1_lc;
   (* init = 1'h0 *)
   wire ch1__cfg_w1_nenw;
+  (* init = 1'h0 *)
+  wire ch1__cfg_w1_signed;
   (* init = 1'h0 *)
   wire ch1__clear_counters;
   input ch1__config_error;
@@ -2504,8 +2545,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$305 ;
-  reg \ch1_ca_request_write$305  = 1'h0;
+  output \ch1_ca_request_write$309 ;
+  reg \ch1_ca_request_write$309  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_write;
   output [23:0] ch1_cfg_ack_ack_limit;
@@ -2581,6 +2622,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch1_cfg_words_w0_lc = 1'h0;
   output ch1_cfg_words_w0_nenw;
   reg ch1_cfg_words_w0_nenw = 1'h0;
+  output ch1_cfg_words_w0_signed;
+  reg ch1_cfg_words_w0_signed = 1'h0;
   output [1:0] ch1_cfg_words_w1_crc;
   reg [1:0] ch1_cfg_words_w1_crc = 2'h0;
   output [5:0] ch1_cfg_words_w1_data_bits;
@@ -2593,6 +2636,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch1_cfg_words_w1_lc = 1'h0;
   output ch1_cfg_words_w1_nenw;
   reg ch1_cfg_words_w1_nenw = 1'h0;
+  output ch1_cfg_words_w1_signed;
+  reg ch1_cfg_words_w1_signed = 1'h0;
   wire ch1_cfg_words_write;
   wire ch1_count_ack_write;
   wire ch1_count_check_write;
@@ -2721,18 +2766,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$4897$0 ;
-  wire [186:0] \port$4897$0 ;
-  input [335:0] \port$4910$0 ;
-  wire [335:0] \port$4910$0 ;
-  input [9:0] \port$5042$0 ;
-  wire [9:0] \port$5042$0 ;
-  input [186:0] \port$5462$0 ;
-  wire [186:0] \port$5462$0 ;
-  input [335:0] \port$5475$0 ;
-  wire [335:0] \port$5475$0 ;
-  input [9:0] \port$5607$0 ;
-  wire [9:0] \port$5607$0 ;
+  input [186:0] \port$5871$0 ;
+  wire [186:0] \port$5871$0 ;
+  input [335:0] \port$5884$0 ;
+  wire [335:0] \port$5884$0 ;
+  input [9:0] \port$6016$0 ;
+  wire [9:0] \port$6016$0 ;
+  input [186:0] \port$6436$0 ;
+  wire [186:0] \port$6436$0 ;
+  input [335:0] \port$6449$0 ;
+  wire [335:0] \port$6449$0 ;
+  input [9:0] \port$6581$0 ;
+  wire [9:0] \port$6581$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2740,900 +2785,920 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg [31:0] write_data = 32'd0;
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
+  assign \$219  = ch1_ctrl_write & write_strb[1];
+  assign \$220  = ch1_ctrl_write & write_strb[1];
+  assign \$221  = write_data[0] & write_strb[0];
+  assign \$222  = ch1_irq_status_write ? \$221  : 1'h0;
+  assign \$223  = write_data[1] & write_strb[0];
+  assign \$224  = ch1_irq_status_write ? \$223  : 1'h0;
+  assign \$225  = write_data[2] & write_strb[0];
+  assign \$226  = ch1_irq_status_write ? \$225  : 1'h0;
   assign \$227  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$228  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$229  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$230  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$231  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$232  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$233  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$234  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$235  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$236  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$237  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$238  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$239  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$240  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$241  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$242  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$243  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$244  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$245  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$228  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$229  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$230  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$231  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$232  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$233  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$234  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$235  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$236  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$237  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$238  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$239  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$240  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$241  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$242  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$243  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$244  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$245  = ch1_cfg_timeout_config_write & config_write_strb[2];
   assign \$246  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$247  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$248  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$249  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$250  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$251  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$252  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$253  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$254  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$255  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$256  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$257  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$258  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$259  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$260  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$261  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$262  = ch1_cfg_crc0_config_write & config_write_strb[0];
-  assign \$263  = ch1_cfg_crc0_config_write & config_write_strb[1];
-  assign \$264  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$265  = ch1_cfg_crc0_config_write & config_write_strb[3];
-  assign \$266  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$267  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$268  = ch1_cfg_crc1_config_write & config_write_strb[0];
-  assign \$269  = ch1_cfg_crc1_config_write & config_write_strb[1];
-  assign \$270  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$271  = ch1_cfg_crc1_config_write & config_write_strb[3];
-  assign \$272  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$273  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$274  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$275  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$276  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$277  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$278  = write_data[0] & write_strb[0];
-  assign \$279  = ch1_ca_ctrl_write ? \$278  : 1'h0;
-  assign \$280  = write_data[1] & write_strb[0];
-  assign \$281  = ch1_ca_ctrl_write ? \$280  : 1'h0;
-  assign \$282  = bus__w_addr == 9'h100;
-  assign \$283  = bus__w_addr == 9'h101;
-  assign \$284  = bus__w_addr == 9'h102;
-  assign \$285  = bus__w_addr == 9'h104;
-  assign \$286  = bus__w_addr == 9'h105;
-  assign \$287  = bus__w_addr == 9'h108;
-  assign \$288  = bus__w_addr == 9'h109;
-  assign \$289  = bus__w_addr == 9'h10a;
-  assign \$290  = bus__w_addr == 9'h10b;
-  assign \$291  = bus__w_addr == 9'h10c;
-  assign \$292  = bus__w_addr == 9'h10d;
-  assign \$293  = bus__w_addr == 9'h10e;
-  assign \$294  = bus__w_addr == 9'h10f;
-  assign \$295  = bus__w_addr == 9'h110;
-  assign \$296  = bus__w_addr == 9'h111;
-  assign \$297  = bus__w_addr == 9'h112;
-  assign \$298  = bus__w_addr == 9'h113;
-  assign \$299  = bus__w_addr == 9'h114;
-  assign \$300  = bus__w_addr == 9'h115;
-  assign \$301  = bus__w_addr == 9'h116;
-  assign \$302  = bus__w_addr == 9'h117;
-  assign \$303  = bus__w_addr == 9'h118;
-  assign \$304  = bus__w_addr == 9'h119;
-  assign \$305  = bus__w_addr == 9'h11a;
-  assign \$306  = bus__w_addr == 9'h11b;
-  assign \$307  = bus__w_addr == 9'h11c;
-  assign \$308  = bus__w_addr == 9'h11d;
-  assign \$309  = bus__w_addr == 9'h11e;
-  assign \$310  = bus__w_addr == 9'h11f;
-  assign \$311  = bus__w_addr == 9'h120;
-  assign \$312  = bus__w_addr == 9'h121;
-  assign \$313  = bus__w_addr == 9'h122;
-  assign \$314  = bus__w_addr == 9'h123;
-  assign \$315  = bus__w_addr == 9'h140;
-  assign \$316  = bus__w_addr == 9'h141;
-  assign \$317  = bus__w_addr == 9'h142;
-  assign \$318  = bus__w_addr == 9'h143;
-  assign \$319  = bus__w_addr == 9'h144;
-  assign \$320  = bus__w_addr == 9'h145;
-  assign \$321  = ch1_read_select_110 & bus__r_load;
-  assign \$322  = bus__w_addr[10:4] == 5'h16;
-  assign \$323  = bus__r_en & \$322 ;
-  assign \$324  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$326  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$327  = \$325  | \$326 ;
-  assign \$328  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
-  assign \$329  = \$327  | \$328 ;
-  assign \$330  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$247  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$248  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$249  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$250  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$251  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$252  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$253  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$254  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$255  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$256  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$257  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$258  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$259  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$260  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$261  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$262  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$263  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$264  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$265  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$266  = ch1_cfg_crc0_config_write & config_write_strb[0];
+  assign \$267  = ch1_cfg_crc0_config_write & config_write_strb[1];
+  assign \$268  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$269  = ch1_cfg_crc0_config_write & config_write_strb[3];
+  assign \$270  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$271  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$272  = ch1_cfg_crc1_config_write & config_write_strb[0];
+  assign \$273  = ch1_cfg_crc1_config_write & config_write_strb[1];
+  assign \$274  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$275  = ch1_cfg_crc1_config_write & config_write_strb[3];
+  assign \$276  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$277  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$278  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$279  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$280  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$281  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$282  = write_data[0] & write_strb[0];
+  assign \$283  = ch1_ca_ctrl_write ? \$282  : 1'h0;
+  assign \$284  = write_data[1] & write_strb[0];
+  assign \$285  = ch1_ca_ctrl_write ? \$284  : 1'h0;
+  assign \$286  = bus__w_addr == 9'h100;
+  assign \$287  = bus__w_addr == 9'h101;
+  assign \$288  = bus__w_addr == 9'h102;
+  assign \$289  = bus__w_addr == 9'h104;
+  assign \$290  = bus__w_addr == 9'h105;
+  assign \$291  = bus__w_addr == 9'h108;
+  assign \$292  = bus__w_addr == 9'h109;
+  assign \$293  = bus__w_addr == 9'h10a;
+  assign \$294  = bus__w_addr == 9'h10b;
+  assign \$295  = bus__w_addr == 9'h10c;
+  assign \$296  = bus__w_addr == 9'h10d;
+  assign \$297  = bus__w_addr == 9'h10e;
+  assign \$298  = bus__w_addr == 9'h10f;
+  assign \$299  = bus__w_addr == 9'h110;
+  assign \$300  = bus__w_addr == 9'h111;
+  assign \$301  = bus__w_addr == 9'h112;
+  assign \$302  = bus__w_addr == 9'h113;
+  assign \$303  = bus__w_addr == 9'h114;
+  assign \$304  = bus__w_addr == 9'h115;
+  assign \$305  = bus__w_addr == 9'h116;
+  assign \$306  = bus__w_addr == 9'h117;
+  assign \$307  = bus__w_addr == 9'h118;
+  assign \$308  = bus__w_addr == 9'h119;
+  assign \$309  = bus__w_addr == 9'h11a;
+  assign \$310  = bus__w_addr == 9'h11b;
+  assign \$311  = bus__w_addr == 9'h11c;
+  assign \$312  = bus__w_addr == 9'h11d;
+  assign \$313  = bus__w_addr == 9'h11e;
+  assign \$314  = bus__w_addr == 9'h11f;
+  assign \$315  = bus__w_addr == 9'h120;
+  assign \$316  = bus__w_addr == 9'h121;
+  assign \$317  = bus__w_addr == 9'h122;
+  assign \$318  = bus__w_addr == 9'h123;
+  assign \$319  = bus__w_addr == 9'h140;
+  assign \$320  = bus__w_addr == 9'h141;
+  assign \$321  = bus__w_addr == 9'h142;
+  assign \$322  = bus__w_addr == 9'h143;
+  assign \$323  = bus__w_addr == 9'h144;
+  assign \$324  = bus__w_addr == 9'h145;
+  assign \$325  = ch1_read_select_110 & bus__r_load;
+  assign \$326  = bus__w_addr[10:4] == 5'h16;
+  assign \$327  = bus__r_en & \$326 ;
+  assign \$328  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$330  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
   assign \$331  = \$329  | \$330 ;
-  assign \$332  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
+  assign \$332  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
   assign \$333  = \$331  | \$332 ;
-  assign \$334  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
+  assign \$334  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$335  = \$333  | \$334 ;
-  assign \$336  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
+  assign \$336  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
   assign \$337  = \$335  | \$336 ;
-  assign \$338  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
+  assign \$338  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
   assign \$339  = \$337  | \$338 ;
-  assign \$340  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
+  assign \$340  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
   assign \$341  = \$339  | \$340 ;
-  assign \$342  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$342  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
   assign \$343  = \$341  | \$342 ;
-  assign \$344  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 4'h0, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 5'h00, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
+  assign \$344  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_10e ? { 8'h00, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
+  assign \$346  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
   assign \$347  = \$345  | \$346 ;
-  assign \$348  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
+  assign \$348  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 3'h0, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 4'h0, ch1_cfg_words_w0_signed, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
   assign \$349  = \$347  | \$348 ;
-  assign \$350  = ch1_read_select_110 ? { 2'h0, \port$5462$0 [182:177], 4'h0, \port$5462$0 [186:183], 1'h0, \port$5462$0 [176:174], 1'h0, \port$5462$0 [133:131], 3'h0, \port$5462$0 [49], \port$5462$0 [3:0] } : 32'd0;
+  assign \$350  = ch1_read_select_10e ? { 8'h00, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
   assign \$351  = \$349  | \$350 ;
-  assign \$352  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$352  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$353  = \$351  | \$352 ;
-  assign \$354  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$354  = ch1_read_select_110 ? { 2'h0, \port$6436$0 [182:177], 4'h0, \port$6436$0 [186:183], 1'h0, \port$6436$0 [176:174], 1'h0, \port$6436$0 [133:131], 3'h0, \port$6436$0 [49], \port$6436$0 [3:0] } : 32'd0;
   assign \$355  = \$353  | \$354 ;
-  assign \$356  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$356  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$357  = \$355  | \$356 ;
-  assign \$358  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$358  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
   assign \$359  = \$357  | \$358 ;
-  assign \$360  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$360  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
   assign \$361  = \$359  | \$360 ;
-  assign \$362  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$362  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
   assign \$363  = \$361  | \$362 ;
-  assign \$364  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
+  assign \$364  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
   assign \$365  = \$363  | \$364 ;
-  assign \$366  = ch1_read_select_118 ? \port$5475$0 [31:0] : 32'd0;
+  assign \$366  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$367  = \$365  | \$366 ;
-  assign \$368  = ch1_read_select_119 ? \port$5475$0 [63:32] : 32'd0;
+  assign \$368  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$369  = \$367  | \$368 ;
-  assign \$370  = ch1_read_select_11a ? \port$5475$0 [95:64] : 32'd0;
+  assign \$370  = ch1_read_select_118 ? \port$6449$0 [31:0] : 32'd0;
   assign \$371  = \$369  | \$370 ;
-  assign \$372  = ch1_read_select_11b ? \port$5475$0 [127:96] : 32'd0;
+  assign \$372  = ch1_read_select_119 ? \port$6449$0 [63:32] : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$374  = ch1_read_select_11c ? \port$5475$0 [159:128] : 32'd0;
+  assign \$374  = ch1_read_select_11a ? \port$6449$0 [95:64] : 32'd0;
   assign \$375  = \$373  | \$374 ;
-  assign \$376  = ch1_read_select_11d ? \port$5475$0 [191:160] : 32'd0;
+  assign \$376  = ch1_read_select_11b ? \port$6449$0 [127:96] : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_11e ? \port$5475$0 [223:192] : 32'd0;
+  assign \$378  = ch1_read_select_11c ? \port$6449$0 [159:128] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_11f ? \port$5475$0 [255:224] : 32'd0;
+  assign \$380  = ch1_read_select_11d ? \port$6449$0 [191:160] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
+  assign \$382  = ch1_read_select_11e ? \port$6449$0 [223:192] : 32'd0;
   assign \$383  = \$381  | \$382 ;
-  assign \$384  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
+  assign \$384  = ch1_read_select_11f ? \port$6449$0 [255:224] : 32'd0;
   assign \$385  = \$383  | \$384 ;
-  assign \$386  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
+  assign \$386  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$387  = \$385  | \$386 ;
-  assign \$388  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
+  assign \$388  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
   assign \$389  = \$387  | \$388 ;
-  assign \$390  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$390  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
   assign \$391  = \$389  | \$390 ;
-  assign \$394  = ch1_read_select_142 ? { 17'h00000, \port$5607$0 [9:3], 1'h0, \port$5607$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$392  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
+  assign \$393  = \$391  | \$392 ;
+  assign \$394  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$309 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$395  = \$393  | \$394 ;
-  assign \$396  = ch1_read_select_143 ? \port$5475$0 [287:256] : 32'd0;
-  assign \$397  = \$395  | \$396 ;
-  assign \$398  = ch1_read_select_144 ? \port$5475$0 [319:288] : 32'd0;
+  assign \$398  = ch1_read_select_142 ? { 17'h00000, \port$6581$0 [9:3], 1'h0, \port$6581$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$399  = \$397  | \$398 ;
-  assign \$400  = ch1_read_select_145 ? { 16'h0000, \port$5475$0 [335:320] } : 32'd0;
+  assign \$400  = ch1_read_select_143 ? \port$6449$0 [287:256] : 32'd0;
   assign \$401  = \$399  | \$400 ;
-  assign \$402  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$402  = ch1_read_select_144 ? \port$6449$0 [319:288] : 32'd0;
   assign \$403  = \$401  | \$402 ;
-  assign \$404  = ! write_addr;
-  assign g_id_write = write_en & \$404 ;
-  assign \$405  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$405 ;
-  assign \$406  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$406 ;
-  assign \$407  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$407 ;
-  assign \$408  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$408 ;
-  assign \$409  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$409 ;
-  assign \$410  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$410 ;
-  assign \$411  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$411 ;
-  assign \$412  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$412 ;
-  assign \$413  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$413 ;
-  assign \$414  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$414 ;
-  assign \$415  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$415 ;
-  assign \$416  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$416 ;
-  assign \$417  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$417 ;
-  assign \$418  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$418 ;
-  assign \$419  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$419 ;
-  assign \$420  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$420 ;
-  assign \$421  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$421 ;
-  assign \$422  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$422 ;
-  assign \$423  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$423 ;
-  assign \$424  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$424 ;
-  assign \$425  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$425 ;
-  assign \$426  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$426 ;
-  assign \$427  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$427 ;
-  assign \$428  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$428 ;
-  assign \$429  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$429 ;
-  assign \$430  = write_addr == 8'h98;
-  assign ch0_count_crc_write = write_en & \$430 ;
-  assign \$431  = write_addr == 8'h99;
-  assign ch0_count_ack_write = write_en & \$431 ;
-  assign \$432  = write_addr == 8'h9a;
-  assign ch0_count_line_write = write_en & \$432 ;
-  assign \$433  = write_addr == 8'h9b;
-  assign ch0_count_lc_write = write_en & \$433 ;
-  assign \$434  = write_addr == 8'h9c;
-  assign ch0_count_check_write = write_en & \$434 ;
-  assign \$435  = write_addr == 8'h9d;
-  assign ch0_count_cycle_write = write_en & \$435 ;
-  assign \$436  = write_addr == 8'h9e;
-  assign ch0_count_stop_write = write_en & \$436 ;
-  assign \$437  = write_addr == 8'h9f;
-  assign ch0_count_noise_write = write_en & \$437 ;
-  assign \$438  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$438 ;
-  assign \$439  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$439 ;
-  assign \$440  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$440 ;
-  assign \$441  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$441 ;
-  assign \$442  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$442 ;
-  assign \$443  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$443 ;
-  assign \$444  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$444 ;
-  assign \$445  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$445 ;
-  assign \$446  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$446 ;
-  assign \$447  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$447 ;
-  assign \$448  = write_addr[10:4] == 4'hd;
-  assign \$449  = write_en & \$448 ;
-  assign ch0__ca_wbuf_en = \$449  ? write_strb : 4'h0;
-  assign \$450  = bus__w_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$450 ;
-  assign \$451  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$453  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$455  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$456 , \$454 , \$452  };
-  assign \$457  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$457 ;
-  assign \$458  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$458 ;
-  assign \$459  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$459 ;
-  assign \$460  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$460 ;
-  assign \$461  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$461 ;
-  assign \$462  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$462 ;
-  assign \$463  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$463 ;
-  assign \$464  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$464 ;
-  assign \$465  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$465 ;
-  assign \$466  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$466 ;
-  assign \$467  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$467 ;
-  assign \$468  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$468 ;
-  assign \$469  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$469 ;
-  assign \$470  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$470 ;
-  assign \$471  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$471 ;
-  assign \$472  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$472 ;
-  assign \$473  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$473 ;
-  assign \$474  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$474 ;
-  assign \$475  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$475 ;
-  assign \$476  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$476 ;
-  assign \$477  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$477 ;
-  assign \$478  = write_addr == 9'h118;
-  assign ch1_count_crc_write = write_en & \$478 ;
-  assign \$479  = write_addr == 9'h119;
-  assign ch1_count_ack_write = write_en & \$479 ;
-  assign \$480  = write_addr == 9'h11a;
-  assign ch1_count_line_write = write_en & \$480 ;
-  assign \$481  = write_addr == 9'h11b;
-  assign ch1_count_lc_write = write_en & \$481 ;
-  assign \$482  = write_addr == 9'h11c;
-  assign ch1_count_check_write = write_en & \$482 ;
-  assign \$483  = write_addr == 9'h11d;
-  assign ch1_count_cycle_write = write_en & \$483 ;
-  assign \$484  = write_addr == 9'h11e;
-  assign ch1_count_stop_write = write_en & \$484 ;
-  assign \$485  = write_addr == 9'h11f;
-  assign ch1_count_noise_write = write_en & \$485 ;
-  assign \$486  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$486 ;
-  assign \$487  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$487 ;
-  assign \$488  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$488 ;
-  assign \$489  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$489 ;
-  assign \$490  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$490 ;
-  assign \$491  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$491 ;
-  assign \$492  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$492 ;
-  assign \$493  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$493 ;
-  assign \$494  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$494 ;
-  assign \$495  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$495 ;
-  assign \$496  = write_addr[10:4] == 5'h15;
-  assign \$497  = write_en & \$496 ;
-  assign ch1__ca_wbuf_en = \$497  ? write_strb : 4'h0;
-  assign \$498  = bus__w_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$498 ;
-  assign \$499  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$501  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$503  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$504 , \$502 , \$500  };
-  assign \$506  = \$505  | ch0_read_data;
-  assign bus__r_data = \$506  | ch1_read_data;
+  assign \$404  = ch1_read_select_145 ? { 16'h0000, \port$6449$0 [335:320] } : 32'd0;
+  assign \$405  = \$403  | \$404 ;
+  assign \$406  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$407  = \$405  | \$406 ;
+  assign \$408  = ! write_addr;
+  assign g_id_write = write_en & \$408 ;
+  assign \$409  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$409 ;
+  assign \$410  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$410 ;
+  assign \$411  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$411 ;
+  assign \$412  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$412 ;
+  assign \$413  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$413 ;
+  assign \$414  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$414 ;
+  assign \$415  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$415 ;
+  assign \$416  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$416 ;
+  assign \$417  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$417 ;
+  assign \$418  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$418 ;
+  assign \$419  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$419 ;
+  assign \$420  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$420 ;
+  assign \$421  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$421 ;
+  assign \$422  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$422 ;
+  assign \$423  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$423 ;
+  assign \$424  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$424 ;
+  assign \$425  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$425 ;
+  assign \$426  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$426 ;
+  assign \$427  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$427 ;
+  assign \$428  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$428 ;
+  assign \$429  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$429 ;
+  assign \$430  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$430 ;
+  assign \$431  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$431 ;
+  assign \$432  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$432 ;
+  assign \$433  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$433 ;
+  assign \$434  = write_addr == 8'h98;
+  assign ch0_count_crc_write = write_en & \$434 ;
+  assign \$435  = write_addr == 8'h99;
+  assign ch0_count_ack_write = write_en & \$435 ;
+  assign \$436  = write_addr == 8'h9a;
+  assign ch0_count_line_write = write_en & \$436 ;
+  assign \$437  = write_addr == 8'h9b;
+  assign ch0_count_lc_write = write_en & \$437 ;
+  assign \$438  = write_addr == 8'h9c;
+  assign ch0_count_check_write = write_en & \$438 ;
+  assign \$439  = write_addr == 8'h9d;
+  assign ch0_count_cycle_write = write_en & \$439 ;
+  assign \$440  = write_addr == 8'h9e;
+  assign ch0_count_stop_write = write_en & \$440 ;
+  assign \$441  = write_addr == 8'h9f;
+  assign ch0_count_noise_write = write_en & \$441 ;
+  assign \$442  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$442 ;
+  assign \$443  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$443 ;
+  assign \$444  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$444 ;
+  assign \$445  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$445 ;
+  assign \$446  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$446 ;
+  assign \$447  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$447 ;
+  assign \$448  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$448 ;
+  assign \$449  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$449 ;
+  assign \$450  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$450 ;
+  assign \$451  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$451 ;
+  assign \$452  = write_addr[10:4] == 4'hd;
+  assign \$453  = write_en & \$452 ;
+  assign ch0__ca_wbuf_en = \$453  ? write_strb : 4'h0;
+  assign \$454  = bus__w_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$454 ;
+  assign \$455  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$457  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$459  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$460 , \$458 , \$456  };
+  assign \$461  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$461 ;
+  assign \$462  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$462 ;
+  assign \$463  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$463 ;
+  assign \$464  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$464 ;
+  assign \$465  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$465 ;
+  assign \$466  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$466 ;
+  assign \$467  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$467 ;
+  assign \$468  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$468 ;
+  assign \$469  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$469 ;
+  assign \$470  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$470 ;
+  assign \$471  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$471 ;
+  assign \$472  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$472 ;
+  assign \$473  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$473 ;
+  assign \$474  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$474 ;
+  assign \$475  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$475 ;
+  assign \$476  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$476 ;
+  assign \$477  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$477 ;
+  assign \$478  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$478 ;
+  assign \$479  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$479 ;
+  assign \$480  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$480 ;
+  assign \$481  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$481 ;
+  assign \$482  = write_addr == 9'h118;
+  assign ch1_count_crc_write = write_en & \$482 ;
+  assign \$483  = write_addr == 9'h119;
+  assign ch1_count_ack_write = write_en & \$483 ;
+  assign \$484  = write_addr == 9'h11a;
+  assign ch1_count_line_write = write_en & \$484 ;
+  assign \$485  = write_addr == 9'h11b;
+  assign ch1_count_lc_write = write_en & \$485 ;
+  assign \$486  = write_addr == 9'h11c;
+  assign ch1_count_check_write = write_en & \$486 ;
+  assign \$487  = write_addr == 9'h11d;
+  assign ch1_count_cycle_write = write_en & \$487 ;
+  assign \$488  = write_addr == 9'h11e;
+  assign ch1_count_stop_write = write_en & \$488 ;
+  assign \$489  = write_addr == 9'h11f;
+  assign ch1_count_noise_write = write_en & \$489 ;
+  assign \$490  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$490 ;
+  assign \$491  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$491 ;
+  assign \$492  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$492 ;
+  assign \$493  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$493 ;
+  assign \$494  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$494 ;
+  assign \$495  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$495 ;
+  assign \$496  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$496 ;
+  assign \$497  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$497 ;
+  assign \$498  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$498 ;
+  assign \$499  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$499 ;
+  assign \$500  = write_addr[10:4] == 5'h15;
+  assign \$501  = write_en & \$500 ;
+  assign ch1__ca_wbuf_en = \$501  ? write_strb : 4'h0;
+  assign \$502  = bus__w_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$502 ;
+  assign \$503  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$505  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$507  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$508 , \$506 , \$504  };
+  assign \$510  = \$509  | ch0_read_data;
+  assign bus__r_data = \$510  | ch1_read_data;
   always @(posedge clk)
-    write_en <= \$507 ;
+    write_en <= \$511 ;
   always @(posedge clk)
-    write_addr <= \$508 ;
+    write_addr <= \$512 ;
   always @(posedge clk)
-    write_data <= \$509 ;
+    write_data <= \$513 ;
   always @(posedge clk)
-    write_strb <= \$510 ;
+    write_strb <= \$514 ;
   always @(posedge clk)
-    config_write_data <= \$511 ;
+    config_write_data <= \$515 ;
   always @(posedge clk)
-    config_write_strb <= \$512 ;
+    config_write_strb <= \$516 ;
   always @(posedge clk)
-    g_trigger_start <= \$513 ;
+    g_trigger_start <= \$517 ;
   always @(posedge clk)
-    g_read_select_0 <= \$514 ;
+    g_read_select_0 <= \$518 ;
   always @(posedge clk)
-    g_read_select_1 <= \$515 ;
+    g_read_select_1 <= \$519 ;
   always @(posedge clk)
-    g_read_select_2 <= \$516 ;
+    g_read_select_2 <= \$520 ;
   always @(posedge clk)
-    g_read_select_3 <= \$517 ;
+    g_read_select_3 <= \$521 ;
   always @(posedge clk)
-    g_read_select_4 <= \$518 ;
+    g_read_select_4 <= \$522 ;
   always @(posedge clk)
-    g_read_data <= \$519 ;
+    g_read_data <= \$523 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$520 ;
+    ch0_ctrl_start <= \$524 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$521 ;
+    ch0_ctrl_abort <= \$525 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$522 ;
+    ch0_ctrl_clear_counters <= \$526 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$523 ;
+    ch0_ctrl_periodic <= \$527 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$524 ;
+    ch0_ctrl_trigger_enable <= \$528 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$525 ;
+    ch0_irq_status_done <= \$529 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$526 ;
+    ch0_irq_status_error <= \$530 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$527 ;
+    ch0_irq_status_access_done <= \$531 ;
   always @(posedge clk)
-    ch0_irq_enable_config_write <= \$528 ;
+    ch0_irq_enable_config_write <= \$532 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$529 ;
+    ch0_irq_enable_done <= \$533 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$530 ;
+    ch0_irq_enable_error <= \$534 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$531 ;
+    ch0_irq_enable_access_done <= \$535 ;
   always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$532 ;
+    ch0_cfg_ma_config_write <= \$536 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$533 ;
+    ch0_cfg_ma_ma_half_period <= \$537 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$534 ;
+    ch0_cfg_ma_delay_limit <= \$538 ;
   always @(posedge clk)
-    ch0_cfg_period_config_write <= \$535 ;
+    ch0_cfg_period_config_write <= \$539 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$536 ;
+    ch0_cfg_period_request_period <= \$540 ;
   always @(posedge clk)
-    ch0_cfg_break_config_write <= \$537 ;
+    ch0_cfg_break_config_write <= \$541 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$538 ;
+    ch0_cfg_break_break_time <= \$542 ;
   always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$539 ;
+    ch0_cfg_ack_config_write <= \$543 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$540 ;
+    ch0_cfg_ack_ack_limit <= \$544 ;
   always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$541 ;
+    ch0_cfg_timeout_config_write <= \$545 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$542 ;
+    ch0_cfg_timeout_timeout_limit <= \$546 ;
   always @(posedge clk)
-    ch0_cfg_words_config_write <= \$543 ;
+    ch0_cfg_words_config_write <= \$547 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$544 ;
+    ch0_cfg_words_w0_data_bits <= \$548 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$545 ;
+    ch0_cfg_words_w0_nenw <= \$549 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$546 ;
+    ch0_cfg_words_w0_lc <= \$550 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$547 ;
+    ch0_cfg_words_w0_crc <= \$551 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$548 ;
+    ch0_cfg_words_w0_gray <= \$552 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$549 ;
+    ch0_cfg_words_w0_signed <= \$553 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$550 ;
+    ch0_cfg_words_w1_data_bits <= \$554 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$551 ;
+    ch0_cfg_words_w1_nenw <= \$555 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$552 ;
+    ch0_cfg_words_w1_lc <= \$556 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$553 ;
+    ch0_cfg_words_w1_crc <= \$557 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$554 ;
+    ch0_cfg_words_w1_gray <= \$558 ;
   always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$555 ;
+    ch0_cfg_words_w1_signed <= \$559 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$556 ;
+    ch0_cfg_words_w1_enable <= \$560 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$557 ;
+    ch0_cfg_checks_config_write <= \$561 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$558 ;
+    ch0_cfg_checks_end_check <= \$562 ;
   always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$559 ;
+    ch0_cfg_checks_spw_check <= \$563 ;
   always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$560 ;
+    ch0_cfg_checks_spw_tolerance <= \$564 ;
   always @(posedge clk)
-    ch0_cfg_quiet_config_write <= \$561 ;
+    ch0_cfg_checks_noise_limit <= \$565 ;
   always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$562 ;
+    ch0_cfg_checks_delay_tolerance <= \$566 ;
   always @(posedge clk)
-    ch0_cfg_crc0_config_write <= \$563 ;
+    ch0_cfg_quiet_config_write <= \$567 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_poly <= \$564 ;
+    ch0_cfg_quiet_quiet_time <= \$568 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$565 ;
+    ch0_cfg_crc0_config_write <= \$569 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_inverted <= \$566 ;
+    ch0_cfg_crc0_w0_crc_poly <= \$570 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_config_write <= \$567 ;
+    ch0_cfg_crc0_w0_crc_width <= \$571 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_w0_crc_start <= \$568 ;
+    ch0_cfg_crc0_w0_crc_inverted <= \$572 ;
   always @(posedge clk)
-    ch0_cfg_crc1_config_write <= \$569 ;
+    ch0_cfg_crc0_start_config_write <= \$573 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_poly <= \$570 ;
+    ch0_cfg_crc0_start_w0_crc_start <= \$574 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$571 ;
+    ch0_cfg_crc1_config_write <= \$575 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_inverted <= \$572 ;
+    ch0_cfg_crc1_w1_crc_poly <= \$576 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_config_write <= \$573 ;
+    ch0_cfg_crc1_w1_crc_width <= \$577 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_w1_crc_start <= \$574 ;
+    ch0_cfg_crc1_w1_crc_inverted <= \$578 ;
   always @(posedge clk)
-    ch0_ca_request_config_write <= \$575 ;
+    ch0_cfg_crc1_start_config_write <= \$579 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$576 ;
+    ch0_cfg_crc1_start_w1_crc_start <= \$580 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$577 ;
+    ch0_ca_request_config_write <= \$581 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$578 ;
+    ch0_ca_request_slave_id <= \$582 ;
   always @(posedge clk)
-    \ch0_ca_request_write$103  <= \$579 ;
+    ch0_ca_request_address <= \$583 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$580 ;
+    ch0_ca_request_count <= \$584 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$581 ;
+    \ch0_ca_request_write$105  <= \$585 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$582 ;
+    ch0_ca_ctrl_start <= \$586 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$583 ;
+    ch0_ca_ctrl_abort <= \$587 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$584 ;
+    ch0_read_select_80 <= \$588 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$585 ;
+    ch0_read_select_81 <= \$589 ;
   always @(posedge clk)
-    ch0_read_select_85 <= \$586 ;
+    ch0_read_select_82 <= \$590 ;
   always @(posedge clk)
-    ch0_read_select_88 <= \$587 ;
+    ch0_read_select_84 <= \$591 ;
   always @(posedge clk)
-    ch0_read_select_89 <= \$588 ;
+    ch0_read_select_85 <= \$592 ;
   always @(posedge clk)
-    ch0_read_select_8a <= \$589 ;
+    ch0_read_select_88 <= \$593 ;
   always @(posedge clk)
-    ch0_read_select_8b <= \$590 ;
+    ch0_read_select_89 <= \$594 ;
   always @(posedge clk)
-    ch0_read_select_8c <= \$591 ;
+    ch0_read_select_8a <= \$595 ;
   always @(posedge clk)
-    ch0_read_select_8d <= \$592 ;
+    ch0_read_select_8b <= \$596 ;
   always @(posedge clk)
-    ch0_read_select_8e <= \$593 ;
+    ch0_read_select_8c <= \$597 ;
   always @(posedge clk)
-    ch0_read_select_8f <= \$594 ;
+    ch0_read_select_8d <= \$598 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$595 ;
+    ch0_read_select_8e <= \$599 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$596 ;
+    ch0_read_select_8f <= \$600 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$597 ;
+    ch0_read_select_90 <= \$601 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$598 ;
+    ch0_read_select_91 <= \$602 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$599 ;
+    ch0_read_select_92 <= \$603 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$600 ;
+    ch0_read_select_93 <= \$604 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$601 ;
+    ch0_read_select_94 <= \$605 ;
   always @(posedge clk)
-    ch0_read_select_97 <= \$602 ;
+    ch0_read_select_95 <= \$606 ;
   always @(posedge clk)
-    ch0_read_select_98 <= \$603 ;
+    ch0_read_select_96 <= \$607 ;
   always @(posedge clk)
-    ch0_read_select_99 <= \$604 ;
+    ch0_read_select_97 <= \$608 ;
   always @(posedge clk)
-    ch0_read_select_9a <= \$605 ;
+    ch0_read_select_98 <= \$609 ;
   always @(posedge clk)
-    ch0_read_select_9b <= \$606 ;
+    ch0_read_select_99 <= \$610 ;
   always @(posedge clk)
-    ch0_read_select_9c <= \$607 ;
+    ch0_read_select_9a <= \$611 ;
   always @(posedge clk)
-    ch0_read_select_9d <= \$608 ;
+    ch0_read_select_9b <= \$612 ;
   always @(posedge clk)
-    ch0_read_select_9e <= \$609 ;
+    ch0_read_select_9c <= \$613 ;
   always @(posedge clk)
-    ch0_read_select_9f <= \$610 ;
+    ch0_read_select_9d <= \$614 ;
   always @(posedge clk)
-    ch0_read_select_a0 <= \$611 ;
+    ch0_read_select_9e <= \$615 ;
   always @(posedge clk)
-    ch0_read_select_a1 <= \$612 ;
+    ch0_read_select_9f <= \$616 ;
   always @(posedge clk)
-    ch0_read_select_a2 <= \$613 ;
+    ch0_read_select_a0 <= \$617 ;
   always @(posedge clk)
-    ch0_read_select_a3 <= \$614 ;
+    ch0_read_select_a1 <= \$618 ;
   always @(posedge clk)
-    ch0_read_select_c0 <= \$615 ;
+    ch0_read_select_a2 <= \$619 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$616 ;
+    ch0_read_select_a3 <= \$620 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$617 ;
+    ch0_read_select_c0 <= \$621 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$618 ;
+    ch0_read_select_c1 <= \$622 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$619 ;
+    ch0_read_select_c2 <= \$623 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$620 ;
+    ch0_read_select_c3 <= \$624 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$621 ;
+    ch0_read_select_c4 <= \$625 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$622 ;
+    ch0_read_select_c5 <= \$626 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$623 ;
+    ch0_result_status_status_snapshot <= \$627 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$624 ;
+    ch0_result_status_cds_snapshot <= \$628 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$625 ;
+    ch0_result_status_w0_ne_snapshot <= \$629 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$626 ;
+    ch0_result_status_w0_nw_snapshot <= \$630 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$627 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$631 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$628 ;
+    ch0_result_status_w1_ne_snapshot <= \$632 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$629 ;
+    ch0_result_status_w1_nw_snapshot <= \$633 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$630 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$634 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$631 ;
+    ch0_result_status_lc_repeat_snapshot <= \$635 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$632 ;
+    ch0_result_status_lc_skip_snapshot <= \$636 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$633 ;
+    ch0_result_status_lc_zero_snapshot <= \$637 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$634 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$638 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$635 ;
+    ch0_result_status_lc_snapshot <= \$639 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$636 ;
+    ch0_result_seq_seq_snapshot <= \$640 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$637 ;
+    ch0_result_seq_line_delay_snapshot <= \$641 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$638 ;
+    ch0_result_w0_lo_data_snapshot <= \$642 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$639 ;
+    ch0_result_w0_hi_data_snapshot <= \$643 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$640 ;
+    ch0_result_w1_lo_data_snapshot <= \$644 ;
   always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$641 ;
+    ch0_result_w1_hi_data_snapshot <= \$645 ;
   always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$642 ;
+    ch0_result_timestamp_time_snapshot <= \$646 ;
   always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$643 ;
+    ch0_result_line_noise_events_snapshot <= \$647 ;
   always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$644 ;
+    ch0_result_line_delay_settled_snapshot <= \$648 ;
   always @(posedge clk)
-    ch0_window0_read <= \$645 ;
+    ch0_result_line_delay_spread_snapshot <= \$649 ;
   always @(posedge clk)
-    ch0_read_data <= \$646 ;
+    ch0_result_line_settled_delay_snapshot <= \$650 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$647 ;
+    ch0_window0_read <= \$651 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$648 ;
+    ch0_read_data <= \$652 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$649 ;
+    ch1_ctrl_start <= \$653 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$650 ;
+    ch1_ctrl_abort <= \$654 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$651 ;
+    ch1_ctrl_clear_counters <= \$655 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$652 ;
+    ch1_ctrl_periodic <= \$656 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$653 ;
+    ch1_ctrl_trigger_enable <= \$657 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$654 ;
+    ch1_irq_status_done <= \$658 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$655 ;
+    ch1_irq_status_error <= \$659 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$656 ;
+    ch1_irq_status_access_done <= \$660 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$657 ;
+    ch1_irq_enable_config_write <= \$661 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$658 ;
+    ch1_irq_enable_done <= \$662 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$659 ;
+    ch1_irq_enable_error <= \$663 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$660 ;
+    ch1_irq_enable_access_done <= \$664 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$661 ;
+    ch1_cfg_ma_config_write <= \$665 ;
   always @(posedge clk)
-    ch1_cfg_period_config_write <= \$662 ;
+    ch1_cfg_ma_ma_half_period <= \$666 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$663 ;
+    ch1_cfg_ma_delay_limit <= \$667 ;
   always @(posedge clk)
-    ch1_cfg_break_config_write <= \$664 ;
+    ch1_cfg_period_config_write <= \$668 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$665 ;
+    ch1_cfg_period_request_period <= \$669 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$666 ;
+    ch1_cfg_break_config_write <= \$670 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$667 ;
+    ch1_cfg_break_break_time <= \$671 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$668 ;
+    ch1_cfg_ack_config_write <= \$672 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$669 ;
+    ch1_cfg_ack_ack_limit <= \$673 ;
   always @(posedge clk)
-    ch1_cfg_words_config_write <= \$670 ;
+    ch1_cfg_timeout_config_write <= \$674 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$671 ;
+    ch1_cfg_timeout_timeout_limit <= \$675 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$672 ;
+    ch1_cfg_words_config_write <= \$676 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$673 ;
+    ch1_cfg_words_w0_data_bits <= \$677 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$674 ;
+    ch1_cfg_words_w0_nenw <= \$678 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$675 ;
+    ch1_cfg_words_w0_lc <= \$679 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$676 ;
+    ch1_cfg_words_w0_crc <= \$680 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$677 ;
+    ch1_cfg_words_w0_gray <= \$681 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$678 ;
+    ch1_cfg_words_w0_signed <= \$682 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$679 ;
+    ch1_cfg_words_w1_data_bits <= \$683 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$680 ;
+    ch1_cfg_words_w1_nenw <= \$684 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$681 ;
+    ch1_cfg_words_w1_lc <= \$685 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$682 ;
+    ch1_cfg_words_w1_crc <= \$686 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$683 ;
+    ch1_cfg_words_w1_gray <= \$687 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$684 ;
+    ch1_cfg_words_w1_signed <= \$688 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$685 ;
+    ch1_cfg_words_w1_enable <= \$689 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$686 ;
+    ch1_cfg_checks_config_write <= \$690 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$687 ;
+    ch1_cfg_checks_end_check <= \$691 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_write <= \$688 ;
+    ch1_cfg_checks_spw_check <= \$692 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$689 ;
+    ch1_cfg_checks_spw_tolerance <= \$693 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_write <= \$690 ;
+    ch1_cfg_checks_noise_limit <= \$694 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_poly <= \$691 ;
+    ch1_cfg_checks_delay_tolerance <= \$695 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$692 ;
+    ch1_cfg_quiet_config_write <= \$696 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_inverted <= \$693 ;
+    ch1_cfg_quiet_quiet_time <= \$697 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_write <= \$694 ;
+    ch1_cfg_crc0_config_write <= \$698 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_w0_crc_start <= \$695 ;
+    ch1_cfg_crc0_w0_crc_poly <= \$699 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_write <= \$696 ;
+    ch1_cfg_crc0_w0_crc_width <= \$700 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_poly <= \$697 ;
+    ch1_cfg_crc0_w0_crc_inverted <= \$701 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$698 ;
+    ch1_cfg_crc0_start_config_write <= \$702 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_inverted <= \$699 ;
+    ch1_cfg_crc0_start_w0_crc_start <= \$703 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_write <= \$700 ;
+    ch1_cfg_crc1_config_write <= \$704 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_w1_crc_start <= \$701 ;
+    ch1_cfg_crc1_w1_crc_poly <= \$705 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$702 ;
+    ch1_cfg_crc1_w1_crc_width <= \$706 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$703 ;
+    ch1_cfg_crc1_w1_crc_inverted <= \$707 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$704 ;
+    ch1_cfg_crc1_start_config_write <= \$708 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$705 ;
+    ch1_cfg_crc1_start_w1_crc_start <= \$709 ;
   always @(posedge clk)
-    \ch1_ca_request_write$305  <= \$706 ;
+    ch1_ca_request_config_write <= \$710 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$707 ;
+    ch1_ca_request_slave_id <= \$711 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$708 ;
+    ch1_ca_request_address <= \$712 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$709 ;
+    ch1_ca_request_count <= \$713 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$710 ;
+    \ch1_ca_request_write$309  <= \$714 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$711 ;
+    ch1_ca_ctrl_start <= \$715 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$712 ;
+    ch1_ca_ctrl_abort <= \$716 ;
   always @(posedge clk)
-    ch1_read_select_105 <= \$713 ;
+    ch1_read_select_100 <= \$717 ;
   always @(posedge clk)
-    ch1_read_select_108 <= \$714 ;
+    ch1_read_select_101 <= \$718 ;
   always @(posedge clk)
-    ch1_read_select_109 <= \$715 ;
+    ch1_read_select_102 <= \$719 ;
   always @(posedge clk)
-    ch1_read_select_10a <= \$716 ;
+    ch1_read_select_104 <= \$720 ;
   always @(posedge clk)
-    ch1_read_select_10b <= \$717 ;
+    ch1_read_select_105 <= \$721 ;
   always @(posedge clk)
-    ch1_read_select_10c <= \$718 ;
+    ch1_read_select_108 <= \$722 ;
   always @(posedge clk)
-    ch1_read_select_10d <= \$719 ;
+    ch1_read_select_109 <= \$723 ;
   always @(posedge clk)
-    ch1_read_select_10e <= \$720 ;
+    ch1_read_select_10a <= \$724 ;
   always @(posedge clk)
-    ch1_read_select_10f <= \$721 ;
+    ch1_read_select_10b <= \$725 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$722 ;
+    ch1_read_select_10c <= \$726 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$723 ;
+    ch1_read_select_10d <= \$727 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$724 ;
+    ch1_read_select_10e <= \$728 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$725 ;
+    ch1_read_select_10f <= \$729 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$726 ;
+    ch1_read_select_110 <= \$730 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$727 ;
+    ch1_read_select_111 <= \$731 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$728 ;
+    ch1_read_select_112 <= \$732 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$729 ;
+    ch1_read_select_113 <= \$733 ;
   always @(posedge clk)
-    ch1_read_select_118 <= \$730 ;
+    ch1_read_select_114 <= \$734 ;
   always @(posedge clk)
-    ch1_read_select_119 <= \$731 ;
+    ch1_read_select_115 <= \$735 ;
   always @(posedge clk)
-    ch1_read_select_11a <= \$732 ;
+    ch1_read_select_116 <= \$736 ;
   always @(posedge clk)
-    ch1_read_select_11b <= \$733 ;
+    ch1_read_select_117 <= \$737 ;
   always @(posedge clk)
-    ch1_read_select_11c <= \$734 ;
+    ch1_read_select_118 <= \$738 ;
   always @(posedge clk)
-    ch1_read_select_11d <= \$735 ;
+    ch1_read_select_119 <= \$739 ;
   always @(posedge clk)
-    ch1_read_select_11e <= \$736 ;
+    ch1_read_select_11a <= \$740 ;
   always @(posedge clk)
-    ch1_read_select_11f <= \$737 ;
+    ch1_read_select_11b <= \$741 ;
   always @(posedge clk)
-    ch1_read_select_120 <= \$738 ;
+    ch1_read_select_11c <= \$742 ;
   always @(posedge clk)
-    ch1_read_select_121 <= \$739 ;
+    ch1_read_select_11d <= \$743 ;
   always @(posedge clk)
-    ch1_read_select_122 <= \$740 ;
+    ch1_read_select_11e <= \$744 ;
   always @(posedge clk)
-    ch1_read_select_123 <= \$741 ;
+    ch1_read_select_11f <= \$745 ;
   always @(posedge clk)
-    ch1_read_select_140 <= \$742 ;
+    ch1_read_select_120 <= \$746 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$743 ;
+    ch1_read_select_121 <= \$747 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$744 ;
+    ch1_read_select_122 <= \$748 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$745 ;
+    ch1_read_select_123 <= \$749 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$746 ;
+    ch1_read_select_140 <= \$750 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$747 ;
+    ch1_read_select_141 <= \$751 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$748 ;
+    ch1_read_select_142 <= \$752 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$749 ;
+    ch1_read_select_143 <= \$753 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$750 ;
+    ch1_read_select_144 <= \$754 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$751 ;
+    ch1_read_select_145 <= \$755 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$752 ;
+    ch1_result_status_status_snapshot <= \$756 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$753 ;
+    ch1_result_status_cds_snapshot <= \$757 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$754 ;
+    ch1_result_status_w0_ne_snapshot <= \$758 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$755 ;
+    ch1_result_status_w0_nw_snapshot <= \$759 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$756 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$760 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$757 ;
+    ch1_result_status_w1_ne_snapshot <= \$761 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$758 ;
+    ch1_result_status_w1_nw_snapshot <= \$762 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$759 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$763 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$760 ;
+    ch1_result_status_lc_repeat_snapshot <= \$764 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$761 ;
+    ch1_result_status_lc_skip_snapshot <= \$765 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$762 ;
+    ch1_result_status_lc_zero_snapshot <= \$766 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$763 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$767 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$764 ;
+    ch1_result_status_lc_snapshot <= \$768 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$765 ;
+    ch1_result_seq_seq_snapshot <= \$769 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$766 ;
+    ch1_result_seq_line_delay_snapshot <= \$770 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$767 ;
+    ch1_result_w0_lo_data_snapshot <= \$771 ;
   always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$768 ;
+    ch1_result_w0_hi_data_snapshot <= \$772 ;
   always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$769 ;
+    ch1_result_w1_lo_data_snapshot <= \$773 ;
   always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$770 ;
+    ch1_result_w1_hi_data_snapshot <= \$774 ;
   always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$771 ;
+    ch1_result_timestamp_time_snapshot <= \$775 ;
   always @(posedge clk)
-    ch1_window0_read <= \$772 ;
+    ch1_result_line_noise_events_snapshot <= \$776 ;
   always @(posedge clk)
-    ch1_read_data <= \$773 ;
+    ch1_result_line_delay_settled_snapshot <= \$777 ;
+  always @(posedge clk)
+    ch1_result_line_delay_spread_snapshot <= \$778 ;
+  always @(posedge clk)
+    ch1_result_line_settled_delay_snapshot <= \$779 ;
+  always @(posedge clk)
+    ch1_window0_read <= \$780 ;
+  always @(posedge clk)
+    ch1_read_data <= \$781 ;
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__w_addr;
@@ -3686,283 +3751,235 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$53  = ch0_cfg_words_config_write & config_write_strb[0];
   assign \$54  = ch0_cfg_words_config_write & config_write_strb[1];
   assign \$55  = ch0_cfg_words_config_write & config_write_strb[1];
-  assign \$56  = ch0_cfg_words_config_write & config_write_strb[2];
+  assign \$56  = ch0_cfg_words_config_write & config_write_strb[1];
   assign \$57  = ch0_cfg_words_config_write & config_write_strb[2];
   assign \$58  = ch0_cfg_words_config_write & config_write_strb[2];
-  assign \$59  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$59  = ch0_cfg_words_config_write & config_write_strb[2];
   assign \$60  = ch0_cfg_words_config_write & config_write_strb[3];
   assign \$61  = ch0_cfg_words_config_write & config_write_strb[3];
-  assign \$62  = ch0_cfg_checks_config_write & config_write_strb[0];
-  assign \$63  = ch0_cfg_checks_config_write & config_write_strb[0];
-  assign \$64  = ch0_cfg_checks_config_write & config_write_strb[1];
-  assign \$65  = ch0_cfg_checks_config_write & config_write_strb[2];
-  assign \$66  = ch0_cfg_checks_config_write & config_write_strb[2];
-  assign \$67  = ch0_cfg_quiet_config_write & config_write_strb[0];
-  assign \$68  = ch0_cfg_quiet_config_write & config_write_strb[1];
-  assign \$69  = ch0_cfg_crc0_config_write & config_write_strb[0];
-  assign \$70  = ch0_cfg_crc0_config_write & config_write_strb[1];
-  assign \$71  = ch0_cfg_crc0_config_write & config_write_strb[2];
-  assign \$72  = ch0_cfg_crc0_config_write & config_write_strb[3];
-  assign \$73  = ch0_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$74  = ch0_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$75  = ch0_cfg_crc1_config_write & config_write_strb[0];
-  assign \$76  = ch0_cfg_crc1_config_write & config_write_strb[1];
-  assign \$77  = ch0_cfg_crc1_config_write & config_write_strb[2];
-  assign \$78  = ch0_cfg_crc1_config_write & config_write_strb[3];
-  assign \$79  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$80  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$81  = ch0_ca_request_config_write & config_write_strb[0];
-  assign \$82  = ch0_ca_request_config_write & config_write_strb[1];
-  assign \$83  = ch0_ca_request_config_write & config_write_strb[2];
-  assign \$84  = ch0_ca_request_config_write & config_write_strb[3];
-  assign \$85  = write_data[0] & write_strb[0];
-  assign \$86  = ch0_ca_ctrl_write ? \$85  : 1'h0;
-  assign \$87  = write_data[1] & write_strb[0];
+  assign \$62  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$63  = ch0_cfg_words_config_write & config_write_strb[3];
+  assign \$64  = ch0_cfg_checks_config_write & config_write_strb[0];
+  assign \$65  = ch0_cfg_checks_config_write & config_write_strb[0];
+  assign \$66  = ch0_cfg_checks_config_write & config_write_strb[1];
+  assign \$67  = ch0_cfg_checks_config_write & config_write_strb[2];
+  assign \$68  = ch0_cfg_checks_config_write & config_write_strb[2];
+  assign \$69  = ch0_cfg_quiet_config_write & config_write_strb[0];
+  assign \$70  = ch0_cfg_quiet_config_write & config_write_strb[1];
+  assign \$71  = ch0_cfg_crc0_config_write & config_write_strb[0];
+  assign \$72  = ch0_cfg_crc0_config_write & config_write_strb[1];
+  assign \$73  = ch0_cfg_crc0_config_write & config_write_strb[2];
+  assign \$74  = ch0_cfg_crc0_config_write & config_write_strb[3];
+  assign \$75  = ch0_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$76  = ch0_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$77  = ch0_cfg_crc1_config_write & config_write_strb[0];
+  assign \$78  = ch0_cfg_crc1_config_write & config_write_strb[1];
+  assign \$79  = ch0_cfg_crc1_config_write & config_write_strb[2];
+  assign \$80  = ch0_cfg_crc1_config_write & config_write_strb[3];
+  assign \$81  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$82  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$83  = ch0_ca_request_config_write & config_write_strb[0];
+  assign \$84  = ch0_ca_request_config_write & config_write_strb[1];
+  assign \$85  = ch0_ca_request_config_write & config_write_strb[2];
+  assign \$86  = ch0_ca_request_config_write & config_write_strb[3];
+  assign \$87  = write_data[0] & write_strb[0];
   assign \$88  = ch0_ca_ctrl_write ? \$87  : 1'h0;
-  assign \$89  = bus__w_addr == 8'h80;
-  assign \$90  = bus__w_addr == 8'h81;
-  assign \$91  = bus__w_addr == 8'h82;
-  assign \$92  = bus__w_addr == 8'h84;
-  assign \$93  = bus__w_addr == 8'h85;
-  assign \$94  = bus__w_addr == 8'h88;
-  assign \$95  = bus__w_addr == 8'h89;
-  assign \$96  = bus__w_addr == 8'h8a;
-  assign \$97  = bus__w_addr == 8'h8b;
-  assign \$98  = bus__w_addr == 8'h8c;
-  assign \$99  = bus__w_addr == 8'h8d;
-  assign \$100  = bus__w_addr == 8'h8e;
-  assign \$101  = bus__w_addr == 8'h8f;
-  assign \$102  = bus__w_addr == 8'h90;
-  assign \$103  = bus__w_addr == 8'h91;
-  assign \$104  = bus__w_addr == 8'h92;
-  assign \$105  = bus__w_addr == 8'h93;
-  assign \$106  = bus__w_addr == 8'h94;
-  assign \$107  = bus__w_addr == 8'h95;
-  assign \$108  = bus__w_addr == 8'h96;
-  assign \$109  = bus__w_addr == 8'h97;
-  assign \$110  = bus__w_addr == 8'h98;
-  assign \$111  = bus__w_addr == 8'h99;
-  assign \$112  = bus__w_addr == 8'h9a;
-  assign \$113  = bus__w_addr == 8'h9b;
-  assign \$114  = bus__w_addr == 8'h9c;
-  assign \$115  = bus__w_addr == 8'h9d;
-  assign \$116  = bus__w_addr == 8'h9e;
-  assign \$117  = bus__w_addr == 8'h9f;
-  assign \$118  = bus__w_addr == 8'ha0;
-  assign \$119  = bus__w_addr == 8'ha1;
-  assign \$120  = bus__w_addr == 8'ha2;
-  assign \$121  = bus__w_addr == 8'ha3;
-  assign \$122  = bus__w_addr == 8'hc0;
-  assign \$123  = bus__w_addr == 8'hc1;
-  assign \$124  = bus__w_addr == 8'hc2;
-  assign \$125  = bus__w_addr == 8'hc3;
-  assign \$126  = bus__w_addr == 8'hc4;
-  assign \$127  = bus__w_addr == 8'hc5;
-  assign \$128  = ch0_read_select_90 & bus__r_load;
-  assign \$129  = bus__w_addr[10:4] == 4'he;
-  assign \$130  = bus__r_en & \$129 ;
-  assign \$131  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$133  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$134  = \$132  | \$133 ;
-  assign \$135  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
+  assign \$89  = write_data[1] & write_strb[0];
+  assign \$90  = ch0_ca_ctrl_write ? \$89  : 1'h0;
+  assign \$91  = bus__w_addr == 8'h80;
+  assign \$92  = bus__w_addr == 8'h81;
+  assign \$93  = bus__w_addr == 8'h82;
+  assign \$94  = bus__w_addr == 8'h84;
+  assign \$95  = bus__w_addr == 8'h85;
+  assign \$96  = bus__w_addr == 8'h88;
+  assign \$97  = bus__w_addr == 8'h89;
+  assign \$98  = bus__w_addr == 8'h8a;
+  assign \$99  = bus__w_addr == 8'h8b;
+  assign \$100  = bus__w_addr == 8'h8c;
+  assign \$101  = bus__w_addr == 8'h8d;
+  assign \$102  = bus__w_addr == 8'h8e;
+  assign \$103  = bus__w_addr == 8'h8f;
+  assign \$104  = bus__w_addr == 8'h90;
+  assign \$105  = bus__w_addr == 8'h91;
+  assign \$106  = bus__w_addr == 8'h92;
+  assign \$107  = bus__w_addr == 8'h93;
+  assign \$108  = bus__w_addr == 8'h94;
+  assign \$109  = bus__w_addr == 8'h95;
+  assign \$110  = bus__w_addr == 8'h96;
+  assign \$111  = bus__w_addr == 8'h97;
+  assign \$112  = bus__w_addr == 8'h98;
+  assign \$113  = bus__w_addr == 8'h99;
+  assign \$114  = bus__w_addr == 8'h9a;
+  assign \$115  = bus__w_addr == 8'h9b;
+  assign \$116  = bus__w_addr == 8'h9c;
+  assign \$117  = bus__w_addr == 8'h9d;
+  assign \$118  = bus__w_addr == 8'h9e;
+  assign \$119  = bus__w_addr == 8'h9f;
+  assign \$120  = bus__w_addr == 8'ha0;
+  assign \$121  = bus__w_addr == 8'ha1;
+  assign \$122  = bus__w_addr == 8'ha2;
+  assign \$123  = bus__w_addr == 8'ha3;
+  assign \$124  = bus__w_addr == 8'hc0;
+  assign \$125  = bus__w_addr == 8'hc1;
+  assign \$126  = bus__w_addr == 8'hc2;
+  assign \$127  = bus__w_addr == 8'hc3;
+  assign \$128  = bus__w_addr == 8'hc4;
+  assign \$129  = bus__w_addr == 8'hc5;
+  assign \$130  = ch0_read_select_90 & bus__r_load;
+  assign \$131  = bus__w_addr[10:4] == 4'he;
+  assign \$132  = bus__r_en & \$131 ;
+  assign \$133  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$135  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
   assign \$136  = \$134  | \$135 ;
-  assign \$137  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$137  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
   assign \$138  = \$136  | \$137 ;
-  assign \$139  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
+  assign \$139  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
   assign \$140  = \$138  | \$139 ;
-  assign \$141  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
+  assign \$141  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
   assign \$142  = \$140  | \$141 ;
-  assign \$143  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
+  assign \$143  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
   assign \$144  = \$142  | \$143 ;
-  assign \$145  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
+  assign \$145  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
   assign \$146  = \$144  | \$145 ;
-  assign \$147  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
+  assign \$147  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
   assign \$148  = \$146  | \$147 ;
-  assign \$149  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$149  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
   assign \$150  = \$148  | \$149 ;
-  assign \$151  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 4'h0, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 5'h00, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
+  assign \$151  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
   assign \$152  = \$150  | \$151 ;
-  assign \$153  = ch0_read_select_8e ? { 8'h00, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
+  assign \$153  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 3'h0, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 4'h0, ch0_cfg_words_w0_signed, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
   assign \$154  = \$152  | \$153 ;
-  assign \$155  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
+  assign \$155  = ch0_read_select_8e ? { 8'h00, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
   assign \$156  = \$154  | \$155 ;
-  assign \$157  = ch0_read_select_90 ? { 2'h0, \port$4897$0 [182:177], 4'h0, \port$4897$0 [186:183], 1'h0, \port$4897$0 [176:174], 1'h0, \port$4897$0 [133:131], 3'h0, \port$4897$0 [49], \port$4897$0 [3:0] } : 32'd0;
+  assign \$157  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$158  = \$156  | \$157 ;
-  assign \$159  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$159  = ch0_read_select_90 ? { 2'h0, \port$5871$0 [182:177], 4'h0, \port$5871$0 [186:183], 1'h0, \port$5871$0 [176:174], 1'h0, \port$5871$0 [133:131], 3'h0, \port$5871$0 [49], \port$5871$0 [3:0] } : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$161  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$163  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$163  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
   assign \$164  = \$162  | \$163 ;
-  assign \$165  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$165  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
   assign \$166  = \$164  | \$165 ;
-  assign \$167  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$167  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
   assign \$168  = \$166  | \$167 ;
-  assign \$169  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$169  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
   assign \$170  = \$168  | \$169 ;
-  assign \$171  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
+  assign \$171  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
   assign \$172  = \$170  | \$171 ;
-  assign \$173  = ch0_read_select_98 ? \port$4910$0 [31:0] : 32'd0;
+  assign \$173  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$174  = \$172  | \$173 ;
-  assign \$175  = ch0_read_select_99 ? \port$4910$0 [63:32] : 32'd0;
+  assign \$175  = ch0_read_select_98 ? \port$5884$0 [31:0] : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_9a ? \port$4910$0 [95:64] : 32'd0;
+  assign \$177  = ch0_read_select_99 ? \port$5884$0 [63:32] : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_9b ? \port$4910$0 [127:96] : 32'd0;
+  assign \$179  = ch0_read_select_9a ? \port$5884$0 [95:64] : 32'd0;
   assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_9c ? \port$4910$0 [159:128] : 32'd0;
+  assign \$181  = ch0_read_select_9b ? \port$5884$0 [127:96] : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_9d ? \port$4910$0 [191:160] : 32'd0;
+  assign \$183  = ch0_read_select_9c ? \port$5884$0 [159:128] : 32'd0;
   assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_9e ? \port$4910$0 [223:192] : 32'd0;
+  assign \$185  = ch0_read_select_9d ? \port$5884$0 [191:160] : 32'd0;
   assign \$186  = \$184  | \$185 ;
-  assign \$187  = ch0_read_select_9f ? \port$4910$0 [255:224] : 32'd0;
+  assign \$187  = ch0_read_select_9e ? \port$5884$0 [223:192] : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$189  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
+  assign \$189  = ch0_read_select_9f ? \port$5884$0 [255:224] : 32'd0;
   assign \$190  = \$188  | \$189 ;
-  assign \$191  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
+  assign \$191  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
+  assign \$193  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
   assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
+  assign \$195  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
   assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$103 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$197  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
   assign \$198  = \$196  | \$197 ;
-  assign \$201  = ch0_read_select_c2 ? { 17'h00000, \port$5042$0 [9:3], 1'h0, \port$5042$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$202  = \$200  | \$201 ;
-  assign \$203  = ch0_read_select_c3 ? \port$4910$0 [287:256] : 32'd0;
+  assign \$199  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$105 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$200  = \$198  | \$199 ;
+  assign \$203  = ch0_read_select_c2 ? { 17'h00000, \port$6016$0 [9:3], 1'h0, \port$6016$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$204  = \$202  | \$203 ;
-  assign \$205  = ch0_read_select_c4 ? \port$4910$0 [319:288] : 32'd0;
+  assign \$205  = ch0_read_select_c3 ? \port$5884$0 [287:256] : 32'd0;
   assign \$206  = \$204  | \$205 ;
-  assign \$207  = ch0_read_select_c5 ? { 16'h0000, \port$4910$0 [335:320] } : 32'd0;
+  assign \$207  = ch0_read_select_c4 ? \port$5884$0 [319:288] : 32'd0;
   assign \$208  = \$206  | \$207 ;
-  assign \$209  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$209  = ch0_read_select_c5 ? { 16'h0000, \port$5884$0 [335:320] } : 32'd0;
   assign \$210  = \$208  | \$209 ;
-  assign \$211  = write_data[0] & write_strb[0];
-  assign \$212  = ch1_ctrl_write ? \$211  : 1'h0;
-  assign \$213  = write_data[1] & write_strb[0];
+  assign \$211  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$212  = \$210  | \$211 ;
+  assign \$213  = write_data[0] & write_strb[0];
   assign \$214  = ch1_ctrl_write ? \$213  : 1'h0;
-  assign \$215  = write_data[2] & write_strb[0];
+  assign \$215  = write_data[1] & write_strb[0];
   assign \$216  = ch1_ctrl_write ? \$215  : 1'h0;
-  assign \$217  = ch1_ctrl_write & write_strb[1];
-  assign \$218  = ch1_ctrl_write & write_strb[1];
-  assign \$219  = write_data[0] & write_strb[0];
-  assign \$220  = ch1_irq_status_write ? \$219  : 1'h0;
-  assign \$221  = write_data[1] & write_strb[0];
-  assign \$222  = ch1_irq_status_write ? \$221  : 1'h0;
-  assign \$223  = write_data[2] & write_strb[0];
-  assign \$224  = ch1_irq_status_write ? \$223  : 1'h0;
-  assign \$225  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$226  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$217  = write_data[2] & write_strb[0];
+  assign \$218  = ch1_ctrl_write ? \$217  : 1'h0;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$507  = bus__w_en;
+    \$511  = bus__w_en;
     if (rst) begin
-      \$507  = 1'h0;
+      \$511  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$508  = write_addr;
+    \$512  = write_addr;
     if (bus__w_en) begin
-      \$508  = bus__w_addr;
+      \$512  = bus__w_addr;
     end
     if (rst) begin
-      \$508  = 11'h000;
+      \$512  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$509  = write_data;
+    \$513  = write_data;
     if (bus__w_en) begin
-      \$509  = bus__w_data;
+      \$513  = bus__w_data;
     end
     if (rst) begin
-      \$509  = 32'd0;
+      \$513  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$510  = write_strb;
+    \$514  = write_strb;
     if (bus__w_en) begin
-      \$510  = bus__w_strb;
+      \$514  = bus__w_strb;
     end
     if (rst) begin
-      \$510  = 4'h0;
+      \$514  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$511  = config_write_data;
+    \$515  = config_write_data;
     if (write_en) begin
-      \$511  = write_data;
+      \$515  = write_data;
     end
     if (rst) begin
-      \$511  = 32'd0;
+      \$515  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$512  = config_write_strb;
+    \$516  = config_write_strb;
     if (write_en) begin
-      \$512  = write_strb;
+      \$516  = write_strb;
     end
     if (rst) begin
-      \$512  = 4'h0;
+      \$516  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$513  = \$2 ;
-    if (rst) begin
-      \$513  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$514  = g_read_select_0;
-    if (bus__r_en) begin
-      \$514  = \$3 ;
-    end
-    if (rst) begin
-      \$514  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$515  = g_read_select_1;
-    if (bus__r_en) begin
-      \$515  = \$4 ;
-    end
-    if (rst) begin
-      \$515  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$516  = g_read_select_2;
-    if (bus__r_en) begin
-      \$516  = \$5 ;
-    end
-    if (rst) begin
-      \$516  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$517  = g_read_select_3;
-    if (bus__r_en) begin
-      \$517  = \$6 ;
-    end
+    \$517  = \$2 ;
     if (rst) begin
       \$517  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$518  = g_read_select_4;
+    \$518  = g_read_select_0;
     if (bus__r_en) begin
-      \$518  = \$7 ;
+      \$518  = \$3 ;
     end
     if (rst) begin
       \$518  = 1'h0;
@@ -3970,86 +3987,80 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$519  = g_read_data;
-    if (bus__r_load) begin
-      \$519  = \$17 ;
+    \$519  = g_read_select_1;
+    if (bus__r_en) begin
+      \$519  = \$4 ;
     end
     if (rst) begin
-      \$519  = 32'd0;
+      \$519  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$520  = \$19 ;
+    \$520  = g_read_select_2;
+    if (bus__r_en) begin
+      \$520  = \$5 ;
+    end
     if (rst) begin
       \$520  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$521  = \$21 ;
+    \$521  = g_read_select_3;
+    if (bus__r_en) begin
+      \$521  = \$6 ;
+    end
     if (rst) begin
       \$521  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$522  = \$23 ;
+    \$522  = g_read_select_4;
+    if (bus__r_en) begin
+      \$522  = \$7 ;
+    end
     if (rst) begin
       \$522  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$523  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$523  = write_data[8];
+    \$523  = g_read_data;
+    if (bus__r_load) begin
+      \$523  = \$17 ;
     end
     if (rst) begin
-      \$523  = 1'h0;
+      \$523  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$524  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$524  = write_data[9];
-    end
+    \$524  = \$19 ;
     if (rst) begin
       \$524  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$525  = ch0_irq_status_done;
-    if (ch0__done) begin
-      \$525  = 1'h1;
-    end else if (\$27 ) begin
-      \$525  = 1'h0;
-    end
+    \$525  = \$21 ;
     if (rst) begin
       \$525  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$526  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$526  = 1'h1;
-    end else if (\$29 ) begin
-      \$526  = 1'h0;
-    end
+    \$526  = \$23 ;
     if (rst) begin
       \$526  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$527  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$527  = 1'h1;
-    end else if (\$31 ) begin
-      \$527  = 1'h0;
+    \$527  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$527  = write_data[8];
     end
     if (rst) begin
       \$527  = 1'h0;
@@ -4057,16 +4068,21 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$528  = ch0_irq_enable_write;
+    \$528  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$528  = write_data[9];
+    end
     if (rst) begin
       \$528  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$529  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$529  = config_write_data[0];
+    \$529  = ch0_irq_status_done;
+    if (ch0__done) begin
+      \$529  = 1'h1;
+    end else if (\$27 ) begin
+      \$529  = 1'h0;
     end
     if (rst) begin
       \$529  = 1'h0;
@@ -4074,9 +4090,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$530  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$530  = config_write_data[1];
+    \$530  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$530  = 1'h1;
+    end else if (\$29 ) begin
+      \$530  = 1'h0;
     end
     if (rst) begin
       \$530  = 1'h0;
@@ -4084,9 +4102,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$531  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$531  = config_write_data[2];
+    \$531  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$531  = 1'h1;
+    end else if (\$31 ) begin
+      \$531  = 1'h0;
     end
     if (rst) begin
       \$531  = 1'h0;
@@ -4094,100 +4114,91 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$532  = ch0_cfg_ma_write;
+    \$532  = ch0_irq_enable_write;
     if (rst) begin
       \$532  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$533  = ch0_cfg_ma_ma_half_period;
-    if (\$35 ) begin
-      \$533 [7:0] = config_write_data[7:0];
-    end
-    if (\$36 ) begin
-      \$533 [15:8] = config_write_data[15:8];
+    \$533  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$533  = config_write_data[0];
     end
     if (rst) begin
-      \$533  = 16'h0000;
+      \$533  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$534  = ch0_cfg_ma_delay_limit;
-    if (\$37 ) begin
-      \$534 [7:0] = config_write_data[23:16];
-    end
-    if (\$38 ) begin
-      \$534 [11:8] = config_write_data[27:24];
+    \$534  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$534  = config_write_data[1];
     end
     if (rst) begin
-      \$534  = 12'h000;
+      \$534  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$535  = ch0_cfg_period_write;
+    \$535  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$535  = config_write_data[2];
+    end
     if (rst) begin
       \$535  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$536  = ch0_cfg_period_request_period;
-    if (\$39 ) begin
-      \$536 [7:0] = config_write_data[7:0];
-    end
-    if (\$40 ) begin
-      \$536 [15:8] = config_write_data[15:8];
-    end
-    if (\$41 ) begin
-      \$536 [23:16] = config_write_data[23:16];
-    end
+    \$536  = ch0_cfg_ma_write;
     if (rst) begin
-      \$536  = 24'h000000;
+      \$536  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$537  = ch0_cfg_break_write;
+    \$537  = ch0_cfg_ma_ma_half_period;
+    if (\$35 ) begin
+      \$537 [7:0] = config_write_data[7:0];
+    end
+    if (\$36 ) begin
+      \$537 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$537  = 1'h0;
+      \$537  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$538  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
-      \$538 [7:0] = config_write_data[7:0];
+    \$538  = ch0_cfg_ma_delay_limit;
+    if (\$37 ) begin
+      \$538 [7:0] = config_write_data[23:16];
     end
-    if (\$43 ) begin
-      \$538 [15:8] = config_write_data[15:8];
-    end
-    if (\$44 ) begin
-      \$538 [23:16] = config_write_data[23:16];
+    if (\$38 ) begin
+      \$538 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$538  = 24'h000000;
+      \$538  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$539  = ch0_cfg_ack_write;
+    \$539  = ch0_cfg_period_write;
     if (rst) begin
       \$539  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$540  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
+    \$540  = ch0_cfg_period_request_period;
+    if (\$39 ) begin
       \$540 [7:0] = config_write_data[7:0];
     end
-    if (\$46 ) begin
+    if (\$40 ) begin
       \$540 [15:8] = config_write_data[15:8];
     end
-    if (\$47 ) begin
+    if (\$41 ) begin
       \$540 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -4196,21 +4207,21 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$541  = ch0_cfg_timeout_write;
+    \$541  = ch0_cfg_break_write;
     if (rst) begin
       \$541  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$542  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
+    \$542  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
       \$542 [7:0] = config_write_data[7:0];
     end
-    if (\$49 ) begin
+    if (\$43 ) begin
       \$542 [15:8] = config_write_data[15:8];
     end
-    if (\$50 ) begin
+    if (\$44 ) begin
       \$542 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -4219,76 +4230,82 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$543  = ch0_cfg_words_write;
+    \$543  = ch0_cfg_ack_write;
     if (rst) begin
       \$543  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$544  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$544  = config_write_data[5:0];
+    \$544  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
+      \$544 [7:0] = config_write_data[7:0];
+    end
+    if (\$46 ) begin
+      \$544 [15:8] = config_write_data[15:8];
+    end
+    if (\$47 ) begin
+      \$544 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$544  = 6'h00;
+      \$544  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$545  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$545  = config_write_data[6];
-    end
+    \$545  = ch0_cfg_timeout_write;
     if (rst) begin
       \$545  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$546  = ch0_cfg_words_w0_lc;
+    \$546  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
+      \$546 [7:0] = config_write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$546 [15:8] = config_write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$546 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$546  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$547  = ch0_cfg_words_write;
+    if (rst) begin
+      \$547  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$548  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$548  = config_write_data[5:0];
+    end
+    if (rst) begin
+      \$548  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$549  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$549  = config_write_data[6];
+    end
+    if (rst) begin
+      \$549  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$550  = ch0_cfg_words_w0_lc;
     if (\$53 ) begin
-      \$546  = config_write_data[7];
-    end
-    if (rst) begin
-      \$546  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$547  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$547  = config_write_data[9:8];
-    end
-    if (rst) begin
-      \$547  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$548  = ch0_cfg_words_w0_gray;
-    if (\$55 ) begin
-      \$548  = config_write_data[10];
-    end
-    if (rst) begin
-      \$548  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$549  = ch0_cfg_words_w1_data_bits;
-    if (\$56 ) begin
-      \$549  = config_write_data[21:16];
-    end
-    if (rst) begin
-      \$549  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$550  = ch0_cfg_words_w1_nenw;
-    if (\$57 ) begin
-      \$550  = config_write_data[22];
+      \$550  = config_write_data[7];
     end
     if (rst) begin
       \$550  = 1'h0;
@@ -4296,29 +4313,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$551  = ch0_cfg_words_w1_lc;
-    if (\$58 ) begin
-      \$551  = config_write_data[23];
+    \$551  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$551  = config_write_data[9:8];
     end
     if (rst) begin
-      \$551  = 1'h0;
+      \$551  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$552  = ch0_cfg_words_w1_crc;
-    if (\$59 ) begin
-      \$552  = config_write_data[25:24];
+    \$552  = ch0_cfg_words_w0_gray;
+    if (\$55 ) begin
+      \$552  = config_write_data[10];
     end
     if (rst) begin
-      \$552  = 2'h0;
+      \$552  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$553  = ch0_cfg_words_w1_gray;
-    if (\$60 ) begin
-      \$553  = config_write_data[26];
+    \$553  = ch0_cfg_words_w0_signed;
+    if (\$56 ) begin
+      \$553  = config_write_data[11];
     end
     if (rst) begin
       \$553  = 1'h0;
@@ -4326,26 +4343,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$554  = ch0_cfg_words_w1_enable;
-    if (\$61 ) begin
-      \$554  = config_write_data[31];
+    \$554  = ch0_cfg_words_w1_data_bits;
+    if (\$57 ) begin
+      \$554  = config_write_data[21:16];
     end
     if (rst) begin
-      \$554  = 1'h0;
+      \$554  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$555  = ch0_cfg_checks_write;
+    \$555  = ch0_cfg_words_w1_nenw;
+    if (\$58 ) begin
+      \$555  = config_write_data[22];
+    end
     if (rst) begin
       \$555  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$556  = ch0_cfg_checks_end_check;
-    if (\$62 ) begin
-      \$556  = config_write_data[0];
+    \$556  = ch0_cfg_words_w1_lc;
+    if (\$59 ) begin
+      \$556  = config_write_data[23];
     end
     if (rst) begin
       \$556  = 1'h0;
@@ -4353,138 +4373,135 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$557  = ch0_cfg_checks_spw_check;
+    \$557  = ch0_cfg_words_w1_crc;
+    if (\$60 ) begin
+      \$557  = config_write_data[25:24];
+    end
+    if (rst) begin
+      \$557  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$558  = ch0_cfg_words_w1_gray;
+    if (\$61 ) begin
+      \$558  = config_write_data[26];
+    end
+    if (rst) begin
+      \$558  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$559  = ch0_cfg_words_w1_signed;
+    if (\$62 ) begin
+      \$559  = config_write_data[27];
+    end
+    if (rst) begin
+      \$559  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$560  = ch0_cfg_words_w1_enable;
     if (\$63 ) begin
-      \$557  = config_write_data[1];
+      \$560  = config_write_data[31];
     end
     if (rst) begin
-      \$557  = 1'h0;
+      \$560  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$558  = ch0_cfg_checks_spw_tolerance;
-    if (\$64 ) begin
-      \$558  = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$558  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$559  = ch0_cfg_checks_noise_limit;
-    if (\$65 ) begin
-      \$559  = config_write_data[19:16];
-    end
-    if (rst) begin
-      \$559  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$560  = ch0_cfg_checks_delay_tolerance;
-    if (\$66 ) begin
-      \$560  = config_write_data[23:20];
-    end
-    if (rst) begin
-      \$560  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$561  = ch0_cfg_quiet_write;
+    \$561  = ch0_cfg_checks_write;
     if (rst) begin
       \$561  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$562  = ch0_cfg_quiet_quiet_time;
-    if (\$67 ) begin
-      \$562 [7:0] = config_write_data[7:0];
-    end
-    if (\$68 ) begin
-      \$562 [11:8] = config_write_data[11:8];
+    \$562  = ch0_cfg_checks_end_check;
+    if (\$64 ) begin
+      \$562  = config_write_data[0];
     end
     if (rst) begin
-      \$562  = 12'h000;
+      \$562  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$563  = ch0_cfg_crc0_write;
+    \$563  = ch0_cfg_checks_spw_check;
+    if (\$65 ) begin
+      \$563  = config_write_data[1];
+    end
     if (rst) begin
       \$563  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$564  = ch0_cfg_crc0_w0_crc_poly;
-    if (\$69 ) begin
-      \$564 [7:0] = config_write_data[7:0];
-    end
-    if (\$70 ) begin
-      \$564 [15:8] = config_write_data[15:8];
+    \$564  = ch0_cfg_checks_spw_tolerance;
+    if (\$66 ) begin
+      \$564  = config_write_data[15:8];
     end
     if (rst) begin
-      \$564  = 16'h0000;
+      \$564  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$565  = ch0_cfg_crc0_w0_crc_width;
-    if (\$71 ) begin
-      \$565  = config_write_data[20:16];
+    \$565  = ch0_cfg_checks_noise_limit;
+    if (\$67 ) begin
+      \$565  = config_write_data[19:16];
     end
     if (rst) begin
-      \$565  = 5'h00;
+      \$565  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$566  = ch0_cfg_crc0_w0_crc_inverted;
-    if (\$72 ) begin
-      \$566  = config_write_data[24];
+    \$566  = ch0_cfg_checks_delay_tolerance;
+    if (\$68 ) begin
+      \$566  = config_write_data[23:20];
     end
     if (rst) begin
-      \$566  = 1'h0;
+      \$566  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$567  = ch0_cfg_crc0_start_write;
+    \$567  = ch0_cfg_quiet_write;
     if (rst) begin
       \$567  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$568  = ch0_cfg_crc0_start_w0_crc_start;
-    if (\$73 ) begin
+    \$568  = ch0_cfg_quiet_quiet_time;
+    if (\$69 ) begin
       \$568 [7:0] = config_write_data[7:0];
     end
-    if (\$74 ) begin
-      \$568 [15:8] = config_write_data[15:8];
+    if (\$70 ) begin
+      \$568 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$568  = 16'h0000;
+      \$568  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$569  = ch0_cfg_crc1_write;
+    \$569  = ch0_cfg_crc0_write;
     if (rst) begin
       \$569  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$570  = ch0_cfg_crc1_w1_crc_poly;
-    if (\$75 ) begin
+    \$570  = ch0_cfg_crc0_w0_crc_poly;
+    if (\$71 ) begin
       \$570 [7:0] = config_write_data[7:0];
     end
-    if (\$76 ) begin
+    if (\$72 ) begin
       \$570 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
@@ -4493,8 +4510,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$571  = ch0_cfg_crc1_w1_crc_width;
-    if (\$77 ) begin
+    \$571  = ch0_cfg_crc0_w0_crc_width;
+    if (\$73 ) begin
       \$571  = config_write_data[20:16];
     end
     if (rst) begin
@@ -4503,8 +4520,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$572  = ch0_cfg_crc1_w1_crc_inverted;
-    if (\$78 ) begin
+    \$572  = ch0_cfg_crc0_w0_crc_inverted;
+    if (\$74 ) begin
       \$572  = config_write_data[24];
     end
     if (rst) begin
@@ -4513,18 +4530,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$573  = ch0_cfg_crc1_start_write;
+    \$573  = ch0_cfg_crc0_start_write;
     if (rst) begin
       \$573  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$574  = ch0_cfg_crc1_start_w1_crc_start;
-    if (\$79 ) begin
+    \$574  = ch0_cfg_crc0_start_w0_crc_start;
+    if (\$75 ) begin
       \$574 [7:0] = config_write_data[7:0];
     end
-    if (\$80 ) begin
+    if (\$76 ) begin
       \$574 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
@@ -4533,100 +4550,106 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$575  = ch0_ca_request_write;
+    \$575  = ch0_cfg_crc1_write;
     if (rst) begin
       \$575  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$576  = ch0_ca_request_slave_id;
-    if (\$81 ) begin
-      \$576  = config_write_data[2:0];
+    \$576  = ch0_cfg_crc1_w1_crc_poly;
+    if (\$77 ) begin
+      \$576 [7:0] = config_write_data[7:0];
+    end
+    if (\$78 ) begin
+      \$576 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$576  = 3'h0;
+      \$576  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$577  = ch0_ca_request_address;
-    if (\$82 ) begin
-      \$577  = config_write_data[14:8];
+    \$577  = ch0_cfg_crc1_w1_crc_width;
+    if (\$79 ) begin
+      \$577  = config_write_data[20:16];
     end
     if (rst) begin
-      \$577  = 7'h00;
+      \$577  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$578  = ch0_ca_request_count;
-    if (\$83 ) begin
-      \$578  = config_write_data[22:16];
+    \$578  = ch0_cfg_crc1_w1_crc_inverted;
+    if (\$80 ) begin
+      \$578  = config_write_data[24];
     end
     if (rst) begin
-      \$578  = 7'h00;
+      \$578  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$579  = \ch0_ca_request_write$103 ;
-    if (\$84 ) begin
-      \$579  = config_write_data[24];
-    end
+    \$579  = ch0_cfg_crc1_start_write;
     if (rst) begin
       \$579  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$580  = \$86 ;
+    \$580  = ch0_cfg_crc1_start_w1_crc_start;
+    if (\$81 ) begin
+      \$580 [7:0] = config_write_data[7:0];
+    end
+    if (\$82 ) begin
+      \$580 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$580  = 1'h0;
+      \$580  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$581  = \$88 ;
+    \$581  = ch0_ca_request_write;
     if (rst) begin
       \$581  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$582  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$582  = \$89 ;
+    \$582  = ch0_ca_request_slave_id;
+    if (\$83 ) begin
+      \$582  = config_write_data[2:0];
     end
     if (rst) begin
-      \$582  = 1'h0;
+      \$582  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$583  = ch0_read_select_81;
-    if (bus__r_en) begin
-      \$583  = \$90 ;
+    \$583  = ch0_ca_request_address;
+    if (\$84 ) begin
+      \$583  = config_write_data[14:8];
     end
     if (rst) begin
-      \$583  = 1'h0;
+      \$583  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$584  = ch0_read_select_82;
-    if (bus__r_en) begin
-      \$584  = \$91 ;
+    \$584  = ch0_ca_request_count;
+    if (\$85 ) begin
+      \$584  = config_write_data[22:16];
     end
     if (rst) begin
-      \$584  = 1'h0;
+      \$584  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$585  = ch0_read_select_84;
-    if (bus__r_en) begin
-      \$585  = \$92 ;
+    \$585  = \ch0_ca_request_write$105 ;
+    if (\$86 ) begin
+      \$585  = config_write_data[24];
     end
     if (rst) begin
       \$585  = 1'h0;
@@ -4634,29 +4657,23 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$586  = ch0_read_select_85;
-    if (bus__r_en) begin
-      \$586  = \$93 ;
-    end
+    \$586  = \$88 ;
     if (rst) begin
       \$586  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$587  = ch0_read_select_88;
-    if (bus__r_en) begin
-      \$587  = \$94 ;
-    end
+    \$587  = \$90 ;
     if (rst) begin
       \$587  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$588  = ch0_read_select_89;
+    \$588  = ch0_read_select_80;
     if (bus__r_en) begin
-      \$588  = \$95 ;
+      \$588  = \$91 ;
     end
     if (rst) begin
       \$588  = 1'h0;
@@ -4664,9 +4681,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$589  = ch0_read_select_8a;
+    \$589  = ch0_read_select_81;
     if (bus__r_en) begin
-      \$589  = \$96 ;
+      \$589  = \$92 ;
     end
     if (rst) begin
       \$589  = 1'h0;
@@ -4674,9 +4691,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$590  = ch0_read_select_8b;
+    \$590  = ch0_read_select_82;
     if (bus__r_en) begin
-      \$590  = \$97 ;
+      \$590  = \$93 ;
     end
     if (rst) begin
       \$590  = 1'h0;
@@ -4684,9 +4701,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$591  = ch0_read_select_8c;
+    \$591  = ch0_read_select_84;
     if (bus__r_en) begin
-      \$591  = \$98 ;
+      \$591  = \$94 ;
     end
     if (rst) begin
       \$591  = 1'h0;
@@ -4694,9 +4711,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$592  = ch0_read_select_8d;
+    \$592  = ch0_read_select_85;
     if (bus__r_en) begin
-      \$592  = \$99 ;
+      \$592  = \$95 ;
     end
     if (rst) begin
       \$592  = 1'h0;
@@ -4704,9 +4721,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$593  = ch0_read_select_8e;
+    \$593  = ch0_read_select_88;
     if (bus__r_en) begin
-      \$593  = \$100 ;
+      \$593  = \$96 ;
     end
     if (rst) begin
       \$593  = 1'h0;
@@ -4714,9 +4731,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$594  = ch0_read_select_8f;
+    \$594  = ch0_read_select_89;
     if (bus__r_en) begin
-      \$594  = \$101 ;
+      \$594  = \$97 ;
     end
     if (rst) begin
       \$594  = 1'h0;
@@ -4724,9 +4741,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$595  = ch0_read_select_90;
+    \$595  = ch0_read_select_8a;
     if (bus__r_en) begin
-      \$595  = \$102 ;
+      \$595  = \$98 ;
     end
     if (rst) begin
       \$595  = 1'h0;
@@ -4734,9 +4751,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$596  = ch0_read_select_91;
+    \$596  = ch0_read_select_8b;
     if (bus__r_en) begin
-      \$596  = \$103 ;
+      \$596  = \$99 ;
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -4744,9 +4761,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$597  = ch0_read_select_92;
+    \$597  = ch0_read_select_8c;
     if (bus__r_en) begin
-      \$597  = \$104 ;
+      \$597  = \$100 ;
     end
     if (rst) begin
       \$597  = 1'h0;
@@ -4754,9 +4771,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$598  = ch0_read_select_93;
+    \$598  = ch0_read_select_8d;
     if (bus__r_en) begin
-      \$598  = \$105 ;
+      \$598  = \$101 ;
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -4764,9 +4781,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$599  = ch0_read_select_94;
+    \$599  = ch0_read_select_8e;
     if (bus__r_en) begin
-      \$599  = \$106 ;
+      \$599  = \$102 ;
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -4774,9 +4791,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$600  = ch0_read_select_95;
+    \$600  = ch0_read_select_8f;
     if (bus__r_en) begin
-      \$600  = \$107 ;
+      \$600  = \$103 ;
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -4784,9 +4801,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$601  = ch0_read_select_96;
+    \$601  = ch0_read_select_90;
     if (bus__r_en) begin
-      \$601  = \$108 ;
+      \$601  = \$104 ;
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -4794,9 +4811,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$602  = ch0_read_select_97;
+    \$602  = ch0_read_select_91;
     if (bus__r_en) begin
-      \$602  = \$109 ;
+      \$602  = \$105 ;
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -4804,9 +4821,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$603  = ch0_read_select_98;
+    \$603  = ch0_read_select_92;
     if (bus__r_en) begin
-      \$603  = \$110 ;
+      \$603  = \$106 ;
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -4814,9 +4831,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$604  = ch0_read_select_99;
+    \$604  = ch0_read_select_93;
     if (bus__r_en) begin
-      \$604  = \$111 ;
+      \$604  = \$107 ;
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -4824,9 +4841,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$605  = ch0_read_select_9a;
+    \$605  = ch0_read_select_94;
     if (bus__r_en) begin
-      \$605  = \$112 ;
+      \$605  = \$108 ;
     end
     if (rst) begin
       \$605  = 1'h0;
@@ -4834,9 +4851,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$606  = ch0_read_select_9b;
+    \$606  = ch0_read_select_95;
     if (bus__r_en) begin
-      \$606  = \$113 ;
+      \$606  = \$109 ;
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -4844,9 +4861,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$607  = ch0_read_select_9c;
+    \$607  = ch0_read_select_96;
     if (bus__r_en) begin
-      \$607  = \$114 ;
+      \$607  = \$110 ;
     end
     if (rst) begin
       \$607  = 1'h0;
@@ -4854,9 +4871,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$608  = ch0_read_select_9d;
+    \$608  = ch0_read_select_97;
     if (bus__r_en) begin
-      \$608  = \$115 ;
+      \$608  = \$111 ;
     end
     if (rst) begin
       \$608  = 1'h0;
@@ -4864,9 +4881,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$609  = ch0_read_select_9e;
+    \$609  = ch0_read_select_98;
     if (bus__r_en) begin
-      \$609  = \$116 ;
+      \$609  = \$112 ;
     end
     if (rst) begin
       \$609  = 1'h0;
@@ -4874,9 +4891,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$610  = ch0_read_select_9f;
+    \$610  = ch0_read_select_99;
     if (bus__r_en) begin
-      \$610  = \$117 ;
+      \$610  = \$113 ;
     end
     if (rst) begin
       \$610  = 1'h0;
@@ -4884,9 +4901,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$611  = ch0_read_select_a0;
+    \$611  = ch0_read_select_9a;
     if (bus__r_en) begin
-      \$611  = \$118 ;
+      \$611  = \$114 ;
     end
     if (rst) begin
       \$611  = 1'h0;
@@ -4894,9 +4911,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$612  = ch0_read_select_a1;
+    \$612  = ch0_read_select_9b;
     if (bus__r_en) begin
-      \$612  = \$119 ;
+      \$612  = \$115 ;
     end
     if (rst) begin
       \$612  = 1'h0;
@@ -4904,9 +4921,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$613  = ch0_read_select_a2;
+    \$613  = ch0_read_select_9c;
     if (bus__r_en) begin
-      \$613  = \$120 ;
+      \$613  = \$116 ;
     end
     if (rst) begin
       \$613  = 1'h0;
@@ -4914,9 +4931,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$614  = ch0_read_select_a3;
+    \$614  = ch0_read_select_9d;
     if (bus__r_en) begin
-      \$614  = \$121 ;
+      \$614  = \$117 ;
     end
     if (rst) begin
       \$614  = 1'h0;
@@ -4924,9 +4941,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$615  = ch0_read_select_c0;
+    \$615  = ch0_read_select_9e;
     if (bus__r_en) begin
-      \$615  = \$122 ;
+      \$615  = \$118 ;
     end
     if (rst) begin
       \$615  = 1'h0;
@@ -4934,9 +4951,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$616  = ch0_read_select_c1;
+    \$616  = ch0_read_select_9f;
     if (bus__r_en) begin
-      \$616  = \$123 ;
+      \$616  = \$119 ;
     end
     if (rst) begin
       \$616  = 1'h0;
@@ -4944,9 +4961,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$617  = ch0_read_select_c2;
+    \$617  = ch0_read_select_a0;
     if (bus__r_en) begin
-      \$617  = \$124 ;
+      \$617  = \$120 ;
     end
     if (rst) begin
       \$617  = 1'h0;
@@ -4954,9 +4971,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$618  = ch0_read_select_c3;
+    \$618  = ch0_read_select_a1;
     if (bus__r_en) begin
-      \$618  = \$125 ;
+      \$618  = \$121 ;
     end
     if (rst) begin
       \$618  = 1'h0;
@@ -4964,9 +4981,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$619  = ch0_read_select_c4;
+    \$619  = ch0_read_select_a2;
     if (bus__r_en) begin
-      \$619  = \$126 ;
+      \$619  = \$122 ;
     end
     if (rst) begin
       \$619  = 1'h0;
@@ -4974,9 +4991,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$620  = ch0_read_select_c5;
+    \$620  = ch0_read_select_a3;
     if (bus__r_en) begin
-      \$620  = \$127 ;
+      \$620  = \$123 ;
     end
     if (rst) begin
       \$620  = 1'h0;
@@ -4984,19 +5001,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$621  = ch0_result_status_status_snapshot;
-    if (\$128 ) begin
-      \$621  = \port$4897$0 [3:0];
+    \$621  = ch0_read_select_c0;
+    if (bus__r_en) begin
+      \$621  = \$124 ;
     end
     if (rst) begin
-      \$621  = 4'h0;
+      \$621  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$622  = ch0_result_status_cds_snapshot;
-    if (\$128 ) begin
-      \$622  = \port$4897$0 [49];
+    \$622  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$622  = \$125 ;
     end
     if (rst) begin
       \$622  = 1'h0;
@@ -5004,9 +5021,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$623  = ch0_result_status_w0_ne_snapshot;
-    if (\$128 ) begin
-      \$623  = \port$4897$0 [131];
+    \$623  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$623  = \$126 ;
     end
     if (rst) begin
       \$623  = 1'h0;
@@ -5014,9 +5031,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$624  = ch0_result_status_w0_nw_snapshot;
-    if (\$128 ) begin
-      \$624  = \port$4897$0 [132];
+    \$624  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$624  = \$127 ;
     end
     if (rst) begin
       \$624  = 1'h0;
@@ -5024,9 +5041,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$625  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$128 ) begin
-      \$625  = \port$4897$0 [133];
+    \$625  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$625  = \$128 ;
     end
     if (rst) begin
       \$625  = 1'h0;
@@ -5034,9 +5051,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$626  = ch0_result_status_w1_ne_snapshot;
-    if (\$128 ) begin
-      \$626  = \port$4897$0 [174];
+    \$626  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$626  = \$129 ;
     end
     if (rst) begin
       \$626  = 1'h0;
@@ -5044,19 +5061,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$627  = ch0_result_status_w1_nw_snapshot;
-    if (\$128 ) begin
-      \$627  = \port$4897$0 [175];
+    \$627  = ch0_result_status_status_snapshot;
+    if (\$130 ) begin
+      \$627  = \port$5871$0 [3:0];
     end
     if (rst) begin
-      \$627  = 1'h0;
+      \$627  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$628  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$128 ) begin
-      \$628  = \port$4897$0 [176];
+    \$628  = ch0_result_status_cds_snapshot;
+    if (\$130 ) begin
+      \$628  = \port$5871$0 [49];
     end
     if (rst) begin
       \$628  = 1'h0;
@@ -5064,9 +5081,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$629  = ch0_result_status_lc_repeat_snapshot;
-    if (\$128 ) begin
-      \$629  = \port$4897$0 [183];
+    \$629  = ch0_result_status_w0_ne_snapshot;
+    if (\$130 ) begin
+      \$629  = \port$5871$0 [131];
     end
     if (rst) begin
       \$629  = 1'h0;
@@ -5074,9 +5091,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$630  = ch0_result_status_lc_skip_snapshot;
-    if (\$128 ) begin
-      \$630  = \port$4897$0 [184];
+    \$630  = ch0_result_status_w0_nw_snapshot;
+    if (\$130 ) begin
+      \$630  = \port$5871$0 [132];
     end
     if (rst) begin
       \$630  = 1'h0;
@@ -5084,9 +5101,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$631  = ch0_result_status_lc_zero_snapshot;
-    if (\$128 ) begin
-      \$631  = \port$4897$0 [185];
+    \$631  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$130 ) begin
+      \$631  = \port$5871$0 [133];
     end
     if (rst) begin
       \$631  = 1'h0;
@@ -5094,9 +5111,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$632  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$128 ) begin
-      \$632  = \port$4897$0 [186];
+    \$632  = ch0_result_status_w1_ne_snapshot;
+    if (\$130 ) begin
+      \$632  = \port$5871$0 [174];
     end
     if (rst) begin
       \$632  = 1'h0;
@@ -5104,139 +5121,139 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$633  = ch0_result_status_lc_snapshot;
-    if (\$128 ) begin
-      \$633  = \port$4897$0 [182:177];
+    \$633  = ch0_result_status_w1_nw_snapshot;
+    if (\$130 ) begin
+      \$633  = \port$5871$0 [175];
     end
     if (rst) begin
-      \$633  = 6'h00;
+      \$633  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$634  = ch0_result_seq_seq_snapshot;
-    if (\$128 ) begin
-      \$634  = ch0__done_count;
+    \$634  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$130 ) begin
+      \$634  = \port$5871$0 [176];
     end
     if (rst) begin
-      \$634  = 16'h0000;
+      \$634  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$635  = ch0_result_seq_line_delay_snapshot;
-    if (\$128 ) begin
-      \$635  = \port$4897$0 [48:36];
+    \$635  = ch0_result_status_lc_repeat_snapshot;
+    if (\$130 ) begin
+      \$635  = \port$5871$0 [183];
     end
     if (rst) begin
-      \$635  = 13'h0000;
+      \$635  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$636  = ch0_result_w0_lo_data_snapshot;
-    if (\$128 ) begin
-      \$636  = \port$4897$0 [107:76];
+    \$636  = ch0_result_status_lc_skip_snapshot;
+    if (\$130 ) begin
+      \$636  = \port$5871$0 [184];
     end
     if (rst) begin
-      \$636  = 32'd0;
+      \$636  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$637  = ch0_result_w0_hi_data_snapshot;
-    if (\$128 ) begin
-      \$637  = \port$4897$0 [130:108];
+    \$637  = ch0_result_status_lc_zero_snapshot;
+    if (\$130 ) begin
+      \$637  = \port$5871$0 [185];
     end
     if (rst) begin
-      \$637  = 23'h000000;
+      \$637  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$638  = ch0_result_w1_lo_data_snapshot;
-    if (\$128 ) begin
-      \$638  = \port$4897$0 [165:134];
+    \$638  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$130 ) begin
+      \$638  = \port$5871$0 [186];
     end
     if (rst) begin
-      \$638  = 32'd0;
+      \$638  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$639  = ch0_result_w1_hi_data_snapshot;
-    if (\$128 ) begin
-      \$639  = \port$4897$0 [173:166];
+    \$639  = ch0_result_status_lc_snapshot;
+    if (\$130 ) begin
+      \$639  = \port$5871$0 [182:177];
     end
     if (rst) begin
-      \$639  = 8'h00;
+      \$639  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$640  = ch0_result_timestamp_time_snapshot;
-    if (\$128 ) begin
-      \$640  = \port$4897$0 [35:4];
+    \$640  = ch0_result_seq_seq_snapshot;
+    if (\$130 ) begin
+      \$640  = ch0__done_count;
     end
     if (rst) begin
-      \$640  = 32'd0;
+      \$640  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$641  = ch0_result_line_noise_events_snapshot;
-    if (\$128 ) begin
-      \$641  = \port$4897$0 [53:50];
+    \$641  = ch0_result_seq_line_delay_snapshot;
+    if (\$130 ) begin
+      \$641  = \port$5871$0 [48:36];
     end
     if (rst) begin
-      \$641  = 4'h0;
+      \$641  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$642  = ch0_result_line_delay_settled_snapshot;
-    if (\$128 ) begin
-      \$642  = \port$4897$0 [54];
+    \$642  = ch0_result_w0_lo_data_snapshot;
+    if (\$130 ) begin
+      \$642  = \port$5871$0 [107:76];
     end
     if (rst) begin
-      \$642  = 1'h0;
+      \$642  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$643  = ch0_result_line_delay_spread_snapshot;
-    if (\$128 ) begin
-      \$643  = \port$4897$0 [75:68];
+    \$643  = ch0_result_w0_hi_data_snapshot;
+    if (\$130 ) begin
+      \$643  = \port$5871$0 [130:108];
     end
     if (rst) begin
-      \$643  = 8'h00;
+      \$643  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$644  = ch0_result_line_settled_delay_snapshot;
-    if (\$128 ) begin
-      \$644  = \port$4897$0 [67:55];
+    \$644  = ch0_result_w1_lo_data_snapshot;
+    if (\$130 ) begin
+      \$644  = \port$5871$0 [165:134];
     end
     if (rst) begin
-      \$644  = 13'h0000;
+      \$644  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$645  = ch0_window0_read;
-    if (bus__r_en) begin
-      \$645  = \$130 ;
+    \$645  = ch0_result_w1_hi_data_snapshot;
+    if (\$130 ) begin
+      \$645  = \port$5871$0 [173:166];
     end
     if (rst) begin
-      \$645  = 1'h0;
+      \$645  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$646  = ch0_read_data;
-    if (bus__r_load) begin
-      \$646  = \$210 ;
+    \$646  = ch0_result_timestamp_time_snapshot;
+    if (\$130 ) begin
+      \$646  = \port$5871$0 [35:4];
     end
     if (rst) begin
       \$646  = 32'd0;
@@ -5244,40 +5261,49 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$647  = \$212 ;
+    \$647  = ch0_result_line_noise_events_snapshot;
+    if (\$130 ) begin
+      \$647  = \port$5871$0 [53:50];
+    end
     if (rst) begin
-      \$647  = 1'h0;
+      \$647  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$648  = \$214 ;
+    \$648  = ch0_result_line_delay_settled_snapshot;
+    if (\$130 ) begin
+      \$648  = \port$5871$0 [54];
+    end
     if (rst) begin
       \$648  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$649  = \$216 ;
+    \$649  = ch0_result_line_delay_spread_snapshot;
+    if (\$130 ) begin
+      \$649  = \port$5871$0 [75:68];
+    end
     if (rst) begin
-      \$649  = 1'h0;
+      \$649  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$650  = ch1_ctrl_periodic;
-    if (\$217 ) begin
-      \$650  = write_data[8];
+    \$650  = ch0_result_line_settled_delay_snapshot;
+    if (\$130 ) begin
+      \$650  = \port$5871$0 [67:55];
     end
     if (rst) begin
-      \$650  = 1'h0;
+      \$650  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$651  = ch1_ctrl_trigger_enable;
-    if (\$218 ) begin
-      \$651  = write_data[9];
+    \$651  = ch0_window0_read;
+    if (bus__r_en) begin
+      \$651  = \$132 ;
     end
     if (rst) begin
       \$651  = 1'h0;
@@ -5285,52 +5311,40 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$652  = ch1_irq_status_done;
-    if (ch1__done) begin
-      \$652  = 1'h1;
-    end else if (\$220 ) begin
-      \$652  = 1'h0;
+    \$652  = ch0_read_data;
+    if (bus__r_load) begin
+      \$652  = \$212 ;
     end
     if (rst) begin
-      \$652  = 1'h0;
+      \$652  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$653  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$653  = 1'h1;
-    end else if (\$222 ) begin
-      \$653  = 1'h0;
-    end
+    \$653  = \$214 ;
     if (rst) begin
       \$653  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$654  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$654  = 1'h1;
-    end else if (\$224 ) begin
-      \$654  = 1'h0;
-    end
+    \$654  = \$216 ;
     if (rst) begin
       \$654  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$655  = ch1_irq_enable_write;
+    \$655  = \$218 ;
     if (rst) begin
       \$655  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$656  = ch1_irq_enable_done;
-    if (\$225 ) begin
-      \$656  = config_write_data[0];
+    \$656  = ch1_ctrl_periodic;
+    if (\$219 ) begin
+      \$656  = write_data[8];
     end
     if (rst) begin
       \$656  = 1'h0;
@@ -5338,9 +5352,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$657  = ch1_irq_enable_error;
-    if (\$226 ) begin
-      \$657  = config_write_data[1];
+    \$657  = ch1_ctrl_trigger_enable;
+    if (\$220 ) begin
+      \$657  = write_data[9];
     end
     if (rst) begin
       \$657  = 1'h0;
@@ -5348,9 +5362,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$658  = ch1_irq_enable_access_done;
-    if (\$227 ) begin
-      \$658  = config_write_data[2];
+    \$658  = ch1_irq_status_done;
+    if (ch1__done) begin
+      \$658  = 1'h1;
+    end else if (\$222 ) begin
+      \$658  = 1'h0;
     end
     if (rst) begin
       \$658  = 1'h0;
@@ -5358,123 +5374,115 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$659  = ch1_cfg_ma_write;
+    \$659  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$659  = 1'h1;
+    end else if (\$224 ) begin
+      \$659  = 1'h0;
+    end
     if (rst) begin
       \$659  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$660  = ch1_cfg_ma_ma_half_period;
-    if (\$228 ) begin
-      \$660 [7:0] = config_write_data[7:0];
-    end
-    if (\$229 ) begin
-      \$660 [15:8] = config_write_data[15:8];
+    \$660  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$660  = 1'h1;
+    end else if (\$226 ) begin
+      \$660  = 1'h0;
     end
     if (rst) begin
-      \$660  = 16'h0000;
+      \$660  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$661  = ch1_cfg_ma_delay_limit;
-    if (\$230 ) begin
-      \$661 [7:0] = config_write_data[23:16];
-    end
-    if (\$231 ) begin
-      \$661 [11:8] = config_write_data[27:24];
-    end
+    \$661  = ch1_irq_enable_write;
     if (rst) begin
-      \$661  = 12'h000;
+      \$661  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$662  = ch1_cfg_period_write;
+    \$662  = ch1_irq_enable_done;
+    if (\$227 ) begin
+      \$662  = config_write_data[0];
+    end
     if (rst) begin
       \$662  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$663  = ch1_cfg_period_request_period;
-    if (\$232 ) begin
-      \$663 [7:0] = config_write_data[7:0];
-    end
-    if (\$233 ) begin
-      \$663 [15:8] = config_write_data[15:8];
-    end
-    if (\$234 ) begin
-      \$663 [23:16] = config_write_data[23:16];
+    \$663  = ch1_irq_enable_error;
+    if (\$228 ) begin
+      \$663  = config_write_data[1];
     end
     if (rst) begin
-      \$663  = 24'h000000;
+      \$663  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$664  = ch1_cfg_break_write;
+    \$664  = ch1_irq_enable_access_done;
+    if (\$229 ) begin
+      \$664  = config_write_data[2];
+    end
     if (rst) begin
       \$664  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$665  = ch1_cfg_break_break_time;
-    if (\$235 ) begin
-      \$665 [7:0] = config_write_data[7:0];
-    end
-    if (\$236 ) begin
-      \$665 [15:8] = config_write_data[15:8];
-    end
-    if (\$237 ) begin
-      \$665 [23:16] = config_write_data[23:16];
-    end
+    \$665  = ch1_cfg_ma_write;
     if (rst) begin
-      \$665  = 24'h000000;
+      \$665  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$666  = ch1_cfg_ack_write;
+    \$666  = ch1_cfg_ma_ma_half_period;
+    if (\$230 ) begin
+      \$666 [7:0] = config_write_data[7:0];
+    end
+    if (\$231 ) begin
+      \$666 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$666  = 1'h0;
+      \$666  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$667  = ch1_cfg_ack_ack_limit;
-    if (\$238 ) begin
-      \$667 [7:0] = config_write_data[7:0];
+    \$667  = ch1_cfg_ma_delay_limit;
+    if (\$232 ) begin
+      \$667 [7:0] = config_write_data[23:16];
     end
-    if (\$239 ) begin
-      \$667 [15:8] = config_write_data[15:8];
-    end
-    if (\$240 ) begin
-      \$667 [23:16] = config_write_data[23:16];
+    if (\$233 ) begin
+      \$667 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$667  = 24'h000000;
+      \$667  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$668  = ch1_cfg_timeout_write;
+    \$668  = ch1_cfg_period_write;
     if (rst) begin
       \$668  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$669  = ch1_cfg_timeout_timeout_limit;
-    if (\$241 ) begin
+    \$669  = ch1_cfg_period_request_period;
+    if (\$234 ) begin
       \$669 [7:0] = config_write_data[7:0];
     end
-    if (\$242 ) begin
+    if (\$235 ) begin
       \$669 [15:8] = config_write_data[15:8];
     end
-    if (\$243 ) begin
+    if (\$236 ) begin
       \$669 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -5483,86 +5491,95 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$670  = ch1_cfg_words_write;
+    \$670  = ch1_cfg_break_write;
     if (rst) begin
       \$670  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$671  = ch1_cfg_words_w0_data_bits;
-    if (\$244 ) begin
-      \$671  = config_write_data[5:0];
+    \$671  = ch1_cfg_break_break_time;
+    if (\$237 ) begin
+      \$671 [7:0] = config_write_data[7:0];
+    end
+    if (\$238 ) begin
+      \$671 [15:8] = config_write_data[15:8];
+    end
+    if (\$239 ) begin
+      \$671 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$671  = 6'h00;
+      \$671  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$672  = ch1_cfg_words_w0_nenw;
-    if (\$245 ) begin
-      \$672  = config_write_data[6];
-    end
+    \$672  = ch1_cfg_ack_write;
     if (rst) begin
       \$672  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$673  = ch1_cfg_words_w0_lc;
+    \$673  = ch1_cfg_ack_ack_limit;
+    if (\$240 ) begin
+      \$673 [7:0] = config_write_data[7:0];
+    end
+    if (\$241 ) begin
+      \$673 [15:8] = config_write_data[15:8];
+    end
+    if (\$242 ) begin
+      \$673 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$673  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$674  = ch1_cfg_timeout_write;
+    if (rst) begin
+      \$674  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$675  = ch1_cfg_timeout_timeout_limit;
+    if (\$243 ) begin
+      \$675 [7:0] = config_write_data[7:0];
+    end
+    if (\$244 ) begin
+      \$675 [15:8] = config_write_data[15:8];
+    end
+    if (\$245 ) begin
+      \$675 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$675  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$676  = ch1_cfg_words_write;
+    if (rst) begin
+      \$676  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$677  = ch1_cfg_words_w0_data_bits;
     if (\$246 ) begin
-      \$673  = config_write_data[7];
+      \$677  = config_write_data[5:0];
     end
     if (rst) begin
-      \$673  = 1'h0;
+      \$677  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$674  = ch1_cfg_words_w0_crc;
+    \$678  = ch1_cfg_words_w0_nenw;
     if (\$247 ) begin
-      \$674  = config_write_data[9:8];
-    end
-    if (rst) begin
-      \$674  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$675  = ch1_cfg_words_w0_gray;
-    if (\$248 ) begin
-      \$675  = config_write_data[10];
-    end
-    if (rst) begin
-      \$675  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$676  = ch1_cfg_words_w1_data_bits;
-    if (\$249 ) begin
-      \$676  = config_write_data[21:16];
-    end
-    if (rst) begin
-      \$676  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$677  = ch1_cfg_words_w1_nenw;
-    if (\$250 ) begin
-      \$677  = config_write_data[22];
-    end
-    if (rst) begin
-      \$677  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$678  = ch1_cfg_words_w1_lc;
-    if (\$251 ) begin
-      \$678  = config_write_data[23];
+      \$678  = config_write_data[6];
     end
     if (rst) begin
       \$678  = 1'h0;
@@ -5570,29 +5587,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$679  = ch1_cfg_words_w1_crc;
-    if (\$252 ) begin
-      \$679  = config_write_data[25:24];
+    \$679  = ch1_cfg_words_w0_lc;
+    if (\$248 ) begin
+      \$679  = config_write_data[7];
     end
     if (rst) begin
-      \$679  = 2'h0;
+      \$679  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$680  = ch1_cfg_words_w1_gray;
-    if (\$253 ) begin
-      \$680  = config_write_data[26];
+    \$680  = ch1_cfg_words_w0_crc;
+    if (\$249 ) begin
+      \$680  = config_write_data[9:8];
     end
     if (rst) begin
-      \$680  = 1'h0;
+      \$680  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$681  = ch1_cfg_words_w1_enable;
-    if (\$254 ) begin
-      \$681  = config_write_data[31];
+    \$681  = ch1_cfg_words_w0_gray;
+    if (\$250 ) begin
+      \$681  = config_write_data[10];
     end
     if (rst) begin
       \$681  = 1'h0;
@@ -5600,26 +5617,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$682  = ch1_cfg_checks_write;
+    \$682  = ch1_cfg_words_w0_signed;
+    if (\$251 ) begin
+      \$682  = config_write_data[11];
+    end
     if (rst) begin
       \$682  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$683  = ch1_cfg_checks_end_check;
-    if (\$255 ) begin
-      \$683  = config_write_data[0];
+    \$683  = ch1_cfg_words_w1_data_bits;
+    if (\$252 ) begin
+      \$683  = config_write_data[21:16];
     end
     if (rst) begin
-      \$683  = 1'h0;
+      \$683  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$684  = ch1_cfg_checks_spw_check;
-    if (\$256 ) begin
-      \$684  = config_write_data[1];
+    \$684  = ch1_cfg_words_w1_nenw;
+    if (\$253 ) begin
+      \$684  = config_write_data[22];
     end
     if (rst) begin
       \$684  = 1'h0;
@@ -5627,290 +5647,293 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$685  = ch1_cfg_checks_spw_tolerance;
+    \$685  = ch1_cfg_words_w1_lc;
+    if (\$254 ) begin
+      \$685  = config_write_data[23];
+    end
+    if (rst) begin
+      \$685  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$686  = ch1_cfg_words_w1_crc;
+    if (\$255 ) begin
+      \$686  = config_write_data[25:24];
+    end
+    if (rst) begin
+      \$686  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$687  = ch1_cfg_words_w1_gray;
+    if (\$256 ) begin
+      \$687  = config_write_data[26];
+    end
+    if (rst) begin
+      \$687  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$688  = ch1_cfg_words_w1_signed;
     if (\$257 ) begin
-      \$685  = config_write_data[15:8];
+      \$688  = config_write_data[27];
     end
-    if (rst) begin
-      \$685  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$686  = ch1_cfg_checks_noise_limit;
-    if (\$258 ) begin
-      \$686  = config_write_data[19:16];
-    end
-    if (rst) begin
-      \$686  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$687  = ch1_cfg_checks_delay_tolerance;
-    if (\$259 ) begin
-      \$687  = config_write_data[23:20];
-    end
-    if (rst) begin
-      \$687  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$688  = ch1_cfg_quiet_write;
     if (rst) begin
       \$688  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$689  = ch1_cfg_quiet_quiet_time;
-    if (\$260 ) begin
-      \$689 [7:0] = config_write_data[7:0];
-    end
-    if (\$261 ) begin
-      \$689 [11:8] = config_write_data[11:8];
+    \$689  = ch1_cfg_words_w1_enable;
+    if (\$258 ) begin
+      \$689  = config_write_data[31];
     end
     if (rst) begin
-      \$689  = 12'h000;
+      \$689  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$690  = ch1_cfg_crc0_write;
+    \$690  = ch1_cfg_checks_write;
     if (rst) begin
       \$690  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$691  = ch1_cfg_crc0_w0_crc_poly;
+    \$691  = ch1_cfg_checks_end_check;
+    if (\$259 ) begin
+      \$691  = config_write_data[0];
+    end
+    if (rst) begin
+      \$691  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$692  = ch1_cfg_checks_spw_check;
+    if (\$260 ) begin
+      \$692  = config_write_data[1];
+    end
+    if (rst) begin
+      \$692  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$693  = ch1_cfg_checks_spw_tolerance;
+    if (\$261 ) begin
+      \$693  = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$693  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$694  = ch1_cfg_checks_noise_limit;
     if (\$262 ) begin
-      \$691 [7:0] = config_write_data[7:0];
+      \$694  = config_write_data[19:16];
     end
+    if (rst) begin
+      \$694  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$695  = ch1_cfg_checks_delay_tolerance;
     if (\$263 ) begin
-      \$691 [15:8] = config_write_data[15:8];
+      \$695  = config_write_data[23:20];
     end
     if (rst) begin
-      \$691  = 16'h0000;
+      \$695  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$692  = ch1_cfg_crc0_w0_crc_width;
-    if (\$264 ) begin
-      \$692  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$692  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$693  = ch1_cfg_crc0_w0_crc_inverted;
-    if (\$265 ) begin
-      \$693  = config_write_data[24];
-    end
-    if (rst) begin
-      \$693  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$694  = ch1_cfg_crc0_start_write;
-    if (rst) begin
-      \$694  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$695  = ch1_cfg_crc0_start_w0_crc_start;
-    if (\$266 ) begin
-      \$695 [7:0] = config_write_data[7:0];
-    end
-    if (\$267 ) begin
-      \$695 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$695  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$696  = ch1_cfg_crc1_write;
+    \$696  = ch1_cfg_quiet_write;
     if (rst) begin
       \$696  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$697  = ch1_cfg_crc1_w1_crc_poly;
-    if (\$268 ) begin
+    \$697  = ch1_cfg_quiet_quiet_time;
+    if (\$264 ) begin
       \$697 [7:0] = config_write_data[7:0];
     end
+    if (\$265 ) begin
+      \$697 [11:8] = config_write_data[11:8];
+    end
+    if (rst) begin
+      \$697  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$698  = ch1_cfg_crc0_write;
+    if (rst) begin
+      \$698  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$699  = ch1_cfg_crc0_w0_crc_poly;
+    if (\$266 ) begin
+      \$699 [7:0] = config_write_data[7:0];
+    end
+    if (\$267 ) begin
+      \$699 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$699  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$700  = ch1_cfg_crc0_w0_crc_width;
+    if (\$268 ) begin
+      \$700  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$700  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$701  = ch1_cfg_crc0_w0_crc_inverted;
     if (\$269 ) begin
-      \$697 [15:8] = config_write_data[15:8];
+      \$701  = config_write_data[24];
     end
     if (rst) begin
-      \$697  = 16'h0000;
+      \$701  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$698  = ch1_cfg_crc1_w1_crc_width;
-    if (\$270 ) begin
-      \$698  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$698  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$699  = ch1_cfg_crc1_w1_crc_inverted;
-    if (\$271 ) begin
-      \$699  = config_write_data[24];
-    end
-    if (rst) begin
-      \$699  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$700  = ch1_cfg_crc1_start_write;
-    if (rst) begin
-      \$700  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$701  = ch1_cfg_crc1_start_w1_crc_start;
-    if (\$272 ) begin
-      \$701 [7:0] = config_write_data[7:0];
-    end
-    if (\$273 ) begin
-      \$701 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$701  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$702  = ch1_ca_request_write;
+    \$702  = ch1_cfg_crc0_start_write;
     if (rst) begin
       \$702  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$703  = ch1_ca_request_slave_id;
+    \$703  = ch1_cfg_crc0_start_w0_crc_start;
+    if (\$270 ) begin
+      \$703 [7:0] = config_write_data[7:0];
+    end
+    if (\$271 ) begin
+      \$703 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$703  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$704  = ch1_cfg_crc1_write;
+    if (rst) begin
+      \$704  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$705  = ch1_cfg_crc1_w1_crc_poly;
+    if (\$272 ) begin
+      \$705 [7:0] = config_write_data[7:0];
+    end
+    if (\$273 ) begin
+      \$705 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$705  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$706  = ch1_cfg_crc1_w1_crc_width;
     if (\$274 ) begin
-      \$703  = config_write_data[2:0];
+      \$706  = config_write_data[20:16];
     end
     if (rst) begin
-      \$703  = 3'h0;
+      \$706  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$704  = ch1_ca_request_address;
+    \$707  = ch1_cfg_crc1_w1_crc_inverted;
     if (\$275 ) begin
-      \$704  = config_write_data[14:8];
+      \$707  = config_write_data[24];
     end
-    if (rst) begin
-      \$704  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$705  = ch1_ca_request_count;
-    if (\$276 ) begin
-      \$705  = config_write_data[22:16];
-    end
-    if (rst) begin
-      \$705  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$706  = \ch1_ca_request_write$305 ;
-    if (\$277 ) begin
-      \$706  = config_write_data[24];
-    end
-    if (rst) begin
-      \$706  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$707  = \$279 ;
     if (rst) begin
       \$707  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$708  = \$281 ;
+    \$708  = ch1_cfg_crc1_start_write;
     if (rst) begin
       \$708  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$709  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$709  = \$282 ;
+    \$709  = ch1_cfg_crc1_start_w1_crc_start;
+    if (\$276 ) begin
+      \$709 [7:0] = config_write_data[7:0];
+    end
+    if (\$277 ) begin
+      \$709 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$709  = 1'h0;
+      \$709  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$710  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$710  = \$283 ;
-    end
+    \$710  = ch1_ca_request_write;
     if (rst) begin
       \$710  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$711  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$711  = \$284 ;
+    \$711  = ch1_ca_request_slave_id;
+    if (\$278 ) begin
+      \$711  = config_write_data[2:0];
     end
     if (rst) begin
-      \$711  = 1'h0;
+      \$711  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$712  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$712  = \$285 ;
+    \$712  = ch1_ca_request_address;
+    if (\$279 ) begin
+      \$712  = config_write_data[14:8];
     end
     if (rst) begin
-      \$712  = 1'h0;
+      \$712  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$713  = ch1_read_select_105;
-    if (bus__r_en) begin
-      \$713  = \$286 ;
+    \$713  = ch1_ca_request_count;
+    if (\$280 ) begin
+      \$713  = config_write_data[22:16];
     end
     if (rst) begin
-      \$713  = 1'h0;
+      \$713  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$714  = ch1_read_select_108;
-    if (bus__r_en) begin
-      \$714  = \$287 ;
+    \$714  = \ch1_ca_request_write$309 ;
+    if (\$281 ) begin
+      \$714  = config_write_data[24];
     end
     if (rst) begin
       \$714  = 1'h0;
@@ -5918,29 +5941,23 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$715  = ch1_read_select_109;
-    if (bus__r_en) begin
-      \$715  = \$288 ;
-    end
+    \$715  = \$283 ;
     if (rst) begin
       \$715  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$716  = ch1_read_select_10a;
-    if (bus__r_en) begin
-      \$716  = \$289 ;
-    end
+    \$716  = \$285 ;
     if (rst) begin
       \$716  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$717  = ch1_read_select_10b;
+    \$717  = ch1_read_select_100;
     if (bus__r_en) begin
-      \$717  = \$290 ;
+      \$717  = \$286 ;
     end
     if (rst) begin
       \$717  = 1'h0;
@@ -5948,9 +5965,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$718  = ch1_read_select_10c;
+    \$718  = ch1_read_select_101;
     if (bus__r_en) begin
-      \$718  = \$291 ;
+      \$718  = \$287 ;
     end
     if (rst) begin
       \$718  = 1'h0;
@@ -5958,9 +5975,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$719  = ch1_read_select_10d;
+    \$719  = ch1_read_select_102;
     if (bus__r_en) begin
-      \$719  = \$292 ;
+      \$719  = \$288 ;
     end
     if (rst) begin
       \$719  = 1'h0;
@@ -5968,9 +5985,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$720  = ch1_read_select_10e;
+    \$720  = ch1_read_select_104;
     if (bus__r_en) begin
-      \$720  = \$293 ;
+      \$720  = \$289 ;
     end
     if (rst) begin
       \$720  = 1'h0;
@@ -5978,9 +5995,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$721  = ch1_read_select_10f;
+    \$721  = ch1_read_select_105;
     if (bus__r_en) begin
-      \$721  = \$294 ;
+      \$721  = \$290 ;
     end
     if (rst) begin
       \$721  = 1'h0;
@@ -5988,9 +6005,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$722  = ch1_read_select_110;
+    \$722  = ch1_read_select_108;
     if (bus__r_en) begin
-      \$722  = \$295 ;
+      \$722  = \$291 ;
     end
     if (rst) begin
       \$722  = 1'h0;
@@ -5998,9 +6015,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$723  = ch1_read_select_111;
+    \$723  = ch1_read_select_109;
     if (bus__r_en) begin
-      \$723  = \$296 ;
+      \$723  = \$292 ;
     end
     if (rst) begin
       \$723  = 1'h0;
@@ -6008,9 +6025,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$724  = ch1_read_select_112;
+    \$724  = ch1_read_select_10a;
     if (bus__r_en) begin
-      \$724  = \$297 ;
+      \$724  = \$293 ;
     end
     if (rst) begin
       \$724  = 1'h0;
@@ -6018,9 +6035,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$725  = ch1_read_select_113;
+    \$725  = ch1_read_select_10b;
     if (bus__r_en) begin
-      \$725  = \$298 ;
+      \$725  = \$294 ;
     end
     if (rst) begin
       \$725  = 1'h0;
@@ -6028,9 +6045,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$726  = ch1_read_select_114;
+    \$726  = ch1_read_select_10c;
     if (bus__r_en) begin
-      \$726  = \$299 ;
+      \$726  = \$295 ;
     end
     if (rst) begin
       \$726  = 1'h0;
@@ -6038,9 +6055,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$727  = ch1_read_select_115;
+    \$727  = ch1_read_select_10d;
     if (bus__r_en) begin
-      \$727  = \$300 ;
+      \$727  = \$296 ;
     end
     if (rst) begin
       \$727  = 1'h0;
@@ -6048,9 +6065,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$728  = ch1_read_select_116;
+    \$728  = ch1_read_select_10e;
     if (bus__r_en) begin
-      \$728  = \$301 ;
+      \$728  = \$297 ;
     end
     if (rst) begin
       \$728  = 1'h0;
@@ -6058,9 +6075,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$729  = ch1_read_select_117;
+    \$729  = ch1_read_select_10f;
     if (bus__r_en) begin
-      \$729  = \$302 ;
+      \$729  = \$298 ;
     end
     if (rst) begin
       \$729  = 1'h0;
@@ -6068,9 +6085,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$730  = ch1_read_select_118;
+    \$730  = ch1_read_select_110;
     if (bus__r_en) begin
-      \$730  = \$303 ;
+      \$730  = \$299 ;
     end
     if (rst) begin
       \$730  = 1'h0;
@@ -6078,9 +6095,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$731  = ch1_read_select_119;
+    \$731  = ch1_read_select_111;
     if (bus__r_en) begin
-      \$731  = \$304 ;
+      \$731  = \$300 ;
     end
     if (rst) begin
       \$731  = 1'h0;
@@ -6088,9 +6105,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$732  = ch1_read_select_11a;
+    \$732  = ch1_read_select_112;
     if (bus__r_en) begin
-      \$732  = \$305 ;
+      \$732  = \$301 ;
     end
     if (rst) begin
       \$732  = 1'h0;
@@ -6098,9 +6115,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$733  = ch1_read_select_11b;
+    \$733  = ch1_read_select_113;
     if (bus__r_en) begin
-      \$733  = \$306 ;
+      \$733  = \$302 ;
     end
     if (rst) begin
       \$733  = 1'h0;
@@ -6108,9 +6125,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$734  = ch1_read_select_11c;
+    \$734  = ch1_read_select_114;
     if (bus__r_en) begin
-      \$734  = \$307 ;
+      \$734  = \$303 ;
     end
     if (rst) begin
       \$734  = 1'h0;
@@ -6118,9 +6135,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$735  = ch1_read_select_11d;
+    \$735  = ch1_read_select_115;
     if (bus__r_en) begin
-      \$735  = \$308 ;
+      \$735  = \$304 ;
     end
     if (rst) begin
       \$735  = 1'h0;
@@ -6128,9 +6145,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$736  = ch1_read_select_11e;
+    \$736  = ch1_read_select_116;
     if (bus__r_en) begin
-      \$736  = \$309 ;
+      \$736  = \$305 ;
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6138,9 +6155,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$737  = ch1_read_select_11f;
+    \$737  = ch1_read_select_117;
     if (bus__r_en) begin
-      \$737  = \$310 ;
+      \$737  = \$306 ;
     end
     if (rst) begin
       \$737  = 1'h0;
@@ -6148,9 +6165,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$738  = ch1_read_select_120;
+    \$738  = ch1_read_select_118;
     if (bus__r_en) begin
-      \$738  = \$311 ;
+      \$738  = \$307 ;
     end
     if (rst) begin
       \$738  = 1'h0;
@@ -6158,9 +6175,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$739  = ch1_read_select_121;
+    \$739  = ch1_read_select_119;
     if (bus__r_en) begin
-      \$739  = \$312 ;
+      \$739  = \$308 ;
     end
     if (rst) begin
       \$739  = 1'h0;
@@ -6168,9 +6185,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$740  = ch1_read_select_122;
+    \$740  = ch1_read_select_11a;
     if (bus__r_en) begin
-      \$740  = \$313 ;
+      \$740  = \$309 ;
     end
     if (rst) begin
       \$740  = 1'h0;
@@ -6178,9 +6195,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$741  = ch1_read_select_123;
+    \$741  = ch1_read_select_11b;
     if (bus__r_en) begin
-      \$741  = \$314 ;
+      \$741  = \$310 ;
     end
     if (rst) begin
       \$741  = 1'h0;
@@ -6188,9 +6205,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$742  = ch1_read_select_140;
+    \$742  = ch1_read_select_11c;
     if (bus__r_en) begin
-      \$742  = \$315 ;
+      \$742  = \$311 ;
     end
     if (rst) begin
       \$742  = 1'h0;
@@ -6198,9 +6215,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$743  = ch1_read_select_141;
+    \$743  = ch1_read_select_11d;
     if (bus__r_en) begin
-      \$743  = \$316 ;
+      \$743  = \$312 ;
     end
     if (rst) begin
       \$743  = 1'h0;
@@ -6208,9 +6225,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$744  = ch1_read_select_142;
+    \$744  = ch1_read_select_11e;
     if (bus__r_en) begin
-      \$744  = \$317 ;
+      \$744  = \$313 ;
     end
     if (rst) begin
       \$744  = 1'h0;
@@ -6218,9 +6235,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$745  = ch1_read_select_143;
+    \$745  = ch1_read_select_11f;
     if (bus__r_en) begin
-      \$745  = \$318 ;
+      \$745  = \$314 ;
     end
     if (rst) begin
       \$745  = 1'h0;
@@ -6228,9 +6245,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$746  = ch1_read_select_144;
+    \$746  = ch1_read_select_120;
     if (bus__r_en) begin
-      \$746  = \$319 ;
+      \$746  = \$315 ;
     end
     if (rst) begin
       \$746  = 1'h0;
@@ -6238,9 +6255,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$747  = ch1_read_select_145;
+    \$747  = ch1_read_select_121;
     if (bus__r_en) begin
-      \$747  = \$320 ;
+      \$747  = \$316 ;
     end
     if (rst) begin
       \$747  = 1'h0;
@@ -6248,19 +6265,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$748  = ch1_result_status_status_snapshot;
-    if (\$321 ) begin
-      \$748  = \port$5462$0 [3:0];
+    \$748  = ch1_read_select_122;
+    if (bus__r_en) begin
+      \$748  = \$317 ;
     end
     if (rst) begin
-      \$748  = 4'h0;
+      \$748  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$749  = ch1_result_status_cds_snapshot;
-    if (\$321 ) begin
-      \$749  = \port$5462$0 [49];
+    \$749  = ch1_read_select_123;
+    if (bus__r_en) begin
+      \$749  = \$318 ;
     end
     if (rst) begin
       \$749  = 1'h0;
@@ -6268,9 +6285,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$750  = ch1_result_status_w0_ne_snapshot;
-    if (\$321 ) begin
-      \$750  = \port$5462$0 [131];
+    \$750  = ch1_read_select_140;
+    if (bus__r_en) begin
+      \$750  = \$319 ;
     end
     if (rst) begin
       \$750  = 1'h0;
@@ -6278,9 +6295,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$751  = ch1_result_status_w0_nw_snapshot;
-    if (\$321 ) begin
-      \$751  = \port$5462$0 [132];
+    \$751  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$751  = \$320 ;
     end
     if (rst) begin
       \$751  = 1'h0;
@@ -6288,9 +6305,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$752  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$321 ) begin
-      \$752  = \port$5462$0 [133];
+    \$752  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$752  = \$321 ;
     end
     if (rst) begin
       \$752  = 1'h0;
@@ -6298,9 +6315,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$753  = ch1_result_status_w1_ne_snapshot;
-    if (\$321 ) begin
-      \$753  = \port$5462$0 [174];
+    \$753  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$753  = \$322 ;
     end
     if (rst) begin
       \$753  = 1'h0;
@@ -6308,9 +6325,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$754  = ch1_result_status_w1_nw_snapshot;
-    if (\$321 ) begin
-      \$754  = \port$5462$0 [175];
+    \$754  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$754  = \$323 ;
     end
     if (rst) begin
       \$754  = 1'h0;
@@ -6318,9 +6335,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$755  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$321 ) begin
-      \$755  = \port$5462$0 [176];
+    \$755  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$755  = \$324 ;
     end
     if (rst) begin
       \$755  = 1'h0;
@@ -6328,19 +6345,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$756  = ch1_result_status_lc_repeat_snapshot;
-    if (\$321 ) begin
-      \$756  = \port$5462$0 [183];
+    \$756  = ch1_result_status_status_snapshot;
+    if (\$325 ) begin
+      \$756  = \port$6436$0 [3:0];
     end
     if (rst) begin
-      \$756  = 1'h0;
+      \$756  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$757  = ch1_result_status_lc_skip_snapshot;
-    if (\$321 ) begin
-      \$757  = \port$5462$0 [184];
+    \$757  = ch1_result_status_cds_snapshot;
+    if (\$325 ) begin
+      \$757  = \port$6436$0 [49];
     end
     if (rst) begin
       \$757  = 1'h0;
@@ -6348,9 +6365,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$758  = ch1_result_status_lc_zero_snapshot;
-    if (\$321 ) begin
-      \$758  = \port$5462$0 [185];
+    \$758  = ch1_result_status_w0_ne_snapshot;
+    if (\$325 ) begin
+      \$758  = \port$6436$0 [131];
     end
     if (rst) begin
       \$758  = 1'h0;
@@ -6358,9 +6375,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$759  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$321 ) begin
-      \$759  = \port$5462$0 [186];
+    \$759  = ch1_result_status_w0_nw_snapshot;
+    if (\$325 ) begin
+      \$759  = \port$6436$0 [132];
     end
     if (rst) begin
       \$759  = 1'h0;
@@ -6368,247 +6385,327 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$760  = ch1_result_status_lc_snapshot;
-    if (\$321 ) begin
-      \$760  = \port$5462$0 [182:177];
+    \$760  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$325 ) begin
+      \$760  = \port$6436$0 [133];
     end
     if (rst) begin
-      \$760  = 6'h00;
+      \$760  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$761  = ch1_result_seq_seq_snapshot;
-    if (\$321 ) begin
-      \$761  = ch1__done_count;
+    \$761  = ch1_result_status_w1_ne_snapshot;
+    if (\$325 ) begin
+      \$761  = \port$6436$0 [174];
     end
     if (rst) begin
-      \$761  = 16'h0000;
+      \$761  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$762  = ch1_result_seq_line_delay_snapshot;
-    if (\$321 ) begin
-      \$762  = \port$5462$0 [48:36];
+    \$762  = ch1_result_status_w1_nw_snapshot;
+    if (\$325 ) begin
+      \$762  = \port$6436$0 [175];
     end
     if (rst) begin
-      \$762  = 13'h0000;
+      \$762  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$763  = ch1_result_w0_lo_data_snapshot;
-    if (\$321 ) begin
-      \$763  = \port$5462$0 [107:76];
+    \$763  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$325 ) begin
+      \$763  = \port$6436$0 [176];
     end
     if (rst) begin
-      \$763  = 32'd0;
+      \$763  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$764  = ch1_result_w0_hi_data_snapshot;
-    if (\$321 ) begin
-      \$764  = \port$5462$0 [130:108];
+    \$764  = ch1_result_status_lc_repeat_snapshot;
+    if (\$325 ) begin
+      \$764  = \port$6436$0 [183];
     end
     if (rst) begin
-      \$764  = 23'h000000;
+      \$764  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$765  = ch1_result_w1_lo_data_snapshot;
-    if (\$321 ) begin
-      \$765  = \port$5462$0 [165:134];
+    \$765  = ch1_result_status_lc_skip_snapshot;
+    if (\$325 ) begin
+      \$765  = \port$6436$0 [184];
     end
     if (rst) begin
-      \$765  = 32'd0;
+      \$765  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$766  = ch1_result_w1_hi_data_snapshot;
-    if (\$321 ) begin
-      \$766  = \port$5462$0 [173:166];
+    \$766  = ch1_result_status_lc_zero_snapshot;
+    if (\$325 ) begin
+      \$766  = \port$6436$0 [185];
     end
     if (rst) begin
-      \$766  = 8'h00;
+      \$766  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$767  = ch1_result_timestamp_time_snapshot;
-    if (\$321 ) begin
-      \$767  = \port$5462$0 [35:4];
+    \$767  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$325 ) begin
+      \$767  = \port$6436$0 [186];
     end
     if (rst) begin
-      \$767  = 32'd0;
+      \$767  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$768  = ch1_result_line_noise_events_snapshot;
-    if (\$321 ) begin
-      \$768  = \port$5462$0 [53:50];
+    \$768  = ch1_result_status_lc_snapshot;
+    if (\$325 ) begin
+      \$768  = \port$6436$0 [182:177];
     end
     if (rst) begin
-      \$768  = 4'h0;
+      \$768  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$769  = ch1_result_line_delay_settled_snapshot;
-    if (\$321 ) begin
-      \$769  = \port$5462$0 [54];
+    \$769  = ch1_result_seq_seq_snapshot;
+    if (\$325 ) begin
+      \$769  = ch1__done_count;
     end
     if (rst) begin
-      \$769  = 1'h0;
+      \$769  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$770  = ch1_result_line_delay_spread_snapshot;
-    if (\$321 ) begin
-      \$770  = \port$5462$0 [75:68];
+    \$770  = ch1_result_seq_line_delay_snapshot;
+    if (\$325 ) begin
+      \$770  = \port$6436$0 [48:36];
     end
     if (rst) begin
-      \$770  = 8'h00;
+      \$770  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$771  = ch1_result_line_settled_delay_snapshot;
-    if (\$321 ) begin
-      \$771  = \port$5462$0 [67:55];
+    \$771  = ch1_result_w0_lo_data_snapshot;
+    if (\$325 ) begin
+      \$771  = \port$6436$0 [107:76];
     end
     if (rst) begin
-      \$771  = 13'h0000;
+      \$771  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$772  = ch1_window0_read;
-    if (bus__r_en) begin
-      \$772  = \$323 ;
+    \$772  = ch1_result_w0_hi_data_snapshot;
+    if (\$325 ) begin
+      \$772  = \port$6436$0 [130:108];
     end
     if (rst) begin
-      \$772  = 1'h0;
+      \$772  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$773  = ch1_read_data;
-    if (bus__r_load) begin
-      \$773  = \$403 ;
+    \$773  = ch1_result_w1_lo_data_snapshot;
+    if (\$325 ) begin
+      \$773  = \port$6436$0 [165:134];
     end
     if (rst) begin
       \$773  = 32'd0;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$774  = ch1_result_w1_hi_data_snapshot;
+    if (\$325 ) begin
+      \$774  = \port$6436$0 [173:166];
+    end
+    if (rst) begin
+      \$774  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$775  = ch1_result_timestamp_time_snapshot;
+    if (\$325 ) begin
+      \$775  = \port$6436$0 [35:4];
+    end
+    if (rst) begin
+      \$775  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$776  = ch1_result_line_noise_events_snapshot;
+    if (\$325 ) begin
+      \$776  = \port$6436$0 [53:50];
+    end
+    if (rst) begin
+      \$776  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$777  = ch1_result_line_delay_settled_snapshot;
+    if (\$325 ) begin
+      \$777  = \port$6436$0 [54];
+    end
+    if (rst) begin
+      \$777  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$778  = ch1_result_line_delay_spread_snapshot;
+    if (\$325 ) begin
+      \$778  = \port$6436$0 [75:68];
+    end
+    if (rst) begin
+      \$778  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$779  = ch1_result_line_settled_delay_snapshot;
+    if (\$325 ) begin
+      \$779  = \port$6436$0 [67:55];
+    end
+    if (rst) begin
+      \$779  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$780  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$780  = \$327 ;
+    end
+    if (rst) begin
+      \$780  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$781  = ch1_read_data;
+    if (bus__r_load) begin
+      \$781  = \$407 ;
+    end
+    if (rst) begin
+      \$781  = 32'd0;
+    end
+  end
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$4897$0 [3:0];
-  assign ch0__cds = \port$4897$0 [49];
-  assign ch0__word0_ne = \port$4897$0 [131];
-  assign ch0__word0_nw = \port$4897$0 [132];
-  assign ch0__word0_crc_ok = \port$4897$0 [133];
-  assign ch0__word1_ne = \port$4897$0 [174];
-  assign ch0__word1_nw = \port$4897$0 [175];
-  assign ch0__word1_crc_ok = \port$4897$0 [176];
-  assign ch0__lc_repeat = \port$4897$0 [183];
-  assign ch0__lc_skip = \port$4897$0 [184];
-  assign ch0__lc_zero = \port$4897$0 [185];
-  assign ch0__spw_mismatch = \port$4897$0 [186];
-  assign ch0__lc = \port$4897$0 [182:177];
-  assign ch0__line_delay = \port$4897$0 [48:36];
-  assign ch0__word0_position = \port$4897$0 [130:76];
-  assign ch0__word1_position = \port$4897$0 [173:134];
-  assign ch0__timestamp = \port$4897$0 [35:4];
-  assign ch0__noise_events = \port$4897$0 [53:50];
-  assign ch0__delay_settled = \port$4897$0 [54];
-  assign ch0__delay_spread = \port$4897$0 [75:68];
-  assign ch0__settled_delay = \port$4897$0 [67:55];
+  assign ch0__status = \port$5871$0 [3:0];
+  assign ch0__cds = \port$5871$0 [49];
+  assign ch0__word0_ne = \port$5871$0 [131];
+  assign ch0__word0_nw = \port$5871$0 [132];
+  assign ch0__word0_crc_ok = \port$5871$0 [133];
+  assign ch0__word1_ne = \port$5871$0 [174];
+  assign ch0__word1_nw = \port$5871$0 [175];
+  assign ch0__word1_crc_ok = \port$5871$0 [176];
+  assign ch0__lc_repeat = \port$5871$0 [183];
+  assign ch0__lc_skip = \port$5871$0 [184];
+  assign ch0__lc_zero = \port$5871$0 [185];
+  assign ch0__spw_mismatch = \port$5871$0 [186];
+  assign ch0__lc = \port$5871$0 [182:177];
+  assign ch0__line_delay = \port$5871$0 [48:36];
+  assign ch0__word0_position = \port$5871$0 [130:76];
+  assign ch0__word1_position = \port$5871$0 [173:134];
+  assign ch0__timestamp = \port$5871$0 [35:4];
+  assign ch0__noise_events = \port$5871$0 [53:50];
+  assign ch0__delay_settled = \port$5871$0 [54];
+  assign ch0__delay_spread = \port$5871$0 [75:68];
+  assign ch0__settled_delay = \port$5871$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$4910$0 [15:0];
-  assign ch0__count_crc_word1 = \port$4910$0 [31:16];
-  assign ch0__count_no_ack = \port$4910$0 [47:32];
-  assign ch0__count_no_start = \port$4910$0 [63:48];
-  assign ch0__count_delay_range = \port$4910$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$4910$0 [95:80];
-  assign ch0__count_lc_repeat = \port$4910$0 [111:96];
-  assign ch0__count_lc_skip = \port$4910$0 [127:112];
-  assign ch0__count_lc_zero = \port$4910$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$4910$0 [159:144];
-  assign ch0__count_overrun = \port$4910$0 [175:160];
-  assign ch0__count_aborted = \port$4910$0 [191:176];
-  assign ch0__count_no_stop = \port$4910$0 [207:192];
-  assign ch0__count_noisy_line = \port$4910$0 [223:208];
-  assign ch0__count_delay_jump = \port$4910$0 [239:224];
-  assign ch0__count_noise_event = \port$4910$0 [255:240];
-  assign ch0__ca_status = \port$5042$0 [2:0];
-  assign ch0__ca_bytes_done = \port$5042$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$4910$0 [271:256];
-  assign ch0__count_ca_no_answer = \port$4910$0 [287:272];
-  assign ch0__count_ca_refused = \port$4910$0 [303:288];
-  assign ch0__count_ca_aborted = \port$4910$0 [319:304];
-  assign ch0__count_ca_data_fault = \port$4910$0 [335:320];
-  assign ch1__status = \port$5462$0 [3:0];
-  assign ch1__cds = \port$5462$0 [49];
-  assign ch1__word0_ne = \port$5462$0 [131];
-  assign ch1__word0_nw = \port$5462$0 [132];
-  assign ch1__word0_crc_ok = \port$5462$0 [133];
-  assign ch1__word1_ne = \port$5462$0 [174];
-  assign ch1__word1_nw = \port$5462$0 [175];
-  assign ch1__word1_crc_ok = \port$5462$0 [176];
-  assign ch1__lc_repeat = \port$5462$0 [183];
-  assign ch1__lc_skip = \port$5462$0 [184];
-  assign ch1__lc_zero = \port$5462$0 [185];
-  assign ch1__spw_mismatch = \port$5462$0 [186];
-  assign ch1__lc = \port$5462$0 [182:177];
-  assign ch1__line_delay = \port$5462$0 [48:36];
-  assign ch1__word0_position = \port$5462$0 [130:76];
-  assign ch1__word1_position = \port$5462$0 [173:134];
-  assign ch1__timestamp = \port$5462$0 [35:4];
-  assign ch1__noise_events = \port$5462$0 [53:50];
-  assign ch1__delay_settled = \port$5462$0 [54];
-  assign ch1__delay_spread = \port$5462$0 [75:68];
-  assign ch1__settled_delay = \port$5462$0 [67:55];
+  assign ch0__count_crc_word0 = \port$5884$0 [15:0];
+  assign ch0__count_crc_word1 = \port$5884$0 [31:16];
+  assign ch0__count_no_ack = \port$5884$0 [47:32];
+  assign ch0__count_no_start = \port$5884$0 [63:48];
+  assign ch0__count_delay_range = \port$5884$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$5884$0 [95:80];
+  assign ch0__count_lc_repeat = \port$5884$0 [111:96];
+  assign ch0__count_lc_skip = \port$5884$0 [127:112];
+  assign ch0__count_lc_zero = \port$5884$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$5884$0 [159:144];
+  assign ch0__count_overrun = \port$5884$0 [175:160];
+  assign ch0__count_aborted = \port$5884$0 [191:176];
+  assign ch0__count_no_stop = \port$5884$0 [207:192];
+  assign ch0__count_noisy_line = \port$5884$0 [223:208];
+  assign ch0__count_delay_jump = \port$5884$0 [239:224];
+  assign ch0__count_noise_event = \port$5884$0 [255:240];
+  assign ch0__ca_status = \port$6016$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6016$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$5884$0 [271:256];
+  assign ch0__count_ca_no_answer = \port$5884$0 [287:272];
+  assign ch0__count_ca_refused = \port$5884$0 [303:288];
+  assign ch0__count_ca_aborted = \port$5884$0 [319:304];
+  assign ch0__count_ca_data_fault = \port$5884$0 [335:320];
+  assign ch1__status = \port$6436$0 [3:0];
+  assign ch1__cds = \port$6436$0 [49];
+  assign ch1__word0_ne = \port$6436$0 [131];
+  assign ch1__word0_nw = \port$6436$0 [132];
+  assign ch1__word0_crc_ok = \port$6436$0 [133];
+  assign ch1__word1_ne = \port$6436$0 [174];
+  assign ch1__word1_nw = \port$6436$0 [175];
+  assign ch1__word1_crc_ok = \port$6436$0 [176];
+  assign ch1__lc_repeat = \port$6436$0 [183];
+  assign ch1__lc_skip = \port$6436$0 [184];
+  assign ch1__lc_zero = \port$6436$0 [185];
+  assign ch1__spw_mismatch = \port$6436$0 [186];
+  assign ch1__lc = \port$6436$0 [182:177];
+  assign ch1__line_delay = \port$6436$0 [48:36];
+  assign ch1__word0_position = \port$6436$0 [130:76];
+  assign ch1__word1_position = \port$6436$0 [173:134];
+  assign ch1__timestamp = \port$6436$0 [35:4];
+  assign ch1__noise_events = \port$6436$0 [53:50];
+  assign ch1__delay_settled = \port$6436$0 [54];
+  assign ch1__delay_spread = \port$6436$0 [75:68];
+  assign ch1__settled_delay = \port$6436$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$5475$0 [15:0];
-  assign ch1__count_crc_word1 = \port$5475$0 [31:16];
-  assign ch1__count_no_ack = \port$5475$0 [47:32];
-  assign ch1__count_no_start = \port$5475$0 [63:48];
-  assign ch1__count_delay_range = \port$5475$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$5475$0 [95:80];
-  assign ch1__count_lc_repeat = \port$5475$0 [111:96];
-  assign ch1__count_lc_skip = \port$5475$0 [127:112];
-  assign ch1__count_lc_zero = \port$5475$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$5475$0 [159:144];
-  assign ch1__count_overrun = \port$5475$0 [175:160];
-  assign ch1__count_aborted = \port$5475$0 [191:176];
-  assign ch1__count_no_stop = \port$5475$0 [207:192];
-  assign ch1__count_noisy_line = \port$5475$0 [223:208];
-  assign ch1__count_delay_jump = \port$5475$0 [239:224];
-  assign ch1__count_noise_event = \port$5475$0 [255:240];
-  assign ch1__ca_status = \port$5607$0 [2:0];
-  assign ch1__ca_bytes_done = \port$5607$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$5475$0 [271:256];
-  assign ch1__count_ca_no_answer = \port$5475$0 [287:272];
-  assign ch1__count_ca_refused = \port$5475$0 [303:288];
-  assign ch1__count_ca_aborted = \port$5475$0 [319:304];
-  assign ch1__count_ca_data_fault = \port$5475$0 [335:320];
+  assign ch1__count_crc_word0 = \port$6449$0 [15:0];
+  assign ch1__count_crc_word1 = \port$6449$0 [31:16];
+  assign ch1__count_no_ack = \port$6449$0 [47:32];
+  assign ch1__count_no_start = \port$6449$0 [63:48];
+  assign ch1__count_delay_range = \port$6449$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$6449$0 [95:80];
+  assign ch1__count_lc_repeat = \port$6449$0 [111:96];
+  assign ch1__count_lc_skip = \port$6449$0 [127:112];
+  assign ch1__count_lc_zero = \port$6449$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$6449$0 [159:144];
+  assign ch1__count_overrun = \port$6449$0 [175:160];
+  assign ch1__count_aborted = \port$6449$0 [191:176];
+  assign ch1__count_no_stop = \port$6449$0 [207:192];
+  assign ch1__count_noisy_line = \port$6449$0 [223:208];
+  assign ch1__count_delay_jump = \port$6449$0 [239:224];
+  assign ch1__count_noise_event = \port$6449$0 [255:240];
+  assign ch1__ca_status = \port$6581$0 [2:0];
+  assign ch1__ca_bytes_done = \port$6581$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$6449$0 [271:256];
+  assign ch1__count_ca_no_answer = \port$6449$0 [287:272];
+  assign ch1__count_ca_refused = \port$6449$0 [303:288];
+  assign ch1__count_ca_aborted = \port$6449$0 [319:304];
+  assign ch1__count_ca_data_fault = \port$6449$0 [335:320];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -6626,11 +6723,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__cfg_w0_lc = ch0_cfg_words_w0_lc;
   assign ch0__cfg_w0_crc = ch0_cfg_words_w0_crc;
   assign ch0__cfg_w0_gray = ch0_cfg_words_w0_gray;
+  assign ch0__cfg_w0_signed = ch0_cfg_words_w0_signed;
   assign ch0__cfg_w1_data_bits = ch0_cfg_words_w1_data_bits;
   assign ch0__cfg_w1_nenw = ch0_cfg_words_w1_nenw;
   assign ch0__cfg_w1_lc = ch0_cfg_words_w1_lc;
   assign ch0__cfg_w1_crc = ch0_cfg_words_w1_crc;
   assign ch0__cfg_w1_gray = ch0_cfg_words_w1_gray;
+  assign ch0__cfg_w1_signed = ch0_cfg_words_w1_signed;
   assign ch0__cfg_w1_enable = ch0_cfg_words_w1_enable;
   assign ch0__cfg_end_check = ch0_cfg_checks_end_check;
   assign ch0__cfg_spw_check = ch0_cfg_checks_spw_check;
@@ -6649,7 +6748,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__ca_slave_id = ch0_ca_request_slave_id;
   assign ch0__ca_address = ch0_ca_request_address;
   assign ch0__ca_count = ch0_ca_request_count;
-  assign ch0__ca_write = \ch0_ca_request_write$103 ;
+  assign ch0__ca_write = \ch0_ca_request_write$105 ;
   assign ch0__ca_start = ch0_ca_ctrl_start;
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
@@ -6670,11 +6769,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__cfg_w0_lc = ch1_cfg_words_w0_lc;
   assign ch1__cfg_w0_crc = ch1_cfg_words_w0_crc;
   assign ch1__cfg_w0_gray = ch1_cfg_words_w0_gray;
+  assign ch1__cfg_w0_signed = ch1_cfg_words_w0_signed;
   assign ch1__cfg_w1_data_bits = ch1_cfg_words_w1_data_bits;
   assign ch1__cfg_w1_nenw = ch1_cfg_words_w1_nenw;
   assign ch1__cfg_w1_lc = ch1_cfg_words_w1_lc;
   assign ch1__cfg_w1_crc = ch1_cfg_words_w1_crc;
   assign ch1__cfg_w1_gray = ch1_cfg_words_w1_gray;
+  assign ch1__cfg_w1_signed = ch1_cfg_words_w1_signed;
   assign ch1__cfg_w1_enable = ch1_cfg_words_w1_enable;
   assign ch1__cfg_end_check = ch1_cfg_checks_end_check;
   assign ch1__cfg_spw_check = ch1_cfg_checks_spw_check;
@@ -6693,7 +6794,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$305 ;
+  assign ch1__ca_write = \ch1_ca_request_write$309 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
@@ -6704,20 +6805,20 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$452  = \$451 ;
-  assign \$454  = \$453 ;
   assign \$456  = \$455 ;
-  assign \$500  = \$499 ;
-  assign \$502  = \$501 ;
+  assign \$458  = \$457 ;
+  assign \$460  = \$459 ;
   assign \$504  = \$503 ;
-  assign \$132  = \$131 ;
-  assign \$199  = 32'd0;
-  assign \$200  = \$198 ;
-  assign \$325  = \$324 ;
-  assign \$392  = 32'd0;
-  assign \$393  = \$391 ;
+  assign \$506  = \$505 ;
+  assign \$508  = \$507 ;
+  assign \$134  = \$133 ;
+  assign \$201  = 32'd0;
+  assign \$202  = \$200 ;
+  assign \$329  = \$328 ;
+  assign \$396  = 32'd0;
+  assign \$397  = \$395 ;
   assign g_irq = 1'h0;
-  assign \$505  = g_read_data;
+  assign \$509  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -6835,10 +6936,10 @@ module \biss_master_wb.bus (wb__stb, wb__we, regs__r_addr, regs__w_data, regs__w
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly
-, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$4897$0 , \port$4910$0 , regs__ca_done, \port$5042$0 , ca_rbuf_addr
-);
+module \biss_master_wb.ch0 (slo, clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
+, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5871$0 , \port$5884$0 , regs__ca_done
+, \port$6016$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -6932,6 +7033,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire cfg_w0_lc;
   input cfg_w0_nenw;
   wire cfg_w0_nenw;
+  input cfg_w0_signed;
+  wire cfg_w0_signed;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -6957,6 +7060,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire cfg_w1_lc;
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
+  input cfg_w1_signed;
+  wire cfg_w1_signed;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -6993,16 +7098,16 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$202 ;
+  wire \ma$206 ;
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$4897$0 ;
-  wire [186:0] \port$4897$0 ;
-  output [335:0] \port$4910$0 ;
-  wire [335:0] \port$4910$0 ;
-  output [9:0] \port$5042$0 ;
-  wire [9:0] \port$5042$0 ;
+  output [186:0] \port$5871$0 ;
+  wire [186:0] \port$5871$0 ;
+  output [335:0] \port$5884$0 ;
+  wire [335:0] \port$5884$0 ;
+  output [9:0] \port$6016$0 ;
+  wire [9:0] \port$6016$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -7059,6 +7164,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire regs__cfg_w0_gray;
   wire regs__cfg_w0_lc;
   wire regs__cfg_w0_nenw;
+  wire regs__cfg_w0_signed;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -7074,6 +7180,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire regs__cfg_w1_gray;
   wire regs__cfg_w1_lc;
   wire regs__cfg_w1_nenw;
+  wire regs__cfg_w1_signed;
   wire regs__clear_counters;
   output regs__config_error;
   wire regs__config_error;
@@ -7133,7 +7240,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$204 ;
+  wire \slo$208 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -7156,8 +7263,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$199 ;
-  wire \trigger$199 ;
+  input \trigger$203 ;
+  wire \trigger$203 ;
   wire valid;
   wire word0_crc_ok;
   wire word0_ne;
@@ -7167,7 +7274,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
-  assign trigger = \trigger$199  & regs__trigger_enable;
+  assign trigger = \trigger$203  & regs__trigger_enable;
   assign \$2  = regs__done_count + 1'h1;
   always @(posedge clk)
     abort_cycle <= \$3 ;
@@ -7177,8 +7284,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   assign regs__frame_error = regs__done & \$1 ;
   \biss_master_wb.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$237 (ca_abort),
-    .\busy$291 (regs__busy),
+    .\abort$239 (ca_abort),
+    .\busy$293 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -7209,6 +7316,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
     .cfg_w0_gray(cfg_w0_gray),
     .cfg_w0_lc(cfg_w0_lc),
     .cfg_w0_nenw(cfg_w0_nenw),
+    .cfg_w0_signed(cfg_w0_signed),
     .cfg_w1_crc(cfg_w1_crc),
     .cfg_w1_crc_inverted(cfg_w1_crc_inverted),
     .cfg_w1_crc_poly(cfg_w1_crc_poly),
@@ -7219,24 +7327,25 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
     .cfg_w1_gray(cfg_w1_gray),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$265 (clear_counters),
+    .cfg_w1_signed(cfg_w1_signed),
+    .\clear$267 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$6 ),
-    .\done$294 (regs__done),
+    .\done$296 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
-    .\periodic$37 (periodic),
+    .\periodic$39 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$7 ),
-    .\result$299 (\$5 ),
+    .\result$301 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$235 (ca_start),
+    .\start$237 (ca_start),
     .trigger(trigger),
-    .\valid$296 (valid)
+    .\valid$298 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
@@ -7279,11 +7388,13 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   assign regs__cfg_w0_lc = cfg_w0_lc;
   assign regs__cfg_w0_crc = cfg_w0_crc;
   assign regs__cfg_w0_gray = cfg_w0_gray;
+  assign regs__cfg_w0_signed = cfg_w0_signed;
   assign regs__cfg_w1_data_bits = cfg_w1_data_bits;
   assign regs__cfg_w1_nenw = cfg_w1_nenw;
   assign regs__cfg_w1_lc = cfg_w1_lc;
   assign regs__cfg_w1_crc = cfg_w1_crc;
   assign regs__cfg_w1_gray = cfg_w1_gray;
+  assign regs__cfg_w1_signed = cfg_w1_signed;
   assign regs__cfg_w1_enable = cfg_w1_enable;
   assign regs__cfg_end_check = cfg_end_check;
   assign regs__cfg_spw_check = cfg_spw_check;
@@ -7400,17 +7511,18 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$202  = ma;
-  assign \slo$204  = slo;
-  assign \port$4897$0  = \$5 ;
-  assign \port$4910$0  = \$6 ;
-  assign \port$5042$0  = \$7 ;
+  assign \ma$206  = ma;
+  assign \slo$208  = slo;
+  assign \port$5871$0  = \$5 ;
+  assign \port$5884$0  = \$6 ;
+  assign \port$6016$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$291 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$265 , \periodic$37 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start
-, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$235 , \abort$237 , abort, ma, \done$294 , \valid$296 , \result$299 , counts, ca_done, result, rbuf_addr);
+module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$293 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$267 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width
+, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$296 , \valid$298 , \result$301 , counts, ca_done, result, rbuf_addr
+);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -7440,25 +7552,25 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$237 ;
-  wire \abort$237 ;
-  wire \abort$49 ;
+  input \abort$239 ;
+  wire \abort$239 ;
+  wire \abort$51 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$81 ;
+  wire \ack_expired$83 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$102 ;
+  wire [23:0] \ack_limit$104 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$323 ;
+  wire \bit$325 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$79 ;
+  wire \break_over$81 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$246 ;
-  output \busy$291 ;
-  wire \busy$291 ;
+  wire \busy$248 ;
+  output \busy$293 ;
+  wire \busy$293 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -7493,11 +7605,11 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$250 ;
+  wire \cdm$252 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$302 ;
-  wire [252:0] cfg;
+  wire \cds$304 ;
+  wire [254:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -7510,7 +7622,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
   wire [23:0] \cfg.timeout_limit ;
-  wire [10:0] \cfg.w0 ;
+  wire [11:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -7521,12 +7633,13 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \cfg.w0.gray ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
+  wire \cfg.w0.signed ;
   wire [37:0] \cfg.w0_crc ;
   wire \cfg.w0_crc.inverted ;
   wire [15:0] \cfg.w0_crc.poly ;
   wire [15:0] \cfg.w0_crc.start ;
   wire [4:0] \cfg.w0_crc.width ;
-  wire [10:0] \cfg.w1 ;
+  wire [11:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -7537,6 +7650,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \cfg.w1.gray ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
+  wire \cfg.w1.signed ;
   wire [37:0] \cfg.w1_crc ;
   wire \cfg.w1_crc.inverted ;
   wire [15:0] \cfg.w1_crc.poly ;
@@ -7590,6 +7704,8 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire cfg_w0_lc;
   input cfg_w0_nenw;
   wire cfg_w0_nenw;
+  input cfg_w0_signed;
+  wire cfg_w0_signed;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -7615,16 +7731,18 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire cfg_w1_lc;
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
+  input cfg_w1_signed;
+  wire cfg_w1_signed;
   wire check;
-  wire \check$160 ;
+  wire \check$162 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$165 ;
-  wire \clean$324 ;
+  wire \clean$167 ;
+  wire \clean$326 ;
   wire clear;
-  wire \clear$126 ;
-  input \clear$265 ;
-  wire \clear$265 ;
+  wire \clear$128 ;
+  input \clear$267 ;
+  wire \clear$267 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -7678,33 +7796,33 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$177 ;
+  wire [39:0] \cpw_top$179 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$191 ;
+  wire [1:0] \crc_ok$193 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$173 ;
-  wire [37:0] \crcs$173[0] ;
-  wire \crcs$173[0].inverted ;
-  wire [15:0] \crcs$173[0].poly ;
-  wire [15:0] \crcs$173[0].start ;
-  wire [4:0] \crcs$173[0].width ;
-  wire [37:0] \crcs$173[1] ;
-  wire \crcs$173[1].inverted ;
-  wire [15:0] \crcs$173[1].poly ;
-  wire [15:0] \crcs$173[1].start ;
-  wire [4:0] \crcs$173[1].width ;
-  wire [75:0] \crcs$174 ;
-  wire [37:0] \crcs$174[0] ;
-  wire \crcs$174[0].inverted ;
-  wire [15:0] \crcs$174[0].poly ;
-  wire [15:0] \crcs$174[0].start ;
-  wire [4:0] \crcs$174[0].width ;
-  wire [37:0] \crcs$174[1] ;
-  wire \crcs$174[1].inverted ;
-  wire [15:0] \crcs$174[1].poly ;
-  wire [15:0] \crcs$174[1].start ;
-  wire [4:0] \crcs$174[1].width ;
+  wire [75:0] \crcs$175 ;
+  wire [37:0] \crcs$175[0] ;
+  wire \crcs$175[0].inverted ;
+  wire [15:0] \crcs$175[0].poly ;
+  wire [15:0] \crcs$175[0].start ;
+  wire [4:0] \crcs$175[0].width ;
+  wire [37:0] \crcs$175[1] ;
+  wire \crcs$175[1].inverted ;
+  wire [15:0] \crcs$175[1].poly ;
+  wire [15:0] \crcs$175[1].start ;
+  wire [4:0] \crcs$175[1].width ;
+  wire [75:0] \crcs$176 ;
+  wire [37:0] \crcs$176[0] ;
+  wire \crcs$176[0].inverted ;
+  wire [15:0] \crcs$176[0].poly ;
+  wire [15:0] \crcs$176[0].start ;
+  wire [4:0] \crcs$176[0].width ;
+  wire [37:0] \crcs$176[1] ;
+  wire \crcs$176[1].inverted ;
+  wire [15:0] \crcs$176[1].poly ;
+  wire [15:0] \crcs$176[1].start ;
+  wire [4:0] \crcs$176[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -7715,7 +7833,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  wire [252:0] cycle;
+  wire [254:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -7728,7 +7846,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
   wire [23:0] \cycle.timeout_limit ;
-  wire [10:0] \cycle.w0 ;
+  wire [11:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -7739,12 +7857,13 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \cycle.w0.gray ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
+  wire \cycle.w0.signed ;
   wire [37:0] \cycle.w0_crc ;
   wire \cycle.w0_crc.inverted ;
   wire [15:0] \cycle.w0_crc.poly ;
   wire [15:0] \cycle.w0_crc.start ;
   wire [4:0] \cycle.w0_crc.width ;
-  wire [10:0] \cycle.w1 ;
+  wire [11:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -7755,6 +7874,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \cycle.w1.gray ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
+  wire \cycle.w1.signed ;
   wire [37:0] \cycle.w1_crc ;
   wire \cycle.w1_crc.inverted ;
   wire [15:0] \cycle.w1_crc.poly ;
@@ -7768,53 +7888,53 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$108 ;
-  wire [12:0] \delay$159 ;
+  wire [12:0] \delay$110 ;
+  wire [12:0] \delay$161 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$110 ;
+  wire [11:0] \delay_limit$112 ;
   wire delay_over;
-  wire \delay_over$89 ;
+  wire \delay_over$91 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$248 ;
-  output \done$294 ;
-  wire \done$294 ;
-  wire \done$295 ;
+  wire \done$250 ;
+  output \done$296 ;
+  wire \done$296 ;
+  wire \done$297 ;
   wire doubtful;
   wire early;
-  wire \early$65 ;
+  wire \early$67 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$260 ;
-  wire \events$260.aborted ;
-  wire \events$260.ca_aborted ;
-  wire \events$260.ca_crc4_error ;
-  wire \events$260.ca_data_fault ;
-  wire \events$260.ca_no_answer ;
-  wire \events$260.ca_refused ;
-  wire \events$260.crc_word0 ;
-  wire \events$260.crc_word1 ;
-  wire \events$260.delay_jump ;
-  wire \events$260.delay_range ;
-  wire \events$260.lc_repeat ;
-  wire \events$260.lc_skip ;
-  wire \events$260.lc_zero ;
-  wire \events$260.no_ack ;
-  wire \events$260.no_start ;
-  wire \events$260.no_stop ;
-  wire \events$260.noise_event ;
-  wire \events$260.noisy_line ;
-  wire \events$260.overrun ;
-  wire \events$260.slo_stuck_low ;
-  wire \events$260.spw_mismatch ;
+  wire [20:0] \events$262 ;
+  wire \events$262.aborted ;
+  wire \events$262.ca_aborted ;
+  wire \events$262.ca_crc4_error ;
+  wire \events$262.ca_data_fault ;
+  wire \events$262.ca_no_answer ;
+  wire \events$262.ca_refused ;
+  wire \events$262.crc_word0 ;
+  wire \events$262.crc_word1 ;
+  wire \events$262.delay_jump ;
+  wire \events$262.delay_range ;
+  wire \events$262.lc_repeat ;
+  wire \events$262.lc_skip ;
+  wire \events$262.lc_zero ;
+  wire \events$262.no_ack ;
+  wire \events$262.no_start ;
+  wire \events$262.no_stop ;
+  wire \events$262.noise_event ;
+  wire \events$262.noisy_line ;
+  wire \events$262.overrun ;
+  wire \events$262.slo_stuck_low ;
+  wire \events$262.spw_mismatch ;
   wire fault;
-  wire \fault$187 ;
+  wire \fault$189 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -7848,7 +7968,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$189 ;
+  wire [3:0] \fault_status$191 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -7858,7 +7978,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$221 ;
+  wire \first_rise$223 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -7909,37 +8029,37 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$132 ;
+  wire [15:0] \half_period$134 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$33 ;
-  wire \idle$42 ;
+  wire \idle$35 ;
+  wire \idle$44 ;
   wire in_clock;
-  wire \in_clock$96 ;
+  wire \in_clock$98 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$137 ;
-  wire [5:0] \lc$315 ;
+  wire [5:0] \lc$139 ;
+  wire [5:0] \lc$317 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$139 ;
+  wire [5:0] \lc_next$141 ;
   wire lc_repeat;
-  wire \lc_repeat$316 ;
+  wire \lc_repeat$318 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$317 ;
+  wire \lc_skip$319 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$318 ;
+  wire \lc_zero$320 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$148 ;
+  wire \level$150 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [252:0] live;
+  wire [254:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -7952,7 +8072,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
   wire [23:0] \live.timeout_limit ;
-  wire [10:0] \live.w0 ;
+  wire [11:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -7963,12 +8083,13 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \live.w0.gray ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
+  wire \live.w0.signed ;
   wire [37:0] \live.w0_crc ;
   wire \live.w0_crc.inverted ;
   wire [15:0] \live.w0_crc.poly ;
   wire [15:0] \live.w0_crc.start ;
   wire [4:0] \live.w0_crc.width ;
-  wire [10:0] \live.w1 ;
+  wire [11:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -7979,6 +8100,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \live.w1.gray ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
+  wire \live.w1.signed ;
   wire [37:0] \live.w1_crc ;
   wire \live.w1_crc.inverted ;
   wire [15:0] \live.w1_crc.poly ;
@@ -7987,13 +8109,13 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$63 ;
+  wire \locked$65 ;
   output ma;
   wire ma;
-  wire \ma$290 ;
+  wire \ma$292 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$91 ;
+  wire \ma_busy$93 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -8001,26 +8123,26 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$83 ;
+  wire \no_start_expired$85 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$106 ;
+  wire [24:0] \no_start_limit$108 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$167 ;
+  wire \noisy$169 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$293 ;
+  wire \overrun$295 ;
   wire [23:0] period;
   wire periodic;
-  input \periodic$37 ;
-  wire \periodic$37 ;
+  input \periodic$39 ;
+  wire \periodic$39 ;
   wire quiet;
-  wire \quiet$115 ;
+  wire \quiet$117 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$117 ;
+  wire \quiet_live$119 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -8032,37 +8154,37 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$199 ;
+  wire \report$201 ;
   wire report_delay;
-  wire \report_delay$202 ;
+  wire \report_delay$204 ;
   wire report_frame;
-  wire \report_frame$186 ;
-  wire \report_frame$200 ;
+  wire \report_frame$188 ;
+  wire \report_frame$202 ;
   wire request;
-  wire [17:0] \request$223 ;
-  wire [6:0] \request$223.address ;
-  wire [6:0] \request$223.count ;
-  wire [2:0] \request$223.slave_id ;
-  wire \request$223.write ;
-  wire \request$48 ;
+  wire [17:0] \request$225 ;
+  wire [6:0] \request$225.address ;
+  wire [6:0] \request$225.count ;
+  wire [2:0] \request$225.slave_id ;
+  wire \request$225.write ;
+  wire \request$50 ;
   wire restart;
-  wire \restart$152 ;
+  wire \restart$154 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$299 ;
-  wire [186:0] \result$299 ;
-  wire \result$299.cds ;
-  wire \result$299.delay_settled ;
-  wire [7:0] \result$299.delay_spread ;
-  wire [5:0] \result$299.lc ;
-  wire \result$299.lc_repeat ;
-  wire \result$299.lc_skip ;
-  wire \result$299.lc_zero ;
-  wire [12:0] \result$299.line_delay ;
-  wire [3:0] \result$299.noise_events ;
-  wire [12:0] \result$299.settled_delay ;
-  wire \result$299.spw_mismatch ;
+  output [186:0] \result$301 ;
+  wire [186:0] \result$301 ;
+  wire \result$301.cds ;
+  wire \result$301.delay_settled ;
+  wire [7:0] \result$301.delay_spread ;
+  wire [5:0] \result$301.lc ;
+  wire \result$301.lc_repeat ;
+  wire \result$301.lc_skip ;
+  wire \result$301.lc_zero ;
+  wire [12:0] \result$301.line_delay ;
+  wire [3:0] \result$301.noise_events ;
+  wire [12:0] \result$301.settled_delay ;
+  wire \result$301.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -8079,18 +8201,18 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$299.status ;
-  wire [31:0] \result$299.timestamp ;
-  wire [57:0] \result$299.word0 ;
-  wire \result$299.word0.crc_ok ;
-  wire \result$299.word0.ne ;
-  wire \result$299.word0.nw ;
-  wire [54:0] \result$299.word0.position ;
-  wire [42:0] \result$299.word1 ;
-  wire \result$299.word1.crc_ok ;
-  wire \result$299.word1.ne ;
-  wire \result$299.word1.nw ;
-  wire [39:0] \result$299.word1.position ;
+  wire [3:0] \result$301.status ;
+  wire [31:0] \result$301.timestamp ;
+  wire [57:0] \result$301.word0 ;
+  wire \result$301.word0.crc_ok ;
+  wire \result$301.word0.ne ;
+  wire \result$301.word0.nw ;
+  wire [54:0] \result$301.word0.position ;
+  wire [42:0] \result$301.word1 ;
+  wire \result$301.word1.crc_ok ;
+  wire \result$301.word1.ne ;
+  wire \result$301.word1.nw ;
+  wire [39:0] \result$301.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -8102,46 +8224,46 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$145 ;
+  wire \resync$147 ;
   wire [15:0] rises;
-  wire [15:0] \rises$125 ;
+  wire [15:0] \rises$127 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$322 ;
+  wire \sample$324 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$305 ;
+  wire [12:0] \settled_delay$307 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$44 ;
-  wire \slo$54 ;
-  wire \slo$90 ;
+  wire \slo$46 ;
+  wire \slo$56 ;
+  wire \slo$92 ;
   wire slo_stuck;
-  wire \slo_stuck$85 ;
+  wire \slo_stuck$87 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$87 ;
+  wire \slo_stuck_live$89 ;
   wire slots_full;
-  wire \slots_full$71 ;
+  wire \slots_full$73 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$319 ;
+  wire \spw_mismatch$321 ;
   input start;
   wire start;
-  input \start$235 ;
-  wire \start$235 ;
-  wire \start$35 ;
+  input \start$237 ;
+  wire \start$237 ;
+  wire \start$37 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$123 ;
+  wire [15:0] \start_slot$125 ;
   wire started;
-  wire \started$121 ;
-  wire \started$69 ;
+  wire \started$123 ;
+  wire \started$71 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -8176,25 +8298,25 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$298 ;
+  wire [3:0] \status$300 ;
   wire stop_bit;
-  wire \stop_bit$75 ;
+  wire \stop_bit$77 ;
   wire stopped;
-  wire \stopped$73 ;
+  wire \stopped$75 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$104 ;
+  wire [23:0] \timeout_limit$106 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$181 ;
+  wire [7:0] \tolerance$183 ;
   input trigger;
   wire trigger;
-  wire \trigger$46 ;
+  wire \trigger$48 ;
   wire valid;
-  wire \valid$204 ;
-  output \valid$296 ;
-  wire \valid$296 ;
+  wire \valid$206 ;
+  output \valid$298 ;
+  wire \valid$298 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -8212,33 +8334,35 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$135 ;
+  wire [1:0] \word_count$137 ;
   wire [1:0] word_crc_ok;
-  wire [21:0] words;
-  wire [21:0] \words$171 ;
-  wire [10:0] \words$171[0] ;
+  wire [23:0] words;
+  wire [23:0] \words$173 ;
+  wire [11:0] \words$173[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$171[0].crc ;
-  wire [5:0] \words$171[0].data_bits ;
-  wire \words$171[0].gray ;
-  wire \words$171[0].lc ;
-  wire \words$171[0].nenw ;
-  wire [10:0] \words$171[1] ;
+  wire [1:0] \words$173[0].crc ;
+  wire [5:0] \words$173[0].data_bits ;
+  wire \words$173[0].gray ;
+  wire \words$173[0].lc ;
+  wire \words$173[0].nenw ;
+  wire \words$173[0].signed ;
+  wire [11:0] \words$173[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$171[1].crc ;
-  wire [5:0] \words$171[1].data_bits ;
-  wire \words$171[1].gray ;
-  wire \words$171[1].lc ;
-  wire \words$171[1].nenw ;
-  wire [10:0] \words[0] ;
+  wire [1:0] \words$173[1].crc ;
+  wire [5:0] \words$173[1].data_bits ;
+  wire \words$173[1].gray ;
+  wire \words$173[1].lc ;
+  wire \words$173[1].nenw ;
+  wire \words$173[1].signed ;
+  wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -8249,7 +8373,8 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [10:0] \words[1] ;
+  wire \words[0].signed ;
+  wire [11:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -8260,12 +8385,13 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
+  wire \words[1].signed ;
   wire zero;
-  assign periodic = \periodic$37  | frames;
+  assign periodic = \periodic$39  | frames;
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$160  = started & \$1 ;
+  assign \check$162  = started & \$1 ;
   assign \$2  = report_frame & spw_mismatch;
   assign \$3  = status == 4'hd;
   assign \$4  = report_frame & \$3 ;
@@ -8281,10 +8407,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \$14  = ca_done & \$13 ;
   assign \$15  = result[2:0] == 3'h5;
   assign \$16  = ca_done & \$15 ;
-  assign \busy$291  = ~ idle;
+  assign \busy$293  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$126 ;
-  assign \$18  = \sample$322  & \$17 ;
+  assign \$17  = ~ \clear$128 ;
+  assign \$18  = \sample$324  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -8322,7 +8448,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$152 ),
+    .fault(\restart$154 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -8339,14 +8465,14 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$126 ),
+    .receiver_clear(\clear$128 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$54 ),
+    .slo(\slo$56 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -8357,10 +8483,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .waiting(watch)
   );
   \biss_master_wb.ch0.core.counters  counters (
-    .clear(\clear$265 ),
+    .clear(\clear$267 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$260 ),
+    .events(\events$262 ),
     .rst(rst)
   );
   \biss_master_wb.ch0.core.decoder  decoder (
@@ -8377,7 +8503,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$126 ),
+    .receiver_clear(\clear$128 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -8389,7 +8515,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .words(words)
   );
   \biss_master_wb.ch0.core.delay_check  delay_check (
-    .check(\check$160 ),
+    .check(\check$162 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -8408,10 +8534,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$54 ),
+    .level(\slo$56 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$152 ),
+    .restart(\restart$154 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -8419,7 +8545,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   \biss_master_wb.ch0.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$91 ),
+    .\clocking (\ma_busy$93 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -8431,7 +8557,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .second_rise(ma_arm)
   );
   \biss_master_wb.ch0.core.ma_stop  ma_stop (
-    .clear(\clear$126 ),
+    .clear(\clear$128 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -8439,11 +8565,11 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .rst(rst),
     .start_slot(start_slot),
     .\started$11 (started),
-    .w1_enable(cycle[194]),
-    .words(\words$171 )
+    .w1_enable(cycle[195]),
+    .words(\words$173 )
   );
   \biss_master_wb.ch0.core.register_access  register_access (
-    .abort(\abort$237 ),
+    .abort(\abort$239 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -8455,37 +8581,37 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$223 ),
+    .request(\request$225 ),
     .result(result),
     .rst(rst),
-    .start(\start$235 ),
+    .start(\start$237 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch0.core.results  results (
     .clk(clk),
-    .done(\done$294 ),
+    .done(\done$296 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$299 ),
+    .result(\result$301 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$296 )
+    .valid_out(\valid$298 )
   );
   \biss_master_wb.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$323 ),
+    .\bit (\bit$325 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$54 ),
+    .level(\slo$56 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$126 ),
+    .receiver_clear(\clear$128 ),
     .rst(rst),
-    .sample(\sample$322 ),
+    .sample(\sample$324 ),
     .slo(slo)
   );
   \biss_master_wb.ch0.core.scheduler  scheduler (
@@ -8506,20 +8632,20 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$4552$0 (\bit ),
+    .\port$5526$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_wb.ch0.core.spw_check  spw_check (
-    .bits(cycle[200:195]),
+    .bits(cycle[201:196]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[252:245])
+    .\tolerance$8 (cycle[254:247])
   );
   \biss_master_wb.ch0.core.time_base  time_base (
     .clk(clk),
@@ -8538,7 +8664,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$91 ),
+    .ma_busy(\ma_busy$93 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -8547,7 +8673,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$54 ),
+    .slo(\slo$56 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -8555,12 +8681,12 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   );
   \biss_master_wb.ch0.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$324 ),
+    .clean(\clean$326 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$152 ),
+    .fault(\restart$154 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -8570,7 +8696,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$1912$0 (\$24 ),
+    .\port$2401$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -8587,7 +8713,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$20  = \bit$323 ;
+    \$20  = \bit$325 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -8608,125 +8734,125 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$23  = \clean$324 ;
+    \$23  = \clean$326 ;
     if (rst) begin
       \$23  = 1'h0;
     end
   end
-  assign \idle$33  = idle;
-  assign \start$35  = start;
+  assign \idle$35  = idle;
+  assign \start$37  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$42  = idle;
-  assign \slo$44  = slo;
-  assign \trigger$46  = trigger;
-  assign \request$48  = request;
-  assign \abort$49  = abort;
+  assign \idle$44  = idle;
+  assign \slo$46  = slo;
+  assign \trigger$48  = trigger;
+  assign \request$50  = request;
+  assign \abort$51  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$54 ;
+  assign level = \slo$56 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$63  = locked;
-  assign \early$65  = early;
+  assign \locked$65  = locked;
+  assign \early$67  = early;
   assign done = frame_done;
-  assign \started$69  = started;
-  assign \slots_full$71  = slots_full;
-  assign \stopped$73  = stopped;
-  assign \stop_bit$75  = stop_bit;
+  assign \started$71  = started;
+  assign \slots_full$73  = slots_full;
+  assign \stopped$75  = stopped;
+  assign \stop_bit$77  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$79  = break_over;
-  assign \ack_expired$81  = ack_expired;
-  assign \no_start_expired$83  = no_start_expired;
-  assign \slo_stuck$85  = slo_stuck;
-  assign \slo_stuck_live$87  = slo_stuck_live;
-  assign \delay_over$89  = delay_over;
-  assign \slo$90  = \slo$54 ;
-  assign \clocking  = \ma_busy$91 ;
+  assign \break_over$81  = break_over;
+  assign \ack_expired$83  = ack_expired;
+  assign \no_start_expired$85  = no_start_expired;
+  assign \slo_stuck$87  = slo_stuck;
+  assign \slo_stuck_live$89  = slo_stuck_live;
+  assign \delay_over$91  = delay_over;
+  assign \slo$92  = \slo$56 ;
+  assign \clocking  = \ma_busy$93 ;
   assign timer_clear = clear;
-  assign \in_clock$96  = in_clock;
+  assign \in_clock$98  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$102  = ack_limit;
-  assign \timeout_limit$104  = timeout_limit;
-  assign \no_start_limit$106  = no_start_limit;
-  assign \delay$108  = delay;
-  assign \delay_limit$110  = delay_limit;
+  assign \ack_limit$104  = ack_limit;
+  assign \timeout_limit$106  = timeout_limit;
+  assign \no_start_limit$108  = no_start_limit;
+  assign \delay$110  = delay;
+  assign \delay_limit$112  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$115  = quiet;
-  assign \quiet_live$117  = quiet_live;
+  assign \quiet$117  = quiet;
+  assign \quiet_live$119  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$121  = started;
-  assign \start_slot$123  = start_slot;
-  assign \rises$125  = rises;
-  assign receiver_clear = \clear$126 ;
+  assign \started$123  = started;
+  assign \start_slot$125  = start_slot;
+  assign \rises$127  = rises;
+  assign receiver_clear = \clear$128 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$132  = cycle[15:0];
+  assign \half_period$134  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$135  = word_count;
-  assign \lc$137  = lc;
+  assign \word_count$137  = word_count;
+  assign \lc$139  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$139  = { lc[4:0], \bit  };
+  assign \lc_next$141  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$145  = resync;
+  assign \resync$147  = resync;
   assign waiting = watch;
-  assign \level$148  = \slo$54 ;
+  assign \level$150  = \slo$56 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$152 ;
+  assign fault = \restart$154 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$159  = delay;
+  assign \delay$161  = delay;
   assign \$signal  = learn;
-  assign \clean$165  = clean;
-  assign \noisy$167  = noisy;
+  assign \clean$167  = clean;
+  assign \noisy$169  = noisy;
   assign jump = delay_jump;
-  assign \crcs$173  = crcs;
-  assign \crcs$174  = crcs;
-  assign w1_enable = cycle[194];
-  assign \cpw_top$177  = cpw_top;
+  assign \crcs$175  = crcs;
+  assign \crcs$176  = crcs;
+  assign w1_enable = cycle[195];
+  assign \cpw_top$179  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[200:195];
-  assign \tolerance$181  = cycle[252:245];
+  assign bits = cycle[201:196];
+  assign \tolerance$183  = cycle[254:247];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$186  = report_frame;
-  assign \fault$187  = \restart$152 ;
-  assign \fault_status$189  = fault_status;
-  assign \crc_ok$191  = crc_ok;
+  assign \report_frame$188  = report_frame;
+  assign \fault$189  = \restart$154 ;
+  assign \fault_status$191  = fault_status;
+  assign \crc_ok$193  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$199  = report;
-  assign \report_frame$200  = report_frame;
-  assign \report_delay$202  = report_delay;
-  assign \valid$204  = valid;
+  assign \report$201  = report;
+  assign \report_frame$202  = report_frame;
+  assign \report_delay$204  = report_delay;
+  assign \valid$206  = valid;
   assign word_crc_ok = { \$24 , crc_ok[0] };
-  assign \first_rise$221  = first_rise;
+  assign \first_rise$223  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$235 ;
-  assign ca_abort = \abort$237 ;
+  assign ca_start = \start$237 ;
+  assign ca_abort = \abort$239 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$246  = frames;
-  assign \done$248  = ca_done;
-  assign \cdm$250  = cdm;
+  assign \busy$248  = frames;
+  assign \done$250  = ca_done;
+  assign \cdm$252  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$265 ;
+  assign clear_counters = \clear$267 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -8748,31 +8874,31 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign count_ca_refused = counts[303:288];
   assign count_ca_aborted = counts[319:304];
   assign count_ca_data_fault = counts[335:320];
-  assign \ma$290  = ma;
-  assign \overrun$293  = overrun;
-  assign \done$295  = \done$294 ;
-  assign valid_out = \valid$296 ;
-  assign \status$298  = \result$299 [3:0];
-  assign timestamp = \result$299 [35:4];
-  assign line_delay = \result$299 [48:36];
-  assign \cds$302  = \result$299 [49];
-  assign noise_events = \result$299 [53:50];
-  assign delay_settled = \result$299 [54];
-  assign \settled_delay$305  = \result$299 [67:55];
-  assign delay_spread = \result$299 [75:68];
-  assign word0_position = \result$299 [130:76];
-  assign word0_ne = \result$299 [131];
-  assign word0_nw = \result$299 [132];
-  assign word0_crc_ok = \result$299 [133];
-  assign word1_position = \result$299 [173:134];
-  assign word1_ne = \result$299 [174];
-  assign word1_nw = \result$299 [175];
-  assign word1_crc_ok = \result$299 [176];
-  assign \lc$315  = \result$299 [182:177];
-  assign \lc_repeat$316  = \result$299 [183];
-  assign \lc_skip$317  = \result$299 [184];
-  assign \lc_zero$318  = \result$299 [185];
-  assign \spw_mismatch$319  = \result$299 [186];
+  assign \ma$292  = ma;
+  assign \overrun$295  = overrun;
+  assign \done$297  = \done$296 ;
+  assign valid_out = \valid$298 ;
+  assign \status$300  = \result$301 [3:0];
+  assign timestamp = \result$301 [35:4];
+  assign line_delay = \result$301 [48:36];
+  assign \cds$304  = \result$301 [49];
+  assign noise_events = \result$301 [53:50];
+  assign delay_settled = \result$301 [54];
+  assign \settled_delay$307  = \result$301 [67:55];
+  assign delay_spread = \result$301 [75:68];
+  assign word0_position = \result$301 [130:76];
+  assign word0_ne = \result$301 [131];
+  assign word0_nw = \result$301 [132];
+  assign word0_crc_ok = \result$301 [133];
+  assign word1_position = \result$301 [173:134];
+  assign word1_ne = \result$301 [174];
+  assign word1_nw = \result$301 [175];
+  assign word1_crc_ok = \result$301 [176];
+  assign \lc$317  = \result$301 [182:177];
+  assign \lc_repeat$318  = \result$301 [183];
+  assign \lc_skip$319  = \result$301 [184];
+  assign \lc_zero$320  = \result$301 [185];
+  assign \spw_mismatch$321  = \result$301 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -8783,31 +8909,33 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[155:145];
+  assign \live.w0  = live[156:145];
   assign \live.w0.data_bits  = live[150:145];
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
   assign \live.w0.gray  = live[155];
-  assign \live.w0_crc  = live[193:156];
-  assign \live.w0_crc.width  = live[160:156];
-  assign \live.w0_crc.poly  = live[176:161];
-  assign \live.w0_crc.start  = live[192:177];
-  assign \live.w0_crc.inverted  = live[193];
-  assign \live.w1_enable  = live[194];
-  assign \live.w1  = live[205:195];
-  assign \live.w1.data_bits  = live[200:195];
-  assign \live.w1.nenw  = live[201];
-  assign \live.w1.lc  = live[202];
-  assign \live.w1.crc  = live[204:203];
-  assign \live.w1.gray  = live[205];
-  assign \live.w1_crc  = live[243:206];
-  assign \live.w1_crc.width  = live[210:206];
-  assign \live.w1_crc.poly  = live[226:211];
-  assign \live.w1_crc.start  = live[242:227];
-  assign \live.w1_crc.inverted  = live[243];
-  assign \live.spw_check  = live[244];
-  assign \live.spw_tolerance  = live[252:245];
+  assign \live.w0.signed  = live[156];
+  assign \live.w0_crc  = live[194:157];
+  assign \live.w0_crc.width  = live[161:157];
+  assign \live.w0_crc.poly  = live[177:162];
+  assign \live.w0_crc.start  = live[193:178];
+  assign \live.w0_crc.inverted  = live[194];
+  assign \live.w1_enable  = live[195];
+  assign \live.w1  = live[207:196];
+  assign \live.w1.data_bits  = live[201:196];
+  assign \live.w1.nenw  = live[202];
+  assign \live.w1.lc  = live[203];
+  assign \live.w1.crc  = live[205:204];
+  assign \live.w1.gray  = live[206];
+  assign \live.w1.signed  = live[207];
+  assign \live.w1_crc  = live[245:208];
+  assign \live.w1_crc.width  = live[212:208];
+  assign \live.w1_crc.poly  = live[228:213];
+  assign \live.w1_crc.start  = live[244:229];
+  assign \live.w1_crc.inverted  = live[245];
+  assign \live.spw_check  = live[246];
+  assign \live.spw_tolerance  = live[254:247];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -8818,55 +8946,61 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[155:145];
+  assign \cycle.w0  = cycle[156:145];
   assign \cycle.w0.data_bits  = cycle[150:145];
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
   assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0_crc  = cycle[193:156];
-  assign \cycle.w0_crc.width  = cycle[160:156];
-  assign \cycle.w0_crc.poly  = cycle[176:161];
-  assign \cycle.w0_crc.start  = cycle[192:177];
-  assign \cycle.w0_crc.inverted  = cycle[193];
-  assign \cycle.w1_enable  = cycle[194];
-  assign \cycle.w1  = cycle[205:195];
-  assign \cycle.w1.data_bits  = cycle[200:195];
-  assign \cycle.w1.nenw  = cycle[201];
-  assign \cycle.w1.lc  = cycle[202];
-  assign \cycle.w1.crc  = cycle[204:203];
-  assign \cycle.w1.gray  = cycle[205];
-  assign \cycle.w1_crc  = cycle[243:206];
-  assign \cycle.w1_crc.width  = cycle[210:206];
-  assign \cycle.w1_crc.poly  = cycle[226:211];
-  assign \cycle.w1_crc.start  = cycle[242:227];
-  assign \cycle.w1_crc.inverted  = cycle[243];
-  assign \cycle.spw_check  = cycle[244];
-  assign \cycle.spw_tolerance  = cycle[252:245];
-  assign \words[0]  = words[10:0];
+  assign \cycle.w0.signed  = cycle[156];
+  assign \cycle.w0_crc  = cycle[194:157];
+  assign \cycle.w0_crc.width  = cycle[161:157];
+  assign \cycle.w0_crc.poly  = cycle[177:162];
+  assign \cycle.w0_crc.start  = cycle[193:178];
+  assign \cycle.w0_crc.inverted  = cycle[194];
+  assign \cycle.w1_enable  = cycle[195];
+  assign \cycle.w1  = cycle[207:196];
+  assign \cycle.w1.data_bits  = cycle[201:196];
+  assign \cycle.w1.nenw  = cycle[202];
+  assign \cycle.w1.lc  = cycle[203];
+  assign \cycle.w1.crc  = cycle[205:204];
+  assign \cycle.w1.gray  = cycle[206];
+  assign \cycle.w1.signed  = cycle[207];
+  assign \cycle.w1_crc  = cycle[245:208];
+  assign \cycle.w1_crc.width  = cycle[212:208];
+  assign \cycle.w1_crc.poly  = cycle[228:213];
+  assign \cycle.w1_crc.start  = cycle[244:229];
+  assign \cycle.w1_crc.inverted  = cycle[245];
+  assign \cycle.spw_check  = cycle[246];
+  assign \cycle.spw_tolerance  = cycle[254:247];
+  assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
   assign \words[0].gray  = words[10];
-  assign \words[1]  = words[21:11];
-  assign \words[1].data_bits  = words[16:11];
-  assign \words[1].nenw  = words[17];
-  assign \words[1].lc  = words[18];
-  assign \words[1].crc  = words[20:19];
-  assign \words[1].gray  = words[21];
-  assign \words$171[0]  = \words$171 [10:0];
-  assign \words$171[0].data_bits  = \words$171 [5:0];
-  assign \words$171[0].nenw  = \words$171 [6];
-  assign \words$171[0].lc  = \words$171 [7];
-  assign \words$171[0].crc  = \words$171 [9:8];
-  assign \words$171[0].gray  = \words$171 [10];
-  assign \words$171[1]  = \words$171 [21:11];
-  assign \words$171[1].data_bits  = \words$171 [16:11];
-  assign \words$171[1].nenw  = \words$171 [17];
-  assign \words$171[1].lc  = \words$171 [18];
-  assign \words$171[1].crc  = \words$171 [20:19];
-  assign \words$171[1].gray  = \words$171 [21];
+  assign \words[0].signed  = words[11];
+  assign \words[1]  = words[23:12];
+  assign \words[1].data_bits  = words[17:12];
+  assign \words[1].nenw  = words[18];
+  assign \words[1].lc  = words[19];
+  assign \words[1].crc  = words[21:20];
+  assign \words[1].gray  = words[22];
+  assign \words[1].signed  = words[23];
+  assign \words$173[0]  = \words$173 [11:0];
+  assign \words$173[0].data_bits  = \words$173 [5:0];
+  assign \words$173[0].nenw  = \words$173 [6];
+  assign \words$173[0].lc  = \words$173 [7];
+  assign \words$173[0].crc  = \words$173 [9:8];
+  assign \words$173[0].gray  = \words$173 [10];
+  assign \words$173[0].signed  = \words$173 [11];
+  assign \words$173[1]  = \words$173 [23:12];
+  assign \words$173[1].data_bits  = \words$173 [17:12];
+  assign \words$173[1].nenw  = \words$173 [18];
+  assign \words$173[1].lc  = \words$173 [19];
+  assign \words$173[1].crc  = \words$173 [21:20];
+  assign \words$173[1].gray  = \words$173 [22];
+  assign \words$173[1].signed  = \words$173 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -8877,26 +9011,26 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$173[0]  = crcs[37:0];
-  assign \crcs$173[0].width  = crcs[4:0];
-  assign \crcs$173[0].poly  = crcs[20:5];
-  assign \crcs$173[0].start  = crcs[36:21];
-  assign \crcs$173[0].inverted  = crcs[37];
-  assign \crcs$173[1]  = crcs[75:38];
-  assign \crcs$173[1].width  = crcs[42:38];
-  assign \crcs$173[1].poly  = crcs[58:43];
-  assign \crcs$173[1].start  = crcs[74:59];
-  assign \crcs$173[1].inverted  = crcs[75];
-  assign \crcs$174[0]  = crcs[37:0];
-  assign \crcs$174[0].width  = crcs[4:0];
-  assign \crcs$174[0].poly  = crcs[20:5];
-  assign \crcs$174[0].start  = crcs[36:21];
-  assign \crcs$174[0].inverted  = crcs[37];
-  assign \crcs$174[1]  = crcs[75:38];
-  assign \crcs$174[1].width  = crcs[42:38];
-  assign \crcs$174[1].poly  = crcs[58:43];
-  assign \crcs$174[1].start  = crcs[74:59];
-  assign \crcs$174[1].inverted  = crcs[75];
+  assign \crcs$175[0]  = crcs[37:0];
+  assign \crcs$175[0].width  = crcs[4:0];
+  assign \crcs$175[0].poly  = crcs[20:5];
+  assign \crcs$175[0].start  = crcs[36:21];
+  assign \crcs$175[0].inverted  = crcs[37];
+  assign \crcs$175[1]  = crcs[75:38];
+  assign \crcs$175[1].width  = crcs[42:38];
+  assign \crcs$175[1].poly  = crcs[58:43];
+  assign \crcs$175[1].start  = crcs[74:59];
+  assign \crcs$175[1].inverted  = crcs[75];
+  assign \crcs$176[0]  = crcs[37:0];
+  assign \crcs$176[0].width  = crcs[4:0];
+  assign \crcs$176[0].poly  = crcs[20:5];
+  assign \crcs$176[0].start  = crcs[36:21];
+  assign \crcs$176[0].inverted  = crcs[37];
+  assign \crcs$176[1]  = crcs[75:38];
+  assign \crcs$176[1].width  = crcs[42:38];
+  assign \crcs$176[1].poly  = crcs[58:43];
+  assign \crcs$176[1].start  = crcs[74:59];
+  assign \crcs$176[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -8907,31 +9041,33 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \cfg.quiet_time  = cycle[136:125];
   assign \cfg.noise_limit  = cycle[140:137];
   assign \cfg.delay_tolerance  = cycle[144:141];
-  assign \cfg.w0  = cycle[155:145];
+  assign \cfg.w0  = cycle[156:145];
   assign \cfg.w0.data_bits  = cycle[150:145];
   assign \cfg.w0.nenw  = cycle[151];
   assign \cfg.w0.lc  = cycle[152];
   assign \cfg.w0.crc  = cycle[154:153];
   assign \cfg.w0.gray  = cycle[155];
-  assign \cfg.w0_crc  = cycle[193:156];
-  assign \cfg.w0_crc.width  = cycle[160:156];
-  assign \cfg.w0_crc.poly  = cycle[176:161];
-  assign \cfg.w0_crc.start  = cycle[192:177];
-  assign \cfg.w0_crc.inverted  = cycle[193];
-  assign \cfg.w1_enable  = cycle[194];
-  assign \cfg.w1  = cycle[205:195];
-  assign \cfg.w1.data_bits  = cycle[200:195];
-  assign \cfg.w1.nenw  = cycle[201];
-  assign \cfg.w1.lc  = cycle[202];
-  assign \cfg.w1.crc  = cycle[204:203];
-  assign \cfg.w1.gray  = cycle[205];
-  assign \cfg.w1_crc  = cycle[243:206];
-  assign \cfg.w1_crc.width  = cycle[210:206];
-  assign \cfg.w1_crc.poly  = cycle[226:211];
-  assign \cfg.w1_crc.start  = cycle[242:227];
-  assign \cfg.w1_crc.inverted  = cycle[243];
-  assign \cfg.spw_check  = cycle[244];
-  assign \cfg.spw_tolerance  = cycle[252:245];
+  assign \cfg.w0.signed  = cycle[156];
+  assign \cfg.w0_crc  = cycle[194:157];
+  assign \cfg.w0_crc.width  = cycle[161:157];
+  assign \cfg.w0_crc.poly  = cycle[177:162];
+  assign \cfg.w0_crc.start  = cycle[193:178];
+  assign \cfg.w0_crc.inverted  = cycle[194];
+  assign \cfg.w1_enable  = cycle[195];
+  assign \cfg.w1  = cycle[207:196];
+  assign \cfg.w1.data_bits  = cycle[201:196];
+  assign \cfg.w1.nenw  = cycle[202];
+  assign \cfg.w1.lc  = cycle[203];
+  assign \cfg.w1.crc  = cycle[205:204];
+  assign \cfg.w1.gray  = cycle[206];
+  assign \cfg.w1.signed  = cycle[207];
+  assign \cfg.w1_crc  = cycle[245:208];
+  assign \cfg.w1_crc.width  = cycle[212:208];
+  assign \cfg.w1_crc.poly  = cycle[228:213];
+  assign \cfg.w1_crc.start  = cycle[244:229];
+  assign \cfg.w1_crc.inverted  = cycle[245];
+  assign \cfg.spw_check  = cycle[246];
+  assign \cfg.spw_tolerance  = cycle[254:247];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -8955,36 +9091,36 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$223.slave_id  = \request$223 [2:0];
-  assign \request$223.address  = \request$223 [9:3];
-  assign \request$223.count  = \request$223 [16:10];
-  assign \request$223.write  = \request$223 [17];
+  assign \request$225.slave_id  = \request$225 [2:0];
+  assign \request$225.address  = \request$225 [9:3];
+  assign \request$225.count  = \request$225 [16:10];
+  assign \request$225.write  = \request$225 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$260.crc_word0  = \events$260 [0];
-  assign \events$260.crc_word1  = \events$260 [1];
-  assign \events$260.no_ack  = \events$260 [2];
-  assign \events$260.no_start  = \events$260 [3];
-  assign \events$260.delay_range  = \events$260 [4];
-  assign \events$260.slo_stuck_low  = \events$260 [5];
-  assign \events$260.lc_repeat  = \events$260 [6];
-  assign \events$260.lc_skip  = \events$260 [7];
-  assign \events$260.lc_zero  = \events$260 [8];
-  assign \events$260.spw_mismatch  = \events$260 [9];
-  assign \events$260.overrun  = \events$260 [10];
-  assign \events$260.aborted  = \events$260 [11];
-  assign \events$260.no_stop  = \events$260 [12];
-  assign \events$260.noisy_line  = \events$260 [13];
-  assign \events$260.delay_jump  = \events$260 [14];
-  assign \events$260.noise_event  = \events$260 [15];
-  assign \events$260.ca_crc4_error  = \events$260 [16];
-  assign \events$260.ca_no_answer  = \events$260 [17];
-  assign \events$260.ca_refused  = \events$260 [18];
-  assign \events$260.ca_aborted  = \events$260 [19];
-  assign \events$260.ca_data_fault  = \events$260 [20];
+  assign \events$262.crc_word0  = \events$262 [0];
+  assign \events$262.crc_word1  = \events$262 [1];
+  assign \events$262.no_ack  = \events$262 [2];
+  assign \events$262.no_start  = \events$262 [3];
+  assign \events$262.delay_range  = \events$262 [4];
+  assign \events$262.slo_stuck_low  = \events$262 [5];
+  assign \events$262.lc_repeat  = \events$262 [6];
+  assign \events$262.lc_skip  = \events$262 [7];
+  assign \events$262.lc_zero  = \events$262 [8];
+  assign \events$262.spw_mismatch  = \events$262 [9];
+  assign \events$262.overrun  = \events$262 [10];
+  assign \events$262.aborted  = \events$262 [11];
+  assign \events$262.no_stop  = \events$262 [12];
+  assign \events$262.noisy_line  = \events$262 [13];
+  assign \events$262.delay_jump  = \events$262 [14];
+  assign \events$262.noise_event  = \events$262 [15];
+  assign \events$262.ca_crc4_error  = \events$262 [16];
+  assign \events$262.ca_no_answer  = \events$262 [17];
+  assign \events$262.ca_refused  = \events$262 [18];
+  assign \events$262.ca_aborted  = \events$262 [19];
+  assign \events$262.ca_data_fault  = \events$262 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -9013,57 +9149,57 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$299.status  = \result$299 [3:0];
-  assign \result$299.timestamp  = \result$299 [35:4];
-  assign \result$299.line_delay  = \result$299 [48:36];
-  assign \result$299.cds  = \result$299 [49];
-  assign \result$299.noise_events  = \result$299 [53:50];
-  assign \result$299.delay_settled  = \result$299 [54];
-  assign \result$299.settled_delay  = \result$299 [67:55];
-  assign \result$299.delay_spread  = \result$299 [75:68];
-  assign \result$299.word0  = \result$299 [133:76];
-  assign \result$299.word0.position  = \result$299 [130:76];
-  assign \result$299.word0.ne  = \result$299 [131];
-  assign \result$299.word0.nw  = \result$299 [132];
-  assign \result$299.word0.crc_ok  = \result$299 [133];
-  assign \result$299.word1  = \result$299 [176:134];
-  assign \result$299.word1.position  = \result$299 [173:134];
-  assign \result$299.word1.ne  = \result$299 [174];
-  assign \result$299.word1.nw  = \result$299 [175];
-  assign \result$299.word1.crc_ok  = \result$299 [176];
-  assign \result$299.lc  = \result$299 [182:177];
-  assign \result$299.lc_repeat  = \result$299 [183];
-  assign \result$299.lc_skip  = \result$299 [184];
-  assign \result$299.lc_zero  = \result$299 [185];
-  assign \result$299.spw_mismatch  = \result$299 [186];
-  assign \events$260 [20] = \$16 ;
-  assign \events$260 [19] = \$14 ;
-  assign \events$260 [18] = \$12 ;
-  assign \events$260 [17] = \$10 ;
-  assign \events$260 [16] = \$8 ;
-  assign \events$260 [15] = \event ;
-  assign \events$260 [14] = \$6 ;
-  assign \events$260 [13] = \$4 ;
-  assign \events$260 [12] = faults[6];
-  assign \events$260 [11] = faults[4];
-  assign \events$260 [10] = overrun;
-  assign \events$260 [9] = \$2 ;
-  assign \events$260 [8] = lc_zero;
-  assign \events$260 [7] = lc_skip;
-  assign \events$260 [6] = lc_repeat;
-  assign \events$260 [5] = faults[3];
-  assign \events$260 [4] = faults[2];
-  assign \events$260 [3] = faults[1];
-  assign \events$260 [2] = faults[0];
-  assign \events$260 [1] = crc_error[1];
-  assign \events$260 [0] = crc_error[0];
+  assign \result$301.status  = \result$301 [3:0];
+  assign \result$301.timestamp  = \result$301 [35:4];
+  assign \result$301.line_delay  = \result$301 [48:36];
+  assign \result$301.cds  = \result$301 [49];
+  assign \result$301.noise_events  = \result$301 [53:50];
+  assign \result$301.delay_settled  = \result$301 [54];
+  assign \result$301.settled_delay  = \result$301 [67:55];
+  assign \result$301.delay_spread  = \result$301 [75:68];
+  assign \result$301.word0  = \result$301 [133:76];
+  assign \result$301.word0.position  = \result$301 [130:76];
+  assign \result$301.word0.ne  = \result$301 [131];
+  assign \result$301.word0.nw  = \result$301 [132];
+  assign \result$301.word0.crc_ok  = \result$301 [133];
+  assign \result$301.word1  = \result$301 [176:134];
+  assign \result$301.word1.position  = \result$301 [173:134];
+  assign \result$301.word1.ne  = \result$301 [174];
+  assign \result$301.word1.nw  = \result$301 [175];
+  assign \result$301.word1.crc_ok  = \result$301 [176];
+  assign \result$301.lc  = \result$301 [182:177];
+  assign \result$301.lc_repeat  = \result$301 [183];
+  assign \result$301.lc_skip  = \result$301 [184];
+  assign \result$301.lc_zero  = \result$301 [185];
+  assign \result$301.spw_mismatch  = \result$301 [186];
+  assign \events$262 [20] = \$16 ;
+  assign \events$262 [19] = \$14 ;
+  assign \events$262 [18] = \$12 ;
+  assign \events$262 [17] = \$10 ;
+  assign \events$262 [16] = \$8 ;
+  assign \events$262 [15] = \event ;
+  assign \events$262 [14] = \$6 ;
+  assign \events$262 [13] = \$4 ;
+  assign \events$262 [12] = faults[6];
+  assign \events$262 [11] = faults[4];
+  assign \events$262 [10] = overrun;
+  assign \events$262 [9] = \$2 ;
+  assign \events$262 [8] = lc_zero;
+  assign \events$262 [7] = lc_skip;
+  assign \events$262 [6] = lc_repeat;
+  assign \events$262 [5] = faults[3];
+  assign \events$262 [4] = faults[2];
+  assign \events$262 [3] = faults[1];
+  assign \events$262 [2] = faults[0];
+  assign \events$262 [1] = crc_error[1];
+  assign \events$262 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$223 [17] = ca_write;
-  assign \request$223 [16:10] = ca_count;
-  assign \request$223 [9:3] = ca_address;
-  assign \request$223 [2:0] = ca_slave_id;
+  assign \request$225 [17] = ca_write;
+  assign \request$225 [16:10] = ca_count;
+  assign \request$225 [9:3] = ca_address;
+  assign \request$225 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$24 ;
@@ -9085,26 +9221,28 @@ module \biss_master_wb.ch0.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$171 [21:11] = cycle[205:195];
-  assign \words$171 [10:0] = cycle[155:145];
-  assign words[21:11] = cycle[205:195];
-  assign words[10:0] = cycle[155:145];
-  assign live[252:245] = cfg_spw_tolerance;
-  assign live[244] = cfg_spw_check;
-  assign live[243] = cfg_w1_crc_inverted;
-  assign live[242:227] = cfg_w1_crc_start;
-  assign live[226:211] = cfg_w1_crc_poly;
-  assign live[210:206] = cfg_w1_crc_width;
-  assign live[205] = cfg_w1_gray;
-  assign live[204:203] = cfg_w1_crc;
-  assign live[202] = cfg_w1_lc;
-  assign live[201] = cfg_w1_nenw;
-  assign live[200:195] = cfg_w1_data_bits;
-  assign live[194] = cfg_w1_enable;
-  assign live[193] = cfg_w0_crc_inverted;
-  assign live[192:177] = cfg_w0_crc_start;
-  assign live[176:161] = cfg_w0_crc_poly;
-  assign live[160:156] = cfg_w0_crc_width;
+  assign \words$173 [23:12] = cycle[207:196];
+  assign \words$173 [11:0] = cycle[156:145];
+  assign words[23:12] = cycle[207:196];
+  assign words[11:0] = cycle[156:145];
+  assign live[254:247] = cfg_spw_tolerance;
+  assign live[246] = cfg_spw_check;
+  assign live[245] = cfg_w1_crc_inverted;
+  assign live[244:229] = cfg_w1_crc_start;
+  assign live[228:213] = cfg_w1_crc_poly;
+  assign live[212:208] = cfg_w1_crc_width;
+  assign live[207] = cfg_w1_signed;
+  assign live[206] = cfg_w1_gray;
+  assign live[205:204] = cfg_w1_crc;
+  assign live[203] = cfg_w1_lc;
+  assign live[202] = cfg_w1_nenw;
+  assign live[201:196] = cfg_w1_data_bits;
+  assign live[195] = cfg_w1_enable;
+  assign live[194] = cfg_w0_crc_inverted;
+  assign live[193:178] = cfg_w0_crc_start;
+  assign live[177:162] = cfg_w0_crc_poly;
+  assign live[161:157] = cfg_w0_crc_width;
+  assign live[156] = cfg_w0_signed;
   assign live[155] = cfg_w0_gray;
   assign live[154:153] = cfg_w0_crc;
   assign live[152] = cfg_w0_lc;
@@ -9181,7 +9319,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   wire [24:0] \$58 ;
   reg \$59 ;
   wire \$6 ;
-  reg [252:0] \$60 ;
+  reg [254:0] \$60 ;
   reg [23:0] \$61 ;
   reg [23:0] \$62 ;
   reg [11:0] \$63 ;
@@ -9208,8 +9346,8 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  output [252:0] cycle;
-  reg [252:0] cycle = 253'h0000000000000000000000000000000000000000000000000000000000000000;
+  output [254:0] cycle;
+  reg [254:0] cycle = 255'h0000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -9222,7 +9360,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
   wire [23:0] \cycle.timeout_limit ;
-  wire [10:0] \cycle.w0 ;
+  wire [11:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -9233,12 +9371,13 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   wire \cycle.w0.gray ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
+  wire \cycle.w0.signed ;
   wire [37:0] \cycle.w0_crc ;
   wire \cycle.w0_crc.inverted ;
   wire [15:0] \cycle.w0_crc.poly ;
   wire [15:0] \cycle.w0_crc.start ;
   wire [4:0] \cycle.w0_crc.width ;
-  wire [10:0] \cycle.w1 ;
+  wire [11:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -9249,6 +9388,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   wire \cycle.w1.gray ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
+  wire \cycle.w1.signed ;
   wire [37:0] \cycle.w1_crc ;
   wire \cycle.w1_crc.inverted ;
   wire [15:0] \cycle.w1_crc.poly ;
@@ -9261,8 +9401,8 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [252:0] live;
-  wire [252:0] live;
+  input [254:0] live;
+  wire [254:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -9275,7 +9415,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
   wire [23:0] \live.timeout_limit ;
-  wire [10:0] \live.w0 ;
+  wire [11:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -9286,12 +9426,13 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   wire \live.w0.gray ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
+  wire \live.w0.signed ;
   wire [37:0] \live.w0_crc ;
   wire \live.w0_crc.inverted ;
   wire [15:0] \live.w0_crc.poly ;
   wire [15:0] \live.w0_crc.start ;
   wire [4:0] \live.w0_crc.width ;
-  wire [10:0] \live.w1 ;
+  wire [11:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -9302,6 +9443,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   wire \live.w1.gray ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
+  wire \live.w1.signed ;
   wire [37:0] \live.w1_crc ;
   wire \live.w1_crc.inverted ;
   wire [15:0] \live.w1_crc.poly ;
@@ -9323,14 +9465,14 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
-  assign \$36  = live[194] & live[152];
-  assign \$37  = \$36  & live[202];
+  assign \$36  = live[195] & live[152];
+  assign \$37  = \$36  & live[203];
   assign \$38  = ~ \$37 ;
   assign \$39  = \$35  & \$38 ;
-  assign \$40  = ~ live[244];
-  assign \$41  = live[200:195] <= live[150:145];
-  assign \$42  = live[194] & \$41 ;
-  assign \$43  = | live[204:203];
+  assign \$40  = ~ live[246];
+  assign \$41  = live[201:196] <= live[150:145];
+  assign \$42  = live[195] & \$41 ;
+  assign \$43  = | live[205:204];
   assign \$44  = \$42  & \$43 ;
   assign \$45  = \$40  | \$44 ;
   assign \$46  = \$39  & \$45 ;
@@ -9346,7 +9488,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \$56  = \$55  ? 4'h2 : live[144:141];
   assign \$57  = live[15:0] + \$56 ;
   assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[194];
+  assign word_count = 1'h1 + cycle[195];
   always @(posedge clk)
     ok <= \$59 ;
   always @(posedge clk)
@@ -9375,26 +9517,26 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \$8  = live[154:153] == 2'h2;
   assign \$9  = \$7  | \$8 ;
   assign \$10  = live[154:153] == 2'h3;
-  assign \$11  = | live[160:156];
+  assign \$11  = | live[161:157];
   assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[160:156] <= 5'h10;
+  assign \$13  = live[161:157] <= 5'h10;
   assign \$14  = \$12  & \$13 ;
   assign \$15  = \$9  | \$14 ;
   assign \$16  = \$4  & \$15 ;
   assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[194];
-  assign \$19  = | live[200:195];
-  assign \$20  = live[200:195] <= 6'h28;
+  assign \$18  = ~ live[195];
+  assign \$19  = | live[201:196];
+  assign \$20  = live[201:196] <= 6'h28;
   assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[204:203];
-  assign \$23  = live[204:203] == 1'h1;
+  assign \$22  = ! live[205:204];
+  assign \$23  = live[205:204] == 1'h1;
   assign \$24  = \$22  | \$23 ;
-  assign \$25  = live[204:203] == 2'h2;
+  assign \$25  = live[205:204] == 2'h2;
   assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[204:203] == 2'h3;
-  assign \$28  = | live[210:206];
+  assign \$27  = live[205:204] == 2'h3;
+  assign \$28  = | live[212:208];
   assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[210:206] <= 5'h10;
+  assign \$30  = live[212:208] <= 5'h10;
   assign \$31  = \$29  & \$30 ;
   assign \$32  = \$26  | \$31 ;
   always @* begin
@@ -9411,7 +9553,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
       \$60  = live;
     end
     if (rst) begin
-      \$60  = 253'h0000000000000000000000000000000000000000000000000000000000000000;
+      \$60  = 255'h0000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
@@ -9485,12 +9627,12 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
             \$66 [37] = 1'h1;
           end
         2'h3:
-            \$66 [37:0] = live[193:156];
+            \$66 [37:0] = live[194:157];
         default:
             \$66 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
-      casez (live[204:203])
+      casez (live[205:204])
         2'h1:
           begin
             \$66 [42:38] = 5'h06;
@@ -9506,7 +9648,7 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
             \$66 [75] = 1'h1;
           end
         2'h3:
-            \$66 [75:38] = live[243:206];
+            \$66 [75:38] = live[245:208];
         default:
             \$66 [75:38] = 38'h0000000000;
       endcase
@@ -9532,31 +9674,33 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[155:145];
+  assign \live.w0  = live[156:145];
   assign \live.w0.data_bits  = live[150:145];
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
   assign \live.w0.gray  = live[155];
-  assign \live.w0_crc  = live[193:156];
-  assign \live.w0_crc.width  = live[160:156];
-  assign \live.w0_crc.poly  = live[176:161];
-  assign \live.w0_crc.start  = live[192:177];
-  assign \live.w0_crc.inverted  = live[193];
-  assign \live.w1_enable  = live[194];
-  assign \live.w1  = live[205:195];
-  assign \live.w1.data_bits  = live[200:195];
-  assign \live.w1.nenw  = live[201];
-  assign \live.w1.lc  = live[202];
-  assign \live.w1.crc  = live[204:203];
-  assign \live.w1.gray  = live[205];
-  assign \live.w1_crc  = live[243:206];
-  assign \live.w1_crc.width  = live[210:206];
-  assign \live.w1_crc.poly  = live[226:211];
-  assign \live.w1_crc.start  = live[242:227];
-  assign \live.w1_crc.inverted  = live[243];
-  assign \live.spw_check  = live[244];
-  assign \live.spw_tolerance  = live[252:245];
+  assign \live.w0.signed  = live[156];
+  assign \live.w0_crc  = live[194:157];
+  assign \live.w0_crc.width  = live[161:157];
+  assign \live.w0_crc.poly  = live[177:162];
+  assign \live.w0_crc.start  = live[193:178];
+  assign \live.w0_crc.inverted  = live[194];
+  assign \live.w1_enable  = live[195];
+  assign \live.w1  = live[207:196];
+  assign \live.w1.data_bits  = live[201:196];
+  assign \live.w1.nenw  = live[202];
+  assign \live.w1.lc  = live[203];
+  assign \live.w1.crc  = live[205:204];
+  assign \live.w1.gray  = live[206];
+  assign \live.w1.signed  = live[207];
+  assign \live.w1_crc  = live[245:208];
+  assign \live.w1_crc.width  = live[212:208];
+  assign \live.w1_crc.poly  = live[228:213];
+  assign \live.w1_crc.start  = live[244:229];
+  assign \live.w1_crc.inverted  = live[245];
+  assign \live.spw_check  = live[246];
+  assign \live.spw_tolerance  = live[254:247];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -9567,31 +9711,33 @@ module \biss_master_wb.ch0.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[155:145];
+  assign \cycle.w0  = cycle[156:145];
   assign \cycle.w0.data_bits  = cycle[150:145];
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
   assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0_crc  = cycle[193:156];
-  assign \cycle.w0_crc.width  = cycle[160:156];
-  assign \cycle.w0_crc.poly  = cycle[176:161];
-  assign \cycle.w0_crc.start  = cycle[192:177];
-  assign \cycle.w0_crc.inverted  = cycle[193];
-  assign \cycle.w1_enable  = cycle[194];
-  assign \cycle.w1  = cycle[205:195];
-  assign \cycle.w1.data_bits  = cycle[200:195];
-  assign \cycle.w1.nenw  = cycle[201];
-  assign \cycle.w1.lc  = cycle[202];
-  assign \cycle.w1.crc  = cycle[204:203];
-  assign \cycle.w1.gray  = cycle[205];
-  assign \cycle.w1_crc  = cycle[243:206];
-  assign \cycle.w1_crc.width  = cycle[210:206];
-  assign \cycle.w1_crc.poly  = cycle[226:211];
-  assign \cycle.w1_crc.start  = cycle[242:227];
-  assign \cycle.w1_crc.inverted  = cycle[243];
-  assign \cycle.spw_check  = cycle[244];
-  assign \cycle.spw_tolerance  = cycle[252:245];
+  assign \cycle.w0.signed  = cycle[156];
+  assign \cycle.w0_crc  = cycle[194:157];
+  assign \cycle.w0_crc.width  = cycle[161:157];
+  assign \cycle.w0_crc.poly  = cycle[177:162];
+  assign \cycle.w0_crc.start  = cycle[193:178];
+  assign \cycle.w0_crc.inverted  = cycle[194];
+  assign \cycle.w1_enable  = cycle[195];
+  assign \cycle.w1  = cycle[207:196];
+  assign \cycle.w1.data_bits  = cycle[201:196];
+  assign \cycle.w1.nenw  = cycle[202];
+  assign \cycle.w1.lc  = cycle[203];
+  assign \cycle.w1.crc  = cycle[205:204];
+  assign \cycle.w1.gray  = cycle[206];
+  assign \cycle.w1.signed  = cycle[207];
+  assign \cycle.w1_crc  = cycle[245:208];
+  assign \cycle.w1_crc.width  = cycle[212:208];
+  assign \cycle.w1_crc.poly  = cycle[228:213];
+  assign \cycle.w1_crc.start  = cycle[244:229];
+  assign \cycle.w1_crc.inverted  = cycle[245];
+  assign \cycle.spw_check  = cycle[246];
+  assign \cycle.spw_tolerance  = cycle[254:247];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -12594,89 +12740,566 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
-  wire [1:0] \$101 ;
-  wire [1:0] \$102 ;
+  wire \$101 ;
+  wire \$102 ;
   wire \$103 ;
   wire \$104 ;
   wire \$105 ;
   wire \$106 ;
   wire \$107 ;
-  reg \$108 ;
-  reg \$109 ;
+  wire \$108 ;
+  wire \$109 ;
   wire [1:0] \$11 ;
-  reg [15:0] \$110 ;
-  reg \$111 ;
-  reg \$112 ;
-  reg [15:0] \$113 ;
-  reg [2:0] \$114 ;
-  reg \$115 ;
-  reg [6:0] \$116 ;
-  reg \$117 ;
-  reg \$118 ;
-  reg \$119 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire [6:0] \$12 ;
-  reg \$120 ;
-  reg \$121 ;
-  reg \$122 ;
-  reg [54:0] \$123 ;
-  reg [1:0] \$124 ;
-  reg [1:0] \$125 ;
-  reg [39:0] \$126 ;
-  reg [5:0] \$127 ;
-  reg [39:0] \$128 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   reg [3:0] \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire [6:0] \$15 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
   wire \$16 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire \$17 ;
+  wire \$170 ;
+  wire \$171 ;
+  wire \$172 ;
+  wire \$173 ;
+  wire \$174 ;
+  wire \$175 ;
+  wire \$176 ;
+  wire \$177 ;
+  wire \$178 ;
+  wire \$179 ;
   wire [6:0] \$18 ;
+  wire \$180 ;
+  wire \$181 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
+  wire \$189 ;
   wire [7:0] \$19 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire \$198 ;
+  wire \$199 ;
   wire [7:0] \$2 ;
   reg [6:0] \$20 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire [7:0] \$21 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
+  wire \$213 ;
+  wire \$214 ;
+  wire \$215 ;
+  wire \$216 ;
+  wire \$217 ;
+  wire \$218 ;
+  wire \$219 ;
   reg [6:0] \$22 ;
+  wire \$220 ;
+  wire \$221 ;
+  wire \$222 ;
+  wire \$223 ;
+  wire \$224 ;
+  wire \$225 ;
+  wire \$226 ;
+  wire \$227 ;
+  wire \$228 ;
+  wire \$229 ;
   wire [7:0] \$23 ;
+  wire \$230 ;
+  wire \$231 ;
+  wire \$232 ;
+  wire \$233 ;
+  wire \$234 ;
+  wire \$235 ;
+  wire \$236 ;
+  wire \$237 ;
+  wire \$238 ;
+  wire \$239 ;
   reg [6:0] \$24 ;
+  wire \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  wire \$243 ;
+  wire \$244 ;
+  wire \$245 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
   wire [7:0] \$25 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
   wire [7:0] \$26 ;
+  wire \$260 ;
+  wire \$261 ;
+  wire \$262 ;
+  wire \$263 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire \$269 ;
   wire \$27 ;
+  wire \$270 ;
+  wire \$271 ;
+  wire \$272 ;
+  wire \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
   wire [1:0] \$28 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
   wire [6:0] \$29 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   reg [6:0] \$3 ;
   wire \$30 ;
+  wire \$300 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
   reg [3:0] \$31 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
   wire [6:0] \$32 ;
+  wire \$320 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
   wire \$33 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  wire \$337 ;
+  wire \$338 ;
+  wire \$339 ;
   wire \$34 ;
+  wire \$340 ;
+  wire \$341 ;
+  wire \$342 ;
+  wire \$343 ;
+  wire [54:0] \$344 ;
+  wire \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire \$349 ;
   wire \$35 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire \$352 ;
+  wire \$353 ;
+  wire \$354 ;
+  wire \$355 ;
+  wire \$356 ;
+  wire \$357 ;
+  wire \$358 ;
+  wire \$359 ;
   wire \$36 ;
+  wire \$360 ;
+  wire \$361 ;
+  wire \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
   wire [16:0] \$37 ;
+  wire \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire \$378 ;
+  wire \$379 ;
   wire \$38 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
   wire \$39 ;
+  wire \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire \$394 ;
+  wire \$395 ;
+  wire \$396 ;
+  wire \$397 ;
+  wire \$398 ;
+  wire \$399 ;
   wire [7:0] \$4 ;
   wire \$40 ;
+  wire \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  wire \$403 ;
+  wire \$404 ;
+  wire \$405 ;
+  wire \$406 ;
+  wire \$407 ;
+  wire \$408 ;
+  wire \$409 ;
   wire [7:0] \$41 ;
+  wire \$410 ;
+  wire \$411 ;
+  wire \$412 ;
+  wire \$413 ;
+  wire \$414 ;
+  wire \$415 ;
+  wire \$416 ;
+  wire \$417 ;
+  wire \$418 ;
+  wire \$419 ;
   wire [6:0] \$42 ;
+  wire \$420 ;
+  wire \$421 ;
+  wire \$422 ;
+  wire \$423 ;
+  wire \$424 ;
+  wire \$425 ;
+  wire \$426 ;
+  wire \$427 ;
+  wire \$428 ;
+  wire \$429 ;
   wire \$43 ;
+  wire \$430 ;
+  wire \$431 ;
+  wire \$432 ;
+  wire \$433 ;
+  wire \$434 ;
+  wire \$435 ;
+  wire \$436 ;
+  wire \$437 ;
+  wire \$438 ;
+  wire \$439 ;
   wire \$44 ;
+  wire \$440 ;
+  wire \$441 ;
+  wire \$442 ;
+  wire \$443 ;
+  wire \$444 ;
+  wire \$445 ;
+  wire \$446 ;
+  wire \$447 ;
+  wire \$448 ;
+  wire \$449 ;
   wire [6:0] \$45 ;
+  wire \$450 ;
+  wire \$451 ;
+  wire \$452 ;
+  wire \$453 ;
+  wire \$454 ;
+  wire \$455 ;
+  wire \$456 ;
+  wire \$457 ;
+  wire \$458 ;
+  wire \$459 ;
   wire \$46 ;
+  wire \$460 ;
+  wire \$461 ;
+  wire \$462 ;
+  wire \$463 ;
+  wire \$464 ;
+  wire \$465 ;
+  wire \$466 ;
+  wire \$467 ;
+  wire \$468 ;
+  wire \$469 ;
   wire \$47 ;
+  wire \$470 ;
+  wire \$471 ;
+  wire \$472 ;
+  wire \$473 ;
+  wire \$474 ;
+  wire \$475 ;
+  wire \$476 ;
+  wire \$477 ;
+  wire \$478 ;
+  wire \$479 ;
   wire [6:0] \$48 ;
+  wire \$480 ;
+  wire \$481 ;
+  wire \$482 ;
+  wire \$483 ;
+  wire \$484 ;
+  wire \$485 ;
+  wire \$486 ;
+  wire \$487 ;
+  wire \$488 ;
+  wire \$489 ;
   wire \$49 ;
+  wire \$490 ;
+  wire \$491 ;
+  wire \$492 ;
+  wire \$493 ;
+  wire \$494 ;
+  wire \$495 ;
+  wire \$496 ;
+  wire \$497 ;
+  wire \$498 ;
+  wire \$499 ;
   reg [6:0] \$5 ;
   wire \$50 ;
+  wire \$500 ;
+  wire \$501 ;
+  wire \$502 ;
+  wire \$503 ;
+  wire \$504 ;
+  wire \$505 ;
+  wire \$506 ;
+  wire \$507 ;
+  wire \$508 ;
+  wire \$509 ;
   wire [6:0] \$51 ;
+  wire \$510 ;
+  wire \$511 ;
+  wire \$512 ;
+  wire \$513 ;
+  wire \$514 ;
+  wire \$515 ;
+  wire \$516 ;
+  wire \$517 ;
+  wire \$518 ;
+  wire \$519 ;
   wire \$52 ;
+  wire \$520 ;
+  wire \$521 ;
+  wire \$522 ;
+  wire \$523 ;
+  wire \$524 ;
+  wire \$525 ;
+  wire \$526 ;
+  wire \$527 ;
+  wire \$528 ;
+  wire \$529 ;
   wire \$53 ;
+  wire \$530 ;
+  wire \$531 ;
+  wire \$532 ;
+  wire \$533 ;
+  wire \$534 ;
+  wire \$535 ;
+  wire \$536 ;
+  wire \$537 ;
+  wire \$538 ;
+  wire \$539 ;
   wire [6:0] \$54 ;
+  wire \$540 ;
+  wire \$541 ;
+  wire \$542 ;
+  wire \$543 ;
+  wire \$544 ;
+  wire \$545 ;
+  wire \$546 ;
+  wire \$547 ;
+  wire \$548 ;
+  wire \$549 ;
   wire \$55 ;
+  wire \$550 ;
+  wire \$551 ;
+  wire \$552 ;
+  wire \$553 ;
+  wire \$554 ;
+  wire \$555 ;
+  wire \$556 ;
+  wire \$557 ;
+  wire \$558 ;
+  wire [39:0] \$559 ;
   wire \$56 ;
+  wire \$560 ;
+  wire \$561 ;
+  wire \$562 ;
+  wire \$563 ;
+  wire \$564 ;
+  wire \$565 ;
+  wire \$566 ;
+  wire \$567 ;
+  wire \$568 ;
+  wire \$569 ;
   wire \$57 ;
+  wire \$570 ;
+  wire \$571 ;
+  wire [6:0] \$572 ;
+  wire \$573 ;
+  wire \$574 ;
+  wire \$575 ;
+  wire [6:0] \$576 ;
+  wire \$577 ;
+  wire [1:0] \$578 ;
+  wire [1:0] \$579 ;
   wire \$58 ;
+  wire \$580 ;
+  wire \$581 ;
+  wire \$582 ;
+  wire \$583 ;
+  wire \$584 ;
+  reg \$585 ;
+  reg \$586 ;
+  reg [15:0] \$587 ;
+  reg \$588 ;
+  reg \$589 ;
   wire [6:0] \$59 ;
+  reg [15:0] \$590 ;
+  reg [2:0] \$591 ;
+  reg \$592 ;
+  reg [6:0] \$593 ;
+  reg \$594 ;
+  reg \$595 ;
+  reg \$596 ;
+  reg \$597 ;
+  reg \$598 ;
+  reg \$599 ;
   wire [7:0] \$6 ;
   wire \$60 ;
+  reg [54:0] \$600 ;
+  reg [1:0] \$601 ;
+  reg [1:0] \$602 ;
+  reg [39:0] \$603 ;
+  reg [5:0] \$604 ;
+  reg [39:0] \$605 ;
   wire [2:0] \$61 ;
   wire \$62 ;
   wire [1:0] \$63 ;
@@ -12714,11 +13337,11 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   wire \$92 ;
   wire \$93 ;
   wire \$94 ;
-  wire [6:0] \$95 ;
+  wire \$95 ;
   wire \$96 ;
   wire \$97 ;
   wire \$98 ;
-  wire [6:0] \$99 ;
+  wire \$99 ;
   reg at_cds;
   input \bit ;
   wire \bit ;
@@ -12818,9 +13441,9 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   reg word = 1'h0;
   input [1:0] word_count;
   wire [1:0] word_count;
-  input [21:0] words;
-  wire [21:0] words;
-  wire [10:0] \words[0] ;
+  input [23:0] words;
+  wire [23:0] words;
+  wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -12831,7 +13454,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [10:0] \words[1] ;
+  wire \words[0].signed ;
+  wire [11:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -12842,107 +13466,200 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
-  assign \$1  = words[5:0] + 1'h1;
-  assign \$2  = words[5:0] + 7'h7f;
-  assign \$4  = words[5:0] + \$3 ;
-  assign \$6  = words[5:0] + \$5 ;
-  assign \$8  = \$7  + crcs[4:0];
-  assign \$9  = words[5:0] + \$8 [6:0];
-  assign \$10  = | words[5:0];
-  assign \$11  = words[6] ? 2'h2 : 2'h0;
-  assign \$12  = words[5:0] + \$11 ;
-  assign \$13  = ! \$12 ;
-  assign \$15  = words[5:0] + \$14 ;
-  assign \$16  = | \$15 ;
-  assign \$17  = \$13  & \$16 ;
-  assign \$18  = words[16:11] + 1'h1;
-  assign \$19  = words[16:11] + 7'h7f;
-  assign \$21  = words[16:11] + \$20 ;
-  assign \$23  = words[16:11] + \$22 ;
-  assign \$25  = \$24  + crcs[42:38];
-  assign \$26  = words[16:11] + \$25 [6:0];
-  assign \$27  = | words[16:11];
-  assign \$28  = words[17] ? 2'h2 : 2'h0;
-  assign \$29  = words[16:11] + \$28 ;
-  assign \$30  = ! \$29 ;
-  assign \$32  = words[16:11] + \$31 ;
-  assign \$33  = | \$32 ;
-  assign \$34  = \$30  & \$33 ;
-  assign \$35  = ~ slots_full;
-  assign \$36  = sample & \$35 ;
-  assign \$37  = slots + 1'h1;
-  assign \$38  = slots == 16'hfffe;
-  assign \$39  = sample & \bit ;
-  assign \$40  = | words[16:11];
-  assign \$41  = idx + 1'h1;
-  assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
-  assign \$43  = idx != \$42 ;
-  assign \$44  = in_data & \$43 ;
-  assign \$45  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
-  assign \$46  = idx == \$45 ;
-  assign \$47  = in_lc | \$46 ;
-  assign \$48  = word ? w1_lc_end_m1 : w0_lc_end_m1;
-  assign \$49  = idx != \$48 ;
-  assign \$50  = \$47  & \$49 ;
-  assign \$51  = word ? w1_lc_end_m1 : w0_lc_end_m1;
-  assign \$52  = idx == \$51 ;
-  assign \$53  = in_crc | \$52 ;
-  assign \$54  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$55  = idx != \$54 ;
-  assign \$56  = \$53  & \$55 ;
-  assign \$57  = idx != w1_data_end_m1;
-  assign \$58  = in_top & \$57 ;
-  assign \$59  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$60  = idx == \$59 ;
-  assign \$61  = word_count - 1'h1;
-  assign \$62  = word == \$61 ;
-  assign \$63  = word + 1'h1;
-  assign \$64  = ! word;
-  assign \$65  = in_word & \$64 ;
-  assign \$66  = \$65  & in_data;
-  assign \$67  = words[10] & data0[0];
-  assign \$68  = \bit  ^ \$67 ;
-  assign \$69  = ~ words[6];
-  assign \$70  = ! word;
-  assign \$71  = in_word & \$70 ;
-  assign \$72  = idx == words[5:0];
-  assign \$73  = \$71  & \$72 ;
-  assign \$74  = ! word;
-  assign \$75  = in_word & \$74 ;
-  assign \$76  = idx == w0_data_end_p1;
-  assign \$77  = \$75  & \$76 ;
-  assign \$79  = in_word & \$78 ;
-  assign \$80  = \$79  & in_data;
-  assign \$81  = words[21] & data1[0];
-  assign \$82  = \bit  ^ \$81 ;
-  assign \$83  = ~ words[17];
-  assign \$85  = in_word & \$84 ;
-  assign \$86  = idx == words[16:11];
-  assign \$87  = \$85  & \$86 ;
-  assign \$89  = in_word & \$88 ;
-  assign \$90  = idx == w1_data_end_p1;
-  assign \$91  = \$89  & \$90 ;
-  assign \$92  = in_word & in_top;
-  assign \$93  = words[10] & data0[0];
-  assign \$94  = \bit  ^ \$93 ;
+  wire \words[1].signed ;
+  assign \$395  = words[23] & \$394 ;
+  assign \$396  = words[22] & data1[0];
+  assign \$397  = \bit  ^ \$396 ;
+  assign \$398  = \$395  & \$397 ;
+  assign \$399  = ! idx;
+  assign \$400  = words[23] & \$399 ;
+  assign \$401  = words[22] & data1[0];
+  assign \$402  = \bit  ^ \$401 ;
+  assign \$403  = \$400  & \$402 ;
+  assign \$404  = ! idx;
+  assign \$405  = words[23] & \$404 ;
+  assign \$406  = words[22] & data1[0];
+  assign \$407  = \bit  ^ \$406 ;
+  assign \$408  = \$405  & \$407 ;
+  assign \$409  = ! idx;
+  assign \$410  = words[23] & \$409 ;
+  assign \$411  = words[22] & data1[0];
+  assign \$412  = \bit  ^ \$411 ;
+  assign \$413  = \$410  & \$412 ;
+  assign \$414  = ! idx;
+  assign \$415  = words[23] & \$414 ;
+  assign \$416  = words[22] & data1[0];
+  assign \$417  = \bit  ^ \$416 ;
+  assign \$418  = \$415  & \$417 ;
+  assign \$419  = ! idx;
+  assign \$420  = words[23] & \$419 ;
+  assign \$421  = words[22] & data1[0];
+  assign \$422  = \bit  ^ \$421 ;
+  assign \$423  = \$420  & \$422 ;
+  assign \$424  = ! idx;
+  assign \$425  = words[23] & \$424 ;
+  assign \$426  = words[22] & data1[0];
+  assign \$427  = \bit  ^ \$426 ;
+  assign \$428  = \$425  & \$427 ;
+  assign \$429  = ! idx;
+  assign \$430  = words[23] & \$429 ;
+  assign \$431  = words[22] & data1[0];
+  assign \$432  = \bit  ^ \$431 ;
+  assign \$433  = \$430  & \$432 ;
+  assign \$434  = ! idx;
+  assign \$435  = words[23] & \$434 ;
+  assign \$436  = words[22] & data1[0];
+  assign \$437  = \bit  ^ \$436 ;
+  assign \$438  = \$435  & \$437 ;
+  assign \$439  = ! idx;
+  assign \$440  = words[23] & \$439 ;
+  assign \$441  = words[22] & data1[0];
+  assign \$442  = \bit  ^ \$441 ;
+  assign \$443  = \$440  & \$442 ;
+  assign \$444  = ! idx;
+  assign \$445  = words[23] & \$444 ;
+  assign \$446  = words[22] & data1[0];
+  assign \$447  = \bit  ^ \$446 ;
+  assign \$448  = \$445  & \$447 ;
+  assign \$449  = ! idx;
+  assign \$450  = words[23] & \$449 ;
+  assign \$451  = words[22] & data1[0];
+  assign \$452  = \bit  ^ \$451 ;
+  assign \$453  = \$450  & \$452 ;
+  assign \$454  = ! idx;
+  assign \$455  = words[23] & \$454 ;
+  assign \$456  = words[22] & data1[0];
+  assign \$457  = \bit  ^ \$456 ;
+  assign \$458  = \$455  & \$457 ;
+  assign \$459  = ! idx;
+  assign \$460  = words[23] & \$459 ;
+  assign \$461  = words[22] & data1[0];
+  assign \$462  = \bit  ^ \$461 ;
+  assign \$463  = \$460  & \$462 ;
+  assign \$464  = ! idx;
+  assign \$465  = words[23] & \$464 ;
+  assign \$466  = words[22] & data1[0];
+  assign \$467  = \bit  ^ \$466 ;
+  assign \$468  = \$465  & \$467 ;
+  assign \$469  = ! idx;
+  assign \$470  = words[23] & \$469 ;
+  assign \$471  = words[22] & data1[0];
+  assign \$472  = \bit  ^ \$471 ;
+  assign \$473  = \$470  & \$472 ;
+  assign \$474  = ! idx;
+  assign \$475  = words[23] & \$474 ;
+  assign \$476  = words[22] & data1[0];
+  assign \$477  = \bit  ^ \$476 ;
+  assign \$478  = \$475  & \$477 ;
+  assign \$479  = ! idx;
+  assign \$480  = words[23] & \$479 ;
+  assign \$481  = words[22] & data1[0];
+  assign \$482  = \bit  ^ \$481 ;
+  assign \$483  = \$480  & \$482 ;
+  assign \$484  = ! idx;
+  assign \$485  = words[23] & \$484 ;
+  assign \$486  = words[22] & data1[0];
+  assign \$487  = \bit  ^ \$486 ;
+  assign \$488  = \$485  & \$487 ;
+  assign \$489  = ! idx;
+  assign \$490  = words[23] & \$489 ;
+  assign \$491  = words[22] & data1[0];
+  assign \$492  = \bit  ^ \$491 ;
+  assign \$493  = \$490  & \$492 ;
+  assign \$494  = ! idx;
+  assign \$495  = words[23] & \$494 ;
+  assign \$496  = words[22] & data1[0];
+  assign \$497  = \bit  ^ \$496 ;
+  assign \$498  = \$495  & \$497 ;
+  assign \$499  = ! idx;
+  assign \$500  = words[23] & \$499 ;
+  assign \$501  = words[22] & data1[0];
+  assign \$502  = \bit  ^ \$501 ;
+  assign \$503  = \$500  & \$502 ;
+  assign \$504  = ! idx;
+  assign \$505  = words[23] & \$504 ;
+  assign \$506  = words[22] & data1[0];
+  assign \$507  = \bit  ^ \$506 ;
+  assign \$508  = \$505  & \$507 ;
+  assign \$509  = ! idx;
+  assign \$510  = words[23] & \$509 ;
+  assign \$511  = words[22] & data1[0];
+  assign \$512  = \bit  ^ \$511 ;
+  assign \$513  = \$510  & \$512 ;
+  assign \$514  = ! idx;
+  assign \$515  = words[23] & \$514 ;
+  assign \$516  = words[22] & data1[0];
+  assign \$517  = \bit  ^ \$516 ;
+  assign \$518  = \$515  & \$517 ;
+  assign \$519  = ! idx;
+  assign \$520  = words[23] & \$519 ;
+  assign \$521  = words[22] & data1[0];
+  assign \$522  = \bit  ^ \$521 ;
+  assign \$523  = \$520  & \$522 ;
+  assign \$524  = ! idx;
+  assign \$525  = words[23] & \$524 ;
+  assign \$526  = words[22] & data1[0];
+  assign \$527  = \bit  ^ \$526 ;
+  assign \$528  = \$525  & \$527 ;
+  assign \$529  = ! idx;
+  assign \$530  = words[23] & \$529 ;
+  assign \$531  = words[22] & data1[0];
+  assign \$532  = \bit  ^ \$531 ;
+  assign \$533  = \$530  & \$532 ;
+  assign \$534  = ! idx;
+  assign \$535  = words[23] & \$534 ;
+  assign \$536  = words[22] & data1[0];
+  assign \$537  = \bit  ^ \$536 ;
+  assign \$538  = \$535  & \$537 ;
+  assign \$539  = ! idx;
+  assign \$540  = words[23] & \$539 ;
+  assign \$541  = words[22] & data1[0];
+  assign \$542  = \bit  ^ \$541 ;
+  assign \$543  = \$540  & \$542 ;
+  assign \$544  = ! idx;
+  assign \$545  = words[23] & \$544 ;
+  assign \$546  = words[22] & data1[0];
+  assign \$547  = \bit  ^ \$546 ;
+  assign \$548  = \$545  & \$547 ;
+  assign \$549  = ! idx;
+  assign \$550  = words[23] & \$549 ;
+  assign \$551  = words[22] & data1[0];
+  assign \$552  = \bit  ^ \$551 ;
+  assign \$553  = \$550  & \$552 ;
+  assign \$554  = ! idx;
+  assign \$555  = words[23] & \$554 ;
+  assign \$556  = words[22] & data1[0];
+  assign \$557  = \bit  ^ \$556 ;
+  assign \$558  = \$555  & \$557 ;
+  assign \$559  = { data1[38:0], \$358  } | { \$558 , \$553 , \$548 , \$543 , \$538 , \$533 , \$528 , \$523 , \$518 , \$513 , \$508 , \$503 , \$498 , \$493 , \$488 , \$483 , \$478 , \$473 , \$468 , \$463 , \$458 , \$453 , \$448 , \$443 , \$438 , \$433 , \$428 , \$423 , \$418 , \$413 , \$408 , \$403 , \$398 , \$393 , \$388 , \$383 , \$378 , \$373 , \$368 , \$363  };
+  assign \$560  = ~ words[18];
+  assign \$562  = in_word & \$561 ;
+  assign \$563  = idx == words[17:12];
+  assign \$564  = \$562  & \$563 ;
+  assign \$566  = in_word & \$565 ;
+  assign \$567  = idx == w1_data_end_p1;
+  assign \$568  = \$566  & \$567 ;
+  assign \$569  = in_word & in_top;
+  assign \$570  = words[10] & data0[0];
+  assign \$571  = \bit  ^ \$570 ;
   assign lc_load = in_word & in_lc;
-  assign \$95  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$96  = idx == \$95 ;
-  assign \$97  = in_word & \$96 ;
-  assign load = at_cds | \$97 ;
-  assign \$98  = ~ in_crc;
-  assign \cover  = in_word & \$98 ;
+  assign \$572  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$573  = idx == \$572 ;
+  assign \$574  = in_word & \$573 ;
+  assign load = at_cds | \$574 ;
+  assign \$575  = ~ in_crc;
+  assign \cover  = in_word & \$575 ;
   assign check = in_word & in_crc;
-  assign \$99  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$100  = idx == \$99 ;
-  assign last = in_word & \$100 ;
-  assign \$101  = word + 1'h1;
-  assign \$102  = at_cds ? 2'h0 : \$101 ;
-  assign \$103  = ! decoder_fsm_state;
-  assign \$104  = decoder_fsm_state == 1'h1;
-  assign \$105  = decoder_fsm_state == 2'h2;
-  assign \$106  = decoder_fsm_state == 2'h3;
-  assign \$107  = decoder_fsm_state == 3'h4;
+  assign \$576  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$577  = idx == \$576 ;
+  assign last = in_word & \$577 ;
+  assign \$578  = word + 1'h1;
+  assign \$579  = at_cds ? 2'h0 : \$578 ;
+  assign \$580  = ! decoder_fsm_state;
+  assign \$581  = decoder_fsm_state == 1'h1;
+  assign \$582  = decoder_fsm_state == 2'h2;
+  assign \$583  = decoder_fsm_state == 2'h3;
+  assign \$584  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -12972,47 +13689,432 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   always @(posedge clk)
     w1_lc_at0 <= \$34 ;
   always @(posedge clk)
-    done <= \$108 ;
+    done <= \$585 ;
   always @(posedge clk)
-    stopped <= \$109 ;
+    stopped <= \$586 ;
   always @(posedge clk)
-    slots <= \$110 ;
+    slots <= \$587 ;
   always @(posedge clk)
-    slots_full <= \$111 ;
+    slots_full <= \$588 ;
   always @(posedge clk)
-    started <= \$112 ;
+    started <= \$589 ;
   always @(posedge clk)
-    start_slot <= \$113 ;
+    start_slot <= \$590 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$114 ;
+    decoder_fsm_state <= \$591 ;
   always @(posedge clk)
-    cds <= \$115 ;
+    cds <= \$592 ;
   always @(posedge clk)
-    idx <= \$116 ;
+    idx <= \$593 ;
   always @(posedge clk)
-    in_data <= \$117 ;
+    in_data <= \$594 ;
   always @(posedge clk)
-    in_lc <= \$118 ;
+    in_lc <= \$595 ;
   always @(posedge clk)
-    in_crc <= \$119 ;
+    in_crc <= \$596 ;
   always @(posedge clk)
-    in_top <= \$120 ;
+    in_top <= \$597 ;
   always @(posedge clk)
-    word <= \$121 ;
+    word <= \$598 ;
   always @(posedge clk)
-    stop_bit <= \$122 ;
+    stop_bit <= \$599 ;
   always @(posedge clk)
-    data0 <= \$123 ;
+    data0 <= \$600 ;
   always @(posedge clk)
-    ne <= \$124 ;
+    ne <= \$601 ;
   always @(posedge clk)
-    nw <= \$125 ;
+    nw <= \$602 ;
   always @(posedge clk)
-    data1 <= \$126 ;
+    data1 <= \$603 ;
   always @(posedge clk)
-    lc <= \$127 ;
+    lc <= \$604 ;
   always @(posedge clk)
-    cpw_top <= \$128 ;
+    cpw_top <= \$605 ;
+  assign \$1  = words[5:0] + 1'h1;
+  assign \$2  = words[5:0] + 7'h7f;
+  assign \$4  = words[5:0] + \$3 ;
+  assign \$6  = words[5:0] + \$5 ;
+  assign \$8  = \$7  + crcs[4:0];
+  assign \$9  = words[5:0] + \$8 [6:0];
+  assign \$10  = | words[5:0];
+  assign \$11  = words[6] ? 2'h2 : 2'h0;
+  assign \$12  = words[5:0] + \$11 ;
+  assign \$13  = ! \$12 ;
+  assign \$15  = words[5:0] + \$14 ;
+  assign \$16  = | \$15 ;
+  assign \$17  = \$13  & \$16 ;
+  assign \$18  = words[17:12] + 1'h1;
+  assign \$19  = words[17:12] + 7'h7f;
+  assign \$21  = words[17:12] + \$20 ;
+  assign \$23  = words[17:12] + \$22 ;
+  assign \$25  = \$24  + crcs[42:38];
+  assign \$26  = words[17:12] + \$25 [6:0];
+  assign \$27  = | words[17:12];
+  assign \$28  = words[18] ? 2'h2 : 2'h0;
+  assign \$29  = words[17:12] + \$28 ;
+  assign \$30  = ! \$29 ;
+  assign \$32  = words[17:12] + \$31 ;
+  assign \$33  = | \$32 ;
+  assign \$34  = \$30  & \$33 ;
+  assign \$35  = ~ slots_full;
+  assign \$36  = sample & \$35 ;
+  assign \$37  = slots + 1'h1;
+  assign \$38  = slots == 16'hfffe;
+  assign \$39  = sample & \bit ;
+  assign \$40  = | words[17:12];
+  assign \$41  = idx + 1'h1;
+  assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
+  assign \$43  = idx != \$42 ;
+  assign \$44  = in_data & \$43 ;
+  assign \$45  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
+  assign \$46  = idx == \$45 ;
+  assign \$47  = in_lc | \$46 ;
+  assign \$48  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$49  = idx != \$48 ;
+  assign \$50  = \$47  & \$49 ;
+  assign \$51  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$52  = idx == \$51 ;
+  assign \$53  = in_crc | \$52 ;
+  assign \$54  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$55  = idx != \$54 ;
+  assign \$56  = \$53  & \$55 ;
+  assign \$57  = idx != w1_data_end_m1;
+  assign \$58  = in_top & \$57 ;
+  assign \$59  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$60  = idx == \$59 ;
+  assign \$61  = word_count - 1'h1;
+  assign \$62  = word == \$61 ;
+  assign \$63  = word + 1'h1;
+  assign \$64  = ! word;
+  assign \$65  = in_word & \$64 ;
+  assign \$66  = \$65  & in_data;
+  assign \$67  = words[10] & data0[0];
+  assign \$68  = \bit  ^ \$67 ;
+  assign \$69  = ! idx;
+  assign \$70  = words[11] & \$69 ;
+  assign \$71  = words[10] & data0[0];
+  assign \$72  = \bit  ^ \$71 ;
+  assign \$73  = \$70  & \$72 ;
+  assign \$74  = ! idx;
+  assign \$75  = words[11] & \$74 ;
+  assign \$76  = words[10] & data0[0];
+  assign \$77  = \bit  ^ \$76 ;
+  assign \$78  = \$75  & \$77 ;
+  assign \$79  = ! idx;
+  assign \$80  = words[11] & \$79 ;
+  assign \$81  = words[10] & data0[0];
+  assign \$82  = \bit  ^ \$81 ;
+  assign \$83  = \$80  & \$82 ;
+  assign \$84  = ! idx;
+  assign \$85  = words[11] & \$84 ;
+  assign \$86  = words[10] & data0[0];
+  assign \$87  = \bit  ^ \$86 ;
+  assign \$88  = \$85  & \$87 ;
+  assign \$89  = ! idx;
+  assign \$90  = words[11] & \$89 ;
+  assign \$91  = words[10] & data0[0];
+  assign \$92  = \bit  ^ \$91 ;
+  assign \$93  = \$90  & \$92 ;
+  assign \$94  = ! idx;
+  assign \$95  = words[11] & \$94 ;
+  assign \$96  = words[10] & data0[0];
+  assign \$97  = \bit  ^ \$96 ;
+  assign \$98  = \$95  & \$97 ;
+  assign \$99  = ! idx;
+  assign \$100  = words[11] & \$99 ;
+  assign \$101  = words[10] & data0[0];
+  assign \$102  = \bit  ^ \$101 ;
+  assign \$103  = \$100  & \$102 ;
+  assign \$104  = ! idx;
+  assign \$105  = words[11] & \$104 ;
+  assign \$106  = words[10] & data0[0];
+  assign \$107  = \bit  ^ \$106 ;
+  assign \$108  = \$105  & \$107 ;
+  assign \$109  = ! idx;
+  assign \$110  = words[11] & \$109 ;
+  assign \$111  = words[10] & data0[0];
+  assign \$112  = \bit  ^ \$111 ;
+  assign \$113  = \$110  & \$112 ;
+  assign \$114  = ! idx;
+  assign \$115  = words[11] & \$114 ;
+  assign \$116  = words[10] & data0[0];
+  assign \$117  = \bit  ^ \$116 ;
+  assign \$118  = \$115  & \$117 ;
+  assign \$119  = ! idx;
+  assign \$120  = words[11] & \$119 ;
+  assign \$121  = words[10] & data0[0];
+  assign \$122  = \bit  ^ \$121 ;
+  assign \$123  = \$120  & \$122 ;
+  assign \$124  = ! idx;
+  assign \$125  = words[11] & \$124 ;
+  assign \$126  = words[10] & data0[0];
+  assign \$127  = \bit  ^ \$126 ;
+  assign \$128  = \$125  & \$127 ;
+  assign \$129  = ! idx;
+  assign \$130  = words[11] & \$129 ;
+  assign \$131  = words[10] & data0[0];
+  assign \$132  = \bit  ^ \$131 ;
+  assign \$133  = \$130  & \$132 ;
+  assign \$134  = ! idx;
+  assign \$135  = words[11] & \$134 ;
+  assign \$136  = words[10] & data0[0];
+  assign \$137  = \bit  ^ \$136 ;
+  assign \$138  = \$135  & \$137 ;
+  assign \$139  = ! idx;
+  assign \$140  = words[11] & \$139 ;
+  assign \$141  = words[10] & data0[0];
+  assign \$142  = \bit  ^ \$141 ;
+  assign \$143  = \$140  & \$142 ;
+  assign \$144  = ! idx;
+  assign \$145  = words[11] & \$144 ;
+  assign \$146  = words[10] & data0[0];
+  assign \$147  = \bit  ^ \$146 ;
+  assign \$148  = \$145  & \$147 ;
+  assign \$149  = ! idx;
+  assign \$150  = words[11] & \$149 ;
+  assign \$151  = words[10] & data0[0];
+  assign \$152  = \bit  ^ \$151 ;
+  assign \$153  = \$150  & \$152 ;
+  assign \$154  = ! idx;
+  assign \$155  = words[11] & \$154 ;
+  assign \$156  = words[10] & data0[0];
+  assign \$157  = \bit  ^ \$156 ;
+  assign \$158  = \$155  & \$157 ;
+  assign \$159  = ! idx;
+  assign \$160  = words[11] & \$159 ;
+  assign \$161  = words[10] & data0[0];
+  assign \$162  = \bit  ^ \$161 ;
+  assign \$163  = \$160  & \$162 ;
+  assign \$164  = ! idx;
+  assign \$165  = words[11] & \$164 ;
+  assign \$166  = words[10] & data0[0];
+  assign \$167  = \bit  ^ \$166 ;
+  assign \$168  = \$165  & \$167 ;
+  assign \$169  = ! idx;
+  assign \$170  = words[11] & \$169 ;
+  assign \$171  = words[10] & data0[0];
+  assign \$172  = \bit  ^ \$171 ;
+  assign \$173  = \$170  & \$172 ;
+  assign \$174  = ! idx;
+  assign \$175  = words[11] & \$174 ;
+  assign \$176  = words[10] & data0[0];
+  assign \$177  = \bit  ^ \$176 ;
+  assign \$178  = \$175  & \$177 ;
+  assign \$179  = ! idx;
+  assign \$180  = words[11] & \$179 ;
+  assign \$181  = words[10] & data0[0];
+  assign \$182  = \bit  ^ \$181 ;
+  assign \$183  = \$180  & \$182 ;
+  assign \$184  = ! idx;
+  assign \$185  = words[11] & \$184 ;
+  assign \$186  = words[10] & data0[0];
+  assign \$187  = \bit  ^ \$186 ;
+  assign \$188  = \$185  & \$187 ;
+  assign \$189  = ! idx;
+  assign \$190  = words[11] & \$189 ;
+  assign \$191  = words[10] & data0[0];
+  assign \$192  = \bit  ^ \$191 ;
+  assign \$193  = \$190  & \$192 ;
+  assign \$194  = ! idx;
+  assign \$195  = words[11] & \$194 ;
+  assign \$196  = words[10] & data0[0];
+  assign \$197  = \bit  ^ \$196 ;
+  assign \$198  = \$195  & \$197 ;
+  assign \$199  = ! idx;
+  assign \$200  = words[11] & \$199 ;
+  assign \$201  = words[10] & data0[0];
+  assign \$202  = \bit  ^ \$201 ;
+  assign \$203  = \$200  & \$202 ;
+  assign \$204  = ! idx;
+  assign \$205  = words[11] & \$204 ;
+  assign \$206  = words[10] & data0[0];
+  assign \$207  = \bit  ^ \$206 ;
+  assign \$208  = \$205  & \$207 ;
+  assign \$209  = ! idx;
+  assign \$210  = words[11] & \$209 ;
+  assign \$211  = words[10] & data0[0];
+  assign \$212  = \bit  ^ \$211 ;
+  assign \$213  = \$210  & \$212 ;
+  assign \$214  = ! idx;
+  assign \$215  = words[11] & \$214 ;
+  assign \$216  = words[10] & data0[0];
+  assign \$217  = \bit  ^ \$216 ;
+  assign \$218  = \$215  & \$217 ;
+  assign \$219  = ! idx;
+  assign \$220  = words[11] & \$219 ;
+  assign \$221  = words[10] & data0[0];
+  assign \$222  = \bit  ^ \$221 ;
+  assign \$223  = \$220  & \$222 ;
+  assign \$224  = ! idx;
+  assign \$225  = words[11] & \$224 ;
+  assign \$226  = words[10] & data0[0];
+  assign \$227  = \bit  ^ \$226 ;
+  assign \$228  = \$225  & \$227 ;
+  assign \$229  = ! idx;
+  assign \$230  = words[11] & \$229 ;
+  assign \$231  = words[10] & data0[0];
+  assign \$232  = \bit  ^ \$231 ;
+  assign \$233  = \$230  & \$232 ;
+  assign \$234  = ! idx;
+  assign \$235  = words[11] & \$234 ;
+  assign \$236  = words[10] & data0[0];
+  assign \$237  = \bit  ^ \$236 ;
+  assign \$238  = \$235  & \$237 ;
+  assign \$239  = ! idx;
+  assign \$240  = words[11] & \$239 ;
+  assign \$241  = words[10] & data0[0];
+  assign \$242  = \bit  ^ \$241 ;
+  assign \$243  = \$240  & \$242 ;
+  assign \$244  = ! idx;
+  assign \$245  = words[11] & \$244 ;
+  assign \$246  = words[10] & data0[0];
+  assign \$247  = \bit  ^ \$246 ;
+  assign \$248  = \$245  & \$247 ;
+  assign \$249  = ! idx;
+  assign \$250  = words[11] & \$249 ;
+  assign \$251  = words[10] & data0[0];
+  assign \$252  = \bit  ^ \$251 ;
+  assign \$253  = \$250  & \$252 ;
+  assign \$254  = ! idx;
+  assign \$255  = words[11] & \$254 ;
+  assign \$256  = words[10] & data0[0];
+  assign \$257  = \bit  ^ \$256 ;
+  assign \$258  = \$255  & \$257 ;
+  assign \$259  = ! idx;
+  assign \$260  = words[11] & \$259 ;
+  assign \$261  = words[10] & data0[0];
+  assign \$262  = \bit  ^ \$261 ;
+  assign \$263  = \$260  & \$262 ;
+  assign \$264  = ! idx;
+  assign \$265  = words[11] & \$264 ;
+  assign \$266  = words[10] & data0[0];
+  assign \$267  = \bit  ^ \$266 ;
+  assign \$268  = \$265  & \$267 ;
+  assign \$269  = ! idx;
+  assign \$270  = words[11] & \$269 ;
+  assign \$271  = words[10] & data0[0];
+  assign \$272  = \bit  ^ \$271 ;
+  assign \$273  = \$270  & \$272 ;
+  assign \$274  = ! idx;
+  assign \$275  = words[11] & \$274 ;
+  assign \$276  = words[10] & data0[0];
+  assign \$277  = \bit  ^ \$276 ;
+  assign \$278  = \$275  & \$277 ;
+  assign \$279  = ! idx;
+  assign \$280  = words[11] & \$279 ;
+  assign \$281  = words[10] & data0[0];
+  assign \$282  = \bit  ^ \$281 ;
+  assign \$283  = \$280  & \$282 ;
+  assign \$284  = ! idx;
+  assign \$285  = words[11] & \$284 ;
+  assign \$286  = words[10] & data0[0];
+  assign \$287  = \bit  ^ \$286 ;
+  assign \$288  = \$285  & \$287 ;
+  assign \$289  = ! idx;
+  assign \$290  = words[11] & \$289 ;
+  assign \$291  = words[10] & data0[0];
+  assign \$292  = \bit  ^ \$291 ;
+  assign \$293  = \$290  & \$292 ;
+  assign \$294  = ! idx;
+  assign \$295  = words[11] & \$294 ;
+  assign \$296  = words[10] & data0[0];
+  assign \$297  = \bit  ^ \$296 ;
+  assign \$298  = \$295  & \$297 ;
+  assign \$299  = ! idx;
+  assign \$300  = words[11] & \$299 ;
+  assign \$301  = words[10] & data0[0];
+  assign \$302  = \bit  ^ \$301 ;
+  assign \$303  = \$300  & \$302 ;
+  assign \$304  = ! idx;
+  assign \$305  = words[11] & \$304 ;
+  assign \$306  = words[10] & data0[0];
+  assign \$307  = \bit  ^ \$306 ;
+  assign \$308  = \$305  & \$307 ;
+  assign \$309  = ! idx;
+  assign \$310  = words[11] & \$309 ;
+  assign \$311  = words[10] & data0[0];
+  assign \$312  = \bit  ^ \$311 ;
+  assign \$313  = \$310  & \$312 ;
+  assign \$314  = ! idx;
+  assign \$315  = words[11] & \$314 ;
+  assign \$316  = words[10] & data0[0];
+  assign \$317  = \bit  ^ \$316 ;
+  assign \$318  = \$315  & \$317 ;
+  assign \$319  = ! idx;
+  assign \$320  = words[11] & \$319 ;
+  assign \$321  = words[10] & data0[0];
+  assign \$322  = \bit  ^ \$321 ;
+  assign \$323  = \$320  & \$322 ;
+  assign \$324  = ! idx;
+  assign \$325  = words[11] & \$324 ;
+  assign \$326  = words[10] & data0[0];
+  assign \$327  = \bit  ^ \$326 ;
+  assign \$328  = \$325  & \$327 ;
+  assign \$329  = ! idx;
+  assign \$330  = words[11] & \$329 ;
+  assign \$331  = words[10] & data0[0];
+  assign \$332  = \bit  ^ \$331 ;
+  assign \$333  = \$330  & \$332 ;
+  assign \$334  = ! idx;
+  assign \$335  = words[11] & \$334 ;
+  assign \$336  = words[10] & data0[0];
+  assign \$337  = \bit  ^ \$336 ;
+  assign \$338  = \$335  & \$337 ;
+  assign \$339  = ! idx;
+  assign \$340  = words[11] & \$339 ;
+  assign \$341  = words[10] & data0[0];
+  assign \$342  = \bit  ^ \$341 ;
+  assign \$343  = \$340  & \$342 ;
+  assign \$344  = { data0[53:0], \$68  } | { \$343 , \$338 , \$333 , \$328 , \$323 , \$318 , \$313 , \$308 , \$303 , \$298 , \$293 , \$288 , \$283 , \$278 , \$273 , \$268 , \$263 , \$258 , \$253 , \$248 , \$243 , \$238 , \$233 , \$228 , \$223 , \$218 , \$213 , \$208 , \$203 , \$198 , \$193 , \$188 , \$183 , \$178 , \$173 , \$168 , \$163 , \$158 , \$153 , \$148 , \$143 , \$138 , \$133 , \$128 , \$123 , \$118 , \$113 , \$108 , \$103 , \$98 , \$93 , \$88 , \$83 , \$78 , \$73  };
+  assign \$345  = ~ words[6];
+  assign \$346  = ! word;
+  assign \$347  = in_word & \$346 ;
+  assign \$348  = idx == words[5:0];
+  assign \$349  = \$347  & \$348 ;
+  assign \$350  = ! word;
+  assign \$351  = in_word & \$350 ;
+  assign \$352  = idx == w0_data_end_p1;
+  assign \$353  = \$351  & \$352 ;
+  assign \$355  = in_word & \$354 ;
+  assign \$356  = \$355  & in_data;
+  assign \$357  = words[22] & data1[0];
+  assign \$358  = \bit  ^ \$357 ;
+  assign \$359  = ! idx;
+  assign \$360  = words[23] & \$359 ;
+  assign \$361  = words[22] & data1[0];
+  assign \$362  = \bit  ^ \$361 ;
+  assign \$363  = \$360  & \$362 ;
+  assign \$364  = ! idx;
+  assign \$365  = words[23] & \$364 ;
+  assign \$366  = words[22] & data1[0];
+  assign \$367  = \bit  ^ \$366 ;
+  assign \$368  = \$365  & \$367 ;
+  assign \$369  = ! idx;
+  assign \$370  = words[23] & \$369 ;
+  assign \$371  = words[22] & data1[0];
+  assign \$372  = \bit  ^ \$371 ;
+  assign \$373  = \$370  & \$372 ;
+  assign \$374  = ! idx;
+  assign \$375  = words[23] & \$374 ;
+  assign \$376  = words[22] & data1[0];
+  assign \$377  = \bit  ^ \$376 ;
+  assign \$378  = \$375  & \$377 ;
+  assign \$379  = ! idx;
+  assign \$380  = words[23] & \$379 ;
+  assign \$381  = words[22] & data1[0];
+  assign \$382  = \bit  ^ \$381 ;
+  assign \$383  = \$380  & \$382 ;
+  assign \$384  = ! idx;
+  assign \$385  = words[23] & \$384 ;
+  assign \$386  = words[22] & data1[0];
+  assign \$387  = \bit  ^ \$386 ;
+  assign \$388  = \$385  & \$387 ;
+  assign \$389  = ! idx;
+  assign \$390  = words[23] & \$389 ;
+  assign \$391  = words[22] & data1[0];
+  assign \$392  = \bit  ^ \$391 ;
+  assign \$393  = \$390  & \$392 ;
+  assign \$394  = ! idx;
   \biss_master_wb.ch0.core.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
@@ -13022,11 +14124,453 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     .index(word),
     .last(last),
     .load(load),
-    .load_index(\$102 [0]),
+    .load_index(\$579 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst)
   );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$585  = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$585  = 1'h1;
+              end
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$585  = 1'h0;
+    end
+    if (rst) begin
+      \$585  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$586  = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$586  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$586  = 1'h0;
+    end
+    if (rst) begin
+      \$586  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$587  = slots;
+    if (\$36 ) begin
+      \$587  = \$37 [15:0];
+    end
+    if (receiver_clear) begin
+      \$587  = 16'h0000;
+    end
+    if (rst) begin
+      \$587  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$588  = slots_full;
+    if (\$36 ) begin
+      \$588  = \$38 ;
+    end
+    if (receiver_clear) begin
+      \$588  = 1'h0;
+    end
+    if (rst) begin
+      \$588  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$589  = started;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$589  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$589  = 1'h0;
+    end
+    if (rst) begin
+      \$589  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$590  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$590  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$590  = 16'h0000;
+    end
+    if (rst) begin
+      \$590  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$591  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$591  = 3'h1;
+          end
+      3'h1:
+          if (sample) begin
+            \$591  = 3'h2;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$591  = 3'h3;
+              end
+            end
+          end
+      3'h3:
+          if (sample) begin
+            \$591  = 3'h4;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$591  = 3'h0;
+    end
+    if (rst) begin
+      \$591  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$592  = cds;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$592  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$592  = 1'h0;
+    end
+    if (rst) begin
+      \$592  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$593  = idx;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$593  = 7'h00;
+          end
+      3'h2:
+          if (sample) begin
+            \$593  = \$41 [6:0];
+            if (\$60 ) begin
+              \$593  = 7'h00;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$593  = 7'h00;
+    end
+    if (rst) begin
+      \$593  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$594  = in_data;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$594  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$594  = \$44 ;
+            if (\$60 ) begin
+              \$594  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$594  = 1'h0;
+    end
+    if (rst) begin
+      \$594  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$595  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$595  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$595  = \$50 ;
+            if (\$60 ) begin
+              \$595  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$595  = 1'h0;
+    end
+    if (rst) begin
+      \$595  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$596  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$596  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$596  = \$56 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$596  = 1'h0;
+    end
+    if (rst) begin
+      \$596  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$597  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$597  = \$40 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$597  = \$58 ;
+            if (\$60 ) begin
+              \$597  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$597  = 1'h0;
+    end
+    if (rst) begin
+      \$597  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$598  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$598  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
+              (* full_case = 32'd1 *)
+              if (\$62 ) begin
+              end else begin
+                \$598  = \$63 [0];
+              end
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$598  = 1'h0;
+    end
+    if (rst) begin
+      \$598  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$599  = stop_bit;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$599  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$599  = 1'h0;
+    end
+    if (rst) begin
+      \$599  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$600  = data0;
+    if (\$66 ) begin
+      \$600  = \$344 ;
+    end
+    if (receiver_clear) begin
+      \$600  = 55'h00000000000000;
+    end
+    if (rst) begin
+      \$600  = 55'h00000000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$601  = ne;
+    if (\$345 ) begin
+      \$601 [0] = 1'h1;
+    end else if (\$349 ) begin
+      \$601 [0] = \bit ;
+    end
+    if (\$560 ) begin
+      \$601 [1] = 1'h1;
+    end else if (\$564 ) begin
+      \$601 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$601  = 2'h0;
+    end
+    if (rst) begin
+      \$601  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$602  = nw;
+    if (\$345 ) begin
+      \$602 [0] = 1'h1;
+    end else if (\$349 ) begin
+    end else if (\$353 ) begin
+      \$602 [0] = \bit ;
+    end
+    if (\$560 ) begin
+      \$602 [1] = 1'h1;
+    end else if (\$564 ) begin
+    end else if (\$568 ) begin
+      \$602 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$602  = 2'h0;
+    end
+    if (rst) begin
+      \$602  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$603  = data1;
+    if (\$356 ) begin
+      \$603  = \$559 ;
+    end
+    if (receiver_clear) begin
+      \$603  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$603  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$604  = lc;
+    if (lc_load) begin
+      \$604  = { lc[4:0], \bit  };
+    end
+    if (receiver_clear) begin
+      \$604  = 6'h00;
+    end
+    if (rst) begin
+      \$604  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$605  = cpw_top;
+    if (\$569 ) begin
+      \$605  = { cpw_top[38:0], \$571  };
+    end
+    if (receiver_clear) begin
+      \$605  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$605  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    at_cds = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          at_cds = sample;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    in_word = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          in_word = sample;
+    endcase
+  end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
@@ -13082,7 +14626,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17])
+    casez (words[18])
       1'h0:
           \$20  = 7'h7f;
       1'h1:
@@ -13092,7 +14636,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18:17])
+    casez (words[19:18])
       2'h0:
           \$22  = 7'h7f;
       2'h1:
@@ -13106,7 +14650,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18:17])
+    casez (words[19:18])
       2'h0:
           \$24  = 7'h7f;
       2'h1:
@@ -13120,7 +14664,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18:17])
+    casez (words[19:18])
       2'h0:
           \$31  = 4'h0;
       2'h1:
@@ -13131,466 +14675,26 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
           \$31  = 4'h8;
     endcase
   end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$108  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$108  = 1'h1;
-              end
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$108  = 1'h0;
-    end
-    if (rst) begin
-      \$108  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$109  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$109  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$109  = 1'h0;
-    end
-    if (rst) begin
-      \$109  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$110  = slots;
-    if (\$36 ) begin
-      \$110  = \$37 [15:0];
-    end
-    if (receiver_clear) begin
-      \$110  = 16'h0000;
-    end
-    if (rst) begin
-      \$110  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$111  = slots_full;
-    if (\$36 ) begin
-      \$111  = \$38 ;
-    end
-    if (receiver_clear) begin
-      \$111  = 1'h0;
-    end
-    if (rst) begin
-      \$111  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$112  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$112  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$112  = 1'h0;
-    end
-    if (rst) begin
-      \$112  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$113  = start_slot;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$113  = slots;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$113  = 16'h0000;
-    end
-    if (rst) begin
-      \$113  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$114  = decoder_fsm_state;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$114  = 3'h1;
-          end
-      3'h1:
-          if (sample) begin
-            \$114  = 3'h2;
-          end
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$114  = 3'h3;
-              end
-            end
-          end
-      3'h3:
-          if (sample) begin
-            \$114  = 3'h4;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$114  = 3'h0;
-    end
-    if (rst) begin
-      \$114  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$115  = cds;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$115  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$115  = 1'h0;
-    end
-    if (rst) begin
-      \$115  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$116  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$116  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$116  = \$41 [6:0];
-            if (\$60 ) begin
-              \$116  = 7'h00;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$116  = 7'h00;
-    end
-    if (rst) begin
-      \$116  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$117  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$117  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$117  = \$44 ;
-            if (\$60 ) begin
-              \$117  = w1_data_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$117  = 1'h0;
-    end
-    if (rst) begin
-      \$117  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$118  = in_lc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$118  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$118  = \$50 ;
-            if (\$60 ) begin
-              \$118  = w1_lc_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$118  = 1'h0;
-    end
-    if (rst) begin
-      \$118  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$119  = in_crc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$119  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            \$119  = \$56 ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$119  = 1'h0;
-    end
-    if (rst) begin
-      \$119  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$120  = in_top;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$120  = \$40 ;
-          end
-      3'h2:
-          if (sample) begin
-            \$120  = \$58 ;
-            if (\$60 ) begin
-              \$120  = 1'h0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$120  = 1'h0;
-    end
-    if (rst) begin
-      \$120  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$121  = word;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$121  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              (* full_case = 32'd1 *)
-              if (\$62 ) begin
-              end else begin
-                \$121  = \$63 [0];
-              end
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$121  = 1'h0;
-    end
-    if (rst) begin
-      \$121  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$122  = stop_bit;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$122  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$122  = 1'h0;
-    end
-    if (rst) begin
-      \$122  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$123  = data0;
-    if (\$66 ) begin
-      \$123  = { data0[53:0], \$68  };
-    end
-    if (receiver_clear) begin
-      \$123  = 55'h00000000000000;
-    end
-    if (rst) begin
-      \$123  = 55'h00000000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$124  = ne;
-    if (\$69 ) begin
-      \$124 [0] = 1'h1;
-    end else if (\$73 ) begin
-      \$124 [0] = \bit ;
-    end
-    if (\$83 ) begin
-      \$124 [1] = 1'h1;
-    end else if (\$87 ) begin
-      \$124 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$124  = 2'h0;
-    end
-    if (rst) begin
-      \$124  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$125  = nw;
-    if (\$69 ) begin
-      \$125 [0] = 1'h1;
-    end else if (\$73 ) begin
-    end else if (\$77 ) begin
-      \$125 [0] = \bit ;
-    end
-    if (\$83 ) begin
-      \$125 [1] = 1'h1;
-    end else if (\$87 ) begin
-    end else if (\$91 ) begin
-      \$125 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$125  = 2'h0;
-    end
-    if (rst) begin
-      \$125  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$126  = data1;
-    if (\$80 ) begin
-      \$126  = { data1[38:0], \$82  };
-    end
-    if (receiver_clear) begin
-      \$126  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$126  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$127  = lc;
-    if (lc_load) begin
-      \$127  = { lc[4:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$127  = 6'h00;
-    end
-    if (rst) begin
-      \$127  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$128  = cpw_top;
-    if (\$92 ) begin
-      \$128  = { cpw_top[38:0], \$94  };
-    end
-    if (receiver_clear) begin
-      \$128  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$128  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    at_cds = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          at_cds = sample;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    in_word = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          in_word = sample;
-    endcase
-  end
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$47  = crcs;
   assign \bit$52  = \bit ;
   assign ok = crc_ok;
   assign index = word;
-  assign load_index = \$102 [0];
-  assign \words[0]  = words[10:0];
+  assign load_index = \$579 [0];
+  assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
   assign \words[0].gray  = words[10];
-  assign \words[1]  = words[21:11];
-  assign \words[1].data_bits  = words[16:11];
-  assign \words[1].nenw  = words[17];
-  assign \words[1].lc  = words[18];
-  assign \words[1].crc  = words[20:19];
-  assign \words[1].gray  = words[21];
+  assign \words[0].signed  = words[11];
+  assign \words[1]  = words[23:12];
+  assign \words[1].data_bits  = words[17:12];
+  assign \words[1].nenw  = words[18];
+  assign \words[1].lc  = words[19];
+  assign \words[1].crc  = words[21:20];
+  assign \words[1].gray  = words[22];
+  assign \words[1].signed  = words[23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -13611,9 +14715,9 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   assign \crcs$47[1].poly  = crcs[58:43];
   assign \crcs$47[1].start  = crcs[74:59];
   assign \crcs$47[1].inverted  = crcs[75];
-  assign \$78  = word;
-  assign \$84  = word;
-  assign \$88  = word;
+  assign \$354  = word;
+  assign \$561  = word;
+  assign \$565  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -14779,9 +15883,9 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, ris
   wire w1_enable;
   reg [7:0] word0_len = 8'h00;
   reg [7:0] word1_len = 8'h00;
-  input [21:0] words;
-  wire [21:0] words;
-  wire [10:0] \words[0] ;
+  input [23:0] words;
+  wire [23:0] words;
+  wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -14792,7 +15896,8 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, ris
   wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [10:0] \words[1] ;
+  wire \words[0].signed ;
+  wire [11:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -14803,6 +15908,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, ris
   wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
+  wire \words[1].signed ;
   assign \$2  = \$1  + crcs[4:0];
   assign \$3  = words[5:0] + \$2 [7:0];
   assign \$4  = w1_enable ? word1_len : 8'h00;
@@ -14813,7 +15919,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, ris
   assign \$9  = ~ clear;
   assign \$10  = \$8  & \$9 ;
   assign \$12  = \$11  + crcs[42:38];
-  assign \$13  = words[16:11] + \$12 [7:0];
+  assign \$13  = words[17:12] + \$12 [7:0];
   always @(posedge clk)
     word0_len <= \$14 ;
   always @(posedge clk)
@@ -14843,7 +15949,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, ris
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18:17])
+    casez (words[19:18])
       2'h0:
           \$11  = 8'h00;
       2'h1:
@@ -14896,18 +16002,20 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, ris
       \$19  = 8'h00;
     end
   end
-  assign \words[0]  = words[10:0];
+  assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
   assign \words[0].gray  = words[10];
-  assign \words[1]  = words[21:11];
-  assign \words[1].data_bits  = words[16:11];
-  assign \words[1].nenw  = words[17];
-  assign \words[1].lc  = words[18];
-  assign \words[1].crc  = words[20:19];
-  assign \words[1].gray  = words[21];
+  assign \words[0].signed  = words[11];
+  assign \words[1]  = words[23:12];
+  assign \words[1].data_bits  = words[17:12];
+  assign \words[1].nenw  = words[18];
+  assign \words[1].lc  = words[19];
+  assign \words[1].crc  = words[21:20];
+  assign \words[1].gray  = words[22];
+  assign \words[1].signed  = words[23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -18309,7 +19417,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$4552$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$5526$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -18351,8 +19459,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$4552$0 ;
-  wire \port$4552$0 ;
+  input \port$5526$0 ;
+  wire \port$5526$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -18366,9 +19474,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$4552$0  };
-  assign \$2  = { lc[4:0], \port$4552$0  } == last;
-  assign \$3  = { lc[4:0], \port$4552$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5526$0  };
+  assign \$2  = { lc[4:0], \port$5526$0  } == last;
+  assign \$3  = { lc[4:0], \port$5526$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -18478,7 +19586,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$4552$0  };
+  assign lc_next = { lc[4:0], \port$5526$0  };
   assign zero = is_zero;
 endmodule
 
@@ -19034,7 +20142,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1912$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2401$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
@@ -19076,8 +20184,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1912$0 , lc_
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [252:0] cfg;
-  wire [252:0] cfg;
+  input [254:0] cfg;
+  wire [254:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -19090,7 +20198,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1912$0 , lc_
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
   wire [23:0] \cfg.timeout_limit ;
-  wire [10:0] \cfg.w0 ;
+  wire [11:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -19101,12 +20209,13 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1912$0 , lc_
   wire \cfg.w0.gray ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
+  wire \cfg.w0.signed ;
   wire [37:0] \cfg.w0_crc ;
   wire \cfg.w0_crc.inverted ;
   wire [15:0] \cfg.w0_crc.poly ;
   wire [15:0] \cfg.w0_crc.start ;
   wire [4:0] \cfg.w0_crc.width ;
-  wire [10:0] \cfg.w1 ;
+  wire [11:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -19117,6 +20226,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1912$0 , lc_
   wire \cfg.w1.gray ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
+  wire \cfg.w1.signed ;
   wire [37:0] \cfg.w1_crc ;
   wire \cfg.w1_crc.inverted ;
   wire [15:0] \cfg.w1_crc.poly ;
@@ -19186,8 +20296,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1912$0 , lc_
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$1912$0 ;
-  wire \port$1912$0 ;
+  output \port$2401$0 ;
+  wire \port$2401$0 ;
   output report;
   wire report;
   input report_frame;
@@ -19217,9 +20327,9 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1912$0 , lc_
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[194];
+  assign \$1  = ~ cfg[195];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[194] & cfg[202];
+  assign \$3  = cfg[195] & cfg[203];
   assign \$4  = cfg[152] | \$3 ;
   assign \$5  = report_frame & \$4 ;
   assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
@@ -19227,7 +20337,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1912$0 , lc_
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[244] & cfg[194];
+  assign \$7  = cfg[246] & cfg[195];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
@@ -19246,7 +20356,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1912$0 , lc_
   assign \$19  = crc_ok[0] & \$2 ;
   assign \$20  = ~ \$19 ;
   assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[194] & cfg[202];
+  assign \$22  = cfg[195] & cfg[203];
   assign \$23  = cfg[152] | \$22 ;
   assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
   assign \$25  = \$23  & \$24 ;
@@ -19293,7 +20403,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1912$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1912$0  = \$2 ;
+  assign \port$2401$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -19304,38 +20414,40 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$1912$0 , lc_
   assign \cfg.quiet_time  = cfg[136:125];
   assign \cfg.noise_limit  = cfg[140:137];
   assign \cfg.delay_tolerance  = cfg[144:141];
-  assign \cfg.w0  = cfg[155:145];
+  assign \cfg.w0  = cfg[156:145];
   assign \cfg.w0.data_bits  = cfg[150:145];
   assign \cfg.w0.nenw  = cfg[151];
   assign \cfg.w0.lc  = cfg[152];
   assign \cfg.w0.crc  = cfg[154:153];
   assign \cfg.w0.gray  = cfg[155];
-  assign \cfg.w0_crc  = cfg[193:156];
-  assign \cfg.w0_crc.width  = cfg[160:156];
-  assign \cfg.w0_crc.poly  = cfg[176:161];
-  assign \cfg.w0_crc.start  = cfg[192:177];
-  assign \cfg.w0_crc.inverted  = cfg[193];
-  assign \cfg.w1_enable  = cfg[194];
-  assign \cfg.w1  = cfg[205:195];
-  assign \cfg.w1.data_bits  = cfg[200:195];
-  assign \cfg.w1.nenw  = cfg[201];
-  assign \cfg.w1.lc  = cfg[202];
-  assign \cfg.w1.crc  = cfg[204:203];
-  assign \cfg.w1.gray  = cfg[205];
-  assign \cfg.w1_crc  = cfg[243:206];
-  assign \cfg.w1_crc.width  = cfg[210:206];
-  assign \cfg.w1_crc.poly  = cfg[226:211];
-  assign \cfg.w1_crc.start  = cfg[242:227];
-  assign \cfg.w1_crc.inverted  = cfg[243];
-  assign \cfg.spw_check  = cfg[244];
-  assign \cfg.spw_tolerance  = cfg[252:245];
+  assign \cfg.w0.signed  = cfg[156];
+  assign \cfg.w0_crc  = cfg[194:157];
+  assign \cfg.w0_crc.width  = cfg[161:157];
+  assign \cfg.w0_crc.poly  = cfg[177:162];
+  assign \cfg.w0_crc.start  = cfg[193:178];
+  assign \cfg.w0_crc.inverted  = cfg[194];
+  assign \cfg.w1_enable  = cfg[195];
+  assign \cfg.w1  = cfg[207:196];
+  assign \cfg.w1.data_bits  = cfg[201:196];
+  assign \cfg.w1.nenw  = cfg[202];
+  assign \cfg.w1.lc  = cfg[203];
+  assign \cfg.w1.crc  = cfg[205:204];
+  assign \cfg.w1.gray  = cfg[206];
+  assign \cfg.w1.signed  = cfg[207];
+  assign \cfg.w1_crc  = cfg[245:208];
+  assign \cfg.w1_crc.width  = cfg[212:208];
+  assign \cfg.w1_crc.poly  = cfg[228:213];
+  assign \cfg.w1_crc.start  = cfg[244:229];
+  assign \cfg.w1_crc.inverted  = cfg[245];
+  assign \cfg.spw_check  = cfg[246];
+  assign \cfg.spw_tolerance  = cfg[254:247];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly
-, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5462$0 , \port$5475$0 , regs__ca_done, \port$5607$0 , ca_rbuf_addr
-);
+module \biss_master_wb.ch1 (slo, clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
+, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$6436$0 , \port$6449$0 , regs__ca_done
+, \port$6581$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -19429,6 +20541,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire cfg_w0_lc;
   input cfg_w0_nenw;
   wire cfg_w0_nenw;
+  input cfg_w0_signed;
+  wire cfg_w0_signed;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -19454,6 +20568,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire cfg_w1_lc;
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
+  input cfg_w1_signed;
+  wire cfg_w1_signed;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -19490,16 +20606,16 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$202 ;
+  wire \ma$206 ;
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$5462$0 ;
-  wire [186:0] \port$5462$0 ;
-  output [335:0] \port$5475$0 ;
-  wire [335:0] \port$5475$0 ;
-  output [9:0] \port$5607$0 ;
-  wire [9:0] \port$5607$0 ;
+  output [186:0] \port$6436$0 ;
+  wire [186:0] \port$6436$0 ;
+  output [335:0] \port$6449$0 ;
+  wire [335:0] \port$6449$0 ;
+  output [9:0] \port$6581$0 ;
+  wire [9:0] \port$6581$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -19556,6 +20672,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire regs__cfg_w0_gray;
   wire regs__cfg_w0_lc;
   wire regs__cfg_w0_nenw;
+  wire regs__cfg_w0_signed;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -19571,6 +20688,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire regs__cfg_w1_gray;
   wire regs__cfg_w1_lc;
   wire regs__cfg_w1_nenw;
+  wire regs__cfg_w1_signed;
   wire regs__clear_counters;
   output regs__config_error;
   wire regs__config_error;
@@ -19630,7 +20748,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$204 ;
+  wire \slo$208 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -19653,8 +20771,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$199 ;
-  wire \trigger$199 ;
+  input \trigger$203 ;
+  wire \trigger$203 ;
   wire valid;
   wire word0_crc_ok;
   wire word0_ne;
@@ -19664,7 +20782,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
-  assign trigger = \trigger$199  & regs__trigger_enable;
+  assign trigger = \trigger$203  & regs__trigger_enable;
   assign \$2  = regs__done_count + 1'h1;
   always @(posedge clk)
     abort_cycle <= \$3 ;
@@ -19674,8 +20792,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   assign regs__frame_error = regs__done & \$1 ;
   \biss_master_wb.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$237 (ca_abort),
-    .\busy$291 (regs__busy),
+    .\abort$239 (ca_abort),
+    .\busy$293 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -19706,6 +20824,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
     .cfg_w0_gray(cfg_w0_gray),
     .cfg_w0_lc(cfg_w0_lc),
     .cfg_w0_nenw(cfg_w0_nenw),
+    .cfg_w0_signed(cfg_w0_signed),
     .cfg_w1_crc(cfg_w1_crc),
     .cfg_w1_crc_inverted(cfg_w1_crc_inverted),
     .cfg_w1_crc_poly(cfg_w1_crc_poly),
@@ -19716,24 +20835,25 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
     .cfg_w1_gray(cfg_w1_gray),
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
-    .\clear$265 (clear_counters),
+    .cfg_w1_signed(cfg_w1_signed),
+    .\clear$267 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .counts(\$6 ),
-    .\done$294 (regs__done),
+    .\done$296 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
-    .\periodic$37 (periodic),
+    .\periodic$39 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .result(\$7 ),
-    .\result$299 (\$5 ),
+    .\result$301 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$235 (ca_start),
+    .\start$237 (ca_start),
     .trigger(trigger),
-    .\valid$296 (valid)
+    .\valid$298 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
@@ -19776,11 +20896,13 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   assign regs__cfg_w0_lc = cfg_w0_lc;
   assign regs__cfg_w0_crc = cfg_w0_crc;
   assign regs__cfg_w0_gray = cfg_w0_gray;
+  assign regs__cfg_w0_signed = cfg_w0_signed;
   assign regs__cfg_w1_data_bits = cfg_w1_data_bits;
   assign regs__cfg_w1_nenw = cfg_w1_nenw;
   assign regs__cfg_w1_lc = cfg_w1_lc;
   assign regs__cfg_w1_crc = cfg_w1_crc;
   assign regs__cfg_w1_gray = cfg_w1_gray;
+  assign regs__cfg_w1_signed = cfg_w1_signed;
   assign regs__cfg_w1_enable = cfg_w1_enable;
   assign regs__cfg_end_check = cfg_end_check;
   assign regs__cfg_spw_check = cfg_spw_check;
@@ -19897,17 +21019,18 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$199 , ca_wbuf_en, ca_rbuf_en
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$202  = ma;
-  assign \slo$204  = slo;
-  assign \port$5462$0  = \$5 ;
-  assign \port$5475$0  = \$6 ;
-  assign \port$5607$0  = \$7 ;
+  assign \ma$206  = ma;
+  assign \slo$208  = slo;
+  assign \port$6436$0  = \$5 ;
+  assign \port$6449$0  = \$6 ;
+  assign \port$6581$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$291 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$265 , \periodic$37 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start
-, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$235 , \abort$237 , abort, ma, \done$294 , \valid$296 , \result$299 , counts, ca_done, result, rbuf_addr);
+module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$293 , config_error, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$267 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
+, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width
+, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$296 , \valid$298 , \result$301 , counts, ca_done, result, rbuf_addr
+);
   reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -19937,25 +21060,25 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$237 ;
-  wire \abort$237 ;
-  wire \abort$49 ;
+  input \abort$239 ;
+  wire \abort$239 ;
+  wire \abort$51 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$81 ;
+  wire \ack_expired$83 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$102 ;
+  wire [23:0] \ack_limit$104 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$323 ;
+  wire \bit$325 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$79 ;
+  wire \break_over$81 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$246 ;
-  output \busy$291 ;
-  wire \busy$291 ;
+  wire \busy$248 ;
+  output \busy$293 ;
+  wire \busy$293 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -19990,11 +21113,11 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$250 ;
+  wire \cdm$252 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$302 ;
-  wire [252:0] cfg;
+  wire \cds$304 ;
+  wire [254:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -20007,7 +21130,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
   wire [23:0] \cfg.timeout_limit ;
-  wire [10:0] \cfg.w0 ;
+  wire [11:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -20018,12 +21141,13 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \cfg.w0.gray ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
+  wire \cfg.w0.signed ;
   wire [37:0] \cfg.w0_crc ;
   wire \cfg.w0_crc.inverted ;
   wire [15:0] \cfg.w0_crc.poly ;
   wire [15:0] \cfg.w0_crc.start ;
   wire [4:0] \cfg.w0_crc.width ;
-  wire [10:0] \cfg.w1 ;
+  wire [11:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -20034,6 +21158,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \cfg.w1.gray ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
+  wire \cfg.w1.signed ;
   wire [37:0] \cfg.w1_crc ;
   wire \cfg.w1_crc.inverted ;
   wire [15:0] \cfg.w1_crc.poly ;
@@ -20087,6 +21212,8 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire cfg_w0_lc;
   input cfg_w0_nenw;
   wire cfg_w0_nenw;
+  input cfg_w0_signed;
+  wire cfg_w0_signed;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -20112,16 +21239,18 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire cfg_w1_lc;
   input cfg_w1_nenw;
   wire cfg_w1_nenw;
+  input cfg_w1_signed;
+  wire cfg_w1_signed;
   wire check;
-  wire \check$160 ;
+  wire \check$162 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$165 ;
-  wire \clean$324 ;
+  wire \clean$167 ;
+  wire \clean$326 ;
   wire clear;
-  wire \clear$126 ;
-  input \clear$265 ;
-  wire \clear$265 ;
+  wire \clear$128 ;
+  input \clear$267 ;
+  wire \clear$267 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -20175,33 +21304,33 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$177 ;
+  wire [39:0] \cpw_top$179 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$191 ;
+  wire [1:0] \crc_ok$193 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$173 ;
-  wire [37:0] \crcs$173[0] ;
-  wire \crcs$173[0].inverted ;
-  wire [15:0] \crcs$173[0].poly ;
-  wire [15:0] \crcs$173[0].start ;
-  wire [4:0] \crcs$173[0].width ;
-  wire [37:0] \crcs$173[1] ;
-  wire \crcs$173[1].inverted ;
-  wire [15:0] \crcs$173[1].poly ;
-  wire [15:0] \crcs$173[1].start ;
-  wire [4:0] \crcs$173[1].width ;
-  wire [75:0] \crcs$174 ;
-  wire [37:0] \crcs$174[0] ;
-  wire \crcs$174[0].inverted ;
-  wire [15:0] \crcs$174[0].poly ;
-  wire [15:0] \crcs$174[0].start ;
-  wire [4:0] \crcs$174[0].width ;
-  wire [37:0] \crcs$174[1] ;
-  wire \crcs$174[1].inverted ;
-  wire [15:0] \crcs$174[1].poly ;
-  wire [15:0] \crcs$174[1].start ;
-  wire [4:0] \crcs$174[1].width ;
+  wire [75:0] \crcs$175 ;
+  wire [37:0] \crcs$175[0] ;
+  wire \crcs$175[0].inverted ;
+  wire [15:0] \crcs$175[0].poly ;
+  wire [15:0] \crcs$175[0].start ;
+  wire [4:0] \crcs$175[0].width ;
+  wire [37:0] \crcs$175[1] ;
+  wire \crcs$175[1].inverted ;
+  wire [15:0] \crcs$175[1].poly ;
+  wire [15:0] \crcs$175[1].start ;
+  wire [4:0] \crcs$175[1].width ;
+  wire [75:0] \crcs$176 ;
+  wire [37:0] \crcs$176[0] ;
+  wire \crcs$176[0].inverted ;
+  wire [15:0] \crcs$176[0].poly ;
+  wire [15:0] \crcs$176[0].start ;
+  wire [4:0] \crcs$176[0].width ;
+  wire [37:0] \crcs$176[1] ;
+  wire \crcs$176[1].inverted ;
+  wire [15:0] \crcs$176[1].poly ;
+  wire [15:0] \crcs$176[1].start ;
+  wire [4:0] \crcs$176[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -20212,7 +21341,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  wire [252:0] cycle;
+  wire [254:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -20225,7 +21354,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
   wire [23:0] \cycle.timeout_limit ;
-  wire [10:0] \cycle.w0 ;
+  wire [11:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -20236,12 +21365,13 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \cycle.w0.gray ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
+  wire \cycle.w0.signed ;
   wire [37:0] \cycle.w0_crc ;
   wire \cycle.w0_crc.inverted ;
   wire [15:0] \cycle.w0_crc.poly ;
   wire [15:0] \cycle.w0_crc.start ;
   wire [4:0] \cycle.w0_crc.width ;
-  wire [10:0] \cycle.w1 ;
+  wire [11:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -20252,6 +21382,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \cycle.w1.gray ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
+  wire \cycle.w1.signed ;
   wire [37:0] \cycle.w1_crc ;
   wire \cycle.w1_crc.inverted ;
   wire [15:0] \cycle.w1_crc.poly ;
@@ -20265,53 +21396,53 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$108 ;
-  wire [12:0] \delay$159 ;
+  wire [12:0] \delay$110 ;
+  wire [12:0] \delay$161 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$110 ;
+  wire [11:0] \delay_limit$112 ;
   wire delay_over;
-  wire \delay_over$89 ;
+  wire \delay_over$91 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$248 ;
-  output \done$294 ;
-  wire \done$294 ;
-  wire \done$295 ;
+  wire \done$250 ;
+  output \done$296 ;
+  wire \done$296 ;
+  wire \done$297 ;
   wire doubtful;
   wire early;
-  wire \early$65 ;
+  wire \early$67 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$260 ;
-  wire \events$260.aborted ;
-  wire \events$260.ca_aborted ;
-  wire \events$260.ca_crc4_error ;
-  wire \events$260.ca_data_fault ;
-  wire \events$260.ca_no_answer ;
-  wire \events$260.ca_refused ;
-  wire \events$260.crc_word0 ;
-  wire \events$260.crc_word1 ;
-  wire \events$260.delay_jump ;
-  wire \events$260.delay_range ;
-  wire \events$260.lc_repeat ;
-  wire \events$260.lc_skip ;
-  wire \events$260.lc_zero ;
-  wire \events$260.no_ack ;
-  wire \events$260.no_start ;
-  wire \events$260.no_stop ;
-  wire \events$260.noise_event ;
-  wire \events$260.noisy_line ;
-  wire \events$260.overrun ;
-  wire \events$260.slo_stuck_low ;
-  wire \events$260.spw_mismatch ;
+  wire [20:0] \events$262 ;
+  wire \events$262.aborted ;
+  wire \events$262.ca_aborted ;
+  wire \events$262.ca_crc4_error ;
+  wire \events$262.ca_data_fault ;
+  wire \events$262.ca_no_answer ;
+  wire \events$262.ca_refused ;
+  wire \events$262.crc_word0 ;
+  wire \events$262.crc_word1 ;
+  wire \events$262.delay_jump ;
+  wire \events$262.delay_range ;
+  wire \events$262.lc_repeat ;
+  wire \events$262.lc_skip ;
+  wire \events$262.lc_zero ;
+  wire \events$262.no_ack ;
+  wire \events$262.no_start ;
+  wire \events$262.no_stop ;
+  wire \events$262.noise_event ;
+  wire \events$262.noisy_line ;
+  wire \events$262.overrun ;
+  wire \events$262.slo_stuck_low ;
+  wire \events$262.spw_mismatch ;
   wire fault;
-  wire \fault$187 ;
+  wire \fault$189 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -20345,7 +21476,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$189 ;
+  wire [3:0] \fault_status$191 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -20355,7 +21486,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$221 ;
+  wire \first_rise$223 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -20406,37 +21537,37 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$132 ;
+  wire [15:0] \half_period$134 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$33 ;
-  wire \idle$42 ;
+  wire \idle$35 ;
+  wire \idle$44 ;
   wire in_clock;
-  wire \in_clock$96 ;
+  wire \in_clock$98 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$137 ;
-  wire [5:0] \lc$315 ;
+  wire [5:0] \lc$139 ;
+  wire [5:0] \lc$317 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$139 ;
+  wire [5:0] \lc_next$141 ;
   wire lc_repeat;
-  wire \lc_repeat$316 ;
+  wire \lc_repeat$318 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$317 ;
+  wire \lc_skip$319 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$318 ;
+  wire \lc_zero$320 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$148 ;
+  wire \level$150 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [252:0] live;
+  wire [254:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -20449,7 +21580,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
   wire [23:0] \live.timeout_limit ;
-  wire [10:0] \live.w0 ;
+  wire [11:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -20460,12 +21591,13 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \live.w0.gray ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
+  wire \live.w0.signed ;
   wire [37:0] \live.w0_crc ;
   wire \live.w0_crc.inverted ;
   wire [15:0] \live.w0_crc.poly ;
   wire [15:0] \live.w0_crc.start ;
   wire [4:0] \live.w0_crc.width ;
-  wire [10:0] \live.w1 ;
+  wire [11:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -20476,6 +21608,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \live.w1.gray ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
+  wire \live.w1.signed ;
   wire [37:0] \live.w1_crc ;
   wire \live.w1_crc.inverted ;
   wire [15:0] \live.w1_crc.poly ;
@@ -20484,13 +21617,13 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$63 ;
+  wire \locked$65 ;
   output ma;
   wire ma;
-  wire \ma$290 ;
+  wire \ma$292 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$91 ;
+  wire \ma_busy$93 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -20498,26 +21631,26 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$83 ;
+  wire \no_start_expired$85 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$106 ;
+  wire [24:0] \no_start_limit$108 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$167 ;
+  wire \noisy$169 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$293 ;
+  wire \overrun$295 ;
   wire [23:0] period;
   wire periodic;
-  input \periodic$37 ;
-  wire \periodic$37 ;
+  input \periodic$39 ;
+  wire \periodic$39 ;
   wire quiet;
-  wire \quiet$115 ;
+  wire \quiet$117 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$117 ;
+  wire \quiet_live$119 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -20529,37 +21662,37 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$199 ;
+  wire \report$201 ;
   wire report_delay;
-  wire \report_delay$202 ;
+  wire \report_delay$204 ;
   wire report_frame;
-  wire \report_frame$186 ;
-  wire \report_frame$200 ;
+  wire \report_frame$188 ;
+  wire \report_frame$202 ;
   wire request;
-  wire [17:0] \request$223 ;
-  wire [6:0] \request$223.address ;
-  wire [6:0] \request$223.count ;
-  wire [2:0] \request$223.slave_id ;
-  wire \request$223.write ;
-  wire \request$48 ;
+  wire [17:0] \request$225 ;
+  wire [6:0] \request$225.address ;
+  wire [6:0] \request$225.count ;
+  wire [2:0] \request$225.slave_id ;
+  wire \request$225.write ;
+  wire \request$50 ;
   wire restart;
-  wire \restart$152 ;
+  wire \restart$154 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$299 ;
-  wire [186:0] \result$299 ;
-  wire \result$299.cds ;
-  wire \result$299.delay_settled ;
-  wire [7:0] \result$299.delay_spread ;
-  wire [5:0] \result$299.lc ;
-  wire \result$299.lc_repeat ;
-  wire \result$299.lc_skip ;
-  wire \result$299.lc_zero ;
-  wire [12:0] \result$299.line_delay ;
-  wire [3:0] \result$299.noise_events ;
-  wire [12:0] \result$299.settled_delay ;
-  wire \result$299.spw_mismatch ;
+  output [186:0] \result$301 ;
+  wire [186:0] \result$301 ;
+  wire \result$301.cds ;
+  wire \result$301.delay_settled ;
+  wire [7:0] \result$301.delay_spread ;
+  wire [5:0] \result$301.lc ;
+  wire \result$301.lc_repeat ;
+  wire \result$301.lc_skip ;
+  wire \result$301.lc_zero ;
+  wire [12:0] \result$301.line_delay ;
+  wire [3:0] \result$301.noise_events ;
+  wire [12:0] \result$301.settled_delay ;
+  wire \result$301.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -20576,18 +21709,18 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$299.status ;
-  wire [31:0] \result$299.timestamp ;
-  wire [57:0] \result$299.word0 ;
-  wire \result$299.word0.crc_ok ;
-  wire \result$299.word0.ne ;
-  wire \result$299.word0.nw ;
-  wire [54:0] \result$299.word0.position ;
-  wire [42:0] \result$299.word1 ;
-  wire \result$299.word1.crc_ok ;
-  wire \result$299.word1.ne ;
-  wire \result$299.word1.nw ;
-  wire [39:0] \result$299.word1.position ;
+  wire [3:0] \result$301.status ;
+  wire [31:0] \result$301.timestamp ;
+  wire [57:0] \result$301.word0 ;
+  wire \result$301.word0.crc_ok ;
+  wire \result$301.word0.ne ;
+  wire \result$301.word0.nw ;
+  wire [54:0] \result$301.word0.position ;
+  wire [42:0] \result$301.word1 ;
+  wire \result$301.word1.crc_ok ;
+  wire \result$301.word1.ne ;
+  wire \result$301.word1.nw ;
+  wire [39:0] \result$301.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -20599,46 +21732,46 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$145 ;
+  wire \resync$147 ;
   wire [15:0] rises;
-  wire [15:0] \rises$125 ;
+  wire [15:0] \rises$127 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$322 ;
+  wire \sample$324 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$305 ;
+  wire [12:0] \settled_delay$307 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$44 ;
-  wire \slo$54 ;
-  wire \slo$90 ;
+  wire \slo$46 ;
+  wire \slo$56 ;
+  wire \slo$92 ;
   wire slo_stuck;
-  wire \slo_stuck$85 ;
+  wire \slo_stuck$87 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$87 ;
+  wire \slo_stuck_live$89 ;
   wire slots_full;
-  wire \slots_full$71 ;
+  wire \slots_full$73 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$319 ;
+  wire \spw_mismatch$321 ;
   input start;
   wire start;
-  input \start$235 ;
-  wire \start$235 ;
-  wire \start$35 ;
+  input \start$237 ;
+  wire \start$237 ;
+  wire \start$37 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$123 ;
+  wire [15:0] \start_slot$125 ;
   wire started;
-  wire \started$121 ;
-  wire \started$69 ;
+  wire \started$123 ;
+  wire \started$71 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -20673,25 +21806,25 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$298 ;
+  wire [3:0] \status$300 ;
   wire stop_bit;
-  wire \stop_bit$75 ;
+  wire \stop_bit$77 ;
   wire stopped;
-  wire \stopped$73 ;
+  wire \stopped$75 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$104 ;
+  wire [23:0] \timeout_limit$106 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$181 ;
+  wire [7:0] \tolerance$183 ;
   input trigger;
   wire trigger;
-  wire \trigger$46 ;
+  wire \trigger$48 ;
   wire valid;
-  wire \valid$204 ;
-  output \valid$296 ;
-  wire \valid$296 ;
+  wire \valid$206 ;
+  output \valid$298 ;
+  wire \valid$298 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -20709,33 +21842,35 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$135 ;
+  wire [1:0] \word_count$137 ;
   wire [1:0] word_crc_ok;
-  wire [21:0] words;
-  wire [21:0] \words$171 ;
-  wire [10:0] \words$171[0] ;
+  wire [23:0] words;
+  wire [23:0] \words$173 ;
+  wire [11:0] \words$173[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$171[0].crc ;
-  wire [5:0] \words$171[0].data_bits ;
-  wire \words$171[0].gray ;
-  wire \words$171[0].lc ;
-  wire \words$171[0].nenw ;
-  wire [10:0] \words$171[1] ;
+  wire [1:0] \words$173[0].crc ;
+  wire [5:0] \words$173[0].data_bits ;
+  wire \words$173[0].gray ;
+  wire \words$173[0].lc ;
+  wire \words$173[0].nenw ;
+  wire \words$173[0].signed ;
+  wire [11:0] \words$173[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$171[1].crc ;
-  wire [5:0] \words$171[1].data_bits ;
-  wire \words$171[1].gray ;
-  wire \words$171[1].lc ;
-  wire \words$171[1].nenw ;
-  wire [10:0] \words[0] ;
+  wire [1:0] \words$173[1].crc ;
+  wire [5:0] \words$173[1].data_bits ;
+  wire \words$173[1].gray ;
+  wire \words$173[1].lc ;
+  wire \words$173[1].nenw ;
+  wire \words$173[1].signed ;
+  wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -20746,7 +21881,8 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [10:0] \words[1] ;
+  wire \words[0].signed ;
+  wire [11:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -20757,12 +21893,13 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
+  wire \words[1].signed ;
   wire zero;
-  assign periodic = \periodic$37  | frames;
+  assign periodic = \periodic$39  | frames;
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$160  = started & \$1 ;
+  assign \check$162  = started & \$1 ;
   assign \$2  = report_frame & spw_mismatch;
   assign \$3  = status == 4'hd;
   assign \$4  = report_frame & \$3 ;
@@ -20778,10 +21915,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \$14  = ca_done & \$13 ;
   assign \$15  = result[2:0] == 3'h5;
   assign \$16  = ca_done & \$15 ;
-  assign \busy$291  = ~ idle;
+  assign \busy$293  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$126 ;
-  assign \$18  = \sample$322  & \$17 ;
+  assign \$17  = ~ \clear$128 ;
+  assign \$18  = \sample$324  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -20819,7 +21956,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$152 ),
+    .fault(\restart$154 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -20836,14 +21973,14 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$126 ),
+    .receiver_clear(\clear$128 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$54 ),
+    .slo(\slo$56 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -20854,10 +21991,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .waiting(watch)
   );
   \biss_master_wb.ch1.core.counters  counters (
-    .clear(\clear$265 ),
+    .clear(\clear$267 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$260 ),
+    .events(\events$262 ),
     .rst(rst)
   );
   \biss_master_wb.ch1.core.decoder  decoder (
@@ -20874,7 +22011,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$126 ),
+    .receiver_clear(\clear$128 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -20886,7 +22023,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .words(words)
   );
   \biss_master_wb.ch1.core.delay_check  delay_check (
-    .check(\check$160 ),
+    .check(\check$162 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -20905,10 +22042,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$54 ),
+    .level(\slo$56 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$152 ),
+    .restart(\restart$154 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -20916,7 +22053,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   \biss_master_wb.ch1.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$91 ),
+    .\clocking (\ma_busy$93 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -20928,7 +22065,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .second_rise(ma_arm)
   );
   \biss_master_wb.ch1.core.ma_stop  ma_stop (
-    .clear(\clear$126 ),
+    .clear(\clear$128 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -20936,11 +22073,11 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .rst(rst),
     .start_slot(start_slot),
     .\started$11 (started),
-    .w1_enable(cycle[194]),
-    .words(\words$171 )
+    .w1_enable(cycle[195]),
+    .words(\words$173 )
   );
   \biss_master_wb.ch1.core.register_access  register_access (
-    .abort(\abort$237 ),
+    .abort(\abort$239 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -20952,37 +22089,37 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$223 ),
+    .request(\request$225 ),
     .result(result),
     .rst(rst),
-    .start(\start$235 ),
+    .start(\start$237 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch1.core.results  results (
     .clk(clk),
-    .done(\done$294 ),
+    .done(\done$296 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$299 ),
+    .result(\result$301 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$296 )
+    .valid_out(\valid$298 )
   );
   \biss_master_wb.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$323 ),
+    .\bit (\bit$325 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$54 ),
+    .level(\slo$56 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$126 ),
+    .receiver_clear(\clear$128 ),
     .rst(rst),
-    .sample(\sample$322 ),
+    .sample(\sample$324 ),
     .slo(slo)
   );
   \biss_master_wb.ch1.core.scheduler  scheduler (
@@ -21003,20 +22140,20 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$5117$0 (\bit ),
+    .\port$6091$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_wb.ch1.core.spw_check  spw_check (
-    .bits(cycle[200:195]),
+    .bits(cycle[201:196]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[252:245])
+    .\tolerance$8 (cycle[254:247])
   );
   \biss_master_wb.ch1.core.time_base  time_base (
     .clk(clk),
@@ -21035,7 +22172,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$91 ),
+    .ma_busy(\ma_busy$93 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -21044,7 +22181,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$54 ),
+    .slo(\slo$56 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -21052,12 +22189,12 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   );
   \biss_master_wb.ch1.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$324 ),
+    .clean(\clean$326 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$152 ),
+    .fault(\restart$154 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -21067,7 +22204,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$3466$0 (\$24 ),
+    .\port$4432$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -21084,7 +22221,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$20  = \bit$323 ;
+    \$20  = \bit$325 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -21105,125 +22242,125 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$23  = \clean$324 ;
+    \$23  = \clean$326 ;
     if (rst) begin
       \$23  = 1'h0;
     end
   end
-  assign \idle$33  = idle;
-  assign \start$35  = start;
+  assign \idle$35  = idle;
+  assign \start$37  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$42  = idle;
-  assign \slo$44  = slo;
-  assign \trigger$46  = trigger;
-  assign \request$48  = request;
-  assign \abort$49  = abort;
+  assign \idle$44  = idle;
+  assign \slo$46  = slo;
+  assign \trigger$48  = trigger;
+  assign \request$50  = request;
+  assign \abort$51  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$54 ;
+  assign level = \slo$56 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$63  = locked;
-  assign \early$65  = early;
+  assign \locked$65  = locked;
+  assign \early$67  = early;
   assign done = frame_done;
-  assign \started$69  = started;
-  assign \slots_full$71  = slots_full;
-  assign \stopped$73  = stopped;
-  assign \stop_bit$75  = stop_bit;
+  assign \started$71  = started;
+  assign \slots_full$73  = slots_full;
+  assign \stopped$75  = stopped;
+  assign \stop_bit$77  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$79  = break_over;
-  assign \ack_expired$81  = ack_expired;
-  assign \no_start_expired$83  = no_start_expired;
-  assign \slo_stuck$85  = slo_stuck;
-  assign \slo_stuck_live$87  = slo_stuck_live;
-  assign \delay_over$89  = delay_over;
-  assign \slo$90  = \slo$54 ;
-  assign \clocking  = \ma_busy$91 ;
+  assign \break_over$81  = break_over;
+  assign \ack_expired$83  = ack_expired;
+  assign \no_start_expired$85  = no_start_expired;
+  assign \slo_stuck$87  = slo_stuck;
+  assign \slo_stuck_live$89  = slo_stuck_live;
+  assign \delay_over$91  = delay_over;
+  assign \slo$92  = \slo$56 ;
+  assign \clocking  = \ma_busy$93 ;
   assign timer_clear = clear;
-  assign \in_clock$96  = in_clock;
+  assign \in_clock$98  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$102  = ack_limit;
-  assign \timeout_limit$104  = timeout_limit;
-  assign \no_start_limit$106  = no_start_limit;
-  assign \delay$108  = delay;
-  assign \delay_limit$110  = delay_limit;
+  assign \ack_limit$104  = ack_limit;
+  assign \timeout_limit$106  = timeout_limit;
+  assign \no_start_limit$108  = no_start_limit;
+  assign \delay$110  = delay;
+  assign \delay_limit$112  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$115  = quiet;
-  assign \quiet_live$117  = quiet_live;
+  assign \quiet$117  = quiet;
+  assign \quiet_live$119  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$121  = started;
-  assign \start_slot$123  = start_slot;
-  assign \rises$125  = rises;
-  assign receiver_clear = \clear$126 ;
+  assign \started$123  = started;
+  assign \start_slot$125  = start_slot;
+  assign \rises$127  = rises;
+  assign receiver_clear = \clear$128 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$132  = cycle[15:0];
+  assign \half_period$134  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$135  = word_count;
-  assign \lc$137  = lc;
+  assign \word_count$137  = word_count;
+  assign \lc$139  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$139  = { lc[4:0], \bit  };
+  assign \lc_next$141  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$145  = resync;
+  assign \resync$147  = resync;
   assign waiting = watch;
-  assign \level$148  = \slo$54 ;
+  assign \level$150  = \slo$56 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$152 ;
+  assign fault = \restart$154 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$159  = delay;
+  assign \delay$161  = delay;
   assign \$signal  = learn;
-  assign \clean$165  = clean;
-  assign \noisy$167  = noisy;
+  assign \clean$167  = clean;
+  assign \noisy$169  = noisy;
   assign jump = delay_jump;
-  assign \crcs$173  = crcs;
-  assign \crcs$174  = crcs;
-  assign w1_enable = cycle[194];
-  assign \cpw_top$177  = cpw_top;
+  assign \crcs$175  = crcs;
+  assign \crcs$176  = crcs;
+  assign w1_enable = cycle[195];
+  assign \cpw_top$179  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[200:195];
-  assign \tolerance$181  = cycle[252:245];
+  assign bits = cycle[201:196];
+  assign \tolerance$183  = cycle[254:247];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$186  = report_frame;
-  assign \fault$187  = \restart$152 ;
-  assign \fault_status$189  = fault_status;
-  assign \crc_ok$191  = crc_ok;
+  assign \report_frame$188  = report_frame;
+  assign \fault$189  = \restart$154 ;
+  assign \fault_status$191  = fault_status;
+  assign \crc_ok$193  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$199  = report;
-  assign \report_frame$200  = report_frame;
-  assign \report_delay$202  = report_delay;
-  assign \valid$204  = valid;
+  assign \report$201  = report;
+  assign \report_frame$202  = report_frame;
+  assign \report_delay$204  = report_delay;
+  assign \valid$206  = valid;
   assign word_crc_ok = { \$24 , crc_ok[0] };
-  assign \first_rise$221  = first_rise;
+  assign \first_rise$223  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$235 ;
-  assign ca_abort = \abort$237 ;
+  assign ca_start = \start$237 ;
+  assign ca_abort = \abort$239 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$246  = frames;
-  assign \done$248  = ca_done;
-  assign \cdm$250  = cdm;
+  assign \busy$248  = frames;
+  assign \done$250  = ca_done;
+  assign \cdm$252  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$265 ;
+  assign clear_counters = \clear$267 ;
   assign count_crc_word0 = counts[15:0];
   assign count_crc_word1 = counts[31:16];
   assign count_no_ack = counts[47:32];
@@ -21245,31 +22382,31 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign count_ca_refused = counts[303:288];
   assign count_ca_aborted = counts[319:304];
   assign count_ca_data_fault = counts[335:320];
-  assign \ma$290  = ma;
-  assign \overrun$293  = overrun;
-  assign \done$295  = \done$294 ;
-  assign valid_out = \valid$296 ;
-  assign \status$298  = \result$299 [3:0];
-  assign timestamp = \result$299 [35:4];
-  assign line_delay = \result$299 [48:36];
-  assign \cds$302  = \result$299 [49];
-  assign noise_events = \result$299 [53:50];
-  assign delay_settled = \result$299 [54];
-  assign \settled_delay$305  = \result$299 [67:55];
-  assign delay_spread = \result$299 [75:68];
-  assign word0_position = \result$299 [130:76];
-  assign word0_ne = \result$299 [131];
-  assign word0_nw = \result$299 [132];
-  assign word0_crc_ok = \result$299 [133];
-  assign word1_position = \result$299 [173:134];
-  assign word1_ne = \result$299 [174];
-  assign word1_nw = \result$299 [175];
-  assign word1_crc_ok = \result$299 [176];
-  assign \lc$315  = \result$299 [182:177];
-  assign \lc_repeat$316  = \result$299 [183];
-  assign \lc_skip$317  = \result$299 [184];
-  assign \lc_zero$318  = \result$299 [185];
-  assign \spw_mismatch$319  = \result$299 [186];
+  assign \ma$292  = ma;
+  assign \overrun$295  = overrun;
+  assign \done$297  = \done$296 ;
+  assign valid_out = \valid$298 ;
+  assign \status$300  = \result$301 [3:0];
+  assign timestamp = \result$301 [35:4];
+  assign line_delay = \result$301 [48:36];
+  assign \cds$304  = \result$301 [49];
+  assign noise_events = \result$301 [53:50];
+  assign delay_settled = \result$301 [54];
+  assign \settled_delay$307  = \result$301 [67:55];
+  assign delay_spread = \result$301 [75:68];
+  assign word0_position = \result$301 [130:76];
+  assign word0_ne = \result$301 [131];
+  assign word0_nw = \result$301 [132];
+  assign word0_crc_ok = \result$301 [133];
+  assign word1_position = \result$301 [173:134];
+  assign word1_ne = \result$301 [174];
+  assign word1_nw = \result$301 [175];
+  assign word1_crc_ok = \result$301 [176];
+  assign \lc$317  = \result$301 [182:177];
+  assign \lc_repeat$318  = \result$301 [183];
+  assign \lc_skip$319  = \result$301 [184];
+  assign \lc_zero$320  = \result$301 [185];
+  assign \spw_mismatch$321  = \result$301 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -21280,31 +22417,33 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[155:145];
+  assign \live.w0  = live[156:145];
   assign \live.w0.data_bits  = live[150:145];
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
   assign \live.w0.gray  = live[155];
-  assign \live.w0_crc  = live[193:156];
-  assign \live.w0_crc.width  = live[160:156];
-  assign \live.w0_crc.poly  = live[176:161];
-  assign \live.w0_crc.start  = live[192:177];
-  assign \live.w0_crc.inverted  = live[193];
-  assign \live.w1_enable  = live[194];
-  assign \live.w1  = live[205:195];
-  assign \live.w1.data_bits  = live[200:195];
-  assign \live.w1.nenw  = live[201];
-  assign \live.w1.lc  = live[202];
-  assign \live.w1.crc  = live[204:203];
-  assign \live.w1.gray  = live[205];
-  assign \live.w1_crc  = live[243:206];
-  assign \live.w1_crc.width  = live[210:206];
-  assign \live.w1_crc.poly  = live[226:211];
-  assign \live.w1_crc.start  = live[242:227];
-  assign \live.w1_crc.inverted  = live[243];
-  assign \live.spw_check  = live[244];
-  assign \live.spw_tolerance  = live[252:245];
+  assign \live.w0.signed  = live[156];
+  assign \live.w0_crc  = live[194:157];
+  assign \live.w0_crc.width  = live[161:157];
+  assign \live.w0_crc.poly  = live[177:162];
+  assign \live.w0_crc.start  = live[193:178];
+  assign \live.w0_crc.inverted  = live[194];
+  assign \live.w1_enable  = live[195];
+  assign \live.w1  = live[207:196];
+  assign \live.w1.data_bits  = live[201:196];
+  assign \live.w1.nenw  = live[202];
+  assign \live.w1.lc  = live[203];
+  assign \live.w1.crc  = live[205:204];
+  assign \live.w1.gray  = live[206];
+  assign \live.w1.signed  = live[207];
+  assign \live.w1_crc  = live[245:208];
+  assign \live.w1_crc.width  = live[212:208];
+  assign \live.w1_crc.poly  = live[228:213];
+  assign \live.w1_crc.start  = live[244:229];
+  assign \live.w1_crc.inverted  = live[245];
+  assign \live.spw_check  = live[246];
+  assign \live.spw_tolerance  = live[254:247];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -21315,55 +22454,61 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[155:145];
+  assign \cycle.w0  = cycle[156:145];
   assign \cycle.w0.data_bits  = cycle[150:145];
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
   assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0_crc  = cycle[193:156];
-  assign \cycle.w0_crc.width  = cycle[160:156];
-  assign \cycle.w0_crc.poly  = cycle[176:161];
-  assign \cycle.w0_crc.start  = cycle[192:177];
-  assign \cycle.w0_crc.inverted  = cycle[193];
-  assign \cycle.w1_enable  = cycle[194];
-  assign \cycle.w1  = cycle[205:195];
-  assign \cycle.w1.data_bits  = cycle[200:195];
-  assign \cycle.w1.nenw  = cycle[201];
-  assign \cycle.w1.lc  = cycle[202];
-  assign \cycle.w1.crc  = cycle[204:203];
-  assign \cycle.w1.gray  = cycle[205];
-  assign \cycle.w1_crc  = cycle[243:206];
-  assign \cycle.w1_crc.width  = cycle[210:206];
-  assign \cycle.w1_crc.poly  = cycle[226:211];
-  assign \cycle.w1_crc.start  = cycle[242:227];
-  assign \cycle.w1_crc.inverted  = cycle[243];
-  assign \cycle.spw_check  = cycle[244];
-  assign \cycle.spw_tolerance  = cycle[252:245];
-  assign \words[0]  = words[10:0];
+  assign \cycle.w0.signed  = cycle[156];
+  assign \cycle.w0_crc  = cycle[194:157];
+  assign \cycle.w0_crc.width  = cycle[161:157];
+  assign \cycle.w0_crc.poly  = cycle[177:162];
+  assign \cycle.w0_crc.start  = cycle[193:178];
+  assign \cycle.w0_crc.inverted  = cycle[194];
+  assign \cycle.w1_enable  = cycle[195];
+  assign \cycle.w1  = cycle[207:196];
+  assign \cycle.w1.data_bits  = cycle[201:196];
+  assign \cycle.w1.nenw  = cycle[202];
+  assign \cycle.w1.lc  = cycle[203];
+  assign \cycle.w1.crc  = cycle[205:204];
+  assign \cycle.w1.gray  = cycle[206];
+  assign \cycle.w1.signed  = cycle[207];
+  assign \cycle.w1_crc  = cycle[245:208];
+  assign \cycle.w1_crc.width  = cycle[212:208];
+  assign \cycle.w1_crc.poly  = cycle[228:213];
+  assign \cycle.w1_crc.start  = cycle[244:229];
+  assign \cycle.w1_crc.inverted  = cycle[245];
+  assign \cycle.spw_check  = cycle[246];
+  assign \cycle.spw_tolerance  = cycle[254:247];
+  assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
   assign \words[0].gray  = words[10];
-  assign \words[1]  = words[21:11];
-  assign \words[1].data_bits  = words[16:11];
-  assign \words[1].nenw  = words[17];
-  assign \words[1].lc  = words[18];
-  assign \words[1].crc  = words[20:19];
-  assign \words[1].gray  = words[21];
-  assign \words$171[0]  = \words$171 [10:0];
-  assign \words$171[0].data_bits  = \words$171 [5:0];
-  assign \words$171[0].nenw  = \words$171 [6];
-  assign \words$171[0].lc  = \words$171 [7];
-  assign \words$171[0].crc  = \words$171 [9:8];
-  assign \words$171[0].gray  = \words$171 [10];
-  assign \words$171[1]  = \words$171 [21:11];
-  assign \words$171[1].data_bits  = \words$171 [16:11];
-  assign \words$171[1].nenw  = \words$171 [17];
-  assign \words$171[1].lc  = \words$171 [18];
-  assign \words$171[1].crc  = \words$171 [20:19];
-  assign \words$171[1].gray  = \words$171 [21];
+  assign \words[0].signed  = words[11];
+  assign \words[1]  = words[23:12];
+  assign \words[1].data_bits  = words[17:12];
+  assign \words[1].nenw  = words[18];
+  assign \words[1].lc  = words[19];
+  assign \words[1].crc  = words[21:20];
+  assign \words[1].gray  = words[22];
+  assign \words[1].signed  = words[23];
+  assign \words$173[0]  = \words$173 [11:0];
+  assign \words$173[0].data_bits  = \words$173 [5:0];
+  assign \words$173[0].nenw  = \words$173 [6];
+  assign \words$173[0].lc  = \words$173 [7];
+  assign \words$173[0].crc  = \words$173 [9:8];
+  assign \words$173[0].gray  = \words$173 [10];
+  assign \words$173[0].signed  = \words$173 [11];
+  assign \words$173[1]  = \words$173 [23:12];
+  assign \words$173[1].data_bits  = \words$173 [17:12];
+  assign \words$173[1].nenw  = \words$173 [18];
+  assign \words$173[1].lc  = \words$173 [19];
+  assign \words$173[1].crc  = \words$173 [21:20];
+  assign \words$173[1].gray  = \words$173 [22];
+  assign \words$173[1].signed  = \words$173 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -21374,26 +22519,26 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$173[0]  = crcs[37:0];
-  assign \crcs$173[0].width  = crcs[4:0];
-  assign \crcs$173[0].poly  = crcs[20:5];
-  assign \crcs$173[0].start  = crcs[36:21];
-  assign \crcs$173[0].inverted  = crcs[37];
-  assign \crcs$173[1]  = crcs[75:38];
-  assign \crcs$173[1].width  = crcs[42:38];
-  assign \crcs$173[1].poly  = crcs[58:43];
-  assign \crcs$173[1].start  = crcs[74:59];
-  assign \crcs$173[1].inverted  = crcs[75];
-  assign \crcs$174[0]  = crcs[37:0];
-  assign \crcs$174[0].width  = crcs[4:0];
-  assign \crcs$174[0].poly  = crcs[20:5];
-  assign \crcs$174[0].start  = crcs[36:21];
-  assign \crcs$174[0].inverted  = crcs[37];
-  assign \crcs$174[1]  = crcs[75:38];
-  assign \crcs$174[1].width  = crcs[42:38];
-  assign \crcs$174[1].poly  = crcs[58:43];
-  assign \crcs$174[1].start  = crcs[74:59];
-  assign \crcs$174[1].inverted  = crcs[75];
+  assign \crcs$175[0]  = crcs[37:0];
+  assign \crcs$175[0].width  = crcs[4:0];
+  assign \crcs$175[0].poly  = crcs[20:5];
+  assign \crcs$175[0].start  = crcs[36:21];
+  assign \crcs$175[0].inverted  = crcs[37];
+  assign \crcs$175[1]  = crcs[75:38];
+  assign \crcs$175[1].width  = crcs[42:38];
+  assign \crcs$175[1].poly  = crcs[58:43];
+  assign \crcs$175[1].start  = crcs[74:59];
+  assign \crcs$175[1].inverted  = crcs[75];
+  assign \crcs$176[0]  = crcs[37:0];
+  assign \crcs$176[0].width  = crcs[4:0];
+  assign \crcs$176[0].poly  = crcs[20:5];
+  assign \crcs$176[0].start  = crcs[36:21];
+  assign \crcs$176[0].inverted  = crcs[37];
+  assign \crcs$176[1]  = crcs[75:38];
+  assign \crcs$176[1].width  = crcs[42:38];
+  assign \crcs$176[1].poly  = crcs[58:43];
+  assign \crcs$176[1].start  = crcs[74:59];
+  assign \crcs$176[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -21404,31 +22549,33 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \cfg.quiet_time  = cycle[136:125];
   assign \cfg.noise_limit  = cycle[140:137];
   assign \cfg.delay_tolerance  = cycle[144:141];
-  assign \cfg.w0  = cycle[155:145];
+  assign \cfg.w0  = cycle[156:145];
   assign \cfg.w0.data_bits  = cycle[150:145];
   assign \cfg.w0.nenw  = cycle[151];
   assign \cfg.w0.lc  = cycle[152];
   assign \cfg.w0.crc  = cycle[154:153];
   assign \cfg.w0.gray  = cycle[155];
-  assign \cfg.w0_crc  = cycle[193:156];
-  assign \cfg.w0_crc.width  = cycle[160:156];
-  assign \cfg.w0_crc.poly  = cycle[176:161];
-  assign \cfg.w0_crc.start  = cycle[192:177];
-  assign \cfg.w0_crc.inverted  = cycle[193];
-  assign \cfg.w1_enable  = cycle[194];
-  assign \cfg.w1  = cycle[205:195];
-  assign \cfg.w1.data_bits  = cycle[200:195];
-  assign \cfg.w1.nenw  = cycle[201];
-  assign \cfg.w1.lc  = cycle[202];
-  assign \cfg.w1.crc  = cycle[204:203];
-  assign \cfg.w1.gray  = cycle[205];
-  assign \cfg.w1_crc  = cycle[243:206];
-  assign \cfg.w1_crc.width  = cycle[210:206];
-  assign \cfg.w1_crc.poly  = cycle[226:211];
-  assign \cfg.w1_crc.start  = cycle[242:227];
-  assign \cfg.w1_crc.inverted  = cycle[243];
-  assign \cfg.spw_check  = cycle[244];
-  assign \cfg.spw_tolerance  = cycle[252:245];
+  assign \cfg.w0.signed  = cycle[156];
+  assign \cfg.w0_crc  = cycle[194:157];
+  assign \cfg.w0_crc.width  = cycle[161:157];
+  assign \cfg.w0_crc.poly  = cycle[177:162];
+  assign \cfg.w0_crc.start  = cycle[193:178];
+  assign \cfg.w0_crc.inverted  = cycle[194];
+  assign \cfg.w1_enable  = cycle[195];
+  assign \cfg.w1  = cycle[207:196];
+  assign \cfg.w1.data_bits  = cycle[201:196];
+  assign \cfg.w1.nenw  = cycle[202];
+  assign \cfg.w1.lc  = cycle[203];
+  assign \cfg.w1.crc  = cycle[205:204];
+  assign \cfg.w1.gray  = cycle[206];
+  assign \cfg.w1.signed  = cycle[207];
+  assign \cfg.w1_crc  = cycle[245:208];
+  assign \cfg.w1_crc.width  = cycle[212:208];
+  assign \cfg.w1_crc.poly  = cycle[228:213];
+  assign \cfg.w1_crc.start  = cycle[244:229];
+  assign \cfg.w1_crc.inverted  = cycle[245];
+  assign \cfg.spw_check  = cycle[246];
+  assign \cfg.spw_tolerance  = cycle[254:247];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -21452,36 +22599,36 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$223.slave_id  = \request$223 [2:0];
-  assign \request$223.address  = \request$223 [9:3];
-  assign \request$223.count  = \request$223 [16:10];
-  assign \request$223.write  = \request$223 [17];
+  assign \request$225.slave_id  = \request$225 [2:0];
+  assign \request$225.address  = \request$225 [9:3];
+  assign \request$225.count  = \request$225 [16:10];
+  assign \request$225.write  = \request$225 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$260.crc_word0  = \events$260 [0];
-  assign \events$260.crc_word1  = \events$260 [1];
-  assign \events$260.no_ack  = \events$260 [2];
-  assign \events$260.no_start  = \events$260 [3];
-  assign \events$260.delay_range  = \events$260 [4];
-  assign \events$260.slo_stuck_low  = \events$260 [5];
-  assign \events$260.lc_repeat  = \events$260 [6];
-  assign \events$260.lc_skip  = \events$260 [7];
-  assign \events$260.lc_zero  = \events$260 [8];
-  assign \events$260.spw_mismatch  = \events$260 [9];
-  assign \events$260.overrun  = \events$260 [10];
-  assign \events$260.aborted  = \events$260 [11];
-  assign \events$260.no_stop  = \events$260 [12];
-  assign \events$260.noisy_line  = \events$260 [13];
-  assign \events$260.delay_jump  = \events$260 [14];
-  assign \events$260.noise_event  = \events$260 [15];
-  assign \events$260.ca_crc4_error  = \events$260 [16];
-  assign \events$260.ca_no_answer  = \events$260 [17];
-  assign \events$260.ca_refused  = \events$260 [18];
-  assign \events$260.ca_aborted  = \events$260 [19];
-  assign \events$260.ca_data_fault  = \events$260 [20];
+  assign \events$262.crc_word0  = \events$262 [0];
+  assign \events$262.crc_word1  = \events$262 [1];
+  assign \events$262.no_ack  = \events$262 [2];
+  assign \events$262.no_start  = \events$262 [3];
+  assign \events$262.delay_range  = \events$262 [4];
+  assign \events$262.slo_stuck_low  = \events$262 [5];
+  assign \events$262.lc_repeat  = \events$262 [6];
+  assign \events$262.lc_skip  = \events$262 [7];
+  assign \events$262.lc_zero  = \events$262 [8];
+  assign \events$262.spw_mismatch  = \events$262 [9];
+  assign \events$262.overrun  = \events$262 [10];
+  assign \events$262.aborted  = \events$262 [11];
+  assign \events$262.no_stop  = \events$262 [12];
+  assign \events$262.noisy_line  = \events$262 [13];
+  assign \events$262.delay_jump  = \events$262 [14];
+  assign \events$262.noise_event  = \events$262 [15];
+  assign \events$262.ca_crc4_error  = \events$262 [16];
+  assign \events$262.ca_no_answer  = \events$262 [17];
+  assign \events$262.ca_refused  = \events$262 [18];
+  assign \events$262.ca_aborted  = \events$262 [19];
+  assign \events$262.ca_data_fault  = \events$262 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -21510,57 +22657,57 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$299.status  = \result$299 [3:0];
-  assign \result$299.timestamp  = \result$299 [35:4];
-  assign \result$299.line_delay  = \result$299 [48:36];
-  assign \result$299.cds  = \result$299 [49];
-  assign \result$299.noise_events  = \result$299 [53:50];
-  assign \result$299.delay_settled  = \result$299 [54];
-  assign \result$299.settled_delay  = \result$299 [67:55];
-  assign \result$299.delay_spread  = \result$299 [75:68];
-  assign \result$299.word0  = \result$299 [133:76];
-  assign \result$299.word0.position  = \result$299 [130:76];
-  assign \result$299.word0.ne  = \result$299 [131];
-  assign \result$299.word0.nw  = \result$299 [132];
-  assign \result$299.word0.crc_ok  = \result$299 [133];
-  assign \result$299.word1  = \result$299 [176:134];
-  assign \result$299.word1.position  = \result$299 [173:134];
-  assign \result$299.word1.ne  = \result$299 [174];
-  assign \result$299.word1.nw  = \result$299 [175];
-  assign \result$299.word1.crc_ok  = \result$299 [176];
-  assign \result$299.lc  = \result$299 [182:177];
-  assign \result$299.lc_repeat  = \result$299 [183];
-  assign \result$299.lc_skip  = \result$299 [184];
-  assign \result$299.lc_zero  = \result$299 [185];
-  assign \result$299.spw_mismatch  = \result$299 [186];
-  assign \events$260 [20] = \$16 ;
-  assign \events$260 [19] = \$14 ;
-  assign \events$260 [18] = \$12 ;
-  assign \events$260 [17] = \$10 ;
-  assign \events$260 [16] = \$8 ;
-  assign \events$260 [15] = \event ;
-  assign \events$260 [14] = \$6 ;
-  assign \events$260 [13] = \$4 ;
-  assign \events$260 [12] = faults[6];
-  assign \events$260 [11] = faults[4];
-  assign \events$260 [10] = overrun;
-  assign \events$260 [9] = \$2 ;
-  assign \events$260 [8] = lc_zero;
-  assign \events$260 [7] = lc_skip;
-  assign \events$260 [6] = lc_repeat;
-  assign \events$260 [5] = faults[3];
-  assign \events$260 [4] = faults[2];
-  assign \events$260 [3] = faults[1];
-  assign \events$260 [2] = faults[0];
-  assign \events$260 [1] = crc_error[1];
-  assign \events$260 [0] = crc_error[0];
+  assign \result$301.status  = \result$301 [3:0];
+  assign \result$301.timestamp  = \result$301 [35:4];
+  assign \result$301.line_delay  = \result$301 [48:36];
+  assign \result$301.cds  = \result$301 [49];
+  assign \result$301.noise_events  = \result$301 [53:50];
+  assign \result$301.delay_settled  = \result$301 [54];
+  assign \result$301.settled_delay  = \result$301 [67:55];
+  assign \result$301.delay_spread  = \result$301 [75:68];
+  assign \result$301.word0  = \result$301 [133:76];
+  assign \result$301.word0.position  = \result$301 [130:76];
+  assign \result$301.word0.ne  = \result$301 [131];
+  assign \result$301.word0.nw  = \result$301 [132];
+  assign \result$301.word0.crc_ok  = \result$301 [133];
+  assign \result$301.word1  = \result$301 [176:134];
+  assign \result$301.word1.position  = \result$301 [173:134];
+  assign \result$301.word1.ne  = \result$301 [174];
+  assign \result$301.word1.nw  = \result$301 [175];
+  assign \result$301.word1.crc_ok  = \result$301 [176];
+  assign \result$301.lc  = \result$301 [182:177];
+  assign \result$301.lc_repeat  = \result$301 [183];
+  assign \result$301.lc_skip  = \result$301 [184];
+  assign \result$301.lc_zero  = \result$301 [185];
+  assign \result$301.spw_mismatch  = \result$301 [186];
+  assign \events$262 [20] = \$16 ;
+  assign \events$262 [19] = \$14 ;
+  assign \events$262 [18] = \$12 ;
+  assign \events$262 [17] = \$10 ;
+  assign \events$262 [16] = \$8 ;
+  assign \events$262 [15] = \event ;
+  assign \events$262 [14] = \$6 ;
+  assign \events$262 [13] = \$4 ;
+  assign \events$262 [12] = faults[6];
+  assign \events$262 [11] = faults[4];
+  assign \events$262 [10] = overrun;
+  assign \events$262 [9] = \$2 ;
+  assign \events$262 [8] = lc_zero;
+  assign \events$262 [7] = lc_skip;
+  assign \events$262 [6] = lc_repeat;
+  assign \events$262 [5] = faults[3];
+  assign \events$262 [4] = faults[2];
+  assign \events$262 [3] = faults[1];
+  assign \events$262 [2] = faults[0];
+  assign \events$262 [1] = crc_error[1];
+  assign \events$262 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$223 [17] = ca_write;
-  assign \request$223 [16:10] = ca_count;
-  assign \request$223 [9:3] = ca_address;
-  assign \request$223 [2:0] = ca_slave_id;
+  assign \request$225 [17] = ca_write;
+  assign \request$225 [16:10] = ca_count;
+  assign \request$225 [9:3] = ca_address;
+  assign \request$225 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$24 ;
@@ -21582,26 +22729,28 @@ module \biss_master_wb.ch1.core (slo, clk, rst, ca_wbuf_en, rbuf_en, trigger, \b
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$171 [21:11] = cycle[205:195];
-  assign \words$171 [10:0] = cycle[155:145];
-  assign words[21:11] = cycle[205:195];
-  assign words[10:0] = cycle[155:145];
-  assign live[252:245] = cfg_spw_tolerance;
-  assign live[244] = cfg_spw_check;
-  assign live[243] = cfg_w1_crc_inverted;
-  assign live[242:227] = cfg_w1_crc_start;
-  assign live[226:211] = cfg_w1_crc_poly;
-  assign live[210:206] = cfg_w1_crc_width;
-  assign live[205] = cfg_w1_gray;
-  assign live[204:203] = cfg_w1_crc;
-  assign live[202] = cfg_w1_lc;
-  assign live[201] = cfg_w1_nenw;
-  assign live[200:195] = cfg_w1_data_bits;
-  assign live[194] = cfg_w1_enable;
-  assign live[193] = cfg_w0_crc_inverted;
-  assign live[192:177] = cfg_w0_crc_start;
-  assign live[176:161] = cfg_w0_crc_poly;
-  assign live[160:156] = cfg_w0_crc_width;
+  assign \words$173 [23:12] = cycle[207:196];
+  assign \words$173 [11:0] = cycle[156:145];
+  assign words[23:12] = cycle[207:196];
+  assign words[11:0] = cycle[156:145];
+  assign live[254:247] = cfg_spw_tolerance;
+  assign live[246] = cfg_spw_check;
+  assign live[245] = cfg_w1_crc_inverted;
+  assign live[244:229] = cfg_w1_crc_start;
+  assign live[228:213] = cfg_w1_crc_poly;
+  assign live[212:208] = cfg_w1_crc_width;
+  assign live[207] = cfg_w1_signed;
+  assign live[206] = cfg_w1_gray;
+  assign live[205:204] = cfg_w1_crc;
+  assign live[203] = cfg_w1_lc;
+  assign live[202] = cfg_w1_nenw;
+  assign live[201:196] = cfg_w1_data_bits;
+  assign live[195] = cfg_w1_enable;
+  assign live[194] = cfg_w0_crc_inverted;
+  assign live[193:178] = cfg_w0_crc_start;
+  assign live[177:162] = cfg_w0_crc_poly;
+  assign live[161:157] = cfg_w0_crc_width;
+  assign live[156] = cfg_w0_signed;
   assign live[155] = cfg_w0_gray;
   assign live[154:153] = cfg_w0_crc;
   assign live[152] = cfg_w0_lc;
@@ -21678,7 +22827,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   wire [24:0] \$58 ;
   reg \$59 ;
   wire \$6 ;
-  reg [252:0] \$60 ;
+  reg [254:0] \$60 ;
   reg [23:0] \$61 ;
   reg [23:0] \$62 ;
   reg [11:0] \$63 ;
@@ -21705,8 +22854,8 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  output [252:0] cycle;
-  reg [252:0] cycle = 253'h0000000000000000000000000000000000000000000000000000000000000000;
+  output [254:0] cycle;
+  reg [254:0] cycle = 255'h0000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [11:0] \cycle.delay_limit ;
@@ -21719,7 +22868,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
   wire [23:0] \cycle.timeout_limit ;
-  wire [10:0] \cycle.w0 ;
+  wire [11:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -21730,12 +22879,13 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   wire \cycle.w0.gray ;
   wire \cycle.w0.lc ;
   wire \cycle.w0.nenw ;
+  wire \cycle.w0.signed ;
   wire [37:0] \cycle.w0_crc ;
   wire \cycle.w0_crc.inverted ;
   wire [15:0] \cycle.w0_crc.poly ;
   wire [15:0] \cycle.w0_crc.start ;
   wire [4:0] \cycle.w0_crc.width ;
-  wire [10:0] \cycle.w1 ;
+  wire [11:0] \cycle.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -21746,6 +22896,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   wire \cycle.w1.gray ;
   wire \cycle.w1.lc ;
   wire \cycle.w1.nenw ;
+  wire \cycle.w1.signed ;
   wire [37:0] \cycle.w1_crc ;
   wire \cycle.w1_crc.inverted ;
   wire [15:0] \cycle.w1_crc.poly ;
@@ -21758,8 +22909,8 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [252:0] live;
-  wire [252:0] live;
+  input [254:0] live;
+  wire [254:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [11:0] \live.delay_limit ;
@@ -21772,7 +22923,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
   wire [23:0] \live.timeout_limit ;
-  wire [10:0] \live.w0 ;
+  wire [11:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -21783,12 +22934,13 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   wire \live.w0.gray ;
   wire \live.w0.lc ;
   wire \live.w0.nenw ;
+  wire \live.w0.signed ;
   wire [37:0] \live.w0_crc ;
   wire \live.w0_crc.inverted ;
   wire [15:0] \live.w0_crc.poly ;
   wire [15:0] \live.w0_crc.start ;
   wire [4:0] \live.w0_crc.width ;
-  wire [10:0] \live.w1 ;
+  wire [11:0] \live.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -21799,6 +22951,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   wire \live.w1.gray ;
   wire \live.w1.lc ;
   wire \live.w1.nenw ;
+  wire \live.w1.signed ;
   wire [37:0] \live.w1_crc ;
   wire \live.w1_crc.inverted ;
   wire [15:0] \live.w1_crc.poly ;
@@ -21820,14 +22973,14 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
-  assign \$36  = live[194] & live[152];
-  assign \$37  = \$36  & live[202];
+  assign \$36  = live[195] & live[152];
+  assign \$37  = \$36  & live[203];
   assign \$38  = ~ \$37 ;
   assign \$39  = \$35  & \$38 ;
-  assign \$40  = ~ live[244];
-  assign \$41  = live[200:195] <= live[150:145];
-  assign \$42  = live[194] & \$41 ;
-  assign \$43  = | live[204:203];
+  assign \$40  = ~ live[246];
+  assign \$41  = live[201:196] <= live[150:145];
+  assign \$42  = live[195] & \$41 ;
+  assign \$43  = | live[205:204];
   assign \$44  = \$42  & \$43 ;
   assign \$45  = \$40  | \$44 ;
   assign \$46  = \$39  & \$45 ;
@@ -21843,7 +22996,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \$56  = \$55  ? 4'h2 : live[144:141];
   assign \$57  = live[15:0] + \$56 ;
   assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[194];
+  assign word_count = 1'h1 + cycle[195];
   always @(posedge clk)
     ok <= \$59 ;
   always @(posedge clk)
@@ -21872,26 +23025,26 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \$8  = live[154:153] == 2'h2;
   assign \$9  = \$7  | \$8 ;
   assign \$10  = live[154:153] == 2'h3;
-  assign \$11  = | live[160:156];
+  assign \$11  = | live[161:157];
   assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[160:156] <= 5'h10;
+  assign \$13  = live[161:157] <= 5'h10;
   assign \$14  = \$12  & \$13 ;
   assign \$15  = \$9  | \$14 ;
   assign \$16  = \$4  & \$15 ;
   assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[194];
-  assign \$19  = | live[200:195];
-  assign \$20  = live[200:195] <= 6'h28;
+  assign \$18  = ~ live[195];
+  assign \$19  = | live[201:196];
+  assign \$20  = live[201:196] <= 6'h28;
   assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[204:203];
-  assign \$23  = live[204:203] == 1'h1;
+  assign \$22  = ! live[205:204];
+  assign \$23  = live[205:204] == 1'h1;
   assign \$24  = \$22  | \$23 ;
-  assign \$25  = live[204:203] == 2'h2;
+  assign \$25  = live[205:204] == 2'h2;
   assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[204:203] == 2'h3;
-  assign \$28  = | live[210:206];
+  assign \$27  = live[205:204] == 2'h3;
+  assign \$28  = | live[212:208];
   assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[210:206] <= 5'h10;
+  assign \$30  = live[212:208] <= 5'h10;
   assign \$31  = \$29  & \$30 ;
   assign \$32  = \$26  | \$31 ;
   always @* begin
@@ -21908,7 +23061,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
       \$60  = live;
     end
     if (rst) begin
-      \$60  = 253'h0000000000000000000000000000000000000000000000000000000000000000;
+      \$60  = 255'h0000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
@@ -21982,12 +23135,12 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
             \$66 [37] = 1'h1;
           end
         2'h3:
-            \$66 [37:0] = live[193:156];
+            \$66 [37:0] = live[194:157];
         default:
             \$66 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
-      casez (live[204:203])
+      casez (live[205:204])
         2'h1:
           begin
             \$66 [42:38] = 5'h06;
@@ -22003,7 +23156,7 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
             \$66 [75] = 1'h1;
           end
         2'h3:
-            \$66 [75:38] = live[243:206];
+            \$66 [75:38] = live[245:208];
         default:
             \$66 [75:38] = 38'h0000000000;
       endcase
@@ -22029,31 +23182,33 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[155:145];
+  assign \live.w0  = live[156:145];
   assign \live.w0.data_bits  = live[150:145];
   assign \live.w0.nenw  = live[151];
   assign \live.w0.lc  = live[152];
   assign \live.w0.crc  = live[154:153];
   assign \live.w0.gray  = live[155];
-  assign \live.w0_crc  = live[193:156];
-  assign \live.w0_crc.width  = live[160:156];
-  assign \live.w0_crc.poly  = live[176:161];
-  assign \live.w0_crc.start  = live[192:177];
-  assign \live.w0_crc.inverted  = live[193];
-  assign \live.w1_enable  = live[194];
-  assign \live.w1  = live[205:195];
-  assign \live.w1.data_bits  = live[200:195];
-  assign \live.w1.nenw  = live[201];
-  assign \live.w1.lc  = live[202];
-  assign \live.w1.crc  = live[204:203];
-  assign \live.w1.gray  = live[205];
-  assign \live.w1_crc  = live[243:206];
-  assign \live.w1_crc.width  = live[210:206];
-  assign \live.w1_crc.poly  = live[226:211];
-  assign \live.w1_crc.start  = live[242:227];
-  assign \live.w1_crc.inverted  = live[243];
-  assign \live.spw_check  = live[244];
-  assign \live.spw_tolerance  = live[252:245];
+  assign \live.w0.signed  = live[156];
+  assign \live.w0_crc  = live[194:157];
+  assign \live.w0_crc.width  = live[161:157];
+  assign \live.w0_crc.poly  = live[177:162];
+  assign \live.w0_crc.start  = live[193:178];
+  assign \live.w0_crc.inverted  = live[194];
+  assign \live.w1_enable  = live[195];
+  assign \live.w1  = live[207:196];
+  assign \live.w1.data_bits  = live[201:196];
+  assign \live.w1.nenw  = live[202];
+  assign \live.w1.lc  = live[203];
+  assign \live.w1.crc  = live[205:204];
+  assign \live.w1.gray  = live[206];
+  assign \live.w1.signed  = live[207];
+  assign \live.w1_crc  = live[245:208];
+  assign \live.w1_crc.width  = live[212:208];
+  assign \live.w1_crc.poly  = live[228:213];
+  assign \live.w1_crc.start  = live[244:229];
+  assign \live.w1_crc.inverted  = live[245];
+  assign \live.spw_check  = live[246];
+  assign \live.spw_tolerance  = live[254:247];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -22064,31 +23219,33 @@ module \biss_master_wb.ch1.core.config (rst, word_count, live, ok, cycle, ack_li
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[155:145];
+  assign \cycle.w0  = cycle[156:145];
   assign \cycle.w0.data_bits  = cycle[150:145];
   assign \cycle.w0.nenw  = cycle[151];
   assign \cycle.w0.lc  = cycle[152];
   assign \cycle.w0.crc  = cycle[154:153];
   assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0_crc  = cycle[193:156];
-  assign \cycle.w0_crc.width  = cycle[160:156];
-  assign \cycle.w0_crc.poly  = cycle[176:161];
-  assign \cycle.w0_crc.start  = cycle[192:177];
-  assign \cycle.w0_crc.inverted  = cycle[193];
-  assign \cycle.w1_enable  = cycle[194];
-  assign \cycle.w1  = cycle[205:195];
-  assign \cycle.w1.data_bits  = cycle[200:195];
-  assign \cycle.w1.nenw  = cycle[201];
-  assign \cycle.w1.lc  = cycle[202];
-  assign \cycle.w1.crc  = cycle[204:203];
-  assign \cycle.w1.gray  = cycle[205];
-  assign \cycle.w1_crc  = cycle[243:206];
-  assign \cycle.w1_crc.width  = cycle[210:206];
-  assign \cycle.w1_crc.poly  = cycle[226:211];
-  assign \cycle.w1_crc.start  = cycle[242:227];
-  assign \cycle.w1_crc.inverted  = cycle[243];
-  assign \cycle.spw_check  = cycle[244];
-  assign \cycle.spw_tolerance  = cycle[252:245];
+  assign \cycle.w0.signed  = cycle[156];
+  assign \cycle.w0_crc  = cycle[194:157];
+  assign \cycle.w0_crc.width  = cycle[161:157];
+  assign \cycle.w0_crc.poly  = cycle[177:162];
+  assign \cycle.w0_crc.start  = cycle[193:178];
+  assign \cycle.w0_crc.inverted  = cycle[194];
+  assign \cycle.w1_enable  = cycle[195];
+  assign \cycle.w1  = cycle[207:196];
+  assign \cycle.w1.data_bits  = cycle[201:196];
+  assign \cycle.w1.nenw  = cycle[202];
+  assign \cycle.w1.lc  = cycle[203];
+  assign \cycle.w1.crc  = cycle[205:204];
+  assign \cycle.w1.gray  = cycle[206];
+  assign \cycle.w1.signed  = cycle[207];
+  assign \cycle.w1_crc  = cycle[245:208];
+  assign \cycle.w1_crc.width  = cycle[212:208];
+  assign \cycle.w1_crc.poly  = cycle[228:213];
+  assign \cycle.w1_crc.start  = cycle[244:229];
+  assign \cycle.w1_crc.inverted  = cycle[245];
+  assign \cycle.spw_check  = cycle[246];
+  assign \cycle.spw_tolerance  = cycle[254:247];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -25091,89 +26248,566 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
-  wire [1:0] \$101 ;
-  wire [1:0] \$102 ;
+  wire \$101 ;
+  wire \$102 ;
   wire \$103 ;
   wire \$104 ;
   wire \$105 ;
   wire \$106 ;
   wire \$107 ;
-  reg \$108 ;
-  reg \$109 ;
+  wire \$108 ;
+  wire \$109 ;
   wire [1:0] \$11 ;
-  reg [15:0] \$110 ;
-  reg \$111 ;
-  reg \$112 ;
-  reg [15:0] \$113 ;
-  reg [2:0] \$114 ;
-  reg \$115 ;
-  reg [6:0] \$116 ;
-  reg \$117 ;
-  reg \$118 ;
-  reg \$119 ;
+  wire \$110 ;
+  wire \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire \$115 ;
+  wire \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
   wire [6:0] \$12 ;
-  reg \$120 ;
-  reg \$121 ;
-  reg \$122 ;
-  reg [54:0] \$123 ;
-  reg [1:0] \$124 ;
-  reg [1:0] \$125 ;
-  reg [39:0] \$126 ;
-  reg [5:0] \$127 ;
-  reg [39:0] \$128 ;
+  wire \$120 ;
+  wire \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire \$125 ;
+  wire \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
   wire \$13 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   reg [3:0] \$14 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire [6:0] \$15 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
   wire \$16 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire \$17 ;
+  wire \$170 ;
+  wire \$171 ;
+  wire \$172 ;
+  wire \$173 ;
+  wire \$174 ;
+  wire \$175 ;
+  wire \$176 ;
+  wire \$177 ;
+  wire \$178 ;
+  wire \$179 ;
   wire [6:0] \$18 ;
+  wire \$180 ;
+  wire \$181 ;
+  wire \$182 ;
+  wire \$183 ;
+  wire \$184 ;
+  wire \$185 ;
+  wire \$186 ;
+  wire \$187 ;
+  wire \$188 ;
+  wire \$189 ;
   wire [7:0] \$19 ;
+  wire \$190 ;
+  wire \$191 ;
+  wire \$192 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire \$198 ;
+  wire \$199 ;
   wire [7:0] \$2 ;
   reg [6:0] \$20 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire [7:0] \$21 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
+  wire \$213 ;
+  wire \$214 ;
+  wire \$215 ;
+  wire \$216 ;
+  wire \$217 ;
+  wire \$218 ;
+  wire \$219 ;
   reg [6:0] \$22 ;
+  wire \$220 ;
+  wire \$221 ;
+  wire \$222 ;
+  wire \$223 ;
+  wire \$224 ;
+  wire \$225 ;
+  wire \$226 ;
+  wire \$227 ;
+  wire \$228 ;
+  wire \$229 ;
   wire [7:0] \$23 ;
+  wire \$230 ;
+  wire \$231 ;
+  wire \$232 ;
+  wire \$233 ;
+  wire \$234 ;
+  wire \$235 ;
+  wire \$236 ;
+  wire \$237 ;
+  wire \$238 ;
+  wire \$239 ;
   reg [6:0] \$24 ;
+  wire \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  wire \$243 ;
+  wire \$244 ;
+  wire \$245 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
   wire [7:0] \$25 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
   wire [7:0] \$26 ;
+  wire \$260 ;
+  wire \$261 ;
+  wire \$262 ;
+  wire \$263 ;
+  wire \$264 ;
+  wire \$265 ;
+  wire \$266 ;
+  wire \$267 ;
+  wire \$268 ;
+  wire \$269 ;
   wire \$27 ;
+  wire \$270 ;
+  wire \$271 ;
+  wire \$272 ;
+  wire \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
   wire [1:0] \$28 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
   wire [6:0] \$29 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   reg [6:0] \$3 ;
   wire \$30 ;
+  wire \$300 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
   reg [3:0] \$31 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
   wire [6:0] \$32 ;
+  wire \$320 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
   wire \$33 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  wire \$337 ;
+  wire \$338 ;
+  wire \$339 ;
   wire \$34 ;
+  wire \$340 ;
+  wire \$341 ;
+  wire \$342 ;
+  wire \$343 ;
+  wire [54:0] \$344 ;
+  wire \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire \$349 ;
   wire \$35 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire \$352 ;
+  wire \$353 ;
+  wire \$354 ;
+  wire \$355 ;
+  wire \$356 ;
+  wire \$357 ;
+  wire \$358 ;
+  wire \$359 ;
   wire \$36 ;
+  wire \$360 ;
+  wire \$361 ;
+  wire \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
   wire [16:0] \$37 ;
+  wire \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire \$378 ;
+  wire \$379 ;
   wire \$38 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
   wire \$39 ;
+  wire \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire \$394 ;
+  wire \$395 ;
+  wire \$396 ;
+  wire \$397 ;
+  wire \$398 ;
+  wire \$399 ;
   wire [7:0] \$4 ;
   wire \$40 ;
+  wire \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  wire \$403 ;
+  wire \$404 ;
+  wire \$405 ;
+  wire \$406 ;
+  wire \$407 ;
+  wire \$408 ;
+  wire \$409 ;
   wire [7:0] \$41 ;
+  wire \$410 ;
+  wire \$411 ;
+  wire \$412 ;
+  wire \$413 ;
+  wire \$414 ;
+  wire \$415 ;
+  wire \$416 ;
+  wire \$417 ;
+  wire \$418 ;
+  wire \$419 ;
   wire [6:0] \$42 ;
+  wire \$420 ;
+  wire \$421 ;
+  wire \$422 ;
+  wire \$423 ;
+  wire \$424 ;
+  wire \$425 ;
+  wire \$426 ;
+  wire \$427 ;
+  wire \$428 ;
+  wire \$429 ;
   wire \$43 ;
+  wire \$430 ;
+  wire \$431 ;
+  wire \$432 ;
+  wire \$433 ;
+  wire \$434 ;
+  wire \$435 ;
+  wire \$436 ;
+  wire \$437 ;
+  wire \$438 ;
+  wire \$439 ;
   wire \$44 ;
+  wire \$440 ;
+  wire \$441 ;
+  wire \$442 ;
+  wire \$443 ;
+  wire \$444 ;
+  wire \$445 ;
+  wire \$446 ;
+  wire \$447 ;
+  wire \$448 ;
+  wire \$449 ;
   wire [6:0] \$45 ;
+  wire \$450 ;
+  wire \$451 ;
+  wire \$452 ;
+  wire \$453 ;
+  wire \$454 ;
+  wire \$455 ;
+  wire \$456 ;
+  wire \$457 ;
+  wire \$458 ;
+  wire \$459 ;
   wire \$46 ;
+  wire \$460 ;
+  wire \$461 ;
+  wire \$462 ;
+  wire \$463 ;
+  wire \$464 ;
+  wire \$465 ;
+  wire \$466 ;
+  wire \$467 ;
+  wire \$468 ;
+  wire \$469 ;
   wire \$47 ;
+  wire \$470 ;
+  wire \$471 ;
+  wire \$472 ;
+  wire \$473 ;
+  wire \$474 ;
+  wire \$475 ;
+  wire \$476 ;
+  wire \$477 ;
+  wire \$478 ;
+  wire \$479 ;
   wire [6:0] \$48 ;
+  wire \$480 ;
+  wire \$481 ;
+  wire \$482 ;
+  wire \$483 ;
+  wire \$484 ;
+  wire \$485 ;
+  wire \$486 ;
+  wire \$487 ;
+  wire \$488 ;
+  wire \$489 ;
   wire \$49 ;
+  wire \$490 ;
+  wire \$491 ;
+  wire \$492 ;
+  wire \$493 ;
+  wire \$494 ;
+  wire \$495 ;
+  wire \$496 ;
+  wire \$497 ;
+  wire \$498 ;
+  wire \$499 ;
   reg [6:0] \$5 ;
   wire \$50 ;
+  wire \$500 ;
+  wire \$501 ;
+  wire \$502 ;
+  wire \$503 ;
+  wire \$504 ;
+  wire \$505 ;
+  wire \$506 ;
+  wire \$507 ;
+  wire \$508 ;
+  wire \$509 ;
   wire [6:0] \$51 ;
+  wire \$510 ;
+  wire \$511 ;
+  wire \$512 ;
+  wire \$513 ;
+  wire \$514 ;
+  wire \$515 ;
+  wire \$516 ;
+  wire \$517 ;
+  wire \$518 ;
+  wire \$519 ;
   wire \$52 ;
+  wire \$520 ;
+  wire \$521 ;
+  wire \$522 ;
+  wire \$523 ;
+  wire \$524 ;
+  wire \$525 ;
+  wire \$526 ;
+  wire \$527 ;
+  wire \$528 ;
+  wire \$529 ;
   wire \$53 ;
+  wire \$530 ;
+  wire \$531 ;
+  wire \$532 ;
+  wire \$533 ;
+  wire \$534 ;
+  wire \$535 ;
+  wire \$536 ;
+  wire \$537 ;
+  wire \$538 ;
+  wire \$539 ;
   wire [6:0] \$54 ;
+  wire \$540 ;
+  wire \$541 ;
+  wire \$542 ;
+  wire \$543 ;
+  wire \$544 ;
+  wire \$545 ;
+  wire \$546 ;
+  wire \$547 ;
+  wire \$548 ;
+  wire \$549 ;
   wire \$55 ;
+  wire \$550 ;
+  wire \$551 ;
+  wire \$552 ;
+  wire \$553 ;
+  wire \$554 ;
+  wire \$555 ;
+  wire \$556 ;
+  wire \$557 ;
+  wire \$558 ;
+  wire [39:0] \$559 ;
   wire \$56 ;
+  wire \$560 ;
+  wire \$561 ;
+  wire \$562 ;
+  wire \$563 ;
+  wire \$564 ;
+  wire \$565 ;
+  wire \$566 ;
+  wire \$567 ;
+  wire \$568 ;
+  wire \$569 ;
   wire \$57 ;
+  wire \$570 ;
+  wire \$571 ;
+  wire [6:0] \$572 ;
+  wire \$573 ;
+  wire \$574 ;
+  wire \$575 ;
+  wire [6:0] \$576 ;
+  wire \$577 ;
+  wire [1:0] \$578 ;
+  wire [1:0] \$579 ;
   wire \$58 ;
+  wire \$580 ;
+  wire \$581 ;
+  wire \$582 ;
+  wire \$583 ;
+  wire \$584 ;
+  reg \$585 ;
+  reg \$586 ;
+  reg [15:0] \$587 ;
+  reg \$588 ;
+  reg \$589 ;
   wire [6:0] \$59 ;
+  reg [15:0] \$590 ;
+  reg [2:0] \$591 ;
+  reg \$592 ;
+  reg [6:0] \$593 ;
+  reg \$594 ;
+  reg \$595 ;
+  reg \$596 ;
+  reg \$597 ;
+  reg \$598 ;
+  reg \$599 ;
   wire [7:0] \$6 ;
   wire \$60 ;
+  reg [54:0] \$600 ;
+  reg [1:0] \$601 ;
+  reg [1:0] \$602 ;
+  reg [39:0] \$603 ;
+  reg [5:0] \$604 ;
+  reg [39:0] \$605 ;
   wire [2:0] \$61 ;
   wire \$62 ;
   wire [1:0] \$63 ;
@@ -25211,11 +26845,11 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   wire \$92 ;
   wire \$93 ;
   wire \$94 ;
-  wire [6:0] \$95 ;
+  wire \$95 ;
   wire \$96 ;
   wire \$97 ;
   wire \$98 ;
-  wire [6:0] \$99 ;
+  wire \$99 ;
   reg at_cds;
   input \bit ;
   wire \bit ;
@@ -25315,9 +26949,9 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   reg word = 1'h0;
   input [1:0] word_count;
   wire [1:0] word_count;
-  input [21:0] words;
-  wire [21:0] words;
-  wire [10:0] \words[0] ;
+  input [23:0] words;
+  wire [23:0] words;
+  wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -25328,7 +26962,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [10:0] \words[1] ;
+  wire \words[0].signed ;
+  wire [11:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -25339,107 +26974,200 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
-  assign \$1  = words[5:0] + 1'h1;
-  assign \$2  = words[5:0] + 7'h7f;
-  assign \$4  = words[5:0] + \$3 ;
-  assign \$6  = words[5:0] + \$5 ;
-  assign \$8  = \$7  + crcs[4:0];
-  assign \$9  = words[5:0] + \$8 [6:0];
-  assign \$10  = | words[5:0];
-  assign \$11  = words[6] ? 2'h2 : 2'h0;
-  assign \$12  = words[5:0] + \$11 ;
-  assign \$13  = ! \$12 ;
-  assign \$15  = words[5:0] + \$14 ;
-  assign \$16  = | \$15 ;
-  assign \$17  = \$13  & \$16 ;
-  assign \$18  = words[16:11] + 1'h1;
-  assign \$19  = words[16:11] + 7'h7f;
-  assign \$21  = words[16:11] + \$20 ;
-  assign \$23  = words[16:11] + \$22 ;
-  assign \$25  = \$24  + crcs[42:38];
-  assign \$26  = words[16:11] + \$25 [6:0];
-  assign \$27  = | words[16:11];
-  assign \$28  = words[17] ? 2'h2 : 2'h0;
-  assign \$29  = words[16:11] + \$28 ;
-  assign \$30  = ! \$29 ;
-  assign \$32  = words[16:11] + \$31 ;
-  assign \$33  = | \$32 ;
-  assign \$34  = \$30  & \$33 ;
-  assign \$35  = ~ slots_full;
-  assign \$36  = sample & \$35 ;
-  assign \$37  = slots + 1'h1;
-  assign \$38  = slots == 16'hfffe;
-  assign \$39  = sample & \bit ;
-  assign \$40  = | words[16:11];
-  assign \$41  = idx + 1'h1;
-  assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
-  assign \$43  = idx != \$42 ;
-  assign \$44  = in_data & \$43 ;
-  assign \$45  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
-  assign \$46  = idx == \$45 ;
-  assign \$47  = in_lc | \$46 ;
-  assign \$48  = word ? w1_lc_end_m1 : w0_lc_end_m1;
-  assign \$49  = idx != \$48 ;
-  assign \$50  = \$47  & \$49 ;
-  assign \$51  = word ? w1_lc_end_m1 : w0_lc_end_m1;
-  assign \$52  = idx == \$51 ;
-  assign \$53  = in_crc | \$52 ;
-  assign \$54  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$55  = idx != \$54 ;
-  assign \$56  = \$53  & \$55 ;
-  assign \$57  = idx != w1_data_end_m1;
-  assign \$58  = in_top & \$57 ;
-  assign \$59  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$60  = idx == \$59 ;
-  assign \$61  = word_count - 1'h1;
-  assign \$62  = word == \$61 ;
-  assign \$63  = word + 1'h1;
-  assign \$64  = ! word;
-  assign \$65  = in_word & \$64 ;
-  assign \$66  = \$65  & in_data;
-  assign \$67  = words[10] & data0[0];
-  assign \$68  = \bit  ^ \$67 ;
-  assign \$69  = ~ words[6];
-  assign \$70  = ! word;
-  assign \$71  = in_word & \$70 ;
-  assign \$72  = idx == words[5:0];
-  assign \$73  = \$71  & \$72 ;
-  assign \$74  = ! word;
-  assign \$75  = in_word & \$74 ;
-  assign \$76  = idx == w0_data_end_p1;
-  assign \$77  = \$75  & \$76 ;
-  assign \$79  = in_word & \$78 ;
-  assign \$80  = \$79  & in_data;
-  assign \$81  = words[21] & data1[0];
-  assign \$82  = \bit  ^ \$81 ;
-  assign \$83  = ~ words[17];
-  assign \$85  = in_word & \$84 ;
-  assign \$86  = idx == words[16:11];
-  assign \$87  = \$85  & \$86 ;
-  assign \$89  = in_word & \$88 ;
-  assign \$90  = idx == w1_data_end_p1;
-  assign \$91  = \$89  & \$90 ;
-  assign \$92  = in_word & in_top;
-  assign \$93  = words[10] & data0[0];
-  assign \$94  = \bit  ^ \$93 ;
+  wire \words[1].signed ;
+  assign \$395  = words[23] & \$394 ;
+  assign \$396  = words[22] & data1[0];
+  assign \$397  = \bit  ^ \$396 ;
+  assign \$398  = \$395  & \$397 ;
+  assign \$399  = ! idx;
+  assign \$400  = words[23] & \$399 ;
+  assign \$401  = words[22] & data1[0];
+  assign \$402  = \bit  ^ \$401 ;
+  assign \$403  = \$400  & \$402 ;
+  assign \$404  = ! idx;
+  assign \$405  = words[23] & \$404 ;
+  assign \$406  = words[22] & data1[0];
+  assign \$407  = \bit  ^ \$406 ;
+  assign \$408  = \$405  & \$407 ;
+  assign \$409  = ! idx;
+  assign \$410  = words[23] & \$409 ;
+  assign \$411  = words[22] & data1[0];
+  assign \$412  = \bit  ^ \$411 ;
+  assign \$413  = \$410  & \$412 ;
+  assign \$414  = ! idx;
+  assign \$415  = words[23] & \$414 ;
+  assign \$416  = words[22] & data1[0];
+  assign \$417  = \bit  ^ \$416 ;
+  assign \$418  = \$415  & \$417 ;
+  assign \$419  = ! idx;
+  assign \$420  = words[23] & \$419 ;
+  assign \$421  = words[22] & data1[0];
+  assign \$422  = \bit  ^ \$421 ;
+  assign \$423  = \$420  & \$422 ;
+  assign \$424  = ! idx;
+  assign \$425  = words[23] & \$424 ;
+  assign \$426  = words[22] & data1[0];
+  assign \$427  = \bit  ^ \$426 ;
+  assign \$428  = \$425  & \$427 ;
+  assign \$429  = ! idx;
+  assign \$430  = words[23] & \$429 ;
+  assign \$431  = words[22] & data1[0];
+  assign \$432  = \bit  ^ \$431 ;
+  assign \$433  = \$430  & \$432 ;
+  assign \$434  = ! idx;
+  assign \$435  = words[23] & \$434 ;
+  assign \$436  = words[22] & data1[0];
+  assign \$437  = \bit  ^ \$436 ;
+  assign \$438  = \$435  & \$437 ;
+  assign \$439  = ! idx;
+  assign \$440  = words[23] & \$439 ;
+  assign \$441  = words[22] & data1[0];
+  assign \$442  = \bit  ^ \$441 ;
+  assign \$443  = \$440  & \$442 ;
+  assign \$444  = ! idx;
+  assign \$445  = words[23] & \$444 ;
+  assign \$446  = words[22] & data1[0];
+  assign \$447  = \bit  ^ \$446 ;
+  assign \$448  = \$445  & \$447 ;
+  assign \$449  = ! idx;
+  assign \$450  = words[23] & \$449 ;
+  assign \$451  = words[22] & data1[0];
+  assign \$452  = \bit  ^ \$451 ;
+  assign \$453  = \$450  & \$452 ;
+  assign \$454  = ! idx;
+  assign \$455  = words[23] & \$454 ;
+  assign \$456  = words[22] & data1[0];
+  assign \$457  = \bit  ^ \$456 ;
+  assign \$458  = \$455  & \$457 ;
+  assign \$459  = ! idx;
+  assign \$460  = words[23] & \$459 ;
+  assign \$461  = words[22] & data1[0];
+  assign \$462  = \bit  ^ \$461 ;
+  assign \$463  = \$460  & \$462 ;
+  assign \$464  = ! idx;
+  assign \$465  = words[23] & \$464 ;
+  assign \$466  = words[22] & data1[0];
+  assign \$467  = \bit  ^ \$466 ;
+  assign \$468  = \$465  & \$467 ;
+  assign \$469  = ! idx;
+  assign \$470  = words[23] & \$469 ;
+  assign \$471  = words[22] & data1[0];
+  assign \$472  = \bit  ^ \$471 ;
+  assign \$473  = \$470  & \$472 ;
+  assign \$474  = ! idx;
+  assign \$475  = words[23] & \$474 ;
+  assign \$476  = words[22] & data1[0];
+  assign \$477  = \bit  ^ \$476 ;
+  assign \$478  = \$475  & \$477 ;
+  assign \$479  = ! idx;
+  assign \$480  = words[23] & \$479 ;
+  assign \$481  = words[22] & data1[0];
+  assign \$482  = \bit  ^ \$481 ;
+  assign \$483  = \$480  & \$482 ;
+  assign \$484  = ! idx;
+  assign \$485  = words[23] & \$484 ;
+  assign \$486  = words[22] & data1[0];
+  assign \$487  = \bit  ^ \$486 ;
+  assign \$488  = \$485  & \$487 ;
+  assign \$489  = ! idx;
+  assign \$490  = words[23] & \$489 ;
+  assign \$491  = words[22] & data1[0];
+  assign \$492  = \bit  ^ \$491 ;
+  assign \$493  = \$490  & \$492 ;
+  assign \$494  = ! idx;
+  assign \$495  = words[23] & \$494 ;
+  assign \$496  = words[22] & data1[0];
+  assign \$497  = \bit  ^ \$496 ;
+  assign \$498  = \$495  & \$497 ;
+  assign \$499  = ! idx;
+  assign \$500  = words[23] & \$499 ;
+  assign \$501  = words[22] & data1[0];
+  assign \$502  = \bit  ^ \$501 ;
+  assign \$503  = \$500  & \$502 ;
+  assign \$504  = ! idx;
+  assign \$505  = words[23] & \$504 ;
+  assign \$506  = words[22] & data1[0];
+  assign \$507  = \bit  ^ \$506 ;
+  assign \$508  = \$505  & \$507 ;
+  assign \$509  = ! idx;
+  assign \$510  = words[23] & \$509 ;
+  assign \$511  = words[22] & data1[0];
+  assign \$512  = \bit  ^ \$511 ;
+  assign \$513  = \$510  & \$512 ;
+  assign \$514  = ! idx;
+  assign \$515  = words[23] & \$514 ;
+  assign \$516  = words[22] & data1[0];
+  assign \$517  = \bit  ^ \$516 ;
+  assign \$518  = \$515  & \$517 ;
+  assign \$519  = ! idx;
+  assign \$520  = words[23] & \$519 ;
+  assign \$521  = words[22] & data1[0];
+  assign \$522  = \bit  ^ \$521 ;
+  assign \$523  = \$520  & \$522 ;
+  assign \$524  = ! idx;
+  assign \$525  = words[23] & \$524 ;
+  assign \$526  = words[22] & data1[0];
+  assign \$527  = \bit  ^ \$526 ;
+  assign \$528  = \$525  & \$527 ;
+  assign \$529  = ! idx;
+  assign \$530  = words[23] & \$529 ;
+  assign \$531  = words[22] & data1[0];
+  assign \$532  = \bit  ^ \$531 ;
+  assign \$533  = \$530  & \$532 ;
+  assign \$534  = ! idx;
+  assign \$535  = words[23] & \$534 ;
+  assign \$536  = words[22] & data1[0];
+  assign \$537  = \bit  ^ \$536 ;
+  assign \$538  = \$535  & \$537 ;
+  assign \$539  = ! idx;
+  assign \$540  = words[23] & \$539 ;
+  assign \$541  = words[22] & data1[0];
+  assign \$542  = \bit  ^ \$541 ;
+  assign \$543  = \$540  & \$542 ;
+  assign \$544  = ! idx;
+  assign \$545  = words[23] & \$544 ;
+  assign \$546  = words[22] & data1[0];
+  assign \$547  = \bit  ^ \$546 ;
+  assign \$548  = \$545  & \$547 ;
+  assign \$549  = ! idx;
+  assign \$550  = words[23] & \$549 ;
+  assign \$551  = words[22] & data1[0];
+  assign \$552  = \bit  ^ \$551 ;
+  assign \$553  = \$550  & \$552 ;
+  assign \$554  = ! idx;
+  assign \$555  = words[23] & \$554 ;
+  assign \$556  = words[22] & data1[0];
+  assign \$557  = \bit  ^ \$556 ;
+  assign \$558  = \$555  & \$557 ;
+  assign \$559  = { data1[38:0], \$358  } | { \$558 , \$553 , \$548 , \$543 , \$538 , \$533 , \$528 , \$523 , \$518 , \$513 , \$508 , \$503 , \$498 , \$493 , \$488 , \$483 , \$478 , \$473 , \$468 , \$463 , \$458 , \$453 , \$448 , \$443 , \$438 , \$433 , \$428 , \$423 , \$418 , \$413 , \$408 , \$403 , \$398 , \$393 , \$388 , \$383 , \$378 , \$373 , \$368 , \$363  };
+  assign \$560  = ~ words[18];
+  assign \$562  = in_word & \$561 ;
+  assign \$563  = idx == words[17:12];
+  assign \$564  = \$562  & \$563 ;
+  assign \$566  = in_word & \$565 ;
+  assign \$567  = idx == w1_data_end_p1;
+  assign \$568  = \$566  & \$567 ;
+  assign \$569  = in_word & in_top;
+  assign \$570  = words[10] & data0[0];
+  assign \$571  = \bit  ^ \$570 ;
   assign lc_load = in_word & in_lc;
-  assign \$95  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$96  = idx == \$95 ;
-  assign \$97  = in_word & \$96 ;
-  assign load = at_cds | \$97 ;
-  assign \$98  = ~ in_crc;
-  assign \cover  = in_word & \$98 ;
+  assign \$572  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$573  = idx == \$572 ;
+  assign \$574  = in_word & \$573 ;
+  assign load = at_cds | \$574 ;
+  assign \$575  = ~ in_crc;
+  assign \cover  = in_word & \$575 ;
   assign check = in_word & in_crc;
-  assign \$99  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$100  = idx == \$99 ;
-  assign last = in_word & \$100 ;
-  assign \$101  = word + 1'h1;
-  assign \$102  = at_cds ? 2'h0 : \$101 ;
-  assign \$103  = ! decoder_fsm_state;
-  assign \$104  = decoder_fsm_state == 1'h1;
-  assign \$105  = decoder_fsm_state == 2'h2;
-  assign \$106  = decoder_fsm_state == 2'h3;
-  assign \$107  = decoder_fsm_state == 3'h4;
+  assign \$576  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$577  = idx == \$576 ;
+  assign last = in_word & \$577 ;
+  assign \$578  = word + 1'h1;
+  assign \$579  = at_cds ? 2'h0 : \$578 ;
+  assign \$580  = ! decoder_fsm_state;
+  assign \$581  = decoder_fsm_state == 1'h1;
+  assign \$582  = decoder_fsm_state == 2'h2;
+  assign \$583  = decoder_fsm_state == 2'h3;
+  assign \$584  = decoder_fsm_state == 3'h4;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -25469,47 +27197,432 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   always @(posedge clk)
     w1_lc_at0 <= \$34 ;
   always @(posedge clk)
-    done <= \$108 ;
+    done <= \$585 ;
   always @(posedge clk)
-    stopped <= \$109 ;
+    stopped <= \$586 ;
   always @(posedge clk)
-    slots <= \$110 ;
+    slots <= \$587 ;
   always @(posedge clk)
-    slots_full <= \$111 ;
+    slots_full <= \$588 ;
   always @(posedge clk)
-    started <= \$112 ;
+    started <= \$589 ;
   always @(posedge clk)
-    start_slot <= \$113 ;
+    start_slot <= \$590 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$114 ;
+    decoder_fsm_state <= \$591 ;
   always @(posedge clk)
-    cds <= \$115 ;
+    cds <= \$592 ;
   always @(posedge clk)
-    idx <= \$116 ;
+    idx <= \$593 ;
   always @(posedge clk)
-    in_data <= \$117 ;
+    in_data <= \$594 ;
   always @(posedge clk)
-    in_lc <= \$118 ;
+    in_lc <= \$595 ;
   always @(posedge clk)
-    in_crc <= \$119 ;
+    in_crc <= \$596 ;
   always @(posedge clk)
-    in_top <= \$120 ;
+    in_top <= \$597 ;
   always @(posedge clk)
-    word <= \$121 ;
+    word <= \$598 ;
   always @(posedge clk)
-    stop_bit <= \$122 ;
+    stop_bit <= \$599 ;
   always @(posedge clk)
-    data0 <= \$123 ;
+    data0 <= \$600 ;
   always @(posedge clk)
-    ne <= \$124 ;
+    ne <= \$601 ;
   always @(posedge clk)
-    nw <= \$125 ;
+    nw <= \$602 ;
   always @(posedge clk)
-    data1 <= \$126 ;
+    data1 <= \$603 ;
   always @(posedge clk)
-    lc <= \$127 ;
+    lc <= \$604 ;
   always @(posedge clk)
-    cpw_top <= \$128 ;
+    cpw_top <= \$605 ;
+  assign \$1  = words[5:0] + 1'h1;
+  assign \$2  = words[5:0] + 7'h7f;
+  assign \$4  = words[5:0] + \$3 ;
+  assign \$6  = words[5:0] + \$5 ;
+  assign \$8  = \$7  + crcs[4:0];
+  assign \$9  = words[5:0] + \$8 [6:0];
+  assign \$10  = | words[5:0];
+  assign \$11  = words[6] ? 2'h2 : 2'h0;
+  assign \$12  = words[5:0] + \$11 ;
+  assign \$13  = ! \$12 ;
+  assign \$15  = words[5:0] + \$14 ;
+  assign \$16  = | \$15 ;
+  assign \$17  = \$13  & \$16 ;
+  assign \$18  = words[17:12] + 1'h1;
+  assign \$19  = words[17:12] + 7'h7f;
+  assign \$21  = words[17:12] + \$20 ;
+  assign \$23  = words[17:12] + \$22 ;
+  assign \$25  = \$24  + crcs[42:38];
+  assign \$26  = words[17:12] + \$25 [6:0];
+  assign \$27  = | words[17:12];
+  assign \$28  = words[18] ? 2'h2 : 2'h0;
+  assign \$29  = words[17:12] + \$28 ;
+  assign \$30  = ! \$29 ;
+  assign \$32  = words[17:12] + \$31 ;
+  assign \$33  = | \$32 ;
+  assign \$34  = \$30  & \$33 ;
+  assign \$35  = ~ slots_full;
+  assign \$36  = sample & \$35 ;
+  assign \$37  = slots + 1'h1;
+  assign \$38  = slots == 16'hfffe;
+  assign \$39  = sample & \bit ;
+  assign \$40  = | words[17:12];
+  assign \$41  = idx + 1'h1;
+  assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
+  assign \$43  = idx != \$42 ;
+  assign \$44  = in_data & \$43 ;
+  assign \$45  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
+  assign \$46  = idx == \$45 ;
+  assign \$47  = in_lc | \$46 ;
+  assign \$48  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$49  = idx != \$48 ;
+  assign \$50  = \$47  & \$49 ;
+  assign \$51  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$52  = idx == \$51 ;
+  assign \$53  = in_crc | \$52 ;
+  assign \$54  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$55  = idx != \$54 ;
+  assign \$56  = \$53  & \$55 ;
+  assign \$57  = idx != w1_data_end_m1;
+  assign \$58  = in_top & \$57 ;
+  assign \$59  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$60  = idx == \$59 ;
+  assign \$61  = word_count - 1'h1;
+  assign \$62  = word == \$61 ;
+  assign \$63  = word + 1'h1;
+  assign \$64  = ! word;
+  assign \$65  = in_word & \$64 ;
+  assign \$66  = \$65  & in_data;
+  assign \$67  = words[10] & data0[0];
+  assign \$68  = \bit  ^ \$67 ;
+  assign \$69  = ! idx;
+  assign \$70  = words[11] & \$69 ;
+  assign \$71  = words[10] & data0[0];
+  assign \$72  = \bit  ^ \$71 ;
+  assign \$73  = \$70  & \$72 ;
+  assign \$74  = ! idx;
+  assign \$75  = words[11] & \$74 ;
+  assign \$76  = words[10] & data0[0];
+  assign \$77  = \bit  ^ \$76 ;
+  assign \$78  = \$75  & \$77 ;
+  assign \$79  = ! idx;
+  assign \$80  = words[11] & \$79 ;
+  assign \$81  = words[10] & data0[0];
+  assign \$82  = \bit  ^ \$81 ;
+  assign \$83  = \$80  & \$82 ;
+  assign \$84  = ! idx;
+  assign \$85  = words[11] & \$84 ;
+  assign \$86  = words[10] & data0[0];
+  assign \$87  = \bit  ^ \$86 ;
+  assign \$88  = \$85  & \$87 ;
+  assign \$89  = ! idx;
+  assign \$90  = words[11] & \$89 ;
+  assign \$91  = words[10] & data0[0];
+  assign \$92  = \bit  ^ \$91 ;
+  assign \$93  = \$90  & \$92 ;
+  assign \$94  = ! idx;
+  assign \$95  = words[11] & \$94 ;
+  assign \$96  = words[10] & data0[0];
+  assign \$97  = \bit  ^ \$96 ;
+  assign \$98  = \$95  & \$97 ;
+  assign \$99  = ! idx;
+  assign \$100  = words[11] & \$99 ;
+  assign \$101  = words[10] & data0[0];
+  assign \$102  = \bit  ^ \$101 ;
+  assign \$103  = \$100  & \$102 ;
+  assign \$104  = ! idx;
+  assign \$105  = words[11] & \$104 ;
+  assign \$106  = words[10] & data0[0];
+  assign \$107  = \bit  ^ \$106 ;
+  assign \$108  = \$105  & \$107 ;
+  assign \$109  = ! idx;
+  assign \$110  = words[11] & \$109 ;
+  assign \$111  = words[10] & data0[0];
+  assign \$112  = \bit  ^ \$111 ;
+  assign \$113  = \$110  & \$112 ;
+  assign \$114  = ! idx;
+  assign \$115  = words[11] & \$114 ;
+  assign \$116  = words[10] & data0[0];
+  assign \$117  = \bit  ^ \$116 ;
+  assign \$118  = \$115  & \$117 ;
+  assign \$119  = ! idx;
+  assign \$120  = words[11] & \$119 ;
+  assign \$121  = words[10] & data0[0];
+  assign \$122  = \bit  ^ \$121 ;
+  assign \$123  = \$120  & \$122 ;
+  assign \$124  = ! idx;
+  assign \$125  = words[11] & \$124 ;
+  assign \$126  = words[10] & data0[0];
+  assign \$127  = \bit  ^ \$126 ;
+  assign \$128  = \$125  & \$127 ;
+  assign \$129  = ! idx;
+  assign \$130  = words[11] & \$129 ;
+  assign \$131  = words[10] & data0[0];
+  assign \$132  = \bit  ^ \$131 ;
+  assign \$133  = \$130  & \$132 ;
+  assign \$134  = ! idx;
+  assign \$135  = words[11] & \$134 ;
+  assign \$136  = words[10] & data0[0];
+  assign \$137  = \bit  ^ \$136 ;
+  assign \$138  = \$135  & \$137 ;
+  assign \$139  = ! idx;
+  assign \$140  = words[11] & \$139 ;
+  assign \$141  = words[10] & data0[0];
+  assign \$142  = \bit  ^ \$141 ;
+  assign \$143  = \$140  & \$142 ;
+  assign \$144  = ! idx;
+  assign \$145  = words[11] & \$144 ;
+  assign \$146  = words[10] & data0[0];
+  assign \$147  = \bit  ^ \$146 ;
+  assign \$148  = \$145  & \$147 ;
+  assign \$149  = ! idx;
+  assign \$150  = words[11] & \$149 ;
+  assign \$151  = words[10] & data0[0];
+  assign \$152  = \bit  ^ \$151 ;
+  assign \$153  = \$150  & \$152 ;
+  assign \$154  = ! idx;
+  assign \$155  = words[11] & \$154 ;
+  assign \$156  = words[10] & data0[0];
+  assign \$157  = \bit  ^ \$156 ;
+  assign \$158  = \$155  & \$157 ;
+  assign \$159  = ! idx;
+  assign \$160  = words[11] & \$159 ;
+  assign \$161  = words[10] & data0[0];
+  assign \$162  = \bit  ^ \$161 ;
+  assign \$163  = \$160  & \$162 ;
+  assign \$164  = ! idx;
+  assign \$165  = words[11] & \$164 ;
+  assign \$166  = words[10] & data0[0];
+  assign \$167  = \bit  ^ \$166 ;
+  assign \$168  = \$165  & \$167 ;
+  assign \$169  = ! idx;
+  assign \$170  = words[11] & \$169 ;
+  assign \$171  = words[10] & data0[0];
+  assign \$172  = \bit  ^ \$171 ;
+  assign \$173  = \$170  & \$172 ;
+  assign \$174  = ! idx;
+  assign \$175  = words[11] & \$174 ;
+  assign \$176  = words[10] & data0[0];
+  assign \$177  = \bit  ^ \$176 ;
+  assign \$178  = \$175  & \$177 ;
+  assign \$179  = ! idx;
+  assign \$180  = words[11] & \$179 ;
+  assign \$181  = words[10] & data0[0];
+  assign \$182  = \bit  ^ \$181 ;
+  assign \$183  = \$180  & \$182 ;
+  assign \$184  = ! idx;
+  assign \$185  = words[11] & \$184 ;
+  assign \$186  = words[10] & data0[0];
+  assign \$187  = \bit  ^ \$186 ;
+  assign \$188  = \$185  & \$187 ;
+  assign \$189  = ! idx;
+  assign \$190  = words[11] & \$189 ;
+  assign \$191  = words[10] & data0[0];
+  assign \$192  = \bit  ^ \$191 ;
+  assign \$193  = \$190  & \$192 ;
+  assign \$194  = ! idx;
+  assign \$195  = words[11] & \$194 ;
+  assign \$196  = words[10] & data0[0];
+  assign \$197  = \bit  ^ \$196 ;
+  assign \$198  = \$195  & \$197 ;
+  assign \$199  = ! idx;
+  assign \$200  = words[11] & \$199 ;
+  assign \$201  = words[10] & data0[0];
+  assign \$202  = \bit  ^ \$201 ;
+  assign \$203  = \$200  & \$202 ;
+  assign \$204  = ! idx;
+  assign \$205  = words[11] & \$204 ;
+  assign \$206  = words[10] & data0[0];
+  assign \$207  = \bit  ^ \$206 ;
+  assign \$208  = \$205  & \$207 ;
+  assign \$209  = ! idx;
+  assign \$210  = words[11] & \$209 ;
+  assign \$211  = words[10] & data0[0];
+  assign \$212  = \bit  ^ \$211 ;
+  assign \$213  = \$210  & \$212 ;
+  assign \$214  = ! idx;
+  assign \$215  = words[11] & \$214 ;
+  assign \$216  = words[10] & data0[0];
+  assign \$217  = \bit  ^ \$216 ;
+  assign \$218  = \$215  & \$217 ;
+  assign \$219  = ! idx;
+  assign \$220  = words[11] & \$219 ;
+  assign \$221  = words[10] & data0[0];
+  assign \$222  = \bit  ^ \$221 ;
+  assign \$223  = \$220  & \$222 ;
+  assign \$224  = ! idx;
+  assign \$225  = words[11] & \$224 ;
+  assign \$226  = words[10] & data0[0];
+  assign \$227  = \bit  ^ \$226 ;
+  assign \$228  = \$225  & \$227 ;
+  assign \$229  = ! idx;
+  assign \$230  = words[11] & \$229 ;
+  assign \$231  = words[10] & data0[0];
+  assign \$232  = \bit  ^ \$231 ;
+  assign \$233  = \$230  & \$232 ;
+  assign \$234  = ! idx;
+  assign \$235  = words[11] & \$234 ;
+  assign \$236  = words[10] & data0[0];
+  assign \$237  = \bit  ^ \$236 ;
+  assign \$238  = \$235  & \$237 ;
+  assign \$239  = ! idx;
+  assign \$240  = words[11] & \$239 ;
+  assign \$241  = words[10] & data0[0];
+  assign \$242  = \bit  ^ \$241 ;
+  assign \$243  = \$240  & \$242 ;
+  assign \$244  = ! idx;
+  assign \$245  = words[11] & \$244 ;
+  assign \$246  = words[10] & data0[0];
+  assign \$247  = \bit  ^ \$246 ;
+  assign \$248  = \$245  & \$247 ;
+  assign \$249  = ! idx;
+  assign \$250  = words[11] & \$249 ;
+  assign \$251  = words[10] & data0[0];
+  assign \$252  = \bit  ^ \$251 ;
+  assign \$253  = \$250  & \$252 ;
+  assign \$254  = ! idx;
+  assign \$255  = words[11] & \$254 ;
+  assign \$256  = words[10] & data0[0];
+  assign \$257  = \bit  ^ \$256 ;
+  assign \$258  = \$255  & \$257 ;
+  assign \$259  = ! idx;
+  assign \$260  = words[11] & \$259 ;
+  assign \$261  = words[10] & data0[0];
+  assign \$262  = \bit  ^ \$261 ;
+  assign \$263  = \$260  & \$262 ;
+  assign \$264  = ! idx;
+  assign \$265  = words[11] & \$264 ;
+  assign \$266  = words[10] & data0[0];
+  assign \$267  = \bit  ^ \$266 ;
+  assign \$268  = \$265  & \$267 ;
+  assign \$269  = ! idx;
+  assign \$270  = words[11] & \$269 ;
+  assign \$271  = words[10] & data0[0];
+  assign \$272  = \bit  ^ \$271 ;
+  assign \$273  = \$270  & \$272 ;
+  assign \$274  = ! idx;
+  assign \$275  = words[11] & \$274 ;
+  assign \$276  = words[10] & data0[0];
+  assign \$277  = \bit  ^ \$276 ;
+  assign \$278  = \$275  & \$277 ;
+  assign \$279  = ! idx;
+  assign \$280  = words[11] & \$279 ;
+  assign \$281  = words[10] & data0[0];
+  assign \$282  = \bit  ^ \$281 ;
+  assign \$283  = \$280  & \$282 ;
+  assign \$284  = ! idx;
+  assign \$285  = words[11] & \$284 ;
+  assign \$286  = words[10] & data0[0];
+  assign \$287  = \bit  ^ \$286 ;
+  assign \$288  = \$285  & \$287 ;
+  assign \$289  = ! idx;
+  assign \$290  = words[11] & \$289 ;
+  assign \$291  = words[10] & data0[0];
+  assign \$292  = \bit  ^ \$291 ;
+  assign \$293  = \$290  & \$292 ;
+  assign \$294  = ! idx;
+  assign \$295  = words[11] & \$294 ;
+  assign \$296  = words[10] & data0[0];
+  assign \$297  = \bit  ^ \$296 ;
+  assign \$298  = \$295  & \$297 ;
+  assign \$299  = ! idx;
+  assign \$300  = words[11] & \$299 ;
+  assign \$301  = words[10] & data0[0];
+  assign \$302  = \bit  ^ \$301 ;
+  assign \$303  = \$300  & \$302 ;
+  assign \$304  = ! idx;
+  assign \$305  = words[11] & \$304 ;
+  assign \$306  = words[10] & data0[0];
+  assign \$307  = \bit  ^ \$306 ;
+  assign \$308  = \$305  & \$307 ;
+  assign \$309  = ! idx;
+  assign \$310  = words[11] & \$309 ;
+  assign \$311  = words[10] & data0[0];
+  assign \$312  = \bit  ^ \$311 ;
+  assign \$313  = \$310  & \$312 ;
+  assign \$314  = ! idx;
+  assign \$315  = words[11] & \$314 ;
+  assign \$316  = words[10] & data0[0];
+  assign \$317  = \bit  ^ \$316 ;
+  assign \$318  = \$315  & \$317 ;
+  assign \$319  = ! idx;
+  assign \$320  = words[11] & \$319 ;
+  assign \$321  = words[10] & data0[0];
+  assign \$322  = \bit  ^ \$321 ;
+  assign \$323  = \$320  & \$322 ;
+  assign \$324  = ! idx;
+  assign \$325  = words[11] & \$324 ;
+  assign \$326  = words[10] & data0[0];
+  assign \$327  = \bit  ^ \$326 ;
+  assign \$328  = \$325  & \$327 ;
+  assign \$329  = ! idx;
+  assign \$330  = words[11] & \$329 ;
+  assign \$331  = words[10] & data0[0];
+  assign \$332  = \bit  ^ \$331 ;
+  assign \$333  = \$330  & \$332 ;
+  assign \$334  = ! idx;
+  assign \$335  = words[11] & \$334 ;
+  assign \$336  = words[10] & data0[0];
+  assign \$337  = \bit  ^ \$336 ;
+  assign \$338  = \$335  & \$337 ;
+  assign \$339  = ! idx;
+  assign \$340  = words[11] & \$339 ;
+  assign \$341  = words[10] & data0[0];
+  assign \$342  = \bit  ^ \$341 ;
+  assign \$343  = \$340  & \$342 ;
+  assign \$344  = { data0[53:0], \$68  } | { \$343 , \$338 , \$333 , \$328 , \$323 , \$318 , \$313 , \$308 , \$303 , \$298 , \$293 , \$288 , \$283 , \$278 , \$273 , \$268 , \$263 , \$258 , \$253 , \$248 , \$243 , \$238 , \$233 , \$228 , \$223 , \$218 , \$213 , \$208 , \$203 , \$198 , \$193 , \$188 , \$183 , \$178 , \$173 , \$168 , \$163 , \$158 , \$153 , \$148 , \$143 , \$138 , \$133 , \$128 , \$123 , \$118 , \$113 , \$108 , \$103 , \$98 , \$93 , \$88 , \$83 , \$78 , \$73  };
+  assign \$345  = ~ words[6];
+  assign \$346  = ! word;
+  assign \$347  = in_word & \$346 ;
+  assign \$348  = idx == words[5:0];
+  assign \$349  = \$347  & \$348 ;
+  assign \$350  = ! word;
+  assign \$351  = in_word & \$350 ;
+  assign \$352  = idx == w0_data_end_p1;
+  assign \$353  = \$351  & \$352 ;
+  assign \$355  = in_word & \$354 ;
+  assign \$356  = \$355  & in_data;
+  assign \$357  = words[22] & data1[0];
+  assign \$358  = \bit  ^ \$357 ;
+  assign \$359  = ! idx;
+  assign \$360  = words[23] & \$359 ;
+  assign \$361  = words[22] & data1[0];
+  assign \$362  = \bit  ^ \$361 ;
+  assign \$363  = \$360  & \$362 ;
+  assign \$364  = ! idx;
+  assign \$365  = words[23] & \$364 ;
+  assign \$366  = words[22] & data1[0];
+  assign \$367  = \bit  ^ \$366 ;
+  assign \$368  = \$365  & \$367 ;
+  assign \$369  = ! idx;
+  assign \$370  = words[23] & \$369 ;
+  assign \$371  = words[22] & data1[0];
+  assign \$372  = \bit  ^ \$371 ;
+  assign \$373  = \$370  & \$372 ;
+  assign \$374  = ! idx;
+  assign \$375  = words[23] & \$374 ;
+  assign \$376  = words[22] & data1[0];
+  assign \$377  = \bit  ^ \$376 ;
+  assign \$378  = \$375  & \$377 ;
+  assign \$379  = ! idx;
+  assign \$380  = words[23] & \$379 ;
+  assign \$381  = words[22] & data1[0];
+  assign \$382  = \bit  ^ \$381 ;
+  assign \$383  = \$380  & \$382 ;
+  assign \$384  = ! idx;
+  assign \$385  = words[23] & \$384 ;
+  assign \$386  = words[22] & data1[0];
+  assign \$387  = \bit  ^ \$386 ;
+  assign \$388  = \$385  & \$387 ;
+  assign \$389  = ! idx;
+  assign \$390  = words[23] & \$389 ;
+  assign \$391  = words[22] & data1[0];
+  assign \$392  = \bit  ^ \$391 ;
+  assign \$393  = \$390  & \$392 ;
+  assign \$394  = ! idx;
   \biss_master_wb.ch1.core.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
@@ -25519,11 +27632,453 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     .index(word),
     .last(last),
     .load(load),
-    .load_index(\$102 [0]),
+    .load_index(\$579 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst)
   );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$585  = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$585  = 1'h1;
+              end
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$585  = 1'h0;
+    end
+    if (rst) begin
+      \$585  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$586  = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$586  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$586  = 1'h0;
+    end
+    if (rst) begin
+      \$586  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$587  = slots;
+    if (\$36 ) begin
+      \$587  = \$37 [15:0];
+    end
+    if (receiver_clear) begin
+      \$587  = 16'h0000;
+    end
+    if (rst) begin
+      \$587  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$588  = slots_full;
+    if (\$36 ) begin
+      \$588  = \$38 ;
+    end
+    if (receiver_clear) begin
+      \$588  = 1'h0;
+    end
+    if (rst) begin
+      \$588  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$589  = started;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$589  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$589  = 1'h0;
+    end
+    if (rst) begin
+      \$589  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$590  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$590  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$590  = 16'h0000;
+    end
+    if (rst) begin
+      \$590  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$591  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (\$39 ) begin
+            \$591  = 3'h1;
+          end
+      3'h1:
+          if (sample) begin
+            \$591  = 3'h2;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
+              if (\$62 ) begin
+                \$591  = 3'h3;
+              end
+            end
+          end
+      3'h3:
+          if (sample) begin
+            \$591  = 3'h4;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$591  = 3'h0;
+    end
+    if (rst) begin
+      \$591  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$592  = cds;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$592  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$592  = 1'h0;
+    end
+    if (rst) begin
+      \$592  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$593  = idx;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$593  = 7'h00;
+          end
+      3'h2:
+          if (sample) begin
+            \$593  = \$41 [6:0];
+            if (\$60 ) begin
+              \$593  = 7'h00;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$593  = 7'h00;
+    end
+    if (rst) begin
+      \$593  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$594  = in_data;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$594  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$594  = \$44 ;
+            if (\$60 ) begin
+              \$594  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$594  = 1'h0;
+    end
+    if (rst) begin
+      \$594  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$595  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$595  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$595  = \$50 ;
+            if (\$60 ) begin
+              \$595  = w1_lc_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$595  = 1'h0;
+    end
+    if (rst) begin
+      \$595  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$596  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$596  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$596  = \$56 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$596  = 1'h0;
+    end
+    if (rst) begin
+      \$596  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$597  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$597  = \$40 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$597  = \$58 ;
+            if (\$60 ) begin
+              \$597  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$597  = 1'h0;
+    end
+    if (rst) begin
+      \$597  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$598  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$598  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            if (\$60 ) begin
+              (* full_case = 32'd1 *)
+              if (\$62 ) begin
+              end else begin
+                \$598  = \$63 [0];
+              end
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$598  = 1'h0;
+    end
+    if (rst) begin
+      \$598  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$599  = stop_bit;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$599  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$599  = 1'h0;
+    end
+    if (rst) begin
+      \$599  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$600  = data0;
+    if (\$66 ) begin
+      \$600  = \$344 ;
+    end
+    if (receiver_clear) begin
+      \$600  = 55'h00000000000000;
+    end
+    if (rst) begin
+      \$600  = 55'h00000000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$601  = ne;
+    if (\$345 ) begin
+      \$601 [0] = 1'h1;
+    end else if (\$349 ) begin
+      \$601 [0] = \bit ;
+    end
+    if (\$560 ) begin
+      \$601 [1] = 1'h1;
+    end else if (\$564 ) begin
+      \$601 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$601  = 2'h0;
+    end
+    if (rst) begin
+      \$601  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$602  = nw;
+    if (\$345 ) begin
+      \$602 [0] = 1'h1;
+    end else if (\$349 ) begin
+    end else if (\$353 ) begin
+      \$602 [0] = \bit ;
+    end
+    if (\$560 ) begin
+      \$602 [1] = 1'h1;
+    end else if (\$564 ) begin
+    end else if (\$568 ) begin
+      \$602 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$602  = 2'h0;
+    end
+    if (rst) begin
+      \$602  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$603  = data1;
+    if (\$356 ) begin
+      \$603  = \$559 ;
+    end
+    if (receiver_clear) begin
+      \$603  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$603  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$604  = lc;
+    if (lc_load) begin
+      \$604  = { lc[4:0], \bit  };
+    end
+    if (receiver_clear) begin
+      \$604  = 6'h00;
+    end
+    if (rst) begin
+      \$604  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    \$605  = cpw_top;
+    if (\$569 ) begin
+      \$605  = { cpw_top[38:0], \$571  };
+    end
+    if (receiver_clear) begin
+      \$605  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$605  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    at_cds = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          at_cds = sample;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    in_word = 1'h0;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          in_word = sample;
+    endcase
+  end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     (* full_case = 32'd1 *)
@@ -25579,7 +28134,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[17])
+    casez (words[18])
       1'h0:
           \$20  = 7'h7f;
       1'h1:
@@ -25589,7 +28144,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18:17])
+    casez (words[19:18])
       2'h0:
           \$22  = 7'h7f;
       2'h1:
@@ -25603,7 +28158,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18:17])
+    casez (words[19:18])
       2'h0:
           \$24  = 7'h7f;
       2'h1:
@@ -25617,7 +28172,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18:17])
+    casez (words[19:18])
       2'h0:
           \$31  = 4'h0;
       2'h1:
@@ -25628,466 +28183,26 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
           \$31  = 4'h8;
     endcase
   end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$108  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$108  = 1'h1;
-              end
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$108  = 1'h0;
-    end
-    if (rst) begin
-      \$108  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$109  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$109  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$109  = 1'h0;
-    end
-    if (rst) begin
-      \$109  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$110  = slots;
-    if (\$36 ) begin
-      \$110  = \$37 [15:0];
-    end
-    if (receiver_clear) begin
-      \$110  = 16'h0000;
-    end
-    if (rst) begin
-      \$110  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$111  = slots_full;
-    if (\$36 ) begin
-      \$111  = \$38 ;
-    end
-    if (receiver_clear) begin
-      \$111  = 1'h0;
-    end
-    if (rst) begin
-      \$111  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$112  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$112  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$112  = 1'h0;
-    end
-    if (rst) begin
-      \$112  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$113  = start_slot;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$113  = slots;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$113  = 16'h0000;
-    end
-    if (rst) begin
-      \$113  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$114  = decoder_fsm_state;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$114  = 3'h1;
-          end
-      3'h1:
-          if (sample) begin
-            \$114  = 3'h2;
-          end
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$114  = 3'h3;
-              end
-            end
-          end
-      3'h3:
-          if (sample) begin
-            \$114  = 3'h4;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$114  = 3'h0;
-    end
-    if (rst) begin
-      \$114  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$115  = cds;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$115  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$115  = 1'h0;
-    end
-    if (rst) begin
-      \$115  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$116  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$116  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$116  = \$41 [6:0];
-            if (\$60 ) begin
-              \$116  = 7'h00;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$116  = 7'h00;
-    end
-    if (rst) begin
-      \$116  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$117  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$117  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$117  = \$44 ;
-            if (\$60 ) begin
-              \$117  = w1_data_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$117  = 1'h0;
-    end
-    if (rst) begin
-      \$117  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$118  = in_lc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$118  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$118  = \$50 ;
-            if (\$60 ) begin
-              \$118  = w1_lc_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$118  = 1'h0;
-    end
-    if (rst) begin
-      \$118  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$119  = in_crc;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$119  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            \$119  = \$56 ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$119  = 1'h0;
-    end
-    if (rst) begin
-      \$119  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$120  = in_top;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$120  = \$40 ;
-          end
-      3'h2:
-          if (sample) begin
-            \$120  = \$58 ;
-            if (\$60 ) begin
-              \$120  = 1'h0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$120  = 1'h0;
-    end
-    if (rst) begin
-      \$120  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$121  = word;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$121  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              (* full_case = 32'd1 *)
-              if (\$62 ) begin
-              end else begin
-                \$121  = \$63 [0];
-              end
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$121  = 1'h0;
-    end
-    if (rst) begin
-      \$121  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$122  = stop_bit;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$122  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$122  = 1'h0;
-    end
-    if (rst) begin
-      \$122  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$123  = data0;
-    if (\$66 ) begin
-      \$123  = { data0[53:0], \$68  };
-    end
-    if (receiver_clear) begin
-      \$123  = 55'h00000000000000;
-    end
-    if (rst) begin
-      \$123  = 55'h00000000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$124  = ne;
-    if (\$69 ) begin
-      \$124 [0] = 1'h1;
-    end else if (\$73 ) begin
-      \$124 [0] = \bit ;
-    end
-    if (\$83 ) begin
-      \$124 [1] = 1'h1;
-    end else if (\$87 ) begin
-      \$124 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$124  = 2'h0;
-    end
-    if (rst) begin
-      \$124  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$125  = nw;
-    if (\$69 ) begin
-      \$125 [0] = 1'h1;
-    end else if (\$73 ) begin
-    end else if (\$77 ) begin
-      \$125 [0] = \bit ;
-    end
-    if (\$83 ) begin
-      \$125 [1] = 1'h1;
-    end else if (\$87 ) begin
-    end else if (\$91 ) begin
-      \$125 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$125  = 2'h0;
-    end
-    if (rst) begin
-      \$125  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$126  = data1;
-    if (\$80 ) begin
-      \$126  = { data1[38:0], \$82  };
-    end
-    if (receiver_clear) begin
-      \$126  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$126  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$127  = lc;
-    if (lc_load) begin
-      \$127  = { lc[4:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$127  = 6'h00;
-    end
-    if (rst) begin
-      \$127  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$128  = cpw_top;
-    if (\$92 ) begin
-      \$128  = { cpw_top[38:0], \$94  };
-    end
-    if (receiver_clear) begin
-      \$128  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$128  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    at_cds = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          at_cds = sample;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    in_word = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          in_word = sample;
-    endcase
-  end
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$47  = crcs;
   assign \bit$52  = \bit ;
   assign ok = crc_ok;
   assign index = word;
-  assign load_index = \$102 [0];
-  assign \words[0]  = words[10:0];
+  assign load_index = \$579 [0];
+  assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
   assign \words[0].gray  = words[10];
-  assign \words[1]  = words[21:11];
-  assign \words[1].data_bits  = words[16:11];
-  assign \words[1].nenw  = words[17];
-  assign \words[1].lc  = words[18];
-  assign \words[1].crc  = words[20:19];
-  assign \words[1].gray  = words[21];
+  assign \words[0].signed  = words[11];
+  assign \words[1]  = words[23:12];
+  assign \words[1].data_bits  = words[17:12];
+  assign \words[1].nenw  = words[18];
+  assign \words[1].lc  = words[19];
+  assign \words[1].crc  = words[21:20];
+  assign \words[1].gray  = words[22];
+  assign \words[1].signed  = words[23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -26108,9 +28223,9 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   assign \crcs$47[1].poly  = crcs[58:43];
   assign \crcs$47[1].start  = crcs[74:59];
   assign \crcs$47[1].inverted  = crcs[75];
-  assign \$78  = word;
-  assign \$84  = word;
-  assign \$88  = word;
+  assign \$354  = word;
+  assign \$561  = word;
+  assign \$565  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -27276,9 +29391,9 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, ris
   wire w1_enable;
   reg [7:0] word0_len = 8'h00;
   reg [7:0] word1_len = 8'h00;
-  input [21:0] words;
-  wire [21:0] words;
-  wire [10:0] \words[0] ;
+  input [23:0] words;
+  wire [23:0] words;
+  wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -27289,7 +29404,8 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, ris
   wire \words[0].gray ;
   wire \words[0].lc ;
   wire \words[0].nenw ;
-  wire [10:0] \words[1] ;
+  wire \words[0].signed ;
+  wire [11:0] \words[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -27300,6 +29416,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, ris
   wire \words[1].gray ;
   wire \words[1].lc ;
   wire \words[1].nenw ;
+  wire \words[1].signed ;
   assign \$2  = \$1  + crcs[4:0];
   assign \$3  = words[5:0] + \$2 [7:0];
   assign \$4  = w1_enable ? word1_len : 8'h00;
@@ -27310,7 +29427,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, ris
   assign \$9  = ~ clear;
   assign \$10  = \$8  & \$9 ;
   assign \$12  = \$11  + crcs[42:38];
-  assign \$13  = words[16:11] + \$12 [7:0];
+  assign \$13  = words[17:12] + \$12 [7:0];
   always @(posedge clk)
     word0_len <= \$14 ;
   always @(posedge clk)
@@ -27340,7 +29457,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, ris
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18:17])
+    casez (words[19:18])
       2'h0:
           \$11  = 8'h00;
       2'h1:
@@ -27393,18 +29510,20 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, ris
       \$19  = 8'h00;
     end
   end
-  assign \words[0]  = words[10:0];
+  assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
   assign \words[0].lc  = words[7];
   assign \words[0].crc  = words[9:8];
   assign \words[0].gray  = words[10];
-  assign \words[1]  = words[21:11];
-  assign \words[1].data_bits  = words[16:11];
-  assign \words[1].nenw  = words[17];
-  assign \words[1].lc  = words[18];
-  assign \words[1].crc  = words[20:19];
-  assign \words[1].gray  = words[21];
+  assign \words[0].signed  = words[11];
+  assign \words[1]  = words[23:12];
+  assign \words[1].data_bits  = words[17:12];
+  assign \words[1].nenw  = words[18];
+  assign \words[1].lc  = words[19];
+  assign \words[1].crc  = words[21:20];
+  assign \words[1].gray  = words[22];
+  assign \words[1].signed  = words[23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -30806,7 +32925,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$5117$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6091$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -30848,8 +32967,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5117$0 ;
-  wire \port$5117$0 ;
+  input \port$6091$0 ;
+  wire \port$6091$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -30863,9 +32982,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5117$0  };
-  assign \$2  = { lc[4:0], \port$5117$0  } == last;
-  assign \$3  = { lc[4:0], \port$5117$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6091$0  };
+  assign \$2  = { lc[4:0], \port$6091$0  } == last;
+  assign \$3  = { lc[4:0], \port$6091$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -30975,7 +33094,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5117$0  };
+  assign lc_next = { lc[4:0], \port$6091$0  };
   assign zero = is_zero;
 endmodule
 
@@ -31531,7 +33650,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3466$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4432$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
   wire \$1 ;
@@ -31573,8 +33692,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3466$0 , lc_
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [252:0] cfg;
-  wire [252:0] cfg;
+  input [254:0] cfg;
+  wire [254:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [11:0] \cfg.delay_limit ;
@@ -31587,7 +33706,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3466$0 , lc_
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
   wire [23:0] \cfg.timeout_limit ;
-  wire [10:0] \cfg.w0 ;
+  wire [11:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -31598,12 +33717,13 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3466$0 , lc_
   wire \cfg.w0.gray ;
   wire \cfg.w0.lc ;
   wire \cfg.w0.nenw ;
+  wire \cfg.w0.signed ;
   wire [37:0] \cfg.w0_crc ;
   wire \cfg.w0_crc.inverted ;
   wire [15:0] \cfg.w0_crc.poly ;
   wire [15:0] \cfg.w0_crc.start ;
   wire [4:0] \cfg.w0_crc.width ;
-  wire [10:0] \cfg.w1 ;
+  wire [11:0] \cfg.w1 ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
@@ -31614,6 +33734,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3466$0 , lc_
   wire \cfg.w1.gray ;
   wire \cfg.w1.lc ;
   wire \cfg.w1.nenw ;
+  wire \cfg.w1.signed ;
   wire [37:0] \cfg.w1_crc ;
   wire \cfg.w1_crc.inverted ;
   wire [15:0] \cfg.w1_crc.poly ;
@@ -31683,8 +33804,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3466$0 , lc_
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$3466$0 ;
-  wire \port$3466$0 ;
+  output \port$4432$0 ;
+  wire \port$4432$0 ;
   output report;
   wire report;
   input report_frame;
@@ -31714,9 +33835,9 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3466$0 , lc_
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[194];
+  assign \$1  = ~ cfg[195];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[194] & cfg[202];
+  assign \$3  = cfg[195] & cfg[203];
   assign \$4  = cfg[152] | \$3 ;
   assign \$5  = report_frame & \$4 ;
   assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
@@ -31724,7 +33845,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3466$0 , lc_
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[244] & cfg[194];
+  assign \$7  = cfg[246] & cfg[195];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
@@ -31743,7 +33864,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3466$0 , lc_
   assign \$19  = crc_ok[0] & \$2 ;
   assign \$20  = ~ \$19 ;
   assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[194] & cfg[202];
+  assign \$22  = cfg[195] & cfg[203];
   assign \$23  = cfg[152] | \$22 ;
   assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
   assign \$25  = \$23  & \$24 ;
@@ -31790,7 +33911,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3466$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$3466$0  = \$2 ;
+  assign \port$4432$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -31801,29 +33922,31 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$3466$0 , lc_
   assign \cfg.quiet_time  = cfg[136:125];
   assign \cfg.noise_limit  = cfg[140:137];
   assign \cfg.delay_tolerance  = cfg[144:141];
-  assign \cfg.w0  = cfg[155:145];
+  assign \cfg.w0  = cfg[156:145];
   assign \cfg.w0.data_bits  = cfg[150:145];
   assign \cfg.w0.nenw  = cfg[151];
   assign \cfg.w0.lc  = cfg[152];
   assign \cfg.w0.crc  = cfg[154:153];
   assign \cfg.w0.gray  = cfg[155];
-  assign \cfg.w0_crc  = cfg[193:156];
-  assign \cfg.w0_crc.width  = cfg[160:156];
-  assign \cfg.w0_crc.poly  = cfg[176:161];
-  assign \cfg.w0_crc.start  = cfg[192:177];
-  assign \cfg.w0_crc.inverted  = cfg[193];
-  assign \cfg.w1_enable  = cfg[194];
-  assign \cfg.w1  = cfg[205:195];
-  assign \cfg.w1.data_bits  = cfg[200:195];
-  assign \cfg.w1.nenw  = cfg[201];
-  assign \cfg.w1.lc  = cfg[202];
-  assign \cfg.w1.crc  = cfg[204:203];
-  assign \cfg.w1.gray  = cfg[205];
-  assign \cfg.w1_crc  = cfg[243:206];
-  assign \cfg.w1_crc.width  = cfg[210:206];
-  assign \cfg.w1_crc.poly  = cfg[226:211];
-  assign \cfg.w1_crc.start  = cfg[242:227];
-  assign \cfg.w1_crc.inverted  = cfg[243];
-  assign \cfg.spw_check  = cfg[244];
-  assign \cfg.spw_tolerance  = cfg[252:245];
+  assign \cfg.w0.signed  = cfg[156];
+  assign \cfg.w0_crc  = cfg[194:157];
+  assign \cfg.w0_crc.width  = cfg[161:157];
+  assign \cfg.w0_crc.poly  = cfg[177:162];
+  assign \cfg.w0_crc.start  = cfg[193:178];
+  assign \cfg.w0_crc.inverted  = cfg[194];
+  assign \cfg.w1_enable  = cfg[195];
+  assign \cfg.w1  = cfg[207:196];
+  assign \cfg.w1.data_bits  = cfg[201:196];
+  assign \cfg.w1.nenw  = cfg[202];
+  assign \cfg.w1.lc  = cfg[203];
+  assign \cfg.w1.crc  = cfg[205:204];
+  assign \cfg.w1.gray  = cfg[206];
+  assign \cfg.w1.signed  = cfg[207];
+  assign \cfg.w1_crc  = cfg[245:208];
+  assign \cfg.w1_crc.width  = cfg[212:208];
+  assign \cfg.w1_crc.poly  = cfg[228:213];
+  assign \cfg.w1_crc.start  = cfg[244:229];
+  assign \cfg.w1_crc.inverted  = cfg[245];
+  assign \cfg.spw_check  = cfg[246];
+  assign \cfg.spw_tolerance  = cfg[254:247];
 endmodule

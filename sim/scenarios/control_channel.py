@@ -74,6 +74,7 @@ def expected_config(dl_pos):
     """docs/control.md, "Derived settings", for a BP3 C = 0 encoder with CRC-6 (binary
     positions: Gray off)."""
     return {"cfg_w0_data_bits": dl_pos, "cfg_w0_nenw": 1, "cfg_w0_lc": 0, "cfg_w0_gray": 0,
+            "cfg_w0_signed": 0,
             "cfg_w0_crc": CRC_CODE["crc6"], "cfg_w1_enable": 0, "cfg_spw_check": 0}
 
 

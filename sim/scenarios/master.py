@@ -235,6 +235,44 @@ async def gray_positions(dut):
     assert differ >= 3
 
 
+#: Signed positions (issue 26): two's complement words, one Gray-coded, and a Safety pair with
+#: both words signed under the SPW plausibility check (it compares the fields modulo their width).
+SIGNED_FORMATS = [
+    frames.FrameFormat("signed_26", (frames.WordFormat(26, signed=True),)),
+    frames.FrameFormat("signed_gray_13", (frames.WordFormat(13, gray=True, signed=True),)),
+    frames.FrameFormat("signed_safety", (frames.WordFormat(36, signed=True),
+                                         frames.WordFormat(28, lc=True, crc=frames.CRC16,
+                                                           signed=True))),
+]
+
+
+@cocotb.test()
+async def signed_positions(dut):
+    """A word set ``signed`` reads as its two's complement value in the port's whole width
+    (check_frame compares signed values): the most negative field, -1, 0 and the most positive,
+    then random ones (half of them negative). The same encoder read unsigned has zeros above
+    its field, so the setting is really used."""
+    tb = Testbench(dut, seed=28)
+    await tb.start(cable=Cable(length_m=20))
+    for fmt in SIGNED_FORMATS:
+        if len(fmt.words) > tb.words:
+            continue
+        tb.configure(fmt, 5e6)
+        if len(fmt.words) == 1:
+            bits = fmt.words[0].data_bits
+            for field in (1 << (bits - 1), (1 << bits) - 1, 0, (1 << (bits - 1)) - 1):
+                tb.queue(values=[frames.WordValue(field, 1, 1)])
+                tb.check_frame(await tb.request())
+        await frames_ok(tb, 4)
+    fmt = SIGNED_FORMATS[0]
+    unsigned = frames.FrameFormat("unsigned_26", (frames.WordFormat(26),))
+    tb.configure(fmt, 5e6, cfg_w0_signed=0)
+    tb.queue(values=[frames.WordValue((1 << 26) - 5, 1, 1)])
+    res = await tb.request()
+    tb.check_frame(res, view=unsigned)
+    assert res.fields["word0_position"] == (1 << 26) - 5, hex(res.fields["word0_position"])
+
+
 @cocotb.test()
 async def encoder_error_and_warning_bits(dut):
     tb = Testbench(dut, seed=4)

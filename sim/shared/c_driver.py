@@ -14,8 +14,8 @@ is kept and raised when the C call returns: ctypes itself would only print it.
 """
 
 import ctypes
-from ctypes import (CFUNCTYPE, POINTER, Structure, byref, c_bool, c_char_p, c_int, c_size_t,
-                    c_uint, c_uint8, c_uint16, c_uint32, c_uint64, c_void_p)
+from ctypes import (CFUNCTYPE, POINTER, Structure, byref, c_bool, c_char_p, c_int, c_int64,
+                    c_size_t, c_uint, c_uint8, c_uint16, c_uint32, c_uint64, c_void_p)
 
 READ32 = CFUNCTYPE(c_uint32, c_void_p, c_size_t)             # uintptr_t is size_t wide here
 WRITE32 = CFUNCTYPE(None, c_void_p, c_size_t, c_uint32)
@@ -35,7 +35,7 @@ class Channel(Structure):
 class WordFormat(Structure):
     _fields_ = [("data_bits", c_uint8), ("crc", c_uint8), ("nenw", c_bool), ("lc", c_bool),
                 ("gray", c_bool), ("crc_inverted", c_bool), ("crc_width", c_uint8),
-                ("crc_poly", c_uint16), ("crc_start", c_uint16)]
+                ("crc_poly", c_uint16), ("crc_start", c_uint16), ("is_signed", c_bool)]
 
 
 class Config(Structure):
@@ -131,6 +131,7 @@ PROTOTYPES = {
     "biss_read_state": (c_int, [_P(Channel), _P(State)]),
     "biss_wait_done": (c_int, [_P(Channel), c_uint32]),
     "biss_read_result": (c_int, [_P(Channel), _P(Result)]),
+    "biss_signed_data": (c_int64, [_P(Channel), c_uint, c_uint64]),
     "biss_read_counters": (c_int, [_P(Channel), _P(Counters)]),
     "biss_irq_enable": (c_int, [_P(Channel), c_uint32]),
     "biss_irq_status": (c_uint32, [_P(Channel)]),

@@ -28,7 +28,8 @@ CFG_PORTS = ["cfg_ma_half_period", "cfg_request_period", "cfg_break_time", "cfg_
              "cfg_timeout_limit", "cfg_delay_limit", "cfg_end_check", "cfg_quiet_time",
              "cfg_noise_limit", "cfg_delay_tolerance", "cfg_w1_enable", "cfg_spw_check",
              "cfg_spw_tolerance"] + [f"cfg_w{w}_{f}" for w in range(2)
-                                     for f in ("data_bits", "nenw", "lc", "crc", "gray")]
+                                     for f in ("data_bits", "nenw", "lc", "crc", "gray",
+                                               "signed")]
 #: A word's custom CRC (cfg_wN_crc = 3), in builds with custom CRCs.
 CUSTOM_CRC_PORTS = [f"cfg_w{w}_crc_{f}" for w in range(2) for f in ("width", "poly", "start", "inverted")]
 
@@ -180,7 +181,8 @@ class Testbench:
             code, custom = crc_config(word.crc)
             ports.update({f"cfg_w{w}_data_bits": word.data_bits, f"cfg_w{w}_nenw": int(word.nenw),
                           f"cfg_w{w}_lc": int(word.lc), f"cfg_w{w}_crc": code,
-                          f"cfg_w{w}_gray": int(word.gray)})
+                          f"cfg_w{w}_gray": int(word.gray),
+                          f"cfg_w{w}_signed": int(word.signed)})
             if self.has_custom_crc:
                 ports.update({f"cfg_w{w}_crc_{k}": v for k, v in custom.items()})
             else:
@@ -329,8 +331,14 @@ class Testbench:
         f = res.fields
         parsed = frames.parse_frame(view, self.line_bits(sent, view))
         for w, word in enumerate(parsed["words"]):
-            assert f[f"word{w}_position"] == word["position"], \
-                f"word{w} position {f[f'word{w}_position']:#x} != sent {word['position']:#x}"
+            got, want = f[f"word{w}_position"], word["position"]
+            if view.words[w].signed:
+                # Two's complement in the port's whole width: the sent field's value, sign
+                # and all (docs/ports.md: a signed word is sign-extended).
+                width = len(getattr(self.dut, f"word{w}_position"))
+                got = frames.to_signed(got, width)
+                want = frames.to_signed(want, view.words[w].data_bits)
+            assert got == want, f"word{w} position {got:#x} != sent {want:#x}"
             if view.words[w].nenw:
                 assert (f[f"word{w}_ne"], f[f"word{w}_nw"]) == (word["ne"], word["nw"])
             if f[f"word{w}_crc_ok"] is None:

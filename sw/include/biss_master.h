@@ -164,6 +164,9 @@ typedef struct {
     uint8_t crc_width;              /* BISS_CRC_CUSTOM: 1 .. 16 bits */
     uint16_t crc_poly;              /* BISS_CRC_CUSTOM: register polynomial, top term dropped */
     uint16_t crc_start;             /* BISS_CRC_CUSTOM: register value before the first bit */
+    /* Added with signed positions (0 = unsigned, as before): */
+    bool is_signed;                 /* the data field is two's complement: the core sign-extends
+                                       it to its register's width (biss_signed_data) */
 } biss_word_format_t;
 
 /* Set `w`'s CRC to the one iC-MB4 names by its length (3: 0xB, 4: 0x13, 5: 0x25, 6: 0x43,
@@ -295,6 +298,11 @@ typedef struct {
     uint16_t settled_delay;         /* the settled round trip, clocks */
     uint8_t delay_spread;           /* largest accepted distance from it, saturating at 255 */
 } biss_result_t;
+
+/* Word `word`'s data (biss_result_t.word0 / word1) of a word set is_signed, as a signed
+ * number: the core has sign-extended it to its register's width (the channel's
+ * max_data_bits[word]); this extends it on to 64 bits. */
+int64_t biss_signed_data(const biss_channel_t *ch, unsigned word, uint64_t data);
 
 /* The last result, all of one frame: result.status is read first (it takes the snapshot,
  * docs/bus.md), then the rest. The frame fields keep the last decoded frame after a fault. */

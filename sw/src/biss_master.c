@@ -87,6 +87,19 @@ const char *biss_error_name(int err)
     return names[-err];
 }
 
+int64_t biss_signed_data(const biss_channel_t *ch, unsigned word, uint64_t data)
+{
+    unsigned bits = ch && word < 2 ? ch->max_data_bits[word] : 0;
+    uint64_t sign;
+
+    if (bits == 0 || bits >= 64)
+        return (int64_t)data;
+    sign = (uint64_t)1 << (bits - 1);
+    data &= (sign << 1) - 1;
+    /* Two's complement from bit `bits - 1`, without a shift into the sign bit (portable C). */
+    return (int64_t)(data ^ sign) - (int64_t)sign;
+}
+
 const char *biss_status_name(unsigned status)
 {
     static const char *const names[] = {
@@ -158,9 +171,9 @@ biss_err_t biss_channel_init(biss_channel_t *ch, const biss_bus_t *bus, unsigned
 /* -- Presets ----------------------------------------------------------------------------- */
 
 /* Word 0 of every preset: position, nE nW, CRC-6. BiSS Safety's SPW: nE nW, LC, CRC-16. */
-#define CPW(bits) { (bits), BISS_CRC6, true, false, false, false, 0, 0, 0 }
-#define SPW(bits) { (bits), BISS_CRC16, true, true, false, false, 0, 0, 0 }
-#define NO_WORD { 0, BISS_CRC_NONE, false, false, false, false, 0, 0, 0 }
+#define CPW(bits) { (bits), BISS_CRC6, true, false, false, false, 0, 0, 0, false }
+#define SPW(bits) { (bits), BISS_CRC16, true, true, false, false, 0, 0, 0, false }
+#define NO_WORD { 0, BISS_CRC_NONE, false, false, false, false, 0, 0, 0, false }
 #define BISS_C(name, bits) { name, 1, { CPW(bits), NO_WORD }, false, 0 }
 /* The SPW check accepts one SPW LSB of distance: CPW and SPW are separate conversions. */
 #define SAFETY(name, cpw, spw) { name, 2, { CPW(cpw), SPW(spw) }, true, 1 }
@@ -357,12 +370,13 @@ biss_err_t biss_configure(biss_channel_t *ch, const biss_config_t *cfg)
     ch_wr(ch, CHANNEL_OFF(cfg_timeout), PUT(cfg->timeout_limit, CH(CFG_TIMEOUT__TIMEOUT_LIMIT)));
     words = PUT(w0->data_bits, CH(CFG_WORDS__W0_DATA_BITS)) | PUT(w0->nenw, CH(CFG_WORDS__W0_NENW))
           | PUT(w0->lc, CH(CFG_WORDS__W0_LC)) | PUT(w0->crc, CH(CFG_WORDS__W0_CRC))
-          | PUT(w0->gray, CH(CFG_WORDS__W0_GRAY));
+          | PUT(w0->gray, CH(CFG_WORDS__W0_GRAY)) | PUT(w0->is_signed, CH(CFG_WORDS__W0_SIGNED));
     if (cfg->word1_enable)
         words |= PUT(1, CH(CFG_WORDS__W1_ENABLE))
                | PUT(w1->data_bits, CH(CFG_WORDS__W1_DATA_BITS))
                | PUT(w1->nenw, CH(CFG_WORDS__W1_NENW)) | PUT(w1->lc, CH(CFG_WORDS__W1_LC))
-               | PUT(w1->crc, CH(CFG_WORDS__W1_CRC)) | PUT(w1->gray, CH(CFG_WORDS__W1_GRAY));
+               | PUT(w1->crc, CH(CFG_WORDS__W1_CRC)) | PUT(w1->gray, CH(CFG_WORDS__W1_GRAY))
+               | PUT(w1->is_signed, CH(CFG_WORDS__W1_SIGNED));
     /* The custom CRCs first: the core latches every setting when a cycle starts. */
     ch_wr(ch, CHANNEL_OFF(cfg_crc0), crc_reg(w0));
     ch_wr(ch, CHANNEL_OFF(cfg_crc0_start), crc_start_reg(w0));

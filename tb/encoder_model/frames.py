@@ -60,6 +60,7 @@ class WordFormat:
     lc: bool = False
     crc: object = CRC6      # CRC_NONE, CRC6, CRC16 or a CustomCrc
     gray: bool = False      # the position is sent Gray-coded (the CRC covers the bits as sent)
+    signed: bool = False    # the position field is two's complement (to_signed reads it)
 
     def __post_init__(self):
         if not 1 <= self.data_bits <= DATA_BITS_MAX:
@@ -204,6 +205,12 @@ def from_gray(g):
         n ^= g
         g >>= 1
     return n
+
+
+def to_signed(field, bits):
+    """The value of a ``bits``-wide two's complement field: its top bit weighs -2**(bits - 1)."""
+    _check_field("field", field, bits)
+    return field - (1 << bits) if field >> (bits - 1) else field
 
 
 def build_frame(fmt, words, faults=None):

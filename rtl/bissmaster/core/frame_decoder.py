@@ -36,15 +36,15 @@ class FrameDecoder(wiring.Component):
     Slots arrive from :class:`~bissmaster.core.slo_sampler.SloSampler`, slot 0 being the first Ack
     slot. Low slots are Ack; the first high slot is Start; then CDS; then each word's data
     (MSB first, right-justified in ``data``; a word set ``gray`` is Gray-decoded as it
-    arrives), nE, nW, LC and CRC. One more slot, the stop bit,
-    ends the frame: the encoder's timeout has begun, so the master may look for SLO high again.
+    arrives, one set ``signed`` is sign-extended to the width of ``data``), nE, nW, LC and
+    CRC. One more slot, the stop bit, ends the frame: the encoder's timeout has begun, so the master may look for SLO high again.
 
     One :class:`~bissmaster.core.crc_engine.CrcEngine` checks every word's CRC in turn, each
     with its own settings (``crcs``). ``crc_ok`` comes from the engine's flip-flops: valid in
     the clock after the word's last bit was sampled, and held until the next frame.
 
     The master holds it in reset between cycles (``ResetInserter``), which also clears the
-    data registers, so data fields are right-justified.
+    data registers, so data fields are right-justified (zeros above an unsigned field).
 
     ``done`` strobes one clock after the last bit of the last word was sampled, when every
     field and ``crc_ok`` is final.
@@ -197,11 +197,16 @@ class FrameDecoder(wiring.Component):
         for w in range(p.words):
             data_w = getattr(self, f"data{w}")
             decoded.append(self.bit ^ (self.words[w].gray & data_w[0]))
+        # A signed word's first bit (its sign, the binary MSB) fills the whole register; each
+        # further bit shifts in below it, so the sign stays copied above the field
+        # (two's complement in the port's full width, with no decode of ``data_bits``).
+        first_bit = idx == 0
         for w in range(p.words):
             this_word = in_word & (word == w)
             data_w = getattr(self, f"data{w}")
+            fill = (self.words[w].signed & first_bit & decoded[w]).replicate(len(data_w))
             with m.If(this_word & in_data):
-                m.d.sync += data_w.eq(Cat(decoded[w], data_w))
+                m.d.sync += data_w.eq(Cat(decoded[w], data_w)[:len(data_w)] | fill)
             # A word without nE/nW reads as "no error, no warning" (both high).
             with m.If(~self.words[w].nenw):
                 m.d.sync += [self.ne[w].eq(1), self.nw[w].eq(1)]

@@ -482,6 +482,7 @@ def derive_config(eds, *, params=None):
         ("w0", "nenw"): 1,
         ("w0", "lc"): 0,
         ("w0", "gray"): 0,                  # BP3 positions are binary
+        ("w0", "signed"): 0,                # ... and unsigned
         **_data_crc(eds, params),
     }
     if params.words == 2:

@@ -79,7 +79,7 @@ def config(name, clock_hz, ma_hz):
     for n, word in ((0, w0), (1, w1 or {"data_bits": 0, "nenw": 0, "lc": 0, "crc": "none"})):
         settings.update({f"w{n}_data_bits": word["data_bits"], f"w{n}_nenw": word["nenw"],
                          f"w{n}_lc": word["lc"], f"w{n}_crc": regmap.CRC_CODES[word["crc"]],
-                         f"w{n}_gray": 0})
+                         f"w{n}_gray": 0, f"w{n}_signed": 0})
         # The presets' encoders use the named CRCs: no custom CRC (its settings cleared).
         settings.update({f"w{n}_crc_{k}": 0 for k in ("width", "poly", "start", "inverted")})
     return settings

@@ -284,6 +284,22 @@ def test_crc_named_gives_icmb4s_crcs(lib, width):
             word.crc_inverted) == (CRC_CODE["custom"], width, top, 0, True)
 
 
+@pytest.mark.parametrize("cap", (55, 40, 36, 13, 1))
+def test_signed_data_extends_from_the_register_width(lib, cap):
+    """biss_signed_data reads a word's register (sign-extended by the core to its width, the
+    channel's max_data_bits) as a 64-bit signed number; a one-word build's word 1 (cap 0)
+    and a word past 1 return the data as it is."""
+    ch = c_driver.Channel()
+    ch.max_data_bits[0], ch.max_data_bits[1] = cap, 0
+    top = 1 << (cap - 1)
+    low = 5 % top
+    for data, want in (((1 << cap) - 1, -1), (top, -top), (top - 1, top - 1), (0, 0),
+                       (top | low, low - top), (low, low)):
+        assert lib.biss_signed_data(byref(ch), 0, data) == want, (hex(data), want)
+        assert lib.biss_signed_data(byref(ch), 1, data) == data
+        assert lib.biss_signed_data(byref(ch), 2, data) == data
+
+
 # -- Register access against a bus of this test's own (no simulator) --------------------------
 class FakeEngine:
     """A bus whose registers are a dict, addresses from the register map source

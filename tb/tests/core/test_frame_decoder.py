@@ -9,7 +9,7 @@ import pytest
 
 from bissmaster.core.frame_decoder import FrameDecoder
 from bissmaster.params import Crc, MasterParams
-from encoder_model.frames import (CRC16, PRESETS, CustomCrc, FrameFaults, FrameFormat, WordFormat, WordValue,
+from encoder_model.frames import (CRC16, PRESETS, CustomCrc, FrameFaults, FrameFormat, WordFormat, WordValue, to_signed,
                                   bp3, build_frame)
 from master_contract import crc_config, crc_settings
 
@@ -20,7 +20,7 @@ def _cfg(wf):
     if wf is None:
         return {"data_bits": 0, "nenw": 0, "lc": 0, "crc": 0}
     return {"data_bits": wf.data_bits, "nenw": int(wf.nenw), "lc": int(wf.lc),
-            "crc": crc_config(wf.crc)[0], "gray": int(wf.gray)}
+            "crc": crc_config(wf.crc)[0], "gray": int(wf.gray), "signed": int(wf.signed)}
 
 
 def _crc(wf):
@@ -114,6 +114,15 @@ DECODER_CASES = {
         MasterParams(max_data_bits=(40,), word_crcs=((Crc.CRC6,),)),
         FrameFormat("custom16", (WordFormat(40, crc=CustomCrc(16, 0x1021, 0xFFFF, False)),)),
         1, None, None),
+    # Signed words: sign-extended to the register's width (not the CPW's top bits: cpw_top).
+    "signed_two_words": (MasterParams(), FrameFormat("signed", (
+        WordFormat(36, signed=True), WordFormat(28, lc=True, crc=CRC16, signed=True))), 1, None,
+        None),
+    "signed_gray_13_one_word_hw": (MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),)),
+                                   FrameFormat("sgray13", (WordFormat(13, gray=True, signed=True),)),
+                                   2, None, None),
+    "signed_55_in_55": (MasterParams(), FrameFormat("s55", (WordFormat(55, signed=True),)), 1,
+                        None, WordFormat(20, signed=True)),
     "custom_crc3_word1_off": (MasterParams(),
                               FrameFormat("custom3", (WordFormat(9, crc=CustomCrc(3, 0x3, 0, True)),)),
                               1, None, WordFormat(5, crc=CustomCrc(11, 0x385, 0x1A, False))),
@@ -124,11 +133,12 @@ DECODER_CASES = {
 def test_frame_decoder_fields_and_strobes(case):
     params, fmt, acks, faults, hw_word1 = DECODER_CASES[case]
     rng = random.Random(case)
-    for rep in range(2):
+    for rep in range(3):
         values = _random_values(fmt, rng)
-        if rep == 0:        # fixed extremes: all-ones / errors asserted / LC 63
-            values = [WordValue((1 << w.data_bits) - 1, 0, 1, 63 if w.lc else None)
-                      for w in fmt.words]
+        if rep < 2:         # fixed extremes: all-ones (rep 0) or the top bit alone (rep 1),
+            # errors asserted, LC 63
+            values = [WordValue((1 << w.data_bits) - 1 if rep == 0 else 1 << (w.data_bits - 1),
+                                0, 1, 63 if w.lc else None) for w in fmt.words]
             if fmt.is_safety:
                 values[1].position = values[0].position >> fmt.spw_shift
         trace, samples, frame = _decode(params, fmt, values, acks=acks, faults=faults,
@@ -148,7 +158,11 @@ def test_frame_decoder_fields_and_strobes(case):
             assert x["start_slot"] == acks
             assert x["cds"] == (faults.cds if faults else 0)
             for w, (wf, v) in enumerate(zip(fmt.words, values)):
-                assert x[f"data{w}"] == v.position, (when, w)
+                # A signed word: its value (the field's two's complement) in the register's
+                # whole width; an unsigned one: the field with zeros above it.
+                want = (to_signed(v.position, wf.data_bits) if wf.signed else v.position) \
+                    % 2**params.max_data_bits[w]
+                assert x[f"data{w}"] == want, (when, w)
                 assert (x["ne"] >> w) & 1 == v.ne and (x["nw"] >> w) & 1 == v.nw
                 if wf.lc:
                     assert x["lc"] == v.lc

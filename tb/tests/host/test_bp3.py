@@ -195,7 +195,8 @@ def test_derive_config_default_build(position_bits):
     # README port table: cfg_wN_data_bits, cfg_wN_nenw, cfg_wN_lc, cfg_wN_crc (1 = CRC-6).
     assert config == {
         "cfg_w0_data_bits": position_bits, "cfg_w0_nenw": 1, "cfg_w0_lc": 0,
-        "cfg_w0_crc": CRC_CODE["crc6"], "cfg_w0_gray": 0, "cfg_w1_enable": 0, "cfg_spw_check": 0,
+        "cfg_w0_crc": CRC_CODE["crc6"], "cfg_w0_gray": 0, "cfg_w0_signed": 0, "cfg_w1_enable": 0,
+        "cfg_spw_check": 0,
     }
     assert all(type(v) is int for v in config.values())
 
@@ -218,7 +219,7 @@ def test_derive_config_one_word_build():
     params = MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),))
     assert bp3.derive_config(_eds(DL=38), params=params) == {
         "cfg_w0_data_bits": 36, "cfg_w0_nenw": 1, "cfg_w0_lc": 0, "cfg_w0_crc": CRC_CODE["crc6"],
-        "cfg_w0_gray": 0}
+        "cfg_w0_gray": 0, "cfg_w0_signed": 0}
     with pytest.raises(bp3.UnsupportedEncoderError, match="1..36"):
         bp3.derive_config(_eds(DL=39), params=params)
 
@@ -299,7 +300,8 @@ class FakeEncoder:
 COMMON_PART = bytes(range(0x80, 0xC0))      # whatever the common EDS part holds
 
 EXPECTED_CONFIG = {"cfg_w0_data_bits": 26, "cfg_w0_nenw": 1, "cfg_w0_lc": 0,
-                   "cfg_w0_crc": CRC_CODE["crc6"], "cfg_w0_gray": 0, "cfg_w1_enable": 0,
+                   "cfg_w0_crc": CRC_CODE["crc6"], "cfg_w0_gray": 0, "cfg_w0_signed": 0,
+                   "cfg_w1_enable": 0,
                    "cfg_spw_check": 0}
 
 
@@ -409,7 +411,7 @@ def test_identify_slave_id_and_params_passed_through():
     params = MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),))
     found = bp3.identify(enc.read_registers, enc.write_register, slave_id=5, params=params)
     assert found.config == {"cfg_w0_data_bits": 36, "cfg_w0_nenw": 1, "cfg_w0_lc": 0,
-                            "cfg_w0_crc": CRC_CODE["crc6"], "cfg_w0_gray": 0}
+                            "cfg_w0_crc": CRC_CODE["crc6"], "cfg_w0_gray": 0, "cfg_w0_signed": 0}
 
 
 def test_identify_bank_beyond_0xff():

@@ -319,6 +319,22 @@ def test_gray_code_published_sequence_and_round_trip():
         assert bin(to_gray(n) ^ to_gray(n + 1)).count("1") == 1
 
 
+def test_to_signed_is_twos_complement():
+    """to_signed against Python's own two's complement reading of the same bytes
+    (int.from_bytes(signed=True)) at byte widths, and hand values at odd ones."""
+    from encoder_model.frames import to_signed
+    rng = random.Random(2601)
+    for bits in (8, 16, 32, 56, 64):
+        for field in [0, 1, (1 << bits) - 1, 1 << (bits - 1)] + [rng.getrandbits(bits)
+                                                                 for _ in range(50)]:
+            assert to_signed(field, bits) == int.from_bytes(
+                field.to_bytes(bits // 8, "big"), "big", signed=True)
+    assert [to_signed(f, 3) for f in range(8)] == [0, 1, 2, 3, -4, -3, -2, -1]
+    assert to_signed(1, 1) == -1 and to_signed(0, 1) == 0
+    with pytest.raises(ValueError):
+        to_signed(8, 3)
+
+
 def test_gray_word_sends_gray_and_parses_binary():
     fmt = FrameFormat("g", (WordFormat(13, gray=True),))
     bits = build_frame(fmt, [WordValue(0b1000000000000, 1, 1)])

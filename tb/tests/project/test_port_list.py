@@ -11,7 +11,7 @@ import pytest
 
 from bissmaster.generate import PRESETS, main
 
-from testkit import DATA
+from testkit import DATA, REPO
 
 
 def port_list(verilog, module="biss_master"):
@@ -38,6 +38,22 @@ def test_port_list_unchanged(preset, tmp_path):
     assert got == want, (f"preset {preset}: the port list changed; if on purpose, run "
                          f"`PYTHONPATH=rtl .venv/bin/python tb/tests/project/test_port_list.py --update`")
 
+
+
+def test_readme_instantiation_ties_every_input():
+    """The README's Verilog instantiation of the default build connects every input port: a
+    user who copies it leaves no input floating (X in simulation) when a port is added. (Its
+    outputs are left to the user: "remaining outputs as needed".)"""
+    text = (REPO / "README.md").read_text()
+    block = text[text.index("biss_master u_biss ("):]
+    block = block[:block.index(");")]
+    connected = set(re.findall(r"\.(\w+)\(", block))
+    inputs = {line.split()[-1] for line in (DATA / "ports_default.txt").read_text().splitlines()
+              if line.startswith("input")}
+    assert not inputs - connected, f"README instantiation leaves inputs open: {sorted(inputs - connected)}"
+    assert not connected - inputs - {line.split()[-1] for line in
+                                      (DATA / "ports_default.txt").read_text().splitlines()}, \
+        "README instantiation names a port the default build does not have"
 
 if __name__ == "__main__" and "--update" in sys.argv:
     import tempfile
