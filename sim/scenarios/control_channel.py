@@ -24,7 +24,7 @@ from bissmaster import bp3
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
 from encoder_model.control import Bp3Eds, ControlFaults, ControlSlave, RegisterFile
-from master_contract import CA_STATUS, CRC_CODE, MAX_DATA_BITS, STATUS, ca_frame_bound
+from master_contract import CA_STATUS, CRC_CODE, MAX_DATA_BITS, STATUS, ca_frame_bound, crc_config
 from sim.shared.control_channel import IDLE_FRAMES, ControlChannel
 from sim.shared.discovery import long_on_icarus
 from sim.shared.testbench import CLK_HZ, Testbench, preset
@@ -119,8 +119,9 @@ IDENTIFY_ACCESSES = [(False, 0x40, 4), (True, 0x40, 1), (False, 0x40, 1), (False
 IDENTIFY_ACCESSES_SELECTED = [(False, 0x40, 4), (False, 0x00, 64)]    # BP3 bank selected already
 
 
-def check_identification(ident, eds, slave, log, bank_select):
-    """What bp3.identify found, against the model's encoder; its accesses as documented."""
+def check_identification(ident, eds, slave, log, bank_select, config=True):
+    """What bp3.identify found, against the model's encoder; its accesses as documented;
+    with ``config``, the derived settings as a CRC-6 encoder's (``expected_config``)."""
     assert ident.profile == bp3.ProfileId(1, bp3.CrcMode.SEPARATE, eds.data_length), ident.profile
     assert (ident.eds_bank, ident.profile_bank) == (1, 2)
     raw = eds.to_bytes()
@@ -128,7 +129,7 @@ def check_identification(ident, eds, slave, log, bank_select):
     for name in (f for f in bp3.Bp3Eds.__dataclass_fields__ if f not in ("raw", "chksum")):
         assert getattr(ident.eds, name) == eds.value_of(name), name
     assert ident.eds.chksum == raw[0x3F]
-    assert ident.config == expected_config(eds.dl_pos), ident.config
+    assert not config or ident.config == expected_config(eds.dl_pos), ident.config
     assert slave.registers.bank_select == bank_select, "bank select not restored"
     assert [(a.write, a.address, a.count) for a in log] == (
         IDENTIFY_ACCESSES if bank_select != 2 else IDENTIFY_ACCESSES_SELECTED), \
@@ -242,6 +243,73 @@ async def bp3_registers_every_rate(dut):
                          ma_hz / 1e6, cable_m, dl_pos, first, first + count - 1,
                          ctl.log[-1].frames)
         await ctl.read_positions(2)
+    finish(tb, ctl)
+
+
+#: A BP3 encoder whose EDS names a CRC other than BiSS's (issue 26): x^16 + x^12 + x^5 + 1
+#: (0x11021) from 0xFFFF, sent inverted as BiSS CRCs are. CPOLY is the polynomial without x^0,
+#: shifted down one bit (docs/protocol.md, section 7): 0x8810. The model computes the CRC itself
+#: (frames.CustomCrc); what the core is expected to be set to comes from crc_config.
+CUSTOM_CRC_EDS = {"cpoly": 0x11021 >> 1, "cstart": 0xFFFF}
+CUSTOM_CRC = frames.CustomCrc(16, 0x1021, start=0xFFFF, inverted=True)
+CUSTOM_CRC_DL_POS = 6
+
+
+@cocotb.test()
+async def bp3_custom_crc_identify_and_configure(dut):
+    """A BP3 encoder whose EDS names CRC 0x11021 from 0xFFFF (CPOLY 0x8810, CSTART 0xFFFF) and
+    whose frames carry it: identified through ``bissmaster.bp3``, the data channel set from
+    derive_config() alone, positions read.
+
+    DL_POS 6 at 10 MHz over 0 m, adaptive timeout, processing 0.3 .. 0.8 us (a cycle of about
+    4 us). The data channel reads the encoder's own frame while the host identifies it (every
+    cycle checked by the monitor). On Verilator bp3.identify() runs through the ports (the
+    documented accesses, its EDS the model's bank: 1,103 frames); on Icarus (that 64-byte read
+    is minutes there: see ``bp3_identify_and_configure``) registers 0x40..0x43 are read through
+    the ports and decoded (bp3.decode_profile_id), and bp3.decode_eds() + derive_config() take
+    the model's bank. The derived settings must be a custom CRC (cfg_w0_crc = 3, width 16,
+    polynomial 0x1021, start 0xFFFF, inverted) as the model's CRC says; word 0's CRC is then set
+    to the named CRC-6 by the test, so only the derived settings can make the cycles OK; they
+    are applied alone and 8 positions read, each OK with the model's CRC good.
+    """
+    eds = Bp3Eds(CUSTOM_CRC_DL_POS, **CUSTOM_CRC_EDS)
+    fmt = frames.FrameFormat("bp3_6_crc_0x11021",
+                             (frames.WordFormat(CUSTOM_CRC_DL_POS, crc=CUSTOM_CRC),))
+    slave = ControlSlave(bp3_registers(eds))
+    timeout_s = adaptive_timeout(10e6)
+    tb = await bench(dut, seed=139, timeout_s=timeout_s)
+    assert tb.has_custom_crc, "the default build has custom CRCs"
+    tb.processing_s = (0.3e-6, 0.8e-6)     # a short cycle: the identification is ~1,100 of them
+    ctl = ControlChannel(tb)
+    await new_encoder(tb, ctl, slave, fmt, 10e6, 0, timeout_s)
+    if on_icarus():
+        regs = await ctl.read_registers(0, 0x40, 4)
+        assert regs == bytes(slave.registers.read(a) for a in range(0x40, 0x44)), regs.hex()
+        profile = bp3.decode_profile_id(regs[2], regs[3])
+        decoded = bp3.decode_eds(eds.to_bytes(), profile=profile)
+        config = bp3.derive_config(decoded)
+    else:
+        first = len(ctl.log)
+        ident = await ctl.run_host(bp3.identify)
+        check_identification(ident, eds, slave, ctl.log[first:], bank_select=0,
+                             config=False)
+        decoded, config = ident.eds, ident.config
+    assert (decoded.cpoly, decoded.cstart) == (eds.cpoly, eds.cstart)
+    code, custom = crc_config(CUSTOM_CRC)
+    assert config == {"cfg_w0_data_bits": CUSTOM_CRC_DL_POS, "cfg_w0_nenw": 1, "cfg_w0_lc": 0,
+                      "cfg_w0_gray": 0, "cfg_w0_crc": code,
+                      **{f"cfg_w0_crc_{k}": v for k, v in custom.items()},
+                      "cfg_w1_enable": 0, "cfg_spw_check": 0}, config
+    # Word 0 set to CRC-6 (what the core would check without the derived settings), then
+    # the derived settings alone.
+    tb.dut.cfg_w0_crc.value = CRC_CODE["crc6"]
+    for k in custom:
+        getattr(tb.dut, f"cfg_w0_crc_{k}").value = 0
+    for port, value in config.items():
+        getattr(tb.dut, port).value = value
+    for checked in await ctl.read_positions(8):
+        assert checked.status == "OK" and checked.result.valid
+        assert frames.parse_frame(fmt, checked.sent.bits)["crc_ok"], "the model's CRC"
     finish(tb, ctl)
 
 

@@ -11,7 +11,7 @@ driver. Run by sim/test_driver.py on Verilator and Icarus.
 """
 
 import os
-from ctypes import byref
+from ctypes import byref, c_uint8
 from dataclasses import replace
 
 import cocotb
@@ -21,7 +21,7 @@ from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
 from encoder_model.control import (BANK_SELECT, USER_REGISTERS, Bp3Eds, ControlSlave,
                                    RegisterFile)
-from master_contract import CRC_CODE, MA_HALF_PERIOD_MIN, MAX_DATA_BITS, STATUS
+from master_contract import CRC_CODE, MA_HALF_PERIOD_MIN, MAX_DATA_BITS, STATUS, crc_config
 from sim.shared.bus_testbench import CLK_HZ, BusTestbench, Encoder
 from sim.shared.c_driver import Bp3Eds as CBp3Eds
 from sim.shared.c_driver import Bp3Id, CDriver, Channel, Config, State
@@ -368,15 +368,17 @@ class PacedBus:
         await self.bus.write(addr, value)
 
 
-async def bp3_setup(dut, seed, bank=None):
-    """Channel 0 reads a BP3 encoder model (DL_POS 6, CRC-6) with a control side, its EDS
-    (BP3_EDS) in bank BP3_EDS_BANK (``bank``: other 64 bytes there); the data channel set by
-    the test from the model's format (the driver's own configuration comes in the BP3 case);
-    the driver on a PacedBus. Returns (tb, driver, channel 0, the model's EDS, registers)."""
-    eds = Bp3Eds(BP3_DL_POS, **BP3_EDS)
+async def bp3_setup(dut, seed, bank=None, fmt=None, **eds_fields):
+    """Channel 0 reads a BP3 encoder model (DL_POS 6, CRC-6; ``fmt``: other frames) with a
+    control side, its EDS (BP3_EDS, ``eds_fields`` changed) in bank BP3_EDS_BANK (``bank``:
+    other 64 bytes there); the data channel set by the test from the model's format (the
+    driver's own configuration comes in the BP3 cases); the driver on a PacedBus. Returns
+    (tb, driver, channel 0, the model's EDS, registers)."""
+    eds = Bp3Eds(BP3_DL_POS, **{**BP3_EDS, **eds_fields})
     registers = RegisterFile.bp3(eds, eds_bank=BP3_EDS_BANK,
                                  **({"banks": {BP3_EDS_BANK: bank}} if bank else {}))
-    spec = Encoder(frames.bp3(BP3_DL_POS), Cable(length_m=10), control=ControlSlave(registers),
+    fmt = frames.bp3(BP3_DL_POS) if fmt is None else fmt
+    spec = Encoder(fmt, Cable(length_m=10), control=ControlSlave(registers),
                    timeout_s=1.5 / BP3_MA_HZ, processing_s=(0.3e-6, 0.8e-6), min_cycle_s=0)
     tb = BusTestbench(dut, seed=seed)
     await tb.start([spec])
@@ -488,3 +490,60 @@ async def driver_bp3_eds_bad_checksum(dut):
     assert drv.error_name(ret) == "BISS_ERR_EDS_CHECKSUM"
     assert registers.bank_select == 0, "the bank select was not restored"
     assert registers.read(BANK_SELECT) == 0
+
+
+#: A BP3 encoder whose EDS names a CRC other than BiSS's (issue 26): x^16 + x^12 + x^5 + 1
+#: (0x11021) from 0xFFFF. CPOLY is the polynomial without x^0, shifted down one bit
+#: (docs/protocol.md, section 7): 0x8810. The encoder sends it inverted, as BiSS CRCs are
+#: (the model computes it itself: frames.CustomCrc).
+CUSTOM_EDS = {"cpoly": 0x11021 >> 1, "cstart": 0xFFFF}
+CUSTOM_CRC = frames.CustomCrc(16, 0x1021, start=0xFFFF, inverted=True)
+
+
+@cocotb.test()
+async def driver_bp3_custom_crc(dut):
+    """A BP3 encoder model whose EDS names CRC 0x11021 from 0xFFFF (CPOLY 0x8810, CSTART
+    0xFFFF) and whose frames carry it (frames.CustomCrc), the data channel reading it.
+    biss_bp3_identify over the control channel; then the EDS: on Verilator read over the
+    control channel (biss_bp3_read_eds, the bank select restored), on Icarus decoded from the
+    model's bank (biss_bp3_decode_eds: the 64-byte read, see
+    driver_bp3_identify_eds_and_configure); its CPOLY / CSTART are the model's. Word 0's
+    custom CRC is then cleared by the test (code 3 with width 0: state.config_error), and
+    biss_bp3_config + biss_configure set it: cfg_words (DL_POS, nE/nW, no LC, code 3, word 1
+    off) and cfg_crc0 / cfg_crc0_start as the model's CRC, config_error 0, and three positions
+    read through the driver are the model's with their CRC good."""
+    fmt = frames.FrameFormat("bp3_6_crc_0x11021",
+                             (frames.WordFormat(BP3_DL_POS, crc=CUSTOM_CRC),))
+    tb, drv, ch, eds, registers = await bp3_setup(dut, seed=25, fmt=fmt, **CUSTOM_EDS)
+    pid = Bp3Id()
+    await drv.check("biss_bp3_identify", byref(ch), 0, byref(pid))
+    assert (pid.version, pid.crc_mode, pid.data_length, pid.position_bits) == \
+        (eds.bp_ver, 0, BP3_DL_POS + 2, BP3_DL_POS)
+    got = CBp3Eds()
+    if icarus():
+        bank = (c_uint8 * len(eds.to_bytes())).from_buffer_copy(eds.to_bytes())
+        await drv.check("biss_bp3_decode_eds", bank, byref(got))
+    else:
+        await drv.check("biss_bp3_read_eds", byref(ch), 0, 0, byref(got))
+        assert registers.bank_select == 0, "the bank select was not restored"
+    assert (got.cpoly, got.cstart) == (CUSTOM_EDS["cpoly"], CUSTOM_EDS["cstart"])
+
+    await tb.write_fields("cfg_crc0", 0, w0_crc_poly=0, w0_crc_width=0, w0_crc_inverted=0)
+    await tb.write_fields("cfg_crc0_start", 0, w0_crc_start=0)
+    assert (await tb.read_fields("state", 0))["config_error"] == 1, "code 3 with width 0"
+    cfg = Config()
+    await drv.check("biss_config_from_preset", byref(cfg), PRESETS[1].encode(), int(CLK_HZ),
+                    BP3_MA_HZ)
+    await drv.check("biss_bp3_config", byref(got), byref(cfg))
+    await drv.check("biss_configure", byref(ch), byref(cfg))
+    code, custom = crc_config(CUSTOM_CRC)
+    words = await tb.read_fields("cfg_words", 0)
+    assert (words["w0_data_bits"], words["w0_nenw"], words["w0_lc"], words["w0_crc"],
+            words["w1_enable"]) == (BP3_DL_POS, 1, 0, code, 0), words
+    regs = {**await tb.read_fields("cfg_crc0", 0), **await tb.read_fields("cfg_crc0_start", 0)}
+    assert {k: regs[f"w0_crc_{k}"] for k in custom} == custom, regs
+    assert (await tb.read_fields("state", 0))["config_error"] == 0
+    await tb.encoders_ready()
+    for _ in range(3):
+        assert tb.check_result(0, await sample(drv, ch))["crc_ok"], "the model's own CRC check"
+    dut._log.info("%d polls, %d bus transactions", drv.model.polls, drv.transactions)

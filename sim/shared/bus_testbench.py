@@ -21,7 +21,7 @@ from cocotb.triggers import ClockCycles, Lock, RisingEdge, Timer, with_timeout
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
-from master_contract import CRC_CODE, STATUS, SYS_CLK_HZ
+from master_contract import STATUS, SYS_CLK_HZ, crc_config
 from sim.shared import regspec
 
 CLK_HZ = SYS_CLK_HZ
@@ -204,19 +204,27 @@ class BusTestbench:
 
     async def configure(self, ch, fmt, ma_hz, **cfg):
         """The cfg_* registers for a frame format and MA rate (every setting, as the core's
-        Testbench.configure does on its ports)."""
+        Testbench.configure does on its ports); a word with a frames.CustomCrc gets code 3 and
+        its cfg_crcN / cfg_crcN_start written (the others' are left as they are: the core does
+        not read them with a named CRC)."""
         hp = CLK_HZ / (2 * ma_hz)
         assert hp == int(hp)
-        words = {}
+        words, custom = {}, {}
         for w in range(2):
             word = fmt.words[w] if w < len(fmt.words) else frames.WordFormat(1)
+            code, crc = crc_config(word.crc)
             words.update({f"w{w}_data_bits": word.data_bits, f"w{w}_nenw": int(word.nenw),
-                          f"w{w}_lc": int(word.lc), f"w{w}_crc": CRC_CODE[word.crc]})
+                          f"w{w}_lc": int(word.lc), f"w{w}_crc": code})
+            if isinstance(word.crc, frames.CustomCrc):
+                custom[f"cfg_crc{w}"] = {f"w{w}_crc_{k}": crc[k]
+                                         for k in ("width", "poly", "inverted")}
+                custom[f"cfg_crc{w}_start"] = {f"w{w}_crc_start": crc["start"]}
         words["w1_enable"] = int(len(fmt.words) == 2)
         settings = {
             "cfg_ma": {"ma_half_period": int(hp), "delay_limit": 0},
             "cfg_period": {"request_period": 0}, "cfg_break": {"break_time": 0},
             "cfg_ack": {"ack_limit": 0}, "cfg_timeout": {"timeout_limit": 0},
+            **custom,
             "cfg_words": words,
             "cfg_checks": {"end_check": 0, "spw_check": int(len(fmt.words) == 2),
                            "spw_tolerance": 1},

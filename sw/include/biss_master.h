@@ -442,10 +442,12 @@ biss_err_t biss_bp3_read_eds(biss_channel_t *ch, unsigned slave_id, unsigned pro
 
 /* The data-channel settings of a BP3 Standard Encoder (C = 0) from its EDS: word 0 with
  * DL - 2 position bits, nE / nW, no LC and the CRC that CPOLY / CSTART name (CRC-6 0x43 or
- * CRC-16 0x190D9, start 0); word 1 and the SPW check off. Only those fields of cfg change: the
- * MA rate and times stay as the caller set them (e.g. biss_config_from_preset). Refused with
- * BISS_ERR_UNSUPPORTED: C = 1, feedback bits other than nE then nW, DL_POS 0, no CRC, another
- * polynomial or a start value other than 0. biss_configure checks DL_POS against the channel. */
+ * CRC-16 0x190D9 from 0: the named ones; any other polynomial of 1 .. 16 bits with a start
+ * value that fits: BISS_CRC_CUSTOM, sent inverted); word 1 and the SPW check off. Only those
+ * fields of cfg change: the MA rate and times stay as the caller set them (e.g.
+ * biss_config_from_preset). Refused with BISS_ERR_UNSUPPORTED: C = 1, feedback bits other than
+ * nE then nW, DL_POS 0, no CRC (CPOLY 0), a CRC wider than 16 bits, a start value wider than
+ * the CRC. biss_configure checks DL_POS against the channel. */
 biss_err_t biss_bp3_config(const biss_bp3_eds_t *eds, biss_config_t *cfg);
 
 #ifdef __cplusplus
