@@ -119,9 +119,8 @@ IDENTIFY_ACCESSES = [(False, 0x40, 4), (True, 0x40, 1), (False, 0x40, 1), (False
 IDENTIFY_ACCESSES_SELECTED = [(False, 0x40, 4), (False, 0x00, 64)]    # BP3 bank selected already
 
 
-def check_identification(ident, eds, slave, log, bank_select, config=True):
-    """What bp3.identify found, against the model's encoder; its accesses as documented;
-    with ``config``, the derived settings as a CRC-6 encoder's (``expected_config``)."""
+def check_identification(ident, eds, slave, log, bank_select):
+    """What bp3.identify found, against the model's encoder; its accesses as documented."""
     assert ident.profile == bp3.ProfileId(1, bp3.CrcMode.SEPARATE, eds.data_length), ident.profile
     assert (ident.eds_bank, ident.profile_bank) == (1, 2)
     raw = eds.to_bytes()
@@ -129,7 +128,7 @@ def check_identification(ident, eds, slave, log, bank_select, config=True):
     for name in (f for f in bp3.Bp3Eds.__dataclass_fields__ if f not in ("raw", "chksum")):
         assert getattr(ident.eds, name) == eds.value_of(name), name
     assert ident.eds.chksum == raw[0x3F]
-    assert not config or ident.config == expected_config(eds.dl_pos), ident.config
+    assert ident.config == expected_config(eds.dl_pos), ident.config
     assert slave.registers.bank_select == bank_select, "bank select not restored"
     assert [(a.write, a.address, a.count) for a in log] == (
         IDENTIFY_ACCESSES if bank_select != 2 else IDENTIFY_ACCESSES_SELECTED), \
@@ -262,12 +261,11 @@ async def bp3_custom_crc_identify_and_configure(dut):
     derive_config() alone, positions read.
 
     DL_POS 6 at 10 MHz over 0 m, adaptive timeout, processing 0.3 .. 0.8 us (a cycle of about
-    4 us). The data channel reads the encoder's own frame while the host identifies it (every
-    cycle checked by the monitor). On Verilator bp3.identify() runs through the ports (the
-    documented accesses, its EDS the model's bank: 1,103 frames); on Icarus (that 64-byte read
-    is minutes there: see ``bp3_identify_and_configure``) registers 0x40..0x43 are read through
-    the ports and decoded (bp3.decode_profile_id), and bp3.decode_eds() + derive_config() take
-    the model's bank. The derived settings must be a custom CRC (cfg_w0_crc = 3, width 16,
+    4 us). The data channel reads the encoder's own frame while the host reads its profile
+    (every cycle checked by the monitor): registers 0x40..0x43 through the ports, decoded by
+    bp3.decode_profile_id; bp3.decode_eds() + derive_config() take the model's bank (the
+    64-byte EDS read through the ports, 1,103 frames, is ``bp3_identify_and_configure``'s
+    and does not depend on the CRC the EDS names). The derived settings must be a custom CRC (cfg_w0_crc = 3, width 16,
     polynomial 0x1021, start 0xFFFF, inverted) as the model's CRC says; word 0's CRC is then set
     to the named CRC-6 by the test, so only the derived settings can make the cycles OK; they
     are applied alone and 8 positions read, each OK with the model's CRC good.
@@ -282,22 +280,15 @@ async def bp3_custom_crc_identify_and_configure(dut):
     tb.processing_s = (0.3e-6, 0.8e-6)     # a short cycle: the identification is ~1,100 of them
     ctl = ControlChannel(tb)
     await new_encoder(tb, ctl, slave, fmt, 10e6, 0, timeout_s)
-    if on_icarus():
-        regs = await ctl.read_registers(0, 0x40, 4)
-        assert regs == bytes(slave.registers.read(a) for a in range(0x40, 0x44)), regs.hex()
-        profile = bp3.decode_profile_id(regs[2], regs[3])
-        decoded = bp3.decode_eds(eds.to_bytes(), profile=profile)
-        config = bp3.derive_config(decoded)
-    else:
-        first = len(ctl.log)
-        ident = await ctl.run_host(bp3.identify)
-        check_identification(ident, eds, slave, ctl.log[first:], bank_select=0,
-                             config=False)
-        decoded, config = ident.eds, ident.config
+    regs = await ctl.read_registers(0, 0x40, 4)
+    assert regs == bytes(slave.registers.read(a) for a in range(0x40, 0x44)), regs.hex()
+    profile = bp3.decode_profile_id(regs[2], regs[3])
+    decoded = bp3.decode_eds(eds.to_bytes(), profile=profile)
+    config = bp3.derive_config(decoded)
     assert (decoded.cpoly, decoded.cstart) == (eds.cpoly, eds.cstart)
     code, custom = crc_config(CUSTOM_CRC)
     assert config == {"cfg_w0_data_bits": CUSTOM_CRC_DL_POS, "cfg_w0_nenw": 1, "cfg_w0_lc": 0,
-                      "cfg_w0_gray": 0, "cfg_w0_crc": code,
+                      "cfg_w0_gray": 0, "cfg_w0_signed": 0, "cfg_w0_crc": code,
                       **{f"cfg_w0_crc_{k}": v for k, v in custom.items()},
                       "cfg_w1_enable": 0, "cfg_spw_check": 0}, config
     # Word 0 set to CRC-6 (what the core would check without the derived settings), then

@@ -109,13 +109,14 @@ async def driver_reads_two_presets(dut):
     dut._log.info("seq per channel %s, %d bus transactions", seqs, drv.transactions)
 
 
-#: Encoders with other CRCs and Gray positions (issue 26): channel 0 a Gray-coded 32-bit word
-#: with CRC-16/IBM-3740 (0x1021 from 0xFFFF, sent plain), channel 1 a 26-bit word with
-#: iC-MB4's 8-bit CRC (0x12F, start 0, inverted).
+#: Encoders with other CRCs, Gray and signed positions (issue 26): channel 0 a Gray-coded
+#: 32-bit word with CRC-16/IBM-3740 (0x1021 from 0xFFFF, sent plain), channel 1 a signed
+#: 26-bit word with iC-MB4's 8-bit CRC (0x12F, start 0, inverted).
 CUSTOM_FORMATS = (
     frames.FrameFormat("gray32_crc16_ibm3740", (frames.WordFormat(
         32, gray=True, crc=frames.CustomCrc(16, 0x1021, 0xFFFF, False)),)),
-    frames.FrameFormat("icmb4_crc8_26", (frames.WordFormat(26, crc=frames.CustomCrc(8, 0x2F)),)),
+    frames.FrameFormat("icmb4_crc8_26_signed", (frames.WordFormat(
+        26, crc=frames.CustomCrc(8, 0x2F), signed=True),)),
 )
 
 
@@ -123,8 +124,9 @@ CUSTOM_FORMATS = (
 @long_on_icarus
 async def driver_custom_crcs_and_gray(dut):
     """The C driver sets each channel's word to its encoder's CRC (a custom one written field
-    by field; iC-MB4's 8-bit one by biss_crc_named) and Gray decoding: the registers hold
-    them, and every position read is the one the encoder sent; the same channel set to the
+    by field; iC-MB4's 8-bit one by biss_crc_named), Gray decoding and signed data: the
+    registers hold them, and every position read is the one the encoder sent (a signed one
+    also through biss_signed_data); the same channel set to the
     named CRC-6 instead gets CRC errors only."""
     tb = BusTestbench(dut, seed=26)
     await tb.start(CUSTOM_FORMATS)
@@ -135,7 +137,7 @@ async def driver_custom_crcs_and_gray(dut):
         await drv.check("biss_config_from_preset", byref(cfg), b"resolute_c_26", int(CLK_HZ),
                         5_000_000)
         word, want = cfg.word[0], fmt.words[0]
-        word.data_bits, word.gray = want.data_bits, want.gray
+        word.data_bits, word.gray, word.is_signed = want.data_bits, want.gray, want.signed
         if ch.index == 0:
             word.crc, word.crc_width, word.crc_poly = CRC_CODE["custom"], 16, 0x1021
             word.crc_start, word.crc_inverted = 0xFFFF, False
@@ -147,11 +149,21 @@ async def driver_custom_crcs_and_gray(dut):
         assert (crc["w0_crc_width"], crc["w0_crc_poly"], start["w0_crc_start"],
                 crc["w0_crc_inverted"]) == (want.crc.width, want.crc.poly, want.crc.start,
                                             int(want.crc.inverted))
-        assert (await tb.read_fields("cfg_words", ch.index))["w0_gray"] == int(want.gray)
+        words = await tb.read_fields("cfg_words", ch.index)
+        assert (words["w0_gray"], words["w0_signed"]) == (int(want.gray), int(want.signed))
     await tb.encoders_ready()
+    negative = 0
     for _ in range(3):
         for n, ch in enumerate(chans):
-            tb.check_result(n, await sample(drv, ch))
+            res = await sample(drv, ch)
+            parsed = tb.check_result(n, res)
+            if CUSTOM_FORMATS[n].words[0].signed:
+                # biss_signed_data: the signed value the encoder sent, whatever its sign.
+                want = frames.to_signed(parsed["words"][0]["position"], 26)
+                got = drv.lib.biss_signed_data(byref(ch), 0, res["word0"])
+                assert got == want, (got, want)
+                negative += want < 0
+    dut._log.info("%d of 3 signed positions negative", negative)
     # Channel 0 with the right CRC but start 0 instead of 0xFFFF: over words of one length the
     # two CRCs always differ (by the start values' difference times x^n, never a multiple of
     # the polynomial), so every frame is a CRC error whatever the position. (A wrong
@@ -504,28 +516,26 @@ CUSTOM_CRC = frames.CustomCrc(16, 0x1021, start=0xFFFF, inverted=True)
 async def driver_bp3_custom_crc(dut):
     """A BP3 encoder model whose EDS names CRC 0x11021 from 0xFFFF (CPOLY 0x8810, CSTART
     0xFFFF) and whose frames carry it (frames.CustomCrc), the data channel reading it.
-    biss_bp3_identify over the control channel; then the EDS: on Verilator read over the
-    control channel (biss_bp3_read_eds, the bank select restored), on Icarus decoded from the
-    model's bank (biss_bp3_decode_eds: the 64-byte read, see
-    driver_bp3_identify_eds_and_configure); its CPOLY / CSTART are the model's. Word 0's
+    biss_bp3_identify over the control channel; then the EDS decoded from the model's bank
+    (biss_bp3_decode_eds; the 64-byte read over the control channel is
+    driver_bp3_identify_eds_and_configure's); its CPOLY / CSTART are the model's. Word 0's
     custom CRC is then cleared by the test (code 3 with width 0: state.config_error), and
     biss_bp3_config + biss_configure set it: cfg_words (DL_POS, nE/nW, no LC, code 3, word 1
     off) and cfg_crc0 / cfg_crc0_start as the model's CRC, config_error 0, and three positions
     read through the driver are the model's with their CRC good."""
     fmt = frames.FrameFormat("bp3_6_crc_0x11021",
                              (frames.WordFormat(BP3_DL_POS, crc=CUSTOM_CRC),))
-    tb, drv, ch, eds, registers = await bp3_setup(dut, seed=25, fmt=fmt, **CUSTOM_EDS)
+    tb, drv, ch, eds, _ = await bp3_setup(dut, seed=25, fmt=fmt, **CUSTOM_EDS)
     pid = Bp3Id()
     await drv.check("biss_bp3_identify", byref(ch), 0, byref(pid))
     assert (pid.version, pid.crc_mode, pid.data_length, pid.position_bits) == \
         (eds.bp_ver, 0, BP3_DL_POS + 2, BP3_DL_POS)
+    # The EDS decoded from the model's bank: reading it over the control channel (about 1,100
+    # cycles, 30 s of Verilator) is driver_bp3_identify_eds_and_configure's, and does not
+    # depend on the CRC the EDS names.
     got = CBp3Eds()
-    if icarus():
-        bank = (c_uint8 * len(eds.to_bytes())).from_buffer_copy(eds.to_bytes())
-        await drv.check("biss_bp3_decode_eds", bank, byref(got))
-    else:
-        await drv.check("biss_bp3_read_eds", byref(ch), 0, 0, byref(got))
-        assert registers.bank_select == 0, "the bank select was not restored"
+    bank = (c_uint8 * len(eds.to_bytes())).from_buffer_copy(eds.to_bytes())
+    await drv.check("biss_bp3_decode_eds", bank, byref(got))
     assert (got.cpoly, got.cstart) == (CUSTOM_EDS["cpoly"], CUSTOM_EDS["cstart"])
 
     await tb.write_fields("cfg_crc0", 0, w0_crc_poly=0, w0_crc_width=0, w0_crc_inverted=0)

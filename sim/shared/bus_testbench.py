@@ -21,7 +21,7 @@ from cocotb.triggers import ClockCycles, Lock, RisingEdge, Timer, with_timeout
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
-from master_contract import STATUS, SYS_CLK_HZ, crc_config
+from master_contract import MAX_DATA_BITS, STATUS, SYS_CLK_HZ, crc_config
 from sim.shared import regspec
 
 CLK_HZ = SYS_CLK_HZ
@@ -214,7 +214,8 @@ class BusTestbench:
             word = fmt.words[w] if w < len(fmt.words) else frames.WordFormat(1)
             code, crc = crc_config(word.crc)
             words.update({f"w{w}_data_bits": word.data_bits, f"w{w}_nenw": int(word.nenw),
-                          f"w{w}_lc": int(word.lc), f"w{w}_crc": code})
+                          f"w{w}_lc": int(word.lc), f"w{w}_crc": code,
+                          f"w{w}_gray": int(word.gray), f"w{w}_signed": int(word.signed)})
             if isinstance(word.crc, frames.CustomCrc):
                 custom[f"cfg_crc{w}"] = {f"w{w}_crc_{k}": crc[k]
                                          for k in ("width", "poly", "inverted")}
@@ -261,8 +262,12 @@ class BusTestbench:
             n = sorted(chan.sent).index(res["time"]) + 1
             assert res["seq"] == n % 2**16, f"ch{ch}: seq {res['seq']}, frame {n} since reset"
         for w, word in enumerate(parsed["words"]):
-            assert res[f"word{w}"] == word["position"], \
-                f"ch{ch} word{w}: {res[f'word{w}']:#x} != sent {word['position']:#x}"
+            got, want = res[f"word{w}"], word["position"]
+            if chan.fmt.words[w].signed:
+                # Sign-extended by the core to the register's width (docs/ports.md).
+                got = frames.to_signed(got, MAX_DATA_BITS[w])
+                want = frames.to_signed(want, chan.fmt.words[w].data_bits)
+            assert got == want, f"ch{ch} word{w}: {got:#x} != sent {want:#x}"
             if chan.fmt.words[w].nenw:
                 assert (res[f"w{w}_ne"], res[f"w{w}_nw"]) == (word["ne"], word["nw"])
             assert res[f"w{w}_crc_ok"] == 1
