@@ -146,10 +146,11 @@ PRESETS = {
     "default": ("the committed rtl/generated/biss_master.v: 2 words of up to 55/40 bits, "
                 "both CRCs on each, the register-access engine (BP3 identification, EDS)", []),
     "biss-c": ("BiSS C only: one word of up to 36 bits, CRC-6, no register access", _BISS_C),
-    "biss-c-lean": ("BiSS C only, smallest: as biss-c, without error counters, timestamp "
-                    "and custom CRCs, 16-bit time settings",
+    "biss-c-lean": ("BiSS C only, smallest: as biss-c, without error counters, timestamp, "
+                    "custom CRCs and signed words, 16-bit time settings",
                     _BISS_C + ["--counter-width", "0", "--timestamp-width", "0",
-                               "--timer-width", "16", "--custom-crc", "0"]),
+                               "--timer-width", "16", "--custom-crc", "0",
+                               "--signed-words", "0"]),
     "bp3": ("BiSS C / BP3 Standard Encoder Profile: one word of up to 55 bits (the profile's "
             "longest position), CRC-6, the register-access engine (identification, EDS, "
             "encoder registers)",
@@ -238,6 +239,11 @@ def _parser():
                       help="1: each word may have its own CRC (cfg_wN_crc = 3: width 1..16, "
                            "polynomial, start value, inversion on the cfg_wN_crc_* ports); "
                            "0: the named CRCs only (default: %(default)s)")
+    core.add_argument("--signed-words", type=int, choices=(0, 1),
+                      default=int(defaults.signed_words),
+                      help="1: a word may be two's complement (cfg_wN_signed: sign-extended to "
+                           "its port's width); 0: unsigned words only, no cfg_wN_signed ports "
+                           "(default: %(default)s)")
     core.add_argument("--register-access", type=int, choices=(0, 1),
                       default=int(defaults.register_access),
                       help="1: build the register-access engine (ca_* ports, CDM hold); "
@@ -275,6 +281,7 @@ def _params(ap, args):
                             counter_width=args.counter_width,
                             timestamp_width=args.timestamp_width,
                             custom_crc=bool(args.custom_crc),
+                            signed_words=bool(args.signed_words),
                             register_access=bool(args.register_access),
                             start_wait_frames=args.start_wait_frames)
     except ValueError as e:

@@ -10,7 +10,7 @@ from amaranth.lib import data
 
 from . import protocol
 from .params import (CRC_SETTINGS, DELAY_SPREAD_WIDTH, FAULTS, HALF_PERIOD_WIDTH, LINE_CHECK_WIDTH,
-                     QUIET_WIDTH, AccessStatus, Status, WORD_CONFIG)
+                     QUIET_WIDTH, AccessStatus, Status, WORD_CONFIG, WORD_CONFIG_UNSIGNED)
 
 
 def config_layout(params):
@@ -19,6 +19,8 @@ def config_layout(params):
     The member order is the port order.
     """
     tw = params.timer_width
+    # ``cfg_wN_signed`` only in builds with signed words (the field is the word's last).
+    word = WORD_CONFIG if params.signed_words else WORD_CONFIG_UNSIGNED
     members = {
         "ma_half_period": HALF_PERIOD_WIDTH,
         "request_period": tw,
@@ -30,14 +32,14 @@ def config_layout(params):
         "quiet_time": QUIET_WIDTH,
         "noise_limit": LINE_CHECK_WIDTH,
         "delay_tolerance": LINE_CHECK_WIDTH,
-        "w0": WORD_CONFIG,
+        "w0": word,
     }
     # A custom CRC per word (``cfg_w0_crc`` = 3): ``cfg_w0_crc_width``, ``_poly``, ``_start``,
     # ``_inverted``.
     if params.custom_crc:
         members["w0_crc"] = CRC_SETTINGS
     if params.words == 2:
-        members.update({"w1_enable": 1, "w1": WORD_CONFIG})
+        members.update({"w1_enable": 1, "w1": word})
         if params.custom_crc:
             members["w1_crc"] = CRC_SETTINGS
         members.update({"spw_check": 1, "spw_tolerance": 8})

@@ -115,6 +115,10 @@ WORD_CONFIG = data.StructLayout({
     "gray": 1,          # the data field is Gray-coded: reported as binary
     "signed": 1,        # the data field is two's complement: sign-extended to the port's width
 })
+#: WORD_CONFIG without ``signed`` (builds without ``signed_words``): the same fields at the same
+#: bits, one shorter, so a view of it assigned to a WORD_CONFIG reads ``signed`` = 0.
+WORD_CONFIG_UNSIGNED = data.StructLayout(
+    {name: field.shape for name, field in WORD_CONFIG if name != "signed"})
 
 
 def _cycles(seconds, clk_hz):
@@ -151,6 +155,10 @@ class MasterParams:
         Accept :attr:`Crc.CUSTOM`: each word's CRC may be any of width 1..16, polynomial,
         start value and inversion, set on its ``cfg_wN_crc_*`` ports (latched per cycle).
         Without it those ports are not built and code 3 is a configuration error.
+    signed_words : bool
+        Accept ``cfg_wN_signed``: a word's data may be two's complement, sign-extended to its
+        port's width (one LUT per data bit). Without it those ports are not built and every
+        word is unsigned.
     register_access : bool
         Build the register-access engine (control channel, CDM/CDS; the ``ca_*`` ports) and
         the CDM hold of MA. Without it MA is never held low after a frame.
@@ -166,6 +174,7 @@ class MasterParams:
     counter_width: int = 16
     timestamp_width: int = 32
     custom_crc: bool = True
+    signed_words: bool = True
     register_access: bool = True
     start_wait_frames: int = 16
 
@@ -203,6 +212,8 @@ class MasterParams:
                              f"to 64, not {self.timestamp_width!r}")
         if not isinstance(self.custom_crc, bool):
             raise ValueError(f"custom_crc must be a bool, not {self.custom_crc!r}")
+        if not isinstance(self.signed_words, bool):
+            raise ValueError(f"signed_words must be a bool, not {self.signed_words!r}")
         if not isinstance(self.register_access, bool):
             raise ValueError(f"register_access must be a bool, not {self.register_access!r}")
         if not isinstance(self.start_wait_frames, int) or not 1 <= self.start_wait_frames <= 255:

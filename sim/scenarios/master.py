@@ -253,6 +253,9 @@ async def signed_positions(dut):
     then random ones (half of them negative). The same encoder read unsigned has zeros above
     its field, so the setting is really used."""
     tb = Testbench(dut, seed=28)
+    if not tb.has_signed:
+        dut._log.info("this build has no signed words (biss-c-lean): nothing to read")
+        return
     await tb.start(cable=Cable(length_m=20))
     for fmt in SIGNED_FORMATS:
         if len(fmt.words) > tb.words:

@@ -28,8 +28,9 @@ CFG_PORTS = ["cfg_ma_half_period", "cfg_request_period", "cfg_break_time", "cfg_
              "cfg_timeout_limit", "cfg_delay_limit", "cfg_end_check", "cfg_quiet_time",
              "cfg_noise_limit", "cfg_delay_tolerance", "cfg_w1_enable", "cfg_spw_check",
              "cfg_spw_tolerance"] + [f"cfg_w{w}_{f}" for w in range(2)
-                                     for f in ("data_bits", "nenw", "lc", "crc", "gray",
-                                               "signed")]
+                                     for f in ("data_bits", "nenw", "lc", "crc", "gray")]
+#: A word's two's complement setting, in builds with signed words.
+SIGNED_PORTS = [f"cfg_w{w}_signed" for w in range(2)]
 #: A word's custom CRC (cfg_wN_crc = 3), in builds with custom CRCs.
 CUSTOM_CRC_PORTS = [f"cfg_w{w}_crc_{f}" for w in range(2) for f in ("width", "poly", "start", "inverted")]
 
@@ -95,6 +96,7 @@ class Testbench:
         self.has_timestamp = hasattr(dut, "timestamp")
         self.has_register_access = hasattr(dut, "ca_start")      # the default build's engine
         self.has_custom_crc = hasattr(dut, "cfg_w0_crc_width")   # not in biss-c-lean
+        self.has_signed = hasattr(dut, "cfg_w0_signed")          # not in biss-c-lean
         # Issue 28's noise defences: their ports only where the core has them, so every
         # scenario runs on a core with them and on one without.
         self.noise_defaults = {n: v for n, v in NOISE_CONFIG_DEFAULTS.items()
@@ -122,7 +124,8 @@ class Testbench:
         for name in ("start", "periodic", "abort_cycle") + (
                 ("clear_counters",) if self.has_counters else ()):
             getattr(dut, name).value = 0
-        for name in self._ports(CFG_PORTS + (CUSTOM_CRC_PORTS if self.has_custom_crc else [])):
+        for name in self._ports(CFG_PORTS + (CUSTOM_CRC_PORTS if self.has_custom_crc else [])
+                                + (SIGNED_PORTS if self.has_signed else [])):
             getattr(dut, name).value = 0
         self._drive_noise_config(self.noise_defaults)
         # The register-access engine's inputs (builds with it): no access unless a test asks.
@@ -181,8 +184,11 @@ class Testbench:
             code, custom = crc_config(word.crc)
             ports.update({f"cfg_w{w}_data_bits": word.data_bits, f"cfg_w{w}_nenw": int(word.nenw),
                           f"cfg_w{w}_lc": int(word.lc), f"cfg_w{w}_crc": code,
-                          f"cfg_w{w}_gray": int(word.gray),
-                          f"cfg_w{w}_signed": int(word.signed)})
+                          f"cfg_w{w}_gray": int(word.gray)})
+            if self.has_signed:
+                ports[f"cfg_w{w}_signed"] = int(word.signed)
+            else:
+                assert not word.signed, "this build has no signed words"
             if self.has_custom_crc:
                 ports.update({f"cfg_w{w}_crc_{k}": v for k, v in custom.items()})
             else:

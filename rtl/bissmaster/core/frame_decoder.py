@@ -204,9 +204,11 @@ class FrameDecoder(wiring.Component):
         for w in range(p.words):
             this_word = in_word & (word == w)
             data_w = getattr(self, f"data{w}")
-            fill = (self.words[w].signed & first_bit & decoded[w]).replicate(len(data_w))
+            shifted = Cat(decoded[w], data_w)[:len(data_w)]
+            if p.signed_words:
+                shifted |= (self.words[w].signed & first_bit & decoded[w]).replicate(len(data_w))
             with m.If(this_word & in_data):
-                m.d.sync += data_w.eq(Cat(decoded[w], data_w)[:len(data_w)] | fill)
+                m.d.sync += data_w.eq(shifted)
             # A word without nE/nW reads as "no error, no warning" (both high).
             with m.If(~self.words[w].nenw):
                 m.d.sync += [self.ne[w].eq(1), self.nw[w].eq(1)]

@@ -482,9 +482,10 @@ def derive_config(eds, *, params=None):
         ("w0", "nenw"): 1,
         ("w0", "lc"): 0,
         ("w0", "gray"): 0,                  # BP3 positions are binary
-        ("w0", "signed"): 0,                # ... and unsigned
         **_data_crc(eds, params),
     }
+    if params.signed_words:
+        settings[("w0", "signed")] = 0      # ... and unsigned
     if params.words == 2:
         settings.update({("w1_enable",): 0, ("spw_check",): 0})
     return _port_values(settings, params)
