@@ -148,3 +148,13 @@ def crc_settings(crc):
         width, poly, start, inverted = named[crc]
         return {"width": width, "poly": poly, "start": start, "inverted": inverted}
     return crc_config(crc)[1]
+
+
+def port_position(word, field, width):
+    """What ``wordN_position`` (``width`` bits) shows for a word's data field ``field`` (the
+    value as the encoder model parses it: Gray already decoded) of frame format word ``word``:
+    the field right-justified with zeros above it, or, for a signed word, its two's complement
+    value sign-extended to the port's width (docs/ports.md, ``cfg_w0_signed``)."""
+    if not word.signed or not field >> (word.data_bits - 1):
+        return field
+    return (field - (1 << word.data_bits)) % (1 << width)

@@ -512,6 +512,12 @@ def random_config(c, two_words):
                 cfg[field[:-len("_width")]] = 3
     if c.tb.has_custom_crc:
         random_custom_crcs(rng, cfg)
+    # Gray and two's complement words (issue 26): any word, valid or not (they never make a
+    # configuration invalid); the encoder then sends Gray / signed fields (format_of).
+    for w in range(2):
+        cfg[f"cfg_w{w}_gray"] = int(rng.random() < 0.3)
+        if c.tb.has_signed:
+            cfg[f"cfg_w{w}_signed"] = int(rng.random() < 0.3)
     return cfg
 
 
@@ -564,8 +570,10 @@ async def config_fuzz(dut):
             stats["slow_ma_clamped"] += 1
         valid = config_valid(cfg)
         if valid:
-            stats["custom_crc_words"] += sum(cfg[f"cfg_w{w}_crc"] == 3
-                                             for w in range(1 + (two and cfg["cfg_w1_enable"])))
+            used = range(1 + (two and cfg["cfg_w1_enable"]))
+            stats["custom_crc_words"] += sum(cfg[f"cfg_w{w}_crc"] == 3 for w in used)
+            stats["gray_words"] += sum(cfg[f"cfg_w{w}_gray"] for w in used)
+            stats["signed_words"] += sum(cfg.get(f"cfg_w{w}_signed", 0) for w in used)
         during = c.rng.random() < 0.25
         if during:
             await apply_config(c, last_valid)       # the cycle runs on the last valid one

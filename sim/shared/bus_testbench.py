@@ -21,7 +21,7 @@ from cocotb.triggers import ClockCycles, Lock, RisingEdge, Timer, with_timeout
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
-from master_contract import MAX_DATA_BITS, STATUS, SYS_CLK_HZ, crc_config
+from master_contract import MAX_DATA_BITS, STATUS, SYS_CLK_HZ, crc_config, port_position
 from sim.shared import regspec
 
 CLK_HZ = SYS_CLK_HZ
@@ -262,11 +262,8 @@ class BusTestbench:
             n = sorted(chan.sent).index(res["time"]) + 1
             assert res["seq"] == n % 2**16, f"ch{ch}: seq {res['seq']}, frame {n} since reset"
         for w, word in enumerate(parsed["words"]):
-            got, want = res[f"word{w}"], word["position"]
-            if chan.fmt.words[w].signed:
-                # Sign-extended by the core to the register's width (docs/ports.md).
-                got = frames.to_signed(got, MAX_DATA_BITS[w])
-                want = frames.to_signed(want, chan.fmt.words[w].data_bits)
+            got = res[f"word{w}"]
+            want = port_position(chan.fmt.words[w], word["position"], MAX_DATA_BITS[w])
             assert got == want, f"ch{ch} word{w}: {got:#x} != sent {want:#x}"
             if chan.fmt.words[w].nenw:
                 assert (res[f"w{w}_ne"], res[f"w{w}_nw"]) == (word["ne"], word["nw"])

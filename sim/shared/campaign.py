@@ -26,7 +26,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer, with_ti
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
-from master_contract import NOISE_STATUSES, STATUS, STATUS_NAME
+from master_contract import NOISE_STATUSES, STATUS, STATUS_NAME, port_position
 from sim.shared.functional_coverage import Coverage
 from sim.shared.reference import BREAK_STATUSES, FRAME_STATUS_CODES, MasterReference
 from sim.shared.testbench import CLK_HZ, Testbench, preset
@@ -206,9 +206,11 @@ class Campaign:
         self.expect(res.valid == int(v.status == STATUS["OK"]), f"{where}: valid {res.valid}")
         for w, word in enumerate(v.parsed["words"]):
             self.expect(f[f"word{w}_crc_ok"] == int(word["crc_ok"]), f"{where}: word{w} crc_ok")
-            self.expect(f[f"word{w}_position"] == word["position"],
+            want = port_position(self.fmt.words[w], word["position"],
+                                 len(getattr(self.dut, f"word{w}_position")))
+            self.expect(f[f"word{w}_position"] == want,
                         f"{where}: word{w} position {f[f'word{w}_position']:#x} "
-                        f"!= {word['position']:#x}")
+                        f"!= {want:#x}")
             if self.fmt.words[w].nenw:
                 self.expect((f[f"word{w}_ne"], f[f"word{w}_nw"]) == (word["ne"], word["nw"]),
                             f"{where}: word{w} nE/nW")

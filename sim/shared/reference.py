@@ -156,7 +156,9 @@ def format_of(cfg, words=2):
     ws = []
     for w in range(2 if words == 2 and cfg["cfg_w1_enable"] else 1):
         ws.append(frames.WordFormat(cfg[f"cfg_w{w}_data_bits"], nenw=bool(cfg[f"cfg_w{w}_nenw"]),
-                                    lc=bool(cfg[f"cfg_w{w}_lc"]), crc=_crc_of(cfg, w)))
+                                    lc=bool(cfg[f"cfg_w{w}_lc"]), crc=_crc_of(cfg, w),
+                                    gray=bool(cfg.get(f"cfg_w{w}_gray", 0)),
+                                    signed=bool(cfg.get(f"cfg_w{w}_signed", 0))))
     return _LooseFormat("fuzz", tuple(ws))
 
 

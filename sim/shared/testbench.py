@@ -17,7 +17,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Time
 from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
 from master_contract import (CA_COUNTERS, COUNTERS, CRC_CODE, crc_config, NOISE_COUNTERS, NOISE_FIELDS,
-                             STATUS, SYS_CLK_HZ, NOISE_CONFIG_DEFAULTS)
+                             STATUS, SYS_CLK_HZ, NOISE_CONFIG_DEFAULTS, port_position)
 
 CLK_HZ = int(os.environ.get("BISS_CLK_HZ", str(SYS_CLK_HZ)))
 CLK_NS = 1e9 / CLK_HZ
@@ -337,13 +337,9 @@ class Testbench:
         f = res.fields
         parsed = frames.parse_frame(view, self.line_bits(sent, view))
         for w, word in enumerate(parsed["words"]):
-            got, want = f[f"word{w}_position"], word["position"]
-            if view.words[w].signed:
-                # Two's complement in the port's whole width: the sent field's value, sign
-                # and all (docs/ports.md: a signed word is sign-extended).
-                width = len(getattr(self.dut, f"word{w}_position"))
-                got = frames.to_signed(got, width)
-                want = frames.to_signed(want, view.words[w].data_bits)
+            got = f[f"word{w}_position"]
+            want = port_position(view.words[w], word["position"],
+                                 len(getattr(self.dut, f"word{w}_position")))
             assert got == want, f"word{w} position {got:#x} != sent {want:#x}"
             if view.words[w].nenw:
                 assert (f[f"word{w}_ne"], f[f"word{w}_nw"]) == (word["ne"], word["nw"])
