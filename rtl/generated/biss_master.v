@@ -1167,7 +1167,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$203 ),
     .load(load),
-    .\port$2038$0 (\bit ),
+    .\port$2007$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1231,7 +1231,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero(\lc_zero$281 ),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$1506$0 (\$24 ),
+    .\port$1475$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -10677,101 +10677,33 @@ endmodule
 module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
-  wire \$10 ;
-  wire \$100 ;
-  wire \$101 ;
-  wire \$102 ;
-  wire \$103 ;
-  wire \$104 ;
-  wire \$105 ;
-  wire \$106 ;
-  wire \$107 ;
-  wire \$108 ;
-  wire \$109 ;
+  wire [14:0] \$10 ;
   wire \$11 ;
-  wire \$110 ;
-  wire \$111 ;
-  wire \$112 ;
-  wire \$113 ;
-  wire \$114 ;
-  wire \$115 ;
-  wire \$116 ;
-  wire \$117 ;
-  wire \$118 ;
-  wire \$119 ;
-  wire \$12 ;
-  wire \$120 ;
-  wire \$121 ;
-  wire \$122 ;
-  wire \$123 ;
-  wire \$124 ;
-  wire \$125 ;
-  wire \$126 ;
-  wire \$127 ;
-  wire \$128 ;
-  wire \$129 ;
-  wire \$13 ;
-  wire \$130 ;
-  wire \$131 ;
-  wire \$132 ;
-  wire \$133 ;
-  wire \$134 ;
-  wire \$135 ;
-  wire \$136 ;
-  wire \$137 ;
-  wire \$138 ;
-  wire \$139 ;
+  wire [13:0] \$12 ;
+  wire [17:0] \$13 ;
   wire \$14 ;
-  wire \$140 ;
-  wire \$141 ;
-  wire \$142 ;
-  wire \$143 ;
-  wire \$144 ;
-  wire \$145 ;
-  reg \$146 ;
-  reg [12:0] \$147 ;
-  reg [16:0] \$148 ;
-  reg \$149 ;
   wire \$15 ;
-  reg \$150 ;
-  reg \$151 ;
-  reg \$152 ;
-  reg \$153 ;
-  reg \$154 ;
-  reg \$155 ;
-  reg [12:0] \$156 ;
-  reg \$157 ;
-  reg \$158 ;
-  reg \$159 ;
   wire \$16 ;
-  reg [1:0] \$160 ;
-  reg [16:0] \$161 ;
-  reg \$162 ;
-  reg \$163 ;
-  reg \$164 ;
-  reg \$165 ;
-  reg [12:0] \$166 ;
-  reg [1:0] \$167 ;
-  wire \$17 ;
-  wire \$18 ;
+  wire [13:0] \$17 ;
+  wire [17:0] \$18 ;
   wire \$19 ;
-  wire [14:0] \$2 ;
+  wire \$2 ;
   wire \$20 ;
   wire \$21 ;
   wire \$22 ;
-  wire \$23 ;
+  wire [12:0] \$23 ;
   wire \$24 ;
   wire \$25 ;
-  wire \$26 ;
-  wire \$27 ;
-  wire \$28 ;
+  wire [13:0] \$26 ;
+  wire [13:0] \$27 ;
+  wire [16:0] \$28 ;
   wire \$29 ;
-  wire \$3 ;
-  wire \$30 ;
-  wire \$31 ;
+  wire [14:0] \$3 ;
+  wire [13:0] \$30 ;
+  wire [13:0] \$31 ;
   wire \$32 ;
-  wire \$33 ;
-  wire \$34 ;
+  wire [13:0] \$33 ;
+  wire [17:0] \$34 ;
   wire \$35 ;
   wire \$36 ;
   wire \$37 ;
@@ -10799,82 +10731,77 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   wire \$57 ;
   wire \$58 ;
   wire \$59 ;
-  wire [15:0] \$6 ;
+  wire \$6 ;
   wire \$60 ;
   wire \$61 ;
   wire \$62 ;
   wire \$63 ;
-  wire [13:0] \$64 ;
-  wire [17:0] \$65 ;
+  wire \$64 ;
+  wire \$65 ;
   wire \$66 ;
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
-  wire \$7 ;
-  wire [12:0] \$70 ;
+  wire [14:0] \$7 ;
+  wire \$70 ;
   wire \$71 ;
   wire \$72 ;
-  wire [13:0] \$73 ;
-  wire [13:0] \$74 ;
-  wire [16:0] \$75 ;
-  wire \$76 ;
-  wire [13:0] \$77 ;
-  wire [13:0] \$78 ;
-  wire \$79 ;
-  wire [13:0] \$8 ;
-  wire [13:0] \$80 ;
-  wire [17:0] \$81 ;
-  wire \$82 ;
-  wire \$83 ;
-  wire \$84 ;
-  wire \$85 ;
-  wire \$86 ;
-  wire \$87 ;
-  wire \$88 ;
-  wire \$89 ;
-  wire [17:0] \$9 ;
-  wire \$90 ;
-  wire \$91 ;
-  wire \$92 ;
-  wire \$93 ;
-  wire \$94 ;
-  wire \$95 ;
-  wire \$96 ;
-  wire \$97 ;
-  wire \$98 ;
-  wire \$99 ;
+  wire \$73 ;
+  wire \$74 ;
+  reg \$75 ;
+  reg [12:0] \$76 ;
+  reg [16:0] \$77 ;
+  reg \$78 ;
+  reg [12:0] \$79 ;
+  wire [15:0] \$8 ;
+  reg \$80 ;
+  reg \$81 ;
+  reg \$82 ;
+  reg [1:0] \$83 ;
+  reg [16:0] \$84 ;
+  reg \$85 ;
+  reg \$86 ;
+  reg \$87 ;
+  reg \$88 ;
+  reg [12:0] \$89 ;
+  wire \$9 ;
+  reg [1:0] \$90 ;
   input arm;
   wire arm;
   output \bit ;
   wire \bit ;
   reg centre;
+  wire \centre$34 ;
+  reg clear;
+  wire \clear$32 ;
   input clk;
   wire clk;
-  reg crowded = 1'h0;
   reg decided;
+  wire \decided$35 ;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
   reg dropped;
   output early;
   reg early = 1'h0;
+  wire \edge ;
   reg [12:0] elapsed = 13'h0000;
   reg [15:0] first_load = 16'h0000;
   reg first_slot = 1'h0;
   reg gap = 1'h0;
   input [15:0] half_period;
   wire [15:0] half_period;
-  reg last = 1'h0;
   output level;
   wire level;
+  wire \level$29 ;
   output locked;
   reg locked = 1'h0;
+  wire majority;
   reg [12:0] mid_delay = 13'h0000;
   reg [16:0] mid_slot = 17'h00000;
   output noise;
   wire noise;
   reg odd = 1'h0;
-  reg one_edge = 1'h0;
-  reg [16:0] period_load = 17'h00000;
+  wire \odd$41 ;
   reg [1:0] phase = 2'h0;
   input receiver_clear;
   wire receiver_clear;
@@ -10889,217 +10816,147 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
-  reg strobed = 1'h0;
-  reg tail_odd = 1'h0;
-  reg two_edges = 1'h0;
-  reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
+  (* init = 1'h0 *)
+  wire \vote1$36 ;
   reg vote2 = 1'h0;
+  (* init = 1'h0 *)
+  wire \vote2$37 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$1  = half_period >= 2'h3;
-  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
-  assign \$3  = half_period < 2'h3;
-  assign \$4  = half_period - vote;
-  assign \$5  = $signed(\$4 ) - $signed(2'h1);
-  assign \$6  = vote - 1'h1;
-  assign \$7  = vote == 1'h1;
-  assign \$8  = mid_delay + 1'h1;
-  assign \$9  = mid_slot - 1'h1;
-  assign \$10  = ~ odd;
-  assign \$11  = level != slo_prev;
-  assign \$12  = one_edge & \$11 ;
-  assign \$13  = two_edges | \$12 ;
-  assign \$14  = level != slo_prev;
-  assign \$15  = one_edge | \$14 ;
-  assign \$16  = level != slo_prev;
-  assign \$17  = one_edge & \$16 ;
-  assign \$18  = two_edges | \$17 ;
-  assign \$19  = ~ single;
-  assign \$20  = decided & \$19 ;
-  assign \$21  = vote1 & vote2;
-  assign \$22  = vote1 & level;
-  assign \$23  = \$21  | \$22 ;
-  assign \$24  = vote2 & level;
-  assign \$25  = \$23  | \$24 ;
-  assign \$26  = vote1 & vote2;
-  assign \$27  = vote1 & level;
-  assign \$28  = \$26  | \$27 ;
-  assign \$29  = vote2 & level;
-  assign \$30  = \$28  | \$29 ;
-  assign \$31  = level != \$30 ;
-  assign \$32  = ~ single;
-  assign \$33  = decided & \$32 ;
-  assign \$34  = vote1 == level;
-  assign \$35  = vote2 != level;
-  assign \$36  = \$34  & \$35 ;
-  assign \$37  = vote1 & vote2;
-  assign \$38  = vote1 & level;
-  assign \$39  = \$37  | \$38 ;
-  assign \$40  = vote2 & level;
-  assign \$41  = \$39  | \$40 ;
-  assign \$42  = vote1 != \$41 ;
-  assign \$43  = vote1 & vote2;
-  assign \$44  = vote1 & level;
+  assign \$10  = \$9  ? half_period[15:1] : 15'h0000;
+  assign \$11  = \$10  == 1'h1;
+  assign \$12  = mid_delay + 1'h1;
+  assign \$13  = mid_slot - 1'h1;
+  assign \$14  = ~ odd;
+  assign \$15  = ~ level;
+  assign \$16  = elapsed != 13'h1fff;
+  assign \$17  = elapsed + 1'h1;
+  assign \$18  = slot_left - 1'h1;
+  assign \$19  = slot_left == 1'h1;
+  assign \$20  = ~ level;
+  assign \$21  = slo_prev & \$20 ;
+  assign \$22  = elapsed == 13'h1fff;
+  assign \$23  = \$22  ? 13'h1fff : mid_delay;
+  assign \$24  = ! mid_slot;
+  assign \$25  = elapsed == 13'h1fff;
+  assign \$26  = elapsed - 1'h1;
+  assign \$27  = \$25  ? 14'h1fff : \$26 ;
+  assign \$28  = half_period - 2'h2;
+  assign \$29  = elapsed == 13'h1fff;
+  assign \$30  = elapsed - 1'h1;
+  assign \$31  = \$29  ? 14'h1fff : \$30 ;
+  assign \$32  = elapsed != 13'h1fff;
+  assign \$33  = elapsed + 1'h1;
+  assign \$34  = slot_left - 1'h1;
+  assign \$35  = slot_left == 1'h1;
+  assign \$36  = ! phase;
+  assign \$37  = first_slot & \$36 ;
+  assign \$38  = \$37  & level;
+  assign \$39  = ~ single;
+  assign \$40  = decided & first_slot;
+  assign \$41  = vote1 & vote2;
+  assign \$42  = vote1 & level;
+  assign \$43  = \$41  | \$42 ;
+  assign \$44  = vote2 & level;
   assign \$45  = \$43  | \$44 ;
-  assign \$46  = vote2 & level;
-  assign \$47  = \$45  | \$46 ;
-  assign \$48  = last == \$47 ;
-  assign \$49  = \$42  & \$48 ;
-  assign \$50  = \$36  | \$49 ;
-  assign \$51  = vote1 & vote2;
-  assign \$52  = vote1 & level;
+  assign \$46  = single ? level : \$45 ;
+  assign \$47  = ~ first_slot;
+  assign \$48  = decided & \$47 ;
+  assign \$49  = vote1 & vote2;
+  assign \$50  = vote1 & level;
+  assign \$51  = \$49  | \$50 ;
+  assign \$52  = vote2 & level;
   assign \$53  = \$51  | \$52 ;
-  assign \$54  = vote2 & level;
-  assign \$55  = \$53  | \$54 ;
-  assign \$56  = last == \$55 ;
-  assign \$57  = tail_odd & \$56 ;
-  assign \$58  = \$50  | \$57 ;
-  assign \$59  = \$58  | crowded;
-  assign \$60  = ~ strobed;
-  assign \$61  = \$59  & \$60 ;
-  assign \$62  = ~ level;
-  assign \$63  = elapsed != 13'h1fff;
-  assign \$64  = elapsed + 1'h1;
-  assign \$65  = slot_left - 1'h1;
-  assign \$66  = slot_left == 1'h1;
-  assign \$67  = ~ level;
-  assign \$68  = slo_prev & \$67 ;
-  assign \$69  = elapsed == 13'h1fff;
-  assign \$70  = \$69  ? 13'h1fff : mid_delay;
-  assign \$71  = ! mid_slot;
-  assign \$72  = elapsed == 13'h1fff;
-  assign \$73  = elapsed - 1'h1;
-  assign \$74  = \$72  ? 14'h1fff : \$73 ;
-  assign \$75  = half_period - 2'h2;
-  assign \$76  = elapsed == 13'h1fff;
-  assign \$77  = elapsed - 1'h1;
-  assign \$78  = \$76  ? 14'h1fff : \$77 ;
-  assign \$79  = elapsed != 13'h1fff;
-  assign \$80  = elapsed + 1'h1;
-  assign \$81  = slot_left - 1'h1;
-  assign \$82  = slot_left == 1'h1;
-  assign \$83  = ! phase;
-  assign \$84  = first_slot & \$83 ;
-  assign \$85  = \$84  & level;
-  assign \$86  = ~ single;
-  assign \$87  = decided & first_slot;
-  assign \$88  = vote1 & vote2;
-  assign \$89  = vote1 & level;
-  assign \$90  = \$88  | \$89 ;
-  assign \$91  = vote2 & level;
-  assign \$92  = \$90  | \$91 ;
-  assign \$93  = single ? level : \$92 ;
-  assign \$94  = ~ first_slot;
-  assign \$95  = decided & \$94 ;
-  assign \$96  = vote1 & vote2;
-  assign \$97  = vote1 & level;
-  assign \$98  = \$96  | \$97 ;
-  assign \$99  = vote2 & level;
-  assign \$100  = \$98  | \$99 ;
-  assign \bit  = single ? level : \$100 ;
-  assign \$101  = ~ single;
-  assign \$102  = decided & \$101 ;
-  assign \$103  = vote1 == level;
-  assign \$104  = vote2 != level;
-  assign \$105  = \$103  & \$104 ;
-  assign \$106  = vote1 & vote2;
-  assign \$107  = vote1 & level;
-  assign \$108  = \$106  | \$107 ;
-  assign \$109  = vote2 & level;
-  assign \$110  = \$108  | \$109 ;
-  assign \$111  = vote1 != \$110 ;
-  assign \$112  = vote1 & vote2;
-  assign \$113  = vote1 & level;
-  assign \$114  = \$112  | \$113 ;
-  assign \$115  = vote2 & level;
-  assign \$116  = \$114  | \$115 ;
-  assign \$117  = last == \$116 ;
-  assign \$118  = \$111  & \$117 ;
-  assign \$119  = \$105  | \$118 ;
-  assign \$120  = vote1 & vote2;
-  assign \$121  = vote1 & level;
-  assign \$122  = \$120  | \$121 ;
-  assign \$123  = vote2 & level;
-  assign \$124  = \$122  | \$123 ;
-  assign \$125  = last == \$124 ;
-  assign \$126  = tail_odd & \$125 ;
-  assign \$127  = \$119  | \$126 ;
-  assign \$128  = \$127  | crowded;
-  assign \$129  = \$102  & \$128 ;
-  assign \$130  = ~ strobed;
-  assign \$131  = \$129  & \$130 ;
-  assign noise = dropped | \$131 ;
-  assign \$132  = ! phase;
-  assign \$133  = first_slot & \$132 ;
-  assign \$134  = \$133  & level;
-  assign \$135  = ~ single;
-  assign \$136  = decided & first_slot;
-  assign \$137  = vote1 & vote2;
-  assign \$138  = vote1 & level;
-  assign \$139  = \$137  | \$138 ;
-  assign \$140  = vote2 & level;
-  assign \$141  = \$139  | \$140 ;
-  assign \$142  = single ? level : \$141 ;
-  assign \$143  = ! sampler_fsm_state;
-  assign \$144  = sampler_fsm_state == 1'h1;
-  assign \$145  = sampler_fsm_state == 2'h2;
+  assign \bit  = single ? level : \$53 ;
+  assign \edge  = level != slo_prev;
+  assign \$54  = ~ single;
+  assign \decided$35  = decided & \$54 ;
+  assign \$55  = vote1 & vote2;
+  assign \$56  = vote1 & level;
+  assign \$57  = \$55  | \$56 ;
+  assign \$58  = vote2 & level;
+  assign majority = \$57  | \$58 ;
+  assign noise = dropped | \odd$41 ;
+  assign \$59  = ~ level;
+  assign \$60  = slo_prev & \$59 ;
+  assign \$61  = ! phase;
+  assign \$62  = first_slot & \$61 ;
+  assign \$63  = \$62  & level;
+  assign \$64  = ~ single;
+  assign \$65  = decided & first_slot;
+  assign \$66  = vote1 & vote2;
+  assign \$67  = vote1 & level;
+  assign \$68  = \$66  | \$67 ;
+  assign \$69  = vote2 & level;
+  assign \$70  = \$68  | \$69 ;
+  assign \$71  = single ? level : \$70 ;
+  assign \$72  = ! sampler_fsm_state;
+  assign \$73  = sampler_fsm_state == 1'h1;
+  assign \$74  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$146 ;
+    slo_prev <= \$75 ;
   always @(posedge clk)
-    vote <= \$2 ;
-  always @(posedge clk)
-    single <= \$3 ;
+    single <= \$1 ;
   always @(posedge clk)
     first_load <= \$5 [15:0];
   always @(posedge clk)
-    vote_load <= \$6 [14:0];
+    vote_load <= \$8 [14:0];
   always @(posedge clk)
-    vote_one <= \$7 ;
+    vote_one <= \$11 ;
   always @(posedge clk)
-    period_load <= { first_load, 1'h1 };
+    mid_delay <= \$76 ;
   always @(posedge clk)
-    mid_delay <= \$147 ;
+    mid_slot <= \$77 ;
   always @(posedge clk)
-    mid_slot <= \$148 ;
+    odd <= \$78 ;
   always @(posedge clk)
-    odd <= \$149 ;
+    elapsed <= \$79 ;
   always @(posedge clk)
-    one_edge <= \$150 ;
+    early <= \$80 ;
   always @(posedge clk)
-    two_edges <= \$151 ;
+    locked <= \$81 ;
   always @(posedge clk)
-    crowded <= \$152 ;
+    gap <= \$82 ;
   always @(posedge clk)
-    last <= \$153 ;
+    sampler_fsm_state <= \$83 ;
   always @(posedge clk)
-    tail_odd <= \$154 ;
+    slot_left <= \$84 ;
   always @(posedge clk)
-    strobed <= \$155 ;
+    slot_zero <= \$85 ;
   always @(posedge clk)
-    elapsed <= \$156 ;
+    vote1 <= \$86 ;
   always @(posedge clk)
-    early <= \$157 ;
+    vote2 <= \$87 ;
   always @(posedge clk)
-    locked <= \$158 ;
+    first_slot <= \$88 ;
   always @(posedge clk)
-    gap <= \$159 ;
+    delay <= \$89 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$160 ;
-  always @(posedge clk)
-    slot_left <= \$161 ;
-  always @(posedge clk)
-    slot_zero <= \$162 ;
-  always @(posedge clk)
-    vote1 <= \$163 ;
-  always @(posedge clk)
-    vote2 <= \$164 ;
-  always @(posedge clk)
-    first_slot <= \$165 ;
-  always @(posedge clk)
-    delay <= \$166 ;
-  always @(posedge clk)
-    phase <= \$167 ;
+    phase <= \$90 ;
+  assign \$1  = half_period < 2'h3;
+  assign \$2  = half_period >= 2'h3;
+  assign \$3  = \$2  ? half_period[15:1] : 15'h0000;
+  assign \$4  = half_period - \$3 ;
+  assign \$5  = $signed(\$4 ) - $signed(2'h1);
+  assign \$6  = half_period >= 2'h3;
+  assign \$7  = \$6  ? half_period[15:1] : 15'h0000;
+  assign \$8  = \$7  - 1'h1;
+  assign \$9  = half_period >= 2'h3;
+  \biss_master.sampler.slot_noise  slot_noise (
+    .centre(centre),
+    .clear(clear),
+    .clk(clk),
+    .decided(\decided$35 ),
+    .\edge (\edge ),
+    .level(level),
+    .majority(majority),
+    .odd(\odd$41 ),
+    .receiver_clear(receiver_clear),
+    .rst(rst),
+    .vote1(vote1),
+    .vote2(vote2)
+  );
   \biss_master.sampler.sync  sync (
     .clk(clk),
     .receiver_clear(receiver_clear),
@@ -11109,570 +10966,440 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$146  = level;
+    \$75  = level;
     if (receiver_clear) begin
-      \$146  = 1'h1;
+      \$75  = 1'h1;
     end
     if (rst) begin
-      \$146  = 1'h1;
+      \$75  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$147  = mid_delay;
+    \$76  = mid_delay;
     if (odd) begin
-      \$147  = \$8 [12:0];
+      \$76  = \$12 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$147  = \$78 [12:0];
+              \$76  = \$31 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$147  = 13'h0000;
+      \$76  = 13'h0000;
     end
     if (rst) begin
-      \$147  = 13'h0000;
+      \$76  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$148  = mid_slot;
+    \$77  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$148  = \$9 [16:0];
+      \$77  = \$13 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$148  = \$75 ;
+              \$77  = \$28 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$148  = 17'h00000;
+      \$77  = 17'h00000;
     end
     if (rst) begin
-      \$148  = 17'h00000;
+      \$77  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$149  = \$10 ;
+    \$78  = \$14 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$149  = 1'h1;
+              \$78  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$149  = 1'h0;
+      \$78  = 1'h0;
     end
     if (rst) begin
-      \$149  = 1'h0;
+      \$78  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    (* full_case = 32'd1 *)
-    if (centre) begin
-      \$150  = 1'h0;
-    end else begin
-      \$150  = \$15 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$150  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$150  = 1'h0;
-    end
-    if (rst) begin
-      \$150  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    (* full_case = 32'd1 *)
-    if (centre) begin
-      \$151  = 1'h0;
-    end else begin
-      \$151  = \$18 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$151  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$151  = 1'h0;
-    end
-    if (rst) begin
-      \$151  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$152  = crowded;
-    if (centre) begin
-      \$152  = \$13 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$152  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$152  = 1'h0;
-    end
-    if (rst) begin
-      \$152  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$153  = last;
-    if (\$20 ) begin
-      \$153  = \$25 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$153  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$153  = 1'h0;
-    end
-    if (rst) begin
-      \$153  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$154  = tail_odd;
-    if (\$20 ) begin
-      \$154  = \$31 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$154  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$154  = 1'h0;
-    end
-    if (rst) begin
-      \$154  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$155  = strobed;
-    if (\$33 ) begin
-      \$155  = \$61 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$155  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$155  = 1'h0;
-    end
-    if (rst) begin
-      \$155  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$156  = elapsed;
+    \$79  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$156  = 13'h0001;
+            \$79  = 13'h0001;
           end
       2'h1:
-          if (\$63 ) begin
-            \$156  = \$64 [12:0];
+          if (\$16 ) begin
+            \$79  = \$17 [12:0];
           end
       2'h2:
-          if (\$79 ) begin
-            \$156  = \$80 [12:0];
+          if (\$32 ) begin
+            \$79  = \$33 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$156  = 13'h0000;
+      \$79  = 13'h0000;
     end
     if (rst) begin
-      \$156  = 13'h0000;
+      \$79  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$157  = early;
+    \$80  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$157  = \$62 ;
+            \$80  = \$15 ;
           end
     endcase
     if (receiver_clear) begin
-      \$157  = 1'h0;
+      \$80  = 1'h0;
     end
     if (rst) begin
-      \$157  = 1'h0;
+      \$80  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$158  = locked;
+    \$81  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$158  = 1'h0;
+            \$81  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$87 ) begin
+          if (\$40 ) begin
             (* full_case = 32'd1 *)
-            if (\$93 ) begin
+            if (\$46 ) begin
             end else begin
-              \$158  = 1'h1;
+              \$81  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$158  = 1'h0;
+      \$81  = 1'h0;
     end
     if (rst) begin
-      \$158  = 1'h0;
+      \$81  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$159  = gap;
+    \$82  = gap;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$159  = 1'h0;
+            \$82  = 1'h0;
           end
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$159  = 1'h0;
+              \$82  = 1'h0;
             end
           end
-          if (\$68 ) begin
-            \$159  = 1'h0;
+          if (\$21 ) begin
+            \$82  = 1'h0;
           end
         end
       2'h2:
-          if (\$85 ) begin
-            \$159  = \$86 ;
+          if (\$38 ) begin
+            \$82  = \$39 ;
           end
     endcase
     if (receiver_clear) begin
-      \$159  = 1'h0;
+      \$82  = 1'h0;
     end
     if (rst) begin
-      \$159  = 1'h0;
+      \$82  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$160  = sampler_fsm_state;
+    \$83  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$160  = 2'h1;
+            \$83  = 2'h1;
           end
       2'h1:
-          if (\$68 ) begin
-            \$160  = 2'h2;
+          if (\$21 ) begin
+            \$83  = 2'h2;
           end
       2'h2:
         begin
-          if (\$85 ) begin
-            \$160  = 2'h1;
+          if (\$38 ) begin
+            \$83  = 2'h1;
           end
-          if (\$87 ) begin
-            if (\$93 ) begin
-              \$160  = 2'h1;
+          if (\$40 ) begin
+            if (\$46 ) begin
+              \$83  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$160  = 2'h0;
+      \$83  = 2'h0;
     end
     if (rst) begin
-      \$160  = 2'h0;
+      \$83  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$161  = slot_left;
+    \$84  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$161  = \$65 [16:0];
+            \$84  = \$18 [16:0];
           end
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$161  = mid_slot;
+              \$84  = mid_slot;
             end else begin
-              \$161  = { 1'h0, first_load };
+              \$84  = { 1'h0, first_load };
             end
           end
         end
       2'h2:
         begin
-          \$161  = \$81 [16:0];
-          if (\$85 ) begin
-            \$161  = { 2'h0, vote_load };
+          \$84  = \$34 [16:0];
+          if (\$38 ) begin
+            \$84  = { 2'h0, vote_load };
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$161  = period_load;
+                    \$84  = { first_load, 1'h1 };
                   end else begin
-                    \$161  = { 2'h0, vote_load };
+                    \$84  = { 2'h0, vote_load };
                   end
               2'h1:
-                  \$161  = { 2'h0, vote_load };
+                  \$84  = { 2'h0, vote_load };
               default:
-                  \$161  = period_load;
+                  \$84  = { first_load, 1'h1 };
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$161  = 17'h00000;
+      \$84  = 17'h00000;
     end
     if (rst) begin
-      \$161  = 17'h00000;
+      \$84  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$162  = slot_zero;
+    \$85  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$162  = \$66 ;
+            \$85  = \$19 ;
           end
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$162  = \$71 ;
+              \$85  = \$24 ;
             end else begin
-              \$162  = 1'h0;
+              \$85  = 1'h0;
             end
           end
         end
       2'h2:
         begin
-          \$162  = \$82 ;
-          if (\$85 ) begin
-            \$162  = vote_one;
+          \$85  = \$35 ;
+          if (\$38 ) begin
+            \$85  = vote_one;
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$162  = 1'h0;
+                    \$85  = 1'h0;
                   end else begin
-                    \$162  = vote_one;
+                    \$85  = vote_one;
                   end
               2'h1:
-                  \$162  = vote_one;
+                  \$85  = vote_one;
               default:
-                  \$162  = 1'h0;
+                  \$85  = 1'h0;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$162  = 1'h1;
+      \$85  = 1'h1;
     end
     if (rst) begin
-      \$162  = 1'h1;
+      \$85  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$163  = vote1;
+    \$86  = vote1;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
-            \$163  = 1'h0;
+          if (\$21 ) begin
+            \$86  = 1'h0;
           end
       2'h2:
-          if (\$85 ) begin
+          if (\$38 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$163  = level;
+                    \$86  = level;
                   end
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$163  = 1'h0;
+      \$86  = 1'h0;
     end
     if (rst) begin
-      \$163  = 1'h0;
+      \$86  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$164  = vote2;
+    \$87  = vote2;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
-            \$164  = 1'h0;
+          if (\$21 ) begin
+            \$87  = 1'h0;
           end
       2'h2:
-          if (\$85 ) begin
+          if (\$38 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  \$164  = level;
+                  \$87  = level;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$164  = 1'h0;
+      \$87  = 1'h0;
     end
     if (rst) begin
-      \$164  = 1'h0;
+      \$87  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$165  = first_slot;
+    \$88  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
-            \$165  = 1'h1;
+          if (\$21 ) begin
+            \$88  = 1'h1;
           end
       2'h2:
-          if (\$87 ) begin
+          if (\$40 ) begin
             (* full_case = 32'd1 *)
-            if (\$93 ) begin
+            if (\$46 ) begin
             end else begin
-              \$165  = 1'h0;
+              \$88  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$165  = 1'h0;
+      \$88  = 1'h0;
     end
     if (rst) begin
-      \$165  = 1'h0;
+      \$88  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$166  = delay;
+    \$89  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$166  = \$70 ;
+              \$89  = \$23 ;
             end else begin
-              \$166  = \$74 [12:0];
+              \$89  = \$27 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$166  = 13'h0000;
+      \$89  = 13'h0000;
     end
     if (rst) begin
-      \$166  = 13'h0000;
+      \$89  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$167  = phase;
+    \$90  = phase;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$167  = 2'h1;
+              \$90  = 2'h1;
             end else begin
-              \$167  = 2'h0;
+              \$90  = 2'h0;
             end
           end
       2'h2:
-          if (\$85 ) begin
+          if (\$38 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -11680,37 +11407,49 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$167  = 2'h1;
+                    \$90  = 2'h1;
                   end
               2'h1:
-                  \$167  = 2'h2;
+                  \$90  = 2'h2;
               default:
-                  \$167  = 2'h0;
+                  \$90  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$167  = 2'h0;
+      \$90  = 2'h0;
     end
     if (rst) begin
-      \$167  = 2'h0;
+      \$90  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    sample = \$95 ;
+    sample = \$48 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           /* empty */;
       2'h2:
-          if (\$136 ) begin
+          if (\$65 ) begin
             (* full_case = 32'd1 *)
-            if (\$142 ) begin
+            if (\$71 ) begin
             end else begin
               sample = 1'h1;
             end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    clear = 1'h0;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$60 ) begin
+            clear = 1'h1;
           end
     endcase
   end
@@ -11724,11 +11463,11 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
           /* empty */;
       2'h2:
         begin
-          if (\$134 ) begin
+          if (\$63 ) begin
             dropped = 1'h1;
           end
-          if (\$136 ) begin
-            if (\$142 ) begin
+          if (\$65 ) begin
+            if (\$71 ) begin
               dropped = 1'h1;
             end
           end
@@ -11744,7 +11483,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
       2'h1:
           /* empty */;
       2'h2:
-          if (\$134 ) begin
+          if (\$63 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -11769,16 +11508,251 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
       2'h1:
           /* empty */;
       2'h2:
-          if (\$134 ) begin
+          if (\$63 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  centre = \$135 ;
+                  centre = \$64 ;
             endcase
           end
     endcase
+  end
+  assign \level$29  = level;
+  assign \clear$32  = clear;
+  assign \centre$34  = centre;
+  assign \vote1$36  = vote1;
+  assign \vote2$37  = vote2;
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, receiver_clear, vote1, vote2, clear, centre, level, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  reg \$33 ;
+  reg \$34 ;
+  reg \$35 ;
+  reg \$36 ;
+  reg \$37 ;
+  reg \$38 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input centre;
+  wire centre;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  reg crowded = 1'h0;
+  input decided;
+  wire decided;
+  input \edge ;
+  wire \edge ;
+  reg last = 1'h0;
+  input level;
+  wire level;
+  input majority;
+  wire majority;
+  output odd;
+  wire odd;
+  reg one_edge = 1'h0;
+  input receiver_clear;
+  wire receiver_clear;
+  input rst;
+  wire rst;
+  reg strobed = 1'h0;
+  reg tail_odd = 1'h0;
+  reg two_edges = 1'h0;
+  input vote1;
+  wire vote1;
+  input vote2;
+  wire vote2;
+  assign \$1  = one_edge & \edge ;
+  assign \$2  = two_edges | \$1 ;
+  assign \$3  = one_edge | \edge ;
+  assign \$4  = one_edge & \edge ;
+  assign \$5  = two_edges | \$4 ;
+  assign \$6  = level != majority;
+  assign \$7  = vote1 == level;
+  assign \$8  = vote2 != level;
+  assign \$9  = \$7  & \$8 ;
+  assign \$10  = vote1 != majority;
+  assign \$11  = last == majority;
+  assign \$12  = \$10  & \$11 ;
+  assign \$13  = \$9  | \$12 ;
+  assign \$14  = last == majority;
+  assign \$15  = tail_odd & \$14 ;
+  assign \$16  = \$13  | \$15 ;
+  assign \$17  = \$16  | crowded;
+  assign \$18  = ~ strobed;
+  assign \$19  = \$17  & \$18 ;
+  assign \$20  = vote1 == level;
+  assign \$21  = vote2 != level;
+  assign \$22  = \$20  & \$21 ;
+  assign \$23  = vote1 != majority;
+  assign \$24  = last == majority;
+  assign \$25  = \$23  & \$24 ;
+  assign \$26  = \$22  | \$25 ;
+  assign \$27  = last == majority;
+  assign \$28  = tail_odd & \$27 ;
+  assign \$29  = \$26  | \$28 ;
+  assign \$30  = \$29  | crowded;
+  assign \$31  = decided & \$30 ;
+  assign \$32  = ~ strobed;
+  assign odd = \$31  & \$32 ;
+  always @(posedge clk)
+    last <= \$33 ;
+  always @(posedge clk)
+    tail_odd <= \$34 ;
+  always @(posedge clk)
+    one_edge <= \$35 ;
+  always @(posedge clk)
+    two_edges <= \$36 ;
+  always @(posedge clk)
+    crowded <= \$37 ;
+  always @(posedge clk)
+    strobed <= \$38 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$33  = last;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$33  = 1'h0;
+    end else begin
+      if (decided) begin
+        \$33  = majority;
+      end
+    end
+    if (receiver_clear) begin
+      \$33  = 1'h0;
+    end
+    if (rst) begin
+      \$33  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$34  = tail_odd;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$34  = 1'h0;
+    end else begin
+      if (decided) begin
+        \$34  = \$6 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$34  = 1'h0;
+    end
+    if (rst) begin
+      \$34  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$35  = 1'h0;
+    end else begin
+      (* full_case = 32'd1 *)
+      if (centre) begin
+        \$35  = 1'h0;
+      end else begin
+        \$35  = \$3 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$35  = 1'h0;
+    end
+    if (rst) begin
+      \$35  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$36  = 1'h0;
+    end else begin
+      (* full_case = 32'd1 *)
+      if (centre) begin
+        \$36  = 1'h0;
+      end else begin
+        \$36  = \$5 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$36  = 1'h0;
+    end
+    if (rst) begin
+      \$36  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$37  = crowded;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$37  = 1'h0;
+    end else begin
+      if (centre) begin
+        \$37  = \$2 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$37  = 1'h0;
+    end
+    if (rst) begin
+      \$37  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$38  = strobed;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$38  = 1'h0;
+    end else begin
+      if (decided) begin
+        \$38  = \$19 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$38  = 1'h0;
+    end
+    if (rst) begin
+      \$38  = 1'h0;
+    end
   end
 endmodule
 
@@ -11806,7 +11780,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overrun, idle, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -11897,14 +11871,14 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -11918,7 +11892,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -11932,7 +11906,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -11951,8 +11925,8 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2038$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2007$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -11993,8 +11967,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2038$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2038$0 ;
-  wire \port$2038$0 ;
+  input \port$2007$0 ;
+  wire \port$2007$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -12008,9 +11982,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2038$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2038$0  };
-  assign \$2  = { lc[4:0], \port$2038$0  } == last;
-  assign \$3  = { lc[4:0], \port$2038$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2007$0  };
+  assign \$2  = { lc[4:0], \port$2007$0  } == last;
+  assign \$3  = { lc[4:0], \port$2007$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -12044,7 +12018,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2038$0
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -12054,7 +12028,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2038$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -12064,7 +12038,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2038$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -12074,21 +12048,21 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2038$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -12098,7 +12072,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2038$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -12108,7 +12082,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2038$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -12120,13 +12094,13 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2038$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2038$0  };
+  assign lc_next = { lc[4:0], \port$2007$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -12331,28 +12305,28 @@ module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, cl
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -12362,7 +12336,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -12381,14 +12355,14 @@ module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -12402,7 +12376,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma_busy, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
 , delay, slo, break_time);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -12582,7 +12556,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
   assign \$40  = in_clock & \$39 ;
   assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$48  = slo_low_time_p1;
     if (\$2 ) begin
       \$48  = 25'h0000001;
@@ -12594,21 +12568,21 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$49  = \$9 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$50  = \$17 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$51  = high_p2;
     if (\$18 ) begin
       \$51  = 13'h0002;
@@ -12620,28 +12594,28 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$52  = \$23 ;
     if (rst) begin
       \$52  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$53  = \$30 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$54  = \$34 [24:0];
     if (rst) begin
       \$54  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$55  = 1'h0;
@@ -12653,21 +12627,21 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$57  = \$46 ;
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$58  = \$47 ;
     if (rst) begin
       \$58  = 1'h0;
@@ -12676,9 +12650,9 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1506$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1475$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -12830,8 +12804,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1506$0 , lc_check, lc_re
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$1506$0 ;
-  wire \port$1506$0 ;
+  output \port$1475$0 ;
+  wire \port$1475$0 ;
   output report;
   wire report;
   input report_frame;
@@ -12912,7 +12886,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1506$0 , lc_check, lc_re
   assign \$39  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$39  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     frame_status = 4'h0;
     if (delay_jump) begin
       frame_status = 4'he;
@@ -12937,7 +12911,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1506$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1506$0  = \$2 ;
+  assign \port$1475$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -642,12 +642,12 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6398$0 (\$8 ),
-    .\port$6411$0 (\$9 ),
-    .\port$6543$0 (\$10 ),
-    .\port$6963$0 (\$11 ),
-    .\port$6976$0 (\$12 ),
-    .\port$7108$0 (\$13 ),
+    .\port$6337$0 (\$8 ),
+    .\port$6350$0 (\$9 ),
+    .\port$6482$0 (\$10 ),
+    .\port$6903$0 (\$11 ),
+    .\port$6916$0 (\$12 ),
+    .\port$7048$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -713,9 +713,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6398$0 (\$8 ),
-    .\port$6411$0 (\$9 ),
-    .\port$6543$0 (\$10 ),
+    .\port$6337$0 (\$8 ),
+    .\port$6350$0 (\$9 ),
+    .\port$6482$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -780,9 +780,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$432 ),
-    .\port$6963$0 (\$11 ),
-    .\port$6976$0 (\$12 ),
-    .\port$7108$0 (\$13 ),
+    .\port$6903$0 (\$11 ),
+    .\port$6916$0 (\$12 ),
+    .\port$7048$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$248 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1158,8 +1158,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
 , ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width
 , ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$105 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw
 , ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start
-, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$309 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$6398$0 , \port$6411$0 , ch0__ca_done, \port$6543$0 , ch1__done_count, ch1__done, \port$6963$0 , \port$6976$0 , ch1__ca_done
-, \port$7108$0 , clk);
+, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$309 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$6337$0 , \port$6350$0 , ch0__ca_done, \port$6482$0 , ch1__done_count, ch1__done, \port$6903$0 , \port$6916$0 , ch1__ca_done
+, \port$7048$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2733,18 +2733,18 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6398$0 ;
-  wire [186:0] \port$6398$0 ;
-  input [335:0] \port$6411$0 ;
-  wire [335:0] \port$6411$0 ;
-  input [9:0] \port$6543$0 ;
-  wire [9:0] \port$6543$0 ;
-  input [186:0] \port$6963$0 ;
-  wire [186:0] \port$6963$0 ;
-  input [335:0] \port$6976$0 ;
-  wire [335:0] \port$6976$0 ;
-  input [9:0] \port$7108$0 ;
-  wire [9:0] \port$7108$0 ;
+  input [186:0] \port$6337$0 ;
+  wire [186:0] \port$6337$0 ;
+  input [335:0] \port$6350$0 ;
+  wire [335:0] \port$6350$0 ;
+  input [9:0] \port$6482$0 ;
+  wire [9:0] \port$6482$0 ;
+  input [186:0] \port$6903$0 ;
+  wire [186:0] \port$6903$0 ;
+  input [335:0] \port$6916$0 ;
+  wire [335:0] \port$6916$0 ;
+  input [9:0] \port$7048$0 ;
+  wire [9:0] \port$7048$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2886,7 +2886,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$351  = \$349  | \$350 ;
   assign \$352  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$353  = \$351  | \$352 ;
-  assign \$354  = ch1_read_select_110 ? { 2'h0, \port$6963$0 [182:177], 4'h0, \port$6963$0 [186:183], 1'h0, \port$6963$0 [176:174], 1'h0, \port$6963$0 [133:131], 3'h0, \port$6963$0 [49], \port$6963$0 [3:0] } : 32'd0;
+  assign \$354  = ch1_read_select_110 ? { 2'h0, \port$6903$0 [182:177], 4'h0, \port$6903$0 [186:183], 1'h0, \port$6903$0 [176:174], 1'h0, \port$6903$0 [133:131], 3'h0, \port$6903$0 [49], \port$6903$0 [3:0] } : 32'd0;
   assign \$355  = \$353  | \$354 ;
   assign \$356  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$357  = \$355  | \$356 ;
@@ -2902,21 +2902,21 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$367  = \$365  | \$366 ;
   assign \$368  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$369  = \$367  | \$368 ;
-  assign \$370  = ch1_read_select_118 ? \port$6976$0 [31:0] : 32'd0;
+  assign \$370  = ch1_read_select_118 ? \port$6916$0 [31:0] : 32'd0;
   assign \$371  = \$369  | \$370 ;
-  assign \$372  = ch1_read_select_119 ? \port$6976$0 [63:32] : 32'd0;
+  assign \$372  = ch1_read_select_119 ? \port$6916$0 [63:32] : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$374  = ch1_read_select_11a ? \port$6976$0 [95:64] : 32'd0;
+  assign \$374  = ch1_read_select_11a ? \port$6916$0 [95:64] : 32'd0;
   assign \$375  = \$373  | \$374 ;
-  assign \$376  = ch1_read_select_11b ? \port$6976$0 [127:96] : 32'd0;
+  assign \$376  = ch1_read_select_11b ? \port$6916$0 [127:96] : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_11c ? \port$6976$0 [159:128] : 32'd0;
+  assign \$378  = ch1_read_select_11c ? \port$6916$0 [159:128] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_11d ? \port$6976$0 [191:160] : 32'd0;
+  assign \$380  = ch1_read_select_11d ? \port$6916$0 [191:160] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_11e ? \port$6976$0 [223:192] : 32'd0;
+  assign \$382  = ch1_read_select_11e ? \port$6916$0 [223:192] : 32'd0;
   assign \$383  = \$381  | \$382 ;
-  assign \$384  = ch1_read_select_11f ? \port$6976$0 [255:224] : 32'd0;
+  assign \$384  = ch1_read_select_11f ? \port$6916$0 [255:224] : 32'd0;
   assign \$385  = \$383  | \$384 ;
   assign \$386  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$387  = \$385  | \$386 ;
@@ -2928,13 +2928,13 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$393  = \$391  | \$392 ;
   assign \$394  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$309 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$395  = \$393  | \$394 ;
-  assign \$398  = ch1_read_select_142 ? { 17'h00000, \port$7108$0 [9:3], 1'h0, \port$7108$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$398  = ch1_read_select_142 ? { 17'h00000, \port$7048$0 [9:3], 1'h0, \port$7048$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$399  = \$397  | \$398 ;
-  assign \$400  = ch1_read_select_143 ? \port$6976$0 [287:256] : 32'd0;
+  assign \$400  = ch1_read_select_143 ? \port$6916$0 [287:256] : 32'd0;
   assign \$401  = \$399  | \$400 ;
-  assign \$402  = ch1_read_select_144 ? \port$6976$0 [319:288] : 32'd0;
+  assign \$402  = ch1_read_select_144 ? \port$6916$0 [319:288] : 32'd0;
   assign \$403  = \$401  | \$402 ;
-  assign \$404  = ch1_read_select_145 ? { 16'h0000, \port$6976$0 [335:320] } : 32'd0;
+  assign \$404  = ch1_read_select_145 ? { 16'h0000, \port$6916$0 [335:320] } : 32'd0;
   assign \$405  = \$403  | \$404 ;
   assign \$406  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
   assign \$407  = \$405  | \$406 ;
@@ -3820,7 +3820,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$156  = \$154  | \$155 ;
   assign \$157  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$158  = \$156  | \$157 ;
-  assign \$159  = ch0_read_select_90 ? { 2'h0, \port$6398$0 [182:177], 4'h0, \port$6398$0 [186:183], 1'h0, \port$6398$0 [176:174], 1'h0, \port$6398$0 [133:131], 3'h0, \port$6398$0 [49], \port$6398$0 [3:0] } : 32'd0;
+  assign \$159  = ch0_read_select_90 ? { 2'h0, \port$6337$0 [182:177], 4'h0, \port$6337$0 [186:183], 1'h0, \port$6337$0 [176:174], 1'h0, \port$6337$0 [133:131], 3'h0, \port$6337$0 [49], \port$6337$0 [3:0] } : 32'd0;
   assign \$160  = \$158  | \$159 ;
   assign \$161  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$162  = \$160  | \$161 ;
@@ -3836,21 +3836,21 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$172  = \$170  | \$171 ;
   assign \$173  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$174  = \$172  | \$173 ;
-  assign \$175  = ch0_read_select_98 ? \port$6411$0 [31:0] : 32'd0;
+  assign \$175  = ch0_read_select_98 ? \port$6350$0 [31:0] : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_99 ? \port$6411$0 [63:32] : 32'd0;
+  assign \$177  = ch0_read_select_99 ? \port$6350$0 [63:32] : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_9a ? \port$6411$0 [95:64] : 32'd0;
+  assign \$179  = ch0_read_select_9a ? \port$6350$0 [95:64] : 32'd0;
   assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_9b ? \port$6411$0 [127:96] : 32'd0;
+  assign \$181  = ch0_read_select_9b ? \port$6350$0 [127:96] : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_9c ? \port$6411$0 [159:128] : 32'd0;
+  assign \$183  = ch0_read_select_9c ? \port$6350$0 [159:128] : 32'd0;
   assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_9d ? \port$6411$0 [191:160] : 32'd0;
+  assign \$185  = ch0_read_select_9d ? \port$6350$0 [191:160] : 32'd0;
   assign \$186  = \$184  | \$185 ;
-  assign \$187  = ch0_read_select_9e ? \port$6411$0 [223:192] : 32'd0;
+  assign \$187  = ch0_read_select_9e ? \port$6350$0 [223:192] : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$189  = ch0_read_select_9f ? \port$6411$0 [255:224] : 32'd0;
+  assign \$189  = ch0_read_select_9f ? \port$6350$0 [255:224] : 32'd0;
   assign \$190  = \$188  | \$189 ;
   assign \$191  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$192  = \$190  | \$191 ;
@@ -3862,13 +3862,13 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$198  = \$196  | \$197 ;
   assign \$199  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$105 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$200  = \$198  | \$199 ;
-  assign \$203  = ch0_read_select_c2 ? { 17'h00000, \port$6543$0 [9:3], 1'h0, \port$6543$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$203  = ch0_read_select_c2 ? { 17'h00000, \port$6482$0 [9:3], 1'h0, \port$6482$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$204  = \$202  | \$203 ;
-  assign \$205  = ch0_read_select_c3 ? \port$6411$0 [287:256] : 32'd0;
+  assign \$205  = ch0_read_select_c3 ? \port$6350$0 [287:256] : 32'd0;
   assign \$206  = \$204  | \$205 ;
-  assign \$207  = ch0_read_select_c4 ? \port$6411$0 [319:288] : 32'd0;
+  assign \$207  = ch0_read_select_c4 ? \port$6350$0 [319:288] : 32'd0;
   assign \$208  = \$206  | \$207 ;
-  assign \$209  = ch0_read_select_c5 ? { 16'h0000, \port$6411$0 [335:320] } : 32'd0;
+  assign \$209  = ch0_read_select_c5 ? { 16'h0000, \port$6350$0 [335:320] } : 32'd0;
   assign \$210  = \$208  | \$209 ;
   assign \$211  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$212  = \$210  | \$211 ;
@@ -5030,7 +5030,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$627  = ch0_result_status_status_snapshot;
     if (\$130 ) begin
-      \$627  = \port$6398$0 [3:0];
+      \$627  = \port$6337$0 [3:0];
     end
     if (rst) begin
       \$627  = 4'h0;
@@ -5040,7 +5040,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$628  = ch0_result_status_cds_snapshot;
     if (\$130 ) begin
-      \$628  = \port$6398$0 [49];
+      \$628  = \port$6337$0 [49];
     end
     if (rst) begin
       \$628  = 1'h0;
@@ -5050,7 +5050,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$629  = ch0_result_status_w0_ne_snapshot;
     if (\$130 ) begin
-      \$629  = \port$6398$0 [131];
+      \$629  = \port$6337$0 [131];
     end
     if (rst) begin
       \$629  = 1'h0;
@@ -5060,7 +5060,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$630  = ch0_result_status_w0_nw_snapshot;
     if (\$130 ) begin
-      \$630  = \port$6398$0 [132];
+      \$630  = \port$6337$0 [132];
     end
     if (rst) begin
       \$630  = 1'h0;
@@ -5070,7 +5070,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$631  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$130 ) begin
-      \$631  = \port$6398$0 [133];
+      \$631  = \port$6337$0 [133];
     end
     if (rst) begin
       \$631  = 1'h0;
@@ -5080,7 +5080,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$632  = ch0_result_status_w1_ne_snapshot;
     if (\$130 ) begin
-      \$632  = \port$6398$0 [174];
+      \$632  = \port$6337$0 [174];
     end
     if (rst) begin
       \$632  = 1'h0;
@@ -5090,7 +5090,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$633  = ch0_result_status_w1_nw_snapshot;
     if (\$130 ) begin
-      \$633  = \port$6398$0 [175];
+      \$633  = \port$6337$0 [175];
     end
     if (rst) begin
       \$633  = 1'h0;
@@ -5100,7 +5100,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$634  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$130 ) begin
-      \$634  = \port$6398$0 [176];
+      \$634  = \port$6337$0 [176];
     end
     if (rst) begin
       \$634  = 1'h0;
@@ -5110,7 +5110,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$635  = ch0_result_status_lc_repeat_snapshot;
     if (\$130 ) begin
-      \$635  = \port$6398$0 [183];
+      \$635  = \port$6337$0 [183];
     end
     if (rst) begin
       \$635  = 1'h0;
@@ -5120,7 +5120,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$636  = ch0_result_status_lc_skip_snapshot;
     if (\$130 ) begin
-      \$636  = \port$6398$0 [184];
+      \$636  = \port$6337$0 [184];
     end
     if (rst) begin
       \$636  = 1'h0;
@@ -5130,7 +5130,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$637  = ch0_result_status_lc_zero_snapshot;
     if (\$130 ) begin
-      \$637  = \port$6398$0 [185];
+      \$637  = \port$6337$0 [185];
     end
     if (rst) begin
       \$637  = 1'h0;
@@ -5140,7 +5140,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$638  = ch0_result_status_spw_mismatch_snapshot;
     if (\$130 ) begin
-      \$638  = \port$6398$0 [186];
+      \$638  = \port$6337$0 [186];
     end
     if (rst) begin
       \$638  = 1'h0;
@@ -5150,7 +5150,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$639  = ch0_result_status_lc_snapshot;
     if (\$130 ) begin
-      \$639  = \port$6398$0 [182:177];
+      \$639  = \port$6337$0 [182:177];
     end
     if (rst) begin
       \$639  = 6'h00;
@@ -5170,7 +5170,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$641  = ch0_result_seq_line_delay_snapshot;
     if (\$130 ) begin
-      \$641  = \port$6398$0 [48:36];
+      \$641  = \port$6337$0 [48:36];
     end
     if (rst) begin
       \$641  = 13'h0000;
@@ -5180,7 +5180,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$642  = ch0_result_w0_lo_data_snapshot;
     if (\$130 ) begin
-      \$642  = \port$6398$0 [107:76];
+      \$642  = \port$6337$0 [107:76];
     end
     if (rst) begin
       \$642  = 32'd0;
@@ -5190,7 +5190,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$643  = ch0_result_w0_hi_data_snapshot;
     if (\$130 ) begin
-      \$643  = \port$6398$0 [130:108];
+      \$643  = \port$6337$0 [130:108];
     end
     if (rst) begin
       \$643  = 23'h000000;
@@ -5200,7 +5200,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$644  = ch0_result_w1_lo_data_snapshot;
     if (\$130 ) begin
-      \$644  = \port$6398$0 [165:134];
+      \$644  = \port$6337$0 [165:134];
     end
     if (rst) begin
       \$644  = 32'd0;
@@ -5210,7 +5210,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$645  = ch0_result_w1_hi_data_snapshot;
     if (\$130 ) begin
-      \$645  = \port$6398$0 [173:166];
+      \$645  = \port$6337$0 [173:166];
     end
     if (rst) begin
       \$645  = 8'h00;
@@ -5220,7 +5220,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$646  = ch0_result_timestamp_time_snapshot;
     if (\$130 ) begin
-      \$646  = \port$6398$0 [35:4];
+      \$646  = \port$6337$0 [35:4];
     end
     if (rst) begin
       \$646  = 32'd0;
@@ -5230,7 +5230,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$647  = ch0_result_line_noise_events_snapshot;
     if (\$130 ) begin
-      \$647  = \port$6398$0 [53:50];
+      \$647  = \port$6337$0 [53:50];
     end
     if (rst) begin
       \$647  = 4'h0;
@@ -5240,7 +5240,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$648  = ch0_result_line_delay_settled_snapshot;
     if (\$130 ) begin
-      \$648  = \port$6398$0 [54];
+      \$648  = \port$6337$0 [54];
     end
     if (rst) begin
       \$648  = 1'h0;
@@ -5250,7 +5250,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$649  = ch0_result_line_delay_spread_snapshot;
     if (\$130 ) begin
-      \$649  = \port$6398$0 [75:68];
+      \$649  = \port$6337$0 [75:68];
     end
     if (rst) begin
       \$649  = 8'h00;
@@ -5260,7 +5260,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$650  = ch0_result_line_settled_delay_snapshot;
     if (\$130 ) begin
-      \$650  = \port$6398$0 [67:55];
+      \$650  = \port$6337$0 [67:55];
     end
     if (rst) begin
       \$650  = 13'h0000;
@@ -6314,7 +6314,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$756  = ch1_result_status_status_snapshot;
     if (\$325 ) begin
-      \$756  = \port$6963$0 [3:0];
+      \$756  = \port$6903$0 [3:0];
     end
     if (rst) begin
       \$756  = 4'h0;
@@ -6324,7 +6324,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$757  = ch1_result_status_cds_snapshot;
     if (\$325 ) begin
-      \$757  = \port$6963$0 [49];
+      \$757  = \port$6903$0 [49];
     end
     if (rst) begin
       \$757  = 1'h0;
@@ -6334,7 +6334,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$758  = ch1_result_status_w0_ne_snapshot;
     if (\$325 ) begin
-      \$758  = \port$6963$0 [131];
+      \$758  = \port$6903$0 [131];
     end
     if (rst) begin
       \$758  = 1'h0;
@@ -6344,7 +6344,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$759  = ch1_result_status_w0_nw_snapshot;
     if (\$325 ) begin
-      \$759  = \port$6963$0 [132];
+      \$759  = \port$6903$0 [132];
     end
     if (rst) begin
       \$759  = 1'h0;
@@ -6354,7 +6354,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$760  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$325 ) begin
-      \$760  = \port$6963$0 [133];
+      \$760  = \port$6903$0 [133];
     end
     if (rst) begin
       \$760  = 1'h0;
@@ -6364,7 +6364,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$761  = ch1_result_status_w1_ne_snapshot;
     if (\$325 ) begin
-      \$761  = \port$6963$0 [174];
+      \$761  = \port$6903$0 [174];
     end
     if (rst) begin
       \$761  = 1'h0;
@@ -6374,7 +6374,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$762  = ch1_result_status_w1_nw_snapshot;
     if (\$325 ) begin
-      \$762  = \port$6963$0 [175];
+      \$762  = \port$6903$0 [175];
     end
     if (rst) begin
       \$762  = 1'h0;
@@ -6384,7 +6384,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$763  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$325 ) begin
-      \$763  = \port$6963$0 [176];
+      \$763  = \port$6903$0 [176];
     end
     if (rst) begin
       \$763  = 1'h0;
@@ -6394,7 +6394,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$764  = ch1_result_status_lc_repeat_snapshot;
     if (\$325 ) begin
-      \$764  = \port$6963$0 [183];
+      \$764  = \port$6903$0 [183];
     end
     if (rst) begin
       \$764  = 1'h0;
@@ -6404,7 +6404,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$765  = ch1_result_status_lc_skip_snapshot;
     if (\$325 ) begin
-      \$765  = \port$6963$0 [184];
+      \$765  = \port$6903$0 [184];
     end
     if (rst) begin
       \$765  = 1'h0;
@@ -6414,7 +6414,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$766  = ch1_result_status_lc_zero_snapshot;
     if (\$325 ) begin
-      \$766  = \port$6963$0 [185];
+      \$766  = \port$6903$0 [185];
     end
     if (rst) begin
       \$766  = 1'h0;
@@ -6424,7 +6424,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$767  = ch1_result_status_spw_mismatch_snapshot;
     if (\$325 ) begin
-      \$767  = \port$6963$0 [186];
+      \$767  = \port$6903$0 [186];
     end
     if (rst) begin
       \$767  = 1'h0;
@@ -6434,7 +6434,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$768  = ch1_result_status_lc_snapshot;
     if (\$325 ) begin
-      \$768  = \port$6963$0 [182:177];
+      \$768  = \port$6903$0 [182:177];
     end
     if (rst) begin
       \$768  = 6'h00;
@@ -6454,7 +6454,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$770  = ch1_result_seq_line_delay_snapshot;
     if (\$325 ) begin
-      \$770  = \port$6963$0 [48:36];
+      \$770  = \port$6903$0 [48:36];
     end
     if (rst) begin
       \$770  = 13'h0000;
@@ -6464,7 +6464,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$771  = ch1_result_w0_lo_data_snapshot;
     if (\$325 ) begin
-      \$771  = \port$6963$0 [107:76];
+      \$771  = \port$6903$0 [107:76];
     end
     if (rst) begin
       \$771  = 32'd0;
@@ -6474,7 +6474,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$772  = ch1_result_w0_hi_data_snapshot;
     if (\$325 ) begin
-      \$772  = \port$6963$0 [130:108];
+      \$772  = \port$6903$0 [130:108];
     end
     if (rst) begin
       \$772  = 23'h000000;
@@ -6484,7 +6484,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$773  = ch1_result_w1_lo_data_snapshot;
     if (\$325 ) begin
-      \$773  = \port$6963$0 [165:134];
+      \$773  = \port$6903$0 [165:134];
     end
     if (rst) begin
       \$773  = 32'd0;
@@ -6494,7 +6494,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$774  = ch1_result_w1_hi_data_snapshot;
     if (\$325 ) begin
-      \$774  = \port$6963$0 [173:166];
+      \$774  = \port$6903$0 [173:166];
     end
     if (rst) begin
       \$774  = 8'h00;
@@ -6504,7 +6504,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$775  = ch1_result_timestamp_time_snapshot;
     if (\$325 ) begin
-      \$775  = \port$6963$0 [35:4];
+      \$775  = \port$6903$0 [35:4];
     end
     if (rst) begin
       \$775  = 32'd0;
@@ -6514,7 +6514,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$776  = ch1_result_line_noise_events_snapshot;
     if (\$325 ) begin
-      \$776  = \port$6963$0 [53:50];
+      \$776  = \port$6903$0 [53:50];
     end
     if (rst) begin
       \$776  = 4'h0;
@@ -6524,7 +6524,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$777  = ch1_result_line_delay_settled_snapshot;
     if (\$325 ) begin
-      \$777  = \port$6963$0 [54];
+      \$777  = \port$6903$0 [54];
     end
     if (rst) begin
       \$777  = 1'h0;
@@ -6534,7 +6534,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$778  = ch1_result_line_delay_spread_snapshot;
     if (\$325 ) begin
-      \$778  = \port$6963$0 [75:68];
+      \$778  = \port$6903$0 [75:68];
     end
     if (rst) begin
       \$778  = 8'h00;
@@ -6544,7 +6544,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$779  = ch1_result_line_settled_delay_snapshot;
     if (\$325 ) begin
-      \$779  = \port$6963$0 [67:55];
+      \$779  = \port$6903$0 [67:55];
     end
     if (rst) begin
       \$779  = 13'h0000;
@@ -6573,106 +6573,106 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6398$0 [3:0];
-  assign ch0__cds = \port$6398$0 [49];
-  assign ch0__word0_ne = \port$6398$0 [131];
-  assign ch0__word0_nw = \port$6398$0 [132];
-  assign ch0__word0_crc_ok = \port$6398$0 [133];
-  assign ch0__word1_ne = \port$6398$0 [174];
-  assign ch0__word1_nw = \port$6398$0 [175];
-  assign ch0__word1_crc_ok = \port$6398$0 [176];
-  assign ch0__lc_repeat = \port$6398$0 [183];
-  assign ch0__lc_skip = \port$6398$0 [184];
-  assign ch0__lc_zero = \port$6398$0 [185];
-  assign ch0__spw_mismatch = \port$6398$0 [186];
-  assign ch0__lc = \port$6398$0 [182:177];
-  assign ch0__line_delay = \port$6398$0 [48:36];
-  assign ch0__word0_position = \port$6398$0 [130:76];
-  assign ch0__word1_position = \port$6398$0 [173:134];
-  assign ch0__timestamp = \port$6398$0 [35:4];
-  assign ch0__noise_events = \port$6398$0 [53:50];
-  assign ch0__delay_settled = \port$6398$0 [54];
-  assign ch0__delay_spread = \port$6398$0 [75:68];
-  assign ch0__settled_delay = \port$6398$0 [67:55];
+  assign ch0__status = \port$6337$0 [3:0];
+  assign ch0__cds = \port$6337$0 [49];
+  assign ch0__word0_ne = \port$6337$0 [131];
+  assign ch0__word0_nw = \port$6337$0 [132];
+  assign ch0__word0_crc_ok = \port$6337$0 [133];
+  assign ch0__word1_ne = \port$6337$0 [174];
+  assign ch0__word1_nw = \port$6337$0 [175];
+  assign ch0__word1_crc_ok = \port$6337$0 [176];
+  assign ch0__lc_repeat = \port$6337$0 [183];
+  assign ch0__lc_skip = \port$6337$0 [184];
+  assign ch0__lc_zero = \port$6337$0 [185];
+  assign ch0__spw_mismatch = \port$6337$0 [186];
+  assign ch0__lc = \port$6337$0 [182:177];
+  assign ch0__line_delay = \port$6337$0 [48:36];
+  assign ch0__word0_position = \port$6337$0 [130:76];
+  assign ch0__word1_position = \port$6337$0 [173:134];
+  assign ch0__timestamp = \port$6337$0 [35:4];
+  assign ch0__noise_events = \port$6337$0 [53:50];
+  assign ch0__delay_settled = \port$6337$0 [54];
+  assign ch0__delay_spread = \port$6337$0 [75:68];
+  assign ch0__settled_delay = \port$6337$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$6411$0 [15:0];
-  assign ch0__count_crc_word1 = \port$6411$0 [31:16];
-  assign ch0__count_no_ack = \port$6411$0 [47:32];
-  assign ch0__count_no_start = \port$6411$0 [63:48];
-  assign ch0__count_delay_range = \port$6411$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$6411$0 [95:80];
-  assign ch0__count_lc_repeat = \port$6411$0 [111:96];
-  assign ch0__count_lc_skip = \port$6411$0 [127:112];
-  assign ch0__count_lc_zero = \port$6411$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$6411$0 [159:144];
-  assign ch0__count_overrun = \port$6411$0 [175:160];
-  assign ch0__count_aborted = \port$6411$0 [191:176];
-  assign ch0__count_no_stop = \port$6411$0 [207:192];
-  assign ch0__count_noisy_line = \port$6411$0 [223:208];
-  assign ch0__count_delay_jump = \port$6411$0 [239:224];
-  assign ch0__count_noise_event = \port$6411$0 [255:240];
-  assign ch0__ca_status = \port$6543$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6543$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6411$0 [271:256];
-  assign ch0__count_ca_no_answer = \port$6411$0 [287:272];
-  assign ch0__count_ca_refused = \port$6411$0 [303:288];
-  assign ch0__count_ca_aborted = \port$6411$0 [319:304];
-  assign ch0__count_ca_data_fault = \port$6411$0 [335:320];
-  assign ch1__status = \port$6963$0 [3:0];
-  assign ch1__cds = \port$6963$0 [49];
-  assign ch1__word0_ne = \port$6963$0 [131];
-  assign ch1__word0_nw = \port$6963$0 [132];
-  assign ch1__word0_crc_ok = \port$6963$0 [133];
-  assign ch1__word1_ne = \port$6963$0 [174];
-  assign ch1__word1_nw = \port$6963$0 [175];
-  assign ch1__word1_crc_ok = \port$6963$0 [176];
-  assign ch1__lc_repeat = \port$6963$0 [183];
-  assign ch1__lc_skip = \port$6963$0 [184];
-  assign ch1__lc_zero = \port$6963$0 [185];
-  assign ch1__spw_mismatch = \port$6963$0 [186];
-  assign ch1__lc = \port$6963$0 [182:177];
-  assign ch1__line_delay = \port$6963$0 [48:36];
-  assign ch1__word0_position = \port$6963$0 [130:76];
-  assign ch1__word1_position = \port$6963$0 [173:134];
-  assign ch1__timestamp = \port$6963$0 [35:4];
-  assign ch1__noise_events = \port$6963$0 [53:50];
-  assign ch1__delay_settled = \port$6963$0 [54];
-  assign ch1__delay_spread = \port$6963$0 [75:68];
-  assign ch1__settled_delay = \port$6963$0 [67:55];
+  assign ch0__count_crc_word0 = \port$6350$0 [15:0];
+  assign ch0__count_crc_word1 = \port$6350$0 [31:16];
+  assign ch0__count_no_ack = \port$6350$0 [47:32];
+  assign ch0__count_no_start = \port$6350$0 [63:48];
+  assign ch0__count_delay_range = \port$6350$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$6350$0 [95:80];
+  assign ch0__count_lc_repeat = \port$6350$0 [111:96];
+  assign ch0__count_lc_skip = \port$6350$0 [127:112];
+  assign ch0__count_lc_zero = \port$6350$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$6350$0 [159:144];
+  assign ch0__count_overrun = \port$6350$0 [175:160];
+  assign ch0__count_aborted = \port$6350$0 [191:176];
+  assign ch0__count_no_stop = \port$6350$0 [207:192];
+  assign ch0__count_noisy_line = \port$6350$0 [223:208];
+  assign ch0__count_delay_jump = \port$6350$0 [239:224];
+  assign ch0__count_noise_event = \port$6350$0 [255:240];
+  assign ch0__ca_status = \port$6482$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6482$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6350$0 [271:256];
+  assign ch0__count_ca_no_answer = \port$6350$0 [287:272];
+  assign ch0__count_ca_refused = \port$6350$0 [303:288];
+  assign ch0__count_ca_aborted = \port$6350$0 [319:304];
+  assign ch0__count_ca_data_fault = \port$6350$0 [335:320];
+  assign ch1__status = \port$6903$0 [3:0];
+  assign ch1__cds = \port$6903$0 [49];
+  assign ch1__word0_ne = \port$6903$0 [131];
+  assign ch1__word0_nw = \port$6903$0 [132];
+  assign ch1__word0_crc_ok = \port$6903$0 [133];
+  assign ch1__word1_ne = \port$6903$0 [174];
+  assign ch1__word1_nw = \port$6903$0 [175];
+  assign ch1__word1_crc_ok = \port$6903$0 [176];
+  assign ch1__lc_repeat = \port$6903$0 [183];
+  assign ch1__lc_skip = \port$6903$0 [184];
+  assign ch1__lc_zero = \port$6903$0 [185];
+  assign ch1__spw_mismatch = \port$6903$0 [186];
+  assign ch1__lc = \port$6903$0 [182:177];
+  assign ch1__line_delay = \port$6903$0 [48:36];
+  assign ch1__word0_position = \port$6903$0 [130:76];
+  assign ch1__word1_position = \port$6903$0 [173:134];
+  assign ch1__timestamp = \port$6903$0 [35:4];
+  assign ch1__noise_events = \port$6903$0 [53:50];
+  assign ch1__delay_settled = \port$6903$0 [54];
+  assign ch1__delay_spread = \port$6903$0 [75:68];
+  assign ch1__settled_delay = \port$6903$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$6976$0 [15:0];
-  assign ch1__count_crc_word1 = \port$6976$0 [31:16];
-  assign ch1__count_no_ack = \port$6976$0 [47:32];
-  assign ch1__count_no_start = \port$6976$0 [63:48];
-  assign ch1__count_delay_range = \port$6976$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$6976$0 [95:80];
-  assign ch1__count_lc_repeat = \port$6976$0 [111:96];
-  assign ch1__count_lc_skip = \port$6976$0 [127:112];
-  assign ch1__count_lc_zero = \port$6976$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$6976$0 [159:144];
-  assign ch1__count_overrun = \port$6976$0 [175:160];
-  assign ch1__count_aborted = \port$6976$0 [191:176];
-  assign ch1__count_no_stop = \port$6976$0 [207:192];
-  assign ch1__count_noisy_line = \port$6976$0 [223:208];
-  assign ch1__count_delay_jump = \port$6976$0 [239:224];
-  assign ch1__count_noise_event = \port$6976$0 [255:240];
-  assign ch1__ca_status = \port$7108$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7108$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$6976$0 [271:256];
-  assign ch1__count_ca_no_answer = \port$6976$0 [287:272];
-  assign ch1__count_ca_refused = \port$6976$0 [303:288];
-  assign ch1__count_ca_aborted = \port$6976$0 [319:304];
-  assign ch1__count_ca_data_fault = \port$6976$0 [335:320];
+  assign ch1__count_crc_word0 = \port$6916$0 [15:0];
+  assign ch1__count_crc_word1 = \port$6916$0 [31:16];
+  assign ch1__count_no_ack = \port$6916$0 [47:32];
+  assign ch1__count_no_start = \port$6916$0 [63:48];
+  assign ch1__count_delay_range = \port$6916$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$6916$0 [95:80];
+  assign ch1__count_lc_repeat = \port$6916$0 [111:96];
+  assign ch1__count_lc_skip = \port$6916$0 [127:112];
+  assign ch1__count_lc_zero = \port$6916$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$6916$0 [159:144];
+  assign ch1__count_overrun = \port$6916$0 [175:160];
+  assign ch1__count_aborted = \port$6916$0 [191:176];
+  assign ch1__count_no_stop = \port$6916$0 [207:192];
+  assign ch1__count_noisy_line = \port$6916$0 [223:208];
+  assign ch1__count_delay_jump = \port$6916$0 [239:224];
+  assign ch1__count_noise_event = \port$6916$0 [255:240];
+  assign ch1__ca_status = \port$7048$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7048$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$6916$0 [271:256];
+  assign ch1__count_ca_no_answer = \port$6916$0 [287:272];
+  assign ch1__count_ca_refused = \port$6916$0 [303:288];
+  assign ch1__count_ca_aborted = \port$6916$0 [319:304];
+  assign ch1__count_ca_data_fault = \port$6916$0 [335:320];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -8939,8 +8939,8 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$6398$0 , \port$6411$0 , regs__ca_done
-, \port$6543$0 , slo);
+, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$6337$0 , \port$6350$0 , regs__ca_done
+, \port$6482$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -9103,12 +9103,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$6398$0 ;
-  wire [186:0] \port$6398$0 ;
-  output [335:0] \port$6411$0 ;
-  wire [335:0] \port$6411$0 ;
-  output [9:0] \port$6543$0 ;
-  wire [9:0] \port$6543$0 ;
+  output [186:0] \port$6337$0 ;
+  wire [186:0] \port$6337$0 ;
+  output [335:0] \port$6350$0 ;
+  wire [335:0] \port$6350$0 ;
+  output [9:0] \port$6482$0 ;
+  wire [9:0] \port$6482$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -9514,9 +9514,9 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$206  = ma;
   assign \slo$208  = slo;
-  assign \port$6398$0  = \$5 ;
-  assign \port$6411$0  = \$6 ;
-  assign \port$6543$0  = \$7 ;
+  assign \port$6337$0  = \$5 ;
+  assign \port$6350$0  = \$6 ;
+  assign \port$6482$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -10633,7 +10633,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6053$0 (\bit ),
+    .\port$5991$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -10697,7 +10697,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$2844$0 (\$24 ),
+    .\port$2813$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -20144,101 +20144,33 @@ endmodule
 module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire \$1 ;
-  wire \$10 ;
-  wire \$100 ;
-  wire \$101 ;
-  wire \$102 ;
-  wire \$103 ;
-  wire \$104 ;
-  wire \$105 ;
-  wire \$106 ;
-  wire \$107 ;
-  wire \$108 ;
-  wire \$109 ;
+  wire [14:0] \$10 ;
   wire \$11 ;
-  wire \$110 ;
-  wire \$111 ;
-  wire \$112 ;
-  wire \$113 ;
-  wire \$114 ;
-  wire \$115 ;
-  wire \$116 ;
-  wire \$117 ;
-  wire \$118 ;
-  wire \$119 ;
-  wire \$12 ;
-  wire \$120 ;
-  wire \$121 ;
-  wire \$122 ;
-  wire \$123 ;
-  wire \$124 ;
-  wire \$125 ;
-  wire \$126 ;
-  wire \$127 ;
-  wire \$128 ;
-  wire \$129 ;
-  wire \$13 ;
-  wire \$130 ;
-  wire \$131 ;
-  wire \$132 ;
-  wire \$133 ;
-  wire \$134 ;
-  wire \$135 ;
-  wire \$136 ;
-  wire \$137 ;
-  wire \$138 ;
-  wire \$139 ;
+  wire [13:0] \$12 ;
+  wire [17:0] \$13 ;
   wire \$14 ;
-  wire \$140 ;
-  wire \$141 ;
-  wire \$142 ;
-  wire \$143 ;
-  wire \$144 ;
-  wire \$145 ;
-  reg \$146 ;
-  reg [12:0] \$147 ;
-  reg [16:0] \$148 ;
-  reg \$149 ;
   wire \$15 ;
-  reg \$150 ;
-  reg \$151 ;
-  reg \$152 ;
-  reg \$153 ;
-  reg \$154 ;
-  reg \$155 ;
-  reg [12:0] \$156 ;
-  reg \$157 ;
-  reg \$158 ;
-  reg \$159 ;
   wire \$16 ;
-  reg [1:0] \$160 ;
-  reg [16:0] \$161 ;
-  reg \$162 ;
-  reg \$163 ;
-  reg \$164 ;
-  reg \$165 ;
-  reg [12:0] \$166 ;
-  reg [1:0] \$167 ;
-  wire \$17 ;
-  wire \$18 ;
+  wire [13:0] \$17 ;
+  wire [17:0] \$18 ;
   wire \$19 ;
-  wire [14:0] \$2 ;
+  wire \$2 ;
   wire \$20 ;
   wire \$21 ;
   wire \$22 ;
-  wire \$23 ;
+  wire [12:0] \$23 ;
   wire \$24 ;
   wire \$25 ;
-  wire \$26 ;
-  wire \$27 ;
-  wire \$28 ;
+  wire [13:0] \$26 ;
+  wire [13:0] \$27 ;
+  wire [16:0] \$28 ;
   wire \$29 ;
-  wire \$3 ;
-  wire \$30 ;
-  wire \$31 ;
+  wire [14:0] \$3 ;
+  wire [13:0] \$30 ;
+  wire [13:0] \$31 ;
   wire \$32 ;
-  wire \$33 ;
-  wire \$34 ;
+  wire [13:0] \$33 ;
+  wire [17:0] \$34 ;
   wire \$35 ;
   wire \$36 ;
   wire \$37 ;
@@ -20266,82 +20198,77 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   wire \$57 ;
   wire \$58 ;
   wire \$59 ;
-  wire [15:0] \$6 ;
+  wire \$6 ;
   wire \$60 ;
   wire \$61 ;
   wire \$62 ;
   wire \$63 ;
-  wire [13:0] \$64 ;
-  wire [17:0] \$65 ;
+  wire \$64 ;
+  wire \$65 ;
   wire \$66 ;
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
-  wire \$7 ;
-  wire [12:0] \$70 ;
+  wire [14:0] \$7 ;
+  wire \$70 ;
   wire \$71 ;
   wire \$72 ;
-  wire [13:0] \$73 ;
-  wire [13:0] \$74 ;
-  wire [16:0] \$75 ;
-  wire \$76 ;
-  wire [13:0] \$77 ;
-  wire [13:0] \$78 ;
-  wire \$79 ;
-  wire [13:0] \$8 ;
-  wire [13:0] \$80 ;
-  wire [17:0] \$81 ;
-  wire \$82 ;
-  wire \$83 ;
-  wire \$84 ;
-  wire \$85 ;
-  wire \$86 ;
-  wire \$87 ;
-  wire \$88 ;
-  wire \$89 ;
-  wire [17:0] \$9 ;
-  wire \$90 ;
-  wire \$91 ;
-  wire \$92 ;
-  wire \$93 ;
-  wire \$94 ;
-  wire \$95 ;
-  wire \$96 ;
-  wire \$97 ;
-  wire \$98 ;
-  wire \$99 ;
+  wire \$73 ;
+  wire \$74 ;
+  reg \$75 ;
+  reg [12:0] \$76 ;
+  reg [16:0] \$77 ;
+  reg \$78 ;
+  reg [12:0] \$79 ;
+  wire [15:0] \$8 ;
+  reg \$80 ;
+  reg \$81 ;
+  reg \$82 ;
+  reg [1:0] \$83 ;
+  reg [16:0] \$84 ;
+  reg \$85 ;
+  reg \$86 ;
+  reg \$87 ;
+  reg \$88 ;
+  reg [12:0] \$89 ;
+  wire \$9 ;
+  reg [1:0] \$90 ;
   input arm;
   wire arm;
   output \bit ;
   wire \bit ;
   reg centre;
+  wire \centre$34 ;
+  reg clear;
+  wire \clear$32 ;
   input clk;
   wire clk;
-  reg crowded = 1'h0;
   reg decided;
+  wire \decided$35 ;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
   reg dropped;
   output early;
   reg early = 1'h0;
+  wire \edge ;
   reg [12:0] elapsed = 13'h0000;
   reg [15:0] first_load = 16'h0000;
   reg first_slot = 1'h0;
   reg gap = 1'h0;
   input [15:0] half_period;
   wire [15:0] half_period;
-  reg last = 1'h0;
   output level;
   wire level;
+  wire \level$29 ;
   output locked;
   reg locked = 1'h0;
+  wire majority;
   reg [12:0] mid_delay = 13'h0000;
   reg [16:0] mid_slot = 17'h00000;
   output noise;
   wire noise;
   reg odd = 1'h0;
-  reg one_edge = 1'h0;
-  reg [16:0] period_load = 17'h00000;
+  wire \odd$41 ;
   reg [1:0] phase = 2'h0;
   input receiver_clear;
   wire receiver_clear;
@@ -20356,217 +20283,147 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
-  reg strobed = 1'h0;
-  reg tail_odd = 1'h0;
-  reg two_edges = 1'h0;
-  reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
+  (* init = 1'h0 *)
+  wire \vote1$36 ;
   reg vote2 = 1'h0;
+  (* init = 1'h0 *)
+  wire \vote2$37 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$1  = half_period >= 2'h3;
-  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
-  assign \$3  = half_period < 2'h3;
-  assign \$4  = half_period - vote;
-  assign \$5  = $signed(\$4 ) - $signed(2'h1);
-  assign \$6  = vote - 1'h1;
-  assign \$7  = vote == 1'h1;
-  assign \$8  = mid_delay + 1'h1;
-  assign \$9  = mid_slot - 1'h1;
-  assign \$10  = ~ odd;
-  assign \$11  = level != slo_prev;
-  assign \$12  = one_edge & \$11 ;
-  assign \$13  = two_edges | \$12 ;
-  assign \$14  = level != slo_prev;
-  assign \$15  = one_edge | \$14 ;
-  assign \$16  = level != slo_prev;
-  assign \$17  = one_edge & \$16 ;
-  assign \$18  = two_edges | \$17 ;
-  assign \$19  = ~ single;
-  assign \$20  = decided & \$19 ;
-  assign \$21  = vote1 & vote2;
-  assign \$22  = vote1 & level;
-  assign \$23  = \$21  | \$22 ;
-  assign \$24  = vote2 & level;
-  assign \$25  = \$23  | \$24 ;
-  assign \$26  = vote1 & vote2;
-  assign \$27  = vote1 & level;
-  assign \$28  = \$26  | \$27 ;
-  assign \$29  = vote2 & level;
-  assign \$30  = \$28  | \$29 ;
-  assign \$31  = level != \$30 ;
-  assign \$32  = ~ single;
-  assign \$33  = decided & \$32 ;
-  assign \$34  = vote1 == level;
-  assign \$35  = vote2 != level;
-  assign \$36  = \$34  & \$35 ;
-  assign \$37  = vote1 & vote2;
-  assign \$38  = vote1 & level;
-  assign \$39  = \$37  | \$38 ;
-  assign \$40  = vote2 & level;
-  assign \$41  = \$39  | \$40 ;
-  assign \$42  = vote1 != \$41 ;
-  assign \$43  = vote1 & vote2;
-  assign \$44  = vote1 & level;
+  assign \$10  = \$9  ? half_period[15:1] : 15'h0000;
+  assign \$11  = \$10  == 1'h1;
+  assign \$12  = mid_delay + 1'h1;
+  assign \$13  = mid_slot - 1'h1;
+  assign \$14  = ~ odd;
+  assign \$15  = ~ level;
+  assign \$16  = elapsed != 13'h1fff;
+  assign \$17  = elapsed + 1'h1;
+  assign \$18  = slot_left - 1'h1;
+  assign \$19  = slot_left == 1'h1;
+  assign \$20  = ~ level;
+  assign \$21  = slo_prev & \$20 ;
+  assign \$22  = elapsed == 13'h1fff;
+  assign \$23  = \$22  ? 13'h1fff : mid_delay;
+  assign \$24  = ! mid_slot;
+  assign \$25  = elapsed == 13'h1fff;
+  assign \$26  = elapsed - 1'h1;
+  assign \$27  = \$25  ? 14'h1fff : \$26 ;
+  assign \$28  = half_period - 2'h2;
+  assign \$29  = elapsed == 13'h1fff;
+  assign \$30  = elapsed - 1'h1;
+  assign \$31  = \$29  ? 14'h1fff : \$30 ;
+  assign \$32  = elapsed != 13'h1fff;
+  assign \$33  = elapsed + 1'h1;
+  assign \$34  = slot_left - 1'h1;
+  assign \$35  = slot_left == 1'h1;
+  assign \$36  = ! phase;
+  assign \$37  = first_slot & \$36 ;
+  assign \$38  = \$37  & level;
+  assign \$39  = ~ single;
+  assign \$40  = decided & first_slot;
+  assign \$41  = vote1 & vote2;
+  assign \$42  = vote1 & level;
+  assign \$43  = \$41  | \$42 ;
+  assign \$44  = vote2 & level;
   assign \$45  = \$43  | \$44 ;
-  assign \$46  = vote2 & level;
-  assign \$47  = \$45  | \$46 ;
-  assign \$48  = last == \$47 ;
-  assign \$49  = \$42  & \$48 ;
-  assign \$50  = \$36  | \$49 ;
-  assign \$51  = vote1 & vote2;
-  assign \$52  = vote1 & level;
+  assign \$46  = single ? level : \$45 ;
+  assign \$47  = ~ first_slot;
+  assign \$48  = decided & \$47 ;
+  assign \$49  = vote1 & vote2;
+  assign \$50  = vote1 & level;
+  assign \$51  = \$49  | \$50 ;
+  assign \$52  = vote2 & level;
   assign \$53  = \$51  | \$52 ;
-  assign \$54  = vote2 & level;
-  assign \$55  = \$53  | \$54 ;
-  assign \$56  = last == \$55 ;
-  assign \$57  = tail_odd & \$56 ;
-  assign \$58  = \$50  | \$57 ;
-  assign \$59  = \$58  | crowded;
-  assign \$60  = ~ strobed;
-  assign \$61  = \$59  & \$60 ;
-  assign \$62  = ~ level;
-  assign \$63  = elapsed != 13'h1fff;
-  assign \$64  = elapsed + 1'h1;
-  assign \$65  = slot_left - 1'h1;
-  assign \$66  = slot_left == 1'h1;
-  assign \$67  = ~ level;
-  assign \$68  = slo_prev & \$67 ;
-  assign \$69  = elapsed == 13'h1fff;
-  assign \$70  = \$69  ? 13'h1fff : mid_delay;
-  assign \$71  = ! mid_slot;
-  assign \$72  = elapsed == 13'h1fff;
-  assign \$73  = elapsed - 1'h1;
-  assign \$74  = \$72  ? 14'h1fff : \$73 ;
-  assign \$75  = half_period - 2'h2;
-  assign \$76  = elapsed == 13'h1fff;
-  assign \$77  = elapsed - 1'h1;
-  assign \$78  = \$76  ? 14'h1fff : \$77 ;
-  assign \$79  = elapsed != 13'h1fff;
-  assign \$80  = elapsed + 1'h1;
-  assign \$81  = slot_left - 1'h1;
-  assign \$82  = slot_left == 1'h1;
-  assign \$83  = ! phase;
-  assign \$84  = first_slot & \$83 ;
-  assign \$85  = \$84  & level;
-  assign \$86  = ~ single;
-  assign \$87  = decided & first_slot;
-  assign \$88  = vote1 & vote2;
-  assign \$89  = vote1 & level;
-  assign \$90  = \$88  | \$89 ;
-  assign \$91  = vote2 & level;
-  assign \$92  = \$90  | \$91 ;
-  assign \$93  = single ? level : \$92 ;
-  assign \$94  = ~ first_slot;
-  assign \$95  = decided & \$94 ;
-  assign \$96  = vote1 & vote2;
-  assign \$97  = vote1 & level;
-  assign \$98  = \$96  | \$97 ;
-  assign \$99  = vote2 & level;
-  assign \$100  = \$98  | \$99 ;
-  assign \bit  = single ? level : \$100 ;
-  assign \$101  = ~ single;
-  assign \$102  = decided & \$101 ;
-  assign \$103  = vote1 == level;
-  assign \$104  = vote2 != level;
-  assign \$105  = \$103  & \$104 ;
-  assign \$106  = vote1 & vote2;
-  assign \$107  = vote1 & level;
-  assign \$108  = \$106  | \$107 ;
-  assign \$109  = vote2 & level;
-  assign \$110  = \$108  | \$109 ;
-  assign \$111  = vote1 != \$110 ;
-  assign \$112  = vote1 & vote2;
-  assign \$113  = vote1 & level;
-  assign \$114  = \$112  | \$113 ;
-  assign \$115  = vote2 & level;
-  assign \$116  = \$114  | \$115 ;
-  assign \$117  = last == \$116 ;
-  assign \$118  = \$111  & \$117 ;
-  assign \$119  = \$105  | \$118 ;
-  assign \$120  = vote1 & vote2;
-  assign \$121  = vote1 & level;
-  assign \$122  = \$120  | \$121 ;
-  assign \$123  = vote2 & level;
-  assign \$124  = \$122  | \$123 ;
-  assign \$125  = last == \$124 ;
-  assign \$126  = tail_odd & \$125 ;
-  assign \$127  = \$119  | \$126 ;
-  assign \$128  = \$127  | crowded;
-  assign \$129  = \$102  & \$128 ;
-  assign \$130  = ~ strobed;
-  assign \$131  = \$129  & \$130 ;
-  assign noise = dropped | \$131 ;
-  assign \$132  = ! phase;
-  assign \$133  = first_slot & \$132 ;
-  assign \$134  = \$133  & level;
-  assign \$135  = ~ single;
-  assign \$136  = decided & first_slot;
-  assign \$137  = vote1 & vote2;
-  assign \$138  = vote1 & level;
-  assign \$139  = \$137  | \$138 ;
-  assign \$140  = vote2 & level;
-  assign \$141  = \$139  | \$140 ;
-  assign \$142  = single ? level : \$141 ;
-  assign \$143  = ! sampler_fsm_state;
-  assign \$144  = sampler_fsm_state == 1'h1;
-  assign \$145  = sampler_fsm_state == 2'h2;
+  assign \bit  = single ? level : \$53 ;
+  assign \edge  = level != slo_prev;
+  assign \$54  = ~ single;
+  assign \decided$35  = decided & \$54 ;
+  assign \$55  = vote1 & vote2;
+  assign \$56  = vote1 & level;
+  assign \$57  = \$55  | \$56 ;
+  assign \$58  = vote2 & level;
+  assign majority = \$57  | \$58 ;
+  assign noise = dropped | \odd$41 ;
+  assign \$59  = ~ level;
+  assign \$60  = slo_prev & \$59 ;
+  assign \$61  = ! phase;
+  assign \$62  = first_slot & \$61 ;
+  assign \$63  = \$62  & level;
+  assign \$64  = ~ single;
+  assign \$65  = decided & first_slot;
+  assign \$66  = vote1 & vote2;
+  assign \$67  = vote1 & level;
+  assign \$68  = \$66  | \$67 ;
+  assign \$69  = vote2 & level;
+  assign \$70  = \$68  | \$69 ;
+  assign \$71  = single ? level : \$70 ;
+  assign \$72  = ! sampler_fsm_state;
+  assign \$73  = sampler_fsm_state == 1'h1;
+  assign \$74  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$146 ;
+    slo_prev <= \$75 ;
   always @(posedge clk)
-    vote <= \$2 ;
-  always @(posedge clk)
-    single <= \$3 ;
+    single <= \$1 ;
   always @(posedge clk)
     first_load <= \$5 [15:0];
   always @(posedge clk)
-    vote_load <= \$6 [14:0];
+    vote_load <= \$8 [14:0];
   always @(posedge clk)
-    vote_one <= \$7 ;
+    vote_one <= \$11 ;
   always @(posedge clk)
-    period_load <= { first_load, 1'h1 };
+    mid_delay <= \$76 ;
   always @(posedge clk)
-    mid_delay <= \$147 ;
+    mid_slot <= \$77 ;
   always @(posedge clk)
-    mid_slot <= \$148 ;
+    odd <= \$78 ;
   always @(posedge clk)
-    odd <= \$149 ;
+    elapsed <= \$79 ;
   always @(posedge clk)
-    one_edge <= \$150 ;
+    early <= \$80 ;
   always @(posedge clk)
-    two_edges <= \$151 ;
+    locked <= \$81 ;
   always @(posedge clk)
-    crowded <= \$152 ;
+    gap <= \$82 ;
   always @(posedge clk)
-    last <= \$153 ;
+    sampler_fsm_state <= \$83 ;
   always @(posedge clk)
-    tail_odd <= \$154 ;
+    slot_left <= \$84 ;
   always @(posedge clk)
-    strobed <= \$155 ;
+    slot_zero <= \$85 ;
   always @(posedge clk)
-    elapsed <= \$156 ;
+    vote1 <= \$86 ;
   always @(posedge clk)
-    early <= \$157 ;
+    vote2 <= \$87 ;
   always @(posedge clk)
-    locked <= \$158 ;
+    first_slot <= \$88 ;
   always @(posedge clk)
-    gap <= \$159 ;
+    delay <= \$89 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$160 ;
-  always @(posedge clk)
-    slot_left <= \$161 ;
-  always @(posedge clk)
-    slot_zero <= \$162 ;
-  always @(posedge clk)
-    vote1 <= \$163 ;
-  always @(posedge clk)
-    vote2 <= \$164 ;
-  always @(posedge clk)
-    first_slot <= \$165 ;
-  always @(posedge clk)
-    delay <= \$166 ;
-  always @(posedge clk)
-    phase <= \$167 ;
+    phase <= \$90 ;
+  assign \$1  = half_period < 2'h3;
+  assign \$2  = half_period >= 2'h3;
+  assign \$3  = \$2  ? half_period[15:1] : 15'h0000;
+  assign \$4  = half_period - \$3 ;
+  assign \$5  = $signed(\$4 ) - $signed(2'h1);
+  assign \$6  = half_period >= 2'h3;
+  assign \$7  = \$6  ? half_period[15:1] : 15'h0000;
+  assign \$8  = \$7  - 1'h1;
+  assign \$9  = half_period >= 2'h3;
+  \biss_master_uart.ch0.core.sampler.slot_noise  slot_noise (
+    .centre(centre),
+    .clear(clear),
+    .clk(clk),
+    .decided(\decided$35 ),
+    .\edge (\edge ),
+    .level(level),
+    .majority(majority),
+    .odd(\odd$41 ),
+    .receiver_clear(receiver_clear),
+    .rst(rst),
+    .vote1(vote1),
+    .vote2(vote2)
+  );
   \biss_master_uart.ch0.core.sampler.sync  sync (
     .clk(clk),
     .receiver_clear(receiver_clear),
@@ -20576,570 +20433,440 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$146  = level;
+    \$75  = level;
     if (receiver_clear) begin
-      \$146  = 1'h1;
+      \$75  = 1'h1;
     end
     if (rst) begin
-      \$146  = 1'h1;
+      \$75  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$147  = mid_delay;
+    \$76  = mid_delay;
     if (odd) begin
-      \$147  = \$8 [12:0];
+      \$76  = \$12 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$147  = \$78 [12:0];
+              \$76  = \$31 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$147  = 13'h0000;
+      \$76  = 13'h0000;
     end
     if (rst) begin
-      \$147  = 13'h0000;
+      \$76  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$148  = mid_slot;
+    \$77  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$148  = \$9 [16:0];
+      \$77  = \$13 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$148  = \$75 ;
+              \$77  = \$28 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$148  = 17'h00000;
+      \$77  = 17'h00000;
     end
     if (rst) begin
-      \$148  = 17'h00000;
+      \$77  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$149  = \$10 ;
+    \$78  = \$14 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$149  = 1'h1;
+              \$78  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$149  = 1'h0;
+      \$78  = 1'h0;
     end
     if (rst) begin
-      \$149  = 1'h0;
+      \$78  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    (* full_case = 32'd1 *)
-    if (centre) begin
-      \$150  = 1'h0;
-    end else begin
-      \$150  = \$15 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$150  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$150  = 1'h0;
-    end
-    if (rst) begin
-      \$150  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    (* full_case = 32'd1 *)
-    if (centre) begin
-      \$151  = 1'h0;
-    end else begin
-      \$151  = \$18 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$151  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$151  = 1'h0;
-    end
-    if (rst) begin
-      \$151  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$152  = crowded;
-    if (centre) begin
-      \$152  = \$13 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$152  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$152  = 1'h0;
-    end
-    if (rst) begin
-      \$152  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$153  = last;
-    if (\$20 ) begin
-      \$153  = \$25 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$153  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$153  = 1'h0;
-    end
-    if (rst) begin
-      \$153  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$154  = tail_odd;
-    if (\$20 ) begin
-      \$154  = \$31 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$154  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$154  = 1'h0;
-    end
-    if (rst) begin
-      \$154  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$155  = strobed;
-    if (\$33 ) begin
-      \$155  = \$61 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$155  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$155  = 1'h0;
-    end
-    if (rst) begin
-      \$155  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$156  = elapsed;
+    \$79  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$156  = 13'h0001;
+            \$79  = 13'h0001;
           end
       2'h1:
-          if (\$63 ) begin
-            \$156  = \$64 [12:0];
+          if (\$16 ) begin
+            \$79  = \$17 [12:0];
           end
       2'h2:
-          if (\$79 ) begin
-            \$156  = \$80 [12:0];
+          if (\$32 ) begin
+            \$79  = \$33 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$156  = 13'h0000;
+      \$79  = 13'h0000;
     end
     if (rst) begin
-      \$156  = 13'h0000;
+      \$79  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$157  = early;
+    \$80  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$157  = \$62 ;
+            \$80  = \$15 ;
           end
     endcase
     if (receiver_clear) begin
-      \$157  = 1'h0;
+      \$80  = 1'h0;
     end
     if (rst) begin
-      \$157  = 1'h0;
+      \$80  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$158  = locked;
+    \$81  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$158  = 1'h0;
+            \$81  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$87 ) begin
+          if (\$40 ) begin
             (* full_case = 32'd1 *)
-            if (\$93 ) begin
+            if (\$46 ) begin
             end else begin
-              \$158  = 1'h1;
+              \$81  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$158  = 1'h0;
+      \$81  = 1'h0;
     end
     if (rst) begin
-      \$158  = 1'h0;
+      \$81  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$159  = gap;
+    \$82  = gap;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$159  = 1'h0;
+            \$82  = 1'h0;
           end
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$159  = 1'h0;
+              \$82  = 1'h0;
             end
           end
-          if (\$68 ) begin
-            \$159  = 1'h0;
+          if (\$21 ) begin
+            \$82  = 1'h0;
           end
         end
       2'h2:
-          if (\$85 ) begin
-            \$159  = \$86 ;
+          if (\$38 ) begin
+            \$82  = \$39 ;
           end
     endcase
     if (receiver_clear) begin
-      \$159  = 1'h0;
+      \$82  = 1'h0;
     end
     if (rst) begin
-      \$159  = 1'h0;
+      \$82  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$160  = sampler_fsm_state;
+    \$83  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$160  = 2'h1;
+            \$83  = 2'h1;
           end
       2'h1:
-          if (\$68 ) begin
-            \$160  = 2'h2;
+          if (\$21 ) begin
+            \$83  = 2'h2;
           end
       2'h2:
         begin
-          if (\$85 ) begin
-            \$160  = 2'h1;
+          if (\$38 ) begin
+            \$83  = 2'h1;
           end
-          if (\$87 ) begin
-            if (\$93 ) begin
-              \$160  = 2'h1;
+          if (\$40 ) begin
+            if (\$46 ) begin
+              \$83  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$160  = 2'h0;
+      \$83  = 2'h0;
     end
     if (rst) begin
-      \$160  = 2'h0;
+      \$83  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$161  = slot_left;
+    \$84  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$161  = \$65 [16:0];
+            \$84  = \$18 [16:0];
           end
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$161  = mid_slot;
+              \$84  = mid_slot;
             end else begin
-              \$161  = { 1'h0, first_load };
+              \$84  = { 1'h0, first_load };
             end
           end
         end
       2'h2:
         begin
-          \$161  = \$81 [16:0];
-          if (\$85 ) begin
-            \$161  = { 2'h0, vote_load };
+          \$84  = \$34 [16:0];
+          if (\$38 ) begin
+            \$84  = { 2'h0, vote_load };
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$161  = period_load;
+                    \$84  = { first_load, 1'h1 };
                   end else begin
-                    \$161  = { 2'h0, vote_load };
+                    \$84  = { 2'h0, vote_load };
                   end
               2'h1:
-                  \$161  = { 2'h0, vote_load };
+                  \$84  = { 2'h0, vote_load };
               default:
-                  \$161  = period_load;
+                  \$84  = { first_load, 1'h1 };
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$161  = 17'h00000;
+      \$84  = 17'h00000;
     end
     if (rst) begin
-      \$161  = 17'h00000;
+      \$84  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$162  = slot_zero;
+    \$85  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$162  = \$66 ;
+            \$85  = \$19 ;
           end
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$162  = \$71 ;
+              \$85  = \$24 ;
             end else begin
-              \$162  = 1'h0;
+              \$85  = 1'h0;
             end
           end
         end
       2'h2:
         begin
-          \$162  = \$82 ;
-          if (\$85 ) begin
-            \$162  = vote_one;
+          \$85  = \$35 ;
+          if (\$38 ) begin
+            \$85  = vote_one;
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$162  = 1'h0;
+                    \$85  = 1'h0;
                   end else begin
-                    \$162  = vote_one;
+                    \$85  = vote_one;
                   end
               2'h1:
-                  \$162  = vote_one;
+                  \$85  = vote_one;
               default:
-                  \$162  = 1'h0;
+                  \$85  = 1'h0;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$162  = 1'h1;
+      \$85  = 1'h1;
     end
     if (rst) begin
-      \$162  = 1'h1;
+      \$85  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$163  = vote1;
+    \$86  = vote1;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
-            \$163  = 1'h0;
+          if (\$21 ) begin
+            \$86  = 1'h0;
           end
       2'h2:
-          if (\$85 ) begin
+          if (\$38 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$163  = level;
+                    \$86  = level;
                   end
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$163  = 1'h0;
+      \$86  = 1'h0;
     end
     if (rst) begin
-      \$163  = 1'h0;
+      \$86  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$164  = vote2;
+    \$87  = vote2;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
-            \$164  = 1'h0;
+          if (\$21 ) begin
+            \$87  = 1'h0;
           end
       2'h2:
-          if (\$85 ) begin
+          if (\$38 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  \$164  = level;
+                  \$87  = level;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$164  = 1'h0;
+      \$87  = 1'h0;
     end
     if (rst) begin
-      \$164  = 1'h0;
+      \$87  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$165  = first_slot;
+    \$88  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
-            \$165  = 1'h1;
+          if (\$21 ) begin
+            \$88  = 1'h1;
           end
       2'h2:
-          if (\$87 ) begin
+          if (\$40 ) begin
             (* full_case = 32'd1 *)
-            if (\$93 ) begin
+            if (\$46 ) begin
             end else begin
-              \$165  = 1'h0;
+              \$88  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$165  = 1'h0;
+      \$88  = 1'h0;
     end
     if (rst) begin
-      \$165  = 1'h0;
+      \$88  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$166  = delay;
+    \$89  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$166  = \$70 ;
+              \$89  = \$23 ;
             end else begin
-              \$166  = \$74 [12:0];
+              \$89  = \$27 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$166  = 13'h0000;
+      \$89  = 13'h0000;
     end
     if (rst) begin
-      \$166  = 13'h0000;
+      \$89  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$167  = phase;
+    \$90  = phase;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$167  = 2'h1;
+              \$90  = 2'h1;
             end else begin
-              \$167  = 2'h0;
+              \$90  = 2'h0;
             end
           end
       2'h2:
-          if (\$85 ) begin
+          if (\$38 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -21147,37 +20874,49 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$167  = 2'h1;
+                    \$90  = 2'h1;
                   end
               2'h1:
-                  \$167  = 2'h2;
+                  \$90  = 2'h2;
               default:
-                  \$167  = 2'h0;
+                  \$90  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$167  = 2'h0;
+      \$90  = 2'h0;
     end
     if (rst) begin
-      \$167  = 2'h0;
+      \$90  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    sample = \$95 ;
+    sample = \$48 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           /* empty */;
       2'h2:
-          if (\$136 ) begin
+          if (\$65 ) begin
             (* full_case = 32'd1 *)
-            if (\$142 ) begin
+            if (\$71 ) begin
             end else begin
               sample = 1'h1;
             end
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    clear = 1'h0;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$60 ) begin
+            clear = 1'h1;
           end
     endcase
   end
@@ -21191,11 +20930,11 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
           /* empty */;
       2'h2:
         begin
-          if (\$134 ) begin
+          if (\$63 ) begin
             dropped = 1'h1;
           end
-          if (\$136 ) begin
-            if (\$142 ) begin
+          if (\$65 ) begin
+            if (\$71 ) begin
               dropped = 1'h1;
             end
           end
@@ -21211,7 +20950,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
       2'h1:
           /* empty */;
       2'h2:
-          if (\$134 ) begin
+          if (\$63 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -21236,16 +20975,251 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
       2'h1:
           /* empty */;
       2'h2:
-          if (\$134 ) begin
+          if (\$63 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  centre = \$135 ;
+                  centre = \$64 ;
             endcase
           end
     endcase
+  end
+  assign \level$29  = level;
+  assign \clear$32  = clear;
+  assign \centre$34  = centre;
+  assign \vote1$36  = vote1;
+  assign \vote2$37  = vote2;
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majority, odd, receiver_clear, vote1, vote2, clear, centre, level, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  reg \$33 ;
+  reg \$34 ;
+  reg \$35 ;
+  reg \$36 ;
+  reg \$37 ;
+  reg \$38 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input centre;
+  wire centre;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  reg crowded = 1'h0;
+  input decided;
+  wire decided;
+  input \edge ;
+  wire \edge ;
+  reg last = 1'h0;
+  input level;
+  wire level;
+  input majority;
+  wire majority;
+  output odd;
+  wire odd;
+  reg one_edge = 1'h0;
+  input receiver_clear;
+  wire receiver_clear;
+  input rst;
+  wire rst;
+  reg strobed = 1'h0;
+  reg tail_odd = 1'h0;
+  reg two_edges = 1'h0;
+  input vote1;
+  wire vote1;
+  input vote2;
+  wire vote2;
+  assign \$1  = one_edge & \edge ;
+  assign \$2  = two_edges | \$1 ;
+  assign \$3  = one_edge | \edge ;
+  assign \$4  = one_edge & \edge ;
+  assign \$5  = two_edges | \$4 ;
+  assign \$6  = level != majority;
+  assign \$7  = vote1 == level;
+  assign \$8  = vote2 != level;
+  assign \$9  = \$7  & \$8 ;
+  assign \$10  = vote1 != majority;
+  assign \$11  = last == majority;
+  assign \$12  = \$10  & \$11 ;
+  assign \$13  = \$9  | \$12 ;
+  assign \$14  = last == majority;
+  assign \$15  = tail_odd & \$14 ;
+  assign \$16  = \$13  | \$15 ;
+  assign \$17  = \$16  | crowded;
+  assign \$18  = ~ strobed;
+  assign \$19  = \$17  & \$18 ;
+  assign \$20  = vote1 == level;
+  assign \$21  = vote2 != level;
+  assign \$22  = \$20  & \$21 ;
+  assign \$23  = vote1 != majority;
+  assign \$24  = last == majority;
+  assign \$25  = \$23  & \$24 ;
+  assign \$26  = \$22  | \$25 ;
+  assign \$27  = last == majority;
+  assign \$28  = tail_odd & \$27 ;
+  assign \$29  = \$26  | \$28 ;
+  assign \$30  = \$29  | crowded;
+  assign \$31  = decided & \$30 ;
+  assign \$32  = ~ strobed;
+  assign odd = \$31  & \$32 ;
+  always @(posedge clk)
+    last <= \$33 ;
+  always @(posedge clk)
+    tail_odd <= \$34 ;
+  always @(posedge clk)
+    one_edge <= \$35 ;
+  always @(posedge clk)
+    two_edges <= \$36 ;
+  always @(posedge clk)
+    crowded <= \$37 ;
+  always @(posedge clk)
+    strobed <= \$38 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$33  = last;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$33  = 1'h0;
+    end else begin
+      if (decided) begin
+        \$33  = majority;
+      end
+    end
+    if (receiver_clear) begin
+      \$33  = 1'h0;
+    end
+    if (rst) begin
+      \$33  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$34  = tail_odd;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$34  = 1'h0;
+    end else begin
+      if (decided) begin
+        \$34  = \$6 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$34  = 1'h0;
+    end
+    if (rst) begin
+      \$34  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$35  = 1'h0;
+    end else begin
+      (* full_case = 32'd1 *)
+      if (centre) begin
+        \$35  = 1'h0;
+      end else begin
+        \$35  = \$3 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$35  = 1'h0;
+    end
+    if (rst) begin
+      \$35  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$36  = 1'h0;
+    end else begin
+      (* full_case = 32'd1 *)
+      if (centre) begin
+        \$36  = 1'h0;
+      end else begin
+        \$36  = \$5 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$36  = 1'h0;
+    end
+    if (rst) begin
+      \$36  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$37  = crowded;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$37  = 1'h0;
+    end else begin
+      if (centre) begin
+        \$37  = \$2 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$37  = 1'h0;
+    end
+    if (rst) begin
+      \$37  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$38  = strobed;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$38  = 1'h0;
+    end else begin
+      if (decided) begin
+        \$38  = \$19 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$38  = 1'h0;
+    end
+    if (rst) begin
+      \$38  = 1'h0;
+    end
   end
 endmodule
 
@@ -21273,7 +21247,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -21367,14 +21341,14 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -21388,7 +21362,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -21402,7 +21376,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -21418,8 +21392,8 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6053$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$5991$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -21460,8 +21434,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6053$0 ;
-  wire \port$6053$0 ;
+  input \port$5991$0 ;
+  wire \port$5991$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -21475,9 +21449,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6053$0  };
-  assign \$2  = { lc[4:0], \port$6053$0  } == last;
-  assign \$3  = { lc[4:0], \port$6053$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5991$0  };
+  assign \$2  = { lc[4:0], \port$5991$0  } == last;
+  assign \$3  = { lc[4:0], \port$5991$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -21511,7 +21485,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -21521,7 +21495,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -21531,7 +21505,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -21541,21 +21515,21 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -21565,7 +21539,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -21575,7 +21549,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -21587,13 +21561,13 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6053$0  };
+  assign lc_next = { lc[4:0], \port$5991$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -21798,28 +21772,28 @@ module \biss_master_uart.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -21829,7 +21803,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -21848,14 +21822,14 @@ module \biss_master_uart.ch0.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -21869,7 +21843,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
 , delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22049,7 +22023,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   assign \$40  = in_clock & \$39 ;
   assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$48  = slo_low_time_p1;
     if (\$2 ) begin
       \$48  = 25'h0000001;
@@ -22061,21 +22035,21 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$49  = \$9 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$50  = \$17 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$51  = high_p2;
     if (\$18 ) begin
       \$51  = 13'h0002;
@@ -22087,28 +22061,28 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$52  = \$23 ;
     if (rst) begin
       \$52  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$53  = \$30 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$54  = \$34 [24:0];
     if (rst) begin
       \$54  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$55  = 1'h0;
@@ -22120,21 +22094,21 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$57  = \$46 ;
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$58  = \$47 ;
     if (rst) begin
       \$58  = 1'h0;
@@ -22143,9 +22117,9 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2844$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2813$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22297,8 +22271,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2844$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$2844$0 ;
-  wire \port$2844$0 ;
+  output \port$2813$0 ;
+  wire \port$2813$0 ;
   output report;
   wire report;
   input report_frame;
@@ -22379,7 +22353,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2844$0 , l
   assign \$39  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$39  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     frame_status = 4'h0;
     if (delay_jump) begin
       frame_status = 4'he;
@@ -22404,7 +22378,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2844$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2844$0  = \$2 ;
+  assign \port$2813$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -22447,9 +22421,9 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$6963$0 , \port$6976$0 , regs__ca_done
-, \port$7108$0 , slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$6903$0 , \port$6916$0 , regs__ca_done
+, \port$7048$0 , slo);
+  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg \$3 ;
@@ -22611,12 +22585,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$6963$0 ;
-  wire [186:0] \port$6963$0 ;
-  output [335:0] \port$6976$0 ;
-  wire [335:0] \port$6976$0 ;
-  output [9:0] \port$7108$0 ;
-  wire [9:0] \port$7108$0 ;
+  output [186:0] \port$6903$0 ;
+  wire [186:0] \port$6903$0 ;
+  output [335:0] \port$6916$0 ;
+  wire [335:0] \port$6916$0 ;
+  output [9:0] \port$7048$0 ;
+  wire [9:0] \port$7048$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -22857,14 +22831,14 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
     .\valid$298 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$3  = regs__abort_cycle;
     if (rst) begin
       \$3  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$4  = regs__done_count;
     if (regs__done) begin
       \$4  = \$2 [15:0];
@@ -23022,9 +22996,9 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$206  = ma;
   assign \slo$208  = slo;
-  assign \port$6963$0  = \$5 ;
-  assign \port$6976$0  = \$6 ;
-  assign \port$7108$0  = \$7 ;
+  assign \port$6903$0  = \$5 ;
+  assign \port$6916$0  = \$6 ;
+  assign \port$7048$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -23032,7 +23006,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
 , cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width
 , cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$296 , \valid$298 , \result$301 , counts, ca_done, result, slo
 );
-  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24141,7 +24115,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6618$0 (\bit ),
+    .\port$6557$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -24205,7 +24179,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$4875$0 (\$24 ),
+    .\port$4813$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -24214,35 +24188,35 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$19  = \$18 ;
     if (rst) begin
       \$19  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$20  = \bit$325 ;
     if (rst) begin
       \$20  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$21  = started;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$22  = report_frame;
     if (rst) begin
       \$22  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$23  = \clean$326 ;
     if (rst) begin
       \$23  = 1'h0;
@@ -24771,7 +24745,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crcs, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -25049,14 +25023,14 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$31  = \$29  & \$30 ;
   assign \$32  = \$26  | \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$59  = \$46 ;
     if (rst) begin
       \$59  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$60  = cycle;
     if (idle) begin
       \$60  = live;
@@ -25066,7 +25040,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$61  = ack_limit;
     if (idle) begin
       \$61  = \$48 ;
@@ -25076,7 +25050,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$62  = timeout_limit;
     if (idle) begin
       \$62  = \$50 ;
@@ -25086,7 +25060,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$63  = delay_limit;
     if (idle) begin
       \$63  = \$52 ;
@@ -25096,7 +25070,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$64  = quiet_time;
     if (idle) begin
       \$64  = \$54 ;
@@ -25106,7 +25080,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$65  = delay_tolerance;
     if (idle) begin
       \$65  = \$57 ;
@@ -25116,7 +25090,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$66  = crcs;
     if (idle) begin
       (* full_case = 32'd1 *)
@@ -25167,7 +25141,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$67  = \$58 ;
     if (rst) begin
       \$67  = 25'h0000000;
@@ -25263,7 +25237,7 @@ endmodule
 module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
 , slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -25598,7 +25572,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     .report_frame(report_frame)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25606,7 +25580,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25653,7 +25627,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     waiting = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25665,7 +25639,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25677,7 +25651,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25726,7 +25700,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25775,7 +25749,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25791,7 +25765,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25805,7 +25779,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25819,7 +25793,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     framing = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25835,7 +25809,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25866,7 +25840,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25884,7 +25858,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     holding = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25907,14 +25881,14 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$27  = idle;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$28  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -26005,7 +25979,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$29  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -26096,7 +26070,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$30  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -26187,7 +26161,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$31  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -26256,7 +26230,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -26295,7 +26269,7 @@ module \biss_master_uart.ch1.core.controller.cdm_hold (rst, abort, framing, hold
   assign \$1  = ~ abort;
   assign \$2  = cdm_cycle & \$1 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$7  = cdm_cycle;
     if (idle) begin
       \$7  = cdm;
@@ -26305,7 +26279,7 @@ module \biss_master_uart.ch1.core.controller.cdm_hold (rst, abort, framing, hold
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     ma_hold = 1'h0;
     if (framing) begin
       ma_hold = \$2 ;
@@ -26317,7 +26291,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -26414,7 +26388,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
   always @(posedge clk)
     locked_seen <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$20  = armed;
     if (clear) begin
       \$20  = 1'h0;
@@ -26427,7 +26401,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$21  = locked_seen;
     if (clear) begin
       \$21  = 1'h0;
@@ -26440,7 +26414,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     fault = 1'h0;
     if (\$7 ) begin
       fault = 1'h1;
@@ -26453,7 +26427,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     status = 4'h0;
     if (\$7 ) begin
       status = 4'h8;
@@ -26466,7 +26440,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     delay = 1'h0;
     if (\$7 ) begin
     end else if (\$12 ) begin
@@ -26478,7 +26452,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -26512,7 +26486,7 @@ module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
   assign \$4  = first_clock ? quiet_live : quiet;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     aborted = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -26520,7 +26494,7 @@ module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     ready = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -26529,7 +26503,7 @@ module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     stuck_low = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -26539,7 +26513,7 @@ module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
@@ -26653,7 +26627,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.counters (rst, clear, events, counts, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   reg [20:0] \$1 ;
   reg \$2 ;
   input clear;
@@ -26967,14 +26941,14 @@ module \biss_master_uart.ch1.core.counters (rst, clear, events, counts, clk);
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$1  = events;
     if (rst) begin
       \$1  = 21'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$2  = clear;
     if (rst) begin
       \$2  = 1'h0;
@@ -27110,60 +27084,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.counters.count_aborted (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27217,7 +27137,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_aborted (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27271,7 +27191,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_crc4_error (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27325,7 +27245,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_data_fault (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27379,7 +27299,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_no_answer (rst, inc, clear, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27433,7 +27353,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_crc_word0 (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27487,7 +27407,7 @@ module \biss_master_uart.ch1.core.counters.count_crc_word0 (rst, inc, clear, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_crc_word1 (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_crc_word0 (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27541,7 +27461,7 @@ module \biss_master_uart.ch1.core.counters.count_crc_word1 (rst, inc, clear, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_delay_jump (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_crc_word1 (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27595,7 +27515,7 @@ module \biss_master_uart.ch1.core.counters.count_delay_jump (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_delay_range (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_delay_jump (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27649,7 +27569,7 @@ module \biss_master_uart.ch1.core.counters.count_delay_range (rst, inc, clear, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_lc_repeat (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_delay_range (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27703,7 +27623,7 @@ module \biss_master_uart.ch1.core.counters.count_lc_repeat (rst, inc, clear, cou
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_lc_skip (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_lc_repeat (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27757,7 +27677,7 @@ module \biss_master_uart.ch1.core.counters.count_lc_skip (rst, inc, clear, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_lc_zero (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_lc_skip (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27811,7 +27731,7 @@ module \biss_master_uart.ch1.core.counters.count_lc_zero (rst, inc, clear, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_no_ack (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_lc_zero (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27865,7 +27785,7 @@ module \biss_master_uart.ch1.core.counters.count_no_ack (rst, inc, clear, count,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_no_start (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_no_ack (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27919,7 +27839,7 @@ module \biss_master_uart.ch1.core.counters.count_no_start (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_no_stop (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_no_start (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27973,7 +27893,7 @@ module \biss_master_uart.ch1.core.counters.count_no_stop (rst, inc, clear, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_noise_event (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_no_stop (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -28027,7 +27947,7 @@ module \biss_master_uart.ch1.core.counters.count_noise_event (rst, inc, clear, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_noisy_line (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_noise_event (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -28081,7 +28001,7 @@ module \biss_master_uart.ch1.core.counters.count_noisy_line (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_overrun (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_noisy_line (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -28135,7 +28055,7 @@ module \biss_master_uart.ch1.core.counters.count_overrun (rst, inc, clear, count
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_overrun (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -28189,7 +28109,7 @@ module \biss_master_uart.ch1.core.counters.count_slo_stuck_low (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_spw_mismatch (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -28243,9 +28163,63 @@ module \biss_master_uart.ch1.core.counters.count_spw_mismatch (rst, inc, clear, 
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_uart.ch1.core.counters.count_spw_mismatch (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top
 , crc_ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -29639,7 +29613,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$585  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -29663,7 +29637,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$586  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -29685,7 +29659,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$587  = slots;
     if (\$36 ) begin
       \$587  = \$37 [15:0];
@@ -29698,7 +29672,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$588  = slots_full;
     if (\$36 ) begin
       \$588  = \$38 ;
@@ -29711,7 +29685,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$589  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -29727,7 +29701,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$590  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -29743,7 +29717,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$591  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -29775,7 +29749,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$592  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -29793,7 +29767,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$593  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -29818,7 +29792,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$594  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -29843,7 +29817,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$595  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -29868,7 +29842,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$596  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
@@ -29890,7 +29864,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$597  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -29915,7 +29889,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$598  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -29943,7 +29917,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$599  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -29965,7 +29939,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$600  = data0;
     if (\$66 ) begin
       \$600  = \$344 ;
@@ -29978,7 +29952,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$601  = ne;
     if (\$345 ) begin
       \$601 [0] = 1'h1;
@@ -29998,7 +29972,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$602  = nw;
     if (\$345 ) begin
       \$602 [0] = 1'h1;
@@ -30020,7 +29994,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$603  = data1;
     if (\$356 ) begin
       \$603  = \$559 ;
@@ -30033,7 +30007,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$604  = lc;
     if (lc_load) begin
       \$604  = { lc[4:0], \bit  };
@@ -30046,7 +30020,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     \$605  = cpw_top;
     if (\$569 ) begin
       \$605  = { cpw_top[38:0], \$571  };
@@ -30059,7 +30033,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     at_cds = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -30069,7 +30043,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -30081,7 +30055,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -30091,7 +30065,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -30105,7 +30079,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -30119,7 +30093,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -30133,7 +30107,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[18])
       1'h0:
@@ -30143,7 +30117,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -30157,7 +30131,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -30171,7 +30145,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -30231,7 +30205,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
   reg \$11 ;
@@ -30332,7 +30306,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @(posedge clk)
     ok <= \$35 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     (* full_case = 32'd1 *)
     casez (load_index)
       1'h0:
@@ -30342,7 +30316,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30352,7 +30326,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30362,7 +30336,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30372,7 +30346,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30382,7 +30356,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30392,7 +30366,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30402,7 +30376,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30412,7 +30386,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30422,7 +30396,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$33  = \reg ;
     if (load) begin
       \$33  = \$1 ;
@@ -30439,7 +30413,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$34  = mismatch;
     if (load) begin
       \$34  = 1'h0;
@@ -30455,7 +30429,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
     \$35  = ok;
     if (last) begin
       if (\$15 ) begin
@@ -30487,7 +30461,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -30659,56 +30633,56 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
   assign \$39  = magnitude > spread;
   assign \$40  = \$38  & \$39 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$46  = \$1 ;
     if (rst) begin
       \$46  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$47  = \$2 ;
     if (rst) begin
       \$47  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$48  = \tolerance$8 ;
     if (rst) begin
       \$48  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$49  = \$3 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$50  = \$11 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$51  = \$20 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$52  = \$25 ;
     if (rst) begin
       \$52  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$53  = 1'h0;
     if (learn) begin
       if (\$32 ) begin
@@ -30725,7 +30699,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$54  = jump;
     if (check) begin
       \$54  = \$26 ;
@@ -30738,7 +30712,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$55  = count;
     if (learn) begin
       (* full_case = 32'd1 *)
@@ -30760,7 +30734,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$56  = spread;
     if (learn) begin
       if (\$32 ) begin
@@ -30780,7 +30754,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$57  = cand;
     if (learn) begin
       if (\$32 ) begin
@@ -30793,7 +30767,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$58  = settled_delay;
     if (learn) begin
       if (\$32 ) begin
@@ -30810,7 +30784,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
     \$59  = settled;
     if (learn) begin
       if (\$32 ) begin
@@ -30830,7 +30804,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
   wire \$1 ;
   reg \$10 ;
   reg \$11 ;
@@ -30893,21 +30867,21 @@ module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, noisy, events,
   always @(posedge clk)
     running <= \$14 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$10  = level;
     if (rst) begin
       \$10  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$11  = \$4 ;
     if (rst) begin
       \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$12  = held_noisy;
     if (close) begin
       \$12  = \$7 ;
@@ -30917,7 +30891,7 @@ module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$13  = held_events;
     if (close) begin
       \$13  = running;
@@ -30927,7 +30901,7 @@ module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
     \$14  = running;
     if (close) begin
       \$14  = { 3'h0, \event  };
@@ -30944,7 +30918,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -31069,7 +31043,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -31084,7 +31058,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -31099,7 +31073,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -31114,7 +31088,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -31143,7 +31117,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -31185,7 +31159,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -31227,7 +31201,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -31246,7 +31220,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -31282,7 +31256,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -31306,7 +31280,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -31322,7 +31296,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -31339,7 +31313,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, \started$11 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
   reg [7:0] \$1 ;
   wire \$10 ;
   reg [7:0] \$11 ;
@@ -31442,7 +31416,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   always @(posedge clk)
     word1_len <= \$19 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -31456,7 +31430,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -31470,42 +31444,42 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$14  = \$3 [7:0];
     if (rst) begin
       \$14  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$15  = \$5 ;
     if (rst) begin
       \$15  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$16  = \$6 ;
     if (rst) begin
       \$16  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$17  = \started$11 ;
     if (rst) begin
       \$17  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$18  = \$10 ;
     if (rst) begin
       \$18  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
     \$19  = \$13 [7:0];
     if (rst) begin
       \$19  = 8'h00;
@@ -31831,7 +31805,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.buffers (rst, host_read__en, byte_to_send, rbuf_data, host_read__addr, wbuf, index, store, byte_received, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -31948,21 +31922,21 @@ module \biss_master_uart.ch1.core.register_access.buffers (rst, host_read__en, b
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -31982,7 +31956,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -32025,7 +31999,7 @@ module \biss_master_uart.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -32035,7 +32009,7 @@ module \biss_master_uart.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -32051,7 +32025,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -32094,7 +32068,7 @@ module \biss_master_uart.ch1.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -32118,7 +32092,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -32188,7 +32162,7 @@ module \biss_master_uart.ch1.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -32198,7 +32172,7 @@ module \biss_master_uart.ch1.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -32211,7 +32185,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$110  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -32283,7 +32257,7 @@ module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -32296,7 +32270,7 @@ module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -32309,7 +32283,7 @@ module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -32319,7 +32293,7 @@ module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -32344,7 +32318,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$110  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -32387,7 +32361,7 @@ module \biss_master_uart.ch1.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -32412,7 +32386,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$112  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -32768,7 +32742,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32806,7 +32780,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -32860,7 +32834,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -32957,7 +32931,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -32974,7 +32948,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -33013,7 +32987,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -33071,7 +33045,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -33138,7 +33112,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -33170,7 +33144,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33184,7 +33158,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33211,7 +33185,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33231,7 +33205,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33250,7 +33224,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33279,7 +33253,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33300,7 +33274,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33322,7 +33296,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33343,7 +33317,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33365,7 +33339,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33387,7 +33361,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33411,7 +33385,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33450,7 +33424,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$112  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$113  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [186:0] \$3 ;
@@ -33559,21 +33533,21 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -33650,103 +33624,35 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$113  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$114  = 0;
   wire \$1 ;
-  wire \$10 ;
-  wire \$100 ;
-  wire \$101 ;
-  wire \$102 ;
-  wire \$103 ;
-  wire \$104 ;
-  wire \$105 ;
-  wire \$106 ;
-  wire \$107 ;
-  wire \$108 ;
-  wire \$109 ;
+  wire [14:0] \$10 ;
   wire \$11 ;
-  wire \$110 ;
-  wire \$111 ;
-  wire \$112 ;
-  wire \$113 ;
-  wire \$114 ;
-  wire \$115 ;
-  wire \$116 ;
-  wire \$117 ;
-  wire \$118 ;
-  wire \$119 ;
-  wire \$12 ;
-  wire \$120 ;
-  wire \$121 ;
-  wire \$122 ;
-  wire \$123 ;
-  wire \$124 ;
-  wire \$125 ;
-  wire \$126 ;
-  wire \$127 ;
-  wire \$128 ;
-  wire \$129 ;
-  wire \$13 ;
-  wire \$130 ;
-  wire \$131 ;
-  wire \$132 ;
-  wire \$133 ;
-  wire \$134 ;
-  wire \$135 ;
-  wire \$136 ;
-  wire \$137 ;
-  wire \$138 ;
-  wire \$139 ;
+  wire [13:0] \$12 ;
+  wire [17:0] \$13 ;
   wire \$14 ;
-  wire \$140 ;
-  wire \$141 ;
-  wire \$142 ;
-  wire \$143 ;
-  wire \$144 ;
-  wire \$145 ;
-  reg \$146 ;
-  reg [12:0] \$147 ;
-  reg [16:0] \$148 ;
-  reg \$149 ;
   wire \$15 ;
-  reg \$150 ;
-  reg \$151 ;
-  reg \$152 ;
-  reg \$153 ;
-  reg \$154 ;
-  reg \$155 ;
-  reg [12:0] \$156 ;
-  reg \$157 ;
-  reg \$158 ;
-  reg \$159 ;
   wire \$16 ;
-  reg [1:0] \$160 ;
-  reg [16:0] \$161 ;
-  reg \$162 ;
-  reg \$163 ;
-  reg \$164 ;
-  reg \$165 ;
-  reg [12:0] \$166 ;
-  reg [1:0] \$167 ;
-  wire \$17 ;
-  wire \$18 ;
+  wire [13:0] \$17 ;
+  wire [17:0] \$18 ;
   wire \$19 ;
-  wire [14:0] \$2 ;
+  wire \$2 ;
   wire \$20 ;
   wire \$21 ;
   wire \$22 ;
-  wire \$23 ;
+  wire [12:0] \$23 ;
   wire \$24 ;
   wire \$25 ;
-  wire \$26 ;
-  wire \$27 ;
-  wire \$28 ;
+  wire [13:0] \$26 ;
+  wire [13:0] \$27 ;
+  wire [16:0] \$28 ;
   wire \$29 ;
-  wire \$3 ;
-  wire \$30 ;
-  wire \$31 ;
+  wire [14:0] \$3 ;
+  wire [13:0] \$30 ;
+  wire [13:0] \$31 ;
   wire \$32 ;
-  wire \$33 ;
-  wire \$34 ;
+  wire [13:0] \$33 ;
+  wire [17:0] \$34 ;
   wire \$35 ;
   wire \$36 ;
   wire \$37 ;
@@ -33774,82 +33680,77 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   wire \$57 ;
   wire \$58 ;
   wire \$59 ;
-  wire [15:0] \$6 ;
+  wire \$6 ;
   wire \$60 ;
   wire \$61 ;
   wire \$62 ;
   wire \$63 ;
-  wire [13:0] \$64 ;
-  wire [17:0] \$65 ;
+  wire \$64 ;
+  wire \$65 ;
   wire \$66 ;
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
-  wire \$7 ;
-  wire [12:0] \$70 ;
+  wire [14:0] \$7 ;
+  wire \$70 ;
   wire \$71 ;
   wire \$72 ;
-  wire [13:0] \$73 ;
-  wire [13:0] \$74 ;
-  wire [16:0] \$75 ;
-  wire \$76 ;
-  wire [13:0] \$77 ;
-  wire [13:0] \$78 ;
-  wire \$79 ;
-  wire [13:0] \$8 ;
-  wire [13:0] \$80 ;
-  wire [17:0] \$81 ;
-  wire \$82 ;
-  wire \$83 ;
-  wire \$84 ;
-  wire \$85 ;
-  wire \$86 ;
-  wire \$87 ;
-  wire \$88 ;
-  wire \$89 ;
-  wire [17:0] \$9 ;
-  wire \$90 ;
-  wire \$91 ;
-  wire \$92 ;
-  wire \$93 ;
-  wire \$94 ;
-  wire \$95 ;
-  wire \$96 ;
-  wire \$97 ;
-  wire \$98 ;
-  wire \$99 ;
+  wire \$73 ;
+  wire \$74 ;
+  reg \$75 ;
+  reg [12:0] \$76 ;
+  reg [16:0] \$77 ;
+  reg \$78 ;
+  reg [12:0] \$79 ;
+  wire [15:0] \$8 ;
+  reg \$80 ;
+  reg \$81 ;
+  reg \$82 ;
+  reg [1:0] \$83 ;
+  reg [16:0] \$84 ;
+  reg \$85 ;
+  reg \$86 ;
+  reg \$87 ;
+  reg \$88 ;
+  reg [12:0] \$89 ;
+  wire \$9 ;
+  reg [1:0] \$90 ;
   input arm;
   wire arm;
   output \bit ;
   wire \bit ;
   reg centre;
+  wire \centre$34 ;
+  reg clear;
+  wire \clear$32 ;
   input clk;
   wire clk;
-  reg crowded = 1'h0;
   reg decided;
+  wire \decided$35 ;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
   reg dropped;
   output early;
   reg early = 1'h0;
+  wire \edge ;
   reg [12:0] elapsed = 13'h0000;
   reg [15:0] first_load = 16'h0000;
   reg first_slot = 1'h0;
   reg gap = 1'h0;
   input [15:0] half_period;
   wire [15:0] half_period;
-  reg last = 1'h0;
   output level;
   wire level;
+  wire \level$29 ;
   output locked;
   reg locked = 1'h0;
+  wire majority;
   reg [12:0] mid_delay = 13'h0000;
   reg [16:0] mid_slot = 17'h00000;
   output noise;
   wire noise;
   reg odd = 1'h0;
-  reg one_edge = 1'h0;
-  reg [16:0] period_load = 17'h00000;
+  wire \odd$41 ;
   reg [1:0] phase = 2'h0;
   input receiver_clear;
   wire receiver_clear;
@@ -33864,217 +33765,147 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
-  reg strobed = 1'h0;
-  reg tail_odd = 1'h0;
-  reg two_edges = 1'h0;
-  reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
+  (* init = 1'h0 *)
+  wire \vote1$36 ;
   reg vote2 = 1'h0;
+  (* init = 1'h0 *)
+  wire \vote2$37 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$1  = half_period >= 2'h3;
-  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
-  assign \$3  = half_period < 2'h3;
-  assign \$4  = half_period - vote;
-  assign \$5  = $signed(\$4 ) - $signed(2'h1);
-  assign \$6  = vote - 1'h1;
-  assign \$7  = vote == 1'h1;
-  assign \$8  = mid_delay + 1'h1;
-  assign \$9  = mid_slot - 1'h1;
-  assign \$10  = ~ odd;
-  assign \$11  = level != slo_prev;
-  assign \$12  = one_edge & \$11 ;
-  assign \$13  = two_edges | \$12 ;
-  assign \$14  = level != slo_prev;
-  assign \$15  = one_edge | \$14 ;
-  assign \$16  = level != slo_prev;
-  assign \$17  = one_edge & \$16 ;
-  assign \$18  = two_edges | \$17 ;
-  assign \$19  = ~ single;
-  assign \$20  = decided & \$19 ;
-  assign \$21  = vote1 & vote2;
-  assign \$22  = vote1 & level;
-  assign \$23  = \$21  | \$22 ;
-  assign \$24  = vote2 & level;
-  assign \$25  = \$23  | \$24 ;
-  assign \$26  = vote1 & vote2;
-  assign \$27  = vote1 & level;
-  assign \$28  = \$26  | \$27 ;
-  assign \$29  = vote2 & level;
-  assign \$30  = \$28  | \$29 ;
-  assign \$31  = level != \$30 ;
-  assign \$32  = ~ single;
-  assign \$33  = decided & \$32 ;
-  assign \$34  = vote1 == level;
-  assign \$35  = vote2 != level;
-  assign \$36  = \$34  & \$35 ;
-  assign \$37  = vote1 & vote2;
-  assign \$38  = vote1 & level;
-  assign \$39  = \$37  | \$38 ;
-  assign \$40  = vote2 & level;
-  assign \$41  = \$39  | \$40 ;
-  assign \$42  = vote1 != \$41 ;
-  assign \$43  = vote1 & vote2;
-  assign \$44  = vote1 & level;
+  assign \$10  = \$9  ? half_period[15:1] : 15'h0000;
+  assign \$11  = \$10  == 1'h1;
+  assign \$12  = mid_delay + 1'h1;
+  assign \$13  = mid_slot - 1'h1;
+  assign \$14  = ~ odd;
+  assign \$15  = ~ level;
+  assign \$16  = elapsed != 13'h1fff;
+  assign \$17  = elapsed + 1'h1;
+  assign \$18  = slot_left - 1'h1;
+  assign \$19  = slot_left == 1'h1;
+  assign \$20  = ~ level;
+  assign \$21  = slo_prev & \$20 ;
+  assign \$22  = elapsed == 13'h1fff;
+  assign \$23  = \$22  ? 13'h1fff : mid_delay;
+  assign \$24  = ! mid_slot;
+  assign \$25  = elapsed == 13'h1fff;
+  assign \$26  = elapsed - 1'h1;
+  assign \$27  = \$25  ? 14'h1fff : \$26 ;
+  assign \$28  = half_period - 2'h2;
+  assign \$29  = elapsed == 13'h1fff;
+  assign \$30  = elapsed - 1'h1;
+  assign \$31  = \$29  ? 14'h1fff : \$30 ;
+  assign \$32  = elapsed != 13'h1fff;
+  assign \$33  = elapsed + 1'h1;
+  assign \$34  = slot_left - 1'h1;
+  assign \$35  = slot_left == 1'h1;
+  assign \$36  = ! phase;
+  assign \$37  = first_slot & \$36 ;
+  assign \$38  = \$37  & level;
+  assign \$39  = ~ single;
+  assign \$40  = decided & first_slot;
+  assign \$41  = vote1 & vote2;
+  assign \$42  = vote1 & level;
+  assign \$43  = \$41  | \$42 ;
+  assign \$44  = vote2 & level;
   assign \$45  = \$43  | \$44 ;
-  assign \$46  = vote2 & level;
-  assign \$47  = \$45  | \$46 ;
-  assign \$48  = last == \$47 ;
-  assign \$49  = \$42  & \$48 ;
-  assign \$50  = \$36  | \$49 ;
-  assign \$51  = vote1 & vote2;
-  assign \$52  = vote1 & level;
+  assign \$46  = single ? level : \$45 ;
+  assign \$47  = ~ first_slot;
+  assign \$48  = decided & \$47 ;
+  assign \$49  = vote1 & vote2;
+  assign \$50  = vote1 & level;
+  assign \$51  = \$49  | \$50 ;
+  assign \$52  = vote2 & level;
   assign \$53  = \$51  | \$52 ;
-  assign \$54  = vote2 & level;
-  assign \$55  = \$53  | \$54 ;
-  assign \$56  = last == \$55 ;
-  assign \$57  = tail_odd & \$56 ;
-  assign \$58  = \$50  | \$57 ;
-  assign \$59  = \$58  | crowded;
-  assign \$60  = ~ strobed;
-  assign \$61  = \$59  & \$60 ;
-  assign \$62  = ~ level;
-  assign \$63  = elapsed != 13'h1fff;
-  assign \$64  = elapsed + 1'h1;
-  assign \$65  = slot_left - 1'h1;
-  assign \$66  = slot_left == 1'h1;
-  assign \$67  = ~ level;
-  assign \$68  = slo_prev & \$67 ;
-  assign \$69  = elapsed == 13'h1fff;
-  assign \$70  = \$69  ? 13'h1fff : mid_delay;
-  assign \$71  = ! mid_slot;
-  assign \$72  = elapsed == 13'h1fff;
-  assign \$73  = elapsed - 1'h1;
-  assign \$74  = \$72  ? 14'h1fff : \$73 ;
-  assign \$75  = half_period - 2'h2;
-  assign \$76  = elapsed == 13'h1fff;
-  assign \$77  = elapsed - 1'h1;
-  assign \$78  = \$76  ? 14'h1fff : \$77 ;
-  assign \$79  = elapsed != 13'h1fff;
-  assign \$80  = elapsed + 1'h1;
-  assign \$81  = slot_left - 1'h1;
-  assign \$82  = slot_left == 1'h1;
-  assign \$83  = ! phase;
-  assign \$84  = first_slot & \$83 ;
-  assign \$85  = \$84  & level;
-  assign \$86  = ~ single;
-  assign \$87  = decided & first_slot;
-  assign \$88  = vote1 & vote2;
-  assign \$89  = vote1 & level;
-  assign \$90  = \$88  | \$89 ;
-  assign \$91  = vote2 & level;
-  assign \$92  = \$90  | \$91 ;
-  assign \$93  = single ? level : \$92 ;
-  assign \$94  = ~ first_slot;
-  assign \$95  = decided & \$94 ;
-  assign \$96  = vote1 & vote2;
-  assign \$97  = vote1 & level;
-  assign \$98  = \$96  | \$97 ;
-  assign \$99  = vote2 & level;
-  assign \$100  = \$98  | \$99 ;
-  assign \bit  = single ? level : \$100 ;
-  assign \$101  = ~ single;
-  assign \$102  = decided & \$101 ;
-  assign \$103  = vote1 == level;
-  assign \$104  = vote2 != level;
-  assign \$105  = \$103  & \$104 ;
-  assign \$106  = vote1 & vote2;
-  assign \$107  = vote1 & level;
-  assign \$108  = \$106  | \$107 ;
-  assign \$109  = vote2 & level;
-  assign \$110  = \$108  | \$109 ;
-  assign \$111  = vote1 != \$110 ;
-  assign \$112  = vote1 & vote2;
-  assign \$113  = vote1 & level;
-  assign \$114  = \$112  | \$113 ;
-  assign \$115  = vote2 & level;
-  assign \$116  = \$114  | \$115 ;
-  assign \$117  = last == \$116 ;
-  assign \$118  = \$111  & \$117 ;
-  assign \$119  = \$105  | \$118 ;
-  assign \$120  = vote1 & vote2;
-  assign \$121  = vote1 & level;
-  assign \$122  = \$120  | \$121 ;
-  assign \$123  = vote2 & level;
-  assign \$124  = \$122  | \$123 ;
-  assign \$125  = last == \$124 ;
-  assign \$126  = tail_odd & \$125 ;
-  assign \$127  = \$119  | \$126 ;
-  assign \$128  = \$127  | crowded;
-  assign \$129  = \$102  & \$128 ;
-  assign \$130  = ~ strobed;
-  assign \$131  = \$129  & \$130 ;
-  assign noise = dropped | \$131 ;
-  assign \$132  = ! phase;
-  assign \$133  = first_slot & \$132 ;
-  assign \$134  = \$133  & level;
-  assign \$135  = ~ single;
-  assign \$136  = decided & first_slot;
-  assign \$137  = vote1 & vote2;
-  assign \$138  = vote1 & level;
-  assign \$139  = \$137  | \$138 ;
-  assign \$140  = vote2 & level;
-  assign \$141  = \$139  | \$140 ;
-  assign \$142  = single ? level : \$141 ;
-  assign \$143  = ! sampler_fsm_state;
-  assign \$144  = sampler_fsm_state == 1'h1;
-  assign \$145  = sampler_fsm_state == 2'h2;
+  assign \bit  = single ? level : \$53 ;
+  assign \edge  = level != slo_prev;
+  assign \$54  = ~ single;
+  assign \decided$35  = decided & \$54 ;
+  assign \$55  = vote1 & vote2;
+  assign \$56  = vote1 & level;
+  assign \$57  = \$55  | \$56 ;
+  assign \$58  = vote2 & level;
+  assign majority = \$57  | \$58 ;
+  assign noise = dropped | \odd$41 ;
+  assign \$59  = ~ level;
+  assign \$60  = slo_prev & \$59 ;
+  assign \$61  = ! phase;
+  assign \$62  = first_slot & \$61 ;
+  assign \$63  = \$62  & level;
+  assign \$64  = ~ single;
+  assign \$65  = decided & first_slot;
+  assign \$66  = vote1 & vote2;
+  assign \$67  = vote1 & level;
+  assign \$68  = \$66  | \$67 ;
+  assign \$69  = vote2 & level;
+  assign \$70  = \$68  | \$69 ;
+  assign \$71  = single ? level : \$70 ;
+  assign \$72  = ! sampler_fsm_state;
+  assign \$73  = sampler_fsm_state == 1'h1;
+  assign \$74  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$146 ;
+    slo_prev <= \$75 ;
   always @(posedge clk)
-    vote <= \$2 ;
-  always @(posedge clk)
-    single <= \$3 ;
+    single <= \$1 ;
   always @(posedge clk)
     first_load <= \$5 [15:0];
   always @(posedge clk)
-    vote_load <= \$6 [14:0];
+    vote_load <= \$8 [14:0];
   always @(posedge clk)
-    vote_one <= \$7 ;
+    vote_one <= \$11 ;
   always @(posedge clk)
-    period_load <= { first_load, 1'h1 };
+    mid_delay <= \$76 ;
   always @(posedge clk)
-    mid_delay <= \$147 ;
+    mid_slot <= \$77 ;
   always @(posedge clk)
-    mid_slot <= \$148 ;
+    odd <= \$78 ;
   always @(posedge clk)
-    odd <= \$149 ;
+    elapsed <= \$79 ;
   always @(posedge clk)
-    one_edge <= \$150 ;
+    early <= \$80 ;
   always @(posedge clk)
-    two_edges <= \$151 ;
+    locked <= \$81 ;
   always @(posedge clk)
-    crowded <= \$152 ;
+    gap <= \$82 ;
   always @(posedge clk)
-    last <= \$153 ;
+    sampler_fsm_state <= \$83 ;
   always @(posedge clk)
-    tail_odd <= \$154 ;
+    slot_left <= \$84 ;
   always @(posedge clk)
-    strobed <= \$155 ;
+    slot_zero <= \$85 ;
   always @(posedge clk)
-    elapsed <= \$156 ;
+    vote1 <= \$86 ;
   always @(posedge clk)
-    early <= \$157 ;
+    vote2 <= \$87 ;
   always @(posedge clk)
-    locked <= \$158 ;
+    first_slot <= \$88 ;
   always @(posedge clk)
-    gap <= \$159 ;
+    delay <= \$89 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$160 ;
-  always @(posedge clk)
-    slot_left <= \$161 ;
-  always @(posedge clk)
-    slot_zero <= \$162 ;
-  always @(posedge clk)
-    vote1 <= \$163 ;
-  always @(posedge clk)
-    vote2 <= \$164 ;
-  always @(posedge clk)
-    first_slot <= \$165 ;
-  always @(posedge clk)
-    delay <= \$166 ;
-  always @(posedge clk)
-    phase <= \$167 ;
+    phase <= \$90 ;
+  assign \$1  = half_period < 2'h3;
+  assign \$2  = half_period >= 2'h3;
+  assign \$3  = \$2  ? half_period[15:1] : 15'h0000;
+  assign \$4  = half_period - \$3 ;
+  assign \$5  = $signed(\$4 ) - $signed(2'h1);
+  assign \$6  = half_period >= 2'h3;
+  assign \$7  = \$6  ? half_period[15:1] : 15'h0000;
+  assign \$8  = \$7  - 1'h1;
+  assign \$9  = half_period >= 2'h3;
+  \biss_master_uart.ch1.core.sampler.slot_noise  slot_noise (
+    .centre(centre),
+    .clear(clear),
+    .clk(clk),
+    .decided(\decided$35 ),
+    .\edge (\edge ),
+    .level(level),
+    .majority(majority),
+    .odd(\odd$41 ),
+    .receiver_clear(receiver_clear),
+    .rst(rst),
+    .vote1(vote1),
+    .vote2(vote2)
+  );
   \biss_master_uart.ch1.core.sampler.sync  sync (
     .clk(clk),
     .receiver_clear(receiver_clear),
@@ -34083,571 +33914,441 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$146  = level;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$75  = level;
     if (receiver_clear) begin
-      \$146  = 1'h1;
+      \$75  = 1'h1;
     end
     if (rst) begin
-      \$146  = 1'h1;
+      \$75  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$147  = mid_delay;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$76  = mid_delay;
     if (odd) begin
-      \$147  = \$8 [12:0];
+      \$76  = \$12 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$147  = \$78 [12:0];
+              \$76  = \$31 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$147  = 13'h0000;
+      \$76  = 13'h0000;
     end
     if (rst) begin
-      \$147  = 13'h0000;
+      \$76  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$148  = mid_slot;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$77  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$148  = \$9 [16:0];
+      \$77  = \$13 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$148  = \$75 ;
+              \$77  = \$28 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$148  = 17'h00000;
+      \$77  = 17'h00000;
     end
     if (rst) begin
-      \$148  = 17'h00000;
+      \$77  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$149  = \$10 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$78  = \$14 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$149  = 1'h1;
+              \$78  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$149  = 1'h0;
+      \$78  = 1'h0;
     end
     if (rst) begin
-      \$149  = 1'h0;
+      \$78  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    (* full_case = 32'd1 *)
-    if (centre) begin
-      \$150  = 1'h0;
-    end else begin
-      \$150  = \$15 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$150  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$150  = 1'h0;
-    end
-    if (rst) begin
-      \$150  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    (* full_case = 32'd1 *)
-    if (centre) begin
-      \$151  = 1'h0;
-    end else begin
-      \$151  = \$18 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$151  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$151  = 1'h0;
-    end
-    if (rst) begin
-      \$151  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$152  = crowded;
-    if (centre) begin
-      \$152  = \$13 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$152  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$152  = 1'h0;
-    end
-    if (rst) begin
-      \$152  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$153  = last;
-    if (\$20 ) begin
-      \$153  = \$25 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$153  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$153  = 1'h0;
-    end
-    if (rst) begin
-      \$153  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$154  = tail_odd;
-    if (\$20 ) begin
-      \$154  = \$31 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$154  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$154  = 1'h0;
-    end
-    if (rst) begin
-      \$154  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$155  = strobed;
-    if (\$33 ) begin
-      \$155  = \$61 ;
-    end
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$68 ) begin
-            \$155  = 1'h0;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$155  = 1'h0;
-    end
-    if (rst) begin
-      \$155  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$156  = elapsed;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$79  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$156  = 13'h0001;
+            \$79  = 13'h0001;
           end
       2'h1:
-          if (\$63 ) begin
-            \$156  = \$64 [12:0];
+          if (\$16 ) begin
+            \$79  = \$17 [12:0];
           end
       2'h2:
-          if (\$79 ) begin
-            \$156  = \$80 [12:0];
+          if (\$32 ) begin
+            \$79  = \$33 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$156  = 13'h0000;
+      \$79  = 13'h0000;
     end
     if (rst) begin
-      \$156  = 13'h0000;
+      \$79  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$157  = early;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$80  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$157  = \$62 ;
+            \$80  = \$15 ;
           end
     endcase
     if (receiver_clear) begin
-      \$157  = 1'h0;
+      \$80  = 1'h0;
     end
     if (rst) begin
-      \$157  = 1'h0;
+      \$80  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$158  = locked;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$81  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$158  = 1'h0;
+            \$81  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$87 ) begin
+          if (\$40 ) begin
             (* full_case = 32'd1 *)
-            if (\$93 ) begin
+            if (\$46 ) begin
             end else begin
-              \$158  = 1'h1;
+              \$81  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$158  = 1'h0;
+      \$81  = 1'h0;
     end
     if (rst) begin
-      \$158  = 1'h0;
+      \$81  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$159  = gap;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$82  = gap;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$159  = 1'h0;
+            \$82  = 1'h0;
           end
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$159  = 1'h0;
+              \$82  = 1'h0;
             end
           end
-          if (\$68 ) begin
-            \$159  = 1'h0;
+          if (\$21 ) begin
+            \$82  = 1'h0;
           end
         end
       2'h2:
-          if (\$85 ) begin
-            \$159  = \$86 ;
+          if (\$38 ) begin
+            \$82  = \$39 ;
           end
     endcase
     if (receiver_clear) begin
-      \$159  = 1'h0;
+      \$82  = 1'h0;
     end
     if (rst) begin
-      \$159  = 1'h0;
+      \$82  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$160  = sampler_fsm_state;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$83  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$160  = 2'h1;
+            \$83  = 2'h1;
           end
       2'h1:
-          if (\$68 ) begin
-            \$160  = 2'h2;
+          if (\$21 ) begin
+            \$83  = 2'h2;
           end
       2'h2:
         begin
-          if (\$85 ) begin
-            \$160  = 2'h1;
+          if (\$38 ) begin
+            \$83  = 2'h1;
           end
-          if (\$87 ) begin
-            if (\$93 ) begin
-              \$160  = 2'h1;
+          if (\$40 ) begin
+            if (\$46 ) begin
+              \$83  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$160  = 2'h0;
+      \$83  = 2'h0;
     end
     if (rst) begin
-      \$160  = 2'h0;
+      \$83  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$161  = slot_left;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$84  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$161  = \$65 [16:0];
+            \$84  = \$18 [16:0];
           end
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$161  = mid_slot;
+              \$84  = mid_slot;
             end else begin
-              \$161  = { 1'h0, first_load };
+              \$84  = { 1'h0, first_load };
             end
           end
         end
       2'h2:
         begin
-          \$161  = \$81 [16:0];
-          if (\$85 ) begin
-            \$161  = { 2'h0, vote_load };
+          \$84  = \$34 [16:0];
+          if (\$38 ) begin
+            \$84  = { 2'h0, vote_load };
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$161  = period_load;
+                    \$84  = { first_load, 1'h1 };
                   end else begin
-                    \$161  = { 2'h0, vote_load };
+                    \$84  = { 2'h0, vote_load };
                   end
               2'h1:
-                  \$161  = { 2'h0, vote_load };
+                  \$84  = { 2'h0, vote_load };
               default:
-                  \$161  = period_load;
+                  \$84  = { first_load, 1'h1 };
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$161  = 17'h00000;
+      \$84  = 17'h00000;
     end
     if (rst) begin
-      \$161  = 17'h00000;
+      \$84  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$162  = slot_zero;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$85  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$162  = \$66 ;
+            \$85  = \$19 ;
           end
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$162  = \$71 ;
+              \$85  = \$24 ;
             end else begin
-              \$162  = 1'h0;
+              \$85  = 1'h0;
             end
           end
         end
       2'h2:
         begin
-          \$162  = \$82 ;
-          if (\$85 ) begin
-            \$162  = vote_one;
+          \$85  = \$35 ;
+          if (\$38 ) begin
+            \$85  = vote_one;
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$162  = 1'h0;
+                    \$85  = 1'h0;
                   end else begin
-                    \$162  = vote_one;
+                    \$85  = vote_one;
                   end
               2'h1:
-                  \$162  = vote_one;
+                  \$85  = vote_one;
               default:
-                  \$162  = 1'h0;
+                  \$85  = 1'h0;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$162  = 1'h1;
+      \$85  = 1'h1;
     end
     if (rst) begin
-      \$162  = 1'h1;
+      \$85  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$163  = vote1;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$86  = vote1;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
-            \$163  = 1'h0;
+          if (\$21 ) begin
+            \$86  = 1'h0;
           end
       2'h2:
-          if (\$85 ) begin
+          if (\$38 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$163  = level;
+                    \$86  = level;
                   end
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$163  = 1'h0;
+      \$86  = 1'h0;
     end
     if (rst) begin
-      \$163  = 1'h0;
+      \$86  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$164  = vote2;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$87  = vote2;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
-            \$164  = 1'h0;
+          if (\$21 ) begin
+            \$87  = 1'h0;
           end
       2'h2:
-          if (\$85 ) begin
+          if (\$38 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  \$164  = level;
+                  \$87  = level;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$164  = 1'h0;
+      \$87  = 1'h0;
     end
     if (rst) begin
-      \$164  = 1'h0;
+      \$87  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$165  = first_slot;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$88  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
-            \$165  = 1'h1;
+          if (\$21 ) begin
+            \$88  = 1'h1;
           end
       2'h2:
-          if (\$87 ) begin
+          if (\$40 ) begin
             (* full_case = 32'd1 *)
-            if (\$93 ) begin
+            if (\$46 ) begin
             end else begin
-              \$165  = 1'h0;
+              \$88  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$165  = 1'h0;
+      \$88  = 1'h0;
     end
     if (rst) begin
-      \$165  = 1'h0;
+      \$88  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$166  = delay;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$89  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$166  = \$70 ;
+              \$89  = \$23 ;
             end else begin
-              \$166  = \$74 [12:0];
+              \$89  = \$27 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$166  = 13'h0000;
+      \$89  = 13'h0000;
     end
     if (rst) begin
-      \$166  = 13'h0000;
+      \$89  = 13'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    \$167  = phase;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    \$90  = phase;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$68 ) begin
+          if (\$21 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$167  = 2'h1;
+              \$90  = 2'h1;
             end else begin
-              \$167  = 2'h0;
+              \$90  = 2'h0;
             end
           end
       2'h2:
-          if (\$85 ) begin
+          if (\$38 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -34655,34 +34356,34 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$167  = 2'h1;
+                    \$90  = 2'h1;
                   end
               2'h1:
-                  \$167  = 2'h2;
+                  \$90  = 2'h2;
               default:
-                  \$167  = 2'h0;
+                  \$90  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$167  = 2'h0;
+      \$90  = 2'h0;
     end
     if (rst) begin
-      \$167  = 2'h0;
+      \$90  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
-    sample = \$95 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    sample = \$48 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           /* empty */;
       2'h2:
-          if (\$136 ) begin
+          if (\$65 ) begin
             (* full_case = 32'd1 *)
-            if (\$142 ) begin
+            if (\$71 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -34690,7 +34391,19 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    clear = 1'h0;
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h1:
+          if (\$60 ) begin
+            clear = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     dropped = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -34699,11 +34412,11 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
           /* empty */;
       2'h2:
         begin
-          if (\$134 ) begin
+          if (\$63 ) begin
             dropped = 1'h1;
           end
-          if (\$136 ) begin
-            if (\$142 ) begin
+          if (\$65 ) begin
+            if (\$71 ) begin
               dropped = 1'h1;
             end
           end
@@ -34711,7 +34424,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -34719,7 +34432,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
       2'h1:
           /* empty */;
       2'h2:
-          if (\$134 ) begin
+          if (\$63 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -34736,7 +34449,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
     centre = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -34744,16 +34457,251 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
       2'h1:
           /* empty */;
       2'h2:
-          if (\$134 ) begin
+          if (\$63 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  centre = \$135 ;
+                  centre = \$64 ;
             endcase
           end
     endcase
+  end
+  assign \level$29  = level;
+  assign \clear$32  = clear;
+  assign \centre$34  = centre;
+  assign \vote1$36  = vote1;
+  assign \vote2$37  = vote2;
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majority, odd, receiver_clear, vote1, vote2, clear, centre, level, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  reg \$33 ;
+  reg \$34 ;
+  reg \$35 ;
+  reg \$36 ;
+  reg \$37 ;
+  reg \$38 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input centre;
+  wire centre;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  reg crowded = 1'h0;
+  input decided;
+  wire decided;
+  input \edge ;
+  wire \edge ;
+  reg last = 1'h0;
+  input level;
+  wire level;
+  input majority;
+  wire majority;
+  output odd;
+  wire odd;
+  reg one_edge = 1'h0;
+  input receiver_clear;
+  wire receiver_clear;
+  input rst;
+  wire rst;
+  reg strobed = 1'h0;
+  reg tail_odd = 1'h0;
+  reg two_edges = 1'h0;
+  input vote1;
+  wire vote1;
+  input vote2;
+  wire vote2;
+  assign \$1  = one_edge & \edge ;
+  assign \$2  = two_edges | \$1 ;
+  assign \$3  = one_edge | \edge ;
+  assign \$4  = one_edge & \edge ;
+  assign \$5  = two_edges | \$4 ;
+  assign \$6  = level != majority;
+  assign \$7  = vote1 == level;
+  assign \$8  = vote2 != level;
+  assign \$9  = \$7  & \$8 ;
+  assign \$10  = vote1 != majority;
+  assign \$11  = last == majority;
+  assign \$12  = \$10  & \$11 ;
+  assign \$13  = \$9  | \$12 ;
+  assign \$14  = last == majority;
+  assign \$15  = tail_odd & \$14 ;
+  assign \$16  = \$13  | \$15 ;
+  assign \$17  = \$16  | crowded;
+  assign \$18  = ~ strobed;
+  assign \$19  = \$17  & \$18 ;
+  assign \$20  = vote1 == level;
+  assign \$21  = vote2 != level;
+  assign \$22  = \$20  & \$21 ;
+  assign \$23  = vote1 != majority;
+  assign \$24  = last == majority;
+  assign \$25  = \$23  & \$24 ;
+  assign \$26  = \$22  | \$25 ;
+  assign \$27  = last == majority;
+  assign \$28  = tail_odd & \$27 ;
+  assign \$29  = \$26  | \$28 ;
+  assign \$30  = \$29  | crowded;
+  assign \$31  = decided & \$30 ;
+  assign \$32  = ~ strobed;
+  assign odd = \$31  & \$32 ;
+  always @(posedge clk)
+    last <= \$33 ;
+  always @(posedge clk)
+    tail_odd <= \$34 ;
+  always @(posedge clk)
+    one_edge <= \$35 ;
+  always @(posedge clk)
+    two_edges <= \$36 ;
+  always @(posedge clk)
+    crowded <= \$37 ;
+  always @(posedge clk)
+    strobed <= \$38 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    \$33  = last;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$33  = 1'h0;
+    end else begin
+      if (decided) begin
+        \$33  = majority;
+      end
+    end
+    if (receiver_clear) begin
+      \$33  = 1'h0;
+    end
+    if (rst) begin
+      \$33  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    \$34  = tail_odd;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$34  = 1'h0;
+    end else begin
+      if (decided) begin
+        \$34  = \$6 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$34  = 1'h0;
+    end
+    if (rst) begin
+      \$34  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$35  = 1'h0;
+    end else begin
+      (* full_case = 32'd1 *)
+      if (centre) begin
+        \$35  = 1'h0;
+      end else begin
+        \$35  = \$3 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$35  = 1'h0;
+    end
+    if (rst) begin
+      \$35  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$36  = 1'h0;
+    end else begin
+      (* full_case = 32'd1 *)
+      if (centre) begin
+        \$36  = 1'h0;
+      end else begin
+        \$36  = \$5 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$36  = 1'h0;
+    end
+    if (rst) begin
+      \$36  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    \$37  = crowded;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$37  = 1'h0;
+    end else begin
+      if (centre) begin
+        \$37  = \$2 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$37  = 1'h0;
+    end
+    if (rst) begin
+      \$37  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    \$38  = strobed;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$38  = 1'h0;
+    end else begin
+      if (decided) begin
+        \$38  = \$19 ;
+      end
+    end
+    if (receiver_clear) begin
+      \$38  = 1'h0;
+    end
+    if (rst) begin
+      \$38  = 1'h0;
+    end
   end
 endmodule
 
@@ -34781,7 +34729,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$114  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$116  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -34875,14 +34823,14 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -34896,7 +34844,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -34910,7 +34858,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -34926,8 +34874,8 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6618$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6557$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$117  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -34968,8 +34916,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6618$0 ;
-  wire \port$6618$0 ;
+  input \port$6557$0 ;
+  wire \port$6557$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -34983,9 +34931,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6618$0  };
-  assign \$2  = { lc[4:0], \port$6618$0  } == last;
-  assign \$3  = { lc[4:0], \port$6618$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6557$0  };
+  assign \$2  = { lc[4:0], \port$6557$0  } == last;
+  assign \$3  = { lc[4:0], \port$6557$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -35019,7 +34967,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -35029,7 +34977,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -35039,7 +34987,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -35049,21 +34997,21 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -35073,7 +35021,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -35083,7 +35031,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -35095,13 +35043,13 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6618$0  };
+  assign lc_next = { lc[4:0], \port$6557$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$116  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$118  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -35306,28 +35254,28 @@ module \biss_master_uart.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -35337,7 +35285,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$117  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$119  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -35356,14 +35304,14 @@ module \biss_master_uart.ch1.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -35377,7 +35325,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
 , delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$118  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$120  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -35557,7 +35505,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   assign \$40  = in_clock & \$39 ;
   assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
     \$48  = slo_low_time_p1;
     if (\$2 ) begin
       \$48  = 25'h0000001;
@@ -35569,21 +35517,21 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
     \$49  = \$9 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
     \$50  = \$17 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
     \$51  = high_p2;
     if (\$18 ) begin
       \$51  = 13'h0002;
@@ -35595,28 +35543,28 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
     \$52  = \$23 ;
     if (rst) begin
       \$52  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
     \$53  = \$30 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
     \$54  = \$34 [24:0];
     if (rst) begin
       \$54  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$55  = 1'h0;
@@ -35628,21 +35576,21 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
     \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
     \$57  = \$46 ;
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
     \$58  = \$47 ;
     if (rst) begin
       \$58  = 1'h0;
@@ -35651,9 +35599,9 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$4875$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$4813$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$119  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$121  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -35805,8 +35753,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$4875$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$4875$0 ;
-  wire \port$4875$0 ;
+  output \port$4813$0 ;
+  wire \port$4813$0 ;
   output report;
   wire report;
   input report_frame;
@@ -35887,7 +35835,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$4875$0 , l
   assign \$39  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$39  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
     frame_status = 4'h0;
     if (delay_jump) begin
       frame_status = 4'he;
@@ -35912,7 +35860,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$4875$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4875$0  = \$2 ;
+  assign \port$4813$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

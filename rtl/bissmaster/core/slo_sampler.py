@@ -5,6 +5,7 @@ from amaranth.lib import cdc, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..params import HALF_PERIOD_WIDTH
+from .slot_noise import SlotNoise
 
 
 #: Clocks between the SLO pin and the Ack-edge detector beyond the pin edge itself: the second
@@ -69,11 +70,12 @@ class SloSampler(wiring.Component):
     span, and counts once (a run of n odd slots strobes ceil(n / 2) times). A noise edge that
     lands in a span without a data edge and off the votes gives no strobe: it looks like data.
     ``noise`` sees part of the noise, never a clean line. No vote or edge strobes at a half
-    period of 2 (one sample per slot).
+    period of 2 (one sample per slot). The patterns and the spans are judged by
+    :class:`~bissmaster.core.slot_noise.SlotNoise`, the dropped edges here.
 
-    **Area.** The slot timer only counts down to zero and reloads, from four values kept as
-    reset-less registers (edge to first vote, vote to vote, third vote to the next slot's first,
-    and the halfway edge): no comparator on the timer's width anywhere.
+    **Area.** The slot timer only counts down to zero and reloads, from four values (edge to
+    first vote, vote to vote, third vote to the next slot's first, and the halfway edge),
+    reset-less registers or wiring from them: no comparator on the timer's width anywhere.
 
     SLO is asynchronous: it passes a two-flop synchronizer
     (:class:`amaranth.lib.cdc.FFSynchronizer`) first, whose flops are reset-less, so the
@@ -144,20 +146,20 @@ class SloSampler(wiring.Component):
         # centre ``v`` later, the third vote (the decision) ``v`` later again, and the next
         # slot's first vote ``2 * u`` after that (``2 * u + 2 * v`` = one MA period). The timer
         # only ever counts down to zero and reloads: no wide compare anywhere.
+        # ``v`` itself and ``2u - 1`` are wiring (a select of the half period's bits, and
+        # ``u - 1`` with a 1 below it): no register of their own.
         vw = HALF_PERIOD_WIDTH - 1
-        vote = Signal(vw, reset_less=True)
+        vote = Mux(hp >= 3, hp[1:], 0)
         single = Signal(reset_less=True)                        # one sample per slot (hp = 2)
         first_load = Signal(HALF_PERIOD_WIDTH, reset_less=True)  # u - 1: edge to first vote
         vote_load = Signal(vw, reset_less=True)                  # v - 1: vote to vote
         vote_one = Signal(reset_less=True)                       # v == 1: vote_load is 0
-        period_load = Signal(HALF_PERIOD_WIDTH + 1, reset_less=True)  # 2u - 1: third to first
+        period_load = Cat(C(1, 1), first_load)                   # 2u - 1: third to first
         m.d.sync += [
-            vote.eq(Mux(hp >= 3, hp[1:], 0)),
             single.eq(hp < 3),
             first_load.eq(hp - vote - 1),
             vote_load.eq(vote - 1),
             vote_one.eq(vote == 1),
-            period_load.eq(Cat(C(1, 1), first_load)),
         ]
 
         elapsed = Signal(self._delay_width)        # clocks since arm
@@ -195,45 +197,23 @@ class SloSampler(wiring.Component):
         decision = Mux(single, slo, majority)
         m.d.comb += [self.sample.eq(decided & ~first_slot), self.bit.eq(decision)]
 
-        # Noise: the vote patterns a clean line cannot give (see the docstring), judged at each
-        # decision; ``last`` is the slot before's decision (0 for slot 0: the Ack is low from
-        # the edge on) and ``tail_odd`` its third vote against it, to be judged now.
-        last = Signal()
-        tail_odd = Signal()
+        # Noise: the vote patterns and edges a clean line cannot give (see the docstring),
+        # judged by SlotNoise at each decision; an edge the sampler drops is noise too.
+        m.submodules.slot_noise = slot_noise = SlotNoise()
         dropped = Signal()                          # an edge dropped in this clock
-        centre_odd = (vote1 == slo) & (vote2 != slo)
-        head_odd = (vote1 != majority) & (last == majority)
-        tail_late = tail_odd & (last == majority)
-        # Two edges between two slot centres: a clean line changes at most once there (near
-        # the slots' boundary; an edge that crossed a centre would have changed a decision).
-        # The span runs from the clock after one slot's centre vote (after the Ack edge, for
-        # slot 0) to the next slot's centre vote, that clock included (the vote sees the new
-        # level); it is judged there (``crowded``) and strobed with that slot's decision.
-        # ``one_edge`` / ``two_edges``: one / two edges in the span so far. Jitter moves an
-        # edge anywhere between the centres without a strobe: the check tolerates what the
-        # votes do.
-        edge = slo != slo_prev
         centre = Signal()                           # the centre vote is taken in this clock
-        one_edge = Signal()
-        two_edges = Signal()
-        crowded = Signal()
-        with m.If(centre):
-            m.d.sync += [one_edge.eq(0), two_edges.eq(0),
-                         crowded.eq(two_edges | one_edge & edge)]
-        with m.Else():
-            m.d.sync += [one_edge.eq(one_edge | edge), two_edges.eq(two_edges | one_edge & edge)]
-        with m.If(decided & ~single):
-            m.d.sync += [last.eq(majority), tail_odd.eq(slo != majority)]
-        # One disturbance, one strobe: a glitch across a slot centre breaks that slot's votes
-        # and may crowd the next span too (its second edge beside a data edge), so a slot's
-        # strobe is dropped when the slot before strobed (a run of n odd slots strobes
-        # ceil(n / 2) times: a noisy line still strobes often; with ``cfg_noise_limit`` = 1 a
-        # lone glitch costs nothing).
-        odd_slot = centre_odd | head_odd | tail_late | crowded
-        strobed = Signal()                          # the last decision strobed
-        with m.If(decided & ~single):
-            m.d.sync += strobed.eq(odd_slot & ~strobed)
-        m.d.comb += self.noise.eq(dropped | decided & ~single & odd_slot & ~strobed)
+        clear = Signal()                            # an Ack edge is taken in this clock
+        m.d.comb += [
+            slot_noise.level.eq(slo),
+            slot_noise.edge.eq(slo != slo_prev),
+            slot_noise.clear.eq(clear),
+            slot_noise.centre.eq(centre),
+            slot_noise.decided.eq(decided & ~single),
+            slot_noise.vote1.eq(vote1),
+            slot_noise.vote2.eq(vote2),
+            slot_noise.majority.eq(majority),
+            self.noise.eq(dropped | slot_noise.odd),
+        ]
 
         with m.FSM(name="sampler_fsm"):
             with m.State("IDLE"):
@@ -262,13 +242,8 @@ class SloSampler(wiring.Component):
                         vote2.eq(0),
                         first_slot.eq(1),
                         gap.eq(0),
-                        last.eq(0),
-                        tail_odd.eq(0),
-                        one_edge.eq(0),
-                        two_edges.eq(0),
-                        crowded.eq(0),
-                        strobed.eq(0),
                     ]
+                    m.d.comb += clear.eq(1)
                     with m.If(gap):
                         # One glitch right at the edge, a short low before it or a short high
                         # after it (the two cannot be told apart): the edge is halfway between
