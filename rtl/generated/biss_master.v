@@ -1167,7 +1167,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$203 ),
     .load(load),
-    .\port$2007$0 (\bit ),
+    .\port$2003$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1231,7 +1231,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero(\lc_zero$281 ),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$1475$0 (\$24 ),
+    .\port$1471$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -10677,33 +10677,33 @@ endmodule
 module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
-  wire [14:0] \$10 ;
+  wire \$10 ;
   wire \$11 ;
-  wire [13:0] \$12 ;
-  wire [17:0] \$13 ;
-  wire \$14 ;
+  wire \$12 ;
+  wire [13:0] \$13 ;
+  wire [17:0] \$14 ;
   wire \$15 ;
   wire \$16 ;
-  wire [13:0] \$17 ;
-  wire [17:0] \$18 ;
-  wire \$19 ;
-  wire \$2 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire [12:0] \$19 ;
+  wire [14:0] \$2 ;
   wire \$20 ;
   wire \$21 ;
-  wire \$22 ;
-  wire [12:0] \$23 ;
-  wire \$24 ;
+  wire [13:0] \$22 ;
+  wire [13:0] \$23 ;
+  wire [16:0] \$24 ;
   wire \$25 ;
   wire [13:0] \$26 ;
   wire [13:0] \$27 ;
-  wire [16:0] \$28 ;
-  wire \$29 ;
-  wire [14:0] \$3 ;
-  wire [13:0] \$30 ;
-  wire [13:0] \$31 ;
+  wire \$28 ;
+  wire [13:0] \$29 ;
+  wire \$3 ;
+  wire [17:0] \$30 ;
+  wire \$31 ;
   wire \$32 ;
-  wire [13:0] \$33 ;
-  wire [17:0] \$34 ;
+  wire \$33 ;
+  wire \$34 ;
   wire \$35 ;
   wire \$36 ;
   wire \$37 ;
@@ -10731,7 +10731,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   wire \$57 ;
   wire \$58 ;
   wire \$59 ;
-  wire \$6 ;
+  wire [15:0] \$6 ;
   wire \$60 ;
   wire \$61 ;
   wire \$62 ;
@@ -10742,42 +10742,38 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
-  wire [14:0] \$7 ;
+  wire \$7 ;
   wire \$70 ;
-  wire \$71 ;
-  wire \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  reg \$75 ;
-  reg [12:0] \$76 ;
-  reg [16:0] \$77 ;
+  reg \$71 ;
+  reg [12:0] \$72 ;
+  reg [16:0] \$73 ;
+  reg \$74 ;
+  reg [12:0] \$75 ;
+  reg \$76 ;
+  reg \$77 ;
   reg \$78 ;
-  reg [12:0] \$79 ;
-  wire [15:0] \$8 ;
-  reg \$80 ;
+  reg [1:0] \$79 ;
+  wire [13:0] \$8 ;
+  reg [16:0] \$80 ;
   reg \$81 ;
   reg \$82 ;
-  reg [1:0] \$83 ;
-  reg [16:0] \$84 ;
-  reg \$85 ;
-  reg \$86 ;
-  reg \$87 ;
-  reg \$88 ;
-  reg [12:0] \$89 ;
-  wire \$9 ;
-  reg [1:0] \$90 ;
+  reg \$83 ;
+  reg \$84 ;
+  reg [12:0] \$85 ;
+  reg [1:0] \$86 ;
+  wire [17:0] \$9 ;
   input arm;
   wire arm;
   output \bit ;
   wire \bit ;
   reg centre;
-  wire \centre$34 ;
+  wire \centre$35 ;
   reg clear;
-  wire \clear$32 ;
+  wire \clear$33 ;
   input clk;
   wire clk;
   reg decided;
-  wire \decided$35 ;
+  wire \decided$36 ;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
   reg dropped;
@@ -10792,7 +10788,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   wire [15:0] half_period;
   output level;
   wire level;
-  wire \level$29 ;
+  wire \level$30 ;
   output locked;
   reg locked = 1'h0;
   wire majority;
@@ -10801,7 +10797,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   output noise;
   wire noise;
   reg odd = 1'h0;
-  wire \odd$41 ;
+  wire \odd$42 ;
   reg [1:0] phase = 2'h0;
   input receiver_clear;
   wire receiver_clear;
@@ -10816,142 +10812,141 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
+  reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
   (* init = 1'h0 *)
-  wire \vote1$36 ;
+  wire \vote1$37 ;
   reg vote2 = 1'h0;
   (* init = 1'h0 *)
-  wire \vote2$37 ;
+  wire \vote2$38 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$10  = \$9  ? half_period[15:1] : 15'h0000;
-  assign \$11  = \$10  == 1'h1;
-  assign \$12  = mid_delay + 1'h1;
-  assign \$13  = mid_slot - 1'h1;
-  assign \$14  = ~ odd;
-  assign \$15  = ~ level;
-  assign \$16  = elapsed != 13'h1fff;
-  assign \$17  = elapsed + 1'h1;
-  assign \$18  = slot_left - 1'h1;
-  assign \$19  = slot_left == 1'h1;
-  assign \$20  = ~ level;
-  assign \$21  = slo_prev & \$20 ;
-  assign \$22  = elapsed == 13'h1fff;
-  assign \$23  = \$22  ? 13'h1fff : mid_delay;
-  assign \$24  = ! mid_slot;
+  assign \$14  = slot_left - 1'h1;
+  assign \$15  = slot_left == 1'h1;
+  assign \$16  = ~ level;
+  assign \$17  = slo_prev & \$16 ;
+  assign \$18  = elapsed == 13'h1fff;
+  assign \$19  = \$18  ? 13'h1fff : mid_delay;
+  assign \$20  = ! mid_slot;
+  assign \$21  = elapsed == 13'h1fff;
+  assign \$22  = elapsed - 1'h1;
+  assign \$23  = \$21  ? 14'h1fff : \$22 ;
+  assign \$24  = half_period - 2'h2;
   assign \$25  = elapsed == 13'h1fff;
   assign \$26  = elapsed - 1'h1;
   assign \$27  = \$25  ? 14'h1fff : \$26 ;
-  assign \$28  = half_period - 2'h2;
-  assign \$29  = elapsed == 13'h1fff;
-  assign \$30  = elapsed - 1'h1;
-  assign \$31  = \$29  ? 14'h1fff : \$30 ;
-  assign \$32  = elapsed != 13'h1fff;
-  assign \$33  = elapsed + 1'h1;
-  assign \$34  = slot_left - 1'h1;
-  assign \$35  = slot_left == 1'h1;
-  assign \$36  = ! phase;
-  assign \$37  = first_slot & \$36 ;
-  assign \$38  = \$37  & level;
-  assign \$39  = ~ single;
-  assign \$40  = decided & first_slot;
-  assign \$41  = vote1 & vote2;
-  assign \$42  = vote1 & level;
-  assign \$43  = \$41  | \$42 ;
-  assign \$44  = vote2 & level;
-  assign \$45  = \$43  | \$44 ;
-  assign \$46  = single ? level : \$45 ;
-  assign \$47  = ~ first_slot;
-  assign \$48  = decided & \$47 ;
-  assign \$49  = vote1 & vote2;
-  assign \$50  = vote1 & level;
-  assign \$51  = \$49  | \$50 ;
-  assign \$52  = vote2 & level;
-  assign \$53  = \$51  | \$52 ;
-  assign \bit  = single ? level : \$53 ;
+  assign \$28  = elapsed != 13'h1fff;
+  assign \$29  = elapsed + 1'h1;
+  assign \$30  = slot_left - 1'h1;
+  assign \$31  = slot_left == 1'h1;
+  assign \$32  = ! phase;
+  assign \$33  = first_slot & \$32 ;
+  assign \$34  = \$33  & level;
+  assign \$35  = ~ single;
+  assign \$36  = decided & first_slot;
+  assign \$37  = vote1 & vote2;
+  assign \$38  = vote1 & level;
+  assign \$39  = \$37  | \$38 ;
+  assign \$40  = vote2 & level;
+  assign \$41  = \$39  | \$40 ;
+  assign \$42  = single ? level : \$41 ;
+  assign \$43  = ~ first_slot;
+  assign \$44  = decided & \$43 ;
+  assign \$45  = vote1 & vote2;
+  assign \$46  = vote1 & level;
+  assign \$47  = \$45  | \$46 ;
+  assign \$48  = vote2 & level;
+  assign \$49  = \$47  | \$48 ;
+  assign \bit  = single ? level : \$49 ;
   assign \edge  = level != slo_prev;
-  assign \$54  = ~ single;
-  assign \decided$35  = decided & \$54 ;
-  assign \$55  = vote1 & vote2;
-  assign \$56  = vote1 & level;
-  assign \$57  = \$55  | \$56 ;
-  assign \$58  = vote2 & level;
-  assign majority = \$57  | \$58 ;
-  assign noise = dropped | \odd$41 ;
-  assign \$59  = ~ level;
-  assign \$60  = slo_prev & \$59 ;
-  assign \$61  = ! phase;
-  assign \$62  = first_slot & \$61 ;
-  assign \$63  = \$62  & level;
-  assign \$64  = ~ single;
-  assign \$65  = decided & first_slot;
-  assign \$66  = vote1 & vote2;
-  assign \$67  = vote1 & level;
-  assign \$68  = \$66  | \$67 ;
-  assign \$69  = vote2 & level;
-  assign \$70  = \$68  | \$69 ;
-  assign \$71  = single ? level : \$70 ;
-  assign \$72  = ! sampler_fsm_state;
-  assign \$73  = sampler_fsm_state == 1'h1;
-  assign \$74  = sampler_fsm_state == 2'h2;
+  assign \$50  = ~ single;
+  assign \decided$36  = decided & \$50 ;
+  assign \$51  = vote1 & vote2;
+  assign \$52  = vote1 & level;
+  assign \$53  = \$51  | \$52 ;
+  assign \$54  = vote2 & level;
+  assign majority = \$53  | \$54 ;
+  assign noise = dropped | \odd$42 ;
+  assign \$55  = ~ level;
+  assign \$56  = slo_prev & \$55 ;
+  assign \$57  = ! phase;
+  assign \$58  = first_slot & \$57 ;
+  assign \$59  = \$58  & level;
+  assign \$60  = ~ single;
+  assign \$61  = decided & first_slot;
+  assign \$62  = vote1 & vote2;
+  assign \$63  = vote1 & level;
+  assign \$64  = \$62  | \$63 ;
+  assign \$65  = vote2 & level;
+  assign \$66  = \$64  | \$65 ;
+  assign \$67  = single ? level : \$66 ;
+  assign \$68  = ! sampler_fsm_state;
+  assign \$69  = sampler_fsm_state == 1'h1;
+  assign \$70  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$75 ;
+    slo_prev <= \$71 ;
   always @(posedge clk)
-    single <= \$1 ;
+    vote <= \$2 ;
+  always @(posedge clk)
+    single <= \$3 ;
   always @(posedge clk)
     first_load <= \$5 [15:0];
   always @(posedge clk)
-    vote_load <= \$8 [14:0];
+    vote_load <= \$6 [14:0];
   always @(posedge clk)
-    vote_one <= \$11 ;
+    vote_one <= \$7 ;
   always @(posedge clk)
-    mid_delay <= \$76 ;
+    mid_delay <= \$72 ;
   always @(posedge clk)
-    mid_slot <= \$77 ;
+    mid_slot <= \$73 ;
   always @(posedge clk)
-    odd <= \$78 ;
+    odd <= \$74 ;
   always @(posedge clk)
-    elapsed <= \$79 ;
+    elapsed <= \$75 ;
   always @(posedge clk)
-    early <= \$80 ;
+    early <= \$76 ;
   always @(posedge clk)
-    locked <= \$81 ;
+    locked <= \$77 ;
   always @(posedge clk)
-    gap <= \$82 ;
+    gap <= \$78 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$83 ;
+    sampler_fsm_state <= \$79 ;
   always @(posedge clk)
-    slot_left <= \$84 ;
+    slot_left <= \$80 ;
   always @(posedge clk)
-    slot_zero <= \$85 ;
+    slot_zero <= \$81 ;
   always @(posedge clk)
-    vote1 <= \$86 ;
+    vote1 <= \$82 ;
   always @(posedge clk)
-    vote2 <= \$87 ;
+    vote2 <= \$83 ;
   always @(posedge clk)
-    first_slot <= \$88 ;
+    first_slot <= \$84 ;
   always @(posedge clk)
-    delay <= \$89 ;
+    delay <= \$85 ;
   always @(posedge clk)
-    phase <= \$90 ;
-  assign \$1  = half_period < 2'h3;
-  assign \$2  = half_period >= 2'h3;
-  assign \$3  = \$2  ? half_period[15:1] : 15'h0000;
-  assign \$4  = half_period - \$3 ;
+    phase <= \$86 ;
+  assign \$1  = half_period >= 2'h3;
+  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
+  assign \$3  = half_period < 2'h3;
+  assign \$4  = half_period - vote;
   assign \$5  = $signed(\$4 ) - $signed(2'h1);
-  assign \$6  = half_period >= 2'h3;
-  assign \$7  = \$6  ? half_period[15:1] : 15'h0000;
-  assign \$8  = \$7  - 1'h1;
-  assign \$9  = half_period >= 2'h3;
+  assign \$6  = vote - 1'h1;
+  assign \$7  = vote == 1'h1;
+  assign \$8  = mid_delay + 1'h1;
+  assign \$9  = mid_slot - 1'h1;
+  assign \$10  = ~ odd;
+  assign \$11  = ~ level;
+  assign \$12  = elapsed != 13'h1fff;
+  assign \$13  = elapsed + 1'h1;
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
     .clk(clk),
-    .decided(\decided$35 ),
+    .decided(\decided$36 ),
     .\edge (\edge ),
     .level(level),
     .majority(majority),
-    .odd(\odd$41 ),
+    .odd(\odd$42 ),
     .receiver_clear(receiver_clear),
     .rst(rst),
     .vote1(vote1),
@@ -10966,440 +10961,440 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$75  = level;
+    \$71  = level;
     if (receiver_clear) begin
-      \$75  = 1'h1;
+      \$71  = 1'h1;
     end
     if (rst) begin
-      \$75  = 1'h1;
+      \$71  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$76  = mid_delay;
+    \$72  = mid_delay;
     if (odd) begin
-      \$76  = \$12 [12:0];
+      \$72  = \$8 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$76  = \$31 [12:0];
+              \$72  = \$27 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$76  = 13'h0000;
+      \$72  = 13'h0000;
     end
     if (rst) begin
-      \$76  = 13'h0000;
+      \$72  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$77  = mid_slot;
+    \$73  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$77  = \$13 [16:0];
+      \$73  = \$9 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$77  = \$28 ;
+              \$73  = \$24 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$77  = 17'h00000;
+      \$73  = 17'h00000;
     end
     if (rst) begin
-      \$77  = 17'h00000;
+      \$73  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$78  = \$14 ;
+    \$74  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$78  = 1'h1;
+              \$74  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$78  = 1'h0;
+      \$74  = 1'h0;
     end
     if (rst) begin
-      \$78  = 1'h0;
+      \$74  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$79  = elapsed;
+    \$75  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$79  = 13'h0001;
+            \$75  = 13'h0001;
           end
       2'h1:
-          if (\$16 ) begin
-            \$79  = \$17 [12:0];
+          if (\$12 ) begin
+            \$75  = \$13 [12:0];
           end
       2'h2:
-          if (\$32 ) begin
-            \$79  = \$33 [12:0];
+          if (\$28 ) begin
+            \$75  = \$29 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$79  = 13'h0000;
+      \$75  = 13'h0000;
     end
     if (rst) begin
-      \$79  = 13'h0000;
+      \$75  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$80  = early;
+    \$76  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$80  = \$15 ;
+            \$76  = \$11 ;
           end
     endcase
     if (receiver_clear) begin
-      \$80  = 1'h0;
+      \$76  = 1'h0;
     end
     if (rst) begin
-      \$80  = 1'h0;
+      \$76  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$81  = locked;
+    \$77  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$81  = 1'h0;
+            \$77  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$40 ) begin
+          if (\$36 ) begin
             (* full_case = 32'd1 *)
-            if (\$46 ) begin
+            if (\$42 ) begin
             end else begin
-              \$81  = 1'h1;
+              \$77  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$81  = 1'h0;
+      \$77  = 1'h0;
     end
     if (rst) begin
-      \$81  = 1'h0;
+      \$77  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$82  = gap;
+    \$78  = gap;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$82  = 1'h0;
+            \$78  = 1'h0;
           end
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$82  = 1'h0;
+              \$78  = 1'h0;
             end
           end
-          if (\$21 ) begin
-            \$82  = 1'h0;
+          if (\$17 ) begin
+            \$78  = 1'h0;
           end
         end
       2'h2:
-          if (\$38 ) begin
-            \$82  = \$39 ;
+          if (\$34 ) begin
+            \$78  = \$35 ;
           end
     endcase
     if (receiver_clear) begin
-      \$82  = 1'h0;
+      \$78  = 1'h0;
     end
     if (rst) begin
-      \$82  = 1'h0;
+      \$78  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$83  = sampler_fsm_state;
+    \$79  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$83  = 2'h1;
+            \$79  = 2'h1;
           end
       2'h1:
-          if (\$21 ) begin
-            \$83  = 2'h2;
+          if (\$17 ) begin
+            \$79  = 2'h2;
           end
       2'h2:
         begin
-          if (\$38 ) begin
-            \$83  = 2'h1;
+          if (\$34 ) begin
+            \$79  = 2'h1;
           end
-          if (\$40 ) begin
-            if (\$46 ) begin
-              \$83  = 2'h1;
+          if (\$36 ) begin
+            if (\$42 ) begin
+              \$79  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$83  = 2'h0;
+      \$79  = 2'h0;
     end
     if (rst) begin
-      \$83  = 2'h0;
+      \$79  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$84  = slot_left;
+    \$80  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$84  = \$18 [16:0];
+            \$80  = \$14 [16:0];
           end
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$84  = mid_slot;
+              \$80  = mid_slot;
             end else begin
-              \$84  = { 1'h0, first_load };
+              \$80  = { 1'h0, first_load };
             end
           end
         end
       2'h2:
         begin
-          \$84  = \$34 [16:0];
-          if (\$38 ) begin
-            \$84  = { 2'h0, vote_load };
+          \$80  = \$30 [16:0];
+          if (\$34 ) begin
+            \$80  = { 2'h0, vote_load };
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$84  = { first_load, 1'h1 };
+                    \$80  = { first_load, 1'h1 };
                   end else begin
-                    \$84  = { 2'h0, vote_load };
+                    \$80  = { 2'h0, vote_load };
                   end
               2'h1:
-                  \$84  = { 2'h0, vote_load };
+                  \$80  = { 2'h0, vote_load };
               default:
-                  \$84  = { first_load, 1'h1 };
+                  \$80  = { first_load, 1'h1 };
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$84  = 17'h00000;
+      \$80  = 17'h00000;
     end
     if (rst) begin
-      \$84  = 17'h00000;
+      \$80  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$85  = slot_zero;
+    \$81  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$85  = \$19 ;
+            \$81  = \$15 ;
           end
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$85  = \$24 ;
+              \$81  = \$20 ;
             end else begin
-              \$85  = 1'h0;
+              \$81  = 1'h0;
             end
           end
         end
       2'h2:
         begin
-          \$85  = \$35 ;
-          if (\$38 ) begin
-            \$85  = vote_one;
+          \$81  = \$31 ;
+          if (\$34 ) begin
+            \$81  = vote_one;
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$85  = 1'h0;
+                    \$81  = 1'h0;
                   end else begin
-                    \$85  = vote_one;
+                    \$81  = vote_one;
                   end
               2'h1:
-                  \$85  = vote_one;
+                  \$81  = vote_one;
               default:
-                  \$85  = 1'h0;
+                  \$81  = 1'h0;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$85  = 1'h1;
+      \$81  = 1'h1;
     end
     if (rst) begin
-      \$85  = 1'h1;
+      \$81  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$86  = vote1;
+    \$82  = vote1;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
-            \$86  = 1'h0;
+          if (\$17 ) begin
+            \$82  = 1'h0;
           end
       2'h2:
-          if (\$38 ) begin
+          if (\$34 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$86  = level;
+                    \$82  = level;
                   end
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$86  = 1'h0;
+      \$82  = 1'h0;
     end
     if (rst) begin
-      \$86  = 1'h0;
+      \$82  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$87  = vote2;
+    \$83  = vote2;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
-            \$87  = 1'h0;
+          if (\$17 ) begin
+            \$83  = 1'h0;
           end
       2'h2:
-          if (\$38 ) begin
+          if (\$34 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  \$87  = level;
+                  \$83  = level;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$87  = 1'h0;
+      \$83  = 1'h0;
     end
     if (rst) begin
-      \$87  = 1'h0;
+      \$83  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$88  = first_slot;
+    \$84  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
-            \$88  = 1'h1;
+          if (\$17 ) begin
+            \$84  = 1'h1;
           end
       2'h2:
-          if (\$40 ) begin
+          if (\$36 ) begin
             (* full_case = 32'd1 *)
-            if (\$46 ) begin
+            if (\$42 ) begin
             end else begin
-              \$88  = 1'h0;
+              \$84  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$88  = 1'h0;
+      \$84  = 1'h0;
     end
     if (rst) begin
-      \$88  = 1'h0;
+      \$84  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$89  = delay;
+    \$85  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$89  = \$23 ;
+              \$85  = \$19 ;
             end else begin
-              \$89  = \$27 [12:0];
+              \$85  = \$23 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$89  = 13'h0000;
+      \$85  = 13'h0000;
     end
     if (rst) begin
-      \$89  = 13'h0000;
+      \$85  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$90  = phase;
+    \$86  = phase;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$90  = 2'h1;
+              \$86  = 2'h1;
             end else begin
-              \$90  = 2'h0;
+              \$86  = 2'h0;
             end
           end
       2'h2:
-          if (\$38 ) begin
+          if (\$34 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -11407,34 +11402,34 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$90  = 2'h1;
+                    \$86  = 2'h1;
                   end
               2'h1:
-                  \$90  = 2'h2;
+                  \$86  = 2'h2;
               default:
-                  \$90  = 2'h0;
+                  \$86  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$90  = 2'h0;
+      \$86  = 2'h0;
     end
     if (rst) begin
-      \$90  = 2'h0;
+      \$86  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    sample = \$48 ;
+    sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           /* empty */;
       2'h2:
-          if (\$65 ) begin
+          if (\$61 ) begin
             (* full_case = 32'd1 *)
-            if (\$71 ) begin
+            if (\$67 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -11448,7 +11443,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
       2'h0:
           /* empty */;
       2'h1:
-          if (\$60 ) begin
+          if (\$56 ) begin
             clear = 1'h1;
           end
     endcase
@@ -11463,11 +11458,11 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
           /* empty */;
       2'h2:
         begin
-          if (\$63 ) begin
+          if (\$59 ) begin
             dropped = 1'h1;
           end
-          if (\$65 ) begin
-            if (\$71 ) begin
+          if (\$61 ) begin
+            if (\$67 ) begin
               dropped = 1'h1;
             end
           end
@@ -11483,7 +11478,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
       2'h1:
           /* empty */;
       2'h2:
-          if (\$63 ) begin
+          if (\$59 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -11508,22 +11503,22 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
       2'h1:
           /* empty */;
       2'h2:
-          if (\$63 ) begin
+          if (\$59 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  centre = \$64 ;
+                  centre = \$60 ;
             endcase
           end
     endcase
   end
-  assign \level$29  = level;
-  assign \clear$32  = clear;
-  assign \centre$34  = centre;
-  assign \vote1$36  = vote1;
-  assign \vote2$37  = vote2;
+  assign \level$30  = level;
+  assign \clear$33  = clear;
+  assign \centre$35  = centre;
+  assign \vote1$37  = vote1;
+  assign \vote2$38  = vote2;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -11925,7 +11920,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2007$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2003$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -11967,8 +11962,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2007$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2007$0 ;
-  wire \port$2007$0 ;
+  input \port$2003$0 ;
+  wire \port$2003$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -11982,9 +11977,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2007$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2007$0  };
-  assign \$2  = { lc[4:0], \port$2007$0  } == last;
-  assign \$3  = { lc[4:0], \port$2007$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2003$0  };
+  assign \$2  = { lc[4:0], \port$2003$0  } == last;
+  assign \$3  = { lc[4:0], \port$2003$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -12094,7 +12089,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2007$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2007$0  };
+  assign lc_next = { lc[4:0], \port$2003$0  };
   assign zero = is_zero;
 endmodule
 
@@ -12650,7 +12645,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1475$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
@@ -12804,8 +12799,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1475$0 , lc_check, lc_re
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$1475$0 ;
-  wire \port$1475$0 ;
+  output \port$1471$0 ;
+  wire \port$1471$0 ;
   output report;
   wire report;
   input report_frame;
@@ -12911,7 +12906,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1475$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1475$0  = \$2 ;
+  assign \port$1471$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

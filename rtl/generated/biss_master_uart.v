@@ -642,12 +642,12 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6337$0 (\$8 ),
-    .\port$6350$0 (\$9 ),
-    .\port$6482$0 (\$10 ),
-    .\port$6903$0 (\$11 ),
-    .\port$6916$0 (\$12 ),
-    .\port$7048$0 (\$13 ),
+    .\port$6330$0 (\$8 ),
+    .\port$6343$0 (\$9 ),
+    .\port$6475$0 (\$10 ),
+    .\port$6897$0 (\$11 ),
+    .\port$6910$0 (\$12 ),
+    .\port$7042$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -713,9 +713,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .clk(clk),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6337$0 (\$8 ),
-    .\port$6350$0 (\$9 ),
-    .\port$6482$0 (\$10 ),
+    .\port$6330$0 (\$8 ),
+    .\port$6343$0 (\$9 ),
+    .\port$6475$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -780,9 +780,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .clk(clk),
     .ma(ch1_ma),
     .periodic(\regs__periodic$432 ),
-    .\port$6903$0 (\$11 ),
-    .\port$6916$0 (\$12 ),
-    .\port$7048$0 (\$13 ),
+    .\port$6897$0 (\$11 ),
+    .\port$6910$0 (\$12 ),
+    .\port$7042$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$248 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1158,8 +1158,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
 , ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width
 , ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$105 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw
 , ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start
-, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$309 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$6337$0 , \port$6350$0 , ch0__ca_done, \port$6482$0 , ch1__done_count, ch1__done, \port$6903$0 , \port$6916$0 , ch1__ca_done
-, \port$7048$0 , clk);
+, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$309 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$6330$0 , \port$6343$0 , ch0__ca_done, \port$6475$0 , ch1__done_count, ch1__done, \port$6897$0 , \port$6910$0 , ch1__ca_done
+, \port$7042$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2733,18 +2733,18 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6337$0 ;
-  wire [186:0] \port$6337$0 ;
-  input [335:0] \port$6350$0 ;
-  wire [335:0] \port$6350$0 ;
-  input [9:0] \port$6482$0 ;
-  wire [9:0] \port$6482$0 ;
-  input [186:0] \port$6903$0 ;
-  wire [186:0] \port$6903$0 ;
-  input [335:0] \port$6916$0 ;
-  wire [335:0] \port$6916$0 ;
-  input [9:0] \port$7048$0 ;
-  wire [9:0] \port$7048$0 ;
+  input [186:0] \port$6330$0 ;
+  wire [186:0] \port$6330$0 ;
+  input [335:0] \port$6343$0 ;
+  wire [335:0] \port$6343$0 ;
+  input [9:0] \port$6475$0 ;
+  wire [9:0] \port$6475$0 ;
+  input [186:0] \port$6897$0 ;
+  wire [186:0] \port$6897$0 ;
+  input [335:0] \port$6910$0 ;
+  wire [335:0] \port$6910$0 ;
+  input [9:0] \port$7042$0 ;
+  wire [9:0] \port$7042$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2886,7 +2886,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$351  = \$349  | \$350 ;
   assign \$352  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$353  = \$351  | \$352 ;
-  assign \$354  = ch1_read_select_110 ? { 2'h0, \port$6903$0 [182:177], 4'h0, \port$6903$0 [186:183], 1'h0, \port$6903$0 [176:174], 1'h0, \port$6903$0 [133:131], 3'h0, \port$6903$0 [49], \port$6903$0 [3:0] } : 32'd0;
+  assign \$354  = ch1_read_select_110 ? { 2'h0, \port$6897$0 [182:177], 4'h0, \port$6897$0 [186:183], 1'h0, \port$6897$0 [176:174], 1'h0, \port$6897$0 [133:131], 3'h0, \port$6897$0 [49], \port$6897$0 [3:0] } : 32'd0;
   assign \$355  = \$353  | \$354 ;
   assign \$356  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$357  = \$355  | \$356 ;
@@ -2902,21 +2902,21 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$367  = \$365  | \$366 ;
   assign \$368  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$369  = \$367  | \$368 ;
-  assign \$370  = ch1_read_select_118 ? \port$6916$0 [31:0] : 32'd0;
+  assign \$370  = ch1_read_select_118 ? \port$6910$0 [31:0] : 32'd0;
   assign \$371  = \$369  | \$370 ;
-  assign \$372  = ch1_read_select_119 ? \port$6916$0 [63:32] : 32'd0;
+  assign \$372  = ch1_read_select_119 ? \port$6910$0 [63:32] : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$374  = ch1_read_select_11a ? \port$6916$0 [95:64] : 32'd0;
+  assign \$374  = ch1_read_select_11a ? \port$6910$0 [95:64] : 32'd0;
   assign \$375  = \$373  | \$374 ;
-  assign \$376  = ch1_read_select_11b ? \port$6916$0 [127:96] : 32'd0;
+  assign \$376  = ch1_read_select_11b ? \port$6910$0 [127:96] : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_11c ? \port$6916$0 [159:128] : 32'd0;
+  assign \$378  = ch1_read_select_11c ? \port$6910$0 [159:128] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_11d ? \port$6916$0 [191:160] : 32'd0;
+  assign \$380  = ch1_read_select_11d ? \port$6910$0 [191:160] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_11e ? \port$6916$0 [223:192] : 32'd0;
+  assign \$382  = ch1_read_select_11e ? \port$6910$0 [223:192] : 32'd0;
   assign \$383  = \$381  | \$382 ;
-  assign \$384  = ch1_read_select_11f ? \port$6916$0 [255:224] : 32'd0;
+  assign \$384  = ch1_read_select_11f ? \port$6910$0 [255:224] : 32'd0;
   assign \$385  = \$383  | \$384 ;
   assign \$386  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$387  = \$385  | \$386 ;
@@ -2928,13 +2928,13 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$393  = \$391  | \$392 ;
   assign \$394  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$309 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$395  = \$393  | \$394 ;
-  assign \$398  = ch1_read_select_142 ? { 17'h00000, \port$7048$0 [9:3], 1'h0, \port$7048$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$398  = ch1_read_select_142 ? { 17'h00000, \port$7042$0 [9:3], 1'h0, \port$7042$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$399  = \$397  | \$398 ;
-  assign \$400  = ch1_read_select_143 ? \port$6916$0 [287:256] : 32'd0;
+  assign \$400  = ch1_read_select_143 ? \port$6910$0 [287:256] : 32'd0;
   assign \$401  = \$399  | \$400 ;
-  assign \$402  = ch1_read_select_144 ? \port$6916$0 [319:288] : 32'd0;
+  assign \$402  = ch1_read_select_144 ? \port$6910$0 [319:288] : 32'd0;
   assign \$403  = \$401  | \$402 ;
-  assign \$404  = ch1_read_select_145 ? { 16'h0000, \port$6916$0 [335:320] } : 32'd0;
+  assign \$404  = ch1_read_select_145 ? { 16'h0000, \port$6910$0 [335:320] } : 32'd0;
   assign \$405  = \$403  | \$404 ;
   assign \$406  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
   assign \$407  = \$405  | \$406 ;
@@ -3820,7 +3820,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$156  = \$154  | \$155 ;
   assign \$157  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$158  = \$156  | \$157 ;
-  assign \$159  = ch0_read_select_90 ? { 2'h0, \port$6337$0 [182:177], 4'h0, \port$6337$0 [186:183], 1'h0, \port$6337$0 [176:174], 1'h0, \port$6337$0 [133:131], 3'h0, \port$6337$0 [49], \port$6337$0 [3:0] } : 32'd0;
+  assign \$159  = ch0_read_select_90 ? { 2'h0, \port$6330$0 [182:177], 4'h0, \port$6330$0 [186:183], 1'h0, \port$6330$0 [176:174], 1'h0, \port$6330$0 [133:131], 3'h0, \port$6330$0 [49], \port$6330$0 [3:0] } : 32'd0;
   assign \$160  = \$158  | \$159 ;
   assign \$161  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$162  = \$160  | \$161 ;
@@ -3836,21 +3836,21 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$172  = \$170  | \$171 ;
   assign \$173  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$174  = \$172  | \$173 ;
-  assign \$175  = ch0_read_select_98 ? \port$6350$0 [31:0] : 32'd0;
+  assign \$175  = ch0_read_select_98 ? \port$6343$0 [31:0] : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_99 ? \port$6350$0 [63:32] : 32'd0;
+  assign \$177  = ch0_read_select_99 ? \port$6343$0 [63:32] : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_9a ? \port$6350$0 [95:64] : 32'd0;
+  assign \$179  = ch0_read_select_9a ? \port$6343$0 [95:64] : 32'd0;
   assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_9b ? \port$6350$0 [127:96] : 32'd0;
+  assign \$181  = ch0_read_select_9b ? \port$6343$0 [127:96] : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_9c ? \port$6350$0 [159:128] : 32'd0;
+  assign \$183  = ch0_read_select_9c ? \port$6343$0 [159:128] : 32'd0;
   assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_9d ? \port$6350$0 [191:160] : 32'd0;
+  assign \$185  = ch0_read_select_9d ? \port$6343$0 [191:160] : 32'd0;
   assign \$186  = \$184  | \$185 ;
-  assign \$187  = ch0_read_select_9e ? \port$6350$0 [223:192] : 32'd0;
+  assign \$187  = ch0_read_select_9e ? \port$6343$0 [223:192] : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$189  = ch0_read_select_9f ? \port$6350$0 [255:224] : 32'd0;
+  assign \$189  = ch0_read_select_9f ? \port$6343$0 [255:224] : 32'd0;
   assign \$190  = \$188  | \$189 ;
   assign \$191  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$192  = \$190  | \$191 ;
@@ -3862,13 +3862,13 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$198  = \$196  | \$197 ;
   assign \$199  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$105 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$200  = \$198  | \$199 ;
-  assign \$203  = ch0_read_select_c2 ? { 17'h00000, \port$6482$0 [9:3], 1'h0, \port$6482$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$203  = ch0_read_select_c2 ? { 17'h00000, \port$6475$0 [9:3], 1'h0, \port$6475$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$204  = \$202  | \$203 ;
-  assign \$205  = ch0_read_select_c3 ? \port$6350$0 [287:256] : 32'd0;
+  assign \$205  = ch0_read_select_c3 ? \port$6343$0 [287:256] : 32'd0;
   assign \$206  = \$204  | \$205 ;
-  assign \$207  = ch0_read_select_c4 ? \port$6350$0 [319:288] : 32'd0;
+  assign \$207  = ch0_read_select_c4 ? \port$6343$0 [319:288] : 32'd0;
   assign \$208  = \$206  | \$207 ;
-  assign \$209  = ch0_read_select_c5 ? { 16'h0000, \port$6350$0 [335:320] } : 32'd0;
+  assign \$209  = ch0_read_select_c5 ? { 16'h0000, \port$6343$0 [335:320] } : 32'd0;
   assign \$210  = \$208  | \$209 ;
   assign \$211  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$212  = \$210  | \$211 ;
@@ -5030,7 +5030,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$627  = ch0_result_status_status_snapshot;
     if (\$130 ) begin
-      \$627  = \port$6337$0 [3:0];
+      \$627  = \port$6330$0 [3:0];
     end
     if (rst) begin
       \$627  = 4'h0;
@@ -5040,7 +5040,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$628  = ch0_result_status_cds_snapshot;
     if (\$130 ) begin
-      \$628  = \port$6337$0 [49];
+      \$628  = \port$6330$0 [49];
     end
     if (rst) begin
       \$628  = 1'h0;
@@ -5050,7 +5050,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$629  = ch0_result_status_w0_ne_snapshot;
     if (\$130 ) begin
-      \$629  = \port$6337$0 [131];
+      \$629  = \port$6330$0 [131];
     end
     if (rst) begin
       \$629  = 1'h0;
@@ -5060,7 +5060,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$630  = ch0_result_status_w0_nw_snapshot;
     if (\$130 ) begin
-      \$630  = \port$6337$0 [132];
+      \$630  = \port$6330$0 [132];
     end
     if (rst) begin
       \$630  = 1'h0;
@@ -5070,7 +5070,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$631  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$130 ) begin
-      \$631  = \port$6337$0 [133];
+      \$631  = \port$6330$0 [133];
     end
     if (rst) begin
       \$631  = 1'h0;
@@ -5080,7 +5080,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$632  = ch0_result_status_w1_ne_snapshot;
     if (\$130 ) begin
-      \$632  = \port$6337$0 [174];
+      \$632  = \port$6330$0 [174];
     end
     if (rst) begin
       \$632  = 1'h0;
@@ -5090,7 +5090,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$633  = ch0_result_status_w1_nw_snapshot;
     if (\$130 ) begin
-      \$633  = \port$6337$0 [175];
+      \$633  = \port$6330$0 [175];
     end
     if (rst) begin
       \$633  = 1'h0;
@@ -5100,7 +5100,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$634  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$130 ) begin
-      \$634  = \port$6337$0 [176];
+      \$634  = \port$6330$0 [176];
     end
     if (rst) begin
       \$634  = 1'h0;
@@ -5110,7 +5110,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$635  = ch0_result_status_lc_repeat_snapshot;
     if (\$130 ) begin
-      \$635  = \port$6337$0 [183];
+      \$635  = \port$6330$0 [183];
     end
     if (rst) begin
       \$635  = 1'h0;
@@ -5120,7 +5120,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$636  = ch0_result_status_lc_skip_snapshot;
     if (\$130 ) begin
-      \$636  = \port$6337$0 [184];
+      \$636  = \port$6330$0 [184];
     end
     if (rst) begin
       \$636  = 1'h0;
@@ -5130,7 +5130,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$637  = ch0_result_status_lc_zero_snapshot;
     if (\$130 ) begin
-      \$637  = \port$6337$0 [185];
+      \$637  = \port$6330$0 [185];
     end
     if (rst) begin
       \$637  = 1'h0;
@@ -5140,7 +5140,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$638  = ch0_result_status_spw_mismatch_snapshot;
     if (\$130 ) begin
-      \$638  = \port$6337$0 [186];
+      \$638  = \port$6330$0 [186];
     end
     if (rst) begin
       \$638  = 1'h0;
@@ -5150,7 +5150,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$639  = ch0_result_status_lc_snapshot;
     if (\$130 ) begin
-      \$639  = \port$6337$0 [182:177];
+      \$639  = \port$6330$0 [182:177];
     end
     if (rst) begin
       \$639  = 6'h00;
@@ -5170,7 +5170,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$641  = ch0_result_seq_line_delay_snapshot;
     if (\$130 ) begin
-      \$641  = \port$6337$0 [48:36];
+      \$641  = \port$6330$0 [48:36];
     end
     if (rst) begin
       \$641  = 13'h0000;
@@ -5180,7 +5180,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$642  = ch0_result_w0_lo_data_snapshot;
     if (\$130 ) begin
-      \$642  = \port$6337$0 [107:76];
+      \$642  = \port$6330$0 [107:76];
     end
     if (rst) begin
       \$642  = 32'd0;
@@ -5190,7 +5190,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$643  = ch0_result_w0_hi_data_snapshot;
     if (\$130 ) begin
-      \$643  = \port$6337$0 [130:108];
+      \$643  = \port$6330$0 [130:108];
     end
     if (rst) begin
       \$643  = 23'h000000;
@@ -5200,7 +5200,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$644  = ch0_result_w1_lo_data_snapshot;
     if (\$130 ) begin
-      \$644  = \port$6337$0 [165:134];
+      \$644  = \port$6330$0 [165:134];
     end
     if (rst) begin
       \$644  = 32'd0;
@@ -5210,7 +5210,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$645  = ch0_result_w1_hi_data_snapshot;
     if (\$130 ) begin
-      \$645  = \port$6337$0 [173:166];
+      \$645  = \port$6330$0 [173:166];
     end
     if (rst) begin
       \$645  = 8'h00;
@@ -5220,7 +5220,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$646  = ch0_result_timestamp_time_snapshot;
     if (\$130 ) begin
-      \$646  = \port$6337$0 [35:4];
+      \$646  = \port$6330$0 [35:4];
     end
     if (rst) begin
       \$646  = 32'd0;
@@ -5230,7 +5230,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$647  = ch0_result_line_noise_events_snapshot;
     if (\$130 ) begin
-      \$647  = \port$6337$0 [53:50];
+      \$647  = \port$6330$0 [53:50];
     end
     if (rst) begin
       \$647  = 4'h0;
@@ -5240,7 +5240,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$648  = ch0_result_line_delay_settled_snapshot;
     if (\$130 ) begin
-      \$648  = \port$6337$0 [54];
+      \$648  = \port$6330$0 [54];
     end
     if (rst) begin
       \$648  = 1'h0;
@@ -5250,7 +5250,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$649  = ch0_result_line_delay_spread_snapshot;
     if (\$130 ) begin
-      \$649  = \port$6337$0 [75:68];
+      \$649  = \port$6330$0 [75:68];
     end
     if (rst) begin
       \$649  = 8'h00;
@@ -5260,7 +5260,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$650  = ch0_result_line_settled_delay_snapshot;
     if (\$130 ) begin
-      \$650  = \port$6337$0 [67:55];
+      \$650  = \port$6330$0 [67:55];
     end
     if (rst) begin
       \$650  = 13'h0000;
@@ -6314,7 +6314,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$756  = ch1_result_status_status_snapshot;
     if (\$325 ) begin
-      \$756  = \port$6903$0 [3:0];
+      \$756  = \port$6897$0 [3:0];
     end
     if (rst) begin
       \$756  = 4'h0;
@@ -6324,7 +6324,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$757  = ch1_result_status_cds_snapshot;
     if (\$325 ) begin
-      \$757  = \port$6903$0 [49];
+      \$757  = \port$6897$0 [49];
     end
     if (rst) begin
       \$757  = 1'h0;
@@ -6334,7 +6334,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$758  = ch1_result_status_w0_ne_snapshot;
     if (\$325 ) begin
-      \$758  = \port$6903$0 [131];
+      \$758  = \port$6897$0 [131];
     end
     if (rst) begin
       \$758  = 1'h0;
@@ -6344,7 +6344,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$759  = ch1_result_status_w0_nw_snapshot;
     if (\$325 ) begin
-      \$759  = \port$6903$0 [132];
+      \$759  = \port$6897$0 [132];
     end
     if (rst) begin
       \$759  = 1'h0;
@@ -6354,7 +6354,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$760  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$325 ) begin
-      \$760  = \port$6903$0 [133];
+      \$760  = \port$6897$0 [133];
     end
     if (rst) begin
       \$760  = 1'h0;
@@ -6364,7 +6364,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$761  = ch1_result_status_w1_ne_snapshot;
     if (\$325 ) begin
-      \$761  = \port$6903$0 [174];
+      \$761  = \port$6897$0 [174];
     end
     if (rst) begin
       \$761  = 1'h0;
@@ -6374,7 +6374,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$762  = ch1_result_status_w1_nw_snapshot;
     if (\$325 ) begin
-      \$762  = \port$6903$0 [175];
+      \$762  = \port$6897$0 [175];
     end
     if (rst) begin
       \$762  = 1'h0;
@@ -6384,7 +6384,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$763  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$325 ) begin
-      \$763  = \port$6903$0 [176];
+      \$763  = \port$6897$0 [176];
     end
     if (rst) begin
       \$763  = 1'h0;
@@ -6394,7 +6394,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$764  = ch1_result_status_lc_repeat_snapshot;
     if (\$325 ) begin
-      \$764  = \port$6903$0 [183];
+      \$764  = \port$6897$0 [183];
     end
     if (rst) begin
       \$764  = 1'h0;
@@ -6404,7 +6404,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$765  = ch1_result_status_lc_skip_snapshot;
     if (\$325 ) begin
-      \$765  = \port$6903$0 [184];
+      \$765  = \port$6897$0 [184];
     end
     if (rst) begin
       \$765  = 1'h0;
@@ -6414,7 +6414,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$766  = ch1_result_status_lc_zero_snapshot;
     if (\$325 ) begin
-      \$766  = \port$6903$0 [185];
+      \$766  = \port$6897$0 [185];
     end
     if (rst) begin
       \$766  = 1'h0;
@@ -6424,7 +6424,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$767  = ch1_result_status_spw_mismatch_snapshot;
     if (\$325 ) begin
-      \$767  = \port$6903$0 [186];
+      \$767  = \port$6897$0 [186];
     end
     if (rst) begin
       \$767  = 1'h0;
@@ -6434,7 +6434,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$768  = ch1_result_status_lc_snapshot;
     if (\$325 ) begin
-      \$768  = \port$6903$0 [182:177];
+      \$768  = \port$6897$0 [182:177];
     end
     if (rst) begin
       \$768  = 6'h00;
@@ -6454,7 +6454,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$770  = ch1_result_seq_line_delay_snapshot;
     if (\$325 ) begin
-      \$770  = \port$6903$0 [48:36];
+      \$770  = \port$6897$0 [48:36];
     end
     if (rst) begin
       \$770  = 13'h0000;
@@ -6464,7 +6464,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$771  = ch1_result_w0_lo_data_snapshot;
     if (\$325 ) begin
-      \$771  = \port$6903$0 [107:76];
+      \$771  = \port$6897$0 [107:76];
     end
     if (rst) begin
       \$771  = 32'd0;
@@ -6474,7 +6474,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$772  = ch1_result_w0_hi_data_snapshot;
     if (\$325 ) begin
-      \$772  = \port$6903$0 [130:108];
+      \$772  = \port$6897$0 [130:108];
     end
     if (rst) begin
       \$772  = 23'h000000;
@@ -6484,7 +6484,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$773  = ch1_result_w1_lo_data_snapshot;
     if (\$325 ) begin
-      \$773  = \port$6903$0 [165:134];
+      \$773  = \port$6897$0 [165:134];
     end
     if (rst) begin
       \$773  = 32'd0;
@@ -6494,7 +6494,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$774  = ch1_result_w1_hi_data_snapshot;
     if (\$325 ) begin
-      \$774  = \port$6903$0 [173:166];
+      \$774  = \port$6897$0 [173:166];
     end
     if (rst) begin
       \$774  = 8'h00;
@@ -6504,7 +6504,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$775  = ch1_result_timestamp_time_snapshot;
     if (\$325 ) begin
-      \$775  = \port$6903$0 [35:4];
+      \$775  = \port$6897$0 [35:4];
     end
     if (rst) begin
       \$775  = 32'd0;
@@ -6514,7 +6514,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$776  = ch1_result_line_noise_events_snapshot;
     if (\$325 ) begin
-      \$776  = \port$6903$0 [53:50];
+      \$776  = \port$6897$0 [53:50];
     end
     if (rst) begin
       \$776  = 4'h0;
@@ -6524,7 +6524,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$777  = ch1_result_line_delay_settled_snapshot;
     if (\$325 ) begin
-      \$777  = \port$6903$0 [54];
+      \$777  = \port$6897$0 [54];
     end
     if (rst) begin
       \$777  = 1'h0;
@@ -6534,7 +6534,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$778  = ch1_result_line_delay_spread_snapshot;
     if (\$325 ) begin
-      \$778  = \port$6903$0 [75:68];
+      \$778  = \port$6897$0 [75:68];
     end
     if (rst) begin
       \$778  = 8'h00;
@@ -6544,7 +6544,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$779  = ch1_result_line_settled_delay_snapshot;
     if (\$325 ) begin
-      \$779  = \port$6903$0 [67:55];
+      \$779  = \port$6897$0 [67:55];
     end
     if (rst) begin
       \$779  = 13'h0000;
@@ -6573,106 +6573,106 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6337$0 [3:0];
-  assign ch0__cds = \port$6337$0 [49];
-  assign ch0__word0_ne = \port$6337$0 [131];
-  assign ch0__word0_nw = \port$6337$0 [132];
-  assign ch0__word0_crc_ok = \port$6337$0 [133];
-  assign ch0__word1_ne = \port$6337$0 [174];
-  assign ch0__word1_nw = \port$6337$0 [175];
-  assign ch0__word1_crc_ok = \port$6337$0 [176];
-  assign ch0__lc_repeat = \port$6337$0 [183];
-  assign ch0__lc_skip = \port$6337$0 [184];
-  assign ch0__lc_zero = \port$6337$0 [185];
-  assign ch0__spw_mismatch = \port$6337$0 [186];
-  assign ch0__lc = \port$6337$0 [182:177];
-  assign ch0__line_delay = \port$6337$0 [48:36];
-  assign ch0__word0_position = \port$6337$0 [130:76];
-  assign ch0__word1_position = \port$6337$0 [173:134];
-  assign ch0__timestamp = \port$6337$0 [35:4];
-  assign ch0__noise_events = \port$6337$0 [53:50];
-  assign ch0__delay_settled = \port$6337$0 [54];
-  assign ch0__delay_spread = \port$6337$0 [75:68];
-  assign ch0__settled_delay = \port$6337$0 [67:55];
+  assign ch0__status = \port$6330$0 [3:0];
+  assign ch0__cds = \port$6330$0 [49];
+  assign ch0__word0_ne = \port$6330$0 [131];
+  assign ch0__word0_nw = \port$6330$0 [132];
+  assign ch0__word0_crc_ok = \port$6330$0 [133];
+  assign ch0__word1_ne = \port$6330$0 [174];
+  assign ch0__word1_nw = \port$6330$0 [175];
+  assign ch0__word1_crc_ok = \port$6330$0 [176];
+  assign ch0__lc_repeat = \port$6330$0 [183];
+  assign ch0__lc_skip = \port$6330$0 [184];
+  assign ch0__lc_zero = \port$6330$0 [185];
+  assign ch0__spw_mismatch = \port$6330$0 [186];
+  assign ch0__lc = \port$6330$0 [182:177];
+  assign ch0__line_delay = \port$6330$0 [48:36];
+  assign ch0__word0_position = \port$6330$0 [130:76];
+  assign ch0__word1_position = \port$6330$0 [173:134];
+  assign ch0__timestamp = \port$6330$0 [35:4];
+  assign ch0__noise_events = \port$6330$0 [53:50];
+  assign ch0__delay_settled = \port$6330$0 [54];
+  assign ch0__delay_spread = \port$6330$0 [75:68];
+  assign ch0__settled_delay = \port$6330$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$6350$0 [15:0];
-  assign ch0__count_crc_word1 = \port$6350$0 [31:16];
-  assign ch0__count_no_ack = \port$6350$0 [47:32];
-  assign ch0__count_no_start = \port$6350$0 [63:48];
-  assign ch0__count_delay_range = \port$6350$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$6350$0 [95:80];
-  assign ch0__count_lc_repeat = \port$6350$0 [111:96];
-  assign ch0__count_lc_skip = \port$6350$0 [127:112];
-  assign ch0__count_lc_zero = \port$6350$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$6350$0 [159:144];
-  assign ch0__count_overrun = \port$6350$0 [175:160];
-  assign ch0__count_aborted = \port$6350$0 [191:176];
-  assign ch0__count_no_stop = \port$6350$0 [207:192];
-  assign ch0__count_noisy_line = \port$6350$0 [223:208];
-  assign ch0__count_delay_jump = \port$6350$0 [239:224];
-  assign ch0__count_noise_event = \port$6350$0 [255:240];
-  assign ch0__ca_status = \port$6482$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6482$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6350$0 [271:256];
-  assign ch0__count_ca_no_answer = \port$6350$0 [287:272];
-  assign ch0__count_ca_refused = \port$6350$0 [303:288];
-  assign ch0__count_ca_aborted = \port$6350$0 [319:304];
-  assign ch0__count_ca_data_fault = \port$6350$0 [335:320];
-  assign ch1__status = \port$6903$0 [3:0];
-  assign ch1__cds = \port$6903$0 [49];
-  assign ch1__word0_ne = \port$6903$0 [131];
-  assign ch1__word0_nw = \port$6903$0 [132];
-  assign ch1__word0_crc_ok = \port$6903$0 [133];
-  assign ch1__word1_ne = \port$6903$0 [174];
-  assign ch1__word1_nw = \port$6903$0 [175];
-  assign ch1__word1_crc_ok = \port$6903$0 [176];
-  assign ch1__lc_repeat = \port$6903$0 [183];
-  assign ch1__lc_skip = \port$6903$0 [184];
-  assign ch1__lc_zero = \port$6903$0 [185];
-  assign ch1__spw_mismatch = \port$6903$0 [186];
-  assign ch1__lc = \port$6903$0 [182:177];
-  assign ch1__line_delay = \port$6903$0 [48:36];
-  assign ch1__word0_position = \port$6903$0 [130:76];
-  assign ch1__word1_position = \port$6903$0 [173:134];
-  assign ch1__timestamp = \port$6903$0 [35:4];
-  assign ch1__noise_events = \port$6903$0 [53:50];
-  assign ch1__delay_settled = \port$6903$0 [54];
-  assign ch1__delay_spread = \port$6903$0 [75:68];
-  assign ch1__settled_delay = \port$6903$0 [67:55];
+  assign ch0__count_crc_word0 = \port$6343$0 [15:0];
+  assign ch0__count_crc_word1 = \port$6343$0 [31:16];
+  assign ch0__count_no_ack = \port$6343$0 [47:32];
+  assign ch0__count_no_start = \port$6343$0 [63:48];
+  assign ch0__count_delay_range = \port$6343$0 [79:64];
+  assign ch0__count_slo_stuck_low = \port$6343$0 [95:80];
+  assign ch0__count_lc_repeat = \port$6343$0 [111:96];
+  assign ch0__count_lc_skip = \port$6343$0 [127:112];
+  assign ch0__count_lc_zero = \port$6343$0 [143:128];
+  assign ch0__count_spw_mismatch = \port$6343$0 [159:144];
+  assign ch0__count_overrun = \port$6343$0 [175:160];
+  assign ch0__count_aborted = \port$6343$0 [191:176];
+  assign ch0__count_no_stop = \port$6343$0 [207:192];
+  assign ch0__count_noisy_line = \port$6343$0 [223:208];
+  assign ch0__count_delay_jump = \port$6343$0 [239:224];
+  assign ch0__count_noise_event = \port$6343$0 [255:240];
+  assign ch0__ca_status = \port$6475$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6475$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6343$0 [271:256];
+  assign ch0__count_ca_no_answer = \port$6343$0 [287:272];
+  assign ch0__count_ca_refused = \port$6343$0 [303:288];
+  assign ch0__count_ca_aborted = \port$6343$0 [319:304];
+  assign ch0__count_ca_data_fault = \port$6343$0 [335:320];
+  assign ch1__status = \port$6897$0 [3:0];
+  assign ch1__cds = \port$6897$0 [49];
+  assign ch1__word0_ne = \port$6897$0 [131];
+  assign ch1__word0_nw = \port$6897$0 [132];
+  assign ch1__word0_crc_ok = \port$6897$0 [133];
+  assign ch1__word1_ne = \port$6897$0 [174];
+  assign ch1__word1_nw = \port$6897$0 [175];
+  assign ch1__word1_crc_ok = \port$6897$0 [176];
+  assign ch1__lc_repeat = \port$6897$0 [183];
+  assign ch1__lc_skip = \port$6897$0 [184];
+  assign ch1__lc_zero = \port$6897$0 [185];
+  assign ch1__spw_mismatch = \port$6897$0 [186];
+  assign ch1__lc = \port$6897$0 [182:177];
+  assign ch1__line_delay = \port$6897$0 [48:36];
+  assign ch1__word0_position = \port$6897$0 [130:76];
+  assign ch1__word1_position = \port$6897$0 [173:134];
+  assign ch1__timestamp = \port$6897$0 [35:4];
+  assign ch1__noise_events = \port$6897$0 [53:50];
+  assign ch1__delay_settled = \port$6897$0 [54];
+  assign ch1__delay_spread = \port$6897$0 [75:68];
+  assign ch1__settled_delay = \port$6897$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$6916$0 [15:0];
-  assign ch1__count_crc_word1 = \port$6916$0 [31:16];
-  assign ch1__count_no_ack = \port$6916$0 [47:32];
-  assign ch1__count_no_start = \port$6916$0 [63:48];
-  assign ch1__count_delay_range = \port$6916$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$6916$0 [95:80];
-  assign ch1__count_lc_repeat = \port$6916$0 [111:96];
-  assign ch1__count_lc_skip = \port$6916$0 [127:112];
-  assign ch1__count_lc_zero = \port$6916$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$6916$0 [159:144];
-  assign ch1__count_overrun = \port$6916$0 [175:160];
-  assign ch1__count_aborted = \port$6916$0 [191:176];
-  assign ch1__count_no_stop = \port$6916$0 [207:192];
-  assign ch1__count_noisy_line = \port$6916$0 [223:208];
-  assign ch1__count_delay_jump = \port$6916$0 [239:224];
-  assign ch1__count_noise_event = \port$6916$0 [255:240];
-  assign ch1__ca_status = \port$7048$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7048$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$6916$0 [271:256];
-  assign ch1__count_ca_no_answer = \port$6916$0 [287:272];
-  assign ch1__count_ca_refused = \port$6916$0 [303:288];
-  assign ch1__count_ca_aborted = \port$6916$0 [319:304];
-  assign ch1__count_ca_data_fault = \port$6916$0 [335:320];
+  assign ch1__count_crc_word0 = \port$6910$0 [15:0];
+  assign ch1__count_crc_word1 = \port$6910$0 [31:16];
+  assign ch1__count_no_ack = \port$6910$0 [47:32];
+  assign ch1__count_no_start = \port$6910$0 [63:48];
+  assign ch1__count_delay_range = \port$6910$0 [79:64];
+  assign ch1__count_slo_stuck_low = \port$6910$0 [95:80];
+  assign ch1__count_lc_repeat = \port$6910$0 [111:96];
+  assign ch1__count_lc_skip = \port$6910$0 [127:112];
+  assign ch1__count_lc_zero = \port$6910$0 [143:128];
+  assign ch1__count_spw_mismatch = \port$6910$0 [159:144];
+  assign ch1__count_overrun = \port$6910$0 [175:160];
+  assign ch1__count_aborted = \port$6910$0 [191:176];
+  assign ch1__count_no_stop = \port$6910$0 [207:192];
+  assign ch1__count_noisy_line = \port$6910$0 [223:208];
+  assign ch1__count_delay_jump = \port$6910$0 [239:224];
+  assign ch1__count_noise_event = \port$6910$0 [255:240];
+  assign ch1__ca_status = \port$7042$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7042$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$6910$0 [271:256];
+  assign ch1__count_ca_no_answer = \port$6910$0 [287:272];
+  assign ch1__count_ca_refused = \port$6910$0 [303:288];
+  assign ch1__count_ca_aborted = \port$6910$0 [319:304];
+  assign ch1__count_ca_data_fault = \port$6910$0 [335:320];
   assign glob__trigger = g_trigger_start;
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
@@ -8939,8 +8939,8 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$6337$0 , \port$6350$0 , regs__ca_done
-, \port$6482$0 , slo);
+, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$6330$0 , \port$6343$0 , regs__ca_done
+, \port$6475$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -9103,12 +9103,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$6337$0 ;
-  wire [186:0] \port$6337$0 ;
-  output [335:0] \port$6350$0 ;
-  wire [335:0] \port$6350$0 ;
-  output [9:0] \port$6482$0 ;
-  wire [9:0] \port$6482$0 ;
+  output [186:0] \port$6330$0 ;
+  wire [186:0] \port$6330$0 ;
+  output [335:0] \port$6343$0 ;
+  wire [335:0] \port$6343$0 ;
+  output [9:0] \port$6475$0 ;
+  wire [9:0] \port$6475$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -9514,9 +9514,9 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$206  = ma;
   assign \slo$208  = slo;
-  assign \port$6337$0  = \$5 ;
-  assign \port$6350$0  = \$6 ;
-  assign \port$6482$0  = \$7 ;
+  assign \port$6330$0  = \$5 ;
+  assign \port$6343$0  = \$6 ;
+  assign \port$6475$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -10633,7 +10633,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$5991$0 (\bit ),
+    .\port$5983$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -10697,7 +10697,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$2813$0 (\$24 ),
+    .\port$2809$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -20144,33 +20144,33 @@ endmodule
 module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire \$1 ;
-  wire [14:0] \$10 ;
+  wire \$10 ;
   wire \$11 ;
-  wire [13:0] \$12 ;
-  wire [17:0] \$13 ;
-  wire \$14 ;
+  wire \$12 ;
+  wire [13:0] \$13 ;
+  wire [17:0] \$14 ;
   wire \$15 ;
   wire \$16 ;
-  wire [13:0] \$17 ;
-  wire [17:0] \$18 ;
-  wire \$19 ;
-  wire \$2 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire [12:0] \$19 ;
+  wire [14:0] \$2 ;
   wire \$20 ;
   wire \$21 ;
-  wire \$22 ;
-  wire [12:0] \$23 ;
-  wire \$24 ;
+  wire [13:0] \$22 ;
+  wire [13:0] \$23 ;
+  wire [16:0] \$24 ;
   wire \$25 ;
   wire [13:0] \$26 ;
   wire [13:0] \$27 ;
-  wire [16:0] \$28 ;
-  wire \$29 ;
-  wire [14:0] \$3 ;
-  wire [13:0] \$30 ;
-  wire [13:0] \$31 ;
+  wire \$28 ;
+  wire [13:0] \$29 ;
+  wire \$3 ;
+  wire [17:0] \$30 ;
+  wire \$31 ;
   wire \$32 ;
-  wire [13:0] \$33 ;
-  wire [17:0] \$34 ;
+  wire \$33 ;
+  wire \$34 ;
   wire \$35 ;
   wire \$36 ;
   wire \$37 ;
@@ -20198,7 +20198,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   wire \$57 ;
   wire \$58 ;
   wire \$59 ;
-  wire \$6 ;
+  wire [15:0] \$6 ;
   wire \$60 ;
   wire \$61 ;
   wire \$62 ;
@@ -20209,42 +20209,38 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
-  wire [14:0] \$7 ;
+  wire \$7 ;
   wire \$70 ;
-  wire \$71 ;
-  wire \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  reg \$75 ;
-  reg [12:0] \$76 ;
-  reg [16:0] \$77 ;
+  reg \$71 ;
+  reg [12:0] \$72 ;
+  reg [16:0] \$73 ;
+  reg \$74 ;
+  reg [12:0] \$75 ;
+  reg \$76 ;
+  reg \$77 ;
   reg \$78 ;
-  reg [12:0] \$79 ;
-  wire [15:0] \$8 ;
-  reg \$80 ;
+  reg [1:0] \$79 ;
+  wire [13:0] \$8 ;
+  reg [16:0] \$80 ;
   reg \$81 ;
   reg \$82 ;
-  reg [1:0] \$83 ;
-  reg [16:0] \$84 ;
-  reg \$85 ;
-  reg \$86 ;
-  reg \$87 ;
-  reg \$88 ;
-  reg [12:0] \$89 ;
-  wire \$9 ;
-  reg [1:0] \$90 ;
+  reg \$83 ;
+  reg \$84 ;
+  reg [12:0] \$85 ;
+  reg [1:0] \$86 ;
+  wire [17:0] \$9 ;
   input arm;
   wire arm;
   output \bit ;
   wire \bit ;
   reg centre;
-  wire \centre$34 ;
+  wire \centre$35 ;
   reg clear;
-  wire \clear$32 ;
+  wire \clear$33 ;
   input clk;
   wire clk;
   reg decided;
-  wire \decided$35 ;
+  wire \decided$36 ;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
   reg dropped;
@@ -20259,7 +20255,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   wire [15:0] half_period;
   output level;
   wire level;
-  wire \level$29 ;
+  wire \level$30 ;
   output locked;
   reg locked = 1'h0;
   wire majority;
@@ -20268,7 +20264,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   output noise;
   wire noise;
   reg odd = 1'h0;
-  wire \odd$41 ;
+  wire \odd$42 ;
   reg [1:0] phase = 2'h0;
   input receiver_clear;
   wire receiver_clear;
@@ -20283,142 +20279,141 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
+  reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
   (* init = 1'h0 *)
-  wire \vote1$36 ;
+  wire \vote1$37 ;
   reg vote2 = 1'h0;
   (* init = 1'h0 *)
-  wire \vote2$37 ;
+  wire \vote2$38 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$10  = \$9  ? half_period[15:1] : 15'h0000;
-  assign \$11  = \$10  == 1'h1;
-  assign \$12  = mid_delay + 1'h1;
-  assign \$13  = mid_slot - 1'h1;
-  assign \$14  = ~ odd;
-  assign \$15  = ~ level;
-  assign \$16  = elapsed != 13'h1fff;
-  assign \$17  = elapsed + 1'h1;
-  assign \$18  = slot_left - 1'h1;
-  assign \$19  = slot_left == 1'h1;
-  assign \$20  = ~ level;
-  assign \$21  = slo_prev & \$20 ;
-  assign \$22  = elapsed == 13'h1fff;
-  assign \$23  = \$22  ? 13'h1fff : mid_delay;
-  assign \$24  = ! mid_slot;
+  assign \$14  = slot_left - 1'h1;
+  assign \$15  = slot_left == 1'h1;
+  assign \$16  = ~ level;
+  assign \$17  = slo_prev & \$16 ;
+  assign \$18  = elapsed == 13'h1fff;
+  assign \$19  = \$18  ? 13'h1fff : mid_delay;
+  assign \$20  = ! mid_slot;
+  assign \$21  = elapsed == 13'h1fff;
+  assign \$22  = elapsed - 1'h1;
+  assign \$23  = \$21  ? 14'h1fff : \$22 ;
+  assign \$24  = half_period - 2'h2;
   assign \$25  = elapsed == 13'h1fff;
   assign \$26  = elapsed - 1'h1;
   assign \$27  = \$25  ? 14'h1fff : \$26 ;
-  assign \$28  = half_period - 2'h2;
-  assign \$29  = elapsed == 13'h1fff;
-  assign \$30  = elapsed - 1'h1;
-  assign \$31  = \$29  ? 14'h1fff : \$30 ;
-  assign \$32  = elapsed != 13'h1fff;
-  assign \$33  = elapsed + 1'h1;
-  assign \$34  = slot_left - 1'h1;
-  assign \$35  = slot_left == 1'h1;
-  assign \$36  = ! phase;
-  assign \$37  = first_slot & \$36 ;
-  assign \$38  = \$37  & level;
-  assign \$39  = ~ single;
-  assign \$40  = decided & first_slot;
-  assign \$41  = vote1 & vote2;
-  assign \$42  = vote1 & level;
-  assign \$43  = \$41  | \$42 ;
-  assign \$44  = vote2 & level;
-  assign \$45  = \$43  | \$44 ;
-  assign \$46  = single ? level : \$45 ;
-  assign \$47  = ~ first_slot;
-  assign \$48  = decided & \$47 ;
-  assign \$49  = vote1 & vote2;
-  assign \$50  = vote1 & level;
-  assign \$51  = \$49  | \$50 ;
-  assign \$52  = vote2 & level;
-  assign \$53  = \$51  | \$52 ;
-  assign \bit  = single ? level : \$53 ;
+  assign \$28  = elapsed != 13'h1fff;
+  assign \$29  = elapsed + 1'h1;
+  assign \$30  = slot_left - 1'h1;
+  assign \$31  = slot_left == 1'h1;
+  assign \$32  = ! phase;
+  assign \$33  = first_slot & \$32 ;
+  assign \$34  = \$33  & level;
+  assign \$35  = ~ single;
+  assign \$36  = decided & first_slot;
+  assign \$37  = vote1 & vote2;
+  assign \$38  = vote1 & level;
+  assign \$39  = \$37  | \$38 ;
+  assign \$40  = vote2 & level;
+  assign \$41  = \$39  | \$40 ;
+  assign \$42  = single ? level : \$41 ;
+  assign \$43  = ~ first_slot;
+  assign \$44  = decided & \$43 ;
+  assign \$45  = vote1 & vote2;
+  assign \$46  = vote1 & level;
+  assign \$47  = \$45  | \$46 ;
+  assign \$48  = vote2 & level;
+  assign \$49  = \$47  | \$48 ;
+  assign \bit  = single ? level : \$49 ;
   assign \edge  = level != slo_prev;
-  assign \$54  = ~ single;
-  assign \decided$35  = decided & \$54 ;
-  assign \$55  = vote1 & vote2;
-  assign \$56  = vote1 & level;
-  assign \$57  = \$55  | \$56 ;
-  assign \$58  = vote2 & level;
-  assign majority = \$57  | \$58 ;
-  assign noise = dropped | \odd$41 ;
-  assign \$59  = ~ level;
-  assign \$60  = slo_prev & \$59 ;
-  assign \$61  = ! phase;
-  assign \$62  = first_slot & \$61 ;
-  assign \$63  = \$62  & level;
-  assign \$64  = ~ single;
-  assign \$65  = decided & first_slot;
-  assign \$66  = vote1 & vote2;
-  assign \$67  = vote1 & level;
-  assign \$68  = \$66  | \$67 ;
-  assign \$69  = vote2 & level;
-  assign \$70  = \$68  | \$69 ;
-  assign \$71  = single ? level : \$70 ;
-  assign \$72  = ! sampler_fsm_state;
-  assign \$73  = sampler_fsm_state == 1'h1;
-  assign \$74  = sampler_fsm_state == 2'h2;
+  assign \$50  = ~ single;
+  assign \decided$36  = decided & \$50 ;
+  assign \$51  = vote1 & vote2;
+  assign \$52  = vote1 & level;
+  assign \$53  = \$51  | \$52 ;
+  assign \$54  = vote2 & level;
+  assign majority = \$53  | \$54 ;
+  assign noise = dropped | \odd$42 ;
+  assign \$55  = ~ level;
+  assign \$56  = slo_prev & \$55 ;
+  assign \$57  = ! phase;
+  assign \$58  = first_slot & \$57 ;
+  assign \$59  = \$58  & level;
+  assign \$60  = ~ single;
+  assign \$61  = decided & first_slot;
+  assign \$62  = vote1 & vote2;
+  assign \$63  = vote1 & level;
+  assign \$64  = \$62  | \$63 ;
+  assign \$65  = vote2 & level;
+  assign \$66  = \$64  | \$65 ;
+  assign \$67  = single ? level : \$66 ;
+  assign \$68  = ! sampler_fsm_state;
+  assign \$69  = sampler_fsm_state == 1'h1;
+  assign \$70  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$75 ;
+    slo_prev <= \$71 ;
   always @(posedge clk)
-    single <= \$1 ;
+    vote <= \$2 ;
+  always @(posedge clk)
+    single <= \$3 ;
   always @(posedge clk)
     first_load <= \$5 [15:0];
   always @(posedge clk)
-    vote_load <= \$8 [14:0];
+    vote_load <= \$6 [14:0];
   always @(posedge clk)
-    vote_one <= \$11 ;
+    vote_one <= \$7 ;
   always @(posedge clk)
-    mid_delay <= \$76 ;
+    mid_delay <= \$72 ;
   always @(posedge clk)
-    mid_slot <= \$77 ;
+    mid_slot <= \$73 ;
   always @(posedge clk)
-    odd <= \$78 ;
+    odd <= \$74 ;
   always @(posedge clk)
-    elapsed <= \$79 ;
+    elapsed <= \$75 ;
   always @(posedge clk)
-    early <= \$80 ;
+    early <= \$76 ;
   always @(posedge clk)
-    locked <= \$81 ;
+    locked <= \$77 ;
   always @(posedge clk)
-    gap <= \$82 ;
+    gap <= \$78 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$83 ;
+    sampler_fsm_state <= \$79 ;
   always @(posedge clk)
-    slot_left <= \$84 ;
+    slot_left <= \$80 ;
   always @(posedge clk)
-    slot_zero <= \$85 ;
+    slot_zero <= \$81 ;
   always @(posedge clk)
-    vote1 <= \$86 ;
+    vote1 <= \$82 ;
   always @(posedge clk)
-    vote2 <= \$87 ;
+    vote2 <= \$83 ;
   always @(posedge clk)
-    first_slot <= \$88 ;
+    first_slot <= \$84 ;
   always @(posedge clk)
-    delay <= \$89 ;
+    delay <= \$85 ;
   always @(posedge clk)
-    phase <= \$90 ;
-  assign \$1  = half_period < 2'h3;
-  assign \$2  = half_period >= 2'h3;
-  assign \$3  = \$2  ? half_period[15:1] : 15'h0000;
-  assign \$4  = half_period - \$3 ;
+    phase <= \$86 ;
+  assign \$1  = half_period >= 2'h3;
+  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
+  assign \$3  = half_period < 2'h3;
+  assign \$4  = half_period - vote;
   assign \$5  = $signed(\$4 ) - $signed(2'h1);
-  assign \$6  = half_period >= 2'h3;
-  assign \$7  = \$6  ? half_period[15:1] : 15'h0000;
-  assign \$8  = \$7  - 1'h1;
-  assign \$9  = half_period >= 2'h3;
+  assign \$6  = vote - 1'h1;
+  assign \$7  = vote == 1'h1;
+  assign \$8  = mid_delay + 1'h1;
+  assign \$9  = mid_slot - 1'h1;
+  assign \$10  = ~ odd;
+  assign \$11  = ~ level;
+  assign \$12  = elapsed != 13'h1fff;
+  assign \$13  = elapsed + 1'h1;
   \biss_master_uart.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
     .clk(clk),
-    .decided(\decided$35 ),
+    .decided(\decided$36 ),
     .\edge (\edge ),
     .level(level),
     .majority(majority),
-    .odd(\odd$41 ),
+    .odd(\odd$42 ),
     .receiver_clear(receiver_clear),
     .rst(rst),
     .vote1(vote1),
@@ -20433,440 +20428,440 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$75  = level;
+    \$71  = level;
     if (receiver_clear) begin
-      \$75  = 1'h1;
+      \$71  = 1'h1;
     end
     if (rst) begin
-      \$75  = 1'h1;
+      \$71  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$76  = mid_delay;
+    \$72  = mid_delay;
     if (odd) begin
-      \$76  = \$12 [12:0];
+      \$72  = \$8 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$76  = \$31 [12:0];
+              \$72  = \$27 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$76  = 13'h0000;
+      \$72  = 13'h0000;
     end
     if (rst) begin
-      \$76  = 13'h0000;
+      \$72  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$77  = mid_slot;
+    \$73  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$77  = \$13 [16:0];
+      \$73  = \$9 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$77  = \$28 ;
+              \$73  = \$24 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$77  = 17'h00000;
+      \$73  = 17'h00000;
     end
     if (rst) begin
-      \$77  = 17'h00000;
+      \$73  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$78  = \$14 ;
+    \$74  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$78  = 1'h1;
+              \$74  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$78  = 1'h0;
+      \$74  = 1'h0;
     end
     if (rst) begin
-      \$78  = 1'h0;
+      \$74  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$79  = elapsed;
+    \$75  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$79  = 13'h0001;
+            \$75  = 13'h0001;
           end
       2'h1:
-          if (\$16 ) begin
-            \$79  = \$17 [12:0];
+          if (\$12 ) begin
+            \$75  = \$13 [12:0];
           end
       2'h2:
-          if (\$32 ) begin
-            \$79  = \$33 [12:0];
+          if (\$28 ) begin
+            \$75  = \$29 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$79  = 13'h0000;
+      \$75  = 13'h0000;
     end
     if (rst) begin
-      \$79  = 13'h0000;
+      \$75  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$80  = early;
+    \$76  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$80  = \$15 ;
+            \$76  = \$11 ;
           end
     endcase
     if (receiver_clear) begin
-      \$80  = 1'h0;
+      \$76  = 1'h0;
     end
     if (rst) begin
-      \$80  = 1'h0;
+      \$76  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$81  = locked;
+    \$77  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$81  = 1'h0;
+            \$77  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$40 ) begin
+          if (\$36 ) begin
             (* full_case = 32'd1 *)
-            if (\$46 ) begin
+            if (\$42 ) begin
             end else begin
-              \$81  = 1'h1;
+              \$77  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$81  = 1'h0;
+      \$77  = 1'h0;
     end
     if (rst) begin
-      \$81  = 1'h0;
+      \$77  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$82  = gap;
+    \$78  = gap;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$82  = 1'h0;
+            \$78  = 1'h0;
           end
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$82  = 1'h0;
+              \$78  = 1'h0;
             end
           end
-          if (\$21 ) begin
-            \$82  = 1'h0;
+          if (\$17 ) begin
+            \$78  = 1'h0;
           end
         end
       2'h2:
-          if (\$38 ) begin
-            \$82  = \$39 ;
+          if (\$34 ) begin
+            \$78  = \$35 ;
           end
     endcase
     if (receiver_clear) begin
-      \$82  = 1'h0;
+      \$78  = 1'h0;
     end
     if (rst) begin
-      \$82  = 1'h0;
+      \$78  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$83  = sampler_fsm_state;
+    \$79  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$83  = 2'h1;
+            \$79  = 2'h1;
           end
       2'h1:
-          if (\$21 ) begin
-            \$83  = 2'h2;
+          if (\$17 ) begin
+            \$79  = 2'h2;
           end
       2'h2:
         begin
-          if (\$38 ) begin
-            \$83  = 2'h1;
+          if (\$34 ) begin
+            \$79  = 2'h1;
           end
-          if (\$40 ) begin
-            if (\$46 ) begin
-              \$83  = 2'h1;
+          if (\$36 ) begin
+            if (\$42 ) begin
+              \$79  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$83  = 2'h0;
+      \$79  = 2'h0;
     end
     if (rst) begin
-      \$83  = 2'h0;
+      \$79  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$84  = slot_left;
+    \$80  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$84  = \$18 [16:0];
+            \$80  = \$14 [16:0];
           end
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$84  = mid_slot;
+              \$80  = mid_slot;
             end else begin
-              \$84  = { 1'h0, first_load };
+              \$80  = { 1'h0, first_load };
             end
           end
         end
       2'h2:
         begin
-          \$84  = \$34 [16:0];
-          if (\$38 ) begin
-            \$84  = { 2'h0, vote_load };
+          \$80  = \$30 [16:0];
+          if (\$34 ) begin
+            \$80  = { 2'h0, vote_load };
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$84  = { first_load, 1'h1 };
+                    \$80  = { first_load, 1'h1 };
                   end else begin
-                    \$84  = { 2'h0, vote_load };
+                    \$80  = { 2'h0, vote_load };
                   end
               2'h1:
-                  \$84  = { 2'h0, vote_load };
+                  \$80  = { 2'h0, vote_load };
               default:
-                  \$84  = { first_load, 1'h1 };
+                  \$80  = { first_load, 1'h1 };
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$84  = 17'h00000;
+      \$80  = 17'h00000;
     end
     if (rst) begin
-      \$84  = 17'h00000;
+      \$80  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$85  = slot_zero;
+    \$81  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$85  = \$19 ;
+            \$81  = \$15 ;
           end
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$85  = \$24 ;
+              \$81  = \$20 ;
             end else begin
-              \$85  = 1'h0;
+              \$81  = 1'h0;
             end
           end
         end
       2'h2:
         begin
-          \$85  = \$35 ;
-          if (\$38 ) begin
-            \$85  = vote_one;
+          \$81  = \$31 ;
+          if (\$34 ) begin
+            \$81  = vote_one;
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$85  = 1'h0;
+                    \$81  = 1'h0;
                   end else begin
-                    \$85  = vote_one;
+                    \$81  = vote_one;
                   end
               2'h1:
-                  \$85  = vote_one;
+                  \$81  = vote_one;
               default:
-                  \$85  = 1'h0;
+                  \$81  = 1'h0;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$85  = 1'h1;
+      \$81  = 1'h1;
     end
     if (rst) begin
-      \$85  = 1'h1;
+      \$81  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$86  = vote1;
+    \$82  = vote1;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
-            \$86  = 1'h0;
+          if (\$17 ) begin
+            \$82  = 1'h0;
           end
       2'h2:
-          if (\$38 ) begin
+          if (\$34 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$86  = level;
+                    \$82  = level;
                   end
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$86  = 1'h0;
+      \$82  = 1'h0;
     end
     if (rst) begin
-      \$86  = 1'h0;
+      \$82  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$87  = vote2;
+    \$83  = vote2;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
-            \$87  = 1'h0;
+          if (\$17 ) begin
+            \$83  = 1'h0;
           end
       2'h2:
-          if (\$38 ) begin
+          if (\$34 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  \$87  = level;
+                  \$83  = level;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$87  = 1'h0;
+      \$83  = 1'h0;
     end
     if (rst) begin
-      \$87  = 1'h0;
+      \$83  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$88  = first_slot;
+    \$84  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
-            \$88  = 1'h1;
+          if (\$17 ) begin
+            \$84  = 1'h1;
           end
       2'h2:
-          if (\$40 ) begin
+          if (\$36 ) begin
             (* full_case = 32'd1 *)
-            if (\$46 ) begin
+            if (\$42 ) begin
             end else begin
-              \$88  = 1'h0;
+              \$84  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$88  = 1'h0;
+      \$84  = 1'h0;
     end
     if (rst) begin
-      \$88  = 1'h0;
+      \$84  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$89  = delay;
+    \$85  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$89  = \$23 ;
+              \$85  = \$19 ;
             end else begin
-              \$89  = \$27 [12:0];
+              \$85  = \$23 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$89  = 13'h0000;
+      \$85  = 13'h0000;
     end
     if (rst) begin
-      \$89  = 13'h0000;
+      \$85  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    \$90  = phase;
+    \$86  = phase;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$90  = 2'h1;
+              \$86  = 2'h1;
             end else begin
-              \$90  = 2'h0;
+              \$86  = 2'h0;
             end
           end
       2'h2:
-          if (\$38 ) begin
+          if (\$34 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -20874,34 +20869,34 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$90  = 2'h1;
+                    \$86  = 2'h1;
                   end
               2'h1:
-                  \$90  = 2'h2;
+                  \$86  = 2'h2;
               default:
-                  \$90  = 2'h0;
+                  \$86  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$90  = 2'h0;
+      \$86  = 2'h0;
     end
     if (rst) begin
-      \$90  = 2'h0;
+      \$86  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
-    sample = \$48 ;
+    sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           /* empty */;
       2'h2:
-          if (\$65 ) begin
+          if (\$61 ) begin
             (* full_case = 32'd1 *)
-            if (\$71 ) begin
+            if (\$67 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -20915,7 +20910,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
       2'h0:
           /* empty */;
       2'h1:
-          if (\$60 ) begin
+          if (\$56 ) begin
             clear = 1'h1;
           end
     endcase
@@ -20930,11 +20925,11 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
           /* empty */;
       2'h2:
         begin
-          if (\$63 ) begin
+          if (\$59 ) begin
             dropped = 1'h1;
           end
-          if (\$65 ) begin
-            if (\$71 ) begin
+          if (\$61 ) begin
+            if (\$67 ) begin
               dropped = 1'h1;
             end
           end
@@ -20950,7 +20945,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
       2'h1:
           /* empty */;
       2'h2:
-          if (\$63 ) begin
+          if (\$59 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -20975,22 +20970,22 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
       2'h1:
           /* empty */;
       2'h2:
-          if (\$63 ) begin
+          if (\$59 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  centre = \$64 ;
+                  centre = \$60 ;
             endcase
           end
     endcase
   end
-  assign \level$29  = level;
-  assign \clear$32  = clear;
-  assign \centre$34  = centre;
-  assign \vote1$36  = vote1;
-  assign \vote2$37  = vote2;
+  assign \level$30  = level;
+  assign \clear$33  = clear;
+  assign \centre$35  = centre;
+  assign \vote1$37  = vote1;
+  assign \vote2$38  = vote2;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -21392,7 +21387,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$5991$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$5983$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -21434,8 +21429,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5991$0 ;
-  wire \port$5991$0 ;
+  input \port$5983$0 ;
+  wire \port$5983$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -21449,9 +21444,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5991$0  };
-  assign \$2  = { lc[4:0], \port$5991$0  } == last;
-  assign \$3  = { lc[4:0], \port$5991$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5983$0  };
+  assign \$2  = { lc[4:0], \port$5983$0  } == last;
+  assign \$3  = { lc[4:0], \port$5983$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -21561,7 +21556,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5991$0  };
+  assign lc_next = { lc[4:0], \port$5983$0  };
   assign zero = is_zero;
 endmodule
 
@@ -22117,7 +22112,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2813$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2809$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire \$1 ;
@@ -22271,8 +22266,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2813$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$2813$0 ;
-  wire \port$2813$0 ;
+  output \port$2809$0 ;
+  wire \port$2809$0 ;
   output report;
   wire report;
   input report_frame;
@@ -22378,7 +22373,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2813$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2813$0  = \$2 ;
+  assign \port$2809$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -22421,8 +22416,8 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$6903$0 , \port$6916$0 , regs__ca_done
-, \port$7048$0 , slo);
+, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$6897$0 , \port$6910$0 , regs__ca_done
+, \port$7042$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
@@ -22585,12 +22580,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$6903$0 ;
-  wire [186:0] \port$6903$0 ;
-  output [335:0] \port$6916$0 ;
-  wire [335:0] \port$6916$0 ;
-  output [9:0] \port$7048$0 ;
-  wire [9:0] \port$7048$0 ;
+  output [186:0] \port$6897$0 ;
+  wire [186:0] \port$6897$0 ;
+  output [335:0] \port$6910$0 ;
+  wire [335:0] \port$6910$0 ;
+  output [9:0] \port$7042$0 ;
+  wire [9:0] \port$7042$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -22996,9 +22991,9 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$206  = ma;
   assign \slo$208  = slo;
-  assign \port$6903$0  = \$5 ;
-  assign \port$6916$0  = \$6 ;
-  assign \port$7048$0  = \$7 ;
+  assign \port$6897$0  = \$5 ;
+  assign \port$6910$0  = \$6 ;
+  assign \port$7042$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -24115,7 +24110,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6557$0 (\bit ),
+    .\port$6550$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -24179,7 +24174,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$4813$0 (\$24 ),
+    .\port$4805$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -33626,33 +33621,33 @@ endmodule
 module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$114  = 0;
   wire \$1 ;
-  wire [14:0] \$10 ;
+  wire \$10 ;
   wire \$11 ;
-  wire [13:0] \$12 ;
-  wire [17:0] \$13 ;
-  wire \$14 ;
+  wire \$12 ;
+  wire [13:0] \$13 ;
+  wire [17:0] \$14 ;
   wire \$15 ;
   wire \$16 ;
-  wire [13:0] \$17 ;
-  wire [17:0] \$18 ;
-  wire \$19 ;
-  wire \$2 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire [12:0] \$19 ;
+  wire [14:0] \$2 ;
   wire \$20 ;
   wire \$21 ;
-  wire \$22 ;
-  wire [12:0] \$23 ;
-  wire \$24 ;
+  wire [13:0] \$22 ;
+  wire [13:0] \$23 ;
+  wire [16:0] \$24 ;
   wire \$25 ;
   wire [13:0] \$26 ;
   wire [13:0] \$27 ;
-  wire [16:0] \$28 ;
-  wire \$29 ;
-  wire [14:0] \$3 ;
-  wire [13:0] \$30 ;
-  wire [13:0] \$31 ;
+  wire \$28 ;
+  wire [13:0] \$29 ;
+  wire \$3 ;
+  wire [17:0] \$30 ;
+  wire \$31 ;
   wire \$32 ;
-  wire [13:0] \$33 ;
-  wire [17:0] \$34 ;
+  wire \$33 ;
+  wire \$34 ;
   wire \$35 ;
   wire \$36 ;
   wire \$37 ;
@@ -33680,7 +33675,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   wire \$57 ;
   wire \$58 ;
   wire \$59 ;
-  wire \$6 ;
+  wire [15:0] \$6 ;
   wire \$60 ;
   wire \$61 ;
   wire \$62 ;
@@ -33691,42 +33686,38 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
-  wire [14:0] \$7 ;
+  wire \$7 ;
   wire \$70 ;
-  wire \$71 ;
-  wire \$72 ;
-  wire \$73 ;
-  wire \$74 ;
-  reg \$75 ;
-  reg [12:0] \$76 ;
-  reg [16:0] \$77 ;
+  reg \$71 ;
+  reg [12:0] \$72 ;
+  reg [16:0] \$73 ;
+  reg \$74 ;
+  reg [12:0] \$75 ;
+  reg \$76 ;
+  reg \$77 ;
   reg \$78 ;
-  reg [12:0] \$79 ;
-  wire [15:0] \$8 ;
-  reg \$80 ;
+  reg [1:0] \$79 ;
+  wire [13:0] \$8 ;
+  reg [16:0] \$80 ;
   reg \$81 ;
   reg \$82 ;
-  reg [1:0] \$83 ;
-  reg [16:0] \$84 ;
-  reg \$85 ;
-  reg \$86 ;
-  reg \$87 ;
-  reg \$88 ;
-  reg [12:0] \$89 ;
-  wire \$9 ;
-  reg [1:0] \$90 ;
+  reg \$83 ;
+  reg \$84 ;
+  reg [12:0] \$85 ;
+  reg [1:0] \$86 ;
+  wire [17:0] \$9 ;
   input arm;
   wire arm;
   output \bit ;
   wire \bit ;
   reg centre;
-  wire \centre$34 ;
+  wire \centre$35 ;
   reg clear;
-  wire \clear$32 ;
+  wire \clear$33 ;
   input clk;
   wire clk;
   reg decided;
-  wire \decided$35 ;
+  wire \decided$36 ;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
   reg dropped;
@@ -33741,7 +33732,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   wire [15:0] half_period;
   output level;
   wire level;
-  wire \level$29 ;
+  wire \level$30 ;
   output locked;
   reg locked = 1'h0;
   wire majority;
@@ -33750,7 +33741,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   output noise;
   wire noise;
   reg odd = 1'h0;
-  wire \odd$41 ;
+  wire \odd$42 ;
   reg [1:0] phase = 2'h0;
   input receiver_clear;
   wire receiver_clear;
@@ -33765,142 +33756,141 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   reg slo_prev = 1'h1;
   reg [16:0] slot_left = 17'h00000;
   reg slot_zero = 1'h1;
+  reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
   (* init = 1'h0 *)
-  wire \vote1$36 ;
+  wire \vote1$37 ;
   reg vote2 = 1'h0;
   (* init = 1'h0 *)
-  wire \vote2$37 ;
+  wire \vote2$38 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$10  = \$9  ? half_period[15:1] : 15'h0000;
-  assign \$11  = \$10  == 1'h1;
-  assign \$12  = mid_delay + 1'h1;
-  assign \$13  = mid_slot - 1'h1;
-  assign \$14  = ~ odd;
-  assign \$15  = ~ level;
-  assign \$16  = elapsed != 13'h1fff;
-  assign \$17  = elapsed + 1'h1;
-  assign \$18  = slot_left - 1'h1;
-  assign \$19  = slot_left == 1'h1;
-  assign \$20  = ~ level;
-  assign \$21  = slo_prev & \$20 ;
-  assign \$22  = elapsed == 13'h1fff;
-  assign \$23  = \$22  ? 13'h1fff : mid_delay;
-  assign \$24  = ! mid_slot;
+  assign \$14  = slot_left - 1'h1;
+  assign \$15  = slot_left == 1'h1;
+  assign \$16  = ~ level;
+  assign \$17  = slo_prev & \$16 ;
+  assign \$18  = elapsed == 13'h1fff;
+  assign \$19  = \$18  ? 13'h1fff : mid_delay;
+  assign \$20  = ! mid_slot;
+  assign \$21  = elapsed == 13'h1fff;
+  assign \$22  = elapsed - 1'h1;
+  assign \$23  = \$21  ? 14'h1fff : \$22 ;
+  assign \$24  = half_period - 2'h2;
   assign \$25  = elapsed == 13'h1fff;
   assign \$26  = elapsed - 1'h1;
   assign \$27  = \$25  ? 14'h1fff : \$26 ;
-  assign \$28  = half_period - 2'h2;
-  assign \$29  = elapsed == 13'h1fff;
-  assign \$30  = elapsed - 1'h1;
-  assign \$31  = \$29  ? 14'h1fff : \$30 ;
-  assign \$32  = elapsed != 13'h1fff;
-  assign \$33  = elapsed + 1'h1;
-  assign \$34  = slot_left - 1'h1;
-  assign \$35  = slot_left == 1'h1;
-  assign \$36  = ! phase;
-  assign \$37  = first_slot & \$36 ;
-  assign \$38  = \$37  & level;
-  assign \$39  = ~ single;
-  assign \$40  = decided & first_slot;
-  assign \$41  = vote1 & vote2;
-  assign \$42  = vote1 & level;
-  assign \$43  = \$41  | \$42 ;
-  assign \$44  = vote2 & level;
-  assign \$45  = \$43  | \$44 ;
-  assign \$46  = single ? level : \$45 ;
-  assign \$47  = ~ first_slot;
-  assign \$48  = decided & \$47 ;
-  assign \$49  = vote1 & vote2;
-  assign \$50  = vote1 & level;
-  assign \$51  = \$49  | \$50 ;
-  assign \$52  = vote2 & level;
-  assign \$53  = \$51  | \$52 ;
-  assign \bit  = single ? level : \$53 ;
+  assign \$28  = elapsed != 13'h1fff;
+  assign \$29  = elapsed + 1'h1;
+  assign \$30  = slot_left - 1'h1;
+  assign \$31  = slot_left == 1'h1;
+  assign \$32  = ! phase;
+  assign \$33  = first_slot & \$32 ;
+  assign \$34  = \$33  & level;
+  assign \$35  = ~ single;
+  assign \$36  = decided & first_slot;
+  assign \$37  = vote1 & vote2;
+  assign \$38  = vote1 & level;
+  assign \$39  = \$37  | \$38 ;
+  assign \$40  = vote2 & level;
+  assign \$41  = \$39  | \$40 ;
+  assign \$42  = single ? level : \$41 ;
+  assign \$43  = ~ first_slot;
+  assign \$44  = decided & \$43 ;
+  assign \$45  = vote1 & vote2;
+  assign \$46  = vote1 & level;
+  assign \$47  = \$45  | \$46 ;
+  assign \$48  = vote2 & level;
+  assign \$49  = \$47  | \$48 ;
+  assign \bit  = single ? level : \$49 ;
   assign \edge  = level != slo_prev;
-  assign \$54  = ~ single;
-  assign \decided$35  = decided & \$54 ;
-  assign \$55  = vote1 & vote2;
-  assign \$56  = vote1 & level;
-  assign \$57  = \$55  | \$56 ;
-  assign \$58  = vote2 & level;
-  assign majority = \$57  | \$58 ;
-  assign noise = dropped | \odd$41 ;
-  assign \$59  = ~ level;
-  assign \$60  = slo_prev & \$59 ;
-  assign \$61  = ! phase;
-  assign \$62  = first_slot & \$61 ;
-  assign \$63  = \$62  & level;
-  assign \$64  = ~ single;
-  assign \$65  = decided & first_slot;
-  assign \$66  = vote1 & vote2;
-  assign \$67  = vote1 & level;
-  assign \$68  = \$66  | \$67 ;
-  assign \$69  = vote2 & level;
-  assign \$70  = \$68  | \$69 ;
-  assign \$71  = single ? level : \$70 ;
-  assign \$72  = ! sampler_fsm_state;
-  assign \$73  = sampler_fsm_state == 1'h1;
-  assign \$74  = sampler_fsm_state == 2'h2;
+  assign \$50  = ~ single;
+  assign \decided$36  = decided & \$50 ;
+  assign \$51  = vote1 & vote2;
+  assign \$52  = vote1 & level;
+  assign \$53  = \$51  | \$52 ;
+  assign \$54  = vote2 & level;
+  assign majority = \$53  | \$54 ;
+  assign noise = dropped | \odd$42 ;
+  assign \$55  = ~ level;
+  assign \$56  = slo_prev & \$55 ;
+  assign \$57  = ! phase;
+  assign \$58  = first_slot & \$57 ;
+  assign \$59  = \$58  & level;
+  assign \$60  = ~ single;
+  assign \$61  = decided & first_slot;
+  assign \$62  = vote1 & vote2;
+  assign \$63  = vote1 & level;
+  assign \$64  = \$62  | \$63 ;
+  assign \$65  = vote2 & level;
+  assign \$66  = \$64  | \$65 ;
+  assign \$67  = single ? level : \$66 ;
+  assign \$68  = ! sampler_fsm_state;
+  assign \$69  = sampler_fsm_state == 1'h1;
+  assign \$70  = sampler_fsm_state == 2'h2;
   always @(posedge clk)
-    slo_prev <= \$75 ;
+    slo_prev <= \$71 ;
   always @(posedge clk)
-    single <= \$1 ;
+    vote <= \$2 ;
+  always @(posedge clk)
+    single <= \$3 ;
   always @(posedge clk)
     first_load <= \$5 [15:0];
   always @(posedge clk)
-    vote_load <= \$8 [14:0];
+    vote_load <= \$6 [14:0];
   always @(posedge clk)
-    vote_one <= \$11 ;
+    vote_one <= \$7 ;
   always @(posedge clk)
-    mid_delay <= \$76 ;
+    mid_delay <= \$72 ;
   always @(posedge clk)
-    mid_slot <= \$77 ;
+    mid_slot <= \$73 ;
   always @(posedge clk)
-    odd <= \$78 ;
+    odd <= \$74 ;
   always @(posedge clk)
-    elapsed <= \$79 ;
+    elapsed <= \$75 ;
   always @(posedge clk)
-    early <= \$80 ;
+    early <= \$76 ;
   always @(posedge clk)
-    locked <= \$81 ;
+    locked <= \$77 ;
   always @(posedge clk)
-    gap <= \$82 ;
+    gap <= \$78 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$83 ;
+    sampler_fsm_state <= \$79 ;
   always @(posedge clk)
-    slot_left <= \$84 ;
+    slot_left <= \$80 ;
   always @(posedge clk)
-    slot_zero <= \$85 ;
+    slot_zero <= \$81 ;
   always @(posedge clk)
-    vote1 <= \$86 ;
+    vote1 <= \$82 ;
   always @(posedge clk)
-    vote2 <= \$87 ;
+    vote2 <= \$83 ;
   always @(posedge clk)
-    first_slot <= \$88 ;
+    first_slot <= \$84 ;
   always @(posedge clk)
-    delay <= \$89 ;
+    delay <= \$85 ;
   always @(posedge clk)
-    phase <= \$90 ;
-  assign \$1  = half_period < 2'h3;
-  assign \$2  = half_period >= 2'h3;
-  assign \$3  = \$2  ? half_period[15:1] : 15'h0000;
-  assign \$4  = half_period - \$3 ;
+    phase <= \$86 ;
+  assign \$1  = half_period >= 2'h3;
+  assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
+  assign \$3  = half_period < 2'h3;
+  assign \$4  = half_period - vote;
   assign \$5  = $signed(\$4 ) - $signed(2'h1);
-  assign \$6  = half_period >= 2'h3;
-  assign \$7  = \$6  ? half_period[15:1] : 15'h0000;
-  assign \$8  = \$7  - 1'h1;
-  assign \$9  = half_period >= 2'h3;
+  assign \$6  = vote - 1'h1;
+  assign \$7  = vote == 1'h1;
+  assign \$8  = mid_delay + 1'h1;
+  assign \$9  = mid_slot - 1'h1;
+  assign \$10  = ~ odd;
+  assign \$11  = ~ level;
+  assign \$12  = elapsed != 13'h1fff;
+  assign \$13  = elapsed + 1'h1;
   \biss_master_uart.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
     .clk(clk),
-    .decided(\decided$35 ),
+    .decided(\decided$36 ),
     .\edge (\edge ),
     .level(level),
     .majority(majority),
-    .odd(\odd$41 ),
+    .odd(\odd$42 ),
     .receiver_clear(receiver_clear),
     .rst(rst),
     .vote1(vote1),
@@ -33915,440 +33905,440 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$75  = level;
+    \$71  = level;
     if (receiver_clear) begin
-      \$75  = 1'h1;
+      \$71  = 1'h1;
     end
     if (rst) begin
-      \$75  = 1'h1;
+      \$71  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$76  = mid_delay;
+    \$72  = mid_delay;
     if (odd) begin
-      \$76  = \$12 [12:0];
+      \$72  = \$8 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$76  = \$31 [12:0];
+              \$72  = \$27 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$76  = 13'h0000;
+      \$72  = 13'h0000;
     end
     if (rst) begin
-      \$76  = 13'h0000;
+      \$72  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$77  = mid_slot;
+    \$73  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$77  = \$13 [16:0];
+      \$73  = \$9 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$77  = \$28 ;
+              \$73  = \$24 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$77  = 17'h00000;
+      \$73  = 17'h00000;
     end
     if (rst) begin
-      \$77  = 17'h00000;
+      \$73  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$78  = \$14 ;
+    \$74  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$78  = 1'h1;
+              \$74  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$78  = 1'h0;
+      \$74  = 1'h0;
     end
     if (rst) begin
-      \$78  = 1'h0;
+      \$74  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$79  = elapsed;
+    \$75  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$79  = 13'h0001;
+            \$75  = 13'h0001;
           end
       2'h1:
-          if (\$16 ) begin
-            \$79  = \$17 [12:0];
+          if (\$12 ) begin
+            \$75  = \$13 [12:0];
           end
       2'h2:
-          if (\$32 ) begin
-            \$79  = \$33 [12:0];
+          if (\$28 ) begin
+            \$75  = \$29 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$79  = 13'h0000;
+      \$75  = 13'h0000;
     end
     if (rst) begin
-      \$79  = 13'h0000;
+      \$75  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$80  = early;
+    \$76  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$80  = \$15 ;
+            \$76  = \$11 ;
           end
     endcase
     if (receiver_clear) begin
-      \$80  = 1'h0;
+      \$76  = 1'h0;
     end
     if (rst) begin
-      \$80  = 1'h0;
+      \$76  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$81  = locked;
+    \$77  = locked;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$81  = 1'h0;
+            \$77  = 1'h0;
           end
       2'h1:
           /* empty */;
       2'h2:
-          if (\$40 ) begin
+          if (\$36 ) begin
             (* full_case = 32'd1 *)
-            if (\$46 ) begin
+            if (\$42 ) begin
             end else begin
-              \$81  = 1'h1;
+              \$77  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$81  = 1'h0;
+      \$77  = 1'h0;
     end
     if (rst) begin
-      \$81  = 1'h0;
+      \$77  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$82  = gap;
+    \$78  = gap;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$82  = 1'h0;
+            \$78  = 1'h0;
           end
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$82  = 1'h0;
+              \$78  = 1'h0;
             end
           end
-          if (\$21 ) begin
-            \$82  = 1'h0;
+          if (\$17 ) begin
+            \$78  = 1'h0;
           end
         end
       2'h2:
-          if (\$38 ) begin
-            \$82  = \$39 ;
+          if (\$34 ) begin
+            \$78  = \$35 ;
           end
     endcase
     if (receiver_clear) begin
-      \$82  = 1'h0;
+      \$78  = 1'h0;
     end
     if (rst) begin
-      \$82  = 1'h0;
+      \$78  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$83  = sampler_fsm_state;
+    \$79  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$83  = 2'h1;
+            \$79  = 2'h1;
           end
       2'h1:
-          if (\$21 ) begin
-            \$83  = 2'h2;
+          if (\$17 ) begin
+            \$79  = 2'h2;
           end
       2'h2:
         begin
-          if (\$38 ) begin
-            \$83  = 2'h1;
+          if (\$34 ) begin
+            \$79  = 2'h1;
           end
-          if (\$40 ) begin
-            if (\$46 ) begin
-              \$83  = 2'h1;
+          if (\$36 ) begin
+            if (\$42 ) begin
+              \$79  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$83  = 2'h0;
+      \$79  = 2'h0;
     end
     if (rst) begin
-      \$83  = 2'h0;
+      \$79  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$84  = slot_left;
+    \$80  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$84  = \$18 [16:0];
+            \$80  = \$14 [16:0];
           end
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$84  = mid_slot;
+              \$80  = mid_slot;
             end else begin
-              \$84  = { 1'h0, first_load };
+              \$80  = { 1'h0, first_load };
             end
           end
         end
       2'h2:
         begin
-          \$84  = \$34 [16:0];
-          if (\$38 ) begin
-            \$84  = { 2'h0, vote_load };
+          \$80  = \$30 [16:0];
+          if (\$34 ) begin
+            \$80  = { 2'h0, vote_load };
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$84  = { first_load, 1'h1 };
+                    \$80  = { first_load, 1'h1 };
                   end else begin
-                    \$84  = { 2'h0, vote_load };
+                    \$80  = { 2'h0, vote_load };
                   end
               2'h1:
-                  \$84  = { 2'h0, vote_load };
+                  \$80  = { 2'h0, vote_load };
               default:
-                  \$84  = { first_load, 1'h1 };
+                  \$80  = { first_load, 1'h1 };
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$84  = 17'h00000;
+      \$80  = 17'h00000;
     end
     if (rst) begin
-      \$84  = 17'h00000;
+      \$80  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$85  = slot_zero;
+    \$81  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
         begin
           if (gap) begin
-            \$85  = \$19 ;
+            \$81  = \$15 ;
           end
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$85  = \$24 ;
+              \$81  = \$20 ;
             end else begin
-              \$85  = 1'h0;
+              \$81  = 1'h0;
             end
           end
         end
       2'h2:
         begin
-          \$85  = \$35 ;
-          if (\$38 ) begin
-            \$85  = vote_one;
+          \$81  = \$31 ;
+          if (\$34 ) begin
+            \$81  = vote_one;
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
-                    \$85  = 1'h0;
+                    \$81  = 1'h0;
                   end else begin
-                    \$85  = vote_one;
+                    \$81  = vote_one;
                   end
               2'h1:
-                  \$85  = vote_one;
+                  \$81  = vote_one;
               default:
-                  \$85  = 1'h0;
+                  \$81  = 1'h0;
             endcase
           end
         end
     endcase
     if (receiver_clear) begin
-      \$85  = 1'h1;
+      \$81  = 1'h1;
     end
     if (rst) begin
-      \$85  = 1'h1;
+      \$81  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$86  = vote1;
+    \$82  = vote1;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
-            \$86  = 1'h0;
+          if (\$17 ) begin
+            \$82  = 1'h0;
           end
       2'h2:
-          if (\$38 ) begin
+          if (\$34 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$86  = level;
+                    \$82  = level;
                   end
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$86  = 1'h0;
+      \$82  = 1'h0;
     end
     if (rst) begin
-      \$86  = 1'h0;
+      \$82  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$87  = vote2;
+    \$83  = vote2;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
-            \$87  = 1'h0;
+          if (\$17 ) begin
+            \$83  = 1'h0;
           end
       2'h2:
-          if (\$38 ) begin
+          if (\$34 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  \$87  = level;
+                  \$83  = level;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$87  = 1'h0;
+      \$83  = 1'h0;
     end
     if (rst) begin
-      \$87  = 1'h0;
+      \$83  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$88  = first_slot;
+    \$84  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
-            \$88  = 1'h1;
+          if (\$17 ) begin
+            \$84  = 1'h1;
           end
       2'h2:
-          if (\$40 ) begin
+          if (\$36 ) begin
             (* full_case = 32'd1 *)
-            if (\$46 ) begin
+            if (\$42 ) begin
             end else begin
-              \$88  = 1'h0;
+              \$84  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$88  = 1'h0;
+      \$84  = 1'h0;
     end
     if (rst) begin
-      \$88  = 1'h0;
+      \$84  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$89  = delay;
+    \$85  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$89  = \$23 ;
+              \$85  = \$19 ;
             end else begin
-              \$89  = \$27 [12:0];
+              \$85  = \$23 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$89  = 13'h0000;
+      \$85  = 13'h0000;
     end
     if (rst) begin
-      \$89  = 13'h0000;
+      \$85  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    \$90  = phase;
+    \$86  = phase;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
-          if (\$21 ) begin
+          if (\$17 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$90  = 2'h1;
+              \$86  = 2'h1;
             end else begin
-              \$90  = 2'h0;
+              \$86  = 2'h0;
             end
           end
       2'h2:
-          if (\$38 ) begin
+          if (\$34 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -34356,34 +34346,34 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$90  = 2'h1;
+                    \$86  = 2'h1;
                   end
               2'h1:
-                  \$90  = 2'h2;
+                  \$86  = 2'h2;
               default:
-                  \$90  = 2'h0;
+                  \$86  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$90  = 2'h0;
+      \$86  = 2'h0;
     end
     if (rst) begin
-      \$90  = 2'h0;
+      \$86  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
-    sample = \$48 ;
+    sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h1:
           /* empty */;
       2'h2:
-          if (\$65 ) begin
+          if (\$61 ) begin
             (* full_case = 32'd1 *)
-            if (\$71 ) begin
+            if (\$67 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -34397,7 +34387,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
       2'h0:
           /* empty */;
       2'h1:
-          if (\$60 ) begin
+          if (\$56 ) begin
             clear = 1'h1;
           end
     endcase
@@ -34412,11 +34402,11 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
           /* empty */;
       2'h2:
         begin
-          if (\$63 ) begin
+          if (\$59 ) begin
             dropped = 1'h1;
           end
-          if (\$65 ) begin
-            if (\$71 ) begin
+          if (\$61 ) begin
+            if (\$67 ) begin
               dropped = 1'h1;
             end
           end
@@ -34432,7 +34422,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
       2'h1:
           /* empty */;
       2'h2:
-          if (\$63 ) begin
+          if (\$59 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -34457,22 +34447,22 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
       2'h1:
           /* empty */;
       2'h2:
-          if (\$63 ) begin
+          if (\$59 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  centre = \$64 ;
+                  centre = \$60 ;
             endcase
           end
     endcase
   end
-  assign \level$29  = level;
-  assign \clear$32  = clear;
-  assign \centre$34  = centre;
-  assign \vote1$36  = vote1;
-  assign \vote2$37  = vote2;
+  assign \level$30  = level;
+  assign \clear$33  = clear;
+  assign \centre$35  = centre;
+  assign \vote1$37  = vote1;
+  assign \vote2$38  = vote2;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -34874,7 +34864,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6557$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6550$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$117  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -34916,8 +34906,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6557$0 ;
-  wire \port$6557$0 ;
+  input \port$6550$0 ;
+  wire \port$6550$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -34931,9 +34921,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6557$0  };
-  assign \$2  = { lc[4:0], \port$6557$0  } == last;
-  assign \$3  = { lc[4:0], \port$6557$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6550$0  };
+  assign \$2  = { lc[4:0], \port$6550$0  } == last;
+  assign \$3  = { lc[4:0], \port$6550$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -35043,7 +35033,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6557$0  };
+  assign lc_next = { lc[4:0], \port$6550$0  };
   assign zero = is_zero;
 endmodule
 
@@ -35599,7 +35589,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$4813$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$4805$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$121  = 0;
   wire \$1 ;
@@ -35753,8 +35743,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$4813$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$4813$0 ;
-  wire \port$4813$0 ;
+  output \port$4805$0 ;
+  wire \port$4805$0 ;
   output report;
   wire report;
   input report_frame;
@@ -35860,7 +35850,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$4813$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4813$0  = \$2 ;
+  assign \port$4805$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

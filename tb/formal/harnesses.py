@@ -67,6 +67,7 @@ INTERNALS = {
     "sampler.slot_zero": ("signal", "", "slot_zero"),
     "sampler.phase": ("signal", "", "phase"),                   # next event: vote 1, centre, 3
     "sampler.first_slot": ("signal", "", "first_slot"),         # slot 0 (the Ack) not decided
+    "sampler.vote": ("signal", "", "vote"),                     # the vote spacing
     "sampler.single": ("signal", "", "single"),                 # one sample per slot (hp 2)
     "sampler.first_load": ("signal", "", "first_load"),         # timer: edge to the first vote
     "sampler.vote_load": ("signal", "", "vote_load"),           # ... vote to vote
@@ -698,9 +699,9 @@ class SamplerHarness(Harness):
             Assert(~(dut.sample & ~dut.locked) | ~dut.bit, "slot 0 is decided low"),
         ]
         if self.lemmas:
-            # The vote registers follow the (constant) half period: the timer's reload values
-            # from two clocks after the start (the spacing and the period's reload are wiring
-            # from the half period and first_load).
+            # The vote registers follow the (constant) half period: the spacing one clock after
+            # the start, the timer's reload values two clocks after it (the period's reload is
+            # wiring from first_load).
             settled = Signal(3)
             with m.If(settled != 4):
                 m.d.sync += settled.eq(settled + 1)
@@ -720,6 +721,7 @@ class SamplerHarness(Harness):
                 # The master arms the sampler long after the half period is latched.
                 Assume((settled == 4) | ~dut.arm),
                 Assert((settled == 4) | in_idle & ~gap, "lemma: idle until armed"),
+                Assert((settled < 2) | (inside("sampler.vote") == v), "lemma: vote spacing"),
                 Assert((settled < 2) | (inside("sampler.single") == (hp < 3)), "lemma: single"),
                 Assert((settled < 3) | (inside("sampler.first_load") == u - 1),
                        "lemma: first_load"),

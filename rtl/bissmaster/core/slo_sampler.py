@@ -146,16 +146,18 @@ class SloSampler(wiring.Component):
         # centre ``v`` later, the third vote (the decision) ``v`` later again, and the next
         # slot's first vote ``2 * u`` after that (``2 * u + 2 * v`` = one MA period). The timer
         # only ever counts down to zero and reloads: no wide compare anywhere.
-        # ``v`` itself and ``2u - 1`` are wiring (a select of the half period's bits, and
-        # ``u - 1`` with a 1 below it): no register of their own.
+        # ``v`` is a register (it keeps the compare and select of the half period out of the
+        # subtracter in front of ``first_load``: the core's critical path without it); ``2u - 1``
+        # is wiring (``u - 1`` with a 1 below it).
         vw = HALF_PERIOD_WIDTH - 1
-        vote = Mux(hp >= 3, hp[1:], 0)
+        vote = Signal(vw, reset_less=True)
         single = Signal(reset_less=True)                        # one sample per slot (hp = 2)
         first_load = Signal(HALF_PERIOD_WIDTH, reset_less=True)  # u - 1: edge to first vote
         vote_load = Signal(vw, reset_less=True)                  # v - 1: vote to vote
         vote_one = Signal(reset_less=True)                       # v == 1: vote_load is 0
         period_load = Cat(C(1, 1), first_load)                   # 2u - 1: third to first
         m.d.sync += [
+            vote.eq(Mux(hp >= 3, hp[1:], 0)),
             single.eq(hp < 3),
             first_load.eq(hp - vote - 1),
             vote_load.eq(vote - 1),
