@@ -37,7 +37,8 @@ class FrameDecoder(wiring.Component):
     slot. Low slots are Ack; the first high slot is Start; then CDS; then each word's data
     (MSB first, right-justified in ``data``; a word set ``gray`` is Gray-decoded as it
     arrives, one set ``signed`` is sign-extended to the width of ``data``), nE, nW, LC and
-    CRC. One more slot, the stop bit, ends the frame: the encoder's timeout has begun, so the master may look for SLO high again.
+    CRC. One more slot, the stop bit, ends the frame: the encoder's timeout has begun, so the
+    master may look for SLO high again.
 
     One :class:`~bissmaster.core.crc_engine.CrcEngine` checks every word's CRC in turn, each
     with its own settings (``crcs``). ``crc_ok`` comes from the engine's flip-flops: valid in

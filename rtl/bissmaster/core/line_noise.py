@@ -13,9 +13,9 @@ class LineNoise(wiring.Component):
     A noise event is a strobe of ``sampler_noise`` (a vote pattern, two edges between two slot
     centres or an Ack edge no clean line gives: :class:`~bissmaster.core.slo_sampler.SloSampler`)
     or a fall of SLO while the master waits (``watch``: IDLE and WAIT_READY, with MA stopped
-    and the encoder's timeout over or running: a clean encoder's SLO then only rises, once). The count runs from the end of the
-    cycle before (its frame's end, ``close``, the decoder's ``done``; or its fault,
-    ``restart``) to this frame's end: each frame is judged by the line since the cycle before
+    and the encoder's timeout over or running: a clean encoder's SLO then only rises, once).
+    The count runs from the end of the cycle before (its frame's end, ``close``, the decoder's
+    ``done``; or its fault, ``restart``) to this frame's end: each frame is judged by the line since the cycle before
     it, so a fault (which has its own status) costs no second frame. It saturates at 15.
 
     At ``close`` the frame is ``noisy`` when its count (the events counted up to the clock
