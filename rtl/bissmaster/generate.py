@@ -230,6 +230,11 @@ def _parser():
     core.add_argument("--counter-width", type=int, default=defaults.counter_width,
                       metavar="BITS",
                       help="width of the error counters, 0: no counters (default: %(default)s)")
+    core.add_argument("--counter-ram", type=int, choices=(0, 1),
+                      default=int(defaults.counter_ram),
+                      help="1: the data channel's counters in one memory behind a read port "
+                           "(count_addr, count_en, count_data) instead of a count_* port each; "
+                           "the bus tops always build them so (default: %(default)s)")
     core.add_argument("--timestamp-width", type=int, default=defaults.timestamp_width,
                       metavar="BITS",
                       help="width of the time base behind `timestamp`, 0: no timestamp "
@@ -279,6 +284,7 @@ def _params(ap, args):
         return MasterParams(sys_clk_hz=args.sys_clk_hz, max_data_bits=bits, word_crcs=crcs,
                             max_line_delay=args.max_line_delay, timer_width=args.timer_width,
                             counter_width=args.counter_width,
+                            counter_ram=bool(args.counter_ram),
                             timestamp_width=args.timestamp_width,
                             custom_crc=bool(args.custom_crc),
                             signed_words=bool(args.signed_words),

@@ -147,6 +147,28 @@ WORD1_COUNTERS = ("crc_word1", "spw_mismatch")
 ACCESS_COUNTERS = ("ca_crc4_error", "ca_no_answer", "ca_refused", "ca_aborted", "ca_data_fault")
 
 
+#: The counters a ``counter_ram`` build keeps in memory, in memory order: slot ``i`` is half
+#: ``i % 2`` of word ``i // 2`` (the low half for even ``i``), the order of the register map's
+#: counter registers (``count_crc`` .. ``count_noise``, biss_master.rdl).
+RAM_COUNTERS = COUNTERS[:16]
+#: Word address bits of the counter memory's read port.
+COUNT_ADDR_BITS = 3
+
+
+def counter_slots(params):
+    """A ``counter_ram`` build's memory slots: the :data:`RAM_COUNTERS`, ``None`` for those the
+    build does not have (they read 0); ``()`` for other builds."""
+    if not params.counter_ram:
+        return ()
+    names = counter_names(params)
+    return tuple(name if name in names else None for name in RAM_COUNTERS)
+
+
+def counter_ports(params):
+    """The counters with a ``count_<name>`` port: all but those in memory."""
+    return tuple(name for name in counter_names(params) if name not in counter_slots(params))
+
+
 def counter_names(params):
     """The :data:`COUNTERS` a build has: none without counters, no word-1 ones for one word,
     no access ones without the register-access engine."""

@@ -7,13 +7,15 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from .core.configuration import Configuration
+from .core.counter_ram import CounterRam
 from .core.counters import CounterBank
 from .core.cycle_controller import CycleController
 from .core.delay_check import DelayCheck
 from .core.frame_decoder import FrameDecoder
 from .core.frame_verdict import FrameVerdict
 from .layouts import (BUFFER_LANES, BUFFER_WORD_BITS, access_request_layout, access_result_layout,
-                      buffer_write_layout, config_ports, config_words, counter_names, field,
+                      buffer_write_layout, config_ports, config_words, counter_names,
+                      counter_ports, counter_slots, COUNT_ADDR_BITS, field,
                       flat_fields, result_layout)
 from .core.limit_timers import LimitTimers
 from .core.line_noise import LineNoise
@@ -46,9 +48,10 @@ class BissMaster(wiring.Component):
     :class:`Configuration`, :class:`LimitTimers`) -> :class:`MaClock` -> line ->
     :class:`SloSampler` -> :class:`FrameDecoder` (:class:`WordCrc` per word) ->
     :class:`SignOfLife`, :class:`SpwCheck`, :class:`LineNoise`, :class:`DelayCheck` ->
-    :class:`FrameVerdict` -> :class:`ResultRegisters`, :class:`CounterBank`. With ``register_access``, :class:`RegisterAccess` supplies each
-    cycle's CDM bit to the controller (which holds MA low through the encoder's timeout for
-    CDM = 1) and takes each frame's CDS (``ca_*`` ports, docs/control.md).
+    :class:`FrameVerdict` -> :class:`ResultRegisters`, :class:`CounterBank` (or, with
+    ``counter_ram``, :class:`CounterRam`). With ``register_access``, :class:`RegisterAccess`
+    supplies each cycle's CDM bit to the controller (which holds MA low through the encoder's
+    timeout for CDM = 1) and takes each frame's CDS (``ca_*`` ports, docs/control.md).
 
     Parameters
     ----------
@@ -118,12 +121,15 @@ class BissMaster(wiring.Component):
             # Register access (control channel)
             **access_ports,
             # Error counters
-            **{f"count_{name}": Out(p.counter_width) for name in counter_names(p)},
+            **{f"count_{name}": Out(p.counter_width) for name in counter_ports(p)},
+            **({"count_addr": In(COUNT_ADDR_BITS), "count_en": In(1), "count_data": Out(32)}
+               if p.counter_ram else {}),
         }
 
     @property
     def counter_names(self):
-        """The error counters this build has (``count_<name>`` ports)."""
+        """The error counters this build has (``count_<name>`` ports, or with ``counter_ram``
+        the counter memory's slots for the data channel's)."""
         return counter_names(self.params)
 
     def elaborate(self, platform):
@@ -167,8 +173,11 @@ class BissMaster(wiring.Component):
         m.submodules.results = results = ResultRegisters(p)
         if p.timestamped:
             m.submodules.time_base = time_base = TimeBase(p.timestamp_width)
-        if p.counters:
-            m.submodules.counters = counters = CounterBank(self.counter_names, p.counter_width)
+        if counter_ports(p):
+            m.submodules.counters = counters = CounterBank(counter_ports(p), p.counter_width)
+        if p.counter_ram:
+            m.submodules.counter_ram = counter_ram = CounterRam(counter_slots(p),
+                                                                p.counter_width)
         if cdm:
             m.submodules.register_access = access = RegisterAccess(p.start_wait_frames)
 
@@ -180,7 +189,8 @@ class BissMaster(wiring.Component):
             spw_check=spw_check if two else None, line_noise=line_noise,
             delay_check=delay_check, verdict=verdict, results=results,
             time_base=time_base if p.timestamped else None,
-            counters=counters if p.counters else None,
+            counters=counters if counter_ports(p) else None,
+            counter_ram=counter_ram if p.counter_ram else None,
             access=access if cdm else None, cycle=cycle, words=words)
 
     def _connect_inputs(self, m, b):
@@ -428,10 +438,18 @@ class BissMaster(wiring.Component):
         if two:
             events["crc_word1"] = b.verdict.crc_error[1]
             events["spw_mismatch"] = b.controller.report_frame & b.verdict.spw_mismatch
-        m.d.comb += [b.counters.events[name].eq(events[name]) for name in self.counter_names]
-        m.d.comb += b.counters.clear.eq(self.clear_counters)
-        m.d.comb += [getattr(self, f"count_{name}").eq(b.counters.counts[name])
-                     for name in self.counter_names]
+        if b.counters is not None:
+            ports = counter_ports(p)
+            m.d.comb += [b.counters.events[name].eq(events[name]) for name in ports]
+            m.d.comb += b.counters.clear.eq(self.clear_counters)
+            m.d.comb += [getattr(self, f"count_{name}").eq(b.counters.counts[name])
+                         for name in ports]
+        if b.counter_ram is not None:
+            ram = b.counter_ram
+            m.d.comb += [ram.events[name].eq(events[name])
+                         for name in counter_slots(p) if name is not None]
+            m.d.comb += [ram.clear.eq(self.clear_counters), ram.read_addr.eq(self.count_addr),
+                         ram.read_en.eq(self.count_en), self.count_data.eq(ram.read_data)]
 
     def _connect_outputs(self, m, b):
         """The state and result ports, out."""

@@ -149,6 +149,12 @@ class MasterParams:
     counter_width : int
         Width of each saturating error counter; 0 builds no counters (no ``count_*`` ports and
         no ``clear_counters``), for the smallest core.
+    counter_ram : bool
+        Keep the data channel's counters in one memory, two per 32-bit word (issue 27): the
+        ``count_<name>`` ports of those counters give way to one read port (``count_addr``,
+        ``count_en``, ``count_data``; docs/ports.md, Counters), and a count lands a few clocks
+        after its event instead of one. Needs ``counter_width`` 1..16. The bus tops always
+        build their cores this way.
     timestamp_width : int
         Width of the free-running time base behind the ``timestamp`` output; 0 builds neither.
     custom_crc : bool
@@ -172,6 +178,7 @@ class MasterParams:
     max_line_delay: int = 4095
     timer_width: int = 24
     counter_width: int = 16
+    counter_ram: bool = False
     timestamp_width: int = 32
     custom_crc: bool = True
     signed_words: bool = True
@@ -206,6 +213,11 @@ class MasterParams:
         if not isinstance(self.counter_width, int) or not 0 <= self.counter_width <= 32:
             raise ValueError(f"counter_width must be an integer from 0 (no counters) to 32, "
                              f"not {self.counter_width!r}")
+        if not isinstance(self.counter_ram, bool):
+            raise ValueError(f"counter_ram must be a bool, not {self.counter_ram!r}")
+        if self.counter_ram and not 1 <= self.counter_width <= 16:
+            raise ValueError(f"counter_ram needs counter_width 1..16 (two counts per 32-bit "
+                             f"word), not {self.counter_width}")
         if not isinstance(self.timestamp_width, int) or not (
                 self.timestamp_width == 0 or 16 <= self.timestamp_width <= 64):
             raise ValueError(f"timestamp_width must be 0 (no timestamp) or an integer from 16 "
@@ -284,7 +296,8 @@ class MasterParams:
             + (" and CUSTOM (cfg_wN_crc_*)" if self.custom_crc else ""),
             f"max_line_delay  = {self.max_line_delay} clocks",
             f"timer_width     = {self.timer_width}",
-            f"counter_width   = {self.counter_width}" + ("" if self.counters else " (no counters)"),
+            f"counter_width   = {self.counter_width}" + ("" if self.counters else " (no counters)")
+            + (" in memory (count_addr, count_data)" if self.counter_ram else ""),
             f"timestamp_width = {self.timestamp_width}" + ("" if self.timestamped else " (no timestamp)"),
             *([f"register_access = on, start wait {self.start_wait_frames} frames"]
               if self.register_access else []),

@@ -25,7 +25,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire \$1 ;
   wire [9:0] \$10 ;
   wire [186:0] \$11 ;
-  wire [335:0] \$12 ;
+  wire [79:0] \$12 ;
   wire [9:0] \$13 ;
   wire \$2 ;
   wire \$3 ;
@@ -34,7 +34,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire \$6 ;
   wire \$7 ;
   wire [186:0] \$8 ;
-  wire [335:0] \$9 ;
+  wire [79:0] \$9 ;
   wire [10:0] bus__r_addr;
   wire [31:0] bus__r_data;
   wire bus__r_en;
@@ -103,27 +103,14 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire ch0__cfg_w1_signed;
   wire ch0__clear_counters;
   wire ch0__config_error;
-  wire [15:0] ch0__count_aborted;
+  wire [2:0] ch0__count_addr;
   wire [15:0] ch0__count_ca_aborted;
   wire [15:0] ch0__count_ca_crc4_error;
   wire [15:0] ch0__count_ca_data_fault;
   wire [15:0] ch0__count_ca_no_answer;
   wire [15:0] ch0__count_ca_refused;
-  wire [15:0] ch0__count_crc_word0;
-  wire [15:0] ch0__count_crc_word1;
-  wire [15:0] ch0__count_delay_jump;
-  wire [15:0] ch0__count_delay_range;
-  wire [15:0] ch0__count_lc_repeat;
-  wire [15:0] ch0__count_lc_skip;
-  wire [15:0] ch0__count_lc_zero;
-  wire [15:0] ch0__count_no_ack;
-  wire [15:0] ch0__count_no_start;
-  wire [15:0] ch0__count_no_stop;
-  wire [15:0] ch0__count_noise_event;
-  wire [15:0] ch0__count_noisy_line;
-  wire [15:0] ch0__count_overrun;
-  wire [15:0] ch0__count_slo_stuck_low;
-  wire [15:0] ch0__count_spw_mismatch;
+  wire [31:0] ch0__count_data;
+  wire ch0__count_en;
   wire ch0__delay_settled;
   wire [7:0] ch0__delay_spread;
   wire ch0__done;
@@ -214,27 +201,14 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire ch1__cfg_w1_signed;
   wire ch1__clear_counters;
   wire ch1__config_error;
-  wire [15:0] ch1__count_aborted;
+  wire [2:0] ch1__count_addr;
   wire [15:0] ch1__count_ca_aborted;
   wire [15:0] ch1__count_ca_crc4_error;
   wire [15:0] ch1__count_ca_data_fault;
   wire [15:0] ch1__count_ca_no_answer;
   wire [15:0] ch1__count_ca_refused;
-  wire [15:0] ch1__count_crc_word0;
-  wire [15:0] ch1__count_crc_word1;
-  wire [15:0] ch1__count_delay_jump;
-  wire [15:0] ch1__count_delay_range;
-  wire [15:0] ch1__count_lc_repeat;
-  wire [15:0] ch1__count_lc_skip;
-  wire [15:0] ch1__count_lc_zero;
-  wire [15:0] ch1__count_no_ack;
-  wire [15:0] ch1__count_no_start;
-  wire [15:0] ch1__count_no_stop;
-  wire [15:0] ch1__count_noise_event;
-  wire [15:0] ch1__count_noisy_line;
-  wire [15:0] ch1__count_overrun;
-  wire [15:0] ch1__count_slo_stuck_low;
-  wire [15:0] ch1__count_spw_mismatch;
+  wire [31:0] ch1__count_data;
+  wire ch1__count_en;
   wire ch1__delay_settled;
   wire [7:0] ch1__delay_spread;
   wire ch1__done;
@@ -272,240 +246,214 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$467 ;
+  wire [1:0] \irq$415 ;
   wire ma;
-  wire \ma$463 ;
+  wire \ma$411 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$248 ;
+  wire \regs__abort_cycle$222 ;
   wire regs__busy;
-  wire \regs__busy$251 ;
+  wire \regs__busy$225 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$252 ;
+  wire \regs__ca_abort$226 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$254 ;
+  wire [6:0] \regs__ca_address$228 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$257 ;
+  wire \regs__ca_busy$231 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$259 ;
+  wire [6:0] \regs__ca_bytes_done$233 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$260 ;
+  wire [6:0] \regs__ca_count$234 ;
   wire regs__ca_done;
-  wire \regs__ca_done$263 ;
+  wire \regs__ca_done$237 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$264 ;
+  wire [3:0] \regs__ca_rbuf_addr$238 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$267 ;
+  wire [31:0] \regs__ca_rbuf_data$241 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$268 ;
+  wire \regs__ca_rbuf_en$242 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$270 ;
+  wire [2:0] \regs__ca_slave_id$244 ;
   wire regs__ca_start;
-  wire \regs__ca_start$272 ;
+  wire \regs__ca_start$246 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$275 ;
+  wire [2:0] \regs__ca_status$249 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$276 ;
+  wire [3:0] \regs__ca_wbuf_addr$250 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$278 ;
+  wire [31:0] \regs__ca_wbuf_data$252 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$280 ;
+  wire [3:0] \regs__ca_wbuf_en$254 ;
   wire regs__ca_write;
-  wire \regs__ca_write$282 ;
+  wire \regs__ca_write$256 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$285 ;
+  wire \regs__cap_counters$259 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$287 ;
+  wire [5:0] \regs__cap_data_bits_w0$261 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$289 ;
+  wire [5:0] \regs__cap_data_bits_w1$263 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$291 ;
+  wire \regs__cap_register_access$265 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$293 ;
+  wire [5:0] \regs__cap_timer_width$267 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$295 ;
+  wire \regs__cap_timestamp$269 ;
   wire regs__cds;
-  wire \regs__cds$297 ;
+  wire \regs__cds$271 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$298 ;
+  wire [23:0] \regs__cfg_ack_limit$272 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$300 ;
+  wire [23:0] \regs__cfg_break_time$274 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$302 ;
+  wire [11:0] \regs__cfg_delay_limit$276 ;
   wire [3:0] regs__cfg_delay_tolerance;
-  wire [3:0] \regs__cfg_delay_tolerance$304 ;
+  wire [3:0] \regs__cfg_delay_tolerance$278 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$306 ;
+  wire \regs__cfg_end_check$280 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$308 ;
+  wire [15:0] \regs__cfg_ma_half_period$282 ;
   wire [3:0] regs__cfg_noise_limit;
-  wire [3:0] \regs__cfg_noise_limit$310 ;
+  wire [3:0] \regs__cfg_noise_limit$284 ;
   wire [11:0] regs__cfg_quiet_time;
-  wire [11:0] \regs__cfg_quiet_time$312 ;
+  wire [11:0] \regs__cfg_quiet_time$286 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$314 ;
+  wire [23:0] \regs__cfg_request_period$288 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$316 ;
+  wire \regs__cfg_spw_check$290 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$318 ;
+  wire [7:0] \regs__cfg_spw_tolerance$292 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$320 ;
+  wire [23:0] \regs__cfg_timeout_limit$294 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$322 ;
+  wire [1:0] \regs__cfg_w0_crc$296 ;
   wire regs__cfg_w0_crc_inverted;
-  wire \regs__cfg_w0_crc_inverted$324 ;
+  wire \regs__cfg_w0_crc_inverted$298 ;
   wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] \regs__cfg_w0_crc_poly$326 ;
+  wire [15:0] \regs__cfg_w0_crc_poly$300 ;
   wire [15:0] regs__cfg_w0_crc_start;
-  wire [15:0] \regs__cfg_w0_crc_start$328 ;
+  wire [15:0] \regs__cfg_w0_crc_start$302 ;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [4:0] \regs__cfg_w0_crc_width$330 ;
+  wire [4:0] \regs__cfg_w0_crc_width$304 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$332 ;
+  wire [5:0] \regs__cfg_w0_data_bits$306 ;
   wire regs__cfg_w0_gray;
-  wire \regs__cfg_w0_gray$334 ;
+  wire \regs__cfg_w0_gray$308 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$336 ;
+  wire \regs__cfg_w0_lc$310 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$338 ;
+  wire \regs__cfg_w0_nenw$312 ;
   wire regs__cfg_w0_signed;
-  wire \regs__cfg_w0_signed$340 ;
+  wire \regs__cfg_w0_signed$314 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$342 ;
+  wire [1:0] \regs__cfg_w1_crc$316 ;
   wire regs__cfg_w1_crc_inverted;
-  wire \regs__cfg_w1_crc_inverted$344 ;
+  wire \regs__cfg_w1_crc_inverted$318 ;
   wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] \regs__cfg_w1_crc_poly$346 ;
+  wire [15:0] \regs__cfg_w1_crc_poly$320 ;
   wire [15:0] regs__cfg_w1_crc_start;
-  wire [15:0] \regs__cfg_w1_crc_start$348 ;
+  wire [15:0] \regs__cfg_w1_crc_start$322 ;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [4:0] \regs__cfg_w1_crc_width$350 ;
+  wire [4:0] \regs__cfg_w1_crc_width$324 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$352 ;
+  wire [5:0] \regs__cfg_w1_data_bits$326 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$354 ;
+  wire \regs__cfg_w1_enable$328 ;
   wire regs__cfg_w1_gray;
-  wire \regs__cfg_w1_gray$356 ;
+  wire \regs__cfg_w1_gray$330 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$358 ;
+  wire \regs__cfg_w1_lc$332 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$360 ;
+  wire \regs__cfg_w1_nenw$334 ;
   wire regs__cfg_w1_signed;
-  wire \regs__cfg_w1_signed$362 ;
+  wire \regs__cfg_w1_signed$336 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$364 ;
+  wire \regs__clear_counters$338 ;
   wire regs__config_error;
-  wire \regs__config_error$367 ;
-  wire [15:0] regs__count_aborted;
-  wire [15:0] \regs__count_aborted$369 ;
+  wire \regs__config_error$341 ;
+  wire [2:0] regs__count_addr;
+  wire [2:0] \regs__count_addr$342 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$371 ;
+  wire [15:0] \regs__count_ca_aborted$345 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$373 ;
+  wire [15:0] \regs__count_ca_crc4_error$347 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$375 ;
+  wire [15:0] \regs__count_ca_data_fault$349 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$377 ;
+  wire [15:0] \regs__count_ca_no_answer$351 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$379 ;
-  wire [15:0] regs__count_crc_word0;
-  wire [15:0] \regs__count_crc_word0$381 ;
-  wire [15:0] regs__count_crc_word1;
-  wire [15:0] \regs__count_crc_word1$383 ;
-  wire [15:0] regs__count_delay_jump;
-  wire [15:0] \regs__count_delay_jump$385 ;
-  wire [15:0] regs__count_delay_range;
-  wire [15:0] \regs__count_delay_range$387 ;
-  wire [15:0] regs__count_lc_repeat;
-  wire [15:0] \regs__count_lc_repeat$389 ;
-  wire [15:0] regs__count_lc_skip;
-  wire [15:0] \regs__count_lc_skip$391 ;
-  wire [15:0] regs__count_lc_zero;
-  wire [15:0] \regs__count_lc_zero$393 ;
-  wire [15:0] regs__count_no_ack;
-  wire [15:0] \regs__count_no_ack$395 ;
-  wire [15:0] regs__count_no_start;
-  wire [15:0] \regs__count_no_start$397 ;
-  wire [15:0] regs__count_no_stop;
-  wire [15:0] \regs__count_no_stop$399 ;
-  wire [15:0] regs__count_noise_event;
-  wire [15:0] \regs__count_noise_event$401 ;
-  wire [15:0] regs__count_noisy_line;
-  wire [15:0] \regs__count_noisy_line$403 ;
-  wire [15:0] regs__count_overrun;
-  wire [15:0] \regs__count_overrun$405 ;
-  wire [15:0] regs__count_slo_stuck_low;
-  wire [15:0] \regs__count_slo_stuck_low$407 ;
-  wire [15:0] regs__count_spw_mismatch;
-  wire [15:0] \regs__count_spw_mismatch$409 ;
+  wire [15:0] \regs__count_ca_refused$353 ;
+  wire [31:0] regs__count_data;
+  wire [31:0] \regs__count_data$355 ;
+  wire regs__count_en;
+  wire \regs__count_en$356 ;
   wire regs__delay_settled;
-  wire \regs__delay_settled$411 ;
+  wire \regs__delay_settled$359 ;
   wire [7:0] regs__delay_spread;
-  wire [7:0] \regs__delay_spread$413 ;
+  wire [7:0] \regs__delay_spread$361 ;
   wire regs__done;
-  wire \regs__done$415 ;
+  wire \regs__done$363 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$417 ;
+  wire [15:0] \regs__done_count$365 ;
   wire regs__frame_error;
-  wire \regs__frame_error$419 ;
+  wire \regs__frame_error$367 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$421 ;
+  wire [5:0] \regs__lc$369 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$423 ;
+  wire \regs__lc_repeat$371 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$425 ;
+  wire \regs__lc_skip$373 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$427 ;
+  wire \regs__lc_zero$375 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$429 ;
+  wire [12:0] \regs__line_delay$377 ;
   wire [3:0] regs__noise_events;
-  wire [3:0] \regs__noise_events$431 ;
+  wire [3:0] \regs__noise_events$379 ;
   wire regs__periodic;
-  wire \regs__periodic$432 ;
+  wire \regs__periodic$380 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__r_load;
   wire [12:0] regs__settled_delay;
-  wire [12:0] \regs__settled_delay$435 ;
+  wire [12:0] \regs__settled_delay$383 ;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$437 ;
+  wire \regs__spw_mismatch$385 ;
   wire regs__start;
-  wire \regs__start$438 ;
+  wire \regs__start$386 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$441 ;
+  wire [3:0] \regs__status$389 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$443 ;
+  wire [31:0] \regs__timestamp$391 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$444 ;
+  wire \regs__trigger_enable$392 ;
   wire [10:0] regs__w_addr;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$447 ;
+  wire \regs__word0_crc_ok$395 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$449 ;
+  wire \regs__word0_ne$397 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$451 ;
+  wire \regs__word0_nw$399 ;
   wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$453 ;
+  wire [54:0] \regs__word0_position$401 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$455 ;
+  wire \regs__word1_crc_ok$403 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$457 ;
+  wire \regs__word1_ne$405 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$459 ;
+  wire \regs__word1_nw$407 ;
   wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$461 ;
+  wire [39:0] \regs__word1_position$409 ;
   input rst;
   wire rst;
   wire slo;
-  wire \slo$464 ;
+  wire \slo$412 ;
   input trigger;
   wire trigger;
-  wire \trigger$245 ;
+  wire \trigger$219 ;
   wire \trigger$28 ;
-  wire \trigger$462 ;
+  wire \trigger$410 ;
   reg trigger_in = 1'h0;
   wire uart__rx;
   wire uart__tx;
@@ -537,6 +485,8 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch0__ca_wbuf_addr(regs__ca_wbuf_addr),
     .ch0__ca_wbuf_en(regs__ca_wbuf_en),
     .ch0__config_error(ch0__config_error),
+    .ch0__count_data(ch0__count_data),
+    .ch0__count_en(regs__count_en),
     .ch0__done(ch0__done),
     .ch0__done_count(ch0__done_count),
     .ch0__frame_error(ch0__frame_error),
@@ -589,65 +539,67 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$268 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$280 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$242 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$254 ),
     .ch1__config_error(ch1__config_error),
+    .ch1__count_data(ch1__count_data),
+    .ch1__count_en(\regs__count_en$356 ),
     .ch1__done(ch1__done),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_error(ch1__frame_error),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$252 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$272 ),
-    .ch1_ca_request_address(\regs__ca_address$254 ),
-    .ch1_ca_request_count(\regs__ca_count$260 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$270 ),
-    .\ch1_ca_request_write$309 (\regs__ca_write$282 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$298 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$300 ),
-    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$304 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$306 ),
-    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$310 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$316 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$318 ),
-    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$328 ),
-    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$324 ),
-    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$326 ),
-    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$330 ),
-    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$348 ),
-    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$344 ),
-    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$346 ),
-    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$350 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$302 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$308 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$314 ),
-    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$312 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$320 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$322 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$332 ),
-    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$334 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$336 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$338 ),
-    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$340 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$342 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$352 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$354 ),
-    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$356 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$358 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$360 ),
-    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$362 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$248 ),
-    .ch1_ctrl_clear_counters(\regs__clear_counters$364 ),
-    .ch1_ctrl_periodic(\regs__periodic$432 ),
-    .ch1_ctrl_start(\regs__start$438 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$444 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$226 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$246 ),
+    .ch1_ca_request_address(\regs__ca_address$228 ),
+    .ch1_ca_request_count(\regs__ca_count$234 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$244 ),
+    .\ch1_ca_request_write$287 (\regs__ca_write$256 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$272 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$274 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$278 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$280 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$284 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$290 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$292 ),
+    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$302 ),
+    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$298 ),
+    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$300 ),
+    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$304 ),
+    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$322 ),
+    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$318 ),
+    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$320 ),
+    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$324 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$276 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$282 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$288 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$286 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$294 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$296 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$306 ),
+    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$308 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$310 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$312 ),
+    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$314 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$316 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$326 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$328 ),
+    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$330 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$332 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$334 ),
+    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$336 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$222 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$338 ),
+    .ch1_ctrl_periodic(\regs__periodic$380 ),
+    .ch1_ctrl_start(\regs__start$386 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$392 ),
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6330$0 (\$8 ),
-    .\port$6343$0 (\$9 ),
-    .\port$6475$0 (\$10 ),
-    .\port$6897$0 (\$11 ),
-    .\port$6910$0 (\$12 ),
-    .\port$7042$0 (\$13 ),
+    .\port$6443$0 (\$8 ),
+    .\port$6456$0 (\$9 ),
+    .\port$6541$0 (\$10 ),
+    .\port$6964$0 (\$11 ),
+    .\port$6977$0 (\$12 ),
+    .\port$7062$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -711,17 +663,19 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .cfg_w1_signed(regs__cfg_w1_signed),
     .clear_counters(regs__clear_counters),
     .clk(clk),
+    .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6330$0 (\$8 ),
-    .\port$6343$0 (\$9 ),
-    .\port$6475$0 (\$10 ),
+    .\port$6443$0 (\$8 ),
+    .\port$6456$0 (\$9 ),
+    .\port$6541$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
     .regs__ca_done(ch0__ca_done),
     .regs__ca_rbuf_data(ch0__ca_rbuf_data),
     .regs__config_error(ch0__config_error),
+    .regs__count_data(ch0__count_data),
     .regs__done(ch0__done),
     .regs__done_count(ch0__done_count),
     .regs__frame_error(ch0__frame_error),
@@ -729,74 +683,76 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$203 (\trigger$28 )
+    .\trigger$177 (\trigger$28 )
   );
   \biss_master_uart.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$252 ),
-    .ca_address(\regs__ca_address$254 ),
-    .ca_count(\regs__ca_count$260 ),
+    .ca_abort(\regs__ca_abort$226 ),
+    .ca_address(\regs__ca_address$228 ),
+    .ca_count(\regs__ca_count$234 ),
     .ca_rbuf_addr(bus__r_addr[3:0]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$268 ),
-    .ca_slave_id(\regs__ca_slave_id$270 ),
-    .ca_start(\regs__ca_start$272 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$242 ),
+    .ca_slave_id(\regs__ca_slave_id$244 ),
+    .ca_start(\regs__ca_start$246 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$280 ),
-    .ca_write(\regs__ca_write$282 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$298 ),
-    .cfg_break_time(\regs__cfg_break_time$300 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$302 ),
-    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$304 ),
-    .cfg_end_check(\regs__cfg_end_check$306 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$308 ),
-    .cfg_noise_limit(\regs__cfg_noise_limit$310 ),
-    .cfg_quiet_time(\regs__cfg_quiet_time$312 ),
-    .cfg_request_period(\regs__cfg_request_period$314 ),
-    .cfg_spw_check(\regs__cfg_spw_check$316 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$318 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$320 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$322 ),
-    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$324 ),
-    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$326 ),
-    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$328 ),
-    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$330 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$332 ),
-    .cfg_w0_gray(\regs__cfg_w0_gray$334 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$336 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$338 ),
-    .cfg_w0_signed(\regs__cfg_w0_signed$340 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$342 ),
-    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$344 ),
-    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$346 ),
-    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$348 ),
-    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$350 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$352 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$354 ),
-    .cfg_w1_gray(\regs__cfg_w1_gray$356 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$358 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$360 ),
-    .cfg_w1_signed(\regs__cfg_w1_signed$362 ),
-    .clear_counters(\regs__clear_counters$364 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$254 ),
+    .ca_write(\regs__ca_write$256 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$272 ),
+    .cfg_break_time(\regs__cfg_break_time$274 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$276 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$278 ),
+    .cfg_end_check(\regs__cfg_end_check$280 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$282 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$284 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$286 ),
+    .cfg_request_period(\regs__cfg_request_period$288 ),
+    .cfg_spw_check(\regs__cfg_spw_check$290 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$292 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$294 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$296 ),
+    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$298 ),
+    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$300 ),
+    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$302 ),
+    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$304 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$306 ),
+    .cfg_w0_gray(\regs__cfg_w0_gray$308 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$310 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$312 ),
+    .cfg_w0_signed(\regs__cfg_w0_signed$314 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$316 ),
+    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$318 ),
+    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$320 ),
+    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$322 ),
+    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$324 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$326 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$328 ),
+    .cfg_w1_gray(\regs__cfg_w1_gray$330 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$332 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$334 ),
+    .cfg_w1_signed(\regs__cfg_w1_signed$336 ),
+    .clear_counters(\regs__clear_counters$338 ),
     .clk(clk),
+    .count_en(\regs__count_en$356 ),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$432 ),
-    .\port$6897$0 (\$11 ),
-    .\port$6910$0 (\$12 ),
-    .\port$7042$0 (\$13 ),
-    .regs__abort_cycle(\regs__abort_cycle$248 ),
+    .periodic(\regs__periodic$380 ),
+    .\port$6964$0 (\$11 ),
+    .\port$6977$0 (\$12 ),
+    .\port$7062$0 (\$13 ),
+    .regs__abort_cycle(\regs__abort_cycle$222 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
     .regs__ca_rbuf_data(ch1__ca_rbuf_data),
     .regs__config_error(ch1__config_error),
+    .regs__count_data(ch1__count_data),
     .regs__done(ch1__done),
     .regs__done_count(ch1__done_count),
     .regs__frame_error(ch1__frame_error),
-    .regs__trigger_enable(\regs__trigger_enable$444 ),
+    .regs__trigger_enable(\regs__trigger_enable$392 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$438 ),
-    .\trigger$203 (\trigger$28 )
+    .start(\regs__start$386 ),
+    .\trigger$177 (\trigger$28 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
@@ -893,48 +849,20 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign ch0__cfg_w1_signed = regs__cfg_w1_signed;
   assign ch0__clear_counters = regs__clear_counters;
   assign regs__config_error = ch0__config_error;
-  assign ch0__count_aborted = \$9 [191:176];
-  assign regs__count_aborted = \$9 [191:176];
-  assign ch0__count_ca_aborted = \$9 [319:304];
-  assign regs__count_ca_aborted = \$9 [319:304];
-  assign ch0__count_ca_crc4_error = \$9 [271:256];
-  assign regs__count_ca_crc4_error = \$9 [271:256];
-  assign ch0__count_ca_data_fault = \$9 [335:320];
-  assign regs__count_ca_data_fault = \$9 [335:320];
-  assign ch0__count_ca_no_answer = \$9 [287:272];
-  assign regs__count_ca_no_answer = \$9 [287:272];
-  assign ch0__count_ca_refused = \$9 [303:288];
-  assign regs__count_ca_refused = \$9 [303:288];
-  assign ch0__count_crc_word0 = \$9 [15:0];
-  assign regs__count_crc_word0 = \$9 [15:0];
-  assign ch0__count_crc_word1 = \$9 [31:16];
-  assign regs__count_crc_word1 = \$9 [31:16];
-  assign ch0__count_delay_jump = \$9 [239:224];
-  assign regs__count_delay_jump = \$9 [239:224];
-  assign ch0__count_delay_range = \$9 [79:64];
-  assign regs__count_delay_range = \$9 [79:64];
-  assign ch0__count_lc_repeat = \$9 [111:96];
-  assign regs__count_lc_repeat = \$9 [111:96];
-  assign ch0__count_lc_skip = \$9 [127:112];
-  assign regs__count_lc_skip = \$9 [127:112];
-  assign ch0__count_lc_zero = \$9 [143:128];
-  assign regs__count_lc_zero = \$9 [143:128];
-  assign ch0__count_no_ack = \$9 [47:32];
-  assign regs__count_no_ack = \$9 [47:32];
-  assign ch0__count_no_start = \$9 [63:48];
-  assign regs__count_no_start = \$9 [63:48];
-  assign ch0__count_no_stop = \$9 [207:192];
-  assign regs__count_no_stop = \$9 [207:192];
-  assign ch0__count_noise_event = \$9 [255:240];
-  assign regs__count_noise_event = \$9 [255:240];
-  assign ch0__count_noisy_line = \$9 [223:208];
-  assign regs__count_noisy_line = \$9 [223:208];
-  assign ch0__count_overrun = \$9 [175:160];
-  assign regs__count_overrun = \$9 [175:160];
-  assign ch0__count_slo_stuck_low = \$9 [95:80];
-  assign regs__count_slo_stuck_low = \$9 [95:80];
-  assign ch0__count_spw_mismatch = \$9 [159:144];
-  assign regs__count_spw_mismatch = \$9 [159:144];
+  assign regs__count_addr = bus__r_addr[2:0];
+  assign ch0__count_addr = bus__r_addr[2:0];
+  assign ch0__count_ca_aborted = \$9 [63:48];
+  assign regs__count_ca_aborted = \$9 [63:48];
+  assign ch0__count_ca_crc4_error = \$9 [15:0];
+  assign regs__count_ca_crc4_error = \$9 [15:0];
+  assign ch0__count_ca_data_fault = \$9 [79:64];
+  assign regs__count_ca_data_fault = \$9 [79:64];
+  assign ch0__count_ca_no_answer = \$9 [31:16];
+  assign regs__count_ca_no_answer = \$9 [31:16];
+  assign ch0__count_ca_refused = \$9 [47:32];
+  assign regs__count_ca_refused = \$9 [47:32];
+  assign regs__count_data = ch0__count_data;
+  assign ch0__count_en = regs__count_en;
   assign ch0__delay_settled = \$8 [54];
   assign regs__delay_settled = \$8 [54];
   assign ch0__delay_spread = \$8 [75:68];
@@ -981,185 +909,157 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign regs__word1_nw = \$8 [175];
   assign ch0__word1_position = \$8 [173:134];
   assign regs__word1_position = \$8 [173:134];
-  assign \trigger$245  = \trigger$28 ;
+  assign \trigger$219  = \trigger$28 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign ch1__abort_cycle = \regs__abort_cycle$248 ;
-  assign \regs__busy$251  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$252 ;
-  assign ch1__ca_address = \regs__ca_address$254 ;
-  assign \regs__ca_busy$257  = ch1__ca_busy;
+  assign ch1__abort_cycle = \regs__abort_cycle$222 ;
+  assign \regs__busy$225  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$226 ;
+  assign ch1__ca_address = \regs__ca_address$228 ;
+  assign \regs__ca_busy$231  = ch1__ca_busy;
   assign ch1__ca_bytes_done = \$13 [9:3];
-  assign \regs__ca_bytes_done$259  = \$13 [9:3];
-  assign ch1__ca_count = \regs__ca_count$260 ;
-  assign \regs__ca_done$263  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$264  = bus__r_addr[3:0];
+  assign \regs__ca_bytes_done$233  = \$13 [9:3];
+  assign ch1__ca_count = \regs__ca_count$234 ;
+  assign \regs__ca_done$237  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$238  = bus__r_addr[3:0];
   assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
-  assign \regs__ca_rbuf_data$267  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$268 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$270 ;
-  assign ch1__ca_start = \regs__ca_start$272 ;
+  assign \regs__ca_rbuf_data$241  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$242 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$244 ;
+  assign ch1__ca_start = \regs__ca_start$246 ;
   assign ch1__ca_status = \$13 [2:0];
-  assign \regs__ca_status$275  = \$13 [2:0];
-  assign \regs__ca_wbuf_addr$276  = regs__ca_wbuf_addr;
+  assign \regs__ca_status$249  = \$13 [2:0];
+  assign \regs__ca_wbuf_addr$250  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$278  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$252  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$280 ;
-  assign ch1__ca_write = \regs__ca_write$282 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$254 ;
+  assign ch1__ca_write = \regs__ca_write$256 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$285  = 1'h1;
+  assign \regs__cap_counters$259  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$287  = 6'h37;
+  assign \regs__cap_data_bits_w0$261  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$289  = 6'h28;
+  assign \regs__cap_data_bits_w1$263  = 6'h28;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$291  = 1'h1;
+  assign \regs__cap_register_access$265  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$293  = 6'h18;
+  assign \regs__cap_timer_width$267  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$295  = 1'h1;
+  assign \regs__cap_timestamp$269  = 1'h1;
   assign ch1__cds = \$11 [49];
-  assign \regs__cds$297  = \$11 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$298 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$300 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$302 ;
-  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$304 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$306 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$308 ;
-  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$310 ;
-  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$312 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$314 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$316 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$318 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$320 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$322 ;
-  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$324 ;
-  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$326 ;
-  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$328 ;
-  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$330 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$332 ;
-  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$334 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$336 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$338 ;
-  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$340 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$342 ;
-  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$344 ;
-  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$346 ;
-  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$348 ;
-  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$350 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$352 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$354 ;
-  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$356 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$358 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$360 ;
-  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$362 ;
-  assign ch1__clear_counters = \regs__clear_counters$364 ;
-  assign \regs__config_error$367  = ch1__config_error;
-  assign ch1__count_aborted = \$12 [191:176];
-  assign \regs__count_aborted$369  = \$12 [191:176];
-  assign ch1__count_ca_aborted = \$12 [319:304];
-  assign \regs__count_ca_aborted$371  = \$12 [319:304];
-  assign ch1__count_ca_crc4_error = \$12 [271:256];
-  assign \regs__count_ca_crc4_error$373  = \$12 [271:256];
-  assign ch1__count_ca_data_fault = \$12 [335:320];
-  assign \regs__count_ca_data_fault$375  = \$12 [335:320];
-  assign ch1__count_ca_no_answer = \$12 [287:272];
-  assign \regs__count_ca_no_answer$377  = \$12 [287:272];
-  assign ch1__count_ca_refused = \$12 [303:288];
-  assign \regs__count_ca_refused$379  = \$12 [303:288];
-  assign ch1__count_crc_word0 = \$12 [15:0];
-  assign \regs__count_crc_word0$381  = \$12 [15:0];
-  assign ch1__count_crc_word1 = \$12 [31:16];
-  assign \regs__count_crc_word1$383  = \$12 [31:16];
-  assign ch1__count_delay_jump = \$12 [239:224];
-  assign \regs__count_delay_jump$385  = \$12 [239:224];
-  assign ch1__count_delay_range = \$12 [79:64];
-  assign \regs__count_delay_range$387  = \$12 [79:64];
-  assign ch1__count_lc_repeat = \$12 [111:96];
-  assign \regs__count_lc_repeat$389  = \$12 [111:96];
-  assign ch1__count_lc_skip = \$12 [127:112];
-  assign \regs__count_lc_skip$391  = \$12 [127:112];
-  assign ch1__count_lc_zero = \$12 [143:128];
-  assign \regs__count_lc_zero$393  = \$12 [143:128];
-  assign ch1__count_no_ack = \$12 [47:32];
-  assign \regs__count_no_ack$395  = \$12 [47:32];
-  assign ch1__count_no_start = \$12 [63:48];
-  assign \regs__count_no_start$397  = \$12 [63:48];
-  assign ch1__count_no_stop = \$12 [207:192];
-  assign \regs__count_no_stop$399  = \$12 [207:192];
-  assign ch1__count_noise_event = \$12 [255:240];
-  assign \regs__count_noise_event$401  = \$12 [255:240];
-  assign ch1__count_noisy_line = \$12 [223:208];
-  assign \regs__count_noisy_line$403  = \$12 [223:208];
-  assign ch1__count_overrun = \$12 [175:160];
-  assign \regs__count_overrun$405  = \$12 [175:160];
-  assign ch1__count_slo_stuck_low = \$12 [95:80];
-  assign \regs__count_slo_stuck_low$407  = \$12 [95:80];
-  assign ch1__count_spw_mismatch = \$12 [159:144];
-  assign \regs__count_spw_mismatch$409  = \$12 [159:144];
+  assign \regs__cds$271  = \$11 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$272 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$274 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$276 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$278 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$280 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$282 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$284 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$286 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$288 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$290 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$292 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$294 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$296 ;
+  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$298 ;
+  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$300 ;
+  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$302 ;
+  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$304 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$306 ;
+  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$308 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$310 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$312 ;
+  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$314 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$316 ;
+  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$318 ;
+  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$320 ;
+  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$322 ;
+  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$324 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$326 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$328 ;
+  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$330 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$332 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$334 ;
+  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$336 ;
+  assign ch1__clear_counters = \regs__clear_counters$338 ;
+  assign \regs__config_error$341  = ch1__config_error;
+  assign \regs__count_addr$342  = bus__r_addr[2:0];
+  assign ch1__count_addr = bus__r_addr[2:0];
+  assign ch1__count_ca_aborted = \$12 [63:48];
+  assign \regs__count_ca_aborted$345  = \$12 [63:48];
+  assign ch1__count_ca_crc4_error = \$12 [15:0];
+  assign \regs__count_ca_crc4_error$347  = \$12 [15:0];
+  assign ch1__count_ca_data_fault = \$12 [79:64];
+  assign \regs__count_ca_data_fault$349  = \$12 [79:64];
+  assign ch1__count_ca_no_answer = \$12 [31:16];
+  assign \regs__count_ca_no_answer$351  = \$12 [31:16];
+  assign ch1__count_ca_refused = \$12 [47:32];
+  assign \regs__count_ca_refused$353  = \$12 [47:32];
+  assign \regs__count_data$355  = ch1__count_data;
+  assign ch1__count_en = \regs__count_en$356 ;
   assign ch1__delay_settled = \$11 [54];
-  assign \regs__delay_settled$411  = \$11 [54];
+  assign \regs__delay_settled$359  = \$11 [54];
   assign ch1__delay_spread = \$11 [75:68];
-  assign \regs__delay_spread$413  = \$11 [75:68];
-  assign \regs__done$415  = ch1__done;
-  assign \regs__done_count$417  = ch1__done_count;
-  assign \regs__frame_error$419  = ch1__frame_error;
+  assign \regs__delay_spread$361  = \$11 [75:68];
+  assign \regs__done$363  = ch1__done;
+  assign \regs__done_count$365  = ch1__done_count;
+  assign \regs__frame_error$367  = ch1__frame_error;
   assign ch1__lc = \$11 [182:177];
-  assign \regs__lc$421  = \$11 [182:177];
+  assign \regs__lc$369  = \$11 [182:177];
   assign ch1__lc_repeat = \$11 [183];
-  assign \regs__lc_repeat$423  = \$11 [183];
+  assign \regs__lc_repeat$371  = \$11 [183];
   assign ch1__lc_skip = \$11 [184];
-  assign \regs__lc_skip$425  = \$11 [184];
+  assign \regs__lc_skip$373  = \$11 [184];
   assign ch1__lc_zero = \$11 [185];
-  assign \regs__lc_zero$427  = \$11 [185];
+  assign \regs__lc_zero$375  = \$11 [185];
   assign ch1__line_delay = \$11 [48:36];
-  assign \regs__line_delay$429  = \$11 [48:36];
+  assign \regs__line_delay$377  = \$11 [48:36];
   assign ch1__noise_events = \$11 [53:50];
-  assign \regs__noise_events$431  = \$11 [53:50];
-  assign ch1__periodic = \regs__periodic$432 ;
+  assign \regs__noise_events$379  = \$11 [53:50];
+  assign ch1__periodic = \regs__periodic$380 ;
   assign ch1__settled_delay = \$11 [67:55];
-  assign \regs__settled_delay$435  = \$11 [67:55];
+  assign \regs__settled_delay$383  = \$11 [67:55];
   assign ch1__spw_mismatch = \$11 [186];
-  assign \regs__spw_mismatch$437  = \$11 [186];
-  assign ch1__start = \regs__start$438 ;
+  assign \regs__spw_mismatch$385  = \$11 [186];
+  assign ch1__start = \regs__start$386 ;
   assign ch1__status = \$11 [3:0];
-  assign \regs__status$441  = \$11 [3:0];
+  assign \regs__status$389  = \$11 [3:0];
   assign ch1__timestamp = \$11 [35:4];
-  assign \regs__timestamp$443  = \$11 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$444 ;
+  assign \regs__timestamp$391  = \$11 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$392 ;
   assign ch1__word0_crc_ok = \$11 [133];
-  assign \regs__word0_crc_ok$447  = \$11 [133];
+  assign \regs__word0_crc_ok$395  = \$11 [133];
   assign ch1__word0_ne = \$11 [131];
-  assign \regs__word0_ne$449  = \$11 [131];
+  assign \regs__word0_ne$397  = \$11 [131];
   assign ch1__word0_nw = \$11 [132];
-  assign \regs__word0_nw$451  = \$11 [132];
+  assign \regs__word0_nw$399  = \$11 [132];
   assign ch1__word0_position = \$11 [130:76];
-  assign \regs__word0_position$453  = \$11 [130:76];
+  assign \regs__word0_position$401  = \$11 [130:76];
   assign ch1__word1_crc_ok = \$11 [176];
-  assign \regs__word1_crc_ok$455  = \$11 [176];
+  assign \regs__word1_crc_ok$403  = \$11 [176];
   assign ch1__word1_ne = \$11 [174];
-  assign \regs__word1_ne$457  = \$11 [174];
+  assign \regs__word1_ne$405  = \$11 [174];
   assign ch1__word1_nw = \$11 [175];
-  assign \regs__word1_nw$459  = \$11 [175];
+  assign \regs__word1_nw$407  = \$11 [175];
   assign ch1__word1_position = \$11 [173:134];
-  assign \regs__word1_position$461  = \$11 [173:134];
-  assign \trigger$462  = \trigger$28 ;
-  assign \ma$463  = ch1_ma;
-  assign \slo$464  = ch1_slo;
+  assign \regs__word1_position$409  = \$11 [173:134];
+  assign \trigger$410  = \trigger$28 ;
+  assign \ma$411  = ch1_ma;
+  assign \slo$412  = ch1_slo;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$7 , \$6  };
-  assign \irq$467  = { \$7 , \$6  };
+  assign \irq$415  = { \$7 , \$6  };
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__ca_busy, ch1__ca_rbuf_data, bus__w_en, bus__r_en, bus__r_load
-, bus__w_addr, bus__w_data, bus__r_addr, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc
-, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width
-, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$105 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw
-, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start
-, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$309 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$6330$0 , \port$6343$0 , ch0__ca_done, \port$6475$0 , ch1__done_count, ch1__done, \port$6897$0 , \port$6910$0 , ch1__ca_done
-, \port$7042$0 , clk);
+module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__count_en, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__count_data, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__count_data, ch1__ca_busy
+, ch1__ca_rbuf_data, bus__w_en, bus__r_en, bus__r_load, bus__w_addr, bus__w_data, bus__r_addr, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit
+, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width
+, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$105 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time
+, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time
+, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$287 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$6443$0 , \port$6456$0 , ch0__ca_done, \port$6541$0 , ch1__done_count
+, ch1__done, \port$6964$0 , \port$6977$0 , ch1__ca_done, \port$7062$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -1192,13 +1092,13 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire \$124 ;
   wire \$125 ;
   wire \$126 ;
-  wire \$127 ;
-  wire \$128 ;
-  wire \$129 ;
+  wire [31:0] \$127 ;
+  wire [31:0] \$128 ;
+  wire [31:0] \$129 ;
   wire [31:0] \$13 ;
-  wire \$130 ;
-  wire \$131 ;
-  wire \$132 ;
+  wire [31:0] \$130 ;
+  wire [31:0] \$131 ;
+  wire [31:0] \$132 ;
   wire [31:0] \$133 ;
   wire [31:0] \$134 ;
   wire [31:0] \$135 ;
@@ -1265,29 +1165,29 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire [31:0] \$190 ;
   wire [31:0] \$191 ;
   wire [31:0] \$192 ;
-  wire [31:0] \$193 ;
-  wire [31:0] \$194 ;
-  wire [31:0] \$195 ;
-  wire [31:0] \$196 ;
-  wire [31:0] \$197 ;
-  wire [31:0] \$198 ;
-  wire [31:0] \$199 ;
+  wire \$193 ;
+  wire \$194 ;
+  wire \$195 ;
+  wire \$196 ;
+  wire \$197 ;
+  wire \$198 ;
+  wire \$199 ;
   wire \$2 ;
   wire \$20 ;
-  wire [31:0] \$200 ;
-  wire [31:0] \$201 ;
-  wire [31:0] \$202 ;
-  wire [31:0] \$203 ;
-  wire [31:0] \$204 ;
-  wire [31:0] \$205 ;
-  wire [31:0] \$206 ;
-  wire [31:0] \$207 ;
-  wire [31:0] \$208 ;
-  wire [31:0] \$209 ;
+  wire \$200 ;
+  wire \$201 ;
+  wire \$202 ;
+  wire \$203 ;
+  wire \$204 ;
+  wire \$205 ;
+  wire \$206 ;
+  wire \$207 ;
+  wire \$208 ;
+  wire \$209 ;
   wire \$21 ;
-  wire [31:0] \$210 ;
-  wire [31:0] \$211 ;
-  wire [31:0] \$212 ;
+  wire \$210 ;
+  wire \$211 ;
+  wire \$212 ;
   wire \$213 ;
   wire \$214 ;
   wire \$215 ;
@@ -1387,34 +1287,34 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire \$30 ;
   wire \$300 ;
   wire \$301 ;
-  wire \$302 ;
-  wire \$303 ;
-  wire \$304 ;
-  wire \$305 ;
-  wire \$306 ;
-  wire \$307 ;
-  wire \$308 ;
-  wire \$309 ;
+  wire [31:0] \$302 ;
+  wire [31:0] \$303 ;
+  wire [31:0] \$304 ;
+  wire [31:0] \$305 ;
+  wire [31:0] \$306 ;
+  wire [31:0] \$307 ;
+  wire [31:0] \$308 ;
+  wire [31:0] \$309 ;
   wire \$31 ;
-  wire \$310 ;
-  wire \$311 ;
-  wire \$312 ;
-  wire \$313 ;
-  wire \$314 ;
-  wire \$315 ;
-  wire \$316 ;
-  wire \$317 ;
-  wire \$318 ;
-  wire \$319 ;
+  wire [31:0] \$310 ;
+  wire [31:0] \$311 ;
+  wire [31:0] \$312 ;
+  wire [31:0] \$313 ;
+  wire [31:0] \$314 ;
+  wire [31:0] \$315 ;
+  wire [31:0] \$316 ;
+  wire [31:0] \$317 ;
+  wire [31:0] \$318 ;
+  wire [31:0] \$319 ;
   wire \$32 ;
-  wire \$320 ;
-  wire \$321 ;
-  wire \$322 ;
-  wire \$323 ;
-  wire \$324 ;
-  wire \$325 ;
-  wire \$326 ;
-  wire \$327 ;
+  wire [31:0] \$320 ;
+  wire [31:0] \$321 ;
+  wire [31:0] \$322 ;
+  wire [31:0] \$323 ;
+  wire [31:0] \$324 ;
+  wire [31:0] \$325 ;
+  wire [31:0] \$326 ;
+  wire [31:0] \$327 ;
   wire [31:0] \$328 ;
   wire [31:0] \$329 ;
   wire \$33 ;
@@ -1459,51 +1359,51 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire [31:0] \$365 ;
   wire [31:0] \$366 ;
   wire [31:0] \$367 ;
-  wire [31:0] \$368 ;
-  wire [31:0] \$369 ;
+  wire \$368 ;
+  wire \$369 ;
   wire \$37 ;
-  wire [31:0] \$370 ;
-  wire [31:0] \$371 ;
-  wire [31:0] \$372 ;
-  wire [31:0] \$373 ;
-  wire [31:0] \$374 ;
-  wire [31:0] \$375 ;
-  wire [31:0] \$376 ;
-  wire [31:0] \$377 ;
-  wire [31:0] \$378 ;
-  wire [31:0] \$379 ;
+  wire \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire \$378 ;
+  wire \$379 ;
   wire \$38 ;
-  wire [31:0] \$380 ;
-  wire [31:0] \$381 ;
-  wire [31:0] \$382 ;
-  wire [31:0] \$383 ;
-  wire [31:0] \$384 ;
-  wire [31:0] \$385 ;
-  wire [31:0] \$386 ;
-  wire [31:0] \$387 ;
-  wire [31:0] \$388 ;
-  wire [31:0] \$389 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire \$386 ;
+  wire \$387 ;
+  wire \$388 ;
+  wire \$389 ;
   wire \$39 ;
-  wire [31:0] \$390 ;
-  wire [31:0] \$391 ;
-  wire [31:0] \$392 ;
-  wire [31:0] \$393 ;
-  wire [31:0] \$394 ;
-  wire [31:0] \$395 ;
-  wire [31:0] \$396 ;
-  wire [31:0] \$397 ;
-  wire [31:0] \$398 ;
-  wire [31:0] \$399 ;
+  wire \$390 ;
+  wire \$391 ;
+  wire \$392 ;
+  wire \$393 ;
+  wire \$394 ;
+  wire \$395 ;
+  wire \$396 ;
+  wire \$397 ;
+  wire \$398 ;
+  wire \$399 ;
   wire \$4 ;
   wire \$40 ;
-  wire [31:0] \$400 ;
-  wire [31:0] \$401 ;
-  wire [31:0] \$402 ;
-  wire [31:0] \$403 ;
-  wire [31:0] \$404 ;
-  wire [31:0] \$405 ;
-  wire [31:0] \$406 ;
-  wire [31:0] \$407 ;
+  wire \$400 ;
+  wire \$401 ;
+  wire \$402 ;
+  wire \$403 ;
+  wire \$404 ;
+  wire \$405 ;
+  wire \$406 ;
+  wire \$407 ;
   wire \$408 ;
   wire \$409 ;
   wire \$41 ;
@@ -1556,120 +1456,120 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire \$452 ;
   wire \$453 ;
   wire \$454 ;
-  wire \$455 ;
-  wire \$456 ;
-  wire \$457 ;
-  wire \$458 ;
-  wire \$459 ;
+  wire [31:0] \$455 ;
+  wire [31:0] \$456 ;
+  reg \$457 ;
+  reg [10:0] \$458 ;
+  reg [31:0] \$459 ;
   wire \$46 ;
-  wire \$460 ;
-  wire \$461 ;
-  wire \$462 ;
-  wire \$463 ;
-  wire \$464 ;
-  wire \$465 ;
-  wire \$466 ;
-  wire \$467 ;
-  wire \$468 ;
-  wire \$469 ;
+  reg [3:0] \$460 ;
+  reg [31:0] \$461 ;
+  reg [3:0] \$462 ;
+  reg \$463 ;
+  reg \$464 ;
+  reg \$465 ;
+  reg \$466 ;
+  reg \$467 ;
+  reg \$468 ;
+  reg [31:0] \$469 ;
   wire \$47 ;
-  wire \$470 ;
-  wire \$471 ;
-  wire \$472 ;
-  wire \$473 ;
-  wire \$474 ;
-  wire \$475 ;
-  wire \$476 ;
-  wire \$477 ;
-  wire \$478 ;
-  wire \$479 ;
+  reg \$470 ;
+  reg \$471 ;
+  reg \$472 ;
+  reg \$473 ;
+  reg \$474 ;
+  reg \$475 ;
+  reg \$476 ;
+  reg \$477 ;
+  reg \$478 ;
+  reg \$479 ;
   wire \$48 ;
-  wire \$480 ;
-  wire \$481 ;
-  wire \$482 ;
-  wire \$483 ;
-  wire \$484 ;
-  wire \$485 ;
-  wire \$486 ;
-  wire \$487 ;
-  wire \$488 ;
-  wire \$489 ;
+  reg \$480 ;
+  reg \$481 ;
+  reg \$482 ;
+  reg [15:0] \$483 ;
+  reg [11:0] \$484 ;
+  reg \$485 ;
+  reg [23:0] \$486 ;
+  reg \$487 ;
+  reg [23:0] \$488 ;
+  reg \$489 ;
   wire \$49 ;
-  wire \$490 ;
-  wire \$491 ;
-  wire \$492 ;
-  wire \$493 ;
-  wire \$494 ;
-  wire \$495 ;
-  wire \$496 ;
-  wire \$497 ;
-  wire \$498 ;
-  wire \$499 ;
+  reg [23:0] \$490 ;
+  reg \$491 ;
+  reg [23:0] \$492 ;
+  reg \$493 ;
+  reg [5:0] \$494 ;
+  reg \$495 ;
+  reg \$496 ;
+  reg [1:0] \$497 ;
+  reg \$498 ;
+  reg \$499 ;
   wire \$5 ;
   wire \$50 ;
-  wire \$500 ;
-  wire \$501 ;
-  wire \$502 ;
-  wire \$503 ;
-  wire \$504 ;
-  wire \$505 ;
-  wire \$506 ;
-  wire \$507 ;
-  wire \$508 ;
-  wire [31:0] \$509 ;
+  reg [5:0] \$500 ;
+  reg \$501 ;
+  reg \$502 ;
+  reg [1:0] \$503 ;
+  reg \$504 ;
+  reg \$505 ;
+  reg \$506 ;
+  reg \$507 ;
+  reg \$508 ;
+  reg \$509 ;
   wire \$51 ;
-  wire [31:0] \$510 ;
-  reg \$511 ;
-  reg [10:0] \$512 ;
-  reg [31:0] \$513 ;
-  reg [3:0] \$514 ;
-  reg [31:0] \$515 ;
-  reg [3:0] \$516 ;
-  reg \$517 ;
+  reg [7:0] \$510 ;
+  reg [3:0] \$511 ;
+  reg [3:0] \$512 ;
+  reg \$513 ;
+  reg [11:0] \$514 ;
+  reg \$515 ;
+  reg [15:0] \$516 ;
+  reg [4:0] \$517 ;
   reg \$518 ;
   reg \$519 ;
   wire \$52 ;
-  reg \$520 ;
+  reg [15:0] \$520 ;
   reg \$521 ;
-  reg \$522 ;
-  reg [31:0] \$523 ;
+  reg [15:0] \$522 ;
+  reg [4:0] \$523 ;
   reg \$524 ;
   reg \$525 ;
-  reg \$526 ;
+  reg [15:0] \$526 ;
   reg \$527 ;
-  reg \$528 ;
-  reg \$529 ;
+  reg [2:0] \$528 ;
+  reg [6:0] \$529 ;
   wire \$53 ;
-  reg \$530 ;
+  reg [6:0] \$530 ;
   reg \$531 ;
   reg \$532 ;
   reg \$533 ;
   reg \$534 ;
   reg \$535 ;
   reg \$536 ;
-  reg [15:0] \$537 ;
-  reg [11:0] \$538 ;
+  reg \$537 ;
+  reg \$538 ;
   reg \$539 ;
   wire \$54 ;
-  reg [23:0] \$540 ;
+  reg \$540 ;
   reg \$541 ;
-  reg [23:0] \$542 ;
+  reg \$542 ;
   reg \$543 ;
-  reg [23:0] \$544 ;
+  reg \$544 ;
   reg \$545 ;
-  reg [23:0] \$546 ;
+  reg \$546 ;
   reg \$547 ;
-  reg [5:0] \$548 ;
+  reg \$548 ;
   reg \$549 ;
   wire \$55 ;
   reg \$550 ;
-  reg [1:0] \$551 ;
+  reg \$551 ;
   reg \$552 ;
   reg \$553 ;
-  reg [5:0] \$554 ;
+  reg \$554 ;
   reg \$555 ;
   reg \$556 ;
-  reg [1:0] \$557 ;
+  reg \$557 ;
   reg \$558 ;
   reg \$559 ;
   wire \$56 ;
@@ -1677,37 +1577,37 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg \$561 ;
   reg \$562 ;
   reg \$563 ;
-  reg [7:0] \$564 ;
+  reg \$564 ;
   reg [3:0] \$565 ;
-  reg [3:0] \$566 ;
+  reg \$566 ;
   reg \$567 ;
-  reg [11:0] \$568 ;
+  reg \$568 ;
   reg \$569 ;
   wire \$57 ;
-  reg [15:0] \$570 ;
-  reg [4:0] \$571 ;
+  reg \$570 ;
+  reg \$571 ;
   reg \$572 ;
   reg \$573 ;
-  reg [15:0] \$574 ;
+  reg \$574 ;
   reg \$575 ;
-  reg [15:0] \$576 ;
-  reg [4:0] \$577 ;
-  reg \$578 ;
-  reg \$579 ;
+  reg \$576 ;
+  reg [5:0] \$577 ;
+  reg [15:0] \$578 ;
+  reg [12:0] \$579 ;
   wire \$58 ;
-  reg [15:0] \$580 ;
-  reg \$581 ;
-  reg [2:0] \$582 ;
-  reg [6:0] \$583 ;
-  reg [6:0] \$584 ;
-  reg \$585 ;
+  reg [31:0] \$580 ;
+  reg [22:0] \$581 ;
+  reg [31:0] \$582 ;
+  reg [7:0] \$583 ;
+  reg [31:0] \$584 ;
+  reg [3:0] \$585 ;
   reg \$586 ;
-  reg \$587 ;
-  reg \$588 ;
+  reg [7:0] \$587 ;
+  reg [12:0] \$588 ;
   reg \$589 ;
   wire \$59 ;
   reg \$590 ;
-  reg \$591 ;
+  reg [31:0] \$591 ;
   reg \$592 ;
   reg \$593 ;
   reg \$594 ;
@@ -1723,59 +1623,59 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg \$602 ;
   reg \$603 ;
   reg \$604 ;
-  reg \$605 ;
-  reg \$606 ;
+  reg [15:0] \$605 ;
+  reg [11:0] \$606 ;
   reg \$607 ;
-  reg \$608 ;
+  reg [23:0] \$608 ;
   reg \$609 ;
   wire \$61 ;
-  reg \$610 ;
+  reg [23:0] \$610 ;
   reg \$611 ;
-  reg \$612 ;
+  reg [23:0] \$612 ;
   reg \$613 ;
-  reg \$614 ;
+  reg [23:0] \$614 ;
   reg \$615 ;
-  reg \$616 ;
+  reg [5:0] \$616 ;
   reg \$617 ;
   reg \$618 ;
-  reg \$619 ;
+  reg [1:0] \$619 ;
   wire \$62 ;
   reg \$620 ;
   reg \$621 ;
-  reg \$622 ;
+  reg [5:0] \$622 ;
   reg \$623 ;
   reg \$624 ;
-  reg \$625 ;
+  reg [1:0] \$625 ;
   reg \$626 ;
-  reg [3:0] \$627 ;
+  reg \$627 ;
   reg \$628 ;
   reg \$629 ;
   wire \$63 ;
   reg \$630 ;
   reg \$631 ;
-  reg \$632 ;
-  reg \$633 ;
-  reg \$634 ;
+  reg [7:0] \$632 ;
+  reg [3:0] \$633 ;
+  reg [3:0] \$634 ;
   reg \$635 ;
-  reg \$636 ;
+  reg [11:0] \$636 ;
   reg \$637 ;
-  reg \$638 ;
-  reg [5:0] \$639 ;
+  reg [15:0] \$638 ;
+  reg [4:0] \$639 ;
   wire \$64 ;
-  reg [15:0] \$640 ;
-  reg [12:0] \$641 ;
-  reg [31:0] \$642 ;
-  reg [22:0] \$643 ;
-  reg [31:0] \$644 ;
-  reg [7:0] \$645 ;
-  reg [31:0] \$646 ;
-  reg [3:0] \$647 ;
-  reg \$648 ;
-  reg [7:0] \$649 ;
+  reg \$640 ;
+  reg \$641 ;
+  reg [15:0] \$642 ;
+  reg \$643 ;
+  reg [15:0] \$644 ;
+  reg [4:0] \$645 ;
+  reg \$646 ;
+  reg \$647 ;
+  reg [15:0] \$648 ;
+  reg \$649 ;
   wire \$65 ;
-  reg [12:0] \$650 ;
-  reg \$651 ;
-  reg [31:0] \$652 ;
+  reg [2:0] \$650 ;
+  reg [6:0] \$651 ;
+  reg [6:0] \$652 ;
   reg \$653 ;
   reg \$654 ;
   reg \$655 ;
@@ -1790,135 +1690,67 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg \$663 ;
   reg \$664 ;
   reg \$665 ;
-  reg [15:0] \$666 ;
-  reg [11:0] \$667 ;
+  reg \$666 ;
+  reg \$667 ;
   reg \$668 ;
-  reg [23:0] \$669 ;
+  reg \$669 ;
   wire \$67 ;
   reg \$670 ;
-  reg [23:0] \$671 ;
+  reg \$671 ;
   reg \$672 ;
-  reg [23:0] \$673 ;
+  reg \$673 ;
   reg \$674 ;
-  reg [23:0] \$675 ;
+  reg \$675 ;
   reg \$676 ;
-  reg [5:0] \$677 ;
+  reg \$677 ;
   reg \$678 ;
   reg \$679 ;
   wire \$68 ;
-  reg [1:0] \$680 ;
+  reg \$680 ;
   reg \$681 ;
   reg \$682 ;
-  reg [5:0] \$683 ;
+  reg \$683 ;
   reg \$684 ;
   reg \$685 ;
-  reg [1:0] \$686 ;
-  reg \$687 ;
+  reg \$686 ;
+  reg [3:0] \$687 ;
   reg \$688 ;
   reg \$689 ;
   wire \$69 ;
   reg \$690 ;
   reg \$691 ;
   reg \$692 ;
-  reg [7:0] \$693 ;
-  reg [3:0] \$694 ;
-  reg [3:0] \$695 ;
+  reg \$693 ;
+  reg \$694 ;
+  reg \$695 ;
   reg \$696 ;
-  reg [11:0] \$697 ;
+  reg \$697 ;
   reg \$698 ;
-  reg [15:0] \$699 ;
+  reg [5:0] \$699 ;
   wire \$7 ;
   wire \$70 ;
-  reg [4:0] \$700 ;
-  reg \$701 ;
-  reg \$702 ;
-  reg [15:0] \$703 ;
-  reg \$704 ;
-  reg [15:0] \$705 ;
-  reg [4:0] \$706 ;
-  reg \$707 ;
+  reg [15:0] \$700 ;
+  reg [12:0] \$701 ;
+  reg [31:0] \$702 ;
+  reg [22:0] \$703 ;
+  reg [31:0] \$704 ;
+  reg [7:0] \$705 ;
+  reg [31:0] \$706 ;
+  reg [3:0] \$707 ;
   reg \$708 ;
-  reg [15:0] \$709 ;
+  reg [7:0] \$709 ;
   wire \$71 ;
-  reg \$710 ;
-  reg [2:0] \$711 ;
-  reg [6:0] \$712 ;
-  reg [6:0] \$713 ;
-  reg \$714 ;
-  reg \$715 ;
-  reg \$716 ;
-  reg \$717 ;
-  reg \$718 ;
-  reg \$719 ;
+  reg [12:0] \$710 ;
+  reg \$711 ;
+  reg \$712 ;
+  reg [31:0] \$713 ;
   wire \$72 ;
-  reg \$720 ;
-  reg \$721 ;
-  reg \$722 ;
-  reg \$723 ;
-  reg \$724 ;
-  reg \$725 ;
-  reg \$726 ;
-  reg \$727 ;
-  reg \$728 ;
-  reg \$729 ;
   wire \$73 ;
-  reg \$730 ;
-  reg \$731 ;
-  reg \$732 ;
-  reg \$733 ;
-  reg \$734 ;
-  reg \$735 ;
-  reg \$736 ;
-  reg \$737 ;
-  reg \$738 ;
-  reg \$739 ;
   wire \$74 ;
-  reg \$740 ;
-  reg \$741 ;
-  reg \$742 ;
-  reg \$743 ;
-  reg \$744 ;
-  reg \$745 ;
-  reg \$746 ;
-  reg \$747 ;
-  reg \$748 ;
-  reg \$749 ;
   wire \$75 ;
-  reg \$750 ;
-  reg \$751 ;
-  reg \$752 ;
-  reg \$753 ;
-  reg \$754 ;
-  reg \$755 ;
-  reg [3:0] \$756 ;
-  reg \$757 ;
-  reg \$758 ;
-  reg \$759 ;
   wire \$76 ;
-  reg \$760 ;
-  reg \$761 ;
-  reg \$762 ;
-  reg \$763 ;
-  reg \$764 ;
-  reg \$765 ;
-  reg \$766 ;
-  reg \$767 ;
-  reg [5:0] \$768 ;
-  reg [15:0] \$769 ;
   wire \$77 ;
-  reg [12:0] \$770 ;
-  reg [31:0] \$771 ;
-  reg [22:0] \$772 ;
-  reg [31:0] \$773 ;
-  reg [7:0] \$774 ;
-  reg [31:0] \$775 ;
-  reg [3:0] \$776 ;
-  reg \$777 ;
-  reg [7:0] \$778 ;
-  reg [12:0] \$779 ;
   wire \$78 ;
-  reg \$780 ;
-  reg [31:0] \$781 ;
   wire \$79 ;
   wire [31:0] \$8 ;
   wire \$80 ;
@@ -2067,27 +1899,16 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire ch0__clear_counters;
   input ch0__config_error;
   wire ch0__config_error;
-  wire [15:0] ch0__count_aborted;
+  wire [2:0] ch0__count_addr;
   wire [15:0] ch0__count_ca_aborted;
   wire [15:0] ch0__count_ca_crc4_error;
   wire [15:0] ch0__count_ca_data_fault;
   wire [15:0] ch0__count_ca_no_answer;
   wire [15:0] ch0__count_ca_refused;
-  wire [15:0] ch0__count_crc_word0;
-  wire [15:0] ch0__count_crc_word1;
-  wire [15:0] ch0__count_delay_jump;
-  wire [15:0] ch0__count_delay_range;
-  wire [15:0] ch0__count_lc_repeat;
-  wire [15:0] ch0__count_lc_skip;
-  wire [15:0] ch0__count_lc_zero;
-  wire [15:0] ch0__count_no_ack;
-  wire [15:0] ch0__count_no_start;
-  wire [15:0] ch0__count_no_stop;
-  wire [15:0] ch0__count_noise_event;
-  wire [15:0] ch0__count_noisy_line;
-  wire [15:0] ch0__count_overrun;
-  wire [15:0] ch0__count_slo_stuck_low;
-  wire [15:0] ch0__count_spw_mismatch;
+  input [31:0] ch0__count_data;
+  wire [31:0] ch0__count_data;
+  output ch0__count_en;
+  wire ch0__count_en;
   wire ch0__delay_settled;
   wire [7:0] ch0__delay_spread;
   input ch0__done;
@@ -2230,14 +2051,6 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   output ch0_cfg_words_w1_signed;
   reg ch0_cfg_words_w1_signed = 1'h0;
   wire ch0_cfg_words_write;
-  wire ch0_count_ack_write;
-  wire ch0_count_check_write;
-  wire ch0_count_crc_write;
-  wire ch0_count_cycle_write;
-  wire ch0_count_lc_write;
-  wire ch0_count_line_write;
-  wire ch0_count_noise_write;
-  wire ch0_count_stop_write;
   output ch0_ctrl_abort;
   reg ch0_ctrl_abort = 1'h0;
   output ch0_ctrl_clear_counters;
@@ -2282,14 +2095,6 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg ch0_read_select_95 = 1'h0;
   reg ch0_read_select_96 = 1'h0;
   reg ch0_read_select_97 = 1'h0;
-  reg ch0_read_select_98 = 1'h0;
-  reg ch0_read_select_99 = 1'h0;
-  reg ch0_read_select_9a = 1'h0;
-  reg ch0_read_select_9b = 1'h0;
-  reg ch0_read_select_9c = 1'h0;
-  reg ch0_read_select_9d = 1'h0;
-  reg ch0_read_select_9e = 1'h0;
-  reg ch0_read_select_9f = 1'h0;
   reg ch0_read_select_a0 = 1'h0;
   reg ch0_read_select_a1 = 1'h0;
   reg ch0_read_select_a2 = 1'h0;
@@ -2334,6 +2139,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire ch0_result_w1_lo_write;
   wire ch0_state_write;
   reg ch0_window0_read = 1'h0;
+  reg ch0_window1_read = 1'h0;
   (* init = 1'h0 *)
   wire ch1__abort_cycle;
   input ch1__busy;
@@ -2443,27 +2249,16 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire ch1__clear_counters;
   input ch1__config_error;
   wire ch1__config_error;
-  wire [15:0] ch1__count_aborted;
+  wire [2:0] ch1__count_addr;
   wire [15:0] ch1__count_ca_aborted;
   wire [15:0] ch1__count_ca_crc4_error;
   wire [15:0] ch1__count_ca_data_fault;
   wire [15:0] ch1__count_ca_no_answer;
   wire [15:0] ch1__count_ca_refused;
-  wire [15:0] ch1__count_crc_word0;
-  wire [15:0] ch1__count_crc_word1;
-  wire [15:0] ch1__count_delay_jump;
-  wire [15:0] ch1__count_delay_range;
-  wire [15:0] ch1__count_lc_repeat;
-  wire [15:0] ch1__count_lc_skip;
-  wire [15:0] ch1__count_lc_zero;
-  wire [15:0] ch1__count_no_ack;
-  wire [15:0] ch1__count_no_start;
-  wire [15:0] ch1__count_no_stop;
-  wire [15:0] ch1__count_noise_event;
-  wire [15:0] ch1__count_noisy_line;
-  wire [15:0] ch1__count_overrun;
-  wire [15:0] ch1__count_slo_stuck_low;
-  wire [15:0] ch1__count_spw_mismatch;
+  input [31:0] ch1__count_data;
+  wire [31:0] ch1__count_data;
+  output ch1__count_en;
+  wire ch1__count_en;
   wire ch1__delay_settled;
   wire [7:0] ch1__delay_spread;
   input ch1__done;
@@ -2512,8 +2307,8 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$309 ;
-  reg \ch1_ca_request_write$309  = 1'h0;
+  output \ch1_ca_request_write$287 ;
+  reg \ch1_ca_request_write$287  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_write;
   output [23:0] ch1_cfg_ack_ack_limit;
@@ -2606,14 +2401,6 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   output ch1_cfg_words_w1_signed;
   reg ch1_cfg_words_w1_signed = 1'h0;
   wire ch1_cfg_words_write;
-  wire ch1_count_ack_write;
-  wire ch1_count_check_write;
-  wire ch1_count_crc_write;
-  wire ch1_count_cycle_write;
-  wire ch1_count_lc_write;
-  wire ch1_count_line_write;
-  wire ch1_count_noise_write;
-  wire ch1_count_stop_write;
   output ch1_ctrl_abort;
   reg ch1_ctrl_abort = 1'h0;
   output ch1_ctrl_clear_counters;
@@ -2658,14 +2445,6 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg ch1_read_select_115 = 1'h0;
   reg ch1_read_select_116 = 1'h0;
   reg ch1_read_select_117 = 1'h0;
-  reg ch1_read_select_118 = 1'h0;
-  reg ch1_read_select_119 = 1'h0;
-  reg ch1_read_select_11a = 1'h0;
-  reg ch1_read_select_11b = 1'h0;
-  reg ch1_read_select_11c = 1'h0;
-  reg ch1_read_select_11d = 1'h0;
-  reg ch1_read_select_11e = 1'h0;
-  reg ch1_read_select_11f = 1'h0;
   reg ch1_read_select_120 = 1'h0;
   reg ch1_read_select_121 = 1'h0;
   reg ch1_read_select_122 = 1'h0;
@@ -2710,6 +2489,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   wire ch1_result_w1_lo_write;
   wire ch1_state_write;
   reg ch1_window0_read = 1'h0;
+  reg ch1_window1_read = 1'h0;
   input clk;
   wire clk;
   reg [31:0] config_write_data = 32'd0;
@@ -2733,18 +2513,18 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6330$0 ;
-  wire [186:0] \port$6330$0 ;
-  input [335:0] \port$6343$0 ;
-  wire [335:0] \port$6343$0 ;
-  input [9:0] \port$6475$0 ;
-  wire [9:0] \port$6475$0 ;
-  input [186:0] \port$6897$0 ;
-  wire [186:0] \port$6897$0 ;
-  input [335:0] \port$6910$0 ;
-  wire [335:0] \port$6910$0 ;
-  input [9:0] \port$7042$0 ;
-  wire [9:0] \port$7042$0 ;
+  input [186:0] \port$6443$0 ;
+  wire [186:0] \port$6443$0 ;
+  input [79:0] \port$6456$0 ;
+  wire [79:0] \port$6456$0 ;
+  input [9:0] \port$6541$0 ;
+  wire [9:0] \port$6541$0 ;
+  input [186:0] \port$6964$0 ;
+  wire [186:0] \port$6964$0 ;
+  input [79:0] \port$6977$0 ;
+  wire [79:0] \port$6977$0 ;
+  input [9:0] \port$7062$0 ;
+  wire [9:0] \port$7062$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2752,920 +2532,756 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   reg [31:0] write_data = 32'd0;
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
-  assign \$219  = ch1_ctrl_write & write_strb[1];
-  assign \$220  = ch1_ctrl_write & write_strb[1];
-  assign \$221  = write_data[0] & write_strb[0];
-  assign \$222  = ch1_irq_status_write ? \$221  : 1'h0;
-  assign \$223  = write_data[1] & write_strb[0];
-  assign \$224  = ch1_irq_status_write ? \$223  : 1'h0;
-  assign \$225  = write_data[2] & write_strb[0];
-  assign \$226  = ch1_irq_status_write ? \$225  : 1'h0;
-  assign \$227  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$228  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$229  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$230  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$231  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$232  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$233  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$234  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$235  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$236  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$237  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$238  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$239  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$240  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$241  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$242  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$243  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$244  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$245  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$246  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$247  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$248  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$249  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$250  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$251  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$252  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$253  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$254  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$255  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$256  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$257  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$258  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$259  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$260  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$261  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$262  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$263  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$264  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$265  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$266  = ch1_cfg_crc0_config_write & config_write_strb[0];
-  assign \$267  = ch1_cfg_crc0_config_write & config_write_strb[1];
-  assign \$268  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$269  = ch1_cfg_crc0_config_write & config_write_strb[3];
-  assign \$270  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$271  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$272  = ch1_cfg_crc1_config_write & config_write_strb[0];
-  assign \$273  = ch1_cfg_crc1_config_write & config_write_strb[1];
-  assign \$274  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$275  = ch1_cfg_crc1_config_write & config_write_strb[3];
-  assign \$276  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$277  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$278  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$279  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$280  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$281  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$282  = write_data[0] & write_strb[0];
-  assign \$283  = ch1_ca_ctrl_write ? \$282  : 1'h0;
-  assign \$284  = write_data[1] & write_strb[0];
-  assign \$285  = ch1_ca_ctrl_write ? \$284  : 1'h0;
-  assign \$286  = bus__r_addr == 9'h100;
-  assign \$287  = bus__r_addr == 9'h101;
-  assign \$288  = bus__r_addr == 9'h102;
-  assign \$289  = bus__r_addr == 9'h104;
-  assign \$290  = bus__r_addr == 9'h105;
-  assign \$291  = bus__r_addr == 9'h108;
-  assign \$292  = bus__r_addr == 9'h109;
-  assign \$293  = bus__r_addr == 9'h10a;
-  assign \$294  = bus__r_addr == 9'h10b;
-  assign \$295  = bus__r_addr == 9'h10c;
-  assign \$296  = bus__r_addr == 9'h10d;
-  assign \$297  = bus__r_addr == 9'h10e;
-  assign \$298  = bus__r_addr == 9'h10f;
-  assign \$299  = bus__r_addr == 9'h110;
-  assign \$300  = bus__r_addr == 9'h111;
-  assign \$301  = bus__r_addr == 9'h112;
-  assign \$302  = bus__r_addr == 9'h113;
-  assign \$303  = bus__r_addr == 9'h114;
-  assign \$304  = bus__r_addr == 9'h115;
-  assign \$305  = bus__r_addr == 9'h116;
-  assign \$306  = bus__r_addr == 9'h117;
-  assign \$307  = bus__r_addr == 9'h118;
-  assign \$308  = bus__r_addr == 9'h119;
-  assign \$309  = bus__r_addr == 9'h11a;
-  assign \$310  = bus__r_addr == 9'h11b;
-  assign \$311  = bus__r_addr == 9'h11c;
-  assign \$312  = bus__r_addr == 9'h11d;
-  assign \$313  = bus__r_addr == 9'h11e;
-  assign \$314  = bus__r_addr == 9'h11f;
-  assign \$315  = bus__r_addr == 9'h120;
-  assign \$316  = bus__r_addr == 9'h121;
-  assign \$317  = bus__r_addr == 9'h122;
-  assign \$318  = bus__r_addr == 9'h123;
-  assign \$319  = bus__r_addr == 9'h140;
-  assign \$320  = bus__r_addr == 9'h141;
-  assign \$321  = bus__r_addr == 9'h142;
-  assign \$322  = bus__r_addr == 9'h143;
-  assign \$323  = bus__r_addr == 9'h144;
-  assign \$324  = bus__r_addr == 9'h145;
-  assign \$325  = ch1_read_select_110 & bus__r_load;
-  assign \$326  = bus__r_addr[10:4] == 5'h16;
-  assign \$327  = bus__r_en & \$326 ;
-  assign \$328  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$330  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
+  assign \$287  = bus__r_addr == 9'h120;
+  assign \$288  = bus__r_addr == 9'h121;
+  assign \$289  = bus__r_addr == 9'h122;
+  assign \$290  = bus__r_addr == 9'h123;
+  assign \$291  = bus__r_addr == 9'h140;
+  assign \$292  = bus__r_addr == 9'h141;
+  assign \$293  = bus__r_addr == 9'h142;
+  assign \$294  = bus__r_addr == 9'h143;
+  assign \$295  = bus__r_addr == 9'h144;
+  assign \$296  = bus__r_addr == 9'h145;
+  assign \$297  = ch1_read_select_110 & bus__r_load;
+  assign \$298  = bus__r_addr[10:3] == 6'h23;
+  assign \$299  = bus__r_en & \$298 ;
+  assign \$300  = bus__r_addr[10:4] == 5'h16;
+  assign \$301  = bus__r_en & \$300 ;
+  assign \$302  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$304  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
+  assign \$305  = \$303  | \$304 ;
+  assign \$306  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
+  assign \$307  = \$305  | \$306 ;
+  assign \$308  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$309  = \$307  | \$308 ;
+  assign \$310  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
+  assign \$311  = \$309  | \$310 ;
+  assign \$312  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
+  assign \$313  = \$311  | \$312 ;
+  assign \$314  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
+  assign \$315  = \$313  | \$314 ;
+  assign \$316  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
+  assign \$317  = \$315  | \$316 ;
+  assign \$318  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
+  assign \$319  = \$317  | \$318 ;
+  assign \$320  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$321  = \$319  | \$320 ;
+  assign \$322  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 3'h0, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 4'h0, ch1_cfg_words_w0_signed, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
+  assign \$323  = \$321  | \$322 ;
+  assign \$324  = ch1_read_select_10e ? { 8'h00, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
+  assign \$325  = \$323  | \$324 ;
+  assign \$326  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
+  assign \$327  = \$325  | \$326 ;
+  assign \$328  = ch1_read_select_110 ? { 2'h0, \port$6964$0 [182:177], 4'h0, \port$6964$0 [186:183], 1'h0, \port$6964$0 [176:174], 1'h0, \port$6964$0 [133:131], 3'h0, \port$6964$0 [49], \port$6964$0 [3:0] } : 32'd0;
+  assign \$329  = \$327  | \$328 ;
+  assign \$330  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$331  = \$329  | \$330 ;
-  assign \$332  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
+  assign \$332  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
   assign \$333  = \$331  | \$332 ;
-  assign \$334  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$334  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
   assign \$335  = \$333  | \$334 ;
-  assign \$336  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
+  assign \$336  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
   assign \$337  = \$335  | \$336 ;
-  assign \$338  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
+  assign \$338  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
   assign \$339  = \$337  | \$338 ;
-  assign \$340  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
+  assign \$340  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$341  = \$339  | \$340 ;
-  assign \$342  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
+  assign \$342  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$343  = \$341  | \$342 ;
-  assign \$344  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
+  assign \$344  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$346  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
   assign \$347  = \$345  | \$346 ;
-  assign \$348  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 3'h0, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 4'h0, ch1_cfg_words_w0_signed, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
+  assign \$348  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
   assign \$349  = \$347  | \$348 ;
-  assign \$350  = ch1_read_select_10e ? { 8'h00, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
+  assign \$350  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
   assign \$351  = \$349  | \$350 ;
-  assign \$352  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
+  assign \$352  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$287 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$353  = \$351  | \$352 ;
-  assign \$354  = ch1_read_select_110 ? { 2'h0, \port$6897$0 [182:177], 4'h0, \port$6897$0 [186:183], 1'h0, \port$6897$0 [176:174], 1'h0, \port$6897$0 [133:131], 3'h0, \port$6897$0 [49], \port$6897$0 [3:0] } : 32'd0;
-  assign \$355  = \$353  | \$354 ;
-  assign \$356  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$356  = ch1_read_select_142 ? { 17'h00000, \port$7062$0 [9:3], 1'h0, \port$7062$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$357  = \$355  | \$356 ;
-  assign \$358  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$358  = ch1_read_select_143 ? \port$6977$0 [31:0] : 32'd0;
   assign \$359  = \$357  | \$358 ;
-  assign \$360  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$360  = ch1_read_select_144 ? \port$6977$0 [63:32] : 32'd0;
   assign \$361  = \$359  | \$360 ;
-  assign \$362  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$362  = ch1_read_select_145 ? { 16'h0000, \port$6977$0 [79:64] } : 32'd0;
   assign \$363  = \$361  | \$362 ;
-  assign \$364  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$364  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$365  = \$363  | \$364 ;
-  assign \$366  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$366  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
   assign \$367  = \$365  | \$366 ;
-  assign \$368  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
-  assign \$369  = \$367  | \$368 ;
-  assign \$370  = ch1_read_select_118 ? \port$6910$0 [31:0] : 32'd0;
-  assign \$371  = \$369  | \$370 ;
-  assign \$372  = ch1_read_select_119 ? \port$6910$0 [63:32] : 32'd0;
-  assign \$373  = \$371  | \$372 ;
-  assign \$374  = ch1_read_select_11a ? \port$6910$0 [95:64] : 32'd0;
-  assign \$375  = \$373  | \$374 ;
-  assign \$376  = ch1_read_select_11b ? \port$6910$0 [127:96] : 32'd0;
-  assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_11c ? \port$6910$0 [159:128] : 32'd0;
-  assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_11d ? \port$6910$0 [191:160] : 32'd0;
-  assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_11e ? \port$6910$0 [223:192] : 32'd0;
-  assign \$383  = \$381  | \$382 ;
-  assign \$384  = ch1_read_select_11f ? \port$6910$0 [255:224] : 32'd0;
-  assign \$385  = \$383  | \$384 ;
-  assign \$386  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
-  assign \$387  = \$385  | \$386 ;
-  assign \$388  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
-  assign \$389  = \$387  | \$388 ;
-  assign \$390  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
-  assign \$391  = \$389  | \$390 ;
-  assign \$392  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
-  assign \$393  = \$391  | \$392 ;
-  assign \$394  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$309 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
-  assign \$395  = \$393  | \$394 ;
-  assign \$398  = ch1_read_select_142 ? { 17'h00000, \port$7042$0 [9:3], 1'h0, \port$7042$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
-  assign \$399  = \$397  | \$398 ;
-  assign \$400  = ch1_read_select_143 ? \port$6910$0 [287:256] : 32'd0;
-  assign \$401  = \$399  | \$400 ;
-  assign \$402  = ch1_read_select_144 ? \port$6910$0 [319:288] : 32'd0;
-  assign \$403  = \$401  | \$402 ;
-  assign \$404  = ch1_read_select_145 ? { 16'h0000, \port$6910$0 [335:320] } : 32'd0;
-  assign \$405  = \$403  | \$404 ;
-  assign \$406  = ch1_window0_read ? ch1__ca_rbuf_data : 32'd0;
-  assign \$407  = \$405  | \$406 ;
-  assign \$408  = ! write_addr;
-  assign g_id_write = write_en & \$408 ;
-  assign \$409  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$409 ;
-  assign \$410  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$410 ;
-  assign \$411  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$411 ;
-  assign \$412  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$412 ;
-  assign \$413  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$413 ;
-  assign \$414  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$414 ;
-  assign \$415  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$415 ;
-  assign \$416  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$416 ;
-  assign \$417  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$417 ;
-  assign \$418  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$418 ;
-  assign \$419  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$419 ;
-  assign \$420  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$420 ;
-  assign \$421  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$421 ;
-  assign \$422  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$422 ;
-  assign \$423  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$423 ;
-  assign \$424  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$424 ;
-  assign \$425  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$425 ;
-  assign \$426  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$426 ;
-  assign \$427  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$427 ;
-  assign \$428  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$428 ;
-  assign \$429  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$429 ;
-  assign \$430  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$430 ;
-  assign \$431  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$431 ;
-  assign \$432  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$432 ;
-  assign \$433  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$433 ;
-  assign \$434  = write_addr == 8'h98;
-  assign ch0_count_crc_write = write_en & \$434 ;
-  assign \$435  = write_addr == 8'h99;
-  assign ch0_count_ack_write = write_en & \$435 ;
-  assign \$436  = write_addr == 8'h9a;
-  assign ch0_count_line_write = write_en & \$436 ;
-  assign \$437  = write_addr == 8'h9b;
-  assign ch0_count_lc_write = write_en & \$437 ;
-  assign \$438  = write_addr == 8'h9c;
-  assign ch0_count_check_write = write_en & \$438 ;
-  assign \$439  = write_addr == 8'h9d;
-  assign ch0_count_cycle_write = write_en & \$439 ;
-  assign \$440  = write_addr == 8'h9e;
-  assign ch0_count_stop_write = write_en & \$440 ;
-  assign \$441  = write_addr == 8'h9f;
-  assign ch0_count_noise_write = write_en & \$441 ;
-  assign \$442  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$442 ;
-  assign \$443  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$443 ;
-  assign \$444  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$444 ;
-  assign \$445  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$445 ;
-  assign \$446  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$446 ;
-  assign \$447  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$447 ;
-  assign \$448  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$448 ;
-  assign \$449  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$449 ;
-  assign \$450  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$450 ;
-  assign \$451  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$451 ;
-  assign \$452  = write_addr[10:4] == 4'hd;
-  assign \$453  = write_en & \$452 ;
-  assign ch0__ca_wbuf_en = \$453  ? write_strb : 4'h0;
-  assign \$454  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$454 ;
-  assign \$455  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$457  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$459  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$460 , \$458 , \$456  };
-  assign \$461  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$461 ;
-  assign \$462  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$462 ;
-  assign \$463  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$463 ;
-  assign \$464  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$464 ;
-  assign \$465  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$465 ;
-  assign \$466  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$466 ;
-  assign \$467  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$467 ;
-  assign \$468  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$468 ;
-  assign \$469  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$469 ;
-  assign \$470  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$470 ;
-  assign \$471  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$471 ;
-  assign \$472  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$472 ;
-  assign \$473  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$473 ;
-  assign \$474  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$474 ;
-  assign \$475  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$475 ;
-  assign \$476  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$476 ;
-  assign \$477  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$477 ;
-  assign \$478  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$478 ;
-  assign \$479  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$479 ;
-  assign \$480  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$480 ;
-  assign \$481  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$481 ;
-  assign \$482  = write_addr == 9'h118;
-  assign ch1_count_crc_write = write_en & \$482 ;
-  assign \$483  = write_addr == 9'h119;
-  assign ch1_count_ack_write = write_en & \$483 ;
-  assign \$484  = write_addr == 9'h11a;
-  assign ch1_count_line_write = write_en & \$484 ;
-  assign \$485  = write_addr == 9'h11b;
-  assign ch1_count_lc_write = write_en & \$485 ;
-  assign \$486  = write_addr == 9'h11c;
-  assign ch1_count_check_write = write_en & \$486 ;
-  assign \$487  = write_addr == 9'h11d;
-  assign ch1_count_cycle_write = write_en & \$487 ;
-  assign \$488  = write_addr == 9'h11e;
-  assign ch1_count_stop_write = write_en & \$488 ;
-  assign \$489  = write_addr == 9'h11f;
-  assign ch1_count_noise_write = write_en & \$489 ;
-  assign \$490  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$490 ;
-  assign \$491  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$491 ;
-  assign \$492  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$492 ;
-  assign \$493  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$493 ;
-  assign \$494  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$494 ;
-  assign \$495  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$495 ;
-  assign \$496  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$496 ;
-  assign \$497  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$497 ;
-  assign \$498  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$498 ;
-  assign \$499  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$499 ;
-  assign \$500  = write_addr[10:4] == 5'h15;
-  assign \$501  = write_en & \$500 ;
-  assign ch1__ca_wbuf_en = \$501  ? write_strb : 4'h0;
-  assign \$502  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$502 ;
-  assign \$503  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$505  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$507  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$508 , \$506 , \$504  };
-  assign \$510  = \$509  | ch0_read_data;
-  assign bus__r_data = \$510  | ch1_read_data;
-  always @(posedge clk)
-    write_en <= \$511 ;
-  always @(posedge clk)
-    write_addr <= \$512 ;
-  always @(posedge clk)
-    write_data <= \$513 ;
-  always @(posedge clk)
-    write_strb <= \$514 ;
-  always @(posedge clk)
-    config_write_data <= \$515 ;
-  always @(posedge clk)
-    config_write_strb <= \$516 ;
-  always @(posedge clk)
-    g_trigger_start <= \$517 ;
-  always @(posedge clk)
-    g_read_select_0 <= \$518 ;
-  always @(posedge clk)
-    g_read_select_1 <= \$519 ;
-  always @(posedge clk)
-    g_read_select_2 <= \$520 ;
-  always @(posedge clk)
-    g_read_select_3 <= \$521 ;
-  always @(posedge clk)
-    g_read_select_4 <= \$522 ;
+  assign \$368  = ! write_addr;
+  assign g_id_write = write_en & \$368 ;
+  assign \$369  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$369 ;
+  assign \$370  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$370 ;
+  assign \$371  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$371 ;
+  assign \$372  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$372 ;
+  assign \$373  = bus__r_addr[10:3] == 5'h13;
+  assign ch0__count_en = bus__r_en & \$373 ;
+  assign \$374  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$374 ;
+  assign \$375  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$375 ;
+  assign \$376  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$376 ;
+  assign \$377  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$377 ;
+  assign \$378  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$378 ;
+  assign \$379  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$379 ;
+  assign \$380  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$380 ;
+  assign \$381  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$381 ;
+  assign \$382  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$382 ;
+  assign \$383  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$383 ;
+  assign \$384  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$384 ;
+  assign \$385  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$385 ;
+  assign \$386  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$386 ;
+  assign \$387  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$387 ;
+  assign \$388  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$388 ;
+  assign \$389  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$389 ;
+  assign \$390  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$390 ;
+  assign \$391  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$391 ;
+  assign \$392  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$392 ;
+  assign \$393  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$393 ;
+  assign \$394  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$394 ;
+  assign \$395  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$395 ;
+  assign \$396  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$396 ;
+  assign \$397  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$397 ;
+  assign \$398  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$398 ;
+  assign \$399  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$399 ;
+  assign \$400  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$400 ;
+  assign \$401  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$401 ;
+  assign \$402  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$402 ;
+  assign \$403  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$403 ;
+  assign \$404  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$404 ;
+  assign \$405  = write_addr[10:4] == 4'hd;
+  assign \$406  = write_en & \$405 ;
+  assign ch0__ca_wbuf_en = \$406  ? write_strb : 4'h0;
+  assign \$407  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$407 ;
+  assign \$408  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$410  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$412  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$413 , \$411 , \$409  };
+  assign \$414  = bus__r_addr[10:3] == 6'h23;
+  assign ch1__count_en = bus__r_en & \$414 ;
+  assign \$415  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$415 ;
+  assign \$416  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$416 ;
+  assign \$417  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$417 ;
+  assign \$418  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$418 ;
+  assign \$419  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$419 ;
+  assign \$420  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$420 ;
+  assign \$421  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$421 ;
+  assign \$422  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$422 ;
+  assign \$423  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$423 ;
+  assign \$424  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$424 ;
+  assign \$425  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$425 ;
+  assign \$426  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$426 ;
+  assign \$427  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$427 ;
+  assign \$428  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$428 ;
+  assign \$429  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$429 ;
+  assign \$430  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$430 ;
+  assign \$431  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$431 ;
+  assign \$432  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$432 ;
+  assign \$433  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$433 ;
+  assign \$434  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$434 ;
+  assign \$435  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$435 ;
+  assign \$436  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$436 ;
+  assign \$437  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$437 ;
+  assign \$438  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$438 ;
+  assign \$439  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$439 ;
+  assign \$440  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$440 ;
+  assign \$441  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$441 ;
+  assign \$442  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$442 ;
+  assign \$443  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$443 ;
+  assign \$444  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$444 ;
+  assign \$445  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$445 ;
+  assign \$446  = write_addr[10:4] == 5'h15;
+  assign \$447  = write_en & \$446 ;
+  assign ch1__ca_wbuf_en = \$447  ? write_strb : 4'h0;
+  assign \$448  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$448 ;
+  assign \$449  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$451  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$453  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$454 , \$452 , \$450  };
+  assign \$456  = \$455  | ch0_read_data;
+  assign bus__r_data = \$456  | ch1_read_data;
   always @(posedge clk)
-    g_read_data <= \$523 ;
+    write_en <= \$457 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$524 ;
+    write_addr <= \$458 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$525 ;
+    write_data <= \$459 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$526 ;
+    write_strb <= \$460 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$527 ;
+    config_write_data <= \$461 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$528 ;
+    config_write_strb <= \$462 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$529 ;
+    g_trigger_start <= \$463 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$530 ;
+    g_read_select_0 <= \$464 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$531 ;
+    g_read_select_1 <= \$465 ;
   always @(posedge clk)
-    ch0_irq_enable_config_write <= \$532 ;
+    g_read_select_2 <= \$466 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$533 ;
+    g_read_select_3 <= \$467 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$534 ;
+    g_read_select_4 <= \$468 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$535 ;
+    g_read_data <= \$469 ;
   always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$536 ;
+    ch0_ctrl_start <= \$470 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$537 ;
+    ch0_ctrl_abort <= \$471 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$538 ;
+    ch0_ctrl_clear_counters <= \$472 ;
   always @(posedge clk)
-    ch0_cfg_period_config_write <= \$539 ;
+    ch0_ctrl_periodic <= \$473 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$540 ;
+    ch0_ctrl_trigger_enable <= \$474 ;
   always @(posedge clk)
-    ch0_cfg_break_config_write <= \$541 ;
+    ch0_irq_status_done <= \$475 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$542 ;
+    ch0_irq_status_error <= \$476 ;
   always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$543 ;
+    ch0_irq_status_access_done <= \$477 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$544 ;
+    ch0_irq_enable_config_write <= \$478 ;
   always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$545 ;
+    ch0_irq_enable_done <= \$479 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$546 ;
+    ch0_irq_enable_error <= \$480 ;
   always @(posedge clk)
-    ch0_cfg_words_config_write <= \$547 ;
+    ch0_irq_enable_access_done <= \$481 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$548 ;
+    ch0_cfg_ma_config_write <= \$482 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$549 ;
+    ch0_cfg_ma_ma_half_period <= \$483 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$550 ;
+    ch0_cfg_ma_delay_limit <= \$484 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$551 ;
+    ch0_cfg_period_config_write <= \$485 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$552 ;
+    ch0_cfg_period_request_period <= \$486 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_signed <= \$553 ;
+    ch0_cfg_break_config_write <= \$487 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$554 ;
+    ch0_cfg_break_break_time <= \$488 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$555 ;
+    ch0_cfg_ack_config_write <= \$489 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$556 ;
+    ch0_cfg_ack_ack_limit <= \$490 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$557 ;
+    ch0_cfg_timeout_config_write <= \$491 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$558 ;
+    ch0_cfg_timeout_timeout_limit <= \$492 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_signed <= \$559 ;
+    ch0_cfg_words_config_write <= \$493 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$560 ;
+    ch0_cfg_words_w0_data_bits <= \$494 ;
   always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$561 ;
+    ch0_cfg_words_w0_nenw <= \$495 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$562 ;
+    ch0_cfg_words_w0_lc <= \$496 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$563 ;
+    ch0_cfg_words_w0_crc <= \$497 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$564 ;
+    ch0_cfg_words_w0_gray <= \$498 ;
   always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$565 ;
+    ch0_cfg_words_w0_signed <= \$499 ;
   always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$566 ;
+    ch0_cfg_words_w1_data_bits <= \$500 ;
   always @(posedge clk)
-    ch0_cfg_quiet_config_write <= \$567 ;
+    ch0_cfg_words_w1_nenw <= \$501 ;
   always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$568 ;
+    ch0_cfg_words_w1_lc <= \$502 ;
   always @(posedge clk)
-    ch0_cfg_crc0_config_write <= \$569 ;
+    ch0_cfg_words_w1_crc <= \$503 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_poly <= \$570 ;
+    ch0_cfg_words_w1_gray <= \$504 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$571 ;
+    ch0_cfg_words_w1_signed <= \$505 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_inverted <= \$572 ;
+    ch0_cfg_words_w1_enable <= \$506 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_config_write <= \$573 ;
+    ch0_cfg_checks_config_write <= \$507 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_w0_crc_start <= \$574 ;
+    ch0_cfg_checks_end_check <= \$508 ;
   always @(posedge clk)
-    ch0_cfg_crc1_config_write <= \$575 ;
+    ch0_cfg_checks_spw_check <= \$509 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_poly <= \$576 ;
+    ch0_cfg_checks_spw_tolerance <= \$510 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$577 ;
+    ch0_cfg_checks_noise_limit <= \$511 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_inverted <= \$578 ;
+    ch0_cfg_checks_delay_tolerance <= \$512 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_config_write <= \$579 ;
+    ch0_cfg_quiet_config_write <= \$513 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_w1_crc_start <= \$580 ;
+    ch0_cfg_quiet_quiet_time <= \$514 ;
   always @(posedge clk)
-    ch0_ca_request_config_write <= \$581 ;
+    ch0_cfg_crc0_config_write <= \$515 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$582 ;
+    ch0_cfg_crc0_w0_crc_poly <= \$516 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$583 ;
+    ch0_cfg_crc0_w0_crc_width <= \$517 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$584 ;
+    ch0_cfg_crc0_w0_crc_inverted <= \$518 ;
   always @(posedge clk)
-    \ch0_ca_request_write$105  <= \$585 ;
+    ch0_cfg_crc0_start_config_write <= \$519 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$586 ;
+    ch0_cfg_crc0_start_w0_crc_start <= \$520 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$587 ;
+    ch0_cfg_crc1_config_write <= \$521 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$588 ;
+    ch0_cfg_crc1_w1_crc_poly <= \$522 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$589 ;
+    ch0_cfg_crc1_w1_crc_width <= \$523 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$590 ;
+    ch0_cfg_crc1_w1_crc_inverted <= \$524 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$591 ;
+    ch0_cfg_crc1_start_config_write <= \$525 ;
   always @(posedge clk)
-    ch0_read_select_85 <= \$592 ;
+    ch0_cfg_crc1_start_w1_crc_start <= \$526 ;
   always @(posedge clk)
-    ch0_read_select_88 <= \$593 ;
+    ch0_ca_request_config_write <= \$527 ;
   always @(posedge clk)
-    ch0_read_select_89 <= \$594 ;
+    ch0_ca_request_slave_id <= \$528 ;
   always @(posedge clk)
-    ch0_read_select_8a <= \$595 ;
+    ch0_ca_request_address <= \$529 ;
   always @(posedge clk)
-    ch0_read_select_8b <= \$596 ;
+    ch0_ca_request_count <= \$530 ;
   always @(posedge clk)
-    ch0_read_select_8c <= \$597 ;
+    \ch0_ca_request_write$105  <= \$531 ;
   always @(posedge clk)
-    ch0_read_select_8d <= \$598 ;
+    ch0_ca_ctrl_start <= \$532 ;
   always @(posedge clk)
-    ch0_read_select_8e <= \$599 ;
+    ch0_ca_ctrl_abort <= \$533 ;
   always @(posedge clk)
-    ch0_read_select_8f <= \$600 ;
+    ch0_read_select_80 <= \$534 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$601 ;
+    ch0_read_select_81 <= \$535 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$602 ;
+    ch0_read_select_82 <= \$536 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$603 ;
+    ch0_read_select_84 <= \$537 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$604 ;
+    ch0_read_select_85 <= \$538 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$605 ;
+    ch0_read_select_88 <= \$539 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$606 ;
+    ch0_read_select_89 <= \$540 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$607 ;
+    ch0_read_select_8a <= \$541 ;
   always @(posedge clk)
-    ch0_read_select_97 <= \$608 ;
+    ch0_read_select_8b <= \$542 ;
   always @(posedge clk)
-    ch0_read_select_98 <= \$609 ;
+    ch0_read_select_8c <= \$543 ;
   always @(posedge clk)
-    ch0_read_select_99 <= \$610 ;
+    ch0_read_select_8d <= \$544 ;
   always @(posedge clk)
-    ch0_read_select_9a <= \$611 ;
+    ch0_read_select_8e <= \$545 ;
   always @(posedge clk)
-    ch0_read_select_9b <= \$612 ;
+    ch0_read_select_8f <= \$546 ;
   always @(posedge clk)
-    ch0_read_select_9c <= \$613 ;
+    ch0_read_select_90 <= \$547 ;
   always @(posedge clk)
-    ch0_read_select_9d <= \$614 ;
+    ch0_read_select_91 <= \$548 ;
   always @(posedge clk)
-    ch0_read_select_9e <= \$615 ;
+    ch0_read_select_92 <= \$549 ;
   always @(posedge clk)
-    ch0_read_select_9f <= \$616 ;
+    ch0_read_select_93 <= \$550 ;
   always @(posedge clk)
-    ch0_read_select_a0 <= \$617 ;
+    ch0_read_select_94 <= \$551 ;
   always @(posedge clk)
-    ch0_read_select_a1 <= \$618 ;
+    ch0_read_select_95 <= \$552 ;
   always @(posedge clk)
-    ch0_read_select_a2 <= \$619 ;
+    ch0_read_select_96 <= \$553 ;
   always @(posedge clk)
-    ch0_read_select_a3 <= \$620 ;
+    ch0_read_select_97 <= \$554 ;
   always @(posedge clk)
-    ch0_read_select_c0 <= \$621 ;
+    ch0_read_select_a0 <= \$555 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$622 ;
+    ch0_read_select_a1 <= \$556 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$623 ;
+    ch0_read_select_a2 <= \$557 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$624 ;
+    ch0_read_select_a3 <= \$558 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$625 ;
+    ch0_read_select_c0 <= \$559 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$626 ;
+    ch0_read_select_c1 <= \$560 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$627 ;
+    ch0_read_select_c2 <= \$561 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$628 ;
+    ch0_read_select_c3 <= \$562 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$629 ;
+    ch0_read_select_c4 <= \$563 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$630 ;
+    ch0_read_select_c5 <= \$564 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$631 ;
+    ch0_result_status_status_snapshot <= \$565 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$632 ;
+    ch0_result_status_cds_snapshot <= \$566 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$633 ;
+    ch0_result_status_w0_ne_snapshot <= \$567 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$634 ;
+    ch0_result_status_w0_nw_snapshot <= \$568 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$635 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$569 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$636 ;
+    ch0_result_status_w1_ne_snapshot <= \$570 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$637 ;
+    ch0_result_status_w1_nw_snapshot <= \$571 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$638 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$572 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$639 ;
+    ch0_result_status_lc_repeat_snapshot <= \$573 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$640 ;
+    ch0_result_status_lc_skip_snapshot <= \$574 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$641 ;
+    ch0_result_status_lc_zero_snapshot <= \$575 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$642 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$576 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$643 ;
+    ch0_result_status_lc_snapshot <= \$577 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$644 ;
+    ch0_result_seq_seq_snapshot <= \$578 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$645 ;
+    ch0_result_seq_line_delay_snapshot <= \$579 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$646 ;
+    ch0_result_w0_lo_data_snapshot <= \$580 ;
   always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$647 ;
+    ch0_result_w0_hi_data_snapshot <= \$581 ;
   always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$648 ;
+    ch0_result_w1_lo_data_snapshot <= \$582 ;
   always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$649 ;
+    ch0_result_w1_hi_data_snapshot <= \$583 ;
   always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$650 ;
+    ch0_result_timestamp_time_snapshot <= \$584 ;
   always @(posedge clk)
-    ch0_window0_read <= \$651 ;
+    ch0_result_line_noise_events_snapshot <= \$585 ;
   always @(posedge clk)
-    ch0_read_data <= \$652 ;
+    ch0_result_line_delay_settled_snapshot <= \$586 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$653 ;
+    ch0_result_line_delay_spread_snapshot <= \$587 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$654 ;
+    ch0_result_line_settled_delay_snapshot <= \$588 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$655 ;
+    ch0_window0_read <= \$589 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$656 ;
+    ch0_window1_read <= \$590 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$657 ;
+    ch0_read_data <= \$591 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$658 ;
+    ch1_ctrl_start <= \$592 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$659 ;
+    ch1_ctrl_abort <= \$593 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$660 ;
+    ch1_ctrl_clear_counters <= \$594 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$661 ;
+    ch1_ctrl_periodic <= \$595 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$662 ;
+    ch1_ctrl_trigger_enable <= \$596 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$663 ;
+    ch1_irq_status_done <= \$597 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$664 ;
+    ch1_irq_status_error <= \$598 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$665 ;
+    ch1_irq_status_access_done <= \$599 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$666 ;
+    ch1_irq_enable_config_write <= \$600 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$667 ;
+    ch1_irq_enable_done <= \$601 ;
   always @(posedge clk)
-    ch1_cfg_period_config_write <= \$668 ;
+    ch1_irq_enable_error <= \$602 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$669 ;
+    ch1_irq_enable_access_done <= \$603 ;
   always @(posedge clk)
-    ch1_cfg_break_config_write <= \$670 ;
+    ch1_cfg_ma_config_write <= \$604 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$671 ;
+    ch1_cfg_ma_ma_half_period <= \$605 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$672 ;
+    ch1_cfg_ma_delay_limit <= \$606 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$673 ;
+    ch1_cfg_period_config_write <= \$607 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$674 ;
+    ch1_cfg_period_request_period <= \$608 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$675 ;
+    ch1_cfg_break_config_write <= \$609 ;
   always @(posedge clk)
-    ch1_cfg_words_config_write <= \$676 ;
+    ch1_cfg_break_break_time <= \$610 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$677 ;
+    ch1_cfg_ack_config_write <= \$611 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$678 ;
+    ch1_cfg_ack_ack_limit <= \$612 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$679 ;
+    ch1_cfg_timeout_config_write <= \$613 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$680 ;
+    ch1_cfg_timeout_timeout_limit <= \$614 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$681 ;
+    ch1_cfg_words_config_write <= \$615 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_signed <= \$682 ;
+    ch1_cfg_words_w0_data_bits <= \$616 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$683 ;
+    ch1_cfg_words_w0_nenw <= \$617 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$684 ;
+    ch1_cfg_words_w0_lc <= \$618 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$685 ;
+    ch1_cfg_words_w0_crc <= \$619 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$686 ;
+    ch1_cfg_words_w0_gray <= \$620 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$687 ;
+    ch1_cfg_words_w0_signed <= \$621 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_signed <= \$688 ;
+    ch1_cfg_words_w1_data_bits <= \$622 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$689 ;
+    ch1_cfg_words_w1_nenw <= \$623 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$690 ;
+    ch1_cfg_words_w1_lc <= \$624 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$691 ;
+    ch1_cfg_words_w1_crc <= \$625 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$692 ;
+    ch1_cfg_words_w1_gray <= \$626 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$693 ;
+    ch1_cfg_words_w1_signed <= \$627 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$694 ;
+    ch1_cfg_words_w1_enable <= \$628 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$695 ;
+    ch1_cfg_checks_config_write <= \$629 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_write <= \$696 ;
+    ch1_cfg_checks_end_check <= \$630 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$697 ;
+    ch1_cfg_checks_spw_check <= \$631 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_write <= \$698 ;
+    ch1_cfg_checks_spw_tolerance <= \$632 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_poly <= \$699 ;
+    ch1_cfg_checks_noise_limit <= \$633 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$700 ;
+    ch1_cfg_checks_delay_tolerance <= \$634 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_inverted <= \$701 ;
+    ch1_cfg_quiet_config_write <= \$635 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_write <= \$702 ;
+    ch1_cfg_quiet_quiet_time <= \$636 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_w0_crc_start <= \$703 ;
+    ch1_cfg_crc0_config_write <= \$637 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_write <= \$704 ;
+    ch1_cfg_crc0_w0_crc_poly <= \$638 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_poly <= \$705 ;
+    ch1_cfg_crc0_w0_crc_width <= \$639 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$706 ;
+    ch1_cfg_crc0_w0_crc_inverted <= \$640 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_inverted <= \$707 ;
+    ch1_cfg_crc0_start_config_write <= \$641 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_write <= \$708 ;
+    ch1_cfg_crc0_start_w0_crc_start <= \$642 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_w1_crc_start <= \$709 ;
+    ch1_cfg_crc1_config_write <= \$643 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$710 ;
+    ch1_cfg_crc1_w1_crc_poly <= \$644 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$711 ;
+    ch1_cfg_crc1_w1_crc_width <= \$645 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$712 ;
+    ch1_cfg_crc1_w1_crc_inverted <= \$646 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$713 ;
+    ch1_cfg_crc1_start_config_write <= \$647 ;
   always @(posedge clk)
-    \ch1_ca_request_write$309  <= \$714 ;
+    ch1_cfg_crc1_start_w1_crc_start <= \$648 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$715 ;
+    ch1_ca_request_config_write <= \$649 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$716 ;
+    ch1_ca_request_slave_id <= \$650 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$717 ;
+    ch1_ca_request_address <= \$651 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$718 ;
+    ch1_ca_request_count <= \$652 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$719 ;
+    \ch1_ca_request_write$287  <= \$653 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$720 ;
+    ch1_ca_ctrl_start <= \$654 ;
   always @(posedge clk)
-    ch1_read_select_105 <= \$721 ;
+    ch1_ca_ctrl_abort <= \$655 ;
   always @(posedge clk)
-    ch1_read_select_108 <= \$722 ;
+    ch1_read_select_100 <= \$656 ;
   always @(posedge clk)
-    ch1_read_select_109 <= \$723 ;
+    ch1_read_select_101 <= \$657 ;
   always @(posedge clk)
-    ch1_read_select_10a <= \$724 ;
+    ch1_read_select_102 <= \$658 ;
   always @(posedge clk)
-    ch1_read_select_10b <= \$725 ;
+    ch1_read_select_104 <= \$659 ;
   always @(posedge clk)
-    ch1_read_select_10c <= \$726 ;
+    ch1_read_select_105 <= \$660 ;
   always @(posedge clk)
-    ch1_read_select_10d <= \$727 ;
+    ch1_read_select_108 <= \$661 ;
   always @(posedge clk)
-    ch1_read_select_10e <= \$728 ;
+    ch1_read_select_109 <= \$662 ;
   always @(posedge clk)
-    ch1_read_select_10f <= \$729 ;
+    ch1_read_select_10a <= \$663 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$730 ;
+    ch1_read_select_10b <= \$664 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$731 ;
+    ch1_read_select_10c <= \$665 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$732 ;
+    ch1_read_select_10d <= \$666 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$733 ;
+    ch1_read_select_10e <= \$667 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$734 ;
+    ch1_read_select_10f <= \$668 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$735 ;
+    ch1_read_select_110 <= \$669 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$736 ;
+    ch1_read_select_111 <= \$670 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$737 ;
+    ch1_read_select_112 <= \$671 ;
   always @(posedge clk)
-    ch1_read_select_118 <= \$738 ;
+    ch1_read_select_113 <= \$672 ;
   always @(posedge clk)
-    ch1_read_select_119 <= \$739 ;
+    ch1_read_select_114 <= \$673 ;
   always @(posedge clk)
-    ch1_read_select_11a <= \$740 ;
+    ch1_read_select_115 <= \$674 ;
   always @(posedge clk)
-    ch1_read_select_11b <= \$741 ;
+    ch1_read_select_116 <= \$675 ;
   always @(posedge clk)
-    ch1_read_select_11c <= \$742 ;
+    ch1_read_select_117 <= \$676 ;
   always @(posedge clk)
-    ch1_read_select_11d <= \$743 ;
+    ch1_read_select_120 <= \$677 ;
   always @(posedge clk)
-    ch1_read_select_11e <= \$744 ;
+    ch1_read_select_121 <= \$678 ;
   always @(posedge clk)
-    ch1_read_select_11f <= \$745 ;
+    ch1_read_select_122 <= \$679 ;
   always @(posedge clk)
-    ch1_read_select_120 <= \$746 ;
+    ch1_read_select_123 <= \$680 ;
   always @(posedge clk)
-    ch1_read_select_121 <= \$747 ;
+    ch1_read_select_140 <= \$681 ;
   always @(posedge clk)
-    ch1_read_select_122 <= \$748 ;
+    ch1_read_select_141 <= \$682 ;
   always @(posedge clk)
-    ch1_read_select_123 <= \$749 ;
+    ch1_read_select_142 <= \$683 ;
   always @(posedge clk)
-    ch1_read_select_140 <= \$750 ;
+    ch1_read_select_143 <= \$684 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$751 ;
+    ch1_read_select_144 <= \$685 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$752 ;
+    ch1_read_select_145 <= \$686 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$753 ;
+    ch1_result_status_status_snapshot <= \$687 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$754 ;
+    ch1_result_status_cds_snapshot <= \$688 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$755 ;
+    ch1_result_status_w0_ne_snapshot <= \$689 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$756 ;
+    ch1_result_status_w0_nw_snapshot <= \$690 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$757 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$691 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$758 ;
+    ch1_result_status_w1_ne_snapshot <= \$692 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$759 ;
+    ch1_result_status_w1_nw_snapshot <= \$693 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$760 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$694 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$761 ;
+    ch1_result_status_lc_repeat_snapshot <= \$695 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$762 ;
+    ch1_result_status_lc_skip_snapshot <= \$696 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$763 ;
+    ch1_result_status_lc_zero_snapshot <= \$697 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$764 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$698 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$765 ;
+    ch1_result_status_lc_snapshot <= \$699 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$766 ;
+    ch1_result_seq_seq_snapshot <= \$700 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$767 ;
+    ch1_result_seq_line_delay_snapshot <= \$701 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$768 ;
+    ch1_result_w0_lo_data_snapshot <= \$702 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$769 ;
+    ch1_result_w0_hi_data_snapshot <= \$703 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$770 ;
+    ch1_result_w1_lo_data_snapshot <= \$704 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$771 ;
+    ch1_result_w1_hi_data_snapshot <= \$705 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$772 ;
+    ch1_result_timestamp_time_snapshot <= \$706 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$773 ;
+    ch1_result_line_noise_events_snapshot <= \$707 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$774 ;
+    ch1_result_line_delay_settled_snapshot <= \$708 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$775 ;
+    ch1_result_line_delay_spread_snapshot <= \$709 ;
   always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$776 ;
+    ch1_result_line_settled_delay_snapshot <= \$710 ;
   always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$777 ;
+    ch1_window0_read <= \$711 ;
   always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$778 ;
+    ch1_window1_read <= \$712 ;
   always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$779 ;
-  always @(posedge clk)
-    ch1_window0_read <= \$780 ;
-  always @(posedge clk)
-    ch1_read_data <= \$781 ;
+    ch1_read_data <= \$713 ;
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__r_addr;
@@ -3774,179 +3390,790 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$109  = bus__r_addr == 8'h95;
   assign \$110  = bus__r_addr == 8'h96;
   assign \$111  = bus__r_addr == 8'h97;
-  assign \$112  = bus__r_addr == 8'h98;
-  assign \$113  = bus__r_addr == 8'h99;
-  assign \$114  = bus__r_addr == 8'h9a;
-  assign \$115  = bus__r_addr == 8'h9b;
-  assign \$116  = bus__r_addr == 8'h9c;
-  assign \$117  = bus__r_addr == 8'h9d;
-  assign \$118  = bus__r_addr == 8'h9e;
-  assign \$119  = bus__r_addr == 8'h9f;
-  assign \$120  = bus__r_addr == 8'ha0;
-  assign \$121  = bus__r_addr == 8'ha1;
-  assign \$122  = bus__r_addr == 8'ha2;
-  assign \$123  = bus__r_addr == 8'ha3;
-  assign \$124  = bus__r_addr == 8'hc0;
-  assign \$125  = bus__r_addr == 8'hc1;
-  assign \$126  = bus__r_addr == 8'hc2;
-  assign \$127  = bus__r_addr == 8'hc3;
-  assign \$128  = bus__r_addr == 8'hc4;
-  assign \$129  = bus__r_addr == 8'hc5;
-  assign \$130  = ch0_read_select_90 & bus__r_load;
-  assign \$131  = bus__r_addr[10:4] == 4'he;
-  assign \$132  = bus__r_en & \$131 ;
-  assign \$133  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$135  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$112  = bus__r_addr == 8'ha0;
+  assign \$113  = bus__r_addr == 8'ha1;
+  assign \$114  = bus__r_addr == 8'ha2;
+  assign \$115  = bus__r_addr == 8'ha3;
+  assign \$116  = bus__r_addr == 8'hc0;
+  assign \$117  = bus__r_addr == 8'hc1;
+  assign \$118  = bus__r_addr == 8'hc2;
+  assign \$119  = bus__r_addr == 8'hc3;
+  assign \$120  = bus__r_addr == 8'hc4;
+  assign \$121  = bus__r_addr == 8'hc5;
+  assign \$122  = ch0_read_select_90 & bus__r_load;
+  assign \$123  = bus__r_addr[10:3] == 5'h13;
+  assign \$124  = bus__r_en & \$123 ;
+  assign \$125  = bus__r_addr[10:4] == 4'he;
+  assign \$126  = bus__r_en & \$125 ;
+  assign \$127  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$129  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$130  = \$128  | \$129 ;
+  assign \$131  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
+  assign \$132  = \$130  | \$131 ;
+  assign \$133  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$134  = \$132  | \$133 ;
+  assign \$135  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
   assign \$136  = \$134  | \$135 ;
-  assign \$137  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
+  assign \$137  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
   assign \$138  = \$136  | \$137 ;
-  assign \$139  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$139  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
   assign \$140  = \$138  | \$139 ;
-  assign \$141  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
+  assign \$141  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
   assign \$142  = \$140  | \$141 ;
-  assign \$143  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
+  assign \$143  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
   assign \$144  = \$142  | \$143 ;
-  assign \$145  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
+  assign \$145  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
   assign \$146  = \$144  | \$145 ;
-  assign \$147  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
+  assign \$147  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 3'h0, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 4'h0, ch0_cfg_words_w0_signed, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
   assign \$148  = \$146  | \$147 ;
-  assign \$149  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
+  assign \$149  = ch0_read_select_8e ? { 8'h00, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
   assign \$150  = \$148  | \$149 ;
-  assign \$151  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$151  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$152  = \$150  | \$151 ;
-  assign \$153  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 3'h0, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 4'h0, ch0_cfg_words_w0_signed, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
+  assign \$153  = ch0_read_select_90 ? { 2'h0, \port$6443$0 [182:177], 4'h0, \port$6443$0 [186:183], 1'h0, \port$6443$0 [176:174], 1'h0, \port$6443$0 [133:131], 3'h0, \port$6443$0 [49], \port$6443$0 [3:0] } : 32'd0;
   assign \$154  = \$152  | \$153 ;
-  assign \$155  = ch0_read_select_8e ? { 8'h00, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
+  assign \$155  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$156  = \$154  | \$155 ;
-  assign \$157  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
+  assign \$157  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
   assign \$158  = \$156  | \$157 ;
-  assign \$159  = ch0_read_select_90 ? { 2'h0, \port$6330$0 [182:177], 4'h0, \port$6330$0 [186:183], 1'h0, \port$6330$0 [176:174], 1'h0, \port$6330$0 [133:131], 3'h0, \port$6330$0 [49], \port$6330$0 [3:0] } : 32'd0;
+  assign \$159  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$161  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
   assign \$162  = \$160  | \$161 ;
-  assign \$163  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$163  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
   assign \$164  = \$162  | \$163 ;
-  assign \$165  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$165  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
   assign \$166  = \$164  | \$165 ;
-  assign \$167  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$167  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
   assign \$168  = \$166  | \$167 ;
-  assign \$169  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$169  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$170  = \$168  | \$169 ;
-  assign \$171  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$171  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
   assign \$172  = \$170  | \$171 ;
-  assign \$173  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
+  assign \$173  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
   assign \$174  = \$172  | \$173 ;
-  assign \$175  = ch0_read_select_98 ? \port$6343$0 [31:0] : 32'd0;
+  assign \$175  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
   assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_99 ? \port$6343$0 [63:32] : 32'd0;
+  assign \$177  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$105 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_9a ? \port$6343$0 [95:64] : 32'd0;
-  assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_9b ? \port$6343$0 [127:96] : 32'd0;
+  assign \$181  = ch0_read_select_c2 ? { 17'h00000, \port$6541$0 [9:3], 1'h0, \port$6541$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_9c ? \port$6343$0 [159:128] : 32'd0;
+  assign \$183  = ch0_read_select_c3 ? \port$6456$0 [31:0] : 32'd0;
   assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_9d ? \port$6343$0 [191:160] : 32'd0;
+  assign \$185  = ch0_read_select_c4 ? \port$6456$0 [63:32] : 32'd0;
   assign \$186  = \$184  | \$185 ;
-  assign \$187  = ch0_read_select_9e ? \port$6343$0 [223:192] : 32'd0;
+  assign \$187  = ch0_read_select_c5 ? { 16'h0000, \port$6456$0 [79:64] } : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$189  = ch0_read_select_9f ? \port$6343$0 [255:224] : 32'd0;
+  assign \$189  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$190  = \$188  | \$189 ;
-  assign \$191  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
+  assign \$191  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
-  assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
-  assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
-  assign \$198  = \$196  | \$197 ;
-  assign \$199  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$105 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
-  assign \$200  = \$198  | \$199 ;
-  assign \$203  = ch0_read_select_c2 ? { 17'h00000, \port$6475$0 [9:3], 1'h0, \port$6475$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$204  = \$202  | \$203 ;
-  assign \$205  = ch0_read_select_c3 ? \port$6343$0 [287:256] : 32'd0;
-  assign \$206  = \$204  | \$205 ;
-  assign \$207  = ch0_read_select_c4 ? \port$6343$0 [319:288] : 32'd0;
-  assign \$208  = \$206  | \$207 ;
-  assign \$209  = ch0_read_select_c5 ? { 16'h0000, \port$6343$0 [335:320] } : 32'd0;
-  assign \$210  = \$208  | \$209 ;
-  assign \$211  = ch0_window0_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$212  = \$210  | \$211 ;
-  assign \$213  = write_data[0] & write_strb[0];
-  assign \$214  = ch1_ctrl_write ? \$213  : 1'h0;
-  assign \$215  = write_data[1] & write_strb[0];
-  assign \$216  = ch1_ctrl_write ? \$215  : 1'h0;
-  assign \$217  = write_data[2] & write_strb[0];
-  assign \$218  = ch1_ctrl_write ? \$217  : 1'h0;
+  assign \$193  = write_data[0] & write_strb[0];
+  assign \$194  = ch1_ctrl_write ? \$193  : 1'h0;
+  assign \$195  = write_data[1] & write_strb[0];
+  assign \$196  = ch1_ctrl_write ? \$195  : 1'h0;
+  assign \$197  = write_data[2] & write_strb[0];
+  assign \$198  = ch1_ctrl_write ? \$197  : 1'h0;
+  assign \$199  = ch1_ctrl_write & write_strb[1];
+  assign \$200  = ch1_ctrl_write & write_strb[1];
+  assign \$201  = write_data[0] & write_strb[0];
+  assign \$202  = ch1_irq_status_write ? \$201  : 1'h0;
+  assign \$203  = write_data[1] & write_strb[0];
+  assign \$204  = ch1_irq_status_write ? \$203  : 1'h0;
+  assign \$205  = write_data[2] & write_strb[0];
+  assign \$206  = ch1_irq_status_write ? \$205  : 1'h0;
+  assign \$207  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$208  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$209  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$210  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$211  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$212  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$213  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$214  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$215  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$216  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$217  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$218  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$219  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$220  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$221  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$222  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$223  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$224  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$225  = ch1_cfg_timeout_config_write & config_write_strb[2];
+  assign \$226  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$227  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$228  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$229  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$230  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$231  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$232  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$233  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$234  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$235  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$236  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$237  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$238  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$239  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$240  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$241  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$242  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$243  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$244  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$245  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$246  = ch1_cfg_crc0_config_write & config_write_strb[0];
+  assign \$247  = ch1_cfg_crc0_config_write & config_write_strb[1];
+  assign \$248  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$249  = ch1_cfg_crc0_config_write & config_write_strb[3];
+  assign \$250  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$251  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$252  = ch1_cfg_crc1_config_write & config_write_strb[0];
+  assign \$253  = ch1_cfg_crc1_config_write & config_write_strb[1];
+  assign \$254  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$255  = ch1_cfg_crc1_config_write & config_write_strb[3];
+  assign \$256  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$257  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$258  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$259  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$260  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$261  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$262  = write_data[0] & write_strb[0];
+  assign \$263  = ch1_ca_ctrl_write ? \$262  : 1'h0;
+  assign \$264  = write_data[1] & write_strb[0];
+  assign \$265  = ch1_ca_ctrl_write ? \$264  : 1'h0;
+  assign \$266  = bus__r_addr == 9'h100;
+  assign \$267  = bus__r_addr == 9'h101;
+  assign \$268  = bus__r_addr == 9'h102;
+  assign \$269  = bus__r_addr == 9'h104;
+  assign \$270  = bus__r_addr == 9'h105;
+  assign \$271  = bus__r_addr == 9'h108;
+  assign \$272  = bus__r_addr == 9'h109;
+  assign \$273  = bus__r_addr == 9'h10a;
+  assign \$274  = bus__r_addr == 9'h10b;
+  assign \$275  = bus__r_addr == 9'h10c;
+  assign \$276  = bus__r_addr == 9'h10d;
+  assign \$277  = bus__r_addr == 9'h10e;
+  assign \$278  = bus__r_addr == 9'h10f;
+  assign \$279  = bus__r_addr == 9'h110;
+  assign \$280  = bus__r_addr == 9'h111;
+  assign \$281  = bus__r_addr == 9'h112;
+  assign \$282  = bus__r_addr == 9'h113;
+  assign \$283  = bus__r_addr == 9'h114;
+  assign \$284  = bus__r_addr == 9'h115;
+  assign \$285  = bus__r_addr == 9'h116;
+  assign \$286  = bus__r_addr == 9'h117;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$511  = bus__w_en;
+    \$457  = bus__w_en;
     if (rst) begin
-      \$511  = 1'h0;
+      \$457  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$512  = write_addr;
+    \$458  = write_addr;
     if (bus__w_en) begin
-      \$512  = bus__w_addr;
+      \$458  = bus__w_addr;
     end
     if (rst) begin
-      \$512  = 11'h000;
+      \$458  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$513  = write_data;
+    \$459  = write_data;
     if (bus__w_en) begin
-      \$513  = bus__w_data;
+      \$459  = bus__w_data;
     end
     if (rst) begin
-      \$513  = 32'd0;
+      \$459  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$514  = write_strb;
+    \$460  = write_strb;
     if (bus__w_en) begin
-      \$514  = 4'hf;
+      \$460  = 4'hf;
     end
     if (rst) begin
-      \$514  = 4'h0;
+      \$460  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$515  = config_write_data;
+    \$461  = config_write_data;
     if (write_en) begin
-      \$515  = write_data;
+      \$461  = write_data;
     end
     if (rst) begin
-      \$515  = 32'd0;
+      \$461  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$516  = config_write_strb;
+    \$462  = config_write_strb;
     if (write_en) begin
-      \$516  = write_strb;
+      \$462  = write_strb;
     end
     if (rst) begin
-      \$516  = 4'h0;
+      \$462  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$517  = \$2 ;
+    \$463  = \$2 ;
     if (rst) begin
-      \$517  = 1'h0;
+      \$463  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$518  = g_read_select_0;
+    \$464  = g_read_select_0;
     if (bus__r_en) begin
-      \$518  = \$3 ;
+      \$464  = \$3 ;
+    end
+    if (rst) begin
+      \$464  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$465  = g_read_select_1;
+    if (bus__r_en) begin
+      \$465  = \$4 ;
+    end
+    if (rst) begin
+      \$465  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$466  = g_read_select_2;
+    if (bus__r_en) begin
+      \$466  = \$5 ;
+    end
+    if (rst) begin
+      \$466  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$467  = g_read_select_3;
+    if (bus__r_en) begin
+      \$467  = \$6 ;
+    end
+    if (rst) begin
+      \$467  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$468  = g_read_select_4;
+    if (bus__r_en) begin
+      \$468  = \$7 ;
+    end
+    if (rst) begin
+      \$468  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$469  = g_read_data;
+    if (bus__r_load) begin
+      \$469  = \$17 ;
+    end
+    if (rst) begin
+      \$469  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$470  = \$19 ;
+    if (rst) begin
+      \$470  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$471  = \$21 ;
+    if (rst) begin
+      \$471  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$472  = \$23 ;
+    if (rst) begin
+      \$472  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$473  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$473  = write_data[8];
+    end
+    if (rst) begin
+      \$473  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$474  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$474  = write_data[9];
+    end
+    if (rst) begin
+      \$474  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$475  = ch0_irq_status_done;
+    if (ch0__done) begin
+      \$475  = 1'h1;
+    end else if (\$27 ) begin
+      \$475  = 1'h0;
+    end
+    if (rst) begin
+      \$475  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$476  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$476  = 1'h1;
+    end else if (\$29 ) begin
+      \$476  = 1'h0;
+    end
+    if (rst) begin
+      \$476  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$477  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$477  = 1'h1;
+    end else if (\$31 ) begin
+      \$477  = 1'h0;
+    end
+    if (rst) begin
+      \$477  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$478  = ch0_irq_enable_write;
+    if (rst) begin
+      \$478  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$479  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$479  = config_write_data[0];
+    end
+    if (rst) begin
+      \$479  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$480  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$480  = config_write_data[1];
+    end
+    if (rst) begin
+      \$480  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$481  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$481  = config_write_data[2];
+    end
+    if (rst) begin
+      \$481  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$482  = ch0_cfg_ma_write;
+    if (rst) begin
+      \$482  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$483  = ch0_cfg_ma_ma_half_period;
+    if (\$35 ) begin
+      \$483 [7:0] = config_write_data[7:0];
+    end
+    if (\$36 ) begin
+      \$483 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$483  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$484  = ch0_cfg_ma_delay_limit;
+    if (\$37 ) begin
+      \$484 [7:0] = config_write_data[23:16];
+    end
+    if (\$38 ) begin
+      \$484 [11:8] = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$484  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$485  = ch0_cfg_period_write;
+    if (rst) begin
+      \$485  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$486  = ch0_cfg_period_request_period;
+    if (\$39 ) begin
+      \$486 [7:0] = config_write_data[7:0];
+    end
+    if (\$40 ) begin
+      \$486 [15:8] = config_write_data[15:8];
+    end
+    if (\$41 ) begin
+      \$486 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$486  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$487  = ch0_cfg_break_write;
+    if (rst) begin
+      \$487  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$488  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
+      \$488 [7:0] = config_write_data[7:0];
+    end
+    if (\$43 ) begin
+      \$488 [15:8] = config_write_data[15:8];
+    end
+    if (\$44 ) begin
+      \$488 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$488  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$489  = ch0_cfg_ack_write;
+    if (rst) begin
+      \$489  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$490  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
+      \$490 [7:0] = config_write_data[7:0];
+    end
+    if (\$46 ) begin
+      \$490 [15:8] = config_write_data[15:8];
+    end
+    if (\$47 ) begin
+      \$490 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$490  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$491  = ch0_cfg_timeout_write;
+    if (rst) begin
+      \$491  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$492  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
+      \$492 [7:0] = config_write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$492 [15:8] = config_write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$492 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$492  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$493  = ch0_cfg_words_write;
+    if (rst) begin
+      \$493  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$494  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$494  = config_write_data[5:0];
+    end
+    if (rst) begin
+      \$494  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$495  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$495  = config_write_data[6];
+    end
+    if (rst) begin
+      \$495  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$496  = ch0_cfg_words_w0_lc;
+    if (\$53 ) begin
+      \$496  = config_write_data[7];
+    end
+    if (rst) begin
+      \$496  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$497  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$497  = config_write_data[9:8];
+    end
+    if (rst) begin
+      \$497  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$498  = ch0_cfg_words_w0_gray;
+    if (\$55 ) begin
+      \$498  = config_write_data[10];
+    end
+    if (rst) begin
+      \$498  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$499  = ch0_cfg_words_w0_signed;
+    if (\$56 ) begin
+      \$499  = config_write_data[11];
+    end
+    if (rst) begin
+      \$499  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$500  = ch0_cfg_words_w1_data_bits;
+    if (\$57 ) begin
+      \$500  = config_write_data[21:16];
+    end
+    if (rst) begin
+      \$500  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$501  = ch0_cfg_words_w1_nenw;
+    if (\$58 ) begin
+      \$501  = config_write_data[22];
+    end
+    if (rst) begin
+      \$501  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$502  = ch0_cfg_words_w1_lc;
+    if (\$59 ) begin
+      \$502  = config_write_data[23];
+    end
+    if (rst) begin
+      \$502  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$503  = ch0_cfg_words_w1_crc;
+    if (\$60 ) begin
+      \$503  = config_write_data[25:24];
+    end
+    if (rst) begin
+      \$503  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$504  = ch0_cfg_words_w1_gray;
+    if (\$61 ) begin
+      \$504  = config_write_data[26];
+    end
+    if (rst) begin
+      \$504  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$505  = ch0_cfg_words_w1_signed;
+    if (\$62 ) begin
+      \$505  = config_write_data[27];
+    end
+    if (rst) begin
+      \$505  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$506  = ch0_cfg_words_w1_enable;
+    if (\$63 ) begin
+      \$506  = config_write_data[31];
+    end
+    if (rst) begin
+      \$506  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$507  = ch0_cfg_checks_write;
+    if (rst) begin
+      \$507  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$508  = ch0_cfg_checks_end_check;
+    if (\$64 ) begin
+      \$508  = config_write_data[0];
+    end
+    if (rst) begin
+      \$508  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$509  = ch0_cfg_checks_spw_check;
+    if (\$65 ) begin
+      \$509  = config_write_data[1];
+    end
+    if (rst) begin
+      \$509  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$510  = ch0_cfg_checks_spw_tolerance;
+    if (\$66 ) begin
+      \$510  = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$510  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$511  = ch0_cfg_checks_noise_limit;
+    if (\$67 ) begin
+      \$511  = config_write_data[19:16];
+    end
+    if (rst) begin
+      \$511  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$512  = ch0_cfg_checks_delay_tolerance;
+    if (\$68 ) begin
+      \$512  = config_write_data[23:20];
+    end
+    if (rst) begin
+      \$512  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$513  = ch0_cfg_quiet_write;
+    if (rst) begin
+      \$513  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$514  = ch0_cfg_quiet_quiet_time;
+    if (\$69 ) begin
+      \$514 [7:0] = config_write_data[7:0];
+    end
+    if (\$70 ) begin
+      \$514 [11:8] = config_write_data[11:8];
+    end
+    if (rst) begin
+      \$514  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$515  = ch0_cfg_crc0_write;
+    if (rst) begin
+      \$515  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$516  = ch0_cfg_crc0_w0_crc_poly;
+    if (\$71 ) begin
+      \$516 [7:0] = config_write_data[7:0];
+    end
+    if (\$72 ) begin
+      \$516 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$516  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$517  = ch0_cfg_crc0_w0_crc_width;
+    if (\$73 ) begin
+      \$517  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$517  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$518  = ch0_cfg_crc0_w0_crc_inverted;
+    if (\$74 ) begin
+      \$518  = config_write_data[24];
     end
     if (rst) begin
       \$518  = 1'h0;
@@ -3954,126 +4181,126 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$519  = g_read_select_1;
-    if (bus__r_en) begin
-      \$519  = \$4 ;
-    end
+    \$519  = ch0_cfg_crc0_start_write;
     if (rst) begin
       \$519  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$520  = g_read_select_2;
-    if (bus__r_en) begin
-      \$520  = \$5 ;
+    \$520  = ch0_cfg_crc0_start_w0_crc_start;
+    if (\$75 ) begin
+      \$520 [7:0] = config_write_data[7:0];
+    end
+    if (\$76 ) begin
+      \$520 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$520  = 1'h0;
+      \$520  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$521  = g_read_select_3;
-    if (bus__r_en) begin
-      \$521  = \$6 ;
-    end
+    \$521  = ch0_cfg_crc1_write;
     if (rst) begin
       \$521  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$522  = g_read_select_4;
-    if (bus__r_en) begin
-      \$522  = \$7 ;
+    \$522  = ch0_cfg_crc1_w1_crc_poly;
+    if (\$77 ) begin
+      \$522 [7:0] = config_write_data[7:0];
+    end
+    if (\$78 ) begin
+      \$522 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$522  = 1'h0;
+      \$522  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$523  = g_read_data;
-    if (bus__r_load) begin
-      \$523  = \$17 ;
+    \$523  = ch0_cfg_crc1_w1_crc_width;
+    if (\$79 ) begin
+      \$523  = config_write_data[20:16];
     end
     if (rst) begin
-      \$523  = 32'd0;
+      \$523  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$524  = \$19 ;
+    \$524  = ch0_cfg_crc1_w1_crc_inverted;
+    if (\$80 ) begin
+      \$524  = config_write_data[24];
+    end
     if (rst) begin
       \$524  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$525  = \$21 ;
+    \$525  = ch0_cfg_crc1_start_write;
     if (rst) begin
       \$525  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$526  = \$23 ;
+    \$526  = ch0_cfg_crc1_start_w1_crc_start;
+    if (\$81 ) begin
+      \$526 [7:0] = config_write_data[7:0];
+    end
+    if (\$82 ) begin
+      \$526 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$526  = 1'h0;
+      \$526  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$527  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$527  = write_data[8];
-    end
+    \$527  = ch0_ca_request_write;
     if (rst) begin
       \$527  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$528  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$528  = write_data[9];
+    \$528  = ch0_ca_request_slave_id;
+    if (\$83 ) begin
+      \$528  = config_write_data[2:0];
     end
     if (rst) begin
-      \$528  = 1'h0;
+      \$528  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$529  = ch0_irq_status_done;
-    if (ch0__done) begin
-      \$529  = 1'h1;
-    end else if (\$27 ) begin
-      \$529  = 1'h0;
+    \$529  = ch0_ca_request_address;
+    if (\$84 ) begin
+      \$529  = config_write_data[14:8];
     end
     if (rst) begin
-      \$529  = 1'h0;
+      \$529  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$530  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$530  = 1'h1;
-    end else if (\$29 ) begin
-      \$530  = 1'h0;
+    \$530  = ch0_ca_request_count;
+    if (\$85 ) begin
+      \$530  = config_write_data[22:16];
     end
     if (rst) begin
-      \$530  = 1'h0;
+      \$530  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$531  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$531  = 1'h1;
-    end else if (\$31 ) begin
-      \$531  = 1'h0;
+    \$531  = \ch0_ca_request_write$105 ;
+    if (\$86 ) begin
+      \$531  = config_write_data[24];
     end
     if (rst) begin
       \$531  = 1'h0;
@@ -4081,26 +4308,23 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$532  = ch0_irq_enable_write;
+    \$532  = \$88 ;
     if (rst) begin
       \$532  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$533  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$533  = config_write_data[0];
-    end
+    \$533  = \$90 ;
     if (rst) begin
       \$533  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$534  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$534  = config_write_data[1];
+    \$534  = ch0_read_select_80;
+    if (bus__r_en) begin
+      \$534  = \$91 ;
     end
     if (rst) begin
       \$534  = 1'h0;
@@ -4108,9 +4332,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$535  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$535  = config_write_data[2];
+    \$535  = ch0_read_select_81;
+    if (bus__r_en) begin
+      \$535  = \$92 ;
     end
     if (rst) begin
       \$535  = 1'h0;
@@ -4118,151 +4342,139 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$536  = ch0_cfg_ma_write;
+    \$536  = ch0_read_select_82;
+    if (bus__r_en) begin
+      \$536  = \$93 ;
+    end
     if (rst) begin
       \$536  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$537  = ch0_cfg_ma_ma_half_period;
-    if (\$35 ) begin
-      \$537 [7:0] = config_write_data[7:0];
-    end
-    if (\$36 ) begin
-      \$537 [15:8] = config_write_data[15:8];
+    \$537  = ch0_read_select_84;
+    if (bus__r_en) begin
+      \$537  = \$94 ;
     end
     if (rst) begin
-      \$537  = 16'h0000;
+      \$537  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$538  = ch0_cfg_ma_delay_limit;
-    if (\$37 ) begin
-      \$538 [7:0] = config_write_data[23:16];
-    end
-    if (\$38 ) begin
-      \$538 [11:8] = config_write_data[27:24];
+    \$538  = ch0_read_select_85;
+    if (bus__r_en) begin
+      \$538  = \$95 ;
     end
     if (rst) begin
-      \$538  = 12'h000;
+      \$538  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$539  = ch0_cfg_period_write;
+    \$539  = ch0_read_select_88;
+    if (bus__r_en) begin
+      \$539  = \$96 ;
+    end
     if (rst) begin
       \$539  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$540  = ch0_cfg_period_request_period;
-    if (\$39 ) begin
-      \$540 [7:0] = config_write_data[7:0];
-    end
-    if (\$40 ) begin
-      \$540 [15:8] = config_write_data[15:8];
-    end
-    if (\$41 ) begin
-      \$540 [23:16] = config_write_data[23:16];
+    \$540  = ch0_read_select_89;
+    if (bus__r_en) begin
+      \$540  = \$97 ;
     end
     if (rst) begin
-      \$540  = 24'h000000;
+      \$540  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$541  = ch0_cfg_break_write;
+    \$541  = ch0_read_select_8a;
+    if (bus__r_en) begin
+      \$541  = \$98 ;
+    end
     if (rst) begin
       \$541  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$542  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
-      \$542 [7:0] = config_write_data[7:0];
-    end
-    if (\$43 ) begin
-      \$542 [15:8] = config_write_data[15:8];
-    end
-    if (\$44 ) begin
-      \$542 [23:16] = config_write_data[23:16];
+    \$542  = ch0_read_select_8b;
+    if (bus__r_en) begin
+      \$542  = \$99 ;
     end
     if (rst) begin
-      \$542  = 24'h000000;
+      \$542  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$543  = ch0_cfg_ack_write;
+    \$543  = ch0_read_select_8c;
+    if (bus__r_en) begin
+      \$543  = \$100 ;
+    end
     if (rst) begin
       \$543  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$544  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
-      \$544 [7:0] = config_write_data[7:0];
-    end
-    if (\$46 ) begin
-      \$544 [15:8] = config_write_data[15:8];
-    end
-    if (\$47 ) begin
-      \$544 [23:16] = config_write_data[23:16];
+    \$544  = ch0_read_select_8d;
+    if (bus__r_en) begin
+      \$544  = \$101 ;
     end
     if (rst) begin
-      \$544  = 24'h000000;
+      \$544  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$545  = ch0_cfg_timeout_write;
+    \$545  = ch0_read_select_8e;
+    if (bus__r_en) begin
+      \$545  = \$102 ;
+    end
     if (rst) begin
       \$545  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$546  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
-      \$546 [7:0] = config_write_data[7:0];
-    end
-    if (\$49 ) begin
-      \$546 [15:8] = config_write_data[15:8];
-    end
-    if (\$50 ) begin
-      \$546 [23:16] = config_write_data[23:16];
+    \$546  = ch0_read_select_8f;
+    if (bus__r_en) begin
+      \$546  = \$103 ;
     end
     if (rst) begin
-      \$546  = 24'h000000;
+      \$546  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$547  = ch0_cfg_words_write;
+    \$547  = ch0_read_select_90;
+    if (bus__r_en) begin
+      \$547  = \$104 ;
+    end
     if (rst) begin
       \$547  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$548  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$548  = config_write_data[5:0];
+    \$548  = ch0_read_select_91;
+    if (bus__r_en) begin
+      \$548  = \$105 ;
     end
     if (rst) begin
-      \$548  = 6'h00;
+      \$548  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$549  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$549  = config_write_data[6];
+    \$549  = ch0_read_select_92;
+    if (bus__r_en) begin
+      \$549  = \$106 ;
     end
     if (rst) begin
       \$549  = 1'h0;
@@ -4270,9 +4482,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$550  = ch0_cfg_words_w0_lc;
-    if (\$53 ) begin
-      \$550  = config_write_data[7];
+    \$550  = ch0_read_select_93;
+    if (bus__r_en) begin
+      \$550  = \$107 ;
     end
     if (rst) begin
       \$550  = 1'h0;
@@ -4280,19 +4492,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$551  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$551  = config_write_data[9:8];
+    \$551  = ch0_read_select_94;
+    if (bus__r_en) begin
+      \$551  = \$108 ;
     end
     if (rst) begin
-      \$551  = 2'h0;
+      \$551  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$552  = ch0_cfg_words_w0_gray;
-    if (\$55 ) begin
-      \$552  = config_write_data[10];
+    \$552  = ch0_read_select_95;
+    if (bus__r_en) begin
+      \$552  = \$109 ;
     end
     if (rst) begin
       \$552  = 1'h0;
@@ -4300,9 +4512,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$553  = ch0_cfg_words_w0_signed;
-    if (\$56 ) begin
-      \$553  = config_write_data[11];
+    \$553  = ch0_read_select_96;
+    if (bus__r_en) begin
+      \$553  = \$110 ;
     end
     if (rst) begin
       \$553  = 1'h0;
@@ -4310,19 +4522,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$554  = ch0_cfg_words_w1_data_bits;
-    if (\$57 ) begin
-      \$554  = config_write_data[21:16];
+    \$554  = ch0_read_select_97;
+    if (bus__r_en) begin
+      \$554  = \$111 ;
     end
     if (rst) begin
-      \$554  = 6'h00;
+      \$554  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$555  = ch0_cfg_words_w1_nenw;
-    if (\$58 ) begin
-      \$555  = config_write_data[22];
+    \$555  = ch0_read_select_a0;
+    if (bus__r_en) begin
+      \$555  = \$112 ;
     end
     if (rst) begin
       \$555  = 1'h0;
@@ -4330,9 +4542,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$556  = ch0_cfg_words_w1_lc;
-    if (\$59 ) begin
-      \$556  = config_write_data[23];
+    \$556  = ch0_read_select_a1;
+    if (bus__r_en) begin
+      \$556  = \$113 ;
     end
     if (rst) begin
       \$556  = 1'h0;
@@ -4340,19 +4552,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$557  = ch0_cfg_words_w1_crc;
-    if (\$60 ) begin
-      \$557  = config_write_data[25:24];
+    \$557  = ch0_read_select_a2;
+    if (bus__r_en) begin
+      \$557  = \$114 ;
     end
     if (rst) begin
-      \$557  = 2'h0;
+      \$557  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$558  = ch0_cfg_words_w1_gray;
-    if (\$61 ) begin
-      \$558  = config_write_data[26];
+    \$558  = ch0_read_select_a3;
+    if (bus__r_en) begin
+      \$558  = \$115 ;
     end
     if (rst) begin
       \$558  = 1'h0;
@@ -4360,9 +4572,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$559  = ch0_cfg_words_w1_signed;
-    if (\$62 ) begin
-      \$559  = config_write_data[27];
+    \$559  = ch0_read_select_c0;
+    if (bus__r_en) begin
+      \$559  = \$116 ;
     end
     if (rst) begin
       \$559  = 1'h0;
@@ -4370,9 +4582,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$560  = ch0_cfg_words_w1_enable;
-    if (\$63 ) begin
-      \$560  = config_write_data[31];
+    \$560  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$560  = \$117 ;
     end
     if (rst) begin
       \$560  = 1'h0;
@@ -4380,16 +4592,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$561  = ch0_cfg_checks_write;
+    \$561  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$561  = \$118 ;
+    end
     if (rst) begin
       \$561  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$562  = ch0_cfg_checks_end_check;
-    if (\$64 ) begin
-      \$562  = config_write_data[0];
+    \$562  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$562  = \$119 ;
     end
     if (rst) begin
       \$562  = 1'h0;
@@ -4397,9 +4612,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$563  = ch0_cfg_checks_spw_check;
-    if (\$65 ) begin
-      \$563  = config_write_data[1];
+    \$563  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$563  = \$120 ;
     end
     if (rst) begin
       \$563  = 1'h0;
@@ -4407,19 +4622,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$564  = ch0_cfg_checks_spw_tolerance;
-    if (\$66 ) begin
-      \$564  = config_write_data[15:8];
+    \$564  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$564  = \$121 ;
     end
     if (rst) begin
-      \$564  = 8'h00;
+      \$564  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$565  = ch0_cfg_checks_noise_limit;
-    if (\$67 ) begin
-      \$565  = config_write_data[19:16];
+    \$565  = ch0_result_status_status_snapshot;
+    if (\$122 ) begin
+      \$565  = \port$6443$0 [3:0];
     end
     if (rst) begin
       \$565  = 4'h0;
@@ -4427,69 +4642,69 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$566  = ch0_cfg_checks_delay_tolerance;
-    if (\$68 ) begin
-      \$566  = config_write_data[23:20];
+    \$566  = ch0_result_status_cds_snapshot;
+    if (\$122 ) begin
+      \$566  = \port$6443$0 [49];
     end
     if (rst) begin
-      \$566  = 4'h0;
+      \$566  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$567  = ch0_cfg_quiet_write;
+    \$567  = ch0_result_status_w0_ne_snapshot;
+    if (\$122 ) begin
+      \$567  = \port$6443$0 [131];
+    end
     if (rst) begin
       \$567  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$568  = ch0_cfg_quiet_quiet_time;
-    if (\$69 ) begin
-      \$568 [7:0] = config_write_data[7:0];
-    end
-    if (\$70 ) begin
-      \$568 [11:8] = config_write_data[11:8];
+    \$568  = ch0_result_status_w0_nw_snapshot;
+    if (\$122 ) begin
+      \$568  = \port$6443$0 [132];
     end
     if (rst) begin
-      \$568  = 12'h000;
+      \$568  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$569  = ch0_cfg_crc0_write;
+    \$569  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$122 ) begin
+      \$569  = \port$6443$0 [133];
+    end
     if (rst) begin
       \$569  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$570  = ch0_cfg_crc0_w0_crc_poly;
-    if (\$71 ) begin
-      \$570 [7:0] = config_write_data[7:0];
-    end
-    if (\$72 ) begin
-      \$570 [15:8] = config_write_data[15:8];
+    \$570  = ch0_result_status_w1_ne_snapshot;
+    if (\$122 ) begin
+      \$570  = \port$6443$0 [174];
     end
     if (rst) begin
-      \$570  = 16'h0000;
+      \$570  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$571  = ch0_cfg_crc0_w0_crc_width;
-    if (\$73 ) begin
-      \$571  = config_write_data[20:16];
+    \$571  = ch0_result_status_w1_nw_snapshot;
+    if (\$122 ) begin
+      \$571  = \port$6443$0 [175];
     end
     if (rst) begin
-      \$571  = 5'h00;
+      \$571  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$572  = ch0_cfg_crc0_w0_crc_inverted;
-    if (\$74 ) begin
-      \$572  = config_write_data[24];
+    \$572  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$122 ) begin
+      \$572  = \port$6443$0 [176];
     end
     if (rst) begin
       \$572  = 1'h0;
@@ -4497,160 +4712,169 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$573  = ch0_cfg_crc0_start_write;
+    \$573  = ch0_result_status_lc_repeat_snapshot;
+    if (\$122 ) begin
+      \$573  = \port$6443$0 [183];
+    end
     if (rst) begin
       \$573  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$574  = ch0_cfg_crc0_start_w0_crc_start;
-    if (\$75 ) begin
-      \$574 [7:0] = config_write_data[7:0];
-    end
-    if (\$76 ) begin
-      \$574 [15:8] = config_write_data[15:8];
+    \$574  = ch0_result_status_lc_skip_snapshot;
+    if (\$122 ) begin
+      \$574  = \port$6443$0 [184];
     end
     if (rst) begin
-      \$574  = 16'h0000;
+      \$574  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$575  = ch0_cfg_crc1_write;
+    \$575  = ch0_result_status_lc_zero_snapshot;
+    if (\$122 ) begin
+      \$575  = \port$6443$0 [185];
+    end
     if (rst) begin
       \$575  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$576  = ch0_cfg_crc1_w1_crc_poly;
-    if (\$77 ) begin
-      \$576 [7:0] = config_write_data[7:0];
-    end
-    if (\$78 ) begin
-      \$576 [15:8] = config_write_data[15:8];
+    \$576  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$122 ) begin
+      \$576  = \port$6443$0 [186];
     end
     if (rst) begin
-      \$576  = 16'h0000;
+      \$576  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$577  = ch0_cfg_crc1_w1_crc_width;
-    if (\$79 ) begin
-      \$577  = config_write_data[20:16];
+    \$577  = ch0_result_status_lc_snapshot;
+    if (\$122 ) begin
+      \$577  = \port$6443$0 [182:177];
     end
     if (rst) begin
-      \$577  = 5'h00;
+      \$577  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$578  = ch0_cfg_crc1_w1_crc_inverted;
-    if (\$80 ) begin
-      \$578  = config_write_data[24];
+    \$578  = ch0_result_seq_seq_snapshot;
+    if (\$122 ) begin
+      \$578  = ch0__done_count;
     end
     if (rst) begin
-      \$578  = 1'h0;
+      \$578  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$579  = ch0_cfg_crc1_start_write;
+    \$579  = ch0_result_seq_line_delay_snapshot;
+    if (\$122 ) begin
+      \$579  = \port$6443$0 [48:36];
+    end
     if (rst) begin
-      \$579  = 1'h0;
+      \$579  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$580  = ch0_cfg_crc1_start_w1_crc_start;
-    if (\$81 ) begin
-      \$580 [7:0] = config_write_data[7:0];
-    end
-    if (\$82 ) begin
-      \$580 [15:8] = config_write_data[15:8];
+    \$580  = ch0_result_w0_lo_data_snapshot;
+    if (\$122 ) begin
+      \$580  = \port$6443$0 [107:76];
     end
     if (rst) begin
-      \$580  = 16'h0000;
+      \$580  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$581  = ch0_ca_request_write;
+    \$581  = ch0_result_w0_hi_data_snapshot;
+    if (\$122 ) begin
+      \$581  = \port$6443$0 [130:108];
+    end
     if (rst) begin
-      \$581  = 1'h0;
+      \$581  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$582  = ch0_ca_request_slave_id;
-    if (\$83 ) begin
-      \$582  = config_write_data[2:0];
+    \$582  = ch0_result_w1_lo_data_snapshot;
+    if (\$122 ) begin
+      \$582  = \port$6443$0 [165:134];
     end
     if (rst) begin
-      \$582  = 3'h0;
+      \$582  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$583  = ch0_ca_request_address;
-    if (\$84 ) begin
-      \$583  = config_write_data[14:8];
+    \$583  = ch0_result_w1_hi_data_snapshot;
+    if (\$122 ) begin
+      \$583  = \port$6443$0 [173:166];
     end
     if (rst) begin
-      \$583  = 7'h00;
+      \$583  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$584  = ch0_ca_request_count;
-    if (\$85 ) begin
-      \$584  = config_write_data[22:16];
+    \$584  = ch0_result_timestamp_time_snapshot;
+    if (\$122 ) begin
+      \$584  = \port$6443$0 [35:4];
     end
     if (rst) begin
-      \$584  = 7'h00;
+      \$584  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$585  = \ch0_ca_request_write$105 ;
-    if (\$86 ) begin
-      \$585  = config_write_data[24];
+    \$585  = ch0_result_line_noise_events_snapshot;
+    if (\$122 ) begin
+      \$585  = \port$6443$0 [53:50];
     end
     if (rst) begin
-      \$585  = 1'h0;
+      \$585  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$586  = \$88 ;
+    \$586  = ch0_result_line_delay_settled_snapshot;
+    if (\$122 ) begin
+      \$586  = \port$6443$0 [54];
+    end
     if (rst) begin
       \$586  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$587  = \$90 ;
+    \$587  = ch0_result_line_delay_spread_snapshot;
+    if (\$122 ) begin
+      \$587  = \port$6443$0 [75:68];
+    end
     if (rst) begin
-      \$587  = 1'h0;
+      \$587  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$588  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$588  = \$91 ;
+    \$588  = ch0_result_line_settled_delay_snapshot;
+    if (\$122 ) begin
+      \$588  = \port$6443$0 [67:55];
     end
     if (rst) begin
-      \$588  = 1'h0;
+      \$588  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$589  = ch0_read_select_81;
+    \$589  = ch0_window0_read;
     if (bus__r_en) begin
-      \$589  = \$92 ;
+      \$589  = \$124 ;
     end
     if (rst) begin
       \$589  = 1'h0;
@@ -4658,9 +4882,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$590  = ch0_read_select_82;
+    \$590  = ch0_window1_read;
     if (bus__r_en) begin
-      \$590  = \$93 ;
+      \$590  = \$126 ;
     end
     if (rst) begin
       \$590  = 1'h0;
@@ -4668,49 +4892,40 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$591  = ch0_read_select_84;
-    if (bus__r_en) begin
-      \$591  = \$94 ;
+    \$591  = ch0_read_data;
+    if (bus__r_load) begin
+      \$591  = \$192 ;
     end
     if (rst) begin
-      \$591  = 1'h0;
+      \$591  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$592  = ch0_read_select_85;
-    if (bus__r_en) begin
-      \$592  = \$95 ;
-    end
+    \$592  = \$194 ;
     if (rst) begin
       \$592  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$593  = ch0_read_select_88;
-    if (bus__r_en) begin
-      \$593  = \$96 ;
-    end
+    \$593  = \$196 ;
     if (rst) begin
       \$593  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$594  = ch0_read_select_89;
-    if (bus__r_en) begin
-      \$594  = \$97 ;
-    end
+    \$594  = \$198 ;
     if (rst) begin
       \$594  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$595  = ch0_read_select_8a;
-    if (bus__r_en) begin
-      \$595  = \$98 ;
+    \$595  = ch1_ctrl_periodic;
+    if (\$199 ) begin
+      \$595  = write_data[8];
     end
     if (rst) begin
       \$595  = 1'h0;
@@ -4718,9 +4933,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$596  = ch0_read_select_8b;
-    if (bus__r_en) begin
-      \$596  = \$99 ;
+    \$596  = ch1_ctrl_trigger_enable;
+    if (\$200 ) begin
+      \$596  = write_data[9];
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -4728,9 +4943,11 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$597  = ch0_read_select_8c;
-    if (bus__r_en) begin
-      \$597  = \$100 ;
+    \$597  = ch1_irq_status_done;
+    if (ch1__done) begin
+      \$597  = 1'h1;
+    end else if (\$202 ) begin
+      \$597  = 1'h0;
     end
     if (rst) begin
       \$597  = 1'h0;
@@ -4738,9 +4955,11 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$598  = ch0_read_select_8d;
-    if (bus__r_en) begin
-      \$598  = \$101 ;
+    \$598  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$598  = 1'h1;
+    end else if (\$204 ) begin
+      \$598  = 1'h0;
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -4748,9 +4967,11 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$599  = ch0_read_select_8e;
-    if (bus__r_en) begin
-      \$599  = \$102 ;
+    \$599  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$599  = 1'h1;
+    end else if (\$206 ) begin
+      \$599  = 1'h0;
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -4758,19 +4979,16 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$600  = ch0_read_select_8f;
-    if (bus__r_en) begin
-      \$600  = \$103 ;
-    end
+    \$600  = ch1_irq_enable_write;
     if (rst) begin
       \$600  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$601  = ch0_read_select_90;
-    if (bus__r_en) begin
-      \$601  = \$104 ;
+    \$601  = ch1_irq_enable_done;
+    if (\$207 ) begin
+      \$601  = config_write_data[0];
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -4778,9 +4996,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$602  = ch0_read_select_91;
-    if (bus__r_en) begin
-      \$602  = \$105 ;
+    \$602  = ch1_irq_enable_error;
+    if (\$208 ) begin
+      \$602  = config_write_data[1];
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -4788,9 +5006,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$603  = ch0_read_select_92;
-    if (bus__r_en) begin
-      \$603  = \$106 ;
+    \$603  = ch1_irq_enable_access_done;
+    if (\$209 ) begin
+      \$603  = config_write_data[2];
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -4798,139 +5016,151 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$604  = ch0_read_select_93;
-    if (bus__r_en) begin
-      \$604  = \$107 ;
-    end
+    \$604  = ch1_cfg_ma_write;
     if (rst) begin
       \$604  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$605  = ch0_read_select_94;
-    if (bus__r_en) begin
-      \$605  = \$108 ;
+    \$605  = ch1_cfg_ma_ma_half_period;
+    if (\$210 ) begin
+      \$605 [7:0] = config_write_data[7:0];
+    end
+    if (\$211 ) begin
+      \$605 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$605  = 1'h0;
+      \$605  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$606  = ch0_read_select_95;
-    if (bus__r_en) begin
-      \$606  = \$109 ;
+    \$606  = ch1_cfg_ma_delay_limit;
+    if (\$212 ) begin
+      \$606 [7:0] = config_write_data[23:16];
+    end
+    if (\$213 ) begin
+      \$606 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$606  = 1'h0;
+      \$606  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$607  = ch0_read_select_96;
-    if (bus__r_en) begin
-      \$607  = \$110 ;
-    end
+    \$607  = ch1_cfg_period_write;
     if (rst) begin
       \$607  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$608  = ch0_read_select_97;
-    if (bus__r_en) begin
-      \$608  = \$111 ;
+    \$608  = ch1_cfg_period_request_period;
+    if (\$214 ) begin
+      \$608 [7:0] = config_write_data[7:0];
+    end
+    if (\$215 ) begin
+      \$608 [15:8] = config_write_data[15:8];
+    end
+    if (\$216 ) begin
+      \$608 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$608  = 1'h0;
+      \$608  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$609  = ch0_read_select_98;
-    if (bus__r_en) begin
-      \$609  = \$112 ;
-    end
+    \$609  = ch1_cfg_break_write;
     if (rst) begin
       \$609  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$610  = ch0_read_select_99;
-    if (bus__r_en) begin
-      \$610  = \$113 ;
+    \$610  = ch1_cfg_break_break_time;
+    if (\$217 ) begin
+      \$610 [7:0] = config_write_data[7:0];
+    end
+    if (\$218 ) begin
+      \$610 [15:8] = config_write_data[15:8];
+    end
+    if (\$219 ) begin
+      \$610 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$610  = 1'h0;
+      \$610  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$611  = ch0_read_select_9a;
-    if (bus__r_en) begin
-      \$611  = \$114 ;
-    end
+    \$611  = ch1_cfg_ack_write;
     if (rst) begin
       \$611  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$612  = ch0_read_select_9b;
-    if (bus__r_en) begin
-      \$612  = \$115 ;
+    \$612  = ch1_cfg_ack_ack_limit;
+    if (\$220 ) begin
+      \$612 [7:0] = config_write_data[7:0];
+    end
+    if (\$221 ) begin
+      \$612 [15:8] = config_write_data[15:8];
+    end
+    if (\$222 ) begin
+      \$612 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$612  = 1'h0;
+      \$612  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$613  = ch0_read_select_9c;
-    if (bus__r_en) begin
-      \$613  = \$116 ;
-    end
+    \$613  = ch1_cfg_timeout_write;
     if (rst) begin
       \$613  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$614  = ch0_read_select_9d;
-    if (bus__r_en) begin
-      \$614  = \$117 ;
+    \$614  = ch1_cfg_timeout_timeout_limit;
+    if (\$223 ) begin
+      \$614 [7:0] = config_write_data[7:0];
+    end
+    if (\$224 ) begin
+      \$614 [15:8] = config_write_data[15:8];
+    end
+    if (\$225 ) begin
+      \$614 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$614  = 1'h0;
+      \$614  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$615  = ch0_read_select_9e;
-    if (bus__r_en) begin
-      \$615  = \$118 ;
-    end
+    \$615  = ch1_cfg_words_write;
     if (rst) begin
       \$615  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$616  = ch0_read_select_9f;
-    if (bus__r_en) begin
-      \$616  = \$119 ;
+    \$616  = ch1_cfg_words_w0_data_bits;
+    if (\$226 ) begin
+      \$616  = config_write_data[5:0];
     end
     if (rst) begin
-      \$616  = 1'h0;
+      \$616  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$617  = ch0_read_select_a0;
-    if (bus__r_en) begin
-      \$617  = \$120 ;
+    \$617  = ch1_cfg_words_w0_nenw;
+    if (\$227 ) begin
+      \$617  = config_write_data[6];
     end
     if (rst) begin
       \$617  = 1'h0;
@@ -4938,9 +5168,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$618  = ch0_read_select_a1;
-    if (bus__r_en) begin
-      \$618  = \$121 ;
+    \$618  = ch1_cfg_words_w0_lc;
+    if (\$228 ) begin
+      \$618  = config_write_data[7];
     end
     if (rst) begin
       \$618  = 1'h0;
@@ -4948,19 +5178,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$619  = ch0_read_select_a2;
-    if (bus__r_en) begin
-      \$619  = \$122 ;
+    \$619  = ch1_cfg_words_w0_crc;
+    if (\$229 ) begin
+      \$619  = config_write_data[9:8];
     end
     if (rst) begin
-      \$619  = 1'h0;
+      \$619  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$620  = ch0_read_select_a3;
-    if (bus__r_en) begin
-      \$620  = \$123 ;
+    \$620  = ch1_cfg_words_w0_gray;
+    if (\$230 ) begin
+      \$620  = config_write_data[10];
     end
     if (rst) begin
       \$620  = 1'h0;
@@ -4968,9 +5198,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$621  = ch0_read_select_c0;
-    if (bus__r_en) begin
-      \$621  = \$124 ;
+    \$621  = ch1_cfg_words_w0_signed;
+    if (\$231 ) begin
+      \$621  = config_write_data[11];
     end
     if (rst) begin
       \$621  = 1'h0;
@@ -4978,19 +5208,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$622  = ch0_read_select_c1;
-    if (bus__r_en) begin
-      \$622  = \$125 ;
+    \$622  = ch1_cfg_words_w1_data_bits;
+    if (\$232 ) begin
+      \$622  = config_write_data[21:16];
     end
     if (rst) begin
-      \$622  = 1'h0;
+      \$622  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$623  = ch0_read_select_c2;
-    if (bus__r_en) begin
-      \$623  = \$126 ;
+    \$623  = ch1_cfg_words_w1_nenw;
+    if (\$233 ) begin
+      \$623  = config_write_data[22];
     end
     if (rst) begin
       \$623  = 1'h0;
@@ -4998,9 +5228,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$624  = ch0_read_select_c3;
-    if (bus__r_en) begin
-      \$624  = \$127 ;
+    \$624  = ch1_cfg_words_w1_lc;
+    if (\$234 ) begin
+      \$624  = config_write_data[23];
     end
     if (rst) begin
       \$624  = 1'h0;
@@ -5008,19 +5238,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$625  = ch0_read_select_c4;
-    if (bus__r_en) begin
-      \$625  = \$128 ;
+    \$625  = ch1_cfg_words_w1_crc;
+    if (\$235 ) begin
+      \$625  = config_write_data[25:24];
     end
     if (rst) begin
-      \$625  = 1'h0;
+      \$625  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$626  = ch0_read_select_c5;
-    if (bus__r_en) begin
-      \$626  = \$129 ;
+    \$626  = ch1_cfg_words_w1_gray;
+    if (\$236 ) begin
+      \$626  = config_write_data[26];
     end
     if (rst) begin
       \$626  = 1'h0;
@@ -5028,19 +5258,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$627  = ch0_result_status_status_snapshot;
-    if (\$130 ) begin
-      \$627  = \port$6330$0 [3:0];
+    \$627  = ch1_cfg_words_w1_signed;
+    if (\$237 ) begin
+      \$627  = config_write_data[27];
     end
     if (rst) begin
-      \$627  = 4'h0;
+      \$627  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$628  = ch0_result_status_cds_snapshot;
-    if (\$130 ) begin
-      \$628  = \port$6330$0 [49];
+    \$628  = ch1_cfg_words_w1_enable;
+    if (\$238 ) begin
+      \$628  = config_write_data[31];
     end
     if (rst) begin
       \$628  = 1'h0;
@@ -5048,19 +5278,16 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$629  = ch0_result_status_w0_ne_snapshot;
-    if (\$130 ) begin
-      \$629  = \port$6330$0 [131];
-    end
+    \$629  = ch1_cfg_checks_write;
     if (rst) begin
       \$629  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$630  = ch0_result_status_w0_nw_snapshot;
-    if (\$130 ) begin
-      \$630  = \port$6330$0 [132];
+    \$630  = ch1_cfg_checks_end_check;
+    if (\$239 ) begin
+      \$630  = config_write_data[0];
     end
     if (rst) begin
       \$630  = 1'h0;
@@ -5068,9 +5295,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$631  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$130 ) begin
-      \$631  = \port$6330$0 [133];
+    \$631  = ch1_cfg_checks_spw_check;
+    if (\$240 ) begin
+      \$631  = config_write_data[1];
     end
     if (rst) begin
       \$631  = 1'h0;
@@ -5078,240 +5305,240 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$632  = ch0_result_status_w1_ne_snapshot;
-    if (\$130 ) begin
-      \$632  = \port$6330$0 [174];
+    \$632  = ch1_cfg_checks_spw_tolerance;
+    if (\$241 ) begin
+      \$632  = config_write_data[15:8];
     end
     if (rst) begin
-      \$632  = 1'h0;
+      \$632  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$633  = ch0_result_status_w1_nw_snapshot;
-    if (\$130 ) begin
-      \$633  = \port$6330$0 [175];
+    \$633  = ch1_cfg_checks_noise_limit;
+    if (\$242 ) begin
+      \$633  = config_write_data[19:16];
     end
     if (rst) begin
-      \$633  = 1'h0;
+      \$633  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$634  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$130 ) begin
-      \$634  = \port$6330$0 [176];
+    \$634  = ch1_cfg_checks_delay_tolerance;
+    if (\$243 ) begin
+      \$634  = config_write_data[23:20];
     end
     if (rst) begin
-      \$634  = 1'h0;
+      \$634  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$635  = ch0_result_status_lc_repeat_snapshot;
-    if (\$130 ) begin
-      \$635  = \port$6330$0 [183];
-    end
+    \$635  = ch1_cfg_quiet_write;
     if (rst) begin
       \$635  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$636  = ch0_result_status_lc_skip_snapshot;
-    if (\$130 ) begin
-      \$636  = \port$6330$0 [184];
+    \$636  = ch1_cfg_quiet_quiet_time;
+    if (\$244 ) begin
+      \$636 [7:0] = config_write_data[7:0];
+    end
+    if (\$245 ) begin
+      \$636 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$636  = 1'h0;
+      \$636  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$637  = ch0_result_status_lc_zero_snapshot;
-    if (\$130 ) begin
-      \$637  = \port$6330$0 [185];
-    end
+    \$637  = ch1_cfg_crc0_write;
     if (rst) begin
       \$637  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$638  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$130 ) begin
-      \$638  = \port$6330$0 [186];
+    \$638  = ch1_cfg_crc0_w0_crc_poly;
+    if (\$246 ) begin
+      \$638 [7:0] = config_write_data[7:0];
+    end
+    if (\$247 ) begin
+      \$638 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$638  = 1'h0;
+      \$638  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$639  = ch0_result_status_lc_snapshot;
-    if (\$130 ) begin
-      \$639  = \port$6330$0 [182:177];
+    \$639  = ch1_cfg_crc0_w0_crc_width;
+    if (\$248 ) begin
+      \$639  = config_write_data[20:16];
     end
     if (rst) begin
-      \$639  = 6'h00;
+      \$639  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$640  = ch0_result_seq_seq_snapshot;
-    if (\$130 ) begin
-      \$640  = ch0__done_count;
+    \$640  = ch1_cfg_crc0_w0_crc_inverted;
+    if (\$249 ) begin
+      \$640  = config_write_data[24];
     end
     if (rst) begin
-      \$640  = 16'h0000;
+      \$640  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$641  = ch0_result_seq_line_delay_snapshot;
-    if (\$130 ) begin
-      \$641  = \port$6330$0 [48:36];
-    end
+    \$641  = ch1_cfg_crc0_start_write;
     if (rst) begin
-      \$641  = 13'h0000;
+      \$641  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$642  = ch0_result_w0_lo_data_snapshot;
-    if (\$130 ) begin
-      \$642  = \port$6330$0 [107:76];
+    \$642  = ch1_cfg_crc0_start_w0_crc_start;
+    if (\$250 ) begin
+      \$642 [7:0] = config_write_data[7:0];
+    end
+    if (\$251 ) begin
+      \$642 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$642  = 32'd0;
+      \$642  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$643  = ch0_result_w0_hi_data_snapshot;
-    if (\$130 ) begin
-      \$643  = \port$6330$0 [130:108];
-    end
+    \$643  = ch1_cfg_crc1_write;
     if (rst) begin
-      \$643  = 23'h000000;
+      \$643  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$644  = ch0_result_w1_lo_data_snapshot;
-    if (\$130 ) begin
-      \$644  = \port$6330$0 [165:134];
+    \$644  = ch1_cfg_crc1_w1_crc_poly;
+    if (\$252 ) begin
+      \$644 [7:0] = config_write_data[7:0];
+    end
+    if (\$253 ) begin
+      \$644 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$644  = 32'd0;
+      \$644  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$645  = ch0_result_w1_hi_data_snapshot;
-    if (\$130 ) begin
-      \$645  = \port$6330$0 [173:166];
+    \$645  = ch1_cfg_crc1_w1_crc_width;
+    if (\$254 ) begin
+      \$645  = config_write_data[20:16];
     end
     if (rst) begin
-      \$645  = 8'h00;
+      \$645  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$646  = ch0_result_timestamp_time_snapshot;
-    if (\$130 ) begin
-      \$646  = \port$6330$0 [35:4];
+    \$646  = ch1_cfg_crc1_w1_crc_inverted;
+    if (\$255 ) begin
+      \$646  = config_write_data[24];
     end
     if (rst) begin
-      \$646  = 32'd0;
+      \$646  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$647  = ch0_result_line_noise_events_snapshot;
-    if (\$130 ) begin
-      \$647  = \port$6330$0 [53:50];
-    end
+    \$647  = ch1_cfg_crc1_start_write;
     if (rst) begin
-      \$647  = 4'h0;
+      \$647  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$648  = ch0_result_line_delay_settled_snapshot;
-    if (\$130 ) begin
-      \$648  = \port$6330$0 [54];
+    \$648  = ch1_cfg_crc1_start_w1_crc_start;
+    if (\$256 ) begin
+      \$648 [7:0] = config_write_data[7:0];
+    end
+    if (\$257 ) begin
+      \$648 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$648  = 1'h0;
+      \$648  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$649  = ch0_result_line_delay_spread_snapshot;
-    if (\$130 ) begin
-      \$649  = \port$6330$0 [75:68];
-    end
+    \$649  = ch1_ca_request_write;
     if (rst) begin
-      \$649  = 8'h00;
+      \$649  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$650  = ch0_result_line_settled_delay_snapshot;
-    if (\$130 ) begin
-      \$650  = \port$6330$0 [67:55];
+    \$650  = ch1_ca_request_slave_id;
+    if (\$258 ) begin
+      \$650  = config_write_data[2:0];
     end
     if (rst) begin
-      \$650  = 13'h0000;
+      \$650  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$651  = ch0_window0_read;
-    if (bus__r_en) begin
-      \$651  = \$132 ;
+    \$651  = ch1_ca_request_address;
+    if (\$259 ) begin
+      \$651  = config_write_data[14:8];
     end
     if (rst) begin
-      \$651  = 1'h0;
+      \$651  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$652  = ch0_read_data;
-    if (bus__r_load) begin
-      \$652  = \$212 ;
+    \$652  = ch1_ca_request_count;
+    if (\$260 ) begin
+      \$652  = config_write_data[22:16];
     end
     if (rst) begin
-      \$652  = 32'd0;
+      \$652  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$653  = \$214 ;
+    \$653  = \ch1_ca_request_write$287 ;
+    if (\$261 ) begin
+      \$653  = config_write_data[24];
+    end
     if (rst) begin
       \$653  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$654  = \$216 ;
+    \$654  = \$263 ;
     if (rst) begin
       \$654  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$655  = \$218 ;
+    \$655  = \$265 ;
     if (rst) begin
       \$655  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$656  = ch1_ctrl_periodic;
-    if (\$219 ) begin
-      \$656  = write_data[8];
+    \$656  = ch1_read_select_100;
+    if (bus__r_en) begin
+      \$656  = \$266 ;
     end
     if (rst) begin
       \$656  = 1'h0;
@@ -5319,9 +5546,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$657  = ch1_ctrl_trigger_enable;
-    if (\$220 ) begin
-      \$657  = write_data[9];
+    \$657  = ch1_read_select_101;
+    if (bus__r_en) begin
+      \$657  = \$267 ;
     end
     if (rst) begin
       \$657  = 1'h0;
@@ -5329,11 +5556,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$658  = ch1_irq_status_done;
-    if (ch1__done) begin
-      \$658  = 1'h1;
-    end else if (\$222 ) begin
-      \$658  = 1'h0;
+    \$658  = ch1_read_select_102;
+    if (bus__r_en) begin
+      \$658  = \$268 ;
     end
     if (rst) begin
       \$658  = 1'h0;
@@ -5341,11 +5566,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$659  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$659  = 1'h1;
-    end else if (\$224 ) begin
-      \$659  = 1'h0;
+    \$659  = ch1_read_select_104;
+    if (bus__r_en) begin
+      \$659  = \$269 ;
     end
     if (rst) begin
       \$659  = 1'h0;
@@ -5353,11 +5576,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$660  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$660  = 1'h1;
-    end else if (\$226 ) begin
-      \$660  = 1'h0;
+    \$660  = ch1_read_select_105;
+    if (bus__r_en) begin
+      \$660  = \$270 ;
     end
     if (rst) begin
       \$660  = 1'h0;
@@ -5365,16 +5586,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$661  = ch1_irq_enable_write;
+    \$661  = ch1_read_select_108;
+    if (bus__r_en) begin
+      \$661  = \$271 ;
+    end
     if (rst) begin
       \$661  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$662  = ch1_irq_enable_done;
-    if (\$227 ) begin
-      \$662  = config_write_data[0];
+    \$662  = ch1_read_select_109;
+    if (bus__r_en) begin
+      \$662  = \$272 ;
     end
     if (rst) begin
       \$662  = 1'h0;
@@ -5382,9 +5606,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$663  = ch1_irq_enable_error;
-    if (\$228 ) begin
-      \$663  = config_write_data[1];
+    \$663  = ch1_read_select_10a;
+    if (bus__r_en) begin
+      \$663  = \$273 ;
     end
     if (rst) begin
       \$663  = 1'h0;
@@ -5392,9 +5616,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$664  = ch1_irq_enable_access_done;
-    if (\$229 ) begin
-      \$664  = config_write_data[2];
+    \$664  = ch1_read_select_10b;
+    if (bus__r_en) begin
+      \$664  = \$274 ;
     end
     if (rst) begin
       \$664  = 1'h0;
@@ -5402,151 +5626,139 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$665  = ch1_cfg_ma_write;
+    \$665  = ch1_read_select_10c;
+    if (bus__r_en) begin
+      \$665  = \$275 ;
+    end
     if (rst) begin
       \$665  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$666  = ch1_cfg_ma_ma_half_period;
-    if (\$230 ) begin
-      \$666 [7:0] = config_write_data[7:0];
-    end
-    if (\$231 ) begin
-      \$666 [15:8] = config_write_data[15:8];
+    \$666  = ch1_read_select_10d;
+    if (bus__r_en) begin
+      \$666  = \$276 ;
     end
     if (rst) begin
-      \$666  = 16'h0000;
+      \$666  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$667  = ch1_cfg_ma_delay_limit;
-    if (\$232 ) begin
-      \$667 [7:0] = config_write_data[23:16];
-    end
-    if (\$233 ) begin
-      \$667 [11:8] = config_write_data[27:24];
+    \$667  = ch1_read_select_10e;
+    if (bus__r_en) begin
+      \$667  = \$277 ;
     end
     if (rst) begin
-      \$667  = 12'h000;
+      \$667  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$668  = ch1_cfg_period_write;
+    \$668  = ch1_read_select_10f;
+    if (bus__r_en) begin
+      \$668  = \$278 ;
+    end
     if (rst) begin
       \$668  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$669  = ch1_cfg_period_request_period;
-    if (\$234 ) begin
-      \$669 [7:0] = config_write_data[7:0];
-    end
-    if (\$235 ) begin
-      \$669 [15:8] = config_write_data[15:8];
-    end
-    if (\$236 ) begin
-      \$669 [23:16] = config_write_data[23:16];
+    \$669  = ch1_read_select_110;
+    if (bus__r_en) begin
+      \$669  = \$279 ;
     end
     if (rst) begin
-      \$669  = 24'h000000;
+      \$669  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$670  = ch1_cfg_break_write;
+    \$670  = ch1_read_select_111;
+    if (bus__r_en) begin
+      \$670  = \$280 ;
+    end
     if (rst) begin
       \$670  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$671  = ch1_cfg_break_break_time;
-    if (\$237 ) begin
-      \$671 [7:0] = config_write_data[7:0];
-    end
-    if (\$238 ) begin
-      \$671 [15:8] = config_write_data[15:8];
-    end
-    if (\$239 ) begin
-      \$671 [23:16] = config_write_data[23:16];
+    \$671  = ch1_read_select_112;
+    if (bus__r_en) begin
+      \$671  = \$281 ;
     end
     if (rst) begin
-      \$671  = 24'h000000;
+      \$671  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$672  = ch1_cfg_ack_write;
+    \$672  = ch1_read_select_113;
+    if (bus__r_en) begin
+      \$672  = \$282 ;
+    end
     if (rst) begin
       \$672  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$673  = ch1_cfg_ack_ack_limit;
-    if (\$240 ) begin
-      \$673 [7:0] = config_write_data[7:0];
-    end
-    if (\$241 ) begin
-      \$673 [15:8] = config_write_data[15:8];
-    end
-    if (\$242 ) begin
-      \$673 [23:16] = config_write_data[23:16];
+    \$673  = ch1_read_select_114;
+    if (bus__r_en) begin
+      \$673  = \$283 ;
     end
     if (rst) begin
-      \$673  = 24'h000000;
+      \$673  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$674  = ch1_cfg_timeout_write;
+    \$674  = ch1_read_select_115;
+    if (bus__r_en) begin
+      \$674  = \$284 ;
+    end
     if (rst) begin
       \$674  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$675  = ch1_cfg_timeout_timeout_limit;
-    if (\$243 ) begin
-      \$675 [7:0] = config_write_data[7:0];
-    end
-    if (\$244 ) begin
-      \$675 [15:8] = config_write_data[15:8];
-    end
-    if (\$245 ) begin
-      \$675 [23:16] = config_write_data[23:16];
+    \$675  = ch1_read_select_116;
+    if (bus__r_en) begin
+      \$675  = \$285 ;
     end
     if (rst) begin
-      \$675  = 24'h000000;
+      \$675  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$676  = ch1_cfg_words_write;
+    \$676  = ch1_read_select_117;
+    if (bus__r_en) begin
+      \$676  = \$286 ;
+    end
     if (rst) begin
       \$676  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$677  = ch1_cfg_words_w0_data_bits;
-    if (\$246 ) begin
-      \$677  = config_write_data[5:0];
+    \$677  = ch1_read_select_120;
+    if (bus__r_en) begin
+      \$677  = \$287 ;
     end
     if (rst) begin
-      \$677  = 6'h00;
+      \$677  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$678  = ch1_cfg_words_w0_nenw;
-    if (\$247 ) begin
-      \$678  = config_write_data[6];
+    \$678  = ch1_read_select_121;
+    if (bus__r_en) begin
+      \$678  = \$288 ;
     end
     if (rst) begin
       \$678  = 1'h0;
@@ -5554,9 +5766,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$679  = ch1_cfg_words_w0_lc;
-    if (\$248 ) begin
-      \$679  = config_write_data[7];
+    \$679  = ch1_read_select_122;
+    if (bus__r_en) begin
+      \$679  = \$289 ;
     end
     if (rst) begin
       \$679  = 1'h0;
@@ -5564,19 +5776,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$680  = ch1_cfg_words_w0_crc;
-    if (\$249 ) begin
-      \$680  = config_write_data[9:8];
+    \$680  = ch1_read_select_123;
+    if (bus__r_en) begin
+      \$680  = \$290 ;
     end
     if (rst) begin
-      \$680  = 2'h0;
+      \$680  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$681  = ch1_cfg_words_w0_gray;
-    if (\$250 ) begin
-      \$681  = config_write_data[10];
+    \$681  = ch1_read_select_140;
+    if (bus__r_en) begin
+      \$681  = \$291 ;
     end
     if (rst) begin
       \$681  = 1'h0;
@@ -5584,9 +5796,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$682  = ch1_cfg_words_w0_signed;
-    if (\$251 ) begin
-      \$682  = config_write_data[11];
+    \$682  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$682  = \$292 ;
     end
     if (rst) begin
       \$682  = 1'h0;
@@ -5594,19 +5806,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$683  = ch1_cfg_words_w1_data_bits;
-    if (\$252 ) begin
-      \$683  = config_write_data[21:16];
+    \$683  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$683  = \$293 ;
     end
     if (rst) begin
-      \$683  = 6'h00;
+      \$683  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$684  = ch1_cfg_words_w1_nenw;
-    if (\$253 ) begin
-      \$684  = config_write_data[22];
+    \$684  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$684  = \$294 ;
     end
     if (rst) begin
       \$684  = 1'h0;
@@ -5614,9 +5826,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$685  = ch1_cfg_words_w1_lc;
-    if (\$254 ) begin
-      \$685  = config_write_data[23];
+    \$685  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$685  = \$295 ;
     end
     if (rst) begin
       \$685  = 1'h0;
@@ -5624,29 +5836,29 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$686  = ch1_cfg_words_w1_crc;
-    if (\$255 ) begin
-      \$686  = config_write_data[25:24];
+    \$686  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$686  = \$296 ;
     end
     if (rst) begin
-      \$686  = 2'h0;
+      \$686  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$687  = ch1_cfg_words_w1_gray;
-    if (\$256 ) begin
-      \$687  = config_write_data[26];
+    \$687  = ch1_result_status_status_snapshot;
+    if (\$297 ) begin
+      \$687  = \port$6964$0 [3:0];
     end
     if (rst) begin
-      \$687  = 1'h0;
+      \$687  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$688  = ch1_cfg_words_w1_signed;
-    if (\$257 ) begin
-      \$688  = config_write_data[27];
+    \$688  = ch1_result_status_cds_snapshot;
+    if (\$297 ) begin
+      \$688  = \port$6964$0 [49];
     end
     if (rst) begin
       \$688  = 1'h0;
@@ -5654,9 +5866,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$689  = ch1_cfg_words_w1_enable;
-    if (\$258 ) begin
-      \$689  = config_write_data[31];
+    \$689  = ch1_result_status_w0_ne_snapshot;
+    if (\$297 ) begin
+      \$689  = \port$6964$0 [131];
     end
     if (rst) begin
       \$689  = 1'h0;
@@ -5664,16 +5876,19 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$690  = ch1_cfg_checks_write;
+    \$690  = ch1_result_status_w0_nw_snapshot;
+    if (\$297 ) begin
+      \$690  = \port$6964$0 [132];
+    end
     if (rst) begin
       \$690  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$691  = ch1_cfg_checks_end_check;
-    if (\$259 ) begin
-      \$691  = config_write_data[0];
+    \$691  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$297 ) begin
+      \$691  = \port$6964$0 [133];
     end
     if (rst) begin
       \$691  = 1'h0;
@@ -5681,9 +5896,9 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$692  = ch1_cfg_checks_spw_check;
-    if (\$260 ) begin
-      \$692  = config_write_data[1];
+    \$692  = ch1_result_status_w1_ne_snapshot;
+    if (\$297 ) begin
+      \$692  = \port$6964$0 [174];
     end
     if (rst) begin
       \$692  = 1'h0;
@@ -5691,989 +5906,287 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$693  = ch1_cfg_checks_spw_tolerance;
-    if (\$261 ) begin
-      \$693  = config_write_data[15:8];
+    \$693  = ch1_result_status_w1_nw_snapshot;
+    if (\$297 ) begin
+      \$693  = \port$6964$0 [175];
     end
     if (rst) begin
-      \$693  = 8'h00;
+      \$693  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$694  = ch1_cfg_checks_noise_limit;
-    if (\$262 ) begin
-      \$694  = config_write_data[19:16];
+    \$694  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$297 ) begin
+      \$694  = \port$6964$0 [176];
     end
     if (rst) begin
-      \$694  = 4'h0;
+      \$694  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$695  = ch1_cfg_checks_delay_tolerance;
-    if (\$263 ) begin
-      \$695  = config_write_data[23:20];
+    \$695  = ch1_result_status_lc_repeat_snapshot;
+    if (\$297 ) begin
+      \$695  = \port$6964$0 [183];
     end
     if (rst) begin
-      \$695  = 4'h0;
+      \$695  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$696  = ch1_cfg_quiet_write;
+    \$696  = ch1_result_status_lc_skip_snapshot;
+    if (\$297 ) begin
+      \$696  = \port$6964$0 [184];
+    end
     if (rst) begin
       \$696  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$697  = ch1_cfg_quiet_quiet_time;
-    if (\$264 ) begin
-      \$697 [7:0] = config_write_data[7:0];
-    end
-    if (\$265 ) begin
-      \$697 [11:8] = config_write_data[11:8];
+    \$697  = ch1_result_status_lc_zero_snapshot;
+    if (\$297 ) begin
+      \$697  = \port$6964$0 [185];
     end
     if (rst) begin
-      \$697  = 12'h000;
+      \$697  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$698  = ch1_cfg_crc0_write;
+    \$698  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$297 ) begin
+      \$698  = \port$6964$0 [186];
+    end
     if (rst) begin
       \$698  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$699  = ch1_cfg_crc0_w0_crc_poly;
-    if (\$266 ) begin
-      \$699 [7:0] = config_write_data[7:0];
-    end
-    if (\$267 ) begin
-      \$699 [15:8] = config_write_data[15:8];
+    \$699  = ch1_result_status_lc_snapshot;
+    if (\$297 ) begin
+      \$699  = \port$6964$0 [182:177];
     end
     if (rst) begin
-      \$699  = 16'h0000;
+      \$699  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$700  = ch1_cfg_crc0_w0_crc_width;
-    if (\$268 ) begin
-      \$700  = config_write_data[20:16];
+    \$700  = ch1_result_seq_seq_snapshot;
+    if (\$297 ) begin
+      \$700  = ch1__done_count;
     end
     if (rst) begin
-      \$700  = 5'h00;
+      \$700  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$701  = ch1_cfg_crc0_w0_crc_inverted;
-    if (\$269 ) begin
-      \$701  = config_write_data[24];
+    \$701  = ch1_result_seq_line_delay_snapshot;
+    if (\$297 ) begin
+      \$701  = \port$6964$0 [48:36];
     end
     if (rst) begin
-      \$701  = 1'h0;
+      \$701  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$702  = ch1_cfg_crc0_start_write;
+    \$702  = ch1_result_w0_lo_data_snapshot;
+    if (\$297 ) begin
+      \$702  = \port$6964$0 [107:76];
+    end
     if (rst) begin
-      \$702  = 1'h0;
+      \$702  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$703  = ch1_cfg_crc0_start_w0_crc_start;
-    if (\$270 ) begin
-      \$703 [7:0] = config_write_data[7:0];
-    end
-    if (\$271 ) begin
-      \$703 [15:8] = config_write_data[15:8];
+    \$703  = ch1_result_w0_hi_data_snapshot;
+    if (\$297 ) begin
+      \$703  = \port$6964$0 [130:108];
     end
     if (rst) begin
-      \$703  = 16'h0000;
+      \$703  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$704  = ch1_cfg_crc1_write;
+    \$704  = ch1_result_w1_lo_data_snapshot;
+    if (\$297 ) begin
+      \$704  = \port$6964$0 [165:134];
+    end
     if (rst) begin
-      \$704  = 1'h0;
+      \$704  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$705  = ch1_cfg_crc1_w1_crc_poly;
-    if (\$272 ) begin
-      \$705 [7:0] = config_write_data[7:0];
-    end
-    if (\$273 ) begin
-      \$705 [15:8] = config_write_data[15:8];
+    \$705  = ch1_result_w1_hi_data_snapshot;
+    if (\$297 ) begin
+      \$705  = \port$6964$0 [173:166];
     end
     if (rst) begin
-      \$705  = 16'h0000;
+      \$705  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$706  = ch1_cfg_crc1_w1_crc_width;
-    if (\$274 ) begin
-      \$706  = config_write_data[20:16];
+    \$706  = ch1_result_timestamp_time_snapshot;
+    if (\$297 ) begin
+      \$706  = \port$6964$0 [35:4];
     end
     if (rst) begin
-      \$706  = 5'h00;
+      \$706  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$707  = ch1_cfg_crc1_w1_crc_inverted;
-    if (\$275 ) begin
-      \$707  = config_write_data[24];
+    \$707  = ch1_result_line_noise_events_snapshot;
+    if (\$297 ) begin
+      \$707  = \port$6964$0 [53:50];
     end
     if (rst) begin
-      \$707  = 1'h0;
+      \$707  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$708  = ch1_cfg_crc1_start_write;
+    \$708  = ch1_result_line_delay_settled_snapshot;
+    if (\$297 ) begin
+      \$708  = \port$6964$0 [54];
+    end
     if (rst) begin
       \$708  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$709  = ch1_cfg_crc1_start_w1_crc_start;
-    if (\$276 ) begin
-      \$709 [7:0] = config_write_data[7:0];
-    end
-    if (\$277 ) begin
-      \$709 [15:8] = config_write_data[15:8];
+    \$709  = ch1_result_line_delay_spread_snapshot;
+    if (\$297 ) begin
+      \$709  = \port$6964$0 [75:68];
     end
     if (rst) begin
-      \$709  = 16'h0000;
+      \$709  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$710  = ch1_ca_request_write;
+    \$710  = ch1_result_line_settled_delay_snapshot;
+    if (\$297 ) begin
+      \$710  = \port$6964$0 [67:55];
+    end
     if (rst) begin
-      \$710  = 1'h0;
+      \$710  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$711  = ch1_ca_request_slave_id;
-    if (\$278 ) begin
-      \$711  = config_write_data[2:0];
-    end
-    if (rst) begin
-      \$711  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$712  = ch1_ca_request_address;
-    if (\$279 ) begin
-      \$712  = config_write_data[14:8];
-    end
-    if (rst) begin
-      \$712  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$713  = ch1_ca_request_count;
-    if (\$280 ) begin
-      \$713  = config_write_data[22:16];
-    end
-    if (rst) begin
-      \$713  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$714  = \ch1_ca_request_write$309 ;
-    if (\$281 ) begin
-      \$714  = config_write_data[24];
-    end
-    if (rst) begin
-      \$714  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$715  = \$283 ;
-    if (rst) begin
-      \$715  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$716  = \$285 ;
-    if (rst) begin
-      \$716  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$717  = ch1_read_select_100;
+    \$711  = ch1_window0_read;
     if (bus__r_en) begin
-      \$717  = \$286 ;
+      \$711  = \$299 ;
     end
     if (rst) begin
-      \$717  = 1'h0;
+      \$711  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$718  = ch1_read_select_101;
+    \$712  = ch1_window1_read;
     if (bus__r_en) begin
-      \$718  = \$287 ;
+      \$712  = \$301 ;
     end
     if (rst) begin
-      \$718  = 1'h0;
+      \$712  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$719  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$719  = \$288 ;
-    end
-    if (rst) begin
-      \$719  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$720  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$720  = \$289 ;
-    end
-    if (rst) begin
-      \$720  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$721  = ch1_read_select_105;
-    if (bus__r_en) begin
-      \$721  = \$290 ;
-    end
-    if (rst) begin
-      \$721  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$722  = ch1_read_select_108;
-    if (bus__r_en) begin
-      \$722  = \$291 ;
-    end
-    if (rst) begin
-      \$722  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$723  = ch1_read_select_109;
-    if (bus__r_en) begin
-      \$723  = \$292 ;
-    end
-    if (rst) begin
-      \$723  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$724  = ch1_read_select_10a;
-    if (bus__r_en) begin
-      \$724  = \$293 ;
-    end
-    if (rst) begin
-      \$724  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$725  = ch1_read_select_10b;
-    if (bus__r_en) begin
-      \$725  = \$294 ;
-    end
-    if (rst) begin
-      \$725  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$726  = ch1_read_select_10c;
-    if (bus__r_en) begin
-      \$726  = \$295 ;
-    end
-    if (rst) begin
-      \$726  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$727  = ch1_read_select_10d;
-    if (bus__r_en) begin
-      \$727  = \$296 ;
-    end
-    if (rst) begin
-      \$727  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$728  = ch1_read_select_10e;
-    if (bus__r_en) begin
-      \$728  = \$297 ;
-    end
-    if (rst) begin
-      \$728  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$729  = ch1_read_select_10f;
-    if (bus__r_en) begin
-      \$729  = \$298 ;
-    end
-    if (rst) begin
-      \$729  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$730  = ch1_read_select_110;
-    if (bus__r_en) begin
-      \$730  = \$299 ;
-    end
-    if (rst) begin
-      \$730  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$731  = ch1_read_select_111;
-    if (bus__r_en) begin
-      \$731  = \$300 ;
-    end
-    if (rst) begin
-      \$731  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$732  = ch1_read_select_112;
-    if (bus__r_en) begin
-      \$732  = \$301 ;
-    end
-    if (rst) begin
-      \$732  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$733  = ch1_read_select_113;
-    if (bus__r_en) begin
-      \$733  = \$302 ;
-    end
-    if (rst) begin
-      \$733  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$734  = ch1_read_select_114;
-    if (bus__r_en) begin
-      \$734  = \$303 ;
-    end
-    if (rst) begin
-      \$734  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$735  = ch1_read_select_115;
-    if (bus__r_en) begin
-      \$735  = \$304 ;
-    end
-    if (rst) begin
-      \$735  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$736  = ch1_read_select_116;
-    if (bus__r_en) begin
-      \$736  = \$305 ;
-    end
-    if (rst) begin
-      \$736  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$737  = ch1_read_select_117;
-    if (bus__r_en) begin
-      \$737  = \$306 ;
-    end
-    if (rst) begin
-      \$737  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$738  = ch1_read_select_118;
-    if (bus__r_en) begin
-      \$738  = \$307 ;
-    end
-    if (rst) begin
-      \$738  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$739  = ch1_read_select_119;
-    if (bus__r_en) begin
-      \$739  = \$308 ;
-    end
-    if (rst) begin
-      \$739  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$740  = ch1_read_select_11a;
-    if (bus__r_en) begin
-      \$740  = \$309 ;
-    end
-    if (rst) begin
-      \$740  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$741  = ch1_read_select_11b;
-    if (bus__r_en) begin
-      \$741  = \$310 ;
-    end
-    if (rst) begin
-      \$741  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$742  = ch1_read_select_11c;
-    if (bus__r_en) begin
-      \$742  = \$311 ;
-    end
-    if (rst) begin
-      \$742  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$743  = ch1_read_select_11d;
-    if (bus__r_en) begin
-      \$743  = \$312 ;
-    end
-    if (rst) begin
-      \$743  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$744  = ch1_read_select_11e;
-    if (bus__r_en) begin
-      \$744  = \$313 ;
-    end
-    if (rst) begin
-      \$744  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$745  = ch1_read_select_11f;
-    if (bus__r_en) begin
-      \$745  = \$314 ;
-    end
-    if (rst) begin
-      \$745  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$746  = ch1_read_select_120;
-    if (bus__r_en) begin
-      \$746  = \$315 ;
-    end
-    if (rst) begin
-      \$746  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$747  = ch1_read_select_121;
-    if (bus__r_en) begin
-      \$747  = \$316 ;
-    end
-    if (rst) begin
-      \$747  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$748  = ch1_read_select_122;
-    if (bus__r_en) begin
-      \$748  = \$317 ;
-    end
-    if (rst) begin
-      \$748  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$749  = ch1_read_select_123;
-    if (bus__r_en) begin
-      \$749  = \$318 ;
-    end
-    if (rst) begin
-      \$749  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$750  = ch1_read_select_140;
-    if (bus__r_en) begin
-      \$750  = \$319 ;
-    end
-    if (rst) begin
-      \$750  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$751  = ch1_read_select_141;
-    if (bus__r_en) begin
-      \$751  = \$320 ;
-    end
-    if (rst) begin
-      \$751  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$752  = ch1_read_select_142;
-    if (bus__r_en) begin
-      \$752  = \$321 ;
-    end
-    if (rst) begin
-      \$752  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$753  = ch1_read_select_143;
-    if (bus__r_en) begin
-      \$753  = \$322 ;
-    end
-    if (rst) begin
-      \$753  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$754  = ch1_read_select_144;
-    if (bus__r_en) begin
-      \$754  = \$323 ;
-    end
-    if (rst) begin
-      \$754  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$755  = ch1_read_select_145;
-    if (bus__r_en) begin
-      \$755  = \$324 ;
-    end
-    if (rst) begin
-      \$755  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$756  = ch1_result_status_status_snapshot;
-    if (\$325 ) begin
-      \$756  = \port$6897$0 [3:0];
-    end
-    if (rst) begin
-      \$756  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$757  = ch1_result_status_cds_snapshot;
-    if (\$325 ) begin
-      \$757  = \port$6897$0 [49];
-    end
-    if (rst) begin
-      \$757  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$758  = ch1_result_status_w0_ne_snapshot;
-    if (\$325 ) begin
-      \$758  = \port$6897$0 [131];
-    end
-    if (rst) begin
-      \$758  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$759  = ch1_result_status_w0_nw_snapshot;
-    if (\$325 ) begin
-      \$759  = \port$6897$0 [132];
-    end
-    if (rst) begin
-      \$759  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$760  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$325 ) begin
-      \$760  = \port$6897$0 [133];
-    end
-    if (rst) begin
-      \$760  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$761  = ch1_result_status_w1_ne_snapshot;
-    if (\$325 ) begin
-      \$761  = \port$6897$0 [174];
-    end
-    if (rst) begin
-      \$761  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$762  = ch1_result_status_w1_nw_snapshot;
-    if (\$325 ) begin
-      \$762  = \port$6897$0 [175];
-    end
-    if (rst) begin
-      \$762  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$763  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$325 ) begin
-      \$763  = \port$6897$0 [176];
-    end
-    if (rst) begin
-      \$763  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$764  = ch1_result_status_lc_repeat_snapshot;
-    if (\$325 ) begin
-      \$764  = \port$6897$0 [183];
-    end
-    if (rst) begin
-      \$764  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$765  = ch1_result_status_lc_skip_snapshot;
-    if (\$325 ) begin
-      \$765  = \port$6897$0 [184];
-    end
-    if (rst) begin
-      \$765  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$766  = ch1_result_status_lc_zero_snapshot;
-    if (\$325 ) begin
-      \$766  = \port$6897$0 [185];
-    end
-    if (rst) begin
-      \$766  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$767  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$325 ) begin
-      \$767  = \port$6897$0 [186];
-    end
-    if (rst) begin
-      \$767  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$768  = ch1_result_status_lc_snapshot;
-    if (\$325 ) begin
-      \$768  = \port$6897$0 [182:177];
-    end
-    if (rst) begin
-      \$768  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$769  = ch1_result_seq_seq_snapshot;
-    if (\$325 ) begin
-      \$769  = ch1__done_count;
-    end
-    if (rst) begin
-      \$769  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$770  = ch1_result_seq_line_delay_snapshot;
-    if (\$325 ) begin
-      \$770  = \port$6897$0 [48:36];
-    end
-    if (rst) begin
-      \$770  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$771  = ch1_result_w0_lo_data_snapshot;
-    if (\$325 ) begin
-      \$771  = \port$6897$0 [107:76];
-    end
-    if (rst) begin
-      \$771  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$772  = ch1_result_w0_hi_data_snapshot;
-    if (\$325 ) begin
-      \$772  = \port$6897$0 [130:108];
-    end
-    if (rst) begin
-      \$772  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$773  = ch1_result_w1_lo_data_snapshot;
-    if (\$325 ) begin
-      \$773  = \port$6897$0 [165:134];
-    end
-    if (rst) begin
-      \$773  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$774  = ch1_result_w1_hi_data_snapshot;
-    if (\$325 ) begin
-      \$774  = \port$6897$0 [173:166];
-    end
-    if (rst) begin
-      \$774  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$775  = ch1_result_timestamp_time_snapshot;
-    if (\$325 ) begin
-      \$775  = \port$6897$0 [35:4];
-    end
-    if (rst) begin
-      \$775  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$776  = ch1_result_line_noise_events_snapshot;
-    if (\$325 ) begin
-      \$776  = \port$6897$0 [53:50];
-    end
-    if (rst) begin
-      \$776  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$777  = ch1_result_line_delay_settled_snapshot;
-    if (\$325 ) begin
-      \$777  = \port$6897$0 [54];
-    end
-    if (rst) begin
-      \$777  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$778  = ch1_result_line_delay_spread_snapshot;
-    if (\$325 ) begin
-      \$778  = \port$6897$0 [75:68];
-    end
-    if (rst) begin
-      \$778  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$779  = ch1_result_line_settled_delay_snapshot;
-    if (\$325 ) begin
-      \$779  = \port$6897$0 [67:55];
-    end
-    if (rst) begin
-      \$779  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$780  = ch1_window0_read;
-    if (bus__r_en) begin
-      \$780  = \$327 ;
-    end
-    if (rst) begin
-      \$780  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$781  = ch1_read_data;
+    \$713  = ch1_read_data;
     if (bus__r_load) begin
-      \$781  = \$407 ;
+      \$713  = \$367 ;
     end
     if (rst) begin
-      \$781  = 32'd0;
+      \$713  = 32'd0;
     end
   end
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6330$0 [3:0];
-  assign ch0__cds = \port$6330$0 [49];
-  assign ch0__word0_ne = \port$6330$0 [131];
-  assign ch0__word0_nw = \port$6330$0 [132];
-  assign ch0__word0_crc_ok = \port$6330$0 [133];
-  assign ch0__word1_ne = \port$6330$0 [174];
-  assign ch0__word1_nw = \port$6330$0 [175];
-  assign ch0__word1_crc_ok = \port$6330$0 [176];
-  assign ch0__lc_repeat = \port$6330$0 [183];
-  assign ch0__lc_skip = \port$6330$0 [184];
-  assign ch0__lc_zero = \port$6330$0 [185];
-  assign ch0__spw_mismatch = \port$6330$0 [186];
-  assign ch0__lc = \port$6330$0 [182:177];
-  assign ch0__line_delay = \port$6330$0 [48:36];
-  assign ch0__word0_position = \port$6330$0 [130:76];
-  assign ch0__word1_position = \port$6330$0 [173:134];
-  assign ch0__timestamp = \port$6330$0 [35:4];
-  assign ch0__noise_events = \port$6330$0 [53:50];
-  assign ch0__delay_settled = \port$6330$0 [54];
-  assign ch0__delay_spread = \port$6330$0 [75:68];
-  assign ch0__settled_delay = \port$6330$0 [67:55];
+  assign ch0__status = \port$6443$0 [3:0];
+  assign ch0__cds = \port$6443$0 [49];
+  assign ch0__word0_ne = \port$6443$0 [131];
+  assign ch0__word0_nw = \port$6443$0 [132];
+  assign ch0__word0_crc_ok = \port$6443$0 [133];
+  assign ch0__word1_ne = \port$6443$0 [174];
+  assign ch0__word1_nw = \port$6443$0 [175];
+  assign ch0__word1_crc_ok = \port$6443$0 [176];
+  assign ch0__lc_repeat = \port$6443$0 [183];
+  assign ch0__lc_skip = \port$6443$0 [184];
+  assign ch0__lc_zero = \port$6443$0 [185];
+  assign ch0__spw_mismatch = \port$6443$0 [186];
+  assign ch0__lc = \port$6443$0 [182:177];
+  assign ch0__line_delay = \port$6443$0 [48:36];
+  assign ch0__word0_position = \port$6443$0 [130:76];
+  assign ch0__word1_position = \port$6443$0 [173:134];
+  assign ch0__timestamp = \port$6443$0 [35:4];
+  assign ch0__noise_events = \port$6443$0 [53:50];
+  assign ch0__delay_settled = \port$6443$0 [54];
+  assign ch0__delay_spread = \port$6443$0 [75:68];
+  assign ch0__settled_delay = \port$6443$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__count_crc_word0 = \port$6343$0 [15:0];
-  assign ch0__count_crc_word1 = \port$6343$0 [31:16];
-  assign ch0__count_no_ack = \port$6343$0 [47:32];
-  assign ch0__count_no_start = \port$6343$0 [63:48];
-  assign ch0__count_delay_range = \port$6343$0 [79:64];
-  assign ch0__count_slo_stuck_low = \port$6343$0 [95:80];
-  assign ch0__count_lc_repeat = \port$6343$0 [111:96];
-  assign ch0__count_lc_skip = \port$6343$0 [127:112];
-  assign ch0__count_lc_zero = \port$6343$0 [143:128];
-  assign ch0__count_spw_mismatch = \port$6343$0 [159:144];
-  assign ch0__count_overrun = \port$6343$0 [175:160];
-  assign ch0__count_aborted = \port$6343$0 [191:176];
-  assign ch0__count_no_stop = \port$6343$0 [207:192];
-  assign ch0__count_noisy_line = \port$6343$0 [223:208];
-  assign ch0__count_delay_jump = \port$6343$0 [239:224];
-  assign ch0__count_noise_event = \port$6343$0 [255:240];
-  assign ch0__ca_status = \port$6475$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6475$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6343$0 [271:256];
-  assign ch0__count_ca_no_answer = \port$6343$0 [287:272];
-  assign ch0__count_ca_refused = \port$6343$0 [303:288];
-  assign ch0__count_ca_aborted = \port$6343$0 [319:304];
-  assign ch0__count_ca_data_fault = \port$6343$0 [335:320];
-  assign ch1__status = \port$6897$0 [3:0];
-  assign ch1__cds = \port$6897$0 [49];
-  assign ch1__word0_ne = \port$6897$0 [131];
-  assign ch1__word0_nw = \port$6897$0 [132];
-  assign ch1__word0_crc_ok = \port$6897$0 [133];
-  assign ch1__word1_ne = \port$6897$0 [174];
-  assign ch1__word1_nw = \port$6897$0 [175];
-  assign ch1__word1_crc_ok = \port$6897$0 [176];
-  assign ch1__lc_repeat = \port$6897$0 [183];
-  assign ch1__lc_skip = \port$6897$0 [184];
-  assign ch1__lc_zero = \port$6897$0 [185];
-  assign ch1__spw_mismatch = \port$6897$0 [186];
-  assign ch1__lc = \port$6897$0 [182:177];
-  assign ch1__line_delay = \port$6897$0 [48:36];
-  assign ch1__word0_position = \port$6897$0 [130:76];
-  assign ch1__word1_position = \port$6897$0 [173:134];
-  assign ch1__timestamp = \port$6897$0 [35:4];
-  assign ch1__noise_events = \port$6897$0 [53:50];
-  assign ch1__delay_settled = \port$6897$0 [54];
-  assign ch1__delay_spread = \port$6897$0 [75:68];
-  assign ch1__settled_delay = \port$6897$0 [67:55];
+  assign ch0__ca_status = \port$6541$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6541$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6456$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$6456$0 [31:16];
+  assign ch0__count_ca_refused = \port$6456$0 [47:32];
+  assign ch0__count_ca_aborted = \port$6456$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$6456$0 [79:64];
+  assign ch1__status = \port$6964$0 [3:0];
+  assign ch1__cds = \port$6964$0 [49];
+  assign ch1__word0_ne = \port$6964$0 [131];
+  assign ch1__word0_nw = \port$6964$0 [132];
+  assign ch1__word0_crc_ok = \port$6964$0 [133];
+  assign ch1__word1_ne = \port$6964$0 [174];
+  assign ch1__word1_nw = \port$6964$0 [175];
+  assign ch1__word1_crc_ok = \port$6964$0 [176];
+  assign ch1__lc_repeat = \port$6964$0 [183];
+  assign ch1__lc_skip = \port$6964$0 [184];
+  assign ch1__lc_zero = \port$6964$0 [185];
+  assign ch1__spw_mismatch = \port$6964$0 [186];
+  assign ch1__lc = \port$6964$0 [182:177];
+  assign ch1__line_delay = \port$6964$0 [48:36];
+  assign ch1__word0_position = \port$6964$0 [130:76];
+  assign ch1__word1_position = \port$6964$0 [173:134];
+  assign ch1__timestamp = \port$6964$0 [35:4];
+  assign ch1__noise_events = \port$6964$0 [53:50];
+  assign ch1__delay_settled = \port$6964$0 [54];
+  assign ch1__delay_spread = \port$6964$0 [75:68];
+  assign ch1__settled_delay = \port$6964$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__count_crc_word0 = \port$6910$0 [15:0];
-  assign ch1__count_crc_word1 = \port$6910$0 [31:16];
-  assign ch1__count_no_ack = \port$6910$0 [47:32];
-  assign ch1__count_no_start = \port$6910$0 [63:48];
-  assign ch1__count_delay_range = \port$6910$0 [79:64];
-  assign ch1__count_slo_stuck_low = \port$6910$0 [95:80];
-  assign ch1__count_lc_repeat = \port$6910$0 [111:96];
-  assign ch1__count_lc_skip = \port$6910$0 [127:112];
-  assign ch1__count_lc_zero = \port$6910$0 [143:128];
-  assign ch1__count_spw_mismatch = \port$6910$0 [159:144];
-  assign ch1__count_overrun = \port$6910$0 [175:160];
-  assign ch1__count_aborted = \port$6910$0 [191:176];
-  assign ch1__count_no_stop = \port$6910$0 [207:192];
-  assign ch1__count_noisy_line = \port$6910$0 [223:208];
-  assign ch1__count_delay_jump = \port$6910$0 [239:224];
-  assign ch1__count_noise_event = \port$6910$0 [255:240];
-  assign ch1__ca_status = \port$7042$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7042$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$6910$0 [271:256];
-  assign ch1__count_ca_no_answer = \port$6910$0 [287:272];
-  assign ch1__count_ca_refused = \port$6910$0 [303:288];
-  assign ch1__count_ca_aborted = \port$6910$0 [319:304];
-  assign ch1__count_ca_data_fault = \port$6910$0 [335:320];
+  assign ch1__ca_status = \port$7062$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7062$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$6977$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$6977$0 [31:16];
+  assign ch1__count_ca_refused = \port$6977$0 [47:32];
+  assign ch1__count_ca_aborted = \port$6977$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$6977$0 [79:64];
   assign glob__trigger = g_trigger_start;
+  assign ch0__count_addr = bus__r_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
   assign ch0__abort_cycle = ch0_ctrl_abort;
   assign ch0__clear_counters = ch0_ctrl_clear_counters;
@@ -6720,6 +6233,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
   assign ch0__ca_rbuf_addr = bus__r_addr[3:0];
+  assign ch1__count_addr = bus__r_addr[2:0];
   assign ch1__start = ch1_ctrl_start;
   assign ch1__abort_cycle = ch1_ctrl_abort;
   assign ch1__clear_counters = ch1_ctrl_clear_counters;
@@ -6761,7 +6275,7 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$309 ;
+  assign ch1__ca_write = \ch1_ca_request_write$287 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
@@ -6772,20 +6286,20 @@ module \biss_master_uart.bank (rst, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, c
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$456  = \$455 ;
-  assign \$458  = \$457 ;
-  assign \$460  = \$459 ;
-  assign \$504  = \$503 ;
-  assign \$506  = \$505 ;
-  assign \$508  = \$507 ;
-  assign \$134  = \$133 ;
-  assign \$201  = 32'd0;
-  assign \$202  = \$200 ;
-  assign \$329  = \$328 ;
-  assign \$396  = 32'd0;
-  assign \$397  = \$395 ;
+  assign \$409  = \$408 ;
+  assign \$411  = \$410 ;
+  assign \$413  = \$412 ;
+  assign \$450  = \$449 ;
+  assign \$452  = \$451 ;
+  assign \$454  = \$453 ;
+  assign \$128  = \$127 ;
+  assign \$179  = 32'd0;
+  assign \$180  = \$178 ;
+  assign \$303  = \$302 ;
+  assign \$354  = 32'd0;
+  assign \$355  = \$353 ;
   assign g_irq = 1'h0;
-  assign \$509  = g_read_data;
+  assign \$455  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -8937,17 +8451,17 @@ module \biss_master_uart.bus.transmitter (rst, ready, tx, data, valid, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$6330$0 , \port$6343$0 , regs__ca_done
-, \port$6475$0 , slo);
+module \biss_master_uart.ch0 (clk, rst, \trigger$177 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
+, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
+, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$6443$0 
+, \port$6456$0 , regs__ca_done, \port$6541$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg \$3 ;
   reg [15:0] \$4 ;
   wire [186:0] \$5 ;
-  wire [335:0] \$6 ;
+  wire [79:0] \$6 ;
   wire [9:0] \$7 ;
   reg abort_cycle = 1'h0;
   wire busy;
@@ -9068,27 +8582,15 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   input clk;
   wire clk;
   wire config_error;
-  wire [15:0] count_aborted;
+  wire [2:0] count_addr;
   wire [15:0] count_ca_aborted;
   wire [15:0] count_ca_crc4_error;
   wire [15:0] count_ca_data_fault;
   wire [15:0] count_ca_no_answer;
   wire [15:0] count_ca_refused;
-  wire [15:0] count_crc_word0;
-  wire [15:0] count_crc_word1;
-  wire [15:0] count_delay_jump;
-  wire [15:0] count_delay_range;
-  wire [15:0] count_lc_repeat;
-  wire [15:0] count_lc_skip;
-  wire [15:0] count_lc_zero;
-  wire [15:0] count_no_ack;
-  wire [15:0] count_no_start;
-  wire [15:0] count_no_stop;
-  wire [15:0] count_noise_event;
-  wire [15:0] count_noisy_line;
-  wire [15:0] count_overrun;
-  wire [15:0] count_slo_stuck_low;
-  wire [15:0] count_spw_mismatch;
+  wire [31:0] count_data;
+  input count_en;
+  wire count_en;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire done;
@@ -9099,16 +8601,16 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$206 ;
+  wire \ma$180 ;
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$6330$0 ;
-  wire [186:0] \port$6330$0 ;
-  output [335:0] \port$6343$0 ;
-  wire [335:0] \port$6343$0 ;
-  output [9:0] \port$6475$0 ;
-  wire [9:0] \port$6475$0 ;
+  output [186:0] \port$6443$0 ;
+  wire [186:0] \port$6443$0 ;
+  output [79:0] \port$6456$0 ;
+  wire [79:0] \port$6456$0 ;
+  output [9:0] \port$6541$0 ;
+  wire [9:0] \port$6541$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -9185,27 +8687,15 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   wire regs__clear_counters;
   output regs__config_error;
   wire regs__config_error;
-  wire [15:0] regs__count_aborted;
+  wire [2:0] regs__count_addr;
   wire [15:0] regs__count_ca_aborted;
   wire [15:0] regs__count_ca_crc4_error;
   wire [15:0] regs__count_ca_data_fault;
   wire [15:0] regs__count_ca_no_answer;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] regs__count_crc_word0;
-  wire [15:0] regs__count_crc_word1;
-  wire [15:0] regs__count_delay_jump;
-  wire [15:0] regs__count_delay_range;
-  wire [15:0] regs__count_lc_repeat;
-  wire [15:0] regs__count_lc_skip;
-  wire [15:0] regs__count_lc_zero;
-  wire [15:0] regs__count_no_ack;
-  wire [15:0] regs__count_no_start;
-  wire [15:0] regs__count_no_stop;
-  wire [15:0] regs__count_noise_event;
-  wire [15:0] regs__count_noisy_line;
-  wire [15:0] regs__count_overrun;
-  wire [15:0] regs__count_slo_stuck_low;
-  wire [15:0] regs__count_spw_mismatch;
+  output [31:0] regs__count_data;
+  wire [31:0] regs__count_data;
+  wire regs__count_en;
   wire regs__delay_settled;
   wire [7:0] regs__delay_spread;
   output regs__done;
@@ -9241,7 +8731,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$208 ;
+  wire \slo$182 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -9264,8 +8754,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$203 ;
-  wire \trigger$203 ;
+  input \trigger$177 ;
+  wire \trigger$177 ;
   wire valid;
   wire word0_crc_ok;
   wire word0_ne;
@@ -9275,7 +8765,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
-  assign trigger = \trigger$203  & regs__trigger_enable;
+  assign trigger = \trigger$177  & regs__trigger_enable;
   assign \$2  = regs__done_count + 1'h1;
   always @(posedge clk)
     abort_cycle <= \$3 ;
@@ -9286,7 +8776,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   \biss_master_uart.ch0.core  core (
     .abort(abort_cycle),
     .\abort$239 (ca_abort),
-    .\busy$293 (regs__busy),
+    .\busy$285 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -9329,24 +8819,26 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$267 (clear_counters),
+    .\clear$263 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
+    .count_data(regs__count_data),
     .counts(\$6 ),
-    .\done$296 (regs__done),
+    .\done$288 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$39 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
+    .read_en(count_en),
     .result(\$7 ),
-    .\result$301 (\$5 ),
+    .\result$293 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
     .\start$237 (ca_start),
     .trigger(trigger),
-    .\valid$298 (valid)
+    .\valid$290 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
@@ -9365,6 +8857,10 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
       \$4  = 16'h0000;
     end
   end
+  assign count_addr = ca_rbuf_addr[2:0];
+  assign regs__count_addr = ca_rbuf_addr[2:0];
+  assign count_data = regs__count_data;
+  assign regs__count_en = count_en;
   assign regs__start = start;
   assign regs__clear_counters = clear_counters;
   assign regs__periodic = periodic;
@@ -9445,38 +8941,6 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   assign delay_spread = \$5 [75:68];
   assign regs__settled_delay = \$5 [67:55];
   assign settled_delay = \$5 [67:55];
-  assign regs__count_crc_word0 = \$6 [15:0];
-  assign count_crc_word0 = \$6 [15:0];
-  assign regs__count_crc_word1 = \$6 [31:16];
-  assign count_crc_word1 = \$6 [31:16];
-  assign regs__count_no_ack = \$6 [47:32];
-  assign count_no_ack = \$6 [47:32];
-  assign regs__count_no_start = \$6 [63:48];
-  assign count_no_start = \$6 [63:48];
-  assign regs__count_delay_range = \$6 [79:64];
-  assign count_delay_range = \$6 [79:64];
-  assign regs__count_slo_stuck_low = \$6 [95:80];
-  assign count_slo_stuck_low = \$6 [95:80];
-  assign regs__count_lc_repeat = \$6 [111:96];
-  assign count_lc_repeat = \$6 [111:96];
-  assign regs__count_lc_skip = \$6 [127:112];
-  assign count_lc_skip = \$6 [127:112];
-  assign regs__count_lc_zero = \$6 [143:128];
-  assign count_lc_zero = \$6 [143:128];
-  assign regs__count_spw_mismatch = \$6 [159:144];
-  assign count_spw_mismatch = \$6 [159:144];
-  assign regs__count_overrun = \$6 [175:160];
-  assign count_overrun = \$6 [175:160];
-  assign regs__count_aborted = \$6 [191:176];
-  assign count_aborted = \$6 [191:176];
-  assign regs__count_no_stop = \$6 [207:192];
-  assign count_no_stop = \$6 [207:192];
-  assign regs__count_noisy_line = \$6 [223:208];
-  assign count_noisy_line = \$6 [223:208];
-  assign regs__count_delay_jump = \$6 [239:224];
-  assign count_delay_jump = \$6 [239:224];
-  assign regs__count_noise_event = \$6 [255:240];
-  assign count_noise_event = \$6 [255:240];
   assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
   assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
   assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
@@ -9496,34 +8960,34 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   assign ca_status = \$7 [2:0];
   assign regs__ca_bytes_done = \$7 [9:3];
   assign ca_bytes_done = \$7 [9:3];
-  assign regs__count_ca_crc4_error = \$6 [271:256];
-  assign count_ca_crc4_error = \$6 [271:256];
-  assign regs__count_ca_no_answer = \$6 [287:272];
-  assign count_ca_no_answer = \$6 [287:272];
-  assign regs__count_ca_refused = \$6 [303:288];
-  assign count_ca_refused = \$6 [303:288];
-  assign regs__count_ca_aborted = \$6 [319:304];
-  assign count_ca_aborted = \$6 [319:304];
-  assign regs__count_ca_data_fault = \$6 [335:320];
-  assign count_ca_data_fault = \$6 [335:320];
+  assign regs__count_ca_crc4_error = \$6 [15:0];
+  assign count_ca_crc4_error = \$6 [15:0];
+  assign regs__count_ca_no_answer = \$6 [31:16];
+  assign count_ca_no_answer = \$6 [31:16];
+  assign regs__count_ca_refused = \$6 [47:32];
+  assign count_ca_refused = \$6 [47:32];
+  assign regs__count_ca_aborted = \$6 [63:48];
+  assign count_ca_aborted = \$6 [63:48];
+  assign regs__count_ca_data_fault = \$6 [79:64];
+  assign count_ca_data_fault = \$6 [79:64];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$206  = ma;
-  assign \slo$208  = slo;
-  assign \port$6330$0  = \$5 ;
-  assign \port$6343$0  = \$6 ;
-  assign \port$6475$0  = \$7 ;
+  assign \ma$180  = ma;
+  assign \slo$182  = slo;
+  assign \port$6443$0  = \$5 ;
+  assign \port$6456$0  = \$6 ;
+  assign \port$6541$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$293 , config_error, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$267 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width
-, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$296 , \valid$298 , \result$301 , counts, ca_done, result, slo
-);
+module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$285 , config_error, count_data, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$263 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time
+, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time
+, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$288 , \valid$290 , \result$293 , counts, ca_done
+, result, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -9563,15 +9027,15 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [23:0] \ack_limit$104 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$325 ;
+  wire \bit$317 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$81 ;
   wire [23:0] break_time;
   wire busy;
   wire \busy$248 ;
-  output \busy$293 ;
-  wire \busy$293 ;
+  output \busy$285 ;
+  wire \busy$285 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -9609,7 +9073,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \cdm$252 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$304 ;
+  wire \cds$296 ;
   wire [254:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -9739,11 +9203,12 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   reg clean = 1'h0;
   (* init = 1'h0 *)
   wire \clean$167 ;
-  wire \clean$326 ;
+  wire \clean$318 ;
   wire clear;
   wire \clear$128 ;
-  input \clear$267 ;
-  wire \clear$267 ;
+  input \clear$263 ;
+  wire \clear$263 ;
+  wire \clear$276 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -9752,50 +9217,22 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   output config_error;
   wire config_error;
   wire config_ok;
-  wire [15:0] count_aborted;
+  wire [2:0] count_addr;
   wire [15:0] count_ca_aborted;
   wire [15:0] count_ca_crc4_error;
   wire [15:0] count_ca_data_fault;
   wire [15:0] count_ca_no_answer;
   wire [15:0] count_ca_refused;
-  wire [15:0] count_crc_word0;
-  wire [15:0] count_crc_word1;
-  wire [15:0] count_delay_jump;
-  wire [15:0] count_delay_range;
-  wire [15:0] count_lc_repeat;
-  wire [15:0] count_lc_skip;
-  wire [15:0] count_lc_zero;
-  wire [15:0] count_no_ack;
-  wire [15:0] count_no_start;
-  wire [15:0] count_no_stop;
-  wire [15:0] count_noise_event;
-  wire [15:0] count_noisy_line;
-  wire [15:0] count_overrun;
-  wire [15:0] count_slo_stuck_low;
-  wire [15:0] count_spw_mismatch;
-  output [335:0] counts;
-  wire [335:0] counts;
-  wire [15:0] \counts.aborted ;
+  output [31:0] count_data;
+  wire [31:0] count_data;
+  wire count_en;
+  output [79:0] counts;
+  wire [79:0] counts;
   wire [15:0] \counts.ca_aborted ;
   wire [15:0] \counts.ca_crc4_error ;
   wire [15:0] \counts.ca_data_fault ;
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
-  wire [15:0] \counts.crc_word0 ;
-  wire [15:0] \counts.crc_word1 ;
-  wire [15:0] \counts.delay_jump ;
-  wire [15:0] \counts.delay_range ;
-  wire [15:0] \counts.lc_repeat ;
-  wire [15:0] \counts.lc_skip ;
-  wire [15:0] \counts.lc_zero ;
-  wire [15:0] \counts.no_ack ;
-  wire [15:0] \counts.no_start ;
-  wire [15:0] \counts.no_stop ;
-  wire [15:0] \counts.noise_event ;
-  wire [15:0] \counts.noisy_line ;
-  wire [15:0] \counts.overrun ;
-  wire [15:0] \counts.slo_stuck_low ;
-  wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
   wire [39:0] \cpw_top$179 ;
   wire [1:0] crc_error;
@@ -9901,9 +9338,9 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [16:0] delay_tolerance;
   wire done;
   wire \done$250 ;
-  output \done$296 ;
-  wire \done$296 ;
-  wire \done$297 ;
+  output \done$288 ;
+  wire \done$288 ;
+  wire \done$289 ;
   wire doubtful;
   wire early;
   wire \early$67 ;
@@ -9912,28 +9349,29 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$262 ;
-  wire \events$262.aborted ;
+  wire [4:0] \events$262 ;
   wire \events$262.ca_aborted ;
   wire \events$262.ca_crc4_error ;
   wire \events$262.ca_data_fault ;
   wire \events$262.ca_no_answer ;
   wire \events$262.ca_refused ;
-  wire \events$262.crc_word0 ;
-  wire \events$262.crc_word1 ;
-  wire \events$262.delay_jump ;
-  wire \events$262.delay_range ;
-  wire \events$262.lc_repeat ;
-  wire \events$262.lc_skip ;
-  wire \events$262.lc_zero ;
-  wire \events$262.no_ack ;
-  wire \events$262.no_start ;
-  wire \events$262.no_stop ;
-  wire \events$262.noise_event ;
-  wire \events$262.noisy_line ;
-  wire \events$262.overrun ;
-  wire \events$262.slo_stuck_low ;
-  wire \events$262.spw_mismatch ;
+  wire [15:0] \events$271 ;
+  wire \events$271.aborted ;
+  wire \events$271.crc_word0 ;
+  wire \events$271.crc_word1 ;
+  wire \events$271.delay_jump ;
+  wire \events$271.delay_range ;
+  wire \events$271.lc_repeat ;
+  wire \events$271.lc_skip ;
+  wire \events$271.lc_zero ;
+  wire \events$271.no_ack ;
+  wire \events$271.no_start ;
+  wire \events$271.no_stop ;
+  wire \events$271.noise_event ;
+  wire \events$271.noisy_line ;
+  wire \events$271.overrun ;
+  wire \events$271.slo_stuck_low ;
+  wire \events$271.spw_mismatch ;
   wire fault;
   wire \fault$189 ;
   (* enum_base_type = "Status" *)
@@ -10041,19 +9479,19 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$139 ;
-  wire [5:0] \lc$317 ;
+  wire [5:0] \lc$309 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$141 ;
   wire lc_repeat;
-  wire \lc_repeat$318 ;
+  wire \lc_repeat$310 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$319 ;
+  wire \lc_skip$311 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$320 ;
+  wire \lc_zero$312 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
@@ -10113,7 +9551,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \locked$65 ;
   output ma;
   wire ma;
-  wire \ma$292 ;
+  wire \ma$284 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$93 ;
@@ -10134,7 +9572,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$295 ;
+  wire \overrun$287 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$39 ;
@@ -10151,6 +9589,10 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [31:0] rbuf_data;
   input rbuf_en;
   wire rbuf_en;
+  wire [2:0] read_addr;
+  wire [31:0] read_data;
+  input read_en;
+  wire read_en;
   wire rearm;
   wire receiver_clear;
   wire \repeat ;
@@ -10173,19 +9615,19 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$301 ;
-  wire [186:0] \result$301 ;
-  wire \result$301.cds ;
-  wire \result$301.delay_settled ;
-  wire [7:0] \result$301.delay_spread ;
-  wire [5:0] \result$301.lc ;
-  wire \result$301.lc_repeat ;
-  wire \result$301.lc_skip ;
-  wire \result$301.lc_zero ;
-  wire [12:0] \result$301.line_delay ;
-  wire [3:0] \result$301.noise_events ;
-  wire [12:0] \result$301.settled_delay ;
-  wire \result$301.spw_mismatch ;
+  output [186:0] \result$293 ;
+  wire [186:0] \result$293 ;
+  wire \result$293.cds ;
+  wire \result$293.delay_settled ;
+  wire [7:0] \result$293.delay_spread ;
+  wire [5:0] \result$293.lc ;
+  wire \result$293.lc_repeat ;
+  wire \result$293.lc_skip ;
+  wire \result$293.lc_zero ;
+  wire [12:0] \result$293.line_delay ;
+  wire [3:0] \result$293.noise_events ;
+  wire [12:0] \result$293.settled_delay ;
+  wire \result$293.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -10202,18 +9644,18 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$301.status ;
-  wire [31:0] \result$301.timestamp ;
-  wire [57:0] \result$301.word0 ;
-  wire \result$301.word0.crc_ok ;
-  wire \result$301.word0.ne ;
-  wire \result$301.word0.nw ;
-  wire [54:0] \result$301.word0.position ;
-  wire [42:0] \result$301.word1 ;
-  wire \result$301.word1.crc_ok ;
-  wire \result$301.word1.ne ;
-  wire \result$301.word1.nw ;
-  wire [39:0] \result$301.word1.position ;
+  wire [3:0] \result$293.status ;
+  wire [31:0] \result$293.timestamp ;
+  wire [57:0] \result$293.word0 ;
+  wire \result$293.word0.crc_ok ;
+  wire \result$293.word0.ne ;
+  wire \result$293.word0.nw ;
+  wire [54:0] \result$293.word0.position ;
+  wire [42:0] \result$293.word1 ;
+  wire \result$293.word1.crc_ok ;
+  wire \result$293.word1.ne ;
+  wire \result$293.word1.nw ;
+  wire [39:0] \result$293.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -10232,12 +9674,12 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$324 ;
+  wire \sample$316 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$307 ;
+  wire [12:0] \settled_delay$299 ;
   wire skip;
   input slo;
   wire slo;
@@ -10254,7 +9696,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$321 ;
+  wire \spw_mismatch$313 ;
   input start;
   wire start;
   input \start$237 ;
@@ -10299,7 +9741,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$300 ;
+  wire [3:0] \status$292 ;
   wire stop_bit;
   wire \stop_bit$77 ;
   wire stopped;
@@ -10316,8 +9758,8 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \trigger$48 ;
   wire valid;
   wire \valid$206 ;
-  output \valid$298 ;
-  wire \valid$298 ;
+  output \valid$290 ;
+  wire \valid$290 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -10393,25 +9835,25 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
   assign \check$162  = started & \$1 ;
-  assign \$2  = report_frame & spw_mismatch;
-  assign \$3  = status == 4'hd;
-  assign \$4  = report_frame & \$3 ;
-  assign \$5  = status == 4'he;
-  assign \$6  = report_frame & \$5 ;
-  assign \$7  = result[2:0] == 1'h1;
-  assign \$8  = ca_done & \$7 ;
-  assign \$9  = result[2:0] == 2'h2;
-  assign \$10  = ca_done & \$9 ;
-  assign \$11  = result[2:0] == 2'h3;
-  assign \$12  = ca_done & \$11 ;
-  assign \$13  = result[2:0] == 3'h4;
-  assign \$14  = ca_done & \$13 ;
-  assign \$15  = result[2:0] == 3'h5;
-  assign \$16  = ca_done & \$15 ;
-  assign \busy$293  = ~ idle;
+  assign \$2  = result[2:0] == 1'h1;
+  assign \$3  = ca_done & \$2 ;
+  assign \$4  = result[2:0] == 2'h2;
+  assign \$5  = ca_done & \$4 ;
+  assign \$6  = result[2:0] == 2'h3;
+  assign \$7  = ca_done & \$6 ;
+  assign \$8  = result[2:0] == 3'h4;
+  assign \$9  = ca_done & \$8 ;
+  assign \$10  = result[2:0] == 3'h5;
+  assign \$11  = ca_done & \$10 ;
+  assign \$12  = report_frame & spw_mismatch;
+  assign \$13  = status == 4'hd;
+  assign \$14  = report_frame & \$13 ;
+  assign \$15  = status == 4'he;
+  assign \$16  = report_frame & \$15 ;
+  assign \busy$285  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$17  = ~ \clear$128 ;
-  assign \$18  = \sample$324  & \$17 ;
+  assign \$18  = \sample$316  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -10483,8 +9925,17 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .timer_clear(clear),
     .waiting(watch)
   );
+  \biss_master_uart.ch0.core.counter_ram  counter_ram (
+    .clear(\clear$263 ),
+    .clk(clk),
+    .events(\events$271 ),
+    .host__addr(rbuf_addr[2:0]),
+    .host__en(read_en),
+    .read_data(count_data),
+    .rst(rst)
+  );
   \biss_master_uart.ch0.core.counters  counters (
-    .clear(\clear$267 ),
+    .clear(\clear$263 ),
     .clk(clk),
     .counts(counts),
     .events(\events$262 ),
@@ -10590,19 +10041,19 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   );
   \biss_master_uart.ch0.core.results  results (
     .clk(clk),
-    .done(\done$296 ),
+    .done(\done$288 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$301 ),
+    .result(\result$293 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$298 )
+    .valid_out(\valid$290 )
   );
   \biss_master_uart.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$325 ),
+    .\bit (\bit$317 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -10612,7 +10063,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .noise(sampler_noise),
     .receiver_clear(\clear$128 ),
     .rst(rst),
-    .sample(\sample$324 ),
+    .sample(\sample$316 ),
     .slo(slo)
   );
   \biss_master_uart.ch0.core.scheduler  scheduler (
@@ -10633,7 +10084,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$5983$0 (\bit ),
+    .\port$6096$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -10682,7 +10133,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   );
   \biss_master_uart.ch0.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$326 ),
+    .clean(\clean$318 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
@@ -10697,7 +10148,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$2809$0 (\$24 ),
+    .\port$2741$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -10714,7 +10165,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
-    \$20  = \bit$325 ;
+    \$20  = \bit$317 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -10735,7 +10186,7 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
-    \$23  = \clean$326 ;
+    \$23  = \clean$318 ;
     if (rst) begin
       \$23  = 1'h0;
     end
@@ -10853,53 +10304,42 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$267 ;
-  assign count_crc_word0 = counts[15:0];
-  assign count_crc_word1 = counts[31:16];
-  assign count_no_ack = counts[47:32];
-  assign count_no_start = counts[63:48];
-  assign count_delay_range = counts[79:64];
-  assign count_slo_stuck_low = counts[95:80];
-  assign count_lc_repeat = counts[111:96];
-  assign count_lc_skip = counts[127:112];
-  assign count_lc_zero = counts[143:128];
-  assign count_spw_mismatch = counts[159:144];
-  assign count_overrun = counts[175:160];
-  assign count_aborted = counts[191:176];
-  assign count_no_stop = counts[207:192];
-  assign count_noisy_line = counts[223:208];
-  assign count_delay_jump = counts[239:224];
-  assign count_noise_event = counts[255:240];
-  assign count_ca_crc4_error = counts[271:256];
-  assign count_ca_no_answer = counts[287:272];
-  assign count_ca_refused = counts[303:288];
-  assign count_ca_aborted = counts[319:304];
-  assign count_ca_data_fault = counts[335:320];
-  assign \ma$292  = ma;
-  assign \overrun$295  = overrun;
-  assign \done$297  = \done$296 ;
-  assign valid_out = \valid$298 ;
-  assign \status$300  = \result$301 [3:0];
-  assign timestamp = \result$301 [35:4];
-  assign line_delay = \result$301 [48:36];
-  assign \cds$304  = \result$301 [49];
-  assign noise_events = \result$301 [53:50];
-  assign delay_settled = \result$301 [54];
-  assign \settled_delay$307  = \result$301 [67:55];
-  assign delay_spread = \result$301 [75:68];
-  assign word0_position = \result$301 [130:76];
-  assign word0_ne = \result$301 [131];
-  assign word0_nw = \result$301 [132];
-  assign word0_crc_ok = \result$301 [133];
-  assign word1_position = \result$301 [173:134];
-  assign word1_ne = \result$301 [174];
-  assign word1_nw = \result$301 [175];
-  assign word1_crc_ok = \result$301 [176];
-  assign \lc$317  = \result$301 [182:177];
-  assign \lc_repeat$318  = \result$301 [183];
-  assign \lc_skip$319  = \result$301 [184];
-  assign \lc_zero$320  = \result$301 [185];
-  assign \spw_mismatch$321  = \result$301 [186];
+  assign clear_counters = \clear$263 ;
+  assign count_ca_crc4_error = counts[15:0];
+  assign count_ca_no_answer = counts[31:16];
+  assign count_ca_refused = counts[47:32];
+  assign count_ca_aborted = counts[63:48];
+  assign count_ca_data_fault = counts[79:64];
+  assign \clear$276  = \clear$263 ;
+  assign read_addr = rbuf_addr[2:0];
+  assign count_addr = rbuf_addr[2:0];
+  assign count_en = read_en;
+  assign read_data = count_data;
+  assign \ma$284  = ma;
+  assign \overrun$287  = overrun;
+  assign \done$289  = \done$288 ;
+  assign valid_out = \valid$290 ;
+  assign \status$292  = \result$293 [3:0];
+  assign timestamp = \result$293 [35:4];
+  assign line_delay = \result$293 [48:36];
+  assign \cds$296  = \result$293 [49];
+  assign noise_events = \result$293 [53:50];
+  assign delay_settled = \result$293 [54];
+  assign \settled_delay$299  = \result$293 [67:55];
+  assign delay_spread = \result$293 [75:68];
+  assign word0_position = \result$293 [130:76];
+  assign word0_ne = \result$293 [131];
+  assign word0_nw = \result$293 [132];
+  assign word0_crc_ok = \result$293 [133];
+  assign word1_position = \result$293 [173:134];
+  assign word1_ne = \result$293 [174];
+  assign word1_nw = \result$293 [175];
+  assign word1_crc_ok = \result$293 [176];
+  assign \lc$309  = \result$293 [182:177];
+  assign \lc_repeat$310  = \result$293 [183];
+  assign \lc_skip$311  = \result$293 [184];
+  assign \lc_zero$312  = \result$293 [185];
+  assign \spw_mismatch$313  = \result$293 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -11101,27 +10541,32 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$262.crc_word0  = \events$262 [0];
-  assign \events$262.crc_word1  = \events$262 [1];
-  assign \events$262.no_ack  = \events$262 [2];
-  assign \events$262.no_start  = \events$262 [3];
-  assign \events$262.delay_range  = \events$262 [4];
-  assign \events$262.slo_stuck_low  = \events$262 [5];
-  assign \events$262.lc_repeat  = \events$262 [6];
-  assign \events$262.lc_skip  = \events$262 [7];
-  assign \events$262.lc_zero  = \events$262 [8];
-  assign \events$262.spw_mismatch  = \events$262 [9];
-  assign \events$262.overrun  = \events$262 [10];
-  assign \events$262.aborted  = \events$262 [11];
-  assign \events$262.no_stop  = \events$262 [12];
-  assign \events$262.noisy_line  = \events$262 [13];
-  assign \events$262.delay_jump  = \events$262 [14];
-  assign \events$262.noise_event  = \events$262 [15];
-  assign \events$262.ca_crc4_error  = \events$262 [16];
-  assign \events$262.ca_no_answer  = \events$262 [17];
-  assign \events$262.ca_refused  = \events$262 [18];
-  assign \events$262.ca_aborted  = \events$262 [19];
-  assign \events$262.ca_data_fault  = \events$262 [20];
+  assign \events$262.ca_crc4_error  = \events$262 [0];
+  assign \events$262.ca_no_answer  = \events$262 [1];
+  assign \events$262.ca_refused  = \events$262 [2];
+  assign \events$262.ca_aborted  = \events$262 [3];
+  assign \events$262.ca_data_fault  = \events$262 [4];
+  assign \counts.ca_crc4_error  = counts[15:0];
+  assign \counts.ca_no_answer  = counts[31:16];
+  assign \counts.ca_refused  = counts[47:32];
+  assign \counts.ca_aborted  = counts[63:48];
+  assign \counts.ca_data_fault  = counts[79:64];
+  assign \events$271.crc_word0  = \events$271 [0];
+  assign \events$271.crc_word1  = \events$271 [1];
+  assign \events$271.no_ack  = \events$271 [2];
+  assign \events$271.no_start  = \events$271 [3];
+  assign \events$271.delay_range  = \events$271 [4];
+  assign \events$271.slo_stuck_low  = \events$271 [5];
+  assign \events$271.lc_repeat  = \events$271 [6];
+  assign \events$271.lc_skip  = \events$271 [7];
+  assign \events$271.lc_zero  = \events$271 [8];
+  assign \events$271.spw_mismatch  = \events$271 [9];
+  assign \events$271.overrun  = \events$271 [10];
+  assign \events$271.aborted  = \events$271 [11];
+  assign \events$271.no_stop  = \events$271 [12];
+  assign \events$271.noisy_line  = \events$271 [13];
+  assign \events$271.delay_jump  = \events$271 [14];
+  assign \events$271.noise_event  = \events$271 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -11129,71 +10574,50 @@ module \biss_master_uart.ch0.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \counts.crc_word0  = counts[15:0];
-  assign \counts.crc_word1  = counts[31:16];
-  assign \counts.no_ack  = counts[47:32];
-  assign \counts.no_start  = counts[63:48];
-  assign \counts.delay_range  = counts[79:64];
-  assign \counts.slo_stuck_low  = counts[95:80];
-  assign \counts.lc_repeat  = counts[111:96];
-  assign \counts.lc_skip  = counts[127:112];
-  assign \counts.lc_zero  = counts[143:128];
-  assign \counts.spw_mismatch  = counts[159:144];
-  assign \counts.overrun  = counts[175:160];
-  assign \counts.aborted  = counts[191:176];
-  assign \counts.no_stop  = counts[207:192];
-  assign \counts.noisy_line  = counts[223:208];
-  assign \counts.delay_jump  = counts[239:224];
-  assign \counts.noise_event  = counts[255:240];
-  assign \counts.ca_crc4_error  = counts[271:256];
-  assign \counts.ca_no_answer  = counts[287:272];
-  assign \counts.ca_refused  = counts[303:288];
-  assign \counts.ca_aborted  = counts[319:304];
-  assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$301.status  = \result$301 [3:0];
-  assign \result$301.timestamp  = \result$301 [35:4];
-  assign \result$301.line_delay  = \result$301 [48:36];
-  assign \result$301.cds  = \result$301 [49];
-  assign \result$301.noise_events  = \result$301 [53:50];
-  assign \result$301.delay_settled  = \result$301 [54];
-  assign \result$301.settled_delay  = \result$301 [67:55];
-  assign \result$301.delay_spread  = \result$301 [75:68];
-  assign \result$301.word0  = \result$301 [133:76];
-  assign \result$301.word0.position  = \result$301 [130:76];
-  assign \result$301.word0.ne  = \result$301 [131];
-  assign \result$301.word0.nw  = \result$301 [132];
-  assign \result$301.word0.crc_ok  = \result$301 [133];
-  assign \result$301.word1  = \result$301 [176:134];
-  assign \result$301.word1.position  = \result$301 [173:134];
-  assign \result$301.word1.ne  = \result$301 [174];
-  assign \result$301.word1.nw  = \result$301 [175];
-  assign \result$301.word1.crc_ok  = \result$301 [176];
-  assign \result$301.lc  = \result$301 [182:177];
-  assign \result$301.lc_repeat  = \result$301 [183];
-  assign \result$301.lc_skip  = \result$301 [184];
-  assign \result$301.lc_zero  = \result$301 [185];
-  assign \result$301.spw_mismatch  = \result$301 [186];
-  assign \events$262 [20] = \$16 ;
-  assign \events$262 [19] = \$14 ;
-  assign \events$262 [18] = \$12 ;
-  assign \events$262 [17] = \$10 ;
-  assign \events$262 [16] = \$8 ;
-  assign \events$262 [15] = \event ;
-  assign \events$262 [14] = \$6 ;
-  assign \events$262 [13] = \$4 ;
-  assign \events$262 [12] = faults[6];
-  assign \events$262 [11] = faults[4];
-  assign \events$262 [10] = overrun;
-  assign \events$262 [9] = \$2 ;
-  assign \events$262 [8] = lc_zero;
-  assign \events$262 [7] = lc_skip;
-  assign \events$262 [6] = lc_repeat;
-  assign \events$262 [5] = faults[3];
-  assign \events$262 [4] = faults[2];
-  assign \events$262 [3] = faults[1];
-  assign \events$262 [2] = faults[0];
-  assign \events$262 [1] = crc_error[1];
-  assign \events$262 [0] = crc_error[0];
+  assign \result$293.status  = \result$293 [3:0];
+  assign \result$293.timestamp  = \result$293 [35:4];
+  assign \result$293.line_delay  = \result$293 [48:36];
+  assign \result$293.cds  = \result$293 [49];
+  assign \result$293.noise_events  = \result$293 [53:50];
+  assign \result$293.delay_settled  = \result$293 [54];
+  assign \result$293.settled_delay  = \result$293 [67:55];
+  assign \result$293.delay_spread  = \result$293 [75:68];
+  assign \result$293.word0  = \result$293 [133:76];
+  assign \result$293.word0.position  = \result$293 [130:76];
+  assign \result$293.word0.ne  = \result$293 [131];
+  assign \result$293.word0.nw  = \result$293 [132];
+  assign \result$293.word0.crc_ok  = \result$293 [133];
+  assign \result$293.word1  = \result$293 [176:134];
+  assign \result$293.word1.position  = \result$293 [173:134];
+  assign \result$293.word1.ne  = \result$293 [174];
+  assign \result$293.word1.nw  = \result$293 [175];
+  assign \result$293.word1.crc_ok  = \result$293 [176];
+  assign \result$293.lc  = \result$293 [182:177];
+  assign \result$293.lc_repeat  = \result$293 [183];
+  assign \result$293.lc_skip  = \result$293 [184];
+  assign \result$293.lc_zero  = \result$293 [185];
+  assign \result$293.spw_mismatch  = \result$293 [186];
+  assign \events$271 [15] = \event ;
+  assign \events$271 [14] = \$16 ;
+  assign \events$271 [13] = \$14 ;
+  assign \events$271 [12] = faults[6];
+  assign \events$271 [11] = faults[4];
+  assign \events$271 [10] = overrun;
+  assign \events$271 [9] = \$12 ;
+  assign \events$271 [8] = lc_zero;
+  assign \events$271 [7] = lc_skip;
+  assign \events$271 [6] = lc_repeat;
+  assign \events$271 [5] = faults[3];
+  assign \events$271 [4] = faults[2];
+  assign \events$271 [3] = faults[1];
+  assign \events$271 [2] = faults[0];
+  assign \events$271 [1] = crc_error[1];
+  assign \events$271 [0] = crc_error[0];
+  assign \events$262 [4] = \$11 ;
+  assign \events$262 [3] = \$9 ;
+  assign \events$262 [2] = \$7 ;
+  assign \events$262 [1] = \$5 ;
+  assign \events$262 [0] = \$3 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
@@ -13144,109 +12568,186 @@ module \biss_master_uart.ch0.core.controller.report (fault, fault_status, report
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters (rst, clear, events, counts, clk);
+module \biss_master_uart.ch0.core.counter_ram (rst, host__en, read_data, host__addr, clear, events, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
-  reg [20:0] \$1 ;
-  reg \$2 ;
+  wire \$1 ;
+  wire \$10 ;
+  wire [3:0] \$100 ;
+  wire [4:0] \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire [3:0] \$105 ;
+  wire [4:0] \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
+  wire \$11 ;
+  wire [3:0] \$110 ;
+  wire [4:0] \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire [3:0] \$115 ;
+  wire [4:0] \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
+  wire \$12 ;
+  wire [3:0] \$120 ;
+  wire [4:0] \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire [3:0] \$125 ;
+  wire [4:0] \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
+  wire \$13 ;
+  wire [3:0] \$130 ;
+  wire [4:0] \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire [3:0] \$135 ;
+  wire [4:0] \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
+  wire \$14 ;
+  wire [3:0] \$140 ;
+  wire [4:0] \$141 ;
+  wire \$142 ;
+  reg \$143 ;
+  reg [2:0] \$144 ;
+  reg [2:0] \$145 ;
+  reg [3:0] \$146 ;
+  reg [3:0] \$147 ;
+  reg [1:0] \$148 ;
+  reg [3:0] \$149 ;
+  wire \$15 ;
+  reg [3:0] \$150 ;
+  reg [3:0] \$151 ;
+  reg [3:0] \$152 ;
+  reg [3:0] \$153 ;
+  reg [3:0] \$154 ;
+  reg [3:0] \$155 ;
+  reg [3:0] \$156 ;
+  reg [3:0] \$157 ;
+  reg [3:0] \$158 ;
+  reg [3:0] \$159 ;
+  wire \$16 ;
+  reg [3:0] \$160 ;
+  reg [3:0] \$161 ;
+  reg [3:0] \$162 ;
+  reg [3:0] \$163 ;
+  reg [3:0] \$164 ;
+  reg [15:0] \$165 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire [4:0] \$228 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire \$4 ;
+  wire \$40 ;
+  wire [7:0] \$41 ;
+  wire [7:0] \$42 ;
+  wire [7:0] \$43 ;
+  wire [8:0] \$44 ;
+  wire [9:0] \$45 ;
+  wire [9:0] \$46 ;
+  wire [9:0] \$47 ;
+  wire \$48 ;
+  wire [15:0] \$49 ;
+  wire \$5 ;
+  wire [16:0] \$50 ;
+  wire [15:0] \$51 ;
+  wire [16:0] \$52 ;
+  wire \$53 ;
+  wire [19:0] \$54 ;
+  wire \$55 ;
+  wire [19:0] \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  reg [3:0] \$59 ;
+  wire \$6 ;
+  reg [3:0] \$60 ;
+  wire [1:0] \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire [3:0] \$65 ;
+  wire [4:0] \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
+  wire \$7 ;
+  wire [3:0] \$70 ;
+  wire [4:0] \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire [3:0] \$75 ;
+  wire [4:0] \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
+  wire \$8 ;
+  wire [3:0] \$80 ;
+  wire [4:0] \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire [3:0] \$85 ;
+  wire [4:0] \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
+  wire \$9 ;
+  wire [3:0] \$90 ;
+  wire [4:0] \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire [3:0] \$95 ;
+  wire [4:0] \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
+  wire [7:0] above;
+  reg [3:0] amount_0 = 4'h0;
+  reg [3:0] amount_1 = 4'h0;
+  reg busy = 1'h0;
   input clear;
   wire clear;
-  (* init = 1'h0 *)
-  wire \clear$11 ;
-  (* init = 1'h0 *)
-  wire \clear$14 ;
-  (* init = 1'h0 *)
-  wire \clear$17 ;
-  (* init = 1'h0 *)
-  wire \clear$20 ;
-  (* init = 1'h0 *)
-  wire \clear$23 ;
-  (* init = 1'h0 *)
-  wire \clear$26 ;
-  (* init = 1'h0 *)
-  wire \clear$29 ;
-  (* init = 1'h0 *)
-  wire \clear$32 ;
-  (* init = 1'h0 *)
-  wire \clear$35 ;
-  (* init = 1'h0 *)
-  wire \clear$38 ;
-  (* init = 1'h0 *)
-  wire \clear$41 ;
-  (* init = 1'h0 *)
-  wire \clear$44 ;
-  (* init = 1'h0 *)
-  wire \clear$47 ;
-  (* init = 1'h0 *)
-  wire \clear$50 ;
-  (* init = 1'h0 *)
-  wire \clear$53 ;
-  (* init = 1'h0 *)
-  wire \clear$56 ;
-  (* init = 1'h0 *)
-  wire \clear$59 ;
-  (* init = 1'h0 *)
-  wire \clear$62 ;
-  (* init = 1'h0 *)
-  wire \clear$65 ;
-  (* init = 1'h0 *)
-  wire \clear$68 ;
-  (* init = 1'h0 *)
-  wire \clear$7 ;
-  reg clear_reg = 1'h0;
   input clk;
   wire clk;
-  wire [15:0] count;
-  wire [15:0] \count$12 ;
-  wire [15:0] \count$15 ;
-  wire [15:0] \count$18 ;
-  wire [15:0] \count$21 ;
-  wire [15:0] \count$24 ;
-  wire [15:0] \count$27 ;
-  wire [15:0] \count$30 ;
-  wire [15:0] \count$33 ;
-  wire [15:0] \count$36 ;
-  wire [15:0] \count$39 ;
-  wire [15:0] \count$42 ;
-  wire [15:0] \count$45 ;
-  wire [15:0] \count$48 ;
-  wire [15:0] \count$51 ;
-  wire [15:0] \count$54 ;
-  wire [15:0] \count$57 ;
-  wire [15:0] \count$60 ;
-  wire [15:0] \count$63 ;
-  wire [15:0] \count$66 ;
-  wire [15:0] \count$69 ;
-  output [335:0] counts;
-  wire [335:0] counts;
-  wire [15:0] \counts.aborted ;
-  wire [15:0] \counts.ca_aborted ;
-  wire [15:0] \counts.ca_crc4_error ;
-  wire [15:0] \counts.ca_data_fault ;
-  wire [15:0] \counts.ca_no_answer ;
-  wire [15:0] \counts.ca_refused ;
-  wire [15:0] \counts.crc_word0 ;
-  wire [15:0] \counts.crc_word1 ;
-  wire [15:0] \counts.delay_jump ;
-  wire [15:0] \counts.delay_range ;
-  wire [15:0] \counts.lc_repeat ;
-  wire [15:0] \counts.lc_skip ;
-  wire [15:0] \counts.lc_zero ;
-  wire [15:0] \counts.no_ack ;
-  wire [15:0] \counts.no_start ;
-  wire [15:0] \counts.no_stop ;
-  wire [15:0] \counts.noise_event ;
-  wire [15:0] \counts.noisy_line ;
-  wire [15:0] \counts.overrun ;
-  wire [15:0] \counts.slo_stuck_low ;
-  wire [15:0] \counts.spw_mismatch ;
-  input [20:0] events;
-  wire [20:0] events;
+  wire [7:0] due;
+  input [15:0] events;
+  wire [15:0] events;
   wire \events.aborted ;
-  wire \events.ca_aborted ;
-  wire \events.ca_crc4_error ;
-  wire \events.ca_data_fault ;
-  wire \events.ca_no_answer ;
-  wire \events.ca_refused ;
   wire \events.crc_word0 ;
   wire \events.crc_word1 ;
   wire \events.delay_jump ;
@@ -13262,279 +12763,651 @@ module \biss_master_uart.ch0.core.counters (rst, clear, events, counts, clk);
   wire \events.overrun ;
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
-  reg [20:0] events_reg = 21'h000000;
-  wire \events_reg.aborted ;
-  wire \events_reg.ca_aborted ;
-  wire \events_reg.ca_crc4_error ;
-  wire \events_reg.ca_data_fault ;
-  wire \events_reg.ca_no_answer ;
-  wire \events_reg.ca_refused ;
-  wire \events_reg.crc_word0 ;
-  wire \events_reg.crc_word1 ;
-  wire \events_reg.delay_jump ;
-  wire \events_reg.delay_range ;
-  wire \events_reg.lc_repeat ;
-  wire \events_reg.lc_skip ;
-  wire \events_reg.lc_zero ;
-  wire \events_reg.no_ack ;
-  wire \events_reg.no_start ;
-  wire \events_reg.no_stop ;
-  wire \events_reg.noise_event ;
-  wire \events_reg.noisy_line ;
-  wire \events_reg.overrun ;
-  wire \events_reg.slo_stuck_low ;
-  wire \events_reg.spw_mismatch ;
-  wire inc;
-  wire \inc$10 ;
-  wire \inc$13 ;
-  wire \inc$16 ;
-  wire \inc$19 ;
-  wire \inc$22 ;
-  wire \inc$25 ;
-  wire \inc$28 ;
-  wire \inc$31 ;
-  wire \inc$34 ;
-  wire \inc$37 ;
-  wire \inc$40 ;
-  wire \inc$43 ;
-  wire \inc$46 ;
-  wire \inc$49 ;
-  wire \inc$52 ;
-  wire \inc$55 ;
-  wire \inc$58 ;
-  wire \inc$61 ;
-  wire \inc$64 ;
-  wire \inc$67 ;
+  input [2:0] host__addr;
+  wire [2:0] host__addr;
+  wire [31:0] host__data;
+  input host__en;
+  wire host__en;
+  reg [2:0] last = 3'h0;
+  reg [15:0] marked = 16'hffff;
+  reg [3:0] pending_0 = 4'h0;
+  reg [3:0] pending_1 = 4'h0;
+  reg [3:0] pending_10 = 4'h0;
+  reg [3:0] pending_11 = 4'h0;
+  reg [3:0] pending_12 = 4'h0;
+  reg [3:0] pending_13 = 4'h0;
+  reg [3:0] pending_14 = 4'h0;
+  reg [3:0] pending_15 = 4'h0;
+  reg [3:0] pending_2 = 4'h0;
+  reg [3:0] pending_3 = 4'h0;
+  reg [3:0] pending_4 = 4'h0;
+  reg [3:0] pending_5 = 4'h0;
+  reg [3:0] pending_6 = 4'h0;
+  reg [3:0] pending_7 = 4'h0;
+  reg [3:0] pending_8 = 4'h0;
+  reg [3:0] pending_9 = 4'h0;
+  reg [2:0] pick;
+  wire [2:0] read_addr;
+  output [31:0] read_data;
+  wire [31:0] read_data;
+  wire read_en;
   input rst;
   wire rst;
+  wire [19:0] total_0;
+  wire [19:0] total_1;
+  wire [2:0] update__addr;
+  wire [31:0] update__data;
+  wire update__en;
+  reg [2:0] word = 3'h0;
+  (* init = 3'h0 *)
+  wire [2:0] write__addr;
+  wire [31:0] write__data;
+  (* init = 1'h0 *)
+  wire write__en;
+  reg [1:0] zero = 2'h0;
+  reg [31:0] memory [7:0];
+  initial begin
+    memory[0] = 32'd0;
+    memory[1] = 32'd0;
+    memory[2] = 32'd0;
+    memory[3] = 32'd0;
+    memory[4] = 32'd0;
+    memory[5] = 32'd0;
+    memory[6] = 32'd0;
+    memory[7] = 32'd0;
+  end
+  always @(posedge clk) begin
+    if (busy)
+      memory[word] <= { \$56 [15:0], \$54 [15:0] };
+  end
+  reg [31:0] _0_;
+  reg [31:0] _1_;
+  always @(posedge clk) begin
+    if (host__en) begin
+      _0_ <= memory[host__addr];
+    end
+    if (update__en) begin
+      _1_ <= memory[pick];
+    end
+  end
+  assign read_data = _0_;
+  assign update__data = _1_;
+  assign \$1  = | pending_0;
+  assign \$2  = | pending_1;
+  assign \$3  = \$1  | \$2 ;
+  assign \$4  = \$3  | marked[0];
+  assign \$5  = \$4  | marked[1];
+  assign \$6  = | pending_2;
+  assign \$7  = | pending_3;
+  assign \$8  = \$6  | \$7 ;
+  assign \$9  = \$8  | marked[2];
+  assign \$10  = \$9  | marked[3];
+  assign \$11  = | pending_4;
+  assign \$12  = | pending_5;
+  assign \$13  = \$11  | \$12 ;
+  assign \$14  = \$13  | marked[4];
+  assign \$15  = \$14  | marked[5];
+  assign \$16  = | pending_6;
+  assign \$17  = | pending_7;
+  assign \$18  = \$16  | \$17 ;
+  assign \$19  = \$18  | marked[6];
+  assign \$20  = \$19  | marked[7];
+  assign \$21  = | pending_8;
+  assign \$22  = | pending_9;
+  assign \$23  = \$21  | \$22 ;
+  assign \$24  = \$23  | marked[8];
+  assign \$25  = \$24  | marked[9];
+  assign \$26  = | pending_10;
+  assign \$27  = | pending_11;
+  assign \$28  = \$26  | \$27 ;
+  assign \$29  = \$28  | marked[10];
+  assign \$30  = \$29  | marked[11];
+  assign \$31  = | pending_12;
+  assign \$32  = | pending_13;
+  assign \$33  = \$31  | \$32 ;
+  assign \$34  = \$33  | marked[12];
+  assign \$35  = \$34  | marked[13];
+  assign \$36  = | pending_14;
+  assign \$37  = | pending_15;
+  assign \$38  = \$36  | \$37 ;
+  assign \$39  = \$38  | marked[14];
+  assign \$40  = \$39  | marked[15];
+  assign \$41  = 1'h1 << word;
+  assign \$42  = busy ? \$41  : 8'h00;
+  assign \$43  = ~ \$42 ;
+  assign due = { \$40 , \$35 , \$30 , \$25 , \$20 , \$15 , \$10 , \$5  } & \$43 ;
+  assign \$44  = 2'h2 << last;
+  assign \$45  = \$44  - 1'h1;
+  assign \$46  = ~ \$45 ;
+  assign \$47  = { 2'h0, due } & \$46 ;
+  assign \$48  = | \$47 [7:0];
+  assign update__en = | due;
+  assign \$49  = zero[0] ? 16'h0000 : update__data[15:0];
+  assign \$50  = \$49  + amount_0;
+  assign \$51  = zero[1] ? 16'h0000 : update__data[31:16];
+  assign \$52  = \$51  + amount_1;
+  assign \$53  = \$50  > 16'hffff;
+  assign \$54  = \$53  ? 20'h0ffff : { 3'h0, \$50  };
+  assign \$55  = \$52  > 16'hffff;
+  assign \$56  = \$55  ? 20'h0ffff : { 3'h0, \$52  };
+  assign \$57  = | due;
+  assign \$58  = | due;
+  assign \$228  = pick * 2'h2;
+  assign \$61  = marked >> \$228 ;
+  assign \$62  = | due;
+  assign \$63  = ! pick;
+  assign \$64  = \$62  & \$63 ;
+  assign \$65  = \$64  ? 4'h0 : pending_0;
+  assign \$66  = \$65  + events[0];
+  assign \$67  = | due;
+  assign \$68  = ! pick;
+  assign \$69  = \$67  & \$68 ;
+  assign \$70  = \$69  ? 4'h0 : pending_1;
+  assign \$71  = \$70  + events[1];
+  assign \$72  = | due;
+  assign \$73  = pick == 1'h1;
+  assign \$74  = \$72  & \$73 ;
+  assign \$75  = \$74  ? 4'h0 : pending_2;
+  assign \$76  = \$75  + events[2];
+  assign \$77  = | due;
+  assign \$78  = pick == 1'h1;
+  assign \$79  = \$77  & \$78 ;
+  assign \$80  = \$79  ? 4'h0 : pending_3;
+  assign \$81  = \$80  + events[3];
+  assign \$82  = | due;
+  assign \$83  = pick == 2'h2;
+  assign \$84  = \$82  & \$83 ;
+  assign \$85  = \$84  ? 4'h0 : pending_4;
+  assign \$86  = \$85  + events[4];
+  assign \$87  = | due;
+  assign \$88  = pick == 2'h2;
+  assign \$89  = \$87  & \$88 ;
+  assign \$90  = \$89  ? 4'h0 : pending_5;
+  assign \$91  = \$90  + events[5];
+  assign \$92  = | due;
+  assign \$93  = pick == 2'h3;
+  assign \$94  = \$92  & \$93 ;
+  assign \$95  = \$94  ? 4'h0 : pending_6;
+  assign \$96  = \$95  + events[6];
+  assign \$97  = | due;
+  assign \$98  = pick == 2'h3;
+  assign \$99  = \$97  & \$98 ;
+  assign \$100  = \$99  ? 4'h0 : pending_7;
+  assign \$101  = \$100  + events[7];
+  assign \$102  = | due;
+  assign \$103  = pick == 3'h4;
+  assign \$104  = \$102  & \$103 ;
+  assign \$105  = \$104  ? 4'h0 : pending_8;
+  assign \$106  = \$105  + events[8];
+  assign \$107  = | due;
+  assign \$108  = pick == 3'h4;
+  assign \$109  = \$107  & \$108 ;
+  assign \$110  = \$109  ? 4'h0 : pending_9;
+  assign \$111  = \$110  + events[9];
+  assign \$112  = | due;
+  assign \$113  = pick == 3'h5;
+  assign \$114  = \$112  & \$113 ;
+  assign \$115  = \$114  ? 4'h0 : pending_10;
+  assign \$116  = \$115  + events[10];
+  assign \$117  = | due;
+  assign \$118  = pick == 3'h5;
+  assign \$119  = \$117  & \$118 ;
+  assign \$120  = \$119  ? 4'h0 : pending_11;
+  assign \$121  = \$120  + events[11];
+  assign \$122  = | due;
+  assign \$123  = pick == 3'h6;
+  assign \$124  = \$122  & \$123 ;
+  assign \$125  = \$124  ? 4'h0 : pending_12;
+  assign \$126  = \$125  + events[12];
+  assign \$127  = | due;
+  assign \$128  = pick == 3'h6;
+  assign \$129  = \$127  & \$128 ;
+  assign \$130  = \$129  ? 4'h0 : pending_13;
+  assign \$131  = \$130  + events[13];
+  assign \$132  = | due;
+  assign \$133  = pick == 3'h7;
+  assign \$134  = \$132  & \$133 ;
+  assign \$135  = \$134  ? 4'h0 : pending_14;
+  assign \$136  = \$135  + events[14];
+  assign \$137  = | due;
+  assign \$138  = pick == 3'h7;
+  assign \$139  = \$137  & \$138 ;
+  assign \$140  = \$139  ? 4'h0 : pending_15;
+  assign \$141  = \$140  + events[15];
+  assign \$142  = | due;
   always @(posedge clk)
-    events_reg <= \$1 ;
+    busy <= \$143 ;
   always @(posedge clk)
-    clear_reg <= \$2 ;
-  \biss_master_uart.ch0.core.counters.count_aborted  count_aborted (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$42 ),
-    .inc(events_reg[11]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_ca_aborted  count_ca_aborted (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$66 ),
-    .inc(events_reg[19]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_ca_crc4_error  count_ca_crc4_error (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$57 ),
-    .inc(events_reg[16]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_ca_data_fault  count_ca_data_fault (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$69 ),
-    .inc(events_reg[20]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_ca_no_answer  count_ca_no_answer (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$60 ),
-    .inc(events_reg[17]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_ca_refused  count_ca_refused (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$63 ),
-    .inc(events_reg[18]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_crc_word0  count_crc_word0 (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(count),
-    .inc(events_reg[0]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_crc_word1  count_crc_word1 (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$12 ),
-    .inc(events_reg[1]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_delay_jump  count_delay_jump (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$51 ),
-    .inc(events_reg[14]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_delay_range  count_delay_range (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$21 ),
-    .inc(events_reg[4]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_lc_repeat  count_lc_repeat (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$27 ),
-    .inc(events_reg[6]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_lc_skip  count_lc_skip (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$30 ),
-    .inc(events_reg[7]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_lc_zero  count_lc_zero (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$33 ),
-    .inc(events_reg[8]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_no_ack  count_no_ack (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$15 ),
-    .inc(events_reg[2]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_no_start  count_no_start (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$18 ),
-    .inc(events_reg[3]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_no_stop  count_no_stop (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$45 ),
-    .inc(events_reg[12]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_noise_event  count_noise_event (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$54 ),
-    .inc(events_reg[15]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_noisy_line  count_noisy_line (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$48 ),
-    .inc(events_reg[13]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_overrun  count_overrun (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$39 ),
-    .inc(events_reg[10]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_slo_stuck_low  count_slo_stuck_low (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$24 ),
-    .inc(events_reg[5]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch0.core.counters.count_spw_mismatch  count_spw_mismatch (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$36 ),
-    .inc(events_reg[9]),
-    .rst(rst)
-  );
+    word <= \$144 ;
+  always @(posedge clk)
+    last <= \$145 ;
+  always @(posedge clk)
+    amount_0 <= \$146 ;
+  always @(posedge clk)
+    amount_1 <= \$147 ;
+  always @(posedge clk)
+    zero <= \$148 ;
+  always @(posedge clk)
+    pending_0 <= \$149 ;
+  always @(posedge clk)
+    pending_1 <= \$150 ;
+  always @(posedge clk)
+    pending_2 <= \$151 ;
+  always @(posedge clk)
+    pending_3 <= \$152 ;
+  always @(posedge clk)
+    pending_4 <= \$153 ;
+  always @(posedge clk)
+    pending_5 <= \$154 ;
+  always @(posedge clk)
+    pending_6 <= \$155 ;
+  always @(posedge clk)
+    pending_7 <= \$156 ;
+  always @(posedge clk)
+    pending_8 <= \$157 ;
+  always @(posedge clk)
+    pending_9 <= \$158 ;
+  always @(posedge clk)
+    pending_10 <= \$159 ;
+  always @(posedge clk)
+    pending_11 <= \$160 ;
+  always @(posedge clk)
+    pending_12 <= \$161 ;
+  always @(posedge clk)
+    pending_13 <= \$162 ;
+  always @(posedge clk)
+    pending_14 <= \$163 ;
+  always @(posedge clk)
+    pending_15 <= \$164 ;
+  always @(posedge clk)
+    marked <= \$165 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$1  = events;
-    if (rst) begin
-      \$1  = 21'h000000;
+    (* full_case = 32'd1 *)
+    casez (pick)
+      3'h0:
+          \$59  = pending_0;
+      3'h1:
+          \$59  = pending_2;
+      3'h2:
+          \$59  = pending_4;
+      3'h3:
+          \$59  = pending_6;
+      3'h4:
+          \$59  = pending_8;
+      3'h5:
+          \$59  = pending_10;
+      3'h6:
+          \$59  = pending_12;
+      3'h7:
+          \$59  = pending_14;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    casez (pick)
+      3'h0:
+          \$60  = pending_1;
+      3'h1:
+          \$60  = pending_3;
+      3'h2:
+          \$60  = pending_5;
+      3'h3:
+          \$60  = pending_7;
+      3'h4:
+          \$60  = pending_9;
+      3'h5:
+          \$60  = pending_11;
+      3'h6:
+          \$60  = pending_13;
+      3'h7:
+          \$60  = pending_15;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    pick = 3'h0;
+    if (due[7]) begin
+      pick = 3'h7;
+    end
+    if (due[6]) begin
+      pick = 3'h6;
+    end
+    if (due[5]) begin
+      pick = 3'h5;
+    end
+    if (due[4]) begin
+      pick = 3'h4;
+    end
+    if (due[3]) begin
+      pick = 3'h3;
+    end
+    if (due[2]) begin
+      pick = 3'h2;
+    end
+    if (due[1]) begin
+      pick = 3'h1;
+    end
+    if (due[0]) begin
+      pick = 3'h0;
+    end
+    if (\$48 ) begin
+      if (\$47 [7]) begin
+        pick = 3'h7;
+      end
+      if (\$47 [6]) begin
+        pick = 3'h6;
+      end
+      if (\$47 [5]) begin
+        pick = 3'h5;
+      end
+      if (\$47 [4]) begin
+        pick = 3'h4;
+      end
+      if (\$47 [3]) begin
+        pick = 3'h3;
+      end
+      if (\$47 [2]) begin
+        pick = 3'h2;
+      end
+      if (\$47 [1]) begin
+        pick = 3'h1;
+      end
+      if (\$47 [0]) begin
+        pick = 3'h0;
+      end
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$2  = clear;
+    \$143  = \$57 ;
     if (rst) begin
-      \$2  = 1'h0;
+      \$143  = 1'h0;
     end
   end
-  assign inc = events_reg[0];
-  assign \clear$7  = clear_reg;
-  assign \inc$10  = events_reg[1];
-  assign \clear$11  = clear_reg;
-  assign \inc$13  = events_reg[2];
-  assign \clear$14  = clear_reg;
-  assign \inc$16  = events_reg[3];
-  assign \clear$17  = clear_reg;
-  assign \inc$19  = events_reg[4];
-  assign \clear$20  = clear_reg;
-  assign \inc$22  = events_reg[5];
-  assign \clear$23  = clear_reg;
-  assign \inc$25  = events_reg[6];
-  assign \clear$26  = clear_reg;
-  assign \inc$28  = events_reg[7];
-  assign \clear$29  = clear_reg;
-  assign \inc$31  = events_reg[8];
-  assign \clear$32  = clear_reg;
-  assign \inc$34  = events_reg[9];
-  assign \clear$35  = clear_reg;
-  assign \inc$37  = events_reg[10];
-  assign \clear$38  = clear_reg;
-  assign \inc$40  = events_reg[11];
-  assign \clear$41  = clear_reg;
-  assign \inc$43  = events_reg[12];
-  assign \clear$44  = clear_reg;
-  assign \inc$46  = events_reg[13];
-  assign \clear$47  = clear_reg;
-  assign \inc$49  = events_reg[14];
-  assign \clear$50  = clear_reg;
-  assign \inc$52  = events_reg[15];
-  assign \clear$53  = clear_reg;
-  assign \inc$55  = events_reg[16];
-  assign \clear$56  = clear_reg;
-  assign \inc$58  = events_reg[17];
-  assign \clear$59  = clear_reg;
-  assign \inc$61  = events_reg[18];
-  assign \clear$62  = clear_reg;
-  assign \inc$64  = events_reg[19];
-  assign \clear$65  = clear_reg;
-  assign \inc$67  = events_reg[20];
-  assign \clear$68  = clear_reg;
-  assign \events_reg.crc_word0  = events_reg[0];
-  assign \events_reg.crc_word1  = events_reg[1];
-  assign \events_reg.no_ack  = events_reg[2];
-  assign \events_reg.no_start  = events_reg[3];
-  assign \events_reg.delay_range  = events_reg[4];
-  assign \events_reg.slo_stuck_low  = events_reg[5];
-  assign \events_reg.lc_repeat  = events_reg[6];
-  assign \events_reg.lc_skip  = events_reg[7];
-  assign \events_reg.lc_zero  = events_reg[8];
-  assign \events_reg.spw_mismatch  = events_reg[9];
-  assign \events_reg.overrun  = events_reg[10];
-  assign \events_reg.aborted  = events_reg[11];
-  assign \events_reg.no_stop  = events_reg[12];
-  assign \events_reg.noisy_line  = events_reg[13];
-  assign \events_reg.delay_jump  = events_reg[14];
-  assign \events_reg.noise_event  = events_reg[15];
-  assign \events_reg.ca_crc4_error  = events_reg[16];
-  assign \events_reg.ca_no_answer  = events_reg[17];
-  assign \events_reg.ca_refused  = events_reg[18];
-  assign \events_reg.ca_aborted  = events_reg[19];
-  assign \events_reg.ca_data_fault  = events_reg[20];
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$144  = word;
+    if (\$58 ) begin
+      \$144  = pick;
+    end
+    if (rst) begin
+      \$144  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$145  = last;
+    if (\$58 ) begin
+      \$145  = pick;
+    end
+    if (rst) begin
+      \$145  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$146  = amount_0;
+    if (\$58 ) begin
+      \$146  = \$59 ;
+    end
+    if (rst) begin
+      \$146  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$147  = amount_1;
+    if (\$58 ) begin
+      \$147  = \$60 ;
+    end
+    if (rst) begin
+      \$147  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$148  = zero;
+    if (\$58 ) begin
+      \$148  = \$61 ;
+    end
+    if (rst) begin
+      \$148  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$149  = 4'h0;
+    end else begin
+      \$149  = \$66 [3:0];
+    end
+    if (rst) begin
+      \$149  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$150  = 4'h0;
+    end else begin
+      \$150  = \$71 [3:0];
+    end
+    if (rst) begin
+      \$150  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$151  = 4'h0;
+    end else begin
+      \$151  = \$76 [3:0];
+    end
+    if (rst) begin
+      \$151  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$152  = 4'h0;
+    end else begin
+      \$152  = \$81 [3:0];
+    end
+    if (rst) begin
+      \$152  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$153  = 4'h0;
+    end else begin
+      \$153  = \$86 [3:0];
+    end
+    if (rst) begin
+      \$153  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$154  = 4'h0;
+    end else begin
+      \$154  = \$91 [3:0];
+    end
+    if (rst) begin
+      \$154  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$155  = 4'h0;
+    end else begin
+      \$155  = \$96 [3:0];
+    end
+    if (rst) begin
+      \$155  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$156  = 4'h0;
+    end else begin
+      \$156  = \$101 [3:0];
+    end
+    if (rst) begin
+      \$156  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$157  = 4'h0;
+    end else begin
+      \$157  = \$106 [3:0];
+    end
+    if (rst) begin
+      \$157  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$158  = 4'h0;
+    end else begin
+      \$158  = \$111 [3:0];
+    end
+    if (rst) begin
+      \$158  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$159  = 4'h0;
+    end else begin
+      \$159  = \$116 [3:0];
+    end
+    if (rst) begin
+      \$159  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$160  = 4'h0;
+    end else begin
+      \$160  = \$121 [3:0];
+    end
+    if (rst) begin
+      \$160  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$161  = 4'h0;
+    end else begin
+      \$161  = \$126 [3:0];
+    end
+    if (rst) begin
+      \$161  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$162  = 4'h0;
+    end else begin
+      \$162  = \$131 [3:0];
+    end
+    if (rst) begin
+      \$162  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$163  = 4'h0;
+    end else begin
+      \$163  = \$136 [3:0];
+    end
+    if (rst) begin
+      \$163  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$164  = 4'h0;
+    end else begin
+      \$164  = \$141 [3:0];
+    end
+    if (rst) begin
+      \$164  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$165  = marked;
+    if (clear) begin
+      \$165  = 16'hffff;
+    end else if (\$142 ) begin
+      (* full_case = 32'd1 *)
+      casez (pick)
+        3'h0:
+            \$165 [1:0] = 2'h0;
+        3'h1:
+            \$165 [3:2] = 2'h0;
+        3'h2:
+            \$165 [5:4] = 2'h0;
+        3'h3:
+            \$165 [7:6] = 2'h0;
+        3'h4:
+            \$165 [9:8] = 2'h0;
+        3'h5:
+            \$165 [11:10] = 2'h0;
+        3'h6:
+            \$165 [13:12] = 2'h0;
+        3'h7:
+            \$165 [15:14] = 2'h0;
+      endcase
+    end
+    if (rst) begin
+      \$165  = 16'hffff;
+    end
+  end
+  assign read_addr = host__addr;
+  assign read_en = host__en;
+  assign host__data = read_data;
+  assign above = \$47 [7:0];
+  assign update__addr = pick;
+  assign total_0 = { 3'h0, \$50  };
+  assign total_1 = { 3'h0, \$52  };
+  assign write__addr = word;
+  assign write__data = { \$56 [15:0], \$54 [15:0] };
+  assign write__en = busy;
   assign \events.crc_word0  = events[0];
   assign \events.crc_word1  = events[1];
   assign \events.no_ack  = events[2];
@@ -13551,107 +13424,143 @@ module \biss_master_uart.ch0.core.counters (rst, clear, events, counts, clk);
   assign \events.noisy_line  = events[13];
   assign \events.delay_jump  = events[14];
   assign \events.noise_event  = events[15];
-  assign \events.ca_crc4_error  = events[16];
-  assign \events.ca_no_answer  = events[17];
-  assign \events.ca_refused  = events[18];
-  assign \events.ca_aborted  = events[19];
-  assign \events.ca_data_fault  = events[20];
-  assign \counts.crc_word0  = counts[15:0];
-  assign \counts.crc_word1  = counts[31:16];
-  assign \counts.no_ack  = counts[47:32];
-  assign \counts.no_start  = counts[63:48];
-  assign \counts.delay_range  = counts[79:64];
-  assign \counts.slo_stuck_low  = counts[95:80];
-  assign \counts.lc_repeat  = counts[111:96];
-  assign \counts.lc_skip  = counts[127:112];
-  assign \counts.lc_zero  = counts[143:128];
-  assign \counts.spw_mismatch  = counts[159:144];
-  assign \counts.overrun  = counts[175:160];
-  assign \counts.aborted  = counts[191:176];
-  assign \counts.no_stop  = counts[207:192];
-  assign \counts.noisy_line  = counts[223:208];
-  assign \counts.delay_jump  = counts[239:224];
-  assign \counts.noise_event  = counts[255:240];
-  assign \counts.ca_crc4_error  = counts[271:256];
-  assign \counts.ca_no_answer  = counts[287:272];
-  assign \counts.ca_refused  = counts[303:288];
-  assign \counts.ca_aborted  = counts[319:304];
-  assign \counts.ca_data_fault  = counts[335:320];
-  assign counts[335:320] = \count$69 ;
-  assign counts[319:304] = \count$66 ;
-  assign counts[303:288] = \count$63 ;
-  assign counts[287:272] = \count$60 ;
-  assign counts[271:256] = \count$57 ;
-  assign counts[255:240] = \count$54 ;
-  assign counts[239:224] = \count$51 ;
-  assign counts[223:208] = \count$48 ;
-  assign counts[207:192] = \count$45 ;
-  assign counts[191:176] = \count$42 ;
-  assign counts[175:160] = \count$39 ;
-  assign counts[159:144] = \count$36 ;
-  assign counts[143:128] = \count$33 ;
-  assign counts[127:112] = \count$30 ;
-  assign counts[111:96] = \count$27 ;
-  assign counts[95:80] = \count$24 ;
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_uart.ch0.core.counters (rst, clear, events, counts, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
+  reg [4:0] \$1 ;
+  reg \$2 ;
+  input clear;
+  wire clear;
+  (* init = 1'h0 *)
+  wire \clear$11 ;
+  (* init = 1'h0 *)
+  wire \clear$14 ;
+  (* init = 1'h0 *)
+  wire \clear$17 ;
+  (* init = 1'h0 *)
+  wire \clear$20 ;
+  (* init = 1'h0 *)
+  wire \clear$7 ;
+  reg clear_reg = 1'h0;
+  input clk;
+  wire clk;
+  wire [15:0] count;
+  wire [15:0] \count$12 ;
+  wire [15:0] \count$15 ;
+  wire [15:0] \count$18 ;
+  wire [15:0] \count$21 ;
+  output [79:0] counts;
+  wire [79:0] counts;
+  wire [15:0] \counts.ca_aborted ;
+  wire [15:0] \counts.ca_crc4_error ;
+  wire [15:0] \counts.ca_data_fault ;
+  wire [15:0] \counts.ca_no_answer ;
+  wire [15:0] \counts.ca_refused ;
+  input [4:0] events;
+  wire [4:0] events;
+  wire \events.ca_aborted ;
+  wire \events.ca_crc4_error ;
+  wire \events.ca_data_fault ;
+  wire \events.ca_no_answer ;
+  wire \events.ca_refused ;
+  reg [4:0] events_reg = 5'h00;
+  wire \events_reg.ca_aborted ;
+  wire \events_reg.ca_crc4_error ;
+  wire \events_reg.ca_data_fault ;
+  wire \events_reg.ca_no_answer ;
+  wire \events_reg.ca_refused ;
+  wire inc;
+  wire \inc$10 ;
+  wire \inc$13 ;
+  wire \inc$16 ;
+  wire \inc$19 ;
+  input rst;
+  wire rst;
+  always @(posedge clk)
+    events_reg <= \$1 ;
+  always @(posedge clk)
+    clear_reg <= \$2 ;
+  \biss_master_uart.ch0.core.counters.count_ca_aborted  count_ca_aborted (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$18 ),
+    .inc(events_reg[3]),
+    .rst(rst)
+  );
+  \biss_master_uart.ch0.core.counters.count_ca_crc4_error  count_ca_crc4_error (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(count),
+    .inc(events_reg[0]),
+    .rst(rst)
+  );
+  \biss_master_uart.ch0.core.counters.count_ca_data_fault  count_ca_data_fault (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$21 ),
+    .inc(events_reg[4]),
+    .rst(rst)
+  );
+  \biss_master_uart.ch0.core.counters.count_ca_no_answer  count_ca_no_answer (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$12 ),
+    .inc(events_reg[1]),
+    .rst(rst)
+  );
+  \biss_master_uart.ch0.core.counters.count_ca_refused  count_ca_refused (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$15 ),
+    .inc(events_reg[2]),
+    .rst(rst)
+  );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    \$1  = events;
+    if (rst) begin
+      \$1  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    \$2  = clear;
+    if (rst) begin
+      \$2  = 1'h0;
+    end
+  end
+  assign inc = events_reg[0];
+  assign \clear$7  = clear_reg;
+  assign \inc$10  = events_reg[1];
+  assign \clear$11  = clear_reg;
+  assign \inc$13  = events_reg[2];
+  assign \clear$14  = clear_reg;
+  assign \inc$16  = events_reg[3];
+  assign \clear$17  = clear_reg;
+  assign \inc$19  = events_reg[4];
+  assign \clear$20  = clear_reg;
+  assign \events_reg.ca_crc4_error  = events_reg[0];
+  assign \events_reg.ca_no_answer  = events_reg[1];
+  assign \events_reg.ca_refused  = events_reg[2];
+  assign \events_reg.ca_aborted  = events_reg[3];
+  assign \events_reg.ca_data_fault  = events_reg[4];
+  assign \events.ca_crc4_error  = events[0];
+  assign \events.ca_no_answer  = events[1];
+  assign \events.ca_refused  = events[2];
+  assign \events.ca_aborted  = events[3];
+  assign \events.ca_data_fault  = events[4];
+  assign \counts.ca_crc4_error  = counts[15:0];
+  assign \counts.ca_no_answer  = counts[31:16];
+  assign \counts.ca_refused  = counts[47:32];
+  assign \counts.ca_aborted  = counts[63:48];
+  assign \counts.ca_data_fault  = counts[79:64];
   assign counts[79:64] = \count$21 ;
   assign counts[63:48] = \count$18 ;
   assign counts[47:32] = \count$15 ;
   assign counts[31:16] = \count$12 ;
   assign counts[15:0] = count;
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_aborted (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
 endmodule
 
 (* generator = "Amaranth" *)
@@ -13925,819 +13834,9 @@ module \biss_master_uart.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_crc_word0 (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_crc_word1 (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_delay_jump (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_delay_range (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_lc_repeat (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_lc_skip (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_lc_zero (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_no_ack (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_no_start (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_no_stop (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_noise_event (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_noisy_line (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_overrun (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_spw_mismatch (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top
 , crc_ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -16131,7 +15230,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$585  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -16155,7 +15254,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$586  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -16177,7 +15276,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$587  = slots;
     if (\$36 ) begin
       \$587  = \$37 [15:0];
@@ -16190,7 +15289,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$588  = slots_full;
     if (\$36 ) begin
       \$588  = \$38 ;
@@ -16203,7 +15302,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$589  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -16219,7 +15318,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$590  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -16235,7 +15334,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$591  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -16267,7 +15366,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$592  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -16285,7 +15384,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$593  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -16310,7 +15409,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$594  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -16335,7 +15434,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$595  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -16360,7 +15459,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$596  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
@@ -16382,7 +15481,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$597  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -16407,7 +15506,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$598  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -16435,7 +15534,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$599  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -16457,7 +15556,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$600  = data0;
     if (\$66 ) begin
       \$600  = \$344 ;
@@ -16470,7 +15569,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$601  = ne;
     if (\$345 ) begin
       \$601 [0] = 1'h1;
@@ -16490,7 +15589,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$602  = nw;
     if (\$345 ) begin
       \$602 [0] = 1'h1;
@@ -16512,7 +15611,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$603  = data1;
     if (\$356 ) begin
       \$603  = \$559 ;
@@ -16525,7 +15624,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$604  = lc;
     if (lc_load) begin
       \$604  = { lc[4:0], \bit  };
@@ -16538,7 +15637,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$605  = cpw_top;
     if (\$569 ) begin
       \$605  = { cpw_top[38:0], \$571  };
@@ -16551,7 +15650,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     at_cds = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -16561,7 +15660,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -16573,7 +15672,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -16583,7 +15682,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -16597,7 +15696,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -16611,7 +15710,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -16625,7 +15724,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[18])
       1'h0:
@@ -16635,7 +15734,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -16649,7 +15748,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -16663,7 +15762,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -16723,7 +15822,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
   reg \$11 ;
@@ -16824,7 +15923,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @(posedge clk)
     ok <= \$35 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (load_index)
       1'h0:
@@ -16834,7 +15933,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16844,7 +15943,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16854,7 +15953,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16864,7 +15963,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16874,7 +15973,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16884,7 +15983,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16894,7 +15993,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16904,7 +16003,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16914,7 +16013,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$33  = \reg ;
     if (load) begin
       \$33  = \$1 ;
@@ -16931,7 +16030,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$34  = mismatch;
     if (load) begin
       \$34  = 1'h0;
@@ -16947,7 +16046,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$35  = ok;
     if (last) begin
       if (\$15 ) begin
@@ -16979,7 +16078,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -17151,56 +16250,56 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
   assign \$39  = magnitude > spread;
   assign \$40  = \$38  & \$39 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$46  = \$1 ;
     if (rst) begin
       \$46  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$47  = \$2 ;
     if (rst) begin
       \$47  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$48  = \tolerance$8 ;
     if (rst) begin
       \$48  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$49  = \$3 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$50  = \$11 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$51  = \$20 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$52  = \$25 ;
     if (rst) begin
       \$52  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$53  = 1'h0;
     if (learn) begin
       if (\$32 ) begin
@@ -17217,7 +16316,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$54  = jump;
     if (check) begin
       \$54  = \$26 ;
@@ -17230,7 +16329,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$55  = count;
     if (learn) begin
       (* full_case = 32'd1 *)
@@ -17252,7 +16351,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$56  = spread;
     if (learn) begin
       if (\$32 ) begin
@@ -17272,7 +16371,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$57  = cand;
     if (learn) begin
       if (\$32 ) begin
@@ -17285,7 +16384,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$58  = settled_delay;
     if (learn) begin
       if (\$32 ) begin
@@ -17302,7 +16401,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$59  = settled;
     if (learn) begin
       if (\$32 ) begin
@@ -17322,7 +16421,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   reg \$10 ;
   reg \$11 ;
@@ -17385,21 +16484,21 @@ module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, noisy, events,
   always @(posedge clk)
     running <= \$14 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$10  = level;
     if (rst) begin
       \$10  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$11  = \$4 ;
     if (rst) begin
       \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$12  = held_noisy;
     if (close) begin
       \$12  = \$7 ;
@@ -17409,7 +16508,7 @@ module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$13  = held_events;
     if (close) begin
       \$13  = running;
@@ -17419,7 +16518,7 @@ module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$14  = running;
     if (close) begin
       \$14  = { 3'h0, \event  };
@@ -17436,7 +16535,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -17561,7 +16660,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -17576,7 +16675,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -17591,7 +16690,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -17606,7 +16705,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -17635,7 +16734,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -17677,7 +16776,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -17719,7 +16818,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -17738,7 +16837,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -17774,7 +16873,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -17798,7 +16897,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -17814,7 +16913,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -17831,7 +16930,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, \started$11 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   reg [7:0] \$1 ;
   wire \$10 ;
   reg [7:0] \$11 ;
@@ -17934,7 +17033,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   always @(posedge clk)
     word1_len <= \$19 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -17948,7 +17047,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -17962,42 +17061,42 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$14  = \$3 [7:0];
     if (rst) begin
       \$14  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$15  = \$5 ;
     if (rst) begin
       \$15  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$16  = \$6 ;
     if (rst) begin
       \$16  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$17  = \started$11 ;
     if (rst) begin
       \$17  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$18  = \$10 ;
     if (rst) begin
       \$18  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$19  = \$13 [7:0];
     if (rst) begin
       \$19  = 8'h00;
@@ -18323,7 +17422,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.register_access.buffers (rst, host_read__en, byte_to_send, rbuf_data, host_read__addr, wbuf, index, store, byte_received, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -18440,21 +17539,21 @@ module \biss_master_uart.ch0.core.register_access.buffers (rst, host_read__en, b
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -18474,7 +17573,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -18517,7 +17616,7 @@ module \biss_master_uart.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -18527,7 +17626,7 @@ module \biss_master_uart.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -18543,7 +17642,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -18586,7 +17685,7 @@ module \biss_master_uart.ch0.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$6  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -18610,7 +17709,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -18680,7 +17779,7 @@ module \biss_master_uart.ch0.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -18690,7 +17789,7 @@ module \biss_master_uart.ch0.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -18703,7 +17802,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -18775,7 +17874,7 @@ module \biss_master_uart.ch0.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -18788,7 +17887,7 @@ module \biss_master_uart.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -18801,7 +17900,7 @@ module \biss_master_uart.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -18811,7 +17910,7 @@ module \biss_master_uart.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -18836,7 +17935,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -18879,7 +17978,7 @@ module \biss_master_uart.ch0.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$8  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -18904,7 +18003,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -19260,7 +18359,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19298,7 +18397,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -19352,7 +18451,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -19449,7 +18548,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -19466,7 +18565,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -19505,7 +18604,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -19563,7 +18662,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -19630,7 +18729,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -19662,7 +18761,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19676,7 +18775,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19703,7 +18802,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19723,7 +18822,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19742,7 +18841,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19771,7 +18870,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19792,7 +18891,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19814,7 +18913,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19835,7 +18934,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19857,7 +18956,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19879,7 +18978,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19903,7 +19002,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19942,7 +19041,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [186:0] \$3 ;
@@ -20051,21 +19150,21 @@ module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -20142,7 +19241,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -20427,7 +19526,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$71  = level;
     if (receiver_clear) begin
       \$71  = 1'h1;
@@ -20437,7 +19536,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$72  = mid_delay;
     if (odd) begin
       \$72  = \$8 [12:0];
@@ -20462,7 +19561,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$73  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -20489,7 +19588,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$74  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -20511,7 +19610,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$75  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -20535,7 +19634,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$76  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -20551,7 +19650,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$77  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -20577,7 +19676,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$78  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -20608,7 +19707,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$79  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -20639,7 +19738,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$80  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -20689,7 +19788,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$81  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -20739,7 +19838,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$82  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -20769,7 +19868,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$83  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -20797,7 +19896,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$84  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -20823,7 +19922,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$85  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -20846,7 +19945,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$86  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -20886,7 +19985,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -20904,7 +20003,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     clear = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -20916,7 +20015,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     dropped = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -20937,7 +20036,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -20962,7 +20061,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     centre = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -20990,7 +20089,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majority, odd, receiver_clear, vote1, vote2, clear, centre, level, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -21105,7 +20204,7 @@ module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
   always @(posedge clk)
     strobed <= \$38 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$33  = last;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -21123,7 +20222,7 @@ module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$34  = tail_odd;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -21141,7 +20240,7 @@ module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$35  = 1'h0;
@@ -21161,7 +20260,7 @@ module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$36  = 1'h0;
@@ -21181,7 +20280,7 @@ module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$37  = crowded;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -21199,7 +20298,7 @@ module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$38  = strobed;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -21242,7 +20341,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -21336,14 +20435,14 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -21357,7 +20456,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -21371,7 +20470,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -21387,8 +20486,8 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$5983$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6096$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -21429,8 +20528,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5983$0 ;
-  wire \port$5983$0 ;
+  input \port$6096$0 ;
+  wire \port$6096$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -21444,9 +20543,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5983$0  };
-  assign \$2  = { lc[4:0], \port$5983$0  } == last;
-  assign \$3  = { lc[4:0], \port$5983$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6096$0  };
+  assign \$2  = { lc[4:0], \port$6096$0  } == last;
+  assign \$3  = { lc[4:0], \port$6096$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -21480,7 +20579,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -21490,7 +20589,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -21500,7 +20599,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -21510,21 +20609,21 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -21534,7 +20633,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -21544,7 +20643,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -21556,13 +20655,13 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5983$0  };
+  assign lc_next = { lc[4:0], \port$6096$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -21767,28 +20866,28 @@ module \biss_master_uart.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -21798,7 +20897,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -21817,14 +20916,14 @@ module \biss_master_uart.ch0.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -21838,7 +20937,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
 , delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22018,7 +21117,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   assign \$40  = in_clock & \$39 ;
   assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$48  = slo_low_time_p1;
     if (\$2 ) begin
       \$48  = 25'h0000001;
@@ -22030,21 +21129,21 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$49  = \$9 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$50  = \$17 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$51  = high_p2;
     if (\$18 ) begin
       \$51  = 13'h0002;
@@ -22056,28 +21155,28 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$52  = \$23 ;
     if (rst) begin
       \$52  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$53  = \$30 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$54  = \$34 [24:0];
     if (rst) begin
       \$54  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$55  = 1'h0;
@@ -22089,21 +21188,21 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$57  = \$46 ;
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$58  = \$47 ;
     if (rst) begin
       \$58  = 1'h0;
@@ -22112,9 +21211,9 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2809$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2741$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22266,8 +21365,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2809$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$2809$0 ;
-  wire \port$2809$0 ;
+  output \port$2741$0 ;
+  wire \port$2741$0 ;
   output report;
   wire report;
   input report_frame;
@@ -22348,7 +21447,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2809$0 , l
   assign \$39  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$39  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     frame_status = 4'h0;
     if (delay_jump) begin
       frame_status = 4'he;
@@ -22373,7 +21472,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2809$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2809$0  = \$2 ;
+  assign \port$2741$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -22414,17 +21513,17 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2809$0 , l
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$6897$0 , \port$6910$0 , regs__ca_done
-, \port$7042$0 , slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+module \biss_master_uart.ch1 (clk, rst, \trigger$177 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
+, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
+, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$6964$0 
+, \port$6977$0 , regs__ca_done, \port$7062$0 , slo);
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire \$1 ;
   wire [16:0] \$2 ;
   reg \$3 ;
   reg [15:0] \$4 ;
   wire [186:0] \$5 ;
-  wire [335:0] \$6 ;
+  wire [79:0] \$6 ;
   wire [9:0] \$7 ;
   reg abort_cycle = 1'h0;
   wire busy;
@@ -22545,27 +21644,15 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   input clk;
   wire clk;
   wire config_error;
-  wire [15:0] count_aborted;
+  wire [2:0] count_addr;
   wire [15:0] count_ca_aborted;
   wire [15:0] count_ca_crc4_error;
   wire [15:0] count_ca_data_fault;
   wire [15:0] count_ca_no_answer;
   wire [15:0] count_ca_refused;
-  wire [15:0] count_crc_word0;
-  wire [15:0] count_crc_word1;
-  wire [15:0] count_delay_jump;
-  wire [15:0] count_delay_range;
-  wire [15:0] count_lc_repeat;
-  wire [15:0] count_lc_skip;
-  wire [15:0] count_lc_zero;
-  wire [15:0] count_no_ack;
-  wire [15:0] count_no_start;
-  wire [15:0] count_no_stop;
-  wire [15:0] count_noise_event;
-  wire [15:0] count_noisy_line;
-  wire [15:0] count_overrun;
-  wire [15:0] count_slo_stuck_low;
-  wire [15:0] count_spw_mismatch;
+  wire [31:0] count_data;
+  input count_en;
+  wire count_en;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire done;
@@ -22576,16 +21663,16 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$206 ;
+  wire \ma$180 ;
   wire [3:0] noise_events;
   input periodic;
   wire periodic;
-  output [186:0] \port$6897$0 ;
-  wire [186:0] \port$6897$0 ;
-  output [335:0] \port$6910$0 ;
-  wire [335:0] \port$6910$0 ;
-  output [9:0] \port$7042$0 ;
-  wire [9:0] \port$7042$0 ;
+  output [186:0] \port$6964$0 ;
+  wire [186:0] \port$6964$0 ;
+  output [79:0] \port$6977$0 ;
+  wire [79:0] \port$6977$0 ;
+  output [9:0] \port$7062$0 ;
+  wire [9:0] \port$7062$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -22662,27 +21749,15 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   wire regs__clear_counters;
   output regs__config_error;
   wire regs__config_error;
-  wire [15:0] regs__count_aborted;
+  wire [2:0] regs__count_addr;
   wire [15:0] regs__count_ca_aborted;
   wire [15:0] regs__count_ca_crc4_error;
   wire [15:0] regs__count_ca_data_fault;
   wire [15:0] regs__count_ca_no_answer;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] regs__count_crc_word0;
-  wire [15:0] regs__count_crc_word1;
-  wire [15:0] regs__count_delay_jump;
-  wire [15:0] regs__count_delay_range;
-  wire [15:0] regs__count_lc_repeat;
-  wire [15:0] regs__count_lc_skip;
-  wire [15:0] regs__count_lc_zero;
-  wire [15:0] regs__count_no_ack;
-  wire [15:0] regs__count_no_start;
-  wire [15:0] regs__count_no_stop;
-  wire [15:0] regs__count_noise_event;
-  wire [15:0] regs__count_noisy_line;
-  wire [15:0] regs__count_overrun;
-  wire [15:0] regs__count_slo_stuck_low;
-  wire [15:0] regs__count_spw_mismatch;
+  output [31:0] regs__count_data;
+  wire [31:0] regs__count_data;
+  wire regs__count_en;
   wire regs__delay_settled;
   wire [7:0] regs__delay_spread;
   output regs__done;
@@ -22718,7 +21793,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$208 ;
+  wire \slo$182 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -22741,8 +21816,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$203 ;
-  wire \trigger$203 ;
+  input \trigger$177 ;
+  wire \trigger$177 ;
   wire valid;
   wire word0_crc_ok;
   wire word0_ne;
@@ -22752,7 +21827,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
-  assign trigger = \trigger$203  & regs__trigger_enable;
+  assign trigger = \trigger$177  & regs__trigger_enable;
   assign \$2  = regs__done_count + 1'h1;
   always @(posedge clk)
     abort_cycle <= \$3 ;
@@ -22763,7 +21838,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   \biss_master_uart.ch1.core  core (
     .abort(abort_cycle),
     .\abort$239 (ca_abort),
-    .\busy$293 (regs__busy),
+    .\busy$285 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -22806,34 +21881,36 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$267 (clear_counters),
+    .\clear$263 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
+    .count_data(regs__count_data),
     .counts(\$6 ),
-    .\done$296 (regs__done),
+    .\done$288 (regs__done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$39 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
+    .read_en(count_en),
     .result(\$7 ),
-    .\result$301 (\$5 ),
+    .\result$293 (\$5 ),
     .rst(rst),
     .slo(slo),
     .start(start),
     .\start$237 (ca_start),
     .trigger(trigger),
-    .\valid$298 (valid)
+    .\valid$290 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$3  = regs__abort_cycle;
     if (rst) begin
       \$3  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$4  = regs__done_count;
     if (regs__done) begin
       \$4  = \$2 [15:0];
@@ -22842,6 +21919,10 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
       \$4  = 16'h0000;
     end
   end
+  assign count_addr = ca_rbuf_addr[2:0];
+  assign regs__count_addr = ca_rbuf_addr[2:0];
+  assign count_data = regs__count_data;
+  assign regs__count_en = count_en;
   assign regs__start = start;
   assign regs__clear_counters = clear_counters;
   assign regs__periodic = periodic;
@@ -22922,38 +22003,6 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   assign delay_spread = \$5 [75:68];
   assign regs__settled_delay = \$5 [67:55];
   assign settled_delay = \$5 [67:55];
-  assign regs__count_crc_word0 = \$6 [15:0];
-  assign count_crc_word0 = \$6 [15:0];
-  assign regs__count_crc_word1 = \$6 [31:16];
-  assign count_crc_word1 = \$6 [31:16];
-  assign regs__count_no_ack = \$6 [47:32];
-  assign count_no_ack = \$6 [47:32];
-  assign regs__count_no_start = \$6 [63:48];
-  assign count_no_start = \$6 [63:48];
-  assign regs__count_delay_range = \$6 [79:64];
-  assign count_delay_range = \$6 [79:64];
-  assign regs__count_slo_stuck_low = \$6 [95:80];
-  assign count_slo_stuck_low = \$6 [95:80];
-  assign regs__count_lc_repeat = \$6 [111:96];
-  assign count_lc_repeat = \$6 [111:96];
-  assign regs__count_lc_skip = \$6 [127:112];
-  assign count_lc_skip = \$6 [127:112];
-  assign regs__count_lc_zero = \$6 [143:128];
-  assign count_lc_zero = \$6 [143:128];
-  assign regs__count_spw_mismatch = \$6 [159:144];
-  assign count_spw_mismatch = \$6 [159:144];
-  assign regs__count_overrun = \$6 [175:160];
-  assign count_overrun = \$6 [175:160];
-  assign regs__count_aborted = \$6 [191:176];
-  assign count_aborted = \$6 [191:176];
-  assign regs__count_no_stop = \$6 [207:192];
-  assign count_no_stop = \$6 [207:192];
-  assign regs__count_noisy_line = \$6 [223:208];
-  assign count_noisy_line = \$6 [223:208];
-  assign regs__count_delay_jump = \$6 [239:224];
-  assign count_delay_jump = \$6 [239:224];
-  assign regs__count_noise_event = \$6 [255:240];
-  assign count_noise_event = \$6 [255:240];
   assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
   assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
   assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
@@ -22973,35 +22022,35 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$203 , ca_wbuf_en, ca_rbuf_en, r
   assign ca_status = \$7 [2:0];
   assign regs__ca_bytes_done = \$7 [9:3];
   assign ca_bytes_done = \$7 [9:3];
-  assign regs__count_ca_crc4_error = \$6 [271:256];
-  assign count_ca_crc4_error = \$6 [271:256];
-  assign regs__count_ca_no_answer = \$6 [287:272];
-  assign count_ca_no_answer = \$6 [287:272];
-  assign regs__count_ca_refused = \$6 [303:288];
-  assign count_ca_refused = \$6 [303:288];
-  assign regs__count_ca_aborted = \$6 [319:304];
-  assign count_ca_aborted = \$6 [319:304];
-  assign regs__count_ca_data_fault = \$6 [335:320];
-  assign count_ca_data_fault = \$6 [335:320];
+  assign regs__count_ca_crc4_error = \$6 [15:0];
+  assign count_ca_crc4_error = \$6 [15:0];
+  assign regs__count_ca_no_answer = \$6 [31:16];
+  assign count_ca_no_answer = \$6 [31:16];
+  assign regs__count_ca_refused = \$6 [47:32];
+  assign count_ca_refused = \$6 [47:32];
+  assign regs__count_ca_aborted = \$6 [63:48];
+  assign count_ca_aborted = \$6 [63:48];
+  assign regs__count_ca_data_fault = \$6 [79:64];
+  assign count_ca_data_fault = \$6 [79:64];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$206  = ma;
-  assign \slo$208  = slo;
-  assign \port$6897$0  = \$5 ;
-  assign \port$6910$0  = \$6 ;
-  assign \port$7042$0  = \$7 ;
+  assign \ma$180  = ma;
+  assign \slo$182  = slo;
+  assign \port$6964$0  = \$5 ;
+  assign \port$6977$0  = \$6 ;
+  assign \port$7062$0  = \$7 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy$293 , config_error, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$267 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit
-, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width
-, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$296 , \valid$298 , \result$301 , counts, ca_done, result, slo
-);
-  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
+module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$285 , config_error, count_data, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$263 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time
+, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time
+, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$288 , \valid$290 , \result$293 , counts, ca_done
+, result, slo);
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23040,15 +22089,15 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [23:0] \ack_limit$104 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$325 ;
+  wire \bit$317 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$81 ;
   wire [23:0] break_time;
   wire busy;
   wire \busy$248 ;
-  output \busy$293 ;
-  wire \busy$293 ;
+  output \busy$285 ;
+  wire \busy$285 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -23086,7 +22135,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \cdm$252 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$304 ;
+  wire \cds$296 ;
   wire [254:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -23216,11 +22265,12 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   reg clean = 1'h0;
   (* init = 1'h0 *)
   wire \clean$167 ;
-  wire \clean$326 ;
+  wire \clean$318 ;
   wire clear;
   wire \clear$128 ;
-  input \clear$267 ;
-  wire \clear$267 ;
+  input \clear$263 ;
+  wire \clear$263 ;
+  wire \clear$276 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -23229,50 +22279,22 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   output config_error;
   wire config_error;
   wire config_ok;
-  wire [15:0] count_aborted;
+  wire [2:0] count_addr;
   wire [15:0] count_ca_aborted;
   wire [15:0] count_ca_crc4_error;
   wire [15:0] count_ca_data_fault;
   wire [15:0] count_ca_no_answer;
   wire [15:0] count_ca_refused;
-  wire [15:0] count_crc_word0;
-  wire [15:0] count_crc_word1;
-  wire [15:0] count_delay_jump;
-  wire [15:0] count_delay_range;
-  wire [15:0] count_lc_repeat;
-  wire [15:0] count_lc_skip;
-  wire [15:0] count_lc_zero;
-  wire [15:0] count_no_ack;
-  wire [15:0] count_no_start;
-  wire [15:0] count_no_stop;
-  wire [15:0] count_noise_event;
-  wire [15:0] count_noisy_line;
-  wire [15:0] count_overrun;
-  wire [15:0] count_slo_stuck_low;
-  wire [15:0] count_spw_mismatch;
-  output [335:0] counts;
-  wire [335:0] counts;
-  wire [15:0] \counts.aborted ;
+  output [31:0] count_data;
+  wire [31:0] count_data;
+  wire count_en;
+  output [79:0] counts;
+  wire [79:0] counts;
   wire [15:0] \counts.ca_aborted ;
   wire [15:0] \counts.ca_crc4_error ;
   wire [15:0] \counts.ca_data_fault ;
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
-  wire [15:0] \counts.crc_word0 ;
-  wire [15:0] \counts.crc_word1 ;
-  wire [15:0] \counts.delay_jump ;
-  wire [15:0] \counts.delay_range ;
-  wire [15:0] \counts.lc_repeat ;
-  wire [15:0] \counts.lc_skip ;
-  wire [15:0] \counts.lc_zero ;
-  wire [15:0] \counts.no_ack ;
-  wire [15:0] \counts.no_start ;
-  wire [15:0] \counts.no_stop ;
-  wire [15:0] \counts.noise_event ;
-  wire [15:0] \counts.noisy_line ;
-  wire [15:0] \counts.overrun ;
-  wire [15:0] \counts.slo_stuck_low ;
-  wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
   wire [39:0] \cpw_top$179 ;
   wire [1:0] crc_error;
@@ -23378,9 +22400,9 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [16:0] delay_tolerance;
   wire done;
   wire \done$250 ;
-  output \done$296 ;
-  wire \done$296 ;
-  wire \done$297 ;
+  output \done$288 ;
+  wire \done$288 ;
+  wire \done$289 ;
   wire doubtful;
   wire early;
   wire \early$67 ;
@@ -23389,28 +22411,29 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$262 ;
-  wire \events$262.aborted ;
+  wire [4:0] \events$262 ;
   wire \events$262.ca_aborted ;
   wire \events$262.ca_crc4_error ;
   wire \events$262.ca_data_fault ;
   wire \events$262.ca_no_answer ;
   wire \events$262.ca_refused ;
-  wire \events$262.crc_word0 ;
-  wire \events$262.crc_word1 ;
-  wire \events$262.delay_jump ;
-  wire \events$262.delay_range ;
-  wire \events$262.lc_repeat ;
-  wire \events$262.lc_skip ;
-  wire \events$262.lc_zero ;
-  wire \events$262.no_ack ;
-  wire \events$262.no_start ;
-  wire \events$262.no_stop ;
-  wire \events$262.noise_event ;
-  wire \events$262.noisy_line ;
-  wire \events$262.overrun ;
-  wire \events$262.slo_stuck_low ;
-  wire \events$262.spw_mismatch ;
+  wire [15:0] \events$271 ;
+  wire \events$271.aborted ;
+  wire \events$271.crc_word0 ;
+  wire \events$271.crc_word1 ;
+  wire \events$271.delay_jump ;
+  wire \events$271.delay_range ;
+  wire \events$271.lc_repeat ;
+  wire \events$271.lc_skip ;
+  wire \events$271.lc_zero ;
+  wire \events$271.no_ack ;
+  wire \events$271.no_start ;
+  wire \events$271.no_stop ;
+  wire \events$271.noise_event ;
+  wire \events$271.noisy_line ;
+  wire \events$271.overrun ;
+  wire \events$271.slo_stuck_low ;
+  wire \events$271.spw_mismatch ;
   wire fault;
   wire \fault$189 ;
   (* enum_base_type = "Status" *)
@@ -23518,19 +22541,19 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$139 ;
-  wire [5:0] \lc$317 ;
+  wire [5:0] \lc$309 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$141 ;
   wire lc_repeat;
-  wire \lc_repeat$318 ;
+  wire \lc_repeat$310 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$319 ;
+  wire \lc_skip$311 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$320 ;
+  wire \lc_zero$312 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
@@ -23590,7 +22613,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \locked$65 ;
   output ma;
   wire ma;
-  wire \ma$292 ;
+  wire \ma$284 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$93 ;
@@ -23611,7 +22634,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$295 ;
+  wire \overrun$287 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$39 ;
@@ -23628,6 +22651,10 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [31:0] rbuf_data;
   input rbuf_en;
   wire rbuf_en;
+  wire [2:0] read_addr;
+  wire [31:0] read_data;
+  input read_en;
+  wire read_en;
   wire rearm;
   wire receiver_clear;
   wire \repeat ;
@@ -23650,19 +22677,19 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$301 ;
-  wire [186:0] \result$301 ;
-  wire \result$301.cds ;
-  wire \result$301.delay_settled ;
-  wire [7:0] \result$301.delay_spread ;
-  wire [5:0] \result$301.lc ;
-  wire \result$301.lc_repeat ;
-  wire \result$301.lc_skip ;
-  wire \result$301.lc_zero ;
-  wire [12:0] \result$301.line_delay ;
-  wire [3:0] \result$301.noise_events ;
-  wire [12:0] \result$301.settled_delay ;
-  wire \result$301.spw_mismatch ;
+  output [186:0] \result$293 ;
+  wire [186:0] \result$293 ;
+  wire \result$293.cds ;
+  wire \result$293.delay_settled ;
+  wire [7:0] \result$293.delay_spread ;
+  wire [5:0] \result$293.lc ;
+  wire \result$293.lc_repeat ;
+  wire \result$293.lc_skip ;
+  wire \result$293.lc_zero ;
+  wire [12:0] \result$293.line_delay ;
+  wire [3:0] \result$293.noise_events ;
+  wire [12:0] \result$293.settled_delay ;
+  wire \result$293.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -23679,18 +22706,18 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$301.status ;
-  wire [31:0] \result$301.timestamp ;
-  wire [57:0] \result$301.word0 ;
-  wire \result$301.word0.crc_ok ;
-  wire \result$301.word0.ne ;
-  wire \result$301.word0.nw ;
-  wire [54:0] \result$301.word0.position ;
-  wire [42:0] \result$301.word1 ;
-  wire \result$301.word1.crc_ok ;
-  wire \result$301.word1.ne ;
-  wire \result$301.word1.nw ;
-  wire [39:0] \result$301.word1.position ;
+  wire [3:0] \result$293.status ;
+  wire [31:0] \result$293.timestamp ;
+  wire [57:0] \result$293.word0 ;
+  wire \result$293.word0.crc_ok ;
+  wire \result$293.word0.ne ;
+  wire \result$293.word0.nw ;
+  wire [54:0] \result$293.word0.position ;
+  wire [42:0] \result$293.word1 ;
+  wire \result$293.word1.crc_ok ;
+  wire \result$293.word1.ne ;
+  wire \result$293.word1.nw ;
+  wire [39:0] \result$293.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -23709,12 +22736,12 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$324 ;
+  wire \sample$316 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$307 ;
+  wire [12:0] \settled_delay$299 ;
   wire skip;
   input slo;
   wire slo;
@@ -23731,7 +22758,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$321 ;
+  wire \spw_mismatch$313 ;
   input start;
   wire start;
   input \start$237 ;
@@ -23776,7 +22803,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$300 ;
+  wire [3:0] \status$292 ;
   wire stop_bit;
   wire \stop_bit$77 ;
   wire stopped;
@@ -23793,8 +22820,8 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   wire \trigger$48 ;
   wire valid;
   wire \valid$206 ;
-  output \valid$298 ;
-  wire \valid$298 ;
+  output \valid$290 ;
+  wire \valid$290 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -23870,25 +22897,25 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
   assign \check$162  = started & \$1 ;
-  assign \$2  = report_frame & spw_mismatch;
-  assign \$3  = status == 4'hd;
-  assign \$4  = report_frame & \$3 ;
-  assign \$5  = status == 4'he;
-  assign \$6  = report_frame & \$5 ;
-  assign \$7  = result[2:0] == 1'h1;
-  assign \$8  = ca_done & \$7 ;
-  assign \$9  = result[2:0] == 2'h2;
-  assign \$10  = ca_done & \$9 ;
-  assign \$11  = result[2:0] == 2'h3;
-  assign \$12  = ca_done & \$11 ;
-  assign \$13  = result[2:0] == 3'h4;
-  assign \$14  = ca_done & \$13 ;
-  assign \$15  = result[2:0] == 3'h5;
-  assign \$16  = ca_done & \$15 ;
-  assign \busy$293  = ~ idle;
+  assign \$2  = result[2:0] == 1'h1;
+  assign \$3  = ca_done & \$2 ;
+  assign \$4  = result[2:0] == 2'h2;
+  assign \$5  = ca_done & \$4 ;
+  assign \$6  = result[2:0] == 2'h3;
+  assign \$7  = ca_done & \$6 ;
+  assign \$8  = result[2:0] == 3'h4;
+  assign \$9  = ca_done & \$8 ;
+  assign \$10  = result[2:0] == 3'h5;
+  assign \$11  = ca_done & \$10 ;
+  assign \$12  = report_frame & spw_mismatch;
+  assign \$13  = status == 4'hd;
+  assign \$14  = report_frame & \$13 ;
+  assign \$15  = status == 4'he;
+  assign \$16  = report_frame & \$15 ;
+  assign \busy$285  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$17  = ~ \clear$128 ;
-  assign \$18  = \sample$324  & \$17 ;
+  assign \$18  = \sample$316  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -23960,8 +22987,17 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .timer_clear(clear),
     .waiting(watch)
   );
+  \biss_master_uart.ch1.core.counter_ram  counter_ram (
+    .clear(\clear$263 ),
+    .clk(clk),
+    .events(\events$271 ),
+    .host__addr(rbuf_addr[2:0]),
+    .host__en(read_en),
+    .read_data(count_data),
+    .rst(rst)
+  );
   \biss_master_uart.ch1.core.counters  counters (
-    .clear(\clear$267 ),
+    .clear(\clear$263 ),
     .clk(clk),
     .counts(counts),
     .events(\events$262 ),
@@ -24067,19 +23103,19 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   );
   \biss_master_uart.ch1.core.results  results (
     .clk(clk),
-    .done(\done$296 ),
+    .done(\done$288 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$301 ),
+    .result(\result$293 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$298 )
+    .valid_out(\valid$290 )
   );
   \biss_master_uart.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$325 ),
+    .\bit (\bit$317 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -24089,7 +23125,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .noise(sampler_noise),
     .receiver_clear(\clear$128 ),
     .rst(rst),
-    .sample(\sample$324 ),
+    .sample(\sample$316 ),
     .slo(slo)
   );
   \biss_master_uart.ch1.core.scheduler  scheduler (
@@ -24110,7 +23146,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6550$0 (\bit ),
+    .\port$6617$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -24159,7 +23195,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   );
   \biss_master_uart.ch1.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$326 ),
+    .clean(\clean$318 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
@@ -24174,7 +23210,7 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$4805$0 (\$24 ),
+    .\port$4841$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -24183,36 +23219,36 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$19  = \$18 ;
     if (rst) begin
       \$19  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$20  = \bit$325 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    \$20  = \bit$317 ;
     if (rst) begin
       \$20  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$21  = started;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$22  = report_frame;
     if (rst) begin
       \$22  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$23  = \clean$326 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    \$23  = \clean$318 ;
     if (rst) begin
       \$23  = 1'h0;
     end
@@ -24330,53 +23366,42 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign frame_ok = valid;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$267 ;
-  assign count_crc_word0 = counts[15:0];
-  assign count_crc_word1 = counts[31:16];
-  assign count_no_ack = counts[47:32];
-  assign count_no_start = counts[63:48];
-  assign count_delay_range = counts[79:64];
-  assign count_slo_stuck_low = counts[95:80];
-  assign count_lc_repeat = counts[111:96];
-  assign count_lc_skip = counts[127:112];
-  assign count_lc_zero = counts[143:128];
-  assign count_spw_mismatch = counts[159:144];
-  assign count_overrun = counts[175:160];
-  assign count_aborted = counts[191:176];
-  assign count_no_stop = counts[207:192];
-  assign count_noisy_line = counts[223:208];
-  assign count_delay_jump = counts[239:224];
-  assign count_noise_event = counts[255:240];
-  assign count_ca_crc4_error = counts[271:256];
-  assign count_ca_no_answer = counts[287:272];
-  assign count_ca_refused = counts[303:288];
-  assign count_ca_aborted = counts[319:304];
-  assign count_ca_data_fault = counts[335:320];
-  assign \ma$292  = ma;
-  assign \overrun$295  = overrun;
-  assign \done$297  = \done$296 ;
-  assign valid_out = \valid$298 ;
-  assign \status$300  = \result$301 [3:0];
-  assign timestamp = \result$301 [35:4];
-  assign line_delay = \result$301 [48:36];
-  assign \cds$304  = \result$301 [49];
-  assign noise_events = \result$301 [53:50];
-  assign delay_settled = \result$301 [54];
-  assign \settled_delay$307  = \result$301 [67:55];
-  assign delay_spread = \result$301 [75:68];
-  assign word0_position = \result$301 [130:76];
-  assign word0_ne = \result$301 [131];
-  assign word0_nw = \result$301 [132];
-  assign word0_crc_ok = \result$301 [133];
-  assign word1_position = \result$301 [173:134];
-  assign word1_ne = \result$301 [174];
-  assign word1_nw = \result$301 [175];
-  assign word1_crc_ok = \result$301 [176];
-  assign \lc$317  = \result$301 [182:177];
-  assign \lc_repeat$318  = \result$301 [183];
-  assign \lc_skip$319  = \result$301 [184];
-  assign \lc_zero$320  = \result$301 [185];
-  assign \spw_mismatch$321  = \result$301 [186];
+  assign clear_counters = \clear$263 ;
+  assign count_ca_crc4_error = counts[15:0];
+  assign count_ca_no_answer = counts[31:16];
+  assign count_ca_refused = counts[47:32];
+  assign count_ca_aborted = counts[63:48];
+  assign count_ca_data_fault = counts[79:64];
+  assign \clear$276  = \clear$263 ;
+  assign read_addr = rbuf_addr[2:0];
+  assign count_addr = rbuf_addr[2:0];
+  assign count_en = read_en;
+  assign read_data = count_data;
+  assign \ma$284  = ma;
+  assign \overrun$287  = overrun;
+  assign \done$289  = \done$288 ;
+  assign valid_out = \valid$290 ;
+  assign \status$292  = \result$293 [3:0];
+  assign timestamp = \result$293 [35:4];
+  assign line_delay = \result$293 [48:36];
+  assign \cds$296  = \result$293 [49];
+  assign noise_events = \result$293 [53:50];
+  assign delay_settled = \result$293 [54];
+  assign \settled_delay$299  = \result$293 [67:55];
+  assign delay_spread = \result$293 [75:68];
+  assign word0_position = \result$293 [130:76];
+  assign word0_ne = \result$293 [131];
+  assign word0_nw = \result$293 [132];
+  assign word0_crc_ok = \result$293 [133];
+  assign word1_position = \result$293 [173:134];
+  assign word1_ne = \result$293 [174];
+  assign word1_nw = \result$293 [175];
+  assign word1_crc_ok = \result$293 [176];
+  assign \lc$309  = \result$293 [182:177];
+  assign \lc_repeat$310  = \result$293 [183];
+  assign \lc_skip$311  = \result$293 [184];
+  assign \lc_zero$312  = \result$293 [185];
+  assign \spw_mismatch$313  = \result$293 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -24578,27 +23603,32 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$262.crc_word0  = \events$262 [0];
-  assign \events$262.crc_word1  = \events$262 [1];
-  assign \events$262.no_ack  = \events$262 [2];
-  assign \events$262.no_start  = \events$262 [3];
-  assign \events$262.delay_range  = \events$262 [4];
-  assign \events$262.slo_stuck_low  = \events$262 [5];
-  assign \events$262.lc_repeat  = \events$262 [6];
-  assign \events$262.lc_skip  = \events$262 [7];
-  assign \events$262.lc_zero  = \events$262 [8];
-  assign \events$262.spw_mismatch  = \events$262 [9];
-  assign \events$262.overrun  = \events$262 [10];
-  assign \events$262.aborted  = \events$262 [11];
-  assign \events$262.no_stop  = \events$262 [12];
-  assign \events$262.noisy_line  = \events$262 [13];
-  assign \events$262.delay_jump  = \events$262 [14];
-  assign \events$262.noise_event  = \events$262 [15];
-  assign \events$262.ca_crc4_error  = \events$262 [16];
-  assign \events$262.ca_no_answer  = \events$262 [17];
-  assign \events$262.ca_refused  = \events$262 [18];
-  assign \events$262.ca_aborted  = \events$262 [19];
-  assign \events$262.ca_data_fault  = \events$262 [20];
+  assign \events$262.ca_crc4_error  = \events$262 [0];
+  assign \events$262.ca_no_answer  = \events$262 [1];
+  assign \events$262.ca_refused  = \events$262 [2];
+  assign \events$262.ca_aborted  = \events$262 [3];
+  assign \events$262.ca_data_fault  = \events$262 [4];
+  assign \counts.ca_crc4_error  = counts[15:0];
+  assign \counts.ca_no_answer  = counts[31:16];
+  assign \counts.ca_refused  = counts[47:32];
+  assign \counts.ca_aborted  = counts[63:48];
+  assign \counts.ca_data_fault  = counts[79:64];
+  assign \events$271.crc_word0  = \events$271 [0];
+  assign \events$271.crc_word1  = \events$271 [1];
+  assign \events$271.no_ack  = \events$271 [2];
+  assign \events$271.no_start  = \events$271 [3];
+  assign \events$271.delay_range  = \events$271 [4];
+  assign \events$271.slo_stuck_low  = \events$271 [5];
+  assign \events$271.lc_repeat  = \events$271 [6];
+  assign \events$271.lc_skip  = \events$271 [7];
+  assign \events$271.lc_zero  = \events$271 [8];
+  assign \events$271.spw_mismatch  = \events$271 [9];
+  assign \events$271.overrun  = \events$271 [10];
+  assign \events$271.aborted  = \events$271 [11];
+  assign \events$271.no_stop  = \events$271 [12];
+  assign \events$271.noisy_line  = \events$271 [13];
+  assign \events$271.delay_jump  = \events$271 [14];
+  assign \events$271.noise_event  = \events$271 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -24606,71 +23636,50 @@ module \biss_master_uart.ch1.core (clk, rst, ca_wbuf_en, rbuf_en, trigger, \busy
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \counts.crc_word0  = counts[15:0];
-  assign \counts.crc_word1  = counts[31:16];
-  assign \counts.no_ack  = counts[47:32];
-  assign \counts.no_start  = counts[63:48];
-  assign \counts.delay_range  = counts[79:64];
-  assign \counts.slo_stuck_low  = counts[95:80];
-  assign \counts.lc_repeat  = counts[111:96];
-  assign \counts.lc_skip  = counts[127:112];
-  assign \counts.lc_zero  = counts[143:128];
-  assign \counts.spw_mismatch  = counts[159:144];
-  assign \counts.overrun  = counts[175:160];
-  assign \counts.aborted  = counts[191:176];
-  assign \counts.no_stop  = counts[207:192];
-  assign \counts.noisy_line  = counts[223:208];
-  assign \counts.delay_jump  = counts[239:224];
-  assign \counts.noise_event  = counts[255:240];
-  assign \counts.ca_crc4_error  = counts[271:256];
-  assign \counts.ca_no_answer  = counts[287:272];
-  assign \counts.ca_refused  = counts[303:288];
-  assign \counts.ca_aborted  = counts[319:304];
-  assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$301.status  = \result$301 [3:0];
-  assign \result$301.timestamp  = \result$301 [35:4];
-  assign \result$301.line_delay  = \result$301 [48:36];
-  assign \result$301.cds  = \result$301 [49];
-  assign \result$301.noise_events  = \result$301 [53:50];
-  assign \result$301.delay_settled  = \result$301 [54];
-  assign \result$301.settled_delay  = \result$301 [67:55];
-  assign \result$301.delay_spread  = \result$301 [75:68];
-  assign \result$301.word0  = \result$301 [133:76];
-  assign \result$301.word0.position  = \result$301 [130:76];
-  assign \result$301.word0.ne  = \result$301 [131];
-  assign \result$301.word0.nw  = \result$301 [132];
-  assign \result$301.word0.crc_ok  = \result$301 [133];
-  assign \result$301.word1  = \result$301 [176:134];
-  assign \result$301.word1.position  = \result$301 [173:134];
-  assign \result$301.word1.ne  = \result$301 [174];
-  assign \result$301.word1.nw  = \result$301 [175];
-  assign \result$301.word1.crc_ok  = \result$301 [176];
-  assign \result$301.lc  = \result$301 [182:177];
-  assign \result$301.lc_repeat  = \result$301 [183];
-  assign \result$301.lc_skip  = \result$301 [184];
-  assign \result$301.lc_zero  = \result$301 [185];
-  assign \result$301.spw_mismatch  = \result$301 [186];
-  assign \events$262 [20] = \$16 ;
-  assign \events$262 [19] = \$14 ;
-  assign \events$262 [18] = \$12 ;
-  assign \events$262 [17] = \$10 ;
-  assign \events$262 [16] = \$8 ;
-  assign \events$262 [15] = \event ;
-  assign \events$262 [14] = \$6 ;
-  assign \events$262 [13] = \$4 ;
-  assign \events$262 [12] = faults[6];
-  assign \events$262 [11] = faults[4];
-  assign \events$262 [10] = overrun;
-  assign \events$262 [9] = \$2 ;
-  assign \events$262 [8] = lc_zero;
-  assign \events$262 [7] = lc_skip;
-  assign \events$262 [6] = lc_repeat;
-  assign \events$262 [5] = faults[3];
-  assign \events$262 [4] = faults[2];
-  assign \events$262 [3] = faults[1];
-  assign \events$262 [2] = faults[0];
-  assign \events$262 [1] = crc_error[1];
-  assign \events$262 [0] = crc_error[0];
+  assign \result$293.status  = \result$293 [3:0];
+  assign \result$293.timestamp  = \result$293 [35:4];
+  assign \result$293.line_delay  = \result$293 [48:36];
+  assign \result$293.cds  = \result$293 [49];
+  assign \result$293.noise_events  = \result$293 [53:50];
+  assign \result$293.delay_settled  = \result$293 [54];
+  assign \result$293.settled_delay  = \result$293 [67:55];
+  assign \result$293.delay_spread  = \result$293 [75:68];
+  assign \result$293.word0  = \result$293 [133:76];
+  assign \result$293.word0.position  = \result$293 [130:76];
+  assign \result$293.word0.ne  = \result$293 [131];
+  assign \result$293.word0.nw  = \result$293 [132];
+  assign \result$293.word0.crc_ok  = \result$293 [133];
+  assign \result$293.word1  = \result$293 [176:134];
+  assign \result$293.word1.position  = \result$293 [173:134];
+  assign \result$293.word1.ne  = \result$293 [174];
+  assign \result$293.word1.nw  = \result$293 [175];
+  assign \result$293.word1.crc_ok  = \result$293 [176];
+  assign \result$293.lc  = \result$293 [182:177];
+  assign \result$293.lc_repeat  = \result$293 [183];
+  assign \result$293.lc_skip  = \result$293 [184];
+  assign \result$293.lc_zero  = \result$293 [185];
+  assign \result$293.spw_mismatch  = \result$293 [186];
+  assign \events$271 [15] = \event ;
+  assign \events$271 [14] = \$16 ;
+  assign \events$271 [13] = \$14 ;
+  assign \events$271 [12] = faults[6];
+  assign \events$271 [11] = faults[4];
+  assign \events$271 [10] = overrun;
+  assign \events$271 [9] = \$12 ;
+  assign \events$271 [8] = lc_zero;
+  assign \events$271 [7] = lc_skip;
+  assign \events$271 [6] = lc_repeat;
+  assign \events$271 [5] = faults[3];
+  assign \events$271 [4] = faults[2];
+  assign \events$271 [3] = faults[1];
+  assign \events$271 [2] = faults[0];
+  assign \events$271 [1] = crc_error[1];
+  assign \events$271 [0] = crc_error[0];
+  assign \events$262 [4] = \$11 ;
+  assign \events$262 [3] = \$9 ;
+  assign \events$262 [2] = \$7 ;
+  assign \events$262 [1] = \$5 ;
+  assign \events$262 [0] = \$3 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
@@ -24740,7 +23749,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crcs, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -25018,14 +24027,14 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$31  = \$29  & \$30 ;
   assign \$32  = \$26  | \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$59  = \$46 ;
     if (rst) begin
       \$59  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$60  = cycle;
     if (idle) begin
       \$60  = live;
@@ -25035,7 +24044,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$61  = ack_limit;
     if (idle) begin
       \$61  = \$48 ;
@@ -25045,7 +24054,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$62  = timeout_limit;
     if (idle) begin
       \$62  = \$50 ;
@@ -25055,7 +24064,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$63  = delay_limit;
     if (idle) begin
       \$63  = \$52 ;
@@ -25065,7 +24074,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$64  = quiet_time;
     if (idle) begin
       \$64  = \$54 ;
@@ -25075,7 +24084,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$65  = delay_tolerance;
     if (idle) begin
       \$65  = \$57 ;
@@ -25085,7 +24094,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$66  = crcs;
     if (idle) begin
       (* full_case = 32'd1 *)
@@ -25136,7 +24145,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$67  = \$58 ;
     if (rst) begin
       \$67  = 25'h0000000;
@@ -25232,7 +24241,7 @@ endmodule
 module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
 , slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -25567,7 +24576,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     .report_frame(report_frame)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25575,7 +24584,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25622,7 +24631,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     waiting = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25634,7 +24643,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25646,7 +24655,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25695,7 +24704,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25744,7 +24753,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25760,7 +24769,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25774,7 +24783,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25788,7 +24797,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     framing = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25804,7 +24813,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25835,7 +24844,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25853,7 +24862,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     holding = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25876,14 +24885,14 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$27  = idle;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$28  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25974,7 +24983,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$29  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -26065,7 +25074,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$30  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -26156,7 +25165,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$31  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -26225,7 +25234,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -26264,7 +25273,7 @@ module \biss_master_uart.ch1.core.controller.cdm_hold (rst, abort, framing, hold
   assign \$1  = ~ abort;
   assign \$2  = cdm_cycle & \$1 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$7  = cdm_cycle;
     if (idle) begin
       \$7  = cdm;
@@ -26274,7 +25283,7 @@ module \biss_master_uart.ch1.core.controller.cdm_hold (rst, abort, framing, hold
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     ma_hold = 1'h0;
     if (framing) begin
       ma_hold = \$2 ;
@@ -26286,7 +25295,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -26383,7 +25392,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
   always @(posedge clk)
     locked_seen <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$20  = armed;
     if (clear) begin
       \$20  = 1'h0;
@@ -26396,7 +25405,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$21  = locked_seen;
     if (clear) begin
       \$21  = 1'h0;
@@ -26409,7 +25418,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     fault = 1'h0;
     if (\$7 ) begin
       fault = 1'h1;
@@ -26422,7 +25431,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     status = 4'h0;
     if (\$7 ) begin
       status = 4'h8;
@@ -26435,7 +25444,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     delay = 1'h0;
     if (\$7 ) begin
     end else if (\$12 ) begin
@@ -26447,7 +25456,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -26481,7 +25490,7 @@ module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
   assign \$4  = first_clock ? quiet_live : quiet;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     aborted = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -26489,7 +25498,7 @@ module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     ready = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -26498,7 +25507,7 @@ module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     stuck_low = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -26508,7 +25517,7 @@ module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
@@ -26621,109 +25630,186 @@ module \biss_master_uart.ch1.core.controller.report (fault, fault_status, report
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters (rst, clear, events, counts, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
-  reg [20:0] \$1 ;
-  reg \$2 ;
+module \biss_master_uart.ch1.core.counter_ram (rst, host__en, read_data, host__addr, clear, events, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire [3:0] \$100 ;
+  wire [4:0] \$101 ;
+  wire \$102 ;
+  wire \$103 ;
+  wire \$104 ;
+  wire [3:0] \$105 ;
+  wire [4:0] \$106 ;
+  wire \$107 ;
+  wire \$108 ;
+  wire \$109 ;
+  wire \$11 ;
+  wire [3:0] \$110 ;
+  wire [4:0] \$111 ;
+  wire \$112 ;
+  wire \$113 ;
+  wire \$114 ;
+  wire [3:0] \$115 ;
+  wire [4:0] \$116 ;
+  wire \$117 ;
+  wire \$118 ;
+  wire \$119 ;
+  wire \$12 ;
+  wire [3:0] \$120 ;
+  wire [4:0] \$121 ;
+  wire \$122 ;
+  wire \$123 ;
+  wire \$124 ;
+  wire [3:0] \$125 ;
+  wire [4:0] \$126 ;
+  wire \$127 ;
+  wire \$128 ;
+  wire \$129 ;
+  wire \$13 ;
+  wire [3:0] \$130 ;
+  wire [4:0] \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
+  wire [3:0] \$135 ;
+  wire [4:0] \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
+  wire \$14 ;
+  wire [3:0] \$140 ;
+  wire [4:0] \$141 ;
+  wire \$142 ;
+  reg \$143 ;
+  reg [2:0] \$144 ;
+  reg [2:0] \$145 ;
+  reg [3:0] \$146 ;
+  reg [3:0] \$147 ;
+  reg [1:0] \$148 ;
+  reg [3:0] \$149 ;
+  wire \$15 ;
+  reg [3:0] \$150 ;
+  reg [3:0] \$151 ;
+  reg [3:0] \$152 ;
+  reg [3:0] \$153 ;
+  reg [3:0] \$154 ;
+  reg [3:0] \$155 ;
+  reg [3:0] \$156 ;
+  reg [3:0] \$157 ;
+  reg [3:0] \$158 ;
+  reg [3:0] \$159 ;
+  wire \$16 ;
+  reg [3:0] \$160 ;
+  reg [3:0] \$161 ;
+  reg [3:0] \$162 ;
+  reg [3:0] \$163 ;
+  reg [3:0] \$164 ;
+  reg [15:0] \$165 ;
+  wire \$17 ;
+  wire \$18 ;
+  wire \$19 ;
+  wire \$2 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire [4:0] \$228 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire \$25 ;
+  wire \$26 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
+  wire \$3 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
+  wire \$4 ;
+  wire \$40 ;
+  wire [7:0] \$41 ;
+  wire [7:0] \$42 ;
+  wire [7:0] \$43 ;
+  wire [8:0] \$44 ;
+  wire [9:0] \$45 ;
+  wire [9:0] \$46 ;
+  wire [9:0] \$47 ;
+  wire \$48 ;
+  wire [15:0] \$49 ;
+  wire \$5 ;
+  wire [16:0] \$50 ;
+  wire [15:0] \$51 ;
+  wire [16:0] \$52 ;
+  wire \$53 ;
+  wire [19:0] \$54 ;
+  wire \$55 ;
+  wire [19:0] \$56 ;
+  wire \$57 ;
+  wire \$58 ;
+  reg [3:0] \$59 ;
+  wire \$6 ;
+  reg [3:0] \$60 ;
+  wire [1:0] \$61 ;
+  wire \$62 ;
+  wire \$63 ;
+  wire \$64 ;
+  wire [3:0] \$65 ;
+  wire [4:0] \$66 ;
+  wire \$67 ;
+  wire \$68 ;
+  wire \$69 ;
+  wire \$7 ;
+  wire [3:0] \$70 ;
+  wire [4:0] \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire [3:0] \$75 ;
+  wire [4:0] \$76 ;
+  wire \$77 ;
+  wire \$78 ;
+  wire \$79 ;
+  wire \$8 ;
+  wire [3:0] \$80 ;
+  wire [4:0] \$81 ;
+  wire \$82 ;
+  wire \$83 ;
+  wire \$84 ;
+  wire [3:0] \$85 ;
+  wire [4:0] \$86 ;
+  wire \$87 ;
+  wire \$88 ;
+  wire \$89 ;
+  wire \$9 ;
+  wire [3:0] \$90 ;
+  wire [4:0] \$91 ;
+  wire \$92 ;
+  wire \$93 ;
+  wire \$94 ;
+  wire [3:0] \$95 ;
+  wire [4:0] \$96 ;
+  wire \$97 ;
+  wire \$98 ;
+  wire \$99 ;
+  wire [7:0] above;
+  reg [3:0] amount_0 = 4'h0;
+  reg [3:0] amount_1 = 4'h0;
+  reg busy = 1'h0;
   input clear;
   wire clear;
-  (* init = 1'h0 *)
-  wire \clear$11 ;
-  (* init = 1'h0 *)
-  wire \clear$14 ;
-  (* init = 1'h0 *)
-  wire \clear$17 ;
-  (* init = 1'h0 *)
-  wire \clear$20 ;
-  (* init = 1'h0 *)
-  wire \clear$23 ;
-  (* init = 1'h0 *)
-  wire \clear$26 ;
-  (* init = 1'h0 *)
-  wire \clear$29 ;
-  (* init = 1'h0 *)
-  wire \clear$32 ;
-  (* init = 1'h0 *)
-  wire \clear$35 ;
-  (* init = 1'h0 *)
-  wire \clear$38 ;
-  (* init = 1'h0 *)
-  wire \clear$41 ;
-  (* init = 1'h0 *)
-  wire \clear$44 ;
-  (* init = 1'h0 *)
-  wire \clear$47 ;
-  (* init = 1'h0 *)
-  wire \clear$50 ;
-  (* init = 1'h0 *)
-  wire \clear$53 ;
-  (* init = 1'h0 *)
-  wire \clear$56 ;
-  (* init = 1'h0 *)
-  wire \clear$59 ;
-  (* init = 1'h0 *)
-  wire \clear$62 ;
-  (* init = 1'h0 *)
-  wire \clear$65 ;
-  (* init = 1'h0 *)
-  wire \clear$68 ;
-  (* init = 1'h0 *)
-  wire \clear$7 ;
-  reg clear_reg = 1'h0;
   input clk;
   wire clk;
-  wire [15:0] count;
-  wire [15:0] \count$12 ;
-  wire [15:0] \count$15 ;
-  wire [15:0] \count$18 ;
-  wire [15:0] \count$21 ;
-  wire [15:0] \count$24 ;
-  wire [15:0] \count$27 ;
-  wire [15:0] \count$30 ;
-  wire [15:0] \count$33 ;
-  wire [15:0] \count$36 ;
-  wire [15:0] \count$39 ;
-  wire [15:0] \count$42 ;
-  wire [15:0] \count$45 ;
-  wire [15:0] \count$48 ;
-  wire [15:0] \count$51 ;
-  wire [15:0] \count$54 ;
-  wire [15:0] \count$57 ;
-  wire [15:0] \count$60 ;
-  wire [15:0] \count$63 ;
-  wire [15:0] \count$66 ;
-  wire [15:0] \count$69 ;
-  output [335:0] counts;
-  wire [335:0] counts;
-  wire [15:0] \counts.aborted ;
-  wire [15:0] \counts.ca_aborted ;
-  wire [15:0] \counts.ca_crc4_error ;
-  wire [15:0] \counts.ca_data_fault ;
-  wire [15:0] \counts.ca_no_answer ;
-  wire [15:0] \counts.ca_refused ;
-  wire [15:0] \counts.crc_word0 ;
-  wire [15:0] \counts.crc_word1 ;
-  wire [15:0] \counts.delay_jump ;
-  wire [15:0] \counts.delay_range ;
-  wire [15:0] \counts.lc_repeat ;
-  wire [15:0] \counts.lc_skip ;
-  wire [15:0] \counts.lc_zero ;
-  wire [15:0] \counts.no_ack ;
-  wire [15:0] \counts.no_start ;
-  wire [15:0] \counts.no_stop ;
-  wire [15:0] \counts.noise_event ;
-  wire [15:0] \counts.noisy_line ;
-  wire [15:0] \counts.overrun ;
-  wire [15:0] \counts.slo_stuck_low ;
-  wire [15:0] \counts.spw_mismatch ;
-  input [20:0] events;
-  wire [20:0] events;
+  wire [7:0] due;
+  input [15:0] events;
+  wire [15:0] events;
   wire \events.aborted ;
-  wire \events.ca_aborted ;
-  wire \events.ca_crc4_error ;
-  wire \events.ca_data_fault ;
-  wire \events.ca_no_answer ;
-  wire \events.ca_refused ;
   wire \events.crc_word0 ;
   wire \events.crc_word1 ;
   wire \events.delay_jump ;
@@ -26739,279 +25825,651 @@ module \biss_master_uart.ch1.core.counters (rst, clear, events, counts, clk);
   wire \events.overrun ;
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
-  reg [20:0] events_reg = 21'h000000;
-  wire \events_reg.aborted ;
-  wire \events_reg.ca_aborted ;
-  wire \events_reg.ca_crc4_error ;
-  wire \events_reg.ca_data_fault ;
-  wire \events_reg.ca_no_answer ;
-  wire \events_reg.ca_refused ;
-  wire \events_reg.crc_word0 ;
-  wire \events_reg.crc_word1 ;
-  wire \events_reg.delay_jump ;
-  wire \events_reg.delay_range ;
-  wire \events_reg.lc_repeat ;
-  wire \events_reg.lc_skip ;
-  wire \events_reg.lc_zero ;
-  wire \events_reg.no_ack ;
-  wire \events_reg.no_start ;
-  wire \events_reg.no_stop ;
-  wire \events_reg.noise_event ;
-  wire \events_reg.noisy_line ;
-  wire \events_reg.overrun ;
-  wire \events_reg.slo_stuck_low ;
-  wire \events_reg.spw_mismatch ;
-  wire inc;
-  wire \inc$10 ;
-  wire \inc$13 ;
-  wire \inc$16 ;
-  wire \inc$19 ;
-  wire \inc$22 ;
-  wire \inc$25 ;
-  wire \inc$28 ;
-  wire \inc$31 ;
-  wire \inc$34 ;
-  wire \inc$37 ;
-  wire \inc$40 ;
-  wire \inc$43 ;
-  wire \inc$46 ;
-  wire \inc$49 ;
-  wire \inc$52 ;
-  wire \inc$55 ;
-  wire \inc$58 ;
-  wire \inc$61 ;
-  wire \inc$64 ;
-  wire \inc$67 ;
+  input [2:0] host__addr;
+  wire [2:0] host__addr;
+  wire [31:0] host__data;
+  input host__en;
+  wire host__en;
+  reg [2:0] last = 3'h0;
+  reg [15:0] marked = 16'hffff;
+  reg [3:0] pending_0 = 4'h0;
+  reg [3:0] pending_1 = 4'h0;
+  reg [3:0] pending_10 = 4'h0;
+  reg [3:0] pending_11 = 4'h0;
+  reg [3:0] pending_12 = 4'h0;
+  reg [3:0] pending_13 = 4'h0;
+  reg [3:0] pending_14 = 4'h0;
+  reg [3:0] pending_15 = 4'h0;
+  reg [3:0] pending_2 = 4'h0;
+  reg [3:0] pending_3 = 4'h0;
+  reg [3:0] pending_4 = 4'h0;
+  reg [3:0] pending_5 = 4'h0;
+  reg [3:0] pending_6 = 4'h0;
+  reg [3:0] pending_7 = 4'h0;
+  reg [3:0] pending_8 = 4'h0;
+  reg [3:0] pending_9 = 4'h0;
+  reg [2:0] pick;
+  wire [2:0] read_addr;
+  output [31:0] read_data;
+  wire [31:0] read_data;
+  wire read_en;
   input rst;
   wire rst;
+  wire [19:0] total_0;
+  wire [19:0] total_1;
+  wire [2:0] update__addr;
+  wire [31:0] update__data;
+  wire update__en;
+  reg [2:0] word = 3'h0;
+  (* init = 3'h0 *)
+  wire [2:0] write__addr;
+  wire [31:0] write__data;
+  (* init = 1'h0 *)
+  wire write__en;
+  reg [1:0] zero = 2'h0;
+  reg [31:0] memory [7:0];
+  initial begin
+    memory[0] = 32'd0;
+    memory[1] = 32'd0;
+    memory[2] = 32'd0;
+    memory[3] = 32'd0;
+    memory[4] = 32'd0;
+    memory[5] = 32'd0;
+    memory[6] = 32'd0;
+    memory[7] = 32'd0;
+  end
+  always @(posedge clk) begin
+    if (busy)
+      memory[word] <= { \$56 [15:0], \$54 [15:0] };
+  end
+  reg [31:0] _0_;
+  reg [31:0] _1_;
+  always @(posedge clk) begin
+    if (host__en) begin
+      _0_ <= memory[host__addr];
+    end
+    if (update__en) begin
+      _1_ <= memory[pick];
+    end
+  end
+  assign read_data = _0_;
+  assign update__data = _1_;
+  assign \$1  = | pending_0;
+  assign \$2  = | pending_1;
+  assign \$3  = \$1  | \$2 ;
+  assign \$4  = \$3  | marked[0];
+  assign \$5  = \$4  | marked[1];
+  assign \$6  = | pending_2;
+  assign \$7  = | pending_3;
+  assign \$8  = \$6  | \$7 ;
+  assign \$9  = \$8  | marked[2];
+  assign \$10  = \$9  | marked[3];
+  assign \$11  = | pending_4;
+  assign \$12  = | pending_5;
+  assign \$13  = \$11  | \$12 ;
+  assign \$14  = \$13  | marked[4];
+  assign \$15  = \$14  | marked[5];
+  assign \$16  = | pending_6;
+  assign \$17  = | pending_7;
+  assign \$18  = \$16  | \$17 ;
+  assign \$19  = \$18  | marked[6];
+  assign \$20  = \$19  | marked[7];
+  assign \$21  = | pending_8;
+  assign \$22  = | pending_9;
+  assign \$23  = \$21  | \$22 ;
+  assign \$24  = \$23  | marked[8];
+  assign \$25  = \$24  | marked[9];
+  assign \$26  = | pending_10;
+  assign \$27  = | pending_11;
+  assign \$28  = \$26  | \$27 ;
+  assign \$29  = \$28  | marked[10];
+  assign \$30  = \$29  | marked[11];
+  assign \$31  = | pending_12;
+  assign \$32  = | pending_13;
+  assign \$33  = \$31  | \$32 ;
+  assign \$34  = \$33  | marked[12];
+  assign \$35  = \$34  | marked[13];
+  assign \$36  = | pending_14;
+  assign \$37  = | pending_15;
+  assign \$38  = \$36  | \$37 ;
+  assign \$39  = \$38  | marked[14];
+  assign \$40  = \$39  | marked[15];
+  assign \$41  = 1'h1 << word;
+  assign \$42  = busy ? \$41  : 8'h00;
+  assign \$43  = ~ \$42 ;
+  assign due = { \$40 , \$35 , \$30 , \$25 , \$20 , \$15 , \$10 , \$5  } & \$43 ;
+  assign \$44  = 2'h2 << last;
+  assign \$45  = \$44  - 1'h1;
+  assign \$46  = ~ \$45 ;
+  assign \$47  = { 2'h0, due } & \$46 ;
+  assign \$48  = | \$47 [7:0];
+  assign update__en = | due;
+  assign \$49  = zero[0] ? 16'h0000 : update__data[15:0];
+  assign \$50  = \$49  + amount_0;
+  assign \$51  = zero[1] ? 16'h0000 : update__data[31:16];
+  assign \$52  = \$51  + amount_1;
+  assign \$53  = \$50  > 16'hffff;
+  assign \$54  = \$53  ? 20'h0ffff : { 3'h0, \$50  };
+  assign \$55  = \$52  > 16'hffff;
+  assign \$56  = \$55  ? 20'h0ffff : { 3'h0, \$52  };
+  assign \$57  = | due;
+  assign \$58  = | due;
+  assign \$228  = pick * 2'h2;
+  assign \$61  = marked >> \$228 ;
+  assign \$62  = | due;
+  assign \$63  = ! pick;
+  assign \$64  = \$62  & \$63 ;
+  assign \$65  = \$64  ? 4'h0 : pending_0;
+  assign \$66  = \$65  + events[0];
+  assign \$67  = | due;
+  assign \$68  = ! pick;
+  assign \$69  = \$67  & \$68 ;
+  assign \$70  = \$69  ? 4'h0 : pending_1;
+  assign \$71  = \$70  + events[1];
+  assign \$72  = | due;
+  assign \$73  = pick == 1'h1;
+  assign \$74  = \$72  & \$73 ;
+  assign \$75  = \$74  ? 4'h0 : pending_2;
+  assign \$76  = \$75  + events[2];
+  assign \$77  = | due;
+  assign \$78  = pick == 1'h1;
+  assign \$79  = \$77  & \$78 ;
+  assign \$80  = \$79  ? 4'h0 : pending_3;
+  assign \$81  = \$80  + events[3];
+  assign \$82  = | due;
+  assign \$83  = pick == 2'h2;
+  assign \$84  = \$82  & \$83 ;
+  assign \$85  = \$84  ? 4'h0 : pending_4;
+  assign \$86  = \$85  + events[4];
+  assign \$87  = | due;
+  assign \$88  = pick == 2'h2;
+  assign \$89  = \$87  & \$88 ;
+  assign \$90  = \$89  ? 4'h0 : pending_5;
+  assign \$91  = \$90  + events[5];
+  assign \$92  = | due;
+  assign \$93  = pick == 2'h3;
+  assign \$94  = \$92  & \$93 ;
+  assign \$95  = \$94  ? 4'h0 : pending_6;
+  assign \$96  = \$95  + events[6];
+  assign \$97  = | due;
+  assign \$98  = pick == 2'h3;
+  assign \$99  = \$97  & \$98 ;
+  assign \$100  = \$99  ? 4'h0 : pending_7;
+  assign \$101  = \$100  + events[7];
+  assign \$102  = | due;
+  assign \$103  = pick == 3'h4;
+  assign \$104  = \$102  & \$103 ;
+  assign \$105  = \$104  ? 4'h0 : pending_8;
+  assign \$106  = \$105  + events[8];
+  assign \$107  = | due;
+  assign \$108  = pick == 3'h4;
+  assign \$109  = \$107  & \$108 ;
+  assign \$110  = \$109  ? 4'h0 : pending_9;
+  assign \$111  = \$110  + events[9];
+  assign \$112  = | due;
+  assign \$113  = pick == 3'h5;
+  assign \$114  = \$112  & \$113 ;
+  assign \$115  = \$114  ? 4'h0 : pending_10;
+  assign \$116  = \$115  + events[10];
+  assign \$117  = | due;
+  assign \$118  = pick == 3'h5;
+  assign \$119  = \$117  & \$118 ;
+  assign \$120  = \$119  ? 4'h0 : pending_11;
+  assign \$121  = \$120  + events[11];
+  assign \$122  = | due;
+  assign \$123  = pick == 3'h6;
+  assign \$124  = \$122  & \$123 ;
+  assign \$125  = \$124  ? 4'h0 : pending_12;
+  assign \$126  = \$125  + events[12];
+  assign \$127  = | due;
+  assign \$128  = pick == 3'h6;
+  assign \$129  = \$127  & \$128 ;
+  assign \$130  = \$129  ? 4'h0 : pending_13;
+  assign \$131  = \$130  + events[13];
+  assign \$132  = | due;
+  assign \$133  = pick == 3'h7;
+  assign \$134  = \$132  & \$133 ;
+  assign \$135  = \$134  ? 4'h0 : pending_14;
+  assign \$136  = \$135  + events[14];
+  assign \$137  = | due;
+  assign \$138  = pick == 3'h7;
+  assign \$139  = \$137  & \$138 ;
+  assign \$140  = \$139  ? 4'h0 : pending_15;
+  assign \$141  = \$140  + events[15];
+  assign \$142  = | due;
   always @(posedge clk)
-    events_reg <= \$1 ;
+    busy <= \$143 ;
   always @(posedge clk)
-    clear_reg <= \$2 ;
-  \biss_master_uart.ch1.core.counters.count_aborted  count_aborted (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$42 ),
-    .inc(events_reg[11]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_ca_aborted  count_ca_aborted (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$66 ),
-    .inc(events_reg[19]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_ca_crc4_error  count_ca_crc4_error (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$57 ),
-    .inc(events_reg[16]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_ca_data_fault  count_ca_data_fault (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$69 ),
-    .inc(events_reg[20]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_ca_no_answer  count_ca_no_answer (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$60 ),
-    .inc(events_reg[17]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_ca_refused  count_ca_refused (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$63 ),
-    .inc(events_reg[18]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_crc_word0  count_crc_word0 (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(count),
-    .inc(events_reg[0]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_crc_word1  count_crc_word1 (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$12 ),
-    .inc(events_reg[1]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_delay_jump  count_delay_jump (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$51 ),
-    .inc(events_reg[14]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_delay_range  count_delay_range (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$21 ),
-    .inc(events_reg[4]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_lc_repeat  count_lc_repeat (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$27 ),
-    .inc(events_reg[6]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_lc_skip  count_lc_skip (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$30 ),
-    .inc(events_reg[7]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_lc_zero  count_lc_zero (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$33 ),
-    .inc(events_reg[8]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_no_ack  count_no_ack (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$15 ),
-    .inc(events_reg[2]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_no_start  count_no_start (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$18 ),
-    .inc(events_reg[3]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_no_stop  count_no_stop (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$45 ),
-    .inc(events_reg[12]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_noise_event  count_noise_event (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$54 ),
-    .inc(events_reg[15]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_noisy_line  count_noisy_line (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$48 ),
-    .inc(events_reg[13]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_overrun  count_overrun (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$39 ),
-    .inc(events_reg[10]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_slo_stuck_low  count_slo_stuck_low (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$24 ),
-    .inc(events_reg[5]),
-    .rst(rst)
-  );
-  \biss_master_uart.ch1.core.counters.count_spw_mismatch  count_spw_mismatch (
-    .clear(clear_reg),
-    .clk(clk),
-    .count(\count$36 ),
-    .inc(events_reg[9]),
-    .rst(rst)
-  );
+    word <= \$144 ;
+  always @(posedge clk)
+    last <= \$145 ;
+  always @(posedge clk)
+    amount_0 <= \$146 ;
+  always @(posedge clk)
+    amount_1 <= \$147 ;
+  always @(posedge clk)
+    zero <= \$148 ;
+  always @(posedge clk)
+    pending_0 <= \$149 ;
+  always @(posedge clk)
+    pending_1 <= \$150 ;
+  always @(posedge clk)
+    pending_2 <= \$151 ;
+  always @(posedge clk)
+    pending_3 <= \$152 ;
+  always @(posedge clk)
+    pending_4 <= \$153 ;
+  always @(posedge clk)
+    pending_5 <= \$154 ;
+  always @(posedge clk)
+    pending_6 <= \$155 ;
+  always @(posedge clk)
+    pending_7 <= \$156 ;
+  always @(posedge clk)
+    pending_8 <= \$157 ;
+  always @(posedge clk)
+    pending_9 <= \$158 ;
+  always @(posedge clk)
+    pending_10 <= \$159 ;
+  always @(posedge clk)
+    pending_11 <= \$160 ;
+  always @(posedge clk)
+    pending_12 <= \$161 ;
+  always @(posedge clk)
+    pending_13 <= \$162 ;
+  always @(posedge clk)
+    pending_14 <= \$163 ;
+  always @(posedge clk)
+    pending_15 <= \$164 ;
+  always @(posedge clk)
+    marked <= \$165 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$1  = events;
-    if (rst) begin
-      \$1  = 21'h000000;
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    casez (pick)
+      3'h0:
+          \$59  = pending_0;
+      3'h1:
+          \$59  = pending_2;
+      3'h2:
+          \$59  = pending_4;
+      3'h3:
+          \$59  = pending_6;
+      3'h4:
+          \$59  = pending_8;
+      3'h5:
+          \$59  = pending_10;
+      3'h6:
+          \$59  = pending_12;
+      3'h7:
+          \$59  = pending_14;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    casez (pick)
+      3'h0:
+          \$60  = pending_1;
+      3'h1:
+          \$60  = pending_3;
+      3'h2:
+          \$60  = pending_5;
+      3'h3:
+          \$60  = pending_7;
+      3'h4:
+          \$60  = pending_9;
+      3'h5:
+          \$60  = pending_11;
+      3'h6:
+          \$60  = pending_13;
+      3'h7:
+          \$60  = pending_15;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    pick = 3'h0;
+    if (due[7]) begin
+      pick = 3'h7;
+    end
+    if (due[6]) begin
+      pick = 3'h6;
+    end
+    if (due[5]) begin
+      pick = 3'h5;
+    end
+    if (due[4]) begin
+      pick = 3'h4;
+    end
+    if (due[3]) begin
+      pick = 3'h3;
+    end
+    if (due[2]) begin
+      pick = 3'h2;
+    end
+    if (due[1]) begin
+      pick = 3'h1;
+    end
+    if (due[0]) begin
+      pick = 3'h0;
+    end
+    if (\$48 ) begin
+      if (\$47 [7]) begin
+        pick = 3'h7;
+      end
+      if (\$47 [6]) begin
+        pick = 3'h6;
+      end
+      if (\$47 [5]) begin
+        pick = 3'h5;
+      end
+      if (\$47 [4]) begin
+        pick = 3'h4;
+      end
+      if (\$47 [3]) begin
+        pick = 3'h3;
+      end
+      if (\$47 [2]) begin
+        pick = 3'h2;
+      end
+      if (\$47 [1]) begin
+        pick = 3'h1;
+      end
+      if (\$47 [0]) begin
+        pick = 3'h0;
+      end
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$2  = clear;
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$143  = \$57 ;
     if (rst) begin
-      \$2  = 1'h0;
+      \$143  = 1'h0;
     end
   end
-  assign inc = events_reg[0];
-  assign \clear$7  = clear_reg;
-  assign \inc$10  = events_reg[1];
-  assign \clear$11  = clear_reg;
-  assign \inc$13  = events_reg[2];
-  assign \clear$14  = clear_reg;
-  assign \inc$16  = events_reg[3];
-  assign \clear$17  = clear_reg;
-  assign \inc$19  = events_reg[4];
-  assign \clear$20  = clear_reg;
-  assign \inc$22  = events_reg[5];
-  assign \clear$23  = clear_reg;
-  assign \inc$25  = events_reg[6];
-  assign \clear$26  = clear_reg;
-  assign \inc$28  = events_reg[7];
-  assign \clear$29  = clear_reg;
-  assign \inc$31  = events_reg[8];
-  assign \clear$32  = clear_reg;
-  assign \inc$34  = events_reg[9];
-  assign \clear$35  = clear_reg;
-  assign \inc$37  = events_reg[10];
-  assign \clear$38  = clear_reg;
-  assign \inc$40  = events_reg[11];
-  assign \clear$41  = clear_reg;
-  assign \inc$43  = events_reg[12];
-  assign \clear$44  = clear_reg;
-  assign \inc$46  = events_reg[13];
-  assign \clear$47  = clear_reg;
-  assign \inc$49  = events_reg[14];
-  assign \clear$50  = clear_reg;
-  assign \inc$52  = events_reg[15];
-  assign \clear$53  = clear_reg;
-  assign \inc$55  = events_reg[16];
-  assign \clear$56  = clear_reg;
-  assign \inc$58  = events_reg[17];
-  assign \clear$59  = clear_reg;
-  assign \inc$61  = events_reg[18];
-  assign \clear$62  = clear_reg;
-  assign \inc$64  = events_reg[19];
-  assign \clear$65  = clear_reg;
-  assign \inc$67  = events_reg[20];
-  assign \clear$68  = clear_reg;
-  assign \events_reg.crc_word0  = events_reg[0];
-  assign \events_reg.crc_word1  = events_reg[1];
-  assign \events_reg.no_ack  = events_reg[2];
-  assign \events_reg.no_start  = events_reg[3];
-  assign \events_reg.delay_range  = events_reg[4];
-  assign \events_reg.slo_stuck_low  = events_reg[5];
-  assign \events_reg.lc_repeat  = events_reg[6];
-  assign \events_reg.lc_skip  = events_reg[7];
-  assign \events_reg.lc_zero  = events_reg[8];
-  assign \events_reg.spw_mismatch  = events_reg[9];
-  assign \events_reg.overrun  = events_reg[10];
-  assign \events_reg.aborted  = events_reg[11];
-  assign \events_reg.no_stop  = events_reg[12];
-  assign \events_reg.noisy_line  = events_reg[13];
-  assign \events_reg.delay_jump  = events_reg[14];
-  assign \events_reg.noise_event  = events_reg[15];
-  assign \events_reg.ca_crc4_error  = events_reg[16];
-  assign \events_reg.ca_no_answer  = events_reg[17];
-  assign \events_reg.ca_refused  = events_reg[18];
-  assign \events_reg.ca_aborted  = events_reg[19];
-  assign \events_reg.ca_data_fault  = events_reg[20];
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$144  = word;
+    if (\$58 ) begin
+      \$144  = pick;
+    end
+    if (rst) begin
+      \$144  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$145  = last;
+    if (\$58 ) begin
+      \$145  = pick;
+    end
+    if (rst) begin
+      \$145  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$146  = amount_0;
+    if (\$58 ) begin
+      \$146  = \$59 ;
+    end
+    if (rst) begin
+      \$146  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$147  = amount_1;
+    if (\$58 ) begin
+      \$147  = \$60 ;
+    end
+    if (rst) begin
+      \$147  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$148  = zero;
+    if (\$58 ) begin
+      \$148  = \$61 ;
+    end
+    if (rst) begin
+      \$148  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$149  = 4'h0;
+    end else begin
+      \$149  = \$66 [3:0];
+    end
+    if (rst) begin
+      \$149  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$150  = 4'h0;
+    end else begin
+      \$150  = \$71 [3:0];
+    end
+    if (rst) begin
+      \$150  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$151  = 4'h0;
+    end else begin
+      \$151  = \$76 [3:0];
+    end
+    if (rst) begin
+      \$151  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$152  = 4'h0;
+    end else begin
+      \$152  = \$81 [3:0];
+    end
+    if (rst) begin
+      \$152  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$153  = 4'h0;
+    end else begin
+      \$153  = \$86 [3:0];
+    end
+    if (rst) begin
+      \$153  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$154  = 4'h0;
+    end else begin
+      \$154  = \$91 [3:0];
+    end
+    if (rst) begin
+      \$154  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$155  = 4'h0;
+    end else begin
+      \$155  = \$96 [3:0];
+    end
+    if (rst) begin
+      \$155  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$156  = 4'h0;
+    end else begin
+      \$156  = \$101 [3:0];
+    end
+    if (rst) begin
+      \$156  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$157  = 4'h0;
+    end else begin
+      \$157  = \$106 [3:0];
+    end
+    if (rst) begin
+      \$157  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$158  = 4'h0;
+    end else begin
+      \$158  = \$111 [3:0];
+    end
+    if (rst) begin
+      \$158  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$159  = 4'h0;
+    end else begin
+      \$159  = \$116 [3:0];
+    end
+    if (rst) begin
+      \$159  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$160  = 4'h0;
+    end else begin
+      \$160  = \$121 [3:0];
+    end
+    if (rst) begin
+      \$160  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$161  = 4'h0;
+    end else begin
+      \$161  = \$126 [3:0];
+    end
+    if (rst) begin
+      \$161  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$162  = 4'h0;
+    end else begin
+      \$162  = \$131 [3:0];
+    end
+    if (rst) begin
+      \$162  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$163  = 4'h0;
+    end else begin
+      \$163  = \$136 [3:0];
+    end
+    if (rst) begin
+      \$163  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$164  = 4'h0;
+    end else begin
+      \$164  = \$141 [3:0];
+    end
+    if (rst) begin
+      \$164  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$165  = marked;
+    if (clear) begin
+      \$165  = 16'hffff;
+    end else if (\$142 ) begin
+      (* full_case = 32'd1 *)
+      casez (pick)
+        3'h0:
+            \$165 [1:0] = 2'h0;
+        3'h1:
+            \$165 [3:2] = 2'h0;
+        3'h2:
+            \$165 [5:4] = 2'h0;
+        3'h3:
+            \$165 [7:6] = 2'h0;
+        3'h4:
+            \$165 [9:8] = 2'h0;
+        3'h5:
+            \$165 [11:10] = 2'h0;
+        3'h6:
+            \$165 [13:12] = 2'h0;
+        3'h7:
+            \$165 [15:14] = 2'h0;
+      endcase
+    end
+    if (rst) begin
+      \$165  = 16'hffff;
+    end
+  end
+  assign read_addr = host__addr;
+  assign read_en = host__en;
+  assign host__data = read_data;
+  assign above = \$47 [7:0];
+  assign update__addr = pick;
+  assign total_0 = { 3'h0, \$50  };
+  assign total_1 = { 3'h0, \$52  };
+  assign write__addr = word;
+  assign write__data = { \$56 [15:0], \$54 [15:0] };
+  assign write__en = busy;
   assign \events.crc_word0  = events[0];
   assign \events.crc_word1  = events[1];
   assign \events.no_ack  = events[2];
@@ -27028,48 +26486,138 @@ module \biss_master_uart.ch1.core.counters (rst, clear, events, counts, clk);
   assign \events.noisy_line  = events[13];
   assign \events.delay_jump  = events[14];
   assign \events.noise_event  = events[15];
-  assign \events.ca_crc4_error  = events[16];
-  assign \events.ca_no_answer  = events[17];
-  assign \events.ca_refused  = events[18];
-  assign \events.ca_aborted  = events[19];
-  assign \events.ca_data_fault  = events[20];
-  assign \counts.crc_word0  = counts[15:0];
-  assign \counts.crc_word1  = counts[31:16];
-  assign \counts.no_ack  = counts[47:32];
-  assign \counts.no_start  = counts[63:48];
-  assign \counts.delay_range  = counts[79:64];
-  assign \counts.slo_stuck_low  = counts[95:80];
-  assign \counts.lc_repeat  = counts[111:96];
-  assign \counts.lc_skip  = counts[127:112];
-  assign \counts.lc_zero  = counts[143:128];
-  assign \counts.spw_mismatch  = counts[159:144];
-  assign \counts.overrun  = counts[175:160];
-  assign \counts.aborted  = counts[191:176];
-  assign \counts.no_stop  = counts[207:192];
-  assign \counts.noisy_line  = counts[223:208];
-  assign \counts.delay_jump  = counts[239:224];
-  assign \counts.noise_event  = counts[255:240];
-  assign \counts.ca_crc4_error  = counts[271:256];
-  assign \counts.ca_no_answer  = counts[287:272];
-  assign \counts.ca_refused  = counts[303:288];
-  assign \counts.ca_aborted  = counts[319:304];
-  assign \counts.ca_data_fault  = counts[335:320];
-  assign counts[335:320] = \count$69 ;
-  assign counts[319:304] = \count$66 ;
-  assign counts[303:288] = \count$63 ;
-  assign counts[287:272] = \count$60 ;
-  assign counts[271:256] = \count$57 ;
-  assign counts[255:240] = \count$54 ;
-  assign counts[239:224] = \count$51 ;
-  assign counts[223:208] = \count$48 ;
-  assign counts[207:192] = \count$45 ;
-  assign counts[191:176] = \count$42 ;
-  assign counts[175:160] = \count$39 ;
-  assign counts[159:144] = \count$36 ;
-  assign counts[143:128] = \count$33 ;
-  assign counts[127:112] = \count$30 ;
-  assign counts[111:96] = \count$27 ;
-  assign counts[95:80] = \count$24 ;
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_uart.ch1.core.counters (rst, clear, events, counts, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+  reg [4:0] \$1 ;
+  reg \$2 ;
+  input clear;
+  wire clear;
+  (* init = 1'h0 *)
+  wire \clear$11 ;
+  (* init = 1'h0 *)
+  wire \clear$14 ;
+  (* init = 1'h0 *)
+  wire \clear$17 ;
+  (* init = 1'h0 *)
+  wire \clear$20 ;
+  (* init = 1'h0 *)
+  wire \clear$7 ;
+  reg clear_reg = 1'h0;
+  input clk;
+  wire clk;
+  wire [15:0] count;
+  wire [15:0] \count$12 ;
+  wire [15:0] \count$15 ;
+  wire [15:0] \count$18 ;
+  wire [15:0] \count$21 ;
+  output [79:0] counts;
+  wire [79:0] counts;
+  wire [15:0] \counts.ca_aborted ;
+  wire [15:0] \counts.ca_crc4_error ;
+  wire [15:0] \counts.ca_data_fault ;
+  wire [15:0] \counts.ca_no_answer ;
+  wire [15:0] \counts.ca_refused ;
+  input [4:0] events;
+  wire [4:0] events;
+  wire \events.ca_aborted ;
+  wire \events.ca_crc4_error ;
+  wire \events.ca_data_fault ;
+  wire \events.ca_no_answer ;
+  wire \events.ca_refused ;
+  reg [4:0] events_reg = 5'h00;
+  wire \events_reg.ca_aborted ;
+  wire \events_reg.ca_crc4_error ;
+  wire \events_reg.ca_data_fault ;
+  wire \events_reg.ca_no_answer ;
+  wire \events_reg.ca_refused ;
+  wire inc;
+  wire \inc$10 ;
+  wire \inc$13 ;
+  wire \inc$16 ;
+  wire \inc$19 ;
+  input rst;
+  wire rst;
+  always @(posedge clk)
+    events_reg <= \$1 ;
+  always @(posedge clk)
+    clear_reg <= \$2 ;
+  \biss_master_uart.ch1.core.counters.count_ca_aborted  count_ca_aborted (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$18 ),
+    .inc(events_reg[3]),
+    .rst(rst)
+  );
+  \biss_master_uart.ch1.core.counters.count_ca_crc4_error  count_ca_crc4_error (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(count),
+    .inc(events_reg[0]),
+    .rst(rst)
+  );
+  \biss_master_uart.ch1.core.counters.count_ca_data_fault  count_ca_data_fault (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$21 ),
+    .inc(events_reg[4]),
+    .rst(rst)
+  );
+  \biss_master_uart.ch1.core.counters.count_ca_no_answer  count_ca_no_answer (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$12 ),
+    .inc(events_reg[1]),
+    .rst(rst)
+  );
+  \biss_master_uart.ch1.core.counters.count_ca_refused  count_ca_refused (
+    .clear(clear_reg),
+    .clk(clk),
+    .count(\count$15 ),
+    .inc(events_reg[2]),
+    .rst(rst)
+  );
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$1  = events;
+    if (rst) begin
+      \$1  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$2  = clear;
+    if (rst) begin
+      \$2  = 1'h0;
+    end
+  end
+  assign inc = events_reg[0];
+  assign \clear$7  = clear_reg;
+  assign \inc$10  = events_reg[1];
+  assign \clear$11  = clear_reg;
+  assign \inc$13  = events_reg[2];
+  assign \clear$14  = clear_reg;
+  assign \inc$16  = events_reg[3];
+  assign \clear$17  = clear_reg;
+  assign \inc$19  = events_reg[4];
+  assign \clear$20  = clear_reg;
+  assign \events_reg.ca_crc4_error  = events_reg[0];
+  assign \events_reg.ca_no_answer  = events_reg[1];
+  assign \events_reg.ca_refused  = events_reg[2];
+  assign \events_reg.ca_aborted  = events_reg[3];
+  assign \events_reg.ca_data_fault  = events_reg[4];
+  assign \events.ca_crc4_error  = events[0];
+  assign \events.ca_no_answer  = events[1];
+  assign \events.ca_refused  = events[2];
+  assign \events.ca_aborted  = events[3];
+  assign \events.ca_data_fault  = events[4];
+  assign \counts.ca_crc4_error  = counts[15:0];
+  assign \counts.ca_no_answer  = counts[31:16];
+  assign \counts.ca_refused  = counts[47:32];
+  assign \counts.ca_aborted  = counts[63:48];
+  assign \counts.ca_data_fault  = counts[79:64];
   assign counts[79:64] = \count$21 ;
   assign counts[63:48] = \count$18 ;
   assign counts[47:32] = \count$15 ;
@@ -27078,62 +26626,8 @@ module \biss_master_uart.ch1.core.counters (rst, clear, events, counts, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_aborted (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -27160,7 +26654,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_aborted (rst, inc, clear, co
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -27172,7 +26666,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_aborted (rst, inc, clear, co
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -27187,7 +26681,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -27214,7 +26708,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_crc4_error (rst, inc, clear,
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -27226,7 +26720,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_crc4_error (rst, inc, clear,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -27241,7 +26735,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -27268,7 +26762,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_data_fault (rst, inc, clear,
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -27280,7 +26774,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_data_fault (rst, inc, clear,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -27295,7 +26789,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -27322,7 +26816,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_no_answer (rst, inc, clear, 
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -27334,7 +26828,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_no_answer (rst, inc, clear, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -27349,7 +26843,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
   wire \$2 ;
   wire [16:0] \$3 ;
@@ -27376,7 +26870,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, co
   assign \$2  = inc & \$1 ;
   assign \$3  = count + 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$5  = count;
     if (clear) begin
       \$5  = 16'h0000;
@@ -27388,817 +26882,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, co
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_crc_word0 (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_crc_word1 (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_delay_jump (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_delay_range (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_lc_repeat (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_lc_skip (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_lc_zero (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_no_ack (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_no_start (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_no_stop (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$94  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$94 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_noise_event (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$95  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$95 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_noisy_line (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$96  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$96 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_overrun (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$97  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$97 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$98  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$98 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_spw_mismatch (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$99  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$99 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$6  = full;
     if (clear) begin
       \$6  = 1'h0;
@@ -28214,7 +26898,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top
 , crc_ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$100  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -29608,7 +28292,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$585  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -29632,7 +28316,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$586  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -29654,7 +28338,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$587  = slots;
     if (\$36 ) begin
       \$587  = \$37 [15:0];
@@ -29667,7 +28351,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$588  = slots_full;
     if (\$36 ) begin
       \$588  = \$38 ;
@@ -29680,7 +28364,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$589  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -29696,7 +28380,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$590  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -29712,7 +28396,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$591  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -29744,7 +28428,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$592  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -29762,7 +28446,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$593  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -29787,7 +28471,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$594  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -29812,7 +28496,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$595  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -29837,7 +28521,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$596  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
@@ -29859,7 +28543,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$597  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -29884,7 +28568,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$598  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -29912,7 +28596,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$599  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -29934,7 +28618,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$600  = data0;
     if (\$66 ) begin
       \$600  = \$344 ;
@@ -29947,7 +28631,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$601  = ne;
     if (\$345 ) begin
       \$601 [0] = 1'h1;
@@ -29967,7 +28651,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$602  = nw;
     if (\$345 ) begin
       \$602 [0] = 1'h1;
@@ -29989,7 +28673,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$603  = data1;
     if (\$356 ) begin
       \$603  = \$559 ;
@@ -30002,7 +28686,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$604  = lc;
     if (lc_load) begin
       \$604  = { lc[4:0], \bit  };
@@ -30015,7 +28699,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$605  = cpw_top;
     if (\$569 ) begin
       \$605  = { cpw_top[38:0], \$571  };
@@ -30028,7 +28712,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     at_cds = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -30038,7 +28722,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -30050,7 +28734,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -30060,7 +28744,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -30074,7 +28758,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -30088,7 +28772,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -30102,7 +28786,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     (* full_case = 32'd1 *)
     casez (words[18])
       1'h0:
@@ -30112,7 +28796,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -30126,7 +28810,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -30140,7 +28824,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$100 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -30200,7 +28884,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$101  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
   reg \$11 ;
@@ -30301,7 +28985,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @(posedge clk)
     ok <= \$35 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     (* full_case = 32'd1 *)
     casez (load_index)
       1'h0:
@@ -30311,7 +28995,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30321,7 +29005,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30331,7 +29015,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30341,7 +29025,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30351,7 +29035,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30361,7 +29045,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30371,7 +29055,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30381,7 +29065,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -30391,7 +29075,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$33  = \reg ;
     if (load) begin
       \$33  = \$1 ;
@@ -30408,7 +29092,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$34  = mismatch;
     if (load) begin
       \$34  = 1'h0;
@@ -30424,7 +29108,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$101 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$35  = ok;
     if (last) begin
       if (\$15 ) begin
@@ -30456,7 +29140,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$102  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -30628,56 +29312,56 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
   assign \$39  = magnitude > spread;
   assign \$40  = \$38  & \$39 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$46  = \$1 ;
     if (rst) begin
       \$46  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$47  = \$2 ;
     if (rst) begin
       \$47  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$48  = \tolerance$8 ;
     if (rst) begin
       \$48  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$49  = \$3 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$50  = \$11 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$51  = \$20 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$52  = \$25 ;
     if (rst) begin
       \$52  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$53  = 1'h0;
     if (learn) begin
       if (\$32 ) begin
@@ -30694,7 +29378,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$54  = jump;
     if (check) begin
       \$54  = \$26 ;
@@ -30707,7 +29391,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$55  = count;
     if (learn) begin
       (* full_case = 32'd1 *)
@@ -30729,7 +29413,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$56  = spread;
     if (learn) begin
       if (\$32 ) begin
@@ -30749,7 +29433,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$57  = cand;
     if (learn) begin
       if (\$32 ) begin
@@ -30762,7 +29446,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$58  = settled_delay;
     if (learn) begin
       if (\$32 ) begin
@@ -30779,7 +29463,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$102 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$59  = settled;
     if (learn) begin
       if (\$32 ) begin
@@ -30799,7 +29483,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$103  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   reg \$10 ;
   reg \$11 ;
@@ -30862,21 +29546,21 @@ module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, noisy, events,
   always @(posedge clk)
     running <= \$14 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$10  = level;
     if (rst) begin
       \$10  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$11  = \$4 ;
     if (rst) begin
       \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$12  = held_noisy;
     if (close) begin
       \$12  = \$7 ;
@@ -30886,7 +29570,7 @@ module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$13  = held_events;
     if (close) begin
       \$13  = running;
@@ -30896,7 +29580,7 @@ module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$103 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$14  = running;
     if (close) begin
       \$14  = { 3'h0, \event  };
@@ -30913,7 +29597,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$104  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -31038,7 +29722,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -31053,7 +29737,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -31068,7 +29752,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -31083,7 +29767,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -31112,7 +29796,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -31154,7 +29838,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -31196,7 +29880,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -31215,7 +29899,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -31251,7 +29935,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -31275,7 +29959,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -31291,7 +29975,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$104 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -31308,7 +29992,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, \started$11 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$105  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   reg [7:0] \$1 ;
   wire \$10 ;
   reg [7:0] \$11 ;
@@ -31411,7 +30095,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   always @(posedge clk)
     word1_len <= \$19 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -31425,7 +30109,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -31439,42 +30123,42 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$14  = \$3 [7:0];
     if (rst) begin
       \$14  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$15  = \$5 ;
     if (rst) begin
       \$15  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$16  = \$6 ;
     if (rst) begin
       \$16  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$17  = \started$11 ;
     if (rst) begin
       \$17  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$18  = \$10 ;
     if (rst) begin
       \$18  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$105 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$19  = \$13 [7:0];
     if (rst) begin
       \$19  = 8'h00;
@@ -31800,7 +30484,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.buffers (rst, host_read__en, byte_to_send, rbuf_data, host_read__addr, wbuf, index, store, byte_received, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$106  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -31917,21 +30601,21 @@ module \biss_master_uart.ch1.core.register_access.buffers (rst, host_read__en, b
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$106 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -31951,7 +30635,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$107  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -31994,7 +30678,7 @@ module \biss_master_uart.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -32004,7 +30688,7 @@ module \biss_master_uart.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$107 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -32020,7 +30704,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$108  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -32063,7 +30747,7 @@ module \biss_master_uart.ch1.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$108 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -32087,7 +30771,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$109  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -32157,7 +30841,7 @@ module \biss_master_uart.ch1.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -32167,7 +30851,7 @@ module \biss_master_uart.ch1.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$109 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -32180,7 +30864,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$110  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -32252,7 +30936,7 @@ module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -32265,7 +30949,7 @@ module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -32278,7 +30962,7 @@ module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -32288,7 +30972,7 @@ module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$110 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -32313,7 +30997,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$111  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -32356,7 +31040,7 @@ module \biss_master_uart.ch1.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$111 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -32381,7 +31065,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$112  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -32737,7 +31421,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32775,7 +31459,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -32829,7 +31513,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -32926,7 +31610,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -32943,7 +31627,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -32982,7 +31666,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -33040,7 +31724,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -33107,7 +31791,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -33139,7 +31823,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33153,7 +31837,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33180,7 +31864,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33200,7 +31884,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33219,7 +31903,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33248,7 +31932,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33269,7 +31953,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33291,7 +31975,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33312,7 +31996,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33334,7 +32018,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33356,7 +32040,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33380,7 +32064,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$112 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33419,7 +32103,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$113  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [186:0] \$3 ;
@@ -33528,21 +32212,21 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$113 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -33619,7 +32303,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$114  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -33904,7 +32588,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$71  = level;
     if (receiver_clear) begin
       \$71  = 1'h1;
@@ -33914,7 +32598,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$72  = mid_delay;
     if (odd) begin
       \$72  = \$8 [12:0];
@@ -33939,7 +32623,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$73  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -33966,7 +32650,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$74  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -33988,7 +32672,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$75  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -34012,7 +32696,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$76  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -34028,7 +32712,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$77  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -34054,7 +32738,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$78  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -34085,7 +32769,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$79  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -34116,7 +32800,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$80  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -34166,7 +32850,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$81  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -34216,7 +32900,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$82  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -34246,7 +32930,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$83  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -34274,7 +32958,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$84  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -34300,7 +32984,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$85  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -34323,7 +33007,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$86  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -34363,7 +33047,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -34381,7 +33065,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     clear = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -34393,7 +33077,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     dropped = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -34414,7 +33098,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -34439,7 +33123,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$114 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     centre = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -34467,7 +33151,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majority, odd, receiver_clear, vote1, vote2, clear, centre, level, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$115  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -34582,7 +33266,7 @@ module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
   always @(posedge clk)
     strobed <= \$38 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$33  = last;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -34600,7 +33284,7 @@ module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$34  = tail_odd;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -34618,7 +33302,7 @@ module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$35  = 1'h0;
@@ -34638,7 +33322,7 @@ module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$36  = 1'h0;
@@ -34658,7 +33342,7 @@ module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$37  = crowded;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -34676,7 +33360,7 @@ module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$115 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$38  = strobed;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -34719,7 +33403,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$116  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -34813,14 +33497,14 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -34834,7 +33518,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -34848,7 +33532,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$116 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -34864,8 +33548,8 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6550$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$117  = 0;
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6617$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -34906,8 +33590,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6550$0 ;
-  wire \port$6550$0 ;
+  input \port$6617$0 ;
+  wire \port$6617$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -34921,9 +33605,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6550$0  };
-  assign \$2  = { lc[4:0], \port$6550$0  } == last;
-  assign \$3  = { lc[4:0], \port$6550$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6617$0  };
+  assign \$2  = { lc[4:0], \port$6617$0  } == last;
+  assign \$3  = { lc[4:0], \port$6617$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -34957,7 +33641,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -34967,7 +33651,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -34977,7 +33661,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -34987,21 +33671,21 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -35011,7 +33695,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -35021,7 +33705,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$117 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -35033,13 +33717,13 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6550$0  };
+  assign lc_next = { lc[4:0], \port$6617$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$118  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -35244,28 +33928,28 @@ module \biss_master_uart.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$118 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -35275,7 +33959,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$119  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -35294,14 +33978,14 @@ module \biss_master_uart.ch1.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$119 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -35315,7 +33999,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
 , delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$120  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -35495,7 +34179,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   assign \$40  = in_clock & \$39 ;
   assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$48  = slo_low_time_p1;
     if (\$2 ) begin
       \$48  = 25'h0000001;
@@ -35507,21 +34191,21 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$49  = \$9 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$50  = \$17 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$51  = high_p2;
     if (\$18 ) begin
       \$51  = 13'h0002;
@@ -35533,28 +34217,28 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$52  = \$23 ;
     if (rst) begin
       \$52  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$53  = \$30 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$54  = \$34 [24:0];
     if (rst) begin
       \$54  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$55  = 1'h0;
@@ -35566,21 +34250,21 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$57  = \$46 ;
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$120 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$58  = \$47 ;
     if (rst) begin
       \$58  = 1'h0;
@@ -35589,9 +34273,9 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$4805$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$4841$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$121  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -35743,8 +34427,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$4805$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$4805$0 ;
-  wire \port$4805$0 ;
+  output \port$4841$0 ;
+  wire \port$4841$0 ;
   output report;
   wire report;
   input report_frame;
@@ -35825,7 +34509,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$4805$0 , l
   assign \$39  = ~ { \$2 , crc_ok[0] };
   assign crc_error = report_frame ? \$39  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$121 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     frame_status = 4'h0;
     if (delay_jump) begin
       frame_status = 4'he;
@@ -35850,7 +34534,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$4805$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4805$0  = \$2 ;
+  assign \port$4841$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

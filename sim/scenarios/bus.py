@@ -8,8 +8,10 @@ values and access types are read from the SystemRDL source (sim/shared/regspec.p
 are checked against what each channel's encoder model sent.
 """
 
+from dataclasses import replace
+
 import cocotb
-from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Timer
+from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Timer, with_timeout
 from cocotb.utils import get_sim_time
 
 from encoder_model import frames
@@ -335,6 +337,85 @@ async def bad_configuration_over_the_bus(dut):
         assert (await tb.read_fields("state", 0))["config_error"] == 0
         await tb.encoders_ready()
         tb.check_result(0, await tb.request(0))
+
+
+#: The counter registers and their fields, in the order the map gives them (docs/registers.md):
+#: the test side's own copy, not read from the RTL.
+COUNTER_REGISTERS = ("count_crc", "count_ack", "count_line", "count_lc", "count_check",
+                     "count_cycle", "count_stop", "count_noise")
+
+
+def flip_crc_bit(fmt, word):
+    """A Response maker: the encoder's frame with the last CRC bit of ``word`` flipped."""
+    def make(resp):
+        bits = list(resp.bits)                      # [Start, CDS, word 0 ..., word 1 ...]
+        end = 2 + sum(w.total_bits for w in fmt.words[:word + 1])
+        bits[end - 1] ^= 1
+        return replace(resp, bits=bits)
+    return make
+
+
+@cocotb.test()
+@only_on_buses("axil")
+async def counters_in_memory_count_every_fault(dut):
+    """The counter registers read the cores' counter memory (issue 27): faults in random order
+    on both channels (no answer, a CRC bit of word 0 or of word 1, each twice), each counted
+    where the register map says. Every count is checked when the host could first read it (the clock after `irq`
+    rises for the frame), every counter register of both channels at the end, then
+    ctrl.clear_counters of one channel: its counts read 0, the other channel's are kept."""
+    tb = BusTestbench(dut, seed=31)
+    await tb.start([SAFETY, BISS_C])
+    faults = {0: {"crc_word0": flip_crc_bit(SAFETY, 0), "crc_word1": flip_crc_bit(SAFETY, 1),
+                  "no_ack": lambda resp: replace(resp, fault="no_response")},
+              1: {"crc_word0": flip_crc_bit(BISS_C, 0),
+                  "no_ack": lambda resp: replace(resp, fault="no_response")}}
+    for ch, fmt in ((0, SAFETY), (1, BISS_C)):
+        await tb.configure(ch, fmt, 5e6, ack_limit=1_000, break_time=2_000)
+        await tb.write_fields("irq_enable", ch, done=1)
+    await tb.encoders_ready()
+    tally = {ch: {} for ch in range(CHANNELS)}
+
+    def counts(words):
+        got = {}
+        for path, word in zip(COUNTER_REGISTERS, words):
+            got.update(tb.fields(path, word, 0))
+        return got
+
+    plan = [(ch, name) for ch in faults for name in faults[ch]] * 2
+    plan += [(ch, None) for ch in faults] * 2
+    tb.rng.shuffle(plan)
+    for i, (ch, name) in enumerate(plan):
+        enc = tb.channels[ch].encoder
+        good = enc.respond
+        if name is not None:
+            def respond(t, good=good, make=faults[ch][name]):
+                enc.respond = good
+                return make(good(t))
+            enc.respond = respond
+            tally[ch][name] = tally[ch].get(name, 0) + 1
+        await tb.wait_idle(ch)
+        for n in range(CHANNELS):
+            await tb.write("irq_status", 0b111, n)
+        await ClockCycles(dut.clk, 3)                   # irq is registered
+        assert int(dut.irq.value) == 0
+        await tb.write_fields("ctrl", ch, start=1, **await tb._ctrl_keep(ch))
+        await with_timeout(RisingEdge(dut.irq), 200, "us")
+        if name is not None:
+            path = next(p for p in COUNTER_REGISTERS if name in tb.map.channel[p].fields)
+            got = (await tb.read_fields(path, ch))[name]
+            assert got == tally[ch][name], f"frame {i}, ch{ch}: {name} reads {got}, " \
+                                           f"{tally[ch][name]} faults so far"
+        enc.respond = good
+        await tb.encoders_ready()
+    for ch in range(CHANNELS):
+        got = counts([await tb.read(p, ch) for p in COUNTER_REGISTERS])
+        assert got == {k: tally[ch].get(k, 0) for k in got}, (ch, got, tally[ch])
+    await tb.write_fields("ctrl", 1, clear_counters=1, **await tb._ctrl_keep(1))
+    await ClockCycles(dut.clk, 12)
+    assert set(counts([await tb.read(p, 1) for p in COUNTER_REGISTERS]).values()) == {0}
+    got = counts([await tb.read(p, 0) for p in COUNTER_REGISTERS])
+    assert got == {k: tally[0].get(k, 0) for k in got}
+    dut._log.info("faults counted: %s", tally)
 
 
 @cocotb.test()

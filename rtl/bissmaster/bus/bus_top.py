@@ -7,7 +7,7 @@
 MA/SLO pins.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from amaranth.hdl import *
 from amaranth.lib import wiring
@@ -70,6 +70,8 @@ CHANNEL_GLUE = ("trigger_enable", "frame_error", "done_count", "cap_data_bits_w0
 #: (docs/performance.md). Not ``start`` (it would delay every request; the trigger pin's path
 #: does not pass the bank), not ``clear_counters`` (the core's counter bank registers it).
 RETIMED_PULSES = ("abort_cycle",)
+#: Bits of each count in the register map (two counts per counter register).
+COUNT_BITS = 16
 #: Global signals of the register map, made by the top.
 GLOBAL_SIGNALS = ("channels", "trigger", "irq_pending")
 
@@ -79,7 +81,8 @@ class BusChannel(wiring.Component):
     core's ports.
 
     Every signal of the map's channel block is connected by name to the core port of that
-    name (``cfg_ma_half_period``, ``start``, ``word0_position``, ``count_no_ack``, ...), or
+    name (``cfg_ma_half_period``, ``start``, ``word0_position``, the counter memory's
+    ``count_addr`` / ``count_en`` / ``count_data``, ...), or
     made here (:data:`CHANNEL_GLUE`): the trigger gate, ``frame_error`` (``done`` with a
     status other than OK), ``done_count`` and the build's capabilities. A signal that only
     other builds of the core have (``word1_position`` in a one-word build, the ``ca_*`` ports
@@ -89,6 +92,8 @@ class BusChannel(wiring.Component):
     Parameters
     ----------
     params : MasterParams
+        The core's; a core with counters is built with ``counter_ram`` (the map reads the
+        counters from its memory), whatever ``params`` says.
     regs : wiring.Signature
         The bank's channel block (:func:`~bissmaster.bus.register_bank.block_signature`).
 
@@ -105,9 +110,15 @@ class BusChannel(wiring.Component):
     """
 
     def __init__(self, params, regs, status=False):
+        if params.counters:
+            if params.counter_width > COUNT_BITS:
+                raise ValueError(f"the register map holds {COUNT_BITS}-bit counts; this build's "
+                                 f"counter_width is {params.counter_width}")
+            # The map reads the data channel's counters from the core's counter memory.
+            params = replace(params, counter_ram=True)
         self.params = params
         self.status = status
-        full = BissMaster.ports(MasterParams())
+        full = BissMaster.ports(MasterParams(counter_ram=True))
         core = BissMaster.ports(params)
         for name, member in regs.members.items():
             if name in CHANNEL_GLUE:

@@ -11,7 +11,7 @@ from amaranth.hdl import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .regmap import DATA_WIDTH, Kind
+from .regmap import DATA_WIDTH, Kind, window_ports
 
 STROBES = DATA_WIDTH // 8
 
@@ -55,10 +55,12 @@ def block_signature(regmap, registers):
     members = {}
     for name, (kind, width) in regmap.signals(registers).items():
         members[name] = Out(width) if kind in (Kind.CONFIG, Kind.PULSE) else In(width)
-    for reg in registers:
-        if reg.window:
-            members.update({name: Out(width) if out else In(width)
-                            for name, (out, width) in reg.window_ports.items()})
+    ports = [reg.window_ports for reg in registers if reg.window]
+    ports += [window_ports(name, count, False)
+              for name, (_, count) in regmap.memories(registers).items()]
+    for window in ports:
+        members.update({name: Out(width) if out else In(width)
+                        for name, (out, width) in window.items()})
     return wiring.Signature(members)
 
 
@@ -75,6 +77,8 @@ class RegisterBank(wiring.Component):
     (``<window>_en`` = the strobes, in the clock of the write); a read of word ``i`` enables
     the memory's registered read port in the ``r_en`` clock, and its data goes to ``r_data``
     at ``r_load``, as a register's word does (the port must hold it until its next read).
+    Memory registers (``memory`` = NAME: the counters) are read the same way, as one read
+    window over their words; their fields only document the word.
 
     Writes: the request (``w_en``, address, data, strobes) is registered, and every write
     decodes from those flip-flops in the next clock. CONFIG fields are written one clock later
@@ -173,10 +177,14 @@ class RegisterBank(wiring.Component):
         irq_terms = []
         groups = {}                    # group -> the copies' assignments
         take = {}                      # group -> the word address of its first register
+        for name, (offset, count) in self.regmap.memories(registers).items():
+            self._read_window(m, port, name, (base + offset) // 4, count, windows)
         for reg in registers:
             word = (base + reg.offset) // 4
             if reg.window:
                 self._window(m, port, word, reg, windows)
+                continue
+            if reg.memory:
                 continue
             reg_name = f"{prefix}_{reg.path.replace('.', '_')}"
             write = Signal(name=f"{reg_name}_write")
@@ -288,20 +296,32 @@ class RegisterBank(wiring.Component):
 
     def _window(self, m, port, word, reg, windows):
         """A window: the bus's word address inside it, its strobes or read enable, its data."""
-        bus = self.bus
-        bits = (reg.count - 1).bit_length()
-        if reg.count != 1 << bits or word % reg.count:
-            raise ValueError(f"{reg.path}: a window has a power-of-two number of words and is "
-                             f"aligned to its size")
+        if not reg.writable:
+            self._read_window(m, port, reg.window, word, reg.count, windows)
+            return
+        bits = self._window_bits(reg.path, word, reg.count)
         ports = {name[len(reg.window) + 1:]: getattr(port, name) for name in reg.window_ports}
-        if reg.writable:
-            hit = self._w_en & (self._w_addr[bits:] == word >> bits)
-            m.d.comb += [ports["addr"].eq(self._w_addr[:bits]), ports["data"].eq(self._w_data),
-                         ports["en"].eq(Mux(hit, self._w_strb, 0))]
-        else:
-            hit = bus.r_en & (bus.r_addr[bits:] == word >> bits)
-            m.d.comb += [ports["addr"].eq(bus.r_addr[:bits]), ports["en"].eq(hit)]
-            windows.append((hit, ports["data"]))
+        hit = self._w_en & (self._w_addr[bits:] == word >> bits)
+        m.d.comb += [ports["addr"].eq(self._w_addr[:bits]), ports["data"].eq(self._w_data),
+                     ports["en"].eq(Mux(hit, self._w_strb, 0))]
+
+    def _read_window(self, m, port, name, word, count, windows):
+        """A read window (or a memory's registers) of ``count`` words from word ``word``: the
+        bus's word address inside it and its read enable; its data joins ``windows``."""
+        bus = self.bus
+        bits = self._window_bits(name, word, count)
+        ports = {p[len(name) + 1:]: getattr(port, p) for p in window_ports(name, count, False)}
+        hit = bus.r_en & (bus.r_addr[bits:] == word >> bits)
+        m.d.comb += [ports["addr"].eq(bus.r_addr[:bits]), ports["en"].eq(hit)]
+        windows.append((hit, ports["data"]))
+
+    @staticmethod
+    def _window_bits(name, word, count):
+        bits = (count - 1).bit_length()
+        if count != 1 << bits or word % count:
+            raise ValueError(f"{name}: a window has a power-of-two number of words and is "
+                             f"aligned to its size")
+        return bits
 
     @staticmethod
     def _signal(port, f):

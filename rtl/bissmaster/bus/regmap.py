@@ -60,18 +60,24 @@ class Register:
     window: str | None = None   # a window: the memory's port name (ports <window>_addr, ...)
     count: int = 1              # a window's words (array elements, 4 bytes apart)
     writable: bool = False      # a window: written (sw = w) rather than read (sw = r)
+    memory: str | None = None   # a word of a read-only memory (ports <memory>_addr, ...)
 
     def field(self, name):
         return next(f for f in self.fields if f.name == name)
 
     @property
     def window_ports(self):
-        """A window's memory ports ``{name: (output of the bank?, width)}``: the word address,
-        the data (out for a write window, in for a read window), the enable (a write: one per
-        byte lane; a read: one)."""
-        return {f"{self.window}_addr": (True, (self.count - 1).bit_length()),
-                f"{self.window}_data": (self.writable, DATA_WIDTH),
-                f"{self.window}_en": (True, DATA_WIDTH // 8 if self.writable else 1)}
+        """A window's memory ports: :func:`window_ports`."""
+        return window_ports(self.window, self.count, self.writable)
+
+
+def window_ports(name, count, writable):
+    """The ports of a memory behind ``count`` words of the map, ``{name: (output of the bank?,
+    width)}``: the word address, the data (out for a write window, in for a read window), the
+    enable (a write: one per byte lane; a read: one)."""
+    return {f"{name}_addr": (True, (count - 1).bit_length()),
+            f"{name}_data": (writable, DATA_WIDTH),
+            f"{name}_en": (True, DATA_WIDTH // 8 if writable else 1)}
 
 
 @dataclass(frozen=True)
@@ -91,16 +97,40 @@ class RegisterMap:
     def channel_address(self, n, register):
         return self.channel_base + n * self.channel_stride + register.offset
 
+    @staticmethod
+    def memories(registers):
+        """``{memory: (byte offset of its first word, words)}`` of the memory registers of
+        ``registers``; a memory's words are adjacent, a power of two of them, aligned to their
+        size."""
+        found = {}
+        for reg in registers:
+            if reg.memory:
+                found.setdefault(reg.memory, []).append(reg.offset)
+        out = {}
+        for name, offsets in found.items():
+            first, count = min(offsets), len(offsets)
+            if (sorted(offsets) != list(range(first, first + 4 * count, 4))
+                    or count & (count - 1) or (first // 4) % count):
+                raise ValueError(f"memory {name}: its registers must be adjacent words, a power "
+                                 f"of two of them, aligned to their size (offsets {offsets})")
+            out[name] = (first, count)
+        return out
+
     def signals(self, registers):
         """``{signal: (kind, width)}`` of every connected field of ``registers``; a signal made
         of several fields (a position split over two registers) is as wide as all of them.
-        A window's ports have the kind :attr:`Kind.BUFFER` (their direction:
-        :attr:`Register.window_ports`)."""
+        The ports of a window or a memory have the kind :attr:`Kind.BUFFER` (their direction:
+        :func:`window_ports`)."""
         found = {}
+        for name, (_, count) in self.memories(registers).items():
+            found.update({port: (Kind.BUFFER, width)
+                          for port, (_, width) in window_ports(name, count, False).items()})
         for reg in registers:
             if reg.window:
                 found.update({name: (Kind.BUFFER, width)
                               for name, (_, width) in reg.window_ports.items()})
+                continue
+            if reg.memory:
                 continue
             for f in reg.fields:
                 if f.signal is None:
@@ -135,7 +165,7 @@ def _kind(node):
                      f"is not one the register bank builds")
 
 
-def _field(node, block):
+def _field(node, block, memory=False):
     kind = _kind(node)
     signal, signal_lsb = None, 0
     path = [p for p in (node.get_property("hdl_path_slice") or []) if p]
@@ -153,7 +183,10 @@ def _field(node, block):
     if kind == Kind.BUFFER and signal is not None:
         raise ValueError(f"{node.get_path()}: a window's fields are byte lanes of its memory "
                          f"(the register's hdl_path), not signals of their own")
-    if kind in (Kind.PULSE, Kind.LIVE) and signal is None:
+    if memory and (kind != Kind.LIVE or signal is not None):
+        raise ValueError(f"{node.get_path()}: a memory register's fields are bits of its word: "
+                         f"read only (sw = r, hw = w), no hdl_path_slice")
+    if kind in (Kind.PULSE, Kind.LIVE) and signal is None and not memory:
         raise ValueError(f"{node.get_path()}: a {kind.value} field needs hdl_path_slice")
     enable = None
     if kind == Kind.IRQ and node.get_property("enable") is not None:
@@ -185,10 +218,14 @@ def _registers(block, regs):
             first = min(r.raw_absolute_address for r in parent.registers())
             takes = reg.raw_absolute_address == first
         window, count, writable = _window(reg)
+        memory = reg.get_property("memory", default=None) or None
+        if memory and (window or snapshot):
+            raise ValueError(f"{reg.get_path()}: a memory register is neither a window nor in "
+                             f"a snapshot")
         out.append(Register(_relative(reg, block),
                             reg.raw_absolute_address - block.absolute_address,
-                            tuple(_field(f, block) for f in reg.fields()), snapshot, takes,
-                            window, count, writable))
+                            tuple(_field(f, block, bool(memory)) for f in reg.fields()),
+                            snapshot, takes, window, count, writable, memory))
     return tuple(sorted(out, key=lambda r: r.offset))
 
 

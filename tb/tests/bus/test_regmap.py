@@ -13,8 +13,8 @@ import pytest
 from bissmaster.bus import regmap
 from bissmaster.bus.bus_top import BusTop
 from bissmaster.generate import generate_bus
-from bissmaster.layouts import (access_request_layout, access_result_layout, config_ports,
-                                counter_names, flat_fields, result_layout)
+from bissmaster.layouts import (RAM_COUNTERS, access_request_layout, access_result_layout,
+                                config_ports, counter_ports, flat_fields, result_layout)
 from bissmaster.params import Crc, MasterParams
 
 from testkit import REPO as ROOT
@@ -54,10 +54,11 @@ def _fields_by_signal(registers):
 def test_map_covers_every_setting_result_and_counter_once():
     rm = regmap.load()
     signals = _fields_by_signal(rm.channel)
-    p = MasterParams()                          # the bus tops' cores: the engine included
+    # The bus tops' cores: the engine included, the data channel's counters in memory.
+    p = MasterParams(counter_ram=True)
     wanted = {name: shape for name, _, shape in config_ports(p)}
     wanted.update({name: shape for name, _, shape in flat_fields(result_layout(p))})
-    wanted.update({f"count_{n}": p.counter_width for n in counter_names(p)})
+    wanted.update({f"count_{n}": p.counter_width for n in counter_ports(p)})
     wanted.update({n: 1 for n in ("start", "periodic", "abort_cycle", "clear_counters",
                                   "busy", "config_error", "done")})
     wanted.update({name: shape for name, _, shape in flat_fields(access_request_layout(), "ca_")})
@@ -70,6 +71,17 @@ def test_map_covers_every_setting_result_and_counter_once():
         assert len(covered) == bits, f"{name}: two fields hold the same bits"
         if name.startswith("cfg_"):
             assert len(signals[name]) == 1, f"{name}: one field per setting"
+
+
+def test_counter_memory_words_are_the_cores_slots():
+    """The map's counter registers are the words of the core's counter memory, two counts
+    each, low half first, in the core's slot order; 16-bit fields."""
+    rm = regmap.load()
+    assert rm.memories(rm.channel) == {"count": (0x060, 8)}
+    words = sorted((r for r in rm.channel if r.memory == "count"), key=lambda r: r.offset)
+    fields = [(f.name, f.lsb, f.width) for r in words
+              for f in sorted(r.fields, key=lambda f: f.lsb)]
+    assert fields == [(name, 16 * (i % 2), 16) for i, name in enumerate(RAM_COUNTERS)]
 
 
 def test_config_fields_match_port_widths():
@@ -128,6 +140,21 @@ def test_bad_window_is_refused(tmp_path, old, new, message):
     bad.write_text(src.replace(old, new))
     with pytest.raises(ValueError, match=message):
         regmap.load(bad)
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ('} count_noise @ 0x07C;', '} count_noise @ 0x0F0;', "adjacent words"),
+    ('count_f #(.DESC("Status NO_ACK.")) no_ack[15:0] = 0;',
+     'live_f #(.PATH("count_no_ack")) no_ack[15:0] = 0;', "no hdl_path_slice"),
+])
+def test_bad_memory_is_refused(tmp_path, old, new, message):
+    src = regmap.RDL.read_text()
+    assert old in src
+    bad = tmp_path / "bad.rdl"
+    bad.write_text(src.replace(old, new))
+    with pytest.raises(ValueError, match=message):
+        rm = regmap.load(bad)
+        rm.signals(rm.channel)
 
 
 def test_unknown_signal_in_map_is_refused(tmp_path):

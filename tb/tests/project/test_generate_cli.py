@@ -24,7 +24,8 @@ def test_help_names_presets_tops_and_every_core_option(capsys):
     assert text.startswith("usage: bissmaster-generate")
     for word in ("--top", "--list-presets", "--version", "-o FILE", "--name", "--sys-clk-hz",
                  "--max-data-bits", "--word-crcs", "--max-line-delay", "--timer-width",
-                 "--counter-width", "--timestamp-width", "examples:", *PRESETS, *TOPS):
+                 "--counter-width", "--counter-ram", "--timestamp-width", "examples:", *PRESETS,
+                 *TOPS):
         assert word in text, word
 
 
@@ -60,6 +61,19 @@ def test_core_top_is_the_default_and_names_biss_master(tmp_path):
     main(["--top", "core", "--preset", "biss-c-lean", "-o", str(b)])
     assert a.read_text() == b.read_text()
     assert "module biss_master(" in a.read_text()
+
+
+def test_counter_ram_gives_a_read_port_instead_of_the_count_ports(tmp_path, capsys):
+    out = tmp_path / "c.v"
+    main(["--preset", "biss-c", "--counter-ram", "1", "-o", str(out)])
+    text = out.read_text()
+    assert "input [2:0] count_addr" in text and "output [31:0] count_data" in text
+    assert "input count_en" in text and "count_no_ack" not in text
+    assert "counter_width   = 16 in memory (count_addr, count_data)" in text
+    with pytest.raises(SystemExit) as e:
+        main(["--counter-ram", "1", "--counter-width", "0", "-o", "/dev/null"])
+    assert e.value.code == 2
+    assert "counter_ram needs counter_width 1..16" in capsys.readouterr().err
 
 
 # -- the hook for bus tops ------------------------------------------------------------------------
