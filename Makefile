@@ -18,8 +18,11 @@ endif
 VERILOG := rtl/generated/biss_master.v
 BUS_TOPS := axil wb uart
 JOBS ?= 2
-# make synth: netlist variants per configuration (scripts/synth.py --variants).
+# make synth: netlist variants per configuration (scripts/synth.py --variants), and the archs:
+# ecp5 and ice40 are synthesised, placed and routed; xilinx (synth_xilinx, 7-series) and intel
+# (synth_intel_alm, Cyclone V) are Yosys cell counts only (seconds per configuration).
 VARIANTS ?= 1
+ARCH ?= ecp5,ice40,xilinx,intel
 # make test runs the three in one pytest session (conftest.py orders it: long items first).
 UNIT_TESTS := tb/tests
 SIM_TESTS := sim/test_regression.py sim/test_bus.py sim/test_driver.py
@@ -110,8 +113,8 @@ bench: setup  ## simulated performance: cycle overhead, verdict latency, line-de
 	$(PY) -m sim.tools.perf
 
 .PHONY: synth
-synth: setup  ## Yosys + nextpnr: LUT4/FF/carry and Fmax of the core presets, the AXI4-Lite bus top (1, 4 channels) and four cores without a bus (the control) on ECP5-25k and iCE40 UP5K (docs/performance.md); VARIANTS=n: n netlists each
-	$(PY) scripts/synth.py --variants $(VARIANTS)
+synth: setup  ## Yosys + nextpnr: LUT4/FF/carry/RAM and Fmax of the core presets, the AXI4-Lite bus top (1, 4 channels) and four cores without a bus (the control) on ECP5-25k and iCE40 UP5K, Yosys-only cell counts for Xilinx 7-series and Cyclone V (docs/performance.md); VARIANTS=n: n netlists each; ARCH=ecp5,ice40,xilinx,intel (any subset)
+	$(PY) scripts/synth.py --variants $(VARIANTS) --arch $(ARCH)
 
 .PHONY: board
 board: setup  ## a board design (docs/bench.md), BOARD=ulx3s-85f|ulx3s-25f|icebreaker: Yosys + nextpnr + packer, fails unless timing is met at the board clock; BOARD=arty-a7-35 PLAN=1: the Vivado build plan (TCL, XDC), no tool run

