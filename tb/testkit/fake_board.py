@@ -219,7 +219,7 @@ class RegisterModel:
         bits = cfg[f"w{w}_data_bits"]
         data = value & ((1 << bits) - 1)
         width = self.caps[f"data_bits_w{w}"]
-        if cfg.get(f"w{w}_signed") and bits < width and data >> (bits - 1):
+        if cfg.get(f"w{w}_signed") and 0 < bits < width and data >> (bits - 1):
             data |= ((1 << width) - 1) ^ ((1 << bits) - 1)
         return data
 
