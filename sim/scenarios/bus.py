@@ -838,6 +838,19 @@ def check_read_rows(rows, sent):
                 (w1["position"], w1["ne"], w1["nw"], "ok", w1["lc"]), (row, words)
 
 
+def check_png(run, path, count):
+    """`bissmaster plot -o path` ran (``run``: its exit code, stdout, stderr): exit 0, every
+    sample OK, and ``path`` is a PNG of 800 x 900 pixels (docs/bench.md) of some content."""
+    import struct
+    code, out, err = run
+    assert code == 0, err
+    assert f"{count} results plotted to {path}" in out, out
+    with open(path, "rb") as f:
+        data = f.read()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and data[12:16] == b"IHDR", data[:16]
+    assert struct.unpack(">II", data[16:24]) == (800, 900) and len(data) > 10_000, len(data)
+
+
 def printed_counters(out):
     """`bissmaster counters` (one channel): {name: value}."""
     return {line.split()[0]: int(line.split()[1]) for line in out.splitlines()[1:]}
@@ -950,7 +963,7 @@ async def uart_host_tool_identify(dut):
     encoder model (the EDS pointer names the BP3 bank: --eds-offset 0): the profile ID and
     EDS fields printed as the model holds them, the bank select restored, the channel then
     configured from the EDS (the model's DL_POS, nE/nW, CRC-6), and `read` gives the positions
-    the encoder sent."""
+    the encoder sent; `plot` writes its PNG."""
     eds, registers, spec = bp3_channel()
     tb = BusTestbench(dut, seed=16)
     await tb.start([spec])
@@ -987,6 +1000,8 @@ async def uart_host_tool_identify(dut):
         assert row[3] == "OK", row
     last = frames.parse_frame(chan.fmt, chan.sent[max(chan.sent)])["words"][0]
     assert int(rows[-1][4]) == last["position"], (rows, last)
+    check_png(await tool("plot", "--count", "2", "--rate", "5000", "-o",
+                         "bissmaster_plot_bp3.png"), "bissmaster_plot_bp3.png", 2)
 
 
 @cocotb.test()
@@ -997,7 +1012,8 @@ async def uart_host_tool_safety(dut):
     biss_master_uart against a RESOLUTE FS (BiSS Safety) encoder model on channel 0: the
     preset writes both words (CPW: 36 bits, nE/nW, CRC-6; SPW: 28 bits, nE/nW, sign of life,
     CRC-16) and the SPW check; `read` prints per frame status OK, both words as the encoder
-    sent them (positions, nE/nW, CRC ok, the SPW's sign of life), exit 0."""
+    sent them (positions, nE/nW, CRC ok, the SPW's sign of life), exit 0; `log` writes both
+    words to the CSV as sent, `counters` are all 0, `plot` writes its PNG."""
     tb = BusTestbench(dut, seed=17)
     await tb.start([SAFETY])
     tool = host_tool(tb)
@@ -1020,6 +1036,26 @@ async def uart_host_tool_safety(dut):
     assert len(rows) == 3
     check_read_rows(rows, sent_frames(tb))
     assert all(len(words) == 2 for _, words in sent_frames(tb))
+
+    # `log`: both words in the CSV as sent; `counters`: all 0; `plot`: a PNG of the run.
+    import csv
+    import io
+    code, out, err = await tool("log", "--count", "3", "--rate", "5000")
+    assert code == 0, err
+    logged = list(csv.DictReader(io.StringIO(out)))
+    sent = sent_frames(tb, since=3)
+    assert len(logged) == len(sent) == 3
+    for row, (timestamp, (w0, w1)) in zip(logged, sent):
+        assert (row["status"], int(row["timestamp"])) == ("OK", timestamp), row
+        assert (int(row["position"]), int(row["crc_ok"]), int(row["word1"]), int(row["w1_ne"]),
+                int(row["w1_nw"]), int(row["w1_crc_ok"]), int(row["lc"])) == \
+            (w0["position"], 1, w1["position"], w1["ne"], w1["nw"], 1, w1["lc"]), (row, w1)
+    code, out, err = await tool("counters")
+    assert code == 0, err
+    counts = printed_counters(out)
+    assert len(counts) == 21 and not any(counts.values()), counts
+    check_png(await tool("plot", "--count", "3", "--rate", "5000", "-o",
+                         "bissmaster_plot_safety.png"), "bissmaster_plot_safety.png", 3)
 
 
 @cocotb.test()

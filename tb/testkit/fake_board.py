@@ -200,8 +200,8 @@ class RegisterModel:
                       w1_crc_ok=int(bool(two) and status not in ("CRC_ERROR_WORD1",
                                                                  "CRC_ERROR_BOTH")),
                       lc=n % 64 if two else 0)
-            live["w0"] = enc.positions(n) & ((1 << cfg["w0_data_bits"]) - 1)
-            live["w1"] = enc.word1(n) if (two and enc.word1) else 0
+            live["w0"] = self._word(0, cfg, enc.positions(n))
+            live["w1"] = self._word(1, cfg, enc.word1(n)) if (two and enc.word1) else 0
             live["seq"]["line_delay"] = enc.line_delay
             live["time"] = self.time
         counter = {"CRC_ERROR_WORD0": "crc_word0", "CRC_ERROR_BOTH": "crc_word0",
@@ -211,6 +211,17 @@ class RegisterModel:
             self.count(ch, counter)
         live["status"] = st
         self._irq(ch, done=1, error=int(status != "OK"))
+
+    def _word(self, w, cfg, value):
+        """Word ``w``'s register bits for a field of ``value`` (its low cfg_wN_data_bits bits):
+        zeros above the field, or with ``cfg_wN_signed`` copies of its top bit up to the
+        register's width, caps.data_bits_wN (docs/ports.md, word0_position)."""
+        bits = cfg[f"w{w}_data_bits"]
+        data = value & ((1 << bits) - 1)
+        width = self.caps[f"data_bits_w{w}"]
+        if cfg.get(f"w{w}_signed") and 0 < bits < width and data >> (bits - 1):
+            data |= ((1 << width) - 1) ^ ((1 << bits) - 1)
+        return data
 
     def access(self, ch):
         """One register access of ``ca.request``, ended at once."""

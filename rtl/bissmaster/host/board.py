@@ -92,6 +92,17 @@ class Result:
         return self.status in regmap.NO_ENCODER_STATUSES or self.status in NO_RESULT
 
 
+def signed_data(data, bits):
+    """A word's data as a signed number, for a word configured ``cfg_words.wN_signed``: the core
+    has sign-extended the field to its register's width, ``bits`` (``caps.data_bits_wN``,
+    docs/ports.md); this extends it on to Python's integers (as the C driver's
+    ``biss_signed_data``). ``bits`` 0: ``data`` unchanged."""
+    if not bits:
+        return data
+    data &= (1 << bits) - 1
+    return data - (1 << bits) if data >> (bits - 1) else data
+
+
 def decode_result(channel, words, time_s, two_words):
     """A :class:`Result` from the seven words of the result block (address order)."""
     w = dict(zip(regmap.RESULT_REGISTERS, words))

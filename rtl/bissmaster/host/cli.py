@@ -27,7 +27,7 @@ from dataclasses import fields as dataclass_fields
 
 from . import presets, regmap
 from .board import (AccessError, Board, BoardError, CapabilityError, EncoderSilentError,
-                    NoBoardError, NotTheCoreError, Result)
+                    NoBoardError, NotTheCoreError, Result, signed_data)
 from .link import Link, LinkError, SerialTransport
 
 #: Exit codes, by what went wrong (docs/bench.md, "Exit codes").
@@ -280,12 +280,17 @@ def sample(board, args, on_sample, keep=True):
     (with ``keep``; else an empty list, for a run without end) and ``{status: number}``. The
     channels are left as they were (trigger_enable, periodic, cfg_period), also on Ctrl-C."""
     chans = args.channel
-    two_words, ctrl_before, period_before = {}, {}, {}
+    two_words, signed, ctrl_before, period_before = {}, {}, {}, {}
     for ch in chans:
         if board.read_fields("state", ch)["config_error"]:
             raise UsageError(f"channel {ch} is not configured (state.config_error 1): e.g. "
                              f"bissmaster config --preset resolute_c_26 --ma-hz 1e6")
-        two_words[ch] = bool(board.read_fields("cfg_words", ch)["w1_enable"])
+        words = board.read_fields("cfg_words", ch)
+        two_words[ch] = bool(words["w1_enable"])
+        # A signed word (cfg_words.wN_signed): the core sign-extends it to its register's
+        # width, caps.data_bits_wN; shown as the negative number it is (0: unsigned).
+        signed[ch] = [board.caps(ch)[f"data_bits_w{w}"] if words.get(f"w{w}_signed") else 0
+                      for w in (0, 1)]
         ctrl_before[ch] = board.read_fields("ctrl", ch)
         if args.free_run is None and ctrl_before[ch]["periodic"]:
             raise UsageError(f"channel {ch} runs periodic requests (ctrl.periodic 1): read it "
@@ -322,6 +327,11 @@ def sample(board, args, on_sample, keep=True):
                     last_seq[r.channel] = r.seq
             for r in results:
                 r.time_s = t - start
+                if r.frame:
+                    bits0, bits1 = signed[r.channel]
+                    r.position = signed_data(r.position, bits0)
+                    if r.word1 is not None:
+                        r.word1 = signed_data(r.word1, bits1)
                 counts[r.status] = counts.get(r.status, 0) + 1
             if keep:
                 taken += results
@@ -394,7 +404,7 @@ class Table:
                      f"{r.lc if w1 else dash:>2}")
         delay = frame or r.status == "DELAY_RANGE"
         text += (f" {r.line_delay if delay else dash:>5} "
-                 f"{_ns(r.line_delay, self.clock_hz) if delay else dash:>8}")
+                 f"{f'{_ns(r.line_delay, self.clock_hz):.1f}' if delay else dash:>8}")
         return text
 
     def show(self, index, results):
@@ -823,7 +833,8 @@ def main(argv=None, *, transport=None, stdout=None, stderr=None):
     except BoardError as e:
         return fail("bad argument", e)
     except OSError as e:                # the port failed while in use (unplugged)
-        return fail("port", f"the port failed: {e}")
+        where = f"the port {args.port}" if transport is None else "the transport"
+        return fail("port", f"{where} failed while in use (unplugged?): {e}")
     finally:
         if board is not None and transport is None:
             close = getattr(board.link.transport, "close", None)

@@ -2,8 +2,9 @@
 (iCEBreaker: 24 MHz, 115200 baud, 208 clocks per bit): it answers a PING and a READ of the
 register map's ``id`` over its UART pins, byte for byte as docs/uart_bridge.md frames them, and
 its transceiver enables are off in reset and on after it; with a faster UART, its status LEDs
-follow a frame from an encoder and a cycle without one. Everything of the board but the PLL and
-the I/O buffers (tb/tests/board/test_board_designs.py elaborates those)."""
+follow a frame from an encoder and a cycle without one, and the host tool ``bissmaster`` itself
+configures it and reads positions and counters over its UART pins. Everything of the board but
+the PLL and the I/O buffers (tb/tests/board/test_board_designs.py elaborates those)."""
 
 import pytest
 from amaranth.hdl import ClockDomain, Module
@@ -209,3 +210,146 @@ def test_leds_follow_the_frames():
     sim.run()
     assert seen["after_frame"] == (1, 0)
     assert seen["after_no_encoder"] == (1, 1)      # valid still held from the first frame
+
+
+# -- The host tool on the board's logic -------------------------------------------------------
+
+class LockstepTransport:
+    """``bissmaster``'s transport into an Amaranth simulation of a board's logic: the tool runs in
+    a thread of its own and each of its calls (``write``, ``read``, ``sleep``) is done by the
+    simulation's testbench, clock by clock, while the tool waits; between calls simulated time
+    stands still. ``now`` is simulated time, so the link's deadlines and the tool's sample rate
+    are the simulation's, as on a board they are the computer's."""
+
+    def __init__(self, sys_clk_hz):
+        import queue
+        self.sys_clk_hz = sys_clk_hz
+        self.clocks = 0
+        self.calls, self.replies = queue.Queue(), queue.Queue()
+
+    def _call(self, *call):
+        self.calls.put(call)
+        return self.replies.get()
+
+    def now(self):
+        return self.clocks / self.sys_clk_hz
+
+    def write(self, data):
+        self._call("write", bytes(data))
+
+    def read(self, n, timeout):
+        return self._call("read", n, timeout)
+
+    def sleep(self, seconds):
+        self._call("sleep", seconds)
+
+
+def test_host_tool_configures_and_reads_the_board():
+    """The host tool itself (bissmaster.host.cli.main) on the iCEBreaker's logic (its core: the
+    ``bp3`` preset with the board's overrides, 24 MHz; the UART at 4 clocks per bit, 6 Mbaud,
+    to keep the run short) over its UART pins, against the limits bench's encoder (a 4-bit
+    BiSS C word with nE/nW and CRC-6 from the independent encoder model): `config --preset
+    biss-c-4 --ma-hz 3e6` (MA half period 4 at 24 MHz), `read` prints the encoder's position
+    with OK and lights the valid LED, `counters` are all 0; unplugged, `read` exits 6 with
+    NO_ACK and `counters` counts it. Every exit code as docs/bench.md gives it."""
+    import io
+    import threading
+
+    from bissmaster.host import cli
+    from testkit.limits_bench import POSITION
+
+    board = BOARDS["icebreaker"]
+    div = 4
+    logic = BoardLogic(len(board.channels), board.params, baud=board.sys_clk_hz // div)
+    m = Module()
+    m.domains.sync = ClockDomain()
+    m.submodules.logic = logic
+    sim = Simulator(m)
+    sim.add_clock(1 / board.sys_clk_hz)
+    encoder = Encoder(hp=4, bits=FRAME)
+    transport = LockstepTransport(board.sys_clk_hz)
+    common = ["--baud", str(board.sys_clk_hz // div), "--clock-hz", str(board.sys_clk_hz),
+              "--latency", "2e-6"]
+    runs = []
+
+    def unplug():
+        encoder.present = False
+    steps = [["config", "--preset", "biss-c-4", "--ma-hz", "3e6"],
+             ["read", "--count", "2", "--rate", "20000"],
+             ["counters"], unplug,
+             ["read", "--count", "2", "--rate", "20000"],
+             ["counters"]]
+
+    def host():
+        try:
+            for step in steps:
+                if callable(step):
+                    step()          # (the simulation waits for the tool's next call)
+                    continue
+                out, err = io.StringIO(), io.StringIO()
+                code = cli.main(step + common, transport=transport, stdout=out, stderr=err)
+                runs.append((step[0], code, out.getvalue(), err.getvalue()))
+        finally:
+            transport.calls.put(("done",))
+
+    leds = []
+
+    async def bench(ctx):
+        line = Line(div)
+        received = bytearray()
+
+        async def tick():
+            ctx.set(logic.ch0_slo, encoder.step(ctx.get(logic.ch0_ma)))
+            line.sample(ctx.get(logic.uart_tx))
+            if line.bytes:
+                received.extend(line.bytes)
+                line.bytes.clear()
+            await ctx.tick()
+            transport.clocks += 1
+
+        for _ in range(4):
+            await tick()
+        thread = threading.Thread(target=host, daemon=True)
+        thread.start()
+        while True:
+            call = transport.calls.get(timeout=600)
+            if call[0] == "done":
+                break
+            if call[0] == "write":
+                for level in uart_levels(call[1], div):
+                    ctx.set(logic.uart_rx, level)
+                    await tick()
+                reply = None
+            elif call[0] == "sleep":
+                for _ in range(max(round(call[1] * board.sys_clk_hz), 0)):
+                    await tick()
+                reply = None
+            else:
+                n, timeout = call[1], call[2]
+                deadline = transport.clocks + round(timeout * board.sys_clk_hz)
+                while len(received) < n and transport.clocks < deadline:
+                    await tick()
+                reply, received[:] = bytes(received[:n]), received[n:]
+            leds.append(ctx.get(logic.ch0_valid_led))
+            transport.replies.put(reply)
+        thread.join(timeout=60)
+
+    sim.add_testbench(bench)
+    sim.run()
+
+    (config, c0, _, e0), (read, c1, out1, e1), (_, c2, out2, e2), \
+        (_, c3, out3, e3), (_, c4, out4, e4) = runs
+    assert c0 == 0, e0
+    assert c1 == 0, e1
+    rows = [line.split() for line in out1.splitlines()[1:]]
+    assert [(r[3], int(r[4]), r[5], r[6], r[7]) for r in rows] == \
+        [("OK", POSITION, "1", "1", "ok")] * 2, out1
+    # the round trip in clocks, and in ns at the board's clock, one decimal (41.7 ns a clock)
+    assert all(r[9] == f"{int(r[8]) * 1e9 / board.sys_clk_hz:.1f}" for r in rows), out1
+    assert [r[2] for r in rows] == ["1", "2"], "one cycle per sample"
+    assert 1 in leds, "the valid LED lit"
+    counts = {l.split()[0]: int(l.split()[1]) for l in out2.splitlines()[1:]}
+    assert c2 == 0 and counts and not any(counts.values()), out2
+    assert c3 == 6 and "NO_ACK 2" in e3 and "does not answer" in e3, (c3, e3)
+    counts = {l.split()[0]: int(l.split()[1]) for l in out4.splitlines()[1:]}
+    assert c4 == 0 and counts["no_ack"] == 2 and sum(counts.values()) == 2, out4

@@ -104,6 +104,40 @@ def test_read_two_channels_one_of_them_two_words():
     assert len(writes(model, "trigger", None)) == 2, "one trigger starts both channels"
 
 
+def test_read_shows_the_line_delay_in_ns_to_one_decimal():
+    """At a clock whose period is not a whole number of ns (the iCEBreaker's 24 MHz), the
+    table's delay_ns has one decimal, as the CSV's line_delay_ns (37 clocks: 1541.7 ns)."""
+    code, out, err = run(["read", "--count", "1", "--clock-hz", "24e6"], biss_c_board())
+    assert code == EXIT["ok"], err
+    assert out.splitlines()[1].split()[8:] == ["37", "1541.7"]
+
+
+def test_read_and_log_show_a_signed_word_as_a_negative_number(tmp_path):
+    """cfg_words.wN_signed: the core sign-extends the word to its register's width
+    (caps.data_bits_wN, 55 and 40 here); the tool shows the negative number, in the table and
+    in the CSV, as the C driver's biss_signed_data; an unsigned word of the same bits stays
+    positive."""
+    model = RegisterModel()
+    model.configure(0, ma_half_period=50, w0_data_bits=26, w0_nenw=1, w0_crc=1, w0_signed=1)
+    model.configure(1, ma_half_period=20, w0_data_bits=36, w0_nenw=1, w0_crc=1, w1_enable=1,
+                    w1_data_bits=28, w1_nenw=1, w1_lc=1, w1_crc=2, w1_signed=1)
+    model.encoders[0] = FakeEncoder(positions=lambda n: (n - 1) % 2**26)     # -1, 0, 1
+    model.encoders[1] = FakeEncoder(positions=lambda n: 2**36 - 5, word1=lambda n: 2**28 - 3)
+    code, out, err = run(["read", "-c", "0,1", "--count", "3"], FakeBridge(model))
+    assert code == EXIT["ok"], err
+    rows = [r.split() for r in out.splitlines()[1:]]
+    assert [int(r[4]) for r in rows if r[1] == "0"] == [-1, 0, 1]
+    ch1 = [r for r in rows if r[1] == "1"]
+    assert [(int(r[4]), int(r[8])) for r in ch1] == [(2**36 - 5, -3)] * 3, "w0 unsigned"
+    path = tmp_path / "run.csv"
+    code, _, err = run(["log", "-c", "0", "--count", "2", "-o", str(path)], FakeBridge(model))
+    assert code == EXIT["ok"], err
+    assert [r["position"] for r in csv.DictReader(path.open())] == ["2", "3"]
+    model.encoders[0] = FakeEncoder(positions=lambda n: 2**26 - 2)
+    code, _, err = run(["log", "-c", "0", "--count", "1", "-o", str(path)], FakeBridge(model))
+    assert [r["position"] for r in csv.DictReader(path.open())] == ["-2"]
+
+
 @pytest.mark.parametrize("status, code", [("NO_ACK", "no encoder"),
                                           ("SLO_STUCK_LOW", "no encoder"),
                                           ("CRC_ERROR_WORD0", "encoder errors")])
