@@ -122,8 +122,8 @@ class BissMaster(wiring.Component):
             **access_ports,
             # Error counters
             **{f"count_{name}": Out(p.counter_width) for name in counter_ports(p)},
-            **({"count_addr": In(COUNT_ADDR_BITS), "count_en": In(1), "count_data": Out(32)}
-               if p.counter_ram else {}),
+            **({"count_addr": In(COUNT_ADDR_BITS), "count_en": In(1), "count_data": Out(32),
+                "count_busy": Out(1)} if p.counter_ram else {}),
         }
 
     @property
@@ -449,7 +449,8 @@ class BissMaster(wiring.Component):
             m.d.comb += [ram.events[name].eq(events[name])
                          for name in counter_slots(p) if name is not None]
             m.d.comb += [ram.clear.eq(self.clear_counters), ram.read_addr.eq(self.count_addr),
-                         ram.read_en.eq(self.count_en), self.count_data.eq(ram.read_data)]
+                         ram.read_en.eq(self.count_en), self.count_data.eq(ram.read_data),
+                         self.count_busy.eq(ram.busy)]
 
     def _connect_outputs(self, m, b):
         """The state and result ports, out."""

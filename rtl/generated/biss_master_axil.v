@@ -129,8 +129,8 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire ch0__count_en;
   wire ch0__delay_settled;
   wire [7:0] ch0__delay_spread;
-  wire ch0__done;
   wire [15:0] ch0__done_count;
+  wire ch0__frame_done;
   wire ch0__frame_error;
   wire [5:0] ch0__lc;
   wire ch0__lc_repeat;
@@ -227,8 +227,8 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire ch1__count_en;
   wire ch1__delay_settled;
   wire [7:0] ch1__delay_spread;
-  wire ch1__done;
   wire [15:0] ch1__done_count;
+  wire ch1__frame_done;
   wire ch1__frame_error;
   wire [5:0] ch1__lc;
   wire ch1__lc_repeat;
@@ -405,10 +405,10 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire \regs__delay_settled$389 ;
   wire [7:0] regs__delay_spread;
   wire [7:0] \regs__delay_spread$391 ;
-  wire regs__done;
-  wire \regs__done$393 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$395 ;
+  wire [15:0] \regs__done_count$393 ;
+  wire regs__frame_done;
+  wire \regs__frame_done$395 ;
   wire regs__frame_error;
   wire \regs__frame_error$397 ;
   wire [5:0] regs__lc;
@@ -532,8 +532,8 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch0__config_error(ch0__config_error),
     .ch0__count_data(ch0__count_data),
     .ch0__count_en(regs__count_en),
-    .ch0__done(ch0__done),
     .ch0__done_count(ch0__done_count),
+    .ch0__frame_done(ch0__frame_done),
     .ch0__frame_error(ch0__frame_error),
     .ch0_ca_ctrl_abort(regs__ca_abort),
     .ch0_ca_ctrl_start(regs__ca_start),
@@ -589,8 +589,8 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1__config_error(ch1__config_error),
     .ch1__count_data(ch1__count_data),
     .ch1__count_en(\regs__count_en$386 ),
-    .ch1__done(ch1__done),
     .ch1__done_count(ch1__done_count),
+    .ch1__frame_done(ch1__frame_done),
     .ch1__frame_error(ch1__frame_error),
     .ch1_ca_ctrl_abort(\regs__ca_abort$256 ),
     .ch1_ca_ctrl_start(\regs__ca_start$276 ),
@@ -639,12 +639,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$5945$0 (\$8 ),
-    .\port$5958$0 (\$9 ),
-    .\port$6043$0 (\$10 ),
-    .\port$6466$0 (\$11 ),
-    .\port$6479$0 (\$12 ),
-    .\port$6564$0 (\$13 ),
+    .\port$6101$0 (\$8 ),
+    .\port$6114$0 (\$9 ),
+    .\port$6210$0 (\$10 ),
+    .\port$6643$0 (\$11 ),
+    .\port$6656$0 (\$12 ),
+    .\port$6752$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -723,9 +723,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$5945$0 (\$8 ),
-    .\port$5958$0 (\$9 ),
-    .\port$6043$0 (\$10 ),
+    .\port$6101$0 (\$8 ),
+    .\port$6114$0 (\$9 ),
+    .\port$6210$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -733,14 +733,14 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .regs__ca_rbuf_data(ch0__ca_rbuf_data),
     .regs__config_error(ch0__config_error),
     .regs__count_data(ch0__count_data),
-    .regs__done(ch0__done),
     .regs__done_count(ch0__done_count),
+    .regs__frame_done(ch0__frame_done),
     .regs__frame_error(ch0__frame_error),
     .regs__trigger_enable(regs__trigger_enable),
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$177 (\trigger$58 )
+    .\trigger$182 (\trigger$58 )
   );
   \biss_master_axil.ch1  ch1 (
     .ca_abort(\regs__ca_abort$256 ),
@@ -792,9 +792,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(\regs__count_en$386 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$410 ),
-    .\port$6466$0 (\$11 ),
-    .\port$6479$0 (\$12 ),
-    .\port$6564$0 (\$13 ),
+    .\port$6643$0 (\$11 ),
+    .\port$6656$0 (\$12 ),
+    .\port$6752$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$252 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -802,14 +802,14 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .regs__ca_rbuf_data(ch1__ca_rbuf_data),
     .regs__config_error(ch1__config_error),
     .regs__count_data(ch1__count_data),
-    .regs__done(ch1__done),
     .regs__done_count(ch1__done_count),
+    .regs__frame_done(ch1__frame_done),
     .regs__frame_error(ch1__frame_error),
     .regs__trigger_enable(\regs__trigger_enable$422 ),
     .rst(rst),
     .slo(ch1_slo),
     .start(\regs__start$416 ),
-    .\trigger$177 (\trigger$58 )
+    .\trigger$182 (\trigger$58 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
@@ -940,8 +940,8 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign regs__delay_settled = \$8 [54];
   assign ch0__delay_spread = \$8 [75:68];
   assign regs__delay_spread = \$8 [75:68];
-  assign regs__done = ch0__done;
   assign regs__done_count = ch0__done_count;
+  assign regs__frame_done = ch0__frame_done;
   assign regs__frame_error = ch0__frame_error;
   assign ch0__lc = \$8 [182:177];
   assign regs__lc = \$8 [182:177];
@@ -1075,8 +1075,8 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign \regs__delay_settled$389  = \$11 [54];
   assign ch1__delay_spread = \$11 [75:68];
   assign \regs__delay_spread$391  = \$11 [75:68];
-  assign \regs__done$393  = ch1__done;
-  assign \regs__done_count$395  = ch1__done_count;
+  assign \regs__done_count$393  = ch1__done_count;
+  assign \regs__frame_done$395  = ch1__frame_done;
   assign \regs__frame_error$397  = ch1__frame_error;
   assign ch1__lc = \$11 [182:177];
   assign \regs__lc$399  = \$11 [182:177];
@@ -1133,8 +1133,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly
 , ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$105 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period
 , ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance
-, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$287 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__done_count, ch0__done, \port$5945$0 , \port$5958$0 , ch0__ca_done, \port$6043$0 
-, ch1__done_count, ch1__done, \port$6466$0 , \port$6479$0 , ch1__ca_done, \port$6564$0 , bus__r_addr);
+, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$287 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6101$0 , \port$6114$0 , ch0__ca_done, \port$6210$0 
+, ch1__frame_done, ch1__done_count, \port$6643$0 , \port$6656$0 , ch1__ca_done, \port$6752$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -1987,10 +1987,10 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch0__count_en;
   wire ch0__delay_settled;
   wire [7:0] ch0__delay_spread;
-  input ch0__done;
-  wire ch0__done;
   input [15:0] ch0__done_count;
   wire [15:0] ch0__done_count;
+  input ch0__frame_done;
+  wire ch0__frame_done;
   input ch0__frame_error;
   wire ch0__frame_error;
   wire [5:0] ch0__lc;
@@ -2337,10 +2337,10 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch1__count_en;
   wire ch1__delay_settled;
   wire [7:0] ch1__delay_spread;
-  input ch1__done;
-  wire ch1__done;
   input [15:0] ch1__done_count;
   wire [15:0] ch1__done_count;
+  input ch1__frame_done;
+  wire ch1__frame_done;
   input ch1__frame_error;
   wire ch1__frame_error;
   wire [5:0] ch1__lc;
@@ -2589,18 +2589,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$5945$0 ;
-  wire [186:0] \port$5945$0 ;
-  input [79:0] \port$5958$0 ;
-  wire [79:0] \port$5958$0 ;
-  input [9:0] \port$6043$0 ;
-  wire [9:0] \port$6043$0 ;
-  input [186:0] \port$6466$0 ;
-  wire [186:0] \port$6466$0 ;
-  input [79:0] \port$6479$0 ;
-  wire [79:0] \port$6479$0 ;
-  input [9:0] \port$6564$0 ;
-  wire [9:0] \port$6564$0 ;
+  input [186:0] \port$6101$0 ;
+  wire [186:0] \port$6101$0 ;
+  input [79:0] \port$6114$0 ;
+  wire [79:0] \port$6114$0 ;
+  input [9:0] \port$6210$0 ;
+  wire [9:0] \port$6210$0 ;
+  input [186:0] \port$6643$0 ;
+  wire [186:0] \port$6643$0 ;
+  input [79:0] \port$6656$0 ;
+  wire [79:0] \port$6656$0 ;
+  input [9:0] \port$6752$0 ;
+  wire [9:0] \port$6752$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2648,7 +2648,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$325  = \$323  | \$324 ;
   assign \$326  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$327  = \$325  | \$326 ;
-  assign \$328  = ch1_read_select_110 ? { 2'h0, \port$6466$0 [182:177], 4'h0, \port$6466$0 [186:183], 1'h0, \port$6466$0 [176:174], 1'h0, \port$6466$0 [133:131], 3'h0, \port$6466$0 [49], \port$6466$0 [3:0] } : 32'd0;
+  assign \$328  = ch1_read_select_110 ? { 2'h0, \port$6643$0 [182:177], 4'h0, \port$6643$0 [186:183], 1'h0, \port$6643$0 [176:174], 1'h0, \port$6643$0 [133:131], 3'h0, \port$6643$0 [49], \port$6643$0 [3:0] } : 32'd0;
   assign \$329  = \$327  | \$328 ;
   assign \$330  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$331  = \$329  | \$330 ;
@@ -2674,13 +2674,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$351  = \$349  | \$350 ;
   assign \$352  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$287 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$353  = \$351  | \$352 ;
-  assign \$356  = ch1_read_select_142 ? { 17'h00000, \port$6564$0 [9:3], 1'h0, \port$6564$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$356  = ch1_read_select_142 ? { 17'h00000, \port$6752$0 [9:3], 1'h0, \port$6752$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$357  = \$355  | \$356 ;
-  assign \$358  = ch1_read_select_143 ? \port$6479$0 [31:0] : 32'd0;
+  assign \$358  = ch1_read_select_143 ? \port$6656$0 [31:0] : 32'd0;
   assign \$359  = \$357  | \$358 ;
-  assign \$360  = ch1_read_select_144 ? \port$6479$0 [63:32] : 32'd0;
+  assign \$360  = ch1_read_select_144 ? \port$6656$0 [63:32] : 32'd0;
   assign \$361  = \$359  | \$360 ;
-  assign \$362  = ch1_read_select_145 ? { 16'h0000, \port$6479$0 [79:64] } : 32'd0;
+  assign \$362  = ch1_read_select_145 ? { 16'h0000, \port$6656$0 [79:64] } : 32'd0;
   assign \$363  = \$361  | \$362 ;
   assign \$364  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$365  = \$363  | \$364 ;
@@ -3506,7 +3506,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$150  = \$148  | \$149 ;
   assign \$151  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$152  = \$150  | \$151 ;
-  assign \$153  = ch0_read_select_90 ? { 2'h0, \port$5945$0 [182:177], 4'h0, \port$5945$0 [186:183], 1'h0, \port$5945$0 [176:174], 1'h0, \port$5945$0 [133:131], 3'h0, \port$5945$0 [49], \port$5945$0 [3:0] } : 32'd0;
+  assign \$153  = ch0_read_select_90 ? { 2'h0, \port$6101$0 [182:177], 4'h0, \port$6101$0 [186:183], 1'h0, \port$6101$0 [176:174], 1'h0, \port$6101$0 [133:131], 3'h0, \port$6101$0 [49], \port$6101$0 [3:0] } : 32'd0;
   assign \$154  = \$152  | \$153 ;
   assign \$155  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$156  = \$154  | \$155 ;
@@ -3532,13 +3532,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$176  = \$174  | \$175 ;
   assign \$177  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$105 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$181  = ch0_read_select_c2 ? { 17'h00000, \port$6043$0 [9:3], 1'h0, \port$6043$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$181  = ch0_read_select_c2 ? { 17'h00000, \port$6210$0 [9:3], 1'h0, \port$6210$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_c3 ? \port$5958$0 [31:0] : 32'd0;
+  assign \$183  = ch0_read_select_c3 ? \port$6114$0 [31:0] : 32'd0;
   assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_c4 ? \port$5958$0 [63:32] : 32'd0;
+  assign \$185  = ch0_read_select_c4 ? \port$6114$0 [63:32] : 32'd0;
   assign \$186  = \$184  | \$185 ;
-  assign \$187  = ch0_read_select_c5 ? { 16'h0000, \port$5958$0 [79:64] } : 32'd0;
+  assign \$187  = ch0_read_select_c5 ? { 16'h0000, \port$6114$0 [79:64] } : 32'd0;
   assign \$188  = \$186  | \$187 ;
   assign \$189  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$190  = \$188  | \$189 ;
@@ -3806,7 +3806,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$475  = ch0_irq_status_done;
-    if (ch0__done) begin
+    if (ch0__frame_done) begin
       \$475  = 1'h1;
     end else if (\$27 ) begin
       \$475  = 1'h0;
@@ -4710,7 +4710,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$565  = ch0_result_status_status_snapshot;
     if (\$122 ) begin
-      \$565  = \port$5945$0 [3:0];
+      \$565  = \port$6101$0 [3:0];
     end
     if (rst) begin
       \$565  = 4'h0;
@@ -4720,7 +4720,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$566  = ch0_result_status_cds_snapshot;
     if (\$122 ) begin
-      \$566  = \port$5945$0 [49];
+      \$566  = \port$6101$0 [49];
     end
     if (rst) begin
       \$566  = 1'h0;
@@ -4730,7 +4730,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$567  = ch0_result_status_w0_ne_snapshot;
     if (\$122 ) begin
-      \$567  = \port$5945$0 [131];
+      \$567  = \port$6101$0 [131];
     end
     if (rst) begin
       \$567  = 1'h0;
@@ -4740,7 +4740,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$568  = ch0_result_status_w0_nw_snapshot;
     if (\$122 ) begin
-      \$568  = \port$5945$0 [132];
+      \$568  = \port$6101$0 [132];
     end
     if (rst) begin
       \$568  = 1'h0;
@@ -4750,7 +4750,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$569  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$122 ) begin
-      \$569  = \port$5945$0 [133];
+      \$569  = \port$6101$0 [133];
     end
     if (rst) begin
       \$569  = 1'h0;
@@ -4760,7 +4760,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$570  = ch0_result_status_w1_ne_snapshot;
     if (\$122 ) begin
-      \$570  = \port$5945$0 [174];
+      \$570  = \port$6101$0 [174];
     end
     if (rst) begin
       \$570  = 1'h0;
@@ -4770,7 +4770,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$571  = ch0_result_status_w1_nw_snapshot;
     if (\$122 ) begin
-      \$571  = \port$5945$0 [175];
+      \$571  = \port$6101$0 [175];
     end
     if (rst) begin
       \$571  = 1'h0;
@@ -4780,7 +4780,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$572  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$122 ) begin
-      \$572  = \port$5945$0 [176];
+      \$572  = \port$6101$0 [176];
     end
     if (rst) begin
       \$572  = 1'h0;
@@ -4790,7 +4790,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$573  = ch0_result_status_lc_repeat_snapshot;
     if (\$122 ) begin
-      \$573  = \port$5945$0 [183];
+      \$573  = \port$6101$0 [183];
     end
     if (rst) begin
       \$573  = 1'h0;
@@ -4800,7 +4800,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$574  = ch0_result_status_lc_skip_snapshot;
     if (\$122 ) begin
-      \$574  = \port$5945$0 [184];
+      \$574  = \port$6101$0 [184];
     end
     if (rst) begin
       \$574  = 1'h0;
@@ -4810,7 +4810,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$575  = ch0_result_status_lc_zero_snapshot;
     if (\$122 ) begin
-      \$575  = \port$5945$0 [185];
+      \$575  = \port$6101$0 [185];
     end
     if (rst) begin
       \$575  = 1'h0;
@@ -4820,7 +4820,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$576  = ch0_result_status_spw_mismatch_snapshot;
     if (\$122 ) begin
-      \$576  = \port$5945$0 [186];
+      \$576  = \port$6101$0 [186];
     end
     if (rst) begin
       \$576  = 1'h0;
@@ -4830,7 +4830,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$577  = ch0_result_status_lc_snapshot;
     if (\$122 ) begin
-      \$577  = \port$5945$0 [182:177];
+      \$577  = \port$6101$0 [182:177];
     end
     if (rst) begin
       \$577  = 6'h00;
@@ -4850,7 +4850,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$579  = ch0_result_seq_line_delay_snapshot;
     if (\$122 ) begin
-      \$579  = \port$5945$0 [48:36];
+      \$579  = \port$6101$0 [48:36];
     end
     if (rst) begin
       \$579  = 13'h0000;
@@ -4860,7 +4860,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$580  = ch0_result_w0_lo_data_snapshot;
     if (\$122 ) begin
-      \$580  = \port$5945$0 [107:76];
+      \$580  = \port$6101$0 [107:76];
     end
     if (rst) begin
       \$580  = 32'd0;
@@ -4870,7 +4870,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$581  = ch0_result_w0_hi_data_snapshot;
     if (\$122 ) begin
-      \$581  = \port$5945$0 [130:108];
+      \$581  = \port$6101$0 [130:108];
     end
     if (rst) begin
       \$581  = 23'h000000;
@@ -4880,7 +4880,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$582  = ch0_result_w1_lo_data_snapshot;
     if (\$122 ) begin
-      \$582  = \port$5945$0 [165:134];
+      \$582  = \port$6101$0 [165:134];
     end
     if (rst) begin
       \$582  = 32'd0;
@@ -4890,7 +4890,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$583  = ch0_result_w1_hi_data_snapshot;
     if (\$122 ) begin
-      \$583  = \port$5945$0 [173:166];
+      \$583  = \port$6101$0 [173:166];
     end
     if (rst) begin
       \$583  = 8'h00;
@@ -4900,7 +4900,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$584  = ch0_result_timestamp_time_snapshot;
     if (\$122 ) begin
-      \$584  = \port$5945$0 [35:4];
+      \$584  = \port$6101$0 [35:4];
     end
     if (rst) begin
       \$584  = 32'd0;
@@ -4910,7 +4910,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$585  = ch0_result_line_noise_events_snapshot;
     if (\$122 ) begin
-      \$585  = \port$5945$0 [53:50];
+      \$585  = \port$6101$0 [53:50];
     end
     if (rst) begin
       \$585  = 4'h0;
@@ -4920,7 +4920,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$586  = ch0_result_line_delay_settled_snapshot;
     if (\$122 ) begin
-      \$586  = \port$5945$0 [54];
+      \$586  = \port$6101$0 [54];
     end
     if (rst) begin
       \$586  = 1'h0;
@@ -4930,7 +4930,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$587  = ch0_result_line_delay_spread_snapshot;
     if (\$122 ) begin
-      \$587  = \port$5945$0 [75:68];
+      \$587  = \port$6101$0 [75:68];
     end
     if (rst) begin
       \$587  = 8'h00;
@@ -4940,7 +4940,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$588  = ch0_result_line_settled_delay_snapshot;
     if (\$122 ) begin
-      \$588  = \port$5945$0 [67:55];
+      \$588  = \port$6101$0 [67:55];
     end
     if (rst) begin
       \$588  = 13'h0000;
@@ -5020,7 +5020,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$597  = ch1_irq_status_done;
-    if (ch1__done) begin
+    if (ch1__frame_done) begin
       \$597  = 1'h1;
     end else if (\$202 ) begin
       \$597  = 1'h0;
@@ -5924,7 +5924,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$687  = ch1_result_status_status_snapshot;
     if (\$297 ) begin
-      \$687  = \port$6466$0 [3:0];
+      \$687  = \port$6643$0 [3:0];
     end
     if (rst) begin
       \$687  = 4'h0;
@@ -5934,7 +5934,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$688  = ch1_result_status_cds_snapshot;
     if (\$297 ) begin
-      \$688  = \port$6466$0 [49];
+      \$688  = \port$6643$0 [49];
     end
     if (rst) begin
       \$688  = 1'h0;
@@ -5944,7 +5944,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$689  = ch1_result_status_w0_ne_snapshot;
     if (\$297 ) begin
-      \$689  = \port$6466$0 [131];
+      \$689  = \port$6643$0 [131];
     end
     if (rst) begin
       \$689  = 1'h0;
@@ -5954,7 +5954,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$690  = ch1_result_status_w0_nw_snapshot;
     if (\$297 ) begin
-      \$690  = \port$6466$0 [132];
+      \$690  = \port$6643$0 [132];
     end
     if (rst) begin
       \$690  = 1'h0;
@@ -5964,7 +5964,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$691  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$297 ) begin
-      \$691  = \port$6466$0 [133];
+      \$691  = \port$6643$0 [133];
     end
     if (rst) begin
       \$691  = 1'h0;
@@ -5974,7 +5974,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$692  = ch1_result_status_w1_ne_snapshot;
     if (\$297 ) begin
-      \$692  = \port$6466$0 [174];
+      \$692  = \port$6643$0 [174];
     end
     if (rst) begin
       \$692  = 1'h0;
@@ -5984,7 +5984,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$693  = ch1_result_status_w1_nw_snapshot;
     if (\$297 ) begin
-      \$693  = \port$6466$0 [175];
+      \$693  = \port$6643$0 [175];
     end
     if (rst) begin
       \$693  = 1'h0;
@@ -5994,7 +5994,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$694  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$297 ) begin
-      \$694  = \port$6466$0 [176];
+      \$694  = \port$6643$0 [176];
     end
     if (rst) begin
       \$694  = 1'h0;
@@ -6004,7 +6004,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$695  = ch1_result_status_lc_repeat_snapshot;
     if (\$297 ) begin
-      \$695  = \port$6466$0 [183];
+      \$695  = \port$6643$0 [183];
     end
     if (rst) begin
       \$695  = 1'h0;
@@ -6014,7 +6014,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$696  = ch1_result_status_lc_skip_snapshot;
     if (\$297 ) begin
-      \$696  = \port$6466$0 [184];
+      \$696  = \port$6643$0 [184];
     end
     if (rst) begin
       \$696  = 1'h0;
@@ -6024,7 +6024,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$697  = ch1_result_status_lc_zero_snapshot;
     if (\$297 ) begin
-      \$697  = \port$6466$0 [185];
+      \$697  = \port$6643$0 [185];
     end
     if (rst) begin
       \$697  = 1'h0;
@@ -6034,7 +6034,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$698  = ch1_result_status_spw_mismatch_snapshot;
     if (\$297 ) begin
-      \$698  = \port$6466$0 [186];
+      \$698  = \port$6643$0 [186];
     end
     if (rst) begin
       \$698  = 1'h0;
@@ -6044,7 +6044,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$699  = ch1_result_status_lc_snapshot;
     if (\$297 ) begin
-      \$699  = \port$6466$0 [182:177];
+      \$699  = \port$6643$0 [182:177];
     end
     if (rst) begin
       \$699  = 6'h00;
@@ -6064,7 +6064,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$701  = ch1_result_seq_line_delay_snapshot;
     if (\$297 ) begin
-      \$701  = \port$6466$0 [48:36];
+      \$701  = \port$6643$0 [48:36];
     end
     if (rst) begin
       \$701  = 13'h0000;
@@ -6074,7 +6074,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$702  = ch1_result_w0_lo_data_snapshot;
     if (\$297 ) begin
-      \$702  = \port$6466$0 [107:76];
+      \$702  = \port$6643$0 [107:76];
     end
     if (rst) begin
       \$702  = 32'd0;
@@ -6084,7 +6084,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$703  = ch1_result_w0_hi_data_snapshot;
     if (\$297 ) begin
-      \$703  = \port$6466$0 [130:108];
+      \$703  = \port$6643$0 [130:108];
     end
     if (rst) begin
       \$703  = 23'h000000;
@@ -6094,7 +6094,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$704  = ch1_result_w1_lo_data_snapshot;
     if (\$297 ) begin
-      \$704  = \port$6466$0 [165:134];
+      \$704  = \port$6643$0 [165:134];
     end
     if (rst) begin
       \$704  = 32'd0;
@@ -6104,7 +6104,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$705  = ch1_result_w1_hi_data_snapshot;
     if (\$297 ) begin
-      \$705  = \port$6466$0 [173:166];
+      \$705  = \port$6643$0 [173:166];
     end
     if (rst) begin
       \$705  = 8'h00;
@@ -6114,7 +6114,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$706  = ch1_result_timestamp_time_snapshot;
     if (\$297 ) begin
-      \$706  = \port$6466$0 [35:4];
+      \$706  = \port$6643$0 [35:4];
     end
     if (rst) begin
       \$706  = 32'd0;
@@ -6124,7 +6124,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$707  = ch1_result_line_noise_events_snapshot;
     if (\$297 ) begin
-      \$707  = \port$6466$0 [53:50];
+      \$707  = \port$6643$0 [53:50];
     end
     if (rst) begin
       \$707  = 4'h0;
@@ -6134,7 +6134,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$708  = ch1_result_line_delay_settled_snapshot;
     if (\$297 ) begin
-      \$708  = \port$6466$0 [54];
+      \$708  = \port$6643$0 [54];
     end
     if (rst) begin
       \$708  = 1'h0;
@@ -6144,7 +6144,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$709  = ch1_result_line_delay_spread_snapshot;
     if (\$297 ) begin
-      \$709  = \port$6466$0 [75:68];
+      \$709  = \port$6643$0 [75:68];
     end
     if (rst) begin
       \$709  = 8'h00;
@@ -6154,7 +6154,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$710  = ch1_result_line_settled_delay_snapshot;
     if (\$297 ) begin
-      \$710  = \port$6466$0 [67:55];
+      \$710  = \port$6643$0 [67:55];
     end
     if (rst) begin
       \$710  = 13'h0000;
@@ -6192,74 +6192,74 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$5945$0 [3:0];
-  assign ch0__cds = \port$5945$0 [49];
-  assign ch0__word0_ne = \port$5945$0 [131];
-  assign ch0__word0_nw = \port$5945$0 [132];
-  assign ch0__word0_crc_ok = \port$5945$0 [133];
-  assign ch0__word1_ne = \port$5945$0 [174];
-  assign ch0__word1_nw = \port$5945$0 [175];
-  assign ch0__word1_crc_ok = \port$5945$0 [176];
-  assign ch0__lc_repeat = \port$5945$0 [183];
-  assign ch0__lc_skip = \port$5945$0 [184];
-  assign ch0__lc_zero = \port$5945$0 [185];
-  assign ch0__spw_mismatch = \port$5945$0 [186];
-  assign ch0__lc = \port$5945$0 [182:177];
-  assign ch0__line_delay = \port$5945$0 [48:36];
-  assign ch0__word0_position = \port$5945$0 [130:76];
-  assign ch0__word1_position = \port$5945$0 [173:134];
-  assign ch0__timestamp = \port$5945$0 [35:4];
-  assign ch0__noise_events = \port$5945$0 [53:50];
-  assign ch0__delay_settled = \port$5945$0 [54];
-  assign ch0__delay_spread = \port$5945$0 [75:68];
-  assign ch0__settled_delay = \port$5945$0 [67:55];
+  assign ch0__status = \port$6101$0 [3:0];
+  assign ch0__cds = \port$6101$0 [49];
+  assign ch0__word0_ne = \port$6101$0 [131];
+  assign ch0__word0_nw = \port$6101$0 [132];
+  assign ch0__word0_crc_ok = \port$6101$0 [133];
+  assign ch0__word1_ne = \port$6101$0 [174];
+  assign ch0__word1_nw = \port$6101$0 [175];
+  assign ch0__word1_crc_ok = \port$6101$0 [176];
+  assign ch0__lc_repeat = \port$6101$0 [183];
+  assign ch0__lc_skip = \port$6101$0 [184];
+  assign ch0__lc_zero = \port$6101$0 [185];
+  assign ch0__spw_mismatch = \port$6101$0 [186];
+  assign ch0__lc = \port$6101$0 [182:177];
+  assign ch0__line_delay = \port$6101$0 [48:36];
+  assign ch0__word0_position = \port$6101$0 [130:76];
+  assign ch0__word1_position = \port$6101$0 [173:134];
+  assign ch0__timestamp = \port$6101$0 [35:4];
+  assign ch0__noise_events = \port$6101$0 [53:50];
+  assign ch0__delay_settled = \port$6101$0 [54];
+  assign ch0__delay_spread = \port$6101$0 [75:68];
+  assign ch0__settled_delay = \port$6101$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__ca_status = \port$6043$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6043$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$5958$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$5958$0 [31:16];
-  assign ch0__count_ca_refused = \port$5958$0 [47:32];
-  assign ch0__count_ca_aborted = \port$5958$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$5958$0 [79:64];
-  assign ch1__status = \port$6466$0 [3:0];
-  assign ch1__cds = \port$6466$0 [49];
-  assign ch1__word0_ne = \port$6466$0 [131];
-  assign ch1__word0_nw = \port$6466$0 [132];
-  assign ch1__word0_crc_ok = \port$6466$0 [133];
-  assign ch1__word1_ne = \port$6466$0 [174];
-  assign ch1__word1_nw = \port$6466$0 [175];
-  assign ch1__word1_crc_ok = \port$6466$0 [176];
-  assign ch1__lc_repeat = \port$6466$0 [183];
-  assign ch1__lc_skip = \port$6466$0 [184];
-  assign ch1__lc_zero = \port$6466$0 [185];
-  assign ch1__spw_mismatch = \port$6466$0 [186];
-  assign ch1__lc = \port$6466$0 [182:177];
-  assign ch1__line_delay = \port$6466$0 [48:36];
-  assign ch1__word0_position = \port$6466$0 [130:76];
-  assign ch1__word1_position = \port$6466$0 [173:134];
-  assign ch1__timestamp = \port$6466$0 [35:4];
-  assign ch1__noise_events = \port$6466$0 [53:50];
-  assign ch1__delay_settled = \port$6466$0 [54];
-  assign ch1__delay_spread = \port$6466$0 [75:68];
-  assign ch1__settled_delay = \port$6466$0 [67:55];
+  assign ch0__ca_status = \port$6210$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6210$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6114$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$6114$0 [31:16];
+  assign ch0__count_ca_refused = \port$6114$0 [47:32];
+  assign ch0__count_ca_aborted = \port$6114$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$6114$0 [79:64];
+  assign ch1__status = \port$6643$0 [3:0];
+  assign ch1__cds = \port$6643$0 [49];
+  assign ch1__word0_ne = \port$6643$0 [131];
+  assign ch1__word0_nw = \port$6643$0 [132];
+  assign ch1__word0_crc_ok = \port$6643$0 [133];
+  assign ch1__word1_ne = \port$6643$0 [174];
+  assign ch1__word1_nw = \port$6643$0 [175];
+  assign ch1__word1_crc_ok = \port$6643$0 [176];
+  assign ch1__lc_repeat = \port$6643$0 [183];
+  assign ch1__lc_skip = \port$6643$0 [184];
+  assign ch1__lc_zero = \port$6643$0 [185];
+  assign ch1__spw_mismatch = \port$6643$0 [186];
+  assign ch1__lc = \port$6643$0 [182:177];
+  assign ch1__line_delay = \port$6643$0 [48:36];
+  assign ch1__word0_position = \port$6643$0 [130:76];
+  assign ch1__word1_position = \port$6643$0 [173:134];
+  assign ch1__timestamp = \port$6643$0 [35:4];
+  assign ch1__noise_events = \port$6643$0 [53:50];
+  assign ch1__delay_settled = \port$6643$0 [54];
+  assign ch1__delay_spread = \port$6643$0 [75:68];
+  assign ch1__settled_delay = \port$6643$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__ca_status = \port$6564$0 [2:0];
-  assign ch1__ca_bytes_done = \port$6564$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$6479$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$6479$0 [31:16];
-  assign ch1__count_ca_refused = \port$6479$0 [47:32];
-  assign ch1__count_ca_aborted = \port$6479$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$6479$0 [79:64];
+  assign ch1__ca_status = \port$6752$0 [2:0];
+  assign ch1__ca_bytes_done = \port$6752$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$6656$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$6656$0 [31:16];
+  assign ch1__count_ca_refused = \port$6656$0 [47:32];
+  assign ch1__count_ca_aborted = \port$6656$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$6656$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__r_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -6622,18 +6622,32 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
+module \biss_master_axil.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
-, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$5945$0 
-, \port$5958$0 , regs__ca_done, \port$6043$0 , ca_rbuf_addr);
+, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6101$0 
+, \port$6114$0 , regs__ca_done, \port$6210$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
-  wire [16:0] \$2 ;
-  reg \$3 ;
-  reg [15:0] \$4 ;
-  wire [186:0] \$5 ;
-  wire [79:0] \$6 ;
-  wire [9:0] \$7 ;
+  wire [16:0] \$10 ;
+  reg \$11 ;
+  reg [3:0] \$12 ;
+  reg \$13 ;
+  reg \$14 ;
+  reg \$15 ;
+  reg \$16 ;
+  reg [15:0] \$17 ;
+  wire [186:0] \$18 ;
+  wire [79:0] \$19 ;
+  wire \$2 ;
+  wire [9:0] \$20 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire [4:0] \$8 ;
+  wire [4:0] \$9 ;
+  reg \$signal  = 1'h0;
   reg abort_cycle = 1'h0;
   wire busy;
   input ca_abort;
@@ -6754,6 +6768,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   wire clk;
   wire config_error;
   wire [2:0] count_addr;
+  wire count_busy;
   wire [15:0] count_ca_aborted;
   wire [15:0] count_ca_crc4_error;
   wire [15:0] count_ca_data_fault;
@@ -6765,6 +6780,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   wire delay_settled;
   wire [7:0] delay_spread;
   wire done;
+  (* init = 1'h0 *)
+  wire ended;
+  reg ended_ok = 1'h0;
   wire [5:0] lc;
   wire lc_repeat;
   wire lc_skip;
@@ -6772,16 +6790,17 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$180 ;
+  wire \ma$185 ;
   wire [3:0] noise_events;
+  reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$5945$0 ;
-  wire [186:0] \port$5945$0 ;
-  output [79:0] \port$5958$0 ;
-  wire [79:0] \port$5958$0 ;
-  output [9:0] \port$6043$0 ;
-  wire [9:0] \port$6043$0 ;
+  output [186:0] \port$6101$0 ;
+  wire [186:0] \port$6101$0 ;
+  output [79:0] \port$6114$0 ;
+  wire [79:0] \port$6114$0 ;
+  output [9:0] \port$6210$0 ;
+  wire [9:0] \port$6210$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -6869,10 +6888,10 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   wire regs__count_en;
   wire regs__delay_settled;
   wire [7:0] regs__delay_spread;
-  output regs__done;
-  wire regs__done;
   output [15:0] regs__done_count;
   reg [15:0] regs__done_count = 16'h0000;
+  output regs__frame_done;
+  reg regs__frame_done = 1'h0;
   output regs__frame_error;
   wire regs__frame_error;
   wire [5:0] regs__lc;
@@ -6897,12 +6916,13 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   wire regs__word1_ne;
   wire regs__word1_nw;
   wire [39:0] regs__word1_position;
+  wire report;
   input rst;
   wire rst;
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$182 ;
+  wire \slo$187 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -6925,9 +6945,10 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$177 ;
-  wire \trigger$177 ;
+  input \trigger$182 ;
+  wire \trigger$182 ;
   wire valid;
+  reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
   wire word0_ne;
   wire word0_nw;
@@ -6936,18 +6957,37 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
-  assign trigger = \trigger$177  & regs__trigger_enable;
-  assign \$2  = regs__done_count + 1'h1;
+  assign \$1  = ~ count_busy;
+  assign \$2  = \$1  | done;
+  assign \$3  = waited == 4'hf;
+  assign \$4  = \$2  | \$3 ;
+  assign report = \$signal  & \$4 ;
+  assign \$5  = ~ ended_ok;
+  assign regs__frame_error = regs__frame_done & \$5 ;
+  assign trigger = \trigger$182  & regs__trigger_enable;
+  assign \$6  = ~ report;
+  assign \$7  = \$signal  & \$6 ;
+  assign \$8  = waited + 1'h1;
+  assign \$9  = \$7  ? \$8  : 5'h00;
+  assign \$10  = regs__done_count + 1'h1;
   always @(posedge clk)
-    abort_cycle <= \$3 ;
+    \$signal  <= \$11 ;
   always @(posedge clk)
-    regs__done_count <= \$4 ;
-  assign \$1  = ~ valid;
-  assign regs__frame_error = regs__done & \$1 ;
+    waited <= \$12 ;
+  always @(posedge clk)
+    pending_ok <= \$13 ;
+  always @(posedge clk)
+    regs__frame_done <= \$14 ;
+  always @(posedge clk)
+    ended_ok <= \$15 ;
+  always @(posedge clk)
+    abort_cycle <= \$16 ;
+  always @(posedge clk)
+    regs__done_count <= \$17 ;
   \biss_master_axil.ch0.core  core (
     .abort(abort_cycle),
     .\abort$239 (ca_abort),
-    .\busy$285 (regs__busy),
+    .\busy$287 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -6993,39 +7033,84 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
     .\clear$263 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
+    .count_busy(count_busy),
     .count_data(regs__count_data),
-    .counts(\$6 ),
-    .\done$288 (regs__done),
+    .counts(\$19 ),
+    .\done$290 (done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$39 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
-    .result(\$7 ),
-    .\result$293 (\$5 ),
+    .result(\$20 ),
+    .\result$295 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
     .\start$237 (ca_start),
     .trigger(trigger),
-    .\valid$290 (valid)
+    .\valid$292 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$3  = regs__abort_cycle;
+    \$11  = \$signal ;
+    if (report) begin
+      \$11  = 1'h0;
+    end
+    if (done) begin
+      \$11  = 1'h1;
+    end
     if (rst) begin
-      \$3  = 1'h0;
+      \$11  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$4  = regs__done_count;
-    if (regs__done) begin
-      \$4  = \$2 [15:0];
+    \$12  = \$9 [3:0];
+    if (rst) begin
+      \$12  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$13  = pending_ok;
+    if (done) begin
+      \$13  = valid;
     end
     if (rst) begin
-      \$4  = 16'h0000;
+      \$13  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$14  = report;
+    if (rst) begin
+      \$14  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$15  = pending_ok;
+    if (rst) begin
+      \$15  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$16  = regs__abort_cycle;
+    if (rst) begin
+      \$16  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$17  = regs__done_count;
+    if (regs__frame_done) begin
+      \$17  = \$10 [15:0];
+    end
+    if (rst) begin
+      \$17  = 16'h0000;
     end
   end
   assign count_addr = ca_rbuf_addr[2:0];
@@ -7043,7 +7128,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   assign regs__cap_counters = 1'h1;
   assign regs__cap_timestamp = 1'h1;
   assign regs__cap_register_access = 1'h1;
-  assign done = regs__done;
+  assign ended = regs__frame_done;
   assign ca_done = regs__ca_done;
   assign regs__cfg_ma_half_period = cfg_ma_half_period;
   assign regs__cfg_delay_limit = cfg_delay_limit;
@@ -7070,48 +7155,48 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   assign regs__cfg_noise_limit = cfg_noise_limit;
   assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
   assign regs__cfg_quiet_time = cfg_quiet_time;
-  assign regs__status = \$5 [3:0];
-  assign status = \$5 [3:0];
-  assign regs__cds = \$5 [49];
-  assign cds = \$5 [49];
-  assign regs__word0_ne = \$5 [131];
-  assign word0_ne = \$5 [131];
-  assign regs__word0_nw = \$5 [132];
-  assign word0_nw = \$5 [132];
-  assign regs__word0_crc_ok = \$5 [133];
-  assign word0_crc_ok = \$5 [133];
-  assign regs__word1_ne = \$5 [174];
-  assign word1_ne = \$5 [174];
-  assign regs__word1_nw = \$5 [175];
-  assign word1_nw = \$5 [175];
-  assign regs__word1_crc_ok = \$5 [176];
-  assign word1_crc_ok = \$5 [176];
-  assign regs__lc_repeat = \$5 [183];
-  assign lc_repeat = \$5 [183];
-  assign regs__lc_skip = \$5 [184];
-  assign lc_skip = \$5 [184];
-  assign regs__lc_zero = \$5 [185];
-  assign lc_zero = \$5 [185];
-  assign regs__spw_mismatch = \$5 [186];
-  assign spw_mismatch = \$5 [186];
-  assign regs__lc = \$5 [182:177];
-  assign lc = \$5 [182:177];
-  assign regs__line_delay = \$5 [48:36];
-  assign line_delay = \$5 [48:36];
-  assign regs__word0_position = \$5 [130:76];
-  assign word0_position = \$5 [130:76];
-  assign regs__word1_position = \$5 [173:134];
-  assign word1_position = \$5 [173:134];
-  assign regs__timestamp = \$5 [35:4];
-  assign timestamp = \$5 [35:4];
-  assign regs__noise_events = \$5 [53:50];
-  assign noise_events = \$5 [53:50];
-  assign regs__delay_settled = \$5 [54];
-  assign delay_settled = \$5 [54];
-  assign regs__delay_spread = \$5 [75:68];
-  assign delay_spread = \$5 [75:68];
-  assign regs__settled_delay = \$5 [67:55];
-  assign settled_delay = \$5 [67:55];
+  assign regs__status = \$18 [3:0];
+  assign status = \$18 [3:0];
+  assign regs__cds = \$18 [49];
+  assign cds = \$18 [49];
+  assign regs__word0_ne = \$18 [131];
+  assign word0_ne = \$18 [131];
+  assign regs__word0_nw = \$18 [132];
+  assign word0_nw = \$18 [132];
+  assign regs__word0_crc_ok = \$18 [133];
+  assign word0_crc_ok = \$18 [133];
+  assign regs__word1_ne = \$18 [174];
+  assign word1_ne = \$18 [174];
+  assign regs__word1_nw = \$18 [175];
+  assign word1_nw = \$18 [175];
+  assign regs__word1_crc_ok = \$18 [176];
+  assign word1_crc_ok = \$18 [176];
+  assign regs__lc_repeat = \$18 [183];
+  assign lc_repeat = \$18 [183];
+  assign regs__lc_skip = \$18 [184];
+  assign lc_skip = \$18 [184];
+  assign regs__lc_zero = \$18 [185];
+  assign lc_zero = \$18 [185];
+  assign regs__spw_mismatch = \$18 [186];
+  assign spw_mismatch = \$18 [186];
+  assign regs__lc = \$18 [182:177];
+  assign lc = \$18 [182:177];
+  assign regs__line_delay = \$18 [48:36];
+  assign line_delay = \$18 [48:36];
+  assign regs__word0_position = \$18 [130:76];
+  assign word0_position = \$18 [130:76];
+  assign regs__word1_position = \$18 [173:134];
+  assign word1_position = \$18 [173:134];
+  assign regs__timestamp = \$18 [35:4];
+  assign timestamp = \$18 [35:4];
+  assign regs__noise_events = \$18 [53:50];
+  assign noise_events = \$18 [53:50];
+  assign regs__delay_settled = \$18 [54];
+  assign delay_settled = \$18 [54];
+  assign regs__delay_spread = \$18 [75:68];
+  assign delay_spread = \$18 [75:68];
+  assign regs__settled_delay = \$18 [67:55];
+  assign settled_delay = \$18 [67:55];
   assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
   assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
   assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
@@ -7127,38 +7212,38 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   assign regs__ca_start = ca_start;
   assign regs__ca_abort = ca_abort;
   assign ca_busy = regs__ca_busy;
-  assign regs__ca_status = \$7 [2:0];
-  assign ca_status = \$7 [2:0];
-  assign regs__ca_bytes_done = \$7 [9:3];
-  assign ca_bytes_done = \$7 [9:3];
-  assign regs__count_ca_crc4_error = \$6 [15:0];
-  assign count_ca_crc4_error = \$6 [15:0];
-  assign regs__count_ca_no_answer = \$6 [31:16];
-  assign count_ca_no_answer = \$6 [31:16];
-  assign regs__count_ca_refused = \$6 [47:32];
-  assign count_ca_refused = \$6 [47:32];
-  assign regs__count_ca_aborted = \$6 [63:48];
-  assign count_ca_aborted = \$6 [63:48];
-  assign regs__count_ca_data_fault = \$6 [79:64];
-  assign count_ca_data_fault = \$6 [79:64];
+  assign regs__ca_status = \$20 [2:0];
+  assign ca_status = \$20 [2:0];
+  assign regs__ca_bytes_done = \$20 [9:3];
+  assign ca_bytes_done = \$20 [9:3];
+  assign regs__count_ca_crc4_error = \$19 [15:0];
+  assign count_ca_crc4_error = \$19 [15:0];
+  assign regs__count_ca_no_answer = \$19 [31:16];
+  assign count_ca_no_answer = \$19 [31:16];
+  assign regs__count_ca_refused = \$19 [47:32];
+  assign count_ca_refused = \$19 [47:32];
+  assign regs__count_ca_aborted = \$19 [63:48];
+  assign count_ca_aborted = \$19 [63:48];
+  assign regs__count_ca_data_fault = \$19 [79:64];
+  assign count_ca_data_fault = \$19 [79:64];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$180  = ma;
-  assign \slo$182  = slo;
-  assign \port$5945$0  = \$5 ;
-  assign \port$5958$0  = \$6 ;
-  assign \port$6043$0  = \$7 ;
+  assign \ma$185  = ma;
+  assign \slo$187  = slo;
+  assign \port$6101$0  = \$18 ;
+  assign \port$6114$0  = \$19 ;
+  assign \port$6210$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$285 , config_error, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$263 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time
-, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time
-, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$288 , \valid$290 , \result$293 , counts, ca_done
-, result, rbuf_addr);
+module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$287 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$263 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
+, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$290 , \valid$292 , \result$295 , counts
+, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -7198,15 +7283,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] \ack_limit$104 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$317 ;
+  wire \bit$319 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$81 ;
   wire [23:0] break_time;
   wire busy;
   wire \busy$248 ;
-  output \busy$285 ;
-  wire \busy$285 ;
+  wire \busy$284 ;
+  output \busy$287 ;
+  wire \busy$287 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -7244,7 +7330,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \cdm$252 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$296 ;
+  wire \cds$298 ;
   wire [254:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -7374,7 +7460,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   reg clean = 1'h0;
   (* init = 1'h0 *)
   wire \clean$167 ;
-  wire \clean$318 ;
+  wire \clean$320 ;
   wire clear;
   wire \clear$128 ;
   input \clear$263 ;
@@ -7389,6 +7475,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire config_error;
   wire config_ok;
   wire [2:0] count_addr;
+  output count_busy;
+  wire count_busy;
   wire [15:0] count_ca_aborted;
   wire [15:0] count_ca_crc4_error;
   wire [15:0] count_ca_data_fault;
@@ -7509,9 +7597,9 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [16:0] delay_tolerance;
   wire done;
   wire \done$250 ;
-  output \done$288 ;
-  wire \done$288 ;
-  wire \done$289 ;
+  output \done$290 ;
+  wire \done$290 ;
+  wire \done$291 ;
   wire doubtful;
   wire early;
   wire \early$67 ;
@@ -7650,19 +7738,19 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$139 ;
-  wire [5:0] \lc$309 ;
+  wire [5:0] \lc$311 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$141 ;
   wire lc_repeat;
-  wire \lc_repeat$310 ;
+  wire \lc_repeat$312 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$311 ;
+  wire \lc_skip$313 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$312 ;
+  wire \lc_zero$314 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
@@ -7722,7 +7810,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \locked$65 ;
   output ma;
   wire ma;
-  wire \ma$284 ;
+  wire \ma$286 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$93 ;
@@ -7743,7 +7831,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$287 ;
+  wire \overrun$289 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$39 ;
@@ -7786,19 +7874,19 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$293 ;
-  wire [186:0] \result$293 ;
-  wire \result$293.cds ;
-  wire \result$293.delay_settled ;
-  wire [7:0] \result$293.delay_spread ;
-  wire [5:0] \result$293.lc ;
-  wire \result$293.lc_repeat ;
-  wire \result$293.lc_skip ;
-  wire \result$293.lc_zero ;
-  wire [12:0] \result$293.line_delay ;
-  wire [3:0] \result$293.noise_events ;
-  wire [12:0] \result$293.settled_delay ;
-  wire \result$293.spw_mismatch ;
+  output [186:0] \result$295 ;
+  wire [186:0] \result$295 ;
+  wire \result$295.cds ;
+  wire \result$295.delay_settled ;
+  wire [7:0] \result$295.delay_spread ;
+  wire [5:0] \result$295.lc ;
+  wire \result$295.lc_repeat ;
+  wire \result$295.lc_skip ;
+  wire \result$295.lc_zero ;
+  wire [12:0] \result$295.line_delay ;
+  wire [3:0] \result$295.noise_events ;
+  wire [12:0] \result$295.settled_delay ;
+  wire \result$295.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -7815,18 +7903,18 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$293.status ;
-  wire [31:0] \result$293.timestamp ;
-  wire [57:0] \result$293.word0 ;
-  wire \result$293.word0.crc_ok ;
-  wire \result$293.word0.ne ;
-  wire \result$293.word0.nw ;
-  wire [54:0] \result$293.word0.position ;
-  wire [42:0] \result$293.word1 ;
-  wire \result$293.word1.crc_ok ;
-  wire \result$293.word1.ne ;
-  wire \result$293.word1.nw ;
-  wire [39:0] \result$293.word1.position ;
+  wire [3:0] \result$295.status ;
+  wire [31:0] \result$295.timestamp ;
+  wire [57:0] \result$295.word0 ;
+  wire \result$295.word0.crc_ok ;
+  wire \result$295.word0.ne ;
+  wire \result$295.word0.nw ;
+  wire [54:0] \result$295.word0.position ;
+  wire [42:0] \result$295.word1 ;
+  wire \result$295.word1.crc_ok ;
+  wire \result$295.word1.ne ;
+  wire \result$295.word1.nw ;
+  wire [39:0] \result$295.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -7845,12 +7933,12 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$316 ;
+  wire \sample$318 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$299 ;
+  wire [12:0] \settled_delay$301 ;
   wire skip;
   input slo;
   wire slo;
@@ -7867,7 +7955,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$313 ;
+  wire \spw_mismatch$315 ;
   input start;
   wire start;
   input \start$237 ;
@@ -7912,7 +8000,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$292 ;
+  wire [3:0] \status$294 ;
   wire stop_bit;
   wire \stop_bit$77 ;
   wire stopped;
@@ -7929,8 +8017,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \trigger$48 ;
   wire valid;
   wire \valid$206 ;
-  output \valid$290 ;
-  wire \valid$290 ;
+  output \valid$292 ;
+  wire \valid$292 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -8021,10 +8109,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \$14  = report_frame & \$13 ;
   assign \$15  = status == 4'he;
   assign \$16  = report_frame & \$15 ;
-  assign \busy$285  = ~ idle;
+  assign \busy$287  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$17  = ~ \clear$128 ;
-  assign \$18  = \sample$316  & \$17 ;
+  assign \$18  = \sample$318  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -8097,6 +8185,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .waiting(watch)
   );
   \biss_master_axil.ch0.core.counter_ram  counter_ram (
+    .busy(count_busy),
     .clear(\clear$263 ),
     .clk(clk),
     .events(\events$271 ),
@@ -8212,19 +8301,19 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch0.core.results  results (
     .clk(clk),
-    .done(\done$288 ),
+    .done(\done$290 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$293 ),
+    .result(\result$295 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$290 )
+    .valid_out(\valid$292 )
   );
   \biss_master_axil.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$317 ),
+    .\bit (\bit$319 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -8234,7 +8323,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .noise(sampler_noise),
     .receiver_clear(\clear$128 ),
     .rst(rst),
-    .sample(\sample$316 ),
+    .sample(\sample$318 ),
     .slo(slo)
   );
   \biss_master_axil.ch0.core.scheduler  scheduler (
@@ -8255,7 +8344,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$5598$0 (\bit ),
+    .\port$5754$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -8304,7 +8393,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch0.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$318 ),
+    .clean(\clean$320 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
@@ -8319,7 +8408,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$2315$0 (\$24 ),
+    .\port$2328$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -8336,7 +8425,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$20  = \bit$317 ;
+    \$20  = \bit$319 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -8357,7 +8446,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$23  = \clean$318 ;
+    \$23  = \clean$320 ;
     if (rst) begin
       \$23  = 1'h0;
     end
@@ -8486,31 +8575,32 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \ma$284  = ma;
-  assign \overrun$287  = overrun;
-  assign \done$289  = \done$288 ;
-  assign valid_out = \valid$290 ;
-  assign \status$292  = \result$293 [3:0];
-  assign timestamp = \result$293 [35:4];
-  assign line_delay = \result$293 [48:36];
-  assign \cds$296  = \result$293 [49];
-  assign noise_events = \result$293 [53:50];
-  assign delay_settled = \result$293 [54];
-  assign \settled_delay$299  = \result$293 [67:55];
-  assign delay_spread = \result$293 [75:68];
-  assign word0_position = \result$293 [130:76];
-  assign word0_ne = \result$293 [131];
-  assign word0_nw = \result$293 [132];
-  assign word0_crc_ok = \result$293 [133];
-  assign word1_position = \result$293 [173:134];
-  assign word1_ne = \result$293 [174];
-  assign word1_nw = \result$293 [175];
-  assign word1_crc_ok = \result$293 [176];
-  assign \lc$309  = \result$293 [182:177];
-  assign \lc_repeat$310  = \result$293 [183];
-  assign \lc_skip$311  = \result$293 [184];
-  assign \lc_zero$312  = \result$293 [185];
-  assign \spw_mismatch$313  = \result$293 [186];
+  assign \busy$284  = count_busy;
+  assign \ma$286  = ma;
+  assign \overrun$289  = overrun;
+  assign \done$291  = \done$290 ;
+  assign valid_out = \valid$292 ;
+  assign \status$294  = \result$295 [3:0];
+  assign timestamp = \result$295 [35:4];
+  assign line_delay = \result$295 [48:36];
+  assign \cds$298  = \result$295 [49];
+  assign noise_events = \result$295 [53:50];
+  assign delay_settled = \result$295 [54];
+  assign \settled_delay$301  = \result$295 [67:55];
+  assign delay_spread = \result$295 [75:68];
+  assign word0_position = \result$295 [130:76];
+  assign word0_ne = \result$295 [131];
+  assign word0_nw = \result$295 [132];
+  assign word0_crc_ok = \result$295 [133];
+  assign word1_position = \result$295 [173:134];
+  assign word1_ne = \result$295 [174];
+  assign word1_nw = \result$295 [175];
+  assign word1_crc_ok = \result$295 [176];
+  assign \lc$311  = \result$295 [182:177];
+  assign \lc_repeat$312  = \result$295 [183];
+  assign \lc_skip$313  = \result$295 [184];
+  assign \lc_zero$314  = \result$295 [185];
+  assign \spw_mismatch$315  = \result$295 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -8745,29 +8835,29 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$293.status  = \result$293 [3:0];
-  assign \result$293.timestamp  = \result$293 [35:4];
-  assign \result$293.line_delay  = \result$293 [48:36];
-  assign \result$293.cds  = \result$293 [49];
-  assign \result$293.noise_events  = \result$293 [53:50];
-  assign \result$293.delay_settled  = \result$293 [54];
-  assign \result$293.settled_delay  = \result$293 [67:55];
-  assign \result$293.delay_spread  = \result$293 [75:68];
-  assign \result$293.word0  = \result$293 [133:76];
-  assign \result$293.word0.position  = \result$293 [130:76];
-  assign \result$293.word0.ne  = \result$293 [131];
-  assign \result$293.word0.nw  = \result$293 [132];
-  assign \result$293.word0.crc_ok  = \result$293 [133];
-  assign \result$293.word1  = \result$293 [176:134];
-  assign \result$293.word1.position  = \result$293 [173:134];
-  assign \result$293.word1.ne  = \result$293 [174];
-  assign \result$293.word1.nw  = \result$293 [175];
-  assign \result$293.word1.crc_ok  = \result$293 [176];
-  assign \result$293.lc  = \result$293 [182:177];
-  assign \result$293.lc_repeat  = \result$293 [183];
-  assign \result$293.lc_skip  = \result$293 [184];
-  assign \result$293.lc_zero  = \result$293 [185];
-  assign \result$293.spw_mismatch  = \result$293 [186];
+  assign \result$295.status  = \result$295 [3:0];
+  assign \result$295.timestamp  = \result$295 [35:4];
+  assign \result$295.line_delay  = \result$295 [48:36];
+  assign \result$295.cds  = \result$295 [49];
+  assign \result$295.noise_events  = \result$295 [53:50];
+  assign \result$295.delay_settled  = \result$295 [54];
+  assign \result$295.settled_delay  = \result$295 [67:55];
+  assign \result$295.delay_spread  = \result$295 [75:68];
+  assign \result$295.word0  = \result$295 [133:76];
+  assign \result$295.word0.position  = \result$295 [130:76];
+  assign \result$295.word0.ne  = \result$295 [131];
+  assign \result$295.word0.nw  = \result$295 [132];
+  assign \result$295.word0.crc_ok  = \result$295 [133];
+  assign \result$295.word1  = \result$295 [176:134];
+  assign \result$295.word1.position  = \result$295 [173:134];
+  assign \result$295.word1.ne  = \result$295 [174];
+  assign \result$295.word1.nw  = \result$295 [175];
+  assign \result$295.word1.crc_ok  = \result$295 [176];
+  assign \result$295.lc  = \result$295 [182:177];
+  assign \result$295.lc_repeat  = \result$295 [183];
+  assign \result$295.lc_skip  = \result$295 [184];
+  assign \result$295.lc_zero  = \result$295 [185];
+  assign \result$295.spw_mismatch  = \result$295 [186];
   assign \events$271 [15] = \event ;
   assign \events$271 [14] = \$16 ;
   assign \events$271 [13] = \$14 ;
@@ -10739,180 +10829,306 @@ module \biss_master_axil.ch0.core.controller.report (fault, fault_status, report
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, read_data, clear, events, host__addr);
+module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_data, clear, events, host__addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
-  wire \$1 ;
+  wire [7:0] \$1 ;
   wire \$10 ;
-  wire [3:0] \$100 ;
-  wire [4:0] \$101 ;
+  wire [15:0] \$100 ;
+  wire \$101 ;
   wire \$102 ;
   wire \$103 ;
   wire \$104 ;
-  wire [3:0] \$105 ;
-  wire [4:0] \$106 ;
+  wire \$105 ;
+  wire \$106 ;
   wire \$107 ;
   wire \$108 ;
   wire \$109 ;
   wire \$11 ;
-  wire [3:0] \$110 ;
-  wire [4:0] \$111 ;
+  wire \$110 ;
+  wire \$111 ;
   wire \$112 ;
   wire \$113 ;
   wire \$114 ;
-  wire [3:0] \$115 ;
-  wire [4:0] \$116 ;
+  wire \$115 ;
+  wire \$116 ;
   wire \$117 ;
   wire \$118 ;
   wire \$119 ;
-  wire \$12 ;
-  wire [3:0] \$120 ;
-  wire [4:0] \$121 ;
+  wire [7:0] \$12 ;
+  wire \$120 ;
+  wire \$121 ;
   wire \$122 ;
   wire \$123 ;
   wire \$124 ;
-  wire [3:0] \$125 ;
-  wire [4:0] \$126 ;
+  wire \$125 ;
+  wire \$126 ;
   wire \$127 ;
   wire \$128 ;
   wire \$129 ;
-  wire \$13 ;
-  wire [3:0] \$130 ;
-  wire [4:0] \$131 ;
+  wire [7:0] \$13 ;
+  wire \$130 ;
+  wire \$131 ;
   wire \$132 ;
   wire \$133 ;
   wire \$134 ;
-  wire [3:0] \$135 ;
-  wire [4:0] \$136 ;
+  wire \$135 ;
+  wire \$136 ;
   wire \$137 ;
   wire \$138 ;
   wire \$139 ;
   wire \$14 ;
-  wire [3:0] \$140 ;
-  wire [4:0] \$141 ;
+  wire \$140 ;
+  wire \$141 ;
   wire \$142 ;
-  reg \$143 ;
-  reg [2:0] \$144 ;
-  reg [2:0] \$145 ;
-  reg [3:0] \$146 ;
-  reg [3:0] \$147 ;
-  reg [1:0] \$148 ;
-  reg [3:0] \$149 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire \$15 ;
-  reg [3:0] \$150 ;
-  reg [3:0] \$151 ;
-  reg [3:0] \$152 ;
-  reg [3:0] \$153 ;
-  reg [3:0] \$154 ;
-  reg [3:0] \$155 ;
-  reg [3:0] \$156 ;
-  reg [3:0] \$157 ;
-  reg [3:0] \$158 ;
-  reg [3:0] \$159 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire [1:0] \$154 ;
+  wire [1:0] \$155 ;
+  wire [1:0] \$156 ;
+  wire [1:0] \$157 ;
+  wire [1:0] \$158 ;
+  wire [1:0] \$159 ;
   wire \$16 ;
-  reg [3:0] \$160 ;
-  reg [3:0] \$161 ;
-  reg [3:0] \$162 ;
-  reg [3:0] \$163 ;
-  reg [3:0] \$164 ;
-  reg [15:0] \$165 ;
-  wire \$17 ;
-  wire \$18 ;
+  wire [1:0] \$160 ;
+  wire [1:0] \$161 ;
+  wire [1:0] \$162 ;
+  wire [1:0] \$163 ;
+  wire [1:0] \$164 ;
+  wire [1:0] \$165 ;
+  wire [1:0] \$166 ;
+  wire [1:0] \$167 ;
+  wire [1:0] \$168 ;
+  wire [1:0] \$169 ;
+  wire [7:0] \$17 ;
+  wire [3:0] \$170 ;
+  wire [3:0] \$171 ;
+  wire [3:0] \$172 ;
+  wire [3:0] \$173 ;
+  wire [3:0] \$174 ;
+  wire [3:0] \$175 ;
+  wire [3:0] \$176 ;
+  wire [3:0] \$177 ;
+  wire [3:0] \$178 ;
+  wire [3:0] \$179 ;
+  wire [7:0] \$18 ;
+  wire [3:0] \$180 ;
+  wire [3:0] \$181 ;
+  wire [3:0] \$182 ;
+  wire [3:0] \$183 ;
+  wire [3:0] \$184 ;
+  wire [3:0] \$185 ;
+  wire [3:0] \$186 ;
+  wire [3:0] \$187 ;
+  wire [3:0] \$188 ;
+  wire [3:0] \$189 ;
   wire \$19 ;
-  wire \$2 ;
+  wire [3:0] \$190 ;
+  wire [3:0] \$191 ;
+  wire [3:0] \$192 ;
+  wire [3:0] \$193 ;
+  wire [3:0] \$194 ;
+  wire [3:0] \$195 ;
+  wire [3:0] \$196 ;
+  wire [3:0] \$197 ;
+  wire [3:0] \$198 ;
+  wire [3:0] \$199 ;
+  wire [7:0] \$2 ;
   wire \$20 ;
+  wire [3:0] \$200 ;
+  wire [3:0] \$201 ;
+  wire [3:0] \$202 ;
+  wire [4:0] \$203 ;
+  wire [3:0] \$204 ;
+  wire [4:0] \$205 ;
+  wire [3:0] \$206 ;
+  wire [4:0] \$207 ;
+  wire [3:0] \$208 ;
+  wire [4:0] \$209 ;
   wire \$21 ;
-  wire \$22 ;
-  wire [4:0] \$228 ;
-  wire \$23 ;
+  wire [3:0] \$210 ;
+  wire [4:0] \$211 ;
+  wire [3:0] \$212 ;
+  wire [4:0] \$213 ;
+  wire [3:0] \$214 ;
+  wire [4:0] \$215 ;
+  wire [3:0] \$216 ;
+  wire [4:0] \$217 ;
+  wire [3:0] \$218 ;
+  wire [4:0] \$219 ;
+  wire [7:0] \$22 ;
+  wire [3:0] \$220 ;
+  wire [4:0] \$221 ;
+  wire [3:0] \$222 ;
+  wire [4:0] \$223 ;
+  wire [3:0] \$224 ;
+  wire [4:0] \$225 ;
+  wire [3:0] \$226 ;
+  wire [4:0] \$227 ;
+  wire [3:0] \$228 ;
+  wire [4:0] \$229 ;
+  wire [7:0] \$23 ;
+  wire [3:0] \$230 ;
+  wire [4:0] \$231 ;
+  wire [3:0] \$232 ;
+  wire [4:0] \$233 ;
+  wire [15:0] \$234 ;
+  wire [15:0] \$235 ;
+  wire \$236 ;
+  wire \$237 ;
+  wire \$238 ;
+  wire \$239 ;
   wire \$24 ;
+  wire \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  wire \$243 ;
+  wire \$244 ;
+  wire \$245 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
   wire \$25 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
   wire \$26 ;
-  wire \$27 ;
-  wire \$28 ;
+  wire \$260 ;
+  wire \$261 ;
+  reg [15:0] \$262 ;
+  reg \$263 ;
+  reg [7:0] \$264 ;
+  reg [7:0] \$265 ;
+  reg [2:0] \$266 ;
+  reg [7:0] \$267 ;
+  reg [7:0] \$268 ;
+  reg [2:0] \$269 ;
+  wire [7:0] \$27 ;
+  reg [1:0] \$270 ;
+  reg [3:0] \$271 ;
+  reg [3:0] \$272 ;
+  reg [3:0] \$273 ;
+  reg [3:0] \$274 ;
+  reg [3:0] \$275 ;
+  reg [3:0] \$276 ;
+  reg [3:0] \$277 ;
+  reg [3:0] \$278 ;
+  reg [3:0] \$279 ;
+  wire [7:0] \$28 ;
+  reg [3:0] \$280 ;
+  reg [3:0] \$281 ;
+  reg [3:0] \$282 ;
+  reg [3:0] \$283 ;
+  reg [3:0] \$284 ;
+  reg [3:0] \$285 ;
+  reg [3:0] \$286 ;
+  reg [3:0] \$287 ;
+  reg [3:0] \$288 ;
+  reg [15:0] \$289 ;
   wire \$29 ;
-  wire \$3 ;
+  reg \$290 ;
+  wire [7:0] \$3 ;
   wire \$30 ;
   wire \$31 ;
-  wire \$32 ;
-  wire \$33 ;
+  wire [7:0] \$32 ;
+  wire [7:0] \$33 ;
   wire \$34 ;
   wire \$35 ;
   wire \$36 ;
-  wire \$37 ;
-  wire \$38 ;
+  wire [7:0] \$37 ;
+  wire [7:0] \$38 ;
   wire \$39 ;
-  wire \$4 ;
+  wire [7:0] \$4 ;
   wire \$40 ;
-  wire [7:0] \$41 ;
-  wire [7:0] \$42 ;
-  wire [7:0] \$43 ;
-  wire [8:0] \$44 ;
-  wire [9:0] \$45 ;
-  wire [9:0] \$46 ;
-  wire [9:0] \$47 ;
+  wire \$41 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
   wire \$48 ;
-  wire [15:0] \$49 ;
+  wire \$49 ;
   wire \$5 ;
-  wire [16:0] \$50 ;
-  wire [15:0] \$51 ;
-  wire [16:0] \$52 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
   wire \$53 ;
-  wire [19:0] \$54 ;
+  wire \$54 ;
   wire \$55 ;
-  wire [19:0] \$56 ;
+  wire \$56 ;
   wire \$57 ;
   wire \$58 ;
-  reg [3:0] \$59 ;
-  wire \$6 ;
-  reg [3:0] \$60 ;
-  wire [1:0] \$61 ;
+  wire \$59 ;
+  wire [7:0] \$6 ;
+  wire \$60 ;
+  wire \$61 ;
   wire \$62 ;
-  wire \$63 ;
-  wire \$64 ;
-  wire [3:0] \$65 ;
-  wire [4:0] \$66 ;
+  wire [15:0] \$63 ;
+  wire [16:0] \$64 ;
+  wire [15:0] \$65 ;
+  wire [16:0] \$66 ;
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
-  wire \$7 ;
-  wire [3:0] \$70 ;
-  wire [4:0] \$71 ;
+  wire [7:0] \$7 ;
+  wire \$70 ;
+  wire \$71 ;
   wire \$72 ;
   wire \$73 ;
   wire \$74 ;
-  wire [3:0] \$75 ;
-  wire [4:0] \$76 ;
+  wire \$75 ;
+  wire \$76 ;
   wire \$77 ;
   wire \$78 ;
   wire \$79 ;
-  wire \$8 ;
-  wire [3:0] \$80 ;
-  wire [4:0] \$81 ;
+  wire [7:0] \$8 ;
+  wire \$80 ;
+  wire \$81 ;
   wire \$82 ;
-  wire \$83 ;
+  wire [15:0] \$83 ;
   wire \$84 ;
-  wire [3:0] \$85 ;
-  wire [4:0] \$86 ;
+  wire \$85 ;
+  wire \$86 ;
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
   wire \$9 ;
-  wire [3:0] \$90 ;
-  wire [4:0] \$91 ;
+  wire \$90 ;
+  wire \$91 ;
   wire \$92 ;
   wire \$93 ;
   wire \$94 ;
-  wire [3:0] \$95 ;
-  wire [4:0] \$96 ;
+  wire \$95 ;
+  wire \$96 ;
   wire \$97 ;
   wire \$98 ;
   wire \$99 ;
-  wire [7:0] above;
+  reg [7:0] above = 8'h00;
   reg [3:0] amount_0 = 4'h0;
   reg [3:0] amount_1 = 4'h0;
-  reg busy = 1'h0;
+  output busy;
+  wire busy;
   input clear;
   wire clear;
+  reg clear_reg = 1'h0;
   input clk;
   wire clk;
   wire [7:0] due;
@@ -10934,12 +11150,28 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, read_data, cl
   wire \events.overrun ;
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
+  reg [15:0] events_reg = 16'h0000;
+  wire \events_reg.aborted ;
+  wire \events_reg.crc_word0 ;
+  wire \events_reg.crc_word1 ;
+  wire \events_reg.delay_jump ;
+  wire \events_reg.delay_range ;
+  wire \events_reg.lc_repeat ;
+  wire \events_reg.lc_skip ;
+  wire \events_reg.lc_zero ;
+  wire \events_reg.no_ack ;
+  wire \events_reg.no_start ;
+  wire \events_reg.no_stop ;
+  wire \events_reg.noise_event ;
+  wire \events_reg.noisy_line ;
+  wire \events_reg.overrun ;
+  wire \events_reg.slo_stuck_low ;
+  wire \events_reg.spw_mismatch ;
   input [2:0] host__addr;
   wire [2:0] host__addr;
   wire [31:0] host__data;
   input host__en;
   wire host__en;
-  reg [2:0] last = 3'h0;
   reg [15:0] marked = 16'hffff;
   reg [3:0] pending_0 = 4'h0;
   reg [3:0] pending_1 = 4'h0;
@@ -10957,24 +11189,29 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, read_data, cl
   reg [3:0] pending_7 = 4'h0;
   reg [3:0] pending_8 = 4'h0;
   reg [3:0] pending_9 = 4'h0;
-  reg [2:0] pick;
+  wire [7:0] pick;
   wire [2:0] read_addr;
   output [31:0] read_data;
   wire [31:0] read_data;
   wire read_en;
   input rst;
   wire rst;
+  reg [7:0] sel = 8'h00;
+  (* init = 3'h0 *)
+  wire [2:0] sel_addr;
   wire [19:0] total_0;
   wire [19:0] total_1;
-  wire [2:0] update__addr;
+  reg [2:0] update__addr = 3'h0;
   wire [31:0] update__data;
   wire update__en;
-  reg [2:0] word = 3'h0;
+  reg [7:0] waiting = 8'h00;
+  reg was_busy = 1'h1;
   (* init = 3'h0 *)
-  wire [2:0] write__addr;
+  wire [2:0] word;
+  reg [2:0] write__addr = 3'h0;
   wire [31:0] write__data;
-  (* init = 1'h0 *)
   wire write__en;
+  reg [7:0] writing = 8'h00;
   reg [1:0] zero = 2'h0;
   reg [31:0] memory [7:0];
   initial begin
@@ -10988,8 +11225,8 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, read_data, cl
     memory[7] = 32'd0;
   end
   always @(posedge clk) begin
-    if (busy)
-      memory[word] <= { \$56 [15:0], \$54 [15:0] };
+    if (write__en)
+      memory[write__addr] <= { \$100 , \$83  };
   end
   reg [31:0] _0_;
   reg [31:0] _1_;
@@ -10998,587 +11235,612 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, read_data, cl
       _0_ <= memory[host__addr];
     end
     if (update__en) begin
-      _1_ <= memory[pick];
+      _1_ <= memory[update__addr];
     end
   end
   assign read_data = _0_;
   assign update__data = _1_;
-  assign \$1  = | pending_0;
-  assign \$2  = | pending_1;
-  assign \$3  = \$1  | \$2 ;
-  assign \$4  = \$3  | marked[0];
-  assign \$5  = \$4  | marked[1];
-  assign \$6  = | pending_2;
-  assign \$7  = | pending_3;
-  assign \$8  = \$6  | \$7 ;
-  assign \$9  = \$8  | marked[2];
-  assign \$10  = \$9  | marked[3];
-  assign \$11  = | pending_4;
-  assign \$12  = | pending_5;
-  assign \$13  = \$11  | \$12 ;
-  assign \$14  = \$13  | marked[4];
-  assign \$15  = \$14  | marked[5];
-  assign \$16  = | pending_6;
-  assign \$17  = | pending_7;
-  assign \$18  = \$16  | \$17 ;
-  assign \$19  = \$18  | marked[6];
-  assign \$20  = \$19  | marked[7];
-  assign \$21  = | pending_8;
-  assign \$22  = | pending_9;
-  assign \$23  = \$21  | \$22 ;
-  assign \$24  = \$23  | marked[8];
-  assign \$25  = \$24  | marked[9];
-  assign \$26  = | pending_10;
-  assign \$27  = | pending_11;
-  assign \$28  = \$26  | \$27 ;
-  assign \$29  = \$28  | marked[10];
-  assign \$30  = \$29  | marked[11];
-  assign \$31  = | pending_12;
-  assign \$32  = | pending_13;
-  assign \$33  = \$31  | \$32 ;
-  assign \$34  = \$33  | marked[12];
-  assign \$35  = \$34  | marked[13];
-  assign \$36  = | pending_14;
-  assign \$37  = | pending_15;
-  assign \$38  = \$36  | \$37 ;
-  assign \$39  = \$38  | marked[14];
-  assign \$40  = \$39  | marked[15];
-  assign \$41  = 1'h1 << word;
-  assign \$42  = busy ? \$41  : 8'h00;
+  assign \$1  = ~ sel;
+  assign \$2  = waiting & \$1 ;
+  assign \$3  = ~ writing;
+  assign due = \$2  & \$3 ;
+  assign \$4  = due & above;
+  assign \$5  = | \$4 ;
+  assign \$6  = due & above;
+  assign \$7  = due & above;
+  assign \$8  = due & above;
+  assign \$10  = ~ \$9 ;
+  assign \$11  = \$7 [1] & \$10 ;
+  assign \$12  = due & above;
+  assign \$13  = due & above;
+  assign \$14  = | \$13 [1:0];
+  assign \$15  = ~ \$14 ;
+  assign \$16  = \$12 [2] & \$15 ;
+  assign \$17  = due & above;
+  assign \$18  = due & above;
+  assign \$19  = | \$18 [2:0];
+  assign \$20  = ~ \$19 ;
+  assign \$21  = \$17 [3] & \$20 ;
+  assign \$22  = due & above;
+  assign \$23  = due & above;
+  assign \$24  = | \$23 [3:0];
+  assign \$25  = ~ \$24 ;
+  assign \$26  = \$22 [4] & \$25 ;
+  assign \$27  = due & above;
+  assign \$28  = due & above;
+  assign \$29  = | \$28 [4:0];
+  assign \$30  = ~ \$29 ;
+  assign \$31  = \$27 [5] & \$30 ;
+  assign \$32  = due & above;
+  assign \$33  = due & above;
+  assign \$34  = | \$33 [5:0];
+  assign \$35  = ~ \$34 ;
+  assign \$36  = \$32 [6] & \$35 ;
+  assign \$37  = due & above;
+  assign \$38  = due & above;
+  assign \$39  = | \$38 [6:0];
+  assign \$40  = ~ \$39 ;
+  assign \$41  = \$37 [7] & \$40 ;
   assign \$43  = ~ \$42 ;
-  assign due = { \$40 , \$35 , \$30 , \$25 , \$20 , \$15 , \$10 , \$5  } & \$43 ;
-  assign \$44  = 2'h2 << last;
-  assign \$45  = \$44  - 1'h1;
+  assign \$44  = due[1] & \$43 ;
+  assign \$45  = | due[1:0];
   assign \$46  = ~ \$45 ;
-  assign \$47  = { 2'h0, due } & \$46 ;
-  assign \$48  = | \$47 [7:0];
-  assign update__en = | due;
-  assign \$49  = zero[0] ? 16'h0000 : update__data[15:0];
-  assign \$50  = \$49  + amount_0;
-  assign \$51  = zero[1] ? 16'h0000 : update__data[31:16];
-  assign \$52  = \$51  + amount_1;
-  assign \$53  = \$50  > 16'hffff;
-  assign \$54  = \$53  ? 20'h0ffff : { 3'h0, \$50  };
-  assign \$55  = \$52  > 16'hffff;
-  assign \$56  = \$55  ? 20'h0ffff : { 3'h0, \$52  };
-  assign \$57  = | due;
-  assign \$58  = | due;
-  assign \$228  = pick * 2'h2;
-  assign \$61  = marked >> \$228 ;
-  assign \$62  = | due;
-  assign \$63  = ! pick;
-  assign \$64  = \$62  & \$63 ;
-  assign \$65  = \$64  ? 4'h0 : pending_0;
-  assign \$66  = \$65  + events[0];
-  assign \$67  = | due;
-  assign \$68  = ! pick;
-  assign \$69  = \$67  & \$68 ;
-  assign \$70  = \$69  ? 4'h0 : pending_1;
-  assign \$71  = \$70  + events[1];
-  assign \$72  = | due;
-  assign \$73  = pick == 1'h1;
-  assign \$74  = \$72  & \$73 ;
-  assign \$75  = \$74  ? 4'h0 : pending_2;
-  assign \$76  = \$75  + events[2];
-  assign \$77  = | due;
-  assign \$78  = pick == 1'h1;
-  assign \$79  = \$77  & \$78 ;
-  assign \$80  = \$79  ? 4'h0 : pending_3;
-  assign \$81  = \$80  + events[3];
-  assign \$82  = | due;
-  assign \$83  = pick == 2'h2;
-  assign \$84  = \$82  & \$83 ;
-  assign \$85  = \$84  ? 4'h0 : pending_4;
-  assign \$86  = \$85  + events[4];
-  assign \$87  = | due;
-  assign \$88  = pick == 2'h2;
-  assign \$89  = \$87  & \$88 ;
-  assign \$90  = \$89  ? 4'h0 : pending_5;
-  assign \$91  = \$90  + events[5];
-  assign \$92  = | due;
-  assign \$93  = pick == 2'h3;
-  assign \$94  = \$92  & \$93 ;
-  assign \$95  = \$94  ? 4'h0 : pending_6;
-  assign \$96  = \$95  + events[6];
-  assign \$97  = | due;
-  assign \$98  = pick == 2'h3;
-  assign \$99  = \$97  & \$98 ;
-  assign \$100  = \$99  ? 4'h0 : pending_7;
-  assign \$101  = \$100  + events[7];
-  assign \$102  = | due;
-  assign \$103  = pick == 3'h4;
-  assign \$104  = \$102  & \$103 ;
-  assign \$105  = \$104  ? 4'h0 : pending_8;
-  assign \$106  = \$105  + events[8];
-  assign \$107  = | due;
-  assign \$108  = pick == 3'h4;
-  assign \$109  = \$107  & \$108 ;
-  assign \$110  = \$109  ? 4'h0 : pending_9;
-  assign \$111  = \$110  + events[9];
-  assign \$112  = | due;
-  assign \$113  = pick == 3'h5;
-  assign \$114  = \$112  & \$113 ;
-  assign \$115  = \$114  ? 4'h0 : pending_10;
-  assign \$116  = \$115  + events[10];
-  assign \$117  = | due;
-  assign \$118  = pick == 3'h5;
-  assign \$119  = \$117  & \$118 ;
-  assign \$120  = \$119  ? 4'h0 : pending_11;
-  assign \$121  = \$120  + events[11];
-  assign \$122  = | due;
-  assign \$123  = pick == 3'h6;
-  assign \$124  = \$122  & \$123 ;
-  assign \$125  = \$124  ? 4'h0 : pending_12;
-  assign \$126  = \$125  + events[12];
-  assign \$127  = | due;
-  assign \$128  = pick == 3'h6;
-  assign \$129  = \$127  & \$128 ;
-  assign \$130  = \$129  ? 4'h0 : pending_13;
-  assign \$131  = \$130  + events[13];
-  assign \$132  = | due;
-  assign \$133  = pick == 3'h7;
-  assign \$134  = \$132  & \$133 ;
-  assign \$135  = \$134  ? 4'h0 : pending_14;
-  assign \$136  = \$135  + events[14];
-  assign \$137  = | due;
-  assign \$138  = pick == 3'h7;
-  assign \$139  = \$137  & \$138 ;
-  assign \$140  = \$139  ? 4'h0 : pending_15;
-  assign \$141  = \$140  + events[15];
-  assign \$142  = | due;
+  assign \$47  = due[2] & \$46 ;
+  assign \$48  = | due[2:0];
+  assign \$49  = ~ \$48 ;
+  assign \$50  = due[3] & \$49 ;
+  assign \$51  = | due[3:0];
+  assign \$52  = ~ \$51 ;
+  assign \$53  = due[4] & \$52 ;
+  assign \$54  = | due[4:0];
+  assign \$55  = ~ \$54 ;
+  assign \$56  = due[5] & \$55 ;
+  assign \$57  = | due[5:0];
+  assign \$58  = ~ \$57 ;
+  assign \$59  = due[6] & \$58 ;
+  assign \$60  = | due[6:0];
+  assign \$61  = ~ \$60 ;
+  assign \$62  = due[7] & \$61 ;
+  assign pick = \$5  ? { \$41 , \$36 , \$31 , \$26 , \$21 , \$16 , \$11 , \$6 [0] } : { \$62 , \$59 , \$56 , \$53 , \$50 , \$47 , \$44 , due[0] };
+  assign update__en = | sel;
+  assign \$63  = zero[0] ? 16'h0000 : update__data[15:0];
+  assign \$64  = \$63  + amount_0;
+  assign \$65  = zero[1] ? 16'h0000 : update__data[31:16];
+  assign \$66  = \$65  + amount_1;
+  assign \$83  = \$64 [15:0] | { \$82 , \$81 , \$80 , \$79 , \$78 , \$77 , \$76 , \$75 , \$74 , \$73 , \$72 , \$71 , \$70 , \$69 , \$68 , \$67  };
+  assign \$100  = \$66 [15:0] | { \$99 , \$98 , \$97 , \$96 , \$95 , \$94 , \$93 , \$92 , \$91 , \$90 , \$89 , \$88 , \$87 , \$86 , \$85 , \$84  };
+  assign write__en = | writing;
+  assign \$101  = | events_reg;
+  assign \$102  = was_busy | \$101 ;
+  assign busy = \$102  | clear_reg;
+  assign \$103  = | pending_0;
+  assign \$104  = | pending_1;
+  assign \$105  = \$103  | \$104 ;
+  assign \$106  = \$105  | marked[0];
+  assign \$107  = \$106  | marked[1];
+  assign \$108  = | pending_2;
+  assign \$109  = | pending_3;
+  assign \$110  = \$108  | \$109 ;
+  assign \$111  = \$110  | marked[2];
+  assign \$112  = \$111  | marked[3];
+  assign \$113  = | pending_4;
+  assign \$114  = | pending_5;
+  assign \$115  = \$113  | \$114 ;
+  assign \$116  = \$115  | marked[4];
+  assign \$117  = \$116  | marked[5];
+  assign \$118  = | pending_6;
+  assign \$119  = | pending_7;
+  assign \$120  = \$118  | \$119 ;
+  assign \$121  = \$120  | marked[6];
+  assign \$122  = \$121  | marked[7];
+  assign \$123  = | pending_8;
+  assign \$124  = | pending_9;
+  assign \$125  = \$123  | \$124 ;
+  assign \$126  = \$125  | marked[8];
+  assign \$127  = \$126  | marked[9];
+  assign \$128  = | pending_10;
+  assign \$129  = | pending_11;
+  assign \$130  = \$128  | \$129 ;
+  assign \$131  = \$130  | marked[10];
+  assign \$132  = \$131  | marked[11];
+  assign \$133  = | pending_12;
+  assign \$134  = | pending_13;
+  assign \$135  = \$133  | \$134 ;
+  assign \$136  = \$135  | marked[12];
+  assign \$137  = \$136  | marked[13];
+  assign \$138  = | pending_14;
+  assign \$139  = | pending_15;
+  assign \$140  = \$138  | \$139 ;
+  assign \$141  = \$140  | marked[14];
+  assign \$142  = \$141  | marked[15];
+  assign \$143  = | { pick[7], pick[5], pick[3], pick[1] };
+  assign \$144  = | { pick[7:6], pick[3:2] };
+  assign \$145  = | pick[7:4];
+  assign \$146  = | due;
+  assign \$148  = | pick[1:0];
+  assign \$149  = | pick[2:0];
+  assign \$150  = | pick[3:0];
+  assign \$151  = | pick[4:0];
+  assign \$152  = | pick[5:0];
+  assign \$153  = | pick[6:0];
+  assign \$154  = sel[0] ? marked[1:0] : 2'h0;
+  assign \$156  = sel[1] ? marked[3:2] : 2'h0;
+  assign \$157  = \$155  | \$156 ;
+  assign \$158  = sel[2] ? marked[5:4] : 2'h0;
+  assign \$159  = \$157  | \$158 ;
+  assign \$160  = sel[3] ? marked[7:6] : 2'h0;
+  assign \$161  = \$159  | \$160 ;
+  assign \$162  = sel[4] ? marked[9:8] : 2'h0;
+  assign \$163  = \$161  | \$162 ;
+  assign \$164  = sel[5] ? marked[11:10] : 2'h0;
+  assign \$165  = \$163  | \$164 ;
+  assign \$166  = sel[6] ? marked[13:12] : 2'h0;
+  assign \$167  = \$165  | \$166 ;
+  assign \$168  = sel[7] ? marked[15:14] : 2'h0;
+  assign \$169  = \$167  | \$168 ;
+  assign \$170  = sel[0] ? pending_0 : 4'h0;
+  assign \$172  = sel[1] ? pending_2 : 4'h0;
+  assign \$173  = \$171  | \$172 ;
+  assign \$174  = sel[2] ? pending_4 : 4'h0;
+  assign \$175  = \$173  | \$174 ;
+  assign \$176  = sel[3] ? pending_6 : 4'h0;
+  assign \$177  = \$175  | \$176 ;
+  assign \$178  = sel[4] ? pending_8 : 4'h0;
+  assign \$179  = \$177  | \$178 ;
+  assign \$180  = sel[5] ? pending_10 : 4'h0;
+  assign \$181  = \$179  | \$180 ;
+  assign \$182  = sel[6] ? pending_12 : 4'h0;
+  assign \$183  = \$181  | \$182 ;
+  assign \$184  = sel[7] ? pending_14 : 4'h0;
+  assign \$185  = \$183  | \$184 ;
+  assign \$186  = sel[0] ? pending_1 : 4'h0;
+  assign \$188  = sel[1] ? pending_3 : 4'h0;
+  assign \$189  = \$187  | \$188 ;
+  assign \$190  = sel[2] ? pending_5 : 4'h0;
+  assign \$191  = \$189  | \$190 ;
+  assign \$192  = sel[3] ? pending_7 : 4'h0;
+  assign \$193  = \$191  | \$192 ;
+  assign \$194  = sel[4] ? pending_9 : 4'h0;
+  assign \$195  = \$193  | \$194 ;
+  assign \$196  = sel[5] ? pending_11 : 4'h0;
+  assign \$197  = \$195  | \$196 ;
+  assign \$198  = sel[6] ? pending_13 : 4'h0;
+  assign \$199  = \$197  | \$198 ;
+  assign \$200  = sel[7] ? pending_15 : 4'h0;
+  assign \$201  = \$199  | \$200 ;
+  assign \$202  = sel[0] ? 4'h0 : pending_0;
+  assign \$203  = \$202  + events_reg[0];
+  assign \$204  = sel[0] ? 4'h0 : pending_1;
+  assign \$205  = \$204  + events_reg[1];
+  assign \$206  = sel[1] ? 4'h0 : pending_2;
+  assign \$207  = \$206  + events_reg[2];
+  assign \$208  = sel[1] ? 4'h0 : pending_3;
+  assign \$209  = \$208  + events_reg[3];
+  assign \$210  = sel[2] ? 4'h0 : pending_4;
+  assign \$211  = \$210  + events_reg[4];
+  assign \$212  = sel[2] ? 4'h0 : pending_5;
+  assign \$213  = \$212  + events_reg[5];
+  assign \$214  = sel[3] ? 4'h0 : pending_6;
+  assign \$215  = \$214  + events_reg[6];
+  assign \$216  = sel[3] ? 4'h0 : pending_7;
+  assign \$217  = \$216  + events_reg[7];
+  assign \$218  = sel[4] ? 4'h0 : pending_8;
+  assign \$219  = \$218  + events_reg[8];
+  assign \$220  = sel[4] ? 4'h0 : pending_9;
+  assign \$221  = \$220  + events_reg[9];
+  assign \$222  = sel[5] ? 4'h0 : pending_10;
+  assign \$223  = \$222  + events_reg[10];
+  assign \$224  = sel[5] ? 4'h0 : pending_11;
+  assign \$225  = \$224  + events_reg[11];
+  assign \$226  = sel[6] ? 4'h0 : pending_12;
+  assign \$227  = \$226  + events_reg[12];
+  assign \$228  = sel[6] ? 4'h0 : pending_13;
+  assign \$229  = \$228  + events_reg[13];
+  assign \$230  = sel[7] ? 4'h0 : pending_14;
+  assign \$231  = \$230  + events_reg[14];
+  assign \$232  = sel[7] ? 4'h0 : pending_15;
+  assign \$233  = \$232  + events_reg[15];
+  assign \$234  = ~ { sel[7], sel[7:6], sel[6:5], sel[5:4], sel[4:3], sel[3:2], sel[2:1], sel[1:0], sel[0] };
+  assign \$235  = marked & \$234 ;
+  assign \$236  = | events_reg;
+  assign \$237  = \$236  | clear_reg;
+  assign \$238  = | marked;
+  assign \$239  = \$237  | \$238 ;
+  assign \$240  = | sel;
+  assign \$241  = \$239  | \$240 ;
+  assign \$242  = | writing;
+  assign \$243  = \$241  | \$242 ;
+  assign \$244  = | pending_0;
+  assign \$245  = | pending_1;
+  assign \$246  = | pending_2;
+  assign \$247  = | pending_3;
+  assign \$248  = | pending_4;
+  assign \$249  = | pending_5;
+  assign \$250  = | pending_6;
+  assign \$251  = | pending_7;
+  assign \$252  = | pending_8;
+  assign \$253  = | pending_9;
+  assign \$254  = | pending_10;
+  assign \$255  = | pending_11;
+  assign \$256  = | pending_12;
+  assign \$257  = | pending_13;
+  assign \$258  = | pending_14;
+  assign \$259  = | pending_15;
+  assign \$260  = | { \$259 , \$258 , \$257 , \$256 , \$255 , \$254 , \$253 , \$252 , \$251 , \$250 , \$249 , \$248 , \$247 , \$246 , \$245 , \$244  };
+  assign \$261  = \$243  | \$260 ;
   always @(posedge clk)
-    busy <= \$143 ;
+    events_reg <= \$262 ;
   always @(posedge clk)
-    word <= \$144 ;
+    clear_reg <= \$263 ;
   always @(posedge clk)
-    last <= \$145 ;
+    waiting <= \$264 ;
   always @(posedge clk)
-    amount_0 <= \$146 ;
+    sel <= \$265 ;
   always @(posedge clk)
-    amount_1 <= \$147 ;
+    update__addr <= \$266 ;
   always @(posedge clk)
-    zero <= \$148 ;
+    above <= \$267 ;
   always @(posedge clk)
-    pending_0 <= \$149 ;
+    writing <= \$268 ;
   always @(posedge clk)
-    pending_1 <= \$150 ;
+    write__addr <= \$269 ;
   always @(posedge clk)
-    pending_2 <= \$151 ;
+    zero <= \$270 ;
   always @(posedge clk)
-    pending_3 <= \$152 ;
+    amount_0 <= \$271 ;
   always @(posedge clk)
-    pending_4 <= \$153 ;
+    amount_1 <= \$272 ;
   always @(posedge clk)
-    pending_5 <= \$154 ;
+    pending_0 <= \$273 ;
   always @(posedge clk)
-    pending_6 <= \$155 ;
+    pending_1 <= \$274 ;
   always @(posedge clk)
-    pending_7 <= \$156 ;
+    pending_2 <= \$275 ;
   always @(posedge clk)
-    pending_8 <= \$157 ;
+    pending_3 <= \$276 ;
   always @(posedge clk)
-    pending_9 <= \$158 ;
+    pending_4 <= \$277 ;
   always @(posedge clk)
-    pending_10 <= \$159 ;
+    pending_5 <= \$278 ;
   always @(posedge clk)
-    pending_11 <= \$160 ;
+    pending_6 <= \$279 ;
   always @(posedge clk)
-    pending_12 <= \$161 ;
+    pending_7 <= \$280 ;
   always @(posedge clk)
-    pending_13 <= \$162 ;
+    pending_8 <= \$281 ;
   always @(posedge clk)
-    pending_14 <= \$163 ;
+    pending_9 <= \$282 ;
   always @(posedge clk)
-    pending_15 <= \$164 ;
+    pending_10 <= \$283 ;
   always @(posedge clk)
-    marked <= \$165 ;
+    pending_11 <= \$284 ;
+  always @(posedge clk)
+    pending_12 <= \$285 ;
+  always @(posedge clk)
+    pending_13 <= \$286 ;
+  always @(posedge clk)
+    pending_14 <= \$287 ;
+  always @(posedge clk)
+    pending_15 <= \$288 ;
+  always @(posedge clk)
+    marked <= \$289 ;
+  always @(posedge clk)
+    was_busy <= \$290 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$262  = events;
+    if (rst) begin
+      \$262  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$263  = clear;
+    if (rst) begin
+      \$263  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$264  = { \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107  };
+    if (rst) begin
+      \$264  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$265  = pick;
+    if (rst) begin
+      \$265  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$266  = { \$145 , \$144 , \$143  };
+    if (rst) begin
+      \$266  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$267  = above;
+    if (\$146 ) begin
+      \$267  = { \$153 , \$152 , \$151 , \$150 , \$149 , \$148 , \$147 , 1'h0 };
+    end
+    if (rst) begin
+      \$267  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$268  = sel;
+    if (rst) begin
+      \$268  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$269  = update__addr;
+    if (rst) begin
+      \$269  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$270  = \$169 ;
+    if (rst) begin
+      \$270  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$271  = \$185 ;
+    if (rst) begin
+      \$271  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$272  = \$201 ;
+    if (rst) begin
+      \$272  = 4'h0;
+    end
+  end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    casez (pick)
-      3'h0:
-          \$59  = pending_0;
-      3'h1:
-          \$59  = pending_2;
-      3'h2:
-          \$59  = pending_4;
-      3'h3:
-          \$59  = pending_6;
-      3'h4:
-          \$59  = pending_8;
-      3'h5:
-          \$59  = pending_10;
-      3'h6:
-          \$59  = pending_12;
-      3'h7:
-          \$59  = pending_14;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    casez (pick)
-      3'h0:
-          \$60  = pending_1;
-      3'h1:
-          \$60  = pending_3;
-      3'h2:
-          \$60  = pending_5;
-      3'h3:
-          \$60  = pending_7;
-      3'h4:
-          \$60  = pending_9;
-      3'h5:
-          \$60  = pending_11;
-      3'h6:
-          \$60  = pending_13;
-      3'h7:
-          \$60  = pending_15;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    pick = 3'h0;
-    if (due[7]) begin
-      pick = 3'h7;
-    end
-    if (due[6]) begin
-      pick = 3'h6;
-    end
-    if (due[5]) begin
-      pick = 3'h5;
-    end
-    if (due[4]) begin
-      pick = 3'h4;
-    end
-    if (due[3]) begin
-      pick = 3'h3;
-    end
-    if (due[2]) begin
-      pick = 3'h2;
-    end
-    if (due[1]) begin
-      pick = 3'h1;
-    end
-    if (due[0]) begin
-      pick = 3'h0;
-    end
-    if (\$48 ) begin
-      if (\$47 [7]) begin
-        pick = 3'h7;
-      end
-      if (\$47 [6]) begin
-        pick = 3'h6;
-      end
-      if (\$47 [5]) begin
-        pick = 3'h5;
-      end
-      if (\$47 [4]) begin
-        pick = 3'h4;
-      end
-      if (\$47 [3]) begin
-        pick = 3'h3;
-      end
-      if (\$47 [2]) begin
-        pick = 3'h2;
-      end
-      if (\$47 [1]) begin
-        pick = 3'h1;
-      end
-      if (\$47 [0]) begin
-        pick = 3'h0;
-      end
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$143  = \$57 ;
-    if (rst) begin
-      \$143  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$144  = word;
-    if (\$58 ) begin
-      \$144  = pick;
-    end
-    if (rst) begin
-      \$144  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$145  = last;
-    if (\$58 ) begin
-      \$145  = pick;
-    end
-    if (rst) begin
-      \$145  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$146  = amount_0;
-    if (\$58 ) begin
-      \$146  = \$59 ;
-    end
-    if (rst) begin
-      \$146  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$147  = amount_1;
-    if (\$58 ) begin
-      \$147  = \$60 ;
-    end
-    if (rst) begin
-      \$147  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$148  = zero;
-    if (\$58 ) begin
-      \$148  = \$61 ;
-    end
-    if (rst) begin
-      \$148  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear) begin
-      \$149  = 4'h0;
+    if (clear_reg) begin
+      \$273  = 4'h0;
     end else begin
-      \$149  = \$66 [3:0];
+      \$273  = \$203 [3:0];
     end
     if (rst) begin
-      \$149  = 4'h0;
+      \$273  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$150  = 4'h0;
+    if (clear_reg) begin
+      \$274  = 4'h0;
     end else begin
-      \$150  = \$71 [3:0];
+      \$274  = \$205 [3:0];
     end
     if (rst) begin
-      \$150  = 4'h0;
+      \$274  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$151  = 4'h0;
+    if (clear_reg) begin
+      \$275  = 4'h0;
     end else begin
-      \$151  = \$76 [3:0];
+      \$275  = \$207 [3:0];
     end
     if (rst) begin
-      \$151  = 4'h0;
+      \$275  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$152  = 4'h0;
+    if (clear_reg) begin
+      \$276  = 4'h0;
     end else begin
-      \$152  = \$81 [3:0];
+      \$276  = \$209 [3:0];
     end
     if (rst) begin
-      \$152  = 4'h0;
+      \$276  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$153  = 4'h0;
+    if (clear_reg) begin
+      \$277  = 4'h0;
     end else begin
-      \$153  = \$86 [3:0];
+      \$277  = \$211 [3:0];
     end
     if (rst) begin
-      \$153  = 4'h0;
+      \$277  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$154  = 4'h0;
+    if (clear_reg) begin
+      \$278  = 4'h0;
     end else begin
-      \$154  = \$91 [3:0];
+      \$278  = \$213 [3:0];
     end
     if (rst) begin
-      \$154  = 4'h0;
+      \$278  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$155  = 4'h0;
+    if (clear_reg) begin
+      \$279  = 4'h0;
     end else begin
-      \$155  = \$96 [3:0];
+      \$279  = \$215 [3:0];
     end
     if (rst) begin
-      \$155  = 4'h0;
+      \$279  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$156  = 4'h0;
+    if (clear_reg) begin
+      \$280  = 4'h0;
     end else begin
-      \$156  = \$101 [3:0];
+      \$280  = \$217 [3:0];
     end
     if (rst) begin
-      \$156  = 4'h0;
+      \$280  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$157  = 4'h0;
+    if (clear_reg) begin
+      \$281  = 4'h0;
     end else begin
-      \$157  = \$106 [3:0];
+      \$281  = \$219 [3:0];
     end
     if (rst) begin
-      \$157  = 4'h0;
+      \$281  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$158  = 4'h0;
+    if (clear_reg) begin
+      \$282  = 4'h0;
     end else begin
-      \$158  = \$111 [3:0];
+      \$282  = \$221 [3:0];
     end
     if (rst) begin
-      \$158  = 4'h0;
+      \$282  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$159  = 4'h0;
+    if (clear_reg) begin
+      \$283  = 4'h0;
     end else begin
-      \$159  = \$116 [3:0];
+      \$283  = \$223 [3:0];
     end
     if (rst) begin
-      \$159  = 4'h0;
+      \$283  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$160  = 4'h0;
+    if (clear_reg) begin
+      \$284  = 4'h0;
     end else begin
-      \$160  = \$121 [3:0];
+      \$284  = \$225 [3:0];
     end
     if (rst) begin
-      \$160  = 4'h0;
+      \$284  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$161  = 4'h0;
+    if (clear_reg) begin
+      \$285  = 4'h0;
     end else begin
-      \$161  = \$126 [3:0];
+      \$285  = \$227 [3:0];
     end
     if (rst) begin
-      \$161  = 4'h0;
+      \$285  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$162  = 4'h0;
+    if (clear_reg) begin
+      \$286  = 4'h0;
     end else begin
-      \$162  = \$131 [3:0];
+      \$286  = \$229 [3:0];
     end
     if (rst) begin
-      \$162  = 4'h0;
+      \$286  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$163  = 4'h0;
+    if (clear_reg) begin
+      \$287  = 4'h0;
     end else begin
-      \$163  = \$136 [3:0];
+      \$287  = \$231 [3:0];
     end
     if (rst) begin
-      \$163  = 4'h0;
+      \$287  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$164  = 4'h0;
+    if (clear_reg) begin
+      \$288  = 4'h0;
     end else begin
-      \$164  = \$141 [3:0];
+      \$288  = \$233 [3:0];
     end
     if (rst) begin
-      \$164  = 4'h0;
+      \$288  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$165  = marked;
-    if (clear) begin
-      \$165  = 16'hffff;
-    end else if (\$142 ) begin
-      (* full_case = 32'd1 *)
-      casez (pick)
-        3'h0:
-            \$165 [1:0] = 2'h0;
-        3'h1:
-            \$165 [3:2] = 2'h0;
-        3'h2:
-            \$165 [5:4] = 2'h0;
-        3'h3:
-            \$165 [7:6] = 2'h0;
-        3'h4:
-            \$165 [9:8] = 2'h0;
-        3'h5:
-            \$165 [11:10] = 2'h0;
-        3'h6:
-            \$165 [13:12] = 2'h0;
-        3'h7:
-            \$165 [15:14] = 2'h0;
-      endcase
+    (* full_case = 32'd1 *)
+    if (clear_reg) begin
+      \$289  = 16'hffff;
+    end else begin
+      \$289  = \$235 ;
     end
     if (rst) begin
-      \$165  = 16'hffff;
+      \$289  = 16'hffff;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    \$290  = \$261 ;
+    if (rst) begin
+      \$290  = 1'h1;
     end
   end
   assign read_addr = host__addr;
   assign read_en = host__en;
   assign host__data = read_data;
-  assign above = \$47 [7:0];
-  assign update__addr = pick;
-  assign total_0 = { 3'h0, \$50  };
-  assign total_1 = { 3'h0, \$52  };
-  assign write__addr = word;
-  assign write__data = { \$56 [15:0], \$54 [15:0] };
-  assign write__en = busy;
+  assign sel_addr = update__addr;
+  assign total_0 = { 3'h0, \$64  };
+  assign total_1 = { 3'h0, \$66  };
+  assign word = write__addr;
+  assign write__data = { \$100 , \$83  };
+  assign \events_reg.crc_word0  = events_reg[0];
+  assign \events_reg.crc_word1  = events_reg[1];
+  assign \events_reg.no_ack  = events_reg[2];
+  assign \events_reg.no_start  = events_reg[3];
+  assign \events_reg.delay_range  = events_reg[4];
+  assign \events_reg.slo_stuck_low  = events_reg[5];
+  assign \events_reg.lc_repeat  = events_reg[6];
+  assign \events_reg.lc_skip  = events_reg[7];
+  assign \events_reg.lc_zero  = events_reg[8];
+  assign \events_reg.spw_mismatch  = events_reg[9];
+  assign \events_reg.overrun  = events_reg[10];
+  assign \events_reg.aborted  = events_reg[11];
+  assign \events_reg.no_stop  = events_reg[12];
+  assign \events_reg.noisy_line  = events_reg[13];
+  assign \events_reg.delay_jump  = events_reg[14];
+  assign \events_reg.noise_event  = events_reg[15];
   assign \events.crc_word0  = events[0];
   assign \events.crc_word1  = events[1];
   assign \events.no_ack  = events[2];
@@ -11595,6 +11857,44 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, read_data, cl
   assign \events.noisy_line  = events[13];
   assign \events.delay_jump  = events[14];
   assign \events.noise_event  = events[15];
+  assign \$9  = \$8 [0];
+  assign \$42  = due[0];
+  assign \$67  = \$64 [16];
+  assign \$68  = \$64 [16];
+  assign \$69  = \$64 [16];
+  assign \$70  = \$64 [16];
+  assign \$71  = \$64 [16];
+  assign \$72  = \$64 [16];
+  assign \$73  = \$64 [16];
+  assign \$74  = \$64 [16];
+  assign \$75  = \$64 [16];
+  assign \$76  = \$64 [16];
+  assign \$77  = \$64 [16];
+  assign \$78  = \$64 [16];
+  assign \$79  = \$64 [16];
+  assign \$80  = \$64 [16];
+  assign \$81  = \$64 [16];
+  assign \$82  = \$64 [16];
+  assign \$84  = \$66 [16];
+  assign \$85  = \$66 [16];
+  assign \$86  = \$66 [16];
+  assign \$87  = \$66 [16];
+  assign \$88  = \$66 [16];
+  assign \$89  = \$66 [16];
+  assign \$90  = \$66 [16];
+  assign \$91  = \$66 [16];
+  assign \$92  = \$66 [16];
+  assign \$93  = \$66 [16];
+  assign \$94  = \$66 [16];
+  assign \$95  = \$66 [16];
+  assign \$96  = \$66 [16];
+  assign \$97  = \$66 [16];
+  assign \$98  = \$66 [16];
+  assign \$99  = \$66 [16];
+  assign \$147  = pick[0];
+  assign \$155  = \$154 ;
+  assign \$171  = \$170 ;
+  assign \$187  = \$186 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -18657,7 +18957,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$5598$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$5754$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -18699,8 +18999,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5598$0 ;
-  wire \port$5598$0 ;
+  input \port$5754$0 ;
+  wire \port$5754$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -18714,9 +19014,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5598$0  };
-  assign \$2  = { lc[4:0], \port$5598$0  } == last;
-  assign \$3  = { lc[4:0], \port$5598$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5754$0  };
+  assign \$2  = { lc[4:0], \port$5754$0  } == last;
+  assign \$3  = { lc[4:0], \port$5754$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -18826,7 +19126,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5598$0  };
+  assign lc_next = { lc[4:0], \port$5754$0  };
   assign zero = is_zero;
 endmodule
 
@@ -19382,7 +19682,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2315$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2328$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
@@ -19536,8 +19836,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2315$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$2315$0 ;
-  wire \port$2315$0 ;
+  output \port$2328$0 ;
+  wire \port$2328$0 ;
   output report;
   wire report;
   input report_frame;
@@ -19643,7 +19943,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2315$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2315$0  = \$2 ;
+  assign \port$2328$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -19684,18 +19984,32 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2315$0 , l
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
+module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
-, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__done_count, ma, regs__done, \port$6466$0 
-, \port$6479$0 , regs__ca_done, \port$6564$0 , ca_rbuf_addr);
+, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6643$0 
+, \port$6656$0 , regs__ca_done, \port$6752$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
-  wire [16:0] \$2 ;
-  reg \$3 ;
-  reg [15:0] \$4 ;
-  wire [186:0] \$5 ;
-  wire [79:0] \$6 ;
-  wire [9:0] \$7 ;
+  wire [16:0] \$10 ;
+  reg \$11 ;
+  reg [3:0] \$12 ;
+  reg \$13 ;
+  reg \$14 ;
+  reg \$15 ;
+  reg \$16 ;
+  reg [15:0] \$17 ;
+  wire [186:0] \$18 ;
+  wire [79:0] \$19 ;
+  wire \$2 ;
+  wire [9:0] \$20 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire [4:0] \$8 ;
+  wire [4:0] \$9 ;
+  reg \$signal  = 1'h0;
   reg abort_cycle = 1'h0;
   wire busy;
   input ca_abort;
@@ -19816,6 +20130,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   wire clk;
   wire config_error;
   wire [2:0] count_addr;
+  wire count_busy;
   wire [15:0] count_ca_aborted;
   wire [15:0] count_ca_crc4_error;
   wire [15:0] count_ca_data_fault;
@@ -19827,6 +20142,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   wire delay_settled;
   wire [7:0] delay_spread;
   wire done;
+  (* init = 1'h0 *)
+  wire ended;
+  reg ended_ok = 1'h0;
   wire [5:0] lc;
   wire lc_repeat;
   wire lc_skip;
@@ -19834,16 +20152,17 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$180 ;
+  wire \ma$185 ;
   wire [3:0] noise_events;
+  reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6466$0 ;
-  wire [186:0] \port$6466$0 ;
-  output [79:0] \port$6479$0 ;
-  wire [79:0] \port$6479$0 ;
-  output [9:0] \port$6564$0 ;
-  wire [9:0] \port$6564$0 ;
+  output [186:0] \port$6643$0 ;
+  wire [186:0] \port$6643$0 ;
+  output [79:0] \port$6656$0 ;
+  wire [79:0] \port$6656$0 ;
+  output [9:0] \port$6752$0 ;
+  wire [9:0] \port$6752$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -19931,10 +20250,10 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   wire regs__count_en;
   wire regs__delay_settled;
   wire [7:0] regs__delay_spread;
-  output regs__done;
-  wire regs__done;
   output [15:0] regs__done_count;
   reg [15:0] regs__done_count = 16'h0000;
+  output regs__frame_done;
+  reg regs__frame_done = 1'h0;
   output regs__frame_error;
   wire regs__frame_error;
   wire [5:0] regs__lc;
@@ -19959,12 +20278,13 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   wire regs__word1_ne;
   wire regs__word1_nw;
   wire [39:0] regs__word1_position;
+  wire report;
   input rst;
   wire rst;
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$182 ;
+  wire \slo$187 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -19987,9 +20307,10 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$177 ;
-  wire \trigger$177 ;
+  input \trigger$182 ;
+  wire \trigger$182 ;
   wire valid;
+  reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
   wire word0_ne;
   wire word0_nw;
@@ -19998,18 +20319,37 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   wire word1_ne;
   wire word1_nw;
   wire [39:0] word1_position;
-  assign trigger = \trigger$177  & regs__trigger_enable;
-  assign \$2  = regs__done_count + 1'h1;
+  assign \$1  = ~ count_busy;
+  assign \$2  = \$1  | done;
+  assign \$3  = waited == 4'hf;
+  assign \$4  = \$2  | \$3 ;
+  assign report = \$signal  & \$4 ;
+  assign \$5  = ~ ended_ok;
+  assign regs__frame_error = regs__frame_done & \$5 ;
+  assign trigger = \trigger$182  & regs__trigger_enable;
+  assign \$6  = ~ report;
+  assign \$7  = \$signal  & \$6 ;
+  assign \$8  = waited + 1'h1;
+  assign \$9  = \$7  ? \$8  : 5'h00;
+  assign \$10  = regs__done_count + 1'h1;
   always @(posedge clk)
-    abort_cycle <= \$3 ;
+    \$signal  <= \$11 ;
   always @(posedge clk)
-    regs__done_count <= \$4 ;
-  assign \$1  = ~ valid;
-  assign regs__frame_error = regs__done & \$1 ;
+    waited <= \$12 ;
+  always @(posedge clk)
+    pending_ok <= \$13 ;
+  always @(posedge clk)
+    regs__frame_done <= \$14 ;
+  always @(posedge clk)
+    ended_ok <= \$15 ;
+  always @(posedge clk)
+    abort_cycle <= \$16 ;
+  always @(posedge clk)
+    regs__done_count <= \$17 ;
   \biss_master_axil.ch1.core  core (
     .abort(abort_cycle),
     .\abort$239 (ca_abort),
-    .\busy$285 (regs__busy),
+    .\busy$287 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -20055,39 +20395,84 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
     .\clear$263 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
+    .count_busy(count_busy),
     .count_data(regs__count_data),
-    .counts(\$6 ),
-    .\done$288 (regs__done),
+    .counts(\$19 ),
+    .\done$290 (done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$39 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
-    .result(\$7 ),
-    .\result$293 (\$5 ),
+    .result(\$20 ),
+    .\result$295 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
     .\start$237 (ca_start),
     .trigger(trigger),
-    .\valid$290 (valid)
+    .\valid$292 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$3  = regs__abort_cycle;
+    \$11  = \$signal ;
+    if (report) begin
+      \$11  = 1'h0;
+    end
+    if (done) begin
+      \$11  = 1'h1;
+    end
     if (rst) begin
-      \$3  = 1'h0;
+      \$11  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$4  = regs__done_count;
-    if (regs__done) begin
-      \$4  = \$2 [15:0];
+    \$12  = \$9 [3:0];
+    if (rst) begin
+      \$12  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$13  = pending_ok;
+    if (done) begin
+      \$13  = valid;
     end
     if (rst) begin
-      \$4  = 16'h0000;
+      \$13  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$14  = report;
+    if (rst) begin
+      \$14  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$15  = pending_ok;
+    if (rst) begin
+      \$15  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$16  = regs__abort_cycle;
+    if (rst) begin
+      \$16  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$17  = regs__done_count;
+    if (regs__frame_done) begin
+      \$17  = \$10 [15:0];
+    end
+    if (rst) begin
+      \$17  = 16'h0000;
     end
   end
   assign count_addr = ca_rbuf_addr[2:0];
@@ -20105,7 +20490,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   assign regs__cap_counters = 1'h1;
   assign regs__cap_timestamp = 1'h1;
   assign regs__cap_register_access = 1'h1;
-  assign done = regs__done;
+  assign ended = regs__frame_done;
   assign ca_done = regs__ca_done;
   assign regs__cfg_ma_half_period = cfg_ma_half_period;
   assign regs__cfg_delay_limit = cfg_delay_limit;
@@ -20132,48 +20517,48 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   assign regs__cfg_noise_limit = cfg_noise_limit;
   assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
   assign regs__cfg_quiet_time = cfg_quiet_time;
-  assign regs__status = \$5 [3:0];
-  assign status = \$5 [3:0];
-  assign regs__cds = \$5 [49];
-  assign cds = \$5 [49];
-  assign regs__word0_ne = \$5 [131];
-  assign word0_ne = \$5 [131];
-  assign regs__word0_nw = \$5 [132];
-  assign word0_nw = \$5 [132];
-  assign regs__word0_crc_ok = \$5 [133];
-  assign word0_crc_ok = \$5 [133];
-  assign regs__word1_ne = \$5 [174];
-  assign word1_ne = \$5 [174];
-  assign regs__word1_nw = \$5 [175];
-  assign word1_nw = \$5 [175];
-  assign regs__word1_crc_ok = \$5 [176];
-  assign word1_crc_ok = \$5 [176];
-  assign regs__lc_repeat = \$5 [183];
-  assign lc_repeat = \$5 [183];
-  assign regs__lc_skip = \$5 [184];
-  assign lc_skip = \$5 [184];
-  assign regs__lc_zero = \$5 [185];
-  assign lc_zero = \$5 [185];
-  assign regs__spw_mismatch = \$5 [186];
-  assign spw_mismatch = \$5 [186];
-  assign regs__lc = \$5 [182:177];
-  assign lc = \$5 [182:177];
-  assign regs__line_delay = \$5 [48:36];
-  assign line_delay = \$5 [48:36];
-  assign regs__word0_position = \$5 [130:76];
-  assign word0_position = \$5 [130:76];
-  assign regs__word1_position = \$5 [173:134];
-  assign word1_position = \$5 [173:134];
-  assign regs__timestamp = \$5 [35:4];
-  assign timestamp = \$5 [35:4];
-  assign regs__noise_events = \$5 [53:50];
-  assign noise_events = \$5 [53:50];
-  assign regs__delay_settled = \$5 [54];
-  assign delay_settled = \$5 [54];
-  assign regs__delay_spread = \$5 [75:68];
-  assign delay_spread = \$5 [75:68];
-  assign regs__settled_delay = \$5 [67:55];
-  assign settled_delay = \$5 [67:55];
+  assign regs__status = \$18 [3:0];
+  assign status = \$18 [3:0];
+  assign regs__cds = \$18 [49];
+  assign cds = \$18 [49];
+  assign regs__word0_ne = \$18 [131];
+  assign word0_ne = \$18 [131];
+  assign regs__word0_nw = \$18 [132];
+  assign word0_nw = \$18 [132];
+  assign regs__word0_crc_ok = \$18 [133];
+  assign word0_crc_ok = \$18 [133];
+  assign regs__word1_ne = \$18 [174];
+  assign word1_ne = \$18 [174];
+  assign regs__word1_nw = \$18 [175];
+  assign word1_nw = \$18 [175];
+  assign regs__word1_crc_ok = \$18 [176];
+  assign word1_crc_ok = \$18 [176];
+  assign regs__lc_repeat = \$18 [183];
+  assign lc_repeat = \$18 [183];
+  assign regs__lc_skip = \$18 [184];
+  assign lc_skip = \$18 [184];
+  assign regs__lc_zero = \$18 [185];
+  assign lc_zero = \$18 [185];
+  assign regs__spw_mismatch = \$18 [186];
+  assign spw_mismatch = \$18 [186];
+  assign regs__lc = \$18 [182:177];
+  assign lc = \$18 [182:177];
+  assign regs__line_delay = \$18 [48:36];
+  assign line_delay = \$18 [48:36];
+  assign regs__word0_position = \$18 [130:76];
+  assign word0_position = \$18 [130:76];
+  assign regs__word1_position = \$18 [173:134];
+  assign word1_position = \$18 [173:134];
+  assign regs__timestamp = \$18 [35:4];
+  assign timestamp = \$18 [35:4];
+  assign regs__noise_events = \$18 [53:50];
+  assign noise_events = \$18 [53:50];
+  assign regs__delay_settled = \$18 [54];
+  assign delay_settled = \$18 [54];
+  assign regs__delay_spread = \$18 [75:68];
+  assign delay_spread = \$18 [75:68];
+  assign regs__settled_delay = \$18 [67:55];
+  assign settled_delay = \$18 [67:55];
   assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
   assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
   assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
@@ -20189,38 +20574,38 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$177 , count_en, ca_wbuf_en
   assign regs__ca_start = ca_start;
   assign regs__ca_abort = ca_abort;
   assign ca_busy = regs__ca_busy;
-  assign regs__ca_status = \$7 [2:0];
-  assign ca_status = \$7 [2:0];
-  assign regs__ca_bytes_done = \$7 [9:3];
-  assign ca_bytes_done = \$7 [9:3];
-  assign regs__count_ca_crc4_error = \$6 [15:0];
-  assign count_ca_crc4_error = \$6 [15:0];
-  assign regs__count_ca_no_answer = \$6 [31:16];
-  assign count_ca_no_answer = \$6 [31:16];
-  assign regs__count_ca_refused = \$6 [47:32];
-  assign count_ca_refused = \$6 [47:32];
-  assign regs__count_ca_aborted = \$6 [63:48];
-  assign count_ca_aborted = \$6 [63:48];
-  assign regs__count_ca_data_fault = \$6 [79:64];
-  assign count_ca_data_fault = \$6 [79:64];
+  assign regs__ca_status = \$20 [2:0];
+  assign ca_status = \$20 [2:0];
+  assign regs__ca_bytes_done = \$20 [9:3];
+  assign ca_bytes_done = \$20 [9:3];
+  assign regs__count_ca_crc4_error = \$19 [15:0];
+  assign count_ca_crc4_error = \$19 [15:0];
+  assign regs__count_ca_no_answer = \$19 [31:16];
+  assign count_ca_no_answer = \$19 [31:16];
+  assign regs__count_ca_refused = \$19 [47:32];
+  assign count_ca_refused = \$19 [47:32];
+  assign regs__count_ca_aborted = \$19 [63:48];
+  assign count_ca_aborted = \$19 [63:48];
+  assign regs__count_ca_data_fault = \$19 [79:64];
+  assign count_ca_data_fault = \$19 [79:64];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$180  = ma;
-  assign \slo$182  = slo;
-  assign \port$6466$0  = \$5 ;
-  assign \port$6479$0  = \$6 ;
-  assign \port$6564$0  = \$7 ;
+  assign \ma$185  = ma;
+  assign \slo$187  = slo;
+  assign \port$6643$0  = \$18 ;
+  assign \port$6656$0  = \$19 ;
+  assign \port$6752$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$285 , config_error, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$263 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time
-, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time
-, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$288 , \valid$290 , \result$293 , counts, ca_done
-, result, rbuf_addr);
+module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$287 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$263 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
+, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$290 , \valid$292 , \result$295 , counts
+, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20260,15 +20645,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] \ack_limit$104 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$317 ;
+  wire \bit$319 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$81 ;
   wire [23:0] break_time;
   wire busy;
   wire \busy$248 ;
-  output \busy$285 ;
-  wire \busy$285 ;
+  wire \busy$284 ;
+  output \busy$287 ;
+  wire \busy$287 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -20306,7 +20692,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \cdm$252 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$296 ;
+  wire \cds$298 ;
   wire [254:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -20436,7 +20822,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   reg clean = 1'h0;
   (* init = 1'h0 *)
   wire \clean$167 ;
-  wire \clean$318 ;
+  wire \clean$320 ;
   wire clear;
   wire \clear$128 ;
   input \clear$263 ;
@@ -20451,6 +20837,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire config_error;
   wire config_ok;
   wire [2:0] count_addr;
+  output count_busy;
+  wire count_busy;
   wire [15:0] count_ca_aborted;
   wire [15:0] count_ca_crc4_error;
   wire [15:0] count_ca_data_fault;
@@ -20571,9 +20959,9 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [16:0] delay_tolerance;
   wire done;
   wire \done$250 ;
-  output \done$288 ;
-  wire \done$288 ;
-  wire \done$289 ;
+  output \done$290 ;
+  wire \done$290 ;
+  wire \done$291 ;
   wire doubtful;
   wire early;
   wire \early$67 ;
@@ -20712,19 +21100,19 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$139 ;
-  wire [5:0] \lc$309 ;
+  wire [5:0] \lc$311 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$141 ;
   wire lc_repeat;
-  wire \lc_repeat$310 ;
+  wire \lc_repeat$312 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$311 ;
+  wire \lc_skip$313 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$312 ;
+  wire \lc_zero$314 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
@@ -20784,7 +21172,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \locked$65 ;
   output ma;
   wire ma;
-  wire \ma$284 ;
+  wire \ma$286 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$93 ;
@@ -20805,7 +21193,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$287 ;
+  wire \overrun$289 ;
   wire [23:0] period;
   wire periodic;
   input \periodic$39 ;
@@ -20848,19 +21236,19 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$293 ;
-  wire [186:0] \result$293 ;
-  wire \result$293.cds ;
-  wire \result$293.delay_settled ;
-  wire [7:0] \result$293.delay_spread ;
-  wire [5:0] \result$293.lc ;
-  wire \result$293.lc_repeat ;
-  wire \result$293.lc_skip ;
-  wire \result$293.lc_zero ;
-  wire [12:0] \result$293.line_delay ;
-  wire [3:0] \result$293.noise_events ;
-  wire [12:0] \result$293.settled_delay ;
-  wire \result$293.spw_mismatch ;
+  output [186:0] \result$295 ;
+  wire [186:0] \result$295 ;
+  wire \result$295.cds ;
+  wire \result$295.delay_settled ;
+  wire [7:0] \result$295.delay_spread ;
+  wire [5:0] \result$295.lc ;
+  wire \result$295.lc_repeat ;
+  wire \result$295.lc_skip ;
+  wire \result$295.lc_zero ;
+  wire [12:0] \result$295.line_delay ;
+  wire [3:0] \result$295.noise_events ;
+  wire [12:0] \result$295.settled_delay ;
+  wire \result$295.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -20877,18 +21265,18 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$293.status ;
-  wire [31:0] \result$293.timestamp ;
-  wire [57:0] \result$293.word0 ;
-  wire \result$293.word0.crc_ok ;
-  wire \result$293.word0.ne ;
-  wire \result$293.word0.nw ;
-  wire [54:0] \result$293.word0.position ;
-  wire [42:0] \result$293.word1 ;
-  wire \result$293.word1.crc_ok ;
-  wire \result$293.word1.ne ;
-  wire \result$293.word1.nw ;
-  wire [39:0] \result$293.word1.position ;
+  wire [3:0] \result$295.status ;
+  wire [31:0] \result$295.timestamp ;
+  wire [57:0] \result$295.word0 ;
+  wire \result$295.word0.crc_ok ;
+  wire \result$295.word0.ne ;
+  wire \result$295.word0.nw ;
+  wire [54:0] \result$295.word0.position ;
+  wire [42:0] \result$295.word1 ;
+  wire \result$295.word1.crc_ok ;
+  wire \result$295.word1.ne ;
+  wire \result$295.word1.nw ;
+  wire [39:0] \result$295.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -20907,12 +21295,12 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$316 ;
+  wire \sample$318 ;
   wire sampler_noise;
   wire second_rise;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$299 ;
+  wire [12:0] \settled_delay$301 ;
   wire skip;
   input slo;
   wire slo;
@@ -20929,7 +21317,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$313 ;
+  wire \spw_mismatch$315 ;
   input start;
   wire start;
   input \start$237 ;
@@ -20974,7 +21362,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$292 ;
+  wire [3:0] \status$294 ;
   wire stop_bit;
   wire \stop_bit$77 ;
   wire stopped;
@@ -20991,8 +21379,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \trigger$48 ;
   wire valid;
   wire \valid$206 ;
-  output \valid$290 ;
-  wire \valid$290 ;
+  output \valid$292 ;
+  wire \valid$292 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -21083,10 +21471,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \$14  = report_frame & \$13 ;
   assign \$15  = status == 4'he;
   assign \$16  = report_frame & \$15 ;
-  assign \busy$285  = ~ idle;
+  assign \busy$287  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$17  = ~ \clear$128 ;
-  assign \$18  = \sample$316  & \$17 ;
+  assign \$18  = \sample$318  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -21159,6 +21547,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .waiting(watch)
   );
   \biss_master_axil.ch1.core.counter_ram  counter_ram (
+    .busy(count_busy),
     .clear(\clear$263 ),
     .clk(clk),
     .events(\events$271 ),
@@ -21274,19 +21663,19 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch1.core.results  results (
     .clk(clk),
-    .done(\done$288 ),
+    .done(\done$290 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$293 ),
+    .result(\result$295 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$290 )
+    .valid_out(\valid$292 )
   );
   \biss_master_axil.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$317 ),
+    .\bit (\bit$319 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -21296,7 +21685,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .noise(sampler_noise),
     .receiver_clear(\clear$128 ),
     .rst(rst),
-    .sample(\sample$316 ),
+    .sample(\sample$318 ),
     .slo(slo)
   );
   \biss_master_axil.ch1.core.scheduler  scheduler (
@@ -21317,7 +21706,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6119$0 (\bit ),
+    .\port$6296$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -21366,7 +21755,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch1.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$318 ),
+    .clean(\clean$320 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
@@ -21381,7 +21770,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$4415$0 (\$24 ),
+    .\port$4501$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -21398,7 +21787,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$20  = \bit$317 ;
+    \$20  = \bit$319 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -21419,7 +21808,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$23  = \clean$318 ;
+    \$23  = \clean$320 ;
     if (rst) begin
       \$23  = 1'h0;
     end
@@ -21548,31 +21937,32 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \ma$284  = ma;
-  assign \overrun$287  = overrun;
-  assign \done$289  = \done$288 ;
-  assign valid_out = \valid$290 ;
-  assign \status$292  = \result$293 [3:0];
-  assign timestamp = \result$293 [35:4];
-  assign line_delay = \result$293 [48:36];
-  assign \cds$296  = \result$293 [49];
-  assign noise_events = \result$293 [53:50];
-  assign delay_settled = \result$293 [54];
-  assign \settled_delay$299  = \result$293 [67:55];
-  assign delay_spread = \result$293 [75:68];
-  assign word0_position = \result$293 [130:76];
-  assign word0_ne = \result$293 [131];
-  assign word0_nw = \result$293 [132];
-  assign word0_crc_ok = \result$293 [133];
-  assign word1_position = \result$293 [173:134];
-  assign word1_ne = \result$293 [174];
-  assign word1_nw = \result$293 [175];
-  assign word1_crc_ok = \result$293 [176];
-  assign \lc$309  = \result$293 [182:177];
-  assign \lc_repeat$310  = \result$293 [183];
-  assign \lc_skip$311  = \result$293 [184];
-  assign \lc_zero$312  = \result$293 [185];
-  assign \spw_mismatch$313  = \result$293 [186];
+  assign \busy$284  = count_busy;
+  assign \ma$286  = ma;
+  assign \overrun$289  = overrun;
+  assign \done$291  = \done$290 ;
+  assign valid_out = \valid$292 ;
+  assign \status$294  = \result$295 [3:0];
+  assign timestamp = \result$295 [35:4];
+  assign line_delay = \result$295 [48:36];
+  assign \cds$298  = \result$295 [49];
+  assign noise_events = \result$295 [53:50];
+  assign delay_settled = \result$295 [54];
+  assign \settled_delay$301  = \result$295 [67:55];
+  assign delay_spread = \result$295 [75:68];
+  assign word0_position = \result$295 [130:76];
+  assign word0_ne = \result$295 [131];
+  assign word0_nw = \result$295 [132];
+  assign word0_crc_ok = \result$295 [133];
+  assign word1_position = \result$295 [173:134];
+  assign word1_ne = \result$295 [174];
+  assign word1_nw = \result$295 [175];
+  assign word1_crc_ok = \result$295 [176];
+  assign \lc$311  = \result$295 [182:177];
+  assign \lc_repeat$312  = \result$295 [183];
+  assign \lc_skip$313  = \result$295 [184];
+  assign \lc_zero$314  = \result$295 [185];
+  assign \spw_mismatch$315  = \result$295 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -21807,29 +22197,29 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$293.status  = \result$293 [3:0];
-  assign \result$293.timestamp  = \result$293 [35:4];
-  assign \result$293.line_delay  = \result$293 [48:36];
-  assign \result$293.cds  = \result$293 [49];
-  assign \result$293.noise_events  = \result$293 [53:50];
-  assign \result$293.delay_settled  = \result$293 [54];
-  assign \result$293.settled_delay  = \result$293 [67:55];
-  assign \result$293.delay_spread  = \result$293 [75:68];
-  assign \result$293.word0  = \result$293 [133:76];
-  assign \result$293.word0.position  = \result$293 [130:76];
-  assign \result$293.word0.ne  = \result$293 [131];
-  assign \result$293.word0.nw  = \result$293 [132];
-  assign \result$293.word0.crc_ok  = \result$293 [133];
-  assign \result$293.word1  = \result$293 [176:134];
-  assign \result$293.word1.position  = \result$293 [173:134];
-  assign \result$293.word1.ne  = \result$293 [174];
-  assign \result$293.word1.nw  = \result$293 [175];
-  assign \result$293.word1.crc_ok  = \result$293 [176];
-  assign \result$293.lc  = \result$293 [182:177];
-  assign \result$293.lc_repeat  = \result$293 [183];
-  assign \result$293.lc_skip  = \result$293 [184];
-  assign \result$293.lc_zero  = \result$293 [185];
-  assign \result$293.spw_mismatch  = \result$293 [186];
+  assign \result$295.status  = \result$295 [3:0];
+  assign \result$295.timestamp  = \result$295 [35:4];
+  assign \result$295.line_delay  = \result$295 [48:36];
+  assign \result$295.cds  = \result$295 [49];
+  assign \result$295.noise_events  = \result$295 [53:50];
+  assign \result$295.delay_settled  = \result$295 [54];
+  assign \result$295.settled_delay  = \result$295 [67:55];
+  assign \result$295.delay_spread  = \result$295 [75:68];
+  assign \result$295.word0  = \result$295 [133:76];
+  assign \result$295.word0.position  = \result$295 [130:76];
+  assign \result$295.word0.ne  = \result$295 [131];
+  assign \result$295.word0.nw  = \result$295 [132];
+  assign \result$295.word0.crc_ok  = \result$295 [133];
+  assign \result$295.word1  = \result$295 [176:134];
+  assign \result$295.word1.position  = \result$295 [173:134];
+  assign \result$295.word1.ne  = \result$295 [174];
+  assign \result$295.word1.nw  = \result$295 [175];
+  assign \result$295.word1.crc_ok  = \result$295 [176];
+  assign \result$295.lc  = \result$295 [182:177];
+  assign \result$295.lc_repeat  = \result$295 [183];
+  assign \result$295.lc_skip  = \result$295 [184];
+  assign \result$295.lc_zero  = \result$295 [185];
+  assign \result$295.spw_mismatch  = \result$295 [186];
   assign \events$271 [15] = \event ;
   assign \events$271 [14] = \$16 ;
   assign \events$271 [13] = \$14 ;
@@ -23801,180 +24191,306 @@ module \biss_master_axil.ch1.core.controller.report (fault, fault_status, report
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, read_data, clear, events, host__addr);
+module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_data, clear, events, host__addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
-  wire \$1 ;
+  wire [7:0] \$1 ;
   wire \$10 ;
-  wire [3:0] \$100 ;
-  wire [4:0] \$101 ;
+  wire [15:0] \$100 ;
+  wire \$101 ;
   wire \$102 ;
   wire \$103 ;
   wire \$104 ;
-  wire [3:0] \$105 ;
-  wire [4:0] \$106 ;
+  wire \$105 ;
+  wire \$106 ;
   wire \$107 ;
   wire \$108 ;
   wire \$109 ;
   wire \$11 ;
-  wire [3:0] \$110 ;
-  wire [4:0] \$111 ;
+  wire \$110 ;
+  wire \$111 ;
   wire \$112 ;
   wire \$113 ;
   wire \$114 ;
-  wire [3:0] \$115 ;
-  wire [4:0] \$116 ;
+  wire \$115 ;
+  wire \$116 ;
   wire \$117 ;
   wire \$118 ;
   wire \$119 ;
-  wire \$12 ;
-  wire [3:0] \$120 ;
-  wire [4:0] \$121 ;
+  wire [7:0] \$12 ;
+  wire \$120 ;
+  wire \$121 ;
   wire \$122 ;
   wire \$123 ;
   wire \$124 ;
-  wire [3:0] \$125 ;
-  wire [4:0] \$126 ;
+  wire \$125 ;
+  wire \$126 ;
   wire \$127 ;
   wire \$128 ;
   wire \$129 ;
-  wire \$13 ;
-  wire [3:0] \$130 ;
-  wire [4:0] \$131 ;
+  wire [7:0] \$13 ;
+  wire \$130 ;
+  wire \$131 ;
   wire \$132 ;
   wire \$133 ;
   wire \$134 ;
-  wire [3:0] \$135 ;
-  wire [4:0] \$136 ;
+  wire \$135 ;
+  wire \$136 ;
   wire \$137 ;
   wire \$138 ;
   wire \$139 ;
   wire \$14 ;
-  wire [3:0] \$140 ;
-  wire [4:0] \$141 ;
+  wire \$140 ;
+  wire \$141 ;
   wire \$142 ;
-  reg \$143 ;
-  reg [2:0] \$144 ;
-  reg [2:0] \$145 ;
-  reg [3:0] \$146 ;
-  reg [3:0] \$147 ;
-  reg [1:0] \$148 ;
-  reg [3:0] \$149 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire \$15 ;
-  reg [3:0] \$150 ;
-  reg [3:0] \$151 ;
-  reg [3:0] \$152 ;
-  reg [3:0] \$153 ;
-  reg [3:0] \$154 ;
-  reg [3:0] \$155 ;
-  reg [3:0] \$156 ;
-  reg [3:0] \$157 ;
-  reg [3:0] \$158 ;
-  reg [3:0] \$159 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire [1:0] \$154 ;
+  wire [1:0] \$155 ;
+  wire [1:0] \$156 ;
+  wire [1:0] \$157 ;
+  wire [1:0] \$158 ;
+  wire [1:0] \$159 ;
   wire \$16 ;
-  reg [3:0] \$160 ;
-  reg [3:0] \$161 ;
-  reg [3:0] \$162 ;
-  reg [3:0] \$163 ;
-  reg [3:0] \$164 ;
-  reg [15:0] \$165 ;
-  wire \$17 ;
-  wire \$18 ;
+  wire [1:0] \$160 ;
+  wire [1:0] \$161 ;
+  wire [1:0] \$162 ;
+  wire [1:0] \$163 ;
+  wire [1:0] \$164 ;
+  wire [1:0] \$165 ;
+  wire [1:0] \$166 ;
+  wire [1:0] \$167 ;
+  wire [1:0] \$168 ;
+  wire [1:0] \$169 ;
+  wire [7:0] \$17 ;
+  wire [3:0] \$170 ;
+  wire [3:0] \$171 ;
+  wire [3:0] \$172 ;
+  wire [3:0] \$173 ;
+  wire [3:0] \$174 ;
+  wire [3:0] \$175 ;
+  wire [3:0] \$176 ;
+  wire [3:0] \$177 ;
+  wire [3:0] \$178 ;
+  wire [3:0] \$179 ;
+  wire [7:0] \$18 ;
+  wire [3:0] \$180 ;
+  wire [3:0] \$181 ;
+  wire [3:0] \$182 ;
+  wire [3:0] \$183 ;
+  wire [3:0] \$184 ;
+  wire [3:0] \$185 ;
+  wire [3:0] \$186 ;
+  wire [3:0] \$187 ;
+  wire [3:0] \$188 ;
+  wire [3:0] \$189 ;
   wire \$19 ;
-  wire \$2 ;
+  wire [3:0] \$190 ;
+  wire [3:0] \$191 ;
+  wire [3:0] \$192 ;
+  wire [3:0] \$193 ;
+  wire [3:0] \$194 ;
+  wire [3:0] \$195 ;
+  wire [3:0] \$196 ;
+  wire [3:0] \$197 ;
+  wire [3:0] \$198 ;
+  wire [3:0] \$199 ;
+  wire [7:0] \$2 ;
   wire \$20 ;
+  wire [3:0] \$200 ;
+  wire [3:0] \$201 ;
+  wire [3:0] \$202 ;
+  wire [4:0] \$203 ;
+  wire [3:0] \$204 ;
+  wire [4:0] \$205 ;
+  wire [3:0] \$206 ;
+  wire [4:0] \$207 ;
+  wire [3:0] \$208 ;
+  wire [4:0] \$209 ;
   wire \$21 ;
-  wire \$22 ;
-  wire [4:0] \$228 ;
-  wire \$23 ;
+  wire [3:0] \$210 ;
+  wire [4:0] \$211 ;
+  wire [3:0] \$212 ;
+  wire [4:0] \$213 ;
+  wire [3:0] \$214 ;
+  wire [4:0] \$215 ;
+  wire [3:0] \$216 ;
+  wire [4:0] \$217 ;
+  wire [3:0] \$218 ;
+  wire [4:0] \$219 ;
+  wire [7:0] \$22 ;
+  wire [3:0] \$220 ;
+  wire [4:0] \$221 ;
+  wire [3:0] \$222 ;
+  wire [4:0] \$223 ;
+  wire [3:0] \$224 ;
+  wire [4:0] \$225 ;
+  wire [3:0] \$226 ;
+  wire [4:0] \$227 ;
+  wire [3:0] \$228 ;
+  wire [4:0] \$229 ;
+  wire [7:0] \$23 ;
+  wire [3:0] \$230 ;
+  wire [4:0] \$231 ;
+  wire [3:0] \$232 ;
+  wire [4:0] \$233 ;
+  wire [15:0] \$234 ;
+  wire [15:0] \$235 ;
+  wire \$236 ;
+  wire \$237 ;
+  wire \$238 ;
+  wire \$239 ;
   wire \$24 ;
+  wire \$240 ;
+  wire \$241 ;
+  wire \$242 ;
+  wire \$243 ;
+  wire \$244 ;
+  wire \$245 ;
+  wire \$246 ;
+  wire \$247 ;
+  wire \$248 ;
+  wire \$249 ;
   wire \$25 ;
+  wire \$250 ;
+  wire \$251 ;
+  wire \$252 ;
+  wire \$253 ;
+  wire \$254 ;
+  wire \$255 ;
+  wire \$256 ;
+  wire \$257 ;
+  wire \$258 ;
+  wire \$259 ;
   wire \$26 ;
-  wire \$27 ;
-  wire \$28 ;
+  wire \$260 ;
+  wire \$261 ;
+  reg [15:0] \$262 ;
+  reg \$263 ;
+  reg [7:0] \$264 ;
+  reg [7:0] \$265 ;
+  reg [2:0] \$266 ;
+  reg [7:0] \$267 ;
+  reg [7:0] \$268 ;
+  reg [2:0] \$269 ;
+  wire [7:0] \$27 ;
+  reg [1:0] \$270 ;
+  reg [3:0] \$271 ;
+  reg [3:0] \$272 ;
+  reg [3:0] \$273 ;
+  reg [3:0] \$274 ;
+  reg [3:0] \$275 ;
+  reg [3:0] \$276 ;
+  reg [3:0] \$277 ;
+  reg [3:0] \$278 ;
+  reg [3:0] \$279 ;
+  wire [7:0] \$28 ;
+  reg [3:0] \$280 ;
+  reg [3:0] \$281 ;
+  reg [3:0] \$282 ;
+  reg [3:0] \$283 ;
+  reg [3:0] \$284 ;
+  reg [3:0] \$285 ;
+  reg [3:0] \$286 ;
+  reg [3:0] \$287 ;
+  reg [3:0] \$288 ;
+  reg [15:0] \$289 ;
   wire \$29 ;
-  wire \$3 ;
+  reg \$290 ;
+  wire [7:0] \$3 ;
   wire \$30 ;
   wire \$31 ;
-  wire \$32 ;
-  wire \$33 ;
+  wire [7:0] \$32 ;
+  wire [7:0] \$33 ;
   wire \$34 ;
   wire \$35 ;
   wire \$36 ;
-  wire \$37 ;
-  wire \$38 ;
+  wire [7:0] \$37 ;
+  wire [7:0] \$38 ;
   wire \$39 ;
-  wire \$4 ;
+  wire [7:0] \$4 ;
   wire \$40 ;
-  wire [7:0] \$41 ;
-  wire [7:0] \$42 ;
-  wire [7:0] \$43 ;
-  wire [8:0] \$44 ;
-  wire [9:0] \$45 ;
-  wire [9:0] \$46 ;
-  wire [9:0] \$47 ;
+  wire \$41 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire \$44 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
   wire \$48 ;
-  wire [15:0] \$49 ;
+  wire \$49 ;
   wire \$5 ;
-  wire [16:0] \$50 ;
-  wire [15:0] \$51 ;
-  wire [16:0] \$52 ;
+  wire \$50 ;
+  wire \$51 ;
+  wire \$52 ;
   wire \$53 ;
-  wire [19:0] \$54 ;
+  wire \$54 ;
   wire \$55 ;
-  wire [19:0] \$56 ;
+  wire \$56 ;
   wire \$57 ;
   wire \$58 ;
-  reg [3:0] \$59 ;
-  wire \$6 ;
-  reg [3:0] \$60 ;
-  wire [1:0] \$61 ;
+  wire \$59 ;
+  wire [7:0] \$6 ;
+  wire \$60 ;
+  wire \$61 ;
   wire \$62 ;
-  wire \$63 ;
-  wire \$64 ;
-  wire [3:0] \$65 ;
-  wire [4:0] \$66 ;
+  wire [15:0] \$63 ;
+  wire [16:0] \$64 ;
+  wire [15:0] \$65 ;
+  wire [16:0] \$66 ;
   wire \$67 ;
   wire \$68 ;
   wire \$69 ;
-  wire \$7 ;
-  wire [3:0] \$70 ;
-  wire [4:0] \$71 ;
+  wire [7:0] \$7 ;
+  wire \$70 ;
+  wire \$71 ;
   wire \$72 ;
   wire \$73 ;
   wire \$74 ;
-  wire [3:0] \$75 ;
-  wire [4:0] \$76 ;
+  wire \$75 ;
+  wire \$76 ;
   wire \$77 ;
   wire \$78 ;
   wire \$79 ;
-  wire \$8 ;
-  wire [3:0] \$80 ;
-  wire [4:0] \$81 ;
+  wire [7:0] \$8 ;
+  wire \$80 ;
+  wire \$81 ;
   wire \$82 ;
-  wire \$83 ;
+  wire [15:0] \$83 ;
   wire \$84 ;
-  wire [3:0] \$85 ;
-  wire [4:0] \$86 ;
+  wire \$85 ;
+  wire \$86 ;
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
   wire \$9 ;
-  wire [3:0] \$90 ;
-  wire [4:0] \$91 ;
+  wire \$90 ;
+  wire \$91 ;
   wire \$92 ;
   wire \$93 ;
   wire \$94 ;
-  wire [3:0] \$95 ;
-  wire [4:0] \$96 ;
+  wire \$95 ;
+  wire \$96 ;
   wire \$97 ;
   wire \$98 ;
   wire \$99 ;
-  wire [7:0] above;
+  reg [7:0] above = 8'h00;
   reg [3:0] amount_0 = 4'h0;
   reg [3:0] amount_1 = 4'h0;
-  reg busy = 1'h0;
+  output busy;
+  wire busy;
   input clear;
   wire clear;
+  reg clear_reg = 1'h0;
   input clk;
   wire clk;
   wire [7:0] due;
@@ -23996,12 +24512,28 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, read_data, cl
   wire \events.overrun ;
   wire \events.slo_stuck_low ;
   wire \events.spw_mismatch ;
+  reg [15:0] events_reg = 16'h0000;
+  wire \events_reg.aborted ;
+  wire \events_reg.crc_word0 ;
+  wire \events_reg.crc_word1 ;
+  wire \events_reg.delay_jump ;
+  wire \events_reg.delay_range ;
+  wire \events_reg.lc_repeat ;
+  wire \events_reg.lc_skip ;
+  wire \events_reg.lc_zero ;
+  wire \events_reg.no_ack ;
+  wire \events_reg.no_start ;
+  wire \events_reg.no_stop ;
+  wire \events_reg.noise_event ;
+  wire \events_reg.noisy_line ;
+  wire \events_reg.overrun ;
+  wire \events_reg.slo_stuck_low ;
+  wire \events_reg.spw_mismatch ;
   input [2:0] host__addr;
   wire [2:0] host__addr;
   wire [31:0] host__data;
   input host__en;
   wire host__en;
-  reg [2:0] last = 3'h0;
   reg [15:0] marked = 16'hffff;
   reg [3:0] pending_0 = 4'h0;
   reg [3:0] pending_1 = 4'h0;
@@ -24019,24 +24551,29 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, read_data, cl
   reg [3:0] pending_7 = 4'h0;
   reg [3:0] pending_8 = 4'h0;
   reg [3:0] pending_9 = 4'h0;
-  reg [2:0] pick;
+  wire [7:0] pick;
   wire [2:0] read_addr;
   output [31:0] read_data;
   wire [31:0] read_data;
   wire read_en;
   input rst;
   wire rst;
+  reg [7:0] sel = 8'h00;
+  (* init = 3'h0 *)
+  wire [2:0] sel_addr;
   wire [19:0] total_0;
   wire [19:0] total_1;
-  wire [2:0] update__addr;
+  reg [2:0] update__addr = 3'h0;
   wire [31:0] update__data;
   wire update__en;
-  reg [2:0] word = 3'h0;
+  reg [7:0] waiting = 8'h00;
+  reg was_busy = 1'h1;
   (* init = 3'h0 *)
-  wire [2:0] write__addr;
+  wire [2:0] word;
+  reg [2:0] write__addr = 3'h0;
   wire [31:0] write__data;
-  (* init = 1'h0 *)
   wire write__en;
+  reg [7:0] writing = 8'h00;
   reg [1:0] zero = 2'h0;
   reg [31:0] memory [7:0];
   initial begin
@@ -24050,8 +24587,8 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, read_data, cl
     memory[7] = 32'd0;
   end
   always @(posedge clk) begin
-    if (busy)
-      memory[word] <= { \$56 [15:0], \$54 [15:0] };
+    if (write__en)
+      memory[write__addr] <= { \$100 , \$83  };
   end
   reg [31:0] _0_;
   reg [31:0] _1_;
@@ -24060,587 +24597,612 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, read_data, cl
       _0_ <= memory[host__addr];
     end
     if (update__en) begin
-      _1_ <= memory[pick];
+      _1_ <= memory[update__addr];
     end
   end
   assign read_data = _0_;
   assign update__data = _1_;
-  assign \$1  = | pending_0;
-  assign \$2  = | pending_1;
-  assign \$3  = \$1  | \$2 ;
-  assign \$4  = \$3  | marked[0];
-  assign \$5  = \$4  | marked[1];
-  assign \$6  = | pending_2;
-  assign \$7  = | pending_3;
-  assign \$8  = \$6  | \$7 ;
-  assign \$9  = \$8  | marked[2];
-  assign \$10  = \$9  | marked[3];
-  assign \$11  = | pending_4;
-  assign \$12  = | pending_5;
-  assign \$13  = \$11  | \$12 ;
-  assign \$14  = \$13  | marked[4];
-  assign \$15  = \$14  | marked[5];
-  assign \$16  = | pending_6;
-  assign \$17  = | pending_7;
-  assign \$18  = \$16  | \$17 ;
-  assign \$19  = \$18  | marked[6];
-  assign \$20  = \$19  | marked[7];
-  assign \$21  = | pending_8;
-  assign \$22  = | pending_9;
-  assign \$23  = \$21  | \$22 ;
-  assign \$24  = \$23  | marked[8];
-  assign \$25  = \$24  | marked[9];
-  assign \$26  = | pending_10;
-  assign \$27  = | pending_11;
-  assign \$28  = \$26  | \$27 ;
-  assign \$29  = \$28  | marked[10];
-  assign \$30  = \$29  | marked[11];
-  assign \$31  = | pending_12;
-  assign \$32  = | pending_13;
-  assign \$33  = \$31  | \$32 ;
-  assign \$34  = \$33  | marked[12];
-  assign \$35  = \$34  | marked[13];
-  assign \$36  = | pending_14;
-  assign \$37  = | pending_15;
-  assign \$38  = \$36  | \$37 ;
-  assign \$39  = \$38  | marked[14];
-  assign \$40  = \$39  | marked[15];
-  assign \$41  = 1'h1 << word;
-  assign \$42  = busy ? \$41  : 8'h00;
+  assign \$1  = ~ sel;
+  assign \$2  = waiting & \$1 ;
+  assign \$3  = ~ writing;
+  assign due = \$2  & \$3 ;
+  assign \$4  = due & above;
+  assign \$5  = | \$4 ;
+  assign \$6  = due & above;
+  assign \$7  = due & above;
+  assign \$8  = due & above;
+  assign \$10  = ~ \$9 ;
+  assign \$11  = \$7 [1] & \$10 ;
+  assign \$12  = due & above;
+  assign \$13  = due & above;
+  assign \$14  = | \$13 [1:0];
+  assign \$15  = ~ \$14 ;
+  assign \$16  = \$12 [2] & \$15 ;
+  assign \$17  = due & above;
+  assign \$18  = due & above;
+  assign \$19  = | \$18 [2:0];
+  assign \$20  = ~ \$19 ;
+  assign \$21  = \$17 [3] & \$20 ;
+  assign \$22  = due & above;
+  assign \$23  = due & above;
+  assign \$24  = | \$23 [3:0];
+  assign \$25  = ~ \$24 ;
+  assign \$26  = \$22 [4] & \$25 ;
+  assign \$27  = due & above;
+  assign \$28  = due & above;
+  assign \$29  = | \$28 [4:0];
+  assign \$30  = ~ \$29 ;
+  assign \$31  = \$27 [5] & \$30 ;
+  assign \$32  = due & above;
+  assign \$33  = due & above;
+  assign \$34  = | \$33 [5:0];
+  assign \$35  = ~ \$34 ;
+  assign \$36  = \$32 [6] & \$35 ;
+  assign \$37  = due & above;
+  assign \$38  = due & above;
+  assign \$39  = | \$38 [6:0];
+  assign \$40  = ~ \$39 ;
+  assign \$41  = \$37 [7] & \$40 ;
   assign \$43  = ~ \$42 ;
-  assign due = { \$40 , \$35 , \$30 , \$25 , \$20 , \$15 , \$10 , \$5  } & \$43 ;
-  assign \$44  = 2'h2 << last;
-  assign \$45  = \$44  - 1'h1;
+  assign \$44  = due[1] & \$43 ;
+  assign \$45  = | due[1:0];
   assign \$46  = ~ \$45 ;
-  assign \$47  = { 2'h0, due } & \$46 ;
-  assign \$48  = | \$47 [7:0];
-  assign update__en = | due;
-  assign \$49  = zero[0] ? 16'h0000 : update__data[15:0];
-  assign \$50  = \$49  + amount_0;
-  assign \$51  = zero[1] ? 16'h0000 : update__data[31:16];
-  assign \$52  = \$51  + amount_1;
-  assign \$53  = \$50  > 16'hffff;
-  assign \$54  = \$53  ? 20'h0ffff : { 3'h0, \$50  };
-  assign \$55  = \$52  > 16'hffff;
-  assign \$56  = \$55  ? 20'h0ffff : { 3'h0, \$52  };
-  assign \$57  = | due;
-  assign \$58  = | due;
-  assign \$228  = pick * 2'h2;
-  assign \$61  = marked >> \$228 ;
-  assign \$62  = | due;
-  assign \$63  = ! pick;
-  assign \$64  = \$62  & \$63 ;
-  assign \$65  = \$64  ? 4'h0 : pending_0;
-  assign \$66  = \$65  + events[0];
-  assign \$67  = | due;
-  assign \$68  = ! pick;
-  assign \$69  = \$67  & \$68 ;
-  assign \$70  = \$69  ? 4'h0 : pending_1;
-  assign \$71  = \$70  + events[1];
-  assign \$72  = | due;
-  assign \$73  = pick == 1'h1;
-  assign \$74  = \$72  & \$73 ;
-  assign \$75  = \$74  ? 4'h0 : pending_2;
-  assign \$76  = \$75  + events[2];
-  assign \$77  = | due;
-  assign \$78  = pick == 1'h1;
-  assign \$79  = \$77  & \$78 ;
-  assign \$80  = \$79  ? 4'h0 : pending_3;
-  assign \$81  = \$80  + events[3];
-  assign \$82  = | due;
-  assign \$83  = pick == 2'h2;
-  assign \$84  = \$82  & \$83 ;
-  assign \$85  = \$84  ? 4'h0 : pending_4;
-  assign \$86  = \$85  + events[4];
-  assign \$87  = | due;
-  assign \$88  = pick == 2'h2;
-  assign \$89  = \$87  & \$88 ;
-  assign \$90  = \$89  ? 4'h0 : pending_5;
-  assign \$91  = \$90  + events[5];
-  assign \$92  = | due;
-  assign \$93  = pick == 2'h3;
-  assign \$94  = \$92  & \$93 ;
-  assign \$95  = \$94  ? 4'h0 : pending_6;
-  assign \$96  = \$95  + events[6];
-  assign \$97  = | due;
-  assign \$98  = pick == 2'h3;
-  assign \$99  = \$97  & \$98 ;
-  assign \$100  = \$99  ? 4'h0 : pending_7;
-  assign \$101  = \$100  + events[7];
-  assign \$102  = | due;
-  assign \$103  = pick == 3'h4;
-  assign \$104  = \$102  & \$103 ;
-  assign \$105  = \$104  ? 4'h0 : pending_8;
-  assign \$106  = \$105  + events[8];
-  assign \$107  = | due;
-  assign \$108  = pick == 3'h4;
-  assign \$109  = \$107  & \$108 ;
-  assign \$110  = \$109  ? 4'h0 : pending_9;
-  assign \$111  = \$110  + events[9];
-  assign \$112  = | due;
-  assign \$113  = pick == 3'h5;
-  assign \$114  = \$112  & \$113 ;
-  assign \$115  = \$114  ? 4'h0 : pending_10;
-  assign \$116  = \$115  + events[10];
-  assign \$117  = | due;
-  assign \$118  = pick == 3'h5;
-  assign \$119  = \$117  & \$118 ;
-  assign \$120  = \$119  ? 4'h0 : pending_11;
-  assign \$121  = \$120  + events[11];
-  assign \$122  = | due;
-  assign \$123  = pick == 3'h6;
-  assign \$124  = \$122  & \$123 ;
-  assign \$125  = \$124  ? 4'h0 : pending_12;
-  assign \$126  = \$125  + events[12];
-  assign \$127  = | due;
-  assign \$128  = pick == 3'h6;
-  assign \$129  = \$127  & \$128 ;
-  assign \$130  = \$129  ? 4'h0 : pending_13;
-  assign \$131  = \$130  + events[13];
-  assign \$132  = | due;
-  assign \$133  = pick == 3'h7;
-  assign \$134  = \$132  & \$133 ;
-  assign \$135  = \$134  ? 4'h0 : pending_14;
-  assign \$136  = \$135  + events[14];
-  assign \$137  = | due;
-  assign \$138  = pick == 3'h7;
-  assign \$139  = \$137  & \$138 ;
-  assign \$140  = \$139  ? 4'h0 : pending_15;
-  assign \$141  = \$140  + events[15];
-  assign \$142  = | due;
+  assign \$47  = due[2] & \$46 ;
+  assign \$48  = | due[2:0];
+  assign \$49  = ~ \$48 ;
+  assign \$50  = due[3] & \$49 ;
+  assign \$51  = | due[3:0];
+  assign \$52  = ~ \$51 ;
+  assign \$53  = due[4] & \$52 ;
+  assign \$54  = | due[4:0];
+  assign \$55  = ~ \$54 ;
+  assign \$56  = due[5] & \$55 ;
+  assign \$57  = | due[5:0];
+  assign \$58  = ~ \$57 ;
+  assign \$59  = due[6] & \$58 ;
+  assign \$60  = | due[6:0];
+  assign \$61  = ~ \$60 ;
+  assign \$62  = due[7] & \$61 ;
+  assign pick = \$5  ? { \$41 , \$36 , \$31 , \$26 , \$21 , \$16 , \$11 , \$6 [0] } : { \$62 , \$59 , \$56 , \$53 , \$50 , \$47 , \$44 , due[0] };
+  assign update__en = | sel;
+  assign \$63  = zero[0] ? 16'h0000 : update__data[15:0];
+  assign \$64  = \$63  + amount_0;
+  assign \$65  = zero[1] ? 16'h0000 : update__data[31:16];
+  assign \$66  = \$65  + amount_1;
+  assign \$83  = \$64 [15:0] | { \$82 , \$81 , \$80 , \$79 , \$78 , \$77 , \$76 , \$75 , \$74 , \$73 , \$72 , \$71 , \$70 , \$69 , \$68 , \$67  };
+  assign \$100  = \$66 [15:0] | { \$99 , \$98 , \$97 , \$96 , \$95 , \$94 , \$93 , \$92 , \$91 , \$90 , \$89 , \$88 , \$87 , \$86 , \$85 , \$84  };
+  assign write__en = | writing;
+  assign \$101  = | events_reg;
+  assign \$102  = was_busy | \$101 ;
+  assign busy = \$102  | clear_reg;
+  assign \$103  = | pending_0;
+  assign \$104  = | pending_1;
+  assign \$105  = \$103  | \$104 ;
+  assign \$106  = \$105  | marked[0];
+  assign \$107  = \$106  | marked[1];
+  assign \$108  = | pending_2;
+  assign \$109  = | pending_3;
+  assign \$110  = \$108  | \$109 ;
+  assign \$111  = \$110  | marked[2];
+  assign \$112  = \$111  | marked[3];
+  assign \$113  = | pending_4;
+  assign \$114  = | pending_5;
+  assign \$115  = \$113  | \$114 ;
+  assign \$116  = \$115  | marked[4];
+  assign \$117  = \$116  | marked[5];
+  assign \$118  = | pending_6;
+  assign \$119  = | pending_7;
+  assign \$120  = \$118  | \$119 ;
+  assign \$121  = \$120  | marked[6];
+  assign \$122  = \$121  | marked[7];
+  assign \$123  = | pending_8;
+  assign \$124  = | pending_9;
+  assign \$125  = \$123  | \$124 ;
+  assign \$126  = \$125  | marked[8];
+  assign \$127  = \$126  | marked[9];
+  assign \$128  = | pending_10;
+  assign \$129  = | pending_11;
+  assign \$130  = \$128  | \$129 ;
+  assign \$131  = \$130  | marked[10];
+  assign \$132  = \$131  | marked[11];
+  assign \$133  = | pending_12;
+  assign \$134  = | pending_13;
+  assign \$135  = \$133  | \$134 ;
+  assign \$136  = \$135  | marked[12];
+  assign \$137  = \$136  | marked[13];
+  assign \$138  = | pending_14;
+  assign \$139  = | pending_15;
+  assign \$140  = \$138  | \$139 ;
+  assign \$141  = \$140  | marked[14];
+  assign \$142  = \$141  | marked[15];
+  assign \$143  = | { pick[7], pick[5], pick[3], pick[1] };
+  assign \$144  = | { pick[7:6], pick[3:2] };
+  assign \$145  = | pick[7:4];
+  assign \$146  = | due;
+  assign \$148  = | pick[1:0];
+  assign \$149  = | pick[2:0];
+  assign \$150  = | pick[3:0];
+  assign \$151  = | pick[4:0];
+  assign \$152  = | pick[5:0];
+  assign \$153  = | pick[6:0];
+  assign \$154  = sel[0] ? marked[1:0] : 2'h0;
+  assign \$156  = sel[1] ? marked[3:2] : 2'h0;
+  assign \$157  = \$155  | \$156 ;
+  assign \$158  = sel[2] ? marked[5:4] : 2'h0;
+  assign \$159  = \$157  | \$158 ;
+  assign \$160  = sel[3] ? marked[7:6] : 2'h0;
+  assign \$161  = \$159  | \$160 ;
+  assign \$162  = sel[4] ? marked[9:8] : 2'h0;
+  assign \$163  = \$161  | \$162 ;
+  assign \$164  = sel[5] ? marked[11:10] : 2'h0;
+  assign \$165  = \$163  | \$164 ;
+  assign \$166  = sel[6] ? marked[13:12] : 2'h0;
+  assign \$167  = \$165  | \$166 ;
+  assign \$168  = sel[7] ? marked[15:14] : 2'h0;
+  assign \$169  = \$167  | \$168 ;
+  assign \$170  = sel[0] ? pending_0 : 4'h0;
+  assign \$172  = sel[1] ? pending_2 : 4'h0;
+  assign \$173  = \$171  | \$172 ;
+  assign \$174  = sel[2] ? pending_4 : 4'h0;
+  assign \$175  = \$173  | \$174 ;
+  assign \$176  = sel[3] ? pending_6 : 4'h0;
+  assign \$177  = \$175  | \$176 ;
+  assign \$178  = sel[4] ? pending_8 : 4'h0;
+  assign \$179  = \$177  | \$178 ;
+  assign \$180  = sel[5] ? pending_10 : 4'h0;
+  assign \$181  = \$179  | \$180 ;
+  assign \$182  = sel[6] ? pending_12 : 4'h0;
+  assign \$183  = \$181  | \$182 ;
+  assign \$184  = sel[7] ? pending_14 : 4'h0;
+  assign \$185  = \$183  | \$184 ;
+  assign \$186  = sel[0] ? pending_1 : 4'h0;
+  assign \$188  = sel[1] ? pending_3 : 4'h0;
+  assign \$189  = \$187  | \$188 ;
+  assign \$190  = sel[2] ? pending_5 : 4'h0;
+  assign \$191  = \$189  | \$190 ;
+  assign \$192  = sel[3] ? pending_7 : 4'h0;
+  assign \$193  = \$191  | \$192 ;
+  assign \$194  = sel[4] ? pending_9 : 4'h0;
+  assign \$195  = \$193  | \$194 ;
+  assign \$196  = sel[5] ? pending_11 : 4'h0;
+  assign \$197  = \$195  | \$196 ;
+  assign \$198  = sel[6] ? pending_13 : 4'h0;
+  assign \$199  = \$197  | \$198 ;
+  assign \$200  = sel[7] ? pending_15 : 4'h0;
+  assign \$201  = \$199  | \$200 ;
+  assign \$202  = sel[0] ? 4'h0 : pending_0;
+  assign \$203  = \$202  + events_reg[0];
+  assign \$204  = sel[0] ? 4'h0 : pending_1;
+  assign \$205  = \$204  + events_reg[1];
+  assign \$206  = sel[1] ? 4'h0 : pending_2;
+  assign \$207  = \$206  + events_reg[2];
+  assign \$208  = sel[1] ? 4'h0 : pending_3;
+  assign \$209  = \$208  + events_reg[3];
+  assign \$210  = sel[2] ? 4'h0 : pending_4;
+  assign \$211  = \$210  + events_reg[4];
+  assign \$212  = sel[2] ? 4'h0 : pending_5;
+  assign \$213  = \$212  + events_reg[5];
+  assign \$214  = sel[3] ? 4'h0 : pending_6;
+  assign \$215  = \$214  + events_reg[6];
+  assign \$216  = sel[3] ? 4'h0 : pending_7;
+  assign \$217  = \$216  + events_reg[7];
+  assign \$218  = sel[4] ? 4'h0 : pending_8;
+  assign \$219  = \$218  + events_reg[8];
+  assign \$220  = sel[4] ? 4'h0 : pending_9;
+  assign \$221  = \$220  + events_reg[9];
+  assign \$222  = sel[5] ? 4'h0 : pending_10;
+  assign \$223  = \$222  + events_reg[10];
+  assign \$224  = sel[5] ? 4'h0 : pending_11;
+  assign \$225  = \$224  + events_reg[11];
+  assign \$226  = sel[6] ? 4'h0 : pending_12;
+  assign \$227  = \$226  + events_reg[12];
+  assign \$228  = sel[6] ? 4'h0 : pending_13;
+  assign \$229  = \$228  + events_reg[13];
+  assign \$230  = sel[7] ? 4'h0 : pending_14;
+  assign \$231  = \$230  + events_reg[14];
+  assign \$232  = sel[7] ? 4'h0 : pending_15;
+  assign \$233  = \$232  + events_reg[15];
+  assign \$234  = ~ { sel[7], sel[7:6], sel[6:5], sel[5:4], sel[4:3], sel[3:2], sel[2:1], sel[1:0], sel[0] };
+  assign \$235  = marked & \$234 ;
+  assign \$236  = | events_reg;
+  assign \$237  = \$236  | clear_reg;
+  assign \$238  = | marked;
+  assign \$239  = \$237  | \$238 ;
+  assign \$240  = | sel;
+  assign \$241  = \$239  | \$240 ;
+  assign \$242  = | writing;
+  assign \$243  = \$241  | \$242 ;
+  assign \$244  = | pending_0;
+  assign \$245  = | pending_1;
+  assign \$246  = | pending_2;
+  assign \$247  = | pending_3;
+  assign \$248  = | pending_4;
+  assign \$249  = | pending_5;
+  assign \$250  = | pending_6;
+  assign \$251  = | pending_7;
+  assign \$252  = | pending_8;
+  assign \$253  = | pending_9;
+  assign \$254  = | pending_10;
+  assign \$255  = | pending_11;
+  assign \$256  = | pending_12;
+  assign \$257  = | pending_13;
+  assign \$258  = | pending_14;
+  assign \$259  = | pending_15;
+  assign \$260  = | { \$259 , \$258 , \$257 , \$256 , \$255 , \$254 , \$253 , \$252 , \$251 , \$250 , \$249 , \$248 , \$247 , \$246 , \$245 , \$244  };
+  assign \$261  = \$243  | \$260 ;
   always @(posedge clk)
-    busy <= \$143 ;
+    events_reg <= \$262 ;
   always @(posedge clk)
-    word <= \$144 ;
+    clear_reg <= \$263 ;
   always @(posedge clk)
-    last <= \$145 ;
+    waiting <= \$264 ;
   always @(posedge clk)
-    amount_0 <= \$146 ;
+    sel <= \$265 ;
   always @(posedge clk)
-    amount_1 <= \$147 ;
+    update__addr <= \$266 ;
   always @(posedge clk)
-    zero <= \$148 ;
+    above <= \$267 ;
   always @(posedge clk)
-    pending_0 <= \$149 ;
+    writing <= \$268 ;
   always @(posedge clk)
-    pending_1 <= \$150 ;
+    write__addr <= \$269 ;
   always @(posedge clk)
-    pending_2 <= \$151 ;
+    zero <= \$270 ;
   always @(posedge clk)
-    pending_3 <= \$152 ;
+    amount_0 <= \$271 ;
   always @(posedge clk)
-    pending_4 <= \$153 ;
+    amount_1 <= \$272 ;
   always @(posedge clk)
-    pending_5 <= \$154 ;
+    pending_0 <= \$273 ;
   always @(posedge clk)
-    pending_6 <= \$155 ;
+    pending_1 <= \$274 ;
   always @(posedge clk)
-    pending_7 <= \$156 ;
+    pending_2 <= \$275 ;
   always @(posedge clk)
-    pending_8 <= \$157 ;
+    pending_3 <= \$276 ;
   always @(posedge clk)
-    pending_9 <= \$158 ;
+    pending_4 <= \$277 ;
   always @(posedge clk)
-    pending_10 <= \$159 ;
+    pending_5 <= \$278 ;
   always @(posedge clk)
-    pending_11 <= \$160 ;
+    pending_6 <= \$279 ;
   always @(posedge clk)
-    pending_12 <= \$161 ;
+    pending_7 <= \$280 ;
   always @(posedge clk)
-    pending_13 <= \$162 ;
+    pending_8 <= \$281 ;
   always @(posedge clk)
-    pending_14 <= \$163 ;
+    pending_9 <= \$282 ;
   always @(posedge clk)
-    pending_15 <= \$164 ;
+    pending_10 <= \$283 ;
   always @(posedge clk)
-    marked <= \$165 ;
+    pending_11 <= \$284 ;
+  always @(posedge clk)
+    pending_12 <= \$285 ;
+  always @(posedge clk)
+    pending_13 <= \$286 ;
+  always @(posedge clk)
+    pending_14 <= \$287 ;
+  always @(posedge clk)
+    pending_15 <= \$288 ;
+  always @(posedge clk)
+    marked <= \$289 ;
+  always @(posedge clk)
+    was_busy <= \$290 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$262  = events;
+    if (rst) begin
+      \$262  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$263  = clear;
+    if (rst) begin
+      \$263  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$264  = { \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107  };
+    if (rst) begin
+      \$264  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$265  = pick;
+    if (rst) begin
+      \$265  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$266  = { \$145 , \$144 , \$143  };
+    if (rst) begin
+      \$266  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$267  = above;
+    if (\$146 ) begin
+      \$267  = { \$153 , \$152 , \$151 , \$150 , \$149 , \$148 , \$147 , 1'h0 };
+    end
+    if (rst) begin
+      \$267  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$268  = sel;
+    if (rst) begin
+      \$268  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$269  = update__addr;
+    if (rst) begin
+      \$269  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$270  = \$169 ;
+    if (rst) begin
+      \$270  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$271  = \$185 ;
+    if (rst) begin
+      \$271  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$272  = \$201 ;
+    if (rst) begin
+      \$272  = 4'h0;
+    end
+  end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    casez (pick)
-      3'h0:
-          \$59  = pending_0;
-      3'h1:
-          \$59  = pending_2;
-      3'h2:
-          \$59  = pending_4;
-      3'h3:
-          \$59  = pending_6;
-      3'h4:
-          \$59  = pending_8;
-      3'h5:
-          \$59  = pending_10;
-      3'h6:
-          \$59  = pending_12;
-      3'h7:
-          \$59  = pending_14;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    casez (pick)
-      3'h0:
-          \$60  = pending_1;
-      3'h1:
-          \$60  = pending_3;
-      3'h2:
-          \$60  = pending_5;
-      3'h3:
-          \$60  = pending_7;
-      3'h4:
-          \$60  = pending_9;
-      3'h5:
-          \$60  = pending_11;
-      3'h6:
-          \$60  = pending_13;
-      3'h7:
-          \$60  = pending_15;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    pick = 3'h0;
-    if (due[7]) begin
-      pick = 3'h7;
-    end
-    if (due[6]) begin
-      pick = 3'h6;
-    end
-    if (due[5]) begin
-      pick = 3'h5;
-    end
-    if (due[4]) begin
-      pick = 3'h4;
-    end
-    if (due[3]) begin
-      pick = 3'h3;
-    end
-    if (due[2]) begin
-      pick = 3'h2;
-    end
-    if (due[1]) begin
-      pick = 3'h1;
-    end
-    if (due[0]) begin
-      pick = 3'h0;
-    end
-    if (\$48 ) begin
-      if (\$47 [7]) begin
-        pick = 3'h7;
-      end
-      if (\$47 [6]) begin
-        pick = 3'h6;
-      end
-      if (\$47 [5]) begin
-        pick = 3'h5;
-      end
-      if (\$47 [4]) begin
-        pick = 3'h4;
-      end
-      if (\$47 [3]) begin
-        pick = 3'h3;
-      end
-      if (\$47 [2]) begin
-        pick = 3'h2;
-      end
-      if (\$47 [1]) begin
-        pick = 3'h1;
-      end
-      if (\$47 [0]) begin
-        pick = 3'h0;
-      end
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$143  = \$57 ;
-    if (rst) begin
-      \$143  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$144  = word;
-    if (\$58 ) begin
-      \$144  = pick;
-    end
-    if (rst) begin
-      \$144  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$145  = last;
-    if (\$58 ) begin
-      \$145  = pick;
-    end
-    if (rst) begin
-      \$145  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$146  = amount_0;
-    if (\$58 ) begin
-      \$146  = \$59 ;
-    end
-    if (rst) begin
-      \$146  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$147  = amount_1;
-    if (\$58 ) begin
-      \$147  = \$60 ;
-    end
-    if (rst) begin
-      \$147  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$148  = zero;
-    if (\$58 ) begin
-      \$148  = \$61 ;
-    end
-    if (rst) begin
-      \$148  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear) begin
-      \$149  = 4'h0;
+    if (clear_reg) begin
+      \$273  = 4'h0;
     end else begin
-      \$149  = \$66 [3:0];
+      \$273  = \$203 [3:0];
     end
     if (rst) begin
-      \$149  = 4'h0;
+      \$273  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$150  = 4'h0;
+    if (clear_reg) begin
+      \$274  = 4'h0;
     end else begin
-      \$150  = \$71 [3:0];
+      \$274  = \$205 [3:0];
     end
     if (rst) begin
-      \$150  = 4'h0;
+      \$274  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$151  = 4'h0;
+    if (clear_reg) begin
+      \$275  = 4'h0;
     end else begin
-      \$151  = \$76 [3:0];
+      \$275  = \$207 [3:0];
     end
     if (rst) begin
-      \$151  = 4'h0;
+      \$275  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$152  = 4'h0;
+    if (clear_reg) begin
+      \$276  = 4'h0;
     end else begin
-      \$152  = \$81 [3:0];
+      \$276  = \$209 [3:0];
     end
     if (rst) begin
-      \$152  = 4'h0;
+      \$276  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$153  = 4'h0;
+    if (clear_reg) begin
+      \$277  = 4'h0;
     end else begin
-      \$153  = \$86 [3:0];
+      \$277  = \$211 [3:0];
     end
     if (rst) begin
-      \$153  = 4'h0;
+      \$277  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$154  = 4'h0;
+    if (clear_reg) begin
+      \$278  = 4'h0;
     end else begin
-      \$154  = \$91 [3:0];
+      \$278  = \$213 [3:0];
     end
     if (rst) begin
-      \$154  = 4'h0;
+      \$278  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$155  = 4'h0;
+    if (clear_reg) begin
+      \$279  = 4'h0;
     end else begin
-      \$155  = \$96 [3:0];
+      \$279  = \$215 [3:0];
     end
     if (rst) begin
-      \$155  = 4'h0;
+      \$279  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$156  = 4'h0;
+    if (clear_reg) begin
+      \$280  = 4'h0;
     end else begin
-      \$156  = \$101 [3:0];
+      \$280  = \$217 [3:0];
     end
     if (rst) begin
-      \$156  = 4'h0;
+      \$280  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$157  = 4'h0;
+    if (clear_reg) begin
+      \$281  = 4'h0;
     end else begin
-      \$157  = \$106 [3:0];
+      \$281  = \$219 [3:0];
     end
     if (rst) begin
-      \$157  = 4'h0;
+      \$281  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$158  = 4'h0;
+    if (clear_reg) begin
+      \$282  = 4'h0;
     end else begin
-      \$158  = \$111 [3:0];
+      \$282  = \$221 [3:0];
     end
     if (rst) begin
-      \$158  = 4'h0;
+      \$282  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$159  = 4'h0;
+    if (clear_reg) begin
+      \$283  = 4'h0;
     end else begin
-      \$159  = \$116 [3:0];
+      \$283  = \$223 [3:0];
     end
     if (rst) begin
-      \$159  = 4'h0;
+      \$283  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$160  = 4'h0;
+    if (clear_reg) begin
+      \$284  = 4'h0;
     end else begin
-      \$160  = \$121 [3:0];
+      \$284  = \$225 [3:0];
     end
     if (rst) begin
-      \$160  = 4'h0;
+      \$284  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$161  = 4'h0;
+    if (clear_reg) begin
+      \$285  = 4'h0;
     end else begin
-      \$161  = \$126 [3:0];
+      \$285  = \$227 [3:0];
     end
     if (rst) begin
-      \$161  = 4'h0;
+      \$285  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$162  = 4'h0;
+    if (clear_reg) begin
+      \$286  = 4'h0;
     end else begin
-      \$162  = \$131 [3:0];
+      \$286  = \$229 [3:0];
     end
     if (rst) begin
-      \$162  = 4'h0;
+      \$286  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$163  = 4'h0;
+    if (clear_reg) begin
+      \$287  = 4'h0;
     end else begin
-      \$163  = \$136 [3:0];
+      \$287  = \$231 [3:0];
     end
     if (rst) begin
-      \$163  = 4'h0;
+      \$287  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear) begin
-      \$164  = 4'h0;
+    if (clear_reg) begin
+      \$288  = 4'h0;
     end else begin
-      \$164  = \$141 [3:0];
+      \$288  = \$233 [3:0];
     end
     if (rst) begin
-      \$164  = 4'h0;
+      \$288  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$165  = marked;
-    if (clear) begin
-      \$165  = 16'hffff;
-    end else if (\$142 ) begin
-      (* full_case = 32'd1 *)
-      casez (pick)
-        3'h0:
-            \$165 [1:0] = 2'h0;
-        3'h1:
-            \$165 [3:2] = 2'h0;
-        3'h2:
-            \$165 [5:4] = 2'h0;
-        3'h3:
-            \$165 [7:6] = 2'h0;
-        3'h4:
-            \$165 [9:8] = 2'h0;
-        3'h5:
-            \$165 [11:10] = 2'h0;
-        3'h6:
-            \$165 [13:12] = 2'h0;
-        3'h7:
-            \$165 [15:14] = 2'h0;
-      endcase
+    (* full_case = 32'd1 *)
+    if (clear_reg) begin
+      \$289  = 16'hffff;
+    end else begin
+      \$289  = \$235 ;
     end
     if (rst) begin
-      \$165  = 16'hffff;
+      \$289  = 16'hffff;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$290  = \$261 ;
+    if (rst) begin
+      \$290  = 1'h1;
     end
   end
   assign read_addr = host__addr;
   assign read_en = host__en;
   assign host__data = read_data;
-  assign above = \$47 [7:0];
-  assign update__addr = pick;
-  assign total_0 = { 3'h0, \$50  };
-  assign total_1 = { 3'h0, \$52  };
-  assign write__addr = word;
-  assign write__data = { \$56 [15:0], \$54 [15:0] };
-  assign write__en = busy;
+  assign sel_addr = update__addr;
+  assign total_0 = { 3'h0, \$64  };
+  assign total_1 = { 3'h0, \$66  };
+  assign word = write__addr;
+  assign write__data = { \$100 , \$83  };
+  assign \events_reg.crc_word0  = events_reg[0];
+  assign \events_reg.crc_word1  = events_reg[1];
+  assign \events_reg.no_ack  = events_reg[2];
+  assign \events_reg.no_start  = events_reg[3];
+  assign \events_reg.delay_range  = events_reg[4];
+  assign \events_reg.slo_stuck_low  = events_reg[5];
+  assign \events_reg.lc_repeat  = events_reg[6];
+  assign \events_reg.lc_skip  = events_reg[7];
+  assign \events_reg.lc_zero  = events_reg[8];
+  assign \events_reg.spw_mismatch  = events_reg[9];
+  assign \events_reg.overrun  = events_reg[10];
+  assign \events_reg.aborted  = events_reg[11];
+  assign \events_reg.no_stop  = events_reg[12];
+  assign \events_reg.noisy_line  = events_reg[13];
+  assign \events_reg.delay_jump  = events_reg[14];
+  assign \events_reg.noise_event  = events_reg[15];
   assign \events.crc_word0  = events[0];
   assign \events.crc_word1  = events[1];
   assign \events.no_ack  = events[2];
@@ -24657,6 +25219,44 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, read_data, cl
   assign \events.noisy_line  = events[13];
   assign \events.delay_jump  = events[14];
   assign \events.noise_event  = events[15];
+  assign \$9  = \$8 [0];
+  assign \$42  = due[0];
+  assign \$67  = \$64 [16];
+  assign \$68  = \$64 [16];
+  assign \$69  = \$64 [16];
+  assign \$70  = \$64 [16];
+  assign \$71  = \$64 [16];
+  assign \$72  = \$64 [16];
+  assign \$73  = \$64 [16];
+  assign \$74  = \$64 [16];
+  assign \$75  = \$64 [16];
+  assign \$76  = \$64 [16];
+  assign \$77  = \$64 [16];
+  assign \$78  = \$64 [16];
+  assign \$79  = \$64 [16];
+  assign \$80  = \$64 [16];
+  assign \$81  = \$64 [16];
+  assign \$82  = \$64 [16];
+  assign \$84  = \$66 [16];
+  assign \$85  = \$66 [16];
+  assign \$86  = \$66 [16];
+  assign \$87  = \$66 [16];
+  assign \$88  = \$66 [16];
+  assign \$89  = \$66 [16];
+  assign \$90  = \$66 [16];
+  assign \$91  = \$66 [16];
+  assign \$92  = \$66 [16];
+  assign \$93  = \$66 [16];
+  assign \$94  = \$66 [16];
+  assign \$95  = \$66 [16];
+  assign \$96  = \$66 [16];
+  assign \$97  = \$66 [16];
+  assign \$98  = \$66 [16];
+  assign \$99  = \$66 [16];
+  assign \$147  = pick[0];
+  assign \$155  = \$154 ;
+  assign \$171  = \$170 ;
+  assign \$187  = \$186 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -31719,7 +32319,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6119$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6296$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -31761,8 +32361,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6119$0 ;
-  wire \port$6119$0 ;
+  input \port$6296$0 ;
+  wire \port$6296$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -31776,9 +32376,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6119$0  };
-  assign \$2  = { lc[4:0], \port$6119$0  } == last;
-  assign \$3  = { lc[4:0], \port$6119$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6296$0  };
+  assign \$2  = { lc[4:0], \port$6296$0  } == last;
+  assign \$3  = { lc[4:0], \port$6296$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -31888,7 +32488,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6119$0  };
+  assign lc_next = { lc[4:0], \port$6296$0  };
   assign zero = is_zero;
 endmodule
 
@@ -32444,7 +33044,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4415$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4501$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire \$1 ;
@@ -32598,8 +33198,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4415$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$4415$0 ;
-  wire \port$4415$0 ;
+  output \port$4501$0 ;
+  wire \port$4501$0 ;
   output report;
   wire report;
   input report_frame;
@@ -32705,7 +33305,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4415$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4415$0  = \$2 ;
+  assign \port$4501$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -61,7 +61,7 @@ BUSES = {
 }
 
 #: Channel signals of the register map that the channel makes itself (not core ports).
-CHANNEL_GLUE = ("trigger_enable", "frame_error", "done_count", "cap_data_bits_w0",
+CHANNEL_GLUE = ("trigger_enable", "frame_done", "frame_error", "done_count", "cap_data_bits_w0",
                 "cap_data_bits_w1", "cap_timer_width", "cap_counters", "cap_timestamp",
                 "cap_register_access")
 #: Pulses of the bank taken into a flip-flop beside the core, so they reach it one clock
@@ -72,6 +72,9 @@ CHANNEL_GLUE = ("trigger_enable", "frame_error", "done_count", "cap_data_bits_w0
 RETIMED_PULSES = ("abort_cycle",)
 #: Bits of each count in the register map (two counts per counter register).
 COUNT_BITS = 16
+#: Longest wait, in clocks, of a cycle's end for its counts (docs/ports.md, Counters: a count is
+#: in the counter memory at most 15 clocks after its event).
+COUNT_SETTLE = 15
 #: Global signals of the register map, made by the top.
 GLOBAL_SIGNALS = ("channels", "trigger", "irq_pending")
 
@@ -83,8 +86,9 @@ class BusChannel(wiring.Component):
     Every signal of the map's channel block is connected by name to the core port of that
     name (``cfg_ma_half_period``, ``start``, ``word0_position``, the counter memory's
     ``count_addr`` / ``count_en`` / ``count_data``, ...), or
-    made here (:data:`CHANNEL_GLUE`): the trigger gate, ``frame_error`` (``done`` with a
-    status other than OK), ``done_count`` and the build's capabilities. A signal that only
+    made here (:data:`CHANNEL_GLUE`): the trigger gate, ``frame_done`` (``done``, held until
+    the cycle's counts are in the counter memory), ``frame_error`` (the same for a status other
+    than OK), ``done_count`` (counts ``frame_done``) and the build's capabilities. A signal that only
     other builds of the core have (``word1_position`` in a one-word build, the ``ca_*`` ports
     of the register-access engine in a build without it) reads 0 and its configuration is not
     used.
@@ -142,9 +146,32 @@ class BusChannel(wiring.Component):
         p = self.params
         m.submodules.core = core = BissMaster(p, trigger=True)
         regs = self.regs
+        # A cycle's end as the host is told of it (irq_status.done and .error, result.seq):
+        # the core's `done`, held until its counts are in the counter memory, so that a host
+        # reading the counters on the interrupt reads this cycle's (at most 16 clocks later;
+        # the next cycle's end reports it at once).
+        ended = Signal()
+        if p.counter_ram:
+            pending, pending_ok = Signal(), Signal()
+            waited = Signal(range(COUNT_SETTLE + 1))
+            report = Signal()
+            m.d.comb += report.eq(pending & (~core.count_busy | core.done
+                                             | (waited == COUNT_SETTLE)))
+            with m.If(report):
+                m.d.sync += pending.eq(0)
+            m.d.sync += waited.eq(Mux(pending & ~report, waited + 1, 0))
+            with m.If(core.done):
+                m.d.sync += [pending.eq(1), pending_ok.eq(core.valid)]
+            # Registered, for timing (the decision sits behind the memory's busy).
+            ended_ok = Signal()
+            m.d.sync += [ended.eq(report), ended_ok.eq(pending_ok)]
+        else:
+            m.d.comb += ended.eq(core.done)
+            ended_ok = core.valid
         glue = {
             "trigger_enable": None,
-            "frame_error": core.done & ~core.valid,
+            "frame_done": ended,
+            "frame_error": ended & ~ended_ok,
             "done_count": None,
             "cap_data_bits_w0": p.max_data_bits[0],
             "cap_data_bits_w1": p.max_data_bits[1] if p.words == 2 else 0,
@@ -166,7 +193,7 @@ class BusChannel(wiring.Component):
                 m.d.comb += port.eq(signal) if member.flow == In else signal.eq(port)
 
         # Every ended cycle counted, so a host sees a lost result.
-        with m.If(core.done):
+        with m.If(ended):
             m.d.sync += regs.done_count.eq(regs.done_count + 1)
         # The global trigger starts the core only when enabled.
         m.d.comb += [

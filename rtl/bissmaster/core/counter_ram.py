@@ -17,22 +17,24 @@ class CounterRam(wiring.Component):
     half for even ``i``), the layout of the register map's counter registers. A slot named
     ``None`` has no event and reads 0.
 
-    Counting: each event adds to its counter's pending count, a register (the timing stage
-    that :class:`~.counters.CounterBank` gets from registering its events). Each clock one word
-    with pending events or a clear to do, whose write is not under way, is read from the
-    memory, in turn: the first such word above the one taken last, else the first from word 0.
-    In the next clock both its counts plus their pending events, saturating at
-    ``2**width - 1``, are written back. So a word waits for each other word at most once: a
-    read issued 3 clocks after an event's clock returns its count when no other count waits,
-    and one issued ``words + 3`` clocks after it (11 for 16 counters) in any case. The events of
-    a counter that come while it waits are added together; its pending count has room for an
-    event in every clock of the longest wait, so none is lost, however fast a source strobes.
+    Counting: each event is taken into a flip-flop (as :class:`~.counters.CounterBank` does),
+    then added to its counter's pending count. Each clock one word with pending events or a
+    clear to do, and not already on its way, is picked, in turn: the first such word above the
+    one picked last, else the first from word 0. In the next clock it is read from the memory
+    and its pending events taken; in the one after, both its counts plus their events,
+    saturating at ``2**width - 1``, are written back. So a word waits for each other word at
+    most once: a read issued 6 clocks after an event's clock returns its count when no other
+    count waits, and one issued ``words + 7`` clocks after it (15 for 16 counters) in any case.
+    The events of a counter that come while it waits are added together; its pending count has
+    room for an event in every clock of the longest wait, so none is lost, however fast a
+    source strobes.
 
-    Clearing: ``clear`` (winning over the events of its own clock) drops the pending counts
-    and marks every slot; a marked slot is written with its events since the clear instead of
-    its count plus them. So every count reads its events since the clear from ``words + 2``
-    clocks after it, and never mixes counts from before it with those after. Reset marks every
-    slot too: the memory, which a reset does not clear, is zeroed within ``words + 1`` clocks.
+    Clearing: ``clear`` (registered like the events, and winning over the events of its own
+    clock) drops the pending counts and marks every slot; a marked slot is written with its
+    events since the clear instead of its count plus them. So every count reads its events
+    since the clear from ``words + 6`` clocks after it, and never mixes counts from before it
+    with those after. Reset marks every slot too: the memory, which a reset does not clear, is
+    zeroed within ``words + 4`` clocks.
 
     Reading: ``read_addr`` and ``read_en`` in one clock, the word on ``read_data`` from the
     next, held until the next read (a registered read port: the register map's window).
@@ -51,6 +53,9 @@ class CounterRam(wiring.Component):
     read_addr : In(range of the words)
     read_en : In(1)
     read_data : Out(32)
+    busy : Out(1)
+        High while an event or a clear is not yet in the memory (registered, pending, or on
+        its way to the write): low, a read issued in that clock returns every event before it.
     """
 
     def __init__(self, slots, width):
@@ -68,6 +73,7 @@ class CounterRam(wiring.Component):
             "read_addr": In(range(self.words)),
             "read_en": In(1),
             "read_data": Out(WORD_BITS),
+            "busy": Out(1),
         })
 
     def elaborate(self, platform):
@@ -86,58 +92,81 @@ class CounterRam(wiring.Component):
         m.d.comb += [host.addr.eq(self.read_addr), host.en.eq(self.read_en),
                      self.read_data.eq(host.data)]
 
+        # The events and the clear are taken into flip-flops first, as CounterBank does: they
+        # are decided at a frame's end, several logic levels deep, and straight into the
+        # pending counts' adders they were the bus top's critical path.
+        events = Signal.like(self.events, name="events_reg")
+        clear = Signal(name="clear_reg")
+        m.d.sync += [events.eq(self.events), clear.eq(self.clear)]
         slots = self._slots + (None,) * (2 * words - len(self._slots))
-        event = [self.events[name] if name is not None else C(0) for name in slots]
-        # A due word is taken within ``words`` clocks of its last write, with at most an
-        # event in each of them and in the clock of that write: ``words + 1`` events.
-        pending = [Signal(range(words + 2), name=f"pending_{i}") for i in range(2 * words)]
+        event = [events[name] if name is not None else C(0) for name in slots]
+        # A word is taken again at most ``words + 3`` clocks after it was, with at most an
+        # event in each of them and in the clock it was taken: ``words + 3`` events.
+        pending = [Signal(range(words + 4), name=f"pending_{i}") for i in range(2 * words)]
         # Every slot starts marked, so the memory is zeroed after reset.
         marked = Signal(2 * words, init=2**(2 * words) - 1)
-        # The word being written this clock (read in the last one), with its two halves'
-        # pending events and marks as taken.
-        busy = Signal()
+        # Three stages, each with its own one-hot register of its word (0: none): a word is
+        # picked (``sel`` from the next clock), then read and its pending events and marks
+        # taken (``writing`` from the next clock), then written. The pick is registered before
+        # anything uses it: taken straight into the memory address, the pending counts and
+        # the marks, its logic was copied into each of them (4x the LUTs) and was the bus top's
+        # critical path.
+        sel = Signal(words)
+        sel_addr = Signal(range(words))
+        writing = Signal(words)
         word = Signal(range(words))
         amount = [Signal.like(pending[0], name=f"amount_{h}") for h in range(2)]
         zero = Signal(2)
 
-        due = Signal(words)
-        m.d.comb += due.eq(Cat((pending[2 * w] != 0) | (pending[2 * w + 1] != 0)
-                               | marked[2 * w] | marked[2 * w + 1] for w in range(words))
-                           & ~Mux(busy, 1 << word, 0))
-        # In turn: the first due word above the last one taken, else the first due word.
-        last = Signal(range(words))
-        above = Signal(words)
-        m.d.comb += above.eq(due & ~((2 << last) - 1))
-        pick = Signal(range(words))
-        for w in reversed(range(words)):
-            with m.If(due[w]):
-                m.d.comb += pick.eq(w)
-        with m.If(above.any()):
-            for w in reversed(range(words)):
-                with m.If(above[w]):
-                    m.d.comb += pick.eq(w)
-        picked = due.any()
+        def lowest(v):
+            """One-hot of the lowest set bit of ``v`` (0 if none), without a carry chain."""
+            return Cat(v[w] & ~v[:w].any() if w else v[0] for w in range(len(v)))
 
-        m.d.comb += [update.addr.eq(pick), update.en.eq(picked)]
-        m.d.sync += busy.eq(picked)
-        with m.If(picked):
-            m.d.sync += [word.eq(pick), last.eq(pick),
-                         amount[0].eq(Array(pending[0::2])[pick]),
-                         amount[1].eq(Array(pending[1::2])[pick]),
-                         zero.eq(marked.word_select(pick, 2))]
+        # Pick: a word with pending events or marks, not in the later stages; in turn, the
+        # first such word above the last one picked (``above``, a register), else the first.
+        # Which words have something to write is registered (a clock late, for timing: the
+        # pick is the longest path of the block). A stale "due" is harmless: the word just
+        # taken is still excluded as ``sel`` or ``writing``, and a word picked with nothing to
+        # write is written unchanged.
+        waiting = Signal(words)
+        m.d.sync += waiting.eq(Cat((pending[2 * w] != 0) | (pending[2 * w + 1] != 0)
+                                   | marked[2 * w] | marked[2 * w + 1] for w in range(words)))
+        due = Signal(words)
+        m.d.comb += due.eq(waiting & ~sel & ~writing)
+        above = Signal(words)
+        pick = Signal(words)
+        m.d.comb += pick.eq(Mux((due & above).any(), lowest(due & above), lowest(due)))
+        m.d.sync += [sel.eq(pick),
+                     sel_addr.eq(Cat(Cat(pick[w] for w in range(words) if w >> b & 1).any()
+                                     for b in range(len(sel_addr))))]
+        with m.If(due.any()):
+            m.d.sync += above.eq(Cat(pick[:w].any() if w else 0 for w in range(words)))
+
+        # Read and take.
+        def chosen(values):
+            """The value of the word ``sel`` holds among ``values`` (an AND-OR on one-hot)."""
+            out = 0
+            for w, value in enumerate(values):
+                out = out | Mux(sel[w], value, 0)
+            return out
+
+        m.d.comb += [update.addr.eq(sel_addr), update.en.eq(sel.any())]
+        m.d.sync += [writing.eq(sel), word.eq(sel_addr),
+                     zero.eq(chosen(marked[2 * w:2 * w + 2] for w in range(words)))]
+        m.d.sync += [amount[h].eq(chosen(pending[2 * w + h] for w in range(words)))
+                     for h in range(2)]
 
         # The pending counts: added to by an event, taken with their word (the event of that
         # clock stays pending); a clear drops them, winning over the events of its clock.
         for i in range(2 * words):
-            taken = picked & (pick == i // 2)
-            with m.If(self.clear):
+            with m.If(clear):
                 m.d.sync += pending[i].eq(0)
             with m.Else():
-                m.d.sync += pending[i].eq(Mux(taken, 0, pending[i]) + event[i])
-        with m.If(self.clear):
+                m.d.sync += pending[i].eq(Mux(sel[i // 2], 0, pending[i]) + event[i])
+        with m.If(clear):
             m.d.sync += marked.eq(2**(2 * words) - 1)
-        with m.Elif(picked):
-            m.d.sync += marked.word_select(pick, 2).eq(0)
+        with m.Else():
+            m.d.sync += marked.eq(marked & ~Cat(sel[w].replicate(2) for w in range(words)))
 
         # The write: each half of the word read plus its pending events, saturating (or just
         # its events since a clear).
@@ -146,7 +175,15 @@ class CounterRam(wiring.Component):
             old = update.data[h * HALF_BITS:h * HALF_BITS + self._width]
             total = Signal(self._width + len(amount[h]), name=f"total_{h}")
             m.d.comb += total.eq(Mux(zero[h], 0, old) + amount[h])
-            halves += [Mux(total > full, full, total)[:self._width],
+            halves += [total[:self._width] | total[self._width:].any().replicate(self._width),
                        C(0, HALF_BITS - self._width)]
-        m.d.comb += [write.addr.eq(word), write.data.eq(Cat(*halves)), write.en.eq(busy)]
+        m.d.comb += [write.addr.eq(word), write.data.eq(Cat(*halves)), write.en.eq(writing.any())]
+        # Busy: the state one clock ago (a register, for timing: the wide OR is not in front
+        # of what the user does with it), or an event taken since. Low in a clock, nothing was
+        # pending or on its way in the last one and no event came in it, so every event before
+        # this clock is in the memory.
+        was_busy = Signal(init=1)         # after reset: the memory is being zeroed
+        m.d.sync += was_busy.eq(events.as_value().any() | clear | marked.any() | sel.any()
+                                | writing.any() | Cat(p != 0 for p in pending).any())
+        m.d.comb += self.busy.eq(was_busy | events.as_value().any() | clear)
         return m

@@ -159,19 +159,19 @@ def test_pulse_is_one_clock_after_the_registered_write():
 def test_interrupt_set_wins_over_clear_and_irq_follows_enable():
     async def bench(ctx, bank):
         status, enable = offset("irq_status"), offset("irq_enable")
-        ctx.set(bank.ch0.done, 1)
+        ctx.set(bank.ch0.frame_done, 1)
         ctx.set(bank.ch0.frame_error, 1)                # two causes, one clock
         await ctx.tick()
-        ctx.set(bank.ch0.done, 0)
+        ctx.set(bank.ch0.frame_done, 0)
         ctx.set(bank.ch0.frame_error, 0)
         assert await read(ctx, bank, status) == 0b11
         assert ctx.get(bank.irq) == 0                   # nothing enabled
         await write(ctx, bank, enable, 0b10)
         assert ctx.get(bank.irq) == 1
         # Clear both while done sets again in the same clock: done stays, error goes.
-        ctx.set(bank.ch0.done, 1)
+        ctx.set(bank.ch0.frame_done, 1)
         await write(ctx, bank, status, 0b11)
-        ctx.set(bank.ch0.done, 0)
+        ctx.set(bank.ch0.frame_done, 0)
         assert await read(ctx, bank, status) == 0b01
         assert ctx.get(bank.irq) == 0
         await write(ctx, bank, status, 0b01, strb=0b0010)    # lane 1 only: no clear

@@ -59,8 +59,9 @@ def test_map_covers_every_setting_result_and_counter_once():
     wanted = {name: shape for name, _, shape in config_ports(p)}
     wanted.update({name: shape for name, _, shape in flat_fields(result_layout(p))})
     wanted.update({f"count_{n}": p.counter_width for n in counter_ports(p)})
+    # The core's `done` reaches the map as the channel's frame_done (held for the counts).
     wanted.update({n: 1 for n in ("start", "periodic", "abort_cycle", "clear_counters",
-                                  "busy", "config_error", "done")})
+                                  "busy", "config_error", "frame_done")})
     wanted.update({name: shape for name, _, shape in flat_fields(access_request_layout(), "ca_")})
     wanted.update({name: shape for name, _, shape in flat_fields(access_result_layout(), "ca_")})
     wanted.update({n: 1 for n in ("ca_start", "ca_abort", "ca_busy", "ca_done")})

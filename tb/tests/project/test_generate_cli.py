@@ -68,7 +68,8 @@ def test_counter_ram_gives_a_read_port_instead_of_the_count_ports(tmp_path, caps
     main(["--preset", "biss-c", "--counter-ram", "1", "-o", str(out)])
     text = out.read_text()
     assert "input [2:0] count_addr" in text and "output [31:0] count_data" in text
-    assert "input count_en" in text and "count_no_ack" not in text
+    assert "input count_en" in text and "output count_busy" in text
+    assert "count_no_ack" not in text
     assert "counter_width   = 16 in memory (count_addr, count_data)" in text
     with pytest.raises(SystemExit) as e:
         main(["--counter-ram", "1", "--counter-width", "0", "-o", "/dev/null"])
