@@ -16,7 +16,7 @@ on the bus is measured, split into parts that add up exactly:
   round trip, Ack slots, Start, CDS, the data and CRC bits, the sampling point of a slot and
   its third vote; the same derivation as sim/scenarios/perf.py's verdict_latency);
 * **verdict**: that edge -> the edge that sets the core's output ``done`` (observed inside the
-  bus top, ``ch0.regs__done``: Verilator builds with public signals);
+  bus top, ``ch0.done``: Verilator builds with public signals);
 * **irq**: ``done`` -> the edge that sets the ``irq`` pin (the register bank's sticky status,
   the registered pin);
 * **read**: ``irq`` -> the AXI read data of the result (the edge of the R handshake), for
@@ -112,10 +112,10 @@ async def bus_trigger_latency(dut):
     cocotb.start_soon(handshakes(dut.clk, axi["rvalid"], axi["rready"], r, axi["rdata"]))
     cocotb.start_soon(rises(dut.irq, irqs))
     try:
-        # The core's output `done` as the channel passes it to the bank (inside the core,
-        # Amaranth names it `done$N`; the core's own `done` wire is the decoder's, a clock
-        # earlier).
-        core_done = dut.ch0.regs__done
+        # The core's output `done` as the channel sees it (inside the core, Amaranth names it
+        # `done$N`; the core's own `done` wire is the decoder's, a clock earlier). The bank
+        # gets it later, as `frame_done`, once the cycle's counts are in the counter memory.
+        core_done = dut.ch0.done
     except AttributeError:
         core_done = None                            # not visible: verdict and irq reported together
     if core_done is not None:

@@ -85,7 +85,13 @@ class CounterRam(wiring.Component):
         # two read ports (counting, the host's reads) become two copies of it. A whole word is
         # written each time, both counts updated together: one write port serves the counters
         # a word per clock, so a counter waits for at most ``words - 1`` others.
-        m.submodules.memory = memory = Memory(shape=WORD_BITS, depth=words, init=[])
+        # iCE40 has no distributed RAM, and Yosys builds a memory this small from flip-flops
+        # there (+576 logic cells on the iCEBreaker) unless told to use a block (EBR). Only
+        # when elaborated for an iCE40 platform (the board designs): the generated Verilog keeps
+        # the choice to the tool (docs/ports.md, Counters).
+        ice40 = getattr(platform, "family", None) == "iCE40"
+        m.submodules.memory = memory = Memory(shape=WORD_BITS, depth=words, init=[],
+                                              attrs={"ram_style": "block"} if ice40 else None)
         write = memory.write_port()
         update = memory.read_port()
         host = memory.read_port()
