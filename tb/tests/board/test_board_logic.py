@@ -154,20 +154,26 @@ def _channel_address(path):
     return MAP.channel_address(0, next(r for r in MAP.channel if r.path == path))
 
 
-def test_leds_follow_the_frames():
-    """The iCEBreaker's logic (its clock and core), the UART at 4 clocks per bit to keep the run
-    short: configured over the UART for a 4-bit BiSS C word with nE/nW and CRC-6, a cycle with
-    an encoder (limits_bench.Encoder, frame bits from the independent encoder model) lights the
-    valid LED and not the fault LED; a cycle with no encoder (SLO idle high) then lights the
-    fault LED. Every register access is answered OK."""
+def icebreaker_logic(div=4):
+    """The iCEBreaker's logic (its clock and core) in a simulator, the UART at ``div`` clocks per
+    bit: ``(board, div, logic, sim)``."""
     board = BOARDS["icebreaker"]
-    div = 4
     logic = BoardLogic(len(board.channels), board.params, baud=board.sys_clk_hz // div)
     m = Module()
     m.domains.sync = ClockDomain()
     m.submodules.logic = logic
     sim = Simulator(m)
     sim.add_clock(1 / board.sys_clk_hz)
+    return board, div, logic, sim
+
+
+def test_leds_follow_the_frames():
+    """The iCEBreaker's logic (its clock and core), the UART at 4 clocks per bit to keep the run
+    short: configured over the UART for a 4-bit BiSS C word with nE/nW and CRC-6, a cycle with
+    an encoder (limits_bench.Encoder, frame bits from the independent encoder model) lights the
+    valid LED and not the fault LED; a cycle with no encoder (SLO idle high) then lights the
+    fault LED. Every register access is answered OK."""
+    board, div, logic, sim = icebreaker_logic()
     hp = 4
     encoder = Encoder(hp=hp, bits=FRAME)
     seen = {}
@@ -258,14 +264,7 @@ def test_host_tool_configures_and_reads_the_board():
     from bissmaster.host import cli
     from testkit.limits_bench import POSITION
 
-    board = BOARDS["icebreaker"]
-    div = 4
-    logic = BoardLogic(len(board.channels), board.params, baud=board.sys_clk_hz // div)
-    m = Module()
-    m.domains.sync = ClockDomain()
-    m.submodules.logic = logic
-    sim = Simulator(m)
-    sim.add_clock(1 / board.sys_clk_hz)
+    board, div, logic, sim = icebreaker_logic()
     encoder = Encoder(hp=4, bits=FRAME)
     transport = LockstepTransport(board.sys_clk_hz)
     common = ["--baud", str(board.sys_clk_hz // div), "--clock-hz", str(board.sys_clk_hz),

@@ -133,22 +133,11 @@ def test_build_without_register_access_connects():
     ('hdl_path = "ca_rbuf";', "", "an hdl_path"),
     ("rbuf[16] @ 0x80 += 4;", "rbuf[16] @ 0x80 += 8;", "adjacent words"),
     ("rbuf_f #(.DESC(\"Byte 4 n + 3.\")) byte3[31:24];", "", "byte lanes"),
-])
-def test_bad_window_is_refused(tmp_path, old, new, message):
-    src = regmap.RDL.read_text()
-    assert old in src
-    bad = tmp_path / "bad.rdl"
-    bad.write_text(src.replace(old, new))
-    with pytest.raises(ValueError, match=message):
-        regmap.load(bad)
-
-
-@pytest.mark.parametrize("old, new, message", [
     ('} count_noise @ 0x07C;', '} count_noise @ 0x0F0;', "adjacent words"),
     ('count_f #(.DESC("Status NO_ACK.")) no_ack[15:0] = 0;',
      'live_f #(.PATH("count_no_ack")) no_ack[15:0] = 0;', "no hdl_path_slice"),
 ])
-def test_bad_memory_is_refused(tmp_path, old, new, message):
+def test_bad_window_or_memory_is_refused(tmp_path, old, new, message):
     src = regmap.RDL.read_text()
     assert old in src
     bad = tmp_path / "bad.rdl"
