@@ -613,12 +613,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6072$0 (\$8 ),
-    .\port$6085$0 (\$9 ),
-    .\port$6181$0 (\$10 ),
-    .\port$6614$0 (\$11 ),
-    .\port$6627$0 (\$12 ),
-    .\port$6723$0 (\$13 ),
+    .\port$6238$0 (\$8 ),
+    .\port$6251$0 (\$9 ),
+    .\port$6328$0 (\$10 ),
+    .\port$6761$0 (\$11 ),
+    .\port$6774$0 (\$12 ),
+    .\port$6851$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -688,9 +688,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6072$0 (\$8 ),
-    .\port$6085$0 (\$9 ),
-    .\port$6181$0 (\$10 ),
+    .\port$6238$0 (\$8 ),
+    .\port$6251$0 (\$9 ),
+    .\port$6328$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -757,9 +757,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(\regs__count_en$370 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$394 ),
-    .\port$6614$0 (\$11 ),
-    .\port$6627$0 (\$12 ),
-    .\port$6723$0 (\$13 ),
+    .\port$6761$0 (\$11 ),
+    .\port$6774$0 (\$12 ),
+    .\port$6851$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$236 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1091,8 +1091,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width
 , ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$105 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time
 , ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time
-, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$287 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6072$0 , \port$6085$0 , ch0__ca_done, \port$6181$0 , ch1__frame_done
-, ch1__done_count, \port$6614$0 , \port$6627$0 , ch1__ca_done, \port$6723$0 , bus__w_addr);
+, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$287 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6238$0 , \port$6251$0 , ch0__ca_done, \port$6328$0 , ch1__frame_done
+, ch1__done_count, \port$6761$0 , \port$6774$0 , ch1__ca_done, \port$6851$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2546,18 +2546,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6072$0 ;
-  wire [186:0] \port$6072$0 ;
-  input [79:0] \port$6085$0 ;
-  wire [79:0] \port$6085$0 ;
-  input [9:0] \port$6181$0 ;
-  wire [9:0] \port$6181$0 ;
-  input [186:0] \port$6614$0 ;
-  wire [186:0] \port$6614$0 ;
-  input [79:0] \port$6627$0 ;
-  wire [79:0] \port$6627$0 ;
-  input [9:0] \port$6723$0 ;
-  wire [9:0] \port$6723$0 ;
+  input [186:0] \port$6238$0 ;
+  wire [186:0] \port$6238$0 ;
+  input [79:0] \port$6251$0 ;
+  wire [79:0] \port$6251$0 ;
+  input [9:0] \port$6328$0 ;
+  wire [9:0] \port$6328$0 ;
+  input [186:0] \port$6761$0 ;
+  wire [186:0] \port$6761$0 ;
+  input [79:0] \port$6774$0 ;
+  wire [79:0] \port$6774$0 ;
+  input [9:0] \port$6851$0 ;
+  wire [9:0] \port$6851$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2605,7 +2605,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$325  = \$323  | \$324 ;
   assign \$326  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$327  = \$325  | \$326 ;
-  assign \$328  = ch1_read_select_110 ? { 2'h0, \port$6614$0 [182:177], 4'h0, \port$6614$0 [186:183], 1'h0, \port$6614$0 [176:174], 1'h0, \port$6614$0 [133:131], 3'h0, \port$6614$0 [49], \port$6614$0 [3:0] } : 32'd0;
+  assign \$328  = ch1_read_select_110 ? { 2'h0, \port$6761$0 [182:177], 4'h0, \port$6761$0 [186:183], 1'h0, \port$6761$0 [176:174], 1'h0, \port$6761$0 [133:131], 3'h0, \port$6761$0 [49], \port$6761$0 [3:0] } : 32'd0;
   assign \$329  = \$327  | \$328 ;
   assign \$330  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$331  = \$329  | \$330 ;
@@ -2631,13 +2631,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$351  = \$349  | \$350 ;
   assign \$352  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$287 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$353  = \$351  | \$352 ;
-  assign \$356  = ch1_read_select_142 ? { 17'h00000, \port$6723$0 [9:3], 1'h0, \port$6723$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$356  = ch1_read_select_142 ? { 17'h00000, \port$6851$0 [9:3], 1'h0, \port$6851$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$357  = \$355  | \$356 ;
-  assign \$358  = ch1_read_select_143 ? \port$6627$0 [31:0] : 32'd0;
+  assign \$358  = ch1_read_select_143 ? \port$6774$0 [31:0] : 32'd0;
   assign \$359  = \$357  | \$358 ;
-  assign \$360  = ch1_read_select_144 ? \port$6627$0 [63:32] : 32'd0;
+  assign \$360  = ch1_read_select_144 ? \port$6774$0 [63:32] : 32'd0;
   assign \$361  = \$359  | \$360 ;
-  assign \$362  = ch1_read_select_145 ? { 16'h0000, \port$6627$0 [79:64] } : 32'd0;
+  assign \$362  = ch1_read_select_145 ? { 16'h0000, \port$6774$0 [79:64] } : 32'd0;
   assign \$363  = \$361  | \$362 ;
   assign \$364  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$365  = \$363  | \$364 ;
@@ -3463,7 +3463,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$150  = \$148  | \$149 ;
   assign \$151  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$152  = \$150  | \$151 ;
-  assign \$153  = ch0_read_select_90 ? { 2'h0, \port$6072$0 [182:177], 4'h0, \port$6072$0 [186:183], 1'h0, \port$6072$0 [176:174], 1'h0, \port$6072$0 [133:131], 3'h0, \port$6072$0 [49], \port$6072$0 [3:0] } : 32'd0;
+  assign \$153  = ch0_read_select_90 ? { 2'h0, \port$6238$0 [182:177], 4'h0, \port$6238$0 [186:183], 1'h0, \port$6238$0 [176:174], 1'h0, \port$6238$0 [133:131], 3'h0, \port$6238$0 [49], \port$6238$0 [3:0] } : 32'd0;
   assign \$154  = \$152  | \$153 ;
   assign \$155  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$156  = \$154  | \$155 ;
@@ -3489,13 +3489,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$176  = \$174  | \$175 ;
   assign \$177  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$105 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$178  = \$176  | \$177 ;
-  assign \$181  = ch0_read_select_c2 ? { 17'h00000, \port$6181$0 [9:3], 1'h0, \port$6181$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$181  = ch0_read_select_c2 ? { 17'h00000, \port$6328$0 [9:3], 1'h0, \port$6328$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_c3 ? \port$6085$0 [31:0] : 32'd0;
+  assign \$183  = ch0_read_select_c3 ? \port$6251$0 [31:0] : 32'd0;
   assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_c4 ? \port$6085$0 [63:32] : 32'd0;
+  assign \$185  = ch0_read_select_c4 ? \port$6251$0 [63:32] : 32'd0;
   assign \$186  = \$184  | \$185 ;
-  assign \$187  = ch0_read_select_c5 ? { 16'h0000, \port$6085$0 [79:64] } : 32'd0;
+  assign \$187  = ch0_read_select_c5 ? { 16'h0000, \port$6251$0 [79:64] } : 32'd0;
   assign \$188  = \$186  | \$187 ;
   assign \$189  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$190  = \$188  | \$189 ;
@@ -4667,7 +4667,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$565  = ch0_result_status_status_snapshot;
     if (\$122 ) begin
-      \$565  = \port$6072$0 [3:0];
+      \$565  = \port$6238$0 [3:0];
     end
     if (rst) begin
       \$565  = 4'h0;
@@ -4677,7 +4677,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$566  = ch0_result_status_cds_snapshot;
     if (\$122 ) begin
-      \$566  = \port$6072$0 [49];
+      \$566  = \port$6238$0 [49];
     end
     if (rst) begin
       \$566  = 1'h0;
@@ -4687,7 +4687,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$567  = ch0_result_status_w0_ne_snapshot;
     if (\$122 ) begin
-      \$567  = \port$6072$0 [131];
+      \$567  = \port$6238$0 [131];
     end
     if (rst) begin
       \$567  = 1'h0;
@@ -4697,7 +4697,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$568  = ch0_result_status_w0_nw_snapshot;
     if (\$122 ) begin
-      \$568  = \port$6072$0 [132];
+      \$568  = \port$6238$0 [132];
     end
     if (rst) begin
       \$568  = 1'h0;
@@ -4707,7 +4707,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$569  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$122 ) begin
-      \$569  = \port$6072$0 [133];
+      \$569  = \port$6238$0 [133];
     end
     if (rst) begin
       \$569  = 1'h0;
@@ -4717,7 +4717,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$570  = ch0_result_status_w1_ne_snapshot;
     if (\$122 ) begin
-      \$570  = \port$6072$0 [174];
+      \$570  = \port$6238$0 [174];
     end
     if (rst) begin
       \$570  = 1'h0;
@@ -4727,7 +4727,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$571  = ch0_result_status_w1_nw_snapshot;
     if (\$122 ) begin
-      \$571  = \port$6072$0 [175];
+      \$571  = \port$6238$0 [175];
     end
     if (rst) begin
       \$571  = 1'h0;
@@ -4737,7 +4737,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$572  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$122 ) begin
-      \$572  = \port$6072$0 [176];
+      \$572  = \port$6238$0 [176];
     end
     if (rst) begin
       \$572  = 1'h0;
@@ -4747,7 +4747,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$573  = ch0_result_status_lc_repeat_snapshot;
     if (\$122 ) begin
-      \$573  = \port$6072$0 [183];
+      \$573  = \port$6238$0 [183];
     end
     if (rst) begin
       \$573  = 1'h0;
@@ -4757,7 +4757,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$574  = ch0_result_status_lc_skip_snapshot;
     if (\$122 ) begin
-      \$574  = \port$6072$0 [184];
+      \$574  = \port$6238$0 [184];
     end
     if (rst) begin
       \$574  = 1'h0;
@@ -4767,7 +4767,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$575  = ch0_result_status_lc_zero_snapshot;
     if (\$122 ) begin
-      \$575  = \port$6072$0 [185];
+      \$575  = \port$6238$0 [185];
     end
     if (rst) begin
       \$575  = 1'h0;
@@ -4777,7 +4777,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$576  = ch0_result_status_spw_mismatch_snapshot;
     if (\$122 ) begin
-      \$576  = \port$6072$0 [186];
+      \$576  = \port$6238$0 [186];
     end
     if (rst) begin
       \$576  = 1'h0;
@@ -4787,7 +4787,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$577  = ch0_result_status_lc_snapshot;
     if (\$122 ) begin
-      \$577  = \port$6072$0 [182:177];
+      \$577  = \port$6238$0 [182:177];
     end
     if (rst) begin
       \$577  = 6'h00;
@@ -4807,7 +4807,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$579  = ch0_result_seq_line_delay_snapshot;
     if (\$122 ) begin
-      \$579  = \port$6072$0 [48:36];
+      \$579  = \port$6238$0 [48:36];
     end
     if (rst) begin
       \$579  = 13'h0000;
@@ -4817,7 +4817,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$580  = ch0_result_w0_lo_data_snapshot;
     if (\$122 ) begin
-      \$580  = \port$6072$0 [107:76];
+      \$580  = \port$6238$0 [107:76];
     end
     if (rst) begin
       \$580  = 32'd0;
@@ -4827,7 +4827,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$581  = ch0_result_w0_hi_data_snapshot;
     if (\$122 ) begin
-      \$581  = \port$6072$0 [130:108];
+      \$581  = \port$6238$0 [130:108];
     end
     if (rst) begin
       \$581  = 23'h000000;
@@ -4837,7 +4837,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$582  = ch0_result_w1_lo_data_snapshot;
     if (\$122 ) begin
-      \$582  = \port$6072$0 [165:134];
+      \$582  = \port$6238$0 [165:134];
     end
     if (rst) begin
       \$582  = 32'd0;
@@ -4847,7 +4847,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$583  = ch0_result_w1_hi_data_snapshot;
     if (\$122 ) begin
-      \$583  = \port$6072$0 [173:166];
+      \$583  = \port$6238$0 [173:166];
     end
     if (rst) begin
       \$583  = 8'h00;
@@ -4857,7 +4857,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$584  = ch0_result_timestamp_time_snapshot;
     if (\$122 ) begin
-      \$584  = \port$6072$0 [35:4];
+      \$584  = \port$6238$0 [35:4];
     end
     if (rst) begin
       \$584  = 32'd0;
@@ -4867,7 +4867,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$585  = ch0_result_line_noise_events_snapshot;
     if (\$122 ) begin
-      \$585  = \port$6072$0 [53:50];
+      \$585  = \port$6238$0 [53:50];
     end
     if (rst) begin
       \$585  = 4'h0;
@@ -4877,7 +4877,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$586  = ch0_result_line_delay_settled_snapshot;
     if (\$122 ) begin
-      \$586  = \port$6072$0 [54];
+      \$586  = \port$6238$0 [54];
     end
     if (rst) begin
       \$586  = 1'h0;
@@ -4887,7 +4887,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$587  = ch0_result_line_delay_spread_snapshot;
     if (\$122 ) begin
-      \$587  = \port$6072$0 [75:68];
+      \$587  = \port$6238$0 [75:68];
     end
     if (rst) begin
       \$587  = 8'h00;
@@ -4897,7 +4897,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$588  = ch0_result_line_settled_delay_snapshot;
     if (\$122 ) begin
-      \$588  = \port$6072$0 [67:55];
+      \$588  = \port$6238$0 [67:55];
     end
     if (rst) begin
       \$588  = 13'h0000;
@@ -5881,7 +5881,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$687  = ch1_result_status_status_snapshot;
     if (\$297 ) begin
-      \$687  = \port$6614$0 [3:0];
+      \$687  = \port$6761$0 [3:0];
     end
     if (rst) begin
       \$687  = 4'h0;
@@ -5891,7 +5891,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$688  = ch1_result_status_cds_snapshot;
     if (\$297 ) begin
-      \$688  = \port$6614$0 [49];
+      \$688  = \port$6761$0 [49];
     end
     if (rst) begin
       \$688  = 1'h0;
@@ -5901,7 +5901,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$689  = ch1_result_status_w0_ne_snapshot;
     if (\$297 ) begin
-      \$689  = \port$6614$0 [131];
+      \$689  = \port$6761$0 [131];
     end
     if (rst) begin
       \$689  = 1'h0;
@@ -5911,7 +5911,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$690  = ch1_result_status_w0_nw_snapshot;
     if (\$297 ) begin
-      \$690  = \port$6614$0 [132];
+      \$690  = \port$6761$0 [132];
     end
     if (rst) begin
       \$690  = 1'h0;
@@ -5921,7 +5921,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$691  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$297 ) begin
-      \$691  = \port$6614$0 [133];
+      \$691  = \port$6761$0 [133];
     end
     if (rst) begin
       \$691  = 1'h0;
@@ -5931,7 +5931,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$692  = ch1_result_status_w1_ne_snapshot;
     if (\$297 ) begin
-      \$692  = \port$6614$0 [174];
+      \$692  = \port$6761$0 [174];
     end
     if (rst) begin
       \$692  = 1'h0;
@@ -5941,7 +5941,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$693  = ch1_result_status_w1_nw_snapshot;
     if (\$297 ) begin
-      \$693  = \port$6614$0 [175];
+      \$693  = \port$6761$0 [175];
     end
     if (rst) begin
       \$693  = 1'h0;
@@ -5951,7 +5951,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$694  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$297 ) begin
-      \$694  = \port$6614$0 [176];
+      \$694  = \port$6761$0 [176];
     end
     if (rst) begin
       \$694  = 1'h0;
@@ -5961,7 +5961,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$695  = ch1_result_status_lc_repeat_snapshot;
     if (\$297 ) begin
-      \$695  = \port$6614$0 [183];
+      \$695  = \port$6761$0 [183];
     end
     if (rst) begin
       \$695  = 1'h0;
@@ -5971,7 +5971,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$696  = ch1_result_status_lc_skip_snapshot;
     if (\$297 ) begin
-      \$696  = \port$6614$0 [184];
+      \$696  = \port$6761$0 [184];
     end
     if (rst) begin
       \$696  = 1'h0;
@@ -5981,7 +5981,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$697  = ch1_result_status_lc_zero_snapshot;
     if (\$297 ) begin
-      \$697  = \port$6614$0 [185];
+      \$697  = \port$6761$0 [185];
     end
     if (rst) begin
       \$697  = 1'h0;
@@ -5991,7 +5991,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$698  = ch1_result_status_spw_mismatch_snapshot;
     if (\$297 ) begin
-      \$698  = \port$6614$0 [186];
+      \$698  = \port$6761$0 [186];
     end
     if (rst) begin
       \$698  = 1'h0;
@@ -6001,7 +6001,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$699  = ch1_result_status_lc_snapshot;
     if (\$297 ) begin
-      \$699  = \port$6614$0 [182:177];
+      \$699  = \port$6761$0 [182:177];
     end
     if (rst) begin
       \$699  = 6'h00;
@@ -6021,7 +6021,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$701  = ch1_result_seq_line_delay_snapshot;
     if (\$297 ) begin
-      \$701  = \port$6614$0 [48:36];
+      \$701  = \port$6761$0 [48:36];
     end
     if (rst) begin
       \$701  = 13'h0000;
@@ -6031,7 +6031,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$702  = ch1_result_w0_lo_data_snapshot;
     if (\$297 ) begin
-      \$702  = \port$6614$0 [107:76];
+      \$702  = \port$6761$0 [107:76];
     end
     if (rst) begin
       \$702  = 32'd0;
@@ -6041,7 +6041,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$703  = ch1_result_w0_hi_data_snapshot;
     if (\$297 ) begin
-      \$703  = \port$6614$0 [130:108];
+      \$703  = \port$6761$0 [130:108];
     end
     if (rst) begin
       \$703  = 23'h000000;
@@ -6051,7 +6051,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$704  = ch1_result_w1_lo_data_snapshot;
     if (\$297 ) begin
-      \$704  = \port$6614$0 [165:134];
+      \$704  = \port$6761$0 [165:134];
     end
     if (rst) begin
       \$704  = 32'd0;
@@ -6061,7 +6061,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$705  = ch1_result_w1_hi_data_snapshot;
     if (\$297 ) begin
-      \$705  = \port$6614$0 [173:166];
+      \$705  = \port$6761$0 [173:166];
     end
     if (rst) begin
       \$705  = 8'h00;
@@ -6071,7 +6071,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$706  = ch1_result_timestamp_time_snapshot;
     if (\$297 ) begin
-      \$706  = \port$6614$0 [35:4];
+      \$706  = \port$6761$0 [35:4];
     end
     if (rst) begin
       \$706  = 32'd0;
@@ -6081,7 +6081,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$707  = ch1_result_line_noise_events_snapshot;
     if (\$297 ) begin
-      \$707  = \port$6614$0 [53:50];
+      \$707  = \port$6761$0 [53:50];
     end
     if (rst) begin
       \$707  = 4'h0;
@@ -6091,7 +6091,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$708  = ch1_result_line_delay_settled_snapshot;
     if (\$297 ) begin
-      \$708  = \port$6614$0 [54];
+      \$708  = \port$6761$0 [54];
     end
     if (rst) begin
       \$708  = 1'h0;
@@ -6101,7 +6101,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$709  = ch1_result_line_delay_spread_snapshot;
     if (\$297 ) begin
-      \$709  = \port$6614$0 [75:68];
+      \$709  = \port$6761$0 [75:68];
     end
     if (rst) begin
       \$709  = 8'h00;
@@ -6111,7 +6111,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$710  = ch1_result_line_settled_delay_snapshot;
     if (\$297 ) begin
-      \$710  = \port$6614$0 [67:55];
+      \$710  = \port$6761$0 [67:55];
     end
     if (rst) begin
       \$710  = 13'h0000;
@@ -6150,74 +6150,74 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6072$0 [3:0];
-  assign ch0__cds = \port$6072$0 [49];
-  assign ch0__word0_ne = \port$6072$0 [131];
-  assign ch0__word0_nw = \port$6072$0 [132];
-  assign ch0__word0_crc_ok = \port$6072$0 [133];
-  assign ch0__word1_ne = \port$6072$0 [174];
-  assign ch0__word1_nw = \port$6072$0 [175];
-  assign ch0__word1_crc_ok = \port$6072$0 [176];
-  assign ch0__lc_repeat = \port$6072$0 [183];
-  assign ch0__lc_skip = \port$6072$0 [184];
-  assign ch0__lc_zero = \port$6072$0 [185];
-  assign ch0__spw_mismatch = \port$6072$0 [186];
-  assign ch0__lc = \port$6072$0 [182:177];
-  assign ch0__line_delay = \port$6072$0 [48:36];
-  assign ch0__word0_position = \port$6072$0 [130:76];
-  assign ch0__word1_position = \port$6072$0 [173:134];
-  assign ch0__timestamp = \port$6072$0 [35:4];
-  assign ch0__noise_events = \port$6072$0 [53:50];
-  assign ch0__delay_settled = \port$6072$0 [54];
-  assign ch0__delay_spread = \port$6072$0 [75:68];
-  assign ch0__settled_delay = \port$6072$0 [67:55];
+  assign ch0__status = \port$6238$0 [3:0];
+  assign ch0__cds = \port$6238$0 [49];
+  assign ch0__word0_ne = \port$6238$0 [131];
+  assign ch0__word0_nw = \port$6238$0 [132];
+  assign ch0__word0_crc_ok = \port$6238$0 [133];
+  assign ch0__word1_ne = \port$6238$0 [174];
+  assign ch0__word1_nw = \port$6238$0 [175];
+  assign ch0__word1_crc_ok = \port$6238$0 [176];
+  assign ch0__lc_repeat = \port$6238$0 [183];
+  assign ch0__lc_skip = \port$6238$0 [184];
+  assign ch0__lc_zero = \port$6238$0 [185];
+  assign ch0__spw_mismatch = \port$6238$0 [186];
+  assign ch0__lc = \port$6238$0 [182:177];
+  assign ch0__line_delay = \port$6238$0 [48:36];
+  assign ch0__word0_position = \port$6238$0 [130:76];
+  assign ch0__word1_position = \port$6238$0 [173:134];
+  assign ch0__timestamp = \port$6238$0 [35:4];
+  assign ch0__noise_events = \port$6238$0 [53:50];
+  assign ch0__delay_settled = \port$6238$0 [54];
+  assign ch0__delay_spread = \port$6238$0 [75:68];
+  assign ch0__settled_delay = \port$6238$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__ca_status = \port$6181$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6181$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6085$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$6085$0 [31:16];
-  assign ch0__count_ca_refused = \port$6085$0 [47:32];
-  assign ch0__count_ca_aborted = \port$6085$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$6085$0 [79:64];
-  assign ch1__status = \port$6614$0 [3:0];
-  assign ch1__cds = \port$6614$0 [49];
-  assign ch1__word0_ne = \port$6614$0 [131];
-  assign ch1__word0_nw = \port$6614$0 [132];
-  assign ch1__word0_crc_ok = \port$6614$0 [133];
-  assign ch1__word1_ne = \port$6614$0 [174];
-  assign ch1__word1_nw = \port$6614$0 [175];
-  assign ch1__word1_crc_ok = \port$6614$0 [176];
-  assign ch1__lc_repeat = \port$6614$0 [183];
-  assign ch1__lc_skip = \port$6614$0 [184];
-  assign ch1__lc_zero = \port$6614$0 [185];
-  assign ch1__spw_mismatch = \port$6614$0 [186];
-  assign ch1__lc = \port$6614$0 [182:177];
-  assign ch1__line_delay = \port$6614$0 [48:36];
-  assign ch1__word0_position = \port$6614$0 [130:76];
-  assign ch1__word1_position = \port$6614$0 [173:134];
-  assign ch1__timestamp = \port$6614$0 [35:4];
-  assign ch1__noise_events = \port$6614$0 [53:50];
-  assign ch1__delay_settled = \port$6614$0 [54];
-  assign ch1__delay_spread = \port$6614$0 [75:68];
-  assign ch1__settled_delay = \port$6614$0 [67:55];
+  assign ch0__ca_status = \port$6328$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6328$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6251$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$6251$0 [31:16];
+  assign ch0__count_ca_refused = \port$6251$0 [47:32];
+  assign ch0__count_ca_aborted = \port$6251$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$6251$0 [79:64];
+  assign ch1__status = \port$6761$0 [3:0];
+  assign ch1__cds = \port$6761$0 [49];
+  assign ch1__word0_ne = \port$6761$0 [131];
+  assign ch1__word0_nw = \port$6761$0 [132];
+  assign ch1__word0_crc_ok = \port$6761$0 [133];
+  assign ch1__word1_ne = \port$6761$0 [174];
+  assign ch1__word1_nw = \port$6761$0 [175];
+  assign ch1__word1_crc_ok = \port$6761$0 [176];
+  assign ch1__lc_repeat = \port$6761$0 [183];
+  assign ch1__lc_skip = \port$6761$0 [184];
+  assign ch1__lc_zero = \port$6761$0 [185];
+  assign ch1__spw_mismatch = \port$6761$0 [186];
+  assign ch1__lc = \port$6761$0 [182:177];
+  assign ch1__line_delay = \port$6761$0 [48:36];
+  assign ch1__word0_position = \port$6761$0 [130:76];
+  assign ch1__word1_position = \port$6761$0 [173:134];
+  assign ch1__timestamp = \port$6761$0 [35:4];
+  assign ch1__noise_events = \port$6761$0 [53:50];
+  assign ch1__delay_settled = \port$6761$0 [54];
+  assign ch1__delay_spread = \port$6761$0 [75:68];
+  assign ch1__settled_delay = \port$6761$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__ca_status = \port$6723$0 [2:0];
-  assign ch1__ca_bytes_done = \port$6723$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$6627$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$6627$0 [31:16];
-  assign ch1__count_ca_refused = \port$6627$0 [47:32];
-  assign ch1__count_ca_aborted = \port$6627$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$6627$0 [79:64];
+  assign ch1__ca_status = \port$6851$0 [2:0];
+  assign ch1__ca_bytes_done = \port$6851$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$6774$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$6774$0 [31:16];
+  assign ch1__count_ca_refused = \port$6774$0 [47:32];
+  assign ch1__count_ca_aborted = \port$6774$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$6774$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__w_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -6452,8 +6452,8 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
-, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6072$0 
-, \port$6085$0 , regs__ca_done, \port$6181$0 , ca_rbuf_addr);
+, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6238$0 
+, \port$6251$0 , regs__ca_done, \port$6328$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -6623,12 +6623,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6072$0 ;
-  wire [186:0] \port$6072$0 ;
-  output [79:0] \port$6085$0 ;
-  wire [79:0] \port$6085$0 ;
-  output [9:0] \port$6181$0 ;
-  wire [9:0] \port$6181$0 ;
+  output [186:0] \port$6238$0 ;
+  wire [186:0] \port$6238$0 ;
+  output [79:0] \port$6251$0 ;
+  wire [79:0] \port$6251$0 ;
+  output [9:0] \port$6328$0 ;
+  wire [9:0] \port$6328$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -7062,9 +7062,9 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en, 
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$185  = ma;
   assign \slo$187  = slo;
-  assign \port$6072$0  = \$18 ;
-  assign \port$6085$0  = \$19 ;
-  assign \port$6181$0  = \$20 ;
+  assign \port$6238$0  = \$18 ;
+  assign \port$6251$0  = \$19 ;
+  assign \port$6328$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -8172,7 +8172,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$5725$0 (\bit ),
+    .\port$5891$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -10661,9 +10661,9 @@ module \biss_master_wb.ch0.core.counter_ram (clk, rst, host__en, busy, read_data
   reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
   wire [7:0] \$1 ;
   wire \$10 ;
-  wire [15:0] \$100 ;
+  wire \$100 ;
   wire \$101 ;
-  wire \$102 ;
+  wire [15:0] \$102 ;
   wire \$103 ;
   wire \$104 ;
   wire \$105 ;
@@ -10682,7 +10682,7 @@ module \biss_master_wb.ch0.core.counter_ram (clk, rst, host__en, busy, read_data
   wire \$117 ;
   wire \$118 ;
   wire \$119 ;
-  wire [7:0] \$12 ;
+  wire \$12 ;
   wire \$120 ;
   wire \$121 ;
   wire \$122 ;
@@ -10704,7 +10704,7 @@ module \biss_master_wb.ch0.core.counter_ram (clk, rst, host__en, busy, read_data
   wire \$137 ;
   wire \$138 ;
   wire \$139 ;
-  wire \$14 ;
+  wire [7:0] \$14 ;
   wire \$140 ;
   wire \$141 ;
   wire \$142 ;
@@ -10720,10 +10720,10 @@ module \biss_master_wb.ch0.core.counter_ram (clk, rst, host__en, busy, read_data
   wire \$151 ;
   wire \$152 ;
   wire \$153 ;
-  wire [1:0] \$154 ;
-  wire [1:0] \$155 ;
-  wire [1:0] \$156 ;
-  wire [1:0] \$157 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire [7:0] \$157 ;
   wire [1:0] \$158 ;
   wire [1:0] \$159 ;
   wire \$16 ;
@@ -10737,11 +10737,11 @@ module \biss_master_wb.ch0.core.counter_ram (clk, rst, host__en, busy, read_data
   wire [1:0] \$167 ;
   wire [1:0] \$168 ;
   wire [1:0] \$169 ;
-  wire [7:0] \$17 ;
-  wire [3:0] \$170 ;
-  wire [3:0] \$171 ;
-  wire [3:0] \$172 ;
-  wire [3:0] \$173 ;
+  wire \$17 ;
+  wire [1:0] \$170 ;
+  wire [1:0] \$171 ;
+  wire [1:0] \$172 ;
+  wire [1:0] \$173 ;
   wire [3:0] \$174 ;
   wire [3:0] \$175 ;
   wire [3:0] \$176 ;
@@ -10759,7 +10759,7 @@ module \biss_master_wb.ch0.core.counter_ram (clk, rst, host__en, busy, read_data
   wire [3:0] \$187 ;
   wire [3:0] \$188 ;
   wire [3:0] \$189 ;
-  wire \$19 ;
+  wire [7:0] \$19 ;
   wire [3:0] \$190 ;
   wire [3:0] \$191 ;
   wire [3:0] \$192 ;
@@ -10775,114 +10775,132 @@ module \biss_master_wb.ch0.core.counter_ram (clk, rst, host__en, busy, read_data
   wire [3:0] \$200 ;
   wire [3:0] \$201 ;
   wire [3:0] \$202 ;
-  wire [4:0] \$203 ;
+  wire [3:0] \$203 ;
   wire [3:0] \$204 ;
-  wire [4:0] \$205 ;
-  wire [3:0] \$206 ;
-  wire [4:0] \$207 ;
-  wire [3:0] \$208 ;
+  wire [3:0] \$205 ;
+  wire \$206 ;
+  wire [3:0] \$207 ;
+  wire [4:0] \$208 ;
   wire [4:0] \$209 ;
   wire \$21 ;
-  wire [3:0] \$210 ;
-  wire [4:0] \$211 ;
-  wire [3:0] \$212 ;
+  wire \$210 ;
+  wire [3:0] \$211 ;
+  wire [4:0] \$212 ;
   wire [4:0] \$213 ;
-  wire [3:0] \$214 ;
-  wire [4:0] \$215 ;
-  wire [3:0] \$216 ;
+  wire \$214 ;
+  wire [3:0] \$215 ;
+  wire [4:0] \$216 ;
   wire [4:0] \$217 ;
-  wire [3:0] \$218 ;
-  wire [4:0] \$219 ;
-  wire [7:0] \$22 ;
-  wire [3:0] \$220 ;
+  wire \$218 ;
+  wire [3:0] \$219 ;
+  wire \$22 ;
+  wire [4:0] \$220 ;
   wire [4:0] \$221 ;
-  wire [3:0] \$222 ;
-  wire [4:0] \$223 ;
-  wire [3:0] \$224 ;
+  wire \$222 ;
+  wire [3:0] \$223 ;
+  wire [4:0] \$224 ;
   wire [4:0] \$225 ;
-  wire [3:0] \$226 ;
-  wire [4:0] \$227 ;
-  wire [3:0] \$228 ;
+  wire \$226 ;
+  wire [3:0] \$227 ;
+  wire [4:0] \$228 ;
   wire [4:0] \$229 ;
   wire [7:0] \$23 ;
-  wire [3:0] \$230 ;
-  wire [4:0] \$231 ;
-  wire [3:0] \$232 ;
+  wire \$230 ;
+  wire [3:0] \$231 ;
+  wire [4:0] \$232 ;
   wire [4:0] \$233 ;
-  wire [15:0] \$234 ;
-  wire [15:0] \$235 ;
-  wire \$236 ;
-  wire \$237 ;
+  wire \$234 ;
+  wire [3:0] \$235 ;
+  wire [4:0] \$236 ;
+  wire [4:0] \$237 ;
   wire \$238 ;
-  wire \$239 ;
-  wire \$24 ;
-  wire \$240 ;
-  wire \$241 ;
+  wire [3:0] \$239 ;
+  wire [7:0] \$24 ;
+  wire [4:0] \$240 ;
+  wire [4:0] \$241 ;
   wire \$242 ;
-  wire \$243 ;
-  wire \$244 ;
-  wire \$245 ;
+  wire [3:0] \$243 ;
+  wire [4:0] \$244 ;
+  wire [4:0] \$245 ;
   wire \$246 ;
-  wire \$247 ;
-  wire \$248 ;
-  wire \$249 ;
+  wire [3:0] \$247 ;
+  wire [4:0] \$248 ;
+  wire [4:0] \$249 ;
   wire \$25 ;
   wire \$250 ;
-  wire \$251 ;
-  wire \$252 ;
-  wire \$253 ;
+  wire [3:0] \$251 ;
+  wire [4:0] \$252 ;
+  wire [4:0] \$253 ;
   wire \$254 ;
-  wire \$255 ;
-  wire \$256 ;
-  wire \$257 ;
+  wire [3:0] \$255 ;
+  wire [4:0] \$256 ;
+  wire [4:0] \$257 ;
   wire \$258 ;
-  wire \$259 ;
+  wire [3:0] \$259 ;
   wire \$26 ;
-  wire \$260 ;
-  wire \$261 ;
-  reg [15:0] \$262 ;
-  reg \$263 ;
-  reg [7:0] \$264 ;
-  reg [7:0] \$265 ;
-  reg [2:0] \$266 ;
-  reg [7:0] \$267 ;
-  reg [7:0] \$268 ;
-  reg [2:0] \$269 ;
-  wire [7:0] \$27 ;
-  reg [1:0] \$270 ;
-  reg [3:0] \$271 ;
-  reg [3:0] \$272 ;
-  reg [3:0] \$273 ;
-  reg [3:0] \$274 ;
-  reg [3:0] \$275 ;
-  reg [3:0] \$276 ;
-  reg [3:0] \$277 ;
-  reg [3:0] \$278 ;
-  reg [3:0] \$279 ;
+  wire [4:0] \$260 ;
+  wire [4:0] \$261 ;
+  wire \$262 ;
+  wire [3:0] \$263 ;
+  wire [4:0] \$264 ;
+  wire [4:0] \$265 ;
+  wire \$266 ;
+  wire [3:0] \$267 ;
+  wire [4:0] \$268 ;
+  wire [4:0] \$269 ;
+  wire \$27 ;
+  wire \$270 ;
+  wire [15:0] \$271 ;
+  wire [15:0] \$272 ;
+  wire [15:0] \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
   wire [7:0] \$28 ;
-  reg [3:0] \$280 ;
-  reg [3:0] \$281 ;
-  reg [3:0] \$282 ;
-  reg [3:0] \$283 ;
-  reg [3:0] \$284 ;
-  reg [3:0] \$285 ;
-  reg [3:0] \$286 ;
-  reg [3:0] \$287 ;
-  reg [3:0] \$288 ;
-  reg [15:0] \$289 ;
-  wire \$29 ;
-  reg \$290 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
+  wire [7:0] \$29 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   wire [7:0] \$3 ;
   wire \$30 ;
+  reg [15:0] \$300 ;
+  reg \$301 ;
+  reg [7:0] \$302 ;
+  reg [7:0] \$303 ;
+  reg [2:0] \$304 ;
+  reg [7:0] \$305 ;
+  reg [2:0] \$306 ;
+  reg [1:0] \$307 ;
+  reg \$308 ;
   wire \$31 ;
-  wire [7:0] \$32 ;
+  wire \$32 ;
   wire [7:0] \$33 ;
-  wire \$34 ;
+  wire [7:0] \$34 ;
   wire \$35 ;
   wire \$36 ;
-  wire [7:0] \$37 ;
+  wire \$37 ;
   wire [7:0] \$38 ;
-  wire \$39 ;
+  wire [7:0] \$39 ;
   wire [7:0] \$4 ;
   wire \$40 ;
   wire \$41 ;
@@ -10905,16 +10923,16 @@ module \biss_master_wb.ch0.core.counter_ram (clk, rst, host__en, busy, read_data
   wire \$57 ;
   wire \$58 ;
   wire \$59 ;
-  wire [7:0] \$6 ;
+  wire \$6 ;
   wire \$60 ;
   wire \$61 ;
   wire \$62 ;
-  wire [15:0] \$63 ;
-  wire [16:0] \$64 ;
+  wire \$63 ;
+  wire [7:0] \$64 ;
   wire [15:0] \$65 ;
   wire [16:0] \$66 ;
-  wire \$67 ;
-  wire \$68 ;
+  wire [15:0] \$67 ;
+  wire [16:0] \$68 ;
   wire \$69 ;
   wire [7:0] \$7 ;
   wire \$70 ;
@@ -10931,14 +10949,14 @@ module \biss_master_wb.ch0.core.counter_ram (clk, rst, host__en, busy, read_data
   wire \$80 ;
   wire \$81 ;
   wire \$82 ;
-  wire [15:0] \$83 ;
+  wire \$83 ;
   wire \$84 ;
-  wire \$85 ;
+  wire [15:0] \$85 ;
   wire \$86 ;
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
-  wire \$9 ;
+  wire [7:0] \$9 ;
   wire \$90 ;
   wire \$91 ;
   wire \$92 ;
@@ -11024,6 +11042,7 @@ module \biss_master_wb.ch0.core.counter_ram (clk, rst, host__en, busy, read_data
   wire read_en;
   input rst;
   wire rst;
+  reg running = 1'h0;
   reg [7:0] sel = 8'h00;
   (* init = 3'h0 *)
   wire [2:0] sel_addr;
@@ -11054,7 +11073,7 @@ module \biss_master_wb.ch0.core.counter_ram (clk, rst, host__en, busy, read_data
   end
   always @(posedge clk) begin
     if (write__en)
-      memory[write__addr] <= { \$100 , \$83  };
+      memory[write__addr] <= { \$102 , \$85  };
   end
   reg [31:0] _0_;
   reg [31:0] _1_;
@@ -11074,585 +11093,525 @@ module \biss_master_wb.ch0.core.counter_ram (clk, rst, host__en, busy, read_data
   assign due = \$2  & \$3 ;
   assign \$4  = due & above;
   assign \$5  = | \$4 ;
-  assign \$6  = due & above;
+  assign \$6  = running & \$5 ;
   assign \$7  = due & above;
   assign \$8  = due & above;
-  assign \$10  = ~ \$9 ;
-  assign \$11  = \$7 [1] & \$10 ;
-  assign \$12  = due & above;
+  assign \$9  = due & above;
+  assign \$11  = ~ \$10 ;
+  assign \$12  = \$8 [1] & \$11 ;
   assign \$13  = due & above;
-  assign \$14  = | \$13 [1:0];
-  assign \$15  = ~ \$14 ;
-  assign \$16  = \$12 [2] & \$15 ;
-  assign \$17  = due & above;
+  assign \$14  = due & above;
+  assign \$15  = | \$14 [1:0];
+  assign \$16  = ~ \$15 ;
+  assign \$17  = \$13 [2] & \$16 ;
   assign \$18  = due & above;
-  assign \$19  = | \$18 [2:0];
-  assign \$20  = ~ \$19 ;
-  assign \$21  = \$17 [3] & \$20 ;
-  assign \$22  = due & above;
+  assign \$19  = due & above;
+  assign \$20  = | \$19 [2:0];
+  assign \$21  = ~ \$20 ;
+  assign \$22  = \$18 [3] & \$21 ;
   assign \$23  = due & above;
-  assign \$24  = | \$23 [3:0];
-  assign \$25  = ~ \$24 ;
-  assign \$26  = \$22 [4] & \$25 ;
-  assign \$27  = due & above;
+  assign \$24  = due & above;
+  assign \$25  = | \$24 [3:0];
+  assign \$26  = ~ \$25 ;
+  assign \$27  = \$23 [4] & \$26 ;
   assign \$28  = due & above;
-  assign \$29  = | \$28 [4:0];
-  assign \$30  = ~ \$29 ;
-  assign \$31  = \$27 [5] & \$30 ;
-  assign \$32  = due & above;
+  assign \$29  = due & above;
+  assign \$30  = | \$29 [4:0];
+  assign \$31  = ~ \$30 ;
+  assign \$32  = \$28 [5] & \$31 ;
   assign \$33  = due & above;
-  assign \$34  = | \$33 [5:0];
-  assign \$35  = ~ \$34 ;
-  assign \$36  = \$32 [6] & \$35 ;
-  assign \$37  = due & above;
+  assign \$34  = due & above;
+  assign \$35  = | \$34 [5:0];
+  assign \$36  = ~ \$35 ;
+  assign \$37  = \$33 [6] & \$36 ;
   assign \$38  = due & above;
-  assign \$39  = | \$38 [6:0];
-  assign \$40  = ~ \$39 ;
-  assign \$41  = \$37 [7] & \$40 ;
-  assign \$43  = ~ \$42 ;
-  assign \$44  = due[1] & \$43 ;
-  assign \$45  = | due[1:0];
-  assign \$46  = ~ \$45 ;
-  assign \$47  = due[2] & \$46 ;
-  assign \$48  = | due[2:0];
-  assign \$49  = ~ \$48 ;
-  assign \$50  = due[3] & \$49 ;
-  assign \$51  = | due[3:0];
-  assign \$52  = ~ \$51 ;
-  assign \$53  = due[4] & \$52 ;
-  assign \$54  = | due[4:0];
-  assign \$55  = ~ \$54 ;
-  assign \$56  = due[5] & \$55 ;
-  assign \$57  = | due[5:0];
-  assign \$58  = ~ \$57 ;
-  assign \$59  = due[6] & \$58 ;
-  assign \$60  = | due[6:0];
-  assign \$61  = ~ \$60 ;
-  assign \$62  = due[7] & \$61 ;
-  assign pick = \$5  ? { \$41 , \$36 , \$31 , \$26 , \$21 , \$16 , \$11 , \$6 [0] } : { \$62 , \$59 , \$56 , \$53 , \$50 , \$47 , \$44 , due[0] };
+  assign \$39  = due & above;
+  assign \$40  = | \$39 [6:0];
+  assign \$41  = ~ \$40 ;
+  assign \$42  = \$38 [7] & \$41 ;
+  assign \$44  = ~ \$43 ;
+  assign \$45  = due[1] & \$44 ;
+  assign \$46  = | due[1:0];
+  assign \$47  = ~ \$46 ;
+  assign \$48  = due[2] & \$47 ;
+  assign \$49  = | due[2:0];
+  assign \$50  = ~ \$49 ;
+  assign \$51  = due[3] & \$50 ;
+  assign \$52  = | due[3:0];
+  assign \$53  = ~ \$52 ;
+  assign \$54  = due[4] & \$53 ;
+  assign \$55  = | due[4:0];
+  assign \$56  = ~ \$55 ;
+  assign \$57  = due[5] & \$56 ;
+  assign \$58  = | due[5:0];
+  assign \$59  = ~ \$58 ;
+  assign \$60  = due[6] & \$59 ;
+  assign \$61  = | due[6:0];
+  assign \$62  = ~ \$61 ;
+  assign \$63  = due[7] & \$62 ;
+  assign \$64  = running ? { \$63 , \$60 , \$57 , \$54 , \$51 , \$48 , \$45 , due[0] } : 8'h00;
+  assign pick = \$6  ? { \$42 , \$37 , \$32 , \$27 , \$22 , \$17 , \$12 , \$7 [0] } : \$64 ;
   assign update__en = | sel;
-  assign \$63  = zero[0] ? 16'h0000 : update__data[15:0];
-  assign \$64  = \$63  + amount_0;
-  assign \$65  = zero[1] ? 16'h0000 : update__data[31:16];
-  assign \$66  = \$65  + amount_1;
-  assign \$83  = \$64 [15:0] | { \$82 , \$81 , \$80 , \$79 , \$78 , \$77 , \$76 , \$75 , \$74 , \$73 , \$72 , \$71 , \$70 , \$69 , \$68 , \$67  };
-  assign \$100  = \$66 [15:0] | { \$99 , \$98 , \$97 , \$96 , \$95 , \$94 , \$93 , \$92 , \$91 , \$90 , \$89 , \$88 , \$87 , \$86 , \$85 , \$84  };
+  assign \$65  = zero[0] ? 16'h0000 : update__data[15:0];
+  assign \$66  = \$65  + amount_0;
+  assign \$67  = zero[1] ? 16'h0000 : update__data[31:16];
+  assign \$68  = \$67  + amount_1;
+  assign \$85  = \$66 [15:0] | { \$84 , \$83 , \$82 , \$81 , \$80 , \$79 , \$78 , \$77 , \$76 , \$75 , \$74 , \$73 , \$72 , \$71 , \$70 , \$69  };
+  assign \$102  = \$68 [15:0] | { \$101 , \$100 , \$99 , \$98 , \$97 , \$96 , \$95 , \$94 , \$93 , \$92 , \$91 , \$90 , \$89 , \$88 , \$87 , \$86  };
   assign write__en = | writing;
-  assign \$101  = | events_reg;
-  assign \$102  = was_busy | \$101 ;
-  assign busy = \$102  | clear_reg;
-  assign \$103  = | pending_0;
-  assign \$104  = | pending_1;
-  assign \$105  = \$103  | \$104 ;
-  assign \$106  = \$105  | marked[0];
-  assign \$107  = \$106  | marked[1];
-  assign \$108  = | pending_2;
-  assign \$109  = | pending_3;
-  assign \$110  = \$108  | \$109 ;
-  assign \$111  = \$110  | marked[2];
-  assign \$112  = \$111  | marked[3];
-  assign \$113  = | pending_4;
-  assign \$114  = | pending_5;
-  assign \$115  = \$113  | \$114 ;
-  assign \$116  = \$115  | marked[4];
-  assign \$117  = \$116  | marked[5];
-  assign \$118  = | pending_6;
-  assign \$119  = | pending_7;
-  assign \$120  = \$118  | \$119 ;
-  assign \$121  = \$120  | marked[6];
-  assign \$122  = \$121  | marked[7];
-  assign \$123  = | pending_8;
-  assign \$124  = | pending_9;
-  assign \$125  = \$123  | \$124 ;
-  assign \$126  = \$125  | marked[8];
-  assign \$127  = \$126  | marked[9];
-  assign \$128  = | pending_10;
-  assign \$129  = | pending_11;
-  assign \$130  = \$128  | \$129 ;
-  assign \$131  = \$130  | marked[10];
-  assign \$132  = \$131  | marked[11];
-  assign \$133  = | pending_12;
-  assign \$134  = | pending_13;
-  assign \$135  = \$133  | \$134 ;
-  assign \$136  = \$135  | marked[12];
-  assign \$137  = \$136  | marked[13];
-  assign \$138  = | pending_14;
-  assign \$139  = | pending_15;
-  assign \$140  = \$138  | \$139 ;
-  assign \$141  = \$140  | marked[14];
-  assign \$142  = \$141  | marked[15];
-  assign \$143  = | { pick[7], pick[5], pick[3], pick[1] };
-  assign \$144  = | { pick[7:6], pick[3:2] };
-  assign \$145  = | pick[7:4];
-  assign \$146  = | due;
-  assign \$148  = | pick[1:0];
-  assign \$149  = | pick[2:0];
-  assign \$150  = | pick[3:0];
-  assign \$151  = | pick[4:0];
-  assign \$152  = | pick[5:0];
-  assign \$153  = | pick[6:0];
-  assign \$154  = sel[0] ? marked[1:0] : 2'h0;
-  assign \$156  = sel[1] ? marked[3:2] : 2'h0;
-  assign \$157  = \$155  | \$156 ;
-  assign \$158  = sel[2] ? marked[5:4] : 2'h0;
-  assign \$159  = \$157  | \$158 ;
-  assign \$160  = sel[3] ? marked[7:6] : 2'h0;
+  assign \$103  = | events_reg;
+  assign \$104  = was_busy | \$103 ;
+  assign busy = \$104  | clear_reg;
+  assign \$105  = | pending_0;
+  assign \$106  = | pending_1;
+  assign \$107  = \$105  | \$106 ;
+  assign \$108  = \$107  | marked[0];
+  assign \$109  = \$108  | marked[1];
+  assign \$110  = | pending_2;
+  assign \$111  = | pending_3;
+  assign \$112  = \$110  | \$111 ;
+  assign \$113  = \$112  | marked[2];
+  assign \$114  = \$113  | marked[3];
+  assign \$115  = | pending_4;
+  assign \$116  = | pending_5;
+  assign \$117  = \$115  | \$116 ;
+  assign \$118  = \$117  | marked[4];
+  assign \$119  = \$118  | marked[5];
+  assign \$120  = | pending_6;
+  assign \$121  = | pending_7;
+  assign \$122  = \$120  | \$121 ;
+  assign \$123  = \$122  | marked[6];
+  assign \$124  = \$123  | marked[7];
+  assign \$125  = | pending_8;
+  assign \$126  = | pending_9;
+  assign \$127  = \$125  | \$126 ;
+  assign \$128  = \$127  | marked[8];
+  assign \$129  = \$128  | marked[9];
+  assign \$130  = | pending_10;
+  assign \$131  = | pending_11;
+  assign \$132  = \$130  | \$131 ;
+  assign \$133  = \$132  | marked[10];
+  assign \$134  = \$133  | marked[11];
+  assign \$135  = | pending_12;
+  assign \$136  = | pending_13;
+  assign \$137  = \$135  | \$136 ;
+  assign \$138  = \$137  | marked[12];
+  assign \$139  = \$138  | marked[13];
+  assign \$140  = | pending_14;
+  assign \$141  = | pending_15;
+  assign \$142  = \$140  | \$141 ;
+  assign \$143  = \$142  | marked[14];
+  assign \$144  = \$143  | marked[15];
+  assign \$145  = ~ rst;
+  assign \$146  = | { pick[7], pick[5], pick[3], pick[1] };
+  assign \$147  = | { pick[7:6], pick[3:2] };
+  assign \$148  = | pick[7:4];
+  assign \$149  = | due;
+  assign \$151  = | pick[1:0];
+  assign \$152  = | pick[2:0];
+  assign \$153  = | pick[3:0];
+  assign \$154  = | pick[4:0];
+  assign \$155  = | pick[5:0];
+  assign \$156  = | pick[6:0];
+  assign \$157  = \$149  ? { \$156 , \$155 , \$154 , \$153 , \$152 , \$151 , \$150 , 1'h0 } : above;
+  assign \$158  = sel[0] ? marked[1:0] : 2'h0;
+  assign \$160  = sel[1] ? marked[3:2] : 2'h0;
   assign \$161  = \$159  | \$160 ;
-  assign \$162  = sel[4] ? marked[9:8] : 2'h0;
+  assign \$162  = sel[2] ? marked[5:4] : 2'h0;
   assign \$163  = \$161  | \$162 ;
-  assign \$164  = sel[5] ? marked[11:10] : 2'h0;
+  assign \$164  = sel[3] ? marked[7:6] : 2'h0;
   assign \$165  = \$163  | \$164 ;
-  assign \$166  = sel[6] ? marked[13:12] : 2'h0;
+  assign \$166  = sel[4] ? marked[9:8] : 2'h0;
   assign \$167  = \$165  | \$166 ;
-  assign \$168  = sel[7] ? marked[15:14] : 2'h0;
+  assign \$168  = sel[5] ? marked[11:10] : 2'h0;
   assign \$169  = \$167  | \$168 ;
-  assign \$170  = sel[0] ? pending_0 : 4'h0;
-  assign \$172  = sel[1] ? pending_2 : 4'h0;
+  assign \$170  = sel[6] ? marked[13:12] : 2'h0;
+  assign \$171  = \$169  | \$170 ;
+  assign \$172  = sel[7] ? marked[15:14] : 2'h0;
   assign \$173  = \$171  | \$172 ;
-  assign \$174  = sel[2] ? pending_4 : 4'h0;
-  assign \$175  = \$173  | \$174 ;
-  assign \$176  = sel[3] ? pending_6 : 4'h0;
+  assign \$174  = sel[0] ? pending_0 : 4'h0;
+  assign \$176  = sel[1] ? pending_2 : 4'h0;
   assign \$177  = \$175  | \$176 ;
-  assign \$178  = sel[4] ? pending_8 : 4'h0;
+  assign \$178  = sel[2] ? pending_4 : 4'h0;
   assign \$179  = \$177  | \$178 ;
-  assign \$180  = sel[5] ? pending_10 : 4'h0;
+  assign \$180  = sel[3] ? pending_6 : 4'h0;
   assign \$181  = \$179  | \$180 ;
-  assign \$182  = sel[6] ? pending_12 : 4'h0;
+  assign \$182  = sel[4] ? pending_8 : 4'h0;
   assign \$183  = \$181  | \$182 ;
-  assign \$184  = sel[7] ? pending_14 : 4'h0;
+  assign \$184  = sel[5] ? pending_10 : 4'h0;
   assign \$185  = \$183  | \$184 ;
-  assign \$186  = sel[0] ? pending_1 : 4'h0;
-  assign \$188  = sel[1] ? pending_3 : 4'h0;
+  assign \$186  = sel[6] ? pending_12 : 4'h0;
+  assign \$187  = \$185  | \$186 ;
+  assign \$188  = sel[7] ? pending_14 : 4'h0;
   assign \$189  = \$187  | \$188 ;
-  assign \$190  = sel[2] ? pending_5 : 4'h0;
-  assign \$191  = \$189  | \$190 ;
-  assign \$192  = sel[3] ? pending_7 : 4'h0;
+  assign \$190  = sel[0] ? pending_1 : 4'h0;
+  assign \$192  = sel[1] ? pending_3 : 4'h0;
   assign \$193  = \$191  | \$192 ;
-  assign \$194  = sel[4] ? pending_9 : 4'h0;
+  assign \$194  = sel[2] ? pending_5 : 4'h0;
   assign \$195  = \$193  | \$194 ;
-  assign \$196  = sel[5] ? pending_11 : 4'h0;
+  assign \$196  = sel[3] ? pending_7 : 4'h0;
   assign \$197  = \$195  | \$196 ;
-  assign \$198  = sel[6] ? pending_13 : 4'h0;
+  assign \$198  = sel[4] ? pending_9 : 4'h0;
   assign \$199  = \$197  | \$198 ;
-  assign \$200  = sel[7] ? pending_15 : 4'h0;
+  assign \$200  = sel[5] ? pending_11 : 4'h0;
   assign \$201  = \$199  | \$200 ;
-  assign \$202  = sel[0] ? 4'h0 : pending_0;
-  assign \$203  = \$202  + events_reg[0];
-  assign \$204  = sel[0] ? 4'h0 : pending_1;
-  assign \$205  = \$204  + events_reg[1];
-  assign \$206  = sel[1] ? 4'h0 : pending_2;
-  assign \$207  = \$206  + events_reg[2];
-  assign \$208  = sel[1] ? 4'h0 : pending_3;
-  assign \$209  = \$208  + events_reg[3];
-  assign \$210  = sel[2] ? 4'h0 : pending_4;
-  assign \$211  = \$210  + events_reg[4];
-  assign \$212  = sel[2] ? 4'h0 : pending_5;
-  assign \$213  = \$212  + events_reg[5];
-  assign \$214  = sel[3] ? 4'h0 : pending_6;
-  assign \$215  = \$214  + events_reg[6];
-  assign \$216  = sel[3] ? 4'h0 : pending_7;
-  assign \$217  = \$216  + events_reg[7];
-  assign \$218  = sel[4] ? 4'h0 : pending_8;
-  assign \$219  = \$218  + events_reg[8];
-  assign \$220  = sel[4] ? 4'h0 : pending_9;
-  assign \$221  = \$220  + events_reg[9];
-  assign \$222  = sel[5] ? 4'h0 : pending_10;
-  assign \$223  = \$222  + events_reg[10];
-  assign \$224  = sel[5] ? 4'h0 : pending_11;
-  assign \$225  = \$224  + events_reg[11];
-  assign \$226  = sel[6] ? 4'h0 : pending_12;
-  assign \$227  = \$226  + events_reg[12];
-  assign \$228  = sel[6] ? 4'h0 : pending_13;
-  assign \$229  = \$228  + events_reg[13];
-  assign \$230  = sel[7] ? 4'h0 : pending_14;
-  assign \$231  = \$230  + events_reg[14];
-  assign \$232  = sel[7] ? 4'h0 : pending_15;
-  assign \$233  = \$232  + events_reg[15];
-  assign \$234  = ~ { sel[7], sel[7:6], sel[6:5], sel[5:4], sel[4:3], sel[3:2], sel[2:1], sel[1:0], sel[0] };
-  assign \$235  = marked & \$234 ;
-  assign \$236  = | events_reg;
-  assign \$237  = \$236  | clear_reg;
-  assign \$238  = | marked;
-  assign \$239  = \$237  | \$238 ;
-  assign \$240  = | sel;
-  assign \$241  = \$239  | \$240 ;
-  assign \$242  = | writing;
-  assign \$243  = \$241  | \$242 ;
-  assign \$244  = | pending_0;
-  assign \$245  = | pending_1;
-  assign \$246  = | pending_2;
-  assign \$247  = | pending_3;
-  assign \$248  = | pending_4;
-  assign \$249  = | pending_5;
-  assign \$250  = | pending_6;
-  assign \$251  = | pending_7;
-  assign \$252  = | pending_8;
-  assign \$253  = | pending_9;
-  assign \$254  = | pending_10;
-  assign \$255  = | pending_11;
-  assign \$256  = | pending_12;
-  assign \$257  = | pending_13;
-  assign \$258  = | pending_14;
-  assign \$259  = | pending_15;
-  assign \$260  = | { \$259 , \$258 , \$257 , \$256 , \$255 , \$254 , \$253 , \$252 , \$251 , \$250 , \$249 , \$248 , \$247 , \$246 , \$245 , \$244  };
-  assign \$261  = \$243  | \$260 ;
+  assign \$202  = sel[6] ? pending_13 : 4'h0;
+  assign \$203  = \$201  | \$202 ;
+  assign \$204  = sel[7] ? pending_15 : 4'h0;
+  assign \$205  = \$203  | \$204 ;
+  assign \$206  = rst | clear_reg;
+  assign \$207  = sel[0] ? 4'h0 : pending_0;
+  assign \$208  = \$207  + events_reg[0];
+  assign \$209  = \$206  ? 5'h00 : \$208 ;
+  assign \$210  = rst | clear_reg;
+  assign \$211  = sel[0] ? 4'h0 : pending_1;
+  assign \$212  = \$211  + events_reg[1];
+  assign \$213  = \$210  ? 5'h00 : \$212 ;
+  assign \$214  = rst | clear_reg;
+  assign \$215  = sel[1] ? 4'h0 : pending_2;
+  assign \$216  = \$215  + events_reg[2];
+  assign \$217  = \$214  ? 5'h00 : \$216 ;
+  assign \$218  = rst | clear_reg;
+  assign \$219  = sel[1] ? 4'h0 : pending_3;
+  assign \$220  = \$219  + events_reg[3];
+  assign \$221  = \$218  ? 5'h00 : \$220 ;
+  assign \$222  = rst | clear_reg;
+  assign \$223  = sel[2] ? 4'h0 : pending_4;
+  assign \$224  = \$223  + events_reg[4];
+  assign \$225  = \$222  ? 5'h00 : \$224 ;
+  assign \$226  = rst | clear_reg;
+  assign \$227  = sel[2] ? 4'h0 : pending_5;
+  assign \$228  = \$227  + events_reg[5];
+  assign \$229  = \$226  ? 5'h00 : \$228 ;
+  assign \$230  = rst | clear_reg;
+  assign \$231  = sel[3] ? 4'h0 : pending_6;
+  assign \$232  = \$231  + events_reg[6];
+  assign \$233  = \$230  ? 5'h00 : \$232 ;
+  assign \$234  = rst | clear_reg;
+  assign \$235  = sel[3] ? 4'h0 : pending_7;
+  assign \$236  = \$235  + events_reg[7];
+  assign \$237  = \$234  ? 5'h00 : \$236 ;
+  assign \$238  = rst | clear_reg;
+  assign \$239  = sel[4] ? 4'h0 : pending_8;
+  assign \$240  = \$239  + events_reg[8];
+  assign \$241  = \$238  ? 5'h00 : \$240 ;
+  assign \$242  = rst | clear_reg;
+  assign \$243  = sel[4] ? 4'h0 : pending_9;
+  assign \$244  = \$243  + events_reg[9];
+  assign \$245  = \$242  ? 5'h00 : \$244 ;
+  assign \$246  = rst | clear_reg;
+  assign \$247  = sel[5] ? 4'h0 : pending_10;
+  assign \$248  = \$247  + events_reg[10];
+  assign \$249  = \$246  ? 5'h00 : \$248 ;
+  assign \$250  = rst | clear_reg;
+  assign \$251  = sel[5] ? 4'h0 : pending_11;
+  assign \$252  = \$251  + events_reg[11];
+  assign \$253  = \$250  ? 5'h00 : \$252 ;
+  assign \$254  = rst | clear_reg;
+  assign \$255  = sel[6] ? 4'h0 : pending_12;
+  assign \$256  = \$255  + events_reg[12];
+  assign \$257  = \$254  ? 5'h00 : \$256 ;
+  assign \$258  = rst | clear_reg;
+  assign \$259  = sel[6] ? 4'h0 : pending_13;
+  assign \$260  = \$259  + events_reg[13];
+  assign \$261  = \$258  ? 5'h00 : \$260 ;
+  assign \$262  = rst | clear_reg;
+  assign \$263  = sel[7] ? 4'h0 : pending_14;
+  assign \$264  = \$263  + events_reg[14];
+  assign \$265  = \$262  ? 5'h00 : \$264 ;
+  assign \$266  = rst | clear_reg;
+  assign \$267  = sel[7] ? 4'h0 : pending_15;
+  assign \$268  = \$267  + events_reg[15];
+  assign \$269  = \$266  ? 5'h00 : \$268 ;
+  assign \$270  = rst | clear_reg;
+  assign \$271  = ~ { sel[7], sel[7:6], sel[6:5], sel[5:4], sel[4:3], sel[3:2], sel[2:1], sel[1:0], sel[0] };
+  assign \$272  = marked & \$271 ;
+  assign \$273  = \$270  ? 16'hffff : \$272 ;
+  assign \$274  = | events_reg;
+  assign \$275  = \$274  | clear_reg;
+  assign \$276  = | marked;
+  assign \$277  = \$275  | \$276 ;
+  assign \$278  = | sel;
+  assign \$279  = \$277  | \$278 ;
+  assign \$280  = | writing;
+  assign \$281  = \$279  | \$280 ;
+  assign \$282  = | pending_0;
+  assign \$283  = | pending_1;
+  assign \$284  = | pending_2;
+  assign \$285  = | pending_3;
+  assign \$286  = | pending_4;
+  assign \$287  = | pending_5;
+  assign \$288  = | pending_6;
+  assign \$289  = | pending_7;
+  assign \$290  = | pending_8;
+  assign \$291  = | pending_9;
+  assign \$292  = | pending_10;
+  assign \$293  = | pending_11;
+  assign \$294  = | pending_12;
+  assign \$295  = | pending_13;
+  assign \$296  = | pending_14;
+  assign \$297  = | pending_15;
+  assign \$298  = | { \$297 , \$296 , \$295 , \$294 , \$293 , \$292 , \$291 , \$290 , \$289 , \$288 , \$287 , \$286 , \$285 , \$284 , \$283 , \$282  };
+  assign \$299  = \$281  | \$298 ;
   always @(posedge clk)
-    events_reg <= \$262 ;
+    events_reg <= \$300 ;
   always @(posedge clk)
-    clear_reg <= \$263 ;
+    clear_reg <= \$301 ;
   always @(posedge clk)
-    waiting <= \$264 ;
+    waiting <= \$302 ;
   always @(posedge clk)
-    sel <= \$265 ;
+    running <= \$145 ;
   always @(posedge clk)
-    update__addr <= \$266 ;
+    sel <= \$303 ;
   always @(posedge clk)
-    above <= \$267 ;
+    update__addr <= \$304 ;
   always @(posedge clk)
-    writing <= \$268 ;
+    above <= \$157 ;
   always @(posedge clk)
-    write__addr <= \$269 ;
+    writing <= \$305 ;
   always @(posedge clk)
-    zero <= \$270 ;
+    write__addr <= \$306 ;
   always @(posedge clk)
-    amount_0 <= \$271 ;
+    zero <= \$307 ;
   always @(posedge clk)
-    amount_1 <= \$272 ;
+    amount_0 <= \$189 ;
   always @(posedge clk)
-    pending_0 <= \$273 ;
+    amount_1 <= \$205 ;
   always @(posedge clk)
-    pending_1 <= \$274 ;
+    pending_0 <= \$209 [3:0];
   always @(posedge clk)
-    pending_2 <= \$275 ;
+    pending_1 <= \$213 [3:0];
   always @(posedge clk)
-    pending_3 <= \$276 ;
+    pending_2 <= \$217 [3:0];
   always @(posedge clk)
-    pending_4 <= \$277 ;
+    pending_3 <= \$221 [3:0];
   always @(posedge clk)
-    pending_5 <= \$278 ;
+    pending_4 <= \$225 [3:0];
   always @(posedge clk)
-    pending_6 <= \$279 ;
+    pending_5 <= \$229 [3:0];
   always @(posedge clk)
-    pending_7 <= \$280 ;
+    pending_6 <= \$233 [3:0];
   always @(posedge clk)
-    pending_8 <= \$281 ;
+    pending_7 <= \$237 [3:0];
   always @(posedge clk)
-    pending_9 <= \$282 ;
+    pending_8 <= \$241 [3:0];
   always @(posedge clk)
-    pending_10 <= \$283 ;
+    pending_9 <= \$245 [3:0];
   always @(posedge clk)
-    pending_11 <= \$284 ;
+    pending_10 <= \$249 [3:0];
   always @(posedge clk)
-    pending_12 <= \$285 ;
+    pending_11 <= \$253 [3:0];
   always @(posedge clk)
-    pending_13 <= \$286 ;
+    pending_12 <= \$257 [3:0];
   always @(posedge clk)
-    pending_14 <= \$287 ;
+    pending_13 <= \$261 [3:0];
   always @(posedge clk)
-    pending_15 <= \$288 ;
+    pending_14 <= \$265 [3:0];
   always @(posedge clk)
-    marked <= \$289 ;
+    pending_15 <= \$269 [3:0];
   always @(posedge clk)
-    was_busy <= \$290 ;
+    marked <= \$273 ;
+  always @(posedge clk)
+    was_busy <= \$308 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$262  = events;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$262  = 16'h0000;
+      \$300 [0] = 1'h0;
+    end else if (events[0]) begin
+      \$300 [0] = 1'h1;
+    end else begin
+      \$300 [0] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$263  = clear;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$263  = 1'h0;
+      \$300 [1] = 1'h0;
+    end else if (events[1]) begin
+      \$300 [1] = 1'h1;
+    end else begin
+      \$300 [1] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$264  = { \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107  };
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$264  = 8'h00;
+      \$300 [2] = 1'h0;
+    end else if (events[2]) begin
+      \$300 [2] = 1'h1;
+    end else begin
+      \$300 [2] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$265  = pick;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$265  = 8'h00;
+      \$300 [3] = 1'h0;
+    end else if (events[3]) begin
+      \$300 [3] = 1'h1;
+    end else begin
+      \$300 [3] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$266  = { \$145 , \$144 , \$143  };
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$266  = 3'h0;
+      \$300 [4] = 1'h0;
+    end else if (events[4]) begin
+      \$300 [4] = 1'h1;
+    end else begin
+      \$300 [4] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$267  = above;
-    if (\$146 ) begin
-      \$267  = { \$153 , \$152 , \$151 , \$150 , \$149 , \$148 , \$147 , 1'h0 };
-    end
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$267  = 8'h00;
+      \$300 [5] = 1'h0;
+    end else if (events[5]) begin
+      \$300 [5] = 1'h1;
+    end else begin
+      \$300 [5] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$268  = sel;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$268  = 8'h00;
+      \$300 [6] = 1'h0;
+    end else if (events[6]) begin
+      \$300 [6] = 1'h1;
+    end else begin
+      \$300 [6] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$269  = update__addr;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$269  = 3'h0;
+      \$300 [7] = 1'h0;
+    end else if (events[7]) begin
+      \$300 [7] = 1'h1;
+    end else begin
+      \$300 [7] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$270  = \$169 ;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$270  = 2'h0;
+      \$300 [8] = 1'h0;
+    end else if (events[8]) begin
+      \$300 [8] = 1'h1;
+    end else begin
+      \$300 [8] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$271  = \$185 ;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$271  = 4'h0;
+      \$300 [9] = 1'h0;
+    end else if (events[9]) begin
+      \$300 [9] = 1'h1;
+    end else begin
+      \$300 [9] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$272  = \$201 ;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$272  = 4'h0;
+      \$300 [10] = 1'h0;
+    end else if (events[10]) begin
+      \$300 [10] = 1'h1;
+    end else begin
+      \$300 [10] = 1'h0;
+    end
+    (* full_case = 32'd1 *)
+    if (rst) begin
+      \$300 [11] = 1'h0;
+    end else if (events[11]) begin
+      \$300 [11] = 1'h1;
+    end else begin
+      \$300 [11] = 1'h0;
+    end
+    (* full_case = 32'd1 *)
+    if (rst) begin
+      \$300 [12] = 1'h0;
+    end else if (events[12]) begin
+      \$300 [12] = 1'h1;
+    end else begin
+      \$300 [12] = 1'h0;
+    end
+    (* full_case = 32'd1 *)
+    if (rst) begin
+      \$300 [13] = 1'h0;
+    end else if (events[13]) begin
+      \$300 [13] = 1'h1;
+    end else begin
+      \$300 [13] = 1'h0;
+    end
+    (* full_case = 32'd1 *)
+    if (rst) begin
+      \$300 [14] = 1'h0;
+    end else if (events[14]) begin
+      \$300 [14] = 1'h1;
+    end else begin
+      \$300 [14] = 1'h0;
+    end
+    (* full_case = 32'd1 *)
+    if (rst) begin
+      \$300 [15] = 1'h0;
+    end else if (events[15]) begin
+      \$300 [15] = 1'h1;
+    end else begin
+      \$300 [15] = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$273  = 4'h0;
-    end else begin
-      \$273  = \$203 [3:0];
-    end
     if (rst) begin
-      \$273  = 4'h0;
+      \$301  = 1'h0;
+    end else if (clear) begin
+      \$301  = 1'h1;
+    end else begin
+      \$301  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$274  = 4'h0;
-    end else begin
-      \$274  = \$205 [3:0];
-    end
+    \$302  = { \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109  };
     if (rst) begin
-      \$274  = 4'h0;
+      \$302  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$275  = 4'h0;
-    end else begin
-      \$275  = \$207 [3:0];
-    end
+    \$303  = pick;
     if (rst) begin
-      \$275  = 4'h0;
+      \$303  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$276  = 4'h0;
-    end else begin
-      \$276  = \$209 [3:0];
-    end
+    \$304  = { \$148 , \$147 , \$146  };
     if (rst) begin
-      \$276  = 4'h0;
+      \$304  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$277  = 4'h0;
-    end else begin
-      \$277  = \$211 [3:0];
-    end
+    \$305  = sel;
     if (rst) begin
-      \$277  = 4'h0;
+      \$305  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$278  = 4'h0;
-    end else begin
-      \$278  = \$213 [3:0];
-    end
+    \$306  = update__addr;
     if (rst) begin
-      \$278  = 4'h0;
+      \$306  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$279  = 4'h0;
-    end else begin
-      \$279  = \$215 [3:0];
-    end
+    \$307  = \$173 ;
     if (rst) begin
-      \$279  = 4'h0;
+      \$307  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$280  = 4'h0;
-    end else begin
-      \$280  = \$217 [3:0];
-    end
+    \$308  = \$299 ;
     if (rst) begin
-      \$280  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$281  = 4'h0;
-    end else begin
-      \$281  = \$219 [3:0];
-    end
-    if (rst) begin
-      \$281  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$282  = 4'h0;
-    end else begin
-      \$282  = \$221 [3:0];
-    end
-    if (rst) begin
-      \$282  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$283  = 4'h0;
-    end else begin
-      \$283  = \$223 [3:0];
-    end
-    if (rst) begin
-      \$283  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$284  = 4'h0;
-    end else begin
-      \$284  = \$225 [3:0];
-    end
-    if (rst) begin
-      \$284  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$285  = 4'h0;
-    end else begin
-      \$285  = \$227 [3:0];
-    end
-    if (rst) begin
-      \$285  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$286  = 4'h0;
-    end else begin
-      \$286  = \$229 [3:0];
-    end
-    if (rst) begin
-      \$286  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$287  = 4'h0;
-    end else begin
-      \$287  = \$231 [3:0];
-    end
-    if (rst) begin
-      \$287  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$288  = 4'h0;
-    end else begin
-      \$288  = \$233 [3:0];
-    end
-    if (rst) begin
-      \$288  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$289  = 16'hffff;
-    end else begin
-      \$289  = \$235 ;
-    end
-    if (rst) begin
-      \$289  = 16'hffff;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
-    \$290  = \$261 ;
-    if (rst) begin
-      \$290  = 1'h1;
+      \$308  = 1'h1;
     end
   end
   assign read_addr = host__addr;
   assign read_en = host__en;
   assign host__data = read_data;
   assign sel_addr = update__addr;
-  assign total_0 = { 3'h0, \$64  };
-  assign total_1 = { 3'h0, \$66  };
+  assign total_0 = { 3'h0, \$66  };
+  assign total_1 = { 3'h0, \$68  };
   assign word = write__addr;
-  assign write__data = { \$100 , \$83  };
+  assign write__data = { \$102 , \$85  };
   assign \events_reg.crc_word0  = events_reg[0];
   assign \events_reg.crc_word1  = events_reg[1];
   assign \events_reg.no_ack  = events_reg[2];
@@ -11685,44 +11644,44 @@ module \biss_master_wb.ch0.core.counter_ram (clk, rst, host__en, busy, read_data
   assign \events.noisy_line  = events[13];
   assign \events.delay_jump  = events[14];
   assign \events.noise_event  = events[15];
-  assign \$9  = \$8 [0];
-  assign \$42  = due[0];
-  assign \$67  = \$64 [16];
-  assign \$68  = \$64 [16];
-  assign \$69  = \$64 [16];
-  assign \$70  = \$64 [16];
-  assign \$71  = \$64 [16];
-  assign \$72  = \$64 [16];
-  assign \$73  = \$64 [16];
-  assign \$74  = \$64 [16];
-  assign \$75  = \$64 [16];
-  assign \$76  = \$64 [16];
-  assign \$77  = \$64 [16];
-  assign \$78  = \$64 [16];
-  assign \$79  = \$64 [16];
-  assign \$80  = \$64 [16];
-  assign \$81  = \$64 [16];
-  assign \$82  = \$64 [16];
+  assign \$10  = \$9 [0];
+  assign \$43  = due[0];
+  assign \$69  = \$66 [16];
+  assign \$70  = \$66 [16];
+  assign \$71  = \$66 [16];
+  assign \$72  = \$66 [16];
+  assign \$73  = \$66 [16];
+  assign \$74  = \$66 [16];
+  assign \$75  = \$66 [16];
+  assign \$76  = \$66 [16];
+  assign \$77  = \$66 [16];
+  assign \$78  = \$66 [16];
+  assign \$79  = \$66 [16];
+  assign \$80  = \$66 [16];
+  assign \$81  = \$66 [16];
+  assign \$82  = \$66 [16];
+  assign \$83  = \$66 [16];
   assign \$84  = \$66 [16];
-  assign \$85  = \$66 [16];
-  assign \$86  = \$66 [16];
-  assign \$87  = \$66 [16];
-  assign \$88  = \$66 [16];
-  assign \$89  = \$66 [16];
-  assign \$90  = \$66 [16];
-  assign \$91  = \$66 [16];
-  assign \$92  = \$66 [16];
-  assign \$93  = \$66 [16];
-  assign \$94  = \$66 [16];
-  assign \$95  = \$66 [16];
-  assign \$96  = \$66 [16];
-  assign \$97  = \$66 [16];
-  assign \$98  = \$66 [16];
-  assign \$99  = \$66 [16];
-  assign \$147  = pick[0];
-  assign \$155  = \$154 ;
-  assign \$171  = \$170 ;
-  assign \$187  = \$186 ;
+  assign \$86  = \$68 [16];
+  assign \$87  = \$68 [16];
+  assign \$88  = \$68 [16];
+  assign \$89  = \$68 [16];
+  assign \$90  = \$68 [16];
+  assign \$91  = \$68 [16];
+  assign \$92  = \$68 [16];
+  assign \$93  = \$68 [16];
+  assign \$94  = \$68 [16];
+  assign \$95  = \$68 [16];
+  assign \$96  = \$68 [16];
+  assign \$97  = \$68 [16];
+  assign \$98  = \$68 [16];
+  assign \$99  = \$68 [16];
+  assign \$100  = \$68 [16];
+  assign \$101  = \$68 [16];
+  assign \$150  = pick[0];
+  assign \$159  = \$158 ;
+  assign \$175  = \$174 ;
+  assign \$191  = \$190 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -18785,7 +18744,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$5725$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$5891$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -18827,8 +18786,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5725$0 ;
-  wire \port$5725$0 ;
+  input \port$5891$0 ;
+  wire \port$5891$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -18842,9 +18801,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5725$0  };
-  assign \$2  = { lc[4:0], \port$5725$0  } == last;
-  assign \$3  = { lc[4:0], \port$5725$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5891$0  };
+  assign \$2  = { lc[4:0], \port$5891$0  } == last;
+  assign \$3  = { lc[4:0], \port$5891$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -18954,7 +18913,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5725$0  };
+  assign lc_next = { lc[4:0], \port$5891$0  };
   assign zero = is_zero;
 endmodule
 
@@ -19814,8 +19773,8 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
-, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6614$0 
-, \port$6627$0 , regs__ca_done, \port$6723$0 , ca_rbuf_addr);
+, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6761$0 
+, \port$6774$0 , regs__ca_done, \port$6851$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -19985,12 +19944,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6614$0 ;
-  wire [186:0] \port$6614$0 ;
-  output [79:0] \port$6627$0 ;
-  wire [79:0] \port$6627$0 ;
-  output [9:0] \port$6723$0 ;
-  wire [9:0] \port$6723$0 ;
+  output [186:0] \port$6761$0 ;
+  wire [186:0] \port$6761$0 ;
+  output [79:0] \port$6774$0 ;
+  wire [79:0] \port$6774$0 ;
+  output [9:0] \port$6851$0 ;
+  wire [9:0] \port$6851$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -20424,9 +20383,9 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en, 
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$185  = ma;
   assign \slo$187  = slo;
-  assign \port$6614$0  = \$18 ;
-  assign \port$6627$0  = \$19 ;
-  assign \port$6723$0  = \$20 ;
+  assign \port$6761$0  = \$18 ;
+  assign \port$6774$0  = \$19 ;
+  assign \port$6851$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -21534,7 +21493,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6267$0 (\bit ),
+    .\port$6414$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -21598,7 +21557,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$4484$0 (\$24 ),
+    .\port$4567$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -24023,9 +23982,9 @@ module \biss_master_wb.ch1.core.counter_ram (clk, rst, host__en, busy, read_data
   reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire [7:0] \$1 ;
   wire \$10 ;
-  wire [15:0] \$100 ;
+  wire \$100 ;
   wire \$101 ;
-  wire \$102 ;
+  wire [15:0] \$102 ;
   wire \$103 ;
   wire \$104 ;
   wire \$105 ;
@@ -24044,7 +24003,7 @@ module \biss_master_wb.ch1.core.counter_ram (clk, rst, host__en, busy, read_data
   wire \$117 ;
   wire \$118 ;
   wire \$119 ;
-  wire [7:0] \$12 ;
+  wire \$12 ;
   wire \$120 ;
   wire \$121 ;
   wire \$122 ;
@@ -24066,7 +24025,7 @@ module \biss_master_wb.ch1.core.counter_ram (clk, rst, host__en, busy, read_data
   wire \$137 ;
   wire \$138 ;
   wire \$139 ;
-  wire \$14 ;
+  wire [7:0] \$14 ;
   wire \$140 ;
   wire \$141 ;
   wire \$142 ;
@@ -24082,10 +24041,10 @@ module \biss_master_wb.ch1.core.counter_ram (clk, rst, host__en, busy, read_data
   wire \$151 ;
   wire \$152 ;
   wire \$153 ;
-  wire [1:0] \$154 ;
-  wire [1:0] \$155 ;
-  wire [1:0] \$156 ;
-  wire [1:0] \$157 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire [7:0] \$157 ;
   wire [1:0] \$158 ;
   wire [1:0] \$159 ;
   wire \$16 ;
@@ -24099,11 +24058,11 @@ module \biss_master_wb.ch1.core.counter_ram (clk, rst, host__en, busy, read_data
   wire [1:0] \$167 ;
   wire [1:0] \$168 ;
   wire [1:0] \$169 ;
-  wire [7:0] \$17 ;
-  wire [3:0] \$170 ;
-  wire [3:0] \$171 ;
-  wire [3:0] \$172 ;
-  wire [3:0] \$173 ;
+  wire \$17 ;
+  wire [1:0] \$170 ;
+  wire [1:0] \$171 ;
+  wire [1:0] \$172 ;
+  wire [1:0] \$173 ;
   wire [3:0] \$174 ;
   wire [3:0] \$175 ;
   wire [3:0] \$176 ;
@@ -24121,7 +24080,7 @@ module \biss_master_wb.ch1.core.counter_ram (clk, rst, host__en, busy, read_data
   wire [3:0] \$187 ;
   wire [3:0] \$188 ;
   wire [3:0] \$189 ;
-  wire \$19 ;
+  wire [7:0] \$19 ;
   wire [3:0] \$190 ;
   wire [3:0] \$191 ;
   wire [3:0] \$192 ;
@@ -24137,114 +24096,132 @@ module \biss_master_wb.ch1.core.counter_ram (clk, rst, host__en, busy, read_data
   wire [3:0] \$200 ;
   wire [3:0] \$201 ;
   wire [3:0] \$202 ;
-  wire [4:0] \$203 ;
+  wire [3:0] \$203 ;
   wire [3:0] \$204 ;
-  wire [4:0] \$205 ;
-  wire [3:0] \$206 ;
-  wire [4:0] \$207 ;
-  wire [3:0] \$208 ;
+  wire [3:0] \$205 ;
+  wire \$206 ;
+  wire [3:0] \$207 ;
+  wire [4:0] \$208 ;
   wire [4:0] \$209 ;
   wire \$21 ;
-  wire [3:0] \$210 ;
-  wire [4:0] \$211 ;
-  wire [3:0] \$212 ;
+  wire \$210 ;
+  wire [3:0] \$211 ;
+  wire [4:0] \$212 ;
   wire [4:0] \$213 ;
-  wire [3:0] \$214 ;
-  wire [4:0] \$215 ;
-  wire [3:0] \$216 ;
+  wire \$214 ;
+  wire [3:0] \$215 ;
+  wire [4:0] \$216 ;
   wire [4:0] \$217 ;
-  wire [3:0] \$218 ;
-  wire [4:0] \$219 ;
-  wire [7:0] \$22 ;
-  wire [3:0] \$220 ;
+  wire \$218 ;
+  wire [3:0] \$219 ;
+  wire \$22 ;
+  wire [4:0] \$220 ;
   wire [4:0] \$221 ;
-  wire [3:0] \$222 ;
-  wire [4:0] \$223 ;
-  wire [3:0] \$224 ;
+  wire \$222 ;
+  wire [3:0] \$223 ;
+  wire [4:0] \$224 ;
   wire [4:0] \$225 ;
-  wire [3:0] \$226 ;
-  wire [4:0] \$227 ;
-  wire [3:0] \$228 ;
+  wire \$226 ;
+  wire [3:0] \$227 ;
+  wire [4:0] \$228 ;
   wire [4:0] \$229 ;
   wire [7:0] \$23 ;
-  wire [3:0] \$230 ;
-  wire [4:0] \$231 ;
-  wire [3:0] \$232 ;
+  wire \$230 ;
+  wire [3:0] \$231 ;
+  wire [4:0] \$232 ;
   wire [4:0] \$233 ;
-  wire [15:0] \$234 ;
-  wire [15:0] \$235 ;
-  wire \$236 ;
-  wire \$237 ;
+  wire \$234 ;
+  wire [3:0] \$235 ;
+  wire [4:0] \$236 ;
+  wire [4:0] \$237 ;
   wire \$238 ;
-  wire \$239 ;
-  wire \$24 ;
-  wire \$240 ;
-  wire \$241 ;
+  wire [3:0] \$239 ;
+  wire [7:0] \$24 ;
+  wire [4:0] \$240 ;
+  wire [4:0] \$241 ;
   wire \$242 ;
-  wire \$243 ;
-  wire \$244 ;
-  wire \$245 ;
+  wire [3:0] \$243 ;
+  wire [4:0] \$244 ;
+  wire [4:0] \$245 ;
   wire \$246 ;
-  wire \$247 ;
-  wire \$248 ;
-  wire \$249 ;
+  wire [3:0] \$247 ;
+  wire [4:0] \$248 ;
+  wire [4:0] \$249 ;
   wire \$25 ;
   wire \$250 ;
-  wire \$251 ;
-  wire \$252 ;
-  wire \$253 ;
+  wire [3:0] \$251 ;
+  wire [4:0] \$252 ;
+  wire [4:0] \$253 ;
   wire \$254 ;
-  wire \$255 ;
-  wire \$256 ;
-  wire \$257 ;
+  wire [3:0] \$255 ;
+  wire [4:0] \$256 ;
+  wire [4:0] \$257 ;
   wire \$258 ;
-  wire \$259 ;
+  wire [3:0] \$259 ;
   wire \$26 ;
-  wire \$260 ;
-  wire \$261 ;
-  reg [15:0] \$262 ;
-  reg \$263 ;
-  reg [7:0] \$264 ;
-  reg [7:0] \$265 ;
-  reg [2:0] \$266 ;
-  reg [7:0] \$267 ;
-  reg [7:0] \$268 ;
-  reg [2:0] \$269 ;
-  wire [7:0] \$27 ;
-  reg [1:0] \$270 ;
-  reg [3:0] \$271 ;
-  reg [3:0] \$272 ;
-  reg [3:0] \$273 ;
-  reg [3:0] \$274 ;
-  reg [3:0] \$275 ;
-  reg [3:0] \$276 ;
-  reg [3:0] \$277 ;
-  reg [3:0] \$278 ;
-  reg [3:0] \$279 ;
+  wire [4:0] \$260 ;
+  wire [4:0] \$261 ;
+  wire \$262 ;
+  wire [3:0] \$263 ;
+  wire [4:0] \$264 ;
+  wire [4:0] \$265 ;
+  wire \$266 ;
+  wire [3:0] \$267 ;
+  wire [4:0] \$268 ;
+  wire [4:0] \$269 ;
+  wire \$27 ;
+  wire \$270 ;
+  wire [15:0] \$271 ;
+  wire [15:0] \$272 ;
+  wire [15:0] \$273 ;
+  wire \$274 ;
+  wire \$275 ;
+  wire \$276 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
   wire [7:0] \$28 ;
-  reg [3:0] \$280 ;
-  reg [3:0] \$281 ;
-  reg [3:0] \$282 ;
-  reg [3:0] \$283 ;
-  reg [3:0] \$284 ;
-  reg [3:0] \$285 ;
-  reg [3:0] \$286 ;
-  reg [3:0] \$287 ;
-  reg [3:0] \$288 ;
-  reg [15:0] \$289 ;
-  wire \$29 ;
-  reg \$290 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
+  wire [7:0] \$29 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   wire [7:0] \$3 ;
   wire \$30 ;
+  reg [15:0] \$300 ;
+  reg \$301 ;
+  reg [7:0] \$302 ;
+  reg [7:0] \$303 ;
+  reg [2:0] \$304 ;
+  reg [7:0] \$305 ;
+  reg [2:0] \$306 ;
+  reg [1:0] \$307 ;
+  reg \$308 ;
   wire \$31 ;
-  wire [7:0] \$32 ;
+  wire \$32 ;
   wire [7:0] \$33 ;
-  wire \$34 ;
+  wire [7:0] \$34 ;
   wire \$35 ;
   wire \$36 ;
-  wire [7:0] \$37 ;
+  wire \$37 ;
   wire [7:0] \$38 ;
-  wire \$39 ;
+  wire [7:0] \$39 ;
   wire [7:0] \$4 ;
   wire \$40 ;
   wire \$41 ;
@@ -24267,16 +24244,16 @@ module \biss_master_wb.ch1.core.counter_ram (clk, rst, host__en, busy, read_data
   wire \$57 ;
   wire \$58 ;
   wire \$59 ;
-  wire [7:0] \$6 ;
+  wire \$6 ;
   wire \$60 ;
   wire \$61 ;
   wire \$62 ;
-  wire [15:0] \$63 ;
-  wire [16:0] \$64 ;
+  wire \$63 ;
+  wire [7:0] \$64 ;
   wire [15:0] \$65 ;
   wire [16:0] \$66 ;
-  wire \$67 ;
-  wire \$68 ;
+  wire [15:0] \$67 ;
+  wire [16:0] \$68 ;
   wire \$69 ;
   wire [7:0] \$7 ;
   wire \$70 ;
@@ -24293,14 +24270,14 @@ module \biss_master_wb.ch1.core.counter_ram (clk, rst, host__en, busy, read_data
   wire \$80 ;
   wire \$81 ;
   wire \$82 ;
-  wire [15:0] \$83 ;
+  wire \$83 ;
   wire \$84 ;
-  wire \$85 ;
+  wire [15:0] \$85 ;
   wire \$86 ;
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
-  wire \$9 ;
+  wire [7:0] \$9 ;
   wire \$90 ;
   wire \$91 ;
   wire \$92 ;
@@ -24386,6 +24363,7 @@ module \biss_master_wb.ch1.core.counter_ram (clk, rst, host__en, busy, read_data
   wire read_en;
   input rst;
   wire rst;
+  reg running = 1'h0;
   reg [7:0] sel = 8'h00;
   (* init = 3'h0 *)
   wire [2:0] sel_addr;
@@ -24416,7 +24394,7 @@ module \biss_master_wb.ch1.core.counter_ram (clk, rst, host__en, busy, read_data
   end
   always @(posedge clk) begin
     if (write__en)
-      memory[write__addr] <= { \$100 , \$83  };
+      memory[write__addr] <= { \$102 , \$85  };
   end
   reg [31:0] _0_;
   reg [31:0] _1_;
@@ -24436,585 +24414,525 @@ module \biss_master_wb.ch1.core.counter_ram (clk, rst, host__en, busy, read_data
   assign due = \$2  & \$3 ;
   assign \$4  = due & above;
   assign \$5  = | \$4 ;
-  assign \$6  = due & above;
+  assign \$6  = running & \$5 ;
   assign \$7  = due & above;
   assign \$8  = due & above;
-  assign \$10  = ~ \$9 ;
-  assign \$11  = \$7 [1] & \$10 ;
-  assign \$12  = due & above;
+  assign \$9  = due & above;
+  assign \$11  = ~ \$10 ;
+  assign \$12  = \$8 [1] & \$11 ;
   assign \$13  = due & above;
-  assign \$14  = | \$13 [1:0];
-  assign \$15  = ~ \$14 ;
-  assign \$16  = \$12 [2] & \$15 ;
-  assign \$17  = due & above;
+  assign \$14  = due & above;
+  assign \$15  = | \$14 [1:0];
+  assign \$16  = ~ \$15 ;
+  assign \$17  = \$13 [2] & \$16 ;
   assign \$18  = due & above;
-  assign \$19  = | \$18 [2:0];
-  assign \$20  = ~ \$19 ;
-  assign \$21  = \$17 [3] & \$20 ;
-  assign \$22  = due & above;
+  assign \$19  = due & above;
+  assign \$20  = | \$19 [2:0];
+  assign \$21  = ~ \$20 ;
+  assign \$22  = \$18 [3] & \$21 ;
   assign \$23  = due & above;
-  assign \$24  = | \$23 [3:0];
-  assign \$25  = ~ \$24 ;
-  assign \$26  = \$22 [4] & \$25 ;
-  assign \$27  = due & above;
+  assign \$24  = due & above;
+  assign \$25  = | \$24 [3:0];
+  assign \$26  = ~ \$25 ;
+  assign \$27  = \$23 [4] & \$26 ;
   assign \$28  = due & above;
-  assign \$29  = | \$28 [4:0];
-  assign \$30  = ~ \$29 ;
-  assign \$31  = \$27 [5] & \$30 ;
-  assign \$32  = due & above;
+  assign \$29  = due & above;
+  assign \$30  = | \$29 [4:0];
+  assign \$31  = ~ \$30 ;
+  assign \$32  = \$28 [5] & \$31 ;
   assign \$33  = due & above;
-  assign \$34  = | \$33 [5:0];
-  assign \$35  = ~ \$34 ;
-  assign \$36  = \$32 [6] & \$35 ;
-  assign \$37  = due & above;
+  assign \$34  = due & above;
+  assign \$35  = | \$34 [5:0];
+  assign \$36  = ~ \$35 ;
+  assign \$37  = \$33 [6] & \$36 ;
   assign \$38  = due & above;
-  assign \$39  = | \$38 [6:0];
-  assign \$40  = ~ \$39 ;
-  assign \$41  = \$37 [7] & \$40 ;
-  assign \$43  = ~ \$42 ;
-  assign \$44  = due[1] & \$43 ;
-  assign \$45  = | due[1:0];
-  assign \$46  = ~ \$45 ;
-  assign \$47  = due[2] & \$46 ;
-  assign \$48  = | due[2:0];
-  assign \$49  = ~ \$48 ;
-  assign \$50  = due[3] & \$49 ;
-  assign \$51  = | due[3:0];
-  assign \$52  = ~ \$51 ;
-  assign \$53  = due[4] & \$52 ;
-  assign \$54  = | due[4:0];
-  assign \$55  = ~ \$54 ;
-  assign \$56  = due[5] & \$55 ;
-  assign \$57  = | due[5:0];
-  assign \$58  = ~ \$57 ;
-  assign \$59  = due[6] & \$58 ;
-  assign \$60  = | due[6:0];
-  assign \$61  = ~ \$60 ;
-  assign \$62  = due[7] & \$61 ;
-  assign pick = \$5  ? { \$41 , \$36 , \$31 , \$26 , \$21 , \$16 , \$11 , \$6 [0] } : { \$62 , \$59 , \$56 , \$53 , \$50 , \$47 , \$44 , due[0] };
+  assign \$39  = due & above;
+  assign \$40  = | \$39 [6:0];
+  assign \$41  = ~ \$40 ;
+  assign \$42  = \$38 [7] & \$41 ;
+  assign \$44  = ~ \$43 ;
+  assign \$45  = due[1] & \$44 ;
+  assign \$46  = | due[1:0];
+  assign \$47  = ~ \$46 ;
+  assign \$48  = due[2] & \$47 ;
+  assign \$49  = | due[2:0];
+  assign \$50  = ~ \$49 ;
+  assign \$51  = due[3] & \$50 ;
+  assign \$52  = | due[3:0];
+  assign \$53  = ~ \$52 ;
+  assign \$54  = due[4] & \$53 ;
+  assign \$55  = | due[4:0];
+  assign \$56  = ~ \$55 ;
+  assign \$57  = due[5] & \$56 ;
+  assign \$58  = | due[5:0];
+  assign \$59  = ~ \$58 ;
+  assign \$60  = due[6] & \$59 ;
+  assign \$61  = | due[6:0];
+  assign \$62  = ~ \$61 ;
+  assign \$63  = due[7] & \$62 ;
+  assign \$64  = running ? { \$63 , \$60 , \$57 , \$54 , \$51 , \$48 , \$45 , due[0] } : 8'h00;
+  assign pick = \$6  ? { \$42 , \$37 , \$32 , \$27 , \$22 , \$17 , \$12 , \$7 [0] } : \$64 ;
   assign update__en = | sel;
-  assign \$63  = zero[0] ? 16'h0000 : update__data[15:0];
-  assign \$64  = \$63  + amount_0;
-  assign \$65  = zero[1] ? 16'h0000 : update__data[31:16];
-  assign \$66  = \$65  + amount_1;
-  assign \$83  = \$64 [15:0] | { \$82 , \$81 , \$80 , \$79 , \$78 , \$77 , \$76 , \$75 , \$74 , \$73 , \$72 , \$71 , \$70 , \$69 , \$68 , \$67  };
-  assign \$100  = \$66 [15:0] | { \$99 , \$98 , \$97 , \$96 , \$95 , \$94 , \$93 , \$92 , \$91 , \$90 , \$89 , \$88 , \$87 , \$86 , \$85 , \$84  };
+  assign \$65  = zero[0] ? 16'h0000 : update__data[15:0];
+  assign \$66  = \$65  + amount_0;
+  assign \$67  = zero[1] ? 16'h0000 : update__data[31:16];
+  assign \$68  = \$67  + amount_1;
+  assign \$85  = \$66 [15:0] | { \$84 , \$83 , \$82 , \$81 , \$80 , \$79 , \$78 , \$77 , \$76 , \$75 , \$74 , \$73 , \$72 , \$71 , \$70 , \$69  };
+  assign \$102  = \$68 [15:0] | { \$101 , \$100 , \$99 , \$98 , \$97 , \$96 , \$95 , \$94 , \$93 , \$92 , \$91 , \$90 , \$89 , \$88 , \$87 , \$86  };
   assign write__en = | writing;
-  assign \$101  = | events_reg;
-  assign \$102  = was_busy | \$101 ;
-  assign busy = \$102  | clear_reg;
-  assign \$103  = | pending_0;
-  assign \$104  = | pending_1;
-  assign \$105  = \$103  | \$104 ;
-  assign \$106  = \$105  | marked[0];
-  assign \$107  = \$106  | marked[1];
-  assign \$108  = | pending_2;
-  assign \$109  = | pending_3;
-  assign \$110  = \$108  | \$109 ;
-  assign \$111  = \$110  | marked[2];
-  assign \$112  = \$111  | marked[3];
-  assign \$113  = | pending_4;
-  assign \$114  = | pending_5;
-  assign \$115  = \$113  | \$114 ;
-  assign \$116  = \$115  | marked[4];
-  assign \$117  = \$116  | marked[5];
-  assign \$118  = | pending_6;
-  assign \$119  = | pending_7;
-  assign \$120  = \$118  | \$119 ;
-  assign \$121  = \$120  | marked[6];
-  assign \$122  = \$121  | marked[7];
-  assign \$123  = | pending_8;
-  assign \$124  = | pending_9;
-  assign \$125  = \$123  | \$124 ;
-  assign \$126  = \$125  | marked[8];
-  assign \$127  = \$126  | marked[9];
-  assign \$128  = | pending_10;
-  assign \$129  = | pending_11;
-  assign \$130  = \$128  | \$129 ;
-  assign \$131  = \$130  | marked[10];
-  assign \$132  = \$131  | marked[11];
-  assign \$133  = | pending_12;
-  assign \$134  = | pending_13;
-  assign \$135  = \$133  | \$134 ;
-  assign \$136  = \$135  | marked[12];
-  assign \$137  = \$136  | marked[13];
-  assign \$138  = | pending_14;
-  assign \$139  = | pending_15;
-  assign \$140  = \$138  | \$139 ;
-  assign \$141  = \$140  | marked[14];
-  assign \$142  = \$141  | marked[15];
-  assign \$143  = | { pick[7], pick[5], pick[3], pick[1] };
-  assign \$144  = | { pick[7:6], pick[3:2] };
-  assign \$145  = | pick[7:4];
-  assign \$146  = | due;
-  assign \$148  = | pick[1:0];
-  assign \$149  = | pick[2:0];
-  assign \$150  = | pick[3:0];
-  assign \$151  = | pick[4:0];
-  assign \$152  = | pick[5:0];
-  assign \$153  = | pick[6:0];
-  assign \$154  = sel[0] ? marked[1:0] : 2'h0;
-  assign \$156  = sel[1] ? marked[3:2] : 2'h0;
-  assign \$157  = \$155  | \$156 ;
-  assign \$158  = sel[2] ? marked[5:4] : 2'h0;
-  assign \$159  = \$157  | \$158 ;
-  assign \$160  = sel[3] ? marked[7:6] : 2'h0;
+  assign \$103  = | events_reg;
+  assign \$104  = was_busy | \$103 ;
+  assign busy = \$104  | clear_reg;
+  assign \$105  = | pending_0;
+  assign \$106  = | pending_1;
+  assign \$107  = \$105  | \$106 ;
+  assign \$108  = \$107  | marked[0];
+  assign \$109  = \$108  | marked[1];
+  assign \$110  = | pending_2;
+  assign \$111  = | pending_3;
+  assign \$112  = \$110  | \$111 ;
+  assign \$113  = \$112  | marked[2];
+  assign \$114  = \$113  | marked[3];
+  assign \$115  = | pending_4;
+  assign \$116  = | pending_5;
+  assign \$117  = \$115  | \$116 ;
+  assign \$118  = \$117  | marked[4];
+  assign \$119  = \$118  | marked[5];
+  assign \$120  = | pending_6;
+  assign \$121  = | pending_7;
+  assign \$122  = \$120  | \$121 ;
+  assign \$123  = \$122  | marked[6];
+  assign \$124  = \$123  | marked[7];
+  assign \$125  = | pending_8;
+  assign \$126  = | pending_9;
+  assign \$127  = \$125  | \$126 ;
+  assign \$128  = \$127  | marked[8];
+  assign \$129  = \$128  | marked[9];
+  assign \$130  = | pending_10;
+  assign \$131  = | pending_11;
+  assign \$132  = \$130  | \$131 ;
+  assign \$133  = \$132  | marked[10];
+  assign \$134  = \$133  | marked[11];
+  assign \$135  = | pending_12;
+  assign \$136  = | pending_13;
+  assign \$137  = \$135  | \$136 ;
+  assign \$138  = \$137  | marked[12];
+  assign \$139  = \$138  | marked[13];
+  assign \$140  = | pending_14;
+  assign \$141  = | pending_15;
+  assign \$142  = \$140  | \$141 ;
+  assign \$143  = \$142  | marked[14];
+  assign \$144  = \$143  | marked[15];
+  assign \$145  = ~ rst;
+  assign \$146  = | { pick[7], pick[5], pick[3], pick[1] };
+  assign \$147  = | { pick[7:6], pick[3:2] };
+  assign \$148  = | pick[7:4];
+  assign \$149  = | due;
+  assign \$151  = | pick[1:0];
+  assign \$152  = | pick[2:0];
+  assign \$153  = | pick[3:0];
+  assign \$154  = | pick[4:0];
+  assign \$155  = | pick[5:0];
+  assign \$156  = | pick[6:0];
+  assign \$157  = \$149  ? { \$156 , \$155 , \$154 , \$153 , \$152 , \$151 , \$150 , 1'h0 } : above;
+  assign \$158  = sel[0] ? marked[1:0] : 2'h0;
+  assign \$160  = sel[1] ? marked[3:2] : 2'h0;
   assign \$161  = \$159  | \$160 ;
-  assign \$162  = sel[4] ? marked[9:8] : 2'h0;
+  assign \$162  = sel[2] ? marked[5:4] : 2'h0;
   assign \$163  = \$161  | \$162 ;
-  assign \$164  = sel[5] ? marked[11:10] : 2'h0;
+  assign \$164  = sel[3] ? marked[7:6] : 2'h0;
   assign \$165  = \$163  | \$164 ;
-  assign \$166  = sel[6] ? marked[13:12] : 2'h0;
+  assign \$166  = sel[4] ? marked[9:8] : 2'h0;
   assign \$167  = \$165  | \$166 ;
-  assign \$168  = sel[7] ? marked[15:14] : 2'h0;
+  assign \$168  = sel[5] ? marked[11:10] : 2'h0;
   assign \$169  = \$167  | \$168 ;
-  assign \$170  = sel[0] ? pending_0 : 4'h0;
-  assign \$172  = sel[1] ? pending_2 : 4'h0;
+  assign \$170  = sel[6] ? marked[13:12] : 2'h0;
+  assign \$171  = \$169  | \$170 ;
+  assign \$172  = sel[7] ? marked[15:14] : 2'h0;
   assign \$173  = \$171  | \$172 ;
-  assign \$174  = sel[2] ? pending_4 : 4'h0;
-  assign \$175  = \$173  | \$174 ;
-  assign \$176  = sel[3] ? pending_6 : 4'h0;
+  assign \$174  = sel[0] ? pending_0 : 4'h0;
+  assign \$176  = sel[1] ? pending_2 : 4'h0;
   assign \$177  = \$175  | \$176 ;
-  assign \$178  = sel[4] ? pending_8 : 4'h0;
+  assign \$178  = sel[2] ? pending_4 : 4'h0;
   assign \$179  = \$177  | \$178 ;
-  assign \$180  = sel[5] ? pending_10 : 4'h0;
+  assign \$180  = sel[3] ? pending_6 : 4'h0;
   assign \$181  = \$179  | \$180 ;
-  assign \$182  = sel[6] ? pending_12 : 4'h0;
+  assign \$182  = sel[4] ? pending_8 : 4'h0;
   assign \$183  = \$181  | \$182 ;
-  assign \$184  = sel[7] ? pending_14 : 4'h0;
+  assign \$184  = sel[5] ? pending_10 : 4'h0;
   assign \$185  = \$183  | \$184 ;
-  assign \$186  = sel[0] ? pending_1 : 4'h0;
-  assign \$188  = sel[1] ? pending_3 : 4'h0;
+  assign \$186  = sel[6] ? pending_12 : 4'h0;
+  assign \$187  = \$185  | \$186 ;
+  assign \$188  = sel[7] ? pending_14 : 4'h0;
   assign \$189  = \$187  | \$188 ;
-  assign \$190  = sel[2] ? pending_5 : 4'h0;
-  assign \$191  = \$189  | \$190 ;
-  assign \$192  = sel[3] ? pending_7 : 4'h0;
+  assign \$190  = sel[0] ? pending_1 : 4'h0;
+  assign \$192  = sel[1] ? pending_3 : 4'h0;
   assign \$193  = \$191  | \$192 ;
-  assign \$194  = sel[4] ? pending_9 : 4'h0;
+  assign \$194  = sel[2] ? pending_5 : 4'h0;
   assign \$195  = \$193  | \$194 ;
-  assign \$196  = sel[5] ? pending_11 : 4'h0;
+  assign \$196  = sel[3] ? pending_7 : 4'h0;
   assign \$197  = \$195  | \$196 ;
-  assign \$198  = sel[6] ? pending_13 : 4'h0;
+  assign \$198  = sel[4] ? pending_9 : 4'h0;
   assign \$199  = \$197  | \$198 ;
-  assign \$200  = sel[7] ? pending_15 : 4'h0;
+  assign \$200  = sel[5] ? pending_11 : 4'h0;
   assign \$201  = \$199  | \$200 ;
-  assign \$202  = sel[0] ? 4'h0 : pending_0;
-  assign \$203  = \$202  + events_reg[0];
-  assign \$204  = sel[0] ? 4'h0 : pending_1;
-  assign \$205  = \$204  + events_reg[1];
-  assign \$206  = sel[1] ? 4'h0 : pending_2;
-  assign \$207  = \$206  + events_reg[2];
-  assign \$208  = sel[1] ? 4'h0 : pending_3;
-  assign \$209  = \$208  + events_reg[3];
-  assign \$210  = sel[2] ? 4'h0 : pending_4;
-  assign \$211  = \$210  + events_reg[4];
-  assign \$212  = sel[2] ? 4'h0 : pending_5;
-  assign \$213  = \$212  + events_reg[5];
-  assign \$214  = sel[3] ? 4'h0 : pending_6;
-  assign \$215  = \$214  + events_reg[6];
-  assign \$216  = sel[3] ? 4'h0 : pending_7;
-  assign \$217  = \$216  + events_reg[7];
-  assign \$218  = sel[4] ? 4'h0 : pending_8;
-  assign \$219  = \$218  + events_reg[8];
-  assign \$220  = sel[4] ? 4'h0 : pending_9;
-  assign \$221  = \$220  + events_reg[9];
-  assign \$222  = sel[5] ? 4'h0 : pending_10;
-  assign \$223  = \$222  + events_reg[10];
-  assign \$224  = sel[5] ? 4'h0 : pending_11;
-  assign \$225  = \$224  + events_reg[11];
-  assign \$226  = sel[6] ? 4'h0 : pending_12;
-  assign \$227  = \$226  + events_reg[12];
-  assign \$228  = sel[6] ? 4'h0 : pending_13;
-  assign \$229  = \$228  + events_reg[13];
-  assign \$230  = sel[7] ? 4'h0 : pending_14;
-  assign \$231  = \$230  + events_reg[14];
-  assign \$232  = sel[7] ? 4'h0 : pending_15;
-  assign \$233  = \$232  + events_reg[15];
-  assign \$234  = ~ { sel[7], sel[7:6], sel[6:5], sel[5:4], sel[4:3], sel[3:2], sel[2:1], sel[1:0], sel[0] };
-  assign \$235  = marked & \$234 ;
-  assign \$236  = | events_reg;
-  assign \$237  = \$236  | clear_reg;
-  assign \$238  = | marked;
-  assign \$239  = \$237  | \$238 ;
-  assign \$240  = | sel;
-  assign \$241  = \$239  | \$240 ;
-  assign \$242  = | writing;
-  assign \$243  = \$241  | \$242 ;
-  assign \$244  = | pending_0;
-  assign \$245  = | pending_1;
-  assign \$246  = | pending_2;
-  assign \$247  = | pending_3;
-  assign \$248  = | pending_4;
-  assign \$249  = | pending_5;
-  assign \$250  = | pending_6;
-  assign \$251  = | pending_7;
-  assign \$252  = | pending_8;
-  assign \$253  = | pending_9;
-  assign \$254  = | pending_10;
-  assign \$255  = | pending_11;
-  assign \$256  = | pending_12;
-  assign \$257  = | pending_13;
-  assign \$258  = | pending_14;
-  assign \$259  = | pending_15;
-  assign \$260  = | { \$259 , \$258 , \$257 , \$256 , \$255 , \$254 , \$253 , \$252 , \$251 , \$250 , \$249 , \$248 , \$247 , \$246 , \$245 , \$244  };
-  assign \$261  = \$243  | \$260 ;
+  assign \$202  = sel[6] ? pending_13 : 4'h0;
+  assign \$203  = \$201  | \$202 ;
+  assign \$204  = sel[7] ? pending_15 : 4'h0;
+  assign \$205  = \$203  | \$204 ;
+  assign \$206  = rst | clear_reg;
+  assign \$207  = sel[0] ? 4'h0 : pending_0;
+  assign \$208  = \$207  + events_reg[0];
+  assign \$209  = \$206  ? 5'h00 : \$208 ;
+  assign \$210  = rst | clear_reg;
+  assign \$211  = sel[0] ? 4'h0 : pending_1;
+  assign \$212  = \$211  + events_reg[1];
+  assign \$213  = \$210  ? 5'h00 : \$212 ;
+  assign \$214  = rst | clear_reg;
+  assign \$215  = sel[1] ? 4'h0 : pending_2;
+  assign \$216  = \$215  + events_reg[2];
+  assign \$217  = \$214  ? 5'h00 : \$216 ;
+  assign \$218  = rst | clear_reg;
+  assign \$219  = sel[1] ? 4'h0 : pending_3;
+  assign \$220  = \$219  + events_reg[3];
+  assign \$221  = \$218  ? 5'h00 : \$220 ;
+  assign \$222  = rst | clear_reg;
+  assign \$223  = sel[2] ? 4'h0 : pending_4;
+  assign \$224  = \$223  + events_reg[4];
+  assign \$225  = \$222  ? 5'h00 : \$224 ;
+  assign \$226  = rst | clear_reg;
+  assign \$227  = sel[2] ? 4'h0 : pending_5;
+  assign \$228  = \$227  + events_reg[5];
+  assign \$229  = \$226  ? 5'h00 : \$228 ;
+  assign \$230  = rst | clear_reg;
+  assign \$231  = sel[3] ? 4'h0 : pending_6;
+  assign \$232  = \$231  + events_reg[6];
+  assign \$233  = \$230  ? 5'h00 : \$232 ;
+  assign \$234  = rst | clear_reg;
+  assign \$235  = sel[3] ? 4'h0 : pending_7;
+  assign \$236  = \$235  + events_reg[7];
+  assign \$237  = \$234  ? 5'h00 : \$236 ;
+  assign \$238  = rst | clear_reg;
+  assign \$239  = sel[4] ? 4'h0 : pending_8;
+  assign \$240  = \$239  + events_reg[8];
+  assign \$241  = \$238  ? 5'h00 : \$240 ;
+  assign \$242  = rst | clear_reg;
+  assign \$243  = sel[4] ? 4'h0 : pending_9;
+  assign \$244  = \$243  + events_reg[9];
+  assign \$245  = \$242  ? 5'h00 : \$244 ;
+  assign \$246  = rst | clear_reg;
+  assign \$247  = sel[5] ? 4'h0 : pending_10;
+  assign \$248  = \$247  + events_reg[10];
+  assign \$249  = \$246  ? 5'h00 : \$248 ;
+  assign \$250  = rst | clear_reg;
+  assign \$251  = sel[5] ? 4'h0 : pending_11;
+  assign \$252  = \$251  + events_reg[11];
+  assign \$253  = \$250  ? 5'h00 : \$252 ;
+  assign \$254  = rst | clear_reg;
+  assign \$255  = sel[6] ? 4'h0 : pending_12;
+  assign \$256  = \$255  + events_reg[12];
+  assign \$257  = \$254  ? 5'h00 : \$256 ;
+  assign \$258  = rst | clear_reg;
+  assign \$259  = sel[6] ? 4'h0 : pending_13;
+  assign \$260  = \$259  + events_reg[13];
+  assign \$261  = \$258  ? 5'h00 : \$260 ;
+  assign \$262  = rst | clear_reg;
+  assign \$263  = sel[7] ? 4'h0 : pending_14;
+  assign \$264  = \$263  + events_reg[14];
+  assign \$265  = \$262  ? 5'h00 : \$264 ;
+  assign \$266  = rst | clear_reg;
+  assign \$267  = sel[7] ? 4'h0 : pending_15;
+  assign \$268  = \$267  + events_reg[15];
+  assign \$269  = \$266  ? 5'h00 : \$268 ;
+  assign \$270  = rst | clear_reg;
+  assign \$271  = ~ { sel[7], sel[7:6], sel[6:5], sel[5:4], sel[4:3], sel[3:2], sel[2:1], sel[1:0], sel[0] };
+  assign \$272  = marked & \$271 ;
+  assign \$273  = \$270  ? 16'hffff : \$272 ;
+  assign \$274  = | events_reg;
+  assign \$275  = \$274  | clear_reg;
+  assign \$276  = | marked;
+  assign \$277  = \$275  | \$276 ;
+  assign \$278  = | sel;
+  assign \$279  = \$277  | \$278 ;
+  assign \$280  = | writing;
+  assign \$281  = \$279  | \$280 ;
+  assign \$282  = | pending_0;
+  assign \$283  = | pending_1;
+  assign \$284  = | pending_2;
+  assign \$285  = | pending_3;
+  assign \$286  = | pending_4;
+  assign \$287  = | pending_5;
+  assign \$288  = | pending_6;
+  assign \$289  = | pending_7;
+  assign \$290  = | pending_8;
+  assign \$291  = | pending_9;
+  assign \$292  = | pending_10;
+  assign \$293  = | pending_11;
+  assign \$294  = | pending_12;
+  assign \$295  = | pending_13;
+  assign \$296  = | pending_14;
+  assign \$297  = | pending_15;
+  assign \$298  = | { \$297 , \$296 , \$295 , \$294 , \$293 , \$292 , \$291 , \$290 , \$289 , \$288 , \$287 , \$286 , \$285 , \$284 , \$283 , \$282  };
+  assign \$299  = \$281  | \$298 ;
   always @(posedge clk)
-    events_reg <= \$262 ;
+    events_reg <= \$300 ;
   always @(posedge clk)
-    clear_reg <= \$263 ;
+    clear_reg <= \$301 ;
   always @(posedge clk)
-    waiting <= \$264 ;
+    waiting <= \$302 ;
   always @(posedge clk)
-    sel <= \$265 ;
+    running <= \$145 ;
   always @(posedge clk)
-    update__addr <= \$266 ;
+    sel <= \$303 ;
   always @(posedge clk)
-    above <= \$267 ;
+    update__addr <= \$304 ;
   always @(posedge clk)
-    writing <= \$268 ;
+    above <= \$157 ;
   always @(posedge clk)
-    write__addr <= \$269 ;
+    writing <= \$305 ;
   always @(posedge clk)
-    zero <= \$270 ;
+    write__addr <= \$306 ;
   always @(posedge clk)
-    amount_0 <= \$271 ;
+    zero <= \$307 ;
   always @(posedge clk)
-    amount_1 <= \$272 ;
+    amount_0 <= \$189 ;
   always @(posedge clk)
-    pending_0 <= \$273 ;
+    amount_1 <= \$205 ;
   always @(posedge clk)
-    pending_1 <= \$274 ;
+    pending_0 <= \$209 [3:0];
   always @(posedge clk)
-    pending_2 <= \$275 ;
+    pending_1 <= \$213 [3:0];
   always @(posedge clk)
-    pending_3 <= \$276 ;
+    pending_2 <= \$217 [3:0];
   always @(posedge clk)
-    pending_4 <= \$277 ;
+    pending_3 <= \$221 [3:0];
   always @(posedge clk)
-    pending_5 <= \$278 ;
+    pending_4 <= \$225 [3:0];
   always @(posedge clk)
-    pending_6 <= \$279 ;
+    pending_5 <= \$229 [3:0];
   always @(posedge clk)
-    pending_7 <= \$280 ;
+    pending_6 <= \$233 [3:0];
   always @(posedge clk)
-    pending_8 <= \$281 ;
+    pending_7 <= \$237 [3:0];
   always @(posedge clk)
-    pending_9 <= \$282 ;
+    pending_8 <= \$241 [3:0];
   always @(posedge clk)
-    pending_10 <= \$283 ;
+    pending_9 <= \$245 [3:0];
   always @(posedge clk)
-    pending_11 <= \$284 ;
+    pending_10 <= \$249 [3:0];
   always @(posedge clk)
-    pending_12 <= \$285 ;
+    pending_11 <= \$253 [3:0];
   always @(posedge clk)
-    pending_13 <= \$286 ;
+    pending_12 <= \$257 [3:0];
   always @(posedge clk)
-    pending_14 <= \$287 ;
+    pending_13 <= \$261 [3:0];
   always @(posedge clk)
-    pending_15 <= \$288 ;
+    pending_14 <= \$265 [3:0];
   always @(posedge clk)
-    marked <= \$289 ;
+    pending_15 <= \$269 [3:0];
   always @(posedge clk)
-    was_busy <= \$290 ;
+    marked <= \$273 ;
+  always @(posedge clk)
+    was_busy <= \$308 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$262  = events;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$262  = 16'h0000;
+      \$300 [0] = 1'h0;
+    end else if (events[0]) begin
+      \$300 [0] = 1'h1;
+    end else begin
+      \$300 [0] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$263  = clear;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$263  = 1'h0;
+      \$300 [1] = 1'h0;
+    end else if (events[1]) begin
+      \$300 [1] = 1'h1;
+    end else begin
+      \$300 [1] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$264  = { \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107  };
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$264  = 8'h00;
+      \$300 [2] = 1'h0;
+    end else if (events[2]) begin
+      \$300 [2] = 1'h1;
+    end else begin
+      \$300 [2] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$265  = pick;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$265  = 8'h00;
+      \$300 [3] = 1'h0;
+    end else if (events[3]) begin
+      \$300 [3] = 1'h1;
+    end else begin
+      \$300 [3] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$266  = { \$145 , \$144 , \$143  };
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$266  = 3'h0;
+      \$300 [4] = 1'h0;
+    end else if (events[4]) begin
+      \$300 [4] = 1'h1;
+    end else begin
+      \$300 [4] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$267  = above;
-    if (\$146 ) begin
-      \$267  = { \$153 , \$152 , \$151 , \$150 , \$149 , \$148 , \$147 , 1'h0 };
-    end
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$267  = 8'h00;
+      \$300 [5] = 1'h0;
+    end else if (events[5]) begin
+      \$300 [5] = 1'h1;
+    end else begin
+      \$300 [5] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$268  = sel;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$268  = 8'h00;
+      \$300 [6] = 1'h0;
+    end else if (events[6]) begin
+      \$300 [6] = 1'h1;
+    end else begin
+      \$300 [6] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$269  = update__addr;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$269  = 3'h0;
+      \$300 [7] = 1'h0;
+    end else if (events[7]) begin
+      \$300 [7] = 1'h1;
+    end else begin
+      \$300 [7] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$270  = \$169 ;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$270  = 2'h0;
+      \$300 [8] = 1'h0;
+    end else if (events[8]) begin
+      \$300 [8] = 1'h1;
+    end else begin
+      \$300 [8] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$271  = \$185 ;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$271  = 4'h0;
+      \$300 [9] = 1'h0;
+    end else if (events[9]) begin
+      \$300 [9] = 1'h1;
+    end else begin
+      \$300 [9] = 1'h0;
     end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$272  = \$201 ;
+    (* full_case = 32'd1 *)
     if (rst) begin
-      \$272  = 4'h0;
+      \$300 [10] = 1'h0;
+    end else if (events[10]) begin
+      \$300 [10] = 1'h1;
+    end else begin
+      \$300 [10] = 1'h0;
+    end
+    (* full_case = 32'd1 *)
+    if (rst) begin
+      \$300 [11] = 1'h0;
+    end else if (events[11]) begin
+      \$300 [11] = 1'h1;
+    end else begin
+      \$300 [11] = 1'h0;
+    end
+    (* full_case = 32'd1 *)
+    if (rst) begin
+      \$300 [12] = 1'h0;
+    end else if (events[12]) begin
+      \$300 [12] = 1'h1;
+    end else begin
+      \$300 [12] = 1'h0;
+    end
+    (* full_case = 32'd1 *)
+    if (rst) begin
+      \$300 [13] = 1'h0;
+    end else if (events[13]) begin
+      \$300 [13] = 1'h1;
+    end else begin
+      \$300 [13] = 1'h0;
+    end
+    (* full_case = 32'd1 *)
+    if (rst) begin
+      \$300 [14] = 1'h0;
+    end else if (events[14]) begin
+      \$300 [14] = 1'h1;
+    end else begin
+      \$300 [14] = 1'h0;
+    end
+    (* full_case = 32'd1 *)
+    if (rst) begin
+      \$300 [15] = 1'h0;
+    end else if (events[15]) begin
+      \$300 [15] = 1'h1;
+    end else begin
+      \$300 [15] = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$273  = 4'h0;
-    end else begin
-      \$273  = \$203 [3:0];
-    end
     if (rst) begin
-      \$273  = 4'h0;
+      \$301  = 1'h0;
+    end else if (clear) begin
+      \$301  = 1'h1;
+    end else begin
+      \$301  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$274  = 4'h0;
-    end else begin
-      \$274  = \$205 [3:0];
-    end
+    \$302  = { \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109  };
     if (rst) begin
-      \$274  = 4'h0;
+      \$302  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$275  = 4'h0;
-    end else begin
-      \$275  = \$207 [3:0];
-    end
+    \$303  = pick;
     if (rst) begin
-      \$275  = 4'h0;
+      \$303  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$276  = 4'h0;
-    end else begin
-      \$276  = \$209 [3:0];
-    end
+    \$304  = { \$148 , \$147 , \$146  };
     if (rst) begin
-      \$276  = 4'h0;
+      \$304  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$277  = 4'h0;
-    end else begin
-      \$277  = \$211 [3:0];
-    end
+    \$305  = sel;
     if (rst) begin
-      \$277  = 4'h0;
+      \$305  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$278  = 4'h0;
-    end else begin
-      \$278  = \$213 [3:0];
-    end
+    \$306  = update__addr;
     if (rst) begin
-      \$278  = 4'h0;
+      \$306  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$279  = 4'h0;
-    end else begin
-      \$279  = \$215 [3:0];
-    end
+    \$307  = \$173 ;
     if (rst) begin
-      \$279  = 4'h0;
+      \$307  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$280  = 4'h0;
-    end else begin
-      \$280  = \$217 [3:0];
-    end
+    \$308  = \$299 ;
     if (rst) begin
-      \$280  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$281  = 4'h0;
-    end else begin
-      \$281  = \$219 [3:0];
-    end
-    if (rst) begin
-      \$281  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$282  = 4'h0;
-    end else begin
-      \$282  = \$221 [3:0];
-    end
-    if (rst) begin
-      \$282  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$283  = 4'h0;
-    end else begin
-      \$283  = \$223 [3:0];
-    end
-    if (rst) begin
-      \$283  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$284  = 4'h0;
-    end else begin
-      \$284  = \$225 [3:0];
-    end
-    if (rst) begin
-      \$284  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$285  = 4'h0;
-    end else begin
-      \$285  = \$227 [3:0];
-    end
-    if (rst) begin
-      \$285  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$286  = 4'h0;
-    end else begin
-      \$286  = \$229 [3:0];
-    end
-    if (rst) begin
-      \$286  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$287  = 4'h0;
-    end else begin
-      \$287  = \$231 [3:0];
-    end
-    if (rst) begin
-      \$287  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$288  = 4'h0;
-    end else begin
-      \$288  = \$233 [3:0];
-    end
-    if (rst) begin
-      \$288  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    (* full_case = 32'd1 *)
-    if (clear_reg) begin
-      \$289  = 16'hffff;
-    end else begin
-      \$289  = \$235 ;
-    end
-    if (rst) begin
-      \$289  = 16'hffff;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$290  = \$261 ;
-    if (rst) begin
-      \$290  = 1'h1;
+      \$308  = 1'h1;
     end
   end
   assign read_addr = host__addr;
   assign read_en = host__en;
   assign host__data = read_data;
   assign sel_addr = update__addr;
-  assign total_0 = { 3'h0, \$64  };
-  assign total_1 = { 3'h0, \$66  };
+  assign total_0 = { 3'h0, \$66  };
+  assign total_1 = { 3'h0, \$68  };
   assign word = write__addr;
-  assign write__data = { \$100 , \$83  };
+  assign write__data = { \$102 , \$85  };
   assign \events_reg.crc_word0  = events_reg[0];
   assign \events_reg.crc_word1  = events_reg[1];
   assign \events_reg.no_ack  = events_reg[2];
@@ -25047,44 +24965,44 @@ module \biss_master_wb.ch1.core.counter_ram (clk, rst, host__en, busy, read_data
   assign \events.noisy_line  = events[13];
   assign \events.delay_jump  = events[14];
   assign \events.noise_event  = events[15];
-  assign \$9  = \$8 [0];
-  assign \$42  = due[0];
-  assign \$67  = \$64 [16];
-  assign \$68  = \$64 [16];
-  assign \$69  = \$64 [16];
-  assign \$70  = \$64 [16];
-  assign \$71  = \$64 [16];
-  assign \$72  = \$64 [16];
-  assign \$73  = \$64 [16];
-  assign \$74  = \$64 [16];
-  assign \$75  = \$64 [16];
-  assign \$76  = \$64 [16];
-  assign \$77  = \$64 [16];
-  assign \$78  = \$64 [16];
-  assign \$79  = \$64 [16];
-  assign \$80  = \$64 [16];
-  assign \$81  = \$64 [16];
-  assign \$82  = \$64 [16];
+  assign \$10  = \$9 [0];
+  assign \$43  = due[0];
+  assign \$69  = \$66 [16];
+  assign \$70  = \$66 [16];
+  assign \$71  = \$66 [16];
+  assign \$72  = \$66 [16];
+  assign \$73  = \$66 [16];
+  assign \$74  = \$66 [16];
+  assign \$75  = \$66 [16];
+  assign \$76  = \$66 [16];
+  assign \$77  = \$66 [16];
+  assign \$78  = \$66 [16];
+  assign \$79  = \$66 [16];
+  assign \$80  = \$66 [16];
+  assign \$81  = \$66 [16];
+  assign \$82  = \$66 [16];
+  assign \$83  = \$66 [16];
   assign \$84  = \$66 [16];
-  assign \$85  = \$66 [16];
-  assign \$86  = \$66 [16];
-  assign \$87  = \$66 [16];
-  assign \$88  = \$66 [16];
-  assign \$89  = \$66 [16];
-  assign \$90  = \$66 [16];
-  assign \$91  = \$66 [16];
-  assign \$92  = \$66 [16];
-  assign \$93  = \$66 [16];
-  assign \$94  = \$66 [16];
-  assign \$95  = \$66 [16];
-  assign \$96  = \$66 [16];
-  assign \$97  = \$66 [16];
-  assign \$98  = \$66 [16];
-  assign \$99  = \$66 [16];
-  assign \$147  = pick[0];
-  assign \$155  = \$154 ;
-  assign \$171  = \$170 ;
-  assign \$187  = \$186 ;
+  assign \$86  = \$68 [16];
+  assign \$87  = \$68 [16];
+  assign \$88  = \$68 [16];
+  assign \$89  = \$68 [16];
+  assign \$90  = \$68 [16];
+  assign \$91  = \$68 [16];
+  assign \$92  = \$68 [16];
+  assign \$93  = \$68 [16];
+  assign \$94  = \$68 [16];
+  assign \$95  = \$68 [16];
+  assign \$96  = \$68 [16];
+  assign \$97  = \$68 [16];
+  assign \$98  = \$68 [16];
+  assign \$99  = \$68 [16];
+  assign \$100  = \$68 [16];
+  assign \$101  = \$68 [16];
+  assign \$150  = pick[0];
+  assign \$159  = \$158 ;
+  assign \$175  = \$174 ;
+  assign \$191  = \$190 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -32147,7 +32065,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6267$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6414$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -32189,8 +32107,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6267$0 ;
-  wire \port$6267$0 ;
+  input \port$6414$0 ;
+  wire \port$6414$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -32204,9 +32122,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6267$0  };
-  assign \$2  = { lc[4:0], \port$6267$0  } == last;
-  assign \$3  = { lc[4:0], \port$6267$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6414$0  };
+  assign \$2  = { lc[4:0], \port$6414$0  } == last;
+  assign \$3  = { lc[4:0], \port$6414$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -32316,7 +32234,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6267$0  };
+  assign lc_next = { lc[4:0], \port$6414$0  };
   assign zero = is_zero;
 endmodule
 
@@ -32872,7 +32790,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4484$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4567$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
 , delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire \$1 ;
@@ -33026,8 +32944,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4484$0 , lc_
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$4484$0 ;
-  wire \port$4484$0 ;
+  output \port$4567$0 ;
+  wire \port$4567$0 ;
   output report;
   wire report;
   input report_frame;
@@ -33133,7 +33051,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4484$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4484$0  = \$2 ;
+  assign \port$4567$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -79,6 +79,7 @@ class CounterRam(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         words = self.words
+        names = [name for name in self._slots if name is not None]
         full = 2**self._width - 1
         # A memory, not registers (issue 27): Yosys maps it to distributed RAM on ECP5
         # (TRELLIS_DPR16X4) and Vivado/Quartus infer the same from the generated Verilog; the
@@ -101,16 +102,33 @@ class CounterRam(wiring.Component):
         # The events and the clear are taken into flip-flops first, as CounterBank does: they
         # are decided at a frame's end, several logic levels deep, and straight into the
         # pending counts' adders they were the bus top's critical path.
-        events = Signal.like(self.events, name="events_reg")
-        clear = Signal(name="clear_reg")
-        m.d.sync += [events.eq(self.events), clear.eq(self.clear)]
+        # Reset-less, for Icarus as the pending counts below, and taken through an `if`: the
+        # core's event strobes read X in Icarus until its power-up break ends (README, Notes),
+        # and an X event added to a pending count would stay there; an `if` on X is not
+        # taken. With the reset in the condition, Icarus runs the process when reset falls.
+        events = Signal.like(self.events, name="events_reg", reset_less=True)
+        clear = Signal(name="clear_reg", reset_less=True)
+        for name in names:
+            with m.If(ResetSignal()):
+                m.d.sync += events[name].eq(0)
+            with m.Elif(self.events[name]):
+                m.d.sync += events[name].eq(1)
+            with m.Else():
+                m.d.sync += events[name].eq(0)
+        with m.If(ResetSignal()):
+            m.d.sync += clear.eq(0)
+        with m.Elif(self.clear):
+            m.d.sync += clear.eq(1)
+        with m.Else():
+            m.d.sync += clear.eq(0)
         slots = self._slots + (None,) * (2 * words - len(self._slots))
         event = [events[name] if name is not None else C(0) for name in slots]
         # A word is taken again at most ``words + 3`` clocks after it was, with at most an
         # event in each of them and in the clock it was taken: ``words + 3`` events.
-        pending = [Signal(range(words + 4), name=f"pending_{i}") for i in range(2 * words)]
+        pending = [Signal(range(words + 4), name=f"pending_{i}", reset_less=True)
+                   for i in range(2 * words)]
         # Every slot starts marked, so the memory is zeroed after reset.
-        marked = Signal(2 * words, init=2**(2 * words) - 1)
+        marked = Signal(2 * words, init=2**(2 * words) - 1, reset_less=True)
         # Three stages, each with its own one-hot register of its word (0: none): a word is
         # picked (``sel`` from the next clock), then read and its pending events and marks
         # taken (``writing`` from the next clock), then written. The pick is registered before
@@ -139,14 +157,22 @@ class CounterRam(wiring.Component):
                                    | marked[2 * w] | marked[2 * w + 1] for w in range(words)))
         due = Signal(words)
         m.d.comb += due.eq(waiting & ~sel & ~writing)
-        above = Signal(words)
+        above = Signal(words, reset_less=True)      # feeds itself: see the pending counts
         pick = Signal(words)
-        m.d.comb += pick.eq(Mux((due & above).any(), lowest(due & above), lowest(due)))
+        # No pick in the first clock after reset: Icarus evaluates ``waiting``'s register input
+        # only once reset falls, so it reads X for that one clock, and an X pick would feed
+        # itself for ever through ``sel`` and the pending counts (hardware and Verilator do
+        # not care; the cost is one flip-flop and a clock). Reset-less, so that no process of
+        # its own can leave it X in that simulator.
+        running = Signal(reset_less=True)
+        m.d.sync += running.eq(~ResetSignal())
+        m.d.comb += pick.eq(Mux(running & (due & above).any(), lowest(due & above),
+                                Mux(running, lowest(due), 0)))
         m.d.sync += [sel.eq(pick),
                      sel_addr.eq(Cat(Cat(pick[w] for w in range(words) if w >> b & 1).any()
                                      for b in range(len(sel_addr))))]
-        with m.If(due.any()):
-            m.d.sync += above.eq(Cat(pick[:w].any() if w else 0 for w in range(words)))
+        m.d.sync += above.eq(Mux(due.any(), Cat(pick[:w].any() if w else 0 for w in range(words)),
+                                 above))
 
         # Read and take.
         def chosen(values):
@@ -164,15 +190,15 @@ class CounterRam(wiring.Component):
 
         # The pending counts: added to by an event, taken with their word (the event of that
         # clock stays pending); a clear drops them, winning over the events of its clock.
+        # The pending counts and the marks feed themselves, so they are reset-less registers
+        # whose reset is a plain multiplexer: Icarus may not run a register's reset process
+        # before the first clock edge, and an X here would never leave (hardware and Verilator
+        # behave the same either way).
+        drop = ResetSignal() | clear
         for i in range(2 * words):
-            with m.If(clear):
-                m.d.sync += pending[i].eq(0)
-            with m.Else():
-                m.d.sync += pending[i].eq(Mux(sel[i // 2], 0, pending[i]) + event[i])
-        with m.If(clear):
-            m.d.sync += marked.eq(2**(2 * words) - 1)
-        with m.Else():
-            m.d.sync += marked.eq(marked & ~Cat(sel[w].replicate(2) for w in range(words)))
+            m.d.sync += pending[i].eq(Mux(drop, 0, Mux(sel[i // 2], 0, pending[i]) + event[i]))
+        m.d.sync += marked.eq(Mux(drop, 2**(2 * words) - 1,
+                                  marked & ~Cat(sel[w].replicate(2) for w in range(words))))
 
         # The write: each half of the word read plus its pending events, saturating (or just
         # its events since a clear).
