@@ -16,6 +16,9 @@ STATUS = {
     # Issue 28's line checks (docs/ports.md, "Noise: the line checks"): more noise events than
     # cfg_noise_limit, and a round trip off the settled one by more than the tolerance.
     "NOISY_LINE": 13, "DELAY_JUMP": 14,
+    # A frame that passed every check, within cfg_confirm_frames frames of a cycle that did not
+    # end OK (docs/ports.md, "Confirmation after a fault").
+    "UNCONFIRMED": 15,
 }
 STATUS_NAME = {code: name for name, code in STATUS.items()}
 #: The line checks' statuses (docs/ports.md, "Noise: the line checks"): a clean line never
@@ -24,7 +27,7 @@ NOISE_STATUSES = ("NOISY_LINE", "DELAY_JUMP")
 
 #: Statuses that judge a received frame (the frame fields are new with them).
 FRAME_STATUSES = ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH",
-                  "SIGN_OF_LIFE", "SPW_MISMATCH", "NOISY_LINE", "DELAY_JUMP")
+                  "SIGN_OF_LIFE", "SPW_MISMATCH", "NOISY_LINE", "DELAY_JUMP", "UNCONFIRMED")
 
 #: ``cfg_wN_crc`` codes, keyed by the encoder model's CRC kinds (frames.CRC_NONE, CRC6, CRC16);
 #: "custom": the word's own CRC from its ``cfg_wN_crc_width/_poly/_start/_inverted`` ports.
@@ -46,7 +49,8 @@ NOISE_COUNTERS = ("noisy_line", "delay_jump", "noise_event")
 #: The line checks' configuration ports (docs/ports.md) at their defaults: every one 0 (any
 #: noise event rejects the frame, SLO high for 1 us before MA starts, the round-trip tolerance
 #: the half period + 2 clocks), whatever the clock.
-NOISE_CONFIG_DEFAULTS = {"cfg_noise_limit": 0, "cfg_quiet_time": 0, "cfg_delay_tolerance": 0}
+NOISE_CONFIG_DEFAULTS = {"cfg_noise_limit": 0, "cfg_quiet_time": 0, "cfg_delay_tolerance": 0,
+                         "cfg_confirm_frames": 0}
 
 
 #: ``cfg_noise_limit`` and ``cfg_delay_tolerance`` value that turns the check off (the noise
@@ -75,6 +79,10 @@ MA_HALF_PERIOD_MIN = 2
 #: MA starts (``cfg_quiet_time`` = 0), a tolerance of 2 clocks (``cfg_delay_tolerance`` = 0),
 #: 4 clean frames that agree settle (or move) the round trip.
 QUIET_TIME_S = 1e-6
+#: Confirmation after a fault (docs/ports.md): ``cfg_confirm_frames`` = 0 stands for 1 frame;
+#: statuses after which it does not apply (they say nothing about the line).
+CONFIRM_FRAMES_DEFAULT = 1
+CONFIRM_NEUTRAL = ("OK", "ABORTED", "BAD_CONFIG", "UNCONFIRMED")
 DELAY_TOLERANCE_DEFAULT = 2
 DELAY_SETTLE_FRAMES = 4
 

@@ -32,6 +32,7 @@ def config_layout(params):
         "quiet_time": QUIET_WIDTH,
         "noise_limit": LINE_CHECK_WIDTH,
         "delay_tolerance": LINE_CHECK_WIDTH,
+        "confirm_frames": LINE_CHECK_WIDTH,
         "w0": word,
     }
     # A custom CRC per word (``cfg_w0_crc`` = 3): ``cfg_w0_crc_width``, ``_poly``, ``_start``,

@@ -6,6 +6,7 @@ from amaranth.hdl import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from .core.confirmation import Confirmation
 from .core.configuration import Configuration
 from .core.counter_ram import CounterRam
 from .core.counters import CounterBank
@@ -170,6 +171,7 @@ class BissMaster(wiring.Component):
             p.delay_width, settle_frames=protocol.DELAY_SETTLE_FRAMES,
             tolerance_width=HALF_PERIOD_WIDTH + 1, spread_width=DELAY_SPREAD_WIDTH)
         m.submodules.verdict = verdict = FrameVerdict(p)
+        m.submodules.confirmation = confirmation = Confirmation()
         m.submodules.results = results = ResultRegisters(p)
         if p.timestamped:
             m.submodules.time_base = time_base = TimeBase(p.timestamp_width)
@@ -187,7 +189,7 @@ class BissMaster(wiring.Component):
             config=config, scheduler=scheduler, controller=controller, timers=timers,
             ma_clock=ma_clock, ma_stop=ma_stop, sampler=sampler, decoder=decoder, sol=sol,
             spw_check=spw_check if two else None, line_noise=line_noise,
-            delay_check=delay_check, verdict=verdict, results=results,
+            delay_check=delay_check, verdict=verdict, confirmation=confirmation, results=results,
             time_base=time_base if p.timestamped else None,
             counters=counters if counter_ports(p) else None,
             counter_ram=counter_ram if p.counter_ram else None,
@@ -346,6 +348,10 @@ class BissMaster(wiring.Component):
             b.verdict.lc_repeat_seen.eq(b.sol.repeat),
             b.verdict.lc_skip_seen.eq(b.sol.skip),
             b.verdict.lc_zero_seen.eq(b.sol.zero),
+            b.verdict.unconfirmed.eq(b.confirmation.pending),
+            b.confirmation.report.eq(b.verdict.report),
+            b.confirmation.status.eq(b.verdict.status),
+            b.confirmation.setting.eq(b.cycle.confirm_frames),
 
             b.results.report.eq(b.verdict.report),
             b.results.report_frame.eq(b.controller.report_frame),
@@ -404,7 +410,7 @@ class BissMaster(wiring.Component):
             b.ma_clock.hold.eq(b.controller.ma_hold),
 
             access.frame_end.eq(b.verdict.report),
-            access.frame_ok.eq(b.verdict.valid),
+            access.frame_ok.eq(b.verdict.passed),
             access.frame_cds.eq(b.decoder.cds),
             access.frame_cdm.eq(b.controller.cdm_cycle),
         ]

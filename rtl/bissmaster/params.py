@@ -43,10 +43,11 @@ CRC_SETTINGS = data.StructLayout({
 class Status(enum.IntEnum, shape=4):
     """Outcome of one request cycle, reported with every ``done`` strobe.
 
-    Codes 0..5, 13 and 14 judge a received frame: when several apply, the first in the order
-    1..5, 13, 14 wins (a CRC error makes the LC meaningless, an LC error makes the
+    Codes 0..5 and 13..15 judge a received frame: when several apply, the first in the order
+    1..5, 13, 14, 15 wins (a CRC error makes the LC meaningless, an LC error makes the
     plausibility check moot; the line checks of issue 28 come last, so that every frame the
-    protocol's checks refuse is counted as before). Codes 6..12 end a cycle without a frame;
+    protocol's checks refuse is counted as before, and UNCONFIRMED is a frame that passed
+    them all). Codes 6..12 end a cycle without a frame;
     with ``cfg_end_check``, NO_STOP and SLO_STUCK_LOW can end a cycle whose frame was received,
     and then replace the frame's verdict (the frame is not reported).
     """
@@ -65,6 +66,7 @@ class Status(enum.IntEnum, shape=4):
     NO_STOP = 12            # cfg_end_check: SLO high at the stop bit (line stuck high, long frame)
     NOISY_LINE = 13         # more noise events since the last frame than cfg_noise_limit
     DELAY_JUMP = 14         # the round trip left the settled one by more than the tolerance
+    UNCONFIRMED = 15        # passed every check, but within cfg_confirm_frames of a fault
 
 
 STATUS_WIDTH = Shape.cast(Status).width

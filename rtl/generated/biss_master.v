@@ -15,11 +15,12 @@
 
 (* top =  1  *)
 (* generator = "Amaranth" *)
-module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_end_check, cfg_quiet_time, cfg_noise_limit, cfg_delay_tolerance, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w0_crc_width
-, cfg_w0_crc_poly, cfg_w0_crc_start, cfg_w0_crc_inverted, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_crc_width, cfg_w1_crc_poly, cfg_w1_crc_start, cfg_w1_crc_inverted, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write, ca_start
-, ca_abort, ca_wbuf_addr, ca_wbuf_data, ca_wbuf_en, ca_rbuf_addr, ca_rbuf_en, clk, rst, ma, busy, config_error, overrun, done, valid, status, timestamp, line_delay, cds, noise_events, delay_settled, settled_delay
-, delay_spread, word0_position, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, ca_rbuf_data, ca_busy, ca_done, ca_status, ca_bytes_done, count_crc_word0, count_crc_word1
-, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_noisy_line, count_delay_jump, count_noise_event, count_ca_crc4_error, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo);
+module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_end_check, cfg_quiet_time, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed
+, cfg_w0_crc_width, cfg_w0_crc_poly, cfg_w0_crc_start, cfg_w0_crc_inverted, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_crc_width, cfg_w1_crc_poly, cfg_w1_crc_start, cfg_w1_crc_inverted, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write
+, ca_start, ca_abort, ca_wbuf_addr, ca_wbuf_data, ca_wbuf_en, ca_rbuf_addr, ca_rbuf_en, clk, rst, ma, busy, config_error, overrun, done, valid, status, timestamp, line_delay, cds, noise_events, delay_settled
+, settled_delay, delay_spread, word0_position, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, ca_rbuf_data, ca_busy, ca_done, ca_status, ca_bytes_done, count_crc_word0
+, count_crc_word1, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_noisy_line, count_delay_jump, count_noise_event, count_ca_crc4_error, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo
+);
   reg \$auto$verilog_backend.cc:2355:dump_module$5  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -48,25 +49,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* init = 1'h0 *)
   wire \$signal ;
   wire abort;
-  wire \abort$116 ;
-  wire \abort$294 ;
+  wire \abort$117 ;
+  wire \abort$300 ;
   input abort_cycle;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$148 ;
+  wire \ack_expired$149 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$169 ;
+  wire [23:0] \ack_limit$170 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$323 ;
+  wire \bit$330 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$146 ;
+  wire \break_over$147 ;
   wire [23:0] break_time;
   output busy;
   wire busy;
-  wire \busy$124 ;
-  wire \busy$298 ;
+  wire \busy$125 ;
+  wire \busy$304 ;
   input ca_abort;
   wire ca_abort;
   input [6:0] ca_address;
@@ -108,14 +109,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$301 ;
+  wire \cdm$307 ;
   wire cdm_cycle;
   output cds;
   wire cds;
-  wire \cds$274 ;
-  wire [254:0] cfg;
+  wire \cds$280 ;
+  wire [258:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
+  wire [3:0] \cfg.confirm_frames ;
   wire [11:0] \cfg.delay_limit ;
   wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
@@ -165,6 +167,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [23:0] cfg_ack_limit;
   input [23:0] cfg_break_time;
   wire [23:0] cfg_break_time;
+  input [3:0] cfg_confirm_frames;
+  wire [3:0] cfg_confirm_frames;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
   input [3:0] cfg_delay_tolerance;
@@ -238,14 +242,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$227 ;
+  wire \check$228 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$232 ;
-  wire \clean$324 ;
+  wire \clean$233 ;
+  wire \clean$331 ;
   wire clear;
-  wire \clear$193 ;
-  wire \clear$316 ;
+  wire \clear$194 ;
+  wire \clear$323 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -320,22 +324,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$244 ;
+  wire [39:0] \cpw_top$245 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$258 ;
+  wire [1:0] \crc_ok$259 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$240 ;
-  wire [37:0] \crcs$240[0] ;
-  wire \crcs$240[0].inverted ;
-  wire [15:0] \crcs$240[0].poly ;
-  wire [15:0] \crcs$240[0].start ;
-  wire [4:0] \crcs$240[0].width ;
-  wire [37:0] \crcs$240[1] ;
-  wire \crcs$240[1].inverted ;
-  wire [15:0] \crcs$240[1].poly ;
-  wire [15:0] \crcs$240[1].start ;
-  wire [4:0] \crcs$240[1].width ;
   wire [75:0] \crcs$241 ;
   wire [37:0] \crcs$241[0] ;
   wire \crcs$241[0].inverted ;
@@ -347,6 +340,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \crcs$241[1].poly ;
   wire [15:0] \crcs$241[1].start ;
   wire [4:0] \crcs$241[1].width ;
+  wire [75:0] \crcs$242 ;
+  wire [37:0] \crcs$242[0] ;
+  wire \crcs$242[0].inverted ;
+  wire [15:0] \crcs$242[0].poly ;
+  wire [15:0] \crcs$242[0].start ;
+  wire [4:0] \crcs$242[0].width ;
+  wire [37:0] \crcs$242[1] ;
+  wire \crcs$242[1].inverted ;
+  wire [15:0] \crcs$242[1].poly ;
+  wire [15:0] \crcs$242[1].start ;
+  wire [4:0] \crcs$242[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -357,9 +361,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  wire [254:0] cycle;
+  wire [258:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
+  wire [3:0] \cycle.confirm_frames ;
   wire [11:0] \cycle.delay_limit ;
   wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
@@ -412,13 +417,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$175 ;
-  wire [12:0] \delay$226 ;
+  wire [12:0] \delay$176 ;
+  wire [12:0] \delay$227 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$177 ;
+  wire [11:0] \delay_limit$178 ;
   wire delay_over;
-  wire \delay_over$156 ;
+  wire \delay_over$157 ;
   output delay_settled;
   wire delay_settled;
   output [7:0] delay_spread;
@@ -426,41 +431,41 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [16:0] delay_tolerance;
   output done;
   wire done;
-  wire \done$134 ;
-  wire \done$299 ;
-  wire \done$319 ;
+  wire \done$135 ;
+  wire \done$305 ;
+  wire \done$326 ;
   wire doubtful;
   wire early;
-  wire \early$132 ;
+  wire \early$133 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$311 ;
-  wire \events$311.aborted ;
-  wire \events$311.ca_aborted ;
-  wire \events$311.ca_crc4_error ;
-  wire \events$311.ca_data_fault ;
-  wire \events$311.ca_no_answer ;
-  wire \events$311.ca_refused ;
-  wire \events$311.crc_word0 ;
-  wire \events$311.crc_word1 ;
-  wire \events$311.delay_jump ;
-  wire \events$311.delay_range ;
-  wire \events$311.lc_repeat ;
-  wire \events$311.lc_skip ;
-  wire \events$311.lc_zero ;
-  wire \events$311.no_ack ;
-  wire \events$311.no_start ;
-  wire \events$311.no_stop ;
-  wire \events$311.noise_event ;
-  wire \events$311.noisy_line ;
-  wire \events$311.overrun ;
-  wire \events$311.slo_stuck_low ;
-  wire \events$311.spw_mismatch ;
+  wire [20:0] \events$318 ;
+  wire \events$318.aborted ;
+  wire \events$318.ca_aborted ;
+  wire \events$318.ca_crc4_error ;
+  wire \events$318.ca_data_fault ;
+  wire \events$318.ca_no_answer ;
+  wire \events$318.ca_refused ;
+  wire \events$318.crc_word0 ;
+  wire \events$318.crc_word1 ;
+  wire \events$318.delay_jump ;
+  wire \events$318.delay_range ;
+  wire \events$318.lc_repeat ;
+  wire \events$318.lc_skip ;
+  wire \events$318.lc_zero ;
+  wire \events$318.no_ack ;
+  wire \events$318.no_start ;
+  wire \events$318.no_stop ;
+  wire \events$318.noise_event ;
+  wire \events$318.noisy_line ;
+  wire \events$318.overrun ;
+  wire \events$318.slo_stuck_low ;
+  wire \events$318.spw_mismatch ;
   wire fault;
-  wire \fault$254 ;
+  wire \fault$255 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -477,6 +482,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -494,7 +500,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$256 ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \fault_status$257 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -504,7 +511,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$288 ;
+  wire \first_rise$294 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -534,6 +541,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -554,44 +562,45 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire frame_ok;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$199 ;
+  wire [15:0] \half_period$200 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$106 ;
-  wire \idle$112 ;
+  wire \idle$107 ;
+  wire \idle$113 ;
   wire in_clock;
-  wire \in_clock$163 ;
+  wire \in_clock$164 ;
   wire jump;
   output [5:0] lc;
   wire [5:0] lc;
-  wire [5:0] \lc$203 ;
   wire [5:0] \lc$204 ;
+  wire [5:0] \lc$205 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$206 ;
+  wire [5:0] \lc_next$207 ;
   output lc_repeat;
   wire lc_repeat;
-  wire \lc_repeat$279 ;
+  wire \lc_repeat$285 ;
   wire lc_repeat_seen;
   output lc_skip;
   wire lc_skip;
-  wire \lc_skip$280 ;
+  wire \lc_skip$286 ;
   wire lc_skip_seen;
   output lc_zero;
   wire lc_zero;
-  wire \lc_zero$281 ;
+  wire \lc_zero$287 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$215 ;
+  wire \level$216 ;
   wire [3:0] limit;
   output [12:0] line_delay;
   wire [12:0] line_delay;
-  wire [254:0] live;
+  wire [258:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
+  wire [3:0] \live.confirm_frames ;
   wire [11:0] \live.delay_limit ;
   wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
@@ -639,13 +648,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$130 ;
+  wire \locked$131 ;
   output ma;
   wire ma;
-  wire \ma$318 ;
+  wire \ma$325 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$158 ;
+  wire \ma_busy$159 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -653,28 +662,30 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$150 ;
+  wire \no_start_expired$151 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$173 ;
+  wire [24:0] \no_start_limit$174 ;
   wire noise;
   output [3:0] noise_events;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$234 ;
+  wire \noisy$235 ;
   wire [1:0] nw;
   wire ok;
   output overrun;
   wire overrun;
-  wire \overrun$314 ;
+  wire \overrun$321 ;
+  wire passed;
+  wire pending;
   wire [23:0] period;
   input periodic;
   wire periodic;
-  wire \periodic$108 ;
+  wire \periodic$109 ;
   wire quiet;
-  wire \quiet$182 ;
+  wire \quiet$183 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$184 ;
+  wire \quiet_live$185 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   wire [3:0] rbuf_addr;
@@ -684,35 +695,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$266 ;
+  wire \report$269 ;
+  wire \report$273 ;
   wire report_delay;
-  wire \report_delay$269 ;
+  wire \report_delay$276 ;
   wire report_frame;
-  wire \report_frame$253 ;
-  wire \report_frame$267 ;
+  wire \report_frame$254 ;
+  wire \report_frame$274 ;
   wire request;
-  wire \request$115 ;
-  wire [17:0] \request$290 ;
-  wire [6:0] \request$290.address ;
-  wire [6:0] \request$290.count ;
-  wire [2:0] \request$290.slave_id ;
-  wire \request$290.write ;
+  wire \request$116 ;
+  wire [17:0] \request$296 ;
+  wire [6:0] \request$296.address ;
+  wire [6:0] \request$296.count ;
+  wire [2:0] \request$296.slave_id ;
+  wire \request$296.write ;
   wire restart;
-  wire \restart$219 ;
+  wire \restart$220 ;
   wire restart_timer;
   wire [9:0] result;
-  wire [186:0] \result$321 ;
-  wire \result$321.cds ;
-  wire \result$321.delay_settled ;
-  wire [7:0] \result$321.delay_spread ;
-  wire [5:0] \result$321.lc ;
-  wire \result$321.lc_repeat ;
-  wire \result$321.lc_skip ;
-  wire \result$321.lc_zero ;
-  wire [12:0] \result$321.line_delay ;
-  wire [3:0] \result$321.noise_events ;
-  wire [12:0] \result$321.settled_delay ;
-  wire \result$321.spw_mismatch ;
+  wire [186:0] \result$328 ;
+  wire \result$328.cds ;
+  wire \result$328.delay_settled ;
+  wire [7:0] \result$328.delay_spread ;
+  wire [5:0] \result$328.lc ;
+  wire \result$328.lc_repeat ;
+  wire \result$328.lc_skip ;
+  wire \result$328.lc_zero ;
+  wire [12:0] \result$328.line_delay ;
+  wire [3:0] \result$328.noise_events ;
+  wire [12:0] \result$328.settled_delay ;
+  wire \result$328.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -729,18 +741,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$321.status ;
-  wire [31:0] \result$321.timestamp ;
-  wire [57:0] \result$321.word0 ;
-  wire \result$321.word0.crc_ok ;
-  wire \result$321.word0.ne ;
-  wire \result$321.word0.nw ;
-  wire [54:0] \result$321.word0.position ;
-  wire [42:0] \result$321.word1 ;
-  wire \result$321.word1.crc_ok ;
-  wire \result$321.word1.ne ;
-  wire \result$321.word1.nw ;
-  wire [39:0] \result$321.word1.position ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \result$328.status ;
+  wire [31:0] \result$328.timestamp ;
+  wire [57:0] \result$328.word0 ;
+  wire \result$328.word0.crc_ok ;
+  wire \result$328.word0.ne ;
+  wire \result$328.word0.nw ;
+  wire [54:0] \result$328.word0.position ;
+  wire [42:0] \result$328.word1 ;
+  wire \result$328.word1.crc_ok ;
+  wire \result$328.word1.ne ;
+  wire \result$328.word1.nw ;
+  wire [39:0] \result$328.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -752,47 +765,48 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$212 ;
+  wire \resync$213 ;
   wire [15:0] rises;
-  wire [15:0] \rises$192 ;
+  wire [15:0] \rises$193 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$322 ;
+  wire \sample$329 ;
   wire sampler_noise;
   wire second_rise;
+  wire [3:0] setting;
   wire settled;
   output [12:0] settled_delay;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$277 ;
+  wire [12:0] \settled_delay$283 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$113 ;
-  wire \slo$121 ;
-  wire \slo$157 ;
+  wire \slo$114 ;
+  wire \slo$122 ;
+  wire \slo$158 ;
   wire slo_stuck;
-  wire \slo_stuck$152 ;
+  wire \slo_stuck$153 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$154 ;
+  wire \slo_stuck_live$155 ;
   wire slots_full;
-  wire \slots_full$138 ;
+  wire \slots_full$139 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   output spw_mismatch;
   wire spw_mismatch;
-  wire \spw_mismatch$286 ;
+  wire \spw_mismatch$292 ;
   input start;
   wire start;
-  wire \start$107 ;
-  wire \start$293 ;
+  wire \start$108 ;
+  wire \start$299 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$190 ;
+  wire [15:0] \start_slot$191 ;
   wire started;
-  wire \started$136 ;
-  wire \started$188 ;
+  wire \started$137 ;
+  wire \started$189 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -810,6 +824,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] status;
   wire [3:0] status;
   (* enum_base_type = "Status" *)
@@ -828,23 +843,43 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$273 ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \status$270 ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \status$271 ;
   wire stop_bit;
-  wire \stop_bit$142 ;
+  wire \stop_bit$143 ;
   wire stopped;
-  wire \stopped$140 ;
+  wire \stopped$141 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$171 ;
+  wire [23:0] \timeout_limit$172 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   output [31:0] timestamp;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$248 ;
+  wire [7:0] \tolerance$249 ;
+  wire unconfirmed;
   output valid;
   wire valid;
-  wire \valid$270 ;
-  wire \valid$271 ;
+  wire \valid$277 ;
+  wire \valid$278 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -870,34 +905,34 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [39:0] word1_position;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$202 ;
+  wire [1:0] \word_count$203 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$238 ;
-  wire [11:0] \words$238[0] ;
+  wire [23:0] \words$239 ;
+  wire [11:0] \words$239[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$238[0].crc ;
-  wire [5:0] \words$238[0].data_bits ;
-  wire \words$238[0].gray ;
-  wire \words$238[0].lc ;
-  wire \words$238[0].nenw ;
-  wire \words$238[0].signed ;
-  wire [11:0] \words$238[1] ;
+  wire [1:0] \words$239[0].crc ;
+  wire [5:0] \words$239[0].data_bits ;
+  wire \words$239[0].gray ;
+  wire \words$239[0].lc ;
+  wire \words$239[0].nenw ;
+  wire \words$239[0].signed ;
+  wire [11:0] \words$239[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$238[1].crc ;
-  wire [5:0] \words$238[1].data_bits ;
-  wire \words$238[1].gray ;
-  wire \words$238[1].lc ;
-  wire \words$238[1].nenw ;
-  wire \words$238[1].signed ;
+  wire [1:0] \words$239[1].crc ;
+  wire [5:0] \words$239[1].data_bits ;
+  wire \words$239[1].gray ;
+  wire \words$239[1].lc ;
+  wire \words$239[1].nenw ;
+  wire \words$239[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -923,15 +958,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \words[1].nenw ;
   wire \words[1].signed ;
   wire zero;
-  assign \periodic$108  = periodic | ca_busy;
+  assign \periodic$109  = periodic | ca_busy;
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$227  = started & \$1 ;
-  assign \$2  = report_frame & \spw_mismatch$286 ;
-  assign \$3  = \status$273  == 4'hd;
+  assign \check$228  = started & \$1 ;
+  assign \$2  = report_frame & \spw_mismatch$292 ;
+  assign \$3  = \status$270  == 4'hd;
   assign \$4  = report_frame & \$3 ;
-  assign \$5  = \status$273  == 4'he;
+  assign \$5  = \status$270  == 4'he;
   assign \$6  = report_frame & \$5 ;
   assign \$7  = result[2:0] == 1'h1;
   assign \$8  = ca_done & \$7 ;
@@ -945,8 +980,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$16  = ca_done & \$15 ;
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$193 ;
-  assign \$18  = \sample$322  & \$17 ;
+  assign \$17  = ~ \clear$194 ;
+  assign \$18  = \sample$329  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -973,6 +1008,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .timeout_limit(timeout_limit),
     .word_count(word_count)
   );
+  \biss_master.confirmation  confirmation (
+    .clk(clk),
+    .pending(unconfirmed),
+    .report(report),
+    .rst(rst),
+    .setting(cycle[148:145]),
+    .status(\status$270 )
+  );
   \biss_master.controller  controller (
     .abort(abort_cycle),
     .ack_expired(ack_expired),
@@ -984,7 +1027,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$219 ),
+    .fault(\restart$220 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -1001,14 +1044,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$193 ),
+    .receiver_clear(\clear$194 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$121 ),
+    .slo(\slo$122 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -1022,12 +1065,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clear(clear_counters),
     .clk(clk),
     .counts(counts),
-    .events(\events$311 ),
+    .events(\events$318 ),
     .rst(rst)
   );
   \biss_master.decoder  decoder (
     .\bit (\bit ),
-    .cds(\cds$274 ),
+    .cds(\cds$280 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
@@ -1035,11 +1078,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .data0(data0),
     .data1(spw),
     .done(frame_done),
-    .lc(\lc$203 ),
+    .lc(\lc$204 ),
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$193 ),
+    .receiver_clear(\clear$194 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -1051,7 +1094,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .words(words)
   );
   \biss_master.delay_check  delay_check (
-    .check(\check$227 ),
+    .check(\check$228 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -1061,7 +1104,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .rearm(rearm),
     .rst(rst),
     .settled(settled),
-    .settled_delay(\settled_delay$277 ),
+    .settled_delay(\settled_delay$283 ),
     .spread(spread),
     .\tolerance$8 (tolerance)
   );
@@ -1070,10 +1113,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$121 ),
+    .level(\slo$122 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$219 ),
+    .restart(\restart$220 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -1081,7 +1124,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   \biss_master.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$158 ),
+    .\clocking (\ma_busy$159 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -1093,7 +1136,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .second_rise(ma_arm)
   );
   \biss_master.ma_stop  ma_stop (
-    .clear(\clear$193 ),
+    .clear(\clear$194 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -1101,8 +1144,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .rst(rst),
     .start_slot(start_slot),
     .\started$11 (started),
-    .w1_enable(cycle[195]),
-    .words(\words$238 )
+    .w1_enable(cycle[199]),
+    .words(\words$239 )
   );
   \biss_master.register_access  register_access (
     .abort(ca_abort),
@@ -1111,13 +1154,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
-    .frame_cds(\cds$274 ),
+    .frame_cds(\cds$280 ),
     .frame_end(report),
-    .frame_ok(\valid$270 ),
+    .frame_ok(frame_ok),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(ca_rbuf_en),
-    .request(\request$290 ),
+    .request(\request$296 ),
     .result(result),
     .rst(rst),
     .start(ca_start),
@@ -1130,24 +1173,24 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$321 ),
+    .result(\result$328 ),
     .rst(rst),
-    .valid(\valid$270 ),
+    .valid(\valid$277 ),
     .valid_out(valid)
   );
   \biss_master.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$323 ),
+    .\bit (\bit$330 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$121 ),
+    .level(\slo$122 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$193 ),
+    .receiver_clear(\clear$194 ),
     .rst(rst),
-    .sample(\sample$322 ),
+    .sample(\sample$329 ),
     .slo(slo)
   );
   \biss_master.scheduler  scheduler (
@@ -1156,7 +1199,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .idle(idle),
     .overrun(overrun),
     .period(cfg_request_period),
-    .periodic(\periodic$108 ),
+    .periodic(\periodic$109 ),
     .request(request),
     .rst(rst),
     .start(start)
@@ -1165,22 +1208,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .check(check),
     .clk(clk),
     .is_zero(lc_zero_seen),
-    .lc(\lc$203 ),
+    .lc(\lc$204 ),
     .load(load),
-    .\port$2003$0 (\bit ),
+    .\port$2029$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master.spw_check  spw_check (
-    .bits(cycle[201:196]),
+    .bits(cycle[205:200]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[254:247])
+    .\tolerance$8 (cycle[258:251])
   );
   \biss_master.time_base  time_base (
     .clk(clk),
@@ -1199,7 +1242,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$158 ),
+    .ma_busy(\ma_busy$159 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -1208,7 +1251,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$121 ),
+    .slo(\slo$122 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -1216,28 +1259,30 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$324 ),
+    .clean(\clean$331 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$219 ),
+    .fault(\restart$220 ),
     .fault_status(fault_status),
     .lc_check(check),
-    .lc_repeat(\lc_repeat$279 ),
+    .lc_repeat(\lc_repeat$285 ),
     .lc_repeat_seen(lc_repeat_seen),
-    .lc_skip(\lc_skip$280 ),
+    .lc_skip(\lc_skip$286 ),
     .lc_skip_seen(lc_skip_seen),
-    .lc_zero(\lc_zero$281 ),
+    .lc_zero(\lc_zero$287 ),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
+    .passed(frame_ok),
     .\port$1471$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
-    .spw_mismatch(\spw_mismatch$286 ),
-    .status(\status$273 ),
-    .valid(\valid$270 )
+    .spw_mismatch(\spw_mismatch$292 ),
+    .status(\status$270 ),
+    .unconfirmed(unconfirmed),
+    .valid(\valid$277 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
@@ -1248,7 +1293,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$20  = \bit$323 ;
+    \$20  = \bit$330 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -1269,147 +1314,151 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$23  = \clean$324 ;
+    \$23  = \clean$331 ;
     if (rst) begin
       \$23  = 1'h0;
     end
   end
-  assign \idle$106  = idle;
-  assign \start$107  = start;
+  assign \idle$107  = idle;
+  assign \start$108  = start;
   assign frames = ca_busy;
   assign period = cfg_request_period;
   assign abort = abort_cycle;
-  assign \idle$112  = idle;
-  assign \slo$113  = slo;
-  assign \request$115  = request;
-  assign \abort$116  = abort_cycle;
+  assign \idle$113  = idle;
+  assign \slo$114  = slo;
+  assign \request$116  = request;
+  assign \abort$117  = abort_cycle;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$121 ;
-  assign \busy$124  = ma_busy;
+  assign level = \slo$122 ;
+  assign \busy$125  = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$130  = locked;
-  assign \early$132  = early;
-  assign \done$134  = frame_done;
-  assign \started$136  = started;
-  assign \slots_full$138  = slots_full;
-  assign \stopped$140  = stopped;
-  assign \stop_bit$142  = stop_bit;
+  assign \locked$131  = locked;
+  assign \early$133  = early;
+  assign \done$135  = frame_done;
+  assign \started$137  = started;
+  assign \slots_full$139  = slots_full;
+  assign \stopped$141  = stopped;
+  assign \stop_bit$143  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$146  = break_over;
-  assign \ack_expired$148  = ack_expired;
-  assign \no_start_expired$150  = no_start_expired;
-  assign \slo_stuck$152  = slo_stuck;
-  assign \slo_stuck_live$154  = slo_stuck_live;
-  assign \delay_over$156  = delay_over;
-  assign \slo$157  = \slo$121 ;
-  assign \clocking  = \ma_busy$158 ;
+  assign \break_over$147  = break_over;
+  assign \ack_expired$149  = ack_expired;
+  assign \no_start_expired$151  = no_start_expired;
+  assign \slo_stuck$153  = slo_stuck;
+  assign \slo_stuck_live$155  = slo_stuck_live;
+  assign \delay_over$157  = delay_over;
+  assign \slo$158  = \slo$122 ;
+  assign \clocking  = \ma_busy$159 ;
   assign timer_clear = clear;
-  assign \in_clock$163  = in_clock;
+  assign \in_clock$164  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$169  = ack_limit;
-  assign \timeout_limit$171  = timeout_limit;
-  assign \no_start_limit$173  = no_start_limit;
-  assign \delay$175  = delay;
-  assign \delay_limit$177  = delay_limit;
+  assign \ack_limit$170  = ack_limit;
+  assign \timeout_limit$172  = timeout_limit;
+  assign \no_start_limit$174  = no_start_limit;
+  assign \delay$176  = delay;
+  assign \delay_limit$178  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$182  = quiet;
-  assign \quiet_live$184  = quiet_live;
+  assign \quiet$183  = quiet;
+  assign \quiet_live$185  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$188  = started;
-  assign \start_slot$190  = start_slot;
-  assign \rises$192  = rises;
-  assign receiver_clear = \clear$193 ;
+  assign \started$189  = started;
+  assign \start_slot$191  = start_slot;
+  assign \rises$193  = rises;
+  assign receiver_clear = \clear$194 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$199  = cycle[15:0];
+  assign \half_period$200  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$202  = word_count;
-  assign \lc$204  = \lc$203 ;
-  assign lc_next = { \lc$203 [4:0], \bit  };
-  assign \lc_next$206  = { \lc$203 [4:0], \bit  };
+  assign \word_count$203  = word_count;
+  assign \lc$205  = \lc$204 ;
+  assign lc_next = { \lc$204 [4:0], \bit  };
+  assign \lc_next$207  = { \lc$204 [4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$212  = resync;
+  assign \resync$213  = resync;
   assign waiting = watch;
-  assign \level$215  = \slo$121 ;
+  assign \level$216  = \slo$122 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$219 ;
+  assign fault = \restart$220 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$226  = delay;
+  assign \delay$227  = delay;
   assign \$signal  = learn;
-  assign \clean$232  = clean;
-  assign \noisy$234  = noisy;
+  assign \clean$233  = clean;
+  assign \noisy$235  = noisy;
   assign jump = delay_jump;
-  assign \crcs$240  = crcs;
   assign \crcs$241  = crcs;
-  assign w1_enable = cycle[195];
-  assign \cpw_top$244  = cpw_top;
+  assign \crcs$242  = crcs;
+  assign w1_enable = cycle[199];
+  assign \cpw_top$245  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[201:196];
-  assign \tolerance$248  = cycle[254:247];
+  assign bits = cycle[205:200];
+  assign \tolerance$249  = cycle[258:251];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$253  = report_frame;
-  assign \fault$254  = \restart$219 ;
-  assign \fault_status$256  = fault_status;
-  assign \crc_ok$258  = crc_ok;
+  assign \report_frame$254  = report_frame;
+  assign \fault$255  = \restart$220 ;
+  assign \fault_status$257  = fault_status;
+  assign \crc_ok$259  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$266  = report;
-  assign \report_frame$267  = report_frame;
-  assign \report_delay$269  = report_delay;
-  assign \valid$271  = \valid$270 ;
+  assign pending = unconfirmed;
+  assign \report$269  = report;
+  assign \status$271  = \status$270 ;
+  assign setting = cycle[148:145];
+  assign \report$273  = report;
+  assign \report_frame$274  = report_frame;
+  assign \report_delay$276  = report_delay;
+  assign \valid$278  = \valid$277 ;
   assign word_crc_ok = { \$24 , crc_ok[0] };
-  assign \first_rise$288  = first_rise;
-  assign \start$293  = ca_start;
-  assign \abort$294  = ca_abort;
+  assign \first_rise$294  = first_rise;
+  assign \start$299  = ca_start;
+  assign \abort$300  = ca_abort;
   assign rbuf_addr = ca_rbuf_addr;
   assign rbuf_en = ca_rbuf_en;
   assign rbuf_data = ca_rbuf_data;
-  assign \busy$298  = ca_busy;
-  assign \done$299  = ca_done;
-  assign \cdm$301  = cdm;
+  assign \busy$304  = ca_busy;
+  assign \done$305  = ca_done;
+  assign \cdm$307  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_ok = \valid$270 ;
-  assign frame_cds = \cds$274 ;
+  assign passed = frame_ok;
+  assign frame_cds = \cds$280 ;
   assign cdm_cycle = frame_cdm;
-  assign \overrun$314  = overrun;
-  assign \clear$316  = clear_counters;
-  assign \ma$318  = ma;
-  assign \done$319  = done;
+  assign \overrun$321  = overrun;
+  assign \clear$323  = clear_counters;
+  assign \ma$325  = ma;
+  assign \done$326  = done;
   assign valid_out = valid;
-  assign status = \result$321 [3:0];
-  assign timestamp = \result$321 [35:4];
-  assign line_delay = \result$321 [48:36];
-  assign cds = \result$321 [49];
-  assign noise_events = \result$321 [53:50];
-  assign delay_settled = \result$321 [54];
-  assign settled_delay = \result$321 [67:55];
-  assign delay_spread = \result$321 [75:68];
-  assign word0_position = \result$321 [130:76];
-  assign word0_ne = \result$321 [131];
-  assign word0_nw = \result$321 [132];
-  assign word0_crc_ok = \result$321 [133];
-  assign word1_position = \result$321 [173:134];
-  assign word1_ne = \result$321 [174];
-  assign word1_nw = \result$321 [175];
-  assign word1_crc_ok = \result$321 [176];
-  assign lc = \result$321 [182:177];
-  assign lc_repeat = \result$321 [183];
-  assign lc_skip = \result$321 [184];
-  assign lc_zero = \result$321 [185];
-  assign spw_mismatch = \result$321 [186];
+  assign status = \result$328 [3:0];
+  assign timestamp = \result$328 [35:4];
+  assign line_delay = \result$328 [48:36];
+  assign cds = \result$328 [49];
+  assign noise_events = \result$328 [53:50];
+  assign delay_settled = \result$328 [54];
+  assign settled_delay = \result$328 [67:55];
+  assign delay_spread = \result$328 [75:68];
+  assign word0_position = \result$328 [130:76];
+  assign word0_ne = \result$328 [131];
+  assign word0_nw = \result$328 [132];
+  assign word0_crc_ok = \result$328 [133];
+  assign word1_position = \result$328 [173:134];
+  assign word1_ne = \result$328 [174];
+  assign word1_nw = \result$328 [175];
+  assign word1_crc_ok = \result$328 [176];
+  assign lc = \result$328 [182:177];
+  assign lc_repeat = \result$328 [183];
+  assign lc_skip = \result$328 [184];
+  assign lc_zero = \result$328 [185];
+  assign spw_mismatch = \result$328 [186];
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
   assign count_crc_word0 = counts[15:0];
@@ -1443,33 +1492,34 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[156:145];
-  assign \live.w0.data_bits  = live[150:145];
-  assign \live.w0.nenw  = live[151];
-  assign \live.w0.lc  = live[152];
-  assign \live.w0.crc  = live[154:153];
-  assign \live.w0.gray  = live[155];
-  assign \live.w0.signed  = live[156];
-  assign \live.w0_crc  = live[194:157];
-  assign \live.w0_crc.width  = live[161:157];
-  assign \live.w0_crc.poly  = live[177:162];
-  assign \live.w0_crc.start  = live[193:178];
-  assign \live.w0_crc.inverted  = live[194];
-  assign \live.w1_enable  = live[195];
-  assign \live.w1  = live[207:196];
-  assign \live.w1.data_bits  = live[201:196];
-  assign \live.w1.nenw  = live[202];
-  assign \live.w1.lc  = live[203];
-  assign \live.w1.crc  = live[205:204];
-  assign \live.w1.gray  = live[206];
-  assign \live.w1.signed  = live[207];
-  assign \live.w1_crc  = live[245:208];
-  assign \live.w1_crc.width  = live[212:208];
-  assign \live.w1_crc.poly  = live[228:213];
-  assign \live.w1_crc.start  = live[244:229];
-  assign \live.w1_crc.inverted  = live[245];
-  assign \live.spw_check  = live[246];
-  assign \live.spw_tolerance  = live[254:247];
+  assign \live.confirm_frames  = live[148:145];
+  assign \live.w0  = live[160:149];
+  assign \live.w0.data_bits  = live[154:149];
+  assign \live.w0.nenw  = live[155];
+  assign \live.w0.lc  = live[156];
+  assign \live.w0.crc  = live[158:157];
+  assign \live.w0.gray  = live[159];
+  assign \live.w0.signed  = live[160];
+  assign \live.w0_crc  = live[198:161];
+  assign \live.w0_crc.width  = live[165:161];
+  assign \live.w0_crc.poly  = live[181:166];
+  assign \live.w0_crc.start  = live[197:182];
+  assign \live.w0_crc.inverted  = live[198];
+  assign \live.w1_enable  = live[199];
+  assign \live.w1  = live[211:200];
+  assign \live.w1.data_bits  = live[205:200];
+  assign \live.w1.nenw  = live[206];
+  assign \live.w1.lc  = live[207];
+  assign \live.w1.crc  = live[209:208];
+  assign \live.w1.gray  = live[210];
+  assign \live.w1.signed  = live[211];
+  assign \live.w1_crc  = live[249:212];
+  assign \live.w1_crc.width  = live[216:212];
+  assign \live.w1_crc.poly  = live[232:217];
+  assign \live.w1_crc.start  = live[248:233];
+  assign \live.w1_crc.inverted  = live[249];
+  assign \live.spw_check  = live[250];
+  assign \live.spw_tolerance  = live[258:251];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -1480,33 +1530,34 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[156:145];
-  assign \cycle.w0.data_bits  = cycle[150:145];
-  assign \cycle.w0.nenw  = cycle[151];
-  assign \cycle.w0.lc  = cycle[152];
-  assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0.signed  = cycle[156];
-  assign \cycle.w0_crc  = cycle[194:157];
-  assign \cycle.w0_crc.width  = cycle[161:157];
-  assign \cycle.w0_crc.poly  = cycle[177:162];
-  assign \cycle.w0_crc.start  = cycle[193:178];
-  assign \cycle.w0_crc.inverted  = cycle[194];
-  assign \cycle.w1_enable  = cycle[195];
-  assign \cycle.w1  = cycle[207:196];
-  assign \cycle.w1.data_bits  = cycle[201:196];
-  assign \cycle.w1.nenw  = cycle[202];
-  assign \cycle.w1.lc  = cycle[203];
-  assign \cycle.w1.crc  = cycle[205:204];
-  assign \cycle.w1.gray  = cycle[206];
-  assign \cycle.w1.signed  = cycle[207];
-  assign \cycle.w1_crc  = cycle[245:208];
-  assign \cycle.w1_crc.width  = cycle[212:208];
-  assign \cycle.w1_crc.poly  = cycle[228:213];
-  assign \cycle.w1_crc.start  = cycle[244:229];
-  assign \cycle.w1_crc.inverted  = cycle[245];
-  assign \cycle.spw_check  = cycle[246];
-  assign \cycle.spw_tolerance  = cycle[254:247];
+  assign \cycle.confirm_frames  = cycle[148:145];
+  assign \cycle.w0  = cycle[160:149];
+  assign \cycle.w0.data_bits  = cycle[154:149];
+  assign \cycle.w0.nenw  = cycle[155];
+  assign \cycle.w0.lc  = cycle[156];
+  assign \cycle.w0.crc  = cycle[158:157];
+  assign \cycle.w0.gray  = cycle[159];
+  assign \cycle.w0.signed  = cycle[160];
+  assign \cycle.w0_crc  = cycle[198:161];
+  assign \cycle.w0_crc.width  = cycle[165:161];
+  assign \cycle.w0_crc.poly  = cycle[181:166];
+  assign \cycle.w0_crc.start  = cycle[197:182];
+  assign \cycle.w0_crc.inverted  = cycle[198];
+  assign \cycle.w1_enable  = cycle[199];
+  assign \cycle.w1  = cycle[211:200];
+  assign \cycle.w1.data_bits  = cycle[205:200];
+  assign \cycle.w1.nenw  = cycle[206];
+  assign \cycle.w1.lc  = cycle[207];
+  assign \cycle.w1.crc  = cycle[209:208];
+  assign \cycle.w1.gray  = cycle[210];
+  assign \cycle.w1.signed  = cycle[211];
+  assign \cycle.w1_crc  = cycle[249:212];
+  assign \cycle.w1_crc.width  = cycle[216:212];
+  assign \cycle.w1_crc.poly  = cycle[232:217];
+  assign \cycle.w1_crc.start  = cycle[248:233];
+  assign \cycle.w1_crc.inverted  = cycle[249];
+  assign \cycle.spw_check  = cycle[250];
+  assign \cycle.spw_tolerance  = cycle[258:251];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -1521,20 +1572,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$238[0]  = \words$238 [11:0];
-  assign \words$238[0].data_bits  = \words$238 [5:0];
-  assign \words$238[0].nenw  = \words$238 [6];
-  assign \words$238[0].lc  = \words$238 [7];
-  assign \words$238[0].crc  = \words$238 [9:8];
-  assign \words$238[0].gray  = \words$238 [10];
-  assign \words$238[0].signed  = \words$238 [11];
-  assign \words$238[1]  = \words$238 [23:12];
-  assign \words$238[1].data_bits  = \words$238 [17:12];
-  assign \words$238[1].nenw  = \words$238 [18];
-  assign \words$238[1].lc  = \words$238 [19];
-  assign \words$238[1].crc  = \words$238 [21:20];
-  assign \words$238[1].gray  = \words$238 [22];
-  assign \words$238[1].signed  = \words$238 [23];
+  assign \words$239[0]  = \words$239 [11:0];
+  assign \words$239[0].data_bits  = \words$239 [5:0];
+  assign \words$239[0].nenw  = \words$239 [6];
+  assign \words$239[0].lc  = \words$239 [7];
+  assign \words$239[0].crc  = \words$239 [9:8];
+  assign \words$239[0].gray  = \words$239 [10];
+  assign \words$239[0].signed  = \words$239 [11];
+  assign \words$239[1]  = \words$239 [23:12];
+  assign \words$239[1].data_bits  = \words$239 [17:12];
+  assign \words$239[1].nenw  = \words$239 [18];
+  assign \words$239[1].lc  = \words$239 [19];
+  assign \words$239[1].crc  = \words$239 [21:20];
+  assign \words$239[1].gray  = \words$239 [22];
+  assign \words$239[1].signed  = \words$239 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -1545,16 +1596,6 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$240[0]  = crcs[37:0];
-  assign \crcs$240[0].width  = crcs[4:0];
-  assign \crcs$240[0].poly  = crcs[20:5];
-  assign \crcs$240[0].start  = crcs[36:21];
-  assign \crcs$240[0].inverted  = crcs[37];
-  assign \crcs$240[1]  = crcs[75:38];
-  assign \crcs$240[1].width  = crcs[42:38];
-  assign \crcs$240[1].poly  = crcs[58:43];
-  assign \crcs$240[1].start  = crcs[74:59];
-  assign \crcs$240[1].inverted  = crcs[75];
   assign \crcs$241[0]  = crcs[37:0];
   assign \crcs$241[0].width  = crcs[4:0];
   assign \crcs$241[0].poly  = crcs[20:5];
@@ -1565,6 +1606,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \crcs$241[1].poly  = crcs[58:43];
   assign \crcs$241[1].start  = crcs[74:59];
   assign \crcs$241[1].inverted  = crcs[75];
+  assign \crcs$242[0]  = crcs[37:0];
+  assign \crcs$242[0].width  = crcs[4:0];
+  assign \crcs$242[0].poly  = crcs[20:5];
+  assign \crcs$242[0].start  = crcs[36:21];
+  assign \crcs$242[0].inverted  = crcs[37];
+  assign \crcs$242[1]  = crcs[75:38];
+  assign \crcs$242[1].width  = crcs[42:38];
+  assign \crcs$242[1].poly  = crcs[58:43];
+  assign \crcs$242[1].start  = crcs[74:59];
+  assign \crcs$242[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -1575,33 +1626,34 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \cfg.quiet_time  = cycle[136:125];
   assign \cfg.noise_limit  = cycle[140:137];
   assign \cfg.delay_tolerance  = cycle[144:141];
-  assign \cfg.w0  = cycle[156:145];
-  assign \cfg.w0.data_bits  = cycle[150:145];
-  assign \cfg.w0.nenw  = cycle[151];
-  assign \cfg.w0.lc  = cycle[152];
-  assign \cfg.w0.crc  = cycle[154:153];
-  assign \cfg.w0.gray  = cycle[155];
-  assign \cfg.w0.signed  = cycle[156];
-  assign \cfg.w0_crc  = cycle[194:157];
-  assign \cfg.w0_crc.width  = cycle[161:157];
-  assign \cfg.w0_crc.poly  = cycle[177:162];
-  assign \cfg.w0_crc.start  = cycle[193:178];
-  assign \cfg.w0_crc.inverted  = cycle[194];
-  assign \cfg.w1_enable  = cycle[195];
-  assign \cfg.w1  = cycle[207:196];
-  assign \cfg.w1.data_bits  = cycle[201:196];
-  assign \cfg.w1.nenw  = cycle[202];
-  assign \cfg.w1.lc  = cycle[203];
-  assign \cfg.w1.crc  = cycle[205:204];
-  assign \cfg.w1.gray  = cycle[206];
-  assign \cfg.w1.signed  = cycle[207];
-  assign \cfg.w1_crc  = cycle[245:208];
-  assign \cfg.w1_crc.width  = cycle[212:208];
-  assign \cfg.w1_crc.poly  = cycle[228:213];
-  assign \cfg.w1_crc.start  = cycle[244:229];
-  assign \cfg.w1_crc.inverted  = cycle[245];
-  assign \cfg.spw_check  = cycle[246];
-  assign \cfg.spw_tolerance  = cycle[254:247];
+  assign \cfg.confirm_frames  = cycle[148:145];
+  assign \cfg.w0  = cycle[160:149];
+  assign \cfg.w0.data_bits  = cycle[154:149];
+  assign \cfg.w0.nenw  = cycle[155];
+  assign \cfg.w0.lc  = cycle[156];
+  assign \cfg.w0.crc  = cycle[158:157];
+  assign \cfg.w0.gray  = cycle[159];
+  assign \cfg.w0.signed  = cycle[160];
+  assign \cfg.w0_crc  = cycle[198:161];
+  assign \cfg.w0_crc.width  = cycle[165:161];
+  assign \cfg.w0_crc.poly  = cycle[181:166];
+  assign \cfg.w0_crc.start  = cycle[197:182];
+  assign \cfg.w0_crc.inverted  = cycle[198];
+  assign \cfg.w1_enable  = cycle[199];
+  assign \cfg.w1  = cycle[211:200];
+  assign \cfg.w1.data_bits  = cycle[205:200];
+  assign \cfg.w1.nenw  = cycle[206];
+  assign \cfg.w1.lc  = cycle[207];
+  assign \cfg.w1.crc  = cycle[209:208];
+  assign \cfg.w1.gray  = cycle[210];
+  assign \cfg.w1.signed  = cycle[211];
+  assign \cfg.w1_crc  = cycle[249:212];
+  assign \cfg.w1_crc.width  = cycle[216:212];
+  assign \cfg.w1_crc.poly  = cycle[232:217];
+  assign \cfg.w1_crc.start  = cycle[248:233];
+  assign \cfg.w1_crc.inverted  = cycle[249];
+  assign \cfg.spw_check  = cycle[250];
+  assign \cfg.spw_tolerance  = cycle[258:251];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -1625,36 +1677,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$290.slave_id  = \request$290 [2:0];
-  assign \request$290.address  = \request$290 [9:3];
-  assign \request$290.count  = \request$290 [16:10];
-  assign \request$290.write  = \request$290 [17];
+  assign \request$296.slave_id  = \request$296 [2:0];
+  assign \request$296.address  = \request$296 [9:3];
+  assign \request$296.count  = \request$296 [16:10];
+  assign \request$296.write  = \request$296 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$311.crc_word0  = \events$311 [0];
-  assign \events$311.crc_word1  = \events$311 [1];
-  assign \events$311.no_ack  = \events$311 [2];
-  assign \events$311.no_start  = \events$311 [3];
-  assign \events$311.delay_range  = \events$311 [4];
-  assign \events$311.slo_stuck_low  = \events$311 [5];
-  assign \events$311.lc_repeat  = \events$311 [6];
-  assign \events$311.lc_skip  = \events$311 [7];
-  assign \events$311.lc_zero  = \events$311 [8];
-  assign \events$311.spw_mismatch  = \events$311 [9];
-  assign \events$311.overrun  = \events$311 [10];
-  assign \events$311.aborted  = \events$311 [11];
-  assign \events$311.no_stop  = \events$311 [12];
-  assign \events$311.noisy_line  = \events$311 [13];
-  assign \events$311.delay_jump  = \events$311 [14];
-  assign \events$311.noise_event  = \events$311 [15];
-  assign \events$311.ca_crc4_error  = \events$311 [16];
-  assign \events$311.ca_no_answer  = \events$311 [17];
-  assign \events$311.ca_refused  = \events$311 [18];
-  assign \events$311.ca_aborted  = \events$311 [19];
-  assign \events$311.ca_data_fault  = \events$311 [20];
+  assign \events$318.crc_word0  = \events$318 [0];
+  assign \events$318.crc_word1  = \events$318 [1];
+  assign \events$318.no_ack  = \events$318 [2];
+  assign \events$318.no_start  = \events$318 [3];
+  assign \events$318.delay_range  = \events$318 [4];
+  assign \events$318.slo_stuck_low  = \events$318 [5];
+  assign \events$318.lc_repeat  = \events$318 [6];
+  assign \events$318.lc_skip  = \events$318 [7];
+  assign \events$318.lc_zero  = \events$318 [8];
+  assign \events$318.spw_mismatch  = \events$318 [9];
+  assign \events$318.overrun  = \events$318 [10];
+  assign \events$318.aborted  = \events$318 [11];
+  assign \events$318.no_stop  = \events$318 [12];
+  assign \events$318.noisy_line  = \events$318 [13];
+  assign \events$318.delay_jump  = \events$318 [14];
+  assign \events$318.noise_event  = \events$318 [15];
+  assign \events$318.ca_crc4_error  = \events$318 [16];
+  assign \events$318.ca_no_answer  = \events$318 [17];
+  assign \events$318.ca_refused  = \events$318 [18];
+  assign \events$318.ca_aborted  = \events$318 [19];
+  assign \events$318.ca_data_fault  = \events$318 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -1683,59 +1735,59 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$321.status  = \result$321 [3:0];
-  assign \result$321.timestamp  = \result$321 [35:4];
-  assign \result$321.line_delay  = \result$321 [48:36];
-  assign \result$321.cds  = \result$321 [49];
-  assign \result$321.noise_events  = \result$321 [53:50];
-  assign \result$321.delay_settled  = \result$321 [54];
-  assign \result$321.settled_delay  = \result$321 [67:55];
-  assign \result$321.delay_spread  = \result$321 [75:68];
-  assign \result$321.word0  = \result$321 [133:76];
-  assign \result$321.word0.position  = \result$321 [130:76];
-  assign \result$321.word0.ne  = \result$321 [131];
-  assign \result$321.word0.nw  = \result$321 [132];
-  assign \result$321.word0.crc_ok  = \result$321 [133];
-  assign \result$321.word1  = \result$321 [176:134];
-  assign \result$321.word1.position  = \result$321 [173:134];
-  assign \result$321.word1.ne  = \result$321 [174];
-  assign \result$321.word1.nw  = \result$321 [175];
-  assign \result$321.word1.crc_ok  = \result$321 [176];
-  assign \result$321.lc  = \result$321 [182:177];
-  assign \result$321.lc_repeat  = \result$321 [183];
-  assign \result$321.lc_skip  = \result$321 [184];
-  assign \result$321.lc_zero  = \result$321 [185];
-  assign \result$321.spw_mismatch  = \result$321 [186];
-  assign \events$311 [20] = \$16 ;
-  assign \events$311 [19] = \$14 ;
-  assign \events$311 [18] = \$12 ;
-  assign \events$311 [17] = \$10 ;
-  assign \events$311 [16] = \$8 ;
-  assign \events$311 [15] = \event ;
-  assign \events$311 [14] = \$6 ;
-  assign \events$311 [13] = \$4 ;
-  assign \events$311 [12] = faults[6];
-  assign \events$311 [11] = faults[4];
-  assign \events$311 [10] = overrun;
-  assign \events$311 [9] = \$2 ;
-  assign \events$311 [8] = \lc_zero$281 ;
-  assign \events$311 [7] = \lc_skip$280 ;
-  assign \events$311 [6] = \lc_repeat$279 ;
-  assign \events$311 [5] = faults[3];
-  assign \events$311 [4] = faults[2];
-  assign \events$311 [3] = faults[1];
-  assign \events$311 [2] = faults[0];
-  assign \events$311 [1] = crc_error[1];
-  assign \events$311 [0] = crc_error[0];
+  assign \result$328.status  = \result$328 [3:0];
+  assign \result$328.timestamp  = \result$328 [35:4];
+  assign \result$328.line_delay  = \result$328 [48:36];
+  assign \result$328.cds  = \result$328 [49];
+  assign \result$328.noise_events  = \result$328 [53:50];
+  assign \result$328.delay_settled  = \result$328 [54];
+  assign \result$328.settled_delay  = \result$328 [67:55];
+  assign \result$328.delay_spread  = \result$328 [75:68];
+  assign \result$328.word0  = \result$328 [133:76];
+  assign \result$328.word0.position  = \result$328 [130:76];
+  assign \result$328.word0.ne  = \result$328 [131];
+  assign \result$328.word0.nw  = \result$328 [132];
+  assign \result$328.word0.crc_ok  = \result$328 [133];
+  assign \result$328.word1  = \result$328 [176:134];
+  assign \result$328.word1.position  = \result$328 [173:134];
+  assign \result$328.word1.ne  = \result$328 [174];
+  assign \result$328.word1.nw  = \result$328 [175];
+  assign \result$328.word1.crc_ok  = \result$328 [176];
+  assign \result$328.lc  = \result$328 [182:177];
+  assign \result$328.lc_repeat  = \result$328 [183];
+  assign \result$328.lc_skip  = \result$328 [184];
+  assign \result$328.lc_zero  = \result$328 [185];
+  assign \result$328.spw_mismatch  = \result$328 [186];
+  assign \events$318 [20] = \$16 ;
+  assign \events$318 [19] = \$14 ;
+  assign \events$318 [18] = \$12 ;
+  assign \events$318 [17] = \$10 ;
+  assign \events$318 [16] = \$8 ;
+  assign \events$318 [15] = \event ;
+  assign \events$318 [14] = \$6 ;
+  assign \events$318 [13] = \$4 ;
+  assign \events$318 [12] = faults[6];
+  assign \events$318 [11] = faults[4];
+  assign \events$318 [10] = overrun;
+  assign \events$318 [9] = \$2 ;
+  assign \events$318 [8] = \lc_zero$287 ;
+  assign \events$318 [7] = \lc_skip$286 ;
+  assign \events$318 [6] = \lc_repeat$285 ;
+  assign \events$318 [5] = faults[3];
+  assign \events$318 [4] = faults[2];
+  assign \events$318 [3] = faults[1];
+  assign \events$318 [2] = faults[0];
+  assign \events$318 [1] = crc_error[1];
+  assign \events$318 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$290 [17] = ca_write;
-  assign \request$290 [16:10] = ca_count;
-  assign \request$290 [9:3] = ca_address;
-  assign \request$290 [2:0] = ca_slave_id;
+  assign \request$296 [17] = ca_write;
+  assign \request$296 [16:10] = ca_count;
+  assign \request$296 [9:3] = ca_address;
+  assign \request$296 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[186] = \spw_mismatch$286 ;
+  assign frame[186] = \spw_mismatch$292 ;
   assign frame[176] = \$24 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
@@ -1744,44 +1796,45 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign frame[132] = nw[0];
   assign frame[131] = ne[0];
   assign frame[130:76] = data0;
-  assign frame[185] = \lc_zero$281 ;
-  assign frame[184] = \lc_skip$280 ;
-  assign frame[183] = \lc_repeat$279 ;
-  assign frame[182:177] = \lc$203 ;
+  assign frame[185] = \lc_zero$287 ;
+  assign frame[184] = \lc_skip$286 ;
+  assign frame[183] = \lc_repeat$285 ;
+  assign frame[182:177] = \lc$204 ;
   assign frame[75:68] = spread;
-  assign frame[67:55] = \settled_delay$277 ;
+  assign frame[67:55] = \settled_delay$283 ;
   assign frame[54] = settled;
   assign frame[53:50] = events;
-  assign frame[49] = \cds$274 ;
+  assign frame[49] = \cds$280 ;
   assign frame[48:36] = delay;
-  assign frame[3:0] = \status$273 ;
-  assign \words$238 [23:12] = cycle[207:196];
-  assign \words$238 [11:0] = cycle[156:145];
-  assign words[23:12] = cycle[207:196];
-  assign words[11:0] = cycle[156:145];
-  assign live[254:247] = cfg_spw_tolerance;
-  assign live[246] = cfg_spw_check;
-  assign live[245] = cfg_w1_crc_inverted;
-  assign live[244:229] = cfg_w1_crc_start;
-  assign live[228:213] = cfg_w1_crc_poly;
-  assign live[212:208] = cfg_w1_crc_width;
-  assign live[207] = cfg_w1_signed;
-  assign live[206] = cfg_w1_gray;
-  assign live[205:204] = cfg_w1_crc;
-  assign live[203] = cfg_w1_lc;
-  assign live[202] = cfg_w1_nenw;
-  assign live[201:196] = cfg_w1_data_bits;
-  assign live[195] = cfg_w1_enable;
-  assign live[194] = cfg_w0_crc_inverted;
-  assign live[193:178] = cfg_w0_crc_start;
-  assign live[177:162] = cfg_w0_crc_poly;
-  assign live[161:157] = cfg_w0_crc_width;
-  assign live[156] = cfg_w0_signed;
-  assign live[155] = cfg_w0_gray;
-  assign live[154:153] = cfg_w0_crc;
-  assign live[152] = cfg_w0_lc;
-  assign live[151] = cfg_w0_nenw;
-  assign live[150:145] = cfg_w0_data_bits;
+  assign frame[3:0] = \status$270 ;
+  assign \words$239 [23:12] = cycle[211:200];
+  assign \words$239 [11:0] = cycle[160:149];
+  assign words[23:12] = cycle[211:200];
+  assign words[11:0] = cycle[160:149];
+  assign live[258:251] = cfg_spw_tolerance;
+  assign live[250] = cfg_spw_check;
+  assign live[249] = cfg_w1_crc_inverted;
+  assign live[248:233] = cfg_w1_crc_start;
+  assign live[232:217] = cfg_w1_crc_poly;
+  assign live[216:212] = cfg_w1_crc_width;
+  assign live[211] = cfg_w1_signed;
+  assign live[210] = cfg_w1_gray;
+  assign live[209:208] = cfg_w1_crc;
+  assign live[207] = cfg_w1_lc;
+  assign live[206] = cfg_w1_nenw;
+  assign live[205:200] = cfg_w1_data_bits;
+  assign live[199] = cfg_w1_enable;
+  assign live[198] = cfg_w0_crc_inverted;
+  assign live[197:182] = cfg_w0_crc_start;
+  assign live[181:166] = cfg_w0_crc_poly;
+  assign live[165:161] = cfg_w0_crc_width;
+  assign live[160] = cfg_w0_signed;
+  assign live[159] = cfg_w0_gray;
+  assign live[158:157] = cfg_w0_crc;
+  assign live[156] = cfg_w0_lc;
+  assign live[155] = cfg_w0_nenw;
+  assign live[154:149] = cfg_w0_data_bits;
+  assign live[148:145] = cfg_confirm_frames;
   assign live[144:141] = cfg_delay_tolerance;
   assign live[140:137] = cfg_noise_limit;
   assign live[136:125] = cfg_quiet_time;
@@ -1853,7 +1906,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire [24:0] \$58 ;
   reg \$59 ;
   wire \$6 ;
-  reg [254:0] \$60 ;
+  reg [258:0] \$60 ;
   reg [23:0] \$61 ;
   reg [23:0] \$62 ;
   reg [11:0] \$63 ;
@@ -1880,10 +1933,11 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  output [254:0] cycle;
-  reg [254:0] cycle = 255'h0000000000000000000000000000000000000000000000000000000000000000;
+  output [258:0] cycle;
+  reg [258:0] cycle = 259'h00000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
+  wire [3:0] \cycle.confirm_frames ;
   wire [11:0] \cycle.delay_limit ;
   wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
@@ -1935,10 +1989,11 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [254:0] live;
-  wire [254:0] live;
+  input [258:0] live;
+  wire [258:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
+  wire [3:0] \live.confirm_frames ;
   wire [11:0] \live.delay_limit ;
   wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
@@ -1999,14 +2054,14 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
-  assign \$36  = live[195] & live[152];
-  assign \$37  = \$36  & live[203];
+  assign \$36  = live[199] & live[156];
+  assign \$37  = \$36  & live[207];
   assign \$38  = ~ \$37 ;
   assign \$39  = \$35  & \$38 ;
-  assign \$40  = ~ live[246];
-  assign \$41  = live[201:196] <= live[150:145];
-  assign \$42  = live[195] & \$41 ;
-  assign \$43  = | live[205:204];
+  assign \$40  = ~ live[250];
+  assign \$41  = live[205:200] <= live[154:149];
+  assign \$42  = live[199] & \$41 ;
+  assign \$43  = | live[209:208];
   assign \$44  = \$42  & \$43 ;
   assign \$45  = \$40  | \$44 ;
   assign \$46  = \$39  & \$45 ;
@@ -2022,7 +2077,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$56  = \$55  ? 4'h2 : live[144:141];
   assign \$57  = live[15:0] + \$56 ;
   assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[195];
+  assign word_count = 1'h1 + cycle[199];
   always @(posedge clk)
     ok <= \$59 ;
   always @(posedge clk)
@@ -2042,35 +2097,35 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   always @(posedge clk)
     no_start_limit <= \$67 ;
   assign \$1  = | live[15:1];
-  assign \$2  = | live[150:145];
-  assign \$3  = live[150:145] <= 6'h37;
+  assign \$2  = | live[154:149];
+  assign \$3  = live[154:149] <= 6'h37;
   assign \$4  = \$2  & \$3 ;
-  assign \$5  = ! live[154:153];
-  assign \$6  = live[154:153] == 1'h1;
+  assign \$5  = ! live[158:157];
+  assign \$6  = live[158:157] == 1'h1;
   assign \$7  = \$5  | \$6 ;
-  assign \$8  = live[154:153] == 2'h2;
+  assign \$8  = live[158:157] == 2'h2;
   assign \$9  = \$7  | \$8 ;
-  assign \$10  = live[154:153] == 2'h3;
-  assign \$11  = | live[161:157];
+  assign \$10  = live[158:157] == 2'h3;
+  assign \$11  = | live[165:161];
   assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[161:157] <= 5'h10;
+  assign \$13  = live[165:161] <= 5'h10;
   assign \$14  = \$12  & \$13 ;
   assign \$15  = \$9  | \$14 ;
   assign \$16  = \$4  & \$15 ;
   assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[195];
-  assign \$19  = | live[201:196];
-  assign \$20  = live[201:196] <= 6'h28;
+  assign \$18  = ~ live[199];
+  assign \$19  = | live[205:200];
+  assign \$20  = live[205:200] <= 6'h28;
   assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[205:204];
-  assign \$23  = live[205:204] == 1'h1;
+  assign \$22  = ! live[209:208];
+  assign \$23  = live[209:208] == 1'h1;
   assign \$24  = \$22  | \$23 ;
-  assign \$25  = live[205:204] == 2'h2;
+  assign \$25  = live[209:208] == 2'h2;
   assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[205:204] == 2'h3;
-  assign \$28  = | live[212:208];
+  assign \$27  = live[209:208] == 2'h3;
+  assign \$28  = | live[216:212];
   assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[212:208] <= 5'h10;
+  assign \$30  = live[216:212] <= 5'h10;
   assign \$31  = \$29  & \$30 ;
   assign \$32  = \$26  | \$31 ;
   always @* begin
@@ -2087,7 +2142,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
       \$60  = live;
     end
     if (rst) begin
-      \$60  = 255'h0000000000000000000000000000000000000000000000000000000000000000;
+      \$60  = 259'h00000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
@@ -2145,7 +2200,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
     \$66  = crcs;
     if (idle) begin
       (* full_case = 32'd1 *)
-      casez (live[154:153])
+      casez (live[158:157])
         2'h1:
           begin
             \$66 [4:0] = 5'h06;
@@ -2161,12 +2216,12 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
             \$66 [37] = 1'h1;
           end
         2'h3:
-            \$66 [37:0] = live[194:157];
+            \$66 [37:0] = live[198:161];
         default:
             \$66 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
-      casez (live[205:204])
+      casez (live[209:208])
         2'h1:
           begin
             \$66 [42:38] = 5'h06;
@@ -2182,7 +2237,7 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
             \$66 [75] = 1'h1;
           end
         2'h3:
-            \$66 [75:38] = live[245:208];
+            \$66 [75:38] = live[249:212];
         default:
             \$66 [75:38] = 38'h0000000000;
       endcase
@@ -2208,33 +2263,34 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[156:145];
-  assign \live.w0.data_bits  = live[150:145];
-  assign \live.w0.nenw  = live[151];
-  assign \live.w0.lc  = live[152];
-  assign \live.w0.crc  = live[154:153];
-  assign \live.w0.gray  = live[155];
-  assign \live.w0.signed  = live[156];
-  assign \live.w0_crc  = live[194:157];
-  assign \live.w0_crc.width  = live[161:157];
-  assign \live.w0_crc.poly  = live[177:162];
-  assign \live.w0_crc.start  = live[193:178];
-  assign \live.w0_crc.inverted  = live[194];
-  assign \live.w1_enable  = live[195];
-  assign \live.w1  = live[207:196];
-  assign \live.w1.data_bits  = live[201:196];
-  assign \live.w1.nenw  = live[202];
-  assign \live.w1.lc  = live[203];
-  assign \live.w1.crc  = live[205:204];
-  assign \live.w1.gray  = live[206];
-  assign \live.w1.signed  = live[207];
-  assign \live.w1_crc  = live[245:208];
-  assign \live.w1_crc.width  = live[212:208];
-  assign \live.w1_crc.poly  = live[228:213];
-  assign \live.w1_crc.start  = live[244:229];
-  assign \live.w1_crc.inverted  = live[245];
-  assign \live.spw_check  = live[246];
-  assign \live.spw_tolerance  = live[254:247];
+  assign \live.confirm_frames  = live[148:145];
+  assign \live.w0  = live[160:149];
+  assign \live.w0.data_bits  = live[154:149];
+  assign \live.w0.nenw  = live[155];
+  assign \live.w0.lc  = live[156];
+  assign \live.w0.crc  = live[158:157];
+  assign \live.w0.gray  = live[159];
+  assign \live.w0.signed  = live[160];
+  assign \live.w0_crc  = live[198:161];
+  assign \live.w0_crc.width  = live[165:161];
+  assign \live.w0_crc.poly  = live[181:166];
+  assign \live.w0_crc.start  = live[197:182];
+  assign \live.w0_crc.inverted  = live[198];
+  assign \live.w1_enable  = live[199];
+  assign \live.w1  = live[211:200];
+  assign \live.w1.data_bits  = live[205:200];
+  assign \live.w1.nenw  = live[206];
+  assign \live.w1.lc  = live[207];
+  assign \live.w1.crc  = live[209:208];
+  assign \live.w1.gray  = live[210];
+  assign \live.w1.signed  = live[211];
+  assign \live.w1_crc  = live[249:212];
+  assign \live.w1_crc.width  = live[216:212];
+  assign \live.w1_crc.poly  = live[232:217];
+  assign \live.w1_crc.start  = live[248:233];
+  assign \live.w1_crc.inverted  = live[249];
+  assign \live.spw_check  = live[250];
+  assign \live.spw_tolerance  = live[258:251];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -2245,33 +2301,34 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[156:145];
-  assign \cycle.w0.data_bits  = cycle[150:145];
-  assign \cycle.w0.nenw  = cycle[151];
-  assign \cycle.w0.lc  = cycle[152];
-  assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0.signed  = cycle[156];
-  assign \cycle.w0_crc  = cycle[194:157];
-  assign \cycle.w0_crc.width  = cycle[161:157];
-  assign \cycle.w0_crc.poly  = cycle[177:162];
-  assign \cycle.w0_crc.start  = cycle[193:178];
-  assign \cycle.w0_crc.inverted  = cycle[194];
-  assign \cycle.w1_enable  = cycle[195];
-  assign \cycle.w1  = cycle[207:196];
-  assign \cycle.w1.data_bits  = cycle[201:196];
-  assign \cycle.w1.nenw  = cycle[202];
-  assign \cycle.w1.lc  = cycle[203];
-  assign \cycle.w1.crc  = cycle[205:204];
-  assign \cycle.w1.gray  = cycle[206];
-  assign \cycle.w1.signed  = cycle[207];
-  assign \cycle.w1_crc  = cycle[245:208];
-  assign \cycle.w1_crc.width  = cycle[212:208];
-  assign \cycle.w1_crc.poly  = cycle[228:213];
-  assign \cycle.w1_crc.start  = cycle[244:229];
-  assign \cycle.w1_crc.inverted  = cycle[245];
-  assign \cycle.spw_check  = cycle[246];
-  assign \cycle.spw_tolerance  = cycle[254:247];
+  assign \cycle.confirm_frames  = cycle[148:145];
+  assign \cycle.w0  = cycle[160:149];
+  assign \cycle.w0.data_bits  = cycle[154:149];
+  assign \cycle.w0.nenw  = cycle[155];
+  assign \cycle.w0.lc  = cycle[156];
+  assign \cycle.w0.crc  = cycle[158:157];
+  assign \cycle.w0.gray  = cycle[159];
+  assign \cycle.w0.signed  = cycle[160];
+  assign \cycle.w0_crc  = cycle[198:161];
+  assign \cycle.w0_crc.width  = cycle[165:161];
+  assign \cycle.w0_crc.poly  = cycle[181:166];
+  assign \cycle.w0_crc.start  = cycle[197:182];
+  assign \cycle.w0_crc.inverted  = cycle[198];
+  assign \cycle.w1_enable  = cycle[199];
+  assign \cycle.w1  = cycle[211:200];
+  assign \cycle.w1.data_bits  = cycle[205:200];
+  assign \cycle.w1.nenw  = cycle[206];
+  assign \cycle.w1.lc  = cycle[207];
+  assign \cycle.w1.crc  = cycle[209:208];
+  assign \cycle.w1.gray  = cycle[210];
+  assign \cycle.w1.signed  = cycle[211];
+  assign \cycle.w1_crc  = cycle[249:212];
+  assign \cycle.w1_crc.width  = cycle[216:212];
+  assign \cycle.w1_crc.poly  = cycle[232:217];
+  assign \cycle.w1_crc.start  = cycle[248:233];
+  assign \cycle.w1_crc.inverted  = cycle[249];
+  assign \cycle.spw_check  = cycle[250];
+  assign \cycle.spw_tolerance  = cycle[258:251];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -2285,10 +2342,93 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master.confirmation (rst, report, status, pending, setting, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$7  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire [3:0] \$12 ;
+  wire [3:0] \$13 ;
+  wire [4:0] \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  reg [3:0] \$17 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input clk;
+  wire clk;
+  reg [3:0] left = 4'h0;
+  output pending;
+  wire pending;
+  input report;
+  wire report;
+  input rst;
+  wire rst;
+  input [3:0] setting;
+  wire [3:0] setting;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  input [3:0] status;
+  wire [3:0] status;
+  assign \$1  = ! status;
+  assign \$2  = status == 4'ha;
+  assign \$3  = status == 4'hb;
+  assign \$4  = status == 4'hf;
+  assign \$5  = | { \$4 , \$3 , \$2 , \$1  };
+  assign \$6  = ~ \$5 ;
+  assign \$7  = report & \$6 ;
+  assign \$8  = status == 4'hf;
+  assign \$9  = report & \$8 ;
+  assign \$10  = ! setting;
+  assign \$11  = setting == 4'hf;
+  assign \$12  = \$11  ? 4'h0 : setting;
+  assign \$13  = \$10  ? 4'h1 : \$12 ;
+  assign \$14  = left - 1'h1;
+  assign \$15  = | left;
+  assign \$16  = setting != 4'hf;
+  assign pending = \$15  & \$16 ;
+  always @(posedge clk)
+    left <= \$17 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    \$17  = left;
+    if (\$7 ) begin
+      \$17  = \$13 ;
+    end else if (\$9 ) begin
+      \$17  = \$14 [3:0];
+    end
+    if (rst) begin
+      \$17  = 4'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master.controller (clk, rst, request, restart_timer, report_delay, frame_doubtful, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
 , slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
 , abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$7  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$8  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -2375,6 +2515,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] fault_status;
   reg [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -2393,6 +2534,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \fault_status$41 ;
   output [6:0] faults;
   wire [6:0] faults;
@@ -2505,6 +2647,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -2522,6 +2665,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \status$79 ;
   input stop_bit;
   wire stop_bit;
@@ -2623,7 +2767,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     .report_frame(report_frame)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2631,7 +2775,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2678,7 +2822,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     waiting = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2690,7 +2834,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2702,7 +2846,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2751,7 +2895,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2800,7 +2944,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2816,7 +2960,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2830,7 +2974,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2844,7 +2988,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     framing = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2860,7 +3004,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2891,7 +3035,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2909,7 +3053,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     holding = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -2932,14 +3076,14 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     \$27  = idle;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     \$28  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -3030,7 +3174,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     \$29  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -3121,7 +3265,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     \$30  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -3212,7 +3356,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$7 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     \$31  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -3281,7 +3425,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.controller.cdm_hold (clk, rst, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$8  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$9  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -3320,7 +3464,7 @@ module \biss_master.controller.cdm_hold (clk, rst, framing, holding, idle, cdm_c
   assign \$1  = ~ abort;
   assign \$2  = cdm_cycle & \$1 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     \$7  = cdm_cycle;
     if (idle) begin
       \$7  = cdm;
@@ -3330,7 +3474,7 @@ module \biss_master.controller.cdm_hold (clk, rst, framing, holding, idle, cdm_c
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
     ma_hold = 1'h0;
     if (framing) begin
       ma_hold = \$2 ;
@@ -3342,7 +3486,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$9  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -3410,6 +3554,7 @@ module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fa
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] status;
   reg [3:0] status;
   input watch;
@@ -3439,7 +3584,7 @@ module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fa
   always @(posedge clk)
     locked_seen <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$20  = armed;
     if (clear) begin
       \$20  = 1'h0;
@@ -3452,7 +3597,7 @@ module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$21  = locked_seen;
     if (clear) begin
       \$21  = 1'h0;
@@ -3465,7 +3610,7 @@ module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     fault = 1'h0;
     if (\$7 ) begin
       fault = 1'h1;
@@ -3478,7 +3623,7 @@ module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     status = 4'h0;
     if (\$7 ) begin
       status = 4'h8;
@@ -3491,7 +3636,7 @@ module \biss_master.controller.line_faults (rst, restart_timer, clear, watch, fa
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     delay = 1'h0;
     if (\$7 ) begin
     end else if (\$12 ) begin
@@ -3503,7 +3648,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$11  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -3537,7 +3682,7 @@ module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, 
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
   assign \$4  = first_clock ? quiet_live : quiet;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     aborted = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -3545,7 +3690,7 @@ module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     ready = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -3554,7 +3699,7 @@ module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     stuck_low = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -3564,7 +3709,7 @@ module \biss_master.controller.ready_check (config_ok, first_clock, bad_config, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
@@ -3609,6 +3754,7 @@ module \biss_master.controller.report (fault, fault_status, report_frame, delay,
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   output [6:0] faults;
@@ -3641,6 +3787,7 @@ module \biss_master.controller.report (fault, fault_status, report_frame, delay,
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   assign report_delay = report_frame | delay;
   assign \$1  = fault_status == 3'h6;
@@ -3678,7 +3825,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.counters (clk, rst, events, counts, clear);
-  reg \$auto$verilog_backend.cc:2355:dump_module$11  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   reg [20:0] \$1 ;
   reg \$2 ;
   input clear;
@@ -3992,14 +4139,14 @@ module \biss_master.counters (clk, rst, events, counts, clear);
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
     \$1  = events;
     if (rst) begin
       \$1  = 21'h000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
     \$2  = clear;
     if (rst) begin
       \$2  = 1'h0;
@@ -4135,60 +4282,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.counters.count_aborted (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_aborted (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4242,7 +4335,7 @@ module \biss_master.counters.count_ca_aborted (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
+module \biss_master.counters.count_ca_aborted (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4296,7 +4389,7 @@ module \biss_master.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_data_fault (rst, inc, clear, count, clk);
+module \biss_master.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4350,7 +4443,7 @@ module \biss_master.counters.count_ca_data_fault (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_no_answer (rst, inc, clear, count, clk);
+module \biss_master.counters.count_ca_data_fault (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4404,7 +4497,7 @@ module \biss_master.counters.count_ca_no_answer (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_ca_refused (rst, inc, clear, count, clk);
+module \biss_master.counters.count_ca_no_answer (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4458,7 +4551,7 @@ module \biss_master.counters.count_ca_refused (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_crc_word0 (rst, inc, clear, count, clk);
+module \biss_master.counters.count_ca_refused (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4512,7 +4605,7 @@ module \biss_master.counters.count_crc_word0 (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_crc_word1 (rst, inc, clear, count, clk);
+module \biss_master.counters.count_crc_word0 (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4566,7 +4659,7 @@ module \biss_master.counters.count_crc_word1 (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_delay_jump (rst, inc, clear, count, clk);
+module \biss_master.counters.count_crc_word1 (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4620,7 +4713,7 @@ module \biss_master.counters.count_delay_jump (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_delay_range (rst, inc, clear, count, clk);
+module \biss_master.counters.count_delay_jump (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4674,7 +4767,7 @@ module \biss_master.counters.count_delay_range (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_repeat (rst, inc, clear, count, clk);
+module \biss_master.counters.count_delay_range (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4728,7 +4821,7 @@ module \biss_master.counters.count_lc_repeat (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_skip (rst, inc, clear, count, clk);
+module \biss_master.counters.count_lc_repeat (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4782,7 +4875,7 @@ module \biss_master.counters.count_lc_skip (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_lc_zero (rst, inc, clear, count, clk);
+module \biss_master.counters.count_lc_skip (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4836,7 +4929,7 @@ module \biss_master.counters.count_lc_zero (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_ack (rst, inc, clear, count, clk);
+module \biss_master.counters.count_lc_zero (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4890,7 +4983,7 @@ module \biss_master.counters.count_no_ack (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_start (rst, inc, clear, count, clk);
+module \biss_master.counters.count_no_ack (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4944,7 +5037,7 @@ module \biss_master.counters.count_no_start (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_no_stop (rst, inc, clear, count, clk);
+module \biss_master.counters.count_no_start (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -4998,7 +5091,7 @@ module \biss_master.counters.count_no_stop (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_noise_event (rst, inc, clear, count, clk);
+module \biss_master.counters.count_no_stop (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -5052,7 +5145,7 @@ module \biss_master.counters.count_noise_event (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_noisy_line (rst, inc, clear, count, clk);
+module \biss_master.counters.count_noise_event (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -5106,7 +5199,7 @@ module \biss_master.counters.count_noisy_line (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_overrun (rst, inc, clear, count, clk);
+module \biss_master.counters.count_noisy_line (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -5160,7 +5253,7 @@ module \biss_master.counters.count_overrun (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
+module \biss_master.counters.count_overrun (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -5214,7 +5307,7 @@ module \biss_master.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
+module \biss_master.counters.count_slo_stuck_low (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -5268,9 +5361,63 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top
 , crc_ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -6664,7 +6811,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$585  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -6688,7 +6835,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$586  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -6710,7 +6857,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$587  = slots;
     if (\$36 ) begin
       \$587  = \$37 [15:0];
@@ -6723,7 +6870,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$588  = slots_full;
     if (\$36 ) begin
       \$588  = \$38 ;
@@ -6736,7 +6883,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$589  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -6752,7 +6899,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$590  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -6768,7 +6915,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$591  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -6800,7 +6947,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$592  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -6818,7 +6965,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$593  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -6843,7 +6990,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$594  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -6868,7 +7015,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$595  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -6893,7 +7040,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$596  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
@@ -6915,7 +7062,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$597  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -6940,7 +7087,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$598  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -6968,7 +7115,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$599  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -6990,7 +7137,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$600  = data0;
     if (\$66 ) begin
       \$600  = \$344 ;
@@ -7003,7 +7150,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$601  = ne;
     if (\$345 ) begin
       \$601 [0] = 1'h1;
@@ -7023,7 +7170,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$602  = nw;
     if (\$345 ) begin
       \$602 [0] = 1'h1;
@@ -7045,7 +7192,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$603  = data1;
     if (\$356 ) begin
       \$603  = \$559 ;
@@ -7058,7 +7205,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$604  = lc;
     if (lc_load) begin
       \$604  = { lc[4:0], \bit  };
@@ -7071,7 +7218,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$605  = cpw_top;
     if (\$569 ) begin
       \$605  = { cpw_top[38:0], \$571  };
@@ -7084,7 +7231,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     at_cds = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -7094,7 +7241,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -7106,7 +7253,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -7116,7 +7263,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -7130,7 +7277,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -7144,7 +7291,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -7158,7 +7305,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[18])
       1'h0:
@@ -7168,7 +7315,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -7182,7 +7329,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -7196,7 +7343,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -7256,7 +7403,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
   reg \$11 ;
@@ -7357,7 +7504,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
   always @(posedge clk)
     ok <= \$35 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (load_index)
       1'h0:
@@ -7367,7 +7514,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -7377,7 +7524,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -7387,7 +7534,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -7397,7 +7544,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -7407,7 +7554,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -7417,7 +7564,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -7427,7 +7574,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -7437,7 +7584,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -7447,7 +7594,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$33  = \reg ;
     if (load) begin
       \$33  = \$1 ;
@@ -7464,7 +7611,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$34  = mismatch;
     if (load) begin
       \$34  = 1'h0;
@@ -7480,7 +7627,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$35  = ok;
     if (last) begin
       if (\$15 ) begin
@@ -7512,7 +7659,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -7684,56 +7831,56 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
   assign \$39  = magnitude > spread;
   assign \$40  = \$38  & \$39 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$46  = \$1 ;
     if (rst) begin
       \$46  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$47  = \$2 ;
     if (rst) begin
       \$47  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$48  = \tolerance$8 ;
     if (rst) begin
       \$48  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$49  = \$3 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$50  = \$11 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$51  = \$20 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$52  = \$25 ;
     if (rst) begin
       \$52  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$53  = 1'h0;
     if (learn) begin
       if (\$32 ) begin
@@ -7750,7 +7897,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$54  = jump;
     if (check) begin
       \$54  = \$26 ;
@@ -7763,7 +7910,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$55  = count;
     if (learn) begin
       (* full_case = 32'd1 *)
@@ -7785,7 +7932,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$56  = spread;
     if (learn) begin
       if (\$32 ) begin
@@ -7805,7 +7952,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$57  = cand;
     if (learn) begin
       if (\$32 ) begin
@@ -7818,7 +7965,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$58  = settled_delay;
     if (learn) begin
       if (\$32 ) begin
@@ -7835,7 +7982,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$59  = settled;
     if (learn) begin
       if (\$32 ) begin
@@ -7855,7 +8002,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   reg \$10 ;
   reg \$11 ;
@@ -7918,21 +8065,21 @@ module \biss_master.line_noise (rst, sampler_noise, noisy, events, limit, watch,
   always @(posedge clk)
     running <= \$14 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$10  = level;
     if (rst) begin
       \$10  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$11  = \$4 ;
     if (rst) begin
       \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$12  = held_noisy;
     if (close) begin
       \$12  = \$7 ;
@@ -7942,7 +8089,7 @@ module \biss_master.line_noise (rst, sampler_noise, noisy, events, limit, watch,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$13  = held_events;
     if (close) begin
       \$13  = running;
@@ -7952,7 +8099,7 @@ module \biss_master.line_noise (rst, sampler_noise, noisy, events, limit, watch,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$14  = running;
     if (close) begin
       \$14  = { 3'h0, \event  };
@@ -7969,7 +8116,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -8094,7 +8241,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -8109,7 +8256,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -8124,7 +8271,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -8139,7 +8286,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -8168,7 +8315,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -8210,7 +8357,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -8252,7 +8399,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -8271,7 +8418,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -8307,7 +8454,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -8331,7 +8478,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -8347,7 +8494,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -8364,7 +8511,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, \started$11 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   reg [7:0] \$1 ;
   wire \$10 ;
   reg [7:0] \$11 ;
@@ -8467,7 +8614,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
   always @(posedge clk)
     word1_len <= \$19 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -8481,7 +8628,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -8495,42 +8642,42 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$14  = \$3 [7:0];
     if (rst) begin
       \$14  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$15  = \$5 ;
     if (rst) begin
       \$15  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$16  = \$6 ;
     if (rst) begin
       \$16  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$17  = \started$11 ;
     if (rst) begin
       \$17  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$18  = \$10 ;
     if (rst) begin
       \$18  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$19  = \$13 [7:0];
     if (rst) begin
       \$19  = 8'h00;
@@ -8856,7 +9003,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -8973,21 +9120,21 @@ module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_se
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -9007,7 +9154,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -9050,7 +9197,7 @@ module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control_
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -9060,7 +9207,7 @@ module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -9076,7 +9223,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -9119,7 +9266,7 @@ module \biss_master.register_access.checker.rx_crc (rst, crc, data_in, valid, st
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -9143,7 +9290,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -9213,7 +9360,7 @@ module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, 
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -9223,7 +9370,7 @@ module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -9236,7 +9383,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -9308,7 +9455,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -9321,7 +9468,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -9334,7 +9481,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -9344,7 +9491,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -9369,7 +9516,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -9412,7 +9559,7 @@ module \biss_master.register_access.sender.tx_crc (rst, data_in, crc, start, val
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -9437,7 +9584,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -9793,7 +9940,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -9831,7 +9978,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -9885,7 +10032,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -9982,7 +10129,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -9999,7 +10146,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -10038,7 +10185,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -10096,7 +10243,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -10163,7 +10310,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -10195,7 +10342,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10209,7 +10356,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10236,7 +10383,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10256,7 +10403,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10275,7 +10422,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10304,7 +10451,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10325,7 +10472,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10347,7 +10494,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10368,7 +10515,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10390,7 +10537,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10412,7 +10559,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10436,7 +10583,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10475,7 +10622,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [186:0] \$3 ;
@@ -10512,6 +10659,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -10559,6 +10707,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \result.status ;
   wire [31:0] \result.timestamp ;
   wire [57:0] \result.word0 ;
@@ -10584,21 +10733,21 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -10675,7 +10824,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -10960,7 +11109,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$71  = level;
     if (receiver_clear) begin
       \$71  = 1'h1;
@@ -10970,7 +11119,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$72  = mid_delay;
     if (odd) begin
       \$72  = \$8 [12:0];
@@ -10995,7 +11144,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$73  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -11022,7 +11171,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$74  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -11044,7 +11193,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$75  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -11068,7 +11217,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$76  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -11084,7 +11233,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$77  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -11110,7 +11259,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$78  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -11141,7 +11290,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$79  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -11172,7 +11321,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$80  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -11222,7 +11371,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$81  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -11272,7 +11421,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$82  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -11302,7 +11451,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$83  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -11330,7 +11479,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$84  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -11356,7 +11505,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$85  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -11379,7 +11528,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$86  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -11419,7 +11568,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -11437,7 +11586,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     clear = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -11449,7 +11598,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     dropped = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -11470,7 +11619,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -11495,7 +11644,7 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     centre = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -11523,7 +11672,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, receiver_clear, vote1, vote2, clear, centre, level, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -11638,7 +11787,7 @@ module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, rec
   always @(posedge clk)
     strobed <= \$38 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$33  = last;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -11656,7 +11805,7 @@ module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$34  = tail_odd;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -11674,7 +11823,7 @@ module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$35  = 1'h0;
@@ -11694,7 +11843,7 @@ module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$36  = 1'h0;
@@ -11714,7 +11863,7 @@ module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$37  = crowded;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -11732,7 +11881,7 @@ module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, rec
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$38  = strobed;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -11775,7 +11924,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overrun, idle, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -11866,14 +12015,14 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -11887,7 +12036,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -11901,7 +12050,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -11920,8 +12069,8 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2003$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2029$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -11962,8 +12111,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2003$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2003$0 ;
-  wire \port$2003$0 ;
+  input \port$2029$0 ;
+  wire \port$2029$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -11977,9 +12126,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2003$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2003$0  };
-  assign \$2  = { lc[4:0], \port$2003$0  } == last;
-  assign \$3  = { lc[4:0], \port$2003$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2029$0  };
+  assign \$2  = { lc[4:0], \port$2029$0  } == last;
+  assign \$3  = { lc[4:0], \port$2029$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -12013,7 +12162,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2003$0
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -12023,7 +12172,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2003$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -12033,7 +12182,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2003$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -12043,21 +12192,21 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2003$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -12067,7 +12216,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2003$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -12077,7 +12226,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2003$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -12089,13 +12238,13 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2003$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2003$0  };
+  assign lc_next = { lc[4:0], \port$2029$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -12300,28 +12449,28 @@ module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, cl
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -12331,7 +12480,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -12350,14 +12499,14 @@ module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -12371,7 +12520,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma_busy, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
 , delay, slo, break_time);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -12551,7 +12700,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
   assign \$40  = in_clock & \$39 ;
   assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$48  = slo_low_time_p1;
     if (\$2 ) begin
       \$48  = 25'h0000001;
@@ -12563,21 +12712,21 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$49  = \$9 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$50  = \$17 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$51  = high_p2;
     if (\$18 ) begin
       \$51  = 13'h0002;
@@ -12589,28 +12738,28 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$52  = \$23 ;
     if (rst) begin
       \$52  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$53  = \$30 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$54  = \$34 [24:0];
     if (rst) begin
       \$54  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$55  = 1'h0;
@@ -12622,21 +12771,21 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$57  = \$46 ;
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$58  = \$47 ;
     if (rst) begin
       \$58  = 1'h0;
@@ -12645,9 +12794,9 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
-, delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, crc_ok
+, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -12680,17 +12829,21 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
   wire \$36 ;
   wire \$37 ;
   wire \$38 ;
-  wire [1:0] \$39 ;
+  wire \$39 ;
   wire \$4 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire [1:0] \$42 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [254:0] cfg;
-  wire [254:0] cfg;
+  input [258:0] cfg;
+  wire [258:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
+  wire [3:0] \cfg.confirm_frames ;
   wire [11:0] \cfg.delay_limit ;
   wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
@@ -12764,6 +12917,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -12782,6 +12936,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   reg [3:0] frame_status;
   output lc_check;
   wire lc_check;
@@ -12799,6 +12954,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
   wire lc_zero_seen;
   input noisy;
   wire noisy;
+  output passed;
+  wire passed;
   output \port$1471$0 ;
   wire \port$1471$0 ;
   output report;
@@ -12825,22 +12982,25 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] status;
   wire [3:0] status;
+  input unconfirmed;
+  wire unconfirmed;
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[195];
+  assign \$1  = ~ cfg[199];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[195] & cfg[203];
-  assign \$4  = cfg[152] | \$3 ;
+  assign \$3  = cfg[199] & cfg[207];
+  assign \$4  = cfg[156] | \$3 ;
   assign \$5  = report_frame & \$4 ;
-  assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
+  assign \$6  = cfg[156] ? crc_ok[0] : \$2 ;
   assign lc_check = \$5  & \$6 ;
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[246] & cfg[195];
+  assign \$7  = cfg[250] & cfg[199];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
@@ -12856,33 +13016,40 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
   assign status = report_frame ? frame_status : fault_status;
   assign \$18  = ! frame_status;
   assign valid = report_frame & \$18 ;
-  assign \$19  = crc_ok[0] & \$2 ;
-  assign \$20  = ~ \$19 ;
-  assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[195] & cfg[203];
-  assign \$23  = cfg[152] | \$22 ;
-  assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
-  assign \$25  = \$23  & \$24 ;
-  assign \$26  = lc_repeat_seen | lc_skip_seen;
-  assign \$27  = \$26  | lc_zero_seen;
-  assign \$28  = \$25  & \$27 ;
-  assign \$29  = \$21  | \$28 ;
-  assign \$30  = \$29  | noisy;
-  assign doubtful = \$30  | delay_jump;
-  assign \$31  = crc_ok[0] & \$2 ;
-  assign \$32  = ~ spw_mismatch;
-  assign \$33  = \$31  & \$32 ;
-  assign \$34  = ~ noisy;
-  assign \$35  = \$33  & \$34 ;
-  assign \$36  = lc_repeat | lc_skip;
-  assign \$37  = \$36  | lc_zero;
-  assign \$38  = ~ \$37 ;
-  assign clean = \$35  & \$38 ;
-  assign \$39  = ~ { \$2 , crc_ok[0] };
-  assign crc_error = report_frame ? \$39  : 2'h0;
+  assign \$19  = ! frame_status;
+  assign \$20  = frame_status == 4'hf;
+  assign \$21  = \$19  | \$20 ;
+  assign passed = report_frame & \$21 ;
+  assign \$22  = crc_ok[0] & \$2 ;
+  assign \$23  = ~ \$22 ;
+  assign \$24  = \$23  | spw_mismatch;
+  assign \$25  = cfg[199] & cfg[207];
+  assign \$26  = cfg[156] | \$25 ;
+  assign \$27  = cfg[156] ? crc_ok[0] : \$2 ;
+  assign \$28  = \$26  & \$27 ;
+  assign \$29  = lc_repeat_seen | lc_skip_seen;
+  assign \$30  = \$29  | lc_zero_seen;
+  assign \$31  = \$28  & \$30 ;
+  assign \$32  = \$24  | \$31 ;
+  assign \$33  = \$32  | noisy;
+  assign doubtful = \$33  | delay_jump;
+  assign \$34  = crc_ok[0] & \$2 ;
+  assign \$35  = ~ spw_mismatch;
+  assign \$36  = \$34  & \$35 ;
+  assign \$37  = ~ noisy;
+  assign \$38  = \$36  & \$37 ;
+  assign \$39  = lc_repeat | lc_skip;
+  assign \$40  = \$39  | lc_zero;
+  assign \$41  = ~ \$40 ;
+  assign clean = \$38  & \$41 ;
+  assign \$42  = ~ { \$2 , crc_ok[0] };
+  assign crc_error = report_frame ? \$42  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     frame_status = 4'h0;
+    if (unconfirmed) begin
+      frame_status = 4'hf;
+    end
     if (delay_jump) begin
       frame_status = 4'he;
     end
@@ -12917,31 +13084,32 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
   assign \cfg.quiet_time  = cfg[136:125];
   assign \cfg.noise_limit  = cfg[140:137];
   assign \cfg.delay_tolerance  = cfg[144:141];
-  assign \cfg.w0  = cfg[156:145];
-  assign \cfg.w0.data_bits  = cfg[150:145];
-  assign \cfg.w0.nenw  = cfg[151];
-  assign \cfg.w0.lc  = cfg[152];
-  assign \cfg.w0.crc  = cfg[154:153];
-  assign \cfg.w0.gray  = cfg[155];
-  assign \cfg.w0.signed  = cfg[156];
-  assign \cfg.w0_crc  = cfg[194:157];
-  assign \cfg.w0_crc.width  = cfg[161:157];
-  assign \cfg.w0_crc.poly  = cfg[177:162];
-  assign \cfg.w0_crc.start  = cfg[193:178];
-  assign \cfg.w0_crc.inverted  = cfg[194];
-  assign \cfg.w1_enable  = cfg[195];
-  assign \cfg.w1  = cfg[207:196];
-  assign \cfg.w1.data_bits  = cfg[201:196];
-  assign \cfg.w1.nenw  = cfg[202];
-  assign \cfg.w1.lc  = cfg[203];
-  assign \cfg.w1.crc  = cfg[205:204];
-  assign \cfg.w1.gray  = cfg[206];
-  assign \cfg.w1.signed  = cfg[207];
-  assign \cfg.w1_crc  = cfg[245:208];
-  assign \cfg.w1_crc.width  = cfg[212:208];
-  assign \cfg.w1_crc.poly  = cfg[228:213];
-  assign \cfg.w1_crc.start  = cfg[244:229];
-  assign \cfg.w1_crc.inverted  = cfg[245];
-  assign \cfg.spw_check  = cfg[246];
-  assign \cfg.spw_tolerance  = cfg[254:247];
+  assign \cfg.confirm_frames  = cfg[148:145];
+  assign \cfg.w0  = cfg[160:149];
+  assign \cfg.w0.data_bits  = cfg[154:149];
+  assign \cfg.w0.nenw  = cfg[155];
+  assign \cfg.w0.lc  = cfg[156];
+  assign \cfg.w0.crc  = cfg[158:157];
+  assign \cfg.w0.gray  = cfg[159];
+  assign \cfg.w0.signed  = cfg[160];
+  assign \cfg.w0_crc  = cfg[198:161];
+  assign \cfg.w0_crc.width  = cfg[165:161];
+  assign \cfg.w0_crc.poly  = cfg[181:166];
+  assign \cfg.w0_crc.start  = cfg[197:182];
+  assign \cfg.w0_crc.inverted  = cfg[198];
+  assign \cfg.w1_enable  = cfg[199];
+  assign \cfg.w1  = cfg[211:200];
+  assign \cfg.w1.data_bits  = cfg[205:200];
+  assign \cfg.w1.nenw  = cfg[206];
+  assign \cfg.w1.lc  = cfg[207];
+  assign \cfg.w1.crc  = cfg[209:208];
+  assign \cfg.w1.gray  = cfg[210];
+  assign \cfg.w1.signed  = cfg[211];
+  assign \cfg.w1_crc  = cfg[249:212];
+  assign \cfg.w1_crc.width  = cfg[216:212];
+  assign \cfg.w1_crc.poly  = cfg[232:217];
+  assign \cfg.w1_crc.start  = cfg[248:233];
+  assign \cfg.w1_crc.inverted  = cfg[249];
+  assign \cfg.spw_check  = cfg[250];
+  assign \cfg.spw_tolerance  = cfg[258:251];
 endmodule

@@ -86,6 +86,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire ch0__cds;
   wire [23:0] ch0__cfg_ack_limit;
   wire [23:0] ch0__cfg_break_time;
+  wire [3:0] ch0__cfg_confirm_frames;
   wire [11:0] ch0__cfg_delay_limit;
   wire [3:0] ch0__cfg_delay_tolerance;
   wire ch0__cfg_end_check;
@@ -184,6 +185,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire ch1__cds;
   wire [23:0] ch1__cfg_ack_limit;
   wire [23:0] ch1__cfg_break_time;
+  wire [3:0] ch1__cfg_confirm_frames;
   wire [11:0] ch1__cfg_delay_limit;
   wire [3:0] ch1__cfg_delay_tolerance;
   wire ch1__cfg_end_check;
@@ -262,205 +264,207 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$445 ;
+  wire [1:0] \irq$449 ;
   wire ma;
-  wire \ma$441 ;
+  wire \ma$445 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$252 ;
+  wire \regs__abort_cycle$254 ;
   wire regs__busy;
-  wire \regs__busy$255 ;
+  wire \regs__busy$257 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$256 ;
+  wire \regs__ca_abort$258 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$258 ;
+  wire [6:0] \regs__ca_address$260 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$261 ;
+  wire \regs__ca_busy$263 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$263 ;
+  wire [6:0] \regs__ca_bytes_done$265 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$264 ;
+  wire [6:0] \regs__ca_count$266 ;
   wire regs__ca_done;
-  wire \regs__ca_done$267 ;
+  wire \regs__ca_done$269 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$268 ;
+  wire [3:0] \regs__ca_rbuf_addr$270 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$271 ;
+  wire [31:0] \regs__ca_rbuf_data$273 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$272 ;
+  wire \regs__ca_rbuf_en$274 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$274 ;
+  wire [2:0] \regs__ca_slave_id$276 ;
   wire regs__ca_start;
-  wire \regs__ca_start$276 ;
+  wire \regs__ca_start$278 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$279 ;
+  wire [2:0] \regs__ca_status$281 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$280 ;
+  wire [3:0] \regs__ca_wbuf_addr$282 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$282 ;
+  wire [31:0] \regs__ca_wbuf_data$284 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$284 ;
+  wire [3:0] \regs__ca_wbuf_en$286 ;
   wire regs__ca_write;
-  wire \regs__ca_write$286 ;
+  wire \regs__ca_write$288 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$289 ;
+  wire \regs__cap_counters$291 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$291 ;
+  wire [5:0] \regs__cap_data_bits_w0$293 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$293 ;
+  wire [5:0] \regs__cap_data_bits_w1$295 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$295 ;
+  wire \regs__cap_register_access$297 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$297 ;
+  wire [5:0] \regs__cap_timer_width$299 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$299 ;
+  wire \regs__cap_timestamp$301 ;
   wire regs__cds;
-  wire \regs__cds$301 ;
+  wire \regs__cds$303 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$302 ;
+  wire [23:0] \regs__cfg_ack_limit$304 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$304 ;
+  wire [23:0] \regs__cfg_break_time$306 ;
+  wire [3:0] regs__cfg_confirm_frames;
+  wire [3:0] \regs__cfg_confirm_frames$308 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$306 ;
+  wire [11:0] \regs__cfg_delay_limit$310 ;
   wire [3:0] regs__cfg_delay_tolerance;
-  wire [3:0] \regs__cfg_delay_tolerance$308 ;
+  wire [3:0] \regs__cfg_delay_tolerance$312 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$310 ;
+  wire \regs__cfg_end_check$314 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$312 ;
+  wire [15:0] \regs__cfg_ma_half_period$316 ;
   wire [3:0] regs__cfg_noise_limit;
-  wire [3:0] \regs__cfg_noise_limit$314 ;
+  wire [3:0] \regs__cfg_noise_limit$318 ;
   wire [11:0] regs__cfg_quiet_time;
-  wire [11:0] \regs__cfg_quiet_time$316 ;
+  wire [11:0] \regs__cfg_quiet_time$320 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$318 ;
+  wire [23:0] \regs__cfg_request_period$322 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$320 ;
+  wire \regs__cfg_spw_check$324 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$322 ;
+  wire [7:0] \regs__cfg_spw_tolerance$326 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$324 ;
+  wire [23:0] \regs__cfg_timeout_limit$328 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$326 ;
+  wire [1:0] \regs__cfg_w0_crc$330 ;
   wire regs__cfg_w0_crc_inverted;
-  wire \regs__cfg_w0_crc_inverted$328 ;
+  wire \regs__cfg_w0_crc_inverted$332 ;
   wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] \regs__cfg_w0_crc_poly$330 ;
+  wire [15:0] \regs__cfg_w0_crc_poly$334 ;
   wire [15:0] regs__cfg_w0_crc_start;
-  wire [15:0] \regs__cfg_w0_crc_start$332 ;
+  wire [15:0] \regs__cfg_w0_crc_start$336 ;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [4:0] \regs__cfg_w0_crc_width$334 ;
+  wire [4:0] \regs__cfg_w0_crc_width$338 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$336 ;
+  wire [5:0] \regs__cfg_w0_data_bits$340 ;
   wire regs__cfg_w0_gray;
-  wire \regs__cfg_w0_gray$338 ;
+  wire \regs__cfg_w0_gray$342 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$340 ;
+  wire \regs__cfg_w0_lc$344 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$342 ;
+  wire \regs__cfg_w0_nenw$346 ;
   wire regs__cfg_w0_signed;
-  wire \regs__cfg_w0_signed$344 ;
+  wire \regs__cfg_w0_signed$348 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$346 ;
+  wire [1:0] \regs__cfg_w1_crc$350 ;
   wire regs__cfg_w1_crc_inverted;
-  wire \regs__cfg_w1_crc_inverted$348 ;
+  wire \regs__cfg_w1_crc_inverted$352 ;
   wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] \regs__cfg_w1_crc_poly$350 ;
+  wire [15:0] \regs__cfg_w1_crc_poly$354 ;
   wire [15:0] regs__cfg_w1_crc_start;
-  wire [15:0] \regs__cfg_w1_crc_start$352 ;
+  wire [15:0] \regs__cfg_w1_crc_start$356 ;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [4:0] \regs__cfg_w1_crc_width$354 ;
+  wire [4:0] \regs__cfg_w1_crc_width$358 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$356 ;
+  wire [5:0] \regs__cfg_w1_data_bits$360 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$358 ;
+  wire \regs__cfg_w1_enable$362 ;
   wire regs__cfg_w1_gray;
-  wire \regs__cfg_w1_gray$360 ;
+  wire \regs__cfg_w1_gray$364 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$362 ;
+  wire \regs__cfg_w1_lc$366 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$364 ;
+  wire \regs__cfg_w1_nenw$368 ;
   wire regs__cfg_w1_signed;
-  wire \regs__cfg_w1_signed$366 ;
+  wire \regs__cfg_w1_signed$370 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$368 ;
+  wire \regs__clear_counters$372 ;
   wire regs__config_error;
-  wire \regs__config_error$371 ;
+  wire \regs__config_error$375 ;
   wire [2:0] regs__count_addr;
-  wire [2:0] \regs__count_addr$372 ;
+  wire [2:0] \regs__count_addr$376 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$375 ;
+  wire [15:0] \regs__count_ca_aborted$379 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$377 ;
+  wire [15:0] \regs__count_ca_crc4_error$381 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$379 ;
+  wire [15:0] \regs__count_ca_data_fault$383 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$381 ;
+  wire [15:0] \regs__count_ca_no_answer$385 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$383 ;
+  wire [15:0] \regs__count_ca_refused$387 ;
   wire [31:0] regs__count_data;
-  wire [31:0] \regs__count_data$385 ;
+  wire [31:0] \regs__count_data$389 ;
   wire regs__count_en;
-  wire \regs__count_en$386 ;
+  wire \regs__count_en$390 ;
   wire regs__delay_settled;
-  wire \regs__delay_settled$389 ;
+  wire \regs__delay_settled$393 ;
   wire [7:0] regs__delay_spread;
-  wire [7:0] \regs__delay_spread$391 ;
+  wire [7:0] \regs__delay_spread$395 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$393 ;
+  wire [15:0] \regs__done_count$397 ;
   wire regs__frame_done;
-  wire \regs__frame_done$395 ;
+  wire \regs__frame_done$399 ;
   wire regs__frame_error;
-  wire \regs__frame_error$397 ;
+  wire \regs__frame_error$401 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$399 ;
+  wire [5:0] \regs__lc$403 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$401 ;
+  wire \regs__lc_repeat$405 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$403 ;
+  wire \regs__lc_skip$407 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$405 ;
+  wire \regs__lc_zero$409 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$407 ;
+  wire [12:0] \regs__line_delay$411 ;
   wire [3:0] regs__noise_events;
-  wire [3:0] \regs__noise_events$409 ;
+  wire [3:0] \regs__noise_events$413 ;
   wire regs__periodic;
-  wire \regs__periodic$410 ;
+  wire \regs__periodic$414 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__r_load;
   wire [12:0] regs__settled_delay;
-  wire [12:0] \regs__settled_delay$413 ;
+  wire [12:0] \regs__settled_delay$417 ;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$415 ;
+  wire \regs__spw_mismatch$419 ;
   wire regs__start;
-  wire \regs__start$416 ;
+  wire \regs__start$420 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$419 ;
+  wire [3:0] \regs__status$423 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$421 ;
+  wire [31:0] \regs__timestamp$425 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$422 ;
+  wire \regs__trigger_enable$426 ;
   wire [10:0] regs__w_addr;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$425 ;
+  wire \regs__word0_crc_ok$429 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$427 ;
+  wire \regs__word0_ne$431 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$429 ;
+  wire \regs__word0_nw$433 ;
   wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$431 ;
+  wire [54:0] \regs__word0_position$435 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$433 ;
+  wire \regs__word1_crc_ok$437 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$435 ;
+  wire \regs__word1_ne$439 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$437 ;
+  wire \regs__word1_nw$441 ;
   wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$439 ;
+  wire [39:0] \regs__word1_position$443 ;
   input rst;
   wire rst;
   input [12:0] s_axil_araddr;
@@ -498,11 +502,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   input s_axil_wvalid;
   wire s_axil_wvalid;
   wire slo;
-  wire \slo$442 ;
+  wire \slo$446 ;
   input trigger;
   wire trigger;
-  wire \trigger$249 ;
-  wire \trigger$440 ;
+  wire \trigger$251 ;
+  wire \trigger$444 ;
   wire \trigger$58 ;
   reg trigger_in = 1'h0;
   assign \$1  = ~ trigger_in;
@@ -540,9 +544,10 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch0_ca_request_address(regs__ca_address),
     .ch0_ca_request_count(regs__ca_count),
     .ch0_ca_request_slave_id(regs__ca_slave_id),
-    .\ch0_ca_request_write$105 (regs__ca_write),
+    .\ch0_ca_request_write$106 (regs__ca_write),
     .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
     .ch0_cfg_break_break_time(regs__cfg_break_time),
+    .ch0_cfg_checks_confirm_frames(regs__cfg_confirm_frames),
     .ch0_cfg_checks_delay_tolerance(regs__cfg_delay_tolerance),
     .ch0_cfg_checks_end_check(regs__cfg_end_check),
     .ch0_cfg_checks_noise_limit(regs__cfg_noise_limit),
@@ -584,67 +589,68 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$272 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$284 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$274 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$286 ),
     .ch1__config_error(ch1__config_error),
     .ch1__count_data(ch1__count_data),
-    .ch1__count_en(\regs__count_en$386 ),
+    .ch1__count_en(\regs__count_en$390 ),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_done(ch1__frame_done),
     .ch1__frame_error(ch1__frame_error),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$256 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$276 ),
-    .ch1_ca_request_address(\regs__ca_address$258 ),
-    .ch1_ca_request_count(\regs__ca_count$264 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$274 ),
-    .\ch1_ca_request_write$287 (\regs__ca_write$286 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$302 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$304 ),
-    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$308 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$310 ),
-    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$314 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$320 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$322 ),
-    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$332 ),
-    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$328 ),
-    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$330 ),
-    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$334 ),
-    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$352 ),
-    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$348 ),
-    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$350 ),
-    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$354 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$306 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$312 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$318 ),
-    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$316 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$324 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$326 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$336 ),
-    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$338 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$340 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$342 ),
-    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$344 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$346 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$356 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$358 ),
-    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$360 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$362 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$364 ),
-    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$366 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$252 ),
-    .ch1_ctrl_clear_counters(\regs__clear_counters$368 ),
-    .ch1_ctrl_periodic(\regs__periodic$410 ),
-    .ch1_ctrl_start(\regs__start$416 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$422 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$258 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$278 ),
+    .ch1_ca_request_address(\regs__ca_address$260 ),
+    .ch1_ca_request_count(\regs__ca_count$266 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$276 ),
+    .\ch1_ca_request_write$289 (\regs__ca_write$288 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$304 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$306 ),
+    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$308 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$312 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$314 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$318 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$324 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$326 ),
+    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$336 ),
+    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$332 ),
+    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$334 ),
+    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$338 ),
+    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$356 ),
+    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$352 ),
+    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$354 ),
+    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$358 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$310 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$316 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$322 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$320 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$328 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$330 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$340 ),
+    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$342 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$344 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$346 ),
+    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$348 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$350 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$360 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$362 ),
+    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$364 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$366 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$368 ),
+    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$370 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$254 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$372 ),
+    .ch1_ctrl_periodic(\regs__periodic$414 ),
+    .ch1_ctrl_start(\regs__start$420 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$426 ),
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6267$0 (\$8 ),
-    .\port$6280$0 (\$9 ),
-    .\port$6357$0 (\$10 ),
-    .\port$6790$0 (\$11 ),
-    .\port$6803$0 (\$12 ),
-    .\port$6880$0 (\$13 ),
+    .\port$6333$0 (\$8 ),
+    .\port$6346$0 (\$9 ),
+    .\port$6423$0 (\$10 ),
+    .\port$6860$0 (\$11 ),
+    .\port$6873$0 (\$12 ),
+    .\port$6950$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -687,6 +693,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ca_write(regs__ca_write),
     .cfg_ack_limit(regs__cfg_ack_limit),
     .cfg_break_time(regs__cfg_break_time),
+    .cfg_confirm_frames(regs__cfg_confirm_frames),
     .cfg_delay_limit(regs__cfg_delay_limit),
     .cfg_delay_tolerance(regs__cfg_delay_tolerance),
     .cfg_end_check(regs__cfg_end_check),
@@ -723,9 +730,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6267$0 (\$8 ),
-    .\port$6280$0 (\$9 ),
-    .\port$6357$0 (\$10 ),
+    .\port$6333$0 (\$8 ),
+    .\port$6346$0 (\$9 ),
+    .\port$6423$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -740,62 +747,63 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$182 (\trigger$58 )
+    .\trigger$184 (\trigger$58 )
   );
   \biss_master_axil.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$256 ),
-    .ca_address(\regs__ca_address$258 ),
-    .ca_count(\regs__ca_count$264 ),
+    .ca_abort(\regs__ca_abort$258 ),
+    .ca_address(\regs__ca_address$260 ),
+    .ca_count(\regs__ca_count$266 ),
     .ca_rbuf_addr(s_axil_araddr[5:2]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$272 ),
-    .ca_slave_id(\regs__ca_slave_id$274 ),
-    .ca_start(\regs__ca_start$276 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$274 ),
+    .ca_slave_id(\regs__ca_slave_id$276 ),
+    .ca_start(\regs__ca_start$278 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$284 ),
-    .ca_write(\regs__ca_write$286 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$302 ),
-    .cfg_break_time(\regs__cfg_break_time$304 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$306 ),
-    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$308 ),
-    .cfg_end_check(\regs__cfg_end_check$310 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$312 ),
-    .cfg_noise_limit(\regs__cfg_noise_limit$314 ),
-    .cfg_quiet_time(\regs__cfg_quiet_time$316 ),
-    .cfg_request_period(\regs__cfg_request_period$318 ),
-    .cfg_spw_check(\regs__cfg_spw_check$320 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$322 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$324 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$326 ),
-    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$328 ),
-    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$330 ),
-    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$332 ),
-    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$334 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$336 ),
-    .cfg_w0_gray(\regs__cfg_w0_gray$338 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$340 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$342 ),
-    .cfg_w0_signed(\regs__cfg_w0_signed$344 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$346 ),
-    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$348 ),
-    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$350 ),
-    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$352 ),
-    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$354 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$356 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$358 ),
-    .cfg_w1_gray(\regs__cfg_w1_gray$360 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$362 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$364 ),
-    .cfg_w1_signed(\regs__cfg_w1_signed$366 ),
-    .clear_counters(\regs__clear_counters$368 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$286 ),
+    .ca_write(\regs__ca_write$288 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$304 ),
+    .cfg_break_time(\regs__cfg_break_time$306 ),
+    .cfg_confirm_frames(\regs__cfg_confirm_frames$308 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$310 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$312 ),
+    .cfg_end_check(\regs__cfg_end_check$314 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$316 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$318 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$320 ),
+    .cfg_request_period(\regs__cfg_request_period$322 ),
+    .cfg_spw_check(\regs__cfg_spw_check$324 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$326 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$328 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$330 ),
+    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$332 ),
+    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$334 ),
+    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$336 ),
+    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$338 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$340 ),
+    .cfg_w0_gray(\regs__cfg_w0_gray$342 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$344 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$346 ),
+    .cfg_w0_signed(\regs__cfg_w0_signed$348 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$350 ),
+    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$352 ),
+    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$354 ),
+    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$356 ),
+    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$358 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$360 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$362 ),
+    .cfg_w1_gray(\regs__cfg_w1_gray$364 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$366 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$368 ),
+    .cfg_w1_signed(\regs__cfg_w1_signed$370 ),
+    .clear_counters(\regs__clear_counters$372 ),
     .clk(clk),
-    .count_en(\regs__count_en$386 ),
+    .count_en(\regs__count_en$390 ),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$410 ),
-    .\port$6790$0 (\$11 ),
-    .\port$6803$0 (\$12 ),
-    .\port$6880$0 (\$13 ),
-    .regs__abort_cycle(\regs__abort_cycle$252 ),
+    .periodic(\regs__periodic$414 ),
+    .\port$6860$0 (\$11 ),
+    .\port$6873$0 (\$12 ),
+    .\port$6950$0 (\$13 ),
+    .regs__abort_cycle(\regs__abort_cycle$254 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -805,11 +813,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .regs__done_count(ch1__done_count),
     .regs__frame_done(ch1__frame_done),
     .regs__frame_error(ch1__frame_error),
-    .regs__trigger_enable(\regs__trigger_enable$422 ),
+    .regs__trigger_enable(\regs__trigger_enable$426 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$416 ),
-    .\trigger$182 (\trigger$58 )
+    .start(\regs__start$420 ),
+    .\trigger$184 (\trigger$58 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
@@ -889,6 +897,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign regs__cds = \$8 [49];
   assign ch0__cfg_ack_limit = regs__cfg_ack_limit;
   assign ch0__cfg_break_time = regs__cfg_break_time;
+  assign ch0__cfg_confirm_frames = regs__cfg_confirm_frames;
   assign ch0__cfg_delay_limit = regs__cfg_delay_limit;
   assign ch0__cfg_delay_tolerance = regs__cfg_delay_tolerance;
   assign ch0__cfg_end_check = regs__cfg_end_check;
@@ -982,147 +991,148 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign regs__word1_nw = \$8 [175];
   assign ch0__word1_position = \$8 [173:134];
   assign regs__word1_position = \$8 [173:134];
-  assign \trigger$249  = \trigger$58 ;
+  assign \trigger$251  = \trigger$58 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign ch1__abort_cycle = \regs__abort_cycle$252 ;
-  assign \regs__busy$255  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$256 ;
-  assign ch1__ca_address = \regs__ca_address$258 ;
-  assign \regs__ca_busy$261  = ch1__ca_busy;
+  assign ch1__abort_cycle = \regs__abort_cycle$254 ;
+  assign \regs__busy$257  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$258 ;
+  assign ch1__ca_address = \regs__ca_address$260 ;
+  assign \regs__ca_busy$263  = ch1__ca_busy;
   assign ch1__ca_bytes_done = \$13 [9:3];
-  assign \regs__ca_bytes_done$263  = \$13 [9:3];
-  assign ch1__ca_count = \regs__ca_count$264 ;
-  assign \regs__ca_done$267  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$268  = s_axil_araddr[5:2];
+  assign \regs__ca_bytes_done$265  = \$13 [9:3];
+  assign ch1__ca_count = \regs__ca_count$266 ;
+  assign \regs__ca_done$269  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$270  = s_axil_araddr[5:2];
   assign ch1__ca_rbuf_addr = s_axil_araddr[5:2];
-  assign \regs__ca_rbuf_data$271  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$272 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$274 ;
-  assign ch1__ca_start = \regs__ca_start$276 ;
+  assign \regs__ca_rbuf_data$273  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$274 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$276 ;
+  assign ch1__ca_start = \regs__ca_start$278 ;
   assign ch1__ca_status = \$13 [2:0];
-  assign \regs__ca_status$279  = \$13 [2:0];
-  assign \regs__ca_wbuf_addr$280  = regs__ca_wbuf_addr;
+  assign \regs__ca_status$281  = \$13 [2:0];
+  assign \regs__ca_wbuf_addr$282  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$282  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$284  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$284 ;
-  assign ch1__ca_write = \regs__ca_write$286 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$286 ;
+  assign ch1__ca_write = \regs__ca_write$288 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$289  = 1'h1;
+  assign \regs__cap_counters$291  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$291  = 6'h37;
+  assign \regs__cap_data_bits_w0$293  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$293  = 6'h28;
+  assign \regs__cap_data_bits_w1$295  = 6'h28;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$295  = 1'h1;
+  assign \regs__cap_register_access$297  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$297  = 6'h18;
+  assign \regs__cap_timer_width$299  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$299  = 1'h1;
+  assign \regs__cap_timestamp$301  = 1'h1;
   assign ch1__cds = \$11 [49];
-  assign \regs__cds$301  = \$11 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$302 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$304 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$306 ;
-  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$308 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$310 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$312 ;
-  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$314 ;
-  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$316 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$318 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$320 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$322 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$324 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$326 ;
-  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$328 ;
-  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$330 ;
-  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$332 ;
-  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$334 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$336 ;
-  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$338 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$340 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$342 ;
-  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$344 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$346 ;
-  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$348 ;
-  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$350 ;
-  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$352 ;
-  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$354 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$356 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$358 ;
-  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$360 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$362 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$364 ;
-  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$366 ;
-  assign ch1__clear_counters = \regs__clear_counters$368 ;
-  assign \regs__config_error$371  = ch1__config_error;
-  assign \regs__count_addr$372  = s_axil_araddr[4:2];
+  assign \regs__cds$303  = \$11 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$304 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$306 ;
+  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$308 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$310 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$312 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$314 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$316 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$318 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$320 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$322 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$324 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$326 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$328 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$330 ;
+  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$332 ;
+  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$334 ;
+  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$336 ;
+  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$338 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$340 ;
+  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$342 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$344 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$346 ;
+  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$348 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$350 ;
+  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$352 ;
+  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$354 ;
+  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$356 ;
+  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$358 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$360 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$362 ;
+  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$364 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$366 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$368 ;
+  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$370 ;
+  assign ch1__clear_counters = \regs__clear_counters$372 ;
+  assign \regs__config_error$375  = ch1__config_error;
+  assign \regs__count_addr$376  = s_axil_araddr[4:2];
   assign ch1__count_addr = s_axil_araddr[4:2];
   assign ch1__count_ca_aborted = \$12 [63:48];
-  assign \regs__count_ca_aborted$375  = \$12 [63:48];
+  assign \regs__count_ca_aborted$379  = \$12 [63:48];
   assign ch1__count_ca_crc4_error = \$12 [15:0];
-  assign \regs__count_ca_crc4_error$377  = \$12 [15:0];
+  assign \regs__count_ca_crc4_error$381  = \$12 [15:0];
   assign ch1__count_ca_data_fault = \$12 [79:64];
-  assign \regs__count_ca_data_fault$379  = \$12 [79:64];
+  assign \regs__count_ca_data_fault$383  = \$12 [79:64];
   assign ch1__count_ca_no_answer = \$12 [31:16];
-  assign \regs__count_ca_no_answer$381  = \$12 [31:16];
+  assign \regs__count_ca_no_answer$385  = \$12 [31:16];
   assign ch1__count_ca_refused = \$12 [47:32];
-  assign \regs__count_ca_refused$383  = \$12 [47:32];
-  assign \regs__count_data$385  = ch1__count_data;
-  assign ch1__count_en = \regs__count_en$386 ;
+  assign \regs__count_ca_refused$387  = \$12 [47:32];
+  assign \regs__count_data$389  = ch1__count_data;
+  assign ch1__count_en = \regs__count_en$390 ;
   assign ch1__delay_settled = \$11 [54];
-  assign \regs__delay_settled$389  = \$11 [54];
+  assign \regs__delay_settled$393  = \$11 [54];
   assign ch1__delay_spread = \$11 [75:68];
-  assign \regs__delay_spread$391  = \$11 [75:68];
-  assign \regs__done_count$393  = ch1__done_count;
-  assign \regs__frame_done$395  = ch1__frame_done;
-  assign \regs__frame_error$397  = ch1__frame_error;
+  assign \regs__delay_spread$395  = \$11 [75:68];
+  assign \regs__done_count$397  = ch1__done_count;
+  assign \regs__frame_done$399  = ch1__frame_done;
+  assign \regs__frame_error$401  = ch1__frame_error;
   assign ch1__lc = \$11 [182:177];
-  assign \regs__lc$399  = \$11 [182:177];
+  assign \regs__lc$403  = \$11 [182:177];
   assign ch1__lc_repeat = \$11 [183];
-  assign \regs__lc_repeat$401  = \$11 [183];
+  assign \regs__lc_repeat$405  = \$11 [183];
   assign ch1__lc_skip = \$11 [184];
-  assign \regs__lc_skip$403  = \$11 [184];
+  assign \regs__lc_skip$407  = \$11 [184];
   assign ch1__lc_zero = \$11 [185];
-  assign \regs__lc_zero$405  = \$11 [185];
+  assign \regs__lc_zero$409  = \$11 [185];
   assign ch1__line_delay = \$11 [48:36];
-  assign \regs__line_delay$407  = \$11 [48:36];
+  assign \regs__line_delay$411  = \$11 [48:36];
   assign ch1__noise_events = \$11 [53:50];
-  assign \regs__noise_events$409  = \$11 [53:50];
-  assign ch1__periodic = \regs__periodic$410 ;
+  assign \regs__noise_events$413  = \$11 [53:50];
+  assign ch1__periodic = \regs__periodic$414 ;
   assign ch1__settled_delay = \$11 [67:55];
-  assign \regs__settled_delay$413  = \$11 [67:55];
+  assign \regs__settled_delay$417  = \$11 [67:55];
   assign ch1__spw_mismatch = \$11 [186];
-  assign \regs__spw_mismatch$415  = \$11 [186];
-  assign ch1__start = \regs__start$416 ;
+  assign \regs__spw_mismatch$419  = \$11 [186];
+  assign ch1__start = \regs__start$420 ;
   assign ch1__status = \$11 [3:0];
-  assign \regs__status$419  = \$11 [3:0];
+  assign \regs__status$423  = \$11 [3:0];
   assign ch1__timestamp = \$11 [35:4];
-  assign \regs__timestamp$421  = \$11 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$422 ;
+  assign \regs__timestamp$425  = \$11 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$426 ;
   assign ch1__word0_crc_ok = \$11 [133];
-  assign \regs__word0_crc_ok$425  = \$11 [133];
+  assign \regs__word0_crc_ok$429  = \$11 [133];
   assign ch1__word0_ne = \$11 [131];
-  assign \regs__word0_ne$427  = \$11 [131];
+  assign \regs__word0_ne$431  = \$11 [131];
   assign ch1__word0_nw = \$11 [132];
-  assign \regs__word0_nw$429  = \$11 [132];
+  assign \regs__word0_nw$433  = \$11 [132];
   assign ch1__word0_position = \$11 [130:76];
-  assign \regs__word0_position$431  = \$11 [130:76];
+  assign \regs__word0_position$435  = \$11 [130:76];
   assign ch1__word1_crc_ok = \$11 [176];
-  assign \regs__word1_crc_ok$433  = \$11 [176];
+  assign \regs__word1_crc_ok$437  = \$11 [176];
   assign ch1__word1_ne = \$11 [174];
-  assign \regs__word1_ne$435  = \$11 [174];
+  assign \regs__word1_ne$439  = \$11 [174];
   assign ch1__word1_nw = \$11 [175];
-  assign \regs__word1_nw$437  = \$11 [175];
+  assign \regs__word1_nw$441  = \$11 [175];
   assign ch1__word1_position = \$11 [173:134];
-  assign \regs__word1_position$439  = \$11 [173:134];
-  assign \trigger$440  = \trigger$58 ;
-  assign \ma$441  = ch1_ma;
-  assign \slo$442  = ch1_slo;
+  assign \regs__word1_position$443  = \$11 [173:134];
+  assign \trigger$444  = \trigger$58 ;
+  assign \ma$445  = ch1_ma;
+  assign \slo$446  = ch1_slo;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$7 , \$6  };
-  assign \irq$445  = { \$7 , \$6  };
+  assign \irq$449  = { \$7 , \$6  };
   assign s_axil_bresp = 2'h0;
   assign s_axil_rresp = 2'h0;
 endmodule
@@ -1130,11 +1140,11 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__count_en, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__count_data, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error
 , ch1__busy, ch1__config_error, ch1__count_data, ch1__ca_busy, ch1__ca_rbuf_data, bus__w_addr, bus__w_data, bus__w_strb, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit
-, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly
-, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$105 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period
-, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance
-, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$287 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6267$0 , \port$6280$0 , ch0__ca_done, \port$6357$0 
-, ch1__frame_done, ch1__done_count, \port$6790$0 , \port$6803$0 , ch1__ca_done, \port$6880$0 , bus__r_addr);
+, ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time
+, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$106 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit
+, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit
+, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$289 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6333$0 , \port$6346$0 
+, ch0__ca_done, \port$6423$0 , ch1__frame_done, ch1__done_count, \port$6860$0 , \port$6873$0 , ch1__ca_done, \port$6950$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -1167,7 +1177,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$124 ;
   wire \$125 ;
   wire \$126 ;
-  wire [31:0] \$127 ;
+  wire \$127 ;
   wire [31:0] \$128 ;
   wire [31:0] \$129 ;
   wire [31:0] \$13 ;
@@ -1240,7 +1250,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$190 ;
   wire [31:0] \$191 ;
   wire [31:0] \$192 ;
-  wire \$193 ;
+  wire [31:0] \$193 ;
   wire \$194 ;
   wire \$195 ;
   wire \$196 ;
@@ -1362,8 +1372,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$30 ;
   wire \$300 ;
   wire \$301 ;
-  wire [31:0] \$302 ;
-  wire [31:0] \$303 ;
+  wire \$302 ;
+  wire \$303 ;
   wire [31:0] \$304 ;
   wire [31:0] \$305 ;
   wire [31:0] \$306 ;
@@ -1434,8 +1444,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$365 ;
   wire [31:0] \$366 ;
   wire [31:0] \$367 ;
-  wire \$368 ;
-  wire \$369 ;
+  wire [31:0] \$368 ;
+  wire [31:0] \$369 ;
   wire \$37 ;
   wire \$370 ;
   wire \$371 ;
@@ -1531,25 +1541,25 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$452 ;
   wire \$453 ;
   wire \$454 ;
-  wire [31:0] \$455 ;
-  wire [31:0] \$456 ;
-  reg \$457 ;
-  reg [10:0] \$458 ;
-  reg [31:0] \$459 ;
+  wire \$455 ;
+  wire \$456 ;
+  wire [31:0] \$457 ;
+  wire [31:0] \$458 ;
+  reg \$459 ;
   wire \$46 ;
-  reg [3:0] \$460 ;
+  reg [10:0] \$460 ;
   reg [31:0] \$461 ;
   reg [3:0] \$462 ;
-  reg \$463 ;
-  reg \$464 ;
+  reg [31:0] \$463 ;
+  reg [3:0] \$464 ;
   reg \$465 ;
   reg \$466 ;
   reg \$467 ;
   reg \$468 ;
-  reg [31:0] \$469 ;
+  reg \$469 ;
   wire \$47 ;
   reg \$470 ;
-  reg \$471 ;
+  reg [31:0] \$471 ;
   reg \$472 ;
   reg \$473 ;
   reg \$474 ;
@@ -1562,10 +1572,10 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$480 ;
   reg \$481 ;
   reg \$482 ;
-  reg [15:0] \$483 ;
-  reg [11:0] \$484 ;
-  reg \$485 ;
-  reg [23:0] \$486 ;
+  reg \$483 ;
+  reg \$484 ;
+  reg [15:0] \$485 ;
+  reg [11:0] \$486 ;
   reg \$487 ;
   reg [23:0] \$488 ;
   reg \$489 ;
@@ -1574,51 +1584,51 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$491 ;
   reg [23:0] \$492 ;
   reg \$493 ;
-  reg [5:0] \$494 ;
+  reg [23:0] \$494 ;
   reg \$495 ;
-  reg \$496 ;
-  reg [1:0] \$497 ;
+  reg [5:0] \$496 ;
+  reg \$497 ;
   reg \$498 ;
-  reg \$499 ;
+  reg [1:0] \$499 ;
   wire \$5 ;
   wire \$50 ;
-  reg [5:0] \$500 ;
+  reg \$500 ;
   reg \$501 ;
-  reg \$502 ;
-  reg [1:0] \$503 ;
+  reg [5:0] \$502 ;
+  reg \$503 ;
   reg \$504 ;
-  reg \$505 ;
+  reg [1:0] \$505 ;
   reg \$506 ;
   reg \$507 ;
   reg \$508 ;
   reg \$509 ;
   wire \$51 ;
-  reg [7:0] \$510 ;
-  reg [3:0] \$511 ;
-  reg [3:0] \$512 ;
-  reg \$513 ;
-  reg [11:0] \$514 ;
-  reg \$515 ;
-  reg [15:0] \$516 ;
-  reg [4:0] \$517 ;
+  reg \$510 ;
+  reg \$511 ;
+  reg [7:0] \$512 ;
+  reg [3:0] \$513 ;
+  reg [3:0] \$514 ;
+  reg [3:0] \$515 ;
+  reg \$516 ;
+  reg [11:0] \$517 ;
   reg \$518 ;
-  reg \$519 ;
+  reg [15:0] \$519 ;
   wire \$52 ;
-  reg [15:0] \$520 ;
+  reg [4:0] \$520 ;
   reg \$521 ;
-  reg [15:0] \$522 ;
-  reg [4:0] \$523 ;
+  reg \$522 ;
+  reg [15:0] \$523 ;
   reg \$524 ;
-  reg \$525 ;
-  reg [15:0] \$526 ;
+  reg [15:0] \$525 ;
+  reg [4:0] \$526 ;
   reg \$527 ;
-  reg [2:0] \$528 ;
-  reg [6:0] \$529 ;
+  reg \$528 ;
+  reg [15:0] \$529 ;
   wire \$53 ;
-  reg [6:0] \$530 ;
-  reg \$531 ;
-  reg \$532 ;
-  reg \$533 ;
+  reg \$530 ;
+  reg [2:0] \$531 ;
+  reg [6:0] \$532 ;
+  reg [6:0] \$533 ;
   reg \$534 ;
   reg \$535 ;
   reg \$536 ;
@@ -1653,10 +1663,10 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$562 ;
   reg \$563 ;
   reg \$564 ;
-  reg [3:0] \$565 ;
+  reg \$565 ;
   reg \$566 ;
   reg \$567 ;
-  reg \$568 ;
+  reg [3:0] \$568 ;
   reg \$569 ;
   wire \$57 ;
   reg \$570 ;
@@ -1666,26 +1676,26 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$574 ;
   reg \$575 ;
   reg \$576 ;
-  reg [5:0] \$577 ;
-  reg [15:0] \$578 ;
-  reg [12:0] \$579 ;
+  reg \$577 ;
+  reg \$578 ;
+  reg \$579 ;
   wire \$58 ;
-  reg [31:0] \$580 ;
-  reg [22:0] \$581 ;
-  reg [31:0] \$582 ;
-  reg [7:0] \$583 ;
-  reg [31:0] \$584 ;
-  reg [3:0] \$585 ;
-  reg \$586 ;
-  reg [7:0] \$587 ;
-  reg [12:0] \$588 ;
+  reg [5:0] \$580 ;
+  reg [15:0] \$581 ;
+  reg [12:0] \$582 ;
+  reg [31:0] \$583 ;
+  reg [22:0] \$584 ;
+  reg [31:0] \$585 ;
+  reg [7:0] \$586 ;
+  reg [31:0] \$587 ;
+  reg [3:0] \$588 ;
   reg \$589 ;
   wire \$59 ;
-  reg \$590 ;
-  reg [31:0] \$591 ;
+  reg [7:0] \$590 ;
+  reg [12:0] \$591 ;
   reg \$592 ;
   reg \$593 ;
-  reg \$594 ;
+  reg [31:0] \$594 ;
   reg \$595 ;
   reg \$596 ;
   reg \$597 ;
@@ -1698,63 +1708,63 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$602 ;
   reg \$603 ;
   reg \$604 ;
-  reg [15:0] \$605 ;
-  reg [11:0] \$606 ;
+  reg \$605 ;
+  reg \$606 ;
   reg \$607 ;
-  reg [23:0] \$608 ;
-  reg \$609 ;
+  reg [15:0] \$608 ;
+  reg [11:0] \$609 ;
   wire \$61 ;
-  reg [23:0] \$610 ;
-  reg \$611 ;
-  reg [23:0] \$612 ;
-  reg \$613 ;
-  reg [23:0] \$614 ;
-  reg \$615 ;
-  reg [5:0] \$616 ;
-  reg \$617 ;
+  reg \$610 ;
+  reg [23:0] \$611 ;
+  reg \$612 ;
+  reg [23:0] \$613 ;
+  reg \$614 ;
+  reg [23:0] \$615 ;
+  reg \$616 ;
+  reg [23:0] \$617 ;
   reg \$618 ;
-  reg [1:0] \$619 ;
+  reg [5:0] \$619 ;
   wire \$62 ;
   reg \$620 ;
   reg \$621 ;
-  reg [5:0] \$622 ;
+  reg [1:0] \$622 ;
   reg \$623 ;
   reg \$624 ;
-  reg [1:0] \$625 ;
+  reg [5:0] \$625 ;
   reg \$626 ;
   reg \$627 ;
-  reg \$628 ;
+  reg [1:0] \$628 ;
   reg \$629 ;
   wire \$63 ;
   reg \$630 ;
   reg \$631 ;
-  reg [7:0] \$632 ;
-  reg [3:0] \$633 ;
-  reg [3:0] \$634 ;
-  reg \$635 ;
-  reg [11:0] \$636 ;
-  reg \$637 ;
-  reg [15:0] \$638 ;
-  reg [4:0] \$639 ;
+  reg \$632 ;
+  reg \$633 ;
+  reg \$634 ;
+  reg [7:0] \$635 ;
+  reg [3:0] \$636 ;
+  reg [3:0] \$637 ;
+  reg [3:0] \$638 ;
+  reg \$639 ;
   wire \$64 ;
-  reg \$640 ;
+  reg [11:0] \$640 ;
   reg \$641 ;
   reg [15:0] \$642 ;
-  reg \$643 ;
-  reg [15:0] \$644 ;
-  reg [4:0] \$645 ;
-  reg \$646 ;
+  reg [4:0] \$643 ;
+  reg \$644 ;
+  reg \$645 ;
+  reg [15:0] \$646 ;
   reg \$647 ;
   reg [15:0] \$648 ;
-  reg \$649 ;
+  reg [4:0] \$649 ;
   wire \$65 ;
-  reg [2:0] \$650 ;
-  reg [6:0] \$651 ;
-  reg [6:0] \$652 ;
+  reg \$650 ;
+  reg \$651 ;
+  reg [15:0] \$652 ;
   reg \$653 ;
-  reg \$654 ;
-  reg \$655 ;
-  reg \$656 ;
+  reg [2:0] \$654 ;
+  reg [6:0] \$655 ;
+  reg [6:0] \$656 ;
   reg \$657 ;
   reg \$658 ;
   reg \$659 ;
@@ -1788,12 +1798,12 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$684 ;
   reg \$685 ;
   reg \$686 ;
-  reg [3:0] \$687 ;
+  reg \$687 ;
   reg \$688 ;
   reg \$689 ;
   wire \$69 ;
   reg \$690 ;
-  reg \$691 ;
+  reg [3:0] \$691 ;
   reg \$692 ;
   reg \$693 ;
   reg \$694 ;
@@ -1801,24 +1811,28 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$696 ;
   reg \$697 ;
   reg \$698 ;
-  reg [5:0] \$699 ;
+  reg \$699 ;
   wire \$7 ;
   wire \$70 ;
-  reg [15:0] \$700 ;
-  reg [12:0] \$701 ;
-  reg [31:0] \$702 ;
-  reg [22:0] \$703 ;
-  reg [31:0] \$704 ;
-  reg [7:0] \$705 ;
+  reg \$700 ;
+  reg \$701 ;
+  reg \$702 ;
+  reg [5:0] \$703 ;
+  reg [15:0] \$704 ;
+  reg [12:0] \$705 ;
   reg [31:0] \$706 ;
-  reg [3:0] \$707 ;
-  reg \$708 ;
+  reg [22:0] \$707 ;
+  reg [31:0] \$708 ;
   reg [7:0] \$709 ;
   wire \$71 ;
-  reg [12:0] \$710 ;
-  reg \$711 ;
+  reg [31:0] \$710 ;
+  reg [3:0] \$711 ;
   reg \$712 ;
-  reg [31:0] \$713 ;
+  reg [7:0] \$713 ;
+  reg [12:0] \$714 ;
+  reg \$715 ;
+  reg \$716 ;
+  reg [31:0] \$717 ;
   wire \$72 ;
   wire \$73 ;
   wire \$74 ;
@@ -1909,6 +1923,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [23:0] ch0__cfg_ack_limit;
   (* init = 24'h000000 *)
   wire [23:0] ch0__cfg_break_time;
+  (* init = 4'h0 *)
+  wire [3:0] ch0__cfg_confirm_frames;
   (* init = 12'h000 *)
   wire [11:0] ch0__cfg_delay_limit;
   (* init = 4'h0 *)
@@ -2033,8 +2049,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [2:0] ch0_ca_request_slave_id;
   reg [2:0] ch0_ca_request_slave_id = 3'h0;
   wire ch0_ca_request_write;
-  output \ch0_ca_request_write$105 ;
-  reg \ch0_ca_request_write$105  = 1'h0;
+  output \ch0_ca_request_write$106 ;
+  reg \ch0_ca_request_write$106  = 1'h0;
   wire ch0_ca_state_write;
   wire ch0_caps_write;
   output [23:0] ch0_cfg_ack_ack_limit;
@@ -2046,6 +2062,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_cfg_break_config_write = 1'h0;
   wire ch0_cfg_break_write;
   reg ch0_cfg_checks_config_write = 1'h0;
+  output [3:0] ch0_cfg_checks_confirm_frames;
+  reg [3:0] ch0_cfg_checks_confirm_frames = 4'h0;
   output [3:0] ch0_cfg_checks_delay_tolerance;
   reg [3:0] ch0_cfg_checks_delay_tolerance = 4'h0;
   output ch0_cfg_checks_end_check;
@@ -2259,6 +2277,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [23:0] ch1__cfg_ack_limit;
   (* init = 24'h000000 *)
   wire [23:0] ch1__cfg_break_time;
+  (* init = 4'h0 *)
+  wire [3:0] ch1__cfg_confirm_frames;
   (* init = 12'h000 *)
   wire [11:0] ch1__cfg_delay_limit;
   (* init = 4'h0 *)
@@ -2383,8 +2403,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$287 ;
-  reg \ch1_ca_request_write$287  = 1'h0;
+  output \ch1_ca_request_write$289 ;
+  reg \ch1_ca_request_write$289  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_write;
   output [23:0] ch1_cfg_ack_ack_limit;
@@ -2396,6 +2416,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_cfg_break_config_write = 1'h0;
   wire ch1_cfg_break_write;
   reg ch1_cfg_checks_config_write = 1'h0;
+  output [3:0] ch1_cfg_checks_confirm_frames;
+  reg [3:0] ch1_cfg_checks_confirm_frames = 4'h0;
   output [3:0] ch1_cfg_checks_delay_tolerance;
   reg [3:0] ch1_cfg_checks_delay_tolerance = 4'h0;
   output ch1_cfg_checks_end_check;
@@ -2589,18 +2611,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6267$0 ;
-  wire [186:0] \port$6267$0 ;
-  input [79:0] \port$6280$0 ;
-  wire [79:0] \port$6280$0 ;
-  input [9:0] \port$6357$0 ;
-  wire [9:0] \port$6357$0 ;
-  input [186:0] \port$6790$0 ;
-  wire [186:0] \port$6790$0 ;
-  input [79:0] \port$6803$0 ;
-  wire [79:0] \port$6803$0 ;
-  input [9:0] \port$6880$0 ;
-  wire [9:0] \port$6880$0 ;
+  input [186:0] \port$6333$0 ;
+  wire [186:0] \port$6333$0 ;
+  input [79:0] \port$6346$0 ;
+  wire [79:0] \port$6346$0 ;
+  input [9:0] \port$6423$0 ;
+  wire [9:0] \port$6423$0 ;
+  input [186:0] \port$6860$0 ;
+  wire [186:0] \port$6860$0 ;
+  input [79:0] \port$6873$0 ;
+  wire [79:0] \port$6873$0 ;
+  input [9:0] \port$6950$0 ;
+  wire [9:0] \port$6950$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2608,756 +2630,766 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg [31:0] write_data = 32'd0;
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
-  assign \$287  = bus__r_addr == 9'h120;
-  assign \$288  = bus__r_addr == 9'h121;
-  assign \$289  = bus__r_addr == 9'h122;
-  assign \$290  = bus__r_addr == 9'h123;
-  assign \$291  = bus__r_addr == 9'h140;
-  assign \$292  = bus__r_addr == 9'h141;
-  assign \$293  = bus__r_addr == 9'h142;
-  assign \$294  = bus__r_addr == 9'h143;
-  assign \$295  = bus__r_addr == 9'h144;
-  assign \$296  = bus__r_addr == 9'h145;
-  assign \$297  = ch1_read_select_110 & bus__r_load;
-  assign \$298  = bus__r_addr[10:3] == 6'h23;
-  assign \$299  = bus__r_en & \$298 ;
-  assign \$300  = bus__r_addr[10:4] == 5'h16;
+  assign \$283  = bus__r_addr == 9'h112;
+  assign \$284  = bus__r_addr == 9'h113;
+  assign \$285  = bus__r_addr == 9'h114;
+  assign \$286  = bus__r_addr == 9'h115;
+  assign \$287  = bus__r_addr == 9'h116;
+  assign \$288  = bus__r_addr == 9'h117;
+  assign \$289  = bus__r_addr == 9'h120;
+  assign \$290  = bus__r_addr == 9'h121;
+  assign \$291  = bus__r_addr == 9'h122;
+  assign \$292  = bus__r_addr == 9'h123;
+  assign \$293  = bus__r_addr == 9'h140;
+  assign \$294  = bus__r_addr == 9'h141;
+  assign \$295  = bus__r_addr == 9'h142;
+  assign \$296  = bus__r_addr == 9'h143;
+  assign \$297  = bus__r_addr == 9'h144;
+  assign \$298  = bus__r_addr == 9'h145;
+  assign \$299  = ch1_read_select_110 & bus__r_load;
+  assign \$300  = bus__r_addr[10:3] == 6'h23;
   assign \$301  = bus__r_en & \$300 ;
-  assign \$302  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$304  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$305  = \$303  | \$304 ;
-  assign \$306  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
+  assign \$302  = bus__r_addr[10:4] == 5'h16;
+  assign \$303  = bus__r_en & \$302 ;
+  assign \$304  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$306  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
   assign \$307  = \$305  | \$306 ;
-  assign \$308  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$308  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
   assign \$309  = \$307  | \$308 ;
-  assign \$310  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
+  assign \$310  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$311  = \$309  | \$310 ;
-  assign \$312  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
+  assign \$312  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
   assign \$313  = \$311  | \$312 ;
-  assign \$314  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
+  assign \$314  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
   assign \$315  = \$313  | \$314 ;
-  assign \$316  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
+  assign \$316  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
   assign \$317  = \$315  | \$316 ;
-  assign \$318  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
+  assign \$318  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
   assign \$319  = \$317  | \$318 ;
-  assign \$320  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$320  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
   assign \$321  = \$319  | \$320 ;
-  assign \$322  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 3'h0, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 4'h0, ch1_cfg_words_w0_signed, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
+  assign \$322  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
   assign \$323  = \$321  | \$322 ;
-  assign \$324  = ch1_read_select_10e ? { 8'h00, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
+  assign \$324  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 3'h0, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 4'h0, ch1_cfg_words_w0_signed, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
   assign \$325  = \$323  | \$324 ;
-  assign \$326  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
+  assign \$326  = ch1_read_select_10e ? { 4'h0, ch1_cfg_checks_confirm_frames, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
   assign \$327  = \$325  | \$326 ;
-  assign \$328  = ch1_read_select_110 ? { 2'h0, \port$6790$0 [182:177], 4'h0, \port$6790$0 [186:183], 1'h0, \port$6790$0 [176:174], 1'h0, \port$6790$0 [133:131], 3'h0, \port$6790$0 [49], \port$6790$0 [3:0] } : 32'd0;
+  assign \$328  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$329  = \$327  | \$328 ;
-  assign \$330  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$330  = ch1_read_select_110 ? { 2'h0, \port$6860$0 [182:177], 4'h0, \port$6860$0 [186:183], 1'h0, \port$6860$0 [176:174], 1'h0, \port$6860$0 [133:131], 3'h0, \port$6860$0 [49], \port$6860$0 [3:0] } : 32'd0;
   assign \$331  = \$329  | \$330 ;
-  assign \$332  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$332  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$333  = \$331  | \$332 ;
-  assign \$334  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$334  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
   assign \$335  = \$333  | \$334 ;
-  assign \$336  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$336  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
   assign \$337  = \$335  | \$336 ;
-  assign \$338  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$338  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
   assign \$339  = \$337  | \$338 ;
-  assign \$340  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$340  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
   assign \$341  = \$339  | \$340 ;
-  assign \$342  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
+  assign \$342  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$343  = \$341  | \$342 ;
-  assign \$344  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
+  assign \$344  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
+  assign \$346  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$347  = \$345  | \$346 ;
-  assign \$348  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
+  assign \$348  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
   assign \$349  = \$347  | \$348 ;
-  assign \$350  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
+  assign \$350  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
   assign \$351  = \$349  | \$350 ;
-  assign \$352  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$287 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$352  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
   assign \$353  = \$351  | \$352 ;
-  assign \$356  = ch1_read_select_142 ? { 17'h00000, \port$6880$0 [9:3], 1'h0, \port$6880$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
-  assign \$357  = \$355  | \$356 ;
-  assign \$358  = ch1_read_select_143 ? \port$6803$0 [31:0] : 32'd0;
+  assign \$354  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$289 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$355  = \$353  | \$354 ;
+  assign \$358  = ch1_read_select_142 ? { 17'h00000, \port$6950$0 [9:3], 1'h0, \port$6950$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$359  = \$357  | \$358 ;
-  assign \$360  = ch1_read_select_144 ? \port$6803$0 [63:32] : 32'd0;
+  assign \$360  = ch1_read_select_143 ? \port$6873$0 [31:0] : 32'd0;
   assign \$361  = \$359  | \$360 ;
-  assign \$362  = ch1_read_select_145 ? { 16'h0000, \port$6803$0 [79:64] } : 32'd0;
+  assign \$362  = ch1_read_select_144 ? \port$6873$0 [63:32] : 32'd0;
   assign \$363  = \$361  | \$362 ;
-  assign \$364  = ch1_window0_read ? ch1__count_data : 32'd0;
+  assign \$364  = ch1_read_select_145 ? { 16'h0000, \port$6873$0 [79:64] } : 32'd0;
   assign \$365  = \$363  | \$364 ;
-  assign \$366  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$366  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$367  = \$365  | \$366 ;
-  assign \$368  = ! write_addr;
-  assign g_id_write = write_en & \$368 ;
-  assign \$369  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$369 ;
-  assign \$370  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$370 ;
-  assign \$371  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$371 ;
-  assign \$372  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$372 ;
-  assign \$373  = bus__r_addr[10:3] == 5'h13;
-  assign ch0__count_en = bus__r_en & \$373 ;
-  assign \$374  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$374 ;
-  assign \$375  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$375 ;
-  assign \$376  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$376 ;
-  assign \$377  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$377 ;
-  assign \$378  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$378 ;
-  assign \$379  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$379 ;
-  assign \$380  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$380 ;
-  assign \$381  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$381 ;
-  assign \$382  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$382 ;
-  assign \$383  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$383 ;
-  assign \$384  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$384 ;
-  assign \$385  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$385 ;
-  assign \$386  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$386 ;
-  assign \$387  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$387 ;
-  assign \$388  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$388 ;
-  assign \$389  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$389 ;
-  assign \$390  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$390 ;
-  assign \$391  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$391 ;
-  assign \$392  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$392 ;
-  assign \$393  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$393 ;
-  assign \$394  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$394 ;
-  assign \$395  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$395 ;
-  assign \$396  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$396 ;
-  assign \$397  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$397 ;
-  assign \$398  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$398 ;
-  assign \$399  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$399 ;
-  assign \$400  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$400 ;
-  assign \$401  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$401 ;
-  assign \$402  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$402 ;
-  assign \$403  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$403 ;
-  assign \$404  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$404 ;
-  assign \$405  = write_addr[10:4] == 4'hd;
-  assign \$406  = write_en & \$405 ;
-  assign ch0__ca_wbuf_en = \$406  ? write_strb : 4'h0;
-  assign \$407  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$407 ;
-  assign \$408  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$410  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$412  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$413 , \$411 , \$409  };
-  assign \$414  = bus__r_addr[10:3] == 6'h23;
-  assign ch1__count_en = bus__r_en & \$414 ;
-  assign \$415  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$415 ;
-  assign \$416  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$416 ;
-  assign \$417  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$417 ;
-  assign \$418  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$418 ;
-  assign \$419  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$419 ;
-  assign \$420  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$420 ;
-  assign \$421  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$421 ;
-  assign \$422  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$422 ;
-  assign \$423  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$423 ;
-  assign \$424  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$424 ;
-  assign \$425  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$425 ;
-  assign \$426  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$426 ;
-  assign \$427  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$427 ;
-  assign \$428  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$428 ;
-  assign \$429  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$429 ;
-  assign \$430  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$430 ;
-  assign \$431  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$431 ;
-  assign \$432  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$432 ;
-  assign \$433  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$433 ;
-  assign \$434  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$434 ;
-  assign \$435  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$435 ;
-  assign \$436  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$436 ;
-  assign \$437  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$437 ;
-  assign \$438  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$438 ;
-  assign \$439  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$439 ;
-  assign \$440  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$440 ;
-  assign \$441  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$441 ;
-  assign \$442  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$442 ;
-  assign \$443  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$443 ;
-  assign \$444  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$444 ;
-  assign \$445  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$445 ;
-  assign \$446  = write_addr[10:4] == 5'h15;
-  assign \$447  = write_en & \$446 ;
-  assign ch1__ca_wbuf_en = \$447  ? write_strb : 4'h0;
-  assign \$448  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$448 ;
-  assign \$449  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$451  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$453  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$454 , \$452 , \$450  };
-  assign \$456  = \$455  | ch0_read_data;
-  assign bus__r_data = \$456  | ch1_read_data;
+  assign \$368  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$369  = \$367  | \$368 ;
+  assign \$370  = ! write_addr;
+  assign g_id_write = write_en & \$370 ;
+  assign \$371  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$371 ;
+  assign \$372  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$372 ;
+  assign \$373  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$373 ;
+  assign \$374  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$374 ;
+  assign \$375  = bus__r_addr[10:3] == 5'h13;
+  assign ch0__count_en = bus__r_en & \$375 ;
+  assign \$376  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$376 ;
+  assign \$377  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$377 ;
+  assign \$378  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$378 ;
+  assign \$379  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$379 ;
+  assign \$380  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$380 ;
+  assign \$381  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$381 ;
+  assign \$382  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$382 ;
+  assign \$383  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$383 ;
+  assign \$384  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$384 ;
+  assign \$385  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$385 ;
+  assign \$386  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$386 ;
+  assign \$387  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$387 ;
+  assign \$388  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$388 ;
+  assign \$389  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$389 ;
+  assign \$390  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$390 ;
+  assign \$391  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$391 ;
+  assign \$392  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$392 ;
+  assign \$393  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$393 ;
+  assign \$394  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$394 ;
+  assign \$395  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$395 ;
+  assign \$396  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$396 ;
+  assign \$397  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$397 ;
+  assign \$398  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$398 ;
+  assign \$399  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$399 ;
+  assign \$400  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$400 ;
+  assign \$401  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$401 ;
+  assign \$402  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$402 ;
+  assign \$403  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$403 ;
+  assign \$404  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$404 ;
+  assign \$405  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$405 ;
+  assign \$406  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$406 ;
+  assign \$407  = write_addr[10:4] == 4'hd;
+  assign \$408  = write_en & \$407 ;
+  assign ch0__ca_wbuf_en = \$408  ? write_strb : 4'h0;
+  assign \$409  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$409 ;
+  assign \$410  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$412  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$414  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$415 , \$413 , \$411  };
+  assign \$416  = bus__r_addr[10:3] == 6'h23;
+  assign ch1__count_en = bus__r_en & \$416 ;
+  assign \$417  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$417 ;
+  assign \$418  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$418 ;
+  assign \$419  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$419 ;
+  assign \$420  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$420 ;
+  assign \$421  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$421 ;
+  assign \$422  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$422 ;
+  assign \$423  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$423 ;
+  assign \$424  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$424 ;
+  assign \$425  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$425 ;
+  assign \$426  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$426 ;
+  assign \$427  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$427 ;
+  assign \$428  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$428 ;
+  assign \$429  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$429 ;
+  assign \$430  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$430 ;
+  assign \$431  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$431 ;
+  assign \$432  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$432 ;
+  assign \$433  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$433 ;
+  assign \$434  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$434 ;
+  assign \$435  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$435 ;
+  assign \$436  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$436 ;
+  assign \$437  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$437 ;
+  assign \$438  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$438 ;
+  assign \$439  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$439 ;
+  assign \$440  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$440 ;
+  assign \$441  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$441 ;
+  assign \$442  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$442 ;
+  assign \$443  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$443 ;
+  assign \$444  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$444 ;
+  assign \$445  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$445 ;
+  assign \$446  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$446 ;
+  assign \$447  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$447 ;
+  assign \$448  = write_addr[10:4] == 5'h15;
+  assign \$449  = write_en & \$448 ;
+  assign ch1__ca_wbuf_en = \$449  ? write_strb : 4'h0;
+  assign \$450  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$450 ;
+  assign \$451  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$453  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$455  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$456 , \$454 , \$452  };
+  assign \$458  = \$457  | ch0_read_data;
+  assign bus__r_data = \$458  | ch1_read_data;
   always @(posedge clk)
-    write_en <= \$457 ;
+    write_en <= \$459 ;
   always @(posedge clk)
-    write_addr <= \$458 ;
+    write_addr <= \$460 ;
   always @(posedge clk)
-    write_data <= \$459 ;
+    write_data <= \$461 ;
   always @(posedge clk)
-    write_strb <= \$460 ;
+    write_strb <= \$462 ;
   always @(posedge clk)
-    config_write_data <= \$461 ;
+    config_write_data <= \$463 ;
   always @(posedge clk)
-    config_write_strb <= \$462 ;
+    config_write_strb <= \$464 ;
   always @(posedge clk)
-    g_trigger_start <= \$463 ;
+    g_trigger_start <= \$465 ;
   always @(posedge clk)
-    g_read_select_0 <= \$464 ;
+    g_read_select_0 <= \$466 ;
   always @(posedge clk)
-    g_read_select_1 <= \$465 ;
+    g_read_select_1 <= \$467 ;
   always @(posedge clk)
-    g_read_select_2 <= \$466 ;
+    g_read_select_2 <= \$468 ;
   always @(posedge clk)
-    g_read_select_3 <= \$467 ;
+    g_read_select_3 <= \$469 ;
   always @(posedge clk)
-    g_read_select_4 <= \$468 ;
+    g_read_select_4 <= \$470 ;
   always @(posedge clk)
-    g_read_data <= \$469 ;
+    g_read_data <= \$471 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$470 ;
+    ch0_ctrl_start <= \$472 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$471 ;
+    ch0_ctrl_abort <= \$473 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$472 ;
+    ch0_ctrl_clear_counters <= \$474 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$473 ;
+    ch0_ctrl_periodic <= \$475 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$474 ;
+    ch0_ctrl_trigger_enable <= \$476 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$475 ;
+    ch0_irq_status_done <= \$477 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$476 ;
+    ch0_irq_status_error <= \$478 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$477 ;
+    ch0_irq_status_access_done <= \$479 ;
   always @(posedge clk)
-    ch0_irq_enable_config_write <= \$478 ;
+    ch0_irq_enable_config_write <= \$480 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$479 ;
+    ch0_irq_enable_done <= \$481 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$480 ;
+    ch0_irq_enable_error <= \$482 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$481 ;
+    ch0_irq_enable_access_done <= \$483 ;
   always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$482 ;
+    ch0_cfg_ma_config_write <= \$484 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$483 ;
+    ch0_cfg_ma_ma_half_period <= \$485 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$484 ;
+    ch0_cfg_ma_delay_limit <= \$486 ;
   always @(posedge clk)
-    ch0_cfg_period_config_write <= \$485 ;
+    ch0_cfg_period_config_write <= \$487 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$486 ;
+    ch0_cfg_period_request_period <= \$488 ;
   always @(posedge clk)
-    ch0_cfg_break_config_write <= \$487 ;
+    ch0_cfg_break_config_write <= \$489 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$488 ;
+    ch0_cfg_break_break_time <= \$490 ;
   always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$489 ;
+    ch0_cfg_ack_config_write <= \$491 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$490 ;
+    ch0_cfg_ack_ack_limit <= \$492 ;
   always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$491 ;
+    ch0_cfg_timeout_config_write <= \$493 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$492 ;
+    ch0_cfg_timeout_timeout_limit <= \$494 ;
   always @(posedge clk)
-    ch0_cfg_words_config_write <= \$493 ;
+    ch0_cfg_words_config_write <= \$495 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$494 ;
+    ch0_cfg_words_w0_data_bits <= \$496 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$495 ;
+    ch0_cfg_words_w0_nenw <= \$497 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$496 ;
+    ch0_cfg_words_w0_lc <= \$498 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$497 ;
+    ch0_cfg_words_w0_crc <= \$499 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$498 ;
+    ch0_cfg_words_w0_gray <= \$500 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_signed <= \$499 ;
+    ch0_cfg_words_w0_signed <= \$501 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$500 ;
+    ch0_cfg_words_w1_data_bits <= \$502 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$501 ;
+    ch0_cfg_words_w1_nenw <= \$503 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$502 ;
+    ch0_cfg_words_w1_lc <= \$504 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$503 ;
+    ch0_cfg_words_w1_crc <= \$505 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$504 ;
+    ch0_cfg_words_w1_gray <= \$506 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_signed <= \$505 ;
+    ch0_cfg_words_w1_signed <= \$507 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$506 ;
+    ch0_cfg_words_w1_enable <= \$508 ;
   always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$507 ;
+    ch0_cfg_checks_config_write <= \$509 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$508 ;
+    ch0_cfg_checks_end_check <= \$510 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$509 ;
+    ch0_cfg_checks_spw_check <= \$511 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$510 ;
+    ch0_cfg_checks_spw_tolerance <= \$512 ;
   always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$511 ;
+    ch0_cfg_checks_noise_limit <= \$513 ;
   always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$512 ;
+    ch0_cfg_checks_delay_tolerance <= \$514 ;
   always @(posedge clk)
-    ch0_cfg_quiet_config_write <= \$513 ;
+    ch0_cfg_checks_confirm_frames <= \$515 ;
   always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$514 ;
+    ch0_cfg_quiet_config_write <= \$516 ;
   always @(posedge clk)
-    ch0_cfg_crc0_config_write <= \$515 ;
+    ch0_cfg_quiet_quiet_time <= \$517 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_poly <= \$516 ;
+    ch0_cfg_crc0_config_write <= \$518 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$517 ;
+    ch0_cfg_crc0_w0_crc_poly <= \$519 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_inverted <= \$518 ;
+    ch0_cfg_crc0_w0_crc_width <= \$520 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_config_write <= \$519 ;
+    ch0_cfg_crc0_w0_crc_inverted <= \$521 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_w0_crc_start <= \$520 ;
+    ch0_cfg_crc0_start_config_write <= \$522 ;
   always @(posedge clk)
-    ch0_cfg_crc1_config_write <= \$521 ;
+    ch0_cfg_crc0_start_w0_crc_start <= \$523 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_poly <= \$522 ;
+    ch0_cfg_crc1_config_write <= \$524 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$523 ;
+    ch0_cfg_crc1_w1_crc_poly <= \$525 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_inverted <= \$524 ;
+    ch0_cfg_crc1_w1_crc_width <= \$526 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_config_write <= \$525 ;
+    ch0_cfg_crc1_w1_crc_inverted <= \$527 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_w1_crc_start <= \$526 ;
+    ch0_cfg_crc1_start_config_write <= \$528 ;
   always @(posedge clk)
-    ch0_ca_request_config_write <= \$527 ;
+    ch0_cfg_crc1_start_w1_crc_start <= \$529 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$528 ;
+    ch0_ca_request_config_write <= \$530 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$529 ;
+    ch0_ca_request_slave_id <= \$531 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$530 ;
+    ch0_ca_request_address <= \$532 ;
   always @(posedge clk)
-    \ch0_ca_request_write$105  <= \$531 ;
+    ch0_ca_request_count <= \$533 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$532 ;
+    \ch0_ca_request_write$106  <= \$534 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$533 ;
+    ch0_ca_ctrl_start <= \$535 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$534 ;
+    ch0_ca_ctrl_abort <= \$536 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$535 ;
+    ch0_read_select_80 <= \$537 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$536 ;
+    ch0_read_select_81 <= \$538 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$537 ;
+    ch0_read_select_82 <= \$539 ;
   always @(posedge clk)
-    ch0_read_select_85 <= \$538 ;
+    ch0_read_select_84 <= \$540 ;
   always @(posedge clk)
-    ch0_read_select_88 <= \$539 ;
+    ch0_read_select_85 <= \$541 ;
   always @(posedge clk)
-    ch0_read_select_89 <= \$540 ;
+    ch0_read_select_88 <= \$542 ;
   always @(posedge clk)
-    ch0_read_select_8a <= \$541 ;
+    ch0_read_select_89 <= \$543 ;
   always @(posedge clk)
-    ch0_read_select_8b <= \$542 ;
+    ch0_read_select_8a <= \$544 ;
   always @(posedge clk)
-    ch0_read_select_8c <= \$543 ;
+    ch0_read_select_8b <= \$545 ;
   always @(posedge clk)
-    ch0_read_select_8d <= \$544 ;
+    ch0_read_select_8c <= \$546 ;
   always @(posedge clk)
-    ch0_read_select_8e <= \$545 ;
+    ch0_read_select_8d <= \$547 ;
   always @(posedge clk)
-    ch0_read_select_8f <= \$546 ;
+    ch0_read_select_8e <= \$548 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$547 ;
+    ch0_read_select_8f <= \$549 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$548 ;
+    ch0_read_select_90 <= \$550 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$549 ;
+    ch0_read_select_91 <= \$551 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$550 ;
+    ch0_read_select_92 <= \$552 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$551 ;
+    ch0_read_select_93 <= \$553 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$552 ;
+    ch0_read_select_94 <= \$554 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$553 ;
+    ch0_read_select_95 <= \$555 ;
   always @(posedge clk)
-    ch0_read_select_97 <= \$554 ;
+    ch0_read_select_96 <= \$556 ;
   always @(posedge clk)
-    ch0_read_select_a0 <= \$555 ;
+    ch0_read_select_97 <= \$557 ;
   always @(posedge clk)
-    ch0_read_select_a1 <= \$556 ;
+    ch0_read_select_a0 <= \$558 ;
   always @(posedge clk)
-    ch0_read_select_a2 <= \$557 ;
+    ch0_read_select_a1 <= \$559 ;
   always @(posedge clk)
-    ch0_read_select_a3 <= \$558 ;
+    ch0_read_select_a2 <= \$560 ;
   always @(posedge clk)
-    ch0_read_select_c0 <= \$559 ;
+    ch0_read_select_a3 <= \$561 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$560 ;
+    ch0_read_select_c0 <= \$562 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$561 ;
+    ch0_read_select_c1 <= \$563 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$562 ;
+    ch0_read_select_c2 <= \$564 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$563 ;
+    ch0_read_select_c3 <= \$565 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$564 ;
+    ch0_read_select_c4 <= \$566 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$565 ;
+    ch0_read_select_c5 <= \$567 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$566 ;
+    ch0_result_status_status_snapshot <= \$568 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$567 ;
+    ch0_result_status_cds_snapshot <= \$569 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$568 ;
+    ch0_result_status_w0_ne_snapshot <= \$570 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$569 ;
+    ch0_result_status_w0_nw_snapshot <= \$571 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$570 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$572 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$571 ;
+    ch0_result_status_w1_ne_snapshot <= \$573 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$572 ;
+    ch0_result_status_w1_nw_snapshot <= \$574 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$573 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$575 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$574 ;
+    ch0_result_status_lc_repeat_snapshot <= \$576 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$575 ;
+    ch0_result_status_lc_skip_snapshot <= \$577 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$576 ;
+    ch0_result_status_lc_zero_snapshot <= \$578 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$577 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$579 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$578 ;
+    ch0_result_status_lc_snapshot <= \$580 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$579 ;
+    ch0_result_seq_seq_snapshot <= \$581 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$580 ;
+    ch0_result_seq_line_delay_snapshot <= \$582 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$581 ;
+    ch0_result_w0_lo_data_snapshot <= \$583 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$582 ;
+    ch0_result_w0_hi_data_snapshot <= \$584 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$583 ;
+    ch0_result_w1_lo_data_snapshot <= \$585 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$584 ;
+    ch0_result_w1_hi_data_snapshot <= \$586 ;
   always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$585 ;
+    ch0_result_timestamp_time_snapshot <= \$587 ;
   always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$586 ;
+    ch0_result_line_noise_events_snapshot <= \$588 ;
   always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$587 ;
+    ch0_result_line_delay_settled_snapshot <= \$589 ;
   always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$588 ;
+    ch0_result_line_delay_spread_snapshot <= \$590 ;
   always @(posedge clk)
-    ch0_window0_read <= \$589 ;
+    ch0_result_line_settled_delay_snapshot <= \$591 ;
   always @(posedge clk)
-    ch0_window1_read <= \$590 ;
+    ch0_window0_read <= \$592 ;
   always @(posedge clk)
-    ch0_read_data <= \$591 ;
+    ch0_window1_read <= \$593 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$592 ;
+    ch0_read_data <= \$594 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$593 ;
+    ch1_ctrl_start <= \$595 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$594 ;
+    ch1_ctrl_abort <= \$596 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$595 ;
+    ch1_ctrl_clear_counters <= \$597 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$596 ;
+    ch1_ctrl_periodic <= \$598 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$597 ;
+    ch1_ctrl_trigger_enable <= \$599 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$598 ;
+    ch1_irq_status_done <= \$600 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$599 ;
+    ch1_irq_status_error <= \$601 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$600 ;
+    ch1_irq_status_access_done <= \$602 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$601 ;
+    ch1_irq_enable_config_write <= \$603 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$602 ;
+    ch1_irq_enable_done <= \$604 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$603 ;
+    ch1_irq_enable_error <= \$605 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$604 ;
+    ch1_irq_enable_access_done <= \$606 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$605 ;
+    ch1_cfg_ma_config_write <= \$607 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$606 ;
+    ch1_cfg_ma_ma_half_period <= \$608 ;
   always @(posedge clk)
-    ch1_cfg_period_config_write <= \$607 ;
+    ch1_cfg_ma_delay_limit <= \$609 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$608 ;
+    ch1_cfg_period_config_write <= \$610 ;
   always @(posedge clk)
-    ch1_cfg_break_config_write <= \$609 ;
+    ch1_cfg_period_request_period <= \$611 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$610 ;
+    ch1_cfg_break_config_write <= \$612 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$611 ;
+    ch1_cfg_break_break_time <= \$613 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$612 ;
+    ch1_cfg_ack_config_write <= \$614 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$613 ;
+    ch1_cfg_ack_ack_limit <= \$615 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$614 ;
+    ch1_cfg_timeout_config_write <= \$616 ;
   always @(posedge clk)
-    ch1_cfg_words_config_write <= \$615 ;
+    ch1_cfg_timeout_timeout_limit <= \$617 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$616 ;
+    ch1_cfg_words_config_write <= \$618 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$617 ;
+    ch1_cfg_words_w0_data_bits <= \$619 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$618 ;
+    ch1_cfg_words_w0_nenw <= \$620 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$619 ;
+    ch1_cfg_words_w0_lc <= \$621 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$620 ;
+    ch1_cfg_words_w0_crc <= \$622 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_signed <= \$621 ;
+    ch1_cfg_words_w0_gray <= \$623 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$622 ;
+    ch1_cfg_words_w0_signed <= \$624 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$623 ;
+    ch1_cfg_words_w1_data_bits <= \$625 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$624 ;
+    ch1_cfg_words_w1_nenw <= \$626 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$625 ;
+    ch1_cfg_words_w1_lc <= \$627 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$626 ;
+    ch1_cfg_words_w1_crc <= \$628 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_signed <= \$627 ;
+    ch1_cfg_words_w1_gray <= \$629 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$628 ;
+    ch1_cfg_words_w1_signed <= \$630 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$629 ;
+    ch1_cfg_words_w1_enable <= \$631 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$630 ;
+    ch1_cfg_checks_config_write <= \$632 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$631 ;
+    ch1_cfg_checks_end_check <= \$633 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$632 ;
+    ch1_cfg_checks_spw_check <= \$634 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$633 ;
+    ch1_cfg_checks_spw_tolerance <= \$635 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$634 ;
+    ch1_cfg_checks_noise_limit <= \$636 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_write <= \$635 ;
+    ch1_cfg_checks_delay_tolerance <= \$637 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$636 ;
+    ch1_cfg_checks_confirm_frames <= \$638 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_write <= \$637 ;
+    ch1_cfg_quiet_config_write <= \$639 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_poly <= \$638 ;
+    ch1_cfg_quiet_quiet_time <= \$640 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$639 ;
+    ch1_cfg_crc0_config_write <= \$641 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_inverted <= \$640 ;
+    ch1_cfg_crc0_w0_crc_poly <= \$642 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_write <= \$641 ;
+    ch1_cfg_crc0_w0_crc_width <= \$643 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_w0_crc_start <= \$642 ;
+    ch1_cfg_crc0_w0_crc_inverted <= \$644 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_write <= \$643 ;
+    ch1_cfg_crc0_start_config_write <= \$645 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_poly <= \$644 ;
+    ch1_cfg_crc0_start_w0_crc_start <= \$646 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$645 ;
+    ch1_cfg_crc1_config_write <= \$647 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_inverted <= \$646 ;
+    ch1_cfg_crc1_w1_crc_poly <= \$648 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_write <= \$647 ;
+    ch1_cfg_crc1_w1_crc_width <= \$649 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_w1_crc_start <= \$648 ;
+    ch1_cfg_crc1_w1_crc_inverted <= \$650 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$649 ;
+    ch1_cfg_crc1_start_config_write <= \$651 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$650 ;
+    ch1_cfg_crc1_start_w1_crc_start <= \$652 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$651 ;
+    ch1_ca_request_config_write <= \$653 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$652 ;
+    ch1_ca_request_slave_id <= \$654 ;
   always @(posedge clk)
-    \ch1_ca_request_write$287  <= \$653 ;
+    ch1_ca_request_address <= \$655 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$654 ;
+    ch1_ca_request_count <= \$656 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$655 ;
+    \ch1_ca_request_write$289  <= \$657 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$656 ;
+    ch1_ca_ctrl_start <= \$658 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$657 ;
+    ch1_ca_ctrl_abort <= \$659 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$658 ;
+    ch1_read_select_100 <= \$660 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$659 ;
+    ch1_read_select_101 <= \$661 ;
   always @(posedge clk)
-    ch1_read_select_105 <= \$660 ;
+    ch1_read_select_102 <= \$662 ;
   always @(posedge clk)
-    ch1_read_select_108 <= \$661 ;
+    ch1_read_select_104 <= \$663 ;
   always @(posedge clk)
-    ch1_read_select_109 <= \$662 ;
+    ch1_read_select_105 <= \$664 ;
   always @(posedge clk)
-    ch1_read_select_10a <= \$663 ;
+    ch1_read_select_108 <= \$665 ;
   always @(posedge clk)
-    ch1_read_select_10b <= \$664 ;
+    ch1_read_select_109 <= \$666 ;
   always @(posedge clk)
-    ch1_read_select_10c <= \$665 ;
+    ch1_read_select_10a <= \$667 ;
   always @(posedge clk)
-    ch1_read_select_10d <= \$666 ;
+    ch1_read_select_10b <= \$668 ;
   always @(posedge clk)
-    ch1_read_select_10e <= \$667 ;
+    ch1_read_select_10c <= \$669 ;
   always @(posedge clk)
-    ch1_read_select_10f <= \$668 ;
+    ch1_read_select_10d <= \$670 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$669 ;
+    ch1_read_select_10e <= \$671 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$670 ;
+    ch1_read_select_10f <= \$672 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$671 ;
+    ch1_read_select_110 <= \$673 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$672 ;
+    ch1_read_select_111 <= \$674 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$673 ;
+    ch1_read_select_112 <= \$675 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$674 ;
+    ch1_read_select_113 <= \$676 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$675 ;
+    ch1_read_select_114 <= \$677 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$676 ;
+    ch1_read_select_115 <= \$678 ;
   always @(posedge clk)
-    ch1_read_select_120 <= \$677 ;
+    ch1_read_select_116 <= \$679 ;
   always @(posedge clk)
-    ch1_read_select_121 <= \$678 ;
+    ch1_read_select_117 <= \$680 ;
   always @(posedge clk)
-    ch1_read_select_122 <= \$679 ;
+    ch1_read_select_120 <= \$681 ;
   always @(posedge clk)
-    ch1_read_select_123 <= \$680 ;
+    ch1_read_select_121 <= \$682 ;
   always @(posedge clk)
-    ch1_read_select_140 <= \$681 ;
+    ch1_read_select_122 <= \$683 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$682 ;
+    ch1_read_select_123 <= \$684 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$683 ;
+    ch1_read_select_140 <= \$685 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$684 ;
+    ch1_read_select_141 <= \$686 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$685 ;
+    ch1_read_select_142 <= \$687 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$686 ;
+    ch1_read_select_143 <= \$688 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$687 ;
+    ch1_read_select_144 <= \$689 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$688 ;
+    ch1_read_select_145 <= \$690 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$689 ;
+    ch1_result_status_status_snapshot <= \$691 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$690 ;
+    ch1_result_status_cds_snapshot <= \$692 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$691 ;
+    ch1_result_status_w0_ne_snapshot <= \$693 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$692 ;
+    ch1_result_status_w0_nw_snapshot <= \$694 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$693 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$695 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$694 ;
+    ch1_result_status_w1_ne_snapshot <= \$696 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$695 ;
+    ch1_result_status_w1_nw_snapshot <= \$697 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$696 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$698 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$697 ;
+    ch1_result_status_lc_repeat_snapshot <= \$699 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$698 ;
+    ch1_result_status_lc_skip_snapshot <= \$700 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$699 ;
+    ch1_result_status_lc_zero_snapshot <= \$701 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$700 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$702 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$701 ;
+    ch1_result_status_lc_snapshot <= \$703 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$702 ;
+    ch1_result_seq_seq_snapshot <= \$704 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$703 ;
+    ch1_result_seq_line_delay_snapshot <= \$705 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$704 ;
+    ch1_result_w0_lo_data_snapshot <= \$706 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$705 ;
+    ch1_result_w0_hi_data_snapshot <= \$707 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$706 ;
+    ch1_result_w1_lo_data_snapshot <= \$708 ;
   always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$707 ;
+    ch1_result_w1_hi_data_snapshot <= \$709 ;
   always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$708 ;
+    ch1_result_timestamp_time_snapshot <= \$710 ;
   always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$709 ;
+    ch1_result_line_noise_events_snapshot <= \$711 ;
   always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$710 ;
+    ch1_result_line_delay_settled_snapshot <= \$712 ;
   always @(posedge clk)
-    ch1_window0_read <= \$711 ;
+    ch1_result_line_delay_spread_snapshot <= \$713 ;
   always @(posedge clk)
-    ch1_window1_read <= \$712 ;
+    ch1_result_line_settled_delay_snapshot <= \$714 ;
   always @(posedge clk)
-    ch1_read_data <= \$713 ;
+    ch1_window0_read <= \$715 ;
+  always @(posedge clk)
+    ch1_window1_read <= \$716 ;
+  always @(posedge clk)
+    ch1_read_data <= \$717 ;
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__r_addr;
@@ -3423,263 +3455,239 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$66  = ch0_cfg_checks_config_write & config_write_strb[1];
   assign \$67  = ch0_cfg_checks_config_write & config_write_strb[2];
   assign \$68  = ch0_cfg_checks_config_write & config_write_strb[2];
-  assign \$69  = ch0_cfg_quiet_config_write & config_write_strb[0];
-  assign \$70  = ch0_cfg_quiet_config_write & config_write_strb[1];
-  assign \$71  = ch0_cfg_crc0_config_write & config_write_strb[0];
-  assign \$72  = ch0_cfg_crc0_config_write & config_write_strb[1];
-  assign \$73  = ch0_cfg_crc0_config_write & config_write_strb[2];
-  assign \$74  = ch0_cfg_crc0_config_write & config_write_strb[3];
-  assign \$75  = ch0_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$76  = ch0_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$77  = ch0_cfg_crc1_config_write & config_write_strb[0];
-  assign \$78  = ch0_cfg_crc1_config_write & config_write_strb[1];
-  assign \$79  = ch0_cfg_crc1_config_write & config_write_strb[2];
-  assign \$80  = ch0_cfg_crc1_config_write & config_write_strb[3];
-  assign \$81  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$82  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$83  = ch0_ca_request_config_write & config_write_strb[0];
-  assign \$84  = ch0_ca_request_config_write & config_write_strb[1];
-  assign \$85  = ch0_ca_request_config_write & config_write_strb[2];
-  assign \$86  = ch0_ca_request_config_write & config_write_strb[3];
-  assign \$87  = write_data[0] & write_strb[0];
-  assign \$88  = ch0_ca_ctrl_write ? \$87  : 1'h0;
-  assign \$89  = write_data[1] & write_strb[0];
-  assign \$90  = ch0_ca_ctrl_write ? \$89  : 1'h0;
-  assign \$91  = bus__r_addr == 8'h80;
-  assign \$92  = bus__r_addr == 8'h81;
-  assign \$93  = bus__r_addr == 8'h82;
-  assign \$94  = bus__r_addr == 8'h84;
-  assign \$95  = bus__r_addr == 8'h85;
-  assign \$96  = bus__r_addr == 8'h88;
-  assign \$97  = bus__r_addr == 8'h89;
-  assign \$98  = bus__r_addr == 8'h8a;
-  assign \$99  = bus__r_addr == 8'h8b;
-  assign \$100  = bus__r_addr == 8'h8c;
-  assign \$101  = bus__r_addr == 8'h8d;
-  assign \$102  = bus__r_addr == 8'h8e;
-  assign \$103  = bus__r_addr == 8'h8f;
-  assign \$104  = bus__r_addr == 8'h90;
-  assign \$105  = bus__r_addr == 8'h91;
-  assign \$106  = bus__r_addr == 8'h92;
-  assign \$107  = bus__r_addr == 8'h93;
-  assign \$108  = bus__r_addr == 8'h94;
-  assign \$109  = bus__r_addr == 8'h95;
-  assign \$110  = bus__r_addr == 8'h96;
-  assign \$111  = bus__r_addr == 8'h97;
-  assign \$112  = bus__r_addr == 8'ha0;
-  assign \$113  = bus__r_addr == 8'ha1;
-  assign \$114  = bus__r_addr == 8'ha2;
-  assign \$115  = bus__r_addr == 8'ha3;
-  assign \$116  = bus__r_addr == 8'hc0;
-  assign \$117  = bus__r_addr == 8'hc1;
-  assign \$118  = bus__r_addr == 8'hc2;
-  assign \$119  = bus__r_addr == 8'hc3;
-  assign \$120  = bus__r_addr == 8'hc4;
-  assign \$121  = bus__r_addr == 8'hc5;
-  assign \$122  = ch0_read_select_90 & bus__r_load;
-  assign \$123  = bus__r_addr[10:3] == 5'h13;
-  assign \$124  = bus__r_en & \$123 ;
-  assign \$125  = bus__r_addr[10:4] == 4'he;
-  assign \$126  = bus__r_en & \$125 ;
-  assign \$127  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$129  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$130  = \$128  | \$129 ;
-  assign \$131  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
-  assign \$132  = \$130  | \$131 ;
-  assign \$133  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
-  assign \$134  = \$132  | \$133 ;
-  assign \$135  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
-  assign \$136  = \$134  | \$135 ;
-  assign \$137  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
-  assign \$138  = \$136  | \$137 ;
-  assign \$139  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
-  assign \$140  = \$138  | \$139 ;
-  assign \$141  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
-  assign \$142  = \$140  | \$141 ;
-  assign \$143  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
-  assign \$144  = \$142  | \$143 ;
-  assign \$145  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$146  = \$144  | \$145 ;
-  assign \$147  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 3'h0, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 4'h0, ch0_cfg_words_w0_signed, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
-  assign \$148  = \$146  | \$147 ;
-  assign \$149  = ch0_read_select_8e ? { 8'h00, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
-  assign \$150  = \$148  | \$149 ;
-  assign \$151  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
-  assign \$152  = \$150  | \$151 ;
-  assign \$153  = ch0_read_select_90 ? { 2'h0, \port$6267$0 [182:177], 4'h0, \port$6267$0 [186:183], 1'h0, \port$6267$0 [176:174], 1'h0, \port$6267$0 [133:131], 3'h0, \port$6267$0 [49], \port$6267$0 [3:0] } : 32'd0;
-  assign \$154  = \$152  | \$153 ;
-  assign \$155  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
-  assign \$156  = \$154  | \$155 ;
-  assign \$157  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
-  assign \$158  = \$156  | \$157 ;
-  assign \$159  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
-  assign \$162  = \$160  | \$161 ;
-  assign \$163  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$164  = \$162  | \$163 ;
-  assign \$165  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
-  assign \$166  = \$164  | \$165 ;
-  assign \$167  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
-  assign \$168  = \$166  | \$167 ;
-  assign \$169  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
-  assign \$170  = \$168  | \$169 ;
-  assign \$171  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
-  assign \$172  = \$170  | \$171 ;
-  assign \$173  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
-  assign \$174  = \$172  | \$173 ;
-  assign \$175  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
-  assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$105 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
-  assign \$178  = \$176  | \$177 ;
-  assign \$181  = ch0_read_select_c2 ? { 17'h00000, \port$6357$0 [9:3], 1'h0, \port$6357$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_c3 ? \port$6280$0 [31:0] : 32'd0;
-  assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_c4 ? \port$6280$0 [63:32] : 32'd0;
-  assign \$186  = \$184  | \$185 ;
-  assign \$187  = ch0_read_select_c5 ? { 16'h0000, \port$6280$0 [79:64] } : 32'd0;
-  assign \$188  = \$186  | \$187 ;
-  assign \$189  = ch0_window0_read ? ch0__count_data : 32'd0;
-  assign \$190  = \$188  | \$189 ;
-  assign \$191  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$192  = \$190  | \$191 ;
-  assign \$193  = write_data[0] & write_strb[0];
-  assign \$194  = ch1_ctrl_write ? \$193  : 1'h0;
-  assign \$195  = write_data[1] & write_strb[0];
-  assign \$196  = ch1_ctrl_write ? \$195  : 1'h0;
-  assign \$197  = write_data[2] & write_strb[0];
-  assign \$198  = ch1_ctrl_write ? \$197  : 1'h0;
-  assign \$199  = ch1_ctrl_write & write_strb[1];
+  assign \$69  = ch0_cfg_checks_config_write & config_write_strb[3];
+  assign \$70  = ch0_cfg_quiet_config_write & config_write_strb[0];
+  assign \$71  = ch0_cfg_quiet_config_write & config_write_strb[1];
+  assign \$72  = ch0_cfg_crc0_config_write & config_write_strb[0];
+  assign \$73  = ch0_cfg_crc0_config_write & config_write_strb[1];
+  assign \$74  = ch0_cfg_crc0_config_write & config_write_strb[2];
+  assign \$75  = ch0_cfg_crc0_config_write & config_write_strb[3];
+  assign \$76  = ch0_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$77  = ch0_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$78  = ch0_cfg_crc1_config_write & config_write_strb[0];
+  assign \$79  = ch0_cfg_crc1_config_write & config_write_strb[1];
+  assign \$80  = ch0_cfg_crc1_config_write & config_write_strb[2];
+  assign \$81  = ch0_cfg_crc1_config_write & config_write_strb[3];
+  assign \$82  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$83  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$84  = ch0_ca_request_config_write & config_write_strb[0];
+  assign \$85  = ch0_ca_request_config_write & config_write_strb[1];
+  assign \$86  = ch0_ca_request_config_write & config_write_strb[2];
+  assign \$87  = ch0_ca_request_config_write & config_write_strb[3];
+  assign \$88  = write_data[0] & write_strb[0];
+  assign \$89  = ch0_ca_ctrl_write ? \$88  : 1'h0;
+  assign \$90  = write_data[1] & write_strb[0];
+  assign \$91  = ch0_ca_ctrl_write ? \$90  : 1'h0;
+  assign \$92  = bus__r_addr == 8'h80;
+  assign \$93  = bus__r_addr == 8'h81;
+  assign \$94  = bus__r_addr == 8'h82;
+  assign \$95  = bus__r_addr == 8'h84;
+  assign \$96  = bus__r_addr == 8'h85;
+  assign \$97  = bus__r_addr == 8'h88;
+  assign \$98  = bus__r_addr == 8'h89;
+  assign \$99  = bus__r_addr == 8'h8a;
+  assign \$100  = bus__r_addr == 8'h8b;
+  assign \$101  = bus__r_addr == 8'h8c;
+  assign \$102  = bus__r_addr == 8'h8d;
+  assign \$103  = bus__r_addr == 8'h8e;
+  assign \$104  = bus__r_addr == 8'h8f;
+  assign \$105  = bus__r_addr == 8'h90;
+  assign \$106  = bus__r_addr == 8'h91;
+  assign \$107  = bus__r_addr == 8'h92;
+  assign \$108  = bus__r_addr == 8'h93;
+  assign \$109  = bus__r_addr == 8'h94;
+  assign \$110  = bus__r_addr == 8'h95;
+  assign \$111  = bus__r_addr == 8'h96;
+  assign \$112  = bus__r_addr == 8'h97;
+  assign \$113  = bus__r_addr == 8'ha0;
+  assign \$114  = bus__r_addr == 8'ha1;
+  assign \$115  = bus__r_addr == 8'ha2;
+  assign \$116  = bus__r_addr == 8'ha3;
+  assign \$117  = bus__r_addr == 8'hc0;
+  assign \$118  = bus__r_addr == 8'hc1;
+  assign \$119  = bus__r_addr == 8'hc2;
+  assign \$120  = bus__r_addr == 8'hc3;
+  assign \$121  = bus__r_addr == 8'hc4;
+  assign \$122  = bus__r_addr == 8'hc5;
+  assign \$123  = ch0_read_select_90 & bus__r_load;
+  assign \$124  = bus__r_addr[10:3] == 5'h13;
+  assign \$125  = bus__r_en & \$124 ;
+  assign \$126  = bus__r_addr[10:4] == 4'he;
+  assign \$127  = bus__r_en & \$126 ;
+  assign \$128  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$130  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$131  = \$129  | \$130 ;
+  assign \$132  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
+  assign \$133  = \$131  | \$132 ;
+  assign \$134  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$135  = \$133  | \$134 ;
+  assign \$136  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
+  assign \$137  = \$135  | \$136 ;
+  assign \$138  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
+  assign \$139  = \$137  | \$138 ;
+  assign \$140  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
+  assign \$141  = \$139  | \$140 ;
+  assign \$142  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
+  assign \$143  = \$141  | \$142 ;
+  assign \$144  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
+  assign \$145  = \$143  | \$144 ;
+  assign \$146  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$147  = \$145  | \$146 ;
+  assign \$148  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 3'h0, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 4'h0, ch0_cfg_words_w0_signed, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
+  assign \$149  = \$147  | \$148 ;
+  assign \$150  = ch0_read_select_8e ? { 4'h0, ch0_cfg_checks_confirm_frames, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
+  assign \$151  = \$149  | \$150 ;
+  assign \$152  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
+  assign \$153  = \$151  | \$152 ;
+  assign \$154  = ch0_read_select_90 ? { 2'h0, \port$6333$0 [182:177], 4'h0, \port$6333$0 [186:183], 1'h0, \port$6333$0 [176:174], 1'h0, \port$6333$0 [133:131], 3'h0, \port$6333$0 [49], \port$6333$0 [3:0] } : 32'd0;
+  assign \$155  = \$153  | \$154 ;
+  assign \$156  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$157  = \$155  | \$156 ;
+  assign \$158  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$159  = \$157  | \$158 ;
+  assign \$160  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$161  = \$159  | \$160 ;
+  assign \$162  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$163  = \$161  | \$162 ;
+  assign \$164  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$165  = \$163  | \$164 ;
+  assign \$166  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$167  = \$165  | \$166 ;
+  assign \$168  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
+  assign \$169  = \$167  | \$168 ;
+  assign \$170  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
+  assign \$171  = \$169  | \$170 ;
+  assign \$172  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
+  assign \$173  = \$171  | \$172 ;
+  assign \$174  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
+  assign \$175  = \$173  | \$174 ;
+  assign \$176  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
+  assign \$177  = \$175  | \$176 ;
+  assign \$178  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$106 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$179  = \$177  | \$178 ;
+  assign \$182  = ch0_read_select_c2 ? { 17'h00000, \port$6423$0 [9:3], 1'h0, \port$6423$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$183  = \$181  | \$182 ;
+  assign \$184  = ch0_read_select_c3 ? \port$6346$0 [31:0] : 32'd0;
+  assign \$185  = \$183  | \$184 ;
+  assign \$186  = ch0_read_select_c4 ? \port$6346$0 [63:32] : 32'd0;
+  assign \$187  = \$185  | \$186 ;
+  assign \$188  = ch0_read_select_c5 ? { 16'h0000, \port$6346$0 [79:64] } : 32'd0;
+  assign \$189  = \$187  | \$188 ;
+  assign \$190  = ch0_window0_read ? ch0__count_data : 32'd0;
+  assign \$191  = \$189  | \$190 ;
+  assign \$192  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$193  = \$191  | \$192 ;
+  assign \$194  = write_data[0] & write_strb[0];
+  assign \$195  = ch1_ctrl_write ? \$194  : 1'h0;
+  assign \$196  = write_data[1] & write_strb[0];
+  assign \$197  = ch1_ctrl_write ? \$196  : 1'h0;
+  assign \$198  = write_data[2] & write_strb[0];
+  assign \$199  = ch1_ctrl_write ? \$198  : 1'h0;
   assign \$200  = ch1_ctrl_write & write_strb[1];
-  assign \$201  = write_data[0] & write_strb[0];
-  assign \$202  = ch1_irq_status_write ? \$201  : 1'h0;
-  assign \$203  = write_data[1] & write_strb[0];
-  assign \$204  = ch1_irq_status_write ? \$203  : 1'h0;
-  assign \$205  = write_data[2] & write_strb[0];
-  assign \$206  = ch1_irq_status_write ? \$205  : 1'h0;
-  assign \$207  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$201  = ch1_ctrl_write & write_strb[1];
+  assign \$202  = write_data[0] & write_strb[0];
+  assign \$203  = ch1_irq_status_write ? \$202  : 1'h0;
+  assign \$204  = write_data[1] & write_strb[0];
+  assign \$205  = ch1_irq_status_write ? \$204  : 1'h0;
+  assign \$206  = write_data[2] & write_strb[0];
+  assign \$207  = ch1_irq_status_write ? \$206  : 1'h0;
   assign \$208  = ch1_irq_enable_config_write & config_write_strb[0];
   assign \$209  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$210  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$211  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$212  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$213  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$214  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$215  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$216  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$217  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$218  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$219  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$220  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$221  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$222  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$223  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$224  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$225  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$226  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$210  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$211  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$212  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$213  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$214  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$215  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$216  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$217  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$218  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$219  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$220  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$221  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$222  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$223  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$224  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$225  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$226  = ch1_cfg_timeout_config_write & config_write_strb[2];
   assign \$227  = ch1_cfg_words_config_write & config_write_strb[0];
   assign \$228  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$229  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$229  = ch1_cfg_words_config_write & config_write_strb[0];
   assign \$230  = ch1_cfg_words_config_write & config_write_strb[1];
   assign \$231  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$232  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$232  = ch1_cfg_words_config_write & config_write_strb[1];
   assign \$233  = ch1_cfg_words_config_write & config_write_strb[2];
   assign \$234  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$235  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$235  = ch1_cfg_words_config_write & config_write_strb[2];
   assign \$236  = ch1_cfg_words_config_write & config_write_strb[3];
   assign \$237  = ch1_cfg_words_config_write & config_write_strb[3];
   assign \$238  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$239  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$239  = ch1_cfg_words_config_write & config_write_strb[3];
   assign \$240  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$241  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$242  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$241  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$242  = ch1_cfg_checks_config_write & config_write_strb[1];
   assign \$243  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$244  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$245  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$246  = ch1_cfg_crc0_config_write & config_write_strb[0];
-  assign \$247  = ch1_cfg_crc0_config_write & config_write_strb[1];
-  assign \$248  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$249  = ch1_cfg_crc0_config_write & config_write_strb[3];
-  assign \$250  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$251  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$252  = ch1_cfg_crc1_config_write & config_write_strb[0];
-  assign \$253  = ch1_cfg_crc1_config_write & config_write_strb[1];
-  assign \$254  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$255  = ch1_cfg_crc1_config_write & config_write_strb[3];
-  assign \$256  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$257  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$258  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$259  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$260  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$261  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$262  = write_data[0] & write_strb[0];
-  assign \$263  = ch1_ca_ctrl_write ? \$262  : 1'h0;
-  assign \$264  = write_data[1] & write_strb[0];
+  assign \$244  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$245  = ch1_cfg_checks_config_write & config_write_strb[3];
+  assign \$246  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$247  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$248  = ch1_cfg_crc0_config_write & config_write_strb[0];
+  assign \$249  = ch1_cfg_crc0_config_write & config_write_strb[1];
+  assign \$250  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$251  = ch1_cfg_crc0_config_write & config_write_strb[3];
+  assign \$252  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$253  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$254  = ch1_cfg_crc1_config_write & config_write_strb[0];
+  assign \$255  = ch1_cfg_crc1_config_write & config_write_strb[1];
+  assign \$256  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$257  = ch1_cfg_crc1_config_write & config_write_strb[3];
+  assign \$258  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$259  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$260  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$261  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$262  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$263  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$264  = write_data[0] & write_strb[0];
   assign \$265  = ch1_ca_ctrl_write ? \$264  : 1'h0;
-  assign \$266  = bus__r_addr == 9'h100;
-  assign \$267  = bus__r_addr == 9'h101;
-  assign \$268  = bus__r_addr == 9'h102;
-  assign \$269  = bus__r_addr == 9'h104;
-  assign \$270  = bus__r_addr == 9'h105;
-  assign \$271  = bus__r_addr == 9'h108;
-  assign \$272  = bus__r_addr == 9'h109;
-  assign \$273  = bus__r_addr == 9'h10a;
-  assign \$274  = bus__r_addr == 9'h10b;
-  assign \$275  = bus__r_addr == 9'h10c;
-  assign \$276  = bus__r_addr == 9'h10d;
-  assign \$277  = bus__r_addr == 9'h10e;
-  assign \$278  = bus__r_addr == 9'h10f;
-  assign \$279  = bus__r_addr == 9'h110;
-  assign \$280  = bus__r_addr == 9'h111;
-  assign \$281  = bus__r_addr == 9'h112;
-  assign \$282  = bus__r_addr == 9'h113;
-  assign \$283  = bus__r_addr == 9'h114;
-  assign \$284  = bus__r_addr == 9'h115;
-  assign \$285  = bus__r_addr == 9'h116;
-  assign \$286  = bus__r_addr == 9'h117;
+  assign \$266  = write_data[1] & write_strb[0];
+  assign \$267  = ch1_ca_ctrl_write ? \$266  : 1'h0;
+  assign \$268  = bus__r_addr == 9'h100;
+  assign \$269  = bus__r_addr == 9'h101;
+  assign \$270  = bus__r_addr == 9'h102;
+  assign \$271  = bus__r_addr == 9'h104;
+  assign \$272  = bus__r_addr == 9'h105;
+  assign \$273  = bus__r_addr == 9'h108;
+  assign \$274  = bus__r_addr == 9'h109;
+  assign \$275  = bus__r_addr == 9'h10a;
+  assign \$276  = bus__r_addr == 9'h10b;
+  assign \$277  = bus__r_addr == 9'h10c;
+  assign \$278  = bus__r_addr == 9'h10d;
+  assign \$279  = bus__r_addr == 9'h10e;
+  assign \$280  = bus__r_addr == 9'h10f;
+  assign \$281  = bus__r_addr == 9'h110;
+  assign \$282  = bus__r_addr == 9'h111;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$457  = bus__w_en;
+    \$459  = bus__w_en;
     if (rst) begin
-      \$457  = 1'h0;
+      \$459  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$458  = write_addr;
+    \$460  = write_addr;
     if (bus__w_en) begin
-      \$458  = bus__w_addr;
+      \$460  = bus__w_addr;
     end
     if (rst) begin
-      \$458  = 11'h000;
+      \$460  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$459  = write_data;
+    \$461  = write_data;
     if (bus__w_en) begin
-      \$459  = bus__w_data;
-    end
-    if (rst) begin
-      \$459  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$460  = write_strb;
-    if (bus__w_en) begin
-      \$460  = bus__w_strb;
-    end
-    if (rst) begin
-      \$460  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$461  = config_write_data;
-    if (write_en) begin
-      \$461  = write_data;
+      \$461  = bus__w_data;
     end
     if (rst) begin
       \$461  = 32'd0;
@@ -3687,9 +3695,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$462  = config_write_strb;
-    if (write_en) begin
-      \$462  = write_strb;
+    \$462  = write_strb;
+    if (bus__w_en) begin
+      \$462  = bus__w_strb;
     end
     if (rst) begin
       \$462  = 4'h0;
@@ -3697,36 +3705,36 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$463  = \$2 ;
+    \$463  = config_write_data;
+    if (write_en) begin
+      \$463  = write_data;
+    end
     if (rst) begin
-      \$463  = 1'h0;
+      \$463  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$464  = g_read_select_0;
-    if (bus__r_en) begin
-      \$464  = \$3 ;
+    \$464  = config_write_strb;
+    if (write_en) begin
+      \$464  = write_strb;
     end
     if (rst) begin
-      \$464  = 1'h0;
+      \$464  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$465  = g_read_select_1;
-    if (bus__r_en) begin
-      \$465  = \$4 ;
-    end
+    \$465  = \$2 ;
     if (rst) begin
       \$465  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$466  = g_read_select_2;
+    \$466  = g_read_select_0;
     if (bus__r_en) begin
-      \$466  = \$5 ;
+      \$466  = \$3 ;
     end
     if (rst) begin
       \$466  = 1'h0;
@@ -3734,9 +3742,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$467  = g_read_select_3;
+    \$467  = g_read_select_1;
     if (bus__r_en) begin
-      \$467  = \$6 ;
+      \$467  = \$4 ;
     end
     if (rst) begin
       \$467  = 1'h0;
@@ -3744,9 +3752,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$468  = g_read_select_4;
+    \$468  = g_read_select_2;
     if (bus__r_en) begin
-      \$468  = \$7 ;
+      \$468  = \$5 ;
     end
     if (rst) begin
       \$468  = 1'h0;
@@ -3754,85 +3762,81 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$469  = g_read_data;
-    if (bus__r_load) begin
-      \$469  = \$17 ;
+    \$469  = g_read_select_3;
+    if (bus__r_en) begin
+      \$469  = \$6 ;
     end
     if (rst) begin
-      \$469  = 32'd0;
+      \$469  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$470  = \$19 ;
+    \$470  = g_read_select_4;
+    if (bus__r_en) begin
+      \$470  = \$7 ;
+    end
     if (rst) begin
       \$470  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$471  = \$21 ;
+    \$471  = g_read_data;
+    if (bus__r_load) begin
+      \$471  = \$17 ;
+    end
     if (rst) begin
-      \$471  = 1'h0;
+      \$471  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$472  = \$23 ;
+    \$472  = \$19 ;
     if (rst) begin
       \$472  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$473  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$473  = write_data[8];
-    end
+    \$473  = \$21 ;
     if (rst) begin
       \$473  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$474  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$474  = write_data[9];
-    end
+    \$474  = \$23 ;
     if (rst) begin
       \$474  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$475  = ch0_irq_status_done;
+    \$475  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$475  = write_data[8];
+    end
+    if (rst) begin
+      \$475  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$476  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$476  = write_data[9];
+    end
+    if (rst) begin
+      \$476  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$477  = ch0_irq_status_done;
     if (ch0__frame_done) begin
-      \$475  = 1'h1;
-    end else if (\$27 ) begin
-      \$475  = 1'h0;
-    end
-    if (rst) begin
-      \$475  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$476  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$476  = 1'h1;
-    end else if (\$29 ) begin
-      \$476  = 1'h0;
-    end
-    if (rst) begin
-      \$476  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$477  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
       \$477  = 1'h1;
-    end else if (\$31 ) begin
+    end else if (\$27 ) begin
       \$477  = 1'h0;
     end
     if (rst) begin
@@ -3841,16 +3845,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$478  = ch0_irq_enable_write;
+    \$478  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$478  = 1'h1;
+    end else if (\$29 ) begin
+      \$478  = 1'h0;
+    end
     if (rst) begin
       \$478  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$479  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$479  = config_write_data[0];
+    \$479  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$479  = 1'h1;
+    end else if (\$31 ) begin
+      \$479  = 1'h0;
     end
     if (rst) begin
       \$479  = 1'h0;
@@ -3858,19 +3869,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$480  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$480  = config_write_data[1];
-    end
+    \$480  = ch0_irq_enable_write;
     if (rst) begin
       \$480  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$481  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$481  = config_write_data[2];
+    \$481  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$481  = config_write_data[0];
     end
     if (rst) begin
       \$481  = 1'h0;
@@ -3878,77 +3886,74 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$482  = ch0_cfg_ma_write;
+    \$482  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$482  = config_write_data[1];
+    end
     if (rst) begin
       \$482  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$483  = ch0_cfg_ma_ma_half_period;
+    \$483  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$483  = config_write_data[2];
+    end
+    if (rst) begin
+      \$483  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$484  = ch0_cfg_ma_write;
+    if (rst) begin
+      \$484  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$485  = ch0_cfg_ma_ma_half_period;
     if (\$35 ) begin
-      \$483 [7:0] = config_write_data[7:0];
+      \$485 [7:0] = config_write_data[7:0];
     end
     if (\$36 ) begin
-      \$483 [15:8] = config_write_data[15:8];
+      \$485 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$483  = 16'h0000;
+      \$485  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$484  = ch0_cfg_ma_delay_limit;
+    \$486  = ch0_cfg_ma_delay_limit;
     if (\$37 ) begin
-      \$484 [7:0] = config_write_data[23:16];
+      \$486 [7:0] = config_write_data[23:16];
     end
     if (\$38 ) begin
-      \$484 [11:8] = config_write_data[27:24];
+      \$486 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$484  = 12'h000;
+      \$486  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$485  = ch0_cfg_period_write;
-    if (rst) begin
-      \$485  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$486  = ch0_cfg_period_request_period;
-    if (\$39 ) begin
-      \$486 [7:0] = config_write_data[7:0];
-    end
-    if (\$40 ) begin
-      \$486 [15:8] = config_write_data[15:8];
-    end
-    if (\$41 ) begin
-      \$486 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$486  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$487  = ch0_cfg_break_write;
+    \$487  = ch0_cfg_period_write;
     if (rst) begin
       \$487  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$488  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
+    \$488  = ch0_cfg_period_request_period;
+    if (\$39 ) begin
       \$488 [7:0] = config_write_data[7:0];
     end
-    if (\$43 ) begin
+    if (\$40 ) begin
       \$488 [15:8] = config_write_data[15:8];
     end
-    if (\$44 ) begin
+    if (\$41 ) begin
       \$488 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -3957,21 +3962,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$489  = ch0_cfg_ack_write;
+    \$489  = ch0_cfg_break_write;
     if (rst) begin
       \$489  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$490  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
+    \$490  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
       \$490 [7:0] = config_write_data[7:0];
     end
-    if (\$46 ) begin
+    if (\$43 ) begin
       \$490 [15:8] = config_write_data[15:8];
     end
-    if (\$47 ) begin
+    if (\$44 ) begin
       \$490 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -3980,21 +3985,21 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$491  = ch0_cfg_timeout_write;
+    \$491  = ch0_cfg_ack_write;
     if (rst) begin
       \$491  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$492  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
+    \$492  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
       \$492 [7:0] = config_write_data[7:0];
     end
-    if (\$49 ) begin
+    if (\$46 ) begin
       \$492 [15:8] = config_write_data[15:8];
     end
-    if (\$50 ) begin
+    if (\$47 ) begin
       \$492 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -4003,56 +4008,59 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$493  = ch0_cfg_words_write;
+    \$493  = ch0_cfg_timeout_write;
     if (rst) begin
       \$493  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$494  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$494  = config_write_data[5:0];
+    \$494  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
+      \$494 [7:0] = config_write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$494 [15:8] = config_write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$494 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$494  = 6'h00;
+      \$494  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$495  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$495  = config_write_data[6];
-    end
+    \$495  = ch0_cfg_words_write;
     if (rst) begin
       \$495  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$496  = ch0_cfg_words_w0_lc;
+    \$496  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$496  = config_write_data[5:0];
+    end
+    if (rst) begin
+      \$496  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$497  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$497  = config_write_data[6];
+    end
+    if (rst) begin
+      \$497  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$498  = ch0_cfg_words_w0_lc;
     if (\$53 ) begin
-      \$496  = config_write_data[7];
-    end
-    if (rst) begin
-      \$496  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$497  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$497  = config_write_data[9:8];
-    end
-    if (rst) begin
-      \$497  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$498  = ch0_cfg_words_w0_gray;
-    if (\$55 ) begin
-      \$498  = config_write_data[10];
+      \$498  = config_write_data[7];
     end
     if (rst) begin
       \$498  = 1'h0;
@@ -4060,29 +4068,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$499  = ch0_cfg_words_w0_signed;
+    \$499  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$499  = config_write_data[9:8];
+    end
+    if (rst) begin
+      \$499  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$500  = ch0_cfg_words_w0_gray;
+    if (\$55 ) begin
+      \$500  = config_write_data[10];
+    end
+    if (rst) begin
+      \$500  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$501  = ch0_cfg_words_w0_signed;
     if (\$56 ) begin
-      \$499  = config_write_data[11];
-    end
-    if (rst) begin
-      \$499  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$500  = ch0_cfg_words_w1_data_bits;
-    if (\$57 ) begin
-      \$500  = config_write_data[21:16];
-    end
-    if (rst) begin
-      \$500  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$501  = ch0_cfg_words_w1_nenw;
-    if (\$58 ) begin
-      \$501  = config_write_data[22];
+      \$501  = config_write_data[11];
     end
     if (rst) begin
       \$501  = 1'h0;
@@ -4090,29 +4098,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$502  = ch0_cfg_words_w1_lc;
+    \$502  = ch0_cfg_words_w1_data_bits;
+    if (\$57 ) begin
+      \$502  = config_write_data[21:16];
+    end
+    if (rst) begin
+      \$502  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$503  = ch0_cfg_words_w1_nenw;
+    if (\$58 ) begin
+      \$503  = config_write_data[22];
+    end
+    if (rst) begin
+      \$503  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$504  = ch0_cfg_words_w1_lc;
     if (\$59 ) begin
-      \$502  = config_write_data[23];
-    end
-    if (rst) begin
-      \$502  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$503  = ch0_cfg_words_w1_crc;
-    if (\$60 ) begin
-      \$503  = config_write_data[25:24];
-    end
-    if (rst) begin
-      \$503  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$504  = ch0_cfg_words_w1_gray;
-    if (\$61 ) begin
-      \$504  = config_write_data[26];
+      \$504  = config_write_data[23];
     end
     if (rst) begin
       \$504  = 1'h0;
@@ -4120,19 +4128,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$505  = ch0_cfg_words_w1_signed;
-    if (\$62 ) begin
-      \$505  = config_write_data[27];
+    \$505  = ch0_cfg_words_w1_crc;
+    if (\$60 ) begin
+      \$505  = config_write_data[25:24];
     end
     if (rst) begin
-      \$505  = 1'h0;
+      \$505  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$506  = ch0_cfg_words_w1_enable;
-    if (\$63 ) begin
-      \$506  = config_write_data[31];
+    \$506  = ch0_cfg_words_w1_gray;
+    if (\$61 ) begin
+      \$506  = config_write_data[26];
     end
     if (rst) begin
       \$506  = 1'h0;
@@ -4140,16 +4148,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$507  = ch0_cfg_checks_write;
+    \$507  = ch0_cfg_words_w1_signed;
+    if (\$62 ) begin
+      \$507  = config_write_data[27];
+    end
     if (rst) begin
       \$507  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$508  = ch0_cfg_checks_end_check;
-    if (\$64 ) begin
-      \$508  = config_write_data[0];
+    \$508  = ch0_cfg_words_w1_enable;
+    if (\$63 ) begin
+      \$508  = config_write_data[31];
     end
     if (rst) begin
       \$508  = 1'h0;
@@ -4157,250 +4168,253 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$509  = ch0_cfg_checks_spw_check;
-    if (\$65 ) begin
-      \$509  = config_write_data[1];
-    end
+    \$509  = ch0_cfg_checks_write;
     if (rst) begin
       \$509  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$510  = ch0_cfg_checks_spw_tolerance;
+    \$510  = ch0_cfg_checks_end_check;
+    if (\$64 ) begin
+      \$510  = config_write_data[0];
+    end
+    if (rst) begin
+      \$510  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$511  = ch0_cfg_checks_spw_check;
+    if (\$65 ) begin
+      \$511  = config_write_data[1];
+    end
+    if (rst) begin
+      \$511  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$512  = ch0_cfg_checks_spw_tolerance;
     if (\$66 ) begin
-      \$510  = config_write_data[15:8];
+      \$512  = config_write_data[15:8];
     end
     if (rst) begin
-      \$510  = 8'h00;
+      \$512  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$511  = ch0_cfg_checks_noise_limit;
+    \$513  = ch0_cfg_checks_noise_limit;
     if (\$67 ) begin
-      \$511  = config_write_data[19:16];
+      \$513  = config_write_data[19:16];
     end
     if (rst) begin
-      \$511  = 4'h0;
+      \$513  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$512  = ch0_cfg_checks_delay_tolerance;
+    \$514  = ch0_cfg_checks_delay_tolerance;
     if (\$68 ) begin
-      \$512  = config_write_data[23:20];
+      \$514  = config_write_data[23:20];
     end
     if (rst) begin
-      \$512  = 4'h0;
+      \$514  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$513  = ch0_cfg_quiet_write;
-    if (rst) begin
-      \$513  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$514  = ch0_cfg_quiet_quiet_time;
+    \$515  = ch0_cfg_checks_confirm_frames;
     if (\$69 ) begin
-      \$514 [7:0] = config_write_data[7:0];
+      \$515  = config_write_data[27:24];
     end
+    if (rst) begin
+      \$515  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$516  = ch0_cfg_quiet_write;
+    if (rst) begin
+      \$516  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$517  = ch0_cfg_quiet_quiet_time;
     if (\$70 ) begin
-      \$514 [11:8] = config_write_data[11:8];
+      \$517 [7:0] = config_write_data[7:0];
     end
-    if (rst) begin
-      \$514  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$515  = ch0_cfg_crc0_write;
-    if (rst) begin
-      \$515  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$516  = ch0_cfg_crc0_w0_crc_poly;
     if (\$71 ) begin
-      \$516 [7:0] = config_write_data[7:0];
-    end
-    if (\$72 ) begin
-      \$516 [15:8] = config_write_data[15:8];
+      \$517 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$516  = 16'h0000;
+      \$517  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$517  = ch0_cfg_crc0_w0_crc_width;
-    if (\$73 ) begin
-      \$517  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$517  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$518  = ch0_cfg_crc0_w0_crc_inverted;
-    if (\$74 ) begin
-      \$518  = config_write_data[24];
-    end
+    \$518  = ch0_cfg_crc0_write;
     if (rst) begin
       \$518  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$519  = ch0_cfg_crc0_start_write;
+    \$519  = ch0_cfg_crc0_w0_crc_poly;
+    if (\$72 ) begin
+      \$519 [7:0] = config_write_data[7:0];
+    end
+    if (\$73 ) begin
+      \$519 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$519  = 1'h0;
+      \$519  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$520  = ch0_cfg_crc0_start_w0_crc_start;
+    \$520  = ch0_cfg_crc0_w0_crc_width;
+    if (\$74 ) begin
+      \$520  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$520  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$521  = ch0_cfg_crc0_w0_crc_inverted;
     if (\$75 ) begin
-      \$520 [7:0] = config_write_data[7:0];
+      \$521  = config_write_data[24];
     end
-    if (\$76 ) begin
-      \$520 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$520  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$521  = ch0_cfg_crc1_write;
     if (rst) begin
       \$521  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$522  = ch0_cfg_crc1_w1_crc_poly;
+    \$522  = ch0_cfg_crc0_start_write;
+    if (rst) begin
+      \$522  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$523  = ch0_cfg_crc0_start_w0_crc_start;
+    if (\$76 ) begin
+      \$523 [7:0] = config_write_data[7:0];
+    end
     if (\$77 ) begin
-      \$522 [7:0] = config_write_data[7:0];
-    end
-    if (\$78 ) begin
-      \$522 [15:8] = config_write_data[15:8];
+      \$523 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$522  = 16'h0000;
+      \$523  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$523  = ch0_cfg_crc1_w1_crc_width;
-    if (\$79 ) begin
-      \$523  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$523  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$524  = ch0_cfg_crc1_w1_crc_inverted;
-    if (\$80 ) begin
-      \$524  = config_write_data[24];
-    end
+    \$524  = ch0_cfg_crc1_write;
     if (rst) begin
       \$524  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$525  = ch0_cfg_crc1_start_write;
+    \$525  = ch0_cfg_crc1_w1_crc_poly;
+    if (\$78 ) begin
+      \$525 [7:0] = config_write_data[7:0];
+    end
+    if (\$79 ) begin
+      \$525 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$525  = 1'h0;
+      \$525  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$526  = ch0_cfg_crc1_start_w1_crc_start;
+    \$526  = ch0_cfg_crc1_w1_crc_width;
+    if (\$80 ) begin
+      \$526  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$526  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$527  = ch0_cfg_crc1_w1_crc_inverted;
     if (\$81 ) begin
-      \$526 [7:0] = config_write_data[7:0];
+      \$527  = config_write_data[24];
     end
-    if (\$82 ) begin
-      \$526 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$526  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$527  = ch0_ca_request_write;
     if (rst) begin
       \$527  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$528  = ch0_ca_request_slave_id;
+    \$528  = ch0_cfg_crc1_start_write;
+    if (rst) begin
+      \$528  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$529  = ch0_cfg_crc1_start_w1_crc_start;
+    if (\$82 ) begin
+      \$529 [7:0] = config_write_data[7:0];
+    end
     if (\$83 ) begin
-      \$528  = config_write_data[2:0];
+      \$529 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$528  = 3'h0;
+      \$529  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$529  = ch0_ca_request_address;
+    \$530  = ch0_ca_request_write;
+    if (rst) begin
+      \$530  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$531  = ch0_ca_request_slave_id;
     if (\$84 ) begin
-      \$529  = config_write_data[14:8];
+      \$531  = config_write_data[2:0];
     end
     if (rst) begin
-      \$529  = 7'h00;
+      \$531  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$530  = ch0_ca_request_count;
+    \$532  = ch0_ca_request_address;
     if (\$85 ) begin
-      \$530  = config_write_data[22:16];
+      \$532  = config_write_data[14:8];
     end
     if (rst) begin
-      \$530  = 7'h00;
+      \$532  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$531  = \ch0_ca_request_write$105 ;
+    \$533  = ch0_ca_request_count;
     if (\$86 ) begin
-      \$531  = config_write_data[24];
+      \$533  = config_write_data[22:16];
     end
     if (rst) begin
-      \$531  = 1'h0;
+      \$533  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$532  = \$88 ;
-    if (rst) begin
-      \$532  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$533  = \$90 ;
-    if (rst) begin
-      \$533  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$534  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$534  = \$91 ;
+    \$534  = \ch0_ca_request_write$106 ;
+    if (\$87 ) begin
+      \$534  = config_write_data[24];
     end
     if (rst) begin
       \$534  = 1'h0;
@@ -4408,29 +4422,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$535  = ch0_read_select_81;
-    if (bus__r_en) begin
-      \$535  = \$92 ;
-    end
+    \$535  = \$89 ;
     if (rst) begin
       \$535  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$536  = ch0_read_select_82;
-    if (bus__r_en) begin
-      \$536  = \$93 ;
-    end
+    \$536  = \$91 ;
     if (rst) begin
       \$536  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$537  = ch0_read_select_84;
+    \$537  = ch0_read_select_80;
     if (bus__r_en) begin
-      \$537  = \$94 ;
+      \$537  = \$92 ;
     end
     if (rst) begin
       \$537  = 1'h0;
@@ -4438,9 +4446,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$538  = ch0_read_select_85;
+    \$538  = ch0_read_select_81;
     if (bus__r_en) begin
-      \$538  = \$95 ;
+      \$538  = \$93 ;
     end
     if (rst) begin
       \$538  = 1'h0;
@@ -4448,9 +4456,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$539  = ch0_read_select_88;
+    \$539  = ch0_read_select_82;
     if (bus__r_en) begin
-      \$539  = \$96 ;
+      \$539  = \$94 ;
     end
     if (rst) begin
       \$539  = 1'h0;
@@ -4458,9 +4466,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$540  = ch0_read_select_89;
+    \$540  = ch0_read_select_84;
     if (bus__r_en) begin
-      \$540  = \$97 ;
+      \$540  = \$95 ;
     end
     if (rst) begin
       \$540  = 1'h0;
@@ -4468,9 +4476,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$541  = ch0_read_select_8a;
+    \$541  = ch0_read_select_85;
     if (bus__r_en) begin
-      \$541  = \$98 ;
+      \$541  = \$96 ;
     end
     if (rst) begin
       \$541  = 1'h0;
@@ -4478,9 +4486,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$542  = ch0_read_select_8b;
+    \$542  = ch0_read_select_88;
     if (bus__r_en) begin
-      \$542  = \$99 ;
+      \$542  = \$97 ;
     end
     if (rst) begin
       \$542  = 1'h0;
@@ -4488,9 +4496,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$543  = ch0_read_select_8c;
+    \$543  = ch0_read_select_89;
     if (bus__r_en) begin
-      \$543  = \$100 ;
+      \$543  = \$98 ;
     end
     if (rst) begin
       \$543  = 1'h0;
@@ -4498,9 +4506,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$544  = ch0_read_select_8d;
+    \$544  = ch0_read_select_8a;
     if (bus__r_en) begin
-      \$544  = \$101 ;
+      \$544  = \$99 ;
     end
     if (rst) begin
       \$544  = 1'h0;
@@ -4508,9 +4516,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$545  = ch0_read_select_8e;
+    \$545  = ch0_read_select_8b;
     if (bus__r_en) begin
-      \$545  = \$102 ;
+      \$545  = \$100 ;
     end
     if (rst) begin
       \$545  = 1'h0;
@@ -4518,9 +4526,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$546  = ch0_read_select_8f;
+    \$546  = ch0_read_select_8c;
     if (bus__r_en) begin
-      \$546  = \$103 ;
+      \$546  = \$101 ;
     end
     if (rst) begin
       \$546  = 1'h0;
@@ -4528,9 +4536,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$547  = ch0_read_select_90;
+    \$547  = ch0_read_select_8d;
     if (bus__r_en) begin
-      \$547  = \$104 ;
+      \$547  = \$102 ;
     end
     if (rst) begin
       \$547  = 1'h0;
@@ -4538,9 +4546,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$548  = ch0_read_select_91;
+    \$548  = ch0_read_select_8e;
     if (bus__r_en) begin
-      \$548  = \$105 ;
+      \$548  = \$103 ;
     end
     if (rst) begin
       \$548  = 1'h0;
@@ -4548,9 +4556,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$549  = ch0_read_select_92;
+    \$549  = ch0_read_select_8f;
     if (bus__r_en) begin
-      \$549  = \$106 ;
+      \$549  = \$104 ;
     end
     if (rst) begin
       \$549  = 1'h0;
@@ -4558,9 +4566,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$550  = ch0_read_select_93;
+    \$550  = ch0_read_select_90;
     if (bus__r_en) begin
-      \$550  = \$107 ;
+      \$550  = \$105 ;
     end
     if (rst) begin
       \$550  = 1'h0;
@@ -4568,9 +4576,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$551  = ch0_read_select_94;
+    \$551  = ch0_read_select_91;
     if (bus__r_en) begin
-      \$551  = \$108 ;
+      \$551  = \$106 ;
     end
     if (rst) begin
       \$551  = 1'h0;
@@ -4578,9 +4586,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$552  = ch0_read_select_95;
+    \$552  = ch0_read_select_92;
     if (bus__r_en) begin
-      \$552  = \$109 ;
+      \$552  = \$107 ;
     end
     if (rst) begin
       \$552  = 1'h0;
@@ -4588,9 +4596,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$553  = ch0_read_select_96;
+    \$553  = ch0_read_select_93;
     if (bus__r_en) begin
-      \$553  = \$110 ;
+      \$553  = \$108 ;
     end
     if (rst) begin
       \$553  = 1'h0;
@@ -4598,9 +4606,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$554  = ch0_read_select_97;
+    \$554  = ch0_read_select_94;
     if (bus__r_en) begin
-      \$554  = \$111 ;
+      \$554  = \$109 ;
     end
     if (rst) begin
       \$554  = 1'h0;
@@ -4608,9 +4616,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$555  = ch0_read_select_a0;
+    \$555  = ch0_read_select_95;
     if (bus__r_en) begin
-      \$555  = \$112 ;
+      \$555  = \$110 ;
     end
     if (rst) begin
       \$555  = 1'h0;
@@ -4618,9 +4626,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$556  = ch0_read_select_a1;
+    \$556  = ch0_read_select_96;
     if (bus__r_en) begin
-      \$556  = \$113 ;
+      \$556  = \$111 ;
     end
     if (rst) begin
       \$556  = 1'h0;
@@ -4628,9 +4636,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$557  = ch0_read_select_a2;
+    \$557  = ch0_read_select_97;
     if (bus__r_en) begin
-      \$557  = \$114 ;
+      \$557  = \$112 ;
     end
     if (rst) begin
       \$557  = 1'h0;
@@ -4638,9 +4646,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$558  = ch0_read_select_a3;
+    \$558  = ch0_read_select_a0;
     if (bus__r_en) begin
-      \$558  = \$115 ;
+      \$558  = \$113 ;
     end
     if (rst) begin
       \$558  = 1'h0;
@@ -4648,9 +4656,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$559  = ch0_read_select_c0;
+    \$559  = ch0_read_select_a1;
     if (bus__r_en) begin
-      \$559  = \$116 ;
+      \$559  = \$114 ;
     end
     if (rst) begin
       \$559  = 1'h0;
@@ -4658,9 +4666,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$560  = ch0_read_select_c1;
+    \$560  = ch0_read_select_a2;
     if (bus__r_en) begin
-      \$560  = \$117 ;
+      \$560  = \$115 ;
     end
     if (rst) begin
       \$560  = 1'h0;
@@ -4668,9 +4676,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$561  = ch0_read_select_c2;
+    \$561  = ch0_read_select_a3;
     if (bus__r_en) begin
-      \$561  = \$118 ;
+      \$561  = \$116 ;
     end
     if (rst) begin
       \$561  = 1'h0;
@@ -4678,9 +4686,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$562  = ch0_read_select_c3;
+    \$562  = ch0_read_select_c0;
     if (bus__r_en) begin
-      \$562  = \$119 ;
+      \$562  = \$117 ;
     end
     if (rst) begin
       \$562  = 1'h0;
@@ -4688,9 +4696,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$563  = ch0_read_select_c4;
+    \$563  = ch0_read_select_c1;
     if (bus__r_en) begin
-      \$563  = \$120 ;
+      \$563  = \$118 ;
     end
     if (rst) begin
       \$563  = 1'h0;
@@ -4698,9 +4706,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$564  = ch0_read_select_c5;
+    \$564  = ch0_read_select_c2;
     if (bus__r_en) begin
-      \$564  = \$121 ;
+      \$564  = \$119 ;
     end
     if (rst) begin
       \$564  = 1'h0;
@@ -4708,19 +4716,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$565  = ch0_result_status_status_snapshot;
-    if (\$122 ) begin
-      \$565  = \port$6267$0 [3:0];
+    \$565  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$565  = \$120 ;
     end
     if (rst) begin
-      \$565  = 4'h0;
+      \$565  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$566  = ch0_result_status_cds_snapshot;
-    if (\$122 ) begin
-      \$566  = \port$6267$0 [49];
+    \$566  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$566  = \$121 ;
     end
     if (rst) begin
       \$566  = 1'h0;
@@ -4728,9 +4736,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$567  = ch0_result_status_w0_ne_snapshot;
-    if (\$122 ) begin
-      \$567  = \port$6267$0 [131];
+    \$567  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$567  = \$122 ;
     end
     if (rst) begin
       \$567  = 1'h0;
@@ -4738,19 +4746,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$568  = ch0_result_status_w0_nw_snapshot;
-    if (\$122 ) begin
-      \$568  = \port$6267$0 [132];
+    \$568  = ch0_result_status_status_snapshot;
+    if (\$123 ) begin
+      \$568  = \port$6333$0 [3:0];
     end
     if (rst) begin
-      \$568  = 1'h0;
+      \$568  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$569  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$122 ) begin
-      \$569  = \port$6267$0 [133];
+    \$569  = ch0_result_status_cds_snapshot;
+    if (\$123 ) begin
+      \$569  = \port$6333$0 [49];
     end
     if (rst) begin
       \$569  = 1'h0;
@@ -4758,9 +4766,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$570  = ch0_result_status_w1_ne_snapshot;
-    if (\$122 ) begin
-      \$570  = \port$6267$0 [174];
+    \$570  = ch0_result_status_w0_ne_snapshot;
+    if (\$123 ) begin
+      \$570  = \port$6333$0 [131];
     end
     if (rst) begin
       \$570  = 1'h0;
@@ -4768,9 +4776,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$571  = ch0_result_status_w1_nw_snapshot;
-    if (\$122 ) begin
-      \$571  = \port$6267$0 [175];
+    \$571  = ch0_result_status_w0_nw_snapshot;
+    if (\$123 ) begin
+      \$571  = \port$6333$0 [132];
     end
     if (rst) begin
       \$571  = 1'h0;
@@ -4778,9 +4786,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$572  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$122 ) begin
-      \$572  = \port$6267$0 [176];
+    \$572  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$123 ) begin
+      \$572  = \port$6333$0 [133];
     end
     if (rst) begin
       \$572  = 1'h0;
@@ -4788,9 +4796,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$573  = ch0_result_status_lc_repeat_snapshot;
-    if (\$122 ) begin
-      \$573  = \port$6267$0 [183];
+    \$573  = ch0_result_status_w1_ne_snapshot;
+    if (\$123 ) begin
+      \$573  = \port$6333$0 [174];
     end
     if (rst) begin
       \$573  = 1'h0;
@@ -4798,9 +4806,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$574  = ch0_result_status_lc_skip_snapshot;
-    if (\$122 ) begin
-      \$574  = \port$6267$0 [184];
+    \$574  = ch0_result_status_w1_nw_snapshot;
+    if (\$123 ) begin
+      \$574  = \port$6333$0 [175];
     end
     if (rst) begin
       \$574  = 1'h0;
@@ -4808,9 +4816,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$575  = ch0_result_status_lc_zero_snapshot;
-    if (\$122 ) begin
-      \$575  = \port$6267$0 [185];
+    \$575  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$123 ) begin
+      \$575  = \port$6333$0 [176];
     end
     if (rst) begin
       \$575  = 1'h0;
@@ -4818,9 +4826,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$576  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$122 ) begin
-      \$576  = \port$6267$0 [186];
+    \$576  = ch0_result_status_lc_repeat_snapshot;
+    if (\$123 ) begin
+      \$576  = \port$6333$0 [183];
     end
     if (rst) begin
       \$576  = 1'h0;
@@ -4828,129 +4836,129 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$577  = ch0_result_status_lc_snapshot;
-    if (\$122 ) begin
-      \$577  = \port$6267$0 [182:177];
+    \$577  = ch0_result_status_lc_skip_snapshot;
+    if (\$123 ) begin
+      \$577  = \port$6333$0 [184];
     end
     if (rst) begin
-      \$577  = 6'h00;
+      \$577  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$578  = ch0_result_seq_seq_snapshot;
-    if (\$122 ) begin
-      \$578  = ch0__done_count;
+    \$578  = ch0_result_status_lc_zero_snapshot;
+    if (\$123 ) begin
+      \$578  = \port$6333$0 [185];
     end
     if (rst) begin
-      \$578  = 16'h0000;
+      \$578  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$579  = ch0_result_seq_line_delay_snapshot;
-    if (\$122 ) begin
-      \$579  = \port$6267$0 [48:36];
+    \$579  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$123 ) begin
+      \$579  = \port$6333$0 [186];
     end
     if (rst) begin
-      \$579  = 13'h0000;
+      \$579  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$580  = ch0_result_w0_lo_data_snapshot;
-    if (\$122 ) begin
-      \$580  = \port$6267$0 [107:76];
+    \$580  = ch0_result_status_lc_snapshot;
+    if (\$123 ) begin
+      \$580  = \port$6333$0 [182:177];
     end
     if (rst) begin
-      \$580  = 32'd0;
+      \$580  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$581  = ch0_result_w0_hi_data_snapshot;
-    if (\$122 ) begin
-      \$581  = \port$6267$0 [130:108];
+    \$581  = ch0_result_seq_seq_snapshot;
+    if (\$123 ) begin
+      \$581  = ch0__done_count;
     end
     if (rst) begin
-      \$581  = 23'h000000;
+      \$581  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$582  = ch0_result_w1_lo_data_snapshot;
-    if (\$122 ) begin
-      \$582  = \port$6267$0 [165:134];
+    \$582  = ch0_result_seq_line_delay_snapshot;
+    if (\$123 ) begin
+      \$582  = \port$6333$0 [48:36];
     end
     if (rst) begin
-      \$582  = 32'd0;
+      \$582  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$583  = ch0_result_w1_hi_data_snapshot;
-    if (\$122 ) begin
-      \$583  = \port$6267$0 [173:166];
+    \$583  = ch0_result_w0_lo_data_snapshot;
+    if (\$123 ) begin
+      \$583  = \port$6333$0 [107:76];
     end
     if (rst) begin
-      \$583  = 8'h00;
+      \$583  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$584  = ch0_result_timestamp_time_snapshot;
-    if (\$122 ) begin
-      \$584  = \port$6267$0 [35:4];
+    \$584  = ch0_result_w0_hi_data_snapshot;
+    if (\$123 ) begin
+      \$584  = \port$6333$0 [130:108];
     end
     if (rst) begin
-      \$584  = 32'd0;
+      \$584  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$585  = ch0_result_line_noise_events_snapshot;
-    if (\$122 ) begin
-      \$585  = \port$6267$0 [53:50];
+    \$585  = ch0_result_w1_lo_data_snapshot;
+    if (\$123 ) begin
+      \$585  = \port$6333$0 [165:134];
     end
     if (rst) begin
-      \$585  = 4'h0;
+      \$585  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$586  = ch0_result_line_delay_settled_snapshot;
-    if (\$122 ) begin
-      \$586  = \port$6267$0 [54];
+    \$586  = ch0_result_w1_hi_data_snapshot;
+    if (\$123 ) begin
+      \$586  = \port$6333$0 [173:166];
     end
     if (rst) begin
-      \$586  = 1'h0;
+      \$586  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$587  = ch0_result_line_delay_spread_snapshot;
-    if (\$122 ) begin
-      \$587  = \port$6267$0 [75:68];
+    \$587  = ch0_result_timestamp_time_snapshot;
+    if (\$123 ) begin
+      \$587  = \port$6333$0 [35:4];
     end
     if (rst) begin
-      \$587  = 8'h00;
+      \$587  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$588  = ch0_result_line_settled_delay_snapshot;
-    if (\$122 ) begin
-      \$588  = \port$6267$0 [67:55];
+    \$588  = ch0_result_line_noise_events_snapshot;
+    if (\$123 ) begin
+      \$588  = \port$6333$0 [53:50];
     end
     if (rst) begin
-      \$588  = 13'h0000;
+      \$588  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$589  = ch0_window0_read;
-    if (bus__r_en) begin
-      \$589  = \$124 ;
+    \$589  = ch0_result_line_delay_settled_snapshot;
+    if (\$123 ) begin
+      \$589  = \port$6333$0 [54];
     end
     if (rst) begin
       \$589  = 1'h0;
@@ -4958,113 +4966,114 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$590  = ch0_window1_read;
+    \$590  = ch0_result_line_delay_spread_snapshot;
+    if (\$123 ) begin
+      \$590  = \port$6333$0 [75:68];
+    end
+    if (rst) begin
+      \$590  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$591  = ch0_result_line_settled_delay_snapshot;
+    if (\$123 ) begin
+      \$591  = \port$6333$0 [67:55];
+    end
+    if (rst) begin
+      \$591  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$592  = ch0_window0_read;
     if (bus__r_en) begin
-      \$590  = \$126 ;
+      \$592  = \$125 ;
     end
-    if (rst) begin
-      \$590  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$591  = ch0_read_data;
-    if (bus__r_load) begin
-      \$591  = \$192 ;
-    end
-    if (rst) begin
-      \$591  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$592  = \$194 ;
     if (rst) begin
       \$592  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$593  = \$196 ;
+    \$593  = ch0_window1_read;
+    if (bus__r_en) begin
+      \$593  = \$127 ;
+    end
     if (rst) begin
       \$593  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$594  = \$198 ;
+    \$594  = ch0_read_data;
+    if (bus__r_load) begin
+      \$594  = \$193 ;
+    end
     if (rst) begin
-      \$594  = 1'h0;
+      \$594  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$595  = ch1_ctrl_periodic;
-    if (\$199 ) begin
-      \$595  = write_data[8];
-    end
+    \$595  = \$195 ;
     if (rst) begin
       \$595  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$596  = ch1_ctrl_trigger_enable;
-    if (\$200 ) begin
-      \$596  = write_data[9];
-    end
+    \$596  = \$197 ;
     if (rst) begin
       \$596  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$597  = ch1_irq_status_done;
+    \$597  = \$199 ;
+    if (rst) begin
+      \$597  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$598  = ch1_ctrl_periodic;
+    if (\$200 ) begin
+      \$598  = write_data[8];
+    end
+    if (rst) begin
+      \$598  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$599  = ch1_ctrl_trigger_enable;
+    if (\$201 ) begin
+      \$599  = write_data[9];
+    end
+    if (rst) begin
+      \$599  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$600  = ch1_irq_status_done;
     if (ch1__frame_done) begin
-      \$597  = 1'h1;
-    end else if (\$202 ) begin
-      \$597  = 1'h0;
+      \$600  = 1'h1;
+    end else if (\$203 ) begin
+      \$600  = 1'h0;
     end
-    if (rst) begin
-      \$597  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$598  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$598  = 1'h1;
-    end else if (\$204 ) begin
-      \$598  = 1'h0;
-    end
-    if (rst) begin
-      \$598  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$599  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$599  = 1'h1;
-    end else if (\$206 ) begin
-      \$599  = 1'h0;
-    end
-    if (rst) begin
-      \$599  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$600  = ch1_irq_enable_write;
     if (rst) begin
       \$600  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$601  = ch1_irq_enable_done;
-    if (\$207 ) begin
-      \$601  = config_write_data[0];
+    \$601  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$601  = 1'h1;
+    end else if (\$205 ) begin
+      \$601  = 1'h0;
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -5072,9 +5081,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$602  = ch1_irq_enable_error;
-    if (\$208 ) begin
-      \$602  = config_write_data[1];
+    \$602  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$602  = 1'h1;
+    end else if (\$207 ) begin
+      \$602  = 1'h0;
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -5082,191 +5093,188 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$603  = ch1_irq_enable_access_done;
-    if (\$209 ) begin
-      \$603  = config_write_data[2];
-    end
+    \$603  = ch1_irq_enable_write;
     if (rst) begin
       \$603  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$604  = ch1_cfg_ma_write;
+    \$604  = ch1_irq_enable_done;
+    if (\$208 ) begin
+      \$604  = config_write_data[0];
+    end
     if (rst) begin
       \$604  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$605  = ch1_cfg_ma_ma_half_period;
+    \$605  = ch1_irq_enable_error;
+    if (\$209 ) begin
+      \$605  = config_write_data[1];
+    end
+    if (rst) begin
+      \$605  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$606  = ch1_irq_enable_access_done;
     if (\$210 ) begin
-      \$605 [7:0] = config_write_data[7:0];
-    end
-    if (\$211 ) begin
-      \$605 [15:8] = config_write_data[15:8];
+      \$606  = config_write_data[2];
     end
     if (rst) begin
-      \$605  = 16'h0000;
+      \$606  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$606  = ch1_cfg_ma_delay_limit;
-    if (\$212 ) begin
-      \$606 [7:0] = config_write_data[23:16];
-    end
-    if (\$213 ) begin
-      \$606 [11:8] = config_write_data[27:24];
-    end
-    if (rst) begin
-      \$606  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$607  = ch1_cfg_period_write;
+    \$607  = ch1_cfg_ma_write;
     if (rst) begin
       \$607  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$608  = ch1_cfg_period_request_period;
-    if (\$214 ) begin
+    \$608  = ch1_cfg_ma_ma_half_period;
+    if (\$211 ) begin
       \$608 [7:0] = config_write_data[7:0];
     end
-    if (\$215 ) begin
+    if (\$212 ) begin
       \$608 [15:8] = config_write_data[15:8];
     end
+    if (rst) begin
+      \$608  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$609  = ch1_cfg_ma_delay_limit;
+    if (\$213 ) begin
+      \$609 [7:0] = config_write_data[23:16];
+    end
+    if (\$214 ) begin
+      \$609 [11:8] = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$609  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$610  = ch1_cfg_period_write;
+    if (rst) begin
+      \$610  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$611  = ch1_cfg_period_request_period;
+    if (\$215 ) begin
+      \$611 [7:0] = config_write_data[7:0];
+    end
     if (\$216 ) begin
-      \$608 [23:16] = config_write_data[23:16];
+      \$611 [15:8] = config_write_data[15:8];
     end
-    if (rst) begin
-      \$608  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$609  = ch1_cfg_break_write;
-    if (rst) begin
-      \$609  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$610  = ch1_cfg_break_break_time;
     if (\$217 ) begin
-      \$610 [7:0] = config_write_data[7:0];
+      \$611 [23:16] = config_write_data[23:16];
     end
+    if (rst) begin
+      \$611  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$612  = ch1_cfg_break_write;
+    if (rst) begin
+      \$612  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$613  = ch1_cfg_break_break_time;
     if (\$218 ) begin
-      \$610 [15:8] = config_write_data[15:8];
+      \$613 [7:0] = config_write_data[7:0];
     end
     if (\$219 ) begin
-      \$610 [23:16] = config_write_data[23:16];
+      \$613 [15:8] = config_write_data[15:8];
     end
-    if (rst) begin
-      \$610  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$611  = ch1_cfg_ack_write;
-    if (rst) begin
-      \$611  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$612  = ch1_cfg_ack_ack_limit;
     if (\$220 ) begin
-      \$612 [7:0] = config_write_data[7:0];
+      \$613 [23:16] = config_write_data[23:16];
     end
+    if (rst) begin
+      \$613  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$614  = ch1_cfg_ack_write;
+    if (rst) begin
+      \$614  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$615  = ch1_cfg_ack_ack_limit;
     if (\$221 ) begin
-      \$612 [15:8] = config_write_data[15:8];
+      \$615 [7:0] = config_write_data[7:0];
     end
     if (\$222 ) begin
-      \$612 [23:16] = config_write_data[23:16];
+      \$615 [15:8] = config_write_data[15:8];
     end
-    if (rst) begin
-      \$612  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$613  = ch1_cfg_timeout_write;
-    if (rst) begin
-      \$613  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$614  = ch1_cfg_timeout_timeout_limit;
     if (\$223 ) begin
-      \$614 [7:0] = config_write_data[7:0];
+      \$615 [23:16] = config_write_data[23:16];
     end
+    if (rst) begin
+      \$615  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$616  = ch1_cfg_timeout_write;
+    if (rst) begin
+      \$616  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$617  = ch1_cfg_timeout_timeout_limit;
     if (\$224 ) begin
-      \$614 [15:8] = config_write_data[15:8];
+      \$617 [7:0] = config_write_data[7:0];
     end
     if (\$225 ) begin
-      \$614 [23:16] = config_write_data[23:16];
+      \$617 [15:8] = config_write_data[15:8];
     end
-    if (rst) begin
-      \$614  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$615  = ch1_cfg_words_write;
-    if (rst) begin
-      \$615  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$616  = ch1_cfg_words_w0_data_bits;
     if (\$226 ) begin
-      \$616  = config_write_data[5:0];
+      \$617 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$616  = 6'h00;
+      \$617  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$617  = ch1_cfg_words_w0_nenw;
-    if (\$227 ) begin
-      \$617  = config_write_data[6];
-    end
-    if (rst) begin
-      \$617  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$618  = ch1_cfg_words_w0_lc;
-    if (\$228 ) begin
-      \$618  = config_write_data[7];
-    end
+    \$618  = ch1_cfg_words_write;
     if (rst) begin
       \$618  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$619  = ch1_cfg_words_w0_crc;
-    if (\$229 ) begin
-      \$619  = config_write_data[9:8];
+    \$619  = ch1_cfg_words_w0_data_bits;
+    if (\$227 ) begin
+      \$619  = config_write_data[5:0];
     end
     if (rst) begin
-      \$619  = 2'h0;
+      \$619  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$620  = ch1_cfg_words_w0_gray;
-    if (\$230 ) begin
-      \$620  = config_write_data[10];
+    \$620  = ch1_cfg_words_w0_nenw;
+    if (\$228 ) begin
+      \$620  = config_write_data[6];
     end
     if (rst) begin
       \$620  = 1'h0;
@@ -5274,9 +5282,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$621  = ch1_cfg_words_w0_signed;
-    if (\$231 ) begin
-      \$621  = config_write_data[11];
+    \$621  = ch1_cfg_words_w0_lc;
+    if (\$229 ) begin
+      \$621  = config_write_data[7];
     end
     if (rst) begin
       \$621  = 1'h0;
@@ -5284,19 +5292,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$622  = ch1_cfg_words_w1_data_bits;
-    if (\$232 ) begin
-      \$622  = config_write_data[21:16];
+    \$622  = ch1_cfg_words_w0_crc;
+    if (\$230 ) begin
+      \$622  = config_write_data[9:8];
     end
     if (rst) begin
-      \$622  = 6'h00;
+      \$622  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$623  = ch1_cfg_words_w1_nenw;
-    if (\$233 ) begin
-      \$623  = config_write_data[22];
+    \$623  = ch1_cfg_words_w0_gray;
+    if (\$231 ) begin
+      \$623  = config_write_data[10];
     end
     if (rst) begin
       \$623  = 1'h0;
@@ -5304,9 +5312,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$624  = ch1_cfg_words_w1_lc;
-    if (\$234 ) begin
-      \$624  = config_write_data[23];
+    \$624  = ch1_cfg_words_w0_signed;
+    if (\$232 ) begin
+      \$624  = config_write_data[11];
     end
     if (rst) begin
       \$624  = 1'h0;
@@ -5314,19 +5322,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$625  = ch1_cfg_words_w1_crc;
-    if (\$235 ) begin
-      \$625  = config_write_data[25:24];
+    \$625  = ch1_cfg_words_w1_data_bits;
+    if (\$233 ) begin
+      \$625  = config_write_data[21:16];
     end
     if (rst) begin
-      \$625  = 2'h0;
+      \$625  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$626  = ch1_cfg_words_w1_gray;
-    if (\$236 ) begin
-      \$626  = config_write_data[26];
+    \$626  = ch1_cfg_words_w1_nenw;
+    if (\$234 ) begin
+      \$626  = config_write_data[22];
     end
     if (rst) begin
       \$626  = 1'h0;
@@ -5334,9 +5342,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$627  = ch1_cfg_words_w1_signed;
-    if (\$237 ) begin
-      \$627  = config_write_data[27];
+    \$627  = ch1_cfg_words_w1_lc;
+    if (\$235 ) begin
+      \$627  = config_write_data[23];
     end
     if (rst) begin
       \$627  = 1'h0;
@@ -5344,26 +5352,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$628  = ch1_cfg_words_w1_enable;
-    if (\$238 ) begin
-      \$628  = config_write_data[31];
+    \$628  = ch1_cfg_words_w1_crc;
+    if (\$236 ) begin
+      \$628  = config_write_data[25:24];
     end
     if (rst) begin
-      \$628  = 1'h0;
+      \$628  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$629  = ch1_cfg_checks_write;
+    \$629  = ch1_cfg_words_w1_gray;
+    if (\$237 ) begin
+      \$629  = config_write_data[26];
+    end
     if (rst) begin
       \$629  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$630  = ch1_cfg_checks_end_check;
-    if (\$239 ) begin
-      \$630  = config_write_data[0];
+    \$630  = ch1_cfg_words_w1_signed;
+    if (\$238 ) begin
+      \$630  = config_write_data[27];
     end
     if (rst) begin
       \$630  = 1'h0;
@@ -5371,9 +5382,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$631  = ch1_cfg_checks_spw_check;
-    if (\$240 ) begin
-      \$631  = config_write_data[1];
+    \$631  = ch1_cfg_words_w1_enable;
+    if (\$239 ) begin
+      \$631  = config_write_data[31];
     end
     if (rst) begin
       \$631  = 1'h0;
@@ -5381,108 +5392,105 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$632  = ch1_cfg_checks_spw_tolerance;
+    \$632  = ch1_cfg_checks_write;
+    if (rst) begin
+      \$632  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$633  = ch1_cfg_checks_end_check;
+    if (\$240 ) begin
+      \$633  = config_write_data[0];
+    end
+    if (rst) begin
+      \$633  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$634  = ch1_cfg_checks_spw_check;
     if (\$241 ) begin
-      \$632  = config_write_data[15:8];
+      \$634  = config_write_data[1];
     end
     if (rst) begin
-      \$632  = 8'h00;
+      \$634  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$633  = ch1_cfg_checks_noise_limit;
+    \$635  = ch1_cfg_checks_spw_tolerance;
     if (\$242 ) begin
-      \$633  = config_write_data[19:16];
+      \$635  = config_write_data[15:8];
     end
     if (rst) begin
-      \$633  = 4'h0;
+      \$635  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$634  = ch1_cfg_checks_delay_tolerance;
+    \$636  = ch1_cfg_checks_noise_limit;
     if (\$243 ) begin
-      \$634  = config_write_data[23:20];
+      \$636  = config_write_data[19:16];
     end
     if (rst) begin
-      \$634  = 4'h0;
+      \$636  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$635  = ch1_cfg_quiet_write;
-    if (rst) begin
-      \$635  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$636  = ch1_cfg_quiet_quiet_time;
+    \$637  = ch1_cfg_checks_delay_tolerance;
     if (\$244 ) begin
-      \$636 [7:0] = config_write_data[7:0];
+      \$637  = config_write_data[23:20];
     end
+    if (rst) begin
+      \$637  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$638  = ch1_cfg_checks_confirm_frames;
     if (\$245 ) begin
-      \$636 [11:8] = config_write_data[11:8];
+      \$638  = config_write_data[27:24];
     end
     if (rst) begin
-      \$636  = 12'h000;
+      \$638  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$637  = ch1_cfg_crc0_write;
+    \$639  = ch1_cfg_quiet_write;
     if (rst) begin
-      \$637  = 1'h0;
+      \$639  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$638  = ch1_cfg_crc0_w0_crc_poly;
+    \$640  = ch1_cfg_quiet_quiet_time;
     if (\$246 ) begin
-      \$638 [7:0] = config_write_data[7:0];
+      \$640 [7:0] = config_write_data[7:0];
     end
     if (\$247 ) begin
-      \$638 [15:8] = config_write_data[15:8];
+      \$640 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$638  = 16'h0000;
+      \$640  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$639  = ch1_cfg_crc0_w0_crc_width;
-    if (\$248 ) begin
-      \$639  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$639  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$640  = ch1_cfg_crc0_w0_crc_inverted;
-    if (\$249 ) begin
-      \$640  = config_write_data[24];
-    end
-    if (rst) begin
-      \$640  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$641  = ch1_cfg_crc0_start_write;
+    \$641  = ch1_cfg_crc0_write;
     if (rst) begin
       \$641  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$642  = ch1_cfg_crc0_start_w0_crc_start;
-    if (\$250 ) begin
+    \$642  = ch1_cfg_crc0_w0_crc_poly;
+    if (\$248 ) begin
       \$642 [7:0] = config_write_data[7:0];
     end
-    if (\$251 ) begin
+    if (\$249 ) begin
       \$642 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
@@ -5491,58 +5499,58 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$643  = ch1_cfg_crc1_write;
+    \$643  = ch1_cfg_crc0_w0_crc_width;
+    if (\$250 ) begin
+      \$643  = config_write_data[20:16];
+    end
     if (rst) begin
-      \$643  = 1'h0;
+      \$643  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$644  = ch1_cfg_crc1_w1_crc_poly;
+    \$644  = ch1_cfg_crc0_w0_crc_inverted;
+    if (\$251 ) begin
+      \$644  = config_write_data[24];
+    end
+    if (rst) begin
+      \$644  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$645  = ch1_cfg_crc0_start_write;
+    if (rst) begin
+      \$645  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$646  = ch1_cfg_crc0_start_w0_crc_start;
     if (\$252 ) begin
-      \$644 [7:0] = config_write_data[7:0];
+      \$646 [7:0] = config_write_data[7:0];
     end
     if (\$253 ) begin
-      \$644 [15:8] = config_write_data[15:8];
+      \$646 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$644  = 16'h0000;
+      \$646  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$645  = ch1_cfg_crc1_w1_crc_width;
-    if (\$254 ) begin
-      \$645  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$645  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$646  = ch1_cfg_crc1_w1_crc_inverted;
-    if (\$255 ) begin
-      \$646  = config_write_data[24];
-    end
-    if (rst) begin
-      \$646  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$647  = ch1_cfg_crc1_start_write;
+    \$647  = ch1_cfg_crc1_write;
     if (rst) begin
       \$647  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$648  = ch1_cfg_crc1_start_w1_crc_start;
-    if (\$256 ) begin
+    \$648  = ch1_cfg_crc1_w1_crc_poly;
+    if (\$254 ) begin
       \$648 [7:0] = config_write_data[7:0];
     end
-    if (\$257 ) begin
+    if (\$255 ) begin
       \$648 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
@@ -5551,80 +5559,86 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$649  = ch1_ca_request_write;
+    \$649  = ch1_cfg_crc1_w1_crc_width;
+    if (\$256 ) begin
+      \$649  = config_write_data[20:16];
+    end
     if (rst) begin
-      \$649  = 1'h0;
+      \$649  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$650  = ch1_ca_request_slave_id;
+    \$650  = ch1_cfg_crc1_w1_crc_inverted;
+    if (\$257 ) begin
+      \$650  = config_write_data[24];
+    end
+    if (rst) begin
+      \$650  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$651  = ch1_cfg_crc1_start_write;
+    if (rst) begin
+      \$651  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$652  = ch1_cfg_crc1_start_w1_crc_start;
     if (\$258 ) begin
-      \$650  = config_write_data[2:0];
+      \$652 [7:0] = config_write_data[7:0];
     end
-    if (rst) begin
-      \$650  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$651  = ch1_ca_request_address;
     if (\$259 ) begin
-      \$651  = config_write_data[14:8];
+      \$652 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$651  = 7'h00;
+      \$652  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$652  = ch1_ca_request_count;
-    if (\$260 ) begin
-      \$652  = config_write_data[22:16];
-    end
-    if (rst) begin
-      \$652  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$653  = \ch1_ca_request_write$287 ;
-    if (\$261 ) begin
-      \$653  = config_write_data[24];
-    end
+    \$653  = ch1_ca_request_write;
     if (rst) begin
       \$653  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$654  = \$263 ;
+    \$654  = ch1_ca_request_slave_id;
+    if (\$260 ) begin
+      \$654  = config_write_data[2:0];
+    end
     if (rst) begin
-      \$654  = 1'h0;
+      \$654  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$655  = \$265 ;
+    \$655  = ch1_ca_request_address;
+    if (\$261 ) begin
+      \$655  = config_write_data[14:8];
+    end
     if (rst) begin
-      \$655  = 1'h0;
+      \$655  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$656  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$656  = \$266 ;
+    \$656  = ch1_ca_request_count;
+    if (\$262 ) begin
+      \$656  = config_write_data[22:16];
     end
     if (rst) begin
-      \$656  = 1'h0;
+      \$656  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$657  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$657  = \$267 ;
+    \$657  = \ch1_ca_request_write$289 ;
+    if (\$263 ) begin
+      \$657  = config_write_data[24];
     end
     if (rst) begin
       \$657  = 1'h0;
@@ -5632,29 +5646,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$658  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$658  = \$268 ;
-    end
+    \$658  = \$265 ;
     if (rst) begin
       \$658  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$659  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$659  = \$269 ;
-    end
+    \$659  = \$267 ;
     if (rst) begin
       \$659  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$660  = ch1_read_select_105;
+    \$660  = ch1_read_select_100;
     if (bus__r_en) begin
-      \$660  = \$270 ;
+      \$660  = \$268 ;
     end
     if (rst) begin
       \$660  = 1'h0;
@@ -5662,9 +5670,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$661  = ch1_read_select_108;
+    \$661  = ch1_read_select_101;
     if (bus__r_en) begin
-      \$661  = \$271 ;
+      \$661  = \$269 ;
     end
     if (rst) begin
       \$661  = 1'h0;
@@ -5672,9 +5680,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$662  = ch1_read_select_109;
+    \$662  = ch1_read_select_102;
     if (bus__r_en) begin
-      \$662  = \$272 ;
+      \$662  = \$270 ;
     end
     if (rst) begin
       \$662  = 1'h0;
@@ -5682,9 +5690,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$663  = ch1_read_select_10a;
+    \$663  = ch1_read_select_104;
     if (bus__r_en) begin
-      \$663  = \$273 ;
+      \$663  = \$271 ;
     end
     if (rst) begin
       \$663  = 1'h0;
@@ -5692,9 +5700,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$664  = ch1_read_select_10b;
+    \$664  = ch1_read_select_105;
     if (bus__r_en) begin
-      \$664  = \$274 ;
+      \$664  = \$272 ;
     end
     if (rst) begin
       \$664  = 1'h0;
@@ -5702,9 +5710,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$665  = ch1_read_select_10c;
+    \$665  = ch1_read_select_108;
     if (bus__r_en) begin
-      \$665  = \$275 ;
+      \$665  = \$273 ;
     end
     if (rst) begin
       \$665  = 1'h0;
@@ -5712,9 +5720,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$666  = ch1_read_select_10d;
+    \$666  = ch1_read_select_109;
     if (bus__r_en) begin
-      \$666  = \$276 ;
+      \$666  = \$274 ;
     end
     if (rst) begin
       \$666  = 1'h0;
@@ -5722,9 +5730,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$667  = ch1_read_select_10e;
+    \$667  = ch1_read_select_10a;
     if (bus__r_en) begin
-      \$667  = \$277 ;
+      \$667  = \$275 ;
     end
     if (rst) begin
       \$667  = 1'h0;
@@ -5732,9 +5740,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$668  = ch1_read_select_10f;
+    \$668  = ch1_read_select_10b;
     if (bus__r_en) begin
-      \$668  = \$278 ;
+      \$668  = \$276 ;
     end
     if (rst) begin
       \$668  = 1'h0;
@@ -5742,9 +5750,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$669  = ch1_read_select_110;
+    \$669  = ch1_read_select_10c;
     if (bus__r_en) begin
-      \$669  = \$279 ;
+      \$669  = \$277 ;
     end
     if (rst) begin
       \$669  = 1'h0;
@@ -5752,9 +5760,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$670  = ch1_read_select_111;
+    \$670  = ch1_read_select_10d;
     if (bus__r_en) begin
-      \$670  = \$280 ;
+      \$670  = \$278 ;
     end
     if (rst) begin
       \$670  = 1'h0;
@@ -5762,9 +5770,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$671  = ch1_read_select_112;
+    \$671  = ch1_read_select_10e;
     if (bus__r_en) begin
-      \$671  = \$281 ;
+      \$671  = \$279 ;
     end
     if (rst) begin
       \$671  = 1'h0;
@@ -5772,9 +5780,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$672  = ch1_read_select_113;
+    \$672  = ch1_read_select_10f;
     if (bus__r_en) begin
-      \$672  = \$282 ;
+      \$672  = \$280 ;
     end
     if (rst) begin
       \$672  = 1'h0;
@@ -5782,9 +5790,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$673  = ch1_read_select_114;
+    \$673  = ch1_read_select_110;
     if (bus__r_en) begin
-      \$673  = \$283 ;
+      \$673  = \$281 ;
     end
     if (rst) begin
       \$673  = 1'h0;
@@ -5792,9 +5800,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$674  = ch1_read_select_115;
+    \$674  = ch1_read_select_111;
     if (bus__r_en) begin
-      \$674  = \$284 ;
+      \$674  = \$282 ;
     end
     if (rst) begin
       \$674  = 1'h0;
@@ -5802,9 +5810,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$675  = ch1_read_select_116;
+    \$675  = ch1_read_select_112;
     if (bus__r_en) begin
-      \$675  = \$285 ;
+      \$675  = \$283 ;
     end
     if (rst) begin
       \$675  = 1'h0;
@@ -5812,9 +5820,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$676  = ch1_read_select_117;
+    \$676  = ch1_read_select_113;
     if (bus__r_en) begin
-      \$676  = \$286 ;
+      \$676  = \$284 ;
     end
     if (rst) begin
       \$676  = 1'h0;
@@ -5822,9 +5830,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$677  = ch1_read_select_120;
+    \$677  = ch1_read_select_114;
     if (bus__r_en) begin
-      \$677  = \$287 ;
+      \$677  = \$285 ;
     end
     if (rst) begin
       \$677  = 1'h0;
@@ -5832,9 +5840,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$678  = ch1_read_select_121;
+    \$678  = ch1_read_select_115;
     if (bus__r_en) begin
-      \$678  = \$288 ;
+      \$678  = \$286 ;
     end
     if (rst) begin
       \$678  = 1'h0;
@@ -5842,9 +5850,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$679  = ch1_read_select_122;
+    \$679  = ch1_read_select_116;
     if (bus__r_en) begin
-      \$679  = \$289 ;
+      \$679  = \$287 ;
     end
     if (rst) begin
       \$679  = 1'h0;
@@ -5852,9 +5860,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$680  = ch1_read_select_123;
+    \$680  = ch1_read_select_117;
     if (bus__r_en) begin
-      \$680  = \$290 ;
+      \$680  = \$288 ;
     end
     if (rst) begin
       \$680  = 1'h0;
@@ -5862,9 +5870,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$681  = ch1_read_select_140;
+    \$681  = ch1_read_select_120;
     if (bus__r_en) begin
-      \$681  = \$291 ;
+      \$681  = \$289 ;
     end
     if (rst) begin
       \$681  = 1'h0;
@@ -5872,9 +5880,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$682  = ch1_read_select_141;
+    \$682  = ch1_read_select_121;
     if (bus__r_en) begin
-      \$682  = \$292 ;
+      \$682  = \$290 ;
     end
     if (rst) begin
       \$682  = 1'h0;
@@ -5882,9 +5890,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$683  = ch1_read_select_142;
+    \$683  = ch1_read_select_122;
     if (bus__r_en) begin
-      \$683  = \$293 ;
+      \$683  = \$291 ;
     end
     if (rst) begin
       \$683  = 1'h0;
@@ -5892,9 +5900,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$684  = ch1_read_select_143;
+    \$684  = ch1_read_select_123;
     if (bus__r_en) begin
-      \$684  = \$294 ;
+      \$684  = \$292 ;
     end
     if (rst) begin
       \$684  = 1'h0;
@@ -5902,9 +5910,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$685  = ch1_read_select_144;
+    \$685  = ch1_read_select_140;
     if (bus__r_en) begin
-      \$685  = \$295 ;
+      \$685  = \$293 ;
     end
     if (rst) begin
       \$685  = 1'h0;
@@ -5912,9 +5920,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$686  = ch1_read_select_145;
+    \$686  = ch1_read_select_141;
     if (bus__r_en) begin
-      \$686  = \$296 ;
+      \$686  = \$294 ;
     end
     if (rst) begin
       \$686  = 1'h0;
@@ -5922,19 +5930,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$687  = ch1_result_status_status_snapshot;
-    if (\$297 ) begin
-      \$687  = \port$6790$0 [3:0];
+    \$687  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$687  = \$295 ;
     end
     if (rst) begin
-      \$687  = 4'h0;
+      \$687  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$688  = ch1_result_status_cds_snapshot;
-    if (\$297 ) begin
-      \$688  = \port$6790$0 [49];
+    \$688  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$688  = \$296 ;
     end
     if (rst) begin
       \$688  = 1'h0;
@@ -5942,9 +5950,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$689  = ch1_result_status_w0_ne_snapshot;
-    if (\$297 ) begin
-      \$689  = \port$6790$0 [131];
+    \$689  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$689  = \$297 ;
     end
     if (rst) begin
       \$689  = 1'h0;
@@ -5952,9 +5960,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$690  = ch1_result_status_w0_nw_snapshot;
-    if (\$297 ) begin
-      \$690  = \port$6790$0 [132];
+    \$690  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$690  = \$298 ;
     end
     if (rst) begin
       \$690  = 1'h0;
@@ -5962,19 +5970,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$691  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$297 ) begin
-      \$691  = \port$6790$0 [133];
+    \$691  = ch1_result_status_status_snapshot;
+    if (\$299 ) begin
+      \$691  = \port$6860$0 [3:0];
     end
     if (rst) begin
-      \$691  = 1'h0;
+      \$691  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$692  = ch1_result_status_w1_ne_snapshot;
-    if (\$297 ) begin
-      \$692  = \port$6790$0 [174];
+    \$692  = ch1_result_status_cds_snapshot;
+    if (\$299 ) begin
+      \$692  = \port$6860$0 [49];
     end
     if (rst) begin
       \$692  = 1'h0;
@@ -5982,9 +5990,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$693  = ch1_result_status_w1_nw_snapshot;
-    if (\$297 ) begin
-      \$693  = \port$6790$0 [175];
+    \$693  = ch1_result_status_w0_ne_snapshot;
+    if (\$299 ) begin
+      \$693  = \port$6860$0 [131];
     end
     if (rst) begin
       \$693  = 1'h0;
@@ -5992,9 +6000,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$694  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$297 ) begin
-      \$694  = \port$6790$0 [176];
+    \$694  = ch1_result_status_w0_nw_snapshot;
+    if (\$299 ) begin
+      \$694  = \port$6860$0 [132];
     end
     if (rst) begin
       \$694  = 1'h0;
@@ -6002,9 +6010,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$695  = ch1_result_status_lc_repeat_snapshot;
-    if (\$297 ) begin
-      \$695  = \port$6790$0 [183];
+    \$695  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$299 ) begin
+      \$695  = \port$6860$0 [133];
     end
     if (rst) begin
       \$695  = 1'h0;
@@ -6012,9 +6020,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$696  = ch1_result_status_lc_skip_snapshot;
-    if (\$297 ) begin
-      \$696  = \port$6790$0 [184];
+    \$696  = ch1_result_status_w1_ne_snapshot;
+    if (\$299 ) begin
+      \$696  = \port$6860$0 [174];
     end
     if (rst) begin
       \$696  = 1'h0;
@@ -6022,9 +6030,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$697  = ch1_result_status_lc_zero_snapshot;
-    if (\$297 ) begin
-      \$697  = \port$6790$0 [185];
+    \$697  = ch1_result_status_w1_nw_snapshot;
+    if (\$299 ) begin
+      \$697  = \port$6860$0 [175];
     end
     if (rst) begin
       \$697  = 1'h0;
@@ -6032,9 +6040,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$698  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$297 ) begin
-      \$698  = \port$6790$0 [186];
+    \$698  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$299 ) begin
+      \$698  = \port$6860$0 [176];
     end
     if (rst) begin
       \$698  = 1'h0;
@@ -6042,79 +6050,79 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$699  = ch1_result_status_lc_snapshot;
-    if (\$297 ) begin
-      \$699  = \port$6790$0 [182:177];
+    \$699  = ch1_result_status_lc_repeat_snapshot;
+    if (\$299 ) begin
+      \$699  = \port$6860$0 [183];
     end
     if (rst) begin
-      \$699  = 6'h00;
+      \$699  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$700  = ch1_result_seq_seq_snapshot;
-    if (\$297 ) begin
-      \$700  = ch1__done_count;
+    \$700  = ch1_result_status_lc_skip_snapshot;
+    if (\$299 ) begin
+      \$700  = \port$6860$0 [184];
     end
     if (rst) begin
-      \$700  = 16'h0000;
+      \$700  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$701  = ch1_result_seq_line_delay_snapshot;
-    if (\$297 ) begin
-      \$701  = \port$6790$0 [48:36];
+    \$701  = ch1_result_status_lc_zero_snapshot;
+    if (\$299 ) begin
+      \$701  = \port$6860$0 [185];
     end
     if (rst) begin
-      \$701  = 13'h0000;
+      \$701  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$702  = ch1_result_w0_lo_data_snapshot;
-    if (\$297 ) begin
-      \$702  = \port$6790$0 [107:76];
+    \$702  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$299 ) begin
+      \$702  = \port$6860$0 [186];
     end
     if (rst) begin
-      \$702  = 32'd0;
+      \$702  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$703  = ch1_result_w0_hi_data_snapshot;
-    if (\$297 ) begin
-      \$703  = \port$6790$0 [130:108];
+    \$703  = ch1_result_status_lc_snapshot;
+    if (\$299 ) begin
+      \$703  = \port$6860$0 [182:177];
     end
     if (rst) begin
-      \$703  = 23'h000000;
+      \$703  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$704  = ch1_result_w1_lo_data_snapshot;
-    if (\$297 ) begin
-      \$704  = \port$6790$0 [165:134];
+    \$704  = ch1_result_seq_seq_snapshot;
+    if (\$299 ) begin
+      \$704  = ch1__done_count;
     end
     if (rst) begin
-      \$704  = 32'd0;
+      \$704  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$705  = ch1_result_w1_hi_data_snapshot;
-    if (\$297 ) begin
-      \$705  = \port$6790$0 [173:166];
+    \$705  = ch1_result_seq_line_delay_snapshot;
+    if (\$299 ) begin
+      \$705  = \port$6860$0 [48:36];
     end
     if (rst) begin
-      \$705  = 8'h00;
+      \$705  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$706  = ch1_result_timestamp_time_snapshot;
-    if (\$297 ) begin
-      \$706  = \port$6790$0 [35:4];
+    \$706  = ch1_result_w0_lo_data_snapshot;
+    if (\$299 ) begin
+      \$706  = \port$6860$0 [107:76];
     end
     if (rst) begin
       \$706  = 32'd0;
@@ -6122,29 +6130,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$707  = ch1_result_line_noise_events_snapshot;
-    if (\$297 ) begin
-      \$707  = \port$6790$0 [53:50];
+    \$707  = ch1_result_w0_hi_data_snapshot;
+    if (\$299 ) begin
+      \$707  = \port$6860$0 [130:108];
     end
     if (rst) begin
-      \$707  = 4'h0;
+      \$707  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$708  = ch1_result_line_delay_settled_snapshot;
-    if (\$297 ) begin
-      \$708  = \port$6790$0 [54];
+    \$708  = ch1_result_w1_lo_data_snapshot;
+    if (\$299 ) begin
+      \$708  = \port$6860$0 [165:134];
     end
     if (rst) begin
-      \$708  = 1'h0;
+      \$708  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$709  = ch1_result_line_delay_spread_snapshot;
-    if (\$297 ) begin
-      \$709  = \port$6790$0 [75:68];
+    \$709  = ch1_result_w1_hi_data_snapshot;
+    if (\$299 ) begin
+      \$709  = \port$6860$0 [173:166];
     end
     if (rst) begin
       \$709  = 8'h00;
@@ -6152,29 +6160,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$710  = ch1_result_line_settled_delay_snapshot;
-    if (\$297 ) begin
-      \$710  = \port$6790$0 [67:55];
+    \$710  = ch1_result_timestamp_time_snapshot;
+    if (\$299 ) begin
+      \$710  = \port$6860$0 [35:4];
     end
     if (rst) begin
-      \$710  = 13'h0000;
+      \$710  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$711  = ch1_window0_read;
-    if (bus__r_en) begin
-      \$711  = \$299 ;
+    \$711  = ch1_result_line_noise_events_snapshot;
+    if (\$299 ) begin
+      \$711  = \port$6860$0 [53:50];
     end
     if (rst) begin
-      \$711  = 1'h0;
+      \$711  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$712  = ch1_window1_read;
-    if (bus__r_en) begin
-      \$712  = \$301 ;
+    \$712  = ch1_result_line_delay_settled_snapshot;
+    if (\$299 ) begin
+      \$712  = \port$6860$0 [54];
     end
     if (rst) begin
       \$712  = 1'h0;
@@ -6182,84 +6190,124 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$713  = ch1_read_data;
-    if (bus__r_load) begin
-      \$713  = \$367 ;
+    \$713  = ch1_result_line_delay_spread_snapshot;
+    if (\$299 ) begin
+      \$713  = \port$6860$0 [75:68];
     end
     if (rst) begin
-      \$713  = 32'd0;
+      \$713  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$714  = ch1_result_line_settled_delay_snapshot;
+    if (\$299 ) begin
+      \$714  = \port$6860$0 [67:55];
+    end
+    if (rst) begin
+      \$714  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$715  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$715  = \$301 ;
+    end
+    if (rst) begin
+      \$715  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$716  = ch1_window1_read;
+    if (bus__r_en) begin
+      \$716  = \$303 ;
+    end
+    if (rst) begin
+      \$716  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$717  = ch1_read_data;
+    if (bus__r_load) begin
+      \$717  = \$369 ;
+    end
+    if (rst) begin
+      \$717  = 32'd0;
     end
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6267$0 [3:0];
-  assign ch0__cds = \port$6267$0 [49];
-  assign ch0__word0_ne = \port$6267$0 [131];
-  assign ch0__word0_nw = \port$6267$0 [132];
-  assign ch0__word0_crc_ok = \port$6267$0 [133];
-  assign ch0__word1_ne = \port$6267$0 [174];
-  assign ch0__word1_nw = \port$6267$0 [175];
-  assign ch0__word1_crc_ok = \port$6267$0 [176];
-  assign ch0__lc_repeat = \port$6267$0 [183];
-  assign ch0__lc_skip = \port$6267$0 [184];
-  assign ch0__lc_zero = \port$6267$0 [185];
-  assign ch0__spw_mismatch = \port$6267$0 [186];
-  assign ch0__lc = \port$6267$0 [182:177];
-  assign ch0__line_delay = \port$6267$0 [48:36];
-  assign ch0__word0_position = \port$6267$0 [130:76];
-  assign ch0__word1_position = \port$6267$0 [173:134];
-  assign ch0__timestamp = \port$6267$0 [35:4];
-  assign ch0__noise_events = \port$6267$0 [53:50];
-  assign ch0__delay_settled = \port$6267$0 [54];
-  assign ch0__delay_spread = \port$6267$0 [75:68];
-  assign ch0__settled_delay = \port$6267$0 [67:55];
+  assign ch0__status = \port$6333$0 [3:0];
+  assign ch0__cds = \port$6333$0 [49];
+  assign ch0__word0_ne = \port$6333$0 [131];
+  assign ch0__word0_nw = \port$6333$0 [132];
+  assign ch0__word0_crc_ok = \port$6333$0 [133];
+  assign ch0__word1_ne = \port$6333$0 [174];
+  assign ch0__word1_nw = \port$6333$0 [175];
+  assign ch0__word1_crc_ok = \port$6333$0 [176];
+  assign ch0__lc_repeat = \port$6333$0 [183];
+  assign ch0__lc_skip = \port$6333$0 [184];
+  assign ch0__lc_zero = \port$6333$0 [185];
+  assign ch0__spw_mismatch = \port$6333$0 [186];
+  assign ch0__lc = \port$6333$0 [182:177];
+  assign ch0__line_delay = \port$6333$0 [48:36];
+  assign ch0__word0_position = \port$6333$0 [130:76];
+  assign ch0__word1_position = \port$6333$0 [173:134];
+  assign ch0__timestamp = \port$6333$0 [35:4];
+  assign ch0__noise_events = \port$6333$0 [53:50];
+  assign ch0__delay_settled = \port$6333$0 [54];
+  assign ch0__delay_spread = \port$6333$0 [75:68];
+  assign ch0__settled_delay = \port$6333$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__ca_status = \port$6357$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6357$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6280$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$6280$0 [31:16];
-  assign ch0__count_ca_refused = \port$6280$0 [47:32];
-  assign ch0__count_ca_aborted = \port$6280$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$6280$0 [79:64];
-  assign ch1__status = \port$6790$0 [3:0];
-  assign ch1__cds = \port$6790$0 [49];
-  assign ch1__word0_ne = \port$6790$0 [131];
-  assign ch1__word0_nw = \port$6790$0 [132];
-  assign ch1__word0_crc_ok = \port$6790$0 [133];
-  assign ch1__word1_ne = \port$6790$0 [174];
-  assign ch1__word1_nw = \port$6790$0 [175];
-  assign ch1__word1_crc_ok = \port$6790$0 [176];
-  assign ch1__lc_repeat = \port$6790$0 [183];
-  assign ch1__lc_skip = \port$6790$0 [184];
-  assign ch1__lc_zero = \port$6790$0 [185];
-  assign ch1__spw_mismatch = \port$6790$0 [186];
-  assign ch1__lc = \port$6790$0 [182:177];
-  assign ch1__line_delay = \port$6790$0 [48:36];
-  assign ch1__word0_position = \port$6790$0 [130:76];
-  assign ch1__word1_position = \port$6790$0 [173:134];
-  assign ch1__timestamp = \port$6790$0 [35:4];
-  assign ch1__noise_events = \port$6790$0 [53:50];
-  assign ch1__delay_settled = \port$6790$0 [54];
-  assign ch1__delay_spread = \port$6790$0 [75:68];
-  assign ch1__settled_delay = \port$6790$0 [67:55];
+  assign ch0__ca_status = \port$6423$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6423$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6346$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$6346$0 [31:16];
+  assign ch0__count_ca_refused = \port$6346$0 [47:32];
+  assign ch0__count_ca_aborted = \port$6346$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$6346$0 [79:64];
+  assign ch1__status = \port$6860$0 [3:0];
+  assign ch1__cds = \port$6860$0 [49];
+  assign ch1__word0_ne = \port$6860$0 [131];
+  assign ch1__word0_nw = \port$6860$0 [132];
+  assign ch1__word0_crc_ok = \port$6860$0 [133];
+  assign ch1__word1_ne = \port$6860$0 [174];
+  assign ch1__word1_nw = \port$6860$0 [175];
+  assign ch1__word1_crc_ok = \port$6860$0 [176];
+  assign ch1__lc_repeat = \port$6860$0 [183];
+  assign ch1__lc_skip = \port$6860$0 [184];
+  assign ch1__lc_zero = \port$6860$0 [185];
+  assign ch1__spw_mismatch = \port$6860$0 [186];
+  assign ch1__lc = \port$6860$0 [182:177];
+  assign ch1__line_delay = \port$6860$0 [48:36];
+  assign ch1__word0_position = \port$6860$0 [130:76];
+  assign ch1__word1_position = \port$6860$0 [173:134];
+  assign ch1__timestamp = \port$6860$0 [35:4];
+  assign ch1__noise_events = \port$6860$0 [53:50];
+  assign ch1__delay_settled = \port$6860$0 [54];
+  assign ch1__delay_spread = \port$6860$0 [75:68];
+  assign ch1__settled_delay = \port$6860$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__ca_status = \port$6880$0 [2:0];
-  assign ch1__ca_bytes_done = \port$6880$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$6803$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$6803$0 [31:16];
-  assign ch1__count_ca_refused = \port$6803$0 [47:32];
-  assign ch1__count_ca_aborted = \port$6803$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$6803$0 [79:64];
+  assign ch1__ca_status = \port$6950$0 [2:0];
+  assign ch1__ca_bytes_done = \port$6950$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$6873$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$6873$0 [31:16];
+  assign ch1__count_ca_refused = \port$6873$0 [47:32];
+  assign ch1__count_ca_aborted = \port$6873$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$6873$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__r_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -6291,6 +6339,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__cfg_spw_tolerance = ch0_cfg_checks_spw_tolerance;
   assign ch0__cfg_noise_limit = ch0_cfg_checks_noise_limit;
   assign ch0__cfg_delay_tolerance = ch0_cfg_checks_delay_tolerance;
+  assign ch0__cfg_confirm_frames = ch0_cfg_checks_confirm_frames;
   assign ch0__cfg_quiet_time = ch0_cfg_quiet_quiet_time;
   assign ch0__cfg_w0_crc_poly = ch0_cfg_crc0_w0_crc_poly;
   assign ch0__cfg_w0_crc_width = ch0_cfg_crc0_w0_crc_width;
@@ -6303,7 +6352,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__ca_slave_id = ch0_ca_request_slave_id;
   assign ch0__ca_address = ch0_ca_request_address;
   assign ch0__ca_count = ch0_ca_request_count;
-  assign ch0__ca_write = \ch0_ca_request_write$105 ;
+  assign ch0__ca_write = \ch0_ca_request_write$106 ;
   assign ch0__ca_start = ch0_ca_ctrl_start;
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
@@ -6338,6 +6387,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__cfg_spw_tolerance = ch1_cfg_checks_spw_tolerance;
   assign ch1__cfg_noise_limit = ch1_cfg_checks_noise_limit;
   assign ch1__cfg_delay_tolerance = ch1_cfg_checks_delay_tolerance;
+  assign ch1__cfg_confirm_frames = ch1_cfg_checks_confirm_frames;
   assign ch1__cfg_quiet_time = ch1_cfg_quiet_quiet_time;
   assign ch1__cfg_w0_crc_poly = ch1_cfg_crc0_w0_crc_poly;
   assign ch1__cfg_w0_crc_width = ch1_cfg_crc0_w0_crc_width;
@@ -6350,7 +6400,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$287 ;
+  assign ch1__ca_write = \ch1_ca_request_write$289 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
@@ -6361,20 +6411,20 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$409  = \$408 ;
   assign \$411  = \$410 ;
   assign \$413  = \$412 ;
-  assign \$450  = \$449 ;
+  assign \$415  = \$414 ;
   assign \$452  = \$451 ;
   assign \$454  = \$453 ;
-  assign \$128  = \$127 ;
-  assign \$179  = 32'd0;
-  assign \$180  = \$178 ;
-  assign \$303  = \$302 ;
-  assign \$354  = 32'd0;
-  assign \$355  = \$353 ;
+  assign \$456  = \$455 ;
+  assign \$129  = \$128 ;
+  assign \$180  = 32'd0;
+  assign \$181  = \$179 ;
+  assign \$305  = \$304 ;
+  assign \$356  = 32'd0;
+  assign \$357  = \$355 ;
   assign g_irq = 1'h0;
-  assign \$455  = g_read_data;
+  assign \$457  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -6622,10 +6672,10 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
+module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
-, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6267$0 
-, \port$6280$0 , regs__ca_done, \port$6357$0 , ca_rbuf_addr);
+, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma
+, \port$6333$0 , \port$6346$0 , regs__ca_done, \port$6423$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -6690,6 +6740,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   wire [23:0] cfg_ack_limit;
   input [23:0] cfg_break_time;
   wire [23:0] cfg_break_time;
+  input [3:0] cfg_confirm_frames;
+  wire [3:0] cfg_confirm_frames;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
   input [3:0] cfg_delay_tolerance;
@@ -6790,17 +6842,17 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$185 ;
+  wire \ma$187 ;
   wire [3:0] noise_events;
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6267$0 ;
-  wire [186:0] \port$6267$0 ;
-  output [79:0] \port$6280$0 ;
-  wire [79:0] \port$6280$0 ;
-  output [9:0] \port$6357$0 ;
-  wire [9:0] \port$6357$0 ;
+  output [186:0] \port$6333$0 ;
+  wire [186:0] \port$6333$0 ;
+  output [79:0] \port$6346$0 ;
+  wire [79:0] \port$6346$0 ;
+  output [9:0] \port$6423$0 ;
+  wire [9:0] \port$6423$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -6833,6 +6885,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   wire regs__cds;
   wire [23:0] regs__cfg_ack_limit;
   wire [23:0] regs__cfg_break_time;
+  wire [3:0] regs__cfg_confirm_frames;
   wire [11:0] regs__cfg_delay_limit;
   wire [3:0] regs__cfg_delay_tolerance;
   wire regs__cfg_end_check;
@@ -6922,7 +6975,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$187 ;
+  wire \slo$189 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -6942,11 +6995,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$182 ;
-  wire \trigger$182 ;
+  input \trigger$184 ;
+  wire \trigger$184 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -6964,7 +7018,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
-  assign trigger = \trigger$182  & regs__trigger_enable;
+  assign trigger = \trigger$184  & regs__trigger_enable;
   assign \$6  = ~ report;
   assign \$7  = \$signal  & \$6 ;
   assign \$8  = waited + 1'h1;
@@ -6986,8 +7040,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
     regs__done_count <= \$17 ;
   \biss_master_axil.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$239 (ca_abort),
-    .\busy$287 (regs__busy),
+    .\abort$245 (ca_abort),
+    .\busy$294 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -6999,6 +7053,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
     .ca_write(ca_write),
     .cfg_ack_limit(cfg_ack_limit),
     .cfg_break_time(cfg_break_time),
+    .cfg_confirm_frames(cfg_confirm_frames),
     .cfg_delay_limit(cfg_delay_limit),
     .cfg_delay_tolerance(cfg_delay_tolerance),
     .cfg_end_check(cfg_end_check),
@@ -7030,27 +7085,27 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$263 (clear_counters),
+    .\clear$270 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$19 ),
-    .\done$290 (done),
+    .\done$297 (done),
     .frames(regs__ca_busy),
     .ma(ma),
-    .\periodic$39 (periodic),
+    .\periodic$40 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$20 ),
-    .\result$295 (\$18 ),
+    .\result$302 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$237 (ca_start),
+    .\start$243 (ca_start),
     .trigger(trigger),
-    .\valid$292 (valid)
+    .\valid$299 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
@@ -7154,6 +7209,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   assign regs__cfg_spw_tolerance = cfg_spw_tolerance;
   assign regs__cfg_noise_limit = cfg_noise_limit;
   assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
+  assign regs__cfg_confirm_frames = cfg_confirm_frames;
   assign regs__cfg_quiet_time = cfg_quiet_time;
   assign regs__status = \$18 [3:0];
   assign status = \$18 [3:0];
@@ -7232,18 +7288,18 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$185  = ma;
-  assign \slo$187  = slo;
-  assign \port$6267$0  = \$18 ;
-  assign \port$6280$0  = \$19 ;
-  assign \port$6357$0  = \$20 ;
+  assign \ma$187  = ma;
+  assign \slo$189  = slo;
+  assign \port$6333$0  = \$18 ;
+  assign \port$6346$0  = \$19 ;
+  assign \port$6423$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$287 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$263 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$294 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$270 , \periodic$40 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$290 , \valid$292 , \result$295 , counts
-, ca_done, result, rbuf_addr);
+, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$243 , \abort$245 , abort, ma, \done$297 , \valid$299 , \result$302 
+, counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -7273,26 +7329,26 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$239 ;
-  wire \abort$239 ;
-  wire \abort$51 ;
+  input \abort$245 ;
+  wire \abort$245 ;
+  wire \abort$52 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$83 ;
+  wire \ack_expired$84 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$104 ;
+  wire [23:0] \ack_limit$105 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$319 ;
+  wire \bit$326 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$81 ;
+  wire \break_over$82 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$248 ;
-  wire \busy$284 ;
-  output \busy$287 ;
-  wire \busy$287 ;
+  wire \busy$254 ;
+  wire \busy$291 ;
+  output \busy$294 ;
+  wire \busy$294 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -7327,13 +7383,14 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$252 ;
+  wire \cdm$258 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$298 ;
-  wire [254:0] cfg;
+  wire \cds$305 ;
+  wire [258:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
+  wire [3:0] \cfg.confirm_frames ;
   wire [11:0] \cfg.delay_limit ;
   wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
@@ -7383,6 +7440,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] cfg_ack_limit;
   input [23:0] cfg_break_time;
   wire [23:0] cfg_break_time;
+  input [3:0] cfg_confirm_frames;
+  wire [3:0] cfg_confirm_frames;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
   input [3:0] cfg_delay_tolerance;
@@ -7456,16 +7515,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$162 ;
+  wire \check$163 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$167 ;
-  wire \clean$320 ;
+  wire \clean$168 ;
+  wire \clean$327 ;
   wire clear;
-  wire \clear$128 ;
-  input \clear$263 ;
-  wire \clear$263 ;
-  wire \clear$276 ;
+  wire \clear$129 ;
+  input \clear$270 ;
+  wire \clear$270 ;
+  wire \clear$283 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -7493,22 +7552,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$179 ;
+  wire [39:0] \cpw_top$180 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$193 ;
+  wire [1:0] \crc_ok$194 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$175 ;
-  wire [37:0] \crcs$175[0] ;
-  wire \crcs$175[0].inverted ;
-  wire [15:0] \crcs$175[0].poly ;
-  wire [15:0] \crcs$175[0].start ;
-  wire [4:0] \crcs$175[0].width ;
-  wire [37:0] \crcs$175[1] ;
-  wire \crcs$175[1].inverted ;
-  wire [15:0] \crcs$175[1].poly ;
-  wire [15:0] \crcs$175[1].start ;
-  wire [4:0] \crcs$175[1].width ;
   wire [75:0] \crcs$176 ;
   wire [37:0] \crcs$176[0] ;
   wire \crcs$176[0].inverted ;
@@ -7520,6 +7568,17 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [15:0] \crcs$176[1].poly ;
   wire [15:0] \crcs$176[1].start ;
   wire [4:0] \crcs$176[1].width ;
+  wire [75:0] \crcs$177 ;
+  wire [37:0] \crcs$177[0] ;
+  wire \crcs$177[0].inverted ;
+  wire [15:0] \crcs$177[0].poly ;
+  wire [15:0] \crcs$177[0].start ;
+  wire [4:0] \crcs$177[0].width ;
+  wire [37:0] \crcs$177[1] ;
+  wire \crcs$177[1].inverted ;
+  wire [15:0] \crcs$177[1].poly ;
+  wire [15:0] \crcs$177[1].start ;
+  wire [4:0] \crcs$177[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -7530,9 +7589,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  wire [254:0] cycle;
+  wire [258:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
+  wire [3:0] \cycle.confirm_frames ;
   wire [11:0] \cycle.delay_limit ;
   wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
@@ -7585,54 +7645,54 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$110 ;
-  wire [12:0] \delay$161 ;
+  wire [12:0] \delay$111 ;
+  wire [12:0] \delay$162 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$112 ;
+  wire [11:0] \delay_limit$113 ;
   wire delay_over;
-  wire \delay_over$91 ;
+  wire \delay_over$92 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$250 ;
-  output \done$290 ;
-  wire \done$290 ;
-  wire \done$291 ;
+  wire \done$256 ;
+  output \done$297 ;
+  wire \done$297 ;
+  wire \done$298 ;
   wire doubtful;
   wire early;
-  wire \early$67 ;
+  wire \early$68 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$262 ;
-  wire \events$262.ca_aborted ;
-  wire \events$262.ca_crc4_error ;
-  wire \events$262.ca_data_fault ;
-  wire \events$262.ca_no_answer ;
-  wire \events$262.ca_refused ;
-  wire [15:0] \events$271 ;
-  wire \events$271.aborted ;
-  wire \events$271.crc_word0 ;
-  wire \events$271.crc_word1 ;
-  wire \events$271.delay_jump ;
-  wire \events$271.delay_range ;
-  wire \events$271.lc_repeat ;
-  wire \events$271.lc_skip ;
-  wire \events$271.lc_zero ;
-  wire \events$271.no_ack ;
-  wire \events$271.no_start ;
-  wire \events$271.no_stop ;
-  wire \events$271.noise_event ;
-  wire \events$271.noisy_line ;
-  wire \events$271.overrun ;
-  wire \events$271.slo_stuck_low ;
-  wire \events$271.spw_mismatch ;
+  wire [4:0] \events$269 ;
+  wire \events$269.ca_aborted ;
+  wire \events$269.ca_crc4_error ;
+  wire \events$269.ca_data_fault ;
+  wire \events$269.ca_no_answer ;
+  wire \events$269.ca_refused ;
+  wire [15:0] \events$278 ;
+  wire \events$278.aborted ;
+  wire \events$278.crc_word0 ;
+  wire \events$278.crc_word1 ;
+  wire \events$278.delay_jump ;
+  wire \events$278.delay_range ;
+  wire \events$278.lc_repeat ;
+  wire \events$278.lc_skip ;
+  wire \events$278.lc_zero ;
+  wire \events$278.no_ack ;
+  wire \events$278.no_start ;
+  wire \events$278.no_stop ;
+  wire \events$278.noise_event ;
+  wire \events$278.noisy_line ;
+  wire \events$278.overrun ;
+  wire \events$278.slo_stuck_low ;
+  wire \events$278.spw_mismatch ;
   wire fault;
-  wire \fault$189 ;
+  wire \fault$190 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -7649,6 +7709,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -7666,7 +7727,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$191 ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \fault_status$192 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -7676,7 +7738,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$223 ;
+  wire \first_rise$229 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -7706,6 +7768,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -7727,39 +7790,40 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$134 ;
+  wire [15:0] \half_period$135 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$35 ;
-  wire \idle$44 ;
+  wire \idle$36 ;
+  wire \idle$45 ;
   wire in_clock;
-  wire \in_clock$98 ;
+  wire \in_clock$99 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$139 ;
-  wire [5:0] \lc$311 ;
+  wire [5:0] \lc$140 ;
+  wire [5:0] \lc$318 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$141 ;
+  wire [5:0] \lc_next$142 ;
   wire lc_repeat;
-  wire \lc_repeat$312 ;
+  wire \lc_repeat$319 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$313 ;
+  wire \lc_skip$320 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$314 ;
+  wire \lc_zero$321 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$150 ;
+  wire \level$151 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [254:0] live;
+  wire [258:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
+  wire [3:0] \live.confirm_frames ;
   wire [11:0] \live.delay_limit ;
   wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
@@ -7807,13 +7871,13 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$65 ;
+  wire \locked$66 ;
   output ma;
   wire ma;
-  wire \ma$286 ;
+  wire \ma$293 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$93 ;
+  wire \ma_busy$94 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -7821,26 +7885,28 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$85 ;
+  wire \no_start_expired$86 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$108 ;
+  wire [24:0] \no_start_limit$109 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$169 ;
+  wire \noisy$170 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$289 ;
+  wire \overrun$296 ;
+  wire passed;
+  wire pending;
   wire [23:0] period;
   wire periodic;
-  input \periodic$39 ;
-  wire \periodic$39 ;
+  input \periodic$40 ;
+  wire \periodic$40 ;
   wire quiet;
-  wire \quiet$117 ;
+  wire \quiet$118 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$119 ;
+  wire \quiet_live$120 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -7856,37 +7922,38 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$201 ;
+  wire \report$204 ;
+  wire \report$208 ;
   wire report_delay;
-  wire \report_delay$204 ;
+  wire \report_delay$211 ;
   wire report_frame;
-  wire \report_frame$188 ;
-  wire \report_frame$202 ;
+  wire \report_frame$189 ;
+  wire \report_frame$209 ;
   wire request;
-  wire [17:0] \request$225 ;
-  wire [6:0] \request$225.address ;
-  wire [6:0] \request$225.count ;
-  wire [2:0] \request$225.slave_id ;
-  wire \request$225.write ;
-  wire \request$50 ;
+  wire [17:0] \request$231 ;
+  wire [6:0] \request$231.address ;
+  wire [6:0] \request$231.count ;
+  wire [2:0] \request$231.slave_id ;
+  wire \request$231.write ;
+  wire \request$51 ;
   wire restart;
-  wire \restart$154 ;
+  wire \restart$155 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$295 ;
-  wire [186:0] \result$295 ;
-  wire \result$295.cds ;
-  wire \result$295.delay_settled ;
-  wire [7:0] \result$295.delay_spread ;
-  wire [5:0] \result$295.lc ;
-  wire \result$295.lc_repeat ;
-  wire \result$295.lc_skip ;
-  wire \result$295.lc_zero ;
-  wire [12:0] \result$295.line_delay ;
-  wire [3:0] \result$295.noise_events ;
-  wire [12:0] \result$295.settled_delay ;
-  wire \result$295.spw_mismatch ;
+  output [186:0] \result$302 ;
+  wire [186:0] \result$302 ;
+  wire \result$302.cds ;
+  wire \result$302.delay_settled ;
+  wire [7:0] \result$302.delay_spread ;
+  wire [5:0] \result$302.lc ;
+  wire \result$302.lc_repeat ;
+  wire \result$302.lc_skip ;
+  wire \result$302.lc_zero ;
+  wire [12:0] \result$302.line_delay ;
+  wire [3:0] \result$302.noise_events ;
+  wire [12:0] \result$302.settled_delay ;
+  wire \result$302.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -7903,18 +7970,19 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$295.status ;
-  wire [31:0] \result$295.timestamp ;
-  wire [57:0] \result$295.word0 ;
-  wire \result$295.word0.crc_ok ;
-  wire \result$295.word0.ne ;
-  wire \result$295.word0.nw ;
-  wire [54:0] \result$295.word0.position ;
-  wire [42:0] \result$295.word1 ;
-  wire \result$295.word1.crc_ok ;
-  wire \result$295.word1.ne ;
-  wire \result$295.word1.nw ;
-  wire [39:0] \result$295.word1.position ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \result$302.status ;
+  wire [31:0] \result$302.timestamp ;
+  wire [57:0] \result$302.word0 ;
+  wire \result$302.word0.crc_ok ;
+  wire \result$302.word0.ne ;
+  wire \result$302.word0.nw ;
+  wire [54:0] \result$302.word0.position ;
+  wire [42:0] \result$302.word1 ;
+  wire \result$302.word1.crc_ok ;
+  wire \result$302.word1.ne ;
+  wire \result$302.word1.nw ;
+  wire [39:0] \result$302.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -7926,46 +7994,47 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$147 ;
+  wire \resync$148 ;
   wire [15:0] rises;
-  wire [15:0] \rises$127 ;
+  wire [15:0] \rises$128 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$318 ;
+  wire \sample$325 ;
   wire sampler_noise;
   wire second_rise;
+  wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$301 ;
+  wire [12:0] \settled_delay$308 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$46 ;
-  wire \slo$56 ;
-  wire \slo$92 ;
+  wire \slo$47 ;
+  wire \slo$57 ;
+  wire \slo$93 ;
   wire slo_stuck;
-  wire \slo_stuck$87 ;
+  wire \slo_stuck$88 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$89 ;
+  wire \slo_stuck_live$90 ;
   wire slots_full;
-  wire \slots_full$73 ;
+  wire \slots_full$74 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$315 ;
+  wire \spw_mismatch$322 ;
   input start;
   wire start;
-  input \start$237 ;
-  wire \start$237 ;
-  wire \start$37 ;
+  input \start$243 ;
+  wire \start$243 ;
+  wire \start$38 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$125 ;
+  wire [15:0] \start_slot$126 ;
   wire started;
-  wire \started$123 ;
-  wire \started$71 ;
+  wire \started$124 ;
+  wire \started$72 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -7983,6 +8052,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -8000,25 +8070,45 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$294 ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \status$206 ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \status$301 ;
   wire stop_bit;
-  wire \stop_bit$77 ;
+  wire \stop_bit$78 ;
   wire stopped;
-  wire \stopped$75 ;
+  wire \stopped$76 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$106 ;
+  wire [23:0] \timeout_limit$107 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$183 ;
+  wire [7:0] \tolerance$184 ;
   input trigger;
   wire trigger;
-  wire \trigger$48 ;
+  wire \trigger$49 ;
+  wire unconfirmed;
   wire valid;
-  wire \valid$206 ;
-  output \valid$292 ;
-  wire \valid$292 ;
+  wire \valid$213 ;
+  output \valid$299 ;
+  wire \valid$299 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -8036,34 +8126,34 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$137 ;
+  wire [1:0] \word_count$138 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$173 ;
-  wire [11:0] \words$173[0] ;
+  wire [23:0] \words$174 ;
+  wire [11:0] \words$174[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$173[0].crc ;
-  wire [5:0] \words$173[0].data_bits ;
-  wire \words$173[0].gray ;
-  wire \words$173[0].lc ;
-  wire \words$173[0].nenw ;
-  wire \words$173[0].signed ;
-  wire [11:0] \words$173[1] ;
+  wire [1:0] \words$174[0].crc ;
+  wire [5:0] \words$174[0].data_bits ;
+  wire \words$174[0].gray ;
+  wire \words$174[0].lc ;
+  wire \words$174[0].nenw ;
+  wire \words$174[0].signed ;
+  wire [11:0] \words$174[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$173[1].crc ;
-  wire [5:0] \words$173[1].data_bits ;
-  wire \words$173[1].gray ;
-  wire \words$173[1].lc ;
-  wire \words$173[1].nenw ;
-  wire \words$173[1].signed ;
+  wire [1:0] \words$174[1].crc ;
+  wire [5:0] \words$174[1].data_bits ;
+  wire \words$174[1].gray ;
+  wire \words$174[1].lc ;
+  wire \words$174[1].nenw ;
+  wire \words$174[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -8089,11 +8179,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \words[1].nenw ;
   wire \words[1].signed ;
   wire zero;
-  assign periodic = \periodic$39  | frames;
+  assign periodic = \periodic$40  | frames;
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$162  = started & \$1 ;
+  assign \check$163  = started & \$1 ;
   assign \$2  = result[2:0] == 1'h1;
   assign \$3  = ca_done & \$2 ;
   assign \$4  = result[2:0] == 2'h2;
@@ -8109,10 +8199,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \$14  = report_frame & \$13 ;
   assign \$15  = status == 4'he;
   assign \$16  = report_frame & \$15 ;
-  assign \busy$287  = ~ idle;
+  assign \busy$294  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$128 ;
-  assign \$18  = \sample$318  & \$17 ;
+  assign \$17  = ~ \clear$129 ;
+  assign \$18  = \sample$325  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -8139,6 +8229,14 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .timeout_limit(timeout_limit),
     .word_count(word_count)
   );
+  \biss_master_axil.ch0.core.confirmation  confirmation (
+    .clk(clk),
+    .pending(unconfirmed),
+    .report(report),
+    .rst(rst),
+    .setting(cycle[148:145]),
+    .status(status)
+  );
   \biss_master_axil.ch0.core.controller  controller (
     .abort(abort),
     .ack_expired(ack_expired),
@@ -8150,7 +8248,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$154 ),
+    .fault(\restart$155 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -8167,14 +8265,14 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$128 ),
+    .receiver_clear(\clear$129 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$56 ),
+    .slo(\slo$57 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -8186,19 +8284,19 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch0.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$263 ),
+    .clear(\clear$270 ),
     .clk(clk),
-    .events(\events$271 ),
+    .events(\events$278 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters  counters (
-    .clear(\clear$263 ),
+    .clear(\clear$270 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$262 ),
+    .events(\events$269 ),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.decoder  decoder (
@@ -8215,7 +8313,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$128 ),
+    .receiver_clear(\clear$129 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -8227,7 +8325,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .words(words)
   );
   \biss_master_axil.ch0.core.delay_check  delay_check (
-    .check(\check$162 ),
+    .check(\check$163 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -8246,10 +8344,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$56 ),
+    .level(\slo$57 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$154 ),
+    .restart(\restart$155 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -8257,7 +8355,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   \biss_master_axil.ch0.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$93 ),
+    .\clocking (\ma_busy$94 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -8269,7 +8367,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .second_rise(ma_arm)
   );
   \biss_master_axil.ch0.core.ma_stop  ma_stop (
-    .clear(\clear$128 ),
+    .clear(\clear$129 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -8277,11 +8375,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .rst(rst),
     .start_slot(start_slot),
     .\started$11 (started),
-    .w1_enable(cycle[195]),
-    .words(\words$173 )
+    .w1_enable(cycle[199]),
+    .words(\words$174 )
   );
   \biss_master_axil.ch0.core.register_access  register_access (
-    .abort(\abort$239 ),
+    .abort(\abort$245 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -8289,41 +8387,41 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .frame_cdm(frame_cdm),
     .frame_cds(cds),
     .frame_end(report),
-    .frame_ok(valid),
+    .frame_ok(frame_ok),
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$225 ),
+    .request(\request$231 ),
     .result(result),
     .rst(rst),
-    .start(\start$237 ),
+    .start(\start$243 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch0.core.results  results (
     .clk(clk),
-    .done(\done$290 ),
+    .done(\done$297 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$295 ),
+    .result(\result$302 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$292 )
+    .valid_out(\valid$299 )
   );
   \biss_master_axil.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$319 ),
+    .\bit (\bit$326 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$56 ),
+    .level(\slo$57 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$128 ),
+    .receiver_clear(\clear$129 ),
     .rst(rst),
-    .sample(\sample$318 ),
+    .sample(\sample$325 ),
     .slo(slo)
   );
   \biss_master_axil.ch0.core.scheduler  scheduler (
@@ -8344,20 +8442,20 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$5920$0 (\bit ),
+    .\port$5982$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_axil.ch0.core.spw_check  spw_check (
-    .bits(cycle[201:196]),
+    .bits(cycle[205:200]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[254:247])
+    .\tolerance$8 (cycle[258:251])
   );
   \biss_master_axil.ch0.core.time_base  time_base (
     .clk(clk),
@@ -8376,7 +8474,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$93 ),
+    .ma_busy(\ma_busy$94 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -8385,7 +8483,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$56 ),
+    .slo(\slo$57 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -8393,12 +8491,12 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch0.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$320 ),
+    .clean(\clean$327 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$154 ),
+    .fault(\restart$155 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -8408,12 +8506,14 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$2328$0 (\$24 ),
+    .passed(frame_ok),
+    .\port$2334$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
     .spw_mismatch(spw_mismatch),
     .status(status),
+    .unconfirmed(unconfirmed),
     .valid(valid)
   );
   always @* begin
@@ -8425,7 +8525,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$20  = \bit$319 ;
+    \$20  = \bit$326 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -8446,161 +8546,165 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$23  = \clean$320 ;
+    \$23  = \clean$327 ;
     if (rst) begin
       \$23  = 1'h0;
     end
   end
-  assign \idle$35  = idle;
-  assign \start$37  = start;
+  assign \idle$36  = idle;
+  assign \start$38  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$44  = idle;
-  assign \slo$46  = slo;
-  assign \trigger$48  = trigger;
-  assign \request$50  = request;
-  assign \abort$51  = abort;
+  assign \idle$45  = idle;
+  assign \slo$47  = slo;
+  assign \trigger$49  = trigger;
+  assign \request$51  = request;
+  assign \abort$52  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$56 ;
+  assign level = \slo$57 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$65  = locked;
-  assign \early$67  = early;
+  assign \locked$66  = locked;
+  assign \early$68  = early;
   assign done = frame_done;
-  assign \started$71  = started;
-  assign \slots_full$73  = slots_full;
-  assign \stopped$75  = stopped;
-  assign \stop_bit$77  = stop_bit;
+  assign \started$72  = started;
+  assign \slots_full$74  = slots_full;
+  assign \stopped$76  = stopped;
+  assign \stop_bit$78  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$81  = break_over;
-  assign \ack_expired$83  = ack_expired;
-  assign \no_start_expired$85  = no_start_expired;
-  assign \slo_stuck$87  = slo_stuck;
-  assign \slo_stuck_live$89  = slo_stuck_live;
-  assign \delay_over$91  = delay_over;
-  assign \slo$92  = \slo$56 ;
-  assign \clocking  = \ma_busy$93 ;
+  assign \break_over$82  = break_over;
+  assign \ack_expired$84  = ack_expired;
+  assign \no_start_expired$86  = no_start_expired;
+  assign \slo_stuck$88  = slo_stuck;
+  assign \slo_stuck_live$90  = slo_stuck_live;
+  assign \delay_over$92  = delay_over;
+  assign \slo$93  = \slo$57 ;
+  assign \clocking  = \ma_busy$94 ;
   assign timer_clear = clear;
-  assign \in_clock$98  = in_clock;
+  assign \in_clock$99  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$104  = ack_limit;
-  assign \timeout_limit$106  = timeout_limit;
-  assign \no_start_limit$108  = no_start_limit;
-  assign \delay$110  = delay;
-  assign \delay_limit$112  = delay_limit;
+  assign \ack_limit$105  = ack_limit;
+  assign \timeout_limit$107  = timeout_limit;
+  assign \no_start_limit$109  = no_start_limit;
+  assign \delay$111  = delay;
+  assign \delay_limit$113  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$117  = quiet;
-  assign \quiet_live$119  = quiet_live;
+  assign \quiet$118  = quiet;
+  assign \quiet_live$120  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$123  = started;
-  assign \start_slot$125  = start_slot;
-  assign \rises$127  = rises;
-  assign receiver_clear = \clear$128 ;
+  assign \started$124  = started;
+  assign \start_slot$126  = start_slot;
+  assign \rises$128  = rises;
+  assign receiver_clear = \clear$129 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$134  = cycle[15:0];
+  assign \half_period$135  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$137  = word_count;
-  assign \lc$139  = lc;
+  assign \word_count$138  = word_count;
+  assign \lc$140  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$141  = { lc[4:0], \bit  };
+  assign \lc_next$142  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$147  = resync;
+  assign \resync$148  = resync;
   assign waiting = watch;
-  assign \level$150  = \slo$56 ;
+  assign \level$151  = \slo$57 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$154 ;
+  assign fault = \restart$155 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$161  = delay;
+  assign \delay$162  = delay;
   assign \$signal  = learn;
-  assign \clean$167  = clean;
-  assign \noisy$169  = noisy;
+  assign \clean$168  = clean;
+  assign \noisy$170  = noisy;
   assign jump = delay_jump;
-  assign \crcs$175  = crcs;
   assign \crcs$176  = crcs;
-  assign w1_enable = cycle[195];
-  assign \cpw_top$179  = cpw_top;
+  assign \crcs$177  = crcs;
+  assign w1_enable = cycle[199];
+  assign \cpw_top$180  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[201:196];
-  assign \tolerance$183  = cycle[254:247];
+  assign bits = cycle[205:200];
+  assign \tolerance$184  = cycle[258:251];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$188  = report_frame;
-  assign \fault$189  = \restart$154 ;
-  assign \fault_status$191  = fault_status;
-  assign \crc_ok$193  = crc_ok;
+  assign \report_frame$189  = report_frame;
+  assign \fault$190  = \restart$155 ;
+  assign \fault_status$192  = fault_status;
+  assign \crc_ok$194  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$201  = report;
-  assign \report_frame$202  = report_frame;
-  assign \report_delay$204  = report_delay;
-  assign \valid$206  = valid;
+  assign pending = unconfirmed;
+  assign \report$204  = report;
+  assign \status$206  = status;
+  assign setting = cycle[148:145];
+  assign \report$208  = report;
+  assign \report_frame$209  = report_frame;
+  assign \report_delay$211  = report_delay;
+  assign \valid$213  = valid;
   assign word_crc_ok = { \$24 , crc_ok[0] };
-  assign \first_rise$223  = first_rise;
+  assign \first_rise$229  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$237 ;
-  assign ca_abort = \abort$239 ;
+  assign ca_start = \start$243 ;
+  assign ca_abort = \abort$245 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$248  = frames;
-  assign \done$250  = ca_done;
-  assign \cdm$252  = cdm;
+  assign \busy$254  = frames;
+  assign \done$256  = ca_done;
+  assign \cdm$258  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_ok = valid;
+  assign passed = frame_ok;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$263 ;
+  assign clear_counters = \clear$270 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$276  = \clear$263 ;
+  assign \clear$283  = \clear$270 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$284  = count_busy;
-  assign \ma$286  = ma;
-  assign \overrun$289  = overrun;
-  assign \done$291  = \done$290 ;
-  assign valid_out = \valid$292 ;
-  assign \status$294  = \result$295 [3:0];
-  assign timestamp = \result$295 [35:4];
-  assign line_delay = \result$295 [48:36];
-  assign \cds$298  = \result$295 [49];
-  assign noise_events = \result$295 [53:50];
-  assign delay_settled = \result$295 [54];
-  assign \settled_delay$301  = \result$295 [67:55];
-  assign delay_spread = \result$295 [75:68];
-  assign word0_position = \result$295 [130:76];
-  assign word0_ne = \result$295 [131];
-  assign word0_nw = \result$295 [132];
-  assign word0_crc_ok = \result$295 [133];
-  assign word1_position = \result$295 [173:134];
-  assign word1_ne = \result$295 [174];
-  assign word1_nw = \result$295 [175];
-  assign word1_crc_ok = \result$295 [176];
-  assign \lc$311  = \result$295 [182:177];
-  assign \lc_repeat$312  = \result$295 [183];
-  assign \lc_skip$313  = \result$295 [184];
-  assign \lc_zero$314  = \result$295 [185];
-  assign \spw_mismatch$315  = \result$295 [186];
+  assign \busy$291  = count_busy;
+  assign \ma$293  = ma;
+  assign \overrun$296  = overrun;
+  assign \done$298  = \done$297 ;
+  assign valid_out = \valid$299 ;
+  assign \status$301  = \result$302 [3:0];
+  assign timestamp = \result$302 [35:4];
+  assign line_delay = \result$302 [48:36];
+  assign \cds$305  = \result$302 [49];
+  assign noise_events = \result$302 [53:50];
+  assign delay_settled = \result$302 [54];
+  assign \settled_delay$308  = \result$302 [67:55];
+  assign delay_spread = \result$302 [75:68];
+  assign word0_position = \result$302 [130:76];
+  assign word0_ne = \result$302 [131];
+  assign word0_nw = \result$302 [132];
+  assign word0_crc_ok = \result$302 [133];
+  assign word1_position = \result$302 [173:134];
+  assign word1_ne = \result$302 [174];
+  assign word1_nw = \result$302 [175];
+  assign word1_crc_ok = \result$302 [176];
+  assign \lc$318  = \result$302 [182:177];
+  assign \lc_repeat$319  = \result$302 [183];
+  assign \lc_skip$320  = \result$302 [184];
+  assign \lc_zero$321  = \result$302 [185];
+  assign \spw_mismatch$322  = \result$302 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -8611,33 +8715,34 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[156:145];
-  assign \live.w0.data_bits  = live[150:145];
-  assign \live.w0.nenw  = live[151];
-  assign \live.w0.lc  = live[152];
-  assign \live.w0.crc  = live[154:153];
-  assign \live.w0.gray  = live[155];
-  assign \live.w0.signed  = live[156];
-  assign \live.w0_crc  = live[194:157];
-  assign \live.w0_crc.width  = live[161:157];
-  assign \live.w0_crc.poly  = live[177:162];
-  assign \live.w0_crc.start  = live[193:178];
-  assign \live.w0_crc.inverted  = live[194];
-  assign \live.w1_enable  = live[195];
-  assign \live.w1  = live[207:196];
-  assign \live.w1.data_bits  = live[201:196];
-  assign \live.w1.nenw  = live[202];
-  assign \live.w1.lc  = live[203];
-  assign \live.w1.crc  = live[205:204];
-  assign \live.w1.gray  = live[206];
-  assign \live.w1.signed  = live[207];
-  assign \live.w1_crc  = live[245:208];
-  assign \live.w1_crc.width  = live[212:208];
-  assign \live.w1_crc.poly  = live[228:213];
-  assign \live.w1_crc.start  = live[244:229];
-  assign \live.w1_crc.inverted  = live[245];
-  assign \live.spw_check  = live[246];
-  assign \live.spw_tolerance  = live[254:247];
+  assign \live.confirm_frames  = live[148:145];
+  assign \live.w0  = live[160:149];
+  assign \live.w0.data_bits  = live[154:149];
+  assign \live.w0.nenw  = live[155];
+  assign \live.w0.lc  = live[156];
+  assign \live.w0.crc  = live[158:157];
+  assign \live.w0.gray  = live[159];
+  assign \live.w0.signed  = live[160];
+  assign \live.w0_crc  = live[198:161];
+  assign \live.w0_crc.width  = live[165:161];
+  assign \live.w0_crc.poly  = live[181:166];
+  assign \live.w0_crc.start  = live[197:182];
+  assign \live.w0_crc.inverted  = live[198];
+  assign \live.w1_enable  = live[199];
+  assign \live.w1  = live[211:200];
+  assign \live.w1.data_bits  = live[205:200];
+  assign \live.w1.nenw  = live[206];
+  assign \live.w1.lc  = live[207];
+  assign \live.w1.crc  = live[209:208];
+  assign \live.w1.gray  = live[210];
+  assign \live.w1.signed  = live[211];
+  assign \live.w1_crc  = live[249:212];
+  assign \live.w1_crc.width  = live[216:212];
+  assign \live.w1_crc.poly  = live[232:217];
+  assign \live.w1_crc.start  = live[248:233];
+  assign \live.w1_crc.inverted  = live[249];
+  assign \live.spw_check  = live[250];
+  assign \live.spw_tolerance  = live[258:251];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -8648,33 +8753,34 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[156:145];
-  assign \cycle.w0.data_bits  = cycle[150:145];
-  assign \cycle.w0.nenw  = cycle[151];
-  assign \cycle.w0.lc  = cycle[152];
-  assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0.signed  = cycle[156];
-  assign \cycle.w0_crc  = cycle[194:157];
-  assign \cycle.w0_crc.width  = cycle[161:157];
-  assign \cycle.w0_crc.poly  = cycle[177:162];
-  assign \cycle.w0_crc.start  = cycle[193:178];
-  assign \cycle.w0_crc.inverted  = cycle[194];
-  assign \cycle.w1_enable  = cycle[195];
-  assign \cycle.w1  = cycle[207:196];
-  assign \cycle.w1.data_bits  = cycle[201:196];
-  assign \cycle.w1.nenw  = cycle[202];
-  assign \cycle.w1.lc  = cycle[203];
-  assign \cycle.w1.crc  = cycle[205:204];
-  assign \cycle.w1.gray  = cycle[206];
-  assign \cycle.w1.signed  = cycle[207];
-  assign \cycle.w1_crc  = cycle[245:208];
-  assign \cycle.w1_crc.width  = cycle[212:208];
-  assign \cycle.w1_crc.poly  = cycle[228:213];
-  assign \cycle.w1_crc.start  = cycle[244:229];
-  assign \cycle.w1_crc.inverted  = cycle[245];
-  assign \cycle.spw_check  = cycle[246];
-  assign \cycle.spw_tolerance  = cycle[254:247];
+  assign \cycle.confirm_frames  = cycle[148:145];
+  assign \cycle.w0  = cycle[160:149];
+  assign \cycle.w0.data_bits  = cycle[154:149];
+  assign \cycle.w0.nenw  = cycle[155];
+  assign \cycle.w0.lc  = cycle[156];
+  assign \cycle.w0.crc  = cycle[158:157];
+  assign \cycle.w0.gray  = cycle[159];
+  assign \cycle.w0.signed  = cycle[160];
+  assign \cycle.w0_crc  = cycle[198:161];
+  assign \cycle.w0_crc.width  = cycle[165:161];
+  assign \cycle.w0_crc.poly  = cycle[181:166];
+  assign \cycle.w0_crc.start  = cycle[197:182];
+  assign \cycle.w0_crc.inverted  = cycle[198];
+  assign \cycle.w1_enable  = cycle[199];
+  assign \cycle.w1  = cycle[211:200];
+  assign \cycle.w1.data_bits  = cycle[205:200];
+  assign \cycle.w1.nenw  = cycle[206];
+  assign \cycle.w1.lc  = cycle[207];
+  assign \cycle.w1.crc  = cycle[209:208];
+  assign \cycle.w1.gray  = cycle[210];
+  assign \cycle.w1.signed  = cycle[211];
+  assign \cycle.w1_crc  = cycle[249:212];
+  assign \cycle.w1_crc.width  = cycle[216:212];
+  assign \cycle.w1_crc.poly  = cycle[232:217];
+  assign \cycle.w1_crc.start  = cycle[248:233];
+  assign \cycle.w1_crc.inverted  = cycle[249];
+  assign \cycle.spw_check  = cycle[250];
+  assign \cycle.spw_tolerance  = cycle[258:251];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -8689,20 +8795,20 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$173[0]  = \words$173 [11:0];
-  assign \words$173[0].data_bits  = \words$173 [5:0];
-  assign \words$173[0].nenw  = \words$173 [6];
-  assign \words$173[0].lc  = \words$173 [7];
-  assign \words$173[0].crc  = \words$173 [9:8];
-  assign \words$173[0].gray  = \words$173 [10];
-  assign \words$173[0].signed  = \words$173 [11];
-  assign \words$173[1]  = \words$173 [23:12];
-  assign \words$173[1].data_bits  = \words$173 [17:12];
-  assign \words$173[1].nenw  = \words$173 [18];
-  assign \words$173[1].lc  = \words$173 [19];
-  assign \words$173[1].crc  = \words$173 [21:20];
-  assign \words$173[1].gray  = \words$173 [22];
-  assign \words$173[1].signed  = \words$173 [23];
+  assign \words$174[0]  = \words$174 [11:0];
+  assign \words$174[0].data_bits  = \words$174 [5:0];
+  assign \words$174[0].nenw  = \words$174 [6];
+  assign \words$174[0].lc  = \words$174 [7];
+  assign \words$174[0].crc  = \words$174 [9:8];
+  assign \words$174[0].gray  = \words$174 [10];
+  assign \words$174[0].signed  = \words$174 [11];
+  assign \words$174[1]  = \words$174 [23:12];
+  assign \words$174[1].data_bits  = \words$174 [17:12];
+  assign \words$174[1].nenw  = \words$174 [18];
+  assign \words$174[1].lc  = \words$174 [19];
+  assign \words$174[1].crc  = \words$174 [21:20];
+  assign \words$174[1].gray  = \words$174 [22];
+  assign \words$174[1].signed  = \words$174 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -8713,16 +8819,6 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$175[0]  = crcs[37:0];
-  assign \crcs$175[0].width  = crcs[4:0];
-  assign \crcs$175[0].poly  = crcs[20:5];
-  assign \crcs$175[0].start  = crcs[36:21];
-  assign \crcs$175[0].inverted  = crcs[37];
-  assign \crcs$175[1]  = crcs[75:38];
-  assign \crcs$175[1].width  = crcs[42:38];
-  assign \crcs$175[1].poly  = crcs[58:43];
-  assign \crcs$175[1].start  = crcs[74:59];
-  assign \crcs$175[1].inverted  = crcs[75];
   assign \crcs$176[0]  = crcs[37:0];
   assign \crcs$176[0].width  = crcs[4:0];
   assign \crcs$176[0].poly  = crcs[20:5];
@@ -8733,6 +8829,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \crcs$176[1].poly  = crcs[58:43];
   assign \crcs$176[1].start  = crcs[74:59];
   assign \crcs$176[1].inverted  = crcs[75];
+  assign \crcs$177[0]  = crcs[37:0];
+  assign \crcs$177[0].width  = crcs[4:0];
+  assign \crcs$177[0].poly  = crcs[20:5];
+  assign \crcs$177[0].start  = crcs[36:21];
+  assign \crcs$177[0].inverted  = crcs[37];
+  assign \crcs$177[1]  = crcs[75:38];
+  assign \crcs$177[1].width  = crcs[42:38];
+  assign \crcs$177[1].poly  = crcs[58:43];
+  assign \crcs$177[1].start  = crcs[74:59];
+  assign \crcs$177[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -8743,33 +8849,34 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \cfg.quiet_time  = cycle[136:125];
   assign \cfg.noise_limit  = cycle[140:137];
   assign \cfg.delay_tolerance  = cycle[144:141];
-  assign \cfg.w0  = cycle[156:145];
-  assign \cfg.w0.data_bits  = cycle[150:145];
-  assign \cfg.w0.nenw  = cycle[151];
-  assign \cfg.w0.lc  = cycle[152];
-  assign \cfg.w0.crc  = cycle[154:153];
-  assign \cfg.w0.gray  = cycle[155];
-  assign \cfg.w0.signed  = cycle[156];
-  assign \cfg.w0_crc  = cycle[194:157];
-  assign \cfg.w0_crc.width  = cycle[161:157];
-  assign \cfg.w0_crc.poly  = cycle[177:162];
-  assign \cfg.w0_crc.start  = cycle[193:178];
-  assign \cfg.w0_crc.inverted  = cycle[194];
-  assign \cfg.w1_enable  = cycle[195];
-  assign \cfg.w1  = cycle[207:196];
-  assign \cfg.w1.data_bits  = cycle[201:196];
-  assign \cfg.w1.nenw  = cycle[202];
-  assign \cfg.w1.lc  = cycle[203];
-  assign \cfg.w1.crc  = cycle[205:204];
-  assign \cfg.w1.gray  = cycle[206];
-  assign \cfg.w1.signed  = cycle[207];
-  assign \cfg.w1_crc  = cycle[245:208];
-  assign \cfg.w1_crc.width  = cycle[212:208];
-  assign \cfg.w1_crc.poly  = cycle[228:213];
-  assign \cfg.w1_crc.start  = cycle[244:229];
-  assign \cfg.w1_crc.inverted  = cycle[245];
-  assign \cfg.spw_check  = cycle[246];
-  assign \cfg.spw_tolerance  = cycle[254:247];
+  assign \cfg.confirm_frames  = cycle[148:145];
+  assign \cfg.w0  = cycle[160:149];
+  assign \cfg.w0.data_bits  = cycle[154:149];
+  assign \cfg.w0.nenw  = cycle[155];
+  assign \cfg.w0.lc  = cycle[156];
+  assign \cfg.w0.crc  = cycle[158:157];
+  assign \cfg.w0.gray  = cycle[159];
+  assign \cfg.w0.signed  = cycle[160];
+  assign \cfg.w0_crc  = cycle[198:161];
+  assign \cfg.w0_crc.width  = cycle[165:161];
+  assign \cfg.w0_crc.poly  = cycle[181:166];
+  assign \cfg.w0_crc.start  = cycle[197:182];
+  assign \cfg.w0_crc.inverted  = cycle[198];
+  assign \cfg.w1_enable  = cycle[199];
+  assign \cfg.w1  = cycle[211:200];
+  assign \cfg.w1.data_bits  = cycle[205:200];
+  assign \cfg.w1.nenw  = cycle[206];
+  assign \cfg.w1.lc  = cycle[207];
+  assign \cfg.w1.crc  = cycle[209:208];
+  assign \cfg.w1.gray  = cycle[210];
+  assign \cfg.w1.signed  = cycle[211];
+  assign \cfg.w1_crc  = cycle[249:212];
+  assign \cfg.w1_crc.width  = cycle[216:212];
+  assign \cfg.w1_crc.poly  = cycle[232:217];
+  assign \cfg.w1_crc.start  = cycle[248:233];
+  assign \cfg.w1_crc.inverted  = cycle[249];
+  assign \cfg.spw_check  = cycle[250];
+  assign \cfg.spw_tolerance  = cycle[258:251];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -8793,41 +8900,41 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$225.slave_id  = \request$225 [2:0];
-  assign \request$225.address  = \request$225 [9:3];
-  assign \request$225.count  = \request$225 [16:10];
-  assign \request$225.write  = \request$225 [17];
+  assign \request$231.slave_id  = \request$231 [2:0];
+  assign \request$231.address  = \request$231 [9:3];
+  assign \request$231.count  = \request$231 [16:10];
+  assign \request$231.write  = \request$231 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$262.ca_crc4_error  = \events$262 [0];
-  assign \events$262.ca_no_answer  = \events$262 [1];
-  assign \events$262.ca_refused  = \events$262 [2];
-  assign \events$262.ca_aborted  = \events$262 [3];
-  assign \events$262.ca_data_fault  = \events$262 [4];
+  assign \events$269.ca_crc4_error  = \events$269 [0];
+  assign \events$269.ca_no_answer  = \events$269 [1];
+  assign \events$269.ca_refused  = \events$269 [2];
+  assign \events$269.ca_aborted  = \events$269 [3];
+  assign \events$269.ca_data_fault  = \events$269 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$271.crc_word0  = \events$271 [0];
-  assign \events$271.crc_word1  = \events$271 [1];
-  assign \events$271.no_ack  = \events$271 [2];
-  assign \events$271.no_start  = \events$271 [3];
-  assign \events$271.delay_range  = \events$271 [4];
-  assign \events$271.slo_stuck_low  = \events$271 [5];
-  assign \events$271.lc_repeat  = \events$271 [6];
-  assign \events$271.lc_skip  = \events$271 [7];
-  assign \events$271.lc_zero  = \events$271 [8];
-  assign \events$271.spw_mismatch  = \events$271 [9];
-  assign \events$271.overrun  = \events$271 [10];
-  assign \events$271.aborted  = \events$271 [11];
-  assign \events$271.no_stop  = \events$271 [12];
-  assign \events$271.noisy_line  = \events$271 [13];
-  assign \events$271.delay_jump  = \events$271 [14];
-  assign \events$271.noise_event  = \events$271 [15];
+  assign \events$278.crc_word0  = \events$278 [0];
+  assign \events$278.crc_word1  = \events$278 [1];
+  assign \events$278.no_ack  = \events$278 [2];
+  assign \events$278.no_start  = \events$278 [3];
+  assign \events$278.delay_range  = \events$278 [4];
+  assign \events$278.slo_stuck_low  = \events$278 [5];
+  assign \events$278.lc_repeat  = \events$278 [6];
+  assign \events$278.lc_skip  = \events$278 [7];
+  assign \events$278.lc_zero  = \events$278 [8];
+  assign \events$278.spw_mismatch  = \events$278 [9];
+  assign \events$278.overrun  = \events$278 [10];
+  assign \events$278.aborted  = \events$278 [11];
+  assign \events$278.no_stop  = \events$278 [12];
+  assign \events$278.noisy_line  = \events$278 [13];
+  assign \events$278.delay_jump  = \events$278 [14];
+  assign \events$278.noise_event  = \events$278 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -8835,57 +8942,57 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$295.status  = \result$295 [3:0];
-  assign \result$295.timestamp  = \result$295 [35:4];
-  assign \result$295.line_delay  = \result$295 [48:36];
-  assign \result$295.cds  = \result$295 [49];
-  assign \result$295.noise_events  = \result$295 [53:50];
-  assign \result$295.delay_settled  = \result$295 [54];
-  assign \result$295.settled_delay  = \result$295 [67:55];
-  assign \result$295.delay_spread  = \result$295 [75:68];
-  assign \result$295.word0  = \result$295 [133:76];
-  assign \result$295.word0.position  = \result$295 [130:76];
-  assign \result$295.word0.ne  = \result$295 [131];
-  assign \result$295.word0.nw  = \result$295 [132];
-  assign \result$295.word0.crc_ok  = \result$295 [133];
-  assign \result$295.word1  = \result$295 [176:134];
-  assign \result$295.word1.position  = \result$295 [173:134];
-  assign \result$295.word1.ne  = \result$295 [174];
-  assign \result$295.word1.nw  = \result$295 [175];
-  assign \result$295.word1.crc_ok  = \result$295 [176];
-  assign \result$295.lc  = \result$295 [182:177];
-  assign \result$295.lc_repeat  = \result$295 [183];
-  assign \result$295.lc_skip  = \result$295 [184];
-  assign \result$295.lc_zero  = \result$295 [185];
-  assign \result$295.spw_mismatch  = \result$295 [186];
-  assign \events$271 [15] = \event ;
-  assign \events$271 [14] = \$16 ;
-  assign \events$271 [13] = \$14 ;
-  assign \events$271 [12] = faults[6];
-  assign \events$271 [11] = faults[4];
-  assign \events$271 [10] = overrun;
-  assign \events$271 [9] = \$12 ;
-  assign \events$271 [8] = lc_zero;
-  assign \events$271 [7] = lc_skip;
-  assign \events$271 [6] = lc_repeat;
-  assign \events$271 [5] = faults[3];
-  assign \events$271 [4] = faults[2];
-  assign \events$271 [3] = faults[1];
-  assign \events$271 [2] = faults[0];
-  assign \events$271 [1] = crc_error[1];
-  assign \events$271 [0] = crc_error[0];
-  assign \events$262 [4] = \$11 ;
-  assign \events$262 [3] = \$9 ;
-  assign \events$262 [2] = \$7 ;
-  assign \events$262 [1] = \$5 ;
-  assign \events$262 [0] = \$3 ;
+  assign \result$302.status  = \result$302 [3:0];
+  assign \result$302.timestamp  = \result$302 [35:4];
+  assign \result$302.line_delay  = \result$302 [48:36];
+  assign \result$302.cds  = \result$302 [49];
+  assign \result$302.noise_events  = \result$302 [53:50];
+  assign \result$302.delay_settled  = \result$302 [54];
+  assign \result$302.settled_delay  = \result$302 [67:55];
+  assign \result$302.delay_spread  = \result$302 [75:68];
+  assign \result$302.word0  = \result$302 [133:76];
+  assign \result$302.word0.position  = \result$302 [130:76];
+  assign \result$302.word0.ne  = \result$302 [131];
+  assign \result$302.word0.nw  = \result$302 [132];
+  assign \result$302.word0.crc_ok  = \result$302 [133];
+  assign \result$302.word1  = \result$302 [176:134];
+  assign \result$302.word1.position  = \result$302 [173:134];
+  assign \result$302.word1.ne  = \result$302 [174];
+  assign \result$302.word1.nw  = \result$302 [175];
+  assign \result$302.word1.crc_ok  = \result$302 [176];
+  assign \result$302.lc  = \result$302 [182:177];
+  assign \result$302.lc_repeat  = \result$302 [183];
+  assign \result$302.lc_skip  = \result$302 [184];
+  assign \result$302.lc_zero  = \result$302 [185];
+  assign \result$302.spw_mismatch  = \result$302 [186];
+  assign \events$278 [15] = \event ;
+  assign \events$278 [14] = \$16 ;
+  assign \events$278 [13] = \$14 ;
+  assign \events$278 [12] = faults[6];
+  assign \events$278 [11] = faults[4];
+  assign \events$278 [10] = overrun;
+  assign \events$278 [9] = \$12 ;
+  assign \events$278 [8] = lc_zero;
+  assign \events$278 [7] = lc_skip;
+  assign \events$278 [6] = lc_repeat;
+  assign \events$278 [5] = faults[3];
+  assign \events$278 [4] = faults[2];
+  assign \events$278 [3] = faults[1];
+  assign \events$278 [2] = faults[0];
+  assign \events$278 [1] = crc_error[1];
+  assign \events$278 [0] = crc_error[0];
+  assign \events$269 [4] = \$11 ;
+  assign \events$269 [3] = \$9 ;
+  assign \events$269 [2] = \$7 ;
+  assign \events$269 [1] = \$5 ;
+  assign \events$269 [0] = \$3 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$225 [17] = ca_write;
-  assign \request$225 [16:10] = ca_count;
-  assign \request$225 [9:3] = ca_address;
-  assign \request$225 [2:0] = ca_slave_id;
+  assign \request$231 [17] = ca_write;
+  assign \request$231 [16:10] = ca_count;
+  assign \request$231 [9:3] = ca_address;
+  assign \request$231 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$24 ;
@@ -8907,33 +9014,34 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$173 [23:12] = cycle[207:196];
-  assign \words$173 [11:0] = cycle[156:145];
-  assign words[23:12] = cycle[207:196];
-  assign words[11:0] = cycle[156:145];
-  assign live[254:247] = cfg_spw_tolerance;
-  assign live[246] = cfg_spw_check;
-  assign live[245] = cfg_w1_crc_inverted;
-  assign live[244:229] = cfg_w1_crc_start;
-  assign live[228:213] = cfg_w1_crc_poly;
-  assign live[212:208] = cfg_w1_crc_width;
-  assign live[207] = cfg_w1_signed;
-  assign live[206] = cfg_w1_gray;
-  assign live[205:204] = cfg_w1_crc;
-  assign live[203] = cfg_w1_lc;
-  assign live[202] = cfg_w1_nenw;
-  assign live[201:196] = cfg_w1_data_bits;
-  assign live[195] = cfg_w1_enable;
-  assign live[194] = cfg_w0_crc_inverted;
-  assign live[193:178] = cfg_w0_crc_start;
-  assign live[177:162] = cfg_w0_crc_poly;
-  assign live[161:157] = cfg_w0_crc_width;
-  assign live[156] = cfg_w0_signed;
-  assign live[155] = cfg_w0_gray;
-  assign live[154:153] = cfg_w0_crc;
-  assign live[152] = cfg_w0_lc;
-  assign live[151] = cfg_w0_nenw;
-  assign live[150:145] = cfg_w0_data_bits;
+  assign \words$174 [23:12] = cycle[211:200];
+  assign \words$174 [11:0] = cycle[160:149];
+  assign words[23:12] = cycle[211:200];
+  assign words[11:0] = cycle[160:149];
+  assign live[258:251] = cfg_spw_tolerance;
+  assign live[250] = cfg_spw_check;
+  assign live[249] = cfg_w1_crc_inverted;
+  assign live[248:233] = cfg_w1_crc_start;
+  assign live[232:217] = cfg_w1_crc_poly;
+  assign live[216:212] = cfg_w1_crc_width;
+  assign live[211] = cfg_w1_signed;
+  assign live[210] = cfg_w1_gray;
+  assign live[209:208] = cfg_w1_crc;
+  assign live[207] = cfg_w1_lc;
+  assign live[206] = cfg_w1_nenw;
+  assign live[205:200] = cfg_w1_data_bits;
+  assign live[199] = cfg_w1_enable;
+  assign live[198] = cfg_w0_crc_inverted;
+  assign live[197:182] = cfg_w0_crc_start;
+  assign live[181:166] = cfg_w0_crc_poly;
+  assign live[165:161] = cfg_w0_crc_width;
+  assign live[160] = cfg_w0_signed;
+  assign live[159] = cfg_w0_gray;
+  assign live[158:157] = cfg_w0_crc;
+  assign live[156] = cfg_w0_lc;
+  assign live[155] = cfg_w0_nenw;
+  assign live[154:149] = cfg_w0_data_bits;
+  assign live[148:145] = cfg_confirm_frames;
   assign live[144:141] = cfg_delay_tolerance;
   assign live[140:137] = cfg_noise_limit;
   assign live[136:125] = cfg_quiet_time;
@@ -9005,7 +9113,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire [24:0] \$58 ;
   reg \$59 ;
   wire \$6 ;
-  reg [254:0] \$60 ;
+  reg [258:0] \$60 ;
   reg [23:0] \$61 ;
   reg [23:0] \$62 ;
   reg [11:0] \$63 ;
@@ -9032,10 +9140,11 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  output [254:0] cycle;
-  reg [254:0] cycle = 255'h0000000000000000000000000000000000000000000000000000000000000000;
+  output [258:0] cycle;
+  reg [258:0] cycle = 259'h00000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
+  wire [3:0] \cycle.confirm_frames ;
   wire [11:0] \cycle.delay_limit ;
   wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
@@ -9087,10 +9196,11 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [254:0] live;
-  wire [254:0] live;
+  input [258:0] live;
+  wire [258:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
+  wire [3:0] \live.confirm_frames ;
   wire [11:0] \live.delay_limit ;
   wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
@@ -9151,14 +9261,14 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
-  assign \$36  = live[195] & live[152];
-  assign \$37  = \$36  & live[203];
+  assign \$36  = live[199] & live[156];
+  assign \$37  = \$36  & live[207];
   assign \$38  = ~ \$37 ;
   assign \$39  = \$35  & \$38 ;
-  assign \$40  = ~ live[246];
-  assign \$41  = live[201:196] <= live[150:145];
-  assign \$42  = live[195] & \$41 ;
-  assign \$43  = | live[205:204];
+  assign \$40  = ~ live[250];
+  assign \$41  = live[205:200] <= live[154:149];
+  assign \$42  = live[199] & \$41 ;
+  assign \$43  = | live[209:208];
   assign \$44  = \$42  & \$43 ;
   assign \$45  = \$40  | \$44 ;
   assign \$46  = \$39  & \$45 ;
@@ -9174,7 +9284,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$56  = \$55  ? 4'h2 : live[144:141];
   assign \$57  = live[15:0] + \$56 ;
   assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[195];
+  assign word_count = 1'h1 + cycle[199];
   always @(posedge clk)
     ok <= \$59 ;
   always @(posedge clk)
@@ -9194,35 +9304,35 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   always @(posedge clk)
     no_start_limit <= \$67 ;
   assign \$1  = | live[15:1];
-  assign \$2  = | live[150:145];
-  assign \$3  = live[150:145] <= 6'h37;
+  assign \$2  = | live[154:149];
+  assign \$3  = live[154:149] <= 6'h37;
   assign \$4  = \$2  & \$3 ;
-  assign \$5  = ! live[154:153];
-  assign \$6  = live[154:153] == 1'h1;
+  assign \$5  = ! live[158:157];
+  assign \$6  = live[158:157] == 1'h1;
   assign \$7  = \$5  | \$6 ;
-  assign \$8  = live[154:153] == 2'h2;
+  assign \$8  = live[158:157] == 2'h2;
   assign \$9  = \$7  | \$8 ;
-  assign \$10  = live[154:153] == 2'h3;
-  assign \$11  = | live[161:157];
+  assign \$10  = live[158:157] == 2'h3;
+  assign \$11  = | live[165:161];
   assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[161:157] <= 5'h10;
+  assign \$13  = live[165:161] <= 5'h10;
   assign \$14  = \$12  & \$13 ;
   assign \$15  = \$9  | \$14 ;
   assign \$16  = \$4  & \$15 ;
   assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[195];
-  assign \$19  = | live[201:196];
-  assign \$20  = live[201:196] <= 6'h28;
+  assign \$18  = ~ live[199];
+  assign \$19  = | live[205:200];
+  assign \$20  = live[205:200] <= 6'h28;
   assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[205:204];
-  assign \$23  = live[205:204] == 1'h1;
+  assign \$22  = ! live[209:208];
+  assign \$23  = live[209:208] == 1'h1;
   assign \$24  = \$22  | \$23 ;
-  assign \$25  = live[205:204] == 2'h2;
+  assign \$25  = live[209:208] == 2'h2;
   assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[205:204] == 2'h3;
-  assign \$28  = | live[212:208];
+  assign \$27  = live[209:208] == 2'h3;
+  assign \$28  = | live[216:212];
   assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[212:208] <= 5'h10;
+  assign \$30  = live[216:212] <= 5'h10;
   assign \$31  = \$29  & \$30 ;
   assign \$32  = \$26  | \$31 ;
   always @* begin
@@ -9239,7 +9349,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
       \$60  = live;
     end
     if (rst) begin
-      \$60  = 255'h0000000000000000000000000000000000000000000000000000000000000000;
+      \$60  = 259'h00000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
@@ -9297,7 +9407,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     \$66  = crcs;
     if (idle) begin
       (* full_case = 32'd1 *)
-      casez (live[154:153])
+      casez (live[158:157])
         2'h1:
           begin
             \$66 [4:0] = 5'h06;
@@ -9313,12 +9423,12 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
             \$66 [37] = 1'h1;
           end
         2'h3:
-            \$66 [37:0] = live[194:157];
+            \$66 [37:0] = live[198:161];
         default:
             \$66 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
-      casez (live[205:204])
+      casez (live[209:208])
         2'h1:
           begin
             \$66 [42:38] = 5'h06;
@@ -9334,7 +9444,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
             \$66 [75] = 1'h1;
           end
         2'h3:
-            \$66 [75:38] = live[245:208];
+            \$66 [75:38] = live[249:212];
         default:
             \$66 [75:38] = 38'h0000000000;
       endcase
@@ -9360,33 +9470,34 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[156:145];
-  assign \live.w0.data_bits  = live[150:145];
-  assign \live.w0.nenw  = live[151];
-  assign \live.w0.lc  = live[152];
-  assign \live.w0.crc  = live[154:153];
-  assign \live.w0.gray  = live[155];
-  assign \live.w0.signed  = live[156];
-  assign \live.w0_crc  = live[194:157];
-  assign \live.w0_crc.width  = live[161:157];
-  assign \live.w0_crc.poly  = live[177:162];
-  assign \live.w0_crc.start  = live[193:178];
-  assign \live.w0_crc.inverted  = live[194];
-  assign \live.w1_enable  = live[195];
-  assign \live.w1  = live[207:196];
-  assign \live.w1.data_bits  = live[201:196];
-  assign \live.w1.nenw  = live[202];
-  assign \live.w1.lc  = live[203];
-  assign \live.w1.crc  = live[205:204];
-  assign \live.w1.gray  = live[206];
-  assign \live.w1.signed  = live[207];
-  assign \live.w1_crc  = live[245:208];
-  assign \live.w1_crc.width  = live[212:208];
-  assign \live.w1_crc.poly  = live[228:213];
-  assign \live.w1_crc.start  = live[244:229];
-  assign \live.w1_crc.inverted  = live[245];
-  assign \live.spw_check  = live[246];
-  assign \live.spw_tolerance  = live[254:247];
+  assign \live.confirm_frames  = live[148:145];
+  assign \live.w0  = live[160:149];
+  assign \live.w0.data_bits  = live[154:149];
+  assign \live.w0.nenw  = live[155];
+  assign \live.w0.lc  = live[156];
+  assign \live.w0.crc  = live[158:157];
+  assign \live.w0.gray  = live[159];
+  assign \live.w0.signed  = live[160];
+  assign \live.w0_crc  = live[198:161];
+  assign \live.w0_crc.width  = live[165:161];
+  assign \live.w0_crc.poly  = live[181:166];
+  assign \live.w0_crc.start  = live[197:182];
+  assign \live.w0_crc.inverted  = live[198];
+  assign \live.w1_enable  = live[199];
+  assign \live.w1  = live[211:200];
+  assign \live.w1.data_bits  = live[205:200];
+  assign \live.w1.nenw  = live[206];
+  assign \live.w1.lc  = live[207];
+  assign \live.w1.crc  = live[209:208];
+  assign \live.w1.gray  = live[210];
+  assign \live.w1.signed  = live[211];
+  assign \live.w1_crc  = live[249:212];
+  assign \live.w1_crc.width  = live[216:212];
+  assign \live.w1_crc.poly  = live[232:217];
+  assign \live.w1_crc.start  = live[248:233];
+  assign \live.w1_crc.inverted  = live[249];
+  assign \live.spw_check  = live[250];
+  assign \live.spw_tolerance  = live[258:251];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -9397,33 +9508,34 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[156:145];
-  assign \cycle.w0.data_bits  = cycle[150:145];
-  assign \cycle.w0.nenw  = cycle[151];
-  assign \cycle.w0.lc  = cycle[152];
-  assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0.signed  = cycle[156];
-  assign \cycle.w0_crc  = cycle[194:157];
-  assign \cycle.w0_crc.width  = cycle[161:157];
-  assign \cycle.w0_crc.poly  = cycle[177:162];
-  assign \cycle.w0_crc.start  = cycle[193:178];
-  assign \cycle.w0_crc.inverted  = cycle[194];
-  assign \cycle.w1_enable  = cycle[195];
-  assign \cycle.w1  = cycle[207:196];
-  assign \cycle.w1.data_bits  = cycle[201:196];
-  assign \cycle.w1.nenw  = cycle[202];
-  assign \cycle.w1.lc  = cycle[203];
-  assign \cycle.w1.crc  = cycle[205:204];
-  assign \cycle.w1.gray  = cycle[206];
-  assign \cycle.w1.signed  = cycle[207];
-  assign \cycle.w1_crc  = cycle[245:208];
-  assign \cycle.w1_crc.width  = cycle[212:208];
-  assign \cycle.w1_crc.poly  = cycle[228:213];
-  assign \cycle.w1_crc.start  = cycle[244:229];
-  assign \cycle.w1_crc.inverted  = cycle[245];
-  assign \cycle.spw_check  = cycle[246];
-  assign \cycle.spw_tolerance  = cycle[254:247];
+  assign \cycle.confirm_frames  = cycle[148:145];
+  assign \cycle.w0  = cycle[160:149];
+  assign \cycle.w0.data_bits  = cycle[154:149];
+  assign \cycle.w0.nenw  = cycle[155];
+  assign \cycle.w0.lc  = cycle[156];
+  assign \cycle.w0.crc  = cycle[158:157];
+  assign \cycle.w0.gray  = cycle[159];
+  assign \cycle.w0.signed  = cycle[160];
+  assign \cycle.w0_crc  = cycle[198:161];
+  assign \cycle.w0_crc.width  = cycle[165:161];
+  assign \cycle.w0_crc.poly  = cycle[181:166];
+  assign \cycle.w0_crc.start  = cycle[197:182];
+  assign \cycle.w0_crc.inverted  = cycle[198];
+  assign \cycle.w1_enable  = cycle[199];
+  assign \cycle.w1  = cycle[211:200];
+  assign \cycle.w1.data_bits  = cycle[205:200];
+  assign \cycle.w1.nenw  = cycle[206];
+  assign \cycle.w1.lc  = cycle[207];
+  assign \cycle.w1.crc  = cycle[209:208];
+  assign \cycle.w1.gray  = cycle[210];
+  assign \cycle.w1.signed  = cycle[211];
+  assign \cycle.w1_crc  = cycle[249:212];
+  assign \cycle.w1_crc.width  = cycle[216:212];
+  assign \cycle.w1_crc.poly  = cycle[232:217];
+  assign \cycle.w1_crc.start  = cycle[248:233];
+  assign \cycle.w1_crc.inverted  = cycle[249];
+  assign \cycle.spw_check  = cycle[250];
+  assign \cycle.spw_tolerance  = cycle[258:251];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -9437,10 +9549,93 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.confirmation (rst, report, status, pending, setting, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire [3:0] \$12 ;
+  wire [3:0] \$13 ;
+  wire [4:0] \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  reg [3:0] \$17 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input clk;
+  wire clk;
+  reg [3:0] left = 4'h0;
+  output pending;
+  wire pending;
+  input report;
+  wire report;
+  input rst;
+  wire rst;
+  input [3:0] setting;
+  wire [3:0] setting;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  input [3:0] status;
+  wire [3:0] status;
+  assign \$1  = ! status;
+  assign \$2  = status == 4'ha;
+  assign \$3  = status == 4'hb;
+  assign \$4  = status == 4'hf;
+  assign \$5  = | { \$4 , \$3 , \$2 , \$1  };
+  assign \$6  = ~ \$5 ;
+  assign \$7  = report & \$6 ;
+  assign \$8  = status == 4'hf;
+  assign \$9  = report & \$8 ;
+  assign \$10  = ! setting;
+  assign \$11  = setting == 4'hf;
+  assign \$12  = \$11  ? 4'h0 : setting;
+  assign \$13  = \$10  ? 4'h1 : \$12 ;
+  assign \$14  = left - 1'h1;
+  assign \$15  = | left;
+  assign \$16  = setting != 4'hf;
+  assign pending = \$15  & \$16 ;
+  always @(posedge clk)
+    left <= \$17 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    \$17  = left;
+    if (\$7 ) begin
+      \$17  = \$13 ;
+    end else if (\$9 ) begin
+      \$17  = \$14 [3:0];
+    end
+    if (rst) begin
+      \$17  = 4'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
 , slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9527,6 +9722,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] fault_status;
   reg [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -9545,6 +9741,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \fault_status$41 ;
   output [6:0] faults;
   wire [6:0] faults;
@@ -9657,6 +9854,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -9674,6 +9872,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \status$79 ;
   input stop_bit;
   wire stop_bit;
@@ -9775,7 +9974,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     .report_frame(report_frame)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -9783,7 +9982,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -9830,7 +10029,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     waiting = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -9842,7 +10041,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -9854,7 +10053,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -9903,7 +10102,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -9952,7 +10151,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -9968,7 +10167,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -9982,7 +10181,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -9996,7 +10195,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     framing = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -10012,7 +10211,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -10043,7 +10242,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -10061,7 +10260,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     holding = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -10084,14 +10283,14 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     \$27  = idle;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     \$28  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -10182,7 +10381,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     \$29  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -10273,7 +10472,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     \$30  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -10364,7 +10563,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     \$31  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -10433,7 +10632,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -10472,7 +10671,7 @@ module \biss_master_axil.ch0.core.controller.cdm_hold (rst, abort, framing, hold
   assign \$1  = ~ abort;
   assign \$2  = cdm_cycle & \$1 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
     \$7  = cdm_cycle;
     if (idle) begin
       \$7  = cdm;
@@ -10482,7 +10681,7 @@ module \biss_master_axil.ch0.core.controller.cdm_hold (rst, abort, framing, hold
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
     ma_hold = 1'h0;
     if (framing) begin
       ma_hold = \$2 ;
@@ -10494,7 +10693,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -10562,6 +10761,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] status;
   reg [3:0] status;
   input watch;
@@ -10591,7 +10791,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
   always @(posedge clk)
     locked_seen <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     \$20  = armed;
     if (clear) begin
       \$20  = 1'h0;
@@ -10604,7 +10804,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     \$21  = locked_seen;
     if (clear) begin
       \$21  = 1'h0;
@@ -10617,7 +10817,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     fault = 1'h0;
     if (\$7 ) begin
       fault = 1'h1;
@@ -10630,7 +10830,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     status = 4'h0;
     if (\$7 ) begin
       status = 4'h8;
@@ -10643,7 +10843,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     delay = 1'h0;
     if (\$7 ) begin
     end else if (\$12 ) begin
@@ -10655,7 +10855,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -10689,7 +10889,7 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
   assign \$4  = first_clock ? quiet_live : quiet;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     aborted = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -10697,7 +10897,7 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     ready = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -10706,7 +10906,7 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     stuck_low = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -10716,7 +10916,7 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
@@ -10761,6 +10961,7 @@ module \biss_master_axil.ch0.core.controller.report (fault, fault_status, report
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   output [6:0] faults;
@@ -10793,6 +10994,7 @@ module \biss_master_axil.ch0.core.controller.report (fault, fault_status, report
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   assign report_delay = report_frame | delay;
   assign \$1  = fault_status == 3'h6;
@@ -10830,7 +11032,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_data, clear, events, host__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire [7:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -11586,7 +11788,7 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_da
   always @(posedge clk)
     was_busy <= \$308 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
       \$300 [0] = 1'h0;
@@ -11717,7 +11919,7 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_da
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
       \$301  = 1'h0;
@@ -11728,49 +11930,49 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_da
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$302  = { \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109  };
     if (rst) begin
       \$302  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$303  = pick;
     if (rst) begin
       \$303  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$304  = { \$148 , \$147 , \$146  };
     if (rst) begin
       \$304  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$305  = sel;
     if (rst) begin
       \$305  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$306  = update__addr;
     if (rst) begin
       \$306  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$307  = \$173 ;
     if (rst) begin
       \$307  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$308  = \$299 ;
     if (rst) begin
       \$308  = 1'h1;
@@ -11858,7 +12060,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   reg [4:0] \$1 ;
   reg \$2 ;
   input clear;
@@ -11948,14 +12150,14 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
     \$1  = events;
     if (rst) begin
       \$1  = 5'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
     \$2  = clear;
     if (rst) begin
       \$2  = 1'h0;
@@ -11995,60 +12197,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -12102,7 +12250,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -12156,7 +12304,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -12210,7 +12358,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, inc, clear, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -12264,9 +12412,63 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top
 , crc_ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -13660,7 +13862,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$585  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -13684,7 +13886,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$586  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -13706,7 +13908,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$587  = slots;
     if (\$36 ) begin
       \$587  = \$37 [15:0];
@@ -13719,7 +13921,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$588  = slots_full;
     if (\$36 ) begin
       \$588  = \$38 ;
@@ -13732,7 +13934,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$589  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -13748,7 +13950,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$590  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -13764,7 +13966,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$591  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -13796,7 +13998,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$592  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -13814,7 +14016,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$593  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -13839,7 +14041,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$594  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -13864,7 +14066,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$595  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -13889,7 +14091,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$596  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
@@ -13911,7 +14113,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$597  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -13936,7 +14138,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$598  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -13964,7 +14166,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$599  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -13986,7 +14188,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$600  = data0;
     if (\$66 ) begin
       \$600  = \$344 ;
@@ -13999,7 +14201,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$601  = ne;
     if (\$345 ) begin
       \$601 [0] = 1'h1;
@@ -14019,7 +14221,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$602  = nw;
     if (\$345 ) begin
       \$602 [0] = 1'h1;
@@ -14041,7 +14243,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$603  = data1;
     if (\$356 ) begin
       \$603  = \$559 ;
@@ -14054,7 +14256,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$604  = lc;
     if (lc_load) begin
       \$604  = { lc[4:0], \bit  };
@@ -14067,7 +14269,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$605  = cpw_top;
     if (\$569 ) begin
       \$605  = { cpw_top[38:0], \$571  };
@@ -14080,7 +14282,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     at_cds = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -14090,7 +14292,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -14102,7 +14304,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -14112,7 +14314,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -14126,7 +14328,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -14140,7 +14342,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -14154,7 +14356,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     (* full_case = 32'd1 *)
     casez (words[18])
       1'h0:
@@ -14164,7 +14366,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -14178,7 +14380,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -14192,7 +14394,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -14252,7 +14454,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
   reg \$11 ;
@@ -14353,7 +14555,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @(posedge clk)
     ok <= \$35 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     (* full_case = 32'd1 *)
     casez (load_index)
       1'h0:
@@ -14363,7 +14565,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -14373,7 +14575,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -14383,7 +14585,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -14393,7 +14595,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -14403,7 +14605,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -14413,7 +14615,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -14423,7 +14625,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -14433,7 +14635,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -14443,7 +14645,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$33  = \reg ;
     if (load) begin
       \$33  = \$1 ;
@@ -14460,7 +14662,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$34  = mismatch;
     if (load) begin
       \$34  = 1'h0;
@@ -14476,7 +14678,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$35  = ok;
     if (last) begin
       if (\$15 ) begin
@@ -14508,7 +14710,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -14680,56 +14882,56 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
   assign \$39  = magnitude > spread;
   assign \$40  = \$38  & \$39 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$46  = \$1 ;
     if (rst) begin
       \$46  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$47  = \$2 ;
     if (rst) begin
       \$47  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$48  = \tolerance$8 ;
     if (rst) begin
       \$48  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$49  = \$3 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$50  = \$11 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$51  = \$20 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$52  = \$25 ;
     if (rst) begin
       \$52  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$53  = 1'h0;
     if (learn) begin
       if (\$32 ) begin
@@ -14746,7 +14948,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$54  = jump;
     if (check) begin
       \$54  = \$26 ;
@@ -14759,7 +14961,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$55  = count;
     if (learn) begin
       (* full_case = 32'd1 *)
@@ -14781,7 +14983,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$56  = spread;
     if (learn) begin
       if (\$32 ) begin
@@ -14801,7 +15003,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$57  = cand;
     if (learn) begin
       if (\$32 ) begin
@@ -14814,7 +15016,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$58  = settled_delay;
     if (learn) begin
       if (\$32 ) begin
@@ -14831,7 +15033,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$59  = settled;
     if (learn) begin
       if (\$32 ) begin
@@ -14851,7 +15053,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   reg \$10 ;
   reg \$11 ;
@@ -14914,21 +15116,21 @@ module \biss_master_axil.ch0.core.line_noise (rst, sampler_noise, noisy, events,
   always @(posedge clk)
     running <= \$14 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$10  = level;
     if (rst) begin
       \$10  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$11  = \$4 ;
     if (rst) begin
       \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$12  = held_noisy;
     if (close) begin
       \$12  = \$7 ;
@@ -14938,7 +15140,7 @@ module \biss_master_axil.ch0.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$13  = held_events;
     if (close) begin
       \$13  = running;
@@ -14948,7 +15150,7 @@ module \biss_master_axil.ch0.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     \$14  = running;
     if (close) begin
       \$14  = { 3'h0, \event  };
@@ -14965,7 +15167,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -15090,7 +15292,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -15105,7 +15307,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -15120,7 +15322,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -15135,7 +15337,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -15164,7 +15366,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -15206,7 +15408,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -15248,7 +15450,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -15267,7 +15469,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -15303,7 +15505,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -15327,7 +15529,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -15343,7 +15545,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -15360,7 +15562,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, \started$11 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   reg [7:0] \$1 ;
   wire \$10 ;
   reg [7:0] \$11 ;
@@ -15463,7 +15665,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   always @(posedge clk)
     word1_len <= \$19 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -15477,7 +15679,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -15491,42 +15693,42 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$14  = \$3 [7:0];
     if (rst) begin
       \$14  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$15  = \$5 ;
     if (rst) begin
       \$15  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$16  = \$6 ;
     if (rst) begin
       \$16  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$17  = \started$11 ;
     if (rst) begin
       \$17  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$18  = \$10 ;
     if (rst) begin
       \$18  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$19  = \$13 [7:0];
     if (rst) begin
       \$19  = 8'h00;
@@ -15852,7 +16054,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -15969,21 +16171,21 @@ module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -16003,7 +16205,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -16046,7 +16248,7 @@ module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -16056,7 +16258,7 @@ module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -16072,7 +16274,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -16115,7 +16317,7 @@ module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$6  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -16139,7 +16341,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -16209,7 +16411,7 @@ module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -16219,7 +16421,7 @@ module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -16232,7 +16434,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -16304,7 +16506,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -16317,7 +16519,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -16330,7 +16532,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -16340,7 +16542,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -16365,7 +16567,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -16408,7 +16610,7 @@ module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$8  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -16433,7 +16635,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -16789,7 +16991,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -16827,7 +17029,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -16881,7 +17083,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -16978,7 +17180,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -16995,7 +17197,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -17034,7 +17236,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -17092,7 +17294,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -17159,7 +17361,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -17191,7 +17393,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -17205,7 +17407,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -17232,7 +17434,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -17252,7 +17454,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -17271,7 +17473,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -17300,7 +17502,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -17321,7 +17523,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -17343,7 +17545,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -17364,7 +17566,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -17386,7 +17588,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -17408,7 +17610,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -17432,7 +17634,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -17471,7 +17673,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [186:0] \$3 ;
@@ -17508,6 +17710,7 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -17555,6 +17758,7 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \result.status ;
   wire [31:0] \result.timestamp ;
   wire [57:0] \result.word0 ;
@@ -17580,21 +17784,21 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -17671,7 +17875,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -17956,7 +18160,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$71  = level;
     if (receiver_clear) begin
       \$71  = 1'h1;
@@ -17966,7 +18170,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$72  = mid_delay;
     if (odd) begin
       \$72  = \$8 [12:0];
@@ -17991,7 +18195,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$73  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -18018,7 +18222,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$74  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -18040,7 +18244,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$75  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -18064,7 +18268,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$76  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -18080,7 +18284,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$77  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -18106,7 +18310,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$78  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -18137,7 +18341,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$79  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -18168,7 +18372,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$80  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -18218,7 +18422,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$81  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -18268,7 +18472,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$82  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -18298,7 +18502,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$83  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -18326,7 +18530,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$84  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -18352,7 +18556,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$85  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -18375,7 +18579,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$86  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -18415,7 +18619,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -18433,7 +18637,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     clear = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -18445,7 +18649,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     dropped = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -18466,7 +18670,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -18491,7 +18695,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     centre = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -18519,7 +18723,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majority, odd, receiver_clear, vote1, vote2, clear, centre, level, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -18634,7 +18838,7 @@ module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
   always @(posedge clk)
     strobed <= \$38 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$33  = last;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -18652,7 +18856,7 @@ module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$34  = tail_odd;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -18670,7 +18874,7 @@ module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$35  = 1'h0;
@@ -18690,7 +18894,7 @@ module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$36  = 1'h0;
@@ -18710,7 +18914,7 @@ module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$37  = crowded;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -18728,7 +18932,7 @@ module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$38  = strobed;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -18771,7 +18975,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -18865,14 +19069,14 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -18886,7 +19090,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -18900,7 +19104,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -18916,8 +19120,8 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$5920$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$5982$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -18958,8 +19162,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5920$0 ;
-  wire \port$5920$0 ;
+  input \port$5982$0 ;
+  wire \port$5982$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -18973,9 +19177,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5920$0  };
-  assign \$2  = { lc[4:0], \port$5920$0  } == last;
-  assign \$3  = { lc[4:0], \port$5920$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$5982$0  };
+  assign \$2  = { lc[4:0], \port$5982$0  } == last;
+  assign \$3  = { lc[4:0], \port$5982$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -19009,7 +19213,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -19019,7 +19223,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -19029,7 +19233,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -19039,21 +19243,21 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -19063,7 +19267,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -19073,7 +19277,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -19085,13 +19289,13 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5920$0  };
+  assign lc_next = { lc[4:0], \port$5982$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -19296,28 +19500,28 @@ module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -19327,7 +19531,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -19346,14 +19550,14 @@ module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -19367,7 +19571,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
 , delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -19547,7 +19751,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   assign \$40  = in_clock & \$39 ;
   assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$48  = slo_low_time_p1;
     if (\$2 ) begin
       \$48  = 25'h0000001;
@@ -19559,21 +19763,21 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$49  = \$9 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$50  = \$17 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$51  = high_p2;
     if (\$18 ) begin
       \$51  = 13'h0002;
@@ -19585,28 +19789,28 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$52  = \$23 ;
     if (rst) begin
       \$52  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$53  = \$30 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$54  = \$34 [24:0];
     if (rst) begin
       \$54  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$55  = 1'h0;
@@ -19618,21 +19822,21 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$57  = \$46 ;
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$58  = \$47 ;
     if (rst) begin
       \$58  = 1'h0;
@@ -19641,9 +19845,9 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2328$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
-, delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2334$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, crc_ok
+, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -19676,17 +19880,21 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2328$0 , l
   wire \$36 ;
   wire \$37 ;
   wire \$38 ;
-  wire [1:0] \$39 ;
+  wire \$39 ;
   wire \$4 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire [1:0] \$42 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [254:0] cfg;
-  wire [254:0] cfg;
+  input [258:0] cfg;
+  wire [258:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
+  wire [3:0] \cfg.confirm_frames ;
   wire [11:0] \cfg.delay_limit ;
   wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
@@ -19760,6 +19968,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2328$0 , l
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -19778,6 +19987,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2328$0 , l
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   reg [3:0] frame_status;
   output lc_check;
   wire lc_check;
@@ -19795,8 +20005,10 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2328$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$2328$0 ;
-  wire \port$2328$0 ;
+  output passed;
+  wire passed;
+  output \port$2334$0 ;
+  wire \port$2334$0 ;
   output report;
   wire report;
   input report_frame;
@@ -19821,22 +20033,25 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2328$0 , l
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] status;
   wire [3:0] status;
+  input unconfirmed;
+  wire unconfirmed;
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[195];
+  assign \$1  = ~ cfg[199];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[195] & cfg[203];
-  assign \$4  = cfg[152] | \$3 ;
+  assign \$3  = cfg[199] & cfg[207];
+  assign \$4  = cfg[156] | \$3 ;
   assign \$5  = report_frame & \$4 ;
-  assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
+  assign \$6  = cfg[156] ? crc_ok[0] : \$2 ;
   assign lc_check = \$5  & \$6 ;
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[246] & cfg[195];
+  assign \$7  = cfg[250] & cfg[199];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
@@ -19852,33 +20067,40 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2328$0 , l
   assign status = report_frame ? frame_status : fault_status;
   assign \$18  = ! frame_status;
   assign valid = report_frame & \$18 ;
-  assign \$19  = crc_ok[0] & \$2 ;
-  assign \$20  = ~ \$19 ;
-  assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[195] & cfg[203];
-  assign \$23  = cfg[152] | \$22 ;
-  assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
-  assign \$25  = \$23  & \$24 ;
-  assign \$26  = lc_repeat_seen | lc_skip_seen;
-  assign \$27  = \$26  | lc_zero_seen;
-  assign \$28  = \$25  & \$27 ;
-  assign \$29  = \$21  | \$28 ;
-  assign \$30  = \$29  | noisy;
-  assign doubtful = \$30  | delay_jump;
-  assign \$31  = crc_ok[0] & \$2 ;
-  assign \$32  = ~ spw_mismatch;
-  assign \$33  = \$31  & \$32 ;
-  assign \$34  = ~ noisy;
-  assign \$35  = \$33  & \$34 ;
-  assign \$36  = lc_repeat | lc_skip;
-  assign \$37  = \$36  | lc_zero;
-  assign \$38  = ~ \$37 ;
-  assign clean = \$35  & \$38 ;
-  assign \$39  = ~ { \$2 , crc_ok[0] };
-  assign crc_error = report_frame ? \$39  : 2'h0;
+  assign \$19  = ! frame_status;
+  assign \$20  = frame_status == 4'hf;
+  assign \$21  = \$19  | \$20 ;
+  assign passed = report_frame & \$21 ;
+  assign \$22  = crc_ok[0] & \$2 ;
+  assign \$23  = ~ \$22 ;
+  assign \$24  = \$23  | spw_mismatch;
+  assign \$25  = cfg[199] & cfg[207];
+  assign \$26  = cfg[156] | \$25 ;
+  assign \$27  = cfg[156] ? crc_ok[0] : \$2 ;
+  assign \$28  = \$26  & \$27 ;
+  assign \$29  = lc_repeat_seen | lc_skip_seen;
+  assign \$30  = \$29  | lc_zero_seen;
+  assign \$31  = \$28  & \$30 ;
+  assign \$32  = \$24  | \$31 ;
+  assign \$33  = \$32  | noisy;
+  assign doubtful = \$33  | delay_jump;
+  assign \$34  = crc_ok[0] & \$2 ;
+  assign \$35  = ~ spw_mismatch;
+  assign \$36  = \$34  & \$35 ;
+  assign \$37  = ~ noisy;
+  assign \$38  = \$36  & \$37 ;
+  assign \$39  = lc_repeat | lc_skip;
+  assign \$40  = \$39  | lc_zero;
+  assign \$41  = ~ \$40 ;
+  assign clean = \$38  & \$41 ;
+  assign \$42  = ~ { \$2 , crc_ok[0] };
+  assign crc_error = report_frame ? \$42  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     frame_status = 4'h0;
+    if (unconfirmed) begin
+      frame_status = 4'hf;
+    end
     if (delay_jump) begin
       frame_status = 4'he;
     end
@@ -19902,7 +20124,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2328$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2328$0  = \$2 ;
+  assign \port$2334$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -19913,41 +20135,42 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2328$0 , l
   assign \cfg.quiet_time  = cfg[136:125];
   assign \cfg.noise_limit  = cfg[140:137];
   assign \cfg.delay_tolerance  = cfg[144:141];
-  assign \cfg.w0  = cfg[156:145];
-  assign \cfg.w0.data_bits  = cfg[150:145];
-  assign \cfg.w0.nenw  = cfg[151];
-  assign \cfg.w0.lc  = cfg[152];
-  assign \cfg.w0.crc  = cfg[154:153];
-  assign \cfg.w0.gray  = cfg[155];
-  assign \cfg.w0.signed  = cfg[156];
-  assign \cfg.w0_crc  = cfg[194:157];
-  assign \cfg.w0_crc.width  = cfg[161:157];
-  assign \cfg.w0_crc.poly  = cfg[177:162];
-  assign \cfg.w0_crc.start  = cfg[193:178];
-  assign \cfg.w0_crc.inverted  = cfg[194];
-  assign \cfg.w1_enable  = cfg[195];
-  assign \cfg.w1  = cfg[207:196];
-  assign \cfg.w1.data_bits  = cfg[201:196];
-  assign \cfg.w1.nenw  = cfg[202];
-  assign \cfg.w1.lc  = cfg[203];
-  assign \cfg.w1.crc  = cfg[205:204];
-  assign \cfg.w1.gray  = cfg[206];
-  assign \cfg.w1.signed  = cfg[207];
-  assign \cfg.w1_crc  = cfg[245:208];
-  assign \cfg.w1_crc.width  = cfg[212:208];
-  assign \cfg.w1_crc.poly  = cfg[228:213];
-  assign \cfg.w1_crc.start  = cfg[244:229];
-  assign \cfg.w1_crc.inverted  = cfg[245];
-  assign \cfg.spw_check  = cfg[246];
-  assign \cfg.spw_tolerance  = cfg[254:247];
+  assign \cfg.confirm_frames  = cfg[148:145];
+  assign \cfg.w0  = cfg[160:149];
+  assign \cfg.w0.data_bits  = cfg[154:149];
+  assign \cfg.w0.nenw  = cfg[155];
+  assign \cfg.w0.lc  = cfg[156];
+  assign \cfg.w0.crc  = cfg[158:157];
+  assign \cfg.w0.gray  = cfg[159];
+  assign \cfg.w0.signed  = cfg[160];
+  assign \cfg.w0_crc  = cfg[198:161];
+  assign \cfg.w0_crc.width  = cfg[165:161];
+  assign \cfg.w0_crc.poly  = cfg[181:166];
+  assign \cfg.w0_crc.start  = cfg[197:182];
+  assign \cfg.w0_crc.inverted  = cfg[198];
+  assign \cfg.w1_enable  = cfg[199];
+  assign \cfg.w1  = cfg[211:200];
+  assign \cfg.w1.data_bits  = cfg[205:200];
+  assign \cfg.w1.nenw  = cfg[206];
+  assign \cfg.w1.lc  = cfg[207];
+  assign \cfg.w1.crc  = cfg[209:208];
+  assign \cfg.w1.gray  = cfg[210];
+  assign \cfg.w1.signed  = cfg[211];
+  assign \cfg.w1_crc  = cfg[249:212];
+  assign \cfg.w1_crc.width  = cfg[216:212];
+  assign \cfg.w1_crc.poly  = cfg[232:217];
+  assign \cfg.w1_crc.start  = cfg[248:233];
+  assign \cfg.w1_crc.inverted  = cfg[249];
+  assign \cfg.spw_check  = cfg[250];
+  assign \cfg.spw_tolerance  = cfg[258:251];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
+module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
-, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6790$0 
-, \port$6803$0 , regs__ca_done, \port$6880$0 , ca_rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma
+, \port$6860$0 , \port$6873$0 , regs__ca_done, \port$6950$0 , ca_rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
   reg \$11 ;
@@ -20011,6 +20234,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   wire [23:0] cfg_ack_limit;
   input [23:0] cfg_break_time;
   wire [23:0] cfg_break_time;
+  input [3:0] cfg_confirm_frames;
+  wire [3:0] cfg_confirm_frames;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
   input [3:0] cfg_delay_tolerance;
@@ -20111,17 +20336,17 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$185 ;
+  wire \ma$187 ;
   wire [3:0] noise_events;
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6790$0 ;
-  wire [186:0] \port$6790$0 ;
-  output [79:0] \port$6803$0 ;
-  wire [79:0] \port$6803$0 ;
-  output [9:0] \port$6880$0 ;
-  wire [9:0] \port$6880$0 ;
+  output [186:0] \port$6860$0 ;
+  wire [186:0] \port$6860$0 ;
+  output [79:0] \port$6873$0 ;
+  wire [79:0] \port$6873$0 ;
+  output [9:0] \port$6950$0 ;
+  wire [9:0] \port$6950$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -20154,6 +20379,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   wire regs__cds;
   wire [23:0] regs__cfg_ack_limit;
   wire [23:0] regs__cfg_break_time;
+  wire [3:0] regs__cfg_confirm_frames;
   wire [11:0] regs__cfg_delay_limit;
   wire [3:0] regs__cfg_delay_tolerance;
   wire regs__cfg_end_check;
@@ -20243,7 +20469,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$187 ;
+  wire \slo$189 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -20263,11 +20489,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$182 ;
-  wire \trigger$182 ;
+  input \trigger$184 ;
+  wire \trigger$184 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -20285,7 +20512,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
-  assign trigger = \trigger$182  & regs__trigger_enable;
+  assign trigger = \trigger$184  & regs__trigger_enable;
   assign \$6  = ~ report;
   assign \$7  = \$signal  & \$6 ;
   assign \$8  = waited + 1'h1;
@@ -20307,8 +20534,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
     regs__done_count <= \$17 ;
   \biss_master_axil.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$239 (ca_abort),
-    .\busy$287 (regs__busy),
+    .\abort$245 (ca_abort),
+    .\busy$294 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -20320,6 +20547,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
     .ca_write(ca_write),
     .cfg_ack_limit(cfg_ack_limit),
     .cfg_break_time(cfg_break_time),
+    .cfg_confirm_frames(cfg_confirm_frames),
     .cfg_delay_limit(cfg_delay_limit),
     .cfg_delay_tolerance(cfg_delay_tolerance),
     .cfg_end_check(cfg_end_check),
@@ -20351,30 +20579,30 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$263 (clear_counters),
+    .\clear$270 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$19 ),
-    .\done$290 (done),
+    .\done$297 (done),
     .frames(regs__ca_busy),
     .ma(ma),
-    .\periodic$39 (periodic),
+    .\periodic$40 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$20 ),
-    .\result$295 (\$18 ),
+    .\result$302 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$237 (ca_start),
+    .\start$243 (ca_start),
     .trigger(trigger),
-    .\valid$292 (valid)
+    .\valid$299 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$11  = \$signal ;
     if (report) begin
       \$11  = 1'h0;
@@ -20387,14 +20615,14 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$12  = \$9 [3:0];
     if (rst) begin
       \$12  = 4'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$13  = pending_ok;
     if (done) begin
       \$13  = valid;
@@ -20404,28 +20632,28 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$14  = report;
     if (rst) begin
       \$14  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$15  = pending_ok;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$16  = regs__abort_cycle;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$17  = regs__done_count;
     if (regs__frame_done) begin
       \$17  = \$10 [15:0];
@@ -20475,6 +20703,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   assign regs__cfg_spw_tolerance = cfg_spw_tolerance;
   assign regs__cfg_noise_limit = cfg_noise_limit;
   assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
+  assign regs__cfg_confirm_frames = cfg_confirm_frames;
   assign regs__cfg_quiet_time = cfg_quiet_time;
   assign regs__status = \$18 [3:0];
   assign status = \$18 [3:0];
@@ -20553,19 +20782,19 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$182 , count_en, ca_wbuf_en
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$185  = ma;
-  assign \slo$187  = slo;
-  assign \port$6790$0  = \$18 ;
-  assign \port$6803$0  = \$19 ;
-  assign \port$6880$0  = \$20 ;
+  assign \ma$187  = ma;
+  assign \slo$189  = slo;
+  assign \port$6860$0  = \$18 ;
+  assign \port$6873$0  = \$19 ;
+  assign \port$6950$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$287 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$263 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$294 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$270 , \periodic$40 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$290 , \valid$292 , \result$295 , counts
-, ca_done, result, rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$243 , \abort$245 , abort, ma, \done$297 , \valid$299 , \result$302 
+, counts, ca_done, result, rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -20594,26 +20823,26 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$239 ;
-  wire \abort$239 ;
-  wire \abort$51 ;
+  input \abort$245 ;
+  wire \abort$245 ;
+  wire \abort$52 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$83 ;
+  wire \ack_expired$84 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$104 ;
+  wire [23:0] \ack_limit$105 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$319 ;
+  wire \bit$326 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$81 ;
+  wire \break_over$82 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$248 ;
-  wire \busy$284 ;
-  output \busy$287 ;
-  wire \busy$287 ;
+  wire \busy$254 ;
+  wire \busy$291 ;
+  output \busy$294 ;
+  wire \busy$294 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -20648,13 +20877,14 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$252 ;
+  wire \cdm$258 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$298 ;
-  wire [254:0] cfg;
+  wire \cds$305 ;
+  wire [258:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
+  wire [3:0] \cfg.confirm_frames ;
   wire [11:0] \cfg.delay_limit ;
   wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
@@ -20704,6 +20934,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] cfg_ack_limit;
   input [23:0] cfg_break_time;
   wire [23:0] cfg_break_time;
+  input [3:0] cfg_confirm_frames;
+  wire [3:0] cfg_confirm_frames;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
   input [3:0] cfg_delay_tolerance;
@@ -20777,16 +21009,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$162 ;
+  wire \check$163 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$167 ;
-  wire \clean$320 ;
+  wire \clean$168 ;
+  wire \clean$327 ;
   wire clear;
-  wire \clear$128 ;
-  input \clear$263 ;
-  wire \clear$263 ;
-  wire \clear$276 ;
+  wire \clear$129 ;
+  input \clear$270 ;
+  wire \clear$270 ;
+  wire \clear$283 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -20814,22 +21046,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$179 ;
+  wire [39:0] \cpw_top$180 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$193 ;
+  wire [1:0] \crc_ok$194 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$175 ;
-  wire [37:0] \crcs$175[0] ;
-  wire \crcs$175[0].inverted ;
-  wire [15:0] \crcs$175[0].poly ;
-  wire [15:0] \crcs$175[0].start ;
-  wire [4:0] \crcs$175[0].width ;
-  wire [37:0] \crcs$175[1] ;
-  wire \crcs$175[1].inverted ;
-  wire [15:0] \crcs$175[1].poly ;
-  wire [15:0] \crcs$175[1].start ;
-  wire [4:0] \crcs$175[1].width ;
   wire [75:0] \crcs$176 ;
   wire [37:0] \crcs$176[0] ;
   wire \crcs$176[0].inverted ;
@@ -20841,6 +21062,17 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [15:0] \crcs$176[1].poly ;
   wire [15:0] \crcs$176[1].start ;
   wire [4:0] \crcs$176[1].width ;
+  wire [75:0] \crcs$177 ;
+  wire [37:0] \crcs$177[0] ;
+  wire \crcs$177[0].inverted ;
+  wire [15:0] \crcs$177[0].poly ;
+  wire [15:0] \crcs$177[0].start ;
+  wire [4:0] \crcs$177[0].width ;
+  wire [37:0] \crcs$177[1] ;
+  wire \crcs$177[1].inverted ;
+  wire [15:0] \crcs$177[1].poly ;
+  wire [15:0] \crcs$177[1].start ;
+  wire [4:0] \crcs$177[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -20851,9 +21083,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  wire [254:0] cycle;
+  wire [258:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
+  wire [3:0] \cycle.confirm_frames ;
   wire [11:0] \cycle.delay_limit ;
   wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
@@ -20906,54 +21139,54 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$110 ;
-  wire [12:0] \delay$161 ;
+  wire [12:0] \delay$111 ;
+  wire [12:0] \delay$162 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$112 ;
+  wire [11:0] \delay_limit$113 ;
   wire delay_over;
-  wire \delay_over$91 ;
+  wire \delay_over$92 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$250 ;
-  output \done$290 ;
-  wire \done$290 ;
-  wire \done$291 ;
+  wire \done$256 ;
+  output \done$297 ;
+  wire \done$297 ;
+  wire \done$298 ;
   wire doubtful;
   wire early;
-  wire \early$67 ;
+  wire \early$68 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$262 ;
-  wire \events$262.ca_aborted ;
-  wire \events$262.ca_crc4_error ;
-  wire \events$262.ca_data_fault ;
-  wire \events$262.ca_no_answer ;
-  wire \events$262.ca_refused ;
-  wire [15:0] \events$271 ;
-  wire \events$271.aborted ;
-  wire \events$271.crc_word0 ;
-  wire \events$271.crc_word1 ;
-  wire \events$271.delay_jump ;
-  wire \events$271.delay_range ;
-  wire \events$271.lc_repeat ;
-  wire \events$271.lc_skip ;
-  wire \events$271.lc_zero ;
-  wire \events$271.no_ack ;
-  wire \events$271.no_start ;
-  wire \events$271.no_stop ;
-  wire \events$271.noise_event ;
-  wire \events$271.noisy_line ;
-  wire \events$271.overrun ;
-  wire \events$271.slo_stuck_low ;
-  wire \events$271.spw_mismatch ;
+  wire [4:0] \events$269 ;
+  wire \events$269.ca_aborted ;
+  wire \events$269.ca_crc4_error ;
+  wire \events$269.ca_data_fault ;
+  wire \events$269.ca_no_answer ;
+  wire \events$269.ca_refused ;
+  wire [15:0] \events$278 ;
+  wire \events$278.aborted ;
+  wire \events$278.crc_word0 ;
+  wire \events$278.crc_word1 ;
+  wire \events$278.delay_jump ;
+  wire \events$278.delay_range ;
+  wire \events$278.lc_repeat ;
+  wire \events$278.lc_skip ;
+  wire \events$278.lc_zero ;
+  wire \events$278.no_ack ;
+  wire \events$278.no_start ;
+  wire \events$278.no_stop ;
+  wire \events$278.noise_event ;
+  wire \events$278.noisy_line ;
+  wire \events$278.overrun ;
+  wire \events$278.slo_stuck_low ;
+  wire \events$278.spw_mismatch ;
   wire fault;
-  wire \fault$189 ;
+  wire \fault$190 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -20970,6 +21203,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -20987,7 +21221,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$191 ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \fault_status$192 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -20997,7 +21232,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$223 ;
+  wire \first_rise$229 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -21027,6 +21262,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -21048,39 +21284,40 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$134 ;
+  wire [15:0] \half_period$135 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$35 ;
-  wire \idle$44 ;
+  wire \idle$36 ;
+  wire \idle$45 ;
   wire in_clock;
-  wire \in_clock$98 ;
+  wire \in_clock$99 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$139 ;
-  wire [5:0] \lc$311 ;
+  wire [5:0] \lc$140 ;
+  wire [5:0] \lc$318 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$141 ;
+  wire [5:0] \lc_next$142 ;
   wire lc_repeat;
-  wire \lc_repeat$312 ;
+  wire \lc_repeat$319 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$313 ;
+  wire \lc_skip$320 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$314 ;
+  wire \lc_zero$321 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$150 ;
+  wire \level$151 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [254:0] live;
+  wire [258:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
+  wire [3:0] \live.confirm_frames ;
   wire [11:0] \live.delay_limit ;
   wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
@@ -21128,13 +21365,13 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$65 ;
+  wire \locked$66 ;
   output ma;
   wire ma;
-  wire \ma$286 ;
+  wire \ma$293 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$93 ;
+  wire \ma_busy$94 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -21142,26 +21379,28 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$85 ;
+  wire \no_start_expired$86 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$108 ;
+  wire [24:0] \no_start_limit$109 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$169 ;
+  wire \noisy$170 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$289 ;
+  wire \overrun$296 ;
+  wire passed;
+  wire pending;
   wire [23:0] period;
   wire periodic;
-  input \periodic$39 ;
-  wire \periodic$39 ;
+  input \periodic$40 ;
+  wire \periodic$40 ;
   wire quiet;
-  wire \quiet$117 ;
+  wire \quiet$118 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$119 ;
+  wire \quiet_live$120 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -21177,37 +21416,38 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$201 ;
+  wire \report$204 ;
+  wire \report$208 ;
   wire report_delay;
-  wire \report_delay$204 ;
+  wire \report_delay$211 ;
   wire report_frame;
-  wire \report_frame$188 ;
-  wire \report_frame$202 ;
+  wire \report_frame$189 ;
+  wire \report_frame$209 ;
   wire request;
-  wire [17:0] \request$225 ;
-  wire [6:0] \request$225.address ;
-  wire [6:0] \request$225.count ;
-  wire [2:0] \request$225.slave_id ;
-  wire \request$225.write ;
-  wire \request$50 ;
+  wire [17:0] \request$231 ;
+  wire [6:0] \request$231.address ;
+  wire [6:0] \request$231.count ;
+  wire [2:0] \request$231.slave_id ;
+  wire \request$231.write ;
+  wire \request$51 ;
   wire restart;
-  wire \restart$154 ;
+  wire \restart$155 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$295 ;
-  wire [186:0] \result$295 ;
-  wire \result$295.cds ;
-  wire \result$295.delay_settled ;
-  wire [7:0] \result$295.delay_spread ;
-  wire [5:0] \result$295.lc ;
-  wire \result$295.lc_repeat ;
-  wire \result$295.lc_skip ;
-  wire \result$295.lc_zero ;
-  wire [12:0] \result$295.line_delay ;
-  wire [3:0] \result$295.noise_events ;
-  wire [12:0] \result$295.settled_delay ;
-  wire \result$295.spw_mismatch ;
+  output [186:0] \result$302 ;
+  wire [186:0] \result$302 ;
+  wire \result$302.cds ;
+  wire \result$302.delay_settled ;
+  wire [7:0] \result$302.delay_spread ;
+  wire [5:0] \result$302.lc ;
+  wire \result$302.lc_repeat ;
+  wire \result$302.lc_skip ;
+  wire \result$302.lc_zero ;
+  wire [12:0] \result$302.line_delay ;
+  wire [3:0] \result$302.noise_events ;
+  wire [12:0] \result$302.settled_delay ;
+  wire \result$302.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -21224,18 +21464,19 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$295.status ;
-  wire [31:0] \result$295.timestamp ;
-  wire [57:0] \result$295.word0 ;
-  wire \result$295.word0.crc_ok ;
-  wire \result$295.word0.ne ;
-  wire \result$295.word0.nw ;
-  wire [54:0] \result$295.word0.position ;
-  wire [42:0] \result$295.word1 ;
-  wire \result$295.word1.crc_ok ;
-  wire \result$295.word1.ne ;
-  wire \result$295.word1.nw ;
-  wire [39:0] \result$295.word1.position ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \result$302.status ;
+  wire [31:0] \result$302.timestamp ;
+  wire [57:0] \result$302.word0 ;
+  wire \result$302.word0.crc_ok ;
+  wire \result$302.word0.ne ;
+  wire \result$302.word0.nw ;
+  wire [54:0] \result$302.word0.position ;
+  wire [42:0] \result$302.word1 ;
+  wire \result$302.word1.crc_ok ;
+  wire \result$302.word1.ne ;
+  wire \result$302.word1.nw ;
+  wire [39:0] \result$302.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -21247,46 +21488,47 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$147 ;
+  wire \resync$148 ;
   wire [15:0] rises;
-  wire [15:0] \rises$127 ;
+  wire [15:0] \rises$128 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$318 ;
+  wire \sample$325 ;
   wire sampler_noise;
   wire second_rise;
+  wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$301 ;
+  wire [12:0] \settled_delay$308 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$46 ;
-  wire \slo$56 ;
-  wire \slo$92 ;
+  wire \slo$47 ;
+  wire \slo$57 ;
+  wire \slo$93 ;
   wire slo_stuck;
-  wire \slo_stuck$87 ;
+  wire \slo_stuck$88 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$89 ;
+  wire \slo_stuck_live$90 ;
   wire slots_full;
-  wire \slots_full$73 ;
+  wire \slots_full$74 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$315 ;
+  wire \spw_mismatch$322 ;
   input start;
   wire start;
-  input \start$237 ;
-  wire \start$237 ;
-  wire \start$37 ;
+  input \start$243 ;
+  wire \start$243 ;
+  wire \start$38 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$125 ;
+  wire [15:0] \start_slot$126 ;
   wire started;
-  wire \started$123 ;
-  wire \started$71 ;
+  wire \started$124 ;
+  wire \started$72 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -21304,6 +21546,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -21321,25 +21564,45 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$294 ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \status$206 ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \status$301 ;
   wire stop_bit;
-  wire \stop_bit$77 ;
+  wire \stop_bit$78 ;
   wire stopped;
-  wire \stopped$75 ;
+  wire \stopped$76 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$106 ;
+  wire [23:0] \timeout_limit$107 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$183 ;
+  wire [7:0] \tolerance$184 ;
   input trigger;
   wire trigger;
-  wire \trigger$48 ;
+  wire \trigger$49 ;
+  wire unconfirmed;
   wire valid;
-  wire \valid$206 ;
-  output \valid$292 ;
-  wire \valid$292 ;
+  wire \valid$213 ;
+  output \valid$299 ;
+  wire \valid$299 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -21357,34 +21620,34 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$137 ;
+  wire [1:0] \word_count$138 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$173 ;
-  wire [11:0] \words$173[0] ;
+  wire [23:0] \words$174 ;
+  wire [11:0] \words$174[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$173[0].crc ;
-  wire [5:0] \words$173[0].data_bits ;
-  wire \words$173[0].gray ;
-  wire \words$173[0].lc ;
-  wire \words$173[0].nenw ;
-  wire \words$173[0].signed ;
-  wire [11:0] \words$173[1] ;
+  wire [1:0] \words$174[0].crc ;
+  wire [5:0] \words$174[0].data_bits ;
+  wire \words$174[0].gray ;
+  wire \words$174[0].lc ;
+  wire \words$174[0].nenw ;
+  wire \words$174[0].signed ;
+  wire [11:0] \words$174[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$173[1].crc ;
-  wire [5:0] \words$173[1].data_bits ;
-  wire \words$173[1].gray ;
-  wire \words$173[1].lc ;
-  wire \words$173[1].nenw ;
-  wire \words$173[1].signed ;
+  wire [1:0] \words$174[1].crc ;
+  wire [5:0] \words$174[1].data_bits ;
+  wire \words$174[1].gray ;
+  wire \words$174[1].lc ;
+  wire \words$174[1].nenw ;
+  wire \words$174[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -21410,11 +21673,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \words[1].nenw ;
   wire \words[1].signed ;
   wire zero;
-  assign periodic = \periodic$39  | frames;
+  assign periodic = \periodic$40  | frames;
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$162  = started & \$1 ;
+  assign \check$163  = started & \$1 ;
   assign \$2  = result[2:0] == 1'h1;
   assign \$3  = ca_done & \$2 ;
   assign \$4  = result[2:0] == 2'h2;
@@ -21430,10 +21693,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \$14  = report_frame & \$13 ;
   assign \$15  = status == 4'he;
   assign \$16  = report_frame & \$15 ;
-  assign \busy$287  = ~ idle;
+  assign \busy$294  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$128 ;
-  assign \$18  = \sample$318  & \$17 ;
+  assign \$17  = ~ \clear$129 ;
+  assign \$18  = \sample$325  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -21460,6 +21723,14 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .timeout_limit(timeout_limit),
     .word_count(word_count)
   );
+  \biss_master_axil.ch1.core.confirmation  confirmation (
+    .clk(clk),
+    .pending(unconfirmed),
+    .report(report),
+    .rst(rst),
+    .setting(cycle[148:145]),
+    .status(status)
+  );
   \biss_master_axil.ch1.core.controller  controller (
     .abort(abort),
     .ack_expired(ack_expired),
@@ -21471,7 +21742,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$154 ),
+    .fault(\restart$155 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -21488,14 +21759,14 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$128 ),
+    .receiver_clear(\clear$129 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$56 ),
+    .slo(\slo$57 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -21507,19 +21778,19 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch1.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$263 ),
+    .clear(\clear$270 ),
     .clk(clk),
-    .events(\events$271 ),
+    .events(\events$278 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters  counters (
-    .clear(\clear$263 ),
+    .clear(\clear$270 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$262 ),
+    .events(\events$269 ),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.decoder  decoder (
@@ -21536,7 +21807,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$128 ),
+    .receiver_clear(\clear$129 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -21548,7 +21819,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .words(words)
   );
   \biss_master_axil.ch1.core.delay_check  delay_check (
-    .check(\check$162 ),
+    .check(\check$163 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -21567,10 +21838,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$56 ),
+    .level(\slo$57 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$154 ),
+    .restart(\restart$155 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -21578,7 +21849,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   \biss_master_axil.ch1.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$93 ),
+    .\clocking (\ma_busy$94 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -21590,7 +21861,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .second_rise(ma_arm)
   );
   \biss_master_axil.ch1.core.ma_stop  ma_stop (
-    .clear(\clear$128 ),
+    .clear(\clear$129 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -21598,11 +21869,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .rst(rst),
     .start_slot(start_slot),
     .\started$11 (started),
-    .w1_enable(cycle[195]),
-    .words(\words$173 )
+    .w1_enable(cycle[199]),
+    .words(\words$174 )
   );
   \biss_master_axil.ch1.core.register_access  register_access (
-    .abort(\abort$239 ),
+    .abort(\abort$245 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -21610,41 +21881,41 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .frame_cdm(frame_cdm),
     .frame_cds(cds),
     .frame_end(report),
-    .frame_ok(valid),
+    .frame_ok(frame_ok),
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$225 ),
+    .request(\request$231 ),
     .result(result),
     .rst(rst),
-    .start(\start$237 ),
+    .start(\start$243 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch1.core.results  results (
     .clk(clk),
-    .done(\done$290 ),
+    .done(\done$297 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$295 ),
+    .result(\result$302 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$292 )
+    .valid_out(\valid$299 )
   );
   \biss_master_axil.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$319 ),
+    .\bit (\bit$326 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$56 ),
+    .level(\slo$57 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$128 ),
+    .receiver_clear(\clear$129 ),
     .rst(rst),
-    .sample(\sample$318 ),
+    .sample(\sample$325 ),
     .slo(slo)
   );
   \biss_master_axil.ch1.core.scheduler  scheduler (
@@ -21665,20 +21936,20 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6443$0 (\bit ),
+    .\port$6509$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_axil.ch1.core.spw_check  spw_check (
-    .bits(cycle[201:196]),
+    .bits(cycle[205:200]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[254:247])
+    .\tolerance$8 (cycle[258:251])
   );
   \biss_master_axil.ch1.core.time_base  time_base (
     .clk(clk),
@@ -21697,7 +21968,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$93 ),
+    .ma_busy(\ma_busy$94 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -21706,7 +21977,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$56 ),
+    .slo(\slo$57 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -21714,12 +21985,12 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch1.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$320 ),
+    .clean(\clean$327 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$154 ),
+    .fault(\restart$155 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -21729,199 +22000,205 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$4584$0 (\$24 ),
+    .passed(frame_ok),
+    .\port$4616$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
     .spw_mismatch(spw_mismatch),
     .status(status),
+    .unconfirmed(unconfirmed),
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$19  = \$18 ;
     if (rst) begin
       \$19  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$20  = \bit$319 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    \$20  = \bit$326 ;
     if (rst) begin
       \$20  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$21  = started;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$22  = report_frame;
     if (rst) begin
       \$22  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
-    \$23  = \clean$320 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    \$23  = \clean$327 ;
     if (rst) begin
       \$23  = 1'h0;
     end
   end
-  assign \idle$35  = idle;
-  assign \start$37  = start;
+  assign \idle$36  = idle;
+  assign \start$38  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$44  = idle;
-  assign \slo$46  = slo;
-  assign \trigger$48  = trigger;
-  assign \request$50  = request;
-  assign \abort$51  = abort;
+  assign \idle$45  = idle;
+  assign \slo$47  = slo;
+  assign \trigger$49  = trigger;
+  assign \request$51  = request;
+  assign \abort$52  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$56 ;
+  assign level = \slo$57 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$65  = locked;
-  assign \early$67  = early;
+  assign \locked$66  = locked;
+  assign \early$68  = early;
   assign done = frame_done;
-  assign \started$71  = started;
-  assign \slots_full$73  = slots_full;
-  assign \stopped$75  = stopped;
-  assign \stop_bit$77  = stop_bit;
+  assign \started$72  = started;
+  assign \slots_full$74  = slots_full;
+  assign \stopped$76  = stopped;
+  assign \stop_bit$78  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$81  = break_over;
-  assign \ack_expired$83  = ack_expired;
-  assign \no_start_expired$85  = no_start_expired;
-  assign \slo_stuck$87  = slo_stuck;
-  assign \slo_stuck_live$89  = slo_stuck_live;
-  assign \delay_over$91  = delay_over;
-  assign \slo$92  = \slo$56 ;
-  assign \clocking  = \ma_busy$93 ;
+  assign \break_over$82  = break_over;
+  assign \ack_expired$84  = ack_expired;
+  assign \no_start_expired$86  = no_start_expired;
+  assign \slo_stuck$88  = slo_stuck;
+  assign \slo_stuck_live$90  = slo_stuck_live;
+  assign \delay_over$92  = delay_over;
+  assign \slo$93  = \slo$57 ;
+  assign \clocking  = \ma_busy$94 ;
   assign timer_clear = clear;
-  assign \in_clock$98  = in_clock;
+  assign \in_clock$99  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$104  = ack_limit;
-  assign \timeout_limit$106  = timeout_limit;
-  assign \no_start_limit$108  = no_start_limit;
-  assign \delay$110  = delay;
-  assign \delay_limit$112  = delay_limit;
+  assign \ack_limit$105  = ack_limit;
+  assign \timeout_limit$107  = timeout_limit;
+  assign \no_start_limit$109  = no_start_limit;
+  assign \delay$111  = delay;
+  assign \delay_limit$113  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$117  = quiet;
-  assign \quiet_live$119  = quiet_live;
+  assign \quiet$118  = quiet;
+  assign \quiet_live$120  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$123  = started;
-  assign \start_slot$125  = start_slot;
-  assign \rises$127  = rises;
-  assign receiver_clear = \clear$128 ;
+  assign \started$124  = started;
+  assign \start_slot$126  = start_slot;
+  assign \rises$128  = rises;
+  assign receiver_clear = \clear$129 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$134  = cycle[15:0];
+  assign \half_period$135  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$137  = word_count;
-  assign \lc$139  = lc;
+  assign \word_count$138  = word_count;
+  assign \lc$140  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$141  = { lc[4:0], \bit  };
+  assign \lc_next$142  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$147  = resync;
+  assign \resync$148  = resync;
   assign waiting = watch;
-  assign \level$150  = \slo$56 ;
+  assign \level$151  = \slo$57 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$154 ;
+  assign fault = \restart$155 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$161  = delay;
+  assign \delay$162  = delay;
   assign \$signal  = learn;
-  assign \clean$167  = clean;
-  assign \noisy$169  = noisy;
+  assign \clean$168  = clean;
+  assign \noisy$170  = noisy;
   assign jump = delay_jump;
-  assign \crcs$175  = crcs;
   assign \crcs$176  = crcs;
-  assign w1_enable = cycle[195];
-  assign \cpw_top$179  = cpw_top;
+  assign \crcs$177  = crcs;
+  assign w1_enable = cycle[199];
+  assign \cpw_top$180  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[201:196];
-  assign \tolerance$183  = cycle[254:247];
+  assign bits = cycle[205:200];
+  assign \tolerance$184  = cycle[258:251];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$188  = report_frame;
-  assign \fault$189  = \restart$154 ;
-  assign \fault_status$191  = fault_status;
-  assign \crc_ok$193  = crc_ok;
+  assign \report_frame$189  = report_frame;
+  assign \fault$190  = \restart$155 ;
+  assign \fault_status$192  = fault_status;
+  assign \crc_ok$194  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$201  = report;
-  assign \report_frame$202  = report_frame;
-  assign \report_delay$204  = report_delay;
-  assign \valid$206  = valid;
+  assign pending = unconfirmed;
+  assign \report$204  = report;
+  assign \status$206  = status;
+  assign setting = cycle[148:145];
+  assign \report$208  = report;
+  assign \report_frame$209  = report_frame;
+  assign \report_delay$211  = report_delay;
+  assign \valid$213  = valid;
   assign word_crc_ok = { \$24 , crc_ok[0] };
-  assign \first_rise$223  = first_rise;
+  assign \first_rise$229  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$237 ;
-  assign ca_abort = \abort$239 ;
+  assign ca_start = \start$243 ;
+  assign ca_abort = \abort$245 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$248  = frames;
-  assign \done$250  = ca_done;
-  assign \cdm$252  = cdm;
+  assign \busy$254  = frames;
+  assign \done$256  = ca_done;
+  assign \cdm$258  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_ok = valid;
+  assign passed = frame_ok;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$263 ;
+  assign clear_counters = \clear$270 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$276  = \clear$263 ;
+  assign \clear$283  = \clear$270 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$284  = count_busy;
-  assign \ma$286  = ma;
-  assign \overrun$289  = overrun;
-  assign \done$291  = \done$290 ;
-  assign valid_out = \valid$292 ;
-  assign \status$294  = \result$295 [3:0];
-  assign timestamp = \result$295 [35:4];
-  assign line_delay = \result$295 [48:36];
-  assign \cds$298  = \result$295 [49];
-  assign noise_events = \result$295 [53:50];
-  assign delay_settled = \result$295 [54];
-  assign \settled_delay$301  = \result$295 [67:55];
-  assign delay_spread = \result$295 [75:68];
-  assign word0_position = \result$295 [130:76];
-  assign word0_ne = \result$295 [131];
-  assign word0_nw = \result$295 [132];
-  assign word0_crc_ok = \result$295 [133];
-  assign word1_position = \result$295 [173:134];
-  assign word1_ne = \result$295 [174];
-  assign word1_nw = \result$295 [175];
-  assign word1_crc_ok = \result$295 [176];
-  assign \lc$311  = \result$295 [182:177];
-  assign \lc_repeat$312  = \result$295 [183];
-  assign \lc_skip$313  = \result$295 [184];
-  assign \lc_zero$314  = \result$295 [185];
-  assign \spw_mismatch$315  = \result$295 [186];
+  assign \busy$291  = count_busy;
+  assign \ma$293  = ma;
+  assign \overrun$296  = overrun;
+  assign \done$298  = \done$297 ;
+  assign valid_out = \valid$299 ;
+  assign \status$301  = \result$302 [3:0];
+  assign timestamp = \result$302 [35:4];
+  assign line_delay = \result$302 [48:36];
+  assign \cds$305  = \result$302 [49];
+  assign noise_events = \result$302 [53:50];
+  assign delay_settled = \result$302 [54];
+  assign \settled_delay$308  = \result$302 [67:55];
+  assign delay_spread = \result$302 [75:68];
+  assign word0_position = \result$302 [130:76];
+  assign word0_ne = \result$302 [131];
+  assign word0_nw = \result$302 [132];
+  assign word0_crc_ok = \result$302 [133];
+  assign word1_position = \result$302 [173:134];
+  assign word1_ne = \result$302 [174];
+  assign word1_nw = \result$302 [175];
+  assign word1_crc_ok = \result$302 [176];
+  assign \lc$318  = \result$302 [182:177];
+  assign \lc_repeat$319  = \result$302 [183];
+  assign \lc_skip$320  = \result$302 [184];
+  assign \lc_zero$321  = \result$302 [185];
+  assign \spw_mismatch$322  = \result$302 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -21932,33 +22209,34 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[156:145];
-  assign \live.w0.data_bits  = live[150:145];
-  assign \live.w0.nenw  = live[151];
-  assign \live.w0.lc  = live[152];
-  assign \live.w0.crc  = live[154:153];
-  assign \live.w0.gray  = live[155];
-  assign \live.w0.signed  = live[156];
-  assign \live.w0_crc  = live[194:157];
-  assign \live.w0_crc.width  = live[161:157];
-  assign \live.w0_crc.poly  = live[177:162];
-  assign \live.w0_crc.start  = live[193:178];
-  assign \live.w0_crc.inverted  = live[194];
-  assign \live.w1_enable  = live[195];
-  assign \live.w1  = live[207:196];
-  assign \live.w1.data_bits  = live[201:196];
-  assign \live.w1.nenw  = live[202];
-  assign \live.w1.lc  = live[203];
-  assign \live.w1.crc  = live[205:204];
-  assign \live.w1.gray  = live[206];
-  assign \live.w1.signed  = live[207];
-  assign \live.w1_crc  = live[245:208];
-  assign \live.w1_crc.width  = live[212:208];
-  assign \live.w1_crc.poly  = live[228:213];
-  assign \live.w1_crc.start  = live[244:229];
-  assign \live.w1_crc.inverted  = live[245];
-  assign \live.spw_check  = live[246];
-  assign \live.spw_tolerance  = live[254:247];
+  assign \live.confirm_frames  = live[148:145];
+  assign \live.w0  = live[160:149];
+  assign \live.w0.data_bits  = live[154:149];
+  assign \live.w0.nenw  = live[155];
+  assign \live.w0.lc  = live[156];
+  assign \live.w0.crc  = live[158:157];
+  assign \live.w0.gray  = live[159];
+  assign \live.w0.signed  = live[160];
+  assign \live.w0_crc  = live[198:161];
+  assign \live.w0_crc.width  = live[165:161];
+  assign \live.w0_crc.poly  = live[181:166];
+  assign \live.w0_crc.start  = live[197:182];
+  assign \live.w0_crc.inverted  = live[198];
+  assign \live.w1_enable  = live[199];
+  assign \live.w1  = live[211:200];
+  assign \live.w1.data_bits  = live[205:200];
+  assign \live.w1.nenw  = live[206];
+  assign \live.w1.lc  = live[207];
+  assign \live.w1.crc  = live[209:208];
+  assign \live.w1.gray  = live[210];
+  assign \live.w1.signed  = live[211];
+  assign \live.w1_crc  = live[249:212];
+  assign \live.w1_crc.width  = live[216:212];
+  assign \live.w1_crc.poly  = live[232:217];
+  assign \live.w1_crc.start  = live[248:233];
+  assign \live.w1_crc.inverted  = live[249];
+  assign \live.spw_check  = live[250];
+  assign \live.spw_tolerance  = live[258:251];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -21969,33 +22247,34 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[156:145];
-  assign \cycle.w0.data_bits  = cycle[150:145];
-  assign \cycle.w0.nenw  = cycle[151];
-  assign \cycle.w0.lc  = cycle[152];
-  assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0.signed  = cycle[156];
-  assign \cycle.w0_crc  = cycle[194:157];
-  assign \cycle.w0_crc.width  = cycle[161:157];
-  assign \cycle.w0_crc.poly  = cycle[177:162];
-  assign \cycle.w0_crc.start  = cycle[193:178];
-  assign \cycle.w0_crc.inverted  = cycle[194];
-  assign \cycle.w1_enable  = cycle[195];
-  assign \cycle.w1  = cycle[207:196];
-  assign \cycle.w1.data_bits  = cycle[201:196];
-  assign \cycle.w1.nenw  = cycle[202];
-  assign \cycle.w1.lc  = cycle[203];
-  assign \cycle.w1.crc  = cycle[205:204];
-  assign \cycle.w1.gray  = cycle[206];
-  assign \cycle.w1.signed  = cycle[207];
-  assign \cycle.w1_crc  = cycle[245:208];
-  assign \cycle.w1_crc.width  = cycle[212:208];
-  assign \cycle.w1_crc.poly  = cycle[228:213];
-  assign \cycle.w1_crc.start  = cycle[244:229];
-  assign \cycle.w1_crc.inverted  = cycle[245];
-  assign \cycle.spw_check  = cycle[246];
-  assign \cycle.spw_tolerance  = cycle[254:247];
+  assign \cycle.confirm_frames  = cycle[148:145];
+  assign \cycle.w0  = cycle[160:149];
+  assign \cycle.w0.data_bits  = cycle[154:149];
+  assign \cycle.w0.nenw  = cycle[155];
+  assign \cycle.w0.lc  = cycle[156];
+  assign \cycle.w0.crc  = cycle[158:157];
+  assign \cycle.w0.gray  = cycle[159];
+  assign \cycle.w0.signed  = cycle[160];
+  assign \cycle.w0_crc  = cycle[198:161];
+  assign \cycle.w0_crc.width  = cycle[165:161];
+  assign \cycle.w0_crc.poly  = cycle[181:166];
+  assign \cycle.w0_crc.start  = cycle[197:182];
+  assign \cycle.w0_crc.inverted  = cycle[198];
+  assign \cycle.w1_enable  = cycle[199];
+  assign \cycle.w1  = cycle[211:200];
+  assign \cycle.w1.data_bits  = cycle[205:200];
+  assign \cycle.w1.nenw  = cycle[206];
+  assign \cycle.w1.lc  = cycle[207];
+  assign \cycle.w1.crc  = cycle[209:208];
+  assign \cycle.w1.gray  = cycle[210];
+  assign \cycle.w1.signed  = cycle[211];
+  assign \cycle.w1_crc  = cycle[249:212];
+  assign \cycle.w1_crc.width  = cycle[216:212];
+  assign \cycle.w1_crc.poly  = cycle[232:217];
+  assign \cycle.w1_crc.start  = cycle[248:233];
+  assign \cycle.w1_crc.inverted  = cycle[249];
+  assign \cycle.spw_check  = cycle[250];
+  assign \cycle.spw_tolerance  = cycle[258:251];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22010,20 +22289,20 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$173[0]  = \words$173 [11:0];
-  assign \words$173[0].data_bits  = \words$173 [5:0];
-  assign \words$173[0].nenw  = \words$173 [6];
-  assign \words$173[0].lc  = \words$173 [7];
-  assign \words$173[0].crc  = \words$173 [9:8];
-  assign \words$173[0].gray  = \words$173 [10];
-  assign \words$173[0].signed  = \words$173 [11];
-  assign \words$173[1]  = \words$173 [23:12];
-  assign \words$173[1].data_bits  = \words$173 [17:12];
-  assign \words$173[1].nenw  = \words$173 [18];
-  assign \words$173[1].lc  = \words$173 [19];
-  assign \words$173[1].crc  = \words$173 [21:20];
-  assign \words$173[1].gray  = \words$173 [22];
-  assign \words$173[1].signed  = \words$173 [23];
+  assign \words$174[0]  = \words$174 [11:0];
+  assign \words$174[0].data_bits  = \words$174 [5:0];
+  assign \words$174[0].nenw  = \words$174 [6];
+  assign \words$174[0].lc  = \words$174 [7];
+  assign \words$174[0].crc  = \words$174 [9:8];
+  assign \words$174[0].gray  = \words$174 [10];
+  assign \words$174[0].signed  = \words$174 [11];
+  assign \words$174[1]  = \words$174 [23:12];
+  assign \words$174[1].data_bits  = \words$174 [17:12];
+  assign \words$174[1].nenw  = \words$174 [18];
+  assign \words$174[1].lc  = \words$174 [19];
+  assign \words$174[1].crc  = \words$174 [21:20];
+  assign \words$174[1].gray  = \words$174 [22];
+  assign \words$174[1].signed  = \words$174 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -22034,16 +22313,6 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$175[0]  = crcs[37:0];
-  assign \crcs$175[0].width  = crcs[4:0];
-  assign \crcs$175[0].poly  = crcs[20:5];
-  assign \crcs$175[0].start  = crcs[36:21];
-  assign \crcs$175[0].inverted  = crcs[37];
-  assign \crcs$175[1]  = crcs[75:38];
-  assign \crcs$175[1].width  = crcs[42:38];
-  assign \crcs$175[1].poly  = crcs[58:43];
-  assign \crcs$175[1].start  = crcs[74:59];
-  assign \crcs$175[1].inverted  = crcs[75];
   assign \crcs$176[0]  = crcs[37:0];
   assign \crcs$176[0].width  = crcs[4:0];
   assign \crcs$176[0].poly  = crcs[20:5];
@@ -22054,6 +22323,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \crcs$176[1].poly  = crcs[58:43];
   assign \crcs$176[1].start  = crcs[74:59];
   assign \crcs$176[1].inverted  = crcs[75];
+  assign \crcs$177[0]  = crcs[37:0];
+  assign \crcs$177[0].width  = crcs[4:0];
+  assign \crcs$177[0].poly  = crcs[20:5];
+  assign \crcs$177[0].start  = crcs[36:21];
+  assign \crcs$177[0].inverted  = crcs[37];
+  assign \crcs$177[1]  = crcs[75:38];
+  assign \crcs$177[1].width  = crcs[42:38];
+  assign \crcs$177[1].poly  = crcs[58:43];
+  assign \crcs$177[1].start  = crcs[74:59];
+  assign \crcs$177[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -22064,33 +22343,34 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \cfg.quiet_time  = cycle[136:125];
   assign \cfg.noise_limit  = cycle[140:137];
   assign \cfg.delay_tolerance  = cycle[144:141];
-  assign \cfg.w0  = cycle[156:145];
-  assign \cfg.w0.data_bits  = cycle[150:145];
-  assign \cfg.w0.nenw  = cycle[151];
-  assign \cfg.w0.lc  = cycle[152];
-  assign \cfg.w0.crc  = cycle[154:153];
-  assign \cfg.w0.gray  = cycle[155];
-  assign \cfg.w0.signed  = cycle[156];
-  assign \cfg.w0_crc  = cycle[194:157];
-  assign \cfg.w0_crc.width  = cycle[161:157];
-  assign \cfg.w0_crc.poly  = cycle[177:162];
-  assign \cfg.w0_crc.start  = cycle[193:178];
-  assign \cfg.w0_crc.inverted  = cycle[194];
-  assign \cfg.w1_enable  = cycle[195];
-  assign \cfg.w1  = cycle[207:196];
-  assign \cfg.w1.data_bits  = cycle[201:196];
-  assign \cfg.w1.nenw  = cycle[202];
-  assign \cfg.w1.lc  = cycle[203];
-  assign \cfg.w1.crc  = cycle[205:204];
-  assign \cfg.w1.gray  = cycle[206];
-  assign \cfg.w1.signed  = cycle[207];
-  assign \cfg.w1_crc  = cycle[245:208];
-  assign \cfg.w1_crc.width  = cycle[212:208];
-  assign \cfg.w1_crc.poly  = cycle[228:213];
-  assign \cfg.w1_crc.start  = cycle[244:229];
-  assign \cfg.w1_crc.inverted  = cycle[245];
-  assign \cfg.spw_check  = cycle[246];
-  assign \cfg.spw_tolerance  = cycle[254:247];
+  assign \cfg.confirm_frames  = cycle[148:145];
+  assign \cfg.w0  = cycle[160:149];
+  assign \cfg.w0.data_bits  = cycle[154:149];
+  assign \cfg.w0.nenw  = cycle[155];
+  assign \cfg.w0.lc  = cycle[156];
+  assign \cfg.w0.crc  = cycle[158:157];
+  assign \cfg.w0.gray  = cycle[159];
+  assign \cfg.w0.signed  = cycle[160];
+  assign \cfg.w0_crc  = cycle[198:161];
+  assign \cfg.w0_crc.width  = cycle[165:161];
+  assign \cfg.w0_crc.poly  = cycle[181:166];
+  assign \cfg.w0_crc.start  = cycle[197:182];
+  assign \cfg.w0_crc.inverted  = cycle[198];
+  assign \cfg.w1_enable  = cycle[199];
+  assign \cfg.w1  = cycle[211:200];
+  assign \cfg.w1.data_bits  = cycle[205:200];
+  assign \cfg.w1.nenw  = cycle[206];
+  assign \cfg.w1.lc  = cycle[207];
+  assign \cfg.w1.crc  = cycle[209:208];
+  assign \cfg.w1.gray  = cycle[210];
+  assign \cfg.w1.signed  = cycle[211];
+  assign \cfg.w1_crc  = cycle[249:212];
+  assign \cfg.w1_crc.width  = cycle[216:212];
+  assign \cfg.w1_crc.poly  = cycle[232:217];
+  assign \cfg.w1_crc.start  = cycle[248:233];
+  assign \cfg.w1_crc.inverted  = cycle[249];
+  assign \cfg.spw_check  = cycle[250];
+  assign \cfg.spw_tolerance  = cycle[258:251];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -22114,41 +22394,41 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$225.slave_id  = \request$225 [2:0];
-  assign \request$225.address  = \request$225 [9:3];
-  assign \request$225.count  = \request$225 [16:10];
-  assign \request$225.write  = \request$225 [17];
+  assign \request$231.slave_id  = \request$231 [2:0];
+  assign \request$231.address  = \request$231 [9:3];
+  assign \request$231.count  = \request$231 [16:10];
+  assign \request$231.write  = \request$231 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$262.ca_crc4_error  = \events$262 [0];
-  assign \events$262.ca_no_answer  = \events$262 [1];
-  assign \events$262.ca_refused  = \events$262 [2];
-  assign \events$262.ca_aborted  = \events$262 [3];
-  assign \events$262.ca_data_fault  = \events$262 [4];
+  assign \events$269.ca_crc4_error  = \events$269 [0];
+  assign \events$269.ca_no_answer  = \events$269 [1];
+  assign \events$269.ca_refused  = \events$269 [2];
+  assign \events$269.ca_aborted  = \events$269 [3];
+  assign \events$269.ca_data_fault  = \events$269 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$271.crc_word0  = \events$271 [0];
-  assign \events$271.crc_word1  = \events$271 [1];
-  assign \events$271.no_ack  = \events$271 [2];
-  assign \events$271.no_start  = \events$271 [3];
-  assign \events$271.delay_range  = \events$271 [4];
-  assign \events$271.slo_stuck_low  = \events$271 [5];
-  assign \events$271.lc_repeat  = \events$271 [6];
-  assign \events$271.lc_skip  = \events$271 [7];
-  assign \events$271.lc_zero  = \events$271 [8];
-  assign \events$271.spw_mismatch  = \events$271 [9];
-  assign \events$271.overrun  = \events$271 [10];
-  assign \events$271.aborted  = \events$271 [11];
-  assign \events$271.no_stop  = \events$271 [12];
-  assign \events$271.noisy_line  = \events$271 [13];
-  assign \events$271.delay_jump  = \events$271 [14];
-  assign \events$271.noise_event  = \events$271 [15];
+  assign \events$278.crc_word0  = \events$278 [0];
+  assign \events$278.crc_word1  = \events$278 [1];
+  assign \events$278.no_ack  = \events$278 [2];
+  assign \events$278.no_start  = \events$278 [3];
+  assign \events$278.delay_range  = \events$278 [4];
+  assign \events$278.slo_stuck_low  = \events$278 [5];
+  assign \events$278.lc_repeat  = \events$278 [6];
+  assign \events$278.lc_skip  = \events$278 [7];
+  assign \events$278.lc_zero  = \events$278 [8];
+  assign \events$278.spw_mismatch  = \events$278 [9];
+  assign \events$278.overrun  = \events$278 [10];
+  assign \events$278.aborted  = \events$278 [11];
+  assign \events$278.no_stop  = \events$278 [12];
+  assign \events$278.noisy_line  = \events$278 [13];
+  assign \events$278.delay_jump  = \events$278 [14];
+  assign \events$278.noise_event  = \events$278 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -22156,57 +22436,57 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$295.status  = \result$295 [3:0];
-  assign \result$295.timestamp  = \result$295 [35:4];
-  assign \result$295.line_delay  = \result$295 [48:36];
-  assign \result$295.cds  = \result$295 [49];
-  assign \result$295.noise_events  = \result$295 [53:50];
-  assign \result$295.delay_settled  = \result$295 [54];
-  assign \result$295.settled_delay  = \result$295 [67:55];
-  assign \result$295.delay_spread  = \result$295 [75:68];
-  assign \result$295.word0  = \result$295 [133:76];
-  assign \result$295.word0.position  = \result$295 [130:76];
-  assign \result$295.word0.ne  = \result$295 [131];
-  assign \result$295.word0.nw  = \result$295 [132];
-  assign \result$295.word0.crc_ok  = \result$295 [133];
-  assign \result$295.word1  = \result$295 [176:134];
-  assign \result$295.word1.position  = \result$295 [173:134];
-  assign \result$295.word1.ne  = \result$295 [174];
-  assign \result$295.word1.nw  = \result$295 [175];
-  assign \result$295.word1.crc_ok  = \result$295 [176];
-  assign \result$295.lc  = \result$295 [182:177];
-  assign \result$295.lc_repeat  = \result$295 [183];
-  assign \result$295.lc_skip  = \result$295 [184];
-  assign \result$295.lc_zero  = \result$295 [185];
-  assign \result$295.spw_mismatch  = \result$295 [186];
-  assign \events$271 [15] = \event ;
-  assign \events$271 [14] = \$16 ;
-  assign \events$271 [13] = \$14 ;
-  assign \events$271 [12] = faults[6];
-  assign \events$271 [11] = faults[4];
-  assign \events$271 [10] = overrun;
-  assign \events$271 [9] = \$12 ;
-  assign \events$271 [8] = lc_zero;
-  assign \events$271 [7] = lc_skip;
-  assign \events$271 [6] = lc_repeat;
-  assign \events$271 [5] = faults[3];
-  assign \events$271 [4] = faults[2];
-  assign \events$271 [3] = faults[1];
-  assign \events$271 [2] = faults[0];
-  assign \events$271 [1] = crc_error[1];
-  assign \events$271 [0] = crc_error[0];
-  assign \events$262 [4] = \$11 ;
-  assign \events$262 [3] = \$9 ;
-  assign \events$262 [2] = \$7 ;
-  assign \events$262 [1] = \$5 ;
-  assign \events$262 [0] = \$3 ;
+  assign \result$302.status  = \result$302 [3:0];
+  assign \result$302.timestamp  = \result$302 [35:4];
+  assign \result$302.line_delay  = \result$302 [48:36];
+  assign \result$302.cds  = \result$302 [49];
+  assign \result$302.noise_events  = \result$302 [53:50];
+  assign \result$302.delay_settled  = \result$302 [54];
+  assign \result$302.settled_delay  = \result$302 [67:55];
+  assign \result$302.delay_spread  = \result$302 [75:68];
+  assign \result$302.word0  = \result$302 [133:76];
+  assign \result$302.word0.position  = \result$302 [130:76];
+  assign \result$302.word0.ne  = \result$302 [131];
+  assign \result$302.word0.nw  = \result$302 [132];
+  assign \result$302.word0.crc_ok  = \result$302 [133];
+  assign \result$302.word1  = \result$302 [176:134];
+  assign \result$302.word1.position  = \result$302 [173:134];
+  assign \result$302.word1.ne  = \result$302 [174];
+  assign \result$302.word1.nw  = \result$302 [175];
+  assign \result$302.word1.crc_ok  = \result$302 [176];
+  assign \result$302.lc  = \result$302 [182:177];
+  assign \result$302.lc_repeat  = \result$302 [183];
+  assign \result$302.lc_skip  = \result$302 [184];
+  assign \result$302.lc_zero  = \result$302 [185];
+  assign \result$302.spw_mismatch  = \result$302 [186];
+  assign \events$278 [15] = \event ;
+  assign \events$278 [14] = \$16 ;
+  assign \events$278 [13] = \$14 ;
+  assign \events$278 [12] = faults[6];
+  assign \events$278 [11] = faults[4];
+  assign \events$278 [10] = overrun;
+  assign \events$278 [9] = \$12 ;
+  assign \events$278 [8] = lc_zero;
+  assign \events$278 [7] = lc_skip;
+  assign \events$278 [6] = lc_repeat;
+  assign \events$278 [5] = faults[3];
+  assign \events$278 [4] = faults[2];
+  assign \events$278 [3] = faults[1];
+  assign \events$278 [2] = faults[0];
+  assign \events$278 [1] = crc_error[1];
+  assign \events$278 [0] = crc_error[0];
+  assign \events$269 [4] = \$11 ;
+  assign \events$269 [3] = \$9 ;
+  assign \events$269 [2] = \$7 ;
+  assign \events$269 [1] = \$5 ;
+  assign \events$269 [0] = \$3 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$225 [17] = ca_write;
-  assign \request$225 [16:10] = ca_count;
-  assign \request$225 [9:3] = ca_address;
-  assign \request$225 [2:0] = ca_slave_id;
+  assign \request$231 [17] = ca_write;
+  assign \request$231 [16:10] = ca_count;
+  assign \request$231 [9:3] = ca_address;
+  assign \request$231 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$24 ;
@@ -22228,33 +22508,34 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$173 [23:12] = cycle[207:196];
-  assign \words$173 [11:0] = cycle[156:145];
-  assign words[23:12] = cycle[207:196];
-  assign words[11:0] = cycle[156:145];
-  assign live[254:247] = cfg_spw_tolerance;
-  assign live[246] = cfg_spw_check;
-  assign live[245] = cfg_w1_crc_inverted;
-  assign live[244:229] = cfg_w1_crc_start;
-  assign live[228:213] = cfg_w1_crc_poly;
-  assign live[212:208] = cfg_w1_crc_width;
-  assign live[207] = cfg_w1_signed;
-  assign live[206] = cfg_w1_gray;
-  assign live[205:204] = cfg_w1_crc;
-  assign live[203] = cfg_w1_lc;
-  assign live[202] = cfg_w1_nenw;
-  assign live[201:196] = cfg_w1_data_bits;
-  assign live[195] = cfg_w1_enable;
-  assign live[194] = cfg_w0_crc_inverted;
-  assign live[193:178] = cfg_w0_crc_start;
-  assign live[177:162] = cfg_w0_crc_poly;
-  assign live[161:157] = cfg_w0_crc_width;
-  assign live[156] = cfg_w0_signed;
-  assign live[155] = cfg_w0_gray;
-  assign live[154:153] = cfg_w0_crc;
-  assign live[152] = cfg_w0_lc;
-  assign live[151] = cfg_w0_nenw;
-  assign live[150:145] = cfg_w0_data_bits;
+  assign \words$174 [23:12] = cycle[211:200];
+  assign \words$174 [11:0] = cycle[160:149];
+  assign words[23:12] = cycle[211:200];
+  assign words[11:0] = cycle[160:149];
+  assign live[258:251] = cfg_spw_tolerance;
+  assign live[250] = cfg_spw_check;
+  assign live[249] = cfg_w1_crc_inverted;
+  assign live[248:233] = cfg_w1_crc_start;
+  assign live[232:217] = cfg_w1_crc_poly;
+  assign live[216:212] = cfg_w1_crc_width;
+  assign live[211] = cfg_w1_signed;
+  assign live[210] = cfg_w1_gray;
+  assign live[209:208] = cfg_w1_crc;
+  assign live[207] = cfg_w1_lc;
+  assign live[206] = cfg_w1_nenw;
+  assign live[205:200] = cfg_w1_data_bits;
+  assign live[199] = cfg_w1_enable;
+  assign live[198] = cfg_w0_crc_inverted;
+  assign live[197:182] = cfg_w0_crc_start;
+  assign live[181:166] = cfg_w0_crc_poly;
+  assign live[165:161] = cfg_w0_crc_width;
+  assign live[160] = cfg_w0_signed;
+  assign live[159] = cfg_w0_gray;
+  assign live[158:157] = cfg_w0_crc;
+  assign live[156] = cfg_w0_lc;
+  assign live[155] = cfg_w0_nenw;
+  assign live[154:149] = cfg_w0_data_bits;
+  assign live[148:145] = cfg_confirm_frames;
   assign live[144:141] = cfg_delay_tolerance;
   assign live[140:137] = cfg_noise_limit;
   assign live[136:125] = cfg_quiet_time;
@@ -22269,7 +22550,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crcs, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22326,7 +22607,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire [24:0] \$58 ;
   reg \$59 ;
   wire \$6 ;
-  reg [254:0] \$60 ;
+  reg [258:0] \$60 ;
   reg [23:0] \$61 ;
   reg [23:0] \$62 ;
   reg [11:0] \$63 ;
@@ -22353,10 +22634,11 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  output [254:0] cycle;
-  reg [254:0] cycle = 255'h0000000000000000000000000000000000000000000000000000000000000000;
+  output [258:0] cycle;
+  reg [258:0] cycle = 259'h00000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
+  wire [3:0] \cycle.confirm_frames ;
   wire [11:0] \cycle.delay_limit ;
   wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
@@ -22408,10 +22690,11 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [254:0] live;
-  wire [254:0] live;
+  input [258:0] live;
+  wire [258:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
+  wire [3:0] \live.confirm_frames ;
   wire [11:0] \live.delay_limit ;
   wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
@@ -22472,14 +22755,14 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
-  assign \$36  = live[195] & live[152];
-  assign \$37  = \$36  & live[203];
+  assign \$36  = live[199] & live[156];
+  assign \$37  = \$36  & live[207];
   assign \$38  = ~ \$37 ;
   assign \$39  = \$35  & \$38 ;
-  assign \$40  = ~ live[246];
-  assign \$41  = live[201:196] <= live[150:145];
-  assign \$42  = live[195] & \$41 ;
-  assign \$43  = | live[205:204];
+  assign \$40  = ~ live[250];
+  assign \$41  = live[205:200] <= live[154:149];
+  assign \$42  = live[199] & \$41 ;
+  assign \$43  = | live[209:208];
   assign \$44  = \$42  & \$43 ;
   assign \$45  = \$40  | \$44 ;
   assign \$46  = \$39  & \$45 ;
@@ -22495,7 +22778,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$56  = \$55  ? 4'h2 : live[144:141];
   assign \$57  = live[15:0] + \$56 ;
   assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[195];
+  assign word_count = 1'h1 + cycle[199];
   always @(posedge clk)
     ok <= \$59 ;
   always @(posedge clk)
@@ -22515,56 +22798,56 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   always @(posedge clk)
     no_start_limit <= \$67 ;
   assign \$1  = | live[15:1];
-  assign \$2  = | live[150:145];
-  assign \$3  = live[150:145] <= 6'h37;
+  assign \$2  = | live[154:149];
+  assign \$3  = live[154:149] <= 6'h37;
   assign \$4  = \$2  & \$3 ;
-  assign \$5  = ! live[154:153];
-  assign \$6  = live[154:153] == 1'h1;
+  assign \$5  = ! live[158:157];
+  assign \$6  = live[158:157] == 1'h1;
   assign \$7  = \$5  | \$6 ;
-  assign \$8  = live[154:153] == 2'h2;
+  assign \$8  = live[158:157] == 2'h2;
   assign \$9  = \$7  | \$8 ;
-  assign \$10  = live[154:153] == 2'h3;
-  assign \$11  = | live[161:157];
+  assign \$10  = live[158:157] == 2'h3;
+  assign \$11  = | live[165:161];
   assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[161:157] <= 5'h10;
+  assign \$13  = live[165:161] <= 5'h10;
   assign \$14  = \$12  & \$13 ;
   assign \$15  = \$9  | \$14 ;
   assign \$16  = \$4  & \$15 ;
   assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[195];
-  assign \$19  = | live[201:196];
-  assign \$20  = live[201:196] <= 6'h28;
+  assign \$18  = ~ live[199];
+  assign \$19  = | live[205:200];
+  assign \$20  = live[205:200] <= 6'h28;
   assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[205:204];
-  assign \$23  = live[205:204] == 1'h1;
+  assign \$22  = ! live[209:208];
+  assign \$23  = live[209:208] == 1'h1;
   assign \$24  = \$22  | \$23 ;
-  assign \$25  = live[205:204] == 2'h2;
+  assign \$25  = live[209:208] == 2'h2;
   assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[205:204] == 2'h3;
-  assign \$28  = | live[212:208];
+  assign \$27  = live[209:208] == 2'h3;
+  assign \$28  = | live[216:212];
   assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[212:208] <= 5'h10;
+  assign \$30  = live[216:212] <= 5'h10;
   assign \$31  = \$29  & \$30 ;
   assign \$32  = \$26  | \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$59  = \$46 ;
     if (rst) begin
       \$59  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$60  = cycle;
     if (idle) begin
       \$60  = live;
     end
     if (rst) begin
-      \$60  = 255'h0000000000000000000000000000000000000000000000000000000000000000;
+      \$60  = 259'h00000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$61  = ack_limit;
     if (idle) begin
       \$61  = \$48 ;
@@ -22574,7 +22857,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$62  = timeout_limit;
     if (idle) begin
       \$62  = \$50 ;
@@ -22584,7 +22867,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$63  = delay_limit;
     if (idle) begin
       \$63  = \$52 ;
@@ -22594,7 +22877,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$64  = quiet_time;
     if (idle) begin
       \$64  = \$54 ;
@@ -22604,7 +22887,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$65  = delay_tolerance;
     if (idle) begin
       \$65  = \$57 ;
@@ -22614,11 +22897,11 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$66  = crcs;
     if (idle) begin
       (* full_case = 32'd1 *)
-      casez (live[154:153])
+      casez (live[158:157])
         2'h1:
           begin
             \$66 [4:0] = 5'h06;
@@ -22634,12 +22917,12 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
             \$66 [37] = 1'h1;
           end
         2'h3:
-            \$66 [37:0] = live[194:157];
+            \$66 [37:0] = live[198:161];
         default:
             \$66 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
-      casez (live[205:204])
+      casez (live[209:208])
         2'h1:
           begin
             \$66 [42:38] = 5'h06;
@@ -22655,7 +22938,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
             \$66 [75] = 1'h1;
           end
         2'h3:
-            \$66 [75:38] = live[245:208];
+            \$66 [75:38] = live[249:212];
         default:
             \$66 [75:38] = 38'h0000000000;
       endcase
@@ -22665,7 +22948,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$67  = \$58 ;
     if (rst) begin
       \$67  = 25'h0000000;
@@ -22681,33 +22964,34 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[156:145];
-  assign \live.w0.data_bits  = live[150:145];
-  assign \live.w0.nenw  = live[151];
-  assign \live.w0.lc  = live[152];
-  assign \live.w0.crc  = live[154:153];
-  assign \live.w0.gray  = live[155];
-  assign \live.w0.signed  = live[156];
-  assign \live.w0_crc  = live[194:157];
-  assign \live.w0_crc.width  = live[161:157];
-  assign \live.w0_crc.poly  = live[177:162];
-  assign \live.w0_crc.start  = live[193:178];
-  assign \live.w0_crc.inverted  = live[194];
-  assign \live.w1_enable  = live[195];
-  assign \live.w1  = live[207:196];
-  assign \live.w1.data_bits  = live[201:196];
-  assign \live.w1.nenw  = live[202];
-  assign \live.w1.lc  = live[203];
-  assign \live.w1.crc  = live[205:204];
-  assign \live.w1.gray  = live[206];
-  assign \live.w1.signed  = live[207];
-  assign \live.w1_crc  = live[245:208];
-  assign \live.w1_crc.width  = live[212:208];
-  assign \live.w1_crc.poly  = live[228:213];
-  assign \live.w1_crc.start  = live[244:229];
-  assign \live.w1_crc.inverted  = live[245];
-  assign \live.spw_check  = live[246];
-  assign \live.spw_tolerance  = live[254:247];
+  assign \live.confirm_frames  = live[148:145];
+  assign \live.w0  = live[160:149];
+  assign \live.w0.data_bits  = live[154:149];
+  assign \live.w0.nenw  = live[155];
+  assign \live.w0.lc  = live[156];
+  assign \live.w0.crc  = live[158:157];
+  assign \live.w0.gray  = live[159];
+  assign \live.w0.signed  = live[160];
+  assign \live.w0_crc  = live[198:161];
+  assign \live.w0_crc.width  = live[165:161];
+  assign \live.w0_crc.poly  = live[181:166];
+  assign \live.w0_crc.start  = live[197:182];
+  assign \live.w0_crc.inverted  = live[198];
+  assign \live.w1_enable  = live[199];
+  assign \live.w1  = live[211:200];
+  assign \live.w1.data_bits  = live[205:200];
+  assign \live.w1.nenw  = live[206];
+  assign \live.w1.lc  = live[207];
+  assign \live.w1.crc  = live[209:208];
+  assign \live.w1.gray  = live[210];
+  assign \live.w1.signed  = live[211];
+  assign \live.w1_crc  = live[249:212];
+  assign \live.w1_crc.width  = live[216:212];
+  assign \live.w1_crc.poly  = live[232:217];
+  assign \live.w1_crc.start  = live[248:233];
+  assign \live.w1_crc.inverted  = live[249];
+  assign \live.spw_check  = live[250];
+  assign \live.spw_tolerance  = live[258:251];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -22718,33 +23002,34 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[156:145];
-  assign \cycle.w0.data_bits  = cycle[150:145];
-  assign \cycle.w0.nenw  = cycle[151];
-  assign \cycle.w0.lc  = cycle[152];
-  assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0.signed  = cycle[156];
-  assign \cycle.w0_crc  = cycle[194:157];
-  assign \cycle.w0_crc.width  = cycle[161:157];
-  assign \cycle.w0_crc.poly  = cycle[177:162];
-  assign \cycle.w0_crc.start  = cycle[193:178];
-  assign \cycle.w0_crc.inverted  = cycle[194];
-  assign \cycle.w1_enable  = cycle[195];
-  assign \cycle.w1  = cycle[207:196];
-  assign \cycle.w1.data_bits  = cycle[201:196];
-  assign \cycle.w1.nenw  = cycle[202];
-  assign \cycle.w1.lc  = cycle[203];
-  assign \cycle.w1.crc  = cycle[205:204];
-  assign \cycle.w1.gray  = cycle[206];
-  assign \cycle.w1.signed  = cycle[207];
-  assign \cycle.w1_crc  = cycle[245:208];
-  assign \cycle.w1_crc.width  = cycle[212:208];
-  assign \cycle.w1_crc.poly  = cycle[228:213];
-  assign \cycle.w1_crc.start  = cycle[244:229];
-  assign \cycle.w1_crc.inverted  = cycle[245];
-  assign \cycle.spw_check  = cycle[246];
-  assign \cycle.spw_tolerance  = cycle[254:247];
+  assign \cycle.confirm_frames  = cycle[148:145];
+  assign \cycle.w0  = cycle[160:149];
+  assign \cycle.w0.data_bits  = cycle[154:149];
+  assign \cycle.w0.nenw  = cycle[155];
+  assign \cycle.w0.lc  = cycle[156];
+  assign \cycle.w0.crc  = cycle[158:157];
+  assign \cycle.w0.gray  = cycle[159];
+  assign \cycle.w0.signed  = cycle[160];
+  assign \cycle.w0_crc  = cycle[198:161];
+  assign \cycle.w0_crc.width  = cycle[165:161];
+  assign \cycle.w0_crc.poly  = cycle[181:166];
+  assign \cycle.w0_crc.start  = cycle[197:182];
+  assign \cycle.w0_crc.inverted  = cycle[198];
+  assign \cycle.w1_enable  = cycle[199];
+  assign \cycle.w1  = cycle[211:200];
+  assign \cycle.w1.data_bits  = cycle[205:200];
+  assign \cycle.w1.nenw  = cycle[206];
+  assign \cycle.w1.lc  = cycle[207];
+  assign \cycle.w1.crc  = cycle[209:208];
+  assign \cycle.w1.gray  = cycle[210];
+  assign \cycle.w1.signed  = cycle[211];
+  assign \cycle.w1_crc  = cycle[249:212];
+  assign \cycle.w1_crc.width  = cycle[216:212];
+  assign \cycle.w1_crc.poly  = cycle[232:217];
+  assign \cycle.w1_crc.start  = cycle[248:233];
+  assign \cycle.w1_crc.inverted  = cycle[249];
+  assign \cycle.spw_check  = cycle[250];
+  assign \cycle.spw_tolerance  = cycle[258:251];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -22758,10 +23043,93 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.confirmation (rst, report, status, pending, setting, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire [3:0] \$12 ;
+  wire [3:0] \$13 ;
+  wire [4:0] \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  reg [3:0] \$17 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input clk;
+  wire clk;
+  reg [3:0] left = 4'h0;
+  output pending;
+  wire pending;
+  input report;
+  wire report;
+  input rst;
+  wire rst;
+  input [3:0] setting;
+  wire [3:0] setting;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  input [3:0] status;
+  wire [3:0] status;
+  assign \$1  = ! status;
+  assign \$2  = status == 4'ha;
+  assign \$3  = status == 4'hb;
+  assign \$4  = status == 4'hf;
+  assign \$5  = | { \$4 , \$3 , \$2 , \$1  };
+  assign \$6  = ~ \$5 ;
+  assign \$7  = report & \$6 ;
+  assign \$8  = status == 4'hf;
+  assign \$9  = report & \$8 ;
+  assign \$10  = ! setting;
+  assign \$11  = setting == 4'hf;
+  assign \$12  = \$11  ? 4'h0 : setting;
+  assign \$13  = \$10  ? 4'h1 : \$12 ;
+  assign \$14  = left - 1'h1;
+  assign \$15  = | left;
+  assign \$16  = setting != 4'hf;
+  assign pending = \$15  & \$16 ;
+  always @(posedge clk)
+    left <= \$17 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$17  = left;
+    if (\$7 ) begin
+      \$17  = \$13 ;
+    end else if (\$9 ) begin
+      \$17  = \$14 [3:0];
+    end
+    if (rst) begin
+      \$17  = 4'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
 , slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22848,6 +23216,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] fault_status;
   reg [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -22866,6 +23235,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \fault_status$41 ;
   output [6:0] faults;
   wire [6:0] faults;
@@ -22978,6 +23348,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -22995,6 +23366,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \status$79 ;
   input stop_bit;
   wire stop_bit;
@@ -23096,7 +23468,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     .report_frame(report_frame)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -23104,7 +23476,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -23151,7 +23523,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     waiting = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -23163,7 +23535,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -23175,7 +23547,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -23224,7 +23596,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -23273,7 +23645,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -23289,7 +23661,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -23303,7 +23675,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -23317,7 +23689,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     framing = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -23333,7 +23705,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -23364,7 +23736,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -23382,7 +23754,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     holding = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -23405,14 +23777,14 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$27  = idle;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$28  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -23503,7 +23875,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$29  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -23594,7 +23966,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$30  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -23685,7 +24057,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$31  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -23754,7 +24126,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -23793,7 +24165,7 @@ module \biss_master_axil.ch1.core.controller.cdm_hold (rst, abort, framing, hold
   assign \$1  = ~ abort;
   assign \$2  = cdm_cycle & \$1 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$7  = cdm_cycle;
     if (idle) begin
       \$7  = cdm;
@@ -23803,7 +24175,7 @@ module \biss_master_axil.ch1.core.controller.cdm_hold (rst, abort, framing, hold
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     ma_hold = 1'h0;
     if (framing) begin
       ma_hold = \$2 ;
@@ -23815,7 +24187,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -23883,6 +24255,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] status;
   reg [3:0] status;
   input watch;
@@ -23912,7 +24285,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
   always @(posedge clk)
     locked_seen <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$20  = armed;
     if (clear) begin
       \$20  = 1'h0;
@@ -23925,7 +24298,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$21  = locked_seen;
     if (clear) begin
       \$21  = 1'h0;
@@ -23938,7 +24311,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     fault = 1'h0;
     if (\$7 ) begin
       fault = 1'h1;
@@ -23951,7 +24324,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     status = 4'h0;
     if (\$7 ) begin
       status = 4'h8;
@@ -23964,7 +24337,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     delay = 1'h0;
     if (\$7 ) begin
     end else if (\$12 ) begin
@@ -23976,7 +24349,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -24010,7 +24383,7 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
   assign \$4  = first_clock ? quiet_live : quiet;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     aborted = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -24018,7 +24391,7 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     ready = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -24027,7 +24400,7 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     stuck_low = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -24037,7 +24410,7 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
@@ -24082,6 +24455,7 @@ module \biss_master_axil.ch1.core.controller.report (fault, fault_status, report
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   output [6:0] faults;
@@ -24114,6 +24488,7 @@ module \biss_master_axil.ch1.core.controller.report (fault, fault_status, report
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   assign report_delay = report_frame | delay;
   assign \$1  = fault_status == 3'h6;
@@ -24151,7 +24526,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_data, clear, events, host__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire [7:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -24907,7 +25282,7 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_da
   always @(posedge clk)
     was_busy <= \$308 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
       \$300 [0] = 1'h0;
@@ -25038,7 +25413,7 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_da
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
       \$301  = 1'h0;
@@ -25049,49 +25424,49 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_da
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$302  = { \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109  };
     if (rst) begin
       \$302  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$303  = pick;
     if (rst) begin
       \$303  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$304  = { \$148 , \$147 , \$146  };
     if (rst) begin
       \$304  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$305  = sel;
     if (rst) begin
       \$305  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$306  = update__addr;
     if (rst) begin
       \$306  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$307  = \$173 ;
     if (rst) begin
       \$307  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$308  = \$299 ;
     if (rst) begin
       \$308  = 1'h1;
@@ -25179,7 +25554,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   reg [4:0] \$1 ;
   reg \$2 ;
   input clear;
@@ -25269,14 +25644,14 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$1  = events;
     if (rst) begin
       \$1  = 5'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$2  = clear;
     if (rst) begin
       \$2  = 1'h0;
@@ -25316,114 +25691,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -25477,7 +25744,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -25531,7 +25798,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, inc, clear, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -25585,9 +25852,117 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top
 , crc_ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -26981,7 +27356,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$585  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -27005,7 +27380,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$586  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -27027,7 +27402,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$587  = slots;
     if (\$36 ) begin
       \$587  = \$37 [15:0];
@@ -27040,7 +27415,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$588  = slots_full;
     if (\$36 ) begin
       \$588  = \$38 ;
@@ -27053,7 +27428,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$589  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -27069,7 +27444,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$590  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -27085,7 +27460,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$591  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -27117,7 +27492,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$592  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -27135,7 +27510,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$593  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -27160,7 +27535,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$594  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -27185,7 +27560,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$595  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -27210,7 +27585,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$596  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
@@ -27232,7 +27607,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$597  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -27257,7 +27632,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$598  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -27285,7 +27660,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$599  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -27307,7 +27682,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$600  = data0;
     if (\$66 ) begin
       \$600  = \$344 ;
@@ -27320,7 +27695,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$601  = ne;
     if (\$345 ) begin
       \$601 [0] = 1'h1;
@@ -27340,7 +27715,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$602  = nw;
     if (\$345 ) begin
       \$602 [0] = 1'h1;
@@ -27362,7 +27737,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$603  = data1;
     if (\$356 ) begin
       \$603  = \$559 ;
@@ -27375,7 +27750,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$604  = lc;
     if (lc_load) begin
       \$604  = { lc[4:0], \bit  };
@@ -27388,7 +27763,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     \$605  = cpw_top;
     if (\$569 ) begin
       \$605  = { cpw_top[38:0], \$571  };
@@ -27401,7 +27776,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     at_cds = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -27411,7 +27786,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -27423,7 +27798,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -27433,7 +27808,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -27447,7 +27822,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -27461,7 +27836,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -27475,7 +27850,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
     casez (words[18])
       1'h0:
@@ -27485,7 +27860,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -27499,7 +27874,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -27513,7 +27888,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -27573,7 +27948,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
   reg \$11 ;
@@ -27674,7 +28049,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @(posedge clk)
     ok <= \$35 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     casez (load_index)
       1'h0:
@@ -27684,7 +28059,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -27694,7 +28069,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -27704,7 +28079,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -27714,7 +28089,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -27724,7 +28099,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -27734,7 +28109,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -27744,7 +28119,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -27754,7 +28129,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -27764,7 +28139,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$33  = \reg ;
     if (load) begin
       \$33  = \$1 ;
@@ -27781,7 +28156,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$34  = mismatch;
     if (load) begin
       \$34  = 1'h0;
@@ -27797,7 +28172,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$35  = ok;
     if (last) begin
       if (\$15 ) begin
@@ -27829,7 +28204,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -28001,56 +28376,56 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
   assign \$39  = magnitude > spread;
   assign \$40  = \$38  & \$39 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$46  = \$1 ;
     if (rst) begin
       \$46  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$47  = \$2 ;
     if (rst) begin
       \$47  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$48  = \tolerance$8 ;
     if (rst) begin
       \$48  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$49  = \$3 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$50  = \$11 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$51  = \$20 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$52  = \$25 ;
     if (rst) begin
       \$52  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$53  = 1'h0;
     if (learn) begin
       if (\$32 ) begin
@@ -28067,7 +28442,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$54  = jump;
     if (check) begin
       \$54  = \$26 ;
@@ -28080,7 +28455,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$55  = count;
     if (learn) begin
       (* full_case = 32'd1 *)
@@ -28102,7 +28477,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$56  = spread;
     if (learn) begin
       if (\$32 ) begin
@@ -28122,7 +28497,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$57  = cand;
     if (learn) begin
       if (\$32 ) begin
@@ -28135,7 +28510,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$58  = settled_delay;
     if (learn) begin
       if (\$32 ) begin
@@ -28152,7 +28527,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$59  = settled;
     if (learn) begin
       if (\$32 ) begin
@@ -28172,7 +28547,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   reg \$10 ;
   reg \$11 ;
@@ -28235,21 +28610,21 @@ module \biss_master_axil.ch1.core.line_noise (rst, sampler_noise, noisy, events,
   always @(posedge clk)
     running <= \$14 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$10  = level;
     if (rst) begin
       \$10  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$11  = \$4 ;
     if (rst) begin
       \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$12  = held_noisy;
     if (close) begin
       \$12  = \$7 ;
@@ -28259,7 +28634,7 @@ module \biss_master_axil.ch1.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$13  = held_events;
     if (close) begin
       \$13  = running;
@@ -28269,7 +28644,7 @@ module \biss_master_axil.ch1.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$14  = running;
     if (close) begin
       \$14  = { 3'h0, \event  };
@@ -28286,7 +28661,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -28411,7 +28786,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -28426,7 +28801,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -28441,7 +28816,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -28456,7 +28831,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -28485,7 +28860,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -28527,7 +28902,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -28569,7 +28944,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -28588,7 +28963,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -28624,7 +28999,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -28648,7 +29023,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -28664,7 +29039,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -28681,7 +29056,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, \started$11 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   reg [7:0] \$1 ;
   wire \$10 ;
   reg [7:0] \$11 ;
@@ -28784,7 +29159,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   always @(posedge clk)
     word1_len <= \$19 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -28798,7 +29173,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -28812,42 +29187,42 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$14  = \$3 [7:0];
     if (rst) begin
       \$14  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$15  = \$5 ;
     if (rst) begin
       \$15  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$16  = \$6 ;
     if (rst) begin
       \$16  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$17  = \started$11 ;
     if (rst) begin
       \$17  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$18  = \$10 ;
     if (rst) begin
       \$18  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     \$19  = \$13 [7:0];
     if (rst) begin
       \$19  = 8'h00;
@@ -29173,7 +29548,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -29290,21 +29665,21 @@ module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -29324,7 +29699,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -29367,7 +29742,7 @@ module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -29377,7 +29752,7 @@ module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -29393,7 +29768,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -29436,7 +29811,7 @@ module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -29460,7 +29835,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -29530,7 +29905,7 @@ module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -29540,7 +29915,7 @@ module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -29553,7 +29928,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -29625,7 +30000,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -29638,7 +30013,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -29651,7 +30026,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -29661,7 +30036,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -29686,7 +30061,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -29729,7 +30104,7 @@ module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -29754,7 +30129,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -30110,7 +30485,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -30148,7 +30523,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -30202,7 +30577,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -30299,7 +30674,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -30316,7 +30691,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -30355,7 +30730,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -30413,7 +30788,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -30480,7 +30855,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -30512,7 +30887,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -30526,7 +30901,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -30553,7 +30928,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -30573,7 +30948,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -30592,7 +30967,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -30621,7 +30996,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -30642,7 +31017,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -30664,7 +31039,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -30685,7 +31060,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -30707,7 +31082,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -30729,7 +31104,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -30753,7 +31128,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -30792,7 +31167,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [186:0] \$3 ;
@@ -30829,6 +31204,7 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -30876,6 +31252,7 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \result.status ;
   wire [31:0] \result.timestamp ;
   wire [57:0] \result.word0 ;
@@ -30901,21 +31278,21 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -30992,7 +31369,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -31277,7 +31654,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$71  = level;
     if (receiver_clear) begin
       \$71  = 1'h1;
@@ -31287,7 +31664,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$72  = mid_delay;
     if (odd) begin
       \$72  = \$8 [12:0];
@@ -31312,7 +31689,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$73  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -31339,7 +31716,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$74  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -31361,7 +31738,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$75  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -31385,7 +31762,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$76  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -31401,7 +31778,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$77  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -31427,7 +31804,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$78  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -31458,7 +31835,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$79  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -31489,7 +31866,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$80  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -31539,7 +31916,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$81  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -31589,7 +31966,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$82  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -31619,7 +31996,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$83  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -31647,7 +32024,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$84  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -31673,7 +32050,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$85  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -31696,7 +32073,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$86  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -31736,7 +32113,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -31754,7 +32131,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     clear = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -31766,7 +32143,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     dropped = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -31787,7 +32164,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -31812,7 +32189,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     centre = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -31840,7 +32217,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majority, odd, receiver_clear, vote1, vote2, clear, centre, level, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -31955,7 +32332,7 @@ module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
   always @(posedge clk)
     strobed <= \$38 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$33  = last;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -31973,7 +32350,7 @@ module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$34  = tail_odd;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -31991,7 +32368,7 @@ module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$35  = 1'h0;
@@ -32011,7 +32388,7 @@ module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$36  = 1'h0;
@@ -32031,7 +32408,7 @@ module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$37  = crowded;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -32049,7 +32426,7 @@ module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$38  = strobed;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -32092,7 +32469,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -32186,14 +32563,14 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -32207,7 +32584,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -32221,7 +32598,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -32237,8 +32614,8 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6443$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6509$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -32279,8 +32656,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6443$0 ;
-  wire \port$6443$0 ;
+  input \port$6509$0 ;
+  wire \port$6509$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -32294,9 +32671,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6443$0  };
-  assign \$2  = { lc[4:0], \port$6443$0  } == last;
-  assign \$3  = { lc[4:0], \port$6443$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6509$0  };
+  assign \$2  = { lc[4:0], \port$6509$0  } == last;
+  assign \$3  = { lc[4:0], \port$6509$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -32330,7 +32707,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -32340,7 +32717,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -32350,7 +32727,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -32360,21 +32737,21 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -32384,7 +32761,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -32394,7 +32771,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -32406,13 +32783,13 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6443$0  };
+  assign lc_next = { lc[4:0], \port$6509$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -32617,28 +32994,28 @@ module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -32648,7 +33025,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -32667,14 +33044,14 @@ module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -32688,7 +33065,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
 , delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -32868,7 +33245,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   assign \$40  = in_clock & \$39 ;
   assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$48  = slo_low_time_p1;
     if (\$2 ) begin
       \$48  = 25'h0000001;
@@ -32880,21 +33257,21 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$49  = \$9 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$50  = \$17 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$51  = high_p2;
     if (\$18 ) begin
       \$51  = 13'h0002;
@@ -32906,28 +33283,28 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$52  = \$23 ;
     if (rst) begin
       \$52  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$53  = \$30 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$54  = \$34 [24:0];
     if (rst) begin
       \$54  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$55  = 1'h0;
@@ -32939,21 +33316,21 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$57  = \$46 ;
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$58  = \$47 ;
     if (rst) begin
       \$58  = 1'h0;
@@ -32962,9 +33339,9 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4584$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
-, delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4616$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, crc_ok
+, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -32997,17 +33374,21 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4584$0 , l
   wire \$36 ;
   wire \$37 ;
   wire \$38 ;
-  wire [1:0] \$39 ;
+  wire \$39 ;
   wire \$4 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire [1:0] \$42 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [254:0] cfg;
-  wire [254:0] cfg;
+  input [258:0] cfg;
+  wire [258:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
+  wire [3:0] \cfg.confirm_frames ;
   wire [11:0] \cfg.delay_limit ;
   wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
@@ -33081,6 +33462,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4584$0 , l
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -33099,6 +33481,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4584$0 , l
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   reg [3:0] frame_status;
   output lc_check;
   wire lc_check;
@@ -33116,8 +33499,10 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4584$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$4584$0 ;
-  wire \port$4584$0 ;
+  output passed;
+  wire passed;
+  output \port$4616$0 ;
+  wire \port$4616$0 ;
   output report;
   wire report;
   input report_frame;
@@ -33142,22 +33527,25 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4584$0 , l
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] status;
   wire [3:0] status;
+  input unconfirmed;
+  wire unconfirmed;
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[195];
+  assign \$1  = ~ cfg[199];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[195] & cfg[203];
-  assign \$4  = cfg[152] | \$3 ;
+  assign \$3  = cfg[199] & cfg[207];
+  assign \$4  = cfg[156] | \$3 ;
   assign \$5  = report_frame & \$4 ;
-  assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
+  assign \$6  = cfg[156] ? crc_ok[0] : \$2 ;
   assign lc_check = \$5  & \$6 ;
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[246] & cfg[195];
+  assign \$7  = cfg[250] & cfg[199];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
@@ -33173,33 +33561,40 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4584$0 , l
   assign status = report_frame ? frame_status : fault_status;
   assign \$18  = ! frame_status;
   assign valid = report_frame & \$18 ;
-  assign \$19  = crc_ok[0] & \$2 ;
-  assign \$20  = ~ \$19 ;
-  assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[195] & cfg[203];
-  assign \$23  = cfg[152] | \$22 ;
-  assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
-  assign \$25  = \$23  & \$24 ;
-  assign \$26  = lc_repeat_seen | lc_skip_seen;
-  assign \$27  = \$26  | lc_zero_seen;
-  assign \$28  = \$25  & \$27 ;
-  assign \$29  = \$21  | \$28 ;
-  assign \$30  = \$29  | noisy;
-  assign doubtful = \$30  | delay_jump;
-  assign \$31  = crc_ok[0] & \$2 ;
-  assign \$32  = ~ spw_mismatch;
-  assign \$33  = \$31  & \$32 ;
-  assign \$34  = ~ noisy;
-  assign \$35  = \$33  & \$34 ;
-  assign \$36  = lc_repeat | lc_skip;
-  assign \$37  = \$36  | lc_zero;
-  assign \$38  = ~ \$37 ;
-  assign clean = \$35  & \$38 ;
-  assign \$39  = ~ { \$2 , crc_ok[0] };
-  assign crc_error = report_frame ? \$39  : 2'h0;
+  assign \$19  = ! frame_status;
+  assign \$20  = frame_status == 4'hf;
+  assign \$21  = \$19  | \$20 ;
+  assign passed = report_frame & \$21 ;
+  assign \$22  = crc_ok[0] & \$2 ;
+  assign \$23  = ~ \$22 ;
+  assign \$24  = \$23  | spw_mismatch;
+  assign \$25  = cfg[199] & cfg[207];
+  assign \$26  = cfg[156] | \$25 ;
+  assign \$27  = cfg[156] ? crc_ok[0] : \$2 ;
+  assign \$28  = \$26  & \$27 ;
+  assign \$29  = lc_repeat_seen | lc_skip_seen;
+  assign \$30  = \$29  | lc_zero_seen;
+  assign \$31  = \$28  & \$30 ;
+  assign \$32  = \$24  | \$31 ;
+  assign \$33  = \$32  | noisy;
+  assign doubtful = \$33  | delay_jump;
+  assign \$34  = crc_ok[0] & \$2 ;
+  assign \$35  = ~ spw_mismatch;
+  assign \$36  = \$34  & \$35 ;
+  assign \$37  = ~ noisy;
+  assign \$38  = \$36  & \$37 ;
+  assign \$39  = lc_repeat | lc_skip;
+  assign \$40  = \$39  | lc_zero;
+  assign \$41  = ~ \$40 ;
+  assign clean = \$38  & \$41 ;
+  assign \$42  = ~ { \$2 , crc_ok[0] };
+  assign crc_error = report_frame ? \$42  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     frame_status = 4'h0;
+    if (unconfirmed) begin
+      frame_status = 4'hf;
+    end
     if (delay_jump) begin
       frame_status = 4'he;
     end
@@ -33223,7 +33618,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4584$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4584$0  = \$2 ;
+  assign \port$4616$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -33234,31 +33629,32 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4584$0 , l
   assign \cfg.quiet_time  = cfg[136:125];
   assign \cfg.noise_limit  = cfg[140:137];
   assign \cfg.delay_tolerance  = cfg[144:141];
-  assign \cfg.w0  = cfg[156:145];
-  assign \cfg.w0.data_bits  = cfg[150:145];
-  assign \cfg.w0.nenw  = cfg[151];
-  assign \cfg.w0.lc  = cfg[152];
-  assign \cfg.w0.crc  = cfg[154:153];
-  assign \cfg.w0.gray  = cfg[155];
-  assign \cfg.w0.signed  = cfg[156];
-  assign \cfg.w0_crc  = cfg[194:157];
-  assign \cfg.w0_crc.width  = cfg[161:157];
-  assign \cfg.w0_crc.poly  = cfg[177:162];
-  assign \cfg.w0_crc.start  = cfg[193:178];
-  assign \cfg.w0_crc.inverted  = cfg[194];
-  assign \cfg.w1_enable  = cfg[195];
-  assign \cfg.w1  = cfg[207:196];
-  assign \cfg.w1.data_bits  = cfg[201:196];
-  assign \cfg.w1.nenw  = cfg[202];
-  assign \cfg.w1.lc  = cfg[203];
-  assign \cfg.w1.crc  = cfg[205:204];
-  assign \cfg.w1.gray  = cfg[206];
-  assign \cfg.w1.signed  = cfg[207];
-  assign \cfg.w1_crc  = cfg[245:208];
-  assign \cfg.w1_crc.width  = cfg[212:208];
-  assign \cfg.w1_crc.poly  = cfg[228:213];
-  assign \cfg.w1_crc.start  = cfg[244:229];
-  assign \cfg.w1_crc.inverted  = cfg[245];
-  assign \cfg.spw_check  = cfg[246];
-  assign \cfg.spw_tolerance  = cfg[254:247];
+  assign \cfg.confirm_frames  = cfg[148:145];
+  assign \cfg.w0  = cfg[160:149];
+  assign \cfg.w0.data_bits  = cfg[154:149];
+  assign \cfg.w0.nenw  = cfg[155];
+  assign \cfg.w0.lc  = cfg[156];
+  assign \cfg.w0.crc  = cfg[158:157];
+  assign \cfg.w0.gray  = cfg[159];
+  assign \cfg.w0.signed  = cfg[160];
+  assign \cfg.w0_crc  = cfg[198:161];
+  assign \cfg.w0_crc.width  = cfg[165:161];
+  assign \cfg.w0_crc.poly  = cfg[181:166];
+  assign \cfg.w0_crc.start  = cfg[197:182];
+  assign \cfg.w0_crc.inverted  = cfg[198];
+  assign \cfg.w1_enable  = cfg[199];
+  assign \cfg.w1  = cfg[211:200];
+  assign \cfg.w1.data_bits  = cfg[205:200];
+  assign \cfg.w1.nenw  = cfg[206];
+  assign \cfg.w1.lc  = cfg[207];
+  assign \cfg.w1.crc  = cfg[209:208];
+  assign \cfg.w1.gray  = cfg[210];
+  assign \cfg.w1.signed  = cfg[211];
+  assign \cfg.w1_crc  = cfg[249:212];
+  assign \cfg.w1_crc.width  = cfg[216:212];
+  assign \cfg.w1_crc.poly  = cfg[232:217];
+  assign \cfg.w1_crc.start  = cfg[248:233];
+  assign \cfg.w1_crc.inverted  = cfg[249];
+  assign \cfg.spw_check  = cfg[250];
+  assign \cfg.spw_tolerance  = cfg[258:251];
 endmodule

@@ -70,6 +70,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire ch0__cds;
   wire [23:0] ch0__cfg_ack_limit;
   wire [23:0] ch0__cfg_break_time;
+  wire [3:0] ch0__cfg_confirm_frames;
   wire [11:0] ch0__cfg_delay_limit;
   wire [3:0] ch0__cfg_delay_tolerance;
   wire ch0__cfg_end_check;
@@ -168,6 +169,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire ch1__cds;
   wire [23:0] ch1__cfg_ack_limit;
   wire [23:0] ch1__cfg_break_time;
+  wire [3:0] ch1__cfg_confirm_frames;
   wire [11:0] ch1__cfg_delay_limit;
   wire [3:0] ch1__cfg_delay_tolerance;
   wire ch1__cfg_end_check;
@@ -246,214 +248,216 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$415 ;
+  wire [1:0] \irq$419 ;
   wire ma;
-  wire \ma$411 ;
+  wire \ma$415 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$222 ;
+  wire \regs__abort_cycle$224 ;
   wire regs__busy;
-  wire \regs__busy$225 ;
+  wire \regs__busy$227 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$226 ;
+  wire \regs__ca_abort$228 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$228 ;
+  wire [6:0] \regs__ca_address$230 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$231 ;
+  wire \regs__ca_busy$233 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$233 ;
+  wire [6:0] \regs__ca_bytes_done$235 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$234 ;
+  wire [6:0] \regs__ca_count$236 ;
   wire regs__ca_done;
-  wire \regs__ca_done$237 ;
+  wire \regs__ca_done$239 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$238 ;
+  wire [3:0] \regs__ca_rbuf_addr$240 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$241 ;
+  wire [31:0] \regs__ca_rbuf_data$243 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$242 ;
+  wire \regs__ca_rbuf_en$244 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$244 ;
+  wire [2:0] \regs__ca_slave_id$246 ;
   wire regs__ca_start;
-  wire \regs__ca_start$246 ;
+  wire \regs__ca_start$248 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$249 ;
+  wire [2:0] \regs__ca_status$251 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$250 ;
+  wire [3:0] \regs__ca_wbuf_addr$252 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$252 ;
+  wire [31:0] \regs__ca_wbuf_data$254 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$254 ;
+  wire [3:0] \regs__ca_wbuf_en$256 ;
   wire regs__ca_write;
-  wire \regs__ca_write$256 ;
+  wire \regs__ca_write$258 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$259 ;
+  wire \regs__cap_counters$261 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$261 ;
+  wire [5:0] \regs__cap_data_bits_w0$263 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$263 ;
+  wire [5:0] \regs__cap_data_bits_w1$265 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$265 ;
+  wire \regs__cap_register_access$267 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$267 ;
+  wire [5:0] \regs__cap_timer_width$269 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$269 ;
+  wire \regs__cap_timestamp$271 ;
   wire regs__cds;
-  wire \regs__cds$271 ;
+  wire \regs__cds$273 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$272 ;
+  wire [23:0] \regs__cfg_ack_limit$274 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$274 ;
+  wire [23:0] \regs__cfg_break_time$276 ;
+  wire [3:0] regs__cfg_confirm_frames;
+  wire [3:0] \regs__cfg_confirm_frames$278 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$276 ;
+  wire [11:0] \regs__cfg_delay_limit$280 ;
   wire [3:0] regs__cfg_delay_tolerance;
-  wire [3:0] \regs__cfg_delay_tolerance$278 ;
+  wire [3:0] \regs__cfg_delay_tolerance$282 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$280 ;
+  wire \regs__cfg_end_check$284 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$282 ;
+  wire [15:0] \regs__cfg_ma_half_period$286 ;
   wire [3:0] regs__cfg_noise_limit;
-  wire [3:0] \regs__cfg_noise_limit$284 ;
+  wire [3:0] \regs__cfg_noise_limit$288 ;
   wire [11:0] regs__cfg_quiet_time;
-  wire [11:0] \regs__cfg_quiet_time$286 ;
+  wire [11:0] \regs__cfg_quiet_time$290 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$288 ;
+  wire [23:0] \regs__cfg_request_period$292 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$290 ;
+  wire \regs__cfg_spw_check$294 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$292 ;
+  wire [7:0] \regs__cfg_spw_tolerance$296 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$294 ;
+  wire [23:0] \regs__cfg_timeout_limit$298 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$296 ;
+  wire [1:0] \regs__cfg_w0_crc$300 ;
   wire regs__cfg_w0_crc_inverted;
-  wire \regs__cfg_w0_crc_inverted$298 ;
+  wire \regs__cfg_w0_crc_inverted$302 ;
   wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] \regs__cfg_w0_crc_poly$300 ;
+  wire [15:0] \regs__cfg_w0_crc_poly$304 ;
   wire [15:0] regs__cfg_w0_crc_start;
-  wire [15:0] \regs__cfg_w0_crc_start$302 ;
+  wire [15:0] \regs__cfg_w0_crc_start$306 ;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [4:0] \regs__cfg_w0_crc_width$304 ;
+  wire [4:0] \regs__cfg_w0_crc_width$308 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$306 ;
+  wire [5:0] \regs__cfg_w0_data_bits$310 ;
   wire regs__cfg_w0_gray;
-  wire \regs__cfg_w0_gray$308 ;
+  wire \regs__cfg_w0_gray$312 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$310 ;
+  wire \regs__cfg_w0_lc$314 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$312 ;
+  wire \regs__cfg_w0_nenw$316 ;
   wire regs__cfg_w0_signed;
-  wire \regs__cfg_w0_signed$314 ;
+  wire \regs__cfg_w0_signed$318 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$316 ;
+  wire [1:0] \regs__cfg_w1_crc$320 ;
   wire regs__cfg_w1_crc_inverted;
-  wire \regs__cfg_w1_crc_inverted$318 ;
+  wire \regs__cfg_w1_crc_inverted$322 ;
   wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] \regs__cfg_w1_crc_poly$320 ;
+  wire [15:0] \regs__cfg_w1_crc_poly$324 ;
   wire [15:0] regs__cfg_w1_crc_start;
-  wire [15:0] \regs__cfg_w1_crc_start$322 ;
+  wire [15:0] \regs__cfg_w1_crc_start$326 ;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [4:0] \regs__cfg_w1_crc_width$324 ;
+  wire [4:0] \regs__cfg_w1_crc_width$328 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$326 ;
+  wire [5:0] \regs__cfg_w1_data_bits$330 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$328 ;
+  wire \regs__cfg_w1_enable$332 ;
   wire regs__cfg_w1_gray;
-  wire \regs__cfg_w1_gray$330 ;
+  wire \regs__cfg_w1_gray$334 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$332 ;
+  wire \regs__cfg_w1_lc$336 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$334 ;
+  wire \regs__cfg_w1_nenw$338 ;
   wire regs__cfg_w1_signed;
-  wire \regs__cfg_w1_signed$336 ;
+  wire \regs__cfg_w1_signed$340 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$338 ;
+  wire \regs__clear_counters$342 ;
   wire regs__config_error;
-  wire \regs__config_error$341 ;
+  wire \regs__config_error$345 ;
   wire [2:0] regs__count_addr;
-  wire [2:0] \regs__count_addr$342 ;
+  wire [2:0] \regs__count_addr$346 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$345 ;
+  wire [15:0] \regs__count_ca_aborted$349 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$347 ;
+  wire [15:0] \regs__count_ca_crc4_error$351 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$349 ;
+  wire [15:0] \regs__count_ca_data_fault$353 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$351 ;
+  wire [15:0] \regs__count_ca_no_answer$355 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$353 ;
+  wire [15:0] \regs__count_ca_refused$357 ;
   wire [31:0] regs__count_data;
-  wire [31:0] \regs__count_data$355 ;
+  wire [31:0] \regs__count_data$359 ;
   wire regs__count_en;
-  wire \regs__count_en$356 ;
+  wire \regs__count_en$360 ;
   wire regs__delay_settled;
-  wire \regs__delay_settled$359 ;
+  wire \regs__delay_settled$363 ;
   wire [7:0] regs__delay_spread;
-  wire [7:0] \regs__delay_spread$361 ;
+  wire [7:0] \regs__delay_spread$365 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$363 ;
+  wire [15:0] \regs__done_count$367 ;
   wire regs__frame_done;
-  wire \regs__frame_done$365 ;
+  wire \regs__frame_done$369 ;
   wire regs__frame_error;
-  wire \regs__frame_error$367 ;
+  wire \regs__frame_error$371 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$369 ;
+  wire [5:0] \regs__lc$373 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$371 ;
+  wire \regs__lc_repeat$375 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$373 ;
+  wire \regs__lc_skip$377 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$375 ;
+  wire \regs__lc_zero$379 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$377 ;
+  wire [12:0] \regs__line_delay$381 ;
   wire [3:0] regs__noise_events;
-  wire [3:0] \regs__noise_events$379 ;
+  wire [3:0] \regs__noise_events$383 ;
   wire regs__periodic;
-  wire \regs__periodic$380 ;
+  wire \regs__periodic$384 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__r_load;
   wire [12:0] regs__settled_delay;
-  wire [12:0] \regs__settled_delay$383 ;
+  wire [12:0] \regs__settled_delay$387 ;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$385 ;
+  wire \regs__spw_mismatch$389 ;
   wire regs__start;
-  wire \regs__start$386 ;
+  wire \regs__start$390 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$389 ;
+  wire [3:0] \regs__status$393 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$391 ;
+  wire [31:0] \regs__timestamp$395 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$392 ;
+  wire \regs__trigger_enable$396 ;
   wire [10:0] regs__w_addr;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$395 ;
+  wire \regs__word0_crc_ok$399 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$397 ;
+  wire \regs__word0_ne$401 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$399 ;
+  wire \regs__word0_nw$403 ;
   wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$401 ;
+  wire [54:0] \regs__word0_position$405 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$403 ;
+  wire \regs__word1_crc_ok$407 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$405 ;
+  wire \regs__word1_ne$409 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$407 ;
+  wire \regs__word1_nw$411 ;
   wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$409 ;
+  wire [39:0] \regs__word1_position$413 ;
   input rst;
   wire rst;
   wire slo;
-  wire \slo$412 ;
+  wire \slo$416 ;
   input trigger;
   wire trigger;
-  wire \trigger$219 ;
+  wire \trigger$221 ;
   wire \trigger$28 ;
-  wire \trigger$410 ;
+  wire \trigger$414 ;
   reg trigger_in = 1'h0;
   wire uart__rx;
   wire uart__tx;
@@ -495,9 +499,10 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch0_ca_request_address(regs__ca_address),
     .ch0_ca_request_count(regs__ca_count),
     .ch0_ca_request_slave_id(regs__ca_slave_id),
-    .\ch0_ca_request_write$105 (regs__ca_write),
+    .\ch0_ca_request_write$106 (regs__ca_write),
     .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
     .ch0_cfg_break_break_time(regs__cfg_break_time),
+    .ch0_cfg_checks_confirm_frames(regs__cfg_confirm_frames),
     .ch0_cfg_checks_delay_tolerance(regs__cfg_delay_tolerance),
     .ch0_cfg_checks_end_check(regs__cfg_end_check),
     .ch0_cfg_checks_noise_limit(regs__cfg_noise_limit),
@@ -539,67 +544,68 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$242 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$254 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$244 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$256 ),
     .ch1__config_error(ch1__config_error),
     .ch1__count_data(ch1__count_data),
-    .ch1__count_en(\regs__count_en$356 ),
+    .ch1__count_en(\regs__count_en$360 ),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_done(ch1__frame_done),
     .ch1__frame_error(ch1__frame_error),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$226 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$246 ),
-    .ch1_ca_request_address(\regs__ca_address$228 ),
-    .ch1_ca_request_count(\regs__ca_count$234 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$244 ),
-    .\ch1_ca_request_write$287 (\regs__ca_write$256 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$272 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$274 ),
-    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$278 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$280 ),
-    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$284 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$290 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$292 ),
-    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$302 ),
-    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$298 ),
-    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$300 ),
-    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$304 ),
-    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$322 ),
-    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$318 ),
-    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$320 ),
-    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$324 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$276 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$282 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$288 ),
-    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$286 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$294 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$296 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$306 ),
-    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$308 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$310 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$312 ),
-    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$314 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$316 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$326 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$328 ),
-    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$330 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$332 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$334 ),
-    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$336 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$222 ),
-    .ch1_ctrl_clear_counters(\regs__clear_counters$338 ),
-    .ch1_ctrl_periodic(\regs__periodic$380 ),
-    .ch1_ctrl_start(\regs__start$386 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$392 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$228 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$248 ),
+    .ch1_ca_request_address(\regs__ca_address$230 ),
+    .ch1_ca_request_count(\regs__ca_count$236 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$246 ),
+    .\ch1_ca_request_write$289 (\regs__ca_write$258 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$274 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$276 ),
+    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$278 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$282 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$284 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$288 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$294 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$296 ),
+    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$306 ),
+    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$302 ),
+    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$304 ),
+    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$308 ),
+    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$326 ),
+    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$322 ),
+    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$324 ),
+    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$328 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$280 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$286 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$292 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$290 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$298 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$300 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$310 ),
+    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$312 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$314 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$316 ),
+    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$318 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$320 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$330 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$332 ),
+    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$334 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$336 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$338 ),
+    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$340 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$224 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$342 ),
+    .ch1_ctrl_periodic(\regs__periodic$384 ),
+    .ch1_ctrl_start(\regs__start$390 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$396 ),
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6765$0 (\$8 ),
-    .\port$6778$0 (\$9 ),
-    .\port$6855$0 (\$10 ),
-    .\port$7288$0 (\$11 ),
-    .\port$7301$0 (\$12 ),
-    .\port$7378$0 (\$13 ),
+    .\port$6831$0 (\$8 ),
+    .\port$6844$0 (\$9 ),
+    .\port$6921$0 (\$10 ),
+    .\port$7358$0 (\$11 ),
+    .\port$7371$0 (\$12 ),
+    .\port$7448$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -630,6 +636,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ca_write(regs__ca_write),
     .cfg_ack_limit(regs__cfg_ack_limit),
     .cfg_break_time(regs__cfg_break_time),
+    .cfg_confirm_frames(regs__cfg_confirm_frames),
     .cfg_delay_limit(regs__cfg_delay_limit),
     .cfg_delay_tolerance(regs__cfg_delay_tolerance),
     .cfg_end_check(regs__cfg_end_check),
@@ -666,9 +673,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6765$0 (\$8 ),
-    .\port$6778$0 (\$9 ),
-    .\port$6855$0 (\$10 ),
+    .\port$6831$0 (\$8 ),
+    .\port$6844$0 (\$9 ),
+    .\port$6921$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -683,62 +690,63 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$182 (\trigger$28 )
+    .\trigger$184 (\trigger$28 )
   );
   \biss_master_uart.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$226 ),
-    .ca_address(\regs__ca_address$228 ),
-    .ca_count(\regs__ca_count$234 ),
+    .ca_abort(\regs__ca_abort$228 ),
+    .ca_address(\regs__ca_address$230 ),
+    .ca_count(\regs__ca_count$236 ),
     .ca_rbuf_addr(bus__r_addr[3:0]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$242 ),
-    .ca_slave_id(\regs__ca_slave_id$244 ),
-    .ca_start(\regs__ca_start$246 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$244 ),
+    .ca_slave_id(\regs__ca_slave_id$246 ),
+    .ca_start(\regs__ca_start$248 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$254 ),
-    .ca_write(\regs__ca_write$256 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$272 ),
-    .cfg_break_time(\regs__cfg_break_time$274 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$276 ),
-    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$278 ),
-    .cfg_end_check(\regs__cfg_end_check$280 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$282 ),
-    .cfg_noise_limit(\regs__cfg_noise_limit$284 ),
-    .cfg_quiet_time(\regs__cfg_quiet_time$286 ),
-    .cfg_request_period(\regs__cfg_request_period$288 ),
-    .cfg_spw_check(\regs__cfg_spw_check$290 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$292 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$294 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$296 ),
-    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$298 ),
-    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$300 ),
-    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$302 ),
-    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$304 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$306 ),
-    .cfg_w0_gray(\regs__cfg_w0_gray$308 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$310 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$312 ),
-    .cfg_w0_signed(\regs__cfg_w0_signed$314 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$316 ),
-    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$318 ),
-    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$320 ),
-    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$322 ),
-    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$324 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$326 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$328 ),
-    .cfg_w1_gray(\regs__cfg_w1_gray$330 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$332 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$334 ),
-    .cfg_w1_signed(\regs__cfg_w1_signed$336 ),
-    .clear_counters(\regs__clear_counters$338 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$256 ),
+    .ca_write(\regs__ca_write$258 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$274 ),
+    .cfg_break_time(\regs__cfg_break_time$276 ),
+    .cfg_confirm_frames(\regs__cfg_confirm_frames$278 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$280 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$282 ),
+    .cfg_end_check(\regs__cfg_end_check$284 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$286 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$288 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$290 ),
+    .cfg_request_period(\regs__cfg_request_period$292 ),
+    .cfg_spw_check(\regs__cfg_spw_check$294 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$296 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$298 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$300 ),
+    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$302 ),
+    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$304 ),
+    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$306 ),
+    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$308 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$310 ),
+    .cfg_w0_gray(\regs__cfg_w0_gray$312 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$314 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$316 ),
+    .cfg_w0_signed(\regs__cfg_w0_signed$318 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$320 ),
+    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$322 ),
+    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$324 ),
+    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$326 ),
+    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$328 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$330 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$332 ),
+    .cfg_w1_gray(\regs__cfg_w1_gray$334 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$336 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$338 ),
+    .cfg_w1_signed(\regs__cfg_w1_signed$340 ),
+    .clear_counters(\regs__clear_counters$342 ),
     .clk(clk),
-    .count_en(\regs__count_en$356 ),
+    .count_en(\regs__count_en$360 ),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$380 ),
-    .\port$7288$0 (\$11 ),
-    .\port$7301$0 (\$12 ),
-    .\port$7378$0 (\$13 ),
-    .regs__abort_cycle(\regs__abort_cycle$222 ),
+    .periodic(\regs__periodic$384 ),
+    .\port$7358$0 (\$11 ),
+    .\port$7371$0 (\$12 ),
+    .\port$7448$0 (\$13 ),
+    .regs__abort_cycle(\regs__abort_cycle$224 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -748,11 +756,11 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .regs__done_count(ch1__done_count),
     .regs__frame_done(ch1__frame_done),
     .regs__frame_error(ch1__frame_error),
-    .regs__trigger_enable(\regs__trigger_enable$392 ),
+    .regs__trigger_enable(\regs__trigger_enable$396 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$386 ),
-    .\trigger$182 (\trigger$28 )
+    .start(\regs__start$390 ),
+    .\trigger$184 (\trigger$28 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
@@ -816,6 +824,7 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign regs__cds = \$8 [49];
   assign ch0__cfg_ack_limit = regs__cfg_ack_limit;
   assign ch0__cfg_break_time = regs__cfg_break_time;
+  assign ch0__cfg_confirm_frames = regs__cfg_confirm_frames;
   assign ch0__cfg_delay_limit = regs__cfg_delay_limit;
   assign ch0__cfg_delay_tolerance = regs__cfg_delay_tolerance;
   assign ch0__cfg_end_check = regs__cfg_end_check;
@@ -909,157 +918,158 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
   assign regs__word1_nw = \$8 [175];
   assign ch0__word1_position = \$8 [173:134];
   assign regs__word1_position = \$8 [173:134];
-  assign \trigger$219  = \trigger$28 ;
+  assign \trigger$221  = \trigger$28 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign ch1__abort_cycle = \regs__abort_cycle$222 ;
-  assign \regs__busy$225  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$226 ;
-  assign ch1__ca_address = \regs__ca_address$228 ;
-  assign \regs__ca_busy$231  = ch1__ca_busy;
+  assign ch1__abort_cycle = \regs__abort_cycle$224 ;
+  assign \regs__busy$227  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$228 ;
+  assign ch1__ca_address = \regs__ca_address$230 ;
+  assign \regs__ca_busy$233  = ch1__ca_busy;
   assign ch1__ca_bytes_done = \$13 [9:3];
-  assign \regs__ca_bytes_done$233  = \$13 [9:3];
-  assign ch1__ca_count = \regs__ca_count$234 ;
-  assign \regs__ca_done$237  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$238  = bus__r_addr[3:0];
+  assign \regs__ca_bytes_done$235  = \$13 [9:3];
+  assign ch1__ca_count = \regs__ca_count$236 ;
+  assign \regs__ca_done$239  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$240  = bus__r_addr[3:0];
   assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
-  assign \regs__ca_rbuf_data$241  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$242 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$244 ;
-  assign ch1__ca_start = \regs__ca_start$246 ;
+  assign \regs__ca_rbuf_data$243  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$244 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$246 ;
+  assign ch1__ca_start = \regs__ca_start$248 ;
   assign ch1__ca_status = \$13 [2:0];
-  assign \regs__ca_status$249  = \$13 [2:0];
-  assign \regs__ca_wbuf_addr$250  = regs__ca_wbuf_addr;
+  assign \regs__ca_status$251  = \$13 [2:0];
+  assign \regs__ca_wbuf_addr$252  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$252  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$254  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$254 ;
-  assign ch1__ca_write = \regs__ca_write$256 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$256 ;
+  assign ch1__ca_write = \regs__ca_write$258 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$259  = 1'h1;
+  assign \regs__cap_counters$261  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$261  = 6'h37;
+  assign \regs__cap_data_bits_w0$263  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$263  = 6'h28;
+  assign \regs__cap_data_bits_w1$265  = 6'h28;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$265  = 1'h1;
+  assign \regs__cap_register_access$267  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$267  = 6'h18;
+  assign \regs__cap_timer_width$269  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$269  = 1'h1;
+  assign \regs__cap_timestamp$271  = 1'h1;
   assign ch1__cds = \$11 [49];
-  assign \regs__cds$271  = \$11 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$272 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$274 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$276 ;
-  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$278 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$280 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$282 ;
-  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$284 ;
-  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$286 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$288 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$290 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$292 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$294 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$296 ;
-  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$298 ;
-  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$300 ;
-  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$302 ;
-  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$304 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$306 ;
-  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$308 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$310 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$312 ;
-  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$314 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$316 ;
-  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$318 ;
-  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$320 ;
-  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$322 ;
-  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$324 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$326 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$328 ;
-  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$330 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$332 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$334 ;
-  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$336 ;
-  assign ch1__clear_counters = \regs__clear_counters$338 ;
-  assign \regs__config_error$341  = ch1__config_error;
-  assign \regs__count_addr$342  = bus__r_addr[2:0];
+  assign \regs__cds$273  = \$11 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$274 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$276 ;
+  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$278 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$280 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$282 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$284 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$286 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$288 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$290 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$292 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$294 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$296 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$298 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$300 ;
+  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$302 ;
+  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$304 ;
+  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$306 ;
+  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$308 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$310 ;
+  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$312 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$314 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$316 ;
+  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$318 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$320 ;
+  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$322 ;
+  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$324 ;
+  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$326 ;
+  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$328 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$330 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$332 ;
+  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$334 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$336 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$338 ;
+  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$340 ;
+  assign ch1__clear_counters = \regs__clear_counters$342 ;
+  assign \regs__config_error$345  = ch1__config_error;
+  assign \regs__count_addr$346  = bus__r_addr[2:0];
   assign ch1__count_addr = bus__r_addr[2:0];
   assign ch1__count_ca_aborted = \$12 [63:48];
-  assign \regs__count_ca_aborted$345  = \$12 [63:48];
+  assign \regs__count_ca_aborted$349  = \$12 [63:48];
   assign ch1__count_ca_crc4_error = \$12 [15:0];
-  assign \regs__count_ca_crc4_error$347  = \$12 [15:0];
+  assign \regs__count_ca_crc4_error$351  = \$12 [15:0];
   assign ch1__count_ca_data_fault = \$12 [79:64];
-  assign \regs__count_ca_data_fault$349  = \$12 [79:64];
+  assign \regs__count_ca_data_fault$353  = \$12 [79:64];
   assign ch1__count_ca_no_answer = \$12 [31:16];
-  assign \regs__count_ca_no_answer$351  = \$12 [31:16];
+  assign \regs__count_ca_no_answer$355  = \$12 [31:16];
   assign ch1__count_ca_refused = \$12 [47:32];
-  assign \regs__count_ca_refused$353  = \$12 [47:32];
-  assign \regs__count_data$355  = ch1__count_data;
-  assign ch1__count_en = \regs__count_en$356 ;
+  assign \regs__count_ca_refused$357  = \$12 [47:32];
+  assign \regs__count_data$359  = ch1__count_data;
+  assign ch1__count_en = \regs__count_en$360 ;
   assign ch1__delay_settled = \$11 [54];
-  assign \regs__delay_settled$359  = \$11 [54];
+  assign \regs__delay_settled$363  = \$11 [54];
   assign ch1__delay_spread = \$11 [75:68];
-  assign \regs__delay_spread$361  = \$11 [75:68];
-  assign \regs__done_count$363  = ch1__done_count;
-  assign \regs__frame_done$365  = ch1__frame_done;
-  assign \regs__frame_error$367  = ch1__frame_error;
+  assign \regs__delay_spread$365  = \$11 [75:68];
+  assign \regs__done_count$367  = ch1__done_count;
+  assign \regs__frame_done$369  = ch1__frame_done;
+  assign \regs__frame_error$371  = ch1__frame_error;
   assign ch1__lc = \$11 [182:177];
-  assign \regs__lc$369  = \$11 [182:177];
+  assign \regs__lc$373  = \$11 [182:177];
   assign ch1__lc_repeat = \$11 [183];
-  assign \regs__lc_repeat$371  = \$11 [183];
+  assign \regs__lc_repeat$375  = \$11 [183];
   assign ch1__lc_skip = \$11 [184];
-  assign \regs__lc_skip$373  = \$11 [184];
+  assign \regs__lc_skip$377  = \$11 [184];
   assign ch1__lc_zero = \$11 [185];
-  assign \regs__lc_zero$375  = \$11 [185];
+  assign \regs__lc_zero$379  = \$11 [185];
   assign ch1__line_delay = \$11 [48:36];
-  assign \regs__line_delay$377  = \$11 [48:36];
+  assign \regs__line_delay$381  = \$11 [48:36];
   assign ch1__noise_events = \$11 [53:50];
-  assign \regs__noise_events$379  = \$11 [53:50];
-  assign ch1__periodic = \regs__periodic$380 ;
+  assign \regs__noise_events$383  = \$11 [53:50];
+  assign ch1__periodic = \regs__periodic$384 ;
   assign ch1__settled_delay = \$11 [67:55];
-  assign \regs__settled_delay$383  = \$11 [67:55];
+  assign \regs__settled_delay$387  = \$11 [67:55];
   assign ch1__spw_mismatch = \$11 [186];
-  assign \regs__spw_mismatch$385  = \$11 [186];
-  assign ch1__start = \regs__start$386 ;
+  assign \regs__spw_mismatch$389  = \$11 [186];
+  assign ch1__start = \regs__start$390 ;
   assign ch1__status = \$11 [3:0];
-  assign \regs__status$389  = \$11 [3:0];
+  assign \regs__status$393  = \$11 [3:0];
   assign ch1__timestamp = \$11 [35:4];
-  assign \regs__timestamp$391  = \$11 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$392 ;
+  assign \regs__timestamp$395  = \$11 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$396 ;
   assign ch1__word0_crc_ok = \$11 [133];
-  assign \regs__word0_crc_ok$395  = \$11 [133];
+  assign \regs__word0_crc_ok$399  = \$11 [133];
   assign ch1__word0_ne = \$11 [131];
-  assign \regs__word0_ne$397  = \$11 [131];
+  assign \regs__word0_ne$401  = \$11 [131];
   assign ch1__word0_nw = \$11 [132];
-  assign \regs__word0_nw$399  = \$11 [132];
+  assign \regs__word0_nw$403  = \$11 [132];
   assign ch1__word0_position = \$11 [130:76];
-  assign \regs__word0_position$401  = \$11 [130:76];
+  assign \regs__word0_position$405  = \$11 [130:76];
   assign ch1__word1_crc_ok = \$11 [176];
-  assign \regs__word1_crc_ok$403  = \$11 [176];
+  assign \regs__word1_crc_ok$407  = \$11 [176];
   assign ch1__word1_ne = \$11 [174];
-  assign \regs__word1_ne$405  = \$11 [174];
+  assign \regs__word1_ne$409  = \$11 [174];
   assign ch1__word1_nw = \$11 [175];
-  assign \regs__word1_nw$407  = \$11 [175];
+  assign \regs__word1_nw$411  = \$11 [175];
   assign ch1__word1_position = \$11 [173:134];
-  assign \regs__word1_position$409  = \$11 [173:134];
-  assign \trigger$410  = \trigger$28 ;
-  assign \ma$411  = ch1_ma;
-  assign \slo$412  = ch1_slo;
+  assign \regs__word1_position$413  = \$11 [173:134];
+  assign \trigger$414  = \trigger$28 ;
+  assign \ma$415  = ch1_ma;
+  assign \slo$416  = ch1_slo;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$7 , \$6  };
-  assign \irq$415  = { \$7 , \$6  };
+  assign \irq$419  = { \$7 , \$6  };
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__count_en, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__count_data, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error, ch1__busy, ch1__config_error, ch1__count_data, ch1__ca_busy
 , ch1__ca_rbuf_data, bus__w_en, bus__r_en, bus__r_load, bus__w_addr, bus__w_data, bus__r_addr, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit
-, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width
-, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$105 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time
-, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_quiet_quiet_time
-, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$287 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6765$0 , \port$6778$0 , ch0__ca_done, \port$6855$0 , ch1__frame_done
-, ch1__done_count, \port$7288$0 , \port$7301$0 , ch1__ca_done, \port$7378$0 , clk);
+, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly
+, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$106 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period
+, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance
+, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$289 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6831$0 , \port$6844$0 , ch0__ca_done
+, \port$6921$0 , ch1__frame_done, ch1__done_count, \port$7358$0 , \port$7371$0 , ch1__ca_done, \port$7448$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -1092,7 +1102,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$124 ;
   wire \$125 ;
   wire \$126 ;
-  wire [31:0] \$127 ;
+  wire \$127 ;
   wire [31:0] \$128 ;
   wire [31:0] \$129 ;
   wire [31:0] \$13 ;
@@ -1165,7 +1175,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire [31:0] \$190 ;
   wire [31:0] \$191 ;
   wire [31:0] \$192 ;
-  wire \$193 ;
+  wire [31:0] \$193 ;
   wire \$194 ;
   wire \$195 ;
   wire \$196 ;
@@ -1287,8 +1297,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$30 ;
   wire \$300 ;
   wire \$301 ;
-  wire [31:0] \$302 ;
-  wire [31:0] \$303 ;
+  wire \$302 ;
+  wire \$303 ;
   wire [31:0] \$304 ;
   wire [31:0] \$305 ;
   wire [31:0] \$306 ;
@@ -1359,8 +1369,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire [31:0] \$365 ;
   wire [31:0] \$366 ;
   wire [31:0] \$367 ;
-  wire \$368 ;
-  wire \$369 ;
+  wire [31:0] \$368 ;
+  wire [31:0] \$369 ;
   wire \$37 ;
   wire \$370 ;
   wire \$371 ;
@@ -1456,25 +1466,25 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire \$452 ;
   wire \$453 ;
   wire \$454 ;
-  wire [31:0] \$455 ;
-  wire [31:0] \$456 ;
-  reg \$457 ;
-  reg [10:0] \$458 ;
-  reg [31:0] \$459 ;
+  wire \$455 ;
+  wire \$456 ;
+  wire [31:0] \$457 ;
+  wire [31:0] \$458 ;
+  reg \$459 ;
   wire \$46 ;
-  reg [3:0] \$460 ;
+  reg [10:0] \$460 ;
   reg [31:0] \$461 ;
   reg [3:0] \$462 ;
-  reg \$463 ;
-  reg \$464 ;
+  reg [31:0] \$463 ;
+  reg [3:0] \$464 ;
   reg \$465 ;
   reg \$466 ;
   reg \$467 ;
   reg \$468 ;
-  reg [31:0] \$469 ;
+  reg \$469 ;
   wire \$47 ;
   reg \$470 ;
-  reg \$471 ;
+  reg [31:0] \$471 ;
   reg \$472 ;
   reg \$473 ;
   reg \$474 ;
@@ -1487,10 +1497,10 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg \$480 ;
   reg \$481 ;
   reg \$482 ;
-  reg [15:0] \$483 ;
-  reg [11:0] \$484 ;
-  reg \$485 ;
-  reg [23:0] \$486 ;
+  reg \$483 ;
+  reg \$484 ;
+  reg [15:0] \$485 ;
+  reg [11:0] \$486 ;
   reg \$487 ;
   reg [23:0] \$488 ;
   reg \$489 ;
@@ -1499,51 +1509,51 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg \$491 ;
   reg [23:0] \$492 ;
   reg \$493 ;
-  reg [5:0] \$494 ;
+  reg [23:0] \$494 ;
   reg \$495 ;
-  reg \$496 ;
-  reg [1:0] \$497 ;
+  reg [5:0] \$496 ;
+  reg \$497 ;
   reg \$498 ;
-  reg \$499 ;
+  reg [1:0] \$499 ;
   wire \$5 ;
   wire \$50 ;
-  reg [5:0] \$500 ;
+  reg \$500 ;
   reg \$501 ;
-  reg \$502 ;
-  reg [1:0] \$503 ;
+  reg [5:0] \$502 ;
+  reg \$503 ;
   reg \$504 ;
-  reg \$505 ;
+  reg [1:0] \$505 ;
   reg \$506 ;
   reg \$507 ;
   reg \$508 ;
   reg \$509 ;
   wire \$51 ;
-  reg [7:0] \$510 ;
-  reg [3:0] \$511 ;
-  reg [3:0] \$512 ;
-  reg \$513 ;
-  reg [11:0] \$514 ;
-  reg \$515 ;
-  reg [15:0] \$516 ;
-  reg [4:0] \$517 ;
+  reg \$510 ;
+  reg \$511 ;
+  reg [7:0] \$512 ;
+  reg [3:0] \$513 ;
+  reg [3:0] \$514 ;
+  reg [3:0] \$515 ;
+  reg \$516 ;
+  reg [11:0] \$517 ;
   reg \$518 ;
-  reg \$519 ;
+  reg [15:0] \$519 ;
   wire \$52 ;
-  reg [15:0] \$520 ;
+  reg [4:0] \$520 ;
   reg \$521 ;
-  reg [15:0] \$522 ;
-  reg [4:0] \$523 ;
+  reg \$522 ;
+  reg [15:0] \$523 ;
   reg \$524 ;
-  reg \$525 ;
-  reg [15:0] \$526 ;
+  reg [15:0] \$525 ;
+  reg [4:0] \$526 ;
   reg \$527 ;
-  reg [2:0] \$528 ;
-  reg [6:0] \$529 ;
+  reg \$528 ;
+  reg [15:0] \$529 ;
   wire \$53 ;
-  reg [6:0] \$530 ;
-  reg \$531 ;
-  reg \$532 ;
-  reg \$533 ;
+  reg \$530 ;
+  reg [2:0] \$531 ;
+  reg [6:0] \$532 ;
+  reg [6:0] \$533 ;
   reg \$534 ;
   reg \$535 ;
   reg \$536 ;
@@ -1578,10 +1588,10 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg \$562 ;
   reg \$563 ;
   reg \$564 ;
-  reg [3:0] \$565 ;
+  reg \$565 ;
   reg \$566 ;
   reg \$567 ;
-  reg \$568 ;
+  reg [3:0] \$568 ;
   reg \$569 ;
   wire \$57 ;
   reg \$570 ;
@@ -1591,26 +1601,26 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg \$574 ;
   reg \$575 ;
   reg \$576 ;
-  reg [5:0] \$577 ;
-  reg [15:0] \$578 ;
-  reg [12:0] \$579 ;
+  reg \$577 ;
+  reg \$578 ;
+  reg \$579 ;
   wire \$58 ;
-  reg [31:0] \$580 ;
-  reg [22:0] \$581 ;
-  reg [31:0] \$582 ;
-  reg [7:0] \$583 ;
-  reg [31:0] \$584 ;
-  reg [3:0] \$585 ;
-  reg \$586 ;
-  reg [7:0] \$587 ;
-  reg [12:0] \$588 ;
+  reg [5:0] \$580 ;
+  reg [15:0] \$581 ;
+  reg [12:0] \$582 ;
+  reg [31:0] \$583 ;
+  reg [22:0] \$584 ;
+  reg [31:0] \$585 ;
+  reg [7:0] \$586 ;
+  reg [31:0] \$587 ;
+  reg [3:0] \$588 ;
   reg \$589 ;
   wire \$59 ;
-  reg \$590 ;
-  reg [31:0] \$591 ;
+  reg [7:0] \$590 ;
+  reg [12:0] \$591 ;
   reg \$592 ;
   reg \$593 ;
-  reg \$594 ;
+  reg [31:0] \$594 ;
   reg \$595 ;
   reg \$596 ;
   reg \$597 ;
@@ -1623,63 +1633,63 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg \$602 ;
   reg \$603 ;
   reg \$604 ;
-  reg [15:0] \$605 ;
-  reg [11:0] \$606 ;
+  reg \$605 ;
+  reg \$606 ;
   reg \$607 ;
-  reg [23:0] \$608 ;
-  reg \$609 ;
+  reg [15:0] \$608 ;
+  reg [11:0] \$609 ;
   wire \$61 ;
-  reg [23:0] \$610 ;
-  reg \$611 ;
-  reg [23:0] \$612 ;
-  reg \$613 ;
-  reg [23:0] \$614 ;
-  reg \$615 ;
-  reg [5:0] \$616 ;
-  reg \$617 ;
+  reg \$610 ;
+  reg [23:0] \$611 ;
+  reg \$612 ;
+  reg [23:0] \$613 ;
+  reg \$614 ;
+  reg [23:0] \$615 ;
+  reg \$616 ;
+  reg [23:0] \$617 ;
   reg \$618 ;
-  reg [1:0] \$619 ;
+  reg [5:0] \$619 ;
   wire \$62 ;
   reg \$620 ;
   reg \$621 ;
-  reg [5:0] \$622 ;
+  reg [1:0] \$622 ;
   reg \$623 ;
   reg \$624 ;
-  reg [1:0] \$625 ;
+  reg [5:0] \$625 ;
   reg \$626 ;
   reg \$627 ;
-  reg \$628 ;
+  reg [1:0] \$628 ;
   reg \$629 ;
   wire \$63 ;
   reg \$630 ;
   reg \$631 ;
-  reg [7:0] \$632 ;
-  reg [3:0] \$633 ;
-  reg [3:0] \$634 ;
-  reg \$635 ;
-  reg [11:0] \$636 ;
-  reg \$637 ;
-  reg [15:0] \$638 ;
-  reg [4:0] \$639 ;
+  reg \$632 ;
+  reg \$633 ;
+  reg \$634 ;
+  reg [7:0] \$635 ;
+  reg [3:0] \$636 ;
+  reg [3:0] \$637 ;
+  reg [3:0] \$638 ;
+  reg \$639 ;
   wire \$64 ;
-  reg \$640 ;
+  reg [11:0] \$640 ;
   reg \$641 ;
   reg [15:0] \$642 ;
-  reg \$643 ;
-  reg [15:0] \$644 ;
-  reg [4:0] \$645 ;
-  reg \$646 ;
+  reg [4:0] \$643 ;
+  reg \$644 ;
+  reg \$645 ;
+  reg [15:0] \$646 ;
   reg \$647 ;
   reg [15:0] \$648 ;
-  reg \$649 ;
+  reg [4:0] \$649 ;
   wire \$65 ;
-  reg [2:0] \$650 ;
-  reg [6:0] \$651 ;
-  reg [6:0] \$652 ;
+  reg \$650 ;
+  reg \$651 ;
+  reg [15:0] \$652 ;
   reg \$653 ;
-  reg \$654 ;
-  reg \$655 ;
-  reg \$656 ;
+  reg [2:0] \$654 ;
+  reg [6:0] \$655 ;
+  reg [6:0] \$656 ;
   reg \$657 ;
   reg \$658 ;
   reg \$659 ;
@@ -1713,12 +1723,12 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg \$684 ;
   reg \$685 ;
   reg \$686 ;
-  reg [3:0] \$687 ;
+  reg \$687 ;
   reg \$688 ;
   reg \$689 ;
   wire \$69 ;
   reg \$690 ;
-  reg \$691 ;
+  reg [3:0] \$691 ;
   reg \$692 ;
   reg \$693 ;
   reg \$694 ;
@@ -1726,24 +1736,28 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg \$696 ;
   reg \$697 ;
   reg \$698 ;
-  reg [5:0] \$699 ;
+  reg \$699 ;
   wire \$7 ;
   wire \$70 ;
-  reg [15:0] \$700 ;
-  reg [12:0] \$701 ;
-  reg [31:0] \$702 ;
-  reg [22:0] \$703 ;
-  reg [31:0] \$704 ;
-  reg [7:0] \$705 ;
+  reg \$700 ;
+  reg \$701 ;
+  reg \$702 ;
+  reg [5:0] \$703 ;
+  reg [15:0] \$704 ;
+  reg [12:0] \$705 ;
   reg [31:0] \$706 ;
-  reg [3:0] \$707 ;
-  reg \$708 ;
+  reg [22:0] \$707 ;
+  reg [31:0] \$708 ;
   reg [7:0] \$709 ;
   wire \$71 ;
-  reg [12:0] \$710 ;
-  reg \$711 ;
+  reg [31:0] \$710 ;
+  reg [3:0] \$711 ;
   reg \$712 ;
-  reg [31:0] \$713 ;
+  reg [7:0] \$713 ;
+  reg [12:0] \$714 ;
+  reg \$715 ;
+  reg \$716 ;
+  reg [31:0] \$717 ;
   wire \$72 ;
   wire \$73 ;
   wire \$74 ;
@@ -1833,6 +1847,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire [23:0] ch0__cfg_ack_limit;
   (* init = 24'h000000 *)
   wire [23:0] ch0__cfg_break_time;
+  (* init = 4'h0 *)
+  wire [3:0] ch0__cfg_confirm_frames;
   (* init = 12'h000 *)
   wire [11:0] ch0__cfg_delay_limit;
   (* init = 4'h0 *)
@@ -1957,8 +1973,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   output [2:0] ch0_ca_request_slave_id;
   reg [2:0] ch0_ca_request_slave_id = 3'h0;
   wire ch0_ca_request_write;
-  output \ch0_ca_request_write$105 ;
-  reg \ch0_ca_request_write$105  = 1'h0;
+  output \ch0_ca_request_write$106 ;
+  reg \ch0_ca_request_write$106  = 1'h0;
   wire ch0_ca_state_write;
   wire ch0_caps_write;
   output [23:0] ch0_cfg_ack_ack_limit;
@@ -1970,6 +1986,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg ch0_cfg_break_config_write = 1'h0;
   wire ch0_cfg_break_write;
   reg ch0_cfg_checks_config_write = 1'h0;
+  output [3:0] ch0_cfg_checks_confirm_frames;
+  reg [3:0] ch0_cfg_checks_confirm_frames = 4'h0;
   output [3:0] ch0_cfg_checks_delay_tolerance;
   reg [3:0] ch0_cfg_checks_delay_tolerance = 4'h0;
   output ch0_cfg_checks_end_check;
@@ -2183,6 +2201,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   wire [23:0] ch1__cfg_ack_limit;
   (* init = 24'h000000 *)
   wire [23:0] ch1__cfg_break_time;
+  (* init = 4'h0 *)
+  wire [3:0] ch1__cfg_confirm_frames;
   (* init = 12'h000 *)
   wire [11:0] ch1__cfg_delay_limit;
   (* init = 4'h0 *)
@@ -2307,8 +2327,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$287 ;
-  reg \ch1_ca_request_write$287  = 1'h0;
+  output \ch1_ca_request_write$289 ;
+  reg \ch1_ca_request_write$289  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_write;
   output [23:0] ch1_cfg_ack_ack_limit;
@@ -2320,6 +2340,8 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg ch1_cfg_break_config_write = 1'h0;
   wire ch1_cfg_break_write;
   reg ch1_cfg_checks_config_write = 1'h0;
+  output [3:0] ch1_cfg_checks_confirm_frames;
+  reg [3:0] ch1_cfg_checks_confirm_frames = 4'h0;
   output [3:0] ch1_cfg_checks_delay_tolerance;
   reg [3:0] ch1_cfg_checks_delay_tolerance = 4'h0;
   output ch1_cfg_checks_end_check;
@@ -2513,18 +2535,18 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6765$0 ;
-  wire [186:0] \port$6765$0 ;
-  input [79:0] \port$6778$0 ;
-  wire [79:0] \port$6778$0 ;
-  input [9:0] \port$6855$0 ;
-  wire [9:0] \port$6855$0 ;
-  input [186:0] \port$7288$0 ;
-  wire [186:0] \port$7288$0 ;
-  input [79:0] \port$7301$0 ;
-  wire [79:0] \port$7301$0 ;
-  input [9:0] \port$7378$0 ;
-  wire [9:0] \port$7378$0 ;
+  input [186:0] \port$6831$0 ;
+  wire [186:0] \port$6831$0 ;
+  input [79:0] \port$6844$0 ;
+  wire [79:0] \port$6844$0 ;
+  input [9:0] \port$6921$0 ;
+  wire [9:0] \port$6921$0 ;
+  input [186:0] \port$7358$0 ;
+  wire [186:0] \port$7358$0 ;
+  input [79:0] \port$7371$0 ;
+  wire [79:0] \port$7371$0 ;
+  input [9:0] \port$7448$0 ;
+  wire [9:0] \port$7448$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2532,756 +2554,766 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   reg [31:0] write_data = 32'd0;
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
-  assign \$287  = bus__r_addr == 9'h120;
-  assign \$288  = bus__r_addr == 9'h121;
-  assign \$289  = bus__r_addr == 9'h122;
-  assign \$290  = bus__r_addr == 9'h123;
-  assign \$291  = bus__r_addr == 9'h140;
-  assign \$292  = bus__r_addr == 9'h141;
-  assign \$293  = bus__r_addr == 9'h142;
-  assign \$294  = bus__r_addr == 9'h143;
-  assign \$295  = bus__r_addr == 9'h144;
-  assign \$296  = bus__r_addr == 9'h145;
-  assign \$297  = ch1_read_select_110 & bus__r_load;
-  assign \$298  = bus__r_addr[10:3] == 6'h23;
-  assign \$299  = bus__r_en & \$298 ;
-  assign \$300  = bus__r_addr[10:4] == 5'h16;
+  assign \$283  = bus__r_addr == 9'h112;
+  assign \$284  = bus__r_addr == 9'h113;
+  assign \$285  = bus__r_addr == 9'h114;
+  assign \$286  = bus__r_addr == 9'h115;
+  assign \$287  = bus__r_addr == 9'h116;
+  assign \$288  = bus__r_addr == 9'h117;
+  assign \$289  = bus__r_addr == 9'h120;
+  assign \$290  = bus__r_addr == 9'h121;
+  assign \$291  = bus__r_addr == 9'h122;
+  assign \$292  = bus__r_addr == 9'h123;
+  assign \$293  = bus__r_addr == 9'h140;
+  assign \$294  = bus__r_addr == 9'h141;
+  assign \$295  = bus__r_addr == 9'h142;
+  assign \$296  = bus__r_addr == 9'h143;
+  assign \$297  = bus__r_addr == 9'h144;
+  assign \$298  = bus__r_addr == 9'h145;
+  assign \$299  = ch1_read_select_110 & bus__r_load;
+  assign \$300  = bus__r_addr[10:3] == 6'h23;
   assign \$301  = bus__r_en & \$300 ;
-  assign \$302  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$304  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$305  = \$303  | \$304 ;
-  assign \$306  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
+  assign \$302  = bus__r_addr[10:4] == 5'h16;
+  assign \$303  = bus__r_en & \$302 ;
+  assign \$304  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$306  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
   assign \$307  = \$305  | \$306 ;
-  assign \$308  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$308  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
   assign \$309  = \$307  | \$308 ;
-  assign \$310  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
+  assign \$310  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$311  = \$309  | \$310 ;
-  assign \$312  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
+  assign \$312  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
   assign \$313  = \$311  | \$312 ;
-  assign \$314  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
+  assign \$314  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
   assign \$315  = \$313  | \$314 ;
-  assign \$316  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
+  assign \$316  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
   assign \$317  = \$315  | \$316 ;
-  assign \$318  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
+  assign \$318  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
   assign \$319  = \$317  | \$318 ;
-  assign \$320  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$320  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
   assign \$321  = \$319  | \$320 ;
-  assign \$322  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 3'h0, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 4'h0, ch1_cfg_words_w0_signed, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
+  assign \$322  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
   assign \$323  = \$321  | \$322 ;
-  assign \$324  = ch1_read_select_10e ? { 8'h00, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
+  assign \$324  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 3'h0, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 4'h0, ch1_cfg_words_w0_signed, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
   assign \$325  = \$323  | \$324 ;
-  assign \$326  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
+  assign \$326  = ch1_read_select_10e ? { 4'h0, ch1_cfg_checks_confirm_frames, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
   assign \$327  = \$325  | \$326 ;
-  assign \$328  = ch1_read_select_110 ? { 2'h0, \port$7288$0 [182:177], 4'h0, \port$7288$0 [186:183], 1'h0, \port$7288$0 [176:174], 1'h0, \port$7288$0 [133:131], 3'h0, \port$7288$0 [49], \port$7288$0 [3:0] } : 32'd0;
+  assign \$328  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$329  = \$327  | \$328 ;
-  assign \$330  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$330  = ch1_read_select_110 ? { 2'h0, \port$7358$0 [182:177], 4'h0, \port$7358$0 [186:183], 1'h0, \port$7358$0 [176:174], 1'h0, \port$7358$0 [133:131], 3'h0, \port$7358$0 [49], \port$7358$0 [3:0] } : 32'd0;
   assign \$331  = \$329  | \$330 ;
-  assign \$332  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$332  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$333  = \$331  | \$332 ;
-  assign \$334  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$334  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
   assign \$335  = \$333  | \$334 ;
-  assign \$336  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$336  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
   assign \$337  = \$335  | \$336 ;
-  assign \$338  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$338  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
   assign \$339  = \$337  | \$338 ;
-  assign \$340  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$340  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
   assign \$341  = \$339  | \$340 ;
-  assign \$342  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
+  assign \$342  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$343  = \$341  | \$342 ;
-  assign \$344  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
+  assign \$344  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
+  assign \$346  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$347  = \$345  | \$346 ;
-  assign \$348  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
+  assign \$348  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
   assign \$349  = \$347  | \$348 ;
-  assign \$350  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
+  assign \$350  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
   assign \$351  = \$349  | \$350 ;
-  assign \$352  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$287 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$352  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
   assign \$353  = \$351  | \$352 ;
-  assign \$356  = ch1_read_select_142 ? { 17'h00000, \port$7378$0 [9:3], 1'h0, \port$7378$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
-  assign \$357  = \$355  | \$356 ;
-  assign \$358  = ch1_read_select_143 ? \port$7301$0 [31:0] : 32'd0;
+  assign \$354  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$289 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$355  = \$353  | \$354 ;
+  assign \$358  = ch1_read_select_142 ? { 17'h00000, \port$7448$0 [9:3], 1'h0, \port$7448$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$359  = \$357  | \$358 ;
-  assign \$360  = ch1_read_select_144 ? \port$7301$0 [63:32] : 32'd0;
+  assign \$360  = ch1_read_select_143 ? \port$7371$0 [31:0] : 32'd0;
   assign \$361  = \$359  | \$360 ;
-  assign \$362  = ch1_read_select_145 ? { 16'h0000, \port$7301$0 [79:64] } : 32'd0;
+  assign \$362  = ch1_read_select_144 ? \port$7371$0 [63:32] : 32'd0;
   assign \$363  = \$361  | \$362 ;
-  assign \$364  = ch1_window0_read ? ch1__count_data : 32'd0;
+  assign \$364  = ch1_read_select_145 ? { 16'h0000, \port$7371$0 [79:64] } : 32'd0;
   assign \$365  = \$363  | \$364 ;
-  assign \$366  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$366  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$367  = \$365  | \$366 ;
-  assign \$368  = ! write_addr;
-  assign g_id_write = write_en & \$368 ;
-  assign \$369  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$369 ;
-  assign \$370  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$370 ;
-  assign \$371  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$371 ;
-  assign \$372  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$372 ;
-  assign \$373  = bus__r_addr[10:3] == 5'h13;
-  assign ch0__count_en = bus__r_en & \$373 ;
-  assign \$374  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$374 ;
-  assign \$375  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$375 ;
-  assign \$376  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$376 ;
-  assign \$377  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$377 ;
-  assign \$378  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$378 ;
-  assign \$379  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$379 ;
-  assign \$380  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$380 ;
-  assign \$381  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$381 ;
-  assign \$382  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$382 ;
-  assign \$383  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$383 ;
-  assign \$384  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$384 ;
-  assign \$385  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$385 ;
-  assign \$386  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$386 ;
-  assign \$387  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$387 ;
-  assign \$388  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$388 ;
-  assign \$389  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$389 ;
-  assign \$390  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$390 ;
-  assign \$391  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$391 ;
-  assign \$392  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$392 ;
-  assign \$393  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$393 ;
-  assign \$394  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$394 ;
-  assign \$395  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$395 ;
-  assign \$396  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$396 ;
-  assign \$397  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$397 ;
-  assign \$398  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$398 ;
-  assign \$399  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$399 ;
-  assign \$400  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$400 ;
-  assign \$401  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$401 ;
-  assign \$402  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$402 ;
-  assign \$403  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$403 ;
-  assign \$404  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$404 ;
-  assign \$405  = write_addr[10:4] == 4'hd;
-  assign \$406  = write_en & \$405 ;
-  assign ch0__ca_wbuf_en = \$406  ? write_strb : 4'h0;
-  assign \$407  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$407 ;
-  assign \$408  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$410  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$412  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$413 , \$411 , \$409  };
-  assign \$414  = bus__r_addr[10:3] == 6'h23;
-  assign ch1__count_en = bus__r_en & \$414 ;
-  assign \$415  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$415 ;
-  assign \$416  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$416 ;
-  assign \$417  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$417 ;
-  assign \$418  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$418 ;
-  assign \$419  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$419 ;
-  assign \$420  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$420 ;
-  assign \$421  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$421 ;
-  assign \$422  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$422 ;
-  assign \$423  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$423 ;
-  assign \$424  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$424 ;
-  assign \$425  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$425 ;
-  assign \$426  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$426 ;
-  assign \$427  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$427 ;
-  assign \$428  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$428 ;
-  assign \$429  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$429 ;
-  assign \$430  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$430 ;
-  assign \$431  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$431 ;
-  assign \$432  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$432 ;
-  assign \$433  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$433 ;
-  assign \$434  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$434 ;
-  assign \$435  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$435 ;
-  assign \$436  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$436 ;
-  assign \$437  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$437 ;
-  assign \$438  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$438 ;
-  assign \$439  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$439 ;
-  assign \$440  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$440 ;
-  assign \$441  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$441 ;
-  assign \$442  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$442 ;
-  assign \$443  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$443 ;
-  assign \$444  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$444 ;
-  assign \$445  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$445 ;
-  assign \$446  = write_addr[10:4] == 5'h15;
-  assign \$447  = write_en & \$446 ;
-  assign ch1__ca_wbuf_en = \$447  ? write_strb : 4'h0;
-  assign \$448  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$448 ;
-  assign \$449  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$451  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$453  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$454 , \$452 , \$450  };
-  assign \$456  = \$455  | ch0_read_data;
-  assign bus__r_data = \$456  | ch1_read_data;
+  assign \$368  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$369  = \$367  | \$368 ;
+  assign \$370  = ! write_addr;
+  assign g_id_write = write_en & \$370 ;
+  assign \$371  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$371 ;
+  assign \$372  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$372 ;
+  assign \$373  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$373 ;
+  assign \$374  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$374 ;
+  assign \$375  = bus__r_addr[10:3] == 5'h13;
+  assign ch0__count_en = bus__r_en & \$375 ;
+  assign \$376  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$376 ;
+  assign \$377  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$377 ;
+  assign \$378  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$378 ;
+  assign \$379  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$379 ;
+  assign \$380  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$380 ;
+  assign \$381  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$381 ;
+  assign \$382  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$382 ;
+  assign \$383  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$383 ;
+  assign \$384  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$384 ;
+  assign \$385  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$385 ;
+  assign \$386  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$386 ;
+  assign \$387  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$387 ;
+  assign \$388  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$388 ;
+  assign \$389  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$389 ;
+  assign \$390  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$390 ;
+  assign \$391  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$391 ;
+  assign \$392  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$392 ;
+  assign \$393  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$393 ;
+  assign \$394  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$394 ;
+  assign \$395  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$395 ;
+  assign \$396  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$396 ;
+  assign \$397  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$397 ;
+  assign \$398  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$398 ;
+  assign \$399  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$399 ;
+  assign \$400  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$400 ;
+  assign \$401  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$401 ;
+  assign \$402  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$402 ;
+  assign \$403  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$403 ;
+  assign \$404  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$404 ;
+  assign \$405  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$405 ;
+  assign \$406  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$406 ;
+  assign \$407  = write_addr[10:4] == 4'hd;
+  assign \$408  = write_en & \$407 ;
+  assign ch0__ca_wbuf_en = \$408  ? write_strb : 4'h0;
+  assign \$409  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$409 ;
+  assign \$410  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$412  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$414  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$415 , \$413 , \$411  };
+  assign \$416  = bus__r_addr[10:3] == 6'h23;
+  assign ch1__count_en = bus__r_en & \$416 ;
+  assign \$417  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$417 ;
+  assign \$418  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$418 ;
+  assign \$419  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$419 ;
+  assign \$420  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$420 ;
+  assign \$421  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$421 ;
+  assign \$422  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$422 ;
+  assign \$423  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$423 ;
+  assign \$424  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$424 ;
+  assign \$425  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$425 ;
+  assign \$426  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$426 ;
+  assign \$427  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$427 ;
+  assign \$428  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$428 ;
+  assign \$429  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$429 ;
+  assign \$430  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$430 ;
+  assign \$431  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$431 ;
+  assign \$432  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$432 ;
+  assign \$433  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$433 ;
+  assign \$434  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$434 ;
+  assign \$435  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$435 ;
+  assign \$436  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$436 ;
+  assign \$437  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$437 ;
+  assign \$438  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$438 ;
+  assign \$439  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$439 ;
+  assign \$440  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$440 ;
+  assign \$441  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$441 ;
+  assign \$442  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$442 ;
+  assign \$443  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$443 ;
+  assign \$444  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$444 ;
+  assign \$445  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$445 ;
+  assign \$446  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$446 ;
+  assign \$447  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$447 ;
+  assign \$448  = write_addr[10:4] == 5'h15;
+  assign \$449  = write_en & \$448 ;
+  assign ch1__ca_wbuf_en = \$449  ? write_strb : 4'h0;
+  assign \$450  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$450 ;
+  assign \$451  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$453  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$455  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$456 , \$454 , \$452  };
+  assign \$458  = \$457  | ch0_read_data;
+  assign bus__r_data = \$458  | ch1_read_data;
   always @(posedge clk)
-    write_en <= \$457 ;
+    write_en <= \$459 ;
   always @(posedge clk)
-    write_addr <= \$458 ;
+    write_addr <= \$460 ;
   always @(posedge clk)
-    write_data <= \$459 ;
+    write_data <= \$461 ;
   always @(posedge clk)
-    write_strb <= \$460 ;
+    write_strb <= \$462 ;
   always @(posedge clk)
-    config_write_data <= \$461 ;
+    config_write_data <= \$463 ;
   always @(posedge clk)
-    config_write_strb <= \$462 ;
+    config_write_strb <= \$464 ;
   always @(posedge clk)
-    g_trigger_start <= \$463 ;
+    g_trigger_start <= \$465 ;
   always @(posedge clk)
-    g_read_select_0 <= \$464 ;
+    g_read_select_0 <= \$466 ;
   always @(posedge clk)
-    g_read_select_1 <= \$465 ;
+    g_read_select_1 <= \$467 ;
   always @(posedge clk)
-    g_read_select_2 <= \$466 ;
+    g_read_select_2 <= \$468 ;
   always @(posedge clk)
-    g_read_select_3 <= \$467 ;
+    g_read_select_3 <= \$469 ;
   always @(posedge clk)
-    g_read_select_4 <= \$468 ;
+    g_read_select_4 <= \$470 ;
   always @(posedge clk)
-    g_read_data <= \$469 ;
+    g_read_data <= \$471 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$470 ;
+    ch0_ctrl_start <= \$472 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$471 ;
+    ch0_ctrl_abort <= \$473 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$472 ;
+    ch0_ctrl_clear_counters <= \$474 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$473 ;
+    ch0_ctrl_periodic <= \$475 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$474 ;
+    ch0_ctrl_trigger_enable <= \$476 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$475 ;
+    ch0_irq_status_done <= \$477 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$476 ;
+    ch0_irq_status_error <= \$478 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$477 ;
+    ch0_irq_status_access_done <= \$479 ;
   always @(posedge clk)
-    ch0_irq_enable_config_write <= \$478 ;
+    ch0_irq_enable_config_write <= \$480 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$479 ;
+    ch0_irq_enable_done <= \$481 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$480 ;
+    ch0_irq_enable_error <= \$482 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$481 ;
+    ch0_irq_enable_access_done <= \$483 ;
   always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$482 ;
+    ch0_cfg_ma_config_write <= \$484 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$483 ;
+    ch0_cfg_ma_ma_half_period <= \$485 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$484 ;
+    ch0_cfg_ma_delay_limit <= \$486 ;
   always @(posedge clk)
-    ch0_cfg_period_config_write <= \$485 ;
+    ch0_cfg_period_config_write <= \$487 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$486 ;
+    ch0_cfg_period_request_period <= \$488 ;
   always @(posedge clk)
-    ch0_cfg_break_config_write <= \$487 ;
+    ch0_cfg_break_config_write <= \$489 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$488 ;
+    ch0_cfg_break_break_time <= \$490 ;
   always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$489 ;
+    ch0_cfg_ack_config_write <= \$491 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$490 ;
+    ch0_cfg_ack_ack_limit <= \$492 ;
   always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$491 ;
+    ch0_cfg_timeout_config_write <= \$493 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$492 ;
+    ch0_cfg_timeout_timeout_limit <= \$494 ;
   always @(posedge clk)
-    ch0_cfg_words_config_write <= \$493 ;
+    ch0_cfg_words_config_write <= \$495 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$494 ;
+    ch0_cfg_words_w0_data_bits <= \$496 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$495 ;
+    ch0_cfg_words_w0_nenw <= \$497 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$496 ;
+    ch0_cfg_words_w0_lc <= \$498 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$497 ;
+    ch0_cfg_words_w0_crc <= \$499 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$498 ;
+    ch0_cfg_words_w0_gray <= \$500 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_signed <= \$499 ;
+    ch0_cfg_words_w0_signed <= \$501 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$500 ;
+    ch0_cfg_words_w1_data_bits <= \$502 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$501 ;
+    ch0_cfg_words_w1_nenw <= \$503 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$502 ;
+    ch0_cfg_words_w1_lc <= \$504 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$503 ;
+    ch0_cfg_words_w1_crc <= \$505 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$504 ;
+    ch0_cfg_words_w1_gray <= \$506 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_signed <= \$505 ;
+    ch0_cfg_words_w1_signed <= \$507 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$506 ;
+    ch0_cfg_words_w1_enable <= \$508 ;
   always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$507 ;
+    ch0_cfg_checks_config_write <= \$509 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$508 ;
+    ch0_cfg_checks_end_check <= \$510 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$509 ;
+    ch0_cfg_checks_spw_check <= \$511 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$510 ;
+    ch0_cfg_checks_spw_tolerance <= \$512 ;
   always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$511 ;
+    ch0_cfg_checks_noise_limit <= \$513 ;
   always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$512 ;
+    ch0_cfg_checks_delay_tolerance <= \$514 ;
   always @(posedge clk)
-    ch0_cfg_quiet_config_write <= \$513 ;
+    ch0_cfg_checks_confirm_frames <= \$515 ;
   always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$514 ;
+    ch0_cfg_quiet_config_write <= \$516 ;
   always @(posedge clk)
-    ch0_cfg_crc0_config_write <= \$515 ;
+    ch0_cfg_quiet_quiet_time <= \$517 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_poly <= \$516 ;
+    ch0_cfg_crc0_config_write <= \$518 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$517 ;
+    ch0_cfg_crc0_w0_crc_poly <= \$519 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_inverted <= \$518 ;
+    ch0_cfg_crc0_w0_crc_width <= \$520 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_config_write <= \$519 ;
+    ch0_cfg_crc0_w0_crc_inverted <= \$521 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_w0_crc_start <= \$520 ;
+    ch0_cfg_crc0_start_config_write <= \$522 ;
   always @(posedge clk)
-    ch0_cfg_crc1_config_write <= \$521 ;
+    ch0_cfg_crc0_start_w0_crc_start <= \$523 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_poly <= \$522 ;
+    ch0_cfg_crc1_config_write <= \$524 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$523 ;
+    ch0_cfg_crc1_w1_crc_poly <= \$525 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_inverted <= \$524 ;
+    ch0_cfg_crc1_w1_crc_width <= \$526 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_config_write <= \$525 ;
+    ch0_cfg_crc1_w1_crc_inverted <= \$527 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_w1_crc_start <= \$526 ;
+    ch0_cfg_crc1_start_config_write <= \$528 ;
   always @(posedge clk)
-    ch0_ca_request_config_write <= \$527 ;
+    ch0_cfg_crc1_start_w1_crc_start <= \$529 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$528 ;
+    ch0_ca_request_config_write <= \$530 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$529 ;
+    ch0_ca_request_slave_id <= \$531 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$530 ;
+    ch0_ca_request_address <= \$532 ;
   always @(posedge clk)
-    \ch0_ca_request_write$105  <= \$531 ;
+    ch0_ca_request_count <= \$533 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$532 ;
+    \ch0_ca_request_write$106  <= \$534 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$533 ;
+    ch0_ca_ctrl_start <= \$535 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$534 ;
+    ch0_ca_ctrl_abort <= \$536 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$535 ;
+    ch0_read_select_80 <= \$537 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$536 ;
+    ch0_read_select_81 <= \$538 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$537 ;
+    ch0_read_select_82 <= \$539 ;
   always @(posedge clk)
-    ch0_read_select_85 <= \$538 ;
+    ch0_read_select_84 <= \$540 ;
   always @(posedge clk)
-    ch0_read_select_88 <= \$539 ;
+    ch0_read_select_85 <= \$541 ;
   always @(posedge clk)
-    ch0_read_select_89 <= \$540 ;
+    ch0_read_select_88 <= \$542 ;
   always @(posedge clk)
-    ch0_read_select_8a <= \$541 ;
+    ch0_read_select_89 <= \$543 ;
   always @(posedge clk)
-    ch0_read_select_8b <= \$542 ;
+    ch0_read_select_8a <= \$544 ;
   always @(posedge clk)
-    ch0_read_select_8c <= \$543 ;
+    ch0_read_select_8b <= \$545 ;
   always @(posedge clk)
-    ch0_read_select_8d <= \$544 ;
+    ch0_read_select_8c <= \$546 ;
   always @(posedge clk)
-    ch0_read_select_8e <= \$545 ;
+    ch0_read_select_8d <= \$547 ;
   always @(posedge clk)
-    ch0_read_select_8f <= \$546 ;
+    ch0_read_select_8e <= \$548 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$547 ;
+    ch0_read_select_8f <= \$549 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$548 ;
+    ch0_read_select_90 <= \$550 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$549 ;
+    ch0_read_select_91 <= \$551 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$550 ;
+    ch0_read_select_92 <= \$552 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$551 ;
+    ch0_read_select_93 <= \$553 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$552 ;
+    ch0_read_select_94 <= \$554 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$553 ;
+    ch0_read_select_95 <= \$555 ;
   always @(posedge clk)
-    ch0_read_select_97 <= \$554 ;
+    ch0_read_select_96 <= \$556 ;
   always @(posedge clk)
-    ch0_read_select_a0 <= \$555 ;
+    ch0_read_select_97 <= \$557 ;
   always @(posedge clk)
-    ch0_read_select_a1 <= \$556 ;
+    ch0_read_select_a0 <= \$558 ;
   always @(posedge clk)
-    ch0_read_select_a2 <= \$557 ;
+    ch0_read_select_a1 <= \$559 ;
   always @(posedge clk)
-    ch0_read_select_a3 <= \$558 ;
+    ch0_read_select_a2 <= \$560 ;
   always @(posedge clk)
-    ch0_read_select_c0 <= \$559 ;
+    ch0_read_select_a3 <= \$561 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$560 ;
+    ch0_read_select_c0 <= \$562 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$561 ;
+    ch0_read_select_c1 <= \$563 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$562 ;
+    ch0_read_select_c2 <= \$564 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$563 ;
+    ch0_read_select_c3 <= \$565 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$564 ;
+    ch0_read_select_c4 <= \$566 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$565 ;
+    ch0_read_select_c5 <= \$567 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$566 ;
+    ch0_result_status_status_snapshot <= \$568 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$567 ;
+    ch0_result_status_cds_snapshot <= \$569 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$568 ;
+    ch0_result_status_w0_ne_snapshot <= \$570 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$569 ;
+    ch0_result_status_w0_nw_snapshot <= \$571 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$570 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$572 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$571 ;
+    ch0_result_status_w1_ne_snapshot <= \$573 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$572 ;
+    ch0_result_status_w1_nw_snapshot <= \$574 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$573 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$575 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$574 ;
+    ch0_result_status_lc_repeat_snapshot <= \$576 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$575 ;
+    ch0_result_status_lc_skip_snapshot <= \$577 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$576 ;
+    ch0_result_status_lc_zero_snapshot <= \$578 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$577 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$579 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$578 ;
+    ch0_result_status_lc_snapshot <= \$580 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$579 ;
+    ch0_result_seq_seq_snapshot <= \$581 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$580 ;
+    ch0_result_seq_line_delay_snapshot <= \$582 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$581 ;
+    ch0_result_w0_lo_data_snapshot <= \$583 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$582 ;
+    ch0_result_w0_hi_data_snapshot <= \$584 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$583 ;
+    ch0_result_w1_lo_data_snapshot <= \$585 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$584 ;
+    ch0_result_w1_hi_data_snapshot <= \$586 ;
   always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$585 ;
+    ch0_result_timestamp_time_snapshot <= \$587 ;
   always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$586 ;
+    ch0_result_line_noise_events_snapshot <= \$588 ;
   always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$587 ;
+    ch0_result_line_delay_settled_snapshot <= \$589 ;
   always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$588 ;
+    ch0_result_line_delay_spread_snapshot <= \$590 ;
   always @(posedge clk)
-    ch0_window0_read <= \$589 ;
+    ch0_result_line_settled_delay_snapshot <= \$591 ;
   always @(posedge clk)
-    ch0_window1_read <= \$590 ;
+    ch0_window0_read <= \$592 ;
   always @(posedge clk)
-    ch0_read_data <= \$591 ;
+    ch0_window1_read <= \$593 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$592 ;
+    ch0_read_data <= \$594 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$593 ;
+    ch1_ctrl_start <= \$595 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$594 ;
+    ch1_ctrl_abort <= \$596 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$595 ;
+    ch1_ctrl_clear_counters <= \$597 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$596 ;
+    ch1_ctrl_periodic <= \$598 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$597 ;
+    ch1_ctrl_trigger_enable <= \$599 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$598 ;
+    ch1_irq_status_done <= \$600 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$599 ;
+    ch1_irq_status_error <= \$601 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$600 ;
+    ch1_irq_status_access_done <= \$602 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$601 ;
+    ch1_irq_enable_config_write <= \$603 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$602 ;
+    ch1_irq_enable_done <= \$604 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$603 ;
+    ch1_irq_enable_error <= \$605 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$604 ;
+    ch1_irq_enable_access_done <= \$606 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$605 ;
+    ch1_cfg_ma_config_write <= \$607 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$606 ;
+    ch1_cfg_ma_ma_half_period <= \$608 ;
   always @(posedge clk)
-    ch1_cfg_period_config_write <= \$607 ;
+    ch1_cfg_ma_delay_limit <= \$609 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$608 ;
+    ch1_cfg_period_config_write <= \$610 ;
   always @(posedge clk)
-    ch1_cfg_break_config_write <= \$609 ;
+    ch1_cfg_period_request_period <= \$611 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$610 ;
+    ch1_cfg_break_config_write <= \$612 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$611 ;
+    ch1_cfg_break_break_time <= \$613 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$612 ;
+    ch1_cfg_ack_config_write <= \$614 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$613 ;
+    ch1_cfg_ack_ack_limit <= \$615 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$614 ;
+    ch1_cfg_timeout_config_write <= \$616 ;
   always @(posedge clk)
-    ch1_cfg_words_config_write <= \$615 ;
+    ch1_cfg_timeout_timeout_limit <= \$617 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$616 ;
+    ch1_cfg_words_config_write <= \$618 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$617 ;
+    ch1_cfg_words_w0_data_bits <= \$619 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$618 ;
+    ch1_cfg_words_w0_nenw <= \$620 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$619 ;
+    ch1_cfg_words_w0_lc <= \$621 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$620 ;
+    ch1_cfg_words_w0_crc <= \$622 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_signed <= \$621 ;
+    ch1_cfg_words_w0_gray <= \$623 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$622 ;
+    ch1_cfg_words_w0_signed <= \$624 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$623 ;
+    ch1_cfg_words_w1_data_bits <= \$625 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$624 ;
+    ch1_cfg_words_w1_nenw <= \$626 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$625 ;
+    ch1_cfg_words_w1_lc <= \$627 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$626 ;
+    ch1_cfg_words_w1_crc <= \$628 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_signed <= \$627 ;
+    ch1_cfg_words_w1_gray <= \$629 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$628 ;
+    ch1_cfg_words_w1_signed <= \$630 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$629 ;
+    ch1_cfg_words_w1_enable <= \$631 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$630 ;
+    ch1_cfg_checks_config_write <= \$632 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$631 ;
+    ch1_cfg_checks_end_check <= \$633 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$632 ;
+    ch1_cfg_checks_spw_check <= \$634 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$633 ;
+    ch1_cfg_checks_spw_tolerance <= \$635 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$634 ;
+    ch1_cfg_checks_noise_limit <= \$636 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_write <= \$635 ;
+    ch1_cfg_checks_delay_tolerance <= \$637 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$636 ;
+    ch1_cfg_checks_confirm_frames <= \$638 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_write <= \$637 ;
+    ch1_cfg_quiet_config_write <= \$639 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_poly <= \$638 ;
+    ch1_cfg_quiet_quiet_time <= \$640 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$639 ;
+    ch1_cfg_crc0_config_write <= \$641 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_inverted <= \$640 ;
+    ch1_cfg_crc0_w0_crc_poly <= \$642 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_write <= \$641 ;
+    ch1_cfg_crc0_w0_crc_width <= \$643 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_w0_crc_start <= \$642 ;
+    ch1_cfg_crc0_w0_crc_inverted <= \$644 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_write <= \$643 ;
+    ch1_cfg_crc0_start_config_write <= \$645 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_poly <= \$644 ;
+    ch1_cfg_crc0_start_w0_crc_start <= \$646 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$645 ;
+    ch1_cfg_crc1_config_write <= \$647 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_inverted <= \$646 ;
+    ch1_cfg_crc1_w1_crc_poly <= \$648 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_write <= \$647 ;
+    ch1_cfg_crc1_w1_crc_width <= \$649 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_w1_crc_start <= \$648 ;
+    ch1_cfg_crc1_w1_crc_inverted <= \$650 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$649 ;
+    ch1_cfg_crc1_start_config_write <= \$651 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$650 ;
+    ch1_cfg_crc1_start_w1_crc_start <= \$652 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$651 ;
+    ch1_ca_request_config_write <= \$653 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$652 ;
+    ch1_ca_request_slave_id <= \$654 ;
   always @(posedge clk)
-    \ch1_ca_request_write$287  <= \$653 ;
+    ch1_ca_request_address <= \$655 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$654 ;
+    ch1_ca_request_count <= \$656 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$655 ;
+    \ch1_ca_request_write$289  <= \$657 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$656 ;
+    ch1_ca_ctrl_start <= \$658 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$657 ;
+    ch1_ca_ctrl_abort <= \$659 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$658 ;
+    ch1_read_select_100 <= \$660 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$659 ;
+    ch1_read_select_101 <= \$661 ;
   always @(posedge clk)
-    ch1_read_select_105 <= \$660 ;
+    ch1_read_select_102 <= \$662 ;
   always @(posedge clk)
-    ch1_read_select_108 <= \$661 ;
+    ch1_read_select_104 <= \$663 ;
   always @(posedge clk)
-    ch1_read_select_109 <= \$662 ;
+    ch1_read_select_105 <= \$664 ;
   always @(posedge clk)
-    ch1_read_select_10a <= \$663 ;
+    ch1_read_select_108 <= \$665 ;
   always @(posedge clk)
-    ch1_read_select_10b <= \$664 ;
+    ch1_read_select_109 <= \$666 ;
   always @(posedge clk)
-    ch1_read_select_10c <= \$665 ;
+    ch1_read_select_10a <= \$667 ;
   always @(posedge clk)
-    ch1_read_select_10d <= \$666 ;
+    ch1_read_select_10b <= \$668 ;
   always @(posedge clk)
-    ch1_read_select_10e <= \$667 ;
+    ch1_read_select_10c <= \$669 ;
   always @(posedge clk)
-    ch1_read_select_10f <= \$668 ;
+    ch1_read_select_10d <= \$670 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$669 ;
+    ch1_read_select_10e <= \$671 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$670 ;
+    ch1_read_select_10f <= \$672 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$671 ;
+    ch1_read_select_110 <= \$673 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$672 ;
+    ch1_read_select_111 <= \$674 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$673 ;
+    ch1_read_select_112 <= \$675 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$674 ;
+    ch1_read_select_113 <= \$676 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$675 ;
+    ch1_read_select_114 <= \$677 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$676 ;
+    ch1_read_select_115 <= \$678 ;
   always @(posedge clk)
-    ch1_read_select_120 <= \$677 ;
+    ch1_read_select_116 <= \$679 ;
   always @(posedge clk)
-    ch1_read_select_121 <= \$678 ;
+    ch1_read_select_117 <= \$680 ;
   always @(posedge clk)
-    ch1_read_select_122 <= \$679 ;
+    ch1_read_select_120 <= \$681 ;
   always @(posedge clk)
-    ch1_read_select_123 <= \$680 ;
+    ch1_read_select_121 <= \$682 ;
   always @(posedge clk)
-    ch1_read_select_140 <= \$681 ;
+    ch1_read_select_122 <= \$683 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$682 ;
+    ch1_read_select_123 <= \$684 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$683 ;
+    ch1_read_select_140 <= \$685 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$684 ;
+    ch1_read_select_141 <= \$686 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$685 ;
+    ch1_read_select_142 <= \$687 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$686 ;
+    ch1_read_select_143 <= \$688 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$687 ;
+    ch1_read_select_144 <= \$689 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$688 ;
+    ch1_read_select_145 <= \$690 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$689 ;
+    ch1_result_status_status_snapshot <= \$691 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$690 ;
+    ch1_result_status_cds_snapshot <= \$692 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$691 ;
+    ch1_result_status_w0_ne_snapshot <= \$693 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$692 ;
+    ch1_result_status_w0_nw_snapshot <= \$694 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$693 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$695 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$694 ;
+    ch1_result_status_w1_ne_snapshot <= \$696 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$695 ;
+    ch1_result_status_w1_nw_snapshot <= \$697 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$696 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$698 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$697 ;
+    ch1_result_status_lc_repeat_snapshot <= \$699 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$698 ;
+    ch1_result_status_lc_skip_snapshot <= \$700 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$699 ;
+    ch1_result_status_lc_zero_snapshot <= \$701 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$700 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$702 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$701 ;
+    ch1_result_status_lc_snapshot <= \$703 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$702 ;
+    ch1_result_seq_seq_snapshot <= \$704 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$703 ;
+    ch1_result_seq_line_delay_snapshot <= \$705 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$704 ;
+    ch1_result_w0_lo_data_snapshot <= \$706 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$705 ;
+    ch1_result_w0_hi_data_snapshot <= \$707 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$706 ;
+    ch1_result_w1_lo_data_snapshot <= \$708 ;
   always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$707 ;
+    ch1_result_w1_hi_data_snapshot <= \$709 ;
   always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$708 ;
+    ch1_result_timestamp_time_snapshot <= \$710 ;
   always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$709 ;
+    ch1_result_line_noise_events_snapshot <= \$711 ;
   always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$710 ;
+    ch1_result_line_delay_settled_snapshot <= \$712 ;
   always @(posedge clk)
-    ch1_window0_read <= \$711 ;
+    ch1_result_line_delay_spread_snapshot <= \$713 ;
   always @(posedge clk)
-    ch1_window1_read <= \$712 ;
+    ch1_result_line_settled_delay_snapshot <= \$714 ;
   always @(posedge clk)
-    ch1_read_data <= \$713 ;
+    ch1_window0_read <= \$715 ;
+  always @(posedge clk)
+    ch1_window1_read <= \$716 ;
+  always @(posedge clk)
+    ch1_read_data <= \$717 ;
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__r_addr;
@@ -3347,263 +3379,239 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$66  = ch0_cfg_checks_config_write & config_write_strb[1];
   assign \$67  = ch0_cfg_checks_config_write & config_write_strb[2];
   assign \$68  = ch0_cfg_checks_config_write & config_write_strb[2];
-  assign \$69  = ch0_cfg_quiet_config_write & config_write_strb[0];
-  assign \$70  = ch0_cfg_quiet_config_write & config_write_strb[1];
-  assign \$71  = ch0_cfg_crc0_config_write & config_write_strb[0];
-  assign \$72  = ch0_cfg_crc0_config_write & config_write_strb[1];
-  assign \$73  = ch0_cfg_crc0_config_write & config_write_strb[2];
-  assign \$74  = ch0_cfg_crc0_config_write & config_write_strb[3];
-  assign \$75  = ch0_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$76  = ch0_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$77  = ch0_cfg_crc1_config_write & config_write_strb[0];
-  assign \$78  = ch0_cfg_crc1_config_write & config_write_strb[1];
-  assign \$79  = ch0_cfg_crc1_config_write & config_write_strb[2];
-  assign \$80  = ch0_cfg_crc1_config_write & config_write_strb[3];
-  assign \$81  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$82  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$83  = ch0_ca_request_config_write & config_write_strb[0];
-  assign \$84  = ch0_ca_request_config_write & config_write_strb[1];
-  assign \$85  = ch0_ca_request_config_write & config_write_strb[2];
-  assign \$86  = ch0_ca_request_config_write & config_write_strb[3];
-  assign \$87  = write_data[0] & write_strb[0];
-  assign \$88  = ch0_ca_ctrl_write ? \$87  : 1'h0;
-  assign \$89  = write_data[1] & write_strb[0];
-  assign \$90  = ch0_ca_ctrl_write ? \$89  : 1'h0;
-  assign \$91  = bus__r_addr == 8'h80;
-  assign \$92  = bus__r_addr == 8'h81;
-  assign \$93  = bus__r_addr == 8'h82;
-  assign \$94  = bus__r_addr == 8'h84;
-  assign \$95  = bus__r_addr == 8'h85;
-  assign \$96  = bus__r_addr == 8'h88;
-  assign \$97  = bus__r_addr == 8'h89;
-  assign \$98  = bus__r_addr == 8'h8a;
-  assign \$99  = bus__r_addr == 8'h8b;
-  assign \$100  = bus__r_addr == 8'h8c;
-  assign \$101  = bus__r_addr == 8'h8d;
-  assign \$102  = bus__r_addr == 8'h8e;
-  assign \$103  = bus__r_addr == 8'h8f;
-  assign \$104  = bus__r_addr == 8'h90;
-  assign \$105  = bus__r_addr == 8'h91;
-  assign \$106  = bus__r_addr == 8'h92;
-  assign \$107  = bus__r_addr == 8'h93;
-  assign \$108  = bus__r_addr == 8'h94;
-  assign \$109  = bus__r_addr == 8'h95;
-  assign \$110  = bus__r_addr == 8'h96;
-  assign \$111  = bus__r_addr == 8'h97;
-  assign \$112  = bus__r_addr == 8'ha0;
-  assign \$113  = bus__r_addr == 8'ha1;
-  assign \$114  = bus__r_addr == 8'ha2;
-  assign \$115  = bus__r_addr == 8'ha3;
-  assign \$116  = bus__r_addr == 8'hc0;
-  assign \$117  = bus__r_addr == 8'hc1;
-  assign \$118  = bus__r_addr == 8'hc2;
-  assign \$119  = bus__r_addr == 8'hc3;
-  assign \$120  = bus__r_addr == 8'hc4;
-  assign \$121  = bus__r_addr == 8'hc5;
-  assign \$122  = ch0_read_select_90 & bus__r_load;
-  assign \$123  = bus__r_addr[10:3] == 5'h13;
-  assign \$124  = bus__r_en & \$123 ;
-  assign \$125  = bus__r_addr[10:4] == 4'he;
-  assign \$126  = bus__r_en & \$125 ;
-  assign \$127  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$129  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$130  = \$128  | \$129 ;
-  assign \$131  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
-  assign \$132  = \$130  | \$131 ;
-  assign \$133  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
-  assign \$134  = \$132  | \$133 ;
-  assign \$135  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
-  assign \$136  = \$134  | \$135 ;
-  assign \$137  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
-  assign \$138  = \$136  | \$137 ;
-  assign \$139  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
-  assign \$140  = \$138  | \$139 ;
-  assign \$141  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
-  assign \$142  = \$140  | \$141 ;
-  assign \$143  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
-  assign \$144  = \$142  | \$143 ;
-  assign \$145  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$146  = \$144  | \$145 ;
-  assign \$147  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 3'h0, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 4'h0, ch0_cfg_words_w0_signed, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
-  assign \$148  = \$146  | \$147 ;
-  assign \$149  = ch0_read_select_8e ? { 8'h00, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
-  assign \$150  = \$148  | \$149 ;
-  assign \$151  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
-  assign \$152  = \$150  | \$151 ;
-  assign \$153  = ch0_read_select_90 ? { 2'h0, \port$6765$0 [182:177], 4'h0, \port$6765$0 [186:183], 1'h0, \port$6765$0 [176:174], 1'h0, \port$6765$0 [133:131], 3'h0, \port$6765$0 [49], \port$6765$0 [3:0] } : 32'd0;
-  assign \$154  = \$152  | \$153 ;
-  assign \$155  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
-  assign \$156  = \$154  | \$155 ;
-  assign \$157  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
-  assign \$158  = \$156  | \$157 ;
-  assign \$159  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
-  assign \$162  = \$160  | \$161 ;
-  assign \$163  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$164  = \$162  | \$163 ;
-  assign \$165  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
-  assign \$166  = \$164  | \$165 ;
-  assign \$167  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
-  assign \$168  = \$166  | \$167 ;
-  assign \$169  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
-  assign \$170  = \$168  | \$169 ;
-  assign \$171  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
-  assign \$172  = \$170  | \$171 ;
-  assign \$173  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
-  assign \$174  = \$172  | \$173 ;
-  assign \$175  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
-  assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$105 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
-  assign \$178  = \$176  | \$177 ;
-  assign \$181  = ch0_read_select_c2 ? { 17'h00000, \port$6855$0 [9:3], 1'h0, \port$6855$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_c3 ? \port$6778$0 [31:0] : 32'd0;
-  assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_c4 ? \port$6778$0 [63:32] : 32'd0;
-  assign \$186  = \$184  | \$185 ;
-  assign \$187  = ch0_read_select_c5 ? { 16'h0000, \port$6778$0 [79:64] } : 32'd0;
-  assign \$188  = \$186  | \$187 ;
-  assign \$189  = ch0_window0_read ? ch0__count_data : 32'd0;
-  assign \$190  = \$188  | \$189 ;
-  assign \$191  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$192  = \$190  | \$191 ;
-  assign \$193  = write_data[0] & write_strb[0];
-  assign \$194  = ch1_ctrl_write ? \$193  : 1'h0;
-  assign \$195  = write_data[1] & write_strb[0];
-  assign \$196  = ch1_ctrl_write ? \$195  : 1'h0;
-  assign \$197  = write_data[2] & write_strb[0];
-  assign \$198  = ch1_ctrl_write ? \$197  : 1'h0;
-  assign \$199  = ch1_ctrl_write & write_strb[1];
+  assign \$69  = ch0_cfg_checks_config_write & config_write_strb[3];
+  assign \$70  = ch0_cfg_quiet_config_write & config_write_strb[0];
+  assign \$71  = ch0_cfg_quiet_config_write & config_write_strb[1];
+  assign \$72  = ch0_cfg_crc0_config_write & config_write_strb[0];
+  assign \$73  = ch0_cfg_crc0_config_write & config_write_strb[1];
+  assign \$74  = ch0_cfg_crc0_config_write & config_write_strb[2];
+  assign \$75  = ch0_cfg_crc0_config_write & config_write_strb[3];
+  assign \$76  = ch0_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$77  = ch0_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$78  = ch0_cfg_crc1_config_write & config_write_strb[0];
+  assign \$79  = ch0_cfg_crc1_config_write & config_write_strb[1];
+  assign \$80  = ch0_cfg_crc1_config_write & config_write_strb[2];
+  assign \$81  = ch0_cfg_crc1_config_write & config_write_strb[3];
+  assign \$82  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$83  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$84  = ch0_ca_request_config_write & config_write_strb[0];
+  assign \$85  = ch0_ca_request_config_write & config_write_strb[1];
+  assign \$86  = ch0_ca_request_config_write & config_write_strb[2];
+  assign \$87  = ch0_ca_request_config_write & config_write_strb[3];
+  assign \$88  = write_data[0] & write_strb[0];
+  assign \$89  = ch0_ca_ctrl_write ? \$88  : 1'h0;
+  assign \$90  = write_data[1] & write_strb[0];
+  assign \$91  = ch0_ca_ctrl_write ? \$90  : 1'h0;
+  assign \$92  = bus__r_addr == 8'h80;
+  assign \$93  = bus__r_addr == 8'h81;
+  assign \$94  = bus__r_addr == 8'h82;
+  assign \$95  = bus__r_addr == 8'h84;
+  assign \$96  = bus__r_addr == 8'h85;
+  assign \$97  = bus__r_addr == 8'h88;
+  assign \$98  = bus__r_addr == 8'h89;
+  assign \$99  = bus__r_addr == 8'h8a;
+  assign \$100  = bus__r_addr == 8'h8b;
+  assign \$101  = bus__r_addr == 8'h8c;
+  assign \$102  = bus__r_addr == 8'h8d;
+  assign \$103  = bus__r_addr == 8'h8e;
+  assign \$104  = bus__r_addr == 8'h8f;
+  assign \$105  = bus__r_addr == 8'h90;
+  assign \$106  = bus__r_addr == 8'h91;
+  assign \$107  = bus__r_addr == 8'h92;
+  assign \$108  = bus__r_addr == 8'h93;
+  assign \$109  = bus__r_addr == 8'h94;
+  assign \$110  = bus__r_addr == 8'h95;
+  assign \$111  = bus__r_addr == 8'h96;
+  assign \$112  = bus__r_addr == 8'h97;
+  assign \$113  = bus__r_addr == 8'ha0;
+  assign \$114  = bus__r_addr == 8'ha1;
+  assign \$115  = bus__r_addr == 8'ha2;
+  assign \$116  = bus__r_addr == 8'ha3;
+  assign \$117  = bus__r_addr == 8'hc0;
+  assign \$118  = bus__r_addr == 8'hc1;
+  assign \$119  = bus__r_addr == 8'hc2;
+  assign \$120  = bus__r_addr == 8'hc3;
+  assign \$121  = bus__r_addr == 8'hc4;
+  assign \$122  = bus__r_addr == 8'hc5;
+  assign \$123  = ch0_read_select_90 & bus__r_load;
+  assign \$124  = bus__r_addr[10:3] == 5'h13;
+  assign \$125  = bus__r_en & \$124 ;
+  assign \$126  = bus__r_addr[10:4] == 4'he;
+  assign \$127  = bus__r_en & \$126 ;
+  assign \$128  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$130  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$131  = \$129  | \$130 ;
+  assign \$132  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
+  assign \$133  = \$131  | \$132 ;
+  assign \$134  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$135  = \$133  | \$134 ;
+  assign \$136  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
+  assign \$137  = \$135  | \$136 ;
+  assign \$138  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
+  assign \$139  = \$137  | \$138 ;
+  assign \$140  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
+  assign \$141  = \$139  | \$140 ;
+  assign \$142  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
+  assign \$143  = \$141  | \$142 ;
+  assign \$144  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
+  assign \$145  = \$143  | \$144 ;
+  assign \$146  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$147  = \$145  | \$146 ;
+  assign \$148  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 3'h0, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 4'h0, ch0_cfg_words_w0_signed, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
+  assign \$149  = \$147  | \$148 ;
+  assign \$150  = ch0_read_select_8e ? { 4'h0, ch0_cfg_checks_confirm_frames, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
+  assign \$151  = \$149  | \$150 ;
+  assign \$152  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
+  assign \$153  = \$151  | \$152 ;
+  assign \$154  = ch0_read_select_90 ? { 2'h0, \port$6831$0 [182:177], 4'h0, \port$6831$0 [186:183], 1'h0, \port$6831$0 [176:174], 1'h0, \port$6831$0 [133:131], 3'h0, \port$6831$0 [49], \port$6831$0 [3:0] } : 32'd0;
+  assign \$155  = \$153  | \$154 ;
+  assign \$156  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$157  = \$155  | \$156 ;
+  assign \$158  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$159  = \$157  | \$158 ;
+  assign \$160  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$161  = \$159  | \$160 ;
+  assign \$162  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$163  = \$161  | \$162 ;
+  assign \$164  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$165  = \$163  | \$164 ;
+  assign \$166  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$167  = \$165  | \$166 ;
+  assign \$168  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
+  assign \$169  = \$167  | \$168 ;
+  assign \$170  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
+  assign \$171  = \$169  | \$170 ;
+  assign \$172  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
+  assign \$173  = \$171  | \$172 ;
+  assign \$174  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
+  assign \$175  = \$173  | \$174 ;
+  assign \$176  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
+  assign \$177  = \$175  | \$176 ;
+  assign \$178  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$106 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$179  = \$177  | \$178 ;
+  assign \$182  = ch0_read_select_c2 ? { 17'h00000, \port$6921$0 [9:3], 1'h0, \port$6921$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$183  = \$181  | \$182 ;
+  assign \$184  = ch0_read_select_c3 ? \port$6844$0 [31:0] : 32'd0;
+  assign \$185  = \$183  | \$184 ;
+  assign \$186  = ch0_read_select_c4 ? \port$6844$0 [63:32] : 32'd0;
+  assign \$187  = \$185  | \$186 ;
+  assign \$188  = ch0_read_select_c5 ? { 16'h0000, \port$6844$0 [79:64] } : 32'd0;
+  assign \$189  = \$187  | \$188 ;
+  assign \$190  = ch0_window0_read ? ch0__count_data : 32'd0;
+  assign \$191  = \$189  | \$190 ;
+  assign \$192  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$193  = \$191  | \$192 ;
+  assign \$194  = write_data[0] & write_strb[0];
+  assign \$195  = ch1_ctrl_write ? \$194  : 1'h0;
+  assign \$196  = write_data[1] & write_strb[0];
+  assign \$197  = ch1_ctrl_write ? \$196  : 1'h0;
+  assign \$198  = write_data[2] & write_strb[0];
+  assign \$199  = ch1_ctrl_write ? \$198  : 1'h0;
   assign \$200  = ch1_ctrl_write & write_strb[1];
-  assign \$201  = write_data[0] & write_strb[0];
-  assign \$202  = ch1_irq_status_write ? \$201  : 1'h0;
-  assign \$203  = write_data[1] & write_strb[0];
-  assign \$204  = ch1_irq_status_write ? \$203  : 1'h0;
-  assign \$205  = write_data[2] & write_strb[0];
-  assign \$206  = ch1_irq_status_write ? \$205  : 1'h0;
-  assign \$207  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$201  = ch1_ctrl_write & write_strb[1];
+  assign \$202  = write_data[0] & write_strb[0];
+  assign \$203  = ch1_irq_status_write ? \$202  : 1'h0;
+  assign \$204  = write_data[1] & write_strb[0];
+  assign \$205  = ch1_irq_status_write ? \$204  : 1'h0;
+  assign \$206  = write_data[2] & write_strb[0];
+  assign \$207  = ch1_irq_status_write ? \$206  : 1'h0;
   assign \$208  = ch1_irq_enable_config_write & config_write_strb[0];
   assign \$209  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$210  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$211  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$212  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$213  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$214  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$215  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$216  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$217  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$218  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$219  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$220  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$221  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$222  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$223  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$224  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$225  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$226  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$210  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$211  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$212  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$213  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$214  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$215  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$216  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$217  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$218  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$219  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$220  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$221  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$222  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$223  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$224  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$225  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$226  = ch1_cfg_timeout_config_write & config_write_strb[2];
   assign \$227  = ch1_cfg_words_config_write & config_write_strb[0];
   assign \$228  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$229  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$229  = ch1_cfg_words_config_write & config_write_strb[0];
   assign \$230  = ch1_cfg_words_config_write & config_write_strb[1];
   assign \$231  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$232  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$232  = ch1_cfg_words_config_write & config_write_strb[1];
   assign \$233  = ch1_cfg_words_config_write & config_write_strb[2];
   assign \$234  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$235  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$235  = ch1_cfg_words_config_write & config_write_strb[2];
   assign \$236  = ch1_cfg_words_config_write & config_write_strb[3];
   assign \$237  = ch1_cfg_words_config_write & config_write_strb[3];
   assign \$238  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$239  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$239  = ch1_cfg_words_config_write & config_write_strb[3];
   assign \$240  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$241  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$242  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$241  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$242  = ch1_cfg_checks_config_write & config_write_strb[1];
   assign \$243  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$244  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$245  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$246  = ch1_cfg_crc0_config_write & config_write_strb[0];
-  assign \$247  = ch1_cfg_crc0_config_write & config_write_strb[1];
-  assign \$248  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$249  = ch1_cfg_crc0_config_write & config_write_strb[3];
-  assign \$250  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$251  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$252  = ch1_cfg_crc1_config_write & config_write_strb[0];
-  assign \$253  = ch1_cfg_crc1_config_write & config_write_strb[1];
-  assign \$254  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$255  = ch1_cfg_crc1_config_write & config_write_strb[3];
-  assign \$256  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$257  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$258  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$259  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$260  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$261  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$262  = write_data[0] & write_strb[0];
-  assign \$263  = ch1_ca_ctrl_write ? \$262  : 1'h0;
-  assign \$264  = write_data[1] & write_strb[0];
+  assign \$244  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$245  = ch1_cfg_checks_config_write & config_write_strb[3];
+  assign \$246  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$247  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$248  = ch1_cfg_crc0_config_write & config_write_strb[0];
+  assign \$249  = ch1_cfg_crc0_config_write & config_write_strb[1];
+  assign \$250  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$251  = ch1_cfg_crc0_config_write & config_write_strb[3];
+  assign \$252  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$253  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$254  = ch1_cfg_crc1_config_write & config_write_strb[0];
+  assign \$255  = ch1_cfg_crc1_config_write & config_write_strb[1];
+  assign \$256  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$257  = ch1_cfg_crc1_config_write & config_write_strb[3];
+  assign \$258  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$259  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$260  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$261  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$262  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$263  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$264  = write_data[0] & write_strb[0];
   assign \$265  = ch1_ca_ctrl_write ? \$264  : 1'h0;
-  assign \$266  = bus__r_addr == 9'h100;
-  assign \$267  = bus__r_addr == 9'h101;
-  assign \$268  = bus__r_addr == 9'h102;
-  assign \$269  = bus__r_addr == 9'h104;
-  assign \$270  = bus__r_addr == 9'h105;
-  assign \$271  = bus__r_addr == 9'h108;
-  assign \$272  = bus__r_addr == 9'h109;
-  assign \$273  = bus__r_addr == 9'h10a;
-  assign \$274  = bus__r_addr == 9'h10b;
-  assign \$275  = bus__r_addr == 9'h10c;
-  assign \$276  = bus__r_addr == 9'h10d;
-  assign \$277  = bus__r_addr == 9'h10e;
-  assign \$278  = bus__r_addr == 9'h10f;
-  assign \$279  = bus__r_addr == 9'h110;
-  assign \$280  = bus__r_addr == 9'h111;
-  assign \$281  = bus__r_addr == 9'h112;
-  assign \$282  = bus__r_addr == 9'h113;
-  assign \$283  = bus__r_addr == 9'h114;
-  assign \$284  = bus__r_addr == 9'h115;
-  assign \$285  = bus__r_addr == 9'h116;
-  assign \$286  = bus__r_addr == 9'h117;
+  assign \$266  = write_data[1] & write_strb[0];
+  assign \$267  = ch1_ca_ctrl_write ? \$266  : 1'h0;
+  assign \$268  = bus__r_addr == 9'h100;
+  assign \$269  = bus__r_addr == 9'h101;
+  assign \$270  = bus__r_addr == 9'h102;
+  assign \$271  = bus__r_addr == 9'h104;
+  assign \$272  = bus__r_addr == 9'h105;
+  assign \$273  = bus__r_addr == 9'h108;
+  assign \$274  = bus__r_addr == 9'h109;
+  assign \$275  = bus__r_addr == 9'h10a;
+  assign \$276  = bus__r_addr == 9'h10b;
+  assign \$277  = bus__r_addr == 9'h10c;
+  assign \$278  = bus__r_addr == 9'h10d;
+  assign \$279  = bus__r_addr == 9'h10e;
+  assign \$280  = bus__r_addr == 9'h10f;
+  assign \$281  = bus__r_addr == 9'h110;
+  assign \$282  = bus__r_addr == 9'h111;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$457  = bus__w_en;
+    \$459  = bus__w_en;
     if (rst) begin
-      \$457  = 1'h0;
+      \$459  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$458  = write_addr;
+    \$460  = write_addr;
     if (bus__w_en) begin
-      \$458  = bus__w_addr;
+      \$460  = bus__w_addr;
     end
     if (rst) begin
-      \$458  = 11'h000;
+      \$460  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$459  = write_data;
+    \$461  = write_data;
     if (bus__w_en) begin
-      \$459  = bus__w_data;
-    end
-    if (rst) begin
-      \$459  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$460  = write_strb;
-    if (bus__w_en) begin
-      \$460  = 4'hf;
-    end
-    if (rst) begin
-      \$460  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$461  = config_write_data;
-    if (write_en) begin
-      \$461  = write_data;
+      \$461  = bus__w_data;
     end
     if (rst) begin
       \$461  = 32'd0;
@@ -3611,9 +3619,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$462  = config_write_strb;
-    if (write_en) begin
-      \$462  = write_strb;
+    \$462  = write_strb;
+    if (bus__w_en) begin
+      \$462  = 4'hf;
     end
     if (rst) begin
       \$462  = 4'h0;
@@ -3621,36 +3629,36 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$463  = \$2 ;
+    \$463  = config_write_data;
+    if (write_en) begin
+      \$463  = write_data;
+    end
     if (rst) begin
-      \$463  = 1'h0;
+      \$463  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$464  = g_read_select_0;
-    if (bus__r_en) begin
-      \$464  = \$3 ;
+    \$464  = config_write_strb;
+    if (write_en) begin
+      \$464  = write_strb;
     end
     if (rst) begin
-      \$464  = 1'h0;
+      \$464  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$465  = g_read_select_1;
-    if (bus__r_en) begin
-      \$465  = \$4 ;
-    end
+    \$465  = \$2 ;
     if (rst) begin
       \$465  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$466  = g_read_select_2;
+    \$466  = g_read_select_0;
     if (bus__r_en) begin
-      \$466  = \$5 ;
+      \$466  = \$3 ;
     end
     if (rst) begin
       \$466  = 1'h0;
@@ -3658,9 +3666,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$467  = g_read_select_3;
+    \$467  = g_read_select_1;
     if (bus__r_en) begin
-      \$467  = \$6 ;
+      \$467  = \$4 ;
     end
     if (rst) begin
       \$467  = 1'h0;
@@ -3668,9 +3676,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$468  = g_read_select_4;
+    \$468  = g_read_select_2;
     if (bus__r_en) begin
-      \$468  = \$7 ;
+      \$468  = \$5 ;
     end
     if (rst) begin
       \$468  = 1'h0;
@@ -3678,85 +3686,81 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$469  = g_read_data;
-    if (bus__r_load) begin
-      \$469  = \$17 ;
+    \$469  = g_read_select_3;
+    if (bus__r_en) begin
+      \$469  = \$6 ;
     end
     if (rst) begin
-      \$469  = 32'd0;
+      \$469  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$470  = \$19 ;
+    \$470  = g_read_select_4;
+    if (bus__r_en) begin
+      \$470  = \$7 ;
+    end
     if (rst) begin
       \$470  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$471  = \$21 ;
+    \$471  = g_read_data;
+    if (bus__r_load) begin
+      \$471  = \$17 ;
+    end
     if (rst) begin
-      \$471  = 1'h0;
+      \$471  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$472  = \$23 ;
+    \$472  = \$19 ;
     if (rst) begin
       \$472  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$473  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$473  = write_data[8];
-    end
+    \$473  = \$21 ;
     if (rst) begin
       \$473  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$474  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$474  = write_data[9];
-    end
+    \$474  = \$23 ;
     if (rst) begin
       \$474  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$475  = ch0_irq_status_done;
+    \$475  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$475  = write_data[8];
+    end
+    if (rst) begin
+      \$475  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$476  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$476  = write_data[9];
+    end
+    if (rst) begin
+      \$476  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$477  = ch0_irq_status_done;
     if (ch0__frame_done) begin
-      \$475  = 1'h1;
-    end else if (\$27 ) begin
-      \$475  = 1'h0;
-    end
-    if (rst) begin
-      \$475  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$476  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$476  = 1'h1;
-    end else if (\$29 ) begin
-      \$476  = 1'h0;
-    end
-    if (rst) begin
-      \$476  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$477  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
       \$477  = 1'h1;
-    end else if (\$31 ) begin
+    end else if (\$27 ) begin
       \$477  = 1'h0;
     end
     if (rst) begin
@@ -3765,16 +3769,23 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$478  = ch0_irq_enable_write;
+    \$478  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$478  = 1'h1;
+    end else if (\$29 ) begin
+      \$478  = 1'h0;
+    end
     if (rst) begin
       \$478  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$479  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$479  = config_write_data[0];
+    \$479  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$479  = 1'h1;
+    end else if (\$31 ) begin
+      \$479  = 1'h0;
     end
     if (rst) begin
       \$479  = 1'h0;
@@ -3782,19 +3793,16 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$480  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$480  = config_write_data[1];
-    end
+    \$480  = ch0_irq_enable_write;
     if (rst) begin
       \$480  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$481  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$481  = config_write_data[2];
+    \$481  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$481  = config_write_data[0];
     end
     if (rst) begin
       \$481  = 1'h0;
@@ -3802,77 +3810,74 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$482  = ch0_cfg_ma_write;
+    \$482  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$482  = config_write_data[1];
+    end
     if (rst) begin
       \$482  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$483  = ch0_cfg_ma_ma_half_period;
+    \$483  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$483  = config_write_data[2];
+    end
+    if (rst) begin
+      \$483  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$484  = ch0_cfg_ma_write;
+    if (rst) begin
+      \$484  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$485  = ch0_cfg_ma_ma_half_period;
     if (\$35 ) begin
-      \$483 [7:0] = config_write_data[7:0];
+      \$485 [7:0] = config_write_data[7:0];
     end
     if (\$36 ) begin
-      \$483 [15:8] = config_write_data[15:8];
+      \$485 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$483  = 16'h0000;
+      \$485  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$484  = ch0_cfg_ma_delay_limit;
+    \$486  = ch0_cfg_ma_delay_limit;
     if (\$37 ) begin
-      \$484 [7:0] = config_write_data[23:16];
+      \$486 [7:0] = config_write_data[23:16];
     end
     if (\$38 ) begin
-      \$484 [11:8] = config_write_data[27:24];
+      \$486 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$484  = 12'h000;
+      \$486  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$485  = ch0_cfg_period_write;
-    if (rst) begin
-      \$485  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$486  = ch0_cfg_period_request_period;
-    if (\$39 ) begin
-      \$486 [7:0] = config_write_data[7:0];
-    end
-    if (\$40 ) begin
-      \$486 [15:8] = config_write_data[15:8];
-    end
-    if (\$41 ) begin
-      \$486 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$486  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$487  = ch0_cfg_break_write;
+    \$487  = ch0_cfg_period_write;
     if (rst) begin
       \$487  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$488  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
+    \$488  = ch0_cfg_period_request_period;
+    if (\$39 ) begin
       \$488 [7:0] = config_write_data[7:0];
     end
-    if (\$43 ) begin
+    if (\$40 ) begin
       \$488 [15:8] = config_write_data[15:8];
     end
-    if (\$44 ) begin
+    if (\$41 ) begin
       \$488 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -3881,21 +3886,21 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$489  = ch0_cfg_ack_write;
+    \$489  = ch0_cfg_break_write;
     if (rst) begin
       \$489  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$490  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
+    \$490  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
       \$490 [7:0] = config_write_data[7:0];
     end
-    if (\$46 ) begin
+    if (\$43 ) begin
       \$490 [15:8] = config_write_data[15:8];
     end
-    if (\$47 ) begin
+    if (\$44 ) begin
       \$490 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -3904,21 +3909,21 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$491  = ch0_cfg_timeout_write;
+    \$491  = ch0_cfg_ack_write;
     if (rst) begin
       \$491  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$492  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
+    \$492  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
       \$492 [7:0] = config_write_data[7:0];
     end
-    if (\$49 ) begin
+    if (\$46 ) begin
       \$492 [15:8] = config_write_data[15:8];
     end
-    if (\$50 ) begin
+    if (\$47 ) begin
       \$492 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
@@ -3927,56 +3932,59 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$493  = ch0_cfg_words_write;
+    \$493  = ch0_cfg_timeout_write;
     if (rst) begin
       \$493  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$494  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$494  = config_write_data[5:0];
+    \$494  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
+      \$494 [7:0] = config_write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$494 [15:8] = config_write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$494 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$494  = 6'h00;
+      \$494  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$495  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$495  = config_write_data[6];
-    end
+    \$495  = ch0_cfg_words_write;
     if (rst) begin
       \$495  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$496  = ch0_cfg_words_w0_lc;
+    \$496  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$496  = config_write_data[5:0];
+    end
+    if (rst) begin
+      \$496  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$497  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$497  = config_write_data[6];
+    end
+    if (rst) begin
+      \$497  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$498  = ch0_cfg_words_w0_lc;
     if (\$53 ) begin
-      \$496  = config_write_data[7];
-    end
-    if (rst) begin
-      \$496  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$497  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$497  = config_write_data[9:8];
-    end
-    if (rst) begin
-      \$497  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$498  = ch0_cfg_words_w0_gray;
-    if (\$55 ) begin
-      \$498  = config_write_data[10];
+      \$498  = config_write_data[7];
     end
     if (rst) begin
       \$498  = 1'h0;
@@ -3984,29 +3992,29 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$499  = ch0_cfg_words_w0_signed;
+    \$499  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$499  = config_write_data[9:8];
+    end
+    if (rst) begin
+      \$499  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$500  = ch0_cfg_words_w0_gray;
+    if (\$55 ) begin
+      \$500  = config_write_data[10];
+    end
+    if (rst) begin
+      \$500  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$501  = ch0_cfg_words_w0_signed;
     if (\$56 ) begin
-      \$499  = config_write_data[11];
-    end
-    if (rst) begin
-      \$499  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$500  = ch0_cfg_words_w1_data_bits;
-    if (\$57 ) begin
-      \$500  = config_write_data[21:16];
-    end
-    if (rst) begin
-      \$500  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$501  = ch0_cfg_words_w1_nenw;
-    if (\$58 ) begin
-      \$501  = config_write_data[22];
+      \$501  = config_write_data[11];
     end
     if (rst) begin
       \$501  = 1'h0;
@@ -4014,29 +4022,29 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$502  = ch0_cfg_words_w1_lc;
+    \$502  = ch0_cfg_words_w1_data_bits;
+    if (\$57 ) begin
+      \$502  = config_write_data[21:16];
+    end
+    if (rst) begin
+      \$502  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$503  = ch0_cfg_words_w1_nenw;
+    if (\$58 ) begin
+      \$503  = config_write_data[22];
+    end
+    if (rst) begin
+      \$503  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$504  = ch0_cfg_words_w1_lc;
     if (\$59 ) begin
-      \$502  = config_write_data[23];
-    end
-    if (rst) begin
-      \$502  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$503  = ch0_cfg_words_w1_crc;
-    if (\$60 ) begin
-      \$503  = config_write_data[25:24];
-    end
-    if (rst) begin
-      \$503  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$504  = ch0_cfg_words_w1_gray;
-    if (\$61 ) begin
-      \$504  = config_write_data[26];
+      \$504  = config_write_data[23];
     end
     if (rst) begin
       \$504  = 1'h0;
@@ -4044,19 +4052,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$505  = ch0_cfg_words_w1_signed;
-    if (\$62 ) begin
-      \$505  = config_write_data[27];
+    \$505  = ch0_cfg_words_w1_crc;
+    if (\$60 ) begin
+      \$505  = config_write_data[25:24];
     end
     if (rst) begin
-      \$505  = 1'h0;
+      \$505  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$506  = ch0_cfg_words_w1_enable;
-    if (\$63 ) begin
-      \$506  = config_write_data[31];
+    \$506  = ch0_cfg_words_w1_gray;
+    if (\$61 ) begin
+      \$506  = config_write_data[26];
     end
     if (rst) begin
       \$506  = 1'h0;
@@ -4064,16 +4072,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$507  = ch0_cfg_checks_write;
+    \$507  = ch0_cfg_words_w1_signed;
+    if (\$62 ) begin
+      \$507  = config_write_data[27];
+    end
     if (rst) begin
       \$507  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$508  = ch0_cfg_checks_end_check;
-    if (\$64 ) begin
-      \$508  = config_write_data[0];
+    \$508  = ch0_cfg_words_w1_enable;
+    if (\$63 ) begin
+      \$508  = config_write_data[31];
     end
     if (rst) begin
       \$508  = 1'h0;
@@ -4081,250 +4092,253 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$509  = ch0_cfg_checks_spw_check;
-    if (\$65 ) begin
-      \$509  = config_write_data[1];
-    end
+    \$509  = ch0_cfg_checks_write;
     if (rst) begin
       \$509  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$510  = ch0_cfg_checks_spw_tolerance;
+    \$510  = ch0_cfg_checks_end_check;
+    if (\$64 ) begin
+      \$510  = config_write_data[0];
+    end
+    if (rst) begin
+      \$510  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$511  = ch0_cfg_checks_spw_check;
+    if (\$65 ) begin
+      \$511  = config_write_data[1];
+    end
+    if (rst) begin
+      \$511  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$512  = ch0_cfg_checks_spw_tolerance;
     if (\$66 ) begin
-      \$510  = config_write_data[15:8];
+      \$512  = config_write_data[15:8];
     end
     if (rst) begin
-      \$510  = 8'h00;
+      \$512  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$511  = ch0_cfg_checks_noise_limit;
+    \$513  = ch0_cfg_checks_noise_limit;
     if (\$67 ) begin
-      \$511  = config_write_data[19:16];
+      \$513  = config_write_data[19:16];
     end
     if (rst) begin
-      \$511  = 4'h0;
+      \$513  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$512  = ch0_cfg_checks_delay_tolerance;
+    \$514  = ch0_cfg_checks_delay_tolerance;
     if (\$68 ) begin
-      \$512  = config_write_data[23:20];
+      \$514  = config_write_data[23:20];
     end
     if (rst) begin
-      \$512  = 4'h0;
+      \$514  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$513  = ch0_cfg_quiet_write;
-    if (rst) begin
-      \$513  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$514  = ch0_cfg_quiet_quiet_time;
+    \$515  = ch0_cfg_checks_confirm_frames;
     if (\$69 ) begin
-      \$514 [7:0] = config_write_data[7:0];
+      \$515  = config_write_data[27:24];
     end
+    if (rst) begin
+      \$515  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$516  = ch0_cfg_quiet_write;
+    if (rst) begin
+      \$516  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$517  = ch0_cfg_quiet_quiet_time;
     if (\$70 ) begin
-      \$514 [11:8] = config_write_data[11:8];
+      \$517 [7:0] = config_write_data[7:0];
     end
-    if (rst) begin
-      \$514  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$515  = ch0_cfg_crc0_write;
-    if (rst) begin
-      \$515  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$516  = ch0_cfg_crc0_w0_crc_poly;
     if (\$71 ) begin
-      \$516 [7:0] = config_write_data[7:0];
-    end
-    if (\$72 ) begin
-      \$516 [15:8] = config_write_data[15:8];
+      \$517 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$516  = 16'h0000;
+      \$517  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$517  = ch0_cfg_crc0_w0_crc_width;
-    if (\$73 ) begin
-      \$517  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$517  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$518  = ch0_cfg_crc0_w0_crc_inverted;
-    if (\$74 ) begin
-      \$518  = config_write_data[24];
-    end
+    \$518  = ch0_cfg_crc0_write;
     if (rst) begin
       \$518  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$519  = ch0_cfg_crc0_start_write;
+    \$519  = ch0_cfg_crc0_w0_crc_poly;
+    if (\$72 ) begin
+      \$519 [7:0] = config_write_data[7:0];
+    end
+    if (\$73 ) begin
+      \$519 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$519  = 1'h0;
+      \$519  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$520  = ch0_cfg_crc0_start_w0_crc_start;
+    \$520  = ch0_cfg_crc0_w0_crc_width;
+    if (\$74 ) begin
+      \$520  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$520  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$521  = ch0_cfg_crc0_w0_crc_inverted;
     if (\$75 ) begin
-      \$520 [7:0] = config_write_data[7:0];
+      \$521  = config_write_data[24];
     end
-    if (\$76 ) begin
-      \$520 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$520  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$521  = ch0_cfg_crc1_write;
     if (rst) begin
       \$521  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$522  = ch0_cfg_crc1_w1_crc_poly;
+    \$522  = ch0_cfg_crc0_start_write;
+    if (rst) begin
+      \$522  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$523  = ch0_cfg_crc0_start_w0_crc_start;
+    if (\$76 ) begin
+      \$523 [7:0] = config_write_data[7:0];
+    end
     if (\$77 ) begin
-      \$522 [7:0] = config_write_data[7:0];
-    end
-    if (\$78 ) begin
-      \$522 [15:8] = config_write_data[15:8];
+      \$523 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$522  = 16'h0000;
+      \$523  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$523  = ch0_cfg_crc1_w1_crc_width;
-    if (\$79 ) begin
-      \$523  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$523  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$524  = ch0_cfg_crc1_w1_crc_inverted;
-    if (\$80 ) begin
-      \$524  = config_write_data[24];
-    end
+    \$524  = ch0_cfg_crc1_write;
     if (rst) begin
       \$524  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$525  = ch0_cfg_crc1_start_write;
+    \$525  = ch0_cfg_crc1_w1_crc_poly;
+    if (\$78 ) begin
+      \$525 [7:0] = config_write_data[7:0];
+    end
+    if (\$79 ) begin
+      \$525 [15:8] = config_write_data[15:8];
+    end
     if (rst) begin
-      \$525  = 1'h0;
+      \$525  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$526  = ch0_cfg_crc1_start_w1_crc_start;
+    \$526  = ch0_cfg_crc1_w1_crc_width;
+    if (\$80 ) begin
+      \$526  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$526  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$527  = ch0_cfg_crc1_w1_crc_inverted;
     if (\$81 ) begin
-      \$526 [7:0] = config_write_data[7:0];
+      \$527  = config_write_data[24];
     end
-    if (\$82 ) begin
-      \$526 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$526  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$527  = ch0_ca_request_write;
     if (rst) begin
       \$527  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$528  = ch0_ca_request_slave_id;
+    \$528  = ch0_cfg_crc1_start_write;
+    if (rst) begin
+      \$528  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$529  = ch0_cfg_crc1_start_w1_crc_start;
+    if (\$82 ) begin
+      \$529 [7:0] = config_write_data[7:0];
+    end
     if (\$83 ) begin
-      \$528  = config_write_data[2:0];
+      \$529 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$528  = 3'h0;
+      \$529  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$529  = ch0_ca_request_address;
+    \$530  = ch0_ca_request_write;
+    if (rst) begin
+      \$530  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$531  = ch0_ca_request_slave_id;
     if (\$84 ) begin
-      \$529  = config_write_data[14:8];
+      \$531  = config_write_data[2:0];
     end
     if (rst) begin
-      \$529  = 7'h00;
+      \$531  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$530  = ch0_ca_request_count;
+    \$532  = ch0_ca_request_address;
     if (\$85 ) begin
-      \$530  = config_write_data[22:16];
+      \$532  = config_write_data[14:8];
     end
     if (rst) begin
-      \$530  = 7'h00;
+      \$532  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$531  = \ch0_ca_request_write$105 ;
+    \$533  = ch0_ca_request_count;
     if (\$86 ) begin
-      \$531  = config_write_data[24];
+      \$533  = config_write_data[22:16];
     end
     if (rst) begin
-      \$531  = 1'h0;
+      \$533  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$532  = \$88 ;
-    if (rst) begin
-      \$532  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$533  = \$90 ;
-    if (rst) begin
-      \$533  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$534  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$534  = \$91 ;
+    \$534  = \ch0_ca_request_write$106 ;
+    if (\$87 ) begin
+      \$534  = config_write_data[24];
     end
     if (rst) begin
       \$534  = 1'h0;
@@ -4332,29 +4346,23 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$535  = ch0_read_select_81;
-    if (bus__r_en) begin
-      \$535  = \$92 ;
-    end
+    \$535  = \$89 ;
     if (rst) begin
       \$535  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$536  = ch0_read_select_82;
-    if (bus__r_en) begin
-      \$536  = \$93 ;
-    end
+    \$536  = \$91 ;
     if (rst) begin
       \$536  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$537  = ch0_read_select_84;
+    \$537  = ch0_read_select_80;
     if (bus__r_en) begin
-      \$537  = \$94 ;
+      \$537  = \$92 ;
     end
     if (rst) begin
       \$537  = 1'h0;
@@ -4362,9 +4370,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$538  = ch0_read_select_85;
+    \$538  = ch0_read_select_81;
     if (bus__r_en) begin
-      \$538  = \$95 ;
+      \$538  = \$93 ;
     end
     if (rst) begin
       \$538  = 1'h0;
@@ -4372,9 +4380,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$539  = ch0_read_select_88;
+    \$539  = ch0_read_select_82;
     if (bus__r_en) begin
-      \$539  = \$96 ;
+      \$539  = \$94 ;
     end
     if (rst) begin
       \$539  = 1'h0;
@@ -4382,9 +4390,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$540  = ch0_read_select_89;
+    \$540  = ch0_read_select_84;
     if (bus__r_en) begin
-      \$540  = \$97 ;
+      \$540  = \$95 ;
     end
     if (rst) begin
       \$540  = 1'h0;
@@ -4392,9 +4400,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$541  = ch0_read_select_8a;
+    \$541  = ch0_read_select_85;
     if (bus__r_en) begin
-      \$541  = \$98 ;
+      \$541  = \$96 ;
     end
     if (rst) begin
       \$541  = 1'h0;
@@ -4402,9 +4410,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$542  = ch0_read_select_8b;
+    \$542  = ch0_read_select_88;
     if (bus__r_en) begin
-      \$542  = \$99 ;
+      \$542  = \$97 ;
     end
     if (rst) begin
       \$542  = 1'h0;
@@ -4412,9 +4420,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$543  = ch0_read_select_8c;
+    \$543  = ch0_read_select_89;
     if (bus__r_en) begin
-      \$543  = \$100 ;
+      \$543  = \$98 ;
     end
     if (rst) begin
       \$543  = 1'h0;
@@ -4422,9 +4430,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$544  = ch0_read_select_8d;
+    \$544  = ch0_read_select_8a;
     if (bus__r_en) begin
-      \$544  = \$101 ;
+      \$544  = \$99 ;
     end
     if (rst) begin
       \$544  = 1'h0;
@@ -4432,9 +4440,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$545  = ch0_read_select_8e;
+    \$545  = ch0_read_select_8b;
     if (bus__r_en) begin
-      \$545  = \$102 ;
+      \$545  = \$100 ;
     end
     if (rst) begin
       \$545  = 1'h0;
@@ -4442,9 +4450,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$546  = ch0_read_select_8f;
+    \$546  = ch0_read_select_8c;
     if (bus__r_en) begin
-      \$546  = \$103 ;
+      \$546  = \$101 ;
     end
     if (rst) begin
       \$546  = 1'h0;
@@ -4452,9 +4460,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$547  = ch0_read_select_90;
+    \$547  = ch0_read_select_8d;
     if (bus__r_en) begin
-      \$547  = \$104 ;
+      \$547  = \$102 ;
     end
     if (rst) begin
       \$547  = 1'h0;
@@ -4462,9 +4470,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$548  = ch0_read_select_91;
+    \$548  = ch0_read_select_8e;
     if (bus__r_en) begin
-      \$548  = \$105 ;
+      \$548  = \$103 ;
     end
     if (rst) begin
       \$548  = 1'h0;
@@ -4472,9 +4480,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$549  = ch0_read_select_92;
+    \$549  = ch0_read_select_8f;
     if (bus__r_en) begin
-      \$549  = \$106 ;
+      \$549  = \$104 ;
     end
     if (rst) begin
       \$549  = 1'h0;
@@ -4482,9 +4490,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$550  = ch0_read_select_93;
+    \$550  = ch0_read_select_90;
     if (bus__r_en) begin
-      \$550  = \$107 ;
+      \$550  = \$105 ;
     end
     if (rst) begin
       \$550  = 1'h0;
@@ -4492,9 +4500,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$551  = ch0_read_select_94;
+    \$551  = ch0_read_select_91;
     if (bus__r_en) begin
-      \$551  = \$108 ;
+      \$551  = \$106 ;
     end
     if (rst) begin
       \$551  = 1'h0;
@@ -4502,9 +4510,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$552  = ch0_read_select_95;
+    \$552  = ch0_read_select_92;
     if (bus__r_en) begin
-      \$552  = \$109 ;
+      \$552  = \$107 ;
     end
     if (rst) begin
       \$552  = 1'h0;
@@ -4512,9 +4520,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$553  = ch0_read_select_96;
+    \$553  = ch0_read_select_93;
     if (bus__r_en) begin
-      \$553  = \$110 ;
+      \$553  = \$108 ;
     end
     if (rst) begin
       \$553  = 1'h0;
@@ -4522,9 +4530,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$554  = ch0_read_select_97;
+    \$554  = ch0_read_select_94;
     if (bus__r_en) begin
-      \$554  = \$111 ;
+      \$554  = \$109 ;
     end
     if (rst) begin
       \$554  = 1'h0;
@@ -4532,9 +4540,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$555  = ch0_read_select_a0;
+    \$555  = ch0_read_select_95;
     if (bus__r_en) begin
-      \$555  = \$112 ;
+      \$555  = \$110 ;
     end
     if (rst) begin
       \$555  = 1'h0;
@@ -4542,9 +4550,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$556  = ch0_read_select_a1;
+    \$556  = ch0_read_select_96;
     if (bus__r_en) begin
-      \$556  = \$113 ;
+      \$556  = \$111 ;
     end
     if (rst) begin
       \$556  = 1'h0;
@@ -4552,9 +4560,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$557  = ch0_read_select_a2;
+    \$557  = ch0_read_select_97;
     if (bus__r_en) begin
-      \$557  = \$114 ;
+      \$557  = \$112 ;
     end
     if (rst) begin
       \$557  = 1'h0;
@@ -4562,9 +4570,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$558  = ch0_read_select_a3;
+    \$558  = ch0_read_select_a0;
     if (bus__r_en) begin
-      \$558  = \$115 ;
+      \$558  = \$113 ;
     end
     if (rst) begin
       \$558  = 1'h0;
@@ -4572,9 +4580,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$559  = ch0_read_select_c0;
+    \$559  = ch0_read_select_a1;
     if (bus__r_en) begin
-      \$559  = \$116 ;
+      \$559  = \$114 ;
     end
     if (rst) begin
       \$559  = 1'h0;
@@ -4582,9 +4590,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$560  = ch0_read_select_c1;
+    \$560  = ch0_read_select_a2;
     if (bus__r_en) begin
-      \$560  = \$117 ;
+      \$560  = \$115 ;
     end
     if (rst) begin
       \$560  = 1'h0;
@@ -4592,9 +4600,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$561  = ch0_read_select_c2;
+    \$561  = ch0_read_select_a3;
     if (bus__r_en) begin
-      \$561  = \$118 ;
+      \$561  = \$116 ;
     end
     if (rst) begin
       \$561  = 1'h0;
@@ -4602,9 +4610,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$562  = ch0_read_select_c3;
+    \$562  = ch0_read_select_c0;
     if (bus__r_en) begin
-      \$562  = \$119 ;
+      \$562  = \$117 ;
     end
     if (rst) begin
       \$562  = 1'h0;
@@ -4612,9 +4620,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$563  = ch0_read_select_c4;
+    \$563  = ch0_read_select_c1;
     if (bus__r_en) begin
-      \$563  = \$120 ;
+      \$563  = \$118 ;
     end
     if (rst) begin
       \$563  = 1'h0;
@@ -4622,9 +4630,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$564  = ch0_read_select_c5;
+    \$564  = ch0_read_select_c2;
     if (bus__r_en) begin
-      \$564  = \$121 ;
+      \$564  = \$119 ;
     end
     if (rst) begin
       \$564  = 1'h0;
@@ -4632,19 +4640,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$565  = ch0_result_status_status_snapshot;
-    if (\$122 ) begin
-      \$565  = \port$6765$0 [3:0];
+    \$565  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$565  = \$120 ;
     end
     if (rst) begin
-      \$565  = 4'h0;
+      \$565  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$566  = ch0_result_status_cds_snapshot;
-    if (\$122 ) begin
-      \$566  = \port$6765$0 [49];
+    \$566  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$566  = \$121 ;
     end
     if (rst) begin
       \$566  = 1'h0;
@@ -4652,9 +4660,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$567  = ch0_result_status_w0_ne_snapshot;
-    if (\$122 ) begin
-      \$567  = \port$6765$0 [131];
+    \$567  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$567  = \$122 ;
     end
     if (rst) begin
       \$567  = 1'h0;
@@ -4662,19 +4670,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$568  = ch0_result_status_w0_nw_snapshot;
-    if (\$122 ) begin
-      \$568  = \port$6765$0 [132];
+    \$568  = ch0_result_status_status_snapshot;
+    if (\$123 ) begin
+      \$568  = \port$6831$0 [3:0];
     end
     if (rst) begin
-      \$568  = 1'h0;
+      \$568  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$569  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$122 ) begin
-      \$569  = \port$6765$0 [133];
+    \$569  = ch0_result_status_cds_snapshot;
+    if (\$123 ) begin
+      \$569  = \port$6831$0 [49];
     end
     if (rst) begin
       \$569  = 1'h0;
@@ -4682,9 +4690,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$570  = ch0_result_status_w1_ne_snapshot;
-    if (\$122 ) begin
-      \$570  = \port$6765$0 [174];
+    \$570  = ch0_result_status_w0_ne_snapshot;
+    if (\$123 ) begin
+      \$570  = \port$6831$0 [131];
     end
     if (rst) begin
       \$570  = 1'h0;
@@ -4692,9 +4700,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$571  = ch0_result_status_w1_nw_snapshot;
-    if (\$122 ) begin
-      \$571  = \port$6765$0 [175];
+    \$571  = ch0_result_status_w0_nw_snapshot;
+    if (\$123 ) begin
+      \$571  = \port$6831$0 [132];
     end
     if (rst) begin
       \$571  = 1'h0;
@@ -4702,9 +4710,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$572  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$122 ) begin
-      \$572  = \port$6765$0 [176];
+    \$572  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$123 ) begin
+      \$572  = \port$6831$0 [133];
     end
     if (rst) begin
       \$572  = 1'h0;
@@ -4712,9 +4720,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$573  = ch0_result_status_lc_repeat_snapshot;
-    if (\$122 ) begin
-      \$573  = \port$6765$0 [183];
+    \$573  = ch0_result_status_w1_ne_snapshot;
+    if (\$123 ) begin
+      \$573  = \port$6831$0 [174];
     end
     if (rst) begin
       \$573  = 1'h0;
@@ -4722,9 +4730,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$574  = ch0_result_status_lc_skip_snapshot;
-    if (\$122 ) begin
-      \$574  = \port$6765$0 [184];
+    \$574  = ch0_result_status_w1_nw_snapshot;
+    if (\$123 ) begin
+      \$574  = \port$6831$0 [175];
     end
     if (rst) begin
       \$574  = 1'h0;
@@ -4732,9 +4740,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$575  = ch0_result_status_lc_zero_snapshot;
-    if (\$122 ) begin
-      \$575  = \port$6765$0 [185];
+    \$575  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$123 ) begin
+      \$575  = \port$6831$0 [176];
     end
     if (rst) begin
       \$575  = 1'h0;
@@ -4742,9 +4750,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$576  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$122 ) begin
-      \$576  = \port$6765$0 [186];
+    \$576  = ch0_result_status_lc_repeat_snapshot;
+    if (\$123 ) begin
+      \$576  = \port$6831$0 [183];
     end
     if (rst) begin
       \$576  = 1'h0;
@@ -4752,129 +4760,129 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$577  = ch0_result_status_lc_snapshot;
-    if (\$122 ) begin
-      \$577  = \port$6765$0 [182:177];
+    \$577  = ch0_result_status_lc_skip_snapshot;
+    if (\$123 ) begin
+      \$577  = \port$6831$0 [184];
     end
     if (rst) begin
-      \$577  = 6'h00;
+      \$577  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$578  = ch0_result_seq_seq_snapshot;
-    if (\$122 ) begin
-      \$578  = ch0__done_count;
+    \$578  = ch0_result_status_lc_zero_snapshot;
+    if (\$123 ) begin
+      \$578  = \port$6831$0 [185];
     end
     if (rst) begin
-      \$578  = 16'h0000;
+      \$578  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$579  = ch0_result_seq_line_delay_snapshot;
-    if (\$122 ) begin
-      \$579  = \port$6765$0 [48:36];
+    \$579  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$123 ) begin
+      \$579  = \port$6831$0 [186];
     end
     if (rst) begin
-      \$579  = 13'h0000;
+      \$579  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$580  = ch0_result_w0_lo_data_snapshot;
-    if (\$122 ) begin
-      \$580  = \port$6765$0 [107:76];
+    \$580  = ch0_result_status_lc_snapshot;
+    if (\$123 ) begin
+      \$580  = \port$6831$0 [182:177];
     end
     if (rst) begin
-      \$580  = 32'd0;
+      \$580  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$581  = ch0_result_w0_hi_data_snapshot;
-    if (\$122 ) begin
-      \$581  = \port$6765$0 [130:108];
+    \$581  = ch0_result_seq_seq_snapshot;
+    if (\$123 ) begin
+      \$581  = ch0__done_count;
     end
     if (rst) begin
-      \$581  = 23'h000000;
+      \$581  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$582  = ch0_result_w1_lo_data_snapshot;
-    if (\$122 ) begin
-      \$582  = \port$6765$0 [165:134];
+    \$582  = ch0_result_seq_line_delay_snapshot;
+    if (\$123 ) begin
+      \$582  = \port$6831$0 [48:36];
     end
     if (rst) begin
-      \$582  = 32'd0;
+      \$582  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$583  = ch0_result_w1_hi_data_snapshot;
-    if (\$122 ) begin
-      \$583  = \port$6765$0 [173:166];
+    \$583  = ch0_result_w0_lo_data_snapshot;
+    if (\$123 ) begin
+      \$583  = \port$6831$0 [107:76];
     end
     if (rst) begin
-      \$583  = 8'h00;
+      \$583  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$584  = ch0_result_timestamp_time_snapshot;
-    if (\$122 ) begin
-      \$584  = \port$6765$0 [35:4];
+    \$584  = ch0_result_w0_hi_data_snapshot;
+    if (\$123 ) begin
+      \$584  = \port$6831$0 [130:108];
     end
     if (rst) begin
-      \$584  = 32'd0;
+      \$584  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$585  = ch0_result_line_noise_events_snapshot;
-    if (\$122 ) begin
-      \$585  = \port$6765$0 [53:50];
+    \$585  = ch0_result_w1_lo_data_snapshot;
+    if (\$123 ) begin
+      \$585  = \port$6831$0 [165:134];
     end
     if (rst) begin
-      \$585  = 4'h0;
+      \$585  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$586  = ch0_result_line_delay_settled_snapshot;
-    if (\$122 ) begin
-      \$586  = \port$6765$0 [54];
+    \$586  = ch0_result_w1_hi_data_snapshot;
+    if (\$123 ) begin
+      \$586  = \port$6831$0 [173:166];
     end
     if (rst) begin
-      \$586  = 1'h0;
+      \$586  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$587  = ch0_result_line_delay_spread_snapshot;
-    if (\$122 ) begin
-      \$587  = \port$6765$0 [75:68];
+    \$587  = ch0_result_timestamp_time_snapshot;
+    if (\$123 ) begin
+      \$587  = \port$6831$0 [35:4];
     end
     if (rst) begin
-      \$587  = 8'h00;
+      \$587  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$588  = ch0_result_line_settled_delay_snapshot;
-    if (\$122 ) begin
-      \$588  = \port$6765$0 [67:55];
+    \$588  = ch0_result_line_noise_events_snapshot;
+    if (\$123 ) begin
+      \$588  = \port$6831$0 [53:50];
     end
     if (rst) begin
-      \$588  = 13'h0000;
+      \$588  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$589  = ch0_window0_read;
-    if (bus__r_en) begin
-      \$589  = \$124 ;
+    \$589  = ch0_result_line_delay_settled_snapshot;
+    if (\$123 ) begin
+      \$589  = \port$6831$0 [54];
     end
     if (rst) begin
       \$589  = 1'h0;
@@ -4882,113 +4890,114 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$590  = ch0_window1_read;
+    \$590  = ch0_result_line_delay_spread_snapshot;
+    if (\$123 ) begin
+      \$590  = \port$6831$0 [75:68];
+    end
+    if (rst) begin
+      \$590  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$591  = ch0_result_line_settled_delay_snapshot;
+    if (\$123 ) begin
+      \$591  = \port$6831$0 [67:55];
+    end
+    if (rst) begin
+      \$591  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$592  = ch0_window0_read;
     if (bus__r_en) begin
-      \$590  = \$126 ;
+      \$592  = \$125 ;
     end
-    if (rst) begin
-      \$590  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$591  = ch0_read_data;
-    if (bus__r_load) begin
-      \$591  = \$192 ;
-    end
-    if (rst) begin
-      \$591  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$592  = \$194 ;
     if (rst) begin
       \$592  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$593  = \$196 ;
+    \$593  = ch0_window1_read;
+    if (bus__r_en) begin
+      \$593  = \$127 ;
+    end
     if (rst) begin
       \$593  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$594  = \$198 ;
+    \$594  = ch0_read_data;
+    if (bus__r_load) begin
+      \$594  = \$193 ;
+    end
     if (rst) begin
-      \$594  = 1'h0;
+      \$594  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$595  = ch1_ctrl_periodic;
-    if (\$199 ) begin
-      \$595  = write_data[8];
-    end
+    \$595  = \$195 ;
     if (rst) begin
       \$595  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$596  = ch1_ctrl_trigger_enable;
-    if (\$200 ) begin
-      \$596  = write_data[9];
-    end
+    \$596  = \$197 ;
     if (rst) begin
       \$596  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$597  = ch1_irq_status_done;
+    \$597  = \$199 ;
+    if (rst) begin
+      \$597  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$598  = ch1_ctrl_periodic;
+    if (\$200 ) begin
+      \$598  = write_data[8];
+    end
+    if (rst) begin
+      \$598  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$599  = ch1_ctrl_trigger_enable;
+    if (\$201 ) begin
+      \$599  = write_data[9];
+    end
+    if (rst) begin
+      \$599  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$600  = ch1_irq_status_done;
     if (ch1__frame_done) begin
-      \$597  = 1'h1;
-    end else if (\$202 ) begin
-      \$597  = 1'h0;
+      \$600  = 1'h1;
+    end else if (\$203 ) begin
+      \$600  = 1'h0;
     end
-    if (rst) begin
-      \$597  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$598  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$598  = 1'h1;
-    end else if (\$204 ) begin
-      \$598  = 1'h0;
-    end
-    if (rst) begin
-      \$598  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$599  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$599  = 1'h1;
-    end else if (\$206 ) begin
-      \$599  = 1'h0;
-    end
-    if (rst) begin
-      \$599  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$600  = ch1_irq_enable_write;
     if (rst) begin
       \$600  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$601  = ch1_irq_enable_done;
-    if (\$207 ) begin
-      \$601  = config_write_data[0];
+    \$601  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$601  = 1'h1;
+    end else if (\$205 ) begin
+      \$601  = 1'h0;
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -4996,9 +5005,11 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$602  = ch1_irq_enable_error;
-    if (\$208 ) begin
-      \$602  = config_write_data[1];
+    \$602  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$602  = 1'h1;
+    end else if (\$207 ) begin
+      \$602  = 1'h0;
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -5006,191 +5017,188 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$603  = ch1_irq_enable_access_done;
-    if (\$209 ) begin
-      \$603  = config_write_data[2];
-    end
+    \$603  = ch1_irq_enable_write;
     if (rst) begin
       \$603  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$604  = ch1_cfg_ma_write;
+    \$604  = ch1_irq_enable_done;
+    if (\$208 ) begin
+      \$604  = config_write_data[0];
+    end
     if (rst) begin
       \$604  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$605  = ch1_cfg_ma_ma_half_period;
+    \$605  = ch1_irq_enable_error;
+    if (\$209 ) begin
+      \$605  = config_write_data[1];
+    end
+    if (rst) begin
+      \$605  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$606  = ch1_irq_enable_access_done;
     if (\$210 ) begin
-      \$605 [7:0] = config_write_data[7:0];
-    end
-    if (\$211 ) begin
-      \$605 [15:8] = config_write_data[15:8];
+      \$606  = config_write_data[2];
     end
     if (rst) begin
-      \$605  = 16'h0000;
+      \$606  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$606  = ch1_cfg_ma_delay_limit;
-    if (\$212 ) begin
-      \$606 [7:0] = config_write_data[23:16];
-    end
-    if (\$213 ) begin
-      \$606 [11:8] = config_write_data[27:24];
-    end
-    if (rst) begin
-      \$606  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$607  = ch1_cfg_period_write;
+    \$607  = ch1_cfg_ma_write;
     if (rst) begin
       \$607  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$608  = ch1_cfg_period_request_period;
-    if (\$214 ) begin
+    \$608  = ch1_cfg_ma_ma_half_period;
+    if (\$211 ) begin
       \$608 [7:0] = config_write_data[7:0];
     end
-    if (\$215 ) begin
+    if (\$212 ) begin
       \$608 [15:8] = config_write_data[15:8];
     end
+    if (rst) begin
+      \$608  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$609  = ch1_cfg_ma_delay_limit;
+    if (\$213 ) begin
+      \$609 [7:0] = config_write_data[23:16];
+    end
+    if (\$214 ) begin
+      \$609 [11:8] = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$609  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$610  = ch1_cfg_period_write;
+    if (rst) begin
+      \$610  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$611  = ch1_cfg_period_request_period;
+    if (\$215 ) begin
+      \$611 [7:0] = config_write_data[7:0];
+    end
     if (\$216 ) begin
-      \$608 [23:16] = config_write_data[23:16];
+      \$611 [15:8] = config_write_data[15:8];
     end
-    if (rst) begin
-      \$608  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$609  = ch1_cfg_break_write;
-    if (rst) begin
-      \$609  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$610  = ch1_cfg_break_break_time;
     if (\$217 ) begin
-      \$610 [7:0] = config_write_data[7:0];
+      \$611 [23:16] = config_write_data[23:16];
     end
+    if (rst) begin
+      \$611  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$612  = ch1_cfg_break_write;
+    if (rst) begin
+      \$612  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$613  = ch1_cfg_break_break_time;
     if (\$218 ) begin
-      \$610 [15:8] = config_write_data[15:8];
+      \$613 [7:0] = config_write_data[7:0];
     end
     if (\$219 ) begin
-      \$610 [23:16] = config_write_data[23:16];
+      \$613 [15:8] = config_write_data[15:8];
     end
-    if (rst) begin
-      \$610  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$611  = ch1_cfg_ack_write;
-    if (rst) begin
-      \$611  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$612  = ch1_cfg_ack_ack_limit;
     if (\$220 ) begin
-      \$612 [7:0] = config_write_data[7:0];
+      \$613 [23:16] = config_write_data[23:16];
     end
+    if (rst) begin
+      \$613  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$614  = ch1_cfg_ack_write;
+    if (rst) begin
+      \$614  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$615  = ch1_cfg_ack_ack_limit;
     if (\$221 ) begin
-      \$612 [15:8] = config_write_data[15:8];
+      \$615 [7:0] = config_write_data[7:0];
     end
     if (\$222 ) begin
-      \$612 [23:16] = config_write_data[23:16];
+      \$615 [15:8] = config_write_data[15:8];
     end
-    if (rst) begin
-      \$612  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$613  = ch1_cfg_timeout_write;
-    if (rst) begin
-      \$613  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$614  = ch1_cfg_timeout_timeout_limit;
     if (\$223 ) begin
-      \$614 [7:0] = config_write_data[7:0];
+      \$615 [23:16] = config_write_data[23:16];
     end
+    if (rst) begin
+      \$615  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$616  = ch1_cfg_timeout_write;
+    if (rst) begin
+      \$616  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$617  = ch1_cfg_timeout_timeout_limit;
     if (\$224 ) begin
-      \$614 [15:8] = config_write_data[15:8];
+      \$617 [7:0] = config_write_data[7:0];
     end
     if (\$225 ) begin
-      \$614 [23:16] = config_write_data[23:16];
+      \$617 [15:8] = config_write_data[15:8];
     end
-    if (rst) begin
-      \$614  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$615  = ch1_cfg_words_write;
-    if (rst) begin
-      \$615  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$616  = ch1_cfg_words_w0_data_bits;
     if (\$226 ) begin
-      \$616  = config_write_data[5:0];
+      \$617 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$616  = 6'h00;
+      \$617  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$617  = ch1_cfg_words_w0_nenw;
-    if (\$227 ) begin
-      \$617  = config_write_data[6];
-    end
-    if (rst) begin
-      \$617  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$618  = ch1_cfg_words_w0_lc;
-    if (\$228 ) begin
-      \$618  = config_write_data[7];
-    end
+    \$618  = ch1_cfg_words_write;
     if (rst) begin
       \$618  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$619  = ch1_cfg_words_w0_crc;
-    if (\$229 ) begin
-      \$619  = config_write_data[9:8];
+    \$619  = ch1_cfg_words_w0_data_bits;
+    if (\$227 ) begin
+      \$619  = config_write_data[5:0];
     end
     if (rst) begin
-      \$619  = 2'h0;
+      \$619  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$620  = ch1_cfg_words_w0_gray;
-    if (\$230 ) begin
-      \$620  = config_write_data[10];
+    \$620  = ch1_cfg_words_w0_nenw;
+    if (\$228 ) begin
+      \$620  = config_write_data[6];
     end
     if (rst) begin
       \$620  = 1'h0;
@@ -5198,9 +5206,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$621  = ch1_cfg_words_w0_signed;
-    if (\$231 ) begin
-      \$621  = config_write_data[11];
+    \$621  = ch1_cfg_words_w0_lc;
+    if (\$229 ) begin
+      \$621  = config_write_data[7];
     end
     if (rst) begin
       \$621  = 1'h0;
@@ -5208,19 +5216,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$622  = ch1_cfg_words_w1_data_bits;
-    if (\$232 ) begin
-      \$622  = config_write_data[21:16];
+    \$622  = ch1_cfg_words_w0_crc;
+    if (\$230 ) begin
+      \$622  = config_write_data[9:8];
     end
     if (rst) begin
-      \$622  = 6'h00;
+      \$622  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$623  = ch1_cfg_words_w1_nenw;
-    if (\$233 ) begin
-      \$623  = config_write_data[22];
+    \$623  = ch1_cfg_words_w0_gray;
+    if (\$231 ) begin
+      \$623  = config_write_data[10];
     end
     if (rst) begin
       \$623  = 1'h0;
@@ -5228,9 +5236,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$624  = ch1_cfg_words_w1_lc;
-    if (\$234 ) begin
-      \$624  = config_write_data[23];
+    \$624  = ch1_cfg_words_w0_signed;
+    if (\$232 ) begin
+      \$624  = config_write_data[11];
     end
     if (rst) begin
       \$624  = 1'h0;
@@ -5238,19 +5246,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$625  = ch1_cfg_words_w1_crc;
-    if (\$235 ) begin
-      \$625  = config_write_data[25:24];
+    \$625  = ch1_cfg_words_w1_data_bits;
+    if (\$233 ) begin
+      \$625  = config_write_data[21:16];
     end
     if (rst) begin
-      \$625  = 2'h0;
+      \$625  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$626  = ch1_cfg_words_w1_gray;
-    if (\$236 ) begin
-      \$626  = config_write_data[26];
+    \$626  = ch1_cfg_words_w1_nenw;
+    if (\$234 ) begin
+      \$626  = config_write_data[22];
     end
     if (rst) begin
       \$626  = 1'h0;
@@ -5258,9 +5266,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$627  = ch1_cfg_words_w1_signed;
-    if (\$237 ) begin
-      \$627  = config_write_data[27];
+    \$627  = ch1_cfg_words_w1_lc;
+    if (\$235 ) begin
+      \$627  = config_write_data[23];
     end
     if (rst) begin
       \$627  = 1'h0;
@@ -5268,26 +5276,29 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$628  = ch1_cfg_words_w1_enable;
-    if (\$238 ) begin
-      \$628  = config_write_data[31];
+    \$628  = ch1_cfg_words_w1_crc;
+    if (\$236 ) begin
+      \$628  = config_write_data[25:24];
     end
     if (rst) begin
-      \$628  = 1'h0;
+      \$628  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$629  = ch1_cfg_checks_write;
+    \$629  = ch1_cfg_words_w1_gray;
+    if (\$237 ) begin
+      \$629  = config_write_data[26];
+    end
     if (rst) begin
       \$629  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$630  = ch1_cfg_checks_end_check;
-    if (\$239 ) begin
-      \$630  = config_write_data[0];
+    \$630  = ch1_cfg_words_w1_signed;
+    if (\$238 ) begin
+      \$630  = config_write_data[27];
     end
     if (rst) begin
       \$630  = 1'h0;
@@ -5295,9 +5306,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$631  = ch1_cfg_checks_spw_check;
-    if (\$240 ) begin
-      \$631  = config_write_data[1];
+    \$631  = ch1_cfg_words_w1_enable;
+    if (\$239 ) begin
+      \$631  = config_write_data[31];
     end
     if (rst) begin
       \$631  = 1'h0;
@@ -5305,108 +5316,105 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$632  = ch1_cfg_checks_spw_tolerance;
+    \$632  = ch1_cfg_checks_write;
+    if (rst) begin
+      \$632  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$633  = ch1_cfg_checks_end_check;
+    if (\$240 ) begin
+      \$633  = config_write_data[0];
+    end
+    if (rst) begin
+      \$633  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$634  = ch1_cfg_checks_spw_check;
     if (\$241 ) begin
-      \$632  = config_write_data[15:8];
+      \$634  = config_write_data[1];
     end
     if (rst) begin
-      \$632  = 8'h00;
+      \$634  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$633  = ch1_cfg_checks_noise_limit;
+    \$635  = ch1_cfg_checks_spw_tolerance;
     if (\$242 ) begin
-      \$633  = config_write_data[19:16];
+      \$635  = config_write_data[15:8];
     end
     if (rst) begin
-      \$633  = 4'h0;
+      \$635  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$634  = ch1_cfg_checks_delay_tolerance;
+    \$636  = ch1_cfg_checks_noise_limit;
     if (\$243 ) begin
-      \$634  = config_write_data[23:20];
+      \$636  = config_write_data[19:16];
     end
     if (rst) begin
-      \$634  = 4'h0;
+      \$636  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$635  = ch1_cfg_quiet_write;
-    if (rst) begin
-      \$635  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$636  = ch1_cfg_quiet_quiet_time;
+    \$637  = ch1_cfg_checks_delay_tolerance;
     if (\$244 ) begin
-      \$636 [7:0] = config_write_data[7:0];
+      \$637  = config_write_data[23:20];
     end
+    if (rst) begin
+      \$637  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$638  = ch1_cfg_checks_confirm_frames;
     if (\$245 ) begin
-      \$636 [11:8] = config_write_data[11:8];
+      \$638  = config_write_data[27:24];
     end
     if (rst) begin
-      \$636  = 12'h000;
+      \$638  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$637  = ch1_cfg_crc0_write;
+    \$639  = ch1_cfg_quiet_write;
     if (rst) begin
-      \$637  = 1'h0;
+      \$639  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$638  = ch1_cfg_crc0_w0_crc_poly;
+    \$640  = ch1_cfg_quiet_quiet_time;
     if (\$246 ) begin
-      \$638 [7:0] = config_write_data[7:0];
+      \$640 [7:0] = config_write_data[7:0];
     end
     if (\$247 ) begin
-      \$638 [15:8] = config_write_data[15:8];
+      \$640 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$638  = 16'h0000;
+      \$640  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$639  = ch1_cfg_crc0_w0_crc_width;
-    if (\$248 ) begin
-      \$639  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$639  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$640  = ch1_cfg_crc0_w0_crc_inverted;
-    if (\$249 ) begin
-      \$640  = config_write_data[24];
-    end
-    if (rst) begin
-      \$640  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$641  = ch1_cfg_crc0_start_write;
+    \$641  = ch1_cfg_crc0_write;
     if (rst) begin
       \$641  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$642  = ch1_cfg_crc0_start_w0_crc_start;
-    if (\$250 ) begin
+    \$642  = ch1_cfg_crc0_w0_crc_poly;
+    if (\$248 ) begin
       \$642 [7:0] = config_write_data[7:0];
     end
-    if (\$251 ) begin
+    if (\$249 ) begin
       \$642 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
@@ -5415,58 +5423,58 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$643  = ch1_cfg_crc1_write;
+    \$643  = ch1_cfg_crc0_w0_crc_width;
+    if (\$250 ) begin
+      \$643  = config_write_data[20:16];
+    end
     if (rst) begin
-      \$643  = 1'h0;
+      \$643  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$644  = ch1_cfg_crc1_w1_crc_poly;
+    \$644  = ch1_cfg_crc0_w0_crc_inverted;
+    if (\$251 ) begin
+      \$644  = config_write_data[24];
+    end
+    if (rst) begin
+      \$644  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$645  = ch1_cfg_crc0_start_write;
+    if (rst) begin
+      \$645  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$646  = ch1_cfg_crc0_start_w0_crc_start;
     if (\$252 ) begin
-      \$644 [7:0] = config_write_data[7:0];
+      \$646 [7:0] = config_write_data[7:0];
     end
     if (\$253 ) begin
-      \$644 [15:8] = config_write_data[15:8];
+      \$646 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$644  = 16'h0000;
+      \$646  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$645  = ch1_cfg_crc1_w1_crc_width;
-    if (\$254 ) begin
-      \$645  = config_write_data[20:16];
-    end
-    if (rst) begin
-      \$645  = 5'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$646  = ch1_cfg_crc1_w1_crc_inverted;
-    if (\$255 ) begin
-      \$646  = config_write_data[24];
-    end
-    if (rst) begin
-      \$646  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$647  = ch1_cfg_crc1_start_write;
+    \$647  = ch1_cfg_crc1_write;
     if (rst) begin
       \$647  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$648  = ch1_cfg_crc1_start_w1_crc_start;
-    if (\$256 ) begin
+    \$648  = ch1_cfg_crc1_w1_crc_poly;
+    if (\$254 ) begin
       \$648 [7:0] = config_write_data[7:0];
     end
-    if (\$257 ) begin
+    if (\$255 ) begin
       \$648 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
@@ -5475,80 +5483,86 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$649  = ch1_ca_request_write;
+    \$649  = ch1_cfg_crc1_w1_crc_width;
+    if (\$256 ) begin
+      \$649  = config_write_data[20:16];
+    end
     if (rst) begin
-      \$649  = 1'h0;
+      \$649  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$650  = ch1_ca_request_slave_id;
+    \$650  = ch1_cfg_crc1_w1_crc_inverted;
+    if (\$257 ) begin
+      \$650  = config_write_data[24];
+    end
+    if (rst) begin
+      \$650  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$651  = ch1_cfg_crc1_start_write;
+    if (rst) begin
+      \$651  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$652  = ch1_cfg_crc1_start_w1_crc_start;
     if (\$258 ) begin
-      \$650  = config_write_data[2:0];
+      \$652 [7:0] = config_write_data[7:0];
     end
-    if (rst) begin
-      \$650  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$651  = ch1_ca_request_address;
     if (\$259 ) begin
-      \$651  = config_write_data[14:8];
+      \$652 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$651  = 7'h00;
+      \$652  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$652  = ch1_ca_request_count;
-    if (\$260 ) begin
-      \$652  = config_write_data[22:16];
-    end
-    if (rst) begin
-      \$652  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$653  = \ch1_ca_request_write$287 ;
-    if (\$261 ) begin
-      \$653  = config_write_data[24];
-    end
+    \$653  = ch1_ca_request_write;
     if (rst) begin
       \$653  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$654  = \$263 ;
+    \$654  = ch1_ca_request_slave_id;
+    if (\$260 ) begin
+      \$654  = config_write_data[2:0];
+    end
     if (rst) begin
-      \$654  = 1'h0;
+      \$654  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$655  = \$265 ;
+    \$655  = ch1_ca_request_address;
+    if (\$261 ) begin
+      \$655  = config_write_data[14:8];
+    end
     if (rst) begin
-      \$655  = 1'h0;
+      \$655  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$656  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$656  = \$266 ;
+    \$656  = ch1_ca_request_count;
+    if (\$262 ) begin
+      \$656  = config_write_data[22:16];
     end
     if (rst) begin
-      \$656  = 1'h0;
+      \$656  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$657  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$657  = \$267 ;
+    \$657  = \ch1_ca_request_write$289 ;
+    if (\$263 ) begin
+      \$657  = config_write_data[24];
     end
     if (rst) begin
       \$657  = 1'h0;
@@ -5556,29 +5570,23 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$658  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$658  = \$268 ;
-    end
+    \$658  = \$265 ;
     if (rst) begin
       \$658  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$659  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$659  = \$269 ;
-    end
+    \$659  = \$267 ;
     if (rst) begin
       \$659  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$660  = ch1_read_select_105;
+    \$660  = ch1_read_select_100;
     if (bus__r_en) begin
-      \$660  = \$270 ;
+      \$660  = \$268 ;
     end
     if (rst) begin
       \$660  = 1'h0;
@@ -5586,9 +5594,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$661  = ch1_read_select_108;
+    \$661  = ch1_read_select_101;
     if (bus__r_en) begin
-      \$661  = \$271 ;
+      \$661  = \$269 ;
     end
     if (rst) begin
       \$661  = 1'h0;
@@ -5596,9 +5604,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$662  = ch1_read_select_109;
+    \$662  = ch1_read_select_102;
     if (bus__r_en) begin
-      \$662  = \$272 ;
+      \$662  = \$270 ;
     end
     if (rst) begin
       \$662  = 1'h0;
@@ -5606,9 +5614,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$663  = ch1_read_select_10a;
+    \$663  = ch1_read_select_104;
     if (bus__r_en) begin
-      \$663  = \$273 ;
+      \$663  = \$271 ;
     end
     if (rst) begin
       \$663  = 1'h0;
@@ -5616,9 +5624,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$664  = ch1_read_select_10b;
+    \$664  = ch1_read_select_105;
     if (bus__r_en) begin
-      \$664  = \$274 ;
+      \$664  = \$272 ;
     end
     if (rst) begin
       \$664  = 1'h0;
@@ -5626,9 +5634,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$665  = ch1_read_select_10c;
+    \$665  = ch1_read_select_108;
     if (bus__r_en) begin
-      \$665  = \$275 ;
+      \$665  = \$273 ;
     end
     if (rst) begin
       \$665  = 1'h0;
@@ -5636,9 +5644,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$666  = ch1_read_select_10d;
+    \$666  = ch1_read_select_109;
     if (bus__r_en) begin
-      \$666  = \$276 ;
+      \$666  = \$274 ;
     end
     if (rst) begin
       \$666  = 1'h0;
@@ -5646,9 +5654,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$667  = ch1_read_select_10e;
+    \$667  = ch1_read_select_10a;
     if (bus__r_en) begin
-      \$667  = \$277 ;
+      \$667  = \$275 ;
     end
     if (rst) begin
       \$667  = 1'h0;
@@ -5656,9 +5664,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$668  = ch1_read_select_10f;
+    \$668  = ch1_read_select_10b;
     if (bus__r_en) begin
-      \$668  = \$278 ;
+      \$668  = \$276 ;
     end
     if (rst) begin
       \$668  = 1'h0;
@@ -5666,9 +5674,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$669  = ch1_read_select_110;
+    \$669  = ch1_read_select_10c;
     if (bus__r_en) begin
-      \$669  = \$279 ;
+      \$669  = \$277 ;
     end
     if (rst) begin
       \$669  = 1'h0;
@@ -5676,9 +5684,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$670  = ch1_read_select_111;
+    \$670  = ch1_read_select_10d;
     if (bus__r_en) begin
-      \$670  = \$280 ;
+      \$670  = \$278 ;
     end
     if (rst) begin
       \$670  = 1'h0;
@@ -5686,9 +5694,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$671  = ch1_read_select_112;
+    \$671  = ch1_read_select_10e;
     if (bus__r_en) begin
-      \$671  = \$281 ;
+      \$671  = \$279 ;
     end
     if (rst) begin
       \$671  = 1'h0;
@@ -5696,9 +5704,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$672  = ch1_read_select_113;
+    \$672  = ch1_read_select_10f;
     if (bus__r_en) begin
-      \$672  = \$282 ;
+      \$672  = \$280 ;
     end
     if (rst) begin
       \$672  = 1'h0;
@@ -5706,9 +5714,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$673  = ch1_read_select_114;
+    \$673  = ch1_read_select_110;
     if (bus__r_en) begin
-      \$673  = \$283 ;
+      \$673  = \$281 ;
     end
     if (rst) begin
       \$673  = 1'h0;
@@ -5716,9 +5724,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$674  = ch1_read_select_115;
+    \$674  = ch1_read_select_111;
     if (bus__r_en) begin
-      \$674  = \$284 ;
+      \$674  = \$282 ;
     end
     if (rst) begin
       \$674  = 1'h0;
@@ -5726,9 +5734,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$675  = ch1_read_select_116;
+    \$675  = ch1_read_select_112;
     if (bus__r_en) begin
-      \$675  = \$285 ;
+      \$675  = \$283 ;
     end
     if (rst) begin
       \$675  = 1'h0;
@@ -5736,9 +5744,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$676  = ch1_read_select_117;
+    \$676  = ch1_read_select_113;
     if (bus__r_en) begin
-      \$676  = \$286 ;
+      \$676  = \$284 ;
     end
     if (rst) begin
       \$676  = 1'h0;
@@ -5746,9 +5754,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$677  = ch1_read_select_120;
+    \$677  = ch1_read_select_114;
     if (bus__r_en) begin
-      \$677  = \$287 ;
+      \$677  = \$285 ;
     end
     if (rst) begin
       \$677  = 1'h0;
@@ -5756,9 +5764,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$678  = ch1_read_select_121;
+    \$678  = ch1_read_select_115;
     if (bus__r_en) begin
-      \$678  = \$288 ;
+      \$678  = \$286 ;
     end
     if (rst) begin
       \$678  = 1'h0;
@@ -5766,9 +5774,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$679  = ch1_read_select_122;
+    \$679  = ch1_read_select_116;
     if (bus__r_en) begin
-      \$679  = \$289 ;
+      \$679  = \$287 ;
     end
     if (rst) begin
       \$679  = 1'h0;
@@ -5776,9 +5784,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$680  = ch1_read_select_123;
+    \$680  = ch1_read_select_117;
     if (bus__r_en) begin
-      \$680  = \$290 ;
+      \$680  = \$288 ;
     end
     if (rst) begin
       \$680  = 1'h0;
@@ -5786,9 +5794,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$681  = ch1_read_select_140;
+    \$681  = ch1_read_select_120;
     if (bus__r_en) begin
-      \$681  = \$291 ;
+      \$681  = \$289 ;
     end
     if (rst) begin
       \$681  = 1'h0;
@@ -5796,9 +5804,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$682  = ch1_read_select_141;
+    \$682  = ch1_read_select_121;
     if (bus__r_en) begin
-      \$682  = \$292 ;
+      \$682  = \$290 ;
     end
     if (rst) begin
       \$682  = 1'h0;
@@ -5806,9 +5814,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$683  = ch1_read_select_142;
+    \$683  = ch1_read_select_122;
     if (bus__r_en) begin
-      \$683  = \$293 ;
+      \$683  = \$291 ;
     end
     if (rst) begin
       \$683  = 1'h0;
@@ -5816,9 +5824,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$684  = ch1_read_select_143;
+    \$684  = ch1_read_select_123;
     if (bus__r_en) begin
-      \$684  = \$294 ;
+      \$684  = \$292 ;
     end
     if (rst) begin
       \$684  = 1'h0;
@@ -5826,9 +5834,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$685  = ch1_read_select_144;
+    \$685  = ch1_read_select_140;
     if (bus__r_en) begin
-      \$685  = \$295 ;
+      \$685  = \$293 ;
     end
     if (rst) begin
       \$685  = 1'h0;
@@ -5836,9 +5844,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$686  = ch1_read_select_145;
+    \$686  = ch1_read_select_141;
     if (bus__r_en) begin
-      \$686  = \$296 ;
+      \$686  = \$294 ;
     end
     if (rst) begin
       \$686  = 1'h0;
@@ -5846,19 +5854,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$687  = ch1_result_status_status_snapshot;
-    if (\$297 ) begin
-      \$687  = \port$7288$0 [3:0];
+    \$687  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$687  = \$295 ;
     end
     if (rst) begin
-      \$687  = 4'h0;
+      \$687  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$688  = ch1_result_status_cds_snapshot;
-    if (\$297 ) begin
-      \$688  = \port$7288$0 [49];
+    \$688  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$688  = \$296 ;
     end
     if (rst) begin
       \$688  = 1'h0;
@@ -5866,9 +5874,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$689  = ch1_result_status_w0_ne_snapshot;
-    if (\$297 ) begin
-      \$689  = \port$7288$0 [131];
+    \$689  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$689  = \$297 ;
     end
     if (rst) begin
       \$689  = 1'h0;
@@ -5876,9 +5884,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$690  = ch1_result_status_w0_nw_snapshot;
-    if (\$297 ) begin
-      \$690  = \port$7288$0 [132];
+    \$690  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$690  = \$298 ;
     end
     if (rst) begin
       \$690  = 1'h0;
@@ -5886,19 +5894,19 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$691  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$297 ) begin
-      \$691  = \port$7288$0 [133];
+    \$691  = ch1_result_status_status_snapshot;
+    if (\$299 ) begin
+      \$691  = \port$7358$0 [3:0];
     end
     if (rst) begin
-      \$691  = 1'h0;
+      \$691  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$692  = ch1_result_status_w1_ne_snapshot;
-    if (\$297 ) begin
-      \$692  = \port$7288$0 [174];
+    \$692  = ch1_result_status_cds_snapshot;
+    if (\$299 ) begin
+      \$692  = \port$7358$0 [49];
     end
     if (rst) begin
       \$692  = 1'h0;
@@ -5906,9 +5914,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$693  = ch1_result_status_w1_nw_snapshot;
-    if (\$297 ) begin
-      \$693  = \port$7288$0 [175];
+    \$693  = ch1_result_status_w0_ne_snapshot;
+    if (\$299 ) begin
+      \$693  = \port$7358$0 [131];
     end
     if (rst) begin
       \$693  = 1'h0;
@@ -5916,9 +5924,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$694  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$297 ) begin
-      \$694  = \port$7288$0 [176];
+    \$694  = ch1_result_status_w0_nw_snapshot;
+    if (\$299 ) begin
+      \$694  = \port$7358$0 [132];
     end
     if (rst) begin
       \$694  = 1'h0;
@@ -5926,9 +5934,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$695  = ch1_result_status_lc_repeat_snapshot;
-    if (\$297 ) begin
-      \$695  = \port$7288$0 [183];
+    \$695  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$299 ) begin
+      \$695  = \port$7358$0 [133];
     end
     if (rst) begin
       \$695  = 1'h0;
@@ -5936,9 +5944,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$696  = ch1_result_status_lc_skip_snapshot;
-    if (\$297 ) begin
-      \$696  = \port$7288$0 [184];
+    \$696  = ch1_result_status_w1_ne_snapshot;
+    if (\$299 ) begin
+      \$696  = \port$7358$0 [174];
     end
     if (rst) begin
       \$696  = 1'h0;
@@ -5946,9 +5954,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$697  = ch1_result_status_lc_zero_snapshot;
-    if (\$297 ) begin
-      \$697  = \port$7288$0 [185];
+    \$697  = ch1_result_status_w1_nw_snapshot;
+    if (\$299 ) begin
+      \$697  = \port$7358$0 [175];
     end
     if (rst) begin
       \$697  = 1'h0;
@@ -5956,9 +5964,9 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$698  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$297 ) begin
-      \$698  = \port$7288$0 [186];
+    \$698  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$299 ) begin
+      \$698  = \port$7358$0 [176];
     end
     if (rst) begin
       \$698  = 1'h0;
@@ -5966,79 +5974,79 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$699  = ch1_result_status_lc_snapshot;
-    if (\$297 ) begin
-      \$699  = \port$7288$0 [182:177];
+    \$699  = ch1_result_status_lc_repeat_snapshot;
+    if (\$299 ) begin
+      \$699  = \port$7358$0 [183];
     end
     if (rst) begin
-      \$699  = 6'h00;
+      \$699  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$700  = ch1_result_seq_seq_snapshot;
-    if (\$297 ) begin
-      \$700  = ch1__done_count;
+    \$700  = ch1_result_status_lc_skip_snapshot;
+    if (\$299 ) begin
+      \$700  = \port$7358$0 [184];
     end
     if (rst) begin
-      \$700  = 16'h0000;
+      \$700  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$701  = ch1_result_seq_line_delay_snapshot;
-    if (\$297 ) begin
-      \$701  = \port$7288$0 [48:36];
+    \$701  = ch1_result_status_lc_zero_snapshot;
+    if (\$299 ) begin
+      \$701  = \port$7358$0 [185];
     end
     if (rst) begin
-      \$701  = 13'h0000;
+      \$701  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$702  = ch1_result_w0_lo_data_snapshot;
-    if (\$297 ) begin
-      \$702  = \port$7288$0 [107:76];
+    \$702  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$299 ) begin
+      \$702  = \port$7358$0 [186];
     end
     if (rst) begin
-      \$702  = 32'd0;
+      \$702  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$703  = ch1_result_w0_hi_data_snapshot;
-    if (\$297 ) begin
-      \$703  = \port$7288$0 [130:108];
+    \$703  = ch1_result_status_lc_snapshot;
+    if (\$299 ) begin
+      \$703  = \port$7358$0 [182:177];
     end
     if (rst) begin
-      \$703  = 23'h000000;
+      \$703  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$704  = ch1_result_w1_lo_data_snapshot;
-    if (\$297 ) begin
-      \$704  = \port$7288$0 [165:134];
+    \$704  = ch1_result_seq_seq_snapshot;
+    if (\$299 ) begin
+      \$704  = ch1__done_count;
     end
     if (rst) begin
-      \$704  = 32'd0;
+      \$704  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$705  = ch1_result_w1_hi_data_snapshot;
-    if (\$297 ) begin
-      \$705  = \port$7288$0 [173:166];
+    \$705  = ch1_result_seq_line_delay_snapshot;
+    if (\$299 ) begin
+      \$705  = \port$7358$0 [48:36];
     end
     if (rst) begin
-      \$705  = 8'h00;
+      \$705  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$706  = ch1_result_timestamp_time_snapshot;
-    if (\$297 ) begin
-      \$706  = \port$7288$0 [35:4];
+    \$706  = ch1_result_w0_lo_data_snapshot;
+    if (\$299 ) begin
+      \$706  = \port$7358$0 [107:76];
     end
     if (rst) begin
       \$706  = 32'd0;
@@ -6046,29 +6054,29 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$707  = ch1_result_line_noise_events_snapshot;
-    if (\$297 ) begin
-      \$707  = \port$7288$0 [53:50];
+    \$707  = ch1_result_w0_hi_data_snapshot;
+    if (\$299 ) begin
+      \$707  = \port$7358$0 [130:108];
     end
     if (rst) begin
-      \$707  = 4'h0;
+      \$707  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$708  = ch1_result_line_delay_settled_snapshot;
-    if (\$297 ) begin
-      \$708  = \port$7288$0 [54];
+    \$708  = ch1_result_w1_lo_data_snapshot;
+    if (\$299 ) begin
+      \$708  = \port$7358$0 [165:134];
     end
     if (rst) begin
-      \$708  = 1'h0;
+      \$708  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$709  = ch1_result_line_delay_spread_snapshot;
-    if (\$297 ) begin
-      \$709  = \port$7288$0 [75:68];
+    \$709  = ch1_result_w1_hi_data_snapshot;
+    if (\$299 ) begin
+      \$709  = \port$7358$0 [173:166];
     end
     if (rst) begin
       \$709  = 8'h00;
@@ -6076,29 +6084,29 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$710  = ch1_result_line_settled_delay_snapshot;
-    if (\$297 ) begin
-      \$710  = \port$7288$0 [67:55];
+    \$710  = ch1_result_timestamp_time_snapshot;
+    if (\$299 ) begin
+      \$710  = \port$7358$0 [35:4];
     end
     if (rst) begin
-      \$710  = 13'h0000;
+      \$710  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$711  = ch1_window0_read;
-    if (bus__r_en) begin
-      \$711  = \$299 ;
+    \$711  = ch1_result_line_noise_events_snapshot;
+    if (\$299 ) begin
+      \$711  = \port$7358$0 [53:50];
     end
     if (rst) begin
-      \$711  = 1'h0;
+      \$711  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$712  = ch1_window1_read;
-    if (bus__r_en) begin
-      \$712  = \$301 ;
+    \$712  = ch1_result_line_delay_settled_snapshot;
+    if (\$299 ) begin
+      \$712  = \port$7358$0 [54];
     end
     if (rst) begin
       \$712  = 1'h0;
@@ -6106,85 +6114,125 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$713  = ch1_read_data;
-    if (bus__r_load) begin
-      \$713  = \$367 ;
+    \$713  = ch1_result_line_delay_spread_snapshot;
+    if (\$299 ) begin
+      \$713  = \port$7358$0 [75:68];
     end
     if (rst) begin
-      \$713  = 32'd0;
+      \$713  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$714  = ch1_result_line_settled_delay_snapshot;
+    if (\$299 ) begin
+      \$714  = \port$7358$0 [67:55];
+    end
+    if (rst) begin
+      \$714  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$715  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$715  = \$301 ;
+    end
+    if (rst) begin
+      \$715  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$716  = ch1_window1_read;
+    if (bus__r_en) begin
+      \$716  = \$303 ;
+    end
+    if (rst) begin
+      \$716  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
+    \$717  = ch1_read_data;
+    if (bus__r_load) begin
+      \$717  = \$369 ;
+    end
+    if (rst) begin
+      \$717  = 32'd0;
     end
   end
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6765$0 [3:0];
-  assign ch0__cds = \port$6765$0 [49];
-  assign ch0__word0_ne = \port$6765$0 [131];
-  assign ch0__word0_nw = \port$6765$0 [132];
-  assign ch0__word0_crc_ok = \port$6765$0 [133];
-  assign ch0__word1_ne = \port$6765$0 [174];
-  assign ch0__word1_nw = \port$6765$0 [175];
-  assign ch0__word1_crc_ok = \port$6765$0 [176];
-  assign ch0__lc_repeat = \port$6765$0 [183];
-  assign ch0__lc_skip = \port$6765$0 [184];
-  assign ch0__lc_zero = \port$6765$0 [185];
-  assign ch0__spw_mismatch = \port$6765$0 [186];
-  assign ch0__lc = \port$6765$0 [182:177];
-  assign ch0__line_delay = \port$6765$0 [48:36];
-  assign ch0__word0_position = \port$6765$0 [130:76];
-  assign ch0__word1_position = \port$6765$0 [173:134];
-  assign ch0__timestamp = \port$6765$0 [35:4];
-  assign ch0__noise_events = \port$6765$0 [53:50];
-  assign ch0__delay_settled = \port$6765$0 [54];
-  assign ch0__delay_spread = \port$6765$0 [75:68];
-  assign ch0__settled_delay = \port$6765$0 [67:55];
+  assign ch0__status = \port$6831$0 [3:0];
+  assign ch0__cds = \port$6831$0 [49];
+  assign ch0__word0_ne = \port$6831$0 [131];
+  assign ch0__word0_nw = \port$6831$0 [132];
+  assign ch0__word0_crc_ok = \port$6831$0 [133];
+  assign ch0__word1_ne = \port$6831$0 [174];
+  assign ch0__word1_nw = \port$6831$0 [175];
+  assign ch0__word1_crc_ok = \port$6831$0 [176];
+  assign ch0__lc_repeat = \port$6831$0 [183];
+  assign ch0__lc_skip = \port$6831$0 [184];
+  assign ch0__lc_zero = \port$6831$0 [185];
+  assign ch0__spw_mismatch = \port$6831$0 [186];
+  assign ch0__lc = \port$6831$0 [182:177];
+  assign ch0__line_delay = \port$6831$0 [48:36];
+  assign ch0__word0_position = \port$6831$0 [130:76];
+  assign ch0__word1_position = \port$6831$0 [173:134];
+  assign ch0__timestamp = \port$6831$0 [35:4];
+  assign ch0__noise_events = \port$6831$0 [53:50];
+  assign ch0__delay_settled = \port$6831$0 [54];
+  assign ch0__delay_spread = \port$6831$0 [75:68];
+  assign ch0__settled_delay = \port$6831$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__ca_status = \port$6855$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6855$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6778$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$6778$0 [31:16];
-  assign ch0__count_ca_refused = \port$6778$0 [47:32];
-  assign ch0__count_ca_aborted = \port$6778$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$6778$0 [79:64];
-  assign ch1__status = \port$7288$0 [3:0];
-  assign ch1__cds = \port$7288$0 [49];
-  assign ch1__word0_ne = \port$7288$0 [131];
-  assign ch1__word0_nw = \port$7288$0 [132];
-  assign ch1__word0_crc_ok = \port$7288$0 [133];
-  assign ch1__word1_ne = \port$7288$0 [174];
-  assign ch1__word1_nw = \port$7288$0 [175];
-  assign ch1__word1_crc_ok = \port$7288$0 [176];
-  assign ch1__lc_repeat = \port$7288$0 [183];
-  assign ch1__lc_skip = \port$7288$0 [184];
-  assign ch1__lc_zero = \port$7288$0 [185];
-  assign ch1__spw_mismatch = \port$7288$0 [186];
-  assign ch1__lc = \port$7288$0 [182:177];
-  assign ch1__line_delay = \port$7288$0 [48:36];
-  assign ch1__word0_position = \port$7288$0 [130:76];
-  assign ch1__word1_position = \port$7288$0 [173:134];
-  assign ch1__timestamp = \port$7288$0 [35:4];
-  assign ch1__noise_events = \port$7288$0 [53:50];
-  assign ch1__delay_settled = \port$7288$0 [54];
-  assign ch1__delay_spread = \port$7288$0 [75:68];
-  assign ch1__settled_delay = \port$7288$0 [67:55];
+  assign ch0__ca_status = \port$6921$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6921$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6844$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$6844$0 [31:16];
+  assign ch0__count_ca_refused = \port$6844$0 [47:32];
+  assign ch0__count_ca_aborted = \port$6844$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$6844$0 [79:64];
+  assign ch1__status = \port$7358$0 [3:0];
+  assign ch1__cds = \port$7358$0 [49];
+  assign ch1__word0_ne = \port$7358$0 [131];
+  assign ch1__word0_nw = \port$7358$0 [132];
+  assign ch1__word0_crc_ok = \port$7358$0 [133];
+  assign ch1__word1_ne = \port$7358$0 [174];
+  assign ch1__word1_nw = \port$7358$0 [175];
+  assign ch1__word1_crc_ok = \port$7358$0 [176];
+  assign ch1__lc_repeat = \port$7358$0 [183];
+  assign ch1__lc_skip = \port$7358$0 [184];
+  assign ch1__lc_zero = \port$7358$0 [185];
+  assign ch1__spw_mismatch = \port$7358$0 [186];
+  assign ch1__lc = \port$7358$0 [182:177];
+  assign ch1__line_delay = \port$7358$0 [48:36];
+  assign ch1__word0_position = \port$7358$0 [130:76];
+  assign ch1__word1_position = \port$7358$0 [173:134];
+  assign ch1__timestamp = \port$7358$0 [35:4];
+  assign ch1__noise_events = \port$7358$0 [53:50];
+  assign ch1__delay_settled = \port$7358$0 [54];
+  assign ch1__delay_spread = \port$7358$0 [75:68];
+  assign ch1__settled_delay = \port$7358$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__ca_status = \port$7378$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7378$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7301$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7301$0 [31:16];
-  assign ch1__count_ca_refused = \port$7301$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7301$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7301$0 [79:64];
+  assign ch1__ca_status = \port$7448$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7448$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7371$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7371$0 [31:16];
+  assign ch1__count_ca_refused = \port$7371$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7371$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7371$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__r_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -6216,6 +6264,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch0__cfg_spw_tolerance = ch0_cfg_checks_spw_tolerance;
   assign ch0__cfg_noise_limit = ch0_cfg_checks_noise_limit;
   assign ch0__cfg_delay_tolerance = ch0_cfg_checks_delay_tolerance;
+  assign ch0__cfg_confirm_frames = ch0_cfg_checks_confirm_frames;
   assign ch0__cfg_quiet_time = ch0_cfg_quiet_quiet_time;
   assign ch0__cfg_w0_crc_poly = ch0_cfg_crc0_w0_crc_poly;
   assign ch0__cfg_w0_crc_width = ch0_cfg_crc0_w0_crc_width;
@@ -6228,7 +6277,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch0__ca_slave_id = ch0_ca_request_slave_id;
   assign ch0__ca_address = ch0_ca_request_address;
   assign ch0__ca_count = ch0_ca_request_count;
-  assign ch0__ca_write = \ch0_ca_request_write$105 ;
+  assign ch0__ca_write = \ch0_ca_request_write$106 ;
   assign ch0__ca_start = ch0_ca_ctrl_start;
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
@@ -6263,6 +6312,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch1__cfg_spw_tolerance = ch1_cfg_checks_spw_tolerance;
   assign ch1__cfg_noise_limit = ch1_cfg_checks_noise_limit;
   assign ch1__cfg_delay_tolerance = ch1_cfg_checks_delay_tolerance;
+  assign ch1__cfg_confirm_frames = ch1_cfg_checks_confirm_frames;
   assign ch1__cfg_quiet_time = ch1_cfg_quiet_quiet_time;
   assign ch1__cfg_w0_crc_poly = ch1_cfg_crc0_w0_crc_poly;
   assign ch1__cfg_w0_crc_width = ch1_cfg_crc0_w0_crc_width;
@@ -6275,7 +6325,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$287 ;
+  assign ch1__ca_write = \ch1_ca_request_write$289 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
@@ -6286,20 +6336,20 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$409  = \$408 ;
   assign \$411  = \$410 ;
   assign \$413  = \$412 ;
-  assign \$450  = \$449 ;
+  assign \$415  = \$414 ;
   assign \$452  = \$451 ;
   assign \$454  = \$453 ;
-  assign \$128  = \$127 ;
-  assign \$179  = 32'd0;
-  assign \$180  = \$178 ;
-  assign \$303  = \$302 ;
-  assign \$354  = 32'd0;
-  assign \$355  = \$353 ;
+  assign \$456  = \$455 ;
+  assign \$129  = \$128 ;
+  assign \$180  = 32'd0;
+  assign \$181  = \$179 ;
+  assign \$305  = \$304 ;
+  assign \$356  = 32'd0;
+  assign \$357  = \$355 ;
   assign g_irq = 1'h0;
-  assign \$455  = g_read_data;
+  assign \$457  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -8451,10 +8501,10 @@ module \biss_master_uart.bus.transmitter (rst, ready, tx, data, valid, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
+module \biss_master_uart.ch0 (clk, rst, \trigger$184 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
-, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6765$0 
-, \port$6778$0 , regs__ca_done, \port$6855$0 , slo);
+, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma
+, \port$6831$0 , \port$6844$0 , regs__ca_done, \port$6921$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -8519,6 +8569,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   wire [23:0] cfg_ack_limit;
   input [23:0] cfg_break_time;
   wire [23:0] cfg_break_time;
+  input [3:0] cfg_confirm_frames;
+  wire [3:0] cfg_confirm_frames;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
   input [3:0] cfg_delay_tolerance;
@@ -8619,17 +8671,17 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$185 ;
+  wire \ma$187 ;
   wire [3:0] noise_events;
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6765$0 ;
-  wire [186:0] \port$6765$0 ;
-  output [79:0] \port$6778$0 ;
-  wire [79:0] \port$6778$0 ;
-  output [9:0] \port$6855$0 ;
-  wire [9:0] \port$6855$0 ;
+  output [186:0] \port$6831$0 ;
+  wire [186:0] \port$6831$0 ;
+  output [79:0] \port$6844$0 ;
+  wire [79:0] \port$6844$0 ;
+  output [9:0] \port$6921$0 ;
+  wire [9:0] \port$6921$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -8662,6 +8714,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   wire regs__cds;
   wire [23:0] regs__cfg_ack_limit;
   wire [23:0] regs__cfg_break_time;
+  wire [3:0] regs__cfg_confirm_frames;
   wire [11:0] regs__cfg_delay_limit;
   wire [3:0] regs__cfg_delay_tolerance;
   wire regs__cfg_end_check;
@@ -8751,7 +8804,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$187 ;
+  wire \slo$189 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -8771,11 +8824,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$182 ;
-  wire \trigger$182 ;
+  input \trigger$184 ;
+  wire \trigger$184 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -8793,7 +8847,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
-  assign trigger = \trigger$182  & regs__trigger_enable;
+  assign trigger = \trigger$184  & regs__trigger_enable;
   assign \$6  = ~ report;
   assign \$7  = \$signal  & \$6 ;
   assign \$8  = waited + 1'h1;
@@ -8815,8 +8869,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
     regs__done_count <= \$17 ;
   \biss_master_uart.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$239 (ca_abort),
-    .\busy$287 (regs__busy),
+    .\abort$245 (ca_abort),
+    .\busy$294 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -8828,6 +8882,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
     .ca_write(ca_write),
     .cfg_ack_limit(cfg_ack_limit),
     .cfg_break_time(cfg_break_time),
+    .cfg_confirm_frames(cfg_confirm_frames),
     .cfg_delay_limit(cfg_delay_limit),
     .cfg_delay_tolerance(cfg_delay_tolerance),
     .cfg_end_check(cfg_end_check),
@@ -8859,27 +8914,27 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$263 (clear_counters),
+    .\clear$270 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$19 ),
-    .\done$290 (done),
+    .\done$297 (done),
     .frames(regs__ca_busy),
     .ma(ma),
-    .\periodic$39 (periodic),
+    .\periodic$40 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$20 ),
-    .\result$295 (\$18 ),
+    .\result$302 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$237 (ca_start),
+    .\start$243 (ca_start),
     .trigger(trigger),
-    .\valid$292 (valid)
+    .\valid$299 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
@@ -8983,6 +9038,7 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   assign regs__cfg_spw_tolerance = cfg_spw_tolerance;
   assign regs__cfg_noise_limit = cfg_noise_limit;
   assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
+  assign regs__cfg_confirm_frames = cfg_confirm_frames;
   assign regs__cfg_quiet_time = cfg_quiet_time;
   assign regs__status = \$18 [3:0];
   assign status = \$18 [3:0];
@@ -9061,18 +9117,18 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$185  = ma;
-  assign \slo$187  = slo;
-  assign \port$6765$0  = \$18 ;
-  assign \port$6778$0  = \$19 ;
-  assign \port$6855$0  = \$20 ;
+  assign \ma$187  = ma;
+  assign \slo$189  = slo;
+  assign \port$6831$0  = \$18 ;
+  assign \port$6844$0  = \$19 ;
+  assign \port$6921$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$287 , config_error, count_busy, count_data, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$263 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$294 , config_error, count_busy, count_data, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$270 , \periodic$40 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$290 , \valid$292 , \result$295 , counts
-, ca_done, result, slo);
+, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$243 , \abort$245 , abort, ma, \done$297 , \valid$299 , \result$302 
+, counts, ca_done, result, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -9102,26 +9158,26 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$239 ;
-  wire \abort$239 ;
-  wire \abort$51 ;
+  input \abort$245 ;
+  wire \abort$245 ;
+  wire \abort$52 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$83 ;
+  wire \ack_expired$84 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$104 ;
+  wire [23:0] \ack_limit$105 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$319 ;
+  wire \bit$326 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$81 ;
+  wire \break_over$82 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$248 ;
-  wire \busy$284 ;
-  output \busy$287 ;
-  wire \busy$287 ;
+  wire \busy$254 ;
+  wire \busy$291 ;
+  output \busy$294 ;
+  wire \busy$294 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -9156,13 +9212,14 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$252 ;
+  wire \cdm$258 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$298 ;
-  wire [254:0] cfg;
+  wire \cds$305 ;
+  wire [258:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
+  wire [3:0] \cfg.confirm_frames ;
   wire [11:0] \cfg.delay_limit ;
   wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
@@ -9212,6 +9269,8 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [23:0] cfg_ack_limit;
   input [23:0] cfg_break_time;
   wire [23:0] cfg_break_time;
+  input [3:0] cfg_confirm_frames;
+  wire [3:0] cfg_confirm_frames;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
   input [3:0] cfg_delay_tolerance;
@@ -9285,16 +9344,16 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$162 ;
+  wire \check$163 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$167 ;
-  wire \clean$320 ;
+  wire \clean$168 ;
+  wire \clean$327 ;
   wire clear;
-  wire \clear$128 ;
-  input \clear$263 ;
-  wire \clear$263 ;
-  wire \clear$276 ;
+  wire \clear$129 ;
+  input \clear$270 ;
+  wire \clear$270 ;
+  wire \clear$283 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -9322,22 +9381,11 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$179 ;
+  wire [39:0] \cpw_top$180 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$193 ;
+  wire [1:0] \crc_ok$194 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$175 ;
-  wire [37:0] \crcs$175[0] ;
-  wire \crcs$175[0].inverted ;
-  wire [15:0] \crcs$175[0].poly ;
-  wire [15:0] \crcs$175[0].start ;
-  wire [4:0] \crcs$175[0].width ;
-  wire [37:0] \crcs$175[1] ;
-  wire \crcs$175[1].inverted ;
-  wire [15:0] \crcs$175[1].poly ;
-  wire [15:0] \crcs$175[1].start ;
-  wire [4:0] \crcs$175[1].width ;
   wire [75:0] \crcs$176 ;
   wire [37:0] \crcs$176[0] ;
   wire \crcs$176[0].inverted ;
@@ -9349,6 +9397,17 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [15:0] \crcs$176[1].poly ;
   wire [15:0] \crcs$176[1].start ;
   wire [4:0] \crcs$176[1].width ;
+  wire [75:0] \crcs$177 ;
+  wire [37:0] \crcs$177[0] ;
+  wire \crcs$177[0].inverted ;
+  wire [15:0] \crcs$177[0].poly ;
+  wire [15:0] \crcs$177[0].start ;
+  wire [4:0] \crcs$177[0].width ;
+  wire [37:0] \crcs$177[1] ;
+  wire \crcs$177[1].inverted ;
+  wire [15:0] \crcs$177[1].poly ;
+  wire [15:0] \crcs$177[1].start ;
+  wire [4:0] \crcs$177[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -9359,9 +9418,10 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  wire [254:0] cycle;
+  wire [258:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
+  wire [3:0] \cycle.confirm_frames ;
   wire [11:0] \cycle.delay_limit ;
   wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
@@ -9414,54 +9474,54 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$110 ;
-  wire [12:0] \delay$161 ;
+  wire [12:0] \delay$111 ;
+  wire [12:0] \delay$162 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$112 ;
+  wire [11:0] \delay_limit$113 ;
   wire delay_over;
-  wire \delay_over$91 ;
+  wire \delay_over$92 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$250 ;
-  output \done$290 ;
-  wire \done$290 ;
-  wire \done$291 ;
+  wire \done$256 ;
+  output \done$297 ;
+  wire \done$297 ;
+  wire \done$298 ;
   wire doubtful;
   wire early;
-  wire \early$67 ;
+  wire \early$68 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$262 ;
-  wire \events$262.ca_aborted ;
-  wire \events$262.ca_crc4_error ;
-  wire \events$262.ca_data_fault ;
-  wire \events$262.ca_no_answer ;
-  wire \events$262.ca_refused ;
-  wire [15:0] \events$271 ;
-  wire \events$271.aborted ;
-  wire \events$271.crc_word0 ;
-  wire \events$271.crc_word1 ;
-  wire \events$271.delay_jump ;
-  wire \events$271.delay_range ;
-  wire \events$271.lc_repeat ;
-  wire \events$271.lc_skip ;
-  wire \events$271.lc_zero ;
-  wire \events$271.no_ack ;
-  wire \events$271.no_start ;
-  wire \events$271.no_stop ;
-  wire \events$271.noise_event ;
-  wire \events$271.noisy_line ;
-  wire \events$271.overrun ;
-  wire \events$271.slo_stuck_low ;
-  wire \events$271.spw_mismatch ;
+  wire [4:0] \events$269 ;
+  wire \events$269.ca_aborted ;
+  wire \events$269.ca_crc4_error ;
+  wire \events$269.ca_data_fault ;
+  wire \events$269.ca_no_answer ;
+  wire \events$269.ca_refused ;
+  wire [15:0] \events$278 ;
+  wire \events$278.aborted ;
+  wire \events$278.crc_word0 ;
+  wire \events$278.crc_word1 ;
+  wire \events$278.delay_jump ;
+  wire \events$278.delay_range ;
+  wire \events$278.lc_repeat ;
+  wire \events$278.lc_skip ;
+  wire \events$278.lc_zero ;
+  wire \events$278.no_ack ;
+  wire \events$278.no_start ;
+  wire \events$278.no_stop ;
+  wire \events$278.noise_event ;
+  wire \events$278.noisy_line ;
+  wire \events$278.overrun ;
+  wire \events$278.slo_stuck_low ;
+  wire \events$278.spw_mismatch ;
   wire fault;
-  wire \fault$189 ;
+  wire \fault$190 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -9478,6 +9538,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -9495,7 +9556,8 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$191 ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \fault_status$192 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -9505,7 +9567,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$223 ;
+  wire \first_rise$229 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -9535,6 +9597,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -9556,39 +9619,40 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$134 ;
+  wire [15:0] \half_period$135 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$35 ;
-  wire \idle$44 ;
+  wire \idle$36 ;
+  wire \idle$45 ;
   wire in_clock;
-  wire \in_clock$98 ;
+  wire \in_clock$99 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$139 ;
-  wire [5:0] \lc$311 ;
+  wire [5:0] \lc$140 ;
+  wire [5:0] \lc$318 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$141 ;
+  wire [5:0] \lc_next$142 ;
   wire lc_repeat;
-  wire \lc_repeat$312 ;
+  wire \lc_repeat$319 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$313 ;
+  wire \lc_skip$320 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$314 ;
+  wire \lc_zero$321 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$150 ;
+  wire \level$151 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [254:0] live;
+  wire [258:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
+  wire [3:0] \live.confirm_frames ;
   wire [11:0] \live.delay_limit ;
   wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
@@ -9636,13 +9700,13 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$65 ;
+  wire \locked$66 ;
   output ma;
   wire ma;
-  wire \ma$286 ;
+  wire \ma$293 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$93 ;
+  wire \ma_busy$94 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -9650,26 +9714,28 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$85 ;
+  wire \no_start_expired$86 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$108 ;
+  wire [24:0] \no_start_limit$109 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$169 ;
+  wire \noisy$170 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$289 ;
+  wire \overrun$296 ;
+  wire passed;
+  wire pending;
   wire [23:0] period;
   wire periodic;
-  input \periodic$39 ;
-  wire \periodic$39 ;
+  input \periodic$40 ;
+  wire \periodic$40 ;
   wire quiet;
-  wire \quiet$117 ;
+  wire \quiet$118 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$119 ;
+  wire \quiet_live$120 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -9685,37 +9751,38 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$201 ;
+  wire \report$204 ;
+  wire \report$208 ;
   wire report_delay;
-  wire \report_delay$204 ;
+  wire \report_delay$211 ;
   wire report_frame;
-  wire \report_frame$188 ;
-  wire \report_frame$202 ;
+  wire \report_frame$189 ;
+  wire \report_frame$209 ;
   wire request;
-  wire [17:0] \request$225 ;
-  wire [6:0] \request$225.address ;
-  wire [6:0] \request$225.count ;
-  wire [2:0] \request$225.slave_id ;
-  wire \request$225.write ;
-  wire \request$50 ;
+  wire [17:0] \request$231 ;
+  wire [6:0] \request$231.address ;
+  wire [6:0] \request$231.count ;
+  wire [2:0] \request$231.slave_id ;
+  wire \request$231.write ;
+  wire \request$51 ;
   wire restart;
-  wire \restart$154 ;
+  wire \restart$155 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$295 ;
-  wire [186:0] \result$295 ;
-  wire \result$295.cds ;
-  wire \result$295.delay_settled ;
-  wire [7:0] \result$295.delay_spread ;
-  wire [5:0] \result$295.lc ;
-  wire \result$295.lc_repeat ;
-  wire \result$295.lc_skip ;
-  wire \result$295.lc_zero ;
-  wire [12:0] \result$295.line_delay ;
-  wire [3:0] \result$295.noise_events ;
-  wire [12:0] \result$295.settled_delay ;
-  wire \result$295.spw_mismatch ;
+  output [186:0] \result$302 ;
+  wire [186:0] \result$302 ;
+  wire \result$302.cds ;
+  wire \result$302.delay_settled ;
+  wire [7:0] \result$302.delay_spread ;
+  wire [5:0] \result$302.lc ;
+  wire \result$302.lc_repeat ;
+  wire \result$302.lc_skip ;
+  wire \result$302.lc_zero ;
+  wire [12:0] \result$302.line_delay ;
+  wire [3:0] \result$302.noise_events ;
+  wire [12:0] \result$302.settled_delay ;
+  wire \result$302.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -9732,18 +9799,19 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$295.status ;
-  wire [31:0] \result$295.timestamp ;
-  wire [57:0] \result$295.word0 ;
-  wire \result$295.word0.crc_ok ;
-  wire \result$295.word0.ne ;
-  wire \result$295.word0.nw ;
-  wire [54:0] \result$295.word0.position ;
-  wire [42:0] \result$295.word1 ;
-  wire \result$295.word1.crc_ok ;
-  wire \result$295.word1.ne ;
-  wire \result$295.word1.nw ;
-  wire [39:0] \result$295.word1.position ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \result$302.status ;
+  wire [31:0] \result$302.timestamp ;
+  wire [57:0] \result$302.word0 ;
+  wire \result$302.word0.crc_ok ;
+  wire \result$302.word0.ne ;
+  wire \result$302.word0.nw ;
+  wire [54:0] \result$302.word0.position ;
+  wire [42:0] \result$302.word1 ;
+  wire \result$302.word1.crc_ok ;
+  wire \result$302.word1.ne ;
+  wire \result$302.word1.nw ;
+  wire [39:0] \result$302.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -9755,46 +9823,47 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$147 ;
+  wire \resync$148 ;
   wire [15:0] rises;
-  wire [15:0] \rises$127 ;
+  wire [15:0] \rises$128 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$318 ;
+  wire \sample$325 ;
   wire sampler_noise;
   wire second_rise;
+  wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$301 ;
+  wire [12:0] \settled_delay$308 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$46 ;
-  wire \slo$56 ;
-  wire \slo$92 ;
+  wire \slo$47 ;
+  wire \slo$57 ;
+  wire \slo$93 ;
   wire slo_stuck;
-  wire \slo_stuck$87 ;
+  wire \slo_stuck$88 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$89 ;
+  wire \slo_stuck_live$90 ;
   wire slots_full;
-  wire \slots_full$73 ;
+  wire \slots_full$74 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$315 ;
+  wire \spw_mismatch$322 ;
   input start;
   wire start;
-  input \start$237 ;
-  wire \start$237 ;
-  wire \start$37 ;
+  input \start$243 ;
+  wire \start$243 ;
+  wire \start$38 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$125 ;
+  wire [15:0] \start_slot$126 ;
   wire started;
-  wire \started$123 ;
-  wire \started$71 ;
+  wire \started$124 ;
+  wire \started$72 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -9812,6 +9881,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -9829,25 +9899,45 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$294 ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \status$206 ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \status$301 ;
   wire stop_bit;
-  wire \stop_bit$77 ;
+  wire \stop_bit$78 ;
   wire stopped;
-  wire \stopped$75 ;
+  wire \stopped$76 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$106 ;
+  wire [23:0] \timeout_limit$107 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$183 ;
+  wire [7:0] \tolerance$184 ;
   input trigger;
   wire trigger;
-  wire \trigger$48 ;
+  wire \trigger$49 ;
+  wire unconfirmed;
   wire valid;
-  wire \valid$206 ;
-  output \valid$292 ;
-  wire \valid$292 ;
+  wire \valid$213 ;
+  output \valid$299 ;
+  wire \valid$299 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -9865,34 +9955,34 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$137 ;
+  wire [1:0] \word_count$138 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$173 ;
-  wire [11:0] \words$173[0] ;
+  wire [23:0] \words$174 ;
+  wire [11:0] \words$174[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$173[0].crc ;
-  wire [5:0] \words$173[0].data_bits ;
-  wire \words$173[0].gray ;
-  wire \words$173[0].lc ;
-  wire \words$173[0].nenw ;
-  wire \words$173[0].signed ;
-  wire [11:0] \words$173[1] ;
+  wire [1:0] \words$174[0].crc ;
+  wire [5:0] \words$174[0].data_bits ;
+  wire \words$174[0].gray ;
+  wire \words$174[0].lc ;
+  wire \words$174[0].nenw ;
+  wire \words$174[0].signed ;
+  wire [11:0] \words$174[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$173[1].crc ;
-  wire [5:0] \words$173[1].data_bits ;
-  wire \words$173[1].gray ;
-  wire \words$173[1].lc ;
-  wire \words$173[1].nenw ;
-  wire \words$173[1].signed ;
+  wire [1:0] \words$174[1].crc ;
+  wire [5:0] \words$174[1].data_bits ;
+  wire \words$174[1].gray ;
+  wire \words$174[1].lc ;
+  wire \words$174[1].nenw ;
+  wire \words$174[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -9918,11 +10008,11 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \words[1].nenw ;
   wire \words[1].signed ;
   wire zero;
-  assign periodic = \periodic$39  | frames;
+  assign periodic = \periodic$40  | frames;
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$162  = started & \$1 ;
+  assign \check$163  = started & \$1 ;
   assign \$2  = result[2:0] == 1'h1;
   assign \$3  = ca_done & \$2 ;
   assign \$4  = result[2:0] == 2'h2;
@@ -9938,10 +10028,10 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \$14  = report_frame & \$13 ;
   assign \$15  = status == 4'he;
   assign \$16  = report_frame & \$15 ;
-  assign \busy$287  = ~ idle;
+  assign \busy$294  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$128 ;
-  assign \$18  = \sample$318  & \$17 ;
+  assign \$17  = ~ \clear$129 ;
+  assign \$18  = \sample$325  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -9968,6 +10058,14 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .timeout_limit(timeout_limit),
     .word_count(word_count)
   );
+  \biss_master_uart.ch0.core.confirmation  confirmation (
+    .clk(clk),
+    .pending(unconfirmed),
+    .report(report),
+    .rst(rst),
+    .setting(cycle[148:145]),
+    .status(status)
+  );
   \biss_master_uart.ch0.core.controller  controller (
     .abort(abort),
     .ack_expired(ack_expired),
@@ -9979,7 +10077,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$154 ),
+    .fault(\restart$155 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -9996,14 +10094,14 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$128 ),
+    .receiver_clear(\clear$129 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$56 ),
+    .slo(\slo$57 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -10015,19 +10113,19 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   );
   \biss_master_uart.ch0.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$263 ),
+    .clear(\clear$270 ),
     .clk(clk),
-    .events(\events$271 ),
+    .events(\events$278 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_uart.ch0.core.counters  counters (
-    .clear(\clear$263 ),
+    .clear(\clear$270 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$262 ),
+    .events(\events$269 ),
     .rst(rst)
   );
   \biss_master_uart.ch0.core.decoder  decoder (
@@ -10044,7 +10142,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$128 ),
+    .receiver_clear(\clear$129 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -10056,7 +10154,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .words(words)
   );
   \biss_master_uart.ch0.core.delay_check  delay_check (
-    .check(\check$162 ),
+    .check(\check$163 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -10075,10 +10173,10 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$56 ),
+    .level(\slo$57 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$154 ),
+    .restart(\restart$155 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -10086,7 +10184,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   \biss_master_uart.ch0.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$93 ),
+    .\clocking (\ma_busy$94 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -10098,7 +10196,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .second_rise(ma_arm)
   );
   \biss_master_uart.ch0.core.ma_stop  ma_stop (
-    .clear(\clear$128 ),
+    .clear(\clear$129 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -10106,11 +10204,11 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .rst(rst),
     .start_slot(start_slot),
     .\started$11 (started),
-    .w1_enable(cycle[195]),
-    .words(\words$173 )
+    .w1_enable(cycle[199]),
+    .words(\words$174 )
   );
   \biss_master_uart.ch0.core.register_access  register_access (
-    .abort(\abort$239 ),
+    .abort(\abort$245 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -10118,41 +10216,41 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .frame_cdm(frame_cdm),
     .frame_cds(cds),
     .frame_end(report),
-    .frame_ok(valid),
+    .frame_ok(frame_ok),
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$225 ),
+    .request(\request$231 ),
     .result(result),
     .rst(rst),
-    .start(\start$237 ),
+    .start(\start$243 ),
     .wbuf(wbuf)
   );
   \biss_master_uart.ch0.core.results  results (
     .clk(clk),
-    .done(\done$290 ),
+    .done(\done$297 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$295 ),
+    .result(\result$302 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$292 )
+    .valid_out(\valid$299 )
   );
   \biss_master_uart.ch0.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$319 ),
+    .\bit (\bit$326 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$56 ),
+    .level(\slo$57 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$128 ),
+    .receiver_clear(\clear$129 ),
     .rst(rst),
-    .sample(\sample$318 ),
+    .sample(\sample$325 ),
     .slo(slo)
   );
   \biss_master_uart.ch0.core.scheduler  scheduler (
@@ -10173,20 +10271,20 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6418$0 (\bit ),
+    .\port$6480$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_uart.ch0.core.spw_check  spw_check (
-    .bits(cycle[201:196]),
+    .bits(cycle[205:200]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[254:247])
+    .\tolerance$8 (cycle[258:251])
   );
   \biss_master_uart.ch0.core.time_base  time_base (
     .clk(clk),
@@ -10205,7 +10303,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$93 ),
+    .ma_busy(\ma_busy$94 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -10214,7 +10312,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$56 ),
+    .slo(\slo$57 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -10222,12 +10320,12 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   );
   \biss_master_uart.ch0.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$320 ),
+    .clean(\clean$327 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$154 ),
+    .fault(\restart$155 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -10237,12 +10335,14 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$2754$0 (\$24 ),
+    .passed(frame_ok),
+    .\port$2760$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
     .spw_mismatch(spw_mismatch),
     .status(status),
+    .unconfirmed(unconfirmed),
     .valid(valid)
   );
   always @* begin
@@ -10254,7 +10354,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
-    \$20  = \bit$319 ;
+    \$20  = \bit$326 ;
     if (rst) begin
       \$20  = 1'h0;
     end
@@ -10275,161 +10375,165 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
-    \$23  = \clean$320 ;
+    \$23  = \clean$327 ;
     if (rst) begin
       \$23  = 1'h0;
     end
   end
-  assign \idle$35  = idle;
-  assign \start$37  = start;
+  assign \idle$36  = idle;
+  assign \start$38  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$44  = idle;
-  assign \slo$46  = slo;
-  assign \trigger$48  = trigger;
-  assign \request$50  = request;
-  assign \abort$51  = abort;
+  assign \idle$45  = idle;
+  assign \slo$47  = slo;
+  assign \trigger$49  = trigger;
+  assign \request$51  = request;
+  assign \abort$52  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$56 ;
+  assign level = \slo$57 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$65  = locked;
-  assign \early$67  = early;
+  assign \locked$66  = locked;
+  assign \early$68  = early;
   assign done = frame_done;
-  assign \started$71  = started;
-  assign \slots_full$73  = slots_full;
-  assign \stopped$75  = stopped;
-  assign \stop_bit$77  = stop_bit;
+  assign \started$72  = started;
+  assign \slots_full$74  = slots_full;
+  assign \stopped$76  = stopped;
+  assign \stop_bit$78  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$81  = break_over;
-  assign \ack_expired$83  = ack_expired;
-  assign \no_start_expired$85  = no_start_expired;
-  assign \slo_stuck$87  = slo_stuck;
-  assign \slo_stuck_live$89  = slo_stuck_live;
-  assign \delay_over$91  = delay_over;
-  assign \slo$92  = \slo$56 ;
-  assign \clocking  = \ma_busy$93 ;
+  assign \break_over$82  = break_over;
+  assign \ack_expired$84  = ack_expired;
+  assign \no_start_expired$86  = no_start_expired;
+  assign \slo_stuck$88  = slo_stuck;
+  assign \slo_stuck_live$90  = slo_stuck_live;
+  assign \delay_over$92  = delay_over;
+  assign \slo$93  = \slo$57 ;
+  assign \clocking  = \ma_busy$94 ;
   assign timer_clear = clear;
-  assign \in_clock$98  = in_clock;
+  assign \in_clock$99  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$104  = ack_limit;
-  assign \timeout_limit$106  = timeout_limit;
-  assign \no_start_limit$108  = no_start_limit;
-  assign \delay$110  = delay;
-  assign \delay_limit$112  = delay_limit;
+  assign \ack_limit$105  = ack_limit;
+  assign \timeout_limit$107  = timeout_limit;
+  assign \no_start_limit$109  = no_start_limit;
+  assign \delay$111  = delay;
+  assign \delay_limit$113  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$117  = quiet;
-  assign \quiet_live$119  = quiet_live;
+  assign \quiet$118  = quiet;
+  assign \quiet_live$120  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$123  = started;
-  assign \start_slot$125  = start_slot;
-  assign \rises$127  = rises;
-  assign receiver_clear = \clear$128 ;
+  assign \started$124  = started;
+  assign \start_slot$126  = start_slot;
+  assign \rises$128  = rises;
+  assign receiver_clear = \clear$129 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$134  = cycle[15:0];
+  assign \half_period$135  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$137  = word_count;
-  assign \lc$139  = lc;
+  assign \word_count$138  = word_count;
+  assign \lc$140  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$141  = { lc[4:0], \bit  };
+  assign \lc_next$142  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$147  = resync;
+  assign \resync$148  = resync;
   assign waiting = watch;
-  assign \level$150  = \slo$56 ;
+  assign \level$151  = \slo$57 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$154 ;
+  assign fault = \restart$155 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$161  = delay;
+  assign \delay$162  = delay;
   assign \$signal  = learn;
-  assign \clean$167  = clean;
-  assign \noisy$169  = noisy;
+  assign \clean$168  = clean;
+  assign \noisy$170  = noisy;
   assign jump = delay_jump;
-  assign \crcs$175  = crcs;
   assign \crcs$176  = crcs;
-  assign w1_enable = cycle[195];
-  assign \cpw_top$179  = cpw_top;
+  assign \crcs$177  = crcs;
+  assign w1_enable = cycle[199];
+  assign \cpw_top$180  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[201:196];
-  assign \tolerance$183  = cycle[254:247];
+  assign bits = cycle[205:200];
+  assign \tolerance$184  = cycle[258:251];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$188  = report_frame;
-  assign \fault$189  = \restart$154 ;
-  assign \fault_status$191  = fault_status;
-  assign \crc_ok$193  = crc_ok;
+  assign \report_frame$189  = report_frame;
+  assign \fault$190  = \restart$155 ;
+  assign \fault_status$192  = fault_status;
+  assign \crc_ok$194  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$201  = report;
-  assign \report_frame$202  = report_frame;
-  assign \report_delay$204  = report_delay;
-  assign \valid$206  = valid;
+  assign pending = unconfirmed;
+  assign \report$204  = report;
+  assign \status$206  = status;
+  assign setting = cycle[148:145];
+  assign \report$208  = report;
+  assign \report_frame$209  = report_frame;
+  assign \report_delay$211  = report_delay;
+  assign \valid$213  = valid;
   assign word_crc_ok = { \$24 , crc_ok[0] };
-  assign \first_rise$223  = first_rise;
+  assign \first_rise$229  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$237 ;
-  assign ca_abort = \abort$239 ;
+  assign ca_start = \start$243 ;
+  assign ca_abort = \abort$245 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$248  = frames;
-  assign \done$250  = ca_done;
-  assign \cdm$252  = cdm;
+  assign \busy$254  = frames;
+  assign \done$256  = ca_done;
+  assign \cdm$258  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_ok = valid;
+  assign passed = frame_ok;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$263 ;
+  assign clear_counters = \clear$270 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$276  = \clear$263 ;
+  assign \clear$283  = \clear$270 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$284  = count_busy;
-  assign \ma$286  = ma;
-  assign \overrun$289  = overrun;
-  assign \done$291  = \done$290 ;
-  assign valid_out = \valid$292 ;
-  assign \status$294  = \result$295 [3:0];
-  assign timestamp = \result$295 [35:4];
-  assign line_delay = \result$295 [48:36];
-  assign \cds$298  = \result$295 [49];
-  assign noise_events = \result$295 [53:50];
-  assign delay_settled = \result$295 [54];
-  assign \settled_delay$301  = \result$295 [67:55];
-  assign delay_spread = \result$295 [75:68];
-  assign word0_position = \result$295 [130:76];
-  assign word0_ne = \result$295 [131];
-  assign word0_nw = \result$295 [132];
-  assign word0_crc_ok = \result$295 [133];
-  assign word1_position = \result$295 [173:134];
-  assign word1_ne = \result$295 [174];
-  assign word1_nw = \result$295 [175];
-  assign word1_crc_ok = \result$295 [176];
-  assign \lc$311  = \result$295 [182:177];
-  assign \lc_repeat$312  = \result$295 [183];
-  assign \lc_skip$313  = \result$295 [184];
-  assign \lc_zero$314  = \result$295 [185];
-  assign \spw_mismatch$315  = \result$295 [186];
+  assign \busy$291  = count_busy;
+  assign \ma$293  = ma;
+  assign \overrun$296  = overrun;
+  assign \done$298  = \done$297 ;
+  assign valid_out = \valid$299 ;
+  assign \status$301  = \result$302 [3:0];
+  assign timestamp = \result$302 [35:4];
+  assign line_delay = \result$302 [48:36];
+  assign \cds$305  = \result$302 [49];
+  assign noise_events = \result$302 [53:50];
+  assign delay_settled = \result$302 [54];
+  assign \settled_delay$308  = \result$302 [67:55];
+  assign delay_spread = \result$302 [75:68];
+  assign word0_position = \result$302 [130:76];
+  assign word0_ne = \result$302 [131];
+  assign word0_nw = \result$302 [132];
+  assign word0_crc_ok = \result$302 [133];
+  assign word1_position = \result$302 [173:134];
+  assign word1_ne = \result$302 [174];
+  assign word1_nw = \result$302 [175];
+  assign word1_crc_ok = \result$302 [176];
+  assign \lc$318  = \result$302 [182:177];
+  assign \lc_repeat$319  = \result$302 [183];
+  assign \lc_skip$320  = \result$302 [184];
+  assign \lc_zero$321  = \result$302 [185];
+  assign \spw_mismatch$322  = \result$302 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -10440,33 +10544,34 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[156:145];
-  assign \live.w0.data_bits  = live[150:145];
-  assign \live.w0.nenw  = live[151];
-  assign \live.w0.lc  = live[152];
-  assign \live.w0.crc  = live[154:153];
-  assign \live.w0.gray  = live[155];
-  assign \live.w0.signed  = live[156];
-  assign \live.w0_crc  = live[194:157];
-  assign \live.w0_crc.width  = live[161:157];
-  assign \live.w0_crc.poly  = live[177:162];
-  assign \live.w0_crc.start  = live[193:178];
-  assign \live.w0_crc.inverted  = live[194];
-  assign \live.w1_enable  = live[195];
-  assign \live.w1  = live[207:196];
-  assign \live.w1.data_bits  = live[201:196];
-  assign \live.w1.nenw  = live[202];
-  assign \live.w1.lc  = live[203];
-  assign \live.w1.crc  = live[205:204];
-  assign \live.w1.gray  = live[206];
-  assign \live.w1.signed  = live[207];
-  assign \live.w1_crc  = live[245:208];
-  assign \live.w1_crc.width  = live[212:208];
-  assign \live.w1_crc.poly  = live[228:213];
-  assign \live.w1_crc.start  = live[244:229];
-  assign \live.w1_crc.inverted  = live[245];
-  assign \live.spw_check  = live[246];
-  assign \live.spw_tolerance  = live[254:247];
+  assign \live.confirm_frames  = live[148:145];
+  assign \live.w0  = live[160:149];
+  assign \live.w0.data_bits  = live[154:149];
+  assign \live.w0.nenw  = live[155];
+  assign \live.w0.lc  = live[156];
+  assign \live.w0.crc  = live[158:157];
+  assign \live.w0.gray  = live[159];
+  assign \live.w0.signed  = live[160];
+  assign \live.w0_crc  = live[198:161];
+  assign \live.w0_crc.width  = live[165:161];
+  assign \live.w0_crc.poly  = live[181:166];
+  assign \live.w0_crc.start  = live[197:182];
+  assign \live.w0_crc.inverted  = live[198];
+  assign \live.w1_enable  = live[199];
+  assign \live.w1  = live[211:200];
+  assign \live.w1.data_bits  = live[205:200];
+  assign \live.w1.nenw  = live[206];
+  assign \live.w1.lc  = live[207];
+  assign \live.w1.crc  = live[209:208];
+  assign \live.w1.gray  = live[210];
+  assign \live.w1.signed  = live[211];
+  assign \live.w1_crc  = live[249:212];
+  assign \live.w1_crc.width  = live[216:212];
+  assign \live.w1_crc.poly  = live[232:217];
+  assign \live.w1_crc.start  = live[248:233];
+  assign \live.w1_crc.inverted  = live[249];
+  assign \live.spw_check  = live[250];
+  assign \live.spw_tolerance  = live[258:251];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -10477,33 +10582,34 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[156:145];
-  assign \cycle.w0.data_bits  = cycle[150:145];
-  assign \cycle.w0.nenw  = cycle[151];
-  assign \cycle.w0.lc  = cycle[152];
-  assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0.signed  = cycle[156];
-  assign \cycle.w0_crc  = cycle[194:157];
-  assign \cycle.w0_crc.width  = cycle[161:157];
-  assign \cycle.w0_crc.poly  = cycle[177:162];
-  assign \cycle.w0_crc.start  = cycle[193:178];
-  assign \cycle.w0_crc.inverted  = cycle[194];
-  assign \cycle.w1_enable  = cycle[195];
-  assign \cycle.w1  = cycle[207:196];
-  assign \cycle.w1.data_bits  = cycle[201:196];
-  assign \cycle.w1.nenw  = cycle[202];
-  assign \cycle.w1.lc  = cycle[203];
-  assign \cycle.w1.crc  = cycle[205:204];
-  assign \cycle.w1.gray  = cycle[206];
-  assign \cycle.w1.signed  = cycle[207];
-  assign \cycle.w1_crc  = cycle[245:208];
-  assign \cycle.w1_crc.width  = cycle[212:208];
-  assign \cycle.w1_crc.poly  = cycle[228:213];
-  assign \cycle.w1_crc.start  = cycle[244:229];
-  assign \cycle.w1_crc.inverted  = cycle[245];
-  assign \cycle.spw_check  = cycle[246];
-  assign \cycle.spw_tolerance  = cycle[254:247];
+  assign \cycle.confirm_frames  = cycle[148:145];
+  assign \cycle.w0  = cycle[160:149];
+  assign \cycle.w0.data_bits  = cycle[154:149];
+  assign \cycle.w0.nenw  = cycle[155];
+  assign \cycle.w0.lc  = cycle[156];
+  assign \cycle.w0.crc  = cycle[158:157];
+  assign \cycle.w0.gray  = cycle[159];
+  assign \cycle.w0.signed  = cycle[160];
+  assign \cycle.w0_crc  = cycle[198:161];
+  assign \cycle.w0_crc.width  = cycle[165:161];
+  assign \cycle.w0_crc.poly  = cycle[181:166];
+  assign \cycle.w0_crc.start  = cycle[197:182];
+  assign \cycle.w0_crc.inverted  = cycle[198];
+  assign \cycle.w1_enable  = cycle[199];
+  assign \cycle.w1  = cycle[211:200];
+  assign \cycle.w1.data_bits  = cycle[205:200];
+  assign \cycle.w1.nenw  = cycle[206];
+  assign \cycle.w1.lc  = cycle[207];
+  assign \cycle.w1.crc  = cycle[209:208];
+  assign \cycle.w1.gray  = cycle[210];
+  assign \cycle.w1.signed  = cycle[211];
+  assign \cycle.w1_crc  = cycle[249:212];
+  assign \cycle.w1_crc.width  = cycle[216:212];
+  assign \cycle.w1_crc.poly  = cycle[232:217];
+  assign \cycle.w1_crc.start  = cycle[248:233];
+  assign \cycle.w1_crc.inverted  = cycle[249];
+  assign \cycle.spw_check  = cycle[250];
+  assign \cycle.spw_tolerance  = cycle[258:251];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -10518,20 +10624,20 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$173[0]  = \words$173 [11:0];
-  assign \words$173[0].data_bits  = \words$173 [5:0];
-  assign \words$173[0].nenw  = \words$173 [6];
-  assign \words$173[0].lc  = \words$173 [7];
-  assign \words$173[0].crc  = \words$173 [9:8];
-  assign \words$173[0].gray  = \words$173 [10];
-  assign \words$173[0].signed  = \words$173 [11];
-  assign \words$173[1]  = \words$173 [23:12];
-  assign \words$173[1].data_bits  = \words$173 [17:12];
-  assign \words$173[1].nenw  = \words$173 [18];
-  assign \words$173[1].lc  = \words$173 [19];
-  assign \words$173[1].crc  = \words$173 [21:20];
-  assign \words$173[1].gray  = \words$173 [22];
-  assign \words$173[1].signed  = \words$173 [23];
+  assign \words$174[0]  = \words$174 [11:0];
+  assign \words$174[0].data_bits  = \words$174 [5:0];
+  assign \words$174[0].nenw  = \words$174 [6];
+  assign \words$174[0].lc  = \words$174 [7];
+  assign \words$174[0].crc  = \words$174 [9:8];
+  assign \words$174[0].gray  = \words$174 [10];
+  assign \words$174[0].signed  = \words$174 [11];
+  assign \words$174[1]  = \words$174 [23:12];
+  assign \words$174[1].data_bits  = \words$174 [17:12];
+  assign \words$174[1].nenw  = \words$174 [18];
+  assign \words$174[1].lc  = \words$174 [19];
+  assign \words$174[1].crc  = \words$174 [21:20];
+  assign \words$174[1].gray  = \words$174 [22];
+  assign \words$174[1].signed  = \words$174 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -10542,16 +10648,6 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$175[0]  = crcs[37:0];
-  assign \crcs$175[0].width  = crcs[4:0];
-  assign \crcs$175[0].poly  = crcs[20:5];
-  assign \crcs$175[0].start  = crcs[36:21];
-  assign \crcs$175[0].inverted  = crcs[37];
-  assign \crcs$175[1]  = crcs[75:38];
-  assign \crcs$175[1].width  = crcs[42:38];
-  assign \crcs$175[1].poly  = crcs[58:43];
-  assign \crcs$175[1].start  = crcs[74:59];
-  assign \crcs$175[1].inverted  = crcs[75];
   assign \crcs$176[0]  = crcs[37:0];
   assign \crcs$176[0].width  = crcs[4:0];
   assign \crcs$176[0].poly  = crcs[20:5];
@@ -10562,6 +10658,16 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \crcs$176[1].poly  = crcs[58:43];
   assign \crcs$176[1].start  = crcs[74:59];
   assign \crcs$176[1].inverted  = crcs[75];
+  assign \crcs$177[0]  = crcs[37:0];
+  assign \crcs$177[0].width  = crcs[4:0];
+  assign \crcs$177[0].poly  = crcs[20:5];
+  assign \crcs$177[0].start  = crcs[36:21];
+  assign \crcs$177[0].inverted  = crcs[37];
+  assign \crcs$177[1]  = crcs[75:38];
+  assign \crcs$177[1].width  = crcs[42:38];
+  assign \crcs$177[1].poly  = crcs[58:43];
+  assign \crcs$177[1].start  = crcs[74:59];
+  assign \crcs$177[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -10572,33 +10678,34 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \cfg.quiet_time  = cycle[136:125];
   assign \cfg.noise_limit  = cycle[140:137];
   assign \cfg.delay_tolerance  = cycle[144:141];
-  assign \cfg.w0  = cycle[156:145];
-  assign \cfg.w0.data_bits  = cycle[150:145];
-  assign \cfg.w0.nenw  = cycle[151];
-  assign \cfg.w0.lc  = cycle[152];
-  assign \cfg.w0.crc  = cycle[154:153];
-  assign \cfg.w0.gray  = cycle[155];
-  assign \cfg.w0.signed  = cycle[156];
-  assign \cfg.w0_crc  = cycle[194:157];
-  assign \cfg.w0_crc.width  = cycle[161:157];
-  assign \cfg.w0_crc.poly  = cycle[177:162];
-  assign \cfg.w0_crc.start  = cycle[193:178];
-  assign \cfg.w0_crc.inverted  = cycle[194];
-  assign \cfg.w1_enable  = cycle[195];
-  assign \cfg.w1  = cycle[207:196];
-  assign \cfg.w1.data_bits  = cycle[201:196];
-  assign \cfg.w1.nenw  = cycle[202];
-  assign \cfg.w1.lc  = cycle[203];
-  assign \cfg.w1.crc  = cycle[205:204];
-  assign \cfg.w1.gray  = cycle[206];
-  assign \cfg.w1.signed  = cycle[207];
-  assign \cfg.w1_crc  = cycle[245:208];
-  assign \cfg.w1_crc.width  = cycle[212:208];
-  assign \cfg.w1_crc.poly  = cycle[228:213];
-  assign \cfg.w1_crc.start  = cycle[244:229];
-  assign \cfg.w1_crc.inverted  = cycle[245];
-  assign \cfg.spw_check  = cycle[246];
-  assign \cfg.spw_tolerance  = cycle[254:247];
+  assign \cfg.confirm_frames  = cycle[148:145];
+  assign \cfg.w0  = cycle[160:149];
+  assign \cfg.w0.data_bits  = cycle[154:149];
+  assign \cfg.w0.nenw  = cycle[155];
+  assign \cfg.w0.lc  = cycle[156];
+  assign \cfg.w0.crc  = cycle[158:157];
+  assign \cfg.w0.gray  = cycle[159];
+  assign \cfg.w0.signed  = cycle[160];
+  assign \cfg.w0_crc  = cycle[198:161];
+  assign \cfg.w0_crc.width  = cycle[165:161];
+  assign \cfg.w0_crc.poly  = cycle[181:166];
+  assign \cfg.w0_crc.start  = cycle[197:182];
+  assign \cfg.w0_crc.inverted  = cycle[198];
+  assign \cfg.w1_enable  = cycle[199];
+  assign \cfg.w1  = cycle[211:200];
+  assign \cfg.w1.data_bits  = cycle[205:200];
+  assign \cfg.w1.nenw  = cycle[206];
+  assign \cfg.w1.lc  = cycle[207];
+  assign \cfg.w1.crc  = cycle[209:208];
+  assign \cfg.w1.gray  = cycle[210];
+  assign \cfg.w1.signed  = cycle[211];
+  assign \cfg.w1_crc  = cycle[249:212];
+  assign \cfg.w1_crc.width  = cycle[216:212];
+  assign \cfg.w1_crc.poly  = cycle[232:217];
+  assign \cfg.w1_crc.start  = cycle[248:233];
+  assign \cfg.w1_crc.inverted  = cycle[249];
+  assign \cfg.spw_check  = cycle[250];
+  assign \cfg.spw_tolerance  = cycle[258:251];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -10622,41 +10729,41 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$225.slave_id  = \request$225 [2:0];
-  assign \request$225.address  = \request$225 [9:3];
-  assign \request$225.count  = \request$225 [16:10];
-  assign \request$225.write  = \request$225 [17];
+  assign \request$231.slave_id  = \request$231 [2:0];
+  assign \request$231.address  = \request$231 [9:3];
+  assign \request$231.count  = \request$231 [16:10];
+  assign \request$231.write  = \request$231 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$262.ca_crc4_error  = \events$262 [0];
-  assign \events$262.ca_no_answer  = \events$262 [1];
-  assign \events$262.ca_refused  = \events$262 [2];
-  assign \events$262.ca_aborted  = \events$262 [3];
-  assign \events$262.ca_data_fault  = \events$262 [4];
+  assign \events$269.ca_crc4_error  = \events$269 [0];
+  assign \events$269.ca_no_answer  = \events$269 [1];
+  assign \events$269.ca_refused  = \events$269 [2];
+  assign \events$269.ca_aborted  = \events$269 [3];
+  assign \events$269.ca_data_fault  = \events$269 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$271.crc_word0  = \events$271 [0];
-  assign \events$271.crc_word1  = \events$271 [1];
-  assign \events$271.no_ack  = \events$271 [2];
-  assign \events$271.no_start  = \events$271 [3];
-  assign \events$271.delay_range  = \events$271 [4];
-  assign \events$271.slo_stuck_low  = \events$271 [5];
-  assign \events$271.lc_repeat  = \events$271 [6];
-  assign \events$271.lc_skip  = \events$271 [7];
-  assign \events$271.lc_zero  = \events$271 [8];
-  assign \events$271.spw_mismatch  = \events$271 [9];
-  assign \events$271.overrun  = \events$271 [10];
-  assign \events$271.aborted  = \events$271 [11];
-  assign \events$271.no_stop  = \events$271 [12];
-  assign \events$271.noisy_line  = \events$271 [13];
-  assign \events$271.delay_jump  = \events$271 [14];
-  assign \events$271.noise_event  = \events$271 [15];
+  assign \events$278.crc_word0  = \events$278 [0];
+  assign \events$278.crc_word1  = \events$278 [1];
+  assign \events$278.no_ack  = \events$278 [2];
+  assign \events$278.no_start  = \events$278 [3];
+  assign \events$278.delay_range  = \events$278 [4];
+  assign \events$278.slo_stuck_low  = \events$278 [5];
+  assign \events$278.lc_repeat  = \events$278 [6];
+  assign \events$278.lc_skip  = \events$278 [7];
+  assign \events$278.lc_zero  = \events$278 [8];
+  assign \events$278.spw_mismatch  = \events$278 [9];
+  assign \events$278.overrun  = \events$278 [10];
+  assign \events$278.aborted  = \events$278 [11];
+  assign \events$278.no_stop  = \events$278 [12];
+  assign \events$278.noisy_line  = \events$278 [13];
+  assign \events$278.delay_jump  = \events$278 [14];
+  assign \events$278.noise_event  = \events$278 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -10664,57 +10771,57 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$295.status  = \result$295 [3:0];
-  assign \result$295.timestamp  = \result$295 [35:4];
-  assign \result$295.line_delay  = \result$295 [48:36];
-  assign \result$295.cds  = \result$295 [49];
-  assign \result$295.noise_events  = \result$295 [53:50];
-  assign \result$295.delay_settled  = \result$295 [54];
-  assign \result$295.settled_delay  = \result$295 [67:55];
-  assign \result$295.delay_spread  = \result$295 [75:68];
-  assign \result$295.word0  = \result$295 [133:76];
-  assign \result$295.word0.position  = \result$295 [130:76];
-  assign \result$295.word0.ne  = \result$295 [131];
-  assign \result$295.word0.nw  = \result$295 [132];
-  assign \result$295.word0.crc_ok  = \result$295 [133];
-  assign \result$295.word1  = \result$295 [176:134];
-  assign \result$295.word1.position  = \result$295 [173:134];
-  assign \result$295.word1.ne  = \result$295 [174];
-  assign \result$295.word1.nw  = \result$295 [175];
-  assign \result$295.word1.crc_ok  = \result$295 [176];
-  assign \result$295.lc  = \result$295 [182:177];
-  assign \result$295.lc_repeat  = \result$295 [183];
-  assign \result$295.lc_skip  = \result$295 [184];
-  assign \result$295.lc_zero  = \result$295 [185];
-  assign \result$295.spw_mismatch  = \result$295 [186];
-  assign \events$271 [15] = \event ;
-  assign \events$271 [14] = \$16 ;
-  assign \events$271 [13] = \$14 ;
-  assign \events$271 [12] = faults[6];
-  assign \events$271 [11] = faults[4];
-  assign \events$271 [10] = overrun;
-  assign \events$271 [9] = \$12 ;
-  assign \events$271 [8] = lc_zero;
-  assign \events$271 [7] = lc_skip;
-  assign \events$271 [6] = lc_repeat;
-  assign \events$271 [5] = faults[3];
-  assign \events$271 [4] = faults[2];
-  assign \events$271 [3] = faults[1];
-  assign \events$271 [2] = faults[0];
-  assign \events$271 [1] = crc_error[1];
-  assign \events$271 [0] = crc_error[0];
-  assign \events$262 [4] = \$11 ;
-  assign \events$262 [3] = \$9 ;
-  assign \events$262 [2] = \$7 ;
-  assign \events$262 [1] = \$5 ;
-  assign \events$262 [0] = \$3 ;
+  assign \result$302.status  = \result$302 [3:0];
+  assign \result$302.timestamp  = \result$302 [35:4];
+  assign \result$302.line_delay  = \result$302 [48:36];
+  assign \result$302.cds  = \result$302 [49];
+  assign \result$302.noise_events  = \result$302 [53:50];
+  assign \result$302.delay_settled  = \result$302 [54];
+  assign \result$302.settled_delay  = \result$302 [67:55];
+  assign \result$302.delay_spread  = \result$302 [75:68];
+  assign \result$302.word0  = \result$302 [133:76];
+  assign \result$302.word0.position  = \result$302 [130:76];
+  assign \result$302.word0.ne  = \result$302 [131];
+  assign \result$302.word0.nw  = \result$302 [132];
+  assign \result$302.word0.crc_ok  = \result$302 [133];
+  assign \result$302.word1  = \result$302 [176:134];
+  assign \result$302.word1.position  = \result$302 [173:134];
+  assign \result$302.word1.ne  = \result$302 [174];
+  assign \result$302.word1.nw  = \result$302 [175];
+  assign \result$302.word1.crc_ok  = \result$302 [176];
+  assign \result$302.lc  = \result$302 [182:177];
+  assign \result$302.lc_repeat  = \result$302 [183];
+  assign \result$302.lc_skip  = \result$302 [184];
+  assign \result$302.lc_zero  = \result$302 [185];
+  assign \result$302.spw_mismatch  = \result$302 [186];
+  assign \events$278 [15] = \event ;
+  assign \events$278 [14] = \$16 ;
+  assign \events$278 [13] = \$14 ;
+  assign \events$278 [12] = faults[6];
+  assign \events$278 [11] = faults[4];
+  assign \events$278 [10] = overrun;
+  assign \events$278 [9] = \$12 ;
+  assign \events$278 [8] = lc_zero;
+  assign \events$278 [7] = lc_skip;
+  assign \events$278 [6] = lc_repeat;
+  assign \events$278 [5] = faults[3];
+  assign \events$278 [4] = faults[2];
+  assign \events$278 [3] = faults[1];
+  assign \events$278 [2] = faults[0];
+  assign \events$278 [1] = crc_error[1];
+  assign \events$278 [0] = crc_error[0];
+  assign \events$269 [4] = \$11 ;
+  assign \events$269 [3] = \$9 ;
+  assign \events$269 [2] = \$7 ;
+  assign \events$269 [1] = \$5 ;
+  assign \events$269 [0] = \$3 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$225 [17] = ca_write;
-  assign \request$225 [16:10] = ca_count;
-  assign \request$225 [9:3] = ca_address;
-  assign \request$225 [2:0] = ca_slave_id;
+  assign \request$231 [17] = ca_write;
+  assign \request$231 [16:10] = ca_count;
+  assign \request$231 [9:3] = ca_address;
+  assign \request$231 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$24 ;
@@ -10736,33 +10843,34 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$173 [23:12] = cycle[207:196];
-  assign \words$173 [11:0] = cycle[156:145];
-  assign words[23:12] = cycle[207:196];
-  assign words[11:0] = cycle[156:145];
-  assign live[254:247] = cfg_spw_tolerance;
-  assign live[246] = cfg_spw_check;
-  assign live[245] = cfg_w1_crc_inverted;
-  assign live[244:229] = cfg_w1_crc_start;
-  assign live[228:213] = cfg_w1_crc_poly;
-  assign live[212:208] = cfg_w1_crc_width;
-  assign live[207] = cfg_w1_signed;
-  assign live[206] = cfg_w1_gray;
-  assign live[205:204] = cfg_w1_crc;
-  assign live[203] = cfg_w1_lc;
-  assign live[202] = cfg_w1_nenw;
-  assign live[201:196] = cfg_w1_data_bits;
-  assign live[195] = cfg_w1_enable;
-  assign live[194] = cfg_w0_crc_inverted;
-  assign live[193:178] = cfg_w0_crc_start;
-  assign live[177:162] = cfg_w0_crc_poly;
-  assign live[161:157] = cfg_w0_crc_width;
-  assign live[156] = cfg_w0_signed;
-  assign live[155] = cfg_w0_gray;
-  assign live[154:153] = cfg_w0_crc;
-  assign live[152] = cfg_w0_lc;
-  assign live[151] = cfg_w0_nenw;
-  assign live[150:145] = cfg_w0_data_bits;
+  assign \words$174 [23:12] = cycle[211:200];
+  assign \words$174 [11:0] = cycle[160:149];
+  assign words[23:12] = cycle[211:200];
+  assign words[11:0] = cycle[160:149];
+  assign live[258:251] = cfg_spw_tolerance;
+  assign live[250] = cfg_spw_check;
+  assign live[249] = cfg_w1_crc_inverted;
+  assign live[248:233] = cfg_w1_crc_start;
+  assign live[232:217] = cfg_w1_crc_poly;
+  assign live[216:212] = cfg_w1_crc_width;
+  assign live[211] = cfg_w1_signed;
+  assign live[210] = cfg_w1_gray;
+  assign live[209:208] = cfg_w1_crc;
+  assign live[207] = cfg_w1_lc;
+  assign live[206] = cfg_w1_nenw;
+  assign live[205:200] = cfg_w1_data_bits;
+  assign live[199] = cfg_w1_enable;
+  assign live[198] = cfg_w0_crc_inverted;
+  assign live[197:182] = cfg_w0_crc_start;
+  assign live[181:166] = cfg_w0_crc_poly;
+  assign live[165:161] = cfg_w0_crc_width;
+  assign live[160] = cfg_w0_signed;
+  assign live[159] = cfg_w0_gray;
+  assign live[158:157] = cfg_w0_crc;
+  assign live[156] = cfg_w0_lc;
+  assign live[155] = cfg_w0_nenw;
+  assign live[154:149] = cfg_w0_data_bits;
+  assign live[148:145] = cfg_confirm_frames;
   assign live[144:141] = cfg_delay_tolerance;
   assign live[140:137] = cfg_noise_limit;
   assign live[136:125] = cfg_quiet_time;
@@ -10834,7 +10942,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire [24:0] \$58 ;
   reg \$59 ;
   wire \$6 ;
-  reg [254:0] \$60 ;
+  reg [258:0] \$60 ;
   reg [23:0] \$61 ;
   reg [23:0] \$62 ;
   reg [11:0] \$63 ;
@@ -10861,10 +10969,11 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  output [254:0] cycle;
-  reg [254:0] cycle = 255'h0000000000000000000000000000000000000000000000000000000000000000;
+  output [258:0] cycle;
+  reg [258:0] cycle = 259'h00000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
+  wire [3:0] \cycle.confirm_frames ;
   wire [11:0] \cycle.delay_limit ;
   wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
@@ -10916,10 +11025,11 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [254:0] live;
-  wire [254:0] live;
+  input [258:0] live;
+  wire [258:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
+  wire [3:0] \live.confirm_frames ;
   wire [11:0] \live.delay_limit ;
   wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
@@ -10980,14 +11090,14 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
-  assign \$36  = live[195] & live[152];
-  assign \$37  = \$36  & live[203];
+  assign \$36  = live[199] & live[156];
+  assign \$37  = \$36  & live[207];
   assign \$38  = ~ \$37 ;
   assign \$39  = \$35  & \$38 ;
-  assign \$40  = ~ live[246];
-  assign \$41  = live[201:196] <= live[150:145];
-  assign \$42  = live[195] & \$41 ;
-  assign \$43  = | live[205:204];
+  assign \$40  = ~ live[250];
+  assign \$41  = live[205:200] <= live[154:149];
+  assign \$42  = live[199] & \$41 ;
+  assign \$43  = | live[209:208];
   assign \$44  = \$42  & \$43 ;
   assign \$45  = \$40  | \$44 ;
   assign \$46  = \$39  & \$45 ;
@@ -11003,7 +11113,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$56  = \$55  ? 4'h2 : live[144:141];
   assign \$57  = live[15:0] + \$56 ;
   assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[195];
+  assign word_count = 1'h1 + cycle[199];
   always @(posedge clk)
     ok <= \$59 ;
   always @(posedge clk)
@@ -11023,35 +11133,35 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   always @(posedge clk)
     no_start_limit <= \$67 ;
   assign \$1  = | live[15:1];
-  assign \$2  = | live[150:145];
-  assign \$3  = live[150:145] <= 6'h37;
+  assign \$2  = | live[154:149];
+  assign \$3  = live[154:149] <= 6'h37;
   assign \$4  = \$2  & \$3 ;
-  assign \$5  = ! live[154:153];
-  assign \$6  = live[154:153] == 1'h1;
+  assign \$5  = ! live[158:157];
+  assign \$6  = live[158:157] == 1'h1;
   assign \$7  = \$5  | \$6 ;
-  assign \$8  = live[154:153] == 2'h2;
+  assign \$8  = live[158:157] == 2'h2;
   assign \$9  = \$7  | \$8 ;
-  assign \$10  = live[154:153] == 2'h3;
-  assign \$11  = | live[161:157];
+  assign \$10  = live[158:157] == 2'h3;
+  assign \$11  = | live[165:161];
   assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[161:157] <= 5'h10;
+  assign \$13  = live[165:161] <= 5'h10;
   assign \$14  = \$12  & \$13 ;
   assign \$15  = \$9  | \$14 ;
   assign \$16  = \$4  & \$15 ;
   assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[195];
-  assign \$19  = | live[201:196];
-  assign \$20  = live[201:196] <= 6'h28;
+  assign \$18  = ~ live[199];
+  assign \$19  = | live[205:200];
+  assign \$20  = live[205:200] <= 6'h28;
   assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[205:204];
-  assign \$23  = live[205:204] == 1'h1;
+  assign \$22  = ! live[209:208];
+  assign \$23  = live[209:208] == 1'h1;
   assign \$24  = \$22  | \$23 ;
-  assign \$25  = live[205:204] == 2'h2;
+  assign \$25  = live[209:208] == 2'h2;
   assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[205:204] == 2'h3;
-  assign \$28  = | live[212:208];
+  assign \$27  = live[209:208] == 2'h3;
+  assign \$28  = | live[216:212];
   assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[212:208] <= 5'h10;
+  assign \$30  = live[216:212] <= 5'h10;
   assign \$31  = \$29  & \$30 ;
   assign \$32  = \$26  | \$31 ;
   always @* begin
@@ -11068,7 +11178,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
       \$60  = live;
     end
     if (rst) begin
-      \$60  = 255'h0000000000000000000000000000000000000000000000000000000000000000;
+      \$60  = 259'h00000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
@@ -11126,7 +11236,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     \$66  = crcs;
     if (idle) begin
       (* full_case = 32'd1 *)
-      casez (live[154:153])
+      casez (live[158:157])
         2'h1:
           begin
             \$66 [4:0] = 5'h06;
@@ -11142,12 +11252,12 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
             \$66 [37] = 1'h1;
           end
         2'h3:
-            \$66 [37:0] = live[194:157];
+            \$66 [37:0] = live[198:161];
         default:
             \$66 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
-      casez (live[205:204])
+      casez (live[209:208])
         2'h1:
           begin
             \$66 [42:38] = 5'h06;
@@ -11163,7 +11273,7 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
             \$66 [75] = 1'h1;
           end
         2'h3:
-            \$66 [75:38] = live[245:208];
+            \$66 [75:38] = live[249:212];
         default:
             \$66 [75:38] = 38'h0000000000;
       endcase
@@ -11189,33 +11299,34 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[156:145];
-  assign \live.w0.data_bits  = live[150:145];
-  assign \live.w0.nenw  = live[151];
-  assign \live.w0.lc  = live[152];
-  assign \live.w0.crc  = live[154:153];
-  assign \live.w0.gray  = live[155];
-  assign \live.w0.signed  = live[156];
-  assign \live.w0_crc  = live[194:157];
-  assign \live.w0_crc.width  = live[161:157];
-  assign \live.w0_crc.poly  = live[177:162];
-  assign \live.w0_crc.start  = live[193:178];
-  assign \live.w0_crc.inverted  = live[194];
-  assign \live.w1_enable  = live[195];
-  assign \live.w1  = live[207:196];
-  assign \live.w1.data_bits  = live[201:196];
-  assign \live.w1.nenw  = live[202];
-  assign \live.w1.lc  = live[203];
-  assign \live.w1.crc  = live[205:204];
-  assign \live.w1.gray  = live[206];
-  assign \live.w1.signed  = live[207];
-  assign \live.w1_crc  = live[245:208];
-  assign \live.w1_crc.width  = live[212:208];
-  assign \live.w1_crc.poly  = live[228:213];
-  assign \live.w1_crc.start  = live[244:229];
-  assign \live.w1_crc.inverted  = live[245];
-  assign \live.spw_check  = live[246];
-  assign \live.spw_tolerance  = live[254:247];
+  assign \live.confirm_frames  = live[148:145];
+  assign \live.w0  = live[160:149];
+  assign \live.w0.data_bits  = live[154:149];
+  assign \live.w0.nenw  = live[155];
+  assign \live.w0.lc  = live[156];
+  assign \live.w0.crc  = live[158:157];
+  assign \live.w0.gray  = live[159];
+  assign \live.w0.signed  = live[160];
+  assign \live.w0_crc  = live[198:161];
+  assign \live.w0_crc.width  = live[165:161];
+  assign \live.w0_crc.poly  = live[181:166];
+  assign \live.w0_crc.start  = live[197:182];
+  assign \live.w0_crc.inverted  = live[198];
+  assign \live.w1_enable  = live[199];
+  assign \live.w1  = live[211:200];
+  assign \live.w1.data_bits  = live[205:200];
+  assign \live.w1.nenw  = live[206];
+  assign \live.w1.lc  = live[207];
+  assign \live.w1.crc  = live[209:208];
+  assign \live.w1.gray  = live[210];
+  assign \live.w1.signed  = live[211];
+  assign \live.w1_crc  = live[249:212];
+  assign \live.w1_crc.width  = live[216:212];
+  assign \live.w1_crc.poly  = live[232:217];
+  assign \live.w1_crc.start  = live[248:233];
+  assign \live.w1_crc.inverted  = live[249];
+  assign \live.spw_check  = live[250];
+  assign \live.spw_tolerance  = live[258:251];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -11226,33 +11337,34 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[156:145];
-  assign \cycle.w0.data_bits  = cycle[150:145];
-  assign \cycle.w0.nenw  = cycle[151];
-  assign \cycle.w0.lc  = cycle[152];
-  assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0.signed  = cycle[156];
-  assign \cycle.w0_crc  = cycle[194:157];
-  assign \cycle.w0_crc.width  = cycle[161:157];
-  assign \cycle.w0_crc.poly  = cycle[177:162];
-  assign \cycle.w0_crc.start  = cycle[193:178];
-  assign \cycle.w0_crc.inverted  = cycle[194];
-  assign \cycle.w1_enable  = cycle[195];
-  assign \cycle.w1  = cycle[207:196];
-  assign \cycle.w1.data_bits  = cycle[201:196];
-  assign \cycle.w1.nenw  = cycle[202];
-  assign \cycle.w1.lc  = cycle[203];
-  assign \cycle.w1.crc  = cycle[205:204];
-  assign \cycle.w1.gray  = cycle[206];
-  assign \cycle.w1.signed  = cycle[207];
-  assign \cycle.w1_crc  = cycle[245:208];
-  assign \cycle.w1_crc.width  = cycle[212:208];
-  assign \cycle.w1_crc.poly  = cycle[228:213];
-  assign \cycle.w1_crc.start  = cycle[244:229];
-  assign \cycle.w1_crc.inverted  = cycle[245];
-  assign \cycle.spw_check  = cycle[246];
-  assign \cycle.spw_tolerance  = cycle[254:247];
+  assign \cycle.confirm_frames  = cycle[148:145];
+  assign \cycle.w0  = cycle[160:149];
+  assign \cycle.w0.data_bits  = cycle[154:149];
+  assign \cycle.w0.nenw  = cycle[155];
+  assign \cycle.w0.lc  = cycle[156];
+  assign \cycle.w0.crc  = cycle[158:157];
+  assign \cycle.w0.gray  = cycle[159];
+  assign \cycle.w0.signed  = cycle[160];
+  assign \cycle.w0_crc  = cycle[198:161];
+  assign \cycle.w0_crc.width  = cycle[165:161];
+  assign \cycle.w0_crc.poly  = cycle[181:166];
+  assign \cycle.w0_crc.start  = cycle[197:182];
+  assign \cycle.w0_crc.inverted  = cycle[198];
+  assign \cycle.w1_enable  = cycle[199];
+  assign \cycle.w1  = cycle[211:200];
+  assign \cycle.w1.data_bits  = cycle[205:200];
+  assign \cycle.w1.nenw  = cycle[206];
+  assign \cycle.w1.lc  = cycle[207];
+  assign \cycle.w1.crc  = cycle[209:208];
+  assign \cycle.w1.gray  = cycle[210];
+  assign \cycle.w1.signed  = cycle[211];
+  assign \cycle.w1_crc  = cycle[249:212];
+  assign \cycle.w1_crc.width  = cycle[216:212];
+  assign \cycle.w1_crc.poly  = cycle[232:217];
+  assign \cycle.w1_crc.start  = cycle[248:233];
+  assign \cycle.w1_crc.inverted  = cycle[249];
+  assign \cycle.spw_check  = cycle[250];
+  assign \cycle.spw_tolerance  = cycle[258:251];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -11266,10 +11378,93 @@ module \biss_master_uart.ch0.core.config (rst, word_count, live, ok, cycle, ack_
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_uart.ch0.core.confirmation (rst, report, status, pending, setting, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire [3:0] \$12 ;
+  wire [3:0] \$13 ;
+  wire [4:0] \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  reg [3:0] \$17 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input clk;
+  wire clk;
+  reg [3:0] left = 4'h0;
+  output pending;
+  wire pending;
+  input report;
+  wire report;
+  input rst;
+  wire rst;
+  input [3:0] setting;
+  wire [3:0] setting;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  input [3:0] status;
+  wire [3:0] status;
+  assign \$1  = ! status;
+  assign \$2  = status == 4'ha;
+  assign \$3  = status == 4'hb;
+  assign \$4  = status == 4'hf;
+  assign \$5  = | { \$4 , \$3 , \$2 , \$1  };
+  assign \$6  = ~ \$5 ;
+  assign \$7  = report & \$6 ;
+  assign \$8  = status == 4'hf;
+  assign \$9  = report & \$8 ;
+  assign \$10  = ! setting;
+  assign \$11  = setting == 4'hf;
+  assign \$12  = \$11  ? 4'h0 : setting;
+  assign \$13  = \$10  ? 4'h1 : \$12 ;
+  assign \$14  = left - 1'h1;
+  assign \$15  = | left;
+  assign \$16  = setting != 4'hf;
+  assign pending = \$15  & \$16 ;
+  always @(posedge clk)
+    left <= \$17 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$17  = left;
+    if (\$7 ) begin
+      \$17  = \$13 ;
+    end else if (\$9 ) begin
+      \$17  = \$14 [3:0];
+    end
+    if (rst) begin
+      \$17  = 4'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
 , slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -11356,6 +11551,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] fault_status;
   reg [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -11374,6 +11570,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \fault_status$41 ;
   output [6:0] faults;
   wire [6:0] faults;
@@ -11486,6 +11683,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -11503,6 +11701,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \status$79 ;
   input stop_bit;
   wire stop_bit;
@@ -11604,7 +11803,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     .report_frame(report_frame)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -11612,7 +11811,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -11659,7 +11858,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     waiting = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -11671,7 +11870,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -11683,7 +11882,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -11732,7 +11931,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -11781,7 +11980,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -11797,7 +11996,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -11811,7 +12010,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -11825,7 +12024,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     framing = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -11841,7 +12040,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -11872,7 +12071,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -11890,7 +12089,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     holding = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -11913,14 +12112,14 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     \$27  = idle;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     \$28  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -12011,7 +12210,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     \$29  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -12102,7 +12301,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     \$30  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -12193,7 +12392,7 @@ module \biss_master_uart.ch0.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     \$31  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -12262,7 +12461,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -12301,7 +12500,7 @@ module \biss_master_uart.ch0.core.controller.cdm_hold (rst, abort, framing, hold
   assign \$1  = ~ abort;
   assign \$2  = cdm_cycle & \$1 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     \$7  = cdm_cycle;
     if (idle) begin
       \$7  = cdm;
@@ -12311,7 +12510,7 @@ module \biss_master_uart.ch0.core.controller.cdm_hold (rst, abort, framing, hold
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
     ma_hold = 1'h0;
     if (framing) begin
       ma_hold = \$2 ;
@@ -12323,7 +12522,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -12391,6 +12590,7 @@ module \biss_master_uart.ch0.core.controller.line_faults (rst, restart_timer, cl
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] status;
   reg [3:0] status;
   input watch;
@@ -12420,7 +12620,7 @@ module \biss_master_uart.ch0.core.controller.line_faults (rst, restart_timer, cl
   always @(posedge clk)
     locked_seen <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$20  = armed;
     if (clear) begin
       \$20  = 1'h0;
@@ -12433,7 +12633,7 @@ module \biss_master_uart.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     \$21  = locked_seen;
     if (clear) begin
       \$21  = 1'h0;
@@ -12446,7 +12646,7 @@ module \biss_master_uart.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     fault = 1'h0;
     if (\$7 ) begin
       fault = 1'h1;
@@ -12459,7 +12659,7 @@ module \biss_master_uart.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     status = 4'h0;
     if (\$7 ) begin
       status = 4'h8;
@@ -12472,7 +12672,7 @@ module \biss_master_uart.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$25 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
     delay = 1'h0;
     if (\$7 ) begin
     end else if (\$12 ) begin
@@ -12484,7 +12684,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -12518,7 +12718,7 @@ module \biss_master_uart.ch0.core.controller.ready_check (config_ok, first_clock
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
   assign \$4  = first_clock ? quiet_live : quiet;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     aborted = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -12526,7 +12726,7 @@ module \biss_master_uart.ch0.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     ready = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -12535,7 +12735,7 @@ module \biss_master_uart.ch0.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     stuck_low = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -12545,7 +12745,7 @@ module \biss_master_uart.ch0.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$26 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
@@ -12590,6 +12790,7 @@ module \biss_master_uart.ch0.core.controller.report (fault, fault_status, report
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   output [6:0] faults;
@@ -12622,6 +12823,7 @@ module \biss_master_uart.ch0.core.controller.report (fault, fault_status, report
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   assign report_delay = report_frame | delay;
   assign \$1  = fault_status == 3'h6;
@@ -12659,7 +12861,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.counter_ram (rst, host__en, busy, read_data, host__addr, clear, events, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire [7:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -13415,7 +13617,7 @@ module \biss_master_uart.ch0.core.counter_ram (rst, host__en, busy, read_data, h
   always @(posedge clk)
     was_busy <= \$308 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
       \$300 [0] = 1'h0;
@@ -13546,7 +13748,7 @@ module \biss_master_uart.ch0.core.counter_ram (rst, host__en, busy, read_data, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
       \$301  = 1'h0;
@@ -13557,49 +13759,49 @@ module \biss_master_uart.ch0.core.counter_ram (rst, host__en, busy, read_data, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$302  = { \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109  };
     if (rst) begin
       \$302  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$303  = pick;
     if (rst) begin
       \$303  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$304  = { \$148 , \$147 , \$146  };
     if (rst) begin
       \$304  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$305  = sel;
     if (rst) begin
       \$305  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$306  = update__addr;
     if (rst) begin
       \$306  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$307  = \$173 ;
     if (rst) begin
       \$307  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$308  = \$299 ;
     if (rst) begin
       \$308  = 1'h1;
@@ -13687,7 +13889,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.counters (rst, clear, events, counts, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   reg [4:0] \$1 ;
   reg \$2 ;
   input clear;
@@ -13777,14 +13979,14 @@ module \biss_master_uart.ch0.core.counters (rst, clear, events, counts, clk);
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$1  = events;
     if (rst) begin
       \$1  = 5'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$2  = clear;
     if (rst) begin
       \$2  = 1'h0;
@@ -13824,60 +14026,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -13931,7 +14079,7 @@ module \biss_master_uart.ch0.core.counters.count_ca_crc4_error (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
+module \biss_master_uart.ch0.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -13985,7 +14133,7 @@ module \biss_master_uart.ch0.core.counters.count_ca_data_fault (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
+module \biss_master_uart.ch0.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -14039,7 +14187,7 @@ module \biss_master_uart.ch0.core.counters.count_ca_no_answer (rst, inc, clear, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.counters.count_ca_refused (rst, inc, clear, count, clk);
+module \biss_master_uart.ch0.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -14093,9 +14241,63 @@ module \biss_master_uart.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_uart.ch0.core.counters.count_ca_refused (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top
 , crc_ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -15489,7 +15691,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$585  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -15513,7 +15715,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$586  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -15535,7 +15737,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$587  = slots;
     if (\$36 ) begin
       \$587  = \$37 [15:0];
@@ -15548,7 +15750,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$588  = slots_full;
     if (\$36 ) begin
       \$588  = \$38 ;
@@ -15561,7 +15763,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$589  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -15577,7 +15779,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$590  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -15593,7 +15795,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$591  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -15625,7 +15827,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$592  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -15643,7 +15845,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$593  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -15668,7 +15870,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$594  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -15693,7 +15895,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$595  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -15718,7 +15920,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$596  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
@@ -15740,7 +15942,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$597  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -15765,7 +15967,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$598  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -15793,7 +15995,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$599  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -15815,7 +16017,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$600  = data0;
     if (\$66 ) begin
       \$600  = \$344 ;
@@ -15828,7 +16030,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$601  = ne;
     if (\$345 ) begin
       \$601 [0] = 1'h1;
@@ -15848,7 +16050,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$602  = nw;
     if (\$345 ) begin
       \$602 [0] = 1'h1;
@@ -15870,7 +16072,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$603  = data1;
     if (\$356 ) begin
       \$603  = \$559 ;
@@ -15883,7 +16085,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$604  = lc;
     if (lc_load) begin
       \$604  = { lc[4:0], \bit  };
@@ -15896,7 +16098,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     \$605  = cpw_top;
     if (\$569 ) begin
       \$605  = { cpw_top[38:0], \$571  };
@@ -15909,7 +16111,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     at_cds = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -15919,7 +16121,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -15931,7 +16133,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -15941,7 +16143,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -15955,7 +16157,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -15969,7 +16171,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -15983,7 +16185,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (words[18])
       1'h0:
@@ -15993,7 +16195,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -16007,7 +16209,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -16021,7 +16223,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -16081,7 +16283,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
   reg \$11 ;
@@ -16182,7 +16384,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @(posedge clk)
     ok <= \$35 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (load_index)
       1'h0:
@@ -16192,7 +16394,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16202,7 +16404,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16212,7 +16414,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16222,7 +16424,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16232,7 +16434,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16242,7 +16444,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16252,7 +16454,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16262,7 +16464,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -16272,7 +16474,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$33  = \reg ;
     if (load) begin
       \$33  = \$1 ;
@@ -16289,7 +16491,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$34  = mismatch;
     if (load) begin
       \$34  = 1'h0;
@@ -16305,7 +16507,7 @@ module \biss_master_uart.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$35  = ok;
     if (last) begin
       if (\$15 ) begin
@@ -16337,7 +16539,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -16509,56 +16711,56 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
   assign \$39  = magnitude > spread;
   assign \$40  = \$38  & \$39 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$46  = \$1 ;
     if (rst) begin
       \$46  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$47  = \$2 ;
     if (rst) begin
       \$47  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$48  = \tolerance$8 ;
     if (rst) begin
       \$48  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$49  = \$3 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$50  = \$11 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$51  = \$20 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$52  = \$25 ;
     if (rst) begin
       \$52  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$53  = 1'h0;
     if (learn) begin
       if (\$32 ) begin
@@ -16575,7 +16777,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$54  = jump;
     if (check) begin
       \$54  = \$26 ;
@@ -16588,7 +16790,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$55  = count;
     if (learn) begin
       (* full_case = 32'd1 *)
@@ -16610,7 +16812,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$56  = spread;
     if (learn) begin
       if (\$32 ) begin
@@ -16630,7 +16832,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$57  = cand;
     if (learn) begin
       if (\$32 ) begin
@@ -16643,7 +16845,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$58  = settled_delay;
     if (learn) begin
       if (\$32 ) begin
@@ -16660,7 +16862,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$59  = settled;
     if (learn) begin
       if (\$32 ) begin
@@ -16680,7 +16882,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire \$1 ;
   reg \$10 ;
   reg \$11 ;
@@ -16743,21 +16945,21 @@ module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, noisy, events,
   always @(posedge clk)
     running <= \$14 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$10  = level;
     if (rst) begin
       \$10  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$11  = \$4 ;
     if (rst) begin
       \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$12  = held_noisy;
     if (close) begin
       \$12  = \$7 ;
@@ -16767,7 +16969,7 @@ module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$13  = held_events;
     if (close) begin
       \$13  = running;
@@ -16777,7 +16979,7 @@ module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$14  = running;
     if (close) begin
       \$14  = { 3'h0, \event  };
@@ -16794,7 +16996,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -16919,7 +17121,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -16934,7 +17136,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -16949,7 +17151,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -16964,7 +17166,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -16993,7 +17195,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -17035,7 +17237,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -17077,7 +17279,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -17096,7 +17298,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -17132,7 +17334,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -17156,7 +17358,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -17172,7 +17374,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -17189,7 +17391,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, \started$11 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   reg [7:0] \$1 ;
   wire \$10 ;
   reg [7:0] \$11 ;
@@ -17292,7 +17494,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   always @(posedge clk)
     word1_len <= \$19 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -17306,7 +17508,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -17320,42 +17522,42 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$14  = \$3 [7:0];
     if (rst) begin
       \$14  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$15  = \$5 ;
     if (rst) begin
       \$15  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$16  = \$6 ;
     if (rst) begin
       \$16  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$17  = \started$11 ;
     if (rst) begin
       \$17  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$18  = \$10 ;
     if (rst) begin
       \$18  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$19  = \$13 [7:0];
     if (rst) begin
       \$19  = 8'h00;
@@ -17681,7 +17883,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.register_access.buffers (rst, host_read__en, byte_to_send, rbuf_data, host_read__addr, wbuf, index, store, byte_received, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -17798,21 +18000,21 @@ module \biss_master_uart.ch0.core.register_access.buffers (rst, host_read__en, b
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -17832,7 +18034,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -17875,7 +18077,7 @@ module \biss_master_uart.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -17885,7 +18087,7 @@ module \biss_master_uart.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -17901,7 +18103,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -17944,7 +18146,7 @@ module \biss_master_uart.ch0.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$6  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -17968,7 +18170,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -18038,7 +18240,7 @@ module \biss_master_uart.ch0.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -18048,7 +18250,7 @@ module \biss_master_uart.ch0.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -18061,7 +18263,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -18133,7 +18335,7 @@ module \biss_master_uart.ch0.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -18146,7 +18348,7 @@ module \biss_master_uart.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -18159,7 +18361,7 @@ module \biss_master_uart.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -18169,7 +18371,7 @@ module \biss_master_uart.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -18194,7 +18396,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -18237,7 +18439,7 @@ module \biss_master_uart.ch0.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$8  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -18262,7 +18464,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -18618,7 +18820,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -18656,7 +18858,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -18710,7 +18912,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -18807,7 +19009,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -18824,7 +19026,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -18863,7 +19065,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -18921,7 +19123,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -18988,7 +19190,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -19020,7 +19222,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19034,7 +19236,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19061,7 +19263,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19081,7 +19283,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19100,7 +19302,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19129,7 +19331,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19150,7 +19352,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19172,7 +19374,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19193,7 +19395,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19215,7 +19417,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19237,7 +19439,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19261,7 +19463,7 @@ module \biss_master_uart.ch0.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -19300,7 +19502,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [186:0] \$3 ;
@@ -19337,6 +19539,7 @@ module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, fra
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -19384,6 +19587,7 @@ module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, fra
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \result.status ;
   wire [31:0] \result.timestamp ;
   wire [57:0] \result.word0 ;
@@ -19409,21 +19613,21 @@ module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -19500,7 +19704,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -19785,7 +19989,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$71  = level;
     if (receiver_clear) begin
       \$71  = 1'h1;
@@ -19795,7 +19999,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$72  = mid_delay;
     if (odd) begin
       \$72  = \$8 [12:0];
@@ -19820,7 +20024,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$73  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -19847,7 +20051,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$74  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -19869,7 +20073,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$75  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -19893,7 +20097,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$76  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -19909,7 +20113,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$77  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -19935,7 +20139,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$78  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -19966,7 +20170,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$79  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -19997,7 +20201,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$80  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -20047,7 +20251,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$81  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -20097,7 +20301,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$82  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -20127,7 +20331,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$83  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -20155,7 +20359,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$84  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -20181,7 +20385,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$85  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -20204,7 +20408,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$86  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -20244,7 +20448,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -20262,7 +20466,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     clear = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -20274,7 +20478,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     dropped = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -20295,7 +20499,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -20320,7 +20524,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     centre = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -20348,7 +20552,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majority, odd, receiver_clear, vote1, vote2, clear, centre, level, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -20463,7 +20667,7 @@ module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
   always @(posedge clk)
     strobed <= \$38 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$33  = last;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -20481,7 +20685,7 @@ module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$34  = tail_odd;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -20499,7 +20703,7 @@ module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$35  = 1'h0;
@@ -20519,7 +20723,7 @@ module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$36  = 1'h0;
@@ -20539,7 +20743,7 @@ module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$37  = crowded;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -20557,7 +20761,7 @@ module \biss_master_uart.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$38  = strobed;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -20600,7 +20804,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -20694,14 +20898,14 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -20715,7 +20919,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -20729,7 +20933,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -20745,8 +20949,8 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6418$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6480$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -20787,8 +20991,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6418$0 ;
-  wire \port$6418$0 ;
+  input \port$6480$0 ;
+  wire \port$6480$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -20802,9 +21006,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6418$0  };
-  assign \$2  = { lc[4:0], \port$6418$0  } == last;
-  assign \$3  = { lc[4:0], \port$6418$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6480$0  };
+  assign \$2  = { lc[4:0], \port$6480$0  } == last;
+  assign \$3  = { lc[4:0], \port$6480$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -20838,7 +21042,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -20848,7 +21052,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -20858,7 +21062,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -20868,21 +21072,21 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -20892,7 +21096,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -20902,7 +21106,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -20914,13 +21118,13 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6418$0  };
+  assign lc_next = { lc[4:0], \port$6480$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -21125,28 +21329,28 @@ module \biss_master_uart.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -21156,7 +21360,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -21175,14 +21379,14 @@ module \biss_master_uart.ch0.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -21196,7 +21400,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
 , delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -21376,7 +21580,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   assign \$40  = in_clock & \$39 ;
   assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$48  = slo_low_time_p1;
     if (\$2 ) begin
       \$48  = 25'h0000001;
@@ -21388,21 +21592,21 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$49  = \$9 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$50  = \$17 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$51  = high_p2;
     if (\$18 ) begin
       \$51  = 13'h0002;
@@ -21414,28 +21618,28 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$52  = \$23 ;
     if (rst) begin
       \$52  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$53  = \$30 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$54  = \$34 [24:0];
     if (rst) begin
       \$54  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$55  = 1'h0;
@@ -21447,21 +21651,21 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$57  = \$46 ;
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$58  = \$47 ;
     if (rst) begin
       \$58  = 1'h0;
@@ -21470,9 +21674,9 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2754$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
-, delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2760$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, crc_ok
+, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -21505,17 +21709,21 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2754$0 , l
   wire \$36 ;
   wire \$37 ;
   wire \$38 ;
-  wire [1:0] \$39 ;
+  wire \$39 ;
   wire \$4 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire [1:0] \$42 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [254:0] cfg;
-  wire [254:0] cfg;
+  input [258:0] cfg;
+  wire [258:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
+  wire [3:0] \cfg.confirm_frames ;
   wire [11:0] \cfg.delay_limit ;
   wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
@@ -21589,6 +21797,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2754$0 , l
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -21607,6 +21816,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2754$0 , l
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   reg [3:0] frame_status;
   output lc_check;
   wire lc_check;
@@ -21624,8 +21834,10 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2754$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$2754$0 ;
-  wire \port$2754$0 ;
+  output passed;
+  wire passed;
+  output \port$2760$0 ;
+  wire \port$2760$0 ;
   output report;
   wire report;
   input report_frame;
@@ -21650,22 +21862,25 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2754$0 , l
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] status;
   wire [3:0] status;
+  input unconfirmed;
+  wire unconfirmed;
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[195];
+  assign \$1  = ~ cfg[199];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[195] & cfg[203];
-  assign \$4  = cfg[152] | \$3 ;
+  assign \$3  = cfg[199] & cfg[207];
+  assign \$4  = cfg[156] | \$3 ;
   assign \$5  = report_frame & \$4 ;
-  assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
+  assign \$6  = cfg[156] ? crc_ok[0] : \$2 ;
   assign lc_check = \$5  & \$6 ;
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[246] & cfg[195];
+  assign \$7  = cfg[250] & cfg[199];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
@@ -21681,33 +21896,40 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2754$0 , l
   assign status = report_frame ? frame_status : fault_status;
   assign \$18  = ! frame_status;
   assign valid = report_frame & \$18 ;
-  assign \$19  = crc_ok[0] & \$2 ;
-  assign \$20  = ~ \$19 ;
-  assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[195] & cfg[203];
-  assign \$23  = cfg[152] | \$22 ;
-  assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
-  assign \$25  = \$23  & \$24 ;
-  assign \$26  = lc_repeat_seen | lc_skip_seen;
-  assign \$27  = \$26  | lc_zero_seen;
-  assign \$28  = \$25  & \$27 ;
-  assign \$29  = \$21  | \$28 ;
-  assign \$30  = \$29  | noisy;
-  assign doubtful = \$30  | delay_jump;
-  assign \$31  = crc_ok[0] & \$2 ;
-  assign \$32  = ~ spw_mismatch;
-  assign \$33  = \$31  & \$32 ;
-  assign \$34  = ~ noisy;
-  assign \$35  = \$33  & \$34 ;
-  assign \$36  = lc_repeat | lc_skip;
-  assign \$37  = \$36  | lc_zero;
-  assign \$38  = ~ \$37 ;
-  assign clean = \$35  & \$38 ;
-  assign \$39  = ~ { \$2 , crc_ok[0] };
-  assign crc_error = report_frame ? \$39  : 2'h0;
+  assign \$19  = ! frame_status;
+  assign \$20  = frame_status == 4'hf;
+  assign \$21  = \$19  | \$20 ;
+  assign passed = report_frame & \$21 ;
+  assign \$22  = crc_ok[0] & \$2 ;
+  assign \$23  = ~ \$22 ;
+  assign \$24  = \$23  | spw_mismatch;
+  assign \$25  = cfg[199] & cfg[207];
+  assign \$26  = cfg[156] | \$25 ;
+  assign \$27  = cfg[156] ? crc_ok[0] : \$2 ;
+  assign \$28  = \$26  & \$27 ;
+  assign \$29  = lc_repeat_seen | lc_skip_seen;
+  assign \$30  = \$29  | lc_zero_seen;
+  assign \$31  = \$28  & \$30 ;
+  assign \$32  = \$24  | \$31 ;
+  assign \$33  = \$32  | noisy;
+  assign doubtful = \$33  | delay_jump;
+  assign \$34  = crc_ok[0] & \$2 ;
+  assign \$35  = ~ spw_mismatch;
+  assign \$36  = \$34  & \$35 ;
+  assign \$37  = ~ noisy;
+  assign \$38  = \$36  & \$37 ;
+  assign \$39  = lc_repeat | lc_skip;
+  assign \$40  = \$39  | lc_zero;
+  assign \$41  = ~ \$40 ;
+  assign clean = \$38  & \$41 ;
+  assign \$42  = ~ { \$2 , crc_ok[0] };
+  assign crc_error = report_frame ? \$42  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     frame_status = 4'h0;
+    if (unconfirmed) begin
+      frame_status = 4'hf;
+    end
     if (delay_jump) begin
       frame_status = 4'he;
     end
@@ -21731,7 +21953,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2754$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2754$0  = \$2 ;
+  assign \port$2760$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -21742,41 +21964,42 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2754$0 , l
   assign \cfg.quiet_time  = cfg[136:125];
   assign \cfg.noise_limit  = cfg[140:137];
   assign \cfg.delay_tolerance  = cfg[144:141];
-  assign \cfg.w0  = cfg[156:145];
-  assign \cfg.w0.data_bits  = cfg[150:145];
-  assign \cfg.w0.nenw  = cfg[151];
-  assign \cfg.w0.lc  = cfg[152];
-  assign \cfg.w0.crc  = cfg[154:153];
-  assign \cfg.w0.gray  = cfg[155];
-  assign \cfg.w0.signed  = cfg[156];
-  assign \cfg.w0_crc  = cfg[194:157];
-  assign \cfg.w0_crc.width  = cfg[161:157];
-  assign \cfg.w0_crc.poly  = cfg[177:162];
-  assign \cfg.w0_crc.start  = cfg[193:178];
-  assign \cfg.w0_crc.inverted  = cfg[194];
-  assign \cfg.w1_enable  = cfg[195];
-  assign \cfg.w1  = cfg[207:196];
-  assign \cfg.w1.data_bits  = cfg[201:196];
-  assign \cfg.w1.nenw  = cfg[202];
-  assign \cfg.w1.lc  = cfg[203];
-  assign \cfg.w1.crc  = cfg[205:204];
-  assign \cfg.w1.gray  = cfg[206];
-  assign \cfg.w1.signed  = cfg[207];
-  assign \cfg.w1_crc  = cfg[245:208];
-  assign \cfg.w1_crc.width  = cfg[212:208];
-  assign \cfg.w1_crc.poly  = cfg[228:213];
-  assign \cfg.w1_crc.start  = cfg[244:229];
-  assign \cfg.w1_crc.inverted  = cfg[245];
-  assign \cfg.spw_check  = cfg[246];
-  assign \cfg.spw_tolerance  = cfg[254:247];
+  assign \cfg.confirm_frames  = cfg[148:145];
+  assign \cfg.w0  = cfg[160:149];
+  assign \cfg.w0.data_bits  = cfg[154:149];
+  assign \cfg.w0.nenw  = cfg[155];
+  assign \cfg.w0.lc  = cfg[156];
+  assign \cfg.w0.crc  = cfg[158:157];
+  assign \cfg.w0.gray  = cfg[159];
+  assign \cfg.w0.signed  = cfg[160];
+  assign \cfg.w0_crc  = cfg[198:161];
+  assign \cfg.w0_crc.width  = cfg[165:161];
+  assign \cfg.w0_crc.poly  = cfg[181:166];
+  assign \cfg.w0_crc.start  = cfg[197:182];
+  assign \cfg.w0_crc.inverted  = cfg[198];
+  assign \cfg.w1_enable  = cfg[199];
+  assign \cfg.w1  = cfg[211:200];
+  assign \cfg.w1.data_bits  = cfg[205:200];
+  assign \cfg.w1.nenw  = cfg[206];
+  assign \cfg.w1.lc  = cfg[207];
+  assign \cfg.w1.crc  = cfg[209:208];
+  assign \cfg.w1.gray  = cfg[210];
+  assign \cfg.w1.signed  = cfg[211];
+  assign \cfg.w1_crc  = cfg[249:212];
+  assign \cfg.w1_crc.width  = cfg[216:212];
+  assign \cfg.w1_crc.poly  = cfg[232:217];
+  assign \cfg.w1_crc.start  = cfg[248:233];
+  assign \cfg.w1_crc.inverted  = cfg[249];
+  assign \cfg.spw_check  = cfg[250];
+  assign \cfg.spw_tolerance  = cfg[258:251];
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
+module \biss_master_uart.ch1 (clk, rst, \trigger$184 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
-, cfg_noise_limit, cfg_delay_tolerance, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7288$0 
-, \port$7301$0 , regs__ca_done, \port$7378$0 , slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma
+, \port$7358$0 , \port$7371$0 , regs__ca_done, \port$7448$0 , slo);
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
   reg \$11 ;
@@ -21840,6 +22063,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   wire [23:0] cfg_ack_limit;
   input [23:0] cfg_break_time;
   wire [23:0] cfg_break_time;
+  input [3:0] cfg_confirm_frames;
+  wire [3:0] cfg_confirm_frames;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
   input [3:0] cfg_delay_tolerance;
@@ -21940,17 +22165,17 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$185 ;
+  wire \ma$187 ;
   wire [3:0] noise_events;
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7288$0 ;
-  wire [186:0] \port$7288$0 ;
-  output [79:0] \port$7301$0 ;
-  wire [79:0] \port$7301$0 ;
-  output [9:0] \port$7378$0 ;
-  wire [9:0] \port$7378$0 ;
+  output [186:0] \port$7358$0 ;
+  wire [186:0] \port$7358$0 ;
+  output [79:0] \port$7371$0 ;
+  wire [79:0] \port$7371$0 ;
+  output [9:0] \port$7448$0 ;
+  wire [9:0] \port$7448$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -21983,6 +22208,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   wire regs__cds;
   wire [23:0] regs__cfg_ack_limit;
   wire [23:0] regs__cfg_break_time;
+  wire [3:0] regs__cfg_confirm_frames;
   wire [11:0] regs__cfg_delay_limit;
   wire [3:0] regs__cfg_delay_tolerance;
   wire regs__cfg_end_check;
@@ -22072,7 +22298,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$187 ;
+  wire \slo$189 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -22092,11 +22318,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$182 ;
-  wire \trigger$182 ;
+  input \trigger$184 ;
+  wire \trigger$184 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -22114,7 +22341,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
-  assign trigger = \trigger$182  & regs__trigger_enable;
+  assign trigger = \trigger$184  & regs__trigger_enable;
   assign \$6  = ~ report;
   assign \$7  = \$signal  & \$6 ;
   assign \$8  = waited + 1'h1;
@@ -22136,8 +22363,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
     regs__done_count <= \$17 ;
   \biss_master_uart.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$239 (ca_abort),
-    .\busy$287 (regs__busy),
+    .\abort$245 (ca_abort),
+    .\busy$294 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -22149,6 +22376,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
     .ca_write(ca_write),
     .cfg_ack_limit(cfg_ack_limit),
     .cfg_break_time(cfg_break_time),
+    .cfg_confirm_frames(cfg_confirm_frames),
     .cfg_delay_limit(cfg_delay_limit),
     .cfg_delay_tolerance(cfg_delay_tolerance),
     .cfg_end_check(cfg_end_check),
@@ -22180,30 +22408,30 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$263 (clear_counters),
+    .\clear$270 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$19 ),
-    .\done$290 (done),
+    .\done$297 (done),
     .frames(regs__ca_busy),
     .ma(ma),
-    .\periodic$39 (periodic),
+    .\periodic$40 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$20 ),
-    .\result$295 (\$18 ),
+    .\result$302 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$237 (ca_start),
+    .\start$243 (ca_start),
     .trigger(trigger),
-    .\valid$292 (valid)
+    .\valid$299 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$11  = \$signal ;
     if (report) begin
       \$11  = 1'h0;
@@ -22216,14 +22444,14 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$12  = \$9 [3:0];
     if (rst) begin
       \$12  = 4'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$13  = pending_ok;
     if (done) begin
       \$13  = valid;
@@ -22233,28 +22461,28 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$14  = report;
     if (rst) begin
       \$14  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$15  = pending_ok;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$16  = regs__abort_cycle;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$17  = regs__done_count;
     if (regs__frame_done) begin
       \$17  = \$10 [15:0];
@@ -22304,6 +22532,7 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   assign regs__cfg_spw_tolerance = cfg_spw_tolerance;
   assign regs__cfg_noise_limit = cfg_noise_limit;
   assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
+  assign regs__cfg_confirm_frames = cfg_confirm_frames;
   assign regs__cfg_quiet_time = cfg_quiet_time;
   assign regs__status = \$18 [3:0];
   assign status = \$18 [3:0];
@@ -22382,19 +22611,19 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$182 , count_en, ca_wbuf_en, ca_
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$185  = ma;
-  assign \slo$187  = slo;
-  assign \port$7288$0  = \$18 ;
-  assign \port$7301$0  = \$19 ;
-  assign \port$7378$0  = \$20 ;
+  assign \ma$187  = ma;
+  assign \slo$189  = slo;
+  assign \port$7358$0  = \$18 ;
+  assign \port$7371$0  = \$19 ;
+  assign \port$7448$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$287 , config_error, count_busy, count_data, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$263 , \periodic$39 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$294 , config_error, count_busy, count_data, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$270 , \periodic$40 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$237 , \abort$239 , abort, ma, \done$290 , \valid$292 , \result$295 , counts
-, ca_done, result, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$243 , \abort$245 , abort, ma, \done$297 , \valid$299 , \result$302 
+, counts, ca_done, result, slo);
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22423,26 +22652,26 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$239 ;
-  wire \abort$239 ;
-  wire \abort$51 ;
+  input \abort$245 ;
+  wire \abort$245 ;
+  wire \abort$52 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$83 ;
+  wire \ack_expired$84 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$104 ;
+  wire [23:0] \ack_limit$105 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$319 ;
+  wire \bit$326 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$81 ;
+  wire \break_over$82 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$248 ;
-  wire \busy$284 ;
-  output \busy$287 ;
-  wire \busy$287 ;
+  wire \busy$254 ;
+  wire \busy$291 ;
+  output \busy$294 ;
+  wire \busy$294 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -22477,13 +22706,14 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$252 ;
+  wire \cdm$258 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$298 ;
-  wire [254:0] cfg;
+  wire \cds$305 ;
+  wire [258:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
+  wire [3:0] \cfg.confirm_frames ;
   wire [11:0] \cfg.delay_limit ;
   wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
@@ -22533,6 +22763,8 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [23:0] cfg_ack_limit;
   input [23:0] cfg_break_time;
   wire [23:0] cfg_break_time;
+  input [3:0] cfg_confirm_frames;
+  wire [3:0] cfg_confirm_frames;
   input [11:0] cfg_delay_limit;
   wire [11:0] cfg_delay_limit;
   input [3:0] cfg_delay_tolerance;
@@ -22606,16 +22838,16 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$162 ;
+  wire \check$163 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$167 ;
-  wire \clean$320 ;
+  wire \clean$168 ;
+  wire \clean$327 ;
   wire clear;
-  wire \clear$128 ;
-  input \clear$263 ;
-  wire \clear$263 ;
-  wire \clear$276 ;
+  wire \clear$129 ;
+  input \clear$270 ;
+  wire \clear$270 ;
+  wire \clear$283 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -22643,22 +22875,11 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$179 ;
+  wire [39:0] \cpw_top$180 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$193 ;
+  wire [1:0] \crc_ok$194 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$175 ;
-  wire [37:0] \crcs$175[0] ;
-  wire \crcs$175[0].inverted ;
-  wire [15:0] \crcs$175[0].poly ;
-  wire [15:0] \crcs$175[0].start ;
-  wire [4:0] \crcs$175[0].width ;
-  wire [37:0] \crcs$175[1] ;
-  wire \crcs$175[1].inverted ;
-  wire [15:0] \crcs$175[1].poly ;
-  wire [15:0] \crcs$175[1].start ;
-  wire [4:0] \crcs$175[1].width ;
   wire [75:0] \crcs$176 ;
   wire [37:0] \crcs$176[0] ;
   wire \crcs$176[0].inverted ;
@@ -22670,6 +22891,17 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [15:0] \crcs$176[1].poly ;
   wire [15:0] \crcs$176[1].start ;
   wire [4:0] \crcs$176[1].width ;
+  wire [75:0] \crcs$177 ;
+  wire [37:0] \crcs$177[0] ;
+  wire \crcs$177[0].inverted ;
+  wire [15:0] \crcs$177[0].poly ;
+  wire [15:0] \crcs$177[0].start ;
+  wire [4:0] \crcs$177[0].width ;
+  wire [37:0] \crcs$177[1] ;
+  wire \crcs$177[1].inverted ;
+  wire [15:0] \crcs$177[1].poly ;
+  wire [15:0] \crcs$177[1].start ;
+  wire [4:0] \crcs$177[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -22680,9 +22912,10 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  wire [254:0] cycle;
+  wire [258:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
+  wire [3:0] \cycle.confirm_frames ;
   wire [11:0] \cycle.delay_limit ;
   wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
@@ -22735,54 +22968,54 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$110 ;
-  wire [12:0] \delay$161 ;
+  wire [12:0] \delay$111 ;
+  wire [12:0] \delay$162 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$112 ;
+  wire [11:0] \delay_limit$113 ;
   wire delay_over;
-  wire \delay_over$91 ;
+  wire \delay_over$92 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$250 ;
-  output \done$290 ;
-  wire \done$290 ;
-  wire \done$291 ;
+  wire \done$256 ;
+  output \done$297 ;
+  wire \done$297 ;
+  wire \done$298 ;
   wire doubtful;
   wire early;
-  wire \early$67 ;
+  wire \early$68 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$262 ;
-  wire \events$262.ca_aborted ;
-  wire \events$262.ca_crc4_error ;
-  wire \events$262.ca_data_fault ;
-  wire \events$262.ca_no_answer ;
-  wire \events$262.ca_refused ;
-  wire [15:0] \events$271 ;
-  wire \events$271.aborted ;
-  wire \events$271.crc_word0 ;
-  wire \events$271.crc_word1 ;
-  wire \events$271.delay_jump ;
-  wire \events$271.delay_range ;
-  wire \events$271.lc_repeat ;
-  wire \events$271.lc_skip ;
-  wire \events$271.lc_zero ;
-  wire \events$271.no_ack ;
-  wire \events$271.no_start ;
-  wire \events$271.no_stop ;
-  wire \events$271.noise_event ;
-  wire \events$271.noisy_line ;
-  wire \events$271.overrun ;
-  wire \events$271.slo_stuck_low ;
-  wire \events$271.spw_mismatch ;
+  wire [4:0] \events$269 ;
+  wire \events$269.ca_aborted ;
+  wire \events$269.ca_crc4_error ;
+  wire \events$269.ca_data_fault ;
+  wire \events$269.ca_no_answer ;
+  wire \events$269.ca_refused ;
+  wire [15:0] \events$278 ;
+  wire \events$278.aborted ;
+  wire \events$278.crc_word0 ;
+  wire \events$278.crc_word1 ;
+  wire \events$278.delay_jump ;
+  wire \events$278.delay_range ;
+  wire \events$278.lc_repeat ;
+  wire \events$278.lc_skip ;
+  wire \events$278.lc_zero ;
+  wire \events$278.no_ack ;
+  wire \events$278.no_start ;
+  wire \events$278.no_stop ;
+  wire \events$278.noise_event ;
+  wire \events$278.noisy_line ;
+  wire \events$278.overrun ;
+  wire \events$278.slo_stuck_low ;
+  wire \events$278.spw_mismatch ;
   wire fault;
-  wire \fault$189 ;
+  wire \fault$190 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -22799,6 +23032,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -22816,7 +23050,8 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \fault_status$191 ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \fault_status$192 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -22826,7 +23061,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$223 ;
+  wire \first_rise$229 ;
   wire [31:0] first_rise_time;
   wire [186:0] frame;
   wire \frame.cds ;
@@ -22856,6 +23091,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -22877,39 +23113,40 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$134 ;
+  wire [15:0] \half_period$135 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$35 ;
-  wire \idle$44 ;
+  wire \idle$36 ;
+  wire \idle$45 ;
   wire in_clock;
-  wire \in_clock$98 ;
+  wire \in_clock$99 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$139 ;
-  wire [5:0] \lc$311 ;
+  wire [5:0] \lc$140 ;
+  wire [5:0] \lc$318 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$141 ;
+  wire [5:0] \lc_next$142 ;
   wire lc_repeat;
-  wire \lc_repeat$312 ;
+  wire \lc_repeat$319 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$313 ;
+  wire \lc_skip$320 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$314 ;
+  wire \lc_zero$321 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$150 ;
+  wire \level$151 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [254:0] live;
+  wire [258:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
+  wire [3:0] \live.confirm_frames ;
   wire [11:0] \live.delay_limit ;
   wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
@@ -22957,13 +23194,13 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$65 ;
+  wire \locked$66 ;
   output ma;
   wire ma;
-  wire \ma$286 ;
+  wire \ma$293 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$93 ;
+  wire \ma_busy$94 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -22971,26 +23208,28 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire match;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$85 ;
+  wire \no_start_expired$86 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$108 ;
+  wire [24:0] \no_start_limit$109 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$169 ;
+  wire \noisy$170 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$289 ;
+  wire \overrun$296 ;
+  wire passed;
+  wire pending;
   wire [23:0] period;
   wire periodic;
-  input \periodic$39 ;
-  wire \periodic$39 ;
+  input \periodic$40 ;
+  wire \periodic$40 ;
   wire quiet;
-  wire \quiet$117 ;
+  wire \quiet$118 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$119 ;
+  wire \quiet_live$120 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -23006,37 +23245,38 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$201 ;
+  wire \report$204 ;
+  wire \report$208 ;
   wire report_delay;
-  wire \report_delay$204 ;
+  wire \report_delay$211 ;
   wire report_frame;
-  wire \report_frame$188 ;
-  wire \report_frame$202 ;
+  wire \report_frame$189 ;
+  wire \report_frame$209 ;
   wire request;
-  wire [17:0] \request$225 ;
-  wire [6:0] \request$225.address ;
-  wire [6:0] \request$225.count ;
-  wire [2:0] \request$225.slave_id ;
-  wire \request$225.write ;
-  wire \request$50 ;
+  wire [17:0] \request$231 ;
+  wire [6:0] \request$231.address ;
+  wire [6:0] \request$231.count ;
+  wire [2:0] \request$231.slave_id ;
+  wire \request$231.write ;
+  wire \request$51 ;
   wire restart;
-  wire \restart$154 ;
+  wire \restart$155 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$295 ;
-  wire [186:0] \result$295 ;
-  wire \result$295.cds ;
-  wire \result$295.delay_settled ;
-  wire [7:0] \result$295.delay_spread ;
-  wire [5:0] \result$295.lc ;
-  wire \result$295.lc_repeat ;
-  wire \result$295.lc_skip ;
-  wire \result$295.lc_zero ;
-  wire [12:0] \result$295.line_delay ;
-  wire [3:0] \result$295.noise_events ;
-  wire [12:0] \result$295.settled_delay ;
-  wire \result$295.spw_mismatch ;
+  output [186:0] \result$302 ;
+  wire [186:0] \result$302 ;
+  wire \result$302.cds ;
+  wire \result$302.delay_settled ;
+  wire [7:0] \result$302.delay_spread ;
+  wire [5:0] \result$302.lc ;
+  wire \result$302.lc_repeat ;
+  wire \result$302.lc_skip ;
+  wire \result$302.lc_zero ;
+  wire [12:0] \result$302.line_delay ;
+  wire [3:0] \result$302.noise_events ;
+  wire [12:0] \result$302.settled_delay ;
+  wire \result$302.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -23053,18 +23293,19 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \result$295.status ;
-  wire [31:0] \result$295.timestamp ;
-  wire [57:0] \result$295.word0 ;
-  wire \result$295.word0.crc_ok ;
-  wire \result$295.word0.ne ;
-  wire \result$295.word0.nw ;
-  wire [54:0] \result$295.word0.position ;
-  wire [42:0] \result$295.word1 ;
-  wire \result$295.word1.crc_ok ;
-  wire \result$295.word1.ne ;
-  wire \result$295.word1.nw ;
-  wire [39:0] \result$295.word1.position ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \result$302.status ;
+  wire [31:0] \result$302.timestamp ;
+  wire [57:0] \result$302.word0 ;
+  wire \result$302.word0.crc_ok ;
+  wire \result$302.word0.ne ;
+  wire \result$302.word0.nw ;
+  wire [54:0] \result$302.word0.position ;
+  wire [42:0] \result$302.word1 ;
+  wire \result$302.word1.crc_ok ;
+  wire \result$302.word1.ne ;
+  wire \result$302.word1.nw ;
+  wire [39:0] \result$302.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -23076,46 +23317,47 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$147 ;
+  wire \resync$148 ;
   wire [15:0] rises;
-  wire [15:0] \rises$127 ;
+  wire [15:0] \rises$128 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$318 ;
+  wire \sample$325 ;
   wire sampler_noise;
   wire second_rise;
+  wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$301 ;
+  wire [12:0] \settled_delay$308 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$46 ;
-  wire \slo$56 ;
-  wire \slo$92 ;
+  wire \slo$47 ;
+  wire \slo$57 ;
+  wire \slo$93 ;
   wire slo_stuck;
-  wire \slo_stuck$87 ;
+  wire \slo_stuck$88 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$89 ;
+  wire \slo_stuck_live$90 ;
   wire slots_full;
-  wire \slots_full$73 ;
+  wire \slots_full$74 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$315 ;
+  wire \spw_mismatch$322 ;
   input start;
   wire start;
-  input \start$237 ;
-  wire \start$237 ;
-  wire \start$37 ;
+  input \start$243 ;
+  wire \start$243 ;
+  wire \start$38 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$125 ;
+  wire [15:0] \start_slot$126 ;
   wire started;
-  wire \started$123 ;
-  wire \started$71 ;
+  wire \started$124 ;
+  wire \started$72 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -23133,6 +23375,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -23150,25 +23393,45 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
-  wire [3:0] \status$294 ;
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \status$206 ;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  wire [3:0] \status$301 ;
   wire stop_bit;
-  wire \stop_bit$77 ;
+  wire \stop_bit$78 ;
   wire stopped;
-  wire \stopped$75 ;
+  wire \stopped$76 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$106 ;
+  wire [23:0] \timeout_limit$107 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$183 ;
+  wire [7:0] \tolerance$184 ;
   input trigger;
   wire trigger;
-  wire \trigger$48 ;
+  wire \trigger$49 ;
+  wire unconfirmed;
   wire valid;
-  wire \valid$206 ;
-  output \valid$292 ;
-  wire \valid$292 ;
+  wire \valid$213 ;
+  output \valid$299 ;
+  wire \valid$299 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -23186,34 +23449,34 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$137 ;
+  wire [1:0] \word_count$138 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$173 ;
-  wire [11:0] \words$173[0] ;
+  wire [23:0] \words$174 ;
+  wire [11:0] \words$174[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$173[0].crc ;
-  wire [5:0] \words$173[0].data_bits ;
-  wire \words$173[0].gray ;
-  wire \words$173[0].lc ;
-  wire \words$173[0].nenw ;
-  wire \words$173[0].signed ;
-  wire [11:0] \words$173[1] ;
+  wire [1:0] \words$174[0].crc ;
+  wire [5:0] \words$174[0].data_bits ;
+  wire \words$174[0].gray ;
+  wire \words$174[0].lc ;
+  wire \words$174[0].nenw ;
+  wire \words$174[0].signed ;
+  wire [11:0] \words$174[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$173[1].crc ;
-  wire [5:0] \words$173[1].data_bits ;
-  wire \words$173[1].gray ;
-  wire \words$173[1].lc ;
-  wire \words$173[1].nenw ;
-  wire \words$173[1].signed ;
+  wire [1:0] \words$174[1].crc ;
+  wire [5:0] \words$174[1].data_bits ;
+  wire \words$174[1].gray ;
+  wire \words$174[1].lc ;
+  wire \words$174[1].nenw ;
+  wire \words$174[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -23239,11 +23502,11 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \words[1].nenw ;
   wire \words[1].signed ;
   wire zero;
-  assign periodic = \periodic$39  | frames;
+  assign periodic = \periodic$40  | frames;
   assign enable = cycle[144:141] != 4'hf;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$1  = ~ started_before;
-  assign \check$162  = started & \$1 ;
+  assign \check$163  = started & \$1 ;
   assign \$2  = result[2:0] == 1'h1;
   assign \$3  = ca_done & \$2 ;
   assign \$4  = result[2:0] == 2'h2;
@@ -23259,10 +23522,10 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \$14  = report_frame & \$13 ;
   assign \$15  = status == 4'he;
   assign \$16  = report_frame & \$15 ;
-  assign \busy$287  = ~ idle;
+  assign \busy$294  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$128 ;
-  assign \$18  = \sample$318  & \$17 ;
+  assign \$17  = ~ \clear$129 ;
+  assign \$18  = \sample$325  & \$17 ;
   always @(posedge clk)
     sample <= \$19 ;
   always @(posedge clk)
@@ -23289,6 +23552,14 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .timeout_limit(timeout_limit),
     .word_count(word_count)
   );
+  \biss_master_uart.ch1.core.confirmation  confirmation (
+    .clk(clk),
+    .pending(unconfirmed),
+    .report(report),
+    .rst(rst),
+    .setting(cycle[148:145]),
+    .status(status)
+  );
   \biss_master_uart.ch1.core.controller  controller (
     .abort(abort),
     .ack_expired(ack_expired),
@@ -23300,7 +23571,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$154 ),
+    .fault(\restart$155 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -23317,14 +23588,14 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$128 ),
+    .receiver_clear(\clear$129 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$56 ),
+    .slo(\slo$57 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
@@ -23336,19 +23607,19 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   );
   \biss_master_uart.ch1.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$263 ),
+    .clear(\clear$270 ),
     .clk(clk),
-    .events(\events$271 ),
+    .events(\events$278 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_uart.ch1.core.counters  counters (
-    .clear(\clear$263 ),
+    .clear(\clear$270 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$262 ),
+    .events(\events$269 ),
     .rst(rst)
   );
   \biss_master_uart.ch1.core.decoder  decoder (
@@ -23365,7 +23636,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_load(load),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$128 ),
+    .receiver_clear(\clear$129 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -23377,7 +23648,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .words(words)
   );
   \biss_master_uart.ch1.core.delay_check  delay_check (
-    .check(\check$162 ),
+    .check(\check$163 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -23396,10 +23667,10 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .close(frame_done),
     .\event (\event ),
     .events(events),
-    .level(\slo$56 ),
+    .level(\slo$57 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$154 ),
+    .restart(\restart$155 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -23407,7 +23678,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   \biss_master_uart.ch1.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$93 ),
+    .\clocking (\ma_busy$94 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -23419,7 +23690,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .second_rise(ma_arm)
   );
   \biss_master_uart.ch1.core.ma_stop  ma_stop (
-    .clear(\clear$128 ),
+    .clear(\clear$129 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -23427,11 +23698,11 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .rst(rst),
     .start_slot(start_slot),
     .\started$11 (started),
-    .w1_enable(cycle[195]),
-    .words(\words$173 )
+    .w1_enable(cycle[199]),
+    .words(\words$174 )
   );
   \biss_master_uart.ch1.core.register_access  register_access (
-    .abort(\abort$239 ),
+    .abort(\abort$245 ),
     .busy(frames),
     .cdm(cdm),
     .clk(clk),
@@ -23439,41 +23710,41 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .frame_cdm(frame_cdm),
     .frame_cds(cds),
     .frame_end(report),
-    .frame_ok(valid),
+    .frame_ok(frame_ok),
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$225 ),
+    .request(\request$231 ),
     .result(result),
     .rst(rst),
-    .start(\start$237 ),
+    .start(\start$243 ),
     .wbuf(wbuf)
   );
   \biss_master_uart.ch1.core.results  results (
     .clk(clk),
-    .done(\done$290 ),
+    .done(\done$297 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$295 ),
+    .result(\result$302 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$292 )
+    .valid_out(\valid$299 )
   );
   \biss_master_uart.ch1.core.sampler  sampler (
     .arm(ma_arm),
-    .\bit (\bit$319 ),
+    .\bit (\bit$326 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$56 ),
+    .level(\slo$57 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$128 ),
+    .receiver_clear(\clear$129 ),
     .rst(rst),
-    .sample(\sample$318 ),
+    .sample(\sample$325 ),
     .slo(slo)
   );
   \biss_master_uart.ch1.core.scheduler  scheduler (
@@ -23494,20 +23765,20 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6941$0 (\bit ),
+    .\port$7007$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
     .skip(lc_skip_seen)
   );
   \biss_master_uart.ch1.core.spw_check  spw_check (
-    .bits(cycle[201:196]),
+    .bits(cycle[205:200]),
     .clk(clk),
     .cpw_top(cpw_top),
     .match(spw_match),
     .rst(rst),
     .spw(spw),
-    .\tolerance$8 (cycle[254:247])
+    .\tolerance$8 (cycle[258:251])
   );
   \biss_master_uart.ch1.core.time_base  time_base (
     .clk(clk),
@@ -23526,7 +23797,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$93 ),
+    .ma_busy(\ma_busy$94 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -23535,7 +23806,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$56 ),
+    .slo(\slo$57 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -23543,12 +23814,12 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   );
   \biss_master_uart.ch1.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$320 ),
+    .clean(\clean$327 ),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$154 ),
+    .fault(\restart$155 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -23558,199 +23829,205 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .\port$5010$0 (\$24 ),
+    .passed(frame_ok),
+    .\port$5042$0 (\$24 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
     .spw_mismatch(spw_mismatch),
     .status(status),
+    .unconfirmed(unconfirmed),
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$19  = \$18 ;
     if (rst) begin
       \$19  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$20  = \bit$319 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    \$20  = \bit$326 ;
     if (rst) begin
       \$20  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$21  = started;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     \$22  = report_frame;
     if (rst) begin
       \$22  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
-    \$23  = \clean$320 ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    \$23  = \clean$327 ;
     if (rst) begin
       \$23  = 1'h0;
     end
   end
-  assign \idle$35  = idle;
-  assign \start$37  = start;
+  assign \idle$36  = idle;
+  assign \start$38  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$44  = idle;
-  assign \slo$46  = slo;
-  assign \trigger$48  = trigger;
-  assign \request$50  = request;
-  assign \abort$51  = abort;
+  assign \idle$45  = idle;
+  assign \slo$47  = slo;
+  assign \trigger$49  = trigger;
+  assign \request$51  = request;
+  assign \abort$52  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$56 ;
+  assign level = \slo$57 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$65  = locked;
-  assign \early$67  = early;
+  assign \locked$66  = locked;
+  assign \early$68  = early;
   assign done = frame_done;
-  assign \started$71  = started;
-  assign \slots_full$73  = slots_full;
-  assign \stopped$75  = stopped;
-  assign \stop_bit$77  = stop_bit;
+  assign \started$72  = started;
+  assign \slots_full$74  = slots_full;
+  assign \stopped$76  = stopped;
+  assign \stop_bit$78  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$81  = break_over;
-  assign \ack_expired$83  = ack_expired;
-  assign \no_start_expired$85  = no_start_expired;
-  assign \slo_stuck$87  = slo_stuck;
-  assign \slo_stuck_live$89  = slo_stuck_live;
-  assign \delay_over$91  = delay_over;
-  assign \slo$92  = \slo$56 ;
-  assign \clocking  = \ma_busy$93 ;
+  assign \break_over$82  = break_over;
+  assign \ack_expired$84  = ack_expired;
+  assign \no_start_expired$86  = no_start_expired;
+  assign \slo_stuck$88  = slo_stuck;
+  assign \slo_stuck_live$90  = slo_stuck_live;
+  assign \delay_over$92  = delay_over;
+  assign \slo$93  = \slo$57 ;
+  assign \clocking  = \ma_busy$94 ;
   assign timer_clear = clear;
-  assign \in_clock$98  = in_clock;
+  assign \in_clock$99  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$104  = ack_limit;
-  assign \timeout_limit$106  = timeout_limit;
-  assign \no_start_limit$108  = no_start_limit;
-  assign \delay$110  = delay;
-  assign \delay_limit$112  = delay_limit;
+  assign \ack_limit$105  = ack_limit;
+  assign \timeout_limit$107  = timeout_limit;
+  assign \no_start_limit$109  = no_start_limit;
+  assign \delay$111  = delay;
+  assign \delay_limit$113  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$117  = quiet;
-  assign \quiet_live$119  = quiet_live;
+  assign \quiet$118  = quiet;
+  assign \quiet_live$120  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$123  = started;
-  assign \start_slot$125  = start_slot;
-  assign \rises$127  = rises;
-  assign receiver_clear = \clear$128 ;
+  assign \started$124  = started;
+  assign \start_slot$126  = start_slot;
+  assign \rises$128  = rises;
+  assign receiver_clear = \clear$129 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$134  = cycle[15:0];
+  assign \half_period$135  = cycle[15:0];
   assign arm = ma_arm;
-  assign \word_count$137  = word_count;
-  assign \lc$139  = lc;
+  assign \word_count$138  = word_count;
+  assign \lc$140  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$141  = { lc[4:0], \bit  };
+  assign \lc_next$142  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$147  = resync;
+  assign \resync$148  = resync;
   assign waiting = watch;
-  assign \level$150  = \slo$56 ;
+  assign \level$151  = \slo$57 ;
   assign noise = sampler_noise;
   assign close = frame_done;
-  assign fault = \restart$154 ;
+  assign fault = \restart$155 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$161  = delay;
+  assign \delay$162  = delay;
   assign \$signal  = learn;
-  assign \clean$167  = clean;
-  assign \noisy$169  = noisy;
+  assign \clean$168  = clean;
+  assign \noisy$170  = noisy;
   assign jump = delay_jump;
-  assign \crcs$175  = crcs;
   assign \crcs$176  = crcs;
-  assign w1_enable = cycle[195];
-  assign \cpw_top$179  = cpw_top;
+  assign \crcs$177  = crcs;
+  assign w1_enable = cycle[199];
+  assign \cpw_top$180  = cpw_top;
   assign data1 = spw;
-  assign bits = cycle[201:196];
-  assign \tolerance$183  = cycle[254:247];
+  assign bits = cycle[205:200];
+  assign \tolerance$184  = cycle[258:251];
   assign match = spw_match;
   assign cfg = cycle;
-  assign \report_frame$188  = report_frame;
-  assign \fault$189  = \restart$154 ;
-  assign \fault_status$191  = fault_status;
-  assign \crc_ok$193  = crc_ok;
+  assign \report_frame$189  = report_frame;
+  assign \fault$190  = \restart$155 ;
+  assign \fault_status$192  = fault_status;
+  assign \crc_ok$194  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
-  assign \report$201  = report;
-  assign \report_frame$202  = report_frame;
-  assign \report_delay$204  = report_delay;
-  assign \valid$206  = valid;
+  assign pending = unconfirmed;
+  assign \report$204  = report;
+  assign \status$206  = status;
+  assign setting = cycle[148:145];
+  assign \report$208  = report;
+  assign \report_frame$209  = report_frame;
+  assign \report_delay$211  = report_delay;
+  assign \valid$213  = valid;
   assign word_crc_ok = { \$24 , crc_ok[0] };
-  assign \first_rise$223  = first_rise;
+  assign \first_rise$229  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$237 ;
-  assign ca_abort = \abort$239 ;
+  assign ca_start = \start$243 ;
+  assign ca_abort = \abort$245 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$248  = frames;
-  assign \done$250  = ca_done;
-  assign \cdm$252  = cdm;
+  assign \busy$254  = frames;
+  assign \done$256  = ca_done;
+  assign \cdm$258  = cdm;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_ok = valid;
+  assign passed = frame_ok;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$263 ;
+  assign clear_counters = \clear$270 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$276  = \clear$263 ;
+  assign \clear$283  = \clear$270 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$284  = count_busy;
-  assign \ma$286  = ma;
-  assign \overrun$289  = overrun;
-  assign \done$291  = \done$290 ;
-  assign valid_out = \valid$292 ;
-  assign \status$294  = \result$295 [3:0];
-  assign timestamp = \result$295 [35:4];
-  assign line_delay = \result$295 [48:36];
-  assign \cds$298  = \result$295 [49];
-  assign noise_events = \result$295 [53:50];
-  assign delay_settled = \result$295 [54];
-  assign \settled_delay$301  = \result$295 [67:55];
-  assign delay_spread = \result$295 [75:68];
-  assign word0_position = \result$295 [130:76];
-  assign word0_ne = \result$295 [131];
-  assign word0_nw = \result$295 [132];
-  assign word0_crc_ok = \result$295 [133];
-  assign word1_position = \result$295 [173:134];
-  assign word1_ne = \result$295 [174];
-  assign word1_nw = \result$295 [175];
-  assign word1_crc_ok = \result$295 [176];
-  assign \lc$311  = \result$295 [182:177];
-  assign \lc_repeat$312  = \result$295 [183];
-  assign \lc_skip$313  = \result$295 [184];
-  assign \lc_zero$314  = \result$295 [185];
-  assign \spw_mismatch$315  = \result$295 [186];
+  assign \busy$291  = count_busy;
+  assign \ma$293  = ma;
+  assign \overrun$296  = overrun;
+  assign \done$298  = \done$297 ;
+  assign valid_out = \valid$299 ;
+  assign \status$301  = \result$302 [3:0];
+  assign timestamp = \result$302 [35:4];
+  assign line_delay = \result$302 [48:36];
+  assign \cds$305  = \result$302 [49];
+  assign noise_events = \result$302 [53:50];
+  assign delay_settled = \result$302 [54];
+  assign \settled_delay$308  = \result$302 [67:55];
+  assign delay_spread = \result$302 [75:68];
+  assign word0_position = \result$302 [130:76];
+  assign word0_ne = \result$302 [131];
+  assign word0_nw = \result$302 [132];
+  assign word0_crc_ok = \result$302 [133];
+  assign word1_position = \result$302 [173:134];
+  assign word1_ne = \result$302 [174];
+  assign word1_nw = \result$302 [175];
+  assign word1_crc_ok = \result$302 [176];
+  assign \lc$318  = \result$302 [182:177];
+  assign \lc_repeat$319  = \result$302 [183];
+  assign \lc_skip$320  = \result$302 [184];
+  assign \lc_zero$321  = \result$302 [185];
+  assign \spw_mismatch$322  = \result$302 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -23761,33 +24038,34 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[156:145];
-  assign \live.w0.data_bits  = live[150:145];
-  assign \live.w0.nenw  = live[151];
-  assign \live.w0.lc  = live[152];
-  assign \live.w0.crc  = live[154:153];
-  assign \live.w0.gray  = live[155];
-  assign \live.w0.signed  = live[156];
-  assign \live.w0_crc  = live[194:157];
-  assign \live.w0_crc.width  = live[161:157];
-  assign \live.w0_crc.poly  = live[177:162];
-  assign \live.w0_crc.start  = live[193:178];
-  assign \live.w0_crc.inverted  = live[194];
-  assign \live.w1_enable  = live[195];
-  assign \live.w1  = live[207:196];
-  assign \live.w1.data_bits  = live[201:196];
-  assign \live.w1.nenw  = live[202];
-  assign \live.w1.lc  = live[203];
-  assign \live.w1.crc  = live[205:204];
-  assign \live.w1.gray  = live[206];
-  assign \live.w1.signed  = live[207];
-  assign \live.w1_crc  = live[245:208];
-  assign \live.w1_crc.width  = live[212:208];
-  assign \live.w1_crc.poly  = live[228:213];
-  assign \live.w1_crc.start  = live[244:229];
-  assign \live.w1_crc.inverted  = live[245];
-  assign \live.spw_check  = live[246];
-  assign \live.spw_tolerance  = live[254:247];
+  assign \live.confirm_frames  = live[148:145];
+  assign \live.w0  = live[160:149];
+  assign \live.w0.data_bits  = live[154:149];
+  assign \live.w0.nenw  = live[155];
+  assign \live.w0.lc  = live[156];
+  assign \live.w0.crc  = live[158:157];
+  assign \live.w0.gray  = live[159];
+  assign \live.w0.signed  = live[160];
+  assign \live.w0_crc  = live[198:161];
+  assign \live.w0_crc.width  = live[165:161];
+  assign \live.w0_crc.poly  = live[181:166];
+  assign \live.w0_crc.start  = live[197:182];
+  assign \live.w0_crc.inverted  = live[198];
+  assign \live.w1_enable  = live[199];
+  assign \live.w1  = live[211:200];
+  assign \live.w1.data_bits  = live[205:200];
+  assign \live.w1.nenw  = live[206];
+  assign \live.w1.lc  = live[207];
+  assign \live.w1.crc  = live[209:208];
+  assign \live.w1.gray  = live[210];
+  assign \live.w1.signed  = live[211];
+  assign \live.w1_crc  = live[249:212];
+  assign \live.w1_crc.width  = live[216:212];
+  assign \live.w1_crc.poly  = live[232:217];
+  assign \live.w1_crc.start  = live[248:233];
+  assign \live.w1_crc.inverted  = live[249];
+  assign \live.spw_check  = live[250];
+  assign \live.spw_tolerance  = live[258:251];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -23798,33 +24076,34 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[156:145];
-  assign \cycle.w0.data_bits  = cycle[150:145];
-  assign \cycle.w0.nenw  = cycle[151];
-  assign \cycle.w0.lc  = cycle[152];
-  assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0.signed  = cycle[156];
-  assign \cycle.w0_crc  = cycle[194:157];
-  assign \cycle.w0_crc.width  = cycle[161:157];
-  assign \cycle.w0_crc.poly  = cycle[177:162];
-  assign \cycle.w0_crc.start  = cycle[193:178];
-  assign \cycle.w0_crc.inverted  = cycle[194];
-  assign \cycle.w1_enable  = cycle[195];
-  assign \cycle.w1  = cycle[207:196];
-  assign \cycle.w1.data_bits  = cycle[201:196];
-  assign \cycle.w1.nenw  = cycle[202];
-  assign \cycle.w1.lc  = cycle[203];
-  assign \cycle.w1.crc  = cycle[205:204];
-  assign \cycle.w1.gray  = cycle[206];
-  assign \cycle.w1.signed  = cycle[207];
-  assign \cycle.w1_crc  = cycle[245:208];
-  assign \cycle.w1_crc.width  = cycle[212:208];
-  assign \cycle.w1_crc.poly  = cycle[228:213];
-  assign \cycle.w1_crc.start  = cycle[244:229];
-  assign \cycle.w1_crc.inverted  = cycle[245];
-  assign \cycle.spw_check  = cycle[246];
-  assign \cycle.spw_tolerance  = cycle[254:247];
+  assign \cycle.confirm_frames  = cycle[148:145];
+  assign \cycle.w0  = cycle[160:149];
+  assign \cycle.w0.data_bits  = cycle[154:149];
+  assign \cycle.w0.nenw  = cycle[155];
+  assign \cycle.w0.lc  = cycle[156];
+  assign \cycle.w0.crc  = cycle[158:157];
+  assign \cycle.w0.gray  = cycle[159];
+  assign \cycle.w0.signed  = cycle[160];
+  assign \cycle.w0_crc  = cycle[198:161];
+  assign \cycle.w0_crc.width  = cycle[165:161];
+  assign \cycle.w0_crc.poly  = cycle[181:166];
+  assign \cycle.w0_crc.start  = cycle[197:182];
+  assign \cycle.w0_crc.inverted  = cycle[198];
+  assign \cycle.w1_enable  = cycle[199];
+  assign \cycle.w1  = cycle[211:200];
+  assign \cycle.w1.data_bits  = cycle[205:200];
+  assign \cycle.w1.nenw  = cycle[206];
+  assign \cycle.w1.lc  = cycle[207];
+  assign \cycle.w1.crc  = cycle[209:208];
+  assign \cycle.w1.gray  = cycle[210];
+  assign \cycle.w1.signed  = cycle[211];
+  assign \cycle.w1_crc  = cycle[249:212];
+  assign \cycle.w1_crc.width  = cycle[216:212];
+  assign \cycle.w1_crc.poly  = cycle[232:217];
+  assign \cycle.w1_crc.start  = cycle[248:233];
+  assign \cycle.w1_crc.inverted  = cycle[249];
+  assign \cycle.spw_check  = cycle[250];
+  assign \cycle.spw_tolerance  = cycle[258:251];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -23839,20 +24118,20 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$173[0]  = \words$173 [11:0];
-  assign \words$173[0].data_bits  = \words$173 [5:0];
-  assign \words$173[0].nenw  = \words$173 [6];
-  assign \words$173[0].lc  = \words$173 [7];
-  assign \words$173[0].crc  = \words$173 [9:8];
-  assign \words$173[0].gray  = \words$173 [10];
-  assign \words$173[0].signed  = \words$173 [11];
-  assign \words$173[1]  = \words$173 [23:12];
-  assign \words$173[1].data_bits  = \words$173 [17:12];
-  assign \words$173[1].nenw  = \words$173 [18];
-  assign \words$173[1].lc  = \words$173 [19];
-  assign \words$173[1].crc  = \words$173 [21:20];
-  assign \words$173[1].gray  = \words$173 [22];
-  assign \words$173[1].signed  = \words$173 [23];
+  assign \words$174[0]  = \words$174 [11:0];
+  assign \words$174[0].data_bits  = \words$174 [5:0];
+  assign \words$174[0].nenw  = \words$174 [6];
+  assign \words$174[0].lc  = \words$174 [7];
+  assign \words$174[0].crc  = \words$174 [9:8];
+  assign \words$174[0].gray  = \words$174 [10];
+  assign \words$174[0].signed  = \words$174 [11];
+  assign \words$174[1]  = \words$174 [23:12];
+  assign \words$174[1].data_bits  = \words$174 [17:12];
+  assign \words$174[1].nenw  = \words$174 [18];
+  assign \words$174[1].lc  = \words$174 [19];
+  assign \words$174[1].crc  = \words$174 [21:20];
+  assign \words$174[1].gray  = \words$174 [22];
+  assign \words$174[1].signed  = \words$174 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -23863,16 +24142,6 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$175[0]  = crcs[37:0];
-  assign \crcs$175[0].width  = crcs[4:0];
-  assign \crcs$175[0].poly  = crcs[20:5];
-  assign \crcs$175[0].start  = crcs[36:21];
-  assign \crcs$175[0].inverted  = crcs[37];
-  assign \crcs$175[1]  = crcs[75:38];
-  assign \crcs$175[1].width  = crcs[42:38];
-  assign \crcs$175[1].poly  = crcs[58:43];
-  assign \crcs$175[1].start  = crcs[74:59];
-  assign \crcs$175[1].inverted  = crcs[75];
   assign \crcs$176[0]  = crcs[37:0];
   assign \crcs$176[0].width  = crcs[4:0];
   assign \crcs$176[0].poly  = crcs[20:5];
@@ -23883,6 +24152,16 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \crcs$176[1].poly  = crcs[58:43];
   assign \crcs$176[1].start  = crcs[74:59];
   assign \crcs$176[1].inverted  = crcs[75];
+  assign \crcs$177[0]  = crcs[37:0];
+  assign \crcs$177[0].width  = crcs[4:0];
+  assign \crcs$177[0].poly  = crcs[20:5];
+  assign \crcs$177[0].start  = crcs[36:21];
+  assign \crcs$177[0].inverted  = crcs[37];
+  assign \crcs$177[1]  = crcs[75:38];
+  assign \crcs$177[1].width  = crcs[42:38];
+  assign \crcs$177[1].poly  = crcs[58:43];
+  assign \crcs$177[1].start  = crcs[74:59];
+  assign \crcs$177[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -23893,33 +24172,34 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \cfg.quiet_time  = cycle[136:125];
   assign \cfg.noise_limit  = cycle[140:137];
   assign \cfg.delay_tolerance  = cycle[144:141];
-  assign \cfg.w0  = cycle[156:145];
-  assign \cfg.w0.data_bits  = cycle[150:145];
-  assign \cfg.w0.nenw  = cycle[151];
-  assign \cfg.w0.lc  = cycle[152];
-  assign \cfg.w0.crc  = cycle[154:153];
-  assign \cfg.w0.gray  = cycle[155];
-  assign \cfg.w0.signed  = cycle[156];
-  assign \cfg.w0_crc  = cycle[194:157];
-  assign \cfg.w0_crc.width  = cycle[161:157];
-  assign \cfg.w0_crc.poly  = cycle[177:162];
-  assign \cfg.w0_crc.start  = cycle[193:178];
-  assign \cfg.w0_crc.inverted  = cycle[194];
-  assign \cfg.w1_enable  = cycle[195];
-  assign \cfg.w1  = cycle[207:196];
-  assign \cfg.w1.data_bits  = cycle[201:196];
-  assign \cfg.w1.nenw  = cycle[202];
-  assign \cfg.w1.lc  = cycle[203];
-  assign \cfg.w1.crc  = cycle[205:204];
-  assign \cfg.w1.gray  = cycle[206];
-  assign \cfg.w1.signed  = cycle[207];
-  assign \cfg.w1_crc  = cycle[245:208];
-  assign \cfg.w1_crc.width  = cycle[212:208];
-  assign \cfg.w1_crc.poly  = cycle[228:213];
-  assign \cfg.w1_crc.start  = cycle[244:229];
-  assign \cfg.w1_crc.inverted  = cycle[245];
-  assign \cfg.spw_check  = cycle[246];
-  assign \cfg.spw_tolerance  = cycle[254:247];
+  assign \cfg.confirm_frames  = cycle[148:145];
+  assign \cfg.w0  = cycle[160:149];
+  assign \cfg.w0.data_bits  = cycle[154:149];
+  assign \cfg.w0.nenw  = cycle[155];
+  assign \cfg.w0.lc  = cycle[156];
+  assign \cfg.w0.crc  = cycle[158:157];
+  assign \cfg.w0.gray  = cycle[159];
+  assign \cfg.w0.signed  = cycle[160];
+  assign \cfg.w0_crc  = cycle[198:161];
+  assign \cfg.w0_crc.width  = cycle[165:161];
+  assign \cfg.w0_crc.poly  = cycle[181:166];
+  assign \cfg.w0_crc.start  = cycle[197:182];
+  assign \cfg.w0_crc.inverted  = cycle[198];
+  assign \cfg.w1_enable  = cycle[199];
+  assign \cfg.w1  = cycle[211:200];
+  assign \cfg.w1.data_bits  = cycle[205:200];
+  assign \cfg.w1.nenw  = cycle[206];
+  assign \cfg.w1.lc  = cycle[207];
+  assign \cfg.w1.crc  = cycle[209:208];
+  assign \cfg.w1.gray  = cycle[210];
+  assign \cfg.w1.signed  = cycle[211];
+  assign \cfg.w1_crc  = cycle[249:212];
+  assign \cfg.w1_crc.width  = cycle[216:212];
+  assign \cfg.w1_crc.poly  = cycle[232:217];
+  assign \cfg.w1_crc.start  = cycle[248:233];
+  assign \cfg.w1_crc.inverted  = cycle[249];
+  assign \cfg.spw_check  = cycle[250];
+  assign \cfg.spw_tolerance  = cycle[258:251];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -23943,41 +24223,41 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$225.slave_id  = \request$225 [2:0];
-  assign \request$225.address  = \request$225 [9:3];
-  assign \request$225.count  = \request$225 [16:10];
-  assign \request$225.write  = \request$225 [17];
+  assign \request$231.slave_id  = \request$231 [2:0];
+  assign \request$231.address  = \request$231 [9:3];
+  assign \request$231.count  = \request$231 [16:10];
+  assign \request$231.write  = \request$231 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$262.ca_crc4_error  = \events$262 [0];
-  assign \events$262.ca_no_answer  = \events$262 [1];
-  assign \events$262.ca_refused  = \events$262 [2];
-  assign \events$262.ca_aborted  = \events$262 [3];
-  assign \events$262.ca_data_fault  = \events$262 [4];
+  assign \events$269.ca_crc4_error  = \events$269 [0];
+  assign \events$269.ca_no_answer  = \events$269 [1];
+  assign \events$269.ca_refused  = \events$269 [2];
+  assign \events$269.ca_aborted  = \events$269 [3];
+  assign \events$269.ca_data_fault  = \events$269 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$271.crc_word0  = \events$271 [0];
-  assign \events$271.crc_word1  = \events$271 [1];
-  assign \events$271.no_ack  = \events$271 [2];
-  assign \events$271.no_start  = \events$271 [3];
-  assign \events$271.delay_range  = \events$271 [4];
-  assign \events$271.slo_stuck_low  = \events$271 [5];
-  assign \events$271.lc_repeat  = \events$271 [6];
-  assign \events$271.lc_skip  = \events$271 [7];
-  assign \events$271.lc_zero  = \events$271 [8];
-  assign \events$271.spw_mismatch  = \events$271 [9];
-  assign \events$271.overrun  = \events$271 [10];
-  assign \events$271.aborted  = \events$271 [11];
-  assign \events$271.no_stop  = \events$271 [12];
-  assign \events$271.noisy_line  = \events$271 [13];
-  assign \events$271.delay_jump  = \events$271 [14];
-  assign \events$271.noise_event  = \events$271 [15];
+  assign \events$278.crc_word0  = \events$278 [0];
+  assign \events$278.crc_word1  = \events$278 [1];
+  assign \events$278.no_ack  = \events$278 [2];
+  assign \events$278.no_start  = \events$278 [3];
+  assign \events$278.delay_range  = \events$278 [4];
+  assign \events$278.slo_stuck_low  = \events$278 [5];
+  assign \events$278.lc_repeat  = \events$278 [6];
+  assign \events$278.lc_skip  = \events$278 [7];
+  assign \events$278.lc_zero  = \events$278 [8];
+  assign \events$278.spw_mismatch  = \events$278 [9];
+  assign \events$278.overrun  = \events$278 [10];
+  assign \events$278.aborted  = \events$278 [11];
+  assign \events$278.no_stop  = \events$278 [12];
+  assign \events$278.noisy_line  = \events$278 [13];
+  assign \events$278.delay_jump  = \events$278 [14];
+  assign \events$278.noise_event  = \events$278 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -23985,57 +24265,57 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$295.status  = \result$295 [3:0];
-  assign \result$295.timestamp  = \result$295 [35:4];
-  assign \result$295.line_delay  = \result$295 [48:36];
-  assign \result$295.cds  = \result$295 [49];
-  assign \result$295.noise_events  = \result$295 [53:50];
-  assign \result$295.delay_settled  = \result$295 [54];
-  assign \result$295.settled_delay  = \result$295 [67:55];
-  assign \result$295.delay_spread  = \result$295 [75:68];
-  assign \result$295.word0  = \result$295 [133:76];
-  assign \result$295.word0.position  = \result$295 [130:76];
-  assign \result$295.word0.ne  = \result$295 [131];
-  assign \result$295.word0.nw  = \result$295 [132];
-  assign \result$295.word0.crc_ok  = \result$295 [133];
-  assign \result$295.word1  = \result$295 [176:134];
-  assign \result$295.word1.position  = \result$295 [173:134];
-  assign \result$295.word1.ne  = \result$295 [174];
-  assign \result$295.word1.nw  = \result$295 [175];
-  assign \result$295.word1.crc_ok  = \result$295 [176];
-  assign \result$295.lc  = \result$295 [182:177];
-  assign \result$295.lc_repeat  = \result$295 [183];
-  assign \result$295.lc_skip  = \result$295 [184];
-  assign \result$295.lc_zero  = \result$295 [185];
-  assign \result$295.spw_mismatch  = \result$295 [186];
-  assign \events$271 [15] = \event ;
-  assign \events$271 [14] = \$16 ;
-  assign \events$271 [13] = \$14 ;
-  assign \events$271 [12] = faults[6];
-  assign \events$271 [11] = faults[4];
-  assign \events$271 [10] = overrun;
-  assign \events$271 [9] = \$12 ;
-  assign \events$271 [8] = lc_zero;
-  assign \events$271 [7] = lc_skip;
-  assign \events$271 [6] = lc_repeat;
-  assign \events$271 [5] = faults[3];
-  assign \events$271 [4] = faults[2];
-  assign \events$271 [3] = faults[1];
-  assign \events$271 [2] = faults[0];
-  assign \events$271 [1] = crc_error[1];
-  assign \events$271 [0] = crc_error[0];
-  assign \events$262 [4] = \$11 ;
-  assign \events$262 [3] = \$9 ;
-  assign \events$262 [2] = \$7 ;
-  assign \events$262 [1] = \$5 ;
-  assign \events$262 [0] = \$3 ;
+  assign \result$302.status  = \result$302 [3:0];
+  assign \result$302.timestamp  = \result$302 [35:4];
+  assign \result$302.line_delay  = \result$302 [48:36];
+  assign \result$302.cds  = \result$302 [49];
+  assign \result$302.noise_events  = \result$302 [53:50];
+  assign \result$302.delay_settled  = \result$302 [54];
+  assign \result$302.settled_delay  = \result$302 [67:55];
+  assign \result$302.delay_spread  = \result$302 [75:68];
+  assign \result$302.word0  = \result$302 [133:76];
+  assign \result$302.word0.position  = \result$302 [130:76];
+  assign \result$302.word0.ne  = \result$302 [131];
+  assign \result$302.word0.nw  = \result$302 [132];
+  assign \result$302.word0.crc_ok  = \result$302 [133];
+  assign \result$302.word1  = \result$302 [176:134];
+  assign \result$302.word1.position  = \result$302 [173:134];
+  assign \result$302.word1.ne  = \result$302 [174];
+  assign \result$302.word1.nw  = \result$302 [175];
+  assign \result$302.word1.crc_ok  = \result$302 [176];
+  assign \result$302.lc  = \result$302 [182:177];
+  assign \result$302.lc_repeat  = \result$302 [183];
+  assign \result$302.lc_skip  = \result$302 [184];
+  assign \result$302.lc_zero  = \result$302 [185];
+  assign \result$302.spw_mismatch  = \result$302 [186];
+  assign \events$278 [15] = \event ;
+  assign \events$278 [14] = \$16 ;
+  assign \events$278 [13] = \$14 ;
+  assign \events$278 [12] = faults[6];
+  assign \events$278 [11] = faults[4];
+  assign \events$278 [10] = overrun;
+  assign \events$278 [9] = \$12 ;
+  assign \events$278 [8] = lc_zero;
+  assign \events$278 [7] = lc_skip;
+  assign \events$278 [6] = lc_repeat;
+  assign \events$278 [5] = faults[3];
+  assign \events$278 [4] = faults[2];
+  assign \events$278 [3] = faults[1];
+  assign \events$278 [2] = faults[0];
+  assign \events$278 [1] = crc_error[1];
+  assign \events$278 [0] = crc_error[0];
+  assign \events$269 [4] = \$11 ;
+  assign \events$269 [3] = \$9 ;
+  assign \events$269 [2] = \$7 ;
+  assign \events$269 [1] = \$5 ;
+  assign \events$269 [0] = \$3 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$225 [17] = ca_write;
-  assign \request$225 [16:10] = ca_count;
-  assign \request$225 [9:3] = ca_address;
-  assign \request$225 [2:0] = ca_slave_id;
+  assign \request$231 [17] = ca_write;
+  assign \request$231 [16:10] = ca_count;
+  assign \request$231 [9:3] = ca_address;
+  assign \request$231 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$24 ;
@@ -24057,33 +24337,34 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$173 [23:12] = cycle[207:196];
-  assign \words$173 [11:0] = cycle[156:145];
-  assign words[23:12] = cycle[207:196];
-  assign words[11:0] = cycle[156:145];
-  assign live[254:247] = cfg_spw_tolerance;
-  assign live[246] = cfg_spw_check;
-  assign live[245] = cfg_w1_crc_inverted;
-  assign live[244:229] = cfg_w1_crc_start;
-  assign live[228:213] = cfg_w1_crc_poly;
-  assign live[212:208] = cfg_w1_crc_width;
-  assign live[207] = cfg_w1_signed;
-  assign live[206] = cfg_w1_gray;
-  assign live[205:204] = cfg_w1_crc;
-  assign live[203] = cfg_w1_lc;
-  assign live[202] = cfg_w1_nenw;
-  assign live[201:196] = cfg_w1_data_bits;
-  assign live[195] = cfg_w1_enable;
-  assign live[194] = cfg_w0_crc_inverted;
-  assign live[193:178] = cfg_w0_crc_start;
-  assign live[177:162] = cfg_w0_crc_poly;
-  assign live[161:157] = cfg_w0_crc_width;
-  assign live[156] = cfg_w0_signed;
-  assign live[155] = cfg_w0_gray;
-  assign live[154:153] = cfg_w0_crc;
-  assign live[152] = cfg_w0_lc;
-  assign live[151] = cfg_w0_nenw;
-  assign live[150:145] = cfg_w0_data_bits;
+  assign \words$174 [23:12] = cycle[211:200];
+  assign \words$174 [11:0] = cycle[160:149];
+  assign words[23:12] = cycle[211:200];
+  assign words[11:0] = cycle[160:149];
+  assign live[258:251] = cfg_spw_tolerance;
+  assign live[250] = cfg_spw_check;
+  assign live[249] = cfg_w1_crc_inverted;
+  assign live[248:233] = cfg_w1_crc_start;
+  assign live[232:217] = cfg_w1_crc_poly;
+  assign live[216:212] = cfg_w1_crc_width;
+  assign live[211] = cfg_w1_signed;
+  assign live[210] = cfg_w1_gray;
+  assign live[209:208] = cfg_w1_crc;
+  assign live[207] = cfg_w1_lc;
+  assign live[206] = cfg_w1_nenw;
+  assign live[205:200] = cfg_w1_data_bits;
+  assign live[199] = cfg_w1_enable;
+  assign live[198] = cfg_w0_crc_inverted;
+  assign live[197:182] = cfg_w0_crc_start;
+  assign live[181:166] = cfg_w0_crc_poly;
+  assign live[165:161] = cfg_w0_crc_width;
+  assign live[160] = cfg_w0_signed;
+  assign live[159] = cfg_w0_gray;
+  assign live[158:157] = cfg_w0_crc;
+  assign live[156] = cfg_w0_lc;
+  assign live[155] = cfg_w0_nenw;
+  assign live[154:149] = cfg_w0_data_bits;
+  assign live[148:145] = cfg_confirm_frames;
   assign live[144:141] = cfg_delay_tolerance;
   assign live[140:137] = cfg_noise_limit;
   assign live[136:125] = cfg_quiet_time;
@@ -24098,7 +24379,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crcs, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24155,7 +24436,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire [24:0] \$58 ;
   reg \$59 ;
   wire \$6 ;
-  reg [254:0] \$60 ;
+  reg [258:0] \$60 ;
   reg [23:0] \$61 ;
   reg [23:0] \$62 ;
   reg [11:0] \$63 ;
@@ -24182,10 +24463,11 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  output [254:0] cycle;
-  reg [254:0] cycle = 255'h0000000000000000000000000000000000000000000000000000000000000000;
+  output [258:0] cycle;
+  reg [258:0] cycle = 259'h00000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
+  wire [3:0] \cycle.confirm_frames ;
   wire [11:0] \cycle.delay_limit ;
   wire [3:0] \cycle.delay_tolerance ;
   wire \cycle.end_check ;
@@ -24237,10 +24519,11 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [254:0] live;
-  wire [254:0] live;
+  input [258:0] live;
+  wire [258:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
+  wire [3:0] \live.confirm_frames ;
   wire [11:0] \live.delay_limit ;
   wire [3:0] \live.delay_tolerance ;
   wire \live.end_check ;
@@ -24301,14 +24584,14 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
-  assign \$36  = live[195] & live[152];
-  assign \$37  = \$36  & live[203];
+  assign \$36  = live[199] & live[156];
+  assign \$37  = \$36  & live[207];
   assign \$38  = ~ \$37 ;
   assign \$39  = \$35  & \$38 ;
-  assign \$40  = ~ live[246];
-  assign \$41  = live[201:196] <= live[150:145];
-  assign \$42  = live[195] & \$41 ;
-  assign \$43  = | live[205:204];
+  assign \$40  = ~ live[250];
+  assign \$41  = live[205:200] <= live[154:149];
+  assign \$42  = live[199] & \$41 ;
+  assign \$43  = | live[209:208];
   assign \$44  = \$42  & \$43 ;
   assign \$45  = \$40  | \$44 ;
   assign \$46  = \$39  & \$45 ;
@@ -24324,7 +24607,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$56  = \$55  ? 4'h2 : live[144:141];
   assign \$57  = live[15:0] + \$56 ;
   assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[195];
+  assign word_count = 1'h1 + cycle[199];
   always @(posedge clk)
     ok <= \$59 ;
   always @(posedge clk)
@@ -24344,56 +24627,56 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   always @(posedge clk)
     no_start_limit <= \$67 ;
   assign \$1  = | live[15:1];
-  assign \$2  = | live[150:145];
-  assign \$3  = live[150:145] <= 6'h37;
+  assign \$2  = | live[154:149];
+  assign \$3  = live[154:149] <= 6'h37;
   assign \$4  = \$2  & \$3 ;
-  assign \$5  = ! live[154:153];
-  assign \$6  = live[154:153] == 1'h1;
+  assign \$5  = ! live[158:157];
+  assign \$6  = live[158:157] == 1'h1;
   assign \$7  = \$5  | \$6 ;
-  assign \$8  = live[154:153] == 2'h2;
+  assign \$8  = live[158:157] == 2'h2;
   assign \$9  = \$7  | \$8 ;
-  assign \$10  = live[154:153] == 2'h3;
-  assign \$11  = | live[161:157];
+  assign \$10  = live[158:157] == 2'h3;
+  assign \$11  = | live[165:161];
   assign \$12  = \$10  & \$11 ;
-  assign \$13  = live[161:157] <= 5'h10;
+  assign \$13  = live[165:161] <= 5'h10;
   assign \$14  = \$12  & \$13 ;
   assign \$15  = \$9  | \$14 ;
   assign \$16  = \$4  & \$15 ;
   assign \$17  = \$1  & \$16 ;
-  assign \$18  = ~ live[195];
-  assign \$19  = | live[201:196];
-  assign \$20  = live[201:196] <= 6'h28;
+  assign \$18  = ~ live[199];
+  assign \$19  = | live[205:200];
+  assign \$20  = live[205:200] <= 6'h28;
   assign \$21  = \$19  & \$20 ;
-  assign \$22  = ! live[205:204];
-  assign \$23  = live[205:204] == 1'h1;
+  assign \$22  = ! live[209:208];
+  assign \$23  = live[209:208] == 1'h1;
   assign \$24  = \$22  | \$23 ;
-  assign \$25  = live[205:204] == 2'h2;
+  assign \$25  = live[209:208] == 2'h2;
   assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[205:204] == 2'h3;
-  assign \$28  = | live[212:208];
+  assign \$27  = live[209:208] == 2'h3;
+  assign \$28  = | live[216:212];
   assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[212:208] <= 5'h10;
+  assign \$30  = live[216:212] <= 5'h10;
   assign \$31  = \$29  & \$30 ;
   assign \$32  = \$26  | \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$59  = \$46 ;
     if (rst) begin
       \$59  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$60  = cycle;
     if (idle) begin
       \$60  = live;
     end
     if (rst) begin
-      \$60  = 255'h0000000000000000000000000000000000000000000000000000000000000000;
+      \$60  = 259'h00000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$61  = ack_limit;
     if (idle) begin
       \$61  = \$48 ;
@@ -24403,7 +24686,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$62  = timeout_limit;
     if (idle) begin
       \$62  = \$50 ;
@@ -24413,7 +24696,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$63  = delay_limit;
     if (idle) begin
       \$63  = \$52 ;
@@ -24423,7 +24706,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$64  = quiet_time;
     if (idle) begin
       \$64  = \$54 ;
@@ -24433,7 +24716,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$65  = delay_tolerance;
     if (idle) begin
       \$65  = \$57 ;
@@ -24443,11 +24726,11 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$66  = crcs;
     if (idle) begin
       (* full_case = 32'd1 *)
-      casez (live[154:153])
+      casez (live[158:157])
         2'h1:
           begin
             \$66 [4:0] = 5'h06;
@@ -24463,12 +24746,12 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
             \$66 [37] = 1'h1;
           end
         2'h3:
-            \$66 [37:0] = live[194:157];
+            \$66 [37:0] = live[198:161];
         default:
             \$66 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
-      casez (live[205:204])
+      casez (live[209:208])
         2'h1:
           begin
             \$66 [42:38] = 5'h06;
@@ -24484,7 +24767,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
             \$66 [75] = 1'h1;
           end
         2'h3:
-            \$66 [75:38] = live[245:208];
+            \$66 [75:38] = live[249:212];
         default:
             \$66 [75:38] = 38'h0000000000;
       endcase
@@ -24494,7 +24777,7 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$67  = \$58 ;
     if (rst) begin
       \$67  = 25'h0000000;
@@ -24510,33 +24793,34 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \live.quiet_time  = live[136:125];
   assign \live.noise_limit  = live[140:137];
   assign \live.delay_tolerance  = live[144:141];
-  assign \live.w0  = live[156:145];
-  assign \live.w0.data_bits  = live[150:145];
-  assign \live.w0.nenw  = live[151];
-  assign \live.w0.lc  = live[152];
-  assign \live.w0.crc  = live[154:153];
-  assign \live.w0.gray  = live[155];
-  assign \live.w0.signed  = live[156];
-  assign \live.w0_crc  = live[194:157];
-  assign \live.w0_crc.width  = live[161:157];
-  assign \live.w0_crc.poly  = live[177:162];
-  assign \live.w0_crc.start  = live[193:178];
-  assign \live.w0_crc.inverted  = live[194];
-  assign \live.w1_enable  = live[195];
-  assign \live.w1  = live[207:196];
-  assign \live.w1.data_bits  = live[201:196];
-  assign \live.w1.nenw  = live[202];
-  assign \live.w1.lc  = live[203];
-  assign \live.w1.crc  = live[205:204];
-  assign \live.w1.gray  = live[206];
-  assign \live.w1.signed  = live[207];
-  assign \live.w1_crc  = live[245:208];
-  assign \live.w1_crc.width  = live[212:208];
-  assign \live.w1_crc.poly  = live[228:213];
-  assign \live.w1_crc.start  = live[244:229];
-  assign \live.w1_crc.inverted  = live[245];
-  assign \live.spw_check  = live[246];
-  assign \live.spw_tolerance  = live[254:247];
+  assign \live.confirm_frames  = live[148:145];
+  assign \live.w0  = live[160:149];
+  assign \live.w0.data_bits  = live[154:149];
+  assign \live.w0.nenw  = live[155];
+  assign \live.w0.lc  = live[156];
+  assign \live.w0.crc  = live[158:157];
+  assign \live.w0.gray  = live[159];
+  assign \live.w0.signed  = live[160];
+  assign \live.w0_crc  = live[198:161];
+  assign \live.w0_crc.width  = live[165:161];
+  assign \live.w0_crc.poly  = live[181:166];
+  assign \live.w0_crc.start  = live[197:182];
+  assign \live.w0_crc.inverted  = live[198];
+  assign \live.w1_enable  = live[199];
+  assign \live.w1  = live[211:200];
+  assign \live.w1.data_bits  = live[205:200];
+  assign \live.w1.nenw  = live[206];
+  assign \live.w1.lc  = live[207];
+  assign \live.w1.crc  = live[209:208];
+  assign \live.w1.gray  = live[210];
+  assign \live.w1.signed  = live[211];
+  assign \live.w1_crc  = live[249:212];
+  assign \live.w1_crc.width  = live[216:212];
+  assign \live.w1_crc.poly  = live[232:217];
+  assign \live.w1_crc.start  = live[248:233];
+  assign \live.w1_crc.inverted  = live[249];
+  assign \live.spw_check  = live[250];
+  assign \live.spw_tolerance  = live[258:251];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -24547,33 +24831,34 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.quiet_time  = cycle[136:125];
   assign \cycle.noise_limit  = cycle[140:137];
   assign \cycle.delay_tolerance  = cycle[144:141];
-  assign \cycle.w0  = cycle[156:145];
-  assign \cycle.w0.data_bits  = cycle[150:145];
-  assign \cycle.w0.nenw  = cycle[151];
-  assign \cycle.w0.lc  = cycle[152];
-  assign \cycle.w0.crc  = cycle[154:153];
-  assign \cycle.w0.gray  = cycle[155];
-  assign \cycle.w0.signed  = cycle[156];
-  assign \cycle.w0_crc  = cycle[194:157];
-  assign \cycle.w0_crc.width  = cycle[161:157];
-  assign \cycle.w0_crc.poly  = cycle[177:162];
-  assign \cycle.w0_crc.start  = cycle[193:178];
-  assign \cycle.w0_crc.inverted  = cycle[194];
-  assign \cycle.w1_enable  = cycle[195];
-  assign \cycle.w1  = cycle[207:196];
-  assign \cycle.w1.data_bits  = cycle[201:196];
-  assign \cycle.w1.nenw  = cycle[202];
-  assign \cycle.w1.lc  = cycle[203];
-  assign \cycle.w1.crc  = cycle[205:204];
-  assign \cycle.w1.gray  = cycle[206];
-  assign \cycle.w1.signed  = cycle[207];
-  assign \cycle.w1_crc  = cycle[245:208];
-  assign \cycle.w1_crc.width  = cycle[212:208];
-  assign \cycle.w1_crc.poly  = cycle[228:213];
-  assign \cycle.w1_crc.start  = cycle[244:229];
-  assign \cycle.w1_crc.inverted  = cycle[245];
-  assign \cycle.spw_check  = cycle[246];
-  assign \cycle.spw_tolerance  = cycle[254:247];
+  assign \cycle.confirm_frames  = cycle[148:145];
+  assign \cycle.w0  = cycle[160:149];
+  assign \cycle.w0.data_bits  = cycle[154:149];
+  assign \cycle.w0.nenw  = cycle[155];
+  assign \cycle.w0.lc  = cycle[156];
+  assign \cycle.w0.crc  = cycle[158:157];
+  assign \cycle.w0.gray  = cycle[159];
+  assign \cycle.w0.signed  = cycle[160];
+  assign \cycle.w0_crc  = cycle[198:161];
+  assign \cycle.w0_crc.width  = cycle[165:161];
+  assign \cycle.w0_crc.poly  = cycle[181:166];
+  assign \cycle.w0_crc.start  = cycle[197:182];
+  assign \cycle.w0_crc.inverted  = cycle[198];
+  assign \cycle.w1_enable  = cycle[199];
+  assign \cycle.w1  = cycle[211:200];
+  assign \cycle.w1.data_bits  = cycle[205:200];
+  assign \cycle.w1.nenw  = cycle[206];
+  assign \cycle.w1.lc  = cycle[207];
+  assign \cycle.w1.crc  = cycle[209:208];
+  assign \cycle.w1.gray  = cycle[210];
+  assign \cycle.w1.signed  = cycle[211];
+  assign \cycle.w1_crc  = cycle[249:212];
+  assign \cycle.w1_crc.width  = cycle[216:212];
+  assign \cycle.w1_crc.poly  = cycle[232:217];
+  assign \cycle.w1_crc.start  = cycle[248:233];
+  assign \cycle.w1_crc.inverted  = cycle[249];
+  assign \cycle.spw_check  = cycle[250];
+  assign \cycle.spw_tolerance  = cycle[258:251];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -24587,10 +24872,93 @@ module \biss_master_uart.ch1.core.config (rst, word_count, live, ok, cycle, ack_
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_uart.ch1.core.confirmation (rst, report, status, pending, setting, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  wire \$1 ;
+  wire \$10 ;
+  wire \$11 ;
+  wire [3:0] \$12 ;
+  wire [3:0] \$13 ;
+  wire [4:0] \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  reg [3:0] \$17 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  wire \$5 ;
+  wire \$6 ;
+  wire \$7 ;
+  wire \$8 ;
+  wire \$9 ;
+  input clk;
+  wire clk;
+  reg [3:0] left = 4'h0;
+  output pending;
+  wire pending;
+  input report;
+  wire report;
+  input rst;
+  wire rst;
+  input [3:0] setting;
+  wire [3:0] setting;
+  (* enum_base_type = "Status" *)
+  (* enum_value_0000 = "OK" *)
+  (* enum_value_0001 = "CRC_ERROR_WORD0" *)
+  (* enum_value_0010 = "CRC_ERROR_WORD1" *)
+  (* enum_value_0011 = "CRC_ERROR_BOTH" *)
+  (* enum_value_0100 = "SIGN_OF_LIFE" *)
+  (* enum_value_0101 = "SPW_MISMATCH" *)
+  (* enum_value_0110 = "NO_ACK" *)
+  (* enum_value_0111 = "NO_START" *)
+  (* enum_value_1000 = "DELAY_RANGE" *)
+  (* enum_value_1001 = "SLO_STUCK_LOW" *)
+  (* enum_value_1010 = "ABORTED" *)
+  (* enum_value_1011 = "BAD_CONFIG" *)
+  (* enum_value_1100 = "NO_STOP" *)
+  (* enum_value_1101 = "NOISY_LINE" *)
+  (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
+  input [3:0] status;
+  wire [3:0] status;
+  assign \$1  = ! status;
+  assign \$2  = status == 4'ha;
+  assign \$3  = status == 4'hb;
+  assign \$4  = status == 4'hf;
+  assign \$5  = | { \$4 , \$3 , \$2 , \$1  };
+  assign \$6  = ~ \$5 ;
+  assign \$7  = report & \$6 ;
+  assign \$8  = status == 4'hf;
+  assign \$9  = report & \$8 ;
+  assign \$10  = ! setting;
+  assign \$11  = setting == 4'hf;
+  assign \$12  = \$11  ? 4'h0 : setting;
+  assign \$13  = \$10  ? 4'h1 : \$12 ;
+  assign \$14  = left - 1'h1;
+  assign \$15  = | left;
+  assign \$16  = setting != 4'hf;
+  assign pending = \$15  & \$16 ;
+  always @(posedge clk)
+    left <= \$17 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    \$17  = left;
+    if (\$7 ) begin
+      \$17  = \$13 ;
+    end else if (\$9 ) begin
+      \$17  = \$14 [3:0];
+    end
+    if (rst) begin
+      \$17  = 4'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
 , slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
 , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24677,6 +25045,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] fault_status;
   reg [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -24695,6 +25064,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \fault_status$41 ;
   output [6:0] faults;
   wire [6:0] faults;
@@ -24807,6 +25177,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -24824,6 +25195,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \status$79 ;
   input stop_bit;
   wire stop_bit;
@@ -24925,7 +25297,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     .report_frame(report_frame)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -24933,7 +25305,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -24980,7 +25352,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     waiting = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -24992,7 +25364,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25004,7 +25376,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25053,7 +25425,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25102,7 +25474,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25118,7 +25490,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25132,7 +25504,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25146,7 +25518,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     framing = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25162,7 +25534,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25193,7 +25565,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25211,7 +25583,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     holding = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25234,14 +25606,14 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$27  = idle;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$28  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25332,7 +25704,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$29  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25423,7 +25795,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$30  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25514,7 +25886,7 @@ module \biss_master_uart.ch1.core.controller (rst, request, restart_timer, repor
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     \$31  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -25583,7 +25955,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -25622,7 +25994,7 @@ module \biss_master_uart.ch1.core.controller.cdm_hold (rst, abort, framing, hold
   assign \$1  = ~ abort;
   assign \$2  = cdm_cycle & \$1 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     \$7  = cdm_cycle;
     if (idle) begin
       \$7  = cdm;
@@ -25632,7 +26004,7 @@ module \biss_master_uart.ch1.core.controller.cdm_hold (rst, abort, framing, hold
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
     ma_hold = 1'h0;
     if (framing) begin
       ma_hold = \$2 ;
@@ -25644,7 +26016,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -25712,6 +26084,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] status;
   reg [3:0] status;
   input watch;
@@ -25741,7 +26114,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
   always @(posedge clk)
     locked_seen <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$20  = armed;
     if (clear) begin
       \$20  = 1'h0;
@@ -25754,7 +26127,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     \$21  = locked_seen;
     if (clear) begin
       \$21  = 1'h0;
@@ -25767,7 +26140,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     fault = 1'h0;
     if (\$7 ) begin
       fault = 1'h1;
@@ -25780,7 +26153,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     status = 4'h0;
     if (\$7 ) begin
       status = 4'h8;
@@ -25793,7 +26166,7 @@ module \biss_master_uart.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
     delay = 1'h0;
     if (\$7 ) begin
     end else if (\$12 ) begin
@@ -25805,7 +26178,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -25839,7 +26212,7 @@ module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
   assign \$4  = first_clock ? quiet_live : quiet;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     aborted = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -25847,7 +26220,7 @@ module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     ready = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -25856,7 +26229,7 @@ module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     stuck_low = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -25866,7 +26239,7 @@ module \biss_master_uart.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
@@ -25911,6 +26284,7 @@ module \biss_master_uart.ch1.core.controller.report (fault, fault_status, report
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   output [6:0] faults;
@@ -25943,6 +26317,7 @@ module \biss_master_uart.ch1.core.controller.report (fault, fault_status, report
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
   assign report_delay = report_frame | delay;
   assign \$1  = fault_status == 3'h6;
@@ -25980,7 +26355,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.counter_ram (rst, host__en, busy, read_data, host__addr, clear, events, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire [7:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -26736,7 +27111,7 @@ module \biss_master_uart.ch1.core.counter_ram (rst, host__en, busy, read_data, h
   always @(posedge clk)
     was_busy <= \$308 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
       \$300 [0] = 1'h0;
@@ -26867,7 +27242,7 @@ module \biss_master_uart.ch1.core.counter_ram (rst, host__en, busy, read_data, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
       \$301  = 1'h0;
@@ -26878,49 +27253,49 @@ module \biss_master_uart.ch1.core.counter_ram (rst, host__en, busy, read_data, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$302  = { \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109  };
     if (rst) begin
       \$302  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$303  = pick;
     if (rst) begin
       \$303  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$304  = { \$148 , \$147 , \$146  };
     if (rst) begin
       \$304  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$305  = sel;
     if (rst) begin
       \$305  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$306  = update__addr;
     if (rst) begin
       \$306  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$307  = \$173 ;
     if (rst) begin
       \$307  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$63 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
     \$308  = \$299 ;
     if (rst) begin
       \$308  = 1'h1;
@@ -27008,7 +27383,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.counters (rst, clear, events, counts, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   reg [4:0] \$1 ;
   reg \$2 ;
   input clear;
@@ -27098,14 +27473,14 @@ module \biss_master_uart.ch1.core.counters (rst, clear, events, counts, clk);
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$1  = events;
     if (rst) begin
       \$1  = 5'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$2  = clear;
     if (rst) begin
       \$2  = 1'h0;
@@ -27145,114 +27520,6 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$65 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27306,7 +27573,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_data_fault (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27360,7 +27627,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_no_answer (rst, inc, clear, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, count, clk);
+module \biss_master_uart.ch1.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27414,9 +27681,117 @@ module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master_uart.ch1.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top
 , crc_ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -28810,7 +29185,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$585  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -28834,7 +29209,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$586  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -28856,7 +29231,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$587  = slots;
     if (\$36 ) begin
       \$587  = \$37 [15:0];
@@ -28869,7 +29244,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$588  = slots_full;
     if (\$36 ) begin
       \$588  = \$38 ;
@@ -28882,7 +29257,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$589  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -28898,7 +29273,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$590  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -28914,7 +29289,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$591  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -28946,7 +29321,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$592  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -28964,7 +29339,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$593  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -28989,7 +29364,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$594  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -29014,7 +29389,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$595  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -29039,7 +29414,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$596  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
@@ -29061,7 +29436,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$597  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -29086,7 +29461,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$598  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -29114,7 +29489,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$599  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -29136,7 +29511,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$600  = data0;
     if (\$66 ) begin
       \$600  = \$344 ;
@@ -29149,7 +29524,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$601  = ne;
     if (\$345 ) begin
       \$601 [0] = 1'h1;
@@ -29169,7 +29544,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$602  = nw;
     if (\$345 ) begin
       \$602 [0] = 1'h1;
@@ -29191,7 +29566,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$603  = data1;
     if (\$356 ) begin
       \$603  = \$559 ;
@@ -29204,7 +29579,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$604  = lc;
     if (lc_load) begin
       \$604  = { lc[4:0], \bit  };
@@ -29217,7 +29592,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$605  = cpw_top;
     if (\$569 ) begin
       \$605  = { cpw_top[38:0], \$571  };
@@ -29230,7 +29605,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     at_cds = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -29240,7 +29615,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -29252,7 +29627,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     (* full_case = 32'd1 *)
     casez (words[6])
       1'h0:
@@ -29262,7 +29637,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -29276,7 +29651,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -29290,7 +29665,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -29304,7 +29679,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     (* full_case = 32'd1 *)
     casez (words[18])
       1'h0:
@@ -29314,7 +29689,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -29328,7 +29703,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -29342,7 +29717,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -29402,7 +29777,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
   reg \$11 ;
@@ -29503,7 +29878,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @(posedge clk)
     ok <= \$35 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     casez (load_index)
       1'h0:
@@ -29513,7 +29888,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29523,7 +29898,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29533,7 +29908,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29543,7 +29918,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29553,7 +29928,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29563,7 +29938,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29573,7 +29948,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29583,7 +29958,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29593,7 +29968,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$33  = \reg ;
     if (load) begin
       \$33  = \$1 ;
@@ -29610,7 +29985,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$34  = mismatch;
     if (load) begin
       \$34  = 1'h0;
@@ -29626,7 +30001,7 @@ module \biss_master_uart.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$35  = ok;
     if (last) begin
       if (\$15 ) begin
@@ -29658,7 +30033,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -29830,56 +30205,56 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
   assign \$39  = magnitude > spread;
   assign \$40  = \$38  & \$39 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$46  = \$1 ;
     if (rst) begin
       \$46  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$47  = \$2 ;
     if (rst) begin
       \$47  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$48  = \tolerance$8 ;
     if (rst) begin
       \$48  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$49  = \$3 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$50  = \$11 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$51  = \$20 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$52  = \$25 ;
     if (rst) begin
       \$52  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$53  = 1'h0;
     if (learn) begin
       if (\$32 ) begin
@@ -29896,7 +30271,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$54  = jump;
     if (check) begin
       \$54  = \$26 ;
@@ -29909,7 +30284,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$55  = count;
     if (learn) begin
       (* full_case = 32'd1 *)
@@ -29931,7 +30306,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$56  = spread;
     if (learn) begin
       if (\$32 ) begin
@@ -29951,7 +30326,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$57  = cand;
     if (learn) begin
       if (\$32 ) begin
@@ -29964,7 +30339,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$58  = settled_delay;
     if (learn) begin
       if (\$32 ) begin
@@ -29981,7 +30356,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     \$59  = settled;
     if (learn) begin
       if (\$32 ) begin
@@ -30001,7 +30376,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire \$1 ;
   reg \$10 ;
   reg \$11 ;
@@ -30064,21 +30439,21 @@ module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, noisy, events,
   always @(posedge clk)
     running <= \$14 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$10  = level;
     if (rst) begin
       \$10  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$11  = \$4 ;
     if (rst) begin
       \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$12  = held_noisy;
     if (close) begin
       \$12  = \$7 ;
@@ -30088,7 +30463,7 @@ module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$13  = held_events;
     if (close) begin
       \$13  = running;
@@ -30098,7 +30473,7 @@ module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, noisy, events,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$14  = running;
     if (close) begin
       \$14  = { 3'h0, \event  };
@@ -30115,7 +30490,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -30240,7 +30615,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -30255,7 +30630,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -30270,7 +30645,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -30285,7 +30660,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -30314,7 +30689,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -30356,7 +30731,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -30398,7 +30773,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -30417,7 +30792,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -30453,7 +30828,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -30477,7 +30852,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -30493,7 +30868,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -30510,7 +30885,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, \started$11 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   reg [7:0] \$1 ;
   wire \$10 ;
   reg [7:0] \$11 ;
@@ -30613,7 +30988,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   always @(posedge clk)
     word1_len <= \$19 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     (* full_case = 32'd1 *)
     casez (words[7:6])
       2'h0:
@@ -30627,7 +31002,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -30641,42 +31016,42 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$14  = \$3 [7:0];
     if (rst) begin
       \$14  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$15  = \$5 ;
     if (rst) begin
       \$15  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$16  = \$6 ;
     if (rst) begin
       \$16  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$17  = \started$11 ;
     if (rst) begin
       \$17  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$18  = \$10 ;
     if (rst) begin
       \$18  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$19  = \$13 [7:0];
     if (rst) begin
       \$19  = 8'h00;
@@ -31002,7 +31377,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.buffers (rst, host_read__en, byte_to_send, rbuf_data, host_read__addr, wbuf, index, store, byte_received, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -31119,21 +31494,21 @@ module \biss_master_uart.ch1.core.register_access.buffers (rst, host_read__en, b
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -31153,7 +31528,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -31196,7 +31571,7 @@ module \biss_master_uart.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -31206,7 +31581,7 @@ module \biss_master_uart.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -31222,7 +31597,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -31265,7 +31640,7 @@ module \biss_master_uart.ch1.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -31289,7 +31664,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -31359,7 +31734,7 @@ module \biss_master_uart.ch1.core.register_access.idle (rst, frame_end, frame_ok
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -31369,7 +31744,7 @@ module \biss_master_uart.ch1.core.register_access.idle (rst, frame_end, frame_ok
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -31382,7 +31757,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -31454,7 +31829,7 @@ module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -31467,7 +31842,7 @@ module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -31480,7 +31855,7 @@ module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -31490,7 +31865,7 @@ module \biss_master_uart.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -31515,7 +31890,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -31558,7 +31933,7 @@ module \biss_master_uart.ch1.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -31583,7 +31958,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -31939,7 +32314,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -31977,7 +32352,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -32031,7 +32406,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -32128,7 +32503,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -32145,7 +32520,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -32184,7 +32559,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -32242,7 +32617,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -32309,7 +32684,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -32341,7 +32716,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32355,7 +32730,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32382,7 +32757,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32402,7 +32777,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32421,7 +32796,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32450,7 +32825,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32471,7 +32846,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32493,7 +32868,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32514,7 +32889,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32536,7 +32911,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32558,7 +32933,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32582,7 +32957,7 @@ module \biss_master_uart.ch1.core.register_access.sequencer (rst, frame_end, fra
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32621,7 +32996,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [186:0] \$3 ;
@@ -32658,6 +33033,7 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \frame.status ;
   wire [31:0] \frame.timestamp ;
   wire [57:0] \frame.word0 ;
@@ -32705,6 +33081,7 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] \result.status ;
   wire [31:0] \result.timestamp ;
   wire [57:0] \result.word0 ;
@@ -32730,21 +33107,21 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -32821,7 +33198,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -33106,7 +33483,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$71  = level;
     if (receiver_clear) begin
       \$71  = 1'h1;
@@ -33116,7 +33493,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$72  = mid_delay;
     if (odd) begin
       \$72  = \$8 [12:0];
@@ -33141,7 +33518,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$73  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -33168,7 +33545,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$74  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -33190,7 +33567,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$75  = elapsed;
     casez (sampler_fsm_state)
       2'h0:
@@ -33214,7 +33591,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$76  = early;
     casez (sampler_fsm_state)
       2'h0:
@@ -33230,7 +33607,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$77  = locked;
     casez (sampler_fsm_state)
       2'h0:
@@ -33256,7 +33633,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$78  = gap;
     casez (sampler_fsm_state)
       2'h0:
@@ -33287,7 +33664,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$79  = sampler_fsm_state;
     casez (sampler_fsm_state)
       2'h0:
@@ -33318,7 +33695,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$80  = slot_left;
     casez (sampler_fsm_state)
       2'h0:
@@ -33368,7 +33745,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$81  = slot_zero;
     casez (sampler_fsm_state)
       2'h0:
@@ -33418,7 +33795,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$82  = vote1;
     casez (sampler_fsm_state)
       2'h0:
@@ -33448,7 +33825,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$83  = vote2;
     casez (sampler_fsm_state)
       2'h0:
@@ -33476,7 +33853,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$84  = first_slot;
     casez (sampler_fsm_state)
       2'h0:
@@ -33502,7 +33879,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$85  = delay;
     casez (sampler_fsm_state)
       2'h0:
@@ -33525,7 +33902,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$86  = phase;
     casez (sampler_fsm_state)
       2'h0:
@@ -33565,7 +33942,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     sample = \$44 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -33583,7 +33960,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     clear = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -33595,7 +33972,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     dropped = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -33616,7 +33993,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     decided = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -33641,7 +34018,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     centre = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -33669,7 +34046,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majority, odd, receiver_clear, vote1, vote2, clear, centre, level, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -33784,7 +34161,7 @@ module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
   always @(posedge clk)
     strobed <= \$38 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     \$33  = last;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -33802,7 +34179,7 @@ module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     \$34  = tail_odd;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -33820,7 +34197,7 @@ module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$35  = 1'h0;
@@ -33840,7 +34217,7 @@ module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$36  = 1'h0;
@@ -33860,7 +34237,7 @@ module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     \$37  = crowded;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -33878,7 +34255,7 @@ module \biss_master_uart.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     \$38  = strobed;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -33921,7 +34298,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -34015,14 +34392,14 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -34036,7 +34413,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -34050,7 +34427,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -34066,8 +34443,8 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6941$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7007$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -34108,8 +34485,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6941$0 ;
-  wire \port$6941$0 ;
+  input \port$7007$0 ;
+  wire \port$7007$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -34123,9 +34500,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6941$0  };
-  assign \$2  = { lc[4:0], \port$6941$0  } == last;
-  assign \$3  = { lc[4:0], \port$6941$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7007$0  };
+  assign \$2  = { lc[4:0], \port$7007$0  } == last;
+  assign \$3  = { lc[4:0], \port$7007$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -34159,7 +34536,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -34169,7 +34546,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -34179,7 +34556,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -34189,21 +34566,21 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -34213,7 +34590,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -34223,7 +34600,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -34235,13 +34612,13 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6941$0  };
+  assign lc_next = { lc[4:0], \port$7007$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -34446,28 +34823,28 @@ module \biss_master_uart.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -34477,7 +34854,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -34496,14 +34873,14 @@ module \biss_master_uart.ch1.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -34517,7 +34894,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
 , delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -34697,7 +35074,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   assign \$40  = in_clock & \$39 ;
   assign \$41  = timer >= ack_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$48  = slo_low_time_p1;
     if (\$2 ) begin
       \$48  = 25'h0000001;
@@ -34709,21 +35086,21 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$49  = \$9 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$50  = \$17 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$51  = high_p2;
     if (\$18 ) begin
       \$51  = 13'h0002;
@@ -34735,28 +35112,28 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$52  = \$23 ;
     if (rst) begin
       \$52  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$53  = \$30 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$54  = \$34 [24:0];
     if (rst) begin
       \$54  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$55  = 1'h0;
@@ -34768,21 +35145,21 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$57  = \$46 ;
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     \$58  = \$47 ;
     if (rst) begin
       \$58  = 1'h0;
@@ -34791,9 +35168,9 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5010$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, doubtful, clean, crc_error, cfg, fault, fault_status, report_frame, crc_ok, lc_zero_seen, spw_match
-, delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5042$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, crc_ok
+, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
+  reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -34826,17 +35203,21 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5010$0 , l
   wire \$36 ;
   wire \$37 ;
   wire \$38 ;
-  wire [1:0] \$39 ;
+  wire \$39 ;
   wire \$4 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire [1:0] \$42 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [254:0] cfg;
-  wire [254:0] cfg;
+  input [258:0] cfg;
+  wire [258:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
+  wire [3:0] \cfg.confirm_frames ;
   wire [11:0] \cfg.delay_limit ;
   wire [3:0] \cfg.delay_tolerance ;
   wire \cfg.end_check ;
@@ -34910,6 +35291,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5010$0 , l
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   input [3:0] fault_status;
   wire [3:0] fault_status;
   (* enum_base_type = "Status" *)
@@ -34928,6 +35310,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5010$0 , l
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   reg [3:0] frame_status;
   output lc_check;
   wire lc_check;
@@ -34945,8 +35328,10 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5010$0 , l
   wire lc_zero_seen;
   input noisy;
   wire noisy;
-  output \port$5010$0 ;
-  wire \port$5010$0 ;
+  output passed;
+  wire passed;
+  output \port$5042$0 ;
+  wire \port$5042$0 ;
   output report;
   wire report;
   input report_frame;
@@ -34971,22 +35356,25 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5010$0 , l
   (* enum_value_1100 = "NO_STOP" *)
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
+  (* enum_value_1111 = "UNCONFIRMED" *)
   output [3:0] status;
   wire [3:0] status;
+  input unconfirmed;
+  wire unconfirmed;
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign \$1  = ~ cfg[195];
+  assign \$1  = ~ cfg[199];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[195] & cfg[203];
-  assign \$4  = cfg[152] | \$3 ;
+  assign \$3  = cfg[199] & cfg[207];
+  assign \$4  = cfg[156] | \$3 ;
   assign \$5  = report_frame & \$4 ;
-  assign \$6  = cfg[152] ? crc_ok[0] : \$2 ;
+  assign \$6  = cfg[156] ? crc_ok[0] : \$2 ;
   assign lc_check = \$5  & \$6 ;
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[246] & cfg[195];
+  assign \$7  = cfg[250] & cfg[199];
   assign \$8  = crc_ok[0] & \$2 ;
   assign \$9  = \$7  & \$8 ;
   assign \$10  = ~ spw_match;
@@ -35002,33 +35390,40 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5010$0 , l
   assign status = report_frame ? frame_status : fault_status;
   assign \$18  = ! frame_status;
   assign valid = report_frame & \$18 ;
-  assign \$19  = crc_ok[0] & \$2 ;
-  assign \$20  = ~ \$19 ;
-  assign \$21  = \$20  | spw_mismatch;
-  assign \$22  = cfg[195] & cfg[203];
-  assign \$23  = cfg[152] | \$22 ;
-  assign \$24  = cfg[152] ? crc_ok[0] : \$2 ;
-  assign \$25  = \$23  & \$24 ;
-  assign \$26  = lc_repeat_seen | lc_skip_seen;
-  assign \$27  = \$26  | lc_zero_seen;
-  assign \$28  = \$25  & \$27 ;
-  assign \$29  = \$21  | \$28 ;
-  assign \$30  = \$29  | noisy;
-  assign doubtful = \$30  | delay_jump;
-  assign \$31  = crc_ok[0] & \$2 ;
-  assign \$32  = ~ spw_mismatch;
-  assign \$33  = \$31  & \$32 ;
-  assign \$34  = ~ noisy;
-  assign \$35  = \$33  & \$34 ;
-  assign \$36  = lc_repeat | lc_skip;
-  assign \$37  = \$36  | lc_zero;
-  assign \$38  = ~ \$37 ;
-  assign clean = \$35  & \$38 ;
-  assign \$39  = ~ { \$2 , crc_ok[0] };
-  assign crc_error = report_frame ? \$39  : 2'h0;
+  assign \$19  = ! frame_status;
+  assign \$20  = frame_status == 4'hf;
+  assign \$21  = \$19  | \$20 ;
+  assign passed = report_frame & \$21 ;
+  assign \$22  = crc_ok[0] & \$2 ;
+  assign \$23  = ~ \$22 ;
+  assign \$24  = \$23  | spw_mismatch;
+  assign \$25  = cfg[199] & cfg[207];
+  assign \$26  = cfg[156] | \$25 ;
+  assign \$27  = cfg[156] ? crc_ok[0] : \$2 ;
+  assign \$28  = \$26  & \$27 ;
+  assign \$29  = lc_repeat_seen | lc_skip_seen;
+  assign \$30  = \$29  | lc_zero_seen;
+  assign \$31  = \$28  & \$30 ;
+  assign \$32  = \$24  | \$31 ;
+  assign \$33  = \$32  | noisy;
+  assign doubtful = \$33  | delay_jump;
+  assign \$34  = crc_ok[0] & \$2 ;
+  assign \$35  = ~ spw_mismatch;
+  assign \$36  = \$34  & \$35 ;
+  assign \$37  = ~ noisy;
+  assign \$38  = \$36  & \$37 ;
+  assign \$39  = lc_repeat | lc_skip;
+  assign \$40  = \$39  | lc_zero;
+  assign \$41  = ~ \$40 ;
+  assign clean = \$38  & \$41 ;
+  assign \$42  = ~ { \$2 , crc_ok[0] };
+  assign crc_error = report_frame ? \$42  : 2'h0;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$93 ) begin end
     frame_status = 4'h0;
+    if (unconfirmed) begin
+      frame_status = 4'hf;
+    end
     if (delay_jump) begin
       frame_status = 4'he;
     end
@@ -35052,7 +35447,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5010$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5010$0  = \$2 ;
+  assign \port$5042$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -35063,31 +35458,32 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5010$0 , l
   assign \cfg.quiet_time  = cfg[136:125];
   assign \cfg.noise_limit  = cfg[140:137];
   assign \cfg.delay_tolerance  = cfg[144:141];
-  assign \cfg.w0  = cfg[156:145];
-  assign \cfg.w0.data_bits  = cfg[150:145];
-  assign \cfg.w0.nenw  = cfg[151];
-  assign \cfg.w0.lc  = cfg[152];
-  assign \cfg.w0.crc  = cfg[154:153];
-  assign \cfg.w0.gray  = cfg[155];
-  assign \cfg.w0.signed  = cfg[156];
-  assign \cfg.w0_crc  = cfg[194:157];
-  assign \cfg.w0_crc.width  = cfg[161:157];
-  assign \cfg.w0_crc.poly  = cfg[177:162];
-  assign \cfg.w0_crc.start  = cfg[193:178];
-  assign \cfg.w0_crc.inverted  = cfg[194];
-  assign \cfg.w1_enable  = cfg[195];
-  assign \cfg.w1  = cfg[207:196];
-  assign \cfg.w1.data_bits  = cfg[201:196];
-  assign \cfg.w1.nenw  = cfg[202];
-  assign \cfg.w1.lc  = cfg[203];
-  assign \cfg.w1.crc  = cfg[205:204];
-  assign \cfg.w1.gray  = cfg[206];
-  assign \cfg.w1.signed  = cfg[207];
-  assign \cfg.w1_crc  = cfg[245:208];
-  assign \cfg.w1_crc.width  = cfg[212:208];
-  assign \cfg.w1_crc.poly  = cfg[228:213];
-  assign \cfg.w1_crc.start  = cfg[244:229];
-  assign \cfg.w1_crc.inverted  = cfg[245];
-  assign \cfg.spw_check  = cfg[246];
-  assign \cfg.spw_tolerance  = cfg[254:247];
+  assign \cfg.confirm_frames  = cfg[148:145];
+  assign \cfg.w0  = cfg[160:149];
+  assign \cfg.w0.data_bits  = cfg[154:149];
+  assign \cfg.w0.nenw  = cfg[155];
+  assign \cfg.w0.lc  = cfg[156];
+  assign \cfg.w0.crc  = cfg[158:157];
+  assign \cfg.w0.gray  = cfg[159];
+  assign \cfg.w0.signed  = cfg[160];
+  assign \cfg.w0_crc  = cfg[198:161];
+  assign \cfg.w0_crc.width  = cfg[165:161];
+  assign \cfg.w0_crc.poly  = cfg[181:166];
+  assign \cfg.w0_crc.start  = cfg[197:182];
+  assign \cfg.w0_crc.inverted  = cfg[198];
+  assign \cfg.w1_enable  = cfg[199];
+  assign \cfg.w1  = cfg[211:200];
+  assign \cfg.w1.data_bits  = cfg[205:200];
+  assign \cfg.w1.nenw  = cfg[206];
+  assign \cfg.w1.lc  = cfg[207];
+  assign \cfg.w1.crc  = cfg[209:208];
+  assign \cfg.w1.gray  = cfg[210];
+  assign \cfg.w1.signed  = cfg[211];
+  assign \cfg.w1_crc  = cfg[249:212];
+  assign \cfg.w1_crc.width  = cfg[216:212];
+  assign \cfg.w1_crc.poly  = cfg[232:217];
+  assign \cfg.w1_crc.start  = cfg[248:233];
+  assign \cfg.w1_crc.inverted  = cfg[249];
+  assign \cfg.spw_check  = cfg[250];
+  assign \cfg.spw_tolerance  = cfg[258:251];
 endmodule

@@ -292,7 +292,10 @@ async def do_jitter(c, frames_n=1):
     """Edges jittered by up to +/-12.5 % of the MA period in each direction: up to +/-25 %
     between the master's MA edge and the SLO edge it causes (the protocol's limit)."""
     cable = c.tb.encoder.cable
-    await c.set_cable(Cable(length_m=cable.length_m, jitter_s=0.125 / c.ma_hz))
+    # The same cable, jittered: its length and extra round trip kept (the round-trip check
+    # stays settled on it; dropping the extra once moved it by microseconds, a DELAY_JUMP).
+    await c.set_cable(Cable(length_m=cable.length_m, extra_round_trip_s=cable.extra_round_trip_s,
+                            jitter_s=0.125 / c.ma_hz))
     for _ in range(frames_n):
         res, fault = await jittered_request(c)
         record = c.tb.encoder.records[-1]
@@ -897,10 +900,10 @@ NOISE_PRESETS = ("resolute_c_36", "resolute_fs_rsh")
 #: The line faults every noisy cycle may end in besides a frame status (docs/ports.md): a faked
 #: or hidden Ack or Start, a misread stop bit (end check), and issue 28's two statuses.
 NOISE_LINE_STATUSES = ["NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW", "NO_STOP",
-                       *NOISE_STATUSES]
+                       *NOISE_STATUSES, "UNCONFIRMED"]
 #: The noise defences all off (issue 28): noise_baseline measures the line without them.
 NOISE_DEFENCES_OFF = {"cfg_noise_limit": CHECK_OFF, "cfg_quiet_time": 1,
-                      "cfg_delay_tolerance": CHECK_OFF}
+                      "cfg_delay_tolerance": CHECK_OFF, "cfg_confirm_frames": CHECK_OFF}
 
 
 def noise_allowed(fmt):
@@ -1223,9 +1226,10 @@ DELAY_TOLERANCE = 2             # cfg_delay_tolerance's default
 
 
 async def step_frame(c, row, want, what):
-    """One request on a clean line that must end ``want`` (OK: every field as the reference
-    says; DELAY_JUMP: not valid, the round trip reported as measured); never a valid wrong
-    position. ``what`` names the frame in a failure."""
+    """One request on a clean line that must end ``want`` (OK, or UNCONFIRMED after a
+    DELAY_JUMP: every field as the reference says; DELAY_JUMP: not valid, the round trip
+    reported as measured); never a valid wrong position. ``what`` names the frame in a
+    failure."""
     c.queue(processing_time_s=c.processing())
     n_sent = len(c.tb.sent)
     res = await c.tb.request(limit_s=WATCHDOG_S)
@@ -1237,7 +1241,7 @@ async def step_frame(c, row, want, what):
              f"{positions(c, res)}")
     c.expect(name == want, f"{where}: status {name}, expected {want} (line delay "
              f"{res.fields['line_delay']}, settled {res.fields.get('settled_delay')})")
-    if want == "OK":
+    if want in ("OK", "UNCONFIRMED"):
         c.check_verdict(res, c.ref.judge(c.fmt, sent.bits, **c.spw_opts()), record, "cable_step")
     else:
         c.expect(res.valid == 0, f"{where}: valid with status {name}")
@@ -1272,7 +1276,8 @@ async def cable_step(dut):
     """A cable that changes length while powered, between cycles: steps of 5..20 m (5..20
     clocks of round trip at 100 MHz) up or down within 0..100 m, and wobbles within 1 m of the
     settled length, BiSS C 36 at 10 MHz. With the round-trip check at its defaults: after a
-    step exactly 4 frames DELAY_JUMP, then OK again (the check re-settled on the new delay); a
+    step exactly 4 frames DELAY_JUMP, then (on a core with cfg_confirm_frames) one frame
+    UNCONFIRMED, then OK again (the check re-settled on the new delay); a
     wobble never DELAY_JUMP; delay_settled / settled_delay follow. With cfg_delay_tolerance = 15
     (the check off): no
     DELAY_JUMP ever. Never a valid wrong position. On a core without the check (no
@@ -1313,8 +1318,12 @@ async def cable_step(dut):
                 res = await step_frame(c, row, "DELAY_JUMP", f"{what}, frame {k + 1}")
                 if k < n_jump - 1:
                     check_settled(c, res, f"{what}, frame {k + 1}", settled=before)
-            for k in range(c.rng.randint(1, 3)):
-                res = await step_frame(c, row, "OK", f"{what}, frame {n_jump + k + 1}")
+            # The frame after the last DELAY_JUMP is to be confirmed (docs/ports.md,
+            # "Confirmation after a fault"), then every frame is OK.
+            confirm = int(n_jump > 0 and c.tb.has_confirmation)
+            wants = ["UNCONFIRMED"] * confirm + ["OK"] * c.rng.randint(1, 3)
+            for k, want in enumerate(wants):
+                res = await step_frame(c, row, want, f"{what}, frame {n_jump + k + 1}")
                 if delay_check:
                     check_settled(c, res, f"{what}, frame {n_jump + k + 1}")
             if not wobble:

@@ -247,7 +247,12 @@ async def driver_handles_the_error_interrupt(dut):
         assert await drv.call("biss_irq_pending", byref(drv.bus)) == 0
         await drv.check("biss_irq_enable", byref(ch), 0)
         await tb.encoders_ready()
-        tb.check_result(n, await sample(drv, ch))       # and on with good frames
+        # The first frame after a fault is withheld (docs/ports.md, "Confirmation after a
+        # fault"), read as UNCONFIRMED; then on with good frames.
+        unconfirmed = await sample(drv, ch)
+        assert drv.lib.biss_status_name(unconfirmed["status"]).decode() == "UNCONFIRMED"
+        tb.check_result(n, unconfirmed, status="UNCONFIRMED")
+        tb.check_result(n, await sample(drv, ch))
         return res
 
     fail_once(1, lambda resp, t: replace(resp, fault="no_response"))
@@ -311,6 +316,7 @@ async def driver_refuses_bad_settings(dut):
         ("BISS_ERR_LINE_CHECK", cfg(quiet_time=1 << width("cfg_quiet.quiet_time"))),
         ("BISS_ERR_LINE_CHECK", cfg(noise_limit=1 << width("cfg_checks.noise_limit"))),
         ("BISS_ERR_LINE_CHECK", cfg(delay_tolerance=1 << width("cfg_checks.delay_tolerance"))),
+        ("BISS_ERR_LINE_CHECK", cfg(confirm_frames=1 << width("cfg_checks.confirm_frames"))),
     ]
     before = {r: await tb.read(r, 1) for r in ("cfg_ma", "cfg_period", "cfg_words", "cfg_checks",
                                                "cfg_quiet")}

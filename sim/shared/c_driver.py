@@ -44,7 +44,8 @@ class Config(Structure):
                 ("ack_limit", c_uint32), ("timeout_limit", c_uint32),
                 ("word", WordFormat * 2), ("word1_enable", c_bool), ("end_check", c_bool),
                 ("spw_check", c_bool), ("spw_tolerance", c_uint8),
-                ("quiet_time", c_uint16), ("noise_limit", c_uint8), ("delay_tolerance", c_uint8)]
+                ("quiet_time", c_uint16), ("noise_limit", c_uint8), ("delay_tolerance", c_uint8),
+                ("confirm_frames", c_uint8)]
 
 
 class Preset(Structure):

@@ -37,16 +37,19 @@ FAULTS = ["none", "crc_1bit", "crc_2bit", "crc_3to5bit", "crc_burst", "slo_stuck
 _FRAME_ERR = ["CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH"]
 #: Which statuses each fault kind can legitimately end in: the bins of the fault x status cross.
 _SOL = "SIGN_OF_LIFE"   # any frame after a lost or faulty LC frame may show it as a skip
-_LATE = ["OK", _SOL]     # a fault that came after the verdict leaves the frame as it was
+#: A frame that passed every check within cfg_confirm_frames frames of a fault (docs/ports.md,
+#: "Confirmation after a fault"): any frame that may follow one.
+_UNC = "UNCONFIRMED"
+_LATE = ["OK", _SOL, _UNC]   # a fault that came after the verdict leaves the frame as it was
 _NOISE = ["NOISY_LINE", "DELAY_JUMP"]   # issue 28's checks: noise seen, a round trip off
 LEGAL = {
-    "none": ["OK", _SOL],
+    "none": ["OK", _SOL, _UNC],
     "crc_1bit": _FRAME_ERR[:2],                    # errors sit in one word: never both
     "crc_2bit": _FRAME_ERR[:2],
     # beyond the Hamming distance a CRC-6 misses 1/64: the frame may pass, and then fail the
     # SPW plausibility or the sign-of-life check instead
-    "crc_3to5bit": ["OK", "SPW_MISMATCH", _SOL] + _FRAME_ERR[:2],
-    "crc_burst": ["OK", "SPW_MISMATCH", _SOL] + _FRAME_ERR[:2],
+    "crc_3to5bit": ["OK", "SPW_MISMATCH", _SOL, _UNC] + _FRAME_ERR[:2],
+    "crc_burst": ["OK", "SPW_MISMATCH", _SOL, _UNC] + _FRAME_ERR[:2],
     "slo_stuck_low": _LATE + _FRAME_ERR + ["NO_START", "DELAY_RANGE", "SLO_STUCK_LOW"],
     "slo_stuck_high": _LATE + _FRAME_ERR + ["NO_ACK", "NO_STOP"],     # NO_STOP: end check
     "unplug": ["NO_ACK"],
@@ -64,13 +67,13 @@ LEGAL = {
     "ack_forever": ["NO_START"],
     "timeout_stuck": ["SLO_STUCK_LOW"],
     # after a resync (a fault that went through the break) any LC is accepted: OK
-    "lc_repeat": [_SOL, "OK"],
-    "lc_skip": [_SOL, "OK"],
+    "lc_repeat": [_SOL, "OK", _UNC],
+    "lc_skip": [_SOL, "OK", _UNC],
     "lc_zero": [_SOL],
-    "lc_random": ["OK", _SOL],
-    "spw_offset": ["OK", "SPW_MISMATCH", _SOL],
+    "lc_random": ["OK", _SOL, _UNC],
+    "spw_offset": ["OK", "SPW_MISMATCH", _SOL, _UNC],
     "bad_config": ["BAD_CONFIG"],
-    "config_change": ["OK"],
+    "config_change": ["OK", _UNC],
     # the clean cycle requested right after a glitched one (glitch_immunity): it may clock the
     # tail of a slipped frame the encoder is still sending (issue 12)
     "after_glitch": _LATE + _FRAME_ERR + ["NO_ACK", "NO_START", "DELAY_RANGE", "NO_STOP"]
@@ -78,12 +81,13 @@ LEGAL = {
     # continuous noise (noise_baseline, noise_immunity; issue 28) on BiSS C 36 and BiSS Safety
     # RSH: a misread frame (the SPW and LC checks too), a faked or hidden Ack or Start, a
     # misread stop bit, issue 28's checks
-    "noise": ["OK", _SOL, "SPW_MISMATCH"] + _FRAME_ERR + ["NO_ACK", "NO_START", "DELAY_RANGE",
+    "noise": ["OK", _SOL, "SPW_MISMATCH", _UNC] + _FRAME_ERR + ["NO_ACK", "NO_START", "DELAY_RANGE",
                                                           "SLO_STUCK_LOW", "NO_STOP"] + _NOISE,
-    # a cable that changes length between cycles (cable_step): 4 frames DELAY_JUMP, then OK
-    "cable_step": ["OK", "DELAY_JUMP"],
+    # a cable that changes length between cycles (cable_step): 4 frames DELAY_JUMP, then one
+    # UNCONFIRMED, then OK
+    "cable_step": ["OK", "DELAY_JUMP", _UNC],
     # one 1..20 ns glitch per cycle (glitch_cost, BiSS C 36): the cycle it hit and the next
-    "glitch_cost": ["OK", "CRC_ERROR_WORD0", "NO_ACK", "NO_START", "DELAY_RANGE",
+    "glitch_cost": ["OK", _UNC, "CRC_ERROR_WORD0", "NO_ACK", "NO_START", "DELAY_RANGE",
                     "SLO_STUCK_LOW", "NO_STOP"] + _NOISE,
 }
 

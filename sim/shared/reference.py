@@ -11,6 +11,9 @@ encoder model sent (tb/encoder_model/frames.py) and on the rules in docs/ports.m
   break) the next non-zero LC is accepted as it is;
 * SPW plausibility: only with both CRCs good; the CPW's leading SPW-length bits against the SPW,
   distance taken both ways modulo 2^SPW bits, within the tolerance;
+* confirmation after a fault: after a cycle reported with any status but OK, ABORTED,
+  BAD_CONFIG and UNCONFIRMED, the next ``cfg_confirm_frames`` frames (0: 1; 15: never) that
+  would be OK are UNCONFIRMED instead;
 * configuration validity: the table of ``cfg_*`` ports.
 """
 
@@ -18,8 +21,8 @@ from dataclasses import dataclass, field
 
 import protocol_facts as facts
 from encoder_model import frames
-from master_contract import (CRC_CODE, CRC_MAX_WIDTH, FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS,
-                             STATUS_NAME)
+from master_contract import (CHECK_OFF, CONFIRM_FRAMES_DEFAULT, CONFIRM_NEUTRAL, CRC_CODE,
+                             CRC_MAX_WIDTH, FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS, STATUS_NAME)
 
 #: Cycles that end in the break (MA high 40 us): the encoder restarts its LC check from scratch.
 BREAK_STATUSES = {STATUS[n] for n in ("NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
@@ -49,18 +52,31 @@ class Verdict:
 
 
 class MasterReference:
-    """The master's state that outlives a cycle (the stored LC) and its frame verdict."""
+    """The master's state that outlives a cycle (the stored LC, the frames still to confirm)
+    and its frame verdict."""
 
     def __init__(self):
         self.last_lc = None         # None: not synchronised (the next LC is accepted as is)
+        self.confirm_setting = 0    # cfg_confirm_frames
+        self.confirm_left = 0       # frames still to confirm after the last fault
 
     def resync(self):
         self.last_lc = None
 
+    @property
+    def confirm_pending(self):
+        return self.confirm_left > 0 and self.confirm_setting != CHECK_OFF
+
     def after_status(self, status):
-        """Update for a cycle that ended without a frame."""
+        """Update for every reported cycle, with or without a frame, by its status."""
         if status in BREAK_STATUSES:
             self.resync()
+        name = STATUS_NAME[status]
+        if name == "UNCONFIRMED":
+            self.confirm_left -= 1
+        elif name not in CONFIRM_NEUTRAL:
+            setting = self.confirm_setting
+            self.confirm_left = 0 if setting == CHECK_OFF else setting or CONFIRM_FRAMES_DEFAULT
 
     def judge(self, fmt, bits, *, spw_check=None, spw_tolerance=1, commit=True,
               received_ok=None):
@@ -108,6 +124,8 @@ class MasterReference:
             v.status = STATUS["SIGN_OF_LIFE"]
         elif v.spw_mismatch:
             v.status = STATUS["SPW_MISMATCH"]
+        elif self.confirm_pending:
+            v.status = STATUS["UNCONFIRMED"]
         return v
 
 

@@ -16,8 +16,9 @@ from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Time
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
-from master_contract import (CA_COUNTERS, COUNTERS, CRC_CODE, crc_config, NOISE_COUNTERS, NOISE_FIELDS,
-                             STATUS, SYS_CLK_HZ, NOISE_CONFIG_DEFAULTS, port_position)
+from master_contract import (CA_COUNTERS, CHECK_OFF, CONFIRM_FRAMES_DEFAULT, CONFIRM_NEUTRAL,
+                             COUNTERS, CRC_CODE, crc_config, NOISE_COUNTERS, NOISE_FIELDS, STATUS,
+                             STATUS_NAME, SYS_CLK_HZ, NOISE_CONFIG_DEFAULTS, port_position)
 
 CLK_HZ = int(os.environ.get("BISS_CLK_HZ", str(SYS_CLK_HZ)))
 CLK_NS = 1e9 / CLK_HZ
@@ -26,7 +27,7 @@ INTERNAL_CLOCK = bool(os.environ.get("BISS_INTERNAL_CLOCK"))
 
 CFG_PORTS = ["cfg_ma_half_period", "cfg_request_period", "cfg_break_time", "cfg_ack_limit",
              "cfg_timeout_limit", "cfg_delay_limit", "cfg_end_check", "cfg_quiet_time",
-             "cfg_noise_limit", "cfg_delay_tolerance", "cfg_w1_enable", "cfg_spw_check",
+             "cfg_noise_limit", "cfg_delay_tolerance", "cfg_confirm_frames", "cfg_w1_enable", "cfg_spw_check",
              "cfg_spw_tolerance"] + [f"cfg_w{w}_{f}" for w in range(2)
                                      for f in ("data_bits", "nenw", "lc", "crc", "gray")]
 #: A word's two's complement setting, in builds with signed words.
@@ -106,6 +107,11 @@ class Testbench:
         #: The encoder's processing time (Ack to Start) is drawn from this range per frame,
         #: unless a queued Response gives it.
         self.processing_s = (2e-6, 16e-6)
+        # Confirmation after a fault (docs/ports.md): the test side's own account of it, kept
+        # by a watch on every ``done`` (_watch_confirmation), on cores with cfg_confirm_frames.
+        self.has_confirmation = hasattr(dut, "cfg_confirm_frames")
+        self.confirm_left = 0           # frames still to confirm after the last fault
+        self.confirm_was_pending = {}   # done time (s) -> the frame there was to be confirmed
 
     def _ports(self, names):
         return [n for n in names if self.words == 2 or not any(
@@ -143,8 +149,35 @@ class Testbench:
         dut.rst.value = 0
         await RisingEdge(dut.clk)
         self.t_clk0 = get_sim_time("step")
+        if self.has_confirmation:
+            cocotb.start_soon(self._watch_confirmation())
         # Power-up break: the core is busy for 40 us before it accepts requests.
         await self.wait_idle()
+
+    async def _watch_confirmation(self):
+        """Every reported cycle, by its status: after one with a status outside
+        CONFIRM_NEUTRAL the next ``cfg_confirm_frames`` frames (0: 1, 15: none) that pass every
+        check are UNCONFIRMED (docs/ports.md, "Confirmation after a fault"). Records, per
+        ``done``, whether its frame was to be confirmed: :meth:`expected_status` reads it."""
+        dut = self.dut
+        while True:
+            await RisingEdge(dut.done)
+            await ReadOnly()
+            setting = int(dut.cfg_confirm_frames.value)
+            pending = self.confirm_left > 0 and setting != CHECK_OFF
+            self.confirm_was_pending[get_sim_time("step") * 1e-12] = pending
+            name = STATUS_NAME.get(int(dut.status.value))
+            if name == "UNCONFIRMED":
+                self.confirm_left -= 1
+            elif name not in CONFIRM_NEUTRAL:
+                self.confirm_left = 0 if setting == CHECK_OFF else setting or CONFIRM_FRAMES_DEFAULT
+
+    def expected_status(self, res, status):
+        """The status a result must have that the protocol's checks judge ``status``: a frame
+        that passes them all is UNCONFIRMED within ``cfg_confirm_frames`` frames of a fault."""
+        if status == "OK" and self.confirm_was_pending.get(res.t_done_s, False):
+            return "UNCONFIRMED"
+        return status
 
     async def wait_idle(self, limit_s=1e-3):
         """Until ``busy`` is low: a start is only honoured then (else it is an overrun)."""
@@ -332,6 +365,7 @@ class Testbench:
         sent = sent or self.sent[-1]
         record = record or self.encoder.records[-1]
         view = view or self.fmt
+        status = self.expected_status(res, status)
         assert res.status == STATUS[status], f"status {res.status}, expected {status}"
         assert res.valid == int(status == "OK"), f"valid {res.valid} with status {status}"
         f = res.fields

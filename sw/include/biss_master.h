@@ -192,6 +192,8 @@ typedef struct {
     uint16_t quiet_time;            /* clocks SLO high before MA starts; 0: 1 us; 1: off */
     uint8_t noise_limit;            /* noise events a valid frame may have; 0: none; 15: off */
     uint8_t delay_tolerance;        /* clocks beyond the half period; 0: 2; 15: off */
+    uint8_t confirm_frames;         /* clean frames after a fault before one is valid (status
+                                       UNCONFIRMED until then); 0: 1; 15: off */
 } biss_config_t;
 
 /* A named encoder: its frame format. */
@@ -274,7 +276,8 @@ typedef enum {
     BISS_STATUS_BAD_CONFIG = 11,
     BISS_STATUS_NO_STOP = 12,
     BISS_STATUS_NOISY_LINE = 13,    /* more noise events than noise_limit (docs/ports.md) */
-    BISS_STATUS_DELAY_JUMP = 14     /* the round trip left the settled one */
+    BISS_STATUS_DELAY_JUMP = 14,    /* the round trip left the settled one */
+    BISS_STATUS_UNCONFIRMED = 15    /* passed every check, within confirm_frames of a fault */
 } biss_status_t;
 
 /* The name of a status code without the prefix ("NO_ACK"), "?" for an unknown one. */

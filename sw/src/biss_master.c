@@ -105,7 +105,7 @@ const char *biss_status_name(unsigned status)
     static const char *const names[] = {
         "OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH", "SIGN_OF_LIFE",
         "SPW_MISMATCH", "NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW", "ABORTED",
-        "BAD_CONFIG", "NO_STOP", "NOISY_LINE", "DELAY_JUMP",
+        "BAD_CONFIG", "NO_STOP", "NOISY_LINE", "DELAY_JUMP", "UNCONFIRMED",
     };
     return status < sizeof names / sizeof names[0] ? names[status] : "?";
 }
@@ -346,7 +346,8 @@ biss_err_t biss_config_check(const biss_channel_t *ch, const biss_config_t *cfg)
         return BISS_ERR_SPW_CHECK;
     if (!fits(cfg->quiet_time, MAX(CH(CFG_QUIET__QUIET_TIME)))
         || !fits(cfg->noise_limit, MAX(CH(CFG_CHECKS__NOISE_LIMIT)))
-        || !fits(cfg->delay_tolerance, MAX(CH(CFG_CHECKS__DELAY_TOLERANCE))))
+        || !fits(cfg->delay_tolerance, MAX(CH(CFG_CHECKS__DELAY_TOLERANCE)))
+        || !fits(cfg->confirm_frames, MAX(CH(CFG_CHECKS__CONFIRM_FRAMES))))
         return BISS_ERR_LINE_CHECK;
     return BISS_OK;
 }
@@ -388,7 +389,9 @@ biss_err_t biss_configure(biss_channel_t *ch, const biss_config_t *cfg)
                                      | PUT(cfg->spw_tolerance, CH(CFG_CHECKS__SPW_TOLERANCE))
                                      | PUT(cfg->noise_limit, CH(CFG_CHECKS__NOISE_LIMIT))
                                      | PUT(cfg->delay_tolerance,
-                                           CH(CFG_CHECKS__DELAY_TOLERANCE)));
+                                           CH(CFG_CHECKS__DELAY_TOLERANCE))
+                                     | PUT(cfg->confirm_frames,
+                                           CH(CFG_CHECKS__CONFIRM_FRAMES)));
     ch_wr(ch, CHANNEL_OFF(cfg_quiet), PUT(cfg->quiet_time, CH(CFG_QUIET__QUIET_TIME)));
     if (GET(ch_rd(ch, CHANNEL_OFF(state)), CH(STATE__CONFIG_ERROR)))
         return BISS_ERR_REFUSED;

@@ -31,13 +31,16 @@ from amaranth.hdl import (Assert, Assume, C, Cat, ClockDomain, Cover, Elaboratab
 from amaranth.lib import wiring
 
 import protocol_facts as facts
+from bissmaster.core.confirmation import Confirmation
 from bissmaster.core.frame_decoder import FrameDecoder
+from bissmaster.core.frame_verdict import FrameVerdict
 from bissmaster.core.ma_clock import MaClock
 from bissmaster.master import BissMaster
 from bissmaster.params import Crc
 from bissmaster.control.register_access import RegisterAccess
 from bissmaster.core.slo_sampler import SloSampler
-from master_contract import CA_STATUS, FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS
+from master_contract import (CA_STATUS, CHECK_OFF, CONFIRM_FRAMES_DEFAULT, CONFIRM_NEUTRAL,
+                             FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS)
 
 from .flow import Internals
 
@@ -107,6 +110,8 @@ INTERNALS = {
     "access.ending": ("signal", "sequencer", "ending"),         # the status a cancel ends with
     "access.header": ("signal", "sender", "header"),            # the header's CDM bits, MSB 1st
     "access.request": ("signal", "sequencer", "req"),           # the request latched at start
+    # Confirmation (in _JudgedFrame)
+    "confirm.left": ("signal", "confirmation", "left"),         # frames still to confirm
 }
 
 
@@ -1532,4 +1537,103 @@ class RegisterAccessEndsHarness(Harness):
             # Non-vacuity: a read of one byte ends OK.
             m.d.comb += Cover(dut.done & (status == ACCESS_OK) & pending & ~write
                               & (count == 1))
+        return m
+
+
+# =============================================================================================
+# (f) Confirmation after a fault: no valid frame within cfg_confirm_frames frames of a fault
+# =============================================================================================
+class _JudgedFrame(Elaboratable):
+    """FrameVerdict and Confirmation wired as :class:`~bissmaster.master.BissMaster` wires them
+    (the verdict's status and report into the confirmation, its ``pending`` back as
+    ``unconfirmed``). ``mutation="unwired"`` leaves ``unconfirmed`` at 0."""
+
+    def __init__(self, params, mutation=None):
+        self.verdict = FrameVerdict(params)
+        self.confirmation = Confirmation()
+        self.mutation = mutation
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.verdict = v = self.verdict
+        m.submodules.confirmation = c = self.confirmation
+        m.d.comb += [c.report.eq(v.report), c.status.eq(v.status)]
+        if self.mutation != "unwired":
+            m.d.comb += v.unconfirmed.eq(c.pending)
+        return m
+
+
+class ConfirmationHarness(Harness):
+    """The verdict and the confirmation: every verdict input free in every clock (a frame
+    report and a fault never in one clock, as the controller makes them; a fault's status one
+    of NO_ACK .. NO_STOP), ``cfg_confirm_frames`` one free value for the trace.
+
+    The harness keeps its own account from the reported statuses (docs/ports.md, "Confirmation
+    after a fault"): whether a fault (any status outside CONFIRM_NEUTRAL) was reported, and how
+    many frames that passed every check (status OK or UNCONFIRMED) were reported since the last
+    one. With N = the setting (0: 1) and the setting not 15, properties: (1) a frame is valid
+    only if no fault was reported yet or N such frames came since the last fault; (2) a frame
+    that passes every check with that behind it (or with the setting 15) is valid: exactly N
+    are withheld. Lemma (k-induction): the block's count of frames still to confirm is what
+    the account says. Mutation ``"unwired"``: the confirmation not wired into the verdict; (1)
+    must fail.
+    """
+
+    def __init__(self, params, lemmas=True, mutation=None):
+        super().__init__(params=params, lemmas=lemmas, mutation=mutation)
+
+    def elaborate(self, platform):
+        m = self._module()
+        dut = _JudgedFrame(self.params, self.mutation)
+        inside = Inside(dut)
+        m.submodules.dut = inside.fragment
+        v = dut.verdict
+
+        for name in ("report_frame", "fault", "crc_ok", "lc_repeat_seen", "lc_skip_seen",
+                     "lc_zero_seen", "spw_match", "noisy", "delay_jump"):
+            port = getattr(v, name)
+            m.d.comb += port.eq(self.any_seq(len(port), name))
+        cfg = Value.cast(v.cfg)
+        m.d.comb += cfg.eq(self.any_seq(len(cfg), "cfg"))
+        fault_status = Value.cast(v.fault_status)
+        m.d.comb += fault_status.eq(self.any_seq(len(fault_status), "fault_status"))
+        m.d.comb += [
+            Assume(~(v.report_frame & v.fault)),
+            Assume(~v.fault | ((fault_status >= STATUS["NO_ACK"])
+                               & (fault_status <= STATUS["NO_STOP"]))),
+        ]
+        setting = self.any_const(m, len(dut.confirmation.setting), "confirm_frames")
+        m.d.comb += dut.confirmation.setting.eq(setting)
+
+        # The account, from the reported status alone.
+        status = Value.cast(v.status)
+        top = 2**len(setting) - 1
+        fault = v.report & ~Cat(status == STATUS[n] for n in CONFIRM_NEUTRAL).any()
+        passed_now = v.report_frame & ((status == STATUS["OK"]) | (status == STATUS["UNCONFIRMED"]))
+        fault_seen = Signal()
+        passed = Signal(len(setting))           # frames that passed since the last fault
+        with m.If(fault):
+            m.d.sync += [fault_seen.eq(1), passed.eq(0)]
+        with m.Elif(passed_now & (passed != top)):
+            m.d.sync += passed.eq(passed + 1)
+        frames = Mux(setting == 0, CONFIRM_FRAMES_DEFAULT, setting)
+        on = setting != CHECK_OFF
+        owed = fault_seen & on & (passed < frames)
+
+        m.d.comb += [
+            Assert(~v.valid | ~owed, "valid only with N clean frames since the last fault"),
+            Assert(~passed_now | owed | v.valid, "a clean frame with N behind it is valid"),
+            Assert(~v.valid | v.report_frame, "valid only with a frame"),
+        ]
+        if self.lemmas:
+            left = inside("confirm.left")
+            m.d.comb += [
+                Assert(~owed | (left == frames - passed), "lemma: frames still owed"),
+                Assert(owed | ~on | (left == 0), "lemma: nothing owed"),
+            ]
+        # Non-vacuity: a frame withheld, then a valid one, after a fault, with N = 2.
+        m.d.comb += [
+            Cover(v.valid & fault_seen & (setting == 2)),
+            Cover(passed_now & ~v.valid & (setting == 2) & (passed == 1)),
+        ]
         return m

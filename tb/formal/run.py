@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 from bissmaster.params import Crc, MasterParams
 from formal import flow
-from formal.harnesses import (DecoderCrcHarness, LivenessLimits, MaClockHarness,
+from formal.harnesses import (ConfirmationHarness, DecoderCrcHarness, LivenessLimits, MaClockHarness,
                               MasterCrcHarness, MasterLivenessHarness, MasterMaHarness,
                               RegisterAccessEndsHarness, SamplerHarness,
                               SamplerImmunityHarness, SamplerCleanLineHarness)
@@ -136,6 +136,11 @@ CHECKS = [
           lambda: DecoderCrcHarness(TINY_DECODER, lemmas=False, mutation="no_invert"), True),
     Check("master_crc_small", "c", "BMC", 56, lambda: MasterCrcHarness(SMALL, CRC_LIMITS), False),
     Check("master_crc_small", "c", "cover", 60, lambda: MasterCrcHarness(SMALL, CRC_LIMITS), False),
+    # (f) no valid frame within cfg_confirm_frames frames of a fault (issue 28) ----------------
+    Check("confirmation", "f", "k-induction", 2, lambda: ConfirmationHarness(DEFAULT), True),
+    Check("confirmation", "f", "cover", 12, lambda: ConfirmationHarness(DEFAULT), True),
+    Check("confirmation_unwired", "f", "mutation", 6,
+          lambda: ConfirmationHarness(DEFAULT, lemmas=False, mutation="unwired"), True),
     # (e) every accepted register access ends within its frame bound (issue 13) ---------------
     Check("access_ends", "e", "k-induction", 1,
           lambda: RegisterAccessEndsHarness(start_wait=ACCESS_WAIT), True),

@@ -46,6 +46,9 @@ class FrameVerdict(wiring.Component):
     delay_jump : In(1)
         The round trip left the settled one (:class:`~bissmaster.core.delay_check.DelayCheck`),
         final long before ``done``.
+    unconfirmed : In(1)
+        A frame that passes every check is UNCONFIRMED, not OK
+        (:class:`~bissmaster.core.confirmation.Confirmation`, registered).
     lc_check : Out(1)
         Judge and store the LC (to the tracker).
     clean : Out(1)
@@ -56,6 +59,9 @@ class FrameVerdict(wiring.Component):
         The status to report (valid with ``report``).
     valid : Out(1)
         ``report_frame`` with status OK.
+    passed : Out(1)
+        ``report_frame`` with status OK or UNCONFIRMED: the frame passed every check (what the
+        control channel's CDS bit needs; it has its own CRC-4).
     doubtful : Out(1)
         The frame's status will not be OK (a CRC, sign-of-life, plausibility or line fault): the frame
         may have been misread, and the controller pauses before the next cycle. Not gated by
@@ -83,11 +89,13 @@ class FrameVerdict(wiring.Component):
             "spw_match": In(1),
             "noisy": In(1),
             "delay_jump": In(1),
+            "unconfirmed": In(1),
             "lc_check": Out(1),
             "clean": Out(1),
             "report": Out(1),
             "status": Out(Status),
             "valid": Out(1),
+            "passed": Out(1),
             "doubtful": Out(1),
             "word_crc_ok": Out(p.words),
             "lc_repeat": Out(1),
@@ -137,6 +145,7 @@ class FrameVerdict(wiring.Component):
             (self.spw_mismatch, Status.SPW_MISMATCH),
             (self.noisy, Status.NOISY_LINE),
             (self.delay_jump, Status.DELAY_JUMP),
+            (self.unconfirmed, Status.UNCONFIRMED),     # a frame that passed every check
         ]
         frame_status = Signal(Status)
         m.d.comb += frame_status.eq(Status.OK)
@@ -148,6 +157,8 @@ class FrameVerdict(wiring.Component):
             self.report.eq(self.report_frame | self.fault),
             self.status.eq(Mux(self.report_frame, frame_status, self.fault_status)),
             self.valid.eq(self.report_frame & (frame_status == Status.OK)),   # faults never OK
+            self.passed.eq(self.report_frame & ((frame_status == Status.OK)
+                                                | (frame_status == Status.UNCONFIRMED))),
             # The same verdict without the report gate: final from the decoder's ``done`` on
             # (CRCs, LC flags and the SPW check are registered and settled by then).
             self.doubtful.eq(~crcs_ok | self.spw_mismatch | lc_on & lc_word_crc_ok

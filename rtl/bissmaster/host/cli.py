@@ -365,6 +365,11 @@ def verdict(counts, err):
               f"does not answer as it should (power, cable, transceiver, MA rate, "
               f"configuration)", file=err)
         return EXIT_CODES["no encoder"]
+    if set(bad) == {"UNCONFIRMED"}:
+        print(f"bissmaster: {nbad} of {total} results not OK ({listed}): the first frame(s) "
+              f"after a fault, withheld until the line proves clean (cfg_confirm_frames; "
+              f"docs/ports.md, \"Confirmation after a fault\")", file=err)
+        return EXIT_CODES["encoder errors"]
     print(f"bissmaster: {nbad} of {total} results not OK ({listed}): the encoder "
           f"answers with errors (noise, cable, a wrong frame configuration)", file=err)
     return EXIT_CODES["encoder errors"]

@@ -101,7 +101,8 @@ FIELDS = {
                   "w1_nenw": (22, 1), "w1_lc": (23, 1), "w1_crc": (24, 2), "w1_gray": (26, 1),
                   "w1_signed": (27, 1), "w1_enable": (31, 1)},
     "cfg_checks": {"end_check": (0, 1), "spw_check": (1, 1), "spw_tolerance": (8, 8),
-                   "noise_limit": (16, 4), "delay_tolerance": (20, 4)},
+                   "noise_limit": (16, 4), "delay_tolerance": (20, 4),
+                   "confirm_frames": (24, 4)},
     "cfg_quiet": {"quiet_time": (0, 12)},
     "cfg_crc0": {"w0_crc_poly": (0, 16), "w0_crc_width": (16, 5), "w0_crc_inverted": (24, 1)},
     "cfg_crc0_start": {"w0_crc_start": (0, 16)},
@@ -157,12 +158,13 @@ STATUS = {
     "OK": 0, "CRC_ERROR_WORD0": 1, "CRC_ERROR_WORD1": 2, "CRC_ERROR_BOTH": 3,
     "SIGN_OF_LIFE": 4, "SPW_MISMATCH": 5, "NO_ACK": 6, "NO_START": 7, "DELAY_RANGE": 8,
     "SLO_STUCK_LOW": 9, "ABORTED": 10, "BAD_CONFIG": 11, "NO_STOP": 12,
-    "NOISY_LINE": 13, "DELAY_JUMP": 14,
+    "NOISY_LINE": 13, "DELAY_JUMP": 14, "UNCONFIRMED": 15,
 }
 STATUS_NAME = {code: name for name, code in STATUS.items()}
 #: Statuses of a received frame (its position, nE/nW, CRC verdicts and line delay are new).
 FRAME_STATUSES = frozenset(("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH",
-                            "SIGN_OF_LIFE", "SPW_MISMATCH", "NOISY_LINE", "DELAY_JUMP"))
+                            "SIGN_OF_LIFE", "SPW_MISMATCH", "NOISY_LINE", "DELAY_JUMP",
+                            "UNCONFIRMED"))
 #: Statuses that say the encoder did not answer as an encoder does (no frame, or a line that
 #: never goes back to idle): unplugged, unpowered, a broken wire, a wrong MA rate.
 NO_ENCODER_STATUSES = frozenset(("NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",

@@ -3,10 +3,11 @@
 Cycle conventions and where expected values come from: ``block_sim.py``. The rules (the
 block's docstring, docs/ports.md "Status codes"): a frame's status is the lowest code that
 applies, CRC (both, word 0, word 1) > sign of life > SPW mismatch > NOISY_LINE > DELAY_JUMP >
-OK (the line checks last); word 1 not in the frame
+UNCONFIRMED > OK (the line checks last, then the confirmation after a fault); word 1 not in the frame
 counts as CRC-good; the LC is judged only for a reported frame whose LC-carrying word passed its
 CRC; the SPW check only between two CRC-good words with the check and word 1 enabled; without a
-frame the controller's fault status passes through; ``valid`` is a reported frame with OK.
+frame the controller's fault status passes through; ``valid`` is a reported frame with OK;
+``passed`` one with OK or UNCONFIRMED.
 """
 
 import itertools
@@ -23,14 +24,14 @@ from testkit.block_sim import pack, run_clocks
 TWO = MasterParams()
 ONE = MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),))
 OUTPUTS = ["doubtful", "lc_check", "report", "status", "valid", "word_crc_ok", "lc_repeat",
-           "lc_skip", "lc_zero", "spw_mismatch", "crc_error", "clean"]
+           "lc_skip", "lc_zero", "spw_mismatch", "crc_error", "clean", "passed"]
 #: The statuses that end a cycle without a frame (docs/ports.md: codes 6..12).
 FAULT_NAMES = [name for name, code in STATUS.items()
                if STATUS["NO_ACK"] <= code <= STATUS["NO_STOP"]]
 
 
 def _inputs(p, *, w0_lc=0, w1_lc=0, w1_enable=0, spw_check=0, report_frame=0, fault=0,
-            fault_status=0, crc_ok=0, seen=(0, 0, 0), spw_match=0, noisy=0, delay_jump=0):
+            fault_status=0, crc_ok=0, seen=(0, 0, 0), spw_match=0, noisy=0, delay_jump=0, unconfirmed=0):
     cfg = {"ma_half_period": 5, "w0": {"data_bits": 20, "lc": w0_lc, "crc": 1}}
     if p.words == 2:
         cfg.update(w1_enable=w1_enable, spw_check=spw_check,
@@ -38,7 +39,7 @@ def _inputs(p, *, w0_lc=0, w1_lc=0, w1_enable=0, spw_check=0, report_frame=0, fa
     step = {"cfg": pack(config_layout(p), cfg), "report_frame": report_frame, "fault": fault,
             "fault_status": fault_status, "crc_ok": crc_ok, "lc_repeat_seen": seen[0],
             "lc_skip_seen": seen[1], "lc_zero_seen": seen[2], "noisy": noisy,
-            "delay_jump": delay_jump}
+            "delay_jump": delay_jump, "unconfirmed": unconfirmed}
     if p.words == 2:
         step["spw_match"] = spw_match
     return step
@@ -74,6 +75,8 @@ def reference(p, s, cfg):
         status = STATUS["NOISY_LINE"]
     elif s["delay_jump"]:
         status = STATUS["DELAY_JUMP"]
+    elif s["unconfirmed"]:
+        status = STATUS["UNCONFIRMED"]
     else:
         status = STATUS["OK"]
     ok_bits = ok0 | (int(ok1) << 1) if two else ok0
@@ -85,6 +88,7 @@ def reference(p, s, cfg):
     clean = int(bool(ok0 and ok1 and not spw and not s["noisy"] and not any(flags)))
     out = {"doubtful": doubtful, "clean": clean, "lc_check": lc_check, "report": int(bool(rf or s["fault"])),
            "valid": int(bool(rf and status == STATUS["OK"])), "word_crc_ok": ok_bits,
+           "passed": int(bool(rf and status in (STATUS["OK"], STATUS["UNCONFIRMED"]))),
            "lc_repeat": flags[0], "lc_skip": flags[1], "lc_zero": flags[2],
            "crc_error": (~ok_bits & (2**p.words - 1)) if rf else 0}
     if rf:
@@ -123,11 +127,12 @@ def _check(p, cases):
 def test_frame_verdict_reported_frame_exhaustive(p, report_frame):
     cases = []
     for cfg in _settings(p):
-        for crc_ok, seen, match, noisy, jump in itertools.product(
+        for crc_ok, seen, match, noisy, jump, unconfirmed in itertools.product(
                 range(2**p.words), itertools.product((0, 1), repeat=3),
-                (0, 1) if p.words == 2 else (0,), (0, 1), (0, 1)):
+                (0, 1) if p.words == 2 else (0,), (0, 1), (0, 1), (0, 1)):
             cases.append((cfg, {"report_frame": report_frame, "crc_ok": crc_ok, "seen": seen,
-                                "spw_match": match, "noisy": noisy, "delay_jump": jump}))
+                                "spw_match": match, "noisy": noisy, "delay_jump": jump,
+                                "unconfirmed": unconfirmed}))
     _check(p, cases)
 
 
@@ -140,7 +145,7 @@ def test_frame_verdict_fault_passes_through(p, name):
         for crc_ok, seen, match in itertools.product(range(2**p.words), ((0, 0, 0), (1, 1, 1)),
                                                      (0, 1)):
             cases.append((cfg, {"fault": 1, "fault_status": STATUS[name], "crc_ok": crc_ok,
-                                "seen": seen, "spw_match": match}))
+                                "seen": seen, "spw_match": match, "unconfirmed": 1}))
     _check(p, cases)
 
 
@@ -170,6 +175,12 @@ PRIORITY = [
      {"crc_ok": 0b11, "spw_match": 1}, "OK"),
     ("no_spw_check_ok", {"w1_enable": 1, "w1_lc": 1}, {"crc_ok": 0b11}, "OK"),
     ("lc_seen_but_no_lc_configured", {"w1_enable": 1}, {"crc_ok": 0b11, "seen": (1, 1, 1)}, "OK"),
+    ("unconfirmed_only_when_every_check_passes", {"w1_enable": 1, "w1_lc": 1, "spw_check": 1},
+     {"crc_ok": 0b11, "spw_match": 1, "unconfirmed": 1}, "UNCONFIRMED"),
+    ("delay_jump_over_unconfirmed", {"w1_enable": 1}, {"crc_ok": 0b11, "delay_jump": 1,
+                                                       "unconfirmed": 1}, "DELAY_JUMP"),
+    ("crc_over_unconfirmed", {"w1_enable": 0}, {"crc_ok": 0b00, "unconfirmed": 1},
+     "CRC_ERROR_WORD0"),
 ]
 
 
