@@ -83,6 +83,28 @@ QUIET_TIME_S = 1e-6
 #: statuses after which it does not apply (they say nothing about the line).
 CONFIRM_FRAMES_DEFAULT = 1
 CONFIRM_NEUTRAL = ("OK", "ABORTED", "BAD_CONFIG", "UNCONFIRMED")
+
+
+class ConfirmationAccount:
+    """The confirmation rule as docs/ports.md states it, kept from the reported statuses: after
+    a status outside CONFIRM_NEUTRAL, the next ``cfg_confirm_frames`` frames (0: 1; 15: none)
+    that pass every check are UNCONFIRMED. The setting is read when a fault is reported and
+    while frames are owed (15 ends the debt at once)."""
+
+    def __init__(self):
+        self.left = 0
+
+    def pending(self, setting):
+        """The next frame that passes every check is UNCONFIRMED."""
+        return self.left > 0 and setting != CHECK_OFF
+
+    def reported(self, status, setting):
+        """Account for a reported cycle's status code."""
+        name = STATUS_NAME[status]
+        if name == "UNCONFIRMED":
+            self.left -= 1
+        elif name not in CONFIRM_NEUTRAL:
+            self.left = 0 if setting == CHECK_OFF else setting or CONFIRM_FRAMES_DEFAULT
 DELAY_TOLERANCE_DEFAULT = 2
 DELAY_SETTLE_FRAMES = 4
 

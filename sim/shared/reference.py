@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 
 import protocol_facts as facts
 from encoder_model import frames
-from master_contract import (CHECK_OFF, CONFIRM_FRAMES_DEFAULT, CONFIRM_NEUTRAL, CRC_CODE,
-                             CRC_MAX_WIDTH, FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS, STATUS_NAME)
+from master_contract import (CRC_CODE, CRC_MAX_WIDTH, FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS,
+                             STATUS_NAME, ConfirmationAccount)
 
 #: Cycles that end in the break (MA high 40 us): the encoder restarts its LC check from scratch.
 BREAK_STATUSES = {STATUS[n] for n in ("NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
@@ -58,25 +58,16 @@ class MasterReference:
     def __init__(self):
         self.last_lc = None         # None: not synchronised (the next LC is accepted as is)
         self.confirm_setting = 0    # cfg_confirm_frames
-        self.confirm_left = 0       # frames still to confirm after the last fault
+        self.confirmation = ConfirmationAccount()
 
     def resync(self):
         self.last_lc = None
-
-    @property
-    def confirm_pending(self):
-        return self.confirm_left > 0 and self.confirm_setting != CHECK_OFF
 
     def after_status(self, status):
         """Update for every reported cycle, with or without a frame, by its status."""
         if status in BREAK_STATUSES:
             self.resync()
-        name = STATUS_NAME[status]
-        if name == "UNCONFIRMED":
-            self.confirm_left -= 1
-        elif name not in CONFIRM_NEUTRAL:
-            setting = self.confirm_setting
-            self.confirm_left = 0 if setting == CHECK_OFF else setting or CONFIRM_FRAMES_DEFAULT
+        self.confirmation.reported(status, self.confirm_setting)
 
     def judge(self, fmt, bits, *, spw_check=None, spw_tolerance=1, commit=True,
               received_ok=None):
@@ -124,7 +115,7 @@ class MasterReference:
             v.status = STATUS["SIGN_OF_LIFE"]
         elif v.spw_mismatch:
             v.status = STATUS["SPW_MISMATCH"]
-        elif self.confirm_pending:
+        elif self.confirmation.pending(self.confirm_setting):
             v.status = STATUS["UNCONFIRMED"]
         return v
 

@@ -16,9 +16,9 @@ from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Time
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
-from master_contract import (CA_COUNTERS, CHECK_OFF, CONFIRM_FRAMES_DEFAULT, CONFIRM_NEUTRAL,
-                             COUNTERS, CRC_CODE, crc_config, NOISE_COUNTERS, NOISE_FIELDS, STATUS,
-                             STATUS_NAME, SYS_CLK_HZ, NOISE_CONFIG_DEFAULTS, port_position)
+from master_contract import (CA_COUNTERS, COUNTERS, CRC_CODE, crc_config, NOISE_COUNTERS, NOISE_FIELDS,
+                             STATUS, SYS_CLK_HZ, NOISE_CONFIG_DEFAULTS, ConfirmationAccount,
+                             port_position)
 
 CLK_HZ = int(os.environ.get("BISS_CLK_HZ", str(SYS_CLK_HZ)))
 CLK_NS = 1e9 / CLK_HZ
@@ -110,7 +110,7 @@ class Testbench:
         # Confirmation after a fault (docs/ports.md): the test side's own account of it, kept
         # by a watch on every ``done`` (_watch_confirmation), on cores with cfg_confirm_frames.
         self.has_confirmation = hasattr(dut, "cfg_confirm_frames")
-        self.confirm_left = 0           # frames still to confirm after the last fault
+        self.confirmation = ConfirmationAccount()
         self.confirm_was_pending = {}   # done time (s) -> the frame there was to be confirmed
 
     def _ports(self, names):
@@ -164,13 +164,9 @@ class Testbench:
             await RisingEdge(dut.done)
             await ReadOnly()
             setting = int(dut.cfg_confirm_frames.value)
-            pending = self.confirm_left > 0 and setting != CHECK_OFF
-            self.confirm_was_pending[get_sim_time("step") * 1e-12] = pending
-            name = STATUS_NAME.get(int(dut.status.value))
-            if name == "UNCONFIRMED":
-                self.confirm_left -= 1
-            elif name not in CONFIRM_NEUTRAL:
-                self.confirm_left = 0 if setting == CHECK_OFF else setting or CONFIRM_FRAMES_DEFAULT
+            self.confirm_was_pending[get_sim_time("step") * 1e-12] = \
+                self.confirmation.pending(setting)
+            self.confirmation.reported(int(dut.status.value), setting)
 
     def expected_status(self, res, status):
         """The status a result must have that the protocol's checks judge ``status``: a frame

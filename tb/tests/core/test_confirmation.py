@@ -12,7 +12,7 @@ import random
 import pytest
 
 from bissmaster.core.confirmation import Confirmation
-from master_contract import CHECK_OFF, CONFIRM_FRAMES_DEFAULT, CONFIRM_NEUTRAL, STATUS
+from master_contract import CHECK_OFF, CONFIRM_NEUTRAL, STATUS, ConfirmationAccount
 
 from testkit.block_sim import run_clocks
 
@@ -20,20 +20,14 @@ FAULTS = [code for name, code in STATUS.items() if name not in CONFIRM_NEUTRAL]
 NEUTRAL_NO_FRAME = [STATUS["ABORTED"], STATUS["BAD_CONFIG"]]
 
 
-class Reference:
-    """The rule, as a user reads it."""
-
-    def __init__(self):
-        self.left = 0
+class Reference(ConfirmationAccount):
+    """The rule, as a user reads it (master_contract)."""
 
     def pending(self, setting):
-        return int(self.left > 0 and setting != CHECK_OFF)
+        return int(super().pending(setting))
 
     def report(self, status, setting):
-        if status == STATUS["UNCONFIRMED"]:
-            self.left -= 1
-        elif status in FAULTS:
-            self.left = 0 if setting == CHECK_OFF else setting or CONFIRM_FRAMES_DEFAULT
+        self.reported(status, setting)
 
 
 def _run(steps):
