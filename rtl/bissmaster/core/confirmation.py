@@ -8,7 +8,8 @@ from ..params import LINE_CHECK_WIDTH, Status
 
 
 class Confirmation(wiring.Component):
-    """Withholds ``valid`` from the first frames after a fault (issue 28; docs/ports.md, *Noise*).
+    """Withholds ``valid`` from the first frames after a fault (issue 28; docs/ports.md,
+    *Confirmation after a fault*).
 
     A cycle that ends with any status but OK, ABORTED, BAD_CONFIG or UNCONFIRMED is evidence
     that the line (or the encoder) was wrong in that cycle: a CRC error, a noise event, a lost

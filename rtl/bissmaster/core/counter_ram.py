@@ -64,7 +64,7 @@ class CounterRam(wiring.Component):
         self._slots = tuple(slots)
         self._width = width
         self.words = (len(self._slots) + 1) // 2
-        names = [name for name in self._slots if name is not None]
+        self._names = names = [name for name in self._slots if name is not None]
         if len(set(names)) != len(names):
             raise ValueError(f"counter names repeat: {self._slots}")
         super().__init__({
@@ -79,7 +79,7 @@ class CounterRam(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         words = self.words
-        names = [name for name in self._slots if name is not None]
+        names = self._names
         full = 2**self._width - 1
         # A memory, not registers (issue 27): Yosys maps it to distributed RAM on ECP5
         # (TRELLIS_DPR16X4) and Vivado/Quartus infer the same from the generated Verilog; the
