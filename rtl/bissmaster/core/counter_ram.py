@@ -108,19 +108,18 @@ class CounterRam(wiring.Component):
         # taken. With the reset in the condition, Icarus runs the process when reset falls.
         events = Signal.like(self.events, name="events_reg", reset_less=True)
         clear = Signal(name="clear_reg", reset_less=True)
-        for name in names:
+
+        def take(strobe, reg):
             with m.If(ResetSignal()):
-                m.d.sync += events[name].eq(0)
-            with m.Elif(self.events[name]):
-                m.d.sync += events[name].eq(1)
+                m.d.sync += reg.eq(0)
+            with m.Elif(strobe):
+                m.d.sync += reg.eq(1)
             with m.Else():
-                m.d.sync += events[name].eq(0)
-        with m.If(ResetSignal()):
-            m.d.sync += clear.eq(0)
-        with m.Elif(self.clear):
-            m.d.sync += clear.eq(1)
-        with m.Else():
-            m.d.sync += clear.eq(0)
+                m.d.sync += reg.eq(0)
+
+        for name in names:
+            take(self.events[name], events[name])
+        take(self.clear, clear)
         slots = self._slots + (None,) * (2 * words - len(self._slots))
         event = [events[name] if name is not None else C(0) for name in slots]
         # A word is taken again at most ``words + 3`` clocks after it was, with at most an
