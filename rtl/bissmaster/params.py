@@ -82,7 +82,7 @@ class AccessStatus(enum.IntEnum, shape=3):
     NO_ANSWER = 2       # no IDL0 from the slave: CDS always 0 (unidirectional encoder, no slave)
     REFUSED = 3         # R/W echo, slave start bit or P echo missing, or a write echoed differently
     ABORTED = 4         # ``ca_abort``: the control frame was cancelled with 14 CDM = 0 frames
-    DATA_FAULT = 5      # a frame carrying a control bit did not end OK (status != OK)
+    DATA_FAULT = 5      # a frame carrying a control bit did not pass (status not OK or UNCONFIRMED)
     BAD_REQUEST = 6     # byte count 0 or > 64, or address + count beyond 0x7F; nothing sent
 
 #: Width of the MA half-period setting, and of the timers that count within one MA phase.
