@@ -44,6 +44,11 @@ def config_layout(params):
         if params.custom_crc:
             members["w1_crc"] = CRC_SETTINGS
         members.update({"spw_check": 1, "spw_tolerance": 8})
+    # SSI mode (docs/ports.md, "SSI mode"): ``cfg_ssi``, the round trip ``cfg_ssi_delay``, one
+    # error bit after the position and its polarity, the double transmission.
+    if params.ssi:
+        members.update({"ssi": 1, "ssi_delay": params.delay_limit_width, "ssi_error": 1,
+                        "ssi_error_low": 1, "ssi_double": 1})
     return data.StructLayout(members)
 
 

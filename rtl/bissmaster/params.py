@@ -167,6 +167,12 @@ class MasterParams:
         Accept ``cfg_wN_signed``: a word's data may be two's complement, sign-extended to its
         port's width (one LUT per data bit). Without it those ports are not built and every
         word is unsigned.
+    ssi : bool
+        Accept ``cfg_ssi``: the channel may run SSI frames instead of BiSS (docs/ports.md,
+        "SSI mode"): no Ack, Start or CDS, word 0 clocked out directly, the round trip set on
+        ``cfg_ssi_delay``, an optional error bit (``cfg_ssi_error``, ``cfg_ssi_error_low``) and
+        an optional double transmission (``cfg_ssi_double``). Without it those ports are not
+        built.
     register_access : bool
         Build the register-access engine (control channel, CDM/CDS; the ``ca_*`` ports) and
         the CDM hold of MA. Without it MA is never held low after a frame.
@@ -184,6 +190,7 @@ class MasterParams:
     timestamp_width: int = 32
     custom_crc: bool = True
     signed_words: bool = True
+    ssi: bool = True
     register_access: bool = True
     start_wait_frames: int = 16
 
@@ -228,6 +235,8 @@ class MasterParams:
             raise ValueError(f"custom_crc must be a bool, not {self.custom_crc!r}")
         if not isinstance(self.signed_words, bool):
             raise ValueError(f"signed_words must be a bool, not {self.signed_words!r}")
+        if not isinstance(self.ssi, bool):
+            raise ValueError(f"ssi must be a bool, not {self.ssi!r}")
         if not isinstance(self.register_access, bool):
             raise ValueError(f"register_access must be a bool, not {self.register_access!r}")
         if not isinstance(self.start_wait_frames, int) or not 1 <= self.start_wait_frames <= 255:
@@ -301,6 +310,7 @@ class MasterParams:
             f"counter_width   = {self.counter_width}" + ("" if self.counters else " (no counters)")
             + (" in memory (count_addr, count_data)" if self.counter_ram else ""),
             f"timestamp_width = {self.timestamp_width}" + ("" if self.timestamped else " (no timestamp)"),
+            *(["ssi             = on (cfg_ssi*)"] if self.ssi else []),
             *([f"register_access = on, start wait {self.start_wait_frames} frames"]
               if self.register_access else []),
             f"defaults (cfg = 0): break {self.break_default}, ack limit {self.ack_limit_default}, "

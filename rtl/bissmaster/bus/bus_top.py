@@ -63,7 +63,7 @@ BUSES = {
 #: Channel signals of the register map that the channel makes itself (not core ports).
 CHANNEL_GLUE = ("trigger_enable", "frame_done", "frame_error", "done_count", "cap_data_bits_w0",
                 "cap_data_bits_w1", "cap_timer_width", "cap_counters", "cap_timestamp",
-                "cap_register_access")
+                "cap_register_access", "cap_ssi")
 #: Pulses of the bank taken into a flip-flop beside the core, so they reach it one clock
 #: later: the bank's pulse register sits by the bank, and with several channels the route from
 #: ``ctrl.abort``'s into a core's controller and timers was the critical path
@@ -179,6 +179,7 @@ class BusChannel(wiring.Component):
             "cap_counters": int(p.counters),
             "cap_timestamp": int(p.timestamped),
             "cap_register_access": int(p.register_access),
+            "cap_ssi": int(p.ssi),
         }
         # The map's signals, by name: to and from the core's ports, or made here.
         for name, member in regs.signature.members.items():
