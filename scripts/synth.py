@@ -23,6 +23,9 @@ builds it (its module ``<top>.ch0.core`` from the same Verilog, out of context),
 bus's own share is the bus top minus N times that core, and the area split into bus adapter,
 register bank, channel glue and cores (``-noflatten``).
 
+A preset with options added (:data:`VARIANT_CONFIGS`: ``biss-c-ssi``, the ``biss-c`` core
+with SSI mode) tells what the option costs.
+
 The control for the bus tops' Fmax (:data:`MULTI_CORE_CONFIGS`: ``cores-4``) is as many
 copies of the core in one harness, without the bus: it separates what the channel count costs
 (a larger placement, longer routes) from what the bus adds.
@@ -86,7 +89,13 @@ BUS_CONFIGS = {
 MULTI_CORE_CONFIGS = {
     "cores-4": (4, "biss-c", ("ecp5",)),
 }
-CONFIGS = PRESET_CONFIGS + tuple(BUS_CONFIGS) + tuple(MULTI_CORE_CONFIGS)
+#: A preset with options added (later options win): name -> (preset, options, what it is).
+#: ``biss-c-ssi`` is what SSI mode (issue 26) costs a BiSS C core.
+VARIANT_CONFIGS = {
+    "biss-c-ssi": ("biss-c", ["--ssi", "1"], "the `biss-c` core with SSI mode (`--ssi 1`)"),
+}
+CONFIGS = (PRESET_CONFIGS + tuple(VARIANT_CONFIGS) + tuple(BUS_CONFIGS)
+           + tuple(MULTI_CORE_CONFIGS))
 
 #: arch -> yosys synth command, nextpnr tool and device options, Fmax target (MHz), and the
 #: nextpnr clock constraint (MHz; a little above the target so that the placer works for it);
@@ -618,6 +627,10 @@ def main(argv=None):
             desc = (f"{copies} `{preset}` cores side by side in one harness, no bus (the "
                     "control for the bus tops' Fmax)")
             cfg_archs = [a for a in archs if a in multi_archs or a in AREA_ONLY_ARCHS]
+        elif name in VARIANT_CONFIGS:
+            preset, extra, desc = VARIANT_CONFIGS[name]
+            module, channels, cfg_archs = "biss_master", 1, archs
+            opts = ["--preset", preset, *extra]
         else:
             module, channels, desc, opts, cfg_archs = "biss_master", 1, PRESETS[name][0], \
                 ["--preset", name], archs

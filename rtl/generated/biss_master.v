@@ -1134,7 +1134,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$2205$272 (cycle[274:272]),
+    .\port$2183$272 (cycle[274:272]),
     .receiver_clear(\clear$200 ),
     .rst(rst),
     .sample(sample),
@@ -1200,7 +1200,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .ssi_double(cycle[274]),
     .ssi_error(cycle[272]),
     .start_slot(start_slot),
-    .\started$14 (started),
+    .\started$15 (started),
     .w1_enable(cycle[199]),
     .words(\words$246 )
   );
@@ -1245,7 +1245,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$2205$259 (cycle[271:259]),
+    .\port$2183$259 (cycle[271:259]),
     .receiver_clear(\clear$200 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -1268,7 +1268,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$211 ),
     .load(load),
-    .\port$2193$0 (\bit ),
+    .\port$2171$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1334,7 +1334,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$1632$0 (\$28 ),
+    .\port$1610$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -5576,7 +5576,7 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$2205$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$2183$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire [6:0] \$1 ;
@@ -6152,15 +6152,15 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   reg \$612 ;
   reg [15:0] \$613 ;
   reg \$614 ;
-  reg \$615 ;
-  reg [6:0] \$616 ;
+  reg [6:0] \$615 ;
+  reg \$616 ;
   reg \$617 ;
   reg \$618 ;
   reg \$619 ;
   wire \$62 ;
   reg \$620 ;
-  reg \$621 ;
-  reg [2:0] \$622 ;
+  reg [2:0] \$621 ;
+  reg \$622 ;
   reg [15:0] \$623 ;
   reg \$624 ;
   reg \$625 ;
@@ -6279,8 +6279,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$2205$272 ;
-  wire [2:0] \port$2205$272 ;
+  input [2:0] \port$2183$272 ;
+  wire [2:0] \port$2183$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -6347,8 +6347,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$367  = ssi & \port$2205$272 [0];
-  assign \$368  = ~ \port$2205$272 [1];
+  assign \$367  = ssi & \port$2183$272 [0];
+  assign \$368  = ~ \port$2183$272 [1];
   assign \$369  = \$367  & \$368 ;
   assign \$370  = \bit  ^ \$369 ;
   assign \$371  = ~ words[6];
@@ -6630,21 +6630,21 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   always @(posedge clk)
     slots_full <= \$614 ;
   always @(posedge clk)
-    started <= \$615 ;
+    idx <= \$615 ;
   always @(posedge clk)
-    idx <= \$616 ;
+    in_data <= \$616 ;
   always @(posedge clk)
-    in_data <= \$617 ;
+    in_lc <= \$617 ;
   always @(posedge clk)
-    in_lc <= \$618 ;
+    in_crc <= \$618 ;
   always @(posedge clk)
-    in_crc <= \$619 ;
+    in_top <= \$619 ;
   always @(posedge clk)
-    in_top <= \$620 ;
+    word <= \$620 ;
   always @(posedge clk)
-    word <= \$621 ;
+    decoder_fsm_state <= \$621 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$622 ;
+    started <= \$622 ;
   always @(posedge clk)
     start_slot <= \$623 ;
   always @(posedge clk)
@@ -6669,18 +6669,18 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
     cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$2205$272 [0];
+  assign \$3  = ssi & \port$2183$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$2205$272 [0];
+  assign \$6  = ssi & \port$2183$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$2205$272 [0];
+  assign \$9  = ssi & \port$2183$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$2205$272 [0];
+  assign \$14  = ssi & \port$2183$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$2205$272 [0];
+  assign \$18  = ssi & \port$2183$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -6725,7 +6725,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   assign \$66  = idx == \$65 ;
   assign \$67  = word_count - 1'h1;
   assign \$68  = word == \$67 ;
-  assign \$69  = ssi & \port$2205$272 [2];
+  assign \$69  = ssi & \port$2183$272 [2];
   assign \$70  = word + 1'h1;
   assign \$71  = idx + 1'h1;
   assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -7016,7 +7016,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   assign \$357  = \$354  & \$356 ;
   assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
   assign \$359  = ~ words[6];
-  assign \$360  = ssi & \port$2205$272 [0];
+  assign \$360  = ssi & \port$2183$272 [0];
   assign \$361  = ~ \$360 ;
   assign \$362  = \$359  & \$361 ;
   assign \$363  = ! word;
@@ -7127,72 +7127,81 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$615  = started;
+    \$615  = idx;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$615  = 1'h1;
-          end else if (\$44 ) begin
-            \$615  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$615  = 1'h0;
-    end
-    if (rst) begin
-      \$615  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$616  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$616  = 7'h00;
+            \$615  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$616  = 7'h00;
+            \$615  = 7'h00;
           end
       3'h1:
           if (sample) begin
-            \$616  = \$47 [6:0];
+            \$615  = \$47 [6:0];
             if (\$66 ) begin
-              \$616  = 7'h00;
+              \$615  = 7'h00;
             end
           end
       3'h3:
           /* empty */;
       3'h5:
           if (sample) begin
-            \$616  = \$71 [6:0];
+            \$615  = \$71 [6:0];
           end
     endcase
     if (receiver_clear) begin
-      \$616  = 7'h00;
+      \$615  = 7'h00;
     end
     if (rst) begin
-      \$616  = 7'h00;
+      \$615  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$617  = in_data;
+    \$616  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$617  = w0_data_at0;
+            \$616  = w0_data_at0;
           end
       3'h2:
           if (sample) begin
-            \$617  = w0_data_at0;
+            \$616  = w0_data_at0;
           end
       3'h1:
           if (sample) begin
-            \$617  = \$50 ;
+            \$616  = \$50 ;
             if (\$66 ) begin
-              \$617  = w1_data_at0;
+              \$616  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$616  = 1'h0;
+    end
+    if (rst) begin
+      \$616  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$617  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$617  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$617  = w0_lc_at0;
+          end
+      3'h1:
+          if (sample) begin
+            \$617  = \$56 ;
+            if (\$66 ) begin
+              \$617  = w1_lc_at0;
             end
           end
     endcase
@@ -7205,22 +7214,19 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$618  = in_lc;
+    \$618  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$618  = w0_lc_at0;
+            \$618  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$618  = w0_lc_at0;
+            \$618  = 1'h0;
           end
       3'h1:
           if (sample) begin
-            \$618  = \$56 ;
-            if (\$66 ) begin
-              \$618  = w1_lc_at0;
-            end
+            \$618  = \$62 ;
           end
     endcase
     if (receiver_clear) begin
@@ -7232,66 +7238,42 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$619  = in_crc;
+    \$619  = in_top;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$619  = 1'h0;
+            \$619  = \$45 ;
           end
       3'h2:
           if (sample) begin
-            \$619  = 1'h0;
+            \$619  = \$46 ;
           end
       3'h1:
           if (sample) begin
-            \$619  = \$62 ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$619  = 1'h0;
-    end
-    if (rst) begin
-      \$619  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$620  = in_top;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$620  = \$45 ;
-          end
-      3'h2:
-          if (sample) begin
-            \$620  = \$46 ;
-          end
-      3'h1:
-          if (sample) begin
-            \$620  = \$64 ;
+            \$619  = \$64 ;
             if (\$66 ) begin
-              \$620  = 1'h0;
+              \$619  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$620  = 1'h0;
+      \$619  = 1'h0;
     end
     if (rst) begin
-      \$620  = 1'h0;
+      \$619  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$621  = word;
+    \$620  = word;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$621  = 1'h0;
+            \$620  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$621  = 1'h0;
+            \$620  = 1'h0;
           end
       3'h1:
           if (sample) begin
@@ -7299,31 +7281,31 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
               (* full_case = 32'd1 *)
               if (\$68 ) begin
               end else begin
-                \$621  = \$70 [0];
+                \$620  = \$70 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$621  = 1'h0;
+      \$620  = 1'h0;
     end
     if (rst) begin
-      \$621  = 1'h0;
+      \$620  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$622  = decoder_fsm_state;
+    \$621  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$622  = 3'h1;
+            \$621  = 3'h1;
           end else if (\$44 ) begin
-            \$622  = 3'h2;
+            \$621  = 3'h2;
           end
       3'h2:
           if (sample) begin
-            \$622  = 3'h1;
+            \$621  = 3'h1;
           end
       3'h1:
           if (sample) begin
@@ -7331,33 +7313,56 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
               if (\$68 ) begin
                 (* full_case = 32'd1 *)
                 if (\$69 ) begin
-                  \$622  = 3'h3;
+                  \$621  = 3'h3;
                 end else begin
-                  \$622  = 3'h4;
+                  \$621  = 3'h4;
                 end
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$622  = 3'h5;
+            \$621  = 3'h5;
           end
       3'h5:
           if (sample) begin
             if (\$77 ) begin
-              \$622  = 3'h4;
+              \$621  = 3'h4;
             end
           end
       3'h4:
           if (sample) begin
-            \$622  = 3'h6;
+            \$621  = 3'h6;
           end
     endcase
     if (receiver_clear) begin
-      \$622  = 3'h0;
+      \$621  = 3'h0;
     end
     if (rst) begin
-      \$622  = 3'h0;
+      \$621  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$622  = started;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+          end else if (\$44 ) begin
+            \$622  = 1'h1;
+          end
+      3'h2:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$622  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$622  = 1'h0;
+    end
+    if (rst) begin
+      \$622  = 1'h0;
     end
   end
   always @* begin
@@ -7773,9 +7778,9 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$2205$272 [0];
-  assign ssi_double = \port$2205$272 [2];
-  assign ssi_error_low = \port$2205$272 [1];
+  assign ssi_error = \port$2183$272 [0];
+  assign ssi_double = \port$2183$272 [2];
+  assign ssi_error_low = \port$2183$272 [1];
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$53  = crcs;
   assign \bit$58  = \bit ;
@@ -8930,41 +8935,36 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$14 , start_slot, clk);
+module \biss_master.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
-  wire [8:0] \$10 ;
-  wire [9:0] \$11 ;
-  wire \$12 ;
-  reg [7:0] \$13 ;
-  wire [8:0] \$14 ;
-  wire [8:0] \$15 ;
-  wire [8:0] \$16 ;
-  wire [9:0] \$17 ;
-  wire [7:0] \$18 ;
-  wire [8:0] \$19 ;
+  wire [7:0] \$10 ;
+  wire [8:0] \$11 ;
+  wire [16:0] \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  reg [7:0] \$19 ;
   reg [7:0] \$2 ;
-  wire [16:0] \$20 ;
-  wire \$21 ;
-  wire \$22 ;
-  wire \$23 ;
-  wire \$24 ;
-  reg [7:0] \$25 ;
-  wire [8:0] \$26 ;
-  wire [8:0] \$27 ;
+  wire [8:0] \$20 ;
+  wire [8:0] \$21 ;
+  reg [7:0] \$22 ;
+  reg [7:0] \$23 ;
+  reg [8:0] \$24 ;
+  reg [16:0] \$25 ;
+  reg \$26 ;
+  reg \$27 ;
   reg [7:0] \$28 ;
-  reg [8:0] \$29 ;
   wire [8:0] \$3 ;
-  reg [16:0] \$30 ;
-  reg \$31 ;
-  reg \$32 ;
-  reg [7:0] \$33 ;
   wire [8:0] \$4 ;
   wire [8:0] \$5 ;
-  wire \$6 ;
-  reg [7:0] \$7 ;
+  wire [8:0] \$6 ;
+  wire [9:0] \$7 ;
   wire [8:0] \$8 ;
-  wire [8:0] \$9 ;
+  wire [9:0] \$9 ;
   input clear;
   wire clear;
   input clk;
@@ -8984,6 +8984,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, 
   output enough;
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
+  reg [7:0] n = 8'h00;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -8997,8 +8998,8 @@ module \biss_master.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, 
   input [15:0] start_slot;
   wire [15:0] start_slot;
   reg started = 1'h0;
-  input \started$14 ;
-  wire \started$14 ;
+  input \started$15 ;
+  wire \started$15 ;
   reg [16:0] target_rises = 17'h00000;
   input w1_enable;
   wire w1_enable;
@@ -9033,38 +9034,36 @@ module \biss_master.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, 
   assign \$1  = ssi & ssi_error;
   assign \$3  = \$2  + crcs[4:0];
   assign \$4  = words[5:0] + \$3 [7:0];
-  assign \$5  = \$4 [7:0] + 1'h1;
-  assign \$6  = ssi & ssi_error;
-  assign \$8  = \$7  + crcs[4:0];
-  assign \$9  = words[5:0] + \$8 [7:0];
-  assign \$10  = \$9 [7:0] + 1'h1;
-  assign \$11  = ssi_double ? { \$5 , 1'h0 } : { 1'h0, \$10  };
-  assign \$12  = ssi & ssi_error;
-  assign \$14  = \$13  + crcs[4:0];
-  assign \$15  = words[5:0] + \$14 [7:0];
-  assign \$16  = \$15 [7:0] + 3'h4;
-  assign \$17  = ssi ? \$11  : { 1'h0, \$16  };
-  assign \$18  = w1_enable ? word1_len : 8'h00;
-  assign \$19  = word0_len + \$18 ;
-  assign \$20  = start_slot + frame_len;
-  assign \$21  = rises >= target_rises;
-  assign \$22  = started & \$21 ;
-  assign \$23  = ~ clear;
-  assign \$24  = \$22  & \$23 ;
-  assign \$26  = \$25  + crcs[42:38];
-  assign \$27  = words[17:12] + \$26 [7:0];
+  assign \$5  = n + 1'h1;
+  assign \$6  = n + 1'h1;
+  assign \$7  = ssi_double ? { \$5 , 1'h0 } : { 1'h0, \$6  };
+  assign \$8  = n + 3'h4;
+  assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
+  assign \$10  = w1_enable ? word1_len : 8'h00;
+  assign \$11  = word0_len + \$10 ;
+  assign \$12  = start_slot + frame_len;
+  assign \$13  = | rises;
+  assign \$14  = ssi ? \$13  : \started$15 ;
+  assign \$15  = rises >= target_rises;
+  assign \$16  = started & \$15 ;
+  assign \$17  = ~ clear;
+  assign \$18  = \$16  & \$17 ;
+  assign \$20  = \$19  + crcs[42:38];
+  assign \$21  = words[17:12] + \$20 [7:0];
   always @(posedge clk)
-    word0_len <= \$28 ;
+    n <= \$22 ;
   always @(posedge clk)
-    frame_len <= \$29 ;
+    word0_len <= \$23 ;
   always @(posedge clk)
-    target_rises <= \$30 ;
+    frame_len <= \$24 ;
   always @(posedge clk)
-    started <= \$31 ;
+    target_rises <= \$25 ;
   always @(posedge clk)
-    enough <= \$32 ;
+    started <= \$26 ;
   always @(posedge clk)
-    word1_len <= \$33 ;
+    enough <= \$27 ;
+  always @(posedge clk)
+    word1_len <= \$28 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     (* full_case = 32'd1 *)
@@ -9090,101 +9089,64 @@ module \biss_master.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$6 , words[7:6] })
-      3'h0:
-          \$7  = 8'h00;
-      3'h1:
-          \$7  = 8'h02;
-      3'h2:
-          \$7  = 8'h06;
-      3'h3:
-          \$7  = 8'h08;
-      3'h4:
-          \$7  = 8'h01;
-      3'h5:
-          \$7  = 8'h03;
-      3'h6:
-          \$7  = 8'h07;
-      3'h7:
-          \$7  = 8'h09;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$12 , words[7:6] })
-      3'h0:
-          \$13  = 8'h00;
-      3'h1:
-          \$13  = 8'h02;
-      3'h2:
-          \$13  = 8'h06;
-      3'h3:
-          \$13  = 8'h08;
-      3'h4:
-          \$13  = 8'h01;
-      3'h5:
-          \$13  = 8'h03;
-      3'h6:
-          \$13  = 8'h07;
-      3'h7:
-          \$13  = 8'h09;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$25  = 8'h00;
+          \$19  = 8'h00;
       2'h1:
-          \$25  = 8'h02;
+          \$19  = 8'h02;
       2'h2:
-          \$25  = 8'h06;
+          \$19  = 8'h06;
       2'h3:
-          \$25  = 8'h08;
+          \$19  = 8'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$28  = \$17 [7:0];
+    \$22  = \$4 [7:0];
+    if (rst) begin
+      \$22  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    \$23  = \$9 [7:0];
+    if (rst) begin
+      \$23  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    \$24  = \$11 ;
+    if (rst) begin
+      \$24  = 9'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    \$25  = \$12 ;
+    if (rst) begin
+      \$25  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    \$26  = \$14 ;
+    if (rst) begin
+      \$26  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    \$27  = \$18 ;
+    if (rst) begin
+      \$27  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    \$28  = \$21 [7:0];
     if (rst) begin
       \$28  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$29  = \$19 ;
-    if (rst) begin
-      \$29  = 9'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$30  = \$20 ;
-    if (rst) begin
-      \$30  = 17'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$31  = \started$14 ;
-    if (rst) begin
-      \$31  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$32  = \$24 ;
-    if (rst) begin
-      \$32  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$33  = \$27 [7:0];
-    if (rst) begin
-      \$33  = 8'h00;
     end
   end
   assign \words[0]  = words[11:0];
@@ -11327,7 +11289,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2205$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2183$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -11461,8 +11423,8 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$2205$259 ;
-  wire [12:0] \port$2205$259 ;
+  input [12:0] \port$2183$259 ;
+  wire [12:0] \port$2183$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -11487,7 +11449,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$2205$259 [12:1] + 1'h1;
+  assign \$11  = \port$2183$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -11612,7 +11574,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$2205$259 [0]),
+    .clear_high(\port$2183$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -11755,7 +11717,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$2205$259 [0]) begin
+            if (\port$2183$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -11840,7 +11802,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$2205$259 [0]) begin
+            if (\port$2183$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -11879,7 +11841,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$2205$259 [12:1] };
+            \$85  = { 1'h0, \port$2183$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -12264,11 +12226,11 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$2205$259 [12:1] };
-  assign fixed = \port$2205$259 [0];
+  assign fixed_delay = { 1'h0, \port$2183$259 [12:1] };
+  assign fixed = \port$2183$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$2205$259 [0];
+  assign clear_high = \port$2183$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -12675,7 +12637,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2193$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2171$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -12717,8 +12679,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2193$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2193$0 ;
-  wire \port$2193$0 ;
+  input \port$2171$0 ;
+  wire \port$2171$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -12732,9 +12694,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2193$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2193$0  };
-  assign \$2  = { lc[4:0], \port$2193$0  } == last;
-  assign \$3  = { lc[4:0], \port$2193$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2171$0  };
+  assign \$2  = { lc[4:0], \port$2171$0  } == last;
+  assign \$3  = { lc[4:0], \port$2171$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -12844,7 +12806,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2193$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2193$0  };
+  assign lc_next = { lc[4:0], \port$2171$0  };
   assign zero = is_zero;
 endmodule
 
@@ -13400,7 +13362,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1632$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1610$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
@@ -13572,8 +13534,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1632$0 , lc_check, lc_re
   wire noisy;
   output passed;
   wire passed;
-  output \port$1632$0 ;
-  wire \port$1632$0 ;
+  output \port$1610$0 ;
+  wire \port$1610$0 ;
   output report;
   wire report;
   input report_frame;
@@ -13691,7 +13653,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1632$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1632$0  = \$2 ;
+  assign \port$1610$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -635,12 +635,12 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$7238$0 (\$8 ),
-    .\port$7251$0 (\$9 ),
-    .\port$7328$0 (\$10 ),
-    .\port$7770$0 (\$11 ),
-    .\port$7783$0 (\$12 ),
-    .\port$7860$0 (\$13 ),
+    .\port$7196$0 (\$8 ),
+    .\port$7209$0 (\$9 ),
+    .\port$7286$0 (\$10 ),
+    .\port$7730$0 (\$11 ),
+    .\port$7743$0 (\$12 ),
+    .\port$7820$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -713,9 +713,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$7238$0 (\$8 ),
-    .\port$7251$0 (\$9 ),
-    .\port$7328$0 (\$10 ),
+    .\port$7196$0 (\$8 ),
+    .\port$7209$0 (\$9 ),
+    .\port$7286$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -788,9 +788,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(\regs__count_en$384 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$408 ),
-    .\port$7770$0 (\$11 ),
-    .\port$7783$0 (\$12 ),
-    .\port$7860$0 (\$13 ),
+    .\port$7730$0 (\$11 ),
+    .\port$7743$0 (\$12 ),
+    .\port$7820$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$236 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1128,7 +1128,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
 , ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$113 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
 , ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
 , ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id
-, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$7238$0 , \port$7251$0 , ch0__ca_done, \port$7328$0 , ch1__frame_done, ch1__done_count, \port$7770$0 , \port$7783$0 , ch1__ca_done, \port$7860$0 , clk);
+, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$7196$0 , \port$7209$0 , ch0__ca_done, \port$7286$0 , ch1__frame_done, ch1__done_count, \port$7730$0 , \port$7743$0 , ch1__ca_done, \port$7820$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2676,18 +2676,18 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$7238$0 ;
-  wire [186:0] \port$7238$0 ;
-  input [79:0] \port$7251$0 ;
-  wire [79:0] \port$7251$0 ;
-  input [9:0] \port$7328$0 ;
-  wire [9:0] \port$7328$0 ;
-  input [186:0] \port$7770$0 ;
-  wire [186:0] \port$7770$0 ;
-  input [79:0] \port$7783$0 ;
-  wire [79:0] \port$7783$0 ;
-  input [9:0] \port$7860$0 ;
-  wire [9:0] \port$7860$0 ;
+  input [186:0] \port$7196$0 ;
+  wire [186:0] \port$7196$0 ;
+  input [79:0] \port$7209$0 ;
+  wire [79:0] \port$7209$0 ;
+  input [9:0] \port$7286$0 ;
+  wire [9:0] \port$7286$0 ;
+  input [186:0] \port$7730$0 ;
+  wire [186:0] \port$7730$0 ;
+  input [79:0] \port$7743$0 ;
+  wire [79:0] \port$7743$0 ;
+  input [9:0] \port$7820$0 ;
+  wire [9:0] \port$7820$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2791,7 +2791,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$343  = \$341  | \$342 ;
   assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7770$0 [182:177], 4'h0, \port$7770$0 [186:183], 1'h0, \port$7770$0 [176:174], 1'h0, \port$7770$0 [133:131], 3'h0, \port$7770$0 [49], \port$7770$0 [3:0] } : 32'd0;
+  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7730$0 [182:177], 4'h0, \port$7730$0 [186:183], 1'h0, \port$7730$0 [176:174], 1'h0, \port$7730$0 [133:131], 3'h0, \port$7730$0 [49], \port$7730$0 [3:0] } : 32'd0;
   assign \$347  = \$345  | \$346 ;
   assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$349  = \$347  | \$348 ;
@@ -2819,13 +2819,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$371  = \$369  | \$370 ;
   assign \$372  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7860$0 [9:3], 1'h0, \port$7860$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7820$0 [9:3], 1'h0, \port$7820$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_143 ? \port$7783$0 [31:0] : 32'd0;
+  assign \$378  = ch1_read_select_143 ? \port$7743$0 [31:0] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_144 ? \port$7783$0 [63:32] : 32'd0;
+  assign \$380  = ch1_read_select_144 ? \port$7743$0 [63:32] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7783$0 [79:64] } : 32'd0;
+  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7743$0 [79:64] } : 32'd0;
   assign \$383  = \$381  | \$382 ;
   assign \$384  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$385  = \$383  | \$384 ;
@@ -3695,7 +3695,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$158  = \$156  | \$157 ;
   assign \$159  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$7238$0 [182:177], 4'h0, \port$7238$0 [186:183], 1'h0, \port$7238$0 [176:174], 1'h0, \port$7238$0 [133:131], 3'h0, \port$7238$0 [49], \port$7238$0 [3:0] } : 32'd0;
+  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$7196$0 [182:177], 4'h0, \port$7196$0 [186:183], 1'h0, \port$7196$0 [176:174], 1'h0, \port$7196$0 [133:131], 3'h0, \port$7196$0 [49], \port$7196$0 [3:0] } : 32'd0;
   assign \$162  = \$160  | \$161 ;
   assign \$163  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$164  = \$162  | \$163 ;
@@ -3723,13 +3723,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$186  = \$184  | \$185 ;
   assign \$187  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$7328$0 [9:3], 1'h0, \port$7328$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$7286$0 [9:3], 1'h0, \port$7286$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_c3 ? \port$7251$0 [31:0] : 32'd0;
+  assign \$193  = ch0_read_select_c3 ? \port$7209$0 [31:0] : 32'd0;
   assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_c4 ? \port$7251$0 [63:32] : 32'd0;
+  assign \$195  = ch0_read_select_c4 ? \port$7209$0 [63:32] : 32'd0;
   assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$7251$0 [79:64] } : 32'd0;
+  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$7209$0 [79:64] } : 32'd0;
   assign \$198  = \$196  | \$197 ;
   assign \$199  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$200  = \$198  | \$199 ;
@@ -4933,7 +4933,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$595  = ch0_result_status_status_snapshot;
     if (\$130 ) begin
-      \$595  = \port$7238$0 [3:0];
+      \$595  = \port$7196$0 [3:0];
     end
     if (rst) begin
       \$595  = 4'h0;
@@ -4943,7 +4943,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$596  = ch0_result_status_cds_snapshot;
     if (\$130 ) begin
-      \$596  = \port$7238$0 [49];
+      \$596  = \port$7196$0 [49];
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -4953,7 +4953,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$597  = ch0_result_status_w0_ne_snapshot;
     if (\$130 ) begin
-      \$597  = \port$7238$0 [131];
+      \$597  = \port$7196$0 [131];
     end
     if (rst) begin
       \$597  = 1'h0;
@@ -4963,7 +4963,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$598  = ch0_result_status_w0_nw_snapshot;
     if (\$130 ) begin
-      \$598  = \port$7238$0 [132];
+      \$598  = \port$7196$0 [132];
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -4973,7 +4973,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$599  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$130 ) begin
-      \$599  = \port$7238$0 [133];
+      \$599  = \port$7196$0 [133];
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -4983,7 +4983,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$600  = ch0_result_status_w1_ne_snapshot;
     if (\$130 ) begin
-      \$600  = \port$7238$0 [174];
+      \$600  = \port$7196$0 [174];
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -4993,7 +4993,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$601  = ch0_result_status_w1_nw_snapshot;
     if (\$130 ) begin
-      \$601  = \port$7238$0 [175];
+      \$601  = \port$7196$0 [175];
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -5003,7 +5003,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$602  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$130 ) begin
-      \$602  = \port$7238$0 [176];
+      \$602  = \port$7196$0 [176];
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -5013,7 +5013,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$603  = ch0_result_status_lc_repeat_snapshot;
     if (\$130 ) begin
-      \$603  = \port$7238$0 [183];
+      \$603  = \port$7196$0 [183];
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -5023,7 +5023,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$604  = ch0_result_status_lc_skip_snapshot;
     if (\$130 ) begin
-      \$604  = \port$7238$0 [184];
+      \$604  = \port$7196$0 [184];
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -5033,7 +5033,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$605  = ch0_result_status_lc_zero_snapshot;
     if (\$130 ) begin
-      \$605  = \port$7238$0 [185];
+      \$605  = \port$7196$0 [185];
     end
     if (rst) begin
       \$605  = 1'h0;
@@ -5043,7 +5043,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$606  = ch0_result_status_spw_mismatch_snapshot;
     if (\$130 ) begin
-      \$606  = \port$7238$0 [186];
+      \$606  = \port$7196$0 [186];
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -5053,7 +5053,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$607  = ch0_result_status_lc_snapshot;
     if (\$130 ) begin
-      \$607  = \port$7238$0 [182:177];
+      \$607  = \port$7196$0 [182:177];
     end
     if (rst) begin
       \$607  = 6'h00;
@@ -5073,7 +5073,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$609  = ch0_result_seq_line_delay_snapshot;
     if (\$130 ) begin
-      \$609  = \port$7238$0 [48:36];
+      \$609  = \port$7196$0 [48:36];
     end
     if (rst) begin
       \$609  = 13'h0000;
@@ -5083,7 +5083,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$610  = ch0_result_w0_lo_data_snapshot;
     if (\$130 ) begin
-      \$610  = \port$7238$0 [107:76];
+      \$610  = \port$7196$0 [107:76];
     end
     if (rst) begin
       \$610  = 32'd0;
@@ -5093,7 +5093,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$611  = ch0_result_w0_hi_data_snapshot;
     if (\$130 ) begin
-      \$611  = \port$7238$0 [130:108];
+      \$611  = \port$7196$0 [130:108];
     end
     if (rst) begin
       \$611  = 23'h000000;
@@ -5103,7 +5103,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$612  = ch0_result_w1_lo_data_snapshot;
     if (\$130 ) begin
-      \$612  = \port$7238$0 [165:134];
+      \$612  = \port$7196$0 [165:134];
     end
     if (rst) begin
       \$612  = 32'd0;
@@ -5113,7 +5113,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$613  = ch0_result_w1_hi_data_snapshot;
     if (\$130 ) begin
-      \$613  = \port$7238$0 [173:166];
+      \$613  = \port$7196$0 [173:166];
     end
     if (rst) begin
       \$613  = 8'h00;
@@ -5123,7 +5123,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$614  = ch0_result_timestamp_time_snapshot;
     if (\$130 ) begin
-      \$614  = \port$7238$0 [35:4];
+      \$614  = \port$7196$0 [35:4];
     end
     if (rst) begin
       \$614  = 32'd0;
@@ -5133,7 +5133,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$615  = ch0_result_line_noise_events_snapshot;
     if (\$130 ) begin
-      \$615  = \port$7238$0 [53:50];
+      \$615  = \port$7196$0 [53:50];
     end
     if (rst) begin
       \$615  = 4'h0;
@@ -5143,7 +5143,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$616  = ch0_result_line_delay_settled_snapshot;
     if (\$130 ) begin
-      \$616  = \port$7238$0 [54];
+      \$616  = \port$7196$0 [54];
     end
     if (rst) begin
       \$616  = 1'h0;
@@ -5153,7 +5153,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$617  = ch0_result_line_delay_spread_snapshot;
     if (\$130 ) begin
-      \$617  = \port$7238$0 [75:68];
+      \$617  = \port$7196$0 [75:68];
     end
     if (rst) begin
       \$617  = 8'h00;
@@ -5163,7 +5163,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$618  = ch0_result_line_settled_delay_snapshot;
     if (\$130 ) begin
-      \$618  = \port$7238$0 [67:55];
+      \$618  = \port$7196$0 [67:55];
     end
     if (rst) begin
       \$618  = 13'h0000;
@@ -6227,7 +6227,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$725  = ch1_result_status_status_snapshot;
     if (\$315 ) begin
-      \$725  = \port$7770$0 [3:0];
+      \$725  = \port$7730$0 [3:0];
     end
     if (rst) begin
       \$725  = 4'h0;
@@ -6237,7 +6237,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$726  = ch1_result_status_cds_snapshot;
     if (\$315 ) begin
-      \$726  = \port$7770$0 [49];
+      \$726  = \port$7730$0 [49];
     end
     if (rst) begin
       \$726  = 1'h0;
@@ -6247,7 +6247,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$727  = ch1_result_status_w0_ne_snapshot;
     if (\$315 ) begin
-      \$727  = \port$7770$0 [131];
+      \$727  = \port$7730$0 [131];
     end
     if (rst) begin
       \$727  = 1'h0;
@@ -6257,7 +6257,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$728  = ch1_result_status_w0_nw_snapshot;
     if (\$315 ) begin
-      \$728  = \port$7770$0 [132];
+      \$728  = \port$7730$0 [132];
     end
     if (rst) begin
       \$728  = 1'h0;
@@ -6267,7 +6267,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$729  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$315 ) begin
-      \$729  = \port$7770$0 [133];
+      \$729  = \port$7730$0 [133];
     end
     if (rst) begin
       \$729  = 1'h0;
@@ -6277,7 +6277,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$730  = ch1_result_status_w1_ne_snapshot;
     if (\$315 ) begin
-      \$730  = \port$7770$0 [174];
+      \$730  = \port$7730$0 [174];
     end
     if (rst) begin
       \$730  = 1'h0;
@@ -6287,7 +6287,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$731  = ch1_result_status_w1_nw_snapshot;
     if (\$315 ) begin
-      \$731  = \port$7770$0 [175];
+      \$731  = \port$7730$0 [175];
     end
     if (rst) begin
       \$731  = 1'h0;
@@ -6297,7 +6297,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$732  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$315 ) begin
-      \$732  = \port$7770$0 [176];
+      \$732  = \port$7730$0 [176];
     end
     if (rst) begin
       \$732  = 1'h0;
@@ -6307,7 +6307,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$733  = ch1_result_status_lc_repeat_snapshot;
     if (\$315 ) begin
-      \$733  = \port$7770$0 [183];
+      \$733  = \port$7730$0 [183];
     end
     if (rst) begin
       \$733  = 1'h0;
@@ -6317,7 +6317,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$734  = ch1_result_status_lc_skip_snapshot;
     if (\$315 ) begin
-      \$734  = \port$7770$0 [184];
+      \$734  = \port$7730$0 [184];
     end
     if (rst) begin
       \$734  = 1'h0;
@@ -6327,7 +6327,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$735  = ch1_result_status_lc_zero_snapshot;
     if (\$315 ) begin
-      \$735  = \port$7770$0 [185];
+      \$735  = \port$7730$0 [185];
     end
     if (rst) begin
       \$735  = 1'h0;
@@ -6337,7 +6337,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$736  = ch1_result_status_spw_mismatch_snapshot;
     if (\$315 ) begin
-      \$736  = \port$7770$0 [186];
+      \$736  = \port$7730$0 [186];
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6347,7 +6347,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$737  = ch1_result_status_lc_snapshot;
     if (\$315 ) begin
-      \$737  = \port$7770$0 [182:177];
+      \$737  = \port$7730$0 [182:177];
     end
     if (rst) begin
       \$737  = 6'h00;
@@ -6367,7 +6367,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$739  = ch1_result_seq_line_delay_snapshot;
     if (\$315 ) begin
-      \$739  = \port$7770$0 [48:36];
+      \$739  = \port$7730$0 [48:36];
     end
     if (rst) begin
       \$739  = 13'h0000;
@@ -6377,7 +6377,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$740  = ch1_result_w0_lo_data_snapshot;
     if (\$315 ) begin
-      \$740  = \port$7770$0 [107:76];
+      \$740  = \port$7730$0 [107:76];
     end
     if (rst) begin
       \$740  = 32'd0;
@@ -6387,7 +6387,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$741  = ch1_result_w0_hi_data_snapshot;
     if (\$315 ) begin
-      \$741  = \port$7770$0 [130:108];
+      \$741  = \port$7730$0 [130:108];
     end
     if (rst) begin
       \$741  = 23'h000000;
@@ -6397,7 +6397,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$742  = ch1_result_w1_lo_data_snapshot;
     if (\$315 ) begin
-      \$742  = \port$7770$0 [165:134];
+      \$742  = \port$7730$0 [165:134];
     end
     if (rst) begin
       \$742  = 32'd0;
@@ -6407,7 +6407,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$743  = ch1_result_w1_hi_data_snapshot;
     if (\$315 ) begin
-      \$743  = \port$7770$0 [173:166];
+      \$743  = \port$7730$0 [173:166];
     end
     if (rst) begin
       \$743  = 8'h00;
@@ -6417,7 +6417,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$744  = ch1_result_timestamp_time_snapshot;
     if (\$315 ) begin
-      \$744  = \port$7770$0 [35:4];
+      \$744  = \port$7730$0 [35:4];
     end
     if (rst) begin
       \$744  = 32'd0;
@@ -6427,7 +6427,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$745  = ch1_result_line_noise_events_snapshot;
     if (\$315 ) begin
-      \$745  = \port$7770$0 [53:50];
+      \$745  = \port$7730$0 [53:50];
     end
     if (rst) begin
       \$745  = 4'h0;
@@ -6437,7 +6437,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$746  = ch1_result_line_delay_settled_snapshot;
     if (\$315 ) begin
-      \$746  = \port$7770$0 [54];
+      \$746  = \port$7730$0 [54];
     end
     if (rst) begin
       \$746  = 1'h0;
@@ -6447,7 +6447,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$747  = ch1_result_line_delay_spread_snapshot;
     if (\$315 ) begin
-      \$747  = \port$7770$0 [75:68];
+      \$747  = \port$7730$0 [75:68];
     end
     if (rst) begin
       \$747  = 8'h00;
@@ -6457,7 +6457,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$748  = ch1_result_line_settled_delay_snapshot;
     if (\$315 ) begin
-      \$748  = \port$7770$0 [67:55];
+      \$748  = \port$7730$0 [67:55];
     end
     if (rst) begin
       \$748  = 13'h0000;
@@ -6496,27 +6496,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$7238$0 [3:0];
-  assign ch0__cds = \port$7238$0 [49];
-  assign ch0__word0_ne = \port$7238$0 [131];
-  assign ch0__word0_nw = \port$7238$0 [132];
-  assign ch0__word0_crc_ok = \port$7238$0 [133];
-  assign ch0__word1_ne = \port$7238$0 [174];
-  assign ch0__word1_nw = \port$7238$0 [175];
-  assign ch0__word1_crc_ok = \port$7238$0 [176];
-  assign ch0__lc_repeat = \port$7238$0 [183];
-  assign ch0__lc_skip = \port$7238$0 [184];
-  assign ch0__lc_zero = \port$7238$0 [185];
-  assign ch0__spw_mismatch = \port$7238$0 [186];
-  assign ch0__lc = \port$7238$0 [182:177];
-  assign ch0__line_delay = \port$7238$0 [48:36];
-  assign ch0__word0_position = \port$7238$0 [130:76];
-  assign ch0__word1_position = \port$7238$0 [173:134];
-  assign ch0__timestamp = \port$7238$0 [35:4];
-  assign ch0__noise_events = \port$7238$0 [53:50];
-  assign ch0__delay_settled = \port$7238$0 [54];
-  assign ch0__delay_spread = \port$7238$0 [75:68];
-  assign ch0__settled_delay = \port$7238$0 [67:55];
+  assign ch0__status = \port$7196$0 [3:0];
+  assign ch0__cds = \port$7196$0 [49];
+  assign ch0__word0_ne = \port$7196$0 [131];
+  assign ch0__word0_nw = \port$7196$0 [132];
+  assign ch0__word0_crc_ok = \port$7196$0 [133];
+  assign ch0__word1_ne = \port$7196$0 [174];
+  assign ch0__word1_nw = \port$7196$0 [175];
+  assign ch0__word1_crc_ok = \port$7196$0 [176];
+  assign ch0__lc_repeat = \port$7196$0 [183];
+  assign ch0__lc_skip = \port$7196$0 [184];
+  assign ch0__lc_zero = \port$7196$0 [185];
+  assign ch0__spw_mismatch = \port$7196$0 [186];
+  assign ch0__lc = \port$7196$0 [182:177];
+  assign ch0__line_delay = \port$7196$0 [48:36];
+  assign ch0__word0_position = \port$7196$0 [130:76];
+  assign ch0__word1_position = \port$7196$0 [173:134];
+  assign ch0__timestamp = \port$7196$0 [35:4];
+  assign ch0__noise_events = \port$7196$0 [53:50];
+  assign ch0__delay_settled = \port$7196$0 [54];
+  assign ch0__delay_spread = \port$7196$0 [75:68];
+  assign ch0__settled_delay = \port$7196$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -6524,34 +6524,34 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
   assign ch0__cap_ssi = 1'h1;
-  assign ch0__ca_status = \port$7328$0 [2:0];
-  assign ch0__ca_bytes_done = \port$7328$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$7251$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$7251$0 [31:16];
-  assign ch0__count_ca_refused = \port$7251$0 [47:32];
-  assign ch0__count_ca_aborted = \port$7251$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$7251$0 [79:64];
-  assign ch1__status = \port$7770$0 [3:0];
-  assign ch1__cds = \port$7770$0 [49];
-  assign ch1__word0_ne = \port$7770$0 [131];
-  assign ch1__word0_nw = \port$7770$0 [132];
-  assign ch1__word0_crc_ok = \port$7770$0 [133];
-  assign ch1__word1_ne = \port$7770$0 [174];
-  assign ch1__word1_nw = \port$7770$0 [175];
-  assign ch1__word1_crc_ok = \port$7770$0 [176];
-  assign ch1__lc_repeat = \port$7770$0 [183];
-  assign ch1__lc_skip = \port$7770$0 [184];
-  assign ch1__lc_zero = \port$7770$0 [185];
-  assign ch1__spw_mismatch = \port$7770$0 [186];
-  assign ch1__lc = \port$7770$0 [182:177];
-  assign ch1__line_delay = \port$7770$0 [48:36];
-  assign ch1__word0_position = \port$7770$0 [130:76];
-  assign ch1__word1_position = \port$7770$0 [173:134];
-  assign ch1__timestamp = \port$7770$0 [35:4];
-  assign ch1__noise_events = \port$7770$0 [53:50];
-  assign ch1__delay_settled = \port$7770$0 [54];
-  assign ch1__delay_spread = \port$7770$0 [75:68];
-  assign ch1__settled_delay = \port$7770$0 [67:55];
+  assign ch0__ca_status = \port$7286$0 [2:0];
+  assign ch0__ca_bytes_done = \port$7286$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$7209$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$7209$0 [31:16];
+  assign ch0__count_ca_refused = \port$7209$0 [47:32];
+  assign ch0__count_ca_aborted = \port$7209$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$7209$0 [79:64];
+  assign ch1__status = \port$7730$0 [3:0];
+  assign ch1__cds = \port$7730$0 [49];
+  assign ch1__word0_ne = \port$7730$0 [131];
+  assign ch1__word0_nw = \port$7730$0 [132];
+  assign ch1__word0_crc_ok = \port$7730$0 [133];
+  assign ch1__word1_ne = \port$7730$0 [174];
+  assign ch1__word1_nw = \port$7730$0 [175];
+  assign ch1__word1_crc_ok = \port$7730$0 [176];
+  assign ch1__lc_repeat = \port$7730$0 [183];
+  assign ch1__lc_skip = \port$7730$0 [184];
+  assign ch1__lc_zero = \port$7730$0 [185];
+  assign ch1__spw_mismatch = \port$7730$0 [186];
+  assign ch1__lc = \port$7730$0 [182:177];
+  assign ch1__line_delay = \port$7730$0 [48:36];
+  assign ch1__word0_position = \port$7730$0 [130:76];
+  assign ch1__word1_position = \port$7730$0 [173:134];
+  assign ch1__timestamp = \port$7730$0 [35:4];
+  assign ch1__noise_events = \port$7730$0 [53:50];
+  assign ch1__delay_settled = \port$7730$0 [54];
+  assign ch1__delay_spread = \port$7730$0 [75:68];
+  assign ch1__settled_delay = \port$7730$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -6559,13 +6559,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign ch1__ca_status = \port$7860$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7860$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7783$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7783$0 [31:16];
-  assign ch1__count_ca_refused = \port$7783$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7783$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7783$0 [79:64];
+  assign ch1__ca_status = \port$7820$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7820$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7743$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7743$0 [31:16];
+  assign ch1__count_ca_refused = \port$7743$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7743$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7743$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__r_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -8847,7 +8847,7 @@ endmodule
 module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7238$0 , \port$7251$0 , regs__ca_done, \port$7328$0 , slo);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7196$0 , \port$7209$0 , regs__ca_done, \port$7286$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -9029,12 +9029,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7238$0 ;
-  wire [186:0] \port$7238$0 ;
-  output [79:0] \port$7251$0 ;
-  wire [79:0] \port$7251$0 ;
-  output [9:0] \port$7328$0 ;
-  wire [9:0] \port$7328$0 ;
+  output [186:0] \port$7196$0 ;
+  wire [186:0] \port$7196$0 ;
+  output [79:0] \port$7209$0 ;
+  wire [79:0] \port$7209$0 ;
+  output [9:0] \port$7286$0 ;
+  wire [9:0] \port$7286$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -9489,9 +9489,9 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$7238$0  = \$18 ;
-  assign \port$7251$0  = \$19 ;
-  assign \port$7328$0  = \$20 ;
+  assign \port$7196$0  = \$18 ;
+  assign \port$7209$0  = \$19 ;
+  assign \port$7286$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -10563,7 +10563,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6894$272 (cycle[274:272]),
+    .\port$6850$272 (cycle[274:272]),
     .receiver_clear(\clear$135 ),
     .rst(rst),
     .sample(sample),
@@ -10629,7 +10629,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .ssi_double(cycle[274]),
     .ssi_error(cycle[272]),
     .start_slot(start_slot),
-    .\started$14 (started),
+    .\started$15 (started),
     .w1_enable(cycle[199]),
     .words(\words$181 )
   );
@@ -10674,7 +10674,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6894$259 (cycle[271:259]),
+    .\port$6850$259 (cycle[271:259]),
     .receiver_clear(\clear$135 ),
     .rst(rst),
     .sample(\sample$342 ),
@@ -10698,7 +10698,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6882$0 (\bit ),
+    .\port$6838$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -10764,7 +10764,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2967$0 (\$28 ),
+    .\port$2945$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -14825,7 +14825,7 @@ module \biss_master_uart.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6894$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6850$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire [6:0] \$1 ;
@@ -15401,15 +15401,15 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg \$612 ;
   reg [15:0] \$613 ;
   reg \$614 ;
-  reg \$615 ;
-  reg [6:0] \$616 ;
+  reg [6:0] \$615 ;
+  reg \$616 ;
   reg \$617 ;
   reg \$618 ;
   reg \$619 ;
   wire \$62 ;
   reg \$620 ;
-  reg \$621 ;
-  reg [2:0] \$622 ;
+  reg [2:0] \$621 ;
+  reg \$622 ;
   reg [15:0] \$623 ;
   reg \$624 ;
   reg \$625 ;
@@ -15528,8 +15528,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6894$272 ;
-  wire [2:0] \port$6894$272 ;
+  input [2:0] \port$6850$272 ;
+  wire [2:0] \port$6850$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -15596,8 +15596,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$367  = ssi & \port$6894$272 [0];
-  assign \$368  = ~ \port$6894$272 [1];
+  assign \$367  = ssi & \port$6850$272 [0];
+  assign \$368  = ~ \port$6850$272 [1];
   assign \$369  = \$367  & \$368 ;
   assign \$370  = \bit  ^ \$369 ;
   assign \$371  = ~ words[6];
@@ -15879,21 +15879,21 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   always @(posedge clk)
     slots_full <= \$614 ;
   always @(posedge clk)
-    started <= \$615 ;
+    idx <= \$615 ;
   always @(posedge clk)
-    idx <= \$616 ;
+    in_data <= \$616 ;
   always @(posedge clk)
-    in_data <= \$617 ;
+    in_lc <= \$617 ;
   always @(posedge clk)
-    in_lc <= \$618 ;
+    in_crc <= \$618 ;
   always @(posedge clk)
-    in_crc <= \$619 ;
+    in_top <= \$619 ;
   always @(posedge clk)
-    in_top <= \$620 ;
+    word <= \$620 ;
   always @(posedge clk)
-    word <= \$621 ;
+    decoder_fsm_state <= \$621 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$622 ;
+    started <= \$622 ;
   always @(posedge clk)
     start_slot <= \$623 ;
   always @(posedge clk)
@@ -15918,18 +15918,18 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$6894$272 [0];
+  assign \$3  = ssi & \port$6850$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$6894$272 [0];
+  assign \$6  = ssi & \port$6850$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$6894$272 [0];
+  assign \$9  = ssi & \port$6850$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$6894$272 [0];
+  assign \$14  = ssi & \port$6850$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$6894$272 [0];
+  assign \$18  = ssi & \port$6850$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -15974,7 +15974,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$66  = idx == \$65 ;
   assign \$67  = word_count - 1'h1;
   assign \$68  = word == \$67 ;
-  assign \$69  = ssi & \port$6894$272 [2];
+  assign \$69  = ssi & \port$6850$272 [2];
   assign \$70  = word + 1'h1;
   assign \$71  = idx + 1'h1;
   assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -16265,7 +16265,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$357  = \$354  & \$356 ;
   assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
   assign \$359  = ~ words[6];
-  assign \$360  = ssi & \port$6894$272 [0];
+  assign \$360  = ssi & \port$6850$272 [0];
   assign \$361  = ~ \$360 ;
   assign \$362  = \$359  & \$361 ;
   assign \$363  = ! word;
@@ -16376,72 +16376,81 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$615  = started;
+    \$615  = idx;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$615  = 1'h1;
-          end else if (\$44 ) begin
-            \$615  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$615  = 1'h0;
-    end
-    if (rst) begin
-      \$615  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$616  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$616  = 7'h00;
+            \$615  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$616  = 7'h00;
+            \$615  = 7'h00;
           end
       3'h1:
           if (sample) begin
-            \$616  = \$47 [6:0];
+            \$615  = \$47 [6:0];
             if (\$66 ) begin
-              \$616  = 7'h00;
+              \$615  = 7'h00;
             end
           end
       3'h3:
           /* empty */;
       3'h5:
           if (sample) begin
-            \$616  = \$71 [6:0];
+            \$615  = \$71 [6:0];
           end
     endcase
     if (receiver_clear) begin
-      \$616  = 7'h00;
+      \$615  = 7'h00;
     end
     if (rst) begin
-      \$616  = 7'h00;
+      \$615  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$617  = in_data;
+    \$616  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$617  = w0_data_at0;
+            \$616  = w0_data_at0;
           end
       3'h2:
           if (sample) begin
-            \$617  = w0_data_at0;
+            \$616  = w0_data_at0;
           end
       3'h1:
           if (sample) begin
-            \$617  = \$50 ;
+            \$616  = \$50 ;
             if (\$66 ) begin
-              \$617  = w1_data_at0;
+              \$616  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$616  = 1'h0;
+    end
+    if (rst) begin
+      \$616  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$617  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$617  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$617  = w0_lc_at0;
+          end
+      3'h1:
+          if (sample) begin
+            \$617  = \$56 ;
+            if (\$66 ) begin
+              \$617  = w1_lc_at0;
             end
           end
     endcase
@@ -16454,22 +16463,19 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$618  = in_lc;
+    \$618  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$618  = w0_lc_at0;
+            \$618  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$618  = w0_lc_at0;
+            \$618  = 1'h0;
           end
       3'h1:
           if (sample) begin
-            \$618  = \$56 ;
-            if (\$66 ) begin
-              \$618  = w1_lc_at0;
-            end
+            \$618  = \$62 ;
           end
     endcase
     if (receiver_clear) begin
@@ -16481,66 +16487,42 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$619  = in_crc;
+    \$619  = in_top;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$619  = 1'h0;
+            \$619  = \$45 ;
           end
       3'h2:
           if (sample) begin
-            \$619  = 1'h0;
+            \$619  = \$46 ;
           end
       3'h1:
           if (sample) begin
-            \$619  = \$62 ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$619  = 1'h0;
-    end
-    if (rst) begin
-      \$619  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$620  = in_top;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$620  = \$45 ;
-          end
-      3'h2:
-          if (sample) begin
-            \$620  = \$46 ;
-          end
-      3'h1:
-          if (sample) begin
-            \$620  = \$64 ;
+            \$619  = \$64 ;
             if (\$66 ) begin
-              \$620  = 1'h0;
+              \$619  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$620  = 1'h0;
+      \$619  = 1'h0;
     end
     if (rst) begin
-      \$620  = 1'h0;
+      \$619  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$621  = word;
+    \$620  = word;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$621  = 1'h0;
+            \$620  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$621  = 1'h0;
+            \$620  = 1'h0;
           end
       3'h1:
           if (sample) begin
@@ -16548,31 +16530,31 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
               (* full_case = 32'd1 *)
               if (\$68 ) begin
               end else begin
-                \$621  = \$70 [0];
+                \$620  = \$70 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$621  = 1'h0;
+      \$620  = 1'h0;
     end
     if (rst) begin
-      \$621  = 1'h0;
+      \$620  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
-    \$622  = decoder_fsm_state;
+    \$621  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$622  = 3'h1;
+            \$621  = 3'h1;
           end else if (\$44 ) begin
-            \$622  = 3'h2;
+            \$621  = 3'h2;
           end
       3'h2:
           if (sample) begin
-            \$622  = 3'h1;
+            \$621  = 3'h1;
           end
       3'h1:
           if (sample) begin
@@ -16580,33 +16562,56 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
               if (\$68 ) begin
                 (* full_case = 32'd1 *)
                 if (\$69 ) begin
-                  \$622  = 3'h3;
+                  \$621  = 3'h3;
                 end else begin
-                  \$622  = 3'h4;
+                  \$621  = 3'h4;
                 end
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$622  = 3'h5;
+            \$621  = 3'h5;
           end
       3'h5:
           if (sample) begin
             if (\$77 ) begin
-              \$622  = 3'h4;
+              \$621  = 3'h4;
             end
           end
       3'h4:
           if (sample) begin
-            \$622  = 3'h6;
+            \$621  = 3'h6;
           end
     endcase
     if (receiver_clear) begin
-      \$622  = 3'h0;
+      \$621  = 3'h0;
     end
     if (rst) begin
-      \$622  = 3'h0;
+      \$621  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$622  = started;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+          end else if (\$44 ) begin
+            \$622  = 1'h1;
+          end
+      3'h2:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$622  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$622  = 1'h0;
+    end
+    if (rst) begin
+      \$622  = 1'h0;
     end
   end
   always @* begin
@@ -17022,9 +17027,9 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$6894$272 [0];
-  assign ssi_double = \port$6894$272 [2];
-  assign ssi_error_low = \port$6894$272 [1];
+  assign ssi_error = \port$6850$272 [0];
+  assign ssi_double = \port$6850$272 [2];
+  assign ssi_error_low = \port$6850$272 [1];
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$53  = crcs;
   assign \bit$58  = \bit ;
@@ -18179,41 +18184,36 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$14 , start_slot, clk);
+module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire \$1 ;
-  wire [8:0] \$10 ;
-  wire [9:0] \$11 ;
-  wire \$12 ;
-  reg [7:0] \$13 ;
-  wire [8:0] \$14 ;
-  wire [8:0] \$15 ;
-  wire [8:0] \$16 ;
-  wire [9:0] \$17 ;
-  wire [7:0] \$18 ;
-  wire [8:0] \$19 ;
+  wire [7:0] \$10 ;
+  wire [8:0] \$11 ;
+  wire [16:0] \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  reg [7:0] \$19 ;
   reg [7:0] \$2 ;
-  wire [16:0] \$20 ;
-  wire \$21 ;
-  wire \$22 ;
-  wire \$23 ;
-  wire \$24 ;
-  reg [7:0] \$25 ;
-  wire [8:0] \$26 ;
-  wire [8:0] \$27 ;
+  wire [8:0] \$20 ;
+  wire [8:0] \$21 ;
+  reg [7:0] \$22 ;
+  reg [7:0] \$23 ;
+  reg [8:0] \$24 ;
+  reg [16:0] \$25 ;
+  reg \$26 ;
+  reg \$27 ;
   reg [7:0] \$28 ;
-  reg [8:0] \$29 ;
   wire [8:0] \$3 ;
-  reg [16:0] \$30 ;
-  reg \$31 ;
-  reg \$32 ;
-  reg [7:0] \$33 ;
   wire [8:0] \$4 ;
   wire [8:0] \$5 ;
-  wire \$6 ;
-  reg [7:0] \$7 ;
+  wire [8:0] \$6 ;
+  wire [9:0] \$7 ;
   wire [8:0] \$8 ;
-  wire [8:0] \$9 ;
+  wire [9:0] \$9 ;
   input clear;
   wire clear;
   input clk;
@@ -18233,6 +18233,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, ssi, ssi_error
   output enough;
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
+  reg [7:0] n = 8'h00;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -18246,8 +18247,8 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, ssi, ssi_error
   input [15:0] start_slot;
   wire [15:0] start_slot;
   reg started = 1'h0;
-  input \started$14 ;
-  wire \started$14 ;
+  input \started$15 ;
+  wire \started$15 ;
   reg [16:0] target_rises = 17'h00000;
   input w1_enable;
   wire w1_enable;
@@ -18282,38 +18283,36 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, ssi, ssi_error
   assign \$1  = ssi & ssi_error;
   assign \$3  = \$2  + crcs[4:0];
   assign \$4  = words[5:0] + \$3 [7:0];
-  assign \$5  = \$4 [7:0] + 1'h1;
-  assign \$6  = ssi & ssi_error;
-  assign \$8  = \$7  + crcs[4:0];
-  assign \$9  = words[5:0] + \$8 [7:0];
-  assign \$10  = \$9 [7:0] + 1'h1;
-  assign \$11  = ssi_double ? { \$5 , 1'h0 } : { 1'h0, \$10  };
-  assign \$12  = ssi & ssi_error;
-  assign \$14  = \$13  + crcs[4:0];
-  assign \$15  = words[5:0] + \$14 [7:0];
-  assign \$16  = \$15 [7:0] + 3'h4;
-  assign \$17  = ssi ? \$11  : { 1'h0, \$16  };
-  assign \$18  = w1_enable ? word1_len : 8'h00;
-  assign \$19  = word0_len + \$18 ;
-  assign \$20  = start_slot + frame_len;
-  assign \$21  = rises >= target_rises;
-  assign \$22  = started & \$21 ;
-  assign \$23  = ~ clear;
-  assign \$24  = \$22  & \$23 ;
-  assign \$26  = \$25  + crcs[42:38];
-  assign \$27  = words[17:12] + \$26 [7:0];
+  assign \$5  = n + 1'h1;
+  assign \$6  = n + 1'h1;
+  assign \$7  = ssi_double ? { \$5 , 1'h0 } : { 1'h0, \$6  };
+  assign \$8  = n + 3'h4;
+  assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
+  assign \$10  = w1_enable ? word1_len : 8'h00;
+  assign \$11  = word0_len + \$10 ;
+  assign \$12  = start_slot + frame_len;
+  assign \$13  = | rises;
+  assign \$14  = ssi ? \$13  : \started$15 ;
+  assign \$15  = rises >= target_rises;
+  assign \$16  = started & \$15 ;
+  assign \$17  = ~ clear;
+  assign \$18  = \$16  & \$17 ;
+  assign \$20  = \$19  + crcs[42:38];
+  assign \$21  = words[17:12] + \$20 [7:0];
   always @(posedge clk)
-    word0_len <= \$28 ;
+    n <= \$22 ;
   always @(posedge clk)
-    frame_len <= \$29 ;
+    word0_len <= \$23 ;
   always @(posedge clk)
-    target_rises <= \$30 ;
+    frame_len <= \$24 ;
   always @(posedge clk)
-    started <= \$31 ;
+    target_rises <= \$25 ;
   always @(posedge clk)
-    enough <= \$32 ;
+    started <= \$26 ;
   always @(posedge clk)
-    word1_len <= \$33 ;
+    enough <= \$27 ;
+  always @(posedge clk)
+    word1_len <= \$28 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     (* full_case = 32'd1 *)
@@ -18339,101 +18338,64 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, w1_enable, ssi, ssi_error
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$6 , words[7:6] })
-      3'h0:
-          \$7  = 8'h00;
-      3'h1:
-          \$7  = 8'h02;
-      3'h2:
-          \$7  = 8'h06;
-      3'h3:
-          \$7  = 8'h08;
-      3'h4:
-          \$7  = 8'h01;
-      3'h5:
-          \$7  = 8'h03;
-      3'h6:
-          \$7  = 8'h07;
-      3'h7:
-          \$7  = 8'h09;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$12 , words[7:6] })
-      3'h0:
-          \$13  = 8'h00;
-      3'h1:
-          \$13  = 8'h02;
-      3'h2:
-          \$13  = 8'h06;
-      3'h3:
-          \$13  = 8'h08;
-      3'h4:
-          \$13  = 8'h01;
-      3'h5:
-          \$13  = 8'h03;
-      3'h6:
-          \$13  = 8'h07;
-      3'h7:
-          \$13  = 8'h09;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
-    (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$25  = 8'h00;
+          \$19  = 8'h00;
       2'h1:
-          \$25  = 8'h02;
+          \$19  = 8'h02;
       2'h2:
-          \$25  = 8'h06;
+          \$19  = 8'h06;
       2'h3:
-          \$25  = 8'h08;
+          \$19  = 8'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
-    \$28  = \$17 [7:0];
+    \$22  = \$4 [7:0];
+    if (rst) begin
+      \$22  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    \$23  = \$9 [7:0];
+    if (rst) begin
+      \$23  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    \$24  = \$11 ;
+    if (rst) begin
+      \$24  = 9'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    \$25  = \$12 ;
+    if (rst) begin
+      \$25  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    \$26  = \$14 ;
+    if (rst) begin
+      \$26  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    \$27  = \$18 ;
+    if (rst) begin
+      \$27  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    \$28  = \$21 [7:0];
     if (rst) begin
       \$28  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
-    \$29  = \$19 ;
-    if (rst) begin
-      \$29  = 9'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
-    \$30  = \$20 ;
-    if (rst) begin
-      \$30  = 17'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
-    \$31  = \started$14 ;
-    if (rst) begin
-      \$31  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
-    \$32  = \$24 ;
-    if (rst) begin
-      \$32  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
-    \$33  = \$27 [7:0];
-    if (rst) begin
-      \$33  = 8'h00;
     end
   end
   assign \words[0]  = words[11:0];
@@ -20576,7 +20538,7 @@ module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6894$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6850$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20710,8 +20672,8 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6894$259 ;
-  wire [12:0] \port$6894$259 ;
+  input [12:0] \port$6850$259 ;
+  wire [12:0] \port$6850$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -20736,7 +20698,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6894$259 [12:1] + 1'h1;
+  assign \$11  = \port$6850$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -20861,7 +20823,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6894$259 [0]),
+    .clear_high(\port$6850$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -21004,7 +20966,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6894$259 [0]) begin
+            if (\port$6850$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -21089,7 +21051,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6894$259 [0]) begin
+            if (\port$6850$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -21128,7 +21090,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6894$259 [12:1] };
+            \$85  = { 1'h0, \port$6850$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -21513,11 +21475,11 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6894$259 [12:1] };
-  assign fixed = \port$6894$259 [0];
+  assign fixed_delay = { 1'h0, \port$6850$259 [12:1] };
+  assign fixed = \port$6850$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6894$259 [0];
+  assign clear_high = \port$6850$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -21924,7 +21886,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6882$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6838$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -21966,8 +21928,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6882$0 ;
-  wire \port$6882$0 ;
+  input \port$6838$0 ;
+  wire \port$6838$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -21981,9 +21943,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6882$0  };
-  assign \$2  = { lc[4:0], \port$6882$0  } == last;
-  assign \$3  = { lc[4:0], \port$6882$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6838$0  };
+  assign \$2  = { lc[4:0], \port$6838$0  } == last;
+  assign \$3  = { lc[4:0], \port$6838$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -22093,7 +22055,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6882$0  };
+  assign lc_next = { lc[4:0], \port$6838$0  };
   assign zero = is_zero;
 endmodule
 
@@ -22649,7 +22611,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2967$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2945$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire \$1 ;
@@ -22821,8 +22783,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2967$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$2967$0 ;
-  wire \port$2967$0 ;
+  output \port$2945$0 ;
+  wire \port$2945$0 ;
   output report;
   wire report;
   input report_frame;
@@ -22940,7 +22902,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2967$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2967$0  = \$2 ;
+  assign \port$2945$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -22991,7 +22953,7 @@ endmodule
 module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7770$0 , \port$7783$0 , regs__ca_done, \port$7860$0 , slo);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7730$0 , \port$7743$0 , regs__ca_done, \port$7820$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -23173,12 +23135,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7770$0 ;
-  wire [186:0] \port$7770$0 ;
-  output [79:0] \port$7783$0 ;
-  wire [79:0] \port$7783$0 ;
-  output [9:0] \port$7860$0 ;
-  wire [9:0] \port$7860$0 ;
+  output [186:0] \port$7730$0 ;
+  wire [186:0] \port$7730$0 ;
+  output [79:0] \port$7743$0 ;
+  wire [79:0] \port$7743$0 ;
+  output [9:0] \port$7820$0 ;
+  wire [9:0] \port$7820$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -23633,9 +23595,9 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$7770$0  = \$18 ;
-  assign \port$7783$0  = \$19 ;
-  assign \port$7860$0  = \$20 ;
+  assign \port$7730$0  = \$18 ;
+  assign \port$7743$0  = \$19 ;
+  assign \port$7820$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -24707,7 +24669,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7426$272 (cycle[274:272]),
+    .\port$7384$272 (cycle[274:272]),
     .receiver_clear(\clear$135 ),
     .rst(rst),
     .sample(sample),
@@ -24773,7 +24735,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .ssi_double(cycle[274]),
     .ssi_error(cycle[272]),
     .start_slot(start_slot),
-    .\started$14 (started),
+    .\started$15 (started),
     .w1_enable(cycle[199]),
     .words(\words$181 )
   );
@@ -24818,7 +24780,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7426$259 (cycle[271:259]),
+    .\port$7384$259 (cycle[271:259]),
     .receiver_clear(\clear$135 ),
     .rst(rst),
     .sample(\sample$342 ),
@@ -24842,7 +24804,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7414$0 (\bit ),
+    .\port$7372$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -24908,7 +24870,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5413$0 (\$28 ),
+    .\port$5369$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -28969,7 +28931,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$7426$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$7384$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire [6:0] \$1 ;
@@ -29545,15 +29507,15 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg \$612 ;
   reg [15:0] \$613 ;
   reg \$614 ;
-  reg \$615 ;
-  reg [6:0] \$616 ;
+  reg [6:0] \$615 ;
+  reg \$616 ;
   reg \$617 ;
   reg \$618 ;
   reg \$619 ;
   wire \$62 ;
   reg \$620 ;
-  reg \$621 ;
-  reg [2:0] \$622 ;
+  reg [2:0] \$621 ;
+  reg \$622 ;
   reg [15:0] \$623 ;
   reg \$624 ;
   reg \$625 ;
@@ -29672,8 +29634,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7426$272 ;
-  wire [2:0] \port$7426$272 ;
+  input [2:0] \port$7384$272 ;
+  wire [2:0] \port$7384$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -29740,8 +29702,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$367  = ssi & \port$7426$272 [0];
-  assign \$368  = ~ \port$7426$272 [1];
+  assign \$367  = ssi & \port$7384$272 [0];
+  assign \$368  = ~ \port$7384$272 [1];
   assign \$369  = \$367  & \$368 ;
   assign \$370  = \bit  ^ \$369 ;
   assign \$371  = ~ words[6];
@@ -30023,21 +29985,21 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   always @(posedge clk)
     slots_full <= \$614 ;
   always @(posedge clk)
-    started <= \$615 ;
+    idx <= \$615 ;
   always @(posedge clk)
-    idx <= \$616 ;
+    in_data <= \$616 ;
   always @(posedge clk)
-    in_data <= \$617 ;
+    in_lc <= \$617 ;
   always @(posedge clk)
-    in_lc <= \$618 ;
+    in_crc <= \$618 ;
   always @(posedge clk)
-    in_crc <= \$619 ;
+    in_top <= \$619 ;
   always @(posedge clk)
-    in_top <= \$620 ;
+    word <= \$620 ;
   always @(posedge clk)
-    word <= \$621 ;
+    decoder_fsm_state <= \$621 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$622 ;
+    started <= \$622 ;
   always @(posedge clk)
     start_slot <= \$623 ;
   always @(posedge clk)
@@ -30062,18 +30024,18 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$7426$272 [0];
+  assign \$3  = ssi & \port$7384$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$7426$272 [0];
+  assign \$6  = ssi & \port$7384$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$7426$272 [0];
+  assign \$9  = ssi & \port$7384$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$7426$272 [0];
+  assign \$14  = ssi & \port$7384$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$7426$272 [0];
+  assign \$18  = ssi & \port$7384$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -30118,7 +30080,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$66  = idx == \$65 ;
   assign \$67  = word_count - 1'h1;
   assign \$68  = word == \$67 ;
-  assign \$69  = ssi & \port$7426$272 [2];
+  assign \$69  = ssi & \port$7384$272 [2];
   assign \$70  = word + 1'h1;
   assign \$71  = idx + 1'h1;
   assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -30409,7 +30371,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$357  = \$354  & \$356 ;
   assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
   assign \$359  = ~ words[6];
-  assign \$360  = ssi & \port$7426$272 [0];
+  assign \$360  = ssi & \port$7384$272 [0];
   assign \$361  = ~ \$360 ;
   assign \$362  = \$359  & \$361 ;
   assign \$363  = ! word;
@@ -30520,72 +30482,81 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$615  = started;
+    \$615  = idx;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$615  = 1'h1;
-          end else if (\$44 ) begin
-            \$615  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$615  = 1'h0;
-    end
-    if (rst) begin
-      \$615  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$616  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$616  = 7'h00;
+            \$615  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$616  = 7'h00;
+            \$615  = 7'h00;
           end
       3'h1:
           if (sample) begin
-            \$616  = \$47 [6:0];
+            \$615  = \$47 [6:0];
             if (\$66 ) begin
-              \$616  = 7'h00;
+              \$615  = 7'h00;
             end
           end
       3'h3:
           /* empty */;
       3'h5:
           if (sample) begin
-            \$616  = \$71 [6:0];
+            \$615  = \$71 [6:0];
           end
     endcase
     if (receiver_clear) begin
-      \$616  = 7'h00;
+      \$615  = 7'h00;
     end
     if (rst) begin
-      \$616  = 7'h00;
+      \$615  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$617  = in_data;
+    \$616  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$617  = w0_data_at0;
+            \$616  = w0_data_at0;
           end
       3'h2:
           if (sample) begin
-            \$617  = w0_data_at0;
+            \$616  = w0_data_at0;
           end
       3'h1:
           if (sample) begin
-            \$617  = \$50 ;
+            \$616  = \$50 ;
             if (\$66 ) begin
-              \$617  = w1_data_at0;
+              \$616  = w1_data_at0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$616  = 1'h0;
+    end
+    if (rst) begin
+      \$616  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$617  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$617  = w0_lc_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$617  = w0_lc_at0;
+          end
+      3'h1:
+          if (sample) begin
+            \$617  = \$56 ;
+            if (\$66 ) begin
+              \$617  = w1_lc_at0;
             end
           end
     endcase
@@ -30598,22 +30569,19 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$618  = in_lc;
+    \$618  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$618  = w0_lc_at0;
+            \$618  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$618  = w0_lc_at0;
+            \$618  = 1'h0;
           end
       3'h1:
           if (sample) begin
-            \$618  = \$56 ;
-            if (\$66 ) begin
-              \$618  = w1_lc_at0;
-            end
+            \$618  = \$62 ;
           end
     endcase
     if (receiver_clear) begin
@@ -30625,66 +30593,42 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$619  = in_crc;
+    \$619  = in_top;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$619  = 1'h0;
+            \$619  = \$45 ;
           end
       3'h2:
           if (sample) begin
-            \$619  = 1'h0;
+            \$619  = \$46 ;
           end
       3'h1:
           if (sample) begin
-            \$619  = \$62 ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$619  = 1'h0;
-    end
-    if (rst) begin
-      \$619  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$620  = in_top;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$620  = \$45 ;
-          end
-      3'h2:
-          if (sample) begin
-            \$620  = \$46 ;
-          end
-      3'h1:
-          if (sample) begin
-            \$620  = \$64 ;
+            \$619  = \$64 ;
             if (\$66 ) begin
-              \$620  = 1'h0;
+              \$619  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$620  = 1'h0;
+      \$619  = 1'h0;
     end
     if (rst) begin
-      \$620  = 1'h0;
+      \$619  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$621  = word;
+    \$620  = word;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$621  = 1'h0;
+            \$620  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$621  = 1'h0;
+            \$620  = 1'h0;
           end
       3'h1:
           if (sample) begin
@@ -30692,31 +30636,31 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
               (* full_case = 32'd1 *)
               if (\$68 ) begin
               end else begin
-                \$621  = \$70 [0];
+                \$620  = \$70 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$621  = 1'h0;
+      \$620  = 1'h0;
     end
     if (rst) begin
-      \$621  = 1'h0;
+      \$620  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
-    \$622  = decoder_fsm_state;
+    \$621  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$622  = 3'h1;
+            \$621  = 3'h1;
           end else if (\$44 ) begin
-            \$622  = 3'h2;
+            \$621  = 3'h2;
           end
       3'h2:
           if (sample) begin
-            \$622  = 3'h1;
+            \$621  = 3'h1;
           end
       3'h1:
           if (sample) begin
@@ -30724,33 +30668,56 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
               if (\$68 ) begin
                 (* full_case = 32'd1 *)
                 if (\$69 ) begin
-                  \$622  = 3'h3;
+                  \$621  = 3'h3;
                 end else begin
-                  \$622  = 3'h4;
+                  \$621  = 3'h4;
                 end
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$622  = 3'h5;
+            \$621  = 3'h5;
           end
       3'h5:
           if (sample) begin
             if (\$77 ) begin
-              \$622  = 3'h4;
+              \$621  = 3'h4;
             end
           end
       3'h4:
           if (sample) begin
-            \$622  = 3'h6;
+            \$621  = 3'h6;
           end
     endcase
     if (receiver_clear) begin
-      \$622  = 3'h0;
+      \$621  = 3'h0;
     end
     if (rst) begin
-      \$622  = 3'h0;
+      \$621  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    \$622  = started;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+          end else if (\$44 ) begin
+            \$622  = 1'h1;
+          end
+      3'h2:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$622  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$622  = 1'h0;
+    end
+    if (rst) begin
+      \$622  = 1'h0;
     end
   end
   always @* begin
@@ -31166,9 +31133,9 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$7426$272 [0];
-  assign ssi_double = \port$7426$272 [2];
-  assign ssi_error_low = \port$7426$272 [1];
+  assign ssi_error = \port$7384$272 [0];
+  assign ssi_double = \port$7384$272 [2];
+  assign ssi_error_low = \port$7384$272 [1];
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$53  = crcs;
   assign \bit$58  = \bit ;
@@ -32323,41 +32290,36 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$14 , start_slot, clk);
+module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   wire \$1 ;
-  wire [8:0] \$10 ;
-  wire [9:0] \$11 ;
-  wire \$12 ;
-  reg [7:0] \$13 ;
-  wire [8:0] \$14 ;
-  wire [8:0] \$15 ;
-  wire [8:0] \$16 ;
-  wire [9:0] \$17 ;
-  wire [7:0] \$18 ;
-  wire [8:0] \$19 ;
+  wire [7:0] \$10 ;
+  wire [8:0] \$11 ;
+  wire [16:0] \$12 ;
+  wire \$13 ;
+  wire \$14 ;
+  wire \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire \$18 ;
+  reg [7:0] \$19 ;
   reg [7:0] \$2 ;
-  wire [16:0] \$20 ;
-  wire \$21 ;
-  wire \$22 ;
-  wire \$23 ;
-  wire \$24 ;
-  reg [7:0] \$25 ;
-  wire [8:0] \$26 ;
-  wire [8:0] \$27 ;
+  wire [8:0] \$20 ;
+  wire [8:0] \$21 ;
+  reg [7:0] \$22 ;
+  reg [7:0] \$23 ;
+  reg [8:0] \$24 ;
+  reg [16:0] \$25 ;
+  reg \$26 ;
+  reg \$27 ;
   reg [7:0] \$28 ;
-  reg [8:0] \$29 ;
   wire [8:0] \$3 ;
-  reg [16:0] \$30 ;
-  reg \$31 ;
-  reg \$32 ;
-  reg [7:0] \$33 ;
   wire [8:0] \$4 ;
   wire [8:0] \$5 ;
-  wire \$6 ;
-  reg [7:0] \$7 ;
+  wire [8:0] \$6 ;
+  wire [9:0] \$7 ;
   wire [8:0] \$8 ;
-  wire [8:0] \$9 ;
+  wire [9:0] \$9 ;
   input clear;
   wire clear;
   input clk;
@@ -32377,6 +32339,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, ssi, ssi_error
   output enough;
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
+  reg [7:0] n = 8'h00;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -32390,8 +32353,8 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, ssi, ssi_error
   input [15:0] start_slot;
   wire [15:0] start_slot;
   reg started = 1'h0;
-  input \started$14 ;
-  wire \started$14 ;
+  input \started$15 ;
+  wire \started$15 ;
   reg [16:0] target_rises = 17'h00000;
   input w1_enable;
   wire w1_enable;
@@ -32426,38 +32389,36 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, ssi, ssi_error
   assign \$1  = ssi & ssi_error;
   assign \$3  = \$2  + crcs[4:0];
   assign \$4  = words[5:0] + \$3 [7:0];
-  assign \$5  = \$4 [7:0] + 1'h1;
-  assign \$6  = ssi & ssi_error;
-  assign \$8  = \$7  + crcs[4:0];
-  assign \$9  = words[5:0] + \$8 [7:0];
-  assign \$10  = \$9 [7:0] + 1'h1;
-  assign \$11  = ssi_double ? { \$5 , 1'h0 } : { 1'h0, \$10  };
-  assign \$12  = ssi & ssi_error;
-  assign \$14  = \$13  + crcs[4:0];
-  assign \$15  = words[5:0] + \$14 [7:0];
-  assign \$16  = \$15 [7:0] + 3'h4;
-  assign \$17  = ssi ? \$11  : { 1'h0, \$16  };
-  assign \$18  = w1_enable ? word1_len : 8'h00;
-  assign \$19  = word0_len + \$18 ;
-  assign \$20  = start_slot + frame_len;
-  assign \$21  = rises >= target_rises;
-  assign \$22  = started & \$21 ;
-  assign \$23  = ~ clear;
-  assign \$24  = \$22  & \$23 ;
-  assign \$26  = \$25  + crcs[42:38];
-  assign \$27  = words[17:12] + \$26 [7:0];
+  assign \$5  = n + 1'h1;
+  assign \$6  = n + 1'h1;
+  assign \$7  = ssi_double ? { \$5 , 1'h0 } : { 1'h0, \$6  };
+  assign \$8  = n + 3'h4;
+  assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
+  assign \$10  = w1_enable ? word1_len : 8'h00;
+  assign \$11  = word0_len + \$10 ;
+  assign \$12  = start_slot + frame_len;
+  assign \$13  = | rises;
+  assign \$14  = ssi ? \$13  : \started$15 ;
+  assign \$15  = rises >= target_rises;
+  assign \$16  = started & \$15 ;
+  assign \$17  = ~ clear;
+  assign \$18  = \$16  & \$17 ;
+  assign \$20  = \$19  + crcs[42:38];
+  assign \$21  = words[17:12] + \$20 [7:0];
   always @(posedge clk)
-    word0_len <= \$28 ;
+    n <= \$22 ;
   always @(posedge clk)
-    frame_len <= \$29 ;
+    word0_len <= \$23 ;
   always @(posedge clk)
-    target_rises <= \$30 ;
+    frame_len <= \$24 ;
   always @(posedge clk)
-    started <= \$31 ;
+    target_rises <= \$25 ;
   always @(posedge clk)
-    enough <= \$32 ;
+    started <= \$26 ;
   always @(posedge clk)
-    word1_len <= \$33 ;
+    enough <= \$27 ;
+  always @(posedge clk)
+    word1_len <= \$28 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     (* full_case = 32'd1 *)
@@ -32483,101 +32444,64 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, w1_enable, ssi, ssi_error
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     (* full_case = 32'd1 *)
-    casez ({ \$6 , words[7:6] })
-      3'h0:
-          \$7  = 8'h00;
-      3'h1:
-          \$7  = 8'h02;
-      3'h2:
-          \$7  = 8'h06;
-      3'h3:
-          \$7  = 8'h08;
-      3'h4:
-          \$7  = 8'h01;
-      3'h5:
-          \$7  = 8'h03;
-      3'h6:
-          \$7  = 8'h07;
-      3'h7:
-          \$7  = 8'h09;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$12 , words[7:6] })
-      3'h0:
-          \$13  = 8'h00;
-      3'h1:
-          \$13  = 8'h02;
-      3'h2:
-          \$13  = 8'h06;
-      3'h3:
-          \$13  = 8'h08;
-      3'h4:
-          \$13  = 8'h01;
-      3'h5:
-          \$13  = 8'h03;
-      3'h6:
-          \$13  = 8'h07;
-      3'h7:
-          \$13  = 8'h09;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
-    (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$25  = 8'h00;
+          \$19  = 8'h00;
       2'h1:
-          \$25  = 8'h02;
+          \$19  = 8'h02;
       2'h2:
-          \$25  = 8'h06;
+          \$19  = 8'h06;
       2'h3:
-          \$25  = 8'h08;
+          \$19  = 8'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
-    \$28  = \$17 [7:0];
+    \$22  = \$4 [7:0];
+    if (rst) begin
+      \$22  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$23  = \$9 [7:0];
+    if (rst) begin
+      \$23  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$24  = \$11 ;
+    if (rst) begin
+      \$24  = 9'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$25  = \$12 ;
+    if (rst) begin
+      \$25  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$26  = \$14 ;
+    if (rst) begin
+      \$26  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$27  = \$18 ;
+    if (rst) begin
+      \$27  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    \$28  = \$21 [7:0];
     if (rst) begin
       \$28  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
-    \$29  = \$19 ;
-    if (rst) begin
-      \$29  = 9'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
-    \$30  = \$20 ;
-    if (rst) begin
-      \$30  = 17'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
-    \$31  = \started$14 ;
-    if (rst) begin
-      \$31  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
-    \$32  = \$24 ;
-    if (rst) begin
-      \$32  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
-    \$33  = \$27 [7:0];
-    if (rst) begin
-      \$33  = 8'h00;
     end
   end
   assign \words[0]  = words[11:0];
@@ -34720,7 +34644,7 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7426$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7384$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -34854,8 +34778,8 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7426$259 ;
-  wire [12:0] \port$7426$259 ;
+  input [12:0] \port$7384$259 ;
+  wire [12:0] \port$7384$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -34880,7 +34804,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7426$259 [12:1] + 1'h1;
+  assign \$11  = \port$7384$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -35005,7 +34929,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7426$259 [0]),
+    .clear_high(\port$7384$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -35148,7 +35072,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7426$259 [0]) begin
+            if (\port$7384$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -35233,7 +35157,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7426$259 [0]) begin
+            if (\port$7384$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -35272,7 +35196,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7426$259 [12:1] };
+            \$85  = { 1'h0, \port$7384$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -35657,11 +35581,11 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7426$259 [12:1] };
-  assign fixed = \port$7426$259 [0];
+  assign fixed_delay = { 1'h0, \port$7384$259 [12:1] };
+  assign fixed = \port$7384$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7426$259 [0];
+  assign clear_high = \port$7384$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -36068,7 +35992,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7414$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7372$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -36110,8 +36034,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7414$0 ;
-  wire \port$7414$0 ;
+  input \port$7372$0 ;
+  wire \port$7372$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -36125,9 +36049,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7414$0  };
-  assign \$2  = { lc[4:0], \port$7414$0  } == last;
-  assign \$3  = { lc[4:0], \port$7414$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7372$0  };
+  assign \$2  = { lc[4:0], \port$7372$0  } == last;
+  assign \$3  = { lc[4:0], \port$7372$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -36237,7 +36161,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7414$0  };
+  assign lc_next = { lc[4:0], \port$7372$0  };
   assign zero = is_zero;
 endmodule
 
@@ -36793,7 +36717,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5413$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5369$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
@@ -36965,8 +36889,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5413$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$5413$0 ;
-  wire \port$5413$0 ;
+  output \port$5369$0 ;
+  wire \port$5369$0 ;
   output report;
   wire report;
   input report_frame;
@@ -37084,7 +37008,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5413$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5413$0  = \$2 ;
+  assign \port$5369$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -282,7 +282,7 @@ async def driver_refuses_bad_settings(dut):
     assert (good.word[0].data_bits, good.word[0].crc, good.word1_enable) == \
         (w0.data_bits, CRC_CODE[w0.crc], False)
     field = {f"{r}.{f}": spec for r in ("cfg_ma", "cfg_period", "cfg_words", "cfg_checks",
-                                         "cfg_quiet")
+                                         "cfg_quiet", "cfg_ssi")
              for f, spec in tb.map.channel[r].fields.items()}
 
     def width(path):
@@ -317,9 +317,15 @@ async def driver_refuses_bad_settings(dut):
         ("BISS_ERR_LINE_CHECK", cfg(noise_limit=1 << width("cfg_checks.noise_limit"))),
         ("BISS_ERR_LINE_CHECK", cfg(delay_tolerance=1 << width("cfg_checks.delay_tolerance"))),
         ("BISS_ERR_LINE_CHECK", cfg(confirm_frames=1 << width("cfg_checks.confirm_frames"))),
+        # SSI mode (docs/ports.md, "SSI mode"): one word, no LC, the error bit or nE/nW.
+        ("BISS_ERR_SSI", cfg(ssi=True, word0={"lc": True})),
+        ("BISS_ERR_SSI", cfg(safety, ssi=True)),                    # word 1, SPW check
+        ("BISS_ERR_SSI", cfg(ssi=True, ssi_error=True, word0={"nenw": True})),
+        ("BISS_ERR_SSI", cfg(ssi=True, word0={"nenw": False},
+                             ssi_delay=1 << width("cfg_ssi.ssi_delay"))),
     ]
     before = {r: await tb.read(r, 1) for r in ("cfg_ma", "cfg_period", "cfg_words", "cfg_checks",
-                                               "cfg_quiet")}
+                                               "cfg_quiet", "cfg_ssi")}
     for want, bad in cases:
         got = drv.error_name(await drv.call("biss_configure", byref(ch), byref(bad)))
         assert got == want, f"{want} expected, driver said {got}"

@@ -68,7 +68,10 @@ class FrameDecoder(wiring.Component):
     field and ``crc_ok`` is final.
 
     **SSI** (builds with ``params.ssi``, ``ssi`` high): no Ack, Start or CDS: slot 0 is word 0's
-    first bit (``started`` is set as the cycle begins, ``start_slot`` 0). With ``ssi_error``
+    first bit (``started`` is set with its decision, ``start_slot`` 0). Word 0 begins in the
+    first clock with ``ssi`` high, from the field boundaries registered from ``words``: those
+    must have been stable for a clock before (in the master the configuration is latched while
+    idle, at least one clock before the decoder leaves its reset). With ``ssi_error``
     the word has one error bit right after its data, reported on ``ne[0]`` as an nE is (0: the
     error is active; active high unless ``ssi_error_low``), ``nw[0]`` 1. With ``ssi_double``
     the word comes twice, the copies separated by one bit that must be 0: every bit of the
@@ -193,8 +196,8 @@ class FrameDecoder(wiring.Component):
         with m.FSM(name="decoder_fsm"):
             with m.State("ACK"):
                 with m.If(ssi):
-                    # SSI: no Ack, Start or CDS; slot 0 is word 0's first bit.
-                    m.d.sync += self.started.eq(1)
+                    # SSI: no Ack, Start or CDS; slot 0 is word 0's first bit (``started``
+                    # with its decision, in WORD).
                     begin_words()
                 with m.Elif(self.sample & self.bit):
                     m.d.sync += [self.started.eq(1), self.start_slot.eq(self.slots)]
@@ -205,6 +208,9 @@ class FrameDecoder(wiring.Component):
                     begin_words()
             with m.State("WORD"):
                 m.d.comb += in_word.eq(self.sample)
+                if p.ssi:
+                    with m.If(self.sample):
+                        m.d.sync += self.started.eq(1)      # SSI: slot 0 (BiSS: set already)
                 with m.If(self.sample):
                     m.d.sync += [
                         idx.eq(idx + 1),

@@ -31,8 +31,10 @@ class MaStop(wiring.Component):
     is longer than the frame, MA may stop one clock (rarely one period) later. ``clear`` (the
     receiver's clear, high before every cycle) keeps the flag 0 in a cycle's first clock.
 
-    In SSI (``ssi``; the decoder reports Start in slot 0 as the cycle begins) the frame needs
-    the word's bits plus 1 rises, or twice that with ``ssi_double``.
+    In SSI (``ssi``) the frame needs the word's bits plus 1 rises, or twice that with
+    ``ssi_double``, counted from the first rise (``start_slot`` is 0): MA stops after exactly
+    those, whatever the round trip. The sum takes one register stage more (valid three clocks
+    after the latch, before the first rise can come).
 
     Parameters
     ----------
@@ -85,8 +87,11 @@ class MaStop(wiring.Component):
         target_rises = Signal(SLOT_WIDTH + 1)
         started = Signal()
         if self._ssi:
-            n = word_length(self.words[0], self.crcs[0], width=FRAME_LENGTH_WIDTH,
-                            error_bit=self.ssi & self.ssi_error)
+            # One register stage more: the word's length, then the frame's by mode (one stage
+            # of both was the SSI build's critical path).
+            n = Signal(FRAME_LENGTH_WIDTH)
+            m.d.sync += n.eq(word_length(self.words[0], self.crcs[0], width=FRAME_LENGTH_WIDTH,
+                                         error_bit=self.ssi & self.ssi_error))
             ssi_len = Mux(self.ssi_double, Cat(C(0, 1), n + SSI_RISES_BEYOND_WORD),
                           n + SSI_RISES_BEYOND_WORD)
             m.d.sync += word_len[0].eq(Mux(self.ssi, ssi_len, n + RISES_BEYOND_WORDS))
@@ -94,10 +99,15 @@ class MaStop(wiring.Component):
             m.d.sync += word_len[0].eq(word_length(self.words[0], self.crcs[0],
                                                    extra=RISES_BEYOND_WORDS,
                                                    width=FRAME_LENGTH_WIDTH))
+        # SSI: the frame starts with MA (the first rise), not when Start comes back: MA stops
+        # after exactly its rises, however long the round trip. Every cycle has at least one
+        # clock in WAIT_READY and a low phase of at least 2 clocks before its first rise: the
+        # four stages above have settled by then (one clock to spare).
+        started_now = Mux(self.ssi, self.rises != 0, self.started) if self._ssi else self.started
         m.d.sync += [
             frame_len.eq(word_len[0] + (Mux(self.w1_enable, word_len[1], 0) if two else 0)),
             target_rises.eq(self.start_slot + frame_len),
-            started.eq(self.started),
+            started.eq(started_now),
             self.enough.eq(started & (self.rises >= target_rises) & ~self.clear),
         ]
         if two:

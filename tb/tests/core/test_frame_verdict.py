@@ -30,16 +30,18 @@ FAULT_NAMES = [name for name, code in STATUS.items()
                if STATUS["NO_ACK"] <= code <= STATUS["NO_STOP"]]
 
 
-def _inputs(p, *, w0_lc=0, w1_lc=0, w1_enable=0, spw_check=0, report_frame=0, fault=0,
-            fault_status=0, crc_ok=0, seen=(0, 0, 0), spw_match=0, noisy=0, delay_jump=0, unconfirmed=0):
-    cfg = {"ma_half_period": 5, "w0": {"data_bits": 20, "lc": w0_lc, "crc": 1}}
+def _inputs(p, *, w0_lc=0, w1_lc=0, w1_enable=0, spw_check=0, ssi=0, report_frame=0, fault=0,
+            fault_status=0, crc_ok=0, seen=(0, 0, 0), spw_match=0, noisy=0, delay_jump=0,
+            unconfirmed=0, copy_mismatch=0):
+    cfg = {"ma_half_period": 5, "w0": {"data_bits": 20, "lc": w0_lc, "crc": 1}, "ssi": ssi}
     if p.words == 2:
         cfg.update(w1_enable=w1_enable, spw_check=spw_check,
                    w1={"data_bits": 20, "lc": w1_lc, "crc": 2})
     step = {"cfg": pack(config_layout(p), cfg), "report_frame": report_frame, "fault": fault,
             "fault_status": fault_status, "crc_ok": crc_ok, "lc_repeat_seen": seen[0],
             "lc_skip_seen": seen[1], "lc_zero_seen": seen[2], "noisy": noisy,
-            "delay_jump": delay_jump, "unconfirmed": unconfirmed}
+            "delay_jump": delay_jump, "unconfirmed": unconfirmed,
+            "copy_mismatch": copy_mismatch}
     if p.words == 2:
         step["spw_match"] = spw_match
     return step
@@ -60,7 +62,10 @@ def reference(p, s, cfg):
         lc_word_ok = None                           # no LC in the frame
     lc_check = int(bool(rf and lc_word_ok))
     flags = [lc_check & s[f"lc_{f}_seen"] for f in ("repeat", "skip", "zero")]
-    spw = int(bool(two and cfg.get("spw_check") and w1 and ok0 and ok1 and not s["spw_match"]))
+    # The plausibility fault: the SPW check, or an SSI double transmission's copies differing
+    # (docs/ports.md, "SSI mode"), only with the CRCs good.
+    spw = int(bool(ok0 and ok1 and (two and cfg.get("spw_check") and w1 and not s["spw_match"]
+                                    or cfg.get("ssi") and s["copy_mismatch"])))
     if not ok0 and not ok1:
         status = STATUS["CRC_ERROR_BOTH"] if two else STATUS["CRC_ERROR_WORD0"]
     elif not ok0:
@@ -93,8 +98,7 @@ def reference(p, s, cfg):
            "crc_error": (~ok_bits & (2**p.words - 1)) if rf else 0}
     if rf:
         out["status"] = status
-        if two:
-            out["spw_mismatch"] = spw
+        out["spw_mismatch"] = spw
     elif s["fault"]:
         out["status"] = s["fault_status"]
     return out
@@ -103,15 +107,16 @@ def reference(p, s, cfg):
 def _settings(p):
     """Every valid combination of the settings the verdict reads (docs/ports.md: one LC per
     frame; the SPW check needs word 1)."""
+    ssi = [{"ssi": 1}]              # SSI: one word, no LC, no SPW check
     if p.words == 1:
-        return [{"w0_lc": lc} for lc in (0, 1)]
+        return [{"w0_lc": lc} for lc in (0, 1)] + ssi
     out = []
     for w0_lc, w1_lc, w1_enable, spw_check in itertools.product((0, 1), repeat=4):
         if (w1_enable and w0_lc and w1_lc) or (spw_check and not w1_enable):
             continue
         out.append({"w0_lc": w0_lc, "w1_lc": w1_lc, "w1_enable": w1_enable,
                     "spw_check": spw_check})
-    return out
+    return out + ssi
 
 
 def _check(p, cases):
@@ -127,12 +132,12 @@ def _check(p, cases):
 def test_frame_verdict_reported_frame_exhaustive(p, report_frame):
     cases = []
     for cfg in _settings(p):
-        for crc_ok, seen, match, noisy, jump, unconfirmed in itertools.product(
+        for crc_ok, seen, match, noisy, jump, unconfirmed, copies in itertools.product(
                 range(2**p.words), itertools.product((0, 1), repeat=3),
-                (0, 1) if p.words == 2 else (0,), (0, 1), (0, 1), (0, 1)):
+                (0, 1) if p.words == 2 else (0,), (0, 1), (0, 1), (0, 1), (0, 1)):
             cases.append((cfg, {"report_frame": report_frame, "crc_ok": crc_ok, "seen": seen,
                                 "spw_match": match, "noisy": noisy, "delay_jump": jump,
-                                "unconfirmed": unconfirmed}))
+                                "unconfirmed": unconfirmed, "copy_mismatch": copies}))
     _check(p, cases)
 
 
@@ -181,6 +186,10 @@ PRIORITY = [
                                                        "unconfirmed": 1}, "DELAY_JUMP"),
     ("crc_over_unconfirmed", {"w1_enable": 0}, {"crc_ok": 0b00, "unconfirmed": 1},
      "CRC_ERROR_WORD0"),
+    ("ssi_copies_differ", {"ssi": 1}, {"crc_ok": 0b01, "copy_mismatch": 1}, "SPW_MISMATCH"),
+    ("ssi_copies_differ_crc_first", {"ssi": 1}, {"crc_ok": 0b00, "copy_mismatch": 1},
+     "CRC_ERROR_WORD0"),
+    ("copies_ignored_in_biss", {"w1_enable": 0}, {"crc_ok": 0b01, "copy_mismatch": 1}, "OK"),
 ]
 
 

@@ -145,3 +145,35 @@ def test_ma_stop_random_formats_back_to_back():
     assert trace == reference(steps, targets)
     for begin, target in firsts:
         assert trace[begin + 1] == 0                    # cleared in the cycle's first clocks
+
+
+# -- SSI (docs/ports.md, "SSI mode"): N + 1 rises, 2 N + 2 with the double transmission --------
+
+@pytest.mark.parametrize("bits, error, nenw, crc, double", [
+    (13, 0, False, CRC_NONE, 0),            # 13-bit Gray singleturn: 14 rises
+    (25, 1, False, CRC_NONE, 0),            # 25 bits and an error bit: 27
+    (25, 1, False, CRC_NONE, 1),            # sent twice: 2 x 26 + 2 = 54
+    (19, 0, True, CRC6, 0),                 # extended SSI: 19 + nE nW + CRC-6: 28
+    (55, 1, False, CustomCrc(16, 0x1021), 1),
+])
+@pytest.mark.parametrize("step", (1, 4, 10))
+def test_ma_stop_ssi_rises_from_the_first_whatever_start_says(bits, error, nenw, crc, double,
+                                                              step):
+    """SSI: ``enough`` one clock after ``rises`` reaches N + 1 (N: data, error bit, nE/nW,
+    CRC) or 2 N + 2, counted from the first rise: ``started`` and ``start_slot`` are not
+    waited for. The configuration is set with the receiver's clear, two clocks before it
+    drops, as the master's latch is."""
+    wf = WordFormat(bits, nenw=nenw, crc=crc)
+    n = wf.total_bits + error
+    target = 2 * n + 2 if double else n + 1
+    cfg = {"words": [_word_cfg(wf), _word_cfg(RSH[1])], "w1_enable": 0,
+           "crcs": [crc_settings(crc), crc_settings(CRC16)], "ssi": 1, "ssi_error": error,
+           "ssi_double": double, "started": 0, "start_slot": 0}
+    steps = [{**cfg, "clear": 1, "rises": 0}] * 2
+    # MA's first rise comes at least 2 clocks after the clear (a low phase of >= 2 clocks).
+    steps += [{**cfg, "clear": 0, "rises": (t + 2) // step if t >= 2 else 0}
+              for t in range(step * (target + 3))]
+    trace = [x["enough"] for x in run_clocks(MaStop(2, ssi=True), steps, ["enough"])]
+    first_at_target = next(t for t, s in enumerate(steps) if s["rises"] >= target)
+    assert _first(trace) == first_at_target + 1
+    assert all(trace[first_at_target + 1:])
