@@ -18,7 +18,7 @@ from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
 from master_contract import (CA_COUNTERS, COUNTERS, CRC_CODE, crc_config, NOISE_COUNTERS, NOISE_FIELDS,
                              STATUS, SYS_CLK_HZ, NOISE_CONFIG_DEFAULTS, ConfirmationAccount,
-                             port_position)
+                             SSI_PORTS, port_position)
 
 CLK_HZ = int(os.environ.get("BISS_CLK_HZ", str(SYS_CLK_HZ)))
 CLK_NS = 1e9 / CLK_HZ
@@ -134,6 +134,10 @@ class Testbench:
                                 + (SIGNED_PORTS if self.has_signed else [])):
             getattr(dut, name).value = 0
         self._drive_noise_config(self.noise_defaults)
+        # The SSI mode's ports (builds with it): BiSS unless a scenario asks for SSI.
+        for name in SSI_PORTS:
+            if hasattr(dut, name):
+                getattr(dut, name).value = 0
         # The register-access engine's inputs (builds with it): no access unless a test asks.
         for name in ("ca_slave_id", "ca_address", "ca_count", "ca_write", "ca_start", "ca_abort",
                      "ca_wbuf_addr", "ca_wbuf_data", "ca_wbuf_en", "ca_rbuf_addr", "ca_rbuf_en"):
@@ -141,9 +145,7 @@ class Testbench:
                 getattr(dut, name).value = 0
         dut.slo.value = 1
         dut.rst.value = 1
-        extra = {} if min_cycle_s is None else {"min_cycle_s": min_cycle_s}
-        self.encoder = BissEncoder(dut.ma, dut.slo, cable=cable, respond=self._respond,
-                                   timeout_s=timeout_s, rng=self.rng, control=control, **extra)
+        self.encoder = self._make_encoder(cable, timeout_s, control, min_cycle_s)
         self.encoder.start()
         await ClockCycles(dut.clk, 3)
         dut.rst.value = 0
@@ -153,6 +155,12 @@ class Testbench:
             cocotb.start_soon(self._watch_confirmation())
         # Power-up break: the core is busy for 40 us before it accepts requests.
         await self.wait_idle()
+
+    def _make_encoder(self, cable, timeout_s, control, min_cycle_s):
+        """The encoder model on the MA / SLO pins (an SSI test bench puts its own there)."""
+        extra = {} if min_cycle_s is None else {"min_cycle_s": min_cycle_s}
+        return BissEncoder(self.dut.ma, self.dut.slo, cable=cable, respond=self._respond,
+                           timeout_s=timeout_s, rng=self.rng, control=control, **extra)
 
     async def _watch_confirmation(self):
         """Every reported cycle, by its status: after one with a status outside
