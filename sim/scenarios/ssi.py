@@ -148,13 +148,15 @@ async def ssi_monoflop_periodic(dut):
         for _ in range(6):
             tb.check(await tb.wait_done())
         dut.periodic.value = 0
+        await tb.wait_idle()
+        if len(tb.encoder.records) > tb.next_record:    # one more began before periodic fell
+            tb.check(tb.read())
         recs = tb.encoder.records[first:]
-        assert len(recs) == 6
+        assert len(recs) in (6, 7)
         for prev, nxt in zip(recs, recs[1:]):
             # the next train's first fall reached the encoder after its line went high and
             # stayed high (at the master pin) for the quiet time
             assert nxt.t_latch_s >= prev.t_line_high_s + QUIET_TIME_S, (prev, nxt)
-        await tb.wait_idle()
         await Timer(round(tm_s * 1e6) + 2, "us")
         tb.check_pending()
     await tb.finish()

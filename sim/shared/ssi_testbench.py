@@ -17,7 +17,7 @@ from encoder_model.ssi import ACTIVE_LOW, REPEAT_RING, REPEAT_ZEROS, SsiFormat, 
 from master_contract import (SSI_FIELD_STATUSES, SSI_PORTS, SSI_STATUSES, STATUS,
                              STATUS_NAME, port_position, ssi_ma_pulses, ssi_ne_nw,
                              ssi_word_bits)
-from sim.shared.testbench import Testbench
+from sim.shared.testbench import CLK_HZ, Testbench
 
 
 class SsiTestbench(Testbench):
@@ -141,9 +141,19 @@ class SsiTestbench(Testbench):
         assert (rec.ma_falls, rec.ma_rises) == (self.pulses, self.pulses), \
             f"MA pulses {rec.ma_falls} falls / {rec.ma_rises} rises, expected {self.pulses}"
         self.ssi_pending.append((rec, self.pulses))
+        if not self.cable.jitter_s:
+            self.check_clock(rec)
         if status in SSI_FIELD_STATUSES:
             self.check_fields(res, rec)
         return rec
+
+    def check_clock(self, rec):
+        """MA at the configured half period: each rise a half period after its fall, each fall a
+        half period after the rise before it (the cable delays every edge alike)."""
+        half = self.half_period / CLK_HZ
+        edges = [t for pair in zip(rec.t_falls_s, rec.t_rises_s) for t in pair]
+        gaps = {round((b - a) / half, 6) for a, b in zip(edges, edges[1:])}
+        assert gaps <= {1.0}, f"MA half periods of {sorted(gaps)} x cfg_ma_half_period"
 
     def check_fields(self, res, rec):
         """Position, nE / nW and crc_ok as the encoder sent them (its ``flip`` faults applied:

@@ -79,6 +79,8 @@ class SsiRecord:
     ma_rises: int = 0                   # MA rising edges the encoder saw
     t_line_high_s: float = math.nan     # encoder time the line went high (monoflop ran out)
     ended: bool = False
+    t_falls_s: list[float] = field(default_factory=list)   # encoder times of the MA edges
+    t_rises_s: list[float] = field(default_factory=list)
 
 
 class SsiLineLogic:
@@ -142,6 +144,7 @@ class SsiLineLogic:
             self._last_rise = None
         else:
             self.records[-1].ma_falls += 1
+        self.records[-1].t_falls_s.append(t * self.step_s)
         self._last_fall = t
         self._retrigger(t, self.records[-1].fmt)
         return out, self.high_at
@@ -156,6 +159,7 @@ class SsiLineLogic:
         self._shifted += 1
         rec.ma_rises += 1
         rec.levels.append(lvl)
+        rec.t_rises_s.append(t * self.step_s)
         self._last_rise = t
         if rec.fmt.retrigger == RETRIGGER_ANY:
             self._retrigger(t, rec.fmt)
