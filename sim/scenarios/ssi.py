@@ -9,16 +9,17 @@ the MA pulses the encoder saw (sim/shared/ssi_testbench.SsiTestbench.check).
 """
 
 import cocotb
-from cocotb.triggers import ClockCycles, RisingEdge, Timer
+from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
 
-from encoder_model.cocotb_encoder import Cable
+from encoder_model.cocotb_encoder import BissEncoder, Cable
 from encoder_model.cocotb_ssi import SsiFaults
-from encoder_model.frames import CRC6, CustomCrc
+from encoder_model.frames import CRC6, CRC16, CustomCrc
 from encoder_model.ssi import SsiFormat
-from master_contract import (DEFAULT_TIMEOUT_LIMIT_S, QUIET_TIME_S, SSI_BAD_CONFIGS,
-                             ssi_vote_margin)
+from master_contract import (DEFAULT_TIMEOUT_LIMIT_S, MAX_DATA_BITS, QUIET_TIME_S,
+                             SSI_BAD_CONFIGS, SSI_DELAY_MAX, ssi_vote_margin)
+from protocol_facts import ENCODER_INTERNAL_DELAY_S
 from sim.shared.ssi_testbench import SsiTestbench
-from sim.shared.testbench import CLK_HZ
+from sim.shared.testbench import CLK_HZ, MA_RATES_HZ, preset
 
 SHORT = Cable(length_m=5)
 
@@ -214,4 +215,119 @@ async def ssi_extended_crc(dut):
     tb.encoder.queue(SsiFaults(flip=(fmt.total_bits - 3,)))
     tb.check(await tb.request(), "CRC_ERROR_WORD0")
     await frames_ok(tb, 2)
+    await tb.finish()
+
+
+@cocotb.test()
+async def ssi_word_lengths(dut):
+    """The shortest and the longest words: 1 and 2 position bits, 33 signed, 55 Gray (the
+    widest cfg_w0_data_bits of the default build), with an error bit, double transmission and
+    a CRC-16 after nE nW: every pulse count N + 1 / 2N + 2 and every field."""
+    tb = SsiTestbench(dut, seed=109)
+    await tb.start(cable=SHORT)
+    cases = [(SsiFormat(1), {}), (SsiFormat(2, error_bits=1), {"double": True}),
+             (SsiFormat(33, error_bits=1, error_polarity=("low",)), {"signed": True}),
+             (SsiFormat(MAX_DATA_BITS[0], gray=True), {"double": True}),
+             (SsiFormat(MAX_DATA_BITS[0], nenw=True, crc=CRC16), {"double": True}),
+             (SsiFormat(40, gray=True, error_bits=1), {"signed": True, "double": True})]
+    for fmt, cfg in cases:
+        tb.configure_ssi(fmt, 5e6, **cfg)
+        for position in (None, (1 << fmt.data_bits) - 1, 1 << (fmt.data_bits - 1)):
+            tb.position = position
+            tb.errors = (position is None,)
+            tb.nenw = (0, 1) if position is None else (1, 1)
+            await frames_ok(tb, 1)
+    await tb.finish()
+
+
+@cocotb.test()
+async def ssi_ma_rates_with_jitter(dut):
+    """Every MA rate of the regression (250 kHz .. 10 MHz) over 0 and 100 m, each edge jittered
+    by up to 5 % of the MA period each way: a 17-bit Gray word with an active-low error bit."""
+    tb = SsiTestbench(dut, seed=110)
+    await tb.start()
+    fmt = SsiFormat(17, gray=True, error_bits=1, error_polarity=("low",))
+    for cable_m in (0, 100):
+        for ma_hz in MA_RATES_HZ:
+            tb.set_cable(Cable(length_m=cable_m, jitter_s=0.05 / ma_hz))
+            tb.configure_ssi(fmt, ma_hz)
+            for active in (False, True):
+                tb.errors = (active,)
+                await frames_ok(tb, 1)
+    await tb.finish()
+
+
+@cocotb.test()
+async def ssi_round_trip_of_many_periods(dut):
+    """cfg_ssi_delay far beyond the frame: 3000 clocks (30 us) and the largest, 4095 clocks,
+    at 10 MHz (a round trip of hundreds of MA periods) and at 1 MHz, with double transmission."""
+    tb = SsiTestbench(dut, seed=111)
+    await tb.start()
+    for clocks in (3000, SSI_DELAY_MAX):
+        tb.set_cable(Cable(extra_round_trip_s=clocks / CLK_HZ - ENCODER_INTERNAL_DELAY_S))
+        assert round(tb.true_delay_clocks()) == clocks
+        for ma_hz, double in ((10e6, False), (10e6, True), (1e6, False)):
+            tb.configure_ssi(SsiFormat(24, gray=True), ma_hz, double=double)
+            await frames_ok(tb, 2)
+    await tb.finish()
+
+
+@cocotb.test()
+async def ssi_abort(dut):
+    """abort_cycle in the middle of an SSI train: ABORTED, not valid, MA back high with fewer
+    pulses than the word needs; the next cycle waits for the encoder's line (tm) and latches
+    anew: OK (ABORTED calls for no confirmation)."""
+    fmt = SsiFormat(13, gray=True)
+    tb = await bench(dut, 112, fmt, 1e6)
+    await frames_ok(tb, 1)
+    for delay_us in (4, 9):
+        await tb.wait_idle()
+        await tb.encoder_ready()
+        await Timer(1.2, "us")
+        await RisingEdge(dut.clk)
+        dut.start.value = 1
+        await RisingEdge(dut.clk)
+        dut.start.value = 0
+        await Timer(delay_us, "us")
+        await FallingEdge(dut.clk)
+        dut.abort_cycle.value = 1
+        done = cocotb.start_soon(tb.wait_done(limit_s=10e-6))
+        await FallingEdge(dut.clk)
+        dut.abort_cycle.value = 0
+        rec = tb.check(await done, "ABORTED")
+        assert rec.ma_rises < tb.pulses, rec
+        res = await tb.request()
+        assert tb.expected_status(res, "OK") == "OK"
+        nxt = tb.check(res)
+        assert nxt.t_latch_s >= rec.t_line_high_s, "a train within tm after the abort"
+    await tb.finish()
+
+
+@cocotb.test()
+async def ssi_and_biss_alternate(dut):
+    """cfg_ssi is taken per cycle: SSI frames, then BiSS frames from a BiSS encoder on the same
+    pins (the SSI one unplugged), then SSI again; each mode's frames are right."""
+    tb = await bench(dut, 113, SsiFormat(20), 5e6)
+    ssi_encoder = tb.encoder
+    await frames_ok(tb, 2)
+    for round_ in range(2):
+        await tb.wait_idle()
+        await Timer(round(tb.ssi_fmt.tm_s * 1e6) + 2, "us")
+        tb.check_pending()
+        ssi_encoder.stop()
+        tb.encoder = BissEncoder(dut.ma, dut.slo, cable=SHORT, respond=tb._respond,
+                                 rng=tb.rng)
+        tb.encoder.start()
+        tb.configure(preset("resolute_fs_rsh" if round_ else "bp3_24"), 5e6)
+        for _ in range(2):
+            tb.check_frame(await tb.request())
+        await tb.wait_idle()
+        await tb.encoder_ready()
+        tb.check_pending()
+        assert not tb.pending
+        tb.encoder.stop()
+        tb.encoder = ssi_encoder
+        ssi_encoder.start()
+        tb.configure_ssi(SsiFormat(20, error_bits=1), 5e6, double=bool(round_))
+        await frames_ok(tb, 2)
     await tb.finish()

@@ -101,13 +101,21 @@ class SsiTestbench(Testbench):
 
     # -- one request --------------------------------------------------------------------------
     def check_pending(self):
-        """Records that ended since: no MA edge came after the result was read."""
+        """Records that ended since: no MA edge came after the result was read (an aborted
+        cycle's: MA back high, at most the full count). BiSS cycles (a scenario that swaps the
+        encoders): Testbench's checks."""
+        super().check_pending()
         for item in [i for i in self.ssi_pending if i[0].ended]:
             self.ssi_pending.remove(item)
-            rec, pulses = item
-            assert (rec.ma_falls, rec.ma_rises) == (pulses, pulses), \
-                f"MA pulses {rec.ma_falls} falls / {rec.ma_rises} rises, expected {pulses}: {rec}"
-        assert self.encoder.logic.stray_rises == 0, "an MA rise while the encoder's line was high"
+            rec, pulses, aborted = item
+            if aborted:
+                assert 1 <= rec.ma_falls == rec.ma_rises <= pulses, \
+                    f"aborted: {rec.ma_falls} falls / {rec.ma_rises} rises of {pulses}"
+            else:
+                assert (rec.ma_falls, rec.ma_rises) == (pulses, pulses), \
+                    f"MA pulses {rec.ma_falls} falls / {rec.ma_rises} rises, expected {pulses}"
+        if isinstance(self.encoder, SsiLineEncoder):
+            assert self.encoder.logic.stray_rises == 0, "an MA rise with the encoder's line high"
 
     async def finish(self):
         """End of a scenario: every transmission's line went high, all its checks done."""
@@ -120,7 +128,9 @@ class SsiTestbench(Testbench):
         """A result against the encoder's record: the status (after the confirmation rule),
         ``valid``, ``line_delay`` = cfg_ssi_delay, the MA pulses the encoder saw, and with the
         statuses of SSI_FIELD_STATUSES the position, nE / nW and crc_ok as sent.
-        ``cycle=False``: no MA edge at all was due (BAD_CONFIG, SLO_STUCK_LOW)."""
+        ``cycle=False``: no MA edge at all was due (BAD_CONFIG, SLO_STUCK_LOW). ABORTED: at most
+        the full count of pulses, MA back high (checked once the encoder's line is high).
+        Returns the encoder's record of the cycle (None without one)."""
         status = self.expected_status(res, status)
         assert status in SSI_STATUSES, status
         got = STATUS_NAME.get(res.status, res.status)
@@ -137,21 +147,24 @@ class SsiTestbench(Testbench):
             return None
         assert len(recs) == 1, f"{len(recs)} latches for one cycle: {recs}"
         rec = recs[0]
+        aborted = status == "ABORTED"
         # every rise has reached the encoder before the master decided the last bit
-        assert (rec.ma_falls, rec.ma_rises) == (self.pulses, self.pulses), \
-            f"MA pulses {rec.ma_falls} falls / {rec.ma_rises} rises, expected {self.pulses}"
-        self.ssi_pending.append((rec, self.pulses))
+        if not aborted:
+            assert (rec.ma_falls, rec.ma_rises) == (self.pulses, self.pulses), \
+                f"MA pulses {rec.ma_falls} falls / {rec.ma_rises} rises, expected {self.pulses}"
+        self.ssi_pending.append((rec, self.pulses, aborted))
         if not self.cable.jitter_s:
-            self.check_clock(rec)
+            self.check_clock(rec, cut=aborted)
         if status in SSI_FIELD_STATUSES:
             self.check_fields(res, rec)
         return rec
 
-    def check_clock(self, rec):
+    def check_clock(self, rec, cut=False):
         """MA at the configured half period: each rise a half period after its fall, each fall a
-        half period after the rise before it (the cable delays every edge alike)."""
+        half period after the rise before it (the cable delays every edge alike). ``cut``: an
+        aborted cycle, whose last edge came when the abort did."""
         half = self.half_period / CLK_HZ
-        edges = [t for pair in zip(rec.t_falls_s, rec.t_rises_s) for t in pair]
+        edges = sorted(rec.t_falls_s + rec.t_rises_s)[:-1 if cut else None]
         gaps = {round((b - a) / half, 6) for a, b in zip(edges, edges[1:])}
         assert gaps <= {1.0}, f"MA half periods of {sorted(gaps)} x cfg_ma_half_period"
 

@@ -216,6 +216,8 @@ class Testbench:
             "cfg_w1_enable": int(len(fmt.words) == 2),
             "cfg_spw_check": int(len(fmt.words) == 2), "cfg_spw_tolerance": spw_tolerance,
         }
+        # A BiSS frame format: the SSI mode off (builds with it; SsiTestbench sets it in cfg).
+        ports.update({n: 0 for n in SSI_PORTS if hasattr(dut, n)})
         for w in range(2):
             word = fmt.words[w] if w < len(fmt.words) else frames.WordFormat(1)
             code, custom = crc_config(word.crc)

@@ -103,7 +103,7 @@ class SsiLineLogic:
         self.plan: list[SsiFaults] = []  # faults of the next latches, first first
         self.level = IDLE_LEVEL          # what the encoder drives
         self.high_at: int | None = None  # when the monoflop runs out (None: no train yet)
-        self.stray_rises = 0             # MA rises while the line was high (no latch)
+        self.stray_rises = 0             # MA rises while the line was high, after a latch
         self._shifted = 0
         self._last_fall = self._last_rise = None
 
@@ -152,7 +152,8 @@ class SsiLineLogic:
     def rise(self, t: int) -> tuple[int | None, int | None]:
         """A rising edge at encoder time ``t``: ``(new level or None, high_at)``."""
         if self._expired(t):        # MA held low past tm: the line went high, nothing to send
-            self.stray_rises += 1
+            # (a rise before any fall is MA coming out of the master's reset: no clock)
+            self.stray_rises += bool(self.records)
             return None, self.high_at
         rec = self.records[-1]
         lvl = self._level(rec, self._shifted)
