@@ -39,6 +39,15 @@ CRC_MAX_WIDTH = 16
 COUNTERS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
             "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted",
             "no_stop", "noisy_line", "delay_jump", "noise_event")
+#: The counters that count a cycle by its status (docs/ports.md, "Counters"): one each per
+#: cycle ended with that status (CRC_ERROR_BOTH counts in both CRC counters); BAD_CONFIG, OK,
+#: SIGN_OF_LIFE, SPW_MISMATCH and UNCONFIRMED in none of these.
+STATUS_COUNTERS = {"CRC_ERROR_WORD0": ("crc_word0",), "CRC_ERROR_WORD1": ("crc_word1",),
+                   "CRC_ERROR_BOTH": ("crc_word0", "crc_word1"), "NO_ACK": ("no_ack",),
+                   "NO_START": ("no_start",), "DELAY_RANGE": ("delay_range",),
+                   "SLO_STUCK_LOW": ("slo_stuck_low",), "ABORTED": ("aborted",),
+                   "NO_STOP": ("no_stop",), "NOISY_LINE": ("noisy_line",),
+                   "DELAY_JUMP": ("delay_jump",)}
 #: Counters a one-word build does not have.
 WORD1_COUNTERS = ("crc_word1", "spw_mismatch")
 #: The counters of issue 28's noise defences (a core with ``count_noisy_line``): one per

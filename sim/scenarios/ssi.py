@@ -18,6 +18,7 @@ from encoder_model.ssi import SsiFormat
 from master_contract import (DEFAULT_TIMEOUT_LIMIT_S, MAX_DATA_BITS, QUIET_TIME_S,
                              SSI_BAD_CONFIGS, SSI_DELAY_MAX, ssi_vote_margin)
 from protocol_facts import ENCODER_INTERNAL_DELAY_S
+from sim.shared.discovery import expected_to_fail
 from sim.shared.ssi_testbench import SsiTestbench
 from sim.shared.testbench import CLK_HZ, MA_RATES_HZ, preset
 
@@ -119,17 +120,20 @@ async def ssi_unplugged_encoder(dut):
 @cocotb.test()
 async def ssi_long_cable_10mhz(dut):
     """100 m of cable at 10 MHz (a round trip of over 10 MA half periods): cfg_ssi_delay the
-    true round trip rounded; then off by half_period // 2 - 1 clocks each way."""
+    true round trip rounded; then off by half_period // 2 - 1 clocks each way (1 clock), and
+    at 1 MHz the same (24 clocks)."""
     cable = Cable(length_m=100)
     tb = await bench(dut, 105, SsiFormat(24), 10e6, cable=cable)
     true = tb.true_delay_clocks()
     assert true > 10 * tb.half_period
     await frames_ok(tb, 20)
-    off = ssi_vote_margin(tb.half_period)
-    assert off >= 1
-    for delay in (round(true) - off, round(true) + off):
-        tb.configure_ssi(SsiFormat(24), 10e6, delay=delay)
-        await frames_ok(tb, 4)
+    for ma_hz in (10e6, 1e6):
+        tb.configure_ssi(SsiFormat(24), ma_hz)
+        off = ssi_vote_margin(tb.half_period)
+        assert off >= 1
+        for delay in (round(true) - off, round(true) + off):
+            tb.configure_ssi(SsiFormat(24), ma_hz, delay=delay)
+            await frames_ok(tb, 4 if ma_hz == 10e6 else 2)
     await tb.finish()
 
 
@@ -330,4 +334,109 @@ async def ssi_and_biss_alternate(dut):
         ssi_encoder.start()
         tb.configure_ssi(SsiFormat(20, error_bits=1), 5e6, double=bool(round_))
         await frames_ok(tb, 2)
+    await tb.finish()
+
+
+@cocotb.test()
+async def ssi_stop_bit_high(dut):
+    """The encoder's own bit after the word is 1 (the line otherwise fine): NO_STOP, not valid;
+    with double transmission the bit after copy 2. Recovery: UNCONFIRMED, then OK."""
+    tb = await bench(dut, 114, SsiFormat(21, gray=True), 5e6)
+    await frames_ok(tb, 1)
+    for double in (False, True):
+        tb.configure_ssi(SsiFormat(21, gray=True), 5e6, double=double)
+        tb.encoder.queue(SsiFaults(force=((tb.pulses - 1, 1),)))
+        rec = tb.check(await tb.request(), "NO_STOP")
+        assert rec.levels[-1] == 1 and rec.levels[:rec.fmt.total_bits] == rec.word
+        await frames_ok(tb, 2)                  # UNCONFIRMED, then OK (expected_status)
+    await tb.finish()
+
+
+@cocotb.test()
+async def ssi_config_latched_per_cycle(dut):
+    """The configuration is latched when the cycle starts: changing the word, the delay and
+    cfg_ssi itself during an SSI cycle changes nothing in it."""
+    fmt = SsiFormat(30, error_bits=1)
+    tb = await bench(dut, 115, fmt, 1e6)
+    await frames_ok(tb, 1)
+    for change in ({"cfg_w0_data_bits": 12}, {"cfg_ssi": 0}, {"cfg_ssi_double": 1},
+                   {"cfg_ssi_delay": 900, "cfg_ma_half_period": 20}):
+        await tb.wait_idle()
+        await RisingEdge(dut.clk)
+        dut.start.value = 1
+        await RisingEdge(dut.clk)
+        dut.start.value = 0
+        await Timer(8, "us")                    # the train is running
+        for name, value in change.items():
+            getattr(dut, name).value = value
+        tb.check(await tb.wait_done())
+        tb.configure_ssi(fmt, 1e6)              # back, for the next cycle
+    await tb.finish()
+
+
+@cocotb.test()
+@expected_to_fail("SSI after an abort: with the encoder's line left high and tm (60 us) longer "
+                  "than the break (40 us), the next train comes within tm; the encoder latches "
+                  "nothing and shifts on, and the core reports OK, valid, a wrong position")
+async def ssi_abort_with_long_monoflop(dut):
+    """An abort leaves the encoder mid-word with its line HIGH (every bit 1) and tm 60 us,
+    longer than the break after an abort: the next cycle must still latch anew (the contract:
+    tm is always respected, however long), and report that latch's position."""
+    fmt = SsiFormat(13, tm_s=60e-6)
+    tb = await bench(dut, 116, fmt, 1e6)
+    await frames_ok(tb, 1)
+    tb.position = (1 << 13) - 1
+    await tb.wait_idle()
+    await tb.encoder_ready()
+    await Timer(1.2, "us")
+    await RisingEdge(dut.clk)
+    dut.start.value = 1
+    await RisingEdge(dut.clk)
+    dut.start.value = 0
+    await Timer(6, "us")
+    await FallingEdge(dut.clk)
+    dut.abort_cycle.value = 1
+    done = cocotb.start_soon(tb.wait_done(limit_s=10e-6))
+    await FallingEdge(dut.clk)
+    dut.abort_cycle.value = 0
+    rec = tb.check(await done, "ABORTED")
+    assert rec.levels and rec.levels[-1] == 1, "the line is left high"
+    tb.position = 0x0A5A
+    res = await tb.request()
+    nxt = tb.check(res)
+    assert nxt.t_latch_s >= rec.t_line_high_s, "the next train came within tm"
+    await tb.finish()
+
+
+async def glitch_at_bit(tb, k, width=6):
+    """SLO inverted at the master pin for ``width`` clocks around the centre vote of bit k
+    (MA rising edge k + 1 + cfg_ssi_delay + one half period)."""
+    dut = tb.dut
+    for _ in range(k + 1):
+        await RisingEdge(dut.ma)
+    clk_ns = 1e9 / CLK_HZ
+    await Timer(round((tb.ssi_delay + tb.half_period - width / 2) * clk_ns * 1000), "ps")
+    tb.encoder.force_slo(1 - int(dut.slo.value))
+    await Timer(round(width * clk_ns * 1000), "ps")
+    tb.encoder.force_slo(None)
+
+
+@cocotb.test()
+async def ssi_noise_glitch(dut):
+    """A short glitch on one bit's centre vote: the majority still reads the bit, but it is a
+    noise event: NOISY_LINE with cfg_noise_limit 0 (not valid), the frame OK with limit 1;
+    then UNCONFIRMED / OK as the confirmation rule says."""
+    fmt = SsiFormat(16, error_bits=1)
+    tb = await bench(dut, 117, fmt, 1e6)
+    await frames_ok(tb, 1)
+    for limit, status in ((0, "NOISY_LINE"), (1, "OK"), (0, "NOISY_LINE")):
+        tb.configure_ssi(fmt, 1e6, cfg_noise_limit=limit)
+        for k in (7, 16):                   # a position bit, the error bit
+            glitch = cocotb.start_soon(glitch_at_bit(tb, k))
+            res = await tb.request()
+            assert glitch.done()
+            tb.check(res, status)
+            if "noise_events" in res.fields:
+                assert res.fields["noise_events"] == 1, res.fields["noise_events"]
+            await frames_ok(tb, 2)
     await tb.finish()

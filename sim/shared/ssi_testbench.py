@@ -15,8 +15,8 @@ from encoder_model.cocotb_encoder import Cable
 from encoder_model.cocotb_ssi import SsiLineEncoder
 from encoder_model.ssi import ACTIVE_LOW, REPEAT_RING, REPEAT_ZEROS, SsiFormat, parse_ssi
 from master_contract import (SSI_FIELD_STATUSES, SSI_PORTS, SSI_STATUSES, STATUS,
-                             STATUS_NAME, port_position, ssi_ma_pulses, ssi_ne_nw,
-                             ssi_word_bits)
+                             STATUS_COUNTERS, STATUS_NAME, port_position, ssi_ma_pulses,
+                             ssi_ne_nw, ssi_word_bits)
 from sim.shared.testbench import CLK_HZ, Testbench
 
 
@@ -39,7 +39,8 @@ class SsiTestbench(Testbench):
         self.errors = (False,)
         self.nenw = (1, 1)
         self.next_record = 0            # first encoder record no result has claimed yet
-        self.ssi_pending = []           # (record, pulses) to check again once it ended
+        self.ssi_pending = []           # (record, pulses, aborted) to check once it ended
+        self.status_counts = None       # the status counters after the last checked result
 
     # -- setup ------------------------------------------------------------------------------
     async def start(self, cable=Cable(), fmt=SsiFormat(13)):
@@ -90,6 +91,11 @@ class SsiTestbench(Testbench):
                        **ports)
         self.ssi_fmt, self.double, self.ssi_delay = fmt, double, ports["cfg_ssi_delay"]
         self.encoder.set_format(fmt)
+        self.status_counts = self._status_counts(self.read().counters)
+
+    def _status_counts(self, counters):
+        names = {n for ns in STATUS_COUNTERS.values() for n in ns}
+        return {n: v for n, v in counters.items() if n in names}
 
     @property
     def pulses(self):
@@ -138,6 +144,14 @@ class SsiTestbench(Testbench):
         self.next_record = len(self.encoder.records)
         assert res.status == STATUS[status], f"status {got}, expected {status}; {recs}"
         assert res.valid == int(status == "OK"), f"valid {res.valid} with status {status}"
+        if self.has_counters:
+            # one count in the status's counter(s), none in the others (BAD_CONFIG: none)
+            now = self._status_counts(res.counters)
+            want = dict(self.status_counts)
+            for name in STATUS_COUNTERS.get(status, ()):
+                want[name] += 1
+            assert now == want, f"status counters {now}, expected {want} after {status}"
+            self.status_counts = now
         f = res.fields
         if status != "BAD_CONFIG":
             assert f["line_delay"] == self.ssi_delay, \

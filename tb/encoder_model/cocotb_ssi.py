@@ -56,10 +56,13 @@ class SsiFaults:
                  the copies differ).
     separator  : the level of the bit right after the first copy (ring: the separator between
                  the copies; zeros: the 0 after the LSB), None: as the model sends it.
+    force      : ``(index, level)`` pairs: the level after rising edge ``index + 1`` of the
+                 transmission, whatever the rest says (e.g. the bit after a ring's second copy).
     """
     flip: tuple[int, ...] = ()
     flip_copy2: tuple[int, ...] = ()
     separator: int | None = None
+    force: tuple[tuple[int, int], ...] = ()
 
 
 @dataclass
@@ -186,6 +189,9 @@ class SsiLineLogic:
     def _level(rec: SsiRecord, index: int) -> int:
         """Rising edge ``index + 1``'s level: the model's (``level_after``), faults applied."""
         fmt, f = rec.fmt, rec.faults
+        forced = dict(f.force)
+        if index in forced:
+            return int(forced[index])
         word = [b ^ (i in f.flip) for i, b in enumerate(rec.word)]
         n = len(word)
         if index == n and f.separator is not None:

@@ -124,7 +124,9 @@ def test_faults_flip_the_second_copy_or_force_the_separator():
             (SsiFaults(), word + [0] + word + [0]),
             (SsiFaults(flip_copy2=(3,)), word + [0] + word[:3] + [1 - word[3]] + word[4:] + [0]),
             (SsiFaults(separator=1), word + [1] + word + [0]),
-            (SsiFaults(flip=(7,)), 2 * (word[:7] + [1 - word[7]] + [0]))):
+            (SsiFaults(flip=(7,)), 2 * (word[:7] + [1 - word[7]] + [0])),
+            (SsiFaults(force=((17, 1), (0, 1 - word[0]))),
+             [1 - word[0]] + word[1:] + [0] + word + [1])):
         logic = SsiLineLogic(fmt, lambda t: 0xA5, step_s=PS)
         logic.plan.append(faults)
         assert drive(logic, tr)[1] == want
