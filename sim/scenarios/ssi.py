@@ -440,3 +440,34 @@ async def ssi_noise_glitch(dut):
                 assert res.fields["noise_events"] == 1, res.fields["noise_events"]
             await frames_ok(tb, 2)
     await tb.finish()
+
+
+@cocotb.test()
+async def ssi_glitch_during_monoflop(dut):
+    """A request waits for the encoder's line (tm); a 0.5 us high pulse of noise comes
+    meanwhile, shorter than the quiet time: the master does not start on it (the train still
+    latches anew after tm), and it is a noise event: NOISY_LINE with cfg_noise_limit 0, OK
+    with 1."""
+    fmt = SsiFormat(18, gray=True)
+    tb = await bench(dut, 118, fmt, 2.5e6)
+    for limit, status in ((0, "NOISY_LINE"), (1, "OK")):
+        tb.configure_ssi(fmt, 2.5e6, cfg_noise_limit=limit)
+        await frames_ok(tb, 2)                  # (UNCONFIRMED after a NOISY_LINE, then OK)
+        prev = tb.encoder.records[-1]
+        assert not tb.encoder.ready, "the encoder's line should still be low (tm)"
+
+        async def noise():
+            await Timer(5, "us")
+            tb.encoder.force_slo(1)
+            await Timer(500, "ns")
+            tb.encoder.force_slo(None)
+
+        pulse = cocotb.start_soon(noise())
+        res = await tb.request()
+        assert pulse.done()
+        rec = tb.check(res, status)
+        assert rec.t_latch_s >= prev.t_line_high_s + QUIET_TIME_S, "started within tm"
+        if "noise_events" in res.fields:
+            assert res.fields["noise_events"] >= 1
+    await frames_ok(tb, 2)
+    await tb.finish()
