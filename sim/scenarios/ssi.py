@@ -89,8 +89,9 @@ async def ssi_double_transmission(dut):
 @cocotb.test()
 async def ssi_unplugged_encoder(dut):
     """Unplugged encoder behind a fail-safe receiver (SLO stuck high) -> NO_STOP each cycle;
-    plugged back -> UNCONFIRMED then OK. SLO shorted low -> SLO_STUCK_LOW after
-    cfg_timeout_limit with no MA edge; repaired -> UNCONFIRMED then OK."""
+    plugged back -> UNCONFIRMED then OK. SLO shorted low -> SLO_STUCK_LOW cfg_timeout_limit
+    after MA stopped (80 us by default, then 30 us), with no MA edge; repaired -> UNCONFIRMED
+    then OK."""
     tb = await bench(dut, 104, SsiFormat(13, gray=True), 2.5e6)
     await frames_ok(tb, 1)
     await tb.wait_idle()
@@ -103,17 +104,29 @@ async def ssi_unplugged_encoder(dut):
     assert tb.expected_status(res, "OK") == "UNCONFIRMED"
     tb.check(res)
     await frames_ok(tb, 1)
-    tb.encoder.force_slo(0)
-    edges = tb.encoder.pin_edges
-    for _ in range(2):
+    for limit_s in (DEFAULT_TIMEOUT_LIMIT_S, 30e-6):
+        cfg = {} if limit_s == DEFAULT_TIMEOUT_LIMIT_S else {
+            "cfg_timeout_limit": round(limit_s * CLK_HZ)}
+        tb.configure_ssi(tb.ssi_fmt, 2.5e6, **cfg)
+        await frames_ok(tb, 1)
+        # MA stopped at its last rise (at the pin: the encoder saw it a cable delay later)
+        t_stop = tb.encoder.records[-1].t_rises_s[-1] - tb.cable.m2e_s()
+        tb.encoder.force_slo(0)
+        edges = tb.encoder.pin_edges
+        for i in range(2):
+            res = await tb.request()
+            tb.check(res, "SLO_STUCK_LOW", cycle=False)
+            if i == 0:      # SLO low for cfg_timeout_limit after MA stopped (its last high
+                # half period over), + 1 clock and the verdict's few clocks
+                late = tb.half_period / CLK_HZ + 10 / CLK_HZ
+                assert limit_s <= res.t_done_s - t_stop <= limit_s + late, \
+                    f"SLO_STUCK_LOW {(res.t_done_s - t_stop) * 1e6:.3f} us after MA stopped"
+        assert tb.encoder.pin_edges == edges, "MA moved while SLO was stuck low"
+        tb.encoder.force_slo(None)
         res = await tb.request()
-        tb.check(res, "SLO_STUCK_LOW", cycle=False)
-    assert tb.encoder.pin_edges == edges, "MA moved while SLO was stuck low"
-    tb.encoder.force_slo(None)
-    res = await tb.request()
-    assert tb.expected_status(res, "OK") == "UNCONFIRMED"
-    tb.check(res)
-    await frames_ok(tb, 1)
+        assert tb.expected_status(res, "OK") == "UNCONFIRMED"
+        tb.check(res)
+        await frames_ok(tb, 1)
     await tb.finish()
 
 
