@@ -138,13 +138,16 @@ def generate(params=None, name=None, top="core", **options):
 # The Renishaw encoders are unidirectional (CDS always 0): their builds leave the
 # register-access engine out.
 _NO_ACCESS = ["--register-access", "0"]
-_BISS_C = ["--max-data-bits", "36", "--word-crcs", "6"] + _NO_ACCESS
+# The named BiSS builds leave SSI out (the default build has it).
+_NO_SSI = ["--ssi", "0"]
+_BISS_C = ["--max-data-bits", "36", "--word-crcs", "6"] + _NO_ACCESS + _NO_SSI
 
 #: Named builds: core options for ``--preset``. Options given besides a preset win.
 #: scripts/synth.py measures these, and the test suite simulates each one.
 PRESETS = {
     "default": ("the committed rtl/generated/biss_master.v: 2 words of up to 55/40 bits, "
-                "both CRCs on each, the register-access engine (BP3 identification, EDS)", []),
+                "both CRCs on each, the register-access engine (BP3 identification, EDS), "
+                "SSI mode", []),
     "biss-c": ("BiSS C only: one word of up to 36 bits, CRC-6, no register access", _BISS_C),
     "biss-c-lean": ("BiSS C only, smallest: as biss-c, without error counters, timestamp, "
                     "custom CRCs and signed words, 16-bit time settings",
@@ -154,10 +157,10 @@ PRESETS = {
     "bp3": ("BiSS C / BP3 Standard Encoder Profile: one word of up to 55 bits (the profile's "
             "longest position), CRC-6, the register-access engine (identification, EDS, "
             "encoder registers)",
-            ["--max-data-bits", "55", "--word-crcs", "6", "--register-access", "1"]),
+            ["--max-data-bits", "55", "--word-crcs", "6", "--register-access", "1"] + _NO_SSI),
     "safety": ("BiSS Safety: CPW up to 36 bits with CRC-6, SPW up to 28 bits with CRC-16, "
                "no register access",
-               ["--max-data-bits", "36,28", "--word-crcs", "6,16"] + _NO_ACCESS),
+               ["--max-data-bits", "36,28", "--word-crcs", "6,16"] + _NO_ACCESS + _NO_SSI),
 }
 
 
@@ -249,6 +252,10 @@ def _parser():
                       help="1: a word may be two's complement (cfg_wN_signed: sign-extended to "
                            "its port's width); 0: unsigned words only, no cfg_wN_signed ports "
                            "(default: %(default)s)")
+    core.add_argument("--ssi", type=int, choices=(0, 1), default=int(defaults.ssi),
+                      help="1: the channel may run SSI encoders (cfg_ssi, cfg_ssi_delay, "
+                           "cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double); 0: BiSS only, "
+                           "no cfg_ssi* ports (default: %(default)s)")
     core.add_argument("--register-access", type=int, choices=(0, 1),
                       default=int(defaults.register_access),
                       help="1: build the register-access engine (ca_* ports, CDM hold); "
@@ -288,6 +295,7 @@ def _params(ap, args):
                             timestamp_width=args.timestamp_width,
                             custom_crc=bool(args.custom_crc),
                             signed_words=bool(args.signed_words),
+                            ssi=bool(args.ssi),
                             register_access=bool(args.register_access),
                             start_wait_frames=args.start_wait_frames)
     except ValueError as e:

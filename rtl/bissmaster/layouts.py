@@ -10,7 +10,8 @@ from amaranth.lib import data
 
 from . import protocol
 from .params import (CRC_SETTINGS, DELAY_SPREAD_WIDTH, FAULTS, HALF_PERIOD_WIDTH, LINE_CHECK_WIDTH,
-                     QUIET_WIDTH, AccessStatus, Status, WORD_CONFIG, WORD_CONFIG_UNSIGNED)
+                     QUIET_WIDTH, AccessStatus, Status, WORD_CONFIG, WORD_CONFIG_UNSIGNED,
+                     counter_settle, counter_words)
 
 
 def config_layout(params):
@@ -44,6 +45,11 @@ def config_layout(params):
         if params.custom_crc:
             members["w1_crc"] = CRC_SETTINGS
         members.update({"spw_check": 1, "spw_tolerance": 8})
+    # SSI mode (docs/ports.md, "SSI mode"): ``cfg_ssi``, the round trip ``cfg_ssi_delay``, one
+    # error bit after the position and its polarity, the double transmission.
+    if params.ssi:
+        members.update({"ssi": 1, "ssi_delay": params.delay_limit_width, "ssi_error": 1,
+                        "ssi_error_low": 1, "ssi_double": 1})
     return data.StructLayout(members)
 
 
@@ -152,8 +158,13 @@ ACCESS_COUNTERS = ("ca_crc4_error", "ca_no_answer", "ca_refused", "ca_aborted", 
 #: ``i % 2`` of word ``i // 2`` (the low half for even ``i``), the order of the register map's
 #: counter registers (``count_crc`` .. ``count_noise``, biss_master.rdl).
 RAM_COUNTERS = COUNTERS[:16]
+#: Words of that memory: two counts each.
+COUNT_WORDS = counter_words(len(RAM_COUNTERS))
 #: Word address bits of the counter memory's read port.
-COUNT_ADDR_BITS = 3
+COUNT_ADDR_BITS = (COUNT_WORDS - 1).bit_length()
+#: Longest wait, in clocks, for a count to land in that memory after its event (15: the bus tops
+#: hold a cycle's end for its counts at most this long; docs/ports.md, Counters).
+COUNT_SETTLE = counter_settle(COUNT_WORDS)
 
 
 def counter_slots(params):

@@ -157,9 +157,9 @@ class BissMaster(wiring.Component):
         m.submodules.controller = controller = CycleController(cdm=cdm)
         m.submodules.timers = timers = LimitTimers(p)
         m.submodules.ma_clock = ma_clock = MaClock(cdm=cdm)
-        m.submodules.ma_stop = ma_stop = MaStop(p.words)
+        m.submodules.ma_stop = ma_stop = MaStop(p.words, ssi=p.ssi)
         # The receiver is held in reset between cycles: every cycle starts from scratch.
-        sampler = SloSampler(p.delay_width)
+        sampler = SloSampler(p.delay_width, fixed=p.ssi)
         decoder = FrameDecoder(p)
         m.submodules.sampler = ResetInserter(controller.receiver_clear)(sampler)
         m.submodules.decoder = ResetInserter(controller.receiver_clear)(decoder)
@@ -185,7 +185,8 @@ class BissMaster(wiring.Component):
 
         cycle = config.cycle
         words = config_words(cycle, p)
-        return SimpleNamespace(
+        ssi = cycle.ssi if p.ssi else C(0)        # the cycle is an SSI frame
+        return SimpleNamespace(ssi=ssi,
             config=config, scheduler=scheduler, controller=controller, timers=timers,
             ma_clock=ma_clock, ma_stop=ma_stop, sampler=sampler, decoder=decoder, sol=sol,
             spw_check=spw_check if two else None, line_noise=line_noise,
@@ -226,7 +227,9 @@ class BissMaster(wiring.Component):
             b.controller.ma_enough.eq(b.ma_stop.enough),
             b.controller.locked.eq(b.sampler.locked),
             b.controller.early.eq(b.sampler.early),
-            b.controller.frame_done.eq(b.decoder.done),
+            # SSI: the frame ends with its stop bit (checked there).
+            b.controller.frame_done.eq(Mux(b.ssi, b.decoder.stopped, b.decoder.done)),
+            b.controller.ssi.eq(b.ssi),
             b.controller.started.eq(b.decoder.started),
             b.controller.slots_full.eq(b.decoder.slots_full),
             b.controller.stopped.eq(b.decoder.stopped),
@@ -283,7 +286,8 @@ class BissMaster(wiring.Component):
         m.d.comb += [b.decoder.sample.eq(sample), b.decoder.bit.eq(bit)]
         m.d.comb += [
             b.sampler.half_period.eq(b.cycle.ma_half_period),
-            b.sampler.arm.eq(b.ma_clock.second_rise),
+            # SSI: the first bit comes with the first rise (BiSS: the Ack with the second).
+            b.sampler.arm.eq(Mux(b.ssi, b.ma_clock.first_rise, b.ma_clock.second_rise)),
             b.decoder.word_count.eq(b.config.word_count),
             b.sol.lc.eq(b.decoder.lc),
             b.sol.lc_next.eq(b.decoder.lc_next),
@@ -311,7 +315,8 @@ class BissMaster(wiring.Component):
             b.line_noise.close.eq(b.decoder.done),
             b.line_noise.restart.eq(b.controller.fault),
             b.line_noise.limit.eq(b.cycle.noise_limit),
-            b.delay_check.enable.eq(b.cycle.delay_tolerance != off),
+            # SSI sets its round trip: nothing to check it against.
+            b.delay_check.enable.eq((b.cycle.delay_tolerance != off) & ~b.ssi),
             b.delay_check.tolerance.eq(b.config.delay_tolerance),
             # Writing 15 forgets the settled round trip at once, whatever the master is doing.
             b.delay_check.rearm.eq(self.cfg_delay_tolerance == off),
@@ -333,6 +338,19 @@ class BissMaster(wiring.Component):
                 b.spw_check.bits.eq(b.cycle.w1.data_bits),
                 b.spw_check.tolerance.eq(b.cycle.spw_tolerance),
                 b.verdict.spw_match.eq(b.spw_check.match),
+            ]
+        if p.ssi:
+            m.d.comb += [
+                b.sampler.fixed.eq(b.cycle.ssi),
+                b.sampler.fixed_delay.eq(b.cycle.ssi_delay),
+                b.decoder.ssi.eq(b.cycle.ssi),
+                b.decoder.ssi_error.eq(b.cycle.ssi_error),
+                b.decoder.ssi_error_low.eq(b.cycle.ssi_error_low),
+                b.decoder.ssi_double.eq(b.cycle.ssi_double),
+                b.ma_stop.ssi.eq(b.cycle.ssi),
+                b.ma_stop.ssi_double.eq(b.cycle.ssi_double),
+                b.ma_stop.ssi_error.eq(b.cycle.ssi_error),
+                b.verdict.copy_mismatch.eq(b.decoder.mismatch),
             ]
 
     def _connect_results(self, m, b):
@@ -405,12 +423,14 @@ class BissMaster(wiring.Component):
             self.ca_busy.eq(access.busy),
             self.ca_done.eq(access.done),
 
-            b.controller.cdm.eq(access.cdm),
+            # SSI has no control channel: no CDM hold, and no frame passes for it (an access
+            # ends with DATA_FAULT at its first frame).
+            b.controller.cdm.eq(access.cdm & ~b.ssi),
             b.controller.ma_held.eq(b.ma_clock.held),
             b.ma_clock.hold.eq(b.controller.ma_hold),
 
             access.frame_end.eq(b.verdict.report),
-            access.frame_ok.eq(b.verdict.passed),
+            access.frame_ok.eq(b.verdict.passed & ~b.ssi),
             access.frame_cds.eq(b.decoder.cds),
             access.frame_cdm.eq(b.controller.cdm_cycle),
         ]

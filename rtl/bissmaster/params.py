@@ -104,6 +104,26 @@ WORD_INDEX_WIDTH = (63 + protocol.NE_NW_BITS + protocol.LC_BITS
 #: Width of a frame's length in bits (two words, plus the slots around them).
 FRAME_LENGTH_WIDTH = WORD_INDEX_WIDTH + 1
 
+#: The counter memory of a ``counter_ram`` build (:class:`~bissmaster.core.counter_ram.CounterRam`,
+#: read by the bus tops' register map): words of 32 bits, each holding two counts, the even slot
+#: in the low half.
+COUNTER_WORD_BITS = 32
+#: Bits of one count's half of a counter memory word: the widest count the memory holds.
+COUNTER_HALF_BITS = COUNTER_WORD_BITS // 2
+
+
+def counter_words(slots):
+    """Words of a counter memory holding ``slots`` counts, two per word."""
+    return (slots + 1) // 2
+
+
+def counter_settle(words):
+    """The longest wait, in clocks, for a count to land in a counter memory of ``words`` words:
+    a read issued ``words + 7`` clocks after an event's clock returns it, however many other
+    counts wait (a word waits for each other word at most once; CounterRam's docstring)."""
+    return words + 7
+
+
 #: The statuses that end a cycle without a frame verdict (codes 6..12): each has a one-clock
 #: event strobe in :func:`~bissmaster.layouts.fault_layout`.
 FAULTS = tuple(s for s in Status if Status.NO_ACK <= s <= Status.NO_STOP)
@@ -167,6 +187,12 @@ class MasterParams:
         Accept ``cfg_wN_signed``: a word's data may be two's complement, sign-extended to its
         port's width (one LUT per data bit). Without it those ports are not built and every
         word is unsigned.
+    ssi : bool
+        Accept ``cfg_ssi``: the channel may run SSI frames instead of BiSS (docs/ports.md,
+        "SSI mode"): no Ack, Start or CDS, word 0 clocked out directly, the round trip set on
+        ``cfg_ssi_delay``, an optional error bit (``cfg_ssi_error``, ``cfg_ssi_error_low``) and
+        an optional double transmission (``cfg_ssi_double``). Without it those ports are not
+        built.
     register_access : bool
         Build the register-access engine (control channel, CDM/CDS; the ``ca_*`` ports) and
         the CDM hold of MA. Without it MA is never held low after a frame.
@@ -184,6 +210,7 @@ class MasterParams:
     timestamp_width: int = 32
     custom_crc: bool = True
     signed_words: bool = True
+    ssi: bool = True
     register_access: bool = True
     start_wait_frames: int = 16
 
@@ -217,9 +244,9 @@ class MasterParams:
                              f"not {self.counter_width!r}")
         if not isinstance(self.counter_ram, bool):
             raise ValueError(f"counter_ram must be a bool, not {self.counter_ram!r}")
-        if self.counter_ram and not 1 <= self.counter_width <= 16:
-            raise ValueError(f"counter_ram needs counter_width 1..16 (two counts per 32-bit "
-                             f"word), not {self.counter_width}")
+        if self.counter_ram and not 1 <= self.counter_width <= COUNTER_HALF_BITS:
+            raise ValueError(f"counter_ram needs counter_width 1..{COUNTER_HALF_BITS} (two counts "
+                             f"per {COUNTER_WORD_BITS}-bit word), not {self.counter_width}")
         if not isinstance(self.timestamp_width, int) or not (
                 self.timestamp_width == 0 or 16 <= self.timestamp_width <= 64):
             raise ValueError(f"timestamp_width must be 0 (no timestamp) or an integer from 16 "
@@ -228,6 +255,8 @@ class MasterParams:
             raise ValueError(f"custom_crc must be a bool, not {self.custom_crc!r}")
         if not isinstance(self.signed_words, bool):
             raise ValueError(f"signed_words must be a bool, not {self.signed_words!r}")
+        if not isinstance(self.ssi, bool):
+            raise ValueError(f"ssi must be a bool, not {self.ssi!r}")
         if not isinstance(self.register_access, bool):
             raise ValueError(f"register_access must be a bool, not {self.register_access!r}")
         if not isinstance(self.start_wait_frames, int) or not 1 <= self.start_wait_frames <= 255:
@@ -301,6 +330,7 @@ class MasterParams:
             f"counter_width   = {self.counter_width}" + ("" if self.counters else " (no counters)")
             + (" in memory (count_addr, count_data)" if self.counter_ram else ""),
             f"timestamp_width = {self.timestamp_width}" + ("" if self.timestamped else " (no timestamp)"),
+            *(["ssi             = on (cfg_ssi*)"] if self.ssi else []),
             *([f"register_access = on, start wait {self.start_wait_frames} frames"]
               if self.register_access else []),
             f"defaults (cfg = 0): break {self.break_default}, ack limit {self.ack_limit_default}, "

@@ -8,6 +8,7 @@
 //   timer_width     = 24
 //   counter_width   = 16
 //   timestamp_width = 32
+//   ssi             = on (cfg_ssi*)
 //   register_access = on, start wait 16 frames
 //   defaults (cfg = 0): break 4000, ack limit 4000, timeout limit 8000 clocks
 // Ports: docs/ports.md. Constraints: constraints/.
@@ -16,11 +17,11 @@
 (* top =  1  *)
 (* generator = "Amaranth" *)
 module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_period, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_delay_limit, cfg_end_check, cfg_quiet_time, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed
-, cfg_w0_crc_width, cfg_w0_crc_poly, cfg_w0_crc_start, cfg_w0_crc_inverted, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_crc_width, cfg_w1_crc_poly, cfg_w1_crc_start, cfg_w1_crc_inverted, cfg_spw_check, cfg_spw_tolerance, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, ca_wbuf_addr, ca_wbuf_data, ca_wbuf_en, ca_rbuf_addr, ca_rbuf_en, clk, rst, ma, busy, config_error, overrun, done, valid, status, timestamp, line_delay, cds, noise_events, delay_settled
-, settled_delay, delay_spread, word0_position, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, ca_rbuf_data, ca_busy, ca_done, ca_status, ca_bytes_done, count_crc_word0
-, count_crc_word1, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_noisy_line, count_delay_jump, count_noise_event, count_ca_crc4_error, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo
-);
+, cfg_w0_crc_width, cfg_w0_crc_poly, cfg_w0_crc_start, cfg_w0_crc_inverted, cfg_w1_enable, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_crc_width, cfg_w1_crc_poly, cfg_w1_crc_start, cfg_w1_crc_inverted, cfg_spw_check, cfg_spw_tolerance, cfg_ssi, cfg_ssi_delay, cfg_ssi_error, cfg_ssi_error_low
+, cfg_ssi_double, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, ca_wbuf_addr, ca_wbuf_data, ca_wbuf_en, ca_rbuf_addr, ca_rbuf_en, clk, rst, ma, busy, config_error, overrun, done, valid, status
+, timestamp, line_delay, cds, noise_events, delay_settled, settled_delay, delay_spread, word0_position, word0_ne, word0_nw, word0_crc_ok, word1_position, word1_ne, word1_nw, word1_crc_ok, lc, lc_repeat, lc_skip, lc_zero, spw_mismatch, ca_rbuf_data
+, ca_busy, ca_done, ca_status, ca_bytes_done, count_crc_word0, count_crc_word1, count_no_ack, count_no_start, count_delay_range, count_slo_stuck_low, count_lc_repeat, count_lc_skip, count_lc_zero, count_spw_mismatch, count_overrun, count_aborted, count_no_stop, count_noisy_line, count_delay_jump, count_noise_event, count_ca_crc4_error
+, count_ca_no_answer, count_ca_refused, count_ca_aborted, count_ca_data_fault, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$5  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -32,13 +33,17 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$16 ;
   wire \$17 ;
   wire \$18 ;
-  reg \$19 ;
+  wire \$19 ;
   wire \$2 ;
-  reg \$20 ;
-  reg \$21 ;
-  reg \$22 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
   reg \$23 ;
-  wire \$24 ;
+  reg \$24 ;
+  reg \$25 ;
+  reg \$26 ;
+  reg \$27 ;
+  wire \$28 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -49,25 +54,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* init = 1'h0 *)
   wire \$signal ;
   wire abort;
-  wire \abort$117 ;
-  wire \abort$300 ;
+  wire \abort$122 ;
+  wire \abort$317 ;
   input abort_cycle;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$149 ;
+  wire \ack_expired$155 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$170 ;
+  wire [23:0] \ack_limit$176 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$330 ;
+  wire \bit$347 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$147 ;
+  wire \break_over$153 ;
   wire [23:0] break_time;
   output busy;
   wire busy;
-  wire \busy$125 ;
-  wire \busy$304 ;
+  wire \busy$130 ;
+  wire \busy$321 ;
   input ca_abort;
   wire ca_abort;
   input [6:0] ca_address;
@@ -109,12 +114,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$307 ;
+  wire \cdm$324 ;
   wire cdm_cycle;
   output cds;
   wire cds;
-  wire \cds$280 ;
-  wire [258:0] cfg;
+  wire \cds$298 ;
+  wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [3:0] \cfg.confirm_frames ;
@@ -127,6 +132,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [23:0] \cfg.request_period ;
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
+  wire \cfg.ssi ;
+  wire [11:0] \cfg.ssi_delay ;
+  wire \cfg.ssi_double ;
+  wire \cfg.ssi_error ;
+  wire \cfg.ssi_error_low ;
   wire [23:0] \cfg.timeout_limit ;
   wire [11:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
@@ -187,6 +197,16 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire cfg_spw_check;
   input [7:0] cfg_spw_tolerance;
   wire [7:0] cfg_spw_tolerance;
+  input cfg_ssi;
+  wire cfg_ssi;
+  input [11:0] cfg_ssi_delay;
+  wire [11:0] cfg_ssi_delay;
+  input cfg_ssi_double;
+  wire cfg_ssi_double;
+  input cfg_ssi_error;
+  wire cfg_ssi_error;
+  input cfg_ssi_error_low;
+  wire cfg_ssi_error_low;
   input [23:0] cfg_timeout_limit;
   wire [23:0] cfg_timeout_limit;
   (* enum_base_type = "Crc" *)
@@ -242,14 +262,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$228 ;
+  wire \check$235 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$233 ;
-  wire \clean$331 ;
+  wire \clean$240 ;
+  wire \clean$348 ;
   wire clear;
-  wire \clear$194 ;
-  wire \clear$323 ;
+  wire \clear$200 ;
+  wire \clear$340 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -259,6 +279,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output config_error;
   wire config_error;
   wire config_ok;
+  wire copy_mismatch;
   output [15:0] count_aborted;
   wire [15:0] count_aborted;
   output [15:0] count_ca_aborted;
@@ -324,33 +345,33 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$245 ;
+  wire [39:0] \cpw_top$252 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$259 ;
+  wire [1:0] \crc_ok$277 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$241 ;
-  wire [37:0] \crcs$241[0] ;
-  wire \crcs$241[0].inverted ;
-  wire [15:0] \crcs$241[0].poly ;
-  wire [15:0] \crcs$241[0].start ;
-  wire [4:0] \crcs$241[0].width ;
-  wire [37:0] \crcs$241[1] ;
-  wire \crcs$241[1].inverted ;
-  wire [15:0] \crcs$241[1].poly ;
-  wire [15:0] \crcs$241[1].start ;
-  wire [4:0] \crcs$241[1].width ;
-  wire [75:0] \crcs$242 ;
-  wire [37:0] \crcs$242[0] ;
-  wire \crcs$242[0].inverted ;
-  wire [15:0] \crcs$242[0].poly ;
-  wire [15:0] \crcs$242[0].start ;
-  wire [4:0] \crcs$242[0].width ;
-  wire [37:0] \crcs$242[1] ;
-  wire \crcs$242[1].inverted ;
-  wire [15:0] \crcs$242[1].poly ;
-  wire [15:0] \crcs$242[1].start ;
-  wire [4:0] \crcs$242[1].width ;
+  wire [75:0] \crcs$248 ;
+  wire [37:0] \crcs$248[0] ;
+  wire \crcs$248[0].inverted ;
+  wire [15:0] \crcs$248[0].poly ;
+  wire [15:0] \crcs$248[0].start ;
+  wire [4:0] \crcs$248[0].width ;
+  wire [37:0] \crcs$248[1] ;
+  wire \crcs$248[1].inverted ;
+  wire [15:0] \crcs$248[1].poly ;
+  wire [15:0] \crcs$248[1].start ;
+  wire [4:0] \crcs$248[1].width ;
+  wire [75:0] \crcs$249 ;
+  wire [37:0] \crcs$249[0] ;
+  wire \crcs$249[0].inverted ;
+  wire [15:0] \crcs$249[0].poly ;
+  wire [15:0] \crcs$249[0].start ;
+  wire [4:0] \crcs$249[0].width ;
+  wire [37:0] \crcs$249[1] ;
+  wire \crcs$249[1].inverted ;
+  wire [15:0] \crcs$249[1].poly ;
+  wire [15:0] \crcs$249[1].start ;
+  wire [4:0] \crcs$249[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -361,7 +382,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  wire [258:0] cycle;
+  wire [274:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [3:0] \cycle.confirm_frames ;
@@ -374,6 +395,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [23:0] \cycle.request_period ;
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
+  wire \cycle.ssi ;
+  wire [11:0] \cycle.ssi_delay ;
+  wire \cycle.ssi_double ;
+  wire \cycle.ssi_error ;
+  wire \cycle.ssi_error_low ;
   wire [23:0] \cycle.timeout_limit ;
   wire [11:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
@@ -417,13 +443,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$176 ;
-  wire [12:0] \delay$227 ;
+  wire [12:0] \delay$182 ;
+  wire [12:0] \delay$234 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$178 ;
+  wire [11:0] \delay_limit$184 ;
   wire delay_over;
-  wire \delay_over$157 ;
+  wire \delay_over$163 ;
   output delay_settled;
   wire delay_settled;
   output [7:0] delay_spread;
@@ -431,41 +457,41 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [16:0] delay_tolerance;
   output done;
   wire done;
-  wire \done$135 ;
-  wire \done$305 ;
-  wire \done$326 ;
+  wire \done$140 ;
+  wire \done$322 ;
+  wire \done$343 ;
   wire doubtful;
   wire early;
-  wire \early$133 ;
+  wire \early$138 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$318 ;
-  wire \events$318.aborted ;
-  wire \events$318.ca_aborted ;
-  wire \events$318.ca_crc4_error ;
-  wire \events$318.ca_data_fault ;
-  wire \events$318.ca_no_answer ;
-  wire \events$318.ca_refused ;
-  wire \events$318.crc_word0 ;
-  wire \events$318.crc_word1 ;
-  wire \events$318.delay_jump ;
-  wire \events$318.delay_range ;
-  wire \events$318.lc_repeat ;
-  wire \events$318.lc_skip ;
-  wire \events$318.lc_zero ;
-  wire \events$318.no_ack ;
-  wire \events$318.no_start ;
-  wire \events$318.no_stop ;
-  wire \events$318.noise_event ;
-  wire \events$318.noisy_line ;
-  wire \events$318.overrun ;
-  wire \events$318.slo_stuck_low ;
-  wire \events$318.spw_mismatch ;
+  wire [20:0] \events$335 ;
+  wire \events$335.aborted ;
+  wire \events$335.ca_aborted ;
+  wire \events$335.ca_crc4_error ;
+  wire \events$335.ca_data_fault ;
+  wire \events$335.ca_no_answer ;
+  wire \events$335.ca_refused ;
+  wire \events$335.crc_word0 ;
+  wire \events$335.crc_word1 ;
+  wire \events$335.delay_jump ;
+  wire \events$335.delay_range ;
+  wire \events$335.lc_repeat ;
+  wire \events$335.lc_skip ;
+  wire \events$335.lc_zero ;
+  wire \events$335.no_ack ;
+  wire \events$335.no_start ;
+  wire \events$335.no_stop ;
+  wire \events$335.noise_event ;
+  wire \events$335.noisy_line ;
+  wire \events$335.overrun ;
+  wire \events$335.slo_stuck_low ;
+  wire \events$335.spw_mismatch ;
   wire fault;
-  wire \fault$255 ;
+  wire \fault$273 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -501,7 +527,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$257 ;
+  wire [3:0] \fault_status$275 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -511,8 +537,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$294 ;
+  wire \first_rise$311 ;
   wire [31:0] first_rise_time;
+  wire fixed;
+  wire [12:0] fixed_delay;
   wire [186:0] frame;
   wire \frame.cds ;
   wire \frame.delay_settled ;
@@ -562,42 +590,42 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire frame_ok;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$200 ;
+  wire [15:0] \half_period$206 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$107 ;
-  wire \idle$113 ;
+  wire \idle$112 ;
+  wire \idle$118 ;
   wire in_clock;
-  wire \in_clock$164 ;
+  wire \in_clock$170 ;
   wire jump;
   output [5:0] lc;
   wire [5:0] lc;
-  wire [5:0] \lc$204 ;
-  wire [5:0] \lc$205 ;
+  wire [5:0] \lc$211 ;
+  wire [5:0] \lc$212 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$207 ;
+  wire [5:0] \lc_next$214 ;
   output lc_repeat;
   wire lc_repeat;
-  wire \lc_repeat$285 ;
+  wire \lc_repeat$303 ;
   wire lc_repeat_seen;
   output lc_skip;
   wire lc_skip;
-  wire \lc_skip$286 ;
+  wire \lc_skip$304 ;
   wire lc_skip_seen;
   output lc_zero;
   wire lc_zero;
-  wire \lc_zero$287 ;
+  wire \lc_zero$305 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$216 ;
+  wire \level$223 ;
   wire [3:0] limit;
   output [12:0] line_delay;
   wire [12:0] line_delay;
-  wire [258:0] live;
+  wire [274:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [3:0] \live.confirm_frames ;
@@ -610,6 +638,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [23:0] \live.request_period ;
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
+  wire \live.ssi ;
+  wire [11:0] \live.ssi_delay ;
+  wire \live.ssi_double ;
+  wire \live.ssi_error ;
+  wire \live.ssi_error_low ;
   wire [23:0] \live.timeout_limit ;
   wire [11:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
@@ -648,44 +681,45 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$131 ;
+  wire \locked$136 ;
   output ma;
   wire ma;
-  wire \ma$325 ;
+  wire \ma$342 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$159 ;
+  wire \ma_busy$165 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
   wire ma_run;
   wire match;
+  wire mismatch;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$151 ;
+  wire \no_start_expired$157 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$174 ;
+  wire [24:0] \no_start_limit$180 ;
   wire noise;
   output [3:0] noise_events;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$235 ;
+  wire \noisy$242 ;
   wire [1:0] nw;
   wire ok;
   output overrun;
   wire overrun;
-  wire \overrun$321 ;
+  wire \overrun$338 ;
   wire passed;
   wire pending;
   wire [23:0] period;
   input periodic;
   wire periodic;
-  wire \periodic$109 ;
+  wire \periodic$114 ;
   wire quiet;
-  wire \quiet$183 ;
+  wire \quiet$189 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$185 ;
+  wire \quiet_live$191 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   wire [3:0] rbuf_addr;
@@ -695,36 +729,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$269 ;
-  wire \report$273 ;
+  wire \report$287 ;
+  wire \report$291 ;
   wire report_delay;
-  wire \report_delay$276 ;
+  wire \report_delay$294 ;
   wire report_frame;
-  wire \report_frame$254 ;
-  wire \report_frame$274 ;
+  wire \report_frame$272 ;
+  wire \report_frame$292 ;
   wire request;
-  wire \request$116 ;
-  wire [17:0] \request$296 ;
-  wire [6:0] \request$296.address ;
-  wire [6:0] \request$296.count ;
-  wire [2:0] \request$296.slave_id ;
-  wire \request$296.write ;
+  wire \request$121 ;
+  wire [17:0] \request$313 ;
+  wire [6:0] \request$313.address ;
+  wire [6:0] \request$313.count ;
+  wire [2:0] \request$313.slave_id ;
+  wire \request$313.write ;
   wire restart;
-  wire \restart$220 ;
+  wire \restart$227 ;
   wire restart_timer;
   wire [9:0] result;
-  wire [186:0] \result$328 ;
-  wire \result$328.cds ;
-  wire \result$328.delay_settled ;
-  wire [7:0] \result$328.delay_spread ;
-  wire [5:0] \result$328.lc ;
-  wire \result$328.lc_repeat ;
-  wire \result$328.lc_skip ;
-  wire \result$328.lc_zero ;
-  wire [12:0] \result$328.line_delay ;
-  wire [3:0] \result$328.noise_events ;
-  wire [12:0] \result$328.settled_delay ;
-  wire \result$328.spw_mismatch ;
+  wire [186:0] \result$345 ;
+  wire \result$345.cds ;
+  wire \result$345.delay_settled ;
+  wire [7:0] \result$345.delay_spread ;
+  wire [5:0] \result$345.lc ;
+  wire \result$345.lc_repeat ;
+  wire \result$345.lc_skip ;
+  wire \result$345.lc_zero ;
+  wire [12:0] \result$345.line_delay ;
+  wire [3:0] \result$345.noise_events ;
+  wire [12:0] \result$345.settled_delay ;
+  wire \result$345.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -742,18 +776,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$328.status ;
-  wire [31:0] \result$328.timestamp ;
-  wire [57:0] \result$328.word0 ;
-  wire \result$328.word0.crc_ok ;
-  wire \result$328.word0.ne ;
-  wire \result$328.word0.nw ;
-  wire [54:0] \result$328.word0.position ;
-  wire [42:0] \result$328.word1 ;
-  wire \result$328.word1.crc_ok ;
-  wire \result$328.word1.ne ;
-  wire \result$328.word1.nw ;
-  wire [39:0] \result$328.word1.position ;
+  wire [3:0] \result$345.status ;
+  wire [31:0] \result$345.timestamp ;
+  wire [57:0] \result$345.word0 ;
+  wire \result$345.word0.crc_ok ;
+  wire \result$345.word0.ne ;
+  wire \result$345.word0.nw ;
+  wire [54:0] \result$345.word0.position ;
+  wire [42:0] \result$345.word1 ;
+  wire \result$345.word1.crc_ok ;
+  wire \result$345.word1.ne ;
+  wire \result$345.word1.nw ;
+  wire [39:0] \result$345.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -765,48 +799,56 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$213 ;
+  wire \resync$220 ;
   wire [15:0] rises;
-  wire [15:0] \rises$193 ;
+  wire [15:0] \rises$199 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$329 ;
+  wire \sample$346 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   output [12:0] settled_delay;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$283 ;
+  wire [12:0] \settled_delay$301 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$114 ;
-  wire \slo$122 ;
-  wire \slo$158 ;
+  wire \slo$119 ;
+  wire \slo$127 ;
+  wire \slo$164 ;
   wire slo_stuck;
-  wire \slo_stuck$153 ;
+  wire \slo_stuck$159 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$155 ;
+  wire \slo_stuck_live$161 ;
   wire slots_full;
-  wire \slots_full$139 ;
+  wire \slots_full$146 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   output spw_mismatch;
   wire spw_mismatch;
-  wire \spw_mismatch$292 ;
+  wire \spw_mismatch$310 ;
+  wire ssi;
+  wire \ssi$261 ;
+  wire \ssi$265 ;
+  wire ssi_double;
+  wire \ssi_double$266 ;
+  wire ssi_error;
+  wire \ssi_error$267 ;
+  wire ssi_error_low;
   input start;
   wire start;
-  wire \start$108 ;
-  wire \start$299 ;
+  wire \start$113 ;
+  wire \start$316 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$191 ;
+  wire [15:0] \start_slot$197 ;
   wire started;
-  wire \started$137 ;
-  wire \started$189 ;
+  wire \started$144 ;
+  wire \started$195 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -844,7 +886,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$270 ;
+  wire [3:0] \status$288 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -862,24 +904,24 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$271 ;
+  wire [3:0] \status$289 ;
   wire stop_bit;
-  wire \stop_bit$143 ;
+  wire \stop_bit$149 ;
   wire stopped;
-  wire \stopped$141 ;
+  wire \stopped$147 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$172 ;
+  wire [23:0] \timeout_limit$178 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   output [31:0] timestamp;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$249 ;
+  wire [7:0] \tolerance$256 ;
   wire unconfirmed;
   output valid;
   wire valid;
-  wire \valid$277 ;
-  wire \valid$278 ;
+  wire \valid$295 ;
+  wire \valid$296 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -905,34 +947,34 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [39:0] word1_position;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$203 ;
+  wire [1:0] \word_count$210 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$239 ;
-  wire [11:0] \words$239[0] ;
+  wire [23:0] \words$246 ;
+  wire [11:0] \words$246[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$239[0].crc ;
-  wire [5:0] \words$239[0].data_bits ;
-  wire \words$239[0].gray ;
-  wire \words$239[0].lc ;
-  wire \words$239[0].nenw ;
-  wire \words$239[0].signed ;
-  wire [11:0] \words$239[1] ;
+  wire [1:0] \words$246[0].crc ;
+  wire [5:0] \words$246[0].data_bits ;
+  wire \words$246[0].gray ;
+  wire \words$246[0].lc ;
+  wire \words$246[0].nenw ;
+  wire \words$246[0].signed ;
+  wire [11:0] \words$246[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$239[1].crc ;
-  wire [5:0] \words$239[1].data_bits ;
-  wire \words$239[1].gray ;
-  wire \words$239[1].lc ;
-  wire \words$239[1].nenw ;
-  wire \words$239[1].signed ;
+  wire [1:0] \words$246[1].crc ;
+  wire [5:0] \words$246[1].data_bits ;
+  wire \words$246[1].gray ;
+  wire \words$246[1].lc ;
+  wire \words$246[1].nenw ;
+  wire \words$246[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -958,40 +1000,48 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \words[1].nenw ;
   wire \words[1].signed ;
   wire zero;
-  assign \periodic$109  = periodic | ca_busy;
-  assign enable = cycle[144:141] != 4'hf;
+  assign \periodic$114  = periodic | ca_busy;
+  assign frame_done = cycle[259] ? stopped : \done$140 ;
+  assign arm = cycle[259] ? first_rise : ma_arm;
+  assign \$1  = cycle[144:141] != 4'hf;
+  assign \$2  = ~ cycle[259];
+  assign enable = \$1  & \$2 ;
   assign rearm = cfg_delay_tolerance == 4'hf;
-  assign \$1  = ~ started_before;
-  assign \check$228  = started & \$1 ;
-  assign \$2  = report_frame & \spw_mismatch$292 ;
-  assign \$3  = \status$270  == 4'hd;
-  assign \$4  = report_frame & \$3 ;
-  assign \$5  = \status$270  == 4'he;
-  assign \$6  = report_frame & \$5 ;
-  assign \$7  = result[2:0] == 1'h1;
-  assign \$8  = ca_done & \$7 ;
-  assign \$9  = result[2:0] == 2'h2;
-  assign \$10  = ca_done & \$9 ;
-  assign \$11  = result[2:0] == 2'h3;
+  assign \$3  = ~ started_before;
+  assign \check$235  = started & \$3 ;
+  assign \$4  = ~ cycle[259];
+  assign cdm = \cdm$324  & \$4 ;
+  assign \$5  = ~ cycle[259];
+  assign frame_ok = passed & \$5 ;
+  assign \$6  = report_frame & \spw_mismatch$310 ;
+  assign \$7  = \status$288  == 4'hd;
+  assign \$8  = report_frame & \$7 ;
+  assign \$9  = \status$288  == 4'he;
+  assign \$10  = report_frame & \$9 ;
+  assign \$11  = result[2:0] == 1'h1;
   assign \$12  = ca_done & \$11 ;
-  assign \$13  = result[2:0] == 3'h4;
+  assign \$13  = result[2:0] == 2'h2;
   assign \$14  = ca_done & \$13 ;
-  assign \$15  = result[2:0] == 3'h5;
+  assign \$15  = result[2:0] == 2'h3;
   assign \$16  = ca_done & \$15 ;
+  assign \$17  = result[2:0] == 3'h4;
+  assign \$18  = ca_done & \$17 ;
+  assign \$19  = result[2:0] == 3'h5;
+  assign \$20  = ca_done & \$19 ;
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$194 ;
-  assign \$18  = \sample$329  & \$17 ;
+  assign \$21  = ~ \clear$200 ;
+  assign \$22  = \sample$346  & \$21 ;
   always @(posedge clk)
-    sample <= \$19 ;
+    sample <= \$23 ;
   always @(posedge clk)
-    \bit  <= \$20 ;
+    \bit  <= \$24 ;
   always @(posedge clk)
-    started_before <= \$21 ;
+    started_before <= \$25 ;
   always @(posedge clk)
-    learn <= \$22 ;
+    learn <= \$26 ;
   always @(posedge clk)
-    clean <= \$23 ;
+    clean <= \$27 ;
   \biss_master.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -1014,7 +1064,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report(report),
     .rst(rst),
     .setting(cycle[148:145]),
-    .status(\status$270 )
+    .status(\status$288 )
   );
   \biss_master.controller  controller (
     .abort(abort_cycle),
@@ -1027,7 +1077,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$220 ),
+    .fault(\restart$227 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -1044,17 +1094,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$194 ),
+    .receiver_clear(\clear$200 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$122 ),
+    .slo(\slo$127 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
+    .ssi(cycle[259]),
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
@@ -1065,27 +1116,30 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clear(clear_counters),
     .clk(clk),
     .counts(counts),
-    .events(\events$318 ),
+    .events(\events$335 ),
     .rst(rst)
   );
   \biss_master.decoder  decoder (
     .\bit (\bit ),
-    .cds(\cds$280 ),
+    .cds(\cds$298 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
     .crcs(crcs),
     .data0(data0),
     .data1(spw),
-    .done(frame_done),
-    .lc(\lc$204 ),
+    .done(\done$140 ),
+    .lc(\lc$211 ),
     .lc_load(load),
+    .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$194 ),
+    .\port$2205$272 (cycle[274:272]),
+    .receiver_clear(\clear$200 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
+    .ssi(cycle[259]),
     .start_slot(start_slot),
     .started(started),
     .stop_bit(stop_bit),
@@ -1094,7 +1148,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .words(words)
   );
   \biss_master.delay_check  delay_check (
-    .check(\check$228 ),
+    .check(\check$235 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -1104,19 +1158,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .rearm(rearm),
     .rst(rst),
     .settled(settled),
-    .settled_delay(\settled_delay$283 ),
+    .settled_delay(\settled_delay$301 ),
     .spread(spread),
     .\tolerance$8 (tolerance)
   );
   \biss_master.line_noise  line_noise (
     .clk(clk),
-    .close(frame_done),
+    .close(\done$140 ),
     .\event (\event ),
     .events(events),
-    .level(\slo$122 ),
+    .level(\slo$127 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$220 ),
+    .restart(\restart$227 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -1124,7 +1178,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   \biss_master.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$159 ),
+    .\clocking (\ma_busy$165 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -1136,31 +1190,34 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .second_rise(ma_arm)
   );
   \biss_master.ma_stop  ma_stop (
-    .clear(\clear$194 ),
+    .clear(\clear$200 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
     .rises(rises),
     .rst(rst),
+    .ssi(cycle[259]),
+    .ssi_double(cycle[274]),
+    .ssi_error(cycle[272]),
     .start_slot(start_slot),
-    .\started$11 (started),
+    .\started$14 (started),
     .w1_enable(cycle[199]),
-    .words(\words$239 )
+    .words(\words$246 )
   );
   \biss_master.register_access  register_access (
     .abort(ca_abort),
     .busy(ca_busy),
-    .cdm(cdm),
+    .cdm(\cdm$324 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
-    .frame_cds(\cds$280 ),
+    .frame_cds(\cds$298 ),
     .frame_end(report),
     .frame_ok(frame_ok),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(ca_rbuf_en),
-    .request(\request$296 ),
+    .request(\request$313 ),
     .result(result),
     .rst(rst),
     .start(ca_start),
@@ -1173,24 +1230,25 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$328 ),
+    .result(\result$345 ),
     .rst(rst),
-    .valid(\valid$277 ),
+    .valid(\valid$295 ),
     .valid_out(valid)
   );
   \biss_master.sampler  sampler (
-    .arm(ma_arm),
-    .\bit (\bit$330 ),
+    .arm(arm),
+    .\bit (\bit$347 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$122 ),
+    .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$194 ),
+    .\port$2205$259 (cycle[271:259]),
+    .receiver_clear(\clear$200 ),
     .rst(rst),
-    .sample(\sample$329 ),
+    .sample(\sample$346 ),
     .slo(slo)
   );
   \biss_master.scheduler  scheduler (
@@ -1199,7 +1257,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .idle(idle),
     .overrun(overrun),
     .period(cfg_request_period),
-    .periodic(\periodic$109 ),
+    .periodic(\periodic$114 ),
     .request(request),
     .rst(rst),
     .start(start)
@@ -1208,9 +1266,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .check(check),
     .clk(clk),
     .is_zero(lc_zero_seen),
-    .lc(\lc$204 ),
+    .lc(\lc$211 ),
     .load(load),
-    .\port$2029$0 (\bit ),
+    .\port$2193$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1242,7 +1300,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$159 ),
+    .ma_busy(\ma_busy$165 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -1251,7 +1309,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$122 ),
+    .slo(\slo$127 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -1259,206 +1317,214 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$331 ),
+    .clean(\clean$348 ),
+    .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$220 ),
+    .fault(\restart$227 ),
     .fault_status(fault_status),
     .lc_check(check),
-    .lc_repeat(\lc_repeat$285 ),
+    .lc_repeat(\lc_repeat$303 ),
     .lc_repeat_seen(lc_repeat_seen),
-    .lc_skip(\lc_skip$286 ),
+    .lc_skip(\lc_skip$304 ),
     .lc_skip_seen(lc_skip_seen),
-    .lc_zero(\lc_zero$287 ),
+    .lc_zero(\lc_zero$305 ),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .passed(frame_ok),
-    .\port$1471$0 (\$24 ),
+    .passed(passed),
+    .\port$1632$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
-    .spw_mismatch(\spw_mismatch$292 ),
-    .status(\status$270 ),
+    .spw_mismatch(\spw_mismatch$310 ),
+    .status(\status$288 ),
     .unconfirmed(unconfirmed),
-    .valid(\valid$277 )
+    .valid(\valid$295 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$19  = \$18 ;
-    if (rst) begin
-      \$19  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$20  = \bit$330 ;
-    if (rst) begin
-      \$20  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$21  = started;
-    if (rst) begin
-      \$21  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$22  = report_frame;
-    if (rst) begin
-      \$22  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$23  = \clean$331 ;
+    \$23  = \$22 ;
     if (rst) begin
       \$23  = 1'h0;
     end
   end
-  assign \idle$107  = idle;
-  assign \start$108  = start;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
+    \$24  = \bit$347 ;
+    if (rst) begin
+      \$24  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
+    \$25  = started;
+    if (rst) begin
+      \$25  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
+    \$26  = report_frame;
+    if (rst) begin
+      \$26  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
+    \$27  = \clean$348 ;
+    if (rst) begin
+      \$27  = 1'h0;
+    end
+  end
+  assign \idle$112  = idle;
+  assign \start$113  = start;
   assign frames = ca_busy;
   assign period = cfg_request_period;
   assign abort = abort_cycle;
-  assign \idle$113  = idle;
-  assign \slo$114  = slo;
-  assign \request$116  = request;
-  assign \abort$117  = abort_cycle;
+  assign \idle$118  = idle;
+  assign \slo$119  = slo;
+  assign \request$121  = request;
+  assign \abort$122  = abort_cycle;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$122 ;
-  assign \busy$125  = ma_busy;
+  assign level = \slo$127 ;
+  assign \busy$130  = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$131  = locked;
-  assign \early$133  = early;
-  assign \done$135  = frame_done;
-  assign \started$137  = started;
-  assign \slots_full$139  = slots_full;
-  assign \stopped$141  = stopped;
-  assign \stop_bit$143  = stop_bit;
+  assign \locked$136  = locked;
+  assign \early$138  = early;
+  assign ssi = cycle[259];
+  assign \started$144  = started;
+  assign \slots_full$146  = slots_full;
+  assign \stopped$147  = stopped;
+  assign \stop_bit$149  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$147  = break_over;
-  assign \ack_expired$149  = ack_expired;
-  assign \no_start_expired$151  = no_start_expired;
-  assign \slo_stuck$153  = slo_stuck;
-  assign \slo_stuck_live$155  = slo_stuck_live;
-  assign \delay_over$157  = delay_over;
-  assign \slo$158  = \slo$122 ;
-  assign \clocking  = \ma_busy$159 ;
+  assign \break_over$153  = break_over;
+  assign \ack_expired$155  = ack_expired;
+  assign \no_start_expired$157  = no_start_expired;
+  assign \slo_stuck$159  = slo_stuck;
+  assign \slo_stuck_live$161  = slo_stuck_live;
+  assign \delay_over$163  = delay_over;
+  assign \slo$164  = \slo$127 ;
+  assign \clocking  = \ma_busy$165 ;
   assign timer_clear = clear;
-  assign \in_clock$164  = in_clock;
+  assign \in_clock$170  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$170  = ack_limit;
-  assign \timeout_limit$172  = timeout_limit;
-  assign \no_start_limit$174  = no_start_limit;
-  assign \delay$176  = delay;
-  assign \delay_limit$178  = delay_limit;
+  assign \ack_limit$176  = ack_limit;
+  assign \timeout_limit$178  = timeout_limit;
+  assign \no_start_limit$180  = no_start_limit;
+  assign \delay$182  = delay;
+  assign \delay_limit$184  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$183  = quiet;
-  assign \quiet_live$185  = quiet_live;
+  assign \quiet$189  = quiet;
+  assign \quiet_live$191  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$189  = started;
-  assign \start_slot$191  = start_slot;
-  assign \rises$193  = rises;
-  assign receiver_clear = \clear$194 ;
+  assign \started$195  = started;
+  assign \start_slot$197  = start_slot;
+  assign \rises$199  = rises;
+  assign receiver_clear = \clear$200 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$200  = cycle[15:0];
-  assign arm = ma_arm;
-  assign \word_count$203  = word_count;
-  assign \lc$205  = \lc$204 ;
-  assign lc_next = { \lc$204 [4:0], \bit  };
-  assign \lc_next$207  = { \lc$204 [4:0], \bit  };
+  assign \half_period$206  = cycle[15:0];
+  assign \word_count$210  = word_count;
+  assign \lc$212  = \lc$211 ;
+  assign lc_next = { \lc$211 [4:0], \bit  };
+  assign \lc_next$214  = { \lc$211 [4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$213  = resync;
+  assign \resync$220  = resync;
   assign waiting = watch;
-  assign \level$216  = \slo$122 ;
+  assign \level$223  = \slo$127 ;
   assign noise = sampler_noise;
-  assign close = frame_done;
-  assign fault = \restart$220 ;
+  assign close = \done$140 ;
+  assign fault = \restart$227 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$227  = delay;
+  assign \delay$234  = delay;
   assign \$signal  = learn;
-  assign \clean$233  = clean;
-  assign \noisy$235  = noisy;
+  assign \clean$240  = clean;
+  assign \noisy$242  = noisy;
   assign jump = delay_jump;
-  assign \crcs$241  = crcs;
-  assign \crcs$242  = crcs;
+  assign \crcs$248  = crcs;
+  assign \crcs$249  = crcs;
   assign w1_enable = cycle[199];
-  assign \cpw_top$245  = cpw_top;
+  assign \cpw_top$252  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[205:200];
-  assign \tolerance$249  = cycle[258:251];
+  assign \tolerance$256  = cycle[258:251];
   assign match = spw_match;
+  assign fixed = cycle[259];
+  assign fixed_delay = { 1'h0, cycle[271:260] };
+  assign \ssi$261  = cycle[259];
+  assign ssi_error = cycle[272];
+  assign ssi_error_low = cycle[273];
+  assign ssi_double = cycle[274];
+  assign \ssi$265  = cycle[259];
+  assign \ssi_double$266  = cycle[274];
+  assign \ssi_error$267  = cycle[272];
+  assign mismatch = copy_mismatch;
   assign cfg = cycle;
-  assign \report_frame$254  = report_frame;
-  assign \fault$255  = \restart$220 ;
-  assign \fault_status$257  = fault_status;
-  assign \crc_ok$259  = crc_ok;
+  assign \report_frame$272  = report_frame;
+  assign \fault$273  = \restart$227 ;
+  assign \fault_status$275  = fault_status;
+  assign \crc_ok$277  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$269  = report;
-  assign \status$271  = \status$270 ;
+  assign \report$287  = report;
+  assign \status$289  = \status$288 ;
   assign setting = cycle[148:145];
-  assign \report$273  = report;
-  assign \report_frame$274  = report_frame;
-  assign \report_delay$276  = report_delay;
-  assign \valid$278  = \valid$277 ;
-  assign word_crc_ok = { \$24 , crc_ok[0] };
-  assign \first_rise$294  = first_rise;
-  assign \start$299  = ca_start;
-  assign \abort$300  = ca_abort;
+  assign \report$291  = report;
+  assign \report_frame$292  = report_frame;
+  assign \report_delay$294  = report_delay;
+  assign \valid$296  = \valid$295 ;
+  assign word_crc_ok = { \$28 , crc_ok[0] };
+  assign \first_rise$311  = first_rise;
+  assign \start$316  = ca_start;
+  assign \abort$317  = ca_abort;
   assign rbuf_addr = ca_rbuf_addr;
   assign rbuf_en = ca_rbuf_en;
   assign rbuf_data = ca_rbuf_data;
-  assign \busy$304  = ca_busy;
-  assign \done$305  = ca_done;
-  assign \cdm$307  = cdm;
+  assign \busy$321  = ca_busy;
+  assign \done$322  = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign passed = frame_ok;
-  assign frame_cds = \cds$280 ;
+  assign frame_cds = \cds$298 ;
   assign cdm_cycle = frame_cdm;
-  assign \overrun$321  = overrun;
-  assign \clear$323  = clear_counters;
-  assign \ma$325  = ma;
-  assign \done$326  = done;
+  assign \overrun$338  = overrun;
+  assign \clear$340  = clear_counters;
+  assign \ma$342  = ma;
+  assign \done$343  = done;
   assign valid_out = valid;
-  assign status = \result$328 [3:0];
-  assign timestamp = \result$328 [35:4];
-  assign line_delay = \result$328 [48:36];
-  assign cds = \result$328 [49];
-  assign noise_events = \result$328 [53:50];
-  assign delay_settled = \result$328 [54];
-  assign settled_delay = \result$328 [67:55];
-  assign delay_spread = \result$328 [75:68];
-  assign word0_position = \result$328 [130:76];
-  assign word0_ne = \result$328 [131];
-  assign word0_nw = \result$328 [132];
-  assign word0_crc_ok = \result$328 [133];
-  assign word1_position = \result$328 [173:134];
-  assign word1_ne = \result$328 [174];
-  assign word1_nw = \result$328 [175];
-  assign word1_crc_ok = \result$328 [176];
-  assign lc = \result$328 [182:177];
-  assign lc_repeat = \result$328 [183];
-  assign lc_skip = \result$328 [184];
-  assign lc_zero = \result$328 [185];
-  assign spw_mismatch = \result$328 [186];
+  assign status = \result$345 [3:0];
+  assign timestamp = \result$345 [35:4];
+  assign line_delay = \result$345 [48:36];
+  assign cds = \result$345 [49];
+  assign noise_events = \result$345 [53:50];
+  assign delay_settled = \result$345 [54];
+  assign settled_delay = \result$345 [67:55];
+  assign delay_spread = \result$345 [75:68];
+  assign word0_position = \result$345 [130:76];
+  assign word0_ne = \result$345 [131];
+  assign word0_nw = \result$345 [132];
+  assign word0_crc_ok = \result$345 [133];
+  assign word1_position = \result$345 [173:134];
+  assign word1_ne = \result$345 [174];
+  assign word1_nw = \result$345 [175];
+  assign word1_crc_ok = \result$345 [176];
+  assign lc = \result$345 [182:177];
+  assign lc_repeat = \result$345 [183];
+  assign lc_skip = \result$345 [184];
+  assign lc_zero = \result$345 [185];
+  assign spw_mismatch = \result$345 [186];
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
   assign count_crc_word0 = counts[15:0];
@@ -1520,6 +1586,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \live.w1_crc.inverted  = live[249];
   assign \live.spw_check  = live[250];
   assign \live.spw_tolerance  = live[258:251];
+  assign \live.ssi  = live[259];
+  assign \live.ssi_delay  = live[271:260];
+  assign \live.ssi_error  = live[272];
+  assign \live.ssi_error_low  = live[273];
+  assign \live.ssi_double  = live[274];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -1558,6 +1629,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \cycle.w1_crc.inverted  = cycle[249];
   assign \cycle.spw_check  = cycle[250];
   assign \cycle.spw_tolerance  = cycle[258:251];
+  assign \cycle.ssi  = cycle[259];
+  assign \cycle.ssi_delay  = cycle[271:260];
+  assign \cycle.ssi_error  = cycle[272];
+  assign \cycle.ssi_error_low  = cycle[273];
+  assign \cycle.ssi_double  = cycle[274];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -1572,20 +1648,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$239[0]  = \words$239 [11:0];
-  assign \words$239[0].data_bits  = \words$239 [5:0];
-  assign \words$239[0].nenw  = \words$239 [6];
-  assign \words$239[0].lc  = \words$239 [7];
-  assign \words$239[0].crc  = \words$239 [9:8];
-  assign \words$239[0].gray  = \words$239 [10];
-  assign \words$239[0].signed  = \words$239 [11];
-  assign \words$239[1]  = \words$239 [23:12];
-  assign \words$239[1].data_bits  = \words$239 [17:12];
-  assign \words$239[1].nenw  = \words$239 [18];
-  assign \words$239[1].lc  = \words$239 [19];
-  assign \words$239[1].crc  = \words$239 [21:20];
-  assign \words$239[1].gray  = \words$239 [22];
-  assign \words$239[1].signed  = \words$239 [23];
+  assign \words$246[0]  = \words$246 [11:0];
+  assign \words$246[0].data_bits  = \words$246 [5:0];
+  assign \words$246[0].nenw  = \words$246 [6];
+  assign \words$246[0].lc  = \words$246 [7];
+  assign \words$246[0].crc  = \words$246 [9:8];
+  assign \words$246[0].gray  = \words$246 [10];
+  assign \words$246[0].signed  = \words$246 [11];
+  assign \words$246[1]  = \words$246 [23:12];
+  assign \words$246[1].data_bits  = \words$246 [17:12];
+  assign \words$246[1].nenw  = \words$246 [18];
+  assign \words$246[1].lc  = \words$246 [19];
+  assign \words$246[1].crc  = \words$246 [21:20];
+  assign \words$246[1].gray  = \words$246 [22];
+  assign \words$246[1].signed  = \words$246 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -1596,26 +1672,26 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$241[0]  = crcs[37:0];
-  assign \crcs$241[0].width  = crcs[4:0];
-  assign \crcs$241[0].poly  = crcs[20:5];
-  assign \crcs$241[0].start  = crcs[36:21];
-  assign \crcs$241[0].inverted  = crcs[37];
-  assign \crcs$241[1]  = crcs[75:38];
-  assign \crcs$241[1].width  = crcs[42:38];
-  assign \crcs$241[1].poly  = crcs[58:43];
-  assign \crcs$241[1].start  = crcs[74:59];
-  assign \crcs$241[1].inverted  = crcs[75];
-  assign \crcs$242[0]  = crcs[37:0];
-  assign \crcs$242[0].width  = crcs[4:0];
-  assign \crcs$242[0].poly  = crcs[20:5];
-  assign \crcs$242[0].start  = crcs[36:21];
-  assign \crcs$242[0].inverted  = crcs[37];
-  assign \crcs$242[1]  = crcs[75:38];
-  assign \crcs$242[1].width  = crcs[42:38];
-  assign \crcs$242[1].poly  = crcs[58:43];
-  assign \crcs$242[1].start  = crcs[74:59];
-  assign \crcs$242[1].inverted  = crcs[75];
+  assign \crcs$248[0]  = crcs[37:0];
+  assign \crcs$248[0].width  = crcs[4:0];
+  assign \crcs$248[0].poly  = crcs[20:5];
+  assign \crcs$248[0].start  = crcs[36:21];
+  assign \crcs$248[0].inverted  = crcs[37];
+  assign \crcs$248[1]  = crcs[75:38];
+  assign \crcs$248[1].width  = crcs[42:38];
+  assign \crcs$248[1].poly  = crcs[58:43];
+  assign \crcs$248[1].start  = crcs[74:59];
+  assign \crcs$248[1].inverted  = crcs[75];
+  assign \crcs$249[0]  = crcs[37:0];
+  assign \crcs$249[0].width  = crcs[4:0];
+  assign \crcs$249[0].poly  = crcs[20:5];
+  assign \crcs$249[0].start  = crcs[36:21];
+  assign \crcs$249[0].inverted  = crcs[37];
+  assign \crcs$249[1]  = crcs[75:38];
+  assign \crcs$249[1].width  = crcs[42:38];
+  assign \crcs$249[1].poly  = crcs[58:43];
+  assign \crcs$249[1].start  = crcs[74:59];
+  assign \crcs$249[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -1654,6 +1730,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \cfg.w1_crc.inverted  = cycle[249];
   assign \cfg.spw_check  = cycle[250];
   assign \cfg.spw_tolerance  = cycle[258:251];
+  assign \cfg.ssi  = cycle[259];
+  assign \cfg.ssi_delay  = cycle[271:260];
+  assign \cfg.ssi_error  = cycle[272];
+  assign \cfg.ssi_error_low  = cycle[273];
+  assign \cfg.ssi_double  = cycle[274];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -1677,36 +1758,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$296.slave_id  = \request$296 [2:0];
-  assign \request$296.address  = \request$296 [9:3];
-  assign \request$296.count  = \request$296 [16:10];
-  assign \request$296.write  = \request$296 [17];
+  assign \request$313.slave_id  = \request$313 [2:0];
+  assign \request$313.address  = \request$313 [9:3];
+  assign \request$313.count  = \request$313 [16:10];
+  assign \request$313.write  = \request$313 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$318.crc_word0  = \events$318 [0];
-  assign \events$318.crc_word1  = \events$318 [1];
-  assign \events$318.no_ack  = \events$318 [2];
-  assign \events$318.no_start  = \events$318 [3];
-  assign \events$318.delay_range  = \events$318 [4];
-  assign \events$318.slo_stuck_low  = \events$318 [5];
-  assign \events$318.lc_repeat  = \events$318 [6];
-  assign \events$318.lc_skip  = \events$318 [7];
-  assign \events$318.lc_zero  = \events$318 [8];
-  assign \events$318.spw_mismatch  = \events$318 [9];
-  assign \events$318.overrun  = \events$318 [10];
-  assign \events$318.aborted  = \events$318 [11];
-  assign \events$318.no_stop  = \events$318 [12];
-  assign \events$318.noisy_line  = \events$318 [13];
-  assign \events$318.delay_jump  = \events$318 [14];
-  assign \events$318.noise_event  = \events$318 [15];
-  assign \events$318.ca_crc4_error  = \events$318 [16];
-  assign \events$318.ca_no_answer  = \events$318 [17];
-  assign \events$318.ca_refused  = \events$318 [18];
-  assign \events$318.ca_aborted  = \events$318 [19];
-  assign \events$318.ca_data_fault  = \events$318 [20];
+  assign \events$335.crc_word0  = \events$335 [0];
+  assign \events$335.crc_word1  = \events$335 [1];
+  assign \events$335.no_ack  = \events$335 [2];
+  assign \events$335.no_start  = \events$335 [3];
+  assign \events$335.delay_range  = \events$335 [4];
+  assign \events$335.slo_stuck_low  = \events$335 [5];
+  assign \events$335.lc_repeat  = \events$335 [6];
+  assign \events$335.lc_skip  = \events$335 [7];
+  assign \events$335.lc_zero  = \events$335 [8];
+  assign \events$335.spw_mismatch  = \events$335 [9];
+  assign \events$335.overrun  = \events$335 [10];
+  assign \events$335.aborted  = \events$335 [11];
+  assign \events$335.no_stop  = \events$335 [12];
+  assign \events$335.noisy_line  = \events$335 [13];
+  assign \events$335.delay_jump  = \events$335 [14];
+  assign \events$335.noise_event  = \events$335 [15];
+  assign \events$335.ca_crc4_error  = \events$335 [16];
+  assign \events$335.ca_no_answer  = \events$335 [17];
+  assign \events$335.ca_refused  = \events$335 [18];
+  assign \events$335.ca_aborted  = \events$335 [19];
+  assign \events$335.ca_data_fault  = \events$335 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -1735,60 +1816,60 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$328.status  = \result$328 [3:0];
-  assign \result$328.timestamp  = \result$328 [35:4];
-  assign \result$328.line_delay  = \result$328 [48:36];
-  assign \result$328.cds  = \result$328 [49];
-  assign \result$328.noise_events  = \result$328 [53:50];
-  assign \result$328.delay_settled  = \result$328 [54];
-  assign \result$328.settled_delay  = \result$328 [67:55];
-  assign \result$328.delay_spread  = \result$328 [75:68];
-  assign \result$328.word0  = \result$328 [133:76];
-  assign \result$328.word0.position  = \result$328 [130:76];
-  assign \result$328.word0.ne  = \result$328 [131];
-  assign \result$328.word0.nw  = \result$328 [132];
-  assign \result$328.word0.crc_ok  = \result$328 [133];
-  assign \result$328.word1  = \result$328 [176:134];
-  assign \result$328.word1.position  = \result$328 [173:134];
-  assign \result$328.word1.ne  = \result$328 [174];
-  assign \result$328.word1.nw  = \result$328 [175];
-  assign \result$328.word1.crc_ok  = \result$328 [176];
-  assign \result$328.lc  = \result$328 [182:177];
-  assign \result$328.lc_repeat  = \result$328 [183];
-  assign \result$328.lc_skip  = \result$328 [184];
-  assign \result$328.lc_zero  = \result$328 [185];
-  assign \result$328.spw_mismatch  = \result$328 [186];
-  assign \events$318 [20] = \$16 ;
-  assign \events$318 [19] = \$14 ;
-  assign \events$318 [18] = \$12 ;
-  assign \events$318 [17] = \$10 ;
-  assign \events$318 [16] = \$8 ;
-  assign \events$318 [15] = \event ;
-  assign \events$318 [14] = \$6 ;
-  assign \events$318 [13] = \$4 ;
-  assign \events$318 [12] = faults[6];
-  assign \events$318 [11] = faults[4];
-  assign \events$318 [10] = overrun;
-  assign \events$318 [9] = \$2 ;
-  assign \events$318 [8] = \lc_zero$287 ;
-  assign \events$318 [7] = \lc_skip$286 ;
-  assign \events$318 [6] = \lc_repeat$285 ;
-  assign \events$318 [5] = faults[3];
-  assign \events$318 [4] = faults[2];
-  assign \events$318 [3] = faults[1];
-  assign \events$318 [2] = faults[0];
-  assign \events$318 [1] = crc_error[1];
-  assign \events$318 [0] = crc_error[0];
+  assign \result$345.status  = \result$345 [3:0];
+  assign \result$345.timestamp  = \result$345 [35:4];
+  assign \result$345.line_delay  = \result$345 [48:36];
+  assign \result$345.cds  = \result$345 [49];
+  assign \result$345.noise_events  = \result$345 [53:50];
+  assign \result$345.delay_settled  = \result$345 [54];
+  assign \result$345.settled_delay  = \result$345 [67:55];
+  assign \result$345.delay_spread  = \result$345 [75:68];
+  assign \result$345.word0  = \result$345 [133:76];
+  assign \result$345.word0.position  = \result$345 [130:76];
+  assign \result$345.word0.ne  = \result$345 [131];
+  assign \result$345.word0.nw  = \result$345 [132];
+  assign \result$345.word0.crc_ok  = \result$345 [133];
+  assign \result$345.word1  = \result$345 [176:134];
+  assign \result$345.word1.position  = \result$345 [173:134];
+  assign \result$345.word1.ne  = \result$345 [174];
+  assign \result$345.word1.nw  = \result$345 [175];
+  assign \result$345.word1.crc_ok  = \result$345 [176];
+  assign \result$345.lc  = \result$345 [182:177];
+  assign \result$345.lc_repeat  = \result$345 [183];
+  assign \result$345.lc_skip  = \result$345 [184];
+  assign \result$345.lc_zero  = \result$345 [185];
+  assign \result$345.spw_mismatch  = \result$345 [186];
+  assign \events$335 [20] = \$20 ;
+  assign \events$335 [19] = \$18 ;
+  assign \events$335 [18] = \$16 ;
+  assign \events$335 [17] = \$14 ;
+  assign \events$335 [16] = \$12 ;
+  assign \events$335 [15] = \event ;
+  assign \events$335 [14] = \$10 ;
+  assign \events$335 [13] = \$8 ;
+  assign \events$335 [12] = faults[6];
+  assign \events$335 [11] = faults[4];
+  assign \events$335 [10] = overrun;
+  assign \events$335 [9] = \$6 ;
+  assign \events$335 [8] = \lc_zero$305 ;
+  assign \events$335 [7] = \lc_skip$304 ;
+  assign \events$335 [6] = \lc_repeat$303 ;
+  assign \events$335 [5] = faults[3];
+  assign \events$335 [4] = faults[2];
+  assign \events$335 [3] = faults[1];
+  assign \events$335 [2] = faults[0];
+  assign \events$335 [1] = crc_error[1];
+  assign \events$335 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$296 [17] = ca_write;
-  assign \request$296 [16:10] = ca_count;
-  assign \request$296 [9:3] = ca_address;
-  assign \request$296 [2:0] = ca_slave_id;
+  assign \request$313 [17] = ca_write;
+  assign \request$313 [16:10] = ca_count;
+  assign \request$313 [9:3] = ca_address;
+  assign \request$313 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[186] = \spw_mismatch$292 ;
-  assign frame[176] = \$24 ;
+  assign frame[186] = \spw_mismatch$310 ;
+  assign frame[176] = \$28 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
   assign frame[173:134] = spw;
@@ -1796,21 +1877,26 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign frame[132] = nw[0];
   assign frame[131] = ne[0];
   assign frame[130:76] = data0;
-  assign frame[185] = \lc_zero$287 ;
-  assign frame[184] = \lc_skip$286 ;
-  assign frame[183] = \lc_repeat$285 ;
-  assign frame[182:177] = \lc$204 ;
+  assign frame[185] = \lc_zero$305 ;
+  assign frame[184] = \lc_skip$304 ;
+  assign frame[183] = \lc_repeat$303 ;
+  assign frame[182:177] = \lc$211 ;
   assign frame[75:68] = spread;
-  assign frame[67:55] = \settled_delay$283 ;
+  assign frame[67:55] = \settled_delay$301 ;
   assign frame[54] = settled;
   assign frame[53:50] = events;
-  assign frame[49] = \cds$280 ;
+  assign frame[49] = \cds$298 ;
   assign frame[48:36] = delay;
-  assign frame[3:0] = \status$270 ;
-  assign \words$239 [23:12] = cycle[211:200];
-  assign \words$239 [11:0] = cycle[160:149];
+  assign frame[3:0] = \status$288 ;
+  assign \words$246 [23:12] = cycle[211:200];
+  assign \words$246 [11:0] = cycle[160:149];
   assign words[23:12] = cycle[211:200];
   assign words[11:0] = cycle[160:149];
+  assign live[274] = cfg_ssi_double;
+  assign live[273] = cfg_ssi_error_low;
+  assign live[272] = cfg_ssi_error;
+  assign live[271:260] = cfg_ssi_delay;
+  assign live[259] = cfg_ssi;
   assign live[258:251] = cfg_spw_tolerance;
   assign live[250] = cfg_spw_check;
   assign live[249] = cfg_w1_crc_inverted;
@@ -1892,29 +1978,36 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \$45 ;
   wire \$46 ;
   wire \$47 ;
-  wire [23:0] \$48 ;
+  wire \$48 ;
   wire \$49 ;
   wire \$5 ;
-  wire [23:0] \$50 ;
+  wire \$50 ;
   wire \$51 ;
-  wire [11:0] \$52 ;
+  wire \$52 ;
   wire \$53 ;
-  wire [11:0] \$54 ;
-  wire \$55 ;
-  wire [3:0] \$56 ;
-  wire [16:0] \$57 ;
-  wire [24:0] \$58 ;
-  reg \$59 ;
+  wire \$54 ;
+  wire [23:0] \$55 ;
+  wire \$56 ;
+  wire [23:0] \$57 ;
+  wire \$58 ;
+  wire [11:0] \$59 ;
   wire \$6 ;
-  reg [258:0] \$60 ;
-  reg [23:0] \$61 ;
-  reg [23:0] \$62 ;
-  reg [11:0] \$63 ;
-  reg [11:0] \$64 ;
-  reg [16:0] \$65 ;
-  reg [75:0] \$66 ;
-  reg [24:0] \$67 ;
+  wire \$60 ;
+  wire [11:0] \$61 ;
+  wire \$62 ;
+  wire [3:0] \$63 ;
+  wire [16:0] \$64 ;
+  wire [24:0] \$65 ;
+  reg \$66 ;
+  reg [274:0] \$67 ;
+  reg [23:0] \$68 ;
+  reg [23:0] \$69 ;
   wire \$7 ;
+  reg [11:0] \$70 ;
+  reg [11:0] \$71 ;
+  reg [16:0] \$72 ;
+  reg [75:0] \$73 ;
+  reg [24:0] \$74 ;
   wire \$8 ;
   wire \$9 ;
   output [23:0] ack_limit;
@@ -1933,8 +2026,8 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  output [258:0] cycle;
-  reg [258:0] cycle = 259'h00000000000000000000000000000000000000000000000000000000000000000;
+  output [274:0] cycle;
+  reg [274:0] cycle = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [3:0] \cycle.confirm_frames ;
@@ -1947,6 +2040,11 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire [23:0] \cycle.request_period ;
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
+  wire \cycle.ssi ;
+  wire [11:0] \cycle.ssi_delay ;
+  wire \cycle.ssi_double ;
+  wire \cycle.ssi_error ;
+  wire \cycle.ssi_error_low ;
   wire [23:0] \cycle.timeout_limit ;
   wire [11:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
@@ -1989,8 +2087,8 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [258:0] live;
-  wire [258:0] live;
+  input [274:0] live;
+  wire [274:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [3:0] \live.confirm_frames ;
@@ -2003,6 +2101,11 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire [23:0] \live.request_period ;
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
+  wire \live.ssi ;
+  wire [11:0] \live.ssi_delay ;
+  wire \live.ssi_double ;
+  wire \live.ssi_error ;
+  wire \live.ssi_error_low ;
   wire [23:0] \live.timeout_limit ;
   wire [11:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
@@ -2051,6 +2154,13 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
+  assign \$26  = \$24  | \$25 ;
+  assign \$27  = live[209:208] == 2'h3;
+  assign \$28  = | live[216:212];
+  assign \$29  = \$27  & \$28 ;
+  assign \$30  = live[216:212] <= 5'h10;
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = \$26  | \$31 ;
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
@@ -2065,37 +2175,44 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$44  = \$42  & \$43 ;
   assign \$45  = \$40  | \$44 ;
   assign \$46  = \$39  & \$45 ;
-  assign \$47  = ! live[87:64];
-  assign \$48  = \$47  ? 24'h000fa0 : live[87:64];
-  assign \$49  = ! live[111:88];
-  assign \$50  = \$49  ? 24'h001f40 : live[111:88];
-  assign \$51  = ! live[123:112];
-  assign \$52  = \$51  ? 12'hfff : live[123:112];
-  assign \$53  = ! live[136:125];
-  assign \$54  = \$53  ? 12'h064 : live[136:125];
-  assign \$55  = ! live[144:141];
-  assign \$56  = \$55  ? 4'h2 : live[144:141];
-  assign \$57  = live[15:0] + \$56 ;
-  assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
+  assign \$47  = live[272] & live[155];
+  assign \$48  = live[156] | \$47 ;
+  assign \$49  = live[199] | live[250];
+  assign \$50  = \$48  | \$49 ;
+  assign \$51  = live[259] & \$50 ;
+  assign \$52  = ~ \$51 ;
+  assign \$53  = \$46  & \$52 ;
+  assign \$54  = ! live[87:64];
+  assign \$55  = \$54  ? 24'h000fa0 : live[87:64];
+  assign \$56  = ! live[111:88];
+  assign \$57  = \$56  ? 24'h001f40 : live[111:88];
+  assign \$58  = ! live[123:112];
+  assign \$59  = \$58  ? 12'hfff : live[123:112];
+  assign \$60  = ! live[136:125];
+  assign \$61  = \$60  ? 12'h064 : live[136:125];
+  assign \$62  = ! live[144:141];
+  assign \$63  = \$62  ? 4'h2 : live[144:141];
+  assign \$64  = live[15:0] + \$63 ;
+  assign \$65  = ack_limit + { cycle[15:0], 1'h1 };
   assign word_count = 1'h1 + cycle[199];
   always @(posedge clk)
-    ok <= \$59 ;
+    ok <= \$66 ;
   always @(posedge clk)
-    cycle <= \$60 ;
+    cycle <= \$67 ;
   always @(posedge clk)
-    ack_limit <= \$61 ;
+    ack_limit <= \$68 ;
   always @(posedge clk)
-    timeout_limit <= \$62 ;
+    timeout_limit <= \$69 ;
   always @(posedge clk)
-    delay_limit <= \$63 ;
+    delay_limit <= \$70 ;
   always @(posedge clk)
-    quiet_time <= \$64 ;
+    quiet_time <= \$71 ;
   always @(posedge clk)
-    delay_tolerance <= \$65 ;
+    delay_tolerance <= \$72 ;
   always @(posedge clk)
-    crcs <= \$66 ;
+    crcs <= \$73 ;
   always @(posedge clk)
-    no_start_limit <= \$67 ;
+    no_start_limit <= \$74 ;
   assign \$1  = | live[15:1];
   assign \$2  = | live[154:149];
   assign \$3  = live[154:149] <= 6'h37;
@@ -2121,136 +2238,129 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$23  = live[209:208] == 1'h1;
   assign \$24  = \$22  | \$23 ;
   assign \$25  = live[209:208] == 2'h2;
-  assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[209:208] == 2'h3;
-  assign \$28  = | live[216:212];
-  assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[216:212] <= 5'h10;
-  assign \$31  = \$29  & \$30 ;
-  assign \$32  = \$26  | \$31 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$59  = \$46 ;
+    \$66  = \$53 ;
     if (rst) begin
-      \$59  = 1'h0;
+      \$66  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$60  = cycle;
+    \$67  = cycle;
     if (idle) begin
-      \$60  = live;
+      \$67  = live;
     end
     if (rst) begin
-      \$60  = 259'h00000000000000000000000000000000000000000000000000000000000000000;
+      \$67  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$61  = ack_limit;
+    \$68  = ack_limit;
     if (idle) begin
-      \$61  = \$48 ;
+      \$68  = \$55 ;
     end
     if (rst) begin
-      \$61  = 24'h000000;
+      \$68  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$62  = timeout_limit;
+    \$69  = timeout_limit;
     if (idle) begin
-      \$62  = \$50 ;
+      \$69  = \$57 ;
     end
     if (rst) begin
-      \$62  = 24'h000000;
+      \$69  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$63  = delay_limit;
+    \$70  = delay_limit;
     if (idle) begin
-      \$63  = \$52 ;
+      \$70  = \$59 ;
     end
     if (rst) begin
-      \$63  = 12'h000;
+      \$70  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$64  = quiet_time;
+    \$71  = quiet_time;
     if (idle) begin
-      \$64  = \$54 ;
+      \$71  = \$61 ;
     end
     if (rst) begin
-      \$64  = 12'h000;
+      \$71  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$65  = delay_tolerance;
+    \$72  = delay_tolerance;
     if (idle) begin
-      \$65  = \$57 ;
+      \$72  = \$64 ;
     end
     if (rst) begin
-      \$65  = 17'h00000;
+      \$72  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$66  = crcs;
+    \$73  = crcs;
     if (idle) begin
       (* full_case = 32'd1 *)
       casez (live[158:157])
         2'h1:
           begin
-            \$66 [4:0] = 5'h06;
-            \$66 [20:5] = 16'h0003;
-            \$66 [36:21] = 16'h0000;
-            \$66 [37] = 1'h1;
+            \$73 [4:0] = 5'h06;
+            \$73 [20:5] = 16'h0003;
+            \$73 [36:21] = 16'h0000;
+            \$73 [37] = 1'h1;
           end
         2'h2:
           begin
-            \$66 [4:0] = 5'h10;
-            \$66 [20:5] = 16'h90d9;
-            \$66 [36:21] = 16'h0000;
-            \$66 [37] = 1'h1;
+            \$73 [4:0] = 5'h10;
+            \$73 [20:5] = 16'h90d9;
+            \$73 [36:21] = 16'h0000;
+            \$73 [37] = 1'h1;
           end
         2'h3:
-            \$66 [37:0] = live[198:161];
+            \$73 [37:0] = live[198:161];
         default:
-            \$66 [37:0] = 38'h0000000000;
+            \$73 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
       casez (live[209:208])
         2'h1:
           begin
-            \$66 [42:38] = 5'h06;
-            \$66 [58:43] = 16'h0003;
-            \$66 [74:59] = 16'h0000;
-            \$66 [75] = 1'h1;
+            \$73 [42:38] = 5'h06;
+            \$73 [58:43] = 16'h0003;
+            \$73 [74:59] = 16'h0000;
+            \$73 [75] = 1'h1;
           end
         2'h2:
           begin
-            \$66 [42:38] = 5'h10;
-            \$66 [58:43] = 16'h90d9;
-            \$66 [74:59] = 16'h0000;
-            \$66 [75] = 1'h1;
+            \$73 [42:38] = 5'h10;
+            \$73 [58:43] = 16'h90d9;
+            \$73 [74:59] = 16'h0000;
+            \$73 [75] = 1'h1;
           end
         2'h3:
-            \$66 [75:38] = live[249:212];
+            \$73 [75:38] = live[249:212];
         default:
-            \$66 [75:38] = 38'h0000000000;
+            \$73 [75:38] = 38'h0000000000;
       endcase
     end
     if (rst) begin
-      \$66  = 76'h0000000000000000000;
+      \$73  = 76'h0000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$67  = \$58 ;
+    \$74  = \$65 ;
     if (rst) begin
-      \$67  = 25'h0000000;
+      \$74  = 25'h0000000;
     end
   end
   assign \live.ma_half_period  = live[15:0];
@@ -2291,6 +2401,11 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \live.w1_crc.inverted  = live[249];
   assign \live.spw_check  = live[250];
   assign \live.spw_tolerance  = live[258:251];
+  assign \live.ssi  = live[259];
+  assign \live.ssi_delay  = live[271:260];
+  assign \live.ssi_error  = live[272];
+  assign \live.ssi_error_low  = live[273];
+  assign \live.ssi_double  = live[274];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -2329,6 +2444,11 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \cycle.w1_crc.inverted  = cycle[249];
   assign \cycle.spw_check  = cycle[250];
   assign \cycle.spw_tolerance  = cycle[258:251];
+  assign \cycle.ssi  = cycle[259];
+  assign \cycle.ssi_delay  = cycle[271:260];
+  assign \cycle.ssi_error  = cycle[272];
+  assign \cycle.ssi_error_low  = cycle[273];
+  assign \cycle.ssi_double  = cycle[274];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -2425,9 +2545,9 @@ module \biss_master.confirmation (rst, report, status, pending, setting, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.controller (clk, rst, request, restart_timer, report_delay, frame_doubtful, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
-, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
-, abort);
+module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_timer, report_delay, frame_doubtful, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
+, faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full, started
+, stop_bit, abort);
   reg \$auto$verilog_backend.cc:2355:dump_module$8  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -2448,13 +2568,23 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   wire \$24 ;
   wire \$25 ;
   wire \$26 ;
-  reg \$27 ;
-  reg [2:0] \$28 ;
-  reg \$29 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
   wire \$3 ;
-  reg \$30 ;
-  reg \$31 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  reg \$37 ;
+  reg [2:0] \$38 ;
+  reg \$39 ;
   wire \$4 ;
+  reg \$40 ;
+  reg \$41 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
@@ -2485,7 +2615,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
   reg delay;
-  wire \delay$78 ;
+  wire \delay$80 ;
   input delay_over;
   wire delay_over;
   wire \delay_over$31 ;
@@ -2498,7 +2628,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   output fault;
   reg fault;
   wire \fault$39 ;
-  wire \fault$74 ;
+  wire \fault$76 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -2628,6 +2758,8 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   input slots_full;
   wire slots_full;
   wire \slots_full$25 ;
+  input ssi;
+  wire ssi;
   input started;
   wire started;
   wire \started$23 ;
@@ -2666,7 +2798,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$79 ;
+  wire [3:0] \status$81 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
@@ -2677,42 +2809,52 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   output waiting;
   reg waiting;
   reg watch;
+  always @(posedge clk)
+    pause <= \$41 ;
   assign \$1  = ma_busy | abort;
   assign \$2  = ~ ma_enough;
   assign \$3  = restart_timer | abort;
-  assign \$4  = ~ end_check;
-  assign \$5  = ~ ma_enough;
-  assign \$6  = ~ end_check;
-  assign \$7  = ma_busy | abort;
-  assign \$8  = ~ ma_busy;
-  assign \$9  = \$8  | ma_held;
-  assign \$10  = \$9  & slo;
-  assign \$11  = ! cycle_fsm_state;
-  assign \$12  = cycle_fsm_state == 1'h1;
-  assign \$13  = cycle_fsm_state == 2'h2;
-  assign \$14  = cycle_fsm_state == 2'h3;
-  assign \$15  = cycle_fsm_state == 3'h4;
-  assign \$16  = cycle_fsm_state == 3'h5;
-  assign \$17  = cycle_fsm_state == 3'h6;
-  assign \$18  = cycle_fsm_state == 3'h7;
-  assign \$19  = ma_busy | abort;
-  assign \$20  = ~ end_check;
-  assign \$21  = ma_busy | abort;
-  assign \$22  = cdm_cycle & abort;
-  assign \$23  = ~ ma_busy;
-  assign \$24  = ~ ma_busy;
-  assign \$25  = \$24  | ma_held;
-  assign \$26  = \$25  & slo;
+  assign \$4  = frame_done & ssi;
+  assign \$5  = \$4  & stop_bit;
+  assign \$6  = ~ ssi;
+  assign \$7  = \fault$76  & \$6 ;
+  assign \$8  = ~ end_check;
+  assign \$9  = ~ ma_enough;
+  assign \$10  = stopped | ssi;
+  assign \$11  = ~ end_check;
+  assign \$12  = ma_busy | abort;
+  assign \$13  = ~ ma_busy;
+  assign \$14  = \$13  | ma_held;
+  assign \$15  = \$14  & slo;
+  assign \$16  = ! cycle_fsm_state;
+  assign \$17  = cycle_fsm_state == 1'h1;
+  assign \$18  = cycle_fsm_state == 2'h2;
+  assign \$19  = cycle_fsm_state == 2'h3;
+  assign \$20  = cycle_fsm_state == 3'h4;
+  assign \$21  = cycle_fsm_state == 3'h5;
+  assign \$22  = cycle_fsm_state == 3'h6;
+  assign \$23  = cycle_fsm_state == 3'h7;
+  assign \$24  = ma_busy | abort;
+  assign \$25  = frame_done & ssi;
+  assign \$26  = \$25  & stop_bit;
+  assign \$27  = ~ ssi;
+  assign \$28  = \fault$76  & \$27 ;
+  assign \$29  = stopped | ssi;
+  assign \$30  = ~ end_check;
+  assign \$31  = ma_busy | abort;
+  assign \$32  = cdm_cycle & abort;
+  assign \$33  = ~ ma_busy;
+  assign \$34  = ~ ma_busy;
+  assign \$35  = \$34  | ma_held;
+  assign \$36  = \$35  & slo;
   always @(posedge clk)
-    first_clock <= \$27 ;
+    first_clock <= \$37 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$28 ;
+    cycle_fsm_state <= \$38 ;
   always @(posedge clk)
-    idle <= \$29 ;
+    idle <= \$39 ;
   always @(posedge clk)
-    receiver_clear <= \$30 ;
-  always @(posedge clk)
-    pause <= \$31 ;
+    receiver_clear <= \$40 ;
   \biss_master.controller.cdm_hold  cdm_hold (
     .abort(abort),
     .cdm(cdm),
@@ -2730,10 +2872,10 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     .ack_expired(ack_expired),
     .clear(clear),
     .clk(clk),
-    .delay(\delay$78 ),
+    .delay(\delay$80 ),
     .delay_over(delay_over),
     .early(early),
-    .fault(\fault$74 ),
+    .fault(\fault$76 ),
     .locked(locked),
     .ma_arm(ma_arm),
     .no_start_expired(no_start_expired),
@@ -2741,7 +2883,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
     .rst(rst),
     .slots_full(slots_full),
     .started(started),
-    .status(\status$79 ),
+    .status(\status$81 ),
     .watch(watch)
   );
   \biss_master.controller.ready_check  ready_check (
@@ -2788,14 +2930,20 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
       3'h2:
           timer_clear = 1'h1;
       3'h3:
+        begin
           if (\$3 ) begin
             timer_clear = 1'h1;
           end
+          if (abort) begin
+          end else if (\$5 ) begin
+            timer_clear = 1'h1;
+          end
+        end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (stopped) begin
-            if (\$6 ) begin
+          end else if (\$10 ) begin
+            if (\$11 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -2804,7 +2952,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
             end
           end
       3'h5:
-          if (\$7 ) begin
+          if (\$12 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -2812,7 +2960,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$10 ) begin
+          end else if (\$15 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
@@ -2866,8 +3014,10 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
       3'h3:
           if (abort) begin
             fault = 1'h1;
+          end else if (\$5 ) begin
+            fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\fault$74 ) begin
+          end else if (\$7 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -2875,8 +3025,8 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
             if (end_check) begin
               fault = 1'h1;
             end
-          end else if (stopped) begin
-            if (\$6 ) begin
+          end else if (\$10 ) begin
+            if (\$11 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -2888,7 +3038,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$10 ) begin
+          end else if (\$15 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
@@ -2915,17 +3065,19 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
+          end else if (\$5 ) begin
+            fault_status = 4'hc;
           end else if (frame_done) begin
-          end else if (\fault$74 ) begin
-            fault_status = \status$79 ;
+          end else if (\$7 ) begin
+            fault_status = \status$81 ;
           end
       3'h4:
           if (abort) begin
             if (end_check) begin
               fault_status = 4'ha;
             end
-          end else if (stopped) begin
-            if (\$6 ) begin
+          end else if (\$10 ) begin
+            if (\$11 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -2937,7 +3089,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$10 ) begin
+          end else if (\$15 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
           end
@@ -2956,7 +3108,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
       3'h3:
           ma_run = \$2 ;
       3'h4:
-          ma_run = \$5 ;
+          ma_run = \$9 ;
     endcase
   end
   always @* begin
@@ -3016,8 +3168,9 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
           /* empty */;
       3'h3:
           if (abort) begin
+          end else if (\$5 ) begin
           end else if (frame_done) begin
-            if (\$4 ) begin
+            if (\$8 ) begin
               report_frame = 1'h1;
             end
           end
@@ -3029,7 +3182,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
           /* empty */;
       3'h7:
           if (abort) begin
-          end else if (\$10 ) begin
+          end else if (\$15 ) begin
             report_frame = 1'h1;
           end
     endcase
@@ -3046,9 +3199,10 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
           /* empty */;
       3'h3:
           if (abort) begin
+          end else if (\$5 ) begin
           end else if (frame_done) begin
-          end else if (\fault$74 ) begin
-            delay = \delay$78 ;
+          end else if (\$7 ) begin
+            delay = \delay$80 ;
           end
     endcase
   end
@@ -3077,287 +3231,293 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
-    \$27  = idle;
+    \$37  = idle;
     if (rst) begin
-      \$27  = 1'h0;
+      \$37  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
-    \$28  = cycle_fsm_state;
+    \$38  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$19 ) begin
+          if (\$24 ) begin
           end else if (break_over) begin
-            \$28  = 3'h1;
+            \$38  = 3'h1;
           end
       3'h1:
           if (abort) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
           end else if (request) begin
-            \$28  = 3'h2;
+            \$38  = 3'h2;
           end
       3'h2:
           if (bad_config) begin
-            \$28  = 3'h1;
+            \$38  = 3'h1;
             if (abort) begin
-              \$28  = 3'h0;
+              \$38  = 3'h0;
             end
           end else if (aborted) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
           end else if (ready) begin
-            \$28  = 3'h3;
+            \$38  = 3'h3;
           end else if (stuck_low) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
           end
       3'h3:
           if (abort) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
+          end else if (\$26 ) begin
+            \$38  = 3'h0;
           end else if (frame_done) begin
-            \$28  = 3'h4;
-          end else if (\fault$74 ) begin
-            \$28  = 3'h0;
+            \$38  = 3'h4;
+          end else if (\$28 ) begin
+            \$38  = 3'h0;
           end
       3'h4:
           if (abort) begin
             (* full_case = 32'd1 *)
             if (end_check) begin
-              \$28  = 3'h0;
+              \$38  = 3'h0;
             end else begin
-              \$28  = 3'h0;
+              \$38  = 3'h0;
             end
-          end else if (stopped) begin
+          end else if (\$29 ) begin
             (* full_case = 32'd1 *)
-            if (\$20 ) begin
+            if (\$30 ) begin
               (* full_case = 32'd1 *)
               if (pause) begin
-                \$28  = 3'h5;
+                \$38  = 3'h5;
               end else begin
-                \$28  = 3'h6;
+                \$38  = 3'h6;
               end
             end else if (stop_bit) begin
-              \$28  = 3'h0;
+              \$38  = 3'h0;
             end else begin
-              \$28  = 3'h7;
+              \$38  = 3'h7;
             end
           end
       3'h5:
-          if (\$21 ) begin
+          if (\$31 ) begin
           end else if (break_over) begin
-            \$28  = 3'h1;
+            \$38  = 3'h1;
           end
       3'h6:
-          if (\$22 ) begin
-            \$28  = 3'h0;
-          end else if (\$23 ) begin
-            \$28  = 3'h1;
+          if (\$32 ) begin
+            \$38  = 3'h0;
+          end else if (\$33 ) begin
+            \$38  = 3'h1;
           end
       3'h7:
           if (abort) begin
-            \$28  = 3'h0;
-          end else if (\$26 ) begin
+            \$38  = 3'h0;
+          end else if (\$36 ) begin
             (* full_case = 32'd1 *)
             if (pause) begin
-              \$28  = 3'h5;
+              \$38  = 3'h5;
             end else if (cdm_cycle) begin
-              \$28  = 3'h6;
+              \$38  = 3'h6;
             end else begin
-              \$28  = 3'h1;
+              \$38  = 3'h1;
             end
           end else if (slo_stuck) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
           end
     endcase
     if (rst) begin
-      \$28  = 3'h0;
+      \$38  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
-    \$29  = idle;
+    \$39  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$19 ) begin
+          if (\$24 ) begin
           end else if (break_over) begin
-            \$29  = 1'h1;
+            \$39  = 1'h1;
           end
       3'h1:
           if (abort) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end else if (request) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end
       3'h2:
           if (bad_config) begin
-            \$29  = 1'h1;
+            \$39  = 1'h1;
             if (abort) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end
           end else if (aborted) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end else if (ready) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end else if (stuck_low) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end
       3'h3:
           if (abort) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
+          end else if (\$26 ) begin
+            \$39  = 1'h0;
           end else if (frame_done) begin
-            \$29  = 1'h0;
-          end else if (\fault$74 ) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
+          end else if (\$28 ) begin
+            \$39  = 1'h0;
           end
       3'h4:
           if (abort) begin
             (* full_case = 32'd1 *)
             if (end_check) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end else begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end
-          end else if (stopped) begin
+          end else if (\$29 ) begin
             (* full_case = 32'd1 *)
-            if (\$20 ) begin
+            if (\$30 ) begin
               (* full_case = 32'd1 *)
               if (pause) begin
-                \$29  = 1'h0;
+                \$39  = 1'h0;
               end else begin
-                \$29  = 1'h0;
+                \$39  = 1'h0;
               end
             end else if (stop_bit) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end else begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end
           end
       3'h5:
-          if (\$21 ) begin
+          if (\$31 ) begin
           end else if (break_over) begin
-            \$29  = 1'h1;
+            \$39  = 1'h1;
           end
       3'h6:
-          if (\$22 ) begin
-            \$29  = 1'h0;
-          end else if (\$23 ) begin
-            \$29  = 1'h1;
+          if (\$32 ) begin
+            \$39  = 1'h0;
+          end else if (\$33 ) begin
+            \$39  = 1'h1;
           end
       3'h7:
           if (abort) begin
-            \$29  = 1'h0;
-          end else if (\$26 ) begin
+            \$39  = 1'h0;
+          end else if (\$36 ) begin
             (* full_case = 32'd1 *)
             if (pause) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end else if (cdm_cycle) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end else begin
-              \$29  = 1'h1;
+              \$39  = 1'h1;
             end
           end else if (slo_stuck) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end
     endcase
     if (rst) begin
-      \$29  = 1'h0;
+      \$39  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
-    \$30  = receiver_clear;
+    \$40  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$19 ) begin
+          if (\$24 ) begin
           end else if (break_over) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
       3'h1:
           if (abort) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end else if (request) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
       3'h2:
           if (bad_config) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
             if (abort) begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end
           end else if (aborted) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end else if (ready) begin
-            \$30  = 1'h0;
+            \$40  = 1'h0;
           end else if (stuck_low) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
       3'h3:
           if (abort) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
+          end else if (\$26 ) begin
+            \$40  = 1'h1;
           end else if (frame_done) begin
-            \$30  = 1'h0;
-          end else if (\fault$74 ) begin
-            \$30  = 1'h1;
+            \$40  = 1'h0;
+          end else if (\$28 ) begin
+            \$40  = 1'h1;
           end
       3'h4:
           if (abort) begin
             (* full_case = 32'd1 *)
             if (end_check) begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end else begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end
-          end else if (stopped) begin
+          end else if (\$29 ) begin
             (* full_case = 32'd1 *)
-            if (\$20 ) begin
+            if (\$30 ) begin
               (* full_case = 32'd1 *)
               if (pause) begin
-                \$30  = 1'h1;
+                \$40  = 1'h1;
               end else begin
-                \$30  = 1'h0;
+                \$40  = 1'h0;
               end
             end else if (stop_bit) begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end else begin
-              \$30  = 1'h0;
+              \$40  = 1'h0;
             end
           end
       3'h5:
-          if (\$21 ) begin
+          if (\$31 ) begin
           end else if (break_over) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
       3'h6:
-          if (\$22 ) begin
-            \$30  = 1'h1;
-          end else if (\$23 ) begin
-            \$30  = 1'h1;
+          if (\$32 ) begin
+            \$40  = 1'h1;
+          end else if (\$33 ) begin
+            \$40  = 1'h1;
           end
       3'h7:
           if (abort) begin
-            \$30  = 1'h1;
-          end else if (\$26 ) begin
+            \$40  = 1'h1;
+          end else if (\$36 ) begin
             (* full_case = 32'd1 *)
             if (pause) begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end else if (cdm_cycle) begin
-              \$30  = 1'h0;
+              \$40  = 1'h0;
             end else begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end
           end else if (slo_stuck) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$30  = 1'h1;
+      \$40  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
-    \$31  = pause;
+    \$41  = pause;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -3367,12 +3527,13 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
           /* empty */;
       3'h3:
           if (abort) begin
+          end else if (\$26 ) begin
           end else if (frame_done) begin
-            \$31  = frame_doubtful;
+            \$41  = frame_doubtful;
           end
     endcase
     if (rst) begin
-      \$31  = 1'h0;
+      \$41  = 1'h0;
     end
   end
   assign \first_clock$1  = first_clock;
@@ -3424,7 +3585,7 @@ module \biss_master.controller (clk, rst, request, restart_timer, report_delay, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.controller.cdm_hold (clk, rst, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, abort);
+module \biss_master.controller.cdm_hold (clk, rst, cdm, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, abort);
   reg \$auto$verilog_backend.cc:2355:dump_module$9  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -5415,11 +5576,11 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top
-, crc_ok, clk);
+module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$2205$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+, data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire [6:0] \$1 ;
-  wire \$10 ;
+  reg [6:0] \$10 ;
   wire \$100 ;
   wire \$101 ;
   wire \$102 ;
@@ -5430,7 +5591,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$107 ;
   wire \$108 ;
   wire \$109 ;
-  wire [1:0] \$11 ;
+  wire [7:0] \$11 ;
   wire \$110 ;
   wire \$111 ;
   wire \$112 ;
@@ -5441,7 +5602,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$117 ;
   wire \$118 ;
   wire \$119 ;
-  wire [6:0] \$12 ;
+  wire [7:0] \$12 ;
   wire \$120 ;
   wire \$121 ;
   wire \$122 ;
@@ -5463,7 +5624,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$137 ;
   wire \$138 ;
   wire \$139 ;
-  reg [3:0] \$14 ;
+  wire \$14 ;
   wire \$140 ;
   wire \$141 ;
   wire \$142 ;
@@ -5474,7 +5635,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$147 ;
   wire \$148 ;
   wire \$149 ;
-  wire [6:0] \$15 ;
+  reg [1:0] \$15 ;
   wire \$150 ;
   wire \$151 ;
   wire \$152 ;
@@ -5485,7 +5646,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$157 ;
   wire \$158 ;
   wire \$159 ;
-  wire \$16 ;
+  wire [6:0] \$16 ;
   wire \$160 ;
   wire \$161 ;
   wire \$162 ;
@@ -5507,7 +5668,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$177 ;
   wire \$178 ;
   wire \$179 ;
-  wire [6:0] \$18 ;
+  wire \$18 ;
   wire \$180 ;
   wire \$181 ;
   wire \$182 ;
@@ -5518,7 +5679,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$187 ;
   wire \$188 ;
   wire \$189 ;
-  wire [7:0] \$19 ;
+  reg [3:0] \$19 ;
   wire \$190 ;
   wire \$191 ;
   wire \$192 ;
@@ -5530,7 +5691,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$198 ;
   wire \$199 ;
   wire [7:0] \$2 ;
-  reg [6:0] \$20 ;
+  wire [6:0] \$20 ;
   wire \$200 ;
   wire \$201 ;
   wire \$202 ;
@@ -5541,7 +5702,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$207 ;
   wire \$208 ;
   wire \$209 ;
-  wire [7:0] \$21 ;
+  wire \$21 ;
   wire \$210 ;
   wire \$211 ;
   wire \$212 ;
@@ -5552,7 +5713,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$217 ;
   wire \$218 ;
   wire \$219 ;
-  reg [6:0] \$22 ;
+  wire \$22 ;
   wire \$220 ;
   wire \$221 ;
   wire \$222 ;
@@ -5563,7 +5724,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$227 ;
   wire \$228 ;
   wire \$229 ;
-  wire [7:0] \$23 ;
+  wire [6:0] \$23 ;
   wire \$230 ;
   wire \$231 ;
   wire \$232 ;
@@ -5574,7 +5735,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$237 ;
   wire \$238 ;
   wire \$239 ;
-  reg [6:0] \$24 ;
+  wire [7:0] \$24 ;
   wire \$240 ;
   wire \$241 ;
   wire \$242 ;
@@ -5585,7 +5746,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$247 ;
   wire \$248 ;
   wire \$249 ;
-  wire [7:0] \$25 ;
+  reg [6:0] \$25 ;
   wire \$250 ;
   wire \$251 ;
   wire \$252 ;
@@ -5607,7 +5768,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$267 ;
   wire \$268 ;
   wire \$269 ;
-  wire \$27 ;
+  reg [6:0] \$27 ;
   wire \$270 ;
   wire \$271 ;
   wire \$272 ;
@@ -5618,7 +5779,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$277 ;
   wire \$278 ;
   wire \$279 ;
-  wire [1:0] \$28 ;
+  wire [7:0] \$28 ;
   wire \$280 ;
   wire \$281 ;
   wire \$282 ;
@@ -5629,7 +5790,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$287 ;
   wire \$288 ;
   wire \$289 ;
-  wire [6:0] \$29 ;
+  reg [6:0] \$29 ;
   wire \$290 ;
   wire \$291 ;
   wire \$292 ;
@@ -5640,8 +5801,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$297 ;
   wire \$298 ;
   wire \$299 ;
-  reg [6:0] \$3 ;
-  wire \$30 ;
+  wire \$3 ;
+  wire [7:0] \$30 ;
   wire \$300 ;
   wire \$301 ;
   wire \$302 ;
@@ -5652,7 +5813,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$307 ;
   wire \$308 ;
   wire \$309 ;
-  reg [3:0] \$31 ;
+  wire [7:0] \$31 ;
   wire \$310 ;
   wire \$311 ;
   wire \$312 ;
@@ -5663,7 +5824,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$317 ;
   wire \$318 ;
   wire \$319 ;
-  wire [6:0] \$32 ;
+  wire \$32 ;
   wire \$320 ;
   wire \$321 ;
   wire \$322 ;
@@ -5674,7 +5835,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$327 ;
   wire \$328 ;
   wire \$329 ;
-  wire \$33 ;
+  reg [1:0] \$33 ;
   wire \$330 ;
   wire \$331 ;
   wire \$332 ;
@@ -5685,12 +5846,12 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$337 ;
   wire \$338 ;
   wire \$339 ;
-  wire \$34 ;
+  wire [6:0] \$34 ;
   wire \$340 ;
   wire \$341 ;
   wire \$342 ;
   wire \$343 ;
-  wire [54:0] \$344 ;
+  wire \$344 ;
   wire \$345 ;
   wire \$346 ;
   wire \$347 ;
@@ -5705,9 +5866,9 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$355 ;
   wire \$356 ;
   wire \$357 ;
-  wire \$358 ;
+  wire [54:0] \$358 ;
   wire \$359 ;
-  wire \$36 ;
+  reg [3:0] \$36 ;
   wire \$360 ;
   wire \$361 ;
   wire \$362 ;
@@ -5718,7 +5879,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$367 ;
   wire \$368 ;
   wire \$369 ;
-  wire [16:0] \$37 ;
+  wire [6:0] \$37 ;
   wire \$370 ;
   wire \$371 ;
   wire \$372 ;
@@ -5751,7 +5912,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$397 ;
   wire \$398 ;
   wire \$399 ;
-  wire [7:0] \$4 ;
+  reg [6:0] \$4 ;
   wire \$40 ;
   wire \$400 ;
   wire \$401 ;
@@ -5763,7 +5924,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$407 ;
   wire \$408 ;
   wire \$409 ;
-  wire [7:0] \$41 ;
+  wire \$41 ;
   wire \$410 ;
   wire \$411 ;
   wire \$412 ;
@@ -5774,7 +5935,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$417 ;
   wire \$418 ;
   wire \$419 ;
-  wire [6:0] \$42 ;
+  wire [16:0] \$42 ;
   wire \$420 ;
   wire \$421 ;
   wire \$422 ;
@@ -5807,7 +5968,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$447 ;
   wire \$448 ;
   wire \$449 ;
-  wire [6:0] \$45 ;
+  wire \$45 ;
   wire \$450 ;
   wire \$451 ;
   wire \$452 ;
@@ -5829,7 +5990,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$467 ;
   wire \$468 ;
   wire \$469 ;
-  wire \$47 ;
+  wire [7:0] \$47 ;
   wire \$470 ;
   wire \$471 ;
   wire \$472 ;
@@ -5862,7 +6023,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$497 ;
   wire \$498 ;
   wire \$499 ;
-  reg [6:0] \$5 ;
+  wire [7:0] \$5 ;
   wire \$50 ;
   wire \$500 ;
   wire \$501 ;
@@ -5928,7 +6089,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$556 ;
   wire \$557 ;
   wire \$558 ;
-  wire [39:0] \$559 ;
+  wire \$559 ;
   wire \$56 ;
   wire \$560 ;
   wire \$561 ;
@@ -5940,64 +6101,92 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$567 ;
   wire \$568 ;
   wire \$569 ;
-  wire \$57 ;
+  wire [6:0] \$57 ;
   wire \$570 ;
   wire \$571 ;
-  wire [6:0] \$572 ;
+  wire \$572 ;
   wire \$573 ;
   wire \$574 ;
   wire \$575 ;
-  wire [6:0] \$576 ;
+  wire \$576 ;
   wire \$577 ;
-  wire [1:0] \$578 ;
-  wire [1:0] \$579 ;
+  wire \$578 ;
+  wire \$579 ;
   wire \$58 ;
   wire \$580 ;
-  wire \$581 ;
+  wire [39:0] \$581 ;
   wire \$582 ;
   wire \$583 ;
   wire \$584 ;
-  reg \$585 ;
-  reg \$586 ;
-  reg [15:0] \$587 ;
-  reg \$588 ;
-  reg \$589 ;
-  wire [6:0] \$59 ;
-  reg [15:0] \$590 ;
-  reg [2:0] \$591 ;
-  reg \$592 ;
-  reg [6:0] \$593 ;
-  reg \$594 ;
-  reg \$595 ;
-  reg \$596 ;
-  reg \$597 ;
-  reg \$598 ;
-  reg \$599 ;
-  wire [7:0] \$6 ;
-  wire \$60 ;
-  reg [54:0] \$600 ;
-  reg [1:0] \$601 ;
-  reg [1:0] \$602 ;
-  reg [39:0] \$603 ;
-  reg [5:0] \$604 ;
-  reg [39:0] \$605 ;
-  wire [2:0] \$61 ;
+  wire \$585 ;
+  wire \$586 ;
+  wire \$587 ;
+  wire \$588 ;
+  wire \$589 ;
+  wire \$59 ;
+  wire \$590 ;
+  wire \$591 ;
+  wire \$592 ;
+  wire \$593 ;
+  wire \$594 ;
+  wire \$595 ;
+  wire [6:0] \$596 ;
+  wire \$597 ;
+  wire \$598 ;
+  wire \$599 ;
+  wire \$6 ;
+  wire [6:0] \$60 ;
+  wire [6:0] \$600 ;
+  wire \$601 ;
+  wire [1:0] \$602 ;
+  wire [1:0] \$603 ;
+  wire \$604 ;
+  wire \$605 ;
+  wire \$606 ;
+  wire \$607 ;
+  wire \$608 ;
+  wire \$609 ;
+  wire \$61 ;
+  wire \$610 ;
+  reg \$611 ;
+  reg \$612 ;
+  reg [15:0] \$613 ;
+  reg \$614 ;
+  reg \$615 ;
+  reg [6:0] \$616 ;
+  reg \$617 ;
+  reg \$618 ;
+  reg \$619 ;
   wire \$62 ;
-  wire [1:0] \$63 ;
+  reg \$620 ;
+  reg \$621 ;
+  reg [2:0] \$622 ;
+  reg [15:0] \$623 ;
+  reg \$624 ;
+  reg \$625 ;
+  reg [72:0] \$626 ;
+  reg \$627 ;
+  reg [54:0] \$628 ;
+  reg [1:0] \$629 ;
+  wire \$63 ;
+  reg [1:0] \$630 ;
+  reg [39:0] \$631 ;
+  reg [5:0] \$632 ;
+  reg [39:0] \$633 ;
   wire \$64 ;
-  wire \$65 ;
+  wire [6:0] \$65 ;
   wire \$66 ;
-  wire \$67 ;
+  wire [2:0] \$67 ;
   wire \$68 ;
   wire \$69 ;
   reg [6:0] \$7 ;
-  wire \$70 ;
-  wire \$71 ;
-  wire \$72 ;
+  wire [1:0] \$70 ;
+  wire [7:0] \$71 ;
+  wire [6:0] \$72 ;
   wire \$73 ;
   wire \$74 ;
   wire \$75 ;
-  wire \$76 ;
+  wire [6:0] \$76 ;
   wire \$77 ;
   wire \$78 ;
   wire \$79 ;
@@ -6012,7 +6201,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
-  wire [7:0] \$9 ;
+  wire \$9 ;
   wire \$90 ;
   wire \$91 ;
   wire \$92 ;
@@ -6026,7 +6215,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   reg at_cds;
   input \bit ;
   wire \bit ;
-  wire \bit$52 ;
+  wire \bit$58 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -6039,17 +6228,17 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire [1:0] crc_ok;
   input [75:0] crcs;
   wire [75:0] crcs;
-  wire [75:0] \crcs$47 ;
-  wire [37:0] \crcs$47[0] ;
-  wire \crcs$47[0].inverted ;
-  wire [15:0] \crcs$47[0].poly ;
-  wire [15:0] \crcs$47[0].start ;
-  wire [4:0] \crcs$47[0].width ;
-  wire [37:0] \crcs$47[1] ;
-  wire \crcs$47[1].inverted ;
-  wire [15:0] \crcs$47[1].poly ;
-  wire [15:0] \crcs$47[1].start ;
-  wire [4:0] \crcs$47[1].width ;
+  wire [75:0] \crcs$53 ;
+  wire [37:0] \crcs$53[0] ;
+  wire \crcs$53[0].inverted ;
+  wire [15:0] \crcs$53[0].poly ;
+  wire [15:0] \crcs$53[0].start ;
+  wire [4:0] \crcs$53[0].width ;
+  wire [37:0] \crcs$53[1] ;
+  wire \crcs$53[1].inverted ;
+  wire [15:0] \crcs$53[1].poly ;
+  wire [15:0] \crcs$53[1].start ;
+  wire [4:0] \crcs$53[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -6083,13 +6272,18 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire [5:0] lc_next;
   wire load;
   wire load_index;
+  output mismatch;
+  reg mismatch = 1'h0;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
+  input [2:0] \port$2205$272 ;
+  wire [2:0] \port$2205$272 ;
   input receiver_clear;
   wire receiver_clear;
+  reg [72:0] ring = 73'h0000000000000000000;
   input rst;
   wire rst;
   input sample;
@@ -6097,6 +6291,11 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   reg [15:0] slots = 16'h0000;
   output slots_full;
   reg slots_full = 1'h0;
+  input ssi;
+  wire ssi;
+  wire ssi_double;
+  wire ssi_error;
+  wire ssi_error_low;
   output [15:0] start_slot;
   reg [15:0] start_slot = 16'h0000;
   output started;
@@ -6148,654 +6347,682 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$395  = words[23] & \$394 ;
-  assign \$396  = words[22] & data1[0];
-  assign \$397  = \bit  ^ \$396 ;
-  assign \$398  = \$395  & \$397 ;
-  assign \$399  = ! idx;
-  assign \$400  = words[23] & \$399 ;
-  assign \$401  = words[22] & data1[0];
-  assign \$402  = \bit  ^ \$401 ;
-  assign \$403  = \$400  & \$402 ;
-  assign \$404  = ! idx;
-  assign \$405  = words[23] & \$404 ;
-  assign \$406  = words[22] & data1[0];
-  assign \$407  = \bit  ^ \$406 ;
-  assign \$408  = \$405  & \$407 ;
-  assign \$409  = ! idx;
-  assign \$410  = words[23] & \$409 ;
-  assign \$411  = words[22] & data1[0];
-  assign \$412  = \bit  ^ \$411 ;
-  assign \$413  = \$410  & \$412 ;
-  assign \$414  = ! idx;
-  assign \$415  = words[23] & \$414 ;
-  assign \$416  = words[22] & data1[0];
-  assign \$417  = \bit  ^ \$416 ;
-  assign \$418  = \$415  & \$417 ;
-  assign \$419  = ! idx;
-  assign \$420  = words[23] & \$419 ;
-  assign \$421  = words[22] & data1[0];
-  assign \$422  = \bit  ^ \$421 ;
-  assign \$423  = \$420  & \$422 ;
-  assign \$424  = ! idx;
-  assign \$425  = words[23] & \$424 ;
-  assign \$426  = words[22] & data1[0];
-  assign \$427  = \bit  ^ \$426 ;
-  assign \$428  = \$425  & \$427 ;
-  assign \$429  = ! idx;
-  assign \$430  = words[23] & \$429 ;
-  assign \$431  = words[22] & data1[0];
-  assign \$432  = \bit  ^ \$431 ;
-  assign \$433  = \$430  & \$432 ;
-  assign \$434  = ! idx;
-  assign \$435  = words[23] & \$434 ;
-  assign \$436  = words[22] & data1[0];
-  assign \$437  = \bit  ^ \$436 ;
-  assign \$438  = \$435  & \$437 ;
-  assign \$439  = ! idx;
-  assign \$440  = words[23] & \$439 ;
-  assign \$441  = words[22] & data1[0];
-  assign \$442  = \bit  ^ \$441 ;
-  assign \$443  = \$440  & \$442 ;
-  assign \$444  = ! idx;
-  assign \$445  = words[23] & \$444 ;
-  assign \$446  = words[22] & data1[0];
-  assign \$447  = \bit  ^ \$446 ;
-  assign \$448  = \$445  & \$447 ;
-  assign \$449  = ! idx;
-  assign \$450  = words[23] & \$449 ;
-  assign \$451  = words[22] & data1[0];
-  assign \$452  = \bit  ^ \$451 ;
-  assign \$453  = \$450  & \$452 ;
-  assign \$454  = ! idx;
-  assign \$455  = words[23] & \$454 ;
-  assign \$456  = words[22] & data1[0];
-  assign \$457  = \bit  ^ \$456 ;
-  assign \$458  = \$455  & \$457 ;
-  assign \$459  = ! idx;
-  assign \$460  = words[23] & \$459 ;
-  assign \$461  = words[22] & data1[0];
-  assign \$462  = \bit  ^ \$461 ;
-  assign \$463  = \$460  & \$462 ;
-  assign \$464  = ! idx;
-  assign \$465  = words[23] & \$464 ;
-  assign \$466  = words[22] & data1[0];
-  assign \$467  = \bit  ^ \$466 ;
-  assign \$468  = \$465  & \$467 ;
-  assign \$469  = ! idx;
-  assign \$470  = words[23] & \$469 ;
-  assign \$471  = words[22] & data1[0];
-  assign \$472  = \bit  ^ \$471 ;
-  assign \$473  = \$470  & \$472 ;
-  assign \$474  = ! idx;
-  assign \$475  = words[23] & \$474 ;
-  assign \$476  = words[22] & data1[0];
-  assign \$477  = \bit  ^ \$476 ;
-  assign \$478  = \$475  & \$477 ;
-  assign \$479  = ! idx;
-  assign \$480  = words[23] & \$479 ;
-  assign \$481  = words[22] & data1[0];
-  assign \$482  = \bit  ^ \$481 ;
-  assign \$483  = \$480  & \$482 ;
-  assign \$484  = ! idx;
-  assign \$485  = words[23] & \$484 ;
-  assign \$486  = words[22] & data1[0];
-  assign \$487  = \bit  ^ \$486 ;
-  assign \$488  = \$485  & \$487 ;
-  assign \$489  = ! idx;
-  assign \$490  = words[23] & \$489 ;
-  assign \$491  = words[22] & data1[0];
-  assign \$492  = \bit  ^ \$491 ;
-  assign \$493  = \$490  & \$492 ;
-  assign \$494  = ! idx;
-  assign \$495  = words[23] & \$494 ;
-  assign \$496  = words[22] & data1[0];
-  assign \$497  = \bit  ^ \$496 ;
-  assign \$498  = \$495  & \$497 ;
-  assign \$499  = ! idx;
-  assign \$500  = words[23] & \$499 ;
-  assign \$501  = words[22] & data1[0];
-  assign \$502  = \bit  ^ \$501 ;
-  assign \$503  = \$500  & \$502 ;
-  assign \$504  = ! idx;
-  assign \$505  = words[23] & \$504 ;
-  assign \$506  = words[22] & data1[0];
-  assign \$507  = \bit  ^ \$506 ;
-  assign \$508  = \$505  & \$507 ;
-  assign \$509  = ! idx;
-  assign \$510  = words[23] & \$509 ;
-  assign \$511  = words[22] & data1[0];
-  assign \$512  = \bit  ^ \$511 ;
-  assign \$513  = \$510  & \$512 ;
-  assign \$514  = ! idx;
-  assign \$515  = words[23] & \$514 ;
-  assign \$516  = words[22] & data1[0];
-  assign \$517  = \bit  ^ \$516 ;
-  assign \$518  = \$515  & \$517 ;
-  assign \$519  = ! idx;
-  assign \$520  = words[23] & \$519 ;
-  assign \$521  = words[22] & data1[0];
-  assign \$522  = \bit  ^ \$521 ;
-  assign \$523  = \$520  & \$522 ;
-  assign \$524  = ! idx;
-  assign \$525  = words[23] & \$524 ;
-  assign \$526  = words[22] & data1[0];
-  assign \$527  = \bit  ^ \$526 ;
-  assign \$528  = \$525  & \$527 ;
-  assign \$529  = ! idx;
-  assign \$530  = words[23] & \$529 ;
-  assign \$531  = words[22] & data1[0];
-  assign \$532  = \bit  ^ \$531 ;
-  assign \$533  = \$530  & \$532 ;
-  assign \$534  = ! idx;
-  assign \$535  = words[23] & \$534 ;
-  assign \$536  = words[22] & data1[0];
-  assign \$537  = \bit  ^ \$536 ;
-  assign \$538  = \$535  & \$537 ;
-  assign \$539  = ! idx;
-  assign \$540  = words[23] & \$539 ;
-  assign \$541  = words[22] & data1[0];
-  assign \$542  = \bit  ^ \$541 ;
-  assign \$543  = \$540  & \$542 ;
-  assign \$544  = ! idx;
-  assign \$545  = words[23] & \$544 ;
-  assign \$546  = words[22] & data1[0];
-  assign \$547  = \bit  ^ \$546 ;
-  assign \$548  = \$545  & \$547 ;
-  assign \$549  = ! idx;
-  assign \$550  = words[23] & \$549 ;
-  assign \$551  = words[22] & data1[0];
-  assign \$552  = \bit  ^ \$551 ;
-  assign \$553  = \$550  & \$552 ;
-  assign \$554  = ! idx;
-  assign \$555  = words[23] & \$554 ;
-  assign \$556  = words[22] & data1[0];
-  assign \$557  = \bit  ^ \$556 ;
-  assign \$558  = \$555  & \$557 ;
-  assign \$559  = { data1[38:0], \$358  } | { \$558 , \$553 , \$548 , \$543 , \$538 , \$533 , \$528 , \$523 , \$518 , \$513 , \$508 , \$503 , \$498 , \$493 , \$488 , \$483 , \$478 , \$473 , \$468 , \$463 , \$458 , \$453 , \$448 , \$443 , \$438 , \$433 , \$428 , \$423 , \$418 , \$413 , \$408 , \$403 , \$398 , \$393 , \$388 , \$383 , \$378 , \$373 , \$368 , \$363  };
-  assign \$560  = ~ words[18];
-  assign \$562  = in_word & \$561 ;
-  assign \$563  = idx == words[17:12];
-  assign \$564  = \$562  & \$563 ;
-  assign \$566  = in_word & \$565 ;
-  assign \$567  = idx == w1_data_end_p1;
-  assign \$568  = \$566  & \$567 ;
-  assign \$569  = in_word & in_top;
-  assign \$570  = words[10] & data0[0];
-  assign \$571  = \bit  ^ \$570 ;
+  assign \$367  = ssi & \port$2205$272 [0];
+  assign \$368  = ~ \port$2205$272 [1];
+  assign \$369  = \$367  & \$368 ;
+  assign \$370  = \bit  ^ \$369 ;
+  assign \$371  = ~ words[6];
+  assign \$372  = ! word;
+  assign \$373  = in_word & \$372 ;
+  assign \$374  = idx == w0_data_end_p1;
+  assign \$375  = \$373  & \$374 ;
+  assign \$377  = in_word & \$376 ;
+  assign \$378  = \$377  & in_data;
+  assign \$379  = words[22] & data1[0];
+  assign \$380  = \bit  ^ \$379 ;
+  assign \$381  = ! idx;
+  assign \$382  = words[23] & \$381 ;
+  assign \$383  = words[22] & data1[0];
+  assign \$384  = \bit  ^ \$383 ;
+  assign \$385  = \$382  & \$384 ;
+  assign \$386  = ! idx;
+  assign \$387  = words[23] & \$386 ;
+  assign \$388  = words[22] & data1[0];
+  assign \$389  = \bit  ^ \$388 ;
+  assign \$390  = \$387  & \$389 ;
+  assign \$391  = ! idx;
+  assign \$392  = words[23] & \$391 ;
+  assign \$393  = words[22] & data1[0];
+  assign \$394  = \bit  ^ \$393 ;
+  assign \$395  = \$392  & \$394 ;
+  assign \$396  = ! idx;
+  assign \$397  = words[23] & \$396 ;
+  assign \$398  = words[22] & data1[0];
+  assign \$399  = \bit  ^ \$398 ;
+  assign \$400  = \$397  & \$399 ;
+  assign \$401  = ! idx;
+  assign \$402  = words[23] & \$401 ;
+  assign \$403  = words[22] & data1[0];
+  assign \$404  = \bit  ^ \$403 ;
+  assign \$405  = \$402  & \$404 ;
+  assign \$406  = ! idx;
+  assign \$407  = words[23] & \$406 ;
+  assign \$408  = words[22] & data1[0];
+  assign \$409  = \bit  ^ \$408 ;
+  assign \$410  = \$407  & \$409 ;
+  assign \$411  = ! idx;
+  assign \$412  = words[23] & \$411 ;
+  assign \$413  = words[22] & data1[0];
+  assign \$414  = \bit  ^ \$413 ;
+  assign \$415  = \$412  & \$414 ;
+  assign \$416  = ! idx;
+  assign \$417  = words[23] & \$416 ;
+  assign \$418  = words[22] & data1[0];
+  assign \$419  = \bit  ^ \$418 ;
+  assign \$420  = \$417  & \$419 ;
+  assign \$421  = ! idx;
+  assign \$422  = words[23] & \$421 ;
+  assign \$423  = words[22] & data1[0];
+  assign \$424  = \bit  ^ \$423 ;
+  assign \$425  = \$422  & \$424 ;
+  assign \$426  = ! idx;
+  assign \$427  = words[23] & \$426 ;
+  assign \$428  = words[22] & data1[0];
+  assign \$429  = \bit  ^ \$428 ;
+  assign \$430  = \$427  & \$429 ;
+  assign \$431  = ! idx;
+  assign \$432  = words[23] & \$431 ;
+  assign \$433  = words[22] & data1[0];
+  assign \$434  = \bit  ^ \$433 ;
+  assign \$435  = \$432  & \$434 ;
+  assign \$436  = ! idx;
+  assign \$437  = words[23] & \$436 ;
+  assign \$438  = words[22] & data1[0];
+  assign \$439  = \bit  ^ \$438 ;
+  assign \$440  = \$437  & \$439 ;
+  assign \$441  = ! idx;
+  assign \$442  = words[23] & \$441 ;
+  assign \$443  = words[22] & data1[0];
+  assign \$444  = \bit  ^ \$443 ;
+  assign \$445  = \$442  & \$444 ;
+  assign \$446  = ! idx;
+  assign \$447  = words[23] & \$446 ;
+  assign \$448  = words[22] & data1[0];
+  assign \$449  = \bit  ^ \$448 ;
+  assign \$450  = \$447  & \$449 ;
+  assign \$451  = ! idx;
+  assign \$452  = words[23] & \$451 ;
+  assign \$453  = words[22] & data1[0];
+  assign \$454  = \bit  ^ \$453 ;
+  assign \$455  = \$452  & \$454 ;
+  assign \$456  = ! idx;
+  assign \$457  = words[23] & \$456 ;
+  assign \$458  = words[22] & data1[0];
+  assign \$459  = \bit  ^ \$458 ;
+  assign \$460  = \$457  & \$459 ;
+  assign \$461  = ! idx;
+  assign \$462  = words[23] & \$461 ;
+  assign \$463  = words[22] & data1[0];
+  assign \$464  = \bit  ^ \$463 ;
+  assign \$465  = \$462  & \$464 ;
+  assign \$466  = ! idx;
+  assign \$467  = words[23] & \$466 ;
+  assign \$468  = words[22] & data1[0];
+  assign \$469  = \bit  ^ \$468 ;
+  assign \$470  = \$467  & \$469 ;
+  assign \$471  = ! idx;
+  assign \$472  = words[23] & \$471 ;
+  assign \$473  = words[22] & data1[0];
+  assign \$474  = \bit  ^ \$473 ;
+  assign \$475  = \$472  & \$474 ;
+  assign \$476  = ! idx;
+  assign \$477  = words[23] & \$476 ;
+  assign \$478  = words[22] & data1[0];
+  assign \$479  = \bit  ^ \$478 ;
+  assign \$480  = \$477  & \$479 ;
+  assign \$481  = ! idx;
+  assign \$482  = words[23] & \$481 ;
+  assign \$483  = words[22] & data1[0];
+  assign \$484  = \bit  ^ \$483 ;
+  assign \$485  = \$482  & \$484 ;
+  assign \$486  = ! idx;
+  assign \$487  = words[23] & \$486 ;
+  assign \$488  = words[22] & data1[0];
+  assign \$489  = \bit  ^ \$488 ;
+  assign \$490  = \$487  & \$489 ;
+  assign \$491  = ! idx;
+  assign \$492  = words[23] & \$491 ;
+  assign \$493  = words[22] & data1[0];
+  assign \$494  = \bit  ^ \$493 ;
+  assign \$495  = \$492  & \$494 ;
+  assign \$496  = ! idx;
+  assign \$497  = words[23] & \$496 ;
+  assign \$498  = words[22] & data1[0];
+  assign \$499  = \bit  ^ \$498 ;
+  assign \$500  = \$497  & \$499 ;
+  assign \$501  = ! idx;
+  assign \$502  = words[23] & \$501 ;
+  assign \$503  = words[22] & data1[0];
+  assign \$504  = \bit  ^ \$503 ;
+  assign \$505  = \$502  & \$504 ;
+  assign \$506  = ! idx;
+  assign \$507  = words[23] & \$506 ;
+  assign \$508  = words[22] & data1[0];
+  assign \$509  = \bit  ^ \$508 ;
+  assign \$510  = \$507  & \$509 ;
+  assign \$511  = ! idx;
+  assign \$512  = words[23] & \$511 ;
+  assign \$513  = words[22] & data1[0];
+  assign \$514  = \bit  ^ \$513 ;
+  assign \$515  = \$512  & \$514 ;
+  assign \$516  = ! idx;
+  assign \$517  = words[23] & \$516 ;
+  assign \$518  = words[22] & data1[0];
+  assign \$519  = \bit  ^ \$518 ;
+  assign \$520  = \$517  & \$519 ;
+  assign \$521  = ! idx;
+  assign \$522  = words[23] & \$521 ;
+  assign \$523  = words[22] & data1[0];
+  assign \$524  = \bit  ^ \$523 ;
+  assign \$525  = \$522  & \$524 ;
+  assign \$526  = ! idx;
+  assign \$527  = words[23] & \$526 ;
+  assign \$528  = words[22] & data1[0];
+  assign \$529  = \bit  ^ \$528 ;
+  assign \$530  = \$527  & \$529 ;
+  assign \$531  = ! idx;
+  assign \$532  = words[23] & \$531 ;
+  assign \$533  = words[22] & data1[0];
+  assign \$534  = \bit  ^ \$533 ;
+  assign \$535  = \$532  & \$534 ;
+  assign \$536  = ! idx;
+  assign \$537  = words[23] & \$536 ;
+  assign \$538  = words[22] & data1[0];
+  assign \$539  = \bit  ^ \$538 ;
+  assign \$540  = \$537  & \$539 ;
+  assign \$541  = ! idx;
+  assign \$542  = words[23] & \$541 ;
+  assign \$543  = words[22] & data1[0];
+  assign \$544  = \bit  ^ \$543 ;
+  assign \$545  = \$542  & \$544 ;
+  assign \$546  = ! idx;
+  assign \$547  = words[23] & \$546 ;
+  assign \$548  = words[22] & data1[0];
+  assign \$549  = \bit  ^ \$548 ;
+  assign \$550  = \$547  & \$549 ;
+  assign \$551  = ! idx;
+  assign \$552  = words[23] & \$551 ;
+  assign \$553  = words[22] & data1[0];
+  assign \$554  = \bit  ^ \$553 ;
+  assign \$555  = \$552  & \$554 ;
+  assign \$556  = ! idx;
+  assign \$557  = words[23] & \$556 ;
+  assign \$558  = words[22] & data1[0];
+  assign \$559  = \bit  ^ \$558 ;
+  assign \$560  = \$557  & \$559 ;
+  assign \$561  = ! idx;
+  assign \$562  = words[23] & \$561 ;
+  assign \$563  = words[22] & data1[0];
+  assign \$564  = \bit  ^ \$563 ;
+  assign \$565  = \$562  & \$564 ;
+  assign \$566  = ! idx;
+  assign \$567  = words[23] & \$566 ;
+  assign \$568  = words[22] & data1[0];
+  assign \$569  = \bit  ^ \$568 ;
+  assign \$570  = \$567  & \$569 ;
+  assign \$571  = ! idx;
+  assign \$572  = words[23] & \$571 ;
+  assign \$573  = words[22] & data1[0];
+  assign \$574  = \bit  ^ \$573 ;
+  assign \$575  = \$572  & \$574 ;
+  assign \$576  = ! idx;
+  assign \$577  = words[23] & \$576 ;
+  assign \$578  = words[22] & data1[0];
+  assign \$579  = \bit  ^ \$578 ;
+  assign \$580  = \$577  & \$579 ;
+  assign \$581  = { data1[38:0], \$380  } | { \$580 , \$575 , \$570 , \$565 , \$560 , \$555 , \$550 , \$545 , \$540 , \$535 , \$530 , \$525 , \$520 , \$515 , \$510 , \$505 , \$500 , \$495 , \$490 , \$485 , \$480 , \$475 , \$470 , \$465 , \$460 , \$455 , \$450 , \$445 , \$440 , \$435 , \$430 , \$425 , \$420 , \$415 , \$410 , \$405 , \$400 , \$395 , \$390 , \$385  };
+  assign \$582  = ~ words[18];
+  assign \$584  = in_word & \$583 ;
+  assign \$585  = idx == words[17:12];
+  assign \$586  = \$584  & \$585 ;
+  assign \$588  = in_word & \$587 ;
+  assign \$589  = idx == w1_data_end_p1;
+  assign \$590  = \$588  & \$589 ;
+  assign \$591  = in_word & ssi;
+  assign \$592  = in_word & in_top;
+  assign \$593  = words[10] & data0[0];
+  assign \$594  = \bit  ^ \$593 ;
+  assign \$595  = sample & \bit ;
   assign lc_load = in_word & in_lc;
-  assign \$572  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$573  = idx == \$572 ;
-  assign \$574  = in_word & \$573 ;
-  assign load = at_cds | \$574 ;
-  assign \$575  = ~ in_crc;
-  assign \cover  = in_word & \$575 ;
+  assign \$596  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$597  = idx == \$596 ;
+  assign \$598  = in_word & \$597 ;
+  assign load = at_cds | \$598 ;
+  assign \$599  = ~ in_crc;
+  assign \cover  = in_word & \$599 ;
   assign check = in_word & in_crc;
-  assign \$576  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$577  = idx == \$576 ;
-  assign last = in_word & \$577 ;
-  assign \$578  = word + 1'h1;
-  assign \$579  = at_cds ? 2'h0 : \$578 ;
-  assign \$580  = ! decoder_fsm_state;
-  assign \$581  = decoder_fsm_state == 1'h1;
-  assign \$582  = decoder_fsm_state == 2'h2;
-  assign \$583  = decoder_fsm_state == 2'h3;
-  assign \$584  = decoder_fsm_state == 3'h4;
+  assign \$600  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$601  = idx == \$600 ;
+  assign last = in_word & \$601 ;
+  assign \$602  = word + 1'h1;
+  assign \$603  = at_cds ? 2'h0 : \$602 ;
+  assign \$604  = ! decoder_fsm_state;
+  assign \$605  = decoder_fsm_state == 1'h1;
+  assign \$606  = decoder_fsm_state == 2'h2;
+  assign \$607  = decoder_fsm_state == 2'h3;
+  assign \$608  = decoder_fsm_state == 3'h4;
+  assign \$609  = decoder_fsm_state == 3'h5;
+  assign \$610  = decoder_fsm_state == 3'h6;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
     w0_data_end_m1 <= \$2 [6:0];
   always @(posedge clk)
-    w0_nenw_end_m1 <= \$4 [6:0];
+    w0_nenw_end_m1 <= \$5 [6:0];
   always @(posedge clk)
-    w0_lc_end_m1 <= \$6 [6:0];
+    w0_lc_end_m1 <= \$8 [6:0];
   always @(posedge clk)
-    w0_word_end_m1 <= \$9 [6:0];
+    w0_word_end_m1 <= \$12 [6:0];
   always @(posedge clk)
-    w0_data_at0 <= \$10 ;
+    w0_data_at0 <= \$13 ;
   always @(posedge clk)
-    w0_lc_at0 <= \$17 ;
+    w0_lc_at0 <= \$22 ;
   always @(posedge clk)
-    w1_data_end_p1 <= \$18 ;
+    w1_data_end_p1 <= \$23 ;
   always @(posedge clk)
-    w1_data_end_m1 <= \$19 [6:0];
+    w1_data_end_m1 <= \$24 [6:0];
   always @(posedge clk)
-    w1_nenw_end_m1 <= \$21 [6:0];
+    w1_nenw_end_m1 <= \$26 [6:0];
   always @(posedge clk)
-    w1_lc_end_m1 <= \$23 [6:0];
+    w1_lc_end_m1 <= \$28 [6:0];
   always @(posedge clk)
-    w1_word_end_m1 <= \$26 [6:0];
+    w1_word_end_m1 <= \$31 [6:0];
   always @(posedge clk)
-    w1_data_at0 <= \$27 ;
+    w1_data_at0 <= \$32 ;
   always @(posedge clk)
-    w1_lc_at0 <= \$34 ;
+    w1_lc_at0 <= \$39 ;
   always @(posedge clk)
-    done <= \$585 ;
+    done <= \$611 ;
   always @(posedge clk)
-    stopped <= \$586 ;
+    stopped <= \$612 ;
   always @(posedge clk)
-    slots <= \$587 ;
+    slots <= \$613 ;
   always @(posedge clk)
-    slots_full <= \$588 ;
+    slots_full <= \$614 ;
   always @(posedge clk)
-    started <= \$589 ;
+    started <= \$615 ;
   always @(posedge clk)
-    start_slot <= \$590 ;
+    idx <= \$616 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$591 ;
+    in_data <= \$617 ;
   always @(posedge clk)
-    cds <= \$592 ;
+    in_lc <= \$618 ;
   always @(posedge clk)
-    idx <= \$593 ;
+    in_crc <= \$619 ;
   always @(posedge clk)
-    in_data <= \$594 ;
+    in_top <= \$620 ;
   always @(posedge clk)
-    in_lc <= \$595 ;
+    word <= \$621 ;
   always @(posedge clk)
-    in_crc <= \$596 ;
+    decoder_fsm_state <= \$622 ;
   always @(posedge clk)
-    in_top <= \$597 ;
+    start_slot <= \$623 ;
   always @(posedge clk)
-    word <= \$598 ;
+    cds <= \$624 ;
   always @(posedge clk)
-    stop_bit <= \$599 ;
+    mismatch <= \$625 ;
   always @(posedge clk)
-    data0 <= \$600 ;
+    ring <= \$626 ;
   always @(posedge clk)
-    ne <= \$601 ;
+    stop_bit <= \$627 ;
   always @(posedge clk)
-    nw <= \$602 ;
+    data0 <= \$628 ;
   always @(posedge clk)
-    data1 <= \$603 ;
+    ne <= \$629 ;
   always @(posedge clk)
-    lc <= \$604 ;
+    nw <= \$630 ;
   always @(posedge clk)
-    cpw_top <= \$605 ;
+    data1 <= \$631 ;
+  always @(posedge clk)
+    lc <= \$632 ;
+  always @(posedge clk)
+    cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$4  = words[5:0] + \$3 ;
-  assign \$6  = words[5:0] + \$5 ;
-  assign \$8  = \$7  + crcs[4:0];
-  assign \$9  = words[5:0] + \$8 [6:0];
-  assign \$10  = | words[5:0];
-  assign \$11  = words[6] ? 2'h2 : 2'h0;
-  assign \$12  = words[5:0] + \$11 ;
-  assign \$13  = ! \$12 ;
-  assign \$15  = words[5:0] + \$14 ;
-  assign \$16  = | \$15 ;
-  assign \$17  = \$13  & \$16 ;
-  assign \$18  = words[17:12] + 1'h1;
-  assign \$19  = words[17:12] + 7'h7f;
-  assign \$21  = words[17:12] + \$20 ;
-  assign \$23  = words[17:12] + \$22 ;
-  assign \$25  = \$24  + crcs[42:38];
-  assign \$26  = words[17:12] + \$25 [6:0];
-  assign \$27  = | words[17:12];
-  assign \$28  = words[18] ? 2'h2 : 2'h0;
-  assign \$29  = words[17:12] + \$28 ;
-  assign \$30  = ! \$29 ;
-  assign \$32  = words[17:12] + \$31 ;
-  assign \$33  = | \$32 ;
-  assign \$34  = \$30  & \$33 ;
-  assign \$35  = ~ slots_full;
-  assign \$36  = sample & \$35 ;
-  assign \$37  = slots + 1'h1;
-  assign \$38  = slots == 16'hfffe;
-  assign \$39  = sample & \bit ;
-  assign \$40  = | words[17:12];
-  assign \$41  = idx + 1'h1;
-  assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
-  assign \$43  = idx != \$42 ;
-  assign \$44  = in_data & \$43 ;
-  assign \$45  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
-  assign \$46  = idx == \$45 ;
-  assign \$47  = in_lc | \$46 ;
-  assign \$48  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$3  = ssi & \port$2205$272 [0];
+  assign \$5  = words[5:0] + \$4 ;
+  assign \$6  = ssi & \port$2205$272 [0];
+  assign \$8  = words[5:0] + \$7 ;
+  assign \$9  = ssi & \port$2205$272 [0];
+  assign \$11  = \$10  + crcs[4:0];
+  assign \$12  = words[5:0] + \$11 [6:0];
+  assign \$13  = | words[5:0];
+  assign \$14  = ssi & \port$2205$272 [0];
+  assign \$16  = words[5:0] + \$15 ;
+  assign \$17  = ! \$16 ;
+  assign \$18  = ssi & \port$2205$272 [0];
+  assign \$20  = words[5:0] + \$19 ;
+  assign \$21  = | \$20 ;
+  assign \$22  = \$17  & \$21 ;
+  assign \$23  = words[17:12] + 1'h1;
+  assign \$24  = words[17:12] + 7'h7f;
+  assign \$26  = words[17:12] + \$25 ;
+  assign \$28  = words[17:12] + \$27 ;
+  assign \$30  = \$29  + crcs[42:38];
+  assign \$31  = words[17:12] + \$30 [6:0];
+  assign \$32  = | words[17:12];
+  assign \$34  = words[17:12] + \$33 ;
+  assign \$35  = ! \$34 ;
+  assign \$37  = words[17:12] + \$36 ;
+  assign \$38  = | \$37 ;
+  assign \$39  = \$35  & \$38 ;
+  assign \$40  = ~ slots_full;
+  assign \$41  = sample & \$40 ;
+  assign \$42  = slots + 1'h1;
+  assign \$43  = slots == 16'hfffe;
+  assign \$44  = sample & \bit ;
+  assign \$45  = | words[17:12];
+  assign \$46  = | words[17:12];
+  assign \$47  = idx + 1'h1;
+  assign \$48  = word ? w1_data_end_m1 : w0_data_end_m1;
   assign \$49  = idx != \$48 ;
-  assign \$50  = \$47  & \$49 ;
-  assign \$51  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$50  = in_data & \$49 ;
+  assign \$51  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
   assign \$52  = idx == \$51 ;
-  assign \$53  = in_crc | \$52 ;
-  assign \$54  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$53  = in_lc | \$52 ;
+  assign \$54  = word ? w1_lc_end_m1 : w0_lc_end_m1;
   assign \$55  = idx != \$54 ;
   assign \$56  = \$53  & \$55 ;
-  assign \$57  = idx != w1_data_end_m1;
-  assign \$58  = in_top & \$57 ;
-  assign \$59  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$60  = idx == \$59 ;
-  assign \$61  = word_count - 1'h1;
-  assign \$62  = word == \$61 ;
-  assign \$63  = word + 1'h1;
-  assign \$64  = ! word;
-  assign \$65  = in_word & \$64 ;
-  assign \$66  = \$65  & in_data;
-  assign \$67  = words[10] & data0[0];
-  assign \$68  = \bit  ^ \$67 ;
-  assign \$69  = ! idx;
-  assign \$70  = words[11] & \$69 ;
-  assign \$71  = words[10] & data0[0];
-  assign \$72  = \bit  ^ \$71 ;
-  assign \$73  = \$70  & \$72 ;
-  assign \$74  = ! idx;
-  assign \$75  = words[11] & \$74 ;
-  assign \$76  = words[10] & data0[0];
-  assign \$77  = \bit  ^ \$76 ;
-  assign \$78  = \$75  & \$77 ;
-  assign \$79  = ! idx;
-  assign \$80  = words[11] & \$79 ;
+  assign \$57  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$58  = idx == \$57 ;
+  assign \$59  = in_crc | \$58 ;
+  assign \$60  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$61  = idx != \$60 ;
+  assign \$62  = \$59  & \$61 ;
+  assign \$63  = idx != w1_data_end_m1;
+  assign \$64  = in_top & \$63 ;
+  assign \$65  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$66  = idx == \$65 ;
+  assign \$67  = word_count - 1'h1;
+  assign \$68  = word == \$67 ;
+  assign \$69  = ssi & \port$2205$272 [2];
+  assign \$70  = word + 1'h1;
+  assign \$71  = idx + 1'h1;
+  assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$73  = ring >> \$72 ;
+  assign \$74  = \bit  != \$73 ;
+  assign \$75  = mismatch | \$74 ;
+  assign \$76  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$77  = idx == \$76 ;
+  assign \$78  = ! word;
+  assign \$79  = in_word & \$78 ;
+  assign \$80  = \$79  & in_data;
   assign \$81  = words[10] & data0[0];
   assign \$82  = \bit  ^ \$81 ;
-  assign \$83  = \$80  & \$82 ;
-  assign \$84  = ! idx;
-  assign \$85  = words[11] & \$84 ;
-  assign \$86  = words[10] & data0[0];
-  assign \$87  = \bit  ^ \$86 ;
-  assign \$88  = \$85  & \$87 ;
-  assign \$89  = ! idx;
-  assign \$90  = words[11] & \$89 ;
-  assign \$91  = words[10] & data0[0];
-  assign \$92  = \bit  ^ \$91 ;
-  assign \$93  = \$90  & \$92 ;
-  assign \$94  = ! idx;
-  assign \$95  = words[11] & \$94 ;
-  assign \$96  = words[10] & data0[0];
-  assign \$97  = \bit  ^ \$96 ;
-  assign \$98  = \$95  & \$97 ;
-  assign \$99  = ! idx;
-  assign \$100  = words[11] & \$99 ;
-  assign \$101  = words[10] & data0[0];
-  assign \$102  = \bit  ^ \$101 ;
-  assign \$103  = \$100  & \$102 ;
-  assign \$104  = ! idx;
-  assign \$105  = words[11] & \$104 ;
-  assign \$106  = words[10] & data0[0];
-  assign \$107  = \bit  ^ \$106 ;
-  assign \$108  = \$105  & \$107 ;
-  assign \$109  = ! idx;
-  assign \$110  = words[11] & \$109 ;
-  assign \$111  = words[10] & data0[0];
-  assign \$112  = \bit  ^ \$111 ;
-  assign \$113  = \$110  & \$112 ;
-  assign \$114  = ! idx;
-  assign \$115  = words[11] & \$114 ;
-  assign \$116  = words[10] & data0[0];
-  assign \$117  = \bit  ^ \$116 ;
-  assign \$118  = \$115  & \$117 ;
-  assign \$119  = ! idx;
-  assign \$120  = words[11] & \$119 ;
-  assign \$121  = words[10] & data0[0];
-  assign \$122  = \bit  ^ \$121 ;
-  assign \$123  = \$120  & \$122 ;
-  assign \$124  = ! idx;
-  assign \$125  = words[11] & \$124 ;
-  assign \$126  = words[10] & data0[0];
-  assign \$127  = \bit  ^ \$126 ;
-  assign \$128  = \$125  & \$127 ;
-  assign \$129  = ! idx;
-  assign \$130  = words[11] & \$129 ;
-  assign \$131  = words[10] & data0[0];
-  assign \$132  = \bit  ^ \$131 ;
-  assign \$133  = \$130  & \$132 ;
-  assign \$134  = ! idx;
-  assign \$135  = words[11] & \$134 ;
-  assign \$136  = words[10] & data0[0];
-  assign \$137  = \bit  ^ \$136 ;
-  assign \$138  = \$135  & \$137 ;
-  assign \$139  = ! idx;
-  assign \$140  = words[11] & \$139 ;
-  assign \$141  = words[10] & data0[0];
-  assign \$142  = \bit  ^ \$141 ;
-  assign \$143  = \$140  & \$142 ;
-  assign \$144  = ! idx;
-  assign \$145  = words[11] & \$144 ;
-  assign \$146  = words[10] & data0[0];
-  assign \$147  = \bit  ^ \$146 ;
-  assign \$148  = \$145  & \$147 ;
-  assign \$149  = ! idx;
-  assign \$150  = words[11] & \$149 ;
-  assign \$151  = words[10] & data0[0];
-  assign \$152  = \bit  ^ \$151 ;
-  assign \$153  = \$150  & \$152 ;
-  assign \$154  = ! idx;
-  assign \$155  = words[11] & \$154 ;
-  assign \$156  = words[10] & data0[0];
-  assign \$157  = \bit  ^ \$156 ;
-  assign \$158  = \$155  & \$157 ;
-  assign \$159  = ! idx;
-  assign \$160  = words[11] & \$159 ;
-  assign \$161  = words[10] & data0[0];
-  assign \$162  = \bit  ^ \$161 ;
-  assign \$163  = \$160  & \$162 ;
-  assign \$164  = ! idx;
-  assign \$165  = words[11] & \$164 ;
-  assign \$166  = words[10] & data0[0];
-  assign \$167  = \bit  ^ \$166 ;
-  assign \$168  = \$165  & \$167 ;
-  assign \$169  = ! idx;
-  assign \$170  = words[11] & \$169 ;
-  assign \$171  = words[10] & data0[0];
-  assign \$172  = \bit  ^ \$171 ;
-  assign \$173  = \$170  & \$172 ;
-  assign \$174  = ! idx;
-  assign \$175  = words[11] & \$174 ;
-  assign \$176  = words[10] & data0[0];
-  assign \$177  = \bit  ^ \$176 ;
-  assign \$178  = \$175  & \$177 ;
-  assign \$179  = ! idx;
-  assign \$180  = words[11] & \$179 ;
-  assign \$181  = words[10] & data0[0];
-  assign \$182  = \bit  ^ \$181 ;
-  assign \$183  = \$180  & \$182 ;
-  assign \$184  = ! idx;
-  assign \$185  = words[11] & \$184 ;
-  assign \$186  = words[10] & data0[0];
-  assign \$187  = \bit  ^ \$186 ;
-  assign \$188  = \$185  & \$187 ;
-  assign \$189  = ! idx;
-  assign \$190  = words[11] & \$189 ;
-  assign \$191  = words[10] & data0[0];
-  assign \$192  = \bit  ^ \$191 ;
-  assign \$193  = \$190  & \$192 ;
-  assign \$194  = ! idx;
-  assign \$195  = words[11] & \$194 ;
-  assign \$196  = words[10] & data0[0];
-  assign \$197  = \bit  ^ \$196 ;
-  assign \$198  = \$195  & \$197 ;
-  assign \$199  = ! idx;
-  assign \$200  = words[11] & \$199 ;
-  assign \$201  = words[10] & data0[0];
-  assign \$202  = \bit  ^ \$201 ;
-  assign \$203  = \$200  & \$202 ;
-  assign \$204  = ! idx;
-  assign \$205  = words[11] & \$204 ;
-  assign \$206  = words[10] & data0[0];
-  assign \$207  = \bit  ^ \$206 ;
-  assign \$208  = \$205  & \$207 ;
-  assign \$209  = ! idx;
-  assign \$210  = words[11] & \$209 ;
-  assign \$211  = words[10] & data0[0];
-  assign \$212  = \bit  ^ \$211 ;
-  assign \$213  = \$210  & \$212 ;
-  assign \$214  = ! idx;
-  assign \$215  = words[11] & \$214 ;
-  assign \$216  = words[10] & data0[0];
-  assign \$217  = \bit  ^ \$216 ;
-  assign \$218  = \$215  & \$217 ;
-  assign \$219  = ! idx;
-  assign \$220  = words[11] & \$219 ;
-  assign \$221  = words[10] & data0[0];
-  assign \$222  = \bit  ^ \$221 ;
-  assign \$223  = \$220  & \$222 ;
-  assign \$224  = ! idx;
-  assign \$225  = words[11] & \$224 ;
-  assign \$226  = words[10] & data0[0];
-  assign \$227  = \bit  ^ \$226 ;
-  assign \$228  = \$225  & \$227 ;
-  assign \$229  = ! idx;
-  assign \$230  = words[11] & \$229 ;
-  assign \$231  = words[10] & data0[0];
-  assign \$232  = \bit  ^ \$231 ;
-  assign \$233  = \$230  & \$232 ;
-  assign \$234  = ! idx;
-  assign \$235  = words[11] & \$234 ;
-  assign \$236  = words[10] & data0[0];
-  assign \$237  = \bit  ^ \$236 ;
-  assign \$238  = \$235  & \$237 ;
-  assign \$239  = ! idx;
-  assign \$240  = words[11] & \$239 ;
-  assign \$241  = words[10] & data0[0];
-  assign \$242  = \bit  ^ \$241 ;
-  assign \$243  = \$240  & \$242 ;
-  assign \$244  = ! idx;
-  assign \$245  = words[11] & \$244 ;
-  assign \$246  = words[10] & data0[0];
-  assign \$247  = \bit  ^ \$246 ;
-  assign \$248  = \$245  & \$247 ;
-  assign \$249  = ! idx;
-  assign \$250  = words[11] & \$249 ;
-  assign \$251  = words[10] & data0[0];
-  assign \$252  = \bit  ^ \$251 ;
-  assign \$253  = \$250  & \$252 ;
-  assign \$254  = ! idx;
-  assign \$255  = words[11] & \$254 ;
-  assign \$256  = words[10] & data0[0];
-  assign \$257  = \bit  ^ \$256 ;
-  assign \$258  = \$255  & \$257 ;
-  assign \$259  = ! idx;
-  assign \$260  = words[11] & \$259 ;
-  assign \$261  = words[10] & data0[0];
-  assign \$262  = \bit  ^ \$261 ;
-  assign \$263  = \$260  & \$262 ;
-  assign \$264  = ! idx;
-  assign \$265  = words[11] & \$264 ;
-  assign \$266  = words[10] & data0[0];
-  assign \$267  = \bit  ^ \$266 ;
-  assign \$268  = \$265  & \$267 ;
-  assign \$269  = ! idx;
-  assign \$270  = words[11] & \$269 ;
-  assign \$271  = words[10] & data0[0];
-  assign \$272  = \bit  ^ \$271 ;
-  assign \$273  = \$270  & \$272 ;
-  assign \$274  = ! idx;
-  assign \$275  = words[11] & \$274 ;
-  assign \$276  = words[10] & data0[0];
-  assign \$277  = \bit  ^ \$276 ;
-  assign \$278  = \$275  & \$277 ;
-  assign \$279  = ! idx;
-  assign \$280  = words[11] & \$279 ;
-  assign \$281  = words[10] & data0[0];
-  assign \$282  = \bit  ^ \$281 ;
-  assign \$283  = \$280  & \$282 ;
-  assign \$284  = ! idx;
-  assign \$285  = words[11] & \$284 ;
-  assign \$286  = words[10] & data0[0];
-  assign \$287  = \bit  ^ \$286 ;
-  assign \$288  = \$285  & \$287 ;
-  assign \$289  = ! idx;
-  assign \$290  = words[11] & \$289 ;
-  assign \$291  = words[10] & data0[0];
-  assign \$292  = \bit  ^ \$291 ;
-  assign \$293  = \$290  & \$292 ;
-  assign \$294  = ! idx;
-  assign \$295  = words[11] & \$294 ;
-  assign \$296  = words[10] & data0[0];
-  assign \$297  = \bit  ^ \$296 ;
-  assign \$298  = \$295  & \$297 ;
-  assign \$299  = ! idx;
-  assign \$300  = words[11] & \$299 ;
-  assign \$301  = words[10] & data0[0];
-  assign \$302  = \bit  ^ \$301 ;
-  assign \$303  = \$300  & \$302 ;
-  assign \$304  = ! idx;
-  assign \$305  = words[11] & \$304 ;
-  assign \$306  = words[10] & data0[0];
-  assign \$307  = \bit  ^ \$306 ;
-  assign \$308  = \$305  & \$307 ;
-  assign \$309  = ! idx;
-  assign \$310  = words[11] & \$309 ;
-  assign \$311  = words[10] & data0[0];
-  assign \$312  = \bit  ^ \$311 ;
-  assign \$313  = \$310  & \$312 ;
-  assign \$314  = ! idx;
-  assign \$315  = words[11] & \$314 ;
-  assign \$316  = words[10] & data0[0];
-  assign \$317  = \bit  ^ \$316 ;
-  assign \$318  = \$315  & \$317 ;
-  assign \$319  = ! idx;
-  assign \$320  = words[11] & \$319 ;
-  assign \$321  = words[10] & data0[0];
-  assign \$322  = \bit  ^ \$321 ;
-  assign \$323  = \$320  & \$322 ;
-  assign \$324  = ! idx;
-  assign \$325  = words[11] & \$324 ;
-  assign \$326  = words[10] & data0[0];
-  assign \$327  = \bit  ^ \$326 ;
-  assign \$328  = \$325  & \$327 ;
-  assign \$329  = ! idx;
-  assign \$330  = words[11] & \$329 ;
-  assign \$331  = words[10] & data0[0];
-  assign \$332  = \bit  ^ \$331 ;
-  assign \$333  = \$330  & \$332 ;
-  assign \$334  = ! idx;
-  assign \$335  = words[11] & \$334 ;
-  assign \$336  = words[10] & data0[0];
-  assign \$337  = \bit  ^ \$336 ;
-  assign \$338  = \$335  & \$337 ;
-  assign \$339  = ! idx;
-  assign \$340  = words[11] & \$339 ;
-  assign \$341  = words[10] & data0[0];
-  assign \$342  = \bit  ^ \$341 ;
-  assign \$343  = \$340  & \$342 ;
-  assign \$344  = { data0[53:0], \$68  } | { \$343 , \$338 , \$333 , \$328 , \$323 , \$318 , \$313 , \$308 , \$303 , \$298 , \$293 , \$288 , \$283 , \$278 , \$273 , \$268 , \$263 , \$258 , \$253 , \$248 , \$243 , \$238 , \$233 , \$228 , \$223 , \$218 , \$213 , \$208 , \$203 , \$198 , \$193 , \$188 , \$183 , \$178 , \$173 , \$168 , \$163 , \$158 , \$153 , \$148 , \$143 , \$138 , \$133 , \$128 , \$123 , \$118 , \$113 , \$108 , \$103 , \$98 , \$93 , \$88 , \$83 , \$78 , \$73  };
-  assign \$345  = ~ words[6];
-  assign \$346  = ! word;
-  assign \$347  = in_word & \$346 ;
-  assign \$348  = idx == words[5:0];
-  assign \$349  = \$347  & \$348 ;
-  assign \$350  = ! word;
-  assign \$351  = in_word & \$350 ;
-  assign \$352  = idx == w0_data_end_p1;
-  assign \$353  = \$351  & \$352 ;
-  assign \$355  = in_word & \$354 ;
-  assign \$356  = \$355  & in_data;
-  assign \$357  = words[22] & data1[0];
-  assign \$358  = \bit  ^ \$357 ;
-  assign \$359  = ! idx;
-  assign \$360  = words[23] & \$359 ;
-  assign \$361  = words[22] & data1[0];
-  assign \$362  = \bit  ^ \$361 ;
-  assign \$363  = \$360  & \$362 ;
-  assign \$364  = ! idx;
-  assign \$365  = words[23] & \$364 ;
-  assign \$366  = words[22] & data1[0];
-  assign \$367  = \bit  ^ \$366 ;
-  assign \$368  = \$365  & \$367 ;
-  assign \$369  = ! idx;
-  assign \$370  = words[23] & \$369 ;
-  assign \$371  = words[22] & data1[0];
-  assign \$372  = \bit  ^ \$371 ;
-  assign \$373  = \$370  & \$372 ;
-  assign \$374  = ! idx;
-  assign \$375  = words[23] & \$374 ;
-  assign \$376  = words[22] & data1[0];
-  assign \$377  = \bit  ^ \$376 ;
-  assign \$378  = \$375  & \$377 ;
-  assign \$379  = ! idx;
-  assign \$380  = words[23] & \$379 ;
-  assign \$381  = words[22] & data1[0];
-  assign \$382  = \bit  ^ \$381 ;
-  assign \$383  = \$380  & \$382 ;
-  assign \$384  = ! idx;
-  assign \$385  = words[23] & \$384 ;
-  assign \$386  = words[22] & data1[0];
-  assign \$387  = \bit  ^ \$386 ;
-  assign \$388  = \$385  & \$387 ;
-  assign \$389  = ! idx;
-  assign \$390  = words[23] & \$389 ;
-  assign \$391  = words[22] & data1[0];
-  assign \$392  = \bit  ^ \$391 ;
-  assign \$393  = \$390  & \$392 ;
-  assign \$394  = ! idx;
+  assign \$83  = ! idx;
+  assign \$84  = words[11] & \$83 ;
+  assign \$85  = words[10] & data0[0];
+  assign \$86  = \bit  ^ \$85 ;
+  assign \$87  = \$84  & \$86 ;
+  assign \$88  = ! idx;
+  assign \$89  = words[11] & \$88 ;
+  assign \$90  = words[10] & data0[0];
+  assign \$91  = \bit  ^ \$90 ;
+  assign \$92  = \$89  & \$91 ;
+  assign \$93  = ! idx;
+  assign \$94  = words[11] & \$93 ;
+  assign \$95  = words[10] & data0[0];
+  assign \$96  = \bit  ^ \$95 ;
+  assign \$97  = \$94  & \$96 ;
+  assign \$98  = ! idx;
+  assign \$99  = words[11] & \$98 ;
+  assign \$100  = words[10] & data0[0];
+  assign \$101  = \bit  ^ \$100 ;
+  assign \$102  = \$99  & \$101 ;
+  assign \$103  = ! idx;
+  assign \$104  = words[11] & \$103 ;
+  assign \$105  = words[10] & data0[0];
+  assign \$106  = \bit  ^ \$105 ;
+  assign \$107  = \$104  & \$106 ;
+  assign \$108  = ! idx;
+  assign \$109  = words[11] & \$108 ;
+  assign \$110  = words[10] & data0[0];
+  assign \$111  = \bit  ^ \$110 ;
+  assign \$112  = \$109  & \$111 ;
+  assign \$113  = ! idx;
+  assign \$114  = words[11] & \$113 ;
+  assign \$115  = words[10] & data0[0];
+  assign \$116  = \bit  ^ \$115 ;
+  assign \$117  = \$114  & \$116 ;
+  assign \$118  = ! idx;
+  assign \$119  = words[11] & \$118 ;
+  assign \$120  = words[10] & data0[0];
+  assign \$121  = \bit  ^ \$120 ;
+  assign \$122  = \$119  & \$121 ;
+  assign \$123  = ! idx;
+  assign \$124  = words[11] & \$123 ;
+  assign \$125  = words[10] & data0[0];
+  assign \$126  = \bit  ^ \$125 ;
+  assign \$127  = \$124  & \$126 ;
+  assign \$128  = ! idx;
+  assign \$129  = words[11] & \$128 ;
+  assign \$130  = words[10] & data0[0];
+  assign \$131  = \bit  ^ \$130 ;
+  assign \$132  = \$129  & \$131 ;
+  assign \$133  = ! idx;
+  assign \$134  = words[11] & \$133 ;
+  assign \$135  = words[10] & data0[0];
+  assign \$136  = \bit  ^ \$135 ;
+  assign \$137  = \$134  & \$136 ;
+  assign \$138  = ! idx;
+  assign \$139  = words[11] & \$138 ;
+  assign \$140  = words[10] & data0[0];
+  assign \$141  = \bit  ^ \$140 ;
+  assign \$142  = \$139  & \$141 ;
+  assign \$143  = ! idx;
+  assign \$144  = words[11] & \$143 ;
+  assign \$145  = words[10] & data0[0];
+  assign \$146  = \bit  ^ \$145 ;
+  assign \$147  = \$144  & \$146 ;
+  assign \$148  = ! idx;
+  assign \$149  = words[11] & \$148 ;
+  assign \$150  = words[10] & data0[0];
+  assign \$151  = \bit  ^ \$150 ;
+  assign \$152  = \$149  & \$151 ;
+  assign \$153  = ! idx;
+  assign \$154  = words[11] & \$153 ;
+  assign \$155  = words[10] & data0[0];
+  assign \$156  = \bit  ^ \$155 ;
+  assign \$157  = \$154  & \$156 ;
+  assign \$158  = ! idx;
+  assign \$159  = words[11] & \$158 ;
+  assign \$160  = words[10] & data0[0];
+  assign \$161  = \bit  ^ \$160 ;
+  assign \$162  = \$159  & \$161 ;
+  assign \$163  = ! idx;
+  assign \$164  = words[11] & \$163 ;
+  assign \$165  = words[10] & data0[0];
+  assign \$166  = \bit  ^ \$165 ;
+  assign \$167  = \$164  & \$166 ;
+  assign \$168  = ! idx;
+  assign \$169  = words[11] & \$168 ;
+  assign \$170  = words[10] & data0[0];
+  assign \$171  = \bit  ^ \$170 ;
+  assign \$172  = \$169  & \$171 ;
+  assign \$173  = ! idx;
+  assign \$174  = words[11] & \$173 ;
+  assign \$175  = words[10] & data0[0];
+  assign \$176  = \bit  ^ \$175 ;
+  assign \$177  = \$174  & \$176 ;
+  assign \$178  = ! idx;
+  assign \$179  = words[11] & \$178 ;
+  assign \$180  = words[10] & data0[0];
+  assign \$181  = \bit  ^ \$180 ;
+  assign \$182  = \$179  & \$181 ;
+  assign \$183  = ! idx;
+  assign \$184  = words[11] & \$183 ;
+  assign \$185  = words[10] & data0[0];
+  assign \$186  = \bit  ^ \$185 ;
+  assign \$187  = \$184  & \$186 ;
+  assign \$188  = ! idx;
+  assign \$189  = words[11] & \$188 ;
+  assign \$190  = words[10] & data0[0];
+  assign \$191  = \bit  ^ \$190 ;
+  assign \$192  = \$189  & \$191 ;
+  assign \$193  = ! idx;
+  assign \$194  = words[11] & \$193 ;
+  assign \$195  = words[10] & data0[0];
+  assign \$196  = \bit  ^ \$195 ;
+  assign \$197  = \$194  & \$196 ;
+  assign \$198  = ! idx;
+  assign \$199  = words[11] & \$198 ;
+  assign \$200  = words[10] & data0[0];
+  assign \$201  = \bit  ^ \$200 ;
+  assign \$202  = \$199  & \$201 ;
+  assign \$203  = ! idx;
+  assign \$204  = words[11] & \$203 ;
+  assign \$205  = words[10] & data0[0];
+  assign \$206  = \bit  ^ \$205 ;
+  assign \$207  = \$204  & \$206 ;
+  assign \$208  = ! idx;
+  assign \$209  = words[11] & \$208 ;
+  assign \$210  = words[10] & data0[0];
+  assign \$211  = \bit  ^ \$210 ;
+  assign \$212  = \$209  & \$211 ;
+  assign \$213  = ! idx;
+  assign \$214  = words[11] & \$213 ;
+  assign \$215  = words[10] & data0[0];
+  assign \$216  = \bit  ^ \$215 ;
+  assign \$217  = \$214  & \$216 ;
+  assign \$218  = ! idx;
+  assign \$219  = words[11] & \$218 ;
+  assign \$220  = words[10] & data0[0];
+  assign \$221  = \bit  ^ \$220 ;
+  assign \$222  = \$219  & \$221 ;
+  assign \$223  = ! idx;
+  assign \$224  = words[11] & \$223 ;
+  assign \$225  = words[10] & data0[0];
+  assign \$226  = \bit  ^ \$225 ;
+  assign \$227  = \$224  & \$226 ;
+  assign \$228  = ! idx;
+  assign \$229  = words[11] & \$228 ;
+  assign \$230  = words[10] & data0[0];
+  assign \$231  = \bit  ^ \$230 ;
+  assign \$232  = \$229  & \$231 ;
+  assign \$233  = ! idx;
+  assign \$234  = words[11] & \$233 ;
+  assign \$235  = words[10] & data0[0];
+  assign \$236  = \bit  ^ \$235 ;
+  assign \$237  = \$234  & \$236 ;
+  assign \$238  = ! idx;
+  assign \$239  = words[11] & \$238 ;
+  assign \$240  = words[10] & data0[0];
+  assign \$241  = \bit  ^ \$240 ;
+  assign \$242  = \$239  & \$241 ;
+  assign \$243  = ! idx;
+  assign \$244  = words[11] & \$243 ;
+  assign \$245  = words[10] & data0[0];
+  assign \$246  = \bit  ^ \$245 ;
+  assign \$247  = \$244  & \$246 ;
+  assign \$248  = ! idx;
+  assign \$249  = words[11] & \$248 ;
+  assign \$250  = words[10] & data0[0];
+  assign \$251  = \bit  ^ \$250 ;
+  assign \$252  = \$249  & \$251 ;
+  assign \$253  = ! idx;
+  assign \$254  = words[11] & \$253 ;
+  assign \$255  = words[10] & data0[0];
+  assign \$256  = \bit  ^ \$255 ;
+  assign \$257  = \$254  & \$256 ;
+  assign \$258  = ! idx;
+  assign \$259  = words[11] & \$258 ;
+  assign \$260  = words[10] & data0[0];
+  assign \$261  = \bit  ^ \$260 ;
+  assign \$262  = \$259  & \$261 ;
+  assign \$263  = ! idx;
+  assign \$264  = words[11] & \$263 ;
+  assign \$265  = words[10] & data0[0];
+  assign \$266  = \bit  ^ \$265 ;
+  assign \$267  = \$264  & \$266 ;
+  assign \$268  = ! idx;
+  assign \$269  = words[11] & \$268 ;
+  assign \$270  = words[10] & data0[0];
+  assign \$271  = \bit  ^ \$270 ;
+  assign \$272  = \$269  & \$271 ;
+  assign \$273  = ! idx;
+  assign \$274  = words[11] & \$273 ;
+  assign \$275  = words[10] & data0[0];
+  assign \$276  = \bit  ^ \$275 ;
+  assign \$277  = \$274  & \$276 ;
+  assign \$278  = ! idx;
+  assign \$279  = words[11] & \$278 ;
+  assign \$280  = words[10] & data0[0];
+  assign \$281  = \bit  ^ \$280 ;
+  assign \$282  = \$279  & \$281 ;
+  assign \$283  = ! idx;
+  assign \$284  = words[11] & \$283 ;
+  assign \$285  = words[10] & data0[0];
+  assign \$286  = \bit  ^ \$285 ;
+  assign \$287  = \$284  & \$286 ;
+  assign \$288  = ! idx;
+  assign \$289  = words[11] & \$288 ;
+  assign \$290  = words[10] & data0[0];
+  assign \$291  = \bit  ^ \$290 ;
+  assign \$292  = \$289  & \$291 ;
+  assign \$293  = ! idx;
+  assign \$294  = words[11] & \$293 ;
+  assign \$295  = words[10] & data0[0];
+  assign \$296  = \bit  ^ \$295 ;
+  assign \$297  = \$294  & \$296 ;
+  assign \$298  = ! idx;
+  assign \$299  = words[11] & \$298 ;
+  assign \$300  = words[10] & data0[0];
+  assign \$301  = \bit  ^ \$300 ;
+  assign \$302  = \$299  & \$301 ;
+  assign \$303  = ! idx;
+  assign \$304  = words[11] & \$303 ;
+  assign \$305  = words[10] & data0[0];
+  assign \$306  = \bit  ^ \$305 ;
+  assign \$307  = \$304  & \$306 ;
+  assign \$308  = ! idx;
+  assign \$309  = words[11] & \$308 ;
+  assign \$310  = words[10] & data0[0];
+  assign \$311  = \bit  ^ \$310 ;
+  assign \$312  = \$309  & \$311 ;
+  assign \$313  = ! idx;
+  assign \$314  = words[11] & \$313 ;
+  assign \$315  = words[10] & data0[0];
+  assign \$316  = \bit  ^ \$315 ;
+  assign \$317  = \$314  & \$316 ;
+  assign \$318  = ! idx;
+  assign \$319  = words[11] & \$318 ;
+  assign \$320  = words[10] & data0[0];
+  assign \$321  = \bit  ^ \$320 ;
+  assign \$322  = \$319  & \$321 ;
+  assign \$323  = ! idx;
+  assign \$324  = words[11] & \$323 ;
+  assign \$325  = words[10] & data0[0];
+  assign \$326  = \bit  ^ \$325 ;
+  assign \$327  = \$324  & \$326 ;
+  assign \$328  = ! idx;
+  assign \$329  = words[11] & \$328 ;
+  assign \$330  = words[10] & data0[0];
+  assign \$331  = \bit  ^ \$330 ;
+  assign \$332  = \$329  & \$331 ;
+  assign \$333  = ! idx;
+  assign \$334  = words[11] & \$333 ;
+  assign \$335  = words[10] & data0[0];
+  assign \$336  = \bit  ^ \$335 ;
+  assign \$337  = \$334  & \$336 ;
+  assign \$338  = ! idx;
+  assign \$339  = words[11] & \$338 ;
+  assign \$340  = words[10] & data0[0];
+  assign \$341  = \bit  ^ \$340 ;
+  assign \$342  = \$339  & \$341 ;
+  assign \$343  = ! idx;
+  assign \$344  = words[11] & \$343 ;
+  assign \$345  = words[10] & data0[0];
+  assign \$346  = \bit  ^ \$345 ;
+  assign \$347  = \$344  & \$346 ;
+  assign \$348  = ! idx;
+  assign \$349  = words[11] & \$348 ;
+  assign \$350  = words[10] & data0[0];
+  assign \$351  = \bit  ^ \$350 ;
+  assign \$352  = \$349  & \$351 ;
+  assign \$353  = ! idx;
+  assign \$354  = words[11] & \$353 ;
+  assign \$355  = words[10] & data0[0];
+  assign \$356  = \bit  ^ \$355 ;
+  assign \$357  = \$354  & \$356 ;
+  assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
+  assign \$359  = ~ words[6];
+  assign \$360  = ssi & \port$2205$272 [0];
+  assign \$361  = ~ \$360 ;
+  assign \$362  = \$359  & \$361 ;
+  assign \$363  = ! word;
+  assign \$364  = in_word & \$363 ;
+  assign \$365  = idx == words[5:0];
+  assign \$366  = \$364  & \$365 ;
   \biss_master.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
@@ -6805,429 +7032,539 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     .index(word),
     .last(last),
     .load(load),
-    .load_index(\$579 [0]),
+    .load_index(\$603 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$585  = 1'h0;
+    \$611  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$585  = 1'h1;
-              end
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$585  = 1'h0;
-    end
-    if (rst) begin
-      \$585  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$586  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
           /* empty */;
       3'h2:
           /* empty */;
-      3'h3:
-          if (sample) begin
-            \$586  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$586  = 1'h0;
-    end
-    if (rst) begin
-      \$586  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$587  = slots;
-    if (\$36 ) begin
-      \$587  = \$37 [15:0];
-    end
-    if (receiver_clear) begin
-      \$587  = 16'h0000;
-    end
-    if (rst) begin
-      \$587  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$588  = slots_full;
-    if (\$36 ) begin
-      \$588  = \$38 ;
-    end
-    if (receiver_clear) begin
-      \$588  = 1'h0;
-    end
-    if (rst) begin
-      \$588  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$589  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$589  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$589  = 1'h0;
-    end
-    if (rst) begin
-      \$589  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$590  = start_slot;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$590  = slots;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$590  = 16'h0000;
-    end
-    if (rst) begin
-      \$590  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$591  = decoder_fsm_state;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$591  = 3'h1;
-          end
       3'h1:
           if (sample) begin
-            \$591  = 3'h2;
-          end
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$591  = 3'h3;
+            if (\$66 ) begin
+              if (\$68 ) begin
+                (* full_case = 32'd1 *)
+                if (\$69 ) begin
+                end else begin
+                  \$611  = 1'h1;
+                end
               end
             end
           end
       3'h3:
-          if (sample) begin
-            \$591  = 3'h4;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$591  = 3'h0;
-    end
-    if (rst) begin
-      \$591  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$592  = cds;
-    casez (decoder_fsm_state)
-      3'h0:
           /* empty */;
-      3'h1:
+      3'h5:
           if (sample) begin
-            \$592  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$592  = 1'h0;
-    end
-    if (rst) begin
-      \$592  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$593  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$593  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$593  = \$41 [6:0];
-            if (\$60 ) begin
-              \$593  = 7'h00;
+            if (\$77 ) begin
+              \$611  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$593  = 7'h00;
+      \$611  = 1'h0;
     end
     if (rst) begin
-      \$593  = 7'h00;
+      \$611  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$594  = in_data;
+    \$612  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
+      3'h2:
+          /* empty */;
       3'h1:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h4:
           if (sample) begin
-            \$594  = w0_data_at0;
+            \$612  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$612  = 1'h0;
+    end
+    if (rst) begin
+      \$612  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$613  = slots;
+    if (\$41 ) begin
+      \$613  = \$42 [15:0];
+    end
+    if (receiver_clear) begin
+      \$613  = 16'h0000;
+    end
+    if (rst) begin
+      \$613  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$614  = slots_full;
+    if (\$41 ) begin
+      \$614  = \$43 ;
+    end
+    if (receiver_clear) begin
+      \$614  = 1'h0;
+    end
+    if (rst) begin
+      \$614  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$615  = started;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$615  = 1'h1;
+          end else if (\$44 ) begin
+            \$615  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$615  = 1'h0;
+    end
+    if (rst) begin
+      \$615  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$616  = idx;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$616  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$594  = \$44 ;
-            if (\$60 ) begin
-              \$594  = w1_data_at0;
+            \$616  = 7'h00;
+          end
+      3'h1:
+          if (sample) begin
+            \$616  = \$47 [6:0];
+            if (\$66 ) begin
+              \$616  = 7'h00;
+            end
+          end
+      3'h3:
+          /* empty */;
+      3'h5:
+          if (sample) begin
+            \$616  = \$71 [6:0];
+          end
+    endcase
+    if (receiver_clear) begin
+      \$616  = 7'h00;
+    end
+    if (rst) begin
+      \$616  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$617  = in_data;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$617  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$617  = w0_data_at0;
+          end
+      3'h1:
+          if (sample) begin
+            \$617  = \$50 ;
+            if (\$66 ) begin
+              \$617  = w1_data_at0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$594  = 1'h0;
+      \$617  = 1'h0;
     end
     if (rst) begin
-      \$594  = 1'h0;
+      \$617  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$595  = in_lc;
+    \$618  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$595  = w0_lc_at0;
+          if (ssi) begin
+            \$618  = w0_lc_at0;
           end
       3'h2:
           if (sample) begin
-            \$595  = \$50 ;
-            if (\$60 ) begin
-              \$595  = w1_lc_at0;
+            \$618  = w0_lc_at0;
+          end
+      3'h1:
+          if (sample) begin
+            \$618  = \$56 ;
+            if (\$66 ) begin
+              \$618  = w1_lc_at0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$595  = 1'h0;
+      \$618  = 1'h0;
     end
     if (rst) begin
-      \$595  = 1'h0;
+      \$618  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$596  = in_crc;
+    \$619  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$596  = 1'h0;
+          if (ssi) begin
+            \$619  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$596  = \$56 ;
+            \$619  = 1'h0;
+          end
+      3'h1:
+          if (sample) begin
+            \$619  = \$62 ;
           end
     endcase
     if (receiver_clear) begin
-      \$596  = 1'h0;
+      \$619  = 1'h0;
     end
     if (rst) begin
-      \$596  = 1'h0;
+      \$619  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$597  = in_top;
+    \$620  = in_top;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$597  = \$40 ;
+          if (ssi) begin
+            \$620  = \$45 ;
           end
       3'h2:
           if (sample) begin
-            \$597  = \$58 ;
-            if (\$60 ) begin
-              \$597  = 1'h0;
+            \$620  = \$46 ;
+          end
+      3'h1:
+          if (sample) begin
+            \$620  = \$64 ;
+            if (\$66 ) begin
+              \$620  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$597  = 1'h0;
+      \$620  = 1'h0;
     end
     if (rst) begin
-      \$597  = 1'h0;
+      \$620  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$598  = word;
+    \$621  = word;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$598  = 1'h0;
+          if (ssi) begin
+            \$621  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            if (\$60 ) begin
+            \$621  = 1'h0;
+          end
+      3'h1:
+          if (sample) begin
+            if (\$66 ) begin
               (* full_case = 32'd1 *)
-              if (\$62 ) begin
+              if (\$68 ) begin
               end else begin
-                \$598  = \$63 [0];
+                \$621  = \$70 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$598  = 1'h0;
+      \$621  = 1'h0;
     end
     if (rst) begin
-      \$598  = 1'h0;
+      \$621  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$599  = stop_bit;
+    \$622  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
+          if (ssi) begin
+            \$622  = 3'h1;
+          end else if (\$44 ) begin
+            \$622  = 3'h2;
+          end
       3'h2:
-          /* empty */;
+          if (sample) begin
+            \$622  = 3'h1;
+          end
+      3'h1:
+          if (sample) begin
+            if (\$66 ) begin
+              if (\$68 ) begin
+                (* full_case = 32'd1 *)
+                if (\$69 ) begin
+                  \$622  = 3'h3;
+                end else begin
+                  \$622  = 3'h4;
+                end
+              end
+            end
+          end
       3'h3:
           if (sample) begin
-            \$599  = \bit ;
+            \$622  = 3'h5;
+          end
+      3'h5:
+          if (sample) begin
+            if (\$77 ) begin
+              \$622  = 3'h4;
+            end
+          end
+      3'h4:
+          if (sample) begin
+            \$622  = 3'h6;
           end
     endcase
     if (receiver_clear) begin
-      \$599  = 1'h0;
+      \$622  = 3'h0;
     end
     if (rst) begin
-      \$599  = 1'h0;
+      \$622  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$600  = data0;
-    if (\$66 ) begin
-      \$600  = \$344 ;
+    \$623  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+          end else if (\$44 ) begin
+            \$623  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$623  = 16'h0000;
+    end
+    if (rst) begin
+      \$623  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$624  = cds;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          if (sample) begin
+            \$624  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$624  = 1'h0;
+    end
+    if (rst) begin
+      \$624  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$625  = mismatch;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$625  = \bit ;
+          end
+      3'h5:
+          if (sample) begin
+            \$625  = \$75 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$625  = 1'h0;
+    end
+    if (rst) begin
+      \$625  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$626  = ring;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h5:
+          if (sample) begin
+            \$626  = { ring[71:0], \bit  };
+          end
+    endcase
+    if (\$591 ) begin
+      \$626  = { ring[71:0], \bit  };
     end
     if (receiver_clear) begin
-      \$600  = 55'h00000000000000;
+      \$626  = 73'h0000000000000000000;
     end
     if (rst) begin
-      \$600  = 55'h00000000000000;
+      \$626  = 73'h0000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$601  = ne;
-    if (\$345 ) begin
-      \$601 [0] = 1'h1;
-    end else if (\$349 ) begin
-      \$601 [0] = \bit ;
+    \$627  = stop_bit;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h4:
+          if (sample) begin
+            \$627  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$627  = 1'h0;
     end
-    if (\$560 ) begin
-      \$601 [1] = 1'h1;
-    end else if (\$564 ) begin
-      \$601 [1] = \bit ;
+    if (rst) begin
+      \$627  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$628  = data0;
+    if (\$80 ) begin
+      \$628  = \$358 ;
     end
     if (receiver_clear) begin
-      \$601  = 2'h0;
+      \$628  = 55'h00000000000000;
     end
     if (rst) begin
-      \$601  = 2'h0;
+      \$628  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$602  = nw;
-    if (\$345 ) begin
-      \$602 [0] = 1'h1;
-    end else if (\$349 ) begin
-    end else if (\$353 ) begin
-      \$602 [0] = \bit ;
+    \$629  = ne;
+    if (\$362 ) begin
+      \$629 [0] = 1'h1;
+    end else if (\$366 ) begin
+      \$629 [0] = \$370 ;
     end
-    if (\$560 ) begin
-      \$602 [1] = 1'h1;
-    end else if (\$564 ) begin
-    end else if (\$568 ) begin
-      \$602 [1] = \bit ;
+    if (\$582 ) begin
+      \$629 [1] = 1'h1;
+    end else if (\$586 ) begin
+      \$629 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$602  = 2'h0;
+      \$629  = 2'h0;
     end
     if (rst) begin
-      \$602  = 2'h0;
+      \$629  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$603  = data1;
-    if (\$356 ) begin
-      \$603  = \$559 ;
+    \$630  = nw;
+    if (\$371 ) begin
+      \$630 [0] = 1'h1;
+    end else if (\$375 ) begin
+      \$630 [0] = \bit ;
+    end
+    if (\$582 ) begin
+      \$630 [1] = 1'h1;
+    end else if (\$586 ) begin
+    end else if (\$590 ) begin
+      \$630 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$603  = 40'h0000000000;
+      \$630  = 2'h0;
     end
     if (rst) begin
-      \$603  = 40'h0000000000;
+      \$630  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$604  = lc;
+    \$631  = data1;
+    if (\$378 ) begin
+      \$631  = \$581 ;
+    end
+    if (receiver_clear) begin
+      \$631  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$631  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$632  = lc;
     if (lc_load) begin
-      \$604  = { lc[4:0], \bit  };
+      \$632  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$604  = 6'h00;
+      \$632  = 6'h00;
     end
     if (rst) begin
-      \$604  = 6'h00;
+      \$632  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$605  = cpw_top;
-    if (\$569 ) begin
-      \$605  = { cpw_top[38:0], \$571  };
+    \$633  = cpw_top;
+    if (\$592 ) begin
+      \$633  = { cpw_top[38:0], \$594  };
     end
     if (receiver_clear) begin
-      \$605  = 40'h0000000000;
+      \$633  = 40'h0000000000;
     end
     if (rst) begin
-      \$605  = 40'h0000000000;
+      \$633  = 40'h0000000000;
     end
   end
   always @* begin
@@ -7235,9 +7572,13 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     at_cds = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          at_cds = sample;
+          if (ssi) begin
+            at_cds = 1'h1;
+          end
+      3'h2:
+          if (sample) begin
+            at_cds = 1'h1;
+          end
     endcase
   end
   always @* begin
@@ -7246,72 +7587,120 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
-      3'h1:
-          /* empty */;
       3'h2:
+          /* empty */;
+      3'h1:
           in_word = sample;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[6])
-      1'h0:
-          \$3  = 7'h7f;
-      1'h1:
-          \$3  = 7'h01;
+    casez ({ \$3 , words[7:6] })
+      3'h0:
+          \$4  = 7'h7f;
+      3'h1:
+          \$4  = 7'h01;
+      3'h2:
+          \$4  = 7'h7f;
+      3'h3:
+          \$4  = 7'h01;
+      3'h4:
+          \$4  = 7'h00;
+      3'h5:
+          \$4  = 7'h02;
+      3'h6:
+          \$4  = 7'h00;
+      3'h7:
+          \$4  = 7'h02;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[7:6])
-      2'h0:
-          \$5  = 7'h7f;
-      2'h1:
-          \$5  = 7'h01;
-      2'h2:
-          \$5  = 7'h05;
-      2'h3:
-          \$5  = 7'h07;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[7:6])
-      2'h0:
+    casez ({ \$6 , words[7:6] })
+      3'h0:
           \$7  = 7'h7f;
-      2'h1:
+      3'h1:
           \$7  = 7'h01;
-      2'h2:
+      3'h2:
           \$7  = 7'h05;
-      2'h3:
+      3'h3:
           \$7  = 7'h07;
+      3'h4:
+          \$7  = 7'h00;
+      3'h5:
+          \$7  = 7'h02;
+      3'h6:
+          \$7  = 7'h06;
+      3'h7:
+          \$7  = 7'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[7:6])
-      2'h0:
-          \$14  = 4'h0;
-      2'h1:
-          \$14  = 4'h2;
-      2'h2:
-          \$14  = 4'h6;
-      2'h3:
-          \$14  = 4'h8;
+    casez ({ \$9 , words[7:6] })
+      3'h0:
+          \$10  = 7'h7f;
+      3'h1:
+          \$10  = 7'h01;
+      3'h2:
+          \$10  = 7'h05;
+      3'h3:
+          \$10  = 7'h07;
+      3'h4:
+          \$10  = 7'h00;
+      3'h5:
+          \$10  = 7'h02;
+      3'h6:
+          \$10  = 7'h06;
+      3'h7:
+          \$10  = 7'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18])
-      1'h0:
-          \$20  = 7'h7f;
-      1'h1:
-          \$20  = 7'h01;
+    casez ({ \$14 , words[7:6] })
+      3'h0:
+          \$15  = 2'h0;
+      3'h1:
+          \$15  = 2'h2;
+      3'h2:
+          \$15  = 2'h0;
+      3'h3:
+          \$15  = 2'h2;
+      3'h4:
+          \$15  = 2'h1;
+      3'h5:
+          \$15  = 2'h3;
+      3'h6:
+          \$15  = 2'h1;
+      3'h7:
+          \$15  = 2'h3;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$18 , words[7:6] })
+      3'h0:
+          \$19  = 4'h0;
+      3'h1:
+          \$19  = 4'h2;
+      3'h2:
+          \$19  = 4'h6;
+      3'h3:
+          \$19  = 4'h8;
+      3'h4:
+          \$19  = 4'h1;
+      3'h5:
+          \$19  = 4'h3;
+      3'h6:
+          \$19  = 4'h7;
+      3'h7:
+          \$19  = 4'h9;
     endcase
   end
   always @* begin
@@ -7319,13 +7708,13 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$22  = 7'h7f;
+          \$25  = 7'h7f;
       2'h1:
-          \$22  = 7'h01;
+          \$25  = 7'h01;
       2'h2:
-          \$22  = 7'h05;
+          \$25  = 7'h7f;
       2'h3:
-          \$22  = 7'h07;
+          \$25  = 7'h01;
     endcase
   end
   always @* begin
@@ -7333,13 +7722,13 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$24  = 7'h7f;
+          \$27  = 7'h7f;
       2'h1:
-          \$24  = 7'h01;
+          \$27  = 7'h01;
       2'h2:
-          \$24  = 7'h05;
+          \$27  = 7'h05;
       2'h3:
-          \$24  = 7'h07;
+          \$27  = 7'h07;
     endcase
   end
   always @* begin
@@ -7347,21 +7736,52 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$31  = 4'h0;
+          \$29  = 7'h7f;
       2'h1:
-          \$31  = 4'h2;
+          \$29  = 7'h01;
       2'h2:
-          \$31  = 4'h6;
+          \$29  = 7'h05;
       2'h3:
-          \$31  = 4'h8;
+          \$29  = 7'h07;
     endcase
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:18])
+      2'h0:
+          \$33  = 2'h0;
+      2'h1:
+          \$33  = 2'h2;
+      2'h2:
+          \$33  = 2'h0;
+      2'h3:
+          \$33  = 2'h2;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:18])
+      2'h0:
+          \$36  = 4'h0;
+      2'h1:
+          \$36  = 4'h2;
+      2'h2:
+          \$36  = 4'h6;
+      2'h3:
+          \$36  = 4'h8;
+    endcase
+  end
+  assign ssi_error = \port$2205$272 [0];
+  assign ssi_double = \port$2205$272 [2];
+  assign ssi_error_low = \port$2205$272 [1];
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$47  = crcs;
-  assign \bit$52  = \bit ;
+  assign \crcs$53  = crcs;
+  assign \bit$58  = \bit ;
   assign ok = crc_ok;
   assign index = word;
-  assign load_index = \$579 [0];
+  assign load_index = \$603 [0];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -7386,19 +7806,19 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , crc
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$47[0]  = crcs[37:0];
-  assign \crcs$47[0].width  = crcs[4:0];
-  assign \crcs$47[0].poly  = crcs[20:5];
-  assign \crcs$47[0].start  = crcs[36:21];
-  assign \crcs$47[0].inverted  = crcs[37];
-  assign \crcs$47[1]  = crcs[75:38];
-  assign \crcs$47[1].width  = crcs[42:38];
-  assign \crcs$47[1].poly  = crcs[58:43];
-  assign \crcs$47[1].start  = crcs[74:59];
-  assign \crcs$47[1].inverted  = crcs[75];
-  assign \$354  = word;
-  assign \$561  = word;
-  assign \$565  = word;
+  assign \crcs$53[0]  = crcs[37:0];
+  assign \crcs$53[0].width  = crcs[4:0];
+  assign \crcs$53[0].poly  = crcs[20:5];
+  assign \crcs$53[0].start  = crcs[36:21];
+  assign \crcs$53[0].inverted  = crcs[37];
+  assign \crcs$53[1]  = crcs[75:38];
+  assign \crcs$53[1].width  = crcs[42:38];
+  assign \crcs$53[1].poly  = crcs[58:43];
+  assign \crcs$53[1].start  = crcs[74:59];
+  assign \crcs$53[1].inverted  = crcs[75];
+  assign \$376  = word;
+  assign \$583  = word;
+  assign \$587  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -8510,27 +8930,41 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, \started$11 , start_slot, clk);
+module \biss_master.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$14 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
-  reg [7:0] \$1 ;
-  wire \$10 ;
-  reg [7:0] \$11 ;
-  wire [8:0] \$12 ;
-  wire [8:0] \$13 ;
-  reg [7:0] \$14 ;
-  reg [8:0] \$15 ;
-  reg [16:0] \$16 ;
-  reg \$17 ;
-  reg \$18 ;
-  reg [7:0] \$19 ;
-  wire [8:0] \$2 ;
+  wire \$1 ;
+  wire [8:0] \$10 ;
+  wire [9:0] \$11 ;
+  wire \$12 ;
+  reg [7:0] \$13 ;
+  wire [8:0] \$14 ;
+  wire [8:0] \$15 ;
+  wire [8:0] \$16 ;
+  wire [9:0] \$17 ;
+  wire [7:0] \$18 ;
+  wire [8:0] \$19 ;
+  reg [7:0] \$2 ;
+  wire [16:0] \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  reg [7:0] \$25 ;
+  wire [8:0] \$26 ;
+  wire [8:0] \$27 ;
+  reg [7:0] \$28 ;
+  reg [8:0] \$29 ;
   wire [8:0] \$3 ;
-  wire [7:0] \$4 ;
+  reg [16:0] \$30 ;
+  reg \$31 ;
+  reg \$32 ;
+  reg [7:0] \$33 ;
+  wire [8:0] \$4 ;
   wire [8:0] \$5 ;
-  wire [16:0] \$6 ;
-  wire \$7 ;
-  wire \$8 ;
-  wire \$9 ;
+  wire \$6 ;
+  reg [7:0] \$7 ;
+  wire [8:0] \$8 ;
+  wire [8:0] \$9 ;
   input clear;
   wire clear;
   input clk;
@@ -8554,11 +8988,17 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
   wire [15:0] rises;
   input rst;
   wire rst;
+  input ssi;
+  wire ssi;
+  input ssi_double;
+  wire ssi_double;
+  input ssi_error;
+  wire ssi_error;
   input [15:0] start_slot;
   wire [15:0] start_slot;
   reg started = 1'h0;
-  input \started$11 ;
-  wire \started$11 ;
+  input \started$14 ;
+  wire \started$14 ;
   reg [16:0] target_rises = 17'h00000;
   input w1_enable;
   wire w1_enable;
@@ -8590,41 +9030,105 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$2  = \$1  + crcs[4:0];
-  assign \$3  = words[5:0] + \$2 [7:0];
-  assign \$4  = w1_enable ? word1_len : 8'h00;
-  assign \$5  = word0_len + \$4 ;
-  assign \$6  = start_slot + frame_len;
-  assign \$7  = rises >= target_rises;
-  assign \$8  = started & \$7 ;
-  assign \$9  = ~ clear;
-  assign \$10  = \$8  & \$9 ;
-  assign \$12  = \$11  + crcs[42:38];
-  assign \$13  = words[17:12] + \$12 [7:0];
+  assign \$1  = ssi & ssi_error;
+  assign \$3  = \$2  + crcs[4:0];
+  assign \$4  = words[5:0] + \$3 [7:0];
+  assign \$5  = \$4 [7:0] + 1'h1;
+  assign \$6  = ssi & ssi_error;
+  assign \$8  = \$7  + crcs[4:0];
+  assign \$9  = words[5:0] + \$8 [7:0];
+  assign \$10  = \$9 [7:0] + 1'h1;
+  assign \$11  = ssi_double ? { \$5 , 1'h0 } : { 1'h0, \$10  };
+  assign \$12  = ssi & ssi_error;
+  assign \$14  = \$13  + crcs[4:0];
+  assign \$15  = words[5:0] + \$14 [7:0];
+  assign \$16  = \$15 [7:0] + 3'h4;
+  assign \$17  = ssi ? \$11  : { 1'h0, \$16  };
+  assign \$18  = w1_enable ? word1_len : 8'h00;
+  assign \$19  = word0_len + \$18 ;
+  assign \$20  = start_slot + frame_len;
+  assign \$21  = rises >= target_rises;
+  assign \$22  = started & \$21 ;
+  assign \$23  = ~ clear;
+  assign \$24  = \$22  & \$23 ;
+  assign \$26  = \$25  + crcs[42:38];
+  assign \$27  = words[17:12] + \$26 [7:0];
   always @(posedge clk)
-    word0_len <= \$14 ;
+    word0_len <= \$28 ;
   always @(posedge clk)
-    frame_len <= \$15 ;
+    frame_len <= \$29 ;
   always @(posedge clk)
-    target_rises <= \$16 ;
+    target_rises <= \$30 ;
   always @(posedge clk)
-    started <= \$17 ;
+    started <= \$31 ;
   always @(posedge clk)
-    enough <= \$18 ;
+    enough <= \$32 ;
   always @(posedge clk)
-    word1_len <= \$19 ;
+    word1_len <= \$33 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[7:6])
-      2'h0:
-          \$1  = 8'h04;
-      2'h1:
-          \$1  = 8'h06;
-      2'h2:
-          \$1  = 8'h0a;
-      2'h3:
-          \$1  = 8'h0c;
+    casez ({ \$1 , words[7:6] })
+      3'h0:
+          \$2  = 8'h00;
+      3'h1:
+          \$2  = 8'h02;
+      3'h2:
+          \$2  = 8'h06;
+      3'h3:
+          \$2  = 8'h08;
+      3'h4:
+          \$2  = 8'h01;
+      3'h5:
+          \$2  = 8'h03;
+      3'h6:
+          \$2  = 8'h07;
+      3'h7:
+          \$2  = 8'h09;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$6 , words[7:6] })
+      3'h0:
+          \$7  = 8'h00;
+      3'h1:
+          \$7  = 8'h02;
+      3'h2:
+          \$7  = 8'h06;
+      3'h3:
+          \$7  = 8'h08;
+      3'h4:
+          \$7  = 8'h01;
+      3'h5:
+          \$7  = 8'h03;
+      3'h6:
+          \$7  = 8'h07;
+      3'h7:
+          \$7  = 8'h09;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$12 , words[7:6] })
+      3'h0:
+          \$13  = 8'h00;
+      3'h1:
+          \$13  = 8'h02;
+      3'h2:
+          \$13  = 8'h06;
+      3'h3:
+          \$13  = 8'h08;
+      3'h4:
+          \$13  = 8'h01;
+      3'h5:
+          \$13  = 8'h03;
+      3'h6:
+          \$13  = 8'h07;
+      3'h7:
+          \$13  = 8'h09;
     endcase
   end
   always @* begin
@@ -8632,55 +9136,55 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$11  = 8'h00;
+          \$25  = 8'h00;
       2'h1:
-          \$11  = 8'h02;
+          \$25  = 8'h02;
       2'h2:
-          \$11  = 8'h06;
+          \$25  = 8'h06;
       2'h3:
-          \$11  = 8'h08;
+          \$25  = 8'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$14  = \$3 [7:0];
+    \$28  = \$17 [7:0];
     if (rst) begin
-      \$14  = 8'h00;
+      \$28  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$15  = \$5 ;
+    \$29  = \$19 ;
     if (rst) begin
-      \$15  = 9'h000;
+      \$29  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$16  = \$6 ;
+    \$30  = \$20 ;
     if (rst) begin
-      \$16  = 17'h00000;
+      \$30  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$17  = \started$11 ;
+    \$31  = \started$14 ;
     if (rst) begin
-      \$17  = 1'h0;
+      \$31  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$18  = \$10 ;
+    \$32  = \$24 ;
     if (rst) begin
-      \$18  = 1'h0;
+      \$32  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$19  = \$13 [7:0];
+    \$33  = \$27 [7:0];
     if (rst) begin
-      \$19  = 8'h00;
+      \$33  = 8'h00;
     end
   end
   assign \words[0]  = words[11:0];
@@ -8710,7 +9214,7 @@ module \biss_master.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, 
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.register_access (abort, rbuf_addr, rbuf_en, clk, rst, frame_end, frame_ok, busy, rbuf_data, request, wbuf, frame_cdm, frame_cds, done, result, cdm, start);
+module \biss_master.register_access (abort, rbuf_addr, rbuf_en, clk, rst, frame_ok, frame_end, busy, rbuf_data, request, wbuf, frame_cdm, frame_cds, done, result, cdm, start);
   input abort;
   wire abort;
   wire \abort$5 ;
@@ -9289,7 +9793,7 @@ module \biss_master.register_access.checker.rx_crc (rst, crc, data_in, valid, st
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
+module \biss_master.register_access.idle (rst, frame_ok, frame_end, run_enough, seen_enough, frame_cdm, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
@@ -9582,7 +10086,7 @@ module \biss_master.register_access.sender.tx_crc (rst, data_in, crc, start, val
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.register_access.sequencer (abort, clk, rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
+module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_end, busy, crc_ok, echo_ok, run_enough, seen_enough, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, start);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
@@ -10823,35 +11327,35 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2205$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
-  wire \$11 ;
+  wire [13:0] \$11 ;
   wire \$12 ;
   wire [13:0] \$13 ;
-  wire [17:0] \$14 ;
+  wire \$14 ;
   wire \$15 ;
-  wire \$16 ;
-  wire \$17 ;
+  wire [13:0] \$16 ;
+  wire [17:0] \$17 ;
   wire \$18 ;
-  wire [12:0] \$19 ;
+  wire \$19 ;
   wire [14:0] \$2 ;
   wire \$20 ;
   wire \$21 ;
-  wire [13:0] \$22 ;
-  wire [13:0] \$23 ;
-  wire [16:0] \$24 ;
-  wire \$25 ;
+  wire [12:0] \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire [13:0] \$25 ;
   wire [13:0] \$26 ;
-  wire [13:0] \$27 ;
+  wire [16:0] \$27 ;
   wire \$28 ;
   wire [13:0] \$29 ;
   wire \$3 ;
-  wire [17:0] \$30 ;
+  wire [13:0] \$30 ;
   wire \$31 ;
-  wire \$32 ;
-  wire \$33 ;
+  wire [13:0] \$32 ;
+  wire [17:0] \$33 ;
   wire \$34 ;
   wire \$35 ;
   wire \$36 ;
@@ -10893,36 +11397,42 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   wire \$69 ;
   wire \$7 ;
   wire \$70 ;
-  reg \$71 ;
-  reg [12:0] \$72 ;
-  reg [16:0] \$73 ;
-  reg \$74 ;
-  reg [12:0] \$75 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
   reg \$76 ;
-  reg \$77 ;
-  reg \$78 ;
-  reg [1:0] \$79 ;
+  reg [12:0] \$77 ;
+  reg [16:0] \$78 ;
+  reg \$79 ;
   wire [13:0] \$8 ;
-  reg [16:0] \$80 ;
+  reg [12:0] \$80 ;
   reg \$81 ;
   reg \$82 ;
   reg \$83 ;
-  reg \$84 ;
+  reg [1:0] \$84 ;
   reg [12:0] \$85 ;
-  reg [1:0] \$86 ;
+  reg \$86 ;
+  reg \$87 ;
+  reg \$88 ;
+  reg [1:0] \$89 ;
   wire [17:0] \$9 ;
+  reg [16:0] \$90 ;
+  reg \$91 ;
   input arm;
   wire arm;
   output \bit ;
   wire \bit ;
   reg centre;
-  wire \centre$35 ;
+  wire \centre$39 ;
   reg clear;
-  wire \clear$33 ;
+  wire \clear$36 ;
+  wire clear_high;
   input clk;
   wire clk;
   reg decided;
-  wire \decided$36 ;
+  wire \decided$40 ;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
   reg dropped;
@@ -10932,12 +11442,15 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   reg [12:0] elapsed = 13'h0000;
   reg [15:0] first_load = 16'h0000;
   reg first_slot = 1'h0;
+  wire fixed;
+  reg [12:0] fixed_at = 13'h0000;
+  wire [12:0] fixed_delay;
   reg gap = 1'h0;
   input [15:0] half_period;
   wire [15:0] half_period;
   output level;
   wire level;
-  wire \level$30 ;
+  wire \level$33 ;
   output locked;
   reg locked = 1'h0;
   wire majority;
@@ -10946,8 +11459,10 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   output noise;
   wire noise;
   reg odd = 1'h0;
-  wire \odd$42 ;
+  wire \odd$46 ;
   reg [1:0] phase = 2'h0;
+  input [12:0] \port$2205$259 ;
+  wire [12:0] \port$2205$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -10964,76 +11479,86 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
   (* init = 1'h0 *)
-  wire \vote1$37 ;
+  wire \vote1$41 ;
   reg vote2 = 1'h0;
   (* init = 1'h0 *)
-  wire \vote2$38 ;
+  wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$14  = slot_left - 1'h1;
-  assign \$15  = slot_left == 1'h1;
-  assign \$16  = ~ level;
-  assign \$17  = slo_prev & \$16 ;
-  assign \$18  = elapsed == 13'h1fff;
-  assign \$19  = \$18  ? 13'h1fff : mid_delay;
-  assign \$20  = ! mid_slot;
+  assign \$9  = mid_slot - 1'h1;
+  assign \$10  = ~ odd;
+  assign \$11  = \port$2205$259 [12:1] + 1'h1;
+  assign \$12  = ~ level;
+  assign \$13  = elapsed + 1'h1;
+  assign \$14  = elapsed == fixed_at;
+  assign \$15  = elapsed != 13'h1fff;
+  assign \$16  = elapsed + 1'h1;
+  assign \$17  = slot_left - 1'h1;
+  assign \$18  = slot_left == 1'h1;
+  assign \$19  = ~ level;
+  assign \$20  = slo_prev & \$19 ;
   assign \$21  = elapsed == 13'h1fff;
-  assign \$22  = elapsed - 1'h1;
-  assign \$23  = \$21  ? 14'h1fff : \$22 ;
-  assign \$24  = half_period - 2'h2;
-  assign \$25  = elapsed == 13'h1fff;
-  assign \$26  = elapsed - 1'h1;
-  assign \$27  = \$25  ? 14'h1fff : \$26 ;
-  assign \$28  = elapsed != 13'h1fff;
-  assign \$29  = elapsed + 1'h1;
-  assign \$30  = slot_left - 1'h1;
-  assign \$31  = slot_left == 1'h1;
-  assign \$32  = ! phase;
-  assign \$33  = first_slot & \$32 ;
-  assign \$34  = \$33  & level;
-  assign \$35  = ~ single;
-  assign \$36  = decided & first_slot;
-  assign \$37  = vote1 & vote2;
-  assign \$38  = vote1 & level;
-  assign \$39  = \$37  | \$38 ;
-  assign \$40  = vote2 & level;
-  assign \$41  = \$39  | \$40 ;
-  assign \$42  = single ? level : \$41 ;
-  assign \$43  = ~ first_slot;
-  assign \$44  = decided & \$43 ;
-  assign \$45  = vote1 & vote2;
-  assign \$46  = vote1 & level;
-  assign \$47  = \$45  | \$46 ;
-  assign \$48  = vote2 & level;
-  assign \$49  = \$47  | \$48 ;
-  assign \bit  = single ? level : \$49 ;
+  assign \$22  = \$21  ? 13'h1fff : mid_delay;
+  assign \$23  = ! mid_slot;
+  assign \$24  = elapsed == 13'h1fff;
+  assign \$25  = elapsed - 1'h1;
+  assign \$26  = \$24  ? 14'h1fff : \$25 ;
+  assign \$27  = half_period - 2'h2;
+  assign \$28  = elapsed == 13'h1fff;
+  assign \$29  = elapsed - 1'h1;
+  assign \$30  = \$28  ? 14'h1fff : \$29 ;
+  assign \$31  = elapsed != 13'h1fff;
+  assign \$32  = elapsed + 1'h1;
+  assign \$33  = slot_left - 1'h1;
+  assign \$34  = slot_left == 1'h1;
+  assign \$35  = ! phase;
+  assign \$36  = first_slot & \$35 ;
+  assign \$37  = \$36  & level;
+  assign \$38  = ~ single;
+  assign \$39  = decided & first_slot;
+  assign \$40  = vote1 & vote2;
+  assign \$41  = vote1 & level;
+  assign \$42  = \$40  | \$41 ;
+  assign \$43  = vote2 & level;
+  assign \$44  = \$42  | \$43 ;
+  assign \$45  = single ? level : \$44 ;
+  assign \$46  = ~ first_slot;
+  assign \$47  = decided & \$46 ;
+  assign \$48  = vote1 & vote2;
+  assign \$49  = vote1 & level;
+  assign \$50  = \$48  | \$49 ;
+  assign \$51  = vote2 & level;
+  assign \$52  = \$50  | \$51 ;
+  assign \bit  = single ? level : \$52 ;
   assign \edge  = level != slo_prev;
-  assign \$50  = ~ single;
-  assign \decided$36  = decided & \$50 ;
-  assign \$51  = vote1 & vote2;
-  assign \$52  = vote1 & level;
-  assign \$53  = \$51  | \$52 ;
-  assign \$54  = vote2 & level;
-  assign majority = \$53  | \$54 ;
-  assign noise = dropped | \odd$42 ;
-  assign \$55  = ~ level;
-  assign \$56  = slo_prev & \$55 ;
-  assign \$57  = ! phase;
-  assign \$58  = first_slot & \$57 ;
-  assign \$59  = \$58  & level;
-  assign \$60  = ~ single;
-  assign \$61  = decided & first_slot;
-  assign \$62  = vote1 & vote2;
-  assign \$63  = vote1 & level;
-  assign \$64  = \$62  | \$63 ;
-  assign \$65  = vote2 & level;
-  assign \$66  = \$64  | \$65 ;
-  assign \$67  = single ? level : \$66 ;
-  assign \$68  = ! sampler_fsm_state;
-  assign \$69  = sampler_fsm_state == 1'h1;
-  assign \$70  = sampler_fsm_state == 2'h2;
+  assign \$53  = ~ single;
+  assign \decided$40  = decided & \$53 ;
+  assign \$54  = vote1 & vote2;
+  assign \$55  = vote1 & level;
+  assign \$56  = \$54  | \$55 ;
+  assign \$57  = vote2 & level;
+  assign majority = \$56  | \$57 ;
+  assign noise = dropped | \odd$46 ;
+  assign \$58  = elapsed == fixed_at;
+  assign \$59  = ~ level;
+  assign \$60  = slo_prev & \$59 ;
+  assign \$61  = ! phase;
+  assign \$62  = first_slot & \$61 ;
+  assign \$63  = \$62  & level;
+  assign \$64  = ~ single;
+  assign \$65  = decided & first_slot;
+  assign \$66  = vote1 & vote2;
+  assign \$67  = vote1 & level;
+  assign \$68  = \$66  | \$67 ;
+  assign \$69  = vote2 & level;
+  assign \$70  = \$68  | \$69 ;
+  assign \$71  = single ? level : \$70 ;
+  assign \$72  = ! sampler_fsm_state;
+  assign \$73  = sampler_fsm_state == 1'h1;
+  assign \$74  = sampler_fsm_state == 2'h2;
+  assign \$75  = sampler_fsm_state == 2'h3;
   always @(posedge clk)
-    slo_prev <= \$71 ;
+    slo_prev <= \$76 ;
   always @(posedge clk)
     vote <= \$2 ;
   always @(posedge clk)
@@ -11045,35 +11570,37 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   always @(posedge clk)
     vote_one <= \$7 ;
   always @(posedge clk)
-    mid_delay <= \$72 ;
+    mid_delay <= \$77 ;
   always @(posedge clk)
-    mid_slot <= \$73 ;
+    mid_slot <= \$78 ;
   always @(posedge clk)
-    odd <= \$74 ;
+    odd <= \$79 ;
   always @(posedge clk)
-    elapsed <= \$75 ;
+    fixed_at <= \$11 [12:0];
   always @(posedge clk)
-    early <= \$76 ;
+    elapsed <= \$80 ;
   always @(posedge clk)
-    locked <= \$77 ;
+    early <= \$81 ;
   always @(posedge clk)
-    gap <= \$78 ;
+    locked <= \$82 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$79 ;
+    gap <= \$83 ;
   always @(posedge clk)
-    slot_left <= \$80 ;
-  always @(posedge clk)
-    slot_zero <= \$81 ;
-  always @(posedge clk)
-    vote1 <= \$82 ;
-  always @(posedge clk)
-    vote2 <= \$83 ;
-  always @(posedge clk)
-    first_slot <= \$84 ;
+    sampler_fsm_state <= \$84 ;
   always @(posedge clk)
     delay <= \$85 ;
   always @(posedge clk)
-    phase <= \$86 ;
+    vote1 <= \$86 ;
+  always @(posedge clk)
+    vote2 <= \$87 ;
+  always @(posedge clk)
+    first_slot <= \$88 ;
+  always @(posedge clk)
+    phase <= \$89 ;
+  always @(posedge clk)
+    slot_left <= \$90 ;
+  always @(posedge clk)
+    slot_zero <= \$91 ;
   assign \$1  = half_period >= 2'h3;
   assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
   assign \$3  = half_period < 2'h3;
@@ -11082,20 +11609,16 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   assign \$6  = vote - 1'h1;
   assign \$7  = vote == 1'h1;
   assign \$8  = mid_delay + 1'h1;
-  assign \$9  = mid_slot - 1'h1;
-  assign \$10  = ~ odd;
-  assign \$11  = ~ level;
-  assign \$12  = elapsed != 13'h1fff;
-  assign \$13  = elapsed + 1'h1;
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
+    .clear_high(\port$2205$259 [0]),
     .clk(clk),
-    .decided(\decided$36 ),
+    .decided(\decided$40 ),
     .\edge (\edge ),
     .level(level),
     .majority(majority),
-    .odd(\odd$42 ),
+    .odd(\odd$46 ),
     .receiver_clear(receiver_clear),
     .rst(rst),
     .vote1(vote1),
@@ -11110,398 +11633,242 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$71  = level;
+    \$76  = level;
     if (receiver_clear) begin
-      \$71  = 1'h1;
+      \$76  = 1'h1;
     end
     if (rst) begin
-      \$71  = 1'h1;
+      \$76  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$72  = mid_delay;
+    \$77  = mid_delay;
     if (odd) begin
-      \$72  = \$8 [12:0];
+      \$77  = \$8 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$72  = \$27 [12:0];
+              \$77  = \$30 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$72  = 13'h0000;
+      \$77  = 13'h0000;
     end
     if (rst) begin
-      \$72  = 13'h0000;
+      \$77  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$73  = mid_slot;
+    \$78  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$73  = \$9 [16:0];
+      \$78  = \$9 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$73  = \$24 ;
+              \$78  = \$27 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$73  = 17'h00000;
+      \$78  = 17'h00000;
     end
     if (rst) begin
-      \$73  = 17'h00000;
+      \$78  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$74  = \$10 ;
+    \$79  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$74  = 1'h1;
+              \$79  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$74  = 1'h0;
+      \$79  = 1'h0;
     end
     if (rst) begin
-      \$74  = 1'h0;
+      \$79  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$75  = elapsed;
+    \$80  = elapsed;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$75  = 13'h0001;
-          end
-      2'h1:
-          if (\$12 ) begin
-            \$75  = \$13 [12:0];
+            \$80  = 13'h0001;
           end
       2'h2:
-          if (\$28 ) begin
-            \$75  = \$29 [12:0];
+          \$80  = \$13 [12:0];
+      2'h1:
+          if (\$15 ) begin
+            \$80  = \$16 [12:0];
+          end
+      2'h3:
+          if (\$31 ) begin
+            \$80  = \$32 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$75  = 13'h0000;
+      \$80  = 13'h0000;
     end
     if (rst) begin
-      \$75  = 13'h0000;
+      \$80  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$76  = early;
+    \$81  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$76  = \$11 ;
+            \$81  = \$12 ;
+            if (\port$2205$259 [0]) begin
+              \$81  = 1'h0;
+            end
           end
     endcase
     if (receiver_clear) begin
-      \$76  = 1'h0;
+      \$81  = 1'h0;
     end
     if (rst) begin
-      \$76  = 1'h0;
+      \$81  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$77  = locked;
+    \$82  = locked;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$77  = 1'h0;
+            \$82  = 1'h0;
+          end
+      2'h2:
+          if (\$14 ) begin
+            \$82  = 1'h1;
           end
       2'h1:
           /* empty */;
-      2'h2:
-          if (\$36 ) begin
+      2'h3:
+          if (\$39 ) begin
             (* full_case = 32'd1 *)
-            if (\$42 ) begin
+            if (\$45 ) begin
             end else begin
-              \$77  = 1'h1;
+              \$82  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$77  = 1'h0;
+      \$82  = 1'h0;
     end
     if (rst) begin
-      \$77  = 1'h0;
+      \$82  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$78  = gap;
+    \$83  = gap;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$78  = 1'h0;
+            \$83  = 1'h0;
           end
+      2'h2:
+          /* empty */;
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$78  = 1'h0;
+              \$83  = 1'h0;
             end
           end
-          if (\$17 ) begin
-            \$78  = 1'h0;
+          if (\$20 ) begin
+            \$83  = 1'h0;
           end
         end
-      2'h2:
-          if (\$34 ) begin
-            \$78  = \$35 ;
+      2'h3:
+          if (\$37 ) begin
+            \$83  = \$38 ;
           end
     endcase
     if (receiver_clear) begin
-      \$78  = 1'h0;
+      \$83  = 1'h0;
     end
     if (rst) begin
-      \$78  = 1'h0;
+      \$83  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$79  = sampler_fsm_state;
+    \$84  = sampler_fsm_state;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$79  = 2'h1;
-          end
-      2'h1:
-          if (\$17 ) begin
-            \$79  = 2'h2;
+            \$84  = 2'h1;
+            if (\port$2205$259 [0]) begin
+              \$84  = 2'h2;
+            end
           end
       2'h2:
-        begin
-          if (\$34 ) begin
-            \$79  = 2'h1;
+          if (\$14 ) begin
+            \$84  = 2'h3;
           end
-          if (\$36 ) begin
-            if (\$42 ) begin
-              \$79  = 2'h1;
+      2'h1:
+          if (\$20 ) begin
+            \$84  = 2'h3;
+          end
+      2'h3:
+        begin
+          if (\$37 ) begin
+            \$84  = 2'h1;
+          end
+          if (\$39 ) begin
+            if (\$45 ) begin
+              \$84  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$79  = 2'h0;
+      \$84  = 2'h0;
     end
     if (rst) begin
-      \$79  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$80  = slot_left;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-        begin
-          if (gap) begin
-            \$80  = \$14 [16:0];
-          end
-          if (\$17 ) begin
-            (* full_case = 32'd1 *)
-            if (gap) begin
-              \$80  = mid_slot;
-            end else begin
-              \$80  = { 1'h0, first_load };
-            end
-          end
-        end
-      2'h2:
-        begin
-          \$80  = \$30 [16:0];
-          if (\$34 ) begin
-            \$80  = { 2'h0, vote_load };
-          end else if (slot_zero) begin
-            (* full_case = 32'd1 *)
-            casez (phase)
-              2'h0:
-                  (* full_case = 32'd1 *)
-                  if (single) begin
-                    \$80  = { first_load, 1'h1 };
-                  end else begin
-                    \$80  = { 2'h0, vote_load };
-                  end
-              2'h1:
-                  \$80  = { 2'h0, vote_load };
-              default:
-                  \$80  = { first_load, 1'h1 };
-            endcase
-          end
-        end
-    endcase
-    if (receiver_clear) begin
-      \$80  = 17'h00000;
-    end
-    if (rst) begin
-      \$80  = 17'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$81  = slot_zero;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-        begin
-          if (gap) begin
-            \$81  = \$15 ;
-          end
-          if (\$17 ) begin
-            (* full_case = 32'd1 *)
-            if (gap) begin
-              \$81  = \$20 ;
-            end else begin
-              \$81  = 1'h0;
-            end
-          end
-        end
-      2'h2:
-        begin
-          \$81  = \$31 ;
-          if (\$34 ) begin
-            \$81  = vote_one;
-          end else if (slot_zero) begin
-            (* full_case = 32'd1 *)
-            casez (phase)
-              2'h0:
-                  (* full_case = 32'd1 *)
-                  if (single) begin
-                    \$81  = 1'h0;
-                  end else begin
-                    \$81  = vote_one;
-                  end
-              2'h1:
-                  \$81  = vote_one;
-              default:
-                  \$81  = 1'h0;
-            endcase
-          end
-        end
-    endcase
-    if (receiver_clear) begin
-      \$81  = 1'h1;
-    end
-    if (rst) begin
-      \$81  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$82  = vote1;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$17 ) begin
-            \$82  = 1'h0;
-          end
-      2'h2:
-          if (\$34 ) begin
-          end else if (slot_zero) begin
-            casez (phase)
-              2'h0:
-                  (* full_case = 32'd1 *)
-                  if (single) begin
-                  end else begin
-                    \$82  = level;
-                  end
-            endcase
-          end
-    endcase
-    if (receiver_clear) begin
-      \$82  = 1'h0;
-    end
-    if (rst) begin
-      \$82  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$83  = vote2;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$17 ) begin
-            \$83  = 1'h0;
-          end
-      2'h2:
-          if (\$34 ) begin
-          end else if (slot_zero) begin
-            casez (phase)
-              2'h0:
-                  /* empty */;
-              2'h1:
-                  \$83  = level;
-            endcase
-          end
-    endcase
-    if (receiver_clear) begin
-      \$83  = 1'h0;
-    end
-    if (rst) begin
-      \$83  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$84  = first_slot;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$17 ) begin
-            \$84  = 1'h1;
-          end
-      2'h2:
-          if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (\$42 ) begin
-            end else begin
-              \$84  = 1'h0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$84  = 1'h0;
-    end
-    if (rst) begin
-      \$84  = 1'h0;
+      \$84  = 2'h0;
     end
   end
   always @* begin
@@ -11510,13 +11877,17 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$85  = { 1'h0, \port$2205$259 [12:1] };
+          end
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$85  = \$19 ;
+              \$85  = \$22 ;
             end else begin
-              \$85  = \$23 [12:0];
+              \$85  = \$26 [12:0];
             end
           end
     endcase
@@ -11529,21 +11900,125 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$86  = phase;
+    \$86  = vote1;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$86  = 1'h0;
+          end
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
+            \$86  = 1'h0;
+          end
+      2'h3:
+          if (\$37 ) begin
+          end else if (slot_zero) begin
+            casez (phase)
+              2'h0:
+                  (* full_case = 32'd1 *)
+                  if (single) begin
+                  end else begin
+                    \$86  = level;
+                  end
+            endcase
+          end
+    endcase
+    if (receiver_clear) begin
+      \$86  = 1'h0;
+    end
+    if (rst) begin
+      \$86  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$87  = vote2;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$87  = 1'h0;
+          end
+      2'h1:
+          if (\$20 ) begin
+            \$87  = 1'h0;
+          end
+      2'h3:
+          if (\$37 ) begin
+          end else if (slot_zero) begin
+            casez (phase)
+              2'h0:
+                  /* empty */;
+              2'h1:
+                  \$87  = level;
+            endcase
+          end
+    endcase
+    if (receiver_clear) begin
+      \$87  = 1'h0;
+    end
+    if (rst) begin
+      \$87  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$88  = first_slot;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$88  = 1'h0;
+          end
+      2'h1:
+          if (\$20 ) begin
+            \$88  = 1'h1;
+          end
+      2'h3:
+          if (\$39 ) begin
             (* full_case = 32'd1 *)
-            if (gap) begin
-              \$86  = 2'h1;
+            if (\$45 ) begin
             end else begin
-              \$86  = 2'h0;
+              \$88  = 1'h0;
             end
           end
+    endcase
+    if (receiver_clear) begin
+      \$88  = 1'h0;
+    end
+    if (rst) begin
+      \$88  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$89  = phase;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
       2'h2:
-          if (\$34 ) begin
+          if (\$14 ) begin
+            \$89  = 2'h0;
+          end
+      2'h1:
+          if (\$20 ) begin
+            (* full_case = 32'd1 *)
+            if (gap) begin
+              \$89  = 2'h1;
+            end else begin
+              \$89  = 2'h0;
+            end
+          end
+      2'h3:
+          if (\$37 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -11551,34 +12026,147 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$86  = 2'h1;
+                    \$89  = 2'h1;
                   end
               2'h1:
-                  \$86  = 2'h2;
+                  \$89  = 2'h2;
               default:
-                  \$86  = 2'h0;
+                  \$89  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$86  = 2'h0;
+      \$89  = 2'h0;
     end
     if (rst) begin
-      \$86  = 2'h0;
+      \$89  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    sample = \$44 ;
+    \$90  = slot_left;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$90  = { 1'h0, first_load };
+          end
       2'h1:
+        begin
+          if (gap) begin
+            \$90  = \$17 [16:0];
+          end
+          if (\$20 ) begin
+            (* full_case = 32'd1 *)
+            if (gap) begin
+              \$90  = mid_slot;
+            end else begin
+              \$90  = { 1'h0, first_load };
+            end
+          end
+        end
+      2'h3:
+        begin
+          \$90  = \$33 [16:0];
+          if (\$37 ) begin
+            \$90  = { 2'h0, vote_load };
+          end else if (slot_zero) begin
+            (* full_case = 32'd1 *)
+            casez (phase)
+              2'h0:
+                  (* full_case = 32'd1 *)
+                  if (single) begin
+                    \$90  = { first_load, 1'h1 };
+                  end else begin
+                    \$90  = { 2'h0, vote_load };
+                  end
+              2'h1:
+                  \$90  = { 2'h0, vote_load };
+              default:
+                  \$90  = { first_load, 1'h1 };
+            endcase
+          end
+        end
+    endcase
+    if (receiver_clear) begin
+      \$90  = 17'h00000;
+    end
+    if (rst) begin
+      \$90  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    \$91  = slot_zero;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
           /* empty */;
       2'h2:
-          if (\$61 ) begin
+          if (\$14 ) begin
+            \$91  = 1'h0;
+          end
+      2'h1:
+        begin
+          if (gap) begin
+            \$91  = \$18 ;
+          end
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
-            if (\$67 ) begin
+            if (gap) begin
+              \$91  = \$23 ;
+            end else begin
+              \$91  = 1'h0;
+            end
+          end
+        end
+      2'h3:
+        begin
+          \$91  = \$34 ;
+          if (\$37 ) begin
+            \$91  = vote_one;
+          end else if (slot_zero) begin
+            (* full_case = 32'd1 *)
+            casez (phase)
+              2'h0:
+                  (* full_case = 32'd1 *)
+                  if (single) begin
+                    \$91  = 1'h0;
+                  end else begin
+                    \$91  = vote_one;
+                  end
+              2'h1:
+                  \$91  = vote_one;
+              default:
+                  \$91  = 1'h0;
+            endcase
+          end
+        end
+    endcase
+    if (receiver_clear) begin
+      \$91  = 1'h1;
+    end
+    if (rst) begin
+      \$91  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    sample = \$47 ;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h2:
+          /* empty */;
+      2'h1:
+          /* empty */;
+      2'h3:
+          if (\$65 ) begin
+            (* full_case = 32'd1 *)
+            if (\$71 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -11591,8 +12179,12 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          if (\$58 ) begin
+            clear = 1'h1;
+          end
       2'h1:
-          if (\$56 ) begin
+          if (\$60 ) begin
             clear = 1'h1;
           end
     endcase
@@ -11600,18 +12192,21 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     dropped = 1'h0;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
           /* empty */;
-      2'h2:
+      2'h3:
         begin
-          if (\$59 ) begin
+          if (\$63 ) begin
             dropped = 1'h1;
           end
-          if (\$61 ) begin
-            if (\$67 ) begin
+          if (\$65 ) begin
+            if (\$71 ) begin
               dropped = 1'h1;
             end
           end
@@ -11621,13 +12216,16 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     decided = 1'h0;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
           /* empty */;
-      2'h2:
-          if (\$59 ) begin
+      2'h3:
+          if (\$63 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -11646,32 +12244,38 @@ module \biss_master.sampler (clk, rst, \bit , noise, half_period, receiver_clear
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     centre = 1'h0;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
           /* empty */;
-      2'h2:
-          if (\$59 ) begin
+      2'h3:
+          if (\$63 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  centre = \$60 ;
+                  centre = \$64 ;
             endcase
           end
     endcase
   end
-  assign \level$30  = level;
-  assign \clear$33  = clear;
-  assign \centre$35  = centre;
-  assign \vote1$37  = vote1;
-  assign \vote2$38  = vote2;
+  assign fixed_delay = { 1'h0, \port$2205$259 [12:1] };
+  assign fixed = \port$2205$259 [0];
+  assign \level$33  = level;
+  assign \clear$36  = clear;
+  assign clear_high = \port$2205$259 [0];
+  assign \centre$39  = centre;
+  assign \vote1$41  = vote1;
+  assign \vote2$42  = vote2;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, receiver_clear, vote1, vote2, clear, centre, level, clk);
+module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, clear_high, receiver_clear, vote1, vote2, clear, centre, level, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -11715,6 +12319,8 @@ module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, rec
   wire centre;
   input clear;
   wire clear;
+  input clear_high;
+  wire clear_high;
   input clk;
   wire clk;
   reg crowded = 1'h0;
@@ -11791,7 +12397,7 @@ module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, rec
     \$33  = last;
     (* full_case = 32'd1 *)
     if (clear) begin
-      \$33  = 1'h0;
+      \$33  = clear_high;
     end else begin
       if (decided) begin
         \$33  = majority;
@@ -12069,7 +12675,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2029$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2193$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -12111,8 +12717,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2029$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2029$0 ;
-  wire \port$2029$0 ;
+  input \port$2193$0 ;
+  wire \port$2193$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -12126,9 +12732,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2029$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2029$0  };
-  assign \$2  = { lc[4:0], \port$2029$0  } == last;
-  assign \$3  = { lc[4:0], \port$2029$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2193$0  };
+  assign \$2  = { lc[4:0], \port$2193$0  } == last;
+  assign \$3  = { lc[4:0], \port$2193$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -12238,7 +12844,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2029$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2029$0  };
+  assign lc_next = { lc[4:0], \port$2193$0  };
   assign zero = is_zero;
 endmodule
 
@@ -12794,8 +13400,8 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, crc_ok
-, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1632$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+, crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -12833,14 +13439,17 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
   wire \$4 ;
   wire \$40 ;
   wire \$41 ;
-  wire [1:0] \$42 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire \$44 ;
+  wire [1:0] \$45 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [258:0] cfg;
-  wire [258:0] cfg;
+  input [274:0] cfg;
+  wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [3:0] \cfg.confirm_frames ;
@@ -12853,6 +13462,11 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
   wire [23:0] \cfg.request_period ;
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
+  wire \cfg.ssi ;
+  wire [11:0] \cfg.ssi_delay ;
+  wire \cfg.ssi_double ;
+  wire \cfg.ssi_error ;
+  wire \cfg.ssi_error_low ;
   wire [23:0] \cfg.timeout_limit ;
   wire [11:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
@@ -12891,6 +13505,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
   wire \cfg.w1_enable ;
   output clean;
   wire clean;
+  input copy_mismatch;
+  wire copy_mismatch;
   output [1:0] crc_error;
   wire [1:0] crc_error;
   input [1:0] crc_ok;
@@ -12956,8 +13572,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
   wire noisy;
   output passed;
   wire passed;
-  output \port$1471$0 ;
-  wire \port$1471$0 ;
+  output \port$1632$0 ;
+  wire \port$1632$0 ;
   output report;
   wire report;
   input report_frame;
@@ -12990,6 +13606,9 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
+  assign clean = \$41  & \$44 ;
+  assign \$45  = ~ { \$2 , crc_ok[0] };
+  assign crc_error = report_frame ? \$45  : 2'h0;
   assign \$1  = ~ cfg[199];
   assign \$2  = crc_ok[1] | \$1 ;
   assign \$3  = cfg[199] & cfg[207];
@@ -13000,50 +13619,49 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[250] & cfg[199];
-  assign \$8  = crc_ok[0] & \$2 ;
-  assign \$9  = \$7  & \$8 ;
-  assign \$10  = ~ spw_match;
-  assign spw_mismatch = \$9  & \$10 ;
-  assign \$11  = lc_repeat | lc_skip;
-  assign \$12  = \$11  | lc_zero;
-  assign \$13  = ~ \$2 ;
-  assign \$14  = ~ crc_ok[0];
-  assign \$15  = ~ crc_ok[0];
+  assign \$7  = crc_ok[0] & \$2 ;
+  assign \$8  = cfg[250] & cfg[199];
+  assign \$9  = ~ spw_match;
+  assign \$10  = \$8  & \$9 ;
+  assign \$12  = cfg[259] & copy_mismatch;
+  assign \$13  = \$11  | \$12 ;
+  assign spw_mismatch = \$7  & \$13 ;
+  assign \$14  = lc_repeat | lc_skip;
+  assign \$15  = \$14  | lc_zero;
   assign \$16  = ~ \$2 ;
-  assign \$17  = \$15  & \$16 ;
+  assign \$17  = ~ crc_ok[0];
+  assign \$18  = ~ crc_ok[0];
+  assign \$19  = ~ \$2 ;
+  assign \$20  = \$18  & \$19 ;
   assign report = report_frame | fault;
   assign status = report_frame ? frame_status : fault_status;
-  assign \$18  = ! frame_status;
-  assign valid = report_frame & \$18 ;
-  assign \$19  = ! frame_status;
-  assign \$20  = frame_status == 4'hf;
-  assign \$21  = \$19  | \$20 ;
-  assign passed = report_frame & \$21 ;
-  assign \$22  = crc_ok[0] & \$2 ;
-  assign \$23  = ~ \$22 ;
-  assign \$24  = \$23  | spw_mismatch;
-  assign \$25  = cfg[199] & cfg[207];
-  assign \$26  = cfg[156] | \$25 ;
-  assign \$27  = cfg[156] ? crc_ok[0] : \$2 ;
-  assign \$28  = \$26  & \$27 ;
-  assign \$29  = lc_repeat_seen | lc_skip_seen;
-  assign \$30  = \$29  | lc_zero_seen;
-  assign \$31  = \$28  & \$30 ;
-  assign \$32  = \$24  | \$31 ;
-  assign \$33  = \$32  | noisy;
-  assign doubtful = \$33  | delay_jump;
-  assign \$34  = crc_ok[0] & \$2 ;
-  assign \$35  = ~ spw_mismatch;
-  assign \$36  = \$34  & \$35 ;
-  assign \$37  = ~ noisy;
-  assign \$38  = \$36  & \$37 ;
-  assign \$39  = lc_repeat | lc_skip;
-  assign \$40  = \$39  | lc_zero;
-  assign \$41  = ~ \$40 ;
-  assign clean = \$38  & \$41 ;
-  assign \$42  = ~ { \$2 , crc_ok[0] };
-  assign crc_error = report_frame ? \$42  : 2'h0;
+  assign \$21  = ! frame_status;
+  assign valid = report_frame & \$21 ;
+  assign \$22  = ! frame_status;
+  assign \$23  = frame_status == 4'hf;
+  assign \$24  = \$22  | \$23 ;
+  assign passed = report_frame & \$24 ;
+  assign \$25  = crc_ok[0] & \$2 ;
+  assign \$26  = ~ \$25 ;
+  assign \$27  = \$26  | spw_mismatch;
+  assign \$28  = cfg[199] & cfg[207];
+  assign \$29  = cfg[156] | \$28 ;
+  assign \$30  = cfg[156] ? crc_ok[0] : \$2 ;
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = lc_repeat_seen | lc_skip_seen;
+  assign \$33  = \$32  | lc_zero_seen;
+  assign \$34  = \$31  & \$33 ;
+  assign \$35  = \$27  | \$34 ;
+  assign \$36  = \$35  | noisy;
+  assign doubtful = \$36  | delay_jump;
+  assign \$37  = crc_ok[0] & \$2 ;
+  assign \$38  = ~ spw_mismatch;
+  assign \$39  = \$37  & \$38 ;
+  assign \$40  = ~ noisy;
+  assign \$41  = \$39  & \$40 ;
+  assign \$42  = lc_repeat | lc_skip;
+  assign \$43  = \$42  | lc_zero;
+  assign \$44  = ~ \$43 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     frame_status = 4'h0;
@@ -13059,21 +13677,21 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
     if (spw_mismatch) begin
       frame_status = 4'h5;
     end
-    if (\$12 ) begin
+    if (\$15 ) begin
       frame_status = 4'h4;
     end
-    if (\$13 ) begin
+    if (\$16 ) begin
       frame_status = 4'h2;
     end
-    if (\$14 ) begin
+    if (\$17 ) begin
       frame_status = 4'h1;
     end
-    if (\$17 ) begin
+    if (\$20 ) begin
       frame_status = 4'h3;
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1471$0  = \$2 ;
+  assign \port$1632$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -13112,4 +13730,10 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1471$0 , lc_check, lc_re
   assign \cfg.w1_crc.inverted  = cfg[249];
   assign \cfg.spw_check  = cfg[250];
   assign \cfg.spw_tolerance  = cfg[258:251];
+  assign \cfg.ssi  = cfg[259];
+  assign \cfg.ssi_delay  = cfg[271:260];
+  assign \cfg.ssi_error  = cfg[272];
+  assign \cfg.ssi_error_low  = cfg[273];
+  assign \cfg.ssi_double  = cfg[274];
+  assign \$11  = \$10 ;
 endmodule

@@ -8,6 +8,7 @@
 //   timer_width     = 24
 //   counter_width   = 16
 //   timestamp_width = 32
+//   ssi             = on (cfg_ssi*)
 //   register_access = on, start wait 16 frames
 //   defaults (cfg = 0): break 4000, ack limit 4000, timeout limit 8000 clocks
 //   bus             = AXI4-Lite
@@ -81,6 +82,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire [5:0] ch0__cap_data_bits_w0;
   wire [5:0] ch0__cap_data_bits_w1;
   wire ch0__cap_register_access;
+  wire ch0__cap_ssi;
   wire [5:0] ch0__cap_timer_width;
   wire ch0__cap_timestamp;
   wire ch0__cds;
@@ -96,6 +98,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire [23:0] ch0__cfg_request_period;
   wire ch0__cfg_spw_check;
   wire [7:0] ch0__cfg_spw_tolerance;
+  wire ch0__cfg_ssi;
+  wire [11:0] ch0__cfg_ssi_delay;
+  wire ch0__cfg_ssi_double;
+  wire ch0__cfg_ssi_error;
+  wire ch0__cfg_ssi_error_low;
   wire [23:0] ch0__cfg_timeout_limit;
   wire [1:0] ch0__cfg_w0_crc;
   wire ch0__cfg_w0_crc_inverted;
@@ -180,6 +187,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire [5:0] ch1__cap_data_bits_w0;
   wire [5:0] ch1__cap_data_bits_w1;
   wire ch1__cap_register_access;
+  wire ch1__cap_ssi;
   wire [5:0] ch1__cap_timer_width;
   wire ch1__cap_timestamp;
   wire ch1__cds;
@@ -195,6 +203,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire [23:0] ch1__cfg_request_period;
   wire ch1__cfg_spw_check;
   wire [7:0] ch1__cfg_spw_tolerance;
+  wire ch1__cfg_ssi;
+  wire [11:0] ch1__cfg_ssi_delay;
+  wire ch1__cfg_ssi_double;
+  wire ch1__cfg_ssi_error;
+  wire ch1__cfg_ssi_error_low;
   wire [23:0] ch1__cfg_timeout_limit;
   wire [1:0] ch1__cfg_w0_crc;
   wire ch1__cfg_w0_crc_inverted;
@@ -264,207 +277,219 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$449 ;
+  wire [1:0] \irq$473 ;
   wire ma;
-  wire \ma$445 ;
+  wire \ma$469 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$254 ;
+  wire \regs__abort_cycle$266 ;
   wire regs__busy;
-  wire \regs__busy$257 ;
+  wire \regs__busy$269 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$258 ;
+  wire \regs__ca_abort$270 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$260 ;
+  wire [6:0] \regs__ca_address$272 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$263 ;
+  wire \regs__ca_busy$275 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$265 ;
+  wire [6:0] \regs__ca_bytes_done$277 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$266 ;
+  wire [6:0] \regs__ca_count$278 ;
   wire regs__ca_done;
-  wire \regs__ca_done$269 ;
+  wire \regs__ca_done$281 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$270 ;
+  wire [3:0] \regs__ca_rbuf_addr$282 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$273 ;
+  wire [31:0] \regs__ca_rbuf_data$285 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$274 ;
+  wire \regs__ca_rbuf_en$286 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$276 ;
+  wire [2:0] \regs__ca_slave_id$288 ;
   wire regs__ca_start;
-  wire \regs__ca_start$278 ;
+  wire \regs__ca_start$290 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$281 ;
+  wire [2:0] \regs__ca_status$293 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$282 ;
+  wire [3:0] \regs__ca_wbuf_addr$294 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$284 ;
+  wire [31:0] \regs__ca_wbuf_data$296 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$286 ;
+  wire [3:0] \regs__ca_wbuf_en$298 ;
   wire regs__ca_write;
-  wire \regs__ca_write$288 ;
+  wire \regs__ca_write$300 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$291 ;
+  wire \regs__cap_counters$303 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$293 ;
+  wire [5:0] \regs__cap_data_bits_w0$305 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$295 ;
+  wire [5:0] \regs__cap_data_bits_w1$307 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$297 ;
+  wire \regs__cap_register_access$309 ;
+  wire regs__cap_ssi;
+  wire \regs__cap_ssi$311 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$299 ;
+  wire [5:0] \regs__cap_timer_width$313 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$301 ;
+  wire \regs__cap_timestamp$315 ;
   wire regs__cds;
-  wire \regs__cds$303 ;
+  wire \regs__cds$317 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$304 ;
+  wire [23:0] \regs__cfg_ack_limit$318 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$306 ;
+  wire [23:0] \regs__cfg_break_time$320 ;
   wire [3:0] regs__cfg_confirm_frames;
-  wire [3:0] \regs__cfg_confirm_frames$308 ;
+  wire [3:0] \regs__cfg_confirm_frames$322 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$310 ;
+  wire [11:0] \regs__cfg_delay_limit$324 ;
   wire [3:0] regs__cfg_delay_tolerance;
-  wire [3:0] \regs__cfg_delay_tolerance$312 ;
+  wire [3:0] \regs__cfg_delay_tolerance$326 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$314 ;
+  wire \regs__cfg_end_check$328 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$316 ;
+  wire [15:0] \regs__cfg_ma_half_period$330 ;
   wire [3:0] regs__cfg_noise_limit;
-  wire [3:0] \regs__cfg_noise_limit$318 ;
+  wire [3:0] \regs__cfg_noise_limit$332 ;
   wire [11:0] regs__cfg_quiet_time;
-  wire [11:0] \regs__cfg_quiet_time$320 ;
+  wire [11:0] \regs__cfg_quiet_time$334 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$322 ;
+  wire [23:0] \regs__cfg_request_period$336 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$324 ;
+  wire \regs__cfg_spw_check$338 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$326 ;
+  wire [7:0] \regs__cfg_spw_tolerance$340 ;
+  wire regs__cfg_ssi;
+  wire \regs__cfg_ssi$342 ;
+  wire [11:0] regs__cfg_ssi_delay;
+  wire [11:0] \regs__cfg_ssi_delay$344 ;
+  wire regs__cfg_ssi_double;
+  wire \regs__cfg_ssi_double$346 ;
+  wire regs__cfg_ssi_error;
+  wire \regs__cfg_ssi_error$348 ;
+  wire regs__cfg_ssi_error_low;
+  wire \regs__cfg_ssi_error_low$350 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$328 ;
+  wire [23:0] \regs__cfg_timeout_limit$352 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$330 ;
+  wire [1:0] \regs__cfg_w0_crc$354 ;
   wire regs__cfg_w0_crc_inverted;
-  wire \regs__cfg_w0_crc_inverted$332 ;
+  wire \regs__cfg_w0_crc_inverted$356 ;
   wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] \regs__cfg_w0_crc_poly$334 ;
+  wire [15:0] \regs__cfg_w0_crc_poly$358 ;
   wire [15:0] regs__cfg_w0_crc_start;
-  wire [15:0] \regs__cfg_w0_crc_start$336 ;
+  wire [15:0] \regs__cfg_w0_crc_start$360 ;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [4:0] \regs__cfg_w0_crc_width$338 ;
+  wire [4:0] \regs__cfg_w0_crc_width$362 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$340 ;
+  wire [5:0] \regs__cfg_w0_data_bits$364 ;
   wire regs__cfg_w0_gray;
-  wire \regs__cfg_w0_gray$342 ;
+  wire \regs__cfg_w0_gray$366 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$344 ;
+  wire \regs__cfg_w0_lc$368 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$346 ;
+  wire \regs__cfg_w0_nenw$370 ;
   wire regs__cfg_w0_signed;
-  wire \regs__cfg_w0_signed$348 ;
+  wire \regs__cfg_w0_signed$372 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$350 ;
+  wire [1:0] \regs__cfg_w1_crc$374 ;
   wire regs__cfg_w1_crc_inverted;
-  wire \regs__cfg_w1_crc_inverted$352 ;
+  wire \regs__cfg_w1_crc_inverted$376 ;
   wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] \regs__cfg_w1_crc_poly$354 ;
+  wire [15:0] \regs__cfg_w1_crc_poly$378 ;
   wire [15:0] regs__cfg_w1_crc_start;
-  wire [15:0] \regs__cfg_w1_crc_start$356 ;
+  wire [15:0] \regs__cfg_w1_crc_start$380 ;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [4:0] \regs__cfg_w1_crc_width$358 ;
+  wire [4:0] \regs__cfg_w1_crc_width$382 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$360 ;
+  wire [5:0] \regs__cfg_w1_data_bits$384 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$362 ;
+  wire \regs__cfg_w1_enable$386 ;
   wire regs__cfg_w1_gray;
-  wire \regs__cfg_w1_gray$364 ;
+  wire \regs__cfg_w1_gray$388 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$366 ;
+  wire \regs__cfg_w1_lc$390 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$368 ;
+  wire \regs__cfg_w1_nenw$392 ;
   wire regs__cfg_w1_signed;
-  wire \regs__cfg_w1_signed$370 ;
+  wire \regs__cfg_w1_signed$394 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$372 ;
+  wire \regs__clear_counters$396 ;
   wire regs__config_error;
-  wire \regs__config_error$375 ;
+  wire \regs__config_error$399 ;
   wire [2:0] regs__count_addr;
-  wire [2:0] \regs__count_addr$376 ;
+  wire [2:0] \regs__count_addr$400 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$379 ;
+  wire [15:0] \regs__count_ca_aborted$403 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$381 ;
+  wire [15:0] \regs__count_ca_crc4_error$405 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$383 ;
+  wire [15:0] \regs__count_ca_data_fault$407 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$385 ;
+  wire [15:0] \regs__count_ca_no_answer$409 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$387 ;
+  wire [15:0] \regs__count_ca_refused$411 ;
   wire [31:0] regs__count_data;
-  wire [31:0] \regs__count_data$389 ;
+  wire [31:0] \regs__count_data$413 ;
   wire regs__count_en;
-  wire \regs__count_en$390 ;
+  wire \regs__count_en$414 ;
   wire regs__delay_settled;
-  wire \regs__delay_settled$393 ;
+  wire \regs__delay_settled$417 ;
   wire [7:0] regs__delay_spread;
-  wire [7:0] \regs__delay_spread$395 ;
+  wire [7:0] \regs__delay_spread$419 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$397 ;
+  wire [15:0] \regs__done_count$421 ;
   wire regs__frame_done;
-  wire \regs__frame_done$399 ;
+  wire \regs__frame_done$423 ;
   wire regs__frame_error;
-  wire \regs__frame_error$401 ;
+  wire \regs__frame_error$425 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$403 ;
+  wire [5:0] \regs__lc$427 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$405 ;
+  wire \regs__lc_repeat$429 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$407 ;
+  wire \regs__lc_skip$431 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$409 ;
+  wire \regs__lc_zero$433 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$411 ;
+  wire [12:0] \regs__line_delay$435 ;
   wire [3:0] regs__noise_events;
-  wire [3:0] \regs__noise_events$413 ;
+  wire [3:0] \regs__noise_events$437 ;
   wire regs__periodic;
-  wire \regs__periodic$414 ;
+  wire \regs__periodic$438 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__r_load;
   wire [12:0] regs__settled_delay;
-  wire [12:0] \regs__settled_delay$417 ;
+  wire [12:0] \regs__settled_delay$441 ;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$419 ;
+  wire \regs__spw_mismatch$443 ;
   wire regs__start;
-  wire \regs__start$420 ;
+  wire \regs__start$444 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$423 ;
+  wire [3:0] \regs__status$447 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$425 ;
+  wire [31:0] \regs__timestamp$449 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$426 ;
+  wire \regs__trigger_enable$450 ;
   wire [10:0] regs__w_addr;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$429 ;
+  wire \regs__word0_crc_ok$453 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$431 ;
+  wire \regs__word0_ne$455 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$433 ;
+  wire \regs__word0_nw$457 ;
   wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$435 ;
+  wire [54:0] \regs__word0_position$459 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$437 ;
+  wire \regs__word1_crc_ok$461 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$439 ;
+  wire \regs__word1_ne$463 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$441 ;
+  wire \regs__word1_nw$465 ;
   wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$443 ;
+  wire [39:0] \regs__word1_position$467 ;
   input rst;
   wire rst;
   input [12:0] s_axil_araddr;
@@ -502,11 +527,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   input s_axil_wvalid;
   wire s_axil_wvalid;
   wire slo;
-  wire \slo$446 ;
+  wire \slo$470 ;
   input trigger;
   wire trigger;
-  wire \trigger$251 ;
-  wire \trigger$444 ;
+  wire \trigger$263 ;
+  wire \trigger$468 ;
   wire \trigger$58 ;
   reg trigger_in = 1'h0;
   assign \$1  = ~ trigger_in;
@@ -544,7 +569,7 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch0_ca_request_address(regs__ca_address),
     .ch0_ca_request_count(regs__ca_count),
     .ch0_ca_request_slave_id(regs__ca_slave_id),
-    .\ch0_ca_request_write$106 (regs__ca_write),
+    .\ch0_ca_request_write$113 (regs__ca_write),
     .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
     .ch0_cfg_break_break_time(regs__cfg_break_time),
     .ch0_cfg_checks_confirm_frames(regs__cfg_confirm_frames),
@@ -565,6 +590,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch0_cfg_ma_ma_half_period(regs__cfg_ma_half_period),
     .ch0_cfg_period_request_period(regs__cfg_request_period),
     .ch0_cfg_quiet_quiet_time(regs__cfg_quiet_time),
+    .ch0_cfg_ssi_ssi(regs__cfg_ssi),
+    .ch0_cfg_ssi_ssi_delay(regs__cfg_ssi_delay),
+    .ch0_cfg_ssi_ssi_double(regs__cfg_ssi_double),
+    .ch0_cfg_ssi_ssi_error(regs__cfg_ssi_error),
+    .ch0_cfg_ssi_ssi_error_low(regs__cfg_ssi_error_low),
     .ch0_cfg_timeout_timeout_limit(regs__cfg_timeout_limit),
     .ch0_cfg_words_w0_crc(regs__cfg_w0_crc),
     .ch0_cfg_words_w0_data_bits(regs__cfg_w0_data_bits),
@@ -589,68 +619,73 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$274 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$286 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$286 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$298 ),
     .ch1__config_error(ch1__config_error),
     .ch1__count_data(ch1__count_data),
-    .ch1__count_en(\regs__count_en$390 ),
+    .ch1__count_en(\regs__count_en$414 ),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_done(ch1__frame_done),
     .ch1__frame_error(ch1__frame_error),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$258 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$278 ),
-    .ch1_ca_request_address(\regs__ca_address$260 ),
-    .ch1_ca_request_count(\regs__ca_count$266 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$276 ),
-    .\ch1_ca_request_write$289 (\regs__ca_write$288 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$304 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$306 ),
-    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$308 ),
-    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$312 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$314 ),
-    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$318 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$324 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$326 ),
-    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$336 ),
-    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$332 ),
-    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$334 ),
-    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$338 ),
-    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$356 ),
-    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$352 ),
-    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$354 ),
-    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$358 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$310 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$316 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$322 ),
-    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$320 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$328 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$330 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$340 ),
-    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$342 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$344 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$346 ),
-    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$348 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$350 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$360 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$362 ),
-    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$364 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$366 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$368 ),
-    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$370 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$254 ),
-    .ch1_ctrl_clear_counters(\regs__clear_counters$372 ),
-    .ch1_ctrl_periodic(\regs__periodic$414 ),
-    .ch1_ctrl_start(\regs__start$420 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$426 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$270 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$290 ),
+    .ch1_ca_request_address(\regs__ca_address$272 ),
+    .ch1_ca_request_count(\regs__ca_count$278 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$288 ),
+    .\ch1_ca_request_write$305 (\regs__ca_write$300 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$318 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$320 ),
+    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$322 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$326 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$328 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$332 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$338 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$340 ),
+    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$360 ),
+    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$356 ),
+    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$358 ),
+    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$362 ),
+    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$380 ),
+    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$376 ),
+    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$378 ),
+    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$382 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$324 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$330 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$336 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$334 ),
+    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$342 ),
+    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$344 ),
+    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$346 ),
+    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$348 ),
+    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$350 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$352 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$354 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$364 ),
+    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$366 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$368 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$370 ),
+    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$372 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$374 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$384 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$386 ),
+    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$388 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$390 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$392 ),
+    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$394 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$266 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$396 ),
+    .ch1_ctrl_periodic(\regs__periodic$438 ),
+    .ch1_ctrl_start(\regs__start$444 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$450 ),
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6333$0 (\$8 ),
-    .\port$6346$0 (\$9 ),
-    .\port$6423$0 (\$10 ),
-    .\port$6860$0 (\$11 ),
-    .\port$6873$0 (\$12 ),
-    .\port$6950$0 (\$13 ),
+    .\port$6740$0 (\$8 ),
+    .\port$6753$0 (\$9 ),
+    .\port$6830$0 (\$10 ),
+    .\port$7272$0 (\$11 ),
+    .\port$7285$0 (\$12 ),
+    .\port$7362$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -703,6 +738,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .cfg_request_period(regs__cfg_request_period),
     .cfg_spw_check(regs__cfg_spw_check),
     .cfg_spw_tolerance(regs__cfg_spw_tolerance),
+    .cfg_ssi(regs__cfg_ssi),
+    .cfg_ssi_delay(regs__cfg_ssi_delay),
+    .cfg_ssi_double(regs__cfg_ssi_double),
+    .cfg_ssi_error(regs__cfg_ssi_error),
+    .cfg_ssi_error_low(regs__cfg_ssi_error_low),
     .cfg_timeout_limit(regs__cfg_timeout_limit),
     .cfg_w0_crc(regs__cfg_w0_crc),
     .cfg_w0_crc_inverted(regs__cfg_w0_crc_inverted),
@@ -730,9 +770,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6333$0 (\$8 ),
-    .\port$6346$0 (\$9 ),
-    .\port$6423$0 (\$10 ),
+    .\port$6740$0 (\$8 ),
+    .\port$6753$0 (\$9 ),
+    .\port$6830$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -747,63 +787,68 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$184 (\trigger$58 )
+    .\trigger$195 (\trigger$58 )
   );
   \biss_master_axil.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$258 ),
-    .ca_address(\regs__ca_address$260 ),
-    .ca_count(\regs__ca_count$266 ),
+    .ca_abort(\regs__ca_abort$270 ),
+    .ca_address(\regs__ca_address$272 ),
+    .ca_count(\regs__ca_count$278 ),
     .ca_rbuf_addr(s_axil_araddr[5:2]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$274 ),
-    .ca_slave_id(\regs__ca_slave_id$276 ),
-    .ca_start(\regs__ca_start$278 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$286 ),
+    .ca_slave_id(\regs__ca_slave_id$288 ),
+    .ca_start(\regs__ca_start$290 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$286 ),
-    .ca_write(\regs__ca_write$288 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$304 ),
-    .cfg_break_time(\regs__cfg_break_time$306 ),
-    .cfg_confirm_frames(\regs__cfg_confirm_frames$308 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$310 ),
-    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$312 ),
-    .cfg_end_check(\regs__cfg_end_check$314 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$316 ),
-    .cfg_noise_limit(\regs__cfg_noise_limit$318 ),
-    .cfg_quiet_time(\regs__cfg_quiet_time$320 ),
-    .cfg_request_period(\regs__cfg_request_period$322 ),
-    .cfg_spw_check(\regs__cfg_spw_check$324 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$326 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$328 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$330 ),
-    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$332 ),
-    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$334 ),
-    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$336 ),
-    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$338 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$340 ),
-    .cfg_w0_gray(\regs__cfg_w0_gray$342 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$344 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$346 ),
-    .cfg_w0_signed(\regs__cfg_w0_signed$348 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$350 ),
-    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$352 ),
-    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$354 ),
-    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$356 ),
-    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$358 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$360 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$362 ),
-    .cfg_w1_gray(\regs__cfg_w1_gray$364 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$366 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$368 ),
-    .cfg_w1_signed(\regs__cfg_w1_signed$370 ),
-    .clear_counters(\regs__clear_counters$372 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$298 ),
+    .ca_write(\regs__ca_write$300 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$318 ),
+    .cfg_break_time(\regs__cfg_break_time$320 ),
+    .cfg_confirm_frames(\regs__cfg_confirm_frames$322 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$324 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$326 ),
+    .cfg_end_check(\regs__cfg_end_check$328 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$330 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$332 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$334 ),
+    .cfg_request_period(\regs__cfg_request_period$336 ),
+    .cfg_spw_check(\regs__cfg_spw_check$338 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$340 ),
+    .cfg_ssi(\regs__cfg_ssi$342 ),
+    .cfg_ssi_delay(\regs__cfg_ssi_delay$344 ),
+    .cfg_ssi_double(\regs__cfg_ssi_double$346 ),
+    .cfg_ssi_error(\regs__cfg_ssi_error$348 ),
+    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$350 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$352 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$354 ),
+    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$356 ),
+    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$358 ),
+    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$360 ),
+    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$362 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$364 ),
+    .cfg_w0_gray(\regs__cfg_w0_gray$366 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$368 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$370 ),
+    .cfg_w0_signed(\regs__cfg_w0_signed$372 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$374 ),
+    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$376 ),
+    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$378 ),
+    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$380 ),
+    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$382 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$384 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$386 ),
+    .cfg_w1_gray(\regs__cfg_w1_gray$388 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$390 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$392 ),
+    .cfg_w1_signed(\regs__cfg_w1_signed$394 ),
+    .clear_counters(\regs__clear_counters$396 ),
     .clk(clk),
-    .count_en(\regs__count_en$390 ),
+    .count_en(\regs__count_en$414 ),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$414 ),
-    .\port$6860$0 (\$11 ),
-    .\port$6873$0 (\$12 ),
-    .\port$6950$0 (\$13 ),
-    .regs__abort_cycle(\regs__abort_cycle$254 ),
+    .periodic(\regs__periodic$438 ),
+    .\port$7272$0 (\$11 ),
+    .\port$7285$0 (\$12 ),
+    .\port$7362$0 (\$13 ),
+    .regs__abort_cycle(\regs__abort_cycle$266 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -813,11 +858,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .regs__done_count(ch1__done_count),
     .regs__frame_done(ch1__frame_done),
     .regs__frame_error(ch1__frame_error),
-    .regs__trigger_enable(\regs__trigger_enable$426 ),
+    .regs__trigger_enable(\regs__trigger_enable$450 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$420 ),
-    .\trigger$184 (\trigger$58 )
+    .start(\regs__start$444 ),
+    .\trigger$195 (\trigger$58 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
@@ -889,6 +934,8 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign regs__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_register_access = 1'h1;
   assign regs__cap_register_access = 1'h1;
+  assign ch0__cap_ssi = 1'h1;
+  assign regs__cap_ssi = 1'h1;
   assign ch0__cap_timer_width = 6'h18;
   assign regs__cap_timer_width = 6'h18;
   assign ch0__cap_timestamp = 1'h1;
@@ -907,6 +954,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign ch0__cfg_request_period = regs__cfg_request_period;
   assign ch0__cfg_spw_check = regs__cfg_spw_check;
   assign ch0__cfg_spw_tolerance = regs__cfg_spw_tolerance;
+  assign ch0__cfg_ssi = regs__cfg_ssi;
+  assign ch0__cfg_ssi_delay = regs__cfg_ssi_delay;
+  assign ch0__cfg_ssi_double = regs__cfg_ssi_double;
+  assign ch0__cfg_ssi_error = regs__cfg_ssi_error;
+  assign ch0__cfg_ssi_error_low = regs__cfg_ssi_error_low;
   assign ch0__cfg_timeout_limit = regs__cfg_timeout_limit;
   assign ch0__cfg_w0_crc = regs__cfg_w0_crc;
   assign ch0__cfg_w0_crc_inverted = regs__cfg_w0_crc_inverted;
@@ -991,148 +1043,155 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign regs__word1_nw = \$8 [175];
   assign ch0__word1_position = \$8 [173:134];
   assign regs__word1_position = \$8 [173:134];
-  assign \trigger$251  = \trigger$58 ;
+  assign \trigger$263  = \trigger$58 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign ch1__abort_cycle = \regs__abort_cycle$254 ;
-  assign \regs__busy$257  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$258 ;
-  assign ch1__ca_address = \regs__ca_address$260 ;
-  assign \regs__ca_busy$263  = ch1__ca_busy;
+  assign ch1__abort_cycle = \regs__abort_cycle$266 ;
+  assign \regs__busy$269  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$270 ;
+  assign ch1__ca_address = \regs__ca_address$272 ;
+  assign \regs__ca_busy$275  = ch1__ca_busy;
   assign ch1__ca_bytes_done = \$13 [9:3];
-  assign \regs__ca_bytes_done$265  = \$13 [9:3];
-  assign ch1__ca_count = \regs__ca_count$266 ;
-  assign \regs__ca_done$269  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$270  = s_axil_araddr[5:2];
+  assign \regs__ca_bytes_done$277  = \$13 [9:3];
+  assign ch1__ca_count = \regs__ca_count$278 ;
+  assign \regs__ca_done$281  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$282  = s_axil_araddr[5:2];
   assign ch1__ca_rbuf_addr = s_axil_araddr[5:2];
-  assign \regs__ca_rbuf_data$273  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$274 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$276 ;
-  assign ch1__ca_start = \regs__ca_start$278 ;
+  assign \regs__ca_rbuf_data$285  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$286 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$288 ;
+  assign ch1__ca_start = \regs__ca_start$290 ;
   assign ch1__ca_status = \$13 [2:0];
-  assign \regs__ca_status$281  = \$13 [2:0];
-  assign \regs__ca_wbuf_addr$282  = regs__ca_wbuf_addr;
+  assign \regs__ca_status$293  = \$13 [2:0];
+  assign \regs__ca_wbuf_addr$294  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$284  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$296  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$286 ;
-  assign ch1__ca_write = \regs__ca_write$288 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$298 ;
+  assign ch1__ca_write = \regs__ca_write$300 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$291  = 1'h1;
+  assign \regs__cap_counters$303  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$293  = 6'h37;
+  assign \regs__cap_data_bits_w0$305  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$295  = 6'h28;
+  assign \regs__cap_data_bits_w1$307  = 6'h28;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$297  = 1'h1;
+  assign \regs__cap_register_access$309  = 1'h1;
+  assign ch1__cap_ssi = 1'h1;
+  assign \regs__cap_ssi$311  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$299  = 6'h18;
+  assign \regs__cap_timer_width$313  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$301  = 1'h1;
+  assign \regs__cap_timestamp$315  = 1'h1;
   assign ch1__cds = \$11 [49];
-  assign \regs__cds$303  = \$11 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$304 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$306 ;
-  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$308 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$310 ;
-  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$312 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$314 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$316 ;
-  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$318 ;
-  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$320 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$322 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$324 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$326 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$328 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$330 ;
-  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$332 ;
-  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$334 ;
-  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$336 ;
-  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$338 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$340 ;
-  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$342 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$344 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$346 ;
-  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$348 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$350 ;
-  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$352 ;
-  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$354 ;
-  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$356 ;
-  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$358 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$360 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$362 ;
-  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$364 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$366 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$368 ;
-  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$370 ;
-  assign ch1__clear_counters = \regs__clear_counters$372 ;
-  assign \regs__config_error$375  = ch1__config_error;
-  assign \regs__count_addr$376  = s_axil_araddr[4:2];
+  assign \regs__cds$317  = \$11 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$318 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$320 ;
+  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$322 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$324 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$326 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$328 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$330 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$332 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$334 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$336 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$338 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$340 ;
+  assign ch1__cfg_ssi = \regs__cfg_ssi$342 ;
+  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$344 ;
+  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$346 ;
+  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$348 ;
+  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$350 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$352 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$354 ;
+  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$356 ;
+  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$358 ;
+  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$360 ;
+  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$362 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$364 ;
+  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$366 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$368 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$370 ;
+  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$372 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$374 ;
+  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$376 ;
+  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$378 ;
+  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$380 ;
+  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$382 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$384 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$386 ;
+  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$388 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$390 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$392 ;
+  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$394 ;
+  assign ch1__clear_counters = \regs__clear_counters$396 ;
+  assign \regs__config_error$399  = ch1__config_error;
+  assign \regs__count_addr$400  = s_axil_araddr[4:2];
   assign ch1__count_addr = s_axil_araddr[4:2];
   assign ch1__count_ca_aborted = \$12 [63:48];
-  assign \regs__count_ca_aborted$379  = \$12 [63:48];
+  assign \regs__count_ca_aborted$403  = \$12 [63:48];
   assign ch1__count_ca_crc4_error = \$12 [15:0];
-  assign \regs__count_ca_crc4_error$381  = \$12 [15:0];
+  assign \regs__count_ca_crc4_error$405  = \$12 [15:0];
   assign ch1__count_ca_data_fault = \$12 [79:64];
-  assign \regs__count_ca_data_fault$383  = \$12 [79:64];
+  assign \regs__count_ca_data_fault$407  = \$12 [79:64];
   assign ch1__count_ca_no_answer = \$12 [31:16];
-  assign \regs__count_ca_no_answer$385  = \$12 [31:16];
+  assign \regs__count_ca_no_answer$409  = \$12 [31:16];
   assign ch1__count_ca_refused = \$12 [47:32];
-  assign \regs__count_ca_refused$387  = \$12 [47:32];
-  assign \regs__count_data$389  = ch1__count_data;
-  assign ch1__count_en = \regs__count_en$390 ;
+  assign \regs__count_ca_refused$411  = \$12 [47:32];
+  assign \regs__count_data$413  = ch1__count_data;
+  assign ch1__count_en = \regs__count_en$414 ;
   assign ch1__delay_settled = \$11 [54];
-  assign \regs__delay_settled$393  = \$11 [54];
+  assign \regs__delay_settled$417  = \$11 [54];
   assign ch1__delay_spread = \$11 [75:68];
-  assign \regs__delay_spread$395  = \$11 [75:68];
-  assign \regs__done_count$397  = ch1__done_count;
-  assign \regs__frame_done$399  = ch1__frame_done;
-  assign \regs__frame_error$401  = ch1__frame_error;
+  assign \regs__delay_spread$419  = \$11 [75:68];
+  assign \regs__done_count$421  = ch1__done_count;
+  assign \regs__frame_done$423  = ch1__frame_done;
+  assign \regs__frame_error$425  = ch1__frame_error;
   assign ch1__lc = \$11 [182:177];
-  assign \regs__lc$403  = \$11 [182:177];
+  assign \regs__lc$427  = \$11 [182:177];
   assign ch1__lc_repeat = \$11 [183];
-  assign \regs__lc_repeat$405  = \$11 [183];
+  assign \regs__lc_repeat$429  = \$11 [183];
   assign ch1__lc_skip = \$11 [184];
-  assign \regs__lc_skip$407  = \$11 [184];
+  assign \regs__lc_skip$431  = \$11 [184];
   assign ch1__lc_zero = \$11 [185];
-  assign \regs__lc_zero$409  = \$11 [185];
+  assign \regs__lc_zero$433  = \$11 [185];
   assign ch1__line_delay = \$11 [48:36];
-  assign \regs__line_delay$411  = \$11 [48:36];
+  assign \regs__line_delay$435  = \$11 [48:36];
   assign ch1__noise_events = \$11 [53:50];
-  assign \regs__noise_events$413  = \$11 [53:50];
-  assign ch1__periodic = \regs__periodic$414 ;
+  assign \regs__noise_events$437  = \$11 [53:50];
+  assign ch1__periodic = \regs__periodic$438 ;
   assign ch1__settled_delay = \$11 [67:55];
-  assign \regs__settled_delay$417  = \$11 [67:55];
+  assign \regs__settled_delay$441  = \$11 [67:55];
   assign ch1__spw_mismatch = \$11 [186];
-  assign \regs__spw_mismatch$419  = \$11 [186];
-  assign ch1__start = \regs__start$420 ;
+  assign \regs__spw_mismatch$443  = \$11 [186];
+  assign ch1__start = \regs__start$444 ;
   assign ch1__status = \$11 [3:0];
-  assign \regs__status$423  = \$11 [3:0];
+  assign \regs__status$447  = \$11 [3:0];
   assign ch1__timestamp = \$11 [35:4];
-  assign \regs__timestamp$425  = \$11 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$426 ;
+  assign \regs__timestamp$449  = \$11 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$450 ;
   assign ch1__word0_crc_ok = \$11 [133];
-  assign \regs__word0_crc_ok$429  = \$11 [133];
+  assign \regs__word0_crc_ok$453  = \$11 [133];
   assign ch1__word0_ne = \$11 [131];
-  assign \regs__word0_ne$431  = \$11 [131];
+  assign \regs__word0_ne$455  = \$11 [131];
   assign ch1__word0_nw = \$11 [132];
-  assign \regs__word0_nw$433  = \$11 [132];
+  assign \regs__word0_nw$457  = \$11 [132];
   assign ch1__word0_position = \$11 [130:76];
-  assign \regs__word0_position$435  = \$11 [130:76];
+  assign \regs__word0_position$459  = \$11 [130:76];
   assign ch1__word1_crc_ok = \$11 [176];
-  assign \regs__word1_crc_ok$437  = \$11 [176];
+  assign \regs__word1_crc_ok$461  = \$11 [176];
   assign ch1__word1_ne = \$11 [174];
-  assign \regs__word1_ne$439  = \$11 [174];
+  assign \regs__word1_ne$463  = \$11 [174];
   assign ch1__word1_nw = \$11 [175];
-  assign \regs__word1_nw$441  = \$11 [175];
+  assign \regs__word1_nw$465  = \$11 [175];
   assign ch1__word1_position = \$11 [173:134];
-  assign \regs__word1_position$443  = \$11 [173:134];
-  assign \trigger$444  = \trigger$58 ;
-  assign \ma$445  = ch1_ma;
-  assign \slo$446  = ch1_slo;
+  assign \regs__word1_position$467  = \$11 [173:134];
+  assign \trigger$468  = \trigger$58 ;
+  assign \ma$469  = ch1_ma;
+  assign \slo$470  = ch1_slo;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$7 , \$6  };
-  assign \irq$449  = { \$7 , \$6  };
+  assign \irq$473  = { \$7 , \$6  };
   assign s_axil_bresp = 2'h0;
   assign s_axil_rresp = 2'h0;
 endmodule
@@ -1141,10 +1200,10 @@ endmodule
 module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__count_en, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__count_data, ch0__ca_busy, ch0__ca_rbuf_data, ch1__frame_error
 , ch1__busy, ch1__config_error, ch1__count_data, ch1__ca_busy, ch1__ca_rbuf_data, bus__w_addr, bus__w_data, bus__w_strb, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit
 , ch0_cfg_timeout_timeout_limit, ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time
-, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$106 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit
-, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit
-, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$289 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6333$0 , \port$6346$0 
-, ch0__ca_done, \port$6423$0 , ch1__frame_done, ch1__done_count, \port$6860$0 , \port$6873$0 , ch1__ca_done, \port$6950$0 , bus__r_addr);
+, ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$113 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort
+, ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed
+, ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay
+, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6740$0 , \port$6753$0 , ch0__ca_done, \port$6830$0 , ch1__frame_done, ch1__done_count, \port$7272$0 , \port$7285$0 , ch1__ca_done, \port$7362$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -1178,14 +1237,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$125 ;
   wire \$126 ;
   wire \$127 ;
-  wire [31:0] \$128 ;
-  wire [31:0] \$129 ;
+  wire \$128 ;
+  wire \$129 ;
   wire [31:0] \$13 ;
-  wire [31:0] \$130 ;
-  wire [31:0] \$131 ;
-  wire [31:0] \$132 ;
-  wire [31:0] \$133 ;
-  wire [31:0] \$134 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
   wire [31:0] \$135 ;
   wire [31:0] \$136 ;
   wire [31:0] \$137 ;
@@ -1251,17 +1310,17 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$191 ;
   wire [31:0] \$192 ;
   wire [31:0] \$193 ;
-  wire \$194 ;
-  wire \$195 ;
-  wire \$196 ;
-  wire \$197 ;
-  wire \$198 ;
-  wire \$199 ;
+  wire [31:0] \$194 ;
+  wire [31:0] \$195 ;
+  wire [31:0] \$196 ;
+  wire [31:0] \$197 ;
+  wire [31:0] \$198 ;
+  wire [31:0] \$199 ;
   wire \$2 ;
   wire \$20 ;
-  wire \$200 ;
-  wire \$201 ;
-  wire \$202 ;
+  wire [31:0] \$200 ;
+  wire [31:0] \$201 ;
+  wire [31:0] \$202 ;
   wire \$203 ;
   wire \$204 ;
   wire \$205 ;
@@ -1374,23 +1433,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$301 ;
   wire \$302 ;
   wire \$303 ;
-  wire [31:0] \$304 ;
-  wire [31:0] \$305 ;
-  wire [31:0] \$306 ;
-  wire [31:0] \$307 ;
-  wire [31:0] \$308 ;
-  wire [31:0] \$309 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
   wire \$31 ;
-  wire [31:0] \$310 ;
-  wire [31:0] \$311 ;
-  wire [31:0] \$312 ;
-  wire [31:0] \$313 ;
-  wire [31:0] \$314 ;
-  wire [31:0] \$315 ;
-  wire [31:0] \$316 ;
-  wire [31:0] \$317 ;
-  wire [31:0] \$318 ;
-  wire [31:0] \$319 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
   wire \$32 ;
   wire [31:0] \$320 ;
   wire [31:0] \$321 ;
@@ -1447,25 +1506,25 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$368 ;
   wire [31:0] \$369 ;
   wire \$37 ;
-  wire \$370 ;
-  wire \$371 ;
-  wire \$372 ;
-  wire \$373 ;
-  wire \$374 ;
-  wire \$375 ;
-  wire \$376 ;
-  wire \$377 ;
-  wire \$378 ;
-  wire \$379 ;
+  wire [31:0] \$370 ;
+  wire [31:0] \$371 ;
+  wire [31:0] \$372 ;
+  wire [31:0] \$373 ;
+  wire [31:0] \$374 ;
+  wire [31:0] \$375 ;
+  wire [31:0] \$376 ;
+  wire [31:0] \$377 ;
+  wire [31:0] \$378 ;
+  wire [31:0] \$379 ;
   wire \$38 ;
-  wire \$380 ;
-  wire \$381 ;
-  wire \$382 ;
-  wire \$383 ;
-  wire \$384 ;
-  wire \$385 ;
-  wire \$386 ;
-  wire \$387 ;
+  wire [31:0] \$380 ;
+  wire [31:0] \$381 ;
+  wire [31:0] \$382 ;
+  wire [31:0] \$383 ;
+  wire [31:0] \$384 ;
+  wire [31:0] \$385 ;
+  wire [31:0] \$386 ;
+  wire [31:0] \$387 ;
   wire \$388 ;
   wire \$389 ;
   wire \$39 ;
@@ -1543,120 +1602,120 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$454 ;
   wire \$455 ;
   wire \$456 ;
-  wire [31:0] \$457 ;
-  wire [31:0] \$458 ;
-  reg \$459 ;
+  wire \$457 ;
+  wire \$458 ;
+  wire \$459 ;
   wire \$46 ;
-  reg [10:0] \$460 ;
-  reg [31:0] \$461 ;
-  reg [3:0] \$462 ;
-  reg [31:0] \$463 ;
-  reg [3:0] \$464 ;
-  reg \$465 ;
-  reg \$466 ;
-  reg \$467 ;
-  reg \$468 ;
-  reg \$469 ;
+  wire \$460 ;
+  wire \$461 ;
+  wire \$462 ;
+  wire \$463 ;
+  wire \$464 ;
+  wire \$465 ;
+  wire \$466 ;
+  wire \$467 ;
+  wire \$468 ;
+  wire \$469 ;
   wire \$47 ;
-  reg \$470 ;
-  reg [31:0] \$471 ;
-  reg \$472 ;
-  reg \$473 ;
-  reg \$474 ;
-  reg \$475 ;
-  reg \$476 ;
-  reg \$477 ;
-  reg \$478 ;
+  wire \$470 ;
+  wire \$471 ;
+  wire \$472 ;
+  wire \$473 ;
+  wire \$474 ;
+  wire \$475 ;
+  wire \$476 ;
+  wire [31:0] \$477 ;
+  wire [31:0] \$478 ;
   reg \$479 ;
   wire \$48 ;
-  reg \$480 ;
-  reg \$481 ;
-  reg \$482 ;
-  reg \$483 ;
-  reg \$484 ;
-  reg [15:0] \$485 ;
-  reg [11:0] \$486 ;
+  reg [10:0] \$480 ;
+  reg [31:0] \$481 ;
+  reg [3:0] \$482 ;
+  reg [31:0] \$483 ;
+  reg [3:0] \$484 ;
+  reg \$485 ;
+  reg \$486 ;
   reg \$487 ;
-  reg [23:0] \$488 ;
+  reg \$488 ;
   reg \$489 ;
   wire \$49 ;
-  reg [23:0] \$490 ;
-  reg \$491 ;
-  reg [23:0] \$492 ;
+  reg \$490 ;
+  reg [31:0] \$491 ;
+  reg \$492 ;
   reg \$493 ;
-  reg [23:0] \$494 ;
+  reg \$494 ;
   reg \$495 ;
-  reg [5:0] \$496 ;
+  reg \$496 ;
   reg \$497 ;
   reg \$498 ;
-  reg [1:0] \$499 ;
+  reg \$499 ;
   wire \$5 ;
   wire \$50 ;
   reg \$500 ;
   reg \$501 ;
-  reg [5:0] \$502 ;
+  reg \$502 ;
   reg \$503 ;
   reg \$504 ;
-  reg [1:0] \$505 ;
-  reg \$506 ;
+  reg [15:0] \$505 ;
+  reg [11:0] \$506 ;
   reg \$507 ;
-  reg \$508 ;
+  reg [23:0] \$508 ;
   reg \$509 ;
   wire \$51 ;
-  reg \$510 ;
+  reg [23:0] \$510 ;
   reg \$511 ;
-  reg [7:0] \$512 ;
-  reg [3:0] \$513 ;
-  reg [3:0] \$514 ;
-  reg [3:0] \$515 ;
-  reg \$516 ;
-  reg [11:0] \$517 ;
+  reg [23:0] \$512 ;
+  reg \$513 ;
+  reg [23:0] \$514 ;
+  reg \$515 ;
+  reg [5:0] \$516 ;
+  reg \$517 ;
   reg \$518 ;
-  reg [15:0] \$519 ;
+  reg [1:0] \$519 ;
   wire \$52 ;
-  reg [4:0] \$520 ;
+  reg \$520 ;
   reg \$521 ;
-  reg \$522 ;
-  reg [15:0] \$523 ;
+  reg [5:0] \$522 ;
+  reg \$523 ;
   reg \$524 ;
-  reg [15:0] \$525 ;
-  reg [4:0] \$526 ;
+  reg [1:0] \$525 ;
+  reg \$526 ;
   reg \$527 ;
   reg \$528 ;
-  reg [15:0] \$529 ;
+  reg \$529 ;
   wire \$53 ;
   reg \$530 ;
-  reg [2:0] \$531 ;
-  reg [6:0] \$532 ;
-  reg [6:0] \$533 ;
-  reg \$534 ;
-  reg \$535 ;
+  reg \$531 ;
+  reg [7:0] \$532 ;
+  reg [3:0] \$533 ;
+  reg [3:0] \$534 ;
+  reg [3:0] \$535 ;
   reg \$536 ;
-  reg \$537 ;
+  reg [11:0] \$537 ;
   reg \$538 ;
-  reg \$539 ;
+  reg [15:0] \$539 ;
   wire \$54 ;
-  reg \$540 ;
+  reg [4:0] \$540 ;
   reg \$541 ;
   reg \$542 ;
-  reg \$543 ;
+  reg [15:0] \$543 ;
   reg \$544 ;
-  reg \$545 ;
-  reg \$546 ;
+  reg [15:0] \$545 ;
+  reg [4:0] \$546 ;
   reg \$547 ;
   reg \$548 ;
-  reg \$549 ;
+  reg [15:0] \$549 ;
   wire \$55 ;
   reg \$550 ;
   reg \$551 ;
   reg \$552 ;
   reg \$553 ;
   reg \$554 ;
-  reg \$555 ;
+  reg [11:0] \$555 ;
   reg \$556 ;
-  reg \$557 ;
-  reg \$558 ;
-  reg \$559 ;
+  reg [2:0] \$557 ;
+  reg [6:0] \$558 ;
+  reg [6:0] \$559 ;
   wire \$56 ;
   reg \$560 ;
   reg \$561 ;
@@ -1666,7 +1725,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$565 ;
   reg \$566 ;
   reg \$567 ;
-  reg [3:0] \$568 ;
+  reg \$568 ;
   reg \$569 ;
   wire \$57 ;
   reg \$570 ;
@@ -1680,23 +1739,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$578 ;
   reg \$579 ;
   wire \$58 ;
-  reg [5:0] \$580 ;
-  reg [15:0] \$581 ;
-  reg [12:0] \$582 ;
-  reg [31:0] \$583 ;
-  reg [22:0] \$584 ;
-  reg [31:0] \$585 ;
-  reg [7:0] \$586 ;
-  reg [31:0] \$587 ;
-  reg [3:0] \$588 ;
+  reg \$580 ;
+  reg \$581 ;
+  reg \$582 ;
+  reg \$583 ;
+  reg \$584 ;
+  reg \$585 ;
+  reg \$586 ;
+  reg \$587 ;
+  reg \$588 ;
   reg \$589 ;
   wire \$59 ;
-  reg [7:0] \$590 ;
-  reg [12:0] \$591 ;
+  reg \$590 ;
+  reg \$591 ;
   reg \$592 ;
   reg \$593 ;
-  reg [31:0] \$594 ;
-  reg \$595 ;
+  reg \$594 ;
+  reg [3:0] \$595 ;
   reg \$596 ;
   reg \$597 ;
   reg \$598 ;
@@ -1710,30 +1769,30 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$604 ;
   reg \$605 ;
   reg \$606 ;
-  reg \$607 ;
+  reg [5:0] \$607 ;
   reg [15:0] \$608 ;
-  reg [11:0] \$609 ;
+  reg [12:0] \$609 ;
   wire \$61 ;
-  reg \$610 ;
-  reg [23:0] \$611 ;
-  reg \$612 ;
-  reg [23:0] \$613 ;
-  reg \$614 ;
-  reg [23:0] \$615 ;
+  reg [31:0] \$610 ;
+  reg [22:0] \$611 ;
+  reg [31:0] \$612 ;
+  reg [7:0] \$613 ;
+  reg [31:0] \$614 ;
+  reg [3:0] \$615 ;
   reg \$616 ;
-  reg [23:0] \$617 ;
-  reg \$618 ;
-  reg [5:0] \$619 ;
+  reg [7:0] \$617 ;
+  reg [12:0] \$618 ;
+  reg \$619 ;
   wire \$62 ;
   reg \$620 ;
-  reg \$621 ;
-  reg [1:0] \$622 ;
+  reg [31:0] \$621 ;
+  reg \$622 ;
   reg \$623 ;
   reg \$624 ;
-  reg [5:0] \$625 ;
+  reg \$625 ;
   reg \$626 ;
   reg \$627 ;
-  reg [1:0] \$628 ;
+  reg \$628 ;
   reg \$629 ;
   wire \$63 ;
   reg \$630 ;
@@ -1741,69 +1800,69 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$632 ;
   reg \$633 ;
   reg \$634 ;
-  reg [7:0] \$635 ;
-  reg [3:0] \$636 ;
-  reg [3:0] \$637 ;
-  reg [3:0] \$638 ;
+  reg [15:0] \$635 ;
+  reg [11:0] \$636 ;
+  reg \$637 ;
+  reg [23:0] \$638 ;
   reg \$639 ;
   wire \$64 ;
-  reg [11:0] \$640 ;
+  reg [23:0] \$640 ;
   reg \$641 ;
-  reg [15:0] \$642 ;
-  reg [4:0] \$643 ;
-  reg \$644 ;
+  reg [23:0] \$642 ;
+  reg \$643 ;
+  reg [23:0] \$644 ;
   reg \$645 ;
-  reg [15:0] \$646 ;
+  reg [5:0] \$646 ;
   reg \$647 ;
-  reg [15:0] \$648 ;
-  reg [4:0] \$649 ;
+  reg \$648 ;
+  reg [1:0] \$649 ;
   wire \$65 ;
   reg \$650 ;
   reg \$651 ;
-  reg [15:0] \$652 ;
+  reg [5:0] \$652 ;
   reg \$653 ;
-  reg [2:0] \$654 ;
-  reg [6:0] \$655 ;
-  reg [6:0] \$656 ;
+  reg \$654 ;
+  reg [1:0] \$655 ;
+  reg \$656 ;
   reg \$657 ;
   reg \$658 ;
   reg \$659 ;
   wire \$66 ;
   reg \$660 ;
   reg \$661 ;
-  reg \$662 ;
-  reg \$663 ;
-  reg \$664 ;
-  reg \$665 ;
+  reg [7:0] \$662 ;
+  reg [3:0] \$663 ;
+  reg [3:0] \$664 ;
+  reg [3:0] \$665 ;
   reg \$666 ;
-  reg \$667 ;
+  reg [11:0] \$667 ;
   reg \$668 ;
-  reg \$669 ;
+  reg [15:0] \$669 ;
   wire \$67 ;
-  reg \$670 ;
+  reg [4:0] \$670 ;
   reg \$671 ;
   reg \$672 ;
-  reg \$673 ;
+  reg [15:0] \$673 ;
   reg \$674 ;
-  reg \$675 ;
-  reg \$676 ;
+  reg [15:0] \$675 ;
+  reg [4:0] \$676 ;
   reg \$677 ;
   reg \$678 ;
-  reg \$679 ;
+  reg [15:0] \$679 ;
   wire \$68 ;
   reg \$680 ;
   reg \$681 ;
   reg \$682 ;
   reg \$683 ;
   reg \$684 ;
-  reg \$685 ;
+  reg [11:0] \$685 ;
   reg \$686 ;
-  reg \$687 ;
-  reg \$688 ;
-  reg \$689 ;
+  reg [2:0] \$687 ;
+  reg [6:0] \$688 ;
+  reg [6:0] \$689 ;
   wire \$69 ;
   reg \$690 ;
-  reg [3:0] \$691 ;
+  reg \$691 ;
   reg \$692 ;
   reg \$693 ;
   reg \$694 ;
@@ -1817,26 +1876,60 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$700 ;
   reg \$701 ;
   reg \$702 ;
-  reg [5:0] \$703 ;
-  reg [15:0] \$704 ;
-  reg [12:0] \$705 ;
-  reg [31:0] \$706 ;
-  reg [22:0] \$707 ;
-  reg [31:0] \$708 ;
-  reg [7:0] \$709 ;
+  reg \$703 ;
+  reg \$704 ;
+  reg \$705 ;
+  reg \$706 ;
+  reg \$707 ;
+  reg \$708 ;
+  reg \$709 ;
   wire \$71 ;
-  reg [31:0] \$710 ;
-  reg [3:0] \$711 ;
+  reg \$710 ;
+  reg \$711 ;
   reg \$712 ;
-  reg [7:0] \$713 ;
-  reg [12:0] \$714 ;
+  reg \$713 ;
+  reg \$714 ;
   reg \$715 ;
   reg \$716 ;
-  reg [31:0] \$717 ;
+  reg \$717 ;
+  reg \$718 ;
+  reg \$719 ;
   wire \$72 ;
+  reg \$720 ;
+  reg \$721 ;
+  reg \$722 ;
+  reg \$723 ;
+  reg \$724 ;
+  reg [3:0] \$725 ;
+  reg \$726 ;
+  reg \$727 ;
+  reg \$728 ;
+  reg \$729 ;
   wire \$73 ;
+  reg \$730 ;
+  reg \$731 ;
+  reg \$732 ;
+  reg \$733 ;
+  reg \$734 ;
+  reg \$735 ;
+  reg \$736 ;
+  reg [5:0] \$737 ;
+  reg [15:0] \$738 ;
+  reg [12:0] \$739 ;
   wire \$74 ;
+  reg [31:0] \$740 ;
+  reg [22:0] \$741 ;
+  reg [31:0] \$742 ;
+  reg [7:0] \$743 ;
+  reg [31:0] \$744 ;
+  reg [3:0] \$745 ;
+  reg \$746 ;
+  reg [7:0] \$747 ;
+  reg [12:0] \$748 ;
+  reg \$749 ;
   wire \$75 ;
+  reg \$750 ;
+  reg [31:0] \$751 ;
   wire \$76 ;
   wire \$77 ;
   wire \$78 ;
@@ -1916,6 +2009,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [5:0] ch0__cap_data_bits_w0;
   wire [5:0] ch0__cap_data_bits_w1;
   wire ch0__cap_register_access;
+  wire ch0__cap_ssi;
   wire [5:0] ch0__cap_timer_width;
   wire ch0__cap_timestamp;
   wire ch0__cds;
@@ -1943,6 +2037,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch0__cfg_spw_check;
   (* init = 8'h00 *)
   wire [7:0] ch0__cfg_spw_tolerance;
+  (* init = 1'h0 *)
+  wire ch0__cfg_ssi;
+  (* init = 12'h000 *)
+  wire [11:0] ch0__cfg_ssi_delay;
+  (* init = 1'h0 *)
+  wire ch0__cfg_ssi_double;
+  (* init = 1'h0 *)
+  wire ch0__cfg_ssi_error;
+  (* init = 1'h0 *)
+  wire ch0__cfg_ssi_error_low;
   (* init = 24'h000000 *)
   wire [23:0] ch0__cfg_timeout_limit;
   (* init = 2'h0 *)
@@ -2049,8 +2153,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [2:0] ch0_ca_request_slave_id;
   reg [2:0] ch0_ca_request_slave_id = 3'h0;
   wire ch0_ca_request_write;
-  output \ch0_ca_request_write$106 ;
-  reg \ch0_ca_request_write$106  = 1'h0;
+  output \ch0_ca_request_write$113 ;
+  reg \ch0_ca_request_write$113  = 1'h0;
   wire ch0_ca_state_write;
   wire ch0_caps_write;
   output [23:0] ch0_cfg_ack_ack_limit;
@@ -2113,6 +2217,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [11:0] ch0_cfg_quiet_quiet_time;
   reg [11:0] ch0_cfg_quiet_quiet_time = 12'h000;
   wire ch0_cfg_quiet_write;
+  reg ch0_cfg_ssi_config_write = 1'h0;
+  output ch0_cfg_ssi_ssi;
+  reg ch0_cfg_ssi_ssi = 1'h0;
+  output [11:0] ch0_cfg_ssi_ssi_delay;
+  reg [11:0] ch0_cfg_ssi_ssi_delay = 12'h000;
+  output ch0_cfg_ssi_ssi_double;
+  reg ch0_cfg_ssi_ssi_double = 1'h0;
+  output ch0_cfg_ssi_ssi_error;
+  reg ch0_cfg_ssi_ssi_error = 1'h0;
+  output ch0_cfg_ssi_ssi_error_low;
+  reg ch0_cfg_ssi_ssi_error_low = 1'h0;
+  wire ch0_cfg_ssi_write;
   reg ch0_cfg_timeout_config_write = 1'h0;
   output [23:0] ch0_cfg_timeout_timeout_limit;
   reg [23:0] ch0_cfg_timeout_timeout_limit = 24'h000000;
@@ -2193,6 +2309,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_read_select_a1 = 1'h0;
   reg ch0_read_select_a2 = 1'h0;
   reg ch0_read_select_a3 = 1'h0;
+  reg ch0_read_select_a4 = 1'h0;
   reg ch0_read_select_c0 = 1'h0;
   reg ch0_read_select_c1 = 1'h0;
   reg ch0_read_select_c2 = 1'h0;
@@ -2270,6 +2387,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [5:0] ch1__cap_data_bits_w0;
   wire [5:0] ch1__cap_data_bits_w1;
   wire ch1__cap_register_access;
+  wire ch1__cap_ssi;
   wire [5:0] ch1__cap_timer_width;
   wire ch1__cap_timestamp;
   wire ch1__cds;
@@ -2297,6 +2415,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire ch1__cfg_spw_check;
   (* init = 8'h00 *)
   wire [7:0] ch1__cfg_spw_tolerance;
+  (* init = 1'h0 *)
+  wire ch1__cfg_ssi;
+  (* init = 12'h000 *)
+  wire [11:0] ch1__cfg_ssi_delay;
+  (* init = 1'h0 *)
+  wire ch1__cfg_ssi_double;
+  (* init = 1'h0 *)
+  wire ch1__cfg_ssi_error;
+  (* init = 1'h0 *)
+  wire ch1__cfg_ssi_error_low;
   (* init = 24'h000000 *)
   wire [23:0] ch1__cfg_timeout_limit;
   (* init = 2'h0 *)
@@ -2403,8 +2531,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$289 ;
-  reg \ch1_ca_request_write$289  = 1'h0;
+  output \ch1_ca_request_write$305 ;
+  reg \ch1_ca_request_write$305  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_write;
   output [23:0] ch1_cfg_ack_ack_limit;
@@ -2467,6 +2595,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [11:0] ch1_cfg_quiet_quiet_time;
   reg [11:0] ch1_cfg_quiet_quiet_time = 12'h000;
   wire ch1_cfg_quiet_write;
+  reg ch1_cfg_ssi_config_write = 1'h0;
+  output ch1_cfg_ssi_ssi;
+  reg ch1_cfg_ssi_ssi = 1'h0;
+  output [11:0] ch1_cfg_ssi_ssi_delay;
+  reg [11:0] ch1_cfg_ssi_ssi_delay = 12'h000;
+  output ch1_cfg_ssi_ssi_double;
+  reg ch1_cfg_ssi_ssi_double = 1'h0;
+  output ch1_cfg_ssi_ssi_error;
+  reg ch1_cfg_ssi_ssi_error = 1'h0;
+  output ch1_cfg_ssi_ssi_error_low;
+  reg ch1_cfg_ssi_ssi_error_low = 1'h0;
+  wire ch1_cfg_ssi_write;
   reg ch1_cfg_timeout_config_write = 1'h0;
   output [23:0] ch1_cfg_timeout_timeout_limit;
   reg [23:0] ch1_cfg_timeout_timeout_limit = 24'h000000;
@@ -2547,6 +2687,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_read_select_121 = 1'h0;
   reg ch1_read_select_122 = 1'h0;
   reg ch1_read_select_123 = 1'h0;
+  reg ch1_read_select_124 = 1'h0;
   reg ch1_read_select_140 = 1'h0;
   reg ch1_read_select_141 = 1'h0;
   reg ch1_read_select_142 = 1'h0;
@@ -2611,18 +2752,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6333$0 ;
-  wire [186:0] \port$6333$0 ;
-  input [79:0] \port$6346$0 ;
-  wire [79:0] \port$6346$0 ;
-  input [9:0] \port$6423$0 ;
-  wire [9:0] \port$6423$0 ;
-  input [186:0] \port$6860$0 ;
-  wire [186:0] \port$6860$0 ;
-  input [79:0] \port$6873$0 ;
-  wire [79:0] \port$6873$0 ;
-  input [9:0] \port$6950$0 ;
-  wire [9:0] \port$6950$0 ;
+  input [186:0] \port$6740$0 ;
+  wire [186:0] \port$6740$0 ;
+  input [79:0] \port$6753$0 ;
+  wire [79:0] \port$6753$0 ;
+  input [9:0] \port$6830$0 ;
+  wire [9:0] \port$6830$0 ;
+  input [186:0] \port$7272$0 ;
+  wire [186:0] \port$7272$0 ;
+  input [79:0] \port$7285$0 ;
+  wire [79:0] \port$7285$0 ;
+  input [9:0] \port$7362$0 ;
+  wire [9:0] \port$7362$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2630,766 +2771,850 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg [31:0] write_data = 32'd0;
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
-  assign \$283  = bus__r_addr == 9'h112;
-  assign \$284  = bus__r_addr == 9'h113;
-  assign \$285  = bus__r_addr == 9'h114;
-  assign \$286  = bus__r_addr == 9'h115;
-  assign \$287  = bus__r_addr == 9'h116;
-  assign \$288  = bus__r_addr == 9'h117;
-  assign \$289  = bus__r_addr == 9'h120;
-  assign \$290  = bus__r_addr == 9'h121;
-  assign \$291  = bus__r_addr == 9'h122;
-  assign \$292  = bus__r_addr == 9'h123;
-  assign \$293  = bus__r_addr == 9'h140;
-  assign \$294  = bus__r_addr == 9'h141;
-  assign \$295  = bus__r_addr == 9'h142;
-  assign \$296  = bus__r_addr == 9'h143;
-  assign \$297  = bus__r_addr == 9'h144;
-  assign \$298  = bus__r_addr == 9'h145;
-  assign \$299  = ch1_read_select_110 & bus__r_load;
-  assign \$300  = bus__r_addr[10:3] == 6'h23;
-  assign \$301  = bus__r_en & \$300 ;
-  assign \$302  = bus__r_addr[10:4] == 5'h16;
-  assign \$303  = bus__r_en & \$302 ;
-  assign \$304  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$306  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$307  = \$305  | \$306 ;
-  assign \$308  = ch1_read_select_102 ? 32'd119023671 : 32'd0;
-  assign \$309  = \$307  | \$308 ;
-  assign \$310  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
-  assign \$311  = \$309  | \$310 ;
-  assign \$312  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
-  assign \$313  = \$311  | \$312 ;
-  assign \$314  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
-  assign \$315  = \$313  | \$314 ;
-  assign \$316  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
-  assign \$317  = \$315  | \$316 ;
-  assign \$318  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
-  assign \$319  = \$317  | \$318 ;
-  assign \$320  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
-  assign \$321  = \$319  | \$320 ;
-  assign \$322  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$249  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$250  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$251  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$252  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$253  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$254  = ch1_cfg_checks_config_write & config_write_strb[3];
+  assign \$255  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$256  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$257  = ch1_cfg_crc0_config_write & config_write_strb[0];
+  assign \$258  = ch1_cfg_crc0_config_write & config_write_strb[1];
+  assign \$259  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$260  = ch1_cfg_crc0_config_write & config_write_strb[3];
+  assign \$261  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$262  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$263  = ch1_cfg_crc1_config_write & config_write_strb[0];
+  assign \$264  = ch1_cfg_crc1_config_write & config_write_strb[1];
+  assign \$265  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$266  = ch1_cfg_crc1_config_write & config_write_strb[3];
+  assign \$267  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$268  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$269  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$270  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$271  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$272  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$273  = ch1_cfg_ssi_config_write & config_write_strb[2];
+  assign \$274  = ch1_cfg_ssi_config_write & config_write_strb[3];
+  assign \$275  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$276  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$277  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$278  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$279  = write_data[0] & write_strb[0];
+  assign \$280  = ch1_ca_ctrl_write ? \$279  : 1'h0;
+  assign \$281  = write_data[1] & write_strb[0];
+  assign \$282  = ch1_ca_ctrl_write ? \$281  : 1'h0;
+  assign \$283  = bus__r_addr == 9'h100;
+  assign \$284  = bus__r_addr == 9'h101;
+  assign \$285  = bus__r_addr == 9'h102;
+  assign \$286  = bus__r_addr == 9'h104;
+  assign \$287  = bus__r_addr == 9'h105;
+  assign \$288  = bus__r_addr == 9'h108;
+  assign \$289  = bus__r_addr == 9'h109;
+  assign \$290  = bus__r_addr == 9'h10a;
+  assign \$291  = bus__r_addr == 9'h10b;
+  assign \$292  = bus__r_addr == 9'h10c;
+  assign \$293  = bus__r_addr == 9'h10d;
+  assign \$294  = bus__r_addr == 9'h10e;
+  assign \$295  = bus__r_addr == 9'h10f;
+  assign \$296  = bus__r_addr == 9'h110;
+  assign \$297  = bus__r_addr == 9'h111;
+  assign \$298  = bus__r_addr == 9'h112;
+  assign \$299  = bus__r_addr == 9'h113;
+  assign \$300  = bus__r_addr == 9'h114;
+  assign \$301  = bus__r_addr == 9'h115;
+  assign \$302  = bus__r_addr == 9'h116;
+  assign \$303  = bus__r_addr == 9'h117;
+  assign \$304  = bus__r_addr == 9'h120;
+  assign \$305  = bus__r_addr == 9'h121;
+  assign \$306  = bus__r_addr == 9'h122;
+  assign \$307  = bus__r_addr == 9'h123;
+  assign \$308  = bus__r_addr == 9'h124;
+  assign \$309  = bus__r_addr == 9'h140;
+  assign \$310  = bus__r_addr == 9'h141;
+  assign \$311  = bus__r_addr == 9'h142;
+  assign \$312  = bus__r_addr == 9'h143;
+  assign \$313  = bus__r_addr == 9'h144;
+  assign \$314  = bus__r_addr == 9'h145;
+  assign \$315  = ch1_read_select_110 & bus__r_load;
+  assign \$316  = bus__r_addr[10:3] == 6'h23;
+  assign \$317  = bus__r_en & \$316 ;
+  assign \$318  = bus__r_addr[10:4] == 5'h16;
+  assign \$319  = bus__r_en & \$318 ;
+  assign \$320  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$322  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
   assign \$323  = \$321  | \$322 ;
-  assign \$324  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 3'h0, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 4'h0, ch1_cfg_words_w0_signed, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
+  assign \$324  = ch1_read_select_102 ? 32'd253241399 : 32'd0;
   assign \$325  = \$323  | \$324 ;
-  assign \$326  = ch1_read_select_10e ? { 4'h0, ch1_cfg_checks_confirm_frames, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
+  assign \$326  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
   assign \$327  = \$325  | \$326 ;
-  assign \$328  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
+  assign \$328  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
   assign \$329  = \$327  | \$328 ;
-  assign \$330  = ch1_read_select_110 ? { 2'h0, \port$6860$0 [182:177], 4'h0, \port$6860$0 [186:183], 1'h0, \port$6860$0 [176:174], 1'h0, \port$6860$0 [133:131], 3'h0, \port$6860$0 [49], \port$6860$0 [3:0] } : 32'd0;
+  assign \$330  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
   assign \$331  = \$329  | \$330 ;
-  assign \$332  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$332  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
   assign \$333  = \$331  | \$332 ;
-  assign \$334  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$334  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
   assign \$335  = \$333  | \$334 ;
-  assign \$336  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$336  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
   assign \$337  = \$335  | \$336 ;
-  assign \$338  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$338  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
   assign \$339  = \$337  | \$338 ;
-  assign \$340  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$340  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 3'h0, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 4'h0, ch1_cfg_words_w0_signed, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
   assign \$341  = \$339  | \$340 ;
-  assign \$342  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$342  = ch1_read_select_10e ? { 4'h0, ch1_cfg_checks_confirm_frames, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
   assign \$343  = \$341  | \$342 ;
-  assign \$344  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
+  assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
+  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7272$0 [182:177], 4'h0, \port$7272$0 [186:183], 1'h0, \port$7272$0 [176:174], 1'h0, \port$7272$0 [133:131], 3'h0, \port$7272$0 [49], \port$7272$0 [3:0] } : 32'd0;
   assign \$347  = \$345  | \$346 ;
-  assign \$348  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
+  assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$349  = \$347  | \$348 ;
-  assign \$350  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
+  assign \$350  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
   assign \$351  = \$349  | \$350 ;
-  assign \$352  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
+  assign \$352  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
   assign \$353  = \$351  | \$352 ;
-  assign \$354  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$289 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$354  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
   assign \$355  = \$353  | \$354 ;
-  assign \$358  = ch1_read_select_142 ? { 17'h00000, \port$6950$0 [9:3], 1'h0, \port$6950$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$356  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$357  = \$355  | \$356 ;
+  assign \$358  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
   assign \$359  = \$357  | \$358 ;
-  assign \$360  = ch1_read_select_143 ? \port$6873$0 [31:0] : 32'd0;
+  assign \$360  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
   assign \$361  = \$359  | \$360 ;
-  assign \$362  = ch1_read_select_144 ? \port$6873$0 [63:32] : 32'd0;
+  assign \$362  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
   assign \$363  = \$361  | \$362 ;
-  assign \$364  = ch1_read_select_145 ? { 16'h0000, \port$6873$0 [79:64] } : 32'd0;
+  assign \$364  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
   assign \$365  = \$363  | \$364 ;
-  assign \$366  = ch1_window0_read ? ch1__count_data : 32'd0;
+  assign \$366  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
   assign \$367  = \$365  | \$366 ;
-  assign \$368  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$368  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
   assign \$369  = \$367  | \$368 ;
-  assign \$370  = ! write_addr;
-  assign g_id_write = write_en & \$370 ;
-  assign \$371  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$371 ;
-  assign \$372  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$372 ;
-  assign \$373  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$373 ;
-  assign \$374  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$374 ;
-  assign \$375  = bus__r_addr[10:3] == 5'h13;
-  assign ch0__count_en = bus__r_en & \$375 ;
-  assign \$376  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$376 ;
-  assign \$377  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$377 ;
-  assign \$378  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$378 ;
-  assign \$379  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$379 ;
-  assign \$380  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$380 ;
-  assign \$381  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$381 ;
-  assign \$382  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$382 ;
-  assign \$383  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$383 ;
-  assign \$384  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$384 ;
-  assign \$385  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$385 ;
-  assign \$386  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$386 ;
-  assign \$387  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$387 ;
-  assign \$388  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$388 ;
-  assign \$389  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$389 ;
-  assign \$390  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$390 ;
-  assign \$391  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$391 ;
-  assign \$392  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$392 ;
-  assign \$393  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$393 ;
-  assign \$394  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$394 ;
-  assign \$395  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$395 ;
-  assign \$396  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$396 ;
-  assign \$397  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$397 ;
-  assign \$398  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$398 ;
-  assign \$399  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$399 ;
-  assign \$400  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$400 ;
-  assign \$401  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$401 ;
-  assign \$402  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$402 ;
-  assign \$403  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$403 ;
-  assign \$404  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$404 ;
-  assign \$405  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$405 ;
-  assign \$406  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$406 ;
-  assign \$407  = write_addr[10:4] == 4'hd;
-  assign \$408  = write_en & \$407 ;
-  assign ch0__ca_wbuf_en = \$408  ? write_strb : 4'h0;
-  assign \$409  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$409 ;
-  assign \$410  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$412  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$414  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$415 , \$413 , \$411  };
-  assign \$416  = bus__r_addr[10:3] == 6'h23;
-  assign ch1__count_en = bus__r_en & \$416 ;
-  assign \$417  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$417 ;
-  assign \$418  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$418 ;
-  assign \$419  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$419 ;
-  assign \$420  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$420 ;
-  assign \$421  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$421 ;
-  assign \$422  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$422 ;
-  assign \$423  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$423 ;
-  assign \$424  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$424 ;
-  assign \$425  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$425 ;
-  assign \$426  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$426 ;
-  assign \$427  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$427 ;
-  assign \$428  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$428 ;
-  assign \$429  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$429 ;
-  assign \$430  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$430 ;
-  assign \$431  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$431 ;
-  assign \$432  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$432 ;
-  assign \$433  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$433 ;
-  assign \$434  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$434 ;
-  assign \$435  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$435 ;
-  assign \$436  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$436 ;
-  assign \$437  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$437 ;
-  assign \$438  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$438 ;
-  assign \$439  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$439 ;
-  assign \$440  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$440 ;
-  assign \$441  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$441 ;
-  assign \$442  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$442 ;
-  assign \$443  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$443 ;
-  assign \$444  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$444 ;
-  assign \$445  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$445 ;
-  assign \$446  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$446 ;
-  assign \$447  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$447 ;
-  assign \$448  = write_addr[10:4] == 5'h15;
-  assign \$449  = write_en & \$448 ;
-  assign ch1__ca_wbuf_en = \$449  ? write_strb : 4'h0;
-  assign \$450  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$450 ;
-  assign \$451  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$453  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$455  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$456 , \$454 , \$452  };
-  assign \$458  = \$457  | ch0_read_data;
-  assign bus__r_data = \$458  | ch1_read_data;
+  assign \$370  = ch1_read_select_124 ? { 4'h0, ch1_cfg_ssi_ssi_delay, 12'h000, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi } : 32'd0;
+  assign \$371  = \$369  | \$370 ;
+  assign \$372  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$373  = \$371  | \$372 ;
+  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7362$0 [9:3], 1'h0, \port$7362$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$377  = \$375  | \$376 ;
+  assign \$378  = ch1_read_select_143 ? \port$7285$0 [31:0] : 32'd0;
+  assign \$379  = \$377  | \$378 ;
+  assign \$380  = ch1_read_select_144 ? \port$7285$0 [63:32] : 32'd0;
+  assign \$381  = \$379  | \$380 ;
+  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7285$0 [79:64] } : 32'd0;
+  assign \$383  = \$381  | \$382 ;
+  assign \$384  = ch1_window0_read ? ch1__count_data : 32'd0;
+  assign \$385  = \$383  | \$384 ;
+  assign \$386  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$387  = \$385  | \$386 ;
+  assign \$388  = ! write_addr;
+  assign g_id_write = write_en & \$388 ;
+  assign \$389  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$389 ;
+  assign \$390  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$390 ;
+  assign \$391  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$391 ;
+  assign \$392  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$392 ;
+  assign \$393  = bus__r_addr[10:3] == 5'h13;
+  assign ch0__count_en = bus__r_en & \$393 ;
+  assign \$394  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$394 ;
+  assign \$395  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$395 ;
+  assign \$396  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$396 ;
+  assign \$397  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$397 ;
+  assign \$398  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$398 ;
+  assign \$399  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$399 ;
+  assign \$400  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$400 ;
+  assign \$401  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$401 ;
+  assign \$402  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$402 ;
+  assign \$403  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$403 ;
+  assign \$404  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$404 ;
+  assign \$405  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$405 ;
+  assign \$406  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$406 ;
+  assign \$407  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$407 ;
+  assign \$408  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$408 ;
+  assign \$409  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$409 ;
+  assign \$410  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$410 ;
+  assign \$411  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$411 ;
+  assign \$412  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$412 ;
+  assign \$413  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$413 ;
+  assign \$414  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$414 ;
+  assign \$415  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$415 ;
+  assign \$416  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$416 ;
+  assign \$417  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$417 ;
+  assign \$418  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$418 ;
+  assign \$419  = write_addr == 8'ha4;
+  assign ch0_cfg_ssi_write = write_en & \$419 ;
+  assign \$420  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$420 ;
+  assign \$421  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$421 ;
+  assign \$422  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$422 ;
+  assign \$423  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$423 ;
+  assign \$424  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$424 ;
+  assign \$425  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$425 ;
+  assign \$426  = write_addr[10:4] == 4'hd;
+  assign \$427  = write_en & \$426 ;
+  assign ch0__ca_wbuf_en = \$427  ? write_strb : 4'h0;
+  assign \$428  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$428 ;
+  assign \$429  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$431  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$433  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$434 , \$432 , \$430  };
+  assign \$435  = bus__r_addr[10:3] == 6'h23;
+  assign ch1__count_en = bus__r_en & \$435 ;
+  assign \$436  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$436 ;
+  assign \$437  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$437 ;
+  assign \$438  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$438 ;
+  assign \$439  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$439 ;
+  assign \$440  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$440 ;
+  assign \$441  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$441 ;
+  assign \$442  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$442 ;
+  assign \$443  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$443 ;
+  assign \$444  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$444 ;
+  assign \$445  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$445 ;
+  assign \$446  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$446 ;
+  assign \$447  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$447 ;
+  assign \$448  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$448 ;
+  assign \$449  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$449 ;
+  assign \$450  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$450 ;
+  assign \$451  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$451 ;
+  assign \$452  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$452 ;
+  assign \$453  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$453 ;
+  assign \$454  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$454 ;
+  assign \$455  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$455 ;
+  assign \$456  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$456 ;
+  assign \$457  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$457 ;
+  assign \$458  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$458 ;
+  assign \$459  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$459 ;
+  assign \$460  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$460 ;
+  assign \$461  = write_addr == 9'h124;
+  assign ch1_cfg_ssi_write = write_en & \$461 ;
+  assign \$462  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$462 ;
+  assign \$463  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$463 ;
+  assign \$464  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$464 ;
+  assign \$465  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$465 ;
+  assign \$466  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$466 ;
+  assign \$467  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$467 ;
+  assign \$468  = write_addr[10:4] == 5'h15;
+  assign \$469  = write_en & \$468 ;
+  assign ch1__ca_wbuf_en = \$469  ? write_strb : 4'h0;
+  assign \$470  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$470 ;
+  assign \$471  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$473  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$475  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$476 , \$474 , \$472  };
+  assign \$478  = \$477  | ch0_read_data;
+  assign bus__r_data = \$478  | ch1_read_data;
   always @(posedge clk)
-    write_en <= \$459 ;
+    write_en <= \$479 ;
   always @(posedge clk)
-    write_addr <= \$460 ;
+    write_addr <= \$480 ;
   always @(posedge clk)
-    write_data <= \$461 ;
+    write_data <= \$481 ;
   always @(posedge clk)
-    write_strb <= \$462 ;
+    write_strb <= \$482 ;
   always @(posedge clk)
-    config_write_data <= \$463 ;
+    config_write_data <= \$483 ;
   always @(posedge clk)
-    config_write_strb <= \$464 ;
+    config_write_strb <= \$484 ;
   always @(posedge clk)
-    g_trigger_start <= \$465 ;
+    g_trigger_start <= \$485 ;
   always @(posedge clk)
-    g_read_select_0 <= \$466 ;
+    g_read_select_0 <= \$486 ;
   always @(posedge clk)
-    g_read_select_1 <= \$467 ;
+    g_read_select_1 <= \$487 ;
   always @(posedge clk)
-    g_read_select_2 <= \$468 ;
+    g_read_select_2 <= \$488 ;
   always @(posedge clk)
-    g_read_select_3 <= \$469 ;
+    g_read_select_3 <= \$489 ;
   always @(posedge clk)
-    g_read_select_4 <= \$470 ;
+    g_read_select_4 <= \$490 ;
   always @(posedge clk)
-    g_read_data <= \$471 ;
+    g_read_data <= \$491 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$472 ;
+    ch0_ctrl_start <= \$492 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$473 ;
+    ch0_ctrl_abort <= \$493 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$474 ;
+    ch0_ctrl_clear_counters <= \$494 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$475 ;
+    ch0_ctrl_periodic <= \$495 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$476 ;
+    ch0_ctrl_trigger_enable <= \$496 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$477 ;
+    ch0_irq_status_done <= \$497 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$478 ;
+    ch0_irq_status_error <= \$498 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$479 ;
+    ch0_irq_status_access_done <= \$499 ;
   always @(posedge clk)
-    ch0_irq_enable_config_write <= \$480 ;
+    ch0_irq_enable_config_write <= \$500 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$481 ;
+    ch0_irq_enable_done <= \$501 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$482 ;
+    ch0_irq_enable_error <= \$502 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$483 ;
+    ch0_irq_enable_access_done <= \$503 ;
   always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$484 ;
+    ch0_cfg_ma_config_write <= \$504 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$485 ;
+    ch0_cfg_ma_ma_half_period <= \$505 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$486 ;
+    ch0_cfg_ma_delay_limit <= \$506 ;
   always @(posedge clk)
-    ch0_cfg_period_config_write <= \$487 ;
+    ch0_cfg_period_config_write <= \$507 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$488 ;
+    ch0_cfg_period_request_period <= \$508 ;
   always @(posedge clk)
-    ch0_cfg_break_config_write <= \$489 ;
+    ch0_cfg_break_config_write <= \$509 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$490 ;
+    ch0_cfg_break_break_time <= \$510 ;
   always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$491 ;
+    ch0_cfg_ack_config_write <= \$511 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$492 ;
+    ch0_cfg_ack_ack_limit <= \$512 ;
   always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$493 ;
+    ch0_cfg_timeout_config_write <= \$513 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$494 ;
+    ch0_cfg_timeout_timeout_limit <= \$514 ;
   always @(posedge clk)
-    ch0_cfg_words_config_write <= \$495 ;
+    ch0_cfg_words_config_write <= \$515 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$496 ;
+    ch0_cfg_words_w0_data_bits <= \$516 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$497 ;
+    ch0_cfg_words_w0_nenw <= \$517 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$498 ;
+    ch0_cfg_words_w0_lc <= \$518 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$499 ;
+    ch0_cfg_words_w0_crc <= \$519 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$500 ;
+    ch0_cfg_words_w0_gray <= \$520 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_signed <= \$501 ;
+    ch0_cfg_words_w0_signed <= \$521 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$502 ;
+    ch0_cfg_words_w1_data_bits <= \$522 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$503 ;
+    ch0_cfg_words_w1_nenw <= \$523 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$504 ;
+    ch0_cfg_words_w1_lc <= \$524 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$505 ;
+    ch0_cfg_words_w1_crc <= \$525 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$506 ;
+    ch0_cfg_words_w1_gray <= \$526 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_signed <= \$507 ;
+    ch0_cfg_words_w1_signed <= \$527 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$508 ;
+    ch0_cfg_words_w1_enable <= \$528 ;
   always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$509 ;
+    ch0_cfg_checks_config_write <= \$529 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$510 ;
+    ch0_cfg_checks_end_check <= \$530 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$511 ;
+    ch0_cfg_checks_spw_check <= \$531 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$512 ;
+    ch0_cfg_checks_spw_tolerance <= \$532 ;
   always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$513 ;
+    ch0_cfg_checks_noise_limit <= \$533 ;
   always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$514 ;
+    ch0_cfg_checks_delay_tolerance <= \$534 ;
   always @(posedge clk)
-    ch0_cfg_checks_confirm_frames <= \$515 ;
+    ch0_cfg_checks_confirm_frames <= \$535 ;
   always @(posedge clk)
-    ch0_cfg_quiet_config_write <= \$516 ;
+    ch0_cfg_quiet_config_write <= \$536 ;
   always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$517 ;
+    ch0_cfg_quiet_quiet_time <= \$537 ;
   always @(posedge clk)
-    ch0_cfg_crc0_config_write <= \$518 ;
+    ch0_cfg_crc0_config_write <= \$538 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_poly <= \$519 ;
+    ch0_cfg_crc0_w0_crc_poly <= \$539 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$520 ;
+    ch0_cfg_crc0_w0_crc_width <= \$540 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_inverted <= \$521 ;
+    ch0_cfg_crc0_w0_crc_inverted <= \$541 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_config_write <= \$522 ;
+    ch0_cfg_crc0_start_config_write <= \$542 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_w0_crc_start <= \$523 ;
+    ch0_cfg_crc0_start_w0_crc_start <= \$543 ;
   always @(posedge clk)
-    ch0_cfg_crc1_config_write <= \$524 ;
+    ch0_cfg_crc1_config_write <= \$544 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_poly <= \$525 ;
+    ch0_cfg_crc1_w1_crc_poly <= \$545 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$526 ;
+    ch0_cfg_crc1_w1_crc_width <= \$546 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_inverted <= \$527 ;
+    ch0_cfg_crc1_w1_crc_inverted <= \$547 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_config_write <= \$528 ;
+    ch0_cfg_crc1_start_config_write <= \$548 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_w1_crc_start <= \$529 ;
+    ch0_cfg_crc1_start_w1_crc_start <= \$549 ;
   always @(posedge clk)
-    ch0_ca_request_config_write <= \$530 ;
+    ch0_cfg_ssi_config_write <= \$550 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$531 ;
+    ch0_cfg_ssi_ssi <= \$551 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$532 ;
+    ch0_cfg_ssi_ssi_error <= \$552 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$533 ;
+    ch0_cfg_ssi_ssi_error_low <= \$553 ;
   always @(posedge clk)
-    \ch0_ca_request_write$106  <= \$534 ;
+    ch0_cfg_ssi_ssi_double <= \$554 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$535 ;
+    ch0_cfg_ssi_ssi_delay <= \$555 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$536 ;
+    ch0_ca_request_config_write <= \$556 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$537 ;
+    ch0_ca_request_slave_id <= \$557 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$538 ;
+    ch0_ca_request_address <= \$558 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$539 ;
+    ch0_ca_request_count <= \$559 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$540 ;
+    \ch0_ca_request_write$113  <= \$560 ;
   always @(posedge clk)
-    ch0_read_select_85 <= \$541 ;
+    ch0_ca_ctrl_start <= \$561 ;
   always @(posedge clk)
-    ch0_read_select_88 <= \$542 ;
+    ch0_ca_ctrl_abort <= \$562 ;
   always @(posedge clk)
-    ch0_read_select_89 <= \$543 ;
+    ch0_read_select_80 <= \$563 ;
   always @(posedge clk)
-    ch0_read_select_8a <= \$544 ;
+    ch0_read_select_81 <= \$564 ;
   always @(posedge clk)
-    ch0_read_select_8b <= \$545 ;
+    ch0_read_select_82 <= \$565 ;
   always @(posedge clk)
-    ch0_read_select_8c <= \$546 ;
+    ch0_read_select_84 <= \$566 ;
   always @(posedge clk)
-    ch0_read_select_8d <= \$547 ;
+    ch0_read_select_85 <= \$567 ;
   always @(posedge clk)
-    ch0_read_select_8e <= \$548 ;
+    ch0_read_select_88 <= \$568 ;
   always @(posedge clk)
-    ch0_read_select_8f <= \$549 ;
+    ch0_read_select_89 <= \$569 ;
   always @(posedge clk)
-    ch0_read_select_90 <= \$550 ;
+    ch0_read_select_8a <= \$570 ;
   always @(posedge clk)
-    ch0_read_select_91 <= \$551 ;
+    ch0_read_select_8b <= \$571 ;
   always @(posedge clk)
-    ch0_read_select_92 <= \$552 ;
+    ch0_read_select_8c <= \$572 ;
   always @(posedge clk)
-    ch0_read_select_93 <= \$553 ;
+    ch0_read_select_8d <= \$573 ;
   always @(posedge clk)
-    ch0_read_select_94 <= \$554 ;
+    ch0_read_select_8e <= \$574 ;
   always @(posedge clk)
-    ch0_read_select_95 <= \$555 ;
+    ch0_read_select_8f <= \$575 ;
   always @(posedge clk)
-    ch0_read_select_96 <= \$556 ;
+    ch0_read_select_90 <= \$576 ;
   always @(posedge clk)
-    ch0_read_select_97 <= \$557 ;
+    ch0_read_select_91 <= \$577 ;
   always @(posedge clk)
-    ch0_read_select_a0 <= \$558 ;
+    ch0_read_select_92 <= \$578 ;
   always @(posedge clk)
-    ch0_read_select_a1 <= \$559 ;
+    ch0_read_select_93 <= \$579 ;
   always @(posedge clk)
-    ch0_read_select_a2 <= \$560 ;
+    ch0_read_select_94 <= \$580 ;
   always @(posedge clk)
-    ch0_read_select_a3 <= \$561 ;
+    ch0_read_select_95 <= \$581 ;
   always @(posedge clk)
-    ch0_read_select_c0 <= \$562 ;
+    ch0_read_select_96 <= \$582 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$563 ;
+    ch0_read_select_97 <= \$583 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$564 ;
+    ch0_read_select_a0 <= \$584 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$565 ;
+    ch0_read_select_a1 <= \$585 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$566 ;
+    ch0_read_select_a2 <= \$586 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$567 ;
+    ch0_read_select_a3 <= \$587 ;
   always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$568 ;
+    ch0_read_select_a4 <= \$588 ;
   always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$569 ;
+    ch0_read_select_c0 <= \$589 ;
   always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$570 ;
+    ch0_read_select_c1 <= \$590 ;
   always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$571 ;
+    ch0_read_select_c2 <= \$591 ;
   always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$572 ;
+    ch0_read_select_c3 <= \$592 ;
   always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$573 ;
+    ch0_read_select_c4 <= \$593 ;
   always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$574 ;
+    ch0_read_select_c5 <= \$594 ;
   always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$575 ;
+    ch0_result_status_status_snapshot <= \$595 ;
   always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$576 ;
+    ch0_result_status_cds_snapshot <= \$596 ;
   always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$577 ;
+    ch0_result_status_w0_ne_snapshot <= \$597 ;
   always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$578 ;
+    ch0_result_status_w0_nw_snapshot <= \$598 ;
   always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$579 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$599 ;
   always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$580 ;
+    ch0_result_status_w1_ne_snapshot <= \$600 ;
   always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$581 ;
+    ch0_result_status_w1_nw_snapshot <= \$601 ;
   always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$582 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$602 ;
   always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$583 ;
+    ch0_result_status_lc_repeat_snapshot <= \$603 ;
   always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$584 ;
+    ch0_result_status_lc_skip_snapshot <= \$604 ;
   always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$585 ;
+    ch0_result_status_lc_zero_snapshot <= \$605 ;
   always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$586 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$606 ;
   always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$587 ;
+    ch0_result_status_lc_snapshot <= \$607 ;
   always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$588 ;
+    ch0_result_seq_seq_snapshot <= \$608 ;
   always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$589 ;
+    ch0_result_seq_line_delay_snapshot <= \$609 ;
   always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$590 ;
+    ch0_result_w0_lo_data_snapshot <= \$610 ;
   always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$591 ;
+    ch0_result_w0_hi_data_snapshot <= \$611 ;
   always @(posedge clk)
-    ch0_window0_read <= \$592 ;
+    ch0_result_w1_lo_data_snapshot <= \$612 ;
   always @(posedge clk)
-    ch0_window1_read <= \$593 ;
+    ch0_result_w1_hi_data_snapshot <= \$613 ;
   always @(posedge clk)
-    ch0_read_data <= \$594 ;
+    ch0_result_timestamp_time_snapshot <= \$614 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$595 ;
+    ch0_result_line_noise_events_snapshot <= \$615 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$596 ;
+    ch0_result_line_delay_settled_snapshot <= \$616 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$597 ;
+    ch0_result_line_delay_spread_snapshot <= \$617 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$598 ;
+    ch0_result_line_settled_delay_snapshot <= \$618 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$599 ;
+    ch0_window0_read <= \$619 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$600 ;
+    ch0_window1_read <= \$620 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$601 ;
+    ch0_read_data <= \$621 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$602 ;
+    ch1_ctrl_start <= \$622 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$603 ;
+    ch1_ctrl_abort <= \$623 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$604 ;
+    ch1_ctrl_clear_counters <= \$624 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$605 ;
+    ch1_ctrl_periodic <= \$625 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$606 ;
+    ch1_ctrl_trigger_enable <= \$626 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$607 ;
+    ch1_irq_status_done <= \$627 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$608 ;
+    ch1_irq_status_error <= \$628 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$609 ;
+    ch1_irq_status_access_done <= \$629 ;
   always @(posedge clk)
-    ch1_cfg_period_config_write <= \$610 ;
+    ch1_irq_enable_config_write <= \$630 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$611 ;
+    ch1_irq_enable_done <= \$631 ;
   always @(posedge clk)
-    ch1_cfg_break_config_write <= \$612 ;
+    ch1_irq_enable_error <= \$632 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$613 ;
+    ch1_irq_enable_access_done <= \$633 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$614 ;
+    ch1_cfg_ma_config_write <= \$634 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$615 ;
+    ch1_cfg_ma_ma_half_period <= \$635 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$616 ;
+    ch1_cfg_ma_delay_limit <= \$636 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$617 ;
+    ch1_cfg_period_config_write <= \$637 ;
   always @(posedge clk)
-    ch1_cfg_words_config_write <= \$618 ;
+    ch1_cfg_period_request_period <= \$638 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$619 ;
+    ch1_cfg_break_config_write <= \$639 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$620 ;
+    ch1_cfg_break_break_time <= \$640 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$621 ;
+    ch1_cfg_ack_config_write <= \$641 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$622 ;
+    ch1_cfg_ack_ack_limit <= \$642 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$623 ;
+    ch1_cfg_timeout_config_write <= \$643 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_signed <= \$624 ;
+    ch1_cfg_timeout_timeout_limit <= \$644 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$625 ;
+    ch1_cfg_words_config_write <= \$645 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$626 ;
+    ch1_cfg_words_w0_data_bits <= \$646 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$627 ;
+    ch1_cfg_words_w0_nenw <= \$647 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$628 ;
+    ch1_cfg_words_w0_lc <= \$648 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$629 ;
+    ch1_cfg_words_w0_crc <= \$649 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_signed <= \$630 ;
+    ch1_cfg_words_w0_gray <= \$650 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$631 ;
+    ch1_cfg_words_w0_signed <= \$651 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$632 ;
+    ch1_cfg_words_w1_data_bits <= \$652 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$633 ;
+    ch1_cfg_words_w1_nenw <= \$653 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$634 ;
+    ch1_cfg_words_w1_lc <= \$654 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$635 ;
+    ch1_cfg_words_w1_crc <= \$655 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$636 ;
+    ch1_cfg_words_w1_gray <= \$656 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$637 ;
+    ch1_cfg_words_w1_signed <= \$657 ;
   always @(posedge clk)
-    ch1_cfg_checks_confirm_frames <= \$638 ;
+    ch1_cfg_words_w1_enable <= \$658 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_write <= \$639 ;
+    ch1_cfg_checks_config_write <= \$659 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$640 ;
+    ch1_cfg_checks_end_check <= \$660 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_write <= \$641 ;
+    ch1_cfg_checks_spw_check <= \$661 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_poly <= \$642 ;
+    ch1_cfg_checks_spw_tolerance <= \$662 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$643 ;
+    ch1_cfg_checks_noise_limit <= \$663 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_inverted <= \$644 ;
+    ch1_cfg_checks_delay_tolerance <= \$664 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_write <= \$645 ;
+    ch1_cfg_checks_confirm_frames <= \$665 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_w0_crc_start <= \$646 ;
+    ch1_cfg_quiet_config_write <= \$666 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_write <= \$647 ;
+    ch1_cfg_quiet_quiet_time <= \$667 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_poly <= \$648 ;
+    ch1_cfg_crc0_config_write <= \$668 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$649 ;
+    ch1_cfg_crc0_w0_crc_poly <= \$669 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_inverted <= \$650 ;
+    ch1_cfg_crc0_w0_crc_width <= \$670 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_write <= \$651 ;
+    ch1_cfg_crc0_w0_crc_inverted <= \$671 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_w1_crc_start <= \$652 ;
+    ch1_cfg_crc0_start_config_write <= \$672 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$653 ;
+    ch1_cfg_crc0_start_w0_crc_start <= \$673 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$654 ;
+    ch1_cfg_crc1_config_write <= \$674 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$655 ;
+    ch1_cfg_crc1_w1_crc_poly <= \$675 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$656 ;
+    ch1_cfg_crc1_w1_crc_width <= \$676 ;
   always @(posedge clk)
-    \ch1_ca_request_write$289  <= \$657 ;
+    ch1_cfg_crc1_w1_crc_inverted <= \$677 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$658 ;
+    ch1_cfg_crc1_start_config_write <= \$678 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$659 ;
+    ch1_cfg_crc1_start_w1_crc_start <= \$679 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$660 ;
+    ch1_cfg_ssi_config_write <= \$680 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$661 ;
+    ch1_cfg_ssi_ssi <= \$681 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$662 ;
+    ch1_cfg_ssi_ssi_error <= \$682 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$663 ;
+    ch1_cfg_ssi_ssi_error_low <= \$683 ;
   always @(posedge clk)
-    ch1_read_select_105 <= \$664 ;
+    ch1_cfg_ssi_ssi_double <= \$684 ;
   always @(posedge clk)
-    ch1_read_select_108 <= \$665 ;
+    ch1_cfg_ssi_ssi_delay <= \$685 ;
   always @(posedge clk)
-    ch1_read_select_109 <= \$666 ;
+    ch1_ca_request_config_write <= \$686 ;
   always @(posedge clk)
-    ch1_read_select_10a <= \$667 ;
+    ch1_ca_request_slave_id <= \$687 ;
   always @(posedge clk)
-    ch1_read_select_10b <= \$668 ;
+    ch1_ca_request_address <= \$688 ;
   always @(posedge clk)
-    ch1_read_select_10c <= \$669 ;
+    ch1_ca_request_count <= \$689 ;
   always @(posedge clk)
-    ch1_read_select_10d <= \$670 ;
+    \ch1_ca_request_write$305  <= \$690 ;
   always @(posedge clk)
-    ch1_read_select_10e <= \$671 ;
+    ch1_ca_ctrl_start <= \$691 ;
   always @(posedge clk)
-    ch1_read_select_10f <= \$672 ;
+    ch1_ca_ctrl_abort <= \$692 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$673 ;
+    ch1_read_select_100 <= \$693 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$674 ;
+    ch1_read_select_101 <= \$694 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$675 ;
+    ch1_read_select_102 <= \$695 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$676 ;
+    ch1_read_select_104 <= \$696 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$677 ;
+    ch1_read_select_105 <= \$697 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$678 ;
+    ch1_read_select_108 <= \$698 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$679 ;
+    ch1_read_select_109 <= \$699 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$680 ;
+    ch1_read_select_10a <= \$700 ;
   always @(posedge clk)
-    ch1_read_select_120 <= \$681 ;
+    ch1_read_select_10b <= \$701 ;
   always @(posedge clk)
-    ch1_read_select_121 <= \$682 ;
+    ch1_read_select_10c <= \$702 ;
   always @(posedge clk)
-    ch1_read_select_122 <= \$683 ;
+    ch1_read_select_10d <= \$703 ;
   always @(posedge clk)
-    ch1_read_select_123 <= \$684 ;
+    ch1_read_select_10e <= \$704 ;
   always @(posedge clk)
-    ch1_read_select_140 <= \$685 ;
+    ch1_read_select_10f <= \$705 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$686 ;
+    ch1_read_select_110 <= \$706 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$687 ;
+    ch1_read_select_111 <= \$707 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$688 ;
+    ch1_read_select_112 <= \$708 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$689 ;
+    ch1_read_select_113 <= \$709 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$690 ;
+    ch1_read_select_114 <= \$710 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$691 ;
+    ch1_read_select_115 <= \$711 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$692 ;
+    ch1_read_select_116 <= \$712 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$693 ;
+    ch1_read_select_117 <= \$713 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$694 ;
+    ch1_read_select_120 <= \$714 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$695 ;
+    ch1_read_select_121 <= \$715 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$696 ;
+    ch1_read_select_122 <= \$716 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$697 ;
+    ch1_read_select_123 <= \$717 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$698 ;
+    ch1_read_select_124 <= \$718 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$699 ;
+    ch1_read_select_140 <= \$719 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$700 ;
+    ch1_read_select_141 <= \$720 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$701 ;
+    ch1_read_select_142 <= \$721 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$702 ;
+    ch1_read_select_143 <= \$722 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$703 ;
+    ch1_read_select_144 <= \$723 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$704 ;
+    ch1_read_select_145 <= \$724 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$705 ;
+    ch1_result_status_status_snapshot <= \$725 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$706 ;
+    ch1_result_status_cds_snapshot <= \$726 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$707 ;
+    ch1_result_status_w0_ne_snapshot <= \$727 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$708 ;
+    ch1_result_status_w0_nw_snapshot <= \$728 ;
   always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$709 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$729 ;
   always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$710 ;
+    ch1_result_status_w1_ne_snapshot <= \$730 ;
   always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$711 ;
+    ch1_result_status_w1_nw_snapshot <= \$731 ;
   always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$712 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$732 ;
   always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$713 ;
+    ch1_result_status_lc_repeat_snapshot <= \$733 ;
   always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$714 ;
+    ch1_result_status_lc_skip_snapshot <= \$734 ;
   always @(posedge clk)
-    ch1_window0_read <= \$715 ;
+    ch1_result_status_lc_zero_snapshot <= \$735 ;
   always @(posedge clk)
-    ch1_window1_read <= \$716 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$736 ;
   always @(posedge clk)
-    ch1_read_data <= \$717 ;
+    ch1_result_status_lc_snapshot <= \$737 ;
+  always @(posedge clk)
+    ch1_result_seq_seq_snapshot <= \$738 ;
+  always @(posedge clk)
+    ch1_result_seq_line_delay_snapshot <= \$739 ;
+  always @(posedge clk)
+    ch1_result_w0_lo_data_snapshot <= \$740 ;
+  always @(posedge clk)
+    ch1_result_w0_hi_data_snapshot <= \$741 ;
+  always @(posedge clk)
+    ch1_result_w1_lo_data_snapshot <= \$742 ;
+  always @(posedge clk)
+    ch1_result_w1_hi_data_snapshot <= \$743 ;
+  always @(posedge clk)
+    ch1_result_timestamp_time_snapshot <= \$744 ;
+  always @(posedge clk)
+    ch1_result_line_noise_events_snapshot <= \$745 ;
+  always @(posedge clk)
+    ch1_result_line_delay_settled_snapshot <= \$746 ;
+  always @(posedge clk)
+    ch1_result_line_delay_spread_snapshot <= \$747 ;
+  always @(posedge clk)
+    ch1_result_line_settled_delay_snapshot <= \$748 ;
+  always @(posedge clk)
+    ch1_window0_read <= \$749 ;
+  always @(posedge clk)
+    ch1_window1_read <= \$750 ;
+  always @(posedge clk)
+    ch1_read_data <= \$751 ;
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__r_addr;
@@ -3470,587 +3695,340 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$81  = ch0_cfg_crc1_config_write & config_write_strb[3];
   assign \$82  = ch0_cfg_crc1_start_config_write & config_write_strb[0];
   assign \$83  = ch0_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$84  = ch0_ca_request_config_write & config_write_strb[0];
-  assign \$85  = ch0_ca_request_config_write & config_write_strb[1];
-  assign \$86  = ch0_ca_request_config_write & config_write_strb[2];
-  assign \$87  = ch0_ca_request_config_write & config_write_strb[3];
-  assign \$88  = write_data[0] & write_strb[0];
-  assign \$89  = ch0_ca_ctrl_write ? \$88  : 1'h0;
-  assign \$90  = write_data[1] & write_strb[0];
-  assign \$91  = ch0_ca_ctrl_write ? \$90  : 1'h0;
-  assign \$92  = bus__r_addr == 8'h80;
-  assign \$93  = bus__r_addr == 8'h81;
-  assign \$94  = bus__r_addr == 8'h82;
-  assign \$95  = bus__r_addr == 8'h84;
-  assign \$96  = bus__r_addr == 8'h85;
-  assign \$97  = bus__r_addr == 8'h88;
-  assign \$98  = bus__r_addr == 8'h89;
-  assign \$99  = bus__r_addr == 8'h8a;
-  assign \$100  = bus__r_addr == 8'h8b;
-  assign \$101  = bus__r_addr == 8'h8c;
-  assign \$102  = bus__r_addr == 8'h8d;
-  assign \$103  = bus__r_addr == 8'h8e;
-  assign \$104  = bus__r_addr == 8'h8f;
-  assign \$105  = bus__r_addr == 8'h90;
-  assign \$106  = bus__r_addr == 8'h91;
-  assign \$107  = bus__r_addr == 8'h92;
-  assign \$108  = bus__r_addr == 8'h93;
-  assign \$109  = bus__r_addr == 8'h94;
-  assign \$110  = bus__r_addr == 8'h95;
-  assign \$111  = bus__r_addr == 8'h96;
-  assign \$112  = bus__r_addr == 8'h97;
-  assign \$113  = bus__r_addr == 8'ha0;
-  assign \$114  = bus__r_addr == 8'ha1;
-  assign \$115  = bus__r_addr == 8'ha2;
-  assign \$116  = bus__r_addr == 8'ha3;
-  assign \$117  = bus__r_addr == 8'hc0;
-  assign \$118  = bus__r_addr == 8'hc1;
-  assign \$119  = bus__r_addr == 8'hc2;
-  assign \$120  = bus__r_addr == 8'hc3;
-  assign \$121  = bus__r_addr == 8'hc4;
-  assign \$122  = bus__r_addr == 8'hc5;
-  assign \$123  = ch0_read_select_90 & bus__r_load;
-  assign \$124  = bus__r_addr[10:3] == 5'h13;
-  assign \$125  = bus__r_en & \$124 ;
-  assign \$126  = bus__r_addr[10:4] == 4'he;
-  assign \$127  = bus__r_en & \$126 ;
-  assign \$128  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$130  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$131  = \$129  | \$130 ;
-  assign \$132  = ch0_read_select_82 ? 32'd119023671 : 32'd0;
-  assign \$133  = \$131  | \$132 ;
-  assign \$134  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
-  assign \$135  = \$133  | \$134 ;
-  assign \$136  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
-  assign \$137  = \$135  | \$136 ;
-  assign \$138  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
-  assign \$139  = \$137  | \$138 ;
-  assign \$140  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
-  assign \$141  = \$139  | \$140 ;
-  assign \$142  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
-  assign \$143  = \$141  | \$142 ;
-  assign \$144  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
-  assign \$145  = \$143  | \$144 ;
-  assign \$146  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$147  = \$145  | \$146 ;
-  assign \$148  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 3'h0, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 4'h0, ch0_cfg_words_w0_signed, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
-  assign \$149  = \$147  | \$148 ;
-  assign \$150  = ch0_read_select_8e ? { 4'h0, ch0_cfg_checks_confirm_frames, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
-  assign \$151  = \$149  | \$150 ;
-  assign \$152  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
-  assign \$153  = \$151  | \$152 ;
-  assign \$154  = ch0_read_select_90 ? { 2'h0, \port$6333$0 [182:177], 4'h0, \port$6333$0 [186:183], 1'h0, \port$6333$0 [176:174], 1'h0, \port$6333$0 [133:131], 3'h0, \port$6333$0 [49], \port$6333$0 [3:0] } : 32'd0;
-  assign \$155  = \$153  | \$154 ;
-  assign \$156  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
-  assign \$157  = \$155  | \$156 ;
-  assign \$158  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
-  assign \$159  = \$157  | \$158 ;
-  assign \$160  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$161  = \$159  | \$160 ;
-  assign \$162  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
-  assign \$163  = \$161  | \$162 ;
-  assign \$164  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$165  = \$163  | \$164 ;
-  assign \$166  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
-  assign \$167  = \$165  | \$166 ;
-  assign \$168  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
-  assign \$169  = \$167  | \$168 ;
-  assign \$170  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
-  assign \$171  = \$169  | \$170 ;
-  assign \$172  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
-  assign \$173  = \$171  | \$172 ;
-  assign \$174  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
-  assign \$175  = \$173  | \$174 ;
-  assign \$176  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
-  assign \$177  = \$175  | \$176 ;
-  assign \$178  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$106 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
-  assign \$179  = \$177  | \$178 ;
-  assign \$182  = ch0_read_select_c2 ? { 17'h00000, \port$6423$0 [9:3], 1'h0, \port$6423$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$183  = \$181  | \$182 ;
-  assign \$184  = ch0_read_select_c3 ? \port$6346$0 [31:0] : 32'd0;
-  assign \$185  = \$183  | \$184 ;
-  assign \$186  = ch0_read_select_c4 ? \port$6346$0 [63:32] : 32'd0;
-  assign \$187  = \$185  | \$186 ;
-  assign \$188  = ch0_read_select_c5 ? { 16'h0000, \port$6346$0 [79:64] } : 32'd0;
-  assign \$189  = \$187  | \$188 ;
-  assign \$190  = ch0_window0_read ? ch0__count_data : 32'd0;
-  assign \$191  = \$189  | \$190 ;
-  assign \$192  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$193  = \$191  | \$192 ;
-  assign \$194  = write_data[0] & write_strb[0];
-  assign \$195  = ch1_ctrl_write ? \$194  : 1'h0;
-  assign \$196  = write_data[1] & write_strb[0];
-  assign \$197  = ch1_ctrl_write ? \$196  : 1'h0;
-  assign \$198  = write_data[2] & write_strb[0];
-  assign \$199  = ch1_ctrl_write ? \$198  : 1'h0;
-  assign \$200  = ch1_ctrl_write & write_strb[1];
-  assign \$201  = ch1_ctrl_write & write_strb[1];
-  assign \$202  = write_data[0] & write_strb[0];
-  assign \$203  = ch1_irq_status_write ? \$202  : 1'h0;
-  assign \$204  = write_data[1] & write_strb[0];
-  assign \$205  = ch1_irq_status_write ? \$204  : 1'h0;
-  assign \$206  = write_data[2] & write_strb[0];
-  assign \$207  = ch1_irq_status_write ? \$206  : 1'h0;
-  assign \$208  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$209  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$210  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$211  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$212  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$213  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$214  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$215  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$216  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$217  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$218  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$219  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$220  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$221  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$222  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$223  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$224  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$225  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$226  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$227  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$228  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$229  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$230  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$231  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$232  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$233  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$234  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$235  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$236  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$237  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$238  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$239  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$240  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$241  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$242  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$243  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$244  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$245  = ch1_cfg_checks_config_write & config_write_strb[3];
-  assign \$246  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$247  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$248  = ch1_cfg_crc0_config_write & config_write_strb[0];
-  assign \$249  = ch1_cfg_crc0_config_write & config_write_strb[1];
-  assign \$250  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$251  = ch1_cfg_crc0_config_write & config_write_strb[3];
-  assign \$252  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$253  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$254  = ch1_cfg_crc1_config_write & config_write_strb[0];
-  assign \$255  = ch1_cfg_crc1_config_write & config_write_strb[1];
-  assign \$256  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$257  = ch1_cfg_crc1_config_write & config_write_strb[3];
-  assign \$258  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$259  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$260  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$261  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$262  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$263  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$264  = write_data[0] & write_strb[0];
-  assign \$265  = ch1_ca_ctrl_write ? \$264  : 1'h0;
-  assign \$266  = write_data[1] & write_strb[0];
-  assign \$267  = ch1_ca_ctrl_write ? \$266  : 1'h0;
-  assign \$268  = bus__r_addr == 9'h100;
-  assign \$269  = bus__r_addr == 9'h101;
-  assign \$270  = bus__r_addr == 9'h102;
-  assign \$271  = bus__r_addr == 9'h104;
-  assign \$272  = bus__r_addr == 9'h105;
-  assign \$273  = bus__r_addr == 9'h108;
-  assign \$274  = bus__r_addr == 9'h109;
-  assign \$275  = bus__r_addr == 9'h10a;
-  assign \$276  = bus__r_addr == 9'h10b;
-  assign \$277  = bus__r_addr == 9'h10c;
-  assign \$278  = bus__r_addr == 9'h10d;
-  assign \$279  = bus__r_addr == 9'h10e;
-  assign \$280  = bus__r_addr == 9'h10f;
-  assign \$281  = bus__r_addr == 9'h110;
-  assign \$282  = bus__r_addr == 9'h111;
+  assign \$84  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$85  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$86  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$87  = ch0_cfg_ssi_config_write & config_write_strb[0];
+  assign \$88  = ch0_cfg_ssi_config_write & config_write_strb[2];
+  assign \$89  = ch0_cfg_ssi_config_write & config_write_strb[3];
+  assign \$90  = ch0_ca_request_config_write & config_write_strb[0];
+  assign \$91  = ch0_ca_request_config_write & config_write_strb[1];
+  assign \$92  = ch0_ca_request_config_write & config_write_strb[2];
+  assign \$93  = ch0_ca_request_config_write & config_write_strb[3];
+  assign \$94  = write_data[0] & write_strb[0];
+  assign \$95  = ch0_ca_ctrl_write ? \$94  : 1'h0;
+  assign \$96  = write_data[1] & write_strb[0];
+  assign \$97  = ch0_ca_ctrl_write ? \$96  : 1'h0;
+  assign \$98  = bus__r_addr == 8'h80;
+  assign \$99  = bus__r_addr == 8'h81;
+  assign \$100  = bus__r_addr == 8'h82;
+  assign \$101  = bus__r_addr == 8'h84;
+  assign \$102  = bus__r_addr == 8'h85;
+  assign \$103  = bus__r_addr == 8'h88;
+  assign \$104  = bus__r_addr == 8'h89;
+  assign \$105  = bus__r_addr == 8'h8a;
+  assign \$106  = bus__r_addr == 8'h8b;
+  assign \$107  = bus__r_addr == 8'h8c;
+  assign \$108  = bus__r_addr == 8'h8d;
+  assign \$109  = bus__r_addr == 8'h8e;
+  assign \$110  = bus__r_addr == 8'h8f;
+  assign \$111  = bus__r_addr == 8'h90;
+  assign \$112  = bus__r_addr == 8'h91;
+  assign \$113  = bus__r_addr == 8'h92;
+  assign \$114  = bus__r_addr == 8'h93;
+  assign \$115  = bus__r_addr == 8'h94;
+  assign \$116  = bus__r_addr == 8'h95;
+  assign \$117  = bus__r_addr == 8'h96;
+  assign \$118  = bus__r_addr == 8'h97;
+  assign \$119  = bus__r_addr == 8'ha0;
+  assign \$120  = bus__r_addr == 8'ha1;
+  assign \$121  = bus__r_addr == 8'ha2;
+  assign \$122  = bus__r_addr == 8'ha3;
+  assign \$123  = bus__r_addr == 8'ha4;
+  assign \$124  = bus__r_addr == 8'hc0;
+  assign \$125  = bus__r_addr == 8'hc1;
+  assign \$126  = bus__r_addr == 8'hc2;
+  assign \$127  = bus__r_addr == 8'hc3;
+  assign \$128  = bus__r_addr == 8'hc4;
+  assign \$129  = bus__r_addr == 8'hc5;
+  assign \$130  = ch0_read_select_90 & bus__r_load;
+  assign \$131  = bus__r_addr[10:3] == 5'h13;
+  assign \$132  = bus__r_en & \$131 ;
+  assign \$133  = bus__r_addr[10:4] == 4'he;
+  assign \$134  = bus__r_en & \$133 ;
+  assign \$135  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$137  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$138  = \$136  | \$137 ;
+  assign \$139  = ch0_read_select_82 ? 32'd253241399 : 32'd0;
+  assign \$140  = \$138  | \$139 ;
+  assign \$141  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$142  = \$140  | \$141 ;
+  assign \$143  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
+  assign \$144  = \$142  | \$143 ;
+  assign \$145  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
+  assign \$146  = \$144  | \$145 ;
+  assign \$147  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
+  assign \$148  = \$146  | \$147 ;
+  assign \$149  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
+  assign \$150  = \$148  | \$149 ;
+  assign \$151  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
+  assign \$152  = \$150  | \$151 ;
+  assign \$153  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$154  = \$152  | \$153 ;
+  assign \$155  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 3'h0, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 4'h0, ch0_cfg_words_w0_signed, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
+  assign \$156  = \$154  | \$155 ;
+  assign \$157  = ch0_read_select_8e ? { 4'h0, ch0_cfg_checks_confirm_frames, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
+  assign \$158  = \$156  | \$157 ;
+  assign \$159  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
+  assign \$160  = \$158  | \$159 ;
+  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6740$0 [182:177], 4'h0, \port$6740$0 [186:183], 1'h0, \port$6740$0 [176:174], 1'h0, \port$6740$0 [133:131], 3'h0, \port$6740$0 [49], \port$6740$0 [3:0] } : 32'd0;
+  assign \$162  = \$160  | \$161 ;
+  assign \$163  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$164  = \$162  | \$163 ;
+  assign \$165  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$166  = \$164  | \$165 ;
+  assign \$167  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$168  = \$166  | \$167 ;
+  assign \$169  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$170  = \$168  | \$169 ;
+  assign \$171  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$172  = \$170  | \$171 ;
+  assign \$173  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$174  = \$172  | \$173 ;
+  assign \$175  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
+  assign \$176  = \$174  | \$175 ;
+  assign \$177  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
+  assign \$178  = \$176  | \$177 ;
+  assign \$179  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
+  assign \$180  = \$178  | \$179 ;
+  assign \$181  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
+  assign \$182  = \$180  | \$181 ;
+  assign \$183  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
+  assign \$184  = \$182  | \$183 ;
+  assign \$185  = ch0_read_select_a4 ? { 4'h0, ch0_cfg_ssi_ssi_delay, 12'h000, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi } : 32'd0;
+  assign \$186  = \$184  | \$185 ;
+  assign \$187  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$188  = \$186  | \$187 ;
+  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6830$0 [9:3], 1'h0, \port$6830$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$192  = \$190  | \$191 ;
+  assign \$193  = ch0_read_select_c3 ? \port$6753$0 [31:0] : 32'd0;
+  assign \$194  = \$192  | \$193 ;
+  assign \$195  = ch0_read_select_c4 ? \port$6753$0 [63:32] : 32'd0;
+  assign \$196  = \$194  | \$195 ;
+  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6753$0 [79:64] } : 32'd0;
+  assign \$198  = \$196  | \$197 ;
+  assign \$199  = ch0_window0_read ? ch0__count_data : 32'd0;
+  assign \$200  = \$198  | \$199 ;
+  assign \$201  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$202  = \$200  | \$201 ;
+  assign \$203  = write_data[0] & write_strb[0];
+  assign \$204  = ch1_ctrl_write ? \$203  : 1'h0;
+  assign \$205  = write_data[1] & write_strb[0];
+  assign \$206  = ch1_ctrl_write ? \$205  : 1'h0;
+  assign \$207  = write_data[2] & write_strb[0];
+  assign \$208  = ch1_ctrl_write ? \$207  : 1'h0;
+  assign \$209  = ch1_ctrl_write & write_strb[1];
+  assign \$210  = ch1_ctrl_write & write_strb[1];
+  assign \$211  = write_data[0] & write_strb[0];
+  assign \$212  = ch1_irq_status_write ? \$211  : 1'h0;
+  assign \$213  = write_data[1] & write_strb[0];
+  assign \$214  = ch1_irq_status_write ? \$213  : 1'h0;
+  assign \$215  = write_data[2] & write_strb[0];
+  assign \$216  = ch1_irq_status_write ? \$215  : 1'h0;
+  assign \$217  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$218  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$219  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$220  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$221  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$222  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$223  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$224  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$225  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$226  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$227  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$228  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$229  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$230  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$231  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$232  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$233  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$234  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$235  = ch1_cfg_timeout_config_write & config_write_strb[2];
+  assign \$236  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$237  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$238  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$239  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$240  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$241  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$242  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$243  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$244  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$245  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$246  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$247  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$248  = ch1_cfg_words_config_write & config_write_strb[3];
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$459  = bus__w_en;
-    if (rst) begin
-      \$459  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$460  = write_addr;
-    if (bus__w_en) begin
-      \$460  = bus__w_addr;
-    end
-    if (rst) begin
-      \$460  = 11'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$461  = write_data;
-    if (bus__w_en) begin
-      \$461  = bus__w_data;
-    end
-    if (rst) begin
-      \$461  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$462  = write_strb;
-    if (bus__w_en) begin
-      \$462  = bus__w_strb;
-    end
-    if (rst) begin
-      \$462  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$463  = config_write_data;
-    if (write_en) begin
-      \$463  = write_data;
-    end
-    if (rst) begin
-      \$463  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$464  = config_write_strb;
-    if (write_en) begin
-      \$464  = write_strb;
-    end
-    if (rst) begin
-      \$464  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$465  = \$2 ;
-    if (rst) begin
-      \$465  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$466  = g_read_select_0;
-    if (bus__r_en) begin
-      \$466  = \$3 ;
-    end
-    if (rst) begin
-      \$466  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$467  = g_read_select_1;
-    if (bus__r_en) begin
-      \$467  = \$4 ;
-    end
-    if (rst) begin
-      \$467  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$468  = g_read_select_2;
-    if (bus__r_en) begin
-      \$468  = \$5 ;
-    end
-    if (rst) begin
-      \$468  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$469  = g_read_select_3;
-    if (bus__r_en) begin
-      \$469  = \$6 ;
-    end
-    if (rst) begin
-      \$469  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$470  = g_read_select_4;
-    if (bus__r_en) begin
-      \$470  = \$7 ;
-    end
-    if (rst) begin
-      \$470  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$471  = g_read_data;
-    if (bus__r_load) begin
-      \$471  = \$17 ;
-    end
-    if (rst) begin
-      \$471  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$472  = \$19 ;
-    if (rst) begin
-      \$472  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$473  = \$21 ;
-    if (rst) begin
-      \$473  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$474  = \$23 ;
-    if (rst) begin
-      \$474  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$475  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$475  = write_data[8];
-    end
-    if (rst) begin
-      \$475  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$476  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$476  = write_data[9];
-    end
-    if (rst) begin
-      \$476  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$477  = ch0_irq_status_done;
-    if (ch0__frame_done) begin
-      \$477  = 1'h1;
-    end else if (\$27 ) begin
-      \$477  = 1'h0;
-    end
-    if (rst) begin
-      \$477  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$478  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$478  = 1'h1;
-    end else if (\$29 ) begin
-      \$478  = 1'h0;
-    end
-    if (rst) begin
-      \$478  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$479  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$479  = 1'h1;
-    end else if (\$31 ) begin
-      \$479  = 1'h0;
-    end
+    \$479  = bus__w_en;
     if (rst) begin
       \$479  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$480  = ch0_irq_enable_write;
+    \$480  = write_addr;
+    if (bus__w_en) begin
+      \$480  = bus__w_addr;
+    end
     if (rst) begin
-      \$480  = 1'h0;
+      \$480  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$481  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$481  = config_write_data[0];
+    \$481  = write_data;
+    if (bus__w_en) begin
+      \$481  = bus__w_data;
     end
     if (rst) begin
-      \$481  = 1'h0;
+      \$481  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$482  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$482  = config_write_data[1];
+    \$482  = write_strb;
+    if (bus__w_en) begin
+      \$482  = bus__w_strb;
     end
     if (rst) begin
-      \$482  = 1'h0;
+      \$482  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$483  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$483  = config_write_data[2];
+    \$483  = config_write_data;
+    if (write_en) begin
+      \$483  = write_data;
     end
     if (rst) begin
-      \$483  = 1'h0;
+      \$483  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$484  = ch0_cfg_ma_write;
+    \$484  = config_write_strb;
+    if (write_en) begin
+      \$484  = write_strb;
+    end
     if (rst) begin
-      \$484  = 1'h0;
+      \$484  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$485  = ch0_cfg_ma_ma_half_period;
-    if (\$35 ) begin
-      \$485 [7:0] = config_write_data[7:0];
-    end
-    if (\$36 ) begin
-      \$485 [15:8] = config_write_data[15:8];
-    end
+    \$485  = \$2 ;
     if (rst) begin
-      \$485  = 16'h0000;
+      \$485  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$486  = ch0_cfg_ma_delay_limit;
-    if (\$37 ) begin
-      \$486 [7:0] = config_write_data[23:16];
-    end
-    if (\$38 ) begin
-      \$486 [11:8] = config_write_data[27:24];
+    \$486  = g_read_select_0;
+    if (bus__r_en) begin
+      \$486  = \$3 ;
     end
     if (rst) begin
-      \$486  = 12'h000;
+      \$486  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$487  = ch0_cfg_period_write;
+    \$487  = g_read_select_1;
+    if (bus__r_en) begin
+      \$487  = \$4 ;
+    end
     if (rst) begin
       \$487  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$488  = ch0_cfg_period_request_period;
-    if (\$39 ) begin
-      \$488 [7:0] = config_write_data[7:0];
-    end
-    if (\$40 ) begin
-      \$488 [15:8] = config_write_data[15:8];
-    end
-    if (\$41 ) begin
-      \$488 [23:16] = config_write_data[23:16];
+    \$488  = g_read_select_2;
+    if (bus__r_en) begin
+      \$488  = \$5 ;
     end
     if (rst) begin
-      \$488  = 24'h000000;
+      \$488  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$489  = ch0_cfg_break_write;
+    \$489  = g_read_select_3;
+    if (bus__r_en) begin
+      \$489  = \$6 ;
+    end
     if (rst) begin
       \$489  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$490  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
-      \$490 [7:0] = config_write_data[7:0];
-    end
-    if (\$43 ) begin
-      \$490 [15:8] = config_write_data[15:8];
-    end
-    if (\$44 ) begin
-      \$490 [23:16] = config_write_data[23:16];
+    \$490  = g_read_select_4;
+    if (bus__r_en) begin
+      \$490  = \$7 ;
     end
     if (rst) begin
-      \$490  = 24'h000000;
+      \$490  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$491  = ch0_cfg_ack_write;
+    \$491  = g_read_data;
+    if (bus__r_load) begin
+      \$491  = \$17 ;
+    end
     if (rst) begin
-      \$491  = 1'h0;
+      \$491  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$492  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
-      \$492 [7:0] = config_write_data[7:0];
-    end
-    if (\$46 ) begin
-      \$492 [15:8] = config_write_data[15:8];
-    end
-    if (\$47 ) begin
-      \$492 [23:16] = config_write_data[23:16];
-    end
+    \$492  = \$19 ;
     if (rst) begin
-      \$492  = 24'h000000;
+      \$492  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$493  = ch0_cfg_timeout_write;
+    \$493  = \$21 ;
     if (rst) begin
       \$493  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$494  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
-      \$494 [7:0] = config_write_data[7:0];
-    end
-    if (\$49 ) begin
-      \$494 [15:8] = config_write_data[15:8];
-    end
-    if (\$50 ) begin
-      \$494 [23:16] = config_write_data[23:16];
-    end
+    \$494  = \$23 ;
     if (rst) begin
-      \$494  = 24'h000000;
+      \$494  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$495  = ch0_cfg_words_write;
+    \$495  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$495  = write_data[8];
+    end
     if (rst) begin
       \$495  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$496  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$496  = config_write_data[5:0];
+    \$496  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$496  = write_data[9];
     end
     if (rst) begin
-      \$496  = 6'h00;
+      \$496  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$497  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$497  = config_write_data[6];
+    \$497  = ch0_irq_status_done;
+    if (ch0__frame_done) begin
+      \$497  = 1'h1;
+    end else if (\$27 ) begin
+      \$497  = 1'h0;
     end
     if (rst) begin
       \$497  = 1'h0;
@@ -4058,9 +4036,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$498  = ch0_cfg_words_w0_lc;
-    if (\$53 ) begin
-      \$498  = config_write_data[7];
+    \$498  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$498  = 1'h1;
+    end else if (\$29 ) begin
+      \$498  = 1'h0;
     end
     if (rst) begin
       \$498  = 1'h0;
@@ -4068,29 +4048,28 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$499  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$499  = config_write_data[9:8];
+    \$499  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$499  = 1'h1;
+    end else if (\$31 ) begin
+      \$499  = 1'h0;
     end
     if (rst) begin
-      \$499  = 2'h0;
+      \$499  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$500  = ch0_cfg_words_w0_gray;
-    if (\$55 ) begin
-      \$500  = config_write_data[10];
-    end
+    \$500  = ch0_irq_enable_write;
     if (rst) begin
       \$500  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$501  = ch0_cfg_words_w0_signed;
-    if (\$56 ) begin
-      \$501  = config_write_data[11];
+    \$501  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$501  = config_write_data[0];
     end
     if (rst) begin
       \$501  = 1'h0;
@@ -4098,19 +4077,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$502  = ch0_cfg_words_w1_data_bits;
-    if (\$57 ) begin
-      \$502  = config_write_data[21:16];
+    \$502  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$502  = config_write_data[1];
     end
     if (rst) begin
-      \$502  = 6'h00;
+      \$502  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$503  = ch0_cfg_words_w1_nenw;
-    if (\$58 ) begin
-      \$503  = config_write_data[22];
+    \$503  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$503  = config_write_data[2];
     end
     if (rst) begin
       \$503  = 1'h0;
@@ -4118,176 +4097,191 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$504  = ch0_cfg_words_w1_lc;
-    if (\$59 ) begin
-      \$504  = config_write_data[23];
-    end
+    \$504  = ch0_cfg_ma_write;
     if (rst) begin
       \$504  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$505  = ch0_cfg_words_w1_crc;
-    if (\$60 ) begin
-      \$505  = config_write_data[25:24];
+    \$505  = ch0_cfg_ma_ma_half_period;
+    if (\$35 ) begin
+      \$505 [7:0] = config_write_data[7:0];
+    end
+    if (\$36 ) begin
+      \$505 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$505  = 2'h0;
+      \$505  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$506  = ch0_cfg_words_w1_gray;
-    if (\$61 ) begin
-      \$506  = config_write_data[26];
+    \$506  = ch0_cfg_ma_delay_limit;
+    if (\$37 ) begin
+      \$506 [7:0] = config_write_data[23:16];
+    end
+    if (\$38 ) begin
+      \$506 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$506  = 1'h0;
+      \$506  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$507  = ch0_cfg_words_w1_signed;
-    if (\$62 ) begin
-      \$507  = config_write_data[27];
-    end
+    \$507  = ch0_cfg_period_write;
     if (rst) begin
       \$507  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$508  = ch0_cfg_words_w1_enable;
-    if (\$63 ) begin
-      \$508  = config_write_data[31];
+    \$508  = ch0_cfg_period_request_period;
+    if (\$39 ) begin
+      \$508 [7:0] = config_write_data[7:0];
+    end
+    if (\$40 ) begin
+      \$508 [15:8] = config_write_data[15:8];
+    end
+    if (\$41 ) begin
+      \$508 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$508  = 1'h0;
+      \$508  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$509  = ch0_cfg_checks_write;
+    \$509  = ch0_cfg_break_write;
     if (rst) begin
       \$509  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$510  = ch0_cfg_checks_end_check;
-    if (\$64 ) begin
-      \$510  = config_write_data[0];
+    \$510  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
+      \$510 [7:0] = config_write_data[7:0];
+    end
+    if (\$43 ) begin
+      \$510 [15:8] = config_write_data[15:8];
+    end
+    if (\$44 ) begin
+      \$510 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$510  = 1'h0;
+      \$510  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$511  = ch0_cfg_checks_spw_check;
-    if (\$65 ) begin
-      \$511  = config_write_data[1];
-    end
+    \$511  = ch0_cfg_ack_write;
     if (rst) begin
       \$511  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$512  = ch0_cfg_checks_spw_tolerance;
-    if (\$66 ) begin
-      \$512  = config_write_data[15:8];
+    \$512  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
+      \$512 [7:0] = config_write_data[7:0];
+    end
+    if (\$46 ) begin
+      \$512 [15:8] = config_write_data[15:8];
+    end
+    if (\$47 ) begin
+      \$512 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$512  = 8'h00;
+      \$512  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$513  = ch0_cfg_checks_noise_limit;
-    if (\$67 ) begin
-      \$513  = config_write_data[19:16];
-    end
+    \$513  = ch0_cfg_timeout_write;
     if (rst) begin
-      \$513  = 4'h0;
+      \$513  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$514  = ch0_cfg_checks_delay_tolerance;
-    if (\$68 ) begin
-      \$514  = config_write_data[23:20];
+    \$514  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
+      \$514 [7:0] = config_write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$514 [15:8] = config_write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$514 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$514  = 4'h0;
+      \$514  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$515  = ch0_cfg_checks_confirm_frames;
-    if (\$69 ) begin
-      \$515  = config_write_data[27:24];
-    end
+    \$515  = ch0_cfg_words_write;
     if (rst) begin
-      \$515  = 4'h0;
+      \$515  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$516  = ch0_cfg_quiet_write;
+    \$516  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$516  = config_write_data[5:0];
+    end
     if (rst) begin
-      \$516  = 1'h0;
+      \$516  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$517  = ch0_cfg_quiet_quiet_time;
-    if (\$70 ) begin
-      \$517 [7:0] = config_write_data[7:0];
-    end
-    if (\$71 ) begin
-      \$517 [11:8] = config_write_data[11:8];
+    \$517  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$517  = config_write_data[6];
     end
     if (rst) begin
-      \$517  = 12'h000;
+      \$517  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$518  = ch0_cfg_crc0_write;
+    \$518  = ch0_cfg_words_w0_lc;
+    if (\$53 ) begin
+      \$518  = config_write_data[7];
+    end
     if (rst) begin
       \$518  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$519  = ch0_cfg_crc0_w0_crc_poly;
-    if (\$72 ) begin
-      \$519 [7:0] = config_write_data[7:0];
-    end
-    if (\$73 ) begin
-      \$519 [15:8] = config_write_data[15:8];
+    \$519  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$519  = config_write_data[9:8];
     end
     if (rst) begin
-      \$519  = 16'h0000;
+      \$519  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$520  = ch0_cfg_crc0_w0_crc_width;
-    if (\$74 ) begin
-      \$520  = config_write_data[20:16];
+    \$520  = ch0_cfg_words_w0_gray;
+    if (\$55 ) begin
+      \$520  = config_write_data[10];
     end
     if (rst) begin
-      \$520  = 5'h00;
+      \$520  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$521  = ch0_cfg_crc0_w0_crc_inverted;
-    if (\$75 ) begin
-      \$521  = config_write_data[24];
+    \$521  = ch0_cfg_words_w0_signed;
+    if (\$56 ) begin
+      \$521  = config_write_data[11];
     end
     if (rst) begin
       \$521  = 1'h0;
@@ -4295,59 +4289,59 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$522  = ch0_cfg_crc0_start_write;
+    \$522  = ch0_cfg_words_w1_data_bits;
+    if (\$57 ) begin
+      \$522  = config_write_data[21:16];
+    end
     if (rst) begin
-      \$522  = 1'h0;
+      \$522  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$523  = ch0_cfg_crc0_start_w0_crc_start;
-    if (\$76 ) begin
-      \$523 [7:0] = config_write_data[7:0];
-    end
-    if (\$77 ) begin
-      \$523 [15:8] = config_write_data[15:8];
+    \$523  = ch0_cfg_words_w1_nenw;
+    if (\$58 ) begin
+      \$523  = config_write_data[22];
     end
     if (rst) begin
-      \$523  = 16'h0000;
+      \$523  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$524  = ch0_cfg_crc1_write;
+    \$524  = ch0_cfg_words_w1_lc;
+    if (\$59 ) begin
+      \$524  = config_write_data[23];
+    end
     if (rst) begin
       \$524  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$525  = ch0_cfg_crc1_w1_crc_poly;
-    if (\$78 ) begin
-      \$525 [7:0] = config_write_data[7:0];
-    end
-    if (\$79 ) begin
-      \$525 [15:8] = config_write_data[15:8];
+    \$525  = ch0_cfg_words_w1_crc;
+    if (\$60 ) begin
+      \$525  = config_write_data[25:24];
     end
     if (rst) begin
-      \$525  = 16'h0000;
+      \$525  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$526  = ch0_cfg_crc1_w1_crc_width;
-    if (\$80 ) begin
-      \$526  = config_write_data[20:16];
+    \$526  = ch0_cfg_words_w1_gray;
+    if (\$61 ) begin
+      \$526  = config_write_data[26];
     end
     if (rst) begin
-      \$526  = 5'h00;
+      \$526  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$527  = ch0_cfg_crc1_w1_crc_inverted;
-    if (\$81 ) begin
-      \$527  = config_write_data[24];
+    \$527  = ch0_cfg_words_w1_signed;
+    if (\$62 ) begin
+      \$527  = config_write_data[27];
     end
     if (rst) begin
       \$527  = 1'h0;
@@ -4355,130 +4349,136 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$528  = ch0_cfg_crc1_start_write;
+    \$528  = ch0_cfg_words_w1_enable;
+    if (\$63 ) begin
+      \$528  = config_write_data[31];
+    end
     if (rst) begin
       \$528  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$529  = ch0_cfg_crc1_start_w1_crc_start;
-    if (\$82 ) begin
-      \$529 [7:0] = config_write_data[7:0];
-    end
-    if (\$83 ) begin
-      \$529 [15:8] = config_write_data[15:8];
-    end
+    \$529  = ch0_cfg_checks_write;
     if (rst) begin
-      \$529  = 16'h0000;
+      \$529  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$530  = ch0_ca_request_write;
+    \$530  = ch0_cfg_checks_end_check;
+    if (\$64 ) begin
+      \$530  = config_write_data[0];
+    end
     if (rst) begin
       \$530  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$531  = ch0_ca_request_slave_id;
-    if (\$84 ) begin
-      \$531  = config_write_data[2:0];
+    \$531  = ch0_cfg_checks_spw_check;
+    if (\$65 ) begin
+      \$531  = config_write_data[1];
     end
     if (rst) begin
-      \$531  = 3'h0;
+      \$531  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$532  = ch0_ca_request_address;
-    if (\$85 ) begin
-      \$532  = config_write_data[14:8];
+    \$532  = ch0_cfg_checks_spw_tolerance;
+    if (\$66 ) begin
+      \$532  = config_write_data[15:8];
     end
     if (rst) begin
-      \$532  = 7'h00;
+      \$532  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$533  = ch0_ca_request_count;
-    if (\$86 ) begin
-      \$533  = config_write_data[22:16];
+    \$533  = ch0_cfg_checks_noise_limit;
+    if (\$67 ) begin
+      \$533  = config_write_data[19:16];
     end
     if (rst) begin
-      \$533  = 7'h00;
+      \$533  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$534  = \ch0_ca_request_write$106 ;
-    if (\$87 ) begin
-      \$534  = config_write_data[24];
+    \$534  = ch0_cfg_checks_delay_tolerance;
+    if (\$68 ) begin
+      \$534  = config_write_data[23:20];
     end
     if (rst) begin
-      \$534  = 1'h0;
+      \$534  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$535  = \$89 ;
+    \$535  = ch0_cfg_checks_confirm_frames;
+    if (\$69 ) begin
+      \$535  = config_write_data[27:24];
+    end
     if (rst) begin
-      \$535  = 1'h0;
+      \$535  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$536  = \$91 ;
+    \$536  = ch0_cfg_quiet_write;
     if (rst) begin
       \$536  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$537  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$537  = \$92 ;
+    \$537  = ch0_cfg_quiet_quiet_time;
+    if (\$70 ) begin
+      \$537 [7:0] = config_write_data[7:0];
+    end
+    if (\$71 ) begin
+      \$537 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$537  = 1'h0;
+      \$537  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$538  = ch0_read_select_81;
-    if (bus__r_en) begin
-      \$538  = \$93 ;
-    end
+    \$538  = ch0_cfg_crc0_write;
     if (rst) begin
       \$538  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$539  = ch0_read_select_82;
-    if (bus__r_en) begin
-      \$539  = \$94 ;
+    \$539  = ch0_cfg_crc0_w0_crc_poly;
+    if (\$72 ) begin
+      \$539 [7:0] = config_write_data[7:0];
+    end
+    if (\$73 ) begin
+      \$539 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$539  = 1'h0;
+      \$539  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$540  = ch0_read_select_84;
-    if (bus__r_en) begin
-      \$540  = \$95 ;
+    \$540  = ch0_cfg_crc0_w0_crc_width;
+    if (\$74 ) begin
+      \$540  = config_write_data[20:16];
     end
     if (rst) begin
-      \$540  = 1'h0;
+      \$540  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$541  = ch0_read_select_85;
-    if (bus__r_en) begin
-      \$541  = \$96 ;
+    \$541  = ch0_cfg_crc0_w0_crc_inverted;
+    if (\$75 ) begin
+      \$541  = config_write_data[24];
     end
     if (rst) begin
       \$541  = 1'h0;
@@ -4486,59 +4486,59 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$542  = ch0_read_select_88;
-    if (bus__r_en) begin
-      \$542  = \$97 ;
-    end
+    \$542  = ch0_cfg_crc0_start_write;
     if (rst) begin
       \$542  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$543  = ch0_read_select_89;
-    if (bus__r_en) begin
-      \$543  = \$98 ;
+    \$543  = ch0_cfg_crc0_start_w0_crc_start;
+    if (\$76 ) begin
+      \$543 [7:0] = config_write_data[7:0];
+    end
+    if (\$77 ) begin
+      \$543 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$543  = 1'h0;
+      \$543  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$544  = ch0_read_select_8a;
-    if (bus__r_en) begin
-      \$544  = \$99 ;
-    end
+    \$544  = ch0_cfg_crc1_write;
     if (rst) begin
       \$544  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$545  = ch0_read_select_8b;
-    if (bus__r_en) begin
-      \$545  = \$100 ;
+    \$545  = ch0_cfg_crc1_w1_crc_poly;
+    if (\$78 ) begin
+      \$545 [7:0] = config_write_data[7:0];
+    end
+    if (\$79 ) begin
+      \$545 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$545  = 1'h0;
+      \$545  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$546  = ch0_read_select_8c;
-    if (bus__r_en) begin
-      \$546  = \$101 ;
+    \$546  = ch0_cfg_crc1_w1_crc_width;
+    if (\$80 ) begin
+      \$546  = config_write_data[20:16];
     end
     if (rst) begin
-      \$546  = 1'h0;
+      \$546  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$547  = ch0_read_select_8d;
-    if (bus__r_en) begin
-      \$547  = \$102 ;
+    \$547  = ch0_cfg_crc1_w1_crc_inverted;
+    if (\$81 ) begin
+      \$547  = config_write_data[24];
     end
     if (rst) begin
       \$547  = 1'h0;
@@ -4546,39 +4546,36 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$548  = ch0_read_select_8e;
-    if (bus__r_en) begin
-      \$548  = \$103 ;
-    end
+    \$548  = ch0_cfg_crc1_start_write;
     if (rst) begin
       \$548  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$549  = ch0_read_select_8f;
-    if (bus__r_en) begin
-      \$549  = \$104 ;
+    \$549  = ch0_cfg_crc1_start_w1_crc_start;
+    if (\$82 ) begin
+      \$549 [7:0] = config_write_data[7:0];
+    end
+    if (\$83 ) begin
+      \$549 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$549  = 1'h0;
+      \$549  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$550  = ch0_read_select_90;
-    if (bus__r_en) begin
-      \$550  = \$105 ;
-    end
+    \$550  = ch0_cfg_ssi_write;
     if (rst) begin
       \$550  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$551  = ch0_read_select_91;
-    if (bus__r_en) begin
-      \$551  = \$106 ;
+    \$551  = ch0_cfg_ssi_ssi;
+    if (\$84 ) begin
+      \$551  = config_write_data[0];
     end
     if (rst) begin
       \$551  = 1'h0;
@@ -4586,9 +4583,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$552  = ch0_read_select_92;
-    if (bus__r_en) begin
-      \$552  = \$107 ;
+    \$552  = ch0_cfg_ssi_ssi_error;
+    if (\$85 ) begin
+      \$552  = config_write_data[1];
     end
     if (rst) begin
       \$552  = 1'h0;
@@ -4596,9 +4593,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$553  = ch0_read_select_93;
-    if (bus__r_en) begin
-      \$553  = \$108 ;
+    \$553  = ch0_cfg_ssi_ssi_error_low;
+    if (\$86 ) begin
+      \$553  = config_write_data[2];
     end
     if (rst) begin
       \$553  = 1'h0;
@@ -4606,9 +4603,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$554  = ch0_read_select_94;
-    if (bus__r_en) begin
-      \$554  = \$109 ;
+    \$554  = ch0_cfg_ssi_ssi_double;
+    if (\$87 ) begin
+      \$554  = config_write_data[3];
     end
     if (rst) begin
       \$554  = 1'h0;
@@ -4616,59 +4613,59 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$555  = ch0_read_select_95;
-    if (bus__r_en) begin
-      \$555  = \$110 ;
+    \$555  = ch0_cfg_ssi_ssi_delay;
+    if (\$88 ) begin
+      \$555 [7:0] = config_write_data[23:16];
+    end
+    if (\$89 ) begin
+      \$555 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$555  = 1'h0;
+      \$555  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$556  = ch0_read_select_96;
-    if (bus__r_en) begin
-      \$556  = \$111 ;
-    end
+    \$556  = ch0_ca_request_write;
     if (rst) begin
       \$556  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$557  = ch0_read_select_97;
-    if (bus__r_en) begin
-      \$557  = \$112 ;
+    \$557  = ch0_ca_request_slave_id;
+    if (\$90 ) begin
+      \$557  = config_write_data[2:0];
     end
     if (rst) begin
-      \$557  = 1'h0;
+      \$557  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$558  = ch0_read_select_a0;
-    if (bus__r_en) begin
-      \$558  = \$113 ;
+    \$558  = ch0_ca_request_address;
+    if (\$91 ) begin
+      \$558  = config_write_data[14:8];
     end
     if (rst) begin
-      \$558  = 1'h0;
+      \$558  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$559  = ch0_read_select_a1;
-    if (bus__r_en) begin
-      \$559  = \$114 ;
+    \$559  = ch0_ca_request_count;
+    if (\$92 ) begin
+      \$559  = config_write_data[22:16];
     end
     if (rst) begin
-      \$559  = 1'h0;
+      \$559  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$560  = ch0_read_select_a2;
-    if (bus__r_en) begin
-      \$560  = \$115 ;
+    \$560  = \ch0_ca_request_write$113 ;
+    if (\$93 ) begin
+      \$560  = config_write_data[24];
     end
     if (rst) begin
       \$560  = 1'h0;
@@ -4676,29 +4673,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$561  = ch0_read_select_a3;
-    if (bus__r_en) begin
-      \$561  = \$116 ;
-    end
+    \$561  = \$95 ;
     if (rst) begin
       \$561  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$562  = ch0_read_select_c0;
-    if (bus__r_en) begin
-      \$562  = \$117 ;
-    end
+    \$562  = \$97 ;
     if (rst) begin
       \$562  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$563  = ch0_read_select_c1;
+    \$563  = ch0_read_select_80;
     if (bus__r_en) begin
-      \$563  = \$118 ;
+      \$563  = \$98 ;
     end
     if (rst) begin
       \$563  = 1'h0;
@@ -4706,9 +4697,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$564  = ch0_read_select_c2;
+    \$564  = ch0_read_select_81;
     if (bus__r_en) begin
-      \$564  = \$119 ;
+      \$564  = \$99 ;
     end
     if (rst) begin
       \$564  = 1'h0;
@@ -4716,9 +4707,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$565  = ch0_read_select_c3;
+    \$565  = ch0_read_select_82;
     if (bus__r_en) begin
-      \$565  = \$120 ;
+      \$565  = \$100 ;
     end
     if (rst) begin
       \$565  = 1'h0;
@@ -4726,9 +4717,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$566  = ch0_read_select_c4;
+    \$566  = ch0_read_select_84;
     if (bus__r_en) begin
-      \$566  = \$121 ;
+      \$566  = \$101 ;
     end
     if (rst) begin
       \$566  = 1'h0;
@@ -4736,9 +4727,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$567  = ch0_read_select_c5;
+    \$567  = ch0_read_select_85;
     if (bus__r_en) begin
-      \$567  = \$122 ;
+      \$567  = \$102 ;
     end
     if (rst) begin
       \$567  = 1'h0;
@@ -4746,19 +4737,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$568  = ch0_result_status_status_snapshot;
-    if (\$123 ) begin
-      \$568  = \port$6333$0 [3:0];
+    \$568  = ch0_read_select_88;
+    if (bus__r_en) begin
+      \$568  = \$103 ;
     end
     if (rst) begin
-      \$568  = 4'h0;
+      \$568  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$569  = ch0_result_status_cds_snapshot;
-    if (\$123 ) begin
-      \$569  = \port$6333$0 [49];
+    \$569  = ch0_read_select_89;
+    if (bus__r_en) begin
+      \$569  = \$104 ;
     end
     if (rst) begin
       \$569  = 1'h0;
@@ -4766,9 +4757,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$570  = ch0_result_status_w0_ne_snapshot;
-    if (\$123 ) begin
-      \$570  = \port$6333$0 [131];
+    \$570  = ch0_read_select_8a;
+    if (bus__r_en) begin
+      \$570  = \$105 ;
     end
     if (rst) begin
       \$570  = 1'h0;
@@ -4776,9 +4767,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$571  = ch0_result_status_w0_nw_snapshot;
-    if (\$123 ) begin
-      \$571  = \port$6333$0 [132];
+    \$571  = ch0_read_select_8b;
+    if (bus__r_en) begin
+      \$571  = \$106 ;
     end
     if (rst) begin
       \$571  = 1'h0;
@@ -4786,9 +4777,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$572  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$123 ) begin
-      \$572  = \port$6333$0 [133];
+    \$572  = ch0_read_select_8c;
+    if (bus__r_en) begin
+      \$572  = \$107 ;
     end
     if (rst) begin
       \$572  = 1'h0;
@@ -4796,9 +4787,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$573  = ch0_result_status_w1_ne_snapshot;
-    if (\$123 ) begin
-      \$573  = \port$6333$0 [174];
+    \$573  = ch0_read_select_8d;
+    if (bus__r_en) begin
+      \$573  = \$108 ;
     end
     if (rst) begin
       \$573  = 1'h0;
@@ -4806,9 +4797,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$574  = ch0_result_status_w1_nw_snapshot;
-    if (\$123 ) begin
-      \$574  = \port$6333$0 [175];
+    \$574  = ch0_read_select_8e;
+    if (bus__r_en) begin
+      \$574  = \$109 ;
     end
     if (rst) begin
       \$574  = 1'h0;
@@ -4816,9 +4807,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$575  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$123 ) begin
-      \$575  = \port$6333$0 [176];
+    \$575  = ch0_read_select_8f;
+    if (bus__r_en) begin
+      \$575  = \$110 ;
     end
     if (rst) begin
       \$575  = 1'h0;
@@ -4826,9 +4817,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$576  = ch0_result_status_lc_repeat_snapshot;
-    if (\$123 ) begin
-      \$576  = \port$6333$0 [183];
+    \$576  = ch0_read_select_90;
+    if (bus__r_en) begin
+      \$576  = \$111 ;
     end
     if (rst) begin
       \$576  = 1'h0;
@@ -4836,9 +4827,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$577  = ch0_result_status_lc_skip_snapshot;
-    if (\$123 ) begin
-      \$577  = \port$6333$0 [184];
+    \$577  = ch0_read_select_91;
+    if (bus__r_en) begin
+      \$577  = \$112 ;
     end
     if (rst) begin
       \$577  = 1'h0;
@@ -4846,9 +4837,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$578  = ch0_result_status_lc_zero_snapshot;
-    if (\$123 ) begin
-      \$578  = \port$6333$0 [185];
+    \$578  = ch0_read_select_92;
+    if (bus__r_en) begin
+      \$578  = \$113 ;
     end
     if (rst) begin
       \$578  = 1'h0;
@@ -4856,9 +4847,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$579  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$123 ) begin
-      \$579  = \port$6333$0 [186];
+    \$579  = ch0_read_select_93;
+    if (bus__r_en) begin
+      \$579  = \$114 ;
     end
     if (rst) begin
       \$579  = 1'h0;
@@ -4866,99 +4857,99 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$580  = ch0_result_status_lc_snapshot;
-    if (\$123 ) begin
-      \$580  = \port$6333$0 [182:177];
+    \$580  = ch0_read_select_94;
+    if (bus__r_en) begin
+      \$580  = \$115 ;
     end
     if (rst) begin
-      \$580  = 6'h00;
+      \$580  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$581  = ch0_result_seq_seq_snapshot;
-    if (\$123 ) begin
-      \$581  = ch0__done_count;
+    \$581  = ch0_read_select_95;
+    if (bus__r_en) begin
+      \$581  = \$116 ;
     end
     if (rst) begin
-      \$581  = 16'h0000;
+      \$581  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$582  = ch0_result_seq_line_delay_snapshot;
-    if (\$123 ) begin
-      \$582  = \port$6333$0 [48:36];
+    \$582  = ch0_read_select_96;
+    if (bus__r_en) begin
+      \$582  = \$117 ;
     end
     if (rst) begin
-      \$582  = 13'h0000;
+      \$582  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$583  = ch0_result_w0_lo_data_snapshot;
-    if (\$123 ) begin
-      \$583  = \port$6333$0 [107:76];
+    \$583  = ch0_read_select_97;
+    if (bus__r_en) begin
+      \$583  = \$118 ;
     end
     if (rst) begin
-      \$583  = 32'd0;
+      \$583  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$584  = ch0_result_w0_hi_data_snapshot;
-    if (\$123 ) begin
-      \$584  = \port$6333$0 [130:108];
+    \$584  = ch0_read_select_a0;
+    if (bus__r_en) begin
+      \$584  = \$119 ;
     end
     if (rst) begin
-      \$584  = 23'h000000;
+      \$584  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$585  = ch0_result_w1_lo_data_snapshot;
-    if (\$123 ) begin
-      \$585  = \port$6333$0 [165:134];
+    \$585  = ch0_read_select_a1;
+    if (bus__r_en) begin
+      \$585  = \$120 ;
     end
     if (rst) begin
-      \$585  = 32'd0;
+      \$585  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$586  = ch0_result_w1_hi_data_snapshot;
-    if (\$123 ) begin
-      \$586  = \port$6333$0 [173:166];
+    \$586  = ch0_read_select_a2;
+    if (bus__r_en) begin
+      \$586  = \$121 ;
     end
     if (rst) begin
-      \$586  = 8'h00;
+      \$586  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$587  = ch0_result_timestamp_time_snapshot;
-    if (\$123 ) begin
-      \$587  = \port$6333$0 [35:4];
+    \$587  = ch0_read_select_a3;
+    if (bus__r_en) begin
+      \$587  = \$122 ;
     end
     if (rst) begin
-      \$587  = 32'd0;
+      \$587  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$588  = ch0_result_line_noise_events_snapshot;
-    if (\$123 ) begin
-      \$588  = \port$6333$0 [53:50];
+    \$588  = ch0_read_select_a4;
+    if (bus__r_en) begin
+      \$588  = \$123 ;
     end
     if (rst) begin
-      \$588  = 4'h0;
+      \$588  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$589  = ch0_result_line_delay_settled_snapshot;
-    if (\$123 ) begin
-      \$589  = \port$6333$0 [54];
+    \$589  = ch0_read_select_c0;
+    if (bus__r_en) begin
+      \$589  = \$124 ;
     end
     if (rst) begin
       \$589  = 1'h0;
@@ -4966,29 +4957,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$590  = ch0_result_line_delay_spread_snapshot;
-    if (\$123 ) begin
-      \$590  = \port$6333$0 [75:68];
-    end
-    if (rst) begin
-      \$590  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$591  = ch0_result_line_settled_delay_snapshot;
-    if (\$123 ) begin
-      \$591  = \port$6333$0 [67:55];
-    end
-    if (rst) begin
-      \$591  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$592  = ch0_window0_read;
+    \$590  = ch0_read_select_c1;
     if (bus__r_en) begin
-      \$592  = \$125 ;
+      \$590  = \$125 ;
+    end
+    if (rst) begin
+      \$590  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$591  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$591  = \$126 ;
+    end
+    if (rst) begin
+      \$591  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$592  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$592  = \$127 ;
     end
     if (rst) begin
       \$592  = 1'h0;
@@ -4996,9 +4987,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$593  = ch0_window1_read;
+    \$593  = ch0_read_select_c4;
     if (bus__r_en) begin
-      \$593  = \$127 ;
+      \$593  = \$128 ;
     end
     if (rst) begin
       \$593  = 1'h0;
@@ -5006,40 +4997,49 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$594  = ch0_read_data;
-    if (bus__r_load) begin
-      \$594  = \$193 ;
+    \$594  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$594  = \$129 ;
     end
     if (rst) begin
-      \$594  = 32'd0;
+      \$594  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$595  = \$195 ;
+    \$595  = ch0_result_status_status_snapshot;
+    if (\$130 ) begin
+      \$595  = \port$6740$0 [3:0];
+    end
     if (rst) begin
-      \$595  = 1'h0;
+      \$595  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$596  = \$197 ;
+    \$596  = ch0_result_status_cds_snapshot;
+    if (\$130 ) begin
+      \$596  = \port$6740$0 [49];
+    end
     if (rst) begin
       \$596  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$597  = \$199 ;
+    \$597  = ch0_result_status_w0_ne_snapshot;
+    if (\$130 ) begin
+      \$597  = \port$6740$0 [131];
+    end
     if (rst) begin
       \$597  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$598  = ch1_ctrl_periodic;
-    if (\$200 ) begin
-      \$598  = write_data[8];
+    \$598  = ch0_result_status_w0_nw_snapshot;
+    if (\$130 ) begin
+      \$598  = \port$6740$0 [132];
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -5047,9 +5047,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$599  = ch1_ctrl_trigger_enable;
-    if (\$201 ) begin
-      \$599  = write_data[9];
+    \$599  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$130 ) begin
+      \$599  = \port$6740$0 [133];
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -5057,11 +5057,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$600  = ch1_irq_status_done;
-    if (ch1__frame_done) begin
-      \$600  = 1'h1;
-    end else if (\$203 ) begin
-      \$600  = 1'h0;
+    \$600  = ch0_result_status_w1_ne_snapshot;
+    if (\$130 ) begin
+      \$600  = \port$6740$0 [174];
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -5069,11 +5067,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$601  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$601  = 1'h1;
-    end else if (\$205 ) begin
-      \$601  = 1'h0;
+    \$601  = ch0_result_status_w1_nw_snapshot;
+    if (\$130 ) begin
+      \$601  = \port$6740$0 [175];
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -5081,11 +5077,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$602  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$602  = 1'h1;
-    end else if (\$207 ) begin
-      \$602  = 1'h0;
+    \$602  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$130 ) begin
+      \$602  = \port$6740$0 [176];
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -5093,16 +5087,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$603  = ch1_irq_enable_write;
+    \$603  = ch0_result_status_lc_repeat_snapshot;
+    if (\$130 ) begin
+      \$603  = \port$6740$0 [183];
+    end
     if (rst) begin
       \$603  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$604  = ch1_irq_enable_done;
-    if (\$208 ) begin
-      \$604  = config_write_data[0];
+    \$604  = ch0_result_status_lc_skip_snapshot;
+    if (\$130 ) begin
+      \$604  = \port$6740$0 [184];
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -5110,9 +5107,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$605  = ch1_irq_enable_error;
-    if (\$209 ) begin
-      \$605  = config_write_data[1];
+    \$605  = ch0_result_status_lc_zero_snapshot;
+    if (\$130 ) begin
+      \$605  = \port$6740$0 [185];
     end
     if (rst) begin
       \$605  = 1'h0;
@@ -5120,9 +5117,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$606  = ch1_irq_enable_access_done;
-    if (\$210 ) begin
-      \$606  = config_write_data[2];
+    \$606  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$130 ) begin
+      \$606  = \port$6740$0 [186];
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -5130,19 +5127,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$607  = ch1_cfg_ma_write;
+    \$607  = ch0_result_status_lc_snapshot;
+    if (\$130 ) begin
+      \$607  = \port$6740$0 [182:177];
+    end
     if (rst) begin
-      \$607  = 1'h0;
+      \$607  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$608  = ch1_cfg_ma_ma_half_period;
-    if (\$211 ) begin
-      \$608 [7:0] = config_write_data[7:0];
-    end
-    if (\$212 ) begin
-      \$608 [15:8] = config_write_data[15:8];
+    \$608  = ch0_result_seq_seq_snapshot;
+    if (\$130 ) begin
+      \$608  = ch0__done_count;
     end
     if (rst) begin
       \$608  = 16'h0000;
@@ -5150,131 +5147,119 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$609  = ch1_cfg_ma_delay_limit;
-    if (\$213 ) begin
-      \$609 [7:0] = config_write_data[23:16];
-    end
-    if (\$214 ) begin
-      \$609 [11:8] = config_write_data[27:24];
+    \$609  = ch0_result_seq_line_delay_snapshot;
+    if (\$130 ) begin
+      \$609  = \port$6740$0 [48:36];
     end
     if (rst) begin
-      \$609  = 12'h000;
+      \$609  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$610  = ch1_cfg_period_write;
+    \$610  = ch0_result_w0_lo_data_snapshot;
+    if (\$130 ) begin
+      \$610  = \port$6740$0 [107:76];
+    end
     if (rst) begin
-      \$610  = 1'h0;
+      \$610  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$611  = ch1_cfg_period_request_period;
-    if (\$215 ) begin
-      \$611 [7:0] = config_write_data[7:0];
-    end
-    if (\$216 ) begin
-      \$611 [15:8] = config_write_data[15:8];
-    end
-    if (\$217 ) begin
-      \$611 [23:16] = config_write_data[23:16];
+    \$611  = ch0_result_w0_hi_data_snapshot;
+    if (\$130 ) begin
+      \$611  = \port$6740$0 [130:108];
     end
     if (rst) begin
-      \$611  = 24'h000000;
+      \$611  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$612  = ch1_cfg_break_write;
+    \$612  = ch0_result_w1_lo_data_snapshot;
+    if (\$130 ) begin
+      \$612  = \port$6740$0 [165:134];
+    end
     if (rst) begin
-      \$612  = 1'h0;
+      \$612  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$613  = ch1_cfg_break_break_time;
-    if (\$218 ) begin
-      \$613 [7:0] = config_write_data[7:0];
-    end
-    if (\$219 ) begin
-      \$613 [15:8] = config_write_data[15:8];
-    end
-    if (\$220 ) begin
-      \$613 [23:16] = config_write_data[23:16];
+    \$613  = ch0_result_w1_hi_data_snapshot;
+    if (\$130 ) begin
+      \$613  = \port$6740$0 [173:166];
     end
     if (rst) begin
-      \$613  = 24'h000000;
+      \$613  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$614  = ch1_cfg_ack_write;
+    \$614  = ch0_result_timestamp_time_snapshot;
+    if (\$130 ) begin
+      \$614  = \port$6740$0 [35:4];
+    end
     if (rst) begin
-      \$614  = 1'h0;
+      \$614  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$615  = ch1_cfg_ack_ack_limit;
-    if (\$221 ) begin
-      \$615 [7:0] = config_write_data[7:0];
-    end
-    if (\$222 ) begin
-      \$615 [15:8] = config_write_data[15:8];
-    end
-    if (\$223 ) begin
-      \$615 [23:16] = config_write_data[23:16];
+    \$615  = ch0_result_line_noise_events_snapshot;
+    if (\$130 ) begin
+      \$615  = \port$6740$0 [53:50];
     end
     if (rst) begin
-      \$615  = 24'h000000;
+      \$615  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$616  = ch1_cfg_timeout_write;
+    \$616  = ch0_result_line_delay_settled_snapshot;
+    if (\$130 ) begin
+      \$616  = \port$6740$0 [54];
+    end
     if (rst) begin
       \$616  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$617  = ch1_cfg_timeout_timeout_limit;
-    if (\$224 ) begin
-      \$617 [7:0] = config_write_data[7:0];
-    end
-    if (\$225 ) begin
-      \$617 [15:8] = config_write_data[15:8];
-    end
-    if (\$226 ) begin
-      \$617 [23:16] = config_write_data[23:16];
+    \$617  = ch0_result_line_delay_spread_snapshot;
+    if (\$130 ) begin
+      \$617  = \port$6740$0 [75:68];
     end
     if (rst) begin
-      \$617  = 24'h000000;
+      \$617  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$618  = ch1_cfg_words_write;
+    \$618  = ch0_result_line_settled_delay_snapshot;
+    if (\$130 ) begin
+      \$618  = \port$6740$0 [67:55];
+    end
     if (rst) begin
-      \$618  = 1'h0;
+      \$618  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$619  = ch1_cfg_words_w0_data_bits;
-    if (\$227 ) begin
-      \$619  = config_write_data[5:0];
+    \$619  = ch0_window0_read;
+    if (bus__r_en) begin
+      \$619  = \$132 ;
     end
     if (rst) begin
-      \$619  = 6'h00;
+      \$619  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$620  = ch1_cfg_words_w0_nenw;
-    if (\$228 ) begin
-      \$620  = config_write_data[6];
+    \$620  = ch0_window1_read;
+    if (bus__r_en) begin
+      \$620  = \$134 ;
     end
     if (rst) begin
       \$620  = 1'h0;
@@ -5282,59 +5267,50 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$621  = ch1_cfg_words_w0_lc;
-    if (\$229 ) begin
-      \$621  = config_write_data[7];
+    \$621  = ch0_read_data;
+    if (bus__r_load) begin
+      \$621  = \$202 ;
     end
     if (rst) begin
-      \$621  = 1'h0;
+      \$621  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$622  = ch1_cfg_words_w0_crc;
-    if (\$230 ) begin
-      \$622  = config_write_data[9:8];
-    end
+    \$622  = \$204 ;
     if (rst) begin
-      \$622  = 2'h0;
+      \$622  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$623  = ch1_cfg_words_w0_gray;
-    if (\$231 ) begin
-      \$623  = config_write_data[10];
-    end
+    \$623  = \$206 ;
     if (rst) begin
       \$623  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$624  = ch1_cfg_words_w0_signed;
-    if (\$232 ) begin
-      \$624  = config_write_data[11];
-    end
+    \$624  = \$208 ;
     if (rst) begin
       \$624  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$625  = ch1_cfg_words_w1_data_bits;
-    if (\$233 ) begin
-      \$625  = config_write_data[21:16];
+    \$625  = ch1_ctrl_periodic;
+    if (\$209 ) begin
+      \$625  = write_data[8];
     end
     if (rst) begin
-      \$625  = 6'h00;
+      \$625  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$626  = ch1_cfg_words_w1_nenw;
-    if (\$234 ) begin
-      \$626  = config_write_data[22];
+    \$626  = ch1_ctrl_trigger_enable;
+    if (\$210 ) begin
+      \$626  = write_data[9];
     end
     if (rst) begin
       \$626  = 1'h0;
@@ -5342,9 +5318,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$627  = ch1_cfg_words_w1_lc;
-    if (\$235 ) begin
-      \$627  = config_write_data[23];
+    \$627  = ch1_irq_status_done;
+    if (ch1__frame_done) begin
+      \$627  = 1'h1;
+    end else if (\$212 ) begin
+      \$627  = 1'h0;
     end
     if (rst) begin
       \$627  = 1'h0;
@@ -5352,19 +5330,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$628  = ch1_cfg_words_w1_crc;
-    if (\$236 ) begin
-      \$628  = config_write_data[25:24];
+    \$628  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$628  = 1'h1;
+    end else if (\$214 ) begin
+      \$628  = 1'h0;
     end
     if (rst) begin
-      \$628  = 2'h0;
+      \$628  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$629  = ch1_cfg_words_w1_gray;
-    if (\$237 ) begin
-      \$629  = config_write_data[26];
+    \$629  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$629  = 1'h1;
+    end else if (\$216 ) begin
+      \$629  = 1'h0;
     end
     if (rst) begin
       \$629  = 1'h0;
@@ -5372,19 +5354,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$630  = ch1_cfg_words_w1_signed;
-    if (\$238 ) begin
-      \$630  = config_write_data[27];
-    end
+    \$630  = ch1_irq_enable_write;
     if (rst) begin
       \$630  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$631  = ch1_cfg_words_w1_enable;
-    if (\$239 ) begin
-      \$631  = config_write_data[31];
+    \$631  = ch1_irq_enable_done;
+    if (\$217 ) begin
+      \$631  = config_write_data[0];
     end
     if (rst) begin
       \$631  = 1'h0;
@@ -5392,16 +5371,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$632  = ch1_cfg_checks_write;
+    \$632  = ch1_irq_enable_error;
+    if (\$218 ) begin
+      \$632  = config_write_data[1];
+    end
     if (rst) begin
       \$632  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$633  = ch1_cfg_checks_end_check;
-    if (\$240 ) begin
-      \$633  = config_write_data[0];
+    \$633  = ch1_irq_enable_access_done;
+    if (\$219 ) begin
+      \$633  = config_write_data[2];
     end
     if (rst) begin
       \$633  = 1'h0;
@@ -5409,169 +5391,181 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$634  = ch1_cfg_checks_spw_check;
-    if (\$241 ) begin
-      \$634  = config_write_data[1];
-    end
+    \$634  = ch1_cfg_ma_write;
     if (rst) begin
       \$634  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$635  = ch1_cfg_checks_spw_tolerance;
-    if (\$242 ) begin
-      \$635  = config_write_data[15:8];
+    \$635  = ch1_cfg_ma_ma_half_period;
+    if (\$220 ) begin
+      \$635 [7:0] = config_write_data[7:0];
+    end
+    if (\$221 ) begin
+      \$635 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$635  = 8'h00;
+      \$635  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$636  = ch1_cfg_checks_noise_limit;
-    if (\$243 ) begin
-      \$636  = config_write_data[19:16];
+    \$636  = ch1_cfg_ma_delay_limit;
+    if (\$222 ) begin
+      \$636 [7:0] = config_write_data[23:16];
+    end
+    if (\$223 ) begin
+      \$636 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$636  = 4'h0;
+      \$636  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$637  = ch1_cfg_checks_delay_tolerance;
-    if (\$244 ) begin
-      \$637  = config_write_data[23:20];
-    end
+    \$637  = ch1_cfg_period_write;
     if (rst) begin
-      \$637  = 4'h0;
+      \$637  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$638  = ch1_cfg_checks_confirm_frames;
-    if (\$245 ) begin
-      \$638  = config_write_data[27:24];
+    \$638  = ch1_cfg_period_request_period;
+    if (\$224 ) begin
+      \$638 [7:0] = config_write_data[7:0];
+    end
+    if (\$225 ) begin
+      \$638 [15:8] = config_write_data[15:8];
+    end
+    if (\$226 ) begin
+      \$638 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$638  = 4'h0;
+      \$638  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$639  = ch1_cfg_quiet_write;
+    \$639  = ch1_cfg_break_write;
     if (rst) begin
       \$639  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$640  = ch1_cfg_quiet_quiet_time;
-    if (\$246 ) begin
+    \$640  = ch1_cfg_break_break_time;
+    if (\$227 ) begin
       \$640 [7:0] = config_write_data[7:0];
     end
-    if (\$247 ) begin
-      \$640 [11:8] = config_write_data[11:8];
+    if (\$228 ) begin
+      \$640 [15:8] = config_write_data[15:8];
+    end
+    if (\$229 ) begin
+      \$640 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$640  = 12'h000;
+      \$640  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$641  = ch1_cfg_crc0_write;
+    \$641  = ch1_cfg_ack_write;
     if (rst) begin
       \$641  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$642  = ch1_cfg_crc0_w0_crc_poly;
-    if (\$248 ) begin
+    \$642  = ch1_cfg_ack_ack_limit;
+    if (\$230 ) begin
       \$642 [7:0] = config_write_data[7:0];
     end
-    if (\$249 ) begin
+    if (\$231 ) begin
       \$642 [15:8] = config_write_data[15:8];
     end
+    if (\$232 ) begin
+      \$642 [23:16] = config_write_data[23:16];
+    end
     if (rst) begin
-      \$642  = 16'h0000;
+      \$642  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$643  = ch1_cfg_crc0_w0_crc_width;
-    if (\$250 ) begin
-      \$643  = config_write_data[20:16];
-    end
+    \$643  = ch1_cfg_timeout_write;
     if (rst) begin
-      \$643  = 5'h00;
+      \$643  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$644  = ch1_cfg_crc0_w0_crc_inverted;
-    if (\$251 ) begin
-      \$644  = config_write_data[24];
+    \$644  = ch1_cfg_timeout_timeout_limit;
+    if (\$233 ) begin
+      \$644 [7:0] = config_write_data[7:0];
+    end
+    if (\$234 ) begin
+      \$644 [15:8] = config_write_data[15:8];
+    end
+    if (\$235 ) begin
+      \$644 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$644  = 1'h0;
+      \$644  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$645  = ch1_cfg_crc0_start_write;
+    \$645  = ch1_cfg_words_write;
     if (rst) begin
       \$645  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$646  = ch1_cfg_crc0_start_w0_crc_start;
-    if (\$252 ) begin
-      \$646 [7:0] = config_write_data[7:0];
-    end
-    if (\$253 ) begin
-      \$646 [15:8] = config_write_data[15:8];
+    \$646  = ch1_cfg_words_w0_data_bits;
+    if (\$236 ) begin
+      \$646  = config_write_data[5:0];
     end
     if (rst) begin
-      \$646  = 16'h0000;
+      \$646  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$647  = ch1_cfg_crc1_write;
+    \$647  = ch1_cfg_words_w0_nenw;
+    if (\$237 ) begin
+      \$647  = config_write_data[6];
+    end
     if (rst) begin
       \$647  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$648  = ch1_cfg_crc1_w1_crc_poly;
-    if (\$254 ) begin
-      \$648 [7:0] = config_write_data[7:0];
-    end
-    if (\$255 ) begin
-      \$648 [15:8] = config_write_data[15:8];
+    \$648  = ch1_cfg_words_w0_lc;
+    if (\$238 ) begin
+      \$648  = config_write_data[7];
     end
     if (rst) begin
-      \$648  = 16'h0000;
+      \$648  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$649  = ch1_cfg_crc1_w1_crc_width;
-    if (\$256 ) begin
-      \$649  = config_write_data[20:16];
+    \$649  = ch1_cfg_words_w0_crc;
+    if (\$239 ) begin
+      \$649  = config_write_data[9:8];
     end
     if (rst) begin
-      \$649  = 5'h00;
+      \$649  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$650  = ch1_cfg_crc1_w1_crc_inverted;
-    if (\$257 ) begin
-      \$650  = config_write_data[24];
+    \$650  = ch1_cfg_words_w0_gray;
+    if (\$240 ) begin
+      \$650  = config_write_data[10];
     end
     if (rst) begin
       \$650  = 1'h0;
@@ -5579,66 +5573,69 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$651  = ch1_cfg_crc1_start_write;
+    \$651  = ch1_cfg_words_w0_signed;
+    if (\$241 ) begin
+      \$651  = config_write_data[11];
+    end
     if (rst) begin
       \$651  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$652  = ch1_cfg_crc1_start_w1_crc_start;
-    if (\$258 ) begin
-      \$652 [7:0] = config_write_data[7:0];
-    end
-    if (\$259 ) begin
-      \$652 [15:8] = config_write_data[15:8];
+    \$652  = ch1_cfg_words_w1_data_bits;
+    if (\$242 ) begin
+      \$652  = config_write_data[21:16];
     end
     if (rst) begin
-      \$652  = 16'h0000;
+      \$652  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$653  = ch1_ca_request_write;
+    \$653  = ch1_cfg_words_w1_nenw;
+    if (\$243 ) begin
+      \$653  = config_write_data[22];
+    end
     if (rst) begin
       \$653  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$654  = ch1_ca_request_slave_id;
-    if (\$260 ) begin
-      \$654  = config_write_data[2:0];
+    \$654  = ch1_cfg_words_w1_lc;
+    if (\$244 ) begin
+      \$654  = config_write_data[23];
     end
     if (rst) begin
-      \$654  = 3'h0;
+      \$654  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$655  = ch1_ca_request_address;
-    if (\$261 ) begin
-      \$655  = config_write_data[14:8];
+    \$655  = ch1_cfg_words_w1_crc;
+    if (\$245 ) begin
+      \$655  = config_write_data[25:24];
     end
     if (rst) begin
-      \$655  = 7'h00;
+      \$655  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$656  = ch1_ca_request_count;
-    if (\$262 ) begin
-      \$656  = config_write_data[22:16];
+    \$656  = ch1_cfg_words_w1_gray;
+    if (\$246 ) begin
+      \$656  = config_write_data[26];
     end
     if (rst) begin
-      \$656  = 7'h00;
+      \$656  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$657  = \ch1_ca_request_write$289 ;
-    if (\$263 ) begin
-      \$657  = config_write_data[24];
+    \$657  = ch1_cfg_words_w1_signed;
+    if (\$247 ) begin
+      \$657  = config_write_data[27];
     end
     if (rst) begin
       \$657  = 1'h0;
@@ -5646,23 +5643,26 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$658  = \$265 ;
+    \$658  = ch1_cfg_words_w1_enable;
+    if (\$248 ) begin
+      \$658  = config_write_data[31];
+    end
     if (rst) begin
       \$658  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$659  = \$267 ;
+    \$659  = ch1_cfg_checks_write;
     if (rst) begin
       \$659  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$660  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$660  = \$268 ;
+    \$660  = ch1_cfg_checks_end_check;
+    if (\$249 ) begin
+      \$660  = config_write_data[0];
     end
     if (rst) begin
       \$660  = 1'h0;
@@ -5670,9 +5670,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$661  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$661  = \$269 ;
+    \$661  = ch1_cfg_checks_spw_check;
+    if (\$250 ) begin
+      \$661  = config_write_data[1];
     end
     if (rst) begin
       \$661  = 1'h0;
@@ -5680,99 +5680,99 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$662  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$662  = \$270 ;
+    \$662  = ch1_cfg_checks_spw_tolerance;
+    if (\$251 ) begin
+      \$662  = config_write_data[15:8];
     end
     if (rst) begin
-      \$662  = 1'h0;
+      \$662  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$663  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$663  = \$271 ;
+    \$663  = ch1_cfg_checks_noise_limit;
+    if (\$252 ) begin
+      \$663  = config_write_data[19:16];
     end
     if (rst) begin
-      \$663  = 1'h0;
+      \$663  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$664  = ch1_read_select_105;
-    if (bus__r_en) begin
-      \$664  = \$272 ;
+    \$664  = ch1_cfg_checks_delay_tolerance;
+    if (\$253 ) begin
+      \$664  = config_write_data[23:20];
     end
     if (rst) begin
-      \$664  = 1'h0;
+      \$664  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$665  = ch1_read_select_108;
-    if (bus__r_en) begin
-      \$665  = \$273 ;
+    \$665  = ch1_cfg_checks_confirm_frames;
+    if (\$254 ) begin
+      \$665  = config_write_data[27:24];
     end
     if (rst) begin
-      \$665  = 1'h0;
+      \$665  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$666  = ch1_read_select_109;
-    if (bus__r_en) begin
-      \$666  = \$274 ;
-    end
+    \$666  = ch1_cfg_quiet_write;
     if (rst) begin
       \$666  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$667  = ch1_read_select_10a;
-    if (bus__r_en) begin
-      \$667  = \$275 ;
+    \$667  = ch1_cfg_quiet_quiet_time;
+    if (\$255 ) begin
+      \$667 [7:0] = config_write_data[7:0];
+    end
+    if (\$256 ) begin
+      \$667 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$667  = 1'h0;
+      \$667  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$668  = ch1_read_select_10b;
-    if (bus__r_en) begin
-      \$668  = \$276 ;
-    end
+    \$668  = ch1_cfg_crc0_write;
     if (rst) begin
       \$668  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$669  = ch1_read_select_10c;
-    if (bus__r_en) begin
-      \$669  = \$277 ;
+    \$669  = ch1_cfg_crc0_w0_crc_poly;
+    if (\$257 ) begin
+      \$669 [7:0] = config_write_data[7:0];
+    end
+    if (\$258 ) begin
+      \$669 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$669  = 1'h0;
+      \$669  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$670  = ch1_read_select_10d;
-    if (bus__r_en) begin
-      \$670  = \$278 ;
+    \$670  = ch1_cfg_crc0_w0_crc_width;
+    if (\$259 ) begin
+      \$670  = config_write_data[20:16];
     end
     if (rst) begin
-      \$670  = 1'h0;
+      \$670  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$671  = ch1_read_select_10e;
-    if (bus__r_en) begin
-      \$671  = \$279 ;
+    \$671  = ch1_cfg_crc0_w0_crc_inverted;
+    if (\$260 ) begin
+      \$671  = config_write_data[24];
     end
     if (rst) begin
       \$671  = 1'h0;
@@ -5780,59 +5780,59 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$672  = ch1_read_select_10f;
-    if (bus__r_en) begin
-      \$672  = \$280 ;
-    end
+    \$672  = ch1_cfg_crc0_start_write;
     if (rst) begin
       \$672  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$673  = ch1_read_select_110;
-    if (bus__r_en) begin
-      \$673  = \$281 ;
+    \$673  = ch1_cfg_crc0_start_w0_crc_start;
+    if (\$261 ) begin
+      \$673 [7:0] = config_write_data[7:0];
+    end
+    if (\$262 ) begin
+      \$673 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$673  = 1'h0;
+      \$673  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$674  = ch1_read_select_111;
-    if (bus__r_en) begin
-      \$674  = \$282 ;
-    end
+    \$674  = ch1_cfg_crc1_write;
     if (rst) begin
       \$674  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$675  = ch1_read_select_112;
-    if (bus__r_en) begin
-      \$675  = \$283 ;
+    \$675  = ch1_cfg_crc1_w1_crc_poly;
+    if (\$263 ) begin
+      \$675 [7:0] = config_write_data[7:0];
+    end
+    if (\$264 ) begin
+      \$675 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$675  = 1'h0;
+      \$675  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$676  = ch1_read_select_113;
-    if (bus__r_en) begin
-      \$676  = \$284 ;
+    \$676  = ch1_cfg_crc1_w1_crc_width;
+    if (\$265 ) begin
+      \$676  = config_write_data[20:16];
     end
     if (rst) begin
-      \$676  = 1'h0;
+      \$676  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$677  = ch1_read_select_114;
-    if (bus__r_en) begin
-      \$677  = \$285 ;
+    \$677  = ch1_cfg_crc1_w1_crc_inverted;
+    if (\$266 ) begin
+      \$677  = config_write_data[24];
     end
     if (rst) begin
       \$677  = 1'h0;
@@ -5840,39 +5840,36 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$678  = ch1_read_select_115;
-    if (bus__r_en) begin
-      \$678  = \$286 ;
-    end
+    \$678  = ch1_cfg_crc1_start_write;
     if (rst) begin
       \$678  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$679  = ch1_read_select_116;
-    if (bus__r_en) begin
-      \$679  = \$287 ;
+    \$679  = ch1_cfg_crc1_start_w1_crc_start;
+    if (\$267 ) begin
+      \$679 [7:0] = config_write_data[7:0];
+    end
+    if (\$268 ) begin
+      \$679 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$679  = 1'h0;
+      \$679  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$680  = ch1_read_select_117;
-    if (bus__r_en) begin
-      \$680  = \$288 ;
-    end
+    \$680  = ch1_cfg_ssi_write;
     if (rst) begin
       \$680  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$681  = ch1_read_select_120;
-    if (bus__r_en) begin
-      \$681  = \$289 ;
+    \$681  = ch1_cfg_ssi_ssi;
+    if (\$269 ) begin
+      \$681  = config_write_data[0];
     end
     if (rst) begin
       \$681  = 1'h0;
@@ -5880,9 +5877,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$682  = ch1_read_select_121;
-    if (bus__r_en) begin
-      \$682  = \$290 ;
+    \$682  = ch1_cfg_ssi_ssi_error;
+    if (\$270 ) begin
+      \$682  = config_write_data[1];
     end
     if (rst) begin
       \$682  = 1'h0;
@@ -5890,9 +5887,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$683  = ch1_read_select_122;
-    if (bus__r_en) begin
-      \$683  = \$291 ;
+    \$683  = ch1_cfg_ssi_ssi_error_low;
+    if (\$271 ) begin
+      \$683  = config_write_data[2];
     end
     if (rst) begin
       \$683  = 1'h0;
@@ -5900,9 +5897,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$684  = ch1_read_select_123;
-    if (bus__r_en) begin
-      \$684  = \$292 ;
+    \$684  = ch1_cfg_ssi_ssi_double;
+    if (\$272 ) begin
+      \$684  = config_write_data[3];
     end
     if (rst) begin
       \$684  = 1'h0;
@@ -5910,59 +5907,59 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$685  = ch1_read_select_140;
-    if (bus__r_en) begin
-      \$685  = \$293 ;
+    \$685  = ch1_cfg_ssi_ssi_delay;
+    if (\$273 ) begin
+      \$685 [7:0] = config_write_data[23:16];
+    end
+    if (\$274 ) begin
+      \$685 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$685  = 1'h0;
+      \$685  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$686  = ch1_read_select_141;
-    if (bus__r_en) begin
-      \$686  = \$294 ;
-    end
+    \$686  = ch1_ca_request_write;
     if (rst) begin
       \$686  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$687  = ch1_read_select_142;
-    if (bus__r_en) begin
-      \$687  = \$295 ;
+    \$687  = ch1_ca_request_slave_id;
+    if (\$275 ) begin
+      \$687  = config_write_data[2:0];
     end
     if (rst) begin
-      \$687  = 1'h0;
+      \$687  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$688  = ch1_read_select_143;
-    if (bus__r_en) begin
-      \$688  = \$296 ;
+    \$688  = ch1_ca_request_address;
+    if (\$276 ) begin
+      \$688  = config_write_data[14:8];
     end
     if (rst) begin
-      \$688  = 1'h0;
+      \$688  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$689  = ch1_read_select_144;
-    if (bus__r_en) begin
-      \$689  = \$297 ;
+    \$689  = ch1_ca_request_count;
+    if (\$277 ) begin
+      \$689  = config_write_data[22:16];
     end
     if (rst) begin
-      \$689  = 1'h0;
+      \$689  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$690  = ch1_read_select_145;
-    if (bus__r_en) begin
-      \$690  = \$298 ;
+    \$690  = \ch1_ca_request_write$305 ;
+    if (\$278 ) begin
+      \$690  = config_write_data[24];
     end
     if (rst) begin
       \$690  = 1'h0;
@@ -5970,29 +5967,23 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$691  = ch1_result_status_status_snapshot;
-    if (\$299 ) begin
-      \$691  = \port$6860$0 [3:0];
-    end
+    \$691  = \$280 ;
     if (rst) begin
-      \$691  = 4'h0;
+      \$691  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$692  = ch1_result_status_cds_snapshot;
-    if (\$299 ) begin
-      \$692  = \port$6860$0 [49];
-    end
+    \$692  = \$282 ;
     if (rst) begin
       \$692  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$693  = ch1_result_status_w0_ne_snapshot;
-    if (\$299 ) begin
-      \$693  = \port$6860$0 [131];
+    \$693  = ch1_read_select_100;
+    if (bus__r_en) begin
+      \$693  = \$283 ;
     end
     if (rst) begin
       \$693  = 1'h0;
@@ -6000,9 +5991,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$694  = ch1_result_status_w0_nw_snapshot;
-    if (\$299 ) begin
-      \$694  = \port$6860$0 [132];
+    \$694  = ch1_read_select_101;
+    if (bus__r_en) begin
+      \$694  = \$284 ;
     end
     if (rst) begin
       \$694  = 1'h0;
@@ -6010,9 +6001,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$695  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$299 ) begin
-      \$695  = \port$6860$0 [133];
+    \$695  = ch1_read_select_102;
+    if (bus__r_en) begin
+      \$695  = \$285 ;
     end
     if (rst) begin
       \$695  = 1'h0;
@@ -6020,9 +6011,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$696  = ch1_result_status_w1_ne_snapshot;
-    if (\$299 ) begin
-      \$696  = \port$6860$0 [174];
+    \$696  = ch1_read_select_104;
+    if (bus__r_en) begin
+      \$696  = \$286 ;
     end
     if (rst) begin
       \$696  = 1'h0;
@@ -6030,9 +6021,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$697  = ch1_result_status_w1_nw_snapshot;
-    if (\$299 ) begin
-      \$697  = \port$6860$0 [175];
+    \$697  = ch1_read_select_105;
+    if (bus__r_en) begin
+      \$697  = \$287 ;
     end
     if (rst) begin
       \$697  = 1'h0;
@@ -6040,9 +6031,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$698  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$299 ) begin
-      \$698  = \port$6860$0 [176];
+    \$698  = ch1_read_select_108;
+    if (bus__r_en) begin
+      \$698  = \$288 ;
     end
     if (rst) begin
       \$698  = 1'h0;
@@ -6050,9 +6041,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$699  = ch1_result_status_lc_repeat_snapshot;
-    if (\$299 ) begin
-      \$699  = \port$6860$0 [183];
+    \$699  = ch1_read_select_109;
+    if (bus__r_en) begin
+      \$699  = \$289 ;
     end
     if (rst) begin
       \$699  = 1'h0;
@@ -6060,9 +6051,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$700  = ch1_result_status_lc_skip_snapshot;
-    if (\$299 ) begin
-      \$700  = \port$6860$0 [184];
+    \$700  = ch1_read_select_10a;
+    if (bus__r_en) begin
+      \$700  = \$290 ;
     end
     if (rst) begin
       \$700  = 1'h0;
@@ -6070,9 +6061,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$701  = ch1_result_status_lc_zero_snapshot;
-    if (\$299 ) begin
-      \$701  = \port$6860$0 [185];
+    \$701  = ch1_read_select_10b;
+    if (bus__r_en) begin
+      \$701  = \$291 ;
     end
     if (rst) begin
       \$701  = 1'h0;
@@ -6080,9 +6071,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$702  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$299 ) begin
-      \$702  = \port$6860$0 [186];
+    \$702  = ch1_read_select_10c;
+    if (bus__r_en) begin
+      \$702  = \$292 ;
     end
     if (rst) begin
       \$702  = 1'h0;
@@ -6090,99 +6081,99 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$703  = ch1_result_status_lc_snapshot;
-    if (\$299 ) begin
-      \$703  = \port$6860$0 [182:177];
+    \$703  = ch1_read_select_10d;
+    if (bus__r_en) begin
+      \$703  = \$293 ;
     end
     if (rst) begin
-      \$703  = 6'h00;
+      \$703  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$704  = ch1_result_seq_seq_snapshot;
-    if (\$299 ) begin
-      \$704  = ch1__done_count;
+    \$704  = ch1_read_select_10e;
+    if (bus__r_en) begin
+      \$704  = \$294 ;
     end
     if (rst) begin
-      \$704  = 16'h0000;
+      \$704  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$705  = ch1_result_seq_line_delay_snapshot;
-    if (\$299 ) begin
-      \$705  = \port$6860$0 [48:36];
+    \$705  = ch1_read_select_10f;
+    if (bus__r_en) begin
+      \$705  = \$295 ;
     end
     if (rst) begin
-      \$705  = 13'h0000;
+      \$705  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$706  = ch1_result_w0_lo_data_snapshot;
-    if (\$299 ) begin
-      \$706  = \port$6860$0 [107:76];
+    \$706  = ch1_read_select_110;
+    if (bus__r_en) begin
+      \$706  = \$296 ;
     end
     if (rst) begin
-      \$706  = 32'd0;
+      \$706  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$707  = ch1_result_w0_hi_data_snapshot;
-    if (\$299 ) begin
-      \$707  = \port$6860$0 [130:108];
+    \$707  = ch1_read_select_111;
+    if (bus__r_en) begin
+      \$707  = \$297 ;
     end
     if (rst) begin
-      \$707  = 23'h000000;
+      \$707  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$708  = ch1_result_w1_lo_data_snapshot;
-    if (\$299 ) begin
-      \$708  = \port$6860$0 [165:134];
+    \$708  = ch1_read_select_112;
+    if (bus__r_en) begin
+      \$708  = \$298 ;
     end
     if (rst) begin
-      \$708  = 32'd0;
+      \$708  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$709  = ch1_result_w1_hi_data_snapshot;
-    if (\$299 ) begin
-      \$709  = \port$6860$0 [173:166];
+    \$709  = ch1_read_select_113;
+    if (bus__r_en) begin
+      \$709  = \$299 ;
     end
     if (rst) begin
-      \$709  = 8'h00;
+      \$709  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$710  = ch1_result_timestamp_time_snapshot;
-    if (\$299 ) begin
-      \$710  = \port$6860$0 [35:4];
+    \$710  = ch1_read_select_114;
+    if (bus__r_en) begin
+      \$710  = \$300 ;
     end
     if (rst) begin
-      \$710  = 32'd0;
+      \$710  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$711  = ch1_result_line_noise_events_snapshot;
-    if (\$299 ) begin
-      \$711  = \port$6860$0 [53:50];
+    \$711  = ch1_read_select_115;
+    if (bus__r_en) begin
+      \$711  = \$301 ;
     end
     if (rst) begin
-      \$711  = 4'h0;
+      \$711  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$712  = ch1_result_line_delay_settled_snapshot;
-    if (\$299 ) begin
-      \$712  = \port$6860$0 [54];
+    \$712  = ch1_read_select_116;
+    if (bus__r_en) begin
+      \$712  = \$302 ;
     end
     if (rst) begin
       \$712  = 1'h0;
@@ -6190,29 +6181,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$713  = ch1_result_line_delay_spread_snapshot;
-    if (\$299 ) begin
-      \$713  = \port$6860$0 [75:68];
-    end
-    if (rst) begin
-      \$713  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$714  = ch1_result_line_settled_delay_snapshot;
-    if (\$299 ) begin
-      \$714  = \port$6860$0 [67:55];
-    end
-    if (rst) begin
-      \$714  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$715  = ch1_window0_read;
+    \$713  = ch1_read_select_117;
     if (bus__r_en) begin
-      \$715  = \$301 ;
+      \$713  = \$303 ;
+    end
+    if (rst) begin
+      \$713  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$714  = ch1_read_select_120;
+    if (bus__r_en) begin
+      \$714  = \$304 ;
+    end
+    if (rst) begin
+      \$714  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$715  = ch1_read_select_121;
+    if (bus__r_en) begin
+      \$715  = \$305 ;
     end
     if (rst) begin
       \$715  = 1'h0;
@@ -6220,9 +6211,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$716  = ch1_window1_read;
+    \$716  = ch1_read_select_122;
     if (bus__r_en) begin
-      \$716  = \$303 ;
+      \$716  = \$306 ;
     end
     if (rst) begin
       \$716  = 1'h0;
@@ -6230,84 +6221,426 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$717  = ch1_read_data;
-    if (bus__r_load) begin
-      \$717  = \$369 ;
+    \$717  = ch1_read_select_123;
+    if (bus__r_en) begin
+      \$717  = \$307 ;
     end
     if (rst) begin
-      \$717  = 32'd0;
+      \$717  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$718  = ch1_read_select_124;
+    if (bus__r_en) begin
+      \$718  = \$308 ;
+    end
+    if (rst) begin
+      \$718  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$719  = ch1_read_select_140;
+    if (bus__r_en) begin
+      \$719  = \$309 ;
+    end
+    if (rst) begin
+      \$719  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$720  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$720  = \$310 ;
+    end
+    if (rst) begin
+      \$720  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$721  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$721  = \$311 ;
+    end
+    if (rst) begin
+      \$721  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$722  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$722  = \$312 ;
+    end
+    if (rst) begin
+      \$722  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$723  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$723  = \$313 ;
+    end
+    if (rst) begin
+      \$723  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$724  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$724  = \$314 ;
+    end
+    if (rst) begin
+      \$724  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$725  = ch1_result_status_status_snapshot;
+    if (\$315 ) begin
+      \$725  = \port$7272$0 [3:0];
+    end
+    if (rst) begin
+      \$725  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$726  = ch1_result_status_cds_snapshot;
+    if (\$315 ) begin
+      \$726  = \port$7272$0 [49];
+    end
+    if (rst) begin
+      \$726  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$727  = ch1_result_status_w0_ne_snapshot;
+    if (\$315 ) begin
+      \$727  = \port$7272$0 [131];
+    end
+    if (rst) begin
+      \$727  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$728  = ch1_result_status_w0_nw_snapshot;
+    if (\$315 ) begin
+      \$728  = \port$7272$0 [132];
+    end
+    if (rst) begin
+      \$728  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$729  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$315 ) begin
+      \$729  = \port$7272$0 [133];
+    end
+    if (rst) begin
+      \$729  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$730  = ch1_result_status_w1_ne_snapshot;
+    if (\$315 ) begin
+      \$730  = \port$7272$0 [174];
+    end
+    if (rst) begin
+      \$730  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$731  = ch1_result_status_w1_nw_snapshot;
+    if (\$315 ) begin
+      \$731  = \port$7272$0 [175];
+    end
+    if (rst) begin
+      \$731  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$732  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$315 ) begin
+      \$732  = \port$7272$0 [176];
+    end
+    if (rst) begin
+      \$732  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$733  = ch1_result_status_lc_repeat_snapshot;
+    if (\$315 ) begin
+      \$733  = \port$7272$0 [183];
+    end
+    if (rst) begin
+      \$733  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$734  = ch1_result_status_lc_skip_snapshot;
+    if (\$315 ) begin
+      \$734  = \port$7272$0 [184];
+    end
+    if (rst) begin
+      \$734  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$735  = ch1_result_status_lc_zero_snapshot;
+    if (\$315 ) begin
+      \$735  = \port$7272$0 [185];
+    end
+    if (rst) begin
+      \$735  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$736  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$315 ) begin
+      \$736  = \port$7272$0 [186];
+    end
+    if (rst) begin
+      \$736  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$737  = ch1_result_status_lc_snapshot;
+    if (\$315 ) begin
+      \$737  = \port$7272$0 [182:177];
+    end
+    if (rst) begin
+      \$737  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$738  = ch1_result_seq_seq_snapshot;
+    if (\$315 ) begin
+      \$738  = ch1__done_count;
+    end
+    if (rst) begin
+      \$738  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$739  = ch1_result_seq_line_delay_snapshot;
+    if (\$315 ) begin
+      \$739  = \port$7272$0 [48:36];
+    end
+    if (rst) begin
+      \$739  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$740  = ch1_result_w0_lo_data_snapshot;
+    if (\$315 ) begin
+      \$740  = \port$7272$0 [107:76];
+    end
+    if (rst) begin
+      \$740  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$741  = ch1_result_w0_hi_data_snapshot;
+    if (\$315 ) begin
+      \$741  = \port$7272$0 [130:108];
+    end
+    if (rst) begin
+      \$741  = 23'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$742  = ch1_result_w1_lo_data_snapshot;
+    if (\$315 ) begin
+      \$742  = \port$7272$0 [165:134];
+    end
+    if (rst) begin
+      \$742  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$743  = ch1_result_w1_hi_data_snapshot;
+    if (\$315 ) begin
+      \$743  = \port$7272$0 [173:166];
+    end
+    if (rst) begin
+      \$743  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$744  = ch1_result_timestamp_time_snapshot;
+    if (\$315 ) begin
+      \$744  = \port$7272$0 [35:4];
+    end
+    if (rst) begin
+      \$744  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$745  = ch1_result_line_noise_events_snapshot;
+    if (\$315 ) begin
+      \$745  = \port$7272$0 [53:50];
+    end
+    if (rst) begin
+      \$745  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$746  = ch1_result_line_delay_settled_snapshot;
+    if (\$315 ) begin
+      \$746  = \port$7272$0 [54];
+    end
+    if (rst) begin
+      \$746  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$747  = ch1_result_line_delay_spread_snapshot;
+    if (\$315 ) begin
+      \$747  = \port$7272$0 [75:68];
+    end
+    if (rst) begin
+      \$747  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$748  = ch1_result_line_settled_delay_snapshot;
+    if (\$315 ) begin
+      \$748  = \port$7272$0 [67:55];
+    end
+    if (rst) begin
+      \$748  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$749  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$749  = \$317 ;
+    end
+    if (rst) begin
+      \$749  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$750  = ch1_window1_read;
+    if (bus__r_en) begin
+      \$750  = \$319 ;
+    end
+    if (rst) begin
+      \$750  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$751  = ch1_read_data;
+    if (bus__r_load) begin
+      \$751  = \$387 ;
+    end
+    if (rst) begin
+      \$751  = 32'd0;
     end
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6333$0 [3:0];
-  assign ch0__cds = \port$6333$0 [49];
-  assign ch0__word0_ne = \port$6333$0 [131];
-  assign ch0__word0_nw = \port$6333$0 [132];
-  assign ch0__word0_crc_ok = \port$6333$0 [133];
-  assign ch0__word1_ne = \port$6333$0 [174];
-  assign ch0__word1_nw = \port$6333$0 [175];
-  assign ch0__word1_crc_ok = \port$6333$0 [176];
-  assign ch0__lc_repeat = \port$6333$0 [183];
-  assign ch0__lc_skip = \port$6333$0 [184];
-  assign ch0__lc_zero = \port$6333$0 [185];
-  assign ch0__spw_mismatch = \port$6333$0 [186];
-  assign ch0__lc = \port$6333$0 [182:177];
-  assign ch0__line_delay = \port$6333$0 [48:36];
-  assign ch0__word0_position = \port$6333$0 [130:76];
-  assign ch0__word1_position = \port$6333$0 [173:134];
-  assign ch0__timestamp = \port$6333$0 [35:4];
-  assign ch0__noise_events = \port$6333$0 [53:50];
-  assign ch0__delay_settled = \port$6333$0 [54];
-  assign ch0__delay_spread = \port$6333$0 [75:68];
-  assign ch0__settled_delay = \port$6333$0 [67:55];
+  assign ch0__status = \port$6740$0 [3:0];
+  assign ch0__cds = \port$6740$0 [49];
+  assign ch0__word0_ne = \port$6740$0 [131];
+  assign ch0__word0_nw = \port$6740$0 [132];
+  assign ch0__word0_crc_ok = \port$6740$0 [133];
+  assign ch0__word1_ne = \port$6740$0 [174];
+  assign ch0__word1_nw = \port$6740$0 [175];
+  assign ch0__word1_crc_ok = \port$6740$0 [176];
+  assign ch0__lc_repeat = \port$6740$0 [183];
+  assign ch0__lc_skip = \port$6740$0 [184];
+  assign ch0__lc_zero = \port$6740$0 [185];
+  assign ch0__spw_mismatch = \port$6740$0 [186];
+  assign ch0__lc = \port$6740$0 [182:177];
+  assign ch0__line_delay = \port$6740$0 [48:36];
+  assign ch0__word0_position = \port$6740$0 [130:76];
+  assign ch0__word1_position = \port$6740$0 [173:134];
+  assign ch0__timestamp = \port$6740$0 [35:4];
+  assign ch0__noise_events = \port$6740$0 [53:50];
+  assign ch0__delay_settled = \port$6740$0 [54];
+  assign ch0__delay_spread = \port$6740$0 [75:68];
+  assign ch0__settled_delay = \port$6740$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
   assign ch0__cap_counters = 1'h1;
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
-  assign ch0__ca_status = \port$6423$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6423$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6346$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$6346$0 [31:16];
-  assign ch0__count_ca_refused = \port$6346$0 [47:32];
-  assign ch0__count_ca_aborted = \port$6346$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$6346$0 [79:64];
-  assign ch1__status = \port$6860$0 [3:0];
-  assign ch1__cds = \port$6860$0 [49];
-  assign ch1__word0_ne = \port$6860$0 [131];
-  assign ch1__word0_nw = \port$6860$0 [132];
-  assign ch1__word0_crc_ok = \port$6860$0 [133];
-  assign ch1__word1_ne = \port$6860$0 [174];
-  assign ch1__word1_nw = \port$6860$0 [175];
-  assign ch1__word1_crc_ok = \port$6860$0 [176];
-  assign ch1__lc_repeat = \port$6860$0 [183];
-  assign ch1__lc_skip = \port$6860$0 [184];
-  assign ch1__lc_zero = \port$6860$0 [185];
-  assign ch1__spw_mismatch = \port$6860$0 [186];
-  assign ch1__lc = \port$6860$0 [182:177];
-  assign ch1__line_delay = \port$6860$0 [48:36];
-  assign ch1__word0_position = \port$6860$0 [130:76];
-  assign ch1__word1_position = \port$6860$0 [173:134];
-  assign ch1__timestamp = \port$6860$0 [35:4];
-  assign ch1__noise_events = \port$6860$0 [53:50];
-  assign ch1__delay_settled = \port$6860$0 [54];
-  assign ch1__delay_spread = \port$6860$0 [75:68];
-  assign ch1__settled_delay = \port$6860$0 [67:55];
+  assign ch0__cap_ssi = 1'h1;
+  assign ch0__ca_status = \port$6830$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6830$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6753$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$6753$0 [31:16];
+  assign ch0__count_ca_refused = \port$6753$0 [47:32];
+  assign ch0__count_ca_aborted = \port$6753$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$6753$0 [79:64];
+  assign ch1__status = \port$7272$0 [3:0];
+  assign ch1__cds = \port$7272$0 [49];
+  assign ch1__word0_ne = \port$7272$0 [131];
+  assign ch1__word0_nw = \port$7272$0 [132];
+  assign ch1__word0_crc_ok = \port$7272$0 [133];
+  assign ch1__word1_ne = \port$7272$0 [174];
+  assign ch1__word1_nw = \port$7272$0 [175];
+  assign ch1__word1_crc_ok = \port$7272$0 [176];
+  assign ch1__lc_repeat = \port$7272$0 [183];
+  assign ch1__lc_skip = \port$7272$0 [184];
+  assign ch1__lc_zero = \port$7272$0 [185];
+  assign ch1__spw_mismatch = \port$7272$0 [186];
+  assign ch1__lc = \port$7272$0 [182:177];
+  assign ch1__line_delay = \port$7272$0 [48:36];
+  assign ch1__word0_position = \port$7272$0 [130:76];
+  assign ch1__word1_position = \port$7272$0 [173:134];
+  assign ch1__timestamp = \port$7272$0 [35:4];
+  assign ch1__noise_events = \port$7272$0 [53:50];
+  assign ch1__delay_settled = \port$7272$0 [54];
+  assign ch1__delay_spread = \port$7272$0 [75:68];
+  assign ch1__settled_delay = \port$7272$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
   assign ch1__cap_counters = 1'h1;
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
-  assign ch1__ca_status = \port$6950$0 [2:0];
-  assign ch1__ca_bytes_done = \port$6950$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$6873$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$6873$0 [31:16];
-  assign ch1__count_ca_refused = \port$6873$0 [47:32];
-  assign ch1__count_ca_aborted = \port$6873$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$6873$0 [79:64];
+  assign ch1__cap_ssi = 1'h1;
+  assign ch1__ca_status = \port$7362$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7362$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7285$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7285$0 [31:16];
+  assign ch1__count_ca_refused = \port$7285$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7285$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7285$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__r_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -6349,10 +6682,15 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__cfg_w1_crc_width = ch0_cfg_crc1_w1_crc_width;
   assign ch0__cfg_w1_crc_inverted = ch0_cfg_crc1_w1_crc_inverted;
   assign ch0__cfg_w1_crc_start = ch0_cfg_crc1_start_w1_crc_start;
+  assign ch0__cfg_ssi = ch0_cfg_ssi_ssi;
+  assign ch0__cfg_ssi_error = ch0_cfg_ssi_ssi_error;
+  assign ch0__cfg_ssi_error_low = ch0_cfg_ssi_ssi_error_low;
+  assign ch0__cfg_ssi_double = ch0_cfg_ssi_ssi_double;
+  assign ch0__cfg_ssi_delay = ch0_cfg_ssi_ssi_delay;
   assign ch0__ca_slave_id = ch0_ca_request_slave_id;
   assign ch0__ca_address = ch0_ca_request_address;
   assign ch0__ca_count = ch0_ca_request_count;
-  assign ch0__ca_write = \ch0_ca_request_write$106 ;
+  assign ch0__ca_write = \ch0_ca_request_write$113 ;
   assign ch0__ca_start = ch0_ca_ctrl_start;
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
@@ -6397,10 +6735,15 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__cfg_w1_crc_width = ch1_cfg_crc1_w1_crc_width;
   assign ch1__cfg_w1_crc_inverted = ch1_cfg_crc1_w1_crc_inverted;
   assign ch1__cfg_w1_crc_start = ch1_cfg_crc1_start_w1_crc_start;
+  assign ch1__cfg_ssi = ch1_cfg_ssi_ssi;
+  assign ch1__cfg_ssi_error = ch1_cfg_ssi_ssi_error;
+  assign ch1__cfg_ssi_error_low = ch1_cfg_ssi_ssi_error_low;
+  assign ch1__cfg_ssi_double = ch1_cfg_ssi_ssi_double;
+  assign ch1__cfg_ssi_delay = ch1_cfg_ssi_ssi_delay;
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$289 ;
+  assign ch1__ca_write = \ch1_ca_request_write$305 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
@@ -6411,20 +6754,20 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$411  = \$410 ;
-  assign \$413  = \$412 ;
-  assign \$415  = \$414 ;
-  assign \$452  = \$451 ;
-  assign \$454  = \$453 ;
-  assign \$456  = \$455 ;
-  assign \$129  = \$128 ;
-  assign \$180  = 32'd0;
-  assign \$181  = \$179 ;
-  assign \$305  = \$304 ;
-  assign \$356  = 32'd0;
-  assign \$357  = \$355 ;
+  assign \$430  = \$429 ;
+  assign \$432  = \$431 ;
+  assign \$434  = \$433 ;
+  assign \$472  = \$471 ;
+  assign \$474  = \$473 ;
+  assign \$476  = \$475 ;
+  assign \$136  = \$135 ;
+  assign \$189  = 32'd0;
+  assign \$190  = \$188 ;
+  assign \$321  = \$320 ;
+  assign \$374  = 32'd0;
+  assign \$375  = \$373 ;
   assign g_irq = 1'h0;
-  assign \$457  = g_read_data;
+  assign \$477  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -6672,10 +7015,10 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
+module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
-, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma
-, \port$6333$0 , \port$6346$0 , regs__ca_done, \port$6423$0 , ca_rbuf_addr);
+, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6740$0 , \port$6753$0 , regs__ca_done, \port$6830$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -6760,6 +7103,16 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   wire cfg_spw_check;
   input [7:0] cfg_spw_tolerance;
   wire [7:0] cfg_spw_tolerance;
+  input cfg_ssi;
+  wire cfg_ssi;
+  input [11:0] cfg_ssi_delay;
+  wire [11:0] cfg_ssi_delay;
+  input cfg_ssi_double;
+  wire cfg_ssi_double;
+  input cfg_ssi_error;
+  wire cfg_ssi_error;
+  input cfg_ssi_error_low;
+  wire cfg_ssi_error_low;
   input [23:0] cfg_timeout_limit;
   wire [23:0] cfg_timeout_limit;
   (* enum_base_type = "Crc" *)
@@ -6842,17 +7195,17 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$187 ;
+  wire \ma$198 ;
   wire [3:0] noise_events;
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6333$0 ;
-  wire [186:0] \port$6333$0 ;
-  output [79:0] \port$6346$0 ;
-  wire [79:0] \port$6346$0 ;
-  output [9:0] \port$6423$0 ;
-  wire [9:0] \port$6423$0 ;
+  output [186:0] \port$6740$0 ;
+  wire [186:0] \port$6740$0 ;
+  output [79:0] \port$6753$0 ;
+  wire [79:0] \port$6753$0 ;
+  output [9:0] \port$6830$0 ;
+  wire [9:0] \port$6830$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -6880,6 +7233,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   wire [5:0] regs__cap_data_bits_w0;
   wire [5:0] regs__cap_data_bits_w1;
   wire regs__cap_register_access;
+  wire regs__cap_ssi;
   wire [5:0] regs__cap_timer_width;
   wire regs__cap_timestamp;
   wire regs__cds;
@@ -6895,6 +7249,11 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   wire [23:0] regs__cfg_request_period;
   wire regs__cfg_spw_check;
   wire [7:0] regs__cfg_spw_tolerance;
+  wire regs__cfg_ssi;
+  wire [11:0] regs__cfg_ssi_delay;
+  wire regs__cfg_ssi_double;
+  wire regs__cfg_ssi_error;
+  wire regs__cfg_ssi_error_low;
   wire [23:0] regs__cfg_timeout_limit;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -6975,7 +7334,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$189 ;
+  wire \slo$200 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -6999,8 +7358,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$184 ;
-  wire \trigger$184 ;
+  input \trigger$195 ;
+  wire \trigger$195 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -7018,7 +7377,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
-  assign trigger = \trigger$184  & regs__trigger_enable;
+  assign trigger = \trigger$195  & regs__trigger_enable;
   assign \$6  = ~ report;
   assign \$7  = \$signal  & \$6 ;
   assign \$8  = waited + 1'h1;
@@ -7040,8 +7399,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
     regs__done_count <= \$17 ;
   \biss_master_axil.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$245 (ca_abort),
-    .\busy$294 (regs__busy),
+    .\abort$262 (ca_abort),
+    .\busy$311 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -7063,6 +7422,11 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
     .cfg_request_period(cfg_request_period),
     .cfg_spw_check(cfg_spw_check),
     .cfg_spw_tolerance(cfg_spw_tolerance),
+    .cfg_ssi(cfg_ssi),
+    .cfg_ssi_delay(cfg_ssi_delay),
+    .cfg_ssi_double(cfg_ssi_double),
+    .cfg_ssi_error(cfg_ssi_error),
+    .cfg_ssi_error_low(cfg_ssi_error_low),
     .cfg_timeout_limit(cfg_timeout_limit),
     .cfg_w0_crc(cfg_w0_crc),
     .cfg_w0_crc_inverted(cfg_w0_crc_inverted),
@@ -7085,27 +7449,27 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$270 (clear_counters),
+    .\clear$287 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$19 ),
-    .\done$297 (done),
+    .\done$314 (done),
     .frames(regs__ca_busy),
     .ma(ma),
-    .\periodic$40 (periodic),
+    .\periodic$45 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$20 ),
-    .\result$302 (\$18 ),
+    .\result$319 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$243 (ca_start),
+    .\start$260 (ca_start),
     .trigger(trigger),
-    .\valid$299 (valid)
+    .\valid$316 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
@@ -7183,6 +7547,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   assign regs__cap_counters = 1'h1;
   assign regs__cap_timestamp = 1'h1;
   assign regs__cap_register_access = 1'h1;
+  assign regs__cap_ssi = 1'h1;
   assign ended = regs__frame_done;
   assign ca_done = regs__ca_done;
   assign regs__cfg_ma_half_period = cfg_ma_half_period;
@@ -7261,6 +7626,11 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   assign regs__cfg_w1_crc_width = cfg_w1_crc_width;
   assign regs__cfg_w1_crc_inverted = cfg_w1_crc_inverted;
   assign regs__cfg_w1_crc_start = cfg_w1_crc_start;
+  assign regs__cfg_ssi = cfg_ssi;
+  assign regs__cfg_ssi_error = cfg_ssi_error;
+  assign regs__cfg_ssi_error_low = cfg_ssi_error_low;
+  assign regs__cfg_ssi_double = cfg_ssi_double;
+  assign regs__cfg_ssi_delay = cfg_ssi_delay;
   assign regs__ca_slave_id = ca_slave_id;
   assign regs__ca_address = ca_address;
   assign regs__ca_count = ca_count;
@@ -7288,18 +7658,18 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$187  = ma;
-  assign \slo$189  = slo;
-  assign \port$6333$0  = \$18 ;
-  assign \port$6346$0  = \$19 ;
-  assign \port$6423$0  = \$20 ;
+  assign \ma$198  = ma;
+  assign \slo$200  = slo;
+  assign \port$6740$0  = \$18 ;
+  assign \port$6753$0  = \$19 ;
+  assign \port$6830$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$294 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$270 , \periodic$40 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$311 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$287 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$243 , \abort$245 , abort, ma, \done$297 , \valid$299 , \result$302 
-, counts, ca_done, result, rbuf_addr);
+, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$260 , \abort$262 
+, abort, ma, \done$314 , \valid$316 , \result$319 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -7311,13 +7681,17 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \$16 ;
   wire \$17 ;
   wire \$18 ;
-  reg \$19 ;
+  wire \$19 ;
   wire \$2 ;
-  reg \$20 ;
-  reg \$21 ;
-  reg \$22 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
   reg \$23 ;
-  wire \$24 ;
+  reg \$24 ;
+  reg \$25 ;
+  reg \$26 ;
+  reg \$27 ;
+  wire \$28 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -7329,26 +7703,26 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$245 ;
-  wire \abort$245 ;
-  wire \abort$52 ;
+  input \abort$262 ;
+  wire \abort$262 ;
+  wire \abort$57 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$84 ;
+  wire \ack_expired$90 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$105 ;
+  wire [23:0] \ack_limit$111 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$326 ;
+  wire \bit$343 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$82 ;
+  wire \break_over$88 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$254 ;
-  wire \busy$291 ;
-  output \busy$294 ;
-  wire \busy$294 ;
+  wire \busy$271 ;
+  wire \busy$308 ;
+  output \busy$311 ;
+  wire \busy$311 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -7383,11 +7757,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$258 ;
+  wire \cdm$275 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$305 ;
-  wire [258:0] cfg;
+  wire \cds$322 ;
+  wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [3:0] \cfg.confirm_frames ;
@@ -7400,6 +7774,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] \cfg.request_period ;
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
+  wire \cfg.ssi ;
+  wire [11:0] \cfg.ssi_delay ;
+  wire \cfg.ssi_double ;
+  wire \cfg.ssi_error ;
+  wire \cfg.ssi_error_low ;
   wire [23:0] \cfg.timeout_limit ;
   wire [11:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
@@ -7460,6 +7839,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire cfg_spw_check;
   input [7:0] cfg_spw_tolerance;
   wire [7:0] cfg_spw_tolerance;
+  input cfg_ssi;
+  wire cfg_ssi;
+  input [11:0] cfg_ssi_delay;
+  wire [11:0] cfg_ssi_delay;
+  input cfg_ssi_double;
+  wire cfg_ssi_double;
+  input cfg_ssi_error;
+  wire cfg_ssi_error;
+  input cfg_ssi_error_low;
+  wire cfg_ssi_error_low;
   input [23:0] cfg_timeout_limit;
   wire [23:0] cfg_timeout_limit;
   (* enum_base_type = "Crc" *)
@@ -7515,16 +7904,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$163 ;
+  wire \check$170 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$168 ;
-  wire \clean$327 ;
+  wire \clean$175 ;
+  wire \clean$344 ;
   wire clear;
-  wire \clear$129 ;
-  input \clear$270 ;
-  wire \clear$270 ;
-  wire \clear$283 ;
+  wire \clear$135 ;
+  input \clear$287 ;
+  wire \clear$287 ;
+  wire \clear$300 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -7533,6 +7922,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   output config_error;
   wire config_error;
   wire config_ok;
+  wire copy_mismatch;
   wire [2:0] count_addr;
   output count_busy;
   wire count_busy;
@@ -7552,33 +7942,33 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$180 ;
+  wire [39:0] \cpw_top$187 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$194 ;
+  wire [1:0] \crc_ok$212 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$176 ;
-  wire [37:0] \crcs$176[0] ;
-  wire \crcs$176[0].inverted ;
-  wire [15:0] \crcs$176[0].poly ;
-  wire [15:0] \crcs$176[0].start ;
-  wire [4:0] \crcs$176[0].width ;
-  wire [37:0] \crcs$176[1] ;
-  wire \crcs$176[1].inverted ;
-  wire [15:0] \crcs$176[1].poly ;
-  wire [15:0] \crcs$176[1].start ;
-  wire [4:0] \crcs$176[1].width ;
-  wire [75:0] \crcs$177 ;
-  wire [37:0] \crcs$177[0] ;
-  wire \crcs$177[0].inverted ;
-  wire [15:0] \crcs$177[0].poly ;
-  wire [15:0] \crcs$177[0].start ;
-  wire [4:0] \crcs$177[0].width ;
-  wire [37:0] \crcs$177[1] ;
-  wire \crcs$177[1].inverted ;
-  wire [15:0] \crcs$177[1].poly ;
-  wire [15:0] \crcs$177[1].start ;
-  wire [4:0] \crcs$177[1].width ;
+  wire [75:0] \crcs$183 ;
+  wire [37:0] \crcs$183[0] ;
+  wire \crcs$183[0].inverted ;
+  wire [15:0] \crcs$183[0].poly ;
+  wire [15:0] \crcs$183[0].start ;
+  wire [4:0] \crcs$183[0].width ;
+  wire [37:0] \crcs$183[1] ;
+  wire \crcs$183[1].inverted ;
+  wire [15:0] \crcs$183[1].poly ;
+  wire [15:0] \crcs$183[1].start ;
+  wire [4:0] \crcs$183[1].width ;
+  wire [75:0] \crcs$184 ;
+  wire [37:0] \crcs$184[0] ;
+  wire \crcs$184[0].inverted ;
+  wire [15:0] \crcs$184[0].poly ;
+  wire [15:0] \crcs$184[0].start ;
+  wire [4:0] \crcs$184[0].width ;
+  wire [37:0] \crcs$184[1] ;
+  wire \crcs$184[1].inverted ;
+  wire [15:0] \crcs$184[1].poly ;
+  wire [15:0] \crcs$184[1].start ;
+  wire [4:0] \crcs$184[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -7589,7 +7979,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  wire [258:0] cycle;
+  wire [274:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [3:0] \cycle.confirm_frames ;
@@ -7602,6 +7992,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] \cycle.request_period ;
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
+  wire \cycle.ssi ;
+  wire [11:0] \cycle.ssi_delay ;
+  wire \cycle.ssi_double ;
+  wire \cycle.ssi_error ;
+  wire \cycle.ssi_error_low ;
   wire [23:0] \cycle.timeout_limit ;
   wire [11:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
@@ -7645,54 +8040,54 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$111 ;
-  wire [12:0] \delay$162 ;
+  wire [12:0] \delay$117 ;
+  wire [12:0] \delay$169 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$113 ;
+  wire [11:0] \delay_limit$119 ;
   wire delay_over;
-  wire \delay_over$92 ;
+  wire \delay_over$98 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$256 ;
-  output \done$297 ;
-  wire \done$297 ;
-  wire \done$298 ;
+  wire \done$273 ;
+  output \done$314 ;
+  wire \done$314 ;
+  wire \done$315 ;
   wire doubtful;
   wire early;
-  wire \early$68 ;
+  wire \early$73 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$269 ;
-  wire \events$269.ca_aborted ;
-  wire \events$269.ca_crc4_error ;
-  wire \events$269.ca_data_fault ;
-  wire \events$269.ca_no_answer ;
-  wire \events$269.ca_refused ;
-  wire [15:0] \events$278 ;
-  wire \events$278.aborted ;
-  wire \events$278.crc_word0 ;
-  wire \events$278.crc_word1 ;
-  wire \events$278.delay_jump ;
-  wire \events$278.delay_range ;
-  wire \events$278.lc_repeat ;
-  wire \events$278.lc_skip ;
-  wire \events$278.lc_zero ;
-  wire \events$278.no_ack ;
-  wire \events$278.no_start ;
-  wire \events$278.no_stop ;
-  wire \events$278.noise_event ;
-  wire \events$278.noisy_line ;
-  wire \events$278.overrun ;
-  wire \events$278.slo_stuck_low ;
-  wire \events$278.spw_mismatch ;
+  wire [4:0] \events$286 ;
+  wire \events$286.ca_aborted ;
+  wire \events$286.ca_crc4_error ;
+  wire \events$286.ca_data_fault ;
+  wire \events$286.ca_no_answer ;
+  wire \events$286.ca_refused ;
+  wire [15:0] \events$295 ;
+  wire \events$295.aborted ;
+  wire \events$295.crc_word0 ;
+  wire \events$295.crc_word1 ;
+  wire \events$295.delay_jump ;
+  wire \events$295.delay_range ;
+  wire \events$295.lc_repeat ;
+  wire \events$295.lc_skip ;
+  wire \events$295.lc_zero ;
+  wire \events$295.no_ack ;
+  wire \events$295.no_start ;
+  wire \events$295.no_stop ;
+  wire \events$295.noise_event ;
+  wire \events$295.noisy_line ;
+  wire \events$295.overrun ;
+  wire \events$295.slo_stuck_low ;
+  wire \events$295.spw_mismatch ;
   wire fault;
-  wire \fault$190 ;
+  wire \fault$208 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -7728,7 +8123,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$192 ;
+  wire [3:0] \fault_status$210 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -7738,8 +8133,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$229 ;
+  wire \first_rise$246 ;
   wire [31:0] first_rise_time;
+  wire fixed;
+  wire [12:0] fixed_delay;
   wire [186:0] frame;
   wire \frame.cds ;
   wire \frame.delay_settled ;
@@ -7790,37 +8187,37 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$135 ;
+  wire [15:0] \half_period$141 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$36 ;
-  wire \idle$45 ;
+  wire \idle$41 ;
+  wire \idle$50 ;
   wire in_clock;
-  wire \in_clock$99 ;
+  wire \in_clock$105 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$140 ;
-  wire [5:0] \lc$318 ;
+  wire [5:0] \lc$147 ;
+  wire [5:0] \lc$335 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$142 ;
+  wire [5:0] \lc_next$149 ;
   wire lc_repeat;
-  wire \lc_repeat$319 ;
+  wire \lc_repeat$336 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$320 ;
+  wire \lc_skip$337 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$321 ;
+  wire \lc_zero$338 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$151 ;
+  wire \level$158 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [258:0] live;
+  wire [274:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [3:0] \live.confirm_frames ;
@@ -7833,6 +8230,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] \live.request_period ;
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
+  wire \live.ssi ;
+  wire [11:0] \live.ssi_delay ;
+  wire \live.ssi_double ;
+  wire \live.ssi_error ;
+  wire \live.ssi_error_low ;
   wire [23:0] \live.timeout_limit ;
   wire [11:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
@@ -7871,42 +8273,43 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$66 ;
+  wire \locked$71 ;
   output ma;
   wire ma;
-  wire \ma$293 ;
+  wire \ma$310 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$94 ;
+  wire \ma_busy$100 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
   wire ma_run;
   wire match;
+  wire mismatch;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$86 ;
+  wire \no_start_expired$92 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$109 ;
+  wire [24:0] \no_start_limit$115 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$170 ;
+  wire \noisy$177 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$296 ;
+  wire \overrun$313 ;
   wire passed;
   wire pending;
   wire [23:0] period;
   wire periodic;
-  input \periodic$40 ;
-  wire \periodic$40 ;
+  input \periodic$45 ;
+  wire \periodic$45 ;
   wire quiet;
-  wire \quiet$118 ;
+  wire \quiet$124 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$120 ;
+  wire \quiet_live$126 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -7922,38 +8325,38 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$204 ;
-  wire \report$208 ;
+  wire \report$222 ;
+  wire \report$226 ;
   wire report_delay;
-  wire \report_delay$211 ;
+  wire \report_delay$229 ;
   wire report_frame;
-  wire \report_frame$189 ;
-  wire \report_frame$209 ;
+  wire \report_frame$207 ;
+  wire \report_frame$227 ;
   wire request;
-  wire [17:0] \request$231 ;
-  wire [6:0] \request$231.address ;
-  wire [6:0] \request$231.count ;
-  wire [2:0] \request$231.slave_id ;
-  wire \request$231.write ;
-  wire \request$51 ;
+  wire [17:0] \request$248 ;
+  wire [6:0] \request$248.address ;
+  wire [6:0] \request$248.count ;
+  wire [2:0] \request$248.slave_id ;
+  wire \request$248.write ;
+  wire \request$56 ;
   wire restart;
-  wire \restart$155 ;
+  wire \restart$162 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$302 ;
-  wire [186:0] \result$302 ;
-  wire \result$302.cds ;
-  wire \result$302.delay_settled ;
-  wire [7:0] \result$302.delay_spread ;
-  wire [5:0] \result$302.lc ;
-  wire \result$302.lc_repeat ;
-  wire \result$302.lc_skip ;
-  wire \result$302.lc_zero ;
-  wire [12:0] \result$302.line_delay ;
-  wire [3:0] \result$302.noise_events ;
-  wire [12:0] \result$302.settled_delay ;
-  wire \result$302.spw_mismatch ;
+  output [186:0] \result$319 ;
+  wire [186:0] \result$319 ;
+  wire \result$319.cds ;
+  wire \result$319.delay_settled ;
+  wire [7:0] \result$319.delay_spread ;
+  wire [5:0] \result$319.lc ;
+  wire \result$319.lc_repeat ;
+  wire \result$319.lc_skip ;
+  wire \result$319.lc_zero ;
+  wire [12:0] \result$319.line_delay ;
+  wire [3:0] \result$319.noise_events ;
+  wire [12:0] \result$319.settled_delay ;
+  wire \result$319.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -7971,18 +8374,18 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$302.status ;
-  wire [31:0] \result$302.timestamp ;
-  wire [57:0] \result$302.word0 ;
-  wire \result$302.word0.crc_ok ;
-  wire \result$302.word0.ne ;
-  wire \result$302.word0.nw ;
-  wire [54:0] \result$302.word0.position ;
-  wire [42:0] \result$302.word1 ;
-  wire \result$302.word1.crc_ok ;
-  wire \result$302.word1.ne ;
-  wire \result$302.word1.nw ;
-  wire [39:0] \result$302.word1.position ;
+  wire [3:0] \result$319.status ;
+  wire [31:0] \result$319.timestamp ;
+  wire [57:0] \result$319.word0 ;
+  wire \result$319.word0.crc_ok ;
+  wire \result$319.word0.ne ;
+  wire \result$319.word0.nw ;
+  wire [54:0] \result$319.word0.position ;
+  wire [42:0] \result$319.word1 ;
+  wire \result$319.word1.crc_ok ;
+  wire \result$319.word1.ne ;
+  wire \result$319.word1.nw ;
+  wire [39:0] \result$319.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -7994,47 +8397,55 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$148 ;
+  wire \resync$155 ;
   wire [15:0] rises;
-  wire [15:0] \rises$128 ;
+  wire [15:0] \rises$134 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$325 ;
+  wire \sample$342 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$308 ;
+  wire [12:0] \settled_delay$325 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$47 ;
-  wire \slo$57 ;
-  wire \slo$93 ;
+  wire \slo$52 ;
+  wire \slo$62 ;
+  wire \slo$99 ;
   wire slo_stuck;
-  wire \slo_stuck$88 ;
+  wire \slo_stuck$94 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$90 ;
+  wire \slo_stuck_live$96 ;
   wire slots_full;
-  wire \slots_full$74 ;
+  wire \slots_full$81 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$322 ;
+  wire \spw_mismatch$339 ;
+  wire ssi;
+  wire \ssi$196 ;
+  wire \ssi$200 ;
+  wire ssi_double;
+  wire \ssi_double$201 ;
+  wire ssi_error;
+  wire \ssi_error$202 ;
+  wire ssi_error_low;
   input start;
   wire start;
-  input \start$243 ;
-  wire \start$243 ;
-  wire \start$38 ;
+  input \start$260 ;
+  wire \start$260 ;
+  wire \start$43 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$126 ;
+  wire [15:0] \start_slot$132 ;
   wire started;
-  wire \started$124 ;
-  wire \started$72 ;
+  wire \started$130 ;
+  wire \started$79 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -8071,7 +8482,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$206 ;
+  wire [3:0] \status$224 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -8089,26 +8500,26 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$301 ;
+  wire [3:0] \status$318 ;
   wire stop_bit;
-  wire \stop_bit$78 ;
+  wire \stop_bit$84 ;
   wire stopped;
-  wire \stopped$76 ;
+  wire \stopped$82 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$107 ;
+  wire [23:0] \timeout_limit$113 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$184 ;
+  wire [7:0] \tolerance$191 ;
   input trigger;
   wire trigger;
-  wire \trigger$49 ;
+  wire \trigger$54 ;
   wire unconfirmed;
   wire valid;
-  wire \valid$213 ;
-  output \valid$299 ;
-  wire \valid$299 ;
+  wire \valid$231 ;
+  output \valid$316 ;
+  wire \valid$316 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -8126,34 +8537,34 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$138 ;
+  wire [1:0] \word_count$145 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$174 ;
-  wire [11:0] \words$174[0] ;
+  wire [23:0] \words$181 ;
+  wire [11:0] \words$181[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$174[0].crc ;
-  wire [5:0] \words$174[0].data_bits ;
-  wire \words$174[0].gray ;
-  wire \words$174[0].lc ;
-  wire \words$174[0].nenw ;
-  wire \words$174[0].signed ;
-  wire [11:0] \words$174[1] ;
+  wire [1:0] \words$181[0].crc ;
+  wire [5:0] \words$181[0].data_bits ;
+  wire \words$181[0].gray ;
+  wire \words$181[0].lc ;
+  wire \words$181[0].nenw ;
+  wire \words$181[0].signed ;
+  wire [11:0] \words$181[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$174[1].crc ;
-  wire [5:0] \words$174[1].data_bits ;
-  wire \words$174[1].gray ;
-  wire \words$174[1].lc ;
-  wire \words$174[1].nenw ;
-  wire \words$174[1].signed ;
+  wire [1:0] \words$181[1].crc ;
+  wire [5:0] \words$181[1].data_bits ;
+  wire \words$181[1].gray ;
+  wire \words$181[1].lc ;
+  wire \words$181[1].nenw ;
+  wire \words$181[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -8179,40 +8590,48 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \words[1].nenw ;
   wire \words[1].signed ;
   wire zero;
-  assign periodic = \periodic$40  | frames;
-  assign enable = cycle[144:141] != 4'hf;
+  assign periodic = \periodic$45  | frames;
+  assign frame_done = cycle[259] ? stopped : done;
+  assign arm = cycle[259] ? first_rise : ma_arm;
+  assign \$1  = cycle[144:141] != 4'hf;
+  assign \$2  = ~ cycle[259];
+  assign enable = \$1  & \$2 ;
   assign rearm = cfg_delay_tolerance == 4'hf;
-  assign \$1  = ~ started_before;
-  assign \check$163  = started & \$1 ;
-  assign \$2  = result[2:0] == 1'h1;
-  assign \$3  = ca_done & \$2 ;
-  assign \$4  = result[2:0] == 2'h2;
-  assign \$5  = ca_done & \$4 ;
-  assign \$6  = result[2:0] == 2'h3;
+  assign \$3  = ~ started_before;
+  assign \check$170  = started & \$3 ;
+  assign \$4  = ~ cycle[259];
+  assign cdm = \cdm$275  & \$4 ;
+  assign \$5  = ~ cycle[259];
+  assign frame_ok = passed & \$5 ;
+  assign \$6  = result[2:0] == 1'h1;
   assign \$7  = ca_done & \$6 ;
-  assign \$8  = result[2:0] == 3'h4;
+  assign \$8  = result[2:0] == 2'h2;
   assign \$9  = ca_done & \$8 ;
-  assign \$10  = result[2:0] == 3'h5;
+  assign \$10  = result[2:0] == 2'h3;
   assign \$11  = ca_done & \$10 ;
-  assign \$12  = report_frame & spw_mismatch;
-  assign \$13  = status == 4'hd;
-  assign \$14  = report_frame & \$13 ;
-  assign \$15  = status == 4'he;
-  assign \$16  = report_frame & \$15 ;
-  assign \busy$294  = ~ idle;
+  assign \$12  = result[2:0] == 3'h4;
+  assign \$13  = ca_done & \$12 ;
+  assign \$14  = result[2:0] == 3'h5;
+  assign \$15  = ca_done & \$14 ;
+  assign \$16  = report_frame & spw_mismatch;
+  assign \$17  = status == 4'hd;
+  assign \$18  = report_frame & \$17 ;
+  assign \$19  = status == 4'he;
+  assign \$20  = report_frame & \$19 ;
+  assign \busy$311  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$129 ;
-  assign \$18  = \sample$325  & \$17 ;
+  assign \$21  = ~ \clear$135 ;
+  assign \$22  = \sample$342  & \$21 ;
   always @(posedge clk)
-    sample <= \$19 ;
+    sample <= \$23 ;
   always @(posedge clk)
-    \bit  <= \$20 ;
+    \bit  <= \$24 ;
   always @(posedge clk)
-    started_before <= \$21 ;
+    started_before <= \$25 ;
   always @(posedge clk)
-    learn <= \$22 ;
+    learn <= \$26 ;
   always @(posedge clk)
-    clean <= \$23 ;
+    clean <= \$27 ;
   \biss_master_axil.ch0.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -8248,7 +8667,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$155 ),
+    .fault(\restart$162 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -8265,17 +8684,18 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$129 ),
+    .receiver_clear(\clear$135 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$57 ),
+    .slo(\slo$62 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
+    .ssi(cycle[259]),
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
@@ -8284,19 +8704,19 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch0.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$270 ),
+    .clear(\clear$287 ),
     .clk(clk),
-    .events(\events$278 ),
+    .events(\events$295 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters  counters (
-    .clear(\clear$270 ),
+    .clear(\clear$287 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$269 ),
+    .events(\events$286 ),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.decoder  decoder (
@@ -8308,15 +8728,18 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .crcs(crcs),
     .data0(data0),
     .data1(spw),
-    .done(frame_done),
+    .done(done),
     .lc(lc),
     .lc_load(load),
+    .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$129 ),
+    .\port$6396$272 (cycle[274:272]),
+    .receiver_clear(\clear$135 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
+    .ssi(cycle[259]),
     .start_slot(start_slot),
     .started(started),
     .stop_bit(stop_bit),
@@ -8325,7 +8748,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .words(words)
   );
   \biss_master_axil.ch0.core.delay_check  delay_check (
-    .check(\check$163 ),
+    .check(\check$170 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -8341,13 +8764,13 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch0.core.line_noise  line_noise (
     .clk(clk),
-    .close(frame_done),
+    .close(done),
     .\event (\event ),
     .events(events),
-    .level(\slo$57 ),
+    .level(\slo$62 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$155 ),
+    .restart(\restart$162 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -8355,7 +8778,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   \biss_master_axil.ch0.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$94 ),
+    .\clocking (\ma_busy$100 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -8367,21 +8790,24 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .second_rise(ma_arm)
   );
   \biss_master_axil.ch0.core.ma_stop  ma_stop (
-    .clear(\clear$129 ),
+    .clear(\clear$135 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
     .rises(rises),
     .rst(rst),
+    .ssi(cycle[259]),
+    .ssi_double(cycle[274]),
+    .ssi_error(cycle[272]),
     .start_slot(start_slot),
-    .\started$11 (started),
+    .\started$14 (started),
     .w1_enable(cycle[199]),
-    .words(\words$174 )
+    .words(\words$181 )
   );
   \biss_master_axil.ch0.core.register_access  register_access (
-    .abort(\abort$245 ),
+    .abort(\abort$262 ),
     .busy(frames),
-    .cdm(cdm),
+    .cdm(\cdm$275 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -8391,37 +8817,38 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$231 ),
+    .request(\request$248 ),
     .result(result),
     .rst(rst),
-    .start(\start$243 ),
+    .start(\start$260 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch0.core.results  results (
     .clk(clk),
-    .done(\done$297 ),
+    .done(\done$314 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$302 ),
+    .result(\result$319 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$299 )
+    .valid_out(\valid$316 )
   );
   \biss_master_axil.ch0.core.sampler  sampler (
-    .arm(ma_arm),
-    .\bit (\bit$326 ),
+    .arm(arm),
+    .\bit (\bit$343 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$57 ),
+    .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$129 ),
+    .\port$6396$259 (cycle[271:259]),
+    .receiver_clear(\clear$135 ),
     .rst(rst),
-    .sample(\sample$325 ),
+    .sample(\sample$342 ),
     .slo(slo)
   );
   \biss_master_axil.ch0.core.scheduler  scheduler (
@@ -8442,7 +8869,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$5982$0 (\bit ),
+    .\port$6384$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -8474,7 +8901,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$94 ),
+    .ma_busy(\ma_busy$100 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -8483,7 +8910,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$57 ),
+    .slo(\slo$62 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -8491,12 +8918,13 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch0.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$327 ),
+    .clean(\clean$344 ),
+    .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$155 ),
+    .fault(\restart$162 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -8506,8 +8934,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .passed(frame_ok),
-    .\port$2334$0 (\$24 ),
+    .passed(passed),
+    .\port$2541$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -8518,193 +8946,200 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$19  = \$18 ;
-    if (rst) begin
-      \$19  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$20  = \bit$326 ;
-    if (rst) begin
-      \$20  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$21  = started;
-    if (rst) begin
-      \$21  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$22  = report_frame;
-    if (rst) begin
-      \$22  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$23  = \clean$327 ;
+    \$23  = \$22 ;
     if (rst) begin
       \$23  = 1'h0;
     end
   end
-  assign \idle$36  = idle;
-  assign \start$38  = start;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$24  = \bit$343 ;
+    if (rst) begin
+      \$24  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$25  = started;
+    if (rst) begin
+      \$25  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$26  = report_frame;
+    if (rst) begin
+      \$26  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$27  = \clean$344 ;
+    if (rst) begin
+      \$27  = 1'h0;
+    end
+  end
+  assign \idle$41  = idle;
+  assign \start$43  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$45  = idle;
-  assign \slo$47  = slo;
-  assign \trigger$49  = trigger;
-  assign \request$51  = request;
-  assign \abort$52  = abort;
+  assign \idle$50  = idle;
+  assign \slo$52  = slo;
+  assign \trigger$54  = trigger;
+  assign \request$56  = request;
+  assign \abort$57  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$57 ;
+  assign level = \slo$62 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$66  = locked;
-  assign \early$68  = early;
-  assign done = frame_done;
-  assign \started$72  = started;
-  assign \slots_full$74  = slots_full;
-  assign \stopped$76  = stopped;
-  assign \stop_bit$78  = stop_bit;
+  assign \locked$71  = locked;
+  assign \early$73  = early;
+  assign ssi = cycle[259];
+  assign \started$79  = started;
+  assign \slots_full$81  = slots_full;
+  assign \stopped$82  = stopped;
+  assign \stop_bit$84  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$82  = break_over;
-  assign \ack_expired$84  = ack_expired;
-  assign \no_start_expired$86  = no_start_expired;
-  assign \slo_stuck$88  = slo_stuck;
-  assign \slo_stuck_live$90  = slo_stuck_live;
-  assign \delay_over$92  = delay_over;
-  assign \slo$93  = \slo$57 ;
-  assign \clocking  = \ma_busy$94 ;
+  assign \break_over$88  = break_over;
+  assign \ack_expired$90  = ack_expired;
+  assign \no_start_expired$92  = no_start_expired;
+  assign \slo_stuck$94  = slo_stuck;
+  assign \slo_stuck_live$96  = slo_stuck_live;
+  assign \delay_over$98  = delay_over;
+  assign \slo$99  = \slo$62 ;
+  assign \clocking  = \ma_busy$100 ;
   assign timer_clear = clear;
-  assign \in_clock$99  = in_clock;
+  assign \in_clock$105  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$105  = ack_limit;
-  assign \timeout_limit$107  = timeout_limit;
-  assign \no_start_limit$109  = no_start_limit;
-  assign \delay$111  = delay;
-  assign \delay_limit$113  = delay_limit;
+  assign \ack_limit$111  = ack_limit;
+  assign \timeout_limit$113  = timeout_limit;
+  assign \no_start_limit$115  = no_start_limit;
+  assign \delay$117  = delay;
+  assign \delay_limit$119  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$118  = quiet;
-  assign \quiet_live$120  = quiet_live;
+  assign \quiet$124  = quiet;
+  assign \quiet_live$126  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$124  = started;
-  assign \start_slot$126  = start_slot;
-  assign \rises$128  = rises;
-  assign receiver_clear = \clear$129 ;
+  assign \started$130  = started;
+  assign \start_slot$132  = start_slot;
+  assign \rises$134  = rises;
+  assign receiver_clear = \clear$135 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$135  = cycle[15:0];
-  assign arm = ma_arm;
-  assign \word_count$138  = word_count;
-  assign \lc$140  = lc;
+  assign \half_period$141  = cycle[15:0];
+  assign \word_count$145  = word_count;
+  assign \lc$147  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$142  = { lc[4:0], \bit  };
+  assign \lc_next$149  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$148  = resync;
+  assign \resync$155  = resync;
   assign waiting = watch;
-  assign \level$151  = \slo$57 ;
+  assign \level$158  = \slo$62 ;
   assign noise = sampler_noise;
-  assign close = frame_done;
-  assign fault = \restart$155 ;
+  assign close = done;
+  assign fault = \restart$162 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$162  = delay;
+  assign \delay$169  = delay;
   assign \$signal  = learn;
-  assign \clean$168  = clean;
-  assign \noisy$170  = noisy;
+  assign \clean$175  = clean;
+  assign \noisy$177  = noisy;
   assign jump = delay_jump;
-  assign \crcs$176  = crcs;
-  assign \crcs$177  = crcs;
+  assign \crcs$183  = crcs;
+  assign \crcs$184  = crcs;
   assign w1_enable = cycle[199];
-  assign \cpw_top$180  = cpw_top;
+  assign \cpw_top$187  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[205:200];
-  assign \tolerance$184  = cycle[258:251];
+  assign \tolerance$191  = cycle[258:251];
   assign match = spw_match;
+  assign fixed = cycle[259];
+  assign fixed_delay = { 1'h0, cycle[271:260] };
+  assign \ssi$196  = cycle[259];
+  assign ssi_error = cycle[272];
+  assign ssi_error_low = cycle[273];
+  assign ssi_double = cycle[274];
+  assign \ssi$200  = cycle[259];
+  assign \ssi_double$201  = cycle[274];
+  assign \ssi_error$202  = cycle[272];
+  assign mismatch = copy_mismatch;
   assign cfg = cycle;
-  assign \report_frame$189  = report_frame;
-  assign \fault$190  = \restart$155 ;
-  assign \fault_status$192  = fault_status;
-  assign \crc_ok$194  = crc_ok;
+  assign \report_frame$207  = report_frame;
+  assign \fault$208  = \restart$162 ;
+  assign \fault_status$210  = fault_status;
+  assign \crc_ok$212  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$204  = report;
-  assign \status$206  = status;
+  assign \report$222  = report;
+  assign \status$224  = status;
   assign setting = cycle[148:145];
-  assign \report$208  = report;
-  assign \report_frame$209  = report_frame;
-  assign \report_delay$211  = report_delay;
-  assign \valid$213  = valid;
-  assign word_crc_ok = { \$24 , crc_ok[0] };
-  assign \first_rise$229  = first_rise;
+  assign \report$226  = report;
+  assign \report_frame$227  = report_frame;
+  assign \report_delay$229  = report_delay;
+  assign \valid$231  = valid;
+  assign word_crc_ok = { \$28 , crc_ok[0] };
+  assign \first_rise$246  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$243 ;
-  assign ca_abort = \abort$245 ;
+  assign ca_start = \start$260 ;
+  assign ca_abort = \abort$262 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$254  = frames;
-  assign \done$256  = ca_done;
-  assign \cdm$258  = cdm;
+  assign \busy$271  = frames;
+  assign \done$273  = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign passed = frame_ok;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$270 ;
+  assign clear_counters = \clear$287 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$283  = \clear$270 ;
+  assign \clear$300  = \clear$287 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$291  = count_busy;
-  assign \ma$293  = ma;
-  assign \overrun$296  = overrun;
-  assign \done$298  = \done$297 ;
-  assign valid_out = \valid$299 ;
-  assign \status$301  = \result$302 [3:0];
-  assign timestamp = \result$302 [35:4];
-  assign line_delay = \result$302 [48:36];
-  assign \cds$305  = \result$302 [49];
-  assign noise_events = \result$302 [53:50];
-  assign delay_settled = \result$302 [54];
-  assign \settled_delay$308  = \result$302 [67:55];
-  assign delay_spread = \result$302 [75:68];
-  assign word0_position = \result$302 [130:76];
-  assign word0_ne = \result$302 [131];
-  assign word0_nw = \result$302 [132];
-  assign word0_crc_ok = \result$302 [133];
-  assign word1_position = \result$302 [173:134];
-  assign word1_ne = \result$302 [174];
-  assign word1_nw = \result$302 [175];
-  assign word1_crc_ok = \result$302 [176];
-  assign \lc$318  = \result$302 [182:177];
-  assign \lc_repeat$319  = \result$302 [183];
-  assign \lc_skip$320  = \result$302 [184];
-  assign \lc_zero$321  = \result$302 [185];
-  assign \spw_mismatch$322  = \result$302 [186];
+  assign \busy$308  = count_busy;
+  assign \ma$310  = ma;
+  assign \overrun$313  = overrun;
+  assign \done$315  = \done$314 ;
+  assign valid_out = \valid$316 ;
+  assign \status$318  = \result$319 [3:0];
+  assign timestamp = \result$319 [35:4];
+  assign line_delay = \result$319 [48:36];
+  assign \cds$322  = \result$319 [49];
+  assign noise_events = \result$319 [53:50];
+  assign delay_settled = \result$319 [54];
+  assign \settled_delay$325  = \result$319 [67:55];
+  assign delay_spread = \result$319 [75:68];
+  assign word0_position = \result$319 [130:76];
+  assign word0_ne = \result$319 [131];
+  assign word0_nw = \result$319 [132];
+  assign word0_crc_ok = \result$319 [133];
+  assign word1_position = \result$319 [173:134];
+  assign word1_ne = \result$319 [174];
+  assign word1_nw = \result$319 [175];
+  assign word1_crc_ok = \result$319 [176];
+  assign \lc$335  = \result$319 [182:177];
+  assign \lc_repeat$336  = \result$319 [183];
+  assign \lc_skip$337  = \result$319 [184];
+  assign \lc_zero$338  = \result$319 [185];
+  assign \spw_mismatch$339  = \result$319 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -8743,6 +9178,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \live.w1_crc.inverted  = live[249];
   assign \live.spw_check  = live[250];
   assign \live.spw_tolerance  = live[258:251];
+  assign \live.ssi  = live[259];
+  assign \live.ssi_delay  = live[271:260];
+  assign \live.ssi_error  = live[272];
+  assign \live.ssi_error_low  = live[273];
+  assign \live.ssi_double  = live[274];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -8781,6 +9221,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \cycle.w1_crc.inverted  = cycle[249];
   assign \cycle.spw_check  = cycle[250];
   assign \cycle.spw_tolerance  = cycle[258:251];
+  assign \cycle.ssi  = cycle[259];
+  assign \cycle.ssi_delay  = cycle[271:260];
+  assign \cycle.ssi_error  = cycle[272];
+  assign \cycle.ssi_error_low  = cycle[273];
+  assign \cycle.ssi_double  = cycle[274];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -8795,20 +9240,20 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$174[0]  = \words$174 [11:0];
-  assign \words$174[0].data_bits  = \words$174 [5:0];
-  assign \words$174[0].nenw  = \words$174 [6];
-  assign \words$174[0].lc  = \words$174 [7];
-  assign \words$174[0].crc  = \words$174 [9:8];
-  assign \words$174[0].gray  = \words$174 [10];
-  assign \words$174[0].signed  = \words$174 [11];
-  assign \words$174[1]  = \words$174 [23:12];
-  assign \words$174[1].data_bits  = \words$174 [17:12];
-  assign \words$174[1].nenw  = \words$174 [18];
-  assign \words$174[1].lc  = \words$174 [19];
-  assign \words$174[1].crc  = \words$174 [21:20];
-  assign \words$174[1].gray  = \words$174 [22];
-  assign \words$174[1].signed  = \words$174 [23];
+  assign \words$181[0]  = \words$181 [11:0];
+  assign \words$181[0].data_bits  = \words$181 [5:0];
+  assign \words$181[0].nenw  = \words$181 [6];
+  assign \words$181[0].lc  = \words$181 [7];
+  assign \words$181[0].crc  = \words$181 [9:8];
+  assign \words$181[0].gray  = \words$181 [10];
+  assign \words$181[0].signed  = \words$181 [11];
+  assign \words$181[1]  = \words$181 [23:12];
+  assign \words$181[1].data_bits  = \words$181 [17:12];
+  assign \words$181[1].nenw  = \words$181 [18];
+  assign \words$181[1].lc  = \words$181 [19];
+  assign \words$181[1].crc  = \words$181 [21:20];
+  assign \words$181[1].gray  = \words$181 [22];
+  assign \words$181[1].signed  = \words$181 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -8819,26 +9264,26 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$176[0]  = crcs[37:0];
-  assign \crcs$176[0].width  = crcs[4:0];
-  assign \crcs$176[0].poly  = crcs[20:5];
-  assign \crcs$176[0].start  = crcs[36:21];
-  assign \crcs$176[0].inverted  = crcs[37];
-  assign \crcs$176[1]  = crcs[75:38];
-  assign \crcs$176[1].width  = crcs[42:38];
-  assign \crcs$176[1].poly  = crcs[58:43];
-  assign \crcs$176[1].start  = crcs[74:59];
-  assign \crcs$176[1].inverted  = crcs[75];
-  assign \crcs$177[0]  = crcs[37:0];
-  assign \crcs$177[0].width  = crcs[4:0];
-  assign \crcs$177[0].poly  = crcs[20:5];
-  assign \crcs$177[0].start  = crcs[36:21];
-  assign \crcs$177[0].inverted  = crcs[37];
-  assign \crcs$177[1]  = crcs[75:38];
-  assign \crcs$177[1].width  = crcs[42:38];
-  assign \crcs$177[1].poly  = crcs[58:43];
-  assign \crcs$177[1].start  = crcs[74:59];
-  assign \crcs$177[1].inverted  = crcs[75];
+  assign \crcs$183[0]  = crcs[37:0];
+  assign \crcs$183[0].width  = crcs[4:0];
+  assign \crcs$183[0].poly  = crcs[20:5];
+  assign \crcs$183[0].start  = crcs[36:21];
+  assign \crcs$183[0].inverted  = crcs[37];
+  assign \crcs$183[1]  = crcs[75:38];
+  assign \crcs$183[1].width  = crcs[42:38];
+  assign \crcs$183[1].poly  = crcs[58:43];
+  assign \crcs$183[1].start  = crcs[74:59];
+  assign \crcs$183[1].inverted  = crcs[75];
+  assign \crcs$184[0]  = crcs[37:0];
+  assign \crcs$184[0].width  = crcs[4:0];
+  assign \crcs$184[0].poly  = crcs[20:5];
+  assign \crcs$184[0].start  = crcs[36:21];
+  assign \crcs$184[0].inverted  = crcs[37];
+  assign \crcs$184[1]  = crcs[75:38];
+  assign \crcs$184[1].width  = crcs[42:38];
+  assign \crcs$184[1].poly  = crcs[58:43];
+  assign \crcs$184[1].start  = crcs[74:59];
+  assign \crcs$184[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -8877,6 +9322,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \cfg.w1_crc.inverted  = cycle[249];
   assign \cfg.spw_check  = cycle[250];
   assign \cfg.spw_tolerance  = cycle[258:251];
+  assign \cfg.ssi  = cycle[259];
+  assign \cfg.ssi_delay  = cycle[271:260];
+  assign \cfg.ssi_error  = cycle[272];
+  assign \cfg.ssi_error_low  = cycle[273];
+  assign \cfg.ssi_double  = cycle[274];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -8900,41 +9350,41 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$231.slave_id  = \request$231 [2:0];
-  assign \request$231.address  = \request$231 [9:3];
-  assign \request$231.count  = \request$231 [16:10];
-  assign \request$231.write  = \request$231 [17];
+  assign \request$248.slave_id  = \request$248 [2:0];
+  assign \request$248.address  = \request$248 [9:3];
+  assign \request$248.count  = \request$248 [16:10];
+  assign \request$248.write  = \request$248 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$269.ca_crc4_error  = \events$269 [0];
-  assign \events$269.ca_no_answer  = \events$269 [1];
-  assign \events$269.ca_refused  = \events$269 [2];
-  assign \events$269.ca_aborted  = \events$269 [3];
-  assign \events$269.ca_data_fault  = \events$269 [4];
+  assign \events$286.ca_crc4_error  = \events$286 [0];
+  assign \events$286.ca_no_answer  = \events$286 [1];
+  assign \events$286.ca_refused  = \events$286 [2];
+  assign \events$286.ca_aborted  = \events$286 [3];
+  assign \events$286.ca_data_fault  = \events$286 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$278.crc_word0  = \events$278 [0];
-  assign \events$278.crc_word1  = \events$278 [1];
-  assign \events$278.no_ack  = \events$278 [2];
-  assign \events$278.no_start  = \events$278 [3];
-  assign \events$278.delay_range  = \events$278 [4];
-  assign \events$278.slo_stuck_low  = \events$278 [5];
-  assign \events$278.lc_repeat  = \events$278 [6];
-  assign \events$278.lc_skip  = \events$278 [7];
-  assign \events$278.lc_zero  = \events$278 [8];
-  assign \events$278.spw_mismatch  = \events$278 [9];
-  assign \events$278.overrun  = \events$278 [10];
-  assign \events$278.aborted  = \events$278 [11];
-  assign \events$278.no_stop  = \events$278 [12];
-  assign \events$278.noisy_line  = \events$278 [13];
-  assign \events$278.delay_jump  = \events$278 [14];
-  assign \events$278.noise_event  = \events$278 [15];
+  assign \events$295.crc_word0  = \events$295 [0];
+  assign \events$295.crc_word1  = \events$295 [1];
+  assign \events$295.no_ack  = \events$295 [2];
+  assign \events$295.no_start  = \events$295 [3];
+  assign \events$295.delay_range  = \events$295 [4];
+  assign \events$295.slo_stuck_low  = \events$295 [5];
+  assign \events$295.lc_repeat  = \events$295 [6];
+  assign \events$295.lc_skip  = \events$295 [7];
+  assign \events$295.lc_zero  = \events$295 [8];
+  assign \events$295.spw_mismatch  = \events$295 [9];
+  assign \events$295.overrun  = \events$295 [10];
+  assign \events$295.aborted  = \events$295 [11];
+  assign \events$295.no_stop  = \events$295 [12];
+  assign \events$295.noisy_line  = \events$295 [13];
+  assign \events$295.delay_jump  = \events$295 [14];
+  assign \events$295.noise_event  = \events$295 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -8942,60 +9392,60 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$302.status  = \result$302 [3:0];
-  assign \result$302.timestamp  = \result$302 [35:4];
-  assign \result$302.line_delay  = \result$302 [48:36];
-  assign \result$302.cds  = \result$302 [49];
-  assign \result$302.noise_events  = \result$302 [53:50];
-  assign \result$302.delay_settled  = \result$302 [54];
-  assign \result$302.settled_delay  = \result$302 [67:55];
-  assign \result$302.delay_spread  = \result$302 [75:68];
-  assign \result$302.word0  = \result$302 [133:76];
-  assign \result$302.word0.position  = \result$302 [130:76];
-  assign \result$302.word0.ne  = \result$302 [131];
-  assign \result$302.word0.nw  = \result$302 [132];
-  assign \result$302.word0.crc_ok  = \result$302 [133];
-  assign \result$302.word1  = \result$302 [176:134];
-  assign \result$302.word1.position  = \result$302 [173:134];
-  assign \result$302.word1.ne  = \result$302 [174];
-  assign \result$302.word1.nw  = \result$302 [175];
-  assign \result$302.word1.crc_ok  = \result$302 [176];
-  assign \result$302.lc  = \result$302 [182:177];
-  assign \result$302.lc_repeat  = \result$302 [183];
-  assign \result$302.lc_skip  = \result$302 [184];
-  assign \result$302.lc_zero  = \result$302 [185];
-  assign \result$302.spw_mismatch  = \result$302 [186];
-  assign \events$278 [15] = \event ;
-  assign \events$278 [14] = \$16 ;
-  assign \events$278 [13] = \$14 ;
-  assign \events$278 [12] = faults[6];
-  assign \events$278 [11] = faults[4];
-  assign \events$278 [10] = overrun;
-  assign \events$278 [9] = \$12 ;
-  assign \events$278 [8] = lc_zero;
-  assign \events$278 [7] = lc_skip;
-  assign \events$278 [6] = lc_repeat;
-  assign \events$278 [5] = faults[3];
-  assign \events$278 [4] = faults[2];
-  assign \events$278 [3] = faults[1];
-  assign \events$278 [2] = faults[0];
-  assign \events$278 [1] = crc_error[1];
-  assign \events$278 [0] = crc_error[0];
-  assign \events$269 [4] = \$11 ;
-  assign \events$269 [3] = \$9 ;
-  assign \events$269 [2] = \$7 ;
-  assign \events$269 [1] = \$5 ;
-  assign \events$269 [0] = \$3 ;
+  assign \result$319.status  = \result$319 [3:0];
+  assign \result$319.timestamp  = \result$319 [35:4];
+  assign \result$319.line_delay  = \result$319 [48:36];
+  assign \result$319.cds  = \result$319 [49];
+  assign \result$319.noise_events  = \result$319 [53:50];
+  assign \result$319.delay_settled  = \result$319 [54];
+  assign \result$319.settled_delay  = \result$319 [67:55];
+  assign \result$319.delay_spread  = \result$319 [75:68];
+  assign \result$319.word0  = \result$319 [133:76];
+  assign \result$319.word0.position  = \result$319 [130:76];
+  assign \result$319.word0.ne  = \result$319 [131];
+  assign \result$319.word0.nw  = \result$319 [132];
+  assign \result$319.word0.crc_ok  = \result$319 [133];
+  assign \result$319.word1  = \result$319 [176:134];
+  assign \result$319.word1.position  = \result$319 [173:134];
+  assign \result$319.word1.ne  = \result$319 [174];
+  assign \result$319.word1.nw  = \result$319 [175];
+  assign \result$319.word1.crc_ok  = \result$319 [176];
+  assign \result$319.lc  = \result$319 [182:177];
+  assign \result$319.lc_repeat  = \result$319 [183];
+  assign \result$319.lc_skip  = \result$319 [184];
+  assign \result$319.lc_zero  = \result$319 [185];
+  assign \result$319.spw_mismatch  = \result$319 [186];
+  assign \events$295 [15] = \event ;
+  assign \events$295 [14] = \$20 ;
+  assign \events$295 [13] = \$18 ;
+  assign \events$295 [12] = faults[6];
+  assign \events$295 [11] = faults[4];
+  assign \events$295 [10] = overrun;
+  assign \events$295 [9] = \$16 ;
+  assign \events$295 [8] = lc_zero;
+  assign \events$295 [7] = lc_skip;
+  assign \events$295 [6] = lc_repeat;
+  assign \events$295 [5] = faults[3];
+  assign \events$295 [4] = faults[2];
+  assign \events$295 [3] = faults[1];
+  assign \events$295 [2] = faults[0];
+  assign \events$295 [1] = crc_error[1];
+  assign \events$295 [0] = crc_error[0];
+  assign \events$286 [4] = \$15 ;
+  assign \events$286 [3] = \$13 ;
+  assign \events$286 [2] = \$11 ;
+  assign \events$286 [1] = \$9 ;
+  assign \events$286 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$231 [17] = ca_write;
-  assign \request$231 [16:10] = ca_count;
-  assign \request$231 [9:3] = ca_address;
-  assign \request$231 [2:0] = ca_slave_id;
+  assign \request$248 [17] = ca_write;
+  assign \request$248 [16:10] = ca_count;
+  assign \request$248 [9:3] = ca_address;
+  assign \request$248 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
-  assign frame[176] = \$24 ;
+  assign frame[176] = \$28 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
   assign frame[173:134] = spw;
@@ -9014,10 +9464,15 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$174 [23:12] = cycle[211:200];
-  assign \words$174 [11:0] = cycle[160:149];
+  assign \words$181 [23:12] = cycle[211:200];
+  assign \words$181 [11:0] = cycle[160:149];
   assign words[23:12] = cycle[211:200];
   assign words[11:0] = cycle[160:149];
+  assign live[274] = cfg_ssi_double;
+  assign live[273] = cfg_ssi_error_low;
+  assign live[272] = cfg_ssi_error;
+  assign live[271:260] = cfg_ssi_delay;
+  assign live[259] = cfg_ssi;
   assign live[258:251] = cfg_spw_tolerance;
   assign live[250] = cfg_spw_check;
   assign live[249] = cfg_w1_crc_inverted;
@@ -9099,29 +9554,36 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire \$45 ;
   wire \$46 ;
   wire \$47 ;
-  wire [23:0] \$48 ;
+  wire \$48 ;
   wire \$49 ;
   wire \$5 ;
-  wire [23:0] \$50 ;
+  wire \$50 ;
   wire \$51 ;
-  wire [11:0] \$52 ;
+  wire \$52 ;
   wire \$53 ;
-  wire [11:0] \$54 ;
-  wire \$55 ;
-  wire [3:0] \$56 ;
-  wire [16:0] \$57 ;
-  wire [24:0] \$58 ;
-  reg \$59 ;
+  wire \$54 ;
+  wire [23:0] \$55 ;
+  wire \$56 ;
+  wire [23:0] \$57 ;
+  wire \$58 ;
+  wire [11:0] \$59 ;
   wire \$6 ;
-  reg [258:0] \$60 ;
-  reg [23:0] \$61 ;
-  reg [23:0] \$62 ;
-  reg [11:0] \$63 ;
-  reg [11:0] \$64 ;
-  reg [16:0] \$65 ;
-  reg [75:0] \$66 ;
-  reg [24:0] \$67 ;
+  wire \$60 ;
+  wire [11:0] \$61 ;
+  wire \$62 ;
+  wire [3:0] \$63 ;
+  wire [16:0] \$64 ;
+  wire [24:0] \$65 ;
+  reg \$66 ;
+  reg [274:0] \$67 ;
+  reg [23:0] \$68 ;
+  reg [23:0] \$69 ;
   wire \$7 ;
+  reg [11:0] \$70 ;
+  reg [11:0] \$71 ;
+  reg [16:0] \$72 ;
+  reg [75:0] \$73 ;
+  reg [24:0] \$74 ;
   wire \$8 ;
   wire \$9 ;
   output [23:0] ack_limit;
@@ -9140,8 +9602,8 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  output [258:0] cycle;
-  reg [258:0] cycle = 259'h00000000000000000000000000000000000000000000000000000000000000000;
+  output [274:0] cycle;
+  reg [274:0] cycle = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [3:0] \cycle.confirm_frames ;
@@ -9154,6 +9616,11 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire [23:0] \cycle.request_period ;
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
+  wire \cycle.ssi ;
+  wire [11:0] \cycle.ssi_delay ;
+  wire \cycle.ssi_double ;
+  wire \cycle.ssi_error ;
+  wire \cycle.ssi_error_low ;
   wire [23:0] \cycle.timeout_limit ;
   wire [11:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
@@ -9196,8 +9663,8 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [258:0] live;
-  wire [258:0] live;
+  input [274:0] live;
+  wire [274:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [3:0] \live.confirm_frames ;
@@ -9210,6 +9677,11 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   wire [23:0] \live.request_period ;
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
+  wire \live.ssi ;
+  wire [11:0] \live.ssi_delay ;
+  wire \live.ssi_double ;
+  wire \live.ssi_error ;
+  wire \live.ssi_error_low ;
   wire [23:0] \live.timeout_limit ;
   wire [11:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
@@ -9258,6 +9730,13 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
+  assign \$26  = \$24  | \$25 ;
+  assign \$27  = live[209:208] == 2'h3;
+  assign \$28  = | live[216:212];
+  assign \$29  = \$27  & \$28 ;
+  assign \$30  = live[216:212] <= 5'h10;
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = \$26  | \$31 ;
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
@@ -9272,37 +9751,44 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$44  = \$42  & \$43 ;
   assign \$45  = \$40  | \$44 ;
   assign \$46  = \$39  & \$45 ;
-  assign \$47  = ! live[87:64];
-  assign \$48  = \$47  ? 24'h000fa0 : live[87:64];
-  assign \$49  = ! live[111:88];
-  assign \$50  = \$49  ? 24'h001f40 : live[111:88];
-  assign \$51  = ! live[123:112];
-  assign \$52  = \$51  ? 12'hfff : live[123:112];
-  assign \$53  = ! live[136:125];
-  assign \$54  = \$53  ? 12'h064 : live[136:125];
-  assign \$55  = ! live[144:141];
-  assign \$56  = \$55  ? 4'h2 : live[144:141];
-  assign \$57  = live[15:0] + \$56 ;
-  assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
+  assign \$47  = live[272] & live[155];
+  assign \$48  = live[156] | \$47 ;
+  assign \$49  = live[199] | live[250];
+  assign \$50  = \$48  | \$49 ;
+  assign \$51  = live[259] & \$50 ;
+  assign \$52  = ~ \$51 ;
+  assign \$53  = \$46  & \$52 ;
+  assign \$54  = ! live[87:64];
+  assign \$55  = \$54  ? 24'h000fa0 : live[87:64];
+  assign \$56  = ! live[111:88];
+  assign \$57  = \$56  ? 24'h001f40 : live[111:88];
+  assign \$58  = ! live[123:112];
+  assign \$59  = \$58  ? 12'hfff : live[123:112];
+  assign \$60  = ! live[136:125];
+  assign \$61  = \$60  ? 12'h064 : live[136:125];
+  assign \$62  = ! live[144:141];
+  assign \$63  = \$62  ? 4'h2 : live[144:141];
+  assign \$64  = live[15:0] + \$63 ;
+  assign \$65  = ack_limit + { cycle[15:0], 1'h1 };
   assign word_count = 1'h1 + cycle[199];
   always @(posedge clk)
-    ok <= \$59 ;
+    ok <= \$66 ;
   always @(posedge clk)
-    cycle <= \$60 ;
+    cycle <= \$67 ;
   always @(posedge clk)
-    ack_limit <= \$61 ;
+    ack_limit <= \$68 ;
   always @(posedge clk)
-    timeout_limit <= \$62 ;
+    timeout_limit <= \$69 ;
   always @(posedge clk)
-    delay_limit <= \$63 ;
+    delay_limit <= \$70 ;
   always @(posedge clk)
-    quiet_time <= \$64 ;
+    quiet_time <= \$71 ;
   always @(posedge clk)
-    delay_tolerance <= \$65 ;
+    delay_tolerance <= \$72 ;
   always @(posedge clk)
-    crcs <= \$66 ;
+    crcs <= \$73 ;
   always @(posedge clk)
-    no_start_limit <= \$67 ;
+    no_start_limit <= \$74 ;
   assign \$1  = | live[15:1];
   assign \$2  = | live[154:149];
   assign \$3  = live[154:149] <= 6'h37;
@@ -9328,136 +9814,129 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$23  = live[209:208] == 1'h1;
   assign \$24  = \$22  | \$23 ;
   assign \$25  = live[209:208] == 2'h2;
-  assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[209:208] == 2'h3;
-  assign \$28  = | live[216:212];
-  assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[216:212] <= 5'h10;
-  assign \$31  = \$29  & \$30 ;
-  assign \$32  = \$26  | \$31 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$59  = \$46 ;
+    \$66  = \$53 ;
     if (rst) begin
-      \$59  = 1'h0;
+      \$66  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$60  = cycle;
+    \$67  = cycle;
     if (idle) begin
-      \$60  = live;
+      \$67  = live;
     end
     if (rst) begin
-      \$60  = 259'h00000000000000000000000000000000000000000000000000000000000000000;
+      \$67  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$61  = ack_limit;
+    \$68  = ack_limit;
     if (idle) begin
-      \$61  = \$48 ;
+      \$68  = \$55 ;
     end
     if (rst) begin
-      \$61  = 24'h000000;
+      \$68  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$62  = timeout_limit;
+    \$69  = timeout_limit;
     if (idle) begin
-      \$62  = \$50 ;
+      \$69  = \$57 ;
     end
     if (rst) begin
-      \$62  = 24'h000000;
+      \$69  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$63  = delay_limit;
+    \$70  = delay_limit;
     if (idle) begin
-      \$63  = \$52 ;
+      \$70  = \$59 ;
     end
     if (rst) begin
-      \$63  = 12'h000;
+      \$70  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$64  = quiet_time;
+    \$71  = quiet_time;
     if (idle) begin
-      \$64  = \$54 ;
+      \$71  = \$61 ;
     end
     if (rst) begin
-      \$64  = 12'h000;
+      \$71  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$65  = delay_tolerance;
+    \$72  = delay_tolerance;
     if (idle) begin
-      \$65  = \$57 ;
+      \$72  = \$64 ;
     end
     if (rst) begin
-      \$65  = 17'h00000;
+      \$72  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$66  = crcs;
+    \$73  = crcs;
     if (idle) begin
       (* full_case = 32'd1 *)
       casez (live[158:157])
         2'h1:
           begin
-            \$66 [4:0] = 5'h06;
-            \$66 [20:5] = 16'h0003;
-            \$66 [36:21] = 16'h0000;
-            \$66 [37] = 1'h1;
+            \$73 [4:0] = 5'h06;
+            \$73 [20:5] = 16'h0003;
+            \$73 [36:21] = 16'h0000;
+            \$73 [37] = 1'h1;
           end
         2'h2:
           begin
-            \$66 [4:0] = 5'h10;
-            \$66 [20:5] = 16'h90d9;
-            \$66 [36:21] = 16'h0000;
-            \$66 [37] = 1'h1;
+            \$73 [4:0] = 5'h10;
+            \$73 [20:5] = 16'h90d9;
+            \$73 [36:21] = 16'h0000;
+            \$73 [37] = 1'h1;
           end
         2'h3:
-            \$66 [37:0] = live[198:161];
+            \$73 [37:0] = live[198:161];
         default:
-            \$66 [37:0] = 38'h0000000000;
+            \$73 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
       casez (live[209:208])
         2'h1:
           begin
-            \$66 [42:38] = 5'h06;
-            \$66 [58:43] = 16'h0003;
-            \$66 [74:59] = 16'h0000;
-            \$66 [75] = 1'h1;
+            \$73 [42:38] = 5'h06;
+            \$73 [58:43] = 16'h0003;
+            \$73 [74:59] = 16'h0000;
+            \$73 [75] = 1'h1;
           end
         2'h2:
           begin
-            \$66 [42:38] = 5'h10;
-            \$66 [58:43] = 16'h90d9;
-            \$66 [74:59] = 16'h0000;
-            \$66 [75] = 1'h1;
+            \$73 [42:38] = 5'h10;
+            \$73 [58:43] = 16'h90d9;
+            \$73 [74:59] = 16'h0000;
+            \$73 [75] = 1'h1;
           end
         2'h3:
-            \$66 [75:38] = live[249:212];
+            \$73 [75:38] = live[249:212];
         default:
-            \$66 [75:38] = 38'h0000000000;
+            \$73 [75:38] = 38'h0000000000;
       endcase
     end
     if (rst) begin
-      \$66  = 76'h0000000000000000000;
+      \$73  = 76'h0000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$67  = \$58 ;
+    \$74  = \$65 ;
     if (rst) begin
-      \$67  = 25'h0000000;
+      \$74  = 25'h0000000;
     end
   end
   assign \live.ma_half_period  = live[15:0];
@@ -9498,6 +9977,11 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \live.w1_crc.inverted  = live[249];
   assign \live.spw_check  = live[250];
   assign \live.spw_tolerance  = live[258:251];
+  assign \live.ssi  = live[259];
+  assign \live.ssi_delay  = live[271:260];
+  assign \live.ssi_error  = live[272];
+  assign \live.ssi_error_low  = live[273];
+  assign \live.ssi_double  = live[274];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -9536,6 +10020,11 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.w1_crc.inverted  = cycle[249];
   assign \cycle.spw_check  = cycle[250];
   assign \cycle.spw_tolerance  = cycle[258:251];
+  assign \cycle.ssi  = cycle[259];
+  assign \cycle.ssi_delay  = cycle[271:260];
+  assign \cycle.ssi_error  = cycle[272];
+  assign \cycle.ssi_error_low  = cycle[273];
+  assign \cycle.ssi_double  = cycle[274];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -9632,9 +10121,9 @@ module \biss_master_axil.ch0.core.confirmation (rst, report, status, pending, se
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
-, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
-, clk);
+module \biss_master_axil.ch0.core.controller (rst, frame_done, cdm, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
+, faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full, started
+, stop_bit, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -9655,13 +10144,23 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   wire \$24 ;
   wire \$25 ;
   wire \$26 ;
-  reg \$27 ;
-  reg [2:0] \$28 ;
-  reg \$29 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
   wire \$3 ;
-  reg \$30 ;
-  reg \$31 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  reg \$37 ;
+  reg [2:0] \$38 ;
+  reg \$39 ;
   wire \$4 ;
+  reg \$40 ;
+  reg \$41 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
@@ -9692,7 +10191,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
   reg delay;
-  wire \delay$78 ;
+  wire \delay$80 ;
   input delay_over;
   wire delay_over;
   wire \delay_over$31 ;
@@ -9705,7 +10204,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   output fault;
   reg fault;
   wire \fault$39 ;
-  wire \fault$74 ;
+  wire \fault$76 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -9835,6 +10334,8 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   input slots_full;
   wire slots_full;
   wire \slots_full$25 ;
+  input ssi;
+  wire ssi;
   input started;
   wire started;
   wire \started$23 ;
@@ -9873,7 +10374,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$79 ;
+  wire [3:0] \status$81 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
@@ -9884,42 +10385,52 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   output waiting;
   reg waiting;
   reg watch;
+  always @(posedge clk)
+    pause <= \$41 ;
   assign \$1  = ma_busy | abort;
   assign \$2  = ~ ma_enough;
   assign \$3  = restart_timer | abort;
-  assign \$4  = ~ end_check;
-  assign \$5  = ~ ma_enough;
-  assign \$6  = ~ end_check;
-  assign \$7  = ma_busy | abort;
-  assign \$8  = ~ ma_busy;
-  assign \$9  = \$8  | ma_held;
-  assign \$10  = \$9  & slo;
-  assign \$11  = ! cycle_fsm_state;
-  assign \$12  = cycle_fsm_state == 1'h1;
-  assign \$13  = cycle_fsm_state == 2'h2;
-  assign \$14  = cycle_fsm_state == 2'h3;
-  assign \$15  = cycle_fsm_state == 3'h4;
-  assign \$16  = cycle_fsm_state == 3'h5;
-  assign \$17  = cycle_fsm_state == 3'h6;
-  assign \$18  = cycle_fsm_state == 3'h7;
-  assign \$19  = ma_busy | abort;
-  assign \$20  = ~ end_check;
-  assign \$21  = ma_busy | abort;
-  assign \$22  = cdm_cycle & abort;
-  assign \$23  = ~ ma_busy;
-  assign \$24  = ~ ma_busy;
-  assign \$25  = \$24  | ma_held;
-  assign \$26  = \$25  & slo;
+  assign \$4  = frame_done & ssi;
+  assign \$5  = \$4  & stop_bit;
+  assign \$6  = ~ ssi;
+  assign \$7  = \fault$76  & \$6 ;
+  assign \$8  = ~ end_check;
+  assign \$9  = ~ ma_enough;
+  assign \$10  = stopped | ssi;
+  assign \$11  = ~ end_check;
+  assign \$12  = ma_busy | abort;
+  assign \$13  = ~ ma_busy;
+  assign \$14  = \$13  | ma_held;
+  assign \$15  = \$14  & slo;
+  assign \$16  = ! cycle_fsm_state;
+  assign \$17  = cycle_fsm_state == 1'h1;
+  assign \$18  = cycle_fsm_state == 2'h2;
+  assign \$19  = cycle_fsm_state == 2'h3;
+  assign \$20  = cycle_fsm_state == 3'h4;
+  assign \$21  = cycle_fsm_state == 3'h5;
+  assign \$22  = cycle_fsm_state == 3'h6;
+  assign \$23  = cycle_fsm_state == 3'h7;
+  assign \$24  = ma_busy | abort;
+  assign \$25  = frame_done & ssi;
+  assign \$26  = \$25  & stop_bit;
+  assign \$27  = ~ ssi;
+  assign \$28  = \fault$76  & \$27 ;
+  assign \$29  = stopped | ssi;
+  assign \$30  = ~ end_check;
+  assign \$31  = ma_busy | abort;
+  assign \$32  = cdm_cycle & abort;
+  assign \$33  = ~ ma_busy;
+  assign \$34  = ~ ma_busy;
+  assign \$35  = \$34  | ma_held;
+  assign \$36  = \$35  & slo;
   always @(posedge clk)
-    first_clock <= \$27 ;
+    first_clock <= \$37 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$28 ;
+    cycle_fsm_state <= \$38 ;
   always @(posedge clk)
-    idle <= \$29 ;
+    idle <= \$39 ;
   always @(posedge clk)
-    receiver_clear <= \$30 ;
-  always @(posedge clk)
-    pause <= \$31 ;
+    receiver_clear <= \$40 ;
   \biss_master_axil.ch0.core.controller.cdm_hold  cdm_hold (
     .abort(abort),
     .cdm(cdm),
@@ -9937,10 +10448,10 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     .ack_expired(ack_expired),
     .clear(clear),
     .clk(clk),
-    .delay(\delay$78 ),
+    .delay(\delay$80 ),
     .delay_over(delay_over),
     .early(early),
-    .fault(\fault$74 ),
+    .fault(\fault$76 ),
     .locked(locked),
     .ma_arm(ma_arm),
     .no_start_expired(no_start_expired),
@@ -9948,7 +10459,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
     .rst(rst),
     .slots_full(slots_full),
     .started(started),
-    .status(\status$79 ),
+    .status(\status$81 ),
     .watch(watch)
   );
   \biss_master_axil.ch0.core.controller.ready_check  ready_check (
@@ -9995,14 +10506,20 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
       3'h2:
           timer_clear = 1'h1;
       3'h3:
+        begin
           if (\$3 ) begin
             timer_clear = 1'h1;
           end
+          if (abort) begin
+          end else if (\$5 ) begin
+            timer_clear = 1'h1;
+          end
+        end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (stopped) begin
-            if (\$6 ) begin
+          end else if (\$10 ) begin
+            if (\$11 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -10011,7 +10528,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
             end
           end
       3'h5:
-          if (\$7 ) begin
+          if (\$12 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -10019,7 +10536,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$10 ) begin
+          end else if (\$15 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
@@ -10073,8 +10590,10 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
       3'h3:
           if (abort) begin
             fault = 1'h1;
+          end else if (\$5 ) begin
+            fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\fault$74 ) begin
+          end else if (\$7 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -10082,8 +10601,8 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
             if (end_check) begin
               fault = 1'h1;
             end
-          end else if (stopped) begin
-            if (\$6 ) begin
+          end else if (\$10 ) begin
+            if (\$11 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -10095,7 +10614,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$10 ) begin
+          end else if (\$15 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
@@ -10122,17 +10641,19 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
+          end else if (\$5 ) begin
+            fault_status = 4'hc;
           end else if (frame_done) begin
-          end else if (\fault$74 ) begin
-            fault_status = \status$79 ;
+          end else if (\$7 ) begin
+            fault_status = \status$81 ;
           end
       3'h4:
           if (abort) begin
             if (end_check) begin
               fault_status = 4'ha;
             end
-          end else if (stopped) begin
-            if (\$6 ) begin
+          end else if (\$10 ) begin
+            if (\$11 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -10144,7 +10665,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$10 ) begin
+          end else if (\$15 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
           end
@@ -10163,7 +10684,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
       3'h3:
           ma_run = \$2 ;
       3'h4:
-          ma_run = \$5 ;
+          ma_run = \$9 ;
     endcase
   end
   always @* begin
@@ -10223,8 +10744,9 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
           /* empty */;
       3'h3:
           if (abort) begin
+          end else if (\$5 ) begin
           end else if (frame_done) begin
-            if (\$4 ) begin
+            if (\$8 ) begin
               report_frame = 1'h1;
             end
           end
@@ -10236,7 +10758,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
           /* empty */;
       3'h7:
           if (abort) begin
-          end else if (\$10 ) begin
+          end else if (\$15 ) begin
             report_frame = 1'h1;
           end
     endcase
@@ -10253,9 +10775,10 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
           /* empty */;
       3'h3:
           if (abort) begin
+          end else if (\$5 ) begin
           end else if (frame_done) begin
-          end else if (\fault$74 ) begin
-            delay = \delay$78 ;
+          end else if (\$7 ) begin
+            delay = \delay$80 ;
           end
     endcase
   end
@@ -10284,287 +10807,293 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    \$27  = idle;
+    \$37  = idle;
     if (rst) begin
-      \$27  = 1'h0;
+      \$37  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    \$28  = cycle_fsm_state;
+    \$38  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$19 ) begin
+          if (\$24 ) begin
           end else if (break_over) begin
-            \$28  = 3'h1;
+            \$38  = 3'h1;
           end
       3'h1:
           if (abort) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
           end else if (request) begin
-            \$28  = 3'h2;
+            \$38  = 3'h2;
           end
       3'h2:
           if (bad_config) begin
-            \$28  = 3'h1;
+            \$38  = 3'h1;
             if (abort) begin
-              \$28  = 3'h0;
+              \$38  = 3'h0;
             end
           end else if (aborted) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
           end else if (ready) begin
-            \$28  = 3'h3;
+            \$38  = 3'h3;
           end else if (stuck_low) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
           end
       3'h3:
           if (abort) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
+          end else if (\$26 ) begin
+            \$38  = 3'h0;
           end else if (frame_done) begin
-            \$28  = 3'h4;
-          end else if (\fault$74 ) begin
-            \$28  = 3'h0;
+            \$38  = 3'h4;
+          end else if (\$28 ) begin
+            \$38  = 3'h0;
           end
       3'h4:
           if (abort) begin
             (* full_case = 32'd1 *)
             if (end_check) begin
-              \$28  = 3'h0;
+              \$38  = 3'h0;
             end else begin
-              \$28  = 3'h0;
+              \$38  = 3'h0;
             end
-          end else if (stopped) begin
+          end else if (\$29 ) begin
             (* full_case = 32'd1 *)
-            if (\$20 ) begin
+            if (\$30 ) begin
               (* full_case = 32'd1 *)
               if (pause) begin
-                \$28  = 3'h5;
+                \$38  = 3'h5;
               end else begin
-                \$28  = 3'h6;
+                \$38  = 3'h6;
               end
             end else if (stop_bit) begin
-              \$28  = 3'h0;
+              \$38  = 3'h0;
             end else begin
-              \$28  = 3'h7;
+              \$38  = 3'h7;
             end
           end
       3'h5:
-          if (\$21 ) begin
+          if (\$31 ) begin
           end else if (break_over) begin
-            \$28  = 3'h1;
+            \$38  = 3'h1;
           end
       3'h6:
-          if (\$22 ) begin
-            \$28  = 3'h0;
-          end else if (\$23 ) begin
-            \$28  = 3'h1;
+          if (\$32 ) begin
+            \$38  = 3'h0;
+          end else if (\$33 ) begin
+            \$38  = 3'h1;
           end
       3'h7:
           if (abort) begin
-            \$28  = 3'h0;
-          end else if (\$26 ) begin
+            \$38  = 3'h0;
+          end else if (\$36 ) begin
             (* full_case = 32'd1 *)
             if (pause) begin
-              \$28  = 3'h5;
+              \$38  = 3'h5;
             end else if (cdm_cycle) begin
-              \$28  = 3'h6;
+              \$38  = 3'h6;
             end else begin
-              \$28  = 3'h1;
+              \$38  = 3'h1;
             end
           end else if (slo_stuck) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
           end
     endcase
     if (rst) begin
-      \$28  = 3'h0;
+      \$38  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    \$29  = idle;
+    \$39  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$19 ) begin
+          if (\$24 ) begin
           end else if (break_over) begin
-            \$29  = 1'h1;
+            \$39  = 1'h1;
           end
       3'h1:
           if (abort) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end else if (request) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end
       3'h2:
           if (bad_config) begin
-            \$29  = 1'h1;
+            \$39  = 1'h1;
             if (abort) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end
           end else if (aborted) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end else if (ready) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end else if (stuck_low) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end
       3'h3:
           if (abort) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
+          end else if (\$26 ) begin
+            \$39  = 1'h0;
           end else if (frame_done) begin
-            \$29  = 1'h0;
-          end else if (\fault$74 ) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
+          end else if (\$28 ) begin
+            \$39  = 1'h0;
           end
       3'h4:
           if (abort) begin
             (* full_case = 32'd1 *)
             if (end_check) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end else begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end
-          end else if (stopped) begin
+          end else if (\$29 ) begin
             (* full_case = 32'd1 *)
-            if (\$20 ) begin
+            if (\$30 ) begin
               (* full_case = 32'd1 *)
               if (pause) begin
-                \$29  = 1'h0;
+                \$39  = 1'h0;
               end else begin
-                \$29  = 1'h0;
+                \$39  = 1'h0;
               end
             end else if (stop_bit) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end else begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end
           end
       3'h5:
-          if (\$21 ) begin
+          if (\$31 ) begin
           end else if (break_over) begin
-            \$29  = 1'h1;
+            \$39  = 1'h1;
           end
       3'h6:
-          if (\$22 ) begin
-            \$29  = 1'h0;
-          end else if (\$23 ) begin
-            \$29  = 1'h1;
+          if (\$32 ) begin
+            \$39  = 1'h0;
+          end else if (\$33 ) begin
+            \$39  = 1'h1;
           end
       3'h7:
           if (abort) begin
-            \$29  = 1'h0;
-          end else if (\$26 ) begin
+            \$39  = 1'h0;
+          end else if (\$36 ) begin
             (* full_case = 32'd1 *)
             if (pause) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end else if (cdm_cycle) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end else begin
-              \$29  = 1'h1;
+              \$39  = 1'h1;
             end
           end else if (slo_stuck) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end
     endcase
     if (rst) begin
-      \$29  = 1'h0;
+      \$39  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    \$30  = receiver_clear;
+    \$40  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$19 ) begin
+          if (\$24 ) begin
           end else if (break_over) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
       3'h1:
           if (abort) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end else if (request) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
       3'h2:
           if (bad_config) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
             if (abort) begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end
           end else if (aborted) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end else if (ready) begin
-            \$30  = 1'h0;
+            \$40  = 1'h0;
           end else if (stuck_low) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
       3'h3:
           if (abort) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
+          end else if (\$26 ) begin
+            \$40  = 1'h1;
           end else if (frame_done) begin
-            \$30  = 1'h0;
-          end else if (\fault$74 ) begin
-            \$30  = 1'h1;
+            \$40  = 1'h0;
+          end else if (\$28 ) begin
+            \$40  = 1'h1;
           end
       3'h4:
           if (abort) begin
             (* full_case = 32'd1 *)
             if (end_check) begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end else begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end
-          end else if (stopped) begin
+          end else if (\$29 ) begin
             (* full_case = 32'd1 *)
-            if (\$20 ) begin
+            if (\$30 ) begin
               (* full_case = 32'd1 *)
               if (pause) begin
-                \$30  = 1'h1;
+                \$40  = 1'h1;
               end else begin
-                \$30  = 1'h0;
+                \$40  = 1'h0;
               end
             end else if (stop_bit) begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end else begin
-              \$30  = 1'h0;
+              \$40  = 1'h0;
             end
           end
       3'h5:
-          if (\$21 ) begin
+          if (\$31 ) begin
           end else if (break_over) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
       3'h6:
-          if (\$22 ) begin
-            \$30  = 1'h1;
-          end else if (\$23 ) begin
-            \$30  = 1'h1;
+          if (\$32 ) begin
+            \$40  = 1'h1;
+          end else if (\$33 ) begin
+            \$40  = 1'h1;
           end
       3'h7:
           if (abort) begin
-            \$30  = 1'h1;
-          end else if (\$26 ) begin
+            \$40  = 1'h1;
+          end else if (\$36 ) begin
             (* full_case = 32'd1 *)
             if (pause) begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end else if (cdm_cycle) begin
-              \$30  = 1'h0;
+              \$40  = 1'h0;
             end else begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end
           end else if (slo_stuck) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$30  = 1'h1;
+      \$40  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    \$31  = pause;
+    \$41  = pause;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -10574,12 +11103,13 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
           /* empty */;
       3'h3:
           if (abort) begin
+          end else if (\$26 ) begin
           end else if (frame_done) begin
-            \$31  = frame_doubtful;
+            \$41  = frame_doubtful;
           end
     endcase
     if (rst) begin
-      \$31  = 1'h0;
+      \$41  = 1'h0;
     end
   end
   assign \first_clock$1  = first_clock;
@@ -10631,7 +11161,7 @@ module \biss_master_axil.ch0.core.controller (rst, request, restart_timer, repor
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
+module \biss_master_axil.ch0.core.controller.cdm_hold (rst, cdm, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -12466,11 +12996,11 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top
-, crc_ok, clk);
+module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6396$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+, data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire [6:0] \$1 ;
-  wire \$10 ;
+  reg [6:0] \$10 ;
   wire \$100 ;
   wire \$101 ;
   wire \$102 ;
@@ -12481,7 +13011,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$107 ;
   wire \$108 ;
   wire \$109 ;
-  wire [1:0] \$11 ;
+  wire [7:0] \$11 ;
   wire \$110 ;
   wire \$111 ;
   wire \$112 ;
@@ -12492,7 +13022,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$117 ;
   wire \$118 ;
   wire \$119 ;
-  wire [6:0] \$12 ;
+  wire [7:0] \$12 ;
   wire \$120 ;
   wire \$121 ;
   wire \$122 ;
@@ -12514,7 +13044,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$137 ;
   wire \$138 ;
   wire \$139 ;
-  reg [3:0] \$14 ;
+  wire \$14 ;
   wire \$140 ;
   wire \$141 ;
   wire \$142 ;
@@ -12525,7 +13055,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$147 ;
   wire \$148 ;
   wire \$149 ;
-  wire [6:0] \$15 ;
+  reg [1:0] \$15 ;
   wire \$150 ;
   wire \$151 ;
   wire \$152 ;
@@ -12536,7 +13066,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$157 ;
   wire \$158 ;
   wire \$159 ;
-  wire \$16 ;
+  wire [6:0] \$16 ;
   wire \$160 ;
   wire \$161 ;
   wire \$162 ;
@@ -12558,7 +13088,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$177 ;
   wire \$178 ;
   wire \$179 ;
-  wire [6:0] \$18 ;
+  wire \$18 ;
   wire \$180 ;
   wire \$181 ;
   wire \$182 ;
@@ -12569,7 +13099,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$187 ;
   wire \$188 ;
   wire \$189 ;
-  wire [7:0] \$19 ;
+  reg [3:0] \$19 ;
   wire \$190 ;
   wire \$191 ;
   wire \$192 ;
@@ -12581,7 +13111,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$198 ;
   wire \$199 ;
   wire [7:0] \$2 ;
-  reg [6:0] \$20 ;
+  wire [6:0] \$20 ;
   wire \$200 ;
   wire \$201 ;
   wire \$202 ;
@@ -12592,7 +13122,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$207 ;
   wire \$208 ;
   wire \$209 ;
-  wire [7:0] \$21 ;
+  wire \$21 ;
   wire \$210 ;
   wire \$211 ;
   wire \$212 ;
@@ -12603,7 +13133,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$217 ;
   wire \$218 ;
   wire \$219 ;
-  reg [6:0] \$22 ;
+  wire \$22 ;
   wire \$220 ;
   wire \$221 ;
   wire \$222 ;
@@ -12614,7 +13144,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$227 ;
   wire \$228 ;
   wire \$229 ;
-  wire [7:0] \$23 ;
+  wire [6:0] \$23 ;
   wire \$230 ;
   wire \$231 ;
   wire \$232 ;
@@ -12625,7 +13155,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$237 ;
   wire \$238 ;
   wire \$239 ;
-  reg [6:0] \$24 ;
+  wire [7:0] \$24 ;
   wire \$240 ;
   wire \$241 ;
   wire \$242 ;
@@ -12636,7 +13166,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$247 ;
   wire \$248 ;
   wire \$249 ;
-  wire [7:0] \$25 ;
+  reg [6:0] \$25 ;
   wire \$250 ;
   wire \$251 ;
   wire \$252 ;
@@ -12658,7 +13188,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$267 ;
   wire \$268 ;
   wire \$269 ;
-  wire \$27 ;
+  reg [6:0] \$27 ;
   wire \$270 ;
   wire \$271 ;
   wire \$272 ;
@@ -12669,7 +13199,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$277 ;
   wire \$278 ;
   wire \$279 ;
-  wire [1:0] \$28 ;
+  wire [7:0] \$28 ;
   wire \$280 ;
   wire \$281 ;
   wire \$282 ;
@@ -12680,7 +13210,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$287 ;
   wire \$288 ;
   wire \$289 ;
-  wire [6:0] \$29 ;
+  reg [6:0] \$29 ;
   wire \$290 ;
   wire \$291 ;
   wire \$292 ;
@@ -12691,8 +13221,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$297 ;
   wire \$298 ;
   wire \$299 ;
-  reg [6:0] \$3 ;
-  wire \$30 ;
+  wire \$3 ;
+  wire [7:0] \$30 ;
   wire \$300 ;
   wire \$301 ;
   wire \$302 ;
@@ -12703,7 +13233,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$307 ;
   wire \$308 ;
   wire \$309 ;
-  reg [3:0] \$31 ;
+  wire [7:0] \$31 ;
   wire \$310 ;
   wire \$311 ;
   wire \$312 ;
@@ -12714,7 +13244,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$317 ;
   wire \$318 ;
   wire \$319 ;
-  wire [6:0] \$32 ;
+  wire \$32 ;
   wire \$320 ;
   wire \$321 ;
   wire \$322 ;
@@ -12725,7 +13255,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$327 ;
   wire \$328 ;
   wire \$329 ;
-  wire \$33 ;
+  reg [1:0] \$33 ;
   wire \$330 ;
   wire \$331 ;
   wire \$332 ;
@@ -12736,12 +13266,12 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$337 ;
   wire \$338 ;
   wire \$339 ;
-  wire \$34 ;
+  wire [6:0] \$34 ;
   wire \$340 ;
   wire \$341 ;
   wire \$342 ;
   wire \$343 ;
-  wire [54:0] \$344 ;
+  wire \$344 ;
   wire \$345 ;
   wire \$346 ;
   wire \$347 ;
@@ -12756,9 +13286,9 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$355 ;
   wire \$356 ;
   wire \$357 ;
-  wire \$358 ;
+  wire [54:0] \$358 ;
   wire \$359 ;
-  wire \$36 ;
+  reg [3:0] \$36 ;
   wire \$360 ;
   wire \$361 ;
   wire \$362 ;
@@ -12769,7 +13299,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$367 ;
   wire \$368 ;
   wire \$369 ;
-  wire [16:0] \$37 ;
+  wire [6:0] \$37 ;
   wire \$370 ;
   wire \$371 ;
   wire \$372 ;
@@ -12802,7 +13332,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$397 ;
   wire \$398 ;
   wire \$399 ;
-  wire [7:0] \$4 ;
+  reg [6:0] \$4 ;
   wire \$40 ;
   wire \$400 ;
   wire \$401 ;
@@ -12814,7 +13344,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$407 ;
   wire \$408 ;
   wire \$409 ;
-  wire [7:0] \$41 ;
+  wire \$41 ;
   wire \$410 ;
   wire \$411 ;
   wire \$412 ;
@@ -12825,7 +13355,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$417 ;
   wire \$418 ;
   wire \$419 ;
-  wire [6:0] \$42 ;
+  wire [16:0] \$42 ;
   wire \$420 ;
   wire \$421 ;
   wire \$422 ;
@@ -12858,7 +13388,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$447 ;
   wire \$448 ;
   wire \$449 ;
-  wire [6:0] \$45 ;
+  wire \$45 ;
   wire \$450 ;
   wire \$451 ;
   wire \$452 ;
@@ -12880,7 +13410,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$467 ;
   wire \$468 ;
   wire \$469 ;
-  wire \$47 ;
+  wire [7:0] \$47 ;
   wire \$470 ;
   wire \$471 ;
   wire \$472 ;
@@ -12913,7 +13443,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$497 ;
   wire \$498 ;
   wire \$499 ;
-  reg [6:0] \$5 ;
+  wire [7:0] \$5 ;
   wire \$50 ;
   wire \$500 ;
   wire \$501 ;
@@ -12979,7 +13509,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$556 ;
   wire \$557 ;
   wire \$558 ;
-  wire [39:0] \$559 ;
+  wire \$559 ;
   wire \$56 ;
   wire \$560 ;
   wire \$561 ;
@@ -12991,64 +13521,92 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$567 ;
   wire \$568 ;
   wire \$569 ;
-  wire \$57 ;
+  wire [6:0] \$57 ;
   wire \$570 ;
   wire \$571 ;
-  wire [6:0] \$572 ;
+  wire \$572 ;
   wire \$573 ;
   wire \$574 ;
   wire \$575 ;
-  wire [6:0] \$576 ;
+  wire \$576 ;
   wire \$577 ;
-  wire [1:0] \$578 ;
-  wire [1:0] \$579 ;
+  wire \$578 ;
+  wire \$579 ;
   wire \$58 ;
   wire \$580 ;
-  wire \$581 ;
+  wire [39:0] \$581 ;
   wire \$582 ;
   wire \$583 ;
   wire \$584 ;
-  reg \$585 ;
-  reg \$586 ;
-  reg [15:0] \$587 ;
-  reg \$588 ;
-  reg \$589 ;
-  wire [6:0] \$59 ;
-  reg [15:0] \$590 ;
-  reg [2:0] \$591 ;
-  reg \$592 ;
-  reg [6:0] \$593 ;
-  reg \$594 ;
-  reg \$595 ;
-  reg \$596 ;
-  reg \$597 ;
-  reg \$598 ;
-  reg \$599 ;
-  wire [7:0] \$6 ;
-  wire \$60 ;
-  reg [54:0] \$600 ;
-  reg [1:0] \$601 ;
-  reg [1:0] \$602 ;
-  reg [39:0] \$603 ;
-  reg [5:0] \$604 ;
-  reg [39:0] \$605 ;
-  wire [2:0] \$61 ;
+  wire \$585 ;
+  wire \$586 ;
+  wire \$587 ;
+  wire \$588 ;
+  wire \$589 ;
+  wire \$59 ;
+  wire \$590 ;
+  wire \$591 ;
+  wire \$592 ;
+  wire \$593 ;
+  wire \$594 ;
+  wire \$595 ;
+  wire [6:0] \$596 ;
+  wire \$597 ;
+  wire \$598 ;
+  wire \$599 ;
+  wire \$6 ;
+  wire [6:0] \$60 ;
+  wire [6:0] \$600 ;
+  wire \$601 ;
+  wire [1:0] \$602 ;
+  wire [1:0] \$603 ;
+  wire \$604 ;
+  wire \$605 ;
+  wire \$606 ;
+  wire \$607 ;
+  wire \$608 ;
+  wire \$609 ;
+  wire \$61 ;
+  wire \$610 ;
+  reg \$611 ;
+  reg \$612 ;
+  reg [15:0] \$613 ;
+  reg \$614 ;
+  reg \$615 ;
+  reg [6:0] \$616 ;
+  reg \$617 ;
+  reg \$618 ;
+  reg \$619 ;
   wire \$62 ;
-  wire [1:0] \$63 ;
+  reg \$620 ;
+  reg \$621 ;
+  reg [2:0] \$622 ;
+  reg [15:0] \$623 ;
+  reg \$624 ;
+  reg \$625 ;
+  reg [72:0] \$626 ;
+  reg \$627 ;
+  reg [54:0] \$628 ;
+  reg [1:0] \$629 ;
+  wire \$63 ;
+  reg [1:0] \$630 ;
+  reg [39:0] \$631 ;
+  reg [5:0] \$632 ;
+  reg [39:0] \$633 ;
   wire \$64 ;
-  wire \$65 ;
+  wire [6:0] \$65 ;
   wire \$66 ;
-  wire \$67 ;
+  wire [2:0] \$67 ;
   wire \$68 ;
   wire \$69 ;
   reg [6:0] \$7 ;
-  wire \$70 ;
-  wire \$71 ;
-  wire \$72 ;
+  wire [1:0] \$70 ;
+  wire [7:0] \$71 ;
+  wire [6:0] \$72 ;
   wire \$73 ;
   wire \$74 ;
   wire \$75 ;
-  wire \$76 ;
+  wire [6:0] \$76 ;
   wire \$77 ;
   wire \$78 ;
   wire \$79 ;
@@ -13063,7 +13621,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
-  wire [7:0] \$9 ;
+  wire \$9 ;
   wire \$90 ;
   wire \$91 ;
   wire \$92 ;
@@ -13077,7 +13635,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg at_cds;
   input \bit ;
   wire \bit ;
-  wire \bit$52 ;
+  wire \bit$58 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -13090,17 +13648,17 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire [1:0] crc_ok;
   input [75:0] crcs;
   wire [75:0] crcs;
-  wire [75:0] \crcs$47 ;
-  wire [37:0] \crcs$47[0] ;
-  wire \crcs$47[0].inverted ;
-  wire [15:0] \crcs$47[0].poly ;
-  wire [15:0] \crcs$47[0].start ;
-  wire [4:0] \crcs$47[0].width ;
-  wire [37:0] \crcs$47[1] ;
-  wire \crcs$47[1].inverted ;
-  wire [15:0] \crcs$47[1].poly ;
-  wire [15:0] \crcs$47[1].start ;
-  wire [4:0] \crcs$47[1].width ;
+  wire [75:0] \crcs$53 ;
+  wire [37:0] \crcs$53[0] ;
+  wire \crcs$53[0].inverted ;
+  wire [15:0] \crcs$53[0].poly ;
+  wire [15:0] \crcs$53[0].start ;
+  wire [4:0] \crcs$53[0].width ;
+  wire [37:0] \crcs$53[1] ;
+  wire \crcs$53[1].inverted ;
+  wire [15:0] \crcs$53[1].poly ;
+  wire [15:0] \crcs$53[1].start ;
+  wire [4:0] \crcs$53[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -13134,13 +13692,18 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire [5:0] lc_next;
   wire load;
   wire load_index;
+  output mismatch;
+  reg mismatch = 1'h0;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
+  input [2:0] \port$6396$272 ;
+  wire [2:0] \port$6396$272 ;
   input receiver_clear;
   wire receiver_clear;
+  reg [72:0] ring = 73'h0000000000000000000;
   input rst;
   wire rst;
   input sample;
@@ -13148,6 +13711,11 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg [15:0] slots = 16'h0000;
   output slots_full;
   reg slots_full = 1'h0;
+  input ssi;
+  wire ssi;
+  wire ssi_double;
+  wire ssi_error;
+  wire ssi_error_low;
   output [15:0] start_slot;
   reg [15:0] start_slot = 16'h0000;
   output started;
@@ -13199,654 +13767,682 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$395  = words[23] & \$394 ;
-  assign \$396  = words[22] & data1[0];
-  assign \$397  = \bit  ^ \$396 ;
-  assign \$398  = \$395  & \$397 ;
-  assign \$399  = ! idx;
-  assign \$400  = words[23] & \$399 ;
-  assign \$401  = words[22] & data1[0];
-  assign \$402  = \bit  ^ \$401 ;
-  assign \$403  = \$400  & \$402 ;
-  assign \$404  = ! idx;
-  assign \$405  = words[23] & \$404 ;
-  assign \$406  = words[22] & data1[0];
-  assign \$407  = \bit  ^ \$406 ;
-  assign \$408  = \$405  & \$407 ;
-  assign \$409  = ! idx;
-  assign \$410  = words[23] & \$409 ;
-  assign \$411  = words[22] & data1[0];
-  assign \$412  = \bit  ^ \$411 ;
-  assign \$413  = \$410  & \$412 ;
-  assign \$414  = ! idx;
-  assign \$415  = words[23] & \$414 ;
-  assign \$416  = words[22] & data1[0];
-  assign \$417  = \bit  ^ \$416 ;
-  assign \$418  = \$415  & \$417 ;
-  assign \$419  = ! idx;
-  assign \$420  = words[23] & \$419 ;
-  assign \$421  = words[22] & data1[0];
-  assign \$422  = \bit  ^ \$421 ;
-  assign \$423  = \$420  & \$422 ;
-  assign \$424  = ! idx;
-  assign \$425  = words[23] & \$424 ;
-  assign \$426  = words[22] & data1[0];
-  assign \$427  = \bit  ^ \$426 ;
-  assign \$428  = \$425  & \$427 ;
-  assign \$429  = ! idx;
-  assign \$430  = words[23] & \$429 ;
-  assign \$431  = words[22] & data1[0];
-  assign \$432  = \bit  ^ \$431 ;
-  assign \$433  = \$430  & \$432 ;
-  assign \$434  = ! idx;
-  assign \$435  = words[23] & \$434 ;
-  assign \$436  = words[22] & data1[0];
-  assign \$437  = \bit  ^ \$436 ;
-  assign \$438  = \$435  & \$437 ;
-  assign \$439  = ! idx;
-  assign \$440  = words[23] & \$439 ;
-  assign \$441  = words[22] & data1[0];
-  assign \$442  = \bit  ^ \$441 ;
-  assign \$443  = \$440  & \$442 ;
-  assign \$444  = ! idx;
-  assign \$445  = words[23] & \$444 ;
-  assign \$446  = words[22] & data1[0];
-  assign \$447  = \bit  ^ \$446 ;
-  assign \$448  = \$445  & \$447 ;
-  assign \$449  = ! idx;
-  assign \$450  = words[23] & \$449 ;
-  assign \$451  = words[22] & data1[0];
-  assign \$452  = \bit  ^ \$451 ;
-  assign \$453  = \$450  & \$452 ;
-  assign \$454  = ! idx;
-  assign \$455  = words[23] & \$454 ;
-  assign \$456  = words[22] & data1[0];
-  assign \$457  = \bit  ^ \$456 ;
-  assign \$458  = \$455  & \$457 ;
-  assign \$459  = ! idx;
-  assign \$460  = words[23] & \$459 ;
-  assign \$461  = words[22] & data1[0];
-  assign \$462  = \bit  ^ \$461 ;
-  assign \$463  = \$460  & \$462 ;
-  assign \$464  = ! idx;
-  assign \$465  = words[23] & \$464 ;
-  assign \$466  = words[22] & data1[0];
-  assign \$467  = \bit  ^ \$466 ;
-  assign \$468  = \$465  & \$467 ;
-  assign \$469  = ! idx;
-  assign \$470  = words[23] & \$469 ;
-  assign \$471  = words[22] & data1[0];
-  assign \$472  = \bit  ^ \$471 ;
-  assign \$473  = \$470  & \$472 ;
-  assign \$474  = ! idx;
-  assign \$475  = words[23] & \$474 ;
-  assign \$476  = words[22] & data1[0];
-  assign \$477  = \bit  ^ \$476 ;
-  assign \$478  = \$475  & \$477 ;
-  assign \$479  = ! idx;
-  assign \$480  = words[23] & \$479 ;
-  assign \$481  = words[22] & data1[0];
-  assign \$482  = \bit  ^ \$481 ;
-  assign \$483  = \$480  & \$482 ;
-  assign \$484  = ! idx;
-  assign \$485  = words[23] & \$484 ;
-  assign \$486  = words[22] & data1[0];
-  assign \$487  = \bit  ^ \$486 ;
-  assign \$488  = \$485  & \$487 ;
-  assign \$489  = ! idx;
-  assign \$490  = words[23] & \$489 ;
-  assign \$491  = words[22] & data1[0];
-  assign \$492  = \bit  ^ \$491 ;
-  assign \$493  = \$490  & \$492 ;
-  assign \$494  = ! idx;
-  assign \$495  = words[23] & \$494 ;
-  assign \$496  = words[22] & data1[0];
-  assign \$497  = \bit  ^ \$496 ;
-  assign \$498  = \$495  & \$497 ;
-  assign \$499  = ! idx;
-  assign \$500  = words[23] & \$499 ;
-  assign \$501  = words[22] & data1[0];
-  assign \$502  = \bit  ^ \$501 ;
-  assign \$503  = \$500  & \$502 ;
-  assign \$504  = ! idx;
-  assign \$505  = words[23] & \$504 ;
-  assign \$506  = words[22] & data1[0];
-  assign \$507  = \bit  ^ \$506 ;
-  assign \$508  = \$505  & \$507 ;
-  assign \$509  = ! idx;
-  assign \$510  = words[23] & \$509 ;
-  assign \$511  = words[22] & data1[0];
-  assign \$512  = \bit  ^ \$511 ;
-  assign \$513  = \$510  & \$512 ;
-  assign \$514  = ! idx;
-  assign \$515  = words[23] & \$514 ;
-  assign \$516  = words[22] & data1[0];
-  assign \$517  = \bit  ^ \$516 ;
-  assign \$518  = \$515  & \$517 ;
-  assign \$519  = ! idx;
-  assign \$520  = words[23] & \$519 ;
-  assign \$521  = words[22] & data1[0];
-  assign \$522  = \bit  ^ \$521 ;
-  assign \$523  = \$520  & \$522 ;
-  assign \$524  = ! idx;
-  assign \$525  = words[23] & \$524 ;
-  assign \$526  = words[22] & data1[0];
-  assign \$527  = \bit  ^ \$526 ;
-  assign \$528  = \$525  & \$527 ;
-  assign \$529  = ! idx;
-  assign \$530  = words[23] & \$529 ;
-  assign \$531  = words[22] & data1[0];
-  assign \$532  = \bit  ^ \$531 ;
-  assign \$533  = \$530  & \$532 ;
-  assign \$534  = ! idx;
-  assign \$535  = words[23] & \$534 ;
-  assign \$536  = words[22] & data1[0];
-  assign \$537  = \bit  ^ \$536 ;
-  assign \$538  = \$535  & \$537 ;
-  assign \$539  = ! idx;
-  assign \$540  = words[23] & \$539 ;
-  assign \$541  = words[22] & data1[0];
-  assign \$542  = \bit  ^ \$541 ;
-  assign \$543  = \$540  & \$542 ;
-  assign \$544  = ! idx;
-  assign \$545  = words[23] & \$544 ;
-  assign \$546  = words[22] & data1[0];
-  assign \$547  = \bit  ^ \$546 ;
-  assign \$548  = \$545  & \$547 ;
-  assign \$549  = ! idx;
-  assign \$550  = words[23] & \$549 ;
-  assign \$551  = words[22] & data1[0];
-  assign \$552  = \bit  ^ \$551 ;
-  assign \$553  = \$550  & \$552 ;
-  assign \$554  = ! idx;
-  assign \$555  = words[23] & \$554 ;
-  assign \$556  = words[22] & data1[0];
-  assign \$557  = \bit  ^ \$556 ;
-  assign \$558  = \$555  & \$557 ;
-  assign \$559  = { data1[38:0], \$358  } | { \$558 , \$553 , \$548 , \$543 , \$538 , \$533 , \$528 , \$523 , \$518 , \$513 , \$508 , \$503 , \$498 , \$493 , \$488 , \$483 , \$478 , \$473 , \$468 , \$463 , \$458 , \$453 , \$448 , \$443 , \$438 , \$433 , \$428 , \$423 , \$418 , \$413 , \$408 , \$403 , \$398 , \$393 , \$388 , \$383 , \$378 , \$373 , \$368 , \$363  };
-  assign \$560  = ~ words[18];
-  assign \$562  = in_word & \$561 ;
-  assign \$563  = idx == words[17:12];
-  assign \$564  = \$562  & \$563 ;
-  assign \$566  = in_word & \$565 ;
-  assign \$567  = idx == w1_data_end_p1;
-  assign \$568  = \$566  & \$567 ;
-  assign \$569  = in_word & in_top;
-  assign \$570  = words[10] & data0[0];
-  assign \$571  = \bit  ^ \$570 ;
+  assign \$367  = ssi & \port$6396$272 [0];
+  assign \$368  = ~ \port$6396$272 [1];
+  assign \$369  = \$367  & \$368 ;
+  assign \$370  = \bit  ^ \$369 ;
+  assign \$371  = ~ words[6];
+  assign \$372  = ! word;
+  assign \$373  = in_word & \$372 ;
+  assign \$374  = idx == w0_data_end_p1;
+  assign \$375  = \$373  & \$374 ;
+  assign \$377  = in_word & \$376 ;
+  assign \$378  = \$377  & in_data;
+  assign \$379  = words[22] & data1[0];
+  assign \$380  = \bit  ^ \$379 ;
+  assign \$381  = ! idx;
+  assign \$382  = words[23] & \$381 ;
+  assign \$383  = words[22] & data1[0];
+  assign \$384  = \bit  ^ \$383 ;
+  assign \$385  = \$382  & \$384 ;
+  assign \$386  = ! idx;
+  assign \$387  = words[23] & \$386 ;
+  assign \$388  = words[22] & data1[0];
+  assign \$389  = \bit  ^ \$388 ;
+  assign \$390  = \$387  & \$389 ;
+  assign \$391  = ! idx;
+  assign \$392  = words[23] & \$391 ;
+  assign \$393  = words[22] & data1[0];
+  assign \$394  = \bit  ^ \$393 ;
+  assign \$395  = \$392  & \$394 ;
+  assign \$396  = ! idx;
+  assign \$397  = words[23] & \$396 ;
+  assign \$398  = words[22] & data1[0];
+  assign \$399  = \bit  ^ \$398 ;
+  assign \$400  = \$397  & \$399 ;
+  assign \$401  = ! idx;
+  assign \$402  = words[23] & \$401 ;
+  assign \$403  = words[22] & data1[0];
+  assign \$404  = \bit  ^ \$403 ;
+  assign \$405  = \$402  & \$404 ;
+  assign \$406  = ! idx;
+  assign \$407  = words[23] & \$406 ;
+  assign \$408  = words[22] & data1[0];
+  assign \$409  = \bit  ^ \$408 ;
+  assign \$410  = \$407  & \$409 ;
+  assign \$411  = ! idx;
+  assign \$412  = words[23] & \$411 ;
+  assign \$413  = words[22] & data1[0];
+  assign \$414  = \bit  ^ \$413 ;
+  assign \$415  = \$412  & \$414 ;
+  assign \$416  = ! idx;
+  assign \$417  = words[23] & \$416 ;
+  assign \$418  = words[22] & data1[0];
+  assign \$419  = \bit  ^ \$418 ;
+  assign \$420  = \$417  & \$419 ;
+  assign \$421  = ! idx;
+  assign \$422  = words[23] & \$421 ;
+  assign \$423  = words[22] & data1[0];
+  assign \$424  = \bit  ^ \$423 ;
+  assign \$425  = \$422  & \$424 ;
+  assign \$426  = ! idx;
+  assign \$427  = words[23] & \$426 ;
+  assign \$428  = words[22] & data1[0];
+  assign \$429  = \bit  ^ \$428 ;
+  assign \$430  = \$427  & \$429 ;
+  assign \$431  = ! idx;
+  assign \$432  = words[23] & \$431 ;
+  assign \$433  = words[22] & data1[0];
+  assign \$434  = \bit  ^ \$433 ;
+  assign \$435  = \$432  & \$434 ;
+  assign \$436  = ! idx;
+  assign \$437  = words[23] & \$436 ;
+  assign \$438  = words[22] & data1[0];
+  assign \$439  = \bit  ^ \$438 ;
+  assign \$440  = \$437  & \$439 ;
+  assign \$441  = ! idx;
+  assign \$442  = words[23] & \$441 ;
+  assign \$443  = words[22] & data1[0];
+  assign \$444  = \bit  ^ \$443 ;
+  assign \$445  = \$442  & \$444 ;
+  assign \$446  = ! idx;
+  assign \$447  = words[23] & \$446 ;
+  assign \$448  = words[22] & data1[0];
+  assign \$449  = \bit  ^ \$448 ;
+  assign \$450  = \$447  & \$449 ;
+  assign \$451  = ! idx;
+  assign \$452  = words[23] & \$451 ;
+  assign \$453  = words[22] & data1[0];
+  assign \$454  = \bit  ^ \$453 ;
+  assign \$455  = \$452  & \$454 ;
+  assign \$456  = ! idx;
+  assign \$457  = words[23] & \$456 ;
+  assign \$458  = words[22] & data1[0];
+  assign \$459  = \bit  ^ \$458 ;
+  assign \$460  = \$457  & \$459 ;
+  assign \$461  = ! idx;
+  assign \$462  = words[23] & \$461 ;
+  assign \$463  = words[22] & data1[0];
+  assign \$464  = \bit  ^ \$463 ;
+  assign \$465  = \$462  & \$464 ;
+  assign \$466  = ! idx;
+  assign \$467  = words[23] & \$466 ;
+  assign \$468  = words[22] & data1[0];
+  assign \$469  = \bit  ^ \$468 ;
+  assign \$470  = \$467  & \$469 ;
+  assign \$471  = ! idx;
+  assign \$472  = words[23] & \$471 ;
+  assign \$473  = words[22] & data1[0];
+  assign \$474  = \bit  ^ \$473 ;
+  assign \$475  = \$472  & \$474 ;
+  assign \$476  = ! idx;
+  assign \$477  = words[23] & \$476 ;
+  assign \$478  = words[22] & data1[0];
+  assign \$479  = \bit  ^ \$478 ;
+  assign \$480  = \$477  & \$479 ;
+  assign \$481  = ! idx;
+  assign \$482  = words[23] & \$481 ;
+  assign \$483  = words[22] & data1[0];
+  assign \$484  = \bit  ^ \$483 ;
+  assign \$485  = \$482  & \$484 ;
+  assign \$486  = ! idx;
+  assign \$487  = words[23] & \$486 ;
+  assign \$488  = words[22] & data1[0];
+  assign \$489  = \bit  ^ \$488 ;
+  assign \$490  = \$487  & \$489 ;
+  assign \$491  = ! idx;
+  assign \$492  = words[23] & \$491 ;
+  assign \$493  = words[22] & data1[0];
+  assign \$494  = \bit  ^ \$493 ;
+  assign \$495  = \$492  & \$494 ;
+  assign \$496  = ! idx;
+  assign \$497  = words[23] & \$496 ;
+  assign \$498  = words[22] & data1[0];
+  assign \$499  = \bit  ^ \$498 ;
+  assign \$500  = \$497  & \$499 ;
+  assign \$501  = ! idx;
+  assign \$502  = words[23] & \$501 ;
+  assign \$503  = words[22] & data1[0];
+  assign \$504  = \bit  ^ \$503 ;
+  assign \$505  = \$502  & \$504 ;
+  assign \$506  = ! idx;
+  assign \$507  = words[23] & \$506 ;
+  assign \$508  = words[22] & data1[0];
+  assign \$509  = \bit  ^ \$508 ;
+  assign \$510  = \$507  & \$509 ;
+  assign \$511  = ! idx;
+  assign \$512  = words[23] & \$511 ;
+  assign \$513  = words[22] & data1[0];
+  assign \$514  = \bit  ^ \$513 ;
+  assign \$515  = \$512  & \$514 ;
+  assign \$516  = ! idx;
+  assign \$517  = words[23] & \$516 ;
+  assign \$518  = words[22] & data1[0];
+  assign \$519  = \bit  ^ \$518 ;
+  assign \$520  = \$517  & \$519 ;
+  assign \$521  = ! idx;
+  assign \$522  = words[23] & \$521 ;
+  assign \$523  = words[22] & data1[0];
+  assign \$524  = \bit  ^ \$523 ;
+  assign \$525  = \$522  & \$524 ;
+  assign \$526  = ! idx;
+  assign \$527  = words[23] & \$526 ;
+  assign \$528  = words[22] & data1[0];
+  assign \$529  = \bit  ^ \$528 ;
+  assign \$530  = \$527  & \$529 ;
+  assign \$531  = ! idx;
+  assign \$532  = words[23] & \$531 ;
+  assign \$533  = words[22] & data1[0];
+  assign \$534  = \bit  ^ \$533 ;
+  assign \$535  = \$532  & \$534 ;
+  assign \$536  = ! idx;
+  assign \$537  = words[23] & \$536 ;
+  assign \$538  = words[22] & data1[0];
+  assign \$539  = \bit  ^ \$538 ;
+  assign \$540  = \$537  & \$539 ;
+  assign \$541  = ! idx;
+  assign \$542  = words[23] & \$541 ;
+  assign \$543  = words[22] & data1[0];
+  assign \$544  = \bit  ^ \$543 ;
+  assign \$545  = \$542  & \$544 ;
+  assign \$546  = ! idx;
+  assign \$547  = words[23] & \$546 ;
+  assign \$548  = words[22] & data1[0];
+  assign \$549  = \bit  ^ \$548 ;
+  assign \$550  = \$547  & \$549 ;
+  assign \$551  = ! idx;
+  assign \$552  = words[23] & \$551 ;
+  assign \$553  = words[22] & data1[0];
+  assign \$554  = \bit  ^ \$553 ;
+  assign \$555  = \$552  & \$554 ;
+  assign \$556  = ! idx;
+  assign \$557  = words[23] & \$556 ;
+  assign \$558  = words[22] & data1[0];
+  assign \$559  = \bit  ^ \$558 ;
+  assign \$560  = \$557  & \$559 ;
+  assign \$561  = ! idx;
+  assign \$562  = words[23] & \$561 ;
+  assign \$563  = words[22] & data1[0];
+  assign \$564  = \bit  ^ \$563 ;
+  assign \$565  = \$562  & \$564 ;
+  assign \$566  = ! idx;
+  assign \$567  = words[23] & \$566 ;
+  assign \$568  = words[22] & data1[0];
+  assign \$569  = \bit  ^ \$568 ;
+  assign \$570  = \$567  & \$569 ;
+  assign \$571  = ! idx;
+  assign \$572  = words[23] & \$571 ;
+  assign \$573  = words[22] & data1[0];
+  assign \$574  = \bit  ^ \$573 ;
+  assign \$575  = \$572  & \$574 ;
+  assign \$576  = ! idx;
+  assign \$577  = words[23] & \$576 ;
+  assign \$578  = words[22] & data1[0];
+  assign \$579  = \bit  ^ \$578 ;
+  assign \$580  = \$577  & \$579 ;
+  assign \$581  = { data1[38:0], \$380  } | { \$580 , \$575 , \$570 , \$565 , \$560 , \$555 , \$550 , \$545 , \$540 , \$535 , \$530 , \$525 , \$520 , \$515 , \$510 , \$505 , \$500 , \$495 , \$490 , \$485 , \$480 , \$475 , \$470 , \$465 , \$460 , \$455 , \$450 , \$445 , \$440 , \$435 , \$430 , \$425 , \$420 , \$415 , \$410 , \$405 , \$400 , \$395 , \$390 , \$385  };
+  assign \$582  = ~ words[18];
+  assign \$584  = in_word & \$583 ;
+  assign \$585  = idx == words[17:12];
+  assign \$586  = \$584  & \$585 ;
+  assign \$588  = in_word & \$587 ;
+  assign \$589  = idx == w1_data_end_p1;
+  assign \$590  = \$588  & \$589 ;
+  assign \$591  = in_word & ssi;
+  assign \$592  = in_word & in_top;
+  assign \$593  = words[10] & data0[0];
+  assign \$594  = \bit  ^ \$593 ;
+  assign \$595  = sample & \bit ;
   assign lc_load = in_word & in_lc;
-  assign \$572  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$573  = idx == \$572 ;
-  assign \$574  = in_word & \$573 ;
-  assign load = at_cds | \$574 ;
-  assign \$575  = ~ in_crc;
-  assign \cover  = in_word & \$575 ;
+  assign \$596  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$597  = idx == \$596 ;
+  assign \$598  = in_word & \$597 ;
+  assign load = at_cds | \$598 ;
+  assign \$599  = ~ in_crc;
+  assign \cover  = in_word & \$599 ;
   assign check = in_word & in_crc;
-  assign \$576  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$577  = idx == \$576 ;
-  assign last = in_word & \$577 ;
-  assign \$578  = word + 1'h1;
-  assign \$579  = at_cds ? 2'h0 : \$578 ;
-  assign \$580  = ! decoder_fsm_state;
-  assign \$581  = decoder_fsm_state == 1'h1;
-  assign \$582  = decoder_fsm_state == 2'h2;
-  assign \$583  = decoder_fsm_state == 2'h3;
-  assign \$584  = decoder_fsm_state == 3'h4;
+  assign \$600  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$601  = idx == \$600 ;
+  assign last = in_word & \$601 ;
+  assign \$602  = word + 1'h1;
+  assign \$603  = at_cds ? 2'h0 : \$602 ;
+  assign \$604  = ! decoder_fsm_state;
+  assign \$605  = decoder_fsm_state == 1'h1;
+  assign \$606  = decoder_fsm_state == 2'h2;
+  assign \$607  = decoder_fsm_state == 2'h3;
+  assign \$608  = decoder_fsm_state == 3'h4;
+  assign \$609  = decoder_fsm_state == 3'h5;
+  assign \$610  = decoder_fsm_state == 3'h6;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
     w0_data_end_m1 <= \$2 [6:0];
   always @(posedge clk)
-    w0_nenw_end_m1 <= \$4 [6:0];
+    w0_nenw_end_m1 <= \$5 [6:0];
   always @(posedge clk)
-    w0_lc_end_m1 <= \$6 [6:0];
+    w0_lc_end_m1 <= \$8 [6:0];
   always @(posedge clk)
-    w0_word_end_m1 <= \$9 [6:0];
+    w0_word_end_m1 <= \$12 [6:0];
   always @(posedge clk)
-    w0_data_at0 <= \$10 ;
+    w0_data_at0 <= \$13 ;
   always @(posedge clk)
-    w0_lc_at0 <= \$17 ;
+    w0_lc_at0 <= \$22 ;
   always @(posedge clk)
-    w1_data_end_p1 <= \$18 ;
+    w1_data_end_p1 <= \$23 ;
   always @(posedge clk)
-    w1_data_end_m1 <= \$19 [6:0];
+    w1_data_end_m1 <= \$24 [6:0];
   always @(posedge clk)
-    w1_nenw_end_m1 <= \$21 [6:0];
+    w1_nenw_end_m1 <= \$26 [6:0];
   always @(posedge clk)
-    w1_lc_end_m1 <= \$23 [6:0];
+    w1_lc_end_m1 <= \$28 [6:0];
   always @(posedge clk)
-    w1_word_end_m1 <= \$26 [6:0];
+    w1_word_end_m1 <= \$31 [6:0];
   always @(posedge clk)
-    w1_data_at0 <= \$27 ;
+    w1_data_at0 <= \$32 ;
   always @(posedge clk)
-    w1_lc_at0 <= \$34 ;
+    w1_lc_at0 <= \$39 ;
   always @(posedge clk)
-    done <= \$585 ;
+    done <= \$611 ;
   always @(posedge clk)
-    stopped <= \$586 ;
+    stopped <= \$612 ;
   always @(posedge clk)
-    slots <= \$587 ;
+    slots <= \$613 ;
   always @(posedge clk)
-    slots_full <= \$588 ;
+    slots_full <= \$614 ;
   always @(posedge clk)
-    started <= \$589 ;
+    started <= \$615 ;
   always @(posedge clk)
-    start_slot <= \$590 ;
+    idx <= \$616 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$591 ;
+    in_data <= \$617 ;
   always @(posedge clk)
-    cds <= \$592 ;
+    in_lc <= \$618 ;
   always @(posedge clk)
-    idx <= \$593 ;
+    in_crc <= \$619 ;
   always @(posedge clk)
-    in_data <= \$594 ;
+    in_top <= \$620 ;
   always @(posedge clk)
-    in_lc <= \$595 ;
+    word <= \$621 ;
   always @(posedge clk)
-    in_crc <= \$596 ;
+    decoder_fsm_state <= \$622 ;
   always @(posedge clk)
-    in_top <= \$597 ;
+    start_slot <= \$623 ;
   always @(posedge clk)
-    word <= \$598 ;
+    cds <= \$624 ;
   always @(posedge clk)
-    stop_bit <= \$599 ;
+    mismatch <= \$625 ;
   always @(posedge clk)
-    data0 <= \$600 ;
+    ring <= \$626 ;
   always @(posedge clk)
-    ne <= \$601 ;
+    stop_bit <= \$627 ;
   always @(posedge clk)
-    nw <= \$602 ;
+    data0 <= \$628 ;
   always @(posedge clk)
-    data1 <= \$603 ;
+    ne <= \$629 ;
   always @(posedge clk)
-    lc <= \$604 ;
+    nw <= \$630 ;
   always @(posedge clk)
-    cpw_top <= \$605 ;
+    data1 <= \$631 ;
+  always @(posedge clk)
+    lc <= \$632 ;
+  always @(posedge clk)
+    cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$4  = words[5:0] + \$3 ;
-  assign \$6  = words[5:0] + \$5 ;
-  assign \$8  = \$7  + crcs[4:0];
-  assign \$9  = words[5:0] + \$8 [6:0];
-  assign \$10  = | words[5:0];
-  assign \$11  = words[6] ? 2'h2 : 2'h0;
-  assign \$12  = words[5:0] + \$11 ;
-  assign \$13  = ! \$12 ;
-  assign \$15  = words[5:0] + \$14 ;
-  assign \$16  = | \$15 ;
-  assign \$17  = \$13  & \$16 ;
-  assign \$18  = words[17:12] + 1'h1;
-  assign \$19  = words[17:12] + 7'h7f;
-  assign \$21  = words[17:12] + \$20 ;
-  assign \$23  = words[17:12] + \$22 ;
-  assign \$25  = \$24  + crcs[42:38];
-  assign \$26  = words[17:12] + \$25 [6:0];
-  assign \$27  = | words[17:12];
-  assign \$28  = words[18] ? 2'h2 : 2'h0;
-  assign \$29  = words[17:12] + \$28 ;
-  assign \$30  = ! \$29 ;
-  assign \$32  = words[17:12] + \$31 ;
-  assign \$33  = | \$32 ;
-  assign \$34  = \$30  & \$33 ;
-  assign \$35  = ~ slots_full;
-  assign \$36  = sample & \$35 ;
-  assign \$37  = slots + 1'h1;
-  assign \$38  = slots == 16'hfffe;
-  assign \$39  = sample & \bit ;
-  assign \$40  = | words[17:12];
-  assign \$41  = idx + 1'h1;
-  assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
-  assign \$43  = idx != \$42 ;
-  assign \$44  = in_data & \$43 ;
-  assign \$45  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
-  assign \$46  = idx == \$45 ;
-  assign \$47  = in_lc | \$46 ;
-  assign \$48  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$3  = ssi & \port$6396$272 [0];
+  assign \$5  = words[5:0] + \$4 ;
+  assign \$6  = ssi & \port$6396$272 [0];
+  assign \$8  = words[5:0] + \$7 ;
+  assign \$9  = ssi & \port$6396$272 [0];
+  assign \$11  = \$10  + crcs[4:0];
+  assign \$12  = words[5:0] + \$11 [6:0];
+  assign \$13  = | words[5:0];
+  assign \$14  = ssi & \port$6396$272 [0];
+  assign \$16  = words[5:0] + \$15 ;
+  assign \$17  = ! \$16 ;
+  assign \$18  = ssi & \port$6396$272 [0];
+  assign \$20  = words[5:0] + \$19 ;
+  assign \$21  = | \$20 ;
+  assign \$22  = \$17  & \$21 ;
+  assign \$23  = words[17:12] + 1'h1;
+  assign \$24  = words[17:12] + 7'h7f;
+  assign \$26  = words[17:12] + \$25 ;
+  assign \$28  = words[17:12] + \$27 ;
+  assign \$30  = \$29  + crcs[42:38];
+  assign \$31  = words[17:12] + \$30 [6:0];
+  assign \$32  = | words[17:12];
+  assign \$34  = words[17:12] + \$33 ;
+  assign \$35  = ! \$34 ;
+  assign \$37  = words[17:12] + \$36 ;
+  assign \$38  = | \$37 ;
+  assign \$39  = \$35  & \$38 ;
+  assign \$40  = ~ slots_full;
+  assign \$41  = sample & \$40 ;
+  assign \$42  = slots + 1'h1;
+  assign \$43  = slots == 16'hfffe;
+  assign \$44  = sample & \bit ;
+  assign \$45  = | words[17:12];
+  assign \$46  = | words[17:12];
+  assign \$47  = idx + 1'h1;
+  assign \$48  = word ? w1_data_end_m1 : w0_data_end_m1;
   assign \$49  = idx != \$48 ;
-  assign \$50  = \$47  & \$49 ;
-  assign \$51  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$50  = in_data & \$49 ;
+  assign \$51  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
   assign \$52  = idx == \$51 ;
-  assign \$53  = in_crc | \$52 ;
-  assign \$54  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$53  = in_lc | \$52 ;
+  assign \$54  = word ? w1_lc_end_m1 : w0_lc_end_m1;
   assign \$55  = idx != \$54 ;
   assign \$56  = \$53  & \$55 ;
-  assign \$57  = idx != w1_data_end_m1;
-  assign \$58  = in_top & \$57 ;
-  assign \$59  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$60  = idx == \$59 ;
-  assign \$61  = word_count - 1'h1;
-  assign \$62  = word == \$61 ;
-  assign \$63  = word + 1'h1;
-  assign \$64  = ! word;
-  assign \$65  = in_word & \$64 ;
-  assign \$66  = \$65  & in_data;
-  assign \$67  = words[10] & data0[0];
-  assign \$68  = \bit  ^ \$67 ;
-  assign \$69  = ! idx;
-  assign \$70  = words[11] & \$69 ;
-  assign \$71  = words[10] & data0[0];
-  assign \$72  = \bit  ^ \$71 ;
-  assign \$73  = \$70  & \$72 ;
-  assign \$74  = ! idx;
-  assign \$75  = words[11] & \$74 ;
-  assign \$76  = words[10] & data0[0];
-  assign \$77  = \bit  ^ \$76 ;
-  assign \$78  = \$75  & \$77 ;
-  assign \$79  = ! idx;
-  assign \$80  = words[11] & \$79 ;
+  assign \$57  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$58  = idx == \$57 ;
+  assign \$59  = in_crc | \$58 ;
+  assign \$60  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$61  = idx != \$60 ;
+  assign \$62  = \$59  & \$61 ;
+  assign \$63  = idx != w1_data_end_m1;
+  assign \$64  = in_top & \$63 ;
+  assign \$65  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$66  = idx == \$65 ;
+  assign \$67  = word_count - 1'h1;
+  assign \$68  = word == \$67 ;
+  assign \$69  = ssi & \port$6396$272 [2];
+  assign \$70  = word + 1'h1;
+  assign \$71  = idx + 1'h1;
+  assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$73  = ring >> \$72 ;
+  assign \$74  = \bit  != \$73 ;
+  assign \$75  = mismatch | \$74 ;
+  assign \$76  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$77  = idx == \$76 ;
+  assign \$78  = ! word;
+  assign \$79  = in_word & \$78 ;
+  assign \$80  = \$79  & in_data;
   assign \$81  = words[10] & data0[0];
   assign \$82  = \bit  ^ \$81 ;
-  assign \$83  = \$80  & \$82 ;
-  assign \$84  = ! idx;
-  assign \$85  = words[11] & \$84 ;
-  assign \$86  = words[10] & data0[0];
-  assign \$87  = \bit  ^ \$86 ;
-  assign \$88  = \$85  & \$87 ;
-  assign \$89  = ! idx;
-  assign \$90  = words[11] & \$89 ;
-  assign \$91  = words[10] & data0[0];
-  assign \$92  = \bit  ^ \$91 ;
-  assign \$93  = \$90  & \$92 ;
-  assign \$94  = ! idx;
-  assign \$95  = words[11] & \$94 ;
-  assign \$96  = words[10] & data0[0];
-  assign \$97  = \bit  ^ \$96 ;
-  assign \$98  = \$95  & \$97 ;
-  assign \$99  = ! idx;
-  assign \$100  = words[11] & \$99 ;
-  assign \$101  = words[10] & data0[0];
-  assign \$102  = \bit  ^ \$101 ;
-  assign \$103  = \$100  & \$102 ;
-  assign \$104  = ! idx;
-  assign \$105  = words[11] & \$104 ;
-  assign \$106  = words[10] & data0[0];
-  assign \$107  = \bit  ^ \$106 ;
-  assign \$108  = \$105  & \$107 ;
-  assign \$109  = ! idx;
-  assign \$110  = words[11] & \$109 ;
-  assign \$111  = words[10] & data0[0];
-  assign \$112  = \bit  ^ \$111 ;
-  assign \$113  = \$110  & \$112 ;
-  assign \$114  = ! idx;
-  assign \$115  = words[11] & \$114 ;
-  assign \$116  = words[10] & data0[0];
-  assign \$117  = \bit  ^ \$116 ;
-  assign \$118  = \$115  & \$117 ;
-  assign \$119  = ! idx;
-  assign \$120  = words[11] & \$119 ;
-  assign \$121  = words[10] & data0[0];
-  assign \$122  = \bit  ^ \$121 ;
-  assign \$123  = \$120  & \$122 ;
-  assign \$124  = ! idx;
-  assign \$125  = words[11] & \$124 ;
-  assign \$126  = words[10] & data0[0];
-  assign \$127  = \bit  ^ \$126 ;
-  assign \$128  = \$125  & \$127 ;
-  assign \$129  = ! idx;
-  assign \$130  = words[11] & \$129 ;
-  assign \$131  = words[10] & data0[0];
-  assign \$132  = \bit  ^ \$131 ;
-  assign \$133  = \$130  & \$132 ;
-  assign \$134  = ! idx;
-  assign \$135  = words[11] & \$134 ;
-  assign \$136  = words[10] & data0[0];
-  assign \$137  = \bit  ^ \$136 ;
-  assign \$138  = \$135  & \$137 ;
-  assign \$139  = ! idx;
-  assign \$140  = words[11] & \$139 ;
-  assign \$141  = words[10] & data0[0];
-  assign \$142  = \bit  ^ \$141 ;
-  assign \$143  = \$140  & \$142 ;
-  assign \$144  = ! idx;
-  assign \$145  = words[11] & \$144 ;
-  assign \$146  = words[10] & data0[0];
-  assign \$147  = \bit  ^ \$146 ;
-  assign \$148  = \$145  & \$147 ;
-  assign \$149  = ! idx;
-  assign \$150  = words[11] & \$149 ;
-  assign \$151  = words[10] & data0[0];
-  assign \$152  = \bit  ^ \$151 ;
-  assign \$153  = \$150  & \$152 ;
-  assign \$154  = ! idx;
-  assign \$155  = words[11] & \$154 ;
-  assign \$156  = words[10] & data0[0];
-  assign \$157  = \bit  ^ \$156 ;
-  assign \$158  = \$155  & \$157 ;
-  assign \$159  = ! idx;
-  assign \$160  = words[11] & \$159 ;
-  assign \$161  = words[10] & data0[0];
-  assign \$162  = \bit  ^ \$161 ;
-  assign \$163  = \$160  & \$162 ;
-  assign \$164  = ! idx;
-  assign \$165  = words[11] & \$164 ;
-  assign \$166  = words[10] & data0[0];
-  assign \$167  = \bit  ^ \$166 ;
-  assign \$168  = \$165  & \$167 ;
-  assign \$169  = ! idx;
-  assign \$170  = words[11] & \$169 ;
-  assign \$171  = words[10] & data0[0];
-  assign \$172  = \bit  ^ \$171 ;
-  assign \$173  = \$170  & \$172 ;
-  assign \$174  = ! idx;
-  assign \$175  = words[11] & \$174 ;
-  assign \$176  = words[10] & data0[0];
-  assign \$177  = \bit  ^ \$176 ;
-  assign \$178  = \$175  & \$177 ;
-  assign \$179  = ! idx;
-  assign \$180  = words[11] & \$179 ;
-  assign \$181  = words[10] & data0[0];
-  assign \$182  = \bit  ^ \$181 ;
-  assign \$183  = \$180  & \$182 ;
-  assign \$184  = ! idx;
-  assign \$185  = words[11] & \$184 ;
-  assign \$186  = words[10] & data0[0];
-  assign \$187  = \bit  ^ \$186 ;
-  assign \$188  = \$185  & \$187 ;
-  assign \$189  = ! idx;
-  assign \$190  = words[11] & \$189 ;
-  assign \$191  = words[10] & data0[0];
-  assign \$192  = \bit  ^ \$191 ;
-  assign \$193  = \$190  & \$192 ;
-  assign \$194  = ! idx;
-  assign \$195  = words[11] & \$194 ;
-  assign \$196  = words[10] & data0[0];
-  assign \$197  = \bit  ^ \$196 ;
-  assign \$198  = \$195  & \$197 ;
-  assign \$199  = ! idx;
-  assign \$200  = words[11] & \$199 ;
-  assign \$201  = words[10] & data0[0];
-  assign \$202  = \bit  ^ \$201 ;
-  assign \$203  = \$200  & \$202 ;
-  assign \$204  = ! idx;
-  assign \$205  = words[11] & \$204 ;
-  assign \$206  = words[10] & data0[0];
-  assign \$207  = \bit  ^ \$206 ;
-  assign \$208  = \$205  & \$207 ;
-  assign \$209  = ! idx;
-  assign \$210  = words[11] & \$209 ;
-  assign \$211  = words[10] & data0[0];
-  assign \$212  = \bit  ^ \$211 ;
-  assign \$213  = \$210  & \$212 ;
-  assign \$214  = ! idx;
-  assign \$215  = words[11] & \$214 ;
-  assign \$216  = words[10] & data0[0];
-  assign \$217  = \bit  ^ \$216 ;
-  assign \$218  = \$215  & \$217 ;
-  assign \$219  = ! idx;
-  assign \$220  = words[11] & \$219 ;
-  assign \$221  = words[10] & data0[0];
-  assign \$222  = \bit  ^ \$221 ;
-  assign \$223  = \$220  & \$222 ;
-  assign \$224  = ! idx;
-  assign \$225  = words[11] & \$224 ;
-  assign \$226  = words[10] & data0[0];
-  assign \$227  = \bit  ^ \$226 ;
-  assign \$228  = \$225  & \$227 ;
-  assign \$229  = ! idx;
-  assign \$230  = words[11] & \$229 ;
-  assign \$231  = words[10] & data0[0];
-  assign \$232  = \bit  ^ \$231 ;
-  assign \$233  = \$230  & \$232 ;
-  assign \$234  = ! idx;
-  assign \$235  = words[11] & \$234 ;
-  assign \$236  = words[10] & data0[0];
-  assign \$237  = \bit  ^ \$236 ;
-  assign \$238  = \$235  & \$237 ;
-  assign \$239  = ! idx;
-  assign \$240  = words[11] & \$239 ;
-  assign \$241  = words[10] & data0[0];
-  assign \$242  = \bit  ^ \$241 ;
-  assign \$243  = \$240  & \$242 ;
-  assign \$244  = ! idx;
-  assign \$245  = words[11] & \$244 ;
-  assign \$246  = words[10] & data0[0];
-  assign \$247  = \bit  ^ \$246 ;
-  assign \$248  = \$245  & \$247 ;
-  assign \$249  = ! idx;
-  assign \$250  = words[11] & \$249 ;
-  assign \$251  = words[10] & data0[0];
-  assign \$252  = \bit  ^ \$251 ;
-  assign \$253  = \$250  & \$252 ;
-  assign \$254  = ! idx;
-  assign \$255  = words[11] & \$254 ;
-  assign \$256  = words[10] & data0[0];
-  assign \$257  = \bit  ^ \$256 ;
-  assign \$258  = \$255  & \$257 ;
-  assign \$259  = ! idx;
-  assign \$260  = words[11] & \$259 ;
-  assign \$261  = words[10] & data0[0];
-  assign \$262  = \bit  ^ \$261 ;
-  assign \$263  = \$260  & \$262 ;
-  assign \$264  = ! idx;
-  assign \$265  = words[11] & \$264 ;
-  assign \$266  = words[10] & data0[0];
-  assign \$267  = \bit  ^ \$266 ;
-  assign \$268  = \$265  & \$267 ;
-  assign \$269  = ! idx;
-  assign \$270  = words[11] & \$269 ;
-  assign \$271  = words[10] & data0[0];
-  assign \$272  = \bit  ^ \$271 ;
-  assign \$273  = \$270  & \$272 ;
-  assign \$274  = ! idx;
-  assign \$275  = words[11] & \$274 ;
-  assign \$276  = words[10] & data0[0];
-  assign \$277  = \bit  ^ \$276 ;
-  assign \$278  = \$275  & \$277 ;
-  assign \$279  = ! idx;
-  assign \$280  = words[11] & \$279 ;
-  assign \$281  = words[10] & data0[0];
-  assign \$282  = \bit  ^ \$281 ;
-  assign \$283  = \$280  & \$282 ;
-  assign \$284  = ! idx;
-  assign \$285  = words[11] & \$284 ;
-  assign \$286  = words[10] & data0[0];
-  assign \$287  = \bit  ^ \$286 ;
-  assign \$288  = \$285  & \$287 ;
-  assign \$289  = ! idx;
-  assign \$290  = words[11] & \$289 ;
-  assign \$291  = words[10] & data0[0];
-  assign \$292  = \bit  ^ \$291 ;
-  assign \$293  = \$290  & \$292 ;
-  assign \$294  = ! idx;
-  assign \$295  = words[11] & \$294 ;
-  assign \$296  = words[10] & data0[0];
-  assign \$297  = \bit  ^ \$296 ;
-  assign \$298  = \$295  & \$297 ;
-  assign \$299  = ! idx;
-  assign \$300  = words[11] & \$299 ;
-  assign \$301  = words[10] & data0[0];
-  assign \$302  = \bit  ^ \$301 ;
-  assign \$303  = \$300  & \$302 ;
-  assign \$304  = ! idx;
-  assign \$305  = words[11] & \$304 ;
-  assign \$306  = words[10] & data0[0];
-  assign \$307  = \bit  ^ \$306 ;
-  assign \$308  = \$305  & \$307 ;
-  assign \$309  = ! idx;
-  assign \$310  = words[11] & \$309 ;
-  assign \$311  = words[10] & data0[0];
-  assign \$312  = \bit  ^ \$311 ;
-  assign \$313  = \$310  & \$312 ;
-  assign \$314  = ! idx;
-  assign \$315  = words[11] & \$314 ;
-  assign \$316  = words[10] & data0[0];
-  assign \$317  = \bit  ^ \$316 ;
-  assign \$318  = \$315  & \$317 ;
-  assign \$319  = ! idx;
-  assign \$320  = words[11] & \$319 ;
-  assign \$321  = words[10] & data0[0];
-  assign \$322  = \bit  ^ \$321 ;
-  assign \$323  = \$320  & \$322 ;
-  assign \$324  = ! idx;
-  assign \$325  = words[11] & \$324 ;
-  assign \$326  = words[10] & data0[0];
-  assign \$327  = \bit  ^ \$326 ;
-  assign \$328  = \$325  & \$327 ;
-  assign \$329  = ! idx;
-  assign \$330  = words[11] & \$329 ;
-  assign \$331  = words[10] & data0[0];
-  assign \$332  = \bit  ^ \$331 ;
-  assign \$333  = \$330  & \$332 ;
-  assign \$334  = ! idx;
-  assign \$335  = words[11] & \$334 ;
-  assign \$336  = words[10] & data0[0];
-  assign \$337  = \bit  ^ \$336 ;
-  assign \$338  = \$335  & \$337 ;
-  assign \$339  = ! idx;
-  assign \$340  = words[11] & \$339 ;
-  assign \$341  = words[10] & data0[0];
-  assign \$342  = \bit  ^ \$341 ;
-  assign \$343  = \$340  & \$342 ;
-  assign \$344  = { data0[53:0], \$68  } | { \$343 , \$338 , \$333 , \$328 , \$323 , \$318 , \$313 , \$308 , \$303 , \$298 , \$293 , \$288 , \$283 , \$278 , \$273 , \$268 , \$263 , \$258 , \$253 , \$248 , \$243 , \$238 , \$233 , \$228 , \$223 , \$218 , \$213 , \$208 , \$203 , \$198 , \$193 , \$188 , \$183 , \$178 , \$173 , \$168 , \$163 , \$158 , \$153 , \$148 , \$143 , \$138 , \$133 , \$128 , \$123 , \$118 , \$113 , \$108 , \$103 , \$98 , \$93 , \$88 , \$83 , \$78 , \$73  };
-  assign \$345  = ~ words[6];
-  assign \$346  = ! word;
-  assign \$347  = in_word & \$346 ;
-  assign \$348  = idx == words[5:0];
-  assign \$349  = \$347  & \$348 ;
-  assign \$350  = ! word;
-  assign \$351  = in_word & \$350 ;
-  assign \$352  = idx == w0_data_end_p1;
-  assign \$353  = \$351  & \$352 ;
-  assign \$355  = in_word & \$354 ;
-  assign \$356  = \$355  & in_data;
-  assign \$357  = words[22] & data1[0];
-  assign \$358  = \bit  ^ \$357 ;
-  assign \$359  = ! idx;
-  assign \$360  = words[23] & \$359 ;
-  assign \$361  = words[22] & data1[0];
-  assign \$362  = \bit  ^ \$361 ;
-  assign \$363  = \$360  & \$362 ;
-  assign \$364  = ! idx;
-  assign \$365  = words[23] & \$364 ;
-  assign \$366  = words[22] & data1[0];
-  assign \$367  = \bit  ^ \$366 ;
-  assign \$368  = \$365  & \$367 ;
-  assign \$369  = ! idx;
-  assign \$370  = words[23] & \$369 ;
-  assign \$371  = words[22] & data1[0];
-  assign \$372  = \bit  ^ \$371 ;
-  assign \$373  = \$370  & \$372 ;
-  assign \$374  = ! idx;
-  assign \$375  = words[23] & \$374 ;
-  assign \$376  = words[22] & data1[0];
-  assign \$377  = \bit  ^ \$376 ;
-  assign \$378  = \$375  & \$377 ;
-  assign \$379  = ! idx;
-  assign \$380  = words[23] & \$379 ;
-  assign \$381  = words[22] & data1[0];
-  assign \$382  = \bit  ^ \$381 ;
-  assign \$383  = \$380  & \$382 ;
-  assign \$384  = ! idx;
-  assign \$385  = words[23] & \$384 ;
-  assign \$386  = words[22] & data1[0];
-  assign \$387  = \bit  ^ \$386 ;
-  assign \$388  = \$385  & \$387 ;
-  assign \$389  = ! idx;
-  assign \$390  = words[23] & \$389 ;
-  assign \$391  = words[22] & data1[0];
-  assign \$392  = \bit  ^ \$391 ;
-  assign \$393  = \$390  & \$392 ;
-  assign \$394  = ! idx;
+  assign \$83  = ! idx;
+  assign \$84  = words[11] & \$83 ;
+  assign \$85  = words[10] & data0[0];
+  assign \$86  = \bit  ^ \$85 ;
+  assign \$87  = \$84  & \$86 ;
+  assign \$88  = ! idx;
+  assign \$89  = words[11] & \$88 ;
+  assign \$90  = words[10] & data0[0];
+  assign \$91  = \bit  ^ \$90 ;
+  assign \$92  = \$89  & \$91 ;
+  assign \$93  = ! idx;
+  assign \$94  = words[11] & \$93 ;
+  assign \$95  = words[10] & data0[0];
+  assign \$96  = \bit  ^ \$95 ;
+  assign \$97  = \$94  & \$96 ;
+  assign \$98  = ! idx;
+  assign \$99  = words[11] & \$98 ;
+  assign \$100  = words[10] & data0[0];
+  assign \$101  = \bit  ^ \$100 ;
+  assign \$102  = \$99  & \$101 ;
+  assign \$103  = ! idx;
+  assign \$104  = words[11] & \$103 ;
+  assign \$105  = words[10] & data0[0];
+  assign \$106  = \bit  ^ \$105 ;
+  assign \$107  = \$104  & \$106 ;
+  assign \$108  = ! idx;
+  assign \$109  = words[11] & \$108 ;
+  assign \$110  = words[10] & data0[0];
+  assign \$111  = \bit  ^ \$110 ;
+  assign \$112  = \$109  & \$111 ;
+  assign \$113  = ! idx;
+  assign \$114  = words[11] & \$113 ;
+  assign \$115  = words[10] & data0[0];
+  assign \$116  = \bit  ^ \$115 ;
+  assign \$117  = \$114  & \$116 ;
+  assign \$118  = ! idx;
+  assign \$119  = words[11] & \$118 ;
+  assign \$120  = words[10] & data0[0];
+  assign \$121  = \bit  ^ \$120 ;
+  assign \$122  = \$119  & \$121 ;
+  assign \$123  = ! idx;
+  assign \$124  = words[11] & \$123 ;
+  assign \$125  = words[10] & data0[0];
+  assign \$126  = \bit  ^ \$125 ;
+  assign \$127  = \$124  & \$126 ;
+  assign \$128  = ! idx;
+  assign \$129  = words[11] & \$128 ;
+  assign \$130  = words[10] & data0[0];
+  assign \$131  = \bit  ^ \$130 ;
+  assign \$132  = \$129  & \$131 ;
+  assign \$133  = ! idx;
+  assign \$134  = words[11] & \$133 ;
+  assign \$135  = words[10] & data0[0];
+  assign \$136  = \bit  ^ \$135 ;
+  assign \$137  = \$134  & \$136 ;
+  assign \$138  = ! idx;
+  assign \$139  = words[11] & \$138 ;
+  assign \$140  = words[10] & data0[0];
+  assign \$141  = \bit  ^ \$140 ;
+  assign \$142  = \$139  & \$141 ;
+  assign \$143  = ! idx;
+  assign \$144  = words[11] & \$143 ;
+  assign \$145  = words[10] & data0[0];
+  assign \$146  = \bit  ^ \$145 ;
+  assign \$147  = \$144  & \$146 ;
+  assign \$148  = ! idx;
+  assign \$149  = words[11] & \$148 ;
+  assign \$150  = words[10] & data0[0];
+  assign \$151  = \bit  ^ \$150 ;
+  assign \$152  = \$149  & \$151 ;
+  assign \$153  = ! idx;
+  assign \$154  = words[11] & \$153 ;
+  assign \$155  = words[10] & data0[0];
+  assign \$156  = \bit  ^ \$155 ;
+  assign \$157  = \$154  & \$156 ;
+  assign \$158  = ! idx;
+  assign \$159  = words[11] & \$158 ;
+  assign \$160  = words[10] & data0[0];
+  assign \$161  = \bit  ^ \$160 ;
+  assign \$162  = \$159  & \$161 ;
+  assign \$163  = ! idx;
+  assign \$164  = words[11] & \$163 ;
+  assign \$165  = words[10] & data0[0];
+  assign \$166  = \bit  ^ \$165 ;
+  assign \$167  = \$164  & \$166 ;
+  assign \$168  = ! idx;
+  assign \$169  = words[11] & \$168 ;
+  assign \$170  = words[10] & data0[0];
+  assign \$171  = \bit  ^ \$170 ;
+  assign \$172  = \$169  & \$171 ;
+  assign \$173  = ! idx;
+  assign \$174  = words[11] & \$173 ;
+  assign \$175  = words[10] & data0[0];
+  assign \$176  = \bit  ^ \$175 ;
+  assign \$177  = \$174  & \$176 ;
+  assign \$178  = ! idx;
+  assign \$179  = words[11] & \$178 ;
+  assign \$180  = words[10] & data0[0];
+  assign \$181  = \bit  ^ \$180 ;
+  assign \$182  = \$179  & \$181 ;
+  assign \$183  = ! idx;
+  assign \$184  = words[11] & \$183 ;
+  assign \$185  = words[10] & data0[0];
+  assign \$186  = \bit  ^ \$185 ;
+  assign \$187  = \$184  & \$186 ;
+  assign \$188  = ! idx;
+  assign \$189  = words[11] & \$188 ;
+  assign \$190  = words[10] & data0[0];
+  assign \$191  = \bit  ^ \$190 ;
+  assign \$192  = \$189  & \$191 ;
+  assign \$193  = ! idx;
+  assign \$194  = words[11] & \$193 ;
+  assign \$195  = words[10] & data0[0];
+  assign \$196  = \bit  ^ \$195 ;
+  assign \$197  = \$194  & \$196 ;
+  assign \$198  = ! idx;
+  assign \$199  = words[11] & \$198 ;
+  assign \$200  = words[10] & data0[0];
+  assign \$201  = \bit  ^ \$200 ;
+  assign \$202  = \$199  & \$201 ;
+  assign \$203  = ! idx;
+  assign \$204  = words[11] & \$203 ;
+  assign \$205  = words[10] & data0[0];
+  assign \$206  = \bit  ^ \$205 ;
+  assign \$207  = \$204  & \$206 ;
+  assign \$208  = ! idx;
+  assign \$209  = words[11] & \$208 ;
+  assign \$210  = words[10] & data0[0];
+  assign \$211  = \bit  ^ \$210 ;
+  assign \$212  = \$209  & \$211 ;
+  assign \$213  = ! idx;
+  assign \$214  = words[11] & \$213 ;
+  assign \$215  = words[10] & data0[0];
+  assign \$216  = \bit  ^ \$215 ;
+  assign \$217  = \$214  & \$216 ;
+  assign \$218  = ! idx;
+  assign \$219  = words[11] & \$218 ;
+  assign \$220  = words[10] & data0[0];
+  assign \$221  = \bit  ^ \$220 ;
+  assign \$222  = \$219  & \$221 ;
+  assign \$223  = ! idx;
+  assign \$224  = words[11] & \$223 ;
+  assign \$225  = words[10] & data0[0];
+  assign \$226  = \bit  ^ \$225 ;
+  assign \$227  = \$224  & \$226 ;
+  assign \$228  = ! idx;
+  assign \$229  = words[11] & \$228 ;
+  assign \$230  = words[10] & data0[0];
+  assign \$231  = \bit  ^ \$230 ;
+  assign \$232  = \$229  & \$231 ;
+  assign \$233  = ! idx;
+  assign \$234  = words[11] & \$233 ;
+  assign \$235  = words[10] & data0[0];
+  assign \$236  = \bit  ^ \$235 ;
+  assign \$237  = \$234  & \$236 ;
+  assign \$238  = ! idx;
+  assign \$239  = words[11] & \$238 ;
+  assign \$240  = words[10] & data0[0];
+  assign \$241  = \bit  ^ \$240 ;
+  assign \$242  = \$239  & \$241 ;
+  assign \$243  = ! idx;
+  assign \$244  = words[11] & \$243 ;
+  assign \$245  = words[10] & data0[0];
+  assign \$246  = \bit  ^ \$245 ;
+  assign \$247  = \$244  & \$246 ;
+  assign \$248  = ! idx;
+  assign \$249  = words[11] & \$248 ;
+  assign \$250  = words[10] & data0[0];
+  assign \$251  = \bit  ^ \$250 ;
+  assign \$252  = \$249  & \$251 ;
+  assign \$253  = ! idx;
+  assign \$254  = words[11] & \$253 ;
+  assign \$255  = words[10] & data0[0];
+  assign \$256  = \bit  ^ \$255 ;
+  assign \$257  = \$254  & \$256 ;
+  assign \$258  = ! idx;
+  assign \$259  = words[11] & \$258 ;
+  assign \$260  = words[10] & data0[0];
+  assign \$261  = \bit  ^ \$260 ;
+  assign \$262  = \$259  & \$261 ;
+  assign \$263  = ! idx;
+  assign \$264  = words[11] & \$263 ;
+  assign \$265  = words[10] & data0[0];
+  assign \$266  = \bit  ^ \$265 ;
+  assign \$267  = \$264  & \$266 ;
+  assign \$268  = ! idx;
+  assign \$269  = words[11] & \$268 ;
+  assign \$270  = words[10] & data0[0];
+  assign \$271  = \bit  ^ \$270 ;
+  assign \$272  = \$269  & \$271 ;
+  assign \$273  = ! idx;
+  assign \$274  = words[11] & \$273 ;
+  assign \$275  = words[10] & data0[0];
+  assign \$276  = \bit  ^ \$275 ;
+  assign \$277  = \$274  & \$276 ;
+  assign \$278  = ! idx;
+  assign \$279  = words[11] & \$278 ;
+  assign \$280  = words[10] & data0[0];
+  assign \$281  = \bit  ^ \$280 ;
+  assign \$282  = \$279  & \$281 ;
+  assign \$283  = ! idx;
+  assign \$284  = words[11] & \$283 ;
+  assign \$285  = words[10] & data0[0];
+  assign \$286  = \bit  ^ \$285 ;
+  assign \$287  = \$284  & \$286 ;
+  assign \$288  = ! idx;
+  assign \$289  = words[11] & \$288 ;
+  assign \$290  = words[10] & data0[0];
+  assign \$291  = \bit  ^ \$290 ;
+  assign \$292  = \$289  & \$291 ;
+  assign \$293  = ! idx;
+  assign \$294  = words[11] & \$293 ;
+  assign \$295  = words[10] & data0[0];
+  assign \$296  = \bit  ^ \$295 ;
+  assign \$297  = \$294  & \$296 ;
+  assign \$298  = ! idx;
+  assign \$299  = words[11] & \$298 ;
+  assign \$300  = words[10] & data0[0];
+  assign \$301  = \bit  ^ \$300 ;
+  assign \$302  = \$299  & \$301 ;
+  assign \$303  = ! idx;
+  assign \$304  = words[11] & \$303 ;
+  assign \$305  = words[10] & data0[0];
+  assign \$306  = \bit  ^ \$305 ;
+  assign \$307  = \$304  & \$306 ;
+  assign \$308  = ! idx;
+  assign \$309  = words[11] & \$308 ;
+  assign \$310  = words[10] & data0[0];
+  assign \$311  = \bit  ^ \$310 ;
+  assign \$312  = \$309  & \$311 ;
+  assign \$313  = ! idx;
+  assign \$314  = words[11] & \$313 ;
+  assign \$315  = words[10] & data0[0];
+  assign \$316  = \bit  ^ \$315 ;
+  assign \$317  = \$314  & \$316 ;
+  assign \$318  = ! idx;
+  assign \$319  = words[11] & \$318 ;
+  assign \$320  = words[10] & data0[0];
+  assign \$321  = \bit  ^ \$320 ;
+  assign \$322  = \$319  & \$321 ;
+  assign \$323  = ! idx;
+  assign \$324  = words[11] & \$323 ;
+  assign \$325  = words[10] & data0[0];
+  assign \$326  = \bit  ^ \$325 ;
+  assign \$327  = \$324  & \$326 ;
+  assign \$328  = ! idx;
+  assign \$329  = words[11] & \$328 ;
+  assign \$330  = words[10] & data0[0];
+  assign \$331  = \bit  ^ \$330 ;
+  assign \$332  = \$329  & \$331 ;
+  assign \$333  = ! idx;
+  assign \$334  = words[11] & \$333 ;
+  assign \$335  = words[10] & data0[0];
+  assign \$336  = \bit  ^ \$335 ;
+  assign \$337  = \$334  & \$336 ;
+  assign \$338  = ! idx;
+  assign \$339  = words[11] & \$338 ;
+  assign \$340  = words[10] & data0[0];
+  assign \$341  = \bit  ^ \$340 ;
+  assign \$342  = \$339  & \$341 ;
+  assign \$343  = ! idx;
+  assign \$344  = words[11] & \$343 ;
+  assign \$345  = words[10] & data0[0];
+  assign \$346  = \bit  ^ \$345 ;
+  assign \$347  = \$344  & \$346 ;
+  assign \$348  = ! idx;
+  assign \$349  = words[11] & \$348 ;
+  assign \$350  = words[10] & data0[0];
+  assign \$351  = \bit  ^ \$350 ;
+  assign \$352  = \$349  & \$351 ;
+  assign \$353  = ! idx;
+  assign \$354  = words[11] & \$353 ;
+  assign \$355  = words[10] & data0[0];
+  assign \$356  = \bit  ^ \$355 ;
+  assign \$357  = \$354  & \$356 ;
+  assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
+  assign \$359  = ~ words[6];
+  assign \$360  = ssi & \port$6396$272 [0];
+  assign \$361  = ~ \$360 ;
+  assign \$362  = \$359  & \$361 ;
+  assign \$363  = ! word;
+  assign \$364  = in_word & \$363 ;
+  assign \$365  = idx == words[5:0];
+  assign \$366  = \$364  & \$365 ;
   \biss_master_axil.ch0.core.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
@@ -13856,429 +14452,539 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     .index(word),
     .last(last),
     .load(load),
-    .load_index(\$579 [0]),
+    .load_index(\$603 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$585  = 1'h0;
+    \$611  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$585  = 1'h1;
-              end
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$585  = 1'h0;
-    end
-    if (rst) begin
-      \$585  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$586  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
           /* empty */;
       3'h2:
           /* empty */;
-      3'h3:
-          if (sample) begin
-            \$586  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$586  = 1'h0;
-    end
-    if (rst) begin
-      \$586  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$587  = slots;
-    if (\$36 ) begin
-      \$587  = \$37 [15:0];
-    end
-    if (receiver_clear) begin
-      \$587  = 16'h0000;
-    end
-    if (rst) begin
-      \$587  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$588  = slots_full;
-    if (\$36 ) begin
-      \$588  = \$38 ;
-    end
-    if (receiver_clear) begin
-      \$588  = 1'h0;
-    end
-    if (rst) begin
-      \$588  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$589  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$589  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$589  = 1'h0;
-    end
-    if (rst) begin
-      \$589  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$590  = start_slot;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$590  = slots;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$590  = 16'h0000;
-    end
-    if (rst) begin
-      \$590  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$591  = decoder_fsm_state;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$591  = 3'h1;
-          end
       3'h1:
           if (sample) begin
-            \$591  = 3'h2;
-          end
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$591  = 3'h3;
+            if (\$66 ) begin
+              if (\$68 ) begin
+                (* full_case = 32'd1 *)
+                if (\$69 ) begin
+                end else begin
+                  \$611  = 1'h1;
+                end
               end
             end
           end
       3'h3:
-          if (sample) begin
-            \$591  = 3'h4;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$591  = 3'h0;
-    end
-    if (rst) begin
-      \$591  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$592  = cds;
-    casez (decoder_fsm_state)
-      3'h0:
           /* empty */;
-      3'h1:
+      3'h5:
           if (sample) begin
-            \$592  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$592  = 1'h0;
-    end
-    if (rst) begin
-      \$592  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$593  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$593  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$593  = \$41 [6:0];
-            if (\$60 ) begin
-              \$593  = 7'h00;
+            if (\$77 ) begin
+              \$611  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$593  = 7'h00;
+      \$611  = 1'h0;
     end
     if (rst) begin
-      \$593  = 7'h00;
+      \$611  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$594  = in_data;
+    \$612  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
+      3'h2:
+          /* empty */;
       3'h1:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h4:
           if (sample) begin
-            \$594  = w0_data_at0;
+            \$612  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$612  = 1'h0;
+    end
+    if (rst) begin
+      \$612  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$613  = slots;
+    if (\$41 ) begin
+      \$613  = \$42 [15:0];
+    end
+    if (receiver_clear) begin
+      \$613  = 16'h0000;
+    end
+    if (rst) begin
+      \$613  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$614  = slots_full;
+    if (\$41 ) begin
+      \$614  = \$43 ;
+    end
+    if (receiver_clear) begin
+      \$614  = 1'h0;
+    end
+    if (rst) begin
+      \$614  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$615  = started;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$615  = 1'h1;
+          end else if (\$44 ) begin
+            \$615  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$615  = 1'h0;
+    end
+    if (rst) begin
+      \$615  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$616  = idx;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$616  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$594  = \$44 ;
-            if (\$60 ) begin
-              \$594  = w1_data_at0;
+            \$616  = 7'h00;
+          end
+      3'h1:
+          if (sample) begin
+            \$616  = \$47 [6:0];
+            if (\$66 ) begin
+              \$616  = 7'h00;
+            end
+          end
+      3'h3:
+          /* empty */;
+      3'h5:
+          if (sample) begin
+            \$616  = \$71 [6:0];
+          end
+    endcase
+    if (receiver_clear) begin
+      \$616  = 7'h00;
+    end
+    if (rst) begin
+      \$616  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$617  = in_data;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$617  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$617  = w0_data_at0;
+          end
+      3'h1:
+          if (sample) begin
+            \$617  = \$50 ;
+            if (\$66 ) begin
+              \$617  = w1_data_at0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$594  = 1'h0;
+      \$617  = 1'h0;
     end
     if (rst) begin
-      \$594  = 1'h0;
+      \$617  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$595  = in_lc;
+    \$618  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$595  = w0_lc_at0;
+          if (ssi) begin
+            \$618  = w0_lc_at0;
           end
       3'h2:
           if (sample) begin
-            \$595  = \$50 ;
-            if (\$60 ) begin
-              \$595  = w1_lc_at0;
+            \$618  = w0_lc_at0;
+          end
+      3'h1:
+          if (sample) begin
+            \$618  = \$56 ;
+            if (\$66 ) begin
+              \$618  = w1_lc_at0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$595  = 1'h0;
+      \$618  = 1'h0;
     end
     if (rst) begin
-      \$595  = 1'h0;
+      \$618  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$596  = in_crc;
+    \$619  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$596  = 1'h0;
+          if (ssi) begin
+            \$619  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$596  = \$56 ;
+            \$619  = 1'h0;
+          end
+      3'h1:
+          if (sample) begin
+            \$619  = \$62 ;
           end
     endcase
     if (receiver_clear) begin
-      \$596  = 1'h0;
+      \$619  = 1'h0;
     end
     if (rst) begin
-      \$596  = 1'h0;
+      \$619  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$597  = in_top;
+    \$620  = in_top;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$597  = \$40 ;
+          if (ssi) begin
+            \$620  = \$45 ;
           end
       3'h2:
           if (sample) begin
-            \$597  = \$58 ;
-            if (\$60 ) begin
-              \$597  = 1'h0;
+            \$620  = \$46 ;
+          end
+      3'h1:
+          if (sample) begin
+            \$620  = \$64 ;
+            if (\$66 ) begin
+              \$620  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$597  = 1'h0;
+      \$620  = 1'h0;
     end
     if (rst) begin
-      \$597  = 1'h0;
+      \$620  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$598  = word;
+    \$621  = word;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$598  = 1'h0;
+          if (ssi) begin
+            \$621  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            if (\$60 ) begin
+            \$621  = 1'h0;
+          end
+      3'h1:
+          if (sample) begin
+            if (\$66 ) begin
               (* full_case = 32'd1 *)
-              if (\$62 ) begin
+              if (\$68 ) begin
               end else begin
-                \$598  = \$63 [0];
+                \$621  = \$70 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$598  = 1'h0;
+      \$621  = 1'h0;
     end
     if (rst) begin
-      \$598  = 1'h0;
+      \$621  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$599  = stop_bit;
+    \$622  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
+          if (ssi) begin
+            \$622  = 3'h1;
+          end else if (\$44 ) begin
+            \$622  = 3'h2;
+          end
       3'h2:
-          /* empty */;
+          if (sample) begin
+            \$622  = 3'h1;
+          end
+      3'h1:
+          if (sample) begin
+            if (\$66 ) begin
+              if (\$68 ) begin
+                (* full_case = 32'd1 *)
+                if (\$69 ) begin
+                  \$622  = 3'h3;
+                end else begin
+                  \$622  = 3'h4;
+                end
+              end
+            end
+          end
       3'h3:
           if (sample) begin
-            \$599  = \bit ;
+            \$622  = 3'h5;
+          end
+      3'h5:
+          if (sample) begin
+            if (\$77 ) begin
+              \$622  = 3'h4;
+            end
+          end
+      3'h4:
+          if (sample) begin
+            \$622  = 3'h6;
           end
     endcase
     if (receiver_clear) begin
-      \$599  = 1'h0;
+      \$622  = 3'h0;
     end
     if (rst) begin
-      \$599  = 1'h0;
+      \$622  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$600  = data0;
-    if (\$66 ) begin
-      \$600  = \$344 ;
+    \$623  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+          end else if (\$44 ) begin
+            \$623  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$623  = 16'h0000;
+    end
+    if (rst) begin
+      \$623  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$624  = cds;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          if (sample) begin
+            \$624  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$624  = 1'h0;
+    end
+    if (rst) begin
+      \$624  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$625  = mismatch;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$625  = \bit ;
+          end
+      3'h5:
+          if (sample) begin
+            \$625  = \$75 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$625  = 1'h0;
+    end
+    if (rst) begin
+      \$625  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$626  = ring;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h5:
+          if (sample) begin
+            \$626  = { ring[71:0], \bit  };
+          end
+    endcase
+    if (\$591 ) begin
+      \$626  = { ring[71:0], \bit  };
     end
     if (receiver_clear) begin
-      \$600  = 55'h00000000000000;
+      \$626  = 73'h0000000000000000000;
     end
     if (rst) begin
-      \$600  = 55'h00000000000000;
+      \$626  = 73'h0000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$601  = ne;
-    if (\$345 ) begin
-      \$601 [0] = 1'h1;
-    end else if (\$349 ) begin
-      \$601 [0] = \bit ;
+    \$627  = stop_bit;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h4:
+          if (sample) begin
+            \$627  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$627  = 1'h0;
     end
-    if (\$560 ) begin
-      \$601 [1] = 1'h1;
-    end else if (\$564 ) begin
-      \$601 [1] = \bit ;
+    if (rst) begin
+      \$627  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$628  = data0;
+    if (\$80 ) begin
+      \$628  = \$358 ;
     end
     if (receiver_clear) begin
-      \$601  = 2'h0;
+      \$628  = 55'h00000000000000;
     end
     if (rst) begin
-      \$601  = 2'h0;
+      \$628  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$602  = nw;
-    if (\$345 ) begin
-      \$602 [0] = 1'h1;
-    end else if (\$349 ) begin
-    end else if (\$353 ) begin
-      \$602 [0] = \bit ;
+    \$629  = ne;
+    if (\$362 ) begin
+      \$629 [0] = 1'h1;
+    end else if (\$366 ) begin
+      \$629 [0] = \$370 ;
     end
-    if (\$560 ) begin
-      \$602 [1] = 1'h1;
-    end else if (\$564 ) begin
-    end else if (\$568 ) begin
-      \$602 [1] = \bit ;
+    if (\$582 ) begin
+      \$629 [1] = 1'h1;
+    end else if (\$586 ) begin
+      \$629 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$602  = 2'h0;
+      \$629  = 2'h0;
     end
     if (rst) begin
-      \$602  = 2'h0;
+      \$629  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$603  = data1;
-    if (\$356 ) begin
-      \$603  = \$559 ;
+    \$630  = nw;
+    if (\$371 ) begin
+      \$630 [0] = 1'h1;
+    end else if (\$375 ) begin
+      \$630 [0] = \bit ;
+    end
+    if (\$582 ) begin
+      \$630 [1] = 1'h1;
+    end else if (\$586 ) begin
+    end else if (\$590 ) begin
+      \$630 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$603  = 40'h0000000000;
+      \$630  = 2'h0;
     end
     if (rst) begin
-      \$603  = 40'h0000000000;
+      \$630  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$604  = lc;
+    \$631  = data1;
+    if (\$378 ) begin
+      \$631  = \$581 ;
+    end
+    if (receiver_clear) begin
+      \$631  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$631  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    \$632  = lc;
     if (lc_load) begin
-      \$604  = { lc[4:0], \bit  };
+      \$632  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$604  = 6'h00;
+      \$632  = 6'h00;
     end
     if (rst) begin
-      \$604  = 6'h00;
+      \$632  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$605  = cpw_top;
-    if (\$569 ) begin
-      \$605  = { cpw_top[38:0], \$571  };
+    \$633  = cpw_top;
+    if (\$592 ) begin
+      \$633  = { cpw_top[38:0], \$594  };
     end
     if (receiver_clear) begin
-      \$605  = 40'h0000000000;
+      \$633  = 40'h0000000000;
     end
     if (rst) begin
-      \$605  = 40'h0000000000;
+      \$633  = 40'h0000000000;
     end
   end
   always @* begin
@@ -14286,9 +14992,13 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     at_cds = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          at_cds = sample;
+          if (ssi) begin
+            at_cds = 1'h1;
+          end
+      3'h2:
+          if (sample) begin
+            at_cds = 1'h1;
+          end
     endcase
   end
   always @* begin
@@ -14297,72 +15007,120 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
-      3'h1:
-          /* empty */;
       3'h2:
+          /* empty */;
+      3'h1:
           in_word = sample;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[6])
-      1'h0:
-          \$3  = 7'h7f;
-      1'h1:
-          \$3  = 7'h01;
+    casez ({ \$3 , words[7:6] })
+      3'h0:
+          \$4  = 7'h7f;
+      3'h1:
+          \$4  = 7'h01;
+      3'h2:
+          \$4  = 7'h7f;
+      3'h3:
+          \$4  = 7'h01;
+      3'h4:
+          \$4  = 7'h00;
+      3'h5:
+          \$4  = 7'h02;
+      3'h6:
+          \$4  = 7'h00;
+      3'h7:
+          \$4  = 7'h02;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[7:6])
-      2'h0:
-          \$5  = 7'h7f;
-      2'h1:
-          \$5  = 7'h01;
-      2'h2:
-          \$5  = 7'h05;
-      2'h3:
-          \$5  = 7'h07;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[7:6])
-      2'h0:
+    casez ({ \$6 , words[7:6] })
+      3'h0:
           \$7  = 7'h7f;
-      2'h1:
+      3'h1:
           \$7  = 7'h01;
-      2'h2:
+      3'h2:
           \$7  = 7'h05;
-      2'h3:
+      3'h3:
           \$7  = 7'h07;
+      3'h4:
+          \$7  = 7'h00;
+      3'h5:
+          \$7  = 7'h02;
+      3'h6:
+          \$7  = 7'h06;
+      3'h7:
+          \$7  = 7'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[7:6])
-      2'h0:
-          \$14  = 4'h0;
-      2'h1:
-          \$14  = 4'h2;
-      2'h2:
-          \$14  = 4'h6;
-      2'h3:
-          \$14  = 4'h8;
+    casez ({ \$9 , words[7:6] })
+      3'h0:
+          \$10  = 7'h7f;
+      3'h1:
+          \$10  = 7'h01;
+      3'h2:
+          \$10  = 7'h05;
+      3'h3:
+          \$10  = 7'h07;
+      3'h4:
+          \$10  = 7'h00;
+      3'h5:
+          \$10  = 7'h02;
+      3'h6:
+          \$10  = 7'h06;
+      3'h7:
+          \$10  = 7'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18])
-      1'h0:
-          \$20  = 7'h7f;
-      1'h1:
-          \$20  = 7'h01;
+    casez ({ \$14 , words[7:6] })
+      3'h0:
+          \$15  = 2'h0;
+      3'h1:
+          \$15  = 2'h2;
+      3'h2:
+          \$15  = 2'h0;
+      3'h3:
+          \$15  = 2'h2;
+      3'h4:
+          \$15  = 2'h1;
+      3'h5:
+          \$15  = 2'h3;
+      3'h6:
+          \$15  = 2'h1;
+      3'h7:
+          \$15  = 2'h3;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$18 , words[7:6] })
+      3'h0:
+          \$19  = 4'h0;
+      3'h1:
+          \$19  = 4'h2;
+      3'h2:
+          \$19  = 4'h6;
+      3'h3:
+          \$19  = 4'h8;
+      3'h4:
+          \$19  = 4'h1;
+      3'h5:
+          \$19  = 4'h3;
+      3'h6:
+          \$19  = 4'h7;
+      3'h7:
+          \$19  = 4'h9;
     endcase
   end
   always @* begin
@@ -14370,13 +15128,13 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$22  = 7'h7f;
+          \$25  = 7'h7f;
       2'h1:
-          \$22  = 7'h01;
+          \$25  = 7'h01;
       2'h2:
-          \$22  = 7'h05;
+          \$25  = 7'h7f;
       2'h3:
-          \$22  = 7'h07;
+          \$25  = 7'h01;
     endcase
   end
   always @* begin
@@ -14384,13 +15142,13 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$24  = 7'h7f;
+          \$27  = 7'h7f;
       2'h1:
-          \$24  = 7'h01;
+          \$27  = 7'h01;
       2'h2:
-          \$24  = 7'h05;
+          \$27  = 7'h05;
       2'h3:
-          \$24  = 7'h07;
+          \$27  = 7'h07;
     endcase
   end
   always @* begin
@@ -14398,21 +15156,52 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$31  = 4'h0;
+          \$29  = 7'h7f;
       2'h1:
-          \$31  = 4'h2;
+          \$29  = 7'h01;
       2'h2:
-          \$31  = 4'h6;
+          \$29  = 7'h05;
       2'h3:
-          \$31  = 4'h8;
+          \$29  = 7'h07;
     endcase
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:18])
+      2'h0:
+          \$33  = 2'h0;
+      2'h1:
+          \$33  = 2'h2;
+      2'h2:
+          \$33  = 2'h0;
+      2'h3:
+          \$33  = 2'h2;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:18])
+      2'h0:
+          \$36  = 4'h0;
+      2'h1:
+          \$36  = 4'h2;
+      2'h2:
+          \$36  = 4'h6;
+      2'h3:
+          \$36  = 4'h8;
+    endcase
+  end
+  assign ssi_error = \port$6396$272 [0];
+  assign ssi_double = \port$6396$272 [2];
+  assign ssi_error_low = \port$6396$272 [1];
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$47  = crcs;
-  assign \bit$52  = \bit ;
+  assign \crcs$53  = crcs;
+  assign \bit$58  = \bit ;
   assign ok = crc_ok;
   assign index = word;
-  assign load_index = \$579 [0];
+  assign load_index = \$603 [0];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -14437,19 +15226,19 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$47[0]  = crcs[37:0];
-  assign \crcs$47[0].width  = crcs[4:0];
-  assign \crcs$47[0].poly  = crcs[20:5];
-  assign \crcs$47[0].start  = crcs[36:21];
-  assign \crcs$47[0].inverted  = crcs[37];
-  assign \crcs$47[1]  = crcs[75:38];
-  assign \crcs$47[1].width  = crcs[42:38];
-  assign \crcs$47[1].poly  = crcs[58:43];
-  assign \crcs$47[1].start  = crcs[74:59];
-  assign \crcs$47[1].inverted  = crcs[75];
-  assign \$354  = word;
-  assign \$561  = word;
-  assign \$565  = word;
+  assign \crcs$53[0]  = crcs[37:0];
+  assign \crcs$53[0].width  = crcs[4:0];
+  assign \crcs$53[0].poly  = crcs[20:5];
+  assign \crcs$53[0].start  = crcs[36:21];
+  assign \crcs$53[0].inverted  = crcs[37];
+  assign \crcs$53[1]  = crcs[75:38];
+  assign \crcs$53[1].width  = crcs[42:38];
+  assign \crcs$53[1].poly  = crcs[58:43];
+  assign \crcs$53[1].start  = crcs[74:59];
+  assign \crcs$53[1].inverted  = crcs[75];
+  assign \$376  = word;
+  assign \$583  = word;
+  assign \$587  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -15561,27 +16350,41 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, \started$11 , start_slot, clk);
+module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$14 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
-  reg [7:0] \$1 ;
-  wire \$10 ;
-  reg [7:0] \$11 ;
-  wire [8:0] \$12 ;
-  wire [8:0] \$13 ;
-  reg [7:0] \$14 ;
-  reg [8:0] \$15 ;
-  reg [16:0] \$16 ;
-  reg \$17 ;
-  reg \$18 ;
-  reg [7:0] \$19 ;
-  wire [8:0] \$2 ;
+  wire \$1 ;
+  wire [8:0] \$10 ;
+  wire [9:0] \$11 ;
+  wire \$12 ;
+  reg [7:0] \$13 ;
+  wire [8:0] \$14 ;
+  wire [8:0] \$15 ;
+  wire [8:0] \$16 ;
+  wire [9:0] \$17 ;
+  wire [7:0] \$18 ;
+  wire [8:0] \$19 ;
+  reg [7:0] \$2 ;
+  wire [16:0] \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  reg [7:0] \$25 ;
+  wire [8:0] \$26 ;
+  wire [8:0] \$27 ;
+  reg [7:0] \$28 ;
+  reg [8:0] \$29 ;
   wire [8:0] \$3 ;
-  wire [7:0] \$4 ;
+  reg [16:0] \$30 ;
+  reg \$31 ;
+  reg \$32 ;
+  reg [7:0] \$33 ;
+  wire [8:0] \$4 ;
   wire [8:0] \$5 ;
-  wire [16:0] \$6 ;
-  wire \$7 ;
-  wire \$8 ;
-  wire \$9 ;
+  wire \$6 ;
+  reg [7:0] \$7 ;
+  wire [8:0] \$8 ;
+  wire [8:0] \$9 ;
   input clear;
   wire clear;
   input clk;
@@ -15605,11 +16408,17 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   wire [15:0] rises;
   input rst;
   wire rst;
+  input ssi;
+  wire ssi;
+  input ssi_double;
+  wire ssi_double;
+  input ssi_error;
+  wire ssi_error;
   input [15:0] start_slot;
   wire [15:0] start_slot;
   reg started = 1'h0;
-  input \started$11 ;
-  wire \started$11 ;
+  input \started$14 ;
+  wire \started$14 ;
   reg [16:0] target_rises = 17'h00000;
   input w1_enable;
   wire w1_enable;
@@ -15641,41 +16450,105 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$2  = \$1  + crcs[4:0];
-  assign \$3  = words[5:0] + \$2 [7:0];
-  assign \$4  = w1_enable ? word1_len : 8'h00;
-  assign \$5  = word0_len + \$4 ;
-  assign \$6  = start_slot + frame_len;
-  assign \$7  = rises >= target_rises;
-  assign \$8  = started & \$7 ;
-  assign \$9  = ~ clear;
-  assign \$10  = \$8  & \$9 ;
-  assign \$12  = \$11  + crcs[42:38];
-  assign \$13  = words[17:12] + \$12 [7:0];
+  assign \$1  = ssi & ssi_error;
+  assign \$3  = \$2  + crcs[4:0];
+  assign \$4  = words[5:0] + \$3 [7:0];
+  assign \$5  = \$4 [7:0] + 1'h1;
+  assign \$6  = ssi & ssi_error;
+  assign \$8  = \$7  + crcs[4:0];
+  assign \$9  = words[5:0] + \$8 [7:0];
+  assign \$10  = \$9 [7:0] + 1'h1;
+  assign \$11  = ssi_double ? { \$5 , 1'h0 } : { 1'h0, \$10  };
+  assign \$12  = ssi & ssi_error;
+  assign \$14  = \$13  + crcs[4:0];
+  assign \$15  = words[5:0] + \$14 [7:0];
+  assign \$16  = \$15 [7:0] + 3'h4;
+  assign \$17  = ssi ? \$11  : { 1'h0, \$16  };
+  assign \$18  = w1_enable ? word1_len : 8'h00;
+  assign \$19  = word0_len + \$18 ;
+  assign \$20  = start_slot + frame_len;
+  assign \$21  = rises >= target_rises;
+  assign \$22  = started & \$21 ;
+  assign \$23  = ~ clear;
+  assign \$24  = \$22  & \$23 ;
+  assign \$26  = \$25  + crcs[42:38];
+  assign \$27  = words[17:12] + \$26 [7:0];
   always @(posedge clk)
-    word0_len <= \$14 ;
+    word0_len <= \$28 ;
   always @(posedge clk)
-    frame_len <= \$15 ;
+    frame_len <= \$29 ;
   always @(posedge clk)
-    target_rises <= \$16 ;
+    target_rises <= \$30 ;
   always @(posedge clk)
-    started <= \$17 ;
+    started <= \$31 ;
   always @(posedge clk)
-    enough <= \$18 ;
+    enough <= \$32 ;
   always @(posedge clk)
-    word1_len <= \$19 ;
+    word1_len <= \$33 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[7:6])
-      2'h0:
-          \$1  = 8'h04;
-      2'h1:
-          \$1  = 8'h06;
-      2'h2:
-          \$1  = 8'h0a;
-      2'h3:
-          \$1  = 8'h0c;
+    casez ({ \$1 , words[7:6] })
+      3'h0:
+          \$2  = 8'h00;
+      3'h1:
+          \$2  = 8'h02;
+      3'h2:
+          \$2  = 8'h06;
+      3'h3:
+          \$2  = 8'h08;
+      3'h4:
+          \$2  = 8'h01;
+      3'h5:
+          \$2  = 8'h03;
+      3'h6:
+          \$2  = 8'h07;
+      3'h7:
+          \$2  = 8'h09;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$6 , words[7:6] })
+      3'h0:
+          \$7  = 8'h00;
+      3'h1:
+          \$7  = 8'h02;
+      3'h2:
+          \$7  = 8'h06;
+      3'h3:
+          \$7  = 8'h08;
+      3'h4:
+          \$7  = 8'h01;
+      3'h5:
+          \$7  = 8'h03;
+      3'h6:
+          \$7  = 8'h07;
+      3'h7:
+          \$7  = 8'h09;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$12 , words[7:6] })
+      3'h0:
+          \$13  = 8'h00;
+      3'h1:
+          \$13  = 8'h02;
+      3'h2:
+          \$13  = 8'h06;
+      3'h3:
+          \$13  = 8'h08;
+      3'h4:
+          \$13  = 8'h01;
+      3'h5:
+          \$13  = 8'h03;
+      3'h6:
+          \$13  = 8'h07;
+      3'h7:
+          \$13  = 8'h09;
     endcase
   end
   always @* begin
@@ -15683,55 +16556,55 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$11  = 8'h00;
+          \$25  = 8'h00;
       2'h1:
-          \$11  = 8'h02;
+          \$25  = 8'h02;
       2'h2:
-          \$11  = 8'h06;
+          \$25  = 8'h06;
       2'h3:
-          \$11  = 8'h08;
+          \$25  = 8'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
-    \$14  = \$3 [7:0];
+    \$28  = \$17 [7:0];
     if (rst) begin
-      \$14  = 8'h00;
+      \$28  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
-    \$15  = \$5 ;
+    \$29  = \$19 ;
     if (rst) begin
-      \$15  = 9'h000;
+      \$29  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
-    \$16  = \$6 ;
+    \$30  = \$20 ;
     if (rst) begin
-      \$16  = 17'h00000;
+      \$30  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
-    \$17  = \started$11 ;
+    \$31  = \started$14 ;
     if (rst) begin
-      \$17  = 1'h0;
+      \$31  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
-    \$18  = \$10 ;
+    \$32  = \$24 ;
     if (rst) begin
-      \$18  = 1'h0;
+      \$32  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
-    \$19  = \$13 [7:0];
+    \$33  = \$27 [7:0];
     if (rst) begin
-      \$19  = 8'h00;
+      \$33  = 8'h00;
     end
   end
   assign \words[0]  = words[11:0];
@@ -15761,7 +16634,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, w1_enable, crcs, clear, r
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.register_access (clk, rst, rbuf_en, frame_end, frame_ok, busy, rbuf_data, start, abort, request, wbuf, frame_cdm, frame_cds, done, result, cdm, rbuf_addr);
+module \biss_master_axil.ch0.core.register_access (clk, rst, rbuf_en, frame_ok, frame_end, busy, rbuf_data, start, abort, request, wbuf, frame_cdm, frame_cds, done, result, cdm, rbuf_addr);
   input abort;
   wire abort;
   wire \abort$5 ;
@@ -16340,7 +17213,7 @@ module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
+module \biss_master_axil.ch0.core.register_access.idle (rst, frame_ok, frame_end, run_enough, seen_enough, frame_cdm, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
@@ -16633,7 +17506,7 @@ module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
+module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, frame_end, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
@@ -17874,35 +18747,35 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6396$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$10 ;
-  wire \$11 ;
+  wire [13:0] \$11 ;
   wire \$12 ;
   wire [13:0] \$13 ;
-  wire [17:0] \$14 ;
+  wire \$14 ;
   wire \$15 ;
-  wire \$16 ;
-  wire \$17 ;
+  wire [13:0] \$16 ;
+  wire [17:0] \$17 ;
   wire \$18 ;
-  wire [12:0] \$19 ;
+  wire \$19 ;
   wire [14:0] \$2 ;
   wire \$20 ;
   wire \$21 ;
-  wire [13:0] \$22 ;
-  wire [13:0] \$23 ;
-  wire [16:0] \$24 ;
-  wire \$25 ;
+  wire [12:0] \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire [13:0] \$25 ;
   wire [13:0] \$26 ;
-  wire [13:0] \$27 ;
+  wire [16:0] \$27 ;
   wire \$28 ;
   wire [13:0] \$29 ;
   wire \$3 ;
-  wire [17:0] \$30 ;
+  wire [13:0] \$30 ;
   wire \$31 ;
-  wire \$32 ;
-  wire \$33 ;
+  wire [13:0] \$32 ;
+  wire [17:0] \$33 ;
   wire \$34 ;
   wire \$35 ;
   wire \$36 ;
@@ -17944,36 +18817,42 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   wire \$69 ;
   wire \$7 ;
   wire \$70 ;
-  reg \$71 ;
-  reg [12:0] \$72 ;
-  reg [16:0] \$73 ;
-  reg \$74 ;
-  reg [12:0] \$75 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
   reg \$76 ;
-  reg \$77 ;
-  reg \$78 ;
-  reg [1:0] \$79 ;
+  reg [12:0] \$77 ;
+  reg [16:0] \$78 ;
+  reg \$79 ;
   wire [13:0] \$8 ;
-  reg [16:0] \$80 ;
+  reg [12:0] \$80 ;
   reg \$81 ;
   reg \$82 ;
   reg \$83 ;
-  reg \$84 ;
+  reg [1:0] \$84 ;
   reg [12:0] \$85 ;
-  reg [1:0] \$86 ;
+  reg \$86 ;
+  reg \$87 ;
+  reg \$88 ;
+  reg [1:0] \$89 ;
   wire [17:0] \$9 ;
+  reg [16:0] \$90 ;
+  reg \$91 ;
   input arm;
   wire arm;
   output \bit ;
   wire \bit ;
   reg centre;
-  wire \centre$35 ;
+  wire \centre$39 ;
   reg clear;
-  wire \clear$33 ;
+  wire \clear$36 ;
+  wire clear_high;
   input clk;
   wire clk;
   reg decided;
-  wire \decided$36 ;
+  wire \decided$40 ;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
   reg dropped;
@@ -17983,12 +18862,15 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   reg [12:0] elapsed = 13'h0000;
   reg [15:0] first_load = 16'h0000;
   reg first_slot = 1'h0;
+  wire fixed;
+  reg [12:0] fixed_at = 13'h0000;
+  wire [12:0] fixed_delay;
   reg gap = 1'h0;
   input [15:0] half_period;
   wire [15:0] half_period;
   output level;
   wire level;
-  wire \level$30 ;
+  wire \level$33 ;
   output locked;
   reg locked = 1'h0;
   wire majority;
@@ -17997,8 +18879,10 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   output noise;
   wire noise;
   reg odd = 1'h0;
-  wire \odd$42 ;
+  wire \odd$46 ;
   reg [1:0] phase = 2'h0;
+  input [12:0] \port$6396$259 ;
+  wire [12:0] \port$6396$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -18015,76 +18899,86 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
   (* init = 1'h0 *)
-  wire \vote1$37 ;
+  wire \vote1$41 ;
   reg vote2 = 1'h0;
   (* init = 1'h0 *)
-  wire \vote2$38 ;
+  wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$14  = slot_left - 1'h1;
-  assign \$15  = slot_left == 1'h1;
-  assign \$16  = ~ level;
-  assign \$17  = slo_prev & \$16 ;
-  assign \$18  = elapsed == 13'h1fff;
-  assign \$19  = \$18  ? 13'h1fff : mid_delay;
-  assign \$20  = ! mid_slot;
+  assign \$9  = mid_slot - 1'h1;
+  assign \$10  = ~ odd;
+  assign \$11  = \port$6396$259 [12:1] + 1'h1;
+  assign \$12  = ~ level;
+  assign \$13  = elapsed + 1'h1;
+  assign \$14  = elapsed == fixed_at;
+  assign \$15  = elapsed != 13'h1fff;
+  assign \$16  = elapsed + 1'h1;
+  assign \$17  = slot_left - 1'h1;
+  assign \$18  = slot_left == 1'h1;
+  assign \$19  = ~ level;
+  assign \$20  = slo_prev & \$19 ;
   assign \$21  = elapsed == 13'h1fff;
-  assign \$22  = elapsed - 1'h1;
-  assign \$23  = \$21  ? 14'h1fff : \$22 ;
-  assign \$24  = half_period - 2'h2;
-  assign \$25  = elapsed == 13'h1fff;
-  assign \$26  = elapsed - 1'h1;
-  assign \$27  = \$25  ? 14'h1fff : \$26 ;
-  assign \$28  = elapsed != 13'h1fff;
-  assign \$29  = elapsed + 1'h1;
-  assign \$30  = slot_left - 1'h1;
-  assign \$31  = slot_left == 1'h1;
-  assign \$32  = ! phase;
-  assign \$33  = first_slot & \$32 ;
-  assign \$34  = \$33  & level;
-  assign \$35  = ~ single;
-  assign \$36  = decided & first_slot;
-  assign \$37  = vote1 & vote2;
-  assign \$38  = vote1 & level;
-  assign \$39  = \$37  | \$38 ;
-  assign \$40  = vote2 & level;
-  assign \$41  = \$39  | \$40 ;
-  assign \$42  = single ? level : \$41 ;
-  assign \$43  = ~ first_slot;
-  assign \$44  = decided & \$43 ;
-  assign \$45  = vote1 & vote2;
-  assign \$46  = vote1 & level;
-  assign \$47  = \$45  | \$46 ;
-  assign \$48  = vote2 & level;
-  assign \$49  = \$47  | \$48 ;
-  assign \bit  = single ? level : \$49 ;
+  assign \$22  = \$21  ? 13'h1fff : mid_delay;
+  assign \$23  = ! mid_slot;
+  assign \$24  = elapsed == 13'h1fff;
+  assign \$25  = elapsed - 1'h1;
+  assign \$26  = \$24  ? 14'h1fff : \$25 ;
+  assign \$27  = half_period - 2'h2;
+  assign \$28  = elapsed == 13'h1fff;
+  assign \$29  = elapsed - 1'h1;
+  assign \$30  = \$28  ? 14'h1fff : \$29 ;
+  assign \$31  = elapsed != 13'h1fff;
+  assign \$32  = elapsed + 1'h1;
+  assign \$33  = slot_left - 1'h1;
+  assign \$34  = slot_left == 1'h1;
+  assign \$35  = ! phase;
+  assign \$36  = first_slot & \$35 ;
+  assign \$37  = \$36  & level;
+  assign \$38  = ~ single;
+  assign \$39  = decided & first_slot;
+  assign \$40  = vote1 & vote2;
+  assign \$41  = vote1 & level;
+  assign \$42  = \$40  | \$41 ;
+  assign \$43  = vote2 & level;
+  assign \$44  = \$42  | \$43 ;
+  assign \$45  = single ? level : \$44 ;
+  assign \$46  = ~ first_slot;
+  assign \$47  = decided & \$46 ;
+  assign \$48  = vote1 & vote2;
+  assign \$49  = vote1 & level;
+  assign \$50  = \$48  | \$49 ;
+  assign \$51  = vote2 & level;
+  assign \$52  = \$50  | \$51 ;
+  assign \bit  = single ? level : \$52 ;
   assign \edge  = level != slo_prev;
-  assign \$50  = ~ single;
-  assign \decided$36  = decided & \$50 ;
-  assign \$51  = vote1 & vote2;
-  assign \$52  = vote1 & level;
-  assign \$53  = \$51  | \$52 ;
-  assign \$54  = vote2 & level;
-  assign majority = \$53  | \$54 ;
-  assign noise = dropped | \odd$42 ;
-  assign \$55  = ~ level;
-  assign \$56  = slo_prev & \$55 ;
-  assign \$57  = ! phase;
-  assign \$58  = first_slot & \$57 ;
-  assign \$59  = \$58  & level;
-  assign \$60  = ~ single;
-  assign \$61  = decided & first_slot;
-  assign \$62  = vote1 & vote2;
-  assign \$63  = vote1 & level;
-  assign \$64  = \$62  | \$63 ;
-  assign \$65  = vote2 & level;
-  assign \$66  = \$64  | \$65 ;
-  assign \$67  = single ? level : \$66 ;
-  assign \$68  = ! sampler_fsm_state;
-  assign \$69  = sampler_fsm_state == 1'h1;
-  assign \$70  = sampler_fsm_state == 2'h2;
+  assign \$53  = ~ single;
+  assign \decided$40  = decided & \$53 ;
+  assign \$54  = vote1 & vote2;
+  assign \$55  = vote1 & level;
+  assign \$56  = \$54  | \$55 ;
+  assign \$57  = vote2 & level;
+  assign majority = \$56  | \$57 ;
+  assign noise = dropped | \odd$46 ;
+  assign \$58  = elapsed == fixed_at;
+  assign \$59  = ~ level;
+  assign \$60  = slo_prev & \$59 ;
+  assign \$61  = ! phase;
+  assign \$62  = first_slot & \$61 ;
+  assign \$63  = \$62  & level;
+  assign \$64  = ~ single;
+  assign \$65  = decided & first_slot;
+  assign \$66  = vote1 & vote2;
+  assign \$67  = vote1 & level;
+  assign \$68  = \$66  | \$67 ;
+  assign \$69  = vote2 & level;
+  assign \$70  = \$68  | \$69 ;
+  assign \$71  = single ? level : \$70 ;
+  assign \$72  = ! sampler_fsm_state;
+  assign \$73  = sampler_fsm_state == 1'h1;
+  assign \$74  = sampler_fsm_state == 2'h2;
+  assign \$75  = sampler_fsm_state == 2'h3;
   always @(posedge clk)
-    slo_prev <= \$71 ;
+    slo_prev <= \$76 ;
   always @(posedge clk)
     vote <= \$2 ;
   always @(posedge clk)
@@ -18096,35 +18990,37 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   always @(posedge clk)
     vote_one <= \$7 ;
   always @(posedge clk)
-    mid_delay <= \$72 ;
+    mid_delay <= \$77 ;
   always @(posedge clk)
-    mid_slot <= \$73 ;
+    mid_slot <= \$78 ;
   always @(posedge clk)
-    odd <= \$74 ;
+    odd <= \$79 ;
   always @(posedge clk)
-    elapsed <= \$75 ;
+    fixed_at <= \$11 [12:0];
   always @(posedge clk)
-    early <= \$76 ;
+    elapsed <= \$80 ;
   always @(posedge clk)
-    locked <= \$77 ;
+    early <= \$81 ;
   always @(posedge clk)
-    gap <= \$78 ;
+    locked <= \$82 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$79 ;
+    gap <= \$83 ;
   always @(posedge clk)
-    slot_left <= \$80 ;
-  always @(posedge clk)
-    slot_zero <= \$81 ;
-  always @(posedge clk)
-    vote1 <= \$82 ;
-  always @(posedge clk)
-    vote2 <= \$83 ;
-  always @(posedge clk)
-    first_slot <= \$84 ;
+    sampler_fsm_state <= \$84 ;
   always @(posedge clk)
     delay <= \$85 ;
   always @(posedge clk)
-    phase <= \$86 ;
+    vote1 <= \$86 ;
+  always @(posedge clk)
+    vote2 <= \$87 ;
+  always @(posedge clk)
+    first_slot <= \$88 ;
+  always @(posedge clk)
+    phase <= \$89 ;
+  always @(posedge clk)
+    slot_left <= \$90 ;
+  always @(posedge clk)
+    slot_zero <= \$91 ;
   assign \$1  = half_period >= 2'h3;
   assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
   assign \$3  = half_period < 2'h3;
@@ -18133,20 +19029,16 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   assign \$6  = vote - 1'h1;
   assign \$7  = vote == 1'h1;
   assign \$8  = mid_delay + 1'h1;
-  assign \$9  = mid_slot - 1'h1;
-  assign \$10  = ~ odd;
-  assign \$11  = ~ level;
-  assign \$12  = elapsed != 13'h1fff;
-  assign \$13  = elapsed + 1'h1;
   \biss_master_axil.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
+    .clear_high(\port$6396$259 [0]),
     .clk(clk),
-    .decided(\decided$36 ),
+    .decided(\decided$40 ),
     .\edge (\edge ),
     .level(level),
     .majority(majority),
-    .odd(\odd$42 ),
+    .odd(\odd$46 ),
     .receiver_clear(receiver_clear),
     .rst(rst),
     .vote1(vote1),
@@ -18161,398 +19053,242 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$71  = level;
+    \$76  = level;
     if (receiver_clear) begin
-      \$71  = 1'h1;
+      \$76  = 1'h1;
     end
     if (rst) begin
-      \$71  = 1'h1;
+      \$76  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$72  = mid_delay;
+    \$77  = mid_delay;
     if (odd) begin
-      \$72  = \$8 [12:0];
+      \$77  = \$8 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$72  = \$27 [12:0];
+              \$77  = \$30 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$72  = 13'h0000;
+      \$77  = 13'h0000;
     end
     if (rst) begin
-      \$72  = 13'h0000;
+      \$77  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$73  = mid_slot;
+    \$78  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$73  = \$9 [16:0];
+      \$78  = \$9 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$73  = \$24 ;
+              \$78  = \$27 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$73  = 17'h00000;
+      \$78  = 17'h00000;
     end
     if (rst) begin
-      \$73  = 17'h00000;
+      \$78  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$74  = \$10 ;
+    \$79  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$74  = 1'h1;
+              \$79  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$74  = 1'h0;
+      \$79  = 1'h0;
     end
     if (rst) begin
-      \$74  = 1'h0;
+      \$79  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$75  = elapsed;
+    \$80  = elapsed;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$75  = 13'h0001;
-          end
-      2'h1:
-          if (\$12 ) begin
-            \$75  = \$13 [12:0];
+            \$80  = 13'h0001;
           end
       2'h2:
-          if (\$28 ) begin
-            \$75  = \$29 [12:0];
+          \$80  = \$13 [12:0];
+      2'h1:
+          if (\$15 ) begin
+            \$80  = \$16 [12:0];
+          end
+      2'h3:
+          if (\$31 ) begin
+            \$80  = \$32 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$75  = 13'h0000;
+      \$80  = 13'h0000;
     end
     if (rst) begin
-      \$75  = 13'h0000;
+      \$80  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$76  = early;
+    \$81  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$76  = \$11 ;
+            \$81  = \$12 ;
+            if (\port$6396$259 [0]) begin
+              \$81  = 1'h0;
+            end
           end
     endcase
     if (receiver_clear) begin
-      \$76  = 1'h0;
+      \$81  = 1'h0;
     end
     if (rst) begin
-      \$76  = 1'h0;
+      \$81  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$77  = locked;
+    \$82  = locked;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$77  = 1'h0;
+            \$82  = 1'h0;
+          end
+      2'h2:
+          if (\$14 ) begin
+            \$82  = 1'h1;
           end
       2'h1:
           /* empty */;
-      2'h2:
-          if (\$36 ) begin
+      2'h3:
+          if (\$39 ) begin
             (* full_case = 32'd1 *)
-            if (\$42 ) begin
+            if (\$45 ) begin
             end else begin
-              \$77  = 1'h1;
+              \$82  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$77  = 1'h0;
+      \$82  = 1'h0;
     end
     if (rst) begin
-      \$77  = 1'h0;
+      \$82  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$78  = gap;
+    \$83  = gap;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$78  = 1'h0;
+            \$83  = 1'h0;
           end
+      2'h2:
+          /* empty */;
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$78  = 1'h0;
+              \$83  = 1'h0;
             end
           end
-          if (\$17 ) begin
-            \$78  = 1'h0;
+          if (\$20 ) begin
+            \$83  = 1'h0;
           end
         end
-      2'h2:
-          if (\$34 ) begin
-            \$78  = \$35 ;
+      2'h3:
+          if (\$37 ) begin
+            \$83  = \$38 ;
           end
     endcase
     if (receiver_clear) begin
-      \$78  = 1'h0;
+      \$83  = 1'h0;
     end
     if (rst) begin
-      \$78  = 1'h0;
+      \$83  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$79  = sampler_fsm_state;
+    \$84  = sampler_fsm_state;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$79  = 2'h1;
-          end
-      2'h1:
-          if (\$17 ) begin
-            \$79  = 2'h2;
+            \$84  = 2'h1;
+            if (\port$6396$259 [0]) begin
+              \$84  = 2'h2;
+            end
           end
       2'h2:
-        begin
-          if (\$34 ) begin
-            \$79  = 2'h1;
+          if (\$14 ) begin
+            \$84  = 2'h3;
           end
-          if (\$36 ) begin
-            if (\$42 ) begin
-              \$79  = 2'h1;
+      2'h1:
+          if (\$20 ) begin
+            \$84  = 2'h3;
+          end
+      2'h3:
+        begin
+          if (\$37 ) begin
+            \$84  = 2'h1;
+          end
+          if (\$39 ) begin
+            if (\$45 ) begin
+              \$84  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$79  = 2'h0;
+      \$84  = 2'h0;
     end
     if (rst) begin
-      \$79  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$80  = slot_left;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-        begin
-          if (gap) begin
-            \$80  = \$14 [16:0];
-          end
-          if (\$17 ) begin
-            (* full_case = 32'd1 *)
-            if (gap) begin
-              \$80  = mid_slot;
-            end else begin
-              \$80  = { 1'h0, first_load };
-            end
-          end
-        end
-      2'h2:
-        begin
-          \$80  = \$30 [16:0];
-          if (\$34 ) begin
-            \$80  = { 2'h0, vote_load };
-          end else if (slot_zero) begin
-            (* full_case = 32'd1 *)
-            casez (phase)
-              2'h0:
-                  (* full_case = 32'd1 *)
-                  if (single) begin
-                    \$80  = { first_load, 1'h1 };
-                  end else begin
-                    \$80  = { 2'h0, vote_load };
-                  end
-              2'h1:
-                  \$80  = { 2'h0, vote_load };
-              default:
-                  \$80  = { first_load, 1'h1 };
-            endcase
-          end
-        end
-    endcase
-    if (receiver_clear) begin
-      \$80  = 17'h00000;
-    end
-    if (rst) begin
-      \$80  = 17'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$81  = slot_zero;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-        begin
-          if (gap) begin
-            \$81  = \$15 ;
-          end
-          if (\$17 ) begin
-            (* full_case = 32'd1 *)
-            if (gap) begin
-              \$81  = \$20 ;
-            end else begin
-              \$81  = 1'h0;
-            end
-          end
-        end
-      2'h2:
-        begin
-          \$81  = \$31 ;
-          if (\$34 ) begin
-            \$81  = vote_one;
-          end else if (slot_zero) begin
-            (* full_case = 32'd1 *)
-            casez (phase)
-              2'h0:
-                  (* full_case = 32'd1 *)
-                  if (single) begin
-                    \$81  = 1'h0;
-                  end else begin
-                    \$81  = vote_one;
-                  end
-              2'h1:
-                  \$81  = vote_one;
-              default:
-                  \$81  = 1'h0;
-            endcase
-          end
-        end
-    endcase
-    if (receiver_clear) begin
-      \$81  = 1'h1;
-    end
-    if (rst) begin
-      \$81  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$82  = vote1;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$17 ) begin
-            \$82  = 1'h0;
-          end
-      2'h2:
-          if (\$34 ) begin
-          end else if (slot_zero) begin
-            casez (phase)
-              2'h0:
-                  (* full_case = 32'd1 *)
-                  if (single) begin
-                  end else begin
-                    \$82  = level;
-                  end
-            endcase
-          end
-    endcase
-    if (receiver_clear) begin
-      \$82  = 1'h0;
-    end
-    if (rst) begin
-      \$82  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$83  = vote2;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$17 ) begin
-            \$83  = 1'h0;
-          end
-      2'h2:
-          if (\$34 ) begin
-          end else if (slot_zero) begin
-            casez (phase)
-              2'h0:
-                  /* empty */;
-              2'h1:
-                  \$83  = level;
-            endcase
-          end
-    endcase
-    if (receiver_clear) begin
-      \$83  = 1'h0;
-    end
-    if (rst) begin
-      \$83  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$84  = first_slot;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$17 ) begin
-            \$84  = 1'h1;
-          end
-      2'h2:
-          if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (\$42 ) begin
-            end else begin
-              \$84  = 1'h0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$84  = 1'h0;
-    end
-    if (rst) begin
-      \$84  = 1'h0;
+      \$84  = 2'h0;
     end
   end
   always @* begin
@@ -18561,13 +19297,17 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$85  = { 1'h0, \port$6396$259 [12:1] };
+          end
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$85  = \$19 ;
+              \$85  = \$22 ;
             end else begin
-              \$85  = \$23 [12:0];
+              \$85  = \$26 [12:0];
             end
           end
     endcase
@@ -18580,21 +19320,125 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    \$86  = phase;
+    \$86  = vote1;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$86  = 1'h0;
+          end
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
+            \$86  = 1'h0;
+          end
+      2'h3:
+          if (\$37 ) begin
+          end else if (slot_zero) begin
+            casez (phase)
+              2'h0:
+                  (* full_case = 32'd1 *)
+                  if (single) begin
+                  end else begin
+                    \$86  = level;
+                  end
+            endcase
+          end
+    endcase
+    if (receiver_clear) begin
+      \$86  = 1'h0;
+    end
+    if (rst) begin
+      \$86  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$87  = vote2;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$87  = 1'h0;
+          end
+      2'h1:
+          if (\$20 ) begin
+            \$87  = 1'h0;
+          end
+      2'h3:
+          if (\$37 ) begin
+          end else if (slot_zero) begin
+            casez (phase)
+              2'h0:
+                  /* empty */;
+              2'h1:
+                  \$87  = level;
+            endcase
+          end
+    endcase
+    if (receiver_clear) begin
+      \$87  = 1'h0;
+    end
+    if (rst) begin
+      \$87  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$88  = first_slot;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$88  = 1'h0;
+          end
+      2'h1:
+          if (\$20 ) begin
+            \$88  = 1'h1;
+          end
+      2'h3:
+          if (\$39 ) begin
             (* full_case = 32'd1 *)
-            if (gap) begin
-              \$86  = 2'h1;
+            if (\$45 ) begin
             end else begin
-              \$86  = 2'h0;
+              \$88  = 1'h0;
             end
           end
+    endcase
+    if (receiver_clear) begin
+      \$88  = 1'h0;
+    end
+    if (rst) begin
+      \$88  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$89  = phase;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
       2'h2:
-          if (\$34 ) begin
+          if (\$14 ) begin
+            \$89  = 2'h0;
+          end
+      2'h1:
+          if (\$20 ) begin
+            (* full_case = 32'd1 *)
+            if (gap) begin
+              \$89  = 2'h1;
+            end else begin
+              \$89  = 2'h0;
+            end
+          end
+      2'h3:
+          if (\$37 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -18602,34 +19446,147 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$86  = 2'h1;
+                    \$89  = 2'h1;
                   end
               2'h1:
-                  \$86  = 2'h2;
+                  \$89  = 2'h2;
               default:
-                  \$86  = 2'h0;
+                  \$89  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$86  = 2'h0;
+      \$89  = 2'h0;
     end
     if (rst) begin
-      \$86  = 2'h0;
+      \$89  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
-    sample = \$44 ;
+    \$90  = slot_left;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$90  = { 1'h0, first_load };
+          end
       2'h1:
+        begin
+          if (gap) begin
+            \$90  = \$17 [16:0];
+          end
+          if (\$20 ) begin
+            (* full_case = 32'd1 *)
+            if (gap) begin
+              \$90  = mid_slot;
+            end else begin
+              \$90  = { 1'h0, first_load };
+            end
+          end
+        end
+      2'h3:
+        begin
+          \$90  = \$33 [16:0];
+          if (\$37 ) begin
+            \$90  = { 2'h0, vote_load };
+          end else if (slot_zero) begin
+            (* full_case = 32'd1 *)
+            casez (phase)
+              2'h0:
+                  (* full_case = 32'd1 *)
+                  if (single) begin
+                    \$90  = { first_load, 1'h1 };
+                  end else begin
+                    \$90  = { 2'h0, vote_load };
+                  end
+              2'h1:
+                  \$90  = { 2'h0, vote_load };
+              default:
+                  \$90  = { first_load, 1'h1 };
+            endcase
+          end
+        end
+    endcase
+    if (receiver_clear) begin
+      \$90  = 17'h00000;
+    end
+    if (rst) begin
+      \$90  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    \$91  = slot_zero;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
           /* empty */;
       2'h2:
-          if (\$61 ) begin
+          if (\$14 ) begin
+            \$91  = 1'h0;
+          end
+      2'h1:
+        begin
+          if (gap) begin
+            \$91  = \$18 ;
+          end
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
-            if (\$67 ) begin
+            if (gap) begin
+              \$91  = \$23 ;
+            end else begin
+              \$91  = 1'h0;
+            end
+          end
+        end
+      2'h3:
+        begin
+          \$91  = \$34 ;
+          if (\$37 ) begin
+            \$91  = vote_one;
+          end else if (slot_zero) begin
+            (* full_case = 32'd1 *)
+            casez (phase)
+              2'h0:
+                  (* full_case = 32'd1 *)
+                  if (single) begin
+                    \$91  = 1'h0;
+                  end else begin
+                    \$91  = vote_one;
+                  end
+              2'h1:
+                  \$91  = vote_one;
+              default:
+                  \$91  = 1'h0;
+            endcase
+          end
+        end
+    endcase
+    if (receiver_clear) begin
+      \$91  = 1'h1;
+    end
+    if (rst) begin
+      \$91  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    sample = \$47 ;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h2:
+          /* empty */;
+      2'h1:
+          /* empty */;
+      2'h3:
+          if (\$65 ) begin
+            (* full_case = 32'd1 *)
+            if (\$71 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -18642,8 +19599,12 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          if (\$58 ) begin
+            clear = 1'h1;
+          end
       2'h1:
-          if (\$56 ) begin
+          if (\$60 ) begin
             clear = 1'h1;
           end
     endcase
@@ -18651,18 +19612,21 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     dropped = 1'h0;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
           /* empty */;
-      2'h2:
+      2'h3:
         begin
-          if (\$59 ) begin
+          if (\$63 ) begin
             dropped = 1'h1;
           end
-          if (\$61 ) begin
-            if (\$67 ) begin
+          if (\$65 ) begin
+            if (\$71 ) begin
               dropped = 1'h1;
             end
           end
@@ -18672,13 +19636,16 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     decided = 1'h0;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
           /* empty */;
-      2'h2:
-          if (\$59 ) begin
+      2'h3:
+          if (\$63 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -18697,32 +19664,38 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, \bit , noise, half_period, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     centre = 1'h0;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
           /* empty */;
-      2'h2:
-          if (\$59 ) begin
+      2'h3:
+          if (\$63 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  centre = \$60 ;
+                  centre = \$64 ;
             endcase
           end
     endcase
   end
-  assign \level$30  = level;
-  assign \clear$33  = clear;
-  assign \centre$35  = centre;
-  assign \vote1$37  = vote1;
-  assign \vote2$38  = vote2;
+  assign fixed_delay = { 1'h0, \port$6396$259 [12:1] };
+  assign fixed = \port$6396$259 [0];
+  assign \level$33  = level;
+  assign \clear$36  = clear;
+  assign clear_high = \port$6396$259 [0];
+  assign \centre$39  = centre;
+  assign \vote1$41  = vote1;
+  assign \vote2$42  = vote2;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majority, odd, receiver_clear, vote1, vote2, clear, centre, level, clk);
+module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majority, odd, clear_high, receiver_clear, vote1, vote2, clear, centre, level, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -18766,6 +19739,8 @@ module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
   wire centre;
   input clear;
   wire clear;
+  input clear_high;
+  wire clear_high;
   input clk;
   wire clk;
   reg crowded = 1'h0;
@@ -18842,7 +19817,7 @@ module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     \$33  = last;
     (* full_case = 32'd1 *)
     if (clear) begin
-      \$33  = 1'h0;
+      \$33  = clear_high;
     end else begin
       if (decided) begin
         \$33  = majority;
@@ -19120,7 +20095,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$5982$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6384$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -19162,8 +20137,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$5982$0 ;
-  wire \port$5982$0 ;
+  input \port$6384$0 ;
+  wire \port$6384$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -19177,9 +20152,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$5982$0  };
-  assign \$2  = { lc[4:0], \port$5982$0  } == last;
-  assign \$3  = { lc[4:0], \port$5982$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6384$0  };
+  assign \$2  = { lc[4:0], \port$6384$0  } == last;
+  assign \$3  = { lc[4:0], \port$6384$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -19289,7 +20264,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$5982$0  };
+  assign lc_next = { lc[4:0], \port$6384$0  };
   assign zero = is_zero;
 endmodule
 
@@ -19845,8 +20820,8 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2334$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, crc_ok
-, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2541$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+, crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -19884,14 +20859,17 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2334$0 , l
   wire \$4 ;
   wire \$40 ;
   wire \$41 ;
-  wire [1:0] \$42 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire \$44 ;
+  wire [1:0] \$45 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [258:0] cfg;
-  wire [258:0] cfg;
+  input [274:0] cfg;
+  wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [3:0] \cfg.confirm_frames ;
@@ -19904,6 +20882,11 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2334$0 , l
   wire [23:0] \cfg.request_period ;
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
+  wire \cfg.ssi ;
+  wire [11:0] \cfg.ssi_delay ;
+  wire \cfg.ssi_double ;
+  wire \cfg.ssi_error ;
+  wire \cfg.ssi_error_low ;
   wire [23:0] \cfg.timeout_limit ;
   wire [11:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
@@ -19942,6 +20925,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2334$0 , l
   wire \cfg.w1_enable ;
   output clean;
   wire clean;
+  input copy_mismatch;
+  wire copy_mismatch;
   output [1:0] crc_error;
   wire [1:0] crc_error;
   input [1:0] crc_ok;
@@ -20007,8 +20992,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2334$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$2334$0 ;
-  wire \port$2334$0 ;
+  output \port$2541$0 ;
+  wire \port$2541$0 ;
   output report;
   wire report;
   input report_frame;
@@ -20041,6 +21026,9 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2334$0 , l
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
+  assign clean = \$41  & \$44 ;
+  assign \$45  = ~ { \$2 , crc_ok[0] };
+  assign crc_error = report_frame ? \$45  : 2'h0;
   assign \$1  = ~ cfg[199];
   assign \$2  = crc_ok[1] | \$1 ;
   assign \$3  = cfg[199] & cfg[207];
@@ -20051,50 +21039,49 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2334$0 , l
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[250] & cfg[199];
-  assign \$8  = crc_ok[0] & \$2 ;
-  assign \$9  = \$7  & \$8 ;
-  assign \$10  = ~ spw_match;
-  assign spw_mismatch = \$9  & \$10 ;
-  assign \$11  = lc_repeat | lc_skip;
-  assign \$12  = \$11  | lc_zero;
-  assign \$13  = ~ \$2 ;
-  assign \$14  = ~ crc_ok[0];
-  assign \$15  = ~ crc_ok[0];
+  assign \$7  = crc_ok[0] & \$2 ;
+  assign \$8  = cfg[250] & cfg[199];
+  assign \$9  = ~ spw_match;
+  assign \$10  = \$8  & \$9 ;
+  assign \$12  = cfg[259] & copy_mismatch;
+  assign \$13  = \$11  | \$12 ;
+  assign spw_mismatch = \$7  & \$13 ;
+  assign \$14  = lc_repeat | lc_skip;
+  assign \$15  = \$14  | lc_zero;
   assign \$16  = ~ \$2 ;
-  assign \$17  = \$15  & \$16 ;
+  assign \$17  = ~ crc_ok[0];
+  assign \$18  = ~ crc_ok[0];
+  assign \$19  = ~ \$2 ;
+  assign \$20  = \$18  & \$19 ;
   assign report = report_frame | fault;
   assign status = report_frame ? frame_status : fault_status;
-  assign \$18  = ! frame_status;
-  assign valid = report_frame & \$18 ;
-  assign \$19  = ! frame_status;
-  assign \$20  = frame_status == 4'hf;
-  assign \$21  = \$19  | \$20 ;
-  assign passed = report_frame & \$21 ;
-  assign \$22  = crc_ok[0] & \$2 ;
-  assign \$23  = ~ \$22 ;
-  assign \$24  = \$23  | spw_mismatch;
-  assign \$25  = cfg[199] & cfg[207];
-  assign \$26  = cfg[156] | \$25 ;
-  assign \$27  = cfg[156] ? crc_ok[0] : \$2 ;
-  assign \$28  = \$26  & \$27 ;
-  assign \$29  = lc_repeat_seen | lc_skip_seen;
-  assign \$30  = \$29  | lc_zero_seen;
-  assign \$31  = \$28  & \$30 ;
-  assign \$32  = \$24  | \$31 ;
-  assign \$33  = \$32  | noisy;
-  assign doubtful = \$33  | delay_jump;
-  assign \$34  = crc_ok[0] & \$2 ;
-  assign \$35  = ~ spw_mismatch;
-  assign \$36  = \$34  & \$35 ;
-  assign \$37  = ~ noisy;
-  assign \$38  = \$36  & \$37 ;
-  assign \$39  = lc_repeat | lc_skip;
-  assign \$40  = \$39  | lc_zero;
-  assign \$41  = ~ \$40 ;
-  assign clean = \$38  & \$41 ;
-  assign \$42  = ~ { \$2 , crc_ok[0] };
-  assign crc_error = report_frame ? \$42  : 2'h0;
+  assign \$21  = ! frame_status;
+  assign valid = report_frame & \$21 ;
+  assign \$22  = ! frame_status;
+  assign \$23  = frame_status == 4'hf;
+  assign \$24  = \$22  | \$23 ;
+  assign passed = report_frame & \$24 ;
+  assign \$25  = crc_ok[0] & \$2 ;
+  assign \$26  = ~ \$25 ;
+  assign \$27  = \$26  | spw_mismatch;
+  assign \$28  = cfg[199] & cfg[207];
+  assign \$29  = cfg[156] | \$28 ;
+  assign \$30  = cfg[156] ? crc_ok[0] : \$2 ;
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = lc_repeat_seen | lc_skip_seen;
+  assign \$33  = \$32  | lc_zero_seen;
+  assign \$34  = \$31  & \$33 ;
+  assign \$35  = \$27  | \$34 ;
+  assign \$36  = \$35  | noisy;
+  assign doubtful = \$36  | delay_jump;
+  assign \$37  = crc_ok[0] & \$2 ;
+  assign \$38  = ~ spw_mismatch;
+  assign \$39  = \$37  & \$38 ;
+  assign \$40  = ~ noisy;
+  assign \$41  = \$39  & \$40 ;
+  assign \$42  = lc_repeat | lc_skip;
+  assign \$43  = \$42  | lc_zero;
+  assign \$44  = ~ \$43 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     frame_status = 4'h0;
@@ -20110,21 +21097,21 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2334$0 , l
     if (spw_mismatch) begin
       frame_status = 4'h5;
     end
-    if (\$12 ) begin
+    if (\$15 ) begin
       frame_status = 4'h4;
     end
-    if (\$13 ) begin
+    if (\$16 ) begin
       frame_status = 4'h2;
     end
-    if (\$14 ) begin
+    if (\$17 ) begin
       frame_status = 4'h1;
     end
-    if (\$17 ) begin
+    if (\$20 ) begin
       frame_status = 4'h3;
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2334$0  = \$2 ;
+  assign \port$2541$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -20163,13 +21150,19 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2334$0 , l
   assign \cfg.w1_crc.inverted  = cfg[249];
   assign \cfg.spw_check  = cfg[250];
   assign \cfg.spw_tolerance  = cfg[258:251];
+  assign \cfg.ssi  = cfg[259];
+  assign \cfg.ssi_delay  = cfg[271:260];
+  assign \cfg.ssi_error  = cfg[272];
+  assign \cfg.ssi_error_low  = cfg[273];
+  assign \cfg.ssi_double  = cfg[274];
+  assign \$11  = \$10 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
+module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
-, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma
-, \port$6860$0 , \port$6873$0 , regs__ca_done, \port$6950$0 , ca_rbuf_addr);
+, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7272$0 , \port$7285$0 , regs__ca_done, \port$7362$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -20254,6 +21247,16 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   wire cfg_spw_check;
   input [7:0] cfg_spw_tolerance;
   wire [7:0] cfg_spw_tolerance;
+  input cfg_ssi;
+  wire cfg_ssi;
+  input [11:0] cfg_ssi_delay;
+  wire [11:0] cfg_ssi_delay;
+  input cfg_ssi_double;
+  wire cfg_ssi_double;
+  input cfg_ssi_error;
+  wire cfg_ssi_error;
+  input cfg_ssi_error_low;
+  wire cfg_ssi_error_low;
   input [23:0] cfg_timeout_limit;
   wire [23:0] cfg_timeout_limit;
   (* enum_base_type = "Crc" *)
@@ -20336,17 +21339,17 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$187 ;
+  wire \ma$198 ;
   wire [3:0] noise_events;
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6860$0 ;
-  wire [186:0] \port$6860$0 ;
-  output [79:0] \port$6873$0 ;
-  wire [79:0] \port$6873$0 ;
-  output [9:0] \port$6950$0 ;
-  wire [9:0] \port$6950$0 ;
+  output [186:0] \port$7272$0 ;
+  wire [186:0] \port$7272$0 ;
+  output [79:0] \port$7285$0 ;
+  wire [79:0] \port$7285$0 ;
+  output [9:0] \port$7362$0 ;
+  wire [9:0] \port$7362$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -20374,6 +21377,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   wire [5:0] regs__cap_data_bits_w0;
   wire [5:0] regs__cap_data_bits_w1;
   wire regs__cap_register_access;
+  wire regs__cap_ssi;
   wire [5:0] regs__cap_timer_width;
   wire regs__cap_timestamp;
   wire regs__cds;
@@ -20389,6 +21393,11 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   wire [23:0] regs__cfg_request_period;
   wire regs__cfg_spw_check;
   wire [7:0] regs__cfg_spw_tolerance;
+  wire regs__cfg_ssi;
+  wire [11:0] regs__cfg_ssi_delay;
+  wire regs__cfg_ssi_double;
+  wire regs__cfg_ssi_error;
+  wire regs__cfg_ssi_error_low;
   wire [23:0] regs__cfg_timeout_limit;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -20469,7 +21478,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$189 ;
+  wire \slo$200 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -20493,8 +21502,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$184 ;
-  wire \trigger$184 ;
+  input \trigger$195 ;
+  wire \trigger$195 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -20512,7 +21521,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
-  assign trigger = \trigger$184  & regs__trigger_enable;
+  assign trigger = \trigger$195  & regs__trigger_enable;
   assign \$6  = ~ report;
   assign \$7  = \$signal  & \$6 ;
   assign \$8  = waited + 1'h1;
@@ -20534,8 +21543,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
     regs__done_count <= \$17 ;
   \biss_master_axil.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$245 (ca_abort),
-    .\busy$294 (regs__busy),
+    .\abort$262 (ca_abort),
+    .\busy$311 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -20557,6 +21566,11 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
     .cfg_request_period(cfg_request_period),
     .cfg_spw_check(cfg_spw_check),
     .cfg_spw_tolerance(cfg_spw_tolerance),
+    .cfg_ssi(cfg_ssi),
+    .cfg_ssi_delay(cfg_ssi_delay),
+    .cfg_ssi_double(cfg_ssi_double),
+    .cfg_ssi_error(cfg_ssi_error),
+    .cfg_ssi_error_low(cfg_ssi_error_low),
     .cfg_timeout_limit(cfg_timeout_limit),
     .cfg_w0_crc(cfg_w0_crc),
     .cfg_w0_crc_inverted(cfg_w0_crc_inverted),
@@ -20579,27 +21593,27 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$270 (clear_counters),
+    .\clear$287 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$19 ),
-    .\done$297 (done),
+    .\done$314 (done),
     .frames(regs__ca_busy),
     .ma(ma),
-    .\periodic$40 (periodic),
+    .\periodic$45 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$20 ),
-    .\result$302 (\$18 ),
+    .\result$319 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$243 (ca_start),
+    .\start$260 (ca_start),
     .trigger(trigger),
-    .\valid$299 (valid)
+    .\valid$316 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
@@ -20677,6 +21691,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   assign regs__cap_counters = 1'h1;
   assign regs__cap_timestamp = 1'h1;
   assign regs__cap_register_access = 1'h1;
+  assign regs__cap_ssi = 1'h1;
   assign ended = regs__frame_done;
   assign ca_done = regs__ca_done;
   assign regs__cfg_ma_half_period = cfg_ma_half_period;
@@ -20755,6 +21770,11 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   assign regs__cfg_w1_crc_width = cfg_w1_crc_width;
   assign regs__cfg_w1_crc_inverted = cfg_w1_crc_inverted;
   assign regs__cfg_w1_crc_start = cfg_w1_crc_start;
+  assign regs__cfg_ssi = cfg_ssi;
+  assign regs__cfg_ssi_error = cfg_ssi_error;
+  assign regs__cfg_ssi_error_low = cfg_ssi_error_low;
+  assign regs__cfg_ssi_double = cfg_ssi_double;
+  assign regs__cfg_ssi_delay = cfg_ssi_delay;
   assign regs__ca_slave_id = ca_slave_id;
   assign regs__ca_address = ca_address;
   assign regs__ca_count = ca_count;
@@ -20782,18 +21802,18 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$184 , count_en, ca_wbuf_en
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$187  = ma;
-  assign \slo$189  = slo;
-  assign \port$6860$0  = \$18 ;
-  assign \port$6873$0  = \$19 ;
-  assign \port$6950$0  = \$20 ;
+  assign \ma$198  = ma;
+  assign \slo$200  = slo;
+  assign \port$7272$0  = \$18 ;
+  assign \port$7285$0  = \$19 ;
+  assign \port$7362$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$294 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$270 , \periodic$40 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$311 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$287 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, ca_slave_id, ca_address, ca_count, ca_write, \start$243 , \abort$245 , abort, ma, \done$297 , \valid$299 , \result$302 
-, counts, ca_done, result, rbuf_addr);
+, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$260 , \abort$262 
+, abort, ma, \done$314 , \valid$316 , \result$319 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20805,13 +21825,17 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \$16 ;
   wire \$17 ;
   wire \$18 ;
-  reg \$19 ;
+  wire \$19 ;
   wire \$2 ;
-  reg \$20 ;
-  reg \$21 ;
-  reg \$22 ;
+  wire \$20 ;
+  wire \$21 ;
+  wire \$22 ;
   reg \$23 ;
-  wire \$24 ;
+  reg \$24 ;
+  reg \$25 ;
+  reg \$26 ;
+  reg \$27 ;
+  wire \$28 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -20823,26 +21847,26 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$245 ;
-  wire \abort$245 ;
-  wire \abort$52 ;
+  input \abort$262 ;
+  wire \abort$262 ;
+  wire \abort$57 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$84 ;
+  wire \ack_expired$90 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$105 ;
+  wire [23:0] \ack_limit$111 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$326 ;
+  wire \bit$343 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$82 ;
+  wire \break_over$88 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$254 ;
-  wire \busy$291 ;
-  output \busy$294 ;
-  wire \busy$294 ;
+  wire \busy$271 ;
+  wire \busy$308 ;
+  output \busy$311 ;
+  wire \busy$311 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -20877,11 +21901,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$258 ;
+  wire \cdm$275 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$305 ;
-  wire [258:0] cfg;
+  wire \cds$322 ;
+  wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [3:0] \cfg.confirm_frames ;
@@ -20894,6 +21918,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] \cfg.request_period ;
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
+  wire \cfg.ssi ;
+  wire [11:0] \cfg.ssi_delay ;
+  wire \cfg.ssi_double ;
+  wire \cfg.ssi_error ;
+  wire \cfg.ssi_error_low ;
   wire [23:0] \cfg.timeout_limit ;
   wire [11:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
@@ -20954,6 +21983,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire cfg_spw_check;
   input [7:0] cfg_spw_tolerance;
   wire [7:0] cfg_spw_tolerance;
+  input cfg_ssi;
+  wire cfg_ssi;
+  input [11:0] cfg_ssi_delay;
+  wire [11:0] cfg_ssi_delay;
+  input cfg_ssi_double;
+  wire cfg_ssi_double;
+  input cfg_ssi_error;
+  wire cfg_ssi_error;
+  input cfg_ssi_error_low;
+  wire cfg_ssi_error_low;
   input [23:0] cfg_timeout_limit;
   wire [23:0] cfg_timeout_limit;
   (* enum_base_type = "Crc" *)
@@ -21009,16 +22048,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$163 ;
+  wire \check$170 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$168 ;
-  wire \clean$327 ;
+  wire \clean$175 ;
+  wire \clean$344 ;
   wire clear;
-  wire \clear$129 ;
-  input \clear$270 ;
-  wire \clear$270 ;
-  wire \clear$283 ;
+  wire \clear$135 ;
+  input \clear$287 ;
+  wire \clear$287 ;
+  wire \clear$300 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -21027,6 +22066,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   output config_error;
   wire config_error;
   wire config_ok;
+  wire copy_mismatch;
   wire [2:0] count_addr;
   output count_busy;
   wire count_busy;
@@ -21046,33 +22086,33 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$180 ;
+  wire [39:0] \cpw_top$187 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$194 ;
+  wire [1:0] \crc_ok$212 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$176 ;
-  wire [37:0] \crcs$176[0] ;
-  wire \crcs$176[0].inverted ;
-  wire [15:0] \crcs$176[0].poly ;
-  wire [15:0] \crcs$176[0].start ;
-  wire [4:0] \crcs$176[0].width ;
-  wire [37:0] \crcs$176[1] ;
-  wire \crcs$176[1].inverted ;
-  wire [15:0] \crcs$176[1].poly ;
-  wire [15:0] \crcs$176[1].start ;
-  wire [4:0] \crcs$176[1].width ;
-  wire [75:0] \crcs$177 ;
-  wire [37:0] \crcs$177[0] ;
-  wire \crcs$177[0].inverted ;
-  wire [15:0] \crcs$177[0].poly ;
-  wire [15:0] \crcs$177[0].start ;
-  wire [4:0] \crcs$177[0].width ;
-  wire [37:0] \crcs$177[1] ;
-  wire \crcs$177[1].inverted ;
-  wire [15:0] \crcs$177[1].poly ;
-  wire [15:0] \crcs$177[1].start ;
-  wire [4:0] \crcs$177[1].width ;
+  wire [75:0] \crcs$183 ;
+  wire [37:0] \crcs$183[0] ;
+  wire \crcs$183[0].inverted ;
+  wire [15:0] \crcs$183[0].poly ;
+  wire [15:0] \crcs$183[0].start ;
+  wire [4:0] \crcs$183[0].width ;
+  wire [37:0] \crcs$183[1] ;
+  wire \crcs$183[1].inverted ;
+  wire [15:0] \crcs$183[1].poly ;
+  wire [15:0] \crcs$183[1].start ;
+  wire [4:0] \crcs$183[1].width ;
+  wire [75:0] \crcs$184 ;
+  wire [37:0] \crcs$184[0] ;
+  wire \crcs$184[0].inverted ;
+  wire [15:0] \crcs$184[0].poly ;
+  wire [15:0] \crcs$184[0].start ;
+  wire [4:0] \crcs$184[0].width ;
+  wire [37:0] \crcs$184[1] ;
+  wire \crcs$184[1].inverted ;
+  wire [15:0] \crcs$184[1].poly ;
+  wire [15:0] \crcs$184[1].start ;
+  wire [4:0] \crcs$184[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -21083,7 +22123,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  wire [258:0] cycle;
+  wire [274:0] cycle;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [3:0] \cycle.confirm_frames ;
@@ -21096,6 +22136,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] \cycle.request_period ;
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
+  wire \cycle.ssi ;
+  wire [11:0] \cycle.ssi_delay ;
+  wire \cycle.ssi_double ;
+  wire \cycle.ssi_error ;
+  wire \cycle.ssi_error_low ;
   wire [23:0] \cycle.timeout_limit ;
   wire [11:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
@@ -21139,54 +22184,54 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$111 ;
-  wire [12:0] \delay$162 ;
+  wire [12:0] \delay$117 ;
+  wire [12:0] \delay$169 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$113 ;
+  wire [11:0] \delay_limit$119 ;
   wire delay_over;
-  wire \delay_over$92 ;
+  wire \delay_over$98 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$256 ;
-  output \done$297 ;
-  wire \done$297 ;
-  wire \done$298 ;
+  wire \done$273 ;
+  output \done$314 ;
+  wire \done$314 ;
+  wire \done$315 ;
   wire doubtful;
   wire early;
-  wire \early$68 ;
+  wire \early$73 ;
   wire enable;
   wire end_check;
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$269 ;
-  wire \events$269.ca_aborted ;
-  wire \events$269.ca_crc4_error ;
-  wire \events$269.ca_data_fault ;
-  wire \events$269.ca_no_answer ;
-  wire \events$269.ca_refused ;
-  wire [15:0] \events$278 ;
-  wire \events$278.aborted ;
-  wire \events$278.crc_word0 ;
-  wire \events$278.crc_word1 ;
-  wire \events$278.delay_jump ;
-  wire \events$278.delay_range ;
-  wire \events$278.lc_repeat ;
-  wire \events$278.lc_skip ;
-  wire \events$278.lc_zero ;
-  wire \events$278.no_ack ;
-  wire \events$278.no_start ;
-  wire \events$278.no_stop ;
-  wire \events$278.noise_event ;
-  wire \events$278.noisy_line ;
-  wire \events$278.overrun ;
-  wire \events$278.slo_stuck_low ;
-  wire \events$278.spw_mismatch ;
+  wire [4:0] \events$286 ;
+  wire \events$286.ca_aborted ;
+  wire \events$286.ca_crc4_error ;
+  wire \events$286.ca_data_fault ;
+  wire \events$286.ca_no_answer ;
+  wire \events$286.ca_refused ;
+  wire [15:0] \events$295 ;
+  wire \events$295.aborted ;
+  wire \events$295.crc_word0 ;
+  wire \events$295.crc_word1 ;
+  wire \events$295.delay_jump ;
+  wire \events$295.delay_range ;
+  wire \events$295.lc_repeat ;
+  wire \events$295.lc_skip ;
+  wire \events$295.lc_zero ;
+  wire \events$295.no_ack ;
+  wire \events$295.no_start ;
+  wire \events$295.no_stop ;
+  wire \events$295.noise_event ;
+  wire \events$295.noisy_line ;
+  wire \events$295.overrun ;
+  wire \events$295.slo_stuck_low ;
+  wire \events$295.spw_mismatch ;
   wire fault;
-  wire \fault$190 ;
+  wire \fault$208 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -21222,7 +22267,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$192 ;
+  wire [3:0] \fault_status$210 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -21232,8 +22277,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$229 ;
+  wire \first_rise$246 ;
   wire [31:0] first_rise_time;
+  wire fixed;
+  wire [12:0] fixed_delay;
   wire [186:0] frame;
   wire \frame.cds ;
   wire \frame.delay_settled ;
@@ -21284,37 +22331,37 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$135 ;
+  wire [15:0] \half_period$141 ;
   wire held;
   wire hold;
   wire idle;
-  wire \idle$36 ;
-  wire \idle$45 ;
+  wire \idle$41 ;
+  wire \idle$50 ;
   wire in_clock;
-  wire \in_clock$99 ;
+  wire \in_clock$105 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$140 ;
-  wire [5:0] \lc$318 ;
+  wire [5:0] \lc$147 ;
+  wire [5:0] \lc$335 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$142 ;
+  wire [5:0] \lc_next$149 ;
   wire lc_repeat;
-  wire \lc_repeat$319 ;
+  wire \lc_repeat$336 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$320 ;
+  wire \lc_skip$337 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$321 ;
+  wire \lc_zero$338 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$151 ;
+  wire \level$158 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
-  wire [258:0] live;
+  wire [274:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [3:0] \live.confirm_frames ;
@@ -21327,6 +22374,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] \live.request_period ;
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
+  wire \live.ssi ;
+  wire [11:0] \live.ssi_delay ;
+  wire \live.ssi_double ;
+  wire \live.ssi_error ;
+  wire \live.ssi_error_low ;
   wire [23:0] \live.timeout_limit ;
   wire [11:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
@@ -21365,42 +22417,43 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \live.w1_enable ;
   wire load;
   wire locked;
-  wire \locked$66 ;
+  wire \locked$71 ;
   output ma;
   wire ma;
-  wire \ma$293 ;
+  wire \ma$310 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$94 ;
+  wire \ma_busy$100 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
   wire ma_run;
   wire match;
+  wire mismatch;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$86 ;
+  wire \no_start_expired$92 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$109 ;
+  wire [24:0] \no_start_limit$115 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$170 ;
+  wire \noisy$177 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$296 ;
+  wire \overrun$313 ;
   wire passed;
   wire pending;
   wire [23:0] period;
   wire periodic;
-  input \periodic$40 ;
-  wire \periodic$40 ;
+  input \periodic$45 ;
+  wire \periodic$45 ;
   wire quiet;
-  wire \quiet$118 ;
+  wire \quiet$124 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$120 ;
+  wire \quiet_live$126 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -21416,38 +22469,38 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$204 ;
-  wire \report$208 ;
+  wire \report$222 ;
+  wire \report$226 ;
   wire report_delay;
-  wire \report_delay$211 ;
+  wire \report_delay$229 ;
   wire report_frame;
-  wire \report_frame$189 ;
-  wire \report_frame$209 ;
+  wire \report_frame$207 ;
+  wire \report_frame$227 ;
   wire request;
-  wire [17:0] \request$231 ;
-  wire [6:0] \request$231.address ;
-  wire [6:0] \request$231.count ;
-  wire [2:0] \request$231.slave_id ;
-  wire \request$231.write ;
-  wire \request$51 ;
+  wire [17:0] \request$248 ;
+  wire [6:0] \request$248.address ;
+  wire [6:0] \request$248.count ;
+  wire [2:0] \request$248.slave_id ;
+  wire \request$248.write ;
+  wire \request$56 ;
   wire restart;
-  wire \restart$155 ;
+  wire \restart$162 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$302 ;
-  wire [186:0] \result$302 ;
-  wire \result$302.cds ;
-  wire \result$302.delay_settled ;
-  wire [7:0] \result$302.delay_spread ;
-  wire [5:0] \result$302.lc ;
-  wire \result$302.lc_repeat ;
-  wire \result$302.lc_skip ;
-  wire \result$302.lc_zero ;
-  wire [12:0] \result$302.line_delay ;
-  wire [3:0] \result$302.noise_events ;
-  wire [12:0] \result$302.settled_delay ;
-  wire \result$302.spw_mismatch ;
+  output [186:0] \result$319 ;
+  wire [186:0] \result$319 ;
+  wire \result$319.cds ;
+  wire \result$319.delay_settled ;
+  wire [7:0] \result$319.delay_spread ;
+  wire [5:0] \result$319.lc ;
+  wire \result$319.lc_repeat ;
+  wire \result$319.lc_skip ;
+  wire \result$319.lc_zero ;
+  wire [12:0] \result$319.line_delay ;
+  wire [3:0] \result$319.noise_events ;
+  wire [12:0] \result$319.settled_delay ;
+  wire \result$319.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -21465,18 +22518,18 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$302.status ;
-  wire [31:0] \result$302.timestamp ;
-  wire [57:0] \result$302.word0 ;
-  wire \result$302.word0.crc_ok ;
-  wire \result$302.word0.ne ;
-  wire \result$302.word0.nw ;
-  wire [54:0] \result$302.word0.position ;
-  wire [42:0] \result$302.word1 ;
-  wire \result$302.word1.crc_ok ;
-  wire \result$302.word1.ne ;
-  wire \result$302.word1.nw ;
-  wire [39:0] \result$302.word1.position ;
+  wire [3:0] \result$319.status ;
+  wire [31:0] \result$319.timestamp ;
+  wire [57:0] \result$319.word0 ;
+  wire \result$319.word0.crc_ok ;
+  wire \result$319.word0.ne ;
+  wire \result$319.word0.nw ;
+  wire [54:0] \result$319.word0.position ;
+  wire [42:0] \result$319.word1 ;
+  wire \result$319.word1.crc_ok ;
+  wire \result$319.word1.ne ;
+  wire \result$319.word1.nw ;
+  wire [39:0] \result$319.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -21488,47 +22541,55 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$148 ;
+  wire \resync$155 ;
   wire [15:0] rises;
-  wire [15:0] \rises$128 ;
+  wire [15:0] \rises$134 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$325 ;
+  wire \sample$342 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$308 ;
+  wire [12:0] \settled_delay$325 ;
   wire skip;
   input slo;
   wire slo;
-  wire \slo$47 ;
-  wire \slo$57 ;
-  wire \slo$93 ;
+  wire \slo$52 ;
+  wire \slo$62 ;
+  wire \slo$99 ;
   wire slo_stuck;
-  wire \slo_stuck$88 ;
+  wire \slo_stuck$94 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$90 ;
+  wire \slo_stuck_live$96 ;
   wire slots_full;
-  wire \slots_full$74 ;
+  wire \slots_full$81 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$322 ;
+  wire \spw_mismatch$339 ;
+  wire ssi;
+  wire \ssi$196 ;
+  wire \ssi$200 ;
+  wire ssi_double;
+  wire \ssi_double$201 ;
+  wire ssi_error;
+  wire \ssi_error$202 ;
+  wire ssi_error_low;
   input start;
   wire start;
-  input \start$243 ;
-  wire \start$243 ;
-  wire \start$38 ;
+  input \start$260 ;
+  wire \start$260 ;
+  wire \start$43 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$126 ;
+  wire [15:0] \start_slot$132 ;
   wire started;
-  wire \started$124 ;
-  wire \started$72 ;
+  wire \started$130 ;
+  wire \started$79 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -21565,7 +22626,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$206 ;
+  wire [3:0] \status$224 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -21583,26 +22644,26 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$301 ;
+  wire [3:0] \status$318 ;
   wire stop_bit;
-  wire \stop_bit$78 ;
+  wire \stop_bit$84 ;
   wire stopped;
-  wire \stopped$76 ;
+  wire \stopped$82 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$107 ;
+  wire [23:0] \timeout_limit$113 ;
   wire [23:0] timeout_live;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$184 ;
+  wire [7:0] \tolerance$191 ;
   input trigger;
   wire trigger;
-  wire \trigger$49 ;
+  wire \trigger$54 ;
   wire unconfirmed;
   wire valid;
-  wire \valid$213 ;
-  output \valid$299 ;
-  wire \valid$299 ;
+  wire \valid$231 ;
+  output \valid$316 ;
+  wire \valid$316 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -21620,34 +22681,34 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$138 ;
+  wire [1:0] \word_count$145 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$174 ;
-  wire [11:0] \words$174[0] ;
+  wire [23:0] \words$181 ;
+  wire [11:0] \words$181[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$174[0].crc ;
-  wire [5:0] \words$174[0].data_bits ;
-  wire \words$174[0].gray ;
-  wire \words$174[0].lc ;
-  wire \words$174[0].nenw ;
-  wire \words$174[0].signed ;
-  wire [11:0] \words$174[1] ;
+  wire [1:0] \words$181[0].crc ;
+  wire [5:0] \words$181[0].data_bits ;
+  wire \words$181[0].gray ;
+  wire \words$181[0].lc ;
+  wire \words$181[0].nenw ;
+  wire \words$181[0].signed ;
+  wire [11:0] \words$181[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$174[1].crc ;
-  wire [5:0] \words$174[1].data_bits ;
-  wire \words$174[1].gray ;
-  wire \words$174[1].lc ;
-  wire \words$174[1].nenw ;
-  wire \words$174[1].signed ;
+  wire [1:0] \words$181[1].crc ;
+  wire [5:0] \words$181[1].data_bits ;
+  wire \words$181[1].gray ;
+  wire \words$181[1].lc ;
+  wire \words$181[1].nenw ;
+  wire \words$181[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -21673,40 +22734,48 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \words[1].nenw ;
   wire \words[1].signed ;
   wire zero;
-  assign periodic = \periodic$40  | frames;
-  assign enable = cycle[144:141] != 4'hf;
+  assign periodic = \periodic$45  | frames;
+  assign frame_done = cycle[259] ? stopped : done;
+  assign arm = cycle[259] ? first_rise : ma_arm;
+  assign \$1  = cycle[144:141] != 4'hf;
+  assign \$2  = ~ cycle[259];
+  assign enable = \$1  & \$2 ;
   assign rearm = cfg_delay_tolerance == 4'hf;
-  assign \$1  = ~ started_before;
-  assign \check$163  = started & \$1 ;
-  assign \$2  = result[2:0] == 1'h1;
-  assign \$3  = ca_done & \$2 ;
-  assign \$4  = result[2:0] == 2'h2;
-  assign \$5  = ca_done & \$4 ;
-  assign \$6  = result[2:0] == 2'h3;
+  assign \$3  = ~ started_before;
+  assign \check$170  = started & \$3 ;
+  assign \$4  = ~ cycle[259];
+  assign cdm = \cdm$275  & \$4 ;
+  assign \$5  = ~ cycle[259];
+  assign frame_ok = passed & \$5 ;
+  assign \$6  = result[2:0] == 1'h1;
   assign \$7  = ca_done & \$6 ;
-  assign \$8  = result[2:0] == 3'h4;
+  assign \$8  = result[2:0] == 2'h2;
   assign \$9  = ca_done & \$8 ;
-  assign \$10  = result[2:0] == 3'h5;
+  assign \$10  = result[2:0] == 2'h3;
   assign \$11  = ca_done & \$10 ;
-  assign \$12  = report_frame & spw_mismatch;
-  assign \$13  = status == 4'hd;
-  assign \$14  = report_frame & \$13 ;
-  assign \$15  = status == 4'he;
-  assign \$16  = report_frame & \$15 ;
-  assign \busy$294  = ~ idle;
+  assign \$12  = result[2:0] == 3'h4;
+  assign \$13  = ca_done & \$12 ;
+  assign \$14  = result[2:0] == 3'h5;
+  assign \$15  = ca_done & \$14 ;
+  assign \$16  = report_frame & spw_mismatch;
+  assign \$17  = status == 4'hd;
+  assign \$18  = report_frame & \$17 ;
+  assign \$19  = status == 4'he;
+  assign \$20  = report_frame & \$19 ;
+  assign \busy$311  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$17  = ~ \clear$129 ;
-  assign \$18  = \sample$325  & \$17 ;
+  assign \$21  = ~ \clear$135 ;
+  assign \$22  = \sample$342  & \$21 ;
   always @(posedge clk)
-    sample <= \$19 ;
+    sample <= \$23 ;
   always @(posedge clk)
-    \bit  <= \$20 ;
+    \bit  <= \$24 ;
   always @(posedge clk)
-    started_before <= \$21 ;
+    started_before <= \$25 ;
   always @(posedge clk)
-    learn <= \$22 ;
+    learn <= \$26 ;
   always @(posedge clk)
-    clean <= \$23 ;
+    clean <= \$27 ;
   \biss_master_axil.ch1.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -21742,7 +22811,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$155 ),
+    .fault(\restart$162 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -21759,17 +22828,18 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$129 ),
+    .receiver_clear(\clear$135 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
     .restart_timer(restart),
     .resync(resync),
     .rst(rst),
-    .slo(\slo$57 ),
+    .slo(\slo$62 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .slots_full(slots_full),
+    .ssi(cycle[259]),
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
@@ -21778,19 +22848,19 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch1.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$270 ),
+    .clear(\clear$287 ),
     .clk(clk),
-    .events(\events$278 ),
+    .events(\events$295 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters  counters (
-    .clear(\clear$270 ),
+    .clear(\clear$287 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$269 ),
+    .events(\events$286 ),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.decoder  decoder (
@@ -21802,15 +22872,18 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .crcs(crcs),
     .data0(data0),
     .data1(spw),
-    .done(frame_done),
+    .done(done),
     .lc(lc),
     .lc_load(load),
+    .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .receiver_clear(\clear$129 ),
+    .\port$6928$272 (cycle[274:272]),
+    .receiver_clear(\clear$135 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
+    .ssi(cycle[259]),
     .start_slot(start_slot),
     .started(started),
     .stop_bit(stop_bit),
@@ -21819,7 +22892,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .words(words)
   );
   \biss_master_axil.ch1.core.delay_check  delay_check (
-    .check(\check$163 ),
+    .check(\check$170 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -21835,13 +22908,13 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch1.core.line_noise  line_noise (
     .clk(clk),
-    .close(frame_done),
+    .close(done),
     .\event (\event ),
     .events(events),
-    .level(\slo$57 ),
+    .level(\slo$62 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$155 ),
+    .restart(\restart$162 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -21849,7 +22922,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   \biss_master_axil.ch1.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$94 ),
+    .\clocking (\ma_busy$100 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -21861,21 +22934,24 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .second_rise(ma_arm)
   );
   \biss_master_axil.ch1.core.ma_stop  ma_stop (
-    .clear(\clear$129 ),
+    .clear(\clear$135 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
     .rises(rises),
     .rst(rst),
+    .ssi(cycle[259]),
+    .ssi_double(cycle[274]),
+    .ssi_error(cycle[272]),
     .start_slot(start_slot),
-    .\started$11 (started),
+    .\started$14 (started),
     .w1_enable(cycle[199]),
-    .words(\words$174 )
+    .words(\words$181 )
   );
   \biss_master_axil.ch1.core.register_access  register_access (
-    .abort(\abort$245 ),
+    .abort(\abort$262 ),
     .busy(frames),
-    .cdm(cdm),
+    .cdm(\cdm$275 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -21885,37 +22961,38 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$231 ),
+    .request(\request$248 ),
     .result(result),
     .rst(rst),
-    .start(\start$243 ),
+    .start(\start$260 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch1.core.results  results (
     .clk(clk),
-    .done(\done$297 ),
+    .done(\done$314 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$302 ),
+    .result(\result$319 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$299 )
+    .valid_out(\valid$316 )
   );
   \biss_master_axil.ch1.core.sampler  sampler (
-    .arm(ma_arm),
-    .\bit (\bit$326 ),
+    .arm(arm),
+    .\bit (\bit$343 ),
     .clk(clk),
     .delay(delay),
     .early(early),
     .half_period(cycle[15:0]),
-    .level(\slo$57 ),
+    .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .receiver_clear(\clear$129 ),
+    .\port$6928$259 (cycle[271:259]),
+    .receiver_clear(\clear$135 ),
     .rst(rst),
-    .sample(\sample$325 ),
+    .sample(\sample$342 ),
     .slo(slo)
   );
   \biss_master_axil.ch1.core.scheduler  scheduler (
@@ -21936,7 +23013,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6509$0 (\bit ),
+    .\port$6916$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -21968,7 +23045,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$94 ),
+    .ma_busy(\ma_busy$100 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -21977,7 +23054,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .quiet_time_live(cfg_quiet_time),
     .restart(restart),
     .rst(rst),
-    .slo(\slo$57 ),
+    .slo(\slo$62 ),
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
@@ -21985,12 +23062,13 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch1.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$327 ),
+    .clean(\clean$344 ),
+    .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$155 ),
+    .fault(\restart$162 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -22000,8 +23078,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero(lc_zero),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
-    .passed(frame_ok),
-    .\port$4616$0 (\$24 ),
+    .passed(passed),
+    .\port$4987$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -22012,193 +23090,200 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
-    \$19  = \$18 ;
-    if (rst) begin
-      \$19  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
-    \$20  = \bit$326 ;
-    if (rst) begin
-      \$20  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
-    \$21  = started;
-    if (rst) begin
-      \$21  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
-    \$22  = report_frame;
-    if (rst) begin
-      \$22  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
-    \$23  = \clean$327 ;
+    \$23  = \$22 ;
     if (rst) begin
       \$23  = 1'h0;
     end
   end
-  assign \idle$36  = idle;
-  assign \start$38  = start;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    \$24  = \bit$343 ;
+    if (rst) begin
+      \$24  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    \$25  = started;
+    if (rst) begin
+      \$25  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    \$26  = report_frame;
+    if (rst) begin
+      \$26  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    \$27  = \clean$344 ;
+    if (rst) begin
+      \$27  = 1'h0;
+    end
+  end
+  assign \idle$41  = idle;
+  assign \start$43  = start;
   assign period = cfg_request_period;
   assign abort_cycle = abort;
-  assign \idle$45  = idle;
-  assign \slo$47  = slo;
-  assign \trigger$49  = trigger;
-  assign \request$51  = request;
-  assign \abort$52  = abort;
+  assign \idle$50  = idle;
+  assign \slo$52  = slo;
+  assign \trigger$54  = trigger;
+  assign \request$56  = request;
+  assign \abort$57  = abort;
   assign ok = config_ok;
   assign end_check = cycle[124];
-  assign level = \slo$57 ;
+  assign level = \slo$62 ;
   assign busy = ma_busy;
   assign second_rise = ma_arm;
   assign enough = ma_enough;
-  assign \locked$66  = locked;
-  assign \early$68  = early;
-  assign done = frame_done;
-  assign \started$72  = started;
-  assign \slots_full$74  = slots_full;
-  assign \stopped$76  = stopped;
-  assign \stop_bit$78  = stop_bit;
+  assign \locked$71  = locked;
+  assign \early$73  = early;
+  assign ssi = cycle[259];
+  assign \started$79  = started;
+  assign \slots_full$81  = slots_full;
+  assign \stopped$82  = stopped;
+  assign \stop_bit$84  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$82  = break_over;
-  assign \ack_expired$84  = ack_expired;
-  assign \no_start_expired$86  = no_start_expired;
-  assign \slo_stuck$88  = slo_stuck;
-  assign \slo_stuck_live$90  = slo_stuck_live;
-  assign \delay_over$92  = delay_over;
-  assign \slo$93  = \slo$57 ;
-  assign \clocking  = \ma_busy$94 ;
+  assign \break_over$88  = break_over;
+  assign \ack_expired$90  = ack_expired;
+  assign \no_start_expired$92  = no_start_expired;
+  assign \slo_stuck$94  = slo_stuck;
+  assign \slo_stuck_live$96  = slo_stuck_live;
+  assign \delay_over$98  = delay_over;
+  assign \slo$99  = \slo$62 ;
+  assign \clocking  = \ma_busy$100 ;
   assign timer_clear = clear;
-  assign \in_clock$99  = in_clock;
+  assign \in_clock$105  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$105  = ack_limit;
-  assign \timeout_limit$107  = timeout_limit;
-  assign \no_start_limit$109  = no_start_limit;
-  assign \delay$111  = delay;
-  assign \delay_limit$113  = delay_limit;
+  assign \ack_limit$111  = ack_limit;
+  assign \timeout_limit$113  = timeout_limit;
+  assign \no_start_limit$115  = no_start_limit;
+  assign \delay$117  = delay;
+  assign \delay_limit$119  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$118  = quiet;
-  assign \quiet_live$120  = quiet_live;
+  assign \quiet$124  = quiet;
+  assign \quiet_live$126  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$124  = started;
-  assign \start_slot$126  = start_slot;
-  assign \rises$128  = rises;
-  assign receiver_clear = \clear$129 ;
+  assign \started$130  = started;
+  assign \start_slot$132  = start_slot;
+  assign \rises$134  = rises;
+  assign receiver_clear = \clear$135 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$135  = cycle[15:0];
-  assign arm = ma_arm;
-  assign \word_count$138  = word_count;
-  assign \lc$140  = lc;
+  assign \half_period$141  = cycle[15:0];
+  assign \word_count$145  = word_count;
+  assign \lc$147  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$142  = { lc[4:0], \bit  };
+  assign \lc_next$149  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$148  = resync;
+  assign \resync$155  = resync;
   assign waiting = watch;
-  assign \level$151  = \slo$57 ;
+  assign \level$158  = \slo$62 ;
   assign noise = sampler_noise;
-  assign close = frame_done;
-  assign fault = \restart$155 ;
+  assign close = done;
+  assign fault = \restart$162 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$162  = delay;
+  assign \delay$169  = delay;
   assign \$signal  = learn;
-  assign \clean$168  = clean;
-  assign \noisy$170  = noisy;
+  assign \clean$175  = clean;
+  assign \noisy$177  = noisy;
   assign jump = delay_jump;
-  assign \crcs$176  = crcs;
-  assign \crcs$177  = crcs;
+  assign \crcs$183  = crcs;
+  assign \crcs$184  = crcs;
   assign w1_enable = cycle[199];
-  assign \cpw_top$180  = cpw_top;
+  assign \cpw_top$187  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[205:200];
-  assign \tolerance$184  = cycle[258:251];
+  assign \tolerance$191  = cycle[258:251];
   assign match = spw_match;
+  assign fixed = cycle[259];
+  assign fixed_delay = { 1'h0, cycle[271:260] };
+  assign \ssi$196  = cycle[259];
+  assign ssi_error = cycle[272];
+  assign ssi_error_low = cycle[273];
+  assign ssi_double = cycle[274];
+  assign \ssi$200  = cycle[259];
+  assign \ssi_double$201  = cycle[274];
+  assign \ssi_error$202  = cycle[272];
+  assign mismatch = copy_mismatch;
   assign cfg = cycle;
-  assign \report_frame$189  = report_frame;
-  assign \fault$190  = \restart$155 ;
-  assign \fault_status$192  = fault_status;
-  assign \crc_ok$194  = crc_ok;
+  assign \report_frame$207  = report_frame;
+  assign \fault$208  = \restart$162 ;
+  assign \fault_status$210  = fault_status;
+  assign \crc_ok$212  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$204  = report;
-  assign \status$206  = status;
+  assign \report$222  = report;
+  assign \status$224  = status;
   assign setting = cycle[148:145];
-  assign \report$208  = report;
-  assign \report_frame$209  = report_frame;
-  assign \report_delay$211  = report_delay;
-  assign \valid$213  = valid;
-  assign word_crc_ok = { \$24 , crc_ok[0] };
-  assign \first_rise$229  = first_rise;
+  assign \report$226  = report;
+  assign \report_frame$227  = report_frame;
+  assign \report_delay$229  = report_delay;
+  assign \valid$231  = valid;
+  assign word_crc_ok = { \$28 , crc_ok[0] };
+  assign \first_rise$246  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$243 ;
-  assign ca_abort = \abort$245 ;
+  assign ca_start = \start$260 ;
+  assign ca_abort = \abort$262 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$254  = frames;
-  assign \done$256  = ca_done;
-  assign \cdm$258  = cdm;
+  assign \busy$271  = frames;
+  assign \done$273  = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign passed = frame_ok;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$270 ;
+  assign clear_counters = \clear$287 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$283  = \clear$270 ;
+  assign \clear$300  = \clear$287 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$291  = count_busy;
-  assign \ma$293  = ma;
-  assign \overrun$296  = overrun;
-  assign \done$298  = \done$297 ;
-  assign valid_out = \valid$299 ;
-  assign \status$301  = \result$302 [3:0];
-  assign timestamp = \result$302 [35:4];
-  assign line_delay = \result$302 [48:36];
-  assign \cds$305  = \result$302 [49];
-  assign noise_events = \result$302 [53:50];
-  assign delay_settled = \result$302 [54];
-  assign \settled_delay$308  = \result$302 [67:55];
-  assign delay_spread = \result$302 [75:68];
-  assign word0_position = \result$302 [130:76];
-  assign word0_ne = \result$302 [131];
-  assign word0_nw = \result$302 [132];
-  assign word0_crc_ok = \result$302 [133];
-  assign word1_position = \result$302 [173:134];
-  assign word1_ne = \result$302 [174];
-  assign word1_nw = \result$302 [175];
-  assign word1_crc_ok = \result$302 [176];
-  assign \lc$318  = \result$302 [182:177];
-  assign \lc_repeat$319  = \result$302 [183];
-  assign \lc_skip$320  = \result$302 [184];
-  assign \lc_zero$321  = \result$302 [185];
-  assign \spw_mismatch$322  = \result$302 [186];
+  assign \busy$308  = count_busy;
+  assign \ma$310  = ma;
+  assign \overrun$313  = overrun;
+  assign \done$315  = \done$314 ;
+  assign valid_out = \valid$316 ;
+  assign \status$318  = \result$319 [3:0];
+  assign timestamp = \result$319 [35:4];
+  assign line_delay = \result$319 [48:36];
+  assign \cds$322  = \result$319 [49];
+  assign noise_events = \result$319 [53:50];
+  assign delay_settled = \result$319 [54];
+  assign \settled_delay$325  = \result$319 [67:55];
+  assign delay_spread = \result$319 [75:68];
+  assign word0_position = \result$319 [130:76];
+  assign word0_ne = \result$319 [131];
+  assign word0_nw = \result$319 [132];
+  assign word0_crc_ok = \result$319 [133];
+  assign word1_position = \result$319 [173:134];
+  assign word1_ne = \result$319 [174];
+  assign word1_nw = \result$319 [175];
+  assign word1_crc_ok = \result$319 [176];
+  assign \lc$335  = \result$319 [182:177];
+  assign \lc_repeat$336  = \result$319 [183];
+  assign \lc_skip$337  = \result$319 [184];
+  assign \lc_zero$338  = \result$319 [185];
+  assign \spw_mismatch$339  = \result$319 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -22237,6 +23322,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \live.w1_crc.inverted  = live[249];
   assign \live.spw_check  = live[250];
   assign \live.spw_tolerance  = live[258:251];
+  assign \live.ssi  = live[259];
+  assign \live.ssi_delay  = live[271:260];
+  assign \live.ssi_error  = live[272];
+  assign \live.ssi_error_low  = live[273];
+  assign \live.ssi_double  = live[274];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -22275,6 +23365,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \cycle.w1_crc.inverted  = cycle[249];
   assign \cycle.spw_check  = cycle[250];
   assign \cycle.spw_tolerance  = cycle[258:251];
+  assign \cycle.ssi  = cycle[259];
+  assign \cycle.ssi_delay  = cycle[271:260];
+  assign \cycle.ssi_error  = cycle[272];
+  assign \cycle.ssi_error_low  = cycle[273];
+  assign \cycle.ssi_double  = cycle[274];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22289,20 +23384,20 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$174[0]  = \words$174 [11:0];
-  assign \words$174[0].data_bits  = \words$174 [5:0];
-  assign \words$174[0].nenw  = \words$174 [6];
-  assign \words$174[0].lc  = \words$174 [7];
-  assign \words$174[0].crc  = \words$174 [9:8];
-  assign \words$174[0].gray  = \words$174 [10];
-  assign \words$174[0].signed  = \words$174 [11];
-  assign \words$174[1]  = \words$174 [23:12];
-  assign \words$174[1].data_bits  = \words$174 [17:12];
-  assign \words$174[1].nenw  = \words$174 [18];
-  assign \words$174[1].lc  = \words$174 [19];
-  assign \words$174[1].crc  = \words$174 [21:20];
-  assign \words$174[1].gray  = \words$174 [22];
-  assign \words$174[1].signed  = \words$174 [23];
+  assign \words$181[0]  = \words$181 [11:0];
+  assign \words$181[0].data_bits  = \words$181 [5:0];
+  assign \words$181[0].nenw  = \words$181 [6];
+  assign \words$181[0].lc  = \words$181 [7];
+  assign \words$181[0].crc  = \words$181 [9:8];
+  assign \words$181[0].gray  = \words$181 [10];
+  assign \words$181[0].signed  = \words$181 [11];
+  assign \words$181[1]  = \words$181 [23:12];
+  assign \words$181[1].data_bits  = \words$181 [17:12];
+  assign \words$181[1].nenw  = \words$181 [18];
+  assign \words$181[1].lc  = \words$181 [19];
+  assign \words$181[1].crc  = \words$181 [21:20];
+  assign \words$181[1].gray  = \words$181 [22];
+  assign \words$181[1].signed  = \words$181 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -22313,26 +23408,26 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$176[0]  = crcs[37:0];
-  assign \crcs$176[0].width  = crcs[4:0];
-  assign \crcs$176[0].poly  = crcs[20:5];
-  assign \crcs$176[0].start  = crcs[36:21];
-  assign \crcs$176[0].inverted  = crcs[37];
-  assign \crcs$176[1]  = crcs[75:38];
-  assign \crcs$176[1].width  = crcs[42:38];
-  assign \crcs$176[1].poly  = crcs[58:43];
-  assign \crcs$176[1].start  = crcs[74:59];
-  assign \crcs$176[1].inverted  = crcs[75];
-  assign \crcs$177[0]  = crcs[37:0];
-  assign \crcs$177[0].width  = crcs[4:0];
-  assign \crcs$177[0].poly  = crcs[20:5];
-  assign \crcs$177[0].start  = crcs[36:21];
-  assign \crcs$177[0].inverted  = crcs[37];
-  assign \crcs$177[1]  = crcs[75:38];
-  assign \crcs$177[1].width  = crcs[42:38];
-  assign \crcs$177[1].poly  = crcs[58:43];
-  assign \crcs$177[1].start  = crcs[74:59];
-  assign \crcs$177[1].inverted  = crcs[75];
+  assign \crcs$183[0]  = crcs[37:0];
+  assign \crcs$183[0].width  = crcs[4:0];
+  assign \crcs$183[0].poly  = crcs[20:5];
+  assign \crcs$183[0].start  = crcs[36:21];
+  assign \crcs$183[0].inverted  = crcs[37];
+  assign \crcs$183[1]  = crcs[75:38];
+  assign \crcs$183[1].width  = crcs[42:38];
+  assign \crcs$183[1].poly  = crcs[58:43];
+  assign \crcs$183[1].start  = crcs[74:59];
+  assign \crcs$183[1].inverted  = crcs[75];
+  assign \crcs$184[0]  = crcs[37:0];
+  assign \crcs$184[0].width  = crcs[4:0];
+  assign \crcs$184[0].poly  = crcs[20:5];
+  assign \crcs$184[0].start  = crcs[36:21];
+  assign \crcs$184[0].inverted  = crcs[37];
+  assign \crcs$184[1]  = crcs[75:38];
+  assign \crcs$184[1].width  = crcs[42:38];
+  assign \crcs$184[1].poly  = crcs[58:43];
+  assign \crcs$184[1].start  = crcs[74:59];
+  assign \crcs$184[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -22371,6 +23466,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \cfg.w1_crc.inverted  = cycle[249];
   assign \cfg.spw_check  = cycle[250];
   assign \cfg.spw_tolerance  = cycle[258:251];
+  assign \cfg.ssi  = cycle[259];
+  assign \cfg.ssi_delay  = cycle[271:260];
+  assign \cfg.ssi_error  = cycle[272];
+  assign \cfg.ssi_error_low  = cycle[273];
+  assign \cfg.ssi_double  = cycle[274];
   assign \frame.status  = frame[3:0];
   assign \frame.timestamp  = frame[35:4];
   assign \frame.line_delay  = frame[48:36];
@@ -22394,41 +23494,41 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$231.slave_id  = \request$231 [2:0];
-  assign \request$231.address  = \request$231 [9:3];
-  assign \request$231.count  = \request$231 [16:10];
-  assign \request$231.write  = \request$231 [17];
+  assign \request$248.slave_id  = \request$248 [2:0];
+  assign \request$248.address  = \request$248 [9:3];
+  assign \request$248.count  = \request$248 [16:10];
+  assign \request$248.write  = \request$248 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$269.ca_crc4_error  = \events$269 [0];
-  assign \events$269.ca_no_answer  = \events$269 [1];
-  assign \events$269.ca_refused  = \events$269 [2];
-  assign \events$269.ca_aborted  = \events$269 [3];
-  assign \events$269.ca_data_fault  = \events$269 [4];
+  assign \events$286.ca_crc4_error  = \events$286 [0];
+  assign \events$286.ca_no_answer  = \events$286 [1];
+  assign \events$286.ca_refused  = \events$286 [2];
+  assign \events$286.ca_aborted  = \events$286 [3];
+  assign \events$286.ca_data_fault  = \events$286 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$278.crc_word0  = \events$278 [0];
-  assign \events$278.crc_word1  = \events$278 [1];
-  assign \events$278.no_ack  = \events$278 [2];
-  assign \events$278.no_start  = \events$278 [3];
-  assign \events$278.delay_range  = \events$278 [4];
-  assign \events$278.slo_stuck_low  = \events$278 [5];
-  assign \events$278.lc_repeat  = \events$278 [6];
-  assign \events$278.lc_skip  = \events$278 [7];
-  assign \events$278.lc_zero  = \events$278 [8];
-  assign \events$278.spw_mismatch  = \events$278 [9];
-  assign \events$278.overrun  = \events$278 [10];
-  assign \events$278.aborted  = \events$278 [11];
-  assign \events$278.no_stop  = \events$278 [12];
-  assign \events$278.noisy_line  = \events$278 [13];
-  assign \events$278.delay_jump  = \events$278 [14];
-  assign \events$278.noise_event  = \events$278 [15];
+  assign \events$295.crc_word0  = \events$295 [0];
+  assign \events$295.crc_word1  = \events$295 [1];
+  assign \events$295.no_ack  = \events$295 [2];
+  assign \events$295.no_start  = \events$295 [3];
+  assign \events$295.delay_range  = \events$295 [4];
+  assign \events$295.slo_stuck_low  = \events$295 [5];
+  assign \events$295.lc_repeat  = \events$295 [6];
+  assign \events$295.lc_skip  = \events$295 [7];
+  assign \events$295.lc_zero  = \events$295 [8];
+  assign \events$295.spw_mismatch  = \events$295 [9];
+  assign \events$295.overrun  = \events$295 [10];
+  assign \events$295.aborted  = \events$295 [11];
+  assign \events$295.no_stop  = \events$295 [12];
+  assign \events$295.noisy_line  = \events$295 [13];
+  assign \events$295.delay_jump  = \events$295 [14];
+  assign \events$295.noise_event  = \events$295 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -22436,60 +23536,60 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$302.status  = \result$302 [3:0];
-  assign \result$302.timestamp  = \result$302 [35:4];
-  assign \result$302.line_delay  = \result$302 [48:36];
-  assign \result$302.cds  = \result$302 [49];
-  assign \result$302.noise_events  = \result$302 [53:50];
-  assign \result$302.delay_settled  = \result$302 [54];
-  assign \result$302.settled_delay  = \result$302 [67:55];
-  assign \result$302.delay_spread  = \result$302 [75:68];
-  assign \result$302.word0  = \result$302 [133:76];
-  assign \result$302.word0.position  = \result$302 [130:76];
-  assign \result$302.word0.ne  = \result$302 [131];
-  assign \result$302.word0.nw  = \result$302 [132];
-  assign \result$302.word0.crc_ok  = \result$302 [133];
-  assign \result$302.word1  = \result$302 [176:134];
-  assign \result$302.word1.position  = \result$302 [173:134];
-  assign \result$302.word1.ne  = \result$302 [174];
-  assign \result$302.word1.nw  = \result$302 [175];
-  assign \result$302.word1.crc_ok  = \result$302 [176];
-  assign \result$302.lc  = \result$302 [182:177];
-  assign \result$302.lc_repeat  = \result$302 [183];
-  assign \result$302.lc_skip  = \result$302 [184];
-  assign \result$302.lc_zero  = \result$302 [185];
-  assign \result$302.spw_mismatch  = \result$302 [186];
-  assign \events$278 [15] = \event ;
-  assign \events$278 [14] = \$16 ;
-  assign \events$278 [13] = \$14 ;
-  assign \events$278 [12] = faults[6];
-  assign \events$278 [11] = faults[4];
-  assign \events$278 [10] = overrun;
-  assign \events$278 [9] = \$12 ;
-  assign \events$278 [8] = lc_zero;
-  assign \events$278 [7] = lc_skip;
-  assign \events$278 [6] = lc_repeat;
-  assign \events$278 [5] = faults[3];
-  assign \events$278 [4] = faults[2];
-  assign \events$278 [3] = faults[1];
-  assign \events$278 [2] = faults[0];
-  assign \events$278 [1] = crc_error[1];
-  assign \events$278 [0] = crc_error[0];
-  assign \events$269 [4] = \$11 ;
-  assign \events$269 [3] = \$9 ;
-  assign \events$269 [2] = \$7 ;
-  assign \events$269 [1] = \$5 ;
-  assign \events$269 [0] = \$3 ;
+  assign \result$319.status  = \result$319 [3:0];
+  assign \result$319.timestamp  = \result$319 [35:4];
+  assign \result$319.line_delay  = \result$319 [48:36];
+  assign \result$319.cds  = \result$319 [49];
+  assign \result$319.noise_events  = \result$319 [53:50];
+  assign \result$319.delay_settled  = \result$319 [54];
+  assign \result$319.settled_delay  = \result$319 [67:55];
+  assign \result$319.delay_spread  = \result$319 [75:68];
+  assign \result$319.word0  = \result$319 [133:76];
+  assign \result$319.word0.position  = \result$319 [130:76];
+  assign \result$319.word0.ne  = \result$319 [131];
+  assign \result$319.word0.nw  = \result$319 [132];
+  assign \result$319.word0.crc_ok  = \result$319 [133];
+  assign \result$319.word1  = \result$319 [176:134];
+  assign \result$319.word1.position  = \result$319 [173:134];
+  assign \result$319.word1.ne  = \result$319 [174];
+  assign \result$319.word1.nw  = \result$319 [175];
+  assign \result$319.word1.crc_ok  = \result$319 [176];
+  assign \result$319.lc  = \result$319 [182:177];
+  assign \result$319.lc_repeat  = \result$319 [183];
+  assign \result$319.lc_skip  = \result$319 [184];
+  assign \result$319.lc_zero  = \result$319 [185];
+  assign \result$319.spw_mismatch  = \result$319 [186];
+  assign \events$295 [15] = \event ;
+  assign \events$295 [14] = \$20 ;
+  assign \events$295 [13] = \$18 ;
+  assign \events$295 [12] = faults[6];
+  assign \events$295 [11] = faults[4];
+  assign \events$295 [10] = overrun;
+  assign \events$295 [9] = \$16 ;
+  assign \events$295 [8] = lc_zero;
+  assign \events$295 [7] = lc_skip;
+  assign \events$295 [6] = lc_repeat;
+  assign \events$295 [5] = faults[3];
+  assign \events$295 [4] = faults[2];
+  assign \events$295 [3] = faults[1];
+  assign \events$295 [2] = faults[0];
+  assign \events$295 [1] = crc_error[1];
+  assign \events$295 [0] = crc_error[0];
+  assign \events$286 [4] = \$15 ;
+  assign \events$286 [3] = \$13 ;
+  assign \events$286 [2] = \$11 ;
+  assign \events$286 [1] = \$9 ;
+  assign \events$286 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$231 [17] = ca_write;
-  assign \request$231 [16:10] = ca_count;
-  assign \request$231 [9:3] = ca_address;
-  assign \request$231 [2:0] = ca_slave_id;
+  assign \request$248 [17] = ca_write;
+  assign \request$248 [16:10] = ca_count;
+  assign \request$248 [9:3] = ca_address;
+  assign \request$248 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
-  assign frame[176] = \$24 ;
+  assign frame[176] = \$28 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
   assign frame[173:134] = spw;
@@ -22508,10 +23608,15 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$174 [23:12] = cycle[211:200];
-  assign \words$174 [11:0] = cycle[160:149];
+  assign \words$181 [23:12] = cycle[211:200];
+  assign \words$181 [11:0] = cycle[160:149];
   assign words[23:12] = cycle[211:200];
   assign words[11:0] = cycle[160:149];
+  assign live[274] = cfg_ssi_double;
+  assign live[273] = cfg_ssi_error_low;
+  assign live[272] = cfg_ssi_error;
+  assign live[271:260] = cfg_ssi_delay;
+  assign live[259] = cfg_ssi;
   assign live[258:251] = cfg_spw_tolerance;
   assign live[250] = cfg_spw_check;
   assign live[249] = cfg_w1_crc_inverted;
@@ -22593,29 +23698,36 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire \$45 ;
   wire \$46 ;
   wire \$47 ;
-  wire [23:0] \$48 ;
+  wire \$48 ;
   wire \$49 ;
   wire \$5 ;
-  wire [23:0] \$50 ;
+  wire \$50 ;
   wire \$51 ;
-  wire [11:0] \$52 ;
+  wire \$52 ;
   wire \$53 ;
-  wire [11:0] \$54 ;
-  wire \$55 ;
-  wire [3:0] \$56 ;
-  wire [16:0] \$57 ;
-  wire [24:0] \$58 ;
-  reg \$59 ;
+  wire \$54 ;
+  wire [23:0] \$55 ;
+  wire \$56 ;
+  wire [23:0] \$57 ;
+  wire \$58 ;
+  wire [11:0] \$59 ;
   wire \$6 ;
-  reg [258:0] \$60 ;
-  reg [23:0] \$61 ;
-  reg [23:0] \$62 ;
-  reg [11:0] \$63 ;
-  reg [11:0] \$64 ;
-  reg [16:0] \$65 ;
-  reg [75:0] \$66 ;
-  reg [24:0] \$67 ;
+  wire \$60 ;
+  wire [11:0] \$61 ;
+  wire \$62 ;
+  wire [3:0] \$63 ;
+  wire [16:0] \$64 ;
+  wire [24:0] \$65 ;
+  reg \$66 ;
+  reg [274:0] \$67 ;
+  reg [23:0] \$68 ;
+  reg [23:0] \$69 ;
   wire \$7 ;
+  reg [11:0] \$70 ;
+  reg [11:0] \$71 ;
+  reg [16:0] \$72 ;
+  reg [75:0] \$73 ;
+  reg [24:0] \$74 ;
   wire \$8 ;
   wire \$9 ;
   output [23:0] ack_limit;
@@ -22634,8 +23746,8 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
-  output [258:0] cycle;
-  reg [258:0] cycle = 259'h00000000000000000000000000000000000000000000000000000000000000000;
+  output [274:0] cycle;
+  reg [274:0] cycle = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
   wire [23:0] \cycle.ack_limit ;
   wire [23:0] \cycle.break_time ;
   wire [3:0] \cycle.confirm_frames ;
@@ -22648,6 +23760,11 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire [23:0] \cycle.request_period ;
   wire \cycle.spw_check ;
   wire [7:0] \cycle.spw_tolerance ;
+  wire \cycle.ssi ;
+  wire [11:0] \cycle.ssi_delay ;
+  wire \cycle.ssi_double ;
+  wire \cycle.ssi_error ;
+  wire \cycle.ssi_error_low ;
   wire [23:0] \cycle.timeout_limit ;
   wire [11:0] \cycle.w0 ;
   (* enum_base_type = "Crc" *)
@@ -22690,8 +23807,8 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg [16:0] delay_tolerance = 17'h00000;
   input idle;
   wire idle;
-  input [258:0] live;
-  wire [258:0] live;
+  input [274:0] live;
+  wire [274:0] live;
   wire [23:0] \live.ack_limit ;
   wire [23:0] \live.break_time ;
   wire [3:0] \live.confirm_frames ;
@@ -22704,6 +23821,11 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   wire [23:0] \live.request_period ;
   wire \live.spw_check ;
   wire [7:0] \live.spw_tolerance ;
+  wire \live.ssi ;
+  wire [11:0] \live.ssi_delay ;
+  wire \live.ssi_double ;
+  wire \live.ssi_error ;
+  wire \live.ssi_error_low ;
   wire [23:0] \live.timeout_limit ;
   wire [11:0] \live.w0 ;
   (* enum_base_type = "Crc" *)
@@ -22752,6 +23874,13 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
+  assign \$26  = \$24  | \$25 ;
+  assign \$27  = live[209:208] == 2'h3;
+  assign \$28  = | live[216:212];
+  assign \$29  = \$27  & \$28 ;
+  assign \$30  = live[216:212] <= 5'h10;
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = \$26  | \$31 ;
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
@@ -22766,37 +23895,44 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$44  = \$42  & \$43 ;
   assign \$45  = \$40  | \$44 ;
   assign \$46  = \$39  & \$45 ;
-  assign \$47  = ! live[87:64];
-  assign \$48  = \$47  ? 24'h000fa0 : live[87:64];
-  assign \$49  = ! live[111:88];
-  assign \$50  = \$49  ? 24'h001f40 : live[111:88];
-  assign \$51  = ! live[123:112];
-  assign \$52  = \$51  ? 12'hfff : live[123:112];
-  assign \$53  = ! live[136:125];
-  assign \$54  = \$53  ? 12'h064 : live[136:125];
-  assign \$55  = ! live[144:141];
-  assign \$56  = \$55  ? 4'h2 : live[144:141];
-  assign \$57  = live[15:0] + \$56 ;
-  assign \$58  = ack_limit + { cycle[15:0], 1'h1 };
+  assign \$47  = live[272] & live[155];
+  assign \$48  = live[156] | \$47 ;
+  assign \$49  = live[199] | live[250];
+  assign \$50  = \$48  | \$49 ;
+  assign \$51  = live[259] & \$50 ;
+  assign \$52  = ~ \$51 ;
+  assign \$53  = \$46  & \$52 ;
+  assign \$54  = ! live[87:64];
+  assign \$55  = \$54  ? 24'h000fa0 : live[87:64];
+  assign \$56  = ! live[111:88];
+  assign \$57  = \$56  ? 24'h001f40 : live[111:88];
+  assign \$58  = ! live[123:112];
+  assign \$59  = \$58  ? 12'hfff : live[123:112];
+  assign \$60  = ! live[136:125];
+  assign \$61  = \$60  ? 12'h064 : live[136:125];
+  assign \$62  = ! live[144:141];
+  assign \$63  = \$62  ? 4'h2 : live[144:141];
+  assign \$64  = live[15:0] + \$63 ;
+  assign \$65  = ack_limit + { cycle[15:0], 1'h1 };
   assign word_count = 1'h1 + cycle[199];
   always @(posedge clk)
-    ok <= \$59 ;
+    ok <= \$66 ;
   always @(posedge clk)
-    cycle <= \$60 ;
+    cycle <= \$67 ;
   always @(posedge clk)
-    ack_limit <= \$61 ;
+    ack_limit <= \$68 ;
   always @(posedge clk)
-    timeout_limit <= \$62 ;
+    timeout_limit <= \$69 ;
   always @(posedge clk)
-    delay_limit <= \$63 ;
+    delay_limit <= \$70 ;
   always @(posedge clk)
-    quiet_time <= \$64 ;
+    quiet_time <= \$71 ;
   always @(posedge clk)
-    delay_tolerance <= \$65 ;
+    delay_tolerance <= \$72 ;
   always @(posedge clk)
-    crcs <= \$66 ;
+    crcs <= \$73 ;
   always @(posedge clk)
-    no_start_limit <= \$67 ;
+    no_start_limit <= \$74 ;
   assign \$1  = | live[15:1];
   assign \$2  = | live[154:149];
   assign \$3  = live[154:149] <= 6'h37;
@@ -22822,136 +23958,129 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$23  = live[209:208] == 1'h1;
   assign \$24  = \$22  | \$23 ;
   assign \$25  = live[209:208] == 2'h2;
-  assign \$26  = \$24  | \$25 ;
-  assign \$27  = live[209:208] == 2'h3;
-  assign \$28  = | live[216:212];
-  assign \$29  = \$27  & \$28 ;
-  assign \$30  = live[216:212] <= 5'h10;
-  assign \$31  = \$29  & \$30 ;
-  assign \$32  = \$26  | \$31 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$59  = \$46 ;
+    \$66  = \$53 ;
     if (rst) begin
-      \$59  = 1'h0;
+      \$66  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$60  = cycle;
+    \$67  = cycle;
     if (idle) begin
-      \$60  = live;
+      \$67  = live;
     end
     if (rst) begin
-      \$60  = 259'h00000000000000000000000000000000000000000000000000000000000000000;
+      \$67  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$61  = ack_limit;
+    \$68  = ack_limit;
     if (idle) begin
-      \$61  = \$48 ;
+      \$68  = \$55 ;
     end
     if (rst) begin
-      \$61  = 24'h000000;
+      \$68  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$62  = timeout_limit;
+    \$69  = timeout_limit;
     if (idle) begin
-      \$62  = \$50 ;
+      \$69  = \$57 ;
     end
     if (rst) begin
-      \$62  = 24'h000000;
+      \$69  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$63  = delay_limit;
+    \$70  = delay_limit;
     if (idle) begin
-      \$63  = \$52 ;
+      \$70  = \$59 ;
     end
     if (rst) begin
-      \$63  = 12'h000;
+      \$70  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$64  = quiet_time;
+    \$71  = quiet_time;
     if (idle) begin
-      \$64  = \$54 ;
+      \$71  = \$61 ;
     end
     if (rst) begin
-      \$64  = 12'h000;
+      \$71  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$65  = delay_tolerance;
+    \$72  = delay_tolerance;
     if (idle) begin
-      \$65  = \$57 ;
+      \$72  = \$64 ;
     end
     if (rst) begin
-      \$65  = 17'h00000;
+      \$72  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$66  = crcs;
+    \$73  = crcs;
     if (idle) begin
       (* full_case = 32'd1 *)
       casez (live[158:157])
         2'h1:
           begin
-            \$66 [4:0] = 5'h06;
-            \$66 [20:5] = 16'h0003;
-            \$66 [36:21] = 16'h0000;
-            \$66 [37] = 1'h1;
+            \$73 [4:0] = 5'h06;
+            \$73 [20:5] = 16'h0003;
+            \$73 [36:21] = 16'h0000;
+            \$73 [37] = 1'h1;
           end
         2'h2:
           begin
-            \$66 [4:0] = 5'h10;
-            \$66 [20:5] = 16'h90d9;
-            \$66 [36:21] = 16'h0000;
-            \$66 [37] = 1'h1;
+            \$73 [4:0] = 5'h10;
+            \$73 [20:5] = 16'h90d9;
+            \$73 [36:21] = 16'h0000;
+            \$73 [37] = 1'h1;
           end
         2'h3:
-            \$66 [37:0] = live[198:161];
+            \$73 [37:0] = live[198:161];
         default:
-            \$66 [37:0] = 38'h0000000000;
+            \$73 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
       casez (live[209:208])
         2'h1:
           begin
-            \$66 [42:38] = 5'h06;
-            \$66 [58:43] = 16'h0003;
-            \$66 [74:59] = 16'h0000;
-            \$66 [75] = 1'h1;
+            \$73 [42:38] = 5'h06;
+            \$73 [58:43] = 16'h0003;
+            \$73 [74:59] = 16'h0000;
+            \$73 [75] = 1'h1;
           end
         2'h2:
           begin
-            \$66 [42:38] = 5'h10;
-            \$66 [58:43] = 16'h90d9;
-            \$66 [74:59] = 16'h0000;
-            \$66 [75] = 1'h1;
+            \$73 [42:38] = 5'h10;
+            \$73 [58:43] = 16'h90d9;
+            \$73 [74:59] = 16'h0000;
+            \$73 [75] = 1'h1;
           end
         2'h3:
-            \$66 [75:38] = live[249:212];
+            \$73 [75:38] = live[249:212];
         default:
-            \$66 [75:38] = 38'h0000000000;
+            \$73 [75:38] = 38'h0000000000;
       endcase
     end
     if (rst) begin
-      \$66  = 76'h0000000000000000000;
+      \$73  = 76'h0000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$67  = \$58 ;
+    \$74  = \$65 ;
     if (rst) begin
-      \$67  = 25'h0000000;
+      \$74  = 25'h0000000;
     end
   end
   assign \live.ma_half_period  = live[15:0];
@@ -22992,6 +24121,11 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \live.w1_crc.inverted  = live[249];
   assign \live.spw_check  = live[250];
   assign \live.spw_tolerance  = live[258:251];
+  assign \live.ssi  = live[259];
+  assign \live.ssi_delay  = live[271:260];
+  assign \live.ssi_error  = live[272];
+  assign \live.ssi_error_low  = live[273];
+  assign \live.ssi_double  = live[274];
   assign \cycle.ma_half_period  = cycle[15:0];
   assign \cycle.request_period  = cycle[39:16];
   assign \cycle.break_time  = cycle[63:40];
@@ -23030,6 +24164,11 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \cycle.w1_crc.inverted  = cycle[249];
   assign \cycle.spw_check  = cycle[250];
   assign \cycle.spw_tolerance  = cycle[258:251];
+  assign \cycle.ssi  = cycle[259];
+  assign \cycle.ssi_delay  = cycle[271:260];
+  assign \cycle.ssi_error  = cycle[272];
+  assign \cycle.ssi_error_low  = cycle[273];
+  assign \cycle.ssi_double  = cycle[274];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -23126,9 +24265,9 @@ module \biss_master_axil.ch1.core.confirmation (rst, report, status, pending, se
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear, faults, cdm_cycle, ma_hold
-, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, frame_done, stopped, slots_full, started, stop_bit, cdm
-, clk);
+module \biss_master_axil.ch1.core.controller (rst, frame_done, cdm, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
+, faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full, started
+, stop_bit, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -23149,13 +24288,23 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   wire \$24 ;
   wire \$25 ;
   wire \$26 ;
-  reg \$27 ;
-  reg [2:0] \$28 ;
-  reg \$29 ;
+  wire \$27 ;
+  wire \$28 ;
+  wire \$29 ;
   wire \$3 ;
-  reg \$30 ;
-  reg \$31 ;
+  wire \$30 ;
+  wire \$31 ;
+  wire \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire \$35 ;
+  wire \$36 ;
+  reg \$37 ;
+  reg [2:0] \$38 ;
+  reg \$39 ;
   wire \$4 ;
+  reg \$40 ;
+  reg \$41 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
@@ -23186,7 +24335,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
   reg delay;
-  wire \delay$78 ;
+  wire \delay$80 ;
   input delay_over;
   wire delay_over;
   wire \delay_over$31 ;
@@ -23199,7 +24348,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   output fault;
   reg fault;
   wire \fault$39 ;
-  wire \fault$74 ;
+  wire \fault$76 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -23329,6 +24478,8 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   input slots_full;
   wire slots_full;
   wire \slots_full$25 ;
+  input ssi;
+  wire ssi;
   input started;
   wire started;
   wire \started$23 ;
@@ -23367,7 +24518,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$79 ;
+  wire [3:0] \status$81 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
@@ -23378,42 +24529,52 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   output waiting;
   reg waiting;
   reg watch;
+  always @(posedge clk)
+    pause <= \$41 ;
   assign \$1  = ma_busy | abort;
   assign \$2  = ~ ma_enough;
   assign \$3  = restart_timer | abort;
-  assign \$4  = ~ end_check;
-  assign \$5  = ~ ma_enough;
-  assign \$6  = ~ end_check;
-  assign \$7  = ma_busy | abort;
-  assign \$8  = ~ ma_busy;
-  assign \$9  = \$8  | ma_held;
-  assign \$10  = \$9  & slo;
-  assign \$11  = ! cycle_fsm_state;
-  assign \$12  = cycle_fsm_state == 1'h1;
-  assign \$13  = cycle_fsm_state == 2'h2;
-  assign \$14  = cycle_fsm_state == 2'h3;
-  assign \$15  = cycle_fsm_state == 3'h4;
-  assign \$16  = cycle_fsm_state == 3'h5;
-  assign \$17  = cycle_fsm_state == 3'h6;
-  assign \$18  = cycle_fsm_state == 3'h7;
-  assign \$19  = ma_busy | abort;
-  assign \$20  = ~ end_check;
-  assign \$21  = ma_busy | abort;
-  assign \$22  = cdm_cycle & abort;
-  assign \$23  = ~ ma_busy;
-  assign \$24  = ~ ma_busy;
-  assign \$25  = \$24  | ma_held;
-  assign \$26  = \$25  & slo;
+  assign \$4  = frame_done & ssi;
+  assign \$5  = \$4  & stop_bit;
+  assign \$6  = ~ ssi;
+  assign \$7  = \fault$76  & \$6 ;
+  assign \$8  = ~ end_check;
+  assign \$9  = ~ ma_enough;
+  assign \$10  = stopped | ssi;
+  assign \$11  = ~ end_check;
+  assign \$12  = ma_busy | abort;
+  assign \$13  = ~ ma_busy;
+  assign \$14  = \$13  | ma_held;
+  assign \$15  = \$14  & slo;
+  assign \$16  = ! cycle_fsm_state;
+  assign \$17  = cycle_fsm_state == 1'h1;
+  assign \$18  = cycle_fsm_state == 2'h2;
+  assign \$19  = cycle_fsm_state == 2'h3;
+  assign \$20  = cycle_fsm_state == 3'h4;
+  assign \$21  = cycle_fsm_state == 3'h5;
+  assign \$22  = cycle_fsm_state == 3'h6;
+  assign \$23  = cycle_fsm_state == 3'h7;
+  assign \$24  = ma_busy | abort;
+  assign \$25  = frame_done & ssi;
+  assign \$26  = \$25  & stop_bit;
+  assign \$27  = ~ ssi;
+  assign \$28  = \fault$76  & \$27 ;
+  assign \$29  = stopped | ssi;
+  assign \$30  = ~ end_check;
+  assign \$31  = ma_busy | abort;
+  assign \$32  = cdm_cycle & abort;
+  assign \$33  = ~ ma_busy;
+  assign \$34  = ~ ma_busy;
+  assign \$35  = \$34  | ma_held;
+  assign \$36  = \$35  & slo;
   always @(posedge clk)
-    first_clock <= \$27 ;
+    first_clock <= \$37 ;
   always @(posedge clk)
-    cycle_fsm_state <= \$28 ;
+    cycle_fsm_state <= \$38 ;
   always @(posedge clk)
-    idle <= \$29 ;
+    idle <= \$39 ;
   always @(posedge clk)
-    receiver_clear <= \$30 ;
-  always @(posedge clk)
-    pause <= \$31 ;
+    receiver_clear <= \$40 ;
   \biss_master_axil.ch1.core.controller.cdm_hold  cdm_hold (
     .abort(abort),
     .cdm(cdm),
@@ -23431,10 +24592,10 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     .ack_expired(ack_expired),
     .clear(clear),
     .clk(clk),
-    .delay(\delay$78 ),
+    .delay(\delay$80 ),
     .delay_over(delay_over),
     .early(early),
-    .fault(\fault$74 ),
+    .fault(\fault$76 ),
     .locked(locked),
     .ma_arm(ma_arm),
     .no_start_expired(no_start_expired),
@@ -23442,7 +24603,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
     .rst(rst),
     .slots_full(slots_full),
     .started(started),
-    .status(\status$79 ),
+    .status(\status$81 ),
     .watch(watch)
   );
   \biss_master_axil.ch1.core.controller.ready_check  ready_check (
@@ -23489,14 +24650,20 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
       3'h2:
           timer_clear = 1'h1;
       3'h3:
+        begin
           if (\$3 ) begin
             timer_clear = 1'h1;
           end
+          if (abort) begin
+          end else if (\$5 ) begin
+            timer_clear = 1'h1;
+          end
+        end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (stopped) begin
-            if (\$6 ) begin
+          end else if (\$10 ) begin
+            if (\$11 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -23505,7 +24672,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
             end
           end
       3'h5:
-          if (\$7 ) begin
+          if (\$12 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -23513,7 +24680,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$10 ) begin
+          end else if (\$15 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
@@ -23567,8 +24734,10 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
       3'h3:
           if (abort) begin
             fault = 1'h1;
+          end else if (\$5 ) begin
+            fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\fault$74 ) begin
+          end else if (\$7 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -23576,8 +24745,8 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
             if (end_check) begin
               fault = 1'h1;
             end
-          end else if (stopped) begin
-            if (\$6 ) begin
+          end else if (\$10 ) begin
+            if (\$11 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -23589,7 +24758,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$10 ) begin
+          end else if (\$15 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
@@ -23616,17 +24785,19 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
+          end else if (\$5 ) begin
+            fault_status = 4'hc;
           end else if (frame_done) begin
-          end else if (\fault$74 ) begin
-            fault_status = \status$79 ;
+          end else if (\$7 ) begin
+            fault_status = \status$81 ;
           end
       3'h4:
           if (abort) begin
             if (end_check) begin
               fault_status = 4'ha;
             end
-          end else if (stopped) begin
-            if (\$6 ) begin
+          end else if (\$10 ) begin
+            if (\$11 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -23638,7 +24809,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$10 ) begin
+          end else if (\$15 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
           end
@@ -23657,7 +24828,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
       3'h3:
           ma_run = \$2 ;
       3'h4:
-          ma_run = \$5 ;
+          ma_run = \$9 ;
     endcase
   end
   always @* begin
@@ -23717,8 +24888,9 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
           /* empty */;
       3'h3:
           if (abort) begin
+          end else if (\$5 ) begin
           end else if (frame_done) begin
-            if (\$4 ) begin
+            if (\$8 ) begin
               report_frame = 1'h1;
             end
           end
@@ -23730,7 +24902,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
           /* empty */;
       3'h7:
           if (abort) begin
-          end else if (\$10 ) begin
+          end else if (\$15 ) begin
             report_frame = 1'h1;
           end
     endcase
@@ -23747,9 +24919,10 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
           /* empty */;
       3'h3:
           if (abort) begin
+          end else if (\$5 ) begin
           end else if (frame_done) begin
-          end else if (\fault$74 ) begin
-            delay = \delay$78 ;
+          end else if (\$7 ) begin
+            delay = \delay$80 ;
           end
     endcase
   end
@@ -23778,287 +24951,293 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$27  = idle;
+    \$37  = idle;
     if (rst) begin
-      \$27  = 1'h0;
+      \$37  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$28  = cycle_fsm_state;
+    \$38  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$19 ) begin
+          if (\$24 ) begin
           end else if (break_over) begin
-            \$28  = 3'h1;
+            \$38  = 3'h1;
           end
       3'h1:
           if (abort) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
           end else if (request) begin
-            \$28  = 3'h2;
+            \$38  = 3'h2;
           end
       3'h2:
           if (bad_config) begin
-            \$28  = 3'h1;
+            \$38  = 3'h1;
             if (abort) begin
-              \$28  = 3'h0;
+              \$38  = 3'h0;
             end
           end else if (aborted) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
           end else if (ready) begin
-            \$28  = 3'h3;
+            \$38  = 3'h3;
           end else if (stuck_low) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
           end
       3'h3:
           if (abort) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
+          end else if (\$26 ) begin
+            \$38  = 3'h0;
           end else if (frame_done) begin
-            \$28  = 3'h4;
-          end else if (\fault$74 ) begin
-            \$28  = 3'h0;
+            \$38  = 3'h4;
+          end else if (\$28 ) begin
+            \$38  = 3'h0;
           end
       3'h4:
           if (abort) begin
             (* full_case = 32'd1 *)
             if (end_check) begin
-              \$28  = 3'h0;
+              \$38  = 3'h0;
             end else begin
-              \$28  = 3'h0;
+              \$38  = 3'h0;
             end
-          end else if (stopped) begin
+          end else if (\$29 ) begin
             (* full_case = 32'd1 *)
-            if (\$20 ) begin
+            if (\$30 ) begin
               (* full_case = 32'd1 *)
               if (pause) begin
-                \$28  = 3'h5;
+                \$38  = 3'h5;
               end else begin
-                \$28  = 3'h6;
+                \$38  = 3'h6;
               end
             end else if (stop_bit) begin
-              \$28  = 3'h0;
+              \$38  = 3'h0;
             end else begin
-              \$28  = 3'h7;
+              \$38  = 3'h7;
             end
           end
       3'h5:
-          if (\$21 ) begin
+          if (\$31 ) begin
           end else if (break_over) begin
-            \$28  = 3'h1;
+            \$38  = 3'h1;
           end
       3'h6:
-          if (\$22 ) begin
-            \$28  = 3'h0;
-          end else if (\$23 ) begin
-            \$28  = 3'h1;
+          if (\$32 ) begin
+            \$38  = 3'h0;
+          end else if (\$33 ) begin
+            \$38  = 3'h1;
           end
       3'h7:
           if (abort) begin
-            \$28  = 3'h0;
-          end else if (\$26 ) begin
+            \$38  = 3'h0;
+          end else if (\$36 ) begin
             (* full_case = 32'd1 *)
             if (pause) begin
-              \$28  = 3'h5;
+              \$38  = 3'h5;
             end else if (cdm_cycle) begin
-              \$28  = 3'h6;
+              \$38  = 3'h6;
             end else begin
-              \$28  = 3'h1;
+              \$38  = 3'h1;
             end
           end else if (slo_stuck) begin
-            \$28  = 3'h0;
+            \$38  = 3'h0;
           end
     endcase
     if (rst) begin
-      \$28  = 3'h0;
+      \$38  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$29  = idle;
+    \$39  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$19 ) begin
+          if (\$24 ) begin
           end else if (break_over) begin
-            \$29  = 1'h1;
+            \$39  = 1'h1;
           end
       3'h1:
           if (abort) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end else if (request) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end
       3'h2:
           if (bad_config) begin
-            \$29  = 1'h1;
+            \$39  = 1'h1;
             if (abort) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end
           end else if (aborted) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end else if (ready) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end else if (stuck_low) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end
       3'h3:
           if (abort) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
+          end else if (\$26 ) begin
+            \$39  = 1'h0;
           end else if (frame_done) begin
-            \$29  = 1'h0;
-          end else if (\fault$74 ) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
+          end else if (\$28 ) begin
+            \$39  = 1'h0;
           end
       3'h4:
           if (abort) begin
             (* full_case = 32'd1 *)
             if (end_check) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end else begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end
-          end else if (stopped) begin
+          end else if (\$29 ) begin
             (* full_case = 32'd1 *)
-            if (\$20 ) begin
+            if (\$30 ) begin
               (* full_case = 32'd1 *)
               if (pause) begin
-                \$29  = 1'h0;
+                \$39  = 1'h0;
               end else begin
-                \$29  = 1'h0;
+                \$39  = 1'h0;
               end
             end else if (stop_bit) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end else begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end
           end
       3'h5:
-          if (\$21 ) begin
+          if (\$31 ) begin
           end else if (break_over) begin
-            \$29  = 1'h1;
+            \$39  = 1'h1;
           end
       3'h6:
-          if (\$22 ) begin
-            \$29  = 1'h0;
-          end else if (\$23 ) begin
-            \$29  = 1'h1;
+          if (\$32 ) begin
+            \$39  = 1'h0;
+          end else if (\$33 ) begin
+            \$39  = 1'h1;
           end
       3'h7:
           if (abort) begin
-            \$29  = 1'h0;
-          end else if (\$26 ) begin
+            \$39  = 1'h0;
+          end else if (\$36 ) begin
             (* full_case = 32'd1 *)
             if (pause) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end else if (cdm_cycle) begin
-              \$29  = 1'h0;
+              \$39  = 1'h0;
             end else begin
-              \$29  = 1'h1;
+              \$39  = 1'h1;
             end
           end else if (slo_stuck) begin
-            \$29  = 1'h0;
+            \$39  = 1'h0;
           end
     endcase
     if (rst) begin
-      \$29  = 1'h0;
+      \$39  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$30  = receiver_clear;
+    \$40  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
       3'h0:
-          if (\$19 ) begin
+          if (\$24 ) begin
           end else if (break_over) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
       3'h1:
           if (abort) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end else if (request) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
       3'h2:
           if (bad_config) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
             if (abort) begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end
           end else if (aborted) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end else if (ready) begin
-            \$30  = 1'h0;
+            \$40  = 1'h0;
           end else if (stuck_low) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
       3'h3:
           if (abort) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
+          end else if (\$26 ) begin
+            \$40  = 1'h1;
           end else if (frame_done) begin
-            \$30  = 1'h0;
-          end else if (\fault$74 ) begin
-            \$30  = 1'h1;
+            \$40  = 1'h0;
+          end else if (\$28 ) begin
+            \$40  = 1'h1;
           end
       3'h4:
           if (abort) begin
             (* full_case = 32'd1 *)
             if (end_check) begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end else begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end
-          end else if (stopped) begin
+          end else if (\$29 ) begin
             (* full_case = 32'd1 *)
-            if (\$20 ) begin
+            if (\$30 ) begin
               (* full_case = 32'd1 *)
               if (pause) begin
-                \$30  = 1'h1;
+                \$40  = 1'h1;
               end else begin
-                \$30  = 1'h0;
+                \$40  = 1'h0;
               end
             end else if (stop_bit) begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end else begin
-              \$30  = 1'h0;
+              \$40  = 1'h0;
             end
           end
       3'h5:
-          if (\$21 ) begin
+          if (\$31 ) begin
           end else if (break_over) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
       3'h6:
-          if (\$22 ) begin
-            \$30  = 1'h1;
-          end else if (\$23 ) begin
-            \$30  = 1'h1;
+          if (\$32 ) begin
+            \$40  = 1'h1;
+          end else if (\$33 ) begin
+            \$40  = 1'h1;
           end
       3'h7:
           if (abort) begin
-            \$30  = 1'h1;
-          end else if (\$26 ) begin
+            \$40  = 1'h1;
+          end else if (\$36 ) begin
             (* full_case = 32'd1 *)
             if (pause) begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end else if (cdm_cycle) begin
-              \$30  = 1'h0;
+              \$40  = 1'h0;
             end else begin
-              \$30  = 1'h1;
+              \$40  = 1'h1;
             end
           end else if (slo_stuck) begin
-            \$30  = 1'h1;
+            \$40  = 1'h1;
           end
     endcase
     if (rst) begin
-      \$30  = 1'h1;
+      \$40  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$31  = pause;
+    \$41  = pause;
     casez (cycle_fsm_state)
       3'h0:
           /* empty */;
@@ -24068,12 +25247,13 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
           /* empty */;
       3'h3:
           if (abort) begin
+          end else if (\$26 ) begin
           end else if (frame_done) begin
-            \$31  = frame_doubtful;
+            \$41  = frame_doubtful;
           end
     endcase
     if (rst) begin
-      \$31  = 1'h0;
+      \$41  = 1'h0;
     end
   end
   assign \first_clock$1  = first_clock;
@@ -24125,7 +25305,7 @@ module \biss_master_axil.ch1.core.controller (rst, request, restart_timer, repor
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.controller.cdm_hold (rst, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, cdm, clk);
+module \biss_master_axil.ch1.core.controller.cdm_hold (rst, cdm, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -25960,11 +27140,11 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1, lc, cpw_top
-, crc_ok, clk);
+module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6928$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+, data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire [6:0] \$1 ;
-  wire \$10 ;
+  reg [6:0] \$10 ;
   wire \$100 ;
   wire \$101 ;
   wire \$102 ;
@@ -25975,7 +27155,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$107 ;
   wire \$108 ;
   wire \$109 ;
-  wire [1:0] \$11 ;
+  wire [7:0] \$11 ;
   wire \$110 ;
   wire \$111 ;
   wire \$112 ;
@@ -25986,7 +27166,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$117 ;
   wire \$118 ;
   wire \$119 ;
-  wire [6:0] \$12 ;
+  wire [7:0] \$12 ;
   wire \$120 ;
   wire \$121 ;
   wire \$122 ;
@@ -26008,7 +27188,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$137 ;
   wire \$138 ;
   wire \$139 ;
-  reg [3:0] \$14 ;
+  wire \$14 ;
   wire \$140 ;
   wire \$141 ;
   wire \$142 ;
@@ -26019,7 +27199,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$147 ;
   wire \$148 ;
   wire \$149 ;
-  wire [6:0] \$15 ;
+  reg [1:0] \$15 ;
   wire \$150 ;
   wire \$151 ;
   wire \$152 ;
@@ -26030,7 +27210,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$157 ;
   wire \$158 ;
   wire \$159 ;
-  wire \$16 ;
+  wire [6:0] \$16 ;
   wire \$160 ;
   wire \$161 ;
   wire \$162 ;
@@ -26052,7 +27232,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$177 ;
   wire \$178 ;
   wire \$179 ;
-  wire [6:0] \$18 ;
+  wire \$18 ;
   wire \$180 ;
   wire \$181 ;
   wire \$182 ;
@@ -26063,7 +27243,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$187 ;
   wire \$188 ;
   wire \$189 ;
-  wire [7:0] \$19 ;
+  reg [3:0] \$19 ;
   wire \$190 ;
   wire \$191 ;
   wire \$192 ;
@@ -26075,7 +27255,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$198 ;
   wire \$199 ;
   wire [7:0] \$2 ;
-  reg [6:0] \$20 ;
+  wire [6:0] \$20 ;
   wire \$200 ;
   wire \$201 ;
   wire \$202 ;
@@ -26086,7 +27266,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$207 ;
   wire \$208 ;
   wire \$209 ;
-  wire [7:0] \$21 ;
+  wire \$21 ;
   wire \$210 ;
   wire \$211 ;
   wire \$212 ;
@@ -26097,7 +27277,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$217 ;
   wire \$218 ;
   wire \$219 ;
-  reg [6:0] \$22 ;
+  wire \$22 ;
   wire \$220 ;
   wire \$221 ;
   wire \$222 ;
@@ -26108,7 +27288,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$227 ;
   wire \$228 ;
   wire \$229 ;
-  wire [7:0] \$23 ;
+  wire [6:0] \$23 ;
   wire \$230 ;
   wire \$231 ;
   wire \$232 ;
@@ -26119,7 +27299,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$237 ;
   wire \$238 ;
   wire \$239 ;
-  reg [6:0] \$24 ;
+  wire [7:0] \$24 ;
   wire \$240 ;
   wire \$241 ;
   wire \$242 ;
@@ -26130,7 +27310,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$247 ;
   wire \$248 ;
   wire \$249 ;
-  wire [7:0] \$25 ;
+  reg [6:0] \$25 ;
   wire \$250 ;
   wire \$251 ;
   wire \$252 ;
@@ -26152,7 +27332,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$267 ;
   wire \$268 ;
   wire \$269 ;
-  wire \$27 ;
+  reg [6:0] \$27 ;
   wire \$270 ;
   wire \$271 ;
   wire \$272 ;
@@ -26163,7 +27343,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$277 ;
   wire \$278 ;
   wire \$279 ;
-  wire [1:0] \$28 ;
+  wire [7:0] \$28 ;
   wire \$280 ;
   wire \$281 ;
   wire \$282 ;
@@ -26174,7 +27354,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$287 ;
   wire \$288 ;
   wire \$289 ;
-  wire [6:0] \$29 ;
+  reg [6:0] \$29 ;
   wire \$290 ;
   wire \$291 ;
   wire \$292 ;
@@ -26185,8 +27365,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$297 ;
   wire \$298 ;
   wire \$299 ;
-  reg [6:0] \$3 ;
-  wire \$30 ;
+  wire \$3 ;
+  wire [7:0] \$30 ;
   wire \$300 ;
   wire \$301 ;
   wire \$302 ;
@@ -26197,7 +27377,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$307 ;
   wire \$308 ;
   wire \$309 ;
-  reg [3:0] \$31 ;
+  wire [7:0] \$31 ;
   wire \$310 ;
   wire \$311 ;
   wire \$312 ;
@@ -26208,7 +27388,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$317 ;
   wire \$318 ;
   wire \$319 ;
-  wire [6:0] \$32 ;
+  wire \$32 ;
   wire \$320 ;
   wire \$321 ;
   wire \$322 ;
@@ -26219,7 +27399,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$327 ;
   wire \$328 ;
   wire \$329 ;
-  wire \$33 ;
+  reg [1:0] \$33 ;
   wire \$330 ;
   wire \$331 ;
   wire \$332 ;
@@ -26230,12 +27410,12 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$337 ;
   wire \$338 ;
   wire \$339 ;
-  wire \$34 ;
+  wire [6:0] \$34 ;
   wire \$340 ;
   wire \$341 ;
   wire \$342 ;
   wire \$343 ;
-  wire [54:0] \$344 ;
+  wire \$344 ;
   wire \$345 ;
   wire \$346 ;
   wire \$347 ;
@@ -26250,9 +27430,9 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$355 ;
   wire \$356 ;
   wire \$357 ;
-  wire \$358 ;
+  wire [54:0] \$358 ;
   wire \$359 ;
-  wire \$36 ;
+  reg [3:0] \$36 ;
   wire \$360 ;
   wire \$361 ;
   wire \$362 ;
@@ -26263,7 +27443,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$367 ;
   wire \$368 ;
   wire \$369 ;
-  wire [16:0] \$37 ;
+  wire [6:0] \$37 ;
   wire \$370 ;
   wire \$371 ;
   wire \$372 ;
@@ -26296,7 +27476,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$397 ;
   wire \$398 ;
   wire \$399 ;
-  wire [7:0] \$4 ;
+  reg [6:0] \$4 ;
   wire \$40 ;
   wire \$400 ;
   wire \$401 ;
@@ -26308,7 +27488,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$407 ;
   wire \$408 ;
   wire \$409 ;
-  wire [7:0] \$41 ;
+  wire \$41 ;
   wire \$410 ;
   wire \$411 ;
   wire \$412 ;
@@ -26319,7 +27499,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$417 ;
   wire \$418 ;
   wire \$419 ;
-  wire [6:0] \$42 ;
+  wire [16:0] \$42 ;
   wire \$420 ;
   wire \$421 ;
   wire \$422 ;
@@ -26352,7 +27532,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$447 ;
   wire \$448 ;
   wire \$449 ;
-  wire [6:0] \$45 ;
+  wire \$45 ;
   wire \$450 ;
   wire \$451 ;
   wire \$452 ;
@@ -26374,7 +27554,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$467 ;
   wire \$468 ;
   wire \$469 ;
-  wire \$47 ;
+  wire [7:0] \$47 ;
   wire \$470 ;
   wire \$471 ;
   wire \$472 ;
@@ -26407,7 +27587,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$497 ;
   wire \$498 ;
   wire \$499 ;
-  reg [6:0] \$5 ;
+  wire [7:0] \$5 ;
   wire \$50 ;
   wire \$500 ;
   wire \$501 ;
@@ -26473,7 +27653,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$556 ;
   wire \$557 ;
   wire \$558 ;
-  wire [39:0] \$559 ;
+  wire \$559 ;
   wire \$56 ;
   wire \$560 ;
   wire \$561 ;
@@ -26485,64 +27665,92 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$567 ;
   wire \$568 ;
   wire \$569 ;
-  wire \$57 ;
+  wire [6:0] \$57 ;
   wire \$570 ;
   wire \$571 ;
-  wire [6:0] \$572 ;
+  wire \$572 ;
   wire \$573 ;
   wire \$574 ;
   wire \$575 ;
-  wire [6:0] \$576 ;
+  wire \$576 ;
   wire \$577 ;
-  wire [1:0] \$578 ;
-  wire [1:0] \$579 ;
+  wire \$578 ;
+  wire \$579 ;
   wire \$58 ;
   wire \$580 ;
-  wire \$581 ;
+  wire [39:0] \$581 ;
   wire \$582 ;
   wire \$583 ;
   wire \$584 ;
-  reg \$585 ;
-  reg \$586 ;
-  reg [15:0] \$587 ;
-  reg \$588 ;
-  reg \$589 ;
-  wire [6:0] \$59 ;
-  reg [15:0] \$590 ;
-  reg [2:0] \$591 ;
-  reg \$592 ;
-  reg [6:0] \$593 ;
-  reg \$594 ;
-  reg \$595 ;
-  reg \$596 ;
-  reg \$597 ;
-  reg \$598 ;
-  reg \$599 ;
-  wire [7:0] \$6 ;
-  wire \$60 ;
-  reg [54:0] \$600 ;
-  reg [1:0] \$601 ;
-  reg [1:0] \$602 ;
-  reg [39:0] \$603 ;
-  reg [5:0] \$604 ;
-  reg [39:0] \$605 ;
-  wire [2:0] \$61 ;
+  wire \$585 ;
+  wire \$586 ;
+  wire \$587 ;
+  wire \$588 ;
+  wire \$589 ;
+  wire \$59 ;
+  wire \$590 ;
+  wire \$591 ;
+  wire \$592 ;
+  wire \$593 ;
+  wire \$594 ;
+  wire \$595 ;
+  wire [6:0] \$596 ;
+  wire \$597 ;
+  wire \$598 ;
+  wire \$599 ;
+  wire \$6 ;
+  wire [6:0] \$60 ;
+  wire [6:0] \$600 ;
+  wire \$601 ;
+  wire [1:0] \$602 ;
+  wire [1:0] \$603 ;
+  wire \$604 ;
+  wire \$605 ;
+  wire \$606 ;
+  wire \$607 ;
+  wire \$608 ;
+  wire \$609 ;
+  wire \$61 ;
+  wire \$610 ;
+  reg \$611 ;
+  reg \$612 ;
+  reg [15:0] \$613 ;
+  reg \$614 ;
+  reg \$615 ;
+  reg [6:0] \$616 ;
+  reg \$617 ;
+  reg \$618 ;
+  reg \$619 ;
   wire \$62 ;
-  wire [1:0] \$63 ;
+  reg \$620 ;
+  reg \$621 ;
+  reg [2:0] \$622 ;
+  reg [15:0] \$623 ;
+  reg \$624 ;
+  reg \$625 ;
+  reg [72:0] \$626 ;
+  reg \$627 ;
+  reg [54:0] \$628 ;
+  reg [1:0] \$629 ;
+  wire \$63 ;
+  reg [1:0] \$630 ;
+  reg [39:0] \$631 ;
+  reg [5:0] \$632 ;
+  reg [39:0] \$633 ;
   wire \$64 ;
-  wire \$65 ;
+  wire [6:0] \$65 ;
   wire \$66 ;
-  wire \$67 ;
+  wire [2:0] \$67 ;
   wire \$68 ;
   wire \$69 ;
   reg [6:0] \$7 ;
-  wire \$70 ;
-  wire \$71 ;
-  wire \$72 ;
+  wire [1:0] \$70 ;
+  wire [7:0] \$71 ;
+  wire [6:0] \$72 ;
   wire \$73 ;
   wire \$74 ;
   wire \$75 ;
-  wire \$76 ;
+  wire [6:0] \$76 ;
   wire \$77 ;
   wire \$78 ;
   wire \$79 ;
@@ -26557,7 +27765,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
-  wire [7:0] \$9 ;
+  wire \$9 ;
   wire \$90 ;
   wire \$91 ;
   wire \$92 ;
@@ -26571,7 +27779,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg at_cds;
   input \bit ;
   wire \bit ;
-  wire \bit$52 ;
+  wire \bit$58 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -26584,17 +27792,17 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire [1:0] crc_ok;
   input [75:0] crcs;
   wire [75:0] crcs;
-  wire [75:0] \crcs$47 ;
-  wire [37:0] \crcs$47[0] ;
-  wire \crcs$47[0].inverted ;
-  wire [15:0] \crcs$47[0].poly ;
-  wire [15:0] \crcs$47[0].start ;
-  wire [4:0] \crcs$47[0].width ;
-  wire [37:0] \crcs$47[1] ;
-  wire \crcs$47[1].inverted ;
-  wire [15:0] \crcs$47[1].poly ;
-  wire [15:0] \crcs$47[1].start ;
-  wire [4:0] \crcs$47[1].width ;
+  wire [75:0] \crcs$53 ;
+  wire [37:0] \crcs$53[0] ;
+  wire \crcs$53[0].inverted ;
+  wire [15:0] \crcs$53[0].poly ;
+  wire [15:0] \crcs$53[0].start ;
+  wire [4:0] \crcs$53[0].width ;
+  wire [37:0] \crcs$53[1] ;
+  wire \crcs$53[1].inverted ;
+  wire [15:0] \crcs$53[1].poly ;
+  wire [15:0] \crcs$53[1].start ;
+  wire [4:0] \crcs$53[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -26628,13 +27836,18 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire [5:0] lc_next;
   wire load;
   wire load_index;
+  output mismatch;
+  reg mismatch = 1'h0;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
+  input [2:0] \port$6928$272 ;
+  wire [2:0] \port$6928$272 ;
   input receiver_clear;
   wire receiver_clear;
+  reg [72:0] ring = 73'h0000000000000000000;
   input rst;
   wire rst;
   input sample;
@@ -26642,6 +27855,11 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg [15:0] slots = 16'h0000;
   output slots_full;
   reg slots_full = 1'h0;
+  input ssi;
+  wire ssi;
+  wire ssi_double;
+  wire ssi_error;
+  wire ssi_error_low;
   output [15:0] start_slot;
   reg [15:0] start_slot = 16'h0000;
   output started;
@@ -26693,654 +27911,682 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$395  = words[23] & \$394 ;
-  assign \$396  = words[22] & data1[0];
-  assign \$397  = \bit  ^ \$396 ;
-  assign \$398  = \$395  & \$397 ;
-  assign \$399  = ! idx;
-  assign \$400  = words[23] & \$399 ;
-  assign \$401  = words[22] & data1[0];
-  assign \$402  = \bit  ^ \$401 ;
-  assign \$403  = \$400  & \$402 ;
-  assign \$404  = ! idx;
-  assign \$405  = words[23] & \$404 ;
-  assign \$406  = words[22] & data1[0];
-  assign \$407  = \bit  ^ \$406 ;
-  assign \$408  = \$405  & \$407 ;
-  assign \$409  = ! idx;
-  assign \$410  = words[23] & \$409 ;
-  assign \$411  = words[22] & data1[0];
-  assign \$412  = \bit  ^ \$411 ;
-  assign \$413  = \$410  & \$412 ;
-  assign \$414  = ! idx;
-  assign \$415  = words[23] & \$414 ;
-  assign \$416  = words[22] & data1[0];
-  assign \$417  = \bit  ^ \$416 ;
-  assign \$418  = \$415  & \$417 ;
-  assign \$419  = ! idx;
-  assign \$420  = words[23] & \$419 ;
-  assign \$421  = words[22] & data1[0];
-  assign \$422  = \bit  ^ \$421 ;
-  assign \$423  = \$420  & \$422 ;
-  assign \$424  = ! idx;
-  assign \$425  = words[23] & \$424 ;
-  assign \$426  = words[22] & data1[0];
-  assign \$427  = \bit  ^ \$426 ;
-  assign \$428  = \$425  & \$427 ;
-  assign \$429  = ! idx;
-  assign \$430  = words[23] & \$429 ;
-  assign \$431  = words[22] & data1[0];
-  assign \$432  = \bit  ^ \$431 ;
-  assign \$433  = \$430  & \$432 ;
-  assign \$434  = ! idx;
-  assign \$435  = words[23] & \$434 ;
-  assign \$436  = words[22] & data1[0];
-  assign \$437  = \bit  ^ \$436 ;
-  assign \$438  = \$435  & \$437 ;
-  assign \$439  = ! idx;
-  assign \$440  = words[23] & \$439 ;
-  assign \$441  = words[22] & data1[0];
-  assign \$442  = \bit  ^ \$441 ;
-  assign \$443  = \$440  & \$442 ;
-  assign \$444  = ! idx;
-  assign \$445  = words[23] & \$444 ;
-  assign \$446  = words[22] & data1[0];
-  assign \$447  = \bit  ^ \$446 ;
-  assign \$448  = \$445  & \$447 ;
-  assign \$449  = ! idx;
-  assign \$450  = words[23] & \$449 ;
-  assign \$451  = words[22] & data1[0];
-  assign \$452  = \bit  ^ \$451 ;
-  assign \$453  = \$450  & \$452 ;
-  assign \$454  = ! idx;
-  assign \$455  = words[23] & \$454 ;
-  assign \$456  = words[22] & data1[0];
-  assign \$457  = \bit  ^ \$456 ;
-  assign \$458  = \$455  & \$457 ;
-  assign \$459  = ! idx;
-  assign \$460  = words[23] & \$459 ;
-  assign \$461  = words[22] & data1[0];
-  assign \$462  = \bit  ^ \$461 ;
-  assign \$463  = \$460  & \$462 ;
-  assign \$464  = ! idx;
-  assign \$465  = words[23] & \$464 ;
-  assign \$466  = words[22] & data1[0];
-  assign \$467  = \bit  ^ \$466 ;
-  assign \$468  = \$465  & \$467 ;
-  assign \$469  = ! idx;
-  assign \$470  = words[23] & \$469 ;
-  assign \$471  = words[22] & data1[0];
-  assign \$472  = \bit  ^ \$471 ;
-  assign \$473  = \$470  & \$472 ;
-  assign \$474  = ! idx;
-  assign \$475  = words[23] & \$474 ;
-  assign \$476  = words[22] & data1[0];
-  assign \$477  = \bit  ^ \$476 ;
-  assign \$478  = \$475  & \$477 ;
-  assign \$479  = ! idx;
-  assign \$480  = words[23] & \$479 ;
-  assign \$481  = words[22] & data1[0];
-  assign \$482  = \bit  ^ \$481 ;
-  assign \$483  = \$480  & \$482 ;
-  assign \$484  = ! idx;
-  assign \$485  = words[23] & \$484 ;
-  assign \$486  = words[22] & data1[0];
-  assign \$487  = \bit  ^ \$486 ;
-  assign \$488  = \$485  & \$487 ;
-  assign \$489  = ! idx;
-  assign \$490  = words[23] & \$489 ;
-  assign \$491  = words[22] & data1[0];
-  assign \$492  = \bit  ^ \$491 ;
-  assign \$493  = \$490  & \$492 ;
-  assign \$494  = ! idx;
-  assign \$495  = words[23] & \$494 ;
-  assign \$496  = words[22] & data1[0];
-  assign \$497  = \bit  ^ \$496 ;
-  assign \$498  = \$495  & \$497 ;
-  assign \$499  = ! idx;
-  assign \$500  = words[23] & \$499 ;
-  assign \$501  = words[22] & data1[0];
-  assign \$502  = \bit  ^ \$501 ;
-  assign \$503  = \$500  & \$502 ;
-  assign \$504  = ! idx;
-  assign \$505  = words[23] & \$504 ;
-  assign \$506  = words[22] & data1[0];
-  assign \$507  = \bit  ^ \$506 ;
-  assign \$508  = \$505  & \$507 ;
-  assign \$509  = ! idx;
-  assign \$510  = words[23] & \$509 ;
-  assign \$511  = words[22] & data1[0];
-  assign \$512  = \bit  ^ \$511 ;
-  assign \$513  = \$510  & \$512 ;
-  assign \$514  = ! idx;
-  assign \$515  = words[23] & \$514 ;
-  assign \$516  = words[22] & data1[0];
-  assign \$517  = \bit  ^ \$516 ;
-  assign \$518  = \$515  & \$517 ;
-  assign \$519  = ! idx;
-  assign \$520  = words[23] & \$519 ;
-  assign \$521  = words[22] & data1[0];
-  assign \$522  = \bit  ^ \$521 ;
-  assign \$523  = \$520  & \$522 ;
-  assign \$524  = ! idx;
-  assign \$525  = words[23] & \$524 ;
-  assign \$526  = words[22] & data1[0];
-  assign \$527  = \bit  ^ \$526 ;
-  assign \$528  = \$525  & \$527 ;
-  assign \$529  = ! idx;
-  assign \$530  = words[23] & \$529 ;
-  assign \$531  = words[22] & data1[0];
-  assign \$532  = \bit  ^ \$531 ;
-  assign \$533  = \$530  & \$532 ;
-  assign \$534  = ! idx;
-  assign \$535  = words[23] & \$534 ;
-  assign \$536  = words[22] & data1[0];
-  assign \$537  = \bit  ^ \$536 ;
-  assign \$538  = \$535  & \$537 ;
-  assign \$539  = ! idx;
-  assign \$540  = words[23] & \$539 ;
-  assign \$541  = words[22] & data1[0];
-  assign \$542  = \bit  ^ \$541 ;
-  assign \$543  = \$540  & \$542 ;
-  assign \$544  = ! idx;
-  assign \$545  = words[23] & \$544 ;
-  assign \$546  = words[22] & data1[0];
-  assign \$547  = \bit  ^ \$546 ;
-  assign \$548  = \$545  & \$547 ;
-  assign \$549  = ! idx;
-  assign \$550  = words[23] & \$549 ;
-  assign \$551  = words[22] & data1[0];
-  assign \$552  = \bit  ^ \$551 ;
-  assign \$553  = \$550  & \$552 ;
-  assign \$554  = ! idx;
-  assign \$555  = words[23] & \$554 ;
-  assign \$556  = words[22] & data1[0];
-  assign \$557  = \bit  ^ \$556 ;
-  assign \$558  = \$555  & \$557 ;
-  assign \$559  = { data1[38:0], \$358  } | { \$558 , \$553 , \$548 , \$543 , \$538 , \$533 , \$528 , \$523 , \$518 , \$513 , \$508 , \$503 , \$498 , \$493 , \$488 , \$483 , \$478 , \$473 , \$468 , \$463 , \$458 , \$453 , \$448 , \$443 , \$438 , \$433 , \$428 , \$423 , \$418 , \$413 , \$408 , \$403 , \$398 , \$393 , \$388 , \$383 , \$378 , \$373 , \$368 , \$363  };
-  assign \$560  = ~ words[18];
-  assign \$562  = in_word & \$561 ;
-  assign \$563  = idx == words[17:12];
-  assign \$564  = \$562  & \$563 ;
-  assign \$566  = in_word & \$565 ;
-  assign \$567  = idx == w1_data_end_p1;
-  assign \$568  = \$566  & \$567 ;
-  assign \$569  = in_word & in_top;
-  assign \$570  = words[10] & data0[0];
-  assign \$571  = \bit  ^ \$570 ;
+  assign \$367  = ssi & \port$6928$272 [0];
+  assign \$368  = ~ \port$6928$272 [1];
+  assign \$369  = \$367  & \$368 ;
+  assign \$370  = \bit  ^ \$369 ;
+  assign \$371  = ~ words[6];
+  assign \$372  = ! word;
+  assign \$373  = in_word & \$372 ;
+  assign \$374  = idx == w0_data_end_p1;
+  assign \$375  = \$373  & \$374 ;
+  assign \$377  = in_word & \$376 ;
+  assign \$378  = \$377  & in_data;
+  assign \$379  = words[22] & data1[0];
+  assign \$380  = \bit  ^ \$379 ;
+  assign \$381  = ! idx;
+  assign \$382  = words[23] & \$381 ;
+  assign \$383  = words[22] & data1[0];
+  assign \$384  = \bit  ^ \$383 ;
+  assign \$385  = \$382  & \$384 ;
+  assign \$386  = ! idx;
+  assign \$387  = words[23] & \$386 ;
+  assign \$388  = words[22] & data1[0];
+  assign \$389  = \bit  ^ \$388 ;
+  assign \$390  = \$387  & \$389 ;
+  assign \$391  = ! idx;
+  assign \$392  = words[23] & \$391 ;
+  assign \$393  = words[22] & data1[0];
+  assign \$394  = \bit  ^ \$393 ;
+  assign \$395  = \$392  & \$394 ;
+  assign \$396  = ! idx;
+  assign \$397  = words[23] & \$396 ;
+  assign \$398  = words[22] & data1[0];
+  assign \$399  = \bit  ^ \$398 ;
+  assign \$400  = \$397  & \$399 ;
+  assign \$401  = ! idx;
+  assign \$402  = words[23] & \$401 ;
+  assign \$403  = words[22] & data1[0];
+  assign \$404  = \bit  ^ \$403 ;
+  assign \$405  = \$402  & \$404 ;
+  assign \$406  = ! idx;
+  assign \$407  = words[23] & \$406 ;
+  assign \$408  = words[22] & data1[0];
+  assign \$409  = \bit  ^ \$408 ;
+  assign \$410  = \$407  & \$409 ;
+  assign \$411  = ! idx;
+  assign \$412  = words[23] & \$411 ;
+  assign \$413  = words[22] & data1[0];
+  assign \$414  = \bit  ^ \$413 ;
+  assign \$415  = \$412  & \$414 ;
+  assign \$416  = ! idx;
+  assign \$417  = words[23] & \$416 ;
+  assign \$418  = words[22] & data1[0];
+  assign \$419  = \bit  ^ \$418 ;
+  assign \$420  = \$417  & \$419 ;
+  assign \$421  = ! idx;
+  assign \$422  = words[23] & \$421 ;
+  assign \$423  = words[22] & data1[0];
+  assign \$424  = \bit  ^ \$423 ;
+  assign \$425  = \$422  & \$424 ;
+  assign \$426  = ! idx;
+  assign \$427  = words[23] & \$426 ;
+  assign \$428  = words[22] & data1[0];
+  assign \$429  = \bit  ^ \$428 ;
+  assign \$430  = \$427  & \$429 ;
+  assign \$431  = ! idx;
+  assign \$432  = words[23] & \$431 ;
+  assign \$433  = words[22] & data1[0];
+  assign \$434  = \bit  ^ \$433 ;
+  assign \$435  = \$432  & \$434 ;
+  assign \$436  = ! idx;
+  assign \$437  = words[23] & \$436 ;
+  assign \$438  = words[22] & data1[0];
+  assign \$439  = \bit  ^ \$438 ;
+  assign \$440  = \$437  & \$439 ;
+  assign \$441  = ! idx;
+  assign \$442  = words[23] & \$441 ;
+  assign \$443  = words[22] & data1[0];
+  assign \$444  = \bit  ^ \$443 ;
+  assign \$445  = \$442  & \$444 ;
+  assign \$446  = ! idx;
+  assign \$447  = words[23] & \$446 ;
+  assign \$448  = words[22] & data1[0];
+  assign \$449  = \bit  ^ \$448 ;
+  assign \$450  = \$447  & \$449 ;
+  assign \$451  = ! idx;
+  assign \$452  = words[23] & \$451 ;
+  assign \$453  = words[22] & data1[0];
+  assign \$454  = \bit  ^ \$453 ;
+  assign \$455  = \$452  & \$454 ;
+  assign \$456  = ! idx;
+  assign \$457  = words[23] & \$456 ;
+  assign \$458  = words[22] & data1[0];
+  assign \$459  = \bit  ^ \$458 ;
+  assign \$460  = \$457  & \$459 ;
+  assign \$461  = ! idx;
+  assign \$462  = words[23] & \$461 ;
+  assign \$463  = words[22] & data1[0];
+  assign \$464  = \bit  ^ \$463 ;
+  assign \$465  = \$462  & \$464 ;
+  assign \$466  = ! idx;
+  assign \$467  = words[23] & \$466 ;
+  assign \$468  = words[22] & data1[0];
+  assign \$469  = \bit  ^ \$468 ;
+  assign \$470  = \$467  & \$469 ;
+  assign \$471  = ! idx;
+  assign \$472  = words[23] & \$471 ;
+  assign \$473  = words[22] & data1[0];
+  assign \$474  = \bit  ^ \$473 ;
+  assign \$475  = \$472  & \$474 ;
+  assign \$476  = ! idx;
+  assign \$477  = words[23] & \$476 ;
+  assign \$478  = words[22] & data1[0];
+  assign \$479  = \bit  ^ \$478 ;
+  assign \$480  = \$477  & \$479 ;
+  assign \$481  = ! idx;
+  assign \$482  = words[23] & \$481 ;
+  assign \$483  = words[22] & data1[0];
+  assign \$484  = \bit  ^ \$483 ;
+  assign \$485  = \$482  & \$484 ;
+  assign \$486  = ! idx;
+  assign \$487  = words[23] & \$486 ;
+  assign \$488  = words[22] & data1[0];
+  assign \$489  = \bit  ^ \$488 ;
+  assign \$490  = \$487  & \$489 ;
+  assign \$491  = ! idx;
+  assign \$492  = words[23] & \$491 ;
+  assign \$493  = words[22] & data1[0];
+  assign \$494  = \bit  ^ \$493 ;
+  assign \$495  = \$492  & \$494 ;
+  assign \$496  = ! idx;
+  assign \$497  = words[23] & \$496 ;
+  assign \$498  = words[22] & data1[0];
+  assign \$499  = \bit  ^ \$498 ;
+  assign \$500  = \$497  & \$499 ;
+  assign \$501  = ! idx;
+  assign \$502  = words[23] & \$501 ;
+  assign \$503  = words[22] & data1[0];
+  assign \$504  = \bit  ^ \$503 ;
+  assign \$505  = \$502  & \$504 ;
+  assign \$506  = ! idx;
+  assign \$507  = words[23] & \$506 ;
+  assign \$508  = words[22] & data1[0];
+  assign \$509  = \bit  ^ \$508 ;
+  assign \$510  = \$507  & \$509 ;
+  assign \$511  = ! idx;
+  assign \$512  = words[23] & \$511 ;
+  assign \$513  = words[22] & data1[0];
+  assign \$514  = \bit  ^ \$513 ;
+  assign \$515  = \$512  & \$514 ;
+  assign \$516  = ! idx;
+  assign \$517  = words[23] & \$516 ;
+  assign \$518  = words[22] & data1[0];
+  assign \$519  = \bit  ^ \$518 ;
+  assign \$520  = \$517  & \$519 ;
+  assign \$521  = ! idx;
+  assign \$522  = words[23] & \$521 ;
+  assign \$523  = words[22] & data1[0];
+  assign \$524  = \bit  ^ \$523 ;
+  assign \$525  = \$522  & \$524 ;
+  assign \$526  = ! idx;
+  assign \$527  = words[23] & \$526 ;
+  assign \$528  = words[22] & data1[0];
+  assign \$529  = \bit  ^ \$528 ;
+  assign \$530  = \$527  & \$529 ;
+  assign \$531  = ! idx;
+  assign \$532  = words[23] & \$531 ;
+  assign \$533  = words[22] & data1[0];
+  assign \$534  = \bit  ^ \$533 ;
+  assign \$535  = \$532  & \$534 ;
+  assign \$536  = ! idx;
+  assign \$537  = words[23] & \$536 ;
+  assign \$538  = words[22] & data1[0];
+  assign \$539  = \bit  ^ \$538 ;
+  assign \$540  = \$537  & \$539 ;
+  assign \$541  = ! idx;
+  assign \$542  = words[23] & \$541 ;
+  assign \$543  = words[22] & data1[0];
+  assign \$544  = \bit  ^ \$543 ;
+  assign \$545  = \$542  & \$544 ;
+  assign \$546  = ! idx;
+  assign \$547  = words[23] & \$546 ;
+  assign \$548  = words[22] & data1[0];
+  assign \$549  = \bit  ^ \$548 ;
+  assign \$550  = \$547  & \$549 ;
+  assign \$551  = ! idx;
+  assign \$552  = words[23] & \$551 ;
+  assign \$553  = words[22] & data1[0];
+  assign \$554  = \bit  ^ \$553 ;
+  assign \$555  = \$552  & \$554 ;
+  assign \$556  = ! idx;
+  assign \$557  = words[23] & \$556 ;
+  assign \$558  = words[22] & data1[0];
+  assign \$559  = \bit  ^ \$558 ;
+  assign \$560  = \$557  & \$559 ;
+  assign \$561  = ! idx;
+  assign \$562  = words[23] & \$561 ;
+  assign \$563  = words[22] & data1[0];
+  assign \$564  = \bit  ^ \$563 ;
+  assign \$565  = \$562  & \$564 ;
+  assign \$566  = ! idx;
+  assign \$567  = words[23] & \$566 ;
+  assign \$568  = words[22] & data1[0];
+  assign \$569  = \bit  ^ \$568 ;
+  assign \$570  = \$567  & \$569 ;
+  assign \$571  = ! idx;
+  assign \$572  = words[23] & \$571 ;
+  assign \$573  = words[22] & data1[0];
+  assign \$574  = \bit  ^ \$573 ;
+  assign \$575  = \$572  & \$574 ;
+  assign \$576  = ! idx;
+  assign \$577  = words[23] & \$576 ;
+  assign \$578  = words[22] & data1[0];
+  assign \$579  = \bit  ^ \$578 ;
+  assign \$580  = \$577  & \$579 ;
+  assign \$581  = { data1[38:0], \$380  } | { \$580 , \$575 , \$570 , \$565 , \$560 , \$555 , \$550 , \$545 , \$540 , \$535 , \$530 , \$525 , \$520 , \$515 , \$510 , \$505 , \$500 , \$495 , \$490 , \$485 , \$480 , \$475 , \$470 , \$465 , \$460 , \$455 , \$450 , \$445 , \$440 , \$435 , \$430 , \$425 , \$420 , \$415 , \$410 , \$405 , \$400 , \$395 , \$390 , \$385  };
+  assign \$582  = ~ words[18];
+  assign \$584  = in_word & \$583 ;
+  assign \$585  = idx == words[17:12];
+  assign \$586  = \$584  & \$585 ;
+  assign \$588  = in_word & \$587 ;
+  assign \$589  = idx == w1_data_end_p1;
+  assign \$590  = \$588  & \$589 ;
+  assign \$591  = in_word & ssi;
+  assign \$592  = in_word & in_top;
+  assign \$593  = words[10] & data0[0];
+  assign \$594  = \bit  ^ \$593 ;
+  assign \$595  = sample & \bit ;
   assign lc_load = in_word & in_lc;
-  assign \$572  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$573  = idx == \$572 ;
-  assign \$574  = in_word & \$573 ;
-  assign load = at_cds | \$574 ;
-  assign \$575  = ~ in_crc;
-  assign \cover  = in_word & \$575 ;
+  assign \$596  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$597  = idx == \$596 ;
+  assign \$598  = in_word & \$597 ;
+  assign load = at_cds | \$598 ;
+  assign \$599  = ~ in_crc;
+  assign \cover  = in_word & \$599 ;
   assign check = in_word & in_crc;
-  assign \$576  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$577  = idx == \$576 ;
-  assign last = in_word & \$577 ;
-  assign \$578  = word + 1'h1;
-  assign \$579  = at_cds ? 2'h0 : \$578 ;
-  assign \$580  = ! decoder_fsm_state;
-  assign \$581  = decoder_fsm_state == 1'h1;
-  assign \$582  = decoder_fsm_state == 2'h2;
-  assign \$583  = decoder_fsm_state == 2'h3;
-  assign \$584  = decoder_fsm_state == 3'h4;
+  assign \$600  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$601  = idx == \$600 ;
+  assign last = in_word & \$601 ;
+  assign \$602  = word + 1'h1;
+  assign \$603  = at_cds ? 2'h0 : \$602 ;
+  assign \$604  = ! decoder_fsm_state;
+  assign \$605  = decoder_fsm_state == 1'h1;
+  assign \$606  = decoder_fsm_state == 2'h2;
+  assign \$607  = decoder_fsm_state == 2'h3;
+  assign \$608  = decoder_fsm_state == 3'h4;
+  assign \$609  = decoder_fsm_state == 3'h5;
+  assign \$610  = decoder_fsm_state == 3'h6;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
     w0_data_end_m1 <= \$2 [6:0];
   always @(posedge clk)
-    w0_nenw_end_m1 <= \$4 [6:0];
+    w0_nenw_end_m1 <= \$5 [6:0];
   always @(posedge clk)
-    w0_lc_end_m1 <= \$6 [6:0];
+    w0_lc_end_m1 <= \$8 [6:0];
   always @(posedge clk)
-    w0_word_end_m1 <= \$9 [6:0];
+    w0_word_end_m1 <= \$12 [6:0];
   always @(posedge clk)
-    w0_data_at0 <= \$10 ;
+    w0_data_at0 <= \$13 ;
   always @(posedge clk)
-    w0_lc_at0 <= \$17 ;
+    w0_lc_at0 <= \$22 ;
   always @(posedge clk)
-    w1_data_end_p1 <= \$18 ;
+    w1_data_end_p1 <= \$23 ;
   always @(posedge clk)
-    w1_data_end_m1 <= \$19 [6:0];
+    w1_data_end_m1 <= \$24 [6:0];
   always @(posedge clk)
-    w1_nenw_end_m1 <= \$21 [6:0];
+    w1_nenw_end_m1 <= \$26 [6:0];
   always @(posedge clk)
-    w1_lc_end_m1 <= \$23 [6:0];
+    w1_lc_end_m1 <= \$28 [6:0];
   always @(posedge clk)
-    w1_word_end_m1 <= \$26 [6:0];
+    w1_word_end_m1 <= \$31 [6:0];
   always @(posedge clk)
-    w1_data_at0 <= \$27 ;
+    w1_data_at0 <= \$32 ;
   always @(posedge clk)
-    w1_lc_at0 <= \$34 ;
+    w1_lc_at0 <= \$39 ;
   always @(posedge clk)
-    done <= \$585 ;
+    done <= \$611 ;
   always @(posedge clk)
-    stopped <= \$586 ;
+    stopped <= \$612 ;
   always @(posedge clk)
-    slots <= \$587 ;
+    slots <= \$613 ;
   always @(posedge clk)
-    slots_full <= \$588 ;
+    slots_full <= \$614 ;
   always @(posedge clk)
-    started <= \$589 ;
+    started <= \$615 ;
   always @(posedge clk)
-    start_slot <= \$590 ;
+    idx <= \$616 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$591 ;
+    in_data <= \$617 ;
   always @(posedge clk)
-    cds <= \$592 ;
+    in_lc <= \$618 ;
   always @(posedge clk)
-    idx <= \$593 ;
+    in_crc <= \$619 ;
   always @(posedge clk)
-    in_data <= \$594 ;
+    in_top <= \$620 ;
   always @(posedge clk)
-    in_lc <= \$595 ;
+    word <= \$621 ;
   always @(posedge clk)
-    in_crc <= \$596 ;
+    decoder_fsm_state <= \$622 ;
   always @(posedge clk)
-    in_top <= \$597 ;
+    start_slot <= \$623 ;
   always @(posedge clk)
-    word <= \$598 ;
+    cds <= \$624 ;
   always @(posedge clk)
-    stop_bit <= \$599 ;
+    mismatch <= \$625 ;
   always @(posedge clk)
-    data0 <= \$600 ;
+    ring <= \$626 ;
   always @(posedge clk)
-    ne <= \$601 ;
+    stop_bit <= \$627 ;
   always @(posedge clk)
-    nw <= \$602 ;
+    data0 <= \$628 ;
   always @(posedge clk)
-    data1 <= \$603 ;
+    ne <= \$629 ;
   always @(posedge clk)
-    lc <= \$604 ;
+    nw <= \$630 ;
   always @(posedge clk)
-    cpw_top <= \$605 ;
+    data1 <= \$631 ;
+  always @(posedge clk)
+    lc <= \$632 ;
+  always @(posedge clk)
+    cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$4  = words[5:0] + \$3 ;
-  assign \$6  = words[5:0] + \$5 ;
-  assign \$8  = \$7  + crcs[4:0];
-  assign \$9  = words[5:0] + \$8 [6:0];
-  assign \$10  = | words[5:0];
-  assign \$11  = words[6] ? 2'h2 : 2'h0;
-  assign \$12  = words[5:0] + \$11 ;
-  assign \$13  = ! \$12 ;
-  assign \$15  = words[5:0] + \$14 ;
-  assign \$16  = | \$15 ;
-  assign \$17  = \$13  & \$16 ;
-  assign \$18  = words[17:12] + 1'h1;
-  assign \$19  = words[17:12] + 7'h7f;
-  assign \$21  = words[17:12] + \$20 ;
-  assign \$23  = words[17:12] + \$22 ;
-  assign \$25  = \$24  + crcs[42:38];
-  assign \$26  = words[17:12] + \$25 [6:0];
-  assign \$27  = | words[17:12];
-  assign \$28  = words[18] ? 2'h2 : 2'h0;
-  assign \$29  = words[17:12] + \$28 ;
-  assign \$30  = ! \$29 ;
-  assign \$32  = words[17:12] + \$31 ;
-  assign \$33  = | \$32 ;
-  assign \$34  = \$30  & \$33 ;
-  assign \$35  = ~ slots_full;
-  assign \$36  = sample & \$35 ;
-  assign \$37  = slots + 1'h1;
-  assign \$38  = slots == 16'hfffe;
-  assign \$39  = sample & \bit ;
-  assign \$40  = | words[17:12];
-  assign \$41  = idx + 1'h1;
-  assign \$42  = word ? w1_data_end_m1 : w0_data_end_m1;
-  assign \$43  = idx != \$42 ;
-  assign \$44  = in_data & \$43 ;
-  assign \$45  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
-  assign \$46  = idx == \$45 ;
-  assign \$47  = in_lc | \$46 ;
-  assign \$48  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$3  = ssi & \port$6928$272 [0];
+  assign \$5  = words[5:0] + \$4 ;
+  assign \$6  = ssi & \port$6928$272 [0];
+  assign \$8  = words[5:0] + \$7 ;
+  assign \$9  = ssi & \port$6928$272 [0];
+  assign \$11  = \$10  + crcs[4:0];
+  assign \$12  = words[5:0] + \$11 [6:0];
+  assign \$13  = | words[5:0];
+  assign \$14  = ssi & \port$6928$272 [0];
+  assign \$16  = words[5:0] + \$15 ;
+  assign \$17  = ! \$16 ;
+  assign \$18  = ssi & \port$6928$272 [0];
+  assign \$20  = words[5:0] + \$19 ;
+  assign \$21  = | \$20 ;
+  assign \$22  = \$17  & \$21 ;
+  assign \$23  = words[17:12] + 1'h1;
+  assign \$24  = words[17:12] + 7'h7f;
+  assign \$26  = words[17:12] + \$25 ;
+  assign \$28  = words[17:12] + \$27 ;
+  assign \$30  = \$29  + crcs[42:38];
+  assign \$31  = words[17:12] + \$30 [6:0];
+  assign \$32  = | words[17:12];
+  assign \$34  = words[17:12] + \$33 ;
+  assign \$35  = ! \$34 ;
+  assign \$37  = words[17:12] + \$36 ;
+  assign \$38  = | \$37 ;
+  assign \$39  = \$35  & \$38 ;
+  assign \$40  = ~ slots_full;
+  assign \$41  = sample & \$40 ;
+  assign \$42  = slots + 1'h1;
+  assign \$43  = slots == 16'hfffe;
+  assign \$44  = sample & \bit ;
+  assign \$45  = | words[17:12];
+  assign \$46  = | words[17:12];
+  assign \$47  = idx + 1'h1;
+  assign \$48  = word ? w1_data_end_m1 : w0_data_end_m1;
   assign \$49  = idx != \$48 ;
-  assign \$50  = \$47  & \$49 ;
-  assign \$51  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$50  = in_data & \$49 ;
+  assign \$51  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
   assign \$52  = idx == \$51 ;
-  assign \$53  = in_crc | \$52 ;
-  assign \$54  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$53  = in_lc | \$52 ;
+  assign \$54  = word ? w1_lc_end_m1 : w0_lc_end_m1;
   assign \$55  = idx != \$54 ;
   assign \$56  = \$53  & \$55 ;
-  assign \$57  = idx != w1_data_end_m1;
-  assign \$58  = in_top & \$57 ;
-  assign \$59  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$60  = idx == \$59 ;
-  assign \$61  = word_count - 1'h1;
-  assign \$62  = word == \$61 ;
-  assign \$63  = word + 1'h1;
-  assign \$64  = ! word;
-  assign \$65  = in_word & \$64 ;
-  assign \$66  = \$65  & in_data;
-  assign \$67  = words[10] & data0[0];
-  assign \$68  = \bit  ^ \$67 ;
-  assign \$69  = ! idx;
-  assign \$70  = words[11] & \$69 ;
-  assign \$71  = words[10] & data0[0];
-  assign \$72  = \bit  ^ \$71 ;
-  assign \$73  = \$70  & \$72 ;
-  assign \$74  = ! idx;
-  assign \$75  = words[11] & \$74 ;
-  assign \$76  = words[10] & data0[0];
-  assign \$77  = \bit  ^ \$76 ;
-  assign \$78  = \$75  & \$77 ;
-  assign \$79  = ! idx;
-  assign \$80  = words[11] & \$79 ;
+  assign \$57  = word ? w1_lc_end_m1 : w0_lc_end_m1;
+  assign \$58  = idx == \$57 ;
+  assign \$59  = in_crc | \$58 ;
+  assign \$60  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$61  = idx != \$60 ;
+  assign \$62  = \$59  & \$61 ;
+  assign \$63  = idx != w1_data_end_m1;
+  assign \$64  = in_top & \$63 ;
+  assign \$65  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$66  = idx == \$65 ;
+  assign \$67  = word_count - 1'h1;
+  assign \$68  = word == \$67 ;
+  assign \$69  = ssi & \port$6928$272 [2];
+  assign \$70  = word + 1'h1;
+  assign \$71  = idx + 1'h1;
+  assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$73  = ring >> \$72 ;
+  assign \$74  = \bit  != \$73 ;
+  assign \$75  = mismatch | \$74 ;
+  assign \$76  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$77  = idx == \$76 ;
+  assign \$78  = ! word;
+  assign \$79  = in_word & \$78 ;
+  assign \$80  = \$79  & in_data;
   assign \$81  = words[10] & data0[0];
   assign \$82  = \bit  ^ \$81 ;
-  assign \$83  = \$80  & \$82 ;
-  assign \$84  = ! idx;
-  assign \$85  = words[11] & \$84 ;
-  assign \$86  = words[10] & data0[0];
-  assign \$87  = \bit  ^ \$86 ;
-  assign \$88  = \$85  & \$87 ;
-  assign \$89  = ! idx;
-  assign \$90  = words[11] & \$89 ;
-  assign \$91  = words[10] & data0[0];
-  assign \$92  = \bit  ^ \$91 ;
-  assign \$93  = \$90  & \$92 ;
-  assign \$94  = ! idx;
-  assign \$95  = words[11] & \$94 ;
-  assign \$96  = words[10] & data0[0];
-  assign \$97  = \bit  ^ \$96 ;
-  assign \$98  = \$95  & \$97 ;
-  assign \$99  = ! idx;
-  assign \$100  = words[11] & \$99 ;
-  assign \$101  = words[10] & data0[0];
-  assign \$102  = \bit  ^ \$101 ;
-  assign \$103  = \$100  & \$102 ;
-  assign \$104  = ! idx;
-  assign \$105  = words[11] & \$104 ;
-  assign \$106  = words[10] & data0[0];
-  assign \$107  = \bit  ^ \$106 ;
-  assign \$108  = \$105  & \$107 ;
-  assign \$109  = ! idx;
-  assign \$110  = words[11] & \$109 ;
-  assign \$111  = words[10] & data0[0];
-  assign \$112  = \bit  ^ \$111 ;
-  assign \$113  = \$110  & \$112 ;
-  assign \$114  = ! idx;
-  assign \$115  = words[11] & \$114 ;
-  assign \$116  = words[10] & data0[0];
-  assign \$117  = \bit  ^ \$116 ;
-  assign \$118  = \$115  & \$117 ;
-  assign \$119  = ! idx;
-  assign \$120  = words[11] & \$119 ;
-  assign \$121  = words[10] & data0[0];
-  assign \$122  = \bit  ^ \$121 ;
-  assign \$123  = \$120  & \$122 ;
-  assign \$124  = ! idx;
-  assign \$125  = words[11] & \$124 ;
-  assign \$126  = words[10] & data0[0];
-  assign \$127  = \bit  ^ \$126 ;
-  assign \$128  = \$125  & \$127 ;
-  assign \$129  = ! idx;
-  assign \$130  = words[11] & \$129 ;
-  assign \$131  = words[10] & data0[0];
-  assign \$132  = \bit  ^ \$131 ;
-  assign \$133  = \$130  & \$132 ;
-  assign \$134  = ! idx;
-  assign \$135  = words[11] & \$134 ;
-  assign \$136  = words[10] & data0[0];
-  assign \$137  = \bit  ^ \$136 ;
-  assign \$138  = \$135  & \$137 ;
-  assign \$139  = ! idx;
-  assign \$140  = words[11] & \$139 ;
-  assign \$141  = words[10] & data0[0];
-  assign \$142  = \bit  ^ \$141 ;
-  assign \$143  = \$140  & \$142 ;
-  assign \$144  = ! idx;
-  assign \$145  = words[11] & \$144 ;
-  assign \$146  = words[10] & data0[0];
-  assign \$147  = \bit  ^ \$146 ;
-  assign \$148  = \$145  & \$147 ;
-  assign \$149  = ! idx;
-  assign \$150  = words[11] & \$149 ;
-  assign \$151  = words[10] & data0[0];
-  assign \$152  = \bit  ^ \$151 ;
-  assign \$153  = \$150  & \$152 ;
-  assign \$154  = ! idx;
-  assign \$155  = words[11] & \$154 ;
-  assign \$156  = words[10] & data0[0];
-  assign \$157  = \bit  ^ \$156 ;
-  assign \$158  = \$155  & \$157 ;
-  assign \$159  = ! idx;
-  assign \$160  = words[11] & \$159 ;
-  assign \$161  = words[10] & data0[0];
-  assign \$162  = \bit  ^ \$161 ;
-  assign \$163  = \$160  & \$162 ;
-  assign \$164  = ! idx;
-  assign \$165  = words[11] & \$164 ;
-  assign \$166  = words[10] & data0[0];
-  assign \$167  = \bit  ^ \$166 ;
-  assign \$168  = \$165  & \$167 ;
-  assign \$169  = ! idx;
-  assign \$170  = words[11] & \$169 ;
-  assign \$171  = words[10] & data0[0];
-  assign \$172  = \bit  ^ \$171 ;
-  assign \$173  = \$170  & \$172 ;
-  assign \$174  = ! idx;
-  assign \$175  = words[11] & \$174 ;
-  assign \$176  = words[10] & data0[0];
-  assign \$177  = \bit  ^ \$176 ;
-  assign \$178  = \$175  & \$177 ;
-  assign \$179  = ! idx;
-  assign \$180  = words[11] & \$179 ;
-  assign \$181  = words[10] & data0[0];
-  assign \$182  = \bit  ^ \$181 ;
-  assign \$183  = \$180  & \$182 ;
-  assign \$184  = ! idx;
-  assign \$185  = words[11] & \$184 ;
-  assign \$186  = words[10] & data0[0];
-  assign \$187  = \bit  ^ \$186 ;
-  assign \$188  = \$185  & \$187 ;
-  assign \$189  = ! idx;
-  assign \$190  = words[11] & \$189 ;
-  assign \$191  = words[10] & data0[0];
-  assign \$192  = \bit  ^ \$191 ;
-  assign \$193  = \$190  & \$192 ;
-  assign \$194  = ! idx;
-  assign \$195  = words[11] & \$194 ;
-  assign \$196  = words[10] & data0[0];
-  assign \$197  = \bit  ^ \$196 ;
-  assign \$198  = \$195  & \$197 ;
-  assign \$199  = ! idx;
-  assign \$200  = words[11] & \$199 ;
-  assign \$201  = words[10] & data0[0];
-  assign \$202  = \bit  ^ \$201 ;
-  assign \$203  = \$200  & \$202 ;
-  assign \$204  = ! idx;
-  assign \$205  = words[11] & \$204 ;
-  assign \$206  = words[10] & data0[0];
-  assign \$207  = \bit  ^ \$206 ;
-  assign \$208  = \$205  & \$207 ;
-  assign \$209  = ! idx;
-  assign \$210  = words[11] & \$209 ;
-  assign \$211  = words[10] & data0[0];
-  assign \$212  = \bit  ^ \$211 ;
-  assign \$213  = \$210  & \$212 ;
-  assign \$214  = ! idx;
-  assign \$215  = words[11] & \$214 ;
-  assign \$216  = words[10] & data0[0];
-  assign \$217  = \bit  ^ \$216 ;
-  assign \$218  = \$215  & \$217 ;
-  assign \$219  = ! idx;
-  assign \$220  = words[11] & \$219 ;
-  assign \$221  = words[10] & data0[0];
-  assign \$222  = \bit  ^ \$221 ;
-  assign \$223  = \$220  & \$222 ;
-  assign \$224  = ! idx;
-  assign \$225  = words[11] & \$224 ;
-  assign \$226  = words[10] & data0[0];
-  assign \$227  = \bit  ^ \$226 ;
-  assign \$228  = \$225  & \$227 ;
-  assign \$229  = ! idx;
-  assign \$230  = words[11] & \$229 ;
-  assign \$231  = words[10] & data0[0];
-  assign \$232  = \bit  ^ \$231 ;
-  assign \$233  = \$230  & \$232 ;
-  assign \$234  = ! idx;
-  assign \$235  = words[11] & \$234 ;
-  assign \$236  = words[10] & data0[0];
-  assign \$237  = \bit  ^ \$236 ;
-  assign \$238  = \$235  & \$237 ;
-  assign \$239  = ! idx;
-  assign \$240  = words[11] & \$239 ;
-  assign \$241  = words[10] & data0[0];
-  assign \$242  = \bit  ^ \$241 ;
-  assign \$243  = \$240  & \$242 ;
-  assign \$244  = ! idx;
-  assign \$245  = words[11] & \$244 ;
-  assign \$246  = words[10] & data0[0];
-  assign \$247  = \bit  ^ \$246 ;
-  assign \$248  = \$245  & \$247 ;
-  assign \$249  = ! idx;
-  assign \$250  = words[11] & \$249 ;
-  assign \$251  = words[10] & data0[0];
-  assign \$252  = \bit  ^ \$251 ;
-  assign \$253  = \$250  & \$252 ;
-  assign \$254  = ! idx;
-  assign \$255  = words[11] & \$254 ;
-  assign \$256  = words[10] & data0[0];
-  assign \$257  = \bit  ^ \$256 ;
-  assign \$258  = \$255  & \$257 ;
-  assign \$259  = ! idx;
-  assign \$260  = words[11] & \$259 ;
-  assign \$261  = words[10] & data0[0];
-  assign \$262  = \bit  ^ \$261 ;
-  assign \$263  = \$260  & \$262 ;
-  assign \$264  = ! idx;
-  assign \$265  = words[11] & \$264 ;
-  assign \$266  = words[10] & data0[0];
-  assign \$267  = \bit  ^ \$266 ;
-  assign \$268  = \$265  & \$267 ;
-  assign \$269  = ! idx;
-  assign \$270  = words[11] & \$269 ;
-  assign \$271  = words[10] & data0[0];
-  assign \$272  = \bit  ^ \$271 ;
-  assign \$273  = \$270  & \$272 ;
-  assign \$274  = ! idx;
-  assign \$275  = words[11] & \$274 ;
-  assign \$276  = words[10] & data0[0];
-  assign \$277  = \bit  ^ \$276 ;
-  assign \$278  = \$275  & \$277 ;
-  assign \$279  = ! idx;
-  assign \$280  = words[11] & \$279 ;
-  assign \$281  = words[10] & data0[0];
-  assign \$282  = \bit  ^ \$281 ;
-  assign \$283  = \$280  & \$282 ;
-  assign \$284  = ! idx;
-  assign \$285  = words[11] & \$284 ;
-  assign \$286  = words[10] & data0[0];
-  assign \$287  = \bit  ^ \$286 ;
-  assign \$288  = \$285  & \$287 ;
-  assign \$289  = ! idx;
-  assign \$290  = words[11] & \$289 ;
-  assign \$291  = words[10] & data0[0];
-  assign \$292  = \bit  ^ \$291 ;
-  assign \$293  = \$290  & \$292 ;
-  assign \$294  = ! idx;
-  assign \$295  = words[11] & \$294 ;
-  assign \$296  = words[10] & data0[0];
-  assign \$297  = \bit  ^ \$296 ;
-  assign \$298  = \$295  & \$297 ;
-  assign \$299  = ! idx;
-  assign \$300  = words[11] & \$299 ;
-  assign \$301  = words[10] & data0[0];
-  assign \$302  = \bit  ^ \$301 ;
-  assign \$303  = \$300  & \$302 ;
-  assign \$304  = ! idx;
-  assign \$305  = words[11] & \$304 ;
-  assign \$306  = words[10] & data0[0];
-  assign \$307  = \bit  ^ \$306 ;
-  assign \$308  = \$305  & \$307 ;
-  assign \$309  = ! idx;
-  assign \$310  = words[11] & \$309 ;
-  assign \$311  = words[10] & data0[0];
-  assign \$312  = \bit  ^ \$311 ;
-  assign \$313  = \$310  & \$312 ;
-  assign \$314  = ! idx;
-  assign \$315  = words[11] & \$314 ;
-  assign \$316  = words[10] & data0[0];
-  assign \$317  = \bit  ^ \$316 ;
-  assign \$318  = \$315  & \$317 ;
-  assign \$319  = ! idx;
-  assign \$320  = words[11] & \$319 ;
-  assign \$321  = words[10] & data0[0];
-  assign \$322  = \bit  ^ \$321 ;
-  assign \$323  = \$320  & \$322 ;
-  assign \$324  = ! idx;
-  assign \$325  = words[11] & \$324 ;
-  assign \$326  = words[10] & data0[0];
-  assign \$327  = \bit  ^ \$326 ;
-  assign \$328  = \$325  & \$327 ;
-  assign \$329  = ! idx;
-  assign \$330  = words[11] & \$329 ;
-  assign \$331  = words[10] & data0[0];
-  assign \$332  = \bit  ^ \$331 ;
-  assign \$333  = \$330  & \$332 ;
-  assign \$334  = ! idx;
-  assign \$335  = words[11] & \$334 ;
-  assign \$336  = words[10] & data0[0];
-  assign \$337  = \bit  ^ \$336 ;
-  assign \$338  = \$335  & \$337 ;
-  assign \$339  = ! idx;
-  assign \$340  = words[11] & \$339 ;
-  assign \$341  = words[10] & data0[0];
-  assign \$342  = \bit  ^ \$341 ;
-  assign \$343  = \$340  & \$342 ;
-  assign \$344  = { data0[53:0], \$68  } | { \$343 , \$338 , \$333 , \$328 , \$323 , \$318 , \$313 , \$308 , \$303 , \$298 , \$293 , \$288 , \$283 , \$278 , \$273 , \$268 , \$263 , \$258 , \$253 , \$248 , \$243 , \$238 , \$233 , \$228 , \$223 , \$218 , \$213 , \$208 , \$203 , \$198 , \$193 , \$188 , \$183 , \$178 , \$173 , \$168 , \$163 , \$158 , \$153 , \$148 , \$143 , \$138 , \$133 , \$128 , \$123 , \$118 , \$113 , \$108 , \$103 , \$98 , \$93 , \$88 , \$83 , \$78 , \$73  };
-  assign \$345  = ~ words[6];
-  assign \$346  = ! word;
-  assign \$347  = in_word & \$346 ;
-  assign \$348  = idx == words[5:0];
-  assign \$349  = \$347  & \$348 ;
-  assign \$350  = ! word;
-  assign \$351  = in_word & \$350 ;
-  assign \$352  = idx == w0_data_end_p1;
-  assign \$353  = \$351  & \$352 ;
-  assign \$355  = in_word & \$354 ;
-  assign \$356  = \$355  & in_data;
-  assign \$357  = words[22] & data1[0];
-  assign \$358  = \bit  ^ \$357 ;
-  assign \$359  = ! idx;
-  assign \$360  = words[23] & \$359 ;
-  assign \$361  = words[22] & data1[0];
-  assign \$362  = \bit  ^ \$361 ;
-  assign \$363  = \$360  & \$362 ;
-  assign \$364  = ! idx;
-  assign \$365  = words[23] & \$364 ;
-  assign \$366  = words[22] & data1[0];
-  assign \$367  = \bit  ^ \$366 ;
-  assign \$368  = \$365  & \$367 ;
-  assign \$369  = ! idx;
-  assign \$370  = words[23] & \$369 ;
-  assign \$371  = words[22] & data1[0];
-  assign \$372  = \bit  ^ \$371 ;
-  assign \$373  = \$370  & \$372 ;
-  assign \$374  = ! idx;
-  assign \$375  = words[23] & \$374 ;
-  assign \$376  = words[22] & data1[0];
-  assign \$377  = \bit  ^ \$376 ;
-  assign \$378  = \$375  & \$377 ;
-  assign \$379  = ! idx;
-  assign \$380  = words[23] & \$379 ;
-  assign \$381  = words[22] & data1[0];
-  assign \$382  = \bit  ^ \$381 ;
-  assign \$383  = \$380  & \$382 ;
-  assign \$384  = ! idx;
-  assign \$385  = words[23] & \$384 ;
-  assign \$386  = words[22] & data1[0];
-  assign \$387  = \bit  ^ \$386 ;
-  assign \$388  = \$385  & \$387 ;
-  assign \$389  = ! idx;
-  assign \$390  = words[23] & \$389 ;
-  assign \$391  = words[22] & data1[0];
-  assign \$392  = \bit  ^ \$391 ;
-  assign \$393  = \$390  & \$392 ;
-  assign \$394  = ! idx;
+  assign \$83  = ! idx;
+  assign \$84  = words[11] & \$83 ;
+  assign \$85  = words[10] & data0[0];
+  assign \$86  = \bit  ^ \$85 ;
+  assign \$87  = \$84  & \$86 ;
+  assign \$88  = ! idx;
+  assign \$89  = words[11] & \$88 ;
+  assign \$90  = words[10] & data0[0];
+  assign \$91  = \bit  ^ \$90 ;
+  assign \$92  = \$89  & \$91 ;
+  assign \$93  = ! idx;
+  assign \$94  = words[11] & \$93 ;
+  assign \$95  = words[10] & data0[0];
+  assign \$96  = \bit  ^ \$95 ;
+  assign \$97  = \$94  & \$96 ;
+  assign \$98  = ! idx;
+  assign \$99  = words[11] & \$98 ;
+  assign \$100  = words[10] & data0[0];
+  assign \$101  = \bit  ^ \$100 ;
+  assign \$102  = \$99  & \$101 ;
+  assign \$103  = ! idx;
+  assign \$104  = words[11] & \$103 ;
+  assign \$105  = words[10] & data0[0];
+  assign \$106  = \bit  ^ \$105 ;
+  assign \$107  = \$104  & \$106 ;
+  assign \$108  = ! idx;
+  assign \$109  = words[11] & \$108 ;
+  assign \$110  = words[10] & data0[0];
+  assign \$111  = \bit  ^ \$110 ;
+  assign \$112  = \$109  & \$111 ;
+  assign \$113  = ! idx;
+  assign \$114  = words[11] & \$113 ;
+  assign \$115  = words[10] & data0[0];
+  assign \$116  = \bit  ^ \$115 ;
+  assign \$117  = \$114  & \$116 ;
+  assign \$118  = ! idx;
+  assign \$119  = words[11] & \$118 ;
+  assign \$120  = words[10] & data0[0];
+  assign \$121  = \bit  ^ \$120 ;
+  assign \$122  = \$119  & \$121 ;
+  assign \$123  = ! idx;
+  assign \$124  = words[11] & \$123 ;
+  assign \$125  = words[10] & data0[0];
+  assign \$126  = \bit  ^ \$125 ;
+  assign \$127  = \$124  & \$126 ;
+  assign \$128  = ! idx;
+  assign \$129  = words[11] & \$128 ;
+  assign \$130  = words[10] & data0[0];
+  assign \$131  = \bit  ^ \$130 ;
+  assign \$132  = \$129  & \$131 ;
+  assign \$133  = ! idx;
+  assign \$134  = words[11] & \$133 ;
+  assign \$135  = words[10] & data0[0];
+  assign \$136  = \bit  ^ \$135 ;
+  assign \$137  = \$134  & \$136 ;
+  assign \$138  = ! idx;
+  assign \$139  = words[11] & \$138 ;
+  assign \$140  = words[10] & data0[0];
+  assign \$141  = \bit  ^ \$140 ;
+  assign \$142  = \$139  & \$141 ;
+  assign \$143  = ! idx;
+  assign \$144  = words[11] & \$143 ;
+  assign \$145  = words[10] & data0[0];
+  assign \$146  = \bit  ^ \$145 ;
+  assign \$147  = \$144  & \$146 ;
+  assign \$148  = ! idx;
+  assign \$149  = words[11] & \$148 ;
+  assign \$150  = words[10] & data0[0];
+  assign \$151  = \bit  ^ \$150 ;
+  assign \$152  = \$149  & \$151 ;
+  assign \$153  = ! idx;
+  assign \$154  = words[11] & \$153 ;
+  assign \$155  = words[10] & data0[0];
+  assign \$156  = \bit  ^ \$155 ;
+  assign \$157  = \$154  & \$156 ;
+  assign \$158  = ! idx;
+  assign \$159  = words[11] & \$158 ;
+  assign \$160  = words[10] & data0[0];
+  assign \$161  = \bit  ^ \$160 ;
+  assign \$162  = \$159  & \$161 ;
+  assign \$163  = ! idx;
+  assign \$164  = words[11] & \$163 ;
+  assign \$165  = words[10] & data0[0];
+  assign \$166  = \bit  ^ \$165 ;
+  assign \$167  = \$164  & \$166 ;
+  assign \$168  = ! idx;
+  assign \$169  = words[11] & \$168 ;
+  assign \$170  = words[10] & data0[0];
+  assign \$171  = \bit  ^ \$170 ;
+  assign \$172  = \$169  & \$171 ;
+  assign \$173  = ! idx;
+  assign \$174  = words[11] & \$173 ;
+  assign \$175  = words[10] & data0[0];
+  assign \$176  = \bit  ^ \$175 ;
+  assign \$177  = \$174  & \$176 ;
+  assign \$178  = ! idx;
+  assign \$179  = words[11] & \$178 ;
+  assign \$180  = words[10] & data0[0];
+  assign \$181  = \bit  ^ \$180 ;
+  assign \$182  = \$179  & \$181 ;
+  assign \$183  = ! idx;
+  assign \$184  = words[11] & \$183 ;
+  assign \$185  = words[10] & data0[0];
+  assign \$186  = \bit  ^ \$185 ;
+  assign \$187  = \$184  & \$186 ;
+  assign \$188  = ! idx;
+  assign \$189  = words[11] & \$188 ;
+  assign \$190  = words[10] & data0[0];
+  assign \$191  = \bit  ^ \$190 ;
+  assign \$192  = \$189  & \$191 ;
+  assign \$193  = ! idx;
+  assign \$194  = words[11] & \$193 ;
+  assign \$195  = words[10] & data0[0];
+  assign \$196  = \bit  ^ \$195 ;
+  assign \$197  = \$194  & \$196 ;
+  assign \$198  = ! idx;
+  assign \$199  = words[11] & \$198 ;
+  assign \$200  = words[10] & data0[0];
+  assign \$201  = \bit  ^ \$200 ;
+  assign \$202  = \$199  & \$201 ;
+  assign \$203  = ! idx;
+  assign \$204  = words[11] & \$203 ;
+  assign \$205  = words[10] & data0[0];
+  assign \$206  = \bit  ^ \$205 ;
+  assign \$207  = \$204  & \$206 ;
+  assign \$208  = ! idx;
+  assign \$209  = words[11] & \$208 ;
+  assign \$210  = words[10] & data0[0];
+  assign \$211  = \bit  ^ \$210 ;
+  assign \$212  = \$209  & \$211 ;
+  assign \$213  = ! idx;
+  assign \$214  = words[11] & \$213 ;
+  assign \$215  = words[10] & data0[0];
+  assign \$216  = \bit  ^ \$215 ;
+  assign \$217  = \$214  & \$216 ;
+  assign \$218  = ! idx;
+  assign \$219  = words[11] & \$218 ;
+  assign \$220  = words[10] & data0[0];
+  assign \$221  = \bit  ^ \$220 ;
+  assign \$222  = \$219  & \$221 ;
+  assign \$223  = ! idx;
+  assign \$224  = words[11] & \$223 ;
+  assign \$225  = words[10] & data0[0];
+  assign \$226  = \bit  ^ \$225 ;
+  assign \$227  = \$224  & \$226 ;
+  assign \$228  = ! idx;
+  assign \$229  = words[11] & \$228 ;
+  assign \$230  = words[10] & data0[0];
+  assign \$231  = \bit  ^ \$230 ;
+  assign \$232  = \$229  & \$231 ;
+  assign \$233  = ! idx;
+  assign \$234  = words[11] & \$233 ;
+  assign \$235  = words[10] & data0[0];
+  assign \$236  = \bit  ^ \$235 ;
+  assign \$237  = \$234  & \$236 ;
+  assign \$238  = ! idx;
+  assign \$239  = words[11] & \$238 ;
+  assign \$240  = words[10] & data0[0];
+  assign \$241  = \bit  ^ \$240 ;
+  assign \$242  = \$239  & \$241 ;
+  assign \$243  = ! idx;
+  assign \$244  = words[11] & \$243 ;
+  assign \$245  = words[10] & data0[0];
+  assign \$246  = \bit  ^ \$245 ;
+  assign \$247  = \$244  & \$246 ;
+  assign \$248  = ! idx;
+  assign \$249  = words[11] & \$248 ;
+  assign \$250  = words[10] & data0[0];
+  assign \$251  = \bit  ^ \$250 ;
+  assign \$252  = \$249  & \$251 ;
+  assign \$253  = ! idx;
+  assign \$254  = words[11] & \$253 ;
+  assign \$255  = words[10] & data0[0];
+  assign \$256  = \bit  ^ \$255 ;
+  assign \$257  = \$254  & \$256 ;
+  assign \$258  = ! idx;
+  assign \$259  = words[11] & \$258 ;
+  assign \$260  = words[10] & data0[0];
+  assign \$261  = \bit  ^ \$260 ;
+  assign \$262  = \$259  & \$261 ;
+  assign \$263  = ! idx;
+  assign \$264  = words[11] & \$263 ;
+  assign \$265  = words[10] & data0[0];
+  assign \$266  = \bit  ^ \$265 ;
+  assign \$267  = \$264  & \$266 ;
+  assign \$268  = ! idx;
+  assign \$269  = words[11] & \$268 ;
+  assign \$270  = words[10] & data0[0];
+  assign \$271  = \bit  ^ \$270 ;
+  assign \$272  = \$269  & \$271 ;
+  assign \$273  = ! idx;
+  assign \$274  = words[11] & \$273 ;
+  assign \$275  = words[10] & data0[0];
+  assign \$276  = \bit  ^ \$275 ;
+  assign \$277  = \$274  & \$276 ;
+  assign \$278  = ! idx;
+  assign \$279  = words[11] & \$278 ;
+  assign \$280  = words[10] & data0[0];
+  assign \$281  = \bit  ^ \$280 ;
+  assign \$282  = \$279  & \$281 ;
+  assign \$283  = ! idx;
+  assign \$284  = words[11] & \$283 ;
+  assign \$285  = words[10] & data0[0];
+  assign \$286  = \bit  ^ \$285 ;
+  assign \$287  = \$284  & \$286 ;
+  assign \$288  = ! idx;
+  assign \$289  = words[11] & \$288 ;
+  assign \$290  = words[10] & data0[0];
+  assign \$291  = \bit  ^ \$290 ;
+  assign \$292  = \$289  & \$291 ;
+  assign \$293  = ! idx;
+  assign \$294  = words[11] & \$293 ;
+  assign \$295  = words[10] & data0[0];
+  assign \$296  = \bit  ^ \$295 ;
+  assign \$297  = \$294  & \$296 ;
+  assign \$298  = ! idx;
+  assign \$299  = words[11] & \$298 ;
+  assign \$300  = words[10] & data0[0];
+  assign \$301  = \bit  ^ \$300 ;
+  assign \$302  = \$299  & \$301 ;
+  assign \$303  = ! idx;
+  assign \$304  = words[11] & \$303 ;
+  assign \$305  = words[10] & data0[0];
+  assign \$306  = \bit  ^ \$305 ;
+  assign \$307  = \$304  & \$306 ;
+  assign \$308  = ! idx;
+  assign \$309  = words[11] & \$308 ;
+  assign \$310  = words[10] & data0[0];
+  assign \$311  = \bit  ^ \$310 ;
+  assign \$312  = \$309  & \$311 ;
+  assign \$313  = ! idx;
+  assign \$314  = words[11] & \$313 ;
+  assign \$315  = words[10] & data0[0];
+  assign \$316  = \bit  ^ \$315 ;
+  assign \$317  = \$314  & \$316 ;
+  assign \$318  = ! idx;
+  assign \$319  = words[11] & \$318 ;
+  assign \$320  = words[10] & data0[0];
+  assign \$321  = \bit  ^ \$320 ;
+  assign \$322  = \$319  & \$321 ;
+  assign \$323  = ! idx;
+  assign \$324  = words[11] & \$323 ;
+  assign \$325  = words[10] & data0[0];
+  assign \$326  = \bit  ^ \$325 ;
+  assign \$327  = \$324  & \$326 ;
+  assign \$328  = ! idx;
+  assign \$329  = words[11] & \$328 ;
+  assign \$330  = words[10] & data0[0];
+  assign \$331  = \bit  ^ \$330 ;
+  assign \$332  = \$329  & \$331 ;
+  assign \$333  = ! idx;
+  assign \$334  = words[11] & \$333 ;
+  assign \$335  = words[10] & data0[0];
+  assign \$336  = \bit  ^ \$335 ;
+  assign \$337  = \$334  & \$336 ;
+  assign \$338  = ! idx;
+  assign \$339  = words[11] & \$338 ;
+  assign \$340  = words[10] & data0[0];
+  assign \$341  = \bit  ^ \$340 ;
+  assign \$342  = \$339  & \$341 ;
+  assign \$343  = ! idx;
+  assign \$344  = words[11] & \$343 ;
+  assign \$345  = words[10] & data0[0];
+  assign \$346  = \bit  ^ \$345 ;
+  assign \$347  = \$344  & \$346 ;
+  assign \$348  = ! idx;
+  assign \$349  = words[11] & \$348 ;
+  assign \$350  = words[10] & data0[0];
+  assign \$351  = \bit  ^ \$350 ;
+  assign \$352  = \$349  & \$351 ;
+  assign \$353  = ! idx;
+  assign \$354  = words[11] & \$353 ;
+  assign \$355  = words[10] & data0[0];
+  assign \$356  = \bit  ^ \$355 ;
+  assign \$357  = \$354  & \$356 ;
+  assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
+  assign \$359  = ~ words[6];
+  assign \$360  = ssi & \port$6928$272 [0];
+  assign \$361  = ~ \$360 ;
+  assign \$362  = \$359  & \$361 ;
+  assign \$363  = ! word;
+  assign \$364  = in_word & \$363 ;
+  assign \$365  = idx == words[5:0];
+  assign \$366  = \$364  & \$365 ;
   \biss_master_axil.ch1.core.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
@@ -27350,429 +28596,539 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     .index(word),
     .last(last),
     .load(load),
-    .load_index(\$579 [0]),
+    .load_index(\$603 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$585  = 1'h0;
+    \$611  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$585  = 1'h1;
-              end
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$585  = 1'h0;
-    end
-    if (rst) begin
-      \$585  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$586  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
           /* empty */;
       3'h2:
           /* empty */;
-      3'h3:
-          if (sample) begin
-            \$586  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$586  = 1'h0;
-    end
-    if (rst) begin
-      \$586  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$587  = slots;
-    if (\$36 ) begin
-      \$587  = \$37 [15:0];
-    end
-    if (receiver_clear) begin
-      \$587  = 16'h0000;
-    end
-    if (rst) begin
-      \$587  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$588  = slots_full;
-    if (\$36 ) begin
-      \$588  = \$38 ;
-    end
-    if (receiver_clear) begin
-      \$588  = 1'h0;
-    end
-    if (rst) begin
-      \$588  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$589  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$589  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$589  = 1'h0;
-    end
-    if (rst) begin
-      \$589  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$590  = start_slot;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$590  = slots;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$590  = 16'h0000;
-    end
-    if (rst) begin
-      \$590  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$591  = decoder_fsm_state;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (\$39 ) begin
-            \$591  = 3'h1;
-          end
       3'h1:
           if (sample) begin
-            \$591  = 3'h2;
-          end
-      3'h2:
-          if (sample) begin
-            if (\$60 ) begin
-              if (\$62 ) begin
-                \$591  = 3'h3;
+            if (\$66 ) begin
+              if (\$68 ) begin
+                (* full_case = 32'd1 *)
+                if (\$69 ) begin
+                end else begin
+                  \$611  = 1'h1;
+                end
               end
             end
           end
       3'h3:
-          if (sample) begin
-            \$591  = 3'h4;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$591  = 3'h0;
-    end
-    if (rst) begin
-      \$591  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$592  = cds;
-    casez (decoder_fsm_state)
-      3'h0:
           /* empty */;
-      3'h1:
+      3'h5:
           if (sample) begin
-            \$592  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$592  = 1'h0;
-    end
-    if (rst) begin
-      \$592  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$593  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$593  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$593  = \$41 [6:0];
-            if (\$60 ) begin
-              \$593  = 7'h00;
+            if (\$77 ) begin
+              \$611  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$593  = 7'h00;
+      \$611  = 1'h0;
     end
     if (rst) begin
-      \$593  = 7'h00;
+      \$611  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$594  = in_data;
+    \$612  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
+      3'h2:
+          /* empty */;
       3'h1:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h4:
           if (sample) begin
-            \$594  = w0_data_at0;
+            \$612  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$612  = 1'h0;
+    end
+    if (rst) begin
+      \$612  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$613  = slots;
+    if (\$41 ) begin
+      \$613  = \$42 [15:0];
+    end
+    if (receiver_clear) begin
+      \$613  = 16'h0000;
+    end
+    if (rst) begin
+      \$613  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$614  = slots_full;
+    if (\$41 ) begin
+      \$614  = \$43 ;
+    end
+    if (receiver_clear) begin
+      \$614  = 1'h0;
+    end
+    if (rst) begin
+      \$614  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$615  = started;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$615  = 1'h1;
+          end else if (\$44 ) begin
+            \$615  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$615  = 1'h0;
+    end
+    if (rst) begin
+      \$615  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$616  = idx;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$616  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$594  = \$44 ;
-            if (\$60 ) begin
-              \$594  = w1_data_at0;
+            \$616  = 7'h00;
+          end
+      3'h1:
+          if (sample) begin
+            \$616  = \$47 [6:0];
+            if (\$66 ) begin
+              \$616  = 7'h00;
+            end
+          end
+      3'h3:
+          /* empty */;
+      3'h5:
+          if (sample) begin
+            \$616  = \$71 [6:0];
+          end
+    endcase
+    if (receiver_clear) begin
+      \$616  = 7'h00;
+    end
+    if (rst) begin
+      \$616  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$617  = in_data;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$617  = w0_data_at0;
+          end
+      3'h2:
+          if (sample) begin
+            \$617  = w0_data_at0;
+          end
+      3'h1:
+          if (sample) begin
+            \$617  = \$50 ;
+            if (\$66 ) begin
+              \$617  = w1_data_at0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$594  = 1'h0;
+      \$617  = 1'h0;
     end
     if (rst) begin
-      \$594  = 1'h0;
+      \$617  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$595  = in_lc;
+    \$618  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$595  = w0_lc_at0;
+          if (ssi) begin
+            \$618  = w0_lc_at0;
           end
       3'h2:
           if (sample) begin
-            \$595  = \$50 ;
-            if (\$60 ) begin
-              \$595  = w1_lc_at0;
+            \$618  = w0_lc_at0;
+          end
+      3'h1:
+          if (sample) begin
+            \$618  = \$56 ;
+            if (\$66 ) begin
+              \$618  = w1_lc_at0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$595  = 1'h0;
+      \$618  = 1'h0;
     end
     if (rst) begin
-      \$595  = 1'h0;
+      \$618  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$596  = in_crc;
+    \$619  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$596  = 1'h0;
+          if (ssi) begin
+            \$619  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            \$596  = \$56 ;
+            \$619  = 1'h0;
+          end
+      3'h1:
+          if (sample) begin
+            \$619  = \$62 ;
           end
     endcase
     if (receiver_clear) begin
-      \$596  = 1'h0;
+      \$619  = 1'h0;
     end
     if (rst) begin
-      \$596  = 1'h0;
+      \$619  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$597  = in_top;
+    \$620  = in_top;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$597  = \$40 ;
+          if (ssi) begin
+            \$620  = \$45 ;
           end
       3'h2:
           if (sample) begin
-            \$597  = \$58 ;
-            if (\$60 ) begin
-              \$597  = 1'h0;
+            \$620  = \$46 ;
+          end
+      3'h1:
+          if (sample) begin
+            \$620  = \$64 ;
+            if (\$66 ) begin
+              \$620  = 1'h0;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$597  = 1'h0;
+      \$620  = 1'h0;
     end
     if (rst) begin
-      \$597  = 1'h0;
+      \$620  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$598  = word;
+    \$621  = word;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$598  = 1'h0;
+          if (ssi) begin
+            \$621  = 1'h0;
           end
       3'h2:
           if (sample) begin
-            if (\$60 ) begin
+            \$621  = 1'h0;
+          end
+      3'h1:
+          if (sample) begin
+            if (\$66 ) begin
               (* full_case = 32'd1 *)
-              if (\$62 ) begin
+              if (\$68 ) begin
               end else begin
-                \$598  = \$63 [0];
+                \$621  = \$70 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$598  = 1'h0;
+      \$621  = 1'h0;
     end
     if (rst) begin
-      \$598  = 1'h0;
+      \$621  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$599  = stop_bit;
+    \$622  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
+          if (ssi) begin
+            \$622  = 3'h1;
+          end else if (\$44 ) begin
+            \$622  = 3'h2;
+          end
       3'h2:
-          /* empty */;
+          if (sample) begin
+            \$622  = 3'h1;
+          end
+      3'h1:
+          if (sample) begin
+            if (\$66 ) begin
+              if (\$68 ) begin
+                (* full_case = 32'd1 *)
+                if (\$69 ) begin
+                  \$622  = 3'h3;
+                end else begin
+                  \$622  = 3'h4;
+                end
+              end
+            end
+          end
       3'h3:
           if (sample) begin
-            \$599  = \bit ;
+            \$622  = 3'h5;
+          end
+      3'h5:
+          if (sample) begin
+            if (\$77 ) begin
+              \$622  = 3'h4;
+            end
+          end
+      3'h4:
+          if (sample) begin
+            \$622  = 3'h6;
           end
     endcase
     if (receiver_clear) begin
-      \$599  = 1'h0;
+      \$622  = 3'h0;
     end
     if (rst) begin
-      \$599  = 1'h0;
+      \$622  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$600  = data0;
-    if (\$66 ) begin
-      \$600  = \$344 ;
+    \$623  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+          end else if (\$44 ) begin
+            \$623  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$623  = 16'h0000;
+    end
+    if (rst) begin
+      \$623  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$624  = cds;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          if (sample) begin
+            \$624  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$624  = 1'h0;
+    end
+    if (rst) begin
+      \$624  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$625  = mismatch;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h3:
+          if (sample) begin
+            \$625  = \bit ;
+          end
+      3'h5:
+          if (sample) begin
+            \$625  = \$75 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$625  = 1'h0;
+    end
+    if (rst) begin
+      \$625  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$626  = ring;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h5:
+          if (sample) begin
+            \$626  = { ring[71:0], \bit  };
+          end
+    endcase
+    if (\$591 ) begin
+      \$626  = { ring[71:0], \bit  };
     end
     if (receiver_clear) begin
-      \$600  = 55'h00000000000000;
+      \$626  = 73'h0000000000000000000;
     end
     if (rst) begin
-      \$600  = 55'h00000000000000;
+      \$626  = 73'h0000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$601  = ne;
-    if (\$345 ) begin
-      \$601 [0] = 1'h1;
-    end else if (\$349 ) begin
-      \$601 [0] = \bit ;
+    \$627  = stop_bit;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h4:
+          if (sample) begin
+            \$627  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$627  = 1'h0;
     end
-    if (\$560 ) begin
-      \$601 [1] = 1'h1;
-    end else if (\$564 ) begin
-      \$601 [1] = \bit ;
+    if (rst) begin
+      \$627  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$628  = data0;
+    if (\$80 ) begin
+      \$628  = \$358 ;
     end
     if (receiver_clear) begin
-      \$601  = 2'h0;
+      \$628  = 55'h00000000000000;
     end
     if (rst) begin
-      \$601  = 2'h0;
+      \$628  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$602  = nw;
-    if (\$345 ) begin
-      \$602 [0] = 1'h1;
-    end else if (\$349 ) begin
-    end else if (\$353 ) begin
-      \$602 [0] = \bit ;
+    \$629  = ne;
+    if (\$362 ) begin
+      \$629 [0] = 1'h1;
+    end else if (\$366 ) begin
+      \$629 [0] = \$370 ;
     end
-    if (\$560 ) begin
-      \$602 [1] = 1'h1;
-    end else if (\$564 ) begin
-    end else if (\$568 ) begin
-      \$602 [1] = \bit ;
+    if (\$582 ) begin
+      \$629 [1] = 1'h1;
+    end else if (\$586 ) begin
+      \$629 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$602  = 2'h0;
+      \$629  = 2'h0;
     end
     if (rst) begin
-      \$602  = 2'h0;
+      \$629  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$603  = data1;
-    if (\$356 ) begin
-      \$603  = \$559 ;
+    \$630  = nw;
+    if (\$371 ) begin
+      \$630 [0] = 1'h1;
+    end else if (\$375 ) begin
+      \$630 [0] = \bit ;
+    end
+    if (\$582 ) begin
+      \$630 [1] = 1'h1;
+    end else if (\$586 ) begin
+    end else if (\$590 ) begin
+      \$630 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$603  = 40'h0000000000;
+      \$630  = 2'h0;
     end
     if (rst) begin
-      \$603  = 40'h0000000000;
+      \$630  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$604  = lc;
+    \$631  = data1;
+    if (\$378 ) begin
+      \$631  = \$581 ;
+    end
+    if (receiver_clear) begin
+      \$631  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$631  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    \$632  = lc;
     if (lc_load) begin
-      \$604  = { lc[4:0], \bit  };
+      \$632  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$604  = 6'h00;
+      \$632  = 6'h00;
     end
     if (rst) begin
-      \$604  = 6'h00;
+      \$632  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    \$605  = cpw_top;
-    if (\$569 ) begin
-      \$605  = { cpw_top[38:0], \$571  };
+    \$633  = cpw_top;
+    if (\$592 ) begin
+      \$633  = { cpw_top[38:0], \$594  };
     end
     if (receiver_clear) begin
-      \$605  = 40'h0000000000;
+      \$633  = 40'h0000000000;
     end
     if (rst) begin
-      \$605  = 40'h0000000000;
+      \$633  = 40'h0000000000;
     end
   end
   always @* begin
@@ -27780,9 +29136,13 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     at_cds = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
-          /* empty */;
-      3'h1:
-          at_cds = sample;
+          if (ssi) begin
+            at_cds = 1'h1;
+          end
+      3'h2:
+          if (sample) begin
+            at_cds = 1'h1;
+          end
     endcase
   end
   always @* begin
@@ -27791,72 +29151,120 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
-      3'h1:
-          /* empty */;
       3'h2:
+          /* empty */;
+      3'h1:
           in_word = sample;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[6])
-      1'h0:
-          \$3  = 7'h7f;
-      1'h1:
-          \$3  = 7'h01;
+    casez ({ \$3 , words[7:6] })
+      3'h0:
+          \$4  = 7'h7f;
+      3'h1:
+          \$4  = 7'h01;
+      3'h2:
+          \$4  = 7'h7f;
+      3'h3:
+          \$4  = 7'h01;
+      3'h4:
+          \$4  = 7'h00;
+      3'h5:
+          \$4  = 7'h02;
+      3'h6:
+          \$4  = 7'h00;
+      3'h7:
+          \$4  = 7'h02;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[7:6])
-      2'h0:
-          \$5  = 7'h7f;
-      2'h1:
-          \$5  = 7'h01;
-      2'h2:
-          \$5  = 7'h05;
-      2'h3:
-          \$5  = 7'h07;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[7:6])
-      2'h0:
+    casez ({ \$6 , words[7:6] })
+      3'h0:
           \$7  = 7'h7f;
-      2'h1:
+      3'h1:
           \$7  = 7'h01;
-      2'h2:
+      3'h2:
           \$7  = 7'h05;
-      2'h3:
+      3'h3:
           \$7  = 7'h07;
+      3'h4:
+          \$7  = 7'h00;
+      3'h5:
+          \$7  = 7'h02;
+      3'h6:
+          \$7  = 7'h06;
+      3'h7:
+          \$7  = 7'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[7:6])
-      2'h0:
-          \$14  = 4'h0;
-      2'h1:
-          \$14  = 4'h2;
-      2'h2:
-          \$14  = 4'h6;
-      2'h3:
-          \$14  = 4'h8;
+    casez ({ \$9 , words[7:6] })
+      3'h0:
+          \$10  = 7'h7f;
+      3'h1:
+          \$10  = 7'h01;
+      3'h2:
+          \$10  = 7'h05;
+      3'h3:
+          \$10  = 7'h07;
+      3'h4:
+          \$10  = 7'h00;
+      3'h5:
+          \$10  = 7'h02;
+      3'h6:
+          \$10  = 7'h06;
+      3'h7:
+          \$10  = 7'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[18])
-      1'h0:
-          \$20  = 7'h7f;
-      1'h1:
-          \$20  = 7'h01;
+    casez ({ \$14 , words[7:6] })
+      3'h0:
+          \$15  = 2'h0;
+      3'h1:
+          \$15  = 2'h2;
+      3'h2:
+          \$15  = 2'h0;
+      3'h3:
+          \$15  = 2'h2;
+      3'h4:
+          \$15  = 2'h1;
+      3'h5:
+          \$15  = 2'h3;
+      3'h6:
+          \$15  = 2'h1;
+      3'h7:
+          \$15  = 2'h3;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$18 , words[7:6] })
+      3'h0:
+          \$19  = 4'h0;
+      3'h1:
+          \$19  = 4'h2;
+      3'h2:
+          \$19  = 4'h6;
+      3'h3:
+          \$19  = 4'h8;
+      3'h4:
+          \$19  = 4'h1;
+      3'h5:
+          \$19  = 4'h3;
+      3'h6:
+          \$19  = 4'h7;
+      3'h7:
+          \$19  = 4'h9;
     endcase
   end
   always @* begin
@@ -27864,13 +29272,13 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$22  = 7'h7f;
+          \$25  = 7'h7f;
       2'h1:
-          \$22  = 7'h01;
+          \$25  = 7'h01;
       2'h2:
-          \$22  = 7'h05;
+          \$25  = 7'h7f;
       2'h3:
-          \$22  = 7'h07;
+          \$25  = 7'h01;
     endcase
   end
   always @* begin
@@ -27878,13 +29286,13 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$24  = 7'h7f;
+          \$27  = 7'h7f;
       2'h1:
-          \$24  = 7'h01;
+          \$27  = 7'h01;
       2'h2:
-          \$24  = 7'h05;
+          \$27  = 7'h05;
       2'h3:
-          \$24  = 7'h07;
+          \$27  = 7'h07;
     endcase
   end
   always @* begin
@@ -27892,21 +29300,52 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$31  = 4'h0;
+          \$29  = 7'h7f;
       2'h1:
-          \$31  = 4'h2;
+          \$29  = 7'h01;
       2'h2:
-          \$31  = 4'h6;
+          \$29  = 7'h05;
       2'h3:
-          \$31  = 4'h8;
+          \$29  = 7'h07;
     endcase
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:18])
+      2'h0:
+          \$33  = 2'h0;
+      2'h1:
+          \$33  = 2'h2;
+      2'h2:
+          \$33  = 2'h0;
+      2'h3:
+          \$33  = 2'h2;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$64 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:18])
+      2'h0:
+          \$36  = 4'h0;
+      2'h1:
+          \$36  = 4'h2;
+      2'h2:
+          \$36  = 4'h6;
+      2'h3:
+          \$36  = 4'h8;
+    endcase
+  end
+  assign ssi_error = \port$6928$272 [0];
+  assign ssi_double = \port$6928$272 [2];
+  assign ssi_error_low = \port$6928$272 [1];
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$47  = crcs;
-  assign \bit$52  = \bit ;
+  assign \crcs$53  = crcs;
+  assign \bit$58  = \bit ;
   assign ok = crc_ok;
   assign index = word;
-  assign load_index = \$579 [0];
+  assign load_index = \$603 [0];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -27931,19 +29370,19 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$47[0]  = crcs[37:0];
-  assign \crcs$47[0].width  = crcs[4:0];
-  assign \crcs$47[0].poly  = crcs[20:5];
-  assign \crcs$47[0].start  = crcs[36:21];
-  assign \crcs$47[0].inverted  = crcs[37];
-  assign \crcs$47[1]  = crcs[75:38];
-  assign \crcs$47[1].width  = crcs[42:38];
-  assign \crcs$47[1].poly  = crcs[58:43];
-  assign \crcs$47[1].start  = crcs[74:59];
-  assign \crcs$47[1].inverted  = crcs[75];
-  assign \$354  = word;
-  assign \$561  = word;
-  assign \$565  = word;
+  assign \crcs$53[0]  = crcs[37:0];
+  assign \crcs$53[0].width  = crcs[4:0];
+  assign \crcs$53[0].poly  = crcs[20:5];
+  assign \crcs$53[0].start  = crcs[36:21];
+  assign \crcs$53[0].inverted  = crcs[37];
+  assign \crcs$53[1]  = crcs[75:38];
+  assign \crcs$53[1].width  = crcs[42:38];
+  assign \crcs$53[1].poly  = crcs[58:43];
+  assign \crcs$53[1].start  = crcs[74:59];
+  assign \crcs$53[1].inverted  = crcs[75];
+  assign \$376  = word;
+  assign \$583  = word;
+  assign \$587  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -29055,27 +30494,41 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, rises, enough, \started$11 , start_slot, clk);
+module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$14 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
-  reg [7:0] \$1 ;
-  wire \$10 ;
-  reg [7:0] \$11 ;
-  wire [8:0] \$12 ;
-  wire [8:0] \$13 ;
-  reg [7:0] \$14 ;
-  reg [8:0] \$15 ;
-  reg [16:0] \$16 ;
-  reg \$17 ;
-  reg \$18 ;
-  reg [7:0] \$19 ;
-  wire [8:0] \$2 ;
+  wire \$1 ;
+  wire [8:0] \$10 ;
+  wire [9:0] \$11 ;
+  wire \$12 ;
+  reg [7:0] \$13 ;
+  wire [8:0] \$14 ;
+  wire [8:0] \$15 ;
+  wire [8:0] \$16 ;
+  wire [9:0] \$17 ;
+  wire [7:0] \$18 ;
+  wire [8:0] \$19 ;
+  reg [7:0] \$2 ;
+  wire [16:0] \$20 ;
+  wire \$21 ;
+  wire \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  reg [7:0] \$25 ;
+  wire [8:0] \$26 ;
+  wire [8:0] \$27 ;
+  reg [7:0] \$28 ;
+  reg [8:0] \$29 ;
   wire [8:0] \$3 ;
-  wire [7:0] \$4 ;
+  reg [16:0] \$30 ;
+  reg \$31 ;
+  reg \$32 ;
+  reg [7:0] \$33 ;
+  wire [8:0] \$4 ;
   wire [8:0] \$5 ;
-  wire [16:0] \$6 ;
-  wire \$7 ;
-  wire \$8 ;
-  wire \$9 ;
+  wire \$6 ;
+  reg [7:0] \$7 ;
+  wire [8:0] \$8 ;
+  wire [8:0] \$9 ;
   input clear;
   wire clear;
   input clk;
@@ -29099,11 +30552,17 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   wire [15:0] rises;
   input rst;
   wire rst;
+  input ssi;
+  wire ssi;
+  input ssi_double;
+  wire ssi_double;
+  input ssi_error;
+  wire ssi_error;
   input [15:0] start_slot;
   wire [15:0] start_slot;
   reg started = 1'h0;
-  input \started$11 ;
-  wire \started$11 ;
+  input \started$14 ;
+  wire \started$14 ;
   reg [16:0] target_rises = 17'h00000;
   input w1_enable;
   wire w1_enable;
@@ -29135,41 +30594,105 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$2  = \$1  + crcs[4:0];
-  assign \$3  = words[5:0] + \$2 [7:0];
-  assign \$4  = w1_enable ? word1_len : 8'h00;
-  assign \$5  = word0_len + \$4 ;
-  assign \$6  = start_slot + frame_len;
-  assign \$7  = rises >= target_rises;
-  assign \$8  = started & \$7 ;
-  assign \$9  = ~ clear;
-  assign \$10  = \$8  & \$9 ;
-  assign \$12  = \$11  + crcs[42:38];
-  assign \$13  = words[17:12] + \$12 [7:0];
+  assign \$1  = ssi & ssi_error;
+  assign \$3  = \$2  + crcs[4:0];
+  assign \$4  = words[5:0] + \$3 [7:0];
+  assign \$5  = \$4 [7:0] + 1'h1;
+  assign \$6  = ssi & ssi_error;
+  assign \$8  = \$7  + crcs[4:0];
+  assign \$9  = words[5:0] + \$8 [7:0];
+  assign \$10  = \$9 [7:0] + 1'h1;
+  assign \$11  = ssi_double ? { \$5 , 1'h0 } : { 1'h0, \$10  };
+  assign \$12  = ssi & ssi_error;
+  assign \$14  = \$13  + crcs[4:0];
+  assign \$15  = words[5:0] + \$14 [7:0];
+  assign \$16  = \$15 [7:0] + 3'h4;
+  assign \$17  = ssi ? \$11  : { 1'h0, \$16  };
+  assign \$18  = w1_enable ? word1_len : 8'h00;
+  assign \$19  = word0_len + \$18 ;
+  assign \$20  = start_slot + frame_len;
+  assign \$21  = rises >= target_rises;
+  assign \$22  = started & \$21 ;
+  assign \$23  = ~ clear;
+  assign \$24  = \$22  & \$23 ;
+  assign \$26  = \$25  + crcs[42:38];
+  assign \$27  = words[17:12] + \$26 [7:0];
   always @(posedge clk)
-    word0_len <= \$14 ;
+    word0_len <= \$28 ;
   always @(posedge clk)
-    frame_len <= \$15 ;
+    frame_len <= \$29 ;
   always @(posedge clk)
-    target_rises <= \$16 ;
+    target_rises <= \$30 ;
   always @(posedge clk)
-    started <= \$17 ;
+    started <= \$31 ;
   always @(posedge clk)
-    enough <= \$18 ;
+    enough <= \$32 ;
   always @(posedge clk)
-    word1_len <= \$19 ;
+    word1_len <= \$33 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
-    casez (words[7:6])
-      2'h0:
-          \$1  = 8'h04;
-      2'h1:
-          \$1  = 8'h06;
-      2'h2:
-          \$1  = 8'h0a;
-      2'h3:
-          \$1  = 8'h0c;
+    casez ({ \$1 , words[7:6] })
+      3'h0:
+          \$2  = 8'h00;
+      3'h1:
+          \$2  = 8'h02;
+      3'h2:
+          \$2  = 8'h06;
+      3'h3:
+          \$2  = 8'h08;
+      3'h4:
+          \$2  = 8'h01;
+      3'h5:
+          \$2  = 8'h03;
+      3'h6:
+          \$2  = 8'h07;
+      3'h7:
+          \$2  = 8'h09;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$6 , words[7:6] })
+      3'h0:
+          \$7  = 8'h00;
+      3'h1:
+          \$7  = 8'h02;
+      3'h2:
+          \$7  = 8'h06;
+      3'h3:
+          \$7  = 8'h08;
+      3'h4:
+          \$7  = 8'h01;
+      3'h5:
+          \$7  = 8'h03;
+      3'h6:
+          \$7  = 8'h07;
+      3'h7:
+          \$7  = 8'h09;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ \$12 , words[7:6] })
+      3'h0:
+          \$13  = 8'h00;
+      3'h1:
+          \$13  = 8'h02;
+      3'h2:
+          \$13  = 8'h06;
+      3'h3:
+          \$13  = 8'h08;
+      3'h4:
+          \$13  = 8'h01;
+      3'h5:
+          \$13  = 8'h03;
+      3'h6:
+          \$13  = 8'h07;
+      3'h7:
+          \$13  = 8'h09;
     endcase
   end
   always @* begin
@@ -29177,55 +30700,55 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$11  = 8'h00;
+          \$25  = 8'h00;
       2'h1:
-          \$11  = 8'h02;
+          \$25  = 8'h02;
       2'h2:
-          \$11  = 8'h06;
+          \$25  = 8'h06;
       2'h3:
-          \$11  = 8'h08;
+          \$25  = 8'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    \$14  = \$3 [7:0];
+    \$28  = \$17 [7:0];
     if (rst) begin
-      \$14  = 8'h00;
+      \$28  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    \$15  = \$5 ;
+    \$29  = \$19 ;
     if (rst) begin
-      \$15  = 9'h000;
+      \$29  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    \$16  = \$6 ;
+    \$30  = \$20 ;
     if (rst) begin
-      \$16  = 17'h00000;
+      \$30  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    \$17  = \started$11 ;
+    \$31  = \started$14 ;
     if (rst) begin
-      \$17  = 1'h0;
+      \$31  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    \$18  = \$10 ;
+    \$32  = \$24 ;
     if (rst) begin
-      \$18  = 1'h0;
+      \$32  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
-    \$19  = \$13 [7:0];
+    \$33  = \$27 [7:0];
     if (rst) begin
-      \$19  = 8'h00;
+      \$33  = 8'h00;
     end
   end
   assign \words[0]  = words[11:0];
@@ -29255,7 +30778,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, w1_enable, crcs, clear, r
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.register_access (clk, rst, rbuf_en, frame_end, frame_ok, busy, rbuf_data, start, abort, request, wbuf, frame_cdm, frame_cds, done, result, cdm, rbuf_addr);
+module \biss_master_axil.ch1.core.register_access (clk, rst, rbuf_en, frame_ok, frame_end, busy, rbuf_data, start, abort, request, wbuf, frame_cdm, frame_cds, done, result, cdm, rbuf_addr);
   input abort;
   wire abort;
   wire \abort$5 ;
@@ -29834,7 +31357,7 @@ module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.register_access.idle (rst, frame_end, frame_ok, run_enough, seen_enough, frame_cdm, clk);
+module \biss_master_axil.ch1.core.register_access.idle (rst, frame_ok, frame_end, run_enough, seen_enough, frame_cdm, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
@@ -30127,7 +31650,7 @@ module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_end, frame_ok, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
+module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, frame_end, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire \$1 ;
@@ -31368,35 +32891,35 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, receiver_clear, arm, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6928$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
   wire \$10 ;
-  wire \$11 ;
+  wire [13:0] \$11 ;
   wire \$12 ;
   wire [13:0] \$13 ;
-  wire [17:0] \$14 ;
+  wire \$14 ;
   wire \$15 ;
-  wire \$16 ;
-  wire \$17 ;
+  wire [13:0] \$16 ;
+  wire [17:0] \$17 ;
   wire \$18 ;
-  wire [12:0] \$19 ;
+  wire \$19 ;
   wire [14:0] \$2 ;
   wire \$20 ;
   wire \$21 ;
-  wire [13:0] \$22 ;
-  wire [13:0] \$23 ;
-  wire [16:0] \$24 ;
-  wire \$25 ;
+  wire [12:0] \$22 ;
+  wire \$23 ;
+  wire \$24 ;
+  wire [13:0] \$25 ;
   wire [13:0] \$26 ;
-  wire [13:0] \$27 ;
+  wire [16:0] \$27 ;
   wire \$28 ;
   wire [13:0] \$29 ;
   wire \$3 ;
-  wire [17:0] \$30 ;
+  wire [13:0] \$30 ;
   wire \$31 ;
-  wire \$32 ;
-  wire \$33 ;
+  wire [13:0] \$32 ;
+  wire [17:0] \$33 ;
   wire \$34 ;
   wire \$35 ;
   wire \$36 ;
@@ -31438,36 +32961,42 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   wire \$69 ;
   wire \$7 ;
   wire \$70 ;
-  reg \$71 ;
-  reg [12:0] \$72 ;
-  reg [16:0] \$73 ;
-  reg \$74 ;
-  reg [12:0] \$75 ;
+  wire \$71 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
+  wire \$75 ;
   reg \$76 ;
-  reg \$77 ;
-  reg \$78 ;
-  reg [1:0] \$79 ;
+  reg [12:0] \$77 ;
+  reg [16:0] \$78 ;
+  reg \$79 ;
   wire [13:0] \$8 ;
-  reg [16:0] \$80 ;
+  reg [12:0] \$80 ;
   reg \$81 ;
   reg \$82 ;
   reg \$83 ;
-  reg \$84 ;
+  reg [1:0] \$84 ;
   reg [12:0] \$85 ;
-  reg [1:0] \$86 ;
+  reg \$86 ;
+  reg \$87 ;
+  reg \$88 ;
+  reg [1:0] \$89 ;
   wire [17:0] \$9 ;
+  reg [16:0] \$90 ;
+  reg \$91 ;
   input arm;
   wire arm;
   output \bit ;
   wire \bit ;
   reg centre;
-  wire \centre$35 ;
+  wire \centre$39 ;
   reg clear;
-  wire \clear$33 ;
+  wire \clear$36 ;
+  wire clear_high;
   input clk;
   wire clk;
   reg decided;
-  wire \decided$36 ;
+  wire \decided$40 ;
   output [12:0] delay;
   reg [12:0] delay = 13'h0000;
   reg dropped;
@@ -31477,12 +33006,15 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   reg [12:0] elapsed = 13'h0000;
   reg [15:0] first_load = 16'h0000;
   reg first_slot = 1'h0;
+  wire fixed;
+  reg [12:0] fixed_at = 13'h0000;
+  wire [12:0] fixed_delay;
   reg gap = 1'h0;
   input [15:0] half_period;
   wire [15:0] half_period;
   output level;
   wire level;
-  wire \level$30 ;
+  wire \level$33 ;
   output locked;
   reg locked = 1'h0;
   wire majority;
@@ -31491,8 +33023,10 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   output noise;
   wire noise;
   reg odd = 1'h0;
-  wire \odd$42 ;
+  wire \odd$46 ;
   reg [1:0] phase = 2'h0;
+  input [12:0] \port$6928$259 ;
+  wire [12:0] \port$6928$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -31509,76 +33043,86 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   reg [14:0] vote = 15'h0000;
   reg vote1 = 1'h0;
   (* init = 1'h0 *)
-  wire \vote1$37 ;
+  wire \vote1$41 ;
   reg vote2 = 1'h0;
   (* init = 1'h0 *)
-  wire \vote2$38 ;
+  wire \vote2$42 ;
   reg [14:0] vote_load = 15'h0000;
   reg vote_one = 1'h0;
-  assign \$14  = slot_left - 1'h1;
-  assign \$15  = slot_left == 1'h1;
-  assign \$16  = ~ level;
-  assign \$17  = slo_prev & \$16 ;
-  assign \$18  = elapsed == 13'h1fff;
-  assign \$19  = \$18  ? 13'h1fff : mid_delay;
-  assign \$20  = ! mid_slot;
+  assign \$9  = mid_slot - 1'h1;
+  assign \$10  = ~ odd;
+  assign \$11  = \port$6928$259 [12:1] + 1'h1;
+  assign \$12  = ~ level;
+  assign \$13  = elapsed + 1'h1;
+  assign \$14  = elapsed == fixed_at;
+  assign \$15  = elapsed != 13'h1fff;
+  assign \$16  = elapsed + 1'h1;
+  assign \$17  = slot_left - 1'h1;
+  assign \$18  = slot_left == 1'h1;
+  assign \$19  = ~ level;
+  assign \$20  = slo_prev & \$19 ;
   assign \$21  = elapsed == 13'h1fff;
-  assign \$22  = elapsed - 1'h1;
-  assign \$23  = \$21  ? 14'h1fff : \$22 ;
-  assign \$24  = half_period - 2'h2;
-  assign \$25  = elapsed == 13'h1fff;
-  assign \$26  = elapsed - 1'h1;
-  assign \$27  = \$25  ? 14'h1fff : \$26 ;
-  assign \$28  = elapsed != 13'h1fff;
-  assign \$29  = elapsed + 1'h1;
-  assign \$30  = slot_left - 1'h1;
-  assign \$31  = slot_left == 1'h1;
-  assign \$32  = ! phase;
-  assign \$33  = first_slot & \$32 ;
-  assign \$34  = \$33  & level;
-  assign \$35  = ~ single;
-  assign \$36  = decided & first_slot;
-  assign \$37  = vote1 & vote2;
-  assign \$38  = vote1 & level;
-  assign \$39  = \$37  | \$38 ;
-  assign \$40  = vote2 & level;
-  assign \$41  = \$39  | \$40 ;
-  assign \$42  = single ? level : \$41 ;
-  assign \$43  = ~ first_slot;
-  assign \$44  = decided & \$43 ;
-  assign \$45  = vote1 & vote2;
-  assign \$46  = vote1 & level;
-  assign \$47  = \$45  | \$46 ;
-  assign \$48  = vote2 & level;
-  assign \$49  = \$47  | \$48 ;
-  assign \bit  = single ? level : \$49 ;
+  assign \$22  = \$21  ? 13'h1fff : mid_delay;
+  assign \$23  = ! mid_slot;
+  assign \$24  = elapsed == 13'h1fff;
+  assign \$25  = elapsed - 1'h1;
+  assign \$26  = \$24  ? 14'h1fff : \$25 ;
+  assign \$27  = half_period - 2'h2;
+  assign \$28  = elapsed == 13'h1fff;
+  assign \$29  = elapsed - 1'h1;
+  assign \$30  = \$28  ? 14'h1fff : \$29 ;
+  assign \$31  = elapsed != 13'h1fff;
+  assign \$32  = elapsed + 1'h1;
+  assign \$33  = slot_left - 1'h1;
+  assign \$34  = slot_left == 1'h1;
+  assign \$35  = ! phase;
+  assign \$36  = first_slot & \$35 ;
+  assign \$37  = \$36  & level;
+  assign \$38  = ~ single;
+  assign \$39  = decided & first_slot;
+  assign \$40  = vote1 & vote2;
+  assign \$41  = vote1 & level;
+  assign \$42  = \$40  | \$41 ;
+  assign \$43  = vote2 & level;
+  assign \$44  = \$42  | \$43 ;
+  assign \$45  = single ? level : \$44 ;
+  assign \$46  = ~ first_slot;
+  assign \$47  = decided & \$46 ;
+  assign \$48  = vote1 & vote2;
+  assign \$49  = vote1 & level;
+  assign \$50  = \$48  | \$49 ;
+  assign \$51  = vote2 & level;
+  assign \$52  = \$50  | \$51 ;
+  assign \bit  = single ? level : \$52 ;
   assign \edge  = level != slo_prev;
-  assign \$50  = ~ single;
-  assign \decided$36  = decided & \$50 ;
-  assign \$51  = vote1 & vote2;
-  assign \$52  = vote1 & level;
-  assign \$53  = \$51  | \$52 ;
-  assign \$54  = vote2 & level;
-  assign majority = \$53  | \$54 ;
-  assign noise = dropped | \odd$42 ;
-  assign \$55  = ~ level;
-  assign \$56  = slo_prev & \$55 ;
-  assign \$57  = ! phase;
-  assign \$58  = first_slot & \$57 ;
-  assign \$59  = \$58  & level;
-  assign \$60  = ~ single;
-  assign \$61  = decided & first_slot;
-  assign \$62  = vote1 & vote2;
-  assign \$63  = vote1 & level;
-  assign \$64  = \$62  | \$63 ;
-  assign \$65  = vote2 & level;
-  assign \$66  = \$64  | \$65 ;
-  assign \$67  = single ? level : \$66 ;
-  assign \$68  = ! sampler_fsm_state;
-  assign \$69  = sampler_fsm_state == 1'h1;
-  assign \$70  = sampler_fsm_state == 2'h2;
+  assign \$53  = ~ single;
+  assign \decided$40  = decided & \$53 ;
+  assign \$54  = vote1 & vote2;
+  assign \$55  = vote1 & level;
+  assign \$56  = \$54  | \$55 ;
+  assign \$57  = vote2 & level;
+  assign majority = \$56  | \$57 ;
+  assign noise = dropped | \odd$46 ;
+  assign \$58  = elapsed == fixed_at;
+  assign \$59  = ~ level;
+  assign \$60  = slo_prev & \$59 ;
+  assign \$61  = ! phase;
+  assign \$62  = first_slot & \$61 ;
+  assign \$63  = \$62  & level;
+  assign \$64  = ~ single;
+  assign \$65  = decided & first_slot;
+  assign \$66  = vote1 & vote2;
+  assign \$67  = vote1 & level;
+  assign \$68  = \$66  | \$67 ;
+  assign \$69  = vote2 & level;
+  assign \$70  = \$68  | \$69 ;
+  assign \$71  = single ? level : \$70 ;
+  assign \$72  = ! sampler_fsm_state;
+  assign \$73  = sampler_fsm_state == 1'h1;
+  assign \$74  = sampler_fsm_state == 2'h2;
+  assign \$75  = sampler_fsm_state == 2'h3;
   always @(posedge clk)
-    slo_prev <= \$71 ;
+    slo_prev <= \$76 ;
   always @(posedge clk)
     vote <= \$2 ;
   always @(posedge clk)
@@ -31590,35 +33134,37 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   always @(posedge clk)
     vote_one <= \$7 ;
   always @(posedge clk)
-    mid_delay <= \$72 ;
+    mid_delay <= \$77 ;
   always @(posedge clk)
-    mid_slot <= \$73 ;
+    mid_slot <= \$78 ;
   always @(posedge clk)
-    odd <= \$74 ;
+    odd <= \$79 ;
   always @(posedge clk)
-    elapsed <= \$75 ;
+    fixed_at <= \$11 [12:0];
   always @(posedge clk)
-    early <= \$76 ;
+    elapsed <= \$80 ;
   always @(posedge clk)
-    locked <= \$77 ;
+    early <= \$81 ;
   always @(posedge clk)
-    gap <= \$78 ;
+    locked <= \$82 ;
   always @(posedge clk)
-    sampler_fsm_state <= \$79 ;
+    gap <= \$83 ;
   always @(posedge clk)
-    slot_left <= \$80 ;
-  always @(posedge clk)
-    slot_zero <= \$81 ;
-  always @(posedge clk)
-    vote1 <= \$82 ;
-  always @(posedge clk)
-    vote2 <= \$83 ;
-  always @(posedge clk)
-    first_slot <= \$84 ;
+    sampler_fsm_state <= \$84 ;
   always @(posedge clk)
     delay <= \$85 ;
   always @(posedge clk)
-    phase <= \$86 ;
+    vote1 <= \$86 ;
+  always @(posedge clk)
+    vote2 <= \$87 ;
+  always @(posedge clk)
+    first_slot <= \$88 ;
+  always @(posedge clk)
+    phase <= \$89 ;
+  always @(posedge clk)
+    slot_left <= \$90 ;
+  always @(posedge clk)
+    slot_zero <= \$91 ;
   assign \$1  = half_period >= 2'h3;
   assign \$2  = \$1  ? half_period[15:1] : 15'h0000;
   assign \$3  = half_period < 2'h3;
@@ -31627,20 +33173,16 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   assign \$6  = vote - 1'h1;
   assign \$7  = vote == 1'h1;
   assign \$8  = mid_delay + 1'h1;
-  assign \$9  = mid_slot - 1'h1;
-  assign \$10  = ~ odd;
-  assign \$11  = ~ level;
-  assign \$12  = elapsed != 13'h1fff;
-  assign \$13  = elapsed + 1'h1;
   \biss_master_axil.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
+    .clear_high(\port$6928$259 [0]),
     .clk(clk),
-    .decided(\decided$36 ),
+    .decided(\decided$40 ),
     .\edge (\edge ),
     .level(level),
     .majority(majority),
-    .odd(\odd$42 ),
+    .odd(\odd$46 ),
     .receiver_clear(receiver_clear),
     .rst(rst),
     .vote1(vote1),
@@ -31655,398 +33197,242 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$71  = level;
+    \$76  = level;
     if (receiver_clear) begin
-      \$71  = 1'h1;
+      \$76  = 1'h1;
     end
     if (rst) begin
-      \$71  = 1'h1;
+      \$76  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$72  = mid_delay;
+    \$77  = mid_delay;
     if (odd) begin
-      \$72  = \$8 [12:0];
+      \$77  = \$8 [12:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$72  = \$27 [12:0];
+              \$77  = \$30 [12:0];
             end
           end
     endcase
     if (receiver_clear) begin
-      \$72  = 13'h0000;
+      \$77  = 13'h0000;
     end
     if (rst) begin
-      \$72  = 13'h0000;
+      \$77  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$73  = mid_slot;
+    \$78  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
     end else begin
-      \$73  = \$9 [16:0];
+      \$78  = \$9 [16:0];
     end
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$73  = \$24 ;
+              \$78  = \$27 ;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$73  = 17'h00000;
+      \$78  = 17'h00000;
     end
     if (rst) begin
-      \$73  = 17'h00000;
+      \$78  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$74  = \$10 ;
+    \$79  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
             end else begin
-              \$74  = 1'h1;
+              \$79  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$74  = 1'h0;
+      \$79  = 1'h0;
     end
     if (rst) begin
-      \$74  = 1'h0;
+      \$79  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$75  = elapsed;
+    \$80  = elapsed;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$75  = 13'h0001;
-          end
-      2'h1:
-          if (\$12 ) begin
-            \$75  = \$13 [12:0];
+            \$80  = 13'h0001;
           end
       2'h2:
-          if (\$28 ) begin
-            \$75  = \$29 [12:0];
+          \$80  = \$13 [12:0];
+      2'h1:
+          if (\$15 ) begin
+            \$80  = \$16 [12:0];
+          end
+      2'h3:
+          if (\$31 ) begin
+            \$80  = \$32 [12:0];
           end
     endcase
     if (receiver_clear) begin
-      \$75  = 13'h0000;
+      \$80  = 13'h0000;
     end
     if (rst) begin
-      \$75  = 13'h0000;
+      \$80  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$76  = early;
+    \$81  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$76  = \$11 ;
+            \$81  = \$12 ;
+            if (\port$6928$259 [0]) begin
+              \$81  = 1'h0;
+            end
           end
     endcase
     if (receiver_clear) begin
-      \$76  = 1'h0;
+      \$81  = 1'h0;
     end
     if (rst) begin
-      \$76  = 1'h0;
+      \$81  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$77  = locked;
+    \$82  = locked;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$77  = 1'h0;
+            \$82  = 1'h0;
+          end
+      2'h2:
+          if (\$14 ) begin
+            \$82  = 1'h1;
           end
       2'h1:
           /* empty */;
-      2'h2:
-          if (\$36 ) begin
+      2'h3:
+          if (\$39 ) begin
             (* full_case = 32'd1 *)
-            if (\$42 ) begin
+            if (\$45 ) begin
             end else begin
-              \$77  = 1'h1;
+              \$82  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$77  = 1'h0;
+      \$82  = 1'h0;
     end
     if (rst) begin
-      \$77  = 1'h0;
+      \$82  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$78  = gap;
+    \$83  = gap;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$78  = 1'h0;
+            \$83  = 1'h0;
           end
+      2'h2:
+          /* empty */;
       2'h1:
         begin
           if (gap) begin
             if (slot_zero) begin
-              \$78  = 1'h0;
+              \$83  = 1'h0;
             end
           end
-          if (\$17 ) begin
-            \$78  = 1'h0;
+          if (\$20 ) begin
+            \$83  = 1'h0;
           end
         end
-      2'h2:
-          if (\$34 ) begin
-            \$78  = \$35 ;
+      2'h3:
+          if (\$37 ) begin
+            \$83  = \$38 ;
           end
     endcase
     if (receiver_clear) begin
-      \$78  = 1'h0;
+      \$83  = 1'h0;
     end
     if (rst) begin
-      \$78  = 1'h0;
+      \$83  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$79  = sampler_fsm_state;
+    \$84  = sampler_fsm_state;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
-            \$79  = 2'h1;
-          end
-      2'h1:
-          if (\$17 ) begin
-            \$79  = 2'h2;
+            \$84  = 2'h1;
+            if (\port$6928$259 [0]) begin
+              \$84  = 2'h2;
+            end
           end
       2'h2:
-        begin
-          if (\$34 ) begin
-            \$79  = 2'h1;
+          if (\$14 ) begin
+            \$84  = 2'h3;
           end
-          if (\$36 ) begin
-            if (\$42 ) begin
-              \$79  = 2'h1;
+      2'h1:
+          if (\$20 ) begin
+            \$84  = 2'h3;
+          end
+      2'h3:
+        begin
+          if (\$37 ) begin
+            \$84  = 2'h1;
+          end
+          if (\$39 ) begin
+            if (\$45 ) begin
+              \$84  = 2'h1;
             end
           end
         end
     endcase
     if (receiver_clear) begin
-      \$79  = 2'h0;
+      \$84  = 2'h0;
     end
     if (rst) begin
-      \$79  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$80  = slot_left;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-        begin
-          if (gap) begin
-            \$80  = \$14 [16:0];
-          end
-          if (\$17 ) begin
-            (* full_case = 32'd1 *)
-            if (gap) begin
-              \$80  = mid_slot;
-            end else begin
-              \$80  = { 1'h0, first_load };
-            end
-          end
-        end
-      2'h2:
-        begin
-          \$80  = \$30 [16:0];
-          if (\$34 ) begin
-            \$80  = { 2'h0, vote_load };
-          end else if (slot_zero) begin
-            (* full_case = 32'd1 *)
-            casez (phase)
-              2'h0:
-                  (* full_case = 32'd1 *)
-                  if (single) begin
-                    \$80  = { first_load, 1'h1 };
-                  end else begin
-                    \$80  = { 2'h0, vote_load };
-                  end
-              2'h1:
-                  \$80  = { 2'h0, vote_load };
-              default:
-                  \$80  = { first_load, 1'h1 };
-            endcase
-          end
-        end
-    endcase
-    if (receiver_clear) begin
-      \$80  = 17'h00000;
-    end
-    if (rst) begin
-      \$80  = 17'h00000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$81  = slot_zero;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-        begin
-          if (gap) begin
-            \$81  = \$15 ;
-          end
-          if (\$17 ) begin
-            (* full_case = 32'd1 *)
-            if (gap) begin
-              \$81  = \$20 ;
-            end else begin
-              \$81  = 1'h0;
-            end
-          end
-        end
-      2'h2:
-        begin
-          \$81  = \$31 ;
-          if (\$34 ) begin
-            \$81  = vote_one;
-          end else if (slot_zero) begin
-            (* full_case = 32'd1 *)
-            casez (phase)
-              2'h0:
-                  (* full_case = 32'd1 *)
-                  if (single) begin
-                    \$81  = 1'h0;
-                  end else begin
-                    \$81  = vote_one;
-                  end
-              2'h1:
-                  \$81  = vote_one;
-              default:
-                  \$81  = 1'h0;
-            endcase
-          end
-        end
-    endcase
-    if (receiver_clear) begin
-      \$81  = 1'h1;
-    end
-    if (rst) begin
-      \$81  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$82  = vote1;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$17 ) begin
-            \$82  = 1'h0;
-          end
-      2'h2:
-          if (\$34 ) begin
-          end else if (slot_zero) begin
-            casez (phase)
-              2'h0:
-                  (* full_case = 32'd1 *)
-                  if (single) begin
-                  end else begin
-                    \$82  = level;
-                  end
-            endcase
-          end
-    endcase
-    if (receiver_clear) begin
-      \$82  = 1'h0;
-    end
-    if (rst) begin
-      \$82  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$83  = vote2;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$17 ) begin
-            \$83  = 1'h0;
-          end
-      2'h2:
-          if (\$34 ) begin
-          end else if (slot_zero) begin
-            casez (phase)
-              2'h0:
-                  /* empty */;
-              2'h1:
-                  \$83  = level;
-            endcase
-          end
-    endcase
-    if (receiver_clear) begin
-      \$83  = 1'h0;
-    end
-    if (rst) begin
-      \$83  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$84  = first_slot;
-    casez (sampler_fsm_state)
-      2'h0:
-          /* empty */;
-      2'h1:
-          if (\$17 ) begin
-            \$84  = 1'h1;
-          end
-      2'h2:
-          if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (\$42 ) begin
-            end else begin
-              \$84  = 1'h0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$84  = 1'h0;
-    end
-    if (rst) begin
-      \$84  = 1'h0;
+      \$84  = 2'h0;
     end
   end
   always @* begin
@@ -32055,13 +33441,17 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$85  = { 1'h0, \port$6928$259 [12:1] };
+          end
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
             if (gap) begin
-              \$85  = \$19 ;
+              \$85  = \$22 ;
             end else begin
-              \$85  = \$23 [12:0];
+              \$85  = \$26 [12:0];
             end
           end
     endcase
@@ -32074,21 +33464,125 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    \$86  = phase;
+    \$86  = vote1;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$86  = 1'h0;
+          end
       2'h1:
-          if (\$17 ) begin
+          if (\$20 ) begin
+            \$86  = 1'h0;
+          end
+      2'h3:
+          if (\$37 ) begin
+          end else if (slot_zero) begin
+            casez (phase)
+              2'h0:
+                  (* full_case = 32'd1 *)
+                  if (single) begin
+                  end else begin
+                    \$86  = level;
+                  end
+            endcase
+          end
+    endcase
+    if (receiver_clear) begin
+      \$86  = 1'h0;
+    end
+    if (rst) begin
+      \$86  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    \$87  = vote2;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$87  = 1'h0;
+          end
+      2'h1:
+          if (\$20 ) begin
+            \$87  = 1'h0;
+          end
+      2'h3:
+          if (\$37 ) begin
+          end else if (slot_zero) begin
+            casez (phase)
+              2'h0:
+                  /* empty */;
+              2'h1:
+                  \$87  = level;
+            endcase
+          end
+    endcase
+    if (receiver_clear) begin
+      \$87  = 1'h0;
+    end
+    if (rst) begin
+      \$87  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    \$88  = first_slot;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$88  = 1'h0;
+          end
+      2'h1:
+          if (\$20 ) begin
+            \$88  = 1'h1;
+          end
+      2'h3:
+          if (\$39 ) begin
             (* full_case = 32'd1 *)
-            if (gap) begin
-              \$86  = 2'h1;
+            if (\$45 ) begin
             end else begin
-              \$86  = 2'h0;
+              \$88  = 1'h0;
             end
           end
+    endcase
+    if (receiver_clear) begin
+      \$88  = 1'h0;
+    end
+    if (rst) begin
+      \$88  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    \$89  = phase;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
       2'h2:
-          if (\$34 ) begin
+          if (\$14 ) begin
+            \$89  = 2'h0;
+          end
+      2'h1:
+          if (\$20 ) begin
+            (* full_case = 32'd1 *)
+            if (gap) begin
+              \$89  = 2'h1;
+            end else begin
+              \$89  = 2'h0;
+            end
+          end
+      2'h3:
+          if (\$37 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -32096,34 +33590,147 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
                   (* full_case = 32'd1 *)
                   if (single) begin
                   end else begin
-                    \$86  = 2'h1;
+                    \$89  = 2'h1;
                   end
               2'h1:
-                  \$86  = 2'h2;
+                  \$89  = 2'h2;
               default:
-                  \$86  = 2'h0;
+                  \$89  = 2'h0;
             endcase
           end
     endcase
     if (receiver_clear) begin
-      \$86  = 2'h0;
+      \$89  = 2'h0;
     end
     if (rst) begin
-      \$86  = 2'h0;
+      \$89  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
-    sample = \$44 ;
+    \$90  = slot_left;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          if (\$14 ) begin
+            \$90  = { 1'h0, first_load };
+          end
       2'h1:
+        begin
+          if (gap) begin
+            \$90  = \$17 [16:0];
+          end
+          if (\$20 ) begin
+            (* full_case = 32'd1 *)
+            if (gap) begin
+              \$90  = mid_slot;
+            end else begin
+              \$90  = { 1'h0, first_load };
+            end
+          end
+        end
+      2'h3:
+        begin
+          \$90  = \$33 [16:0];
+          if (\$37 ) begin
+            \$90  = { 2'h0, vote_load };
+          end else if (slot_zero) begin
+            (* full_case = 32'd1 *)
+            casez (phase)
+              2'h0:
+                  (* full_case = 32'd1 *)
+                  if (single) begin
+                    \$90  = { first_load, 1'h1 };
+                  end else begin
+                    \$90  = { 2'h0, vote_load };
+                  end
+              2'h1:
+                  \$90  = { 2'h0, vote_load };
+              default:
+                  \$90  = { first_load, 1'h1 };
+            endcase
+          end
+        end
+    endcase
+    if (receiver_clear) begin
+      \$90  = 17'h00000;
+    end
+    if (rst) begin
+      \$90  = 17'h00000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    \$91  = slot_zero;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
           /* empty */;
       2'h2:
-          if (\$61 ) begin
+          if (\$14 ) begin
+            \$91  = 1'h0;
+          end
+      2'h1:
+        begin
+          if (gap) begin
+            \$91  = \$18 ;
+          end
+          if (\$20 ) begin
             (* full_case = 32'd1 *)
-            if (\$67 ) begin
+            if (gap) begin
+              \$91  = \$23 ;
+            end else begin
+              \$91  = 1'h0;
+            end
+          end
+        end
+      2'h3:
+        begin
+          \$91  = \$34 ;
+          if (\$37 ) begin
+            \$91  = vote_one;
+          end else if (slot_zero) begin
+            (* full_case = 32'd1 *)
+            casez (phase)
+              2'h0:
+                  (* full_case = 32'd1 *)
+                  if (single) begin
+                    \$91  = 1'h0;
+                  end else begin
+                    \$91  = vote_one;
+                  end
+              2'h1:
+                  \$91  = vote_one;
+              default:
+                  \$91  = 1'h0;
+            endcase
+          end
+        end
+    endcase
+    if (receiver_clear) begin
+      \$91  = 1'h1;
+    end
+    if (rst) begin
+      \$91  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    sample = \$47 ;
+    (* full_case = 32'd1 *)
+    casez (sampler_fsm_state)
+      2'h0:
+          /* empty */;
+      2'h2:
+          /* empty */;
+      2'h1:
+          /* empty */;
+      2'h3:
+          if (\$65 ) begin
+            (* full_case = 32'd1 *)
+            if (\$71 ) begin
             end else begin
               sample = 1'h1;
             end
@@ -32136,8 +33743,12 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          if (\$58 ) begin
+            clear = 1'h1;
+          end
       2'h1:
-          if (\$56 ) begin
+          if (\$60 ) begin
             clear = 1'h1;
           end
     endcase
@@ -32145,18 +33756,21 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     dropped = 1'h0;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
           /* empty */;
-      2'h2:
+      2'h3:
         begin
-          if (\$59 ) begin
+          if (\$63 ) begin
             dropped = 1'h1;
           end
-          if (\$61 ) begin
-            if (\$67 ) begin
+          if (\$65 ) begin
+            if (\$71 ) begin
               dropped = 1'h1;
             end
           end
@@ -32166,13 +33780,16 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     decided = 1'h0;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
           /* empty */;
-      2'h2:
-          if (\$59 ) begin
+      2'h3:
+          if (\$63 ) begin
           end else if (slot_zero) begin
             (* full_case = 32'd1 *)
             casez (phase)
@@ -32191,32 +33808,38 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, \bit , noise, half_period, 
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     centre = 1'h0;
+    (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
+      2'h2:
+          /* empty */;
       2'h1:
           /* empty */;
-      2'h2:
-          if (\$59 ) begin
+      2'h3:
+          if (\$63 ) begin
           end else if (slot_zero) begin
             casez (phase)
               2'h0:
                   /* empty */;
               2'h1:
-                  centre = \$60 ;
+                  centre = \$64 ;
             endcase
           end
     endcase
   end
-  assign \level$30  = level;
-  assign \clear$33  = clear;
-  assign \centre$35  = centre;
-  assign \vote1$37  = vote1;
-  assign \vote2$38  = vote2;
+  assign fixed_delay = { 1'h0, \port$6928$259 [12:1] };
+  assign fixed = \port$6928$259 [0];
+  assign \level$33  = level;
+  assign \clear$36  = clear;
+  assign clear_high = \port$6928$259 [0];
+  assign \centre$39  = centre;
+  assign \vote1$41  = vote1;
+  assign \vote2$42  = vote2;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majority, odd, receiver_clear, vote1, vote2, clear, centre, level, clk);
+module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majority, odd, clear_high, receiver_clear, vote1, vote2, clear, centre, level, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -32260,6 +33883,8 @@ module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
   wire centre;
   input clear;
   wire clear;
+  input clear_high;
+  wire clear_high;
   input clk;
   wire clk;
   reg crowded = 1'h0;
@@ -32336,7 +33961,7 @@ module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     \$33  = last;
     (* full_case = 32'd1 *)
     if (clear) begin
-      \$33  = 1'h0;
+      \$33  = clear_high;
     end else begin
       if (decided) begin
         \$33  = majority;
@@ -32614,7 +34239,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6509$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6916$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -32656,8 +34281,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6509$0 ;
-  wire \port$6509$0 ;
+  input \port$6916$0 ;
+  wire \port$6916$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -32671,9 +34296,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6509$0  };
-  assign \$2  = { lc[4:0], \port$6509$0  } == last;
-  assign \$3  = { lc[4:0], \port$6509$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6916$0  };
+  assign \$2  = { lc[4:0], \port$6916$0  } == last;
+  assign \$3  = { lc[4:0], \port$6916$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -32783,7 +34408,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6509$0  };
+  assign lc_next = { lc[4:0], \port$6916$0  };
   assign zero = is_zero;
 endmodule
 
@@ -33339,8 +34964,8 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4616$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, crc_ok
-, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4987$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+, crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -33378,14 +35003,17 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4616$0 , l
   wire \$4 ;
   wire \$40 ;
   wire \$41 ;
-  wire [1:0] \$42 ;
+  wire \$42 ;
+  wire \$43 ;
+  wire \$44 ;
+  wire [1:0] \$45 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
-  input [258:0] cfg;
-  wire [258:0] cfg;
+  input [274:0] cfg;
+  wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
   wire [3:0] \cfg.confirm_frames ;
@@ -33398,6 +35026,11 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4616$0 , l
   wire [23:0] \cfg.request_period ;
   wire \cfg.spw_check ;
   wire [7:0] \cfg.spw_tolerance ;
+  wire \cfg.ssi ;
+  wire [11:0] \cfg.ssi_delay ;
+  wire \cfg.ssi_double ;
+  wire \cfg.ssi_error ;
+  wire \cfg.ssi_error_low ;
   wire [23:0] \cfg.timeout_limit ;
   wire [11:0] \cfg.w0 ;
   (* enum_base_type = "Crc" *)
@@ -33436,6 +35069,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4616$0 , l
   wire \cfg.w1_enable ;
   output clean;
   wire clean;
+  input copy_mismatch;
+  wire copy_mismatch;
   output [1:0] crc_error;
   wire [1:0] crc_error;
   input [1:0] crc_ok;
@@ -33501,8 +35136,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4616$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$4616$0 ;
-  wire \port$4616$0 ;
+  output \port$4987$0 ;
+  wire \port$4987$0 ;
   output report;
   wire report;
   input report_frame;
@@ -33535,6 +35170,9 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4616$0 , l
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
+  assign clean = \$41  & \$44 ;
+  assign \$45  = ~ { \$2 , crc_ok[0] };
+  assign crc_error = report_frame ? \$45  : 2'h0;
   assign \$1  = ~ cfg[199];
   assign \$2  = crc_ok[1] | \$1 ;
   assign \$3  = cfg[199] & cfg[207];
@@ -33545,50 +35183,49 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4616$0 , l
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = cfg[250] & cfg[199];
-  assign \$8  = crc_ok[0] & \$2 ;
-  assign \$9  = \$7  & \$8 ;
-  assign \$10  = ~ spw_match;
-  assign spw_mismatch = \$9  & \$10 ;
-  assign \$11  = lc_repeat | lc_skip;
-  assign \$12  = \$11  | lc_zero;
-  assign \$13  = ~ \$2 ;
-  assign \$14  = ~ crc_ok[0];
-  assign \$15  = ~ crc_ok[0];
+  assign \$7  = crc_ok[0] & \$2 ;
+  assign \$8  = cfg[250] & cfg[199];
+  assign \$9  = ~ spw_match;
+  assign \$10  = \$8  & \$9 ;
+  assign \$12  = cfg[259] & copy_mismatch;
+  assign \$13  = \$11  | \$12 ;
+  assign spw_mismatch = \$7  & \$13 ;
+  assign \$14  = lc_repeat | lc_skip;
+  assign \$15  = \$14  | lc_zero;
   assign \$16  = ~ \$2 ;
-  assign \$17  = \$15  & \$16 ;
+  assign \$17  = ~ crc_ok[0];
+  assign \$18  = ~ crc_ok[0];
+  assign \$19  = ~ \$2 ;
+  assign \$20  = \$18  & \$19 ;
   assign report = report_frame | fault;
   assign status = report_frame ? frame_status : fault_status;
-  assign \$18  = ! frame_status;
-  assign valid = report_frame & \$18 ;
-  assign \$19  = ! frame_status;
-  assign \$20  = frame_status == 4'hf;
-  assign \$21  = \$19  | \$20 ;
-  assign passed = report_frame & \$21 ;
-  assign \$22  = crc_ok[0] & \$2 ;
-  assign \$23  = ~ \$22 ;
-  assign \$24  = \$23  | spw_mismatch;
-  assign \$25  = cfg[199] & cfg[207];
-  assign \$26  = cfg[156] | \$25 ;
-  assign \$27  = cfg[156] ? crc_ok[0] : \$2 ;
-  assign \$28  = \$26  & \$27 ;
-  assign \$29  = lc_repeat_seen | lc_skip_seen;
-  assign \$30  = \$29  | lc_zero_seen;
-  assign \$31  = \$28  & \$30 ;
-  assign \$32  = \$24  | \$31 ;
-  assign \$33  = \$32  | noisy;
-  assign doubtful = \$33  | delay_jump;
-  assign \$34  = crc_ok[0] & \$2 ;
-  assign \$35  = ~ spw_mismatch;
-  assign \$36  = \$34  & \$35 ;
-  assign \$37  = ~ noisy;
-  assign \$38  = \$36  & \$37 ;
-  assign \$39  = lc_repeat | lc_skip;
-  assign \$40  = \$39  | lc_zero;
-  assign \$41  = ~ \$40 ;
-  assign clean = \$38  & \$41 ;
-  assign \$42  = ~ { \$2 , crc_ok[0] };
-  assign crc_error = report_frame ? \$42  : 2'h0;
+  assign \$21  = ! frame_status;
+  assign valid = report_frame & \$21 ;
+  assign \$22  = ! frame_status;
+  assign \$23  = frame_status == 4'hf;
+  assign \$24  = \$22  | \$23 ;
+  assign passed = report_frame & \$24 ;
+  assign \$25  = crc_ok[0] & \$2 ;
+  assign \$26  = ~ \$25 ;
+  assign \$27  = \$26  | spw_mismatch;
+  assign \$28  = cfg[199] & cfg[207];
+  assign \$29  = cfg[156] | \$28 ;
+  assign \$30  = cfg[156] ? crc_ok[0] : \$2 ;
+  assign \$31  = \$29  & \$30 ;
+  assign \$32  = lc_repeat_seen | lc_skip_seen;
+  assign \$33  = \$32  | lc_zero_seen;
+  assign \$34  = \$31  & \$33 ;
+  assign \$35  = \$27  | \$34 ;
+  assign \$36  = \$35  | noisy;
+  assign doubtful = \$36  | delay_jump;
+  assign \$37  = crc_ok[0] & \$2 ;
+  assign \$38  = ~ spw_mismatch;
+  assign \$39  = \$37  & \$38 ;
+  assign \$40  = ~ noisy;
+  assign \$41  = \$39  & \$40 ;
+  assign \$42  = lc_repeat | lc_skip;
+  assign \$43  = \$42  | lc_zero;
+  assign \$44  = ~ \$43 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     frame_status = 4'h0;
@@ -33604,21 +35241,21 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4616$0 , l
     if (spw_mismatch) begin
       frame_status = 4'h5;
     end
-    if (\$12 ) begin
+    if (\$15 ) begin
       frame_status = 4'h4;
     end
-    if (\$13 ) begin
+    if (\$16 ) begin
       frame_status = 4'h2;
     end
-    if (\$14 ) begin
+    if (\$17 ) begin
       frame_status = 4'h1;
     end
-    if (\$17 ) begin
+    if (\$20 ) begin
       frame_status = 4'h3;
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4616$0  = \$2 ;
+  assign \port$4987$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -33657,4 +35294,10 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4616$0 , l
   assign \cfg.w1_crc.inverted  = cfg[249];
   assign \cfg.spw_check  = cfg[250];
   assign \cfg.spw_tolerance  = cfg[258:251];
+  assign \cfg.ssi  = cfg[259];
+  assign \cfg.ssi_delay  = cfg[271:260];
+  assign \cfg.ssi_error  = cfg[272];
+  assign \cfg.ssi_error_low  = cfg[273];
+  assign \cfg.ssi_double  = cfg[274];
+  assign \$11  = \$10 ;
 endmodule

@@ -29,7 +29,7 @@ class Channel(Structure):
     _fields_ = [("bus", Bus), ("base", c_size_t), ("index", c_uint8),
                 ("max_data_bits", c_uint8 * 2), ("timer_width", c_uint8),
                 ("has_counters", c_bool), ("has_timestamp", c_bool),
-                ("has_register_access", c_bool), ("max_polls", c_uint32)]
+                ("has_register_access", c_bool), ("max_polls", c_uint32), ("has_ssi", c_bool)]
 
 
 class WordFormat(Structure):
@@ -45,7 +45,8 @@ class Config(Structure):
                 ("word", WordFormat * 2), ("word1_enable", c_bool), ("end_check", c_bool),
                 ("spw_check", c_bool), ("spw_tolerance", c_uint8),
                 ("quiet_time", c_uint16), ("noise_limit", c_uint8), ("delay_tolerance", c_uint8),
-                ("confirm_frames", c_uint8)]
+                ("confirm_frames", c_uint8), ("ssi", c_bool), ("ssi_error", c_bool),
+                ("ssi_error_low", c_bool), ("ssi_double", c_bool), ("ssi_delay", c_uint16)]
 
 
 class Preset(Structure):

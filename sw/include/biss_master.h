@@ -81,8 +81,12 @@ typedef enum {
     BISS_ERR_UNSUPPORTED = -35,     /* a valid BP3 encoder the core cannot read from its EDS */
     BISS_ERR_CA_SHORT = -36,        /* the engine said OK with fewer bytes done than asked: a
                                        broken or foreign register window; no byte is trusted */
-    BISS_ERR_LINE_CHECK = -37       /* quiet time, noise limit or delay tolerance wider than
+    BISS_ERR_LINE_CHECK = -37,      /* quiet time, noise limit or delay tolerance wider than
                                        its field */
+    BISS_ERR_SSI = -38              /* SSI asked of a build without it (caps.ssi = 0), with a
+                                       word option SSI cannot have (LC, word 1, the SPW check,
+                                       the error bit with nE/nW), or a delay wider than its
+                                       field */
 } biss_err_t;
 
 /* The name of an error code ("BISS_ERR_CRC"), "?" for an unknown one. */
@@ -137,6 +141,7 @@ typedef struct {
     uint32_t max_polls;             /* polls of irq_status per register access before
                                        BISS_ERR_TIMEOUT; biss_channel_init sets
                                        BISS_REG_MAX_POLLS, the caller may change it */
+    bool has_ssi;                   /* caps: SSI mode built (added last: older layouts hold) */
 } biss_channel_t;
 
 /* The default poll limit of a register access: the longest access (64 registers) takes at
@@ -194,6 +199,15 @@ typedef struct {
     uint8_t delay_tolerance;        /* clocks beyond the half period; 0: 2; 15: off */
     uint8_t confirm_frames;         /* clean frames after a fault before one is valid (status
                                        UNCONFIRMED until then); 0: 1; 15: off */
+    /* SSI mode (docs/ports.md, "SSI mode"; 0 = BiSS, as before): word[0] is clocked out with
+     * no Ack, Start or CDS. */
+    bool ssi;                       /* read an SSI encoder */
+    bool ssi_error;                 /* one error bit follows the position (result w0_ne = 0:
+                                       active) */
+    bool ssi_error_low;             /* that bit is active low */
+    bool ssi_double;                /* the encoder sends the word twice; a difference is
+                                       status SPW_MISMATCH */
+    uint16_t ssi_delay;             /* round trip, system clocks (MA rise to SLO change) */
 } biss_config_t;
 
 /* A named encoder: its frame format. */

@@ -98,6 +98,10 @@ extern "C" {
 #define BISS_MASTER_REGS__CHANNELX__CAPS__REGISTER_ACCESS_bp 26
 #define BISS_MASTER_REGS__CHANNELX__CAPS__REGISTER_ACCESS_bw 1
 #define BISS_MASTER_REGS__CHANNELX__CAPS__REGISTER_ACCESS_reset 0x1
+#define BISS_MASTER_REGS__CHANNELX__CAPS__SSI_bm 0x8000000
+#define BISS_MASTER_REGS__CHANNELX__CAPS__SSI_bp 27
+#define BISS_MASTER_REGS__CHANNELX__CAPS__SSI_bw 1
+#define BISS_MASTER_REGS__CHANNELX__CAPS__SSI_reset 0x1
 
 // reg - biss_master_regs.channel[].irq_status
 #define BISS_MASTER_REGS__CHANNELX__IRQ_STATUS__DONE_bm 0x1
@@ -491,6 +495,28 @@ typedef struct __attribute__ ((__packed__)) {
 #define BISS_MASTER_REGS__CHANNELX__CFG_CRC1_START__W1_CRC_START_bw 16
 #define BISS_MASTER_REGS__CHANNELX__CFG_CRC1_START__W1_CRC_START_reset 0x0
 
+// reg - biss_master_regs.channel[].cfg_ssi
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_bm 0x1
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_bp 0
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_bw 1
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_ERROR_bm 0x2
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_ERROR_bp 1
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_ERROR_bw 1
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_ERROR_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_ERROR_LOW_bm 0x4
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_ERROR_LOW_bp 2
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_ERROR_LOW_bw 1
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_ERROR_LOW_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_DOUBLE_bm 0x8
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_DOUBLE_bp 3
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_DOUBLE_bw 1
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_DOUBLE_reset 0x0
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_DELAY_bm 0xfff0000
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_DELAY_bp 16
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_DELAY_bw 12
+#define BISS_MASTER_REGS__CHANNELX__CFG_SSI__SSI_DELAY_reset 0x0
+
 // reg - biss_master_regs.channel[].ca.request
 #define BISS_MASTER_REGS__CHANNELX__CA__REQUEST__SLAVE_ID_bm 0x7
 #define BISS_MASTER_REGS__CHANNELX__CA__REQUEST__SLAVE_ID_bp 0
@@ -630,7 +656,8 @@ typedef struct __attribute__ ((__packed__)) {
     uint32_t cfg_crc0_start;
     uint32_t cfg_crc1;
     uint32_t cfg_crc1_start;
-    uint8_t RESERVED_90_ff[0x70];
+    uint32_t cfg_ssi;
+    uint8_t RESERVED_94_ff[0x6c];
     biss_master_regs__channelx__ca_t ca;
     uint8_t RESERVED_1c0_1ff[0x40];
 } biss_master_regs__channelx__stride200_t;

@@ -80,7 +80,7 @@ const char *biss_error_name(int err)
         "BISS_ERR_CA_ABORTED", "BISS_ERR_CA_DATA_FAULT", "BISS_ERR_CA_BAD_REQUEST",
         "BISS_ERR_NOT_BP3", "BISS_ERR_BP3_FIELD", "BISS_ERR_NO_EDS", "BISS_ERR_EDS_CHECKSUM",
         "BISS_ERR_EDS_MISMATCH", "BISS_ERR_BANK_SELECT", "BISS_ERR_UNSUPPORTED",
-        "BISS_ERR_CA_SHORT", "BISS_ERR_LINE_CHECK",
+        "BISS_ERR_CA_SHORT", "BISS_ERR_LINE_CHECK", "BISS_ERR_SSI",
     };
     if (err > 0 || (unsigned)-err >= sizeof names / sizeof names[0])
         return "?";
@@ -164,6 +164,7 @@ biss_err_t biss_channel_init(biss_channel_t *ch, const biss_bus_t *bus, unsigned
     ch->has_counters = GET(caps, CH(CAPS__COUNTERS)) != 0;
     ch->has_timestamp = GET(caps, CH(CAPS__TIMESTAMP)) != 0;
     ch->has_register_access = GET(caps, CH(CAPS__REGISTER_ACCESS)) != 0;
+    ch->has_ssi = GET(caps, CH(CAPS__SSI)) != 0;
     ch->max_polls = BISS_REG_MAX_POLLS;
     return BISS_OK;
 }
@@ -349,6 +350,11 @@ biss_err_t biss_config_check(const biss_channel_t *ch, const biss_config_t *cfg)
         || !fits(cfg->delay_tolerance, MAX(CH(CFG_CHECKS__DELAY_TOLERANCE)))
         || !fits(cfg->confirm_frames, MAX(CH(CFG_CHECKS__CONFIRM_FRAMES))))
         return BISS_ERR_LINE_CHECK;
+    /* SSI: one word without LC; the error bit or nE/nW, not both (docs/ports.md, SSI mode). */
+    if (cfg->ssi && (!ch->has_ssi || cfg->word1_enable || cfg->spw_check || cfg->word[0].lc
+                     || (cfg->ssi_error && cfg->word[0].nenw)
+                     || !fits(cfg->ssi_delay, MAX(CH(CFG_SSI__SSI_DELAY)))))
+        return BISS_ERR_SSI;
     return BISS_OK;
 }
 
@@ -393,6 +399,11 @@ biss_err_t biss_configure(biss_channel_t *ch, const biss_config_t *cfg)
                                      | PUT(cfg->confirm_frames,
                                            CH(CFG_CHECKS__CONFIRM_FRAMES)));
     ch_wr(ch, CHANNEL_OFF(cfg_quiet), PUT(cfg->quiet_time, CH(CFG_QUIET__QUIET_TIME)));
+    ch_wr(ch, CHANNEL_OFF(cfg_ssi), PUT(cfg->ssi, CH(CFG_SSI__SSI))
+                                  | PUT(cfg->ssi_error, CH(CFG_SSI__SSI_ERROR))
+                                  | PUT(cfg->ssi_error_low, CH(CFG_SSI__SSI_ERROR_LOW))
+                                  | PUT(cfg->ssi_double, CH(CFG_SSI__SSI_DOUBLE))
+                                  | PUT(cfg->ssi_delay, CH(CFG_SSI__SSI_DELAY)));
     if (GET(ch_rd(ch, CHANNEL_OFF(state)), CH(STATE__CONFIG_ERROR)))
         return BISS_ERR_REFUSED;
     return BISS_OK;

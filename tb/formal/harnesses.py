@@ -1186,6 +1186,12 @@ class DecoderCrcHarness(Harness):
             if p.words == 2:
                 word = inside("decoder.word")
                 m.d.comb += Assert(~state["WORD"] | (word == parse.word), "lemma: word index")
+            if p.ssi:
+                # BiSS frames (``ssi`` left at 0): the SSI double transmission's states are
+                # never entered.
+                m.d.comb += Assert(~inside.in_state("decoder.fsm", "SEPARATOR")
+                                   & ~inside.in_state("decoder.fsm", "COPY"),
+                                   "lemma: no SSI copy in a BiSS frame")
         for w in range(p.words):
             used = count > w
             m.d.comb += Assert(~(in_done & used) | (dut.crc_ok[w] == parse.ok[w]),

@@ -16,7 +16,8 @@ from amaranth.lib.wiring import In, Out
 from . import regmap as regmap_mod
 from .bus_adapters import AxiLiteAdapter, AxiLiteSignature, WishboneAdapter, WishboneSignature
 from ..master import BissMaster
-from ..params import MasterParams
+from ..layouts import COUNT_SETTLE
+from ..params import COUNTER_HALF_BITS, MasterParams
 from .register_bank import RegisterBank, block_signature
 from .uart import divider as uart_divider
 from .uart_bridge import DEFAULT_TIMEOUT_BITS, UartBridge, UartSignature, check_timeout_bits
@@ -63,18 +64,18 @@ BUSES = {
 #: Channel signals of the register map that the channel makes itself (not core ports).
 CHANNEL_GLUE = ("trigger_enable", "frame_done", "frame_error", "done_count", "cap_data_bits_w0",
                 "cap_data_bits_w1", "cap_timer_width", "cap_counters", "cap_timestamp",
-                "cap_register_access")
+                "cap_register_access", "cap_ssi")
 #: Pulses of the bank taken into a flip-flop beside the core, so they reach it one clock
 #: later: the bank's pulse register sits by the bank, and with several channels the route from
 #: ``ctrl.abort``'s into a core's controller and timers was the critical path
 #: (docs/performance.md). Not ``start`` (it would delay every request; the trigger pin's path
 #: does not pass the bank), not ``clear_counters`` (the core's counter bank registers it).
 RETIMED_PULSES = ("abort_cycle",)
-#: Bits of each count in the register map (two counts per counter register).
-COUNT_BITS = 16
-#: Longest wait, in clocks, of a cycle's end for its counts (docs/ports.md, Counters: a count is
-#: in the counter memory at most 15 clocks after its event).
-COUNT_SETTLE = 15
+#: Bits of each count in the register map (two counts per counter register, as in the core's
+#: counter memory): :data:`~bissmaster.params.COUNTER_HALF_BITS`. The longest wait of a cycle's
+#: end for its counts is :data:`~bissmaster.layouts.COUNT_SETTLE` (docs/ports.md, Counters: a
+#: count is in the counter memory at most 15 clocks after its event).
+COUNT_BITS = COUNTER_HALF_BITS
 #: Global signals of the register map, made by the top.
 GLOBAL_SIGNALS = ("channels", "trigger", "irq_pending")
 
@@ -179,6 +180,7 @@ class BusChannel(wiring.Component):
             "cap_counters": int(p.counters),
             "cap_timestamp": int(p.timestamped),
             "cap_register_access": int(p.register_access),
+            "cap_ssi": int(p.ssi),
         }
         # The map's signals, by name: to and from the core's ports, or made here.
         for name, member in regs.signature.members.items():

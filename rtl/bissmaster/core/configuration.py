@@ -115,6 +115,15 @@ class Configuration(wiring.Component):
             # read after the CRC bits; see SpwCheck).
             ok &= ~cfg.spw_check | (w1 & (cfg.w1.data_bits <= cfg.w0.data_bits)
                                     & (cfg.w1.crc != Crc.NONE))
+        if p.ssi:
+            # SSI: one word, no sign of life, nE/nW or the error bit (not both), no SPW check
+            # (docs/ports.md, "SSI mode"); a round trip the sampler can count to.
+            ssi_bad = cfg.w0.lc | (cfg.ssi_error & cfg.w0.nenw)
+            if p.words == 2:
+                ssi_bad |= cfg.w1_enable | cfg.spw_check
+            if p.max_line_delay < 2**p.delay_limit_width - 1:
+                ssi_bad |= cfg.ssi_delay > p.max_line_delay
+            ok &= ~(cfg.ssi & ssi_bad)
         return ok
 
     def elaborate(self, platform):

@@ -5,9 +5,10 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-#: Bits of a memory word; each word holds two counts, the even slot in its low half.
-WORD_BITS = 32
-HALF_BITS = WORD_BITS // 2
+# Each memory word holds two counts, the even slot in its low half: the shared definitions
+# (params) give the widths and the settle bound, which the bus tops rely on as well.
+from ..params import (COUNTER_HALF_BITS as HALF_BITS, COUNTER_WORD_BITS as WORD_BITS,
+                      counter_settle, counter_words)
 
 
 class CounterRam(wiring.Component):
@@ -24,7 +25,8 @@ class CounterRam(wiring.Component):
     and its pending events taken; in the one after, both its counts plus their events,
     saturating at ``2**width - 1``, are written back. So a word waits for each other word at
     most once: a read issued 6 clocks after an event's clock returns its count when no other
-    count waits, and one issued ``words + 7`` clocks after it (15 for 16 counters) in any case.
+    count waits, and one issued ``words + 7`` clocks after it (15 for 16 counters) in any case
+    (``settle``, :func:`~bissmaster.params.counter_settle`).
     The events of a counter that come while it waits are added together; its pending count has
     room for an event in every clock of the longest wait, so none is lost, however fast a
     source strobes.
@@ -63,7 +65,9 @@ class CounterRam(wiring.Component):
             raise ValueError(f"a counter in memory is 1 to {HALF_BITS} bits, not {width}")
         self._slots = tuple(slots)
         self._width = width
-        self.words = (len(self._slots) + 1) // 2
+        self.words = counter_words(len(self._slots))
+        #: A read issued this many clocks after an event's clock returns it in any case.
+        self.settle = counter_settle(self.words)
         self._names = names = [name for name in self._slots if name is not None]
         if len(set(names)) != len(names):
             raise ValueError(f"counter names repeat: {self._slots}")

@@ -91,6 +91,11 @@ class CycleController(wiring.Component):
         From the decoder.
     frame_doubtful : In(1)
         From the verdict: the frame's status will not be OK (registered with ``frame_done``).
+    ssi : In(1)
+        The cycle is an SSI frame (docs/ports.md, "SSI mode"): no line faults of Ack and
+        Start; ``frame_done`` is the stop bit's strobe (the decoder's ``stopped``), and a stop
+        bit of 1 there is NO_STOP whatever ``end_check`` says (an SSI line stuck high sends
+        nothing else to tell it by); TAIL does not wait for the stop bit again.
     break_over, ack_expired, no_start_expired, slo_stuck, slo_stuck_live, delay_over : In(1)
         From the limit timers.
     quiet, quiet_live : In(1)
@@ -148,6 +153,7 @@ class CycleController(wiring.Component):
             "stopped": In(1),
             "stop_bit": In(1),
             "frame_doubtful": In(1),
+            "ssi": In(1),
             "break_over": In(1),
             "ack_expired": In(1),
             "no_start_expired": In(1),
@@ -265,13 +271,18 @@ class CycleController(wiring.Component):
                 # frame's verdict.
                 with m.If(self.abort):
                     fault(Status.ABORTED)
+                with m.Elif(self.frame_done & self.ssi & self.stop_bit):
+                    # SSI: the bit after the word is high: the line is stuck high (an unplugged
+                    # encoder behind a fail-safe receiver) or the word is longer than set.
+                    m.d.comb += self.timer_clear.eq(1)
+                    fault(Status.NO_STOP)
                 with m.Elif(self.frame_done):
                     m.d.sync += pause.eq(self.frame_doubtful)
                     # With the end check the verdict waits for the end of the frame (CONFIRM).
                     with m.If(~self.end_check):
                         m.d.comb += report.frame.eq(1)
                     goto("TAIL")
-                with m.Elif(line.fault):
+                with m.Elif(line.fault & ~self.ssi):
                     m.d.comb += report.delay.eq(line.delay)
                     fault(line.status)
 
@@ -285,7 +296,7 @@ class CycleController(wiring.Component):
                         fault(Status.ABORTED)
                     with m.Else():
                         goto("BREAK")
-                with m.Elif(self.stopped):
+                with m.Elif(self.stopped | self.ssi):      # SSI: stop bit checked in CLOCK
                     with m.If(~self.end_check):
                         with m.If(pause):
                             # MA may have stopped already: the pause starts from 0.

@@ -4,7 +4,7 @@ from amaranth.hdl import *
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import CRC_SETTINGS, SLOT_WIDTH, WORD_CONFIG, WORD_INDEX_WIDTH
+from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, SLOT_WIDTH, WORD_CONFIG, WORD_INDEX_WIDTH
 from .crc_engine import CrcEngine
 from .. import protocol
 
@@ -15,19 +15,36 @@ def _table(index, values, width):
     return Array(C(v % 2**width, width) for v in values)[index]
 
 
-def tail_bits(word, crc, extra=0, width=WORD_INDEX_WIDTH):
-    """Bits after a word's data field (nE/nW, LC, CRC), plus ``extra``, modulo ``2**width``:
-    a table on the two flag bits plus the CRC's width (a WORD_CONFIG and a CRC_SETTINGS
-    view)."""
-    values = [nenw * protocol.NE_NW_BITS + lc * protocol.LC_BITS + extra
-              for lc in (0, 1) for nenw in (0, 1)]
-    return (_table(Cat(word.nenw, word.lc), values, width) + crc.width)[:width]
+def _flag_table(word, error_bit, width, value):
+    """``value(nenw, lc, error)`` modulo ``2**width`` as a table on a word's flag settings (a
+    WORD_CONFIG view) and, when ``error_bit`` is given, its SSI error bit (the word has one
+    error bit after the data: SSI mode, ``cfg_ssi_error``)."""
+    index = Cat(word.nenw, word.lc)
+    errors = (0,)
+    if error_bit is not None:
+        index, errors = Cat(index, error_bit), (0, 1)
+    return _table(index, [value(nenw, lc, error) for error in errors for lc in (0, 1)
+                          for nenw in (0, 1)], width)
 
 
-def word_length(word, crc, extra=0, width=WORD_INDEX_WIDTH):
+def flag_bits(nenw, lc, error):
+    """Bits between a word's data and its CRC: nE/nW, LC, an SSI error bit."""
+    return nenw * protocol.NE_NW_BITS + lc * protocol.LC_BITS + error
+
+
+def tail_bits(word, crc, extra=0, width=WORD_INDEX_WIDTH, error_bit=None):
+    """Bits after a word's data field (nE/nW, LC, the SSI error bit, CRC), plus ``extra``,
+    modulo ``2**width``: a table on the flag bits plus the CRC's width (a WORD_CONFIG and a
+    CRC_SETTINGS view; ``error_bit`` as in :func:`_flag_table`)."""
+    flags = _flag_table(word, error_bit, width, lambda *f: flag_bits(*f) + extra)
+    return (flags + crc.width)[:width]
+
+
+def word_length(word, crc, extra=0, width=WORD_INDEX_WIDTH, error_bit=None):
     """Bits of one word on the line (plus ``extra``), from its runtime configuration (a
-    WORD_CONFIG view and its resolved CRC_SETTINGS view)."""
-    return (word.data_bits + tail_bits(word, crc, extra, width))[:width]
+    WORD_CONFIG view and its resolved CRC_SETTINGS view; ``error_bit`` as in
+    :func:`_flag_table`)."""
+    return (word.data_bits + tail_bits(word, crc, extra, width, error_bit))[:width]
 
 
 class FrameDecoder(wiring.Component):
@@ -49,6 +66,16 @@ class FrameDecoder(wiring.Component):
 
     ``done`` strobes one clock after the last bit of the last word was sampled, when every
     field and ``crc_ok`` is final.
+
+    **SSI** (builds with ``params.ssi``, ``ssi`` high): no Ack, Start or CDS: slot 0 is word 0's
+    first bit (``started`` is set as the cycle begins, ``start_slot`` 0). With ``ssi_error``
+    the word has one error bit right after its data, reported on ``ne[0]`` as an nE is (0: the
+    error is active; active high unless ``ssi_error_low``), ``nw[0]`` 1. With ``ssi_double``
+    the word comes twice, the copies separated by one bit that must be 0: every bit of the
+    second copy is compared with the first as it arrives (a shift register of the first copy's
+    bits as sent), and ``mismatch`` is set for any difference or a separator of 1; ``done``
+    comes after the second copy. The stop bit (``stopped``, ``stop_bit``) is the bit after the
+    word, or after the second copy.
     """
 
     def __init__(self, params):
@@ -76,6 +103,8 @@ class FrameDecoder(wiring.Component):
             "done": Out(1),
             "stopped": Out(1),
             "stop_bit": Out(1),             # the stop slot's level (0 from a good encoder)
+            **({"ssi": In(1), "ssi_error": In(1), "ssi_error_low": In(1), "ssi_double": In(1),
+                "mismatch": Out(1)} if params.ssi else {}),
         })
 
     def elaborate(self, platform):
@@ -92,7 +121,10 @@ class FrameDecoder(wiring.Component):
         # least three samples (Ack, Start, CDS) after that.
         ends = []
         iw = WORD_INDEX_WIDTH
+        # Word 0's SSI error bit (SSI builds): a flag bit after the data, like nE.
+        error_bit = (self.ssi & self.ssi_error) if p.ssi else None
         for w in range(p.words):
+            err = error_bit if w == 0 else None
             wcfg = self.words[w]
             e = {name: Signal(WORD_INDEX_WIDTH, name=f"w{w}_{name}", reset_less=True)
                  for name in ("data_end_p1", "data_end_m1", "nenw_end_m1", "lc_end_m1",
@@ -101,23 +133,21 @@ class FrameDecoder(wiring.Component):
             # The fields at bit 0 of the word (only with an invalid data_bits = 0).
             e["data_at0"] = Signal(name=f"w{w}_data_at0", reset_less=True)
             e["lc_at0"] = Signal(name=f"w{w}_lc_at0", reset_less=True)
-            nenw_bits = Mux(wcfg.nenw, protocol.NE_NW_BITS, 0)
-            nenw_lc_bits = _table(Cat(wcfg.nenw, wcfg.lc),
-                                  [0, protocol.NE_NW_BITS, protocol.LC_BITS,
-                                   protocol.NE_NW_BITS + protocol.LC_BITS], 4)
+            # The flag fields' lengths: nE/nW (or the SSI error bit), and those plus LC.
+            nenw_bits = _flag_table(wcfg, err, 2, lambda n, lc, e: flag_bits(n, 0, e))
+            nenw_lc_bits = _flag_table(wcfg, err, 4, flag_bits)
             # "- 1" folded into the tables, modulo 2**iw: a field end of 0 (only with
             # data_bits = 0) becomes 2**iw - 1, which ``idx`` never reaches inside a word.
-            nenw_m1 = _table(wcfg.nenw, [-1, protocol.NE_NW_BITS - 1], iw)
-            nenw_lc_m1 = _table(Cat(wcfg.nenw, wcfg.lc),
-                                [-1, protocol.NE_NW_BITS - 1, protocol.LC_BITS - 1,
-                                 protocol.NE_NW_BITS + protocol.LC_BITS - 1], iw)
+            nenw_m1 = _flag_table(wcfg, err, iw, lambda n, lc, e: flag_bits(n, 0, e) - 1)
+            nenw_lc_m1 = _flag_table(wcfg, err, iw, lambda *f: flag_bits(*f) - 1)
             m.d.sync += [
                 e["data_end_p1"].eq(wcfg.data_bits + 1),
                 e["data_end_m1"].eq((wcfg.data_bits + C(2**iw - 1, iw))[:iw]),
                 e["nenw_end_m1"].eq((wcfg.data_bits + nenw_m1)[:iw]),
                 e["lc_end_m1"].eq((wcfg.data_bits + nenw_lc_m1)[:iw]),
                 # data_bits >= 1, so "- 1" folded into the table (modulo 2**iw) never wraps.
-                e["word_end_m1"].eq((wcfg.data_bits + tail_bits(wcfg, wcrc, extra=-1))[:iw]),
+                e["word_end_m1"].eq((wcfg.data_bits + tail_bits(wcfg, wcrc, extra=-1,
+                                                                error_bit=err))[:iw]),
                 e["data_at0"].eq(wcfg.data_bits != 0),
                 e["lc_at0"].eq((wcfg.data_bits + nenw_bits == 0)
                                & (wcfg.data_bits + nenw_lc_bits != 0)),
@@ -144,22 +174,35 @@ class FrameDecoder(wiring.Component):
         with m.If(self.sample & ~self.slots_full):
             m.d.sync += [self.slots.eq(self.slots + 1), self.slots_full.eq(self.slots == 2**SLOT_WIDTH - 2)]
 
+        def begin_words():
+            """Word 0 begins with the next sample (the CRC engine loads its start value)."""
+            m.d.comb += at_cds.eq(1)
+            m.d.sync += [idx.eq(0), in_data.eq(ends[0]["data_at0"]),
+                         in_lc.eq(ends[0]["lc_at0"]), in_crc.eq(0)]
+            if p.words > 1:
+                m.d.sync += [in_top.eq(self.words[1].data_bits != 0), word.eq(0)]
+            m.next = "WORD"
+
+        ssi = self.ssi if p.ssi else C(0)
+        # SSI double transmission: the first copy's bits as sent (the newest in bit 0), and
+        # whether the copies differ so far.
+        if p.ssi:
+            ring = Signal(p.max_data_bits[0] + protocol.NE_NW_BITS + CRC_MAX_WIDTH)
+            expected = ring.bit_select(word_end_m1, 1)     # the first copy's bit at this index
+
         with m.FSM(name="decoder_fsm"):
             with m.State("ACK"):
-                with m.If(self.sample & self.bit):
+                with m.If(ssi):
+                    # SSI: no Ack, Start or CDS; slot 0 is word 0's first bit.
+                    m.d.sync += self.started.eq(1)
+                    begin_words()
+                with m.Elif(self.sample & self.bit):
                     m.d.sync += [self.started.eq(1), self.start_slot.eq(self.slots)]
                     m.next = "CDS"
             with m.State("CDS"):
-                m.d.comb += at_cds.eq(self.sample)
                 with m.If(self.sample):
-                    m.d.sync += [self.cds.eq(self.bit), idx.eq(0),
-                                 in_data.eq(ends[0]["data_at0"]), in_lc.eq(ends[0]["lc_at0"]),
-                                 in_crc.eq(0)]
-                    if p.words > 1:
-                        m.d.sync += in_top.eq(self.words[1].data_bits != 0)
-                    if p.words > 1:
-                        m.d.sync += word.eq(0)
-                    m.next = "WORD"
+                    m.d.sync += self.cds.eq(self.bit)
+                    begin_words()
             with m.State("WORD"):
                 m.d.comb += in_word.eq(self.sample)
                 with m.If(self.sample):
@@ -178,11 +221,33 @@ class FrameDecoder(wiring.Component):
                         m.d.sync += [in_data.eq(ends[-1]["data_at0"]),
                                      in_lc.eq(ends[-1]["lc_at0"]), in_top.eq(0)]
                         with m.If(word == last_word):
-                            m.d.sync += self.done.eq(1)
-                            m.next = "STOP"
+                            if p.ssi:
+                                with m.If(ssi & self.ssi_double):
+                                    m.next = "SEPARATOR"
+                                with m.Else():
+                                    m.d.sync += self.done.eq(1)
+                                    m.next = "STOP"
+                            else:
+                                m.d.sync += self.done.eq(1)
+                                m.next = "STOP"
                         if p.words > 1:
                             with m.Else():
                                 m.d.sync += word.eq(word + 1)
+            if p.ssi:
+                with m.State("SEPARATOR"):
+                    with m.If(self.sample):
+                        m.d.sync += self.mismatch.eq(self.bit)      # must be 0
+                        m.next = "COPY"
+                with m.State("COPY"):
+                    with m.If(self.sample):
+                        m.d.sync += [
+                            idx.eq(idx + 1),
+                            ring.eq(Cat(self.bit, ring)),
+                            self.mismatch.eq(self.mismatch | (self.bit != expected)),
+                        ]
+                        with m.If(idx == word_end_m1):
+                            m.d.sync += self.done.eq(1)
+                            m.next = "STOP"
             with m.State("STOP"):
                 with m.If(self.sample):
                     m.d.sync += [self.stopped.eq(1), self.stop_bit.eq(self.bit)]
@@ -210,13 +275,29 @@ class FrameDecoder(wiring.Component):
                 shifted |= (self.words[w].signed & first_bit & decoded[w]).replicate(len(data_w))
             with m.If(this_word & in_data):
                 m.d.sync += data_w.eq(shifted)
-            # A word without nE/nW reads as "no error, no warning" (both high).
-            with m.If(~self.words[w].nenw):
-                m.d.sync += [self.ne[w].eq(1), self.nw[w].eq(1)]
-            with m.Elif(this_word & (idx == self.words[w].data_bits)):
-                m.d.sync += self.ne[w].eq(self.bit)
-            with m.Elif(this_word & (idx == ends[w]["data_end_p1"])):
-                m.d.sync += self.nw[w].eq(self.bit)
+            # A word without nE/nW reads as "no error, no warning" (both high); an SSI error
+            # bit (word 0) is read as nE is: 0 when active (inverted when active high).
+            nenw = self.words[w].nenw
+            if w == 0 and p.ssi:
+                with m.If(~nenw & ~error_bit):
+                    m.d.sync += self.ne[w].eq(1)
+                with m.Elif(this_word & (idx == self.words[w].data_bits)):
+                    m.d.sync += self.ne[w].eq(self.bit ^ (error_bit & ~self.ssi_error_low))
+                with m.If(~nenw):
+                    m.d.sync += self.nw[w].eq(1)
+                with m.Elif(this_word & (idx == ends[w]["data_end_p1"])):
+                    m.d.sync += self.nw[w].eq(self.bit)
+            else:
+                with m.If(~nenw):
+                    m.d.sync += [self.ne[w].eq(1), self.nw[w].eq(1)]
+                with m.Elif(this_word & (idx == self.words[w].data_bits)):
+                    m.d.sync += self.ne[w].eq(self.bit)
+                with m.Elif(this_word & (idx == ends[w]["data_end_p1"])):
+                    m.d.sync += self.nw[w].eq(self.bit)
+        if p.ssi:
+            # The first copy of an SSI double transmission, as sent (word 0 is the only word).
+            with m.If(in_word & ssi):
+                m.d.sync += ring.eq(Cat(self.bit, ring))
         m.d.comb += [
             self.lc_load.eq(in_word & in_lc),
             self.lc_next.eq(Cat(self.bit, self.lc)),

@@ -40,6 +40,9 @@ class FrameVerdict(wiring.Component):
         The sign-of-life tracker's flags for the frame's LC.
     spw_match : In(1)
         The SPW check (two-word builds).
+    copy_mismatch : In(1)
+        SSI builds: the two copies of an SSI double transmission differ (the decoder's
+        ``mismatch``; read only with ``cfg.ssi``): SPW_MISMATCH, as a plausibility fault.
     noisy : In(1)
         The line-noise judgement of the frame (:class:`~bissmaster.core.line_noise.LineNoise`),
         final from the decoder's ``done`` on.
@@ -70,7 +73,8 @@ class FrameVerdict(wiring.Component):
     word_crc_ok : Out(words)
         Per word, the CRC verdict as reported (a word not in the frame is good).
     lc_repeat, lc_skip, lc_zero, spw_mismatch : Out(1)
-        The flags as reported with the frame.
+        The flags as reported with the frame (``spw_mismatch``: the SPW check, or an SSI
+        double transmission's copies).
     crc_error : Out(words)
         Event strobes: a reported frame's word failed its CRC.
     """
@@ -87,6 +91,7 @@ class FrameVerdict(wiring.Component):
             "lc_skip_seen": In(1),
             "lc_zero_seen": In(1),
             "spw_match": In(1),
+            "copy_mismatch": In(1),
             "noisy": In(1),
             "delay_jump": In(1),
             "unconfirmed": In(1),
@@ -130,9 +135,13 @@ class FrameVerdict(wiring.Component):
             self.lc_zero.eq(self.lc_check & self.lc_zero_seen),
         ]
 
-        # Plausibility: only between two CRC-good words.
+        # Plausibility: only between two CRC-good words (or copies).
+        implausible = C(0)
         if two:
-            m.d.comb += self.spw_mismatch.eq(cfg.spw_check & word1_on & crcs_ok & ~self.spw_match)
+            implausible |= cfg.spw_check & word1_on & ~self.spw_match
+        if p.ssi:
+            implausible |= cfg.ssi & self.copy_mismatch
+        m.d.comb += self.spw_mismatch.eq(crcs_ok & implausible)
 
         # Status priority: the first condition that holds (a one-word build has one CRC).
         if two:

@@ -12,6 +12,10 @@ from ..params import CRC_SETTINGS, FRAME_LENGTH_WIDTH, SLOT_WIDTH, WORD_CONFIG
 #: in slot ``s`` comes at rise ``s + 2``, CDS at ``s + 3``, ``N`` word bits, and the stop bit at
 #: rise ``s + N + 4``: the frame needs ``s + N + 4`` rising edges.
 RISES_BEYOND_WORDS = 4
+#: SSI (no Ack, Start or CDS): the word's ``N`` bits come at rises 1..N, the bit after it (0
+#: from a good encoder) at rise ``N + 1``; a double transmission is ``N`` bits, one separator,
+#: ``N`` bits and that last bit: ``2 N + 2`` rises.
+SSI_RISES_BEYOND_WORD = 1
 
 
 class MaStop(wiring.Component):
@@ -27,10 +31,15 @@ class MaStop(wiring.Component):
     is longer than the frame, MA may stop one clock (rarely one period) later. ``clear`` (the
     receiver's clear, high before every cycle) keeps the flag 0 in a cycle's first clock.
 
+    In SSI (``ssi``; the decoder reports Start in slot 0 as the cycle begins) the frame needs
+    the word's bits plus 1 rises, or twice that with ``ssi_double``.
+
     Parameters
     ----------
     words : int
         Words the build can decode (1 or 2).
+    ssi : bool
+        Build the SSI inputs.
 
     Attributes
     ----------
@@ -48,10 +57,13 @@ class MaStop(wiring.Component):
         MA rising edges so far (MaClock).
     clear : In(1)
     enough : Out(1)
+    ssi, ssi_double, ssi_error : In(1)
+        SSI builds: the cycle is an SSI frame; its word comes twice; its word has an error bit.
     """
 
-    def __init__(self, words):
+    def __init__(self, words, ssi=False):
         self._words = words
+        self._ssi = ssi
         super().__init__({
             "words": In(data.ArrayLayout(WORD_CONFIG, words)),
             "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
@@ -61,6 +73,7 @@ class MaStop(wiring.Component):
             "rises": In(SLOT_WIDTH),
             "clear": In(1),
             "enough": Out(1),
+            **({"ssi": In(1), "ssi_double": In(1), "ssi_error": In(1)} if ssi else {}),
         })
 
     def elaborate(self, platform):
@@ -71,8 +84,17 @@ class MaStop(wiring.Component):
         frame_len = Signal(FRAME_LENGTH_WIDTH + 1)          # every word's bits + RISES_BEYOND_WORDS
         target_rises = Signal(SLOT_WIDTH + 1)
         started = Signal()
+        if self._ssi:
+            n = word_length(self.words[0], self.crcs[0], width=FRAME_LENGTH_WIDTH,
+                            error_bit=self.ssi & self.ssi_error)
+            ssi_len = Mux(self.ssi_double, Cat(C(0, 1), n + SSI_RISES_BEYOND_WORD),
+                          n + SSI_RISES_BEYOND_WORD)
+            m.d.sync += word_len[0].eq(Mux(self.ssi, ssi_len, n + RISES_BEYOND_WORDS))
+        else:
+            m.d.sync += word_len[0].eq(word_length(self.words[0], self.crcs[0],
+                                                   extra=RISES_BEYOND_WORDS,
+                                                   width=FRAME_LENGTH_WIDTH))
         m.d.sync += [
-            word_len[0].eq(word_length(self.words[0], self.crcs[0], extra=RISES_BEYOND_WORDS, width=FRAME_LENGTH_WIDTH)),
             frame_len.eq(word_len[0] + (Mux(self.w1_enable, word_len[1], 0) if two else 0)),
             target_rises.eq(self.start_slot + frame_len),
             started.eq(self.started),

@@ -85,6 +85,14 @@ class SloSampler(wiring.Component):
     flops out for block tests and formal harnesses of the sampler alone: they drive ``slo`` as
     the output of such a synchronizer (the compensation stays).
 
+    **A set round trip (SSI).** Built with ``fixed=True``, the sampler also takes the round trip
+    from ``fixed_delay`` when ``fixed`` is high (an SSI frame has no Ack edge to measure it on):
+    the edge is then taken ``fixed_delay`` clocks after ``arm`` by the same measure as a
+    measured one (the clock in which a fall with that delay would have been seen), ``delay``
+    reports ``fixed_delay``, ``early`` stays low, and slot 0 is data, not an Ack: its decision is
+    the first ``sample``, ``locked`` rises with the edge, and the slot before it counts as
+    decided high (the idle line) for the noise judgement. Nothing is dropped or waited for.
+
     Attributes
     ----------
     slo : In(1)
@@ -107,11 +115,17 @@ class SloSampler(wiring.Component):
     bit : Out(1)
     noise : Out(1)
         Strobe: a vote pattern or edges no clean line gives (see *Noise*).
+    fixed : In(1)
+        ``fixed=True`` builds: take the round trip from ``fixed_delay`` (constant during the
+        cycle), not from an Ack edge.
+    fixed_delay : In(bits)
+        ``fixed=True`` builds: the round trip to use, in the same measure as ``delay``.
     """
 
-    def __init__(self, delay_width, *, synchronizer=True):
+    def __init__(self, delay_width, *, synchronizer=True, fixed=False):
         self._delay_width = delay_width
         self._synchronizer = bool(synchronizer)
+        self._fixed = bool(fixed)
         super().__init__({
             "slo": In(1, init=1),
             "level": Out(1, init=1),
@@ -123,6 +137,7 @@ class SloSampler(wiring.Component):
             "sample": Out(1),
             "bit": Out(1),
             "noise": Out(1),
+            **({"fixed": In(1), "fixed_delay": In(delay_width)} if fixed else {}),
         })
 
     def elaborate(self, platform):
@@ -209,6 +224,7 @@ class SloSampler(wiring.Component):
             slot_noise.level.eq(slo),
             slot_noise.edge.eq(slo != slo_prev),
             slot_noise.clear.eq(clear),
+            slot_noise.clear_high.eq(self.fixed if self._fixed else 0),
             slot_noise.centre.eq(centre),
             slot_noise.decided.eq(decided & ~single),
             slot_noise.vote1.eq(vote1),
@@ -227,6 +243,30 @@ class SloSampler(wiring.Component):
                         gap.eq(0),
                     ]
                     m.next = "MEASURE"
+                    if self._fixed:
+                        with m.If(self.fixed):
+                            m.d.sync += self.early.eq(0)
+                            m.next = "FIXED"
+            if self._fixed:
+                # The clock in which a fall with ``fixed_delay`` would be seen (reset-less: it
+                # follows the cycle's constant setting long before ``arm``).
+                fixed_at = Signal(self._delay_width, reset_less=True)
+                m.d.sync += fixed_at.eq(self.fixed_delay + SYNC_EXTRA_LATENCY)
+                with m.State("FIXED"):
+                    m.d.sync += elapsed.eq(elapsed + 1)     # stops at fixed_at, below its max
+                    with m.If(elapsed == fixed_at):
+                        # As a measured edge (MEASURE, no gap), but slot 0 is data.
+                        m.d.sync += [
+                            self.delay.eq(self.fixed_delay),
+                            self.locked.eq(1),
+                            vote1.eq(0),
+                            vote2.eq(0),
+                            first_slot.eq(0),
+                            phase.eq(0),
+                        ]
+                        m.d.comb += clear.eq(1)
+                        load(first_load, 0)                 # u >= 2
+                        m.next = "SAMPLE"
             with m.State("MEASURE"):
                 with m.If(elapsed != delay_max):
                     m.d.sync += elapsed.eq(elapsed + 1)

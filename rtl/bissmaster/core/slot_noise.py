@@ -40,7 +40,11 @@ class SlotNoise(wiring.Component):
         ``level`` differs from its value in the clock before.
     clear : In(1)
         An Ack edge is taken: slot 0's span starts in the next clock, the slot before counts as
-        decided low (the Ack is low from the edge on) and as not reported. Wins over the others.
+        decided low (the Ack is low from the edge on; high with ``clear_high``) and as not
+        reported. Wins over the others.
+    clear_high : In(1)
+        With ``clear``: the slot before slot 0 counts as decided high (an SSI frame: the idle
+        line before the first bit).
     centre : In(1)
         The centre vote of a slot is taken in this clock (never at a half period of 2).
     decided : In(1)
@@ -58,6 +62,7 @@ class SlotNoise(wiring.Component):
             "level": In(1),
             "edge": In(1),
             "clear": In(1),
+            "clear_high": In(1),
             "centre": In(1),
             "decided": In(1),
             "vote1": In(1),
@@ -70,7 +75,7 @@ class SlotNoise(wiring.Component):
         m = Module()
         level, majority = self.level, self.majority
 
-        # ``last`` is the slot before's decision (0 for slot 0), ``tail_odd`` its third vote
+        # ``last`` is the slot before's decision (``clear_high`` for slot 0), ``tail_odd`` its third vote
         # against it, to be judged with this slot's decision.
         last = Signal()
         tail_odd = Signal()
@@ -86,7 +91,7 @@ class SlotNoise(wiring.Component):
         odd_slot = centre_odd | head_odd | tail_late | crowded
 
         with m.If(self.clear):
-            m.d.sync += [last.eq(0), tail_odd.eq(0), one_edge.eq(0), two_edges.eq(0),
+            m.d.sync += [last.eq(self.clear_high), tail_odd.eq(0), one_edge.eq(0), two_edges.eq(0),
                          crowded.eq(0), strobed.eq(0)]
         with m.Else():
             with m.If(self.centre):

@@ -75,6 +75,8 @@ def config(name, clock_hz, ma_hz):
         "w1_enable": int(w1 is not None),
         # The line checks at their defaults (docs/ports.md, "Noise: the line checks").
         "quiet_time": 0, "noise_limit": 0, "delay_tolerance": 0, "confirm_frames": 0,
+        # The presets are BiSS encoders: SSI mode off.
+        "ssi": 0, "ssi_error": 0, "ssi_error_low": 0, "ssi_double": 0, "ssi_delay": 0,
     }
     for n, word in ((0, w0), (1, w1 or {"data_bits": 0, "nenw": 0, "lc": 0, "crc": "none"})):
         settings.update({f"w{n}_data_bits": word["data_bits"], f"w{n}_nenw": word["nenw"],

@@ -64,6 +64,7 @@ CHANNEL = {
     "cfg_crc0_start": 0x084,
     "cfg_crc1": 0x088,
     "cfg_crc1_start": 0x08C,
+    "cfg_ssi": 0x090,
     "ca.request": 0x100,
     "ca.ctrl": 0x104,
     "ca.state": 0x108,
@@ -88,7 +89,8 @@ FIELDS = {
              "trigger_enable": (9, 1)},
     "state": {"busy": (0, 1), "config_error": (1, 1)},
     "caps": {"data_bits_w0": (0, 6), "data_bits_w1": (8, 6), "timer_width": (16, 6),
-             "counters": (24, 1), "timestamp": (25, 1), "register_access": (26, 1)},
+             "counters": (24, 1), "timestamp": (25, 1), "register_access": (26, 1),
+             "ssi": (27, 1)},
     "irq_status": {"done": (0, 1), "error": (1, 1), "access_done": (2, 1)},
     "irq_enable": {"done": (0, 1), "error": (1, 1), "access_done": (2, 1)},
     "cfg_ma": {"ma_half_period": (0, 16), "delay_limit": (16, 12)},
@@ -108,6 +110,8 @@ FIELDS = {
     "cfg_crc0_start": {"w0_crc_start": (0, 16)},
     "cfg_crc1": {"w1_crc_poly": (0, 16), "w1_crc_width": (16, 5), "w1_crc_inverted": (24, 1)},
     "cfg_crc1_start": {"w1_crc_start": (0, 16)},
+    "cfg_ssi": {"ssi": (0, 1), "ssi_error": (1, 1), "ssi_error_low": (2, 1),
+                "ssi_double": (3, 1), "ssi_delay": (16, 12)},
     "result.status": {"status": (0, 4), "cds": (4, 1), "w0_ne": (8, 1), "w0_nw": (9, 1),
                       "w0_crc_ok": (10, 1), "w1_ne": (12, 1), "w1_nw": (13, 1),
                       "w1_crc_ok": (14, 1), "lc_repeat": (16, 1), "lc_skip": (17, 1),
@@ -137,10 +141,10 @@ FIELDS = {
 }
 
 #: The configuration registers, in address order: two runs of consecutive registers (one
-#: READ_BURST each), the eight at 0x020 and each word's custom CRC at 0x080.
+#: READ_BURST each), the eight at 0x020, and each word's custom CRC and SSI mode at 0x080.
 CONFIG_RUNS = (("cfg_ma", "cfg_period", "cfg_break", "cfg_ack", "cfg_timeout",
                 "cfg_words", "cfg_checks", "cfg_quiet"),
-               ("cfg_crc0", "cfg_crc0_start", "cfg_crc1", "cfg_crc1_start"))
+               ("cfg_crc0", "cfg_crc0_start", "cfg_crc1", "cfg_crc1_start", "cfg_ssi"))
 CONFIG_REGISTERS = CONFIG_RUNS[0] + CONFIG_RUNS[1]
 #: The result block, in address order: one READ_BURST of these reads one snapshot (the first,
 #: result.status, takes it).

@@ -35,6 +35,8 @@ BUILT_CRCS = {
 }
 #: Builds that accept a custom CRC (code 3 with a width of 1..16).
 CUSTOM = {"default", "narrow", "one_word"}
+#: Builds with SSI mode (``cfg_ssi``): every build here (the default).
+SSI = {"default", "narrow", "one_word", "no_custom"}
 
 
 def reference_ok(build, cfg):
@@ -56,6 +58,13 @@ def reference_ok(build, cfg):
         ok = ok and not (w1 and cfg["w0"]["lc"] and cfg["w1"]["lc"])
         ok = ok and (not cfg["spw_check"] or (w1 and cfg["w1"]["data_bits"] <= cfg["w0"]["data_bits"]
                                               and cfg["w1"]["crc"] != CRC_CODE["none"]))
+    if build in SSI and cfg["ssi"]:
+        # docs/ports.md, "SSI mode": one word without LC, the error bit or nE/nW (not both),
+        # no SPW check, a round trip up to the build's maximum line delay.
+        ok = (ok and not cfg["w0"]["lc"] and not (cfg["ssi_error"] and cfg["w0"]["nenw"])
+              and cfg["ssi_delay"] <= p.max_line_delay)
+        if p.words == 2:
+            ok = ok and not cfg["w1_enable"] and not cfg["spw_check"]
     return int(ok)
 
 
@@ -143,6 +152,22 @@ RULES = [
     ("one_word_lc", "one_word", _with(BASE_ONE_WORD, w0__lc=1), 1),
     ("one_word_half_period_1", "one_word", _with(BASE_ONE_WORD, ma_half_period=1), 0),
     ("one_word_delay_limit_4095", "one_word", _with(BASE_ONE_WORD, delay_limit=4095), 1),
+    # SSI mode: the Safety base is refused (two words, LC, SPW check); one word is not.
+    ("ssi_safety_base", "default", _with(BASE, ssi=1), 0),
+    ("ssi_safety_base_off", "default", _with(BASE, ssi=0, ssi_error=1, ssi_delay=4095), 1),
+    ("ssi_one_word", "default", _with(BASE, ssi=1, w1_enable=0, w1__lc=0, **NO_SPW), 1),
+    ("ssi_w1_enable", "default", _with(BASE, ssi=1, w1__lc=0, **NO_SPW), 0),
+    ("ssi_spw_check", "default", _with(BASE, ssi=1, w1_enable=0, w1__lc=0), 0),
+    ("ssi_lc", "one_word", _with(BASE_ONE_WORD, ssi=1, w0__lc=1), 0),
+    ("ssi_error_bit", "one_word", _with(BASE_ONE_WORD, ssi=1, ssi_error=1, w0__nenw=0), 1),
+    ("ssi_error_bit_and_nenw", "one_word", _with(BASE_ONE_WORD, ssi=1, ssi_error=1), 0),
+    ("ssi_error_bit_and_nenw_biss", "one_word", _with(BASE_ONE_WORD, ssi_error=1), 1),
+    ("ssi_double_error_low", "one_word",
+     _with(BASE_ONE_WORD, ssi=1, ssi_double=1, ssi_error=1, ssi_error_low=1, w0__nenw=0), 1),
+    ("ssi_delay_4095", "default", _with(BASE_ONE_WORD, ssi=1, ssi_delay=4095), 1),
+    ("narrow_ssi_delay_1000", "narrow", _with(BASE_ONE_WORD, ssi=1, ssi_delay=1000), 1),
+    ("narrow_ssi_delay_1001", "narrow", _with(BASE_ONE_WORD, ssi=1, ssi_delay=1001), 0),
+    ("narrow_ssi_delay_1001_biss", "narrow", _with(BASE_ONE_WORD, ssi_delay=1001), 1),
 ]
 
 
@@ -177,6 +202,9 @@ def test_configuration_check_random_sweep(build):
                 cfg[f"w{w}_crc"]["width"] = rng.choice((cfg[f"w{w}_crc"]["width"], 0, 1, 16, 17))
         cfg["ma_half_period"] = rng.choice((cfg["ma_half_period"], rng.randrange(4)))
         cfg["delay_limit"] = rng.choice((cfg["delay_limit"], p.max_line_delay + rng.randint(-1, 1)))
+        if "ssi" in cfg:        # SSI often off (else most random configurations are refused)
+            cfg["ssi"] &= rng.randrange(2)
+            cfg["ssi_delay"] = rng.choice((cfg["ssi_delay"], p.max_line_delay + rng.randint(-1, 1)))
         cfgs.append(cfg)
     trace = run_clocks(Configuration(p), [{"live": pack(layout, c)} for c in cfgs], ["ok"])
     expected = [reference_ok(build, c) for c in cfgs]

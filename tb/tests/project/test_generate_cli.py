@@ -130,7 +130,7 @@ def test_core_output_does_not_change_when_tops_are_added(fake_tops, tmp_path):
     main(["--preset", "biss-c-lean", "-o", str(out)])
     lean = MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),), counter_width=0,
                         timestamp_width=0, timer_width=16, register_access=False,
-                        custom_crc=False, signed_words=False)
+                        custom_crc=False, signed_words=False, ssi=False)
     assert out.read_text() == generate.generate(lean)
 
 
