@@ -35,9 +35,6 @@ SIGNED_PORTS = [f"cfg_w{w}_signed" for w in range(2)]
 #: A word's custom CRC (cfg_wN_crc = 3), in builds with custom CRCs.
 CUSTOM_CRC_PORTS = [f"cfg_w{w}_crc_{f}" for w in range(2) for f in ("width", "poly", "start", "inverted")]
 
-#: SSI mode (docs/ports.md, "SSI mode"), in builds with it: 0 = BiSS.
-SSI_PORTS = ["cfg_ssi", "cfg_ssi_delay", "cfg_ssi_error", "cfg_ssi_error_low", "cfg_ssi_double"]
-
 MA_RATES_HZ = (250e3, 1e6, 2.5e6, 5e6, 10e6)
 CABLES_M = (0, 20, 50, 100)
 
@@ -135,13 +132,10 @@ class Testbench:
             getattr(dut, name).value = 0
         for name in self._ports(CFG_PORTS + (CUSTOM_CRC_PORTS if self.has_custom_crc else [])
                                 + (SIGNED_PORTS if self.has_signed else [])
-                + [n for n in SSI_PORTS if hasattr(dut, n)]):
+                                # SSI mode (master_contract.SSI_PORTS), in builds with it: 0 = BiSS
+                                + [n for n in SSI_PORTS if hasattr(dut, n)]):
             getattr(dut, name).value = 0
         self._drive_noise_config(self.noise_defaults)
-        # The SSI mode's ports (builds with it): BiSS unless a scenario asks for SSI.
-        for name in SSI_PORTS:
-            if hasattr(dut, name):
-                getattr(dut, name).value = 0
         # The register-access engine's inputs (builds with it): no access unless a test asks.
         for name in ("ca_slave_id", "ca_address", "ca_count", "ca_write", "ca_start", "ca_abort",
                      "ca_wbuf_addr", "ca_wbuf_data", "ca_wbuf_en", "ca_rbuf_addr", "ca_rbuf_en"):
