@@ -238,6 +238,16 @@ SSI_NEVER = ("NO_ACK", "NO_START", "DELAY_RANGE", "DELAY_JUMP", "SIGN_OF_LIFE",
 #: (both copies alike where there are two).
 SSI_FIELD_STATUSES = ("OK", "UNCONFIRMED", "CRC_ERROR_WORD0")
 
+#: Double transmission: the position (and flags) reported are the first copy's, whatever the
+#: status; an encoder that sends zeros after its word (no ring) fails every frame with
+#: SPW_MISMATCH.
+SSI_DOUBLE_REPORTS = "first copy"
+#: Register access has no channel in SSI: no CDM hold is made (MA high after the pulses), and
+#: an access started while the channel runs SSI ends with this ca_status at its first frame.
+SSI_ACCESS_STATUS = "DATA_FAULT"
+#: cfg_end_check = 1 also waits, in SSI, for SLO high again after the frame (the encoder's tm
+#: over) before done; NO_STOP is checked in every SSI cycle, whatever cfg_end_check says.
+
 #: Configurations SSI refuses (status BAD_CONFIG, config_error high, no MA edge at all), as
 #: port overrides on a valid SSI configuration: an LC, a second word, the SPW check, and the
 #: error bit together with nE nW.

@@ -9,14 +9,15 @@ the MA pulses the encoder saw (sim/shared/ssi_testbench.SsiTestbench.check).
 """
 
 import cocotb
-from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
+from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, Timer, with_timeout
 
 from encoder_model.cocotb_encoder import BissEncoder, Cable
 from encoder_model.cocotb_ssi import SsiFaults
 from encoder_model.frames import CRC6, CRC16, CustomCrc
 from encoder_model.ssi import SsiFormat
-from master_contract import (DEFAULT_TIMEOUT_LIMIT_S, MAX_DATA_BITS, QUIET_TIME_S,
-                             SSI_BAD_CONFIGS, SSI_DELAY_MAX, ssi_vote_margin)
+from master_contract import (CA_COUNTERS, CA_STATUS, DEFAULT_TIMEOUT_LIMIT_S, MAX_DATA_BITS,
+                             QUIET_TIME_S, SSI_ACCESS_STATUS, SSI_BAD_CONFIGS, SSI_DELAY_MAX,
+                             ssi_vote_margin)
 from protocol_facts import ENCODER_INTERNAL_DELAY_S
 from sim.shared.discovery import expected_to_fail
 from sim.shared.ssi_testbench import SsiTestbench
@@ -75,14 +76,28 @@ async def ssi_double_transmission(dut):
     for faults in (SsiFaults(flip_copy2=(7,)), SsiFaults(flip_copy2=(24,)),
                    SsiFaults(flip_copy2=(0,)), SsiFaults(separator=1)):
         tb.encoder.queue(faults)
-        rec = tb.check(await tb.request(), "SPW_MISMATCH")
+        res = await tb.request()
+        rec = tb.check(res, "SPW_MISMATCH")
         assert rec.faults == faults
+        # the position reported is the first copy's (master_contract.SSI_DOUBLE_REPORTS)
+        assert res.fields["word0_position"] == rec.position
         res = await tb.request()
         assert tb.expected_status(res, "OK") == "UNCONFIRMED"
         tb.check(res)
         res = await tb.request()
         assert tb.expected_status(res, "OK") == "OK"
         tb.check(res)
+    # an encoder that sends zeros after its word, read with double transmission: every frame
+    # SPW_MISMATCH (a word of zeros alone would match its zeros)
+    tb.configure_ssi(SsiFormat(25), 5e6, double=True, repeat="zeros")
+    tb.position = 0x1000001
+    for _ in range(2):
+        res = await tb.request()
+        tb.check(res, "SPW_MISMATCH")
+        assert res.fields["word0_position"] == 0x1000001
+    tb.position = None
+    tb.configure_ssi(SsiFormat(25), 5e6, double=True)
+    await frames_ok(tb, 2)
     await tb.finish()
 
 
@@ -483,4 +498,52 @@ async def ssi_glitch_during_monoflop(dut):
         if "noise_events" in res.fields:
             assert res.fields["noise_events"] >= 1
     await frames_ok(tb, 2)
+    await tb.finish()
+
+
+@cocotb.test()
+async def ssi_end_check(dut):
+    """cfg_end_check = 1 in SSI: done only once SLO is high again after the frame (the
+    encoder's tm over); without it, done right after the bit after the word, SLO still low."""
+    fmt = SsiFormat(16, gray=True)
+    tb = await bench(dut, 119, fmt, 5e6)
+    for end_check in (1, 0, 1):
+        tb.configure_ssi(fmt, 5e6, cfg_end_check=end_check)
+        for _ in range(2):
+            res = await tb.request()
+            rec = tb.check(res)
+            if end_check:
+                assert rec.ended and int(dut.slo.value) == 1, "done before the encoder's tm ended"
+                assert res.t_done_s >= rec.t_line_high_s
+            else:
+                assert not rec.ended and int(dut.slo.value) == 0, "done waited for tm"
+    await tb.finish()
+
+
+@cocotb.test()
+async def ssi_register_access_refused(dut):
+    """Register access has no channel in SSI: an access started while the channel runs SSI
+    ends with DATA_FAULT at its first frame; the frames stay plain SSI (no CDM hold: MA back
+    high after exactly the word's pulses)."""
+    tb = await bench(dut, 120, SsiFormat(20), 2.5e6)
+    await frames_ok(tb, 1)
+    counter = CA_COUNTERS[SSI_ACCESS_STATUS]
+    before = tb.read().counters[counter]            # the default build counts accesses
+    await FallingEdge(dut.clk)
+    dut.ca_slave_id.value = 0
+    dut.ca_address.value = 0x42
+    dut.ca_count.value = 1
+    dut.ca_write.value = 0
+    ca_done = cocotb.start_soon(RisingEdge(dut.ca_done))
+    dut.ca_start.value = 1
+    await FallingEdge(dut.clk)
+    dut.ca_start.value = 0
+    res = await tb.request()
+    tb.check(res)
+    await with_timeout(ca_done, 1, "us")
+    await ReadOnly()
+    assert int(dut.ca_status.value) == CA_STATUS[SSI_ACCESS_STATUS], int(dut.ca_status.value)
+    await Timer(1, "ps")
+    await frames_ok(tb, 2)
+    assert tb.read().counters[counter] == before + 1
     await tb.finish()

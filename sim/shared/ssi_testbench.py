@@ -72,13 +72,13 @@ class SsiTestbench(Testbench):
         return self.clocks(self.cable.round_trip_s())
 
     def configure_ssi(self, fmt, ma_hz=None, *, half_period=None, delay=None, double=False,
-                      signed=False, **cfg):
+                      signed=False, repeat=None, **cfg):
         """The cfg_* ports for an SSI encoder of format ``fmt`` (an ssi.SsiFormat: one error bit
         at most; its nE nW and CRC are the word-0 ports'), ``delay``: cfg_ssi_delay (default:
         the true round trip, rounded); ``double``: double transmission (the encoder repeats in
-        ring mode); ``cfg``: port overrides."""
+        ring mode; ``repeat``: the encoder's repeat mode instead); ``cfg``: port overrides."""
         assert fmt.error_bits <= 1, "the core has one SSI error bit"
-        fmt = replace(fmt, repeat=REPEAT_RING if double else REPEAT_ZEROS)
+        fmt = replace(fmt, repeat=repeat or (REPEAT_RING if double else REPEAT_ZEROS))
         self.word = frames.WordFormat(fmt.data_bits, nenw=fmt.nenw, crc=fmt.crc, gray=fmt.gray,
                                       signed=signed)
         delay = round(self.true_delay_clocks()) if delay is None else delay
