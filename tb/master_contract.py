@@ -39,6 +39,15 @@ CRC_MAX_WIDTH = 16
 COUNTERS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range", "slo_stuck_low",
             "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch", "overrun", "aborted",
             "no_stop", "noisy_line", "delay_jump", "noise_event")
+#: The counters that count a cycle by its status (docs/ports.md, "Counters"): one each per
+#: cycle ended with that status (CRC_ERROR_BOTH counts in both CRC counters); BAD_CONFIG, OK,
+#: SIGN_OF_LIFE, SPW_MISMATCH and UNCONFIRMED in none of these.
+STATUS_COUNTERS = {"CRC_ERROR_WORD0": ("crc_word0",), "CRC_ERROR_WORD1": ("crc_word1",),
+                   "CRC_ERROR_BOTH": ("crc_word0", "crc_word1"), "NO_ACK": ("no_ack",),
+                   "NO_START": ("no_start",), "DELAY_RANGE": ("delay_range",),
+                   "SLO_STUCK_LOW": ("slo_stuck_low",), "ABORTED": ("aborted",),
+                   "NO_STOP": ("no_stop",), "NOISY_LINE": ("noisy_line",),
+                   "DELAY_JUMP": ("delay_jump",)}
 #: Counters a one-word build does not have.
 WORD1_COUNTERS = ("crc_word1", "spw_mismatch")
 #: The counters of issue 28's noise defences (a core with ``count_noisy_line``): one per
@@ -188,3 +197,91 @@ def port_position(word, field, width):
     if not word.signed or not field >> (word.data_bits - 1):
         return field
     return (field - (1 << word.data_bits)) % (1 << width)
+
+
+# -- SSI channel mode (issue 26; docs/ports.md, "SSI") -----------------------------------------
+# The channel runs SSI frames instead of BiSS when cfg_ssi = 1 (latched when the cycle starts,
+# like every cfg_*). The word uses the word-0 ports: cfg_w0_data_bits (position bits),
+# cfg_w0_gray (Gray on the line, reported binary), cfg_w0_signed, cfg_w0_nenw (nE nW after the
+# position, active low: "extended SSI") and cfg_w0_crc with its custom-CRC ports (a CRC after
+# the flags over the position and flag bits, exactly as a BiSS word's CRC).
+
+#: The SSI configuration ports, in port order (the default build; the presets biss-c,
+#: biss-c-lean, bp3 and safety have none of them).
+SSI_PORTS = ("cfg_ssi", "cfg_ssi_delay", "cfg_ssi_error", "cfg_ssi_error_low", "cfg_ssi_double")
+#: The builds with SSI: the default build only (bissmaster.generate presets have no cfg_ssi).
+SSI_BUILDS = ("default",)
+#: cfg_ssi_delay: the round trip in system clocks, from the master's MA rising edge at its ma
+#: pin to the encoder's resulting change at the slo pin (cable both ways + encoder internal
+#: delay: the measure BiSS reports on line_delay). 12 bits in the default build: 0 .. 4095,
+#: longer than many MA periods is fine. In SSI mode line_delay reports cfg_ssi_delay.
+SSI_DELAY_BITS = 12
+SSI_DELAY_MAX = (1 << SSI_DELAY_BITS) - 1
+#: cfg_ssi_error: ONE error bit right after the position bits; cfg_ssi_error_low: it is active
+#: low (line 0 = error), else active high (line 1 = error).
+SSI_ERROR_BITS = 1
+
+#: The statuses an SSI cycle can end with: OK; CRC_ERROR_WORD0 (a bad CRC, extended SSI);
+#: SPW_MISMATCH (the copies of a double transmission differ in any bit, or the separator bit
+#: between them is 1); SLO_STUCK_LOW (SLO low longer than cfg_timeout_limit, 80 us by default,
+#: before a cycle); ABORTED; BAD_CONFIG; NO_STOP (the bit after the word, after copy 2 with
+#: double, is 1: line stuck high, an unplugged encoder behind a fail-safe receiver);
+#: NOISY_LINE; UNCONFIRMED (the confirmation rule after a fault applies as in BiSS:
+#: ConfirmationAccount).
+SSI_STATUSES = ("OK", "CRC_ERROR_WORD0", "SPW_MISMATCH", "SLO_STUCK_LOW", "ABORTED",
+                "BAD_CONFIG", "NO_STOP", "NOISY_LINE", "UNCONFIRMED")
+#: BiSS-only statuses: never in SSI mode (no Ack, no Start, no measured round trip, no LC, no
+#: second word).
+SSI_NEVER = ("NO_ACK", "NO_START", "DELAY_RANGE", "DELAY_JUMP", "SIGN_OF_LIFE",
+             "CRC_ERROR_WORD1", "CRC_ERROR_BOTH")
+#: Statuses with which the SSI word's fields (position, nE, nW, crc_ok) are those received
+#: (both copies alike where there are two).
+SSI_FIELD_STATUSES = ("OK", "UNCONFIRMED", "CRC_ERROR_WORD0")
+
+#: Double transmission: the position (and flags) reported are the first copy's, whatever the
+#: status; an encoder that sends zeros after its word (no ring) fails every frame with
+#: SPW_MISMATCH.
+SSI_DOUBLE_REPORTS = "first copy"
+#: Register access has no channel in SSI: no CDM hold is made (MA high after the pulses), and
+#: an access started while the channel runs SSI ends with this ca_status at its first frame.
+SSI_ACCESS_STATUS = "DATA_FAULT"
+#: cfg_end_check = 1 also waits, in SSI, for SLO high again after the frame (the encoder's tm
+#: over) before done; NO_STOP is checked in every SSI cycle, whatever cfg_end_check says.
+
+#: Configurations SSI refuses (status BAD_CONFIG, config_error high, no MA edge at all), as
+#: port overrides on a valid SSI configuration: an LC, a second word, the SPW check, and the
+#: error bit together with nE nW.
+SSI_BAD_CONFIGS = ({"cfg_w0_lc": 1}, {"cfg_w1_enable": 1}, {"cfg_spw_check": 1},
+                   {"cfg_ssi_error": 1, "cfg_w0_nenw": 1})
+
+
+def ssi_word_bits(data_bits, error, nenw, crc_width):
+    """N, the bits of one SSI word on the line: the position, the error bit, nE nW, the CRC."""
+    return data_bits + int(bool(error)) + 2 * int(bool(nenw)) + crc_width
+
+
+def ssi_ma_pulses(word_bits, double):
+    """MA clock pulses (fall then rise, the configured half period) of one SSI cycle: N + 1, the
+    last one bringing the bit after the word that must be 0; with double transmission
+    2N + 2 (word, separator 0, word, the 0 after it). MA idles high before and after."""
+    return 2 * word_bits + 2 if double else word_bits + 1
+
+
+def ssi_ne_nw(error_active=None, nenw=None):
+    """``(word0_ne, word0_nw)`` of an SSI word: with the error bit (``error_active`` True or
+    False), ne = 0 when it is active (either polarity) and 1 otherwise, nw = 1; with nE nW, the
+    two line levels as in BiSS (``nenw``). An active error bit does not change the status (the
+    frame stays OK). None for a word with neither: the contract says nothing then."""
+    if nenw is not None:
+        return tuple(nenw)
+    if error_active is None:
+        return None
+    return (0 if error_active else 1), 1
+
+
+def ssi_vote_margin(half_period):
+    """The master decides bit k from votes at (MA rising edge k + 1) + cfg_ssi_delay + one half
+    period, +/- half_period // 2 clocks: a configured delay off from the true round trip by
+    less than about a quarter MA period still reads every bit right. The largest error in
+    clocks, each way, that the test side relies on: half_period // 2 - 1."""
+    return half_period // 2 - 1

@@ -18,7 +18,7 @@ from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
 from master_contract import (CA_COUNTERS, COUNTERS, CRC_CODE, crc_config, NOISE_COUNTERS, NOISE_FIELDS,
                              STATUS, SYS_CLK_HZ, NOISE_CONFIG_DEFAULTS, ConfirmationAccount,
-                             port_position)
+                             SSI_PORTS, port_position)
 
 CLK_HZ = int(os.environ.get("BISS_CLK_HZ", str(SYS_CLK_HZ)))
 CLK_NS = 1e9 / CLK_HZ
@@ -34,9 +34,6 @@ CFG_PORTS = ["cfg_ma_half_period", "cfg_request_period", "cfg_break_time", "cfg_
 SIGNED_PORTS = [f"cfg_w{w}_signed" for w in range(2)]
 #: A word's custom CRC (cfg_wN_crc = 3), in builds with custom CRCs.
 CUSTOM_CRC_PORTS = [f"cfg_w{w}_crc_{f}" for w in range(2) for f in ("width", "poly", "start", "inverted")]
-
-#: SSI mode (docs/ports.md, "SSI mode"), in builds with it: 0 = BiSS.
-SSI_PORTS = ["cfg_ssi", "cfg_ssi_delay", "cfg_ssi_error", "cfg_ssi_error_low", "cfg_ssi_double"]
 
 MA_RATES_HZ = (250e3, 1e6, 2.5e6, 5e6, 10e6)
 CABLES_M = (0, 20, 50, 100)
@@ -135,7 +132,8 @@ class Testbench:
             getattr(dut, name).value = 0
         for name in self._ports(CFG_PORTS + (CUSTOM_CRC_PORTS if self.has_custom_crc else [])
                                 + (SIGNED_PORTS if self.has_signed else [])
-                + [n for n in SSI_PORTS if hasattr(dut, n)]):
+                                # SSI mode (master_contract.SSI_PORTS), in builds with it: 0 = BiSS
+                                + [n for n in SSI_PORTS if hasattr(dut, n)]):
             getattr(dut, name).value = 0
         self._drive_noise_config(self.noise_defaults)
         # The register-access engine's inputs (builds with it): no access unless a test asks.
@@ -145,9 +143,7 @@ class Testbench:
                 getattr(dut, name).value = 0
         dut.slo.value = 1
         dut.rst.value = 1
-        extra = {} if min_cycle_s is None else {"min_cycle_s": min_cycle_s}
-        self.encoder = BissEncoder(dut.ma, dut.slo, cable=cable, respond=self._respond,
-                                   timeout_s=timeout_s, rng=self.rng, control=control, **extra)
+        self.encoder = self._make_encoder(cable, timeout_s, control, min_cycle_s)
         self.encoder.start()
         await ClockCycles(dut.clk, 3)
         dut.rst.value = 0
@@ -157,6 +153,12 @@ class Testbench:
             cocotb.start_soon(self._watch_confirmation())
         # Power-up break: the core is busy for 40 us before it accepts requests.
         await self.wait_idle()
+
+    def _make_encoder(self, cable, timeout_s, control, min_cycle_s):
+        """The encoder model on the MA / SLO pins (an SSI test bench puts its own there)."""
+        extra = {} if min_cycle_s is None else {"min_cycle_s": min_cycle_s}
+        return BissEncoder(self.dut.ma, self.dut.slo, cable=cable, respond=self._respond,
+                           timeout_s=timeout_s, rng=self.rng, control=control, **extra)
 
     async def _watch_confirmation(self):
         """Every reported cycle, by its status: after one with a status outside
@@ -212,6 +214,8 @@ class Testbench:
             "cfg_w1_enable": int(len(fmt.words) == 2),
             "cfg_spw_check": int(len(fmt.words) == 2), "cfg_spw_tolerance": spw_tolerance,
         }
+        # A BiSS frame format: the SSI mode off (builds with it; SsiTestbench sets it in cfg).
+        ports.update({n: 0 for n in SSI_PORTS if hasattr(dut, n)})
         for w in range(2):
             word = fmt.words[w] if w < len(fmt.words) else frames.WordFormat(1)
             code, custom = crc_config(word.crc)

@@ -48,6 +48,12 @@ def crc_width(crc):
 def _crc_func(crc):
     return crc if isinstance(crc, CustomCrc) else _CRC_FUNCS[crc]
 
+
+def word_crc(crc, bits):
+    """The CRC ``crc`` (CRC6, CRC16 or a :class:`CustomCrc`) over ``bits`` as sent: the value
+    a word carries after them (also extended SSI's, encoder_model.ssi)."""
+    return _crc_func(crc)(bits)
+
 DATA_BITS_MAX = 64          # widest position field the model accepts (BiSS C data word limit)
 FRAME_HEADER_BITS = 2       # Start and CDS precede the first word
 

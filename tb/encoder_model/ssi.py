@@ -18,6 +18,8 @@ directly.
   bit (iC-MU RSSI = 1, "ring operation"). [iC-MU]
 * Binary or Gray; 0..2 error bits after the position, active high or low, Gray-coded with the
   data or not, by product. [Beckhoff; iC-MU; Leuze; SICK DL100; KEB]
+* "Extended SSI": nE and nW (active low, as in a BiSS word) after the position and a CRC over
+  every bit before it, like a BiSS C word without Ack and Start. [iC-MU MODEA 0x7]
 
 The pure functions (:func:`ssi_bits`, :func:`line_levels`, :func:`parse_ssi`,
 :func:`line_high_at`) give the bits and levels; :class:`SsiEncoder` runs clock trains over time
@@ -28,7 +30,10 @@ encoder delay and cable are left to the cocotb side. Choices no source settles a
 
 from dataclasses import dataclass, field
 
+import protocol_facts as facts
+
 from .crc import bits_to_int, int_to_bits
+from .frames import CRC_NONE, CRC_WIDTHS, CustomCrc, crc_width, word_crc
 
 DATA_BITS_MAX = 64              # the widest position the model takes (issue 26: up to 64 bits)
 ERROR_BITS_MAX = 2              # issue 26 / this model: 0..2 error bits after the position
@@ -62,6 +67,11 @@ class SsiFormat:
     tm_s           : monoflop time.
     retrigger      : ``"falling"`` (tm runs from the last falling edge, TR) or ``"any"``
                      (from the last clock edge, which ends a train with a rising edge).
+    nenw           : extended SSI: nE and nW (active low, 1 = no error / no warning) after the
+                     error bits. [iC-MU MODEA 0x7]
+    crc            : extended SSI: a CRC after everything else (``frames.CRC_NONE``, ``CRC6``,
+                     ``CRC16`` or a ``frames.CustomCrc``), computed over every bit before it
+                     as sent, exactly as a BiSS word's CRC. [iC-MU MODEA 0x7]
     """
     data_bits: int
     gray: bool = False
@@ -71,6 +81,8 @@ class SsiFormat:
     repeat: str = REPEAT_ZEROS
     tm_s: float = TM_DEFAULT_S
     retrigger: str = RETRIGGER_FALLING
+    nenw: bool = False
+    crc: object = CRC_NONE
 
     def __post_init__(self):
         if not isinstance(self.data_bits, int) or not 1 <= self.data_bits <= DATA_BITS_MAX:
@@ -92,11 +104,24 @@ class SsiFormat:
         if self.retrigger not in (RETRIGGER_FALLING, RETRIGGER_ANY):
             raise ValueError(f"retrigger must be {RETRIGGER_FALLING!r} or {RETRIGGER_ANY!r}, "
                              f"got {self.retrigger!r}")
+        if not isinstance(self.crc, CustomCrc) and self.crc not in CRC_WIDTHS:
+            raise ValueError(f"crc must be one of {sorted(CRC_WIDTHS)} or a CustomCrc, "
+                             f"got {self.crc!r}")
+        object.__setattr__(self, "nenw", bool(self.nenw))
+
+    @property
+    def flag_bits(self):
+        """The bits after the position and before the CRC: error bits, nE nW."""
+        return self.error_bits + (facts.NE_NW_BITS if self.nenw else 0)
+
+    @property
+    def crc_bits(self):
+        return crc_width(self.crc)
 
     @property
     def total_bits(self):
-        """Bits of one word on the line: position + error bits."""
-        return self.data_bits + self.error_bits
+        """Bits of one word on the line: position + error bits (+ nE nW + CRC, extended)."""
+        return self.data_bits + self.flag_bits + self.crc_bits
 
     @property
     def clocks(self):
@@ -106,9 +131,13 @@ class SsiFormat:
 
 @dataclass(frozen=True)
 class SsiReading:
-    """A parsed word: the position in binary and each error flag (True = error active)."""
+    """A parsed word: the position in binary and each error flag (True = error active); with
+    extended SSI nE / nW as on the line and whether the CRC matches (None: no such field)."""
     position: int
     errors: tuple[bool, ...] = ()
+    ne: int | None = None
+    nw: int | None = None
+    crc_ok: bool | None = None
 
 
 # -- Gray code on bit lists (MSB first), as a serial encoder or master does it -----------------
@@ -142,17 +171,29 @@ def _error_levels(fmt, errors):
     return levels
 
 
-def ssi_bits(fmt, position, errors=None):
+def ssi_bits(fmt, position, errors=None, nenw=None):
     """The word the encoder sends after the latch, MSB first, as on the line (Gray applied):
     exactly ``fmt.total_bits`` bits. ``errors``: one flag per error bit (True = active), default
-    none active."""
+    none active. ``nenw``: (nE, nW) line levels of an extended-SSI word (default (1, 1): no
+    error, no warning); its CRC covers every bit before it, as sent."""
     if not isinstance(position, int) or not 0 <= position < 1 << fmt.data_bits:
         raise ValueError(f"position={position!r} does not fit in {fmt.data_bits} bits")
     data = int_to_bits(position, fmt.data_bits)
     err = _error_levels(fmt, (False,) * fmt.error_bits if errors is None else errors)
     if fmt.gray_errors:
-        return gray_encode_bits(data + err)
-    return (gray_encode_bits(data) if fmt.gray else data) + err
+        bits = gray_encode_bits(data + err)
+    else:
+        bits = (gray_encode_bits(data) if fmt.gray else data) + err
+    if fmt.nenw:
+        flags = (1, 1) if nenw is None else tuple(nenw)
+        if len(flags) != facts.NE_NW_BITS or any(f not in (0, 1) for f in flags):
+            raise ValueError(f"nenw is two line levels (nE, nW), got {nenw!r}")
+        bits += [int(f) for f in flags]
+    elif nenw is not None:
+        raise ValueError("nenw given for a format without nE / nW")
+    if fmt.crc != CRC_NONE:
+        bits += int_to_bits(word_crc(fmt.crc, bits), fmt.crc_bits)
+    return bits
 
 
 def parse_ssi(fmt, bits):
@@ -160,6 +201,14 @@ def parse_ssi(fmt, bits):
     bits = list(bits)
     if len(bits) != fmt.total_bits:
         raise ValueError(f"expected {fmt.total_bits} bits, got {len(bits)}")
+    extra = {}
+    if fmt.crc != CRC_NONE:
+        body = bits[:-fmt.crc_bits]
+        extra["crc_ok"] = word_crc(fmt.crc, body) == bits_to_int(bits[-fmt.crc_bits:])
+        bits = body
+    if fmt.nenw:
+        extra["ne"], extra["nw"] = bits[-facts.NE_NW_BITS:]
+        bits = bits[:-facts.NE_NW_BITS]
     if fmt.gray_errors:
         bits = gray_decode_bits(bits)
     elif fmt.gray:
@@ -167,10 +216,10 @@ def parse_ssi(fmt, bits):
     position = bits_to_int(bits[:fmt.data_bits])
     errors = tuple(level == (1 if polarity == ACTIVE_HIGH else 0)
                    for level, polarity in zip(bits[fmt.data_bits:], fmt.error_polarity))
-    return SsiReading(position, errors)
+    return SsiReading(position, errors, **extra)
 
 
-def _level(fmt, word, index):
+def level_after(fmt, word, index):
     """The line after rising edge ``index + 1`` counted from the word's start (``word`` as sent).
 
     zeros / same_value: the word, then 0 [POSITAL; Balluff; iC-MU RSSI = 0]; same_value past
@@ -182,7 +231,7 @@ def _level(fmt, word, index):
     return word[index] if index < len(word) else TRAILING_LEVEL
 
 
-def line_levels(fmt, position, errors=None, n_clocks=None):
+def line_levels(fmt, position, errors=None, n_clocks=None, nenw=None):
     """The data line right after each of the master's rising edges 1..n_clocks of one clock
     train that starts from idle (the first falling edge latched ``position``).
 
@@ -194,8 +243,8 @@ def line_levels(fmt, position, errors=None, n_clocks=None):
     n_clocks = fmt.clocks if n_clocks is None else n_clocks
     if not isinstance(n_clocks, int) or n_clocks < 0:
         raise ValueError(f"n_clocks must be an int >= 0, got {n_clocks!r}")
-    word = ssi_bits(fmt, position, errors)
-    return [_level(fmt, word, i) for i in range(n_clocks)]
+    word = ssi_bits(fmt, position, errors, nenw)
+    return [level_after(fmt, word, i) for i in range(n_clocks)]
 
 
 def read_at_rising_edges(levels):
@@ -233,6 +282,7 @@ class SsiTrain:
     levels: list[int]           # line after each rising edge of this train
     level_before: int           # line level from the first fall to the first rise
     line_high_s: float          # when the line goes high unless a later train retriggers
+    nenw: tuple[int, int] | None = None     # extended SSI: (nE, nW) as sent
 
     def rising_edge_s(self, k):
         """Time of rising edge k (1..n_clocks): the clock falls at t0 + (k - 1) T and rises
@@ -253,7 +303,8 @@ class SsiEncoder:
     """An SSI encoder over time: clock trains in, what it latched and sent out.
 
     ``position_at(t)`` gives the position (wrapped to ``data_bits``) at time ``t``;
-    ``errors_at(t)`` the error flags (default: none active). :meth:`train` runs one clock train;
+    ``errors_at(t)`` the error flags (default: none active); ``nenw_at(t)`` an extended-SSI
+    word's (nE, nW) (default (1, 1)). :meth:`train` runs one clock train;
     :meth:`level_at` gives the data line at any time after the trains run so far.
 
     A train whose first fall comes at or after the line went high latches anew. One that comes
@@ -265,6 +316,7 @@ class SsiEncoder:
     fmt: SsiFormat
     position_at: object
     errors_at: object = None
+    nenw_at: object = None
     trains: list[SsiTrain] = field(default_factory=list, init=False)
     _shifted: int = field(default=0, init=False, repr=False)   # rising edges since (re)start
 
@@ -290,19 +342,20 @@ class SsiEncoder:
             t_latch = t_first_fall_s
             position = self.position_at(t_latch) % (1 << fmt.data_bits)
             errors = tuple(self.errors_at(t_latch)) if self.errors_at else (False,) * fmt.error_bits
-            word = ssi_bits(fmt, position, errors)
+            nenw = (tuple(self.nenw_at(t_latch)) if self.nenw_at else (1, 1)) if fmt.nenw else None
+            word = ssi_bits(fmt, position, errors, nenw)
             self._shifted = 0
             level_before = IDLE_LEVEL
         else:
-            t_latch, position, errors, word = (prev.t_latch_s, prev.position, prev.errors,
-                                               prev.word)
+            t_latch, position, errors, word, nenw = (prev.t_latch_s, prev.position, prev.errors,
+                                                     prev.word, prev.nenw)
             if fmt.repeat == REPEAT_SAME_VALUE:
                 self._shifted = 0
             level_before = prev.levels[-1]
-        levels = [_level(fmt, word, self._shifted + i) for i in range(n_clocks)]
+        levels = [level_after(fmt, word, self._shifted + i) for i in range(n_clocks)]
         self._shifted += n_clocks
         t = SsiTrain(t_first_fall_s, n_clocks, period_s, new_latch, t_latch, position, errors,
-                     word, levels, level_before, 0.0)
+                     word, levels, level_before, 0.0, nenw)
         t.line_high_s = line_high_at(fmt, t.t_last_fall_s, t.t_last_rise_s)
         self.trains.append(t)
         return t

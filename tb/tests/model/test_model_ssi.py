@@ -5,8 +5,9 @@ import random
 
 import pytest
 
-from encoder_model.crc import bits_to_int, int_to_bits
-from encoder_model.frames import from_gray, to_gray
+from encoder_model.crc import bits_to_int, crc6_biss, int_to_bits
+from encoder_model.frames import (CRC6, CRC16, CRC_NONE, CustomCrc, WordFormat, WordValue,
+                                  from_gray, to_gray, word_bits)
 from encoder_model.ssi import (SsiEncoder, SsiFormat, SsiReading, gray_decode_bits,
                                gray_encode_bits, line_high_at, line_levels, parse_ssi,
                                read_at_rising_edges, ssi_bits)
@@ -290,3 +291,52 @@ def test_trains_must_not_overlap_and_clock_must_outrun_tm():
         enc.train(100 * US, period_s=25 * US)               # a period longer than tm
     with pytest.raises(ValueError):
         enc.train(100 * US, n_clocks=0)
+
+
+# -- extended SSI (iC-MU MODEA 0x7): nE nW and a CRC after the position ------------------------
+
+def test_extended_ssi_is_a_biss_word_without_ack_and_start():
+    # Position, nE, nW and a CRC over all of them as sent: bit for bit the BiSS word of the
+    # same layout (frames.word_bits, an independent builder).
+    rng = random.Random(7)
+    for crc in (CRC6, CRC16, CustomCrc(8, 0x07), CRC_NONE):
+        for gray in (False, True):
+            width = rng.randint(1, 48)
+            fmt = SsiFormat(width, gray=gray, nenw=True, crc=crc)
+            biss = WordFormat(width, nenw=True, crc=crc, gray=gray)
+            assert fmt.total_bits == biss.total_bits
+            for _ in range(20):
+                pos, ne, nw = rng.getrandbits(width), rng.getrandbits(1), rng.getrandbits(1)
+                bits = ssi_bits(fmt, pos, nenw=(ne, nw))
+                assert bits == word_bits(biss, WordValue(pos, ne, nw))
+                crc_ok = True if crc != CRC_NONE else None
+                assert parse_ssi(fmt, bits) == SsiReading(pos, (), ne, nw, crc_ok)
+
+
+def test_extended_ssi_crc_covers_the_error_bit_and_catches_a_flip():
+    fmt = SsiFormat(13, error_bits=1, crc=CRC6)
+    assert fmt.total_bits == 13 + 1 + 6 and fmt.flag_bits == 1
+    bits = ssi_bits(fmt, 0x1ABC, (True,))
+    assert bits[:14] == int_to_bits(0x1ABC, 13) + [1]
+    assert bits_to_int(bits[14:]) == crc6_biss(bits[:14])
+    assert parse_ssi(fmt, bits) == SsiReading(0x1ABC, (True,), crc_ok=True)
+    for i in range(len(bits)):
+        flipped = bits[:i] + [1 - bits[i]] + bits[i + 1:]
+        assert parse_ssi(fmt, flipped).crc_ok is False
+
+
+def test_extended_ssi_in_ring_mode_repeats_the_whole_word():
+    fmt = SsiFormat(5, nenw=True, crc=CRC6, repeat="ring")
+    word = ssi_bits(fmt, 0b10110, nenw=(0, 1))
+    assert line_levels(fmt, 0b10110, n_clocks=2 * fmt.clocks, nenw=(0, 1)) == word + [0] + word + [0]
+    enc = SsiEncoder(fmt, lambda t: 0b10110, nenw_at=lambda t: (0, 1))
+    assert enc.train(0.0, n_clocks=2 * fmt.clocks).levels == word + [0] + word + [0]
+
+
+def test_extended_ssi_refuses_bad_flags():
+    with pytest.raises(ValueError):
+        ssi_bits(SsiFormat(4, nenw=True), 3, nenw=(1, 2))
+    with pytest.raises(ValueError):
+        ssi_bits(SsiFormat(4), 3, nenw=(1, 1))          # no nE / nW in this format
+    with pytest.raises(ValueError):
+        SsiFormat(4, crc="crc7")
