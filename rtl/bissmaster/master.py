@@ -216,6 +216,7 @@ class BissMaster(wiring.Component):
 
     def _connect_control(self, m, b):
         """The controller, its limits and the MA clock."""
+        p = self.params
         m.d.comb += [
             b.controller.request.eq(b.scheduler.request),
             b.controller.abort.eq(self.abort_cycle),
@@ -230,6 +231,7 @@ class BissMaster(wiring.Component):
             # SSI: the frame ends with its stop bit (checked there).
             b.controller.frame_done.eq(Mux(b.ssi, b.decoder.stopped, b.decoder.done)),
             b.controller.ssi.eq(b.ssi),
+            b.controller.timeout_over.eq(b.timers.timeout_over if p.ssi else 0),
             b.controller.started.eq(b.decoder.started),
             b.controller.slots_full.eq(b.decoder.slots_full),
             b.controller.stopped.eq(b.decoder.stopped),

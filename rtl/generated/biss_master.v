@@ -55,24 +55,24 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$signal ;
   wire abort;
   wire \abort$122 ;
-  wire \abort$317 ;
+  wire \abort$319 ;
   input abort_cycle;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$155 ;
+  wire \ack_expired$157 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$176 ;
+  wire [23:0] \ack_limit$178 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$347 ;
+  wire \bit$349 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$153 ;
+  wire \break_over$155 ;
   wire [23:0] break_time;
   output busy;
   wire busy;
   wire \busy$130 ;
-  wire \busy$321 ;
+  wire \busy$323 ;
   input ca_abort;
   wire ca_abort;
   input [6:0] ca_address;
@@ -114,11 +114,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$324 ;
+  wire \cdm$326 ;
   wire cdm_cycle;
   output cds;
   wire cds;
-  wire \cds$298 ;
+  wire \cds$300 ;
   wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -262,14 +262,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$235 ;
+  wire \check$237 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$240 ;
-  wire \clean$348 ;
+  wire \clean$242 ;
+  wire \clean$350 ;
   wire clear;
-  wire \clear$200 ;
-  wire \clear$340 ;
+  wire \clear$202 ;
+  wire \clear$342 ;
   input clear_counters;
   wire clear_counters;
   input clk;
@@ -345,33 +345,33 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] \counts.slo_stuck_low ;
   wire [15:0] \counts.spw_mismatch ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$252 ;
+  wire [39:0] \cpw_top$254 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$277 ;
+  wire [1:0] \crc_ok$279 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$248 ;
-  wire [37:0] \crcs$248[0] ;
-  wire \crcs$248[0].inverted ;
-  wire [15:0] \crcs$248[0].poly ;
-  wire [15:0] \crcs$248[0].start ;
-  wire [4:0] \crcs$248[0].width ;
-  wire [37:0] \crcs$248[1] ;
-  wire \crcs$248[1].inverted ;
-  wire [15:0] \crcs$248[1].poly ;
-  wire [15:0] \crcs$248[1].start ;
-  wire [4:0] \crcs$248[1].width ;
-  wire [75:0] \crcs$249 ;
-  wire [37:0] \crcs$249[0] ;
-  wire \crcs$249[0].inverted ;
-  wire [15:0] \crcs$249[0].poly ;
-  wire [15:0] \crcs$249[0].start ;
-  wire [4:0] \crcs$249[0].width ;
-  wire [37:0] \crcs$249[1] ;
-  wire \crcs$249[1].inverted ;
-  wire [15:0] \crcs$249[1].poly ;
-  wire [15:0] \crcs$249[1].start ;
-  wire [4:0] \crcs$249[1].width ;
+  wire [75:0] \crcs$250 ;
+  wire [37:0] \crcs$250[0] ;
+  wire \crcs$250[0].inverted ;
+  wire [15:0] \crcs$250[0].poly ;
+  wire [15:0] \crcs$250[0].start ;
+  wire [4:0] \crcs$250[0].width ;
+  wire [37:0] \crcs$250[1] ;
+  wire \crcs$250[1].inverted ;
+  wire [15:0] \crcs$250[1].poly ;
+  wire [15:0] \crcs$250[1].start ;
+  wire [4:0] \crcs$250[1].width ;
+  wire [75:0] \crcs$251 ;
+  wire [37:0] \crcs$251[0] ;
+  wire \crcs$251[0].inverted ;
+  wire [15:0] \crcs$251[0].poly ;
+  wire [15:0] \crcs$251[0].start ;
+  wire [4:0] \crcs$251[0].width ;
+  wire [37:0] \crcs$251[1] ;
+  wire \crcs$251[1].inverted ;
+  wire [15:0] \crcs$251[1].poly ;
+  wire [15:0] \crcs$251[1].start ;
+  wire [4:0] \crcs$251[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -443,13 +443,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$182 ;
-  wire [12:0] \delay$234 ;
+  wire [12:0] \delay$184 ;
+  wire [12:0] \delay$236 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$184 ;
+  wire [11:0] \delay_limit$186 ;
   wire delay_over;
-  wire \delay_over$163 ;
+  wire \delay_over$165 ;
   output delay_settled;
   wire delay_settled;
   output [7:0] delay_spread;
@@ -458,8 +458,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output done;
   wire done;
   wire \done$140 ;
-  wire \done$322 ;
-  wire \done$343 ;
+  wire \done$324 ;
+  wire \done$345 ;
   wire doubtful;
   wire early;
   wire \early$138 ;
@@ -468,30 +468,30 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [20:0] \events$335 ;
-  wire \events$335.aborted ;
-  wire \events$335.ca_aborted ;
-  wire \events$335.ca_crc4_error ;
-  wire \events$335.ca_data_fault ;
-  wire \events$335.ca_no_answer ;
-  wire \events$335.ca_refused ;
-  wire \events$335.crc_word0 ;
-  wire \events$335.crc_word1 ;
-  wire \events$335.delay_jump ;
-  wire \events$335.delay_range ;
-  wire \events$335.lc_repeat ;
-  wire \events$335.lc_skip ;
-  wire \events$335.lc_zero ;
-  wire \events$335.no_ack ;
-  wire \events$335.no_start ;
-  wire \events$335.no_stop ;
-  wire \events$335.noise_event ;
-  wire \events$335.noisy_line ;
-  wire \events$335.overrun ;
-  wire \events$335.slo_stuck_low ;
-  wire \events$335.spw_mismatch ;
+  wire [20:0] \events$337 ;
+  wire \events$337.aborted ;
+  wire \events$337.ca_aborted ;
+  wire \events$337.ca_crc4_error ;
+  wire \events$337.ca_data_fault ;
+  wire \events$337.ca_no_answer ;
+  wire \events$337.ca_refused ;
+  wire \events$337.crc_word0 ;
+  wire \events$337.crc_word1 ;
+  wire \events$337.delay_jump ;
+  wire \events$337.delay_range ;
+  wire \events$337.lc_repeat ;
+  wire \events$337.lc_skip ;
+  wire \events$337.lc_zero ;
+  wire \events$337.no_ack ;
+  wire \events$337.no_start ;
+  wire \events$337.no_stop ;
+  wire \events$337.noise_event ;
+  wire \events$337.noisy_line ;
+  wire \events$337.overrun ;
+  wire \events$337.slo_stuck_low ;
+  wire \events$337.spw_mismatch ;
   wire fault;
-  wire \fault$273 ;
+  wire \fault$275 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -527,7 +527,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$275 ;
+  wire [3:0] \fault_status$277 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -537,7 +537,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$311 ;
+  wire \first_rise$313 ;
   wire [31:0] first_rise_time;
   wire fixed;
   wire [12:0] fixed_delay;
@@ -590,38 +590,38 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire frame_ok;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$206 ;
+  wire [15:0] \half_period$208 ;
   wire held;
   wire hold;
   wire idle;
   wire \idle$112 ;
   wire \idle$118 ;
   wire in_clock;
-  wire \in_clock$170 ;
+  wire \in_clock$172 ;
   wire jump;
   output [5:0] lc;
   wire [5:0] lc;
-  wire [5:0] \lc$211 ;
-  wire [5:0] \lc$212 ;
+  wire [5:0] \lc$213 ;
+  wire [5:0] \lc$214 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$214 ;
+  wire [5:0] \lc_next$216 ;
   output lc_repeat;
   wire lc_repeat;
-  wire \lc_repeat$303 ;
+  wire \lc_repeat$305 ;
   wire lc_repeat_seen;
   output lc_skip;
   wire lc_skip;
-  wire \lc_skip$304 ;
+  wire \lc_skip$306 ;
   wire lc_skip_seen;
   output lc_zero;
   wire lc_zero;
-  wire \lc_zero$305 ;
+  wire \lc_zero$307 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$223 ;
+  wire \level$225 ;
   wire [3:0] limit;
   output [12:0] line_delay;
   wire [12:0] line_delay;
@@ -684,10 +684,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \locked$136 ;
   output ma;
   wire ma;
-  wire \ma$342 ;
+  wire \ma$344 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$165 ;
+  wire \ma_busy$167 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -696,19 +696,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire mismatch;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$157 ;
+  wire \no_start_expired$159 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$180 ;
+  wire [24:0] \no_start_limit$182 ;
   wire noise;
   output [3:0] noise_events;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$242 ;
+  wire \noisy$244 ;
   wire [1:0] nw;
   wire ok;
   output overrun;
   wire overrun;
-  wire \overrun$338 ;
+  wire \overrun$340 ;
   wire passed;
   wire pending;
   wire [23:0] period;
@@ -716,10 +716,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire periodic;
   wire \periodic$114 ;
   wire quiet;
-  wire \quiet$189 ;
+  wire \quiet$191 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$191 ;
+  wire \quiet_live$193 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   wire [3:0] rbuf_addr;
@@ -729,36 +729,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$287 ;
-  wire \report$291 ;
+  wire \report$289 ;
+  wire \report$293 ;
   wire report_delay;
-  wire \report_delay$294 ;
+  wire \report_delay$296 ;
   wire report_frame;
-  wire \report_frame$272 ;
-  wire \report_frame$292 ;
+  wire \report_frame$274 ;
+  wire \report_frame$294 ;
   wire request;
   wire \request$121 ;
-  wire [17:0] \request$313 ;
-  wire [6:0] \request$313.address ;
-  wire [6:0] \request$313.count ;
-  wire [2:0] \request$313.slave_id ;
-  wire \request$313.write ;
+  wire [17:0] \request$315 ;
+  wire [6:0] \request$315.address ;
+  wire [6:0] \request$315.count ;
+  wire [2:0] \request$315.slave_id ;
+  wire \request$315.write ;
   wire restart;
-  wire \restart$227 ;
+  wire \restart$229 ;
   wire restart_timer;
   wire [9:0] result;
-  wire [186:0] \result$345 ;
-  wire \result$345.cds ;
-  wire \result$345.delay_settled ;
-  wire [7:0] \result$345.delay_spread ;
-  wire [5:0] \result$345.lc ;
-  wire \result$345.lc_repeat ;
-  wire \result$345.lc_skip ;
-  wire \result$345.lc_zero ;
-  wire [12:0] \result$345.line_delay ;
-  wire [3:0] \result$345.noise_events ;
-  wire [12:0] \result$345.settled_delay ;
-  wire \result$345.spw_mismatch ;
+  wire [186:0] \result$347 ;
+  wire \result$347.cds ;
+  wire \result$347.delay_settled ;
+  wire [7:0] \result$347.delay_spread ;
+  wire [5:0] \result$347.lc ;
+  wire \result$347.lc_repeat ;
+  wire \result$347.lc_skip ;
+  wire \result$347.lc_zero ;
+  wire [12:0] \result$347.line_delay ;
+  wire [3:0] \result$347.noise_events ;
+  wire [12:0] \result$347.settled_delay ;
+  wire \result$347.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -776,18 +776,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$345.status ;
-  wire [31:0] \result$345.timestamp ;
-  wire [57:0] \result$345.word0 ;
-  wire \result$345.word0.crc_ok ;
-  wire \result$345.word0.ne ;
-  wire \result$345.word0.nw ;
-  wire [54:0] \result$345.word0.position ;
-  wire [42:0] \result$345.word1 ;
-  wire \result$345.word1.crc_ok ;
-  wire \result$345.word1.ne ;
-  wire \result$345.word1.nw ;
-  wire [39:0] \result$345.word1.position ;
+  wire [3:0] \result$347.status ;
+  wire [31:0] \result$347.timestamp ;
+  wire [57:0] \result$347.word0 ;
+  wire \result$347.word0.crc_ok ;
+  wire \result$347.word0.ne ;
+  wire \result$347.word0.nw ;
+  wire [54:0] \result$347.word0.position ;
+  wire [42:0] \result$347.word1 ;
+  wire \result$347.word1.crc_ok ;
+  wire \result$347.word1.ne ;
+  wire \result$347.word1.nw ;
+  wire [39:0] \result$347.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -799,56 +799,56 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$220 ;
+  wire \resync$222 ;
   wire [15:0] rises;
-  wire [15:0] \rises$199 ;
+  wire [15:0] \rises$201 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$346 ;
+  wire \sample$348 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   output [12:0] settled_delay;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$301 ;
+  wire [12:0] \settled_delay$303 ;
   wire skip;
   input slo;
   wire slo;
   wire \slo$119 ;
   wire \slo$127 ;
-  wire \slo$164 ;
+  wire \slo$166 ;
   wire slo_stuck;
-  wire \slo_stuck$159 ;
+  wire \slo_stuck$161 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$161 ;
+  wire \slo_stuck_live$163 ;
   wire slots_full;
-  wire \slots_full$146 ;
+  wire \slots_full$148 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   output spw_mismatch;
   wire spw_mismatch;
-  wire \spw_mismatch$310 ;
+  wire \spw_mismatch$312 ;
   wire ssi;
-  wire \ssi$261 ;
-  wire \ssi$265 ;
+  wire \ssi$263 ;
+  wire \ssi$267 ;
   wire ssi_double;
-  wire \ssi_double$266 ;
+  wire \ssi_double$268 ;
   wire ssi_error;
-  wire \ssi_error$267 ;
+  wire \ssi_error$269 ;
   wire ssi_error_low;
   input start;
   wire start;
   wire \start$113 ;
-  wire \start$316 ;
+  wire \start$318 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$197 ;
+  wire [15:0] \start_slot$199 ;
   wire started;
-  wire \started$144 ;
-  wire \started$195 ;
+  wire \started$146 ;
+  wire \started$197 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -886,7 +886,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$288 ;
+  wire [3:0] \status$290 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -904,24 +904,26 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$289 ;
+  wire [3:0] \status$291 ;
   wire stop_bit;
-  wire \stop_bit$149 ;
+  wire \stop_bit$151 ;
   wire stopped;
-  wire \stopped$147 ;
+  wire \stopped$149 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$178 ;
+  wire [23:0] \timeout_limit$180 ;
   wire [23:0] timeout_live;
+  wire timeout_over;
+  wire \timeout_over$144 ;
   wire timer_clear;
   output [31:0] timestamp;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$256 ;
+  wire [7:0] \tolerance$258 ;
   wire unconfirmed;
   output valid;
   wire valid;
-  wire \valid$295 ;
-  wire \valid$296 ;
+  wire \valid$297 ;
+  wire \valid$298 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -947,34 +949,34 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   output [39:0] word1_position;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$210 ;
+  wire [1:0] \word_count$212 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$246 ;
-  wire [11:0] \words$246[0] ;
+  wire [23:0] \words$248 ;
+  wire [11:0] \words$248[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$246[0].crc ;
-  wire [5:0] \words$246[0].data_bits ;
-  wire \words$246[0].gray ;
-  wire \words$246[0].lc ;
-  wire \words$246[0].nenw ;
-  wire \words$246[0].signed ;
-  wire [11:0] \words$246[1] ;
+  wire [1:0] \words$248[0].crc ;
+  wire [5:0] \words$248[0].data_bits ;
+  wire \words$248[0].gray ;
+  wire \words$248[0].lc ;
+  wire \words$248[0].nenw ;
+  wire \words$248[0].signed ;
+  wire [11:0] \words$248[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$246[1].crc ;
-  wire [5:0] \words$246[1].data_bits ;
-  wire \words$246[1].gray ;
-  wire \words$246[1].lc ;
-  wire \words$246[1].nenw ;
-  wire \words$246[1].signed ;
+  wire [1:0] \words$248[1].crc ;
+  wire [5:0] \words$248[1].data_bits ;
+  wire \words$248[1].gray ;
+  wire \words$248[1].lc ;
+  wire \words$248[1].nenw ;
+  wire \words$248[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -1008,15 +1010,15 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign enable = \$1  & \$2 ;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$3  = ~ started_before;
-  assign \check$235  = started & \$3 ;
+  assign \check$237  = started & \$3 ;
   assign \$4  = ~ cycle[259];
-  assign cdm = \cdm$324  & \$4 ;
+  assign cdm = \cdm$326  & \$4 ;
   assign \$5  = ~ cycle[259];
   assign frame_ok = passed & \$5 ;
-  assign \$6  = report_frame & \spw_mismatch$310 ;
-  assign \$7  = \status$288  == 4'hd;
+  assign \$6  = report_frame & \spw_mismatch$312 ;
+  assign \$7  = \status$290  == 4'hd;
   assign \$8  = report_frame & \$7 ;
-  assign \$9  = \status$288  == 4'he;
+  assign \$9  = \status$290  == 4'he;
   assign \$10  = report_frame & \$9 ;
   assign \$11  = result[2:0] == 1'h1;
   assign \$12  = ca_done & \$11 ;
@@ -1030,8 +1032,8 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \$20  = ca_done & \$19 ;
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$21  = ~ \clear$200 ;
-  assign \$22  = \sample$346  & \$21 ;
+  assign \$21  = ~ \clear$202 ;
+  assign \$22  = \sample$348  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -1064,7 +1066,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report(report),
     .rst(rst),
     .setting(cycle[148:145]),
-    .status(\status$288 )
+    .status(\status$290 )
   );
   \biss_master.controller  controller (
     .abort(abort_cycle),
@@ -1077,7 +1079,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$227 ),
+    .fault(\restart$229 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -1094,7 +1096,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$200 ),
+    .receiver_clear(\clear$202 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
@@ -1109,6 +1111,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
+    .timeout_over(timeout_over),
     .timer_clear(clear),
     .waiting(watch)
   );
@@ -1116,12 +1119,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clear(clear_counters),
     .clk(clk),
     .counts(counts),
-    .events(\events$335 ),
+    .events(\events$337 ),
     .rst(rst)
   );
   \biss_master.decoder  decoder (
     .\bit (\bit ),
-    .cds(\cds$298 ),
+    .cds(\cds$300 ),
     .clk(clk),
     .cpw_top(cpw_top),
     .crc_ok(crc_ok),
@@ -1129,13 +1132,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .data0(data0),
     .data1(spw),
     .done(\done$140 ),
-    .lc(\lc$211 ),
+    .lc(\lc$213 ),
     .lc_load(load),
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$2183$272 (cycle[274:272]),
-    .receiver_clear(\clear$200 ),
+    .\port$2190$272 (cycle[274:272]),
+    .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -1148,7 +1151,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .words(words)
   );
   \biss_master.delay_check  delay_check (
-    .check(\check$235 ),
+    .check(\check$237 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -1158,7 +1161,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .rearm(rearm),
     .rst(rst),
     .settled(settled),
-    .settled_delay(\settled_delay$301 ),
+    .settled_delay(\settled_delay$303 ),
     .spread(spread),
     .\tolerance$8 (tolerance)
   );
@@ -1170,7 +1173,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$227 ),
+    .restart(\restart$229 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -1178,7 +1181,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   \biss_master.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$165 ),
+    .\clocking (\ma_busy$167 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -1190,7 +1193,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .second_rise(ma_arm)
   );
   \biss_master.ma_stop  ma_stop (
-    .clear(\clear$200 ),
+    .clear(\clear$202 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -1202,22 +1205,22 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .start_slot(start_slot),
     .\started$15 (started),
     .w1_enable(cycle[199]),
-    .words(\words$246 )
+    .words(\words$248 )
   );
   \biss_master.register_access  register_access (
     .abort(ca_abort),
     .busy(ca_busy),
-    .cdm(\cdm$324 ),
+    .cdm(\cdm$326 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
-    .frame_cds(\cds$298 ),
+    .frame_cds(\cds$300 ),
     .frame_end(report),
     .frame_ok(frame_ok),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(ca_rbuf_en),
-    .request(\request$313 ),
+    .request(\request$315 ),
     .result(result),
     .rst(rst),
     .start(ca_start),
@@ -1230,14 +1233,14 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$345 ),
+    .result(\result$347 ),
     .rst(rst),
-    .valid(\valid$295 ),
+    .valid(\valid$297 ),
     .valid_out(valid)
   );
   \biss_master.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$347 ),
+    .\bit (\bit$349 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -1245,10 +1248,10 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$2183$259 (cycle[271:259]),
-    .receiver_clear(\clear$200 ),
+    .\port$2190$259 (cycle[271:259]),
+    .receiver_clear(\clear$202 ),
     .rst(rst),
-    .sample(\sample$346 ),
+    .sample(\sample$348 ),
     .slo(slo)
   );
   \biss_master.scheduler  scheduler (
@@ -1266,9 +1269,9 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .check(check),
     .clk(clk),
     .is_zero(lc_zero_seen),
-    .lc(\lc$211 ),
+    .lc(\lc$213 ),
     .load(load),
-    .\port$2171$0 (\bit ),
+    .\port$2178$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1300,7 +1303,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$165 ),
+    .ma_busy(\ma_busy$167 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -1313,35 +1316,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
-    .timeout_live(cfg_timeout_limit)
+    .timeout_live(cfg_timeout_limit),
+    .timeout_over(timeout_over)
   );
   \biss_master.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$348 ),
+    .clean(\clean$350 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$227 ),
+    .fault(\restart$229 ),
     .fault_status(fault_status),
     .lc_check(check),
-    .lc_repeat(\lc_repeat$303 ),
+    .lc_repeat(\lc_repeat$305 ),
     .lc_repeat_seen(lc_repeat_seen),
-    .lc_skip(\lc_skip$304 ),
+    .lc_skip(\lc_skip$306 ),
     .lc_skip_seen(lc_skip_seen),
-    .lc_zero(\lc_zero$305 ),
+    .lc_zero(\lc_zero$307 ),
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$1610$0 (\$28 ),
+    .\port$1617$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
-    .spw_mismatch(\spw_mismatch$310 ),
-    .status(\status$288 ),
+    .spw_mismatch(\spw_mismatch$312 ),
+    .status(\status$290 ),
     .unconfirmed(unconfirmed),
-    .valid(\valid$295 )
+    .valid(\valid$297 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
@@ -1352,7 +1356,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$24  = \bit$347 ;
+    \$24  = \bit$349 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -1373,7 +1377,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$27  = \clean$348 ;
+    \$27  = \clean$350 ;
     if (rst) begin
       \$27  = 1'h0;
     end
@@ -1396,135 +1400,136 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \locked$136  = locked;
   assign \early$138  = early;
   assign ssi = cycle[259];
-  assign \started$144  = started;
-  assign \slots_full$146  = slots_full;
-  assign \stopped$147  = stopped;
-  assign \stop_bit$149  = stop_bit;
+  assign \timeout_over$144  = timeout_over;
+  assign \started$146  = started;
+  assign \slots_full$148  = slots_full;
+  assign \stopped$149  = stopped;
+  assign \stop_bit$151  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$153  = break_over;
-  assign \ack_expired$155  = ack_expired;
-  assign \no_start_expired$157  = no_start_expired;
-  assign \slo_stuck$159  = slo_stuck;
-  assign \slo_stuck_live$161  = slo_stuck_live;
-  assign \delay_over$163  = delay_over;
-  assign \slo$164  = \slo$127 ;
-  assign \clocking  = \ma_busy$165 ;
+  assign \break_over$155  = break_over;
+  assign \ack_expired$157  = ack_expired;
+  assign \no_start_expired$159  = no_start_expired;
+  assign \slo_stuck$161  = slo_stuck;
+  assign \slo_stuck_live$163  = slo_stuck_live;
+  assign \delay_over$165  = delay_over;
+  assign \slo$166  = \slo$127 ;
+  assign \clocking  = \ma_busy$167 ;
   assign timer_clear = clear;
-  assign \in_clock$170  = in_clock;
+  assign \in_clock$172  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$176  = ack_limit;
-  assign \timeout_limit$178  = timeout_limit;
-  assign \no_start_limit$180  = no_start_limit;
-  assign \delay$182  = delay;
-  assign \delay_limit$184  = delay_limit;
+  assign \ack_limit$178  = ack_limit;
+  assign \timeout_limit$180  = timeout_limit;
+  assign \no_start_limit$182  = no_start_limit;
+  assign \delay$184  = delay;
+  assign \delay_limit$186  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$189  = quiet;
-  assign \quiet_live$191  = quiet_live;
+  assign \quiet$191  = quiet;
+  assign \quiet_live$193  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$195  = started;
-  assign \start_slot$197  = start_slot;
-  assign \rises$199  = rises;
-  assign receiver_clear = \clear$200 ;
+  assign \started$197  = started;
+  assign \start_slot$199  = start_slot;
+  assign \rises$201  = rises;
+  assign receiver_clear = \clear$202 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$206  = cycle[15:0];
-  assign \word_count$210  = word_count;
-  assign \lc$212  = \lc$211 ;
-  assign lc_next = { \lc$211 [4:0], \bit  };
-  assign \lc_next$214  = { \lc$211 [4:0], \bit  };
+  assign \half_period$208  = cycle[15:0];
+  assign \word_count$212  = word_count;
+  assign \lc$214  = \lc$213 ;
+  assign lc_next = { \lc$213 [4:0], \bit  };
+  assign \lc_next$216  = { \lc$213 [4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$220  = resync;
+  assign \resync$222  = resync;
   assign waiting = watch;
-  assign \level$223  = \slo$127 ;
+  assign \level$225  = \slo$127 ;
   assign noise = sampler_noise;
   assign close = \done$140 ;
-  assign fault = \restart$227 ;
+  assign fault = \restart$229 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$234  = delay;
+  assign \delay$236  = delay;
   assign \$signal  = learn;
-  assign \clean$240  = clean;
-  assign \noisy$242  = noisy;
+  assign \clean$242  = clean;
+  assign \noisy$244  = noisy;
   assign jump = delay_jump;
-  assign \crcs$248  = crcs;
-  assign \crcs$249  = crcs;
+  assign \crcs$250  = crcs;
+  assign \crcs$251  = crcs;
   assign w1_enable = cycle[199];
-  assign \cpw_top$252  = cpw_top;
+  assign \cpw_top$254  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[205:200];
-  assign \tolerance$256  = cycle[258:251];
+  assign \tolerance$258  = cycle[258:251];
   assign match = spw_match;
   assign fixed = cycle[259];
   assign fixed_delay = { 1'h0, cycle[271:260] };
-  assign \ssi$261  = cycle[259];
+  assign \ssi$263  = cycle[259];
   assign ssi_error = cycle[272];
   assign ssi_error_low = cycle[273];
   assign ssi_double = cycle[274];
-  assign \ssi$265  = cycle[259];
-  assign \ssi_double$266  = cycle[274];
-  assign \ssi_error$267  = cycle[272];
+  assign \ssi$267  = cycle[259];
+  assign \ssi_double$268  = cycle[274];
+  assign \ssi_error$269  = cycle[272];
   assign mismatch = copy_mismatch;
   assign cfg = cycle;
-  assign \report_frame$272  = report_frame;
-  assign \fault$273  = \restart$227 ;
-  assign \fault_status$275  = fault_status;
-  assign \crc_ok$277  = crc_ok;
+  assign \report_frame$274  = report_frame;
+  assign \fault$275  = \restart$229 ;
+  assign \fault_status$277  = fault_status;
+  assign \crc_ok$279  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$287  = report;
-  assign \status$289  = \status$288 ;
+  assign \report$289  = report;
+  assign \status$291  = \status$290 ;
   assign setting = cycle[148:145];
-  assign \report$291  = report;
-  assign \report_frame$292  = report_frame;
-  assign \report_delay$294  = report_delay;
-  assign \valid$296  = \valid$295 ;
+  assign \report$293  = report;
+  assign \report_frame$294  = report_frame;
+  assign \report_delay$296  = report_delay;
+  assign \valid$298  = \valid$297 ;
   assign word_crc_ok = { \$28 , crc_ok[0] };
-  assign \first_rise$311  = first_rise;
-  assign \start$316  = ca_start;
-  assign \abort$317  = ca_abort;
+  assign \first_rise$313  = first_rise;
+  assign \start$318  = ca_start;
+  assign \abort$319  = ca_abort;
   assign rbuf_addr = ca_rbuf_addr;
   assign rbuf_en = ca_rbuf_en;
   assign rbuf_data = ca_rbuf_data;
-  assign \busy$321  = ca_busy;
-  assign \done$322  = ca_done;
+  assign \busy$323  = ca_busy;
+  assign \done$324  = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
-  assign frame_cds = \cds$298 ;
+  assign frame_cds = \cds$300 ;
   assign cdm_cycle = frame_cdm;
-  assign \overrun$338  = overrun;
-  assign \clear$340  = clear_counters;
-  assign \ma$342  = ma;
-  assign \done$343  = done;
+  assign \overrun$340  = overrun;
+  assign \clear$342  = clear_counters;
+  assign \ma$344  = ma;
+  assign \done$345  = done;
   assign valid_out = valid;
-  assign status = \result$345 [3:0];
-  assign timestamp = \result$345 [35:4];
-  assign line_delay = \result$345 [48:36];
-  assign cds = \result$345 [49];
-  assign noise_events = \result$345 [53:50];
-  assign delay_settled = \result$345 [54];
-  assign settled_delay = \result$345 [67:55];
-  assign delay_spread = \result$345 [75:68];
-  assign word0_position = \result$345 [130:76];
-  assign word0_ne = \result$345 [131];
-  assign word0_nw = \result$345 [132];
-  assign word0_crc_ok = \result$345 [133];
-  assign word1_position = \result$345 [173:134];
-  assign word1_ne = \result$345 [174];
-  assign word1_nw = \result$345 [175];
-  assign word1_crc_ok = \result$345 [176];
-  assign lc = \result$345 [182:177];
-  assign lc_repeat = \result$345 [183];
-  assign lc_skip = \result$345 [184];
-  assign lc_zero = \result$345 [185];
-  assign spw_mismatch = \result$345 [186];
+  assign status = \result$347 [3:0];
+  assign timestamp = \result$347 [35:4];
+  assign line_delay = \result$347 [48:36];
+  assign cds = \result$347 [49];
+  assign noise_events = \result$347 [53:50];
+  assign delay_settled = \result$347 [54];
+  assign settled_delay = \result$347 [67:55];
+  assign delay_spread = \result$347 [75:68];
+  assign word0_position = \result$347 [130:76];
+  assign word0_ne = \result$347 [131];
+  assign word0_nw = \result$347 [132];
+  assign word0_crc_ok = \result$347 [133];
+  assign word1_position = \result$347 [173:134];
+  assign word1_ne = \result$347 [174];
+  assign word1_nw = \result$347 [175];
+  assign word1_crc_ok = \result$347 [176];
+  assign lc = \result$347 [182:177];
+  assign lc_repeat = \result$347 [183];
+  assign lc_skip = \result$347 [184];
+  assign lc_zero = \result$347 [185];
+  assign spw_mismatch = \result$347 [186];
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
   assign count_crc_word0 = counts[15:0];
@@ -1648,20 +1653,20 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$246[0]  = \words$246 [11:0];
-  assign \words$246[0].data_bits  = \words$246 [5:0];
-  assign \words$246[0].nenw  = \words$246 [6];
-  assign \words$246[0].lc  = \words$246 [7];
-  assign \words$246[0].crc  = \words$246 [9:8];
-  assign \words$246[0].gray  = \words$246 [10];
-  assign \words$246[0].signed  = \words$246 [11];
-  assign \words$246[1]  = \words$246 [23:12];
-  assign \words$246[1].data_bits  = \words$246 [17:12];
-  assign \words$246[1].nenw  = \words$246 [18];
-  assign \words$246[1].lc  = \words$246 [19];
-  assign \words$246[1].crc  = \words$246 [21:20];
-  assign \words$246[1].gray  = \words$246 [22];
-  assign \words$246[1].signed  = \words$246 [23];
+  assign \words$248[0]  = \words$248 [11:0];
+  assign \words$248[0].data_bits  = \words$248 [5:0];
+  assign \words$248[0].nenw  = \words$248 [6];
+  assign \words$248[0].lc  = \words$248 [7];
+  assign \words$248[0].crc  = \words$248 [9:8];
+  assign \words$248[0].gray  = \words$248 [10];
+  assign \words$248[0].signed  = \words$248 [11];
+  assign \words$248[1]  = \words$248 [23:12];
+  assign \words$248[1].data_bits  = \words$248 [17:12];
+  assign \words$248[1].nenw  = \words$248 [18];
+  assign \words$248[1].lc  = \words$248 [19];
+  assign \words$248[1].crc  = \words$248 [21:20];
+  assign \words$248[1].gray  = \words$248 [22];
+  assign \words$248[1].signed  = \words$248 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -1672,26 +1677,26 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$248[0]  = crcs[37:0];
-  assign \crcs$248[0].width  = crcs[4:0];
-  assign \crcs$248[0].poly  = crcs[20:5];
-  assign \crcs$248[0].start  = crcs[36:21];
-  assign \crcs$248[0].inverted  = crcs[37];
-  assign \crcs$248[1]  = crcs[75:38];
-  assign \crcs$248[1].width  = crcs[42:38];
-  assign \crcs$248[1].poly  = crcs[58:43];
-  assign \crcs$248[1].start  = crcs[74:59];
-  assign \crcs$248[1].inverted  = crcs[75];
-  assign \crcs$249[0]  = crcs[37:0];
-  assign \crcs$249[0].width  = crcs[4:0];
-  assign \crcs$249[0].poly  = crcs[20:5];
-  assign \crcs$249[0].start  = crcs[36:21];
-  assign \crcs$249[0].inverted  = crcs[37];
-  assign \crcs$249[1]  = crcs[75:38];
-  assign \crcs$249[1].width  = crcs[42:38];
-  assign \crcs$249[1].poly  = crcs[58:43];
-  assign \crcs$249[1].start  = crcs[74:59];
-  assign \crcs$249[1].inverted  = crcs[75];
+  assign \crcs$250[0]  = crcs[37:0];
+  assign \crcs$250[0].width  = crcs[4:0];
+  assign \crcs$250[0].poly  = crcs[20:5];
+  assign \crcs$250[0].start  = crcs[36:21];
+  assign \crcs$250[0].inverted  = crcs[37];
+  assign \crcs$250[1]  = crcs[75:38];
+  assign \crcs$250[1].width  = crcs[42:38];
+  assign \crcs$250[1].poly  = crcs[58:43];
+  assign \crcs$250[1].start  = crcs[74:59];
+  assign \crcs$250[1].inverted  = crcs[75];
+  assign \crcs$251[0]  = crcs[37:0];
+  assign \crcs$251[0].width  = crcs[4:0];
+  assign \crcs$251[0].poly  = crcs[20:5];
+  assign \crcs$251[0].start  = crcs[36:21];
+  assign \crcs$251[0].inverted  = crcs[37];
+  assign \crcs$251[1]  = crcs[75:38];
+  assign \crcs$251[1].width  = crcs[42:38];
+  assign \crcs$251[1].poly  = crcs[58:43];
+  assign \crcs$251[1].start  = crcs[74:59];
+  assign \crcs$251[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -1758,36 +1763,36 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$313.slave_id  = \request$313 [2:0];
-  assign \request$313.address  = \request$313 [9:3];
-  assign \request$313.count  = \request$313 [16:10];
-  assign \request$313.write  = \request$313 [17];
+  assign \request$315.slave_id  = \request$315 [2:0];
+  assign \request$315.address  = \request$315 [9:3];
+  assign \request$315.count  = \request$315 [16:10];
+  assign \request$315.write  = \request$315 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$335.crc_word0  = \events$335 [0];
-  assign \events$335.crc_word1  = \events$335 [1];
-  assign \events$335.no_ack  = \events$335 [2];
-  assign \events$335.no_start  = \events$335 [3];
-  assign \events$335.delay_range  = \events$335 [4];
-  assign \events$335.slo_stuck_low  = \events$335 [5];
-  assign \events$335.lc_repeat  = \events$335 [6];
-  assign \events$335.lc_skip  = \events$335 [7];
-  assign \events$335.lc_zero  = \events$335 [8];
-  assign \events$335.spw_mismatch  = \events$335 [9];
-  assign \events$335.overrun  = \events$335 [10];
-  assign \events$335.aborted  = \events$335 [11];
-  assign \events$335.no_stop  = \events$335 [12];
-  assign \events$335.noisy_line  = \events$335 [13];
-  assign \events$335.delay_jump  = \events$335 [14];
-  assign \events$335.noise_event  = \events$335 [15];
-  assign \events$335.ca_crc4_error  = \events$335 [16];
-  assign \events$335.ca_no_answer  = \events$335 [17];
-  assign \events$335.ca_refused  = \events$335 [18];
-  assign \events$335.ca_aborted  = \events$335 [19];
-  assign \events$335.ca_data_fault  = \events$335 [20];
+  assign \events$337.crc_word0  = \events$337 [0];
+  assign \events$337.crc_word1  = \events$337 [1];
+  assign \events$337.no_ack  = \events$337 [2];
+  assign \events$337.no_start  = \events$337 [3];
+  assign \events$337.delay_range  = \events$337 [4];
+  assign \events$337.slo_stuck_low  = \events$337 [5];
+  assign \events$337.lc_repeat  = \events$337 [6];
+  assign \events$337.lc_skip  = \events$337 [7];
+  assign \events$337.lc_zero  = \events$337 [8];
+  assign \events$337.spw_mismatch  = \events$337 [9];
+  assign \events$337.overrun  = \events$337 [10];
+  assign \events$337.aborted  = \events$337 [11];
+  assign \events$337.no_stop  = \events$337 [12];
+  assign \events$337.noisy_line  = \events$337 [13];
+  assign \events$337.delay_jump  = \events$337 [14];
+  assign \events$337.noise_event  = \events$337 [15];
+  assign \events$337.ca_crc4_error  = \events$337 [16];
+  assign \events$337.ca_no_answer  = \events$337 [17];
+  assign \events$337.ca_refused  = \events$337 [18];
+  assign \events$337.ca_aborted  = \events$337 [19];
+  assign \events$337.ca_data_fault  = \events$337 [20];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -1816,59 +1821,59 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \counts.ca_refused  = counts[303:288];
   assign \counts.ca_aborted  = counts[319:304];
   assign \counts.ca_data_fault  = counts[335:320];
-  assign \result$345.status  = \result$345 [3:0];
-  assign \result$345.timestamp  = \result$345 [35:4];
-  assign \result$345.line_delay  = \result$345 [48:36];
-  assign \result$345.cds  = \result$345 [49];
-  assign \result$345.noise_events  = \result$345 [53:50];
-  assign \result$345.delay_settled  = \result$345 [54];
-  assign \result$345.settled_delay  = \result$345 [67:55];
-  assign \result$345.delay_spread  = \result$345 [75:68];
-  assign \result$345.word0  = \result$345 [133:76];
-  assign \result$345.word0.position  = \result$345 [130:76];
-  assign \result$345.word0.ne  = \result$345 [131];
-  assign \result$345.word0.nw  = \result$345 [132];
-  assign \result$345.word0.crc_ok  = \result$345 [133];
-  assign \result$345.word1  = \result$345 [176:134];
-  assign \result$345.word1.position  = \result$345 [173:134];
-  assign \result$345.word1.ne  = \result$345 [174];
-  assign \result$345.word1.nw  = \result$345 [175];
-  assign \result$345.word1.crc_ok  = \result$345 [176];
-  assign \result$345.lc  = \result$345 [182:177];
-  assign \result$345.lc_repeat  = \result$345 [183];
-  assign \result$345.lc_skip  = \result$345 [184];
-  assign \result$345.lc_zero  = \result$345 [185];
-  assign \result$345.spw_mismatch  = \result$345 [186];
-  assign \events$335 [20] = \$20 ;
-  assign \events$335 [19] = \$18 ;
-  assign \events$335 [18] = \$16 ;
-  assign \events$335 [17] = \$14 ;
-  assign \events$335 [16] = \$12 ;
-  assign \events$335 [15] = \event ;
-  assign \events$335 [14] = \$10 ;
-  assign \events$335 [13] = \$8 ;
-  assign \events$335 [12] = faults[6];
-  assign \events$335 [11] = faults[4];
-  assign \events$335 [10] = overrun;
-  assign \events$335 [9] = \$6 ;
-  assign \events$335 [8] = \lc_zero$305 ;
-  assign \events$335 [7] = \lc_skip$304 ;
-  assign \events$335 [6] = \lc_repeat$303 ;
-  assign \events$335 [5] = faults[3];
-  assign \events$335 [4] = faults[2];
-  assign \events$335 [3] = faults[1];
-  assign \events$335 [2] = faults[0];
-  assign \events$335 [1] = crc_error[1];
-  assign \events$335 [0] = crc_error[0];
+  assign \result$347.status  = \result$347 [3:0];
+  assign \result$347.timestamp  = \result$347 [35:4];
+  assign \result$347.line_delay  = \result$347 [48:36];
+  assign \result$347.cds  = \result$347 [49];
+  assign \result$347.noise_events  = \result$347 [53:50];
+  assign \result$347.delay_settled  = \result$347 [54];
+  assign \result$347.settled_delay  = \result$347 [67:55];
+  assign \result$347.delay_spread  = \result$347 [75:68];
+  assign \result$347.word0  = \result$347 [133:76];
+  assign \result$347.word0.position  = \result$347 [130:76];
+  assign \result$347.word0.ne  = \result$347 [131];
+  assign \result$347.word0.nw  = \result$347 [132];
+  assign \result$347.word0.crc_ok  = \result$347 [133];
+  assign \result$347.word1  = \result$347 [176:134];
+  assign \result$347.word1.position  = \result$347 [173:134];
+  assign \result$347.word1.ne  = \result$347 [174];
+  assign \result$347.word1.nw  = \result$347 [175];
+  assign \result$347.word1.crc_ok  = \result$347 [176];
+  assign \result$347.lc  = \result$347 [182:177];
+  assign \result$347.lc_repeat  = \result$347 [183];
+  assign \result$347.lc_skip  = \result$347 [184];
+  assign \result$347.lc_zero  = \result$347 [185];
+  assign \result$347.spw_mismatch  = \result$347 [186];
+  assign \events$337 [20] = \$20 ;
+  assign \events$337 [19] = \$18 ;
+  assign \events$337 [18] = \$16 ;
+  assign \events$337 [17] = \$14 ;
+  assign \events$337 [16] = \$12 ;
+  assign \events$337 [15] = \event ;
+  assign \events$337 [14] = \$10 ;
+  assign \events$337 [13] = \$8 ;
+  assign \events$337 [12] = faults[6];
+  assign \events$337 [11] = faults[4];
+  assign \events$337 [10] = overrun;
+  assign \events$337 [9] = \$6 ;
+  assign \events$337 [8] = \lc_zero$307 ;
+  assign \events$337 [7] = \lc_skip$306 ;
+  assign \events$337 [6] = \lc_repeat$305 ;
+  assign \events$337 [5] = faults[3];
+  assign \events$337 [4] = faults[2];
+  assign \events$337 [3] = faults[1];
+  assign \events$337 [2] = faults[0];
+  assign \events$337 [1] = crc_error[1];
+  assign \events$337 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$313 [17] = ca_write;
-  assign \request$313 [16:10] = ca_count;
-  assign \request$313 [9:3] = ca_address;
-  assign \request$313 [2:0] = ca_slave_id;
+  assign \request$315 [17] = ca_write;
+  assign \request$315 [16:10] = ca_count;
+  assign \request$315 [9:3] = ca_address;
+  assign \request$315 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
-  assign frame[186] = \spw_mismatch$310 ;
+  assign frame[186] = \spw_mismatch$312 ;
   assign frame[176] = \$28 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
@@ -1877,19 +1882,19 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign frame[132] = nw[0];
   assign frame[131] = ne[0];
   assign frame[130:76] = data0;
-  assign frame[185] = \lc_zero$305 ;
-  assign frame[184] = \lc_skip$304 ;
-  assign frame[183] = \lc_repeat$303 ;
-  assign frame[182:177] = \lc$211 ;
+  assign frame[185] = \lc_zero$307 ;
+  assign frame[184] = \lc_skip$306 ;
+  assign frame[183] = \lc_repeat$305 ;
+  assign frame[182:177] = \lc$213 ;
   assign frame[75:68] = spread;
-  assign frame[67:55] = \settled_delay$301 ;
+  assign frame[67:55] = \settled_delay$303 ;
   assign frame[54] = settled;
   assign frame[53:50] = events;
-  assign frame[49] = \cds$298 ;
+  assign frame[49] = \cds$300 ;
   assign frame[48:36] = delay;
-  assign frame[3:0] = \status$288 ;
-  assign \words$246 [23:12] = cycle[211:200];
-  assign \words$246 [11:0] = cycle[160:149];
+  assign frame[3:0] = \status$290 ;
+  assign \words$248 [23:12] = cycle[211:200];
+  assign \words$248 [11:0] = cycle[160:149];
   assign words[23:12] = cycle[211:200];
   assign words[11:0] = cycle[160:149];
   assign live[274] = cfg_ssi_double;
@@ -2546,8 +2551,8 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_timer, report_delay, frame_doubtful, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
-, faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full, started
-, stop_bit, abort);
+, faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full
+, started, stop_bit, abort);
   reg \$auto$verilog_backend.cc:2355:dump_module$8  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -2579,12 +2584,18 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
   wire \$34 ;
   wire \$35 ;
   wire \$36 ;
-  reg \$37 ;
-  reg [2:0] \$38 ;
-  reg \$39 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
   wire \$4 ;
-  reg \$40 ;
-  reg \$41 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  reg \$43 ;
+  reg [2:0] \$44 ;
+  reg \$45 ;
+  reg \$46 ;
+  reg \$47 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
@@ -2615,7 +2626,7 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
   wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
   reg delay;
-  wire \delay$80 ;
+  wire \delay$81 ;
   input delay_over;
   wire delay_over;
   wire \delay_over$31 ;
@@ -2628,7 +2639,7 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
   output fault;
   reg fault;
   wire \fault$39 ;
-  wire \fault$76 ;
+  wire \fault$77 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -2798,63 +2809,71 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$81 ;
+  wire [3:0] \status$82 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
   wire stopped;
   wire stuck_low;
+  input timeout_over;
+  wire timeout_over;
   output timer_clear;
   reg timer_clear;
   output waiting;
   reg waiting;
   reg watch;
   always @(posedge clk)
-    pause <= \$41 ;
+    first_clock <= \$43 ;
+  always @(posedge clk)
+    cycle_fsm_state <= \$44 ;
+  always @(posedge clk)
+    idle <= \$45 ;
+  always @(posedge clk)
+    receiver_clear <= \$46 ;
+  always @(posedge clk)
+    pause <= \$47 ;
   assign \$1  = ma_busy | abort;
-  assign \$2  = ~ ma_enough;
-  assign \$3  = restart_timer | abort;
-  assign \$4  = frame_done & ssi;
-  assign \$5  = \$4  & stop_bit;
-  assign \$6  = ~ ssi;
-  assign \$7  = \fault$76  & \$6 ;
-  assign \$8  = ~ end_check;
-  assign \$9  = ~ ma_enough;
-  assign \$10  = stopped | ssi;
+  assign \$2  = ~ ssi;
+  assign \$3  = \$2  | timeout_over;
+  assign \$4  = break_over & \$3 ;
+  assign \$5  = ~ ma_enough;
+  assign \$6  = restart_timer | abort;
+  assign \$7  = frame_done & ssi;
+  assign \$8  = \$7  & stop_bit;
+  assign \$9  = ~ ssi;
+  assign \$10  = \fault$77  & \$9 ;
   assign \$11  = ~ end_check;
-  assign \$12  = ma_busy | abort;
-  assign \$13  = ~ ma_busy;
-  assign \$14  = \$13  | ma_held;
-  assign \$15  = \$14  & slo;
-  assign \$16  = ! cycle_fsm_state;
-  assign \$17  = cycle_fsm_state == 1'h1;
-  assign \$18  = cycle_fsm_state == 2'h2;
-  assign \$19  = cycle_fsm_state == 2'h3;
-  assign \$20  = cycle_fsm_state == 3'h4;
-  assign \$21  = cycle_fsm_state == 3'h5;
-  assign \$22  = cycle_fsm_state == 3'h6;
-  assign \$23  = cycle_fsm_state == 3'h7;
-  assign \$24  = ma_busy | abort;
-  assign \$25  = frame_done & ssi;
-  assign \$26  = \$25  & stop_bit;
-  assign \$27  = ~ ssi;
-  assign \$28  = \fault$76  & \$27 ;
-  assign \$29  = stopped | ssi;
-  assign \$30  = ~ end_check;
-  assign \$31  = ma_busy | abort;
-  assign \$32  = cdm_cycle & abort;
-  assign \$33  = ~ ma_busy;
-  assign \$34  = ~ ma_busy;
-  assign \$35  = \$34  | ma_held;
-  assign \$36  = \$35  & slo;
-  always @(posedge clk)
-    first_clock <= \$37 ;
-  always @(posedge clk)
-    cycle_fsm_state <= \$38 ;
-  always @(posedge clk)
-    idle <= \$39 ;
-  always @(posedge clk)
-    receiver_clear <= \$40 ;
+  assign \$12  = ~ ma_enough;
+  assign \$13  = stopped | ssi;
+  assign \$14  = ~ end_check;
+  assign \$15  = ma_busy | abort;
+  assign \$16  = ~ ma_busy;
+  assign \$17  = \$16  | ma_held;
+  assign \$18  = \$17  & slo;
+  assign \$19  = ! cycle_fsm_state;
+  assign \$20  = cycle_fsm_state == 1'h1;
+  assign \$21  = cycle_fsm_state == 2'h2;
+  assign \$22  = cycle_fsm_state == 2'h3;
+  assign \$23  = cycle_fsm_state == 3'h4;
+  assign \$24  = cycle_fsm_state == 3'h5;
+  assign \$25  = cycle_fsm_state == 3'h6;
+  assign \$26  = cycle_fsm_state == 3'h7;
+  assign \$27  = ma_busy | abort;
+  assign \$28  = ~ ssi;
+  assign \$29  = \$28  | timeout_over;
+  assign \$30  = break_over & \$29 ;
+  assign \$31  = frame_done & ssi;
+  assign \$32  = \$31  & stop_bit;
+  assign \$33  = ~ ssi;
+  assign \$34  = \fault$77  & \$33 ;
+  assign \$35  = stopped | ssi;
+  assign \$36  = ~ end_check;
+  assign \$37  = ma_busy | abort;
+  assign \$38  = cdm_cycle & abort;
+  assign \$39  = ~ ma_busy;
+  assign \$40  = ~ ma_busy;
+  assign \$41  = \$40  | ma_held;
+  assign \$42  = \$41  & slo;
   \biss_master.controller.cdm_hold  cdm_hold (
     .abort(abort),
     .cdm(cdm),
@@ -2872,10 +2891,10 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
     .ack_expired(ack_expired),
     .clear(clear),
     .clk(clk),
-    .delay(\delay$80 ),
+    .delay(\delay$81 ),
     .delay_over(delay_over),
     .early(early),
-    .fault(\fault$76 ),
+    .fault(\fault$77 ),
     .locked(locked),
     .ma_arm(ma_arm),
     .no_start_expired(no_start_expired),
@@ -2883,7 +2902,7 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
     .rst(rst),
     .slots_full(slots_full),
     .started(started),
-    .status(\status$81 ),
+    .status(\status$82 ),
     .watch(watch)
   );
   \biss_master.controller.ready_check  ready_check (
@@ -2910,6 +2929,387 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
+    report_frame = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$8 ) begin
+          end else if (frame_done) begin
+            if (\$11 ) begin
+              report_frame = 1'h1;
+            end
+          end
+      3'h4:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h6:
+          /* empty */;
+      3'h7:
+          if (abort) begin
+          end else if (\$18 ) begin
+            report_frame = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
+    delay = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$8 ) begin
+          end else if (frame_done) begin
+          end else if (\$10 ) begin
+            delay = \delay$81 ;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
+    holding = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          holding = 1'h1;
+      3'h6:
+          holding = 1'h1;
+      3'h7:
+          holding = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
+    \$43  = idle;
+    if (rst) begin
+      \$43  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
+    \$44  = cycle_fsm_state;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$44  = 3'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (request) begin
+            \$44  = 3'h2;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$44  = 3'h1;
+            if (abort) begin
+              \$44  = 3'h0;
+            end
+          end else if (aborted) begin
+            \$44  = 3'h0;
+          end else if (ready) begin
+            \$44  = 3'h3;
+          end else if (stuck_low) begin
+            \$44  = 3'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (\$32 ) begin
+            \$44  = 3'h0;
+          end else if (frame_done) begin
+            \$44  = 3'h4;
+          end else if (\$34 ) begin
+            \$44  = 3'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$44  = 3'h0;
+            end else begin
+              \$44  = 3'h0;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$44  = 3'h5;
+              end else begin
+                \$44  = 3'h6;
+              end
+            end else if (stop_bit) begin
+              \$44  = 3'h0;
+            end else begin
+              \$44  = 3'h7;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$44  = 3'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$44  = 3'h0;
+          end else if (\$39 ) begin
+            \$44  = 3'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$44  = 3'h5;
+            end else if (cdm_cycle) begin
+              \$44  = 3'h6;
+            end else begin
+              \$44  = 3'h1;
+            end
+          end else if (slo_stuck) begin
+            \$44  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$44  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
+    \$45  = idle;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$45  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (request) begin
+            \$45  = 1'h0;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$45  = 1'h1;
+            if (abort) begin
+              \$45  = 1'h0;
+            end
+          end else if (aborted) begin
+            \$45  = 1'h0;
+          end else if (ready) begin
+            \$45  = 1'h0;
+          end else if (stuck_low) begin
+            \$45  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (\$32 ) begin
+            \$45  = 1'h0;
+          end else if (frame_done) begin
+            \$45  = 1'h0;
+          end else if (\$34 ) begin
+            \$45  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h0;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$45  = 1'h0;
+              end else begin
+                \$45  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$45  = 1'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$45  = 1'h0;
+          end else if (\$39 ) begin
+            \$45  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$45  = 1'h0;
+            end else if (cdm_cycle) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$45  = 1'h0;
+          end
+    endcase
+    if (rst) begin
+      \$45  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
+    \$46  = receiver_clear;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$46  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (request) begin
+            \$46  = 1'h1;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$46  = 1'h1;
+            if (abort) begin
+              \$46  = 1'h1;
+            end
+          end else if (aborted) begin
+            \$46  = 1'h1;
+          end else if (ready) begin
+            \$46  = 1'h0;
+          end else if (stuck_low) begin
+            \$46  = 1'h1;
+          end
+      3'h3:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (\$32 ) begin
+            \$46  = 1'h1;
+          end else if (frame_done) begin
+            \$46  = 1'h0;
+          end else if (\$34 ) begin
+            \$46  = 1'h1;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$46  = 1'h1;
+            end else begin
+              \$46  = 1'h1;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$46  = 1'h1;
+              end else begin
+                \$46  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$46  = 1'h1;
+            end else begin
+              \$46  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$46  = 1'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$46  = 1'h1;
+          end else if (\$39 ) begin
+            \$46  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$46  = 1'h1;
+            end else if (cdm_cycle) begin
+              \$46  = 1'h0;
+            end else begin
+              \$46  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$46  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$46  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
+    \$47  = pause;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$32 ) begin
+          end else if (frame_done) begin
+            \$47  = frame_doubtful;
+          end
+    endcase
+    if (rst) begin
+      \$47  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -2931,19 +3331,19 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
           timer_clear = 1'h1;
       3'h3:
         begin
-          if (\$3 ) begin
+          if (\$6 ) begin
             timer_clear = 1'h1;
           end
           if (abort) begin
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             timer_clear = 1'h1;
           end
         end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -2952,7 +3352,7 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
             end
           end
       3'h5:
-          if (\$12 ) begin
+          if (\$15 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -2960,7 +3360,7 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
@@ -3014,10 +3414,10 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
       3'h3:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\$7 ) begin
+          end else if (\$10 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -3025,8 +3425,8 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
             if (end_check) begin
               fault = 1'h1;
             end
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -3038,7 +3438,7 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
@@ -3065,19 +3465,19 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             fault_status = 4'hc;
           end else if (frame_done) begin
-          end else if (\$7 ) begin
-            fault_status = \status$81 ;
+          end else if (\$10 ) begin
+            fault_status = \status$82 ;
           end
       3'h4:
           if (abort) begin
             if (end_check) begin
               fault_status = 4'ha;
             end
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -3089,7 +3489,7 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
           end
@@ -3106,9 +3506,9 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
       3'h2:
           /* empty */;
       3'h3:
-          ma_run = \$2 ;
+          ma_run = \$5 ;
       3'h4:
-          ma_run = \$9 ;
+          ma_run = \$12 ;
     endcase
   end
   always @* begin
@@ -3154,387 +3554,6 @@ module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_time
       3'h4:
           framing = 1'h1;
     endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
-    report_frame = 1'h0;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$5 ) begin
-          end else if (frame_done) begin
-            if (\$8 ) begin
-              report_frame = 1'h1;
-            end
-          end
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-          end else if (\$15 ) begin
-            report_frame = 1'h1;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
-    delay = 1'h0;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$5 ) begin
-          end else if (frame_done) begin
-          end else if (\$7 ) begin
-            delay = \delay$80 ;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
-    holding = 1'h0;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          /* empty */;
-      3'h4:
-          /* empty */;
-      3'h5:
-          holding = 1'h1;
-      3'h6:
-          holding = 1'h1;
-      3'h7:
-          holding = 1'h1;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
-    \$37  = idle;
-    if (rst) begin
-      \$37  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
-    \$38  = cycle_fsm_state;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$38  = 3'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (request) begin
-            \$38  = 3'h2;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$38  = 3'h1;
-            if (abort) begin
-              \$38  = 3'h0;
-            end
-          end else if (aborted) begin
-            \$38  = 3'h0;
-          end else if (ready) begin
-            \$38  = 3'h3;
-          end else if (stuck_low) begin
-            \$38  = 3'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (\$26 ) begin
-            \$38  = 3'h0;
-          end else if (frame_done) begin
-            \$38  = 3'h4;
-          end else if (\$28 ) begin
-            \$38  = 3'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$38  = 3'h0;
-            end else begin
-              \$38  = 3'h0;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$38  = 3'h5;
-              end else begin
-                \$38  = 3'h6;
-              end
-            end else if (stop_bit) begin
-              \$38  = 3'h0;
-            end else begin
-              \$38  = 3'h7;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$38  = 3'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$38  = 3'h0;
-          end else if (\$33 ) begin
-            \$38  = 3'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$38  = 3'h5;
-            end else if (cdm_cycle) begin
-              \$38  = 3'h6;
-            end else begin
-              \$38  = 3'h1;
-            end
-          end else if (slo_stuck) begin
-            \$38  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$38  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
-    \$39  = idle;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$39  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (request) begin
-            \$39  = 1'h0;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$39  = 1'h1;
-            if (abort) begin
-              \$39  = 1'h0;
-            end
-          end else if (aborted) begin
-            \$39  = 1'h0;
-          end else if (ready) begin
-            \$39  = 1'h0;
-          end else if (stuck_low) begin
-            \$39  = 1'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (\$26 ) begin
-            \$39  = 1'h0;
-          end else if (frame_done) begin
-            \$39  = 1'h0;
-          end else if (\$28 ) begin
-            \$39  = 1'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h0;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$39  = 1'h0;
-              end else begin
-                \$39  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$39  = 1'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$39  = 1'h0;
-          end else if (\$33 ) begin
-            \$39  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$39  = 1'h0;
-            end else if (cdm_cycle) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$39  = 1'h0;
-          end
-    endcase
-    if (rst) begin
-      \$39  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
-    \$40  = receiver_clear;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$40  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (request) begin
-            \$40  = 1'h1;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$40  = 1'h1;
-            if (abort) begin
-              \$40  = 1'h1;
-            end
-          end else if (aborted) begin
-            \$40  = 1'h1;
-          end else if (ready) begin
-            \$40  = 1'h0;
-          end else if (stuck_low) begin
-            \$40  = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (\$26 ) begin
-            \$40  = 1'h1;
-          end else if (frame_done) begin
-            \$40  = 1'h0;
-          end else if (\$28 ) begin
-            \$40  = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$40  = 1'h1;
-            end else begin
-              \$40  = 1'h1;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$40  = 1'h1;
-              end else begin
-                \$40  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$40  = 1'h1;
-            end else begin
-              \$40  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$40  = 1'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$40  = 1'h1;
-          end else if (\$33 ) begin
-            \$40  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$40  = 1'h1;
-            end else if (cdm_cycle) begin
-              \$40  = 1'h0;
-            end else begin
-              \$40  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$40  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$40  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$8 ) begin end
-    \$41  = pause;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$26 ) begin
-          end else if (frame_done) begin
-            \$41  = frame_doubtful;
-          end
-    endcase
-    if (rst) begin
-      \$41  = 1'h0;
-    end
   end
   assign \first_clock$1  = first_clock;
   assign \config_ok$3  = config_ok;
@@ -5576,7 +5595,7 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$2183$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$2190$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire [6:0] \$1 ;
@@ -6279,8 +6298,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$2183$272 ;
-  wire [2:0] \port$2183$272 ;
+  input [2:0] \port$2190$272 ;
+  wire [2:0] \port$2190$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -6347,8 +6366,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$367  = ssi & \port$2183$272 [0];
-  assign \$368  = ~ \port$2183$272 [1];
+  assign \$367  = ssi & \port$2190$272 [0];
+  assign \$368  = ~ \port$2190$272 [1];
   assign \$369  = \$367  & \$368 ;
   assign \$370  = \bit  ^ \$369 ;
   assign \$371  = ~ words[6];
@@ -6669,18 +6688,18 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
     cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$2183$272 [0];
+  assign \$3  = ssi & \port$2190$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$2183$272 [0];
+  assign \$6  = ssi & \port$2190$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$2183$272 [0];
+  assign \$9  = ssi & \port$2190$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$2183$272 [0];
+  assign \$14  = ssi & \port$2190$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$2183$272 [0];
+  assign \$18  = ssi & \port$2190$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -6725,7 +6744,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   assign \$66  = idx == \$65 ;
   assign \$67  = word_count - 1'h1;
   assign \$68  = word == \$67 ;
-  assign \$69  = ssi & \port$2183$272 [2];
+  assign \$69  = ssi & \port$2190$272 [2];
   assign \$70  = word + 1'h1;
   assign \$71  = idx + 1'h1;
   assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -7016,7 +7035,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   assign \$357  = \$354  & \$356 ;
   assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
   assign \$359  = ~ words[6];
-  assign \$360  = ssi & \port$2183$272 [0];
+  assign \$360  = ssi & \port$2190$272 [0];
   assign \$361  = ~ \$360 ;
   assign \$362  = \$359  & \$361 ;
   assign \$363  = ! word;
@@ -7778,9 +7797,9 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$2183$272 [0];
-  assign ssi_double = \port$2183$272 [2];
-  assign ssi_error_low = \port$2183$272 [1];
+  assign ssi_error = \port$2190$272 [0];
+  assign ssi_double = \port$2190$272 [2];
+  assign ssi_error_low = \port$2190$272 [1];
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$53  = crcs;
   assign \bit$58  = \bit ;
@@ -11289,7 +11308,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2183$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2190$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -11423,8 +11442,8 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$218
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$2183$259 ;
-  wire [12:0] \port$2183$259 ;
+  input [12:0] \port$2190$259 ;
+  wire [12:0] \port$2190$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -11449,7 +11468,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$218
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$2183$259 [12:1] + 1'h1;
+  assign \$11  = \port$2190$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -11574,7 +11593,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$218
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$2183$259 [0]),
+    .clear_high(\port$2190$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -11717,7 +11736,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$218
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$2183$259 [0]) begin
+            if (\port$2190$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -11802,7 +11821,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$218
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$2183$259 [0]) begin
+            if (\port$2190$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -11841,7 +11860,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$218
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$2183$259 [12:1] };
+            \$85  = { 1'h0, \port$2190$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -12226,11 +12245,11 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$218
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$2183$259 [12:1] };
-  assign fixed = \port$2183$259 [0];
+  assign fixed_delay = { 1'h0, \port$2190$259 [12:1] };
+  assign fixed = \port$2190$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$2183$259 [0];
+  assign clear_high = \port$2190$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -12637,7 +12656,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2171$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2178$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -12679,8 +12698,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2171$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2171$0 ;
-  wire \port$2171$0 ;
+  input \port$2178$0 ;
+  wire \port$2178$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -12694,9 +12713,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2171$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2171$0  };
-  assign \$2  = { lc[4:0], \port$2171$0  } == last;
-  assign \$3  = { lc[4:0], \port$2171$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2178$0  };
+  assign \$2  = { lc[4:0], \port$2178$0  } == last;
+  assign \$3  = { lc[4:0], \port$2178$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -12806,7 +12825,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2171$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2171$0  };
+  assign lc_next = { lc[4:0], \port$2178$0  };
   assign zero = is_zero;
 endmodule
 
@@ -13086,8 +13105,8 @@ module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma_busy, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
-, delay, slo, break_time);
+module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma_busy, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired
+, delay_over, delay, slo, break_time);
   reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -13131,19 +13150,21 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
   wire \$45 ;
   wire \$46 ;
   wire \$47 ;
-  reg [24:0] \$48 ;
-  reg \$49 ;
+  wire \$48 ;
+  reg [24:0] \$49 ;
   wire \$5 ;
   reg \$50 ;
-  reg [12:0] \$51 ;
-  reg \$52 ;
+  reg \$51 ;
+  reg [12:0] \$52 ;
   reg \$53 ;
-  reg [24:0] \$54 ;
-  reg \$55 ;
+  reg \$54 ;
+  reg [24:0] \$55 ;
   reg \$56 ;
   reg \$57 ;
   reg \$58 ;
+  reg \$59 ;
   wire \$6 ;
+  reg \$60 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
@@ -13197,35 +13218,42 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
   wire [23:0] timeout_limit;
   input [23:0] timeout_live;
   wire [23:0] timeout_live;
+  output timeout_over;
+  reg timeout_over = 1'h0;
   reg [24:0] timer = 25'h0000001;
-  assign \$42  = \$40  & \$41 ;
-  assign \$43  = ~ restart;
-  assign \$44  = in_clock & \$43 ;
-  assign \$45  = timer >= no_start_limit;
-  assign \$46  = \$44  & \$45 ;
-  assign \$47  = delay > delay_limit;
+  assign \$40  = ~ restart;
+  assign \$41  = in_clock & \$40 ;
+  assign \$42  = timer >= ack_limit;
+  assign \$43  = \$41  & \$42 ;
+  assign \$44  = ~ restart;
+  assign \$45  = in_clock & \$44 ;
+  assign \$46  = timer >= no_start_limit;
+  assign \$47  = \$45  & \$46 ;
+  assign \$48  = delay > delay_limit;
   always @(posedge clk)
-    slo_low_time_p1 <= \$48 ;
+    slo_low_time_p1 <= \$49 ;
   always @(posedge clk)
-    slo_stuck <= \$49 ;
+    slo_stuck <= \$50 ;
   always @(posedge clk)
-    slo_stuck_live <= \$50 ;
+    slo_stuck_live <= \$51 ;
   always @(posedge clk)
-    high_p2 <= \$51 ;
+    high_p2 <= \$52 ;
   always @(posedge clk)
-    quiet <= \$52 ;
+    quiet <= \$53 ;
   always @(posedge clk)
-    quiet_live <= \$53 ;
+    quiet_live <= \$54 ;
   always @(posedge clk)
-    timer <= \$54 ;
+    timer <= \$55 ;
   always @(posedge clk)
-    break_over <= \$55 ;
+    break_over <= \$56 ;
   always @(posedge clk)
-    ack_expired <= \$56 ;
+    timeout_over <= \$57 ;
   always @(posedge clk)
-    no_start_expired <= \$57 ;
+    ack_expired <= \$58 ;
   always @(posedge clk)
-    delay_over <= \$58 ;
+    no_start_expired <= \$59 ;
+  always @(posedge clk)
+    delay_over <= \$60 ;
   assign \$1  = slo & quiet;
   assign \$2  = \$1  | ma_busy;
   assign \$3  = ~ slo_low_time_p1[24];
@@ -13264,105 +13292,115 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
   assign \$36  = timer >= 12'hfa0;
   assign \$37  = timer >= break_time;
   assign \$38  = \$35  ? \$36  : \$37 ;
-  assign \$39  = ~ restart;
-  assign \$40  = in_clock & \$39 ;
-  assign \$41  = timer >= ack_limit;
+  assign \$39  = timer >= timeout_limit;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$48  = slo_low_time_p1;
+    \$49  = slo_low_time_p1;
     if (\$2 ) begin
-      \$48  = 25'h0000001;
+      \$49  = 25'h0000001;
     end else if (\$3 ) begin
-      \$48  = \$4 [24:0];
+      \$49  = \$4 [24:0];
     end
     if (rst) begin
-      \$48  = 25'h0000001;
+      \$49  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$49  = \$9 ;
-    if (rst) begin
-      \$49  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$50  = \$17 ;
+    \$50  = \$9 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$51  = high_p2;
+    \$51  = \$17 ;
+    if (rst) begin
+      \$51  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$52  = high_p2;
     if (\$18 ) begin
-      \$51  = 13'h0002;
+      \$52  = 13'h0002;
     end else if (\$19 ) begin
-      \$51  = \$20 [12:0];
+      \$52  = \$20 [12:0];
     end
     if (rst) begin
-      \$51  = 13'h0002;
+      \$52  = 13'h0002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$52  = \$23 ;
-    if (rst) begin
-      \$52  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$53  = \$30 ;
+    \$53  = \$23 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$54  = \$34 [24:0];
+    \$54  = \$30 ;
     if (rst) begin
-      \$54  = 25'h0000001;
+      \$54  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$55  = \$34 [24:0];
+    if (rst) begin
+      \$55  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
-      \$55  = 1'h0;
+      \$56  = 1'h0;
     end else begin
-      \$55  = \$38 ;
+      \$56  = \$38 ;
     end
-    if (rst) begin
-      \$55  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$57  = \$46 ;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$57  = 1'h0;
+    end else begin
+      \$57  = \$39 ;
+    end
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
-    \$58  = \$47 ;
+    \$58  = \$43 ;
     if (rst) begin
       \$58  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$59  = \$47 ;
+    if (rst) begin
+      \$59  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    \$60  = \$48 ;
+    if (rst) begin
+      \$60  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1610$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1617$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
@@ -13534,8 +13572,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1610$0 , lc_check, lc_re
   wire noisy;
   output passed;
   wire passed;
-  output \port$1610$0 ;
-  wire \port$1610$0 ;
+  output \port$1617$0 ;
+  wire \port$1617$0 ;
   output report;
   wire report;
   input report_frame;
@@ -13653,7 +13691,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1610$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1610$0  = \$2 ;
+  assign \port$1617$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

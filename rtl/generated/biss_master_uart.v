@@ -635,12 +635,12 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$7196$0 (\$8 ),
-    .\port$7209$0 (\$9 ),
-    .\port$7286$0 (\$10 ),
-    .\port$7730$0 (\$11 ),
-    .\port$7743$0 (\$12 ),
-    .\port$7820$0 (\$13 ),
+    .\port$7212$0 (\$8 ),
+    .\port$7225$0 (\$9 ),
+    .\port$7302$0 (\$10 ),
+    .\port$7748$0 (\$11 ),
+    .\port$7761$0 (\$12 ),
+    .\port$7838$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -713,9 +713,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$7196$0 (\$8 ),
-    .\port$7209$0 (\$9 ),
-    .\port$7286$0 (\$10 ),
+    .\port$7212$0 (\$8 ),
+    .\port$7225$0 (\$9 ),
+    .\port$7302$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -788,9 +788,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(\regs__count_en$384 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$408 ),
-    .\port$7730$0 (\$11 ),
-    .\port$7743$0 (\$12 ),
-    .\port$7820$0 (\$13 ),
+    .\port$7748$0 (\$11 ),
+    .\port$7761$0 (\$12 ),
+    .\port$7838$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$236 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1128,7 +1128,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
 , ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$113 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
 , ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
 , ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id
-, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$7196$0 , \port$7209$0 , ch0__ca_done, \port$7286$0 , ch1__frame_done, ch1__done_count, \port$7730$0 , \port$7743$0 , ch1__ca_done, \port$7820$0 , clk);
+, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$7212$0 , \port$7225$0 , ch0__ca_done, \port$7302$0 , ch1__frame_done, ch1__done_count, \port$7748$0 , \port$7761$0 , ch1__ca_done, \port$7838$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2676,18 +2676,18 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$7196$0 ;
-  wire [186:0] \port$7196$0 ;
-  input [79:0] \port$7209$0 ;
-  wire [79:0] \port$7209$0 ;
-  input [9:0] \port$7286$0 ;
-  wire [9:0] \port$7286$0 ;
-  input [186:0] \port$7730$0 ;
-  wire [186:0] \port$7730$0 ;
-  input [79:0] \port$7743$0 ;
-  wire [79:0] \port$7743$0 ;
-  input [9:0] \port$7820$0 ;
-  wire [9:0] \port$7820$0 ;
+  input [186:0] \port$7212$0 ;
+  wire [186:0] \port$7212$0 ;
+  input [79:0] \port$7225$0 ;
+  wire [79:0] \port$7225$0 ;
+  input [9:0] \port$7302$0 ;
+  wire [9:0] \port$7302$0 ;
+  input [186:0] \port$7748$0 ;
+  wire [186:0] \port$7748$0 ;
+  input [79:0] \port$7761$0 ;
+  wire [79:0] \port$7761$0 ;
+  input [9:0] \port$7838$0 ;
+  wire [9:0] \port$7838$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2791,7 +2791,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$343  = \$341  | \$342 ;
   assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7730$0 [182:177], 4'h0, \port$7730$0 [186:183], 1'h0, \port$7730$0 [176:174], 1'h0, \port$7730$0 [133:131], 3'h0, \port$7730$0 [49], \port$7730$0 [3:0] } : 32'd0;
+  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7748$0 [182:177], 4'h0, \port$7748$0 [186:183], 1'h0, \port$7748$0 [176:174], 1'h0, \port$7748$0 [133:131], 3'h0, \port$7748$0 [49], \port$7748$0 [3:0] } : 32'd0;
   assign \$347  = \$345  | \$346 ;
   assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$349  = \$347  | \$348 ;
@@ -2819,13 +2819,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$371  = \$369  | \$370 ;
   assign \$372  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7820$0 [9:3], 1'h0, \port$7820$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7838$0 [9:3], 1'h0, \port$7838$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_143 ? \port$7743$0 [31:0] : 32'd0;
+  assign \$378  = ch1_read_select_143 ? \port$7761$0 [31:0] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_144 ? \port$7743$0 [63:32] : 32'd0;
+  assign \$380  = ch1_read_select_144 ? \port$7761$0 [63:32] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7743$0 [79:64] } : 32'd0;
+  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7761$0 [79:64] } : 32'd0;
   assign \$383  = \$381  | \$382 ;
   assign \$384  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$385  = \$383  | \$384 ;
@@ -3695,7 +3695,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$158  = \$156  | \$157 ;
   assign \$159  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$7196$0 [182:177], 4'h0, \port$7196$0 [186:183], 1'h0, \port$7196$0 [176:174], 1'h0, \port$7196$0 [133:131], 3'h0, \port$7196$0 [49], \port$7196$0 [3:0] } : 32'd0;
+  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$7212$0 [182:177], 4'h0, \port$7212$0 [186:183], 1'h0, \port$7212$0 [176:174], 1'h0, \port$7212$0 [133:131], 3'h0, \port$7212$0 [49], \port$7212$0 [3:0] } : 32'd0;
   assign \$162  = \$160  | \$161 ;
   assign \$163  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$164  = \$162  | \$163 ;
@@ -3723,13 +3723,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$186  = \$184  | \$185 ;
   assign \$187  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$7286$0 [9:3], 1'h0, \port$7286$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$7302$0 [9:3], 1'h0, \port$7302$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_c3 ? \port$7209$0 [31:0] : 32'd0;
+  assign \$193  = ch0_read_select_c3 ? \port$7225$0 [31:0] : 32'd0;
   assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_c4 ? \port$7209$0 [63:32] : 32'd0;
+  assign \$195  = ch0_read_select_c4 ? \port$7225$0 [63:32] : 32'd0;
   assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$7209$0 [79:64] } : 32'd0;
+  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$7225$0 [79:64] } : 32'd0;
   assign \$198  = \$196  | \$197 ;
   assign \$199  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$200  = \$198  | \$199 ;
@@ -4933,7 +4933,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$595  = ch0_result_status_status_snapshot;
     if (\$130 ) begin
-      \$595  = \port$7196$0 [3:0];
+      \$595  = \port$7212$0 [3:0];
     end
     if (rst) begin
       \$595  = 4'h0;
@@ -4943,7 +4943,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$596  = ch0_result_status_cds_snapshot;
     if (\$130 ) begin
-      \$596  = \port$7196$0 [49];
+      \$596  = \port$7212$0 [49];
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -4953,7 +4953,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$597  = ch0_result_status_w0_ne_snapshot;
     if (\$130 ) begin
-      \$597  = \port$7196$0 [131];
+      \$597  = \port$7212$0 [131];
     end
     if (rst) begin
       \$597  = 1'h0;
@@ -4963,7 +4963,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$598  = ch0_result_status_w0_nw_snapshot;
     if (\$130 ) begin
-      \$598  = \port$7196$0 [132];
+      \$598  = \port$7212$0 [132];
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -4973,7 +4973,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$599  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$130 ) begin
-      \$599  = \port$7196$0 [133];
+      \$599  = \port$7212$0 [133];
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -4983,7 +4983,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$600  = ch0_result_status_w1_ne_snapshot;
     if (\$130 ) begin
-      \$600  = \port$7196$0 [174];
+      \$600  = \port$7212$0 [174];
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -4993,7 +4993,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$601  = ch0_result_status_w1_nw_snapshot;
     if (\$130 ) begin
-      \$601  = \port$7196$0 [175];
+      \$601  = \port$7212$0 [175];
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -5003,7 +5003,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$602  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$130 ) begin
-      \$602  = \port$7196$0 [176];
+      \$602  = \port$7212$0 [176];
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -5013,7 +5013,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$603  = ch0_result_status_lc_repeat_snapshot;
     if (\$130 ) begin
-      \$603  = \port$7196$0 [183];
+      \$603  = \port$7212$0 [183];
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -5023,7 +5023,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$604  = ch0_result_status_lc_skip_snapshot;
     if (\$130 ) begin
-      \$604  = \port$7196$0 [184];
+      \$604  = \port$7212$0 [184];
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -5033,7 +5033,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$605  = ch0_result_status_lc_zero_snapshot;
     if (\$130 ) begin
-      \$605  = \port$7196$0 [185];
+      \$605  = \port$7212$0 [185];
     end
     if (rst) begin
       \$605  = 1'h0;
@@ -5043,7 +5043,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$606  = ch0_result_status_spw_mismatch_snapshot;
     if (\$130 ) begin
-      \$606  = \port$7196$0 [186];
+      \$606  = \port$7212$0 [186];
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -5053,7 +5053,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$607  = ch0_result_status_lc_snapshot;
     if (\$130 ) begin
-      \$607  = \port$7196$0 [182:177];
+      \$607  = \port$7212$0 [182:177];
     end
     if (rst) begin
       \$607  = 6'h00;
@@ -5073,7 +5073,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$609  = ch0_result_seq_line_delay_snapshot;
     if (\$130 ) begin
-      \$609  = \port$7196$0 [48:36];
+      \$609  = \port$7212$0 [48:36];
     end
     if (rst) begin
       \$609  = 13'h0000;
@@ -5083,7 +5083,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$610  = ch0_result_w0_lo_data_snapshot;
     if (\$130 ) begin
-      \$610  = \port$7196$0 [107:76];
+      \$610  = \port$7212$0 [107:76];
     end
     if (rst) begin
       \$610  = 32'd0;
@@ -5093,7 +5093,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$611  = ch0_result_w0_hi_data_snapshot;
     if (\$130 ) begin
-      \$611  = \port$7196$0 [130:108];
+      \$611  = \port$7212$0 [130:108];
     end
     if (rst) begin
       \$611  = 23'h000000;
@@ -5103,7 +5103,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$612  = ch0_result_w1_lo_data_snapshot;
     if (\$130 ) begin
-      \$612  = \port$7196$0 [165:134];
+      \$612  = \port$7212$0 [165:134];
     end
     if (rst) begin
       \$612  = 32'd0;
@@ -5113,7 +5113,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$613  = ch0_result_w1_hi_data_snapshot;
     if (\$130 ) begin
-      \$613  = \port$7196$0 [173:166];
+      \$613  = \port$7212$0 [173:166];
     end
     if (rst) begin
       \$613  = 8'h00;
@@ -5123,7 +5123,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$614  = ch0_result_timestamp_time_snapshot;
     if (\$130 ) begin
-      \$614  = \port$7196$0 [35:4];
+      \$614  = \port$7212$0 [35:4];
     end
     if (rst) begin
       \$614  = 32'd0;
@@ -5133,7 +5133,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$615  = ch0_result_line_noise_events_snapshot;
     if (\$130 ) begin
-      \$615  = \port$7196$0 [53:50];
+      \$615  = \port$7212$0 [53:50];
     end
     if (rst) begin
       \$615  = 4'h0;
@@ -5143,7 +5143,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$616  = ch0_result_line_delay_settled_snapshot;
     if (\$130 ) begin
-      \$616  = \port$7196$0 [54];
+      \$616  = \port$7212$0 [54];
     end
     if (rst) begin
       \$616  = 1'h0;
@@ -5153,7 +5153,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$617  = ch0_result_line_delay_spread_snapshot;
     if (\$130 ) begin
-      \$617  = \port$7196$0 [75:68];
+      \$617  = \port$7212$0 [75:68];
     end
     if (rst) begin
       \$617  = 8'h00;
@@ -5163,7 +5163,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$618  = ch0_result_line_settled_delay_snapshot;
     if (\$130 ) begin
-      \$618  = \port$7196$0 [67:55];
+      \$618  = \port$7212$0 [67:55];
     end
     if (rst) begin
       \$618  = 13'h0000;
@@ -6227,7 +6227,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$725  = ch1_result_status_status_snapshot;
     if (\$315 ) begin
-      \$725  = \port$7730$0 [3:0];
+      \$725  = \port$7748$0 [3:0];
     end
     if (rst) begin
       \$725  = 4'h0;
@@ -6237,7 +6237,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$726  = ch1_result_status_cds_snapshot;
     if (\$315 ) begin
-      \$726  = \port$7730$0 [49];
+      \$726  = \port$7748$0 [49];
     end
     if (rst) begin
       \$726  = 1'h0;
@@ -6247,7 +6247,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$727  = ch1_result_status_w0_ne_snapshot;
     if (\$315 ) begin
-      \$727  = \port$7730$0 [131];
+      \$727  = \port$7748$0 [131];
     end
     if (rst) begin
       \$727  = 1'h0;
@@ -6257,7 +6257,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$728  = ch1_result_status_w0_nw_snapshot;
     if (\$315 ) begin
-      \$728  = \port$7730$0 [132];
+      \$728  = \port$7748$0 [132];
     end
     if (rst) begin
       \$728  = 1'h0;
@@ -6267,7 +6267,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$729  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$315 ) begin
-      \$729  = \port$7730$0 [133];
+      \$729  = \port$7748$0 [133];
     end
     if (rst) begin
       \$729  = 1'h0;
@@ -6277,7 +6277,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$730  = ch1_result_status_w1_ne_snapshot;
     if (\$315 ) begin
-      \$730  = \port$7730$0 [174];
+      \$730  = \port$7748$0 [174];
     end
     if (rst) begin
       \$730  = 1'h0;
@@ -6287,7 +6287,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$731  = ch1_result_status_w1_nw_snapshot;
     if (\$315 ) begin
-      \$731  = \port$7730$0 [175];
+      \$731  = \port$7748$0 [175];
     end
     if (rst) begin
       \$731  = 1'h0;
@@ -6297,7 +6297,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$732  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$315 ) begin
-      \$732  = \port$7730$0 [176];
+      \$732  = \port$7748$0 [176];
     end
     if (rst) begin
       \$732  = 1'h0;
@@ -6307,7 +6307,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$733  = ch1_result_status_lc_repeat_snapshot;
     if (\$315 ) begin
-      \$733  = \port$7730$0 [183];
+      \$733  = \port$7748$0 [183];
     end
     if (rst) begin
       \$733  = 1'h0;
@@ -6317,7 +6317,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$734  = ch1_result_status_lc_skip_snapshot;
     if (\$315 ) begin
-      \$734  = \port$7730$0 [184];
+      \$734  = \port$7748$0 [184];
     end
     if (rst) begin
       \$734  = 1'h0;
@@ -6327,7 +6327,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$735  = ch1_result_status_lc_zero_snapshot;
     if (\$315 ) begin
-      \$735  = \port$7730$0 [185];
+      \$735  = \port$7748$0 [185];
     end
     if (rst) begin
       \$735  = 1'h0;
@@ -6337,7 +6337,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$736  = ch1_result_status_spw_mismatch_snapshot;
     if (\$315 ) begin
-      \$736  = \port$7730$0 [186];
+      \$736  = \port$7748$0 [186];
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6347,7 +6347,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$737  = ch1_result_status_lc_snapshot;
     if (\$315 ) begin
-      \$737  = \port$7730$0 [182:177];
+      \$737  = \port$7748$0 [182:177];
     end
     if (rst) begin
       \$737  = 6'h00;
@@ -6367,7 +6367,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$739  = ch1_result_seq_line_delay_snapshot;
     if (\$315 ) begin
-      \$739  = \port$7730$0 [48:36];
+      \$739  = \port$7748$0 [48:36];
     end
     if (rst) begin
       \$739  = 13'h0000;
@@ -6377,7 +6377,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$740  = ch1_result_w0_lo_data_snapshot;
     if (\$315 ) begin
-      \$740  = \port$7730$0 [107:76];
+      \$740  = \port$7748$0 [107:76];
     end
     if (rst) begin
       \$740  = 32'd0;
@@ -6387,7 +6387,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$741  = ch1_result_w0_hi_data_snapshot;
     if (\$315 ) begin
-      \$741  = \port$7730$0 [130:108];
+      \$741  = \port$7748$0 [130:108];
     end
     if (rst) begin
       \$741  = 23'h000000;
@@ -6397,7 +6397,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$742  = ch1_result_w1_lo_data_snapshot;
     if (\$315 ) begin
-      \$742  = \port$7730$0 [165:134];
+      \$742  = \port$7748$0 [165:134];
     end
     if (rst) begin
       \$742  = 32'd0;
@@ -6407,7 +6407,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$743  = ch1_result_w1_hi_data_snapshot;
     if (\$315 ) begin
-      \$743  = \port$7730$0 [173:166];
+      \$743  = \port$7748$0 [173:166];
     end
     if (rst) begin
       \$743  = 8'h00;
@@ -6417,7 +6417,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$744  = ch1_result_timestamp_time_snapshot;
     if (\$315 ) begin
-      \$744  = \port$7730$0 [35:4];
+      \$744  = \port$7748$0 [35:4];
     end
     if (rst) begin
       \$744  = 32'd0;
@@ -6427,7 +6427,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$745  = ch1_result_line_noise_events_snapshot;
     if (\$315 ) begin
-      \$745  = \port$7730$0 [53:50];
+      \$745  = \port$7748$0 [53:50];
     end
     if (rst) begin
       \$745  = 4'h0;
@@ -6437,7 +6437,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$746  = ch1_result_line_delay_settled_snapshot;
     if (\$315 ) begin
-      \$746  = \port$7730$0 [54];
+      \$746  = \port$7748$0 [54];
     end
     if (rst) begin
       \$746  = 1'h0;
@@ -6447,7 +6447,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$747  = ch1_result_line_delay_spread_snapshot;
     if (\$315 ) begin
-      \$747  = \port$7730$0 [75:68];
+      \$747  = \port$7748$0 [75:68];
     end
     if (rst) begin
       \$747  = 8'h00;
@@ -6457,7 +6457,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$748  = ch1_result_line_settled_delay_snapshot;
     if (\$315 ) begin
-      \$748  = \port$7730$0 [67:55];
+      \$748  = \port$7748$0 [67:55];
     end
     if (rst) begin
       \$748  = 13'h0000;
@@ -6496,27 +6496,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$7196$0 [3:0];
-  assign ch0__cds = \port$7196$0 [49];
-  assign ch0__word0_ne = \port$7196$0 [131];
-  assign ch0__word0_nw = \port$7196$0 [132];
-  assign ch0__word0_crc_ok = \port$7196$0 [133];
-  assign ch0__word1_ne = \port$7196$0 [174];
-  assign ch0__word1_nw = \port$7196$0 [175];
-  assign ch0__word1_crc_ok = \port$7196$0 [176];
-  assign ch0__lc_repeat = \port$7196$0 [183];
-  assign ch0__lc_skip = \port$7196$0 [184];
-  assign ch0__lc_zero = \port$7196$0 [185];
-  assign ch0__spw_mismatch = \port$7196$0 [186];
-  assign ch0__lc = \port$7196$0 [182:177];
-  assign ch0__line_delay = \port$7196$0 [48:36];
-  assign ch0__word0_position = \port$7196$0 [130:76];
-  assign ch0__word1_position = \port$7196$0 [173:134];
-  assign ch0__timestamp = \port$7196$0 [35:4];
-  assign ch0__noise_events = \port$7196$0 [53:50];
-  assign ch0__delay_settled = \port$7196$0 [54];
-  assign ch0__delay_spread = \port$7196$0 [75:68];
-  assign ch0__settled_delay = \port$7196$0 [67:55];
+  assign ch0__status = \port$7212$0 [3:0];
+  assign ch0__cds = \port$7212$0 [49];
+  assign ch0__word0_ne = \port$7212$0 [131];
+  assign ch0__word0_nw = \port$7212$0 [132];
+  assign ch0__word0_crc_ok = \port$7212$0 [133];
+  assign ch0__word1_ne = \port$7212$0 [174];
+  assign ch0__word1_nw = \port$7212$0 [175];
+  assign ch0__word1_crc_ok = \port$7212$0 [176];
+  assign ch0__lc_repeat = \port$7212$0 [183];
+  assign ch0__lc_skip = \port$7212$0 [184];
+  assign ch0__lc_zero = \port$7212$0 [185];
+  assign ch0__spw_mismatch = \port$7212$0 [186];
+  assign ch0__lc = \port$7212$0 [182:177];
+  assign ch0__line_delay = \port$7212$0 [48:36];
+  assign ch0__word0_position = \port$7212$0 [130:76];
+  assign ch0__word1_position = \port$7212$0 [173:134];
+  assign ch0__timestamp = \port$7212$0 [35:4];
+  assign ch0__noise_events = \port$7212$0 [53:50];
+  assign ch0__delay_settled = \port$7212$0 [54];
+  assign ch0__delay_spread = \port$7212$0 [75:68];
+  assign ch0__settled_delay = \port$7212$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -6524,34 +6524,34 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
   assign ch0__cap_ssi = 1'h1;
-  assign ch0__ca_status = \port$7286$0 [2:0];
-  assign ch0__ca_bytes_done = \port$7286$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$7209$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$7209$0 [31:16];
-  assign ch0__count_ca_refused = \port$7209$0 [47:32];
-  assign ch0__count_ca_aborted = \port$7209$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$7209$0 [79:64];
-  assign ch1__status = \port$7730$0 [3:0];
-  assign ch1__cds = \port$7730$0 [49];
-  assign ch1__word0_ne = \port$7730$0 [131];
-  assign ch1__word0_nw = \port$7730$0 [132];
-  assign ch1__word0_crc_ok = \port$7730$0 [133];
-  assign ch1__word1_ne = \port$7730$0 [174];
-  assign ch1__word1_nw = \port$7730$0 [175];
-  assign ch1__word1_crc_ok = \port$7730$0 [176];
-  assign ch1__lc_repeat = \port$7730$0 [183];
-  assign ch1__lc_skip = \port$7730$0 [184];
-  assign ch1__lc_zero = \port$7730$0 [185];
-  assign ch1__spw_mismatch = \port$7730$0 [186];
-  assign ch1__lc = \port$7730$0 [182:177];
-  assign ch1__line_delay = \port$7730$0 [48:36];
-  assign ch1__word0_position = \port$7730$0 [130:76];
-  assign ch1__word1_position = \port$7730$0 [173:134];
-  assign ch1__timestamp = \port$7730$0 [35:4];
-  assign ch1__noise_events = \port$7730$0 [53:50];
-  assign ch1__delay_settled = \port$7730$0 [54];
-  assign ch1__delay_spread = \port$7730$0 [75:68];
-  assign ch1__settled_delay = \port$7730$0 [67:55];
+  assign ch0__ca_status = \port$7302$0 [2:0];
+  assign ch0__ca_bytes_done = \port$7302$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$7225$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$7225$0 [31:16];
+  assign ch0__count_ca_refused = \port$7225$0 [47:32];
+  assign ch0__count_ca_aborted = \port$7225$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$7225$0 [79:64];
+  assign ch1__status = \port$7748$0 [3:0];
+  assign ch1__cds = \port$7748$0 [49];
+  assign ch1__word0_ne = \port$7748$0 [131];
+  assign ch1__word0_nw = \port$7748$0 [132];
+  assign ch1__word0_crc_ok = \port$7748$0 [133];
+  assign ch1__word1_ne = \port$7748$0 [174];
+  assign ch1__word1_nw = \port$7748$0 [175];
+  assign ch1__word1_crc_ok = \port$7748$0 [176];
+  assign ch1__lc_repeat = \port$7748$0 [183];
+  assign ch1__lc_skip = \port$7748$0 [184];
+  assign ch1__lc_zero = \port$7748$0 [185];
+  assign ch1__spw_mismatch = \port$7748$0 [186];
+  assign ch1__lc = \port$7748$0 [182:177];
+  assign ch1__line_delay = \port$7748$0 [48:36];
+  assign ch1__word0_position = \port$7748$0 [130:76];
+  assign ch1__word1_position = \port$7748$0 [173:134];
+  assign ch1__timestamp = \port$7748$0 [35:4];
+  assign ch1__noise_events = \port$7748$0 [53:50];
+  assign ch1__delay_settled = \port$7748$0 [54];
+  assign ch1__delay_spread = \port$7748$0 [75:68];
+  assign ch1__settled_delay = \port$7748$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -6559,13 +6559,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign ch1__ca_status = \port$7820$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7820$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7743$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7743$0 [31:16];
-  assign ch1__count_ca_refused = \port$7743$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7743$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7743$0 [79:64];
+  assign ch1__ca_status = \port$7838$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7838$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7761$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7761$0 [31:16];
+  assign ch1__count_ca_refused = \port$7761$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7761$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7761$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__r_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -8847,7 +8847,7 @@ endmodule
 module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7196$0 , \port$7209$0 , regs__ca_done, \port$7286$0 , slo);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7212$0 , \port$7225$0 , regs__ca_done, \port$7302$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -9029,12 +9029,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7196$0 ;
-  wire [186:0] \port$7196$0 ;
-  output [79:0] \port$7209$0 ;
-  wire [79:0] \port$7209$0 ;
-  output [9:0] \port$7286$0 ;
-  wire [9:0] \port$7286$0 ;
+  output [186:0] \port$7212$0 ;
+  wire [186:0] \port$7212$0 ;
+  output [79:0] \port$7225$0 ;
+  wire [79:0] \port$7225$0 ;
+  output [9:0] \port$7302$0 ;
+  wire [9:0] \port$7302$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -9228,8 +9228,8 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
     regs__done_count <= \$17 ;
   \biss_master_uart.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$262 (ca_abort),
-    .\busy$311 (regs__busy),
+    .\abort$264 (ca_abort),
+    .\busy$313 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -9278,13 +9278,13 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$287 (clear_counters),
+    .\clear$289 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$19 ),
-    .\done$314 (done),
+    .\done$316 (done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$45 (periodic),
@@ -9292,13 +9292,13 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$20 ),
-    .\result$319 (\$18 ),
+    .\result$321 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$260 (ca_start),
+    .\start$262 (ca_start),
     .trigger(trigger),
-    .\valid$316 (valid)
+    .\valid$318 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
@@ -9489,16 +9489,16 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$7196$0  = \$18 ;
-  assign \port$7209$0  = \$19 ;
-  assign \port$7286$0  = \$20 ;
+  assign \port$7212$0  = \$18 ;
+  assign \port$7225$0  = \$19 ;
+  assign \port$7302$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$311 , config_error, count_busy, count_data, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$287 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$313 , config_error, count_busy, count_data, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$289 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$260 , \abort$262 
-, abort, ma, \done$314 , \valid$316 , \result$319 , counts, ca_done, result, slo);
+, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$262 , \abort$264 
+, abort, ma, \done$316 , \valid$318 , \result$321 , counts, ca_done, result, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -9532,26 +9532,26 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$262 ;
-  wire \abort$262 ;
+  input \abort$264 ;
+  wire \abort$264 ;
   wire \abort$57 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$90 ;
+  wire \ack_expired$92 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$111 ;
+  wire [23:0] \ack_limit$113 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$343 ;
+  wire \bit$345 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$88 ;
+  wire \break_over$90 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$271 ;
-  wire \busy$308 ;
-  output \busy$311 ;
-  wire \busy$311 ;
+  wire \busy$273 ;
+  wire \busy$310 ;
+  output \busy$313 ;
+  wire \busy$313 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -9586,10 +9586,10 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$275 ;
+  wire \cdm$277 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$322 ;
+  wire \cds$324 ;
   wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -9733,16 +9733,16 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$170 ;
+  wire \check$172 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$175 ;
-  wire \clean$344 ;
+  wire \clean$177 ;
+  wire \clean$346 ;
   wire clear;
-  wire \clear$135 ;
-  input \clear$287 ;
-  wire \clear$287 ;
-  wire \clear$300 ;
+  wire \clear$137 ;
+  input \clear$289 ;
+  wire \clear$289 ;
+  wire \clear$302 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -9771,33 +9771,33 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$187 ;
+  wire [39:0] \cpw_top$189 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$212 ;
+  wire [1:0] \crc_ok$214 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$183 ;
-  wire [37:0] \crcs$183[0] ;
-  wire \crcs$183[0].inverted ;
-  wire [15:0] \crcs$183[0].poly ;
-  wire [15:0] \crcs$183[0].start ;
-  wire [4:0] \crcs$183[0].width ;
-  wire [37:0] \crcs$183[1] ;
-  wire \crcs$183[1].inverted ;
-  wire [15:0] \crcs$183[1].poly ;
-  wire [15:0] \crcs$183[1].start ;
-  wire [4:0] \crcs$183[1].width ;
-  wire [75:0] \crcs$184 ;
-  wire [37:0] \crcs$184[0] ;
-  wire \crcs$184[0].inverted ;
-  wire [15:0] \crcs$184[0].poly ;
-  wire [15:0] \crcs$184[0].start ;
-  wire [4:0] \crcs$184[0].width ;
-  wire [37:0] \crcs$184[1] ;
-  wire \crcs$184[1].inverted ;
-  wire [15:0] \crcs$184[1].poly ;
-  wire [15:0] \crcs$184[1].start ;
-  wire [4:0] \crcs$184[1].width ;
+  wire [75:0] \crcs$185 ;
+  wire [37:0] \crcs$185[0] ;
+  wire \crcs$185[0].inverted ;
+  wire [15:0] \crcs$185[0].poly ;
+  wire [15:0] \crcs$185[0].start ;
+  wire [4:0] \crcs$185[0].width ;
+  wire [37:0] \crcs$185[1] ;
+  wire \crcs$185[1].inverted ;
+  wire [15:0] \crcs$185[1].poly ;
+  wire [15:0] \crcs$185[1].start ;
+  wire [4:0] \crcs$185[1].width ;
+  wire [75:0] \crcs$186 ;
+  wire [37:0] \crcs$186[0] ;
+  wire \crcs$186[0].inverted ;
+  wire [15:0] \crcs$186[0].poly ;
+  wire [15:0] \crcs$186[0].start ;
+  wire [4:0] \crcs$186[0].width ;
+  wire [37:0] \crcs$186[1] ;
+  wire \crcs$186[1].inverted ;
+  wire [15:0] \crcs$186[1].poly ;
+  wire [15:0] \crcs$186[1].start ;
+  wire [4:0] \crcs$186[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -9869,21 +9869,21 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$117 ;
-  wire [12:0] \delay$169 ;
+  wire [12:0] \delay$119 ;
+  wire [12:0] \delay$171 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$119 ;
+  wire [11:0] \delay_limit$121 ;
   wire delay_over;
-  wire \delay_over$98 ;
+  wire \delay_over$100 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$273 ;
-  output \done$314 ;
-  wire \done$314 ;
-  wire \done$315 ;
+  wire \done$275 ;
+  output \done$316 ;
+  wire \done$316 ;
+  wire \done$317 ;
   wire doubtful;
   wire early;
   wire \early$73 ;
@@ -9892,31 +9892,31 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$286 ;
-  wire \events$286.ca_aborted ;
-  wire \events$286.ca_crc4_error ;
-  wire \events$286.ca_data_fault ;
-  wire \events$286.ca_no_answer ;
-  wire \events$286.ca_refused ;
-  wire [15:0] \events$295 ;
-  wire \events$295.aborted ;
-  wire \events$295.crc_word0 ;
-  wire \events$295.crc_word1 ;
-  wire \events$295.delay_jump ;
-  wire \events$295.delay_range ;
-  wire \events$295.lc_repeat ;
-  wire \events$295.lc_skip ;
-  wire \events$295.lc_zero ;
-  wire \events$295.no_ack ;
-  wire \events$295.no_start ;
-  wire \events$295.no_stop ;
-  wire \events$295.noise_event ;
-  wire \events$295.noisy_line ;
-  wire \events$295.overrun ;
-  wire \events$295.slo_stuck_low ;
-  wire \events$295.spw_mismatch ;
+  wire [4:0] \events$288 ;
+  wire \events$288.ca_aborted ;
+  wire \events$288.ca_crc4_error ;
+  wire \events$288.ca_data_fault ;
+  wire \events$288.ca_no_answer ;
+  wire \events$288.ca_refused ;
+  wire [15:0] \events$297 ;
+  wire \events$297.aborted ;
+  wire \events$297.crc_word0 ;
+  wire \events$297.crc_word1 ;
+  wire \events$297.delay_jump ;
+  wire \events$297.delay_range ;
+  wire \events$297.lc_repeat ;
+  wire \events$297.lc_skip ;
+  wire \events$297.lc_zero ;
+  wire \events$297.no_ack ;
+  wire \events$297.no_start ;
+  wire \events$297.no_stop ;
+  wire \events$297.noise_event ;
+  wire \events$297.noisy_line ;
+  wire \events$297.overrun ;
+  wire \events$297.slo_stuck_low ;
+  wire \events$297.spw_mismatch ;
   wire fault;
-  wire \fault$208 ;
+  wire \fault$210 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -9952,7 +9952,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$210 ;
+  wire [3:0] \fault_status$212 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -9962,7 +9962,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$246 ;
+  wire \first_rise$248 ;
   wire [31:0] first_rise_time;
   wire fixed;
   wire [12:0] fixed_delay;
@@ -10016,34 +10016,34 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$141 ;
+  wire [15:0] \half_period$143 ;
   wire held;
   wire hold;
   wire idle;
   wire \idle$41 ;
   wire \idle$50 ;
   wire in_clock;
-  wire \in_clock$105 ;
+  wire \in_clock$107 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$147 ;
-  wire [5:0] \lc$335 ;
+  wire [5:0] \lc$149 ;
+  wire [5:0] \lc$337 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$149 ;
+  wire [5:0] \lc_next$151 ;
   wire lc_repeat;
-  wire \lc_repeat$336 ;
+  wire \lc_repeat$338 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$337 ;
+  wire \lc_skip$339 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$338 ;
+  wire \lc_zero$340 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$158 ;
+  wire \level$160 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
   wire [274:0] live;
@@ -10105,10 +10105,10 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \locked$71 ;
   output ma;
   wire ma;
-  wire \ma$310 ;
+  wire \ma$312 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$100 ;
+  wire \ma_busy$102 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -10117,17 +10117,17 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire mismatch;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$92 ;
+  wire \no_start_expired$94 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$115 ;
+  wire [24:0] \no_start_limit$117 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$177 ;
+  wire \noisy$179 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$313 ;
+  wire \overrun$315 ;
   wire passed;
   wire pending;
   wire [23:0] period;
@@ -10135,10 +10135,10 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   input \periodic$45 ;
   wire \periodic$45 ;
   wire quiet;
-  wire \quiet$124 ;
+  wire \quiet$126 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$126 ;
+  wire \quiet_live$128 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -10154,38 +10154,38 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$222 ;
-  wire \report$226 ;
+  wire \report$224 ;
+  wire \report$228 ;
   wire report_delay;
-  wire \report_delay$229 ;
+  wire \report_delay$231 ;
   wire report_frame;
-  wire \report_frame$207 ;
-  wire \report_frame$227 ;
+  wire \report_frame$209 ;
+  wire \report_frame$229 ;
   wire request;
-  wire [17:0] \request$248 ;
-  wire [6:0] \request$248.address ;
-  wire [6:0] \request$248.count ;
-  wire [2:0] \request$248.slave_id ;
-  wire \request$248.write ;
+  wire [17:0] \request$250 ;
+  wire [6:0] \request$250.address ;
+  wire [6:0] \request$250.count ;
+  wire [2:0] \request$250.slave_id ;
+  wire \request$250.write ;
   wire \request$56 ;
   wire restart;
-  wire \restart$162 ;
+  wire \restart$164 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$319 ;
-  wire [186:0] \result$319 ;
-  wire \result$319.cds ;
-  wire \result$319.delay_settled ;
-  wire [7:0] \result$319.delay_spread ;
-  wire [5:0] \result$319.lc ;
-  wire \result$319.lc_repeat ;
-  wire \result$319.lc_skip ;
-  wire \result$319.lc_zero ;
-  wire [12:0] \result$319.line_delay ;
-  wire [3:0] \result$319.noise_events ;
-  wire [12:0] \result$319.settled_delay ;
-  wire \result$319.spw_mismatch ;
+  output [186:0] \result$321 ;
+  wire [186:0] \result$321 ;
+  wire \result$321.cds ;
+  wire \result$321.delay_settled ;
+  wire [7:0] \result$321.delay_spread ;
+  wire [5:0] \result$321.lc ;
+  wire \result$321.lc_repeat ;
+  wire \result$321.lc_skip ;
+  wire \result$321.lc_zero ;
+  wire [12:0] \result$321.line_delay ;
+  wire [3:0] \result$321.noise_events ;
+  wire [12:0] \result$321.settled_delay ;
+  wire \result$321.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -10203,18 +10203,18 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$319.status ;
-  wire [31:0] \result$319.timestamp ;
-  wire [57:0] \result$319.word0 ;
-  wire \result$319.word0.crc_ok ;
-  wire \result$319.word0.ne ;
-  wire \result$319.word0.nw ;
-  wire [54:0] \result$319.word0.position ;
-  wire [42:0] \result$319.word1 ;
-  wire \result$319.word1.crc_ok ;
-  wire \result$319.word1.ne ;
-  wire \result$319.word1.nw ;
-  wire [39:0] \result$319.word1.position ;
+  wire [3:0] \result$321.status ;
+  wire [31:0] \result$321.timestamp ;
+  wire [57:0] \result$321.word0 ;
+  wire \result$321.word0.crc_ok ;
+  wire \result$321.word0.ne ;
+  wire \result$321.word0.nw ;
+  wire [54:0] \result$321.word0.position ;
+  wire [42:0] \result$321.word1 ;
+  wire \result$321.word1.crc_ok ;
+  wire \result$321.word1.ne ;
+  wire \result$321.word1.nw ;
+  wire [39:0] \result$321.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -10226,55 +10226,55 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$155 ;
+  wire \resync$157 ;
   wire [15:0] rises;
-  wire [15:0] \rises$134 ;
+  wire [15:0] \rises$136 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$342 ;
+  wire \sample$344 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$325 ;
+  wire [12:0] \settled_delay$327 ;
   wire skip;
   input slo;
   wire slo;
+  wire \slo$101 ;
   wire \slo$52 ;
   wire \slo$62 ;
-  wire \slo$99 ;
   wire slo_stuck;
-  wire \slo_stuck$94 ;
+  wire \slo_stuck$96 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$96 ;
+  wire \slo_stuck_live$98 ;
   wire slots_full;
-  wire \slots_full$81 ;
+  wire \slots_full$83 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$339 ;
+  wire \spw_mismatch$341 ;
   wire ssi;
-  wire \ssi$196 ;
-  wire \ssi$200 ;
+  wire \ssi$198 ;
+  wire \ssi$202 ;
   wire ssi_double;
-  wire \ssi_double$201 ;
+  wire \ssi_double$203 ;
   wire ssi_error;
-  wire \ssi_error$202 ;
+  wire \ssi_error$204 ;
   wire ssi_error_low;
   input start;
   wire start;
-  input \start$260 ;
-  wire \start$260 ;
+  input \start$262 ;
+  wire \start$262 ;
   wire \start$43 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$132 ;
+  wire [15:0] \start_slot$134 ;
   wire started;
-  wire \started$130 ;
-  wire \started$79 ;
+  wire \started$132 ;
+  wire \started$81 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -10311,7 +10311,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$224 ;
+  wire [3:0] \status$226 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -10329,26 +10329,28 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$318 ;
+  wire [3:0] \status$320 ;
   wire stop_bit;
-  wire \stop_bit$84 ;
+  wire \stop_bit$86 ;
   wire stopped;
-  wire \stopped$82 ;
+  wire \stopped$84 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$113 ;
+  wire [23:0] \timeout_limit$115 ;
   wire [23:0] timeout_live;
+  wire timeout_over;
+  wire \timeout_over$79 ;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$191 ;
+  wire [7:0] \tolerance$193 ;
   input trigger;
   wire trigger;
   wire \trigger$54 ;
   wire unconfirmed;
   wire valid;
-  wire \valid$231 ;
-  output \valid$316 ;
-  wire \valid$316 ;
+  wire \valid$233 ;
+  output \valid$318 ;
+  wire \valid$318 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -10366,34 +10368,34 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$145 ;
+  wire [1:0] \word_count$147 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$181 ;
-  wire [11:0] \words$181[0] ;
+  wire [23:0] \words$183 ;
+  wire [11:0] \words$183[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$181[0].crc ;
-  wire [5:0] \words$181[0].data_bits ;
-  wire \words$181[0].gray ;
-  wire \words$181[0].lc ;
-  wire \words$181[0].nenw ;
-  wire \words$181[0].signed ;
-  wire [11:0] \words$181[1] ;
+  wire [1:0] \words$183[0].crc ;
+  wire [5:0] \words$183[0].data_bits ;
+  wire \words$183[0].gray ;
+  wire \words$183[0].lc ;
+  wire \words$183[0].nenw ;
+  wire \words$183[0].signed ;
+  wire [11:0] \words$183[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$181[1].crc ;
-  wire [5:0] \words$181[1].data_bits ;
-  wire \words$181[1].gray ;
-  wire \words$181[1].lc ;
-  wire \words$181[1].nenw ;
-  wire \words$181[1].signed ;
+  wire [1:0] \words$183[1].crc ;
+  wire [5:0] \words$183[1].data_bits ;
+  wire \words$183[1].gray ;
+  wire \words$183[1].lc ;
+  wire \words$183[1].nenw ;
+  wire \words$183[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -10427,9 +10429,9 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign enable = \$1  & \$2 ;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$3  = ~ started_before;
-  assign \check$170  = started & \$3 ;
+  assign \check$172  = started & \$3 ;
   assign \$4  = ~ cycle[259];
-  assign cdm = \cdm$275  & \$4 ;
+  assign cdm = \cdm$277  & \$4 ;
   assign \$5  = ~ cycle[259];
   assign frame_ok = passed & \$5 ;
   assign \$6  = result[2:0] == 1'h1;
@@ -10447,10 +10449,10 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \$18  = report_frame & \$17 ;
   assign \$19  = status == 4'he;
   assign \$20  = report_frame & \$19 ;
-  assign \busy$311  = ~ idle;
+  assign \busy$313  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$21  = ~ \clear$135 ;
-  assign \$22  = \sample$342  & \$21 ;
+  assign \$21  = ~ \clear$137 ;
+  assign \$22  = \sample$344  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -10496,7 +10498,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$162 ),
+    .fault(\restart$164 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -10513,7 +10515,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$135 ),
+    .receiver_clear(\clear$137 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
@@ -10528,24 +10530,25 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
+    .timeout_over(timeout_over),
     .timer_clear(clear),
     .waiting(watch)
   );
   \biss_master_uart.ch0.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$287 ),
+    .clear(\clear$289 ),
     .clk(clk),
-    .events(\events$295 ),
+    .events(\events$297 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_uart.ch0.core.counters  counters (
-    .clear(\clear$287 ),
+    .clear(\clear$289 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$286 ),
+    .events(\events$288 ),
     .rst(rst)
   );
   \biss_master_uart.ch0.core.decoder  decoder (
@@ -10563,8 +10566,8 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6850$272 (cycle[274:272]),
-    .receiver_clear(\clear$135 ),
+    .\port$6864$272 (cycle[274:272]),
+    .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -10577,7 +10580,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .words(words)
   );
   \biss_master_uart.ch0.core.delay_check  delay_check (
-    .check(\check$170 ),
+    .check(\check$172 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -10599,7 +10602,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$162 ),
+    .restart(\restart$164 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -10607,7 +10610,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   \biss_master_uart.ch0.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$100 ),
+    .\clocking (\ma_busy$102 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -10619,7 +10622,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .second_rise(ma_arm)
   );
   \biss_master_uart.ch0.core.ma_stop  ma_stop (
-    .clear(\clear$135 ),
+    .clear(\clear$137 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -10631,12 +10634,12 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .start_slot(start_slot),
     .\started$15 (started),
     .w1_enable(cycle[199]),
-    .words(\words$181 )
+    .words(\words$183 )
   );
   \biss_master_uart.ch0.core.register_access  register_access (
-    .abort(\abort$262 ),
+    .abort(\abort$264 ),
     .busy(frames),
-    .cdm(\cdm$275 ),
+    .cdm(\cdm$277 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -10646,27 +10649,27 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$248 ),
+    .request(\request$250 ),
     .result(result),
     .rst(rst),
-    .start(\start$260 ),
+    .start(\start$262 ),
     .wbuf(wbuf)
   );
   \biss_master_uart.ch0.core.results  results (
     .clk(clk),
-    .done(\done$314 ),
+    .done(\done$316 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$319 ),
+    .result(\result$321 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$316 )
+    .valid_out(\valid$318 )
   );
   \biss_master_uart.ch0.core.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$343 ),
+    .\bit (\bit$345 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -10674,10 +10677,10 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6850$259 (cycle[271:259]),
-    .receiver_clear(\clear$135 ),
+    .\port$6864$259 (cycle[271:259]),
+    .receiver_clear(\clear$137 ),
     .rst(rst),
-    .sample(\sample$342 ),
+    .sample(\sample$344 ),
     .slo(slo)
   );
   \biss_master_uart.ch0.core.scheduler  scheduler (
@@ -10698,7 +10701,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6838$0 (\bit ),
+    .\port$6852$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -10730,7 +10733,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$100 ),
+    .ma_busy(\ma_busy$102 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -10743,17 +10746,18 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
-    .timeout_live(cfg_timeout_limit)
+    .timeout_live(cfg_timeout_limit),
+    .timeout_over(timeout_over)
   );
   \biss_master_uart.ch0.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$344 ),
+    .clean(\clean$346 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$162 ),
+    .fault(\restart$164 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -10764,7 +10768,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2945$0 (\$28 ),
+    .\port$2952$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -10782,7 +10786,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
-    \$24  = \bit$343 ;
+    \$24  = \bit$345 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -10803,7 +10807,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
-    \$27  = \clean$344 ;
+    \$27  = \clean$346 ;
     if (rst) begin
       \$27  = 1'h0;
     end
@@ -10826,149 +10830,150 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \locked$71  = locked;
   assign \early$73  = early;
   assign ssi = cycle[259];
-  assign \started$79  = started;
-  assign \slots_full$81  = slots_full;
-  assign \stopped$82  = stopped;
-  assign \stop_bit$84  = stop_bit;
+  assign \timeout_over$79  = timeout_over;
+  assign \started$81  = started;
+  assign \slots_full$83  = slots_full;
+  assign \stopped$84  = stopped;
+  assign \stop_bit$86  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$88  = break_over;
-  assign \ack_expired$90  = ack_expired;
-  assign \no_start_expired$92  = no_start_expired;
-  assign \slo_stuck$94  = slo_stuck;
-  assign \slo_stuck_live$96  = slo_stuck_live;
-  assign \delay_over$98  = delay_over;
-  assign \slo$99  = \slo$62 ;
-  assign \clocking  = \ma_busy$100 ;
+  assign \break_over$90  = break_over;
+  assign \ack_expired$92  = ack_expired;
+  assign \no_start_expired$94  = no_start_expired;
+  assign \slo_stuck$96  = slo_stuck;
+  assign \slo_stuck_live$98  = slo_stuck_live;
+  assign \delay_over$100  = delay_over;
+  assign \slo$101  = \slo$62 ;
+  assign \clocking  = \ma_busy$102 ;
   assign timer_clear = clear;
-  assign \in_clock$105  = in_clock;
+  assign \in_clock$107  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$111  = ack_limit;
-  assign \timeout_limit$113  = timeout_limit;
-  assign \no_start_limit$115  = no_start_limit;
-  assign \delay$117  = delay;
-  assign \delay_limit$119  = delay_limit;
+  assign \ack_limit$113  = ack_limit;
+  assign \timeout_limit$115  = timeout_limit;
+  assign \no_start_limit$117  = no_start_limit;
+  assign \delay$119  = delay;
+  assign \delay_limit$121  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$124  = quiet;
-  assign \quiet_live$126  = quiet_live;
+  assign \quiet$126  = quiet;
+  assign \quiet_live$128  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$130  = started;
-  assign \start_slot$132  = start_slot;
-  assign \rises$134  = rises;
-  assign receiver_clear = \clear$135 ;
+  assign \started$132  = started;
+  assign \start_slot$134  = start_slot;
+  assign \rises$136  = rises;
+  assign receiver_clear = \clear$137 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$141  = cycle[15:0];
-  assign \word_count$145  = word_count;
-  assign \lc$147  = lc;
+  assign \half_period$143  = cycle[15:0];
+  assign \word_count$147  = word_count;
+  assign \lc$149  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$149  = { lc[4:0], \bit  };
+  assign \lc_next$151  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$155  = resync;
+  assign \resync$157  = resync;
   assign waiting = watch;
-  assign \level$158  = \slo$62 ;
+  assign \level$160  = \slo$62 ;
   assign noise = sampler_noise;
   assign close = done;
-  assign fault = \restart$162 ;
+  assign fault = \restart$164 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$169  = delay;
+  assign \delay$171  = delay;
   assign \$signal  = learn;
-  assign \clean$175  = clean;
-  assign \noisy$177  = noisy;
+  assign \clean$177  = clean;
+  assign \noisy$179  = noisy;
   assign jump = delay_jump;
-  assign \crcs$183  = crcs;
-  assign \crcs$184  = crcs;
+  assign \crcs$185  = crcs;
+  assign \crcs$186  = crcs;
   assign w1_enable = cycle[199];
-  assign \cpw_top$187  = cpw_top;
+  assign \cpw_top$189  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[205:200];
-  assign \tolerance$191  = cycle[258:251];
+  assign \tolerance$193  = cycle[258:251];
   assign match = spw_match;
   assign fixed = cycle[259];
   assign fixed_delay = { 1'h0, cycle[271:260] };
-  assign \ssi$196  = cycle[259];
+  assign \ssi$198  = cycle[259];
   assign ssi_error = cycle[272];
   assign ssi_error_low = cycle[273];
   assign ssi_double = cycle[274];
-  assign \ssi$200  = cycle[259];
-  assign \ssi_double$201  = cycle[274];
-  assign \ssi_error$202  = cycle[272];
+  assign \ssi$202  = cycle[259];
+  assign \ssi_double$203  = cycle[274];
+  assign \ssi_error$204  = cycle[272];
   assign mismatch = copy_mismatch;
   assign cfg = cycle;
-  assign \report_frame$207  = report_frame;
-  assign \fault$208  = \restart$162 ;
-  assign \fault_status$210  = fault_status;
-  assign \crc_ok$212  = crc_ok;
+  assign \report_frame$209  = report_frame;
+  assign \fault$210  = \restart$164 ;
+  assign \fault_status$212  = fault_status;
+  assign \crc_ok$214  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$222  = report;
-  assign \status$224  = status;
+  assign \report$224  = report;
+  assign \status$226  = status;
   assign setting = cycle[148:145];
-  assign \report$226  = report;
-  assign \report_frame$227  = report_frame;
-  assign \report_delay$229  = report_delay;
-  assign \valid$231  = valid;
+  assign \report$228  = report;
+  assign \report_frame$229  = report_frame;
+  assign \report_delay$231  = report_delay;
+  assign \valid$233  = valid;
   assign word_crc_ok = { \$28 , crc_ok[0] };
-  assign \first_rise$246  = first_rise;
+  assign \first_rise$248  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$260 ;
-  assign ca_abort = \abort$262 ;
+  assign ca_start = \start$262 ;
+  assign ca_abort = \abort$264 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$271  = frames;
-  assign \done$273  = ca_done;
+  assign \busy$273  = frames;
+  assign \done$275  = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$287 ;
+  assign clear_counters = \clear$289 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$300  = \clear$287 ;
+  assign \clear$302  = \clear$289 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$308  = count_busy;
-  assign \ma$310  = ma;
-  assign \overrun$313  = overrun;
-  assign \done$315  = \done$314 ;
-  assign valid_out = \valid$316 ;
-  assign \status$318  = \result$319 [3:0];
-  assign timestamp = \result$319 [35:4];
-  assign line_delay = \result$319 [48:36];
-  assign \cds$322  = \result$319 [49];
-  assign noise_events = \result$319 [53:50];
-  assign delay_settled = \result$319 [54];
-  assign \settled_delay$325  = \result$319 [67:55];
-  assign delay_spread = \result$319 [75:68];
-  assign word0_position = \result$319 [130:76];
-  assign word0_ne = \result$319 [131];
-  assign word0_nw = \result$319 [132];
-  assign word0_crc_ok = \result$319 [133];
-  assign word1_position = \result$319 [173:134];
-  assign word1_ne = \result$319 [174];
-  assign word1_nw = \result$319 [175];
-  assign word1_crc_ok = \result$319 [176];
-  assign \lc$335  = \result$319 [182:177];
-  assign \lc_repeat$336  = \result$319 [183];
-  assign \lc_skip$337  = \result$319 [184];
-  assign \lc_zero$338  = \result$319 [185];
-  assign \spw_mismatch$339  = \result$319 [186];
+  assign \busy$310  = count_busy;
+  assign \ma$312  = ma;
+  assign \overrun$315  = overrun;
+  assign \done$317  = \done$316 ;
+  assign valid_out = \valid$318 ;
+  assign \status$320  = \result$321 [3:0];
+  assign timestamp = \result$321 [35:4];
+  assign line_delay = \result$321 [48:36];
+  assign \cds$324  = \result$321 [49];
+  assign noise_events = \result$321 [53:50];
+  assign delay_settled = \result$321 [54];
+  assign \settled_delay$327  = \result$321 [67:55];
+  assign delay_spread = \result$321 [75:68];
+  assign word0_position = \result$321 [130:76];
+  assign word0_ne = \result$321 [131];
+  assign word0_nw = \result$321 [132];
+  assign word0_crc_ok = \result$321 [133];
+  assign word1_position = \result$321 [173:134];
+  assign word1_ne = \result$321 [174];
+  assign word1_nw = \result$321 [175];
+  assign word1_crc_ok = \result$321 [176];
+  assign \lc$337  = \result$321 [182:177];
+  assign \lc_repeat$338  = \result$321 [183];
+  assign \lc_skip$339  = \result$321 [184];
+  assign \lc_zero$340  = \result$321 [185];
+  assign \spw_mismatch$341  = \result$321 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -11069,20 +11074,20 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$181[0]  = \words$181 [11:0];
-  assign \words$181[0].data_bits  = \words$181 [5:0];
-  assign \words$181[0].nenw  = \words$181 [6];
-  assign \words$181[0].lc  = \words$181 [7];
-  assign \words$181[0].crc  = \words$181 [9:8];
-  assign \words$181[0].gray  = \words$181 [10];
-  assign \words$181[0].signed  = \words$181 [11];
-  assign \words$181[1]  = \words$181 [23:12];
-  assign \words$181[1].data_bits  = \words$181 [17:12];
-  assign \words$181[1].nenw  = \words$181 [18];
-  assign \words$181[1].lc  = \words$181 [19];
-  assign \words$181[1].crc  = \words$181 [21:20];
-  assign \words$181[1].gray  = \words$181 [22];
-  assign \words$181[1].signed  = \words$181 [23];
+  assign \words$183[0]  = \words$183 [11:0];
+  assign \words$183[0].data_bits  = \words$183 [5:0];
+  assign \words$183[0].nenw  = \words$183 [6];
+  assign \words$183[0].lc  = \words$183 [7];
+  assign \words$183[0].crc  = \words$183 [9:8];
+  assign \words$183[0].gray  = \words$183 [10];
+  assign \words$183[0].signed  = \words$183 [11];
+  assign \words$183[1]  = \words$183 [23:12];
+  assign \words$183[1].data_bits  = \words$183 [17:12];
+  assign \words$183[1].nenw  = \words$183 [18];
+  assign \words$183[1].lc  = \words$183 [19];
+  assign \words$183[1].crc  = \words$183 [21:20];
+  assign \words$183[1].gray  = \words$183 [22];
+  assign \words$183[1].signed  = \words$183 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -11093,26 +11098,26 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$183[0]  = crcs[37:0];
-  assign \crcs$183[0].width  = crcs[4:0];
-  assign \crcs$183[0].poly  = crcs[20:5];
-  assign \crcs$183[0].start  = crcs[36:21];
-  assign \crcs$183[0].inverted  = crcs[37];
-  assign \crcs$183[1]  = crcs[75:38];
-  assign \crcs$183[1].width  = crcs[42:38];
-  assign \crcs$183[1].poly  = crcs[58:43];
-  assign \crcs$183[1].start  = crcs[74:59];
-  assign \crcs$183[1].inverted  = crcs[75];
-  assign \crcs$184[0]  = crcs[37:0];
-  assign \crcs$184[0].width  = crcs[4:0];
-  assign \crcs$184[0].poly  = crcs[20:5];
-  assign \crcs$184[0].start  = crcs[36:21];
-  assign \crcs$184[0].inverted  = crcs[37];
-  assign \crcs$184[1]  = crcs[75:38];
-  assign \crcs$184[1].width  = crcs[42:38];
-  assign \crcs$184[1].poly  = crcs[58:43];
-  assign \crcs$184[1].start  = crcs[74:59];
-  assign \crcs$184[1].inverted  = crcs[75];
+  assign \crcs$185[0]  = crcs[37:0];
+  assign \crcs$185[0].width  = crcs[4:0];
+  assign \crcs$185[0].poly  = crcs[20:5];
+  assign \crcs$185[0].start  = crcs[36:21];
+  assign \crcs$185[0].inverted  = crcs[37];
+  assign \crcs$185[1]  = crcs[75:38];
+  assign \crcs$185[1].width  = crcs[42:38];
+  assign \crcs$185[1].poly  = crcs[58:43];
+  assign \crcs$185[1].start  = crcs[74:59];
+  assign \crcs$185[1].inverted  = crcs[75];
+  assign \crcs$186[0]  = crcs[37:0];
+  assign \crcs$186[0].width  = crcs[4:0];
+  assign \crcs$186[0].poly  = crcs[20:5];
+  assign \crcs$186[0].start  = crcs[36:21];
+  assign \crcs$186[0].inverted  = crcs[37];
+  assign \crcs$186[1]  = crcs[75:38];
+  assign \crcs$186[1].width  = crcs[42:38];
+  assign \crcs$186[1].poly  = crcs[58:43];
+  assign \crcs$186[1].start  = crcs[74:59];
+  assign \crcs$186[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -11179,41 +11184,41 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$248.slave_id  = \request$248 [2:0];
-  assign \request$248.address  = \request$248 [9:3];
-  assign \request$248.count  = \request$248 [16:10];
-  assign \request$248.write  = \request$248 [17];
+  assign \request$250.slave_id  = \request$250 [2:0];
+  assign \request$250.address  = \request$250 [9:3];
+  assign \request$250.count  = \request$250 [16:10];
+  assign \request$250.write  = \request$250 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$286.ca_crc4_error  = \events$286 [0];
-  assign \events$286.ca_no_answer  = \events$286 [1];
-  assign \events$286.ca_refused  = \events$286 [2];
-  assign \events$286.ca_aborted  = \events$286 [3];
-  assign \events$286.ca_data_fault  = \events$286 [4];
+  assign \events$288.ca_crc4_error  = \events$288 [0];
+  assign \events$288.ca_no_answer  = \events$288 [1];
+  assign \events$288.ca_refused  = \events$288 [2];
+  assign \events$288.ca_aborted  = \events$288 [3];
+  assign \events$288.ca_data_fault  = \events$288 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$295.crc_word0  = \events$295 [0];
-  assign \events$295.crc_word1  = \events$295 [1];
-  assign \events$295.no_ack  = \events$295 [2];
-  assign \events$295.no_start  = \events$295 [3];
-  assign \events$295.delay_range  = \events$295 [4];
-  assign \events$295.slo_stuck_low  = \events$295 [5];
-  assign \events$295.lc_repeat  = \events$295 [6];
-  assign \events$295.lc_skip  = \events$295 [7];
-  assign \events$295.lc_zero  = \events$295 [8];
-  assign \events$295.spw_mismatch  = \events$295 [9];
-  assign \events$295.overrun  = \events$295 [10];
-  assign \events$295.aborted  = \events$295 [11];
-  assign \events$295.no_stop  = \events$295 [12];
-  assign \events$295.noisy_line  = \events$295 [13];
-  assign \events$295.delay_jump  = \events$295 [14];
-  assign \events$295.noise_event  = \events$295 [15];
+  assign \events$297.crc_word0  = \events$297 [0];
+  assign \events$297.crc_word1  = \events$297 [1];
+  assign \events$297.no_ack  = \events$297 [2];
+  assign \events$297.no_start  = \events$297 [3];
+  assign \events$297.delay_range  = \events$297 [4];
+  assign \events$297.slo_stuck_low  = \events$297 [5];
+  assign \events$297.lc_repeat  = \events$297 [6];
+  assign \events$297.lc_skip  = \events$297 [7];
+  assign \events$297.lc_zero  = \events$297 [8];
+  assign \events$297.spw_mismatch  = \events$297 [9];
+  assign \events$297.overrun  = \events$297 [10];
+  assign \events$297.aborted  = \events$297 [11];
+  assign \events$297.no_stop  = \events$297 [12];
+  assign \events$297.noisy_line  = \events$297 [13];
+  assign \events$297.delay_jump  = \events$297 [14];
+  assign \events$297.noise_event  = \events$297 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -11221,57 +11226,57 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$319.status  = \result$319 [3:0];
-  assign \result$319.timestamp  = \result$319 [35:4];
-  assign \result$319.line_delay  = \result$319 [48:36];
-  assign \result$319.cds  = \result$319 [49];
-  assign \result$319.noise_events  = \result$319 [53:50];
-  assign \result$319.delay_settled  = \result$319 [54];
-  assign \result$319.settled_delay  = \result$319 [67:55];
-  assign \result$319.delay_spread  = \result$319 [75:68];
-  assign \result$319.word0  = \result$319 [133:76];
-  assign \result$319.word0.position  = \result$319 [130:76];
-  assign \result$319.word0.ne  = \result$319 [131];
-  assign \result$319.word0.nw  = \result$319 [132];
-  assign \result$319.word0.crc_ok  = \result$319 [133];
-  assign \result$319.word1  = \result$319 [176:134];
-  assign \result$319.word1.position  = \result$319 [173:134];
-  assign \result$319.word1.ne  = \result$319 [174];
-  assign \result$319.word1.nw  = \result$319 [175];
-  assign \result$319.word1.crc_ok  = \result$319 [176];
-  assign \result$319.lc  = \result$319 [182:177];
-  assign \result$319.lc_repeat  = \result$319 [183];
-  assign \result$319.lc_skip  = \result$319 [184];
-  assign \result$319.lc_zero  = \result$319 [185];
-  assign \result$319.spw_mismatch  = \result$319 [186];
-  assign \events$295 [15] = \event ;
-  assign \events$295 [14] = \$20 ;
-  assign \events$295 [13] = \$18 ;
-  assign \events$295 [12] = faults[6];
-  assign \events$295 [11] = faults[4];
-  assign \events$295 [10] = overrun;
-  assign \events$295 [9] = \$16 ;
-  assign \events$295 [8] = lc_zero;
-  assign \events$295 [7] = lc_skip;
-  assign \events$295 [6] = lc_repeat;
-  assign \events$295 [5] = faults[3];
-  assign \events$295 [4] = faults[2];
-  assign \events$295 [3] = faults[1];
-  assign \events$295 [2] = faults[0];
-  assign \events$295 [1] = crc_error[1];
-  assign \events$295 [0] = crc_error[0];
-  assign \events$286 [4] = \$15 ;
-  assign \events$286 [3] = \$13 ;
-  assign \events$286 [2] = \$11 ;
-  assign \events$286 [1] = \$9 ;
-  assign \events$286 [0] = \$7 ;
+  assign \result$321.status  = \result$321 [3:0];
+  assign \result$321.timestamp  = \result$321 [35:4];
+  assign \result$321.line_delay  = \result$321 [48:36];
+  assign \result$321.cds  = \result$321 [49];
+  assign \result$321.noise_events  = \result$321 [53:50];
+  assign \result$321.delay_settled  = \result$321 [54];
+  assign \result$321.settled_delay  = \result$321 [67:55];
+  assign \result$321.delay_spread  = \result$321 [75:68];
+  assign \result$321.word0  = \result$321 [133:76];
+  assign \result$321.word0.position  = \result$321 [130:76];
+  assign \result$321.word0.ne  = \result$321 [131];
+  assign \result$321.word0.nw  = \result$321 [132];
+  assign \result$321.word0.crc_ok  = \result$321 [133];
+  assign \result$321.word1  = \result$321 [176:134];
+  assign \result$321.word1.position  = \result$321 [173:134];
+  assign \result$321.word1.ne  = \result$321 [174];
+  assign \result$321.word1.nw  = \result$321 [175];
+  assign \result$321.word1.crc_ok  = \result$321 [176];
+  assign \result$321.lc  = \result$321 [182:177];
+  assign \result$321.lc_repeat  = \result$321 [183];
+  assign \result$321.lc_skip  = \result$321 [184];
+  assign \result$321.lc_zero  = \result$321 [185];
+  assign \result$321.spw_mismatch  = \result$321 [186];
+  assign \events$297 [15] = \event ;
+  assign \events$297 [14] = \$20 ;
+  assign \events$297 [13] = \$18 ;
+  assign \events$297 [12] = faults[6];
+  assign \events$297 [11] = faults[4];
+  assign \events$297 [10] = overrun;
+  assign \events$297 [9] = \$16 ;
+  assign \events$297 [8] = lc_zero;
+  assign \events$297 [7] = lc_skip;
+  assign \events$297 [6] = lc_repeat;
+  assign \events$297 [5] = faults[3];
+  assign \events$297 [4] = faults[2];
+  assign \events$297 [3] = faults[1];
+  assign \events$297 [2] = faults[0];
+  assign \events$297 [1] = crc_error[1];
+  assign \events$297 [0] = crc_error[0];
+  assign \events$288 [4] = \$15 ;
+  assign \events$288 [3] = \$13 ;
+  assign \events$288 [2] = \$11 ;
+  assign \events$288 [1] = \$9 ;
+  assign \events$288 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$248 [17] = ca_write;
-  assign \request$248 [16:10] = ca_count;
-  assign \request$248 [9:3] = ca_address;
-  assign \request$248 [2:0] = ca_slave_id;
+  assign \request$250 [17] = ca_write;
+  assign \request$250 [16:10] = ca_count;
+  assign \request$250 [9:3] = ca_address;
+  assign \request$250 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$28 ;
@@ -11293,8 +11298,8 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$181 [23:12] = cycle[211:200];
-  assign \words$181 [11:0] = cycle[160:149];
+  assign \words$183 [23:12] = cycle[211:200];
+  assign \words$183 [11:0] = cycle[160:149];
   assign words[23:12] = cycle[211:200];
   assign words[11:0] = cycle[160:149];
   assign live[274] = cfg_ssi_double;
@@ -11951,8 +11956,8 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
-, faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full, started
-, stop_bit, clk);
+, faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full
+, started, stop_bit, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -11984,12 +11989,18 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
   wire \$34 ;
   wire \$35 ;
   wire \$36 ;
-  reg \$37 ;
-  reg [2:0] \$38 ;
-  reg \$39 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
   wire \$4 ;
-  reg \$40 ;
-  reg \$41 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  reg \$43 ;
+  reg [2:0] \$44 ;
+  reg \$45 ;
+  reg \$46 ;
+  reg \$47 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
@@ -12020,7 +12031,7 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
   wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
   reg delay;
-  wire \delay$80 ;
+  wire \delay$81 ;
   input delay_over;
   wire delay_over;
   wire \delay_over$31 ;
@@ -12033,7 +12044,7 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
   output fault;
   reg fault;
   wire \fault$39 ;
-  wire \fault$76 ;
+  wire \fault$77 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -12203,63 +12214,71 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$81 ;
+  wire [3:0] \status$82 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
   wire stopped;
   wire stuck_low;
+  input timeout_over;
+  wire timeout_over;
   output timer_clear;
   reg timer_clear;
   output waiting;
   reg waiting;
   reg watch;
   always @(posedge clk)
-    pause <= \$41 ;
+    first_clock <= \$43 ;
+  always @(posedge clk)
+    cycle_fsm_state <= \$44 ;
+  always @(posedge clk)
+    idle <= \$45 ;
+  always @(posedge clk)
+    receiver_clear <= \$46 ;
+  always @(posedge clk)
+    pause <= \$47 ;
   assign \$1  = ma_busy | abort;
-  assign \$2  = ~ ma_enough;
-  assign \$3  = restart_timer | abort;
-  assign \$4  = frame_done & ssi;
-  assign \$5  = \$4  & stop_bit;
-  assign \$6  = ~ ssi;
-  assign \$7  = \fault$76  & \$6 ;
-  assign \$8  = ~ end_check;
-  assign \$9  = ~ ma_enough;
-  assign \$10  = stopped | ssi;
+  assign \$2  = ~ ssi;
+  assign \$3  = \$2  | timeout_over;
+  assign \$4  = break_over & \$3 ;
+  assign \$5  = ~ ma_enough;
+  assign \$6  = restart_timer | abort;
+  assign \$7  = frame_done & ssi;
+  assign \$8  = \$7  & stop_bit;
+  assign \$9  = ~ ssi;
+  assign \$10  = \fault$77  & \$9 ;
   assign \$11  = ~ end_check;
-  assign \$12  = ma_busy | abort;
-  assign \$13  = ~ ma_busy;
-  assign \$14  = \$13  | ma_held;
-  assign \$15  = \$14  & slo;
-  assign \$16  = ! cycle_fsm_state;
-  assign \$17  = cycle_fsm_state == 1'h1;
-  assign \$18  = cycle_fsm_state == 2'h2;
-  assign \$19  = cycle_fsm_state == 2'h3;
-  assign \$20  = cycle_fsm_state == 3'h4;
-  assign \$21  = cycle_fsm_state == 3'h5;
-  assign \$22  = cycle_fsm_state == 3'h6;
-  assign \$23  = cycle_fsm_state == 3'h7;
-  assign \$24  = ma_busy | abort;
-  assign \$25  = frame_done & ssi;
-  assign \$26  = \$25  & stop_bit;
-  assign \$27  = ~ ssi;
-  assign \$28  = \fault$76  & \$27 ;
-  assign \$29  = stopped | ssi;
-  assign \$30  = ~ end_check;
-  assign \$31  = ma_busy | abort;
-  assign \$32  = cdm_cycle & abort;
-  assign \$33  = ~ ma_busy;
-  assign \$34  = ~ ma_busy;
-  assign \$35  = \$34  | ma_held;
-  assign \$36  = \$35  & slo;
-  always @(posedge clk)
-    first_clock <= \$37 ;
-  always @(posedge clk)
-    cycle_fsm_state <= \$38 ;
-  always @(posedge clk)
-    idle <= \$39 ;
-  always @(posedge clk)
-    receiver_clear <= \$40 ;
+  assign \$12  = ~ ma_enough;
+  assign \$13  = stopped | ssi;
+  assign \$14  = ~ end_check;
+  assign \$15  = ma_busy | abort;
+  assign \$16  = ~ ma_busy;
+  assign \$17  = \$16  | ma_held;
+  assign \$18  = \$17  & slo;
+  assign \$19  = ! cycle_fsm_state;
+  assign \$20  = cycle_fsm_state == 1'h1;
+  assign \$21  = cycle_fsm_state == 2'h2;
+  assign \$22  = cycle_fsm_state == 2'h3;
+  assign \$23  = cycle_fsm_state == 3'h4;
+  assign \$24  = cycle_fsm_state == 3'h5;
+  assign \$25  = cycle_fsm_state == 3'h6;
+  assign \$26  = cycle_fsm_state == 3'h7;
+  assign \$27  = ma_busy | abort;
+  assign \$28  = ~ ssi;
+  assign \$29  = \$28  | timeout_over;
+  assign \$30  = break_over & \$29 ;
+  assign \$31  = frame_done & ssi;
+  assign \$32  = \$31  & stop_bit;
+  assign \$33  = ~ ssi;
+  assign \$34  = \fault$77  & \$33 ;
+  assign \$35  = stopped | ssi;
+  assign \$36  = ~ end_check;
+  assign \$37  = ma_busy | abort;
+  assign \$38  = cdm_cycle & abort;
+  assign \$39  = ~ ma_busy;
+  assign \$40  = ~ ma_busy;
+  assign \$41  = \$40  | ma_held;
+  assign \$42  = \$41  & slo;
   \biss_master_uart.ch0.core.controller.cdm_hold  cdm_hold (
     .abort(abort),
     .cdm(cdm),
@@ -12277,10 +12296,10 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
     .ack_expired(ack_expired),
     .clear(clear),
     .clk(clk),
-    .delay(\delay$80 ),
+    .delay(\delay$81 ),
     .delay_over(delay_over),
     .early(early),
-    .fault(\fault$76 ),
+    .fault(\fault$77 ),
     .locked(locked),
     .ma_arm(ma_arm),
     .no_start_expired(no_start_expired),
@@ -12288,7 +12307,7 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
     .rst(rst),
     .slots_full(slots_full),
     .started(started),
-    .status(\status$81 ),
+    .status(\status$82 ),
     .watch(watch)
   );
   \biss_master_uart.ch0.core.controller.ready_check  ready_check (
@@ -12315,6 +12334,387 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    report_frame = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$8 ) begin
+          end else if (frame_done) begin
+            if (\$11 ) begin
+              report_frame = 1'h1;
+            end
+          end
+      3'h4:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h6:
+          /* empty */;
+      3'h7:
+          if (abort) begin
+          end else if (\$18 ) begin
+            report_frame = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    delay = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$8 ) begin
+          end else if (frame_done) begin
+          end else if (\$10 ) begin
+            delay = \delay$81 ;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    holding = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          holding = 1'h1;
+      3'h6:
+          holding = 1'h1;
+      3'h7:
+          holding = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$43  = idle;
+    if (rst) begin
+      \$43  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$44  = cycle_fsm_state;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$44  = 3'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (request) begin
+            \$44  = 3'h2;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$44  = 3'h1;
+            if (abort) begin
+              \$44  = 3'h0;
+            end
+          end else if (aborted) begin
+            \$44  = 3'h0;
+          end else if (ready) begin
+            \$44  = 3'h3;
+          end else if (stuck_low) begin
+            \$44  = 3'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (\$32 ) begin
+            \$44  = 3'h0;
+          end else if (frame_done) begin
+            \$44  = 3'h4;
+          end else if (\$34 ) begin
+            \$44  = 3'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$44  = 3'h0;
+            end else begin
+              \$44  = 3'h0;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$44  = 3'h5;
+              end else begin
+                \$44  = 3'h6;
+              end
+            end else if (stop_bit) begin
+              \$44  = 3'h0;
+            end else begin
+              \$44  = 3'h7;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$44  = 3'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$44  = 3'h0;
+          end else if (\$39 ) begin
+            \$44  = 3'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$44  = 3'h5;
+            end else if (cdm_cycle) begin
+              \$44  = 3'h6;
+            end else begin
+              \$44  = 3'h1;
+            end
+          end else if (slo_stuck) begin
+            \$44  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$44  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$45  = idle;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$45  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (request) begin
+            \$45  = 1'h0;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$45  = 1'h1;
+            if (abort) begin
+              \$45  = 1'h0;
+            end
+          end else if (aborted) begin
+            \$45  = 1'h0;
+          end else if (ready) begin
+            \$45  = 1'h0;
+          end else if (stuck_low) begin
+            \$45  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (\$32 ) begin
+            \$45  = 1'h0;
+          end else if (frame_done) begin
+            \$45  = 1'h0;
+          end else if (\$34 ) begin
+            \$45  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h0;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$45  = 1'h0;
+              end else begin
+                \$45  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$45  = 1'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$45  = 1'h0;
+          end else if (\$39 ) begin
+            \$45  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$45  = 1'h0;
+            end else if (cdm_cycle) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$45  = 1'h0;
+          end
+    endcase
+    if (rst) begin
+      \$45  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$46  = receiver_clear;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$46  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (request) begin
+            \$46  = 1'h1;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$46  = 1'h1;
+            if (abort) begin
+              \$46  = 1'h1;
+            end
+          end else if (aborted) begin
+            \$46  = 1'h1;
+          end else if (ready) begin
+            \$46  = 1'h0;
+          end else if (stuck_low) begin
+            \$46  = 1'h1;
+          end
+      3'h3:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (\$32 ) begin
+            \$46  = 1'h1;
+          end else if (frame_done) begin
+            \$46  = 1'h0;
+          end else if (\$34 ) begin
+            \$46  = 1'h1;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$46  = 1'h1;
+            end else begin
+              \$46  = 1'h1;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$46  = 1'h1;
+              end else begin
+                \$46  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$46  = 1'h1;
+            end else begin
+              \$46  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$46  = 1'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$46  = 1'h1;
+          end else if (\$39 ) begin
+            \$46  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$46  = 1'h1;
+            end else if (cdm_cycle) begin
+              \$46  = 1'h0;
+            end else begin
+              \$46  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$46  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$46  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
+    \$47  = pause;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$32 ) begin
+          end else if (frame_done) begin
+            \$47  = frame_doubtful;
+          end
+    endcase
+    if (rst) begin
+      \$47  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -12336,19 +12736,19 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
           timer_clear = 1'h1;
       3'h3:
         begin
-          if (\$3 ) begin
+          if (\$6 ) begin
             timer_clear = 1'h1;
           end
           if (abort) begin
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             timer_clear = 1'h1;
           end
         end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -12357,7 +12757,7 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
             end
           end
       3'h5:
-          if (\$12 ) begin
+          if (\$15 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -12365,7 +12765,7 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
@@ -12419,10 +12819,10 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
       3'h3:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\$7 ) begin
+          end else if (\$10 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -12430,8 +12830,8 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
             if (end_check) begin
               fault = 1'h1;
             end
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -12443,7 +12843,7 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
@@ -12470,19 +12870,19 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             fault_status = 4'hc;
           end else if (frame_done) begin
-          end else if (\$7 ) begin
-            fault_status = \status$81 ;
+          end else if (\$10 ) begin
+            fault_status = \status$82 ;
           end
       3'h4:
           if (abort) begin
             if (end_check) begin
               fault_status = 4'ha;
             end
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -12494,7 +12894,7 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
           end
@@ -12511,9 +12911,9 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
       3'h2:
           /* empty */;
       3'h3:
-          ma_run = \$2 ;
+          ma_run = \$5 ;
       3'h4:
-          ma_run = \$9 ;
+          ma_run = \$12 ;
     endcase
   end
   always @* begin
@@ -12559,387 +12959,6 @@ module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, res
       3'h4:
           framing = 1'h1;
     endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
-    report_frame = 1'h0;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$5 ) begin
-          end else if (frame_done) begin
-            if (\$8 ) begin
-              report_frame = 1'h1;
-            end
-          end
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-          end else if (\$15 ) begin
-            report_frame = 1'h1;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
-    delay = 1'h0;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$5 ) begin
-          end else if (frame_done) begin
-          end else if (\$7 ) begin
-            delay = \delay$80 ;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
-    holding = 1'h0;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          /* empty */;
-      3'h4:
-          /* empty */;
-      3'h5:
-          holding = 1'h1;
-      3'h6:
-          holding = 1'h1;
-      3'h7:
-          holding = 1'h1;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
-    \$37  = idle;
-    if (rst) begin
-      \$37  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
-    \$38  = cycle_fsm_state;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$38  = 3'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (request) begin
-            \$38  = 3'h2;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$38  = 3'h1;
-            if (abort) begin
-              \$38  = 3'h0;
-            end
-          end else if (aborted) begin
-            \$38  = 3'h0;
-          end else if (ready) begin
-            \$38  = 3'h3;
-          end else if (stuck_low) begin
-            \$38  = 3'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (\$26 ) begin
-            \$38  = 3'h0;
-          end else if (frame_done) begin
-            \$38  = 3'h4;
-          end else if (\$28 ) begin
-            \$38  = 3'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$38  = 3'h0;
-            end else begin
-              \$38  = 3'h0;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$38  = 3'h5;
-              end else begin
-                \$38  = 3'h6;
-              end
-            end else if (stop_bit) begin
-              \$38  = 3'h0;
-            end else begin
-              \$38  = 3'h7;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$38  = 3'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$38  = 3'h0;
-          end else if (\$33 ) begin
-            \$38  = 3'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$38  = 3'h5;
-            end else if (cdm_cycle) begin
-              \$38  = 3'h6;
-            end else begin
-              \$38  = 3'h1;
-            end
-          end else if (slo_stuck) begin
-            \$38  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$38  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
-    \$39  = idle;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$39  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (request) begin
-            \$39  = 1'h0;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$39  = 1'h1;
-            if (abort) begin
-              \$39  = 1'h0;
-            end
-          end else if (aborted) begin
-            \$39  = 1'h0;
-          end else if (ready) begin
-            \$39  = 1'h0;
-          end else if (stuck_low) begin
-            \$39  = 1'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (\$26 ) begin
-            \$39  = 1'h0;
-          end else if (frame_done) begin
-            \$39  = 1'h0;
-          end else if (\$28 ) begin
-            \$39  = 1'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h0;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$39  = 1'h0;
-              end else begin
-                \$39  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$39  = 1'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$39  = 1'h0;
-          end else if (\$33 ) begin
-            \$39  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$39  = 1'h0;
-            end else if (cdm_cycle) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$39  = 1'h0;
-          end
-    endcase
-    if (rst) begin
-      \$39  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
-    \$40  = receiver_clear;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$40  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (request) begin
-            \$40  = 1'h1;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$40  = 1'h1;
-            if (abort) begin
-              \$40  = 1'h1;
-            end
-          end else if (aborted) begin
-            \$40  = 1'h1;
-          end else if (ready) begin
-            \$40  = 1'h0;
-          end else if (stuck_low) begin
-            \$40  = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (\$26 ) begin
-            \$40  = 1'h1;
-          end else if (frame_done) begin
-            \$40  = 1'h0;
-          end else if (\$28 ) begin
-            \$40  = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$40  = 1'h1;
-            end else begin
-              \$40  = 1'h1;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$40  = 1'h1;
-              end else begin
-                \$40  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$40  = 1'h1;
-            end else begin
-              \$40  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$40  = 1'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$40  = 1'h1;
-          end else if (\$33 ) begin
-            \$40  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$40  = 1'h1;
-            end else if (cdm_cycle) begin
-              \$40  = 1'h0;
-            end else begin
-              \$40  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$40  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$40  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$24 ) begin end
-    \$41  = pause;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$26 ) begin
-          end else if (frame_done) begin
-            \$41  = frame_doubtful;
-          end
-    endcase
-    if (rst) begin
-      \$41  = 1'h0;
-    end
   end
   assign \first_clock$1  = first_clock;
   assign \config_ok$3  = config_ok;
@@ -14825,7 +14844,7 @@ module \biss_master_uart.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6850$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6864$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire [6:0] \$1 ;
@@ -15528,8 +15547,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6850$272 ;
-  wire [2:0] \port$6850$272 ;
+  input [2:0] \port$6864$272 ;
+  wire [2:0] \port$6864$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -15596,8 +15615,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$367  = ssi & \port$6850$272 [0];
-  assign \$368  = ~ \port$6850$272 [1];
+  assign \$367  = ssi & \port$6864$272 [0];
+  assign \$368  = ~ \port$6864$272 [1];
   assign \$369  = \$367  & \$368 ;
   assign \$370  = \bit  ^ \$369 ;
   assign \$371  = ~ words[6];
@@ -15918,18 +15937,18 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$6850$272 [0];
+  assign \$3  = ssi & \port$6864$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$6850$272 [0];
+  assign \$6  = ssi & \port$6864$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$6850$272 [0];
+  assign \$9  = ssi & \port$6864$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$6850$272 [0];
+  assign \$14  = ssi & \port$6864$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$6850$272 [0];
+  assign \$18  = ssi & \port$6864$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -15974,7 +15993,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$66  = idx == \$65 ;
   assign \$67  = word_count - 1'h1;
   assign \$68  = word == \$67 ;
-  assign \$69  = ssi & \port$6850$272 [2];
+  assign \$69  = ssi & \port$6864$272 [2];
   assign \$70  = word + 1'h1;
   assign \$71  = idx + 1'h1;
   assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -16265,7 +16284,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$357  = \$354  & \$356 ;
   assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
   assign \$359  = ~ words[6];
-  assign \$360  = ssi & \port$6850$272 [0];
+  assign \$360  = ssi & \port$6864$272 [0];
   assign \$361  = ~ \$360 ;
   assign \$362  = \$359  & \$361 ;
   assign \$363  = ! word;
@@ -17027,9 +17046,9 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$6850$272 [0];
-  assign ssi_double = \port$6850$272 [2];
-  assign ssi_error_low = \port$6850$272 [1];
+  assign ssi_error = \port$6864$272 [0];
+  assign ssi_double = \port$6864$272 [2];
+  assign ssi_error_low = \port$6864$272 [1];
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$53  = crcs;
   assign \bit$58  = \bit ;
@@ -20538,7 +20557,7 @@ module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6850$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6864$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20672,8 +20691,8 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6850$259 ;
-  wire [12:0] \port$6850$259 ;
+  input [12:0] \port$6864$259 ;
+  wire [12:0] \port$6864$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -20698,7 +20717,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6850$259 [12:1] + 1'h1;
+  assign \$11  = \port$6864$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -20823,7 +20842,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6850$259 [0]),
+    .clear_high(\port$6864$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -20966,7 +20985,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6850$259 [0]) begin
+            if (\port$6864$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -21051,7 +21070,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6850$259 [0]) begin
+            if (\port$6864$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -21090,7 +21109,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6850$259 [12:1] };
+            \$85  = { 1'h0, \port$6864$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -21475,11 +21494,11 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6850$259 [12:1] };
-  assign fixed = \port$6850$259 [0];
+  assign fixed_delay = { 1'h0, \port$6864$259 [12:1] };
+  assign fixed = \port$6864$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6850$259 [0];
+  assign clear_high = \port$6864$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -21886,7 +21905,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6838$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6852$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -21928,8 +21947,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6838$0 ;
-  wire \port$6838$0 ;
+  input \port$6852$0 ;
+  wire \port$6852$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -21943,9 +21962,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6838$0  };
-  assign \$2  = { lc[4:0], \port$6838$0  } == last;
-  assign \$3  = { lc[4:0], \port$6838$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6852$0  };
+  assign \$2  = { lc[4:0], \port$6852$0  } == last;
+  assign \$3  = { lc[4:0], \port$6852$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -22055,7 +22074,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6838$0  };
+  assign lc_next = { lc[4:0], \port$6852$0  };
   assign zero = is_zero;
 endmodule
 
@@ -22335,8 +22354,8 @@ module \biss_master_uart.ch0.core.time_base (rst, first_rise, first_rise_time, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
-, delay, slo, clk);
+module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired
+, delay_over, delay, slo, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -22380,19 +22399,21 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   wire \$45 ;
   wire \$46 ;
   wire \$47 ;
-  reg [24:0] \$48 ;
-  reg \$49 ;
+  wire \$48 ;
+  reg [24:0] \$49 ;
   wire \$5 ;
   reg \$50 ;
-  reg [12:0] \$51 ;
-  reg \$52 ;
+  reg \$51 ;
+  reg [12:0] \$52 ;
   reg \$53 ;
-  reg [24:0] \$54 ;
-  reg \$55 ;
+  reg \$54 ;
+  reg [24:0] \$55 ;
   reg \$56 ;
   reg \$57 ;
   reg \$58 ;
+  reg \$59 ;
   wire \$6 ;
+  reg \$60 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
@@ -22446,35 +22467,42 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   wire [23:0] timeout_limit;
   input [23:0] timeout_live;
   wire [23:0] timeout_live;
+  output timeout_over;
+  reg timeout_over = 1'h0;
   reg [24:0] timer = 25'h0000001;
-  assign \$42  = \$40  & \$41 ;
-  assign \$43  = ~ restart;
-  assign \$44  = in_clock & \$43 ;
-  assign \$45  = timer >= no_start_limit;
-  assign \$46  = \$44  & \$45 ;
-  assign \$47  = delay > delay_limit;
+  assign \$40  = ~ restart;
+  assign \$41  = in_clock & \$40 ;
+  assign \$42  = timer >= ack_limit;
+  assign \$43  = \$41  & \$42 ;
+  assign \$44  = ~ restart;
+  assign \$45  = in_clock & \$44 ;
+  assign \$46  = timer >= no_start_limit;
+  assign \$47  = \$45  & \$46 ;
+  assign \$48  = delay > delay_limit;
   always @(posedge clk)
-    slo_low_time_p1 <= \$48 ;
+    slo_low_time_p1 <= \$49 ;
   always @(posedge clk)
-    slo_stuck <= \$49 ;
+    slo_stuck <= \$50 ;
   always @(posedge clk)
-    slo_stuck_live <= \$50 ;
+    slo_stuck_live <= \$51 ;
   always @(posedge clk)
-    high_p2 <= \$51 ;
+    high_p2 <= \$52 ;
   always @(posedge clk)
-    quiet <= \$52 ;
+    quiet <= \$53 ;
   always @(posedge clk)
-    quiet_live <= \$53 ;
+    quiet_live <= \$54 ;
   always @(posedge clk)
-    timer <= \$54 ;
+    timer <= \$55 ;
   always @(posedge clk)
-    break_over <= \$55 ;
+    break_over <= \$56 ;
   always @(posedge clk)
-    ack_expired <= \$56 ;
+    timeout_over <= \$57 ;
   always @(posedge clk)
-    no_start_expired <= \$57 ;
+    ack_expired <= \$58 ;
   always @(posedge clk)
-    delay_over <= \$58 ;
+    no_start_expired <= \$59 ;
+  always @(posedge clk)
+    delay_over <= \$60 ;
   assign \$1  = slo & quiet;
   assign \$2  = \$1  | ma_busy;
   assign \$3  = ~ slo_low_time_p1[24];
@@ -22513,105 +22541,115 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   assign \$36  = timer >= 12'hfa0;
   assign \$37  = timer >= break_time;
   assign \$38  = \$35  ? \$36  : \$37 ;
-  assign \$39  = ~ restart;
-  assign \$40  = in_clock & \$39 ;
-  assign \$41  = timer >= ack_limit;
+  assign \$39  = timer >= timeout_limit;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$48  = slo_low_time_p1;
+    \$49  = slo_low_time_p1;
     if (\$2 ) begin
-      \$48  = 25'h0000001;
+      \$49  = 25'h0000001;
     end else if (\$3 ) begin
-      \$48  = \$4 [24:0];
+      \$49  = \$4 [24:0];
     end
     if (rst) begin
-      \$48  = 25'h0000001;
+      \$49  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$49  = \$9 ;
-    if (rst) begin
-      \$49  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$50  = \$17 ;
+    \$50  = \$9 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$51  = high_p2;
+    \$51  = \$17 ;
+    if (rst) begin
+      \$51  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$52  = high_p2;
     if (\$18 ) begin
-      \$51  = 13'h0002;
+      \$52  = 13'h0002;
     end else if (\$19 ) begin
-      \$51  = \$20 [12:0];
+      \$52  = \$20 [12:0];
     end
     if (rst) begin
-      \$51  = 13'h0002;
+      \$52  = 13'h0002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$52  = \$23 ;
-    if (rst) begin
-      \$52  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$53  = \$30 ;
+    \$53  = \$23 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$54  = \$34 [24:0];
+    \$54  = \$30 ;
     if (rst) begin
-      \$54  = 25'h0000001;
+      \$54  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$55  = \$34 [24:0];
+    if (rst) begin
+      \$55  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
-      \$55  = 1'h0;
+      \$56  = 1'h0;
     end else begin
-      \$55  = \$38 ;
+      \$56  = \$38 ;
     end
-    if (rst) begin
-      \$55  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$57  = \$46 ;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$57  = 1'h0;
+    end else begin
+      \$57  = \$39 ;
+    end
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
-    \$58  = \$47 ;
+    \$58  = \$43 ;
     if (rst) begin
       \$58  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$59  = \$47 ;
+    if (rst) begin
+      \$59  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    \$60  = \$48 ;
+    if (rst) begin
+      \$60  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2945$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2952$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire \$1 ;
@@ -22783,8 +22821,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2945$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$2945$0 ;
-  wire \port$2945$0 ;
+  output \port$2952$0 ;
+  wire \port$2952$0 ;
   output report;
   wire report;
   input report_frame;
@@ -22902,7 +22940,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2945$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2945$0  = \$2 ;
+  assign \port$2952$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -22953,7 +22991,7 @@ endmodule
 module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7730$0 , \port$7743$0 , regs__ca_done, \port$7820$0 , slo);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7748$0 , \port$7761$0 , regs__ca_done, \port$7838$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -23135,12 +23173,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7730$0 ;
-  wire [186:0] \port$7730$0 ;
-  output [79:0] \port$7743$0 ;
-  wire [79:0] \port$7743$0 ;
-  output [9:0] \port$7820$0 ;
-  wire [9:0] \port$7820$0 ;
+  output [186:0] \port$7748$0 ;
+  wire [186:0] \port$7748$0 ;
+  output [79:0] \port$7761$0 ;
+  wire [79:0] \port$7761$0 ;
+  output [9:0] \port$7838$0 ;
+  wire [9:0] \port$7838$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -23334,8 +23372,8 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
     regs__done_count <= \$17 ;
   \biss_master_uart.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$262 (ca_abort),
-    .\busy$311 (regs__busy),
+    .\abort$264 (ca_abort),
+    .\busy$313 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -23384,13 +23422,13 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$287 (clear_counters),
+    .\clear$289 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$19 ),
-    .\done$314 (done),
+    .\done$316 (done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$45 (periodic),
@@ -23398,13 +23436,13 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$20 ),
-    .\result$319 (\$18 ),
+    .\result$321 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$260 (ca_start),
+    .\start$262 (ca_start),
     .trigger(trigger),
-    .\valid$316 (valid)
+    .\valid$318 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
@@ -23595,16 +23633,16 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$7730$0  = \$18 ;
-  assign \port$7743$0  = \$19 ;
-  assign \port$7820$0  = \$20 ;
+  assign \port$7748$0  = \$18 ;
+  assign \port$7761$0  = \$19 ;
+  assign \port$7838$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$311 , config_error, count_busy, count_data, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$287 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$313 , config_error, count_busy, count_data, frames, ca_rbuf_data, rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, \clear$289 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$260 , \abort$262 
-, abort, ma, \done$314 , \valid$316 , \result$319 , counts, ca_done, result, slo);
+, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$262 , \abort$264 
+, abort, ma, \done$316 , \valid$318 , \result$321 , counts, ca_done, result, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -23638,26 +23676,26 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$262 ;
-  wire \abort$262 ;
+  input \abort$264 ;
+  wire \abort$264 ;
   wire \abort$57 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$90 ;
+  wire \ack_expired$92 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$111 ;
+  wire [23:0] \ack_limit$113 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$343 ;
+  wire \bit$345 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$88 ;
+  wire \break_over$90 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$271 ;
-  wire \busy$308 ;
-  output \busy$311 ;
-  wire \busy$311 ;
+  wire \busy$273 ;
+  wire \busy$310 ;
+  output \busy$313 ;
+  wire \busy$313 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -23692,10 +23730,10 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$275 ;
+  wire \cdm$277 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$322 ;
+  wire \cds$324 ;
   wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -23839,16 +23877,16 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$170 ;
+  wire \check$172 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$175 ;
-  wire \clean$344 ;
+  wire \clean$177 ;
+  wire \clean$346 ;
   wire clear;
-  wire \clear$135 ;
-  input \clear$287 ;
-  wire \clear$287 ;
-  wire \clear$300 ;
+  wire \clear$137 ;
+  input \clear$289 ;
+  wire \clear$289 ;
+  wire \clear$302 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -23877,33 +23915,33 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$187 ;
+  wire [39:0] \cpw_top$189 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$212 ;
+  wire [1:0] \crc_ok$214 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$183 ;
-  wire [37:0] \crcs$183[0] ;
-  wire \crcs$183[0].inverted ;
-  wire [15:0] \crcs$183[0].poly ;
-  wire [15:0] \crcs$183[0].start ;
-  wire [4:0] \crcs$183[0].width ;
-  wire [37:0] \crcs$183[1] ;
-  wire \crcs$183[1].inverted ;
-  wire [15:0] \crcs$183[1].poly ;
-  wire [15:0] \crcs$183[1].start ;
-  wire [4:0] \crcs$183[1].width ;
-  wire [75:0] \crcs$184 ;
-  wire [37:0] \crcs$184[0] ;
-  wire \crcs$184[0].inverted ;
-  wire [15:0] \crcs$184[0].poly ;
-  wire [15:0] \crcs$184[0].start ;
-  wire [4:0] \crcs$184[0].width ;
-  wire [37:0] \crcs$184[1] ;
-  wire \crcs$184[1].inverted ;
-  wire [15:0] \crcs$184[1].poly ;
-  wire [15:0] \crcs$184[1].start ;
-  wire [4:0] \crcs$184[1].width ;
+  wire [75:0] \crcs$185 ;
+  wire [37:0] \crcs$185[0] ;
+  wire \crcs$185[0].inverted ;
+  wire [15:0] \crcs$185[0].poly ;
+  wire [15:0] \crcs$185[0].start ;
+  wire [4:0] \crcs$185[0].width ;
+  wire [37:0] \crcs$185[1] ;
+  wire \crcs$185[1].inverted ;
+  wire [15:0] \crcs$185[1].poly ;
+  wire [15:0] \crcs$185[1].start ;
+  wire [4:0] \crcs$185[1].width ;
+  wire [75:0] \crcs$186 ;
+  wire [37:0] \crcs$186[0] ;
+  wire \crcs$186[0].inverted ;
+  wire [15:0] \crcs$186[0].poly ;
+  wire [15:0] \crcs$186[0].start ;
+  wire [4:0] \crcs$186[0].width ;
+  wire [37:0] \crcs$186[1] ;
+  wire \crcs$186[1].inverted ;
+  wire [15:0] \crcs$186[1].poly ;
+  wire [15:0] \crcs$186[1].start ;
+  wire [4:0] \crcs$186[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -23975,21 +24013,21 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$117 ;
-  wire [12:0] \delay$169 ;
+  wire [12:0] \delay$119 ;
+  wire [12:0] \delay$171 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$119 ;
+  wire [11:0] \delay_limit$121 ;
   wire delay_over;
-  wire \delay_over$98 ;
+  wire \delay_over$100 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$273 ;
-  output \done$314 ;
-  wire \done$314 ;
-  wire \done$315 ;
+  wire \done$275 ;
+  output \done$316 ;
+  wire \done$316 ;
+  wire \done$317 ;
   wire doubtful;
   wire early;
   wire \early$73 ;
@@ -23998,31 +24036,31 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$286 ;
-  wire \events$286.ca_aborted ;
-  wire \events$286.ca_crc4_error ;
-  wire \events$286.ca_data_fault ;
-  wire \events$286.ca_no_answer ;
-  wire \events$286.ca_refused ;
-  wire [15:0] \events$295 ;
-  wire \events$295.aborted ;
-  wire \events$295.crc_word0 ;
-  wire \events$295.crc_word1 ;
-  wire \events$295.delay_jump ;
-  wire \events$295.delay_range ;
-  wire \events$295.lc_repeat ;
-  wire \events$295.lc_skip ;
-  wire \events$295.lc_zero ;
-  wire \events$295.no_ack ;
-  wire \events$295.no_start ;
-  wire \events$295.no_stop ;
-  wire \events$295.noise_event ;
-  wire \events$295.noisy_line ;
-  wire \events$295.overrun ;
-  wire \events$295.slo_stuck_low ;
-  wire \events$295.spw_mismatch ;
+  wire [4:0] \events$288 ;
+  wire \events$288.ca_aborted ;
+  wire \events$288.ca_crc4_error ;
+  wire \events$288.ca_data_fault ;
+  wire \events$288.ca_no_answer ;
+  wire \events$288.ca_refused ;
+  wire [15:0] \events$297 ;
+  wire \events$297.aborted ;
+  wire \events$297.crc_word0 ;
+  wire \events$297.crc_word1 ;
+  wire \events$297.delay_jump ;
+  wire \events$297.delay_range ;
+  wire \events$297.lc_repeat ;
+  wire \events$297.lc_skip ;
+  wire \events$297.lc_zero ;
+  wire \events$297.no_ack ;
+  wire \events$297.no_start ;
+  wire \events$297.no_stop ;
+  wire \events$297.noise_event ;
+  wire \events$297.noisy_line ;
+  wire \events$297.overrun ;
+  wire \events$297.slo_stuck_low ;
+  wire \events$297.spw_mismatch ;
   wire fault;
-  wire \fault$208 ;
+  wire \fault$210 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -24058,7 +24096,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$210 ;
+  wire [3:0] \fault_status$212 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -24068,7 +24106,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$246 ;
+  wire \first_rise$248 ;
   wire [31:0] first_rise_time;
   wire fixed;
   wire [12:0] fixed_delay;
@@ -24122,34 +24160,34 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$141 ;
+  wire [15:0] \half_period$143 ;
   wire held;
   wire hold;
   wire idle;
   wire \idle$41 ;
   wire \idle$50 ;
   wire in_clock;
-  wire \in_clock$105 ;
+  wire \in_clock$107 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$147 ;
-  wire [5:0] \lc$335 ;
+  wire [5:0] \lc$149 ;
+  wire [5:0] \lc$337 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$149 ;
+  wire [5:0] \lc_next$151 ;
   wire lc_repeat;
-  wire \lc_repeat$336 ;
+  wire \lc_repeat$338 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$337 ;
+  wire \lc_skip$339 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$338 ;
+  wire \lc_zero$340 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$158 ;
+  wire \level$160 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
   wire [274:0] live;
@@ -24211,10 +24249,10 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \locked$71 ;
   output ma;
   wire ma;
-  wire \ma$310 ;
+  wire \ma$312 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$100 ;
+  wire \ma_busy$102 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -24223,17 +24261,17 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire mismatch;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$92 ;
+  wire \no_start_expired$94 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$115 ;
+  wire [24:0] \no_start_limit$117 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$177 ;
+  wire \noisy$179 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$313 ;
+  wire \overrun$315 ;
   wire passed;
   wire pending;
   wire [23:0] period;
@@ -24241,10 +24279,10 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   input \periodic$45 ;
   wire \periodic$45 ;
   wire quiet;
-  wire \quiet$124 ;
+  wire \quiet$126 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$126 ;
+  wire \quiet_live$128 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -24260,38 +24298,38 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$222 ;
-  wire \report$226 ;
+  wire \report$224 ;
+  wire \report$228 ;
   wire report_delay;
-  wire \report_delay$229 ;
+  wire \report_delay$231 ;
   wire report_frame;
-  wire \report_frame$207 ;
-  wire \report_frame$227 ;
+  wire \report_frame$209 ;
+  wire \report_frame$229 ;
   wire request;
-  wire [17:0] \request$248 ;
-  wire [6:0] \request$248.address ;
-  wire [6:0] \request$248.count ;
-  wire [2:0] \request$248.slave_id ;
-  wire \request$248.write ;
+  wire [17:0] \request$250 ;
+  wire [6:0] \request$250.address ;
+  wire [6:0] \request$250.count ;
+  wire [2:0] \request$250.slave_id ;
+  wire \request$250.write ;
   wire \request$56 ;
   wire restart;
-  wire \restart$162 ;
+  wire \restart$164 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$319 ;
-  wire [186:0] \result$319 ;
-  wire \result$319.cds ;
-  wire \result$319.delay_settled ;
-  wire [7:0] \result$319.delay_spread ;
-  wire [5:0] \result$319.lc ;
-  wire \result$319.lc_repeat ;
-  wire \result$319.lc_skip ;
-  wire \result$319.lc_zero ;
-  wire [12:0] \result$319.line_delay ;
-  wire [3:0] \result$319.noise_events ;
-  wire [12:0] \result$319.settled_delay ;
-  wire \result$319.spw_mismatch ;
+  output [186:0] \result$321 ;
+  wire [186:0] \result$321 ;
+  wire \result$321.cds ;
+  wire \result$321.delay_settled ;
+  wire [7:0] \result$321.delay_spread ;
+  wire [5:0] \result$321.lc ;
+  wire \result$321.lc_repeat ;
+  wire \result$321.lc_skip ;
+  wire \result$321.lc_zero ;
+  wire [12:0] \result$321.line_delay ;
+  wire [3:0] \result$321.noise_events ;
+  wire [12:0] \result$321.settled_delay ;
+  wire \result$321.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -24309,18 +24347,18 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$319.status ;
-  wire [31:0] \result$319.timestamp ;
-  wire [57:0] \result$319.word0 ;
-  wire \result$319.word0.crc_ok ;
-  wire \result$319.word0.ne ;
-  wire \result$319.word0.nw ;
-  wire [54:0] \result$319.word0.position ;
-  wire [42:0] \result$319.word1 ;
-  wire \result$319.word1.crc_ok ;
-  wire \result$319.word1.ne ;
-  wire \result$319.word1.nw ;
-  wire [39:0] \result$319.word1.position ;
+  wire [3:0] \result$321.status ;
+  wire [31:0] \result$321.timestamp ;
+  wire [57:0] \result$321.word0 ;
+  wire \result$321.word0.crc_ok ;
+  wire \result$321.word0.ne ;
+  wire \result$321.word0.nw ;
+  wire [54:0] \result$321.word0.position ;
+  wire [42:0] \result$321.word1 ;
+  wire \result$321.word1.crc_ok ;
+  wire \result$321.word1.ne ;
+  wire \result$321.word1.nw ;
+  wire [39:0] \result$321.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -24332,55 +24370,55 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$155 ;
+  wire \resync$157 ;
   wire [15:0] rises;
-  wire [15:0] \rises$134 ;
+  wire [15:0] \rises$136 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$342 ;
+  wire \sample$344 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$325 ;
+  wire [12:0] \settled_delay$327 ;
   wire skip;
   input slo;
   wire slo;
+  wire \slo$101 ;
   wire \slo$52 ;
   wire \slo$62 ;
-  wire \slo$99 ;
   wire slo_stuck;
-  wire \slo_stuck$94 ;
+  wire \slo_stuck$96 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$96 ;
+  wire \slo_stuck_live$98 ;
   wire slots_full;
-  wire \slots_full$81 ;
+  wire \slots_full$83 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$339 ;
+  wire \spw_mismatch$341 ;
   wire ssi;
-  wire \ssi$196 ;
-  wire \ssi$200 ;
+  wire \ssi$198 ;
+  wire \ssi$202 ;
   wire ssi_double;
-  wire \ssi_double$201 ;
+  wire \ssi_double$203 ;
   wire ssi_error;
-  wire \ssi_error$202 ;
+  wire \ssi_error$204 ;
   wire ssi_error_low;
   input start;
   wire start;
-  input \start$260 ;
-  wire \start$260 ;
+  input \start$262 ;
+  wire \start$262 ;
   wire \start$43 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$132 ;
+  wire [15:0] \start_slot$134 ;
   wire started;
-  wire \started$130 ;
-  wire \started$79 ;
+  wire \started$132 ;
+  wire \started$81 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -24417,7 +24455,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$224 ;
+  wire [3:0] \status$226 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -24435,26 +24473,28 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$318 ;
+  wire [3:0] \status$320 ;
   wire stop_bit;
-  wire \stop_bit$84 ;
+  wire \stop_bit$86 ;
   wire stopped;
-  wire \stopped$82 ;
+  wire \stopped$84 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$113 ;
+  wire [23:0] \timeout_limit$115 ;
   wire [23:0] timeout_live;
+  wire timeout_over;
+  wire \timeout_over$79 ;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$191 ;
+  wire [7:0] \tolerance$193 ;
   input trigger;
   wire trigger;
   wire \trigger$54 ;
   wire unconfirmed;
   wire valid;
-  wire \valid$231 ;
-  output \valid$316 ;
-  wire \valid$316 ;
+  wire \valid$233 ;
+  output \valid$318 ;
+  wire \valid$318 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -24472,34 +24512,34 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$145 ;
+  wire [1:0] \word_count$147 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$181 ;
-  wire [11:0] \words$181[0] ;
+  wire [23:0] \words$183 ;
+  wire [11:0] \words$183[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$181[0].crc ;
-  wire [5:0] \words$181[0].data_bits ;
-  wire \words$181[0].gray ;
-  wire \words$181[0].lc ;
-  wire \words$181[0].nenw ;
-  wire \words$181[0].signed ;
-  wire [11:0] \words$181[1] ;
+  wire [1:0] \words$183[0].crc ;
+  wire [5:0] \words$183[0].data_bits ;
+  wire \words$183[0].gray ;
+  wire \words$183[0].lc ;
+  wire \words$183[0].nenw ;
+  wire \words$183[0].signed ;
+  wire [11:0] \words$183[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$181[1].crc ;
-  wire [5:0] \words$181[1].data_bits ;
-  wire \words$181[1].gray ;
-  wire \words$181[1].lc ;
-  wire \words$181[1].nenw ;
-  wire \words$181[1].signed ;
+  wire [1:0] \words$183[1].crc ;
+  wire [5:0] \words$183[1].data_bits ;
+  wire \words$183[1].gray ;
+  wire \words$183[1].lc ;
+  wire \words$183[1].nenw ;
+  wire \words$183[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -24533,9 +24573,9 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign enable = \$1  & \$2 ;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$3  = ~ started_before;
-  assign \check$170  = started & \$3 ;
+  assign \check$172  = started & \$3 ;
   assign \$4  = ~ cycle[259];
-  assign cdm = \cdm$275  & \$4 ;
+  assign cdm = \cdm$277  & \$4 ;
   assign \$5  = ~ cycle[259];
   assign frame_ok = passed & \$5 ;
   assign \$6  = result[2:0] == 1'h1;
@@ -24553,10 +24593,10 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \$18  = report_frame & \$17 ;
   assign \$19  = status == 4'he;
   assign \$20  = report_frame & \$19 ;
-  assign \busy$311  = ~ idle;
+  assign \busy$313  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$21  = ~ \clear$135 ;
-  assign \$22  = \sample$342  & \$21 ;
+  assign \$21  = ~ \clear$137 ;
+  assign \$22  = \sample$344  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -24602,7 +24642,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$162 ),
+    .fault(\restart$164 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -24619,7 +24659,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$135 ),
+    .receiver_clear(\clear$137 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
@@ -24634,24 +24674,25 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
+    .timeout_over(timeout_over),
     .timer_clear(clear),
     .waiting(watch)
   );
   \biss_master_uart.ch1.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$287 ),
+    .clear(\clear$289 ),
     .clk(clk),
-    .events(\events$295 ),
+    .events(\events$297 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_uart.ch1.core.counters  counters (
-    .clear(\clear$287 ),
+    .clear(\clear$289 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$286 ),
+    .events(\events$288 ),
     .rst(rst)
   );
   \biss_master_uart.ch1.core.decoder  decoder (
@@ -24669,8 +24710,8 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7384$272 (cycle[274:272]),
-    .receiver_clear(\clear$135 ),
+    .\port$7400$272 (cycle[274:272]),
+    .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -24683,7 +24724,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .words(words)
   );
   \biss_master_uart.ch1.core.delay_check  delay_check (
-    .check(\check$170 ),
+    .check(\check$172 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -24705,7 +24746,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$162 ),
+    .restart(\restart$164 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -24713,7 +24754,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   \biss_master_uart.ch1.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$100 ),
+    .\clocking (\ma_busy$102 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -24725,7 +24766,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .second_rise(ma_arm)
   );
   \biss_master_uart.ch1.core.ma_stop  ma_stop (
-    .clear(\clear$135 ),
+    .clear(\clear$137 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -24737,12 +24778,12 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .start_slot(start_slot),
     .\started$15 (started),
     .w1_enable(cycle[199]),
-    .words(\words$181 )
+    .words(\words$183 )
   );
   \biss_master_uart.ch1.core.register_access  register_access (
-    .abort(\abort$262 ),
+    .abort(\abort$264 ),
     .busy(frames),
-    .cdm(\cdm$275 ),
+    .cdm(\cdm$277 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -24752,27 +24793,27 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$248 ),
+    .request(\request$250 ),
     .result(result),
     .rst(rst),
-    .start(\start$260 ),
+    .start(\start$262 ),
     .wbuf(wbuf)
   );
   \biss_master_uart.ch1.core.results  results (
     .clk(clk),
-    .done(\done$314 ),
+    .done(\done$316 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$319 ),
+    .result(\result$321 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$316 )
+    .valid_out(\valid$318 )
   );
   \biss_master_uart.ch1.core.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$343 ),
+    .\bit (\bit$345 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -24780,10 +24821,10 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7384$259 (cycle[271:259]),
-    .receiver_clear(\clear$135 ),
+    .\port$7400$259 (cycle[271:259]),
+    .receiver_clear(\clear$137 ),
     .rst(rst),
-    .sample(\sample$342 ),
+    .sample(\sample$344 ),
     .slo(slo)
   );
   \biss_master_uart.ch1.core.scheduler  scheduler (
@@ -24804,7 +24845,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7372$0 (\bit ),
+    .\port$7388$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -24836,7 +24877,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$100 ),
+    .ma_busy(\ma_busy$102 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -24849,17 +24890,18 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
-    .timeout_live(cfg_timeout_limit)
+    .timeout_live(cfg_timeout_limit),
+    .timeout_over(timeout_over)
   );
   \biss_master_uart.ch1.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$344 ),
+    .clean(\clean$346 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$162 ),
+    .fault(\restart$164 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -24870,7 +24912,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5369$0 (\$28 ),
+    .\port$5383$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -24888,7 +24930,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
-    \$24  = \bit$343 ;
+    \$24  = \bit$345 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -24909,7 +24951,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
-    \$27  = \clean$344 ;
+    \$27  = \clean$346 ;
     if (rst) begin
       \$27  = 1'h0;
     end
@@ -24932,149 +24974,150 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \locked$71  = locked;
   assign \early$73  = early;
   assign ssi = cycle[259];
-  assign \started$79  = started;
-  assign \slots_full$81  = slots_full;
-  assign \stopped$82  = stopped;
-  assign \stop_bit$84  = stop_bit;
+  assign \timeout_over$79  = timeout_over;
+  assign \started$81  = started;
+  assign \slots_full$83  = slots_full;
+  assign \stopped$84  = stopped;
+  assign \stop_bit$86  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$88  = break_over;
-  assign \ack_expired$90  = ack_expired;
-  assign \no_start_expired$92  = no_start_expired;
-  assign \slo_stuck$94  = slo_stuck;
-  assign \slo_stuck_live$96  = slo_stuck_live;
-  assign \delay_over$98  = delay_over;
-  assign \slo$99  = \slo$62 ;
-  assign \clocking  = \ma_busy$100 ;
+  assign \break_over$90  = break_over;
+  assign \ack_expired$92  = ack_expired;
+  assign \no_start_expired$94  = no_start_expired;
+  assign \slo_stuck$96  = slo_stuck;
+  assign \slo_stuck_live$98  = slo_stuck_live;
+  assign \delay_over$100  = delay_over;
+  assign \slo$101  = \slo$62 ;
+  assign \clocking  = \ma_busy$102 ;
   assign timer_clear = clear;
-  assign \in_clock$105  = in_clock;
+  assign \in_clock$107  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$111  = ack_limit;
-  assign \timeout_limit$113  = timeout_limit;
-  assign \no_start_limit$115  = no_start_limit;
-  assign \delay$117  = delay;
-  assign \delay_limit$119  = delay_limit;
+  assign \ack_limit$113  = ack_limit;
+  assign \timeout_limit$115  = timeout_limit;
+  assign \no_start_limit$117  = no_start_limit;
+  assign \delay$119  = delay;
+  assign \delay_limit$121  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$124  = quiet;
-  assign \quiet_live$126  = quiet_live;
+  assign \quiet$126  = quiet;
+  assign \quiet_live$128  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$130  = started;
-  assign \start_slot$132  = start_slot;
-  assign \rises$134  = rises;
-  assign receiver_clear = \clear$135 ;
+  assign \started$132  = started;
+  assign \start_slot$134  = start_slot;
+  assign \rises$136  = rises;
+  assign receiver_clear = \clear$137 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$141  = cycle[15:0];
-  assign \word_count$145  = word_count;
-  assign \lc$147  = lc;
+  assign \half_period$143  = cycle[15:0];
+  assign \word_count$147  = word_count;
+  assign \lc$149  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$149  = { lc[4:0], \bit  };
+  assign \lc_next$151  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$155  = resync;
+  assign \resync$157  = resync;
   assign waiting = watch;
-  assign \level$158  = \slo$62 ;
+  assign \level$160  = \slo$62 ;
   assign noise = sampler_noise;
   assign close = done;
-  assign fault = \restart$162 ;
+  assign fault = \restart$164 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$169  = delay;
+  assign \delay$171  = delay;
   assign \$signal  = learn;
-  assign \clean$175  = clean;
-  assign \noisy$177  = noisy;
+  assign \clean$177  = clean;
+  assign \noisy$179  = noisy;
   assign jump = delay_jump;
-  assign \crcs$183  = crcs;
-  assign \crcs$184  = crcs;
+  assign \crcs$185  = crcs;
+  assign \crcs$186  = crcs;
   assign w1_enable = cycle[199];
-  assign \cpw_top$187  = cpw_top;
+  assign \cpw_top$189  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[205:200];
-  assign \tolerance$191  = cycle[258:251];
+  assign \tolerance$193  = cycle[258:251];
   assign match = spw_match;
   assign fixed = cycle[259];
   assign fixed_delay = { 1'h0, cycle[271:260] };
-  assign \ssi$196  = cycle[259];
+  assign \ssi$198  = cycle[259];
   assign ssi_error = cycle[272];
   assign ssi_error_low = cycle[273];
   assign ssi_double = cycle[274];
-  assign \ssi$200  = cycle[259];
-  assign \ssi_double$201  = cycle[274];
-  assign \ssi_error$202  = cycle[272];
+  assign \ssi$202  = cycle[259];
+  assign \ssi_double$203  = cycle[274];
+  assign \ssi_error$204  = cycle[272];
   assign mismatch = copy_mismatch;
   assign cfg = cycle;
-  assign \report_frame$207  = report_frame;
-  assign \fault$208  = \restart$162 ;
-  assign \fault_status$210  = fault_status;
-  assign \crc_ok$212  = crc_ok;
+  assign \report_frame$209  = report_frame;
+  assign \fault$210  = \restart$164 ;
+  assign \fault_status$212  = fault_status;
+  assign \crc_ok$214  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$222  = report;
-  assign \status$224  = status;
+  assign \report$224  = report;
+  assign \status$226  = status;
   assign setting = cycle[148:145];
-  assign \report$226  = report;
-  assign \report_frame$227  = report_frame;
-  assign \report_delay$229  = report_delay;
-  assign \valid$231  = valid;
+  assign \report$228  = report;
+  assign \report_frame$229  = report_frame;
+  assign \report_delay$231  = report_delay;
+  assign \valid$233  = valid;
   assign word_crc_ok = { \$28 , crc_ok[0] };
-  assign \first_rise$246  = first_rise;
+  assign \first_rise$248  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$260 ;
-  assign ca_abort = \abort$262 ;
+  assign ca_start = \start$262 ;
+  assign ca_abort = \abort$264 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$271  = frames;
-  assign \done$273  = ca_done;
+  assign \busy$273  = frames;
+  assign \done$275  = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$287 ;
+  assign clear_counters = \clear$289 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$300  = \clear$287 ;
+  assign \clear$302  = \clear$289 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$308  = count_busy;
-  assign \ma$310  = ma;
-  assign \overrun$313  = overrun;
-  assign \done$315  = \done$314 ;
-  assign valid_out = \valid$316 ;
-  assign \status$318  = \result$319 [3:0];
-  assign timestamp = \result$319 [35:4];
-  assign line_delay = \result$319 [48:36];
-  assign \cds$322  = \result$319 [49];
-  assign noise_events = \result$319 [53:50];
-  assign delay_settled = \result$319 [54];
-  assign \settled_delay$325  = \result$319 [67:55];
-  assign delay_spread = \result$319 [75:68];
-  assign word0_position = \result$319 [130:76];
-  assign word0_ne = \result$319 [131];
-  assign word0_nw = \result$319 [132];
-  assign word0_crc_ok = \result$319 [133];
-  assign word1_position = \result$319 [173:134];
-  assign word1_ne = \result$319 [174];
-  assign word1_nw = \result$319 [175];
-  assign word1_crc_ok = \result$319 [176];
-  assign \lc$335  = \result$319 [182:177];
-  assign \lc_repeat$336  = \result$319 [183];
-  assign \lc_skip$337  = \result$319 [184];
-  assign \lc_zero$338  = \result$319 [185];
-  assign \spw_mismatch$339  = \result$319 [186];
+  assign \busy$310  = count_busy;
+  assign \ma$312  = ma;
+  assign \overrun$315  = overrun;
+  assign \done$317  = \done$316 ;
+  assign valid_out = \valid$318 ;
+  assign \status$320  = \result$321 [3:0];
+  assign timestamp = \result$321 [35:4];
+  assign line_delay = \result$321 [48:36];
+  assign \cds$324  = \result$321 [49];
+  assign noise_events = \result$321 [53:50];
+  assign delay_settled = \result$321 [54];
+  assign \settled_delay$327  = \result$321 [67:55];
+  assign delay_spread = \result$321 [75:68];
+  assign word0_position = \result$321 [130:76];
+  assign word0_ne = \result$321 [131];
+  assign word0_nw = \result$321 [132];
+  assign word0_crc_ok = \result$321 [133];
+  assign word1_position = \result$321 [173:134];
+  assign word1_ne = \result$321 [174];
+  assign word1_nw = \result$321 [175];
+  assign word1_crc_ok = \result$321 [176];
+  assign \lc$337  = \result$321 [182:177];
+  assign \lc_repeat$338  = \result$321 [183];
+  assign \lc_skip$339  = \result$321 [184];
+  assign \lc_zero$340  = \result$321 [185];
+  assign \spw_mismatch$341  = \result$321 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -25175,20 +25218,20 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$181[0]  = \words$181 [11:0];
-  assign \words$181[0].data_bits  = \words$181 [5:0];
-  assign \words$181[0].nenw  = \words$181 [6];
-  assign \words$181[0].lc  = \words$181 [7];
-  assign \words$181[0].crc  = \words$181 [9:8];
-  assign \words$181[0].gray  = \words$181 [10];
-  assign \words$181[0].signed  = \words$181 [11];
-  assign \words$181[1]  = \words$181 [23:12];
-  assign \words$181[1].data_bits  = \words$181 [17:12];
-  assign \words$181[1].nenw  = \words$181 [18];
-  assign \words$181[1].lc  = \words$181 [19];
-  assign \words$181[1].crc  = \words$181 [21:20];
-  assign \words$181[1].gray  = \words$181 [22];
-  assign \words$181[1].signed  = \words$181 [23];
+  assign \words$183[0]  = \words$183 [11:0];
+  assign \words$183[0].data_bits  = \words$183 [5:0];
+  assign \words$183[0].nenw  = \words$183 [6];
+  assign \words$183[0].lc  = \words$183 [7];
+  assign \words$183[0].crc  = \words$183 [9:8];
+  assign \words$183[0].gray  = \words$183 [10];
+  assign \words$183[0].signed  = \words$183 [11];
+  assign \words$183[1]  = \words$183 [23:12];
+  assign \words$183[1].data_bits  = \words$183 [17:12];
+  assign \words$183[1].nenw  = \words$183 [18];
+  assign \words$183[1].lc  = \words$183 [19];
+  assign \words$183[1].crc  = \words$183 [21:20];
+  assign \words$183[1].gray  = \words$183 [22];
+  assign \words$183[1].signed  = \words$183 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -25199,26 +25242,26 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$183[0]  = crcs[37:0];
-  assign \crcs$183[0].width  = crcs[4:0];
-  assign \crcs$183[0].poly  = crcs[20:5];
-  assign \crcs$183[0].start  = crcs[36:21];
-  assign \crcs$183[0].inverted  = crcs[37];
-  assign \crcs$183[1]  = crcs[75:38];
-  assign \crcs$183[1].width  = crcs[42:38];
-  assign \crcs$183[1].poly  = crcs[58:43];
-  assign \crcs$183[1].start  = crcs[74:59];
-  assign \crcs$183[1].inverted  = crcs[75];
-  assign \crcs$184[0]  = crcs[37:0];
-  assign \crcs$184[0].width  = crcs[4:0];
-  assign \crcs$184[0].poly  = crcs[20:5];
-  assign \crcs$184[0].start  = crcs[36:21];
-  assign \crcs$184[0].inverted  = crcs[37];
-  assign \crcs$184[1]  = crcs[75:38];
-  assign \crcs$184[1].width  = crcs[42:38];
-  assign \crcs$184[1].poly  = crcs[58:43];
-  assign \crcs$184[1].start  = crcs[74:59];
-  assign \crcs$184[1].inverted  = crcs[75];
+  assign \crcs$185[0]  = crcs[37:0];
+  assign \crcs$185[0].width  = crcs[4:0];
+  assign \crcs$185[0].poly  = crcs[20:5];
+  assign \crcs$185[0].start  = crcs[36:21];
+  assign \crcs$185[0].inverted  = crcs[37];
+  assign \crcs$185[1]  = crcs[75:38];
+  assign \crcs$185[1].width  = crcs[42:38];
+  assign \crcs$185[1].poly  = crcs[58:43];
+  assign \crcs$185[1].start  = crcs[74:59];
+  assign \crcs$185[1].inverted  = crcs[75];
+  assign \crcs$186[0]  = crcs[37:0];
+  assign \crcs$186[0].width  = crcs[4:0];
+  assign \crcs$186[0].poly  = crcs[20:5];
+  assign \crcs$186[0].start  = crcs[36:21];
+  assign \crcs$186[0].inverted  = crcs[37];
+  assign \crcs$186[1]  = crcs[75:38];
+  assign \crcs$186[1].width  = crcs[42:38];
+  assign \crcs$186[1].poly  = crcs[58:43];
+  assign \crcs$186[1].start  = crcs[74:59];
+  assign \crcs$186[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -25285,41 +25328,41 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$248.slave_id  = \request$248 [2:0];
-  assign \request$248.address  = \request$248 [9:3];
-  assign \request$248.count  = \request$248 [16:10];
-  assign \request$248.write  = \request$248 [17];
+  assign \request$250.slave_id  = \request$250 [2:0];
+  assign \request$250.address  = \request$250 [9:3];
+  assign \request$250.count  = \request$250 [16:10];
+  assign \request$250.write  = \request$250 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$286.ca_crc4_error  = \events$286 [0];
-  assign \events$286.ca_no_answer  = \events$286 [1];
-  assign \events$286.ca_refused  = \events$286 [2];
-  assign \events$286.ca_aborted  = \events$286 [3];
-  assign \events$286.ca_data_fault  = \events$286 [4];
+  assign \events$288.ca_crc4_error  = \events$288 [0];
+  assign \events$288.ca_no_answer  = \events$288 [1];
+  assign \events$288.ca_refused  = \events$288 [2];
+  assign \events$288.ca_aborted  = \events$288 [3];
+  assign \events$288.ca_data_fault  = \events$288 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$295.crc_word0  = \events$295 [0];
-  assign \events$295.crc_word1  = \events$295 [1];
-  assign \events$295.no_ack  = \events$295 [2];
-  assign \events$295.no_start  = \events$295 [3];
-  assign \events$295.delay_range  = \events$295 [4];
-  assign \events$295.slo_stuck_low  = \events$295 [5];
-  assign \events$295.lc_repeat  = \events$295 [6];
-  assign \events$295.lc_skip  = \events$295 [7];
-  assign \events$295.lc_zero  = \events$295 [8];
-  assign \events$295.spw_mismatch  = \events$295 [9];
-  assign \events$295.overrun  = \events$295 [10];
-  assign \events$295.aborted  = \events$295 [11];
-  assign \events$295.no_stop  = \events$295 [12];
-  assign \events$295.noisy_line  = \events$295 [13];
-  assign \events$295.delay_jump  = \events$295 [14];
-  assign \events$295.noise_event  = \events$295 [15];
+  assign \events$297.crc_word0  = \events$297 [0];
+  assign \events$297.crc_word1  = \events$297 [1];
+  assign \events$297.no_ack  = \events$297 [2];
+  assign \events$297.no_start  = \events$297 [3];
+  assign \events$297.delay_range  = \events$297 [4];
+  assign \events$297.slo_stuck_low  = \events$297 [5];
+  assign \events$297.lc_repeat  = \events$297 [6];
+  assign \events$297.lc_skip  = \events$297 [7];
+  assign \events$297.lc_zero  = \events$297 [8];
+  assign \events$297.spw_mismatch  = \events$297 [9];
+  assign \events$297.overrun  = \events$297 [10];
+  assign \events$297.aborted  = \events$297 [11];
+  assign \events$297.no_stop  = \events$297 [12];
+  assign \events$297.noisy_line  = \events$297 [13];
+  assign \events$297.delay_jump  = \events$297 [14];
+  assign \events$297.noise_event  = \events$297 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -25327,57 +25370,57 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$319.status  = \result$319 [3:0];
-  assign \result$319.timestamp  = \result$319 [35:4];
-  assign \result$319.line_delay  = \result$319 [48:36];
-  assign \result$319.cds  = \result$319 [49];
-  assign \result$319.noise_events  = \result$319 [53:50];
-  assign \result$319.delay_settled  = \result$319 [54];
-  assign \result$319.settled_delay  = \result$319 [67:55];
-  assign \result$319.delay_spread  = \result$319 [75:68];
-  assign \result$319.word0  = \result$319 [133:76];
-  assign \result$319.word0.position  = \result$319 [130:76];
-  assign \result$319.word0.ne  = \result$319 [131];
-  assign \result$319.word0.nw  = \result$319 [132];
-  assign \result$319.word0.crc_ok  = \result$319 [133];
-  assign \result$319.word1  = \result$319 [176:134];
-  assign \result$319.word1.position  = \result$319 [173:134];
-  assign \result$319.word1.ne  = \result$319 [174];
-  assign \result$319.word1.nw  = \result$319 [175];
-  assign \result$319.word1.crc_ok  = \result$319 [176];
-  assign \result$319.lc  = \result$319 [182:177];
-  assign \result$319.lc_repeat  = \result$319 [183];
-  assign \result$319.lc_skip  = \result$319 [184];
-  assign \result$319.lc_zero  = \result$319 [185];
-  assign \result$319.spw_mismatch  = \result$319 [186];
-  assign \events$295 [15] = \event ;
-  assign \events$295 [14] = \$20 ;
-  assign \events$295 [13] = \$18 ;
-  assign \events$295 [12] = faults[6];
-  assign \events$295 [11] = faults[4];
-  assign \events$295 [10] = overrun;
-  assign \events$295 [9] = \$16 ;
-  assign \events$295 [8] = lc_zero;
-  assign \events$295 [7] = lc_skip;
-  assign \events$295 [6] = lc_repeat;
-  assign \events$295 [5] = faults[3];
-  assign \events$295 [4] = faults[2];
-  assign \events$295 [3] = faults[1];
-  assign \events$295 [2] = faults[0];
-  assign \events$295 [1] = crc_error[1];
-  assign \events$295 [0] = crc_error[0];
-  assign \events$286 [4] = \$15 ;
-  assign \events$286 [3] = \$13 ;
-  assign \events$286 [2] = \$11 ;
-  assign \events$286 [1] = \$9 ;
-  assign \events$286 [0] = \$7 ;
+  assign \result$321.status  = \result$321 [3:0];
+  assign \result$321.timestamp  = \result$321 [35:4];
+  assign \result$321.line_delay  = \result$321 [48:36];
+  assign \result$321.cds  = \result$321 [49];
+  assign \result$321.noise_events  = \result$321 [53:50];
+  assign \result$321.delay_settled  = \result$321 [54];
+  assign \result$321.settled_delay  = \result$321 [67:55];
+  assign \result$321.delay_spread  = \result$321 [75:68];
+  assign \result$321.word0  = \result$321 [133:76];
+  assign \result$321.word0.position  = \result$321 [130:76];
+  assign \result$321.word0.ne  = \result$321 [131];
+  assign \result$321.word0.nw  = \result$321 [132];
+  assign \result$321.word0.crc_ok  = \result$321 [133];
+  assign \result$321.word1  = \result$321 [176:134];
+  assign \result$321.word1.position  = \result$321 [173:134];
+  assign \result$321.word1.ne  = \result$321 [174];
+  assign \result$321.word1.nw  = \result$321 [175];
+  assign \result$321.word1.crc_ok  = \result$321 [176];
+  assign \result$321.lc  = \result$321 [182:177];
+  assign \result$321.lc_repeat  = \result$321 [183];
+  assign \result$321.lc_skip  = \result$321 [184];
+  assign \result$321.lc_zero  = \result$321 [185];
+  assign \result$321.spw_mismatch  = \result$321 [186];
+  assign \events$297 [15] = \event ;
+  assign \events$297 [14] = \$20 ;
+  assign \events$297 [13] = \$18 ;
+  assign \events$297 [12] = faults[6];
+  assign \events$297 [11] = faults[4];
+  assign \events$297 [10] = overrun;
+  assign \events$297 [9] = \$16 ;
+  assign \events$297 [8] = lc_zero;
+  assign \events$297 [7] = lc_skip;
+  assign \events$297 [6] = lc_repeat;
+  assign \events$297 [5] = faults[3];
+  assign \events$297 [4] = faults[2];
+  assign \events$297 [3] = faults[1];
+  assign \events$297 [2] = faults[0];
+  assign \events$297 [1] = crc_error[1];
+  assign \events$297 [0] = crc_error[0];
+  assign \events$288 [4] = \$15 ;
+  assign \events$288 [3] = \$13 ;
+  assign \events$288 [2] = \$11 ;
+  assign \events$288 [1] = \$9 ;
+  assign \events$288 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$248 [17] = ca_write;
-  assign \request$248 [16:10] = ca_count;
-  assign \request$248 [9:3] = ca_address;
-  assign \request$248 [2:0] = ca_slave_id;
+  assign \request$250 [17] = ca_write;
+  assign \request$250 [16:10] = ca_count;
+  assign \request$250 [9:3] = ca_address;
+  assign \request$250 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$28 ;
@@ -25399,8 +25442,8 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$181 [23:12] = cycle[211:200];
-  assign \words$181 [11:0] = cycle[160:149];
+  assign \words$183 [23:12] = cycle[211:200];
+  assign \words$183 [11:0] = cycle[160:149];
   assign words[23:12] = cycle[211:200];
   assign words[11:0] = cycle[160:149];
   assign live[274] = cfg_ssi_double;
@@ -26057,8 +26100,8 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
-, faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full, started
-, stop_bit, clk);
+, faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full
+, started, stop_bit, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -26090,12 +26133,18 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
   wire \$34 ;
   wire \$35 ;
   wire \$36 ;
-  reg \$37 ;
-  reg [2:0] \$38 ;
-  reg \$39 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
   wire \$4 ;
-  reg \$40 ;
-  reg \$41 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  reg \$43 ;
+  reg [2:0] \$44 ;
+  reg \$45 ;
+  reg \$46 ;
+  reg \$47 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
@@ -26126,7 +26175,7 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
   wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
   reg delay;
-  wire \delay$80 ;
+  wire \delay$81 ;
   input delay_over;
   wire delay_over;
   wire \delay_over$31 ;
@@ -26139,7 +26188,7 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
   output fault;
   reg fault;
   wire \fault$39 ;
-  wire \fault$76 ;
+  wire \fault$77 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -26309,63 +26358,71 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$81 ;
+  wire [3:0] \status$82 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
   wire stopped;
   wire stuck_low;
+  input timeout_over;
+  wire timeout_over;
   output timer_clear;
   reg timer_clear;
   output waiting;
   reg waiting;
   reg watch;
   always @(posedge clk)
-    pause <= \$41 ;
+    first_clock <= \$43 ;
+  always @(posedge clk)
+    cycle_fsm_state <= \$44 ;
+  always @(posedge clk)
+    idle <= \$45 ;
+  always @(posedge clk)
+    receiver_clear <= \$46 ;
+  always @(posedge clk)
+    pause <= \$47 ;
   assign \$1  = ma_busy | abort;
-  assign \$2  = ~ ma_enough;
-  assign \$3  = restart_timer | abort;
-  assign \$4  = frame_done & ssi;
-  assign \$5  = \$4  & stop_bit;
-  assign \$6  = ~ ssi;
-  assign \$7  = \fault$76  & \$6 ;
-  assign \$8  = ~ end_check;
-  assign \$9  = ~ ma_enough;
-  assign \$10  = stopped | ssi;
+  assign \$2  = ~ ssi;
+  assign \$3  = \$2  | timeout_over;
+  assign \$4  = break_over & \$3 ;
+  assign \$5  = ~ ma_enough;
+  assign \$6  = restart_timer | abort;
+  assign \$7  = frame_done & ssi;
+  assign \$8  = \$7  & stop_bit;
+  assign \$9  = ~ ssi;
+  assign \$10  = \fault$77  & \$9 ;
   assign \$11  = ~ end_check;
-  assign \$12  = ma_busy | abort;
-  assign \$13  = ~ ma_busy;
-  assign \$14  = \$13  | ma_held;
-  assign \$15  = \$14  & slo;
-  assign \$16  = ! cycle_fsm_state;
-  assign \$17  = cycle_fsm_state == 1'h1;
-  assign \$18  = cycle_fsm_state == 2'h2;
-  assign \$19  = cycle_fsm_state == 2'h3;
-  assign \$20  = cycle_fsm_state == 3'h4;
-  assign \$21  = cycle_fsm_state == 3'h5;
-  assign \$22  = cycle_fsm_state == 3'h6;
-  assign \$23  = cycle_fsm_state == 3'h7;
-  assign \$24  = ma_busy | abort;
-  assign \$25  = frame_done & ssi;
-  assign \$26  = \$25  & stop_bit;
-  assign \$27  = ~ ssi;
-  assign \$28  = \fault$76  & \$27 ;
-  assign \$29  = stopped | ssi;
-  assign \$30  = ~ end_check;
-  assign \$31  = ma_busy | abort;
-  assign \$32  = cdm_cycle & abort;
-  assign \$33  = ~ ma_busy;
-  assign \$34  = ~ ma_busy;
-  assign \$35  = \$34  | ma_held;
-  assign \$36  = \$35  & slo;
-  always @(posedge clk)
-    first_clock <= \$37 ;
-  always @(posedge clk)
-    cycle_fsm_state <= \$38 ;
-  always @(posedge clk)
-    idle <= \$39 ;
-  always @(posedge clk)
-    receiver_clear <= \$40 ;
+  assign \$12  = ~ ma_enough;
+  assign \$13  = stopped | ssi;
+  assign \$14  = ~ end_check;
+  assign \$15  = ma_busy | abort;
+  assign \$16  = ~ ma_busy;
+  assign \$17  = \$16  | ma_held;
+  assign \$18  = \$17  & slo;
+  assign \$19  = ! cycle_fsm_state;
+  assign \$20  = cycle_fsm_state == 1'h1;
+  assign \$21  = cycle_fsm_state == 2'h2;
+  assign \$22  = cycle_fsm_state == 2'h3;
+  assign \$23  = cycle_fsm_state == 3'h4;
+  assign \$24  = cycle_fsm_state == 3'h5;
+  assign \$25  = cycle_fsm_state == 3'h6;
+  assign \$26  = cycle_fsm_state == 3'h7;
+  assign \$27  = ma_busy | abort;
+  assign \$28  = ~ ssi;
+  assign \$29  = \$28  | timeout_over;
+  assign \$30  = break_over & \$29 ;
+  assign \$31  = frame_done & ssi;
+  assign \$32  = \$31  & stop_bit;
+  assign \$33  = ~ ssi;
+  assign \$34  = \fault$77  & \$33 ;
+  assign \$35  = stopped | ssi;
+  assign \$36  = ~ end_check;
+  assign \$37  = ma_busy | abort;
+  assign \$38  = cdm_cycle & abort;
+  assign \$39  = ~ ma_busy;
+  assign \$40  = ~ ma_busy;
+  assign \$41  = \$40  | ma_held;
+  assign \$42  = \$41  & slo;
   \biss_master_uart.ch1.core.controller.cdm_hold  cdm_hold (
     .abort(abort),
     .cdm(cdm),
@@ -26383,10 +26440,10 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
     .ack_expired(ack_expired),
     .clear(clear),
     .clk(clk),
-    .delay(\delay$80 ),
+    .delay(\delay$81 ),
     .delay_over(delay_over),
     .early(early),
-    .fault(\fault$76 ),
+    .fault(\fault$77 ),
     .locked(locked),
     .ma_arm(ma_arm),
     .no_start_expired(no_start_expired),
@@ -26394,7 +26451,7 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
     .rst(rst),
     .slots_full(slots_full),
     .started(started),
-    .status(\status$81 ),
+    .status(\status$82 ),
     .watch(watch)
   );
   \biss_master_uart.ch1.core.controller.ready_check  ready_check (
@@ -26421,6 +26478,387 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    report_frame = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$8 ) begin
+          end else if (frame_done) begin
+            if (\$11 ) begin
+              report_frame = 1'h1;
+            end
+          end
+      3'h4:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h6:
+          /* empty */;
+      3'h7:
+          if (abort) begin
+          end else if (\$18 ) begin
+            report_frame = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    delay = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$8 ) begin
+          end else if (frame_done) begin
+          end else if (\$10 ) begin
+            delay = \delay$81 ;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    holding = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          holding = 1'h1;
+      3'h6:
+          holding = 1'h1;
+      3'h7:
+          holding = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$43  = idle;
+    if (rst) begin
+      \$43  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$44  = cycle_fsm_state;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$44  = 3'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (request) begin
+            \$44  = 3'h2;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$44  = 3'h1;
+            if (abort) begin
+              \$44  = 3'h0;
+            end
+          end else if (aborted) begin
+            \$44  = 3'h0;
+          end else if (ready) begin
+            \$44  = 3'h3;
+          end else if (stuck_low) begin
+            \$44  = 3'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (\$32 ) begin
+            \$44  = 3'h0;
+          end else if (frame_done) begin
+            \$44  = 3'h4;
+          end else if (\$34 ) begin
+            \$44  = 3'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$44  = 3'h0;
+            end else begin
+              \$44  = 3'h0;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$44  = 3'h5;
+              end else begin
+                \$44  = 3'h6;
+              end
+            end else if (stop_bit) begin
+              \$44  = 3'h0;
+            end else begin
+              \$44  = 3'h7;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$44  = 3'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$44  = 3'h0;
+          end else if (\$39 ) begin
+            \$44  = 3'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$44  = 3'h5;
+            end else if (cdm_cycle) begin
+              \$44  = 3'h6;
+            end else begin
+              \$44  = 3'h1;
+            end
+          end else if (slo_stuck) begin
+            \$44  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$44  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$45  = idle;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$45  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (request) begin
+            \$45  = 1'h0;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$45  = 1'h1;
+            if (abort) begin
+              \$45  = 1'h0;
+            end
+          end else if (aborted) begin
+            \$45  = 1'h0;
+          end else if (ready) begin
+            \$45  = 1'h0;
+          end else if (stuck_low) begin
+            \$45  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (\$32 ) begin
+            \$45  = 1'h0;
+          end else if (frame_done) begin
+            \$45  = 1'h0;
+          end else if (\$34 ) begin
+            \$45  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h0;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$45  = 1'h0;
+              end else begin
+                \$45  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$45  = 1'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$45  = 1'h0;
+          end else if (\$39 ) begin
+            \$45  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$45  = 1'h0;
+            end else if (cdm_cycle) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$45  = 1'h0;
+          end
+    endcase
+    if (rst) begin
+      \$45  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$46  = receiver_clear;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$46  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (request) begin
+            \$46  = 1'h1;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$46  = 1'h1;
+            if (abort) begin
+              \$46  = 1'h1;
+            end
+          end else if (aborted) begin
+            \$46  = 1'h1;
+          end else if (ready) begin
+            \$46  = 1'h0;
+          end else if (stuck_low) begin
+            \$46  = 1'h1;
+          end
+      3'h3:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (\$32 ) begin
+            \$46  = 1'h1;
+          end else if (frame_done) begin
+            \$46  = 1'h0;
+          end else if (\$34 ) begin
+            \$46  = 1'h1;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$46  = 1'h1;
+            end else begin
+              \$46  = 1'h1;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$46  = 1'h1;
+              end else begin
+                \$46  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$46  = 1'h1;
+            end else begin
+              \$46  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$46  = 1'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$46  = 1'h1;
+          end else if (\$39 ) begin
+            \$46  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$46  = 1'h1;
+            end else if (cdm_cycle) begin
+              \$46  = 1'h0;
+            end else begin
+              \$46  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$46  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$46  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$47  = pause;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$32 ) begin
+          end else if (frame_done) begin
+            \$47  = frame_doubtful;
+          end
+    endcase
+    if (rst) begin
+      \$47  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -26442,19 +26880,19 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
           timer_clear = 1'h1;
       3'h3:
         begin
-          if (\$3 ) begin
+          if (\$6 ) begin
             timer_clear = 1'h1;
           end
           if (abort) begin
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             timer_clear = 1'h1;
           end
         end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -26463,7 +26901,7 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
             end
           end
       3'h5:
-          if (\$12 ) begin
+          if (\$15 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -26471,7 +26909,7 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
@@ -26525,10 +26963,10 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
       3'h3:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\$7 ) begin
+          end else if (\$10 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -26536,8 +26974,8 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
             if (end_check) begin
               fault = 1'h1;
             end
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -26549,7 +26987,7 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
@@ -26576,19 +27014,19 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             fault_status = 4'hc;
           end else if (frame_done) begin
-          end else if (\$7 ) begin
-            fault_status = \status$81 ;
+          end else if (\$10 ) begin
+            fault_status = \status$82 ;
           end
       3'h4:
           if (abort) begin
             if (end_check) begin
               fault_status = 4'ha;
             end
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -26600,7 +27038,7 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
           end
@@ -26617,9 +27055,9 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
       3'h2:
           /* empty */;
       3'h3:
-          ma_run = \$2 ;
+          ma_run = \$5 ;
       3'h4:
-          ma_run = \$9 ;
+          ma_run = \$12 ;
     endcase
   end
   always @* begin
@@ -26665,387 +27103,6 @@ module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, res
       3'h4:
           framing = 1'h1;
     endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
-    report_frame = 1'h0;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$5 ) begin
-          end else if (frame_done) begin
-            if (\$8 ) begin
-              report_frame = 1'h1;
-            end
-          end
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-          end else if (\$15 ) begin
-            report_frame = 1'h1;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
-    delay = 1'h0;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$5 ) begin
-          end else if (frame_done) begin
-          end else if (\$7 ) begin
-            delay = \delay$80 ;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
-    holding = 1'h0;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          /* empty */;
-      3'h4:
-          /* empty */;
-      3'h5:
-          holding = 1'h1;
-      3'h6:
-          holding = 1'h1;
-      3'h7:
-          holding = 1'h1;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
-    \$37  = idle;
-    if (rst) begin
-      \$37  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
-    \$38  = cycle_fsm_state;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$38  = 3'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (request) begin
-            \$38  = 3'h2;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$38  = 3'h1;
-            if (abort) begin
-              \$38  = 3'h0;
-            end
-          end else if (aborted) begin
-            \$38  = 3'h0;
-          end else if (ready) begin
-            \$38  = 3'h3;
-          end else if (stuck_low) begin
-            \$38  = 3'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (\$26 ) begin
-            \$38  = 3'h0;
-          end else if (frame_done) begin
-            \$38  = 3'h4;
-          end else if (\$28 ) begin
-            \$38  = 3'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$38  = 3'h0;
-            end else begin
-              \$38  = 3'h0;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$38  = 3'h5;
-              end else begin
-                \$38  = 3'h6;
-              end
-            end else if (stop_bit) begin
-              \$38  = 3'h0;
-            end else begin
-              \$38  = 3'h7;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$38  = 3'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$38  = 3'h0;
-          end else if (\$33 ) begin
-            \$38  = 3'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$38  = 3'h5;
-            end else if (cdm_cycle) begin
-              \$38  = 3'h6;
-            end else begin
-              \$38  = 3'h1;
-            end
-          end else if (slo_stuck) begin
-            \$38  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$38  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
-    \$39  = idle;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$39  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (request) begin
-            \$39  = 1'h0;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$39  = 1'h1;
-            if (abort) begin
-              \$39  = 1'h0;
-            end
-          end else if (aborted) begin
-            \$39  = 1'h0;
-          end else if (ready) begin
-            \$39  = 1'h0;
-          end else if (stuck_low) begin
-            \$39  = 1'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (\$26 ) begin
-            \$39  = 1'h0;
-          end else if (frame_done) begin
-            \$39  = 1'h0;
-          end else if (\$28 ) begin
-            \$39  = 1'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h0;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$39  = 1'h0;
-              end else begin
-                \$39  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$39  = 1'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$39  = 1'h0;
-          end else if (\$33 ) begin
-            \$39  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$39  = 1'h0;
-            end else if (cdm_cycle) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$39  = 1'h0;
-          end
-    endcase
-    if (rst) begin
-      \$39  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
-    \$40  = receiver_clear;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$40  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (request) begin
-            \$40  = 1'h1;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$40  = 1'h1;
-            if (abort) begin
-              \$40  = 1'h1;
-            end
-          end else if (aborted) begin
-            \$40  = 1'h1;
-          end else if (ready) begin
-            \$40  = 1'h0;
-          end else if (stuck_low) begin
-            \$40  = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (\$26 ) begin
-            \$40  = 1'h1;
-          end else if (frame_done) begin
-            \$40  = 1'h0;
-          end else if (\$28 ) begin
-            \$40  = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$40  = 1'h1;
-            end else begin
-              \$40  = 1'h1;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$40  = 1'h1;
-              end else begin
-                \$40  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$40  = 1'h1;
-            end else begin
-              \$40  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$40  = 1'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$40  = 1'h1;
-          end else if (\$33 ) begin
-            \$40  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$40  = 1'h1;
-            end else if (cdm_cycle) begin
-              \$40  = 1'h0;
-            end else begin
-              \$40  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$40  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$40  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
-    \$41  = pause;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$26 ) begin
-          end else if (frame_done) begin
-            \$41  = frame_doubtful;
-          end
-    endcase
-    if (rst) begin
-      \$41  = 1'h0;
-    end
   end
   assign \first_clock$1  = first_clock;
   assign \config_ok$3  = config_ok;
@@ -28931,7 +28988,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$7384$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$7400$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire [6:0] \$1 ;
@@ -29634,8 +29691,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7384$272 ;
-  wire [2:0] \port$7384$272 ;
+  input [2:0] \port$7400$272 ;
+  wire [2:0] \port$7400$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -29702,8 +29759,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$367  = ssi & \port$7384$272 [0];
-  assign \$368  = ~ \port$7384$272 [1];
+  assign \$367  = ssi & \port$7400$272 [0];
+  assign \$368  = ~ \port$7400$272 [1];
   assign \$369  = \$367  & \$368 ;
   assign \$370  = \bit  ^ \$369 ;
   assign \$371  = ~ words[6];
@@ -30024,18 +30081,18 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$7384$272 [0];
+  assign \$3  = ssi & \port$7400$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$7384$272 [0];
+  assign \$6  = ssi & \port$7400$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$7384$272 [0];
+  assign \$9  = ssi & \port$7400$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$7384$272 [0];
+  assign \$14  = ssi & \port$7400$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$7384$272 [0];
+  assign \$18  = ssi & \port$7400$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -30080,7 +30137,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$66  = idx == \$65 ;
   assign \$67  = word_count - 1'h1;
   assign \$68  = word == \$67 ;
-  assign \$69  = ssi & \port$7384$272 [2];
+  assign \$69  = ssi & \port$7400$272 [2];
   assign \$70  = word + 1'h1;
   assign \$71  = idx + 1'h1;
   assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -30371,7 +30428,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$357  = \$354  & \$356 ;
   assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
   assign \$359  = ~ words[6];
-  assign \$360  = ssi & \port$7384$272 [0];
+  assign \$360  = ssi & \port$7400$272 [0];
   assign \$361  = ~ \$360 ;
   assign \$362  = \$359  & \$361 ;
   assign \$363  = ! word;
@@ -31133,9 +31190,9 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$7384$272 [0];
-  assign ssi_double = \port$7384$272 [2];
-  assign ssi_error_low = \port$7384$272 [1];
+  assign ssi_error = \port$7400$272 [0];
+  assign ssi_double = \port$7400$272 [2];
+  assign ssi_error_low = \port$7400$272 [1];
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$53  = crcs;
   assign \bit$58  = \bit ;
@@ -34644,7 +34701,7 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7384$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7400$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -34778,8 +34835,8 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7384$259 ;
-  wire [12:0] \port$7384$259 ;
+  input [12:0] \port$7400$259 ;
+  wire [12:0] \port$7400$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -34804,7 +34861,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7384$259 [12:1] + 1'h1;
+  assign \$11  = \port$7400$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -34929,7 +34986,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7384$259 [0]),
+    .clear_high(\port$7400$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -35072,7 +35129,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7384$259 [0]) begin
+            if (\port$7400$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -35157,7 +35214,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7384$259 [0]) begin
+            if (\port$7400$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -35196,7 +35253,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7384$259 [12:1] };
+            \$85  = { 1'h0, \port$7400$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -35581,11 +35638,11 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7384$259 [12:1] };
-  assign fixed = \port$7384$259 [0];
+  assign fixed_delay = { 1'h0, \port$7400$259 [12:1] };
+  assign fixed = \port$7400$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7384$259 [0];
+  assign clear_high = \port$7400$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -35992,7 +36049,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7372$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7388$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -36034,8 +36091,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7372$0 ;
-  wire \port$7372$0 ;
+  input \port$7388$0 ;
+  wire \port$7388$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -36049,9 +36106,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7372$0  };
-  assign \$2  = { lc[4:0], \port$7372$0  } == last;
-  assign \$3  = { lc[4:0], \port$7372$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7388$0  };
+  assign \$2  = { lc[4:0], \port$7388$0  } == last;
+  assign \$3  = { lc[4:0], \port$7388$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -36161,7 +36218,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7372$0  };
+  assign lc_next = { lc[4:0], \port$7388$0  };
   assign zero = is_zero;
 endmodule
 
@@ -36441,8 +36498,8 @@ module \biss_master_uart.ch1.core.time_base (rst, first_rise, first_rise_time, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
-, delay, slo, clk);
+module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired
+, delay_over, delay, slo, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$92  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -36486,19 +36543,21 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   wire \$45 ;
   wire \$46 ;
   wire \$47 ;
-  reg [24:0] \$48 ;
-  reg \$49 ;
+  wire \$48 ;
+  reg [24:0] \$49 ;
   wire \$5 ;
   reg \$50 ;
-  reg [12:0] \$51 ;
-  reg \$52 ;
+  reg \$51 ;
+  reg [12:0] \$52 ;
   reg \$53 ;
-  reg [24:0] \$54 ;
-  reg \$55 ;
+  reg \$54 ;
+  reg [24:0] \$55 ;
   reg \$56 ;
   reg \$57 ;
   reg \$58 ;
+  reg \$59 ;
   wire \$6 ;
+  reg \$60 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
@@ -36552,35 +36611,42 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   wire [23:0] timeout_limit;
   input [23:0] timeout_live;
   wire [23:0] timeout_live;
+  output timeout_over;
+  reg timeout_over = 1'h0;
   reg [24:0] timer = 25'h0000001;
-  assign \$42  = \$40  & \$41 ;
-  assign \$43  = ~ restart;
-  assign \$44  = in_clock & \$43 ;
-  assign \$45  = timer >= no_start_limit;
-  assign \$46  = \$44  & \$45 ;
-  assign \$47  = delay > delay_limit;
+  assign \$40  = ~ restart;
+  assign \$41  = in_clock & \$40 ;
+  assign \$42  = timer >= ack_limit;
+  assign \$43  = \$41  & \$42 ;
+  assign \$44  = ~ restart;
+  assign \$45  = in_clock & \$44 ;
+  assign \$46  = timer >= no_start_limit;
+  assign \$47  = \$45  & \$46 ;
+  assign \$48  = delay > delay_limit;
   always @(posedge clk)
-    slo_low_time_p1 <= \$48 ;
+    slo_low_time_p1 <= \$49 ;
   always @(posedge clk)
-    slo_stuck <= \$49 ;
+    slo_stuck <= \$50 ;
   always @(posedge clk)
-    slo_stuck_live <= \$50 ;
+    slo_stuck_live <= \$51 ;
   always @(posedge clk)
-    high_p2 <= \$51 ;
+    high_p2 <= \$52 ;
   always @(posedge clk)
-    quiet <= \$52 ;
+    quiet <= \$53 ;
   always @(posedge clk)
-    quiet_live <= \$53 ;
+    quiet_live <= \$54 ;
   always @(posedge clk)
-    timer <= \$54 ;
+    timer <= \$55 ;
   always @(posedge clk)
-    break_over <= \$55 ;
+    break_over <= \$56 ;
   always @(posedge clk)
-    ack_expired <= \$56 ;
+    timeout_over <= \$57 ;
   always @(posedge clk)
-    no_start_expired <= \$57 ;
+    ack_expired <= \$58 ;
   always @(posedge clk)
-    delay_over <= \$58 ;
+    no_start_expired <= \$59 ;
+  always @(posedge clk)
+    delay_over <= \$60 ;
   assign \$1  = slo & quiet;
   assign \$2  = \$1  | ma_busy;
   assign \$3  = ~ slo_low_time_p1[24];
@@ -36619,105 +36685,115 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   assign \$36  = timer >= 12'hfa0;
   assign \$37  = timer >= break_time;
   assign \$38  = \$35  ? \$36  : \$37 ;
-  assign \$39  = ~ restart;
-  assign \$40  = in_clock & \$39 ;
-  assign \$41  = timer >= ack_limit;
+  assign \$39  = timer >= timeout_limit;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$48  = slo_low_time_p1;
+    \$49  = slo_low_time_p1;
     if (\$2 ) begin
-      \$48  = 25'h0000001;
+      \$49  = 25'h0000001;
     end else if (\$3 ) begin
-      \$48  = \$4 [24:0];
+      \$49  = \$4 [24:0];
     end
     if (rst) begin
-      \$48  = 25'h0000001;
+      \$49  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$49  = \$9 ;
-    if (rst) begin
-      \$49  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$50  = \$17 ;
+    \$50  = \$9 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$51  = high_p2;
+    \$51  = \$17 ;
+    if (rst) begin
+      \$51  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$52  = high_p2;
     if (\$18 ) begin
-      \$51  = 13'h0002;
+      \$52  = 13'h0002;
     end else if (\$19 ) begin
-      \$51  = \$20 [12:0];
+      \$52  = \$20 [12:0];
     end
     if (rst) begin
-      \$51  = 13'h0002;
+      \$52  = 13'h0002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$52  = \$23 ;
-    if (rst) begin
-      \$52  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$53  = \$30 ;
+    \$53  = \$23 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$54  = \$34 [24:0];
+    \$54  = \$30 ;
     if (rst) begin
-      \$54  = 25'h0000001;
+      \$54  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$55  = \$34 [24:0];
+    if (rst) begin
+      \$55  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
-      \$55  = 1'h0;
+      \$56  = 1'h0;
     end else begin
-      \$55  = \$38 ;
+      \$56  = \$38 ;
     end
-    if (rst) begin
-      \$55  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$57  = \$46 ;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$57  = 1'h0;
+    end else begin
+      \$57  = \$39 ;
+    end
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
-    \$58  = \$47 ;
+    \$58  = \$43 ;
     if (rst) begin
       \$58  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$59  = \$47 ;
+    if (rst) begin
+      \$59  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$92 ) begin end
+    \$60  = \$48 ;
+    if (rst) begin
+      \$60  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5369$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5383$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
@@ -36889,8 +36965,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5369$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$5369$0 ;
-  wire \port$5369$0 ;
+  output \port$5383$0 ;
+  wire \port$5383$0 ;
   output report;
   wire report;
   input report_frame;
@@ -37008,7 +37084,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5369$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5369$0  = \$2 ;
+  assign \port$5383$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -654,12 +654,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6669$0 (\$8 ),
-    .\port$6682$0 (\$9 ),
-    .\port$6759$0 (\$10 ),
-    .\port$7203$0 (\$11 ),
-    .\port$7216$0 (\$12 ),
-    .\port$7293$0 (\$13 ),
+    .\port$6685$0 (\$8 ),
+    .\port$6698$0 (\$9 ),
+    .\port$6775$0 (\$10 ),
+    .\port$7221$0 (\$11 ),
+    .\port$7234$0 (\$12 ),
+    .\port$7311$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -735,9 +735,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6669$0 (\$8 ),
-    .\port$6682$0 (\$9 ),
-    .\port$6759$0 (\$10 ),
+    .\port$6685$0 (\$8 ),
+    .\port$6698$0 (\$9 ),
+    .\port$6775$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -810,9 +810,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(\regs__count_en$398 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$422 ),
-    .\port$7203$0 (\$11 ),
-    .\port$7216$0 (\$12 ),
-    .\port$7293$0 (\$13 ),
+    .\port$7221$0 (\$11 ),
+    .\port$7234$0 (\$12 ),
+    .\port$7311$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$250 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1161,7 +1161,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$113 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
 , ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
 , ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id
-, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6669$0 , \port$6682$0 , ch0__ca_done, \port$6759$0 , ch1__frame_done, ch1__done_count, \port$7203$0 , \port$7216$0 , ch1__ca_done, \port$7293$0 , bus__w_addr);
+, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6685$0 , \port$6698$0 , ch0__ca_done, \port$6775$0 , ch1__frame_done, ch1__done_count, \port$7221$0 , \port$7234$0 , ch1__ca_done, \port$7311$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2709,18 +2709,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6669$0 ;
-  wire [186:0] \port$6669$0 ;
-  input [79:0] \port$6682$0 ;
-  wire [79:0] \port$6682$0 ;
-  input [9:0] \port$6759$0 ;
-  wire [9:0] \port$6759$0 ;
-  input [186:0] \port$7203$0 ;
-  wire [186:0] \port$7203$0 ;
-  input [79:0] \port$7216$0 ;
-  wire [79:0] \port$7216$0 ;
-  input [9:0] \port$7293$0 ;
-  wire [9:0] \port$7293$0 ;
+  input [186:0] \port$6685$0 ;
+  wire [186:0] \port$6685$0 ;
+  input [79:0] \port$6698$0 ;
+  wire [79:0] \port$6698$0 ;
+  input [9:0] \port$6775$0 ;
+  wire [9:0] \port$6775$0 ;
+  input [186:0] \port$7221$0 ;
+  wire [186:0] \port$7221$0 ;
+  input [79:0] \port$7234$0 ;
+  wire [79:0] \port$7234$0 ;
+  input [9:0] \port$7311$0 ;
+  wire [9:0] \port$7311$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2824,7 +2824,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$343  = \$341  | \$342 ;
   assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7203$0 [182:177], 4'h0, \port$7203$0 [186:183], 1'h0, \port$7203$0 [176:174], 1'h0, \port$7203$0 [133:131], 3'h0, \port$7203$0 [49], \port$7203$0 [3:0] } : 32'd0;
+  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7221$0 [182:177], 4'h0, \port$7221$0 [186:183], 1'h0, \port$7221$0 [176:174], 1'h0, \port$7221$0 [133:131], 3'h0, \port$7221$0 [49], \port$7221$0 [3:0] } : 32'd0;
   assign \$347  = \$345  | \$346 ;
   assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$349  = \$347  | \$348 ;
@@ -2852,13 +2852,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$371  = \$369  | \$370 ;
   assign \$372  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7293$0 [9:3], 1'h0, \port$7293$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7311$0 [9:3], 1'h0, \port$7311$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_143 ? \port$7216$0 [31:0] : 32'd0;
+  assign \$378  = ch1_read_select_143 ? \port$7234$0 [31:0] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_144 ? \port$7216$0 [63:32] : 32'd0;
+  assign \$380  = ch1_read_select_144 ? \port$7234$0 [63:32] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7216$0 [79:64] } : 32'd0;
+  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7234$0 [79:64] } : 32'd0;
   assign \$383  = \$381  | \$382 ;
   assign \$384  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$385  = \$383  | \$384 ;
@@ -3728,7 +3728,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$158  = \$156  | \$157 ;
   assign \$159  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6669$0 [182:177], 4'h0, \port$6669$0 [186:183], 1'h0, \port$6669$0 [176:174], 1'h0, \port$6669$0 [133:131], 3'h0, \port$6669$0 [49], \port$6669$0 [3:0] } : 32'd0;
+  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6685$0 [182:177], 4'h0, \port$6685$0 [186:183], 1'h0, \port$6685$0 [176:174], 1'h0, \port$6685$0 [133:131], 3'h0, \port$6685$0 [49], \port$6685$0 [3:0] } : 32'd0;
   assign \$162  = \$160  | \$161 ;
   assign \$163  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$164  = \$162  | \$163 ;
@@ -3756,13 +3756,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$186  = \$184  | \$185 ;
   assign \$187  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6759$0 [9:3], 1'h0, \port$6759$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6775$0 [9:3], 1'h0, \port$6775$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_c3 ? \port$6682$0 [31:0] : 32'd0;
+  assign \$193  = ch0_read_select_c3 ? \port$6698$0 [31:0] : 32'd0;
   assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_c4 ? \port$6682$0 [63:32] : 32'd0;
+  assign \$195  = ch0_read_select_c4 ? \port$6698$0 [63:32] : 32'd0;
   assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6682$0 [79:64] } : 32'd0;
+  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6698$0 [79:64] } : 32'd0;
   assign \$198  = \$196  | \$197 ;
   assign \$199  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$200  = \$198  | \$199 ;
@@ -4966,7 +4966,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$595  = ch0_result_status_status_snapshot;
     if (\$130 ) begin
-      \$595  = \port$6669$0 [3:0];
+      \$595  = \port$6685$0 [3:0];
     end
     if (rst) begin
       \$595  = 4'h0;
@@ -4976,7 +4976,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$596  = ch0_result_status_cds_snapshot;
     if (\$130 ) begin
-      \$596  = \port$6669$0 [49];
+      \$596  = \port$6685$0 [49];
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -4986,7 +4986,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$597  = ch0_result_status_w0_ne_snapshot;
     if (\$130 ) begin
-      \$597  = \port$6669$0 [131];
+      \$597  = \port$6685$0 [131];
     end
     if (rst) begin
       \$597  = 1'h0;
@@ -4996,7 +4996,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$598  = ch0_result_status_w0_nw_snapshot;
     if (\$130 ) begin
-      \$598  = \port$6669$0 [132];
+      \$598  = \port$6685$0 [132];
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -5006,7 +5006,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$599  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$130 ) begin
-      \$599  = \port$6669$0 [133];
+      \$599  = \port$6685$0 [133];
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -5016,7 +5016,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$600  = ch0_result_status_w1_ne_snapshot;
     if (\$130 ) begin
-      \$600  = \port$6669$0 [174];
+      \$600  = \port$6685$0 [174];
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -5026,7 +5026,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$601  = ch0_result_status_w1_nw_snapshot;
     if (\$130 ) begin
-      \$601  = \port$6669$0 [175];
+      \$601  = \port$6685$0 [175];
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -5036,7 +5036,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$602  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$130 ) begin
-      \$602  = \port$6669$0 [176];
+      \$602  = \port$6685$0 [176];
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -5046,7 +5046,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$603  = ch0_result_status_lc_repeat_snapshot;
     if (\$130 ) begin
-      \$603  = \port$6669$0 [183];
+      \$603  = \port$6685$0 [183];
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -5056,7 +5056,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$604  = ch0_result_status_lc_skip_snapshot;
     if (\$130 ) begin
-      \$604  = \port$6669$0 [184];
+      \$604  = \port$6685$0 [184];
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -5066,7 +5066,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$605  = ch0_result_status_lc_zero_snapshot;
     if (\$130 ) begin
-      \$605  = \port$6669$0 [185];
+      \$605  = \port$6685$0 [185];
     end
     if (rst) begin
       \$605  = 1'h0;
@@ -5076,7 +5076,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$606  = ch0_result_status_spw_mismatch_snapshot;
     if (\$130 ) begin
-      \$606  = \port$6669$0 [186];
+      \$606  = \port$6685$0 [186];
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -5086,7 +5086,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$607  = ch0_result_status_lc_snapshot;
     if (\$130 ) begin
-      \$607  = \port$6669$0 [182:177];
+      \$607  = \port$6685$0 [182:177];
     end
     if (rst) begin
       \$607  = 6'h00;
@@ -5106,7 +5106,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$609  = ch0_result_seq_line_delay_snapshot;
     if (\$130 ) begin
-      \$609  = \port$6669$0 [48:36];
+      \$609  = \port$6685$0 [48:36];
     end
     if (rst) begin
       \$609  = 13'h0000;
@@ -5116,7 +5116,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$610  = ch0_result_w0_lo_data_snapshot;
     if (\$130 ) begin
-      \$610  = \port$6669$0 [107:76];
+      \$610  = \port$6685$0 [107:76];
     end
     if (rst) begin
       \$610  = 32'd0;
@@ -5126,7 +5126,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$611  = ch0_result_w0_hi_data_snapshot;
     if (\$130 ) begin
-      \$611  = \port$6669$0 [130:108];
+      \$611  = \port$6685$0 [130:108];
     end
     if (rst) begin
       \$611  = 23'h000000;
@@ -5136,7 +5136,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$612  = ch0_result_w1_lo_data_snapshot;
     if (\$130 ) begin
-      \$612  = \port$6669$0 [165:134];
+      \$612  = \port$6685$0 [165:134];
     end
     if (rst) begin
       \$612  = 32'd0;
@@ -5146,7 +5146,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$613  = ch0_result_w1_hi_data_snapshot;
     if (\$130 ) begin
-      \$613  = \port$6669$0 [173:166];
+      \$613  = \port$6685$0 [173:166];
     end
     if (rst) begin
       \$613  = 8'h00;
@@ -5156,7 +5156,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$614  = ch0_result_timestamp_time_snapshot;
     if (\$130 ) begin
-      \$614  = \port$6669$0 [35:4];
+      \$614  = \port$6685$0 [35:4];
     end
     if (rst) begin
       \$614  = 32'd0;
@@ -5166,7 +5166,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$615  = ch0_result_line_noise_events_snapshot;
     if (\$130 ) begin
-      \$615  = \port$6669$0 [53:50];
+      \$615  = \port$6685$0 [53:50];
     end
     if (rst) begin
       \$615  = 4'h0;
@@ -5176,7 +5176,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$616  = ch0_result_line_delay_settled_snapshot;
     if (\$130 ) begin
-      \$616  = \port$6669$0 [54];
+      \$616  = \port$6685$0 [54];
     end
     if (rst) begin
       \$616  = 1'h0;
@@ -5186,7 +5186,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$617  = ch0_result_line_delay_spread_snapshot;
     if (\$130 ) begin
-      \$617  = \port$6669$0 [75:68];
+      \$617  = \port$6685$0 [75:68];
     end
     if (rst) begin
       \$617  = 8'h00;
@@ -5196,7 +5196,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$618  = ch0_result_line_settled_delay_snapshot;
     if (\$130 ) begin
-      \$618  = \port$6669$0 [67:55];
+      \$618  = \port$6685$0 [67:55];
     end
     if (rst) begin
       \$618  = 13'h0000;
@@ -6260,7 +6260,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$725  = ch1_result_status_status_snapshot;
     if (\$315 ) begin
-      \$725  = \port$7203$0 [3:0];
+      \$725  = \port$7221$0 [3:0];
     end
     if (rst) begin
       \$725  = 4'h0;
@@ -6270,7 +6270,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$726  = ch1_result_status_cds_snapshot;
     if (\$315 ) begin
-      \$726  = \port$7203$0 [49];
+      \$726  = \port$7221$0 [49];
     end
     if (rst) begin
       \$726  = 1'h0;
@@ -6280,7 +6280,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$727  = ch1_result_status_w0_ne_snapshot;
     if (\$315 ) begin
-      \$727  = \port$7203$0 [131];
+      \$727  = \port$7221$0 [131];
     end
     if (rst) begin
       \$727  = 1'h0;
@@ -6290,7 +6290,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$728  = ch1_result_status_w0_nw_snapshot;
     if (\$315 ) begin
-      \$728  = \port$7203$0 [132];
+      \$728  = \port$7221$0 [132];
     end
     if (rst) begin
       \$728  = 1'h0;
@@ -6300,7 +6300,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$729  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$315 ) begin
-      \$729  = \port$7203$0 [133];
+      \$729  = \port$7221$0 [133];
     end
     if (rst) begin
       \$729  = 1'h0;
@@ -6310,7 +6310,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$730  = ch1_result_status_w1_ne_snapshot;
     if (\$315 ) begin
-      \$730  = \port$7203$0 [174];
+      \$730  = \port$7221$0 [174];
     end
     if (rst) begin
       \$730  = 1'h0;
@@ -6320,7 +6320,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$731  = ch1_result_status_w1_nw_snapshot;
     if (\$315 ) begin
-      \$731  = \port$7203$0 [175];
+      \$731  = \port$7221$0 [175];
     end
     if (rst) begin
       \$731  = 1'h0;
@@ -6330,7 +6330,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$732  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$315 ) begin
-      \$732  = \port$7203$0 [176];
+      \$732  = \port$7221$0 [176];
     end
     if (rst) begin
       \$732  = 1'h0;
@@ -6340,7 +6340,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$733  = ch1_result_status_lc_repeat_snapshot;
     if (\$315 ) begin
-      \$733  = \port$7203$0 [183];
+      \$733  = \port$7221$0 [183];
     end
     if (rst) begin
       \$733  = 1'h0;
@@ -6350,7 +6350,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$734  = ch1_result_status_lc_skip_snapshot;
     if (\$315 ) begin
-      \$734  = \port$7203$0 [184];
+      \$734  = \port$7221$0 [184];
     end
     if (rst) begin
       \$734  = 1'h0;
@@ -6360,7 +6360,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$735  = ch1_result_status_lc_zero_snapshot;
     if (\$315 ) begin
-      \$735  = \port$7203$0 [185];
+      \$735  = \port$7221$0 [185];
     end
     if (rst) begin
       \$735  = 1'h0;
@@ -6370,7 +6370,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$736  = ch1_result_status_spw_mismatch_snapshot;
     if (\$315 ) begin
-      \$736  = \port$7203$0 [186];
+      \$736  = \port$7221$0 [186];
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6380,7 +6380,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$737  = ch1_result_status_lc_snapshot;
     if (\$315 ) begin
-      \$737  = \port$7203$0 [182:177];
+      \$737  = \port$7221$0 [182:177];
     end
     if (rst) begin
       \$737  = 6'h00;
@@ -6400,7 +6400,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$739  = ch1_result_seq_line_delay_snapshot;
     if (\$315 ) begin
-      \$739  = \port$7203$0 [48:36];
+      \$739  = \port$7221$0 [48:36];
     end
     if (rst) begin
       \$739  = 13'h0000;
@@ -6410,7 +6410,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$740  = ch1_result_w0_lo_data_snapshot;
     if (\$315 ) begin
-      \$740  = \port$7203$0 [107:76];
+      \$740  = \port$7221$0 [107:76];
     end
     if (rst) begin
       \$740  = 32'd0;
@@ -6420,7 +6420,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$741  = ch1_result_w0_hi_data_snapshot;
     if (\$315 ) begin
-      \$741  = \port$7203$0 [130:108];
+      \$741  = \port$7221$0 [130:108];
     end
     if (rst) begin
       \$741  = 23'h000000;
@@ -6430,7 +6430,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$742  = ch1_result_w1_lo_data_snapshot;
     if (\$315 ) begin
-      \$742  = \port$7203$0 [165:134];
+      \$742  = \port$7221$0 [165:134];
     end
     if (rst) begin
       \$742  = 32'd0;
@@ -6440,7 +6440,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$743  = ch1_result_w1_hi_data_snapshot;
     if (\$315 ) begin
-      \$743  = \port$7203$0 [173:166];
+      \$743  = \port$7221$0 [173:166];
     end
     if (rst) begin
       \$743  = 8'h00;
@@ -6450,7 +6450,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$744  = ch1_result_timestamp_time_snapshot;
     if (\$315 ) begin
-      \$744  = \port$7203$0 [35:4];
+      \$744  = \port$7221$0 [35:4];
     end
     if (rst) begin
       \$744  = 32'd0;
@@ -6460,7 +6460,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$745  = ch1_result_line_noise_events_snapshot;
     if (\$315 ) begin
-      \$745  = \port$7203$0 [53:50];
+      \$745  = \port$7221$0 [53:50];
     end
     if (rst) begin
       \$745  = 4'h0;
@@ -6470,7 +6470,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$746  = ch1_result_line_delay_settled_snapshot;
     if (\$315 ) begin
-      \$746  = \port$7203$0 [54];
+      \$746  = \port$7221$0 [54];
     end
     if (rst) begin
       \$746  = 1'h0;
@@ -6480,7 +6480,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$747  = ch1_result_line_delay_spread_snapshot;
     if (\$315 ) begin
-      \$747  = \port$7203$0 [75:68];
+      \$747  = \port$7221$0 [75:68];
     end
     if (rst) begin
       \$747  = 8'h00;
@@ -6490,7 +6490,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$748  = ch1_result_line_settled_delay_snapshot;
     if (\$315 ) begin
-      \$748  = \port$7203$0 [67:55];
+      \$748  = \port$7221$0 [67:55];
     end
     if (rst) begin
       \$748  = 13'h0000;
@@ -6529,27 +6529,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6669$0 [3:0];
-  assign ch0__cds = \port$6669$0 [49];
-  assign ch0__word0_ne = \port$6669$0 [131];
-  assign ch0__word0_nw = \port$6669$0 [132];
-  assign ch0__word0_crc_ok = \port$6669$0 [133];
-  assign ch0__word1_ne = \port$6669$0 [174];
-  assign ch0__word1_nw = \port$6669$0 [175];
-  assign ch0__word1_crc_ok = \port$6669$0 [176];
-  assign ch0__lc_repeat = \port$6669$0 [183];
-  assign ch0__lc_skip = \port$6669$0 [184];
-  assign ch0__lc_zero = \port$6669$0 [185];
-  assign ch0__spw_mismatch = \port$6669$0 [186];
-  assign ch0__lc = \port$6669$0 [182:177];
-  assign ch0__line_delay = \port$6669$0 [48:36];
-  assign ch0__word0_position = \port$6669$0 [130:76];
-  assign ch0__word1_position = \port$6669$0 [173:134];
-  assign ch0__timestamp = \port$6669$0 [35:4];
-  assign ch0__noise_events = \port$6669$0 [53:50];
-  assign ch0__delay_settled = \port$6669$0 [54];
-  assign ch0__delay_spread = \port$6669$0 [75:68];
-  assign ch0__settled_delay = \port$6669$0 [67:55];
+  assign ch0__status = \port$6685$0 [3:0];
+  assign ch0__cds = \port$6685$0 [49];
+  assign ch0__word0_ne = \port$6685$0 [131];
+  assign ch0__word0_nw = \port$6685$0 [132];
+  assign ch0__word0_crc_ok = \port$6685$0 [133];
+  assign ch0__word1_ne = \port$6685$0 [174];
+  assign ch0__word1_nw = \port$6685$0 [175];
+  assign ch0__word1_crc_ok = \port$6685$0 [176];
+  assign ch0__lc_repeat = \port$6685$0 [183];
+  assign ch0__lc_skip = \port$6685$0 [184];
+  assign ch0__lc_zero = \port$6685$0 [185];
+  assign ch0__spw_mismatch = \port$6685$0 [186];
+  assign ch0__lc = \port$6685$0 [182:177];
+  assign ch0__line_delay = \port$6685$0 [48:36];
+  assign ch0__word0_position = \port$6685$0 [130:76];
+  assign ch0__word1_position = \port$6685$0 [173:134];
+  assign ch0__timestamp = \port$6685$0 [35:4];
+  assign ch0__noise_events = \port$6685$0 [53:50];
+  assign ch0__delay_settled = \port$6685$0 [54];
+  assign ch0__delay_spread = \port$6685$0 [75:68];
+  assign ch0__settled_delay = \port$6685$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -6557,34 +6557,34 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
   assign ch0__cap_ssi = 1'h1;
-  assign ch0__ca_status = \port$6759$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6759$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6682$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$6682$0 [31:16];
-  assign ch0__count_ca_refused = \port$6682$0 [47:32];
-  assign ch0__count_ca_aborted = \port$6682$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$6682$0 [79:64];
-  assign ch1__status = \port$7203$0 [3:0];
-  assign ch1__cds = \port$7203$0 [49];
-  assign ch1__word0_ne = \port$7203$0 [131];
-  assign ch1__word0_nw = \port$7203$0 [132];
-  assign ch1__word0_crc_ok = \port$7203$0 [133];
-  assign ch1__word1_ne = \port$7203$0 [174];
-  assign ch1__word1_nw = \port$7203$0 [175];
-  assign ch1__word1_crc_ok = \port$7203$0 [176];
-  assign ch1__lc_repeat = \port$7203$0 [183];
-  assign ch1__lc_skip = \port$7203$0 [184];
-  assign ch1__lc_zero = \port$7203$0 [185];
-  assign ch1__spw_mismatch = \port$7203$0 [186];
-  assign ch1__lc = \port$7203$0 [182:177];
-  assign ch1__line_delay = \port$7203$0 [48:36];
-  assign ch1__word0_position = \port$7203$0 [130:76];
-  assign ch1__word1_position = \port$7203$0 [173:134];
-  assign ch1__timestamp = \port$7203$0 [35:4];
-  assign ch1__noise_events = \port$7203$0 [53:50];
-  assign ch1__delay_settled = \port$7203$0 [54];
-  assign ch1__delay_spread = \port$7203$0 [75:68];
-  assign ch1__settled_delay = \port$7203$0 [67:55];
+  assign ch0__ca_status = \port$6775$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6775$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6698$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$6698$0 [31:16];
+  assign ch0__count_ca_refused = \port$6698$0 [47:32];
+  assign ch0__count_ca_aborted = \port$6698$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$6698$0 [79:64];
+  assign ch1__status = \port$7221$0 [3:0];
+  assign ch1__cds = \port$7221$0 [49];
+  assign ch1__word0_ne = \port$7221$0 [131];
+  assign ch1__word0_nw = \port$7221$0 [132];
+  assign ch1__word0_crc_ok = \port$7221$0 [133];
+  assign ch1__word1_ne = \port$7221$0 [174];
+  assign ch1__word1_nw = \port$7221$0 [175];
+  assign ch1__word1_crc_ok = \port$7221$0 [176];
+  assign ch1__lc_repeat = \port$7221$0 [183];
+  assign ch1__lc_skip = \port$7221$0 [184];
+  assign ch1__lc_zero = \port$7221$0 [185];
+  assign ch1__spw_mismatch = \port$7221$0 [186];
+  assign ch1__lc = \port$7221$0 [182:177];
+  assign ch1__line_delay = \port$7221$0 [48:36];
+  assign ch1__word0_position = \port$7221$0 [130:76];
+  assign ch1__word1_position = \port$7221$0 [173:134];
+  assign ch1__timestamp = \port$7221$0 [35:4];
+  assign ch1__noise_events = \port$7221$0 [53:50];
+  assign ch1__delay_settled = \port$7221$0 [54];
+  assign ch1__delay_spread = \port$7221$0 [75:68];
+  assign ch1__settled_delay = \port$7221$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -6592,13 +6592,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign ch1__ca_status = \port$7293$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7293$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7216$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7216$0 [31:16];
-  assign ch1__count_ca_refused = \port$7216$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7216$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7216$0 [79:64];
+  assign ch1__ca_status = \port$7311$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7311$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7234$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7234$0 [31:16];
+  assign ch1__count_ca_refused = \port$7234$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7234$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7234$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__w_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -6846,7 +6846,7 @@ endmodule
 module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6669$0 , \port$6682$0 , regs__ca_done, \port$6759$0 , ca_rbuf_addr);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6685$0 , \port$6698$0 , regs__ca_done, \port$6775$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -7028,12 +7028,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6669$0 ;
-  wire [186:0] \port$6669$0 ;
-  output [79:0] \port$6682$0 ;
-  wire [79:0] \port$6682$0 ;
-  output [9:0] \port$6759$0 ;
-  wire [9:0] \port$6759$0 ;
+  output [186:0] \port$6685$0 ;
+  wire [186:0] \port$6685$0 ;
+  output [79:0] \port$6698$0 ;
+  wire [79:0] \port$6698$0 ;
+  output [9:0] \port$6775$0 ;
+  wire [9:0] \port$6775$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -7227,8 +7227,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
     regs__done_count <= \$17 ;
   \biss_master_wb.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$262 (ca_abort),
-    .\busy$311 (regs__busy),
+    .\abort$264 (ca_abort),
+    .\busy$313 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -7277,13 +7277,13 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$287 (clear_counters),
+    .\clear$289 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$19 ),
-    .\done$314 (done),
+    .\done$316 (done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$45 (periodic),
@@ -7291,13 +7291,13 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$20 ),
-    .\result$319 (\$18 ),
+    .\result$321 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$260 (ca_start),
+    .\start$262 (ca_start),
     .trigger(trigger),
-    .\valid$316 (valid)
+    .\valid$318 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
@@ -7488,16 +7488,16 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$6669$0  = \$18 ;
-  assign \port$6682$0  = \$19 ;
-  assign \port$6759$0  = \$20 ;
+  assign \port$6685$0  = \$18 ;
+  assign \port$6698$0  = \$19 ;
+  assign \port$6775$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$311 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$287 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$313 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$289 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$260 , \abort$262 
-, abort, ma, \done$314 , \valid$316 , \result$319 , counts, ca_done, result, rbuf_addr);
+, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$262 , \abort$264 
+, abort, ma, \done$316 , \valid$318 , \result$321 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -7531,26 +7531,26 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$262 ;
-  wire \abort$262 ;
+  input \abort$264 ;
+  wire \abort$264 ;
   wire \abort$57 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$90 ;
+  wire \ack_expired$92 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$111 ;
+  wire [23:0] \ack_limit$113 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$343 ;
+  wire \bit$345 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$88 ;
+  wire \break_over$90 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$271 ;
-  wire \busy$308 ;
-  output \busy$311 ;
-  wire \busy$311 ;
+  wire \busy$273 ;
+  wire \busy$310 ;
+  output \busy$313 ;
+  wire \busy$313 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -7585,10 +7585,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$275 ;
+  wire \cdm$277 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$322 ;
+  wire \cds$324 ;
   wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -7732,16 +7732,16 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$170 ;
+  wire \check$172 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$175 ;
-  wire \clean$344 ;
+  wire \clean$177 ;
+  wire \clean$346 ;
   wire clear;
-  wire \clear$135 ;
-  input \clear$287 ;
-  wire \clear$287 ;
-  wire \clear$300 ;
+  wire \clear$137 ;
+  input \clear$289 ;
+  wire \clear$289 ;
+  wire \clear$302 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -7770,33 +7770,33 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$187 ;
+  wire [39:0] \cpw_top$189 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$212 ;
+  wire [1:0] \crc_ok$214 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$183 ;
-  wire [37:0] \crcs$183[0] ;
-  wire \crcs$183[0].inverted ;
-  wire [15:0] \crcs$183[0].poly ;
-  wire [15:0] \crcs$183[0].start ;
-  wire [4:0] \crcs$183[0].width ;
-  wire [37:0] \crcs$183[1] ;
-  wire \crcs$183[1].inverted ;
-  wire [15:0] \crcs$183[1].poly ;
-  wire [15:0] \crcs$183[1].start ;
-  wire [4:0] \crcs$183[1].width ;
-  wire [75:0] \crcs$184 ;
-  wire [37:0] \crcs$184[0] ;
-  wire \crcs$184[0].inverted ;
-  wire [15:0] \crcs$184[0].poly ;
-  wire [15:0] \crcs$184[0].start ;
-  wire [4:0] \crcs$184[0].width ;
-  wire [37:0] \crcs$184[1] ;
-  wire \crcs$184[1].inverted ;
-  wire [15:0] \crcs$184[1].poly ;
-  wire [15:0] \crcs$184[1].start ;
-  wire [4:0] \crcs$184[1].width ;
+  wire [75:0] \crcs$185 ;
+  wire [37:0] \crcs$185[0] ;
+  wire \crcs$185[0].inverted ;
+  wire [15:0] \crcs$185[0].poly ;
+  wire [15:0] \crcs$185[0].start ;
+  wire [4:0] \crcs$185[0].width ;
+  wire [37:0] \crcs$185[1] ;
+  wire \crcs$185[1].inverted ;
+  wire [15:0] \crcs$185[1].poly ;
+  wire [15:0] \crcs$185[1].start ;
+  wire [4:0] \crcs$185[1].width ;
+  wire [75:0] \crcs$186 ;
+  wire [37:0] \crcs$186[0] ;
+  wire \crcs$186[0].inverted ;
+  wire [15:0] \crcs$186[0].poly ;
+  wire [15:0] \crcs$186[0].start ;
+  wire [4:0] \crcs$186[0].width ;
+  wire [37:0] \crcs$186[1] ;
+  wire \crcs$186[1].inverted ;
+  wire [15:0] \crcs$186[1].poly ;
+  wire [15:0] \crcs$186[1].start ;
+  wire [4:0] \crcs$186[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -7868,21 +7868,21 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$117 ;
-  wire [12:0] \delay$169 ;
+  wire [12:0] \delay$119 ;
+  wire [12:0] \delay$171 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$119 ;
+  wire [11:0] \delay_limit$121 ;
   wire delay_over;
-  wire \delay_over$98 ;
+  wire \delay_over$100 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$273 ;
-  output \done$314 ;
-  wire \done$314 ;
-  wire \done$315 ;
+  wire \done$275 ;
+  output \done$316 ;
+  wire \done$316 ;
+  wire \done$317 ;
   wire doubtful;
   wire early;
   wire \early$73 ;
@@ -7891,31 +7891,31 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$286 ;
-  wire \events$286.ca_aborted ;
-  wire \events$286.ca_crc4_error ;
-  wire \events$286.ca_data_fault ;
-  wire \events$286.ca_no_answer ;
-  wire \events$286.ca_refused ;
-  wire [15:0] \events$295 ;
-  wire \events$295.aborted ;
-  wire \events$295.crc_word0 ;
-  wire \events$295.crc_word1 ;
-  wire \events$295.delay_jump ;
-  wire \events$295.delay_range ;
-  wire \events$295.lc_repeat ;
-  wire \events$295.lc_skip ;
-  wire \events$295.lc_zero ;
-  wire \events$295.no_ack ;
-  wire \events$295.no_start ;
-  wire \events$295.no_stop ;
-  wire \events$295.noise_event ;
-  wire \events$295.noisy_line ;
-  wire \events$295.overrun ;
-  wire \events$295.slo_stuck_low ;
-  wire \events$295.spw_mismatch ;
+  wire [4:0] \events$288 ;
+  wire \events$288.ca_aborted ;
+  wire \events$288.ca_crc4_error ;
+  wire \events$288.ca_data_fault ;
+  wire \events$288.ca_no_answer ;
+  wire \events$288.ca_refused ;
+  wire [15:0] \events$297 ;
+  wire \events$297.aborted ;
+  wire \events$297.crc_word0 ;
+  wire \events$297.crc_word1 ;
+  wire \events$297.delay_jump ;
+  wire \events$297.delay_range ;
+  wire \events$297.lc_repeat ;
+  wire \events$297.lc_skip ;
+  wire \events$297.lc_zero ;
+  wire \events$297.no_ack ;
+  wire \events$297.no_start ;
+  wire \events$297.no_stop ;
+  wire \events$297.noise_event ;
+  wire \events$297.noisy_line ;
+  wire \events$297.overrun ;
+  wire \events$297.slo_stuck_low ;
+  wire \events$297.spw_mismatch ;
   wire fault;
-  wire \fault$208 ;
+  wire \fault$210 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -7951,7 +7951,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$210 ;
+  wire [3:0] \fault_status$212 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -7961,7 +7961,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$246 ;
+  wire \first_rise$248 ;
   wire [31:0] first_rise_time;
   wire fixed;
   wire [12:0] fixed_delay;
@@ -8015,34 +8015,34 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$141 ;
+  wire [15:0] \half_period$143 ;
   wire held;
   wire hold;
   wire idle;
   wire \idle$41 ;
   wire \idle$50 ;
   wire in_clock;
-  wire \in_clock$105 ;
+  wire \in_clock$107 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$147 ;
-  wire [5:0] \lc$335 ;
+  wire [5:0] \lc$149 ;
+  wire [5:0] \lc$337 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$149 ;
+  wire [5:0] \lc_next$151 ;
   wire lc_repeat;
-  wire \lc_repeat$336 ;
+  wire \lc_repeat$338 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$337 ;
+  wire \lc_skip$339 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$338 ;
+  wire \lc_zero$340 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$158 ;
+  wire \level$160 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
   wire [274:0] live;
@@ -8104,10 +8104,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire \locked$71 ;
   output ma;
   wire ma;
-  wire \ma$310 ;
+  wire \ma$312 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$100 ;
+  wire \ma_busy$102 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -8116,17 +8116,17 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire mismatch;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$92 ;
+  wire \no_start_expired$94 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$115 ;
+  wire [24:0] \no_start_limit$117 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$177 ;
+  wire \noisy$179 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$313 ;
+  wire \overrun$315 ;
   wire passed;
   wire pending;
   wire [23:0] period;
@@ -8134,10 +8134,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   input \periodic$45 ;
   wire \periodic$45 ;
   wire quiet;
-  wire \quiet$124 ;
+  wire \quiet$126 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$126 ;
+  wire \quiet_live$128 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -8153,38 +8153,38 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$222 ;
-  wire \report$226 ;
+  wire \report$224 ;
+  wire \report$228 ;
   wire report_delay;
-  wire \report_delay$229 ;
+  wire \report_delay$231 ;
   wire report_frame;
-  wire \report_frame$207 ;
-  wire \report_frame$227 ;
+  wire \report_frame$209 ;
+  wire \report_frame$229 ;
   wire request;
-  wire [17:0] \request$248 ;
-  wire [6:0] \request$248.address ;
-  wire [6:0] \request$248.count ;
-  wire [2:0] \request$248.slave_id ;
-  wire \request$248.write ;
+  wire [17:0] \request$250 ;
+  wire [6:0] \request$250.address ;
+  wire [6:0] \request$250.count ;
+  wire [2:0] \request$250.slave_id ;
+  wire \request$250.write ;
   wire \request$56 ;
   wire restart;
-  wire \restart$162 ;
+  wire \restart$164 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$319 ;
-  wire [186:0] \result$319 ;
-  wire \result$319.cds ;
-  wire \result$319.delay_settled ;
-  wire [7:0] \result$319.delay_spread ;
-  wire [5:0] \result$319.lc ;
-  wire \result$319.lc_repeat ;
-  wire \result$319.lc_skip ;
-  wire \result$319.lc_zero ;
-  wire [12:0] \result$319.line_delay ;
-  wire [3:0] \result$319.noise_events ;
-  wire [12:0] \result$319.settled_delay ;
-  wire \result$319.spw_mismatch ;
+  output [186:0] \result$321 ;
+  wire [186:0] \result$321 ;
+  wire \result$321.cds ;
+  wire \result$321.delay_settled ;
+  wire [7:0] \result$321.delay_spread ;
+  wire [5:0] \result$321.lc ;
+  wire \result$321.lc_repeat ;
+  wire \result$321.lc_skip ;
+  wire \result$321.lc_zero ;
+  wire [12:0] \result$321.line_delay ;
+  wire [3:0] \result$321.noise_events ;
+  wire [12:0] \result$321.settled_delay ;
+  wire \result$321.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -8202,18 +8202,18 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$319.status ;
-  wire [31:0] \result$319.timestamp ;
-  wire [57:0] \result$319.word0 ;
-  wire \result$319.word0.crc_ok ;
-  wire \result$319.word0.ne ;
-  wire \result$319.word0.nw ;
-  wire [54:0] \result$319.word0.position ;
-  wire [42:0] \result$319.word1 ;
-  wire \result$319.word1.crc_ok ;
-  wire \result$319.word1.ne ;
-  wire \result$319.word1.nw ;
-  wire [39:0] \result$319.word1.position ;
+  wire [3:0] \result$321.status ;
+  wire [31:0] \result$321.timestamp ;
+  wire [57:0] \result$321.word0 ;
+  wire \result$321.word0.crc_ok ;
+  wire \result$321.word0.ne ;
+  wire \result$321.word0.nw ;
+  wire [54:0] \result$321.word0.position ;
+  wire [42:0] \result$321.word1 ;
+  wire \result$321.word1.crc_ok ;
+  wire \result$321.word1.ne ;
+  wire \result$321.word1.nw ;
+  wire [39:0] \result$321.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -8225,55 +8225,55 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$155 ;
+  wire \resync$157 ;
   wire [15:0] rises;
-  wire [15:0] \rises$134 ;
+  wire [15:0] \rises$136 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$342 ;
+  wire \sample$344 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$325 ;
+  wire [12:0] \settled_delay$327 ;
   wire skip;
   input slo;
   wire slo;
+  wire \slo$101 ;
   wire \slo$52 ;
   wire \slo$62 ;
-  wire \slo$99 ;
   wire slo_stuck;
-  wire \slo_stuck$94 ;
+  wire \slo_stuck$96 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$96 ;
+  wire \slo_stuck_live$98 ;
   wire slots_full;
-  wire \slots_full$81 ;
+  wire \slots_full$83 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$339 ;
+  wire \spw_mismatch$341 ;
   wire ssi;
-  wire \ssi$196 ;
-  wire \ssi$200 ;
+  wire \ssi$198 ;
+  wire \ssi$202 ;
   wire ssi_double;
-  wire \ssi_double$201 ;
+  wire \ssi_double$203 ;
   wire ssi_error;
-  wire \ssi_error$202 ;
+  wire \ssi_error$204 ;
   wire ssi_error_low;
   input start;
   wire start;
-  input \start$260 ;
-  wire \start$260 ;
+  input \start$262 ;
+  wire \start$262 ;
   wire \start$43 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$132 ;
+  wire [15:0] \start_slot$134 ;
   wire started;
-  wire \started$130 ;
-  wire \started$79 ;
+  wire \started$132 ;
+  wire \started$81 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -8310,7 +8310,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$224 ;
+  wire [3:0] \status$226 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -8328,26 +8328,28 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$318 ;
+  wire [3:0] \status$320 ;
   wire stop_bit;
-  wire \stop_bit$84 ;
+  wire \stop_bit$86 ;
   wire stopped;
-  wire \stopped$82 ;
+  wire \stopped$84 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$113 ;
+  wire [23:0] \timeout_limit$115 ;
   wire [23:0] timeout_live;
+  wire timeout_over;
+  wire \timeout_over$79 ;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$191 ;
+  wire [7:0] \tolerance$193 ;
   input trigger;
   wire trigger;
   wire \trigger$54 ;
   wire unconfirmed;
   wire valid;
-  wire \valid$231 ;
-  output \valid$316 ;
-  wire \valid$316 ;
+  wire \valid$233 ;
+  output \valid$318 ;
+  wire \valid$318 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -8365,34 +8367,34 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$145 ;
+  wire [1:0] \word_count$147 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$181 ;
-  wire [11:0] \words$181[0] ;
+  wire [23:0] \words$183 ;
+  wire [11:0] \words$183[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$181[0].crc ;
-  wire [5:0] \words$181[0].data_bits ;
-  wire \words$181[0].gray ;
-  wire \words$181[0].lc ;
-  wire \words$181[0].nenw ;
-  wire \words$181[0].signed ;
-  wire [11:0] \words$181[1] ;
+  wire [1:0] \words$183[0].crc ;
+  wire [5:0] \words$183[0].data_bits ;
+  wire \words$183[0].gray ;
+  wire \words$183[0].lc ;
+  wire \words$183[0].nenw ;
+  wire \words$183[0].signed ;
+  wire [11:0] \words$183[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$181[1].crc ;
-  wire [5:0] \words$181[1].data_bits ;
-  wire \words$181[1].gray ;
-  wire \words$181[1].lc ;
-  wire \words$181[1].nenw ;
-  wire \words$181[1].signed ;
+  wire [1:0] \words$183[1].crc ;
+  wire [5:0] \words$183[1].data_bits ;
+  wire \words$183[1].gray ;
+  wire \words$183[1].lc ;
+  wire \words$183[1].nenw ;
+  wire \words$183[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -8426,9 +8428,9 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign enable = \$1  & \$2 ;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$3  = ~ started_before;
-  assign \check$170  = started & \$3 ;
+  assign \check$172  = started & \$3 ;
   assign \$4  = ~ cycle[259];
-  assign cdm = \cdm$275  & \$4 ;
+  assign cdm = \cdm$277  & \$4 ;
   assign \$5  = ~ cycle[259];
   assign frame_ok = passed & \$5 ;
   assign \$6  = result[2:0] == 1'h1;
@@ -8446,10 +8448,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \$18  = report_frame & \$17 ;
   assign \$19  = status == 4'he;
   assign \$20  = report_frame & \$19 ;
-  assign \busy$311  = ~ idle;
+  assign \busy$313  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$21  = ~ \clear$135 ;
-  assign \$22  = \sample$342  & \$21 ;
+  assign \$21  = ~ \clear$137 ;
+  assign \$22  = \sample$344  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -8495,7 +8497,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$162 ),
+    .fault(\restart$164 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -8512,7 +8514,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$135 ),
+    .receiver_clear(\clear$137 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
@@ -8527,24 +8529,25 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
+    .timeout_over(timeout_over),
     .timer_clear(clear),
     .waiting(watch)
   );
   \biss_master_wb.ch0.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$287 ),
+    .clear(\clear$289 ),
     .clk(clk),
-    .events(\events$295 ),
+    .events(\events$297 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_wb.ch0.core.counters  counters (
-    .clear(\clear$287 ),
+    .clear(\clear$289 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$286 ),
+    .events(\events$288 ),
     .rst(rst)
   );
   \biss_master_wb.ch0.core.decoder  decoder (
@@ -8562,8 +8565,8 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6323$272 (cycle[274:272]),
-    .receiver_clear(\clear$135 ),
+    .\port$6337$272 (cycle[274:272]),
+    .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -8576,7 +8579,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .words(words)
   );
   \biss_master_wb.ch0.core.delay_check  delay_check (
-    .check(\check$170 ),
+    .check(\check$172 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -8598,7 +8601,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$162 ),
+    .restart(\restart$164 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -8606,7 +8609,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   \biss_master_wb.ch0.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$100 ),
+    .\clocking (\ma_busy$102 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -8618,7 +8621,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .second_rise(ma_arm)
   );
   \biss_master_wb.ch0.core.ma_stop  ma_stop (
-    .clear(\clear$135 ),
+    .clear(\clear$137 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -8630,12 +8633,12 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .start_slot(start_slot),
     .\started$15 (started),
     .w1_enable(cycle[199]),
-    .words(\words$181 )
+    .words(\words$183 )
   );
   \biss_master_wb.ch0.core.register_access  register_access (
-    .abort(\abort$262 ),
+    .abort(\abort$264 ),
     .busy(frames),
-    .cdm(\cdm$275 ),
+    .cdm(\cdm$277 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -8645,27 +8648,27 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$248 ),
+    .request(\request$250 ),
     .result(result),
     .rst(rst),
-    .start(\start$260 ),
+    .start(\start$262 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch0.core.results  results (
     .clk(clk),
-    .done(\done$314 ),
+    .done(\done$316 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$319 ),
+    .result(\result$321 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$316 )
+    .valid_out(\valid$318 )
   );
   \biss_master_wb.ch0.core.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$343 ),
+    .\bit (\bit$345 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -8673,10 +8676,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6323$259 (cycle[271:259]),
-    .receiver_clear(\clear$135 ),
+    .\port$6337$259 (cycle[271:259]),
+    .receiver_clear(\clear$137 ),
     .rst(rst),
-    .sample(\sample$342 ),
+    .sample(\sample$344 ),
     .slo(slo)
   );
   \biss_master_wb.ch0.core.scheduler  scheduler (
@@ -8697,7 +8700,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6311$0 (\bit ),
+    .\port$6325$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -8729,7 +8732,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$100 ),
+    .ma_busy(\ma_busy$102 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -8742,17 +8745,18 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
-    .timeout_live(cfg_timeout_limit)
+    .timeout_live(cfg_timeout_limit),
+    .timeout_over(timeout_over)
   );
   \biss_master_wb.ch0.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$344 ),
+    .clean(\clean$346 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$162 ),
+    .fault(\restart$164 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -8763,7 +8767,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2502$0 (\$28 ),
+    .\port$2509$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -8781,7 +8785,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$24  = \bit$343 ;
+    \$24  = \bit$345 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -8802,7 +8806,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$27  = \clean$344 ;
+    \$27  = \clean$346 ;
     if (rst) begin
       \$27  = 1'h0;
     end
@@ -8825,149 +8829,150 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \locked$71  = locked;
   assign \early$73  = early;
   assign ssi = cycle[259];
-  assign \started$79  = started;
-  assign \slots_full$81  = slots_full;
-  assign \stopped$82  = stopped;
-  assign \stop_bit$84  = stop_bit;
+  assign \timeout_over$79  = timeout_over;
+  assign \started$81  = started;
+  assign \slots_full$83  = slots_full;
+  assign \stopped$84  = stopped;
+  assign \stop_bit$86  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$88  = break_over;
-  assign \ack_expired$90  = ack_expired;
-  assign \no_start_expired$92  = no_start_expired;
-  assign \slo_stuck$94  = slo_stuck;
-  assign \slo_stuck_live$96  = slo_stuck_live;
-  assign \delay_over$98  = delay_over;
-  assign \slo$99  = \slo$62 ;
-  assign \clocking  = \ma_busy$100 ;
+  assign \break_over$90  = break_over;
+  assign \ack_expired$92  = ack_expired;
+  assign \no_start_expired$94  = no_start_expired;
+  assign \slo_stuck$96  = slo_stuck;
+  assign \slo_stuck_live$98  = slo_stuck_live;
+  assign \delay_over$100  = delay_over;
+  assign \slo$101  = \slo$62 ;
+  assign \clocking  = \ma_busy$102 ;
   assign timer_clear = clear;
-  assign \in_clock$105  = in_clock;
+  assign \in_clock$107  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$111  = ack_limit;
-  assign \timeout_limit$113  = timeout_limit;
-  assign \no_start_limit$115  = no_start_limit;
-  assign \delay$117  = delay;
-  assign \delay_limit$119  = delay_limit;
+  assign \ack_limit$113  = ack_limit;
+  assign \timeout_limit$115  = timeout_limit;
+  assign \no_start_limit$117  = no_start_limit;
+  assign \delay$119  = delay;
+  assign \delay_limit$121  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$124  = quiet;
-  assign \quiet_live$126  = quiet_live;
+  assign \quiet$126  = quiet;
+  assign \quiet_live$128  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$130  = started;
-  assign \start_slot$132  = start_slot;
-  assign \rises$134  = rises;
-  assign receiver_clear = \clear$135 ;
+  assign \started$132  = started;
+  assign \start_slot$134  = start_slot;
+  assign \rises$136  = rises;
+  assign receiver_clear = \clear$137 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$141  = cycle[15:0];
-  assign \word_count$145  = word_count;
-  assign \lc$147  = lc;
+  assign \half_period$143  = cycle[15:0];
+  assign \word_count$147  = word_count;
+  assign \lc$149  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$149  = { lc[4:0], \bit  };
+  assign \lc_next$151  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$155  = resync;
+  assign \resync$157  = resync;
   assign waiting = watch;
-  assign \level$158  = \slo$62 ;
+  assign \level$160  = \slo$62 ;
   assign noise = sampler_noise;
   assign close = done;
-  assign fault = \restart$162 ;
+  assign fault = \restart$164 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$169  = delay;
+  assign \delay$171  = delay;
   assign \$signal  = learn;
-  assign \clean$175  = clean;
-  assign \noisy$177  = noisy;
+  assign \clean$177  = clean;
+  assign \noisy$179  = noisy;
   assign jump = delay_jump;
-  assign \crcs$183  = crcs;
-  assign \crcs$184  = crcs;
+  assign \crcs$185  = crcs;
+  assign \crcs$186  = crcs;
   assign w1_enable = cycle[199];
-  assign \cpw_top$187  = cpw_top;
+  assign \cpw_top$189  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[205:200];
-  assign \tolerance$191  = cycle[258:251];
+  assign \tolerance$193  = cycle[258:251];
   assign match = spw_match;
   assign fixed = cycle[259];
   assign fixed_delay = { 1'h0, cycle[271:260] };
-  assign \ssi$196  = cycle[259];
+  assign \ssi$198  = cycle[259];
   assign ssi_error = cycle[272];
   assign ssi_error_low = cycle[273];
   assign ssi_double = cycle[274];
-  assign \ssi$200  = cycle[259];
-  assign \ssi_double$201  = cycle[274];
-  assign \ssi_error$202  = cycle[272];
+  assign \ssi$202  = cycle[259];
+  assign \ssi_double$203  = cycle[274];
+  assign \ssi_error$204  = cycle[272];
   assign mismatch = copy_mismatch;
   assign cfg = cycle;
-  assign \report_frame$207  = report_frame;
-  assign \fault$208  = \restart$162 ;
-  assign \fault_status$210  = fault_status;
-  assign \crc_ok$212  = crc_ok;
+  assign \report_frame$209  = report_frame;
+  assign \fault$210  = \restart$164 ;
+  assign \fault_status$212  = fault_status;
+  assign \crc_ok$214  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$222  = report;
-  assign \status$224  = status;
+  assign \report$224  = report;
+  assign \status$226  = status;
   assign setting = cycle[148:145];
-  assign \report$226  = report;
-  assign \report_frame$227  = report_frame;
-  assign \report_delay$229  = report_delay;
-  assign \valid$231  = valid;
+  assign \report$228  = report;
+  assign \report_frame$229  = report_frame;
+  assign \report_delay$231  = report_delay;
+  assign \valid$233  = valid;
   assign word_crc_ok = { \$28 , crc_ok[0] };
-  assign \first_rise$246  = first_rise;
+  assign \first_rise$248  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$260 ;
-  assign ca_abort = \abort$262 ;
+  assign ca_start = \start$262 ;
+  assign ca_abort = \abort$264 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$271  = frames;
-  assign \done$273  = ca_done;
+  assign \busy$273  = frames;
+  assign \done$275  = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$287 ;
+  assign clear_counters = \clear$289 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$300  = \clear$287 ;
+  assign \clear$302  = \clear$289 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$308  = count_busy;
-  assign \ma$310  = ma;
-  assign \overrun$313  = overrun;
-  assign \done$315  = \done$314 ;
-  assign valid_out = \valid$316 ;
-  assign \status$318  = \result$319 [3:0];
-  assign timestamp = \result$319 [35:4];
-  assign line_delay = \result$319 [48:36];
-  assign \cds$322  = \result$319 [49];
-  assign noise_events = \result$319 [53:50];
-  assign delay_settled = \result$319 [54];
-  assign \settled_delay$325  = \result$319 [67:55];
-  assign delay_spread = \result$319 [75:68];
-  assign word0_position = \result$319 [130:76];
-  assign word0_ne = \result$319 [131];
-  assign word0_nw = \result$319 [132];
-  assign word0_crc_ok = \result$319 [133];
-  assign word1_position = \result$319 [173:134];
-  assign word1_ne = \result$319 [174];
-  assign word1_nw = \result$319 [175];
-  assign word1_crc_ok = \result$319 [176];
-  assign \lc$335  = \result$319 [182:177];
-  assign \lc_repeat$336  = \result$319 [183];
-  assign \lc_skip$337  = \result$319 [184];
-  assign \lc_zero$338  = \result$319 [185];
-  assign \spw_mismatch$339  = \result$319 [186];
+  assign \busy$310  = count_busy;
+  assign \ma$312  = ma;
+  assign \overrun$315  = overrun;
+  assign \done$317  = \done$316 ;
+  assign valid_out = \valid$318 ;
+  assign \status$320  = \result$321 [3:0];
+  assign timestamp = \result$321 [35:4];
+  assign line_delay = \result$321 [48:36];
+  assign \cds$324  = \result$321 [49];
+  assign noise_events = \result$321 [53:50];
+  assign delay_settled = \result$321 [54];
+  assign \settled_delay$327  = \result$321 [67:55];
+  assign delay_spread = \result$321 [75:68];
+  assign word0_position = \result$321 [130:76];
+  assign word0_ne = \result$321 [131];
+  assign word0_nw = \result$321 [132];
+  assign word0_crc_ok = \result$321 [133];
+  assign word1_position = \result$321 [173:134];
+  assign word1_ne = \result$321 [174];
+  assign word1_nw = \result$321 [175];
+  assign word1_crc_ok = \result$321 [176];
+  assign \lc$337  = \result$321 [182:177];
+  assign \lc_repeat$338  = \result$321 [183];
+  assign \lc_skip$339  = \result$321 [184];
+  assign \lc_zero$340  = \result$321 [185];
+  assign \spw_mismatch$341  = \result$321 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -9068,20 +9073,20 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$181[0]  = \words$181 [11:0];
-  assign \words$181[0].data_bits  = \words$181 [5:0];
-  assign \words$181[0].nenw  = \words$181 [6];
-  assign \words$181[0].lc  = \words$181 [7];
-  assign \words$181[0].crc  = \words$181 [9:8];
-  assign \words$181[0].gray  = \words$181 [10];
-  assign \words$181[0].signed  = \words$181 [11];
-  assign \words$181[1]  = \words$181 [23:12];
-  assign \words$181[1].data_bits  = \words$181 [17:12];
-  assign \words$181[1].nenw  = \words$181 [18];
-  assign \words$181[1].lc  = \words$181 [19];
-  assign \words$181[1].crc  = \words$181 [21:20];
-  assign \words$181[1].gray  = \words$181 [22];
-  assign \words$181[1].signed  = \words$181 [23];
+  assign \words$183[0]  = \words$183 [11:0];
+  assign \words$183[0].data_bits  = \words$183 [5:0];
+  assign \words$183[0].nenw  = \words$183 [6];
+  assign \words$183[0].lc  = \words$183 [7];
+  assign \words$183[0].crc  = \words$183 [9:8];
+  assign \words$183[0].gray  = \words$183 [10];
+  assign \words$183[0].signed  = \words$183 [11];
+  assign \words$183[1]  = \words$183 [23:12];
+  assign \words$183[1].data_bits  = \words$183 [17:12];
+  assign \words$183[1].nenw  = \words$183 [18];
+  assign \words$183[1].lc  = \words$183 [19];
+  assign \words$183[1].crc  = \words$183 [21:20];
+  assign \words$183[1].gray  = \words$183 [22];
+  assign \words$183[1].signed  = \words$183 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -9092,26 +9097,26 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$183[0]  = crcs[37:0];
-  assign \crcs$183[0].width  = crcs[4:0];
-  assign \crcs$183[0].poly  = crcs[20:5];
-  assign \crcs$183[0].start  = crcs[36:21];
-  assign \crcs$183[0].inverted  = crcs[37];
-  assign \crcs$183[1]  = crcs[75:38];
-  assign \crcs$183[1].width  = crcs[42:38];
-  assign \crcs$183[1].poly  = crcs[58:43];
-  assign \crcs$183[1].start  = crcs[74:59];
-  assign \crcs$183[1].inverted  = crcs[75];
-  assign \crcs$184[0]  = crcs[37:0];
-  assign \crcs$184[0].width  = crcs[4:0];
-  assign \crcs$184[0].poly  = crcs[20:5];
-  assign \crcs$184[0].start  = crcs[36:21];
-  assign \crcs$184[0].inverted  = crcs[37];
-  assign \crcs$184[1]  = crcs[75:38];
-  assign \crcs$184[1].width  = crcs[42:38];
-  assign \crcs$184[1].poly  = crcs[58:43];
-  assign \crcs$184[1].start  = crcs[74:59];
-  assign \crcs$184[1].inverted  = crcs[75];
+  assign \crcs$185[0]  = crcs[37:0];
+  assign \crcs$185[0].width  = crcs[4:0];
+  assign \crcs$185[0].poly  = crcs[20:5];
+  assign \crcs$185[0].start  = crcs[36:21];
+  assign \crcs$185[0].inverted  = crcs[37];
+  assign \crcs$185[1]  = crcs[75:38];
+  assign \crcs$185[1].width  = crcs[42:38];
+  assign \crcs$185[1].poly  = crcs[58:43];
+  assign \crcs$185[1].start  = crcs[74:59];
+  assign \crcs$185[1].inverted  = crcs[75];
+  assign \crcs$186[0]  = crcs[37:0];
+  assign \crcs$186[0].width  = crcs[4:0];
+  assign \crcs$186[0].poly  = crcs[20:5];
+  assign \crcs$186[0].start  = crcs[36:21];
+  assign \crcs$186[0].inverted  = crcs[37];
+  assign \crcs$186[1]  = crcs[75:38];
+  assign \crcs$186[1].width  = crcs[42:38];
+  assign \crcs$186[1].poly  = crcs[58:43];
+  assign \crcs$186[1].start  = crcs[74:59];
+  assign \crcs$186[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -9178,41 +9183,41 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$248.slave_id  = \request$248 [2:0];
-  assign \request$248.address  = \request$248 [9:3];
-  assign \request$248.count  = \request$248 [16:10];
-  assign \request$248.write  = \request$248 [17];
+  assign \request$250.slave_id  = \request$250 [2:0];
+  assign \request$250.address  = \request$250 [9:3];
+  assign \request$250.count  = \request$250 [16:10];
+  assign \request$250.write  = \request$250 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$286.ca_crc4_error  = \events$286 [0];
-  assign \events$286.ca_no_answer  = \events$286 [1];
-  assign \events$286.ca_refused  = \events$286 [2];
-  assign \events$286.ca_aborted  = \events$286 [3];
-  assign \events$286.ca_data_fault  = \events$286 [4];
+  assign \events$288.ca_crc4_error  = \events$288 [0];
+  assign \events$288.ca_no_answer  = \events$288 [1];
+  assign \events$288.ca_refused  = \events$288 [2];
+  assign \events$288.ca_aborted  = \events$288 [3];
+  assign \events$288.ca_data_fault  = \events$288 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$295.crc_word0  = \events$295 [0];
-  assign \events$295.crc_word1  = \events$295 [1];
-  assign \events$295.no_ack  = \events$295 [2];
-  assign \events$295.no_start  = \events$295 [3];
-  assign \events$295.delay_range  = \events$295 [4];
-  assign \events$295.slo_stuck_low  = \events$295 [5];
-  assign \events$295.lc_repeat  = \events$295 [6];
-  assign \events$295.lc_skip  = \events$295 [7];
-  assign \events$295.lc_zero  = \events$295 [8];
-  assign \events$295.spw_mismatch  = \events$295 [9];
-  assign \events$295.overrun  = \events$295 [10];
-  assign \events$295.aborted  = \events$295 [11];
-  assign \events$295.no_stop  = \events$295 [12];
-  assign \events$295.noisy_line  = \events$295 [13];
-  assign \events$295.delay_jump  = \events$295 [14];
-  assign \events$295.noise_event  = \events$295 [15];
+  assign \events$297.crc_word0  = \events$297 [0];
+  assign \events$297.crc_word1  = \events$297 [1];
+  assign \events$297.no_ack  = \events$297 [2];
+  assign \events$297.no_start  = \events$297 [3];
+  assign \events$297.delay_range  = \events$297 [4];
+  assign \events$297.slo_stuck_low  = \events$297 [5];
+  assign \events$297.lc_repeat  = \events$297 [6];
+  assign \events$297.lc_skip  = \events$297 [7];
+  assign \events$297.lc_zero  = \events$297 [8];
+  assign \events$297.spw_mismatch  = \events$297 [9];
+  assign \events$297.overrun  = \events$297 [10];
+  assign \events$297.aborted  = \events$297 [11];
+  assign \events$297.no_stop  = \events$297 [12];
+  assign \events$297.noisy_line  = \events$297 [13];
+  assign \events$297.delay_jump  = \events$297 [14];
+  assign \events$297.noise_event  = \events$297 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -9220,57 +9225,57 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$319.status  = \result$319 [3:0];
-  assign \result$319.timestamp  = \result$319 [35:4];
-  assign \result$319.line_delay  = \result$319 [48:36];
-  assign \result$319.cds  = \result$319 [49];
-  assign \result$319.noise_events  = \result$319 [53:50];
-  assign \result$319.delay_settled  = \result$319 [54];
-  assign \result$319.settled_delay  = \result$319 [67:55];
-  assign \result$319.delay_spread  = \result$319 [75:68];
-  assign \result$319.word0  = \result$319 [133:76];
-  assign \result$319.word0.position  = \result$319 [130:76];
-  assign \result$319.word0.ne  = \result$319 [131];
-  assign \result$319.word0.nw  = \result$319 [132];
-  assign \result$319.word0.crc_ok  = \result$319 [133];
-  assign \result$319.word1  = \result$319 [176:134];
-  assign \result$319.word1.position  = \result$319 [173:134];
-  assign \result$319.word1.ne  = \result$319 [174];
-  assign \result$319.word1.nw  = \result$319 [175];
-  assign \result$319.word1.crc_ok  = \result$319 [176];
-  assign \result$319.lc  = \result$319 [182:177];
-  assign \result$319.lc_repeat  = \result$319 [183];
-  assign \result$319.lc_skip  = \result$319 [184];
-  assign \result$319.lc_zero  = \result$319 [185];
-  assign \result$319.spw_mismatch  = \result$319 [186];
-  assign \events$295 [15] = \event ;
-  assign \events$295 [14] = \$20 ;
-  assign \events$295 [13] = \$18 ;
-  assign \events$295 [12] = faults[6];
-  assign \events$295 [11] = faults[4];
-  assign \events$295 [10] = overrun;
-  assign \events$295 [9] = \$16 ;
-  assign \events$295 [8] = lc_zero;
-  assign \events$295 [7] = lc_skip;
-  assign \events$295 [6] = lc_repeat;
-  assign \events$295 [5] = faults[3];
-  assign \events$295 [4] = faults[2];
-  assign \events$295 [3] = faults[1];
-  assign \events$295 [2] = faults[0];
-  assign \events$295 [1] = crc_error[1];
-  assign \events$295 [0] = crc_error[0];
-  assign \events$286 [4] = \$15 ;
-  assign \events$286 [3] = \$13 ;
-  assign \events$286 [2] = \$11 ;
-  assign \events$286 [1] = \$9 ;
-  assign \events$286 [0] = \$7 ;
+  assign \result$321.status  = \result$321 [3:0];
+  assign \result$321.timestamp  = \result$321 [35:4];
+  assign \result$321.line_delay  = \result$321 [48:36];
+  assign \result$321.cds  = \result$321 [49];
+  assign \result$321.noise_events  = \result$321 [53:50];
+  assign \result$321.delay_settled  = \result$321 [54];
+  assign \result$321.settled_delay  = \result$321 [67:55];
+  assign \result$321.delay_spread  = \result$321 [75:68];
+  assign \result$321.word0  = \result$321 [133:76];
+  assign \result$321.word0.position  = \result$321 [130:76];
+  assign \result$321.word0.ne  = \result$321 [131];
+  assign \result$321.word0.nw  = \result$321 [132];
+  assign \result$321.word0.crc_ok  = \result$321 [133];
+  assign \result$321.word1  = \result$321 [176:134];
+  assign \result$321.word1.position  = \result$321 [173:134];
+  assign \result$321.word1.ne  = \result$321 [174];
+  assign \result$321.word1.nw  = \result$321 [175];
+  assign \result$321.word1.crc_ok  = \result$321 [176];
+  assign \result$321.lc  = \result$321 [182:177];
+  assign \result$321.lc_repeat  = \result$321 [183];
+  assign \result$321.lc_skip  = \result$321 [184];
+  assign \result$321.lc_zero  = \result$321 [185];
+  assign \result$321.spw_mismatch  = \result$321 [186];
+  assign \events$297 [15] = \event ;
+  assign \events$297 [14] = \$20 ;
+  assign \events$297 [13] = \$18 ;
+  assign \events$297 [12] = faults[6];
+  assign \events$297 [11] = faults[4];
+  assign \events$297 [10] = overrun;
+  assign \events$297 [9] = \$16 ;
+  assign \events$297 [8] = lc_zero;
+  assign \events$297 [7] = lc_skip;
+  assign \events$297 [6] = lc_repeat;
+  assign \events$297 [5] = faults[3];
+  assign \events$297 [4] = faults[2];
+  assign \events$297 [3] = faults[1];
+  assign \events$297 [2] = faults[0];
+  assign \events$297 [1] = crc_error[1];
+  assign \events$297 [0] = crc_error[0];
+  assign \events$288 [4] = \$15 ;
+  assign \events$288 [3] = \$13 ;
+  assign \events$288 [2] = \$11 ;
+  assign \events$288 [1] = \$9 ;
+  assign \events$288 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$248 [17] = ca_write;
-  assign \request$248 [16:10] = ca_count;
-  assign \request$248 [9:3] = ca_address;
-  assign \request$248 [2:0] = ca_slave_id;
+  assign \request$250 [17] = ca_write;
+  assign \request$250 [16:10] = ca_count;
+  assign \request$250 [9:3] = ca_address;
+  assign \request$250 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$28 ;
@@ -9292,8 +9297,8 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$181 [23:12] = cycle[211:200];
-  assign \words$181 [11:0] = cycle[160:149];
+  assign \words$183 [23:12] = cycle[211:200];
+  assign \words$183 [11:0] = cycle[160:149];
   assign words[23:12] = cycle[211:200];
   assign words[11:0] = cycle[160:149];
   assign live[274] = cfg_ssi_double;
@@ -9950,8 +9955,8 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
-, faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full, started
-, stop_bit, clk);
+, faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full
+, started, stop_bit, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -9983,12 +9988,18 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
   wire \$34 ;
   wire \$35 ;
   wire \$36 ;
-  reg \$37 ;
-  reg [2:0] \$38 ;
-  reg \$39 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
   wire \$4 ;
-  reg \$40 ;
-  reg \$41 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  reg \$43 ;
+  reg [2:0] \$44 ;
+  reg \$45 ;
+  reg \$46 ;
+  reg \$47 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
@@ -10019,7 +10030,7 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
   wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
   reg delay;
-  wire \delay$80 ;
+  wire \delay$81 ;
   input delay_over;
   wire delay_over;
   wire \delay_over$31 ;
@@ -10032,7 +10043,7 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
   output fault;
   reg fault;
   wire \fault$39 ;
-  wire \fault$76 ;
+  wire \fault$77 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -10202,63 +10213,71 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$81 ;
+  wire [3:0] \status$82 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
   wire stopped;
   wire stuck_low;
+  input timeout_over;
+  wire timeout_over;
   output timer_clear;
   reg timer_clear;
   output waiting;
   reg waiting;
   reg watch;
   always @(posedge clk)
-    pause <= \$41 ;
+    first_clock <= \$43 ;
+  always @(posedge clk)
+    cycle_fsm_state <= \$44 ;
+  always @(posedge clk)
+    idle <= \$45 ;
+  always @(posedge clk)
+    receiver_clear <= \$46 ;
+  always @(posedge clk)
+    pause <= \$47 ;
   assign \$1  = ma_busy | abort;
-  assign \$2  = ~ ma_enough;
-  assign \$3  = restart_timer | abort;
-  assign \$4  = frame_done & ssi;
-  assign \$5  = \$4  & stop_bit;
-  assign \$6  = ~ ssi;
-  assign \$7  = \fault$76  & \$6 ;
-  assign \$8  = ~ end_check;
-  assign \$9  = ~ ma_enough;
-  assign \$10  = stopped | ssi;
+  assign \$2  = ~ ssi;
+  assign \$3  = \$2  | timeout_over;
+  assign \$4  = break_over & \$3 ;
+  assign \$5  = ~ ma_enough;
+  assign \$6  = restart_timer | abort;
+  assign \$7  = frame_done & ssi;
+  assign \$8  = \$7  & stop_bit;
+  assign \$9  = ~ ssi;
+  assign \$10  = \fault$77  & \$9 ;
   assign \$11  = ~ end_check;
-  assign \$12  = ma_busy | abort;
-  assign \$13  = ~ ma_busy;
-  assign \$14  = \$13  | ma_held;
-  assign \$15  = \$14  & slo;
-  assign \$16  = ! cycle_fsm_state;
-  assign \$17  = cycle_fsm_state == 1'h1;
-  assign \$18  = cycle_fsm_state == 2'h2;
-  assign \$19  = cycle_fsm_state == 2'h3;
-  assign \$20  = cycle_fsm_state == 3'h4;
-  assign \$21  = cycle_fsm_state == 3'h5;
-  assign \$22  = cycle_fsm_state == 3'h6;
-  assign \$23  = cycle_fsm_state == 3'h7;
-  assign \$24  = ma_busy | abort;
-  assign \$25  = frame_done & ssi;
-  assign \$26  = \$25  & stop_bit;
-  assign \$27  = ~ ssi;
-  assign \$28  = \fault$76  & \$27 ;
-  assign \$29  = stopped | ssi;
-  assign \$30  = ~ end_check;
-  assign \$31  = ma_busy | abort;
-  assign \$32  = cdm_cycle & abort;
-  assign \$33  = ~ ma_busy;
-  assign \$34  = ~ ma_busy;
-  assign \$35  = \$34  | ma_held;
-  assign \$36  = \$35  & slo;
-  always @(posedge clk)
-    first_clock <= \$37 ;
-  always @(posedge clk)
-    cycle_fsm_state <= \$38 ;
-  always @(posedge clk)
-    idle <= \$39 ;
-  always @(posedge clk)
-    receiver_clear <= \$40 ;
+  assign \$12  = ~ ma_enough;
+  assign \$13  = stopped | ssi;
+  assign \$14  = ~ end_check;
+  assign \$15  = ma_busy | abort;
+  assign \$16  = ~ ma_busy;
+  assign \$17  = \$16  | ma_held;
+  assign \$18  = \$17  & slo;
+  assign \$19  = ! cycle_fsm_state;
+  assign \$20  = cycle_fsm_state == 1'h1;
+  assign \$21  = cycle_fsm_state == 2'h2;
+  assign \$22  = cycle_fsm_state == 2'h3;
+  assign \$23  = cycle_fsm_state == 3'h4;
+  assign \$24  = cycle_fsm_state == 3'h5;
+  assign \$25  = cycle_fsm_state == 3'h6;
+  assign \$26  = cycle_fsm_state == 3'h7;
+  assign \$27  = ma_busy | abort;
+  assign \$28  = ~ ssi;
+  assign \$29  = \$28  | timeout_over;
+  assign \$30  = break_over & \$29 ;
+  assign \$31  = frame_done & ssi;
+  assign \$32  = \$31  & stop_bit;
+  assign \$33  = ~ ssi;
+  assign \$34  = \fault$77  & \$33 ;
+  assign \$35  = stopped | ssi;
+  assign \$36  = ~ end_check;
+  assign \$37  = ma_busy | abort;
+  assign \$38  = cdm_cycle & abort;
+  assign \$39  = ~ ma_busy;
+  assign \$40  = ~ ma_busy;
+  assign \$41  = \$40  | ma_held;
+  assign \$42  = \$41  & slo;
   \biss_master_wb.ch0.core.controller.cdm_hold  cdm_hold (
     .abort(abort),
     .cdm(cdm),
@@ -10276,10 +10295,10 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
     .ack_expired(ack_expired),
     .clear(clear),
     .clk(clk),
-    .delay(\delay$80 ),
+    .delay(\delay$81 ),
     .delay_over(delay_over),
     .early(early),
-    .fault(\fault$76 ),
+    .fault(\fault$77 ),
     .locked(locked),
     .ma_arm(ma_arm),
     .no_start_expired(no_start_expired),
@@ -10287,7 +10306,7 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
     .rst(rst),
     .slots_full(slots_full),
     .started(started),
-    .status(\status$81 ),
+    .status(\status$82 ),
     .watch(watch)
   );
   \biss_master_wb.ch0.core.controller.ready_check  ready_check (
@@ -10314,6 +10333,387 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    report_frame = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$8 ) begin
+          end else if (frame_done) begin
+            if (\$11 ) begin
+              report_frame = 1'h1;
+            end
+          end
+      3'h4:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h6:
+          /* empty */;
+      3'h7:
+          if (abort) begin
+          end else if (\$18 ) begin
+            report_frame = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    delay = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$8 ) begin
+          end else if (frame_done) begin
+          end else if (\$10 ) begin
+            delay = \delay$81 ;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    holding = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          holding = 1'h1;
+      3'h6:
+          holding = 1'h1;
+      3'h7:
+          holding = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    \$43  = idle;
+    if (rst) begin
+      \$43  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    \$44  = cycle_fsm_state;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$44  = 3'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (request) begin
+            \$44  = 3'h2;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$44  = 3'h1;
+            if (abort) begin
+              \$44  = 3'h0;
+            end
+          end else if (aborted) begin
+            \$44  = 3'h0;
+          end else if (ready) begin
+            \$44  = 3'h3;
+          end else if (stuck_low) begin
+            \$44  = 3'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (\$32 ) begin
+            \$44  = 3'h0;
+          end else if (frame_done) begin
+            \$44  = 3'h4;
+          end else if (\$34 ) begin
+            \$44  = 3'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$44  = 3'h0;
+            end else begin
+              \$44  = 3'h0;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$44  = 3'h5;
+              end else begin
+                \$44  = 3'h6;
+              end
+            end else if (stop_bit) begin
+              \$44  = 3'h0;
+            end else begin
+              \$44  = 3'h7;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$44  = 3'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$44  = 3'h0;
+          end else if (\$39 ) begin
+            \$44  = 3'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$44  = 3'h5;
+            end else if (cdm_cycle) begin
+              \$44  = 3'h6;
+            end else begin
+              \$44  = 3'h1;
+            end
+          end else if (slo_stuck) begin
+            \$44  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$44  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    \$45  = idle;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$45  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (request) begin
+            \$45  = 1'h0;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$45  = 1'h1;
+            if (abort) begin
+              \$45  = 1'h0;
+            end
+          end else if (aborted) begin
+            \$45  = 1'h0;
+          end else if (ready) begin
+            \$45  = 1'h0;
+          end else if (stuck_low) begin
+            \$45  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (\$32 ) begin
+            \$45  = 1'h0;
+          end else if (frame_done) begin
+            \$45  = 1'h0;
+          end else if (\$34 ) begin
+            \$45  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h0;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$45  = 1'h0;
+              end else begin
+                \$45  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$45  = 1'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$45  = 1'h0;
+          end else if (\$39 ) begin
+            \$45  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$45  = 1'h0;
+            end else if (cdm_cycle) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$45  = 1'h0;
+          end
+    endcase
+    if (rst) begin
+      \$45  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    \$46  = receiver_clear;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$46  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (request) begin
+            \$46  = 1'h1;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$46  = 1'h1;
+            if (abort) begin
+              \$46  = 1'h1;
+            end
+          end else if (aborted) begin
+            \$46  = 1'h1;
+          end else if (ready) begin
+            \$46  = 1'h0;
+          end else if (stuck_low) begin
+            \$46  = 1'h1;
+          end
+      3'h3:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (\$32 ) begin
+            \$46  = 1'h1;
+          end else if (frame_done) begin
+            \$46  = 1'h0;
+          end else if (\$34 ) begin
+            \$46  = 1'h1;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$46  = 1'h1;
+            end else begin
+              \$46  = 1'h1;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$46  = 1'h1;
+              end else begin
+                \$46  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$46  = 1'h1;
+            end else begin
+              \$46  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$46  = 1'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$46  = 1'h1;
+          end else if (\$39 ) begin
+            \$46  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$46  = 1'h1;
+            end else if (cdm_cycle) begin
+              \$46  = 1'h0;
+            end else begin
+              \$46  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$46  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$46  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    \$47  = pause;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$32 ) begin
+          end else if (frame_done) begin
+            \$47  = frame_doubtful;
+          end
+    endcase
+    if (rst) begin
+      \$47  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -10335,19 +10735,19 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
           timer_clear = 1'h1;
       3'h3:
         begin
-          if (\$3 ) begin
+          if (\$6 ) begin
             timer_clear = 1'h1;
           end
           if (abort) begin
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             timer_clear = 1'h1;
           end
         end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -10356,7 +10756,7 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
             end
           end
       3'h5:
-          if (\$12 ) begin
+          if (\$15 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -10364,7 +10764,7 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
@@ -10418,10 +10818,10 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
       3'h3:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\$7 ) begin
+          end else if (\$10 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -10429,8 +10829,8 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
             if (end_check) begin
               fault = 1'h1;
             end
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -10442,7 +10842,7 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
@@ -10469,19 +10869,19 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             fault_status = 4'hc;
           end else if (frame_done) begin
-          end else if (\$7 ) begin
-            fault_status = \status$81 ;
+          end else if (\$10 ) begin
+            fault_status = \status$82 ;
           end
       3'h4:
           if (abort) begin
             if (end_check) begin
               fault_status = 4'ha;
             end
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -10493,7 +10893,7 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
           end
@@ -10510,9 +10910,9 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
       3'h2:
           /* empty */;
       3'h3:
-          ma_run = \$2 ;
+          ma_run = \$5 ;
       3'h4:
-          ma_run = \$9 ;
+          ma_run = \$12 ;
     endcase
   end
   always @* begin
@@ -10558,387 +10958,6 @@ module \biss_master_wb.ch0.core.controller (rst, frame_done, cdm, request, resta
       3'h4:
           framing = 1'h1;
     endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    report_frame = 1'h0;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$5 ) begin
-          end else if (frame_done) begin
-            if (\$8 ) begin
-              report_frame = 1'h1;
-            end
-          end
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-          end else if (\$15 ) begin
-            report_frame = 1'h1;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    delay = 1'h0;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$5 ) begin
-          end else if (frame_done) begin
-          end else if (\$7 ) begin
-            delay = \delay$80 ;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    holding = 1'h0;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          /* empty */;
-      3'h4:
-          /* empty */;
-      3'h5:
-          holding = 1'h1;
-      3'h6:
-          holding = 1'h1;
-      3'h7:
-          holding = 1'h1;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    \$37  = idle;
-    if (rst) begin
-      \$37  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    \$38  = cycle_fsm_state;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$38  = 3'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (request) begin
-            \$38  = 3'h2;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$38  = 3'h1;
-            if (abort) begin
-              \$38  = 3'h0;
-            end
-          end else if (aborted) begin
-            \$38  = 3'h0;
-          end else if (ready) begin
-            \$38  = 3'h3;
-          end else if (stuck_low) begin
-            \$38  = 3'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (\$26 ) begin
-            \$38  = 3'h0;
-          end else if (frame_done) begin
-            \$38  = 3'h4;
-          end else if (\$28 ) begin
-            \$38  = 3'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$38  = 3'h0;
-            end else begin
-              \$38  = 3'h0;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$38  = 3'h5;
-              end else begin
-                \$38  = 3'h6;
-              end
-            end else if (stop_bit) begin
-              \$38  = 3'h0;
-            end else begin
-              \$38  = 3'h7;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$38  = 3'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$38  = 3'h0;
-          end else if (\$33 ) begin
-            \$38  = 3'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$38  = 3'h5;
-            end else if (cdm_cycle) begin
-              \$38  = 3'h6;
-            end else begin
-              \$38  = 3'h1;
-            end
-          end else if (slo_stuck) begin
-            \$38  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$38  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    \$39  = idle;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$39  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (request) begin
-            \$39  = 1'h0;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$39  = 1'h1;
-            if (abort) begin
-              \$39  = 1'h0;
-            end
-          end else if (aborted) begin
-            \$39  = 1'h0;
-          end else if (ready) begin
-            \$39  = 1'h0;
-          end else if (stuck_low) begin
-            \$39  = 1'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (\$26 ) begin
-            \$39  = 1'h0;
-          end else if (frame_done) begin
-            \$39  = 1'h0;
-          end else if (\$28 ) begin
-            \$39  = 1'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h0;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$39  = 1'h0;
-              end else begin
-                \$39  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$39  = 1'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$39  = 1'h0;
-          end else if (\$33 ) begin
-            \$39  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$39  = 1'h0;
-            end else if (cdm_cycle) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$39  = 1'h0;
-          end
-    endcase
-    if (rst) begin
-      \$39  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    \$40  = receiver_clear;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$40  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (request) begin
-            \$40  = 1'h1;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$40  = 1'h1;
-            if (abort) begin
-              \$40  = 1'h1;
-            end
-          end else if (aborted) begin
-            \$40  = 1'h1;
-          end else if (ready) begin
-            \$40  = 1'h0;
-          end else if (stuck_low) begin
-            \$40  = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (\$26 ) begin
-            \$40  = 1'h1;
-          end else if (frame_done) begin
-            \$40  = 1'h0;
-          end else if (\$28 ) begin
-            \$40  = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$40  = 1'h1;
-            end else begin
-              \$40  = 1'h1;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$40  = 1'h1;
-              end else begin
-                \$40  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$40  = 1'h1;
-            end else begin
-              \$40  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$40  = 1'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$40  = 1'h1;
-          end else if (\$33 ) begin
-            \$40  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$40  = 1'h1;
-            end else if (cdm_cycle) begin
-              \$40  = 1'h0;
-            end else begin
-              \$40  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$40  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$40  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
-    \$41  = pause;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$26 ) begin
-          end else if (frame_done) begin
-            \$41  = frame_doubtful;
-          end
-    endcase
-    if (rst) begin
-      \$41  = 1'h0;
-    end
   end
   assign \first_clock$1  = first_clock;
   assign \config_ok$3  = config_ok;
@@ -12824,7 +12843,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6323$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6337$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire [6:0] \$1 ;
@@ -13527,8 +13546,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6323$272 ;
-  wire [2:0] \port$6323$272 ;
+  input [2:0] \port$6337$272 ;
+  wire [2:0] \port$6337$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -13595,8 +13614,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$367  = ssi & \port$6323$272 [0];
-  assign \$368  = ~ \port$6323$272 [1];
+  assign \$367  = ssi & \port$6337$272 [0];
+  assign \$368  = ~ \port$6337$272 [1];
   assign \$369  = \$367  & \$368 ;
   assign \$370  = \bit  ^ \$369 ;
   assign \$371  = ~ words[6];
@@ -13917,18 +13936,18 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$6323$272 [0];
+  assign \$3  = ssi & \port$6337$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$6323$272 [0];
+  assign \$6  = ssi & \port$6337$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$6323$272 [0];
+  assign \$9  = ssi & \port$6337$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$6323$272 [0];
+  assign \$14  = ssi & \port$6337$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$6323$272 [0];
+  assign \$18  = ssi & \port$6337$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -13973,7 +13992,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   assign \$66  = idx == \$65 ;
   assign \$67  = word_count - 1'h1;
   assign \$68  = word == \$67 ;
-  assign \$69  = ssi & \port$6323$272 [2];
+  assign \$69  = ssi & \port$6337$272 [2];
   assign \$70  = word + 1'h1;
   assign \$71  = idx + 1'h1;
   assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -14264,7 +14283,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   assign \$357  = \$354  & \$356 ;
   assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
   assign \$359  = ~ words[6];
-  assign \$360  = ssi & \port$6323$272 [0];
+  assign \$360  = ssi & \port$6337$272 [0];
   assign \$361  = ~ \$360 ;
   assign \$362  = \$359  & \$361 ;
   assign \$363  = ! word;
@@ -15026,9 +15045,9 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$6323$272 [0];
-  assign ssi_double = \port$6323$272 [2];
-  assign ssi_error_low = \port$6323$272 [1];
+  assign ssi_error = \port$6337$272 [0];
+  assign ssi_double = \port$6337$272 [2];
+  assign ssi_error_low = \port$6337$272 [1];
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$53  = crcs;
   assign \bit$58  = \bit ;
@@ -18537,7 +18556,7 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6323$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6337$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -18671,8 +18690,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6323$259 ;
-  wire [12:0] \port$6323$259 ;
+  input [12:0] \port$6337$259 ;
+  wire [12:0] \port$6337$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -18697,7 +18716,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6323$259 [12:1] + 1'h1;
+  assign \$11  = \port$6337$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -18822,7 +18841,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6323$259 [0]),
+    .clear_high(\port$6337$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -18965,7 +18984,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6323$259 [0]) begin
+            if (\port$6337$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -19050,7 +19069,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6323$259 [0]) begin
+            if (\port$6337$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -19089,7 +19108,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6323$259 [12:1] };
+            \$85  = { 1'h0, \port$6337$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -19474,11 +19493,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6323$259 [12:1] };
-  assign fixed = \port$6323$259 [0];
+  assign fixed_delay = { 1'h0, \port$6337$259 [12:1] };
+  assign fixed = \port$6337$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6323$259 [0];
+  assign clear_high = \port$6337$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -19885,7 +19904,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6311$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6325$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -19927,8 +19946,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6311$0 ;
-  wire \port$6311$0 ;
+  input \port$6325$0 ;
+  wire \port$6325$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -19942,9 +19961,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6311$0  };
-  assign \$2  = { lc[4:0], \port$6311$0  } == last;
-  assign \$3  = { lc[4:0], \port$6311$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6325$0  };
+  assign \$2  = { lc[4:0], \port$6325$0  } == last;
+  assign \$3  = { lc[4:0], \port$6325$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -20054,7 +20073,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6311$0  };
+  assign lc_next = { lc[4:0], \port$6325$0  };
   assign zero = is_zero;
 endmodule
 
@@ -20334,8 +20353,8 @@ module \biss_master_wb.ch0.core.time_base (rst, first_rise, first_rise_time, clk
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
-, delay, slo, clk);
+module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired
+, delay_over, delay, slo, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20379,19 +20398,21 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
   wire \$45 ;
   wire \$46 ;
   wire \$47 ;
-  reg [24:0] \$48 ;
-  reg \$49 ;
+  wire \$48 ;
+  reg [24:0] \$49 ;
   wire \$5 ;
   reg \$50 ;
-  reg [12:0] \$51 ;
-  reg \$52 ;
+  reg \$51 ;
+  reg [12:0] \$52 ;
   reg \$53 ;
-  reg [24:0] \$54 ;
-  reg \$55 ;
+  reg \$54 ;
+  reg [24:0] \$55 ;
   reg \$56 ;
   reg \$57 ;
   reg \$58 ;
+  reg \$59 ;
   wire \$6 ;
+  reg \$60 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
@@ -20445,35 +20466,42 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
   wire [23:0] timeout_limit;
   input [23:0] timeout_live;
   wire [23:0] timeout_live;
+  output timeout_over;
+  reg timeout_over = 1'h0;
   reg [24:0] timer = 25'h0000001;
-  assign \$42  = \$40  & \$41 ;
-  assign \$43  = ~ restart;
-  assign \$44  = in_clock & \$43 ;
-  assign \$45  = timer >= no_start_limit;
-  assign \$46  = \$44  & \$45 ;
-  assign \$47  = delay > delay_limit;
+  assign \$40  = ~ restart;
+  assign \$41  = in_clock & \$40 ;
+  assign \$42  = timer >= ack_limit;
+  assign \$43  = \$41  & \$42 ;
+  assign \$44  = ~ restart;
+  assign \$45  = in_clock & \$44 ;
+  assign \$46  = timer >= no_start_limit;
+  assign \$47  = \$45  & \$46 ;
+  assign \$48  = delay > delay_limit;
   always @(posedge clk)
-    slo_low_time_p1 <= \$48 ;
+    slo_low_time_p1 <= \$49 ;
   always @(posedge clk)
-    slo_stuck <= \$49 ;
+    slo_stuck <= \$50 ;
   always @(posedge clk)
-    slo_stuck_live <= \$50 ;
+    slo_stuck_live <= \$51 ;
   always @(posedge clk)
-    high_p2 <= \$51 ;
+    high_p2 <= \$52 ;
   always @(posedge clk)
-    quiet <= \$52 ;
+    quiet <= \$53 ;
   always @(posedge clk)
-    quiet_live <= \$53 ;
+    quiet_live <= \$54 ;
   always @(posedge clk)
-    timer <= \$54 ;
+    timer <= \$55 ;
   always @(posedge clk)
-    break_over <= \$55 ;
+    break_over <= \$56 ;
   always @(posedge clk)
-    ack_expired <= \$56 ;
+    timeout_over <= \$57 ;
   always @(posedge clk)
-    no_start_expired <= \$57 ;
+    ack_expired <= \$58 ;
   always @(posedge clk)
-    delay_over <= \$58 ;
+    no_start_expired <= \$59 ;
+  always @(posedge clk)
+    delay_over <= \$60 ;
   assign \$1  = slo & quiet;
   assign \$2  = \$1  | ma_busy;
   assign \$3  = ~ slo_low_time_p1[24];
@@ -20512,105 +20540,115 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
   assign \$36  = timer >= 12'hfa0;
   assign \$37  = timer >= break_time;
   assign \$38  = \$35  ? \$36  : \$37 ;
-  assign \$39  = ~ restart;
-  assign \$40  = in_clock & \$39 ;
-  assign \$41  = timer >= ack_limit;
+  assign \$39  = timer >= timeout_limit;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$48  = slo_low_time_p1;
+    \$49  = slo_low_time_p1;
     if (\$2 ) begin
-      \$48  = 25'h0000001;
+      \$49  = 25'h0000001;
     end else if (\$3 ) begin
-      \$48  = \$4 [24:0];
+      \$49  = \$4 [24:0];
     end
     if (rst) begin
-      \$48  = 25'h0000001;
+      \$49  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$49  = \$9 ;
-    if (rst) begin
-      \$49  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$50  = \$17 ;
+    \$50  = \$9 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$51  = high_p2;
+    \$51  = \$17 ;
+    if (rst) begin
+      \$51  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    \$52  = high_p2;
     if (\$18 ) begin
-      \$51  = 13'h0002;
+      \$52  = 13'h0002;
     end else if (\$19 ) begin
-      \$51  = \$20 [12:0];
+      \$52  = \$20 [12:0];
     end
     if (rst) begin
-      \$51  = 13'h0002;
+      \$52  = 13'h0002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$52  = \$23 ;
-    if (rst) begin
-      \$52  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$53  = \$30 ;
+    \$53  = \$23 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$54  = \$34 [24:0];
+    \$54  = \$30 ;
     if (rst) begin
-      \$54  = 25'h0000001;
+      \$54  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    \$55  = \$34 [24:0];
+    if (rst) begin
+      \$55  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
-      \$55  = 1'h0;
+      \$56  = 1'h0;
     end else begin
-      \$55  = \$38 ;
+      \$56  = \$38 ;
     end
-    if (rst) begin
-      \$55  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$57  = \$46 ;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$57  = 1'h0;
+    end else begin
+      \$57  = \$39 ;
+    end
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
-    \$58  = \$47 ;
+    \$58  = \$43 ;
     if (rst) begin
       \$58  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    \$59  = \$47 ;
+    if (rst) begin
+      \$59  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    \$60  = \$48 ;
+    if (rst) begin
+      \$60  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2502$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2509$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
@@ -20782,8 +20820,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2502$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$2502$0 ;
-  wire \port$2502$0 ;
+  output \port$2509$0 ;
+  wire \port$2509$0 ;
   output report;
   wire report;
   input report_frame;
@@ -20901,7 +20939,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2502$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2502$0  = \$2 ;
+  assign \port$2509$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -20952,7 +20990,7 @@ endmodule
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7203$0 , \port$7216$0 , regs__ca_done, \port$7293$0 , ca_rbuf_addr);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7221$0 , \port$7234$0 , regs__ca_done, \port$7311$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -21134,12 +21172,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7203$0 ;
-  wire [186:0] \port$7203$0 ;
-  output [79:0] \port$7216$0 ;
-  wire [79:0] \port$7216$0 ;
-  output [9:0] \port$7293$0 ;
-  wire [9:0] \port$7293$0 ;
+  output [186:0] \port$7221$0 ;
+  wire [186:0] \port$7221$0 ;
+  output [79:0] \port$7234$0 ;
+  wire [79:0] \port$7234$0 ;
+  output [9:0] \port$7311$0 ;
+  wire [9:0] \port$7311$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -21333,8 +21371,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
     regs__done_count <= \$17 ;
   \biss_master_wb.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$262 (ca_abort),
-    .\busy$311 (regs__busy),
+    .\abort$264 (ca_abort),
+    .\busy$313 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -21383,13 +21421,13 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$287 (clear_counters),
+    .\clear$289 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$19 ),
-    .\done$314 (done),
+    .\done$316 (done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$45 (periodic),
@@ -21397,13 +21435,13 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$20 ),
-    .\result$319 (\$18 ),
+    .\result$321 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$260 (ca_start),
+    .\start$262 (ca_start),
     .trigger(trigger),
-    .\valid$316 (valid)
+    .\valid$318 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
@@ -21594,16 +21632,16 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$7203$0  = \$18 ;
-  assign \port$7216$0  = \$19 ;
-  assign \port$7293$0  = \$20 ;
+  assign \port$7221$0  = \$18 ;
+  assign \port$7234$0  = \$19 ;
+  assign \port$7311$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$311 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$287 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
+module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$313 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$289 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$260 , \abort$262 
-, abort, ma, \done$314 , \valid$316 , \result$319 , counts, ca_done, result, rbuf_addr);
+, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$262 , \abort$264 
+, abort, ma, \done$316 , \valid$318 , \result$321 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -21637,26 +21675,26 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$262 ;
-  wire \abort$262 ;
+  input \abort$264 ;
+  wire \abort$264 ;
   wire \abort$57 ;
   wire abort_cycle;
   wire ack_expired;
-  wire \ack_expired$90 ;
+  wire \ack_expired$92 ;
   wire [23:0] ack_limit;
-  wire [23:0] \ack_limit$111 ;
+  wire [23:0] \ack_limit$113 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$343 ;
+  wire \bit$345 ;
   wire [5:0] bits;
   wire break_over;
-  wire \break_over$88 ;
+  wire \break_over$90 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$271 ;
-  wire \busy$308 ;
-  output \busy$311 ;
-  wire \busy$311 ;
+  wire \busy$273 ;
+  wire \busy$310 ;
+  output \busy$313 ;
+  wire \busy$313 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -21691,10 +21729,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$275 ;
+  wire \cdm$277 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$322 ;
+  wire \cds$324 ;
   wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -21838,16 +21876,16 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   input cfg_w1_signed;
   wire cfg_w1_signed;
   wire check;
-  wire \check$170 ;
+  wire \check$172 ;
   reg clean = 1'h0;
   (* init = 1'h0 *)
-  wire \clean$175 ;
-  wire \clean$344 ;
+  wire \clean$177 ;
+  wire \clean$346 ;
   wire clear;
-  wire \clear$135 ;
-  input \clear$287 ;
-  wire \clear$287 ;
-  wire \clear$300 ;
+  wire \clear$137 ;
+  input \clear$289 ;
+  wire \clear$289 ;
+  wire \clear$302 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -21876,33 +21914,33 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire [15:0] \counts.ca_no_answer ;
   wire [15:0] \counts.ca_refused ;
   wire [39:0] cpw_top;
-  wire [39:0] \cpw_top$187 ;
+  wire [39:0] \cpw_top$189 ;
   wire [1:0] crc_error;
   wire [1:0] crc_ok;
-  wire [1:0] \crc_ok$212 ;
+  wire [1:0] \crc_ok$214 ;
   wire [75:0] crcs;
-  wire [75:0] \crcs$183 ;
-  wire [37:0] \crcs$183[0] ;
-  wire \crcs$183[0].inverted ;
-  wire [15:0] \crcs$183[0].poly ;
-  wire [15:0] \crcs$183[0].start ;
-  wire [4:0] \crcs$183[0].width ;
-  wire [37:0] \crcs$183[1] ;
-  wire \crcs$183[1].inverted ;
-  wire [15:0] \crcs$183[1].poly ;
-  wire [15:0] \crcs$183[1].start ;
-  wire [4:0] \crcs$183[1].width ;
-  wire [75:0] \crcs$184 ;
-  wire [37:0] \crcs$184[0] ;
-  wire \crcs$184[0].inverted ;
-  wire [15:0] \crcs$184[0].poly ;
-  wire [15:0] \crcs$184[0].start ;
-  wire [4:0] \crcs$184[0].width ;
-  wire [37:0] \crcs$184[1] ;
-  wire \crcs$184[1].inverted ;
-  wire [15:0] \crcs$184[1].poly ;
-  wire [15:0] \crcs$184[1].start ;
-  wire [4:0] \crcs$184[1].width ;
+  wire [75:0] \crcs$185 ;
+  wire [37:0] \crcs$185[0] ;
+  wire \crcs$185[0].inverted ;
+  wire [15:0] \crcs$185[0].poly ;
+  wire [15:0] \crcs$185[0].start ;
+  wire [4:0] \crcs$185[0].width ;
+  wire [37:0] \crcs$185[1] ;
+  wire \crcs$185[1].inverted ;
+  wire [15:0] \crcs$185[1].poly ;
+  wire [15:0] \crcs$185[1].start ;
+  wire [4:0] \crcs$185[1].width ;
+  wire [75:0] \crcs$186 ;
+  wire [37:0] \crcs$186[0] ;
+  wire \crcs$186[0].inverted ;
+  wire [15:0] \crcs$186[0].poly ;
+  wire [15:0] \crcs$186[0].start ;
+  wire [4:0] \crcs$186[0].width ;
+  wire [37:0] \crcs$186[1] ;
+  wire \crcs$186[1].inverted ;
+  wire [15:0] \crcs$186[1].poly ;
+  wire [15:0] \crcs$186[1].start ;
+  wire [4:0] \crcs$186[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -21974,21 +22012,21 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* init = 1'h0 *)
   wire decoder_sample;
   wire [12:0] delay;
-  wire [12:0] \delay$117 ;
-  wire [12:0] \delay$169 ;
+  wire [12:0] \delay$119 ;
+  wire [12:0] \delay$171 ;
   wire delay_jump;
   wire [11:0] delay_limit;
-  wire [11:0] \delay_limit$119 ;
+  wire [11:0] \delay_limit$121 ;
   wire delay_over;
-  wire \delay_over$98 ;
+  wire \delay_over$100 ;
   wire delay_settled;
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$273 ;
-  output \done$314 ;
-  wire \done$314 ;
-  wire \done$315 ;
+  wire \done$275 ;
+  output \done$316 ;
+  wire \done$316 ;
+  wire \done$317 ;
   wire doubtful;
   wire early;
   wire \early$73 ;
@@ -21997,31 +22035,31 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$286 ;
-  wire \events$286.ca_aborted ;
-  wire \events$286.ca_crc4_error ;
-  wire \events$286.ca_data_fault ;
-  wire \events$286.ca_no_answer ;
-  wire \events$286.ca_refused ;
-  wire [15:0] \events$295 ;
-  wire \events$295.aborted ;
-  wire \events$295.crc_word0 ;
-  wire \events$295.crc_word1 ;
-  wire \events$295.delay_jump ;
-  wire \events$295.delay_range ;
-  wire \events$295.lc_repeat ;
-  wire \events$295.lc_skip ;
-  wire \events$295.lc_zero ;
-  wire \events$295.no_ack ;
-  wire \events$295.no_start ;
-  wire \events$295.no_stop ;
-  wire \events$295.noise_event ;
-  wire \events$295.noisy_line ;
-  wire \events$295.overrun ;
-  wire \events$295.slo_stuck_low ;
-  wire \events$295.spw_mismatch ;
+  wire [4:0] \events$288 ;
+  wire \events$288.ca_aborted ;
+  wire \events$288.ca_crc4_error ;
+  wire \events$288.ca_data_fault ;
+  wire \events$288.ca_no_answer ;
+  wire \events$288.ca_refused ;
+  wire [15:0] \events$297 ;
+  wire \events$297.aborted ;
+  wire \events$297.crc_word0 ;
+  wire \events$297.crc_word1 ;
+  wire \events$297.delay_jump ;
+  wire \events$297.delay_range ;
+  wire \events$297.lc_repeat ;
+  wire \events$297.lc_skip ;
+  wire \events$297.lc_zero ;
+  wire \events$297.no_ack ;
+  wire \events$297.no_start ;
+  wire \events$297.no_stop ;
+  wire \events$297.noise_event ;
+  wire \events$297.noisy_line ;
+  wire \events$297.overrun ;
+  wire \events$297.slo_stuck_low ;
+  wire \events$297.spw_mismatch ;
   wire fault;
-  wire \fault$208 ;
+  wire \fault$210 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -22057,7 +22095,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \fault_status$210 ;
+  wire [3:0] \fault_status$212 ;
   wire [6:0] faults;
   wire \faults.aborted ;
   wire \faults.bad_config ;
@@ -22067,7 +22105,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire \faults.no_stop ;
   wire \faults.slo_stuck_low ;
   wire first_rise;
-  wire \first_rise$246 ;
+  wire \first_rise$248 ;
   wire [31:0] first_rise_time;
   wire fixed;
   wire [12:0] fixed_delay;
@@ -22121,34 +22159,34 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   output frames;
   wire frames;
   wire [15:0] half_period;
-  wire [15:0] \half_period$141 ;
+  wire [15:0] \half_period$143 ;
   wire held;
   wire hold;
   wire idle;
   wire \idle$41 ;
   wire \idle$50 ;
   wire in_clock;
-  wire \in_clock$105 ;
+  wire \in_clock$107 ;
   wire jump;
   wire [5:0] lc;
-  wire [5:0] \lc$147 ;
-  wire [5:0] \lc$335 ;
+  wire [5:0] \lc$149 ;
+  wire [5:0] \lc$337 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
-  wire [5:0] \lc_next$149 ;
+  wire [5:0] \lc_next$151 ;
   wire lc_repeat;
-  wire \lc_repeat$336 ;
+  wire \lc_repeat$338 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$337 ;
+  wire \lc_skip$339 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$338 ;
+  wire \lc_zero$340 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
-  wire \level$158 ;
+  wire \level$160 ;
   wire [3:0] limit;
   wire [12:0] line_delay;
   wire [274:0] live;
@@ -22210,10 +22248,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire \locked$71 ;
   output ma;
   wire ma;
-  wire \ma$310 ;
+  wire \ma$312 ;
   wire ma_arm;
   wire ma_busy;
-  wire \ma_busy$100 ;
+  wire \ma_busy$102 ;
   wire ma_enough;
   wire ma_held;
   wire ma_hold;
@@ -22222,17 +22260,17 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire mismatch;
   wire [1:0] ne;
   wire no_start_expired;
-  wire \no_start_expired$92 ;
+  wire \no_start_expired$94 ;
   wire [24:0] no_start_limit;
-  wire [24:0] \no_start_limit$115 ;
+  wire [24:0] \no_start_limit$117 ;
   wire noise;
   wire [3:0] noise_events;
   wire noisy;
-  wire \noisy$177 ;
+  wire \noisy$179 ;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$313 ;
+  wire \overrun$315 ;
   wire passed;
   wire pending;
   wire [23:0] period;
@@ -22240,10 +22278,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   input \periodic$45 ;
   wire \periodic$45 ;
   wire quiet;
-  wire \quiet$124 ;
+  wire \quiet$126 ;
   wire [11:0] quiet_limit;
   wire quiet_live;
-  wire \quiet_live$126 ;
+  wire \quiet_live$128 ;
   wire [11:0] quiet_time;
   wire [11:0] quiet_time_live;
   input [3:0] rbuf_addr;
@@ -22259,38 +22297,38 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire receiver_clear;
   wire \repeat ;
   wire report;
-  wire \report$222 ;
-  wire \report$226 ;
+  wire \report$224 ;
+  wire \report$228 ;
   wire report_delay;
-  wire \report_delay$229 ;
+  wire \report_delay$231 ;
   wire report_frame;
-  wire \report_frame$207 ;
-  wire \report_frame$227 ;
+  wire \report_frame$209 ;
+  wire \report_frame$229 ;
   wire request;
-  wire [17:0] \request$248 ;
-  wire [6:0] \request$248.address ;
-  wire [6:0] \request$248.count ;
-  wire [2:0] \request$248.slave_id ;
-  wire \request$248.write ;
+  wire [17:0] \request$250 ;
+  wire [6:0] \request$250.address ;
+  wire [6:0] \request$250.count ;
+  wire [2:0] \request$250.slave_id ;
+  wire \request$250.write ;
   wire \request$56 ;
   wire restart;
-  wire \restart$162 ;
+  wire \restart$164 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$319 ;
-  wire [186:0] \result$319 ;
-  wire \result$319.cds ;
-  wire \result$319.delay_settled ;
-  wire [7:0] \result$319.delay_spread ;
-  wire [5:0] \result$319.lc ;
-  wire \result$319.lc_repeat ;
-  wire \result$319.lc_skip ;
-  wire \result$319.lc_zero ;
-  wire [12:0] \result$319.line_delay ;
-  wire [3:0] \result$319.noise_events ;
-  wire [12:0] \result$319.settled_delay ;
-  wire \result$319.spw_mismatch ;
+  output [186:0] \result$321 ;
+  wire [186:0] \result$321 ;
+  wire \result$321.cds ;
+  wire \result$321.delay_settled ;
+  wire [7:0] \result$321.delay_spread ;
+  wire [5:0] \result$321.lc ;
+  wire \result$321.lc_repeat ;
+  wire \result$321.lc_skip ;
+  wire \result$321.lc_zero ;
+  wire [12:0] \result$321.line_delay ;
+  wire [3:0] \result$321.noise_events ;
+  wire [12:0] \result$321.settled_delay ;
+  wire \result$321.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -22308,18 +22346,18 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$319.status ;
-  wire [31:0] \result$319.timestamp ;
-  wire [57:0] \result$319.word0 ;
-  wire \result$319.word0.crc_ok ;
-  wire \result$319.word0.ne ;
-  wire \result$319.word0.nw ;
-  wire [54:0] \result$319.word0.position ;
-  wire [42:0] \result$319.word1 ;
-  wire \result$319.word1.crc_ok ;
-  wire \result$319.word1.ne ;
-  wire \result$319.word1.nw ;
-  wire [39:0] \result$319.word1.position ;
+  wire [3:0] \result$321.status ;
+  wire [31:0] \result$321.timestamp ;
+  wire [57:0] \result$321.word0 ;
+  wire \result$321.word0.crc_ok ;
+  wire \result$321.word0.ne ;
+  wire \result$321.word0.nw ;
+  wire [54:0] \result$321.word0.position ;
+  wire [42:0] \result$321.word1 ;
+  wire \result$321.word1.crc_ok ;
+  wire \result$321.word1.ne ;
+  wire \result$321.word1.nw ;
+  wire [39:0] \result$321.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -22331,55 +22369,55 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* enum_value_110 = "BAD_REQUEST" *)
   wire [2:0] \result.status ;
   wire resync;
-  wire \resync$155 ;
+  wire \resync$157 ;
   wire [15:0] rises;
-  wire [15:0] \rises$134 ;
+  wire [15:0] \rises$136 ;
   input rst;
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$342 ;
+  wire \sample$344 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$325 ;
+  wire [12:0] \settled_delay$327 ;
   wire skip;
   input slo;
   wire slo;
+  wire \slo$101 ;
   wire \slo$52 ;
   wire \slo$62 ;
-  wire \slo$99 ;
   wire slo_stuck;
-  wire \slo_stuck$94 ;
+  wire \slo_stuck$96 ;
   wire slo_stuck_live;
-  wire \slo_stuck_live$96 ;
+  wire \slo_stuck_live$98 ;
   wire slots_full;
-  wire \slots_full$81 ;
+  wire \slots_full$83 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$339 ;
+  wire \spw_mismatch$341 ;
   wire ssi;
-  wire \ssi$196 ;
-  wire \ssi$200 ;
+  wire \ssi$198 ;
+  wire \ssi$202 ;
   wire ssi_double;
-  wire \ssi_double$201 ;
+  wire \ssi_double$203 ;
   wire ssi_error;
-  wire \ssi_error$202 ;
+  wire \ssi_error$204 ;
   wire ssi_error_low;
   input start;
   wire start;
-  input \start$260 ;
-  wire \start$260 ;
+  input \start$262 ;
+  wire \start$262 ;
   wire \start$43 ;
   wire [15:0] start_slot;
-  wire [15:0] \start_slot$132 ;
+  wire [15:0] \start_slot$134 ;
   wire started;
-  wire \started$130 ;
-  wire \started$79 ;
+  wire \started$132 ;
+  wire \started$81 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -22416,7 +22454,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$224 ;
+  wire [3:0] \status$226 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -22434,26 +22472,28 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$318 ;
+  wire [3:0] \status$320 ;
   wire stop_bit;
-  wire \stop_bit$84 ;
+  wire \stop_bit$86 ;
   wire stopped;
-  wire \stopped$82 ;
+  wire \stopped$84 ;
   wire [23:0] timeout_limit;
-  wire [23:0] \timeout_limit$113 ;
+  wire [23:0] \timeout_limit$115 ;
   wire [23:0] timeout_live;
+  wire timeout_over;
+  wire \timeout_over$79 ;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
-  wire [7:0] \tolerance$191 ;
+  wire [7:0] \tolerance$193 ;
   input trigger;
   wire trigger;
   wire \trigger$54 ;
   wire unconfirmed;
   wire valid;
-  wire \valid$231 ;
-  output \valid$316 ;
-  wire \valid$316 ;
+  wire \valid$233 ;
+  output \valid$318 ;
+  wire \valid$318 ;
   wire valid_out;
   wire w1_enable;
   wire waiting;
@@ -22471,34 +22511,34 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire word1_nw;
   wire [39:0] word1_position;
   wire [1:0] word_count;
-  wire [1:0] \word_count$145 ;
+  wire [1:0] \word_count$147 ;
   wire [1:0] word_crc_ok;
   wire [23:0] words;
-  wire [23:0] \words$181 ;
-  wire [11:0] \words$181[0] ;
+  wire [23:0] \words$183 ;
+  wire [11:0] \words$183[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$181[0].crc ;
-  wire [5:0] \words$181[0].data_bits ;
-  wire \words$181[0].gray ;
-  wire \words$181[0].lc ;
-  wire \words$181[0].nenw ;
-  wire \words$181[0].signed ;
-  wire [11:0] \words$181[1] ;
+  wire [1:0] \words$183[0].crc ;
+  wire [5:0] \words$183[0].data_bits ;
+  wire \words$183[0].gray ;
+  wire \words$183[0].lc ;
+  wire \words$183[0].nenw ;
+  wire \words$183[0].signed ;
+  wire [11:0] \words$183[1] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
   (* enum_value_01 = "CRC6" *)
   (* enum_value_10 = "CRC16" *)
   (* enum_value_11 = "CUSTOM" *)
-  wire [1:0] \words$181[1].crc ;
-  wire [5:0] \words$181[1].data_bits ;
-  wire \words$181[1].gray ;
-  wire \words$181[1].lc ;
-  wire \words$181[1].nenw ;
-  wire \words$181[1].signed ;
+  wire [1:0] \words$183[1].crc ;
+  wire [5:0] \words$183[1].data_bits ;
+  wire \words$183[1].gray ;
+  wire \words$183[1].lc ;
+  wire \words$183[1].nenw ;
+  wire \words$183[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -22532,9 +22572,9 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign enable = \$1  & \$2 ;
   assign rearm = cfg_delay_tolerance == 4'hf;
   assign \$3  = ~ started_before;
-  assign \check$170  = started & \$3 ;
+  assign \check$172  = started & \$3 ;
   assign \$4  = ~ cycle[259];
-  assign cdm = \cdm$275  & \$4 ;
+  assign cdm = \cdm$277  & \$4 ;
   assign \$5  = ~ cycle[259];
   assign frame_ok = passed & \$5 ;
   assign \$6  = result[2:0] == 1'h1;
@@ -22552,10 +22592,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \$18  = report_frame & \$17 ;
   assign \$19  = status == 4'he;
   assign \$20  = report_frame & \$19 ;
-  assign \busy$311  = ~ idle;
+  assign \busy$313  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$21  = ~ \clear$135 ;
-  assign \$22  = \sample$342  & \$21 ;
+  assign \$21  = ~ \clear$137 ;
+  assign \$22  = \sample$344  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -22601,7 +22641,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .delay_over(delay_over),
     .early(early),
     .end_check(cycle[124]),
-    .fault(\restart$162 ),
+    .fault(\restart$164 ),
     .fault_status(fault_status),
     .faults(faults),
     .frame_done(frame_done),
@@ -22618,7 +22658,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .no_start_expired(no_start_expired),
     .quiet(quiet),
     .quiet_live(quiet_live),
-    .receiver_clear(\clear$135 ),
+    .receiver_clear(\clear$137 ),
     .report_delay(report_delay),
     .report_frame(report_frame),
     .request(request),
@@ -22633,24 +22673,25 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .started(started),
     .stop_bit(stop_bit),
     .stopped(stopped),
+    .timeout_over(timeout_over),
     .timer_clear(clear),
     .waiting(watch)
   );
   \biss_master_wb.ch1.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$287 ),
+    .clear(\clear$289 ),
     .clk(clk),
-    .events(\events$295 ),
+    .events(\events$297 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_wb.ch1.core.counters  counters (
-    .clear(\clear$287 ),
+    .clear(\clear$289 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$286 ),
+    .events(\events$288 ),
     .rst(rst)
   );
   \biss_master_wb.ch1.core.decoder  decoder (
@@ -22668,8 +22709,8 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6857$272 (cycle[274:272]),
-    .receiver_clear(\clear$135 ),
+    .\port$6873$272 (cycle[274:272]),
+    .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
     .slots_full(slots_full),
@@ -22682,7 +22723,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .words(words)
   );
   \biss_master_wb.ch1.core.delay_check  delay_check (
-    .check(\check$170 ),
+    .check(\check$172 ),
     .clean(clean),
     .clk(clk),
     .delay(delay),
@@ -22704,7 +22745,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .limit(cycle[140:137]),
     .noisy(noisy),
-    .restart(\restart$162 ),
+    .restart(\restart$164 ),
     .rst(rst),
     .sampler_noise(sampler_noise),
     .watch(watch)
@@ -22712,7 +22753,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   \biss_master_wb.ch1.core.ma_clock  ma_clock (
     .busy(ma_busy),
     .clk(clk),
-    .\clocking (\ma_busy$100 ),
+    .\clocking (\ma_busy$102 ),
     .first_rise(first_rise),
     .half_period(cycle[15:0]),
     .held(ma_held),
@@ -22724,7 +22765,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .second_rise(ma_arm)
   );
   \biss_master_wb.ch1.core.ma_stop  ma_stop (
-    .clear(\clear$135 ),
+    .clear(\clear$137 ),
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
@@ -22736,12 +22777,12 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .start_slot(start_slot),
     .\started$15 (started),
     .w1_enable(cycle[199]),
-    .words(\words$181 )
+    .words(\words$183 )
   );
   \biss_master_wb.ch1.core.register_access  register_access (
-    .abort(\abort$262 ),
+    .abort(\abort$264 ),
     .busy(frames),
-    .cdm(\cdm$275 ),
+    .cdm(\cdm$277 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -22751,27 +22792,27 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$248 ),
+    .request(\request$250 ),
     .result(result),
     .rst(rst),
-    .start(\start$260 ),
+    .start(\start$262 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch1.core.results  results (
     .clk(clk),
-    .done(\done$314 ),
+    .done(\done$316 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$319 ),
+    .result(\result$321 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$316 )
+    .valid_out(\valid$318 )
   );
   \biss_master_wb.ch1.core.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$343 ),
+    .\bit (\bit$345 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -22779,10 +22820,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6857$259 (cycle[271:259]),
-    .receiver_clear(\clear$135 ),
+    .\port$6873$259 (cycle[271:259]),
+    .receiver_clear(\clear$137 ),
     .rst(rst),
-    .sample(\sample$342 ),
+    .sample(\sample$344 ),
     .slo(slo)
   );
   \biss_master_wb.ch1.core.scheduler  scheduler (
@@ -22803,7 +22844,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6845$0 (\bit ),
+    .\port$6861$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -22835,7 +22876,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .delay_limit(delay_limit),
     .delay_over(delay_over),
     .in_clock(in_clock),
-    .ma_busy(\ma_busy$100 ),
+    .ma_busy(\ma_busy$102 ),
     .no_start_expired(no_start_expired),
     .no_start_limit(no_start_limit),
     .quiet(quiet),
@@ -22848,17 +22889,18 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .slo_stuck(slo_stuck),
     .slo_stuck_live(slo_stuck_live),
     .timeout_limit(timeout_limit),
-    .timeout_live(cfg_timeout_limit)
+    .timeout_live(cfg_timeout_limit),
+    .timeout_over(timeout_over)
   );
   \biss_master_wb.ch1.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$344 ),
+    .clean(\clean$346 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
     .delay_jump(delay_jump),
     .doubtful(frame_doubtful),
-    .fault(\restart$162 ),
+    .fault(\restart$164 ),
     .fault_status(fault_status),
     .lc_check(check),
     .lc_repeat(lc_repeat),
@@ -22869,7 +22911,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$4926$0 (\$28 ),
+    .\port$4940$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -22887,7 +22929,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
-    \$24  = \bit$343 ;
+    \$24  = \bit$345 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -22908,7 +22950,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
-    \$27  = \clean$344 ;
+    \$27  = \clean$346 ;
     if (rst) begin
       \$27  = 1'h0;
     end
@@ -22931,149 +22973,150 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \locked$71  = locked;
   assign \early$73  = early;
   assign ssi = cycle[259];
-  assign \started$79  = started;
-  assign \slots_full$81  = slots_full;
-  assign \stopped$82  = stopped;
-  assign \stop_bit$84  = stop_bit;
+  assign \timeout_over$79  = timeout_over;
+  assign \started$81  = started;
+  assign \slots_full$83  = slots_full;
+  assign \stopped$84  = stopped;
+  assign \stop_bit$86  = stop_bit;
   assign doubtful = frame_doubtful;
-  assign \break_over$88  = break_over;
-  assign \ack_expired$90  = ack_expired;
-  assign \no_start_expired$92  = no_start_expired;
-  assign \slo_stuck$94  = slo_stuck;
-  assign \slo_stuck_live$96  = slo_stuck_live;
-  assign \delay_over$98  = delay_over;
-  assign \slo$99  = \slo$62 ;
-  assign \clocking  = \ma_busy$100 ;
+  assign \break_over$90  = break_over;
+  assign \ack_expired$92  = ack_expired;
+  assign \no_start_expired$94  = no_start_expired;
+  assign \slo_stuck$96  = slo_stuck;
+  assign \slo_stuck_live$98  = slo_stuck_live;
+  assign \delay_over$100  = delay_over;
+  assign \slo$101  = \slo$62 ;
+  assign \clocking  = \ma_busy$102 ;
   assign timer_clear = clear;
-  assign \in_clock$105  = in_clock;
+  assign \in_clock$107  = in_clock;
   assign restart_timer = restart;
   assign break_time = cfg_break_time;
   assign timeout_live = cfg_timeout_limit;
-  assign \ack_limit$111  = ack_limit;
-  assign \timeout_limit$113  = timeout_limit;
-  assign \no_start_limit$115  = no_start_limit;
-  assign \delay$117  = delay;
-  assign \delay_limit$119  = delay_limit;
+  assign \ack_limit$113  = ack_limit;
+  assign \timeout_limit$115  = timeout_limit;
+  assign \no_start_limit$117  = no_start_limit;
+  assign \delay$119  = delay;
+  assign \delay_limit$121  = delay_limit;
   assign quiet_time_live = cfg_quiet_time;
   assign quiet_time = quiet_limit;
-  assign \quiet$124  = quiet;
-  assign \quiet_live$126  = quiet_live;
+  assign \quiet$126  = quiet;
+  assign \quiet_live$128  = quiet_live;
   assign ma_run = run;
   assign half_period = cycle[15:0];
-  assign \started$130  = started;
-  assign \start_slot$132  = start_slot;
-  assign \rises$134  = rises;
-  assign receiver_clear = \clear$135 ;
+  assign \started$132  = started;
+  assign \start_slot$134  = start_slot;
+  assign \rises$136  = rises;
+  assign receiver_clear = \clear$137 ;
   assign decoder_sample = sample;
   assign decoder_bit = \bit ;
-  assign \half_period$141  = cycle[15:0];
-  assign \word_count$145  = word_count;
-  assign \lc$147  = lc;
+  assign \half_period$143  = cycle[15:0];
+  assign \word_count$147  = word_count;
+  assign \lc$149  = lc;
   assign lc_next = { lc[4:0], \bit  };
-  assign \lc_next$149  = { lc[4:0], \bit  };
+  assign \lc_next$151  = { lc[4:0], \bit  };
   assign lc_load = load;
   assign lc_check = check;
-  assign \resync$155  = resync;
+  assign \resync$157  = resync;
   assign waiting = watch;
-  assign \level$158  = \slo$62 ;
+  assign \level$160  = \slo$62 ;
   assign noise = sampler_noise;
   assign close = done;
-  assign fault = \restart$162 ;
+  assign fault = \restart$164 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
-  assign \delay$169  = delay;
+  assign \delay$171  = delay;
   assign \$signal  = learn;
-  assign \clean$175  = clean;
-  assign \noisy$177  = noisy;
+  assign \clean$177  = clean;
+  assign \noisy$179  = noisy;
   assign jump = delay_jump;
-  assign \crcs$183  = crcs;
-  assign \crcs$184  = crcs;
+  assign \crcs$185  = crcs;
+  assign \crcs$186  = crcs;
   assign w1_enable = cycle[199];
-  assign \cpw_top$187  = cpw_top;
+  assign \cpw_top$189  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[205:200];
-  assign \tolerance$191  = cycle[258:251];
+  assign \tolerance$193  = cycle[258:251];
   assign match = spw_match;
   assign fixed = cycle[259];
   assign fixed_delay = { 1'h0, cycle[271:260] };
-  assign \ssi$196  = cycle[259];
+  assign \ssi$198  = cycle[259];
   assign ssi_error = cycle[272];
   assign ssi_error_low = cycle[273];
   assign ssi_double = cycle[274];
-  assign \ssi$200  = cycle[259];
-  assign \ssi_double$201  = cycle[274];
-  assign \ssi_error$202  = cycle[272];
+  assign \ssi$202  = cycle[259];
+  assign \ssi_double$203  = cycle[274];
+  assign \ssi_error$204  = cycle[272];
   assign mismatch = copy_mismatch;
   assign cfg = cycle;
-  assign \report_frame$207  = report_frame;
-  assign \fault$208  = \restart$162 ;
-  assign \fault_status$210  = fault_status;
-  assign \crc_ok$212  = crc_ok;
+  assign \report_frame$209  = report_frame;
+  assign \fault$210  = \restart$164 ;
+  assign \fault_status$212  = fault_status;
+  assign \crc_ok$214  = crc_ok;
   assign \repeat  = lc_repeat_seen;
   assign skip = lc_skip_seen;
   assign zero = lc_zero_seen;
   assign pending = unconfirmed;
-  assign \report$222  = report;
-  assign \status$224  = status;
+  assign \report$224  = report;
+  assign \status$226  = status;
   assign setting = cycle[148:145];
-  assign \report$226  = report;
-  assign \report_frame$227  = report_frame;
-  assign \report_delay$229  = report_delay;
-  assign \valid$231  = valid;
+  assign \report$228  = report;
+  assign \report_frame$229  = report_frame;
+  assign \report_delay$231  = report_delay;
+  assign \valid$233  = valid;
   assign word_crc_ok = { \$28 , crc_ok[0] };
-  assign \first_rise$246  = first_rise;
+  assign \first_rise$248  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$260 ;
-  assign ca_abort = \abort$262 ;
+  assign ca_start = \start$262 ;
+  assign ca_abort = \abort$264 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$271  = frames;
-  assign \done$273  = ca_done;
+  assign \busy$273  = frames;
+  assign \done$275  = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
   assign frame_end = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$287 ;
+  assign clear_counters = \clear$289 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$300  = \clear$287 ;
+  assign \clear$302  = \clear$289 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$308  = count_busy;
-  assign \ma$310  = ma;
-  assign \overrun$313  = overrun;
-  assign \done$315  = \done$314 ;
-  assign valid_out = \valid$316 ;
-  assign \status$318  = \result$319 [3:0];
-  assign timestamp = \result$319 [35:4];
-  assign line_delay = \result$319 [48:36];
-  assign \cds$322  = \result$319 [49];
-  assign noise_events = \result$319 [53:50];
-  assign delay_settled = \result$319 [54];
-  assign \settled_delay$325  = \result$319 [67:55];
-  assign delay_spread = \result$319 [75:68];
-  assign word0_position = \result$319 [130:76];
-  assign word0_ne = \result$319 [131];
-  assign word0_nw = \result$319 [132];
-  assign word0_crc_ok = \result$319 [133];
-  assign word1_position = \result$319 [173:134];
-  assign word1_ne = \result$319 [174];
-  assign word1_nw = \result$319 [175];
-  assign word1_crc_ok = \result$319 [176];
-  assign \lc$335  = \result$319 [182:177];
-  assign \lc_repeat$336  = \result$319 [183];
-  assign \lc_skip$337  = \result$319 [184];
-  assign \lc_zero$338  = \result$319 [185];
-  assign \spw_mismatch$339  = \result$319 [186];
+  assign \busy$310  = count_busy;
+  assign \ma$312  = ma;
+  assign \overrun$315  = overrun;
+  assign \done$317  = \done$316 ;
+  assign valid_out = \valid$318 ;
+  assign \status$320  = \result$321 [3:0];
+  assign timestamp = \result$321 [35:4];
+  assign line_delay = \result$321 [48:36];
+  assign \cds$324  = \result$321 [49];
+  assign noise_events = \result$321 [53:50];
+  assign delay_settled = \result$321 [54];
+  assign \settled_delay$327  = \result$321 [67:55];
+  assign delay_spread = \result$321 [75:68];
+  assign word0_position = \result$321 [130:76];
+  assign word0_ne = \result$321 [131];
+  assign word0_nw = \result$321 [132];
+  assign word0_crc_ok = \result$321 [133];
+  assign word1_position = \result$321 [173:134];
+  assign word1_ne = \result$321 [174];
+  assign word1_nw = \result$321 [175];
+  assign word1_crc_ok = \result$321 [176];
+  assign \lc$337  = \result$321 [182:177];
+  assign \lc_repeat$338  = \result$321 [183];
+  assign \lc_skip$339  = \result$321 [184];
+  assign \lc_zero$340  = \result$321 [185];
+  assign \spw_mismatch$341  = \result$321 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -23174,20 +23217,20 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
-  assign \words$181[0]  = \words$181 [11:0];
-  assign \words$181[0].data_bits  = \words$181 [5:0];
-  assign \words$181[0].nenw  = \words$181 [6];
-  assign \words$181[0].lc  = \words$181 [7];
-  assign \words$181[0].crc  = \words$181 [9:8];
-  assign \words$181[0].gray  = \words$181 [10];
-  assign \words$181[0].signed  = \words$181 [11];
-  assign \words$181[1]  = \words$181 [23:12];
-  assign \words$181[1].data_bits  = \words$181 [17:12];
-  assign \words$181[1].nenw  = \words$181 [18];
-  assign \words$181[1].lc  = \words$181 [19];
-  assign \words$181[1].crc  = \words$181 [21:20];
-  assign \words$181[1].gray  = \words$181 [22];
-  assign \words$181[1].signed  = \words$181 [23];
+  assign \words$183[0]  = \words$183 [11:0];
+  assign \words$183[0].data_bits  = \words$183 [5:0];
+  assign \words$183[0].nenw  = \words$183 [6];
+  assign \words$183[0].lc  = \words$183 [7];
+  assign \words$183[0].crc  = \words$183 [9:8];
+  assign \words$183[0].gray  = \words$183 [10];
+  assign \words$183[0].signed  = \words$183 [11];
+  assign \words$183[1]  = \words$183 [23:12];
+  assign \words$183[1].data_bits  = \words$183 [17:12];
+  assign \words$183[1].nenw  = \words$183 [18];
+  assign \words$183[1].lc  = \words$183 [19];
+  assign \words$183[1].crc  = \words$183 [21:20];
+  assign \words$183[1].gray  = \words$183 [22];
+  assign \words$183[1].signed  = \words$183 [23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -23198,26 +23241,26 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$183[0]  = crcs[37:0];
-  assign \crcs$183[0].width  = crcs[4:0];
-  assign \crcs$183[0].poly  = crcs[20:5];
-  assign \crcs$183[0].start  = crcs[36:21];
-  assign \crcs$183[0].inverted  = crcs[37];
-  assign \crcs$183[1]  = crcs[75:38];
-  assign \crcs$183[1].width  = crcs[42:38];
-  assign \crcs$183[1].poly  = crcs[58:43];
-  assign \crcs$183[1].start  = crcs[74:59];
-  assign \crcs$183[1].inverted  = crcs[75];
-  assign \crcs$184[0]  = crcs[37:0];
-  assign \crcs$184[0].width  = crcs[4:0];
-  assign \crcs$184[0].poly  = crcs[20:5];
-  assign \crcs$184[0].start  = crcs[36:21];
-  assign \crcs$184[0].inverted  = crcs[37];
-  assign \crcs$184[1]  = crcs[75:38];
-  assign \crcs$184[1].width  = crcs[42:38];
-  assign \crcs$184[1].poly  = crcs[58:43];
-  assign \crcs$184[1].start  = crcs[74:59];
-  assign \crcs$184[1].inverted  = crcs[75];
+  assign \crcs$185[0]  = crcs[37:0];
+  assign \crcs$185[0].width  = crcs[4:0];
+  assign \crcs$185[0].poly  = crcs[20:5];
+  assign \crcs$185[0].start  = crcs[36:21];
+  assign \crcs$185[0].inverted  = crcs[37];
+  assign \crcs$185[1]  = crcs[75:38];
+  assign \crcs$185[1].width  = crcs[42:38];
+  assign \crcs$185[1].poly  = crcs[58:43];
+  assign \crcs$185[1].start  = crcs[74:59];
+  assign \crcs$185[1].inverted  = crcs[75];
+  assign \crcs$186[0]  = crcs[37:0];
+  assign \crcs$186[0].width  = crcs[4:0];
+  assign \crcs$186[0].poly  = crcs[20:5];
+  assign \crcs$186[0].start  = crcs[36:21];
+  assign \crcs$186[0].inverted  = crcs[37];
+  assign \crcs$186[1]  = crcs[75:38];
+  assign \crcs$186[1].width  = crcs[42:38];
+  assign \crcs$186[1].poly  = crcs[58:43];
+  assign \crcs$186[1].start  = crcs[74:59];
+  assign \crcs$186[1].inverted  = crcs[75];
   assign \cfg.ma_half_period  = cycle[15:0];
   assign \cfg.request_period  = cycle[39:16];
   assign \cfg.break_time  = cycle[63:40];
@@ -23284,41 +23327,41 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$248.slave_id  = \request$248 [2:0];
-  assign \request$248.address  = \request$248 [9:3];
-  assign \request$248.count  = \request$248 [16:10];
-  assign \request$248.write  = \request$248 [17];
+  assign \request$250.slave_id  = \request$250 [2:0];
+  assign \request$250.address  = \request$250 [9:3];
+  assign \request$250.count  = \request$250 [16:10];
+  assign \request$250.write  = \request$250 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$286.ca_crc4_error  = \events$286 [0];
-  assign \events$286.ca_no_answer  = \events$286 [1];
-  assign \events$286.ca_refused  = \events$286 [2];
-  assign \events$286.ca_aborted  = \events$286 [3];
-  assign \events$286.ca_data_fault  = \events$286 [4];
+  assign \events$288.ca_crc4_error  = \events$288 [0];
+  assign \events$288.ca_no_answer  = \events$288 [1];
+  assign \events$288.ca_refused  = \events$288 [2];
+  assign \events$288.ca_aborted  = \events$288 [3];
+  assign \events$288.ca_data_fault  = \events$288 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$295.crc_word0  = \events$295 [0];
-  assign \events$295.crc_word1  = \events$295 [1];
-  assign \events$295.no_ack  = \events$295 [2];
-  assign \events$295.no_start  = \events$295 [3];
-  assign \events$295.delay_range  = \events$295 [4];
-  assign \events$295.slo_stuck_low  = \events$295 [5];
-  assign \events$295.lc_repeat  = \events$295 [6];
-  assign \events$295.lc_skip  = \events$295 [7];
-  assign \events$295.lc_zero  = \events$295 [8];
-  assign \events$295.spw_mismatch  = \events$295 [9];
-  assign \events$295.overrun  = \events$295 [10];
-  assign \events$295.aborted  = \events$295 [11];
-  assign \events$295.no_stop  = \events$295 [12];
-  assign \events$295.noisy_line  = \events$295 [13];
-  assign \events$295.delay_jump  = \events$295 [14];
-  assign \events$295.noise_event  = \events$295 [15];
+  assign \events$297.crc_word0  = \events$297 [0];
+  assign \events$297.crc_word1  = \events$297 [1];
+  assign \events$297.no_ack  = \events$297 [2];
+  assign \events$297.no_start  = \events$297 [3];
+  assign \events$297.delay_range  = \events$297 [4];
+  assign \events$297.slo_stuck_low  = \events$297 [5];
+  assign \events$297.lc_repeat  = \events$297 [6];
+  assign \events$297.lc_skip  = \events$297 [7];
+  assign \events$297.lc_zero  = \events$297 [8];
+  assign \events$297.spw_mismatch  = \events$297 [9];
+  assign \events$297.overrun  = \events$297 [10];
+  assign \events$297.aborted  = \events$297 [11];
+  assign \events$297.no_stop  = \events$297 [12];
+  assign \events$297.noisy_line  = \events$297 [13];
+  assign \events$297.delay_jump  = \events$297 [14];
+  assign \events$297.noise_event  = \events$297 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -23326,57 +23369,57 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$319.status  = \result$319 [3:0];
-  assign \result$319.timestamp  = \result$319 [35:4];
-  assign \result$319.line_delay  = \result$319 [48:36];
-  assign \result$319.cds  = \result$319 [49];
-  assign \result$319.noise_events  = \result$319 [53:50];
-  assign \result$319.delay_settled  = \result$319 [54];
-  assign \result$319.settled_delay  = \result$319 [67:55];
-  assign \result$319.delay_spread  = \result$319 [75:68];
-  assign \result$319.word0  = \result$319 [133:76];
-  assign \result$319.word0.position  = \result$319 [130:76];
-  assign \result$319.word0.ne  = \result$319 [131];
-  assign \result$319.word0.nw  = \result$319 [132];
-  assign \result$319.word0.crc_ok  = \result$319 [133];
-  assign \result$319.word1  = \result$319 [176:134];
-  assign \result$319.word1.position  = \result$319 [173:134];
-  assign \result$319.word1.ne  = \result$319 [174];
-  assign \result$319.word1.nw  = \result$319 [175];
-  assign \result$319.word1.crc_ok  = \result$319 [176];
-  assign \result$319.lc  = \result$319 [182:177];
-  assign \result$319.lc_repeat  = \result$319 [183];
-  assign \result$319.lc_skip  = \result$319 [184];
-  assign \result$319.lc_zero  = \result$319 [185];
-  assign \result$319.spw_mismatch  = \result$319 [186];
-  assign \events$295 [15] = \event ;
-  assign \events$295 [14] = \$20 ;
-  assign \events$295 [13] = \$18 ;
-  assign \events$295 [12] = faults[6];
-  assign \events$295 [11] = faults[4];
-  assign \events$295 [10] = overrun;
-  assign \events$295 [9] = \$16 ;
-  assign \events$295 [8] = lc_zero;
-  assign \events$295 [7] = lc_skip;
-  assign \events$295 [6] = lc_repeat;
-  assign \events$295 [5] = faults[3];
-  assign \events$295 [4] = faults[2];
-  assign \events$295 [3] = faults[1];
-  assign \events$295 [2] = faults[0];
-  assign \events$295 [1] = crc_error[1];
-  assign \events$295 [0] = crc_error[0];
-  assign \events$286 [4] = \$15 ;
-  assign \events$286 [3] = \$13 ;
-  assign \events$286 [2] = \$11 ;
-  assign \events$286 [1] = \$9 ;
-  assign \events$286 [0] = \$7 ;
+  assign \result$321.status  = \result$321 [3:0];
+  assign \result$321.timestamp  = \result$321 [35:4];
+  assign \result$321.line_delay  = \result$321 [48:36];
+  assign \result$321.cds  = \result$321 [49];
+  assign \result$321.noise_events  = \result$321 [53:50];
+  assign \result$321.delay_settled  = \result$321 [54];
+  assign \result$321.settled_delay  = \result$321 [67:55];
+  assign \result$321.delay_spread  = \result$321 [75:68];
+  assign \result$321.word0  = \result$321 [133:76];
+  assign \result$321.word0.position  = \result$321 [130:76];
+  assign \result$321.word0.ne  = \result$321 [131];
+  assign \result$321.word0.nw  = \result$321 [132];
+  assign \result$321.word0.crc_ok  = \result$321 [133];
+  assign \result$321.word1  = \result$321 [176:134];
+  assign \result$321.word1.position  = \result$321 [173:134];
+  assign \result$321.word1.ne  = \result$321 [174];
+  assign \result$321.word1.nw  = \result$321 [175];
+  assign \result$321.word1.crc_ok  = \result$321 [176];
+  assign \result$321.lc  = \result$321 [182:177];
+  assign \result$321.lc_repeat  = \result$321 [183];
+  assign \result$321.lc_skip  = \result$321 [184];
+  assign \result$321.lc_zero  = \result$321 [185];
+  assign \result$321.spw_mismatch  = \result$321 [186];
+  assign \events$297 [15] = \event ;
+  assign \events$297 [14] = \$20 ;
+  assign \events$297 [13] = \$18 ;
+  assign \events$297 [12] = faults[6];
+  assign \events$297 [11] = faults[4];
+  assign \events$297 [10] = overrun;
+  assign \events$297 [9] = \$16 ;
+  assign \events$297 [8] = lc_zero;
+  assign \events$297 [7] = lc_skip;
+  assign \events$297 [6] = lc_repeat;
+  assign \events$297 [5] = faults[3];
+  assign \events$297 [4] = faults[2];
+  assign \events$297 [3] = faults[1];
+  assign \events$297 [2] = faults[0];
+  assign \events$297 [1] = crc_error[1];
+  assign \events$297 [0] = crc_error[0];
+  assign \events$288 [4] = \$15 ;
+  assign \events$288 [3] = \$13 ;
+  assign \events$288 [2] = \$11 ;
+  assign \events$288 [1] = \$9 ;
+  assign \events$288 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$248 [17] = ca_write;
-  assign \request$248 [16:10] = ca_count;
-  assign \request$248 [9:3] = ca_address;
-  assign \request$248 [2:0] = ca_slave_id;
+  assign \request$250 [17] = ca_write;
+  assign \request$250 [16:10] = ca_count;
+  assign \request$250 [9:3] = ca_address;
+  assign \request$250 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$28 ;
@@ -23398,8 +23441,8 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign frame[49] = cds;
   assign frame[48:36] = delay;
   assign frame[3:0] = status;
-  assign \words$181 [23:12] = cycle[211:200];
-  assign \words$181 [11:0] = cycle[160:149];
+  assign \words$183 [23:12] = cycle[211:200];
+  assign \words$183 [11:0] = cycle[160:149];
   assign words[23:12] = cycle[211:200];
   assign words[11:0] = cycle[160:149];
   assign live[274] = cfg_ssi_double;
@@ -24056,8 +24099,8 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
-, faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full, started
-, stop_bit, clk);
+, faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full
+, started, stop_bit, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -24089,12 +24132,18 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
   wire \$34 ;
   wire \$35 ;
   wire \$36 ;
-  reg \$37 ;
-  reg [2:0] \$38 ;
-  reg \$39 ;
+  wire \$37 ;
+  wire \$38 ;
+  wire \$39 ;
   wire \$4 ;
-  reg \$40 ;
-  reg \$41 ;
+  wire \$40 ;
+  wire \$41 ;
+  wire \$42 ;
+  reg \$43 ;
+  reg [2:0] \$44 ;
+  reg \$45 ;
+  reg \$46 ;
+  reg \$47 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
@@ -24125,7 +24174,7 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
   wire \config_ok$3 ;
   reg [2:0] cycle_fsm_state = 3'h0;
   reg delay;
-  wire \delay$80 ;
+  wire \delay$81 ;
   input delay_over;
   wire delay_over;
   wire \delay_over$31 ;
@@ -24138,7 +24187,7 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
   output fault;
   reg fault;
   wire \fault$39 ;
-  wire \fault$76 ;
+  wire \fault$77 ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -24308,63 +24357,71 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$81 ;
+  wire [3:0] \status$82 ;
   input stop_bit;
   wire stop_bit;
   input stopped;
   wire stopped;
   wire stuck_low;
+  input timeout_over;
+  wire timeout_over;
   output timer_clear;
   reg timer_clear;
   output waiting;
   reg waiting;
   reg watch;
   always @(posedge clk)
-    pause <= \$41 ;
+    first_clock <= \$43 ;
+  always @(posedge clk)
+    cycle_fsm_state <= \$44 ;
+  always @(posedge clk)
+    idle <= \$45 ;
+  always @(posedge clk)
+    receiver_clear <= \$46 ;
+  always @(posedge clk)
+    pause <= \$47 ;
   assign \$1  = ma_busy | abort;
-  assign \$2  = ~ ma_enough;
-  assign \$3  = restart_timer | abort;
-  assign \$4  = frame_done & ssi;
-  assign \$5  = \$4  & stop_bit;
-  assign \$6  = ~ ssi;
-  assign \$7  = \fault$76  & \$6 ;
-  assign \$8  = ~ end_check;
-  assign \$9  = ~ ma_enough;
-  assign \$10  = stopped | ssi;
+  assign \$2  = ~ ssi;
+  assign \$3  = \$2  | timeout_over;
+  assign \$4  = break_over & \$3 ;
+  assign \$5  = ~ ma_enough;
+  assign \$6  = restart_timer | abort;
+  assign \$7  = frame_done & ssi;
+  assign \$8  = \$7  & stop_bit;
+  assign \$9  = ~ ssi;
+  assign \$10  = \fault$77  & \$9 ;
   assign \$11  = ~ end_check;
-  assign \$12  = ma_busy | abort;
-  assign \$13  = ~ ma_busy;
-  assign \$14  = \$13  | ma_held;
-  assign \$15  = \$14  & slo;
-  assign \$16  = ! cycle_fsm_state;
-  assign \$17  = cycle_fsm_state == 1'h1;
-  assign \$18  = cycle_fsm_state == 2'h2;
-  assign \$19  = cycle_fsm_state == 2'h3;
-  assign \$20  = cycle_fsm_state == 3'h4;
-  assign \$21  = cycle_fsm_state == 3'h5;
-  assign \$22  = cycle_fsm_state == 3'h6;
-  assign \$23  = cycle_fsm_state == 3'h7;
-  assign \$24  = ma_busy | abort;
-  assign \$25  = frame_done & ssi;
-  assign \$26  = \$25  & stop_bit;
-  assign \$27  = ~ ssi;
-  assign \$28  = \fault$76  & \$27 ;
-  assign \$29  = stopped | ssi;
-  assign \$30  = ~ end_check;
-  assign \$31  = ma_busy | abort;
-  assign \$32  = cdm_cycle & abort;
-  assign \$33  = ~ ma_busy;
-  assign \$34  = ~ ma_busy;
-  assign \$35  = \$34  | ma_held;
-  assign \$36  = \$35  & slo;
-  always @(posedge clk)
-    first_clock <= \$37 ;
-  always @(posedge clk)
-    cycle_fsm_state <= \$38 ;
-  always @(posedge clk)
-    idle <= \$39 ;
-  always @(posedge clk)
-    receiver_clear <= \$40 ;
+  assign \$12  = ~ ma_enough;
+  assign \$13  = stopped | ssi;
+  assign \$14  = ~ end_check;
+  assign \$15  = ma_busy | abort;
+  assign \$16  = ~ ma_busy;
+  assign \$17  = \$16  | ma_held;
+  assign \$18  = \$17  & slo;
+  assign \$19  = ! cycle_fsm_state;
+  assign \$20  = cycle_fsm_state == 1'h1;
+  assign \$21  = cycle_fsm_state == 2'h2;
+  assign \$22  = cycle_fsm_state == 2'h3;
+  assign \$23  = cycle_fsm_state == 3'h4;
+  assign \$24  = cycle_fsm_state == 3'h5;
+  assign \$25  = cycle_fsm_state == 3'h6;
+  assign \$26  = cycle_fsm_state == 3'h7;
+  assign \$27  = ma_busy | abort;
+  assign \$28  = ~ ssi;
+  assign \$29  = \$28  | timeout_over;
+  assign \$30  = break_over & \$29 ;
+  assign \$31  = frame_done & ssi;
+  assign \$32  = \$31  & stop_bit;
+  assign \$33  = ~ ssi;
+  assign \$34  = \fault$77  & \$33 ;
+  assign \$35  = stopped | ssi;
+  assign \$36  = ~ end_check;
+  assign \$37  = ma_busy | abort;
+  assign \$38  = cdm_cycle & abort;
+  assign \$39  = ~ ma_busy;
+  assign \$40  = ~ ma_busy;
+  assign \$41  = \$40  | ma_held;
+  assign \$42  = \$41  & slo;
   \biss_master_wb.ch1.core.controller.cdm_hold  cdm_hold (
     .abort(abort),
     .cdm(cdm),
@@ -24382,10 +24439,10 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
     .ack_expired(ack_expired),
     .clear(clear),
     .clk(clk),
-    .delay(\delay$80 ),
+    .delay(\delay$81 ),
     .delay_over(delay_over),
     .early(early),
-    .fault(\fault$76 ),
+    .fault(\fault$77 ),
     .locked(locked),
     .ma_arm(ma_arm),
     .no_start_expired(no_start_expired),
@@ -24393,7 +24450,7 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
     .rst(rst),
     .slots_full(slots_full),
     .started(started),
-    .status(\status$81 ),
+    .status(\status$82 ),
     .watch(watch)
   );
   \biss_master_wb.ch1.core.controller.ready_check  ready_check (
@@ -24420,6 +24477,387 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    report_frame = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$8 ) begin
+          end else if (frame_done) begin
+            if (\$11 ) begin
+              report_frame = 1'h1;
+            end
+          end
+      3'h4:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h6:
+          /* empty */;
+      3'h7:
+          if (abort) begin
+          end else if (\$18 ) begin
+            report_frame = 1'h1;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    delay = 1'h0;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$8 ) begin
+          end else if (frame_done) begin
+          end else if (\$10 ) begin
+            delay = \delay$81 ;
+          end
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    holding = 1'h0;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h4:
+          /* empty */;
+      3'h5:
+          holding = 1'h1;
+      3'h6:
+          holding = 1'h1;
+      3'h7:
+          holding = 1'h1;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$43  = idle;
+    if (rst) begin
+      \$43  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$44  = cycle_fsm_state;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$44  = 3'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (request) begin
+            \$44  = 3'h2;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$44  = 3'h1;
+            if (abort) begin
+              \$44  = 3'h0;
+            end
+          end else if (aborted) begin
+            \$44  = 3'h0;
+          end else if (ready) begin
+            \$44  = 3'h3;
+          end else if (stuck_low) begin
+            \$44  = 3'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (\$32 ) begin
+            \$44  = 3'h0;
+          end else if (frame_done) begin
+            \$44  = 3'h4;
+          end else if (\$34 ) begin
+            \$44  = 3'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$44  = 3'h0;
+            end else begin
+              \$44  = 3'h0;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$44  = 3'h5;
+              end else begin
+                \$44  = 3'h6;
+              end
+            end else if (stop_bit) begin
+              \$44  = 3'h0;
+            end else begin
+              \$44  = 3'h7;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$44  = 3'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$44  = 3'h0;
+          end else if (\$39 ) begin
+            \$44  = 3'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$44  = 3'h0;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$44  = 3'h5;
+            end else if (cdm_cycle) begin
+              \$44  = 3'h6;
+            end else begin
+              \$44  = 3'h1;
+            end
+          end else if (slo_stuck) begin
+            \$44  = 3'h0;
+          end
+    endcase
+    if (rst) begin
+      \$44  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$45  = idle;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$45  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (request) begin
+            \$45  = 1'h0;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$45  = 1'h1;
+            if (abort) begin
+              \$45  = 1'h0;
+            end
+          end else if (aborted) begin
+            \$45  = 1'h0;
+          end else if (ready) begin
+            \$45  = 1'h0;
+          end else if (stuck_low) begin
+            \$45  = 1'h0;
+          end
+      3'h3:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (\$32 ) begin
+            \$45  = 1'h0;
+          end else if (frame_done) begin
+            \$45  = 1'h0;
+          end else if (\$34 ) begin
+            \$45  = 1'h0;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h0;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$45  = 1'h0;
+              end else begin
+                \$45  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$45  = 1'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$45  = 1'h0;
+          end else if (\$39 ) begin
+            \$45  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$45  = 1'h0;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$45  = 1'h0;
+            end else if (cdm_cycle) begin
+              \$45  = 1'h0;
+            end else begin
+              \$45  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$45  = 1'h0;
+          end
+    endcase
+    if (rst) begin
+      \$45  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$46  = receiver_clear;
+    (* full_case = 32'd1 *)
+    casez (cycle_fsm_state)
+      3'h0:
+          if (\$27 ) begin
+          end else if (\$30 ) begin
+            \$46  = 1'h1;
+          end
+      3'h1:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (request) begin
+            \$46  = 1'h1;
+          end
+      3'h2:
+          if (bad_config) begin
+            \$46  = 1'h1;
+            if (abort) begin
+              \$46  = 1'h1;
+            end
+          end else if (aborted) begin
+            \$46  = 1'h1;
+          end else if (ready) begin
+            \$46  = 1'h0;
+          end else if (stuck_low) begin
+            \$46  = 1'h1;
+          end
+      3'h3:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (\$32 ) begin
+            \$46  = 1'h1;
+          end else if (frame_done) begin
+            \$46  = 1'h0;
+          end else if (\$34 ) begin
+            \$46  = 1'h1;
+          end
+      3'h4:
+          if (abort) begin
+            (* full_case = 32'd1 *)
+            if (end_check) begin
+              \$46  = 1'h1;
+            end else begin
+              \$46  = 1'h1;
+            end
+          end else if (\$35 ) begin
+            (* full_case = 32'd1 *)
+            if (\$36 ) begin
+              (* full_case = 32'd1 *)
+              if (pause) begin
+                \$46  = 1'h1;
+              end else begin
+                \$46  = 1'h0;
+              end
+            end else if (stop_bit) begin
+              \$46  = 1'h1;
+            end else begin
+              \$46  = 1'h0;
+            end
+          end
+      3'h5:
+          if (\$37 ) begin
+          end else if (break_over) begin
+            \$46  = 1'h1;
+          end
+      3'h6:
+          if (\$38 ) begin
+            \$46  = 1'h1;
+          end else if (\$39 ) begin
+            \$46  = 1'h1;
+          end
+      3'h7:
+          if (abort) begin
+            \$46  = 1'h1;
+          end else if (\$42 ) begin
+            (* full_case = 32'd1 *)
+            if (pause) begin
+              \$46  = 1'h1;
+            end else if (cdm_cycle) begin
+              \$46  = 1'h0;
+            end else begin
+              \$46  = 1'h1;
+            end
+          end else if (slo_stuck) begin
+            \$46  = 1'h1;
+          end
+    endcase
+    if (rst) begin
+      \$46  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    \$47  = pause;
+    casez (cycle_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h3:
+          if (abort) begin
+          end else if (\$32 ) begin
+          end else if (frame_done) begin
+            \$47  = frame_doubtful;
+          end
+    endcase
+    if (rst) begin
+      \$47  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -24441,19 +24879,19 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
           timer_clear = 1'h1;
       3'h3:
         begin
-          if (\$3 ) begin
+          if (\$6 ) begin
             timer_clear = 1'h1;
           end
           if (abort) begin
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             timer_clear = 1'h1;
           end
         end
       3'h4:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
               if (pause) begin
                 timer_clear = 1'h1;
               end
@@ -24462,7 +24900,7 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
             end
           end
       3'h5:
-          if (\$12 ) begin
+          if (\$15 ) begin
             timer_clear = 1'h1;
           end
       3'h6:
@@ -24470,7 +24908,7 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
       3'h7:
           if (abort) begin
             timer_clear = 1'h1;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
             if (pause) begin
               timer_clear = 1'h1;
             end
@@ -24524,10 +24962,10 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
       3'h3:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             fault = 1'h1;
           end else if (frame_done) begin
-          end else if (\$7 ) begin
+          end else if (\$10 ) begin
             fault = 1'h1;
           end
       3'h4:
@@ -24535,8 +24973,8 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
             if (end_check) begin
               fault = 1'h1;
             end
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
             end else if (stop_bit) begin
               fault = 1'h1;
             end
@@ -24548,7 +24986,7 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
       3'h7:
           if (abort) begin
             fault = 1'h1;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
           end else if (slo_stuck) begin
             fault = 1'h1;
           end
@@ -24575,19 +25013,19 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
       3'h3:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$5 ) begin
+          end else if (\$8 ) begin
             fault_status = 4'hc;
           end else if (frame_done) begin
-          end else if (\$7 ) begin
-            fault_status = \status$81 ;
+          end else if (\$10 ) begin
+            fault_status = \status$82 ;
           end
       3'h4:
           if (abort) begin
             if (end_check) begin
               fault_status = 4'ha;
             end
-          end else if (\$10 ) begin
-            if (\$11 ) begin
+          end else if (\$13 ) begin
+            if (\$14 ) begin
             end else if (stop_bit) begin
               fault_status = 4'hc;
             end
@@ -24599,7 +25037,7 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
       3'h7:
           if (abort) begin
             fault_status = 4'ha;
-          end else if (\$15 ) begin
+          end else if (\$18 ) begin
           end else if (slo_stuck) begin
             fault_status = 4'h9;
           end
@@ -24616,9 +25054,9 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
       3'h2:
           /* empty */;
       3'h3:
-          ma_run = \$2 ;
+          ma_run = \$5 ;
       3'h4:
-          ma_run = \$9 ;
+          ma_run = \$12 ;
     endcase
   end
   always @* begin
@@ -24664,387 +25102,6 @@ module \biss_master_wb.ch1.core.controller (rst, frame_done, cdm, request, resta
       3'h4:
           framing = 1'h1;
     endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    report_frame = 1'h0;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$5 ) begin
-          end else if (frame_done) begin
-            if (\$8 ) begin
-              report_frame = 1'h1;
-            end
-          end
-      3'h4:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h6:
-          /* empty */;
-      3'h7:
-          if (abort) begin
-          end else if (\$15 ) begin
-            report_frame = 1'h1;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    delay = 1'h0;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$5 ) begin
-          end else if (frame_done) begin
-          end else if (\$7 ) begin
-            delay = \delay$80 ;
-          end
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    holding = 1'h0;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          /* empty */;
-      3'h4:
-          /* empty */;
-      3'h5:
-          holding = 1'h1;
-      3'h6:
-          holding = 1'h1;
-      3'h7:
-          holding = 1'h1;
-    endcase
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$37  = idle;
-    if (rst) begin
-      \$37  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$38  = cycle_fsm_state;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$38  = 3'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (request) begin
-            \$38  = 3'h2;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$38  = 3'h1;
-            if (abort) begin
-              \$38  = 3'h0;
-            end
-          end else if (aborted) begin
-            \$38  = 3'h0;
-          end else if (ready) begin
-            \$38  = 3'h3;
-          end else if (stuck_low) begin
-            \$38  = 3'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (\$26 ) begin
-            \$38  = 3'h0;
-          end else if (frame_done) begin
-            \$38  = 3'h4;
-          end else if (\$28 ) begin
-            \$38  = 3'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$38  = 3'h0;
-            end else begin
-              \$38  = 3'h0;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$38  = 3'h5;
-              end else begin
-                \$38  = 3'h6;
-              end
-            end else if (stop_bit) begin
-              \$38  = 3'h0;
-            end else begin
-              \$38  = 3'h7;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$38  = 3'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$38  = 3'h0;
-          end else if (\$33 ) begin
-            \$38  = 3'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$38  = 3'h0;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$38  = 3'h5;
-            end else if (cdm_cycle) begin
-              \$38  = 3'h6;
-            end else begin
-              \$38  = 3'h1;
-            end
-          end else if (slo_stuck) begin
-            \$38  = 3'h0;
-          end
-    endcase
-    if (rst) begin
-      \$38  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$39  = idle;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$39  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (request) begin
-            \$39  = 1'h0;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$39  = 1'h1;
-            if (abort) begin
-              \$39  = 1'h0;
-            end
-          end else if (aborted) begin
-            \$39  = 1'h0;
-          end else if (ready) begin
-            \$39  = 1'h0;
-          end else if (stuck_low) begin
-            \$39  = 1'h0;
-          end
-      3'h3:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (\$26 ) begin
-            \$39  = 1'h0;
-          end else if (frame_done) begin
-            \$39  = 1'h0;
-          end else if (\$28 ) begin
-            \$39  = 1'h0;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h0;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$39  = 1'h0;
-              end else begin
-                \$39  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$39  = 1'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$39  = 1'h0;
-          end else if (\$33 ) begin
-            \$39  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$39  = 1'h0;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$39  = 1'h0;
-            end else if (cdm_cycle) begin
-              \$39  = 1'h0;
-            end else begin
-              \$39  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$39  = 1'h0;
-          end
-    endcase
-    if (rst) begin
-      \$39  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$40  = receiver_clear;
-    (* full_case = 32'd1 *)
-    casez (cycle_fsm_state)
-      3'h0:
-          if (\$24 ) begin
-          end else if (break_over) begin
-            \$40  = 1'h1;
-          end
-      3'h1:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (request) begin
-            \$40  = 1'h1;
-          end
-      3'h2:
-          if (bad_config) begin
-            \$40  = 1'h1;
-            if (abort) begin
-              \$40  = 1'h1;
-            end
-          end else if (aborted) begin
-            \$40  = 1'h1;
-          end else if (ready) begin
-            \$40  = 1'h0;
-          end else if (stuck_low) begin
-            \$40  = 1'h1;
-          end
-      3'h3:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (\$26 ) begin
-            \$40  = 1'h1;
-          end else if (frame_done) begin
-            \$40  = 1'h0;
-          end else if (\$28 ) begin
-            \$40  = 1'h1;
-          end
-      3'h4:
-          if (abort) begin
-            (* full_case = 32'd1 *)
-            if (end_check) begin
-              \$40  = 1'h1;
-            end else begin
-              \$40  = 1'h1;
-            end
-          end else if (\$29 ) begin
-            (* full_case = 32'd1 *)
-            if (\$30 ) begin
-              (* full_case = 32'd1 *)
-              if (pause) begin
-                \$40  = 1'h1;
-              end else begin
-                \$40  = 1'h0;
-              end
-            end else if (stop_bit) begin
-              \$40  = 1'h1;
-            end else begin
-              \$40  = 1'h0;
-            end
-          end
-      3'h5:
-          if (\$31 ) begin
-          end else if (break_over) begin
-            \$40  = 1'h1;
-          end
-      3'h6:
-          if (\$32 ) begin
-            \$40  = 1'h1;
-          end else if (\$33 ) begin
-            \$40  = 1'h1;
-          end
-      3'h7:
-          if (abort) begin
-            \$40  = 1'h1;
-          end else if (\$36 ) begin
-            (* full_case = 32'd1 *)
-            if (pause) begin
-              \$40  = 1'h1;
-            end else if (cdm_cycle) begin
-              \$40  = 1'h0;
-            end else begin
-              \$40  = 1'h1;
-            end
-          end else if (slo_stuck) begin
-            \$40  = 1'h1;
-          end
-    endcase
-    if (rst) begin
-      \$40  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$41  = pause;
-    casez (cycle_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h3:
-          if (abort) begin
-          end else if (\$26 ) begin
-          end else if (frame_done) begin
-            \$41  = frame_doubtful;
-          end
-    endcase
-    if (rst) begin
-      \$41  = 1'h0;
-    end
   end
   assign \first_clock$1  = first_clock;
   assign \config_ok$3  = config_ok;
@@ -26930,7 +26987,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6857$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6873$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire [6:0] \$1 ;
@@ -27633,8 +27690,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6857$272 ;
-  wire [2:0] \port$6857$272 ;
+  input [2:0] \port$6873$272 ;
+  wire [2:0] \port$6873$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -27701,8 +27758,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$367  = ssi & \port$6857$272 [0];
-  assign \$368  = ~ \port$6857$272 [1];
+  assign \$367  = ssi & \port$6873$272 [0];
+  assign \$368  = ~ \port$6873$272 [1];
   assign \$369  = \$367  & \$368 ;
   assign \$370  = \bit  ^ \$369 ;
   assign \$371  = ~ words[6];
@@ -28023,18 +28080,18 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$6857$272 [0];
+  assign \$3  = ssi & \port$6873$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$6857$272 [0];
+  assign \$6  = ssi & \port$6873$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$6857$272 [0];
+  assign \$9  = ssi & \port$6873$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$6857$272 [0];
+  assign \$14  = ssi & \port$6873$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$6857$272 [0];
+  assign \$18  = ssi & \port$6873$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -28079,7 +28136,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   assign \$66  = idx == \$65 ;
   assign \$67  = word_count - 1'h1;
   assign \$68  = word == \$67 ;
-  assign \$69  = ssi & \port$6857$272 [2];
+  assign \$69  = ssi & \port$6873$272 [2];
   assign \$70  = word + 1'h1;
   assign \$71  = idx + 1'h1;
   assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -28370,7 +28427,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   assign \$357  = \$354  & \$356 ;
   assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
   assign \$359  = ~ words[6];
-  assign \$360  = ssi & \port$6857$272 [0];
+  assign \$360  = ssi & \port$6873$272 [0];
   assign \$361  = ~ \$360 ;
   assign \$362  = \$359  & \$361 ;
   assign \$363  = ! word;
@@ -29132,9 +29189,9 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$6857$272 [0];
-  assign ssi_double = \port$6857$272 [2];
-  assign ssi_error_low = \port$6857$272 [1];
+  assign ssi_error = \port$6873$272 [0];
+  assign ssi_double = \port$6873$272 [2];
+  assign ssi_error_low = \port$6873$272 [1];
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$53  = crcs;
   assign \bit$58  = \bit ;
@@ -32643,7 +32700,7 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6857$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6873$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -32777,8 +32834,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6857$259 ;
-  wire [12:0] \port$6857$259 ;
+  input [12:0] \port$6873$259 ;
+  wire [12:0] \port$6873$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -32803,7 +32860,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6857$259 [12:1] + 1'h1;
+  assign \$11  = \port$6873$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -32928,7 +32985,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6857$259 [0]),
+    .clear_high(\port$6873$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -33071,7 +33128,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6857$259 [0]) begin
+            if (\port$6873$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -33156,7 +33213,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6857$259 [0]) begin
+            if (\port$6873$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -33195,7 +33252,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6857$259 [12:1] };
+            \$85  = { 1'h0, \port$6873$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -33580,11 +33637,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6857$259 [12:1] };
-  assign fixed = \port$6857$259 [0];
+  assign fixed_delay = { 1'h0, \port$6873$259 [12:1] };
+  assign fixed = \port$6873$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6857$259 [0];
+  assign clear_high = \port$6873$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -33991,7 +34048,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6845$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6861$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -34033,8 +34090,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6845$0 ;
-  wire \port$6845$0 ;
+  input \port$6861$0 ;
+  wire \port$6861$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -34048,9 +34105,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6845$0  };
-  assign \$2  = { lc[4:0], \port$6845$0  } == last;
-  assign \$3  = { lc[4:0], \port$6845$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6861$0  };
+  assign \$2  = { lc[4:0], \port$6861$0  } == last;
+  assign \$3  = { lc[4:0], \port$6861$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -34160,7 +34217,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6845$0  };
+  assign lc_next = { lc[4:0], \port$6861$0  };
   assign zero = is_zero;
 endmodule
 
@@ -34440,8 +34497,8 @@ module \biss_master_wb.ch1.core.time_base (rst, first_rise, first_rise_time, clk
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, ack_expired, no_start_expired, delay_over
-, delay, slo, clk);
+module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired
+, delay_over, delay, slo, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -34485,19 +34542,21 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
   wire \$45 ;
   wire \$46 ;
   wire \$47 ;
-  reg [24:0] \$48 ;
-  reg \$49 ;
+  wire \$48 ;
+  reg [24:0] \$49 ;
   wire \$5 ;
   reg \$50 ;
-  reg [12:0] \$51 ;
-  reg \$52 ;
+  reg \$51 ;
+  reg [12:0] \$52 ;
   reg \$53 ;
-  reg [24:0] \$54 ;
-  reg \$55 ;
+  reg \$54 ;
+  reg [24:0] \$55 ;
   reg \$56 ;
   reg \$57 ;
   reg \$58 ;
+  reg \$59 ;
   wire \$6 ;
+  reg \$60 ;
   wire \$7 ;
   wire \$8 ;
   wire \$9 ;
@@ -34551,35 +34610,42 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
   wire [23:0] timeout_limit;
   input [23:0] timeout_live;
   wire [23:0] timeout_live;
+  output timeout_over;
+  reg timeout_over = 1'h0;
   reg [24:0] timer = 25'h0000001;
-  assign \$42  = \$40  & \$41 ;
-  assign \$43  = ~ restart;
-  assign \$44  = in_clock & \$43 ;
-  assign \$45  = timer >= no_start_limit;
-  assign \$46  = \$44  & \$45 ;
-  assign \$47  = delay > delay_limit;
+  assign \$40  = ~ restart;
+  assign \$41  = in_clock & \$40 ;
+  assign \$42  = timer >= ack_limit;
+  assign \$43  = \$41  & \$42 ;
+  assign \$44  = ~ restart;
+  assign \$45  = in_clock & \$44 ;
+  assign \$46  = timer >= no_start_limit;
+  assign \$47  = \$45  & \$46 ;
+  assign \$48  = delay > delay_limit;
   always @(posedge clk)
-    slo_low_time_p1 <= \$48 ;
+    slo_low_time_p1 <= \$49 ;
   always @(posedge clk)
-    slo_stuck <= \$49 ;
+    slo_stuck <= \$50 ;
   always @(posedge clk)
-    slo_stuck_live <= \$50 ;
+    slo_stuck_live <= \$51 ;
   always @(posedge clk)
-    high_p2 <= \$51 ;
+    high_p2 <= \$52 ;
   always @(posedge clk)
-    quiet <= \$52 ;
+    quiet <= \$53 ;
   always @(posedge clk)
-    quiet_live <= \$53 ;
+    quiet_live <= \$54 ;
   always @(posedge clk)
-    timer <= \$54 ;
+    timer <= \$55 ;
   always @(posedge clk)
-    break_over <= \$55 ;
+    break_over <= \$56 ;
   always @(posedge clk)
-    ack_expired <= \$56 ;
+    timeout_over <= \$57 ;
   always @(posedge clk)
-    no_start_expired <= \$57 ;
+    ack_expired <= \$58 ;
   always @(posedge clk)
-    delay_over <= \$58 ;
+    no_start_expired <= \$59 ;
+  always @(posedge clk)
+    delay_over <= \$60 ;
   assign \$1  = slo & quiet;
   assign \$2  = \$1  | ma_busy;
   assign \$3  = ~ slo_low_time_p1[24];
@@ -34618,105 +34684,115 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
   assign \$36  = timer >= 12'hfa0;
   assign \$37  = timer >= break_time;
   assign \$38  = \$35  ? \$36  : \$37 ;
-  assign \$39  = ~ restart;
-  assign \$40  = in_clock & \$39 ;
-  assign \$41  = timer >= ack_limit;
+  assign \$39  = timer >= timeout_limit;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$48  = slo_low_time_p1;
+    \$49  = slo_low_time_p1;
     if (\$2 ) begin
-      \$48  = 25'h0000001;
+      \$49  = 25'h0000001;
     end else if (\$3 ) begin
-      \$48  = \$4 [24:0];
+      \$49  = \$4 [24:0];
     end
     if (rst) begin
-      \$48  = 25'h0000001;
+      \$49  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$49  = \$9 ;
-    if (rst) begin
-      \$49  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$50  = \$17 ;
+    \$50  = \$9 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$51  = high_p2;
+    \$51  = \$17 ;
+    if (rst) begin
+      \$51  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    \$52  = high_p2;
     if (\$18 ) begin
-      \$51  = 13'h0002;
+      \$52  = 13'h0002;
     end else if (\$19 ) begin
-      \$51  = \$20 [12:0];
+      \$52  = \$20 [12:0];
     end
     if (rst) begin
-      \$51  = 13'h0002;
+      \$52  = 13'h0002;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$52  = \$23 ;
-    if (rst) begin
-      \$52  = 1'h1;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$53  = \$30 ;
+    \$53  = \$23 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$54  = \$34 [24:0];
+    \$54  = \$30 ;
     if (rst) begin
-      \$54  = 25'h0000001;
+      \$54  = 1'h1;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    \$55  = \$34 [24:0];
+    if (rst) begin
+      \$55  = 25'h0000001;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
-      \$55  = 1'h0;
+      \$56  = 1'h0;
     end else begin
-      \$55  = \$38 ;
+      \$56  = \$38 ;
     end
-    if (rst) begin
-      \$55  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$56  = \$42 ;
     if (rst) begin
       \$56  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$57  = \$46 ;
+    (* full_case = 32'd1 *)
+    if (clear) begin
+      \$57  = 1'h0;
+    end else begin
+      \$57  = \$39 ;
+    end
     if (rst) begin
       \$57  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
-    \$58  = \$47 ;
+    \$58  = \$43 ;
     if (rst) begin
       \$58  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    \$59  = \$47 ;
+    if (rst) begin
+      \$59  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    \$60  = \$48 ;
+    if (rst) begin
+      \$60  = 1'h0;
     end
   end
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4926$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4940$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
@@ -34888,8 +34964,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4926$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$4926$0 ;
-  wire \port$4926$0 ;
+  output \port$4940$0 ;
+  wire \port$4940$0 ;
   output report;
   wire report;
   input report_frame;
@@ -35007,7 +35083,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4926$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4926$0  = \$2 ;
+  assign \port$4940$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -19,7 +19,6 @@ from master_contract import (CA_COUNTERS, CA_STATUS, DEFAULT_TIMEOUT_LIMIT_S, MA
                              QUIET_TIME_S, SSI_ACCESS_STATUS, SSI_BAD_CONFIGS, SSI_DELAY_MAX,
                              ssi_vote_margin)
 from protocol_facts import ENCODER_INTERNAL_DELAY_S
-from sim.shared.discovery import expected_to_fail
 from sim.shared.ssi_testbench import SsiTestbench
 from sim.shared.testbench import CLK_HZ, MA_RATES_HZ, preset
 
@@ -403,9 +402,6 @@ async def ssi_config_latched_per_cycle(dut):
 
 
 @cocotb.test()
-@expected_to_fail("SSI after an abort: with the encoder's line left high and tm (60 us) longer "
-                  "than the break (40 us), the next train comes within tm; the encoder latches "
-                  "nothing and shifts on, and the core reports OK, valid, a wrong position")
 async def ssi_abort_with_long_monoflop(dut):
     """An abort leaves the encoder mid-word with its line HIGH (every bit 1) and tm 60 us,
     longer than the break after an abort: the next cycle must still latch anew (the contract:

@@ -95,7 +95,11 @@ class CycleController(wiring.Component):
         The cycle is an SSI frame (docs/ports.md, "SSI mode"): no line faults of Ack and
         Start; ``frame_done`` is the stop bit's strobe (the decoder's ``stopped``), and a stop
         bit of 1 there is NO_STOP whatever ``end_check`` says (an SSI line stuck high sends
-        nothing else to tell it by); TAIL does not wait for the stop bit again.
+        nothing else to tell it by); TAIL does not wait for the stop bit again; BREAK also
+        waits for ``timeout_over`` (an aborted train may leave the encoder's line high within
+        its monoflop time: nothing shows when it ends).
+    timeout_over : In(1)
+        From the limit timers: BREAK has lasted the timeout limit (SSI).
     break_over, ack_expired, no_start_expired, slo_stuck, slo_stuck_live, delay_over : In(1)
         From the limit timers.
     quiet, quiet_live : In(1)
@@ -154,6 +158,7 @@ class CycleController(wiring.Component):
             "stop_bit": In(1),
             "frame_doubtful": In(1),
             "ssi": In(1),
+            "timeout_over": In(1),
             "break_over": In(1),
             "ack_expired": In(1),
             "no_start_expired": In(1),
@@ -231,7 +236,7 @@ class CycleController(wiring.Component):
                 m.d.comb += self.resync.eq(1)
                 with m.If(self.ma_busy | self.abort):
                     m.d.comb += self.timer_clear.eq(1)
-                with m.Elif(self.break_over):
+                with m.Elif(self.break_over & (~self.ssi | self.timeout_over)):
                     goto("IDLE")
 
             with m.State("IDLE"):

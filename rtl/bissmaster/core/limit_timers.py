@@ -20,6 +20,9 @@ class LimitTimers(wiring.Component):
 
     - ``break_over``: elapsed >= ``break_time`` (live; 0 -> ``break_default``). The next
       elapsed time after a clear is 0, never >= a time >= 1: a clear resets the flag.
+    - ``timeout_over`` (SSI builds): elapsed >= ``timeout_limit`` (latched), cleared with
+      ``break_over``: in SSI, BREAK lasts this long too (the encoder's monoflop time after an
+      interrupted train).
     - ``ack_expired``: elapsed >= ``ack_limit``; ``no_start_expired``: elapsed >=
       ``no_start_limit``. Right only in CLOCK, after a clock that stays in CLOCK without
       ``restart`` (the controller clears the timer on ``restart``) or after WAIT_READY (timer
@@ -68,6 +71,7 @@ class LimitTimers(wiring.Component):
             "quiet_time_live": In(QUIET_WIDTH),
             "quiet_limit": In(QUIET_WIDTH),
             "break_over": Out(1),
+            **({"timeout_over": Out(1)} if p.ssi else {}),
             "ack_expired": Out(1),
             "no_start_expired": Out(1),
             "slo_stuck": Out(1),
@@ -126,10 +130,14 @@ class LimitTimers(wiring.Component):
         counting = self.in_clock & ~self.restart
         with m.If(self.clear):
             m.d.sync += self.break_over.eq(0)
+            if p.ssi:
+                m.d.sync += self.timeout_over.eq(0)
         with m.Else():
             m.d.sync += self.break_over.eq(Mux(self.break_time == 0,
                                                timer >= p.break_default,
                                                timer >= self.break_time))
+            if p.ssi:
+                m.d.sync += self.timeout_over.eq(timer >= self.timeout_limit)
         m.d.sync += [
             self.ack_expired.eq(counting & (timer >= self.ack_limit)),
             self.no_start_expired.eq(counting & (timer >= self.no_start_limit)),

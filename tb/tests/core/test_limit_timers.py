@@ -29,7 +29,7 @@ BREAK_DEFAULT = protocol_clocks(40, PARAMS.sys_clk_hz)
 TIMEOUT_DEFAULT = protocol_clocks(80, PARAMS.sys_clk_hz)
 QUIET_DEFAULT = protocol_clocks(1, PARAMS.sys_clk_hz)
 FLAGS = ["break_over", "ack_expired", "no_start_expired", "slo_stuck", "slo_stuck_live",
-         "delay_over", "quiet", "quiet_live"]
+         "delay_over", "quiet", "quiet_live", "timeout_over"]
 QUIET = {"slo": 1, "ma_busy": 0, "clear": 0, "in_clock": 0, "restart": 0, "break_time": 1000,
          "timeout_live": 1000, "ack_limit": 1000, "timeout_limit": 1000, "no_start_limit": 1000,
          "delay": 0, "delay_limit": 50, "quiet_limit": 0, "quiet_time_live": 0}
@@ -47,6 +47,8 @@ def reference(steps):
         if prev is not None and elapsed is not None:
             row["break_over"] = int(not prev["clear"]
                                     and elapsed >= (prev["break_time"] or BREAK_DEFAULT))
+            # SSI builds: the cycle timer against the (latched) timeout limit, as break_over.
+            row["timeout_over"] = int(not prev["clear"] and elapsed >= prev["timeout_limit"])
             counting = prev["in_clock"] and not prev["restart"]
             row["ack_expired"] = int(counting and elapsed >= prev["ack_limit"])
             row["no_start_expired"] = int(counting and elapsed >= prev["no_start_limit"])
@@ -92,6 +94,15 @@ def test_limit_timers_break_over_at_the_limit(setting, limit):
     trace = _run(steps)
     assert [trace[3 + k]["break_over"] for k in (limit - 1, limit, limit + 1)] == [0, 1, 1]
     assert [x["break_over"] for x in trace] == [x["break_over"] for x in reference(steps)]
+
+
+@pytest.mark.parametrize("limit", (1, 2, 37, 80))
+def test_limit_timers_timeout_over_at_the_limit(limit):
+    """SSI builds: BREAK lasts the timeout limit too (docs/ports.md, "SSI mode")."""
+    steps = _after_clear(limit + 4, timeout_limit=limit)
+    trace = _run(steps)
+    assert [trace[3 + k]["timeout_over"] for k in (limit - 1, limit, limit + 1)] == [0, 1, 1]
+    assert [x["timeout_over"] for x in trace] == [x["timeout_over"] for x in reference(steps)]
 
 
 def test_limit_timers_break_time_read_live_and_restarted_by_clear():
@@ -218,7 +229,8 @@ def test_limit_timers_saturate_instead_of_wrapping():
     # Elapsed time e; SLO-low time e + 1 (SLO low from the clear's clock on).
     for elapsed, flags in seen:
         cycle_up, low_up = int(elapsed >= 2**tw - 1), int(elapsed + 1 >= 2**tw - 1)
-        expected = {"break_over": cycle_up, "ack_expired": cycle_up, "slo_stuck": low_up,
+        expected = {"break_over": cycle_up, "timeout_over": cycle_up, "ack_expired": cycle_up,
+                    "slo_stuck": low_up,
                     "slo_stuck_live": low_up, "delay_over": 0,
                     "no_start_expired": int(elapsed >= 2**(tw + 1) - 1),
                     # SLO low, a quiet time of 0 (latched) and 1 us = 1 clock (live): a high
