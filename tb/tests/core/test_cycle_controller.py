@@ -23,7 +23,7 @@ QUIET = {"request": 0, "abort": 0, "config_ok": 1, "end_check": 0, "slo": 1, "ma
          "slots_full": 0, "stopped": 0, "stop_bit": 0, "break_over": 0, "ack_expired": 0,
          "no_start_expired": 0, "slo_stuck": 0, "slo_stuck_live": 0, "delay_over": 0,
          "quiet": 1, "quiet_live": 1,
-         "frame_doubtful": 0}
+         "frame_doubtful": 0, "ssi": 0, "timeout_over": 0}
 SIGNALS = ["idle", "waiting", "first_clock", "receiver_clear", "resync", "timer_clear", "in_clock",
            "restart_timer", "ma_run", "report_frame", "report_delay", "fault", "fault_status"]
 OUTPUTS = SIGNALS + [f"faults.{name.lower()}" for name in FAULT_NAMES]
@@ -363,3 +363,60 @@ def test_cycle_controller_cdm1_no_hold_after_a_fault():
     trace = run_cdm(steps)
     assert trace[-3]["fault"] and trace[-3]["ma_hold"] == 0
     assert trace[-1]["state"] == "BREAK" and not trace[-1]["ma_hold"]
+
+
+# -- SSI (docs/ports.md, "SSI mode") ------------------------------------------------------------
+
+#: An SSI cycle: no Ack or Start to wait for; the frame ends with the stop bit's decision
+#: (``frame_done`` is the decoder's ``stopped`` in the master), checked there.
+SSI_PREFIX = [{}, {"break_over": 1, "timeout_over": 1}, {}, {"request": 1}, {}, {}]   # CLOCK at 5
+
+
+@pytest.mark.parametrize("end_check", (0, 1), ids=("end_check0", "end_check1"))
+def test_cycle_controller_ssi_line_faults_ignored_stop_bit_low_reports(end_check):
+    """No Ack, Start or delay fault in SSI (their flags are ignored in CLOCK); a stop bit of 0
+    reports the frame (without the end check at once, with it after SLO is high again and MA
+    stopped), TAIL does not wait for ``stopped`` again."""
+    steps = SSI_PREFIX + [
+        {"ack_expired": 1, "early": 1, "ma_arm": 1},                  # 6: would be faults
+        {"locked": 1, "delay_over": 1, "no_start_expired": 1},        # 7
+        {"ma_enough": 1},                                             # 8
+        {"ma_enough": 1, "frame_done": 1, "stop_bit": 0, "slo": 0},   # 9: the stop bit, low
+        {"ma_enough": 1, "slo": 0},                                   # 10
+        {"ma_enough": 1, "slo": 1},                                   # 11: tm over
+        {"ma_enough": 1},                                             # 12
+    ]
+    trace = run_clocks(CycleController(), steps, OUTPUTS,
+                       defaults={**QUIET, "end_check": end_check, "ssi": 1})
+    assert not any(x["fault"] for x in trace)
+    reports = [t for t, x in enumerate(trace) if x["report_frame"]]
+    assert reports == ([9] if not end_check else [11])
+    assert trace[-1]["idle"] == 1
+
+
+@pytest.mark.parametrize("end_check", (0, 1), ids=("end_check0", "end_check1"))
+def test_cycle_controller_ssi_stop_bit_high_is_no_stop(end_check):
+    """SSI: a stop bit of 1 is NO_STOP in CLOCK, with or without the end check; no report."""
+    steps = SSI_PREFIX + [{"ma_enough": 1}, {"ma_enough": 1, "frame_done": 1, "stop_bit": 1},
+                          {}]
+    trace = run_clocks(CycleController(), steps, OUTPUTS,
+                       defaults={**QUIET, "end_check": end_check, "ssi": 1})
+    faults = [(t, STATUS_NAME[x["fault_status"]]) for t, x in enumerate(trace) if x["fault"]]
+    assert faults == [(7, "NO_STOP")]
+    assert not any(x["report_frame"] for x in trace)
+    assert trace[7]["timer_clear"] == 1 and trace[8]["resync"] == 1       # to BREAK
+
+
+def test_cycle_controller_ssi_break_waits_for_the_timeout_limit_too():
+    """SSI: BREAK (after an abort here) ends only with both ``break_over`` and
+    ``timeout_over``; BiSS: ``break_over`` alone."""
+    for ssi in (0, 1):
+        steps = SSI_PREFIX + [{"abort": 1}, {}, {"break_over": 1}, {"break_over": 1},
+                              {"break_over": 1, "timeout_over": 1}, {}]
+        trace = run_clocks(CycleController(), steps, OUTPUTS, defaults={**QUIET, "ssi": ssi})
+        assert STATUS_NAME[trace[6]["fault_status"]] == "ABORTED" and trace[6]["fault"]
+        states = [state(x) for x in trace[7:]]
+        if ssi:
+            assert states == ["BREAK"] * 4 + ["IDLE"]
+        else:
+            assert states == ["BREAK"] * 2 + ["IDLE"] * 3
