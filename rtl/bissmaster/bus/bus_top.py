@@ -125,6 +125,12 @@ class BusChannel(wiring.Component):
         self.status = status
         full = BissMaster.ports(MasterParams(counter_ram=True))
         core = BissMaster.ports(params)
+        #: The map's configuration signals this channel's core does not have (word 1 in a
+        #: one-word build, SSI or register access in a build without): the bank stores none
+        #: of them (:class:`~bissmaster.bus.register_bank.RegisterBank`, ``absent``).
+        self.absent = frozenset(name for name, member in regs.members.items()
+                                if member.flow == Out and name not in CHANNEL_GLUE
+                                and name not in core)
         for name, member in regs.members.items():
             if name in CHANNEL_GLUE:
                 continue
@@ -300,7 +306,8 @@ class BusTop(wiring.Component):
         member, prefix = spec.member, spec.prefix
         m.submodules.bus = adapter = spec.adapter(self.regmap.addr_width, self.sys_clk_hz,
                                                   **self.options)
-        m.submodules.bank = bank = RegisterBank(self.regmap, self.channels)
+        m.submodules.bank = bank = RegisterBank(self.regmap, self.channels,
+                                                [c.absent for c in self._channels])
         wiring.connect(m, adapter.regs, bank.bus)
 
         # The bus pins, flat.

@@ -70,7 +70,9 @@ class RegisterBank(wiring.Component):
     Field kinds (:class:`~bissmaster.bus.regmap.Kind`): CONFIG fields are registers with their
     reset values, written per byte lane; PULSE fields give a registered one-clock pulse for
     each 1 written and read 0; LIVE fields read their signal (a snapshot group reads a copy
-    taken when its first register is read); CONST fields read their reset value; IRQ fields
+    taken when its first register is read); CONST fields read their reset value (and so does
+    a CONFIG field whose signal the channel's core does not have, ``absent``: no storage, its
+    writes ignored); IRQ fields
     are sticky, set by their event and cleared by writing 1, a set winning over a clear in the
     same clock. Unmapped addresses read 0 and ignore writes. A window (an external register
     array) is a memory's port: a write of word ``i`` writes its strobed byte lanes to word ``i``
@@ -93,6 +95,14 @@ class RegisterBank(wiring.Component):
     reads the live values copied; the group's other registers read the copy, so every word of
     the group read after the first belongs to the same snapshot.
 
+    Parameters
+    ----------
+    regmap : RegisterMap
+    channels : int
+    absent : sequence of sets of str, one per channel, optional
+        The signals of CONFIG fields that the channel's core does not have (a one-word build's
+        word 1, a build without SSI or register access): those fields are not stored.
+
     Attributes
     ----------
     bus : In(RegisterBus)
@@ -104,12 +114,15 @@ class RegisterBank(wiring.Component):
         Per channel: a cause is set in its IRQ fields and enabled.
     """
 
-    def __init__(self, regmap, channels):
+    def __init__(self, regmap, channels, absent=None):
         if not isinstance(channels, int) or not 1 <= channels <= regmap.channel_slots:
             raise ValueError(f"channels must be an integer from 1 to {regmap.channel_slots}, "
                              f"not {channels!r}")
         self.regmap = regmap
         self.channels = channels
+        self.absent = [frozenset(a) for a in (absent or [()] * channels)]
+        if len(self.absent) != channels:
+            raise ValueError(f"absent must name one set per channel ({channels})")
         members = {
             "bus": In(RegisterBus(regmap.addr_width - 2)),
             "glob": Out(block_signature(regmap, regmap.globals)),
@@ -121,9 +134,9 @@ class RegisterBank(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         rm = self.regmap
-        blocks = [(self.glob, 0, rm.globals, "g")]
+        blocks = [(self.glob, 0, rm.globals, "g", frozenset())]
         blocks += [(getattr(self, f"ch{n}"), rm.channel_base + n * rm.channel_stride,
-                    rm.channel, f"ch{n}") for n in range(self.channels)]
+                    rm.channel, f"ch{n}", self.absent[n]) for n in range(self.channels)]
         # The write request, registered: every write decodes from these flip-flops, in the
         # clock after w_en, so that no path runs from the bus through the decode.
         bus = self.bus
@@ -145,9 +158,10 @@ class RegisterBank(wiring.Component):
             m.d.sync += [self._w2_data.eq(self._w_data), self._w2_strb.eq(self._w_strb)]
         partials = []                  # each block's registered share of the read data
         irqs = []
-        for port, base, registers, prefix in blocks:
+        for port, base, registers, prefix, absent in blocks:
             read_words, windows, snapshots = {}, [], {}
-            irq = self._block(m, port, base, registers, prefix, read_words, windows, snapshots)
+            irq = self._block(m, port, base, registers, prefix, read_words, windows, snapshots,
+                              absent)
             if prefix != "g":
                 irqs.append(irq)
             selects = self._read_select(m, prefix, read_words)
@@ -167,10 +181,12 @@ class RegisterBank(wiring.Component):
         m.d.comb += self.bus.r_data.eq(merged)
         return m
 
-    def _block(self, m, port, base, registers, prefix, read_words, windows, snapshots):
+    def _block(self, m, port, base, registers, prefix, read_words, windows, snapshots,
+               absent):
         """One block (the globals or a channel): storage, pulses, interrupts, windows and its
         read words; ``snapshots`` gets, per snapshot group, the word address of the register
-        that takes it and the copies' assignments. Returns the block's interrupt request."""
+        that takes it and the copies' assignments; CONFIG fields of ``absent`` signals read
+        their reset value. Returns the block's interrupt request."""
         bus = self.bus
         w_en, w_addr, w_data, w_strb = self._w_en, self._w_addr, self._w_data, self._w_strb
         storage = {}                   # "register.field" -> the Signal that holds it
@@ -202,7 +218,11 @@ class RegisterBank(wiring.Component):
                 data = w_data[f.lsb:f.lsb + f.width]
                 # Bit i of the field is written only if its byte lane's strobe is set.
                 lanes = Cat(w_strb[(f.lsb + i) // 8] for i in range(f.width))
-                if f.kind == Kind.CONFIG:
+                if f.kind == Kind.CONFIG and f.signal in absent:
+                    # The core has no such setting: nothing to store (reads its reset value).
+                    parts.append((f.lsb, C(f.reset, f.width)))
+                    m.d.comb += self._signal(port, f).eq(f.reset)
+                elif f.kind == Kind.CONFIG:
                     reg_bits = Signal(f.width, init=f.reset, name=name)
                     storage[f"{reg.path}.{f.name}"] = reg_bits
                     # Lane by lane: each lane's strobe enables its flip-flops, no logic per bit.

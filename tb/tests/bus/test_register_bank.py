@@ -26,12 +26,13 @@ def offset(path):
     return CH0 + next(r for r in MAP.channel if r.path == path).offset
 
 
-def run(bench, channels=1, buffers=False):
+def run(bench, channels=1, buffers=False, absent=None):
     """``buffers``: channel 0's windows on one memory of the test (16 words, byte lanes): the
-    write window writes it, the read window reads it through a registered port."""
+    write window writes it, the read window reads it through a registered port. ``absent``:
+    the bank's per-channel signals the core lacks."""
     top = Module()
     top.domains.sync = ClockDomain()
-    top.submodules.bank = bank = RegisterBank(MAP, channels)
+    top.submodules.bank = bank = RegisterBank(MAP, channels, absent)
     if buffers:
         top.submodules.mem = mem = Memory(shape=32, depth=16, init=[])
         wr, rd = mem.write_port(granularity=8), mem.read_port()
@@ -104,6 +105,36 @@ def test_storage_lanes_and_unmapped():
             assert await read(ctx, bank, addr) == 0
         assert await read(ctx, bank, 0) == 0x42695353           # id
     run(bench)
+
+
+def test_settings_the_core_lacks_are_not_stored():
+    """docs/bus.md: a configuration field whose signal the channel's core does not have (a
+    one-word build's word 1, no SSI) reads its reset value and ignores writes, per channel;
+    the fields beside it in the same register are stored as ever."""
+    absent = [{"cfg_w1_data_bits", "cfg_w1_enable", "cfg_ssi", "cfg_ssi_delay"}, set()]
+
+    async def bench(ctx, bank):
+        words, ssi = offset("cfg_words"), offset("cfg_ssi")
+        for ch in (0, 1):
+            base = ch * MAP.channel_stride
+            await write(ctx, bank, base + words, 0xFFFFFFFF)
+            await write(ctx, bank, base + ssi, 0xFFFFFFFF)
+        w1_bits = 0x3F << 16 | 1 << 31              # w1_data_bits [21:16], w1_enable [31]
+        assert await read(ctx, bank, words) == 0xFFFFFFFF & ~w1_bits & _mask("cfg_words")
+        assert await read(ctx, bank, ssi) == 0b1110                # error, error_low, double
+        assert ctx.get(bank.ch0.cfg_w1_enable) == 0 and ctx.get(bank.ch0.cfg_ssi_delay) == 0
+        assert ctx.get(bank.ch0.cfg_w0_data_bits) == 0x3F
+        ch1 = MAP.channel_stride
+        assert await read(ctx, bank, ch1 + words) == _mask("cfg_words")
+        assert await read(ctx, bank, ch1 + ssi) == _mask("cfg_ssi")
+        assert ctx.get(bank.ch1.cfg_w1_enable) == 1 and ctx.get(bank.ch1.cfg_ssi_delay) == 0xFFF
+    run(bench, channels=2, absent=absent)
+
+
+def _mask(path):
+    """The bits of a register's fields (from the map's source)."""
+    reg = next(r for r in MAP.channel if r.path == path)
+    return sum(((1 << f.width) - 1) << f.lsb for f in reg.fields)
 
 
 def test_configuration_register_holds_the_new_value_from_the_third_clock():
