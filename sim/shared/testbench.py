@@ -35,6 +35,10 @@ SIGNED_PORTS = [f"cfg_w{w}_signed" for w in range(2)]
 #: A word's custom CRC (cfg_wN_crc = 3), in builds with custom CRCs.
 CUSTOM_CRC_PORTS = [f"cfg_w{w}_crc_{f}" for w in range(2) for f in ("width", "poly", "start", "inverted")]
 
+#: ``done`` strobes whose confirmation state the watch keeps (the newest; expected_status
+#: looks up a result read right after its ``done``).
+CONFIRM_MEMORY = 256
+
 MA_RATES_HZ = (250e3, 1e6, 2.5e6, 5e6, 10e6)
 CABLES_M = (0, 20, 50, 100)
 
@@ -172,6 +176,10 @@ class Testbench:
             setting = int(dut.cfg_confirm_frames.value)
             self.confirm_was_pending[get_sim_time("step") * 1e-12] = \
                 self.confirmation.pending(setting)
+            # Results are judged soon after their ``done``: keep the recent ones only, so a
+            # long campaign does not grow the map with every cycle.
+            while len(self.confirm_was_pending) > CONFIRM_MEMORY:
+                del self.confirm_was_pending[next(iter(self.confirm_was_pending))]
             self.confirmation.reported(int(dut.status.value), setting)
 
     def expected_status(self, res, status):
