@@ -186,6 +186,11 @@ class FrameDecoder(wiring.Component):
                 m.d.sync += [in_top.eq(self.words[1].data_bits != 0), word.eq(0)]
             m.next = "WORD"
 
+        def end_words():
+            """The last word bit is in: ``done``, then the stop bit."""
+            m.d.sync += self.done.eq(1)
+            m.next = "STOP"
+
         ssi = self.ssi if p.ssi else C(0)
         # SSI double transmission: the first copy's bits as sent (the newest in bit 0), and
         # whether the copies differ so far.
@@ -231,11 +236,9 @@ class FrameDecoder(wiring.Component):
                                 with m.If(ssi & self.ssi_double):
                                     m.next = "SEPARATOR"
                                 with m.Else():
-                                    m.d.sync += self.done.eq(1)
-                                    m.next = "STOP"
+                                    end_words()
                             else:
-                                m.d.sync += self.done.eq(1)
-                                m.next = "STOP"
+                                end_words()
                         if p.words > 1:
                             with m.Else():
                                 m.d.sync += word.eq(word + 1)
@@ -252,8 +255,7 @@ class FrameDecoder(wiring.Component):
                             self.mismatch.eq(self.mismatch | (self.bit != expected)),
                         ]
                         with m.If(idx == word_end_m1):
-                            m.d.sync += self.done.eq(1)
-                            m.next = "STOP"
+                            end_words()
             with m.State("STOP"):
                 with m.If(self.sample):
                     m.d.sync += [self.stopped.eq(1), self.stop_bit.eq(self.bit)]
