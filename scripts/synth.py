@@ -79,6 +79,8 @@ PRESET_CONFIGS = ("biss-c", "biss-c-lean", "safety", "bp3")
 BUS_CONFIGS = {
     "axil-1": ("axil", 1, "biss-c", ("ecp5", "ice40", "xilinx", "intel")),
     "axil-4": ("axil", 4, "biss-c", ("ecp5", "xilinx", "intel")),
+    # issue 27's iCE40 target: two channels behind AXI4-Lite in the UP5K (the lean core)
+    "axil-2-lean": ("axil", 2, "biss-c-lean", ("ice40", "ecp5")),
     # the UART bridge instead of AXI4-Lite (a board's host link; docs/uart_bridge.md)
     "uart-1": ("uart", 1, "biss-c", ("ecp5", "ice40", "xilinx", "intel")),
 }
