@@ -867,7 +867,9 @@ async def uart_host_tool_read_and_counters(dut):
     prints each position the encoder sent, in order, with status OK, nE/nW 1 and CRC ok;
     `log` writes the same as CSV (positions, timestamps and line delays against the frames
     sent; the CSV is kept in the build folder, bissmaster_log.csv, the source of the example
-    plot of docs/bench.md); `counters` prints every counter 0; every exit code 0."""
+    plot of docs/bench.md); `counters` prints every counter 0; every exit code 0. Before
+    that, `config --set` puts the channel in SSI mode (cfg_ssi as set, and shown) and
+    `config --preset` back to BiSS (cfg_ssi all 0)."""
     import csv
     import io
 
@@ -875,8 +877,21 @@ async def uart_host_tool_read_and_counters(dut):
     await tb.start([BISS_C], [Cable(length_m=HOST_TOOL_CABLE_M)], [turning(BISS_C)])
     tool = host_tool(tb)
 
+    # First SSI mode by `config --set` after the preset (cfg_ssi, docs/registers.md; the
+    # preset's word is a valid extended SSI word): written and shown; the preset alone then
+    # sets BiSS back (every cfg_ssi field 0), which the BiSS frames below need.
+    ssi = {"ssi": 1, "ssi_error": 0, "ssi_error_low": 0, "ssi_double": 1, "ssi_delay": 1234}
+    code, out, err = await tool("config", "--preset", BISS_C.name, "--ma-hz", "2.5e6",
+                                "--set", "ssi=1", "--set", "cfg_ssi_double=1",
+                                "--set", "ssi_delay=1234")
+    assert code == 0, err
+    assert await tb.read_fields("cfg_ssi", 0) == ssi
+    shown = {line.split()[0]: int(line.split()[1]) for line in out.splitlines()
+             if line.startswith("  ") and line.split()[0] in ssi}
+    assert shown == ssi, out
     code, _, err = await tool("config", "--preset", BISS_C.name, "--ma-hz", "2.5e6")
     assert code == 0, err
+    assert await tb.read_fields("cfg_ssi", 0) == {k: 0 for k in ssi}
     words = await tb.read_fields("cfg_words", 0)
     word = BISS_C.words[0]
     assert (words["w0_data_bits"], words["w0_nenw"], words["w0_lc"], words["w0_crc"],

@@ -19,10 +19,13 @@ from cocotb.triggers import ClockCycles, RisingEdge, Timer, with_timeout
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
+from encoder_model.cocotb_ssi import SsiFaults
 from encoder_model.control import (BANK_SELECT, USER_REGISTERS, Bp3Eds, ControlSlave,
                                    RegisterFile)
-from master_contract import CRC_CODE, MA_HALF_PERIOD_MIN, MAX_DATA_BITS, STATUS, crc_config
-from sim.shared.bus_testbench import CLK_HZ, BusTestbench, Encoder
+from encoder_model.ssi import REPEAT_RING, SsiFormat
+from master_contract import (CRC_CODE, MA_HALF_PERIOD_MIN, MAX_DATA_BITS, STATUS,
+                             STATUS_COUNTERS, crc_config)
+from sim.shared.bus_testbench import CLK_HZ, BusTestbench, Encoder, SsiEncoder
 from sim.shared.c_driver import Bp3Eds as CBp3Eds
 from sim.shared.c_driver import Bp3Id, CDriver, Channel, Config, State
 from sim.shared.discovery import long_on_icarus
@@ -349,6 +352,92 @@ async def driver_refuses_bad_settings(dut):
     await tb.encoders_ready()
     tb.check_result(1, await sample(drv, ch))
 
+
+
+#: SSI (docs/ports.md, "SSI mode"): channel 1 reads a 13-bit Gray singleturn SSI encoder behind
+#: 25 m of cable at 1 MHz, channel 0 its BiSS C encoder as before.
+SSI_CHANNEL = 1
+SSI_WORD = SsiFormat(13, gray=True)
+SSI_MA_HZ = 1_000_000
+
+
+@cocotb.test()
+async def driver_reads_an_ssi_encoder(dut):
+    """The driver reads caps.ssi (has_ssi) and configures channel 1 for an SSI encoder through
+    biss_configure (13-bit Gray, 1 MHz, ssi_delay the true round trip in clocks: cfg_ssi and
+    cfg_words hold it); ten positions read through biss_read_result are those the encoder
+    latched (N + 1 MA pulses each, line_delay = ssi_delay, seq 1..10), while channel 0 keeps
+    reading its BiSS C encoder. Then double transmission (the encoder in ring mode): OK, one
+    bit of the second copy flipped -> SPW_MISMATCH with the first copy's position, then
+    UNCONFIRMED, then OK. No status counter moves on channel 1 (SPW_MISMATCH has none)."""
+    biss = frames.PRESETS["resolute_c_26"]
+    tb = BusTestbench(dut, seed=27)
+    await tb.start([biss, SsiEncoder(SSI_WORD, Cable(length_m=25))])
+    drv = CDriver(os.environ["BISS_DRIVER_LIB"], tb.bus)
+    chans = [await drv.channel(n) for n in range(CHANNELS)]
+    for n, ch in enumerate(chans):
+        assert (await tb.read_fields("caps", n))["ssi"] == 1, "the default core has SSI"
+        assert ch.has_ssi, f"ch{n}: has_ssi not read from caps.ssi"
+    await drv.check("biss_configure_preset", byref(chans[0]), b"resolute_c_26", int(CLK_HZ),
+                    10_000_000)
+    ch, enc = chans[SSI_CHANNEL], tb.channels[SSI_CHANNEL]
+    delay = enc.round_trip_clocks()
+    assert delay > 0
+    word = frames.WordFormat(SSI_WORD.data_bits, nenw=False, crc="none", gray=True)
+
+    async def configure(double):
+        cfg = Config()                          # every other setting 0: the core's default
+        cfg.ma_half_period = CLK_HZ // (2 * SSI_MA_HZ)
+        w0 = cfg.word[0]
+        w0.data_bits, w0.gray, w0.crc = SSI_WORD.data_bits, True, CRC_CODE["none"]
+        cfg.ssi, cfg.ssi_double, cfg.ssi_delay = True, double, delay
+        await drv.check("biss_configure", byref(ch), byref(cfg))
+        assert await tb.read_fields("cfg_ssi", SSI_CHANNEL) == {
+            "ssi": 1, "ssi_error": 0, "ssi_error_low": 0, "ssi_double": int(double),
+            "ssi_delay": delay}
+        words = await tb.read_fields("cfg_words", SSI_CHANNEL)
+        assert (words["w0_data_bits"], words["w0_gray"], words["w0_nenw"], words["w0_lc"],
+                words["w0_crc"], words["w1_enable"]) == (SSI_WORD.data_bits, 1, 0, 0, 0, 0), \
+            words
+        assert (await tb.read_fields("state", SSI_CHANNEL))["config_error"] == 0
+
+    async def ssi_sample(status="OK", double=False):
+        res = await sample(drv, ch)
+        name = drv.lib.biss_status_name(res["status"]).decode()
+        assert name == status, f"status {name}, expected {status}: {res}"
+        rec = tb.check_ssi_result(SSI_CHANNEL, res, status, word=word, ssi_delay=delay,
+                                  double=double)
+        assert res["word0"] == rec.position, "the position the encoder latched (binary)"
+        return res, rec
+
+    await configure(double=False)
+    await tb.encoders_ready()
+    tb.check_result(0, await sample(drv, chans[0]))
+    seqs = []
+    for _ in range(10):
+        res, _ = await ssi_sample()
+        seqs.append(res["seq"])
+    assert seqs == list(range(1, 11)), f"result.seq {seqs}: one frame per request"
+    assert len(enc.encoder.records) == 10, "one latch per request"
+    tb.check_result(0, await sample(drv, chans[0]))
+
+    # Double transmission: the encoder repeats its word after one 0 (iC-MU's ring mode).
+    enc.encoder.set_format(replace(SSI_WORD, repeat=REPEAT_RING))
+    await configure(double=True)
+    await ssi_sample(double=True)
+    faults = SsiFaults(flip_copy2=(5,))
+    enc.encoder.queue(faults)
+    res, rec = await ssi_sample("SPW_MISMATCH", double=True)
+    assert rec.faults == faults
+    dut._log.info("SSI SPW_MISMATCH: result spw_mismatch %d, count_spw_mismatch %d",
+                  res["spw_mismatch"], (await drv.counters(ch))["spw_mismatch"])
+    await ssi_sample("UNCONFIRMED", double=True)        # the confirmation rule after a fault
+    await ssi_sample(double=True)
+    counts = await drv.counters(ch)
+    status_counters = {c for cs in STATUS_COUNTERS.values() for c in cs}
+    assert not any(counts[c] for c in status_counters), counts
+    assert (await drv.counters(chans[0])) == {k: 0 for k in counts}, "channel 0"
+    tb.check_result(0, await sample(drv, chans[0]))
 
 
 # -- Register access and BP3 (the control channel) --------------------------------------------

@@ -5,8 +5,9 @@ The bus is driven by bus models (cocotbext-axi's AxiLiteMaster, cocotbext-wishbo
 WishboneMaster; on the UART top the host software's ``Link`` over a UART model,
 sim/shared/uart.py), every address and field comes from the SystemRDL source through
 :mod:`sim.shared.regspec`, and each channel's MA/SLO pair has its own encoder model
-(tb/encoder_model). Expected results come from what each encoder sent, looked up by the
-result's timestamp (the clock count of the frame's first MA rise), never from the RTL.
+(tb/encoder_model): a BiSS one, or an SSI one (:class:`SsiEncoder`). Expected results come
+from what each encoder sent, looked up by the result's timestamp (the clock count of the
+frame's first MA rise), never from the RTL.
 """
 
 import logging
@@ -21,7 +22,10 @@ from cocotb.triggers import ClockCycles, Lock, RisingEdge, Timer, with_timeout
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
-from master_contract import MAX_DATA_BITS, STATUS, SYS_CLK_HZ, crc_config, port_position
+from encoder_model.cocotb_ssi import SsiLineEncoder
+from encoder_model.ssi import parse_ssi
+from master_contract import (MAX_DATA_BITS, STATUS, SYS_CLK_HZ, crc_config, port_position,
+                             ssi_ma_pulses, ssi_ne_nw)
 from sim.shared import regspec
 
 CLK_HZ = SYS_CLK_HZ
@@ -135,6 +139,33 @@ class Channel:
         return Response(bits=bits, processing_time_s=self.tb.rng.uniform(*self.spec.processing_s))
 
 
+@dataclass(frozen=True)
+class SsiEncoder:
+    """One channel's SSI encoder model (encoder_model.cocotb_ssi.SsiLineEncoder on its pins):
+    its word (an encoder_model.ssi.SsiFormat; ``encoder.set_format`` changes it for the next
+    latch), cable, position function of time (default: random)."""
+    fmt: object
+    cable: Cable = field(default_factory=Cable)
+    position: object = None
+
+
+class SsiChannel:
+    """One channel's SSI encoder model; what it sent is its ``encoder.records``."""
+
+    def __init__(self, tb, n, spec):
+        self.tb, self.n, self.spec = tb, n, spec
+        self.position = spec.position or (
+            lambda t: tb.rng.getrandbits(self.encoder.fmt.data_bits))
+        self.encoder = SsiLineEncoder(getattr(tb.dut, f"ch{n}_ma"),
+                                      getattr(tb.dut, f"ch{n}_slo"), spec.fmt,
+                                      lambda t: self.position(t), cable=spec.cable, rng=tb.rng)
+
+    def round_trip_clocks(self):
+        """The true round trip (cable both ways + the encoder's delay), in clocks: what
+        cfg_ssi.ssi_delay is set to (as sim/shared/ssi_testbench.py does)."""
+        return round(self.spec.cable.round_trip_s() * CLK_HZ)
+
+
 class BusTestbench:
     def __init__(self, dut, *, seed=1):
         self.dut = dut
@@ -151,17 +182,18 @@ class BusTestbench:
     # -- Setup ----------------------------------------------------------------------------
     async def start(self, formats=(), cables=(), positions=()):
         """Clock, reset, and one encoder per entry of ``formats`` (channel 0, 1, ...): a frame
-        format, or an :class:`Encoder`; ``cables``, ``positions``: per channel, for the entries
-        given as formats (default: a 0 m cable, random positions)."""
+        format, an :class:`Encoder` or an :class:`SsiEncoder`; ``cables``, ``positions``: per
+        channel, for the entries given as formats (default: a 0 m cable, random positions)."""
         dut = self.dut
         Clock(dut.clk, CLK_NS, unit="ns").start()
         dut.trigger.value = 0
         dut.rst.value = 1
         for n, spec in enumerate(formats):
-            if not isinstance(spec, Encoder):
+            if not isinstance(spec, (Encoder, SsiEncoder)):
                 spec = Encoder(spec, cables[n] if n < len(cables) else Cable(),
                                positions[n] if n < len(positions) else None)
-            self.channels[n] = Channel(self, n, spec)
+            self.channels[n] = (SsiChannel if isinstance(spec, SsiEncoder) else Channel)(
+                self, n, spec)
             self.channels[n].encoder.start()
         await ClockCycles(dut.clk, 4)
         dut.rst.value = 0
@@ -271,6 +303,34 @@ class BusTestbench:
             if chan.fmt.words[w].lc:
                 assert res["lc"] == word["lc"]
         return parsed
+
+    def check_ssi_result(self, ch, res, status="OK", *, word, ssi_delay, double=False):
+        """An SSI result against the transmission channel ``ch``'s SSI encoder latched for it
+        (the record whose first MA rise is the result's timestamp): the status, MA pulses
+        N + 1 (2N + 2 ``double``) as the encoder saw them, ``line_delay`` = ``ssi_delay``, and
+        word 0 (``word``: the frames.WordFormat configured) as the first copy was sent (the
+        position, flags and CRC). Returns the record."""
+        chan = self.channels[ch]
+        assert res["status"] == STATUS[status], f"ch{ch}: status {res['status']} != {status}"
+        m2e = chan.spec.cable.m2e_s()
+        recs = [r for r in chan.encoder.records
+                if r.t_rises_s and self.timestamp_of(r.t_rises_s[0] - m2e) == res["time"]]
+        assert len(recs) == 1, f"ch{ch}: {len(recs)} SSI latches at timestamp {res['time']}"
+        rec = recs[0]
+        pulses = ssi_ma_pulses(rec.fmt.total_bits, double)
+        assert (rec.ma_falls, rec.ma_rises) == (pulses, pulses), \
+            f"ch{ch}: MA {rec.ma_falls} falls / {rec.ma_rises} rises, expected {pulses}"
+        assert res["line_delay"] == ssi_delay, f"line_delay {res['line_delay']} != {ssi_delay}"
+        sent = parse_ssi(rec.fmt, [b ^ (i in rec.faults.flip) for i, b in enumerate(rec.word)])
+        want = port_position(word, sent.position, MAX_DATA_BITS[0])
+        assert res["word0"] == want, f"ch{ch} word0: {res['word0']:#x} != sent {want:#x}"
+        flags = ssi_ne_nw(error_active=sent.errors[0] if rec.fmt.error_bits else None,
+                          nenw=(sent.ne, sent.nw) if rec.fmt.nenw else None)
+        if flags is not None:
+            assert (res["w0_ne"], res["w0_nw"]) == flags
+        crc_ok = 1 if sent.crc_ok is None else int(sent.crc_ok)
+        assert res["w0_crc_ok"] == crc_ok, f"w0_crc_ok {res['w0_crc_ok']}, sent {crc_ok}"
+        return rec
 
     async def wait_irq_status(self, ch, cause="done", limit_s=1e-3, clear=True):
         """Poll ``irq_status`` until ``cause`` is set; clear it (write 1) if asked."""
