@@ -48,6 +48,10 @@ STATUS_COUNTERS = {"CRC_ERROR_WORD0": ("crc_word0",), "CRC_ERROR_WORD1": ("crc_w
                    "SLO_STUCK_LOW": ("slo_stuck_low",), "ABORTED": ("aborted",),
                    "NO_STOP": ("no_stop",), "NOISY_LINE": ("noisy_line",),
                    "DELAY_JUMP": ("delay_jump",)}
+#: In SSI mode (no LC, docs/ports.md "SPW check"): ``spw_mismatch``, and so
+#: ``count_spw_mismatch``, is set exactly with status SPW_MISMATCH (a double transmission's
+#: copies differ).
+SSI_STATUS_COUNTERS = {**STATUS_COUNTERS, "SPW_MISMATCH": ("spw_mismatch",)}
 #: Counters a one-word build does not have.
 WORD1_COUNTERS = ("crc_word1", "spw_mismatch")
 #: The counters of issue 28's noise defences (a core with ``count_noisy_line``): one per

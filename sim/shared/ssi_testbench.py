@@ -15,7 +15,7 @@ from encoder_model.cocotb_encoder import Cable
 from encoder_model.cocotb_ssi import SsiLineEncoder
 from encoder_model.ssi import ACTIVE_LOW, REPEAT_RING, REPEAT_ZEROS, SsiFormat, parse_ssi
 from master_contract import (SSI_FIELD_STATUSES, SSI_PORTS, SSI_STATUSES, STATUS,
-                             STATUS_COUNTERS, STATUS_NAME, port_position, ssi_ma_pulses,
+                             SSI_STATUS_COUNTERS, STATUS_NAME, port_position, ssi_ma_pulses,
                              ssi_ne_nw, ssi_word_bits)
 from sim.shared.testbench import CLK_HZ, Testbench
 
@@ -94,7 +94,7 @@ class SsiTestbench(Testbench):
         self.status_counts = self._status_counts(self.read().counters)
 
     def _status_counts(self, counters):
-        names = {n for ns in STATUS_COUNTERS.values() for n in ns}
+        names = {n for ns in SSI_STATUS_COUNTERS.values() for n in ns}
         return {n: v for n, v in counters.items() if n in names}
 
     @property
@@ -148,7 +148,7 @@ class SsiTestbench(Testbench):
             # one count in the status's counter(s), none in the others (BAD_CONFIG: none)
             now = self._status_counts(res.counters)
             want = dict(self.status_counts)
-            for name in STATUS_COUNTERS.get(status, ()):
+            for name in SSI_STATUS_COUNTERS.get(status, ()):
                 want[name] += 1
             assert now == want, f"status counters {now}, expected {want} after {status}"
             self.status_counts = now
