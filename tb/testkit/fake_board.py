@@ -96,7 +96,7 @@ class RegisterModel:
         out = {}
         for path in ("cfg_ma", "cfg_period", "cfg_break", "cfg_ack", "cfg_timeout",
                      "cfg_words", "cfg_checks", "cfg_crc0", "cfg_crc0_start", "cfg_crc1",
-                     "cfg_crc1_start"):
+                     "cfg_crc1_start", "cfg_ssi"):
             out.update(self.fields(path, ch, self.stored(path, ch)))
         return out
 

@@ -763,7 +763,7 @@ def show_config(board, ch, clock_hz, out):
     print(f"channel {ch}: caps: word 0 up to {caps['data_bits_w0']} bits, word 1 up to "
           f"{caps['data_bits_w1']}, timers {caps['timer_width']} bits, counters "
           f"{yes[caps['counters']]}, timestamp {yes[caps['timestamp']]}, register access "
-          f"{yes[caps['register_access']]}", file=out)
+          f"{yes[caps['register_access']]}, SSI {yes[caps['ssi']]}", file=out)
     print(f"channel {ch}: state: busy {state['busy']}, config_error {state['config_error']}; "
           f"ctrl: periodic {ctrl['periodic']}, trigger_enable {ctrl['trigger_enable']}",
           file=out)
