@@ -80,7 +80,7 @@ sim-all: setup  ## cocotb regression, bus-top and C-driver scenarios on Verilato
 sim-long: setup  ## the Icarus runs of the scenarios marked long_on_icarus (core, bus tops, driver; Verilator runs them in make test)
 	$(PY) -m pytest $(SIM_TESTS) -q -n $(JOBS) --dist worksteal -m long
 
-campaigns: setup  ## reliability campaigns, fast slice (CRC, line faults, LC, config fuzz, random mix) + report
+campaigns: setup  ## reliability campaigns, fast slice (CRC, line faults, LC, config fuzz, random mix, SSI) + report
 	rm -rf sim_build/campaign/slice
 	$(PY) -m pytest $(CAMPAIGN_TESTS) -q -n $(JOBS) --dist worksteal
 	$(PY) -m sim.tools.campaign_report sim_build/campaign/slice

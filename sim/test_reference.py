@@ -100,3 +100,29 @@ def test_coverage_bins_and_holes():
     assert illegal == [("fault", "unplug", "CRC_ERROR_WORD0")]
     assert delay_bin(0.04e-6, 10e6) == "<0.5 bit"
     assert sum(len(b) for b in bins().values()) == 16 * 5 * 4 + sum(map(len, LEGAL.values())) + len(STATUS)
+
+
+def test_ssi_verdict_rules():
+    """docs/ports.md, "SSI mode": NO_STOP first, then copy 1's CRC, then the copies compared."""
+    from encoder_model.frames import CRC6
+    from encoder_model.ssi import SsiFormat, ssi_bits
+    from sim.shared.reference import ssi_verdict
+    plain, ext = SsiFormat(12, gray=True), SsiFormat(9, nenw=True, crc=CRC6)
+    for fmt in (plain, ext):
+        word = ssi_bits(fmt, 0x0A5)
+        n = len(word)
+        flip = lambda bits, i: [b ^ (k == i) for k, b in enumerate(bits)]    # noqa: E731
+        assert ssi_verdict(fmt, word + [0], double=False)[0] == "OK"
+        assert ssi_verdict(fmt, word + [0] + word + [0], double=True)[0] == "OK"
+        assert ssi_verdict(fmt, word + [1], double=False)[0] == "NO_STOP"
+        assert ssi_verdict(fmt, flip(word, 3) + [0] + word + [1], double=True)[0] == "NO_STOP"
+        # one bit of copy 1 wrong: undetectable without a CRC (a wrong reading), else the CRC
+        status, reading = ssi_verdict(fmt, flip(word, 3) + [0], double=False)
+        assert status == ("OK" if fmt is plain else "CRC_ERROR_WORD0")
+        assert fmt is ext or reading.position != 0x0A5
+        status, reading = ssi_verdict(fmt, flip(word, 3) + [0] + word + [0], double=True)
+        assert status == ("SPW_MISMATCH" if fmt is plain else "CRC_ERROR_WORD0")
+        # copy 2 or the separator wrong: the copies differ, copy 1 reported
+        for bad in (word + [0] + flip(word, n - 1) + [0], word + [1] + word + [0]):
+            status, reading = ssi_verdict(fmt, bad, double=True)
+            assert (status, reading.position) == ("SPW_MISMATCH", 0x0A5)

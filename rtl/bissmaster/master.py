@@ -314,7 +314,9 @@ class BissMaster(wiring.Component):
             b.line_noise.watch.eq(b.controller.waiting),
             b.line_noise.level.eq(b.sampler.level),
             b.line_noise.sampler_noise.eq(b.sampler.noise),
-            b.line_noise.close.eq(b.decoder.done),
+            # A frame's end: its last word bit (BiSS), the bit after the word (SSI, where the
+            # verdict waits for that bit too).
+            b.line_noise.close.eq(Mux(b.ssi, b.decoder.stopped, b.decoder.done)),
             b.line_noise.restart.eq(b.controller.fault),
             b.line_noise.limit.eq(b.cycle.noise_limit),
             # SSI sets its round trip: nothing to check it against.

@@ -1005,6 +1005,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \periodic$114  = periodic | ca_busy;
   assign frame_done = cycle[259] ? stopped : \done$140 ;
   assign arm = cycle[259] ? first_rise : ma_arm;
+  assign close = cycle[259] ? stopped : \done$140 ;
   assign \$1  = cycle[144:141] != 4'hf;
   assign \$2  = ~ cycle[259];
   assign enable = \$1  & \$2 ;
@@ -1137,7 +1138,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$2190$272 (cycle[274:272]),
+    .\port$2191$272 (cycle[274:272]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(sample),
@@ -1167,7 +1168,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.line_noise  line_noise (
     .clk(clk),
-    .close(\done$140 ),
+    .close(close),
     .\event (\event ),
     .events(events),
     .level(\slo$127 ),
@@ -1248,7 +1249,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$2190$259 (cycle[271:259]),
+    .\port$2191$259 (cycle[271:259]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(\sample$348 ),
@@ -1271,7 +1272,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$213 ),
     .load(load),
-    .\port$2178$0 (\bit ),
+    .\port$2179$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1338,7 +1339,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$1617$0 (\$28 ),
+    .\port$1618$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -1447,7 +1448,6 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign waiting = watch;
   assign \level$225  = \slo$127 ;
   assign noise = sampler_noise;
-  assign close = \done$140 ;
   assign fault = \restart$229 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
@@ -5595,7 +5595,7 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$2190$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$2191$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire [6:0] \$1 ;
@@ -6298,8 +6298,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$2190$272 ;
-  wire [2:0] \port$2190$272 ;
+  input [2:0] \port$2191$272 ;
+  wire [2:0] \port$2191$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -6366,8 +6366,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$367  = ssi & \port$2190$272 [0];
-  assign \$368  = ~ \port$2190$272 [1];
+  assign \$367  = ssi & \port$2191$272 [0];
+  assign \$368  = ~ \port$2191$272 [1];
   assign \$369  = \$367  & \$368 ;
   assign \$370  = \bit  ^ \$369 ;
   assign \$371  = ~ words[6];
@@ -6688,18 +6688,18 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
     cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$2190$272 [0];
+  assign \$3  = ssi & \port$2191$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$2190$272 [0];
+  assign \$6  = ssi & \port$2191$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$2190$272 [0];
+  assign \$9  = ssi & \port$2191$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$2190$272 [0];
+  assign \$14  = ssi & \port$2191$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$2190$272 [0];
+  assign \$18  = ssi & \port$2191$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -6744,7 +6744,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   assign \$66  = idx == \$65 ;
   assign \$67  = word_count - 1'h1;
   assign \$68  = word == \$67 ;
-  assign \$69  = ssi & \port$2190$272 [2];
+  assign \$69  = ssi & \port$2191$272 [2];
   assign \$70  = word + 1'h1;
   assign \$71  = idx + 1'h1;
   assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -7035,7 +7035,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   assign \$357  = \$354  & \$356 ;
   assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
   assign \$359  = ~ words[6];
-  assign \$360  = ssi & \port$2190$272 [0];
+  assign \$360  = ssi & \port$2191$272 [0];
   assign \$361  = ~ \$360 ;
   assign \$362  = \$359  & \$361 ;
   assign \$363  = ! word;
@@ -7797,9 +7797,9 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$2190$272 [0];
-  assign ssi_double = \port$2190$272 [2];
-  assign ssi_error_low = \port$2190$272 [1];
+  assign ssi_error = \port$2191$272 [0];
+  assign ssi_double = \port$2191$272 [2];
+  assign ssi_error_low = \port$2191$272 [1];
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$53  = crcs;
   assign \bit$58  = \bit ;
@@ -8445,7 +8445,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
+module \biss_master.line_noise (rst, close, sampler_noise, noisy, events, limit, watch, restart, level, \event , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   reg \$10 ;
@@ -11308,7 +11308,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2190$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2191$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -11442,8 +11442,8 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$219
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$2190$259 ;
-  wire [12:0] \port$2190$259 ;
+  input [12:0] \port$2191$259 ;
+  wire [12:0] \port$2191$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -11468,7 +11468,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$219
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$2190$259 [12:1] + 1'h1;
+  assign \$11  = \port$2191$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -11593,7 +11593,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$219
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$2190$259 [0]),
+    .clear_high(\port$2191$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -11736,7 +11736,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$219
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$2190$259 [0]) begin
+            if (\port$2191$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -11821,7 +11821,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$219
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$2190$259 [0]) begin
+            if (\port$2191$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -11860,7 +11860,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$219
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$2190$259 [12:1] };
+            \$85  = { 1'h0, \port$2191$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -12245,11 +12245,11 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$219
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$2190$259 [12:1] };
-  assign fixed = \port$2190$259 [0];
+  assign fixed_delay = { 1'h0, \port$2191$259 [12:1] };
+  assign fixed = \port$2191$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$2190$259 [0];
+  assign clear_high = \port$2191$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -12656,7 +12656,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2178$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2179$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -12698,8 +12698,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2178$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2178$0 ;
-  wire \port$2178$0 ;
+  input \port$2179$0 ;
+  wire \port$2179$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -12713,9 +12713,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2178$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2178$0  };
-  assign \$2  = { lc[4:0], \port$2178$0  } == last;
-  assign \$3  = { lc[4:0], \port$2178$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2179$0  };
+  assign \$2  = { lc[4:0], \port$2179$0  } == last;
+  assign \$3  = { lc[4:0], \port$2179$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -12825,7 +12825,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2178$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2178$0  };
+  assign lc_next = { lc[4:0], \port$2179$0  };
   assign zero = is_zero;
 endmodule
 
@@ -13400,7 +13400,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1617$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1618$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
@@ -13572,8 +13572,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1617$0 , lc_check, lc_re
   wire noisy;
   output passed;
   wire passed;
-  output \port$1617$0 ;
-  wire \port$1617$0 ;
+  output \port$1618$0 ;
+  wire \port$1618$0 ;
   output report;
   wire report;
   input report_frame;
@@ -13691,7 +13691,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1617$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1617$0  = \$2 ;
+  assign \port$1618$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -635,12 +635,12 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$7212$0 (\$8 ),
-    .\port$7225$0 (\$9 ),
-    .\port$7302$0 (\$10 ),
-    .\port$7748$0 (\$11 ),
-    .\port$7761$0 (\$12 ),
-    .\port$7838$0 (\$13 ),
+    .\port$7214$0 (\$8 ),
+    .\port$7227$0 (\$9 ),
+    .\port$7304$0 (\$10 ),
+    .\port$7750$0 (\$11 ),
+    .\port$7763$0 (\$12 ),
+    .\port$7840$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -713,9 +713,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$7212$0 (\$8 ),
-    .\port$7225$0 (\$9 ),
-    .\port$7302$0 (\$10 ),
+    .\port$7214$0 (\$8 ),
+    .\port$7227$0 (\$9 ),
+    .\port$7304$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -788,9 +788,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(\regs__count_en$384 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$408 ),
-    .\port$7748$0 (\$11 ),
-    .\port$7761$0 (\$12 ),
-    .\port$7838$0 (\$13 ),
+    .\port$7750$0 (\$11 ),
+    .\port$7763$0 (\$12 ),
+    .\port$7840$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$236 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1128,7 +1128,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
 , ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$113 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
 , ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
 , ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id
-, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$7212$0 , \port$7225$0 , ch0__ca_done, \port$7302$0 , ch1__frame_done, ch1__done_count, \port$7748$0 , \port$7761$0 , ch1__ca_done, \port$7838$0 , clk);
+, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$7214$0 , \port$7227$0 , ch0__ca_done, \port$7304$0 , ch1__frame_done, ch1__done_count, \port$7750$0 , \port$7763$0 , ch1__ca_done, \port$7840$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2676,18 +2676,18 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$7212$0 ;
-  wire [186:0] \port$7212$0 ;
-  input [79:0] \port$7225$0 ;
-  wire [79:0] \port$7225$0 ;
-  input [9:0] \port$7302$0 ;
-  wire [9:0] \port$7302$0 ;
-  input [186:0] \port$7748$0 ;
-  wire [186:0] \port$7748$0 ;
-  input [79:0] \port$7761$0 ;
-  wire [79:0] \port$7761$0 ;
-  input [9:0] \port$7838$0 ;
-  wire [9:0] \port$7838$0 ;
+  input [186:0] \port$7214$0 ;
+  wire [186:0] \port$7214$0 ;
+  input [79:0] \port$7227$0 ;
+  wire [79:0] \port$7227$0 ;
+  input [9:0] \port$7304$0 ;
+  wire [9:0] \port$7304$0 ;
+  input [186:0] \port$7750$0 ;
+  wire [186:0] \port$7750$0 ;
+  input [79:0] \port$7763$0 ;
+  wire [79:0] \port$7763$0 ;
+  input [9:0] \port$7840$0 ;
+  wire [9:0] \port$7840$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2791,7 +2791,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$343  = \$341  | \$342 ;
   assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7748$0 [182:177], 4'h0, \port$7748$0 [186:183], 1'h0, \port$7748$0 [176:174], 1'h0, \port$7748$0 [133:131], 3'h0, \port$7748$0 [49], \port$7748$0 [3:0] } : 32'd0;
+  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7750$0 [182:177], 4'h0, \port$7750$0 [186:183], 1'h0, \port$7750$0 [176:174], 1'h0, \port$7750$0 [133:131], 3'h0, \port$7750$0 [49], \port$7750$0 [3:0] } : 32'd0;
   assign \$347  = \$345  | \$346 ;
   assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$349  = \$347  | \$348 ;
@@ -2819,13 +2819,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$371  = \$369  | \$370 ;
   assign \$372  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7838$0 [9:3], 1'h0, \port$7838$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7840$0 [9:3], 1'h0, \port$7840$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_143 ? \port$7761$0 [31:0] : 32'd0;
+  assign \$378  = ch1_read_select_143 ? \port$7763$0 [31:0] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_144 ? \port$7761$0 [63:32] : 32'd0;
+  assign \$380  = ch1_read_select_144 ? \port$7763$0 [63:32] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7761$0 [79:64] } : 32'd0;
+  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7763$0 [79:64] } : 32'd0;
   assign \$383  = \$381  | \$382 ;
   assign \$384  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$385  = \$383  | \$384 ;
@@ -3695,7 +3695,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$158  = \$156  | \$157 ;
   assign \$159  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$7212$0 [182:177], 4'h0, \port$7212$0 [186:183], 1'h0, \port$7212$0 [176:174], 1'h0, \port$7212$0 [133:131], 3'h0, \port$7212$0 [49], \port$7212$0 [3:0] } : 32'd0;
+  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$7214$0 [182:177], 4'h0, \port$7214$0 [186:183], 1'h0, \port$7214$0 [176:174], 1'h0, \port$7214$0 [133:131], 3'h0, \port$7214$0 [49], \port$7214$0 [3:0] } : 32'd0;
   assign \$162  = \$160  | \$161 ;
   assign \$163  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$164  = \$162  | \$163 ;
@@ -3723,13 +3723,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$186  = \$184  | \$185 ;
   assign \$187  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$7302$0 [9:3], 1'h0, \port$7302$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$7304$0 [9:3], 1'h0, \port$7304$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_c3 ? \port$7225$0 [31:0] : 32'd0;
+  assign \$193  = ch0_read_select_c3 ? \port$7227$0 [31:0] : 32'd0;
   assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_c4 ? \port$7225$0 [63:32] : 32'd0;
+  assign \$195  = ch0_read_select_c4 ? \port$7227$0 [63:32] : 32'd0;
   assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$7225$0 [79:64] } : 32'd0;
+  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$7227$0 [79:64] } : 32'd0;
   assign \$198  = \$196  | \$197 ;
   assign \$199  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$200  = \$198  | \$199 ;
@@ -4933,7 +4933,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$595  = ch0_result_status_status_snapshot;
     if (\$130 ) begin
-      \$595  = \port$7212$0 [3:0];
+      \$595  = \port$7214$0 [3:0];
     end
     if (rst) begin
       \$595  = 4'h0;
@@ -4943,7 +4943,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$596  = ch0_result_status_cds_snapshot;
     if (\$130 ) begin
-      \$596  = \port$7212$0 [49];
+      \$596  = \port$7214$0 [49];
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -4953,7 +4953,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$597  = ch0_result_status_w0_ne_snapshot;
     if (\$130 ) begin
-      \$597  = \port$7212$0 [131];
+      \$597  = \port$7214$0 [131];
     end
     if (rst) begin
       \$597  = 1'h0;
@@ -4963,7 +4963,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$598  = ch0_result_status_w0_nw_snapshot;
     if (\$130 ) begin
-      \$598  = \port$7212$0 [132];
+      \$598  = \port$7214$0 [132];
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -4973,7 +4973,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$599  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$130 ) begin
-      \$599  = \port$7212$0 [133];
+      \$599  = \port$7214$0 [133];
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -4983,7 +4983,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$600  = ch0_result_status_w1_ne_snapshot;
     if (\$130 ) begin
-      \$600  = \port$7212$0 [174];
+      \$600  = \port$7214$0 [174];
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -4993,7 +4993,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$601  = ch0_result_status_w1_nw_snapshot;
     if (\$130 ) begin
-      \$601  = \port$7212$0 [175];
+      \$601  = \port$7214$0 [175];
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -5003,7 +5003,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$602  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$130 ) begin
-      \$602  = \port$7212$0 [176];
+      \$602  = \port$7214$0 [176];
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -5013,7 +5013,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$603  = ch0_result_status_lc_repeat_snapshot;
     if (\$130 ) begin
-      \$603  = \port$7212$0 [183];
+      \$603  = \port$7214$0 [183];
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -5023,7 +5023,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$604  = ch0_result_status_lc_skip_snapshot;
     if (\$130 ) begin
-      \$604  = \port$7212$0 [184];
+      \$604  = \port$7214$0 [184];
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -5033,7 +5033,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$605  = ch0_result_status_lc_zero_snapshot;
     if (\$130 ) begin
-      \$605  = \port$7212$0 [185];
+      \$605  = \port$7214$0 [185];
     end
     if (rst) begin
       \$605  = 1'h0;
@@ -5043,7 +5043,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$606  = ch0_result_status_spw_mismatch_snapshot;
     if (\$130 ) begin
-      \$606  = \port$7212$0 [186];
+      \$606  = \port$7214$0 [186];
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -5053,7 +5053,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$607  = ch0_result_status_lc_snapshot;
     if (\$130 ) begin
-      \$607  = \port$7212$0 [182:177];
+      \$607  = \port$7214$0 [182:177];
     end
     if (rst) begin
       \$607  = 6'h00;
@@ -5073,7 +5073,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$609  = ch0_result_seq_line_delay_snapshot;
     if (\$130 ) begin
-      \$609  = \port$7212$0 [48:36];
+      \$609  = \port$7214$0 [48:36];
     end
     if (rst) begin
       \$609  = 13'h0000;
@@ -5083,7 +5083,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$610  = ch0_result_w0_lo_data_snapshot;
     if (\$130 ) begin
-      \$610  = \port$7212$0 [107:76];
+      \$610  = \port$7214$0 [107:76];
     end
     if (rst) begin
       \$610  = 32'd0;
@@ -5093,7 +5093,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$611  = ch0_result_w0_hi_data_snapshot;
     if (\$130 ) begin
-      \$611  = \port$7212$0 [130:108];
+      \$611  = \port$7214$0 [130:108];
     end
     if (rst) begin
       \$611  = 23'h000000;
@@ -5103,7 +5103,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$612  = ch0_result_w1_lo_data_snapshot;
     if (\$130 ) begin
-      \$612  = \port$7212$0 [165:134];
+      \$612  = \port$7214$0 [165:134];
     end
     if (rst) begin
       \$612  = 32'd0;
@@ -5113,7 +5113,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$613  = ch0_result_w1_hi_data_snapshot;
     if (\$130 ) begin
-      \$613  = \port$7212$0 [173:166];
+      \$613  = \port$7214$0 [173:166];
     end
     if (rst) begin
       \$613  = 8'h00;
@@ -5123,7 +5123,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$614  = ch0_result_timestamp_time_snapshot;
     if (\$130 ) begin
-      \$614  = \port$7212$0 [35:4];
+      \$614  = \port$7214$0 [35:4];
     end
     if (rst) begin
       \$614  = 32'd0;
@@ -5133,7 +5133,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$615  = ch0_result_line_noise_events_snapshot;
     if (\$130 ) begin
-      \$615  = \port$7212$0 [53:50];
+      \$615  = \port$7214$0 [53:50];
     end
     if (rst) begin
       \$615  = 4'h0;
@@ -5143,7 +5143,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$616  = ch0_result_line_delay_settled_snapshot;
     if (\$130 ) begin
-      \$616  = \port$7212$0 [54];
+      \$616  = \port$7214$0 [54];
     end
     if (rst) begin
       \$616  = 1'h0;
@@ -5153,7 +5153,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$617  = ch0_result_line_delay_spread_snapshot;
     if (\$130 ) begin
-      \$617  = \port$7212$0 [75:68];
+      \$617  = \port$7214$0 [75:68];
     end
     if (rst) begin
       \$617  = 8'h00;
@@ -5163,7 +5163,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$618  = ch0_result_line_settled_delay_snapshot;
     if (\$130 ) begin
-      \$618  = \port$7212$0 [67:55];
+      \$618  = \port$7214$0 [67:55];
     end
     if (rst) begin
       \$618  = 13'h0000;
@@ -6227,7 +6227,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$725  = ch1_result_status_status_snapshot;
     if (\$315 ) begin
-      \$725  = \port$7748$0 [3:0];
+      \$725  = \port$7750$0 [3:0];
     end
     if (rst) begin
       \$725  = 4'h0;
@@ -6237,7 +6237,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$726  = ch1_result_status_cds_snapshot;
     if (\$315 ) begin
-      \$726  = \port$7748$0 [49];
+      \$726  = \port$7750$0 [49];
     end
     if (rst) begin
       \$726  = 1'h0;
@@ -6247,7 +6247,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$727  = ch1_result_status_w0_ne_snapshot;
     if (\$315 ) begin
-      \$727  = \port$7748$0 [131];
+      \$727  = \port$7750$0 [131];
     end
     if (rst) begin
       \$727  = 1'h0;
@@ -6257,7 +6257,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$728  = ch1_result_status_w0_nw_snapshot;
     if (\$315 ) begin
-      \$728  = \port$7748$0 [132];
+      \$728  = \port$7750$0 [132];
     end
     if (rst) begin
       \$728  = 1'h0;
@@ -6267,7 +6267,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$729  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$315 ) begin
-      \$729  = \port$7748$0 [133];
+      \$729  = \port$7750$0 [133];
     end
     if (rst) begin
       \$729  = 1'h0;
@@ -6277,7 +6277,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$730  = ch1_result_status_w1_ne_snapshot;
     if (\$315 ) begin
-      \$730  = \port$7748$0 [174];
+      \$730  = \port$7750$0 [174];
     end
     if (rst) begin
       \$730  = 1'h0;
@@ -6287,7 +6287,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$731  = ch1_result_status_w1_nw_snapshot;
     if (\$315 ) begin
-      \$731  = \port$7748$0 [175];
+      \$731  = \port$7750$0 [175];
     end
     if (rst) begin
       \$731  = 1'h0;
@@ -6297,7 +6297,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$732  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$315 ) begin
-      \$732  = \port$7748$0 [176];
+      \$732  = \port$7750$0 [176];
     end
     if (rst) begin
       \$732  = 1'h0;
@@ -6307,7 +6307,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$733  = ch1_result_status_lc_repeat_snapshot;
     if (\$315 ) begin
-      \$733  = \port$7748$0 [183];
+      \$733  = \port$7750$0 [183];
     end
     if (rst) begin
       \$733  = 1'h0;
@@ -6317,7 +6317,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$734  = ch1_result_status_lc_skip_snapshot;
     if (\$315 ) begin
-      \$734  = \port$7748$0 [184];
+      \$734  = \port$7750$0 [184];
     end
     if (rst) begin
       \$734  = 1'h0;
@@ -6327,7 +6327,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$735  = ch1_result_status_lc_zero_snapshot;
     if (\$315 ) begin
-      \$735  = \port$7748$0 [185];
+      \$735  = \port$7750$0 [185];
     end
     if (rst) begin
       \$735  = 1'h0;
@@ -6337,7 +6337,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$736  = ch1_result_status_spw_mismatch_snapshot;
     if (\$315 ) begin
-      \$736  = \port$7748$0 [186];
+      \$736  = \port$7750$0 [186];
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6347,7 +6347,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$737  = ch1_result_status_lc_snapshot;
     if (\$315 ) begin
-      \$737  = \port$7748$0 [182:177];
+      \$737  = \port$7750$0 [182:177];
     end
     if (rst) begin
       \$737  = 6'h00;
@@ -6367,7 +6367,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$739  = ch1_result_seq_line_delay_snapshot;
     if (\$315 ) begin
-      \$739  = \port$7748$0 [48:36];
+      \$739  = \port$7750$0 [48:36];
     end
     if (rst) begin
       \$739  = 13'h0000;
@@ -6377,7 +6377,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$740  = ch1_result_w0_lo_data_snapshot;
     if (\$315 ) begin
-      \$740  = \port$7748$0 [107:76];
+      \$740  = \port$7750$0 [107:76];
     end
     if (rst) begin
       \$740  = 32'd0;
@@ -6387,7 +6387,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$741  = ch1_result_w0_hi_data_snapshot;
     if (\$315 ) begin
-      \$741  = \port$7748$0 [130:108];
+      \$741  = \port$7750$0 [130:108];
     end
     if (rst) begin
       \$741  = 23'h000000;
@@ -6397,7 +6397,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$742  = ch1_result_w1_lo_data_snapshot;
     if (\$315 ) begin
-      \$742  = \port$7748$0 [165:134];
+      \$742  = \port$7750$0 [165:134];
     end
     if (rst) begin
       \$742  = 32'd0;
@@ -6407,7 +6407,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$743  = ch1_result_w1_hi_data_snapshot;
     if (\$315 ) begin
-      \$743  = \port$7748$0 [173:166];
+      \$743  = \port$7750$0 [173:166];
     end
     if (rst) begin
       \$743  = 8'h00;
@@ -6417,7 +6417,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$744  = ch1_result_timestamp_time_snapshot;
     if (\$315 ) begin
-      \$744  = \port$7748$0 [35:4];
+      \$744  = \port$7750$0 [35:4];
     end
     if (rst) begin
       \$744  = 32'd0;
@@ -6427,7 +6427,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$745  = ch1_result_line_noise_events_snapshot;
     if (\$315 ) begin
-      \$745  = \port$7748$0 [53:50];
+      \$745  = \port$7750$0 [53:50];
     end
     if (rst) begin
       \$745  = 4'h0;
@@ -6437,7 +6437,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$746  = ch1_result_line_delay_settled_snapshot;
     if (\$315 ) begin
-      \$746  = \port$7748$0 [54];
+      \$746  = \port$7750$0 [54];
     end
     if (rst) begin
       \$746  = 1'h0;
@@ -6447,7 +6447,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$747  = ch1_result_line_delay_spread_snapshot;
     if (\$315 ) begin
-      \$747  = \port$7748$0 [75:68];
+      \$747  = \port$7750$0 [75:68];
     end
     if (rst) begin
       \$747  = 8'h00;
@@ -6457,7 +6457,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$748  = ch1_result_line_settled_delay_snapshot;
     if (\$315 ) begin
-      \$748  = \port$7748$0 [67:55];
+      \$748  = \port$7750$0 [67:55];
     end
     if (rst) begin
       \$748  = 13'h0000;
@@ -6496,27 +6496,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$7212$0 [3:0];
-  assign ch0__cds = \port$7212$0 [49];
-  assign ch0__word0_ne = \port$7212$0 [131];
-  assign ch0__word0_nw = \port$7212$0 [132];
-  assign ch0__word0_crc_ok = \port$7212$0 [133];
-  assign ch0__word1_ne = \port$7212$0 [174];
-  assign ch0__word1_nw = \port$7212$0 [175];
-  assign ch0__word1_crc_ok = \port$7212$0 [176];
-  assign ch0__lc_repeat = \port$7212$0 [183];
-  assign ch0__lc_skip = \port$7212$0 [184];
-  assign ch0__lc_zero = \port$7212$0 [185];
-  assign ch0__spw_mismatch = \port$7212$0 [186];
-  assign ch0__lc = \port$7212$0 [182:177];
-  assign ch0__line_delay = \port$7212$0 [48:36];
-  assign ch0__word0_position = \port$7212$0 [130:76];
-  assign ch0__word1_position = \port$7212$0 [173:134];
-  assign ch0__timestamp = \port$7212$0 [35:4];
-  assign ch0__noise_events = \port$7212$0 [53:50];
-  assign ch0__delay_settled = \port$7212$0 [54];
-  assign ch0__delay_spread = \port$7212$0 [75:68];
-  assign ch0__settled_delay = \port$7212$0 [67:55];
+  assign ch0__status = \port$7214$0 [3:0];
+  assign ch0__cds = \port$7214$0 [49];
+  assign ch0__word0_ne = \port$7214$0 [131];
+  assign ch0__word0_nw = \port$7214$0 [132];
+  assign ch0__word0_crc_ok = \port$7214$0 [133];
+  assign ch0__word1_ne = \port$7214$0 [174];
+  assign ch0__word1_nw = \port$7214$0 [175];
+  assign ch0__word1_crc_ok = \port$7214$0 [176];
+  assign ch0__lc_repeat = \port$7214$0 [183];
+  assign ch0__lc_skip = \port$7214$0 [184];
+  assign ch0__lc_zero = \port$7214$0 [185];
+  assign ch0__spw_mismatch = \port$7214$0 [186];
+  assign ch0__lc = \port$7214$0 [182:177];
+  assign ch0__line_delay = \port$7214$0 [48:36];
+  assign ch0__word0_position = \port$7214$0 [130:76];
+  assign ch0__word1_position = \port$7214$0 [173:134];
+  assign ch0__timestamp = \port$7214$0 [35:4];
+  assign ch0__noise_events = \port$7214$0 [53:50];
+  assign ch0__delay_settled = \port$7214$0 [54];
+  assign ch0__delay_spread = \port$7214$0 [75:68];
+  assign ch0__settled_delay = \port$7214$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -6524,34 +6524,34 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
   assign ch0__cap_ssi = 1'h1;
-  assign ch0__ca_status = \port$7302$0 [2:0];
-  assign ch0__ca_bytes_done = \port$7302$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$7225$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$7225$0 [31:16];
-  assign ch0__count_ca_refused = \port$7225$0 [47:32];
-  assign ch0__count_ca_aborted = \port$7225$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$7225$0 [79:64];
-  assign ch1__status = \port$7748$0 [3:0];
-  assign ch1__cds = \port$7748$0 [49];
-  assign ch1__word0_ne = \port$7748$0 [131];
-  assign ch1__word0_nw = \port$7748$0 [132];
-  assign ch1__word0_crc_ok = \port$7748$0 [133];
-  assign ch1__word1_ne = \port$7748$0 [174];
-  assign ch1__word1_nw = \port$7748$0 [175];
-  assign ch1__word1_crc_ok = \port$7748$0 [176];
-  assign ch1__lc_repeat = \port$7748$0 [183];
-  assign ch1__lc_skip = \port$7748$0 [184];
-  assign ch1__lc_zero = \port$7748$0 [185];
-  assign ch1__spw_mismatch = \port$7748$0 [186];
-  assign ch1__lc = \port$7748$0 [182:177];
-  assign ch1__line_delay = \port$7748$0 [48:36];
-  assign ch1__word0_position = \port$7748$0 [130:76];
-  assign ch1__word1_position = \port$7748$0 [173:134];
-  assign ch1__timestamp = \port$7748$0 [35:4];
-  assign ch1__noise_events = \port$7748$0 [53:50];
-  assign ch1__delay_settled = \port$7748$0 [54];
-  assign ch1__delay_spread = \port$7748$0 [75:68];
-  assign ch1__settled_delay = \port$7748$0 [67:55];
+  assign ch0__ca_status = \port$7304$0 [2:0];
+  assign ch0__ca_bytes_done = \port$7304$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$7227$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$7227$0 [31:16];
+  assign ch0__count_ca_refused = \port$7227$0 [47:32];
+  assign ch0__count_ca_aborted = \port$7227$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$7227$0 [79:64];
+  assign ch1__status = \port$7750$0 [3:0];
+  assign ch1__cds = \port$7750$0 [49];
+  assign ch1__word0_ne = \port$7750$0 [131];
+  assign ch1__word0_nw = \port$7750$0 [132];
+  assign ch1__word0_crc_ok = \port$7750$0 [133];
+  assign ch1__word1_ne = \port$7750$0 [174];
+  assign ch1__word1_nw = \port$7750$0 [175];
+  assign ch1__word1_crc_ok = \port$7750$0 [176];
+  assign ch1__lc_repeat = \port$7750$0 [183];
+  assign ch1__lc_skip = \port$7750$0 [184];
+  assign ch1__lc_zero = \port$7750$0 [185];
+  assign ch1__spw_mismatch = \port$7750$0 [186];
+  assign ch1__lc = \port$7750$0 [182:177];
+  assign ch1__line_delay = \port$7750$0 [48:36];
+  assign ch1__word0_position = \port$7750$0 [130:76];
+  assign ch1__word1_position = \port$7750$0 [173:134];
+  assign ch1__timestamp = \port$7750$0 [35:4];
+  assign ch1__noise_events = \port$7750$0 [53:50];
+  assign ch1__delay_settled = \port$7750$0 [54];
+  assign ch1__delay_spread = \port$7750$0 [75:68];
+  assign ch1__settled_delay = \port$7750$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -6559,13 +6559,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign ch1__ca_status = \port$7838$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7838$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7761$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7761$0 [31:16];
-  assign ch1__count_ca_refused = \port$7761$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7761$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7761$0 [79:64];
+  assign ch1__ca_status = \port$7840$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7840$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7763$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7763$0 [31:16];
+  assign ch1__count_ca_refused = \port$7763$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7763$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7763$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__r_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -8847,7 +8847,7 @@ endmodule
 module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7212$0 , \port$7225$0 , regs__ca_done, \port$7302$0 , slo);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7214$0 , \port$7227$0 , regs__ca_done, \port$7304$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -9029,12 +9029,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7212$0 ;
-  wire [186:0] \port$7212$0 ;
-  output [79:0] \port$7225$0 ;
-  wire [79:0] \port$7225$0 ;
-  output [9:0] \port$7302$0 ;
-  wire [9:0] \port$7302$0 ;
+  output [186:0] \port$7214$0 ;
+  wire [186:0] \port$7214$0 ;
+  output [79:0] \port$7227$0 ;
+  wire [79:0] \port$7227$0 ;
+  output [9:0] \port$7304$0 ;
+  wire [9:0] \port$7304$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -9489,9 +9489,9 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$7212$0  = \$18 ;
-  assign \port$7225$0  = \$19 ;
-  assign \port$7302$0  = \$20 ;
+  assign \port$7214$0  = \$18 ;
+  assign \port$7227$0  = \$19 ;
+  assign \port$7304$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -10424,6 +10424,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign periodic = \periodic$45  | frames;
   assign frame_done = cycle[259] ? stopped : done;
   assign arm = cycle[259] ? first_rise : ma_arm;
+  assign close = cycle[259] ? stopped : done;
   assign \$1  = cycle[144:141] != 4'hf;
   assign \$2  = ~ cycle[259];
   assign enable = \$1  & \$2 ;
@@ -10566,7 +10567,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6864$272 (cycle[274:272]),
+    .\port$6866$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -10596,7 +10597,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   );
   \biss_master_uart.ch0.core.line_noise  line_noise (
     .clk(clk),
-    .close(done),
+    .close(close),
     .\event (\event ),
     .events(events),
     .level(\slo$62 ),
@@ -10677,7 +10678,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6864$259 (cycle[271:259]),
+    .\port$6866$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$344 ),
@@ -10701,7 +10702,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6852$0 (\bit ),
+    .\port$6854$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -10768,7 +10769,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2952$0 (\$28 ),
+    .\port$2953$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -10877,7 +10878,6 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign waiting = watch;
   assign \level$160  = \slo$62 ;
   assign noise = sampler_noise;
-  assign close = done;
   assign fault = \restart$164 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
@@ -14844,7 +14844,7 @@ module \biss_master_uart.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6864$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6866$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire [6:0] \$1 ;
@@ -15547,8 +15547,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6864$272 ;
-  wire [2:0] \port$6864$272 ;
+  input [2:0] \port$6866$272 ;
+  wire [2:0] \port$6866$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -15615,8 +15615,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$367  = ssi & \port$6864$272 [0];
-  assign \$368  = ~ \port$6864$272 [1];
+  assign \$367  = ssi & \port$6866$272 [0];
+  assign \$368  = ~ \port$6866$272 [1];
   assign \$369  = \$367  & \$368 ;
   assign \$370  = \bit  ^ \$369 ;
   assign \$371  = ~ words[6];
@@ -15937,18 +15937,18 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$6864$272 [0];
+  assign \$3  = ssi & \port$6866$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$6864$272 [0];
+  assign \$6  = ssi & \port$6866$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$6864$272 [0];
+  assign \$9  = ssi & \port$6866$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$6864$272 [0];
+  assign \$14  = ssi & \port$6866$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$6864$272 [0];
+  assign \$18  = ssi & \port$6866$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -15993,7 +15993,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$66  = idx == \$65 ;
   assign \$67  = word_count - 1'h1;
   assign \$68  = word == \$67 ;
-  assign \$69  = ssi & \port$6864$272 [2];
+  assign \$69  = ssi & \port$6866$272 [2];
   assign \$70  = word + 1'h1;
   assign \$71  = idx + 1'h1;
   assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -16284,7 +16284,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$357  = \$354  & \$356 ;
   assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
   assign \$359  = ~ words[6];
-  assign \$360  = ssi & \port$6864$272 [0];
+  assign \$360  = ssi & \port$6866$272 [0];
   assign \$361  = ~ \$360 ;
   assign \$362  = \$359  & \$361 ;
   assign \$363  = ! word;
@@ -17046,9 +17046,9 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$6864$272 [0];
-  assign ssi_double = \port$6864$272 [2];
-  assign ssi_error_low = \port$6864$272 [1];
+  assign ssi_error = \port$6866$272 [0];
+  assign ssi_double = \port$6866$272 [2];
+  assign ssi_error_low = \port$6866$272 [1];
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$53  = crcs;
   assign \bit$58  = \bit ;
@@ -17694,7 +17694,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
+module \biss_master_uart.ch0.core.line_noise (rst, close, sampler_noise, noisy, events, limit, watch, restart, level, \event , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire \$1 ;
   reg \$10 ;
@@ -20557,7 +20557,7 @@ module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6864$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6866$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20691,8 +20691,8 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6864$259 ;
-  wire [12:0] \port$6864$259 ;
+  input [12:0] \port$6866$259 ;
+  wire [12:0] \port$6866$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -20717,7 +20717,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6864$259 [12:1] + 1'h1;
+  assign \$11  = \port$6866$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -20842,7 +20842,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6864$259 [0]),
+    .clear_high(\port$6866$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -20985,7 +20985,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6864$259 [0]) begin
+            if (\port$6866$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -21070,7 +21070,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6864$259 [0]) begin
+            if (\port$6866$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -21109,7 +21109,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6864$259 [12:1] };
+            \$85  = { 1'h0, \port$6866$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -21494,11 +21494,11 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6864$259 [12:1] };
-  assign fixed = \port$6864$259 [0];
+  assign fixed_delay = { 1'h0, \port$6866$259 [12:1] };
+  assign fixed = \port$6866$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6864$259 [0];
+  assign clear_high = \port$6866$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -21905,7 +21905,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6852$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6854$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -21947,8 +21947,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6852$0 ;
-  wire \port$6852$0 ;
+  input \port$6854$0 ;
+  wire \port$6854$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -21962,9 +21962,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6852$0  };
-  assign \$2  = { lc[4:0], \port$6852$0  } == last;
-  assign \$3  = { lc[4:0], \port$6852$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6854$0  };
+  assign \$2  = { lc[4:0], \port$6854$0  } == last;
+  assign \$3  = { lc[4:0], \port$6854$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -22074,7 +22074,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6852$0  };
+  assign lc_next = { lc[4:0], \port$6854$0  };
   assign zero = is_zero;
 endmodule
 
@@ -22649,7 +22649,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2952$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2953$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire \$1 ;
@@ -22821,8 +22821,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2952$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$2952$0 ;
-  wire \port$2952$0 ;
+  output \port$2953$0 ;
+  wire \port$2953$0 ;
   output report;
   wire report;
   input report_frame;
@@ -22940,7 +22940,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2952$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2952$0  = \$2 ;
+  assign \port$2953$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -22991,7 +22991,7 @@ endmodule
 module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7748$0 , \port$7761$0 , regs__ca_done, \port$7838$0 , slo);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7750$0 , \port$7763$0 , regs__ca_done, \port$7840$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -23173,12 +23173,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7748$0 ;
-  wire [186:0] \port$7748$0 ;
-  output [79:0] \port$7761$0 ;
-  wire [79:0] \port$7761$0 ;
-  output [9:0] \port$7838$0 ;
-  wire [9:0] \port$7838$0 ;
+  output [186:0] \port$7750$0 ;
+  wire [186:0] \port$7750$0 ;
+  output [79:0] \port$7763$0 ;
+  wire [79:0] \port$7763$0 ;
+  output [9:0] \port$7840$0 ;
+  wire [9:0] \port$7840$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -23633,9 +23633,9 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$7748$0  = \$18 ;
-  assign \port$7761$0  = \$19 ;
-  assign \port$7838$0  = \$20 ;
+  assign \port$7750$0  = \$18 ;
+  assign \port$7763$0  = \$19 ;
+  assign \port$7840$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -24568,6 +24568,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign periodic = \periodic$45  | frames;
   assign frame_done = cycle[259] ? stopped : done;
   assign arm = cycle[259] ? first_rise : ma_arm;
+  assign close = cycle[259] ? stopped : done;
   assign \$1  = cycle[144:141] != 4'hf;
   assign \$2  = ~ cycle[259];
   assign enable = \$1  & \$2 ;
@@ -24710,7 +24711,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7400$272 (cycle[274:272]),
+    .\port$7402$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -24740,7 +24741,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   );
   \biss_master_uart.ch1.core.line_noise  line_noise (
     .clk(clk),
-    .close(done),
+    .close(close),
     .\event (\event ),
     .events(events),
     .level(\slo$62 ),
@@ -24821,7 +24822,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7400$259 (cycle[271:259]),
+    .\port$7402$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$344 ),
@@ -24845,7 +24846,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7388$0 (\bit ),
+    .\port$7390$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -24912,7 +24913,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5383$0 (\$28 ),
+    .\port$5385$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -25021,7 +25022,6 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign waiting = watch;
   assign \level$160  = \slo$62 ;
   assign noise = sampler_noise;
-  assign close = done;
   assign fault = \restart$164 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
@@ -28988,7 +28988,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$7400$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$7402$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire [6:0] \$1 ;
@@ -29691,8 +29691,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7400$272 ;
-  wire [2:0] \port$7400$272 ;
+  input [2:0] \port$7402$272 ;
+  wire [2:0] \port$7402$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -29759,8 +29759,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$367  = ssi & \port$7400$272 [0];
-  assign \$368  = ~ \port$7400$272 [1];
+  assign \$367  = ssi & \port$7402$272 [0];
+  assign \$368  = ~ \port$7402$272 [1];
   assign \$369  = \$367  & \$368 ;
   assign \$370  = \bit  ^ \$369 ;
   assign \$371  = ~ words[6];
@@ -30081,18 +30081,18 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$7400$272 [0];
+  assign \$3  = ssi & \port$7402$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$7400$272 [0];
+  assign \$6  = ssi & \port$7402$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$7400$272 [0];
+  assign \$9  = ssi & \port$7402$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$7400$272 [0];
+  assign \$14  = ssi & \port$7402$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$7400$272 [0];
+  assign \$18  = ssi & \port$7402$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -30137,7 +30137,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$66  = idx == \$65 ;
   assign \$67  = word_count - 1'h1;
   assign \$68  = word == \$67 ;
-  assign \$69  = ssi & \port$7400$272 [2];
+  assign \$69  = ssi & \port$7402$272 [2];
   assign \$70  = word + 1'h1;
   assign \$71  = idx + 1'h1;
   assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -30428,7 +30428,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$357  = \$354  & \$356 ;
   assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
   assign \$359  = ~ words[6];
-  assign \$360  = ssi & \port$7400$272 [0];
+  assign \$360  = ssi & \port$7402$272 [0];
   assign \$361  = ~ \$360 ;
   assign \$362  = \$359  & \$361 ;
   assign \$363  = ! word;
@@ -31190,9 +31190,9 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$7400$272 [0];
-  assign ssi_double = \port$7400$272 [2];
-  assign ssi_error_low = \port$7400$272 [1];
+  assign ssi_error = \port$7402$272 [0];
+  assign ssi_double = \port$7402$272 [2];
+  assign ssi_error_low = \port$7402$272 [1];
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$53  = crcs;
   assign \bit$58  = \bit ;
@@ -31838,7 +31838,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
+module \biss_master_uart.ch1.core.line_noise (rst, close, sampler_noise, noisy, events, limit, watch, restart, level, \event , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire \$1 ;
   reg \$10 ;
@@ -34701,7 +34701,7 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7400$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7402$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -34835,8 +34835,8 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7400$259 ;
-  wire [12:0] \port$7400$259 ;
+  input [12:0] \port$7402$259 ;
+  wire [12:0] \port$7402$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -34861,7 +34861,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7400$259 [12:1] + 1'h1;
+  assign \$11  = \port$7402$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -34986,7 +34986,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7400$259 [0]),
+    .clear_high(\port$7402$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -35129,7 +35129,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7400$259 [0]) begin
+            if (\port$7402$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -35214,7 +35214,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7400$259 [0]) begin
+            if (\port$7402$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -35253,7 +35253,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7400$259 [12:1] };
+            \$85  = { 1'h0, \port$7402$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -35638,11 +35638,11 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7400$259 [12:1] };
-  assign fixed = \port$7400$259 [0];
+  assign fixed_delay = { 1'h0, \port$7402$259 [12:1] };
+  assign fixed = \port$7402$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7400$259 [0];
+  assign clear_high = \port$7402$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -36049,7 +36049,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7388$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7390$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -36091,8 +36091,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7388$0 ;
-  wire \port$7388$0 ;
+  input \port$7390$0 ;
+  wire \port$7390$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -36106,9 +36106,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7388$0  };
-  assign \$2  = { lc[4:0], \port$7388$0  } == last;
-  assign \$3  = { lc[4:0], \port$7388$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7390$0  };
+  assign \$2  = { lc[4:0], \port$7390$0  } == last;
+  assign \$3  = { lc[4:0], \port$7390$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -36218,7 +36218,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7388$0  };
+  assign lc_next = { lc[4:0], \port$7390$0  };
   assign zero = is_zero;
 endmodule
 
@@ -36793,7 +36793,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5383$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5385$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
@@ -36965,8 +36965,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5383$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$5383$0 ;
-  wire \port$5383$0 ;
+  output \port$5385$0 ;
+  wire \port$5385$0 ;
   output report;
   wire report;
   input report_frame;
@@ -37084,7 +37084,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5383$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5383$0  = \$2 ;
+  assign \port$5385$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

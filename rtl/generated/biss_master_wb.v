@@ -654,12 +654,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6685$0 (\$8 ),
-    .\port$6698$0 (\$9 ),
-    .\port$6775$0 (\$10 ),
-    .\port$7221$0 (\$11 ),
-    .\port$7234$0 (\$12 ),
-    .\port$7311$0 (\$13 ),
+    .\port$6687$0 (\$8 ),
+    .\port$6700$0 (\$9 ),
+    .\port$6777$0 (\$10 ),
+    .\port$7223$0 (\$11 ),
+    .\port$7236$0 (\$12 ),
+    .\port$7313$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -735,9 +735,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6685$0 (\$8 ),
-    .\port$6698$0 (\$9 ),
-    .\port$6775$0 (\$10 ),
+    .\port$6687$0 (\$8 ),
+    .\port$6700$0 (\$9 ),
+    .\port$6777$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -810,9 +810,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(\regs__count_en$398 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$422 ),
-    .\port$7221$0 (\$11 ),
-    .\port$7234$0 (\$12 ),
-    .\port$7311$0 (\$13 ),
+    .\port$7223$0 (\$11 ),
+    .\port$7236$0 (\$12 ),
+    .\port$7313$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$250 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1161,7 +1161,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$113 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
 , ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
 , ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id
-, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6685$0 , \port$6698$0 , ch0__ca_done, \port$6775$0 , ch1__frame_done, ch1__done_count, \port$7221$0 , \port$7234$0 , ch1__ca_done, \port$7311$0 , bus__w_addr);
+, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6687$0 , \port$6700$0 , ch0__ca_done, \port$6777$0 , ch1__frame_done, ch1__done_count, \port$7223$0 , \port$7236$0 , ch1__ca_done, \port$7313$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2709,18 +2709,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6685$0 ;
-  wire [186:0] \port$6685$0 ;
-  input [79:0] \port$6698$0 ;
-  wire [79:0] \port$6698$0 ;
-  input [9:0] \port$6775$0 ;
-  wire [9:0] \port$6775$0 ;
-  input [186:0] \port$7221$0 ;
-  wire [186:0] \port$7221$0 ;
-  input [79:0] \port$7234$0 ;
-  wire [79:0] \port$7234$0 ;
-  input [9:0] \port$7311$0 ;
-  wire [9:0] \port$7311$0 ;
+  input [186:0] \port$6687$0 ;
+  wire [186:0] \port$6687$0 ;
+  input [79:0] \port$6700$0 ;
+  wire [79:0] \port$6700$0 ;
+  input [9:0] \port$6777$0 ;
+  wire [9:0] \port$6777$0 ;
+  input [186:0] \port$7223$0 ;
+  wire [186:0] \port$7223$0 ;
+  input [79:0] \port$7236$0 ;
+  wire [79:0] \port$7236$0 ;
+  input [9:0] \port$7313$0 ;
+  wire [9:0] \port$7313$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2824,7 +2824,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$343  = \$341  | \$342 ;
   assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7221$0 [182:177], 4'h0, \port$7221$0 [186:183], 1'h0, \port$7221$0 [176:174], 1'h0, \port$7221$0 [133:131], 3'h0, \port$7221$0 [49], \port$7221$0 [3:0] } : 32'd0;
+  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7223$0 [182:177], 4'h0, \port$7223$0 [186:183], 1'h0, \port$7223$0 [176:174], 1'h0, \port$7223$0 [133:131], 3'h0, \port$7223$0 [49], \port$7223$0 [3:0] } : 32'd0;
   assign \$347  = \$345  | \$346 ;
   assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$349  = \$347  | \$348 ;
@@ -2852,13 +2852,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$371  = \$369  | \$370 ;
   assign \$372  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7311$0 [9:3], 1'h0, \port$7311$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7313$0 [9:3], 1'h0, \port$7313$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_143 ? \port$7234$0 [31:0] : 32'd0;
+  assign \$378  = ch1_read_select_143 ? \port$7236$0 [31:0] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_144 ? \port$7234$0 [63:32] : 32'd0;
+  assign \$380  = ch1_read_select_144 ? \port$7236$0 [63:32] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7234$0 [79:64] } : 32'd0;
+  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7236$0 [79:64] } : 32'd0;
   assign \$383  = \$381  | \$382 ;
   assign \$384  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$385  = \$383  | \$384 ;
@@ -3728,7 +3728,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$158  = \$156  | \$157 ;
   assign \$159  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6685$0 [182:177], 4'h0, \port$6685$0 [186:183], 1'h0, \port$6685$0 [176:174], 1'h0, \port$6685$0 [133:131], 3'h0, \port$6685$0 [49], \port$6685$0 [3:0] } : 32'd0;
+  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6687$0 [182:177], 4'h0, \port$6687$0 [186:183], 1'h0, \port$6687$0 [176:174], 1'h0, \port$6687$0 [133:131], 3'h0, \port$6687$0 [49], \port$6687$0 [3:0] } : 32'd0;
   assign \$162  = \$160  | \$161 ;
   assign \$163  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$164  = \$162  | \$163 ;
@@ -3756,13 +3756,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$186  = \$184  | \$185 ;
   assign \$187  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6775$0 [9:3], 1'h0, \port$6775$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6777$0 [9:3], 1'h0, \port$6777$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_c3 ? \port$6698$0 [31:0] : 32'd0;
+  assign \$193  = ch0_read_select_c3 ? \port$6700$0 [31:0] : 32'd0;
   assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_c4 ? \port$6698$0 [63:32] : 32'd0;
+  assign \$195  = ch0_read_select_c4 ? \port$6700$0 [63:32] : 32'd0;
   assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6698$0 [79:64] } : 32'd0;
+  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6700$0 [79:64] } : 32'd0;
   assign \$198  = \$196  | \$197 ;
   assign \$199  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$200  = \$198  | \$199 ;
@@ -4966,7 +4966,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$595  = ch0_result_status_status_snapshot;
     if (\$130 ) begin
-      \$595  = \port$6685$0 [3:0];
+      \$595  = \port$6687$0 [3:0];
     end
     if (rst) begin
       \$595  = 4'h0;
@@ -4976,7 +4976,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$596  = ch0_result_status_cds_snapshot;
     if (\$130 ) begin
-      \$596  = \port$6685$0 [49];
+      \$596  = \port$6687$0 [49];
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -4986,7 +4986,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$597  = ch0_result_status_w0_ne_snapshot;
     if (\$130 ) begin
-      \$597  = \port$6685$0 [131];
+      \$597  = \port$6687$0 [131];
     end
     if (rst) begin
       \$597  = 1'h0;
@@ -4996,7 +4996,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$598  = ch0_result_status_w0_nw_snapshot;
     if (\$130 ) begin
-      \$598  = \port$6685$0 [132];
+      \$598  = \port$6687$0 [132];
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -5006,7 +5006,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$599  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$130 ) begin
-      \$599  = \port$6685$0 [133];
+      \$599  = \port$6687$0 [133];
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -5016,7 +5016,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$600  = ch0_result_status_w1_ne_snapshot;
     if (\$130 ) begin
-      \$600  = \port$6685$0 [174];
+      \$600  = \port$6687$0 [174];
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -5026,7 +5026,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$601  = ch0_result_status_w1_nw_snapshot;
     if (\$130 ) begin
-      \$601  = \port$6685$0 [175];
+      \$601  = \port$6687$0 [175];
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -5036,7 +5036,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$602  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$130 ) begin
-      \$602  = \port$6685$0 [176];
+      \$602  = \port$6687$0 [176];
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -5046,7 +5046,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$603  = ch0_result_status_lc_repeat_snapshot;
     if (\$130 ) begin
-      \$603  = \port$6685$0 [183];
+      \$603  = \port$6687$0 [183];
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -5056,7 +5056,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$604  = ch0_result_status_lc_skip_snapshot;
     if (\$130 ) begin
-      \$604  = \port$6685$0 [184];
+      \$604  = \port$6687$0 [184];
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -5066,7 +5066,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$605  = ch0_result_status_lc_zero_snapshot;
     if (\$130 ) begin
-      \$605  = \port$6685$0 [185];
+      \$605  = \port$6687$0 [185];
     end
     if (rst) begin
       \$605  = 1'h0;
@@ -5076,7 +5076,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$606  = ch0_result_status_spw_mismatch_snapshot;
     if (\$130 ) begin
-      \$606  = \port$6685$0 [186];
+      \$606  = \port$6687$0 [186];
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -5086,7 +5086,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$607  = ch0_result_status_lc_snapshot;
     if (\$130 ) begin
-      \$607  = \port$6685$0 [182:177];
+      \$607  = \port$6687$0 [182:177];
     end
     if (rst) begin
       \$607  = 6'h00;
@@ -5106,7 +5106,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$609  = ch0_result_seq_line_delay_snapshot;
     if (\$130 ) begin
-      \$609  = \port$6685$0 [48:36];
+      \$609  = \port$6687$0 [48:36];
     end
     if (rst) begin
       \$609  = 13'h0000;
@@ -5116,7 +5116,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$610  = ch0_result_w0_lo_data_snapshot;
     if (\$130 ) begin
-      \$610  = \port$6685$0 [107:76];
+      \$610  = \port$6687$0 [107:76];
     end
     if (rst) begin
       \$610  = 32'd0;
@@ -5126,7 +5126,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$611  = ch0_result_w0_hi_data_snapshot;
     if (\$130 ) begin
-      \$611  = \port$6685$0 [130:108];
+      \$611  = \port$6687$0 [130:108];
     end
     if (rst) begin
       \$611  = 23'h000000;
@@ -5136,7 +5136,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$612  = ch0_result_w1_lo_data_snapshot;
     if (\$130 ) begin
-      \$612  = \port$6685$0 [165:134];
+      \$612  = \port$6687$0 [165:134];
     end
     if (rst) begin
       \$612  = 32'd0;
@@ -5146,7 +5146,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$613  = ch0_result_w1_hi_data_snapshot;
     if (\$130 ) begin
-      \$613  = \port$6685$0 [173:166];
+      \$613  = \port$6687$0 [173:166];
     end
     if (rst) begin
       \$613  = 8'h00;
@@ -5156,7 +5156,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$614  = ch0_result_timestamp_time_snapshot;
     if (\$130 ) begin
-      \$614  = \port$6685$0 [35:4];
+      \$614  = \port$6687$0 [35:4];
     end
     if (rst) begin
       \$614  = 32'd0;
@@ -5166,7 +5166,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$615  = ch0_result_line_noise_events_snapshot;
     if (\$130 ) begin
-      \$615  = \port$6685$0 [53:50];
+      \$615  = \port$6687$0 [53:50];
     end
     if (rst) begin
       \$615  = 4'h0;
@@ -5176,7 +5176,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$616  = ch0_result_line_delay_settled_snapshot;
     if (\$130 ) begin
-      \$616  = \port$6685$0 [54];
+      \$616  = \port$6687$0 [54];
     end
     if (rst) begin
       \$616  = 1'h0;
@@ -5186,7 +5186,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$617  = ch0_result_line_delay_spread_snapshot;
     if (\$130 ) begin
-      \$617  = \port$6685$0 [75:68];
+      \$617  = \port$6687$0 [75:68];
     end
     if (rst) begin
       \$617  = 8'h00;
@@ -5196,7 +5196,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$618  = ch0_result_line_settled_delay_snapshot;
     if (\$130 ) begin
-      \$618  = \port$6685$0 [67:55];
+      \$618  = \port$6687$0 [67:55];
     end
     if (rst) begin
       \$618  = 13'h0000;
@@ -6260,7 +6260,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$725  = ch1_result_status_status_snapshot;
     if (\$315 ) begin
-      \$725  = \port$7221$0 [3:0];
+      \$725  = \port$7223$0 [3:0];
     end
     if (rst) begin
       \$725  = 4'h0;
@@ -6270,7 +6270,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$726  = ch1_result_status_cds_snapshot;
     if (\$315 ) begin
-      \$726  = \port$7221$0 [49];
+      \$726  = \port$7223$0 [49];
     end
     if (rst) begin
       \$726  = 1'h0;
@@ -6280,7 +6280,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$727  = ch1_result_status_w0_ne_snapshot;
     if (\$315 ) begin
-      \$727  = \port$7221$0 [131];
+      \$727  = \port$7223$0 [131];
     end
     if (rst) begin
       \$727  = 1'h0;
@@ -6290,7 +6290,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$728  = ch1_result_status_w0_nw_snapshot;
     if (\$315 ) begin
-      \$728  = \port$7221$0 [132];
+      \$728  = \port$7223$0 [132];
     end
     if (rst) begin
       \$728  = 1'h0;
@@ -6300,7 +6300,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$729  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$315 ) begin
-      \$729  = \port$7221$0 [133];
+      \$729  = \port$7223$0 [133];
     end
     if (rst) begin
       \$729  = 1'h0;
@@ -6310,7 +6310,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$730  = ch1_result_status_w1_ne_snapshot;
     if (\$315 ) begin
-      \$730  = \port$7221$0 [174];
+      \$730  = \port$7223$0 [174];
     end
     if (rst) begin
       \$730  = 1'h0;
@@ -6320,7 +6320,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$731  = ch1_result_status_w1_nw_snapshot;
     if (\$315 ) begin
-      \$731  = \port$7221$0 [175];
+      \$731  = \port$7223$0 [175];
     end
     if (rst) begin
       \$731  = 1'h0;
@@ -6330,7 +6330,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$732  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$315 ) begin
-      \$732  = \port$7221$0 [176];
+      \$732  = \port$7223$0 [176];
     end
     if (rst) begin
       \$732  = 1'h0;
@@ -6340,7 +6340,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$733  = ch1_result_status_lc_repeat_snapshot;
     if (\$315 ) begin
-      \$733  = \port$7221$0 [183];
+      \$733  = \port$7223$0 [183];
     end
     if (rst) begin
       \$733  = 1'h0;
@@ -6350,7 +6350,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$734  = ch1_result_status_lc_skip_snapshot;
     if (\$315 ) begin
-      \$734  = \port$7221$0 [184];
+      \$734  = \port$7223$0 [184];
     end
     if (rst) begin
       \$734  = 1'h0;
@@ -6360,7 +6360,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$735  = ch1_result_status_lc_zero_snapshot;
     if (\$315 ) begin
-      \$735  = \port$7221$0 [185];
+      \$735  = \port$7223$0 [185];
     end
     if (rst) begin
       \$735  = 1'h0;
@@ -6370,7 +6370,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$736  = ch1_result_status_spw_mismatch_snapshot;
     if (\$315 ) begin
-      \$736  = \port$7221$0 [186];
+      \$736  = \port$7223$0 [186];
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6380,7 +6380,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$737  = ch1_result_status_lc_snapshot;
     if (\$315 ) begin
-      \$737  = \port$7221$0 [182:177];
+      \$737  = \port$7223$0 [182:177];
     end
     if (rst) begin
       \$737  = 6'h00;
@@ -6400,7 +6400,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$739  = ch1_result_seq_line_delay_snapshot;
     if (\$315 ) begin
-      \$739  = \port$7221$0 [48:36];
+      \$739  = \port$7223$0 [48:36];
     end
     if (rst) begin
       \$739  = 13'h0000;
@@ -6410,7 +6410,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$740  = ch1_result_w0_lo_data_snapshot;
     if (\$315 ) begin
-      \$740  = \port$7221$0 [107:76];
+      \$740  = \port$7223$0 [107:76];
     end
     if (rst) begin
       \$740  = 32'd0;
@@ -6420,7 +6420,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$741  = ch1_result_w0_hi_data_snapshot;
     if (\$315 ) begin
-      \$741  = \port$7221$0 [130:108];
+      \$741  = \port$7223$0 [130:108];
     end
     if (rst) begin
       \$741  = 23'h000000;
@@ -6430,7 +6430,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$742  = ch1_result_w1_lo_data_snapshot;
     if (\$315 ) begin
-      \$742  = \port$7221$0 [165:134];
+      \$742  = \port$7223$0 [165:134];
     end
     if (rst) begin
       \$742  = 32'd0;
@@ -6440,7 +6440,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$743  = ch1_result_w1_hi_data_snapshot;
     if (\$315 ) begin
-      \$743  = \port$7221$0 [173:166];
+      \$743  = \port$7223$0 [173:166];
     end
     if (rst) begin
       \$743  = 8'h00;
@@ -6450,7 +6450,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$744  = ch1_result_timestamp_time_snapshot;
     if (\$315 ) begin
-      \$744  = \port$7221$0 [35:4];
+      \$744  = \port$7223$0 [35:4];
     end
     if (rst) begin
       \$744  = 32'd0;
@@ -6460,7 +6460,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$745  = ch1_result_line_noise_events_snapshot;
     if (\$315 ) begin
-      \$745  = \port$7221$0 [53:50];
+      \$745  = \port$7223$0 [53:50];
     end
     if (rst) begin
       \$745  = 4'h0;
@@ -6470,7 +6470,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$746  = ch1_result_line_delay_settled_snapshot;
     if (\$315 ) begin
-      \$746  = \port$7221$0 [54];
+      \$746  = \port$7223$0 [54];
     end
     if (rst) begin
       \$746  = 1'h0;
@@ -6480,7 +6480,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$747  = ch1_result_line_delay_spread_snapshot;
     if (\$315 ) begin
-      \$747  = \port$7221$0 [75:68];
+      \$747  = \port$7223$0 [75:68];
     end
     if (rst) begin
       \$747  = 8'h00;
@@ -6490,7 +6490,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$748  = ch1_result_line_settled_delay_snapshot;
     if (\$315 ) begin
-      \$748  = \port$7221$0 [67:55];
+      \$748  = \port$7223$0 [67:55];
     end
     if (rst) begin
       \$748  = 13'h0000;
@@ -6529,27 +6529,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6685$0 [3:0];
-  assign ch0__cds = \port$6685$0 [49];
-  assign ch0__word0_ne = \port$6685$0 [131];
-  assign ch0__word0_nw = \port$6685$0 [132];
-  assign ch0__word0_crc_ok = \port$6685$0 [133];
-  assign ch0__word1_ne = \port$6685$0 [174];
-  assign ch0__word1_nw = \port$6685$0 [175];
-  assign ch0__word1_crc_ok = \port$6685$0 [176];
-  assign ch0__lc_repeat = \port$6685$0 [183];
-  assign ch0__lc_skip = \port$6685$0 [184];
-  assign ch0__lc_zero = \port$6685$0 [185];
-  assign ch0__spw_mismatch = \port$6685$0 [186];
-  assign ch0__lc = \port$6685$0 [182:177];
-  assign ch0__line_delay = \port$6685$0 [48:36];
-  assign ch0__word0_position = \port$6685$0 [130:76];
-  assign ch0__word1_position = \port$6685$0 [173:134];
-  assign ch0__timestamp = \port$6685$0 [35:4];
-  assign ch0__noise_events = \port$6685$0 [53:50];
-  assign ch0__delay_settled = \port$6685$0 [54];
-  assign ch0__delay_spread = \port$6685$0 [75:68];
-  assign ch0__settled_delay = \port$6685$0 [67:55];
+  assign ch0__status = \port$6687$0 [3:0];
+  assign ch0__cds = \port$6687$0 [49];
+  assign ch0__word0_ne = \port$6687$0 [131];
+  assign ch0__word0_nw = \port$6687$0 [132];
+  assign ch0__word0_crc_ok = \port$6687$0 [133];
+  assign ch0__word1_ne = \port$6687$0 [174];
+  assign ch0__word1_nw = \port$6687$0 [175];
+  assign ch0__word1_crc_ok = \port$6687$0 [176];
+  assign ch0__lc_repeat = \port$6687$0 [183];
+  assign ch0__lc_skip = \port$6687$0 [184];
+  assign ch0__lc_zero = \port$6687$0 [185];
+  assign ch0__spw_mismatch = \port$6687$0 [186];
+  assign ch0__lc = \port$6687$0 [182:177];
+  assign ch0__line_delay = \port$6687$0 [48:36];
+  assign ch0__word0_position = \port$6687$0 [130:76];
+  assign ch0__word1_position = \port$6687$0 [173:134];
+  assign ch0__timestamp = \port$6687$0 [35:4];
+  assign ch0__noise_events = \port$6687$0 [53:50];
+  assign ch0__delay_settled = \port$6687$0 [54];
+  assign ch0__delay_spread = \port$6687$0 [75:68];
+  assign ch0__settled_delay = \port$6687$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -6557,34 +6557,34 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
   assign ch0__cap_ssi = 1'h1;
-  assign ch0__ca_status = \port$6775$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6775$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6698$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$6698$0 [31:16];
-  assign ch0__count_ca_refused = \port$6698$0 [47:32];
-  assign ch0__count_ca_aborted = \port$6698$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$6698$0 [79:64];
-  assign ch1__status = \port$7221$0 [3:0];
-  assign ch1__cds = \port$7221$0 [49];
-  assign ch1__word0_ne = \port$7221$0 [131];
-  assign ch1__word0_nw = \port$7221$0 [132];
-  assign ch1__word0_crc_ok = \port$7221$0 [133];
-  assign ch1__word1_ne = \port$7221$0 [174];
-  assign ch1__word1_nw = \port$7221$0 [175];
-  assign ch1__word1_crc_ok = \port$7221$0 [176];
-  assign ch1__lc_repeat = \port$7221$0 [183];
-  assign ch1__lc_skip = \port$7221$0 [184];
-  assign ch1__lc_zero = \port$7221$0 [185];
-  assign ch1__spw_mismatch = \port$7221$0 [186];
-  assign ch1__lc = \port$7221$0 [182:177];
-  assign ch1__line_delay = \port$7221$0 [48:36];
-  assign ch1__word0_position = \port$7221$0 [130:76];
-  assign ch1__word1_position = \port$7221$0 [173:134];
-  assign ch1__timestamp = \port$7221$0 [35:4];
-  assign ch1__noise_events = \port$7221$0 [53:50];
-  assign ch1__delay_settled = \port$7221$0 [54];
-  assign ch1__delay_spread = \port$7221$0 [75:68];
-  assign ch1__settled_delay = \port$7221$0 [67:55];
+  assign ch0__ca_status = \port$6777$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6777$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6700$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$6700$0 [31:16];
+  assign ch0__count_ca_refused = \port$6700$0 [47:32];
+  assign ch0__count_ca_aborted = \port$6700$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$6700$0 [79:64];
+  assign ch1__status = \port$7223$0 [3:0];
+  assign ch1__cds = \port$7223$0 [49];
+  assign ch1__word0_ne = \port$7223$0 [131];
+  assign ch1__word0_nw = \port$7223$0 [132];
+  assign ch1__word0_crc_ok = \port$7223$0 [133];
+  assign ch1__word1_ne = \port$7223$0 [174];
+  assign ch1__word1_nw = \port$7223$0 [175];
+  assign ch1__word1_crc_ok = \port$7223$0 [176];
+  assign ch1__lc_repeat = \port$7223$0 [183];
+  assign ch1__lc_skip = \port$7223$0 [184];
+  assign ch1__lc_zero = \port$7223$0 [185];
+  assign ch1__spw_mismatch = \port$7223$0 [186];
+  assign ch1__lc = \port$7223$0 [182:177];
+  assign ch1__line_delay = \port$7223$0 [48:36];
+  assign ch1__word0_position = \port$7223$0 [130:76];
+  assign ch1__word1_position = \port$7223$0 [173:134];
+  assign ch1__timestamp = \port$7223$0 [35:4];
+  assign ch1__noise_events = \port$7223$0 [53:50];
+  assign ch1__delay_settled = \port$7223$0 [54];
+  assign ch1__delay_spread = \port$7223$0 [75:68];
+  assign ch1__settled_delay = \port$7223$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -6592,13 +6592,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign ch1__ca_status = \port$7311$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7311$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7234$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7234$0 [31:16];
-  assign ch1__count_ca_refused = \port$7234$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7234$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7234$0 [79:64];
+  assign ch1__ca_status = \port$7313$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7313$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7236$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7236$0 [31:16];
+  assign ch1__count_ca_refused = \port$7236$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7236$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7236$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__w_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -6846,7 +6846,7 @@ endmodule
 module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6685$0 , \port$6698$0 , regs__ca_done, \port$6775$0 , ca_rbuf_addr);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6687$0 , \port$6700$0 , regs__ca_done, \port$6777$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -7028,12 +7028,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6685$0 ;
-  wire [186:0] \port$6685$0 ;
-  output [79:0] \port$6698$0 ;
-  wire [79:0] \port$6698$0 ;
-  output [9:0] \port$6775$0 ;
-  wire [9:0] \port$6775$0 ;
+  output [186:0] \port$6687$0 ;
+  wire [186:0] \port$6687$0 ;
+  output [79:0] \port$6700$0 ;
+  wire [79:0] \port$6700$0 ;
+  output [9:0] \port$6777$0 ;
+  wire [9:0] \port$6777$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -7488,9 +7488,9 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$6685$0  = \$18 ;
-  assign \port$6698$0  = \$19 ;
-  assign \port$6775$0  = \$20 ;
+  assign \port$6687$0  = \$18 ;
+  assign \port$6700$0  = \$19 ;
+  assign \port$6777$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -8423,6 +8423,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign periodic = \periodic$45  | frames;
   assign frame_done = cycle[259] ? stopped : done;
   assign arm = cycle[259] ? first_rise : ma_arm;
+  assign close = cycle[259] ? stopped : done;
   assign \$1  = cycle[144:141] != 4'hf;
   assign \$2  = ~ cycle[259];
   assign enable = \$1  & \$2 ;
@@ -8565,7 +8566,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6337$272 (cycle[274:272]),
+    .\port$6339$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -8595,7 +8596,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   );
   \biss_master_wb.ch0.core.line_noise  line_noise (
     .clk(clk),
-    .close(done),
+    .close(close),
     .\event (\event ),
     .events(events),
     .level(\slo$62 ),
@@ -8676,7 +8677,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6337$259 (cycle[271:259]),
+    .\port$6339$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$344 ),
@@ -8700,7 +8701,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6325$0 (\bit ),
+    .\port$6327$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -8767,7 +8768,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2509$0 (\$28 ),
+    .\port$2510$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -8876,7 +8877,6 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign waiting = watch;
   assign \level$160  = \slo$62 ;
   assign noise = sampler_noise;
-  assign close = done;
   assign fault = \restart$164 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
@@ -12843,7 +12843,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6337$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6339$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire [6:0] \$1 ;
@@ -13546,8 +13546,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6337$272 ;
-  wire [2:0] \port$6337$272 ;
+  input [2:0] \port$6339$272 ;
+  wire [2:0] \port$6339$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -13614,8 +13614,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$367  = ssi & \port$6337$272 [0];
-  assign \$368  = ~ \port$6337$272 [1];
+  assign \$367  = ssi & \port$6339$272 [0];
+  assign \$368  = ~ \port$6339$272 [1];
   assign \$369  = \$367  & \$368 ;
   assign \$370  = \bit  ^ \$369 ;
   assign \$371  = ~ words[6];
@@ -13936,18 +13936,18 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
     cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$6337$272 [0];
+  assign \$3  = ssi & \port$6339$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$6337$272 [0];
+  assign \$6  = ssi & \port$6339$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$6337$272 [0];
+  assign \$9  = ssi & \port$6339$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$6337$272 [0];
+  assign \$14  = ssi & \port$6339$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$6337$272 [0];
+  assign \$18  = ssi & \port$6339$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -13992,7 +13992,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   assign \$66  = idx == \$65 ;
   assign \$67  = word_count - 1'h1;
   assign \$68  = word == \$67 ;
-  assign \$69  = ssi & \port$6337$272 [2];
+  assign \$69  = ssi & \port$6339$272 [2];
   assign \$70  = word + 1'h1;
   assign \$71  = idx + 1'h1;
   assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -14283,7 +14283,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
   assign \$357  = \$354  & \$356 ;
   assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
   assign \$359  = ~ words[6];
-  assign \$360  = ssi & \port$6337$272 [0];
+  assign \$360  = ssi & \port$6339$272 [0];
   assign \$361  = ~ \$360 ;
   assign \$362  = \$359  & \$361 ;
   assign \$363  = ! word;
@@ -15045,9 +15045,9 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, lc_load, words, sample
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$6337$272 [0];
-  assign ssi_double = \port$6337$272 [2];
-  assign ssi_error_low = \port$6337$272 [1];
+  assign ssi_error = \port$6339$272 [0];
+  assign ssi_double = \port$6339$272 [2];
+  assign ssi_error_low = \port$6339$272 [1];
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$53  = crcs;
   assign \bit$58  = \bit ;
@@ -15693,7 +15693,7 @@ module \biss_master_wb.ch0.core.delay_check (rst, enable, rearm, check, learn, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
+module \biss_master_wb.ch0.core.line_noise (rst, close, sampler_noise, noisy, events, limit, watch, restart, level, \event , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   reg \$10 ;
@@ -18556,7 +18556,7 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6337$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6339$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -18690,8 +18690,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6337$259 ;
-  wire [12:0] \port$6337$259 ;
+  input [12:0] \port$6339$259 ;
+  wire [12:0] \port$6339$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -18716,7 +18716,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6337$259 [12:1] + 1'h1;
+  assign \$11  = \port$6339$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -18841,7 +18841,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6337$259 [0]),
+    .clear_high(\port$6339$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -18984,7 +18984,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6337$259 [0]) begin
+            if (\port$6339$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -19069,7 +19069,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6337$259 [0]) begin
+            if (\port$6339$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -19108,7 +19108,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6337$259 [12:1] };
+            \$85  = { 1'h0, \port$6339$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -19493,11 +19493,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6337$259 [12:1] };
-  assign fixed = \port$6337$259 [0];
+  assign fixed_delay = { 1'h0, \port$6339$259 [12:1] };
+  assign fixed = \port$6339$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6337$259 [0];
+  assign clear_high = \port$6339$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -19904,7 +19904,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6325$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6327$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -19946,8 +19946,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6325$0 ;
-  wire \port$6325$0 ;
+  input \port$6327$0 ;
+  wire \port$6327$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -19961,9 +19961,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6325$0  };
-  assign \$2  = { lc[4:0], \port$6325$0  } == last;
-  assign \$3  = { lc[4:0], \port$6325$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6327$0  };
+  assign \$2  = { lc[4:0], \port$6327$0  } == last;
+  assign \$3  = { lc[4:0], \port$6327$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -20073,7 +20073,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6325$0  };
+  assign lc_next = { lc[4:0], \port$6327$0  };
   assign zero = is_zero;
 endmodule
 
@@ -20648,7 +20648,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2509$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2510$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
@@ -20820,8 +20820,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2509$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$2509$0 ;
-  wire \port$2509$0 ;
+  output \port$2510$0 ;
+  wire \port$2510$0 ;
   output report;
   wire report;
   input report_frame;
@@ -20939,7 +20939,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2509$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2509$0  = \$2 ;
+  assign \port$2510$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -20990,7 +20990,7 @@ endmodule
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7221$0 , \port$7234$0 , regs__ca_done, \port$7311$0 , ca_rbuf_addr);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7223$0 , \port$7236$0 , regs__ca_done, \port$7313$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -21172,12 +21172,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7221$0 ;
-  wire [186:0] \port$7221$0 ;
-  output [79:0] \port$7234$0 ;
-  wire [79:0] \port$7234$0 ;
-  output [9:0] \port$7311$0 ;
-  wire [9:0] \port$7311$0 ;
+  output [186:0] \port$7223$0 ;
+  wire [186:0] \port$7223$0 ;
+  output [79:0] \port$7236$0 ;
+  wire [79:0] \port$7236$0 ;
+  output [9:0] \port$7313$0 ;
+  wire [9:0] \port$7313$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -21632,9 +21632,9 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$7221$0  = \$18 ;
-  assign \port$7234$0  = \$19 ;
-  assign \port$7311$0  = \$20 ;
+  assign \port$7223$0  = \$18 ;
+  assign \port$7236$0  = \$19 ;
+  assign \port$7313$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -22567,6 +22567,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign periodic = \periodic$45  | frames;
   assign frame_done = cycle[259] ? stopped : done;
   assign arm = cycle[259] ? first_rise : ma_arm;
+  assign close = cycle[259] ? stopped : done;
   assign \$1  = cycle[144:141] != 4'hf;
   assign \$2  = ~ cycle[259];
   assign enable = \$1  & \$2 ;
@@ -22709,7 +22710,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6873$272 (cycle[274:272]),
+    .\port$6875$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -22739,7 +22740,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   );
   \biss_master_wb.ch1.core.line_noise  line_noise (
     .clk(clk),
-    .close(done),
+    .close(close),
     .\event (\event ),
     .events(events),
     .level(\slo$62 ),
@@ -22820,7 +22821,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6873$259 (cycle[271:259]),
+    .\port$6875$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$344 ),
@@ -22844,7 +22845,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6861$0 (\bit ),
+    .\port$6863$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -22911,7 +22912,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$4940$0 (\$28 ),
+    .\port$4942$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -23020,7 +23021,6 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign waiting = watch;
   assign \level$160  = \slo$62 ;
   assign noise = sampler_noise;
-  assign close = done;
   assign fault = \restart$164 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
@@ -26987,7 +26987,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6873$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6875$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire [6:0] \$1 ;
@@ -27690,8 +27690,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6873$272 ;
-  wire [2:0] \port$6873$272 ;
+  input [2:0] \port$6875$272 ;
+  wire [2:0] \port$6875$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -27758,8 +27758,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$367  = ssi & \port$6873$272 [0];
-  assign \$368  = ~ \port$6873$272 [1];
+  assign \$367  = ssi & \port$6875$272 [0];
+  assign \$368  = ~ \port$6875$272 [1];
   assign \$369  = \$367  & \$368 ;
   assign \$370  = \bit  ^ \$369 ;
   assign \$371  = ~ words[6];
@@ -28080,18 +28080,18 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
     cpw_top <= \$633 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$6873$272 [0];
+  assign \$3  = ssi & \port$6875$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$6873$272 [0];
+  assign \$6  = ssi & \port$6875$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$6873$272 [0];
+  assign \$9  = ssi & \port$6875$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$6873$272 [0];
+  assign \$14  = ssi & \port$6875$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$6873$272 [0];
+  assign \$18  = ssi & \port$6875$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -28136,7 +28136,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   assign \$66  = idx == \$65 ;
   assign \$67  = word_count - 1'h1;
   assign \$68  = word == \$67 ;
-  assign \$69  = ssi & \port$6873$272 [2];
+  assign \$69  = ssi & \port$6875$272 [2];
   assign \$70  = word + 1'h1;
   assign \$71  = idx + 1'h1;
   assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -28427,7 +28427,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
   assign \$357  = \$354  & \$356 ;
   assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
   assign \$359  = ~ words[6];
-  assign \$360  = ssi & \port$6873$272 [0];
+  assign \$360  = ssi & \port$6875$272 [0];
   assign \$361  = ~ \$360 ;
   assign \$362  = \$359  & \$361 ;
   assign \$363  = ! word;
@@ -29189,9 +29189,9 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, lc_load, words, sample
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$6873$272 [0];
-  assign ssi_double = \port$6873$272 [2];
-  assign ssi_error_low = \port$6873$272 [1];
+  assign ssi_error = \port$6875$272 [0];
+  assign ssi_double = \port$6875$272 [2];
+  assign ssi_error_low = \port$6875$272 [1];
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$53  = crcs;
   assign \bit$58  = \bit ;
@@ -29837,7 +29837,7 @@ module \biss_master_wb.ch1.core.delay_check (rst, enable, rearm, check, learn, c
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.line_noise (rst, sampler_noise, noisy, events, limit, watch, restart, level, close, \event , clk);
+module \biss_master_wb.ch1.core.line_noise (rst, close, sampler_noise, noisy, events, limit, watch, restart, level, \event , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   reg \$10 ;
@@ -32700,7 +32700,7 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6873$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6875$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -32834,8 +32834,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6873$259 ;
-  wire [12:0] \port$6873$259 ;
+  input [12:0] \port$6875$259 ;
+  wire [12:0] \port$6875$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -32860,7 +32860,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6873$259 [12:1] + 1'h1;
+  assign \$11  = \port$6875$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -32985,7 +32985,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6873$259 [0]),
+    .clear_high(\port$6875$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -33128,7 +33128,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6873$259 [0]) begin
+            if (\port$6875$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -33213,7 +33213,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6873$259 [0]) begin
+            if (\port$6875$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -33252,7 +33252,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6873$259 [12:1] };
+            \$85  = { 1'h0, \port$6875$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -33637,11 +33637,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6873$259 [12:1] };
-  assign fixed = \port$6873$259 [0];
+  assign fixed_delay = { 1'h0, \port$6875$259 [12:1] };
+  assign fixed = \port$6875$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6873$259 [0];
+  assign clear_high = \port$6875$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -34048,7 +34048,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6861$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6863$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -34090,8 +34090,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6861$0 ;
-  wire \port$6861$0 ;
+  input \port$6863$0 ;
+  wire \port$6863$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -34105,9 +34105,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6861$0  };
-  assign \$2  = { lc[4:0], \port$6861$0  } == last;
-  assign \$3  = { lc[4:0], \port$6861$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6863$0  };
+  assign \$2  = { lc[4:0], \port$6863$0  } == last;
+  assign \$3  = { lc[4:0], \port$6863$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -34217,7 +34217,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6861$0  };
+  assign lc_next = { lc[4:0], \port$6863$0  };
   assign zero = is_zero;
 endmodule
 
@@ -34792,7 +34792,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4940$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4942$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
@@ -34964,8 +34964,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4940$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$4940$0 ;
-  wire \port$4940$0 ;
+  output \port$4942$0 ;
+  wire \port$4942$0 ;
   output report;
   wire report;
   input report_frame;
@@ -35083,7 +35083,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4940$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4940$0  = \$2 ;
+  assign \port$4942$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -9,6 +9,7 @@ The engine (sim/shared/campaign.py) predicts every outcome with the reference mo
 
 import itertools
 import math
+import time
 
 import cocotb
 from cocotb.simtime import convert, get_sim_time
@@ -16,12 +17,18 @@ from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
-from master_contract import CHECK_OFF, FRAME_STATUSES, NOISE_STATUSES, STATUS, STATUS_NAME
+from encoder_model.cocotb_ssi import SsiFaults
+from encoder_model.ssi import ACTIVE_HIGH, ACTIVE_LOW, SsiFormat, parse_ssi, ssi_bits
+from master_contract import (CHECK_OFF, CONFIRM_NEUTRAL, CRC_MAX_WIDTH, FRAME_STATUSES,
+                             MAX_DATA_BITS, NOISE_STATUSES, SSI_FIELD_STATUSES, STATUS,
+                             STATUS_NAME, ConfirmationAccount, port_position, ssi_ne_nw,
+                             ssi_vote_margin)
 from sim.shared import glitch
 from sim.shared.campaign import WATCHDOG_S, Campaign, CampaignFailure, scaled
 from sim.shared.functional_coverage import PRESETS
-from sim.shared.reference import FRAME_STATUS_CODES, config_valid, format_of
-from sim.shared.testbench import CLK_HZ, MA_RATES_HZ, preset
+from sim.shared.reference import FRAME_STATUS_CODES, config_valid, format_of, ssi_verdict
+from sim.shared.ssi_testbench import SsiTestbench
+from sim.shared.testbench import CLK_HZ, MA_RATES_HZ, half_period_for, preset
 
 #: Undetected fraction of random errors beyond the Hamming distance: 2^-width.
 CRC_THEORY = {kind: 2.0 ** -frames.CRC_WIDTHS[kind] for kind in (frames.CRC6, frames.CRC16)}
@@ -1429,3 +1436,308 @@ async def glitch_cost(dut):
         "width_s": GLITCH_COST_WIDTH_S, "defences_in_core": defences(dut)}})
     wrong = {k: r["valid_wrong"] for k, r in table.items() if r["valid_wrong"]}
     c.expect(not wrong, f"glitch_cost: valid with a wrong position after one glitch: {wrong}")
+
+
+# -- SSI (issue 26): one random event per cycle on random SSI formats, predicted and compared ---
+#: MA rates of the SSI campaign, the slow ones drawn less often (simulation time grows with the
+#: MA period), every one drawn.
+SSI_RATE_WEIGHTS = (1, 3, 4, 5, 6)          # 250 kHz, 1, 2.5, 5, 10 MHz (MA_RATES_HZ)
+#: The events, one per cycle, and their weights. ``copy2_flip`` needs double transmission
+#: (else a ``bit_flip``).
+SSI_EVENTS = {"none": 3, "bit_flip": 4, "copy2_flip": 2, "stuck_high": 1, "stuck_low": 1,
+              "glitch": 1}
+SSI_BREAK = 300                             # cfg_break_time: 3 us (the campaigns' short break)
+
+
+def ssi_class(fmt, double):
+    """The format class a tally row is kept for: plain SSI or extended SSI by its CRC, with
+    or without double transmission."""
+    kind = ("plain" if not fmt.nenw else
+            "extended CRC-6" if fmt.crc == frames.CRC6 else "extended custom CRC")
+    return kind + (" + double" if double else "")
+
+
+def random_ssi_format(rng, ma_hz):
+    """A random SSI word: 1..55 position bits, Gray or binary; plain (an error bit, either
+    polarity, or none) or extended (nE nW and CRC-6 or a custom CRC of 1..16 bits with a
+    polynomial other than 0, so that it sees every single-bit error); a short monoflop time
+    (1.5..3 MA periods, at least 3 us: the campaign's cycles cost little more than their
+    frames)."""
+    tm_s = max(3e-6, rng.uniform(1.5, 3) / ma_hz)
+    data_bits = rng.randint(1, MAX_DATA_BITS[0])
+    gray = rng.random() < 0.5
+    if rng.random() < 0.45:
+        if rng.random() < 0.6:
+            crc = frames.CRC6
+        else:
+            width = rng.randint(1, CRC_MAX_WIDTH)
+            crc = frames.CustomCrc(width, rng.randrange(1, 1 << width), rng.getrandbits(width),
+                                   bool(rng.getrandbits(1)))
+        return SsiFormat(data_bits, gray=gray, nenw=True, crc=crc, tm_s=tm_s)
+    if rng.random() < 0.5:
+        return SsiFormat(data_bits, gray=gray, error_bits=1,
+                         error_polarity=(rng.choice((ACTIVE_HIGH, ACTIVE_LOW)),), tm_s=tm_s)
+    return SsiFormat(data_bits, gray=gray, tm_s=tm_s)
+
+
+class SsiCampaign(Campaign):
+    """The campaign engine's tallies, coverage and results around an SsiTestbench: the SSI
+    encoder on the pins, every result checked by SsiTestbench.check (status counters, valid,
+    line_delay, MA pulses, the first copy's fields) after the status was predicted here."""
+
+    def __init__(self, dut, name, *, seed):
+        super().__init__(dut, name, seed=seed)
+        self.tb = SsiTestbench(dut, seed=seed)
+        self.rng = self.tb.rng
+        self.seed = seed
+        self.confirmation = ConfirmationAccount()   # from the predicted statuses
+        self.table = {}                             # "class | event" -> its row
+        self.setup_info = {}
+        self.fault_open = None                      # [event, cycles since] until a valid one
+        self.detail = ""                            # the event's particulars (messages)
+
+    async def start(self, cable=Cable()):
+        await self.tb.start(cable=cable, fmt=SsiFormat(13))
+        self.t0 = time.monotonic()
+
+    async def setup_ssi(self):
+        """A random format, MA rate, cable (0..100 m), cfg_ssi_delay (the true round trip, or
+        off by up to ssi_vote_margin clocks) and jitter (what the votes leave of a quarter
+        period after the delay's error), end check, confirmation setting."""
+        tb, rng = self.tb, self.rng
+        await self.settle()
+        ma_hz = rng.choices(MA_RATES_HZ, weights=SSI_RATE_WEIGHTS)[0]
+        fmt = random_ssi_format(rng, ma_hz)
+        double = rng.random() < 0.5
+        hp = half_period_for(ma_hz)
+        length = round(rng.uniform(0, 100), 1)
+        tb.set_cable(Cable(length_m=length))
+        true = tb.true_delay_clocks()
+        margin = ssi_vote_margin(hp)
+        off = rng.randint(-margin, margin) if rng.random() < 0.35 else 0
+        delay = max(0, round(true) + off)
+        # Every vote of a bit inside that bit: the delay's error plus the jitter of the MA edge
+        # and of the SLO edge it causes (j each) within hp - hp // 2 clocks, one clock spare.
+        room = hp - hp // 2 - abs(delay - true) - 1
+        jitter_s = rng.uniform(0, room / 2) / CLK_HZ if room > 0 and rng.random() < 0.6 else 0.0
+        tb.set_cable(Cable(length_m=length, jitter_s=jitter_s))
+        rt = tb.cable.round_trip_s()
+        self.ma_hz = ma_hz
+        self.cfg = {"cfg_break_time": SSI_BREAK,
+                    # above the encoder's tm plus the round trip (docs/ports.md, SSI mode)
+                    "cfg_timeout_limit": round((fmt.tm_s + rt) * CLK_HZ) + 300,
+                    "cfg_end_check": int(rng.random() < 0.5), "cfg_noise_limit": 0,
+                    "cfg_confirm_frames": rng.choice((0, 0, 2, CHECK_OFF))}
+        signed = rng.random() < 0.2
+        tb.configure_ssi(fmt, ma_hz, delay=delay, double=double, signed=signed, **self.cfg)
+        self.setup_info = {"fmt": tb.ssi_fmt, "double": double, "signed": signed,
+                           "cable_m": length, "delay": delay, "true_delay": round(true, 2),
+                           "jitter_ns": round(jitter_s * 1e9, 2), "ma_hz": ma_hz, **self.cfg}
+        self.stats["setups"] += 1
+        self.stats[f"setups_{ssi_class(fmt, double)}"] += 1
+        self.stats["setups_delay_off"] += int(delay != round(true))
+        self.stats["setups_jittered"] += int(jitter_s > 0)
+
+    def where(self, event):
+        i = self.setup_info
+        return (f"[ssi seed {self.seed}, cycle {self.stats['cycles']}, event {event} "
+                f"{self.detail}] "
+                f"{i['fmt']}, double {i['double']}, signed {i['signed']}, "
+                f"{i['ma_hz'] / 1e6:g} MHz, {i['cable_m']} m, cfg_ssi_delay {i['delay']} "
+                f"(true {i['true_delay']}), jitter {i['jitter_ns']} ns, "
+                f"end check {i['cfg_end_check']}, confirm {i['cfg_confirm_frames']}")
+
+    def row(self, event):
+        key = f"{ssi_class(self.tb.ssi_fmt, self.tb.double)} | {event}"
+        return self.table.setdefault(key, {"cycles": 0, "statuses": {}, "valid_wrong": 0,
+                                           "undetectable_by_design": 0})
+
+
+async def ssi_vote_glitch(c, k):
+    """SLO inverted at the master pin for hp // 2 clocks (at most one vote: they are hp // 2
+    apart) over the centre vote of bit k: (MA rising edge k + 1) + cfg_ssi_delay + hp."""
+    tb, dut = c.tb, c.dut
+    hp = tb.half_period
+    width = max(1, hp // 2)
+    clk_ps = 1e12 / CLK_HZ
+    for _ in range(k + 1):
+        await RisingEdge(dut.ma)
+    await Timer(round((tb.ssi_delay + hp - width / 2 + 0.25) * clk_ps), "ps")
+    tb.encoder.force_slo(1 - int(dut.slo.value))
+    c.detail += f" at {get_sim_time('ns'):.0f} ns for {width} clocks"
+    await Timer(round(width * clk_ps), "ps")
+    tb.encoder.force_slo(None)
+
+
+async def ssi_force_at_rise(c, k, level):
+    """SLO held at ``level`` from a little after the master's MA rising edge k (before the votes
+    of the bit that edge asks for: they start hp - hp // 2 clocks after its round trip)."""
+    tb = c.tb
+    hp = tb.half_period
+    for _ in range(k):
+        await RisingEdge(c.dut.ma)
+    await Timer(round(c.rng.uniform(0, max(0, hp - hp // 2 - 1)) * 1e12 / CLK_HZ) + 1, "ps")
+    tb.encoder.force_slo(level)
+
+
+async def ssi_release(c):
+    """End a stuck line once the encoder's own line is high at the master pin (tm over, the
+    round trip passed): releasing onto a low line would be a fall while the master waits, a
+    noise event of the next frame."""
+    await c.tb.wait_idle(limit_s=WATCHDOG_S)
+    await c.tb.encoder_ready()
+    await Timer(round(c.tb.cable.round_trip_s() * 1e9) + 100, "ns")
+    c.tb.encoder.force_slo(None)
+    await Timer(200, "ns")          # high at the pin before the next request (synchronizer)
+
+
+async def ssi_cycle(c, event):
+    """One request with one event; its status predicted (reference.ssi_verdict on what the
+    encoder put on the line, the line checks, the confirmation rule) and compared; then every
+    field, counter and MA pulse by SsiTestbench.check; the tallies."""
+    tb, rng, dut = c.tb, c.rng, c.dut
+    fmt, double, pulses = tb.ssi_fmt, tb.double, tb.pulses
+    n = fmt.total_bits
+    tb.position = rng.getrandbits(fmt.data_bits)
+    tb.errors = (rng.random() < 0.3,)
+    tb.nenw = rng.choice(((1, 1), (1, 1), (0, 1), (1, 0), (0, 0)))
+    word = ssi_bits(fmt, tb.position, tb._errors_at(0), tb.nenw if fmt.nenw else None)
+    tb.encoder.logic.plan.clear()
+    inject, latch = None, True
+    c.detail = ""
+    if event == "bit_flip":         # one bit of the (first) copy wrong on the line
+        i = rng.randrange(n)
+        tb.encoder.queue(SsiFaults(force=((i, 1 - word[i]),)))
+        c.detail = f"bit {i}"
+        part = ("crc" if i >= n - fmt.crc_bits else "flags" if i >= fmt.data_bits
+                else "position")
+        c.stats[f"bit_flip_in_{part}"] += 1
+    elif event == "copy2_flip":     # one bit of copy 2, or the separator, wrong
+        j = n if rng.random() < 0.2 else rng.randrange(n)
+        tb.encoder.queue(SsiFaults(separator=1) if j == n else SsiFaults(flip_copy2=(j,)))
+        c.detail = "separator" if j == n else f"copy 2 bit {j}"
+        c.stats["copy2_flip_separator"] += int(j == n)
+    elif event == "stuck_high":     # from before the cycle, or from MA rising edge k
+        await c.settle()
+        k = 0 if rng.random() < 0.25 else rng.randint(1, pulses)
+        if k == 0:
+            tb.encoder.force_slo(1)
+        else:
+            inject = lambda: ssi_force_at_rise(c, k, 1)          # noqa: E731
+        c.stats["stuck_high_before_the_cycle"] += int(k == 0)
+        c.detail = f"from MA rise {k}"
+    elif event == "stuck_low":      # before the request; with the end check also mid-frame
+        await c.settle()
+        if c.cfg["cfg_end_check"] and rng.random() < 0.6:
+            k = rng.randint(1, pulses)
+            inject = lambda: ssi_force_at_rise(c, k, 0)          # noqa: E731
+            c.stats["stuck_low_mid_frame_end_check"] += 1
+            c.detail = f"from MA rise {k}"
+        else:
+            tb.encoder.force_slo(0)
+            await Timer(1, "us")        # low at the pin before the request (synchronizer)
+            latch = False
+            c.stats["stuck_low_before_the_request"] += 1
+    elif event == "glitch":
+        # Any bit, the one after the word included (the frame ends with its decision).
+        k = rng.randrange(pulses)
+        inject = lambda: ssi_vote_glitch(c, k)                   # noqa: E731
+        c.detail = f"bit {k}"
+    n_rec = len(tb.encoder.records)
+    task = cocotb.start_soon(inject()) if inject else None
+    res = await tb.request(limit_s=WATCHDOG_S)
+    if task is not None and not task.done():
+        task.cancel()
+    where = c.where(event)
+    c.expect(len(tb.encoder.records) == n_rec + int(latch),
+             f"{where}: {len(tb.encoder.records) - n_rec} latches, expected {int(latch)}, "
+             f"status {STATUS_NAME.get(res.status, res.status)}")
+    rec = tb.encoder.records[-1] if latch else None
+    # -- the prediction, from the documentation --
+    if event == "stuck_high":
+        base, reading = "NO_STOP", None
+    elif event == "stuck_low":
+        base, reading = "SLO_STUCK_LOW", None
+    else:
+        c.expect(len(rec.levels) == pulses, f"{where}: the encoder saw {len(rec.levels)} rises")
+        base, reading = ssi_verdict(fmt, rec.levels, double=double)
+        if event == "glitch" and base == "OK":
+            base = "NOISY_LINE"         # one noise event, cfg_noise_limit 0
+    setting = c.cfg["cfg_confirm_frames"]
+    want = "UNCONFIRMED" if base == "OK" and c.confirmation.pending(setting) else base
+    got = STATUS_NAME.get(res.status, res.status)
+    c.expect(got == want, f"{where}: status {got}, expected {want} (the line: "
+                          f"{rec.levels if rec else 'no latch'}, word sent {word})")
+    c.confirmation.reported(STATUS[want], setting)
+    try:
+        tb.check(res, want, cycle=latch)
+    except AssertionError as e:
+        raise CampaignFailure(f"{where}: status {got}: {e}") from e
+    f = res.fields
+    if want == "SPW_MISMATCH":          # the first copy's reading (SSI_DOUBLE_REPORTS)
+        pos = port_position(tb.word, reading.position, len(dut.word0_position))
+        c.expect(f["word0_position"] == pos,
+                 f"{where}: SPW_MISMATCH reports {f['word0_position']:#x}, copy 1 {pos:#x}")
+    if "noise_events" in f and want in FRAME_STATUSES:
+        events = 1 if event == "glitch" else 0      # a clean line never shows one
+        c.expect(f["noise_events"] == events,
+                 f"{where}: noise_events {f['noise_events']}, expected {events}")
+    if event in ("stuck_high", "stuck_low"):
+        await ssi_release(c)
+    # -- the tallies --
+    truth = parse_ssi(fmt, rec.word) if rec else None
+    wrong_reading = bool(rec) and want in SSI_FIELD_STATUSES and (
+        f["word0_position"] != port_position(tb.word, truth.position, len(dut.word0_position))
+        or (fmt.error_bits or fmt.nenw) and (f["word0_ne"], f["word0_nw"]) != ssi_ne_nw(
+            error_active=truth.errors[0] if fmt.error_bits else None,
+            nenw=(truth.ne, truth.nw) if fmt.nenw else None))
+    valid_wrong = bool(res.valid) and wrong_reading
+    row = c.row(event)
+    row["cycles"] += 1
+    row["statuses"][got] = row["statuses"].get(got, 0) + 1
+    row["valid_wrong"] += int(valid_wrong)
+    outcome = got
+    if wrong_reading and want != "CRC_ERROR_WORD0":
+        # Only a single-bit error in plain SSI read once can pass: no check sees it.
+        c.expect(event == "bit_flip" and not double and not fmt.nenw,
+                 f"{where}: {got} with a wrong reading")
+        row["undetectable_by_design"] += 1
+        c.stats["undetectable_by_design"] += 1
+        outcome = f"{got}, wrong reading (undetectable by design: plain SSI)"
+    # The bounds: one bit error never gives a valid wrong reading with double transmission,
+    # nor with extended SSI's CRC-6.
+    c.expect(not (valid_wrong and (double or fmt.crc == frames.CRC6)),
+             f"{where}: valid with a wrong reading after a single bit error")
+    if c.fault_open is not None:
+        c.fault_open[1] += 1
+        if res.valid:
+            c.recovery[c.fault_open[0]][c.fault_open[1]] += 1
+            c.fault_open = None
+    if got not in CONFIRM_NEUTRAL:
+        c.fault_open = [f"ssi_{event}", 0]
+    c.note(f"ssi_{event}", res, tb.cable.round_trip_s(), outcome)
+    dut._log.debug("%s: %s line_delay %d", where, got, f["line_delay"])
+
+
+@cocotb.test()
+async def ssi(dut):
+    """The SSI mode (issue 26) under faults: random formats (1..55 bits, Gray or binary, an
+    error bit or extended SSI with nE nW and CRC-6 or a custom CRC, double transmission or
+    not), MA rates up to 10 MHz, 0..100 m with cfg_ssi_delay the true round trip or off by up
+    to a quarter period less a clock, jitter; per cycle one event: none, one bit of the word
+    wrong on the line, one bit of copy 2 (or the separator) wrong, the line stuck high or low,
+    a glitch on a vote. Every status predicted from docs/ports.md and compared; a single bit
+    error in plain SSI read once is counted as undetectable by design, never as a failure."""
+    c = SsiCampaign(dut, "ssi", seed=int(__import__("os").environ.get("BISS_SOAK_SEED", "81")))
+    await c.start()
+    events, weights = list(SSI_EVENTS), list(SSI_EVENTS.values())
+    target = scaled(450)            # about 20 s of wall time on Verilator at scale 1
+    while c.stats["cycles"] < target:
+        await c.setup_ssi()
+        for _ in range(c.rng.randint(2, 6)):
+            event = c.rng.choices(events, weights)[0]
+            if event == "copy2_flip" and not c.tb.double:
+                event = "bit_flip"
+            await ssi_cycle(c, event)
+    await c.tb.finish()
+    c.save({"ssi_table": c.table})

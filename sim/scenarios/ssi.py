@@ -17,7 +17,7 @@ from encoder_model.frames import CRC6, CRC16, CustomCrc
 from encoder_model.ssi import SsiFormat
 from master_contract import (CA_COUNTERS, CA_STATUS, DEFAULT_TIMEOUT_LIMIT_S, MAX_DATA_BITS,
                              QUIET_TIME_S, SSI_ACCESS_STATUS, SSI_BAD_CONFIGS, SSI_DELAY_MAX,
-                             ssi_vote_margin)
+                             STATUS, STATUS_NAME, ssi_vote_margin)
 from protocol_facts import ENCODER_INTERNAL_DELAY_S
 from sim.shared.ssi_testbench import SsiTestbench
 from sim.shared.testbench import CLK_HZ, MA_RATES_HZ, preset
@@ -463,6 +463,33 @@ async def ssi_noise_glitch(dut):
             if "noise_events" in res.fields:
                 assert res.fields["noise_events"] == 1, res.fields["noise_events"]
             await frames_ok(tb, 2)
+    await tb.finish()
+
+
+@cocotb.test()
+async def ssi_glitch_on_the_bit_after_the_word(dut):
+    """The bit after the word (after copy 2 with double transmission) is decided by three votes
+    like every other: a glitch on its centre vote leaves the 0 read, and is a noise event of
+    this frame: NOISY_LINE with cfg_noise_limit 0 (docs/ports.md, "Noise: the line checks":
+    events are counted to this frame's end, the decision of its last bit), and the next frame
+    has none (UNCONFIRMED, then OK). The campaign ``ssi`` glitches every other bit."""
+    fmt = SsiFormat(13)
+    tb = await bench(dut, 121, fmt, 5e6)
+    for double in (False, True):
+        tb.configure_ssi(fmt, 5e6, double=double)
+        await frames_ok(tb, 1)
+        glitch = cocotb.start_soon(glitch_at_bit(tb, tb.pulses - 1))
+        res = await tb.request()
+        assert glitch.done()
+        first = (res.status, res.fields.get("noise_events"))
+        nxt = await tb.request()
+        assert first[0] == STATUS["NOISY_LINE"], \
+            (f"double {double}: the glitched frame {STATUS_NAME[first[0]]} with noise_events "
+             f"{first[1]}; the next, clean one {STATUS_NAME[nxt.status]} with "
+             f"{nxt.fields.get('noise_events')}")
+        tb.check(res, "NOISY_LINE")
+        tb.check(nxt)
+        await frames_ok(tb, 1)
     await tb.finish()
 
 

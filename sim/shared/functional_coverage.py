@@ -32,7 +32,10 @@ FAULTS = ["none", "crc_1bit", "crc_2bit", "crc_3to5bit", "crc_burst", "slo_stuck
           "abort",
           "no_response", "ack_forever", "timeout_stuck", "lc_repeat", "lc_skip", "lc_zero",
           "lc_random", "spw_offset", "bad_config", "config_change", "after_glitch", "noise",
-          "cable_step", "glitch_cost"]
+          "cable_step", "glitch_cost",
+          # the SSI campaign (sim/scenarios/campaigns.py, ssi): one event per cycle
+          "ssi_none", "ssi_bit_flip", "ssi_copy2_flip", "ssi_stuck_high", "ssi_stuck_low",
+          "ssi_glitch"]
 
 _FRAME_ERR = ["CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH"]
 #: Which statuses each fault kind can legitimately end in: the bins of the fault x status cross.
@@ -89,6 +92,16 @@ LEGAL = {
     # one 1..20 ns glitch per cycle (glitch_cost, BiSS C 36): the cycle it hit and the next
     "glitch_cost": ["OK", _UNC, "CRC_ERROR_WORD0", "NO_ACK", "NO_START", "DELAY_RANGE",
                     "SLO_STUCK_LOW", "NO_STOP"] + _NOISE,
+    # SSI (docs/ports.md, "SSI mode"): a clean cycle; one bit of the word wrong on the line
+    # (plain SSI cannot tell: OK with a wrong reading; extended SSI: its CRC; double
+    # transmission: the copies differ); copy 2 or the separator wrong; the line stuck high
+    # (the bit after the word is 1) or low (the encoder never ready); a glitch on a vote
+    "ssi_none": ["OK", _UNC],
+    "ssi_bit_flip": ["OK", _UNC, "CRC_ERROR_WORD0", "SPW_MISMATCH"],
+    "ssi_copy2_flip": ["SPW_MISMATCH"],
+    "ssi_stuck_high": ["NO_STOP"],
+    "ssi_stuck_low": ["SLO_STUCK_LOW"],
+    "ssi_glitch": ["NOISY_LINE"],
 }
 
 

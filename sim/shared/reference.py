@@ -181,3 +181,34 @@ class _LooseFormat(frames.FrameFormat):
     @property
     def spw_shift(self):
         return max(0, self.words[0].data_bits - self.words[1].data_bits) if self.is_safety else 0
+
+
+# -- SSI mode (docs/ports.md, "SSI mode"; master_contract's SSI facts) ------------------------
+def ssi_verdict(fmt, levels, *, double):
+    """``(status name, reading)`` of one SSI cycle whose line, as the master reads it, showed
+    ``levels`` after its MA rising edges 1 .. N + 1 (2 N + 2 with double transmission): the word
+    (``fmt``: an encoder_model.ssi.SsiFormat), with ``double`` a separator and the second copy,
+    then the bit after the word that must be 0. ``reading``: copy 1 parsed
+    (encoder_model.ssi.parse_ssi), what the position and flags report whatever the status
+    (master_contract.SSI_DOUBLE_REPORTS). The rules, in order:
+
+    * the bit after the word (after copy 2) is 1: NO_STOP, whatever cfg_end_check says; it
+      replaces the frame's verdict (the frame is not reported);
+    * copy 1's CRC (extended SSI) fails: CRC_ERROR_WORD0 (it comes before SPW_MISMATCH);
+    * double transmission: a separator of 1, or copy 2 differing from copy 1 in any bit:
+      SPW_MISMATCH;
+    * else OK (the caller applies the line checks and the confirmation rule, which judge the
+      line, not the bits).
+    An active error bit or nE / nW never changes the status."""
+    from encoder_model.ssi import parse_ssi       # the test side's SSI model
+    n = fmt.total_bits
+    levels = list(levels)
+    assert len(levels) == (2 * n + 2 if double else n + 1), (len(levels), n, double)
+    reading = parse_ssi(fmt, levels[:n])
+    if levels[-1]:
+        return "NO_STOP", reading
+    if reading.crc_ok is False:
+        return "CRC_ERROR_WORD0", reading
+    if double and (levels[n] or levels[n + 1:2 * n + 1] != levels[:n]):
+        return "SPW_MISMATCH", reading
+    return "OK", reading

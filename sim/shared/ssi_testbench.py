@@ -14,7 +14,7 @@ from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
 from encoder_model.cocotb_ssi import SsiLineEncoder
 from encoder_model.ssi import ACTIVE_LOW, REPEAT_RING, REPEAT_ZEROS, SsiFormat, parse_ssi
-from master_contract import (SSI_FIELD_STATUSES, SSI_PORTS, SSI_STATUSES, STATUS,
+from master_contract import (FRAME_STATUSES, SSI_FIELD_STATUSES, SSI_PORTS, SSI_STATUSES, STATUS,
                              SSI_STATUS_COUNTERS, STATUS_NAME, port_position, ssi_ma_pulses,
                              ssi_ne_nw, ssi_word_bits)
 from sim.shared.testbench import CLK_HZ, Testbench
@@ -41,6 +41,7 @@ class SsiTestbench(Testbench):
         self.next_record = 0            # first encoder record no result has claimed yet
         self.ssi_pending = []           # (record, pulses, aborted) to check once it ended
         self.status_counts = None       # the status counters after the last checked result
+        self.frame_line_delay = None    # line_delay of the last frame checked
 
     # -- setup ------------------------------------------------------------------------------
     async def start(self, cable=Cable(), fmt=SsiFormat(13)):
@@ -153,9 +154,16 @@ class SsiTestbench(Testbench):
             assert now == want, f"status counters {now}, expected {want} after {status}"
             self.status_counts = now
         f = res.fields
-        if status != "BAD_CONFIG":
+        # line_delay is "updated on frames" (docs/ports.md): cfg_ssi_delay after a frame, the
+        # last frame's after a cycle without one (NO_STOP, SLO_STUCK_LOW, ABORTED)
+        if status in FRAME_STATUSES:
             assert f["line_delay"] == self.ssi_delay, \
                 f"line_delay {f['line_delay']}, cfg_ssi_delay {self.ssi_delay}"
+            self.frame_line_delay = self.ssi_delay
+        elif status != "BAD_CONFIG" and self.frame_line_delay is not None:
+            assert f["line_delay"] == self.frame_line_delay, \
+                f"line_delay {f['line_delay']} after {status}, the last frame's " \
+                f"{self.frame_line_delay}"
         if not cycle:
             assert recs == [], f"the encoder latched {len(recs)} time(s): {recs}"
             return None
@@ -183,10 +191,11 @@ class SsiTestbench(Testbench):
         assert gaps <= {1.0}, f"MA half periods of {sorted(gaps)} x cfg_ma_half_period"
 
     def check_fields(self, res, rec):
-        """Position, nE / nW and crc_ok as the encoder sent them (its ``flip`` faults applied:
-        both copies alike)."""
+        """Position, nE / nW and crc_ok as the encoder sent them: the first copy as it went on
+        the line (its faults applied: a ``flip`` in both copies, a level ``force``d in copy 1)."""
         fmt, f = rec.fmt, res.fields
-        sent = [b ^ (i in rec.faults.flip) for i, b in enumerate(rec.word)]
+        sent = (rec.levels[:fmt.total_bits] if len(rec.levels) >= fmt.total_bits
+                else [b ^ (i in rec.faults.flip) for i, b in enumerate(rec.word)])
         reading = parse_ssi(fmt, sent)
         want = port_position(self.word, reading.position, len(self.dut.word0_position))
         assert f["word0_position"] == want, \

@@ -3,7 +3,7 @@
     python -m sim.tools.campaign_report [DIR]     (default: sim_build/campaign/slice)
 
 Prints Markdown tables (CRC detection, noise immunity, continuous noise, a glitch's cost, a
-changing cable, false alarms, line faults and recovery, sign-of-life, configuration fuzz,
+changing cable, SSI, false alarms, line faults and recovery, sign-of-life, configuration fuzz,
 throughput, functional coverage with its holes) and writes them to DIR/report.md.
 Exits non-zero if a coverage sample shows a fault ending in a status outside the legal table.
 """
@@ -176,6 +176,32 @@ def false_alarm_table(runs):
     return out
 
 
+def ssi_table(run):
+    """The SSI campaign: per format class and event, the cycles, their statuses, results valid
+    with a wrong reading, and single-bit errors plain SSI cannot see (undetectable by design:
+    no CRC, read once; counted, not failures). Then the totals per event."""
+    out = ["| format class | event | cycles | statuses | valid, wrong reading | undetectable "
+           "by design |", "|---|---|---:|---|---:|---:|"]
+    total = {}
+    for key in sorted(run["ssi_table"]):
+        r = run["ssi_table"][key]
+        cls, event = key.split(" | ")
+        statuses = ", ".join(f"{k} {v}" for k, v in sorted(r["statuses"].items()))
+        out.append(f"| {cls} | {event} | {r['cycles']} | {statuses} | {r['valid_wrong']} | "
+                   f"{r['undetectable_by_design']} |")
+        t = total.setdefault(event, {"cycles": 0, "statuses": Counter(), "valid_wrong": 0,
+                                     "undetectable_by_design": 0})
+        t["cycles"] += r["cycles"]
+        t["statuses"].update(r["statuses"])
+        t["valid_wrong"] += r["valid_wrong"]
+        t["undetectable_by_design"] += r["undetectable_by_design"]
+    for event, t in sorted(total.items()):
+        statuses = ", ".join(f"{k} {v}" for k, v in sorted(t["statuses"].items()))
+        out.append(f"| **all** | {event} | {t['cycles']} | {statuses} | {t['valid_wrong']} | "
+                   f"{t['undetectable_by_design']} |")
+    return out
+
+
 def throughput(runs):
     out = ["| campaign | simulator | cycles | wall time | cycles/s |", "|---|---|---:|---:|---:|"]
     for name, run in sorted(runs.items()):
@@ -211,6 +237,9 @@ def main(argv=None):
         if "glitch_cost_table" in run:
             lines += [f"## What one short glitch costs ({name})", ""] + glitch_cost_table(run)
             lines += [""]
+        if "ssi_table" in run:
+            lines += [f"## SSI: events and outcomes per format class ({name})", ""]
+            lines += ssi_table(run) + [""]
         if "cable_step_table" in run:
             lines += [f"## A cable that changes length ({name})", ""] + cable_step_table(run)
             lines += [""]

@@ -33,7 +33,8 @@ class LineNoise(wiring.Component):
     sampler_noise : In(1)
         The sampler's ``noise`` strobe.
     close : In(1)
-        The decoder's ``done``: a frame ends.
+        A frame ends: the decoder's ``done`` (BiSS), or its ``stopped`` (SSI: the frame ends
+        with the bit after the word), both two clocks after the last bit's decision.
     restart : In(1)
         A cycle ended without a frame (the controller's ``fault``): the count starts again
         (an event in the same clock is dropped with it).
