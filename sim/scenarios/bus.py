@@ -657,15 +657,15 @@ async def uart_registers_through_the_link(dut):
             expect[ch, path] = value & stored
     for (ch, path), value in expect.items():
         assert await tb.read(path, ch) == value, f"ch{ch} {path}"
-    # The configuration is two runs of consecutive registers (0x020.. and the custom CRCs at
-    # 0x080..): one READ_BURST each.
+    # The configuration is two runs of consecutive registers (0x020.., and the custom CRCs and
+    # SSI mode at 0x080..0x090): one READ_BURST each.
     runs = [[cfg[0]]]
     for path in cfg[1:]:
         if tb.addr(path, 1) == tb.addr(runs[-1][-1], 1) + 4:
             runs[-1].append(path)
         else:
             runs.append([path])
-    assert [len(r) for r in runs] == [8, 4], runs
+    assert [len(r) for r in runs] == [8, 5], runs
     for run in runs:
         assert await tb.bus.read_burst(tb.addr(run[0], 1), len(run)) == [expect[1, p] for p in run]
     for addr in (0x2000, 0x0222):

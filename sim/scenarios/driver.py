@@ -362,6 +362,7 @@ SSI_MA_HZ = 1_000_000
 
 
 @cocotb.test()
+@long_on_icarus
 async def driver_reads_an_ssi_encoder(dut):
     """The driver reads caps.ssi (has_ssi) and configures channel 1 for an SSI encoder through
     biss_configure (13-bit Gray, 1 MHz, ssi_delay the true round trip in clocks: cfg_ssi and

@@ -19,6 +19,7 @@ from master_contract import (CA_COUNTERS, CA_STATUS, DEFAULT_TIMEOUT_LIMIT_S, MA
                              QUIET_TIME_S, SSI_ACCESS_STATUS, SSI_BAD_CONFIGS, SSI_DELAY_MAX,
                              STATUS, STATUS_NAME, ssi_vote_margin)
 from protocol_facts import ENCODER_INTERNAL_DELAY_S
+from sim.shared.discovery import long_on_icarus
 from sim.shared.ssi_testbench import SsiTestbench
 from sim.shared.testbench import CLK_HZ, MA_RATES_HZ, preset
 
@@ -145,6 +146,7 @@ async def ssi_unplugged_encoder(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_long_cable_10mhz(dut):
     """100 m of cable at 10 MHz (a round trip of over 10 MA half periods): cfg_ssi_delay the
     true round trip rounded; then off by half_period // 2 - 1 clocks each way (1 clock), and
@@ -165,6 +167,7 @@ async def ssi_long_cable_10mhz(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_monoflop_periodic(dut):
     """Periodic requests with cfg_request_period shorter than frame + tm: the master waits for
     SLO high (and the quiet time) before each train, so every train latches anew, whatever tm
@@ -220,6 +223,7 @@ async def ssi_bad_configuration(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_extended_crc(dut):
     """Extended SSI: position, nE nW and a CRC over them (iC-MU MODEA 0x7). CRC-6 with every
     nE / nW combination: OK; one CRC bit flipped -> CRC_ERROR_WORD0 (crc_ok 0, the fields as
@@ -250,6 +254,7 @@ async def ssi_extended_crc(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_word_lengths(dut):
     """The shortest and the longest words: 1 and 2 position bits, 33 signed, 55 Gray (the
     widest cfg_w0_data_bits of the default build), with an error bit, double transmission and
@@ -272,6 +277,7 @@ async def ssi_word_lengths(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_ma_rates_with_jitter(dut):
     """Every MA rate of the regression (250 kHz .. 10 MHz) over 0 and 100 m, each edge jittered
     by up to 5 % of the MA period each way: a 17-bit Gray word with an active-low error bit."""
@@ -289,6 +295,7 @@ async def ssi_ma_rates_with_jitter(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_round_trip_of_many_periods(dut):
     """cfg_ssi_delay far beyond the frame: 3000 clocks (30 us) and the largest, 4095 clocks,
     at 10 MHz (a round trip of hundreds of MA periods) and at 1 MHz, with double transmission."""
@@ -335,6 +342,7 @@ async def ssi_abort(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_and_biss_alternate(dut):
     """cfg_ssi is taken per cycle: SSI frames, then BiSS frames from a BiSS encoder on the same
     pins (the SSI one unplugged), then SSI again; each mode's frames are right."""
@@ -446,6 +454,7 @@ async def glitch_at_bit(tb, k, width=6):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_noise_glitch(dut):
     """A short glitch on one bit's centre vote: the majority still reads the bit, but it is a
     noise event: NOISY_LINE with cfg_noise_limit 0 (not valid), the frame OK with limit 1;
