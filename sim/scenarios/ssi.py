@@ -310,6 +310,26 @@ async def ssi_round_trip_of_many_periods(dut):
     await tb.finish()
 
 
+async def start_and_abort(tb, after_us):
+    """One request once the encoder is ready, ``abort_cycle`` for one clock ``after_us`` later:
+    the cycle must end ABORTED. Returns the encoder's record of the aborted train."""
+    dut = tb.dut
+    await tb.wait_idle()
+    await tb.encoder_ready()
+    await Timer(1.2, "us")
+    await RisingEdge(dut.clk)
+    dut.start.value = 1
+    await RisingEdge(dut.clk)
+    dut.start.value = 0
+    await Timer(after_us, "us")
+    await FallingEdge(dut.clk)
+    dut.abort_cycle.value = 1
+    done = cocotb.start_soon(tb.wait_done(limit_s=10e-6))
+    await FallingEdge(dut.clk)
+    dut.abort_cycle.value = 0
+    return tb.check(await done, "ABORTED")
+
+
 @cocotb.test()
 async def ssi_abort(dut):
     """abort_cycle in the middle of an SSI train: ABORTED, not valid, MA back high with fewer
@@ -319,20 +339,7 @@ async def ssi_abort(dut):
     tb = await bench(dut, 112, fmt, 1e6)
     await frames_ok(tb, 1)
     for delay_us in (4, 9):
-        await tb.wait_idle()
-        await tb.encoder_ready()
-        await Timer(1.2, "us")
-        await RisingEdge(dut.clk)
-        dut.start.value = 1
-        await RisingEdge(dut.clk)
-        dut.start.value = 0
-        await Timer(delay_us, "us")
-        await FallingEdge(dut.clk)
-        dut.abort_cycle.value = 1
-        done = cocotb.start_soon(tb.wait_done(limit_s=10e-6))
-        await FallingEdge(dut.clk)
-        dut.abort_cycle.value = 0
-        rec = tb.check(await done, "ABORTED")
+        rec = await start_and_abort(tb, delay_us)
         assert rec.ma_rises < tb.pulses, rec
         res = await tb.request()
         assert tb.expected_status(res, "OK") == "OK"
@@ -418,20 +425,7 @@ async def ssi_abort_with_long_monoflop(dut):
     tb = await bench(dut, 116, fmt, 1e6)
     await frames_ok(tb, 1)
     tb.position = (1 << 13) - 1
-    await tb.wait_idle()
-    await tb.encoder_ready()
-    await Timer(1.2, "us")
-    await RisingEdge(dut.clk)
-    dut.start.value = 1
-    await RisingEdge(dut.clk)
-    dut.start.value = 0
-    await Timer(6, "us")
-    await FallingEdge(dut.clk)
-    dut.abort_cycle.value = 1
-    done = cocotb.start_soon(tb.wait_done(limit_s=10e-6))
-    await FallingEdge(dut.clk)
-    dut.abort_cycle.value = 0
-    rec = tb.check(await done, "ABORTED")
+    rec = await start_and_abort(tb, 6)
     assert rec.levels and rec.levels[-1] == 1, "the line is left high"
     tb.position = 0x0A5A
     res = await tb.request()
