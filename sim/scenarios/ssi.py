@@ -48,6 +48,7 @@ async def ssi_gray_singleturn(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_error_bit(dut):
     """25-bit binary with one error bit after the position, active high then active low:
     inactive -> ne 1, active -> ne 0; the frame is OK either way."""
@@ -198,6 +199,7 @@ async def ssi_monoflop_periodic(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_bad_configuration(dut):
     """What SSI refuses (master_contract.SSI_BAD_CONFIGS): BAD_CONFIG, config_error high, and
     no MA edge at all; a good configuration afterwards runs."""
@@ -331,6 +333,7 @@ async def start_and_abort(tb, after_us):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_abort(dut):
     """abort_cycle in the middle of an SSI train: ABORTED, not valid, MA back high with fewer
     pulses than the word needs; the next cycle waits for the encoder's line (tm) and latches
@@ -380,6 +383,7 @@ async def ssi_and_biss_alternate(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_stop_bit_high(dut):
     """The encoder's own bit after the word is 1 (the line otherwise fine): NO_STOP, not valid;
     with double transmission the bit after copy 2. Recovery: UNCONFIRMED, then OK."""
@@ -395,6 +399,7 @@ async def ssi_stop_bit_high(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_config_latched_per_cycle(dut):
     """The configuration is latched when the cycle starts: changing the word, the delay and
     cfg_ssi itself during an SSI cycle changes nothing in it."""
@@ -497,6 +502,7 @@ async def ssi_glitch_on_the_bit_after_the_word(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_glitch_during_monoflop(dut):
     """A request waits for the encoder's line (tm); a 0.5 us high pulse of noise comes
     meanwhile, shorter than the quiet time: the master does not start on it (the train still
@@ -528,6 +534,7 @@ async def ssi_glitch_during_monoflop(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_end_check(dut):
     """cfg_end_check = 1 in SSI: done only once SLO is high again after the frame (the
     encoder's tm over); without it, done right after the bit after the word, SLO still low."""
@@ -547,6 +554,7 @@ async def ssi_end_check(dut):
 
 
 @cocotb.test()
+@long_on_icarus
 async def ssi_register_access_refused(dut):
     """Register access has no channel in SSI: an access started while the channel runs SSI
     ends with DATA_FAULT at its first frame; the frames stay plain SSI (no CDM hold: MA back
