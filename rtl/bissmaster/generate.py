@@ -161,6 +161,9 @@ PRESETS = {
     "safety": ("BiSS Safety: CPW up to 36 bits with CRC-6, SPW up to 28 bits with CRC-16, "
                "no register access",
                ["--max-data-bits", "36,28", "--word-crcs", "6,16"] + _NO_ACCESS + _NO_SSI),
+    "chain": ("a chain of three slaves on one cable: words of up to 40, 32 and 24 bits, each "
+              "with CRC-6 or its own CRC, no register access",
+              ["--max-data-bits", "40,32,24", "--word-crcs", "6,6,6"] + _NO_ACCESS + _NO_SSI),
 }
 
 
@@ -217,9 +220,10 @@ def _parser():
                       help="system clock; turns the protocol's default times into clocks "
                            "(default: %(default)s)")
     core.add_argument("--max-data-bits", default=",".join(map(str, defaults.max_data_bits)),
-                      metavar="N[,N]",
-                      help="longest data field per word, 1 or 2 words, 1..63 each: 36 (BiSS C "
-                           "only), 36,28 (CPW, SPW) (default: %(default)s)")
+                      metavar="N[,N...]",
+                      help="longest data field per word, 1 to 8 words, 1..63 each: 36 (BiSS C "
+                           "only), 36,28 (CPW, SPW), 40,32,24 (a chain of three) "
+                           "(default: %(default)s)")
     core.add_argument("--word-crcs", type=_parse_crcs, default=None, metavar="C[+C][,...]",
                       help="CRC checkers built per word, 6 and/or 16: 6, 6,16, 6+16,6+16 "
                            "(default: both on each word)")
@@ -284,9 +288,9 @@ def _params(ap, args):
     try:
         bits = tuple(int(b) for b in args.max_data_bits.split(","))
     except ValueError:
-        ap.error(f"--max-data-bits takes 1 or 2 integers, e.g. 36 or 36,28, "
+        ap.error(f"--max-data-bits takes 1 to 8 integers, e.g. 36 or 36,28, "
                  f"not {args.max_data_bits!r}")
-    crcs = args.word_crcs or defaults.word_crcs[:len(bits)]
+    crcs = args.word_crcs or (defaults.word_crcs[0],) * len(bits)
     try:
         return MasterParams(sys_clk_hz=args.sys_clk_hz, max_data_bits=bits, word_crcs=crcs,
                             max_line_delay=args.max_line_delay, timer_width=args.timer_width,

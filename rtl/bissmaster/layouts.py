@@ -6,6 +6,7 @@ each other; only :class:`~bissmaster.master.BissMaster` flattens them into Veril
 :func:`flat_fields`, the one place where a port name is made from a field's path.
 """
 
+from amaranth.hdl import C
 from amaranth.lib import data
 
 from . import protocol
@@ -40,10 +41,13 @@ def config_layout(params):
     # ``_inverted``.
     if params.custom_crc:
         members["w0_crc"] = CRC_SETTINGS
-    if params.words == 2:
-        members.update({"w1_enable": 1, "w1": word})
+    # Words 1 .. N - 1 (a Safety encoder's SPW, a chain's further slaves), each with its
+    # enable: ``cfg_wN_enable``, ``cfg_wN_*``, ``cfg_wN_crc_*``.
+    for w in range(1, params.words):
+        members.update({f"w{w}_enable": 1, f"w{w}": word})
         if params.custom_crc:
-            members["w1_crc"] = CRC_SETTINGS
+            members[f"w{w}_crc"] = CRC_SETTINGS
+    if params.words >= 2:
         members.update({"spw_check": 1, "spw_tolerance": 8})
     # SSI mode (docs/ports.md, "SSI mode"): ``cfg_ssi``, the round trip ``cfg_ssi_delay``, one
     # error bit after the position and its polarity, the double transmission.
@@ -65,7 +69,13 @@ def config_ports(params):
 
 def config_words(cfg, params):
     """The per-word settings of a :func:`config_layout` view, word 0 first."""
-    return [cfg.w0, cfg.w1] if params.words == 2 else [cfg.w0]
+    return [cfg[f"w{w}"] for w in range(params.words)]
+
+
+def config_enables(cfg, params):
+    """Which words a :func:`config_layout` view puts in the frame, word 0 first (word 0 is
+    always in it: the constant 1)."""
+    return [C(1, 1)] + [cfg[f"w{w}_enable"] for w in range(1, params.words)]
 
 
 def config_custom_crcs(cfg, params):
@@ -73,7 +83,7 @@ def config_custom_crcs(cfg, params):
     empty list in builds without ``custom_crc``)."""
     if not params.custom_crc:
         return []
-    return [cfg.w0_crc, cfg.w1_crc] if params.words == 2 else [cfg.w0_crc]
+    return [cfg[f"w{w}_crc"] for w in range(params.words)]
 
 
 def word_result_layout(bits):
@@ -96,7 +106,7 @@ def result_layout(params):
     for w, bits in enumerate(params.max_data_bits):
         members[f"word{w}"] = word_result_layout(bits)
     members.update({"lc": protocol.LC_BITS, "lc_repeat": 1, "lc_skip": 1, "lc_zero": 1})
-    if params.words == 2:
+    if params.words >= 2:
         members["spw_mismatch"] = 1
     return data.StructLayout(members)
 
@@ -187,7 +197,7 @@ def counter_names(params):
     if not params.counters:
         return ()
     return tuple(name for name in COUNTERS
-                 if (params.words == 2 or name not in WORD1_COUNTERS)
+                 if (params.words >= 2 or name not in WORD1_COUNTERS)
                  and (params.register_access or name not in ACCESS_COUNTERS))
 
 

@@ -15,7 +15,7 @@ from .core.delay_check import DelayCheck
 from .core.frame_decoder import FrameDecoder
 from .core.frame_verdict import FrameVerdict
 from .layouts import (BUFFER_LANES, BUFFER_WORD_BITS, access_request_layout, access_result_layout,
-                      buffer_write_layout, config_ports, config_words, counter_names,
+                      buffer_write_layout, config_enables, config_ports, config_words, counter_names,
                       counter_ports, counter_slots, COUNT_ADDR_BITS, field,
                       flat_fields, result_layout)
 from .core.limit_timers import LimitTimers
@@ -150,7 +150,7 @@ class BissMaster(wiring.Component):
     def _blocks(self, m):
         """Every block of the master, as attributes of one namespace."""
         p = self.params
-        two = p.words == 2
+        two = p.words >= 2
         m.submodules.config = config = Configuration(p)
         m.submodules.scheduler = scheduler = RequestScheduler(p.timer_width)
         cdm = p.register_access
@@ -275,7 +275,7 @@ class BissMaster(wiring.Component):
     def _connect_receiver(self, m, b):
         """Sampler -> decoder -> checks."""
         p = self.params
-        two = p.words == 2
+        two = p.words >= 2
         # One register stage between the sampler's decision and the decoder: the vote decode and
         # the decoder's shift enables are too much for one clock at 100 MHz (ECP5). The verdict
         # comes one clock later. The strobe is cleared with the receiver, so a decision made in
@@ -334,9 +334,9 @@ class BissMaster(wiring.Component):
         for w, word in enumerate(b.words):
             m.d.comb += [b.decoder.words[w].eq(word), b.ma_stop.words[w].eq(word)]
         m.d.comb += [b.decoder.crcs.eq(b.config.crcs), b.ma_stop.crcs.eq(b.config.crcs)]
+        m.d.comb += b.ma_stop.enables.eq(Cat(*config_enables(b.cycle, p)))
         if two:
             m.d.comb += [
-                b.ma_stop.w1_enable.eq(b.cycle.w1_enable),
                 b.spw_check.cpw_top.eq(b.decoder.cpw_top),
                 b.spw_check.spw.eq(b.decoder.data1),
                 b.spw_check.bits.eq(b.cycle.w1.data_bits),
@@ -360,7 +360,7 @@ class BissMaster(wiring.Component):
     def _connect_results(self, m, b):
         """Verdict -> result registers."""
         p = self.params
-        two = p.words == 2
+        two = p.words >= 2
         m.d.comb += [
             b.verdict.cfg.eq(b.cycle),
             b.verdict.report_frame.eq(b.controller.report_frame),
@@ -442,7 +442,7 @@ class BissMaster(wiring.Component):
     def _connect_counters(self, m, b):
         """The counter bank's events."""
         p = self.params
-        two = p.words == 2
+        two = p.words >= 2
         faults = b.controller.faults
         events = {
             "crc_word0": b.verdict.crc_error[0],
@@ -466,7 +466,8 @@ class BissMaster(wiring.Component):
                 events[f"ca_{status.name.lower()}"] = (b.access.done
                                                        & (b.access.result.status == status))
         if two:
-            events["crc_word1"] = b.verdict.crc_error[1]
+            # Word 1, or in a chain any word after word 0.
+            events["crc_word1"] = b.verdict.crc_error[1:].any()
             events["spw_mismatch"] = b.controller.report_frame & b.verdict.spw_mismatch
         if b.counters is not None:
             ports = counter_ports(p)

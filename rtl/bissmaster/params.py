@@ -98,11 +98,19 @@ DELAY_SPREAD_WIDTH = 8
 #: Width of the slot and MA-edge counters of one cycle (saturating): Ack slots plus the frame.
 #: 2**16 - 1 slots outlast every Ack limit the timers can hold at the shortest half period.
 SLOT_WIDTH = 16
-#: Width of a bit index inside one word: data, nE/nW, LC and the longest CRC.
-WORD_INDEX_WIDTH = (63 + protocol.NE_NW_BITS + protocol.LC_BITS
-                    + protocol.CRC16_WIDTH).bit_length()
-#: Width of a frame's length in bits (two words, plus the slots around them).
-FRAME_LENGTH_WIDTH = WORD_INDEX_WIDTH + 1
+#: Bits of the longest word on the line: data, nE/nW, LC and the longest CRC.
+WORD_BITS_MAX = 63 + protocol.NE_NW_BITS + protocol.LC_BITS + protocol.CRC16_WIDTH
+#: Width of a bit index inside one word.
+WORD_INDEX_WIDTH = WORD_BITS_MAX.bit_length()
+#: Most data words one frame can have (a chain of up to 8 one-word slaves, as iC-MB4 reads).
+MAX_WORDS = 8
+
+
+def frame_length_width(words):
+    """Width of a frame's length in bits: ``words`` of the longest, plus the slots around
+    them (8 bits for one or two words)."""
+    return max(WORD_INDEX_WIDTH + 1, (words * WORD_BITS_MAX + 8).bit_length())
+
 
 #: The counter memory of a ``counter_ram`` build (:class:`~bissmaster.core.counter_ram.CounterRam`,
 #: read by the bus tops' register map): words of 32 bits, each holding two counts, the even slot
@@ -157,8 +165,10 @@ class MasterParams:
         System clock the core runs on; only used to turn the protocol's default times
         (break, Ack limit, timeout limit) into clock counts.
     max_data_bits : tuple of int
-        Longest data field per word; its length (1 or 2) is the number of words the core can
-        decode. Default: 55 (BP3 DL_POS maximum) for word 0, 40 for the SPW.
+        Longest data field per word; its length (1 .. :data:`MAX_WORDS`) is the number of
+        words the core can decode: one slave's word, a Safety encoder's CPW and SPW, or a
+        chain of slaves' words back to back (docs/frames.md). Default: 55 (BP3 DL_POS
+        maximum) for word 0, 40 for the SPW.
     word_crcs : tuple of tuple of Crc
         The named CRCs (:attr:`Crc.CRC6`, :attr:`Crc.CRC16`) each word accepts. A runtime
         choice outside this set is a configuration error. :attr:`Crc.NONE` is always accepted.
@@ -217,8 +227,9 @@ class MasterParams:
     def __post_init__(self):
         if not isinstance(self.sys_clk_hz, int) or not 1_000_000 <= self.sys_clk_hz <= 1_000_000_000:
             raise ValueError(f"sys_clk_hz must be an integer from 1 MHz to 1 GHz, not {self.sys_clk_hz!r}")
-        if not 1 <= len(self.max_data_bits) <= 2:
-            raise ValueError(f"max_data_bits must name 1 or 2 words, not {self.max_data_bits!r}")
+        if not 1 <= len(self.max_data_bits) <= MAX_WORDS:
+            raise ValueError(f"max_data_bits must name 1 to {MAX_WORDS} words, "
+                             f"not {self.max_data_bits!r}")
         for bits in self.max_data_bits:
             if not isinstance(bits, int) or not 1 <= bits <= 63:
                 raise ValueError(f"each max_data_bits entry must be an integer from 1 to 63, "

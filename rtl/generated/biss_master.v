@@ -38,12 +38,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$20 ;
   wire \$21 ;
   wire \$22 ;
-  reg \$23 ;
+  wire \$23 ;
   reg \$24 ;
   reg \$25 ;
   reg \$26 ;
   reg \$27 ;
-  wire \$28 ;
+  reg \$28 ;
+  wire \$29 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -464,6 +465,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire early;
   wire \early$138 ;
   wire enable;
+  wire [1:0] enables;
   wire end_check;
   wire enough;
   wire \event ;
@@ -925,7 +927,6 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \valid$297 ;
   wire \valid$298 ;
   wire valid_out;
-  wire w1_enable;
   wire waiting;
   wire watch;
   wire [39:0] wbuf;
@@ -1016,35 +1017,35 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign cdm = \cdm$326  & \$4 ;
   assign \$5  = ~ cycle[259];
   assign frame_ok = passed & \$5 ;
-  assign \$6  = report_frame & \spw_mismatch$312 ;
-  assign \$7  = \status$290  == 4'hd;
-  assign \$8  = report_frame & \$7 ;
-  assign \$9  = \status$290  == 4'he;
-  assign \$10  = report_frame & \$9 ;
-  assign \$11  = result[2:0] == 1'h1;
-  assign \$12  = ca_done & \$11 ;
-  assign \$13  = result[2:0] == 2'h2;
-  assign \$14  = ca_done & \$13 ;
-  assign \$15  = result[2:0] == 2'h3;
-  assign \$16  = ca_done & \$15 ;
-  assign \$17  = result[2:0] == 3'h4;
-  assign \$18  = ca_done & \$17 ;
-  assign \$19  = result[2:0] == 3'h5;
-  assign \$20  = ca_done & \$19 ;
+  assign \$7  = report_frame & \spw_mismatch$312 ;
+  assign \$8  = \status$290  == 4'hd;
+  assign \$9  = report_frame & \$8 ;
+  assign \$10  = \status$290  == 4'he;
+  assign \$11  = report_frame & \$10 ;
+  assign \$12  = result[2:0] == 1'h1;
+  assign \$13  = ca_done & \$12 ;
+  assign \$14  = result[2:0] == 2'h2;
+  assign \$15  = ca_done & \$14 ;
+  assign \$16  = result[2:0] == 2'h3;
+  assign \$17  = ca_done & \$16 ;
+  assign \$18  = result[2:0] == 3'h4;
+  assign \$19  = ca_done & \$18 ;
+  assign \$20  = result[2:0] == 3'h5;
+  assign \$21  = ca_done & \$20 ;
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$21  = ~ \clear$202 ;
-  assign \$22  = \sample$348  & \$21 ;
+  assign \$22  = ~ \clear$202 ;
+  assign \$23  = \sample$348  & \$22 ;
   always @(posedge clk)
-    sample <= \$23 ;
+    sample <= \$24 ;
   always @(posedge clk)
-    \bit  <= \$24 ;
+    \bit  <= \$25 ;
   always @(posedge clk)
-    started_before <= \$25 ;
+    started_before <= \$26 ;
   always @(posedge clk)
-    learn <= \$26 ;
+    learn <= \$27 ;
   always @(posedge clk)
-    clean <= \$27 ;
+    clean <= \$28 ;
   \biss_master.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -1138,7 +1139,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$2191$272 (cycle[274:272]),
+    .\port$2203$272 (cycle[274:272]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(sample),
@@ -1198,6 +1199,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
+    .\port$2203$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -1205,7 +1207,6 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .ssi_error(cycle[272]),
     .start_slot(start_slot),
     .\started$15 (started),
-    .w1_enable(cycle[199]),
     .words(\words$248 )
   );
   \biss_master.register_access  register_access (
@@ -1249,7 +1250,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$2191$259 (cycle[271:259]),
+    .\port$2203$259 (cycle[271:259]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(\sample$348 ),
@@ -1272,7 +1273,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$213 ),
     .load(load),
-    .\port$2179$0 (\bit ),
+    .\port$2191$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1339,7 +1340,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$1618$0 (\$28 ),
+    .\port$1624$0 (\$29 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -1350,37 +1351,37 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$23  = \$22 ;
-    if (rst) begin
-      \$23  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$24  = \bit$349 ;
+    \$24  = \$23 ;
     if (rst) begin
       \$24  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$25  = started;
+    \$25  = \bit$349 ;
     if (rst) begin
       \$25  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$26  = report_frame;
+    \$26  = started;
     if (rst) begin
       \$26  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$27  = \clean$350 ;
+    \$27  = report_frame;
     if (rst) begin
       \$27  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
+    \$28  = \clean$350 ;
+    if (rst) begin
+      \$28  = 1'h0;
     end
   end
   assign \idle$112  = idle;
@@ -1458,7 +1459,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign jump = delay_jump;
   assign \crcs$250  = crcs;
   assign \crcs$251  = crcs;
-  assign w1_enable = cycle[199];
+  assign enables = { cycle[199], 1'h1 };
   assign \cpw_top$254  = cpw_top;
   assign data1 = spw;
   assign bits = cycle[205:200];
@@ -1490,7 +1491,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \report_frame$294  = report_frame;
   assign \report_delay$296  = report_delay;
   assign \valid$298  = \valid$297 ;
-  assign word_crc_ok = { \$28 , crc_ok[0] };
+  assign word_crc_ok = { \$29 , crc_ok[0] };
   assign \first_rise$313  = first_rise;
   assign \start$318  = ca_start;
   assign \abort$319  = ca_abort;
@@ -1844,18 +1845,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \result$347.lc_skip  = \result$347 [184];
   assign \result$347.lc_zero  = \result$347 [185];
   assign \result$347.spw_mismatch  = \result$347 [186];
-  assign \events$337 [20] = \$20 ;
-  assign \events$337 [19] = \$18 ;
-  assign \events$337 [18] = \$16 ;
-  assign \events$337 [17] = \$14 ;
-  assign \events$337 [16] = \$12 ;
+  assign \events$337 [20] = \$21 ;
+  assign \events$337 [19] = \$19 ;
+  assign \events$337 [18] = \$17 ;
+  assign \events$337 [17] = \$15 ;
+  assign \events$337 [16] = \$13 ;
   assign \events$337 [15] = \event ;
-  assign \events$337 [14] = \$10 ;
-  assign \events$337 [13] = \$8 ;
+  assign \events$337 [14] = \$11 ;
+  assign \events$337 [13] = \$9 ;
   assign \events$337 [12] = faults[6];
   assign \events$337 [11] = faults[4];
   assign \events$337 [10] = overrun;
-  assign \events$337 [9] = \$6 ;
+  assign \events$337 [9] = \$7 ;
   assign \events$337 [8] = \lc_zero$307 ;
   assign \events$337 [7] = \lc_skip$306 ;
   assign \events$337 [6] = \lc_repeat$305 ;
@@ -1863,7 +1864,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \events$337 [4] = faults[2];
   assign \events$337 [3] = faults[1];
   assign \events$337 [2] = faults[0];
-  assign \events$337 [1] = crc_error[1];
+  assign \events$337 [1] = \$6 ;
   assign \events$337 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
@@ -1874,7 +1875,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \request$315 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = \spw_mismatch$312 ;
-  assign frame[176] = \$28 ;
+  assign frame[176] = \$29 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
   assign frame[173:134] = spw;
@@ -1936,6 +1937,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign live[63:40] = cfg_break_time;
   assign live[39:16] = cfg_request_period;
   assign live[15:0] = cfg_ma_half_period;
+  assign \$6  = crc_error[1];
 endmodule
 
 (* generator = "Amaranth" *)
@@ -1991,28 +1993,31 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   wire \$52 ;
   wire \$53 ;
   wire \$54 ;
-  wire [23:0] \$55 ;
-  wire \$56 ;
-  wire [23:0] \$57 ;
-  wire \$58 ;
-  wire [11:0] \$59 ;
+  wire \$55 ;
+  wire [23:0] \$56 ;
+  wire \$57 ;
+  wire [23:0] \$58 ;
+  wire \$59 ;
   wire \$6 ;
-  wire \$60 ;
-  wire [11:0] \$61 ;
-  wire \$62 ;
-  wire [3:0] \$63 ;
-  wire [16:0] \$64 ;
-  wire [24:0] \$65 ;
-  reg \$66 ;
-  reg [274:0] \$67 ;
-  reg [23:0] \$68 ;
-  reg [23:0] \$69 ;
+  wire [11:0] \$60 ;
+  wire \$61 ;
+  wire [11:0] \$62 ;
+  wire \$63 ;
+  wire [3:0] \$64 ;
+  wire [16:0] \$65 ;
+  wire [24:0] \$66 ;
+  wire [1:0] \$67 ;
+  wire [2:0] \$68 ;
+  reg \$69 ;
   wire \$7 ;
-  reg [11:0] \$70 ;
-  reg [11:0] \$71 ;
-  reg [16:0] \$72 ;
-  reg [75:0] \$73 ;
-  reg [24:0] \$74 ;
+  reg [274:0] \$70 ;
+  reg [23:0] \$71 ;
+  reg [23:0] \$72 ;
+  reg [11:0] \$73 ;
+  reg [11:0] \$74 ;
+  reg [16:0] \$75 ;
+  reg [75:0] \$76 ;
+  reg [24:0] \$77 ;
   wire \$8 ;
   wire \$9 ;
   output [23:0] ack_limit;
@@ -2159,6 +2164,9 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   reg [23:0] timeout_limit = 24'h000000;
   output [1:0] word_count;
   wire [1:0] word_count;
+  assign \$23  = live[209:208] == 1'h1;
+  assign \$24  = \$22  | \$23 ;
+  assign \$25  = live[209:208] == 2'h2;
   assign \$26  = \$24  | \$25 ;
   assign \$27  = live[209:208] == 2'h3;
   assign \$28  = | live[216:212];
@@ -2169,55 +2177,55 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$33  = \$21  & \$32 ;
   assign \$34  = \$18  | \$33 ;
   assign \$35  = \$17  & \$34 ;
-  assign \$36  = live[199] & live[156];
-  assign \$37  = \$36  & live[207];
-  assign \$38  = ~ \$37 ;
-  assign \$39  = \$35  & \$38 ;
-  assign \$40  = ~ live[250];
-  assign \$41  = live[205:200] <= live[154:149];
-  assign \$42  = live[199] & \$41 ;
-  assign \$43  = | live[209:208];
-  assign \$44  = \$42  & \$43 ;
-  assign \$45  = \$40  | \$44 ;
-  assign \$46  = \$39  & \$45 ;
-  assign \$47  = live[272] & live[155];
-  assign \$48  = live[156] | \$47 ;
-  assign \$49  = live[199] | live[250];
-  assign \$50  = \$48  | \$49 ;
-  assign \$51  = live[259] & \$50 ;
-  assign \$52  = ~ \$51 ;
-  assign \$53  = \$46  & \$52 ;
-  assign \$54  = ! live[87:64];
-  assign \$55  = \$54  ? 24'h000fa0 : live[87:64];
-  assign \$56  = ! live[111:88];
-  assign \$57  = \$56  ? 24'h001f40 : live[111:88];
-  assign \$58  = ! live[123:112];
-  assign \$59  = \$58  ? 12'hfff : live[123:112];
-  assign \$60  = ! live[136:125];
-  assign \$61  = \$60  ? 12'h064 : live[136:125];
-  assign \$62  = ! live[144:141];
-  assign \$63  = \$62  ? 4'h2 : live[144:141];
-  assign \$64  = live[15:0] + \$63 ;
-  assign \$65  = ack_limit + { cycle[15:0], 1'h1 };
-  assign word_count = 1'h1 + cycle[199];
+  assign \$37  = live[199] & live[207];
+  assign \$38  = \$36  & \$37 ;
+  assign \$39  = ~ \$38 ;
+  assign \$40  = \$35  & \$39 ;
+  assign \$41  = ~ live[250];
+  assign \$42  = live[205:200] <= live[154:149];
+  assign \$43  = live[199] & \$42 ;
+  assign \$44  = | live[209:208];
+  assign \$45  = \$43  & \$44 ;
+  assign \$46  = \$41  | \$45 ;
+  assign \$47  = \$40  & \$46 ;
+  assign \$48  = live[272] & live[155];
+  assign \$49  = live[156] | \$48 ;
+  assign \$50  = \$49  | live[250];
+  assign \$51  = \$50  | live[199];
+  assign \$52  = live[259] & \$51 ;
+  assign \$53  = ~ \$52 ;
+  assign \$54  = \$47  & \$53 ;
+  assign \$55  = ! live[87:64];
+  assign \$56  = \$55  ? 24'h000fa0 : live[87:64];
+  assign \$57  = ! live[111:88];
+  assign \$58  = \$57  ? 24'h001f40 : live[111:88];
+  assign \$59  = ! live[123:112];
+  assign \$60  = \$59  ? 12'hfff : live[123:112];
+  assign \$61  = ! live[136:125];
+  assign \$62  = \$61  ? 12'h064 : live[136:125];
+  assign \$63  = ! live[144:141];
+  assign \$64  = \$63  ? 4'h2 : live[144:141];
+  assign \$65  = live[15:0] + \$64 ;
+  assign \$66  = ack_limit + { cycle[15:0], 1'h1 };
+  assign \$68  = 2'h1 + cycle[199];
   always @(posedge clk)
-    ok <= \$66 ;
+    ok <= \$69 ;
   always @(posedge clk)
-    cycle <= \$67 ;
+    cycle <= \$70 ;
   always @(posedge clk)
-    ack_limit <= \$68 ;
+    ack_limit <= \$71 ;
   always @(posedge clk)
-    timeout_limit <= \$69 ;
+    timeout_limit <= \$72 ;
   always @(posedge clk)
-    delay_limit <= \$70 ;
+    delay_limit <= \$73 ;
   always @(posedge clk)
-    quiet_time <= \$71 ;
+    quiet_time <= \$74 ;
   always @(posedge clk)
-    delay_tolerance <= \$72 ;
+    delay_tolerance <= \$75 ;
   always @(posedge clk)
-    crcs <= \$73 ;
+    crcs <= \$76 ;
   always @(posedge clk)
-    no_start_limit <= \$74 ;
+    no_start_limit <= \$77 ;
   assign \$1  = | live[15:1];
   assign \$2  = | live[154:149];
   assign \$3  = live[154:149] <= 6'h37;
@@ -2240,134 +2248,132 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \$20  = live[205:200] <= 6'h28;
   assign \$21  = \$19  & \$20 ;
   assign \$22  = ! live[209:208];
-  assign \$23  = live[209:208] == 1'h1;
-  assign \$24  = \$22  | \$23 ;
-  assign \$25  = live[209:208] == 2'h2;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$66  = \$53 ;
+    \$69  = \$54 ;
     if (rst) begin
-      \$66  = 1'h0;
+      \$69  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$67  = cycle;
+    \$70  = cycle;
     if (idle) begin
-      \$67  = live;
+      \$70  = live;
     end
     if (rst) begin
-      \$67  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
+      \$70  = 275'h000000000000000000000000000000000000000000000000000000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$68  = ack_limit;
+    \$71  = ack_limit;
     if (idle) begin
-      \$68  = \$55 ;
+      \$71  = \$56 ;
     end
     if (rst) begin
-      \$68  = 24'h000000;
+      \$71  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$69  = timeout_limit;
+    \$72  = timeout_limit;
     if (idle) begin
-      \$69  = \$57 ;
+      \$72  = \$58 ;
     end
     if (rst) begin
-      \$69  = 24'h000000;
+      \$72  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$70  = delay_limit;
+    \$73  = delay_limit;
     if (idle) begin
-      \$70  = \$59 ;
+      \$73  = \$60 ;
     end
     if (rst) begin
-      \$70  = 12'h000;
+      \$73  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$71  = quiet_time;
+    \$74  = quiet_time;
     if (idle) begin
-      \$71  = \$61 ;
+      \$74  = \$62 ;
     end
     if (rst) begin
-      \$71  = 12'h000;
+      \$74  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$72  = delay_tolerance;
+    \$75  = delay_tolerance;
     if (idle) begin
-      \$72  = \$64 ;
+      \$75  = \$65 ;
     end
     if (rst) begin
-      \$72  = 17'h00000;
+      \$75  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$73  = crcs;
+    \$76  = crcs;
     if (idle) begin
       (* full_case = 32'd1 *)
       casez (live[158:157])
         2'h1:
           begin
-            \$73 [4:0] = 5'h06;
-            \$73 [20:5] = 16'h0003;
-            \$73 [36:21] = 16'h0000;
-            \$73 [37] = 1'h1;
+            \$76 [4:0] = 5'h06;
+            \$76 [20:5] = 16'h0003;
+            \$76 [36:21] = 16'h0000;
+            \$76 [37] = 1'h1;
           end
         2'h2:
           begin
-            \$73 [4:0] = 5'h10;
-            \$73 [20:5] = 16'h90d9;
-            \$73 [36:21] = 16'h0000;
-            \$73 [37] = 1'h1;
+            \$76 [4:0] = 5'h10;
+            \$76 [20:5] = 16'h90d9;
+            \$76 [36:21] = 16'h0000;
+            \$76 [37] = 1'h1;
           end
         2'h3:
-            \$73 [37:0] = live[198:161];
+            \$76 [37:0] = live[198:161];
         default:
-            \$73 [37:0] = 38'h0000000000;
+            \$76 [37:0] = 38'h0000000000;
       endcase
       (* full_case = 32'd1 *)
       casez (live[209:208])
         2'h1:
           begin
-            \$73 [42:38] = 5'h06;
-            \$73 [58:43] = 16'h0003;
-            \$73 [74:59] = 16'h0000;
-            \$73 [75] = 1'h1;
+            \$76 [42:38] = 5'h06;
+            \$76 [58:43] = 16'h0003;
+            \$76 [74:59] = 16'h0000;
+            \$76 [75] = 1'h1;
           end
         2'h2:
           begin
-            \$73 [42:38] = 5'h10;
-            \$73 [58:43] = 16'h90d9;
-            \$73 [74:59] = 16'h0000;
-            \$73 [75] = 1'h1;
+            \$76 [42:38] = 5'h10;
+            \$76 [58:43] = 16'h90d9;
+            \$76 [74:59] = 16'h0000;
+            \$76 [75] = 1'h1;
           end
         2'h3:
-            \$73 [75:38] = live[249:212];
+            \$76 [75:38] = live[249:212];
         default:
-            \$73 [75:38] = 38'h0000000000;
+            \$76 [75:38] = 38'h0000000000;
       endcase
     end
     if (rst) begin
-      \$73  = 76'h0000000000000000000;
+      \$76  = 76'h0000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$6 ) begin end
-    \$74  = \$65 ;
+    \$77  = \$66 ;
     if (rst) begin
-      \$74  = 25'h0000000;
+      \$77  = 25'h0000000;
     end
   end
+  assign word_count = \$68 [1:0];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -2464,6 +2470,8 @@ module \biss_master.config (rst, word_count, live, ok, cycle, ack_limit, timeout
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
+  assign \$36  = live[156];
+  assign \$67  = 2'h1;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -5595,7 +5603,7 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$2191$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$2203$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire [6:0] \$1 ;
@@ -5885,10 +5893,10 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   wire \$355 ;
   wire \$356 ;
   wire \$357 ;
-  wire [54:0] \$358 ;
+  wire \$358 ;
   wire \$359 ;
   reg [3:0] \$36 ;
-  wire \$360 ;
+  wire [54:0] \$360 ;
   wire \$361 ;
   wire \$362 ;
   wire \$363 ;
@@ -6133,9 +6141,9 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   wire \$579 ;
   wire \$58 ;
   wire \$580 ;
-  wire [39:0] \$581 ;
+  wire \$581 ;
   wire \$582 ;
-  wire \$583 ;
+  wire [39:0] \$583 ;
   wire \$584 ;
   wire \$585 ;
   wire \$586 ;
@@ -6149,65 +6157,67 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   wire \$593 ;
   wire \$594 ;
   wire \$595 ;
-  wire [6:0] \$596 ;
+  wire \$596 ;
   wire \$597 ;
-  wire \$598 ;
+  wire [6:0] \$598 ;
   wire \$599 ;
   wire \$6 ;
   wire [6:0] \$60 ;
-  wire [6:0] \$600 ;
+  wire \$600 ;
   wire \$601 ;
-  wire [1:0] \$602 ;
-  wire [1:0] \$603 ;
-  wire \$604 ;
-  wire \$605 ;
+  wire [6:0] \$602 ;
+  wire \$603 ;
+  wire [1:0] \$604 ;
+  wire [1:0] \$605 ;
   wire \$606 ;
   wire \$607 ;
   wire \$608 ;
   wire \$609 ;
   wire \$61 ;
   wire \$610 ;
-  reg \$611 ;
-  reg \$612 ;
-  reg [15:0] \$613 ;
+  wire \$611 ;
+  wire \$612 ;
+  reg \$613 ;
   reg \$614 ;
-  reg [6:0] \$615 ;
+  reg [15:0] \$615 ;
   reg \$616 ;
-  reg \$617 ;
+  reg [6:0] \$617 ;
   reg \$618 ;
   reg \$619 ;
   wire \$62 ;
   reg \$620 ;
-  reg [2:0] \$621 ;
+  reg \$621 ;
   reg \$622 ;
-  reg [15:0] \$623 ;
+  reg [2:0] \$623 ;
   reg \$624 ;
-  reg \$625 ;
-  reg [72:0] \$626 ;
+  reg [15:0] \$625 ;
+  reg \$626 ;
   reg \$627 ;
-  reg [54:0] \$628 ;
-  reg [1:0] \$629 ;
+  reg [72:0] \$628 ;
+  reg \$629 ;
   wire \$63 ;
-  reg [1:0] \$630 ;
-  reg [39:0] \$631 ;
-  reg [5:0] \$632 ;
+  reg [54:0] \$630 ;
+  reg [1:0] \$631 ;
+  reg [1:0] \$632 ;
   reg [39:0] \$633 ;
+  reg [5:0] \$634 ;
+  reg [39:0] \$635 ;
   wire \$64 ;
   wire [6:0] \$65 ;
   wire \$66 ;
-  wire [2:0] \$67 ;
+  wire \$67 ;
   wire \$68 ;
-  wire \$69 ;
+  wire [2:0] \$69 ;
   reg [6:0] \$7 ;
-  wire [1:0] \$70 ;
-  wire [7:0] \$71 ;
-  wire [6:0] \$72 ;
-  wire \$73 ;
-  wire \$74 ;
+  wire \$70 ;
+  wire \$71 ;
+  wire [1:0] \$72 ;
+  wire [7:0] \$73 ;
+  wire [6:0] \$74 ;
   wire \$75 ;
-  wire [6:0] \$76 ;
+  wire \$76 ;
   wire \$77 ;
-  wire \$78 ;
+  wire [6:0] \$78 ;
   wire \$79 ;
   wire [7:0] \$8 ;
   wire \$80 ;
@@ -6298,8 +6308,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$2191$272 ;
-  wire [2:0] \port$2191$272 ;
+  input [2:0] \port$2203$272 ;
+  wire [2:0] \port$2203$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -6366,252 +6376,256 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$367  = ssi & \port$2191$272 [0];
-  assign \$368  = ~ \port$2191$272 [1];
-  assign \$369  = \$367  & \$368 ;
-  assign \$370  = \bit  ^ \$369 ;
-  assign \$371  = ~ words[6];
-  assign \$372  = ! word;
-  assign \$373  = in_word & \$372 ;
-  assign \$374  = idx == w0_data_end_p1;
-  assign \$375  = \$373  & \$374 ;
-  assign \$377  = in_word & \$376 ;
-  assign \$378  = \$377  & in_data;
-  assign \$379  = words[22] & data1[0];
-  assign \$380  = \bit  ^ \$379 ;
-  assign \$381  = ! idx;
-  assign \$382  = words[23] & \$381 ;
-  assign \$383  = words[22] & data1[0];
-  assign \$384  = \bit  ^ \$383 ;
-  assign \$385  = \$382  & \$384 ;
-  assign \$386  = ! idx;
-  assign \$387  = words[23] & \$386 ;
-  assign \$388  = words[22] & data1[0];
-  assign \$389  = \bit  ^ \$388 ;
-  assign \$390  = \$387  & \$389 ;
-  assign \$391  = ! idx;
-  assign \$392  = words[23] & \$391 ;
-  assign \$393  = words[22] & data1[0];
-  assign \$394  = \bit  ^ \$393 ;
-  assign \$395  = \$392  & \$394 ;
-  assign \$396  = ! idx;
-  assign \$397  = words[23] & \$396 ;
-  assign \$398  = words[22] & data1[0];
-  assign \$399  = \bit  ^ \$398 ;
-  assign \$400  = \$397  & \$399 ;
-  assign \$401  = ! idx;
-  assign \$402  = words[23] & \$401 ;
-  assign \$403  = words[22] & data1[0];
-  assign \$404  = \bit  ^ \$403 ;
-  assign \$405  = \$402  & \$404 ;
-  assign \$406  = ! idx;
-  assign \$407  = words[23] & \$406 ;
-  assign \$408  = words[22] & data1[0];
-  assign \$409  = \bit  ^ \$408 ;
-  assign \$410  = \$407  & \$409 ;
-  assign \$411  = ! idx;
-  assign \$412  = words[23] & \$411 ;
-  assign \$413  = words[22] & data1[0];
-  assign \$414  = \bit  ^ \$413 ;
-  assign \$415  = \$412  & \$414 ;
-  assign \$416  = ! idx;
-  assign \$417  = words[23] & \$416 ;
-  assign \$418  = words[22] & data1[0];
-  assign \$419  = \bit  ^ \$418 ;
-  assign \$420  = \$417  & \$419 ;
-  assign \$421  = ! idx;
-  assign \$422  = words[23] & \$421 ;
-  assign \$423  = words[22] & data1[0];
-  assign \$424  = \bit  ^ \$423 ;
-  assign \$425  = \$422  & \$424 ;
-  assign \$426  = ! idx;
-  assign \$427  = words[23] & \$426 ;
-  assign \$428  = words[22] & data1[0];
-  assign \$429  = \bit  ^ \$428 ;
-  assign \$430  = \$427  & \$429 ;
-  assign \$431  = ! idx;
-  assign \$432  = words[23] & \$431 ;
-  assign \$433  = words[22] & data1[0];
-  assign \$434  = \bit  ^ \$433 ;
-  assign \$435  = \$432  & \$434 ;
-  assign \$436  = ! idx;
-  assign \$437  = words[23] & \$436 ;
-  assign \$438  = words[22] & data1[0];
-  assign \$439  = \bit  ^ \$438 ;
-  assign \$440  = \$437  & \$439 ;
-  assign \$441  = ! idx;
-  assign \$442  = words[23] & \$441 ;
-  assign \$443  = words[22] & data1[0];
-  assign \$444  = \bit  ^ \$443 ;
-  assign \$445  = \$442  & \$444 ;
-  assign \$446  = ! idx;
-  assign \$447  = words[23] & \$446 ;
-  assign \$448  = words[22] & data1[0];
-  assign \$449  = \bit  ^ \$448 ;
-  assign \$450  = \$447  & \$449 ;
-  assign \$451  = ! idx;
-  assign \$452  = words[23] & \$451 ;
-  assign \$453  = words[22] & data1[0];
-  assign \$454  = \bit  ^ \$453 ;
-  assign \$455  = \$452  & \$454 ;
-  assign \$456  = ! idx;
-  assign \$457  = words[23] & \$456 ;
-  assign \$458  = words[22] & data1[0];
-  assign \$459  = \bit  ^ \$458 ;
-  assign \$460  = \$457  & \$459 ;
-  assign \$461  = ! idx;
-  assign \$462  = words[23] & \$461 ;
-  assign \$463  = words[22] & data1[0];
-  assign \$464  = \bit  ^ \$463 ;
-  assign \$465  = \$462  & \$464 ;
-  assign \$466  = ! idx;
-  assign \$467  = words[23] & \$466 ;
-  assign \$468  = words[22] & data1[0];
-  assign \$469  = \bit  ^ \$468 ;
-  assign \$470  = \$467  & \$469 ;
-  assign \$471  = ! idx;
-  assign \$472  = words[23] & \$471 ;
-  assign \$473  = words[22] & data1[0];
-  assign \$474  = \bit  ^ \$473 ;
-  assign \$475  = \$472  & \$474 ;
-  assign \$476  = ! idx;
-  assign \$477  = words[23] & \$476 ;
-  assign \$478  = words[22] & data1[0];
-  assign \$479  = \bit  ^ \$478 ;
-  assign \$480  = \$477  & \$479 ;
-  assign \$481  = ! idx;
-  assign \$482  = words[23] & \$481 ;
-  assign \$483  = words[22] & data1[0];
-  assign \$484  = \bit  ^ \$483 ;
-  assign \$485  = \$482  & \$484 ;
-  assign \$486  = ! idx;
-  assign \$487  = words[23] & \$486 ;
-  assign \$488  = words[22] & data1[0];
-  assign \$489  = \bit  ^ \$488 ;
-  assign \$490  = \$487  & \$489 ;
-  assign \$491  = ! idx;
-  assign \$492  = words[23] & \$491 ;
-  assign \$493  = words[22] & data1[0];
-  assign \$494  = \bit  ^ \$493 ;
-  assign \$495  = \$492  & \$494 ;
-  assign \$496  = ! idx;
-  assign \$497  = words[23] & \$496 ;
-  assign \$498  = words[22] & data1[0];
-  assign \$499  = \bit  ^ \$498 ;
-  assign \$500  = \$497  & \$499 ;
-  assign \$501  = ! idx;
-  assign \$502  = words[23] & \$501 ;
-  assign \$503  = words[22] & data1[0];
-  assign \$504  = \bit  ^ \$503 ;
-  assign \$505  = \$502  & \$504 ;
-  assign \$506  = ! idx;
-  assign \$507  = words[23] & \$506 ;
-  assign \$508  = words[22] & data1[0];
-  assign \$509  = \bit  ^ \$508 ;
-  assign \$510  = \$507  & \$509 ;
-  assign \$511  = ! idx;
-  assign \$512  = words[23] & \$511 ;
-  assign \$513  = words[22] & data1[0];
-  assign \$514  = \bit  ^ \$513 ;
-  assign \$515  = \$512  & \$514 ;
-  assign \$516  = ! idx;
-  assign \$517  = words[23] & \$516 ;
-  assign \$518  = words[22] & data1[0];
-  assign \$519  = \bit  ^ \$518 ;
-  assign \$520  = \$517  & \$519 ;
-  assign \$521  = ! idx;
-  assign \$522  = words[23] & \$521 ;
-  assign \$523  = words[22] & data1[0];
-  assign \$524  = \bit  ^ \$523 ;
-  assign \$525  = \$522  & \$524 ;
-  assign \$526  = ! idx;
-  assign \$527  = words[23] & \$526 ;
-  assign \$528  = words[22] & data1[0];
-  assign \$529  = \bit  ^ \$528 ;
-  assign \$530  = \$527  & \$529 ;
-  assign \$531  = ! idx;
-  assign \$532  = words[23] & \$531 ;
-  assign \$533  = words[22] & data1[0];
-  assign \$534  = \bit  ^ \$533 ;
-  assign \$535  = \$532  & \$534 ;
-  assign \$536  = ! idx;
-  assign \$537  = words[23] & \$536 ;
-  assign \$538  = words[22] & data1[0];
-  assign \$539  = \bit  ^ \$538 ;
-  assign \$540  = \$537  & \$539 ;
-  assign \$541  = ! idx;
-  assign \$542  = words[23] & \$541 ;
-  assign \$543  = words[22] & data1[0];
-  assign \$544  = \bit  ^ \$543 ;
-  assign \$545  = \$542  & \$544 ;
-  assign \$546  = ! idx;
-  assign \$547  = words[23] & \$546 ;
-  assign \$548  = words[22] & data1[0];
-  assign \$549  = \bit  ^ \$548 ;
-  assign \$550  = \$547  & \$549 ;
-  assign \$551  = ! idx;
-  assign \$552  = words[23] & \$551 ;
-  assign \$553  = words[22] & data1[0];
-  assign \$554  = \bit  ^ \$553 ;
-  assign \$555  = \$552  & \$554 ;
-  assign \$556  = ! idx;
-  assign \$557  = words[23] & \$556 ;
-  assign \$558  = words[22] & data1[0];
-  assign \$559  = \bit  ^ \$558 ;
-  assign \$560  = \$557  & \$559 ;
-  assign \$561  = ! idx;
-  assign \$562  = words[23] & \$561 ;
-  assign \$563  = words[22] & data1[0];
-  assign \$564  = \bit  ^ \$563 ;
-  assign \$565  = \$562  & \$564 ;
-  assign \$566  = ! idx;
-  assign \$567  = words[23] & \$566 ;
-  assign \$568  = words[22] & data1[0];
-  assign \$569  = \bit  ^ \$568 ;
-  assign \$570  = \$567  & \$569 ;
-  assign \$571  = ! idx;
-  assign \$572  = words[23] & \$571 ;
-  assign \$573  = words[22] & data1[0];
-  assign \$574  = \bit  ^ \$573 ;
-  assign \$575  = \$572  & \$574 ;
-  assign \$576  = ! idx;
-  assign \$577  = words[23] & \$576 ;
-  assign \$578  = words[22] & data1[0];
-  assign \$579  = \bit  ^ \$578 ;
-  assign \$580  = \$577  & \$579 ;
-  assign \$581  = { data1[38:0], \$380  } | { \$580 , \$575 , \$570 , \$565 , \$560 , \$555 , \$550 , \$545 , \$540 , \$535 , \$530 , \$525 , \$520 , \$515 , \$510 , \$505 , \$500 , \$495 , \$490 , \$485 , \$480 , \$475 , \$470 , \$465 , \$460 , \$455 , \$450 , \$445 , \$440 , \$435 , \$430 , \$425 , \$420 , \$415 , \$410 , \$405 , \$400 , \$395 , \$390 , \$385  };
-  assign \$582  = ~ words[18];
-  assign \$584  = in_word & \$583 ;
-  assign \$585  = idx == words[17:12];
-  assign \$586  = \$584  & \$585 ;
-  assign \$588  = in_word & \$587 ;
-  assign \$589  = idx == w1_data_end_p1;
-  assign \$590  = \$588  & \$589 ;
-  assign \$591  = in_word & ssi;
-  assign \$592  = in_word & in_top;
-  assign \$593  = words[10] & data0[0];
-  assign \$594  = \bit  ^ \$593 ;
-  assign \$595  = sample & \bit ;
+  assign \$365  = ! word;
+  assign \$366  = in_word & \$365 ;
+  assign \$367  = idx == words[5:0];
+  assign \$368  = \$366  & \$367 ;
+  assign \$369  = ssi & \port$2203$272 [0];
+  assign \$370  = ~ \port$2203$272 [1];
+  assign \$371  = \$369  & \$370 ;
+  assign \$372  = \bit  ^ \$371 ;
+  assign \$373  = ~ words[6];
+  assign \$374  = ! word;
+  assign \$375  = in_word & \$374 ;
+  assign \$376  = idx == w0_data_end_p1;
+  assign \$377  = \$375  & \$376 ;
+  assign \$379  = in_word & \$378 ;
+  assign \$380  = \$379  & in_data;
+  assign \$381  = words[22] & data1[0];
+  assign \$382  = \bit  ^ \$381 ;
+  assign \$383  = ! idx;
+  assign \$384  = words[23] & \$383 ;
+  assign \$385  = words[22] & data1[0];
+  assign \$386  = \bit  ^ \$385 ;
+  assign \$387  = \$384  & \$386 ;
+  assign \$388  = ! idx;
+  assign \$389  = words[23] & \$388 ;
+  assign \$390  = words[22] & data1[0];
+  assign \$391  = \bit  ^ \$390 ;
+  assign \$392  = \$389  & \$391 ;
+  assign \$393  = ! idx;
+  assign \$394  = words[23] & \$393 ;
+  assign \$395  = words[22] & data1[0];
+  assign \$396  = \bit  ^ \$395 ;
+  assign \$397  = \$394  & \$396 ;
+  assign \$398  = ! idx;
+  assign \$399  = words[23] & \$398 ;
+  assign \$400  = words[22] & data1[0];
+  assign \$401  = \bit  ^ \$400 ;
+  assign \$402  = \$399  & \$401 ;
+  assign \$403  = ! idx;
+  assign \$404  = words[23] & \$403 ;
+  assign \$405  = words[22] & data1[0];
+  assign \$406  = \bit  ^ \$405 ;
+  assign \$407  = \$404  & \$406 ;
+  assign \$408  = ! idx;
+  assign \$409  = words[23] & \$408 ;
+  assign \$410  = words[22] & data1[0];
+  assign \$411  = \bit  ^ \$410 ;
+  assign \$412  = \$409  & \$411 ;
+  assign \$413  = ! idx;
+  assign \$414  = words[23] & \$413 ;
+  assign \$415  = words[22] & data1[0];
+  assign \$416  = \bit  ^ \$415 ;
+  assign \$417  = \$414  & \$416 ;
+  assign \$418  = ! idx;
+  assign \$419  = words[23] & \$418 ;
+  assign \$420  = words[22] & data1[0];
+  assign \$421  = \bit  ^ \$420 ;
+  assign \$422  = \$419  & \$421 ;
+  assign \$423  = ! idx;
+  assign \$424  = words[23] & \$423 ;
+  assign \$425  = words[22] & data1[0];
+  assign \$426  = \bit  ^ \$425 ;
+  assign \$427  = \$424  & \$426 ;
+  assign \$428  = ! idx;
+  assign \$429  = words[23] & \$428 ;
+  assign \$430  = words[22] & data1[0];
+  assign \$431  = \bit  ^ \$430 ;
+  assign \$432  = \$429  & \$431 ;
+  assign \$433  = ! idx;
+  assign \$434  = words[23] & \$433 ;
+  assign \$435  = words[22] & data1[0];
+  assign \$436  = \bit  ^ \$435 ;
+  assign \$437  = \$434  & \$436 ;
+  assign \$438  = ! idx;
+  assign \$439  = words[23] & \$438 ;
+  assign \$440  = words[22] & data1[0];
+  assign \$441  = \bit  ^ \$440 ;
+  assign \$442  = \$439  & \$441 ;
+  assign \$443  = ! idx;
+  assign \$444  = words[23] & \$443 ;
+  assign \$445  = words[22] & data1[0];
+  assign \$446  = \bit  ^ \$445 ;
+  assign \$447  = \$444  & \$446 ;
+  assign \$448  = ! idx;
+  assign \$449  = words[23] & \$448 ;
+  assign \$450  = words[22] & data1[0];
+  assign \$451  = \bit  ^ \$450 ;
+  assign \$452  = \$449  & \$451 ;
+  assign \$453  = ! idx;
+  assign \$454  = words[23] & \$453 ;
+  assign \$455  = words[22] & data1[0];
+  assign \$456  = \bit  ^ \$455 ;
+  assign \$457  = \$454  & \$456 ;
+  assign \$458  = ! idx;
+  assign \$459  = words[23] & \$458 ;
+  assign \$460  = words[22] & data1[0];
+  assign \$461  = \bit  ^ \$460 ;
+  assign \$462  = \$459  & \$461 ;
+  assign \$463  = ! idx;
+  assign \$464  = words[23] & \$463 ;
+  assign \$465  = words[22] & data1[0];
+  assign \$466  = \bit  ^ \$465 ;
+  assign \$467  = \$464  & \$466 ;
+  assign \$468  = ! idx;
+  assign \$469  = words[23] & \$468 ;
+  assign \$470  = words[22] & data1[0];
+  assign \$471  = \bit  ^ \$470 ;
+  assign \$472  = \$469  & \$471 ;
+  assign \$473  = ! idx;
+  assign \$474  = words[23] & \$473 ;
+  assign \$475  = words[22] & data1[0];
+  assign \$476  = \bit  ^ \$475 ;
+  assign \$477  = \$474  & \$476 ;
+  assign \$478  = ! idx;
+  assign \$479  = words[23] & \$478 ;
+  assign \$480  = words[22] & data1[0];
+  assign \$481  = \bit  ^ \$480 ;
+  assign \$482  = \$479  & \$481 ;
+  assign \$483  = ! idx;
+  assign \$484  = words[23] & \$483 ;
+  assign \$485  = words[22] & data1[0];
+  assign \$486  = \bit  ^ \$485 ;
+  assign \$487  = \$484  & \$486 ;
+  assign \$488  = ! idx;
+  assign \$489  = words[23] & \$488 ;
+  assign \$490  = words[22] & data1[0];
+  assign \$491  = \bit  ^ \$490 ;
+  assign \$492  = \$489  & \$491 ;
+  assign \$493  = ! idx;
+  assign \$494  = words[23] & \$493 ;
+  assign \$495  = words[22] & data1[0];
+  assign \$496  = \bit  ^ \$495 ;
+  assign \$497  = \$494  & \$496 ;
+  assign \$498  = ! idx;
+  assign \$499  = words[23] & \$498 ;
+  assign \$500  = words[22] & data1[0];
+  assign \$501  = \bit  ^ \$500 ;
+  assign \$502  = \$499  & \$501 ;
+  assign \$503  = ! idx;
+  assign \$504  = words[23] & \$503 ;
+  assign \$505  = words[22] & data1[0];
+  assign \$506  = \bit  ^ \$505 ;
+  assign \$507  = \$504  & \$506 ;
+  assign \$508  = ! idx;
+  assign \$509  = words[23] & \$508 ;
+  assign \$510  = words[22] & data1[0];
+  assign \$511  = \bit  ^ \$510 ;
+  assign \$512  = \$509  & \$511 ;
+  assign \$513  = ! idx;
+  assign \$514  = words[23] & \$513 ;
+  assign \$515  = words[22] & data1[0];
+  assign \$516  = \bit  ^ \$515 ;
+  assign \$517  = \$514  & \$516 ;
+  assign \$518  = ! idx;
+  assign \$519  = words[23] & \$518 ;
+  assign \$520  = words[22] & data1[0];
+  assign \$521  = \bit  ^ \$520 ;
+  assign \$522  = \$519  & \$521 ;
+  assign \$523  = ! idx;
+  assign \$524  = words[23] & \$523 ;
+  assign \$525  = words[22] & data1[0];
+  assign \$526  = \bit  ^ \$525 ;
+  assign \$527  = \$524  & \$526 ;
+  assign \$528  = ! idx;
+  assign \$529  = words[23] & \$528 ;
+  assign \$530  = words[22] & data1[0];
+  assign \$531  = \bit  ^ \$530 ;
+  assign \$532  = \$529  & \$531 ;
+  assign \$533  = ! idx;
+  assign \$534  = words[23] & \$533 ;
+  assign \$535  = words[22] & data1[0];
+  assign \$536  = \bit  ^ \$535 ;
+  assign \$537  = \$534  & \$536 ;
+  assign \$538  = ! idx;
+  assign \$539  = words[23] & \$538 ;
+  assign \$540  = words[22] & data1[0];
+  assign \$541  = \bit  ^ \$540 ;
+  assign \$542  = \$539  & \$541 ;
+  assign \$543  = ! idx;
+  assign \$544  = words[23] & \$543 ;
+  assign \$545  = words[22] & data1[0];
+  assign \$546  = \bit  ^ \$545 ;
+  assign \$547  = \$544  & \$546 ;
+  assign \$548  = ! idx;
+  assign \$549  = words[23] & \$548 ;
+  assign \$550  = words[22] & data1[0];
+  assign \$551  = \bit  ^ \$550 ;
+  assign \$552  = \$549  & \$551 ;
+  assign \$553  = ! idx;
+  assign \$554  = words[23] & \$553 ;
+  assign \$555  = words[22] & data1[0];
+  assign \$556  = \bit  ^ \$555 ;
+  assign \$557  = \$554  & \$556 ;
+  assign \$558  = ! idx;
+  assign \$559  = words[23] & \$558 ;
+  assign \$560  = words[22] & data1[0];
+  assign \$561  = \bit  ^ \$560 ;
+  assign \$562  = \$559  & \$561 ;
+  assign \$563  = ! idx;
+  assign \$564  = words[23] & \$563 ;
+  assign \$565  = words[22] & data1[0];
+  assign \$566  = \bit  ^ \$565 ;
+  assign \$567  = \$564  & \$566 ;
+  assign \$568  = ! idx;
+  assign \$569  = words[23] & \$568 ;
+  assign \$570  = words[22] & data1[0];
+  assign \$571  = \bit  ^ \$570 ;
+  assign \$572  = \$569  & \$571 ;
+  assign \$573  = ! idx;
+  assign \$574  = words[23] & \$573 ;
+  assign \$575  = words[22] & data1[0];
+  assign \$576  = \bit  ^ \$575 ;
+  assign \$577  = \$574  & \$576 ;
+  assign \$578  = ! idx;
+  assign \$579  = words[23] & \$578 ;
+  assign \$580  = words[22] & data1[0];
+  assign \$581  = \bit  ^ \$580 ;
+  assign \$582  = \$579  & \$581 ;
+  assign \$583  = { data1[38:0], \$382  } | { \$582 , \$577 , \$572 , \$567 , \$562 , \$557 , \$552 , \$547 , \$542 , \$537 , \$532 , \$527 , \$522 , \$517 , \$512 , \$507 , \$502 , \$497 , \$492 , \$487 , \$482 , \$477 , \$472 , \$467 , \$462 , \$457 , \$452 , \$447 , \$442 , \$437 , \$432 , \$427 , \$422 , \$417 , \$412 , \$407 , \$402 , \$397 , \$392 , \$387  };
+  assign \$584  = ~ words[18];
+  assign \$586  = in_word & \$585 ;
+  assign \$587  = idx == words[17:12];
+  assign \$588  = \$586  & \$587 ;
+  assign \$590  = in_word & \$589 ;
+  assign \$591  = idx == w1_data_end_p1;
+  assign \$592  = \$590  & \$591 ;
+  assign \$593  = in_word & ssi;
+  assign \$594  = in_word & in_top;
+  assign \$595  = words[10] & data0[0];
+  assign \$596  = \bit  ^ \$595 ;
+  assign \$597  = sample & \bit ;
   assign lc_load = in_word & in_lc;
-  assign \$596  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$597  = idx == \$596 ;
-  assign \$598  = in_word & \$597 ;
-  assign load = at_cds | \$598 ;
-  assign \$599  = ~ in_crc;
-  assign \cover  = in_word & \$599 ;
+  assign \$598  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$599  = idx == \$598 ;
+  assign \$600  = in_word & \$599 ;
+  assign load = at_cds | \$600 ;
+  assign \$601  = ~ in_crc;
+  assign \cover  = in_word & \$601 ;
   assign check = in_word & in_crc;
-  assign \$600  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$601  = idx == \$600 ;
-  assign last = in_word & \$601 ;
-  assign \$602  = word + 1'h1;
-  assign \$603  = at_cds ? 2'h0 : \$602 ;
-  assign \$604  = ! decoder_fsm_state;
-  assign \$605  = decoder_fsm_state == 1'h1;
-  assign \$606  = decoder_fsm_state == 2'h2;
-  assign \$607  = decoder_fsm_state == 2'h3;
-  assign \$608  = decoder_fsm_state == 3'h4;
-  assign \$609  = decoder_fsm_state == 3'h5;
-  assign \$610  = decoder_fsm_state == 3'h6;
+  assign \$602  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$603  = idx == \$602 ;
+  assign last = in_word & \$603 ;
+  assign \$604  = word + 1'h1;
+  assign \$605  = at_cds ? 2'h0 : \$604 ;
+  assign \$606  = ! decoder_fsm_state;
+  assign \$607  = decoder_fsm_state == 1'h1;
+  assign \$608  = decoder_fsm_state == 2'h2;
+  assign \$609  = decoder_fsm_state == 2'h3;
+  assign \$610  = decoder_fsm_state == 3'h4;
+  assign \$611  = decoder_fsm_state == 3'h5;
+  assign \$612  = decoder_fsm_state == 3'h6;
   always @(posedge clk)
     w0_data_end_p1 <= \$1 ;
   always @(posedge clk)
@@ -6641,65 +6655,65 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   always @(posedge clk)
     w1_lc_at0 <= \$39 ;
   always @(posedge clk)
-    done <= \$611 ;
+    done <= \$613 ;
   always @(posedge clk)
-    stopped <= \$612 ;
+    stopped <= \$614 ;
   always @(posedge clk)
-    slots <= \$613 ;
+    slots <= \$615 ;
   always @(posedge clk)
-    slots_full <= \$614 ;
+    slots_full <= \$616 ;
   always @(posedge clk)
-    idx <= \$615 ;
+    idx <= \$617 ;
   always @(posedge clk)
-    in_data <= \$616 ;
+    in_data <= \$618 ;
   always @(posedge clk)
-    in_lc <= \$617 ;
+    in_lc <= \$619 ;
   always @(posedge clk)
-    in_crc <= \$618 ;
+    in_crc <= \$620 ;
   always @(posedge clk)
-    in_top <= \$619 ;
+    in_top <= \$621 ;
   always @(posedge clk)
-    word <= \$620 ;
+    word <= \$622 ;
   always @(posedge clk)
-    decoder_fsm_state <= \$621 ;
+    decoder_fsm_state <= \$623 ;
   always @(posedge clk)
-    started <= \$622 ;
+    started <= \$624 ;
   always @(posedge clk)
-    start_slot <= \$623 ;
+    start_slot <= \$625 ;
   always @(posedge clk)
-    cds <= \$624 ;
+    cds <= \$626 ;
   always @(posedge clk)
-    mismatch <= \$625 ;
+    mismatch <= \$627 ;
   always @(posedge clk)
-    ring <= \$626 ;
+    ring <= \$628 ;
   always @(posedge clk)
-    stop_bit <= \$627 ;
+    stop_bit <= \$629 ;
   always @(posedge clk)
-    data0 <= \$628 ;
+    data0 <= \$630 ;
   always @(posedge clk)
-    ne <= \$629 ;
+    ne <= \$631 ;
   always @(posedge clk)
-    nw <= \$630 ;
+    nw <= \$632 ;
   always @(posedge clk)
-    data1 <= \$631 ;
+    data1 <= \$633 ;
   always @(posedge clk)
-    lc <= \$632 ;
+    lc <= \$634 ;
   always @(posedge clk)
-    cpw_top <= \$633 ;
+    cpw_top <= \$635 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$2191$272 [0];
+  assign \$3  = ssi & \port$2203$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$2191$272 [0];
+  assign \$6  = ssi & \port$2203$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$2191$272 [0];
+  assign \$9  = ssi & \port$2203$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$2191$272 [0];
+  assign \$14  = ssi & \port$2203$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$2191$272 [0];
+  assign \$18  = ssi & \port$2203$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -6742,306 +6756,302 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   assign \$64  = in_top & \$63 ;
   assign \$65  = word ? w1_word_end_m1 : w0_word_end_m1;
   assign \$66  = idx == \$65 ;
-  assign \$67  = word_count - 1'h1;
-  assign \$68  = word == \$67 ;
-  assign \$69  = ssi & \port$2191$272 [2];
-  assign \$70  = word + 1'h1;
-  assign \$71  = idx + 1'h1;
-  assign \$72  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$73  = ring >> \$72 ;
-  assign \$74  = \bit  != \$73 ;
-  assign \$75  = mismatch | \$74 ;
-  assign \$76  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$77  = idx == \$76 ;
-  assign \$78  = ! word;
-  assign \$79  = in_word & \$78 ;
-  assign \$80  = \$79  & in_data;
-  assign \$81  = words[10] & data0[0];
-  assign \$82  = \bit  ^ \$81 ;
-  assign \$83  = ! idx;
-  assign \$84  = words[11] & \$83 ;
-  assign \$85  = words[10] & data0[0];
-  assign \$86  = \bit  ^ \$85 ;
-  assign \$87  = \$84  & \$86 ;
-  assign \$88  = ! idx;
-  assign \$89  = words[11] & \$88 ;
-  assign \$90  = words[10] & data0[0];
-  assign \$91  = \bit  ^ \$90 ;
-  assign \$92  = \$89  & \$91 ;
-  assign \$93  = ! idx;
-  assign \$94  = words[11] & \$93 ;
-  assign \$95  = words[10] & data0[0];
-  assign \$96  = \bit  ^ \$95 ;
-  assign \$97  = \$94  & \$96 ;
-  assign \$98  = ! idx;
-  assign \$99  = words[11] & \$98 ;
-  assign \$100  = words[10] & data0[0];
-  assign \$101  = \bit  ^ \$100 ;
-  assign \$102  = \$99  & \$101 ;
-  assign \$103  = ! idx;
-  assign \$104  = words[11] & \$103 ;
-  assign \$105  = words[10] & data0[0];
-  assign \$106  = \bit  ^ \$105 ;
-  assign \$107  = \$104  & \$106 ;
-  assign \$108  = ! idx;
-  assign \$109  = words[11] & \$108 ;
-  assign \$110  = words[10] & data0[0];
-  assign \$111  = \bit  ^ \$110 ;
-  assign \$112  = \$109  & \$111 ;
-  assign \$113  = ! idx;
-  assign \$114  = words[11] & \$113 ;
-  assign \$115  = words[10] & data0[0];
-  assign \$116  = \bit  ^ \$115 ;
-  assign \$117  = \$114  & \$116 ;
-  assign \$118  = ! idx;
-  assign \$119  = words[11] & \$118 ;
-  assign \$120  = words[10] & data0[0];
-  assign \$121  = \bit  ^ \$120 ;
-  assign \$122  = \$119  & \$121 ;
-  assign \$123  = ! idx;
-  assign \$124  = words[11] & \$123 ;
-  assign \$125  = words[10] & data0[0];
-  assign \$126  = \bit  ^ \$125 ;
-  assign \$127  = \$124  & \$126 ;
-  assign \$128  = ! idx;
-  assign \$129  = words[11] & \$128 ;
-  assign \$130  = words[10] & data0[0];
-  assign \$131  = \bit  ^ \$130 ;
-  assign \$132  = \$129  & \$131 ;
-  assign \$133  = ! idx;
-  assign \$134  = words[11] & \$133 ;
-  assign \$135  = words[10] & data0[0];
-  assign \$136  = \bit  ^ \$135 ;
-  assign \$137  = \$134  & \$136 ;
-  assign \$138  = ! idx;
-  assign \$139  = words[11] & \$138 ;
-  assign \$140  = words[10] & data0[0];
-  assign \$141  = \bit  ^ \$140 ;
-  assign \$142  = \$139  & \$141 ;
-  assign \$143  = ! idx;
-  assign \$144  = words[11] & \$143 ;
-  assign \$145  = words[10] & data0[0];
-  assign \$146  = \bit  ^ \$145 ;
-  assign \$147  = \$144  & \$146 ;
-  assign \$148  = ! idx;
-  assign \$149  = words[11] & \$148 ;
-  assign \$150  = words[10] & data0[0];
-  assign \$151  = \bit  ^ \$150 ;
-  assign \$152  = \$149  & \$151 ;
-  assign \$153  = ! idx;
-  assign \$154  = words[11] & \$153 ;
-  assign \$155  = words[10] & data0[0];
-  assign \$156  = \bit  ^ \$155 ;
-  assign \$157  = \$154  & \$156 ;
-  assign \$158  = ! idx;
-  assign \$159  = words[11] & \$158 ;
-  assign \$160  = words[10] & data0[0];
-  assign \$161  = \bit  ^ \$160 ;
-  assign \$162  = \$159  & \$161 ;
-  assign \$163  = ! idx;
-  assign \$164  = words[11] & \$163 ;
-  assign \$165  = words[10] & data0[0];
-  assign \$166  = \bit  ^ \$165 ;
-  assign \$167  = \$164  & \$166 ;
-  assign \$168  = ! idx;
-  assign \$169  = words[11] & \$168 ;
-  assign \$170  = words[10] & data0[0];
-  assign \$171  = \bit  ^ \$170 ;
-  assign \$172  = \$169  & \$171 ;
-  assign \$173  = ! idx;
-  assign \$174  = words[11] & \$173 ;
-  assign \$175  = words[10] & data0[0];
-  assign \$176  = \bit  ^ \$175 ;
-  assign \$177  = \$174  & \$176 ;
-  assign \$178  = ! idx;
-  assign \$179  = words[11] & \$178 ;
-  assign \$180  = words[10] & data0[0];
-  assign \$181  = \bit  ^ \$180 ;
-  assign \$182  = \$179  & \$181 ;
-  assign \$183  = ! idx;
-  assign \$184  = words[11] & \$183 ;
-  assign \$185  = words[10] & data0[0];
-  assign \$186  = \bit  ^ \$185 ;
-  assign \$187  = \$184  & \$186 ;
-  assign \$188  = ! idx;
-  assign \$189  = words[11] & \$188 ;
-  assign \$190  = words[10] & data0[0];
-  assign \$191  = \bit  ^ \$190 ;
-  assign \$192  = \$189  & \$191 ;
-  assign \$193  = ! idx;
-  assign \$194  = words[11] & \$193 ;
-  assign \$195  = words[10] & data0[0];
-  assign \$196  = \bit  ^ \$195 ;
-  assign \$197  = \$194  & \$196 ;
-  assign \$198  = ! idx;
-  assign \$199  = words[11] & \$198 ;
-  assign \$200  = words[10] & data0[0];
-  assign \$201  = \bit  ^ \$200 ;
-  assign \$202  = \$199  & \$201 ;
-  assign \$203  = ! idx;
-  assign \$204  = words[11] & \$203 ;
-  assign \$205  = words[10] & data0[0];
-  assign \$206  = \bit  ^ \$205 ;
-  assign \$207  = \$204  & \$206 ;
-  assign \$208  = ! idx;
-  assign \$209  = words[11] & \$208 ;
-  assign \$210  = words[10] & data0[0];
-  assign \$211  = \bit  ^ \$210 ;
-  assign \$212  = \$209  & \$211 ;
-  assign \$213  = ! idx;
-  assign \$214  = words[11] & \$213 ;
-  assign \$215  = words[10] & data0[0];
-  assign \$216  = \bit  ^ \$215 ;
-  assign \$217  = \$214  & \$216 ;
-  assign \$218  = ! idx;
-  assign \$219  = words[11] & \$218 ;
-  assign \$220  = words[10] & data0[0];
-  assign \$221  = \bit  ^ \$220 ;
-  assign \$222  = \$219  & \$221 ;
-  assign \$223  = ! idx;
-  assign \$224  = words[11] & \$223 ;
-  assign \$225  = words[10] & data0[0];
-  assign \$226  = \bit  ^ \$225 ;
-  assign \$227  = \$224  & \$226 ;
-  assign \$228  = ! idx;
-  assign \$229  = words[11] & \$228 ;
-  assign \$230  = words[10] & data0[0];
-  assign \$231  = \bit  ^ \$230 ;
-  assign \$232  = \$229  & \$231 ;
-  assign \$233  = ! idx;
-  assign \$234  = words[11] & \$233 ;
-  assign \$235  = words[10] & data0[0];
-  assign \$236  = \bit  ^ \$235 ;
-  assign \$237  = \$234  & \$236 ;
-  assign \$238  = ! idx;
-  assign \$239  = words[11] & \$238 ;
-  assign \$240  = words[10] & data0[0];
-  assign \$241  = \bit  ^ \$240 ;
-  assign \$242  = \$239  & \$241 ;
-  assign \$243  = ! idx;
-  assign \$244  = words[11] & \$243 ;
-  assign \$245  = words[10] & data0[0];
-  assign \$246  = \bit  ^ \$245 ;
-  assign \$247  = \$244  & \$246 ;
-  assign \$248  = ! idx;
-  assign \$249  = words[11] & \$248 ;
-  assign \$250  = words[10] & data0[0];
-  assign \$251  = \bit  ^ \$250 ;
-  assign \$252  = \$249  & \$251 ;
-  assign \$253  = ! idx;
-  assign \$254  = words[11] & \$253 ;
-  assign \$255  = words[10] & data0[0];
-  assign \$256  = \bit  ^ \$255 ;
-  assign \$257  = \$254  & \$256 ;
-  assign \$258  = ! idx;
-  assign \$259  = words[11] & \$258 ;
-  assign \$260  = words[10] & data0[0];
-  assign \$261  = \bit  ^ \$260 ;
-  assign \$262  = \$259  & \$261 ;
-  assign \$263  = ! idx;
-  assign \$264  = words[11] & \$263 ;
-  assign \$265  = words[10] & data0[0];
-  assign \$266  = \bit  ^ \$265 ;
-  assign \$267  = \$264  & \$266 ;
-  assign \$268  = ! idx;
-  assign \$269  = words[11] & \$268 ;
-  assign \$270  = words[10] & data0[0];
-  assign \$271  = \bit  ^ \$270 ;
-  assign \$272  = \$269  & \$271 ;
-  assign \$273  = ! idx;
-  assign \$274  = words[11] & \$273 ;
-  assign \$275  = words[10] & data0[0];
-  assign \$276  = \bit  ^ \$275 ;
-  assign \$277  = \$274  & \$276 ;
-  assign \$278  = ! idx;
-  assign \$279  = words[11] & \$278 ;
-  assign \$280  = words[10] & data0[0];
-  assign \$281  = \bit  ^ \$280 ;
-  assign \$282  = \$279  & \$281 ;
-  assign \$283  = ! idx;
-  assign \$284  = words[11] & \$283 ;
-  assign \$285  = words[10] & data0[0];
-  assign \$286  = \bit  ^ \$285 ;
-  assign \$287  = \$284  & \$286 ;
-  assign \$288  = ! idx;
-  assign \$289  = words[11] & \$288 ;
-  assign \$290  = words[10] & data0[0];
-  assign \$291  = \bit  ^ \$290 ;
-  assign \$292  = \$289  & \$291 ;
-  assign \$293  = ! idx;
-  assign \$294  = words[11] & \$293 ;
-  assign \$295  = words[10] & data0[0];
-  assign \$296  = \bit  ^ \$295 ;
-  assign \$297  = \$294  & \$296 ;
-  assign \$298  = ! idx;
-  assign \$299  = words[11] & \$298 ;
-  assign \$300  = words[10] & data0[0];
-  assign \$301  = \bit  ^ \$300 ;
-  assign \$302  = \$299  & \$301 ;
-  assign \$303  = ! idx;
-  assign \$304  = words[11] & \$303 ;
-  assign \$305  = words[10] & data0[0];
-  assign \$306  = \bit  ^ \$305 ;
-  assign \$307  = \$304  & \$306 ;
-  assign \$308  = ! idx;
-  assign \$309  = words[11] & \$308 ;
-  assign \$310  = words[10] & data0[0];
-  assign \$311  = \bit  ^ \$310 ;
-  assign \$312  = \$309  & \$311 ;
-  assign \$313  = ! idx;
-  assign \$314  = words[11] & \$313 ;
-  assign \$315  = words[10] & data0[0];
-  assign \$316  = \bit  ^ \$315 ;
-  assign \$317  = \$314  & \$316 ;
-  assign \$318  = ! idx;
-  assign \$319  = words[11] & \$318 ;
-  assign \$320  = words[10] & data0[0];
-  assign \$321  = \bit  ^ \$320 ;
-  assign \$322  = \$319  & \$321 ;
-  assign \$323  = ! idx;
-  assign \$324  = words[11] & \$323 ;
-  assign \$325  = words[10] & data0[0];
-  assign \$326  = \bit  ^ \$325 ;
-  assign \$327  = \$324  & \$326 ;
-  assign \$328  = ! idx;
-  assign \$329  = words[11] & \$328 ;
-  assign \$330  = words[10] & data0[0];
-  assign \$331  = \bit  ^ \$330 ;
-  assign \$332  = \$329  & \$331 ;
-  assign \$333  = ! idx;
-  assign \$334  = words[11] & \$333 ;
-  assign \$335  = words[10] & data0[0];
-  assign \$336  = \bit  ^ \$335 ;
-  assign \$337  = \$334  & \$336 ;
-  assign \$338  = ! idx;
-  assign \$339  = words[11] & \$338 ;
-  assign \$340  = words[10] & data0[0];
-  assign \$341  = \bit  ^ \$340 ;
-  assign \$342  = \$339  & \$341 ;
-  assign \$343  = ! idx;
-  assign \$344  = words[11] & \$343 ;
-  assign \$345  = words[10] & data0[0];
-  assign \$346  = \bit  ^ \$345 ;
-  assign \$347  = \$344  & \$346 ;
-  assign \$348  = ! idx;
-  assign \$349  = words[11] & \$348 ;
-  assign \$350  = words[10] & data0[0];
-  assign \$351  = \bit  ^ \$350 ;
-  assign \$352  = \$349  & \$351 ;
-  assign \$353  = ! idx;
-  assign \$354  = words[11] & \$353 ;
-  assign \$355  = words[10] & data0[0];
-  assign \$356  = \bit  ^ \$355 ;
-  assign \$357  = \$354  & \$356 ;
-  assign \$358  = { data0[53:0], \$82  } | { \$357 , \$352 , \$347 , \$342 , \$337 , \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87  };
-  assign \$359  = ~ words[6];
-  assign \$360  = ssi & \port$2191$272 [0];
-  assign \$361  = ~ \$360 ;
-  assign \$362  = \$359  & \$361 ;
-  assign \$363  = ! word;
-  assign \$364  = in_word & \$363 ;
-  assign \$365  = idx == words[5:0];
-  assign \$366  = \$364  & \$365 ;
+  assign \$69  = word_count - 1'h1;
+  assign \$70  = word == \$69 ;
+  assign \$71  = ssi & \port$2203$272 [2];
+  assign \$72  = word + 1'h1;
+  assign \$73  = idx + 1'h1;
+  assign \$74  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$75  = ring >> \$74 ;
+  assign \$76  = \bit  != \$75 ;
+  assign \$77  = mismatch | \$76 ;
+  assign \$78  = word ? w1_word_end_m1 : w0_word_end_m1;
+  assign \$79  = idx == \$78 ;
+  assign \$80  = ! word;
+  assign \$81  = in_word & \$80 ;
+  assign \$82  = \$81  & in_data;
+  assign \$83  = words[10] & data0[0];
+  assign \$84  = \bit  ^ \$83 ;
+  assign \$85  = ! idx;
+  assign \$86  = words[11] & \$85 ;
+  assign \$87  = words[10] & data0[0];
+  assign \$88  = \bit  ^ \$87 ;
+  assign \$89  = \$86  & \$88 ;
+  assign \$90  = ! idx;
+  assign \$91  = words[11] & \$90 ;
+  assign \$92  = words[10] & data0[0];
+  assign \$93  = \bit  ^ \$92 ;
+  assign \$94  = \$91  & \$93 ;
+  assign \$95  = ! idx;
+  assign \$96  = words[11] & \$95 ;
+  assign \$97  = words[10] & data0[0];
+  assign \$98  = \bit  ^ \$97 ;
+  assign \$99  = \$96  & \$98 ;
+  assign \$100  = ! idx;
+  assign \$101  = words[11] & \$100 ;
+  assign \$102  = words[10] & data0[0];
+  assign \$103  = \bit  ^ \$102 ;
+  assign \$104  = \$101  & \$103 ;
+  assign \$105  = ! idx;
+  assign \$106  = words[11] & \$105 ;
+  assign \$107  = words[10] & data0[0];
+  assign \$108  = \bit  ^ \$107 ;
+  assign \$109  = \$106  & \$108 ;
+  assign \$110  = ! idx;
+  assign \$111  = words[11] & \$110 ;
+  assign \$112  = words[10] & data0[0];
+  assign \$113  = \bit  ^ \$112 ;
+  assign \$114  = \$111  & \$113 ;
+  assign \$115  = ! idx;
+  assign \$116  = words[11] & \$115 ;
+  assign \$117  = words[10] & data0[0];
+  assign \$118  = \bit  ^ \$117 ;
+  assign \$119  = \$116  & \$118 ;
+  assign \$120  = ! idx;
+  assign \$121  = words[11] & \$120 ;
+  assign \$122  = words[10] & data0[0];
+  assign \$123  = \bit  ^ \$122 ;
+  assign \$124  = \$121  & \$123 ;
+  assign \$125  = ! idx;
+  assign \$126  = words[11] & \$125 ;
+  assign \$127  = words[10] & data0[0];
+  assign \$128  = \bit  ^ \$127 ;
+  assign \$129  = \$126  & \$128 ;
+  assign \$130  = ! idx;
+  assign \$131  = words[11] & \$130 ;
+  assign \$132  = words[10] & data0[0];
+  assign \$133  = \bit  ^ \$132 ;
+  assign \$134  = \$131  & \$133 ;
+  assign \$135  = ! idx;
+  assign \$136  = words[11] & \$135 ;
+  assign \$137  = words[10] & data0[0];
+  assign \$138  = \bit  ^ \$137 ;
+  assign \$139  = \$136  & \$138 ;
+  assign \$140  = ! idx;
+  assign \$141  = words[11] & \$140 ;
+  assign \$142  = words[10] & data0[0];
+  assign \$143  = \bit  ^ \$142 ;
+  assign \$144  = \$141  & \$143 ;
+  assign \$145  = ! idx;
+  assign \$146  = words[11] & \$145 ;
+  assign \$147  = words[10] & data0[0];
+  assign \$148  = \bit  ^ \$147 ;
+  assign \$149  = \$146  & \$148 ;
+  assign \$150  = ! idx;
+  assign \$151  = words[11] & \$150 ;
+  assign \$152  = words[10] & data0[0];
+  assign \$153  = \bit  ^ \$152 ;
+  assign \$154  = \$151  & \$153 ;
+  assign \$155  = ! idx;
+  assign \$156  = words[11] & \$155 ;
+  assign \$157  = words[10] & data0[0];
+  assign \$158  = \bit  ^ \$157 ;
+  assign \$159  = \$156  & \$158 ;
+  assign \$160  = ! idx;
+  assign \$161  = words[11] & \$160 ;
+  assign \$162  = words[10] & data0[0];
+  assign \$163  = \bit  ^ \$162 ;
+  assign \$164  = \$161  & \$163 ;
+  assign \$165  = ! idx;
+  assign \$166  = words[11] & \$165 ;
+  assign \$167  = words[10] & data0[0];
+  assign \$168  = \bit  ^ \$167 ;
+  assign \$169  = \$166  & \$168 ;
+  assign \$170  = ! idx;
+  assign \$171  = words[11] & \$170 ;
+  assign \$172  = words[10] & data0[0];
+  assign \$173  = \bit  ^ \$172 ;
+  assign \$174  = \$171  & \$173 ;
+  assign \$175  = ! idx;
+  assign \$176  = words[11] & \$175 ;
+  assign \$177  = words[10] & data0[0];
+  assign \$178  = \bit  ^ \$177 ;
+  assign \$179  = \$176  & \$178 ;
+  assign \$180  = ! idx;
+  assign \$181  = words[11] & \$180 ;
+  assign \$182  = words[10] & data0[0];
+  assign \$183  = \bit  ^ \$182 ;
+  assign \$184  = \$181  & \$183 ;
+  assign \$185  = ! idx;
+  assign \$186  = words[11] & \$185 ;
+  assign \$187  = words[10] & data0[0];
+  assign \$188  = \bit  ^ \$187 ;
+  assign \$189  = \$186  & \$188 ;
+  assign \$190  = ! idx;
+  assign \$191  = words[11] & \$190 ;
+  assign \$192  = words[10] & data0[0];
+  assign \$193  = \bit  ^ \$192 ;
+  assign \$194  = \$191  & \$193 ;
+  assign \$195  = ! idx;
+  assign \$196  = words[11] & \$195 ;
+  assign \$197  = words[10] & data0[0];
+  assign \$198  = \bit  ^ \$197 ;
+  assign \$199  = \$196  & \$198 ;
+  assign \$200  = ! idx;
+  assign \$201  = words[11] & \$200 ;
+  assign \$202  = words[10] & data0[0];
+  assign \$203  = \bit  ^ \$202 ;
+  assign \$204  = \$201  & \$203 ;
+  assign \$205  = ! idx;
+  assign \$206  = words[11] & \$205 ;
+  assign \$207  = words[10] & data0[0];
+  assign \$208  = \bit  ^ \$207 ;
+  assign \$209  = \$206  & \$208 ;
+  assign \$210  = ! idx;
+  assign \$211  = words[11] & \$210 ;
+  assign \$212  = words[10] & data0[0];
+  assign \$213  = \bit  ^ \$212 ;
+  assign \$214  = \$211  & \$213 ;
+  assign \$215  = ! idx;
+  assign \$216  = words[11] & \$215 ;
+  assign \$217  = words[10] & data0[0];
+  assign \$218  = \bit  ^ \$217 ;
+  assign \$219  = \$216  & \$218 ;
+  assign \$220  = ! idx;
+  assign \$221  = words[11] & \$220 ;
+  assign \$222  = words[10] & data0[0];
+  assign \$223  = \bit  ^ \$222 ;
+  assign \$224  = \$221  & \$223 ;
+  assign \$225  = ! idx;
+  assign \$226  = words[11] & \$225 ;
+  assign \$227  = words[10] & data0[0];
+  assign \$228  = \bit  ^ \$227 ;
+  assign \$229  = \$226  & \$228 ;
+  assign \$230  = ! idx;
+  assign \$231  = words[11] & \$230 ;
+  assign \$232  = words[10] & data0[0];
+  assign \$233  = \bit  ^ \$232 ;
+  assign \$234  = \$231  & \$233 ;
+  assign \$235  = ! idx;
+  assign \$236  = words[11] & \$235 ;
+  assign \$237  = words[10] & data0[0];
+  assign \$238  = \bit  ^ \$237 ;
+  assign \$239  = \$236  & \$238 ;
+  assign \$240  = ! idx;
+  assign \$241  = words[11] & \$240 ;
+  assign \$242  = words[10] & data0[0];
+  assign \$243  = \bit  ^ \$242 ;
+  assign \$244  = \$241  & \$243 ;
+  assign \$245  = ! idx;
+  assign \$246  = words[11] & \$245 ;
+  assign \$247  = words[10] & data0[0];
+  assign \$248  = \bit  ^ \$247 ;
+  assign \$249  = \$246  & \$248 ;
+  assign \$250  = ! idx;
+  assign \$251  = words[11] & \$250 ;
+  assign \$252  = words[10] & data0[0];
+  assign \$253  = \bit  ^ \$252 ;
+  assign \$254  = \$251  & \$253 ;
+  assign \$255  = ! idx;
+  assign \$256  = words[11] & \$255 ;
+  assign \$257  = words[10] & data0[0];
+  assign \$258  = \bit  ^ \$257 ;
+  assign \$259  = \$256  & \$258 ;
+  assign \$260  = ! idx;
+  assign \$261  = words[11] & \$260 ;
+  assign \$262  = words[10] & data0[0];
+  assign \$263  = \bit  ^ \$262 ;
+  assign \$264  = \$261  & \$263 ;
+  assign \$265  = ! idx;
+  assign \$266  = words[11] & \$265 ;
+  assign \$267  = words[10] & data0[0];
+  assign \$268  = \bit  ^ \$267 ;
+  assign \$269  = \$266  & \$268 ;
+  assign \$270  = ! idx;
+  assign \$271  = words[11] & \$270 ;
+  assign \$272  = words[10] & data0[0];
+  assign \$273  = \bit  ^ \$272 ;
+  assign \$274  = \$271  & \$273 ;
+  assign \$275  = ! idx;
+  assign \$276  = words[11] & \$275 ;
+  assign \$277  = words[10] & data0[0];
+  assign \$278  = \bit  ^ \$277 ;
+  assign \$279  = \$276  & \$278 ;
+  assign \$280  = ! idx;
+  assign \$281  = words[11] & \$280 ;
+  assign \$282  = words[10] & data0[0];
+  assign \$283  = \bit  ^ \$282 ;
+  assign \$284  = \$281  & \$283 ;
+  assign \$285  = ! idx;
+  assign \$286  = words[11] & \$285 ;
+  assign \$287  = words[10] & data0[0];
+  assign \$288  = \bit  ^ \$287 ;
+  assign \$289  = \$286  & \$288 ;
+  assign \$290  = ! idx;
+  assign \$291  = words[11] & \$290 ;
+  assign \$292  = words[10] & data0[0];
+  assign \$293  = \bit  ^ \$292 ;
+  assign \$294  = \$291  & \$293 ;
+  assign \$295  = ! idx;
+  assign \$296  = words[11] & \$295 ;
+  assign \$297  = words[10] & data0[0];
+  assign \$298  = \bit  ^ \$297 ;
+  assign \$299  = \$296  & \$298 ;
+  assign \$300  = ! idx;
+  assign \$301  = words[11] & \$300 ;
+  assign \$302  = words[10] & data0[0];
+  assign \$303  = \bit  ^ \$302 ;
+  assign \$304  = \$301  & \$303 ;
+  assign \$305  = ! idx;
+  assign \$306  = words[11] & \$305 ;
+  assign \$307  = words[10] & data0[0];
+  assign \$308  = \bit  ^ \$307 ;
+  assign \$309  = \$306  & \$308 ;
+  assign \$310  = ! idx;
+  assign \$311  = words[11] & \$310 ;
+  assign \$312  = words[10] & data0[0];
+  assign \$313  = \bit  ^ \$312 ;
+  assign \$314  = \$311  & \$313 ;
+  assign \$315  = ! idx;
+  assign \$316  = words[11] & \$315 ;
+  assign \$317  = words[10] & data0[0];
+  assign \$318  = \bit  ^ \$317 ;
+  assign \$319  = \$316  & \$318 ;
+  assign \$320  = ! idx;
+  assign \$321  = words[11] & \$320 ;
+  assign \$322  = words[10] & data0[0];
+  assign \$323  = \bit  ^ \$322 ;
+  assign \$324  = \$321  & \$323 ;
+  assign \$325  = ! idx;
+  assign \$326  = words[11] & \$325 ;
+  assign \$327  = words[10] & data0[0];
+  assign \$328  = \bit  ^ \$327 ;
+  assign \$329  = \$326  & \$328 ;
+  assign \$330  = ! idx;
+  assign \$331  = words[11] & \$330 ;
+  assign \$332  = words[10] & data0[0];
+  assign \$333  = \bit  ^ \$332 ;
+  assign \$334  = \$331  & \$333 ;
+  assign \$335  = ! idx;
+  assign \$336  = words[11] & \$335 ;
+  assign \$337  = words[10] & data0[0];
+  assign \$338  = \bit  ^ \$337 ;
+  assign \$339  = \$336  & \$338 ;
+  assign \$340  = ! idx;
+  assign \$341  = words[11] & \$340 ;
+  assign \$342  = words[10] & data0[0];
+  assign \$343  = \bit  ^ \$342 ;
+  assign \$344  = \$341  & \$343 ;
+  assign \$345  = ! idx;
+  assign \$346  = words[11] & \$345 ;
+  assign \$347  = words[10] & data0[0];
+  assign \$348  = \bit  ^ \$347 ;
+  assign \$349  = \$346  & \$348 ;
+  assign \$350  = ! idx;
+  assign \$351  = words[11] & \$350 ;
+  assign \$352  = words[10] & data0[0];
+  assign \$353  = \bit  ^ \$352 ;
+  assign \$354  = \$351  & \$353 ;
+  assign \$355  = ! idx;
+  assign \$356  = words[11] & \$355 ;
+  assign \$357  = words[10] & data0[0];
+  assign \$358  = \bit  ^ \$357 ;
+  assign \$359  = \$356  & \$358 ;
+  assign \$360  = { data0[53:0], \$84  } | { \$359 , \$354 , \$349 , \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89  };
+  assign \$361  = ~ words[6];
+  assign \$362  = ssi & \port$2203$272 [0];
+  assign \$363  = ~ \$362 ;
+  assign \$364  = \$361  & \$363 ;
   \biss_master.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
@@ -7051,14 +7061,14 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
     .index(word),
     .last(last),
     .load(load),
-    .load_index(\$603 [0]),
+    .load_index(\$605 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$611  = 1'h0;
+    \$613  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -7067,11 +7077,11 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
       3'h1:
           if (sample) begin
             if (\$66 ) begin
-              if (\$68 ) begin
+              if (\$70 ) begin
                 (* full_case = 32'd1 *)
-                if (\$69 ) begin
+                if (\$71 ) begin
                 end else begin
-                  \$611  = 1'h1;
+                  \$613  = 1'h1;
                 end
               end
             end
@@ -7080,21 +7090,21 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
           /* empty */;
       3'h5:
           if (sample) begin
-            if (\$77 ) begin
-              \$611  = 1'h1;
+            if (\$79 ) begin
+              \$613  = 1'h1;
             end
           end
     endcase
     if (receiver_clear) begin
-      \$611  = 1'h0;
+      \$613  = 1'h0;
     end
     if (rst) begin
-      \$611  = 1'h0;
+      \$613  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$612  = 1'h0;
+    \$614  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -7108,36 +7118,10 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
           /* empty */;
       3'h4:
           if (sample) begin
-            \$612  = 1'h1;
+            \$614  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
-      \$612  = 1'h0;
-    end
-    if (rst) begin
-      \$612  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$613  = slots;
-    if (\$41 ) begin
-      \$613  = \$42 [15:0];
-    end
-    if (receiver_clear) begin
-      \$613  = 16'h0000;
-    end
-    if (rst) begin
-      \$613  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$614  = slots_full;
-    if (\$41 ) begin
-      \$614  = \$43 ;
-    end
-    if (receiver_clear) begin
       \$614  = 1'h0;
     end
     if (rst) begin
@@ -7146,106 +7130,81 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$615  = idx;
+    \$615  = slots;
+    if (\$41 ) begin
+      \$615  = \$42 [15:0];
+    end
+    if (receiver_clear) begin
+      \$615  = 16'h0000;
+    end
+    if (rst) begin
+      \$615  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$616  = slots_full;
+    if (\$41 ) begin
+      \$616  = \$43 ;
+    end
+    if (receiver_clear) begin
+      \$616  = 1'h0;
+    end
+    if (rst) begin
+      \$616  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$617  = idx;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$615  = 7'h00;
+            \$617  = 7'h00;
           end
       3'h2:
           if (sample) begin
-            \$615  = 7'h00;
+            \$617  = 7'h00;
           end
       3'h1:
           if (sample) begin
-            \$615  = \$47 [6:0];
+            \$617  = \$47 [6:0];
             if (\$66 ) begin
-              \$615  = 7'h00;
+              \$617  = 7'h00;
             end
           end
       3'h3:
           /* empty */;
       3'h5:
           if (sample) begin
-            \$615  = \$71 [6:0];
+            \$617  = \$73 [6:0];
           end
     endcase
     if (receiver_clear) begin
-      \$615  = 7'h00;
+      \$617  = 7'h00;
     end
     if (rst) begin
-      \$615  = 7'h00;
+      \$617  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$616  = in_data;
+    \$618  = in_data;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$616  = w0_data_at0;
+            \$618  = w0_data_at0;
           end
       3'h2:
           if (sample) begin
-            \$616  = w0_data_at0;
+            \$618  = w0_data_at0;
           end
       3'h1:
           if (sample) begin
-            \$616  = \$50 ;
+            \$618  = \$50 ;
             if (\$66 ) begin
-              \$616  = w1_data_at0;
+              \$618  = \$67 ;
             end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$616  = 1'h0;
-    end
-    if (rst) begin
-      \$616  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$617  = in_lc;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$617  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$617  = w0_lc_at0;
-          end
-      3'h1:
-          if (sample) begin
-            \$617  = \$56 ;
-            if (\$66 ) begin
-              \$617  = w1_lc_at0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$617  = 1'h0;
-    end
-    if (rst) begin
-      \$617  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$618  = in_crc;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$618  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            \$618  = 1'h0;
-          end
-      3'h1:
-          if (sample) begin
-            \$618  = \$62 ;
           end
     endcase
     if (receiver_clear) begin
@@ -7257,21 +7216,21 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$619  = in_top;
+    \$619  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$619  = \$45 ;
+            \$619  = w0_lc_at0;
           end
       3'h2:
           if (sample) begin
-            \$619  = \$46 ;
+            \$619  = w0_lc_at0;
           end
       3'h1:
           if (sample) begin
-            \$619  = \$64 ;
+            \$619  = \$56 ;
             if (\$66 ) begin
-              \$619  = 1'h0;
+              \$619  = \$68 ;
             end
           end
     endcase
@@ -7284,7 +7243,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$620  = word;
+    \$620  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
@@ -7293,123 +7252,139 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
       3'h2:
           if (sample) begin
             \$620  = 1'h0;
+          end
+      3'h1:
+          if (sample) begin
+            \$620  = \$62 ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$620  = 1'h0;
+    end
+    if (rst) begin
+      \$620  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$621  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$621  = \$45 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$621  = \$46 ;
+          end
+      3'h1:
+          if (sample) begin
+            \$621  = \$64 ;
+            if (\$66 ) begin
+              \$621  = 1'h0;
+            end
+          end
+    endcase
+    if (receiver_clear) begin
+      \$621  = 1'h0;
+    end
+    if (rst) begin
+      \$621  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$622  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$622  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$622  = 1'h0;
           end
       3'h1:
           if (sample) begin
             if (\$66 ) begin
               (* full_case = 32'd1 *)
-              if (\$68 ) begin
+              if (\$70 ) begin
               end else begin
-                \$620  = \$70 [0];
+                \$622  = \$72 [0];
               end
             end
           end
     endcase
     if (receiver_clear) begin
-      \$620  = 1'h0;
+      \$622  = 1'h0;
     end
     if (rst) begin
-      \$620  = 1'h0;
+      \$622  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$621  = decoder_fsm_state;
+    \$623  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
-            \$621  = 3'h1;
+            \$623  = 3'h1;
           end else if (\$44 ) begin
-            \$621  = 3'h2;
+            \$623  = 3'h2;
           end
       3'h2:
           if (sample) begin
-            \$621  = 3'h1;
+            \$623  = 3'h1;
           end
       3'h1:
           if (sample) begin
             if (\$66 ) begin
-              if (\$68 ) begin
+              if (\$70 ) begin
                 (* full_case = 32'd1 *)
-                if (\$69 ) begin
-                  \$621  = 3'h3;
+                if (\$71 ) begin
+                  \$623  = 3'h3;
                 end else begin
-                  \$621  = 3'h4;
+                  \$623  = 3'h4;
                 end
               end
             end
           end
       3'h3:
           if (sample) begin
-            \$621  = 3'h5;
+            \$623  = 3'h5;
           end
       3'h5:
           if (sample) begin
-            if (\$77 ) begin
-              \$621  = 3'h4;
+            if (\$79 ) begin
+              \$623  = 3'h4;
             end
           end
       3'h4:
           if (sample) begin
-            \$621  = 3'h6;
+            \$623  = 3'h6;
           end
     endcase
     if (receiver_clear) begin
-      \$621  = 3'h0;
+      \$623  = 3'h0;
     end
     if (rst) begin
-      \$621  = 3'h0;
+      \$623  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$622  = started;
+    \$624  = started;
     casez (decoder_fsm_state)
       3'h0:
           if (ssi) begin
           end else if (\$44 ) begin
-            \$622  = 1'h1;
+            \$624  = 1'h1;
           end
       3'h2:
           /* empty */;
       3'h1:
           if (sample) begin
-            \$622  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$622  = 1'h0;
-    end
-    if (rst) begin
-      \$622  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$623  = start_slot;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-          end else if (\$44 ) begin
-            \$623  = slots;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$623  = 16'h0000;
-    end
-    if (rst) begin
-      \$623  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$624  = cds;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h2:
-          if (sample) begin
-            \$624  = \bit ;
+            \$624  = 1'h1;
           end
     endcase
     if (receiver_clear) begin
@@ -7421,7 +7396,42 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$625  = mismatch;
+    \$625  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+          end else if (\$44 ) begin
+            \$625  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$625  = 16'h0000;
+    end
+    if (rst) begin
+      \$625  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$626  = cds;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          if (sample) begin
+            \$626  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$626  = 1'h0;
+    end
+    if (rst) begin
+      \$626  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$627  = mismatch;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -7431,23 +7441,23 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
           /* empty */;
       3'h3:
           if (sample) begin
-            \$625  = \bit ;
+            \$627  = \bit ;
           end
       3'h5:
           if (sample) begin
-            \$625  = \$75 ;
+            \$627  = \$77 ;
           end
     endcase
     if (receiver_clear) begin
-      \$625  = 1'h0;
+      \$627  = 1'h0;
     end
     if (rst) begin
-      \$625  = 1'h0;
+      \$627  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$626  = ring;
+    \$628  = ring;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -7459,22 +7469,22 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
           /* empty */;
       3'h5:
           if (sample) begin
-            \$626  = { ring[71:0], \bit  };
+            \$628  = { ring[71:0], \bit  };
           end
     endcase
-    if (\$591 ) begin
-      \$626  = { ring[71:0], \bit  };
+    if (\$593 ) begin
+      \$628  = { ring[71:0], \bit  };
     end
     if (receiver_clear) begin
-      \$626  = 73'h0000000000000000000;
+      \$628  = 73'h0000000000000000000;
     end
     if (rst) begin
-      \$626  = 73'h0000000000000000000;
+      \$628  = 73'h0000000000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$627  = stop_bit;
+    \$629  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
           /* empty */;
@@ -7488,107 +7498,107 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
           /* empty */;
       3'h4:
           if (sample) begin
-            \$627  = \bit ;
+            \$629  = \bit ;
           end
     endcase
     if (receiver_clear) begin
-      \$627  = 1'h0;
+      \$629  = 1'h0;
     end
     if (rst) begin
-      \$627  = 1'h0;
+      \$629  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$628  = data0;
-    if (\$80 ) begin
-      \$628  = \$358 ;
+    \$630  = data0;
+    if (\$82 ) begin
+      \$630  = \$360 ;
     end
     if (receiver_clear) begin
-      \$628  = 55'h00000000000000;
+      \$630  = 55'h00000000000000;
     end
     if (rst) begin
-      \$628  = 55'h00000000000000;
+      \$630  = 55'h00000000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$629  = ne;
-    if (\$362 ) begin
-      \$629 [0] = 1'h1;
-    end else if (\$366 ) begin
-      \$629 [0] = \$370 ;
+    \$631  = ne;
+    if (\$364 ) begin
+      \$631 [0] = 1'h1;
+    end else if (\$368 ) begin
+      \$631 [0] = \$372 ;
     end
-    if (\$582 ) begin
-      \$629 [1] = 1'h1;
-    end else if (\$586 ) begin
-      \$629 [1] = \bit ;
+    if (\$584 ) begin
+      \$631 [1] = 1'h1;
+    end else if (\$588 ) begin
+      \$631 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$629  = 2'h0;
+      \$631  = 2'h0;
     end
     if (rst) begin
-      \$629  = 2'h0;
+      \$631  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$630  = nw;
-    if (\$371 ) begin
-      \$630 [0] = 1'h1;
-    end else if (\$375 ) begin
-      \$630 [0] = \bit ;
+    \$632  = nw;
+    if (\$373 ) begin
+      \$632 [0] = 1'h1;
+    end else if (\$377 ) begin
+      \$632 [0] = \bit ;
     end
-    if (\$582 ) begin
-      \$630 [1] = 1'h1;
-    end else if (\$586 ) begin
-    end else if (\$590 ) begin
-      \$630 [1] = \bit ;
+    if (\$584 ) begin
+      \$632 [1] = 1'h1;
+    end else if (\$588 ) begin
+    end else if (\$592 ) begin
+      \$632 [1] = \bit ;
     end
     if (receiver_clear) begin
-      \$630  = 2'h0;
+      \$632  = 2'h0;
     end
     if (rst) begin
-      \$630  = 2'h0;
+      \$632  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$631  = data1;
-    if (\$378 ) begin
-      \$631  = \$581 ;
+    \$633  = data1;
+    if (\$380 ) begin
+      \$633  = \$583 ;
     end
     if (receiver_clear) begin
-      \$631  = 40'h0000000000;
+      \$633  = 40'h0000000000;
     end
     if (rst) begin
-      \$631  = 40'h0000000000;
+      \$633  = 40'h0000000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$632  = lc;
+    \$634  = lc;
     if (lc_load) begin
-      \$632  = { lc[4:0], \bit  };
+      \$634  = { lc[4:0], \bit  };
     end
     if (receiver_clear) begin
-      \$632  = 6'h00;
+      \$634  = 6'h00;
     end
     if (rst) begin
-      \$632  = 6'h00;
+      \$634  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$633  = cpw_top;
-    if (\$592 ) begin
-      \$633  = { cpw_top[38:0], \$594  };
+    \$635  = cpw_top;
+    if (\$594 ) begin
+      \$635  = { cpw_top[38:0], \$596  };
     end
     if (receiver_clear) begin
-      \$633  = 40'h0000000000;
+      \$635  = 40'h0000000000;
     end
     if (rst) begin
-      \$633  = 40'h0000000000;
+      \$635  = 40'h0000000000;
     end
   end
   always @* begin
@@ -7797,15 +7807,15 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$2191$272 [0];
-  assign ssi_double = \port$2191$272 [2];
-  assign ssi_error_low = \port$2191$272 [1];
+  assign ssi_error = \port$2203$272 [0];
+  assign ssi_double = \port$2203$272 [2];
+  assign ssi_error_low = \port$2203$272 [1];
   assign lc_next = { lc[4:0], \bit  };
   assign \crcs$53  = crcs;
   assign \bit$58  = \bit ;
   assign ok = crc_ok;
   assign index = word;
-  assign load_index = \$603 [0];
+  assign load_index = \$605 [0];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -7840,9 +7850,11 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   assign \crcs$53[1].poly  = crcs[58:43];
   assign \crcs$53[1].start  = crcs[74:59];
   assign \crcs$53[1].inverted  = crcs[75];
-  assign \$376  = word;
-  assign \$583  = word;
-  assign \$587  = word;
+  assign \$67  = w1_data_at0;
+  assign \$68  = w1_lc_at0;
+  assign \$378  = word;
+  assign \$585  = word;
+  assign \$589  = word;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -8954,29 +8966,30 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master.ma_stop (rst, words, \port$2203$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
-  wire [7:0] \$10 ;
-  wire [8:0] \$11 ;
-  wire [16:0] \$12 ;
-  wire \$13 ;
+  wire [8:0] \$10 ;
+  wire [7:0] \$11 ;
+  wire [9:0] \$12 ;
+  wire [16:0] \$13 ;
   wire \$14 ;
   wire \$15 ;
   wire \$16 ;
   wire \$17 ;
   wire \$18 ;
-  reg [7:0] \$19 ;
+  wire \$19 ;
   reg [7:0] \$2 ;
-  wire [8:0] \$20 ;
+  reg [7:0] \$20 ;
   wire [8:0] \$21 ;
-  reg [7:0] \$22 ;
+  wire [8:0] \$22 ;
   reg [7:0] \$23 ;
-  reg [8:0] \$24 ;
-  reg [16:0] \$25 ;
-  reg \$26 ;
+  reg [7:0] \$24 ;
+  reg [8:0] \$25 ;
+  reg [16:0] \$26 ;
   reg \$27 ;
-  reg [7:0] \$28 ;
+  reg \$28 ;
+  reg [7:0] \$29 ;
   wire [8:0] \$3 ;
   wire [8:0] \$4 ;
   wire [8:0] \$5 ;
@@ -9000,10 +9013,13 @@ module \biss_master.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, 
   wire [15:0] \crcs[1].poly ;
   wire [15:0] \crcs[1].start ;
   wire [4:0] \crcs[1].width ;
+  wire [1:0] enables;
   output enough;
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
+  input \port$2203$199 ;
+  wire \port$2203$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -9020,8 +9036,6 @@ module \biss_master.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, 
   input \started$15 ;
   wire \started$15 ;
   reg [16:0] target_rises = 17'h00000;
-  input w1_enable;
-  wire w1_enable;
   reg [7:0] word0_len = 8'h00;
   reg [7:0] word1_len = 8'h00;
   input [23:0] words;
@@ -9058,31 +9072,32 @@ module \biss_master.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, 
   assign \$7  = ssi_double ? { \$5 , 1'h0 } : { 1'h0, \$6  };
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
-  assign \$10  = w1_enable ? word1_len : 8'h00;
-  assign \$11  = word0_len + \$10 ;
-  assign \$12  = start_slot + frame_len;
-  assign \$13  = | rises;
-  assign \$14  = ssi ? \$13  : \started$15 ;
-  assign \$15  = rises >= target_rises;
-  assign \$16  = started & \$15 ;
-  assign \$17  = ~ clear;
-  assign \$18  = \$16  & \$17 ;
-  assign \$20  = \$19  + crcs[42:38];
-  assign \$21  = words[17:12] + \$20 [7:0];
+  assign \$10  = 1'h0 + word0_len;
+  assign \$11  = \port$2203$199  ? word1_len : 8'h00;
+  assign \$12  = \$10  + \$11 ;
+  assign \$13  = start_slot + frame_len;
+  assign \$14  = | rises;
+  assign \$15  = ssi ? \$14  : \started$15 ;
+  assign \$16  = rises >= target_rises;
+  assign \$17  = started & \$16 ;
+  assign \$18  = ~ clear;
+  assign \$19  = \$17  & \$18 ;
+  assign \$21  = \$20  + crcs[42:38];
+  assign \$22  = words[17:12] + \$21 [7:0];
   always @(posedge clk)
-    n <= \$22 ;
+    n <= \$23 ;
   always @(posedge clk)
-    word0_len <= \$23 ;
+    word0_len <= \$24 ;
   always @(posedge clk)
-    frame_len <= \$24 ;
+    frame_len <= \$25 ;
   always @(posedge clk)
-    target_rises <= \$25 ;
+    target_rises <= \$26 ;
   always @(posedge clk)
-    started <= \$26 ;
+    started <= \$27 ;
   always @(posedge clk)
-    enough <= \$27 ;
+    enough <= \$28 ;
   always @(posedge clk)
-    word1_len <= \$28 ;
+    word1_len <= \$29 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     (* full_case = 32'd1 *)
@@ -9110,64 +9125,65 @@ module \biss_master.ma_stop (rst, words, w1_enable, ssi, ssi_error, ssi_double, 
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
-          \$19  = 8'h00;
+          \$20  = 8'h00;
       2'h1:
-          \$19  = 8'h02;
+          \$20  = 8'h02;
       2'h2:
-          \$19  = 8'h06;
+          \$20  = 8'h06;
       2'h3:
-          \$19  = 8'h08;
+          \$20  = 8'h08;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$22  = \$4 [7:0];
-    if (rst) begin
-      \$22  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$23  = \$9 [7:0];
+    \$23  = \$4 [7:0];
     if (rst) begin
       \$23  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$24  = \$11 ;
+    \$24  = \$9 [7:0];
     if (rst) begin
-      \$24  = 9'h000;
+      \$24  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$25  = \$12 ;
+    \$25  = \$12 [8:0];
     if (rst) begin
-      \$25  = 17'h00000;
+      \$25  = 9'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$26  = \$14 ;
+    \$26  = \$13 ;
     if (rst) begin
-      \$26  = 1'h0;
+      \$26  = 17'h00000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$27  = \$18 ;
+    \$27  = \$15 ;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
-    \$28  = \$21 [7:0];
+    \$28  = \$19 ;
     if (rst) begin
-      \$28  = 8'h00;
+      \$28  = 1'h0;
     end
   end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    \$29  = \$22 [7:0];
+    if (rst) begin
+      \$29  = 8'h00;
+    end
+  end
+  assign enables = { \port$2203$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -11308,7 +11324,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2191$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2203$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -11442,8 +11458,8 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$219
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$2191$259 ;
-  wire [12:0] \port$2191$259 ;
+  input [12:0] \port$2203$259 ;
+  wire [12:0] \port$2203$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -11468,7 +11484,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$219
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$2191$259 [12:1] + 1'h1;
+  assign \$11  = \port$2203$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -11593,7 +11609,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$219
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$2191$259 [0]),
+    .clear_high(\port$2203$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -11736,7 +11752,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$219
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$2191$259 [0]) begin
+            if (\port$2203$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -11821,7 +11837,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$219
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$2191$259 [0]) begin
+            if (\port$2203$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -11860,7 +11876,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$219
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$2191$259 [12:1] };
+            \$85  = { 1'h0, \port$2203$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -12245,11 +12261,11 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$219
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$2191$259 [12:1] };
-  assign fixed = \port$2191$259 [0];
+  assign fixed_delay = { 1'h0, \port$2203$259 [12:1] };
+  assign fixed = \port$2203$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$2191$259 [0];
+  assign clear_high = \port$2203$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -12656,7 +12672,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2179$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2191$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -12698,8 +12714,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2179$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2179$0 ;
-  wire \port$2179$0 ;
+  input \port$2191$0 ;
+  wire \port$2191$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -12713,9 +12729,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2179$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2179$0  };
-  assign \$2  = { lc[4:0], \port$2179$0  } == last;
-  assign \$3  = { lc[4:0], \port$2179$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2191$0  };
+  assign \$2  = { lc[4:0], \port$2191$0  } == last;
+  assign \$3  = { lc[4:0], \port$2191$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -12825,7 +12841,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2179$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2179$0  };
+  assign lc_next = { lc[4:0], \port$2191$0  };
   assign zero = is_zero;
 endmodule
 
@@ -13400,7 +13416,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1618$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1624$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
@@ -13442,8 +13458,14 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1618$0 , lc_check, lc_re
   wire \$42 ;
   wire \$43 ;
   wire \$44 ;
-  wire [1:0] \$45 ;
+  wire \$45 ;
+  wire \$46 ;
+  wire \$47 ;
+  wire \$48 ;
+  wire \$49 ;
   wire \$5 ;
+  wire \$50 ;
+  wire [1:0] \$51 ;
   wire \$6 ;
   wire \$7 ;
   wire \$8 ;
@@ -13572,8 +13594,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1618$0 , lc_check, lc_re
   wire noisy;
   output passed;
   wire passed;
-  output \port$1618$0 ;
-  wire \port$1618$0 ;
+  output \port$1624$0 ;
+  wire \port$1624$0 ;
   output report;
   wire report;
   input report_frame;
@@ -13606,62 +13628,62 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1618$0 , lc_check, lc_re
   output valid;
   wire valid;
   wire [1:0] word_crc_ok;
-  assign clean = \$41  & \$44 ;
-  assign \$45  = ~ { \$2 , crc_ok[0] };
-  assign crc_error = report_frame ? \$45  : 2'h0;
+  assign \$40  = \$37  & \$39 ;
+  assign \$41  = \$31  | \$40 ;
+  assign \$42  = \$41  | noisy;
+  assign doubtful = \$42  | delay_jump;
+  assign \$43  = & { \$2 , crc_ok[0] };
+  assign \$44  = ~ spw_mismatch;
+  assign \$45  = \$43  & \$44 ;
+  assign \$46  = ~ noisy;
+  assign \$47  = \$45  & \$46 ;
+  assign \$48  = lc_repeat | lc_skip;
+  assign \$49  = \$48  | lc_zero;
+  assign \$50  = ~ \$49 ;
+  assign clean = \$47  & \$50 ;
+  assign \$51  = ~ { \$2 , crc_ok[0] };
+  assign crc_error = report_frame ? \$51  : 2'h0;
   assign \$1  = ~ cfg[199];
   assign \$2  = crc_ok[1] | \$1 ;
-  assign \$3  = cfg[199] & cfg[207];
-  assign \$4  = cfg[156] | \$3 ;
-  assign \$5  = report_frame & \$4 ;
-  assign \$6  = cfg[156] ? crc_ok[0] : \$2 ;
-  assign lc_check = \$5  & \$6 ;
+  assign \$4  = cfg[199] & cfg[207];
+  assign \$5  = | { \$4 , \$3  };
+  assign \$6  = report_frame & \$5 ;
+  assign \$8  = \$7  ? crc_ok[0] : \$2 ;
+  assign lc_check = \$6  & \$8 ;
   assign lc_repeat = lc_check & lc_repeat_seen;
   assign lc_skip = lc_check & lc_skip_seen;
   assign lc_zero = lc_check & lc_zero_seen;
-  assign \$7  = crc_ok[0] & \$2 ;
-  assign \$8  = cfg[250] & cfg[199];
-  assign \$9  = ~ spw_match;
-  assign \$10  = \$8  & \$9 ;
-  assign \$12  = cfg[259] & copy_mismatch;
-  assign \$13  = \$11  | \$12 ;
-  assign spw_mismatch = \$7  & \$13 ;
-  assign \$14  = lc_repeat | lc_skip;
-  assign \$15  = \$14  | lc_zero;
-  assign \$16  = ~ \$2 ;
-  assign \$17  = ~ crc_ok[0];
-  assign \$18  = ~ crc_ok[0];
-  assign \$19  = ~ \$2 ;
-  assign \$20  = \$18  & \$19 ;
+  assign \$9  = & { \$2 , crc_ok[0] };
+  assign \$10  = cfg[250] & cfg[199];
+  assign \$11  = ~ spw_match;
+  assign \$12  = \$10  & \$11 ;
+  assign \$14  = cfg[259] & copy_mismatch;
+  assign \$15  = \$13  | \$14 ;
+  assign spw_mismatch = \$9  & \$15 ;
+  assign \$16  = lc_repeat | lc_skip;
+  assign \$17  = \$16  | lc_zero;
+  assign \$19  = ~ \$18 ;
+  assign \$20  = ~ crc_ok[0];
+  assign \$21  = ~ crc_ok[0];
+  assign \$23  = ~ \$22 ;
+  assign \$24  = \$21  & \$23 ;
   assign report = report_frame | fault;
   assign status = report_frame ? frame_status : fault_status;
-  assign \$21  = ! frame_status;
-  assign valid = report_frame & \$21 ;
-  assign \$22  = ! frame_status;
-  assign \$23  = frame_status == 4'hf;
-  assign \$24  = \$22  | \$23 ;
-  assign passed = report_frame & \$24 ;
-  assign \$25  = crc_ok[0] & \$2 ;
-  assign \$26  = ~ \$25 ;
-  assign \$27  = \$26  | spw_mismatch;
-  assign \$28  = cfg[199] & cfg[207];
-  assign \$29  = cfg[156] | \$28 ;
-  assign \$30  = cfg[156] ? crc_ok[0] : \$2 ;
-  assign \$31  = \$29  & \$30 ;
-  assign \$32  = lc_repeat_seen | lc_skip_seen;
-  assign \$33  = \$32  | lc_zero_seen;
-  assign \$34  = \$31  & \$33 ;
-  assign \$35  = \$27  | \$34 ;
-  assign \$36  = \$35  | noisy;
-  assign doubtful = \$36  | delay_jump;
-  assign \$37  = crc_ok[0] & \$2 ;
-  assign \$38  = ~ spw_mismatch;
-  assign \$39  = \$37  & \$38 ;
-  assign \$40  = ~ noisy;
-  assign \$41  = \$39  & \$40 ;
-  assign \$42  = lc_repeat | lc_skip;
-  assign \$43  = \$42  | lc_zero;
-  assign \$44  = ~ \$43 ;
+  assign \$25  = ! frame_status;
+  assign valid = report_frame & \$25 ;
+  assign \$26  = ! frame_status;
+  assign \$27  = frame_status == 4'hf;
+  assign \$28  = \$26  | \$27 ;
+  assign passed = report_frame & \$28 ;
+  assign \$29  = & { \$2 , crc_ok[0] };
+  assign \$30  = ~ \$29 ;
+  assign \$31  = \$30  | spw_mismatch;
+  assign \$33  = cfg[199] & cfg[207];
+  assign \$34  = | { \$33 , \$32  };
+  assign \$36  = \$35  ? crc_ok[0] : \$2 ;
+  assign \$37  = \$34  & \$36 ;
+  assign \$38  = lc_repeat_seen | lc_skip_seen;
+  assign \$39  = \$38  | lc_zero_seen;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     frame_status = 4'h0;
@@ -13677,21 +13699,21 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1618$0 , lc_check, lc_re
     if (spw_mismatch) begin
       frame_status = 4'h5;
     end
-    if (\$15 ) begin
+    if (\$17 ) begin
       frame_status = 4'h4;
     end
-    if (\$16 ) begin
+    if (\$19 ) begin
       frame_status = 4'h2;
     end
-    if (\$17 ) begin
+    if (\$20 ) begin
       frame_status = 4'h1;
     end
-    if (\$20 ) begin
+    if (\$24 ) begin
       frame_status = 4'h3;
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1618$0  = \$2 ;
+  assign \port$1624$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -13735,5 +13757,11 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1618$0 , lc_check, lc_re
   assign \cfg.ssi_error  = cfg[272];
   assign \cfg.ssi_error_low  = cfg[273];
   assign \cfg.ssi_double  = cfg[274];
-  assign \$11  = \$10 ;
+  assign \$3  = cfg[156];
+  assign \$7  = cfg[156];
+  assign \$13  = \$12 ;
+  assign \$18  = \$2 ;
+  assign \$22  = \$2 ;
+  assign \$32  = cfg[156];
+  assign \$35  = cfg[156];
 endmodule

@@ -115,6 +115,10 @@ class BusChannel(wiring.Component):
     """
 
     def __init__(self, params, regs, status=False):
+        if params.words > 2:
+            raise ValueError(f"the register map holds words 0 and 1; this build has "
+                             f"{params.words} words (a chain: build the core on its own, "
+                             f"docs/frames.md)")
         if params.counters:
             if params.counter_width > COUNT_BITS:
                 raise ValueError(f"the register map holds {COUNT_BITS}-bit counts; this build's "

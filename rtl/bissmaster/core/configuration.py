@@ -5,7 +5,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 from .. import protocol
-from ..layouts import config_custom_crcs, config_layout, config_words
+from ..layouts import config_custom_crcs, config_enables, config_layout, config_words
 from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, HALF_PERIOD_WIDTH, QUIET_WIDTH, Crc
 
 
@@ -107,10 +107,18 @@ class Configuration(wiring.Component):
         ok = cfg.ma_half_period[1:].any() & word_ok(words[0], 0)        # half period >= 2
         if p.max_line_delay < 2**p.delay_limit_width - 1:
             ok &= cfg.delay_limit <= p.max_line_delay
-        if p.words == 2:
+        enables = config_enables(cfg, p)
+        for w in range(1, p.words):
+            ok &= ~enables[w] | word_ok(words[w], w)
+            if w >= 2:
+                ok &= ~enables[w] | enables[w - 1]          # the frame's words come in order
+        if p.words >= 2:
+            # One LC per frame (one sign-of-life tracker).
+            lc_words = [enables[w] & words[w].lc for w in range(p.words)]
+            for a in range(p.words):
+                for b in range(a + 1, p.words):
+                    ok &= ~(lc_words[a] & lc_words[b])
             w1 = cfg.w1_enable
-            ok &= ~w1 | word_ok(words[1], 1)
-            ok &= ~(w1 & cfg.w0.lc & cfg.w1.lc)            # one LC per frame
             # The SPW check needs an SPW no longer than the CPW, and its CRC (the check is
             # read after the CRC bits; see SpwCheck).
             ok &= ~cfg.spw_check | (w1 & (cfg.w1.data_bits <= cfg.w0.data_bits)
@@ -119,8 +127,10 @@ class Configuration(wiring.Component):
             # SSI: one word, no sign of life, nE/nW or the error bit (not both), no SPW check
             # (docs/ports.md, "SSI mode"); a round trip the sampler can count to.
             ssi_bad = cfg.w0.lc | (cfg.ssi_error & cfg.w0.nenw)
-            if p.words == 2:
-                ssi_bad |= cfg.w1_enable | cfg.spw_check
+            if p.words >= 2:
+                ssi_bad |= cfg.spw_check
+            for w in range(1, p.words):
+                ssi_bad |= enables[w]
             if p.max_line_delay < 2**p.delay_limit_width - 1:
                 ssi_bad |= cfg.ssi_delay > p.max_line_delay
             ok &= ~(cfg.ssi & ssi_bad)
@@ -165,5 +175,7 @@ class Configuration(wiring.Component):
         # controller sees Start one clock later after its decision than the Ack's (the register
         # between sampler and decoder), so the same decisions pass as with the Ack limit alone.
         m.d.sync += self.no_start_limit.eq(self.ack_limit + Cat(C(1, 1), cycle.ma_half_period))
-        m.d.comb += self.word_count.eq((1 + cycle.w1_enable) if p.words == 2 else 1)
+        # The words in the frame: word 0 and the enabled ones after it (in order: a gap is
+        # refused above).
+        m.d.comb += self.word_count.eq(sum(config_enables(cycle, p)))
         return m

@@ -1,4 +1,5 @@
-"""Frame decoder: Ack, Start, CDS, then one or two single-cycle data words."""
+"""Frame decoder: Ack, Start, CDS, then the frame's data words (one slave's, a Safety
+encoder's CPW and SPW, or a chain's words back to back)."""
 
 from amaranth.hdl import *
 from amaranth.lib import data, wiring
@@ -157,8 +158,13 @@ class FrameDecoder(wiring.Component):
             ]
             ends.append(e)
 
-        def end(name):
-            return ends[0][name] if p.words == 1 else Mux(word, ends[1][name], ends[0][name])
+        def end(name, of=word):
+            """A field end of word ``of`` (the current word by default)."""
+            if p.words == 1:
+                return ends[0][name]
+            if p.words == 2:
+                return Mux(of, ends[1][name], ends[0][name])
+            return Array(e[name] for e in ends)[of]
 
         word_end_m1 = end("word_end_m1")
 
@@ -228,9 +234,13 @@ class FrameDecoder(wiring.Component):
                         m.d.sync += in_top.eq(in_top & (idx != ends[1]["data_end_m1"]))
                     with m.If(idx == word_end_m1):
                         m.d.sync += idx.eq(0)
-                        # The next word (word 1) starts; after it nothing is read.
-                        m.d.sync += [in_data.eq(ends[-1]["data_at0"]),
-                                     in_lc.eq(ends[-1]["lc_at0"]), in_top.eq(0)]
+                        # The next word starts (after the last one nothing is read).
+                        if p.words <= 2:
+                            next_word = C(p.words - 1, 1)
+                        else:
+                            next_word = (word + 1)[:len(word)]
+                        m.d.sync += [in_data.eq(end("data_at0", next_word)),
+                                     in_lc.eq(end("lc_at0", next_word)), in_top.eq(0)]
                         with m.If(word == last_word):
                             if p.ssi:
                                 with m.If(ssi & self.ssi_double):
@@ -312,7 +322,7 @@ class FrameDecoder(wiring.Component):
         ]
         with m.If(self.lc_load):
             m.d.sync += self.lc.eq(self.lc_next)
-        if p.words == 2:
+        if p.words >= 2:
             # Word 0's leading bits, as many as word 1 has: the CPW with its extra low bits dropped.
             with m.If(in_word & in_top):
                 m.d.sync += self.cpw_top.eq(Cat(decoded[0], self.cpw_top))

@@ -4,7 +4,7 @@ from amaranth.hdl import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from ..layouts import config_layout
+from ..layouts import config_enables, config_layout, config_words
 from ..params import Status
 
 
@@ -16,7 +16,9 @@ class FrameVerdict(wiring.Component):
 
     A frame's status is the lowest-numbered that applies (docs/ports.md): a CRC error makes the
     LC meaningless, an LC error makes the plausibility check moot. A word that is not in the
-    frame (word 1 with ``cfg_w1_enable`` = 0) counts as CRC-good.
+    frame (word ``N`` with ``cfg_wN_enable`` = 0) counts as CRC-good. In a frame of more than two
+    words (a chain) CRC_ERROR_WORD1 stands for "a word after word 0", CRC_ERROR_BOTH for "word
+    0 and a word after it"; ``word_crc_ok`` says which.
 
     The sign of life is judged (``lc_check``, which also stores the new LC in the tracker) only
     for a reported frame whose LC-carrying word passed its CRC.
@@ -114,20 +116,23 @@ class FrameVerdict(wiring.Component):
         m = Module()
         p = self._params
         cfg = self.cfg
-        two = p.words == 2
+        two = p.words >= 2
+        words, on = config_words(cfg, p), config_enables(cfg, p)
 
         # CRCs: a word not in the frame is good.
-        word1_on = cfg.w1_enable if two else C(0)
-        if two:
-            m.d.comb += self.word_crc_ok.eq(Cat(self.crc_ok[0], self.crc_ok[1] | ~word1_on))
-        else:
-            m.d.comb += self.word_crc_ok.eq(self.crc_ok)
+        m.d.comb += self.word_crc_ok.eq(Cat(self.crc_ok[0], *(self.crc_ok[w] | ~on[w]
+                                                              for w in range(1, p.words))))
         ok = self.word_crc_ok
-        crcs_ok = ok[0] & ok[-1]
+        crcs_ok = ok.all()
+        later_ok = ok[1:].all() if two else C(1)        # every word after word 0
 
-        # Sign of life: judged for the word that carries it, when its CRC is good.
-        lc_on = (cfg.w0.lc | (word1_on & cfg.w1.lc)) if two else cfg.w0.lc
-        lc_word_crc_ok = Mux(cfg.w0.lc, ok[0], ok[-1])
+        # Sign of life: judged for the word that carries it (one per frame: Configuration),
+        # when its CRC is good.
+        carries = [on[w] & words[w].lc for w in range(p.words)]
+        lc_on = Cat(*carries).any()
+        lc_word_crc_ok = ok[-1]
+        for w in reversed(range(p.words - 1)):
+            lc_word_crc_ok = Mux(carries[w], ok[w], lc_word_crc_ok)
         m.d.comb += [
             self.lc_check.eq(self.report_frame & lc_on & lc_word_crc_ok),
             self.lc_repeat.eq(self.lc_check & self.lc_repeat_seen),
@@ -138,15 +143,17 @@ class FrameVerdict(wiring.Component):
         # Plausibility: only between two CRC-good words (or copies).
         implausible = C(0)
         if two:
-            implausible |= cfg.spw_check & word1_on & ~self.spw_match
+            implausible |= cfg.spw_check & on[1] & ~self.spw_match
         if p.ssi:
             implausible |= cfg.ssi & self.copy_mismatch
         m.d.comb += self.spw_mismatch.eq(crcs_ok & implausible)
 
         # Status priority: the first condition that holds (a one-word build has one CRC).
+        # CRC_ERROR_WORD1 stands for any word after word 0 (a chain's: ``word_crc_ok`` tells
+        # which).
         if two:
-            crc_order = [(~ok[0] & ~ok[1], Status.CRC_ERROR_BOTH),
-                         (~ok[0], Status.CRC_ERROR_WORD0), (~ok[1], Status.CRC_ERROR_WORD1)]
+            crc_order = [(~ok[0] & ~later_ok, Status.CRC_ERROR_BOTH),
+                         (~ok[0], Status.CRC_ERROR_WORD0), (~later_ok, Status.CRC_ERROR_WORD1)]
         else:
             crc_order = [(~ok[0], Status.CRC_ERROR_WORD0)]
         order = crc_order + [

@@ -5,7 +5,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 from .frame_decoder import word_length
-from ..params import CRC_SETTINGS, FRAME_LENGTH_WIDTH, SLOT_WIDTH, WORD_CONFIG
+from ..params import CRC_SETTINGS, SLOT_WIDTH, WORD_CONFIG, frame_length_width
 
 
 #: Slot ``k`` is the bit the encoder puts on SLO at MA rising edge ``k + 2`` (SloSampler). Start
@@ -39,7 +39,7 @@ class MaStop(wiring.Component):
     Parameters
     ----------
     words : int
-        Words the build can decode (1 or 2).
+        Words the build can decode (1 .. :data:`~bissmaster.params.MAX_WORDS`).
     ssi : bool
         Build the SSI inputs.
 
@@ -49,8 +49,8 @@ class MaStop(wiring.Component):
         The cycle's word settings.
     crcs : In(ArrayLayout(CRC_SETTINGS, words))
         Their CRCs (Configuration.crcs: the width counts).
-    w1_enable : In(1)
-        Word 1 is in the frame (two-word builds).
+    enables : In(words)
+        Which words are in the frame (bit 0, word 0, is not read: it always is).
     started : In(1)
         The decoder has seen Start ...
     start_slot : In(16)
@@ -69,7 +69,7 @@ class MaStop(wiring.Component):
         super().__init__({
             "words": In(data.ArrayLayout(WORD_CONFIG, words)),
             "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
-            "w1_enable": In(1),
+            "enables": In(words),
             "started": In(1),
             "start_slot": In(SLOT_WIDTH),
             "rises": In(SLOT_WIDTH),
@@ -80,17 +80,18 @@ class MaStop(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        two = self._words == 2
+        n_words = self._words
+        width = frame_length_width(n_words)
 
-        word_len = [Signal(FRAME_LENGTH_WIDTH, name=f"word{w}_len") for w in range(self._words)]
-        frame_len = Signal(FRAME_LENGTH_WIDTH + 1)          # every word's bits + RISES_BEYOND_WORDS
+        word_len = [Signal(width, name=f"word{w}_len") for w in range(n_words)]
+        frame_len = Signal(width + 1)          # every word's bits + RISES_BEYOND_WORDS
         target_rises = Signal(SLOT_WIDTH + 1)
         started = Signal()
         if self._ssi:
             # One register stage more: the word's length, then the frame's by mode (one stage
             # of both was the SSI build's critical path).
-            n = Signal(FRAME_LENGTH_WIDTH)
-            m.d.sync += n.eq(word_length(self.words[0], self.crcs[0], width=FRAME_LENGTH_WIDTH,
+            n = Signal(width)
+            m.d.sync += n.eq(word_length(self.words[0], self.crcs[0], width=width,
                                          error_bit=self.ssi & self.ssi_error))
             ssi_len = Mux(self.ssi_double, Cat(C(0, 1), n + SSI_RISES_BEYOND_WORD),
                           n + SSI_RISES_BEYOND_WORD)
@@ -98,18 +99,20 @@ class MaStop(wiring.Component):
         else:
             m.d.sync += word_len[0].eq(word_length(self.words[0], self.crcs[0],
                                                    extra=RISES_BEYOND_WORDS,
-                                                   width=FRAME_LENGTH_WIDTH))
+                                                   width=width))
         # SSI: the frame starts with MA (the first rise), not when Start comes back: MA stops
         # after exactly its rises, however long the round trip. Every cycle has at least one
         # clock in WAIT_READY and a low phase of at least 2 clocks before its first rise: the
         # four stages above have settled by then (one clock to spare).
         started_now = Mux(self.ssi, self.rises != 0, self.started) if self._ssi else self.started
         m.d.sync += [
-            frame_len.eq(word_len[0] + (Mux(self.w1_enable, word_len[1], 0) if two else 0)),
+            # Words not in the frame add nothing (bit w of ``enables``; word 0 always counts).
+            frame_len.eq(sum([word_len[0]] + [Mux(self.enables[w], word_len[w], 0)
+                                              for w in range(1, n_words)])),
             target_rises.eq(self.start_slot + frame_len),
             started.eq(started_now),
             self.enough.eq(started & (self.rises >= target_rises) & ~self.clear),
         ]
-        if two:
-            m.d.sync += word_len[1].eq(word_length(self.words[1], self.crcs[1], width=FRAME_LENGTH_WIDTH))
+        for w in range(1, n_words):
+            m.d.sync += word_len[w].eq(word_length(self.words[w], self.crcs[w], width=width))
         return m

@@ -486,8 +486,10 @@ def derive_config(eds, *, params=None):
     }
     if params.signed_words:
         settings[("w0", "signed")] = 0      # ... and unsigned
-    if params.words == 2:
-        settings.update({("w1_enable",): 0, ("spw_check",): 0})
+    if params.words >= 2:
+        settings[("spw_check",)] = 0
+    for w in range(1, params.words):        # one slave: no word after word 0
+        settings[(f"w{w}_enable",)] = 0
     return _port_values(settings, params)
 
 

@@ -3,7 +3,8 @@
 Cycle conventions and where expected values come from: ``block_sim.py``. The frame needs
 ``start_slot + frame bits + 4`` rising edges (Start at rise ``start_slot + 2``, CDS, the word bits,
 the stop bit: docs/timing.md); a word's bits are counted by the encoder model's
-``WordFormat.total_bits`` (data, nE/nW, LC, CRC), word 1 only when it is enabled. The register
+``WordFormat.total_bits`` (data, nE/nW, LC, CRC), a word after word 0 only when it is enabled
+(``enables``: bit w for word w). The register
 stages of the block's docstring: ``enough`` in clock ``t`` compares ``rises`` of clock ``t - 1``
 with the target made from ``started`` / ``start_slot`` of clock ``t - 2``, from a configuration
 held since the receiver's clear; ``clear`` in clock ``t - 1`` forces it to 0.
@@ -40,16 +41,23 @@ FRAMES = [
 ]
 
 
-def frame_bits(words, w1_enable):
-    return sum(wf.total_bits for wf in words[:1 + w1_enable])
+def frame_bits(words, w1_enable=None, *, enables=None):
+    """Bits of the enabled words: word 0 and word 1 if ``w1_enable``, or the words whose bit
+    is set in ``enables`` (word 0 always)."""
+    if enables is None:
+        enables = 1 | w1_enable << 1
+    return sum(wf.total_bits for w, wf in enumerate(words) if w == 0 or enables >> w & 1)
 
 
-def scenario(words, w1_enable, start_slot, *, step, started_at, clears=4, extra=6):
+def scenario(words, w1_enable, start_slot, *, step, started_at, clears=4, extra=6,
+             enables=None):
     """A cycle as the master runs it: the configuration set with the receiver's clear, MA rises
     every ``step`` clocks, Start seen in clock ``started_at``; until ``extra`` clocks past the
-    target."""
-    target = start_slot + frame_bits(words, w1_enable) + RISES_AROUND_WORDS
-    cfg = {"words": [_word_cfg(wf) for wf in words], "w1_enable": w1_enable,
+    target. ``enables`` (bit w: word w in the frame) replaces ``w1_enable`` for chains."""
+    if enables is None:
+        enables = 1 | w1_enable << 1
+    target = start_slot + frame_bits(words, enables=enables) + RISES_AROUND_WORDS
+    cfg = {"words": [_word_cfg(wf) for wf in words], "enables": enables,
            "crcs": [crc_settings(wf.crc) for wf in words]}
     steps = [{**cfg, "clear": 1, "rises": 0, "started": 0, "start_slot": 0}] * clears
     t, end = 0, None
@@ -166,7 +174,7 @@ def test_ma_stop_ssi_rises_from_the_first_whatever_start_says(bits, error, nenw,
     wf = WordFormat(bits, nenw=nenw, crc=crc)
     n = wf.total_bits + error
     target = 2 * n + 2 if double else n + 1
-    cfg = {"words": [_word_cfg(wf), _word_cfg(RSH[1])], "w1_enable": 0,
+    cfg = {"words": [_word_cfg(wf), _word_cfg(RSH[1])], "enables": 1,
            "crcs": [crc_settings(crc), crc_settings(CRC16)], "ssi": 1, "ssi_error": error,
            "ssi_double": double, "started": 0, "start_slot": 0}
     steps = [{**cfg, "clear": 1, "rises": 0}] * 2
@@ -177,3 +185,38 @@ def test_ma_stop_ssi_rises_from_the_first_whatever_start_says(bits, error, nenw,
     first_at_target = next(t for t, s in enumerate(steps) if s["rises"] >= target)
     assert _first(trace) == first_at_target + 1
     assert all(trace[first_at_target + 1:])
+
+
+# -- Chains: up to 8 words back to back, each counted when it is enabled -----------------------
+
+@pytest.mark.parametrize("enables", (0b111, 0b011, 0b001))
+def test_ma_stop_chain_of_three_counts_the_enabled_words(enables):
+    """A chain of three slaves (40-bit CRC-6, 24-bit custom CRC-8 with LC, 13 bits without
+    nE/nW or CRC): the target is the enabled words' bits, whatever the others hold."""
+    words = (WordFormat(40), WordFormat(24, lc=True, crc=CustomCrc(8, 0x2F, start=0x5A)),
+             WordFormat(13, nenw=False, crc=CRC_NONE))
+    bits = {0b111: 48 + 40 + 13, 0b011: 48 + 40, 0b001: 48}[enables]
+    assert frame_bits(words, enables=enables) == bits
+    for step in (1, 4):
+        steps, target = scenario(words, None, 5, step=step, started_at=7, enables=enables)
+        assert target == 5 + bits + 4
+        trace = _run(3, steps)
+        first_at_target = next(t for t, s in enumerate(steps) if not s["clear"]
+                               and s["rises"] >= target)
+        assert _first(trace) == first_at_target + 1, step
+
+
+def test_ma_stop_eight_longest_words():
+    """Eight words of the longest kind (63 data bits, nE/nW, LC, CRC-16: 87 bits each): the
+    frame's length (696 bits) needs more than the two-word build's 8 bits."""
+    words = tuple(WordFormat(63, lc=True, crc=CRC16) for _ in range(8))
+    rng = random.Random(8)
+    steps, targets = [], []
+    for enables in (0xFF, 0x7F, 0x01, 0xFF):
+        slot = rng.randint(1, 9)
+        part, target = scenario(words, None, slot, step=1, started_at=3, enables=enables)
+        steps += part
+        targets += [target - slot] * len(part)
+    assert max(targets) == 8 * 87 + RISES_AROUND_WORDS
+    trace = _run(8, steps)
+    assert trace == reference(steps, targets)
