@@ -25,6 +25,8 @@ BUILDS = {
                            max_line_delay=1000, timer_width=16),
     "one_word": MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),)),
     "no_custom": MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),), custom_crc=False),
+    # A chain of three slaves (the chain preset's words).
+    "chain": MasterParams(max_data_bits=(40, 32, 24), word_crcs=((Crc.CRC6,),) * 3),
 }
 #: The CRC codes each build accepts per word (``none`` always).
 BUILT_CRCS = {
@@ -32,11 +34,12 @@ BUILT_CRCS = {
     "narrow": ({0, CRC_CODE["crc6"]}, {0, CRC_CODE["crc16"]}),
     "one_word": ({0, CRC_CODE["crc6"]},),
     "no_custom": ({0, CRC_CODE["crc6"]},),
+    "chain": ({0, CRC_CODE["crc6"]},) * 3,
 }
 #: Builds that accept a custom CRC (code 3 with a width of 1..16).
-CUSTOM = {"default", "narrow", "one_word"}
+CUSTOM = {"default", "narrow", "one_word", "chain"}
 #: Builds with SSI mode (``cfg_ssi``): every build here (the default).
-SSI = {"default", "narrow", "one_word", "no_custom"}
+SSI = {"default", "narrow", "one_word", "no_custom", "chain"}
 
 
 def reference_ok(build, cfg):
@@ -52,10 +55,13 @@ def reference_ok(build, cfg):
         return 1 <= word["data_bits"] <= p.max_data_bits[w] and (word["crc"] in crcs[w] or custom)
 
     ok = cfg["ma_half_period"] >= 2 and word_ok(0) and cfg["delay_limit"] <= p.max_line_delay
-    if p.words == 2:
-        w1 = cfg["w1_enable"]
-        ok = ok and (not w1 or word_ok(1))
-        ok = ok and not (w1 and cfg["w0"]["lc"] and cfg["w1"]["lc"])
+    on = enabled(p, cfg)
+    if p.words >= 2:
+        # Each enabled word valid, none after a disabled one, one LC per frame.
+        ok = ok and all(word_ok(w) for w in range(1, p.words) if on[w])
+        ok = ok and all(on[w - 1] for w in range(2, p.words) if on[w])
+        ok = ok and sum(on[w] and cfg[f"w{w}"]["lc"] for w in range(p.words)) <= 1
+        w1 = on[1]
         ok = ok and (not cfg["spw_check"] or (w1 and cfg["w1"]["data_bits"] <= cfg["w0"]["data_bits"]
                                               and cfg["w1"]["crc"] != CRC_CODE["none"]))
     if build in SSI and cfg["ssi"]:
@@ -63,9 +69,14 @@ def reference_ok(build, cfg):
         # no SPW check, a round trip up to the build's maximum line delay.
         ok = (ok and not cfg["w0"]["lc"] and not (cfg["ssi_error"] and cfg["w0"]["nenw"])
               and cfg["ssi_delay"] <= p.max_line_delay)
-        if p.words == 2:
-            ok = ok and not cfg["w1_enable"] and not cfg["spw_check"]
+        if p.words >= 2:
+            ok = ok and not any(on[1:]) and not cfg["spw_check"]
     return int(ok)
+
+
+def enabled(p, cfg):
+    """Per word: in the frame (word 0 always, word N with ``cfg_wN_enable``)."""
+    return [1] + [cfg[f"w{w}_enable"] for w in range(1, p.words)]
 
 
 def _word(bits, crc, *, nenw=1, lc=0):
@@ -76,6 +87,10 @@ def _word(bits, crc, *, nenw=1, lc=0):
 BASE = {"ma_half_period": 5, "w0": _word(36, "crc6"), "w1_enable": 1,
         "w1": _word(28, "crc16", lc=1), "spw_check": 1, "spw_tolerance": 3}
 BASE_ONE_WORD = {"ma_half_period": 5, "w0": _word(36, "crc6")}
+#: A valid chain of three (40-bit CRC-6, 24-bit custom CRC-8, 16-bit CRC-6), no SPW check.
+CHAIN = {"ma_half_period": 5, "w0": _word(40, "crc6"), "w1_enable": 1,
+         "w1": _word(24, "custom"), "w1_crc": {"width": 8, "poly": 0x2F, "start": 0xA5},
+         "w2_enable": 1, "w2": _word(16, "crc6")}
 
 
 def _with(base, **changes):
@@ -168,6 +183,24 @@ RULES = [
     ("narrow_ssi_delay_1000", "narrow", _with(BASE_ONE_WORD, ssi=1, ssi_delay=1000), 1),
     ("narrow_ssi_delay_1001", "narrow", _with(BASE_ONE_WORD, ssi=1, ssi_delay=1001), 0),
     ("narrow_ssi_delay_1001_biss", "narrow", _with(BASE_ONE_WORD, ssi_delay=1001), 1),
+    # A chain of three: words in order, each within its build maximum, one LC.
+    ("chain_base", "chain", CHAIN, 1),
+    ("chain_w2_without_w1", "chain", _with(CHAIN, w1_enable=0), 0),
+    ("chain_w1_only", "chain", _with(CHAIN, w2_enable=0), 1),
+    ("chain_w0_only", "chain", _with(CHAIN, w1_enable=0, w2_enable=0), 1),
+    ("chain_w2_bits_24", "chain", _with(CHAIN, w2__data_bits=24), 1),
+    ("chain_w2_bits_25", "chain", _with(CHAIN, w2__data_bits=25), 0),
+    ("chain_w2_bits_25_disabled", "chain", _with(CHAIN, w2__data_bits=25, w2_enable=0), 1),
+    ("chain_w2_bits_0", "chain", _with(CHAIN, w2__data_bits=0), 0),
+    ("chain_w2_crc16_not_built", "chain", _with(CHAIN, w2__crc=CRC_CODE["crc16"]), 0),
+    ("chain_w2_custom_width_17", "chain", _with(CHAIN, w2__crc=3, w2_crc__width=17), 0),
+    ("chain_lc_on_w2", "chain", _with(CHAIN, w2__lc=1), 1),
+    ("chain_lc_on_w0_and_w2", "chain", _with(CHAIN, w0__lc=1, w2__lc=1), 0),
+    ("chain_lc_on_w1_and_w2", "chain", _with(CHAIN, w1__lc=1, w2__lc=1), 0),
+    ("chain_lc_on_w0_and_w2_disabled", "chain", _with(CHAIN, w0__lc=1, w2__lc=1, w2_enable=0),
+     1),
+    ("chain_ssi_w2", "chain", _with(CHAIN, ssi=1, w1_enable=0), 0),
+    ("chain_ssi_one_word", "chain", _with(CHAIN, ssi=1, w1_enable=0, w2_enable=0), 1),
 ]
 
 
@@ -176,7 +209,7 @@ def test_configuration_rule_registered_one_clock_after_live_input(build, cfg, va
     p = BUILDS[build]
     layout = config_layout(p)
     assert reference_ok(build, cfg) == valid          # the table agrees with the reference
-    good = BASE if p.words == 2 else BASE_ONE_WORD
+    good = {1: BASE_ONE_WORD, 2: BASE, 3: CHAIN}[p.words]
     dut = Configuration(p)
     # The case alone for one clock, between valid configurations; then held for two clocks.
     seq = [good, good, cfg, good, cfg, cfg, good, good]
@@ -258,7 +291,7 @@ def test_configuration_latch_while_idle_defaults_no_start_limit_word_count(build
         cfg = unpack(layout, latched)
         limits = {name: cfg[name] or defaults[name] for name in defaults}
         assert {name: got[name] for name in defaults} == limits, t
-        assert got["word_count"] == 1 + (cfg["w1_enable"] if p.words == 2 else 0), t
+        assert got["word_count"] == sum(enabled(p, cfg)), t
         if t >= 2:
             # Registered from the latched Ack limit and half period of the clock before.
             before = trace[t - 1]

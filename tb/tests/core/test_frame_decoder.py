@@ -9,8 +9,8 @@ import pytest
 
 from bissmaster.core.frame_decoder import FrameDecoder
 from bissmaster.params import Crc, MasterParams
-from encoder_model.frames import (CRC16, PRESETS, CustomCrc, FrameFaults, FrameFormat, WordFormat, WordValue, to_signed,
-                                  bp3, build_frame)
+from encoder_model.frames import (CRC16, CRC_NONE, PRESETS, CustomCrc, FrameFaults, FrameFormat,
+                                  WordFormat, WordValue, to_signed, bp3, build_frame, word_bits)
 from master_contract import crc_config, crc_settings
 
 from testkit.block_sim import simulate
@@ -38,11 +38,14 @@ def _random_values(fmt, rng):
     return values
 
 
-def _decode(params, fmt, values, *, acks, faults=None, hw_word1=None, seed=0):
+def _decode(params, fmt, values, *, acks, faults=None, hw_word1=None, seed=0, frame=None):
     """Feed Ack zeros, the model frame and the stop bit, samples 1..4 clocks apart with junk on
-    ``bit`` in between; then two more samples (SLO back high). Returns (trace, sample cycles)."""
+    ``bit`` in between; then two more samples (SLO back high). Returns (trace, sample cycles).
+    ``frame``: the bits after Ack, when they are not ``build_frame(fmt, values, faults)`` (a
+    chain: ``fmt`` then only needs its ``words``)."""
     rng = random.Random(seed)
-    frame = build_frame(fmt, values, faults)
+    if frame is None:
+        frame = build_frame(fmt, values, faults)
     slots = [0] * acks + frame + [0] + [1, 1]
     dut = FrameDecoder(params)
     cfgs = [_cfg(w) for w in fmt.words]
@@ -193,3 +196,94 @@ def test_frame_decoder_flipped_bit_fails_only_that_words_crc(word, fmt):
     done = [c for c, x in enumerate(trace) if x["done"]]
     assert done == [samples[1 + len(frame) - 1] + 1]
     assert trace[done[0]]["crc_ok"] == (0b10 if word == 0 else 0b01)
+
+
+
+# -- Chains: the words of several slaves back to back after one Start and CDS -----------------
+
+#: A chain of three (docs/frames.md): a 40-bit word with CRC-6; a 24-bit word with LC and a
+#: CRC-8 (0x2F) with a start value, sent inverted; a 13-bit word without nE/nW and a CRC-4
+#: (0x3) with a start value, sent plain.
+CHAIN_PARAMS = MasterParams(max_data_bits=(40, 32, 24), word_crcs=((Crc.CRC6,),) * 3)
+CHAIN = (WordFormat(40), WordFormat(24, lc=True, crc=CustomCrc(8, 0x2F, 0xA5, True)),
+         WordFormat(13, nenw=False, crc=CustomCrc(4, 0x3, 0x9, False)))
+
+
+def _chain_bits(words, values, flip=None):
+    """Start, CDS 0, then each word as the model sends it; ``flip``: one bit index inverted."""
+    bits = [1, 0]
+    for wf, v in zip(words, values):
+        bits += word_bits(wf, v)
+    if flip is not None:
+        bits[flip] ^= 1
+    return bits
+
+
+def _chain_values(words, rng):
+    return [WordValue(rng.randrange(1 << wf.data_bits), *((rng.randrange(2), rng.randrange(2))
+                      if wf.nenw else (1, 1)), rng.randint(1, 63) if wf.lc else None)
+            for wf in words]
+
+
+def _chain_decode(params, words, values, *, flip=None, seed=0, acks=2):
+    frame = _chain_bits(words, values, flip)
+    trace, samples, _ = _decode(params, _Words(words), values, acks=acks, seed=seed,
+                                frame=frame)
+    done = [c for c, x in enumerate(trace) if x["done"]]
+    assert done == [samples[acks + len(frame) - 1] + 1]
+    return trace[done[0]], trace[-1]
+
+
+class _Words:
+    """What ``_decode`` reads of a frame format when it is given the frame: its words."""
+    def __init__(self, words):
+        self.words = tuple(words)
+
+
+@pytest.mark.parametrize("rep", range(4))
+def test_frame_decoder_chain_of_three_every_field(rep):
+    rng = random.Random(7600 + rep)
+    values = _chain_values(CHAIN, rng)
+    at_done, held = _chain_decode(CHAIN_PARAMS, CHAIN, values, seed=rep, acks=1 + rep)
+    for x in (at_done, held):
+        for w, (wf, v) in enumerate(zip(CHAIN, values)):
+            assert x[f"data{w}"] == v.position, w
+            assert (x["ne"] >> w & 1, x["nw"] >> w & 1) == (v.ne, v.nw), w
+        assert x["lc"] == values[1].lc
+        assert x["crc_ok"] == 0b111
+
+
+@pytest.mark.parametrize("word", range(3))
+def test_frame_decoder_chain_flipped_bit_fails_only_that_words_crc(word):
+    rng = random.Random(7700 + word)
+    values = _chain_values(CHAIN, rng)
+    first = 2 + sum(wf.total_bits for wf in CHAIN[:word])
+    for flip in rng.sample(range(first, first + CHAIN[word].total_bits), 3):
+        at_done, _ = _chain_decode(CHAIN_PARAMS, CHAIN, values, flip=flip, seed=flip)
+        assert at_done["crc_ok"] == 0b111 & ~(1 << word), flip
+
+
+def test_frame_decoder_eight_words_random_formats():
+    """Eight words of random formats (up to 63 data bits, any CRC of 0..16 bits, LC on one):
+    each word's fields and CRC verdict, and a flipped bit failing only its word."""
+    params = MasterParams(max_data_bits=(63,) * 8, word_crcs=((Crc.CRC6, Crc.CRC16),) * 8)
+    rng = random.Random(7800)
+    for rep in range(3):
+        lc_word = rng.randrange(8)
+        words = tuple(WordFormat(rng.randint(1, 63), nenw=rng.random() < 0.7, lc=w == lc_word,
+                                 crc=rng.choice((CRC_NONE, CRC16, CustomCrc(
+                                     rng.randint(1, 16), 1, 0)))
+                                 if w % 2 else CustomCrc(6, 0x03, rng.randrange(64), True))
+                      for w in range(8))
+        values = _chain_values(words, rng)
+        at_done, _ = _chain_decode(params, words, values, seed=rep)
+        for w, v in enumerate(values):
+            assert at_done[f"data{w}"] == v.position, (rep, w)
+            assert (at_done["ne"] >> w & 1, at_done["nw"] >> w & 1) == (v.ne, v.nw)
+        assert at_done["lc"] == values[lc_word].lc
+        assert at_done["crc_ok"] == 0xFF
+        word = rng.choice([w for w in range(8) if words[w].crc != CRC_NONE])
+        first = 2 + sum(wf.total_bits for wf in words[:word])
+        flip = first + rng.randrange(words[word].total_bits)
+        at_done, _ = _chain_decode(params, words, values, flip=flip, seed=rep)
+        assert at_done["crc_ok"] == 0xFF & ~(1 << word), (rep, word)

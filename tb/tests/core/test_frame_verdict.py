@@ -23,6 +23,8 @@ from testkit.block_sim import pack, run_clocks
 
 TWO = MasterParams()
 ONE = MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),))
+#: A chain of three slaves: "word 1" in the CRC statuses is any word after word 0.
+CHAIN = MasterParams(max_data_bits=(40, 32, 24), word_crcs=((Crc.CRC6,),) * 3)
 OUTPUTS = ["doubtful", "lc_check", "report", "status", "valid", "word_crc_ok", "lc_repeat",
            "lc_skip", "lc_zero", "spw_mismatch", "crc_error", "clean", "passed"]
 #: The statuses that end a cycle without a frame (docs/ports.md: codes 6..12).
@@ -30,36 +32,37 @@ FAULT_NAMES = [name for name, code in STATUS.items()
                if STATUS["NO_ACK"] <= code <= STATUS["NO_STOP"]]
 
 
-def _inputs(p, *, w0_lc=0, w1_lc=0, w1_enable=0, spw_check=0, ssi=0, report_frame=0, fault=0,
-            fault_status=0, crc_ok=0, seen=(0, 0, 0), spw_match=0, noisy=0, delay_jump=0,
-            unconfirmed=0, copy_mismatch=0):
+def _inputs(p, *, w0_lc=0, w1_lc=0, w1_enable=0, w2_lc=0, w2_enable=0, spw_check=0, ssi=0,
+            report_frame=0, fault=0, fault_status=0, crc_ok=0, seen=(0, 0, 0), spw_match=0,
+            noisy=0, delay_jump=0, unconfirmed=0, copy_mismatch=0):
     cfg = {"ma_half_period": 5, "w0": {"data_bits": 20, "lc": w0_lc, "crc": 1}, "ssi": ssi}
-    if p.words == 2:
+    if p.words >= 2:
         cfg.update(w1_enable=w1_enable, spw_check=spw_check,
                    w1={"data_bits": 20, "lc": w1_lc, "crc": 2})
+    if p.words >= 3:
+        cfg.update(w2_enable=w2_enable, w2={"data_bits": 20, "lc": w2_lc, "crc": 1})
     step = {"cfg": pack(config_layout(p), cfg), "report_frame": report_frame, "fault": fault,
             "fault_status": fault_status, "crc_ok": crc_ok, "lc_repeat_seen": seen[0],
             "lc_skip_seen": seen[1], "lc_zero_seen": seen[2], "noisy": noisy,
             "delay_jump": delay_jump, "unconfirmed": unconfirmed,
             "copy_mismatch": copy_mismatch}
-    if p.words == 2:
+    if p.words >= 2:
         step["spw_match"] = spw_match
     return step
 
 
 def reference(p, s, cfg):
     """Every output for the inputs ``s`` and the settings ``cfg`` they were made from."""
-    two = p.words == 2
+    two = p.words >= 2
     rf = s["report_frame"]
-    w1 = two and cfg.get("w1_enable", 0)
-    ok0 = s["crc_ok"] & 1
-    ok1 = ((s["crc_ok"] >> 1) & 1 or not w1) if two else ok0
-    if cfg.get("w0_lc"):
-        lc_word_ok = ok0
-    elif w1 and cfg.get("w1_lc"):
-        lc_word_ok = ok1
-    else:
-        lc_word_ok = None                           # no LC in the frame
+    on = [1] + [cfg.get(f"w{w}_enable", 0) for w in range(1, p.words)]
+    w1 = two and on[1]
+    # Per word: CRC good, or not in the frame.
+    oks = [int(bool((s["crc_ok"] >> w) & 1 or not on[w])) for w in range(p.words)]
+    ok0 = oks[0]
+    ok1 = int(all(oks[1:])) if two else ok0         # "word 1": every word after word 0
+    lc_words = [w for w in range(p.words) if on[w] and cfg.get(f"w{w}_lc")]
+    lc_word_ok = oks[lc_words[0]] if lc_words else None     # None: no LC in the frame
     lc_check = int(bool(rf and lc_word_ok))
     flags = [lc_check & s[f"lc_{f}_seen"] for f in ("repeat", "skip", "zero")]
     # The plausibility fault: the SPW check, or an SSI double transmission's copies differing
@@ -84,7 +87,7 @@ def reference(p, s, cfg):
         status = STATUS["UNCONFIRMED"]
     else:
         status = STATUS["OK"]
-    ok_bits = ok0 | (int(ok1) << 1) if two else ok0
+    ok_bits = sum(ok << w for w, ok in enumerate(oks))
     # The frame will not be OK (the pause after it): the same verdict, reported or not.
     seen_any = any(s[f"lc_{f}_seen"] for f in ("repeat", "skip", "zero"))
     doubtful = int(not ok0 or not ok1 or bool(lc_word_ok and seen_any) or bool(spw)
@@ -111,11 +114,16 @@ def _settings(p):
     if p.words == 1:
         return [{"w0_lc": lc} for lc in (0, 1)] + ssi
     out = []
-    for w0_lc, w1_lc, w1_enable, spw_check in itertools.product((0, 1), repeat=4):
-        if (w1_enable and w0_lc and w1_lc) or (spw_check and not w1_enable):
+    w2 = (0, 1) if p.words >= 3 else (0,)
+    for w0_lc, w1_lc, w1_enable, spw_check, w2_lc, w2_enable in itertools.product(
+            (0, 1), (0, 1), (0, 1), (0, 1), w2, w2):
+        lcs = w0_lc + (w1_enable and w1_lc) + (w2_enable and w2_lc)
+        if lcs > 1 or (spw_check and not w1_enable) or (w2_enable and not w1_enable):
             continue
-        out.append({"w0_lc": w0_lc, "w1_lc": w1_lc, "w1_enable": w1_enable,
-                    "spw_check": spw_check})
+        cfg = {"w0_lc": w0_lc, "w1_lc": w1_lc, "w1_enable": w1_enable, "spw_check": spw_check}
+        if p.words >= 3:
+            cfg.update(w2_lc=w2_lc, w2_enable=w2_enable)
+        out.append(cfg)
     return out + ssi
 
 
@@ -127,21 +135,29 @@ def _check(p, cases):
         assert {k: got[k] for k in want} == want, (cfg, kw)
 
 
-@pytest.mark.parametrize("p", (TWO, ONE), ids=("two_words", "one_word"))
+@pytest.mark.parametrize("p", (TWO, ONE, CHAIN), ids=("two_words", "one_word", "chain_of_three"))
 @pytest.mark.parametrize("report_frame", (1, 0), ids=("reported", "not_yet_reported"))
 def test_frame_verdict_reported_frame_exhaustive(p, report_frame):
     cases = []
+    # The line checks, the confirmation and SSI's copies do not depend on the word count:
+    # every combination for one and two words; for the chain (what it adds is the CRCs and
+    # the LC word) none of them, or one at a time.
+    # The same for the three LC flags (judged alike): none, one, all.
+    later = (itertools.product((0, 1), repeat=4) if p.words <= 2
+             else [(0, 0, 0, 0), (1, 0, 0, 0), (0, 1, 0, 0), (0, 0, 1, 0), (0, 0, 0, 1)])
+    seens = (itertools.product((0, 1), repeat=3) if p.words <= 2
+             else [(0, 0, 0), (0, 1, 0), (1, 1, 1)])
     for cfg in _settings(p):
-        for crc_ok, seen, match, noisy, jump, unconfirmed, copies in itertools.product(
-                range(2**p.words), itertools.product((0, 1), repeat=3),
-                (0, 1) if p.words == 2 else (0,), (0, 1), (0, 1), (0, 1), (0, 1)):
+        for crc_ok, seen, match, (noisy, jump, unconfirmed, copies) in itertools.product(
+                range(2**p.words), list(seens),
+                (0, 1) if p.words >= 2 else (0,), list(later)):
             cases.append((cfg, {"report_frame": report_frame, "crc_ok": crc_ok, "seen": seen,
                                 "spw_match": match, "noisy": noisy, "delay_jump": jump,
                                 "unconfirmed": unconfirmed, "copy_mismatch": copies}))
     _check(p, cases)
 
 
-@pytest.mark.parametrize("p", (TWO, ONE), ids=("two_words", "one_word"))
+@pytest.mark.parametrize("p", (TWO, ONE, CHAIN), ids=("two_words", "one_word", "chain_of_three"))
 @pytest.mark.parametrize("name", FAULT_NAMES)
 def test_frame_verdict_fault_passes_through(p, name):
     # Whatever the frame inputs say: no LC judged, no CRC event, not valid.
@@ -197,4 +213,28 @@ PRIORITY = [
 def test_frame_verdict_priority_cases(cfg, kw, name):
     trace = run_clocks(FrameVerdict(TWO), [_inputs(TWO, report_frame=1, **cfg, **kw)], OUTPUTS)
     assert trace[0]["status"] == STATUS[name]
+    assert trace[0]["valid"] == int(name == "OK")
+
+
+# The chain's statuses spelled out: "word 1" is any word after word 0.
+CHAIN_CASES = [
+    ("word2_bad_is_word1", {"w1_enable": 1, "w2_enable": 1}, {"crc_ok": 0b011},
+     "CRC_ERROR_WORD1", 0b011),
+    ("word0_and_word2_bad_is_both", {"w1_enable": 1, "w2_enable": 1}, {"crc_ok": 0b010},
+     "CRC_ERROR_BOTH", 0b010),
+    ("word2_off_counts_good", {"w1_enable": 1}, {"crc_ok": 0b011}, "OK", 0b111),
+    ("lc_in_word2_judged_when_word2_good", {"w1_enable": 1, "w2_enable": 1, "w2_lc": 1},
+     {"crc_ok": 0b111, "seen": (0, 1, 0)}, "SIGN_OF_LIFE", 0b111),
+    ("lc_in_word2_not_judged_when_word1_bad", {"w1_enable": 1, "w2_enable": 1, "w2_lc": 1},
+     {"crc_ok": 0b101, "seen": (0, 1, 0)}, "CRC_ERROR_WORD1", 0b101),
+]
+
+
+@pytest.mark.parametrize("cfg, kw, name, word_crc_ok", [c[1:] for c in CHAIN_CASES],
+                         ids=[c[0] for c in CHAIN_CASES])
+def test_frame_verdict_chain_cases(cfg, kw, name, word_crc_ok):
+    trace = run_clocks(FrameVerdict(CHAIN), [_inputs(CHAIN, report_frame=1, **cfg, **kw)],
+                       OUTPUTS)
+    assert trace[0]["status"] == STATUS[name]
+    assert trace[0]["word_crc_ok"] == word_crc_ok
     assert trace[0]["valid"] == int(name == "OK")
