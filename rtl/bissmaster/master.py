@@ -229,7 +229,7 @@ class BissMaster(wiring.Component):
             b.controller.locked.eq(b.sampler.locked),
             b.controller.early.eq(b.sampler.early),
             # SSI: the frame ends with its stop bit (checked there).
-            b.controller.frame_done.eq(Mux(b.ssi, b.decoder.stopped, b.decoder.done)),
+            b.controller.frame_done.eq(b.decoder.frame_end),
             b.controller.ssi.eq(b.ssi),
             b.controller.timeout_over.eq(b.timers.timeout_over if p.ssi else 0),
             b.controller.started.eq(b.decoder.started),
@@ -316,7 +316,7 @@ class BissMaster(wiring.Component):
             b.line_noise.sampler_noise.eq(b.sampler.noise),
             # A frame's end: its last word bit (BiSS), the bit after the word (SSI, where the
             # verdict waits for that bit too).
-            b.line_noise.close.eq(Mux(b.ssi, b.decoder.stopped, b.decoder.done)),
+            b.line_noise.close.eq(b.decoder.frame_end),
             b.line_noise.restart.eq(b.controller.fault),
             b.line_noise.limit.eq(b.cycle.noise_limit),
             # SSI sets its round trip: nothing to check it against.

@@ -458,7 +458,6 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [16:0] delay_tolerance;
   output done;
   wire done;
-  wire \done$140 ;
   wire \done$324 ;
   wire \done$345 ;
   wire doubtful;
@@ -589,6 +588,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
+  wire \frame_end$331 ;
   wire frame_ok;
   wire frames;
   wire [15:0] half_period;
@@ -827,7 +827,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire slo_stuck_live;
   wire \slo_stuck_live$163 ;
   wire slots_full;
-  wire \slots_full$148 ;
+  wire \slots_full$147 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
@@ -849,7 +849,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [15:0] start_slot;
   wire [15:0] \start_slot$199 ;
   wire started;
-  wire \started$146 ;
+  wire \started$145 ;
   wire \started$197 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
@@ -915,7 +915,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire [23:0] \timeout_limit$180 ;
   wire [23:0] timeout_live;
   wire timeout_over;
-  wire \timeout_over$144 ;
+  wire \timeout_over$143 ;
   wire timer_clear;
   output [31:0] timestamp;
   wire [31:0] timestamp;
@@ -1004,9 +1004,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \words[1].signed ;
   wire zero;
   assign \periodic$114  = periodic | ca_busy;
-  assign frame_done = cycle[259] ? stopped : \done$140 ;
   assign arm = cycle[259] ? first_rise : ma_arm;
-  assign close = cycle[259] ? stopped : \done$140 ;
   assign \$1  = cycle[144:141] != 4'hf;
   assign \$2  = ~ cycle[259];
   assign enable = \$1  & \$2 ;
@@ -1133,13 +1131,13 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .crcs(crcs),
     .data0(data0),
     .data1(spw),
-    .done(\done$140 ),
+    .frame_end(frame_done),
     .lc(\lc$213 ),
     .lc_load(load),
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$2203$272 (cycle[274:272]),
+    .\port$2202$272 (cycle[274:272]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(sample),
@@ -1169,7 +1167,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   \biss_master.line_noise  line_noise (
     .clk(clk),
-    .close(close),
+    .close(frame_done),
     .\event (\event ),
     .events(events),
     .level(\slo$127 ),
@@ -1199,7 +1197,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$2203$199 (cycle[199]),
+    .\port$2202$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -1250,7 +1248,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$2203$259 (cycle[271:259]),
+    .\port$2202$259 (cycle[271:259]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(\sample$348 ),
@@ -1273,7 +1271,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$213 ),
     .load(load),
-    .\port$2191$0 (\bit ),
+    .\port$2190$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1340,7 +1338,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$1624$0 (\$29 ),
+    .\port$1623$0 (\$29 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -1401,10 +1399,11 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign enough = ma_enough;
   assign \locked$136  = locked;
   assign \early$138  = early;
+  assign frame_end = frame_done;
   assign ssi = cycle[259];
-  assign \timeout_over$144  = timeout_over;
-  assign \started$146  = started;
-  assign \slots_full$148  = slots_full;
+  assign \timeout_over$143  = timeout_over;
+  assign \started$145  = started;
+  assign \slots_full$147  = slots_full;
   assign \stopped$149  = stopped;
   assign \stop_bit$151  = stop_bit;
   assign doubtful = frame_doubtful;
@@ -1449,6 +1448,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign waiting = watch;
   assign \level$225  = \slo$127 ;
   assign noise = sampler_noise;
+  assign close = frame_done;
   assign fault = \restart$229 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
@@ -1502,7 +1502,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \done$324  = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
-  assign frame_end = report;
+  assign \frame_end$331  = report;
   assign frame_cds = \cds$300 ;
   assign cdm_cycle = frame_cdm;
   assign \overrun$340  = overrun;
@@ -2558,7 +2558,7 @@ module \biss_master.confirmation (rst, report, status, pending, setting, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.controller (clk, rst, frame_done, cdm, request, restart_timer, report_delay, frame_doubtful, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
+module \biss_master.controller (clk, rst, cdm, request, restart_timer, report_delay, frame_done, frame_doubtful, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
 , faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full
 , started, stop_bit, abort);
   reg \$auto$verilog_backend.cc:2355:dump_module$8  = 0;
@@ -5603,7 +5603,7 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$2203$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$2202$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire [6:0] \$1 ;
@@ -6244,7 +6244,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   reg at_cds;
   input \bit ;
   wire \bit ;
-  wire \bit$58 ;
+  wire \bit$59 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -6257,17 +6257,17 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   wire [1:0] crc_ok;
   input [75:0] crcs;
   wire [75:0] crcs;
-  wire [75:0] \crcs$53 ;
-  wire [37:0] \crcs$53[0] ;
-  wire \crcs$53[0].inverted ;
-  wire [15:0] \crcs$53[0].poly ;
-  wire [15:0] \crcs$53[0].start ;
-  wire [4:0] \crcs$53[0].width ;
-  wire [37:0] \crcs$53[1] ;
-  wire \crcs$53[1].inverted ;
-  wire [15:0] \crcs$53[1].poly ;
-  wire [15:0] \crcs$53[1].start ;
-  wire [4:0] \crcs$53[1].width ;
+  wire [75:0] \crcs$54 ;
+  wire [37:0] \crcs$54[0] ;
+  wire \crcs$54[0].inverted ;
+  wire [15:0] \crcs$54[0].poly ;
+  wire [15:0] \crcs$54[0].start ;
+  wire [4:0] \crcs$54[0].width ;
+  wire [37:0] \crcs$54[1] ;
+  wire \crcs$54[1].inverted ;
+  wire [15:0] \crcs$54[1].poly ;
+  wire [15:0] \crcs$54[1].start ;
+  wire [4:0] \crcs$54[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -6283,8 +6283,9 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   output [39:0] data1;
   reg [39:0] data1 = 40'h0000000000;
   reg [2:0] decoder_fsm_state = 3'h0;
-  output done;
   reg done = 1'h0;
+  output frame_end;
+  wire frame_end;
   reg [6:0] idx = 7'h00;
   reg in_crc = 1'h0;
   reg in_data = 1'h0;
@@ -6308,8 +6309,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$2203$272 ;
-  wire [2:0] \port$2203$272 ;
+  input [2:0] \port$2202$272 ;
+  wire [2:0] \port$2202$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -6380,8 +6381,8 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   assign \$366  = in_word & \$365 ;
   assign \$367  = idx == words[5:0];
   assign \$368  = \$366  & \$367 ;
-  assign \$369  = ssi & \port$2203$272 [0];
-  assign \$370  = ~ \port$2203$272 [1];
+  assign \$369  = ssi & \port$2202$272 [0];
+  assign \$370  = ~ \port$2202$272 [1];
   assign \$371  = \$369  & \$370 ;
   assign \$372  = \bit  ^ \$371 ;
   assign \$373  = ~ words[6];
@@ -6605,6 +6606,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   assign \$594  = in_word & in_top;
   assign \$595  = words[10] & data0[0];
   assign \$596  = \bit  ^ \$595 ;
+  assign frame_end = ssi ? stopped : done;
   assign \$597  = sample & \bit ;
   assign lc_load = in_word & in_lc;
   assign \$598  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -6702,18 +6704,18 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
     cpw_top <= \$635 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$2203$272 [0];
+  assign \$3  = ssi & \port$2202$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$2203$272 [0];
+  assign \$6  = ssi & \port$2202$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$2203$272 [0];
+  assign \$9  = ssi & \port$2202$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$2203$272 [0];
+  assign \$14  = ssi & \port$2202$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$2203$272 [0];
+  assign \$18  = ssi & \port$2202$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -6758,7 +6760,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   assign \$66  = idx == \$65 ;
   assign \$69  = word_count - 1'h1;
   assign \$70  = word == \$69 ;
-  assign \$71  = ssi & \port$2203$272 [2];
+  assign \$71  = ssi & \port$2202$272 [2];
   assign \$72  = word + 1'h1;
   assign \$73  = idx + 1'h1;
   assign \$74  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -7049,7 +7051,7 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   assign \$359  = \$356  & \$358 ;
   assign \$360  = { data0[53:0], \$84  } | { \$359 , \$354 , \$349 , \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89  };
   assign \$361  = ~ words[6];
-  assign \$362  = ssi & \port$2203$272 [0];
+  assign \$362  = ssi & \port$2202$272 [0];
   assign \$363  = ~ \$362 ;
   assign \$364  = \$361  & \$363 ;
   \biss_master.decoder.crc  crc (
@@ -7807,12 +7809,12 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$2203$272 [0];
-  assign ssi_double = \port$2203$272 [2];
-  assign ssi_error_low = \port$2203$272 [1];
+  assign ssi_error = \port$2202$272 [0];
+  assign ssi_double = \port$2202$272 [2];
+  assign ssi_error_low = \port$2202$272 [1];
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$53  = crcs;
-  assign \bit$58  = \bit ;
+  assign \crcs$54  = crcs;
+  assign \bit$59  = \bit ;
   assign ok = crc_ok;
   assign index = word;
   assign load_index = \$605 [0];
@@ -7840,16 +7842,16 @@ module \biss_master.decoder (rst, word_count, lc_load, words, sample, \bit , ssi
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$53[0]  = crcs[37:0];
-  assign \crcs$53[0].width  = crcs[4:0];
-  assign \crcs$53[0].poly  = crcs[20:5];
-  assign \crcs$53[0].start  = crcs[36:21];
-  assign \crcs$53[0].inverted  = crcs[37];
-  assign \crcs$53[1]  = crcs[75:38];
-  assign \crcs$53[1].width  = crcs[42:38];
-  assign \crcs$53[1].poly  = crcs[58:43];
-  assign \crcs$53[1].start  = crcs[74:59];
-  assign \crcs$53[1].inverted  = crcs[75];
+  assign \crcs$54[0]  = crcs[37:0];
+  assign \crcs$54[0].width  = crcs[4:0];
+  assign \crcs$54[0].poly  = crcs[20:5];
+  assign \crcs$54[0].start  = crcs[36:21];
+  assign \crcs$54[0].inverted  = crcs[37];
+  assign \crcs$54[1]  = crcs[75:38];
+  assign \crcs$54[1].width  = crcs[42:38];
+  assign \crcs$54[1].poly  = crcs[58:43];
+  assign \crcs$54[1].start  = crcs[74:59];
+  assign \crcs$54[1].inverted  = crcs[75];
   assign \$67  = w1_data_at0;
   assign \$68  = w1_lc_at0;
   assign \$378  = word;
@@ -8457,7 +8459,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.line_noise (rst, close, sampler_noise, noisy, events, limit, watch, restart, level, \event , clk);
+module \biss_master.line_noise (rst, sampler_noise, close, noisy, events, limit, watch, restart, level, \event , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire \$1 ;
   reg \$10 ;
@@ -8966,7 +8968,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_stop (rst, words, \port$2203$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master.ma_stop (rst, words, \port$2202$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -9018,8 +9020,8 @@ module \biss_master.ma_stop (rst, words, \port$2203$199 , ssi, ssi_error, ssi_do
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$2203$199 ;
-  wire \port$2203$199 ;
+  input \port$2202$199 ;
+  wire \port$2202$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -9073,7 +9075,7 @@ module \biss_master.ma_stop (rst, words, \port$2203$199 , ssi, ssi_error, ssi_do
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$2203$199  ? word1_len : 8'h00;
+  assign \$11  = \port$2202$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -9183,7 +9185,7 @@ module \biss_master.ma_stop (rst, words, \port$2203$199 , ssi, ssi_error, ssi_do
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$2203$199 , 1'h1 };
+  assign enables = { \port$2202$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -11324,7 +11326,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2203$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2202$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -11458,8 +11460,8 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$2203$259 ;
-  wire [12:0] \port$2203$259 ;
+  input [12:0] \port$2202$259 ;
+  wire [12:0] \port$2202$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -11484,7 +11486,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$2203$259 [12:1] + 1'h1;
+  assign \$11  = \port$2202$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -11609,7 +11611,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$2203$259 [0]),
+    .clear_high(\port$2202$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -11752,7 +11754,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$2203$259 [0]) begin
+            if (\port$2202$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -11837,7 +11839,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$2203$259 [0]) begin
+            if (\port$2202$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -11876,7 +11878,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$2203$259 [12:1] };
+            \$85  = { 1'h0, \port$2202$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -12261,11 +12263,11 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$2203$259 [12:1] };
-  assign fixed = \port$2203$259 [0];
+  assign fixed_delay = { 1'h0, \port$2202$259 [12:1] };
+  assign fixed = \port$2202$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$2203$259 [0];
+  assign clear_high = \port$2202$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -12672,7 +12674,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2191$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2190$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -12714,8 +12716,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2191$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2191$0 ;
-  wire \port$2191$0 ;
+  input \port$2190$0 ;
+  wire \port$2190$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -12729,9 +12731,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2191$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2191$0  };
-  assign \$2  = { lc[4:0], \port$2191$0  } == last;
-  assign \$3  = { lc[4:0], \port$2191$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2190$0  };
+  assign \$2  = { lc[4:0], \port$2190$0  } == last;
+  assign \$3  = { lc[4:0], \port$2190$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -12841,7 +12843,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2191$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2191$0  };
+  assign lc_next = { lc[4:0], \port$2190$0  };
   assign zero = is_zero;
 endmodule
 
@@ -13416,7 +13418,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1624$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1623$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
@@ -13594,8 +13596,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1624$0 , lc_check, lc_re
   wire noisy;
   output passed;
   wire passed;
-  output \port$1624$0 ;
-  wire \port$1624$0 ;
+  output \port$1623$0 ;
+  wire \port$1623$0 ;
   output report;
   wire report;
   input report_frame;
@@ -13713,7 +13715,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1624$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1624$0  = \$2 ;
+  assign \port$1623$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -680,12 +680,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6740$0 (\$8 ),
-    .\port$6753$0 (\$9 ),
-    .\port$6830$0 (\$10 ),
-    .\port$7276$0 (\$11 ),
-    .\port$7289$0 (\$12 ),
-    .\port$7366$0 (\$13 ),
+    .\port$6738$0 (\$8 ),
+    .\port$6751$0 (\$9 ),
+    .\port$6828$0 (\$10 ),
+    .\port$7274$0 (\$11 ),
+    .\port$7287$0 (\$12 ),
+    .\port$7364$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -770,9 +770,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6740$0 (\$8 ),
-    .\port$6753$0 (\$9 ),
-    .\port$6830$0 (\$10 ),
+    .\port$6738$0 (\$8 ),
+    .\port$6751$0 (\$9 ),
+    .\port$6828$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -845,9 +845,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(\regs__count_en$414 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$438 ),
-    .\port$7276$0 (\$11 ),
-    .\port$7289$0 (\$12 ),
-    .\port$7366$0 (\$13 ),
+    .\port$7274$0 (\$11 ),
+    .\port$7287$0 (\$12 ),
+    .\port$7364$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$266 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1203,7 +1203,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$113 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort
 , ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed
 , ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay
-, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6740$0 , \port$6753$0 , ch0__ca_done, \port$6830$0 , ch1__frame_done, ch1__done_count, \port$7276$0 , \port$7289$0 , ch1__ca_done, \port$7366$0 , bus__r_addr);
+, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6738$0 , \port$6751$0 , ch0__ca_done, \port$6828$0 , ch1__frame_done, ch1__done_count, \port$7274$0 , \port$7287$0 , ch1__ca_done, \port$7364$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2752,18 +2752,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6740$0 ;
-  wire [186:0] \port$6740$0 ;
-  input [79:0] \port$6753$0 ;
-  wire [79:0] \port$6753$0 ;
-  input [9:0] \port$6830$0 ;
-  wire [9:0] \port$6830$0 ;
-  input [186:0] \port$7276$0 ;
-  wire [186:0] \port$7276$0 ;
-  input [79:0] \port$7289$0 ;
-  wire [79:0] \port$7289$0 ;
-  input [9:0] \port$7366$0 ;
-  wire [9:0] \port$7366$0 ;
+  input [186:0] \port$6738$0 ;
+  wire [186:0] \port$6738$0 ;
+  input [79:0] \port$6751$0 ;
+  wire [79:0] \port$6751$0 ;
+  input [9:0] \port$6828$0 ;
+  wire [9:0] \port$6828$0 ;
+  input [186:0] \port$7274$0 ;
+  wire [186:0] \port$7274$0 ;
+  input [79:0] \port$7287$0 ;
+  wire [79:0] \port$7287$0 ;
+  input [9:0] \port$7364$0 ;
+  wire [9:0] \port$7364$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2867,7 +2867,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$343  = \$341  | \$342 ;
   assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7276$0 [182:177], 4'h0, \port$7276$0 [186:183], 1'h0, \port$7276$0 [176:174], 1'h0, \port$7276$0 [133:131], 3'h0, \port$7276$0 [49], \port$7276$0 [3:0] } : 32'd0;
+  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7274$0 [182:177], 4'h0, \port$7274$0 [186:183], 1'h0, \port$7274$0 [176:174], 1'h0, \port$7274$0 [133:131], 3'h0, \port$7274$0 [49], \port$7274$0 [3:0] } : 32'd0;
   assign \$347  = \$345  | \$346 ;
   assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$349  = \$347  | \$348 ;
@@ -2895,13 +2895,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$371  = \$369  | \$370 ;
   assign \$372  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7366$0 [9:3], 1'h0, \port$7366$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7364$0 [9:3], 1'h0, \port$7364$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_143 ? \port$7289$0 [31:0] : 32'd0;
+  assign \$378  = ch1_read_select_143 ? \port$7287$0 [31:0] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_144 ? \port$7289$0 [63:32] : 32'd0;
+  assign \$380  = ch1_read_select_144 ? \port$7287$0 [63:32] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7289$0 [79:64] } : 32'd0;
+  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7287$0 [79:64] } : 32'd0;
   assign \$383  = \$381  | \$382 ;
   assign \$384  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$385  = \$383  | \$384 ;
@@ -3771,7 +3771,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$158  = \$156  | \$157 ;
   assign \$159  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6740$0 [182:177], 4'h0, \port$6740$0 [186:183], 1'h0, \port$6740$0 [176:174], 1'h0, \port$6740$0 [133:131], 3'h0, \port$6740$0 [49], \port$6740$0 [3:0] } : 32'd0;
+  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6738$0 [182:177], 4'h0, \port$6738$0 [186:183], 1'h0, \port$6738$0 [176:174], 1'h0, \port$6738$0 [133:131], 3'h0, \port$6738$0 [49], \port$6738$0 [3:0] } : 32'd0;
   assign \$162  = \$160  | \$161 ;
   assign \$163  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$164  = \$162  | \$163 ;
@@ -3799,13 +3799,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$186  = \$184  | \$185 ;
   assign \$187  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6830$0 [9:3], 1'h0, \port$6830$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6828$0 [9:3], 1'h0, \port$6828$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_c3 ? \port$6753$0 [31:0] : 32'd0;
+  assign \$193  = ch0_read_select_c3 ? \port$6751$0 [31:0] : 32'd0;
   assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_c4 ? \port$6753$0 [63:32] : 32'd0;
+  assign \$195  = ch0_read_select_c4 ? \port$6751$0 [63:32] : 32'd0;
   assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6753$0 [79:64] } : 32'd0;
+  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6751$0 [79:64] } : 32'd0;
   assign \$198  = \$196  | \$197 ;
   assign \$199  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$200  = \$198  | \$199 ;
@@ -5009,7 +5009,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$595  = ch0_result_status_status_snapshot;
     if (\$130 ) begin
-      \$595  = \port$6740$0 [3:0];
+      \$595  = \port$6738$0 [3:0];
     end
     if (rst) begin
       \$595  = 4'h0;
@@ -5019,7 +5019,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$596  = ch0_result_status_cds_snapshot;
     if (\$130 ) begin
-      \$596  = \port$6740$0 [49];
+      \$596  = \port$6738$0 [49];
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -5029,7 +5029,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$597  = ch0_result_status_w0_ne_snapshot;
     if (\$130 ) begin
-      \$597  = \port$6740$0 [131];
+      \$597  = \port$6738$0 [131];
     end
     if (rst) begin
       \$597  = 1'h0;
@@ -5039,7 +5039,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$598  = ch0_result_status_w0_nw_snapshot;
     if (\$130 ) begin
-      \$598  = \port$6740$0 [132];
+      \$598  = \port$6738$0 [132];
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -5049,7 +5049,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$599  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$130 ) begin
-      \$599  = \port$6740$0 [133];
+      \$599  = \port$6738$0 [133];
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -5059,7 +5059,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$600  = ch0_result_status_w1_ne_snapshot;
     if (\$130 ) begin
-      \$600  = \port$6740$0 [174];
+      \$600  = \port$6738$0 [174];
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -5069,7 +5069,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$601  = ch0_result_status_w1_nw_snapshot;
     if (\$130 ) begin
-      \$601  = \port$6740$0 [175];
+      \$601  = \port$6738$0 [175];
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -5079,7 +5079,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$602  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$130 ) begin
-      \$602  = \port$6740$0 [176];
+      \$602  = \port$6738$0 [176];
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -5089,7 +5089,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$603  = ch0_result_status_lc_repeat_snapshot;
     if (\$130 ) begin
-      \$603  = \port$6740$0 [183];
+      \$603  = \port$6738$0 [183];
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -5099,7 +5099,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$604  = ch0_result_status_lc_skip_snapshot;
     if (\$130 ) begin
-      \$604  = \port$6740$0 [184];
+      \$604  = \port$6738$0 [184];
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -5109,7 +5109,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$605  = ch0_result_status_lc_zero_snapshot;
     if (\$130 ) begin
-      \$605  = \port$6740$0 [185];
+      \$605  = \port$6738$0 [185];
     end
     if (rst) begin
       \$605  = 1'h0;
@@ -5119,7 +5119,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$606  = ch0_result_status_spw_mismatch_snapshot;
     if (\$130 ) begin
-      \$606  = \port$6740$0 [186];
+      \$606  = \port$6738$0 [186];
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -5129,7 +5129,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$607  = ch0_result_status_lc_snapshot;
     if (\$130 ) begin
-      \$607  = \port$6740$0 [182:177];
+      \$607  = \port$6738$0 [182:177];
     end
     if (rst) begin
       \$607  = 6'h00;
@@ -5149,7 +5149,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$609  = ch0_result_seq_line_delay_snapshot;
     if (\$130 ) begin
-      \$609  = \port$6740$0 [48:36];
+      \$609  = \port$6738$0 [48:36];
     end
     if (rst) begin
       \$609  = 13'h0000;
@@ -5159,7 +5159,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$610  = ch0_result_w0_lo_data_snapshot;
     if (\$130 ) begin
-      \$610  = \port$6740$0 [107:76];
+      \$610  = \port$6738$0 [107:76];
     end
     if (rst) begin
       \$610  = 32'd0;
@@ -5169,7 +5169,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$611  = ch0_result_w0_hi_data_snapshot;
     if (\$130 ) begin
-      \$611  = \port$6740$0 [130:108];
+      \$611  = \port$6738$0 [130:108];
     end
     if (rst) begin
       \$611  = 23'h000000;
@@ -5179,7 +5179,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$612  = ch0_result_w1_lo_data_snapshot;
     if (\$130 ) begin
-      \$612  = \port$6740$0 [165:134];
+      \$612  = \port$6738$0 [165:134];
     end
     if (rst) begin
       \$612  = 32'd0;
@@ -5189,7 +5189,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$613  = ch0_result_w1_hi_data_snapshot;
     if (\$130 ) begin
-      \$613  = \port$6740$0 [173:166];
+      \$613  = \port$6738$0 [173:166];
     end
     if (rst) begin
       \$613  = 8'h00;
@@ -5199,7 +5199,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$614  = ch0_result_timestamp_time_snapshot;
     if (\$130 ) begin
-      \$614  = \port$6740$0 [35:4];
+      \$614  = \port$6738$0 [35:4];
     end
     if (rst) begin
       \$614  = 32'd0;
@@ -5209,7 +5209,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$615  = ch0_result_line_noise_events_snapshot;
     if (\$130 ) begin
-      \$615  = \port$6740$0 [53:50];
+      \$615  = \port$6738$0 [53:50];
     end
     if (rst) begin
       \$615  = 4'h0;
@@ -5219,7 +5219,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$616  = ch0_result_line_delay_settled_snapshot;
     if (\$130 ) begin
-      \$616  = \port$6740$0 [54];
+      \$616  = \port$6738$0 [54];
     end
     if (rst) begin
       \$616  = 1'h0;
@@ -5229,7 +5229,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$617  = ch0_result_line_delay_spread_snapshot;
     if (\$130 ) begin
-      \$617  = \port$6740$0 [75:68];
+      \$617  = \port$6738$0 [75:68];
     end
     if (rst) begin
       \$617  = 8'h00;
@@ -5239,7 +5239,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$618  = ch0_result_line_settled_delay_snapshot;
     if (\$130 ) begin
-      \$618  = \port$6740$0 [67:55];
+      \$618  = \port$6738$0 [67:55];
     end
     if (rst) begin
       \$618  = 13'h0000;
@@ -6303,7 +6303,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$725  = ch1_result_status_status_snapshot;
     if (\$315 ) begin
-      \$725  = \port$7276$0 [3:0];
+      \$725  = \port$7274$0 [3:0];
     end
     if (rst) begin
       \$725  = 4'h0;
@@ -6313,7 +6313,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$726  = ch1_result_status_cds_snapshot;
     if (\$315 ) begin
-      \$726  = \port$7276$0 [49];
+      \$726  = \port$7274$0 [49];
     end
     if (rst) begin
       \$726  = 1'h0;
@@ -6323,7 +6323,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$727  = ch1_result_status_w0_ne_snapshot;
     if (\$315 ) begin
-      \$727  = \port$7276$0 [131];
+      \$727  = \port$7274$0 [131];
     end
     if (rst) begin
       \$727  = 1'h0;
@@ -6333,7 +6333,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$728  = ch1_result_status_w0_nw_snapshot;
     if (\$315 ) begin
-      \$728  = \port$7276$0 [132];
+      \$728  = \port$7274$0 [132];
     end
     if (rst) begin
       \$728  = 1'h0;
@@ -6343,7 +6343,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$729  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$315 ) begin
-      \$729  = \port$7276$0 [133];
+      \$729  = \port$7274$0 [133];
     end
     if (rst) begin
       \$729  = 1'h0;
@@ -6353,7 +6353,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$730  = ch1_result_status_w1_ne_snapshot;
     if (\$315 ) begin
-      \$730  = \port$7276$0 [174];
+      \$730  = \port$7274$0 [174];
     end
     if (rst) begin
       \$730  = 1'h0;
@@ -6363,7 +6363,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$731  = ch1_result_status_w1_nw_snapshot;
     if (\$315 ) begin
-      \$731  = \port$7276$0 [175];
+      \$731  = \port$7274$0 [175];
     end
     if (rst) begin
       \$731  = 1'h0;
@@ -6373,7 +6373,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$732  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$315 ) begin
-      \$732  = \port$7276$0 [176];
+      \$732  = \port$7274$0 [176];
     end
     if (rst) begin
       \$732  = 1'h0;
@@ -6383,7 +6383,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$733  = ch1_result_status_lc_repeat_snapshot;
     if (\$315 ) begin
-      \$733  = \port$7276$0 [183];
+      \$733  = \port$7274$0 [183];
     end
     if (rst) begin
       \$733  = 1'h0;
@@ -6393,7 +6393,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$734  = ch1_result_status_lc_skip_snapshot;
     if (\$315 ) begin
-      \$734  = \port$7276$0 [184];
+      \$734  = \port$7274$0 [184];
     end
     if (rst) begin
       \$734  = 1'h0;
@@ -6403,7 +6403,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$735  = ch1_result_status_lc_zero_snapshot;
     if (\$315 ) begin
-      \$735  = \port$7276$0 [185];
+      \$735  = \port$7274$0 [185];
     end
     if (rst) begin
       \$735  = 1'h0;
@@ -6413,7 +6413,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$736  = ch1_result_status_spw_mismatch_snapshot;
     if (\$315 ) begin
-      \$736  = \port$7276$0 [186];
+      \$736  = \port$7274$0 [186];
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6423,7 +6423,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$737  = ch1_result_status_lc_snapshot;
     if (\$315 ) begin
-      \$737  = \port$7276$0 [182:177];
+      \$737  = \port$7274$0 [182:177];
     end
     if (rst) begin
       \$737  = 6'h00;
@@ -6443,7 +6443,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$739  = ch1_result_seq_line_delay_snapshot;
     if (\$315 ) begin
-      \$739  = \port$7276$0 [48:36];
+      \$739  = \port$7274$0 [48:36];
     end
     if (rst) begin
       \$739  = 13'h0000;
@@ -6453,7 +6453,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$740  = ch1_result_w0_lo_data_snapshot;
     if (\$315 ) begin
-      \$740  = \port$7276$0 [107:76];
+      \$740  = \port$7274$0 [107:76];
     end
     if (rst) begin
       \$740  = 32'd0;
@@ -6463,7 +6463,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$741  = ch1_result_w0_hi_data_snapshot;
     if (\$315 ) begin
-      \$741  = \port$7276$0 [130:108];
+      \$741  = \port$7274$0 [130:108];
     end
     if (rst) begin
       \$741  = 23'h000000;
@@ -6473,7 +6473,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$742  = ch1_result_w1_lo_data_snapshot;
     if (\$315 ) begin
-      \$742  = \port$7276$0 [165:134];
+      \$742  = \port$7274$0 [165:134];
     end
     if (rst) begin
       \$742  = 32'd0;
@@ -6483,7 +6483,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$743  = ch1_result_w1_hi_data_snapshot;
     if (\$315 ) begin
-      \$743  = \port$7276$0 [173:166];
+      \$743  = \port$7274$0 [173:166];
     end
     if (rst) begin
       \$743  = 8'h00;
@@ -6493,7 +6493,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$744  = ch1_result_timestamp_time_snapshot;
     if (\$315 ) begin
-      \$744  = \port$7276$0 [35:4];
+      \$744  = \port$7274$0 [35:4];
     end
     if (rst) begin
       \$744  = 32'd0;
@@ -6503,7 +6503,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$745  = ch1_result_line_noise_events_snapshot;
     if (\$315 ) begin
-      \$745  = \port$7276$0 [53:50];
+      \$745  = \port$7274$0 [53:50];
     end
     if (rst) begin
       \$745  = 4'h0;
@@ -6513,7 +6513,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$746  = ch1_result_line_delay_settled_snapshot;
     if (\$315 ) begin
-      \$746  = \port$7276$0 [54];
+      \$746  = \port$7274$0 [54];
     end
     if (rst) begin
       \$746  = 1'h0;
@@ -6523,7 +6523,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$747  = ch1_result_line_delay_spread_snapshot;
     if (\$315 ) begin
-      \$747  = \port$7276$0 [75:68];
+      \$747  = \port$7274$0 [75:68];
     end
     if (rst) begin
       \$747  = 8'h00;
@@ -6533,7 +6533,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$748  = ch1_result_line_settled_delay_snapshot;
     if (\$315 ) begin
-      \$748  = \port$7276$0 [67:55];
+      \$748  = \port$7274$0 [67:55];
     end
     if (rst) begin
       \$748  = 13'h0000;
@@ -6571,27 +6571,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6740$0 [3:0];
-  assign ch0__cds = \port$6740$0 [49];
-  assign ch0__word0_ne = \port$6740$0 [131];
-  assign ch0__word0_nw = \port$6740$0 [132];
-  assign ch0__word0_crc_ok = \port$6740$0 [133];
-  assign ch0__word1_ne = \port$6740$0 [174];
-  assign ch0__word1_nw = \port$6740$0 [175];
-  assign ch0__word1_crc_ok = \port$6740$0 [176];
-  assign ch0__lc_repeat = \port$6740$0 [183];
-  assign ch0__lc_skip = \port$6740$0 [184];
-  assign ch0__lc_zero = \port$6740$0 [185];
-  assign ch0__spw_mismatch = \port$6740$0 [186];
-  assign ch0__lc = \port$6740$0 [182:177];
-  assign ch0__line_delay = \port$6740$0 [48:36];
-  assign ch0__word0_position = \port$6740$0 [130:76];
-  assign ch0__word1_position = \port$6740$0 [173:134];
-  assign ch0__timestamp = \port$6740$0 [35:4];
-  assign ch0__noise_events = \port$6740$0 [53:50];
-  assign ch0__delay_settled = \port$6740$0 [54];
-  assign ch0__delay_spread = \port$6740$0 [75:68];
-  assign ch0__settled_delay = \port$6740$0 [67:55];
+  assign ch0__status = \port$6738$0 [3:0];
+  assign ch0__cds = \port$6738$0 [49];
+  assign ch0__word0_ne = \port$6738$0 [131];
+  assign ch0__word0_nw = \port$6738$0 [132];
+  assign ch0__word0_crc_ok = \port$6738$0 [133];
+  assign ch0__word1_ne = \port$6738$0 [174];
+  assign ch0__word1_nw = \port$6738$0 [175];
+  assign ch0__word1_crc_ok = \port$6738$0 [176];
+  assign ch0__lc_repeat = \port$6738$0 [183];
+  assign ch0__lc_skip = \port$6738$0 [184];
+  assign ch0__lc_zero = \port$6738$0 [185];
+  assign ch0__spw_mismatch = \port$6738$0 [186];
+  assign ch0__lc = \port$6738$0 [182:177];
+  assign ch0__line_delay = \port$6738$0 [48:36];
+  assign ch0__word0_position = \port$6738$0 [130:76];
+  assign ch0__word1_position = \port$6738$0 [173:134];
+  assign ch0__timestamp = \port$6738$0 [35:4];
+  assign ch0__noise_events = \port$6738$0 [53:50];
+  assign ch0__delay_settled = \port$6738$0 [54];
+  assign ch0__delay_spread = \port$6738$0 [75:68];
+  assign ch0__settled_delay = \port$6738$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -6599,34 +6599,34 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
   assign ch0__cap_ssi = 1'h1;
-  assign ch0__ca_status = \port$6830$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6830$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6753$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$6753$0 [31:16];
-  assign ch0__count_ca_refused = \port$6753$0 [47:32];
-  assign ch0__count_ca_aborted = \port$6753$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$6753$0 [79:64];
-  assign ch1__status = \port$7276$0 [3:0];
-  assign ch1__cds = \port$7276$0 [49];
-  assign ch1__word0_ne = \port$7276$0 [131];
-  assign ch1__word0_nw = \port$7276$0 [132];
-  assign ch1__word0_crc_ok = \port$7276$0 [133];
-  assign ch1__word1_ne = \port$7276$0 [174];
-  assign ch1__word1_nw = \port$7276$0 [175];
-  assign ch1__word1_crc_ok = \port$7276$0 [176];
-  assign ch1__lc_repeat = \port$7276$0 [183];
-  assign ch1__lc_skip = \port$7276$0 [184];
-  assign ch1__lc_zero = \port$7276$0 [185];
-  assign ch1__spw_mismatch = \port$7276$0 [186];
-  assign ch1__lc = \port$7276$0 [182:177];
-  assign ch1__line_delay = \port$7276$0 [48:36];
-  assign ch1__word0_position = \port$7276$0 [130:76];
-  assign ch1__word1_position = \port$7276$0 [173:134];
-  assign ch1__timestamp = \port$7276$0 [35:4];
-  assign ch1__noise_events = \port$7276$0 [53:50];
-  assign ch1__delay_settled = \port$7276$0 [54];
-  assign ch1__delay_spread = \port$7276$0 [75:68];
-  assign ch1__settled_delay = \port$7276$0 [67:55];
+  assign ch0__ca_status = \port$6828$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6828$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6751$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$6751$0 [31:16];
+  assign ch0__count_ca_refused = \port$6751$0 [47:32];
+  assign ch0__count_ca_aborted = \port$6751$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$6751$0 [79:64];
+  assign ch1__status = \port$7274$0 [3:0];
+  assign ch1__cds = \port$7274$0 [49];
+  assign ch1__word0_ne = \port$7274$0 [131];
+  assign ch1__word0_nw = \port$7274$0 [132];
+  assign ch1__word0_crc_ok = \port$7274$0 [133];
+  assign ch1__word1_ne = \port$7274$0 [174];
+  assign ch1__word1_nw = \port$7274$0 [175];
+  assign ch1__word1_crc_ok = \port$7274$0 [176];
+  assign ch1__lc_repeat = \port$7274$0 [183];
+  assign ch1__lc_skip = \port$7274$0 [184];
+  assign ch1__lc_zero = \port$7274$0 [185];
+  assign ch1__spw_mismatch = \port$7274$0 [186];
+  assign ch1__lc = \port$7274$0 [182:177];
+  assign ch1__line_delay = \port$7274$0 [48:36];
+  assign ch1__word0_position = \port$7274$0 [130:76];
+  assign ch1__word1_position = \port$7274$0 [173:134];
+  assign ch1__timestamp = \port$7274$0 [35:4];
+  assign ch1__noise_events = \port$7274$0 [53:50];
+  assign ch1__delay_settled = \port$7274$0 [54];
+  assign ch1__delay_spread = \port$7274$0 [75:68];
+  assign ch1__settled_delay = \port$7274$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -6634,13 +6634,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign ch1__ca_status = \port$7366$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7366$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7289$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7289$0 [31:16];
-  assign ch1__count_ca_refused = \port$7289$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7289$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7289$0 [79:64];
+  assign ch1__ca_status = \port$7364$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7364$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7287$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7287$0 [31:16];
+  assign ch1__count_ca_refused = \port$7287$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7287$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7287$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__r_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -7018,7 +7018,7 @@ endmodule
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6740$0 , \port$6753$0 , regs__ca_done, \port$6830$0 , ca_rbuf_addr);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6738$0 , \port$6751$0 , regs__ca_done, \port$6828$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -7200,12 +7200,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6740$0 ;
-  wire [186:0] \port$6740$0 ;
-  output [79:0] \port$6753$0 ;
-  wire [79:0] \port$6753$0 ;
-  output [9:0] \port$6830$0 ;
-  wire [9:0] \port$6830$0 ;
+  output [186:0] \port$6738$0 ;
+  wire [186:0] \port$6738$0 ;
+  output [79:0] \port$6751$0 ;
+  wire [79:0] \port$6751$0 ;
+  output [9:0] \port$6828$0 ;
+  wire [9:0] \port$6828$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -7660,9 +7660,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$6740$0  = \$18 ;
-  assign \port$6753$0  = \$19 ;
-  assign \port$6830$0  = \$20 ;
+  assign \port$6738$0  = \$18 ;
+  assign \port$6751$0  = \$19 ;
+  assign \port$6828$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -8052,7 +8052,6 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$275 ;
   output \done$316 ;
   wire \done$316 ;
   wire \done$317 ;
@@ -8185,6 +8184,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
+  wire \frame_end$282 ;
   wire frame_ok;
   output frames;
   wire frames;
@@ -8424,7 +8424,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire slo_stuck_live;
   wire \slo_stuck_live$98 ;
   wire slots_full;
-  wire \slots_full$83 ;
+  wire \slots_full$82 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
@@ -8447,7 +8447,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [15:0] \start_slot$134 ;
   wire started;
   wire \started$132 ;
-  wire \started$81 ;
+  wire \started$80 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -8511,7 +8511,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] \timeout_limit$115 ;
   wire [23:0] timeout_live;
   wire timeout_over;
-  wire \timeout_over$79 ;
+  wire \timeout_over$78 ;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
@@ -8594,9 +8594,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \words[1].signed ;
   wire zero;
   assign periodic = \periodic$45  | frames;
-  assign frame_done = cycle[259] ? stopped : done;
   assign arm = cycle[259] ? first_rise : ma_arm;
-  assign close = cycle[259] ? stopped : done;
   assign \$1  = cycle[144:141] != 4'hf;
   assign \$2  = ~ cycle[259];
   assign enable = \$1  & \$2 ;
@@ -8733,13 +8731,13 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .crcs(crcs),
     .data0(data0),
     .data1(spw),
-    .done(done),
+    .frame_end(frame_done),
     .lc(lc),
     .lc_load(load),
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6392$272 (cycle[274:272]),
+    .\port$6390$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -8769,7 +8767,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch0.core.line_noise  line_noise (
     .clk(clk),
-    .close(close),
+    .close(frame_done),
     .\event (\event ),
     .events(events),
     .level(\slo$62 ),
@@ -8799,7 +8797,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6392$199 (cycle[199]),
+    .\port$6390$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -8850,7 +8848,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6392$259 (cycle[271:259]),
+    .\port$6390$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$344 ),
@@ -8874,7 +8872,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6380$0 (\bit ),
+    .\port$6378$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -8941,7 +8939,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2533$0 (\$29 ),
+    .\port$2532$0 (\$29 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -9002,10 +9000,11 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign enough = ma_enough;
   assign \locked$71  = locked;
   assign \early$73  = early;
+  assign frame_end = frame_done;
   assign ssi = cycle[259];
-  assign \timeout_over$79  = timeout_over;
-  assign \started$81  = started;
-  assign \slots_full$83  = slots_full;
+  assign \timeout_over$78  = timeout_over;
+  assign \started$80  = started;
+  assign \slots_full$82  = slots_full;
   assign \stopped$84  = stopped;
   assign \stop_bit$86  = stop_bit;
   assign doubtful = frame_doubtful;
@@ -9050,6 +9049,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign waiting = watch;
   assign \level$160  = \slo$62 ;
   assign noise = sampler_noise;
+  assign close = frame_done;
   assign fault = \restart$164 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
@@ -9103,10 +9103,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
   assign \busy$273  = frames;
-  assign \done$275  = ca_done;
+  assign done = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
-  assign frame_end = report;
+  assign \frame_end$282  = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
   assign clear_counters = \clear$289 ;
@@ -10134,7 +10134,7 @@ module \biss_master_axil.ch0.core.confirmation (rst, report, status, pending, se
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.controller (rst, frame_done, cdm, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
+module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, report_delay, frame_done, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
 , faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full
 , started, stop_bit, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
@@ -13023,7 +13023,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6392$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6390$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire [6:0] \$1 ;
@@ -13664,7 +13664,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg at_cds;
   input \bit ;
   wire \bit ;
-  wire \bit$58 ;
+  wire \bit$59 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -13677,17 +13677,17 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire [1:0] crc_ok;
   input [75:0] crcs;
   wire [75:0] crcs;
-  wire [75:0] \crcs$53 ;
-  wire [37:0] \crcs$53[0] ;
-  wire \crcs$53[0].inverted ;
-  wire [15:0] \crcs$53[0].poly ;
-  wire [15:0] \crcs$53[0].start ;
-  wire [4:0] \crcs$53[0].width ;
-  wire [37:0] \crcs$53[1] ;
-  wire \crcs$53[1].inverted ;
-  wire [15:0] \crcs$53[1].poly ;
-  wire [15:0] \crcs$53[1].start ;
-  wire [4:0] \crcs$53[1].width ;
+  wire [75:0] \crcs$54 ;
+  wire [37:0] \crcs$54[0] ;
+  wire \crcs$54[0].inverted ;
+  wire [15:0] \crcs$54[0].poly ;
+  wire [15:0] \crcs$54[0].start ;
+  wire [4:0] \crcs$54[0].width ;
+  wire [37:0] \crcs$54[1] ;
+  wire \crcs$54[1].inverted ;
+  wire [15:0] \crcs$54[1].poly ;
+  wire [15:0] \crcs$54[1].start ;
+  wire [4:0] \crcs$54[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -13703,8 +13703,9 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   output [39:0] data1;
   reg [39:0] data1 = 40'h0000000000;
   reg [2:0] decoder_fsm_state = 3'h0;
-  output done;
   reg done = 1'h0;
+  output frame_end;
+  wire frame_end;
   reg [6:0] idx = 7'h00;
   reg in_crc = 1'h0;
   reg in_data = 1'h0;
@@ -13728,8 +13729,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6392$272 ;
-  wire [2:0] \port$6392$272 ;
+  input [2:0] \port$6390$272 ;
+  wire [2:0] \port$6390$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -13800,8 +13801,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$366  = in_word & \$365 ;
   assign \$367  = idx == words[5:0];
   assign \$368  = \$366  & \$367 ;
-  assign \$369  = ssi & \port$6392$272 [0];
-  assign \$370  = ~ \port$6392$272 [1];
+  assign \$369  = ssi & \port$6390$272 [0];
+  assign \$370  = ~ \port$6390$272 [1];
   assign \$371  = \$369  & \$370 ;
   assign \$372  = \bit  ^ \$371 ;
   assign \$373  = ~ words[6];
@@ -14025,6 +14026,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$594  = in_word & in_top;
   assign \$595  = words[10] & data0[0];
   assign \$596  = \bit  ^ \$595 ;
+  assign frame_end = ssi ? stopped : done;
   assign \$597  = sample & \bit ;
   assign lc_load = in_word & in_lc;
   assign \$598  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -14122,18 +14124,18 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
     cpw_top <= \$635 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$6392$272 [0];
+  assign \$3  = ssi & \port$6390$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$6392$272 [0];
+  assign \$6  = ssi & \port$6390$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$6392$272 [0];
+  assign \$9  = ssi & \port$6390$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$6392$272 [0];
+  assign \$14  = ssi & \port$6390$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$6392$272 [0];
+  assign \$18  = ssi & \port$6390$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -14178,7 +14180,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$66  = idx == \$65 ;
   assign \$69  = word_count - 1'h1;
   assign \$70  = word == \$69 ;
-  assign \$71  = ssi & \port$6392$272 [2];
+  assign \$71  = ssi & \port$6390$272 [2];
   assign \$72  = word + 1'h1;
   assign \$73  = idx + 1'h1;
   assign \$74  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -14469,7 +14471,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$359  = \$356  & \$358 ;
   assign \$360  = { data0[53:0], \$84  } | { \$359 , \$354 , \$349 , \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89  };
   assign \$361  = ~ words[6];
-  assign \$362  = ssi & \port$6392$272 [0];
+  assign \$362  = ssi & \port$6390$272 [0];
   assign \$363  = ~ \$362 ;
   assign \$364  = \$361  & \$363 ;
   \biss_master_axil.ch0.core.decoder.crc  crc (
@@ -15227,12 +15229,12 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$6392$272 [0];
-  assign ssi_double = \port$6392$272 [2];
-  assign ssi_error_low = \port$6392$272 [1];
+  assign ssi_error = \port$6390$272 [0];
+  assign ssi_double = \port$6390$272 [2];
+  assign ssi_error_low = \port$6390$272 [1];
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$53  = crcs;
-  assign \bit$58  = \bit ;
+  assign \crcs$54  = crcs;
+  assign \bit$59  = \bit ;
   assign ok = crc_ok;
   assign index = word;
   assign load_index = \$605 [0];
@@ -15260,16 +15262,16 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$53[0]  = crcs[37:0];
-  assign \crcs$53[0].width  = crcs[4:0];
-  assign \crcs$53[0].poly  = crcs[20:5];
-  assign \crcs$53[0].start  = crcs[36:21];
-  assign \crcs$53[0].inverted  = crcs[37];
-  assign \crcs$53[1]  = crcs[75:38];
-  assign \crcs$53[1].width  = crcs[42:38];
-  assign \crcs$53[1].poly  = crcs[58:43];
-  assign \crcs$53[1].start  = crcs[74:59];
-  assign \crcs$53[1].inverted  = crcs[75];
+  assign \crcs$54[0]  = crcs[37:0];
+  assign \crcs$54[0].width  = crcs[4:0];
+  assign \crcs$54[0].poly  = crcs[20:5];
+  assign \crcs$54[0].start  = crcs[36:21];
+  assign \crcs$54[0].inverted  = crcs[37];
+  assign \crcs$54[1]  = crcs[75:38];
+  assign \crcs$54[1].width  = crcs[42:38];
+  assign \crcs$54[1].poly  = crcs[58:43];
+  assign \crcs$54[1].start  = crcs[74:59];
+  assign \crcs$54[1].inverted  = crcs[75];
   assign \$67  = w1_data_at0;
   assign \$68  = w1_lc_at0;
   assign \$378  = word;
@@ -15877,7 +15879,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.line_noise (rst, close, sampler_noise, noisy, events, limit, watch, restart, level, \event , clk);
+module \biss_master_axil.ch0.core.line_noise (rst, sampler_noise, close, noisy, events, limit, watch, restart, level, \event , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire \$1 ;
   reg \$10 ;
@@ -16386,7 +16388,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6392$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6390$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -16438,8 +16440,8 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6392$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6392$199 ;
-  wire \port$6392$199 ;
+  input \port$6390$199 ;
+  wire \port$6390$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -16493,7 +16495,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6392$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6392$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6390$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -16603,7 +16605,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6392$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6392$199 , 1'h1 };
+  assign enables = { \port$6390$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -18744,7 +18746,7 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6392$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6390$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -18878,8 +18880,8 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6392$259 ;
-  wire [12:0] \port$6392$259 ;
+  input [12:0] \port$6390$259 ;
+  wire [12:0] \port$6390$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -18904,7 +18906,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6392$259 [12:1] + 1'h1;
+  assign \$11  = \port$6390$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -19029,7 +19031,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6392$259 [0]),
+    .clear_high(\port$6390$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -19172,7 +19174,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6392$259 [0]) begin
+            if (\port$6390$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -19257,7 +19259,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6392$259 [0]) begin
+            if (\port$6390$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -19296,7 +19298,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6392$259 [12:1] };
+            \$85  = { 1'h0, \port$6390$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -19681,11 +19683,11 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6392$259 [12:1] };
-  assign fixed = \port$6392$259 [0];
+  assign fixed_delay = { 1'h0, \port$6390$259 [12:1] };
+  assign fixed = \port$6390$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6392$259 [0];
+  assign clear_high = \port$6390$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -20092,7 +20094,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6380$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6378$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -20134,8 +20136,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6380$0 ;
-  wire \port$6380$0 ;
+  input \port$6378$0 ;
+  wire \port$6378$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -20149,9 +20151,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6380$0  };
-  assign \$2  = { lc[4:0], \port$6380$0  } == last;
-  assign \$3  = { lc[4:0], \port$6380$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6378$0  };
+  assign \$2  = { lc[4:0], \port$6378$0  } == last;
+  assign \$3  = { lc[4:0], \port$6378$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -20261,7 +20263,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6380$0  };
+  assign lc_next = { lc[4:0], \port$6378$0  };
   assign zero = is_zero;
 endmodule
 
@@ -20836,7 +20838,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2533$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2532$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
@@ -21014,8 +21016,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2533$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$2533$0 ;
-  wire \port$2533$0 ;
+  output \port$2532$0 ;
+  wire \port$2532$0 ;
   output report;
   wire report;
   input report_frame;
@@ -21133,7 +21135,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2533$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2533$0  = \$2 ;
+  assign \port$2532$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -21190,7 +21192,7 @@ endmodule
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7276$0 , \port$7289$0 , regs__ca_done, \port$7366$0 , ca_rbuf_addr);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7274$0 , \port$7287$0 , regs__ca_done, \port$7364$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -21372,12 +21374,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7276$0 ;
-  wire [186:0] \port$7276$0 ;
-  output [79:0] \port$7289$0 ;
-  wire [79:0] \port$7289$0 ;
-  output [9:0] \port$7366$0 ;
-  wire [9:0] \port$7366$0 ;
+  output [186:0] \port$7274$0 ;
+  wire [186:0] \port$7274$0 ;
+  output [79:0] \port$7287$0 ;
+  wire [79:0] \port$7287$0 ;
+  output [9:0] \port$7364$0 ;
+  wire [9:0] \port$7364$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -21832,9 +21834,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$7276$0  = \$18 ;
-  assign \port$7289$0  = \$19 ;
-  assign \port$7366$0  = \$20 ;
+  assign \port$7274$0  = \$18 ;
+  assign \port$7287$0  = \$19 ;
+  assign \port$7364$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -22224,7 +22226,6 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$275 ;
   output \done$316 ;
   wire \done$316 ;
   wire \done$317 ;
@@ -22357,6 +22358,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
+  wire \frame_end$282 ;
   wire frame_ok;
   output frames;
   wire frames;
@@ -22596,7 +22598,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire slo_stuck_live;
   wire \slo_stuck_live$98 ;
   wire slots_full;
-  wire \slots_full$83 ;
+  wire \slots_full$82 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
@@ -22619,7 +22621,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [15:0] \start_slot$134 ;
   wire started;
   wire \started$132 ;
-  wire \started$81 ;
+  wire \started$80 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -22683,7 +22685,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] \timeout_limit$115 ;
   wire [23:0] timeout_live;
   wire timeout_over;
-  wire \timeout_over$79 ;
+  wire \timeout_over$78 ;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
@@ -22766,9 +22768,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \words[1].signed ;
   wire zero;
   assign periodic = \periodic$45  | frames;
-  assign frame_done = cycle[259] ? stopped : done;
   assign arm = cycle[259] ? first_rise : ma_arm;
-  assign close = cycle[259] ? stopped : done;
   assign \$1  = cycle[144:141] != 4'hf;
   assign \$2  = ~ cycle[259];
   assign enable = \$1  & \$2 ;
@@ -22905,13 +22905,13 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .crcs(crcs),
     .data0(data0),
     .data1(spw),
-    .done(done),
+    .frame_end(frame_done),
     .lc(lc),
     .lc_load(load),
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6928$272 (cycle[274:272]),
+    .\port$6926$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -22941,7 +22941,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch1.core.line_noise  line_noise (
     .clk(clk),
-    .close(close),
+    .close(frame_done),
     .\event (\event ),
     .events(events),
     .level(\slo$62 ),
@@ -22971,7 +22971,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6928$199 (cycle[199]),
+    .\port$6926$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -23022,7 +23022,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6928$259 (cycle[271:259]),
+    .\port$6926$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$344 ),
@@ -23046,7 +23046,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6916$0 (\bit ),
+    .\port$6914$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -23113,7 +23113,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$4977$0 (\$29 ),
+    .\port$4975$0 (\$29 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -23174,10 +23174,11 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign enough = ma_enough;
   assign \locked$71  = locked;
   assign \early$73  = early;
+  assign frame_end = frame_done;
   assign ssi = cycle[259];
-  assign \timeout_over$79  = timeout_over;
-  assign \started$81  = started;
-  assign \slots_full$83  = slots_full;
+  assign \timeout_over$78  = timeout_over;
+  assign \started$80  = started;
+  assign \slots_full$82  = slots_full;
   assign \stopped$84  = stopped;
   assign \stop_bit$86  = stop_bit;
   assign doubtful = frame_doubtful;
@@ -23222,6 +23223,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign waiting = watch;
   assign \level$160  = \slo$62 ;
   assign noise = sampler_noise;
+  assign close = frame_done;
   assign fault = \restart$164 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
@@ -23275,10 +23277,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
   assign \busy$273  = frames;
-  assign \done$275  = ca_done;
+  assign done = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
-  assign frame_end = report;
+  assign \frame_end$282  = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
   assign clear_counters = \clear$289 ;
@@ -24306,7 +24308,7 @@ module \biss_master_axil.ch1.core.confirmation (rst, report, status, pending, se
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.controller (rst, frame_done, cdm, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
+module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, report_delay, frame_done, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
 , faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full
 , started, stop_bit, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
@@ -27195,7 +27197,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6928$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6926$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire [6:0] \$1 ;
@@ -27836,7 +27838,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg at_cds;
   input \bit ;
   wire \bit ;
-  wire \bit$58 ;
+  wire \bit$59 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -27849,17 +27851,17 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire [1:0] crc_ok;
   input [75:0] crcs;
   wire [75:0] crcs;
-  wire [75:0] \crcs$53 ;
-  wire [37:0] \crcs$53[0] ;
-  wire \crcs$53[0].inverted ;
-  wire [15:0] \crcs$53[0].poly ;
-  wire [15:0] \crcs$53[0].start ;
-  wire [4:0] \crcs$53[0].width ;
-  wire [37:0] \crcs$53[1] ;
-  wire \crcs$53[1].inverted ;
-  wire [15:0] \crcs$53[1].poly ;
-  wire [15:0] \crcs$53[1].start ;
-  wire [4:0] \crcs$53[1].width ;
+  wire [75:0] \crcs$54 ;
+  wire [37:0] \crcs$54[0] ;
+  wire \crcs$54[0].inverted ;
+  wire [15:0] \crcs$54[0].poly ;
+  wire [15:0] \crcs$54[0].start ;
+  wire [4:0] \crcs$54[0].width ;
+  wire [37:0] \crcs$54[1] ;
+  wire \crcs$54[1].inverted ;
+  wire [15:0] \crcs$54[1].poly ;
+  wire [15:0] \crcs$54[1].start ;
+  wire [4:0] \crcs$54[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -27875,8 +27877,9 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   output [39:0] data1;
   reg [39:0] data1 = 40'h0000000000;
   reg [2:0] decoder_fsm_state = 3'h0;
-  output done;
   reg done = 1'h0;
+  output frame_end;
+  wire frame_end;
   reg [6:0] idx = 7'h00;
   reg in_crc = 1'h0;
   reg in_data = 1'h0;
@@ -27900,8 +27903,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6928$272 ;
-  wire [2:0] \port$6928$272 ;
+  input [2:0] \port$6926$272 ;
+  wire [2:0] \port$6926$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -27972,8 +27975,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$366  = in_word & \$365 ;
   assign \$367  = idx == words[5:0];
   assign \$368  = \$366  & \$367 ;
-  assign \$369  = ssi & \port$6928$272 [0];
-  assign \$370  = ~ \port$6928$272 [1];
+  assign \$369  = ssi & \port$6926$272 [0];
+  assign \$370  = ~ \port$6926$272 [1];
   assign \$371  = \$369  & \$370 ;
   assign \$372  = \bit  ^ \$371 ;
   assign \$373  = ~ words[6];
@@ -28197,6 +28200,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$594  = in_word & in_top;
   assign \$595  = words[10] & data0[0];
   assign \$596  = \bit  ^ \$595 ;
+  assign frame_end = ssi ? stopped : done;
   assign \$597  = sample & \bit ;
   assign lc_load = in_word & in_lc;
   assign \$598  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -28294,18 +28298,18 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
     cpw_top <= \$635 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$6928$272 [0];
+  assign \$3  = ssi & \port$6926$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$6928$272 [0];
+  assign \$6  = ssi & \port$6926$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$6928$272 [0];
+  assign \$9  = ssi & \port$6926$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$6928$272 [0];
+  assign \$14  = ssi & \port$6926$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$6928$272 [0];
+  assign \$18  = ssi & \port$6926$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -28350,7 +28354,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$66  = idx == \$65 ;
   assign \$69  = word_count - 1'h1;
   assign \$70  = word == \$69 ;
-  assign \$71  = ssi & \port$6928$272 [2];
+  assign \$71  = ssi & \port$6926$272 [2];
   assign \$72  = word + 1'h1;
   assign \$73  = idx + 1'h1;
   assign \$74  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -28641,7 +28645,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$359  = \$356  & \$358 ;
   assign \$360  = { data0[53:0], \$84  } | { \$359 , \$354 , \$349 , \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89  };
   assign \$361  = ~ words[6];
-  assign \$362  = ssi & \port$6928$272 [0];
+  assign \$362  = ssi & \port$6926$272 [0];
   assign \$363  = ~ \$362 ;
   assign \$364  = \$361  & \$363 ;
   \biss_master_axil.ch1.core.decoder.crc  crc (
@@ -29399,12 +29403,12 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$6928$272 [0];
-  assign ssi_double = \port$6928$272 [2];
-  assign ssi_error_low = \port$6928$272 [1];
+  assign ssi_error = \port$6926$272 [0];
+  assign ssi_double = \port$6926$272 [2];
+  assign ssi_error_low = \port$6926$272 [1];
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$53  = crcs;
-  assign \bit$58  = \bit ;
+  assign \crcs$54  = crcs;
+  assign \bit$59  = \bit ;
   assign ok = crc_ok;
   assign index = word;
   assign load_index = \$605 [0];
@@ -29432,16 +29436,16 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$53[0]  = crcs[37:0];
-  assign \crcs$53[0].width  = crcs[4:0];
-  assign \crcs$53[0].poly  = crcs[20:5];
-  assign \crcs$53[0].start  = crcs[36:21];
-  assign \crcs$53[0].inverted  = crcs[37];
-  assign \crcs$53[1]  = crcs[75:38];
-  assign \crcs$53[1].width  = crcs[42:38];
-  assign \crcs$53[1].poly  = crcs[58:43];
-  assign \crcs$53[1].start  = crcs[74:59];
-  assign \crcs$53[1].inverted  = crcs[75];
+  assign \crcs$54[0]  = crcs[37:0];
+  assign \crcs$54[0].width  = crcs[4:0];
+  assign \crcs$54[0].poly  = crcs[20:5];
+  assign \crcs$54[0].start  = crcs[36:21];
+  assign \crcs$54[0].inverted  = crcs[37];
+  assign \crcs$54[1]  = crcs[75:38];
+  assign \crcs$54[1].width  = crcs[42:38];
+  assign \crcs$54[1].poly  = crcs[58:43];
+  assign \crcs$54[1].start  = crcs[74:59];
+  assign \crcs$54[1].inverted  = crcs[75];
   assign \$67  = w1_data_at0;
   assign \$68  = w1_lc_at0;
   assign \$378  = word;
@@ -30049,7 +30053,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.line_noise (rst, close, sampler_noise, noisy, events, limit, watch, restart, level, \event , clk);
+module \biss_master_axil.ch1.core.line_noise (rst, sampler_noise, close, noisy, events, limit, watch, restart, level, \event , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   reg \$10 ;
@@ -30558,7 +30562,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6928$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6926$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -30610,8 +30614,8 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6928$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6928$199 ;
-  wire \port$6928$199 ;
+  input \port$6926$199 ;
+  wire \port$6926$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -30665,7 +30669,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6928$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6928$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6926$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -30775,7 +30779,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6928$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6928$199 , 1'h1 };
+  assign enables = { \port$6926$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -32916,7 +32920,7 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6928$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6926$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -33050,8 +33054,8 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6928$259 ;
-  wire [12:0] \port$6928$259 ;
+  input [12:0] \port$6926$259 ;
+  wire [12:0] \port$6926$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -33076,7 +33080,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6928$259 [12:1] + 1'h1;
+  assign \$11  = \port$6926$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -33201,7 +33205,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6928$259 [0]),
+    .clear_high(\port$6926$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -33344,7 +33348,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6928$259 [0]) begin
+            if (\port$6926$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -33429,7 +33433,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6928$259 [0]) begin
+            if (\port$6926$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -33468,7 +33472,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6928$259 [12:1] };
+            \$85  = { 1'h0, \port$6926$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -33853,11 +33857,11 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6928$259 [12:1] };
-  assign fixed = \port$6928$259 [0];
+  assign fixed_delay = { 1'h0, \port$6926$259 [12:1] };
+  assign fixed = \port$6926$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6928$259 [0];
+  assign clear_high = \port$6926$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -34264,7 +34268,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6916$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6914$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -34306,8 +34310,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6916$0 ;
-  wire \port$6916$0 ;
+  input \port$6914$0 ;
+  wire \port$6914$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -34321,9 +34325,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6916$0  };
-  assign \$2  = { lc[4:0], \port$6916$0  } == last;
-  assign \$3  = { lc[4:0], \port$6916$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6914$0  };
+  assign \$2  = { lc[4:0], \port$6914$0  } == last;
+  assign \$3  = { lc[4:0], \port$6914$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -34433,7 +34437,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6916$0  };
+  assign lc_next = { lc[4:0], \port$6914$0  };
   assign zero = is_zero;
 endmodule
 
@@ -35008,7 +35012,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4977$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4975$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
@@ -35186,8 +35190,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4977$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$4977$0 ;
-  wire \port$4977$0 ;
+  output \port$4975$0 ;
+  wire \port$4975$0 ;
   output report;
   wire report;
   input report_frame;
@@ -35305,7 +35309,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4977$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4977$0  = \$2 ;
+  assign \port$4975$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

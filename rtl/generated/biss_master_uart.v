@@ -635,12 +635,12 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$7238$0 (\$8 ),
-    .\port$7251$0 (\$9 ),
-    .\port$7328$0 (\$10 ),
-    .\port$7774$0 (\$11 ),
-    .\port$7787$0 (\$12 ),
-    .\port$7864$0 (\$13 ),
+    .\port$7236$0 (\$8 ),
+    .\port$7249$0 (\$9 ),
+    .\port$7326$0 (\$10 ),
+    .\port$7772$0 (\$11 ),
+    .\port$7785$0 (\$12 ),
+    .\port$7862$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -713,9 +713,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$7238$0 (\$8 ),
-    .\port$7251$0 (\$9 ),
-    .\port$7328$0 (\$10 ),
+    .\port$7236$0 (\$8 ),
+    .\port$7249$0 (\$9 ),
+    .\port$7326$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -788,9 +788,9 @@ module biss_master_uart(trigger, ch0_slo, ch1_slo, clk, rst, uart_tx, irq, ch0_m
     .count_en(\regs__count_en$384 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$408 ),
-    .\port$7774$0 (\$11 ),
-    .\port$7787$0 (\$12 ),
-    .\port$7864$0 (\$13 ),
+    .\port$7772$0 (\$11 ),
+    .\port$7785$0 (\$12 ),
+    .\port$7862$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$236 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1128,7 +1128,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
 , ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$113 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
 , ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
 , ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id
-, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$7238$0 , \port$7251$0 , ch0__ca_done, \port$7328$0 , ch1__frame_done, ch1__done_count, \port$7774$0 , \port$7787$0 , ch1__ca_done, \port$7864$0 , clk);
+, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$7236$0 , \port$7249$0 , ch0__ca_done, \port$7326$0 , ch1__frame_done, ch1__done_count, \port$7772$0 , \port$7785$0 , ch1__ca_done, \port$7862$0 , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2676,18 +2676,18 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$7238$0 ;
-  wire [186:0] \port$7238$0 ;
-  input [79:0] \port$7251$0 ;
-  wire [79:0] \port$7251$0 ;
-  input [9:0] \port$7328$0 ;
-  wire [9:0] \port$7328$0 ;
-  input [186:0] \port$7774$0 ;
-  wire [186:0] \port$7774$0 ;
-  input [79:0] \port$7787$0 ;
-  wire [79:0] \port$7787$0 ;
-  input [9:0] \port$7864$0 ;
-  wire [9:0] \port$7864$0 ;
+  input [186:0] \port$7236$0 ;
+  wire [186:0] \port$7236$0 ;
+  input [79:0] \port$7249$0 ;
+  wire [79:0] \port$7249$0 ;
+  input [9:0] \port$7326$0 ;
+  wire [9:0] \port$7326$0 ;
+  input [186:0] \port$7772$0 ;
+  wire [186:0] \port$7772$0 ;
+  input [79:0] \port$7785$0 ;
+  wire [79:0] \port$7785$0 ;
+  input [9:0] \port$7862$0 ;
+  wire [9:0] \port$7862$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2791,7 +2791,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$343  = \$341  | \$342 ;
   assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7774$0 [182:177], 4'h0, \port$7774$0 [186:183], 1'h0, \port$7774$0 [176:174], 1'h0, \port$7774$0 [133:131], 3'h0, \port$7774$0 [49], \port$7774$0 [3:0] } : 32'd0;
+  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7772$0 [182:177], 4'h0, \port$7772$0 [186:183], 1'h0, \port$7772$0 [176:174], 1'h0, \port$7772$0 [133:131], 3'h0, \port$7772$0 [49], \port$7772$0 [3:0] } : 32'd0;
   assign \$347  = \$345  | \$346 ;
   assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$349  = \$347  | \$348 ;
@@ -2819,13 +2819,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$371  = \$369  | \$370 ;
   assign \$372  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7864$0 [9:3], 1'h0, \port$7864$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7862$0 [9:3], 1'h0, \port$7862$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_143 ? \port$7787$0 [31:0] : 32'd0;
+  assign \$378  = ch1_read_select_143 ? \port$7785$0 [31:0] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_144 ? \port$7787$0 [63:32] : 32'd0;
+  assign \$380  = ch1_read_select_144 ? \port$7785$0 [63:32] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7787$0 [79:64] } : 32'd0;
+  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7785$0 [79:64] } : 32'd0;
   assign \$383  = \$381  | \$382 ;
   assign \$384  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$385  = \$383  | \$384 ;
@@ -3695,7 +3695,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$158  = \$156  | \$157 ;
   assign \$159  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$7238$0 [182:177], 4'h0, \port$7238$0 [186:183], 1'h0, \port$7238$0 [176:174], 1'h0, \port$7238$0 [133:131], 3'h0, \port$7238$0 [49], \port$7238$0 [3:0] } : 32'd0;
+  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$7236$0 [182:177], 4'h0, \port$7236$0 [186:183], 1'h0, \port$7236$0 [176:174], 1'h0, \port$7236$0 [133:131], 3'h0, \port$7236$0 [49], \port$7236$0 [3:0] } : 32'd0;
   assign \$162  = \$160  | \$161 ;
   assign \$163  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$164  = \$162  | \$163 ;
@@ -3723,13 +3723,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign \$186  = \$184  | \$185 ;
   assign \$187  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$7328$0 [9:3], 1'h0, \port$7328$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$7326$0 [9:3], 1'h0, \port$7326$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_c3 ? \port$7251$0 [31:0] : 32'd0;
+  assign \$193  = ch0_read_select_c3 ? \port$7249$0 [31:0] : 32'd0;
   assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_c4 ? \port$7251$0 [63:32] : 32'd0;
+  assign \$195  = ch0_read_select_c4 ? \port$7249$0 [63:32] : 32'd0;
   assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$7251$0 [79:64] } : 32'd0;
+  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$7249$0 [79:64] } : 32'd0;
   assign \$198  = \$196  | \$197 ;
   assign \$199  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$200  = \$198  | \$199 ;
@@ -4933,7 +4933,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$595  = ch0_result_status_status_snapshot;
     if (\$130 ) begin
-      \$595  = \port$7238$0 [3:0];
+      \$595  = \port$7236$0 [3:0];
     end
     if (rst) begin
       \$595  = 4'h0;
@@ -4943,7 +4943,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$596  = ch0_result_status_cds_snapshot;
     if (\$130 ) begin
-      \$596  = \port$7238$0 [49];
+      \$596  = \port$7236$0 [49];
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -4953,7 +4953,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$597  = ch0_result_status_w0_ne_snapshot;
     if (\$130 ) begin
-      \$597  = \port$7238$0 [131];
+      \$597  = \port$7236$0 [131];
     end
     if (rst) begin
       \$597  = 1'h0;
@@ -4963,7 +4963,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$598  = ch0_result_status_w0_nw_snapshot;
     if (\$130 ) begin
-      \$598  = \port$7238$0 [132];
+      \$598  = \port$7236$0 [132];
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -4973,7 +4973,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$599  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$130 ) begin
-      \$599  = \port$7238$0 [133];
+      \$599  = \port$7236$0 [133];
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -4983,7 +4983,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$600  = ch0_result_status_w1_ne_snapshot;
     if (\$130 ) begin
-      \$600  = \port$7238$0 [174];
+      \$600  = \port$7236$0 [174];
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -4993,7 +4993,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$601  = ch0_result_status_w1_nw_snapshot;
     if (\$130 ) begin
-      \$601  = \port$7238$0 [175];
+      \$601  = \port$7236$0 [175];
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -5003,7 +5003,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$602  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$130 ) begin
-      \$602  = \port$7238$0 [176];
+      \$602  = \port$7236$0 [176];
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -5013,7 +5013,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$603  = ch0_result_status_lc_repeat_snapshot;
     if (\$130 ) begin
-      \$603  = \port$7238$0 [183];
+      \$603  = \port$7236$0 [183];
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -5023,7 +5023,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$604  = ch0_result_status_lc_skip_snapshot;
     if (\$130 ) begin
-      \$604  = \port$7238$0 [184];
+      \$604  = \port$7236$0 [184];
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -5033,7 +5033,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$605  = ch0_result_status_lc_zero_snapshot;
     if (\$130 ) begin
-      \$605  = \port$7238$0 [185];
+      \$605  = \port$7236$0 [185];
     end
     if (rst) begin
       \$605  = 1'h0;
@@ -5043,7 +5043,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$606  = ch0_result_status_spw_mismatch_snapshot;
     if (\$130 ) begin
-      \$606  = \port$7238$0 [186];
+      \$606  = \port$7236$0 [186];
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -5053,7 +5053,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$607  = ch0_result_status_lc_snapshot;
     if (\$130 ) begin
-      \$607  = \port$7238$0 [182:177];
+      \$607  = \port$7236$0 [182:177];
     end
     if (rst) begin
       \$607  = 6'h00;
@@ -5073,7 +5073,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$609  = ch0_result_seq_line_delay_snapshot;
     if (\$130 ) begin
-      \$609  = \port$7238$0 [48:36];
+      \$609  = \port$7236$0 [48:36];
     end
     if (rst) begin
       \$609  = 13'h0000;
@@ -5083,7 +5083,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$610  = ch0_result_w0_lo_data_snapshot;
     if (\$130 ) begin
-      \$610  = \port$7238$0 [107:76];
+      \$610  = \port$7236$0 [107:76];
     end
     if (rst) begin
       \$610  = 32'd0;
@@ -5093,7 +5093,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$611  = ch0_result_w0_hi_data_snapshot;
     if (\$130 ) begin
-      \$611  = \port$7238$0 [130:108];
+      \$611  = \port$7236$0 [130:108];
     end
     if (rst) begin
       \$611  = 23'h000000;
@@ -5103,7 +5103,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$612  = ch0_result_w1_lo_data_snapshot;
     if (\$130 ) begin
-      \$612  = \port$7238$0 [165:134];
+      \$612  = \port$7236$0 [165:134];
     end
     if (rst) begin
       \$612  = 32'd0;
@@ -5113,7 +5113,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$613  = ch0_result_w1_hi_data_snapshot;
     if (\$130 ) begin
-      \$613  = \port$7238$0 [173:166];
+      \$613  = \port$7236$0 [173:166];
     end
     if (rst) begin
       \$613  = 8'h00;
@@ -5123,7 +5123,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$614  = ch0_result_timestamp_time_snapshot;
     if (\$130 ) begin
-      \$614  = \port$7238$0 [35:4];
+      \$614  = \port$7236$0 [35:4];
     end
     if (rst) begin
       \$614  = 32'd0;
@@ -5133,7 +5133,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$615  = ch0_result_line_noise_events_snapshot;
     if (\$130 ) begin
-      \$615  = \port$7238$0 [53:50];
+      \$615  = \port$7236$0 [53:50];
     end
     if (rst) begin
       \$615  = 4'h0;
@@ -5143,7 +5143,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$616  = ch0_result_line_delay_settled_snapshot;
     if (\$130 ) begin
-      \$616  = \port$7238$0 [54];
+      \$616  = \port$7236$0 [54];
     end
     if (rst) begin
       \$616  = 1'h0;
@@ -5153,7 +5153,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$617  = ch0_result_line_delay_spread_snapshot;
     if (\$130 ) begin
-      \$617  = \port$7238$0 [75:68];
+      \$617  = \port$7236$0 [75:68];
     end
     if (rst) begin
       \$617  = 8'h00;
@@ -5163,7 +5163,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$618  = ch0_result_line_settled_delay_snapshot;
     if (\$130 ) begin
-      \$618  = \port$7238$0 [67:55];
+      \$618  = \port$7236$0 [67:55];
     end
     if (rst) begin
       \$618  = 13'h0000;
@@ -6227,7 +6227,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$725  = ch1_result_status_status_snapshot;
     if (\$315 ) begin
-      \$725  = \port$7774$0 [3:0];
+      \$725  = \port$7772$0 [3:0];
     end
     if (rst) begin
       \$725  = 4'h0;
@@ -6237,7 +6237,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$726  = ch1_result_status_cds_snapshot;
     if (\$315 ) begin
-      \$726  = \port$7774$0 [49];
+      \$726  = \port$7772$0 [49];
     end
     if (rst) begin
       \$726  = 1'h0;
@@ -6247,7 +6247,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$727  = ch1_result_status_w0_ne_snapshot;
     if (\$315 ) begin
-      \$727  = \port$7774$0 [131];
+      \$727  = \port$7772$0 [131];
     end
     if (rst) begin
       \$727  = 1'h0;
@@ -6257,7 +6257,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$728  = ch1_result_status_w0_nw_snapshot;
     if (\$315 ) begin
-      \$728  = \port$7774$0 [132];
+      \$728  = \port$7772$0 [132];
     end
     if (rst) begin
       \$728  = 1'h0;
@@ -6267,7 +6267,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$729  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$315 ) begin
-      \$729  = \port$7774$0 [133];
+      \$729  = \port$7772$0 [133];
     end
     if (rst) begin
       \$729  = 1'h0;
@@ -6277,7 +6277,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$730  = ch1_result_status_w1_ne_snapshot;
     if (\$315 ) begin
-      \$730  = \port$7774$0 [174];
+      \$730  = \port$7772$0 [174];
     end
     if (rst) begin
       \$730  = 1'h0;
@@ -6287,7 +6287,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$731  = ch1_result_status_w1_nw_snapshot;
     if (\$315 ) begin
-      \$731  = \port$7774$0 [175];
+      \$731  = \port$7772$0 [175];
     end
     if (rst) begin
       \$731  = 1'h0;
@@ -6297,7 +6297,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$732  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$315 ) begin
-      \$732  = \port$7774$0 [176];
+      \$732  = \port$7772$0 [176];
     end
     if (rst) begin
       \$732  = 1'h0;
@@ -6307,7 +6307,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$733  = ch1_result_status_lc_repeat_snapshot;
     if (\$315 ) begin
-      \$733  = \port$7774$0 [183];
+      \$733  = \port$7772$0 [183];
     end
     if (rst) begin
       \$733  = 1'h0;
@@ -6317,7 +6317,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$734  = ch1_result_status_lc_skip_snapshot;
     if (\$315 ) begin
-      \$734  = \port$7774$0 [184];
+      \$734  = \port$7772$0 [184];
     end
     if (rst) begin
       \$734  = 1'h0;
@@ -6327,7 +6327,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$735  = ch1_result_status_lc_zero_snapshot;
     if (\$315 ) begin
-      \$735  = \port$7774$0 [185];
+      \$735  = \port$7772$0 [185];
     end
     if (rst) begin
       \$735  = 1'h0;
@@ -6337,7 +6337,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$736  = ch1_result_status_spw_mismatch_snapshot;
     if (\$315 ) begin
-      \$736  = \port$7774$0 [186];
+      \$736  = \port$7772$0 [186];
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6347,7 +6347,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$737  = ch1_result_status_lc_snapshot;
     if (\$315 ) begin
-      \$737  = \port$7774$0 [182:177];
+      \$737  = \port$7772$0 [182:177];
     end
     if (rst) begin
       \$737  = 6'h00;
@@ -6367,7 +6367,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$739  = ch1_result_seq_line_delay_snapshot;
     if (\$315 ) begin
-      \$739  = \port$7774$0 [48:36];
+      \$739  = \port$7772$0 [48:36];
     end
     if (rst) begin
       \$739  = 13'h0000;
@@ -6377,7 +6377,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$740  = ch1_result_w0_lo_data_snapshot;
     if (\$315 ) begin
-      \$740  = \port$7774$0 [107:76];
+      \$740  = \port$7772$0 [107:76];
     end
     if (rst) begin
       \$740  = 32'd0;
@@ -6387,7 +6387,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$741  = ch1_result_w0_hi_data_snapshot;
     if (\$315 ) begin
-      \$741  = \port$7774$0 [130:108];
+      \$741  = \port$7772$0 [130:108];
     end
     if (rst) begin
       \$741  = 23'h000000;
@@ -6397,7 +6397,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$742  = ch1_result_w1_lo_data_snapshot;
     if (\$315 ) begin
-      \$742  = \port$7774$0 [165:134];
+      \$742  = \port$7772$0 [165:134];
     end
     if (rst) begin
       \$742  = 32'd0;
@@ -6407,7 +6407,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$743  = ch1_result_w1_hi_data_snapshot;
     if (\$315 ) begin
-      \$743  = \port$7774$0 [173:166];
+      \$743  = \port$7772$0 [173:166];
     end
     if (rst) begin
       \$743  = 8'h00;
@@ -6417,7 +6417,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$744  = ch1_result_timestamp_time_snapshot;
     if (\$315 ) begin
-      \$744  = \port$7774$0 [35:4];
+      \$744  = \port$7772$0 [35:4];
     end
     if (rst) begin
       \$744  = 32'd0;
@@ -6427,7 +6427,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$745  = ch1_result_line_noise_events_snapshot;
     if (\$315 ) begin
-      \$745  = \port$7774$0 [53:50];
+      \$745  = \port$7772$0 [53:50];
     end
     if (rst) begin
       \$745  = 4'h0;
@@ -6437,7 +6437,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$746  = ch1_result_line_delay_settled_snapshot;
     if (\$315 ) begin
-      \$746  = \port$7774$0 [54];
+      \$746  = \port$7772$0 [54];
     end
     if (rst) begin
       \$746  = 1'h0;
@@ -6447,7 +6447,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$747  = ch1_result_line_delay_spread_snapshot;
     if (\$315 ) begin
-      \$747  = \port$7774$0 [75:68];
+      \$747  = \port$7772$0 [75:68];
     end
     if (rst) begin
       \$747  = 8'h00;
@@ -6457,7 +6457,7 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
     if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$748  = ch1_result_line_settled_delay_snapshot;
     if (\$315 ) begin
-      \$748  = \port$7774$0 [67:55];
+      \$748  = \port$7772$0 [67:55];
     end
     if (rst) begin
       \$748  = 13'h0000;
@@ -6496,27 +6496,27 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign bus__w_strb = 4'hf;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$7238$0 [3:0];
-  assign ch0__cds = \port$7238$0 [49];
-  assign ch0__word0_ne = \port$7238$0 [131];
-  assign ch0__word0_nw = \port$7238$0 [132];
-  assign ch0__word0_crc_ok = \port$7238$0 [133];
-  assign ch0__word1_ne = \port$7238$0 [174];
-  assign ch0__word1_nw = \port$7238$0 [175];
-  assign ch0__word1_crc_ok = \port$7238$0 [176];
-  assign ch0__lc_repeat = \port$7238$0 [183];
-  assign ch0__lc_skip = \port$7238$0 [184];
-  assign ch0__lc_zero = \port$7238$0 [185];
-  assign ch0__spw_mismatch = \port$7238$0 [186];
-  assign ch0__lc = \port$7238$0 [182:177];
-  assign ch0__line_delay = \port$7238$0 [48:36];
-  assign ch0__word0_position = \port$7238$0 [130:76];
-  assign ch0__word1_position = \port$7238$0 [173:134];
-  assign ch0__timestamp = \port$7238$0 [35:4];
-  assign ch0__noise_events = \port$7238$0 [53:50];
-  assign ch0__delay_settled = \port$7238$0 [54];
-  assign ch0__delay_spread = \port$7238$0 [75:68];
-  assign ch0__settled_delay = \port$7238$0 [67:55];
+  assign ch0__status = \port$7236$0 [3:0];
+  assign ch0__cds = \port$7236$0 [49];
+  assign ch0__word0_ne = \port$7236$0 [131];
+  assign ch0__word0_nw = \port$7236$0 [132];
+  assign ch0__word0_crc_ok = \port$7236$0 [133];
+  assign ch0__word1_ne = \port$7236$0 [174];
+  assign ch0__word1_nw = \port$7236$0 [175];
+  assign ch0__word1_crc_ok = \port$7236$0 [176];
+  assign ch0__lc_repeat = \port$7236$0 [183];
+  assign ch0__lc_skip = \port$7236$0 [184];
+  assign ch0__lc_zero = \port$7236$0 [185];
+  assign ch0__spw_mismatch = \port$7236$0 [186];
+  assign ch0__lc = \port$7236$0 [182:177];
+  assign ch0__line_delay = \port$7236$0 [48:36];
+  assign ch0__word0_position = \port$7236$0 [130:76];
+  assign ch0__word1_position = \port$7236$0 [173:134];
+  assign ch0__timestamp = \port$7236$0 [35:4];
+  assign ch0__noise_events = \port$7236$0 [53:50];
+  assign ch0__delay_settled = \port$7236$0 [54];
+  assign ch0__delay_spread = \port$7236$0 [75:68];
+  assign ch0__settled_delay = \port$7236$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -6524,34 +6524,34 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
   assign ch0__cap_ssi = 1'h1;
-  assign ch0__ca_status = \port$7328$0 [2:0];
-  assign ch0__ca_bytes_done = \port$7328$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$7251$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$7251$0 [31:16];
-  assign ch0__count_ca_refused = \port$7251$0 [47:32];
-  assign ch0__count_ca_aborted = \port$7251$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$7251$0 [79:64];
-  assign ch1__status = \port$7774$0 [3:0];
-  assign ch1__cds = \port$7774$0 [49];
-  assign ch1__word0_ne = \port$7774$0 [131];
-  assign ch1__word0_nw = \port$7774$0 [132];
-  assign ch1__word0_crc_ok = \port$7774$0 [133];
-  assign ch1__word1_ne = \port$7774$0 [174];
-  assign ch1__word1_nw = \port$7774$0 [175];
-  assign ch1__word1_crc_ok = \port$7774$0 [176];
-  assign ch1__lc_repeat = \port$7774$0 [183];
-  assign ch1__lc_skip = \port$7774$0 [184];
-  assign ch1__lc_zero = \port$7774$0 [185];
-  assign ch1__spw_mismatch = \port$7774$0 [186];
-  assign ch1__lc = \port$7774$0 [182:177];
-  assign ch1__line_delay = \port$7774$0 [48:36];
-  assign ch1__word0_position = \port$7774$0 [130:76];
-  assign ch1__word1_position = \port$7774$0 [173:134];
-  assign ch1__timestamp = \port$7774$0 [35:4];
-  assign ch1__noise_events = \port$7774$0 [53:50];
-  assign ch1__delay_settled = \port$7774$0 [54];
-  assign ch1__delay_spread = \port$7774$0 [75:68];
-  assign ch1__settled_delay = \port$7774$0 [67:55];
+  assign ch0__ca_status = \port$7326$0 [2:0];
+  assign ch0__ca_bytes_done = \port$7326$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$7249$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$7249$0 [31:16];
+  assign ch0__count_ca_refused = \port$7249$0 [47:32];
+  assign ch0__count_ca_aborted = \port$7249$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$7249$0 [79:64];
+  assign ch1__status = \port$7772$0 [3:0];
+  assign ch1__cds = \port$7772$0 [49];
+  assign ch1__word0_ne = \port$7772$0 [131];
+  assign ch1__word0_nw = \port$7772$0 [132];
+  assign ch1__word0_crc_ok = \port$7772$0 [133];
+  assign ch1__word1_ne = \port$7772$0 [174];
+  assign ch1__word1_nw = \port$7772$0 [175];
+  assign ch1__word1_crc_ok = \port$7772$0 [176];
+  assign ch1__lc_repeat = \port$7772$0 [183];
+  assign ch1__lc_skip = \port$7772$0 [184];
+  assign ch1__lc_zero = \port$7772$0 [185];
+  assign ch1__spw_mismatch = \port$7772$0 [186];
+  assign ch1__lc = \port$7772$0 [182:177];
+  assign ch1__line_delay = \port$7772$0 [48:36];
+  assign ch1__word0_position = \port$7772$0 [130:76];
+  assign ch1__word1_position = \port$7772$0 [173:134];
+  assign ch1__timestamp = \port$7772$0 [35:4];
+  assign ch1__noise_events = \port$7772$0 [53:50];
+  assign ch1__delay_settled = \port$7772$0 [54];
+  assign ch1__delay_spread = \port$7772$0 [75:68];
+  assign ch1__settled_delay = \port$7772$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -6559,13 +6559,13 @@ module \biss_master_uart.bank (rst, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign ch1__ca_status = \port$7864$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7864$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7787$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7787$0 [31:16];
-  assign ch1__count_ca_refused = \port$7787$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7787$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7787$0 [79:64];
+  assign ch1__ca_status = \port$7862$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7862$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7785$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7785$0 [31:16];
+  assign ch1__count_ca_refused = \port$7785$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7785$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7785$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__r_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -8847,7 +8847,7 @@ endmodule
 module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7238$0 , \port$7251$0 , regs__ca_done, \port$7328$0 , slo);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7236$0 , \port$7249$0 , regs__ca_done, \port$7326$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -9029,12 +9029,12 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7238$0 ;
-  wire [186:0] \port$7238$0 ;
-  output [79:0] \port$7251$0 ;
-  wire [79:0] \port$7251$0 ;
-  output [9:0] \port$7328$0 ;
-  wire [9:0] \port$7328$0 ;
+  output [186:0] \port$7236$0 ;
+  wire [186:0] \port$7236$0 ;
+  output [79:0] \port$7249$0 ;
+  wire [79:0] \port$7249$0 ;
+  output [9:0] \port$7326$0 ;
+  wire [9:0] \port$7326$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -9489,9 +9489,9 @@ module \biss_master_uart.ch0 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$7238$0  = \$18 ;
-  assign \port$7251$0  = \$19 ;
-  assign \port$7328$0  = \$20 ;
+  assign \port$7236$0  = \$18 ;
+  assign \port$7249$0  = \$19 ;
+  assign \port$7326$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -9881,7 +9881,6 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$275 ;
   output \done$316 ;
   wire \done$316 ;
   wire \done$317 ;
@@ -10014,6 +10013,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
+  wire \frame_end$282 ;
   wire frame_ok;
   output frames;
   wire frames;
@@ -10253,7 +10253,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire slo_stuck_live;
   wire \slo_stuck_live$98 ;
   wire slots_full;
-  wire \slots_full$83 ;
+  wire \slots_full$82 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
@@ -10276,7 +10276,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [15:0] \start_slot$134 ;
   wire started;
   wire \started$132 ;
-  wire \started$81 ;
+  wire \started$80 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -10340,7 +10340,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [23:0] \timeout_limit$115 ;
   wire [23:0] timeout_live;
   wire timeout_over;
-  wire \timeout_over$79 ;
+  wire \timeout_over$78 ;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
@@ -10423,9 +10423,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \words[1].signed ;
   wire zero;
   assign periodic = \periodic$45  | frames;
-  assign frame_done = cycle[259] ? stopped : done;
   assign arm = cycle[259] ? first_rise : ma_arm;
-  assign close = cycle[259] ? stopped : done;
   assign \$1  = cycle[144:141] != 4'hf;
   assign \$2  = ~ cycle[259];
   assign enable = \$1  & \$2 ;
@@ -10562,13 +10560,13 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .crcs(crcs),
     .data0(data0),
     .data1(spw),
-    .done(done),
+    .frame_end(frame_done),
     .lc(lc),
     .lc_load(load),
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6890$272 (cycle[274:272]),
+    .\port$6888$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -10598,7 +10596,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   );
   \biss_master_uart.ch0.core.line_noise  line_noise (
     .clk(clk),
-    .close(close),
+    .close(frame_done),
     .\event (\event ),
     .events(events),
     .level(\slo$62 ),
@@ -10628,7 +10626,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6890$199 (cycle[199]),
+    .\port$6888$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -10679,7 +10677,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6890$259 (cycle[271:259]),
+    .\port$6888$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$344 ),
@@ -10703,7 +10701,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6878$0 (\bit ),
+    .\port$6876$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -10770,7 +10768,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2959$0 (\$29 ),
+    .\port$2958$0 (\$29 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -10831,10 +10829,11 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign enough = ma_enough;
   assign \locked$71  = locked;
   assign \early$73  = early;
+  assign frame_end = frame_done;
   assign ssi = cycle[259];
-  assign \timeout_over$79  = timeout_over;
-  assign \started$81  = started;
-  assign \slots_full$83  = slots_full;
+  assign \timeout_over$78  = timeout_over;
+  assign \started$80  = started;
+  assign \slots_full$82  = slots_full;
   assign \stopped$84  = stopped;
   assign \stop_bit$86  = stop_bit;
   assign doubtful = frame_doubtful;
@@ -10879,6 +10878,7 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign waiting = watch;
   assign \level$160  = \slo$62 ;
   assign noise = sampler_noise;
+  assign close = frame_done;
   assign fault = \restart$164 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
@@ -10932,10 +10932,10 @@ module \biss_master_uart.ch0.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
   assign \busy$273  = frames;
-  assign \done$275  = ca_done;
+  assign done = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
-  assign frame_end = report;
+  assign \frame_end$282  = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
   assign clear_counters = \clear$289 ;
@@ -11963,7 +11963,7 @@ module \biss_master_uart.ch0.core.confirmation (rst, report, status, pending, se
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.controller (rst, frame_done, cdm, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
+module \biss_master_uart.ch0.core.controller (rst, cdm, request, restart_timer, report_delay, frame_done, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
 , faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full
 , started, stop_bit, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
@@ -14852,7 +14852,7 @@ module \biss_master_uart.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$6890$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master_uart.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6888$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire [6:0] \$1 ;
@@ -15493,7 +15493,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   reg at_cds;
   input \bit ;
   wire \bit ;
-  wire \bit$58 ;
+  wire \bit$59 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -15506,17 +15506,17 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   wire [1:0] crc_ok;
   input [75:0] crcs;
   wire [75:0] crcs;
-  wire [75:0] \crcs$53 ;
-  wire [37:0] \crcs$53[0] ;
-  wire \crcs$53[0].inverted ;
-  wire [15:0] \crcs$53[0].poly ;
-  wire [15:0] \crcs$53[0].start ;
-  wire [4:0] \crcs$53[0].width ;
-  wire [37:0] \crcs$53[1] ;
-  wire \crcs$53[1].inverted ;
-  wire [15:0] \crcs$53[1].poly ;
-  wire [15:0] \crcs$53[1].start ;
-  wire [4:0] \crcs$53[1].width ;
+  wire [75:0] \crcs$54 ;
+  wire [37:0] \crcs$54[0] ;
+  wire \crcs$54[0].inverted ;
+  wire [15:0] \crcs$54[0].poly ;
+  wire [15:0] \crcs$54[0].start ;
+  wire [4:0] \crcs$54[0].width ;
+  wire [37:0] \crcs$54[1] ;
+  wire \crcs$54[1].inverted ;
+  wire [15:0] \crcs$54[1].poly ;
+  wire [15:0] \crcs$54[1].start ;
+  wire [4:0] \crcs$54[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -15532,8 +15532,9 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   output [39:0] data1;
   reg [39:0] data1 = 40'h0000000000;
   reg [2:0] decoder_fsm_state = 3'h0;
-  output done;
   reg done = 1'h0;
+  output frame_end;
+  wire frame_end;
   reg [6:0] idx = 7'h00;
   reg in_crc = 1'h0;
   reg in_data = 1'h0;
@@ -15557,8 +15558,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6890$272 ;
-  wire [2:0] \port$6890$272 ;
+  input [2:0] \port$6888$272 ;
+  wire [2:0] \port$6888$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -15629,8 +15630,8 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$366  = in_word & \$365 ;
   assign \$367  = idx == words[5:0];
   assign \$368  = \$366  & \$367 ;
-  assign \$369  = ssi & \port$6890$272 [0];
-  assign \$370  = ~ \port$6890$272 [1];
+  assign \$369  = ssi & \port$6888$272 [0];
+  assign \$370  = ~ \port$6888$272 [1];
   assign \$371  = \$369  & \$370 ;
   assign \$372  = \bit  ^ \$371 ;
   assign \$373  = ~ words[6];
@@ -15854,6 +15855,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$594  = in_word & in_top;
   assign \$595  = words[10] & data0[0];
   assign \$596  = \bit  ^ \$595 ;
+  assign frame_end = ssi ? stopped : done;
   assign \$597  = sample & \bit ;
   assign lc_load = in_word & in_lc;
   assign \$598  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -15951,18 +15953,18 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
     cpw_top <= \$635 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$6890$272 [0];
+  assign \$3  = ssi & \port$6888$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$6890$272 [0];
+  assign \$6  = ssi & \port$6888$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$6890$272 [0];
+  assign \$9  = ssi & \port$6888$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$6890$272 [0];
+  assign \$14  = ssi & \port$6888$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$6890$272 [0];
+  assign \$18  = ssi & \port$6888$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -16007,7 +16009,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$66  = idx == \$65 ;
   assign \$69  = word_count - 1'h1;
   assign \$70  = word == \$69 ;
-  assign \$71  = ssi & \port$6890$272 [2];
+  assign \$71  = ssi & \port$6888$272 [2];
   assign \$72  = word + 1'h1;
   assign \$73  = idx + 1'h1;
   assign \$74  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -16298,7 +16300,7 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \$359  = \$356  & \$358 ;
   assign \$360  = { data0[53:0], \$84  } | { \$359 , \$354 , \$349 , \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89  };
   assign \$361  = ~ words[6];
-  assign \$362  = ssi & \port$6890$272 [0];
+  assign \$362  = ssi & \port$6888$272 [0];
   assign \$363  = ~ \$362 ;
   assign \$364  = \$361  & \$363 ;
   \biss_master_uart.ch0.core.decoder.crc  crc (
@@ -17056,12 +17058,12 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$6890$272 [0];
-  assign ssi_double = \port$6890$272 [2];
-  assign ssi_error_low = \port$6890$272 [1];
+  assign ssi_error = \port$6888$272 [0];
+  assign ssi_double = \port$6888$272 [2];
+  assign ssi_error_low = \port$6888$272 [1];
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$53  = crcs;
-  assign \bit$58  = \bit ;
+  assign \crcs$54  = crcs;
+  assign \bit$59  = \bit ;
   assign ok = crc_ok;
   assign index = word;
   assign load_index = \$605 [0];
@@ -17089,16 +17091,16 @@ module \biss_master_uart.ch0.core.decoder (rst, word_count, lc_load, words, samp
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$53[0]  = crcs[37:0];
-  assign \crcs$53[0].width  = crcs[4:0];
-  assign \crcs$53[0].poly  = crcs[20:5];
-  assign \crcs$53[0].start  = crcs[36:21];
-  assign \crcs$53[0].inverted  = crcs[37];
-  assign \crcs$53[1]  = crcs[75:38];
-  assign \crcs$53[1].width  = crcs[42:38];
-  assign \crcs$53[1].poly  = crcs[58:43];
-  assign \crcs$53[1].start  = crcs[74:59];
-  assign \crcs$53[1].inverted  = crcs[75];
+  assign \crcs$54[0]  = crcs[37:0];
+  assign \crcs$54[0].width  = crcs[4:0];
+  assign \crcs$54[0].poly  = crcs[20:5];
+  assign \crcs$54[0].start  = crcs[36:21];
+  assign \crcs$54[0].inverted  = crcs[37];
+  assign \crcs$54[1]  = crcs[75:38];
+  assign \crcs$54[1].width  = crcs[42:38];
+  assign \crcs$54[1].poly  = crcs[58:43];
+  assign \crcs$54[1].start  = crcs[74:59];
+  assign \crcs$54[1].inverted  = crcs[75];
   assign \$67  = w1_data_at0;
   assign \$68  = w1_lc_at0;
   assign \$378  = word;
@@ -17706,7 +17708,7 @@ module \biss_master_uart.ch0.core.delay_check (rst, enable, rearm, check, learn,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.line_noise (rst, close, sampler_noise, noisy, events, limit, watch, restart, level, \event , clk);
+module \biss_master_uart.ch0.core.line_noise (rst, sampler_noise, close, noisy, events, limit, watch, restart, level, \event , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire \$1 ;
   reg \$10 ;
@@ -18215,7 +18217,7 @@ module \biss_master_uart.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$6890$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$6888$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -18267,8 +18269,8 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$6890$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6890$199 ;
-  wire \port$6890$199 ;
+  input \port$6888$199 ;
+  wire \port$6888$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -18322,7 +18324,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$6890$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6890$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6888$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -18432,7 +18434,7 @@ module \biss_master_uart.ch0.core.ma_stop (rst, words, \port$6890$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6890$199 , 1'h1 };
+  assign enables = { \port$6888$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -20573,7 +20575,7 @@ module \biss_master_uart.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6890$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6888$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -20707,8 +20709,8 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6890$259 ;
-  wire [12:0] \port$6890$259 ;
+  input [12:0] \port$6888$259 ;
+  wire [12:0] \port$6888$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -20733,7 +20735,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6890$259 [12:1] + 1'h1;
+  assign \$11  = \port$6888$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -20858,7 +20860,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6890$259 [0]),
+    .clear_high(\port$6888$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -21001,7 +21003,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6890$259 [0]) begin
+            if (\port$6888$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -21086,7 +21088,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6890$259 [0]) begin
+            if (\port$6888$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -21125,7 +21127,7 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6890$259 [12:1] };
+            \$85  = { 1'h0, \port$6888$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -21510,11 +21512,11 @@ module \biss_master_uart.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6890$259 [12:1] };
-  assign fixed = \port$6890$259 [0];
+  assign fixed_delay = { 1'h0, \port$6888$259 [12:1] };
+  assign fixed = \port$6888$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6890$259 [0];
+  assign clear_high = \port$6888$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -21921,7 +21923,7 @@ module \biss_master_uart.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6878$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6876$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -21963,8 +21965,8 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6878$0 ;
-  wire \port$6878$0 ;
+  input \port$6876$0 ;
+  wire \port$6876$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -21978,9 +21980,9 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6878$0  };
-  assign \$2  = { lc[4:0], \port$6878$0  } == last;
-  assign \$3  = { lc[4:0], \port$6878$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6876$0  };
+  assign \$2  = { lc[4:0], \port$6876$0  } == last;
+  assign \$3  = { lc[4:0], \port$6876$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -22090,7 +22092,7 @@ module \biss_master_uart.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6878$0  };
+  assign lc_next = { lc[4:0], \port$6876$0  };
   assign zero = is_zero;
 endmodule
 
@@ -22665,7 +22667,7 @@ module \biss_master_uart.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2959$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2958$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire \$1 ;
@@ -22843,8 +22845,8 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2959$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$2959$0 ;
-  wire \port$2959$0 ;
+  output \port$2958$0 ;
+  wire \port$2958$0 ;
   output report;
   wire report;
   input report_frame;
@@ -22962,7 +22964,7 @@ module \biss_master_uart.ch0.core.verdict (lc_skip_seen, noisy, \port$2959$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2959$0  = \$2 ;
+  assign \port$2958$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -23019,7 +23021,7 @@ endmodule
 module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_rbuf_addr, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7774$0 , \port$7787$0 , regs__ca_done, \port$7864$0 , slo);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7772$0 , \port$7785$0 , regs__ca_done, \port$7862$0 , slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -23201,12 +23203,12 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7774$0 ;
-  wire [186:0] \port$7774$0 ;
-  output [79:0] \port$7787$0 ;
-  wire [79:0] \port$7787$0 ;
-  output [9:0] \port$7864$0 ;
-  wire [9:0] \port$7864$0 ;
+  output [186:0] \port$7772$0 ;
+  wire [186:0] \port$7772$0 ;
+  output [79:0] \port$7785$0 ;
+  wire [79:0] \port$7785$0 ;
+  output [9:0] \port$7862$0 ;
+  wire [9:0] \port$7862$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -23661,9 +23663,9 @@ module \biss_master_uart.ch1 (clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$7774$0  = \$18 ;
-  assign \port$7787$0  = \$19 ;
-  assign \port$7864$0  = \$20 ;
+  assign \port$7772$0  = \$18 ;
+  assign \port$7785$0  = \$19 ;
+  assign \port$7862$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -24053,7 +24055,6 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  wire \done$275 ;
   output \done$316 ;
   wire \done$316 ;
   wire \done$317 ;
@@ -24186,6 +24187,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
+  wire \frame_end$282 ;
   wire frame_ok;
   output frames;
   wire frames;
@@ -24425,7 +24427,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire slo_stuck_live;
   wire \slo_stuck_live$98 ;
   wire slots_full;
-  wire \slots_full$83 ;
+  wire \slots_full$82 ;
   wire [7:0] spread;
   wire [39:0] spw;
   wire spw_match;
@@ -24448,7 +24450,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [15:0] \start_slot$134 ;
   wire started;
   wire \started$132 ;
-  wire \started$81 ;
+  wire \started$80 ;
   reg started_before = 1'h0;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
@@ -24512,7 +24514,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire [23:0] \timeout_limit$115 ;
   wire [23:0] timeout_live;
   wire timeout_over;
-  wire \timeout_over$79 ;
+  wire \timeout_over$78 ;
   wire timer_clear;
   wire [31:0] timestamp;
   wire [16:0] tolerance;
@@ -24595,9 +24597,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   wire \words[1].signed ;
   wire zero;
   assign periodic = \periodic$45  | frames;
-  assign frame_done = cycle[259] ? stopped : done;
   assign arm = cycle[259] ? first_rise : ma_arm;
-  assign close = cycle[259] ? stopped : done;
   assign \$1  = cycle[144:141] != 4'hf;
   assign \$2  = ~ cycle[259];
   assign enable = \$1  & \$2 ;
@@ -24734,13 +24734,13 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .crcs(crcs),
     .data0(data0),
     .data1(spw),
-    .done(done),
+    .frame_end(frame_done),
     .lc(lc),
     .lc_load(load),
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7426$272 (cycle[274:272]),
+    .\port$7424$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -24770,7 +24770,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   );
   \biss_master_uart.ch1.core.line_noise  line_noise (
     .clk(clk),
-    .close(close),
+    .close(frame_done),
     .\event (\event ),
     .events(events),
     .level(\slo$62 ),
@@ -24800,7 +24800,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$7426$199 (cycle[199]),
+    .\port$7424$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -24851,7 +24851,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7426$259 (cycle[271:259]),
+    .\port$7424$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$344 ),
@@ -24875,7 +24875,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7414$0 (\bit ),
+    .\port$7412$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -24942,7 +24942,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5403$0 (\$29 ),
+    .\port$5401$0 (\$29 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -25003,10 +25003,11 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign enough = ma_enough;
   assign \locked$71  = locked;
   assign \early$73  = early;
+  assign frame_end = frame_done;
   assign ssi = cycle[259];
-  assign \timeout_over$79  = timeout_over;
-  assign \started$81  = started;
-  assign \slots_full$83  = slots_full;
+  assign \timeout_over$78  = timeout_over;
+  assign \started$80  = started;
+  assign \slots_full$82  = slots_full;
   assign \stopped$84  = stopped;
   assign \stop_bit$86  = stop_bit;
   assign doubtful = frame_doubtful;
@@ -25051,6 +25052,7 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign waiting = watch;
   assign \level$160  = \slo$62 ;
   assign noise = sampler_noise;
+  assign close = frame_done;
   assign fault = \restart$164 ;
   assign limit = cycle[140:137];
   assign delay_tolerance = tolerance;
@@ -25104,10 +25106,10 @@ module \biss_master_uart.ch1.core (clk, rst, read_en, ca_wbuf_en, rbuf_en, trigg
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
   assign \busy$273  = frames;
-  assign \done$275  = ca_done;
+  assign done = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
-  assign frame_end = report;
+  assign \frame_end$282  = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
   assign clear_counters = \clear$289 ;
@@ -26135,7 +26137,7 @@ module \biss_master_uart.ch1.core.confirmation (rst, report, status, pending, se
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.controller (rst, frame_done, cdm, request, restart_timer, report_delay, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
+module \biss_master_uart.ch1.core.controller (rst, cdm, request, restart_timer, report_delay, frame_done, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
 , faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full
 , started, stop_bit, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
@@ -29024,7 +29026,7 @@ module \biss_master_uart.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, sample, \bit , ssi, \port$7426$272 , crcs, receiver_clear, done, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
+module \biss_master_uart.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$7424$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
 , data1, lc, cpw_top, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire [6:0] \$1 ;
@@ -29665,7 +29667,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   reg at_cds;
   input \bit ;
   wire \bit ;
-  wire \bit$58 ;
+  wire \bit$59 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -29678,17 +29680,17 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   wire [1:0] crc_ok;
   input [75:0] crcs;
   wire [75:0] crcs;
-  wire [75:0] \crcs$53 ;
-  wire [37:0] \crcs$53[0] ;
-  wire \crcs$53[0].inverted ;
-  wire [15:0] \crcs$53[0].poly ;
-  wire [15:0] \crcs$53[0].start ;
-  wire [4:0] \crcs$53[0].width ;
-  wire [37:0] \crcs$53[1] ;
-  wire \crcs$53[1].inverted ;
-  wire [15:0] \crcs$53[1].poly ;
-  wire [15:0] \crcs$53[1].start ;
-  wire [4:0] \crcs$53[1].width ;
+  wire [75:0] \crcs$54 ;
+  wire [37:0] \crcs$54[0] ;
+  wire \crcs$54[0].inverted ;
+  wire [15:0] \crcs$54[0].poly ;
+  wire [15:0] \crcs$54[0].start ;
+  wire [4:0] \crcs$54[0].width ;
+  wire [37:0] \crcs$54[1] ;
+  wire \crcs$54[1].inverted ;
+  wire [15:0] \crcs$54[1].poly ;
+  wire [15:0] \crcs$54[1].start ;
+  wire [4:0] \crcs$54[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -29704,8 +29706,9 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   output [39:0] data1;
   reg [39:0] data1 = 40'h0000000000;
   reg [2:0] decoder_fsm_state = 3'h0;
-  output done;
   reg done = 1'h0;
+  output frame_end;
+  wire frame_end;
   reg [6:0] idx = 7'h00;
   reg in_crc = 1'h0;
   reg in_data = 1'h0;
@@ -29729,8 +29732,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7426$272 ;
-  wire [2:0] \port$7426$272 ;
+  input [2:0] \port$7424$272 ;
+  wire [2:0] \port$7424$272 ;
   input receiver_clear;
   wire receiver_clear;
   reg [72:0] ring = 73'h0000000000000000000;
@@ -29801,8 +29804,8 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$366  = in_word & \$365 ;
   assign \$367  = idx == words[5:0];
   assign \$368  = \$366  & \$367 ;
-  assign \$369  = ssi & \port$7426$272 [0];
-  assign \$370  = ~ \port$7426$272 [1];
+  assign \$369  = ssi & \port$7424$272 [0];
+  assign \$370  = ~ \port$7424$272 [1];
   assign \$371  = \$369  & \$370 ;
   assign \$372  = \bit  ^ \$371 ;
   assign \$373  = ~ words[6];
@@ -30026,6 +30029,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$594  = in_word & in_top;
   assign \$595  = words[10] & data0[0];
   assign \$596  = \bit  ^ \$595 ;
+  assign frame_end = ssi ? stopped : done;
   assign \$597  = sample & \bit ;
   assign lc_load = in_word & in_lc;
   assign \$598  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -30123,18 +30127,18 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
     cpw_top <= \$635 ;
   assign \$1  = words[5:0] + 1'h1;
   assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$7426$272 [0];
+  assign \$3  = ssi & \port$7424$272 [0];
   assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$7426$272 [0];
+  assign \$6  = ssi & \port$7424$272 [0];
   assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$7426$272 [0];
+  assign \$9  = ssi & \port$7424$272 [0];
   assign \$11  = \$10  + crcs[4:0];
   assign \$12  = words[5:0] + \$11 [6:0];
   assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$7426$272 [0];
+  assign \$14  = ssi & \port$7424$272 [0];
   assign \$16  = words[5:0] + \$15 ;
   assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$7426$272 [0];
+  assign \$18  = ssi & \port$7424$272 [0];
   assign \$20  = words[5:0] + \$19 ;
   assign \$21  = | \$20 ;
   assign \$22  = \$17  & \$21 ;
@@ -30179,7 +30183,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$66  = idx == \$65 ;
   assign \$69  = word_count - 1'h1;
   assign \$70  = word == \$69 ;
-  assign \$71  = ssi & \port$7426$272 [2];
+  assign \$71  = ssi & \port$7424$272 [2];
   assign \$72  = word + 1'h1;
   assign \$73  = idx + 1'h1;
   assign \$74  = word ? w1_word_end_m1 : w0_word_end_m1;
@@ -30470,7 +30474,7 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \$359  = \$356  & \$358 ;
   assign \$360  = { data0[53:0], \$84  } | { \$359 , \$354 , \$349 , \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89  };
   assign \$361  = ~ words[6];
-  assign \$362  = ssi & \port$7426$272 [0];
+  assign \$362  = ssi & \port$7424$272 [0];
   assign \$363  = ~ \$362 ;
   assign \$364  = \$361  & \$363 ;
   \biss_master_uart.ch1.core.decoder.crc  crc (
@@ -31228,12 +31232,12 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
           \$36  = 4'h8;
     endcase
   end
-  assign ssi_error = \port$7426$272 [0];
-  assign ssi_double = \port$7426$272 [2];
-  assign ssi_error_low = \port$7426$272 [1];
+  assign ssi_error = \port$7424$272 [0];
+  assign ssi_double = \port$7424$272 [2];
+  assign ssi_error_low = \port$7424$272 [1];
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$53  = crcs;
-  assign \bit$58  = \bit ;
+  assign \crcs$54  = crcs;
+  assign \bit$59  = \bit ;
   assign ok = crc_ok;
   assign index = word;
   assign load_index = \$605 [0];
@@ -31261,16 +31265,16 @@ module \biss_master_uart.ch1.core.decoder (rst, word_count, lc_load, words, samp
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$53[0]  = crcs[37:0];
-  assign \crcs$53[0].width  = crcs[4:0];
-  assign \crcs$53[0].poly  = crcs[20:5];
-  assign \crcs$53[0].start  = crcs[36:21];
-  assign \crcs$53[0].inverted  = crcs[37];
-  assign \crcs$53[1]  = crcs[75:38];
-  assign \crcs$53[1].width  = crcs[42:38];
-  assign \crcs$53[1].poly  = crcs[58:43];
-  assign \crcs$53[1].start  = crcs[74:59];
-  assign \crcs$53[1].inverted  = crcs[75];
+  assign \crcs$54[0]  = crcs[37:0];
+  assign \crcs$54[0].width  = crcs[4:0];
+  assign \crcs$54[0].poly  = crcs[20:5];
+  assign \crcs$54[0].start  = crcs[36:21];
+  assign \crcs$54[0].inverted  = crcs[37];
+  assign \crcs$54[1]  = crcs[75:38];
+  assign \crcs$54[1].width  = crcs[42:38];
+  assign \crcs$54[1].poly  = crcs[58:43];
+  assign \crcs$54[1].start  = crcs[74:59];
+  assign \crcs$54[1].inverted  = crcs[75];
   assign \$67  = w1_data_at0;
   assign \$68  = w1_lc_at0;
   assign \$378  = word;
@@ -31878,7 +31882,7 @@ module \biss_master_uart.ch1.core.delay_check (rst, enable, rearm, check, learn,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.line_noise (rst, close, sampler_noise, noisy, events, limit, watch, restart, level, \event , clk);
+module \biss_master_uart.ch1.core.line_noise (rst, sampler_noise, close, noisy, events, limit, watch, restart, level, \event , clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   wire \$1 ;
   reg \$10 ;
@@ -32387,7 +32391,7 @@ module \biss_master_uart.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$7426$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$7424$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -32439,8 +32443,8 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$7426$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$7426$199 ;
-  wire \port$7426$199 ;
+  input \port$7424$199 ;
+  wire \port$7424$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -32494,7 +32498,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$7426$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$7426$199  ? word1_len : 8'h00;
+  assign \$11  = \port$7424$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -32604,7 +32608,7 @@ module \biss_master_uart.ch1.core.ma_stop (rst, words, \port$7426$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$7426$199 , 1'h1 };
+  assign enables = { \port$7424$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -34745,7 +34749,7 @@ module \biss_master_uart.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7426$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7424$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -34879,8 +34883,8 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7426$259 ;
-  wire [12:0] \port$7426$259 ;
+  input [12:0] \port$7424$259 ;
+  wire [12:0] \port$7424$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -34905,7 +34909,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7426$259 [12:1] + 1'h1;
+  assign \$11  = \port$7424$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -35030,7 +35034,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_uart.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7426$259 [0]),
+    .clear_high(\port$7424$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -35173,7 +35177,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7426$259 [0]) begin
+            if (\port$7424$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -35258,7 +35262,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7426$259 [0]) begin
+            if (\port$7424$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -35297,7 +35301,7 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7426$259 [12:1] };
+            \$85  = { 1'h0, \port$7424$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -35682,11 +35686,11 @@ module \biss_master_uart.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7426$259 [12:1] };
-  assign fixed = \port$7426$259 [0];
+  assign fixed_delay = { 1'h0, \port$7424$259 [12:1] };
+  assign fixed = \port$7424$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7426$259 [0];
+  assign clear_high = \port$7424$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -36093,7 +36097,7 @@ module \biss_master_uart.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7414$0 , resync, lc, is_zero, clk);
+module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7412$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -36135,8 +36139,8 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7414$0 ;
-  wire \port$7414$0 ;
+  input \port$7412$0 ;
+  wire \port$7412$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -36150,9 +36154,9 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7414$0  };
-  assign \$2  = { lc[4:0], \port$7414$0  } == last;
-  assign \$3  = { lc[4:0], \port$7414$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7412$0  };
+  assign \$2  = { lc[4:0], \port$7412$0  } == last;
+  assign \$3  = { lc[4:0], \port$7412$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -36262,7 +36266,7 @@ module \biss_master_uart.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7414$0  };
+  assign lc_next = { lc[4:0], \port$7412$0  };
   assign zero = is_zero;
 endmodule
 
@@ -36837,7 +36841,7 @@ module \biss_master_uart.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5403$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5401$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$93  = 0;
   wire \$1 ;
@@ -37015,8 +37019,8 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5403$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$5403$0 ;
-  wire \port$5403$0 ;
+  output \port$5401$0 ;
+  wire \port$5401$0 ;
   output report;
   wire report;
   input report_frame;
@@ -37134,7 +37138,7 @@ module \biss_master_uart.ch1.core.verdict (lc_skip_seen, noisy, \port$5403$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5403$0  = \$2 ;
+  assign \port$5401$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

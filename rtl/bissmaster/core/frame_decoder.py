@@ -80,6 +80,9 @@ class FrameDecoder(wiring.Component):
     bits as sent), and ``mismatch`` is set for any difference or a separator of 1; ``done``
     comes after the second copy. The stop bit (``stopped``, ``stop_bit``) is the bit after the
     word, or after the second copy.
+
+    ``frame_end`` is where the frame's verdict and its noise count close: ``done`` in BiSS,
+    ``stopped`` in SSI (whose verdict waits for the bit after the word: it must be 0).
     """
 
     def __init__(self, params):
@@ -106,6 +109,7 @@ class FrameDecoder(wiring.Component):
             "crc_ok": Out(words),
             "done": Out(1),
             "stopped": Out(1),
+            "frame_end": Out(1),            # ``done`` in BiSS, ``stopped`` in SSI
             "stop_bit": Out(1),             # the stop slot's level (0 from a good encoder)
             **({"ssi": In(1), "ssi_error": In(1), "ssi_error_low": In(1), "ssi_double": In(1),
                 "mismatch": Out(1)} if params.ssi else {}),
@@ -198,6 +202,7 @@ class FrameDecoder(wiring.Component):
             m.next = "STOP"
 
         ssi = self.ssi if p.ssi else C(0)
+        m.d.comb += self.frame_end.eq(Mux(ssi, self.stopped, self.done))
         # SSI double transmission: the first copy's bits as sent (the newest in bit 0), and
         # whether the copies differ so far.
         if p.ssi:

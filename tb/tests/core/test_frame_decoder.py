@@ -53,7 +53,7 @@ def _decode(params, fmt, values, *, acks, faults=None, hw_word1=None, seed=0, fr
     if params.words == 2 and len(cfgs) == 1:
         cfgs.append(_cfg(hw_word1))
         crcs.append(_crc(hw_word1))
-    fields = ["done", "stopped", "started", "start_slot", "slots", "cds", "ne", "nw", "lc",
+    fields = ["done", "stopped", "frame_end", "started", "start_slot", "slots", "cds", "ne", "nw", "lc",
               "cpw_top", "crc_ok"] + [f"data{w}" for w in range(params.words)]
     trace, sample_cycles = [], []
 
@@ -151,6 +151,8 @@ def test_frame_decoder_fields_and_strobes(case):
         stop_sample = samples[acks + len(frame)]
         assert [c for c, x in enumerate(trace) if x["done"]] == [last_bit_sample + 1]
         assert [c for c, x in enumerate(trace) if x["stopped"]] == [stop_sample + 1]
+        # The frame's end in BiSS: its last word bit (``done``), not the stop bit.
+        assert [c for c, x in enumerate(trace) if x["frame_end"]] == [last_bit_sample + 1]
         # started in the cycle after the Start sample, not before.
         start_sample = samples[acks]
         assert [x["started"] for x in trace] == \

@@ -19,8 +19,8 @@ from master_contract import crc_config, crc_settings
 from testkit.block_sim import simulate
 
 PARAMS = MasterParams()
-FIELDS = ["done", "stopped", "stop_bit", "started", "start_slot", "ne", "nw", "crc_ok",
-          "mismatch", "data0"]
+FIELDS = ["done", "stopped", "frame_end", "stop_bit", "started", "start_slot", "ne", "nw",
+          "crc_ok", "mismatch", "data0"]
 
 
 def _run(word_cfg, crc, line, *, error=0, error_low=0, double=0, seed=0):
@@ -101,6 +101,8 @@ def test_ssi_word_fields_and_strobes(case):
         n = fmt.total_bits
         assert _strobes(trace, "done") == [samples[n - 1] + 1]
         assert _strobes(trace, "stopped") == [samples[n] + 1]
+        # The frame's end in SSI: the bit after the word (its verdict waits for it).
+        assert _strobes(trace, "frame_end") == [samples[n] + 1]
         assert [x["started"] for x in trace] == \
             [0] * (samples[0] + 1) + [1] * (len(trace) - samples[0] - 1)
         for when in (samples[n - 1] + 1, len(trace) - 1):
@@ -156,6 +158,7 @@ def test_ssi_double_transmission_compares_every_bit(fmt):
                           double=1)
     assert _strobes(trace, "done") == [samples[2 * n] + 1]
     assert _strobes(trace, "stopped") == [samples[2 * n + 1] + 1]
+    assert _strobes(trace, "frame_end") == [samples[2 * n + 1] + 1]
     assert (trace[-1]["mismatch"], trace[-1]["data0"]) == (0, position)
     for flip in list(range(n + 1, 2 * n + 1)) + [n]:        # each bit of copy 2, the separator
         line = list(good)
