@@ -69,7 +69,7 @@ from venvtools import tool  # scripts/, this file's folder
 #: The named builds measured (bissmaster.generate's presets): the issue's two configurations,
 #: the smallest BiSS C build (no error counters, no timestamp, 16-bit time settings), and the
 #: BP3 build with the register-access engine.
-PRESET_CONFIGS = ("biss-c", "biss-c-lean", "safety", "bp3")
+PRESET_CONFIGS = ("biss-c", "biss-c-lean", "safety", "bp3", "chain")
 
 #: The bus tops measured (issue 14): name -> (bus, channels, core preset, archs). The cores
 #: inside are the preset's (the bus top builds them without the register-access engine and

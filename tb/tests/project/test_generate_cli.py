@@ -46,13 +46,30 @@ def test_list_presets_gives_each_preset_its_options_and_parameters(capsys):
     assert "max_data_bits   = [36]" in blocks["biss-c-lean"]
     assert "counter_width   = 0 (no counters)" in blocks["biss-c-lean"]
     assert "max_data_bits   = [36, 28]" in blocks["safety"]
+    assert "max_data_bits   = [40, 32, 24]" in blocks["chain"]
 
 
 def test_bad_max_data_bits_is_a_usage_error(capsys):
     with pytest.raises(SystemExit) as e:
         main(["--max-data-bits", "36,x", "-o", "/dev/null"])
     assert e.value.code == 2
-    assert "--max-data-bits takes 1 or 2 integers" in capsys.readouterr().err
+    assert "--max-data-bits takes 1 to 8 integers" in capsys.readouterr().err
+
+
+def test_nine_words_is_a_usage_error(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["--max-data-bits", ",".join(["8"] * 9), "-o", "/dev/null"])
+    assert e.value.code == 2
+    assert "max_data_bits must name 1 to 8 words" in capsys.readouterr().err
+
+
+def test_a_chain_core_has_no_bus_top(capsys):
+    """The register map holds two words per channel: a bus top of a three-word core is a
+    usage error, not a register map that silently drops word 2."""
+    with pytest.raises(SystemExit) as e:
+        main(["--top", "axil", "--preset", "chain", "-o", "/dev/null"])
+    assert e.value.code == 2
+    assert "the register map holds words 0 and 1" in capsys.readouterr().err
 
 
 def test_core_top_is_the_default_and_names_biss_master(tmp_path):
