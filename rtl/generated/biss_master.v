@@ -1137,7 +1137,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$2202$272 (cycle[274:272]),
+    .\port$2171$272 (cycle[274:272]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(sample),
@@ -1197,7 +1197,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$2202$199 (cycle[199]),
+    .\port$2171$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -1248,7 +1248,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$2202$259 (cycle[271:259]),
+    .\port$2171$259 (cycle[271:259]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(\sample$348 ),
@@ -1271,7 +1271,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$213 ),
     .load(load),
-    .\port$2190$0 (\bit ),
+    .\port$2159$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1338,7 +1338,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$1623$0 (\$29 ),
+    .\port$1592$0 (\$29 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -5603,11 +5603,11 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$2202$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, mismatch, stop_bit, data0, ne, nw
-, data1, lc, cpw_top, crc_ok, clk);
+module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$2171$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+, lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
-  wire [6:0] \$1 ;
-  reg [6:0] \$10 ;
+  wire \$1 ;
+  wire \$10 ;
   wire \$100 ;
   wire \$101 ;
   wire \$102 ;
@@ -5618,7 +5618,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$107 ;
   wire \$108 ;
   wire \$109 ;
-  wire [7:0] \$11 ;
+  wire \$11 ;
   wire \$110 ;
   wire \$111 ;
   wire \$112 ;
@@ -5629,7 +5629,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$117 ;
   wire \$118 ;
   wire \$119 ;
-  wire [7:0] \$12 ;
+  wire \$12 ;
   wire \$120 ;
   wire \$121 ;
   wire \$122 ;
@@ -5662,7 +5662,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$147 ;
   wire \$148 ;
   wire \$149 ;
-  reg [1:0] \$15 ;
+  wire \$15 ;
   wire \$150 ;
   wire \$151 ;
   wire \$152 ;
@@ -5673,7 +5673,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$157 ;
   wire \$158 ;
   wire \$159 ;
-  wire [6:0] \$16 ;
+  wire \$16 ;
   wire \$160 ;
   wire \$161 ;
   wire \$162 ;
@@ -5706,7 +5706,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$187 ;
   wire \$188 ;
   wire \$189 ;
-  reg [3:0] \$19 ;
+  wire [16:0] \$19 ;
   wire \$190 ;
   wire \$191 ;
   wire \$192 ;
@@ -5717,8 +5717,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$197 ;
   wire \$198 ;
   wire \$199 ;
-  wire [7:0] \$2 ;
-  wire [6:0] \$20 ;
+  wire [6:0] \$2 ;
+  wire \$20 ;
   wire \$200 ;
   wire \$201 ;
   wire \$202 ;
@@ -5751,7 +5751,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$227 ;
   wire \$228 ;
   wire \$229 ;
-  wire [6:0] \$23 ;
+  wire \$23 ;
   wire \$230 ;
   wire \$231 ;
   wire \$232 ;
@@ -5773,7 +5773,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$247 ;
   wire \$248 ;
   wire \$249 ;
-  reg [6:0] \$25 ;
+  wire [6:0] \$25 ;
   wire \$250 ;
   wire \$251 ;
   wire \$252 ;
@@ -5784,7 +5784,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$257 ;
   wire \$258 ;
   wire \$259 ;
-  wire [7:0] \$26 ;
+  wire \$26 ;
   wire \$260 ;
   wire \$261 ;
   wire \$262 ;
@@ -5795,7 +5795,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$267 ;
   wire \$268 ;
   wire \$269 ;
-  reg [6:0] \$27 ;
+  wire \$27 ;
   wire \$270 ;
   wire \$271 ;
   wire \$272 ;
@@ -5806,7 +5806,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$277 ;
   wire \$278 ;
   wire \$279 ;
-  wire [7:0] \$28 ;
+  wire [6:0] \$28 ;
   wire \$280 ;
   wire \$281 ;
   wire \$282 ;
@@ -5817,7 +5817,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$287 ;
   wire \$288 ;
   wire \$289 ;
-  reg [6:0] \$29 ;
+  wire \$29 ;
   wire \$290 ;
   wire \$291 ;
   wire \$292 ;
@@ -5829,7 +5829,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$298 ;
   wire \$299 ;
   wire \$3 ;
-  wire [7:0] \$30 ;
+  wire \$30 ;
   wire \$300 ;
   wire \$301 ;
   wire \$302 ;
@@ -5840,7 +5840,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$307 ;
   wire \$308 ;
   wire \$309 ;
-  wire [7:0] \$31 ;
+  wire [6:0] \$31 ;
   wire \$310 ;
   wire \$311 ;
   wire \$312 ;
@@ -5862,11 +5862,11 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$327 ;
   wire \$328 ;
   wire \$329 ;
-  reg [1:0] \$33 ;
+  wire \$33 ;
   wire \$330 ;
   wire \$331 ;
   wire \$332 ;
-  wire \$333 ;
+  wire [54:0] \$333 ;
   wire \$334 ;
   wire \$335 ;
   wire \$336 ;
@@ -5895,8 +5895,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$357 ;
   wire \$358 ;
   wire \$359 ;
-  reg [3:0] \$36 ;
-  wire [54:0] \$360 ;
+  wire \$36 ;
+  wire \$360 ;
   wire \$361 ;
   wire \$362 ;
   wire \$363 ;
@@ -5939,7 +5939,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$397 ;
   wire \$398 ;
   wire \$399 ;
-  reg [6:0] \$4 ;
+  wire \$4 ;
   wire \$40 ;
   wire \$400 ;
   wire \$401 ;
@@ -5962,7 +5962,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$417 ;
   wire \$418 ;
   wire \$419 ;
-  wire [16:0] \$42 ;
+  wire [6:0] \$42 ;
   wire \$420 ;
   wire \$421 ;
   wire \$422 ;
@@ -6006,7 +6006,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$457 ;
   wire \$458 ;
   wire \$459 ;
-  wire \$46 ;
+  wire [2:0] \$46 ;
   wire \$460 ;
   wire \$461 ;
   wire \$462 ;
@@ -6017,7 +6017,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$467 ;
   wire \$468 ;
   wire \$469 ;
-  wire [7:0] \$47 ;
+  wire \$47 ;
   wire \$470 ;
   wire \$471 ;
   wire \$472 ;
@@ -6028,7 +6028,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$477 ;
   wire \$478 ;
   wire \$479 ;
-  wire [6:0] \$48 ;
+  wire \$48 ;
   wire \$480 ;
   wire \$481 ;
   wire \$482 ;
@@ -6039,7 +6039,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$487 ;
   wire \$488 ;
   wire \$489 ;
-  wire \$49 ;
+  wire [1:0] \$49 ;
   wire \$490 ;
   wire \$491 ;
   wire \$492 ;
@@ -6050,8 +6050,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$497 ;
   wire \$498 ;
   wire \$499 ;
-  wire [7:0] \$5 ;
-  wire \$50 ;
+  wire \$5 ;
+  wire [7:0] \$50 ;
   wire \$500 ;
   wire \$501 ;
   wire \$502 ;
@@ -6095,7 +6095,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$537 ;
   wire \$538 ;
   wire \$539 ;
-  wire [6:0] \$54 ;
+  wire \$54 ;
   wire \$540 ;
   wire \$541 ;
   wire \$542 ;
@@ -6113,7 +6113,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$553 ;
   wire \$554 ;
   wire \$555 ;
-  wire \$556 ;
+  wire [39:0] \$556 ;
   wire \$557 ;
   wire \$558 ;
   wire \$559 ;
@@ -6127,99 +6127,53 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$566 ;
   wire \$567 ;
   wire \$568 ;
-  wire \$569 ;
-  wire [6:0] \$57 ;
-  wire \$570 ;
-  wire \$571 ;
-  wire \$572 ;
-  wire \$573 ;
-  wire \$574 ;
-  wire \$575 ;
-  wire \$576 ;
-  wire \$577 ;
-  wire \$578 ;
-  wire \$579 ;
+  reg \$569 ;
+  wire \$57 ;
+  reg \$570 ;
+  reg [15:0] \$571 ;
+  reg \$572 ;
+  reg [6:0] \$573 ;
+  reg \$574 ;
+  reg \$575 ;
+  reg \$576 ;
+  reg \$577 ;
+  reg \$578 ;
+  reg [2:0] \$579 ;
   wire \$58 ;
-  wire \$580 ;
-  wire \$581 ;
-  wire \$582 ;
-  wire [39:0] \$583 ;
-  wire \$584 ;
-  wire \$585 ;
-  wire \$586 ;
-  wire \$587 ;
-  wire \$588 ;
-  wire \$589 ;
+  reg \$580 ;
+  reg [15:0] \$581 ;
+  reg \$582 ;
+  reg \$583 ;
+  reg [54:0] \$584 ;
+  reg [1:0] \$585 ;
+  reg [1:0] \$586 ;
+  reg [39:0] \$587 ;
+  reg [5:0] \$588 ;
+  reg [39:0] \$589 ;
   wire \$59 ;
-  wire \$590 ;
-  wire \$591 ;
-  wire \$592 ;
-  wire \$593 ;
-  wire \$594 ;
-  wire \$595 ;
-  wire \$596 ;
-  wire \$597 ;
-  wire [6:0] \$598 ;
-  wire \$599 ;
-  wire \$6 ;
-  wire [6:0] \$60 ;
-  wire \$600 ;
-  wire \$601 ;
-  wire [6:0] \$602 ;
-  wire \$603 ;
-  wire [1:0] \$604 ;
-  wire [1:0] \$605 ;
-  wire \$606 ;
-  wire \$607 ;
-  wire \$608 ;
-  wire \$609 ;
+  wire [6:0] \$6 ;
+  wire \$60 ;
   wire \$61 ;
-  wire \$610 ;
-  wire \$611 ;
-  wire \$612 ;
-  reg \$613 ;
-  reg \$614 ;
-  reg [15:0] \$615 ;
-  reg \$616 ;
-  reg [6:0] \$617 ;
-  reg \$618 ;
-  reg \$619 ;
   wire \$62 ;
-  reg \$620 ;
-  reg \$621 ;
-  reg \$622 ;
-  reg [2:0] \$623 ;
-  reg \$624 ;
-  reg [15:0] \$625 ;
-  reg \$626 ;
-  reg \$627 ;
-  reg [72:0] \$628 ;
-  reg \$629 ;
   wire \$63 ;
-  reg [54:0] \$630 ;
-  reg [1:0] \$631 ;
-  reg [1:0] \$632 ;
-  reg [39:0] \$633 ;
-  reg [5:0] \$634 ;
-  reg [39:0] \$635 ;
   wire \$64 ;
-  wire [6:0] \$65 ;
+  wire \$65 ;
   wire \$66 ;
   wire \$67 ;
   wire \$68 ;
-  wire [2:0] \$69 ;
-  reg [6:0] \$7 ;
+  wire \$69 ;
+  wire \$7 ;
   wire \$70 ;
   wire \$71 ;
-  wire [1:0] \$72 ;
-  wire [7:0] \$73 ;
-  wire [6:0] \$74 ;
+  wire \$72 ;
+  wire \$73 ;
+  wire \$74 ;
   wire \$75 ;
   wire \$76 ;
   wire \$77 ;
-  wire [6:0] \$78 ;
+  wire \$78 ;
   wire \$79 ;
-  wire [7:0] \$8 ;
+  wire [1:0] \$8 ;
   wire \$80 ;
   wire \$81 ;
   wire \$82 ;
@@ -6230,7 +6184,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \$87 ;
   wire \$88 ;
   wire \$89 ;
-  wire \$9 ;
+  wire [1:0] \$9 ;
   wire \$90 ;
   wire \$91 ;
   wire \$92 ;
@@ -6244,7 +6198,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   reg at_cds;
   input \bit ;
   wire \bit ;
-  wire \bit$59 ;
+  wire \bit$11 ;
+  wire \bit$35 ;
   output cds;
   reg cds = 1'h0;
   wire check;
@@ -6257,17 +6212,28 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire [1:0] crc_ok;
   input [75:0] crcs;
   wire [75:0] crcs;
-  wire [75:0] \crcs$54 ;
-  wire [37:0] \crcs$54[0] ;
-  wire \crcs$54[0].inverted ;
-  wire [15:0] \crcs$54[0].poly ;
-  wire [15:0] \crcs$54[0].start ;
-  wire [4:0] \crcs$54[0].width ;
-  wire [37:0] \crcs$54[1] ;
-  wire \crcs$54[1].inverted ;
-  wire [15:0] \crcs$54[1].poly ;
-  wire [15:0] \crcs$54[1].start ;
-  wire [4:0] \crcs$54[1].width ;
+  wire [75:0] \crcs$28 ;
+  wire [37:0] \crcs$28[0] ;
+  wire \crcs$28[0].inverted ;
+  wire [15:0] \crcs$28[0].poly ;
+  wire [15:0] \crcs$28[0].start ;
+  wire [4:0] \crcs$28[0].width ;
+  wire [37:0] \crcs$28[1] ;
+  wire \crcs$28[1].inverted ;
+  wire [15:0] \crcs$28[1].poly ;
+  wire [15:0] \crcs$28[1].start ;
+  wire [4:0] \crcs$28[1].width ;
+  wire [75:0] \crcs$3 ;
+  wire [37:0] \crcs$3[0] ;
+  wire \crcs$3[0].inverted ;
+  wire [15:0] \crcs$3[0].poly ;
+  wire [15:0] \crcs$3[0].start ;
+  wire [4:0] \crcs$3[0].width ;
+  wire [37:0] \crcs$3[1] ;
+  wire \crcs$3[1].inverted ;
+  wire [15:0] \crcs$3[1].poly ;
+  wire [15:0] \crcs$3[1].start ;
+  wire [4:0] \crcs$3[1].width ;
   wire [37:0] \crcs[0] ;
   wire \crcs[0].inverted ;
   wire [15:0] \crcs[0].poly ;
@@ -6284,6 +6250,25 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   reg [39:0] data1 = 40'h0000000000;
   reg [2:0] decoder_fsm_state = 3'h0;
   reg done = 1'h0;
+  wire [73:0] ends;
+  wire [36:0] \ends[0] ;
+  wire \ends[0].data_at0 ;
+  wire [6:0] \ends[0].data_end_m1 ;
+  wire [6:0] \ends[0].data_end_p1 ;
+  wire \ends[0].lc_at0 ;
+  wire [6:0] \ends[0].lc_end_m1 ;
+  wire [6:0] \ends[0].nenw_end_m1 ;
+  wire [6:0] \ends[0].word_end_m1 ;
+  wire [36:0] \ends[1] ;
+  wire \ends[1].data_at0 ;
+  wire [6:0] \ends[1].data_end_m1 ;
+  wire [6:0] \ends[1].data_end_p1 ;
+  wire \ends[1].lc_at0 ;
+  wire [6:0] \ends[1].lc_end_m1 ;
+  wire [6:0] \ends[1].nenw_end_m1 ;
+  wire [6:0] \ends[1].word_end_m1 ;
+  wire error_bit;
+  wire first;
   output frame_end;
   wire frame_end;
   reg [6:0] idx = 7'h00;
@@ -6292,8 +6277,9 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   reg in_lc = 1'h0;
   reg in_top = 1'h0;
   reg in_word;
+  wire [6:0] index;
   (* init = 1'h0 *)
-  wire index;
+  wire \index$38 ;
   wire last;
   output [5:0] lc;
   reg [5:0] lc = 6'h00;
@@ -6303,21 +6289,23 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire load;
   wire load_index;
   output mismatch;
-  reg mismatch = 1'h0;
+  wire mismatch;
+  wire \mismatch$16 ;
   output [1:0] ne;
   reg [1:0] ne = 2'h0;
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$2202$272 ;
-  wire [2:0] \port$2202$272 ;
+  input [2:0] \port$2171$272 ;
+  wire [2:0] \port$2171$272 ;
   input receiver_clear;
   wire receiver_clear;
-  reg [72:0] ring = 73'h0000000000000000000;
   input rst;
   wire rst;
   input sample;
   wire sample;
+  reg second;
+  reg separator;
   reg [15:0] slots = 16'h0000;
   output slots_full;
   reg slots_full = 1'h0;
@@ -6334,25 +6322,36 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   reg stop_bit = 1'h0;
   output stopped;
   reg stopped = 1'h0;
-  reg w0_data_at0 = 1'h0;
-  reg [6:0] w0_data_end_m1 = 7'h00;
-  reg [6:0] w0_data_end_p1 = 7'h00;
-  reg w0_lc_at0 = 1'h0;
-  reg [6:0] w0_lc_end_m1 = 7'h00;
-  reg [6:0] w0_nenw_end_m1 = 7'h00;
-  reg [6:0] w0_word_end_m1 = 7'h00;
-  reg w1_data_at0 = 1'h0;
-  reg [6:0] w1_data_end_m1 = 7'h00;
-  reg [6:0] w1_data_end_p1 = 7'h00;
-  reg w1_lc_at0 = 1'h0;
-  reg [6:0] w1_lc_end_m1 = 7'h00;
-  reg [6:0] w1_nenw_end_m1 = 7'h00;
-  reg [6:0] w1_word_end_m1 = 7'h00;
   reg word = 1'h0;
   input [1:0] word_count;
   wire [1:0] word_count;
   input [23:0] words;
   wire [23:0] words;
+  wire [23:0] \words$1 ;
+  wire [11:0] \words$1[0] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \words$1[0].crc ;
+  wire [5:0] \words$1[0].data_bits ;
+  wire \words$1[0].gray ;
+  wire \words$1[0].lc ;
+  wire \words$1[0].nenw ;
+  wire \words$1[0].signed ;
+  wire [11:0] \words$1[1] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \words$1[1].crc ;
+  wire [5:0] \words$1[1].data_bits ;
+  wire \words$1[1].gray ;
+  wire \words$1[1].lc ;
+  wire \words$1[1].nenw ;
+  wire \words$1[1].signed ;
   wire [11:0] \words[0] ;
   (* enum_base_type = "Crc" *)
   (* enum_value_00 = "NONE" *)
@@ -6377,683 +6376,631 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   wire \words[1].lc ;
   wire \words[1].nenw ;
   wire \words[1].signed ;
-  assign \$365  = ! word;
-  assign \$366  = in_word & \$365 ;
-  assign \$367  = idx == words[5:0];
-  assign \$368  = \$366  & \$367 ;
-  assign \$369  = ssi & \port$2202$272 [0];
-  assign \$370  = ~ \port$2202$272 [1];
-  assign \$371  = \$369  & \$370 ;
-  assign \$372  = \bit  ^ \$371 ;
-  assign \$373  = ~ words[6];
-  assign \$374  = ! word;
-  assign \$375  = in_word & \$374 ;
-  assign \$376  = idx == w0_data_end_p1;
-  assign \$377  = \$375  & \$376 ;
-  assign \$379  = in_word & \$378 ;
-  assign \$380  = \$379  & in_data;
-  assign \$381  = words[22] & data1[0];
-  assign \$382  = \bit  ^ \$381 ;
-  assign \$383  = ! idx;
-  assign \$384  = words[23] & \$383 ;
-  assign \$385  = words[22] & data1[0];
-  assign \$386  = \bit  ^ \$385 ;
-  assign \$387  = \$384  & \$386 ;
-  assign \$388  = ! idx;
-  assign \$389  = words[23] & \$388 ;
-  assign \$390  = words[22] & data1[0];
-  assign \$391  = \bit  ^ \$390 ;
-  assign \$392  = \$389  & \$391 ;
-  assign \$393  = ! idx;
-  assign \$394  = words[23] & \$393 ;
-  assign \$395  = words[22] & data1[0];
-  assign \$396  = \bit  ^ \$395 ;
-  assign \$397  = \$394  & \$396 ;
-  assign \$398  = ! idx;
-  assign \$399  = words[23] & \$398 ;
-  assign \$400  = words[22] & data1[0];
-  assign \$401  = \bit  ^ \$400 ;
-  assign \$402  = \$399  & \$401 ;
-  assign \$403  = ! idx;
-  assign \$404  = words[23] & \$403 ;
-  assign \$405  = words[22] & data1[0];
-  assign \$406  = \bit  ^ \$405 ;
-  assign \$407  = \$404  & \$406 ;
-  assign \$408  = ! idx;
-  assign \$409  = words[23] & \$408 ;
-  assign \$410  = words[22] & data1[0];
-  assign \$411  = \bit  ^ \$410 ;
-  assign \$412  = \$409  & \$411 ;
-  assign \$413  = ! idx;
-  assign \$414  = words[23] & \$413 ;
-  assign \$415  = words[22] & data1[0];
-  assign \$416  = \bit  ^ \$415 ;
-  assign \$417  = \$414  & \$416 ;
-  assign \$418  = ! idx;
-  assign \$419  = words[23] & \$418 ;
-  assign \$420  = words[22] & data1[0];
-  assign \$421  = \bit  ^ \$420 ;
-  assign \$422  = \$419  & \$421 ;
-  assign \$423  = ! idx;
-  assign \$424  = words[23] & \$423 ;
-  assign \$425  = words[22] & data1[0];
-  assign \$426  = \bit  ^ \$425 ;
-  assign \$427  = \$424  & \$426 ;
-  assign \$428  = ! idx;
-  assign \$429  = words[23] & \$428 ;
-  assign \$430  = words[22] & data1[0];
-  assign \$431  = \bit  ^ \$430 ;
-  assign \$432  = \$429  & \$431 ;
-  assign \$433  = ! idx;
-  assign \$434  = words[23] & \$433 ;
-  assign \$435  = words[22] & data1[0];
-  assign \$436  = \bit  ^ \$435 ;
-  assign \$437  = \$434  & \$436 ;
-  assign \$438  = ! idx;
-  assign \$439  = words[23] & \$438 ;
-  assign \$440  = words[22] & data1[0];
-  assign \$441  = \bit  ^ \$440 ;
-  assign \$442  = \$439  & \$441 ;
-  assign \$443  = ! idx;
-  assign \$444  = words[23] & \$443 ;
-  assign \$445  = words[22] & data1[0];
-  assign \$446  = \bit  ^ \$445 ;
-  assign \$447  = \$444  & \$446 ;
-  assign \$448  = ! idx;
-  assign \$449  = words[23] & \$448 ;
-  assign \$450  = words[22] & data1[0];
-  assign \$451  = \bit  ^ \$450 ;
-  assign \$452  = \$449  & \$451 ;
-  assign \$453  = ! idx;
-  assign \$454  = words[23] & \$453 ;
-  assign \$455  = words[22] & data1[0];
-  assign \$456  = \bit  ^ \$455 ;
-  assign \$457  = \$454  & \$456 ;
-  assign \$458  = ! idx;
-  assign \$459  = words[23] & \$458 ;
-  assign \$460  = words[22] & data1[0];
-  assign \$461  = \bit  ^ \$460 ;
-  assign \$462  = \$459  & \$461 ;
-  assign \$463  = ! idx;
-  assign \$464  = words[23] & \$463 ;
-  assign \$465  = words[22] & data1[0];
-  assign \$466  = \bit  ^ \$465 ;
-  assign \$467  = \$464  & \$466 ;
-  assign \$468  = ! idx;
-  assign \$469  = words[23] & \$468 ;
-  assign \$470  = words[22] & data1[0];
-  assign \$471  = \bit  ^ \$470 ;
-  assign \$472  = \$469  & \$471 ;
-  assign \$473  = ! idx;
-  assign \$474  = words[23] & \$473 ;
-  assign \$475  = words[22] & data1[0];
-  assign \$476  = \bit  ^ \$475 ;
-  assign \$477  = \$474  & \$476 ;
-  assign \$478  = ! idx;
-  assign \$479  = words[23] & \$478 ;
-  assign \$480  = words[22] & data1[0];
-  assign \$481  = \bit  ^ \$480 ;
-  assign \$482  = \$479  & \$481 ;
-  assign \$483  = ! idx;
-  assign \$484  = words[23] & \$483 ;
-  assign \$485  = words[22] & data1[0];
-  assign \$486  = \bit  ^ \$485 ;
-  assign \$487  = \$484  & \$486 ;
-  assign \$488  = ! idx;
-  assign \$489  = words[23] & \$488 ;
-  assign \$490  = words[22] & data1[0];
-  assign \$491  = \bit  ^ \$490 ;
-  assign \$492  = \$489  & \$491 ;
-  assign \$493  = ! idx;
-  assign \$494  = words[23] & \$493 ;
-  assign \$495  = words[22] & data1[0];
-  assign \$496  = \bit  ^ \$495 ;
-  assign \$497  = \$494  & \$496 ;
-  assign \$498  = ! idx;
-  assign \$499  = words[23] & \$498 ;
-  assign \$500  = words[22] & data1[0];
-  assign \$501  = \bit  ^ \$500 ;
-  assign \$502  = \$499  & \$501 ;
-  assign \$503  = ! idx;
-  assign \$504  = words[23] & \$503 ;
-  assign \$505  = words[22] & data1[0];
-  assign \$506  = \bit  ^ \$505 ;
-  assign \$507  = \$504  & \$506 ;
-  assign \$508  = ! idx;
-  assign \$509  = words[23] & \$508 ;
-  assign \$510  = words[22] & data1[0];
-  assign \$511  = \bit  ^ \$510 ;
-  assign \$512  = \$509  & \$511 ;
-  assign \$513  = ! idx;
-  assign \$514  = words[23] & \$513 ;
-  assign \$515  = words[22] & data1[0];
-  assign \$516  = \bit  ^ \$515 ;
-  assign \$517  = \$514  & \$516 ;
-  assign \$518  = ! idx;
-  assign \$519  = words[23] & \$518 ;
-  assign \$520  = words[22] & data1[0];
-  assign \$521  = \bit  ^ \$520 ;
-  assign \$522  = \$519  & \$521 ;
-  assign \$523  = ! idx;
-  assign \$524  = words[23] & \$523 ;
-  assign \$525  = words[22] & data1[0];
-  assign \$526  = \bit  ^ \$525 ;
-  assign \$527  = \$524  & \$526 ;
-  assign \$528  = ! idx;
-  assign \$529  = words[23] & \$528 ;
-  assign \$530  = words[22] & data1[0];
-  assign \$531  = \bit  ^ \$530 ;
-  assign \$532  = \$529  & \$531 ;
-  assign \$533  = ! idx;
-  assign \$534  = words[23] & \$533 ;
-  assign \$535  = words[22] & data1[0];
-  assign \$536  = \bit  ^ \$535 ;
-  assign \$537  = \$534  & \$536 ;
-  assign \$538  = ! idx;
-  assign \$539  = words[23] & \$538 ;
-  assign \$540  = words[22] & data1[0];
-  assign \$541  = \bit  ^ \$540 ;
-  assign \$542  = \$539  & \$541 ;
-  assign \$543  = ! idx;
-  assign \$544  = words[23] & \$543 ;
-  assign \$545  = words[22] & data1[0];
-  assign \$546  = \bit  ^ \$545 ;
-  assign \$547  = \$544  & \$546 ;
-  assign \$548  = ! idx;
-  assign \$549  = words[23] & \$548 ;
-  assign \$550  = words[22] & data1[0];
-  assign \$551  = \bit  ^ \$550 ;
-  assign \$552  = \$549  & \$551 ;
-  assign \$553  = ! idx;
-  assign \$554  = words[23] & \$553 ;
-  assign \$555  = words[22] & data1[0];
-  assign \$556  = \bit  ^ \$555 ;
-  assign \$557  = \$554  & \$556 ;
-  assign \$558  = ! idx;
-  assign \$559  = words[23] & \$558 ;
-  assign \$560  = words[22] & data1[0];
-  assign \$561  = \bit  ^ \$560 ;
-  assign \$562  = \$559  & \$561 ;
-  assign \$563  = ! idx;
-  assign \$564  = words[23] & \$563 ;
-  assign \$565  = words[22] & data1[0];
-  assign \$566  = \bit  ^ \$565 ;
-  assign \$567  = \$564  & \$566 ;
-  assign \$568  = ! idx;
-  assign \$569  = words[23] & \$568 ;
-  assign \$570  = words[22] & data1[0];
-  assign \$571  = \bit  ^ \$570 ;
-  assign \$572  = \$569  & \$571 ;
-  assign \$573  = ! idx;
-  assign \$574  = words[23] & \$573 ;
-  assign \$575  = words[22] & data1[0];
-  assign \$576  = \bit  ^ \$575 ;
-  assign \$577  = \$574  & \$576 ;
-  assign \$578  = ! idx;
-  assign \$579  = words[23] & \$578 ;
-  assign \$580  = words[22] & data1[0];
-  assign \$581  = \bit  ^ \$580 ;
-  assign \$582  = \$579  & \$581 ;
-  assign \$583  = { data1[38:0], \$382  } | { \$582 , \$577 , \$572 , \$567 , \$562 , \$557 , \$552 , \$547 , \$542 , \$537 , \$532 , \$527 , \$522 , \$517 , \$512 , \$507 , \$502 , \$497 , \$492 , \$487 , \$482 , \$477 , \$472 , \$467 , \$462 , \$457 , \$452 , \$447 , \$442 , \$437 , \$432 , \$427 , \$422 , \$417 , \$412 , \$407 , \$402 , \$397 , \$392 , \$387  };
-  assign \$584  = ~ words[18];
-  assign \$586  = in_word & \$585 ;
-  assign \$587  = idx == words[17:12];
-  assign \$588  = \$586  & \$587 ;
-  assign \$590  = in_word & \$589 ;
-  assign \$591  = idx == w1_data_end_p1;
-  assign \$592  = \$590  & \$591 ;
-  assign \$593  = in_word & ssi;
-  assign \$594  = in_word & in_top;
-  assign \$595  = words[10] & data0[0];
-  assign \$596  = \bit  ^ \$595 ;
+  assign \$402  = words[23] & \$401 ;
+  assign \$403  = words[22] & data1[0];
+  assign \$404  = \bit  ^ \$403 ;
+  assign \$405  = \$402  & \$404 ;
+  assign \$406  = ! idx;
+  assign \$407  = words[23] & \$406 ;
+  assign \$408  = words[22] & data1[0];
+  assign \$409  = \bit  ^ \$408 ;
+  assign \$410  = \$407  & \$409 ;
+  assign \$411  = ! idx;
+  assign \$412  = words[23] & \$411 ;
+  assign \$413  = words[22] & data1[0];
+  assign \$414  = \bit  ^ \$413 ;
+  assign \$415  = \$412  & \$414 ;
+  assign \$416  = ! idx;
+  assign \$417  = words[23] & \$416 ;
+  assign \$418  = words[22] & data1[0];
+  assign \$419  = \bit  ^ \$418 ;
+  assign \$420  = \$417  & \$419 ;
+  assign \$421  = ! idx;
+  assign \$422  = words[23] & \$421 ;
+  assign \$423  = words[22] & data1[0];
+  assign \$424  = \bit  ^ \$423 ;
+  assign \$425  = \$422  & \$424 ;
+  assign \$426  = ! idx;
+  assign \$427  = words[23] & \$426 ;
+  assign \$428  = words[22] & data1[0];
+  assign \$429  = \bit  ^ \$428 ;
+  assign \$430  = \$427  & \$429 ;
+  assign \$431  = ! idx;
+  assign \$432  = words[23] & \$431 ;
+  assign \$433  = words[22] & data1[0];
+  assign \$434  = \bit  ^ \$433 ;
+  assign \$435  = \$432  & \$434 ;
+  assign \$436  = ! idx;
+  assign \$437  = words[23] & \$436 ;
+  assign \$438  = words[22] & data1[0];
+  assign \$439  = \bit  ^ \$438 ;
+  assign \$440  = \$437  & \$439 ;
+  assign \$441  = ! idx;
+  assign \$442  = words[23] & \$441 ;
+  assign \$443  = words[22] & data1[0];
+  assign \$444  = \bit  ^ \$443 ;
+  assign \$445  = \$442  & \$444 ;
+  assign \$446  = ! idx;
+  assign \$447  = words[23] & \$446 ;
+  assign \$448  = words[22] & data1[0];
+  assign \$449  = \bit  ^ \$448 ;
+  assign \$450  = \$447  & \$449 ;
+  assign \$451  = ! idx;
+  assign \$452  = words[23] & \$451 ;
+  assign \$453  = words[22] & data1[0];
+  assign \$454  = \bit  ^ \$453 ;
+  assign \$455  = \$452  & \$454 ;
+  assign \$456  = ! idx;
+  assign \$457  = words[23] & \$456 ;
+  assign \$458  = words[22] & data1[0];
+  assign \$459  = \bit  ^ \$458 ;
+  assign \$460  = \$457  & \$459 ;
+  assign \$461  = ! idx;
+  assign \$462  = words[23] & \$461 ;
+  assign \$463  = words[22] & data1[0];
+  assign \$464  = \bit  ^ \$463 ;
+  assign \$465  = \$462  & \$464 ;
+  assign \$466  = ! idx;
+  assign \$467  = words[23] & \$466 ;
+  assign \$468  = words[22] & data1[0];
+  assign \$469  = \bit  ^ \$468 ;
+  assign \$470  = \$467  & \$469 ;
+  assign \$471  = ! idx;
+  assign \$472  = words[23] & \$471 ;
+  assign \$473  = words[22] & data1[0];
+  assign \$474  = \bit  ^ \$473 ;
+  assign \$475  = \$472  & \$474 ;
+  assign \$476  = ! idx;
+  assign \$477  = words[23] & \$476 ;
+  assign \$478  = words[22] & data1[0];
+  assign \$479  = \bit  ^ \$478 ;
+  assign \$480  = \$477  & \$479 ;
+  assign \$481  = ! idx;
+  assign \$482  = words[23] & \$481 ;
+  assign \$483  = words[22] & data1[0];
+  assign \$484  = \bit  ^ \$483 ;
+  assign \$485  = \$482  & \$484 ;
+  assign \$486  = ! idx;
+  assign \$487  = words[23] & \$486 ;
+  assign \$488  = words[22] & data1[0];
+  assign \$489  = \bit  ^ \$488 ;
+  assign \$490  = \$487  & \$489 ;
+  assign \$491  = ! idx;
+  assign \$492  = words[23] & \$491 ;
+  assign \$493  = words[22] & data1[0];
+  assign \$494  = \bit  ^ \$493 ;
+  assign \$495  = \$492  & \$494 ;
+  assign \$496  = ! idx;
+  assign \$497  = words[23] & \$496 ;
+  assign \$498  = words[22] & data1[0];
+  assign \$499  = \bit  ^ \$498 ;
+  assign \$500  = \$497  & \$499 ;
+  assign \$501  = ! idx;
+  assign \$502  = words[23] & \$501 ;
+  assign \$503  = words[22] & data1[0];
+  assign \$504  = \bit  ^ \$503 ;
+  assign \$505  = \$502  & \$504 ;
+  assign \$506  = ! idx;
+  assign \$507  = words[23] & \$506 ;
+  assign \$508  = words[22] & data1[0];
+  assign \$509  = \bit  ^ \$508 ;
+  assign \$510  = \$507  & \$509 ;
+  assign \$511  = ! idx;
+  assign \$512  = words[23] & \$511 ;
+  assign \$513  = words[22] & data1[0];
+  assign \$514  = \bit  ^ \$513 ;
+  assign \$515  = \$512  & \$514 ;
+  assign \$516  = ! idx;
+  assign \$517  = words[23] & \$516 ;
+  assign \$518  = words[22] & data1[0];
+  assign \$519  = \bit  ^ \$518 ;
+  assign \$520  = \$517  & \$519 ;
+  assign \$521  = ! idx;
+  assign \$522  = words[23] & \$521 ;
+  assign \$523  = words[22] & data1[0];
+  assign \$524  = \bit  ^ \$523 ;
+  assign \$525  = \$522  & \$524 ;
+  assign \$526  = ! idx;
+  assign \$527  = words[23] & \$526 ;
+  assign \$528  = words[22] & data1[0];
+  assign \$529  = \bit  ^ \$528 ;
+  assign \$530  = \$527  & \$529 ;
+  assign \$531  = ! idx;
+  assign \$532  = words[23] & \$531 ;
+  assign \$533  = words[22] & data1[0];
+  assign \$534  = \bit  ^ \$533 ;
+  assign \$535  = \$532  & \$534 ;
+  assign \$536  = ! idx;
+  assign \$537  = words[23] & \$536 ;
+  assign \$538  = words[22] & data1[0];
+  assign \$539  = \bit  ^ \$538 ;
+  assign \$540  = \$537  & \$539 ;
+  assign \$541  = ! idx;
+  assign \$542  = words[23] & \$541 ;
+  assign \$543  = words[22] & data1[0];
+  assign \$544  = \bit  ^ \$543 ;
+  assign \$545  = \$542  & \$544 ;
+  assign \$546  = ! idx;
+  assign \$547  = words[23] & \$546 ;
+  assign \$548  = words[22] & data1[0];
+  assign \$549  = \bit  ^ \$548 ;
+  assign \$550  = \$547  & \$549 ;
+  assign \$551  = ! idx;
+  assign \$552  = words[23] & \$551 ;
+  assign \$553  = words[22] & data1[0];
+  assign \$554  = \bit  ^ \$553 ;
+  assign \$555  = \$552  & \$554 ;
+  assign \$556  = { data1[38:0], \$355  } | { \$555 , \$550 , \$545 , \$540 , \$535 , \$530 , \$525 , \$520 , \$515 , \$510 , \$505 , \$500 , \$495 , \$490 , \$485 , \$480 , \$475 , \$470 , \$465 , \$460 , \$455 , \$450 , \$445 , \$440 , \$435 , \$430 , \$425 , \$420 , \$415 , \$410 , \$405 , \$400 , \$395 , \$390 , \$385 , \$380 , \$375 , \$370 , \$365 , \$360  };
+  assign \$557  = ~ words[18];
+  assign \$559  = in_word & \$558 ;
+  assign \$560  = idx == words[17:12];
+  assign \$561  = \$559  & \$560 ;
+  assign \$563  = in_word & \$562 ;
+  assign \$564  = idx == ends[43:37];
+  assign \$565  = \$563  & \$564 ;
+  assign \$566  = in_word & in_top;
+  assign \$567  = words[10] & data0[0];
+  assign \$568  = \bit  ^ \$567 ;
+  always @(posedge clk)
+    done <= \$569 ;
+  always @(posedge clk)
+    stopped <= \$570 ;
+  always @(posedge clk)
+    slots <= \$571 ;
+  always @(posedge clk)
+    slots_full <= \$572 ;
+  always @(posedge clk)
+    idx <= \$573 ;
+  always @(posedge clk)
+    in_data <= \$574 ;
+  always @(posedge clk)
+    in_lc <= \$575 ;
+  always @(posedge clk)
+    in_crc <= \$576 ;
+  always @(posedge clk)
+    in_top <= \$577 ;
+  always @(posedge clk)
+    word <= \$578 ;
+  always @(posedge clk)
+    decoder_fsm_state <= \$579 ;
+  always @(posedge clk)
+    started <= \$580 ;
+  always @(posedge clk)
+    start_slot <= \$581 ;
+  always @(posedge clk)
+    cds <= \$582 ;
+  always @(posedge clk)
+    stop_bit <= \$583 ;
+  always @(posedge clk)
+    data0 <= \$584 ;
+  always @(posedge clk)
+    ne <= \$585 ;
+  always @(posedge clk)
+    nw <= \$586 ;
+  always @(posedge clk)
+    data1 <= \$587 ;
+  always @(posedge clk)
+    lc <= \$588 ;
+  always @(posedge clk)
+    cpw_top <= \$589 ;
+  assign error_bit = ssi & \port$2171$272 [0];
   assign frame_end = ssi ? stopped : done;
-  assign \$597  = sample & \bit ;
+  assign index = word ? ends[71:65] : ends[34:28];
+  assign \$1  = sample & \bit ;
+  assign first = in_word & ssi;
   assign lc_load = in_word & in_lc;
-  assign \$598  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$599  = idx == \$598 ;
-  assign \$600  = in_word & \$599 ;
-  assign load = at_cds | \$600 ;
-  assign \$601  = ~ in_crc;
-  assign \cover  = in_word & \$601 ;
+  assign \$2  = word ? ends[71:65] : ends[34:28];
+  assign \$3  = idx == \$2 ;
+  assign \$4  = in_word & \$3 ;
+  assign load = at_cds | \$4 ;
+  assign \$5  = ~ in_crc;
+  assign \cover  = in_word & \$5 ;
   assign check = in_word & in_crc;
-  assign \$602  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$603  = idx == \$602 ;
-  assign last = in_word & \$603 ;
-  assign \$604  = word + 1'h1;
-  assign \$605  = at_cds ? 2'h0 : \$604 ;
-  assign \$606  = ! decoder_fsm_state;
-  assign \$607  = decoder_fsm_state == 1'h1;
-  assign \$608  = decoder_fsm_state == 2'h2;
-  assign \$609  = decoder_fsm_state == 2'h3;
-  assign \$610  = decoder_fsm_state == 3'h4;
-  assign \$611  = decoder_fsm_state == 3'h5;
-  assign \$612  = decoder_fsm_state == 3'h6;
-  always @(posedge clk)
-    w0_data_end_p1 <= \$1 ;
-  always @(posedge clk)
-    w0_data_end_m1 <= \$2 [6:0];
-  always @(posedge clk)
-    w0_nenw_end_m1 <= \$5 [6:0];
-  always @(posedge clk)
-    w0_lc_end_m1 <= \$8 [6:0];
-  always @(posedge clk)
-    w0_word_end_m1 <= \$12 [6:0];
-  always @(posedge clk)
-    w0_data_at0 <= \$13 ;
-  always @(posedge clk)
-    w0_lc_at0 <= \$22 ;
-  always @(posedge clk)
-    w1_data_end_p1 <= \$23 ;
-  always @(posedge clk)
-    w1_data_end_m1 <= \$24 [6:0];
-  always @(posedge clk)
-    w1_nenw_end_m1 <= \$26 [6:0];
-  always @(posedge clk)
-    w1_lc_end_m1 <= \$28 [6:0];
-  always @(posedge clk)
-    w1_word_end_m1 <= \$31 [6:0];
-  always @(posedge clk)
-    w1_data_at0 <= \$32 ;
-  always @(posedge clk)
-    w1_lc_at0 <= \$39 ;
-  always @(posedge clk)
-    done <= \$613 ;
-  always @(posedge clk)
-    stopped <= \$614 ;
-  always @(posedge clk)
-    slots <= \$615 ;
-  always @(posedge clk)
-    slots_full <= \$616 ;
-  always @(posedge clk)
-    idx <= \$617 ;
-  always @(posedge clk)
-    in_data <= \$618 ;
-  always @(posedge clk)
-    in_lc <= \$619 ;
-  always @(posedge clk)
-    in_crc <= \$620 ;
-  always @(posedge clk)
-    in_top <= \$621 ;
-  always @(posedge clk)
-    word <= \$622 ;
-  always @(posedge clk)
-    decoder_fsm_state <= \$623 ;
-  always @(posedge clk)
-    started <= \$624 ;
-  always @(posedge clk)
-    start_slot <= \$625 ;
-  always @(posedge clk)
-    cds <= \$626 ;
-  always @(posedge clk)
-    mismatch <= \$627 ;
-  always @(posedge clk)
-    ring <= \$628 ;
-  always @(posedge clk)
-    stop_bit <= \$629 ;
-  always @(posedge clk)
-    data0 <= \$630 ;
-  always @(posedge clk)
-    ne <= \$631 ;
-  always @(posedge clk)
-    nw <= \$632 ;
-  always @(posedge clk)
-    data1 <= \$633 ;
-  always @(posedge clk)
-    lc <= \$634 ;
-  always @(posedge clk)
-    cpw_top <= \$635 ;
-  assign \$1  = words[5:0] + 1'h1;
-  assign \$2  = words[5:0] + 7'h7f;
-  assign \$3  = ssi & \port$2202$272 [0];
-  assign \$5  = words[5:0] + \$4 ;
-  assign \$6  = ssi & \port$2202$272 [0];
-  assign \$8  = words[5:0] + \$7 ;
-  assign \$9  = ssi & \port$2202$272 [0];
-  assign \$11  = \$10  + crcs[4:0];
-  assign \$12  = words[5:0] + \$11 [6:0];
-  assign \$13  = | words[5:0];
-  assign \$14  = ssi & \port$2202$272 [0];
-  assign \$16  = words[5:0] + \$15 ;
-  assign \$17  = ! \$16 ;
-  assign \$18  = ssi & \port$2202$272 [0];
-  assign \$20  = words[5:0] + \$19 ;
-  assign \$21  = | \$20 ;
-  assign \$22  = \$17  & \$21 ;
-  assign \$23  = words[17:12] + 1'h1;
-  assign \$24  = words[17:12] + 7'h7f;
-  assign \$26  = words[17:12] + \$25 ;
-  assign \$28  = words[17:12] + \$27 ;
-  assign \$30  = \$29  + crcs[42:38];
-  assign \$31  = words[17:12] + \$30 [6:0];
-  assign \$32  = | words[17:12];
-  assign \$34  = words[17:12] + \$33 ;
-  assign \$35  = ! \$34 ;
-  assign \$37  = words[17:12] + \$36 ;
-  assign \$38  = | \$37 ;
-  assign \$39  = \$35  & \$38 ;
-  assign \$40  = ~ slots_full;
-  assign \$41  = sample & \$40 ;
-  assign \$42  = slots + 1'h1;
-  assign \$43  = slots == 16'hfffe;
-  assign \$44  = sample & \bit ;
-  assign \$45  = | words[17:12];
-  assign \$46  = | words[17:12];
-  assign \$47  = idx + 1'h1;
-  assign \$48  = word ? w1_data_end_m1 : w0_data_end_m1;
-  assign \$49  = idx != \$48 ;
-  assign \$50  = in_data & \$49 ;
-  assign \$51  = word ? w1_nenw_end_m1 : w0_nenw_end_m1;
+  assign \$6  = word ? ends[71:65] : ends[34:28];
+  assign \$7  = idx == \$6 ;
+  assign last = in_word & \$7 ;
+  assign \$8  = word + 1'h1;
+  assign \$9  = at_cds ? 2'h0 : \$8 ;
+  assign \$10  = ! decoder_fsm_state;
+  assign \$11  = decoder_fsm_state == 1'h1;
+  assign \$12  = decoder_fsm_state == 2'h2;
+  assign \$13  = decoder_fsm_state == 2'h3;
+  assign \$14  = decoder_fsm_state == 3'h4;
+  assign \$15  = decoder_fsm_state == 3'h5;
+  assign \$16  = decoder_fsm_state == 3'h6;
+  assign \$17  = ~ slots_full;
+  assign \$18  = sample & \$17 ;
+  assign \$19  = slots + 1'h1;
+  assign \$20  = slots == 16'hfffe;
+  assign \$21  = sample & \bit ;
+  assign \$22  = | words[17:12];
+  assign \$23  = | words[17:12];
+  assign \$24  = idx + 1'h1;
+  assign \$25  = word ? ends[50:44] : ends[13:7];
+  assign \$26  = idx != \$25 ;
+  assign \$27  = in_data & \$26 ;
+  assign \$28  = word ? ends[57:51] : ends[20:14];
+  assign \$29  = idx == \$28 ;
+  assign \$30  = in_lc | \$29 ;
+  assign \$31  = word ? ends[64:58] : ends[27:21];
+  assign \$32  = idx != \$31 ;
+  assign \$33  = \$30  & \$32 ;
+  assign \$34  = word ? ends[64:58] : ends[27:21];
+  assign \$35  = idx == \$34 ;
+  assign \$36  = in_crc | \$35 ;
+  assign \$37  = word ? ends[71:65] : ends[34:28];
+  assign \$38  = idx != \$37 ;
+  assign \$39  = \$36  & \$38 ;
+  assign \$40  = idx != ends[50:44];
+  assign \$41  = in_top & \$40 ;
+  assign \$42  = word ? ends[71:65] : ends[34:28];
+  assign \$43  = idx == \$42 ;
+  assign \$46  = word_count - 1'h1;
+  assign \$47  = word == \$46 ;
+  assign \$48  = ssi & \port$2171$272 [2];
+  assign \$49  = word + 1'h1;
+  assign \$50  = idx + 1'h1;
+  assign \$51  = word ? ends[71:65] : ends[34:28];
   assign \$52  = idx == \$51 ;
-  assign \$53  = in_lc | \$52 ;
-  assign \$54  = word ? w1_lc_end_m1 : w0_lc_end_m1;
-  assign \$55  = idx != \$54 ;
-  assign \$56  = \$53  & \$55 ;
-  assign \$57  = word ? w1_lc_end_m1 : w0_lc_end_m1;
-  assign \$58  = idx == \$57 ;
-  assign \$59  = in_crc | \$58 ;
-  assign \$60  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$61  = idx != \$60 ;
+  assign \$53  = ! word;
+  assign \$54  = in_word & \$53 ;
+  assign \$55  = \$54  & in_data;
+  assign \$56  = words[10] & data0[0];
+  assign \$57  = \bit  ^ \$56 ;
+  assign \$58  = ! idx;
+  assign \$59  = words[11] & \$58 ;
+  assign \$60  = words[10] & data0[0];
+  assign \$61  = \bit  ^ \$60 ;
   assign \$62  = \$59  & \$61 ;
-  assign \$63  = idx != w1_data_end_m1;
-  assign \$64  = in_top & \$63 ;
-  assign \$65  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$66  = idx == \$65 ;
-  assign \$69  = word_count - 1'h1;
-  assign \$70  = word == \$69 ;
-  assign \$71  = ssi & \port$2202$272 [2];
-  assign \$72  = word + 1'h1;
-  assign \$73  = idx + 1'h1;
-  assign \$74  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$75  = ring >> \$74 ;
-  assign \$76  = \bit  != \$75 ;
-  assign \$77  = mismatch | \$76 ;
-  assign \$78  = word ? w1_word_end_m1 : w0_word_end_m1;
-  assign \$79  = idx == \$78 ;
-  assign \$80  = ! word;
-  assign \$81  = in_word & \$80 ;
-  assign \$82  = \$81  & in_data;
-  assign \$83  = words[10] & data0[0];
-  assign \$84  = \bit  ^ \$83 ;
-  assign \$85  = ! idx;
-  assign \$86  = words[11] & \$85 ;
-  assign \$87  = words[10] & data0[0];
-  assign \$88  = \bit  ^ \$87 ;
-  assign \$89  = \$86  & \$88 ;
-  assign \$90  = ! idx;
-  assign \$91  = words[11] & \$90 ;
-  assign \$92  = words[10] & data0[0];
-  assign \$93  = \bit  ^ \$92 ;
-  assign \$94  = \$91  & \$93 ;
-  assign \$95  = ! idx;
-  assign \$96  = words[11] & \$95 ;
-  assign \$97  = words[10] & data0[0];
-  assign \$98  = \bit  ^ \$97 ;
-  assign \$99  = \$96  & \$98 ;
-  assign \$100  = ! idx;
-  assign \$101  = words[11] & \$100 ;
-  assign \$102  = words[10] & data0[0];
-  assign \$103  = \bit  ^ \$102 ;
-  assign \$104  = \$101  & \$103 ;
-  assign \$105  = ! idx;
-  assign \$106  = words[11] & \$105 ;
-  assign \$107  = words[10] & data0[0];
-  assign \$108  = \bit  ^ \$107 ;
-  assign \$109  = \$106  & \$108 ;
-  assign \$110  = ! idx;
-  assign \$111  = words[11] & \$110 ;
-  assign \$112  = words[10] & data0[0];
-  assign \$113  = \bit  ^ \$112 ;
-  assign \$114  = \$111  & \$113 ;
-  assign \$115  = ! idx;
-  assign \$116  = words[11] & \$115 ;
-  assign \$117  = words[10] & data0[0];
-  assign \$118  = \bit  ^ \$117 ;
-  assign \$119  = \$116  & \$118 ;
-  assign \$120  = ! idx;
-  assign \$121  = words[11] & \$120 ;
-  assign \$122  = words[10] & data0[0];
-  assign \$123  = \bit  ^ \$122 ;
-  assign \$124  = \$121  & \$123 ;
-  assign \$125  = ! idx;
-  assign \$126  = words[11] & \$125 ;
-  assign \$127  = words[10] & data0[0];
-  assign \$128  = \bit  ^ \$127 ;
-  assign \$129  = \$126  & \$128 ;
-  assign \$130  = ! idx;
-  assign \$131  = words[11] & \$130 ;
-  assign \$132  = words[10] & data0[0];
-  assign \$133  = \bit  ^ \$132 ;
-  assign \$134  = \$131  & \$133 ;
-  assign \$135  = ! idx;
-  assign \$136  = words[11] & \$135 ;
-  assign \$137  = words[10] & data0[0];
-  assign \$138  = \bit  ^ \$137 ;
-  assign \$139  = \$136  & \$138 ;
-  assign \$140  = ! idx;
-  assign \$141  = words[11] & \$140 ;
-  assign \$142  = words[10] & data0[0];
-  assign \$143  = \bit  ^ \$142 ;
-  assign \$144  = \$141  & \$143 ;
-  assign \$145  = ! idx;
-  assign \$146  = words[11] & \$145 ;
-  assign \$147  = words[10] & data0[0];
-  assign \$148  = \bit  ^ \$147 ;
-  assign \$149  = \$146  & \$148 ;
-  assign \$150  = ! idx;
-  assign \$151  = words[11] & \$150 ;
-  assign \$152  = words[10] & data0[0];
-  assign \$153  = \bit  ^ \$152 ;
-  assign \$154  = \$151  & \$153 ;
-  assign \$155  = ! idx;
-  assign \$156  = words[11] & \$155 ;
-  assign \$157  = words[10] & data0[0];
-  assign \$158  = \bit  ^ \$157 ;
-  assign \$159  = \$156  & \$158 ;
-  assign \$160  = ! idx;
-  assign \$161  = words[11] & \$160 ;
-  assign \$162  = words[10] & data0[0];
-  assign \$163  = \bit  ^ \$162 ;
-  assign \$164  = \$161  & \$163 ;
-  assign \$165  = ! idx;
-  assign \$166  = words[11] & \$165 ;
-  assign \$167  = words[10] & data0[0];
-  assign \$168  = \bit  ^ \$167 ;
-  assign \$169  = \$166  & \$168 ;
-  assign \$170  = ! idx;
-  assign \$171  = words[11] & \$170 ;
-  assign \$172  = words[10] & data0[0];
-  assign \$173  = \bit  ^ \$172 ;
-  assign \$174  = \$171  & \$173 ;
-  assign \$175  = ! idx;
-  assign \$176  = words[11] & \$175 ;
-  assign \$177  = words[10] & data0[0];
-  assign \$178  = \bit  ^ \$177 ;
-  assign \$179  = \$176  & \$178 ;
-  assign \$180  = ! idx;
-  assign \$181  = words[11] & \$180 ;
-  assign \$182  = words[10] & data0[0];
-  assign \$183  = \bit  ^ \$182 ;
-  assign \$184  = \$181  & \$183 ;
-  assign \$185  = ! idx;
-  assign \$186  = words[11] & \$185 ;
-  assign \$187  = words[10] & data0[0];
-  assign \$188  = \bit  ^ \$187 ;
-  assign \$189  = \$186  & \$188 ;
-  assign \$190  = ! idx;
-  assign \$191  = words[11] & \$190 ;
-  assign \$192  = words[10] & data0[0];
-  assign \$193  = \bit  ^ \$192 ;
-  assign \$194  = \$191  & \$193 ;
-  assign \$195  = ! idx;
-  assign \$196  = words[11] & \$195 ;
-  assign \$197  = words[10] & data0[0];
-  assign \$198  = \bit  ^ \$197 ;
-  assign \$199  = \$196  & \$198 ;
-  assign \$200  = ! idx;
-  assign \$201  = words[11] & \$200 ;
-  assign \$202  = words[10] & data0[0];
-  assign \$203  = \bit  ^ \$202 ;
-  assign \$204  = \$201  & \$203 ;
-  assign \$205  = ! idx;
-  assign \$206  = words[11] & \$205 ;
-  assign \$207  = words[10] & data0[0];
-  assign \$208  = \bit  ^ \$207 ;
-  assign \$209  = \$206  & \$208 ;
-  assign \$210  = ! idx;
-  assign \$211  = words[11] & \$210 ;
-  assign \$212  = words[10] & data0[0];
-  assign \$213  = \bit  ^ \$212 ;
-  assign \$214  = \$211  & \$213 ;
-  assign \$215  = ! idx;
-  assign \$216  = words[11] & \$215 ;
-  assign \$217  = words[10] & data0[0];
-  assign \$218  = \bit  ^ \$217 ;
-  assign \$219  = \$216  & \$218 ;
-  assign \$220  = ! idx;
-  assign \$221  = words[11] & \$220 ;
-  assign \$222  = words[10] & data0[0];
-  assign \$223  = \bit  ^ \$222 ;
-  assign \$224  = \$221  & \$223 ;
-  assign \$225  = ! idx;
-  assign \$226  = words[11] & \$225 ;
-  assign \$227  = words[10] & data0[0];
-  assign \$228  = \bit  ^ \$227 ;
-  assign \$229  = \$226  & \$228 ;
-  assign \$230  = ! idx;
-  assign \$231  = words[11] & \$230 ;
-  assign \$232  = words[10] & data0[0];
-  assign \$233  = \bit  ^ \$232 ;
-  assign \$234  = \$231  & \$233 ;
-  assign \$235  = ! idx;
-  assign \$236  = words[11] & \$235 ;
-  assign \$237  = words[10] & data0[0];
-  assign \$238  = \bit  ^ \$237 ;
-  assign \$239  = \$236  & \$238 ;
-  assign \$240  = ! idx;
-  assign \$241  = words[11] & \$240 ;
-  assign \$242  = words[10] & data0[0];
-  assign \$243  = \bit  ^ \$242 ;
-  assign \$244  = \$241  & \$243 ;
-  assign \$245  = ! idx;
-  assign \$246  = words[11] & \$245 ;
-  assign \$247  = words[10] & data0[0];
-  assign \$248  = \bit  ^ \$247 ;
-  assign \$249  = \$246  & \$248 ;
-  assign \$250  = ! idx;
-  assign \$251  = words[11] & \$250 ;
-  assign \$252  = words[10] & data0[0];
-  assign \$253  = \bit  ^ \$252 ;
-  assign \$254  = \$251  & \$253 ;
-  assign \$255  = ! idx;
-  assign \$256  = words[11] & \$255 ;
-  assign \$257  = words[10] & data0[0];
-  assign \$258  = \bit  ^ \$257 ;
-  assign \$259  = \$256  & \$258 ;
-  assign \$260  = ! idx;
-  assign \$261  = words[11] & \$260 ;
-  assign \$262  = words[10] & data0[0];
-  assign \$263  = \bit  ^ \$262 ;
-  assign \$264  = \$261  & \$263 ;
-  assign \$265  = ! idx;
-  assign \$266  = words[11] & \$265 ;
-  assign \$267  = words[10] & data0[0];
-  assign \$268  = \bit  ^ \$267 ;
-  assign \$269  = \$266  & \$268 ;
-  assign \$270  = ! idx;
-  assign \$271  = words[11] & \$270 ;
-  assign \$272  = words[10] & data0[0];
-  assign \$273  = \bit  ^ \$272 ;
-  assign \$274  = \$271  & \$273 ;
-  assign \$275  = ! idx;
-  assign \$276  = words[11] & \$275 ;
-  assign \$277  = words[10] & data0[0];
-  assign \$278  = \bit  ^ \$277 ;
-  assign \$279  = \$276  & \$278 ;
-  assign \$280  = ! idx;
-  assign \$281  = words[11] & \$280 ;
-  assign \$282  = words[10] & data0[0];
-  assign \$283  = \bit  ^ \$282 ;
-  assign \$284  = \$281  & \$283 ;
-  assign \$285  = ! idx;
-  assign \$286  = words[11] & \$285 ;
-  assign \$287  = words[10] & data0[0];
-  assign \$288  = \bit  ^ \$287 ;
-  assign \$289  = \$286  & \$288 ;
-  assign \$290  = ! idx;
-  assign \$291  = words[11] & \$290 ;
-  assign \$292  = words[10] & data0[0];
-  assign \$293  = \bit  ^ \$292 ;
-  assign \$294  = \$291  & \$293 ;
-  assign \$295  = ! idx;
-  assign \$296  = words[11] & \$295 ;
-  assign \$297  = words[10] & data0[0];
-  assign \$298  = \bit  ^ \$297 ;
-  assign \$299  = \$296  & \$298 ;
-  assign \$300  = ! idx;
-  assign \$301  = words[11] & \$300 ;
-  assign \$302  = words[10] & data0[0];
-  assign \$303  = \bit  ^ \$302 ;
-  assign \$304  = \$301  & \$303 ;
-  assign \$305  = ! idx;
-  assign \$306  = words[11] & \$305 ;
-  assign \$307  = words[10] & data0[0];
-  assign \$308  = \bit  ^ \$307 ;
-  assign \$309  = \$306  & \$308 ;
-  assign \$310  = ! idx;
-  assign \$311  = words[11] & \$310 ;
-  assign \$312  = words[10] & data0[0];
-  assign \$313  = \bit  ^ \$312 ;
-  assign \$314  = \$311  & \$313 ;
-  assign \$315  = ! idx;
-  assign \$316  = words[11] & \$315 ;
-  assign \$317  = words[10] & data0[0];
-  assign \$318  = \bit  ^ \$317 ;
-  assign \$319  = \$316  & \$318 ;
-  assign \$320  = ! idx;
-  assign \$321  = words[11] & \$320 ;
-  assign \$322  = words[10] & data0[0];
-  assign \$323  = \bit  ^ \$322 ;
-  assign \$324  = \$321  & \$323 ;
-  assign \$325  = ! idx;
-  assign \$326  = words[11] & \$325 ;
-  assign \$327  = words[10] & data0[0];
-  assign \$328  = \bit  ^ \$327 ;
-  assign \$329  = \$326  & \$328 ;
-  assign \$330  = ! idx;
-  assign \$331  = words[11] & \$330 ;
-  assign \$332  = words[10] & data0[0];
-  assign \$333  = \bit  ^ \$332 ;
-  assign \$334  = \$331  & \$333 ;
-  assign \$335  = ! idx;
-  assign \$336  = words[11] & \$335 ;
-  assign \$337  = words[10] & data0[0];
-  assign \$338  = \bit  ^ \$337 ;
-  assign \$339  = \$336  & \$338 ;
-  assign \$340  = ! idx;
-  assign \$341  = words[11] & \$340 ;
-  assign \$342  = words[10] & data0[0];
-  assign \$343  = \bit  ^ \$342 ;
-  assign \$344  = \$341  & \$343 ;
-  assign \$345  = ! idx;
-  assign \$346  = words[11] & \$345 ;
-  assign \$347  = words[10] & data0[0];
-  assign \$348  = \bit  ^ \$347 ;
-  assign \$349  = \$346  & \$348 ;
-  assign \$350  = ! idx;
-  assign \$351  = words[11] & \$350 ;
-  assign \$352  = words[10] & data0[0];
-  assign \$353  = \bit  ^ \$352 ;
-  assign \$354  = \$351  & \$353 ;
-  assign \$355  = ! idx;
-  assign \$356  = words[11] & \$355 ;
-  assign \$357  = words[10] & data0[0];
-  assign \$358  = \bit  ^ \$357 ;
-  assign \$359  = \$356  & \$358 ;
-  assign \$360  = { data0[53:0], \$84  } | { \$359 , \$354 , \$349 , \$344 , \$339 , \$334 , \$329 , \$324 , \$319 , \$314 , \$309 , \$304 , \$299 , \$294 , \$289 , \$284 , \$279 , \$274 , \$269 , \$264 , \$259 , \$254 , \$249 , \$244 , \$239 , \$234 , \$229 , \$224 , \$219 , \$214 , \$209 , \$204 , \$199 , \$194 , \$189 , \$184 , \$179 , \$174 , \$169 , \$164 , \$159 , \$154 , \$149 , \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109 , \$104 , \$99 , \$94 , \$89  };
-  assign \$361  = ~ words[6];
-  assign \$362  = ssi & \port$2202$272 [0];
-  assign \$363  = ~ \$362 ;
-  assign \$364  = \$361  & \$363 ;
+  assign \$63  = ! idx;
+  assign \$64  = words[11] & \$63 ;
+  assign \$65  = words[10] & data0[0];
+  assign \$66  = \bit  ^ \$65 ;
+  assign \$67  = \$64  & \$66 ;
+  assign \$68  = ! idx;
+  assign \$69  = words[11] & \$68 ;
+  assign \$70  = words[10] & data0[0];
+  assign \$71  = \bit  ^ \$70 ;
+  assign \$72  = \$69  & \$71 ;
+  assign \$73  = ! idx;
+  assign \$74  = words[11] & \$73 ;
+  assign \$75  = words[10] & data0[0];
+  assign \$76  = \bit  ^ \$75 ;
+  assign \$77  = \$74  & \$76 ;
+  assign \$78  = ! idx;
+  assign \$79  = words[11] & \$78 ;
+  assign \$80  = words[10] & data0[0];
+  assign \$81  = \bit  ^ \$80 ;
+  assign \$82  = \$79  & \$81 ;
+  assign \$83  = ! idx;
+  assign \$84  = words[11] & \$83 ;
+  assign \$85  = words[10] & data0[0];
+  assign \$86  = \bit  ^ \$85 ;
+  assign \$87  = \$84  & \$86 ;
+  assign \$88  = ! idx;
+  assign \$89  = words[11] & \$88 ;
+  assign \$90  = words[10] & data0[0];
+  assign \$91  = \bit  ^ \$90 ;
+  assign \$92  = \$89  & \$91 ;
+  assign \$93  = ! idx;
+  assign \$94  = words[11] & \$93 ;
+  assign \$95  = words[10] & data0[0];
+  assign \$96  = \bit  ^ \$95 ;
+  assign \$97  = \$94  & \$96 ;
+  assign \$98  = ! idx;
+  assign \$99  = words[11] & \$98 ;
+  assign \$100  = words[10] & data0[0];
+  assign \$101  = \bit  ^ \$100 ;
+  assign \$102  = \$99  & \$101 ;
+  assign \$103  = ! idx;
+  assign \$104  = words[11] & \$103 ;
+  assign \$105  = words[10] & data0[0];
+  assign \$106  = \bit  ^ \$105 ;
+  assign \$107  = \$104  & \$106 ;
+  assign \$108  = ! idx;
+  assign \$109  = words[11] & \$108 ;
+  assign \$110  = words[10] & data0[0];
+  assign \$111  = \bit  ^ \$110 ;
+  assign \$112  = \$109  & \$111 ;
+  assign \$113  = ! idx;
+  assign \$114  = words[11] & \$113 ;
+  assign \$115  = words[10] & data0[0];
+  assign \$116  = \bit  ^ \$115 ;
+  assign \$117  = \$114  & \$116 ;
+  assign \$118  = ! idx;
+  assign \$119  = words[11] & \$118 ;
+  assign \$120  = words[10] & data0[0];
+  assign \$121  = \bit  ^ \$120 ;
+  assign \$122  = \$119  & \$121 ;
+  assign \$123  = ! idx;
+  assign \$124  = words[11] & \$123 ;
+  assign \$125  = words[10] & data0[0];
+  assign \$126  = \bit  ^ \$125 ;
+  assign \$127  = \$124  & \$126 ;
+  assign \$128  = ! idx;
+  assign \$129  = words[11] & \$128 ;
+  assign \$130  = words[10] & data0[0];
+  assign \$131  = \bit  ^ \$130 ;
+  assign \$132  = \$129  & \$131 ;
+  assign \$133  = ! idx;
+  assign \$134  = words[11] & \$133 ;
+  assign \$135  = words[10] & data0[0];
+  assign \$136  = \bit  ^ \$135 ;
+  assign \$137  = \$134  & \$136 ;
+  assign \$138  = ! idx;
+  assign \$139  = words[11] & \$138 ;
+  assign \$140  = words[10] & data0[0];
+  assign \$141  = \bit  ^ \$140 ;
+  assign \$142  = \$139  & \$141 ;
+  assign \$143  = ! idx;
+  assign \$144  = words[11] & \$143 ;
+  assign \$145  = words[10] & data0[0];
+  assign \$146  = \bit  ^ \$145 ;
+  assign \$147  = \$144  & \$146 ;
+  assign \$148  = ! idx;
+  assign \$149  = words[11] & \$148 ;
+  assign \$150  = words[10] & data0[0];
+  assign \$151  = \bit  ^ \$150 ;
+  assign \$152  = \$149  & \$151 ;
+  assign \$153  = ! idx;
+  assign \$154  = words[11] & \$153 ;
+  assign \$155  = words[10] & data0[0];
+  assign \$156  = \bit  ^ \$155 ;
+  assign \$157  = \$154  & \$156 ;
+  assign \$158  = ! idx;
+  assign \$159  = words[11] & \$158 ;
+  assign \$160  = words[10] & data0[0];
+  assign \$161  = \bit  ^ \$160 ;
+  assign \$162  = \$159  & \$161 ;
+  assign \$163  = ! idx;
+  assign \$164  = words[11] & \$163 ;
+  assign \$165  = words[10] & data0[0];
+  assign \$166  = \bit  ^ \$165 ;
+  assign \$167  = \$164  & \$166 ;
+  assign \$168  = ! idx;
+  assign \$169  = words[11] & \$168 ;
+  assign \$170  = words[10] & data0[0];
+  assign \$171  = \bit  ^ \$170 ;
+  assign \$172  = \$169  & \$171 ;
+  assign \$173  = ! idx;
+  assign \$174  = words[11] & \$173 ;
+  assign \$175  = words[10] & data0[0];
+  assign \$176  = \bit  ^ \$175 ;
+  assign \$177  = \$174  & \$176 ;
+  assign \$178  = ! idx;
+  assign \$179  = words[11] & \$178 ;
+  assign \$180  = words[10] & data0[0];
+  assign \$181  = \bit  ^ \$180 ;
+  assign \$182  = \$179  & \$181 ;
+  assign \$183  = ! idx;
+  assign \$184  = words[11] & \$183 ;
+  assign \$185  = words[10] & data0[0];
+  assign \$186  = \bit  ^ \$185 ;
+  assign \$187  = \$184  & \$186 ;
+  assign \$188  = ! idx;
+  assign \$189  = words[11] & \$188 ;
+  assign \$190  = words[10] & data0[0];
+  assign \$191  = \bit  ^ \$190 ;
+  assign \$192  = \$189  & \$191 ;
+  assign \$193  = ! idx;
+  assign \$194  = words[11] & \$193 ;
+  assign \$195  = words[10] & data0[0];
+  assign \$196  = \bit  ^ \$195 ;
+  assign \$197  = \$194  & \$196 ;
+  assign \$198  = ! idx;
+  assign \$199  = words[11] & \$198 ;
+  assign \$200  = words[10] & data0[0];
+  assign \$201  = \bit  ^ \$200 ;
+  assign \$202  = \$199  & \$201 ;
+  assign \$203  = ! idx;
+  assign \$204  = words[11] & \$203 ;
+  assign \$205  = words[10] & data0[0];
+  assign \$206  = \bit  ^ \$205 ;
+  assign \$207  = \$204  & \$206 ;
+  assign \$208  = ! idx;
+  assign \$209  = words[11] & \$208 ;
+  assign \$210  = words[10] & data0[0];
+  assign \$211  = \bit  ^ \$210 ;
+  assign \$212  = \$209  & \$211 ;
+  assign \$213  = ! idx;
+  assign \$214  = words[11] & \$213 ;
+  assign \$215  = words[10] & data0[0];
+  assign \$216  = \bit  ^ \$215 ;
+  assign \$217  = \$214  & \$216 ;
+  assign \$218  = ! idx;
+  assign \$219  = words[11] & \$218 ;
+  assign \$220  = words[10] & data0[0];
+  assign \$221  = \bit  ^ \$220 ;
+  assign \$222  = \$219  & \$221 ;
+  assign \$223  = ! idx;
+  assign \$224  = words[11] & \$223 ;
+  assign \$225  = words[10] & data0[0];
+  assign \$226  = \bit  ^ \$225 ;
+  assign \$227  = \$224  & \$226 ;
+  assign \$228  = ! idx;
+  assign \$229  = words[11] & \$228 ;
+  assign \$230  = words[10] & data0[0];
+  assign \$231  = \bit  ^ \$230 ;
+  assign \$232  = \$229  & \$231 ;
+  assign \$233  = ! idx;
+  assign \$234  = words[11] & \$233 ;
+  assign \$235  = words[10] & data0[0];
+  assign \$236  = \bit  ^ \$235 ;
+  assign \$237  = \$234  & \$236 ;
+  assign \$238  = ! idx;
+  assign \$239  = words[11] & \$238 ;
+  assign \$240  = words[10] & data0[0];
+  assign \$241  = \bit  ^ \$240 ;
+  assign \$242  = \$239  & \$241 ;
+  assign \$243  = ! idx;
+  assign \$244  = words[11] & \$243 ;
+  assign \$245  = words[10] & data0[0];
+  assign \$246  = \bit  ^ \$245 ;
+  assign \$247  = \$244  & \$246 ;
+  assign \$248  = ! idx;
+  assign \$249  = words[11] & \$248 ;
+  assign \$250  = words[10] & data0[0];
+  assign \$251  = \bit  ^ \$250 ;
+  assign \$252  = \$249  & \$251 ;
+  assign \$253  = ! idx;
+  assign \$254  = words[11] & \$253 ;
+  assign \$255  = words[10] & data0[0];
+  assign \$256  = \bit  ^ \$255 ;
+  assign \$257  = \$254  & \$256 ;
+  assign \$258  = ! idx;
+  assign \$259  = words[11] & \$258 ;
+  assign \$260  = words[10] & data0[0];
+  assign \$261  = \bit  ^ \$260 ;
+  assign \$262  = \$259  & \$261 ;
+  assign \$263  = ! idx;
+  assign \$264  = words[11] & \$263 ;
+  assign \$265  = words[10] & data0[0];
+  assign \$266  = \bit  ^ \$265 ;
+  assign \$267  = \$264  & \$266 ;
+  assign \$268  = ! idx;
+  assign \$269  = words[11] & \$268 ;
+  assign \$270  = words[10] & data0[0];
+  assign \$271  = \bit  ^ \$270 ;
+  assign \$272  = \$269  & \$271 ;
+  assign \$273  = ! idx;
+  assign \$274  = words[11] & \$273 ;
+  assign \$275  = words[10] & data0[0];
+  assign \$276  = \bit  ^ \$275 ;
+  assign \$277  = \$274  & \$276 ;
+  assign \$278  = ! idx;
+  assign \$279  = words[11] & \$278 ;
+  assign \$280  = words[10] & data0[0];
+  assign \$281  = \bit  ^ \$280 ;
+  assign \$282  = \$279  & \$281 ;
+  assign \$283  = ! idx;
+  assign \$284  = words[11] & \$283 ;
+  assign \$285  = words[10] & data0[0];
+  assign \$286  = \bit  ^ \$285 ;
+  assign \$287  = \$284  & \$286 ;
+  assign \$288  = ! idx;
+  assign \$289  = words[11] & \$288 ;
+  assign \$290  = words[10] & data0[0];
+  assign \$291  = \bit  ^ \$290 ;
+  assign \$292  = \$289  & \$291 ;
+  assign \$293  = ! idx;
+  assign \$294  = words[11] & \$293 ;
+  assign \$295  = words[10] & data0[0];
+  assign \$296  = \bit  ^ \$295 ;
+  assign \$297  = \$294  & \$296 ;
+  assign \$298  = ! idx;
+  assign \$299  = words[11] & \$298 ;
+  assign \$300  = words[10] & data0[0];
+  assign \$301  = \bit  ^ \$300 ;
+  assign \$302  = \$299  & \$301 ;
+  assign \$303  = ! idx;
+  assign \$304  = words[11] & \$303 ;
+  assign \$305  = words[10] & data0[0];
+  assign \$306  = \bit  ^ \$305 ;
+  assign \$307  = \$304  & \$306 ;
+  assign \$308  = ! idx;
+  assign \$309  = words[11] & \$308 ;
+  assign \$310  = words[10] & data0[0];
+  assign \$311  = \bit  ^ \$310 ;
+  assign \$312  = \$309  & \$311 ;
+  assign \$313  = ! idx;
+  assign \$314  = words[11] & \$313 ;
+  assign \$315  = words[10] & data0[0];
+  assign \$316  = \bit  ^ \$315 ;
+  assign \$317  = \$314  & \$316 ;
+  assign \$318  = ! idx;
+  assign \$319  = words[11] & \$318 ;
+  assign \$320  = words[10] & data0[0];
+  assign \$321  = \bit  ^ \$320 ;
+  assign \$322  = \$319  & \$321 ;
+  assign \$323  = ! idx;
+  assign \$324  = words[11] & \$323 ;
+  assign \$325  = words[10] & data0[0];
+  assign \$326  = \bit  ^ \$325 ;
+  assign \$327  = \$324  & \$326 ;
+  assign \$328  = ! idx;
+  assign \$329  = words[11] & \$328 ;
+  assign \$330  = words[10] & data0[0];
+  assign \$331  = \bit  ^ \$330 ;
+  assign \$332  = \$329  & \$331 ;
+  assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
+  assign \$334  = ~ words[6];
+  assign \$335  = ssi & \port$2171$272 [0];
+  assign \$336  = ~ \$335 ;
+  assign \$337  = \$334  & \$336 ;
+  assign \$338  = ! word;
+  assign \$339  = in_word & \$338 ;
+  assign \$340  = idx == words[5:0];
+  assign \$341  = \$339  & \$340 ;
+  assign \$342  = ssi & \port$2171$272 [0];
+  assign \$343  = ~ \port$2171$272 [1];
+  assign \$344  = \$342  & \$343 ;
+  assign \$345  = \bit  ^ \$344 ;
+  assign \$346  = ~ words[6];
+  assign \$347  = ! word;
+  assign \$348  = in_word & \$347 ;
+  assign \$349  = idx == ends[6:0];
+  assign \$350  = \$348  & \$349 ;
+  assign \$352  = in_word & \$351 ;
+  assign \$353  = \$352  & in_data;
+  assign \$354  = words[22] & data1[0];
+  assign \$355  = \bit  ^ \$354 ;
+  assign \$356  = ! idx;
+  assign \$357  = words[23] & \$356 ;
+  assign \$358  = words[22] & data1[0];
+  assign \$359  = \bit  ^ \$358 ;
+  assign \$360  = \$357  & \$359 ;
+  assign \$361  = ! idx;
+  assign \$362  = words[23] & \$361 ;
+  assign \$363  = words[22] & data1[0];
+  assign \$364  = \bit  ^ \$363 ;
+  assign \$365  = \$362  & \$364 ;
+  assign \$366  = ! idx;
+  assign \$367  = words[23] & \$366 ;
+  assign \$368  = words[22] & data1[0];
+  assign \$369  = \bit  ^ \$368 ;
+  assign \$370  = \$367  & \$369 ;
+  assign \$371  = ! idx;
+  assign \$372  = words[23] & \$371 ;
+  assign \$373  = words[22] & data1[0];
+  assign \$374  = \bit  ^ \$373 ;
+  assign \$375  = \$372  & \$374 ;
+  assign \$376  = ! idx;
+  assign \$377  = words[23] & \$376 ;
+  assign \$378  = words[22] & data1[0];
+  assign \$379  = \bit  ^ \$378 ;
+  assign \$380  = \$377  & \$379 ;
+  assign \$381  = ! idx;
+  assign \$382  = words[23] & \$381 ;
+  assign \$383  = words[22] & data1[0];
+  assign \$384  = \bit  ^ \$383 ;
+  assign \$385  = \$382  & \$384 ;
+  assign \$386  = ! idx;
+  assign \$387  = words[23] & \$386 ;
+  assign \$388  = words[22] & data1[0];
+  assign \$389  = \bit  ^ \$388 ;
+  assign \$390  = \$387  & \$389 ;
+  assign \$391  = ! idx;
+  assign \$392  = words[23] & \$391 ;
+  assign \$393  = words[22] & data1[0];
+  assign \$394  = \bit  ^ \$393 ;
+  assign \$395  = \$392  & \$394 ;
+  assign \$396  = ! idx;
+  assign \$397  = words[23] & \$396 ;
+  assign \$398  = words[22] & data1[0];
+  assign \$399  = \bit  ^ \$398 ;
+  assign \$400  = \$397  & \$399 ;
+  assign \$401  = ! idx;
+  \biss_master.decoder.copy  copy (
+    .\bit (\bit ),
+    .clk(clk),
+    .first(first),
+    .index(index),
+    .mismatch(mismatch),
+    .receiver_clear(receiver_clear),
+    .rst(rst),
+    .second(second),
+    .separator(separator)
+  );
   \biss_master.decoder.crc  crc (
     .\bit (\bit ),
     .check(check),
@@ -7063,546 +7010,20 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
     .index(word),
     .last(last),
     .load(load),
-    .load_index(\$605 [0]),
+    .load_index(\$9 [0]),
     .ok(crc_ok),
     .receiver_clear(receiver_clear),
     .rst(rst)
   );
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$613  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            if (\$66 ) begin
-              if (\$70 ) begin
-                (* full_case = 32'd1 *)
-                if (\$71 ) begin
-                end else begin
-                  \$613  = 1'h1;
-                end
-              end
-            end
-          end
-      3'h3:
-          /* empty */;
-      3'h5:
-          if (sample) begin
-            if (\$79 ) begin
-              \$613  = 1'h1;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$613  = 1'h0;
-    end
-    if (rst) begin
-      \$613  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$614  = 1'h0;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h3:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h4:
-          if (sample) begin
-            \$614  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$614  = 1'h0;
-    end
-    if (rst) begin
-      \$614  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$615  = slots;
-    if (\$41 ) begin
-      \$615  = \$42 [15:0];
-    end
-    if (receiver_clear) begin
-      \$615  = 16'h0000;
-    end
-    if (rst) begin
-      \$615  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$616  = slots_full;
-    if (\$41 ) begin
-      \$616  = \$43 ;
-    end
-    if (receiver_clear) begin
-      \$616  = 1'h0;
-    end
-    if (rst) begin
-      \$616  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$617  = idx;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$617  = 7'h00;
-          end
-      3'h2:
-          if (sample) begin
-            \$617  = 7'h00;
-          end
-      3'h1:
-          if (sample) begin
-            \$617  = \$47 [6:0];
-            if (\$66 ) begin
-              \$617  = 7'h00;
-            end
-          end
-      3'h3:
-          /* empty */;
-      3'h5:
-          if (sample) begin
-            \$617  = \$73 [6:0];
-          end
-    endcase
-    if (receiver_clear) begin
-      \$617  = 7'h00;
-    end
-    if (rst) begin
-      \$617  = 7'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$618  = in_data;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$618  = w0_data_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$618  = w0_data_at0;
-          end
-      3'h1:
-          if (sample) begin
-            \$618  = \$50 ;
-            if (\$66 ) begin
-              \$618  = \$67 ;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$618  = 1'h0;
-    end
-    if (rst) begin
-      \$618  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$619  = in_lc;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$619  = w0_lc_at0;
-          end
-      3'h2:
-          if (sample) begin
-            \$619  = w0_lc_at0;
-          end
-      3'h1:
-          if (sample) begin
-            \$619  = \$56 ;
-            if (\$66 ) begin
-              \$619  = \$68 ;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$619  = 1'h0;
-    end
-    if (rst) begin
-      \$619  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$620  = in_crc;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$620  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            \$620  = 1'h0;
-          end
-      3'h1:
-          if (sample) begin
-            \$620  = \$62 ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$620  = 1'h0;
-    end
-    if (rst) begin
-      \$620  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$621  = in_top;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$621  = \$45 ;
-          end
-      3'h2:
-          if (sample) begin
-            \$621  = \$46 ;
-          end
-      3'h1:
-          if (sample) begin
-            \$621  = \$64 ;
-            if (\$66 ) begin
-              \$621  = 1'h0;
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$621  = 1'h0;
-    end
-    if (rst) begin
-      \$621  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$622  = word;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$622  = 1'h0;
-          end
-      3'h2:
-          if (sample) begin
-            \$622  = 1'h0;
-          end
-      3'h1:
-          if (sample) begin
-            if (\$66 ) begin
-              (* full_case = 32'd1 *)
-              if (\$70 ) begin
-              end else begin
-                \$622  = \$72 [0];
-              end
-            end
-          end
-    endcase
-    if (receiver_clear) begin
-      \$622  = 1'h0;
-    end
-    if (rst) begin
-      \$622  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$623  = decoder_fsm_state;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-            \$623  = 3'h1;
-          end else if (\$44 ) begin
-            \$623  = 3'h2;
-          end
-      3'h2:
-          if (sample) begin
-            \$623  = 3'h1;
-          end
-      3'h1:
-          if (sample) begin
-            if (\$66 ) begin
-              if (\$70 ) begin
-                (* full_case = 32'd1 *)
-                if (\$71 ) begin
-                  \$623  = 3'h3;
-                end else begin
-                  \$623  = 3'h4;
-                end
-              end
-            end
-          end
-      3'h3:
-          if (sample) begin
-            \$623  = 3'h5;
-          end
-      3'h5:
-          if (sample) begin
-            if (\$79 ) begin
-              \$623  = 3'h4;
-            end
-          end
-      3'h4:
-          if (sample) begin
-            \$623  = 3'h6;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$623  = 3'h0;
-    end
-    if (rst) begin
-      \$623  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$624  = started;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-          end else if (\$44 ) begin
-            \$624  = 1'h1;
-          end
-      3'h2:
-          /* empty */;
-      3'h1:
-          if (sample) begin
-            \$624  = 1'h1;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$624  = 1'h0;
-    end
-    if (rst) begin
-      \$624  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$625  = start_slot;
-    casez (decoder_fsm_state)
-      3'h0:
-          if (ssi) begin
-          end else if (\$44 ) begin
-            \$625  = slots;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$625  = 16'h0000;
-    end
-    if (rst) begin
-      \$625  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$626  = cds;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h2:
-          if (sample) begin
-            \$626  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$626  = 1'h0;
-    end
-    if (rst) begin
-      \$626  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$627  = mismatch;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h3:
-          if (sample) begin
-            \$627  = \bit ;
-          end
-      3'h5:
-          if (sample) begin
-            \$627  = \$77 ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$627  = 1'h0;
-    end
-    if (rst) begin
-      \$627  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$628  = ring;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h3:
-          /* empty */;
-      3'h5:
-          if (sample) begin
-            \$628  = { ring[71:0], \bit  };
-          end
-    endcase
-    if (\$593 ) begin
-      \$628  = { ring[71:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$628  = 73'h0000000000000000000;
-    end
-    if (rst) begin
-      \$628  = 73'h0000000000000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$629  = stop_bit;
-    casez (decoder_fsm_state)
-      3'h0:
-          /* empty */;
-      3'h2:
-          /* empty */;
-      3'h1:
-          /* empty */;
-      3'h3:
-          /* empty */;
-      3'h5:
-          /* empty */;
-      3'h4:
-          if (sample) begin
-            \$629  = \bit ;
-          end
-    endcase
-    if (receiver_clear) begin
-      \$629  = 1'h0;
-    end
-    if (rst) begin
-      \$629  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$630  = data0;
-    if (\$82 ) begin
-      \$630  = \$360 ;
-    end
-    if (receiver_clear) begin
-      \$630  = 55'h00000000000000;
-    end
-    if (rst) begin
-      \$630  = 55'h00000000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$631  = ne;
-    if (\$364 ) begin
-      \$631 [0] = 1'h1;
-    end else if (\$368 ) begin
-      \$631 [0] = \$372 ;
-    end
-    if (\$584 ) begin
-      \$631 [1] = 1'h1;
-    end else if (\$588 ) begin
-      \$631 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$631  = 2'h0;
-    end
-    if (rst) begin
-      \$631  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$632  = nw;
-    if (\$373 ) begin
-      \$632 [0] = 1'h1;
-    end else if (\$377 ) begin
-      \$632 [0] = \bit ;
-    end
-    if (\$584 ) begin
-      \$632 [1] = 1'h1;
-    end else if (\$588 ) begin
-    end else if (\$592 ) begin
-      \$632 [1] = \bit ;
-    end
-    if (receiver_clear) begin
-      \$632  = 2'h0;
-    end
-    if (rst) begin
-      \$632  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$633  = data1;
-    if (\$380 ) begin
-      \$633  = \$583 ;
-    end
-    if (receiver_clear) begin
-      \$633  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$633  = 40'h0000000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$634  = lc;
-    if (lc_load) begin
-      \$634  = { lc[4:0], \bit  };
-    end
-    if (receiver_clear) begin
-      \$634  = 6'h00;
-    end
-    if (rst) begin
-      \$634  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    \$635  = cpw_top;
-    if (\$594 ) begin
-      \$635  = { cpw_top[38:0], \$596  };
-    end
-    if (receiver_clear) begin
-      \$635  = 40'h0000000000;
-    end
-    if (rst) begin
-      \$635  = 40'h0000000000;
-    end
-  end
+  \biss_master.decoder.field_ends  field_ends (
+    .clk(clk),
+    .crcs(crcs),
+    .ends(ends),
+    .error_bit(error_bit),
+    .receiver_clear(receiver_clear),
+    .rst(rst),
+    .words(words)
+  );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     at_cds = 1'h0;
@@ -7631,193 +7052,529 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$3 , words[7:6] })
+    separator = 1'h0;
+    casez (decoder_fsm_state)
       3'h0:
-          \$4  = 7'h7f;
-      3'h1:
-          \$4  = 7'h01;
+          /* empty */;
       3'h2:
-          \$4  = 7'h7f;
+          /* empty */;
+      3'h1:
+          /* empty */;
       3'h3:
-          \$4  = 7'h01;
-      3'h4:
-          \$4  = 7'h00;
-      3'h5:
-          \$4  = 7'h02;
-      3'h6:
-          \$4  = 7'h00;
-      3'h7:
-          \$4  = 7'h02;
+          separator = sample;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$6 , words[7:6] })
+    second = 1'h0;
+    casez (decoder_fsm_state)
       3'h0:
-          \$7  = 7'h7f;
-      3'h1:
-          \$7  = 7'h01;
+          /* empty */;
       3'h2:
-          \$7  = 7'h05;
+          /* empty */;
+      3'h1:
+          /* empty */;
       3'h3:
-          \$7  = 7'h07;
-      3'h4:
-          \$7  = 7'h00;
+          /* empty */;
       3'h5:
-          \$7  = 7'h02;
-      3'h6:
-          \$7  = 7'h06;
-      3'h7:
-          \$7  = 7'h08;
+          second = sample;
     endcase
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$9 , words[7:6] })
+    \$569  = 1'h0;
+    casez (decoder_fsm_state)
       3'h0:
-          \$10  = 7'h7f;
-      3'h1:
-          \$10  = 7'h01;
+          /* empty */;
       3'h2:
-          \$10  = 7'h05;
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            if (\$43 ) begin
+              if (\$47 ) begin
+                (* full_case = 32'd1 *)
+                if (\$48 ) begin
+                end else begin
+                  \$569  = 1'h1;
+                end
+              end
+            end
+          end
       3'h3:
-          \$10  = 7'h07;
-      3'h4:
-          \$10  = 7'h00;
+          /* empty */;
       3'h5:
-          \$10  = 7'h02;
-      3'h6:
-          \$10  = 7'h06;
-      3'h7:
-          \$10  = 7'h08;
+          if (sample) begin
+            if (\$52 ) begin
+              \$569  = 1'h1;
+            end
+          end
     endcase
+    if (receiver_clear) begin
+      \$569  = 1'h0;
+    end
+    if (rst) begin
+      \$569  = 1'h0;
+    end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$14 , words[7:6] })
+    \$570  = 1'h0;
+    casez (decoder_fsm_state)
       3'h0:
-          \$15  = 2'h0;
-      3'h1:
-          \$15  = 2'h2;
+          /* empty */;
       3'h2:
-          \$15  = 2'h0;
+          /* empty */;
+      3'h1:
+          /* empty */;
       3'h3:
-          \$15  = 2'h2;
-      3'h4:
-          \$15  = 2'h1;
+          /* empty */;
       3'h5:
-          \$15  = 2'h3;
-      3'h6:
-          \$15  = 2'h1;
-      3'h7:
-          \$15  = 2'h3;
+          /* empty */;
+      3'h4:
+          if (sample) begin
+            \$570  = 1'h1;
+          end
     endcase
+    if (receiver_clear) begin
+      \$570  = 1'h0;
+    end
+    if (rst) begin
+      \$570  = 1'h0;
+    end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez ({ \$18 , words[7:6] })
+    \$571  = slots;
+    if (\$18 ) begin
+      \$571  = \$19 [15:0];
+    end
+    if (receiver_clear) begin
+      \$571  = 16'h0000;
+    end
+    if (rst) begin
+      \$571  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$572  = slots_full;
+    if (\$18 ) begin
+      \$572  = \$20 ;
+    end
+    if (receiver_clear) begin
+      \$572  = 1'h0;
+    end
+    if (rst) begin
+      \$572  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$573  = idx;
+    casez (decoder_fsm_state)
       3'h0:
-          \$19  = 4'h0;
-      3'h1:
-          \$19  = 4'h2;
+          if (ssi) begin
+            \$573  = 7'h00;
+          end
       3'h2:
-          \$19  = 4'h6;
+          if (sample) begin
+            \$573  = 7'h00;
+          end
+      3'h1:
+          if (sample) begin
+            \$573  = \$24 [6:0];
+            if (\$43 ) begin
+              \$573  = 7'h00;
+            end
+          end
       3'h3:
-          \$19  = 4'h8;
-      3'h4:
-          \$19  = 4'h1;
+          /* empty */;
       3'h5:
-          \$19  = 4'h3;
-      3'h6:
-          \$19  = 4'h7;
-      3'h7:
-          \$19  = 4'h9;
+          if (sample) begin
+            \$573  = \$50 [6:0];
+          end
     endcase
+    if (receiver_clear) begin
+      \$573  = 7'h00;
+    end
+    if (rst) begin
+      \$573  = 7'h00;
+    end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$25  = 7'h7f;
-      2'h1:
-          \$25  = 7'h01;
-      2'h2:
-          \$25  = 7'h7f;
-      2'h3:
-          \$25  = 7'h01;
+    \$574  = in_data;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$574  = ends[35];
+          end
+      3'h2:
+          if (sample) begin
+            \$574  = ends[35];
+          end
+      3'h1:
+          if (sample) begin
+            \$574  = \$27 ;
+            if (\$43 ) begin
+              \$574  = \$44 ;
+            end
+          end
     endcase
+    if (receiver_clear) begin
+      \$574  = 1'h0;
+    end
+    if (rst) begin
+      \$574  = 1'h0;
+    end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$27  = 7'h7f;
-      2'h1:
-          \$27  = 7'h01;
-      2'h2:
-          \$27  = 7'h05;
-      2'h3:
-          \$27  = 7'h07;
+    \$575  = in_lc;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$575  = ends[36];
+          end
+      3'h2:
+          if (sample) begin
+            \$575  = ends[36];
+          end
+      3'h1:
+          if (sample) begin
+            \$575  = \$33 ;
+            if (\$43 ) begin
+              \$575  = \$45 ;
+            end
+          end
     endcase
+    if (receiver_clear) begin
+      \$575  = 1'h0;
+    end
+    if (rst) begin
+      \$575  = 1'h0;
+    end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$29  = 7'h7f;
-      2'h1:
-          \$29  = 7'h01;
-      2'h2:
-          \$29  = 7'h05;
-      2'h3:
-          \$29  = 7'h07;
+    \$576  = in_crc;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$576  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$576  = 1'h0;
+          end
+      3'h1:
+          if (sample) begin
+            \$576  = \$39 ;
+          end
     endcase
+    if (receiver_clear) begin
+      \$576  = 1'h0;
+    end
+    if (rst) begin
+      \$576  = 1'h0;
+    end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$33  = 2'h0;
-      2'h1:
-          \$33  = 2'h2;
-      2'h2:
-          \$33  = 2'h0;
-      2'h3:
-          \$33  = 2'h2;
+    \$577  = in_top;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$577  = \$22 ;
+          end
+      3'h2:
+          if (sample) begin
+            \$577  = \$23 ;
+          end
+      3'h1:
+          if (sample) begin
+            \$577  = \$41 ;
+            if (\$43 ) begin
+              \$577  = 1'h0;
+            end
+          end
     endcase
+    if (receiver_clear) begin
+      \$577  = 1'h0;
+    end
+    if (rst) begin
+      \$577  = 1'h0;
+    end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
-    (* full_case = 32'd1 *)
-    casez (words[19:18])
-      2'h0:
-          \$36  = 4'h0;
-      2'h1:
-          \$36  = 4'h2;
-      2'h2:
-          \$36  = 4'h6;
-      2'h3:
-          \$36  = 4'h8;
+    \$578  = word;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$578  = 1'h0;
+          end
+      3'h2:
+          if (sample) begin
+            \$578  = 1'h0;
+          end
+      3'h1:
+          if (sample) begin
+            if (\$43 ) begin
+              (* full_case = 32'd1 *)
+              if (\$47 ) begin
+              end else begin
+                \$578  = \$49 [0];
+              end
+            end
+          end
     endcase
+    if (receiver_clear) begin
+      \$578  = 1'h0;
+    end
+    if (rst) begin
+      \$578  = 1'h0;
+    end
   end
-  assign ssi_error = \port$2202$272 [0];
-  assign ssi_double = \port$2202$272 [2];
-  assign ssi_error_low = \port$2202$272 [1];
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$579  = decoder_fsm_state;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+            \$579  = 3'h1;
+          end else if (\$21 ) begin
+            \$579  = 3'h2;
+          end
+      3'h2:
+          if (sample) begin
+            \$579  = 3'h1;
+          end
+      3'h1:
+          if (sample) begin
+            if (\$43 ) begin
+              if (\$47 ) begin
+                (* full_case = 32'd1 *)
+                if (\$48 ) begin
+                  \$579  = 3'h3;
+                end else begin
+                  \$579  = 3'h4;
+                end
+              end
+            end
+          end
+      3'h3:
+          if (sample) begin
+            \$579  = 3'h5;
+          end
+      3'h5:
+          if (sample) begin
+            if (\$52 ) begin
+              \$579  = 3'h4;
+            end
+          end
+      3'h4:
+          if (sample) begin
+            \$579  = 3'h6;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$579  = 3'h0;
+    end
+    if (rst) begin
+      \$579  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$580  = started;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+          end else if (\$21 ) begin
+            \$580  = 1'h1;
+          end
+      3'h2:
+          /* empty */;
+      3'h1:
+          if (sample) begin
+            \$580  = 1'h1;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$580  = 1'h0;
+    end
+    if (rst) begin
+      \$580  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$581  = start_slot;
+    casez (decoder_fsm_state)
+      3'h0:
+          if (ssi) begin
+          end else if (\$21 ) begin
+            \$581  = slots;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$581  = 16'h0000;
+    end
+    if (rst) begin
+      \$581  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$582  = cds;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          if (sample) begin
+            \$582  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$582  = 1'h0;
+    end
+    if (rst) begin
+      \$582  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$583  = stop_bit;
+    casez (decoder_fsm_state)
+      3'h0:
+          /* empty */;
+      3'h2:
+          /* empty */;
+      3'h1:
+          /* empty */;
+      3'h3:
+          /* empty */;
+      3'h5:
+          /* empty */;
+      3'h4:
+          if (sample) begin
+            \$583  = \bit ;
+          end
+    endcase
+    if (receiver_clear) begin
+      \$583  = 1'h0;
+    end
+    if (rst) begin
+      \$583  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$584  = data0;
+    if (\$55 ) begin
+      \$584  = \$333 ;
+    end
+    if (receiver_clear) begin
+      \$584  = 55'h00000000000000;
+    end
+    if (rst) begin
+      \$584  = 55'h00000000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$585  = ne;
+    if (\$337 ) begin
+      \$585 [0] = 1'h1;
+    end else if (\$341 ) begin
+      \$585 [0] = \$345 ;
+    end
+    if (\$557 ) begin
+      \$585 [1] = 1'h1;
+    end else if (\$561 ) begin
+      \$585 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$585  = 2'h0;
+    end
+    if (rst) begin
+      \$585  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$586  = nw;
+    if (\$346 ) begin
+      \$586 [0] = 1'h1;
+    end else if (\$350 ) begin
+      \$586 [0] = \bit ;
+    end
+    if (\$557 ) begin
+      \$586 [1] = 1'h1;
+    end else if (\$561 ) begin
+    end else if (\$565 ) begin
+      \$586 [1] = \bit ;
+    end
+    if (receiver_clear) begin
+      \$586  = 2'h0;
+    end
+    if (rst) begin
+      \$586  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$587  = data1;
+    if (\$353 ) begin
+      \$587  = \$556 ;
+    end
+    if (receiver_clear) begin
+      \$587  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$587  = 40'h0000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$588  = lc;
+    if (lc_load) begin
+      \$588  = { lc[4:0], \bit  };
+    end
+    if (receiver_clear) begin
+      \$588  = 6'h00;
+    end
+    if (rst) begin
+      \$588  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    \$589  = cpw_top;
+    if (\$566 ) begin
+      \$589  = { cpw_top[38:0], \$568  };
+    end
+    if (receiver_clear) begin
+      \$589  = 40'h0000000000;
+    end
+    if (rst) begin
+      \$589  = 40'h0000000000;
+    end
+  end
+  assign \words$1  = words;
+  assign \crcs$3  = crcs;
+  assign ssi_error = \port$2171$272 [0];
+  assign \bit$11  = \bit ;
+  assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
-  assign \crcs$54  = crcs;
-  assign \bit$59  = \bit ;
+  assign \crcs$28  = crcs;
+  assign \bit$35  = \bit ;
   assign ok = crc_ok;
-  assign index = word;
-  assign load_index = \$605 [0];
+  assign \index$38  = word;
+  assign load_index = \$9 [0];
+  assign ssi_double = \port$2171$272 [2];
+  assign ssi_error_low = \port$2171$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -7832,6 +7589,20 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   assign \words[1].crc  = words[21:20];
   assign \words[1].gray  = words[22];
   assign \words[1].signed  = words[23];
+  assign \words$1[0]  = words[11:0];
+  assign \words$1[0].data_bits  = words[5:0];
+  assign \words$1[0].nenw  = words[6];
+  assign \words$1[0].lc  = words[7];
+  assign \words$1[0].crc  = words[9:8];
+  assign \words$1[0].gray  = words[10];
+  assign \words$1[0].signed  = words[11];
+  assign \words$1[1]  = words[23:12];
+  assign \words$1[1].data_bits  = words[17:12];
+  assign \words$1[1].nenw  = words[18];
+  assign \words$1[1].lc  = words[19];
+  assign \words$1[1].crc  = words[21:20];
+  assign \words$1[1].gray  = words[22];
+  assign \words$1[1].signed  = words[23];
   assign \crcs[0]  = crcs[37:0];
   assign \crcs[0].width  = crcs[4:0];
   assign \crcs[0].poly  = crcs[20:5];
@@ -7842,26 +7613,119 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   assign \crcs[1].poly  = crcs[58:43];
   assign \crcs[1].start  = crcs[74:59];
   assign \crcs[1].inverted  = crcs[75];
-  assign \crcs$54[0]  = crcs[37:0];
-  assign \crcs$54[0].width  = crcs[4:0];
-  assign \crcs$54[0].poly  = crcs[20:5];
-  assign \crcs$54[0].start  = crcs[36:21];
-  assign \crcs$54[0].inverted  = crcs[37];
-  assign \crcs$54[1]  = crcs[75:38];
-  assign \crcs$54[1].width  = crcs[42:38];
-  assign \crcs$54[1].poly  = crcs[58:43];
-  assign \crcs$54[1].start  = crcs[74:59];
-  assign \crcs$54[1].inverted  = crcs[75];
-  assign \$67  = w1_data_at0;
-  assign \$68  = w1_lc_at0;
-  assign \$378  = word;
-  assign \$585  = word;
-  assign \$589  = word;
+  assign \crcs$3[0]  = crcs[37:0];
+  assign \crcs$3[0].width  = crcs[4:0];
+  assign \crcs$3[0].poly  = crcs[20:5];
+  assign \crcs$3[0].start  = crcs[36:21];
+  assign \crcs$3[0].inverted  = crcs[37];
+  assign \crcs$3[1]  = crcs[75:38];
+  assign \crcs$3[1].width  = crcs[42:38];
+  assign \crcs$3[1].poly  = crcs[58:43];
+  assign \crcs$3[1].start  = crcs[74:59];
+  assign \crcs$3[1].inverted  = crcs[75];
+  assign \ends[0]  = ends[36:0];
+  assign \ends[0].data_end_p1  = ends[6:0];
+  assign \ends[0].data_end_m1  = ends[13:7];
+  assign \ends[0].nenw_end_m1  = ends[20:14];
+  assign \ends[0].lc_end_m1  = ends[27:21];
+  assign \ends[0].word_end_m1  = ends[34:28];
+  assign \ends[0].data_at0  = ends[35];
+  assign \ends[0].lc_at0  = ends[36];
+  assign \ends[1]  = ends[73:37];
+  assign \ends[1].data_end_p1  = ends[43:37];
+  assign \ends[1].data_end_m1  = ends[50:44];
+  assign \ends[1].nenw_end_m1  = ends[57:51];
+  assign \ends[1].lc_end_m1  = ends[64:58];
+  assign \ends[1].word_end_m1  = ends[71:65];
+  assign \ends[1].data_at0  = ends[72];
+  assign \ends[1].lc_at0  = ends[73];
+  assign \crcs$28[0]  = crcs[37:0];
+  assign \crcs$28[0].width  = crcs[4:0];
+  assign \crcs$28[0].poly  = crcs[20:5];
+  assign \crcs$28[0].start  = crcs[36:21];
+  assign \crcs$28[0].inverted  = crcs[37];
+  assign \crcs$28[1]  = crcs[75:38];
+  assign \crcs$28[1].width  = crcs[42:38];
+  assign \crcs$28[1].poly  = crcs[58:43];
+  assign \crcs$28[1].start  = crcs[74:59];
+  assign \crcs$28[1].inverted  = crcs[75];
+  assign \$44  = ends[72];
+  assign \$45  = ends[73];
+  assign \$351  = word;
+  assign \$558  = word;
+  assign \$562  = word;
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master.decoder.copy (rst, index, first, \bit , receiver_clear, separator, second, mismatch, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire \$3 ;
+  wire \$4 ;
+  reg [72:0] \$5 ;
+  reg \$6 ;
+  input \bit ;
+  wire \bit ;
+  input clk;
+  wire clk;
+  input first;
+  wire first;
+  input [6:0] index;
+  wire [6:0] index;
+  output mismatch;
+  reg mismatch = 1'h0;
+  input receiver_clear;
+  wire receiver_clear;
+  reg [72:0] ring = 73'h0000000000000000000;
+  input rst;
+  wire rst;
+  input second;
+  wire second;
+  input separator;
+  wire separator;
+  assign \$4  = mismatch | \$3 ;
+  always @(posedge clk)
+    ring <= \$5 ;
+  always @(posedge clk)
+    mismatch <= \$6 ;
+  assign \$1  = first | second;
+  assign \$2  = ring >> index;
+  assign \$3  = \bit  != \$2 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$5  = ring;
+    if (\$1 ) begin
+      \$5  = { ring[71:0], \bit  };
+    end
+    if (receiver_clear) begin
+      \$5  = 73'h0000000000000000000;
+    end
+    if (rst) begin
+      \$5  = 73'h0000000000000000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    \$6  = mismatch;
+    if (separator) begin
+      \$6  = \bit ;
+    end
+    if (second) begin
+      \$6  = \$4 ;
+    end
+    if (receiver_clear) begin
+      \$6  = 1'h0;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
   reg \$11 ;
@@ -7962,7 +7826,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
   always @(posedge clk)
     ok <= \$35 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (load_index)
       1'h0:
@@ -7972,7 +7836,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -7982,7 +7846,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -7992,7 +7856,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -8002,7 +7866,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -8012,7 +7876,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -8022,7 +7886,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -8032,7 +7896,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -8042,7 +7906,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -8052,7 +7916,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$33  = \reg ;
     if (load) begin
       \$33  = \$1 ;
@@ -8069,7 +7933,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$34  = mismatch;
     if (load) begin
       \$34  = 1'h0;
@@ -8085,7 +7949,7 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$35  = ok;
     if (last) begin
       if (\$15 ) begin
@@ -8116,8 +7980,407 @@ module \biss_master.decoder.crc (rst, load, \cover , check, last, load_index, \b
 endmodule
 
 (* generator = "Amaranth" *)
+module \biss_master.decoder.field_ends (rst, error_bit, words, crcs, receiver_clear, ends, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
+  wire [6:0] \$1 ;
+  wire \$10 ;
+  reg [1:0] \$11 ;
+  wire [6:0] \$12 ;
+  wire \$13 ;
+  reg [3:0] \$14 ;
+  wire [6:0] \$15 ;
+  wire \$16 ;
+  wire \$17 ;
+  wire [6:0] \$18 ;
+  wire [7:0] \$19 ;
+  wire [7:0] \$2 ;
+  reg [6:0] \$20 ;
+  wire [7:0] \$21 ;
+  reg [6:0] \$22 ;
+  wire [7:0] \$23 ;
+  reg [6:0] \$24 ;
+  wire [7:0] \$25 ;
+  wire [7:0] \$26 ;
+  wire \$27 ;
+  reg [1:0] \$28 ;
+  wire [6:0] \$29 ;
+  reg [6:0] \$3 ;
+  wire \$30 ;
+  reg [3:0] \$31 ;
+  wire [6:0] \$32 ;
+  wire \$33 ;
+  wire \$34 ;
+  wire [36:0] \$35 ;
+  wire [36:0] \$36 ;
+  wire [7:0] \$4 ;
+  reg [6:0] \$5 ;
+  wire [7:0] \$6 ;
+  reg [6:0] \$7 ;
+  wire [7:0] \$8 ;
+  wire [7:0] \$9 ;
+  input clk;
+  wire clk;
+  input [75:0] crcs;
+  wire [75:0] crcs;
+  wire [37:0] \crcs[0] ;
+  wire \crcs[0].inverted ;
+  wire [15:0] \crcs[0].poly ;
+  wire [15:0] \crcs[0].start ;
+  wire [4:0] \crcs[0].width ;
+  wire [37:0] \crcs[1] ;
+  wire \crcs[1].inverted ;
+  wire [15:0] \crcs[1].poly ;
+  wire [15:0] \crcs[1].start ;
+  wire [4:0] \crcs[1].width ;
+  output [73:0] ends;
+  wire [73:0] ends;
+  wire [36:0] \ends[0] ;
+  wire \ends[0].data_at0 ;
+  wire [6:0] \ends[0].data_end_m1 ;
+  wire [6:0] \ends[0].data_end_p1 ;
+  wire \ends[0].lc_at0 ;
+  wire [6:0] \ends[0].lc_end_m1 ;
+  wire [6:0] \ends[0].nenw_end_m1 ;
+  wire [6:0] \ends[0].word_end_m1 ;
+  wire [36:0] \ends[1] ;
+  wire \ends[1].data_at0 ;
+  wire [6:0] \ends[1].data_end_m1 ;
+  wire [6:0] \ends[1].data_end_p1 ;
+  wire \ends[1].lc_at0 ;
+  wire [6:0] \ends[1].lc_end_m1 ;
+  wire [6:0] \ends[1].nenw_end_m1 ;
+  wire [6:0] \ends[1].word_end_m1 ;
+  input error_bit;
+  wire error_bit;
+  input receiver_clear;
+  wire receiver_clear;
+  input rst;
+  wire rst;
+  reg [36:0] w0_ends = 37'h0000000000;
+  wire \w0_ends.data_at0 ;
+  wire [6:0] \w0_ends.data_end_m1 ;
+  wire [6:0] \w0_ends.data_end_p1 ;
+  wire \w0_ends.lc_at0 ;
+  wire [6:0] \w0_ends.lc_end_m1 ;
+  wire [6:0] \w0_ends.nenw_end_m1 ;
+  wire [6:0] \w0_ends.word_end_m1 ;
+  reg [36:0] w1_ends = 37'h0000000000;
+  wire \w1_ends.data_at0 ;
+  wire [6:0] \w1_ends.data_end_m1 ;
+  wire [6:0] \w1_ends.data_end_p1 ;
+  wire \w1_ends.lc_at0 ;
+  wire [6:0] \w1_ends.lc_end_m1 ;
+  wire [6:0] \w1_ends.nenw_end_m1 ;
+  wire [6:0] \w1_ends.word_end_m1 ;
+  input [23:0] words;
+  wire [23:0] words;
+  wire [11:0] \words[0] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \words[0].crc ;
+  wire [5:0] \words[0].data_bits ;
+  wire \words[0].gray ;
+  wire \words[0].lc ;
+  wire \words[0].nenw ;
+  wire \words[0].signed ;
+  wire [11:0] \words[1] ;
+  (* enum_base_type = "Crc" *)
+  (* enum_value_00 = "NONE" *)
+  (* enum_value_01 = "CRC6" *)
+  (* enum_value_10 = "CRC16" *)
+  (* enum_value_11 = "CUSTOM" *)
+  wire [1:0] \words[1].crc ;
+  wire [5:0] \words[1].data_bits ;
+  wire \words[1].gray ;
+  wire \words[1].lc ;
+  wire \words[1].nenw ;
+  wire \words[1].signed ;
+  assign \$1  = words[5:0] + 1'h1;
+  assign \$2  = words[5:0] + 7'h7f;
+  assign \$4  = words[5:0] + \$3 ;
+  assign \$6  = words[5:0] + \$5 ;
+  assign \$8  = \$7  + crcs[4:0];
+  assign \$9  = words[5:0] + \$8 [6:0];
+  assign \$10  = | words[5:0];
+  assign \$12  = words[5:0] + \$11 ;
+  assign \$13  = ! \$12 ;
+  assign \$15  = words[5:0] + \$14 ;
+  assign \$16  = | \$15 ;
+  assign \$17  = \$13  & \$16 ;
+  assign \$18  = words[17:12] + 1'h1;
+  assign \$19  = words[17:12] + 7'h7f;
+  assign \$21  = words[17:12] + \$20 ;
+  assign \$23  = words[17:12] + \$22 ;
+  assign \$25  = \$24  + crcs[42:38];
+  assign \$26  = words[17:12] + \$25 [6:0];
+  assign \$27  = | words[17:12];
+  assign \$29  = words[17:12] + \$28 ;
+  assign \$30  = ! \$29 ;
+  assign \$32  = words[17:12] + \$31 ;
+  assign \$33  = | \$32 ;
+  assign \$34  = \$30  & \$33 ;
+  always @(posedge clk)
+    w0_ends <= \$35 ;
+  always @(posedge clk)
+    w1_ends <= \$36 ;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ error_bit, words[7:6] })
+      3'h0:
+          \$3  = 7'h7f;
+      3'h1:
+          \$3  = 7'h01;
+      3'h2:
+          \$3  = 7'h7f;
+      3'h3:
+          \$3  = 7'h01;
+      3'h4:
+          \$3  = 7'h00;
+      3'h5:
+          \$3  = 7'h02;
+      3'h6:
+          \$3  = 7'h00;
+      3'h7:
+          \$3  = 7'h02;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ error_bit, words[7:6] })
+      3'h0:
+          \$5  = 7'h7f;
+      3'h1:
+          \$5  = 7'h01;
+      3'h2:
+          \$5  = 7'h05;
+      3'h3:
+          \$5  = 7'h07;
+      3'h4:
+          \$5  = 7'h00;
+      3'h5:
+          \$5  = 7'h02;
+      3'h6:
+          \$5  = 7'h06;
+      3'h7:
+          \$5  = 7'h08;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ error_bit, words[7:6] })
+      3'h0:
+          \$7  = 7'h7f;
+      3'h1:
+          \$7  = 7'h01;
+      3'h2:
+          \$7  = 7'h05;
+      3'h3:
+          \$7  = 7'h07;
+      3'h4:
+          \$7  = 7'h00;
+      3'h5:
+          \$7  = 7'h02;
+      3'h6:
+          \$7  = 7'h06;
+      3'h7:
+          \$7  = 7'h08;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ error_bit, words[7:6] })
+      3'h0:
+          \$11  = 2'h0;
+      3'h1:
+          \$11  = 2'h2;
+      3'h2:
+          \$11  = 2'h0;
+      3'h3:
+          \$11  = 2'h2;
+      3'h4:
+          \$11  = 2'h1;
+      3'h5:
+          \$11  = 2'h3;
+      3'h6:
+          \$11  = 2'h1;
+      3'h7:
+          \$11  = 2'h3;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    (* full_case = 32'd1 *)
+    casez ({ error_bit, words[7:6] })
+      3'h0:
+          \$14  = 4'h0;
+      3'h1:
+          \$14  = 4'h2;
+      3'h2:
+          \$14  = 4'h6;
+      3'h3:
+          \$14  = 4'h8;
+      3'h4:
+          \$14  = 4'h1;
+      3'h5:
+          \$14  = 4'h3;
+      3'h6:
+          \$14  = 4'h7;
+      3'h7:
+          \$14  = 4'h9;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:18])
+      2'h0:
+          \$20  = 7'h7f;
+      2'h1:
+          \$20  = 7'h01;
+      2'h2:
+          \$20  = 7'h7f;
+      2'h3:
+          \$20  = 7'h01;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:18])
+      2'h0:
+          \$22  = 7'h7f;
+      2'h1:
+          \$22  = 7'h01;
+      2'h2:
+          \$22  = 7'h05;
+      2'h3:
+          \$22  = 7'h07;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:18])
+      2'h0:
+          \$24  = 7'h7f;
+      2'h1:
+          \$24  = 7'h01;
+      2'h2:
+          \$24  = 7'h05;
+      2'h3:
+          \$24  = 7'h07;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:18])
+      2'h0:
+          \$28  = 2'h0;
+      2'h1:
+          \$28  = 2'h2;
+      2'h2:
+          \$28  = 2'h0;
+      2'h3:
+          \$28  = 2'h2;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    (* full_case = 32'd1 *)
+    casez (words[19:18])
+      2'h0:
+          \$31  = 4'h0;
+      2'h1:
+          \$31  = 4'h2;
+      2'h2:
+          \$31  = 4'h6;
+      2'h3:
+          \$31  = 4'h8;
+    endcase
+  end
+  assign \ends[0]  = ends[36:0];
+  assign \ends[0].data_end_p1  = ends[6:0];
+  assign \ends[0].data_end_m1  = ends[13:7];
+  assign \ends[0].nenw_end_m1  = ends[20:14];
+  assign \ends[0].lc_end_m1  = ends[27:21];
+  assign \ends[0].word_end_m1  = ends[34:28];
+  assign \ends[0].data_at0  = ends[35];
+  assign \ends[0].lc_at0  = ends[36];
+  assign \ends[1]  = ends[73:37];
+  assign \ends[1].data_end_p1  = ends[43:37];
+  assign \ends[1].data_end_m1  = ends[50:44];
+  assign \ends[1].nenw_end_m1  = ends[57:51];
+  assign \ends[1].lc_end_m1  = ends[64:58];
+  assign \ends[1].word_end_m1  = ends[71:65];
+  assign \ends[1].data_at0  = ends[72];
+  assign \ends[1].lc_at0  = ends[73];
+  assign \w0_ends.data_end_p1  = w0_ends[6:0];
+  assign \w0_ends.data_end_m1  = w0_ends[13:7];
+  assign \w0_ends.nenw_end_m1  = w0_ends[20:14];
+  assign \w0_ends.lc_end_m1  = w0_ends[27:21];
+  assign \w0_ends.word_end_m1  = w0_ends[34:28];
+  assign \w0_ends.data_at0  = w0_ends[35];
+  assign \w0_ends.lc_at0  = w0_ends[36];
+  assign \w1_ends.data_end_p1  = w1_ends[6:0];
+  assign \w1_ends.data_end_m1  = w1_ends[13:7];
+  assign \w1_ends.nenw_end_m1  = w1_ends[20:14];
+  assign \w1_ends.lc_end_m1  = w1_ends[27:21];
+  assign \w1_ends.word_end_m1  = w1_ends[34:28];
+  assign \w1_ends.data_at0  = w1_ends[35];
+  assign \w1_ends.lc_at0  = w1_ends[36];
+  assign \words[0]  = words[11:0];
+  assign \words[0].data_bits  = words[5:0];
+  assign \words[0].nenw  = words[6];
+  assign \words[0].lc  = words[7];
+  assign \words[0].crc  = words[9:8];
+  assign \words[0].gray  = words[10];
+  assign \words[0].signed  = words[11];
+  assign \words[1]  = words[23:12];
+  assign \words[1].data_bits  = words[17:12];
+  assign \words[1].nenw  = words[18];
+  assign \words[1].lc  = words[19];
+  assign \words[1].crc  = words[21:20];
+  assign \words[1].gray  = words[22];
+  assign \words[1].signed  = words[23];
+  assign \crcs[0]  = crcs[37:0];
+  assign \crcs[0].width  = crcs[4:0];
+  assign \crcs[0].poly  = crcs[20:5];
+  assign \crcs[0].start  = crcs[36:21];
+  assign \crcs[0].inverted  = crcs[37];
+  assign \crcs[1]  = crcs[75:38];
+  assign \crcs[1].width  = crcs[42:38];
+  assign \crcs[1].poly  = crcs[58:43];
+  assign \crcs[1].start  = crcs[74:59];
+  assign \crcs[1].inverted  = crcs[75];
+  assign \$36 [36] = \$34 ;
+  assign \$36 [35] = \$27 ;
+  assign \$36 [34:28] = \$26 [6:0];
+  assign \$36 [27:21] = \$23 [6:0];
+  assign \$36 [20:14] = \$21 [6:0];
+  assign \$36 [13:7] = \$19 [6:0];
+  assign \$36 [6:0] = \$18 ;
+  assign \$35 [36] = \$17 ;
+  assign \$35 [35] = \$10 ;
+  assign \$35 [34:28] = \$9 [6:0];
+  assign \$35 [27:21] = \$6 [6:0];
+  assign \$35 [20:14] = \$4 [6:0];
+  assign \$35 [13:7] = \$2 [6:0];
+  assign \$35 [6:0] = \$1 ;
+  assign ends[73:37] = w1_ends;
+  assign ends[36:0] = w0_ends;
+endmodule
+
+(* generator = "Amaranth" *)
 module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8289,56 +8552,56 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
   assign \$39  = magnitude > spread;
   assign \$40  = \$38  & \$39 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$46  = \$1 ;
     if (rst) begin
       \$46  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$47  = \$2 ;
     if (rst) begin
       \$47  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$48  = \tolerance$8 ;
     if (rst) begin
       \$48  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$49  = \$3 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$50  = \$11 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$51  = \$20 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$52  = \$25 ;
     if (rst) begin
       \$52  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$53  = 1'h0;
     if (learn) begin
       if (\$32 ) begin
@@ -8355,7 +8618,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$54  = jump;
     if (check) begin
       \$54  = \$26 ;
@@ -8368,7 +8631,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$55  = count;
     if (learn) begin
       (* full_case = 32'd1 *)
@@ -8390,7 +8653,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$56  = spread;
     if (learn) begin
       if (\$32 ) begin
@@ -8410,7 +8673,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$57  = cand;
     if (learn) begin
       if (\$32 ) begin
@@ -8423,7 +8686,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$58  = settled_delay;
     if (learn) begin
       if (\$32 ) begin
@@ -8440,7 +8703,7 @@ module \biss_master.delay_check (rst, enable, rearm, check, learn, clean, \toler
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$59  = settled;
     if (learn) begin
       if (\$32 ) begin
@@ -8460,7 +8723,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.line_noise (rst, sampler_noise, close, noisy, events, limit, watch, restart, level, \event , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
   reg \$10 ;
   reg \$11 ;
@@ -8523,21 +8786,21 @@ module \biss_master.line_noise (rst, sampler_noise, close, noisy, events, limit,
   always @(posedge clk)
     running <= \$14 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$10  = level;
     if (rst) begin
       \$10  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$11  = \$4 ;
     if (rst) begin
       \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$12  = held_noisy;
     if (close) begin
       \$12  = \$7 ;
@@ -8547,7 +8810,7 @@ module \biss_master.line_noise (rst, sampler_noise, close, noisy, events, limit,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$13  = held_events;
     if (close) begin
       \$13  = running;
@@ -8557,7 +8820,7 @@ module \biss_master.line_noise (rst, sampler_noise, close, noisy, events, limit,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$14  = running;
     if (close) begin
       \$14  = { 3'h0, \event  };
@@ -8574,7 +8837,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -8699,7 +8962,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -8714,7 +8977,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -8729,7 +8992,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -8744,7 +9007,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -8773,7 +9036,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -8815,7 +9078,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -8857,7 +9120,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -8876,7 +9139,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -8912,7 +9175,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -8936,7 +9199,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -8952,7 +9215,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -8968,8 +9231,8 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_stop (rst, words, \port$2202$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
+module \biss_master.ma_stop (rst, words, \port$2171$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
   wire [7:0] \$11 ;
@@ -9020,8 +9283,8 @@ module \biss_master.ma_stop (rst, words, \port$2202$199 , ssi, ssi_error, ssi_do
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$2202$199 ;
-  wire \port$2202$199 ;
+  input \port$2171$199 ;
+  wire \port$2171$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -9075,7 +9338,7 @@ module \biss_master.ma_stop (rst, words, \port$2202$199 , ssi, ssi_error, ssi_do
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$2202$199  ? word1_len : 8'h00;
+  assign \$11  = \port$2171$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -9101,7 +9364,7 @@ module \biss_master.ma_stop (rst, words, \port$2202$199 , ssi, ssi_error, ssi_do
   always @(posedge clk)
     word1_len <= \$29 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez ({ \$1 , words[7:6] })
       3'h0:
@@ -9123,7 +9386,7 @@ module \biss_master.ma_stop (rst, words, \port$2202$199 , ssi, ssi_error, ssi_do
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -9137,55 +9400,55 @@ module \biss_master.ma_stop (rst, words, \port$2202$199 , ssi, ssi_error, ssi_do
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$23  = \$4 [7:0];
     if (rst) begin
       \$23  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$24  = \$9 [7:0];
     if (rst) begin
       \$24  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$25  = \$12 [8:0];
     if (rst) begin
       \$25  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$26  = \$13 ;
     if (rst) begin
       \$26  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$27  = \$15 ;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$28  = \$19 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$29  = \$22 [7:0];
     if (rst) begin
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$2202$199 , 1'h1 };
+  assign enables = { \port$2171$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -9506,7 +9769,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -9623,21 +9886,21 @@ module \biss_master.register_access.buffers (host_read__en, clk, rst, byte_to_se
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -9657,7 +9920,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -9700,7 +9963,7 @@ module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control_
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -9710,7 +9973,7 @@ module \biss_master.register_access.checker (rst, crc_ok, echo_ok, cds, control_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -9726,7 +9989,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -9769,7 +10032,7 @@ module \biss_master.register_access.checker.rx_crc (rst, crc, data_in, valid, st
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -9793,7 +10056,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.idle (rst, frame_ok, frame_end, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -9863,7 +10126,7 @@ module \biss_master.register_access.idle (rst, frame_ok, frame_end, run_enough, 
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -9873,7 +10136,7 @@ module \biss_master.register_access.idle (rst, frame_ok, frame_end, run_enough, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -9886,7 +10149,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -9958,7 +10221,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -9971,7 +10234,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -9984,7 +10247,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -9994,7 +10257,7 @@ module \biss_master.register_access.sender (rst, \byte , request, control__load_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -10019,7 +10282,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -10062,7 +10325,7 @@ module \biss_master.register_access.sender.tx_crc (rst, data_in, crc, start, val
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -10087,7 +10350,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_end, busy, crc_ok, echo_ok, run_enough, seen_enough, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -10443,7 +10706,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10481,7 +10744,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -10535,7 +10798,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -10632,7 +10895,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -10649,7 +10912,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -10688,7 +10951,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -10746,7 +11009,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -10813,7 +11076,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -10845,7 +11108,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10859,7 +11122,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10886,7 +11149,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10906,7 +11169,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10925,7 +11188,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10954,7 +11217,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10975,7 +11238,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -10997,7 +11260,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11018,7 +11281,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11040,7 +11303,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11062,7 +11325,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11086,7 +11349,7 @@ module \biss_master.register_access.sequencer (abort, clk, rst, frame_ok, frame_
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -11125,7 +11388,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [186:0] \$3 ;
@@ -11236,21 +11499,21 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -11326,8 +11589,8 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2202$259 , receiver_clear, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2171$259 , receiver_clear, early, locked, delay, sample, level, slo);
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
   wire [13:0] \$11 ;
@@ -11460,8 +11723,8 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$2202$259 ;
-  wire [12:0] \port$2202$259 ;
+  input [12:0] \port$2171$259 ;
+  wire [12:0] \port$2171$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -11486,7 +11749,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$2202$259 [12:1] + 1'h1;
+  assign \$11  = \port$2171$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -11611,7 +11874,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$2202$259 [0]),
+    .clear_high(\port$2171$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -11631,7 +11894,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$76  = level;
     if (receiver_clear) begin
       \$76  = 1'h1;
@@ -11641,7 +11904,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$77  = mid_delay;
     if (odd) begin
       \$77  = \$8 [12:0];
@@ -11668,7 +11931,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$78  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -11697,7 +11960,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$79  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -11721,7 +11984,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$80  = elapsed;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -11748,13 +12011,13 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$81  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$2202$259 [0]) begin
+            if (\port$2171$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -11767,7 +12030,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$82  = locked;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -11798,7 +12061,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$83  = gap;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -11832,14 +12095,14 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$84  = sampler_fsm_state;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$2202$259 [0]) begin
+            if (\port$2171$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -11871,14 +12134,14 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$85  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$2202$259 [12:1] };
+            \$85  = { 1'h0, \port$2171$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -11898,7 +12161,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$86  = vote1;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -11933,7 +12196,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$87  = vote2;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -11966,7 +12229,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$88  = first_slot;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -11997,7 +12260,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$89  = phase;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -12042,7 +12305,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$90  = slot_left;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -12097,7 +12360,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     \$91  = slot_zero;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -12152,7 +12415,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     sample = \$47 ;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -12173,7 +12436,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     clear = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -12189,7 +12452,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     dropped = 1'h0;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -12213,7 +12476,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     decided = 1'h0;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -12241,7 +12504,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     centre = 1'h0;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -12263,11 +12526,11 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$220
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$2202$259 [12:1] };
-  assign fixed = \port$2202$259 [0];
+  assign fixed_delay = { 1'h0, \port$2171$259 [12:1] };
+  assign fixed = \port$2171$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$2202$259 [0];
+  assign clear_high = \port$2171$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -12275,7 +12538,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, clear_high, receiver_clear, vote1, vote2, clear, centre, level, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -12392,7 +12655,7 @@ module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, cle
   always @(posedge clk)
     strobed <= \$38 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$33  = last;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -12410,7 +12673,7 @@ module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, cle
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$34  = tail_odd;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -12428,7 +12691,7 @@ module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, cle
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$35  = 1'h0;
@@ -12448,7 +12711,7 @@ module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, cle
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$36  = 1'h0;
@@ -12468,7 +12731,7 @@ module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, cle
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$37  = crowded;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -12486,7 +12749,7 @@ module \biss_master.sampler.slot_noise (rst, \edge , decided, majority, odd, cle
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
     \$38  = strobed;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -12529,7 +12792,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overrun, idle, start);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -12620,14 +12883,14 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -12641,7 +12904,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -12655,7 +12918,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -12674,8 +12937,8 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2190$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2159$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -12716,8 +12979,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2190$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2190$0 ;
-  wire \port$2190$0 ;
+  input \port$2159$0 ;
+  wire \port$2159$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -12731,9 +12994,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2190$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2190$0  };
-  assign \$2  = { lc[4:0], \port$2190$0  } == last;
-  assign \$3  = { lc[4:0], \port$2190$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2159$0  };
+  assign \$2  = { lc[4:0], \port$2159$0  } == last;
+  assign \$3  = { lc[4:0], \port$2159$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -12767,7 +13030,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2190$0
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -12777,7 +13040,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2190$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -12787,7 +13050,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2190$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -12797,21 +13060,21 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2190$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -12821,7 +13084,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2190$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -12831,7 +13094,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2190$0
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -12843,13 +13106,13 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2190$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2190$0  };
+  assign lc_next = { lc[4:0], \port$2159$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13054,28 +13317,28 @@ module \biss_master.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, cl
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -13085,7 +13348,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -13104,14 +13367,14 @@ module \biss_master.time_base (rst, first_rise, first_rise_time, clk);
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -13125,7 +13388,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma_busy, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired
 , delay_over, delay, slo, break_time);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13312,7 +13575,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
   assign \$38  = \$35  ? \$36  : \$37 ;
   assign \$39  = timer >= timeout_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$49  = slo_low_time_p1;
     if (\$2 ) begin
       \$49  = 25'h0000001;
@@ -13324,21 +13587,21 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$50  = \$9 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$51  = \$17 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$52  = high_p2;
     if (\$18 ) begin
       \$52  = 13'h0002;
@@ -13350,28 +13613,28 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$53  = \$23 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$54  = \$30 ;
     if (rst) begin
       \$54  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$55  = \$34 [24:0];
     if (rst) begin
       \$55  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$56  = 1'h0;
@@ -13383,7 +13646,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$57  = 1'h0;
@@ -13395,21 +13658,21 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$58  = \$43 ;
     if (rst) begin
       \$58  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$59  = \$47 ;
     if (rst) begin
       \$59  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$60  = \$48 ;
     if (rst) begin
       \$60  = 1'h0;
@@ -13418,9 +13681,9 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1623$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1592$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -13596,8 +13859,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1623$0 , lc_check, lc_re
   wire noisy;
   output passed;
   wire passed;
-  output \port$1623$0 ;
-  wire \port$1623$0 ;
+  output \port$1592$0 ;
+  wire \port$1592$0 ;
   output report;
   wire report;
   input report_frame;
@@ -13687,7 +13950,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1623$0 , lc_check, lc_re
   assign \$38  = lc_repeat_seen | lc_skip_seen;
   assign \$39  = \$38  | lc_zero_seen;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     frame_status = 4'h0;
     if (unconfirmed) begin
       frame_status = 4'hf;
@@ -13715,7 +13978,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1623$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1623$0  = \$2 ;
+  assign \port$1592$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

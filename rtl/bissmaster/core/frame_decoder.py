@@ -7,45 +7,9 @@ from amaranth.lib.wiring import In, Out
 
 from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, SLOT_WIDTH, WORD_CONFIG, WORD_INDEX_WIDTH
 from .crc_engine import CrcEngine
+from .field_ends import FieldEnds
+from .ssi_copy import SsiCopyCompare
 from .. import protocol
-
-
-def _table(index, values, width):
-    """``values[index]`` modulo ``2**width`` as a small lookup: one LUT level per result bit
-    instead of an adder chain."""
-    return Array(C(v % 2**width, width) for v in values)[index]
-
-
-def _flag_table(word, error_bit, width, value):
-    """``value(nenw, lc, error)`` modulo ``2**width`` as a table on a word's flag settings (a
-    WORD_CONFIG view) and, when ``error_bit`` is given, its SSI error bit (the word has one
-    error bit after the data: SSI mode, ``cfg_ssi_error``)."""
-    index = Cat(word.nenw, word.lc)
-    errors = (0,)
-    if error_bit is not None:
-        index, errors = Cat(index, error_bit), (0, 1)
-    return _table(index, [value(nenw, lc, error) for error in errors for lc in (0, 1)
-                          for nenw in (0, 1)], width)
-
-
-def flag_bits(nenw, lc, error):
-    """Bits between a word's data and its CRC: nE/nW, LC, an SSI error bit."""
-    return nenw * protocol.NE_NW_BITS + lc * protocol.LC_BITS + error
-
-
-def tail_bits(word, crc, extra=0, width=WORD_INDEX_WIDTH, error_bit=None):
-    """Bits after a word's data field (nE/nW, LC, the SSI error bit, CRC), plus ``extra``,
-    modulo ``2**width``: a table on the flag bits plus the CRC's width (a WORD_CONFIG and a
-    CRC_SETTINGS view; ``error_bit`` as in :func:`_flag_table`)."""
-    flags = _flag_table(word, error_bit, width, lambda *f: flag_bits(*f) + extra)
-    return (flags + crc.width)[:width]
-
-
-def word_length(word, crc, extra=0, width=WORD_INDEX_WIDTH, error_bit=None):
-    """Bits of one word on the line (plus ``extra``), from its runtime configuration (a
-    WORD_CONFIG view and its resolved CRC_SETTINGS view; ``error_bit`` as in
-    :func:`_flag_table`)."""
-    return (word.data_bits + tail_bits(word, crc, extra, width, error_bit))[:width]
 
 
 class FrameDecoder(wiring.Component):
@@ -124,43 +88,15 @@ class FrameDecoder(wiring.Component):
         word = Signal(range(p.words), name="word") if p.words > 1 else C(0, 1)   # none in one-word builds
         idx = Signal(WORD_INDEX_WIDTH)
         # Field boundaries of each word, registered from the configuration (no adders in front
-        # of the ``idx`` compares). They are not reset (they follow ``words`` in every clock),
-        # so they are valid one clock after ``words`` settles; the first word bit comes at
-        # least three samples (Ack, Start, CDS) after that.
-        ends = []
-        iw = WORD_INDEX_WIDTH
-        # Word 0's SSI error bit (SSI builds): a flag bit after the data, like nE.
-        error_bit = (self.ssi & self.ssi_error) if p.ssi else None
-        for w in range(p.words):
-            err = error_bit if w == 0 else None
-            wcfg = self.words[w]
-            e = {name: Signal(WORD_INDEX_WIDTH, name=f"w{w}_{name}", reset_less=True)
-                 for name in ("data_end_p1", "data_end_m1", "nenw_end_m1", "lc_end_m1",
-                              "word_end_m1")}
-            wcrc = self.crcs[w]
-            # The fields at bit 0 of the word (only with an invalid data_bits = 0).
-            e["data_at0"] = Signal(name=f"w{w}_data_at0", reset_less=True)
-            e["lc_at0"] = Signal(name=f"w{w}_lc_at0", reset_less=True)
-            # The flag fields' lengths: nE/nW (or the SSI error bit), and those plus LC.
-            nenw_bits = _flag_table(wcfg, err, 2, lambda n, lc, e: flag_bits(n, 0, e))
-            nenw_lc_bits = _flag_table(wcfg, err, 4, flag_bits)
-            # "- 1" folded into the tables, modulo 2**iw: a field end of 0 (only with
-            # data_bits = 0) becomes 2**iw - 1, which ``idx`` never reaches inside a word.
-            nenw_m1 = _flag_table(wcfg, err, iw, lambda n, lc, e: flag_bits(n, 0, e) - 1)
-            nenw_lc_m1 = _flag_table(wcfg, err, iw, lambda *f: flag_bits(*f) - 1)
-            m.d.sync += [
-                e["data_end_p1"].eq(wcfg.data_bits + 1),
-                e["data_end_m1"].eq((wcfg.data_bits + C(2**iw - 1, iw))[:iw]),
-                e["nenw_end_m1"].eq((wcfg.data_bits + nenw_m1)[:iw]),
-                e["lc_end_m1"].eq((wcfg.data_bits + nenw_lc_m1)[:iw]),
-                # data_bits >= 1, so "- 1" folded into the table (modulo 2**iw) never wraps.
-                e["word_end_m1"].eq((wcfg.data_bits + tail_bits(wcfg, wcrc, extra=-1,
-                                                                error_bit=err))[:iw]),
-                e["data_at0"].eq(wcfg.data_bits != 0),
-                e["lc_at0"].eq((wcfg.data_bits + nenw_bits == 0)
-                               & (wcfg.data_bits + nenw_lc_bits != 0)),
-            ]
-            ends.append(e)
+        # of the ``idx`` compares), valid one clock after ``words`` settles; the first word bit
+        # comes at least three samples (Ack, Start, CDS) after that (SSI: see above).
+        m.submodules.field_ends = field_ends = FieldEnds(p.words, error_bit=p.ssi)
+        m.d.comb += [field_ends.words.eq(self.words), field_ends.crcs.eq(self.crcs)]
+        if p.ssi:
+            # Word 0's SSI error bit: a flag bit after the data, like nE.
+            error_bit = self.ssi & self.ssi_error
+            m.d.comb += field_ends.error_bit.eq(error_bit)
+        ends = [field_ends.ends[w] for w in range(p.words)]
 
         def end(name, of=word):
             """A field end of word ``of`` (the current word by default)."""
@@ -203,11 +139,12 @@ class FrameDecoder(wiring.Component):
 
         ssi = self.ssi if p.ssi else C(0)
         m.d.comb += self.frame_end.eq(Mux(ssi, self.stopped, self.done))
-        # SSI double transmission: the first copy's bits as sent (the newest in bit 0), and
-        # whether the copies differ so far.
+        # SSI double transmission: the second copy compared with the first as it arrives.
         if p.ssi:
-            ring = Signal(p.max_data_bits[0] + protocol.NE_NW_BITS + CRC_MAX_WIDTH)
-            expected = ring.bit_select(word_end_m1, 1)     # the first copy's bit at this index
+            m.submodules.copy = copy = SsiCopyCompare(
+                p.max_data_bits[0] + protocol.NE_NW_BITS + CRC_MAX_WIDTH)
+            m.d.comb += [copy.bit.eq(self.bit), copy.index.eq(word_end_m1),
+                         self.mismatch.eq(copy.mismatch)]
 
         with m.FSM(name="decoder_fsm"):
             with m.State("ACK"):
@@ -259,16 +196,13 @@ class FrameDecoder(wiring.Component):
                                 m.d.sync += word.eq(word + 1)
             if p.ssi:
                 with m.State("SEPARATOR"):
+                    m.d.comb += copy.separator.eq(self.sample)
                     with m.If(self.sample):
-                        m.d.sync += self.mismatch.eq(self.bit)      # must be 0
                         m.next = "COPY"
                 with m.State("COPY"):
+                    m.d.comb += copy.second.eq(self.sample)
                     with m.If(self.sample):
-                        m.d.sync += [
-                            idx.eq(idx + 1),
-                            ring.eq(Cat(self.bit, ring)),
-                            self.mismatch.eq(self.mismatch | (self.bit != expected)),
-                        ]
+                        m.d.sync += idx.eq(idx + 1)
                         with m.If(idx == word_end_m1):
                             end_words()
             with m.State("STOP"):
@@ -319,8 +253,7 @@ class FrameDecoder(wiring.Component):
                     m.d.sync += self.nw[w].eq(self.bit)
         if p.ssi:
             # The first copy of an SSI double transmission, as sent (word 0 is the only word).
-            with m.If(in_word & ssi):
-                m.d.sync += ring.eq(Cat(self.bit, ring))
+            m.d.comb += copy.first.eq(in_word & ssi)
         m.d.comb += [
             self.lc_load.eq(in_word & in_lc),
             self.lc_next.eq(Cat(self.bit, self.lc)),

@@ -4,7 +4,7 @@ from amaranth.hdl import *
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from .frame_decoder import word_length
+from .field_ends import word_length
 from ..params import CRC_SETTINGS, SLOT_WIDTH, WORD_CONFIG, frame_length_width
 
 

@@ -1,0 +1,127 @@
+"""Where each data word's fields end, registered from its runtime configuration."""
+
+from amaranth.hdl import *
+from amaranth.lib import data, wiring
+from amaranth.lib.wiring import In, Out
+
+from .. import protocol
+from ..params import CRC_SETTINGS, WORD_CONFIG, WORD_INDEX_WIDTH
+
+
+def _table(index, values, width):
+    """``values[index]`` modulo ``2**width`` as a small lookup: one LUT level per result bit
+    instead of an adder chain."""
+    return Array(C(v % 2**width, width) for v in values)[index]
+
+
+def _flag_table(word, error_bit, width, value):
+    """``value(nenw, lc, error)`` modulo ``2**width`` as a table on a word's flag settings (a
+    WORD_CONFIG view) and, when ``error_bit`` is given, its SSI error bit (the word has one
+    error bit after the data: SSI mode, ``cfg_ssi_error``)."""
+    index = Cat(word.nenw, word.lc)
+    errors = (0,)
+    if error_bit is not None:
+        index, errors = Cat(index, error_bit), (0, 1)
+    return _table(index, [value(nenw, lc, error) for error in errors for lc in (0, 1)
+                          for nenw in (0, 1)], width)
+
+
+def flag_bits(nenw, lc, error):
+    """Bits between a word's data and its CRC: nE/nW, LC, an SSI error bit."""
+    return nenw * protocol.NE_NW_BITS + lc * protocol.LC_BITS + error
+
+
+def tail_bits(word, crc, extra=0, width=WORD_INDEX_WIDTH, error_bit=None):
+    """Bits after a word's data field (nE/nW, LC, the SSI error bit, CRC), plus ``extra``,
+    modulo ``2**width``: a table on the flag bits plus the CRC's width (a WORD_CONFIG and a
+    CRC_SETTINGS view; ``error_bit`` as in :func:`_flag_table`)."""
+    flags = _flag_table(word, error_bit, width, lambda *f: flag_bits(*f) + extra)
+    return (flags + crc.width)[:width]
+
+
+def word_length(word, crc, extra=0, width=WORD_INDEX_WIDTH, error_bit=None):
+    """Bits of one word on the line (plus ``extra``), from its runtime configuration (a
+    WORD_CONFIG view and its resolved CRC_SETTINGS view; ``error_bit`` as in
+    :func:`_flag_table`)."""
+    return (word.data_bits + tail_bits(word, crc, extra, width, error_bit))[:width]
+
+
+#: One word's field ends, as bit indices inside the word (``idx`` of the decoder counts from 0
+#: at the word's first data bit). ``_m1`` / ``_p1``: the end minus / plus one, so the decoder
+#: compares ``idx`` with a register and never adds in front of a compare. ``data_at0`` and
+#: ``lc_at0``: the data and the LC field are in progress at bit 0 (the decoder's field flags
+#: for the word's first bit).
+FIELD_ENDS = data.StructLayout({
+    "data_end_p1": WORD_INDEX_WIDTH,    # the nW bit (data_bits + 1)
+    "data_end_m1": WORD_INDEX_WIDTH,    # the last data bit
+    "nenw_end_m1": WORD_INDEX_WIDTH,    # the last nE/nW (or SSI error) bit
+    "lc_end_m1": WORD_INDEX_WIDTH,      # the last LC bit (the last flag bit)
+    "word_end_m1": WORD_INDEX_WIDTH,    # the word's last bit
+    "data_at0": 1,
+    "lc_at0": 1,
+})
+
+
+class FieldEnds(wiring.Component):
+    """Each word's field boundaries, registered from its configuration.
+
+    The registers are not reset (they follow ``words``, ``crcs`` and ``error_bit`` in every
+    clock, even while the decoder around them is held in reset), so they are valid one clock
+    after their inputs settle. The "- 1" and "+ 1" are folded into tables on the flag bits
+    (modulo ``2**WORD_INDEX_WIDTH``): a field end of 0, which only an invalid ``data_bits`` of 0
+    gives, becomes ``2**WORD_INDEX_WIDTH - 1``, which a bit index never reaches inside a word.
+
+    Parameters
+    ----------
+    words : int
+        Words of the build.
+    error_bit : bool
+        Word 0 may have an SSI error bit after its data (SSI builds).
+
+    Attributes
+    ----------
+    words : In(ArrayLayout(WORD_CONFIG, words))
+    crcs : In(ArrayLayout(CRC_SETTINGS, words))
+        Each word's settings and resolved CRC.
+    error_bit : In(1)
+        Word 0 has an SSI error bit (SSI builds: ``ssi & ssi_error``).
+    ends : Out(ArrayLayout(FIELD_ENDS, words))
+        Each word's field ends (registered).
+    """
+
+    def __init__(self, words, error_bit=False):
+        self._words = words
+        self._error_bit = error_bit
+        super().__init__({
+            "words": In(data.ArrayLayout(WORD_CONFIG, words)),
+            "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
+            **({"error_bit": In(1)} if error_bit else {}),
+            "ends": Out(data.ArrayLayout(FIELD_ENDS, words)),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        iw = WORD_INDEX_WIDTH
+        for w in range(self._words):
+            err = self.error_bit if (w == 0 and self._error_bit) else None
+            wcfg, wcrc = self.words[w], self.crcs[w]
+            regs = Signal(FIELD_ENDS, name=f"w{w}_ends", reset_less=True)
+            m.d.comb += self.ends[w].eq(regs)
+            # The flag fields' lengths: nE/nW (or the SSI error bit), and those plus LC.
+            nenw_bits = _flag_table(wcfg, err, 2, lambda n, lc, e: flag_bits(n, 0, e))
+            nenw_lc_bits = _flag_table(wcfg, err, 4, flag_bits)
+            nenw_m1 = _flag_table(wcfg, err, iw, lambda n, lc, e: flag_bits(n, 0, e) - 1)
+            nenw_lc_m1 = _flag_table(wcfg, err, iw, lambda *f: flag_bits(*f) - 1)
+            m.d.sync += [
+                regs.data_end_p1.eq(wcfg.data_bits + 1),
+                regs.data_end_m1.eq((wcfg.data_bits + C(2**iw - 1, iw))[:iw]),
+                regs.nenw_end_m1.eq((wcfg.data_bits + nenw_m1)[:iw]),
+                regs.lc_end_m1.eq((wcfg.data_bits + nenw_lc_m1)[:iw]),
+                # data_bits >= 1, so "- 1" folded into the table (modulo 2**iw) never wraps.
+                regs.word_end_m1.eq((wcfg.data_bits + tail_bits(wcfg, wcrc, extra=-1,
+                                                               error_bit=err))[:iw]),
+                regs.data_at0.eq(wcfg.data_bits != 0),
+                regs.lc_at0.eq((wcfg.data_bits + nenw_bits == 0)
+                               & (wcfg.data_bits + nenw_lc_bits != 0)),
+            ]
+        return m
