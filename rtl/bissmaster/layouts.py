@@ -193,12 +193,18 @@ def counter_ports(params):
 
 def counter_names(params):
     """The :data:`COUNTERS` a build has: none without counters, no word-1 ones for one word,
-    no access ones without the register-access engine."""
+    no access ones without the register-access engine; a build of more words (a chain) has
+    ``crc_word<N>`` for each word N >= 2 too, after ``crc_word1``."""
     if not params.counters:
         return ()
-    return tuple(name for name in COUNTERS
-                 if (params.words >= 2 or name not in WORD1_COUNTERS)
-                 and (params.register_access or name not in ACCESS_COUNTERS))
+    names = []
+    for name in COUNTERS:
+        if ((params.words >= 2 or name not in WORD1_COUNTERS)
+                and (params.register_access or name not in ACCESS_COUNTERS)):
+            names.append(name)
+        if name == "crc_word1":
+            names += [f"crc_word{w}" for w in range(2, params.words)]
+    return tuple(names)
 
 
 def flat_fields(layout, prefix=""):

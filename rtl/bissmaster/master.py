@@ -465,9 +465,10 @@ class BissMaster(wiring.Component):
                            AccessStatus.REFUSED, AccessStatus.ABORTED, AccessStatus.DATA_FAULT):
                 events[f"ca_{status.name.lower()}"] = (b.access.done
                                                        & (b.access.result.status == status))
+        # Each word's CRC failures (a chain: every word its own counter).
+        for w in range(1, p.words):
+            events[f"crc_word{w}"] = b.verdict.crc_error[w]
         if two:
-            # Word 1, or in a chain any word after word 0.
-            events["crc_word1"] = b.verdict.crc_error[1:].any()
             events["spw_mismatch"] = b.controller.report_frame & b.verdict.spw_mismatch
         if b.counters is not None:
             ports = counter_ports(p)

@@ -38,13 +38,12 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   wire \$20 ;
   wire \$21 ;
   wire \$22 ;
-  wire \$23 ;
+  reg \$23 ;
   reg \$24 ;
   reg \$25 ;
   reg \$26 ;
   reg \$27 ;
-  reg \$28 ;
-  wire \$29 ;
+  wire \$28 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -1015,35 +1014,35 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign cdm = \cdm$326  & \$4 ;
   assign \$5  = ~ cycle[259];
   assign frame_ok = passed & \$5 ;
-  assign \$7  = report_frame & \spw_mismatch$312 ;
-  assign \$8  = \status$290  == 4'hd;
-  assign \$9  = report_frame & \$8 ;
-  assign \$10  = \status$290  == 4'he;
-  assign \$11  = report_frame & \$10 ;
-  assign \$12  = result[2:0] == 1'h1;
-  assign \$13  = ca_done & \$12 ;
-  assign \$14  = result[2:0] == 2'h2;
-  assign \$15  = ca_done & \$14 ;
-  assign \$16  = result[2:0] == 2'h3;
-  assign \$17  = ca_done & \$16 ;
-  assign \$18  = result[2:0] == 3'h4;
-  assign \$19  = ca_done & \$18 ;
-  assign \$20  = result[2:0] == 3'h5;
-  assign \$21  = ca_done & \$20 ;
+  assign \$6  = report_frame & \spw_mismatch$312 ;
+  assign \$7  = \status$290  == 4'hd;
+  assign \$8  = report_frame & \$7 ;
+  assign \$9  = \status$290  == 4'he;
+  assign \$10  = report_frame & \$9 ;
+  assign \$11  = result[2:0] == 1'h1;
+  assign \$12  = ca_done & \$11 ;
+  assign \$13  = result[2:0] == 2'h2;
+  assign \$14  = ca_done & \$13 ;
+  assign \$15  = result[2:0] == 2'h3;
+  assign \$16  = ca_done & \$15 ;
+  assign \$17  = result[2:0] == 3'h4;
+  assign \$18  = ca_done & \$17 ;
+  assign \$19  = result[2:0] == 3'h5;
+  assign \$20  = ca_done & \$19 ;
   assign busy = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$22  = ~ \clear$202 ;
-  assign \$23  = \sample$348  & \$22 ;
+  assign \$21  = ~ \clear$202 ;
+  assign \$22  = \sample$348  & \$21 ;
   always @(posedge clk)
-    sample <= \$24 ;
+    sample <= \$23 ;
   always @(posedge clk)
-    \bit  <= \$25 ;
+    \bit  <= \$24 ;
   always @(posedge clk)
-    started_before <= \$26 ;
+    started_before <= \$25 ;
   always @(posedge clk)
-    learn <= \$27 ;
+    learn <= \$26 ;
   always @(posedge clk)
-    clean <= \$28 ;
+    clean <= \$27 ;
   \biss_master.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -1137,7 +1136,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$2171$272 (cycle[274:272]),
+    .\port$2170$272 (cycle[274:272]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(sample),
@@ -1197,7 +1196,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$2171$199 (cycle[199]),
+    .\port$2170$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -1248,7 +1247,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .level(\slo$127 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$2171$259 (cycle[271:259]),
+    .\port$2170$259 (cycle[271:259]),
     .receiver_clear(\clear$202 ),
     .rst(rst),
     .sample(\sample$348 ),
@@ -1271,7 +1270,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .is_zero(lc_zero_seen),
     .lc(\lc$213 ),
     .load(load),
-    .\port$2159$0 (\bit ),
+    .\port$2158$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -1338,7 +1337,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$1592$0 (\$29 ),
+    .\port$1591$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -1349,37 +1348,37 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$24  = \$23 ;
+    \$23  = \$22 ;
+    if (rst) begin
+      \$23  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
+    \$24  = \bit$349 ;
     if (rst) begin
       \$24  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$25  = \bit$349 ;
+    \$25  = started;
     if (rst) begin
       \$25  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$26  = started;
+    \$26  = report_frame;
     if (rst) begin
       \$26  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$27  = report_frame;
+    \$27  = \clean$350 ;
     if (rst) begin
       \$27  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$5 ) begin end
-    \$28  = \clean$350 ;
-    if (rst) begin
-      \$28  = 1'h0;
     end
   end
   assign \idle$112  = idle;
@@ -1491,7 +1490,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \report_frame$294  = report_frame;
   assign \report_delay$296  = report_delay;
   assign \valid$298  = \valid$297 ;
-  assign word_crc_ok = { \$29 , crc_ok[0] };
+  assign word_crc_ok = { \$28 , crc_ok[0] };
   assign \first_rise$313  = first_rise;
   assign \start$318  = ca_start;
   assign \abort$319  = ca_abort;
@@ -1845,18 +1844,18 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \result$347.lc_skip  = \result$347 [184];
   assign \result$347.lc_zero  = \result$347 [185];
   assign \result$347.spw_mismatch  = \result$347 [186];
-  assign \events$337 [20] = \$21 ;
-  assign \events$337 [19] = \$19 ;
-  assign \events$337 [18] = \$17 ;
-  assign \events$337 [17] = \$15 ;
-  assign \events$337 [16] = \$13 ;
+  assign \events$337 [20] = \$20 ;
+  assign \events$337 [19] = \$18 ;
+  assign \events$337 [18] = \$16 ;
+  assign \events$337 [17] = \$14 ;
+  assign \events$337 [16] = \$12 ;
   assign \events$337 [15] = \event ;
-  assign \events$337 [14] = \$11 ;
-  assign \events$337 [13] = \$9 ;
+  assign \events$337 [14] = \$10 ;
+  assign \events$337 [13] = \$8 ;
   assign \events$337 [12] = faults[6];
   assign \events$337 [11] = faults[4];
   assign \events$337 [10] = overrun;
-  assign \events$337 [9] = \$7 ;
+  assign \events$337 [9] = \$6 ;
   assign \events$337 [8] = \lc_zero$307 ;
   assign \events$337 [7] = \lc_skip$306 ;
   assign \events$337 [6] = \lc_repeat$305 ;
@@ -1864,7 +1863,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \events$337 [4] = faults[2];
   assign \events$337 [3] = faults[1];
   assign \events$337 [2] = faults[0];
-  assign \events$337 [1] = \$6 ;
+  assign \events$337 [1] = crc_error[1];
   assign \events$337 [0] = crc_error[0];
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
@@ -1875,7 +1874,7 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign \request$315 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = \spw_mismatch$312 ;
-  assign frame[176] = \$29 ;
+  assign frame[176] = \$28 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
   assign frame[173:134] = spw;
@@ -1937,7 +1936,6 @@ module biss_master(start, periodic, abort_cycle, clear_counters, cfg_ma_half_per
   assign live[63:40] = cfg_break_time;
   assign live[39:16] = cfg_request_period;
   assign live[15:0] = cfg_ma_half_period;
-  assign \$6  = crc_error[1];
 endmodule
 
 (* generator = "Amaranth" *)
@@ -5603,7 +5601,7 @@ module \biss_master.counters.count_spw_mismatch (rst, inc, clear, count, clk);
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$2171$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$2170$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
@@ -6296,8 +6294,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$2171$272 ;
-  wire [2:0] \port$2171$272 ;
+  input [2:0] \port$2170$272 ;
+  wire [2:0] \port$2170$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -6583,7 +6581,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$2171$272 [0];
+  assign error_bit = ssi & \port$2170$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -6637,7 +6635,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$2171$272 [2];
+  assign \$48  = ssi & \port$2170$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -6924,15 +6922,15 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$2171$272 [0];
+  assign \$335  = ssi & \port$2170$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$2171$272 [0];
-  assign \$343  = ~ \port$2171$272 [1];
+  assign \$342  = ssi & \port$2170$272 [0];
+  assign \$343  = ~ \port$2170$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -7564,7 +7562,7 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$2171$272 [0];
+  assign ssi_error = \port$2170$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -7573,8 +7571,8 @@ module \biss_master.decoder (rst, word_count, frame_end, lc_load, words, sample,
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$2171$272 [2];
-  assign ssi_error_low = \port$2171$272 [1];
+  assign ssi_double = \port$2170$272 [2];
+  assign ssi_error_low = \port$2170$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -9231,7 +9229,7 @@ module \biss_master.ma_clock (rst, \clocking , half_period, run, hold, first_ris
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.ma_stop (rst, words, \port$2171$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master.ma_stop (rst, words, \port$2170$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -9283,8 +9281,8 @@ module \biss_master.ma_stop (rst, words, \port$2171$199 , ssi, ssi_error, ssi_do
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$2171$199 ;
-  wire \port$2171$199 ;
+  input \port$2170$199 ;
+  wire \port$2170$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -9338,7 +9336,7 @@ module \biss_master.ma_stop (rst, words, \port$2171$199 , ssi, ssi_error, ssi_do
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$2171$199  ? word1_len : 8'h00;
+  assign \$11  = \port$2170$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -9448,7 +9446,7 @@ module \biss_master.ma_stop (rst, words, \port$2171$199 , ssi, ssi_error, ssi_do
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$2171$199 , 1'h1 };
+  assign enables = { \port$2170$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -11589,7 +11587,7 @@ module \biss_master.results (rst, report_delay, report, valid, frame, report_fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2171$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$2170$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -11723,8 +11721,8 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$217
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$2171$259 ;
-  wire [12:0] \port$2171$259 ;
+  input [12:0] \port$2170$259 ;
+  wire [12:0] \port$2170$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -11749,7 +11747,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$217
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$2171$259 [12:1] + 1'h1;
+  assign \$11  = \port$2170$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -11874,7 +11872,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$217
   \biss_master.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$2171$259 [0]),
+    .clear_high(\port$2170$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -12017,7 +12015,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$217
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$2171$259 [0]) begin
+            if (\port$2170$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -12102,7 +12100,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$217
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$2171$259 [0]) begin
+            if (\port$2170$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -12141,7 +12139,7 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$217
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$2171$259 [12:1] };
+            \$85  = { 1'h0, \port$2170$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -12526,11 +12524,11 @@ module \biss_master.sampler (clk, rst, arm, \bit , noise, half_period, \port$217
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$2171$259 [12:1] };
-  assign fixed = \port$2171$259 [0];
+  assign fixed_delay = { 1'h0, \port$2170$259 [12:1] };
+  assign fixed = \port$2170$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$2171$259 [0];
+  assign clear_high = \port$2170$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -12937,7 +12935,7 @@ module \biss_master.scheduler (abort, period, clk, rst, periodic, request, overr
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2159$0 , resync, lc, is_zero, clk);
+module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2158$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -12979,8 +12977,8 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2159$0
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$2159$0 ;
-  wire \port$2159$0 ;
+  input \port$2158$0 ;
+  wire \port$2158$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -12994,9 +12992,9 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2159$0
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$2159$0  };
-  assign \$2  = { lc[4:0], \port$2159$0  } == last;
-  assign \$3  = { lc[4:0], \port$2159$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$2158$0  };
+  assign \$2  = { lc[4:0], \port$2158$0  } == last;
+  assign \$3  = { lc[4:0], \port$2158$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -13106,7 +13104,7 @@ module \biss_master.sign_of_life (rst, load, \repeat , skip, check, \port$2159$0
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$2159$0  };
+  assign lc_next = { lc[4:0], \port$2158$0  };
   assign zero = is_zero;
 endmodule
 
@@ -13681,7 +13679,7 @@ module \biss_master.timers (timeout_live, quiet_time_live, clk, rst, restart, ma
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master.verdict (lc_skip_seen, noisy, \port$1592$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master.verdict (lc_skip_seen, noisy, \port$1591$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
@@ -13859,8 +13857,8 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1592$0 , lc_check, lc_re
   wire noisy;
   output passed;
   wire passed;
-  output \port$1592$0 ;
-  wire \port$1592$0 ;
+  output \port$1591$0 ;
+  wire \port$1591$0 ;
   output report;
   wire report;
   input report_frame;
@@ -13978,7 +13976,7 @@ module \biss_master.verdict (lc_skip_seen, noisy, \port$1592$0 , lc_check, lc_re
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$1592$0  = \$2 ;
+  assign \port$1591$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

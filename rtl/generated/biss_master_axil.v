@@ -680,12 +680,12 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6671$0 (\$8 ),
-    .\port$6684$0 (\$9 ),
-    .\port$6761$0 (\$10 ),
-    .\port$7202$0 (\$11 ),
-    .\port$7215$0 (\$12 ),
-    .\port$7292$0 (\$13 ),
+    .\port$6669$0 (\$8 ),
+    .\port$6682$0 (\$9 ),
+    .\port$6759$0 (\$10 ),
+    .\port$7200$0 (\$11 ),
+    .\port$7213$0 (\$12 ),
+    .\port$7290$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -770,9 +770,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6671$0 (\$8 ),
-    .\port$6684$0 (\$9 ),
-    .\port$6761$0 (\$10 ),
+    .\port$6669$0 (\$8 ),
+    .\port$6682$0 (\$9 ),
+    .\port$6759$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -845,9 +845,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(\regs__count_en$414 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$438 ),
-    .\port$7202$0 (\$11 ),
-    .\port$7215$0 (\$12 ),
-    .\port$7292$0 (\$13 ),
+    .\port$7200$0 (\$11 ),
+    .\port$7213$0 (\$12 ),
+    .\port$7290$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$266 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1203,7 +1203,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$113 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort
 , ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed
 , ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay
-, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6671$0 , \port$6684$0 , ch0__ca_done, \port$6761$0 , ch1__frame_done, ch1__done_count, \port$7202$0 , \port$7215$0 , ch1__ca_done, \port$7292$0 , bus__r_addr);
+, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6669$0 , \port$6682$0 , ch0__ca_done, \port$6759$0 , ch1__frame_done, ch1__done_count, \port$7200$0 , \port$7213$0 , ch1__ca_done, \port$7290$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2752,18 +2752,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6671$0 ;
-  wire [186:0] \port$6671$0 ;
-  input [79:0] \port$6684$0 ;
-  wire [79:0] \port$6684$0 ;
-  input [9:0] \port$6761$0 ;
-  wire [9:0] \port$6761$0 ;
-  input [186:0] \port$7202$0 ;
-  wire [186:0] \port$7202$0 ;
-  input [79:0] \port$7215$0 ;
-  wire [79:0] \port$7215$0 ;
-  input [9:0] \port$7292$0 ;
-  wire [9:0] \port$7292$0 ;
+  input [186:0] \port$6669$0 ;
+  wire [186:0] \port$6669$0 ;
+  input [79:0] \port$6682$0 ;
+  wire [79:0] \port$6682$0 ;
+  input [9:0] \port$6759$0 ;
+  wire [9:0] \port$6759$0 ;
+  input [186:0] \port$7200$0 ;
+  wire [186:0] \port$7200$0 ;
+  input [79:0] \port$7213$0 ;
+  wire [79:0] \port$7213$0 ;
+  input [9:0] \port$7290$0 ;
+  wire [9:0] \port$7290$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2867,7 +2867,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$343  = \$341  | \$342 ;
   assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7202$0 [182:177], 4'h0, \port$7202$0 [186:183], 1'h0, \port$7202$0 [176:174], 1'h0, \port$7202$0 [133:131], 3'h0, \port$7202$0 [49], \port$7202$0 [3:0] } : 32'd0;
+  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7200$0 [182:177], 4'h0, \port$7200$0 [186:183], 1'h0, \port$7200$0 [176:174], 1'h0, \port$7200$0 [133:131], 3'h0, \port$7200$0 [49], \port$7200$0 [3:0] } : 32'd0;
   assign \$347  = \$345  | \$346 ;
   assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$349  = \$347  | \$348 ;
@@ -2895,13 +2895,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$371  = \$369  | \$370 ;
   assign \$372  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7292$0 [9:3], 1'h0, \port$7292$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7290$0 [9:3], 1'h0, \port$7290$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_143 ? \port$7215$0 [31:0] : 32'd0;
+  assign \$378  = ch1_read_select_143 ? \port$7213$0 [31:0] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_144 ? \port$7215$0 [63:32] : 32'd0;
+  assign \$380  = ch1_read_select_144 ? \port$7213$0 [63:32] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7215$0 [79:64] } : 32'd0;
+  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7213$0 [79:64] } : 32'd0;
   assign \$383  = \$381  | \$382 ;
   assign \$384  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$385  = \$383  | \$384 ;
@@ -3771,7 +3771,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$158  = \$156  | \$157 ;
   assign \$159  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6671$0 [182:177], 4'h0, \port$6671$0 [186:183], 1'h0, \port$6671$0 [176:174], 1'h0, \port$6671$0 [133:131], 3'h0, \port$6671$0 [49], \port$6671$0 [3:0] } : 32'd0;
+  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6669$0 [182:177], 4'h0, \port$6669$0 [186:183], 1'h0, \port$6669$0 [176:174], 1'h0, \port$6669$0 [133:131], 3'h0, \port$6669$0 [49], \port$6669$0 [3:0] } : 32'd0;
   assign \$162  = \$160  | \$161 ;
   assign \$163  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$164  = \$162  | \$163 ;
@@ -3799,13 +3799,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$186  = \$184  | \$185 ;
   assign \$187  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6761$0 [9:3], 1'h0, \port$6761$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6759$0 [9:3], 1'h0, \port$6759$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_c3 ? \port$6684$0 [31:0] : 32'd0;
+  assign \$193  = ch0_read_select_c3 ? \port$6682$0 [31:0] : 32'd0;
   assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_c4 ? \port$6684$0 [63:32] : 32'd0;
+  assign \$195  = ch0_read_select_c4 ? \port$6682$0 [63:32] : 32'd0;
   assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6684$0 [79:64] } : 32'd0;
+  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6682$0 [79:64] } : 32'd0;
   assign \$198  = \$196  | \$197 ;
   assign \$199  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$200  = \$198  | \$199 ;
@@ -5009,7 +5009,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$595  = ch0_result_status_status_snapshot;
     if (\$130 ) begin
-      \$595  = \port$6671$0 [3:0];
+      \$595  = \port$6669$0 [3:0];
     end
     if (rst) begin
       \$595  = 4'h0;
@@ -5019,7 +5019,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$596  = ch0_result_status_cds_snapshot;
     if (\$130 ) begin
-      \$596  = \port$6671$0 [49];
+      \$596  = \port$6669$0 [49];
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -5029,7 +5029,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$597  = ch0_result_status_w0_ne_snapshot;
     if (\$130 ) begin
-      \$597  = \port$6671$0 [131];
+      \$597  = \port$6669$0 [131];
     end
     if (rst) begin
       \$597  = 1'h0;
@@ -5039,7 +5039,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$598  = ch0_result_status_w0_nw_snapshot;
     if (\$130 ) begin
-      \$598  = \port$6671$0 [132];
+      \$598  = \port$6669$0 [132];
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -5049,7 +5049,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$599  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$130 ) begin
-      \$599  = \port$6671$0 [133];
+      \$599  = \port$6669$0 [133];
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -5059,7 +5059,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$600  = ch0_result_status_w1_ne_snapshot;
     if (\$130 ) begin
-      \$600  = \port$6671$0 [174];
+      \$600  = \port$6669$0 [174];
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -5069,7 +5069,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$601  = ch0_result_status_w1_nw_snapshot;
     if (\$130 ) begin
-      \$601  = \port$6671$0 [175];
+      \$601  = \port$6669$0 [175];
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -5079,7 +5079,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$602  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$130 ) begin
-      \$602  = \port$6671$0 [176];
+      \$602  = \port$6669$0 [176];
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -5089,7 +5089,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$603  = ch0_result_status_lc_repeat_snapshot;
     if (\$130 ) begin
-      \$603  = \port$6671$0 [183];
+      \$603  = \port$6669$0 [183];
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -5099,7 +5099,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$604  = ch0_result_status_lc_skip_snapshot;
     if (\$130 ) begin
-      \$604  = \port$6671$0 [184];
+      \$604  = \port$6669$0 [184];
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -5109,7 +5109,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$605  = ch0_result_status_lc_zero_snapshot;
     if (\$130 ) begin
-      \$605  = \port$6671$0 [185];
+      \$605  = \port$6669$0 [185];
     end
     if (rst) begin
       \$605  = 1'h0;
@@ -5119,7 +5119,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$606  = ch0_result_status_spw_mismatch_snapshot;
     if (\$130 ) begin
-      \$606  = \port$6671$0 [186];
+      \$606  = \port$6669$0 [186];
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -5129,7 +5129,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$607  = ch0_result_status_lc_snapshot;
     if (\$130 ) begin
-      \$607  = \port$6671$0 [182:177];
+      \$607  = \port$6669$0 [182:177];
     end
     if (rst) begin
       \$607  = 6'h00;
@@ -5149,7 +5149,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$609  = ch0_result_seq_line_delay_snapshot;
     if (\$130 ) begin
-      \$609  = \port$6671$0 [48:36];
+      \$609  = \port$6669$0 [48:36];
     end
     if (rst) begin
       \$609  = 13'h0000;
@@ -5159,7 +5159,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$610  = ch0_result_w0_lo_data_snapshot;
     if (\$130 ) begin
-      \$610  = \port$6671$0 [107:76];
+      \$610  = \port$6669$0 [107:76];
     end
     if (rst) begin
       \$610  = 32'd0;
@@ -5169,7 +5169,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$611  = ch0_result_w0_hi_data_snapshot;
     if (\$130 ) begin
-      \$611  = \port$6671$0 [130:108];
+      \$611  = \port$6669$0 [130:108];
     end
     if (rst) begin
       \$611  = 23'h000000;
@@ -5179,7 +5179,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$612  = ch0_result_w1_lo_data_snapshot;
     if (\$130 ) begin
-      \$612  = \port$6671$0 [165:134];
+      \$612  = \port$6669$0 [165:134];
     end
     if (rst) begin
       \$612  = 32'd0;
@@ -5189,7 +5189,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$613  = ch0_result_w1_hi_data_snapshot;
     if (\$130 ) begin
-      \$613  = \port$6671$0 [173:166];
+      \$613  = \port$6669$0 [173:166];
     end
     if (rst) begin
       \$613  = 8'h00;
@@ -5199,7 +5199,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$614  = ch0_result_timestamp_time_snapshot;
     if (\$130 ) begin
-      \$614  = \port$6671$0 [35:4];
+      \$614  = \port$6669$0 [35:4];
     end
     if (rst) begin
       \$614  = 32'd0;
@@ -5209,7 +5209,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$615  = ch0_result_line_noise_events_snapshot;
     if (\$130 ) begin
-      \$615  = \port$6671$0 [53:50];
+      \$615  = \port$6669$0 [53:50];
     end
     if (rst) begin
       \$615  = 4'h0;
@@ -5219,7 +5219,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$616  = ch0_result_line_delay_settled_snapshot;
     if (\$130 ) begin
-      \$616  = \port$6671$0 [54];
+      \$616  = \port$6669$0 [54];
     end
     if (rst) begin
       \$616  = 1'h0;
@@ -5229,7 +5229,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$617  = ch0_result_line_delay_spread_snapshot;
     if (\$130 ) begin
-      \$617  = \port$6671$0 [75:68];
+      \$617  = \port$6669$0 [75:68];
     end
     if (rst) begin
       \$617  = 8'h00;
@@ -5239,7 +5239,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$618  = ch0_result_line_settled_delay_snapshot;
     if (\$130 ) begin
-      \$618  = \port$6671$0 [67:55];
+      \$618  = \port$6669$0 [67:55];
     end
     if (rst) begin
       \$618  = 13'h0000;
@@ -6303,7 +6303,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$725  = ch1_result_status_status_snapshot;
     if (\$315 ) begin
-      \$725  = \port$7202$0 [3:0];
+      \$725  = \port$7200$0 [3:0];
     end
     if (rst) begin
       \$725  = 4'h0;
@@ -6313,7 +6313,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$726  = ch1_result_status_cds_snapshot;
     if (\$315 ) begin
-      \$726  = \port$7202$0 [49];
+      \$726  = \port$7200$0 [49];
     end
     if (rst) begin
       \$726  = 1'h0;
@@ -6323,7 +6323,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$727  = ch1_result_status_w0_ne_snapshot;
     if (\$315 ) begin
-      \$727  = \port$7202$0 [131];
+      \$727  = \port$7200$0 [131];
     end
     if (rst) begin
       \$727  = 1'h0;
@@ -6333,7 +6333,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$728  = ch1_result_status_w0_nw_snapshot;
     if (\$315 ) begin
-      \$728  = \port$7202$0 [132];
+      \$728  = \port$7200$0 [132];
     end
     if (rst) begin
       \$728  = 1'h0;
@@ -6343,7 +6343,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$729  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$315 ) begin
-      \$729  = \port$7202$0 [133];
+      \$729  = \port$7200$0 [133];
     end
     if (rst) begin
       \$729  = 1'h0;
@@ -6353,7 +6353,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$730  = ch1_result_status_w1_ne_snapshot;
     if (\$315 ) begin
-      \$730  = \port$7202$0 [174];
+      \$730  = \port$7200$0 [174];
     end
     if (rst) begin
       \$730  = 1'h0;
@@ -6363,7 +6363,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$731  = ch1_result_status_w1_nw_snapshot;
     if (\$315 ) begin
-      \$731  = \port$7202$0 [175];
+      \$731  = \port$7200$0 [175];
     end
     if (rst) begin
       \$731  = 1'h0;
@@ -6373,7 +6373,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$732  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$315 ) begin
-      \$732  = \port$7202$0 [176];
+      \$732  = \port$7200$0 [176];
     end
     if (rst) begin
       \$732  = 1'h0;
@@ -6383,7 +6383,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$733  = ch1_result_status_lc_repeat_snapshot;
     if (\$315 ) begin
-      \$733  = \port$7202$0 [183];
+      \$733  = \port$7200$0 [183];
     end
     if (rst) begin
       \$733  = 1'h0;
@@ -6393,7 +6393,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$734  = ch1_result_status_lc_skip_snapshot;
     if (\$315 ) begin
-      \$734  = \port$7202$0 [184];
+      \$734  = \port$7200$0 [184];
     end
     if (rst) begin
       \$734  = 1'h0;
@@ -6403,7 +6403,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$735  = ch1_result_status_lc_zero_snapshot;
     if (\$315 ) begin
-      \$735  = \port$7202$0 [185];
+      \$735  = \port$7200$0 [185];
     end
     if (rst) begin
       \$735  = 1'h0;
@@ -6413,7 +6413,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$736  = ch1_result_status_spw_mismatch_snapshot;
     if (\$315 ) begin
-      \$736  = \port$7202$0 [186];
+      \$736  = \port$7200$0 [186];
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6423,7 +6423,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$737  = ch1_result_status_lc_snapshot;
     if (\$315 ) begin
-      \$737  = \port$7202$0 [182:177];
+      \$737  = \port$7200$0 [182:177];
     end
     if (rst) begin
       \$737  = 6'h00;
@@ -6443,7 +6443,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$739  = ch1_result_seq_line_delay_snapshot;
     if (\$315 ) begin
-      \$739  = \port$7202$0 [48:36];
+      \$739  = \port$7200$0 [48:36];
     end
     if (rst) begin
       \$739  = 13'h0000;
@@ -6453,7 +6453,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$740  = ch1_result_w0_lo_data_snapshot;
     if (\$315 ) begin
-      \$740  = \port$7202$0 [107:76];
+      \$740  = \port$7200$0 [107:76];
     end
     if (rst) begin
       \$740  = 32'd0;
@@ -6463,7 +6463,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$741  = ch1_result_w0_hi_data_snapshot;
     if (\$315 ) begin
-      \$741  = \port$7202$0 [130:108];
+      \$741  = \port$7200$0 [130:108];
     end
     if (rst) begin
       \$741  = 23'h000000;
@@ -6473,7 +6473,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$742  = ch1_result_w1_lo_data_snapshot;
     if (\$315 ) begin
-      \$742  = \port$7202$0 [165:134];
+      \$742  = \port$7200$0 [165:134];
     end
     if (rst) begin
       \$742  = 32'd0;
@@ -6483,7 +6483,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$743  = ch1_result_w1_hi_data_snapshot;
     if (\$315 ) begin
-      \$743  = \port$7202$0 [173:166];
+      \$743  = \port$7200$0 [173:166];
     end
     if (rst) begin
       \$743  = 8'h00;
@@ -6493,7 +6493,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$744  = ch1_result_timestamp_time_snapshot;
     if (\$315 ) begin
-      \$744  = \port$7202$0 [35:4];
+      \$744  = \port$7200$0 [35:4];
     end
     if (rst) begin
       \$744  = 32'd0;
@@ -6503,7 +6503,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$745  = ch1_result_line_noise_events_snapshot;
     if (\$315 ) begin
-      \$745  = \port$7202$0 [53:50];
+      \$745  = \port$7200$0 [53:50];
     end
     if (rst) begin
       \$745  = 4'h0;
@@ -6513,7 +6513,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$746  = ch1_result_line_delay_settled_snapshot;
     if (\$315 ) begin
-      \$746  = \port$7202$0 [54];
+      \$746  = \port$7200$0 [54];
     end
     if (rst) begin
       \$746  = 1'h0;
@@ -6523,7 +6523,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$747  = ch1_result_line_delay_spread_snapshot;
     if (\$315 ) begin
-      \$747  = \port$7202$0 [75:68];
+      \$747  = \port$7200$0 [75:68];
     end
     if (rst) begin
       \$747  = 8'h00;
@@ -6533,7 +6533,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$748  = ch1_result_line_settled_delay_snapshot;
     if (\$315 ) begin
-      \$748  = \port$7202$0 [67:55];
+      \$748  = \port$7200$0 [67:55];
     end
     if (rst) begin
       \$748  = 13'h0000;
@@ -6571,27 +6571,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6671$0 [3:0];
-  assign ch0__cds = \port$6671$0 [49];
-  assign ch0__word0_ne = \port$6671$0 [131];
-  assign ch0__word0_nw = \port$6671$0 [132];
-  assign ch0__word0_crc_ok = \port$6671$0 [133];
-  assign ch0__word1_ne = \port$6671$0 [174];
-  assign ch0__word1_nw = \port$6671$0 [175];
-  assign ch0__word1_crc_ok = \port$6671$0 [176];
-  assign ch0__lc_repeat = \port$6671$0 [183];
-  assign ch0__lc_skip = \port$6671$0 [184];
-  assign ch0__lc_zero = \port$6671$0 [185];
-  assign ch0__spw_mismatch = \port$6671$0 [186];
-  assign ch0__lc = \port$6671$0 [182:177];
-  assign ch0__line_delay = \port$6671$0 [48:36];
-  assign ch0__word0_position = \port$6671$0 [130:76];
-  assign ch0__word1_position = \port$6671$0 [173:134];
-  assign ch0__timestamp = \port$6671$0 [35:4];
-  assign ch0__noise_events = \port$6671$0 [53:50];
-  assign ch0__delay_settled = \port$6671$0 [54];
-  assign ch0__delay_spread = \port$6671$0 [75:68];
-  assign ch0__settled_delay = \port$6671$0 [67:55];
+  assign ch0__status = \port$6669$0 [3:0];
+  assign ch0__cds = \port$6669$0 [49];
+  assign ch0__word0_ne = \port$6669$0 [131];
+  assign ch0__word0_nw = \port$6669$0 [132];
+  assign ch0__word0_crc_ok = \port$6669$0 [133];
+  assign ch0__word1_ne = \port$6669$0 [174];
+  assign ch0__word1_nw = \port$6669$0 [175];
+  assign ch0__word1_crc_ok = \port$6669$0 [176];
+  assign ch0__lc_repeat = \port$6669$0 [183];
+  assign ch0__lc_skip = \port$6669$0 [184];
+  assign ch0__lc_zero = \port$6669$0 [185];
+  assign ch0__spw_mismatch = \port$6669$0 [186];
+  assign ch0__lc = \port$6669$0 [182:177];
+  assign ch0__line_delay = \port$6669$0 [48:36];
+  assign ch0__word0_position = \port$6669$0 [130:76];
+  assign ch0__word1_position = \port$6669$0 [173:134];
+  assign ch0__timestamp = \port$6669$0 [35:4];
+  assign ch0__noise_events = \port$6669$0 [53:50];
+  assign ch0__delay_settled = \port$6669$0 [54];
+  assign ch0__delay_spread = \port$6669$0 [75:68];
+  assign ch0__settled_delay = \port$6669$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -6599,34 +6599,34 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
   assign ch0__cap_ssi = 1'h1;
-  assign ch0__ca_status = \port$6761$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6761$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6684$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$6684$0 [31:16];
-  assign ch0__count_ca_refused = \port$6684$0 [47:32];
-  assign ch0__count_ca_aborted = \port$6684$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$6684$0 [79:64];
-  assign ch1__status = \port$7202$0 [3:0];
-  assign ch1__cds = \port$7202$0 [49];
-  assign ch1__word0_ne = \port$7202$0 [131];
-  assign ch1__word0_nw = \port$7202$0 [132];
-  assign ch1__word0_crc_ok = \port$7202$0 [133];
-  assign ch1__word1_ne = \port$7202$0 [174];
-  assign ch1__word1_nw = \port$7202$0 [175];
-  assign ch1__word1_crc_ok = \port$7202$0 [176];
-  assign ch1__lc_repeat = \port$7202$0 [183];
-  assign ch1__lc_skip = \port$7202$0 [184];
-  assign ch1__lc_zero = \port$7202$0 [185];
-  assign ch1__spw_mismatch = \port$7202$0 [186];
-  assign ch1__lc = \port$7202$0 [182:177];
-  assign ch1__line_delay = \port$7202$0 [48:36];
-  assign ch1__word0_position = \port$7202$0 [130:76];
-  assign ch1__word1_position = \port$7202$0 [173:134];
-  assign ch1__timestamp = \port$7202$0 [35:4];
-  assign ch1__noise_events = \port$7202$0 [53:50];
-  assign ch1__delay_settled = \port$7202$0 [54];
-  assign ch1__delay_spread = \port$7202$0 [75:68];
-  assign ch1__settled_delay = \port$7202$0 [67:55];
+  assign ch0__ca_status = \port$6759$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6759$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6682$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$6682$0 [31:16];
+  assign ch0__count_ca_refused = \port$6682$0 [47:32];
+  assign ch0__count_ca_aborted = \port$6682$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$6682$0 [79:64];
+  assign ch1__status = \port$7200$0 [3:0];
+  assign ch1__cds = \port$7200$0 [49];
+  assign ch1__word0_ne = \port$7200$0 [131];
+  assign ch1__word0_nw = \port$7200$0 [132];
+  assign ch1__word0_crc_ok = \port$7200$0 [133];
+  assign ch1__word1_ne = \port$7200$0 [174];
+  assign ch1__word1_nw = \port$7200$0 [175];
+  assign ch1__word1_crc_ok = \port$7200$0 [176];
+  assign ch1__lc_repeat = \port$7200$0 [183];
+  assign ch1__lc_skip = \port$7200$0 [184];
+  assign ch1__lc_zero = \port$7200$0 [185];
+  assign ch1__spw_mismatch = \port$7200$0 [186];
+  assign ch1__lc = \port$7200$0 [182:177];
+  assign ch1__line_delay = \port$7200$0 [48:36];
+  assign ch1__word0_position = \port$7200$0 [130:76];
+  assign ch1__word1_position = \port$7200$0 [173:134];
+  assign ch1__timestamp = \port$7200$0 [35:4];
+  assign ch1__noise_events = \port$7200$0 [53:50];
+  assign ch1__delay_settled = \port$7200$0 [54];
+  assign ch1__delay_spread = \port$7200$0 [75:68];
+  assign ch1__settled_delay = \port$7200$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -6634,13 +6634,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign ch1__ca_status = \port$7292$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7292$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7215$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7215$0 [31:16];
-  assign ch1__count_ca_refused = \port$7215$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7215$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7215$0 [79:64];
+  assign ch1__ca_status = \port$7290$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7290$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7213$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7213$0 [31:16];
+  assign ch1__count_ca_refused = \port$7213$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7213$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7213$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__r_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -7018,7 +7018,7 @@ endmodule
 module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6671$0 , \port$6684$0 , regs__ca_done, \port$6761$0 , ca_rbuf_addr);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6669$0 , \port$6682$0 , regs__ca_done, \port$6759$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -7200,12 +7200,12 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6671$0 ;
-  wire [186:0] \port$6671$0 ;
-  output [79:0] \port$6684$0 ;
-  wire [79:0] \port$6684$0 ;
-  output [9:0] \port$6761$0 ;
-  wire [9:0] \port$6761$0 ;
+  output [186:0] \port$6669$0 ;
+  wire [186:0] \port$6669$0 ;
+  output [79:0] \port$6682$0 ;
+  wire [79:0] \port$6682$0 ;
+  output [9:0] \port$6759$0 ;
+  wire [9:0] \port$6759$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -7660,9 +7660,9 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$6671$0  = \$18 ;
-  assign \port$6684$0  = \$19 ;
-  assign \port$6761$0  = \$20 ;
+  assign \port$6669$0  = \$18 ;
+  assign \port$6682$0  = \$19 ;
+  assign \port$6759$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -7686,13 +7686,12 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \$20 ;
   wire \$21 ;
   wire \$22 ;
-  wire \$23 ;
+  reg \$23 ;
   reg \$24 ;
   reg \$25 ;
   reg \$26 ;
   reg \$27 ;
-  reg \$28 ;
-  wire \$29 ;
+  wire \$28 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -8615,25 +8614,25 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \$13  = ca_done & \$12 ;
   assign \$14  = result[2:0] == 3'h5;
   assign \$15  = ca_done & \$14 ;
-  assign \$17  = report_frame & spw_mismatch;
-  assign \$18  = status == 4'hd;
-  assign \$19  = report_frame & \$18 ;
-  assign \$20  = status == 4'he;
-  assign \$21  = report_frame & \$20 ;
+  assign \$16  = report_frame & spw_mismatch;
+  assign \$17  = status == 4'hd;
+  assign \$18  = report_frame & \$17 ;
+  assign \$19  = status == 4'he;
+  assign \$20  = report_frame & \$19 ;
   assign \busy$313  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$22  = ~ \clear$137 ;
-  assign \$23  = \sample$344  & \$22 ;
+  assign \$21  = ~ \clear$137 ;
+  assign \$22  = \sample$344  & \$21 ;
   always @(posedge clk)
-    sample <= \$24 ;
+    sample <= \$23 ;
   always @(posedge clk)
-    \bit  <= \$25 ;
+    \bit  <= \$24 ;
   always @(posedge clk)
-    started_before <= \$26 ;
+    started_before <= \$25 ;
   always @(posedge clk)
-    learn <= \$27 ;
+    learn <= \$26 ;
   always @(posedge clk)
-    clean <= \$28 ;
+    clean <= \$27 ;
   \biss_master_axil.ch0.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -8737,7 +8736,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6328$272 (cycle[274:272]),
+    .\port$6326$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -8797,7 +8796,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6328$199 (cycle[199]),
+    .\port$6326$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -8848,7 +8847,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6328$259 (cycle[271:259]),
+    .\port$6326$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$344 ),
@@ -8872,7 +8871,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6316$0 (\bit ),
+    .\port$6314$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -8939,7 +8938,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2501$0 (\$29 ),
+    .\port$2500$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -8950,37 +8949,37 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$24  = \$23 ;
+    \$23  = \$22 ;
+    if (rst) begin
+      \$23  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$24  = \bit$345 ;
     if (rst) begin
       \$24  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$25  = \bit$345 ;
+    \$25  = started;
     if (rst) begin
       \$25  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$26  = started;
+    \$26  = report_frame;
     if (rst) begin
       \$26  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$27  = report_frame;
+    \$27  = \clean$346 ;
     if (rst) begin
       \$27  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$28  = \clean$346 ;
-    if (rst) begin
-      \$28  = 1'h0;
     end
   end
   assign \idle$41  = idle;
@@ -9092,7 +9091,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \report_frame$229  = report_frame;
   assign \report_delay$231  = report_delay;
   assign \valid$233  = valid;
-  assign word_crc_ok = { \$29 , crc_ok[0] };
+  assign word_crc_ok = { \$28 , crc_ok[0] };
   assign \first_rise$248  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
@@ -9422,12 +9421,12 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \result$321.lc_zero  = \result$321 [185];
   assign \result$321.spw_mismatch  = \result$321 [186];
   assign \events$297 [15] = \event ;
-  assign \events$297 [14] = \$21 ;
-  assign \events$297 [13] = \$19 ;
+  assign \events$297 [14] = \$20 ;
+  assign \events$297 [13] = \$18 ;
   assign \events$297 [12] = faults[6];
   assign \events$297 [11] = faults[4];
   assign \events$297 [10] = overrun;
-  assign \events$297 [9] = \$17 ;
+  assign \events$297 [9] = \$16 ;
   assign \events$297 [8] = lc_zero;
   assign \events$297 [7] = lc_skip;
   assign \events$297 [6] = lc_repeat;
@@ -9435,7 +9434,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \events$297 [4] = faults[2];
   assign \events$297 [3] = faults[1];
   assign \events$297 [2] = faults[0];
-  assign \events$297 [1] = \$16 ;
+  assign \events$297 [1] = crc_error[1];
   assign \events$297 [0] = crc_error[0];
   assign \events$288 [4] = \$15 ;
   assign \events$288 [3] = \$13 ;
@@ -9451,7 +9450,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \request$250 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
-  assign frame[176] = \$29 ;
+  assign frame[176] = \$28 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
   assign frame[173:134] = spw;
@@ -9513,7 +9512,6 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign live[63:40] = cfg_break_time;
   assign live[39:16] = cfg_request_period;
   assign live[15:0] = cfg_ma_half_period;
-  assign \$16  = crc_error[1];
 endmodule
 
 (* generator = "Amaranth" *)
@@ -13023,7 +13021,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6328$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6326$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -13716,8 +13714,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6328$272 ;
-  wire [2:0] \port$6328$272 ;
+  input [2:0] \port$6326$272 ;
+  wire [2:0] \port$6326$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -14003,7 +14001,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6328$272 [0];
+  assign error_bit = ssi & \port$6326$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -14057,7 +14055,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6328$272 [2];
+  assign \$48  = ssi & \port$6326$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -14344,15 +14342,15 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6328$272 [0];
+  assign \$335  = ssi & \port$6326$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6328$272 [0];
-  assign \$343  = ~ \port$6328$272 [1];
+  assign \$342  = ssi & \port$6326$272 [0];
+  assign \$343  = ~ \port$6326$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -14984,7 +14982,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$6328$272 [0];
+  assign ssi_error = \port$6326$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -14993,8 +14991,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6328$272 [2];
-  assign ssi_error_low = \port$6328$272 [1];
+  assign ssi_double = \port$6326$272 [2];
+  assign ssi_error_low = \port$6326$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -16651,7 +16649,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6328$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6326$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -16703,8 +16701,8 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6328$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6328$199 ;
-  wire \port$6328$199 ;
+  input \port$6326$199 ;
+  wire \port$6326$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -16758,7 +16756,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6328$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6328$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6326$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -16868,7 +16866,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6328$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6328$199 , 1'h1 };
+  assign enables = { \port$6326$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -19009,7 +19007,7 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6328$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6326$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -19143,8 +19141,8 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6328$259 ;
-  wire [12:0] \port$6328$259 ;
+  input [12:0] \port$6326$259 ;
+  wire [12:0] \port$6326$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -19169,7 +19167,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6328$259 [12:1] + 1'h1;
+  assign \$11  = \port$6326$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -19294,7 +19292,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6328$259 [0]),
+    .clear_high(\port$6326$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -19437,7 +19435,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6328$259 [0]) begin
+            if (\port$6326$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -19522,7 +19520,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6328$259 [0]) begin
+            if (\port$6326$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -19561,7 +19559,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6328$259 [12:1] };
+            \$85  = { 1'h0, \port$6326$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -19946,11 +19944,11 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6328$259 [12:1] };
-  assign fixed = \port$6328$259 [0];
+  assign fixed_delay = { 1'h0, \port$6326$259 [12:1] };
+  assign fixed = \port$6326$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6328$259 [0];
+  assign clear_high = \port$6326$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -20357,7 +20355,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6316$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6314$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -20399,8 +20397,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6316$0 ;
-  wire \port$6316$0 ;
+  input \port$6314$0 ;
+  wire \port$6314$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -20414,9 +20412,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6316$0  };
-  assign \$2  = { lc[4:0], \port$6316$0  } == last;
-  assign \$3  = { lc[4:0], \port$6316$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6314$0  };
+  assign \$2  = { lc[4:0], \port$6314$0  } == last;
+  assign \$3  = { lc[4:0], \port$6314$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -20526,7 +20524,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6316$0  };
+  assign lc_next = { lc[4:0], \port$6314$0  };
   assign zero = is_zero;
 endmodule
 
@@ -21101,7 +21099,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2501$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2500$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -21279,8 +21277,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2501$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$2501$0 ;
-  wire \port$2501$0 ;
+  output \port$2500$0 ;
+  wire \port$2500$0 ;
   output report;
   wire report;
   input report_frame;
@@ -21398,7 +21396,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2501$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2501$0  = \$2 ;
+  assign \port$2500$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -21455,7 +21453,7 @@ endmodule
 module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7202$0 , \port$7215$0 , regs__ca_done, \port$7292$0 , ca_rbuf_addr);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7200$0 , \port$7213$0 , regs__ca_done, \port$7290$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -21637,12 +21635,12 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7202$0 ;
-  wire [186:0] \port$7202$0 ;
-  output [79:0] \port$7215$0 ;
-  wire [79:0] \port$7215$0 ;
-  output [9:0] \port$7292$0 ;
-  wire [9:0] \port$7292$0 ;
+  output [186:0] \port$7200$0 ;
+  wire [186:0] \port$7200$0 ;
+  output [79:0] \port$7213$0 ;
+  wire [79:0] \port$7213$0 ;
+  output [9:0] \port$7290$0 ;
+  wire [9:0] \port$7290$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -22097,9 +22095,9 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$7202$0  = \$18 ;
-  assign \port$7215$0  = \$19 ;
-  assign \port$7292$0  = \$20 ;
+  assign \port$7200$0  = \$18 ;
+  assign \port$7213$0  = \$19 ;
+  assign \port$7290$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -22123,13 +22121,12 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \$20 ;
   wire \$21 ;
   wire \$22 ;
-  wire \$23 ;
+  reg \$23 ;
   reg \$24 ;
   reg \$25 ;
   reg \$26 ;
   reg \$27 ;
-  reg \$28 ;
-  wire \$29 ;
+  wire \$28 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -23052,25 +23049,25 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \$13  = ca_done & \$12 ;
   assign \$14  = result[2:0] == 3'h5;
   assign \$15  = ca_done & \$14 ;
-  assign \$17  = report_frame & spw_mismatch;
-  assign \$18  = status == 4'hd;
-  assign \$19  = report_frame & \$18 ;
-  assign \$20  = status == 4'he;
-  assign \$21  = report_frame & \$20 ;
+  assign \$16  = report_frame & spw_mismatch;
+  assign \$17  = status == 4'hd;
+  assign \$18  = report_frame & \$17 ;
+  assign \$19  = status == 4'he;
+  assign \$20  = report_frame & \$19 ;
   assign \busy$313  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$22  = ~ \clear$137 ;
-  assign \$23  = \sample$344  & \$22 ;
+  assign \$21  = ~ \clear$137 ;
+  assign \$22  = \sample$344  & \$21 ;
   always @(posedge clk)
-    sample <= \$24 ;
+    sample <= \$23 ;
   always @(posedge clk)
-    \bit  <= \$25 ;
+    \bit  <= \$24 ;
   always @(posedge clk)
-    started_before <= \$26 ;
+    started_before <= \$25 ;
   always @(posedge clk)
-    learn <= \$27 ;
+    learn <= \$26 ;
   always @(posedge clk)
-    clean <= \$28 ;
+    clean <= \$27 ;
   \biss_master_axil.ch1.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -23174,7 +23171,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6859$272 (cycle[274:272]),
+    .\port$6857$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -23234,7 +23231,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6859$199 (cycle[199]),
+    .\port$6857$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -23285,7 +23282,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6859$259 (cycle[271:259]),
+    .\port$6857$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$344 ),
@@ -23309,7 +23306,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6847$0 (\bit ),
+    .\port$6845$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -23376,7 +23373,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$4913$0 (\$29 ),
+    .\port$4911$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -23387,37 +23384,37 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$24  = \$23 ;
+    \$23  = \$22 ;
+    if (rst) begin
+      \$23  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$24  = \bit$345 ;
     if (rst) begin
       \$24  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$25  = \bit$345 ;
+    \$25  = started;
     if (rst) begin
       \$25  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$26  = started;
+    \$26  = report_frame;
     if (rst) begin
       \$26  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$27  = report_frame;
+    \$27  = \clean$346 ;
     if (rst) begin
       \$27  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$28  = \clean$346 ;
-    if (rst) begin
-      \$28  = 1'h0;
     end
   end
   assign \idle$41  = idle;
@@ -23529,7 +23526,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \report_frame$229  = report_frame;
   assign \report_delay$231  = report_delay;
   assign \valid$233  = valid;
-  assign word_crc_ok = { \$29 , crc_ok[0] };
+  assign word_crc_ok = { \$28 , crc_ok[0] };
   assign \first_rise$248  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
@@ -23859,12 +23856,12 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \result$321.lc_zero  = \result$321 [185];
   assign \result$321.spw_mismatch  = \result$321 [186];
   assign \events$297 [15] = \event ;
-  assign \events$297 [14] = \$21 ;
-  assign \events$297 [13] = \$19 ;
+  assign \events$297 [14] = \$20 ;
+  assign \events$297 [13] = \$18 ;
   assign \events$297 [12] = faults[6];
   assign \events$297 [11] = faults[4];
   assign \events$297 [10] = overrun;
-  assign \events$297 [9] = \$17 ;
+  assign \events$297 [9] = \$16 ;
   assign \events$297 [8] = lc_zero;
   assign \events$297 [7] = lc_skip;
   assign \events$297 [6] = lc_repeat;
@@ -23872,7 +23869,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \events$297 [4] = faults[2];
   assign \events$297 [3] = faults[1];
   assign \events$297 [2] = faults[0];
-  assign \events$297 [1] = \$16 ;
+  assign \events$297 [1] = crc_error[1];
   assign \events$297 [0] = crc_error[0];
   assign \events$288 [4] = \$15 ;
   assign \events$288 [3] = \$13 ;
@@ -23888,7 +23885,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \request$250 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
-  assign frame[176] = \$29 ;
+  assign frame[176] = \$28 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
   assign frame[173:134] = spw;
@@ -23950,7 +23947,6 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign live[63:40] = cfg_break_time;
   assign live[39:16] = cfg_request_period;
   assign live[15:0] = cfg_ma_half_period;
-  assign \$16  = crc_error[1];
 endmodule
 
 (* generator = "Amaranth" *)
@@ -27460,7 +27456,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6859$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6857$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -28153,8 +28149,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6859$272 ;
-  wire [2:0] \port$6859$272 ;
+  input [2:0] \port$6857$272 ;
+  wire [2:0] \port$6857$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -28440,7 +28436,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6859$272 [0];
+  assign error_bit = ssi & \port$6857$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -28494,7 +28490,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6859$272 [2];
+  assign \$48  = ssi & \port$6857$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -28781,15 +28777,15 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6859$272 [0];
+  assign \$335  = ssi & \port$6857$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6859$272 [0];
-  assign \$343  = ~ \port$6859$272 [1];
+  assign \$342  = ssi & \port$6857$272 [0];
+  assign \$343  = ~ \port$6857$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -29421,7 +29417,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$6859$272 [0];
+  assign ssi_error = \port$6857$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -29430,8 +29426,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6859$272 [2];
-  assign ssi_error_low = \port$6859$272 [1];
+  assign ssi_double = \port$6857$272 [2];
+  assign ssi_error_low = \port$6857$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -31088,7 +31084,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6859$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6857$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -31140,8 +31136,8 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6859$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6859$199 ;
-  wire \port$6859$199 ;
+  input \port$6857$199 ;
+  wire \port$6857$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -31195,7 +31191,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6859$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6859$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6857$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -31305,7 +31301,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6859$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6859$199 , 1'h1 };
+  assign enables = { \port$6857$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -33446,7 +33442,7 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6859$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6857$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -33580,8 +33576,8 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6859$259 ;
-  wire [12:0] \port$6859$259 ;
+  input [12:0] \port$6857$259 ;
+  wire [12:0] \port$6857$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -33606,7 +33602,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6859$259 [12:1] + 1'h1;
+  assign \$11  = \port$6857$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -33731,7 +33727,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6859$259 [0]),
+    .clear_high(\port$6857$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -33874,7 +33870,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6859$259 [0]) begin
+            if (\port$6857$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -33959,7 +33955,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6859$259 [0]) begin
+            if (\port$6857$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -33998,7 +33994,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6859$259 [12:1] };
+            \$85  = { 1'h0, \port$6857$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -34383,11 +34379,11 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6859$259 [12:1] };
-  assign fixed = \port$6859$259 [0];
+  assign fixed_delay = { 1'h0, \port$6857$259 [12:1] };
+  assign fixed = \port$6857$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6859$259 [0];
+  assign clear_high = \port$6857$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -34794,7 +34790,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6847$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6845$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -34836,8 +34832,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6847$0 ;
-  wire \port$6847$0 ;
+  input \port$6845$0 ;
+  wire \port$6845$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -34851,9 +34847,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6847$0  };
-  assign \$2  = { lc[4:0], \port$6847$0  } == last;
-  assign \$3  = { lc[4:0], \port$6847$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6845$0  };
+  assign \$2  = { lc[4:0], \port$6845$0  } == last;
+  assign \$3  = { lc[4:0], \port$6845$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -34963,7 +34959,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6847$0  };
+  assign lc_next = { lc[4:0], \port$6845$0  };
   assign zero = is_zero;
 endmodule
 
@@ -35538,7 +35534,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4913$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4911$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -35716,8 +35712,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4913$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$4913$0 ;
-  wire \port$4913$0 ;
+  output \port$4911$0 ;
+  wire \port$4911$0 ;
   output report;
   wire report;
   input report_frame;
@@ -35835,7 +35831,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4913$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4913$0  = \$2 ;
+  assign \port$4911$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -654,12 +654,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6642$0 (\$8 ),
-    .\port$6655$0 (\$9 ),
-    .\port$6732$0 (\$10 ),
-    .\port$7173$0 (\$11 ),
-    .\port$7186$0 (\$12 ),
-    .\port$7263$0 (\$13 ),
+    .\port$6640$0 (\$8 ),
+    .\port$6653$0 (\$9 ),
+    .\port$6730$0 (\$10 ),
+    .\port$7171$0 (\$11 ),
+    .\port$7184$0 (\$12 ),
+    .\port$7261$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -735,9 +735,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6642$0 (\$8 ),
-    .\port$6655$0 (\$9 ),
-    .\port$6732$0 (\$10 ),
+    .\port$6640$0 (\$8 ),
+    .\port$6653$0 (\$9 ),
+    .\port$6730$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -810,9 +810,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(\regs__count_en$398 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$422 ),
-    .\port$7173$0 (\$11 ),
-    .\port$7186$0 (\$12 ),
-    .\port$7263$0 (\$13 ),
+    .\port$7171$0 (\$11 ),
+    .\port$7184$0 (\$12 ),
+    .\port$7261$0 (\$13 ),
     .regs__abort_cycle(\regs__abort_cycle$250 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -1161,7 +1161,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$113 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
 , ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
 , ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id
-, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6642$0 , \port$6655$0 , ch0__ca_done, \port$6732$0 , ch1__frame_done, ch1__done_count, \port$7173$0 , \port$7186$0 , ch1__ca_done, \port$7263$0 , bus__w_addr);
+, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6640$0 , \port$6653$0 , ch0__ca_done, \port$6730$0 , ch1__frame_done, ch1__done_count, \port$7171$0 , \port$7184$0 , ch1__ca_done, \port$7261$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2709,18 +2709,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6642$0 ;
-  wire [186:0] \port$6642$0 ;
-  input [79:0] \port$6655$0 ;
-  wire [79:0] \port$6655$0 ;
-  input [9:0] \port$6732$0 ;
-  wire [9:0] \port$6732$0 ;
-  input [186:0] \port$7173$0 ;
-  wire [186:0] \port$7173$0 ;
-  input [79:0] \port$7186$0 ;
-  wire [79:0] \port$7186$0 ;
-  input [9:0] \port$7263$0 ;
-  wire [9:0] \port$7263$0 ;
+  input [186:0] \port$6640$0 ;
+  wire [186:0] \port$6640$0 ;
+  input [79:0] \port$6653$0 ;
+  wire [79:0] \port$6653$0 ;
+  input [9:0] \port$6730$0 ;
+  wire [9:0] \port$6730$0 ;
+  input [186:0] \port$7171$0 ;
+  wire [186:0] \port$7171$0 ;
+  input [79:0] \port$7184$0 ;
+  wire [79:0] \port$7184$0 ;
+  input [9:0] \port$7261$0 ;
+  wire [9:0] \port$7261$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2824,7 +2824,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$343  = \$341  | \$342 ;
   assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7173$0 [182:177], 4'h0, \port$7173$0 [186:183], 1'h0, \port$7173$0 [176:174], 1'h0, \port$7173$0 [133:131], 3'h0, \port$7173$0 [49], \port$7173$0 [3:0] } : 32'd0;
+  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7171$0 [182:177], 4'h0, \port$7171$0 [186:183], 1'h0, \port$7171$0 [176:174], 1'h0, \port$7171$0 [133:131], 3'h0, \port$7171$0 [49], \port$7171$0 [3:0] } : 32'd0;
   assign \$347  = \$345  | \$346 ;
   assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$349  = \$347  | \$348 ;
@@ -2852,13 +2852,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$371  = \$369  | \$370 ;
   assign \$372  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7263$0 [9:3], 1'h0, \port$7263$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7261$0 [9:3], 1'h0, \port$7261$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_143 ? \port$7186$0 [31:0] : 32'd0;
+  assign \$378  = ch1_read_select_143 ? \port$7184$0 [31:0] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_144 ? \port$7186$0 [63:32] : 32'd0;
+  assign \$380  = ch1_read_select_144 ? \port$7184$0 [63:32] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7186$0 [79:64] } : 32'd0;
+  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7184$0 [79:64] } : 32'd0;
   assign \$383  = \$381  | \$382 ;
   assign \$384  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$385  = \$383  | \$384 ;
@@ -3728,7 +3728,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$158  = \$156  | \$157 ;
   assign \$159  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6642$0 [182:177], 4'h0, \port$6642$0 [186:183], 1'h0, \port$6642$0 [176:174], 1'h0, \port$6642$0 [133:131], 3'h0, \port$6642$0 [49], \port$6642$0 [3:0] } : 32'd0;
+  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6640$0 [182:177], 4'h0, \port$6640$0 [186:183], 1'h0, \port$6640$0 [176:174], 1'h0, \port$6640$0 [133:131], 3'h0, \port$6640$0 [49], \port$6640$0 [3:0] } : 32'd0;
   assign \$162  = \$160  | \$161 ;
   assign \$163  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$164  = \$162  | \$163 ;
@@ -3756,13 +3756,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$186  = \$184  | \$185 ;
   assign \$187  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6732$0 [9:3], 1'h0, \port$6732$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6730$0 [9:3], 1'h0, \port$6730$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_c3 ? \port$6655$0 [31:0] : 32'd0;
+  assign \$193  = ch0_read_select_c3 ? \port$6653$0 [31:0] : 32'd0;
   assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_c4 ? \port$6655$0 [63:32] : 32'd0;
+  assign \$195  = ch0_read_select_c4 ? \port$6653$0 [63:32] : 32'd0;
   assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6655$0 [79:64] } : 32'd0;
+  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6653$0 [79:64] } : 32'd0;
   assign \$198  = \$196  | \$197 ;
   assign \$199  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$200  = \$198  | \$199 ;
@@ -4966,7 +4966,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$595  = ch0_result_status_status_snapshot;
     if (\$130 ) begin
-      \$595  = \port$6642$0 [3:0];
+      \$595  = \port$6640$0 [3:0];
     end
     if (rst) begin
       \$595  = 4'h0;
@@ -4976,7 +4976,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$596  = ch0_result_status_cds_snapshot;
     if (\$130 ) begin
-      \$596  = \port$6642$0 [49];
+      \$596  = \port$6640$0 [49];
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -4986,7 +4986,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$597  = ch0_result_status_w0_ne_snapshot;
     if (\$130 ) begin
-      \$597  = \port$6642$0 [131];
+      \$597  = \port$6640$0 [131];
     end
     if (rst) begin
       \$597  = 1'h0;
@@ -4996,7 +4996,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$598  = ch0_result_status_w0_nw_snapshot;
     if (\$130 ) begin
-      \$598  = \port$6642$0 [132];
+      \$598  = \port$6640$0 [132];
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -5006,7 +5006,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$599  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$130 ) begin
-      \$599  = \port$6642$0 [133];
+      \$599  = \port$6640$0 [133];
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -5016,7 +5016,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$600  = ch0_result_status_w1_ne_snapshot;
     if (\$130 ) begin
-      \$600  = \port$6642$0 [174];
+      \$600  = \port$6640$0 [174];
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -5026,7 +5026,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$601  = ch0_result_status_w1_nw_snapshot;
     if (\$130 ) begin
-      \$601  = \port$6642$0 [175];
+      \$601  = \port$6640$0 [175];
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -5036,7 +5036,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$602  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$130 ) begin
-      \$602  = \port$6642$0 [176];
+      \$602  = \port$6640$0 [176];
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -5046,7 +5046,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$603  = ch0_result_status_lc_repeat_snapshot;
     if (\$130 ) begin
-      \$603  = \port$6642$0 [183];
+      \$603  = \port$6640$0 [183];
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -5056,7 +5056,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$604  = ch0_result_status_lc_skip_snapshot;
     if (\$130 ) begin
-      \$604  = \port$6642$0 [184];
+      \$604  = \port$6640$0 [184];
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -5066,7 +5066,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$605  = ch0_result_status_lc_zero_snapshot;
     if (\$130 ) begin
-      \$605  = \port$6642$0 [185];
+      \$605  = \port$6640$0 [185];
     end
     if (rst) begin
       \$605  = 1'h0;
@@ -5076,7 +5076,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$606  = ch0_result_status_spw_mismatch_snapshot;
     if (\$130 ) begin
-      \$606  = \port$6642$0 [186];
+      \$606  = \port$6640$0 [186];
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -5086,7 +5086,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$607  = ch0_result_status_lc_snapshot;
     if (\$130 ) begin
-      \$607  = \port$6642$0 [182:177];
+      \$607  = \port$6640$0 [182:177];
     end
     if (rst) begin
       \$607  = 6'h00;
@@ -5106,7 +5106,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$609  = ch0_result_seq_line_delay_snapshot;
     if (\$130 ) begin
-      \$609  = \port$6642$0 [48:36];
+      \$609  = \port$6640$0 [48:36];
     end
     if (rst) begin
       \$609  = 13'h0000;
@@ -5116,7 +5116,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$610  = ch0_result_w0_lo_data_snapshot;
     if (\$130 ) begin
-      \$610  = \port$6642$0 [107:76];
+      \$610  = \port$6640$0 [107:76];
     end
     if (rst) begin
       \$610  = 32'd0;
@@ -5126,7 +5126,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$611  = ch0_result_w0_hi_data_snapshot;
     if (\$130 ) begin
-      \$611  = \port$6642$0 [130:108];
+      \$611  = \port$6640$0 [130:108];
     end
     if (rst) begin
       \$611  = 23'h000000;
@@ -5136,7 +5136,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$612  = ch0_result_w1_lo_data_snapshot;
     if (\$130 ) begin
-      \$612  = \port$6642$0 [165:134];
+      \$612  = \port$6640$0 [165:134];
     end
     if (rst) begin
       \$612  = 32'd0;
@@ -5146,7 +5146,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$613  = ch0_result_w1_hi_data_snapshot;
     if (\$130 ) begin
-      \$613  = \port$6642$0 [173:166];
+      \$613  = \port$6640$0 [173:166];
     end
     if (rst) begin
       \$613  = 8'h00;
@@ -5156,7 +5156,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$614  = ch0_result_timestamp_time_snapshot;
     if (\$130 ) begin
-      \$614  = \port$6642$0 [35:4];
+      \$614  = \port$6640$0 [35:4];
     end
     if (rst) begin
       \$614  = 32'd0;
@@ -5166,7 +5166,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$615  = ch0_result_line_noise_events_snapshot;
     if (\$130 ) begin
-      \$615  = \port$6642$0 [53:50];
+      \$615  = \port$6640$0 [53:50];
     end
     if (rst) begin
       \$615  = 4'h0;
@@ -5176,7 +5176,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$616  = ch0_result_line_delay_settled_snapshot;
     if (\$130 ) begin
-      \$616  = \port$6642$0 [54];
+      \$616  = \port$6640$0 [54];
     end
     if (rst) begin
       \$616  = 1'h0;
@@ -5186,7 +5186,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$617  = ch0_result_line_delay_spread_snapshot;
     if (\$130 ) begin
-      \$617  = \port$6642$0 [75:68];
+      \$617  = \port$6640$0 [75:68];
     end
     if (rst) begin
       \$617  = 8'h00;
@@ -5196,7 +5196,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$618  = ch0_result_line_settled_delay_snapshot;
     if (\$130 ) begin
-      \$618  = \port$6642$0 [67:55];
+      \$618  = \port$6640$0 [67:55];
     end
     if (rst) begin
       \$618  = 13'h0000;
@@ -6260,7 +6260,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$725  = ch1_result_status_status_snapshot;
     if (\$315 ) begin
-      \$725  = \port$7173$0 [3:0];
+      \$725  = \port$7171$0 [3:0];
     end
     if (rst) begin
       \$725  = 4'h0;
@@ -6270,7 +6270,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$726  = ch1_result_status_cds_snapshot;
     if (\$315 ) begin
-      \$726  = \port$7173$0 [49];
+      \$726  = \port$7171$0 [49];
     end
     if (rst) begin
       \$726  = 1'h0;
@@ -6280,7 +6280,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$727  = ch1_result_status_w0_ne_snapshot;
     if (\$315 ) begin
-      \$727  = \port$7173$0 [131];
+      \$727  = \port$7171$0 [131];
     end
     if (rst) begin
       \$727  = 1'h0;
@@ -6290,7 +6290,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$728  = ch1_result_status_w0_nw_snapshot;
     if (\$315 ) begin
-      \$728  = \port$7173$0 [132];
+      \$728  = \port$7171$0 [132];
     end
     if (rst) begin
       \$728  = 1'h0;
@@ -6300,7 +6300,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$729  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$315 ) begin
-      \$729  = \port$7173$0 [133];
+      \$729  = \port$7171$0 [133];
     end
     if (rst) begin
       \$729  = 1'h0;
@@ -6310,7 +6310,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$730  = ch1_result_status_w1_ne_snapshot;
     if (\$315 ) begin
-      \$730  = \port$7173$0 [174];
+      \$730  = \port$7171$0 [174];
     end
     if (rst) begin
       \$730  = 1'h0;
@@ -6320,7 +6320,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$731  = ch1_result_status_w1_nw_snapshot;
     if (\$315 ) begin
-      \$731  = \port$7173$0 [175];
+      \$731  = \port$7171$0 [175];
     end
     if (rst) begin
       \$731  = 1'h0;
@@ -6330,7 +6330,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$732  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$315 ) begin
-      \$732  = \port$7173$0 [176];
+      \$732  = \port$7171$0 [176];
     end
     if (rst) begin
       \$732  = 1'h0;
@@ -6340,7 +6340,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$733  = ch1_result_status_lc_repeat_snapshot;
     if (\$315 ) begin
-      \$733  = \port$7173$0 [183];
+      \$733  = \port$7171$0 [183];
     end
     if (rst) begin
       \$733  = 1'h0;
@@ -6350,7 +6350,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$734  = ch1_result_status_lc_skip_snapshot;
     if (\$315 ) begin
-      \$734  = \port$7173$0 [184];
+      \$734  = \port$7171$0 [184];
     end
     if (rst) begin
       \$734  = 1'h0;
@@ -6360,7 +6360,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$735  = ch1_result_status_lc_zero_snapshot;
     if (\$315 ) begin
-      \$735  = \port$7173$0 [185];
+      \$735  = \port$7171$0 [185];
     end
     if (rst) begin
       \$735  = 1'h0;
@@ -6370,7 +6370,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$736  = ch1_result_status_spw_mismatch_snapshot;
     if (\$315 ) begin
-      \$736  = \port$7173$0 [186];
+      \$736  = \port$7171$0 [186];
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6380,7 +6380,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$737  = ch1_result_status_lc_snapshot;
     if (\$315 ) begin
-      \$737  = \port$7173$0 [182:177];
+      \$737  = \port$7171$0 [182:177];
     end
     if (rst) begin
       \$737  = 6'h00;
@@ -6400,7 +6400,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$739  = ch1_result_seq_line_delay_snapshot;
     if (\$315 ) begin
-      \$739  = \port$7173$0 [48:36];
+      \$739  = \port$7171$0 [48:36];
     end
     if (rst) begin
       \$739  = 13'h0000;
@@ -6410,7 +6410,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$740  = ch1_result_w0_lo_data_snapshot;
     if (\$315 ) begin
-      \$740  = \port$7173$0 [107:76];
+      \$740  = \port$7171$0 [107:76];
     end
     if (rst) begin
       \$740  = 32'd0;
@@ -6420,7 +6420,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$741  = ch1_result_w0_hi_data_snapshot;
     if (\$315 ) begin
-      \$741  = \port$7173$0 [130:108];
+      \$741  = \port$7171$0 [130:108];
     end
     if (rst) begin
       \$741  = 23'h000000;
@@ -6430,7 +6430,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$742  = ch1_result_w1_lo_data_snapshot;
     if (\$315 ) begin
-      \$742  = \port$7173$0 [165:134];
+      \$742  = \port$7171$0 [165:134];
     end
     if (rst) begin
       \$742  = 32'd0;
@@ -6440,7 +6440,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$743  = ch1_result_w1_hi_data_snapshot;
     if (\$315 ) begin
-      \$743  = \port$7173$0 [173:166];
+      \$743  = \port$7171$0 [173:166];
     end
     if (rst) begin
       \$743  = 8'h00;
@@ -6450,7 +6450,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$744  = ch1_result_timestamp_time_snapshot;
     if (\$315 ) begin
-      \$744  = \port$7173$0 [35:4];
+      \$744  = \port$7171$0 [35:4];
     end
     if (rst) begin
       \$744  = 32'd0;
@@ -6460,7 +6460,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$745  = ch1_result_line_noise_events_snapshot;
     if (\$315 ) begin
-      \$745  = \port$7173$0 [53:50];
+      \$745  = \port$7171$0 [53:50];
     end
     if (rst) begin
       \$745  = 4'h0;
@@ -6470,7 +6470,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$746  = ch1_result_line_delay_settled_snapshot;
     if (\$315 ) begin
-      \$746  = \port$7173$0 [54];
+      \$746  = \port$7171$0 [54];
     end
     if (rst) begin
       \$746  = 1'h0;
@@ -6480,7 +6480,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$747  = ch1_result_line_delay_spread_snapshot;
     if (\$315 ) begin
-      \$747  = \port$7173$0 [75:68];
+      \$747  = \port$7171$0 [75:68];
     end
     if (rst) begin
       \$747  = 8'h00;
@@ -6490,7 +6490,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$748  = ch1_result_line_settled_delay_snapshot;
     if (\$315 ) begin
-      \$748  = \port$7173$0 [67:55];
+      \$748  = \port$7171$0 [67:55];
     end
     if (rst) begin
       \$748  = 13'h0000;
@@ -6529,27 +6529,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6642$0 [3:0];
-  assign ch0__cds = \port$6642$0 [49];
-  assign ch0__word0_ne = \port$6642$0 [131];
-  assign ch0__word0_nw = \port$6642$0 [132];
-  assign ch0__word0_crc_ok = \port$6642$0 [133];
-  assign ch0__word1_ne = \port$6642$0 [174];
-  assign ch0__word1_nw = \port$6642$0 [175];
-  assign ch0__word1_crc_ok = \port$6642$0 [176];
-  assign ch0__lc_repeat = \port$6642$0 [183];
-  assign ch0__lc_skip = \port$6642$0 [184];
-  assign ch0__lc_zero = \port$6642$0 [185];
-  assign ch0__spw_mismatch = \port$6642$0 [186];
-  assign ch0__lc = \port$6642$0 [182:177];
-  assign ch0__line_delay = \port$6642$0 [48:36];
-  assign ch0__word0_position = \port$6642$0 [130:76];
-  assign ch0__word1_position = \port$6642$0 [173:134];
-  assign ch0__timestamp = \port$6642$0 [35:4];
-  assign ch0__noise_events = \port$6642$0 [53:50];
-  assign ch0__delay_settled = \port$6642$0 [54];
-  assign ch0__delay_spread = \port$6642$0 [75:68];
-  assign ch0__settled_delay = \port$6642$0 [67:55];
+  assign ch0__status = \port$6640$0 [3:0];
+  assign ch0__cds = \port$6640$0 [49];
+  assign ch0__word0_ne = \port$6640$0 [131];
+  assign ch0__word0_nw = \port$6640$0 [132];
+  assign ch0__word0_crc_ok = \port$6640$0 [133];
+  assign ch0__word1_ne = \port$6640$0 [174];
+  assign ch0__word1_nw = \port$6640$0 [175];
+  assign ch0__word1_crc_ok = \port$6640$0 [176];
+  assign ch0__lc_repeat = \port$6640$0 [183];
+  assign ch0__lc_skip = \port$6640$0 [184];
+  assign ch0__lc_zero = \port$6640$0 [185];
+  assign ch0__spw_mismatch = \port$6640$0 [186];
+  assign ch0__lc = \port$6640$0 [182:177];
+  assign ch0__line_delay = \port$6640$0 [48:36];
+  assign ch0__word0_position = \port$6640$0 [130:76];
+  assign ch0__word1_position = \port$6640$0 [173:134];
+  assign ch0__timestamp = \port$6640$0 [35:4];
+  assign ch0__noise_events = \port$6640$0 [53:50];
+  assign ch0__delay_settled = \port$6640$0 [54];
+  assign ch0__delay_spread = \port$6640$0 [75:68];
+  assign ch0__settled_delay = \port$6640$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -6557,34 +6557,34 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
   assign ch0__cap_ssi = 1'h1;
-  assign ch0__ca_status = \port$6732$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6732$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6655$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$6655$0 [31:16];
-  assign ch0__count_ca_refused = \port$6655$0 [47:32];
-  assign ch0__count_ca_aborted = \port$6655$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$6655$0 [79:64];
-  assign ch1__status = \port$7173$0 [3:0];
-  assign ch1__cds = \port$7173$0 [49];
-  assign ch1__word0_ne = \port$7173$0 [131];
-  assign ch1__word0_nw = \port$7173$0 [132];
-  assign ch1__word0_crc_ok = \port$7173$0 [133];
-  assign ch1__word1_ne = \port$7173$0 [174];
-  assign ch1__word1_nw = \port$7173$0 [175];
-  assign ch1__word1_crc_ok = \port$7173$0 [176];
-  assign ch1__lc_repeat = \port$7173$0 [183];
-  assign ch1__lc_skip = \port$7173$0 [184];
-  assign ch1__lc_zero = \port$7173$0 [185];
-  assign ch1__spw_mismatch = \port$7173$0 [186];
-  assign ch1__lc = \port$7173$0 [182:177];
-  assign ch1__line_delay = \port$7173$0 [48:36];
-  assign ch1__word0_position = \port$7173$0 [130:76];
-  assign ch1__word1_position = \port$7173$0 [173:134];
-  assign ch1__timestamp = \port$7173$0 [35:4];
-  assign ch1__noise_events = \port$7173$0 [53:50];
-  assign ch1__delay_settled = \port$7173$0 [54];
-  assign ch1__delay_spread = \port$7173$0 [75:68];
-  assign ch1__settled_delay = \port$7173$0 [67:55];
+  assign ch0__ca_status = \port$6730$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6730$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6653$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$6653$0 [31:16];
+  assign ch0__count_ca_refused = \port$6653$0 [47:32];
+  assign ch0__count_ca_aborted = \port$6653$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$6653$0 [79:64];
+  assign ch1__status = \port$7171$0 [3:0];
+  assign ch1__cds = \port$7171$0 [49];
+  assign ch1__word0_ne = \port$7171$0 [131];
+  assign ch1__word0_nw = \port$7171$0 [132];
+  assign ch1__word0_crc_ok = \port$7171$0 [133];
+  assign ch1__word1_ne = \port$7171$0 [174];
+  assign ch1__word1_nw = \port$7171$0 [175];
+  assign ch1__word1_crc_ok = \port$7171$0 [176];
+  assign ch1__lc_repeat = \port$7171$0 [183];
+  assign ch1__lc_skip = \port$7171$0 [184];
+  assign ch1__lc_zero = \port$7171$0 [185];
+  assign ch1__spw_mismatch = \port$7171$0 [186];
+  assign ch1__lc = \port$7171$0 [182:177];
+  assign ch1__line_delay = \port$7171$0 [48:36];
+  assign ch1__word0_position = \port$7171$0 [130:76];
+  assign ch1__word1_position = \port$7171$0 [173:134];
+  assign ch1__timestamp = \port$7171$0 [35:4];
+  assign ch1__noise_events = \port$7171$0 [53:50];
+  assign ch1__delay_settled = \port$7171$0 [54];
+  assign ch1__delay_spread = \port$7171$0 [75:68];
+  assign ch1__settled_delay = \port$7171$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -6592,13 +6592,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign ch1__ca_status = \port$7263$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7263$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7186$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7186$0 [31:16];
-  assign ch1__count_ca_refused = \port$7186$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7186$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7186$0 [79:64];
+  assign ch1__ca_status = \port$7261$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7261$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7184$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7184$0 [31:16];
+  assign ch1__count_ca_refused = \port$7184$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7184$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7184$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__w_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -6846,7 +6846,7 @@ endmodule
 module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6642$0 , \port$6655$0 , regs__ca_done, \port$6732$0 , ca_rbuf_addr);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6640$0 , \port$6653$0 , regs__ca_done, \port$6730$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -7028,12 +7028,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6642$0 ;
-  wire [186:0] \port$6642$0 ;
-  output [79:0] \port$6655$0 ;
-  wire [79:0] \port$6655$0 ;
-  output [9:0] \port$6732$0 ;
-  wire [9:0] \port$6732$0 ;
+  output [186:0] \port$6640$0 ;
+  wire [186:0] \port$6640$0 ;
+  output [79:0] \port$6653$0 ;
+  wire [79:0] \port$6653$0 ;
+  output [9:0] \port$6730$0 ;
+  wire [9:0] \port$6730$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -7488,9 +7488,9 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$6642$0  = \$18 ;
-  assign \port$6655$0  = \$19 ;
-  assign \port$6732$0  = \$20 ;
+  assign \port$6640$0  = \$18 ;
+  assign \port$6653$0  = \$19 ;
+  assign \port$6730$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -7514,13 +7514,12 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire \$20 ;
   wire \$21 ;
   wire \$22 ;
-  wire \$23 ;
+  reg \$23 ;
   reg \$24 ;
   reg \$25 ;
   reg \$26 ;
   reg \$27 ;
-  reg \$28 ;
-  wire \$29 ;
+  wire \$28 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -8443,25 +8442,25 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \$13  = ca_done & \$12 ;
   assign \$14  = result[2:0] == 3'h5;
   assign \$15  = ca_done & \$14 ;
-  assign \$17  = report_frame & spw_mismatch;
-  assign \$18  = status == 4'hd;
-  assign \$19  = report_frame & \$18 ;
-  assign \$20  = status == 4'he;
-  assign \$21  = report_frame & \$20 ;
+  assign \$16  = report_frame & spw_mismatch;
+  assign \$17  = status == 4'hd;
+  assign \$18  = report_frame & \$17 ;
+  assign \$19  = status == 4'he;
+  assign \$20  = report_frame & \$19 ;
   assign \busy$313  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$22  = ~ \clear$137 ;
-  assign \$23  = \sample$344  & \$22 ;
+  assign \$21  = ~ \clear$137 ;
+  assign \$22  = \sample$344  & \$21 ;
   always @(posedge clk)
-    sample <= \$24 ;
+    sample <= \$23 ;
   always @(posedge clk)
-    \bit  <= \$25 ;
+    \bit  <= \$24 ;
   always @(posedge clk)
-    started_before <= \$26 ;
+    started_before <= \$25 ;
   always @(posedge clk)
-    learn <= \$27 ;
+    learn <= \$26 ;
   always @(posedge clk)
-    clean <= \$28 ;
+    clean <= \$27 ;
   \biss_master_wb.ch0.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -8565,7 +8564,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6299$272 (cycle[274:272]),
+    .\port$6297$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -8625,7 +8624,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6299$199 (cycle[199]),
+    .\port$6297$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -8676,7 +8675,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6299$259 (cycle[271:259]),
+    .\port$6297$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$344 ),
@@ -8700,7 +8699,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6287$0 (\bit ),
+    .\port$6285$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -8767,7 +8766,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2484$0 (\$29 ),
+    .\port$2483$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -8778,37 +8777,37 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$24  = \$23 ;
+    \$23  = \$22 ;
+    if (rst) begin
+      \$23  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    \$24  = \bit$345 ;
     if (rst) begin
       \$24  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$25  = \bit$345 ;
+    \$25  = started;
     if (rst) begin
       \$25  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$26  = started;
+    \$26  = report_frame;
     if (rst) begin
       \$26  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$27  = report_frame;
+    \$27  = \clean$346 ;
     if (rst) begin
       \$27  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$28  = \clean$346 ;
-    if (rst) begin
-      \$28  = 1'h0;
     end
   end
   assign \idle$41  = idle;
@@ -8920,7 +8919,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \report_frame$229  = report_frame;
   assign \report_delay$231  = report_delay;
   assign \valid$233  = valid;
-  assign word_crc_ok = { \$29 , crc_ok[0] };
+  assign word_crc_ok = { \$28 , crc_ok[0] };
   assign \first_rise$248  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
@@ -9250,12 +9249,12 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \result$321.lc_zero  = \result$321 [185];
   assign \result$321.spw_mismatch  = \result$321 [186];
   assign \events$297 [15] = \event ;
-  assign \events$297 [14] = \$21 ;
-  assign \events$297 [13] = \$19 ;
+  assign \events$297 [14] = \$20 ;
+  assign \events$297 [13] = \$18 ;
   assign \events$297 [12] = faults[6];
   assign \events$297 [11] = faults[4];
   assign \events$297 [10] = overrun;
-  assign \events$297 [9] = \$17 ;
+  assign \events$297 [9] = \$16 ;
   assign \events$297 [8] = lc_zero;
   assign \events$297 [7] = lc_skip;
   assign \events$297 [6] = lc_repeat;
@@ -9263,7 +9262,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \events$297 [4] = faults[2];
   assign \events$297 [3] = faults[1];
   assign \events$297 [2] = faults[0];
-  assign \events$297 [1] = \$16 ;
+  assign \events$297 [1] = crc_error[1];
   assign \events$297 [0] = crc_error[0];
   assign \events$288 [4] = \$15 ;
   assign \events$288 [3] = \$13 ;
@@ -9279,7 +9278,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \request$250 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
-  assign frame[176] = \$29 ;
+  assign frame[176] = \$28 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
   assign frame[173:134] = spw;
@@ -9341,7 +9340,6 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign live[63:40] = cfg_break_time;
   assign live[39:16] = cfg_request_period;
   assign live[15:0] = cfg_ma_half_period;
-  assign \$16  = crc_error[1];
 endmodule
 
 (* generator = "Amaranth" *)
@@ -12851,7 +12849,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6299$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6297$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -13544,8 +13542,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6299$272 ;
-  wire [2:0] \port$6299$272 ;
+  input [2:0] \port$6297$272 ;
+  wire [2:0] \port$6297$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -13831,7 +13829,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6299$272 [0];
+  assign error_bit = ssi & \port$6297$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -13885,7 +13883,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6299$272 [2];
+  assign \$48  = ssi & \port$6297$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -14172,15 +14170,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6299$272 [0];
+  assign \$335  = ssi & \port$6297$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6299$272 [0];
-  assign \$343  = ~ \port$6299$272 [1];
+  assign \$342  = ssi & \port$6297$272 [0];
+  assign \$343  = ~ \port$6297$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -14812,7 +14810,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$6299$272 [0];
+  assign ssi_error = \port$6297$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -14821,8 +14819,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6299$272 [2];
-  assign ssi_error_low = \port$6299$272 [1];
+  assign ssi_double = \port$6297$272 [2];
+  assign ssi_error_low = \port$6297$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -16479,7 +16477,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6299$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6297$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -16531,8 +16529,8 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6299$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6299$199 ;
-  wire \port$6299$199 ;
+  input \port$6297$199 ;
+  wire \port$6297$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -16586,7 +16584,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6299$199 , ssi, ssi_e
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6299$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6297$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -16696,7 +16694,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6299$199 , ssi, ssi_e
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6299$199 , 1'h1 };
+  assign enables = { \port$6297$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -18837,7 +18835,7 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6299$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6297$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -18971,8 +18969,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6299$259 ;
-  wire [12:0] \port$6299$259 ;
+  input [12:0] \port$6297$259 ;
+  wire [12:0] \port$6297$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -18997,7 +18995,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6299$259 [12:1] + 1'h1;
+  assign \$11  = \port$6297$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -19122,7 +19120,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6299$259 [0]),
+    .clear_high(\port$6297$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -19265,7 +19263,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6299$259 [0]) begin
+            if (\port$6297$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -19350,7 +19348,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6299$259 [0]) begin
+            if (\port$6297$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -19389,7 +19387,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6299$259 [12:1] };
+            \$85  = { 1'h0, \port$6297$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -19774,11 +19772,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6299$259 [12:1] };
-  assign fixed = \port$6299$259 [0];
+  assign fixed_delay = { 1'h0, \port$6297$259 [12:1] };
+  assign fixed = \port$6297$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6299$259 [0];
+  assign clear_high = \port$6297$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -20185,7 +20183,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6287$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6285$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -20227,8 +20225,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6287$0 ;
-  wire \port$6287$0 ;
+  input \port$6285$0 ;
+  wire \port$6285$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -20242,9 +20240,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6287$0  };
-  assign \$2  = { lc[4:0], \port$6287$0  } == last;
-  assign \$3  = { lc[4:0], \port$6287$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6285$0  };
+  assign \$2  = { lc[4:0], \port$6285$0  } == last;
+  assign \$3  = { lc[4:0], \port$6285$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -20354,7 +20352,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6287$0  };
+  assign lc_next = { lc[4:0], \port$6285$0  };
   assign zero = is_zero;
 endmodule
 
@@ -20929,7 +20927,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2484$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2483$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -21107,8 +21105,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2484$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$2484$0 ;
-  wire \port$2484$0 ;
+  output \port$2483$0 ;
+  wire \port$2483$0 ;
   output report;
   wire report;
   input report_frame;
@@ -21226,7 +21224,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2484$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2484$0  = \$2 ;
+  assign \port$2483$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -21283,7 +21281,7 @@ endmodule
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7173$0 , \port$7186$0 , regs__ca_done, \port$7263$0 , ca_rbuf_addr);
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7171$0 , \port$7184$0 , regs__ca_done, \port$7261$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -21465,12 +21463,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7173$0 ;
-  wire [186:0] \port$7173$0 ;
-  output [79:0] \port$7186$0 ;
-  wire [79:0] \port$7186$0 ;
-  output [9:0] \port$7263$0 ;
-  wire [9:0] \port$7263$0 ;
+  output [186:0] \port$7171$0 ;
+  wire [186:0] \port$7171$0 ;
+  output [79:0] \port$7184$0 ;
+  wire [79:0] \port$7184$0 ;
+  output [9:0] \port$7261$0 ;
+  wire [9:0] \port$7261$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -21925,9 +21923,9 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   assign regs__ca_rbuf_en = ca_rbuf_en;
   assign \ma$198  = ma;
   assign \slo$200  = slo;
-  assign \port$7173$0  = \$18 ;
-  assign \port$7186$0  = \$19 ;
-  assign \port$7263$0  = \$20 ;
+  assign \port$7171$0  = \$18 ;
+  assign \port$7184$0  = \$19 ;
+  assign \port$7261$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -21951,13 +21949,12 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire \$20 ;
   wire \$21 ;
   wire \$22 ;
-  wire \$23 ;
+  reg \$23 ;
   reg \$24 ;
   reg \$25 ;
   reg \$26 ;
   reg \$27 ;
-  reg \$28 ;
-  wire \$29 ;
+  wire \$28 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -22880,25 +22877,25 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \$13  = ca_done & \$12 ;
   assign \$14  = result[2:0] == 3'h5;
   assign \$15  = ca_done & \$14 ;
-  assign \$17  = report_frame & spw_mismatch;
-  assign \$18  = status == 4'hd;
-  assign \$19  = report_frame & \$18 ;
-  assign \$20  = status == 4'he;
-  assign \$21  = report_frame & \$20 ;
+  assign \$16  = report_frame & spw_mismatch;
+  assign \$17  = status == 4'hd;
+  assign \$18  = report_frame & \$17 ;
+  assign \$19  = status == 4'he;
+  assign \$20  = report_frame & \$19 ;
   assign \busy$313  = ~ idle;
   assign config_error = ~ config_ok;
-  assign \$22  = ~ \clear$137 ;
-  assign \$23  = \sample$344  & \$22 ;
+  assign \$21  = ~ \clear$137 ;
+  assign \$22  = \sample$344  & \$21 ;
   always @(posedge clk)
-    sample <= \$24 ;
+    sample <= \$23 ;
   always @(posedge clk)
-    \bit  <= \$25 ;
+    \bit  <= \$24 ;
   always @(posedge clk)
-    started_before <= \$26 ;
+    started_before <= \$25 ;
   always @(posedge clk)
-    learn <= \$27 ;
+    learn <= \$26 ;
   always @(posedge clk)
-    clean <= \$28 ;
+    clean <= \$27 ;
   \biss_master_wb.ch1.core.config  \config  (
     .ack_limit(ack_limit),
     .clk(clk),
@@ -23002,7 +22999,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6830$272 (cycle[274:272]),
+    .\port$6828$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -23062,7 +23059,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6830$199 (cycle[199]),
+    .\port$6828$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -23113,7 +23110,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6830$259 (cycle[271:259]),
+    .\port$6828$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$344 ),
@@ -23137,7 +23134,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6818$0 (\bit ),
+    .\port$6816$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -23204,7 +23201,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$4896$0 (\$29 ),
+    .\port$4894$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -23215,37 +23212,37 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$24  = \$23 ;
+    \$23  = \$22 ;
+    if (rst) begin
+      \$23  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    \$24  = \bit$345 ;
     if (rst) begin
       \$24  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$25  = \bit$345 ;
+    \$25  = started;
     if (rst) begin
       \$25  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$26  = started;
+    \$26  = report_frame;
     if (rst) begin
       \$26  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$27  = report_frame;
+    \$27  = \clean$346 ;
     if (rst) begin
       \$27  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$28  = \clean$346 ;
-    if (rst) begin
-      \$28  = 1'h0;
     end
   end
   assign \idle$41  = idle;
@@ -23357,7 +23354,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \report_frame$229  = report_frame;
   assign \report_delay$231  = report_delay;
   assign \valid$233  = valid;
-  assign word_crc_ok = { \$29 , crc_ok[0] };
+  assign word_crc_ok = { \$28 , crc_ok[0] };
   assign \first_rise$248  = first_rise;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
@@ -23687,12 +23684,12 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \result$321.lc_zero  = \result$321 [185];
   assign \result$321.spw_mismatch  = \result$321 [186];
   assign \events$297 [15] = \event ;
-  assign \events$297 [14] = \$21 ;
-  assign \events$297 [13] = \$19 ;
+  assign \events$297 [14] = \$20 ;
+  assign \events$297 [13] = \$18 ;
   assign \events$297 [12] = faults[6];
   assign \events$297 [11] = faults[4];
   assign \events$297 [10] = overrun;
-  assign \events$297 [9] = \$17 ;
+  assign \events$297 [9] = \$16 ;
   assign \events$297 [8] = lc_zero;
   assign \events$297 [7] = lc_skip;
   assign \events$297 [6] = lc_repeat;
@@ -23700,7 +23697,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \events$297 [4] = faults[2];
   assign \events$297 [3] = faults[1];
   assign \events$297 [2] = faults[0];
-  assign \events$297 [1] = \$16 ;
+  assign \events$297 [1] = crc_error[1];
   assign \events$297 [0] = crc_error[0];
   assign \events$288 [4] = \$15 ;
   assign \events$288 [3] = \$13 ;
@@ -23716,7 +23713,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \request$250 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
-  assign frame[176] = \$29 ;
+  assign frame[176] = \$28 ;
   assign frame[175] = nw[1];
   assign frame[174] = ne[1];
   assign frame[173:134] = spw;
@@ -23778,7 +23775,6 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign live[63:40] = cfg_break_time;
   assign live[39:16] = cfg_request_period;
   assign live[15:0] = cfg_ma_half_period;
-  assign \$16  = crc_error[1];
 endmodule
 
 (* generator = "Amaranth" *)
@@ -27288,7 +27284,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6830$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6828$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -27981,8 +27977,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6830$272 ;
-  wire [2:0] \port$6830$272 ;
+  input [2:0] \port$6828$272 ;
+  wire [2:0] \port$6828$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -28268,7 +28264,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6830$272 [0];
+  assign error_bit = ssi & \port$6828$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -28322,7 +28318,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6830$272 [2];
+  assign \$48  = ssi & \port$6828$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -28609,15 +28605,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6830$272 [0];
+  assign \$335  = ssi & \port$6828$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6830$272 [0];
-  assign \$343  = ~ \port$6830$272 [1];
+  assign \$342  = ssi & \port$6828$272 [0];
+  assign \$343  = ~ \port$6828$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -29249,7 +29245,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$6830$272 [0];
+  assign ssi_error = \port$6828$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -29258,8 +29254,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6830$272 [2];
-  assign ssi_error_low = \port$6830$272 [1];
+  assign ssi_double = \port$6828$272 [2];
+  assign ssi_error_low = \port$6828$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -30916,7 +30912,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$6830$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$6828$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -30968,8 +30964,8 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$6830$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6830$199 ;
-  wire \port$6830$199 ;
+  input \port$6828$199 ;
+  wire \port$6828$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -31023,7 +31019,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$6830$199 , ssi, ssi_e
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6830$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6828$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -31133,7 +31129,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$6830$199 , ssi, ssi_e
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6830$199 , 1'h1 };
+  assign enables = { \port$6828$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -33274,7 +33270,7 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6830$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6828$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -33408,8 +33404,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6830$259 ;
-  wire [12:0] \port$6830$259 ;
+  input [12:0] \port$6828$259 ;
+  wire [12:0] \port$6828$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -33434,7 +33430,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6830$259 [12:1] + 1'h1;
+  assign \$11  = \port$6828$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -33559,7 +33555,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6830$259 [0]),
+    .clear_high(\port$6828$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -33702,7 +33698,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6830$259 [0]) begin
+            if (\port$6828$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -33787,7 +33783,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6830$259 [0]) begin
+            if (\port$6828$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -33826,7 +33822,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6830$259 [12:1] };
+            \$85  = { 1'h0, \port$6828$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -34211,11 +34207,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6830$259 [12:1] };
-  assign fixed = \port$6830$259 [0];
+  assign fixed_delay = { 1'h0, \port$6828$259 [12:1] };
+  assign fixed = \port$6828$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6830$259 [0];
+  assign clear_high = \port$6828$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -34622,7 +34618,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6818$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6816$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -34664,8 +34660,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6818$0 ;
-  wire \port$6818$0 ;
+  input \port$6816$0 ;
+  wire \port$6816$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -34679,9 +34675,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6818$0  };
-  assign \$2  = { lc[4:0], \port$6818$0  } == last;
-  assign \$3  = { lc[4:0], \port$6818$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6816$0  };
+  assign \$2  = { lc[4:0], \port$6816$0  } == last;
+  assign \$3  = { lc[4:0], \port$6816$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -34791,7 +34787,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6818$0  };
+  assign lc_next = { lc[4:0], \port$6816$0  };
   assign zero = is_zero;
 endmodule
 
@@ -35366,7 +35362,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4896$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4894$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -35544,8 +35540,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4896$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$4896$0 ;
-  wire \port$4896$0 ;
+  output \port$4894$0 ;
+  wire \port$4894$0 ;
   output report;
   wire report;
   input report_frame;
@@ -35663,7 +35659,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4896$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4896$0  = \$2 ;
+  assign \port$4894$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
