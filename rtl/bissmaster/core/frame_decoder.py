@@ -69,7 +69,7 @@ class FrameDecoder(wiring.Component):
             "lc": Out(protocol.LC_BITS),
             "lc_next": Out(protocol.LC_BITS),   # what ``lc`` holds after a clock with lc_load
             "lc_load": Out(1),                  # an LC bit is shifted in in this clock
-            "cpw_top": Out(params.max_data_bits[-1]),   # the first SPW-length bits of word 0
+            "cpw_top": Out(params.max_data_bits[min(1, words - 1)]),   # word 0's first SPW-length bits
             "crc_ok": Out(words),
             "done": Out(1),
             "stopped": Out(1),
