@@ -52,7 +52,7 @@ def test_bad_max_data_bits_is_a_usage_error(capsys):
     with pytest.raises(SystemExit) as e:
         main(["--max-data-bits", "36,x", "-o", "/dev/null"])
     assert e.value.code == 2
-    assert "--max-data-bits takes 1 or 2 integers" in capsys.readouterr().err
+    assert "--max-data-bits takes 1 to 8 integers" in capsys.readouterr().err
 
 
 def test_core_top_is_the_default_and_names_biss_master(tmp_path):

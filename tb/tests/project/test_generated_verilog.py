@@ -25,7 +25,8 @@ def test_header_names_generator_and_parameters():
 
 @pytest.mark.parametrize("kwargs, message", [
     ({"max_data_bits": (64,)}, "max_data_bits"),
-    ({"max_data_bits": (36, 28, 20)}, "1 or 2 words"),
+    ({"max_data_bits": (36,) * 9}, "1 to 8 words"),     # a chain of up to 8 slaves (issue 26)
+    ({"max_data_bits": ()}, "1 to 8 words"),
     ({"word_crcs": ((Crc.CRC6,),)}, "one entry per word"),
     ({"word_crcs": ((Crc.NONE,), (Crc.CRC16,))}, "Crc.CRC6 or Crc.CRC16"),
     ({"sys_clk_hz": 100}, "sys_clk_hz"),
