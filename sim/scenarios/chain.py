@@ -154,6 +154,44 @@ async def chain_crc_error_per_word(dut):
     await settle(tb)
 
 
+#: The chain with Gray-coded and signed words (the chain preset has both): word 0 signed,
+#: word 1 Gray, word 2 Gray and signed (sign-extended to its 24-bit port).
+CHAIN_GRAY_SIGNED = frames.FrameFormat("chain_3_gray_signed", (
+    frames.WordFormat(26, signed=True),
+    frames.WordFormat(17, gray=True, crc=CHAIN.words[1].crc),
+    frames.WordFormat(12, nenw=False, gray=True, signed=True, crc=CHAIN.words[2].crc)),
+    chain=True)
+
+
+@cocotb.test()
+@only_on_builds("chain")
+@long_on_icarus
+async def chain_gray_and_signed_words(dut):
+    """Each slave's word decoded by its own settings: Gray words reported in binary, signed
+    words sign-extended to their port (check_frame compares master_contract.port_position):
+    the most negative, -1, 0 and the most positive field of every word, then random ones."""
+    tb = await bench(dut, seed=2606, cable_m=20)
+    tb.configure(CHAIN_GRAY_SIGNED, 5e6)
+    for k in range(4):
+        values = []
+        for word in CHAIN_GRAY_SIGNED.words:
+            n = word.data_bits
+            values.append(frames.WordValue((1 << (n - 1), (1 << n) - 1, 0, (1 << (n - 1)) - 1)[k]))
+        tb.queue(values=values)
+        res = await tb.request()
+        tb.check_frame(res)
+        assert res.status == STATUS["OK"]
+    res = await tb.request()
+    tb.check_frame(res)
+    # word 2 at its most negative: all ones above its 12 bits in the 24-bit port
+    tb.queue(values=[frames.WordValue(0), frames.WordValue(0), frames.WordValue(0x800)])
+    res = await tb.request()
+    tb.check_frame(res)
+    assert res.fields["word2_position"] == 0xFFF800, hex(res.fields["word2_position"])
+    await frames_ok(tb, 4)
+    await settle(tb)
+
+
 async def ma_edges_during(dut, seconds):
     """MA edges seen within ``seconds`` from now."""
     edges = 0
