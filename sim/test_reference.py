@@ -4,7 +4,7 @@ against hand-worked cases from docs/ports.md: the model must be right before it 
 import pytest
 
 from encoder_model import frames
-from master_contract import STATUS
+from master_contract import STATUS, crc_counters, crc_status
 from sim.shared.functional_coverage import LEGAL, Coverage, bins, delay_bin, report
 from sim.shared.reference import MasterReference, config_valid
 
@@ -87,6 +87,52 @@ def test_config_rules_one_word_build():
     assert config_valid({**GOOD, "cfg_w0_data_bits": 36}, **one)
     assert not config_valid({**GOOD, "cfg_w0_data_bits": 37}, **one)
     assert not config_valid({**GOOD, "cfg_w0_crc": 2}, **one)     # no CRC-16 in that build
+
+
+CHAIN = frames.PRESETS["chain_3"]
+
+
+def test_chain_crc_status_rule():
+    """Issue 26's chains: WORD0 when word 0 fails alone, WORD1 when word 0 passes and any later
+    word fails, BOTH when word 0 and any later word fail; the counters follow word 0 and 'any
+    later word'. One- and two-word frames keep their meaning."""
+    ref = MasterReference()
+    values = [frames.WordValue(0x1234567), frames.WordValue(0x1ABCD), frames.WordValue(0xABC)]
+    starts = CHAIN.word_offsets()
+    cases = {(): "OK", (0,): "CRC_ERROR_WORD0", (1,): "CRC_ERROR_WORD1",
+             (2,): "CRC_ERROR_WORD1", (1, 2): "CRC_ERROR_WORD1", (0, 1): "CRC_ERROR_BOTH",
+             (0, 2): "CRC_ERROR_BOTH", (0, 1, 2): "CRC_ERROR_BOTH"}
+    for bad, status in cases.items():
+        bits = frames.build_frame(CHAIN, values,
+                                  frames.FrameFaults(flip_bits=tuple(starts[w] for w in bad)))
+        v = ref.judge(CHAIN, bits)
+        assert (v.name, v.crc_ok) == (status, tuple(w not in bad for w in range(3))), bad
+        assert v.spw_mismatch == 0                   # a chain has no SPW check
+        assert crc_counters(v.crc_ok) == (("crc_word0",) if 0 in bad else ()) + (
+            ("crc_word1",) if set(bad) - {0} else ())
+    assert [crc_status(ok) for ok in ((True,), (False,), (True, False), (False, False))] == [
+        None, "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH"]
+
+
+CHAIN_GOOD = {"cfg_ma_half_period": 5, "cfg_delay_limit": 0, "cfg_spw_check": 0,
+              "cfg_spw_tolerance": 1, **{f"cfg_w{w}_{k}": v for w in range(3) for k, v in (
+                  ("data_bits", 8), ("nenw", 1), ("lc", 0), ("crc", 1))},
+              "cfg_w1_enable": 1, "cfg_w2_enable": 1}
+
+
+@pytest.mark.parametrize("change,valid", [
+    ({}, True), ({"cfg_w2_enable": 0}, True), ({"cfg_w1_enable": 0, "cfg_w2_enable": 0}, True),
+    ({"cfg_w1_enable": 0}, False),                       # word 2 without word 1
+    ({"cfg_w2_data_bits": 25}, False), ({"cfg_w2_data_bits": 24}, True),
+    ({"cfg_w2_crc": 2}, False),                          # CRC-16: not in this build
+    ({"cfg_w0_lc": 1}, True), ({"cfg_w2_lc": 1}, True),
+    ({"cfg_w0_lc": 1, "cfg_w2_lc": 1}, False),           # two LCs in one frame
+    ({"cfg_w1_lc": 1, "cfg_w2_lc": 1}, False),
+    ({"cfg_w0_lc": 1, "cfg_w2_lc": 1, "cfg_w2_enable": 0}, True),   # the disabled word's LC
+])
+def test_config_rules_chain_build(change, valid):
+    chain = dict(max_data_bits=(40, 32, 24), word_crcs=((1,), (1,), (1,)))
+    assert config_valid({**CHAIN_GOOD, **change}, **chain) == valid
 
 
 def test_coverage_bins_and_holes():

@@ -25,6 +25,34 @@ STATUS_NAME = {code: name for name, code in STATUS.items()}
 #: gives them.
 NOISE_STATUSES = ("NOISY_LINE", "DELAY_JUMP")
 
+#: Words a core may be built for (docs: ``MasterParams.max_data_bits`` has one entry per word,
+#: 1..8): word N's ports are ``cfg_wN_*`` and ``wordN_*``, ``cfg_wN_enable`` for N >= 1.
+MAX_WORDS = 8
+
+
+def crc_status(crc_ok):
+    """The status of a frame whose words' CRC verdicts are ``crc_ok`` (word 0 first, the enabled
+    words only; None if every CRC is good): CRC_ERROR_WORD0 when word 0 fails and no later word,
+    CRC_ERROR_WORD1 when word 0 passes and any later word fails (a chain's word 2 too: the
+    ``wordN_crc_ok`` ports say which), CRC_ERROR_BOTH when word 0 and any later word fail."""
+    first_bad = not crc_ok[0]
+    later_bad = not all(crc_ok[1:])
+    if first_bad and later_bad:
+        return "CRC_ERROR_BOTH"
+    if first_bad:
+        return "CRC_ERROR_WORD0"
+    if later_bad:
+        return "CRC_ERROR_WORD1"
+    return None
+
+
+def crc_counters(crc_ok):
+    """The CRC counters a frame with these verdicts advances: ``crc_word0`` when word 0 failed,
+    ``crc_word1`` when any later word failed (docs/ports.md, Counters)."""
+    return tuple(n for n, bad in (("crc_word0", not crc_ok[0]),
+                                  ("crc_word1", not all(crc_ok[1:]))) if bad)
+
+
 #: Statuses that judge a received frame (the frame fields are new with them).
 FRAME_STATUSES = ("OK", "CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH",
                   "SIGN_OF_LIFE", "SPW_MISMATCH", "NOISY_LINE", "DELAY_JUMP", "UNCONFIRMED")

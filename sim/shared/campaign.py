@@ -26,7 +26,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer, with_ti
 
 from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
-from master_contract import NOISE_STATUSES, STATUS, STATUS_NAME, port_position
+from master_contract import NOISE_STATUSES, STATUS, STATUS_NAME, crc_counters, port_position
 from sim.shared.functional_coverage import Coverage
 from sim.shared.reference import BREAK_STATUSES, FRAME_STATUS_CODES, MasterReference
 from sim.shared.testbench import CLK_HZ, Testbench, preset
@@ -255,10 +255,8 @@ class Campaign:
 
         if res.status in FRAME_STATUS_CODES and frame:
             words = len(self.fmt.words)
-            if not f["word0_crc_ok"]:
-                inc("crc_word0")
-            if words == 2 and not f["word1_crc_ok"]:
-                inc("crc_word1")
+            for counter in crc_counters([f[f"word{w}_crc_ok"] for w in range(words)]):
+                inc(counter)
             for flag in ("lc_repeat", "lc_skip", "lc_zero"):
                 if f[flag]:
                     inc(flag)

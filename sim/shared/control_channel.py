@@ -30,7 +30,8 @@ from cocotb.triggers import Event, FallingEdge, ReadOnly, RisingEdge, Timer, wit
 from encoder_model import frames
 from encoder_model.control_master import RegisterAccess, control_frame_cdm
 from master_contract import (CA_COUNTERS, CA_STATUS, CA_STATUS_NAME, DEFAULT_ACK_LIMIT_S,
-                             DEFAULT_BREAK_S, DEFAULT_TIMEOUT_LIMIT_S, STATUS, ca_frame_bound)
+                             DEFAULT_BREAK_S, DEFAULT_TIMEOUT_LIMIT_S, STATUS, ca_frame_bound,
+                             crc_status)
 from sim.shared.testbench import CLK_HZ
 
 #: CDM = 0 cycles before S (docs/protocol.md, section 10).
@@ -41,14 +42,7 @@ FAULT_STATUS = {"no_response": "NO_ACK", "stuck_high": "NO_ACK", "ack_forever": 
 
 def frame_status(parsed, view):
     """The status a frame with these parsed words gets (docs/ports.md, "Status codes")."""
-    bad = [not w["crc_ok"] for w in parsed["words"]]
-    if len(view.words) == 2 and bad[0] and bad[1]:
-        return "CRC_ERROR_BOTH"
-    if bad[0]:
-        return "CRC_ERROR_WORD0"
-    if len(bad) == 2 and bad[1]:
-        return "CRC_ERROR_WORD1"
-    return "OK"
+    return crc_status([w["crc_ok"] for w in parsed["words"]]) or "OK"
 
 
 @dataclass

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import protocol_facts as facts
 from encoder_model import frames
 from master_contract import (CRC_CODE, CRC_MAX_WIDTH, FRAME_STATUSES, MA_HALF_PERIOD_MIN, STATUS,
-                             STATUS_NAME, ConfirmationAccount)
+                             STATUS_NAME, ConfirmationAccount, crc_status)
 
 #: Cycles that end in the break (MA high 40 us): the encoder restarts its LC check from scratch.
 BREAK_STATUSES = {STATUS[n] for n in ("NO_ACK", "NO_START", "DELAY_RANGE", "SLO_STUCK_LOW",
@@ -80,7 +80,8 @@ class MasterReference:
         words = parsed["words"]
         crc_ok = tuple(w["crc_ok"] and (received_ok is None or bool(received_ok[i]))
                        for i, w in enumerate(words))
-        two = len(words) == 2
+        # The SPW plausibility check belongs to BiSS Safety (two words, not a chain).
+        two = fmt.is_safety
         if spw_check is None:
             spw_check = two
         v = Verdict(STATUS["OK"], crc_ok, parsed=parsed)
@@ -105,12 +106,9 @@ class MasterReference:
             behind = (spw - cpw_top) % (1 << bits_spw)
             v.spw_mismatch = int(min(ahead, behind) > spw_tolerance)
 
-        if not crc_ok[0] and not crc_ok[-1]:
-            v.status = STATUS["CRC_ERROR_BOTH" if two else "CRC_ERROR_WORD0"]
-        elif not crc_ok[0]:
-            v.status = STATUS["CRC_ERROR_WORD0"]
-        elif not crc_ok[-1]:
-            v.status = STATUS["CRC_ERROR_WORD1"]
+        crc_error = crc_status(crc_ok)      # word 0, any later word, or both
+        if crc_error:
+            v.status = STATUS[crc_error]
         elif v.lc_repeat or v.lc_skip or v.lc_zero:
             v.status = STATUS["SIGN_OF_LIFE"]
         elif v.spw_mismatch:
@@ -137,12 +135,16 @@ def config_valid(cfg, *, max_data_bits=(55, 40), word_crcs=((1, 2), (1, 2)),
 
     ok = cfg["cfg_ma_half_period"] >= MA_HALF_PERIOD_MIN and word_ok(0)
     ok = ok and cfg["cfg_delay_limit"] <= max_line_delay
-    if len(max_data_bits) == 2:
-        w1 = cfg["cfg_w1_enable"]
-        ok = ok and (not w1 or word_ok(1))
-        ok = ok and not (w1 and cfg["cfg_w0_lc"] and cfg["cfg_w1_lc"])
+    n = len(max_data_bits)
+    if n >= 2:
+        # Word N is in the frame when enabled; an enabled word needs its predecessor enabled;
+        # one LC per frame (docs/ports.md; issue 26's chains for N >= 2).
+        on = [True] + [bool(cfg.get(f"cfg_w{w}_enable", 0)) for w in range(1, n)]
+        for w in range(1, n):
+            ok = ok and (not on[w] or (on[w - 1] and word_ok(w)))
+        ok = ok and sum(bool(on[w] and cfg[f"cfg_w{w}_lc"]) for w in range(n)) <= 1
         if cfg["cfg_spw_check"]:
-            ok = ok and w1 and cfg["cfg_w1_data_bits"] <= cfg["cfg_w0_data_bits"] \
+            ok = ok and on[1] and cfg["cfg_w1_data_bits"] <= cfg["cfg_w0_data_bits"] \
                 and cfg["cfg_w1_crc"] != 0
     return bool(ok)
 
@@ -161,9 +163,13 @@ def _crc_of(cfg, w):
 
 
 def format_of(cfg, words=2):
-    """The frame format a valid configuration describes (what the encoder must send)."""
+    """The frame format a valid configuration describes (what the encoder must send) in a
+    build of ``words`` words: word 0 and the enabled words after it."""
+    n = 1
+    while n < words and cfg.get(f"cfg_w{n}_enable", 0):
+        n += 1
     ws = []
-    for w in range(2 if words == 2 and cfg["cfg_w1_enable"] else 1):
+    for w in range(n):
         ws.append(frames.WordFormat(cfg[f"cfg_w{w}_data_bits"], nenw=bool(cfg[f"cfg_w{w}_nenw"]),
                                     lc=bool(cfg[f"cfg_w{w}_lc"]), crc=_crc_of(cfg, w),
                                     gray=bool(cfg.get(f"cfg_w{w}_gray", 0)),

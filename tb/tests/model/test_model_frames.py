@@ -7,9 +7,9 @@ from amaranth.lib import crc as am_crc
 
 import protocol_facts as facts
 from encoder_model.crc import bits_to_int
-from encoder_model.frames import (CRC6, CRC16, CRC_NONE, PRESETS, EncoderFrameSource,
-                                  FrameFaults, FrameFormat, SignOfLife, WordFormat, WordValue,
-                                  bp3, build_frame, parse_frame, word_bits)
+from encoder_model.frames import (CRC6, CRC16, CRC_NONE, MAX_WORDS, PRESETS, CustomCrc,
+                                  EncoderFrameSource, FrameFaults, FrameFormat, SignOfLife,
+                                  WordFormat, WordValue, bp3, build_frame, parse_frame, word_bits)
 
 HEADER = 2          # Start + CDS
 N_RANDOM = 40
@@ -23,9 +23,12 @@ EXPECTED_TOTAL_BITS = {
     "evolute_26": 34, "evolute_32": 40, "evolute_36": 44,
     "resolute_c_18": 26, "resolute_c_26": 34, "resolute_c_32": 40, "resolute_c_36": 44,
     "bp3_1": 9, "bp3_24": 32, "bp3_55": 63,
+    # chain of three: 26 + nE/nW + CRC-6, 17 + nE/nW + CRC-8, 12 + CRC-4
+    "chain_3": (26 + 2 + 6) + (17 + 2 + 8) + (12 + 4),      # 77
 }
 EXPECTED_SPW_SHIFT = {"resolute_fs_lmm": 0, "resolute_fs_rsm": 4, "resolute_fs_rsh": 8,
                       "fortis_fs_rsh": 8}
+CHAIN_PRESETS = ("chain_3",)
 ALL_FORMATS = list(PRESETS.values()) + [bp3(n) for n in range(1, 56)]
 
 
@@ -68,7 +71,7 @@ def test_safety_presets_layout(name):
 
 def test_single_word_presets_layout():
     for name, fmt in PRESETS.items():
-        if name not in EXPECTED_SPW_SHIFT:
+        if name not in EXPECTED_SPW_SHIFT and name not in CHAIN_PRESETS:
             (word,) = fmt.words
             assert (word.nenw, word.lc, word.crc) == (True, False, CRC6)
             assert fmt.spw_shift == 0
@@ -102,7 +105,11 @@ def test_frame_format_rejects_bad_word_counts():
     with pytest.raises(ValueError):
         FrameFormat("none", ())
     with pytest.raises(ValueError):
-        FrameFormat("three", (w, w, w))
+        FrameFormat("nine", (w,) * (MAX_WORDS + 1))
+    with pytest.raises(ValueError):
+        FrameFormat("nine_chain", (w,) * (MAX_WORDS + 1), chain=True)
+    with pytest.raises(ValueError):
+        FrameFormat("not_a_word", (w, w, 8))
     with pytest.raises(ValueError):
         FrameFormat("finer_spw", (WordFormat(8), WordFormat(12, lc=True, crc=CRC16)))
 
@@ -153,9 +160,10 @@ def test_round_trip(fmt):
         values = _random_values(fmt, rng)
         parsed = parse_frame(fmt, build_frame(fmt, values))
         assert parsed["start"] == 1 and parsed["cds"] == 0 and parsed["crc_ok"]
-        for word, value in zip(parsed["words"], values):
+        for word, value, wfmt in zip(parsed["words"], values, fmt.words):
+            flags = (value.ne, value.nw) if wfmt.nenw else (None, None)
             assert (word["position"], word["ne"], word["nw"], word["lc"]) == (
-                value.position, value.ne, value.nw, value.lc)
+                value.position, *flags, value.lc)
             assert word["crc_ok"]
 
 
@@ -341,3 +349,101 @@ def test_gray_word_sends_gray_and_parses_binary():
     assert bits[2:15] == [1, 1] + [0] * 11             # 4096 -> Gray 0b1100000000000
     assert parse_frame(fmt, bits)["words"][0]["position"] == 4096
     assert parse_frame(fmt, bits)["crc_ok"]
+
+
+# -- chains of slaves (issue 26): 1..8 words, not BiSS Safety ---------------------------------
+
+def _crc_ref(bits, width, poly, init, xor_out):
+    """amaranth's CRC model with a start value: a reference the model shares no code with."""
+    algo = am_crc.Algorithm(crc_width=width, polynomial=poly, initial_crc=init,
+                            reflect_input=False, reflect_output=False, xor_output=xor_out)
+    return algo(data_width=1).compute(bits)
+
+
+def test_chain_3_layout():
+    fmt = PRESETS["chain_3"]
+    assert fmt.chain and fmt.is_chain and not fmt.is_safety and fmt.spw_shift == 0
+    w0, w1, w2 = fmt.words
+    assert (w0.data_bits, w0.nenw, w0.lc, w0.crc) == (26, True, False, CRC6)
+    assert (w1.data_bits, w1.nenw, w1.lc, w1.crc) == (17, True, False, CustomCrc(8, 0x2F, 0xA5, True))
+    assert (w2.data_bits, w2.nenw, w2.lc, w2.crc) == (12, False, False, CustomCrc(4, 0x3, 0x9, False))
+    # different lengths, CRC widths, polynomials and start values
+    assert len({w.data_bits for w in fmt.words}) == 3
+    assert len({w.crc_bits for w in fmt.words}) == 3
+    assert fmt.word_offsets() == [HEADER, HEADER + 34, HEADER + 34 + 27]
+
+
+def test_chain_3_frame_by_hand():
+    """Every word where its offset says, each CRC against amaranth's model with the word's own
+    polynomial, start value and inversion; parse_frame gives the values back."""
+    fmt = PRESETS["chain_3"]
+    values = [WordValue(0x2ABCDEF, 1, 0), WordValue(0x1F0F1, 0, 1), WordValue(0xA5C)]
+    bits = build_frame(fmt, values)
+    assert len(bits) == HEADER + 77 and bits[:HEADER] == [facts.START_BIT, 0]
+    o0, o1, o2 = fmt.word_offsets()
+    w0, w1, w2 = bits[o0:o1], bits[o1:o2], bits[o2:]
+    assert bits_to_int(w0[:26]) == 0x2ABCDEF and w0[26:28] == [1, 0]
+    assert bits_to_int(w0[28:]) == _crc_ref(w0[:28], 6, 0x03, 0, 0x3F)
+    assert bits_to_int(w1[:17]) == 0x1F0F1 and w1[17:19] == [0, 1]
+    assert bits_to_int(w1[19:]) == _crc_ref(w1[:19], 8, 0x2F, 0xA5, 0xFF)
+    assert bits_to_int(w2[:12]) == 0xA5C and len(w2) == 16
+    assert bits_to_int(w2[12:]) == _crc_ref(w2[:12], 4, 0x3, 0x9, 0)
+    parsed = parse_frame(fmt, bits)
+    assert parsed["crc_ok"]
+    assert [(w["position"], w["ne"], w["nw"]) for w in parsed["words"]] == [
+        (0x2ABCDEF, 1, 0), (0x1F0F1, 0, 1), (0xA5C, None, None)]
+    # The start value matters: the same word with start 0 has another CRC (for most data).
+    assert _crc_ref(w1[:19], 8, 0x2F, 0, 0xFF) != bits_to_int(w1[19:])
+
+
+@pytest.mark.parametrize("word", range(3))
+def test_chain_3_crc_error_in_one_word_only(word):
+    fmt = PRESETS["chain_3"]
+    rng = random.Random(word)
+    values = _random_values(fmt, rng)
+    for xor in (1, (1 << fmt.words[word].crc_bits) - 1):
+        crc_xor = tuple(xor if k == word else 0 for k in range(3))
+        parsed = parse_frame(fmt, build_frame(fmt, values, FrameFaults(crc_xor=crc_xor)))
+        assert [w["crc_ok"] for w in parsed["words"]] == [k != word for k in range(3)]
+        assert not parsed["crc_ok"]
+
+
+def test_two_words_are_safety_unless_a_chain():
+    """Every existing two-word format stays BiSS Safety; chain=True says two slaves: no SPW
+    relation, so a second word longer than the first is fine."""
+    for name in EXPECTED_SPW_SHIFT:
+        assert PRESETS[name].is_safety and not PRESETS[name].is_chain
+    pair = (WordFormat(8), WordFormat(12, lc=True, crc=CRC16))
+    with pytest.raises(ValueError):
+        FrameFormat("finer_spw", pair)
+    two = FrameFormat("two_slaves", pair, chain=True)
+    assert not two.is_safety and two.is_chain and two.spw_shift == 0
+    for n in (1, 3, MAX_WORDS):
+        fmt = FrameFormat(f"w{n}", (WordFormat(8),) * n)
+        assert not fmt.is_safety and fmt.is_chain == (n > 2)
+
+
+def test_eight_word_chain_round_trip():
+    fmt = FrameFormat("eight", tuple(WordFormat(n, nenw=n % 2 == 0,
+                                                crc=CustomCrc(n % 16 + 1, 1, n % 2))
+                                     for n in range(3, 3 + MAX_WORDS)), chain=True)
+    rng = random.Random(8)
+    for _ in range(N_RANDOM):
+        values = _random_values(fmt, rng)
+        parsed = parse_frame(fmt, build_frame(fmt, values))
+        assert parsed["crc_ok"]
+        assert [w["position"] for w in parsed["words"]] == [v.position for v in values]
+
+
+def test_chain_source_positions_per_word():
+    fmt = PRESETS["chain_3"]
+    src = EncoderFrameSource(fmt, lambda t: 0,
+                             chain_positions_at=lambda t: ((1 << 26) + 5, (1 << 17) + 6, 0xFFFF))
+    assert [v.position for v in src.values_at(0.0)] == [5, 6, 0xFFF]
+    # without per-word positions every slave shows position_at, wrapped to its word
+    src = EncoderFrameSource(fmt, lambda t: 0x3FFFFFF)
+    assert [v.position for v in src.values_at(0.0)] == [0x3FFFFFF, 0x1FFFF, 0xFFF]
+    # a Safety source is unchanged: SPW = CPW >> spw_shift
+    rsh = PRESETS["resolute_fs_rsh"]
+    src = EncoderFrameSource(rsh, lambda t: 0x123456789, chain_positions_at=lambda t: (1, 2))
+    assert [v.position for v in src.values_at(0.0)] == [0x123456789, 0x123456789 >> 8]
