@@ -47,10 +47,9 @@ def crc_status(crc_ok):
 
 
 def crc_counters(crc_ok):
-    """The CRC counters a frame with these verdicts advances: ``crc_word0`` when word 0 failed,
-    ``crc_word1`` when any later word failed (docs/ports.md, Counters)."""
-    return tuple(n for n, bad in (("crc_word0", not crc_ok[0]),
-                                  ("crc_word1", not all(crc_ok[1:]))) if bad)
+    """The CRC counters a frame with these verdicts advances: ``crc_word<N>`` for each word N
+    that failed (docs/ports.md, Counters: one counter per word)."""
+    return tuple(f"crc_word{w}" for w, ok in enumerate(crc_ok) if not ok)
 
 
 #: Statuses that judge a received frame (the frame fields are new with them).

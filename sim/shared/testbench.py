@@ -371,6 +371,8 @@ class Testbench:
                        for n in self._ports(names) if n.endswith("crc_ok")})
         fields.update({n: _int(dut, n) for n in self.noise_fields})
         names = self._ports(COUNTERS) + self.noise_counters if self.has_counters else []
+        # A chain build counts each word's CRC errors (count_crc_word2 ..).
+        names += [f"crc_word{w}" for w in range(2, self.words) if self.has_counters]
         if self.has_counters and self.has_register_access:
             names += list(CA_COUNTERS.values())
         counters = {n: _int(dut, f"count_{n}") for n in names}
