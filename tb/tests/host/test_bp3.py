@@ -215,6 +215,16 @@ def test_derived_names_are_ports_of_the_build(preset, params):
     assert {"cfg_w0_data_bits", "cfg_w0_nenw", "cfg_w0_lc", "cfg_w0_crc"} <= set(config)
 
 
+def test_derive_config_chain_build_reads_one_slave():
+    """A BP3 encoder alone on a chain build (three words): word 0 as the EDS says, every word
+    after it out of the frame, no SPW check (docs/ports.md, Chains)."""
+    params = MasterParams(max_data_bits=(40, 32, 24), word_crcs=((Crc.CRC6,),) * 3)
+    config = bp3.derive_config(_eds(DL=38), params=params)
+    assert set(config) <= _ports("chain")
+    assert (config["cfg_w0_data_bits"], config["cfg_w1_enable"], config["cfg_w2_enable"],
+            config["cfg_spw_check"]) == (36, 0, 0, 0)
+
+
 def test_derive_config_one_word_build():
     params = MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),))
     assert bp3.derive_config(_eds(DL=38), params=params) == {
