@@ -79,9 +79,10 @@ async def safety_and_biss_c_presets(dut):
 
 
 @cocotb.test()
+@full_in_sim_long(100_000_000)
 @long_on_icarus
 async def bp3_lengths(dut):
-    await matrix(dut, [f"bp3_{n}" for n in BP3_LENGTHS])
+    await matrix(dut, [f"bp3_{n}" for n in BP3_LENGTHS], subset_slowest=True)
 
 
 @cocotb.test()
