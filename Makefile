@@ -78,7 +78,7 @@ sim-all: setup  ## cocotb regression, bus-top and C-driver scenarios on Verilato
 	$(PY) -m sim.tools.prebuild
 	$(PY) -m pytest $(SIM_TESTS) -q -n $(JOBS) --dist worksteal -m "not long"
 
-sim-long: setup  ## the Icarus runs of the scenarios marked long_on_icarus (core, bus tops, driver; Verilator runs them in make test)
+sim-long: setup  ## the Icarus runs of the scenarios marked long_on_icarus (core, bus tops, driver; Verilator runs them in make test), the full Verilator runs of those marked full_in_sim_long (make test: a subset)
 	$(PY) -m pytest $(SIM_TESTS) -q -n $(JOBS) --dist worksteal -m long
 
 campaigns: setup  ## reliability campaigns, fast slice (CRC, line faults, LC, config fuzz, random mix, SSI) + report

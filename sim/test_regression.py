@@ -27,18 +27,28 @@ def marks(s, sim="verilator"):
     return out
 
 
-CASES = [pytest.param(sim, build, s, runner.CLK_HZ, id="-".join(
+CASES = [pytest.param(sim, build, s, runner.CLK_HZ, False, id="-".join(
              [sim] + ([] if build == discovery.DEFAULT_BUILD else [build]) + [s.name]),
              marks=marks(s, sim))
          for sim in SIMS for s in SCENARIOS for build in s.builds]
-CASES += [pytest.param("verilator", discovery.DEFAULT_BUILD, s, discovery.FAST_CLK_HZ,
+CASES += [pytest.param("verilator", discovery.DEFAULT_BUILD, s, discovery.FAST_CLK_HZ, False,
                        id=f"verilator-200MHz-{s.name}", marks=marks(s))
           for s in SCENARIOS if s.fast_clock and "verilator" in SIMS]
+# full_in_sim_long: the run above at that clock is a subset; the whole is one more Verilator
+# run, marked long (make sim-long).
+CASES += [pytest.param("verilator", discovery.DEFAULT_BUILD, s, clk, True,
+                       id="-".join(["verilator"] + ([] if clk == runner.CLK_HZ else
+                                                    [f"{clk // 1_000_000}MHz"])
+                                   + ["full", s.name]),
+                       marks=marks(s) + [pytest.mark.long])
+          for s in SCENARIOS for clk in s.full_clocks if "verilator" in SIMS]
 
 
-@pytest.mark.parametrize("sim,build,scenario,clk_hz", CASES)
-def test_scenario(sim, build, scenario, clk_hz):
+@pytest.mark.parametrize("sim,build,scenario,clk_hz,full", CASES)
+def test_scenario(sim, build, scenario, clk_hz, full):
     r, build_dir = runner.build_once(sim, build)
-    xml = runner.run(r, build_dir, scenario.module, testcase=scenario.name,
-                     extra_env={"BISS_CLK_HZ": str(clk_hz)})
+    env = {"BISS_CLK_HZ": str(clk_hz)}
+    if full:
+        env[discovery.FULL_ENV] = "1"
+    xml = runner.run(r, build_dir, scenario.module, testcase=scenario.name, extra_env=env)
     runner.check(xml)

@@ -632,6 +632,7 @@ ANSWER_FAULTS = {
 
 @cocotb.test()
 @only_on_buses("uart")
+@long_on_icarus
 async def uart_registers_through_the_link(dut):
     """The host's Link on biss_master_uart: the global registers' reset values (the RDL's),
     every configuration register of both channels written with a random word and read back
@@ -745,6 +746,7 @@ async def uart_lost_and_damaged_bytes(dut):
 
 @cocotb.test()
 @only_on_buses("uart")
+@long_on_icarus
 async def uart_frame_results(dut):
     """Both channels configured over the UART (channel 0 BiSS Safety, channel 1 BiSS C), one
     request each by ctrl.start, the result read word by word and again in one READ_BURST of

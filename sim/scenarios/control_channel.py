@@ -26,7 +26,7 @@ from encoder_model.cocotb_encoder import Cable
 from encoder_model.control import Bp3Eds, ControlFaults, ControlSlave, RegisterFile
 from master_contract import CA_STATUS, CRC_CODE, MAX_DATA_BITS, STATUS, ca_frame_bound, crc_config
 from sim.shared.control_channel import IDLE_FRAMES, ControlChannel
-from sim.shared.discovery import long_on_icarus
+from sim.shared.discovery import full_in_sim_long, full_run, long_on_icarus
 from sim.shared.testbench import CLK_HZ, Testbench, preset
 
 #: A BP3 encoder's processing time (Ack to Start) here: short, so that a 1,000-frame
@@ -180,6 +180,7 @@ async def identify_point(tb, ctl, eds, fmt, ma_hz, cable_m, timeout_s, bank_sele
 
 @cocotb.test()
 @long_on_icarus
+@full_in_sim_long(100_000_000)
 async def bp3_identify_and_configure(dut):
     """bp3.identify() through the ports against BP3 encoder models, then the data channel set
     from derive_config() alone and positions read with it, every frame checked.
@@ -195,8 +196,12 @@ async def bp3_identify_and_configure(dut):
     over 100 m (bank switched), DL_POS 55 over 0 m (bank selected already), C = 1 over 100 m
     (bank switched; DL_POS 1, the shortest frame, is read at 250 kHz in
     ``bp3_registers_every_rate``); Icarus: DL_POS 36 over 100 m (bank switched). Each identification
-    is 12 .. 15 ms of simulated time (about a minute of wall time on Verilator, five on
-    Icarus); the other rates are in ``bp3_registers_every_rate``.
+    is 12 .. 15 ms of simulated time (about 30 s of wall time on Verilator, five minutes on
+    Icarus); the other rates are in ``bp3_registers_every_rate``. ``make test``'s Verilator run
+    is the first (DL_POS 24: the whole sequence with the bank switched, the EDS field by field,
+    the derived settings applied, positions); the full run (BISS_FULL=1, make sim-long) has all
+    three. The two left out check host-side branches that tb/tests/host/test_bp3.py also checks
+    on its fake encoder (the bank selected already; the C = 1 refusal).
     """
     tb = await bench(dut, seed=131)
     ctl = ControlChannel(tb)
@@ -205,6 +210,8 @@ async def bp3_identify_and_configure(dut):
               (Bp3Eds(36, c=1), preset("resolute_fs_rsh"), 100, 0)]
     if on_icarus():
         points = [(Bp3Eds(36), frames.bp3(36), 100, 0)]
+    elif not full_run():
+        points = points[:1]
     for eds, fmt, cable_m, bank_select in points:
         await identify_point(tb, ctl, eds, fmt, 10e6, cable_m, timeout_s, bank_select)
     finish(tb, ctl)
@@ -212,6 +219,7 @@ async def bp3_identify_and_configure(dut):
 
 @cocotb.test()
 @long_on_icarus
+@full_in_sim_long(100_000_000)
 async def bp3_registers_every_rate(dut):
     """Register reads at every MA rate over 0 m and 100 m, each with its own BP3 encoder:
     250 kHz DL_POS 1, 1 MHz DL_POS 36, 5 MHz DL_POS 55, 10 MHz DL_POS 24 (the data channel set
@@ -219,15 +227,20 @@ async def bp3_registers_every_rate(dut):
     select, EDS pointer, profile ID, DL: what identification starts with) each, checked against
     the model and decoded with bp3.decode_profile_id; 14 positions before it (the new encoder's
     idle cycles) and 2 after it. Timeouts: static 12.5 us over 0 m, adaptive over 100 m.
-    Icarus: each rate once (0 m at 250 kHz and 5 MHz, 100 m at 1 and 10 MHz), 0x42..0x43."""
+    Icarus: each rate once (0 m at 250 kHz and 5 MHz, 100 m at 1 and 10 MHz), 0x42..0x43.
+    make test's Verilator run: the same four points, 0x40..0x43; the eight in the full run
+    (BISS_FULL=1, make sim-long)."""
     tb = await bench(dut, seed=133)
     ctl = ControlChannel(tb)
     points = [(ma, dl, cable) for ma, dl in ((250e3, 1), (1e6, 36), (5e6, 55), (10e6, 24))
               for cable in (0, 100)]
     first, count = 0x40, 4
+    each_rate_once = [(250e3, 1, 0), (1e6, 36, 100), (5e6, 55, 0), (10e6, 24, 100)]
     if on_icarus():
-        points = [(250e3, 1, 0), (1e6, 36, 100), (5e6, 55, 0), (10e6, 24, 100)]
+        points = each_rate_once
         first, count = 0x42, 2
+    elif not full_run():
+        points = each_rate_once
     for ma_hz, dl_pos, cable_m in points:
         eds = Bp3Eds(dl_pos)
         regs = bp3_registers(eds)

@@ -18,7 +18,8 @@ from encoder_model import frames
 from encoder_model.cocotb_encoder import Cable
 from master_contract import ENCODER_PRESETS, STATUS, STATUS_NAME, SYS_CLK_HZ
 from sim.shared import glitch
-from sim.shared.discovery import also_at_fast_clock, long_on_icarus, only_on_builds
+from sim.shared.discovery import (also_at_fast_clock, full_in_sim_long, full_run, long_on_icarus,
+                                  only_on_builds)
 from sim.shared.testbench import CABLES_M, CLK_HZ, MA_RATES_HZ, Testbench, half_period_for, preset
 
 #: Every preset of the issue: BiSS Safety, EVOLUTE, RESOLUTE BiSS C (master_contract) and BP3.
@@ -33,35 +34,55 @@ async def frames_ok(tb, n, **check):
     return res
 
 
-async def matrix(dut, names):
+#: The subset of the matrix at another system clock in make test (full_in_sim_long): MA rates
+#: at which the cable matters there. The clock ratio (MA half period in clocks) is set by the
+#: rate, the line delay in clocks by the cable: every rate over the longest cable (the largest
+#: delay count with every half period, 250 kHz's 400 clocks at 200 MHz the longest), and the
+#: other cables at the fast rates, where the round trip is bit periods long.
+SUBSET_FAST_RATES_HZ = (5e6, 10e6)
+
+
+async def matrix(dut, names, subset_slowest=False):
     """Every preset x MA rate x cable length, FRAMES_PER_POINT random frames each (one at a
     system clock other than the default: that run checks the clock-dependent settings and
-    limits, which one frame per point does)."""
+    limits, which one frame per point does). make test's runs are subsets: at the default
+    clock one frame per point at the slowest rate (250 kHz: two thirds of the simulation) with
+    ``subset_slowest``, at another clock every preset at every rate over the longest cable, at
+    SUBSET_FAST_RATES_HZ over the others; the whole runs with BISS_FULL=1 (make sim-long)."""
     tb = Testbench(dut, seed=hash(tuple(names)) & 0xFFFF)
     per_point = FRAMES_PER_POINT if CLK_HZ == SYS_CLK_HZ else 1
+    subset = CLK_HZ != SYS_CLK_HZ and not full_run()
+    # Verilator's run in make test (the Icarus run, make sim-long, is whole as before).
+    one_at_slowest = (subset_slowest and CLK_HZ == SYS_CLK_HZ and not full_run()
+                      and "verilator" in cocotb.SIM_NAME.lower())
     await tb.start()
     count = 0
     for cable_m in CABLES_M:
         tb.encoder.set_cable(Cable(length_m=cable_m))
         for name in names:
             for ma_hz in MA_RATES_HZ:
+                if subset and cable_m != max(CABLES_M) and ma_hz not in SUBSET_FAST_RATES_HZ:
+                    continue
                 tb.configure(preset(name), ma_hz)
-                await frames_ok(tb, per_point)
-                count += per_point
+                n = 1 if one_at_slowest and ma_hz == min(MA_RATES_HZ) else per_point
+                await frames_ok(tb, n)
+                count += n
     dut._log.info("%d frames decoded and checked", count)
 
 
 @cocotb.test()
 @also_at_fast_clock
+@full_in_sim_long(100_000_000, 200_000_000)
 @long_on_icarus
 async def safety_and_biss_c_presets(dut):
-    await matrix(dut, ENCODER_PRESETS)
+    await matrix(dut, ENCODER_PRESETS, subset_slowest=True)
 
 
 @cocotb.test()
+@full_in_sim_long(100_000_000)
 @long_on_icarus
 async def bp3_lengths(dut):
-    await matrix(dut, [f"bp3_{n}" for n in BP3_LENGTHS])
+    await matrix(dut, [f"bp3_{n}" for n in BP3_LENGTHS], subset_slowest=True)
 
 
 @cocotb.test()

@@ -49,6 +49,12 @@ def scaled(n, minimum=1):
     return max(minimum, round(n * SCALE))
 
 
+def sliced(n, slice_n, minimum=1):
+    """``n`` scaled, except up to scale 1 (the slice of make test and make campaigns), where
+    it is ``slice_n`` scaled: a smaller slice, the soak's sizes unchanged."""
+    return scaled(slice_n if SCALE <= 1 else n, minimum)
+
+
 class CampaignFailure(AssertionError):
     pass
 

@@ -19,6 +19,10 @@ at the default clock says so with a marker right under ``@cocotb.test()``:
     async def bp3_lengths(dut): ...
 
     @cocotb.test()
+    @full_in_sim_long(200_000_000)               # make test: a subset at this clock (Verilator);
+    async def safety_and_biss_c_presets(dut): ...   # the whole (BISS_FULL=1) in make sim-long
+
+    @cocotb.test()
     @expected_to_fail("issue 12: ...")           # fails on today's core; pytest xfail, strict
     async def glitch_in_the_ack(dut): ...
 
@@ -64,6 +68,27 @@ def long_on_icarus(func):
     return func
 
 
+def full_in_sim_long(*clocks_hz):
+    """Marker: on Verilator at these system clocks, ``make test`` runs a subset of this
+    scenario (the scenario reads :data:`FULL_ENV` and chooses; see its docstring for what the
+    subset keeps); one more Verilator run at each clock with ``BISS_FULL=1`` runs the whole,
+    with the pytest mark ``long``, in ``make sim-long``."""
+    def mark(func):
+        return func
+    return mark
+
+
+#: Set to "1" in the simulator's environment for the full run of a ``full_in_sim_long`` scenario.
+FULL_ENV = "BISS_FULL"
+
+
+def full_run():
+    """In the simulator: True in the full run of a ``full_in_sim_long`` scenario (or whenever
+    ``BISS_FULL=1`` is set by hand)."""
+    import os
+    return os.environ.get(FULL_ENV) == "1"
+
+
 def expected_to_fail(reason):
     """Marker: the scenario fails on today's core for ``reason`` (an open issue): pytest runs it
     as a strict xfail, so it fails loudly once it passes (remove the marker with the fix)."""
@@ -81,6 +106,7 @@ class Scenario:
     xfail: str | None = None            # expected_to_fail's reason
     buses: tuple = ("axil", "wb")       # bus scenarios: the bus tops to run on
     long_on_icarus: bool = False        # Icarus run only in make sim-long
+    full_clocks: tuple = ()             # full_in_sim_long: the whole at these clocks (sim-long)
 
 
 def pytest_marks(scenario, sim):
@@ -124,8 +150,11 @@ def scenarios(module):
         buses = Scenario.buses
         if "only_on_buses" in marks:
             buses = tuple(ast.literal_eval(a) for a in marks["only_on_buses"].args)
+        full_clocks = ()
+        if "full_in_sim_long" in marks:
+            full_clocks = tuple(ast.literal_eval(a) for a in marks["full_in_sim_long"].args)
         found.append(Scenario(module, node.name, builds, "also_at_fast_clock" in marks, xfail,
-                              buses, "long_on_icarus" in marks))
+                              buses, "long_on_icarus" in marks, full_clocks))
     if not found:
         raise ValueError(f"{module} has no @cocotb.test function")
     return found

@@ -141,6 +141,7 @@ def run(runner, build_dir, module, testcase=None, waves=False, extra_env=None, s
         env["BISS_INTERNAL_CLOCK"] = "1"
     env.update(extra_env or {})
     results = build_dir / (f"results_{module}_{testcase or 'all'}_{env['BISS_CLK_HZ']}"
+                           f"{'_full' if env.get('BISS_FULL') == '1' else ''}"
                            f"{'' if seed is None else f'_{seed}'}.xml")
     runner.test(
         test_module=module,
