@@ -118,7 +118,8 @@ async def crc_detection(dut):
                 await run(name, w, f"{k}-bit random", sample(n, k, count), k < hd)
             # A CRC of degree r detects every burst of length <= r.
             width = wfmt.crc_bits
-            await run(name, w, f"burst <= {width}", random_bursts(c.rng, n, sliced(100, 60), width), True)
+            await run(name, w, f"burst <= {width}",
+                      random_bursts(c.rng, n, sliced(100, 60), width), True)
             await run(name, w, f"burst {width + 1}..{n}",
                       [b for b in random_bursts(c.rng, n, sliced(600, 180), n)
                        if b[-1] - b[0] >= width][:sliced(200, 60)], False)
@@ -1828,8 +1829,8 @@ async def chain_crc(dut):
         await c.frame()                 # the round trip settled (issue 28's check)
         for w, (first, n, wfmt) in enumerate(word_spans(c.fmt)):
             await run(w, "1-bit", [[k] for k in range(n) if k % len(settings) == i], True)
-            await run(w, f"burst <= {wfmt.crc_bits}", random_bursts(c.rng, n, scaled(12), wfmt.crc_bits),
-                      True)
+            await run(w, f"burst <= {wfmt.crc_bits}",
+                      random_bursts(c.rng, n, scaled(12), wfmt.crc_bits), True)
             for k in (2, 3):
                 await run(w, f"{k}-bit random",
                           [sorted(c.rng.sample(range(n), k)) for _ in range(scaled(12))],
