@@ -1797,10 +1797,8 @@ async def chain_crc(dut):
             "crc": crc, "patterns": 0, "detected": 0, "undetected": 0,
             "frame_rejected": 0, "valid_corrupted": 0, "theory": 2.0 ** -wfmt.crc_bits,
             "must_detect": must_detect})
-        # The functional coverage's fault kinds (as crc_detection names them).
-        kind = ("crc_2bit" if other is not None or cls.startswith("2-bit") else
-                "crc_1bit" if cls == "1-bit" else
-                "crc_burst" if cls.startswith("burst") else "crc_3to5bit")
+        # The functional coverage's fault kinds (sim/shared/functional_coverage.py).
+        kind = "chain_word_error" if other is None else "chain_two_words"
         for pattern in patterns:
             flips = [first + i for i in pattern]
             if other is not None:

@@ -35,7 +35,9 @@ FAULTS = ["none", "crc_1bit", "crc_2bit", "crc_3to5bit", "crc_burst", "slo_stuck
           "cable_step", "glitch_cost",
           # the SSI campaign (sim/scenarios/campaigns.py, ssi): one event per cycle
           "ssi_none", "ssi_bit_flip", "ssi_copy2_flip", "ssi_stuck_high", "ssi_stuck_low",
-          "ssi_glitch"]
+          "ssi_glitch",
+          # the chain campaign (chain_crc): errors inside one word, one bit in each of two
+          "chain_word_error", "chain_two_words"]
 
 _FRAME_ERR = ["CRC_ERROR_WORD0", "CRC_ERROR_WORD1", "CRC_ERROR_BOTH"]
 #: Which statuses each fault kind can legitimately end in: the bins of the fault x status cross.
@@ -53,6 +55,11 @@ LEGAL = {
     # SPW plausibility or the sign-of-life check instead
     "crc_3to5bit": ["OK", "SPW_MISMATCH", _SOL, _UNC] + _FRAME_ERR[:2],
     "crc_burst": ["OK", "SPW_MISMATCH", _SOL, _UNC] + _FRAME_ERR[:2],
+    # a chain (issue 26): errors in one word fail that word alone (word 0: WORD0, a later
+    # word: WORD1), or pass beyond what its CRC must detect; one bit in each of two words is
+    # always seen in both (BOTH with word 0, WORD1 without)
+    "chain_word_error": ["OK", _UNC] + _FRAME_ERR[:2],
+    "chain_two_words": _FRAME_ERR[1:],
     "slo_stuck_low": _LATE + _FRAME_ERR + ["NO_START", "DELAY_RANGE", "SLO_STUCK_LOW"],
     "slo_stuck_high": _LATE + _FRAME_ERR + ["NO_ACK", "NO_STOP"],     # NO_STOP: end check
     "unplug": ["NO_ACK"],
