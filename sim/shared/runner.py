@@ -16,6 +16,7 @@ from cocotb_tools.runner import get_runner
 
 from bissmaster import generate
 from master_contract import SYS_CLK_HZ
+from sim.shared import discovery
 from sim.shared import fastclk
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -260,8 +261,12 @@ def build_driver():
 
 
 def run_campaign(campaign, scale, results, sim="verilator", seed=None, extra_env=None,
-                 preset="default"):
-    """One campaign of sim/scenarios/campaigns.py at ``scale``, its figures to ``results``."""
+                 preset=None):
+    """One campaign of sim/scenarios/campaigns.py at ``scale``, its figures to ``results``,
+    on ``preset`` (None: the campaign's own build, ``only_on_builds``, else the default)."""
+    if preset is None:
+        preset = next(s.builds[0] for s in discovery.scenarios(CAMPAIGN_SCENARIOS)
+                      if s.name == campaign)
     r, build_dir = build_once(sim, preset, internal_clock=True)
     env = {"BISS_CAMPAIGN_SCALE": str(scale), "BISS_CAMPAIGN_RESULTS": str(results),
            **(extra_env or {})}

@@ -42,7 +42,10 @@ def main(argv=None):
         return 0
     shutil.rmtree(RESULTS, ignore_errors=True)
     RESULTS.mkdir(parents=True)
-    runner.build_once("verilator", internal_clock=True)   # once, before the parallel runs
+    # Once, before the parallel runs: every build a campaign runs on (only_on_builds).
+    for build in sorted({b for s in discovery.scenarios(runner.CAMPAIGN_SCENARIOS)
+                         for b in s.builds}):
+        runner.build_once("verilator", build, internal_clock=True)
     jobs = [(name, args.frames / args.jobs / at_1, 1000 + i)
             for name, at_1 in FRAMES_AT_SCALE_1.items() for i in range(args.jobs)]
     jobs += [(s.name, args.scale, None) for s in discovery.scenarios(runner.CAMPAIGN_SCENARIOS)
