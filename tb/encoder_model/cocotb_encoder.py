@@ -168,7 +168,33 @@ class _Cycle:
         self.tm_second_rise: int | None = None
 
 
-class BissEncoder:
+class SimSteps:
+    """Time helpers of the cocotb encoder models (``BissEncoder``, cocotb_ssi.SsiLineEncoder):
+    times in integer simulator steps, rounded to the nearest step; ``_jitter`` draws one value
+    from ``self.rng`` per call, uniform in +-``self.cable.jitter_s`` (no draw when that is 0),
+    so a seeded ``rng`` gives the same edges whichever model uses it."""
+
+    cable: Cable
+    rng: random.Random
+
+    @staticmethod
+    def _steps(seconds: float) -> int:
+        return convert(seconds, "sec", to="step", round_mode="round")
+
+    @staticmethod
+    def _sec(steps: int) -> float:
+        return convert(steps, "step", to="sec")
+
+    @staticmethod
+    def _now() -> int:
+        return get_sim_time("step")
+
+    def _jitter(self) -> float:
+        j = self.cable.jitter_s
+        return self.rng.uniform(-j, j) if j > 0 else 0.0
+
+
+class BissEncoder(SimSteps):
     """BiSS encoder + cable model. See the module doc string."""
 
     def __init__(self, ma, slo, *, cable: Cable, respond: Callable[[float], Response],
@@ -279,23 +305,6 @@ class BissEncoder:
     def ready(self) -> bool:
         """True when the encoder would start a cycle on the next MA falling edge."""
         return self._state == "ready"
-
-    # -- time helpers -----------------------------------------------------------------------
-    @staticmethod
-    def _steps(seconds: float) -> int:
-        return convert(seconds, "sec", to="step", round_mode="round")
-
-    @staticmethod
-    def _sec(steps: int) -> float:
-        return convert(steps, "step", to="sec")
-
-    @staticmethod
-    def _now() -> int:
-        return get_sim_time("step")
-
-    def _jitter(self) -> float:
-        j = self.cable.jitter_s
-        return self.rng.uniform(-j, j) if j > 0 else 0.0
 
     # -- event queue ------------------------------------------------------------------------
     def _push(self, t: int, fn: Callable, *args) -> None:

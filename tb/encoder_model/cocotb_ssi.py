@@ -37,12 +37,12 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import cocotb
-from cocotb.simtime import convert, get_sim_time
+from cocotb.simtime import convert
 from cocotb.triggers import Timer
 
 import protocol_facts as facts
 
-from .cocotb_encoder import Cable
+from .cocotb_encoder import Cable, SimSteps
 from .ssi import (IDLE_LEVEL, REPEAT_SAME_VALUE, RETRIGGER_ANY, SsiFormat, level_after,
                   ssi_bits)
 
@@ -202,7 +202,7 @@ class SsiLineLogic:
         return lvl
 
 
-class SsiLineEncoder:
+class SsiLineEncoder(SimSteps):
     """SSI encoder + cable on the MA / SLO pins. See the module doc string.
 
     ``position_at(t)``, ``errors_at(t)``, ``nenw_at(t)``: the values latched at encoder time
@@ -283,19 +283,7 @@ class SsiLineEncoder:
         self._queue.clear()
         self._armed.clear()
 
-    # -- time and queue (as BissEncoder: integer steps, FIFO among equal times) -------------
-    @staticmethod
-    def _steps(seconds: float) -> int:
-        return convert(seconds, "sec", to="step", round_mode="round")
-
-    @staticmethod
-    def _now() -> int:
-        return get_sim_time("step")
-
-    def _jitter(self) -> float:
-        j = self.cable.jitter_s
-        return self.rng.uniform(-j, j) if j > 0 else 0.0
-
+    # -- queue (as BissEncoder: integer steps from SimSteps, FIFO among equal times) --------
     def _push(self, t: int, fn: Callable, *args) -> None:
         heapq.heappush(self._queue, (t, next(self._seq), fn, args))
         if not self._running or any(w <= self._queue[0][0] for w in self._armed):
