@@ -147,8 +147,6 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire [12:0] ch0__line_delay;
   wire [3:0] ch0__noise_events;
   wire ch0__periodic;
-  wire ch0__result_capture;
-  wire ch0__result_published;
   wire [12:0] ch0__settled_delay;
   wire ch0__spw_mismatch;
   wire ch0__start;
@@ -254,8 +252,6 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire [12:0] ch1__line_delay;
   wire [3:0] ch1__noise_events;
   wire ch1__periodic;
-  wire ch1__result_capture;
-  wire ch1__result_published;
   wire [12:0] ch1__settled_delay;
   wire ch1__spw_mismatch;
   wire ch1__start;
@@ -281,223 +277,219 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$481 ;
+  wire [1:0] \irq$473 ;
   wire ma;
-  wire \ma$477 ;
+  wire \ma$469 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$270 ;
+  wire \regs__abort_cycle$266 ;
   wire regs__busy;
-  wire \regs__busy$273 ;
+  wire \regs__busy$269 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$274 ;
+  wire \regs__ca_abort$270 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$276 ;
+  wire [6:0] \regs__ca_address$272 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$279 ;
+  wire \regs__ca_busy$275 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$281 ;
+  wire [6:0] \regs__ca_bytes_done$277 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$282 ;
+  wire [6:0] \regs__ca_count$278 ;
   wire regs__ca_done;
-  wire \regs__ca_done$285 ;
+  wire \regs__ca_done$281 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$286 ;
+  wire [3:0] \regs__ca_rbuf_addr$282 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$289 ;
+  wire [31:0] \regs__ca_rbuf_data$285 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$290 ;
+  wire \regs__ca_rbuf_en$286 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$292 ;
+  wire [2:0] \regs__ca_slave_id$288 ;
   wire regs__ca_start;
-  wire \regs__ca_start$294 ;
+  wire \regs__ca_start$290 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$297 ;
+  wire [2:0] \regs__ca_status$293 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$298 ;
+  wire [3:0] \regs__ca_wbuf_addr$294 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$300 ;
+  wire [31:0] \regs__ca_wbuf_data$296 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$302 ;
+  wire [3:0] \regs__ca_wbuf_en$298 ;
   wire regs__ca_write;
-  wire \regs__ca_write$304 ;
+  wire \regs__ca_write$300 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$307 ;
+  wire \regs__cap_counters$303 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$309 ;
+  wire [5:0] \regs__cap_data_bits_w0$305 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$311 ;
+  wire [5:0] \regs__cap_data_bits_w1$307 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$313 ;
+  wire \regs__cap_register_access$309 ;
   wire regs__cap_ssi;
-  wire \regs__cap_ssi$315 ;
+  wire \regs__cap_ssi$311 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$317 ;
+  wire [5:0] \regs__cap_timer_width$313 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$319 ;
+  wire \regs__cap_timestamp$315 ;
   wire regs__cds;
-  wire \regs__cds$321 ;
+  wire \regs__cds$317 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$322 ;
+  wire [23:0] \regs__cfg_ack_limit$318 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$324 ;
+  wire [23:0] \regs__cfg_break_time$320 ;
   wire [3:0] regs__cfg_confirm_frames;
-  wire [3:0] \regs__cfg_confirm_frames$326 ;
+  wire [3:0] \regs__cfg_confirm_frames$322 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$328 ;
+  wire [11:0] \regs__cfg_delay_limit$324 ;
   wire [3:0] regs__cfg_delay_tolerance;
-  wire [3:0] \regs__cfg_delay_tolerance$330 ;
+  wire [3:0] \regs__cfg_delay_tolerance$326 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$332 ;
+  wire \regs__cfg_end_check$328 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$334 ;
+  wire [15:0] \regs__cfg_ma_half_period$330 ;
   wire [3:0] regs__cfg_noise_limit;
-  wire [3:0] \regs__cfg_noise_limit$336 ;
+  wire [3:0] \regs__cfg_noise_limit$332 ;
   wire [11:0] regs__cfg_quiet_time;
-  wire [11:0] \regs__cfg_quiet_time$338 ;
+  wire [11:0] \regs__cfg_quiet_time$334 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$340 ;
+  wire [23:0] \regs__cfg_request_period$336 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$342 ;
+  wire \regs__cfg_spw_check$338 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$344 ;
+  wire [7:0] \regs__cfg_spw_tolerance$340 ;
   wire regs__cfg_ssi;
-  wire \regs__cfg_ssi$346 ;
+  wire \regs__cfg_ssi$342 ;
   wire [11:0] regs__cfg_ssi_delay;
-  wire [11:0] \regs__cfg_ssi_delay$348 ;
+  wire [11:0] \regs__cfg_ssi_delay$344 ;
   wire regs__cfg_ssi_double;
-  wire \regs__cfg_ssi_double$350 ;
+  wire \regs__cfg_ssi_double$346 ;
   wire regs__cfg_ssi_error;
-  wire \regs__cfg_ssi_error$352 ;
+  wire \regs__cfg_ssi_error$348 ;
   wire regs__cfg_ssi_error_low;
-  wire \regs__cfg_ssi_error_low$354 ;
+  wire \regs__cfg_ssi_error_low$350 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$356 ;
+  wire [23:0] \regs__cfg_timeout_limit$352 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$358 ;
+  wire [1:0] \regs__cfg_w0_crc$354 ;
   wire regs__cfg_w0_crc_inverted;
-  wire \regs__cfg_w0_crc_inverted$360 ;
+  wire \regs__cfg_w0_crc_inverted$356 ;
   wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] \regs__cfg_w0_crc_poly$362 ;
+  wire [15:0] \regs__cfg_w0_crc_poly$358 ;
   wire [15:0] regs__cfg_w0_crc_start;
-  wire [15:0] \regs__cfg_w0_crc_start$364 ;
+  wire [15:0] \regs__cfg_w0_crc_start$360 ;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [4:0] \regs__cfg_w0_crc_width$366 ;
+  wire [4:0] \regs__cfg_w0_crc_width$362 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$368 ;
+  wire [5:0] \regs__cfg_w0_data_bits$364 ;
   wire regs__cfg_w0_gray;
-  wire \regs__cfg_w0_gray$370 ;
+  wire \regs__cfg_w0_gray$366 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$372 ;
+  wire \regs__cfg_w0_lc$368 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$374 ;
+  wire \regs__cfg_w0_nenw$370 ;
   wire regs__cfg_w0_signed;
-  wire \regs__cfg_w0_signed$376 ;
+  wire \regs__cfg_w0_signed$372 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$378 ;
+  wire [1:0] \regs__cfg_w1_crc$374 ;
   wire regs__cfg_w1_crc_inverted;
-  wire \regs__cfg_w1_crc_inverted$380 ;
+  wire \regs__cfg_w1_crc_inverted$376 ;
   wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] \regs__cfg_w1_crc_poly$382 ;
+  wire [15:0] \regs__cfg_w1_crc_poly$378 ;
   wire [15:0] regs__cfg_w1_crc_start;
-  wire [15:0] \regs__cfg_w1_crc_start$384 ;
+  wire [15:0] \regs__cfg_w1_crc_start$380 ;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [4:0] \regs__cfg_w1_crc_width$386 ;
+  wire [4:0] \regs__cfg_w1_crc_width$382 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$388 ;
+  wire [5:0] \regs__cfg_w1_data_bits$384 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$390 ;
+  wire \regs__cfg_w1_enable$386 ;
   wire regs__cfg_w1_gray;
-  wire \regs__cfg_w1_gray$392 ;
+  wire \regs__cfg_w1_gray$388 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$394 ;
+  wire \regs__cfg_w1_lc$390 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$396 ;
+  wire \regs__cfg_w1_nenw$392 ;
   wire regs__cfg_w1_signed;
-  wire \regs__cfg_w1_signed$398 ;
+  wire \regs__cfg_w1_signed$394 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$400 ;
+  wire \regs__clear_counters$396 ;
   wire regs__config_error;
-  wire \regs__config_error$403 ;
+  wire \regs__config_error$399 ;
   wire [2:0] regs__count_addr;
-  wire [2:0] \regs__count_addr$404 ;
+  wire [2:0] \regs__count_addr$400 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$407 ;
+  wire [15:0] \regs__count_ca_aborted$403 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$409 ;
+  wire [15:0] \regs__count_ca_crc4_error$405 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$411 ;
+  wire [15:0] \regs__count_ca_data_fault$407 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$413 ;
+  wire [15:0] \regs__count_ca_no_answer$409 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$415 ;
+  wire [15:0] \regs__count_ca_refused$411 ;
   wire [31:0] regs__count_data;
-  wire [31:0] \regs__count_data$417 ;
+  wire [31:0] \regs__count_data$413 ;
   wire regs__count_en;
-  wire \regs__count_en$418 ;
+  wire \regs__count_en$414 ;
   wire regs__delay_settled;
-  wire \regs__delay_settled$421 ;
+  wire \regs__delay_settled$417 ;
   wire [7:0] regs__delay_spread;
-  wire [7:0] \regs__delay_spread$423 ;
+  wire [7:0] \regs__delay_spread$419 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$425 ;
+  wire [15:0] \regs__done_count$421 ;
   wire regs__frame_done;
-  wire \regs__frame_done$427 ;
+  wire \regs__frame_done$423 ;
   wire regs__frame_error;
-  wire \regs__frame_error$429 ;
+  wire \regs__frame_error$425 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$431 ;
+  wire [5:0] \regs__lc$427 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$433 ;
+  wire \regs__lc_repeat$429 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$435 ;
+  wire \regs__lc_skip$431 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$437 ;
+  wire \regs__lc_zero$433 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$439 ;
+  wire [12:0] \regs__line_delay$435 ;
   wire [3:0] regs__noise_events;
-  wire [3:0] \regs__noise_events$441 ;
+  wire [3:0] \regs__noise_events$437 ;
   wire regs__periodic;
-  wire \regs__periodic$442 ;
+  wire \regs__periodic$438 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__r_load;
-  wire regs__result_capture;
-  wire \regs__result_capture$445 ;
-  wire regs__result_published;
-  wire \regs__result_published$446 ;
   wire [12:0] regs__settled_delay;
-  wire [12:0] \regs__settled_delay$449 ;
+  wire [12:0] \regs__settled_delay$441 ;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$451 ;
+  wire \regs__spw_mismatch$443 ;
   wire regs__start;
-  wire \regs__start$452 ;
+  wire \regs__start$444 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$455 ;
+  wire [3:0] \regs__status$447 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$457 ;
+  wire [31:0] \regs__timestamp$449 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$458 ;
+  wire \regs__trigger_enable$450 ;
   wire [10:0] regs__w_addr;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$461 ;
+  wire \regs__word0_crc_ok$453 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$463 ;
+  wire \regs__word0_ne$455 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$465 ;
+  wire \regs__word0_nw$457 ;
   wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$467 ;
+  wire [54:0] \regs__word0_position$459 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$469 ;
+  wire \regs__word1_crc_ok$461 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$471 ;
+  wire \regs__word1_ne$463 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$473 ;
+  wire \regs__word1_nw$465 ;
   wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$475 ;
+  wire [39:0] \regs__word1_position$467 ;
   input rst;
   wire rst;
   input [12:0] s_axil_araddr;
@@ -535,11 +527,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   input s_axil_wvalid;
   wire s_axil_wvalid;
   wire slo;
-  wire \slo$478 ;
+  wire \slo$470 ;
   input trigger;
   wire trigger;
-  wire \trigger$267 ;
-  wire \trigger$476 ;
+  wire \trigger$263 ;
+  wire \trigger$468 ;
   wire \trigger$58 ;
   reg trigger_in = 1'h0;
   assign \$1  = ~ trigger_in;
@@ -559,8 +551,6 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .bus__w_data(bus__w_data),
     .bus__w_en(bus__w_en),
     .bus__w_strb(bus__w_strb),
-    .capture(ch0__result_capture),
-    .\capture$507 (ch1__result_capture),
     .ch0__busy(ch0__busy),
     .ch0__ca_busy(ch0__ca_busy),
     .ch0__ca_done(ch0__ca_done),
@@ -574,7 +564,6 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch0__done_count(ch0__done_count),
     .ch0__frame_done(ch0__frame_done),
     .ch0__frame_error(ch0__frame_error),
-    .ch0__result_published(regs__result_published),
     .ch0_ca_ctrl_abort(regs__ca_abort),
     .ch0_ca_ctrl_start(regs__ca_start),
     .ch0_ca_request_address(regs__ca_address),
@@ -630,74 +619,73 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$290 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$302 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$286 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$298 ),
     .ch1__config_error(ch1__config_error),
     .ch1__count_data(ch1__count_data),
-    .ch1__count_en(\regs__count_en$418 ),
+    .ch1__count_en(\regs__count_en$414 ),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_done(ch1__frame_done),
     .ch1__frame_error(ch1__frame_error),
-    .ch1__result_published(\regs__result_published$446 ),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$274 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$294 ),
-    .ch1_ca_request_address(\regs__ca_address$276 ),
-    .ch1_ca_request_count(\regs__ca_count$282 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$292 ),
-    .\ch1_ca_request_write$253 (\regs__ca_write$304 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$322 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$324 ),
-    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$326 ),
-    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$330 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$332 ),
-    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$336 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$342 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$344 ),
-    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$364 ),
-    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$360 ),
-    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$362 ),
-    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$366 ),
-    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$384 ),
-    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$380 ),
-    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$382 ),
-    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$386 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$328 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$334 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$340 ),
-    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$338 ),
-    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$346 ),
-    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$348 ),
-    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$350 ),
-    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$352 ),
-    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$354 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$356 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$358 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$368 ),
-    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$370 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$372 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$374 ),
-    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$376 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$378 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$388 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$390 ),
-    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$392 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$394 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$396 ),
-    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$398 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$270 ),
-    .ch1_ctrl_clear_counters(\regs__clear_counters$400 ),
-    .ch1_ctrl_periodic(\regs__periodic$442 ),
-    .ch1_ctrl_start(\regs__start$452 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$458 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$270 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$290 ),
+    .ch1_ca_request_address(\regs__ca_address$272 ),
+    .ch1_ca_request_count(\regs__ca_count$278 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$288 ),
+    .\ch1_ca_request_write$305 (\regs__ca_write$300 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$318 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$320 ),
+    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$322 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$326 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$328 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$332 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$338 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$340 ),
+    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$360 ),
+    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$356 ),
+    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$358 ),
+    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$362 ),
+    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$380 ),
+    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$376 ),
+    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$378 ),
+    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$382 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$324 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$330 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$336 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$334 ),
+    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$342 ),
+    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$344 ),
+    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$346 ),
+    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$348 ),
+    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$350 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$352 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$354 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$364 ),
+    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$366 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$368 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$370 ),
+    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$372 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$374 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$384 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$386 ),
+    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$388 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$390 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$392 ),
+    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$394 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$266 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$396 ),
+    .ch1_ctrl_periodic(\regs__periodic$438 ),
+    .ch1_ctrl_start(\regs__start$444 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$450 ),
     .ch1_irq(\$7 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6611$0 (\$8 ),
-    .\port$6624$0 (\$9 ),
-    .\port$6701$0 (\$10 ),
-    .\port$7144$0 (\$11 ),
-    .\port$7157$0 (\$12 ),
-    .\port$7234$0 (\$13 ),
+    .\port$6669$0 (\$8 ),
+    .\port$6682$0 (\$9 ),
+    .\port$6759$0 (\$10 ),
+    .\port$7200$0 (\$11 ),
+    .\port$7213$0 (\$12 ),
+    .\port$7290$0 (\$13 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -782,10 +770,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6611$0 (\$8 ),
-    .\port$6624$0 (\$9 ),
-    .\port$6701$0 (\$10 ),
-    .published(regs__result_published),
+    .\port$6669$0 (\$8 ),
+    .\port$6682$0 (\$9 ),
+    .\port$6759$0 (\$10 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -796,74 +783,72 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .regs__done_count(ch0__done_count),
     .regs__frame_done(ch0__frame_done),
     .regs__frame_error(ch0__frame_error),
-    .regs__result_capture(ch0__result_capture),
     .regs__trigger_enable(regs__trigger_enable),
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$199 (\trigger$58 )
+    .\trigger$195 (\trigger$58 )
   );
   \biss_master_axil.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$274 ),
-    .ca_address(\regs__ca_address$276 ),
-    .ca_count(\regs__ca_count$282 ),
+    .ca_abort(\regs__ca_abort$270 ),
+    .ca_address(\regs__ca_address$272 ),
+    .ca_count(\regs__ca_count$278 ),
     .ca_rbuf_addr(s_axil_araddr[5:2]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$290 ),
-    .ca_slave_id(\regs__ca_slave_id$292 ),
-    .ca_start(\regs__ca_start$294 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$286 ),
+    .ca_slave_id(\regs__ca_slave_id$288 ),
+    .ca_start(\regs__ca_start$290 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$302 ),
-    .ca_write(\regs__ca_write$304 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$322 ),
-    .cfg_break_time(\regs__cfg_break_time$324 ),
-    .cfg_confirm_frames(\regs__cfg_confirm_frames$326 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$328 ),
-    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$330 ),
-    .cfg_end_check(\regs__cfg_end_check$332 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$334 ),
-    .cfg_noise_limit(\regs__cfg_noise_limit$336 ),
-    .cfg_quiet_time(\regs__cfg_quiet_time$338 ),
-    .cfg_request_period(\regs__cfg_request_period$340 ),
-    .cfg_spw_check(\regs__cfg_spw_check$342 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$344 ),
-    .cfg_ssi(\regs__cfg_ssi$346 ),
-    .cfg_ssi_delay(\regs__cfg_ssi_delay$348 ),
-    .cfg_ssi_double(\regs__cfg_ssi_double$350 ),
-    .cfg_ssi_error(\regs__cfg_ssi_error$352 ),
-    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$354 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$356 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$358 ),
-    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$360 ),
-    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$362 ),
-    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$364 ),
-    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$366 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$368 ),
-    .cfg_w0_gray(\regs__cfg_w0_gray$370 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$372 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$374 ),
-    .cfg_w0_signed(\regs__cfg_w0_signed$376 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$378 ),
-    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$380 ),
-    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$382 ),
-    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$384 ),
-    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$386 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$388 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$390 ),
-    .cfg_w1_gray(\regs__cfg_w1_gray$392 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$394 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$396 ),
-    .cfg_w1_signed(\regs__cfg_w1_signed$398 ),
-    .clear_counters(\regs__clear_counters$400 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$298 ),
+    .ca_write(\regs__ca_write$300 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$318 ),
+    .cfg_break_time(\regs__cfg_break_time$320 ),
+    .cfg_confirm_frames(\regs__cfg_confirm_frames$322 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$324 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$326 ),
+    .cfg_end_check(\regs__cfg_end_check$328 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$330 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$332 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$334 ),
+    .cfg_request_period(\regs__cfg_request_period$336 ),
+    .cfg_spw_check(\regs__cfg_spw_check$338 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$340 ),
+    .cfg_ssi(\regs__cfg_ssi$342 ),
+    .cfg_ssi_delay(\regs__cfg_ssi_delay$344 ),
+    .cfg_ssi_double(\regs__cfg_ssi_double$346 ),
+    .cfg_ssi_error(\regs__cfg_ssi_error$348 ),
+    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$350 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$352 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$354 ),
+    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$356 ),
+    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$358 ),
+    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$360 ),
+    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$362 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$364 ),
+    .cfg_w0_gray(\regs__cfg_w0_gray$366 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$368 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$370 ),
+    .cfg_w0_signed(\regs__cfg_w0_signed$372 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$374 ),
+    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$376 ),
+    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$378 ),
+    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$380 ),
+    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$382 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$384 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$386 ),
+    .cfg_w1_gray(\regs__cfg_w1_gray$388 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$390 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$392 ),
+    .cfg_w1_signed(\regs__cfg_w1_signed$394 ),
+    .clear_counters(\regs__clear_counters$396 ),
     .clk(clk),
-    .count_en(\regs__count_en$418 ),
+    .count_en(\regs__count_en$414 ),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$442 ),
-    .\port$7144$0 (\$11 ),
-    .\port$7157$0 (\$12 ),
-    .\port$7234$0 (\$13 ),
-    .published(\regs__result_published$446 ),
-    .regs__abort_cycle(\regs__abort_cycle$270 ),
+    .periodic(\regs__periodic$438 ),
+    .\port$7200$0 (\$11 ),
+    .\port$7213$0 (\$12 ),
+    .\port$7290$0 (\$13 ),
+    .regs__abort_cycle(\regs__abort_cycle$266 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -873,12 +858,11 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .regs__done_count(ch1__done_count),
     .regs__frame_done(ch1__frame_done),
     .regs__frame_error(ch1__frame_error),
-    .regs__result_capture(ch1__result_capture),
-    .regs__trigger_enable(\regs__trigger_enable$458 ),
+    .regs__trigger_enable(\regs__trigger_enable$450 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$452 ),
-    .\trigger$199 (\trigger$58 )
+    .start(\regs__start$444 ),
+    .\trigger$195 (\trigger$58 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
@@ -1033,8 +1017,6 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign ch0__noise_events = \$8 [53:50];
   assign regs__noise_events = \$8 [53:50];
   assign ch0__periodic = regs__periodic;
-  assign regs__result_capture = ch0__result_capture;
-  assign ch0__result_published = regs__result_published;
   assign ch0__settled_delay = \$8 [67:55];
   assign regs__settled_delay = \$8 [67:55];
   assign ch0__spw_mismatch = \$8 [186];
@@ -1061,157 +1043,155 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign regs__word1_nw = \$8 [175];
   assign ch0__word1_position = \$8 [173:134];
   assign regs__word1_position = \$8 [173:134];
-  assign \trigger$267  = \trigger$58 ;
+  assign \trigger$263  = \trigger$58 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign ch1__abort_cycle = \regs__abort_cycle$270 ;
-  assign \regs__busy$273  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$274 ;
-  assign ch1__ca_address = \regs__ca_address$276 ;
-  assign \regs__ca_busy$279  = ch1__ca_busy;
+  assign ch1__abort_cycle = \regs__abort_cycle$266 ;
+  assign \regs__busy$269  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$270 ;
+  assign ch1__ca_address = \regs__ca_address$272 ;
+  assign \regs__ca_busy$275  = ch1__ca_busy;
   assign ch1__ca_bytes_done = \$13 [9:3];
-  assign \regs__ca_bytes_done$281  = \$13 [9:3];
-  assign ch1__ca_count = \regs__ca_count$282 ;
-  assign \regs__ca_done$285  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$286  = s_axil_araddr[5:2];
+  assign \regs__ca_bytes_done$277  = \$13 [9:3];
+  assign ch1__ca_count = \regs__ca_count$278 ;
+  assign \regs__ca_done$281  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$282  = s_axil_araddr[5:2];
   assign ch1__ca_rbuf_addr = s_axil_araddr[5:2];
-  assign \regs__ca_rbuf_data$289  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$290 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$292 ;
-  assign ch1__ca_start = \regs__ca_start$294 ;
+  assign \regs__ca_rbuf_data$285  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$286 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$288 ;
+  assign ch1__ca_start = \regs__ca_start$290 ;
   assign ch1__ca_status = \$13 [2:0];
-  assign \regs__ca_status$297  = \$13 [2:0];
-  assign \regs__ca_wbuf_addr$298  = regs__ca_wbuf_addr;
+  assign \regs__ca_status$293  = \$13 [2:0];
+  assign \regs__ca_wbuf_addr$294  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$300  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$296  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$302 ;
-  assign ch1__ca_write = \regs__ca_write$304 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$298 ;
+  assign ch1__ca_write = \regs__ca_write$300 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$307  = 1'h1;
+  assign \regs__cap_counters$303  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$309  = 6'h37;
+  assign \regs__cap_data_bits_w0$305  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$311  = 6'h28;
+  assign \regs__cap_data_bits_w1$307  = 6'h28;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$313  = 1'h1;
+  assign \regs__cap_register_access$309  = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign \regs__cap_ssi$315  = 1'h1;
+  assign \regs__cap_ssi$311  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$317  = 6'h18;
+  assign \regs__cap_timer_width$313  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$319  = 1'h1;
+  assign \regs__cap_timestamp$315  = 1'h1;
   assign ch1__cds = \$11 [49];
-  assign \regs__cds$321  = \$11 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$322 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$324 ;
-  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$326 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$328 ;
-  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$330 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$332 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$334 ;
-  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$336 ;
-  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$338 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$340 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$342 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$344 ;
-  assign ch1__cfg_ssi = \regs__cfg_ssi$346 ;
-  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$348 ;
-  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$350 ;
-  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$352 ;
-  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$354 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$356 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$358 ;
-  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$360 ;
-  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$362 ;
-  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$364 ;
-  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$366 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$368 ;
-  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$370 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$372 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$374 ;
-  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$376 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$378 ;
-  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$380 ;
-  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$382 ;
-  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$384 ;
-  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$386 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$388 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$390 ;
-  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$392 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$394 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$396 ;
-  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$398 ;
-  assign ch1__clear_counters = \regs__clear_counters$400 ;
-  assign \regs__config_error$403  = ch1__config_error;
-  assign \regs__count_addr$404  = s_axil_araddr[4:2];
+  assign \regs__cds$317  = \$11 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$318 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$320 ;
+  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$322 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$324 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$326 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$328 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$330 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$332 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$334 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$336 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$338 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$340 ;
+  assign ch1__cfg_ssi = \regs__cfg_ssi$342 ;
+  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$344 ;
+  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$346 ;
+  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$348 ;
+  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$350 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$352 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$354 ;
+  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$356 ;
+  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$358 ;
+  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$360 ;
+  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$362 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$364 ;
+  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$366 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$368 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$370 ;
+  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$372 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$374 ;
+  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$376 ;
+  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$378 ;
+  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$380 ;
+  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$382 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$384 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$386 ;
+  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$388 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$390 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$392 ;
+  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$394 ;
+  assign ch1__clear_counters = \regs__clear_counters$396 ;
+  assign \regs__config_error$399  = ch1__config_error;
+  assign \regs__count_addr$400  = s_axil_araddr[4:2];
   assign ch1__count_addr = s_axil_araddr[4:2];
   assign ch1__count_ca_aborted = \$12 [63:48];
-  assign \regs__count_ca_aborted$407  = \$12 [63:48];
+  assign \regs__count_ca_aborted$403  = \$12 [63:48];
   assign ch1__count_ca_crc4_error = \$12 [15:0];
-  assign \regs__count_ca_crc4_error$409  = \$12 [15:0];
+  assign \regs__count_ca_crc4_error$405  = \$12 [15:0];
   assign ch1__count_ca_data_fault = \$12 [79:64];
-  assign \regs__count_ca_data_fault$411  = \$12 [79:64];
+  assign \regs__count_ca_data_fault$407  = \$12 [79:64];
   assign ch1__count_ca_no_answer = \$12 [31:16];
-  assign \regs__count_ca_no_answer$413  = \$12 [31:16];
+  assign \regs__count_ca_no_answer$409  = \$12 [31:16];
   assign ch1__count_ca_refused = \$12 [47:32];
-  assign \regs__count_ca_refused$415  = \$12 [47:32];
-  assign \regs__count_data$417  = ch1__count_data;
-  assign ch1__count_en = \regs__count_en$418 ;
+  assign \regs__count_ca_refused$411  = \$12 [47:32];
+  assign \regs__count_data$413  = ch1__count_data;
+  assign ch1__count_en = \regs__count_en$414 ;
   assign ch1__delay_settled = \$11 [54];
-  assign \regs__delay_settled$421  = \$11 [54];
+  assign \regs__delay_settled$417  = \$11 [54];
   assign ch1__delay_spread = \$11 [75:68];
-  assign \regs__delay_spread$423  = \$11 [75:68];
-  assign \regs__done_count$425  = ch1__done_count;
-  assign \regs__frame_done$427  = ch1__frame_done;
-  assign \regs__frame_error$429  = ch1__frame_error;
+  assign \regs__delay_spread$419  = \$11 [75:68];
+  assign \regs__done_count$421  = ch1__done_count;
+  assign \regs__frame_done$423  = ch1__frame_done;
+  assign \regs__frame_error$425  = ch1__frame_error;
   assign ch1__lc = \$11 [182:177];
-  assign \regs__lc$431  = \$11 [182:177];
+  assign \regs__lc$427  = \$11 [182:177];
   assign ch1__lc_repeat = \$11 [183];
-  assign \regs__lc_repeat$433  = \$11 [183];
+  assign \regs__lc_repeat$429  = \$11 [183];
   assign ch1__lc_skip = \$11 [184];
-  assign \regs__lc_skip$435  = \$11 [184];
+  assign \regs__lc_skip$431  = \$11 [184];
   assign ch1__lc_zero = \$11 [185];
-  assign \regs__lc_zero$437  = \$11 [185];
+  assign \regs__lc_zero$433  = \$11 [185];
   assign ch1__line_delay = \$11 [48:36];
-  assign \regs__line_delay$439  = \$11 [48:36];
+  assign \regs__line_delay$435  = \$11 [48:36];
   assign ch1__noise_events = \$11 [53:50];
-  assign \regs__noise_events$441  = \$11 [53:50];
-  assign ch1__periodic = \regs__periodic$442 ;
-  assign \regs__result_capture$445  = ch1__result_capture;
-  assign ch1__result_published = \regs__result_published$446 ;
+  assign \regs__noise_events$437  = \$11 [53:50];
+  assign ch1__periodic = \regs__periodic$438 ;
   assign ch1__settled_delay = \$11 [67:55];
-  assign \regs__settled_delay$449  = \$11 [67:55];
+  assign \regs__settled_delay$441  = \$11 [67:55];
   assign ch1__spw_mismatch = \$11 [186];
-  assign \regs__spw_mismatch$451  = \$11 [186];
-  assign ch1__start = \regs__start$452 ;
+  assign \regs__spw_mismatch$443  = \$11 [186];
+  assign ch1__start = \regs__start$444 ;
   assign ch1__status = \$11 [3:0];
-  assign \regs__status$455  = \$11 [3:0];
+  assign \regs__status$447  = \$11 [3:0];
   assign ch1__timestamp = \$11 [35:4];
-  assign \regs__timestamp$457  = \$11 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$458 ;
+  assign \regs__timestamp$449  = \$11 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$450 ;
   assign ch1__word0_crc_ok = \$11 [133];
-  assign \regs__word0_crc_ok$461  = \$11 [133];
+  assign \regs__word0_crc_ok$453  = \$11 [133];
   assign ch1__word0_ne = \$11 [131];
-  assign \regs__word0_ne$463  = \$11 [131];
+  assign \regs__word0_ne$455  = \$11 [131];
   assign ch1__word0_nw = \$11 [132];
-  assign \regs__word0_nw$465  = \$11 [132];
+  assign \regs__word0_nw$457  = \$11 [132];
   assign ch1__word0_position = \$11 [130:76];
-  assign \regs__word0_position$467  = \$11 [130:76];
+  assign \regs__word0_position$459  = \$11 [130:76];
   assign ch1__word1_crc_ok = \$11 [176];
-  assign \regs__word1_crc_ok$469  = \$11 [176];
+  assign \regs__word1_crc_ok$461  = \$11 [176];
   assign ch1__word1_ne = \$11 [174];
-  assign \regs__word1_ne$471  = \$11 [174];
+  assign \regs__word1_ne$463  = \$11 [174];
   assign ch1__word1_nw = \$11 [175];
-  assign \regs__word1_nw$473  = \$11 [175];
+  assign \regs__word1_nw$465  = \$11 [175];
   assign ch1__word1_position = \$11 [173:134];
-  assign \regs__word1_position$475  = \$11 [173:134];
-  assign \trigger$476  = \trigger$58 ;
-  assign \ma$477  = ch1_ma;
-  assign \slo$478  = ch1_slo;
+  assign \regs__word1_position$467  = \$11 [173:134];
+  assign \trigger$468  = \trigger$58 ;
+  assign \ma$469  = ch1_ma;
+  assign \slo$470  = ch1_slo;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$7 , \$6  };
-  assign \irq$481  = { \$7 , \$6  };
+  assign \irq$473  = { \$7 , \$6  };
   assign s_axil_bresp = 2'h0;
   assign s_axil_rresp = 2'h0;
 endmodule
@@ -1223,8 +1203,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$113 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort
 , ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed
 , ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay
-, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$253 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__result_published, ch1__result_published, ch0__frame_done, ch0__done_count, capture, \port$6611$0 , \port$6624$0 , ch0__ca_done, \port$6701$0 , ch1__frame_done, ch1__done_count, \capture$507 , \port$7144$0 , \port$7157$0 , ch1__ca_done
-, \port$7234$0 , bus__r_addr);
+, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6669$0 , \port$6682$0 , ch0__ca_done, \port$6759$0 , ch1__frame_done, ch1__done_count, \port$7200$0 , \port$7213$0 , ch1__ca_done, \port$7290$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -1258,14 +1237,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$125 ;
   wire \$126 ;
   wire \$127 ;
-  wire [31:0] \$128 ;
-  wire [31:0] \$129 ;
+  wire \$128 ;
+  wire \$129 ;
   wire [31:0] \$13 ;
-  wire [31:0] \$130 ;
-  wire [31:0] \$131 ;
-  wire [31:0] \$132 ;
-  wire [31:0] \$133 ;
-  wire [31:0] \$134 ;
+  wire \$130 ;
+  wire \$131 ;
+  wire \$132 ;
+  wire \$133 ;
+  wire \$134 ;
   wire [31:0] \$135 ;
   wire [31:0] \$136 ;
   wire [31:0] \$137 ;
@@ -1318,30 +1297,30 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$18 ;
   wire [31:0] \$180 ;
   wire [31:0] \$181 ;
-  wire \$182 ;
-  wire \$183 ;
-  wire \$184 ;
-  wire \$185 ;
-  wire \$186 ;
-  wire \$187 ;
-  wire \$188 ;
-  wire \$189 ;
+  wire [31:0] \$182 ;
+  wire [31:0] \$183 ;
+  wire [31:0] \$184 ;
+  wire [31:0] \$185 ;
+  wire [31:0] \$186 ;
+  wire [31:0] \$187 ;
+  wire [31:0] \$188 ;
+  wire [31:0] \$189 ;
   wire \$19 ;
-  wire \$190 ;
-  wire \$191 ;
-  wire \$192 ;
-  wire \$193 ;
-  wire \$194 ;
-  wire \$195 ;
-  wire \$196 ;
-  wire \$197 ;
-  wire \$198 ;
-  wire \$199 ;
+  wire [31:0] \$190 ;
+  wire [31:0] \$191 ;
+  wire [31:0] \$192 ;
+  wire [31:0] \$193 ;
+  wire [31:0] \$194 ;
+  wire [31:0] \$195 ;
+  wire [31:0] \$196 ;
+  wire [31:0] \$197 ;
+  wire [31:0] \$198 ;
+  wire [31:0] \$199 ;
   wire \$2 ;
   wire \$20 ;
-  wire \$200 ;
-  wire \$201 ;
-  wire \$202 ;
+  wire [31:0] \$200 ;
+  wire [31:0] \$201 ;
+  wire [31:0] \$202 ;
   wire \$203 ;
   wire \$204 ;
   wire \$205 ;
@@ -1440,37 +1419,37 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$29 ;
   wire \$290 ;
   wire \$291 ;
-  wire [31:0] \$292 ;
-  wire [31:0] \$293 ;
-  wire [31:0] \$294 ;
-  wire [31:0] \$295 ;
-  wire [31:0] \$296 ;
-  wire [31:0] \$297 ;
-  wire [31:0] \$298 ;
-  wire [31:0] \$299 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   wire \$3 ;
   wire \$30 ;
-  wire [31:0] \$300 ;
-  wire [31:0] \$301 ;
-  wire [31:0] \$302 ;
-  wire [31:0] \$303 ;
-  wire [31:0] \$304 ;
-  wire [31:0] \$305 ;
-  wire [31:0] \$306 ;
-  wire [31:0] \$307 ;
-  wire [31:0] \$308 ;
-  wire [31:0] \$309 ;
+  wire \$300 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
   wire \$31 ;
-  wire [31:0] \$310 ;
-  wire [31:0] \$311 ;
-  wire [31:0] \$312 ;
-  wire [31:0] \$313 ;
-  wire [31:0] \$314 ;
-  wire [31:0] \$315 ;
-  wire [31:0] \$316 ;
-  wire [31:0] \$317 ;
-  wire [31:0] \$318 ;
-  wire [31:0] \$319 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
+  wire \$314 ;
+  wire \$315 ;
+  wire \$316 ;
+  wire \$317 ;
+  wire \$318 ;
+  wire \$319 ;
   wire \$32 ;
   wire [31:0] \$320 ;
   wire [31:0] \$321 ;
@@ -1500,52 +1479,52 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [31:0] \$343 ;
   wire [31:0] \$344 ;
   wire [31:0] \$345 ;
-  wire \$346 ;
-  wire \$347 ;
-  wire \$348 ;
-  wire \$349 ;
+  wire [31:0] \$346 ;
+  wire [31:0] \$347 ;
+  wire [31:0] \$348 ;
+  wire [31:0] \$349 ;
   wire \$35 ;
-  wire \$350 ;
-  wire \$351 ;
-  wire \$352 ;
-  wire \$353 ;
-  wire \$354 ;
-  wire \$355 ;
-  wire \$356 ;
-  wire \$357 ;
-  wire \$358 ;
-  wire \$359 ;
+  wire [31:0] \$350 ;
+  wire [31:0] \$351 ;
+  wire [31:0] \$352 ;
+  wire [31:0] \$353 ;
+  wire [31:0] \$354 ;
+  wire [31:0] \$355 ;
+  wire [31:0] \$356 ;
+  wire [31:0] \$357 ;
+  wire [31:0] \$358 ;
+  wire [31:0] \$359 ;
   wire \$36 ;
-  wire \$360 ;
-  wire \$361 ;
-  wire \$362 ;
-  wire \$363 ;
-  wire \$364 ;
-  wire \$365 ;
-  wire \$366 ;
-  wire \$367 ;
-  wire \$368 ;
-  wire \$369 ;
+  wire [31:0] \$360 ;
+  wire [31:0] \$361 ;
+  wire [31:0] \$362 ;
+  wire [31:0] \$363 ;
+  wire [31:0] \$364 ;
+  wire [31:0] \$365 ;
+  wire [31:0] \$366 ;
+  wire [31:0] \$367 ;
+  wire [31:0] \$368 ;
+  wire [31:0] \$369 ;
   wire \$37 ;
-  wire \$370 ;
-  wire \$371 ;
-  wire \$372 ;
-  wire \$373 ;
-  wire \$374 ;
-  wire \$375 ;
-  wire \$376 ;
-  wire \$377 ;
-  wire \$378 ;
-  wire \$379 ;
+  wire [31:0] \$370 ;
+  wire [31:0] \$371 ;
+  wire [31:0] \$372 ;
+  wire [31:0] \$373 ;
+  wire [31:0] \$374 ;
+  wire [31:0] \$375 ;
+  wire [31:0] \$376 ;
+  wire [31:0] \$377 ;
+  wire [31:0] \$378 ;
+  wire [31:0] \$379 ;
   wire \$38 ;
-  wire \$380 ;
-  wire \$381 ;
-  wire \$382 ;
-  wire \$383 ;
-  wire \$384 ;
-  wire \$385 ;
-  wire \$386 ;
-  wire \$387 ;
+  wire [31:0] \$380 ;
+  wire [31:0] \$381 ;
+  wire [31:0] \$382 ;
+  wire [31:0] \$383 ;
+  wire [31:0] \$384 ;
+  wire [31:0] \$385 ;
+  wire [31:0] \$386 ;
+  wire [31:0] \$387 ;
   wire \$388 ;
   wire \$389 ;
   wire \$39 ;
@@ -1601,105 +1580,105 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$434 ;
   wire \$435 ;
   wire \$436 ;
-  wire [31:0] \$437 ;
-  wire [31:0] \$438 ;
-  reg \$439 ;
+  wire \$437 ;
+  wire \$438 ;
+  wire \$439 ;
   wire \$44 ;
-  reg [10:0] \$440 ;
-  reg [31:0] \$441 ;
-  reg [3:0] \$442 ;
-  reg [31:0] \$443 ;
-  reg [3:0] \$444 ;
-  reg \$445 ;
-  reg \$446 ;
-  reg \$447 ;
-  reg \$448 ;
-  reg \$449 ;
+  wire \$440 ;
+  wire \$441 ;
+  wire \$442 ;
+  wire \$443 ;
+  wire \$444 ;
+  wire \$445 ;
+  wire \$446 ;
+  wire \$447 ;
+  wire \$448 ;
+  wire \$449 ;
   wire \$45 ;
-  reg \$450 ;
-  reg [31:0] \$451 ;
-  reg \$452 ;
-  reg \$453 ;
-  reg \$454 ;
-  reg \$455 ;
-  reg \$456 ;
-  reg \$457 ;
-  reg \$458 ;
-  reg \$459 ;
+  wire \$450 ;
+  wire \$451 ;
+  wire \$452 ;
+  wire \$453 ;
+  wire \$454 ;
+  wire \$455 ;
+  wire \$456 ;
+  wire \$457 ;
+  wire \$458 ;
+  wire \$459 ;
   wire \$46 ;
-  reg \$460 ;
-  reg \$461 ;
-  reg \$462 ;
-  reg \$463 ;
-  reg \$464 ;
-  reg [15:0] \$465 ;
-  reg [11:0] \$466 ;
-  reg \$467 ;
-  reg [23:0] \$468 ;
-  reg \$469 ;
+  wire \$460 ;
+  wire \$461 ;
+  wire \$462 ;
+  wire \$463 ;
+  wire \$464 ;
+  wire \$465 ;
+  wire \$466 ;
+  wire \$467 ;
+  wire \$468 ;
+  wire \$469 ;
   wire \$47 ;
-  reg [23:0] \$470 ;
-  reg \$471 ;
-  reg [23:0] \$472 ;
-  reg \$473 ;
-  reg [23:0] \$474 ;
-  reg \$475 ;
-  reg [5:0] \$476 ;
-  reg \$477 ;
-  reg \$478 ;
-  reg [1:0] \$479 ;
+  wire \$470 ;
+  wire \$471 ;
+  wire \$472 ;
+  wire \$473 ;
+  wire \$474 ;
+  wire \$475 ;
+  wire \$476 ;
+  wire [31:0] \$477 ;
+  wire [31:0] \$478 ;
+  reg \$479 ;
   wire \$48 ;
-  reg \$480 ;
-  reg \$481 ;
-  reg [5:0] \$482 ;
-  reg \$483 ;
-  reg \$484 ;
-  reg [1:0] \$485 ;
+  reg [10:0] \$480 ;
+  reg [31:0] \$481 ;
+  reg [3:0] \$482 ;
+  reg [31:0] \$483 ;
+  reg [3:0] \$484 ;
+  reg \$485 ;
   reg \$486 ;
   reg \$487 ;
   reg \$488 ;
   reg \$489 ;
   wire \$49 ;
   reg \$490 ;
-  reg \$491 ;
-  reg [7:0] \$492 ;
-  reg [3:0] \$493 ;
-  reg [3:0] \$494 ;
-  reg [3:0] \$495 ;
+  reg [31:0] \$491 ;
+  reg \$492 ;
+  reg \$493 ;
+  reg \$494 ;
+  reg \$495 ;
   reg \$496 ;
-  reg [11:0] \$497 ;
+  reg \$497 ;
   reg \$498 ;
-  reg [15:0] \$499 ;
+  reg \$499 ;
   wire \$5 ;
   wire \$50 ;
-  reg [4:0] \$500 ;
+  reg \$500 ;
   reg \$501 ;
   reg \$502 ;
-  reg [15:0] \$503 ;
+  reg \$503 ;
   reg \$504 ;
   reg [15:0] \$505 ;
-  reg [4:0] \$506 ;
+  reg [11:0] \$506 ;
   reg \$507 ;
-  reg \$508 ;
-  reg [15:0] \$509 ;
+  reg [23:0] \$508 ;
+  reg \$509 ;
   wire \$51 ;
-  reg \$510 ;
+  reg [23:0] \$510 ;
   reg \$511 ;
-  reg \$512 ;
+  reg [23:0] \$512 ;
   reg \$513 ;
-  reg \$514 ;
-  reg [11:0] \$515 ;
-  reg \$516 ;
-  reg [2:0] \$517 ;
-  reg [6:0] \$518 ;
-  reg [6:0] \$519 ;
+  reg [23:0] \$514 ;
+  reg \$515 ;
+  reg [5:0] \$516 ;
+  reg \$517 ;
+  reg \$518 ;
+  reg [1:0] \$519 ;
   wire \$52 ;
   reg \$520 ;
   reg \$521 ;
-  reg \$522 ;
+  reg [5:0] \$522 ;
   reg \$523 ;
   reg \$524 ;
-  reg \$525 ;
+  reg [1:0] \$525 ;
   reg \$526 ;
   reg \$527 ;
   reg \$528 ;
@@ -1707,64 +1686,64 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire \$53 ;
   reg \$530 ;
   reg \$531 ;
-  reg \$532 ;
-  reg \$533 ;
-  reg \$534 ;
-  reg \$535 ;
+  reg [7:0] \$532 ;
+  reg [3:0] \$533 ;
+  reg [3:0] \$534 ;
+  reg [3:0] \$535 ;
   reg \$536 ;
-  reg \$537 ;
+  reg [11:0] \$537 ;
   reg \$538 ;
-  reg \$539 ;
+  reg [15:0] \$539 ;
   wire \$54 ;
-  reg \$540 ;
+  reg [4:0] \$540 ;
   reg \$541 ;
   reg \$542 ;
-  reg \$543 ;
+  reg [15:0] \$543 ;
   reg \$544 ;
-  reg \$545 ;
-  reg \$546 ;
+  reg [15:0] \$545 ;
+  reg [4:0] \$546 ;
   reg \$547 ;
   reg \$548 ;
-  reg \$549 ;
+  reg [15:0] \$549 ;
   wire \$55 ;
-  reg [31:0] \$550 ;
+  reg \$550 ;
   reg \$551 ;
   reg \$552 ;
   reg \$553 ;
   reg \$554 ;
-  reg \$555 ;
+  reg [11:0] \$555 ;
   reg \$556 ;
-  reg \$557 ;
-  reg \$558 ;
-  reg \$559 ;
+  reg [2:0] \$557 ;
+  reg [6:0] \$558 ;
+  reg [6:0] \$559 ;
   wire \$56 ;
   reg \$560 ;
   reg \$561 ;
   reg \$562 ;
   reg \$563 ;
-  reg [15:0] \$564 ;
-  reg [11:0] \$565 ;
+  reg \$564 ;
+  reg \$565 ;
   reg \$566 ;
-  reg [23:0] \$567 ;
+  reg \$567 ;
   reg \$568 ;
-  reg [23:0] \$569 ;
+  reg \$569 ;
   wire \$57 ;
   reg \$570 ;
-  reg [23:0] \$571 ;
+  reg \$571 ;
   reg \$572 ;
-  reg [23:0] \$573 ;
+  reg \$573 ;
   reg \$574 ;
-  reg [5:0] \$575 ;
+  reg \$575 ;
   reg \$576 ;
   reg \$577 ;
-  reg [1:0] \$578 ;
+  reg \$578 ;
   reg \$579 ;
   wire \$58 ;
   reg \$580 ;
-  reg [5:0] \$581 ;
+  reg \$581 ;
   reg \$582 ;
   reg \$583 ;
-  reg [1:0] \$584 ;
+  reg \$584 ;
   reg \$585 ;
   reg \$586 ;
   reg \$587 ;
@@ -1772,41 +1751,41 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$589 ;
   wire \$59 ;
   reg \$590 ;
-  reg [7:0] \$591 ;
-  reg [3:0] \$592 ;
-  reg [3:0] \$593 ;
-  reg [3:0] \$594 ;
-  reg \$595 ;
-  reg [11:0] \$596 ;
+  reg \$591 ;
+  reg \$592 ;
+  reg \$593 ;
+  reg \$594 ;
+  reg [3:0] \$595 ;
+  reg \$596 ;
   reg \$597 ;
-  reg [15:0] \$598 ;
-  reg [4:0] \$599 ;
+  reg \$598 ;
+  reg \$599 ;
   wire \$6 ;
   wire \$60 ;
   reg \$600 ;
   reg \$601 ;
-  reg [15:0] \$602 ;
+  reg \$602 ;
   reg \$603 ;
-  reg [15:0] \$604 ;
-  reg [4:0] \$605 ;
+  reg \$604 ;
+  reg \$605 ;
   reg \$606 ;
-  reg \$607 ;
+  reg [5:0] \$607 ;
   reg [15:0] \$608 ;
-  reg \$609 ;
+  reg [12:0] \$609 ;
   wire \$61 ;
-  reg \$610 ;
-  reg \$611 ;
-  reg \$612 ;
-  reg \$613 ;
-  reg [11:0] \$614 ;
-  reg \$615 ;
-  reg [2:0] \$616 ;
-  reg [6:0] \$617 ;
-  reg [6:0] \$618 ;
+  reg [31:0] \$610 ;
+  reg [22:0] \$611 ;
+  reg [31:0] \$612 ;
+  reg [7:0] \$613 ;
+  reg [31:0] \$614 ;
+  reg [3:0] \$615 ;
+  reg \$616 ;
+  reg [7:0] \$617 ;
+  reg [12:0] \$618 ;
   reg \$619 ;
   wire \$62 ;
   reg \$620 ;
-  reg \$621 ;
+  reg [31:0] \$621 ;
   reg \$622 ;
   reg \$623 ;
   reg \$624 ;
@@ -1821,34 +1800,136 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg \$632 ;
   reg \$633 ;
   reg \$634 ;
-  reg \$635 ;
-  reg \$636 ;
+  reg [15:0] \$635 ;
+  reg [11:0] \$636 ;
   reg \$637 ;
-  reg \$638 ;
+  reg [23:0] \$638 ;
   reg \$639 ;
   wire \$64 ;
-  reg \$640 ;
+  reg [23:0] \$640 ;
   reg \$641 ;
-  reg \$642 ;
+  reg [23:0] \$642 ;
   reg \$643 ;
-  reg \$644 ;
+  reg [23:0] \$644 ;
   reg \$645 ;
-  reg \$646 ;
+  reg [5:0] \$646 ;
   reg \$647 ;
   reg \$648 ;
-  reg [31:0] \$649 ;
+  reg [1:0] \$649 ;
   wire \$65 ;
+  reg \$650 ;
+  reg \$651 ;
+  reg [5:0] \$652 ;
+  reg \$653 ;
+  reg \$654 ;
+  reg [1:0] \$655 ;
+  reg \$656 ;
+  reg \$657 ;
+  reg \$658 ;
+  reg \$659 ;
   wire \$66 ;
+  reg \$660 ;
+  reg \$661 ;
+  reg [7:0] \$662 ;
+  reg [3:0] \$663 ;
+  reg [3:0] \$664 ;
+  reg [3:0] \$665 ;
+  reg \$666 ;
+  reg [11:0] \$667 ;
+  reg \$668 ;
+  reg [15:0] \$669 ;
   wire \$67 ;
+  reg [4:0] \$670 ;
+  reg \$671 ;
+  reg \$672 ;
+  reg [15:0] \$673 ;
+  reg \$674 ;
+  reg [15:0] \$675 ;
+  reg [4:0] \$676 ;
+  reg \$677 ;
+  reg \$678 ;
+  reg [15:0] \$679 ;
   wire \$68 ;
+  reg \$680 ;
+  reg \$681 ;
+  reg \$682 ;
+  reg \$683 ;
+  reg \$684 ;
+  reg [11:0] \$685 ;
+  reg \$686 ;
+  reg [2:0] \$687 ;
+  reg [6:0] \$688 ;
+  reg [6:0] \$689 ;
   wire \$69 ;
+  reg \$690 ;
+  reg \$691 ;
+  reg \$692 ;
+  reg \$693 ;
+  reg \$694 ;
+  reg \$695 ;
+  reg \$696 ;
+  reg \$697 ;
+  reg \$698 ;
+  reg \$699 ;
   wire \$7 ;
   wire \$70 ;
+  reg \$700 ;
+  reg \$701 ;
+  reg \$702 ;
+  reg \$703 ;
+  reg \$704 ;
+  reg \$705 ;
+  reg \$706 ;
+  reg \$707 ;
+  reg \$708 ;
+  reg \$709 ;
   wire \$71 ;
+  reg \$710 ;
+  reg \$711 ;
+  reg \$712 ;
+  reg \$713 ;
+  reg \$714 ;
+  reg \$715 ;
+  reg \$716 ;
+  reg \$717 ;
+  reg \$718 ;
+  reg \$719 ;
   wire \$72 ;
+  reg \$720 ;
+  reg \$721 ;
+  reg \$722 ;
+  reg \$723 ;
+  reg \$724 ;
+  reg [3:0] \$725 ;
+  reg \$726 ;
+  reg \$727 ;
+  reg \$728 ;
+  reg \$729 ;
   wire \$73 ;
+  reg \$730 ;
+  reg \$731 ;
+  reg \$732 ;
+  reg \$733 ;
+  reg \$734 ;
+  reg \$735 ;
+  reg \$736 ;
+  reg [5:0] \$737 ;
+  reg [15:0] \$738 ;
+  reg [12:0] \$739 ;
   wire \$74 ;
+  reg [31:0] \$740 ;
+  reg [22:0] \$741 ;
+  reg [31:0] \$742 ;
+  reg [7:0] \$743 ;
+  reg [31:0] \$744 ;
+  reg [3:0] \$745 ;
+  reg \$746 ;
+  reg [7:0] \$747 ;
+  reg [12:0] \$748 ;
+  reg \$749 ;
   wire \$75 ;
+  reg \$750 ;
+  reg [31:0] \$751 ;
   wire \$76 ;
   wire \$77 ;
   wire \$78 ;
@@ -1891,10 +1972,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire bus__w_en;
   input [3:0] bus__w_strb;
   wire [3:0] bus__w_strb;
-  input capture;
-  wire capture;
-  input \capture$507 ;
-  wire \capture$507 ;
   (* init = 1'h0 *)
   wire ch0__abort_cycle;
   input ch0__busy;
@@ -2044,9 +2121,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [3:0] ch0__noise_events;
   (* init = 1'h0 *)
   wire ch0__periodic;
-  wire ch0__result_capture;
-  output ch0__result_published;
-  wire ch0__result_published;
   wire [12:0] ch0__settled_delay;
   wire ch0__spw_mismatch;
   (* init = 1'h0 *)
@@ -2223,6 +2297,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_read_select_8d = 1'h0;
   reg ch0_read_select_8e = 1'h0;
   reg ch0_read_select_8f = 1'h0;
+  reg ch0_read_select_90 = 1'h0;
+  reg ch0_read_select_91 = 1'h0;
+  reg ch0_read_select_92 = 1'h0;
+  reg ch0_read_select_93 = 1'h0;
+  reg ch0_read_select_94 = 1'h0;
+  reg ch0_read_select_95 = 1'h0;
+  reg ch0_read_select_96 = 1'h0;
+  reg ch0_read_select_97 = 1'h0;
   reg ch0_read_select_a0 = 1'h0;
   reg ch0_read_select_a1 = 1'h0;
   reg ch0_read_select_a2 = 1'h0;
@@ -2234,18 +2316,41 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch0_read_select_c3 = 1'h0;
   reg ch0_read_select_c4 = 1'h0;
   reg ch0_read_select_c5 = 1'h0;
+  reg ch0_result_line_delay_settled_snapshot = 1'h0;
+  reg [7:0] ch0_result_line_delay_spread_snapshot = 8'h00;
+  reg [3:0] ch0_result_line_noise_events_snapshot = 4'h0;
+  reg [12:0] ch0_result_line_settled_delay_snapshot = 13'h0000;
   wire ch0_result_line_write;
+  reg [12:0] ch0_result_seq_line_delay_snapshot = 13'h0000;
+  reg [15:0] ch0_result_seq_seq_snapshot = 16'h0000;
   wire ch0_result_seq_write;
+  reg ch0_result_status_cds_snapshot = 1'h0;
+  reg ch0_result_status_lc_repeat_snapshot = 1'h0;
+  reg ch0_result_status_lc_skip_snapshot = 1'h0;
+  reg [5:0] ch0_result_status_lc_snapshot = 6'h00;
+  reg ch0_result_status_lc_zero_snapshot = 1'h0;
+  reg ch0_result_status_spw_mismatch_snapshot = 1'h0;
+  reg [3:0] ch0_result_status_status_snapshot = 4'h0;
+  reg ch0_result_status_w0_crc_ok_snapshot = 1'h0;
+  reg ch0_result_status_w0_ne_snapshot = 1'h0;
+  reg ch0_result_status_w0_nw_snapshot = 1'h0;
+  reg ch0_result_status_w1_crc_ok_snapshot = 1'h0;
+  reg ch0_result_status_w1_ne_snapshot = 1'h0;
+  reg ch0_result_status_w1_nw_snapshot = 1'h0;
   wire ch0_result_status_write;
+  reg [31:0] ch0_result_timestamp_time_snapshot = 32'd0;
   wire ch0_result_timestamp_write;
+  reg [22:0] ch0_result_w0_hi_data_snapshot = 23'h000000;
   wire ch0_result_w0_hi_write;
+  reg [31:0] ch0_result_w0_lo_data_snapshot = 32'd0;
   wire ch0_result_w0_lo_write;
+  reg [7:0] ch0_result_w1_hi_data_snapshot = 8'h00;
   wire ch0_result_w1_hi_write;
+  reg [31:0] ch0_result_w1_lo_data_snapshot = 32'd0;
   wire ch0_result_w1_lo_write;
   wire ch0_state_write;
   reg ch0_window0_read = 1'h0;
   reg ch0_window1_read = 1'h0;
-  reg ch0_window2_read = 1'h0;
   (* init = 1'h0 *)
   wire ch1__abort_cycle;
   input ch1__busy;
@@ -2394,9 +2499,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   wire [3:0] ch1__noise_events;
   (* init = 1'h0 *)
   wire ch1__periodic;
-  wire ch1__result_capture;
-  output ch1__result_published;
-  wire ch1__result_published;
   wire [12:0] ch1__settled_delay;
   wire ch1__spw_mismatch;
   (* init = 1'h0 *)
@@ -2429,8 +2531,8 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$253 ;
-  reg \ch1_ca_request_write$253  = 1'h0;
+  output \ch1_ca_request_write$305 ;
+  reg \ch1_ca_request_write$305  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_write;
   output [23:0] ch1_cfg_ack_ack_limit;
@@ -2573,6 +2675,14 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_read_select_10d = 1'h0;
   reg ch1_read_select_10e = 1'h0;
   reg ch1_read_select_10f = 1'h0;
+  reg ch1_read_select_110 = 1'h0;
+  reg ch1_read_select_111 = 1'h0;
+  reg ch1_read_select_112 = 1'h0;
+  reg ch1_read_select_113 = 1'h0;
+  reg ch1_read_select_114 = 1'h0;
+  reg ch1_read_select_115 = 1'h0;
+  reg ch1_read_select_116 = 1'h0;
+  reg ch1_read_select_117 = 1'h0;
   reg ch1_read_select_120 = 1'h0;
   reg ch1_read_select_121 = 1'h0;
   reg ch1_read_select_122 = 1'h0;
@@ -2584,18 +2694,41 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   reg ch1_read_select_143 = 1'h0;
   reg ch1_read_select_144 = 1'h0;
   reg ch1_read_select_145 = 1'h0;
+  reg ch1_result_line_delay_settled_snapshot = 1'h0;
+  reg [7:0] ch1_result_line_delay_spread_snapshot = 8'h00;
+  reg [3:0] ch1_result_line_noise_events_snapshot = 4'h0;
+  reg [12:0] ch1_result_line_settled_delay_snapshot = 13'h0000;
   wire ch1_result_line_write;
+  reg [12:0] ch1_result_seq_line_delay_snapshot = 13'h0000;
+  reg [15:0] ch1_result_seq_seq_snapshot = 16'h0000;
   wire ch1_result_seq_write;
+  reg ch1_result_status_cds_snapshot = 1'h0;
+  reg ch1_result_status_lc_repeat_snapshot = 1'h0;
+  reg ch1_result_status_lc_skip_snapshot = 1'h0;
+  reg [5:0] ch1_result_status_lc_snapshot = 6'h00;
+  reg ch1_result_status_lc_zero_snapshot = 1'h0;
+  reg ch1_result_status_spw_mismatch_snapshot = 1'h0;
+  reg [3:0] ch1_result_status_status_snapshot = 4'h0;
+  reg ch1_result_status_w0_crc_ok_snapshot = 1'h0;
+  reg ch1_result_status_w0_ne_snapshot = 1'h0;
+  reg ch1_result_status_w0_nw_snapshot = 1'h0;
+  reg ch1_result_status_w1_crc_ok_snapshot = 1'h0;
+  reg ch1_result_status_w1_ne_snapshot = 1'h0;
+  reg ch1_result_status_w1_nw_snapshot = 1'h0;
   wire ch1_result_status_write;
+  reg [31:0] ch1_result_timestamp_time_snapshot = 32'd0;
   wire ch1_result_timestamp_write;
+  reg [22:0] ch1_result_w0_hi_data_snapshot = 23'h000000;
   wire ch1_result_w0_hi_write;
+  reg [31:0] ch1_result_w0_lo_data_snapshot = 32'd0;
   wire ch1_result_w0_lo_write;
+  reg [7:0] ch1_result_w1_hi_data_snapshot = 8'h00;
   wire ch1_result_w1_hi_write;
+  reg [31:0] ch1_result_w1_lo_data_snapshot = 32'd0;
   wire ch1_result_w1_lo_write;
   wire ch1_state_write;
   reg ch1_window0_read = 1'h0;
   reg ch1_window1_read = 1'h0;
-  reg ch1_window2_read = 1'h0;
   input clk;
   wire clk;
   reg [31:0] config_write_data = 32'd0;
@@ -2619,638 +2752,869 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6611$0 ;
-  wire [186:0] \port$6611$0 ;
-  input [79:0] \port$6624$0 ;
-  wire [79:0] \port$6624$0 ;
-  input [9:0] \port$6701$0 ;
-  wire [9:0] \port$6701$0 ;
-  input [186:0] \port$7144$0 ;
-  wire [186:0] \port$7144$0 ;
-  input [79:0] \port$7157$0 ;
-  wire [79:0] \port$7157$0 ;
-  input [9:0] \port$7234$0 ;
-  wire [9:0] \port$7234$0 ;
-  wire published;
-  wire \published$510 ;
-  wire [2:0] read_addr;
-  wire [2:0] \read_addr$511 ;
-  wire [31:0] read_data;
-  wire [31:0] \read_data$304 ;
-  wire read_en;
-  wire \read_en$512 ;
-  wire read_take;
-  wire \read_take$513 ;
+  input [186:0] \port$6669$0 ;
+  wire [186:0] \port$6669$0 ;
+  input [79:0] \port$6682$0 ;
+  wire [79:0] \port$6682$0 ;
+  input [9:0] \port$6759$0 ;
+  wire [9:0] \port$6759$0 ;
+  input [186:0] \port$7200$0 ;
+  wire [186:0] \port$7200$0 ;
+  input [79:0] \port$7213$0 ;
+  wire [79:0] \port$7213$0 ;
+  input [9:0] \port$7290$0 ;
+  wire [9:0] \port$7290$0 ;
   input rst;
   wire rst;
-  wire [255:0] words;
-  wire [255:0] \words$484 ;
-  wire [31:0] \words$484[0] ;
-  wire [31:0] \words$484[1] ;
-  wire [31:0] \words$484[2] ;
-  wire [31:0] \words$484[3] ;
-  wire [31:0] \words$484[4] ;
-  wire [31:0] \words$484[5] ;
-  wire [31:0] \words$484[6] ;
-  wire [31:0] \words$484[7] ;
-  wire [31:0] \words[0] ;
-  wire [31:0] \words[1] ;
-  wire [31:0] \words[2] ;
-  wire [31:0] \words[3] ;
-  wire [31:0] \words[4] ;
-  wire [31:0] \words[5] ;
-  wire [31:0] \words[6] ;
-  wire [31:0] \words[7] ;
   reg [10:0] write_addr = 11'h000;
   output [31:0] write_data;
   reg [31:0] write_data = 32'd0;
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
-  assign g_channels_write = write_en & \$348 ;
-  assign \$349  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$349 ;
-  assign \$350  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$350 ;
-  assign \$351  = bus__r_addr[10:3] == 5'h13;
-  assign ch0__count_en = bus__r_en & \$351 ;
-  assign \$352  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$352 ;
-  assign \$353  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$353 ;
-  assign \$354  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$354 ;
-  assign \$355  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$355 ;
-  assign \$356  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$356 ;
-  assign \$357  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$357 ;
-  assign \$358  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$358 ;
-  assign \$359  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$359 ;
-  assign \$360  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$360 ;
-  assign \$361  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$361 ;
-  assign \$362  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$362 ;
-  assign \$363  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$363 ;
-  assign \$364  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$364 ;
-  assign \$365  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$365 ;
-  assign \$366  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$366 ;
-  assign \$367  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$367 ;
-  assign \$368  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$368 ;
-  assign \$369  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$369 ;
-  assign \$370  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$370 ;
-  assign \$371  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$371 ;
-  assign \$372  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$372 ;
-  assign \$373  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$373 ;
-  assign \$374  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$374 ;
-  assign \$375  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$375 ;
-  assign \$376  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$376 ;
-  assign \$377  = write_addr == 8'ha4;
-  assign ch0_cfg_ssi_write = write_en & \$377 ;
-  assign \$378  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$378 ;
-  assign \$379  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$379 ;
-  assign \$380  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$380 ;
-  assign \$381  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$381 ;
-  assign \$382  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$382 ;
-  assign \$383  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$383 ;
-  assign \$384  = write_addr[10:4] == 4'hd;
-  assign \$385  = write_en & \$384 ;
-  assign ch0__ca_wbuf_en = \$385  ? write_strb : 4'h0;
-  assign \$386  = bus__r_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$386 ;
-  assign \$387  = bus__r_addr[10:3] == 5'h12;
-  assign read_en = bus__r_en & \$387 ;
-  assign read_take = ! bus__r_addr[2:0];
-  assign \$388  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$390  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$392  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$393 , \$391 , \$389  };
-  assign \$394  = bus__r_addr[10:3] == 6'h23;
-  assign ch1__count_en = bus__r_en & \$394 ;
-  assign \$395  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$395 ;
-  assign \$396  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$396 ;
-  assign \$397  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$397 ;
-  assign \$398  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$398 ;
-  assign \$399  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$399 ;
-  assign \$400  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$400 ;
-  assign \$401  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$401 ;
-  assign \$402  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$402 ;
-  assign \$403  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$403 ;
-  assign \$404  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$404 ;
-  assign \$405  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$405 ;
-  assign \$406  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$406 ;
-  assign \$407  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$407 ;
-  assign \$408  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$408 ;
-  assign \$409  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$409 ;
-  assign \$410  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$410 ;
-  assign \$411  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$411 ;
-  assign \$412  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$412 ;
-  assign \$413  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$413 ;
-  assign \$414  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$414 ;
-  assign \$415  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$415 ;
-  assign \$416  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$416 ;
-  assign \$417  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$417 ;
-  assign \$418  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$418 ;
-  assign \$419  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$419 ;
-  assign \$420  = write_addr == 9'h124;
-  assign ch1_cfg_ssi_write = write_en & \$420 ;
-  assign \$421  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$421 ;
-  assign \$422  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$422 ;
-  assign \$423  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$423 ;
-  assign \$424  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$424 ;
-  assign \$425  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$425 ;
-  assign \$426  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$426 ;
-  assign \$427  = write_addr[10:4] == 5'h15;
-  assign \$428  = write_en & \$427 ;
-  assign ch1__ca_wbuf_en = \$428  ? write_strb : 4'h0;
-  assign \$429  = bus__r_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$429 ;
-  assign \$430  = bus__r_addr[10:3] == 6'h22;
-  assign \read_en$512  = bus__r_en & \$430 ;
-  assign \read_take$513  = ! bus__r_addr[2:0];
-  assign \$431  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$433  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$435  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$436 , \$434 , \$432  };
-  assign \$438  = \$437  | ch0_read_data;
-  assign bus__r_data = \$438  | ch1_read_data;
+  assign \$249  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$250  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$251  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$252  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$253  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$254  = ch1_cfg_checks_config_write & config_write_strb[3];
+  assign \$255  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$256  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$257  = ch1_cfg_crc0_config_write & config_write_strb[0];
+  assign \$258  = ch1_cfg_crc0_config_write & config_write_strb[1];
+  assign \$259  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$260  = ch1_cfg_crc0_config_write & config_write_strb[3];
+  assign \$261  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$262  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$263  = ch1_cfg_crc1_config_write & config_write_strb[0];
+  assign \$264  = ch1_cfg_crc1_config_write & config_write_strb[1];
+  assign \$265  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$266  = ch1_cfg_crc1_config_write & config_write_strb[3];
+  assign \$267  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$268  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$269  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$270  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$271  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$272  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$273  = ch1_cfg_ssi_config_write & config_write_strb[2];
+  assign \$274  = ch1_cfg_ssi_config_write & config_write_strb[3];
+  assign \$275  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$276  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$277  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$278  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$279  = write_data[0] & write_strb[0];
+  assign \$280  = ch1_ca_ctrl_write ? \$279  : 1'h0;
+  assign \$281  = write_data[1] & write_strb[0];
+  assign \$282  = ch1_ca_ctrl_write ? \$281  : 1'h0;
+  assign \$283  = bus__r_addr == 9'h100;
+  assign \$284  = bus__r_addr == 9'h101;
+  assign \$285  = bus__r_addr == 9'h102;
+  assign \$286  = bus__r_addr == 9'h104;
+  assign \$287  = bus__r_addr == 9'h105;
+  assign \$288  = bus__r_addr == 9'h108;
+  assign \$289  = bus__r_addr == 9'h109;
+  assign \$290  = bus__r_addr == 9'h10a;
+  assign \$291  = bus__r_addr == 9'h10b;
+  assign \$292  = bus__r_addr == 9'h10c;
+  assign \$293  = bus__r_addr == 9'h10d;
+  assign \$294  = bus__r_addr == 9'h10e;
+  assign \$295  = bus__r_addr == 9'h10f;
+  assign \$296  = bus__r_addr == 9'h110;
+  assign \$297  = bus__r_addr == 9'h111;
+  assign \$298  = bus__r_addr == 9'h112;
+  assign \$299  = bus__r_addr == 9'h113;
+  assign \$300  = bus__r_addr == 9'h114;
+  assign \$301  = bus__r_addr == 9'h115;
+  assign \$302  = bus__r_addr == 9'h116;
+  assign \$303  = bus__r_addr == 9'h117;
+  assign \$304  = bus__r_addr == 9'h120;
+  assign \$305  = bus__r_addr == 9'h121;
+  assign \$306  = bus__r_addr == 9'h122;
+  assign \$307  = bus__r_addr == 9'h123;
+  assign \$308  = bus__r_addr == 9'h124;
+  assign \$309  = bus__r_addr == 9'h140;
+  assign \$310  = bus__r_addr == 9'h141;
+  assign \$311  = bus__r_addr == 9'h142;
+  assign \$312  = bus__r_addr == 9'h143;
+  assign \$313  = bus__r_addr == 9'h144;
+  assign \$314  = bus__r_addr == 9'h145;
+  assign \$315  = ch1_read_select_110 & bus__r_load;
+  assign \$316  = bus__r_addr[10:3] == 6'h23;
+  assign \$317  = bus__r_en & \$316 ;
+  assign \$318  = bus__r_addr[10:4] == 5'h16;
+  assign \$319  = bus__r_en & \$318 ;
+  assign \$320  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$322  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
+  assign \$323  = \$321  | \$322 ;
+  assign \$324  = ch1_read_select_102 ? 32'd253241399 : 32'd0;
+  assign \$325  = \$323  | \$324 ;
+  assign \$326  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$327  = \$325  | \$326 ;
+  assign \$328  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
+  assign \$329  = \$327  | \$328 ;
+  assign \$330  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
+  assign \$331  = \$329  | \$330 ;
+  assign \$332  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
+  assign \$333  = \$331  | \$332 ;
+  assign \$334  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
+  assign \$335  = \$333  | \$334 ;
+  assign \$336  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
+  assign \$337  = \$335  | \$336 ;
+  assign \$338  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$339  = \$337  | \$338 ;
+  assign \$340  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 3'h0, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 4'h0, ch1_cfg_words_w0_signed, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
+  assign \$341  = \$339  | \$340 ;
+  assign \$342  = ch1_read_select_10e ? { 4'h0, ch1_cfg_checks_confirm_frames, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
+  assign \$343  = \$341  | \$342 ;
+  assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
+  assign \$345  = \$343  | \$344 ;
+  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7200$0 [182:177], 4'h0, \port$7200$0 [186:183], 1'h0, \port$7200$0 [176:174], 1'h0, \port$7200$0 [133:131], 3'h0, \port$7200$0 [49], \port$7200$0 [3:0] } : 32'd0;
+  assign \$347  = \$345  | \$346 ;
+  assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$349  = \$347  | \$348 ;
+  assign \$350  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$351  = \$349  | \$350 ;
+  assign \$352  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$353  = \$351  | \$352 ;
+  assign \$354  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$355  = \$353  | \$354 ;
+  assign \$356  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$357  = \$355  | \$356 ;
+  assign \$358  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$359  = \$357  | \$358 ;
+  assign \$360  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
+  assign \$361  = \$359  | \$360 ;
+  assign \$362  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
+  assign \$363  = \$361  | \$362 ;
+  assign \$364  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
+  assign \$365  = \$363  | \$364 ;
+  assign \$366  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
+  assign \$367  = \$365  | \$366 ;
+  assign \$368  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
+  assign \$369  = \$367  | \$368 ;
+  assign \$370  = ch1_read_select_124 ? { 4'h0, ch1_cfg_ssi_ssi_delay, 12'h000, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi } : 32'd0;
+  assign \$371  = \$369  | \$370 ;
+  assign \$372  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$373  = \$371  | \$372 ;
+  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7290$0 [9:3], 1'h0, \port$7290$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$377  = \$375  | \$376 ;
+  assign \$378  = ch1_read_select_143 ? \port$7213$0 [31:0] : 32'd0;
+  assign \$379  = \$377  | \$378 ;
+  assign \$380  = ch1_read_select_144 ? \port$7213$0 [63:32] : 32'd0;
+  assign \$381  = \$379  | \$380 ;
+  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7213$0 [79:64] } : 32'd0;
+  assign \$383  = \$381  | \$382 ;
+  assign \$384  = ch1_window0_read ? ch1__count_data : 32'd0;
+  assign \$385  = \$383  | \$384 ;
+  assign \$386  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$387  = \$385  | \$386 ;
+  assign \$388  = ! write_addr;
+  assign g_id_write = write_en & \$388 ;
+  assign \$389  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$389 ;
+  assign \$390  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$390 ;
+  assign \$391  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$391 ;
+  assign \$392  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$392 ;
+  assign \$393  = bus__r_addr[10:3] == 5'h13;
+  assign ch0__count_en = bus__r_en & \$393 ;
+  assign \$394  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$394 ;
+  assign \$395  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$395 ;
+  assign \$396  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$396 ;
+  assign \$397  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$397 ;
+  assign \$398  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$398 ;
+  assign \$399  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$399 ;
+  assign \$400  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$400 ;
+  assign \$401  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$401 ;
+  assign \$402  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$402 ;
+  assign \$403  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$403 ;
+  assign \$404  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$404 ;
+  assign \$405  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$405 ;
+  assign \$406  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$406 ;
+  assign \$407  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$407 ;
+  assign \$408  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$408 ;
+  assign \$409  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$409 ;
+  assign \$410  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$410 ;
+  assign \$411  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$411 ;
+  assign \$412  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$412 ;
+  assign \$413  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$413 ;
+  assign \$414  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$414 ;
+  assign \$415  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$415 ;
+  assign \$416  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$416 ;
+  assign \$417  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$417 ;
+  assign \$418  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$418 ;
+  assign \$419  = write_addr == 8'ha4;
+  assign ch0_cfg_ssi_write = write_en & \$419 ;
+  assign \$420  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$420 ;
+  assign \$421  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$421 ;
+  assign \$422  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$422 ;
+  assign \$423  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$423 ;
+  assign \$424  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$424 ;
+  assign \$425  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$425 ;
+  assign \$426  = write_addr[10:4] == 4'hd;
+  assign \$427  = write_en & \$426 ;
+  assign ch0__ca_wbuf_en = \$427  ? write_strb : 4'h0;
+  assign \$428  = bus__r_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$428 ;
+  assign \$429  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$431  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$433  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$434 , \$432 , \$430  };
+  assign \$435  = bus__r_addr[10:3] == 6'h23;
+  assign ch1__count_en = bus__r_en & \$435 ;
+  assign \$436  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$436 ;
+  assign \$437  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$437 ;
+  assign \$438  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$438 ;
+  assign \$439  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$439 ;
+  assign \$440  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$440 ;
+  assign \$441  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$441 ;
+  assign \$442  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$442 ;
+  assign \$443  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$443 ;
+  assign \$444  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$444 ;
+  assign \$445  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$445 ;
+  assign \$446  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$446 ;
+  assign \$447  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$447 ;
+  assign \$448  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$448 ;
+  assign \$449  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$449 ;
+  assign \$450  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$450 ;
+  assign \$451  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$451 ;
+  assign \$452  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$452 ;
+  assign \$453  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$453 ;
+  assign \$454  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$454 ;
+  assign \$455  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$455 ;
+  assign \$456  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$456 ;
+  assign \$457  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$457 ;
+  assign \$458  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$458 ;
+  assign \$459  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$459 ;
+  assign \$460  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$460 ;
+  assign \$461  = write_addr == 9'h124;
+  assign ch1_cfg_ssi_write = write_en & \$461 ;
+  assign \$462  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$462 ;
+  assign \$463  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$463 ;
+  assign \$464  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$464 ;
+  assign \$465  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$465 ;
+  assign \$466  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$466 ;
+  assign \$467  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$467 ;
+  assign \$468  = write_addr[10:4] == 5'h15;
+  assign \$469  = write_en & \$468 ;
+  assign ch1__ca_wbuf_en = \$469  ? write_strb : 4'h0;
+  assign \$470  = bus__r_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$470 ;
+  assign \$471  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$473  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$475  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$476 , \$474 , \$472  };
+  assign \$478  = \$477  | ch0_read_data;
+  assign bus__r_data = \$478  | ch1_read_data;
+  always @(posedge clk)
+    write_en <= \$479 ;
+  always @(posedge clk)
+    write_addr <= \$480 ;
+  always @(posedge clk)
+    write_data <= \$481 ;
+  always @(posedge clk)
+    write_strb <= \$482 ;
+  always @(posedge clk)
+    config_write_data <= \$483 ;
+  always @(posedge clk)
+    config_write_strb <= \$484 ;
+  always @(posedge clk)
+    g_trigger_start <= \$485 ;
+  always @(posedge clk)
+    g_read_select_0 <= \$486 ;
+  always @(posedge clk)
+    g_read_select_1 <= \$487 ;
+  always @(posedge clk)
+    g_read_select_2 <= \$488 ;
+  always @(posedge clk)
+    g_read_select_3 <= \$489 ;
+  always @(posedge clk)
+    g_read_select_4 <= \$490 ;
+  always @(posedge clk)
+    g_read_data <= \$491 ;
+  always @(posedge clk)
+    ch0_ctrl_start <= \$492 ;
+  always @(posedge clk)
+    ch0_ctrl_abort <= \$493 ;
+  always @(posedge clk)
+    ch0_ctrl_clear_counters <= \$494 ;
+  always @(posedge clk)
+    ch0_ctrl_periodic <= \$495 ;
+  always @(posedge clk)
+    ch0_ctrl_trigger_enable <= \$496 ;
+  always @(posedge clk)
+    ch0_irq_status_done <= \$497 ;
+  always @(posedge clk)
+    ch0_irq_status_error <= \$498 ;
+  always @(posedge clk)
+    ch0_irq_status_access_done <= \$499 ;
+  always @(posedge clk)
+    ch0_irq_enable_config_write <= \$500 ;
+  always @(posedge clk)
+    ch0_irq_enable_done <= \$501 ;
+  always @(posedge clk)
+    ch0_irq_enable_error <= \$502 ;
+  always @(posedge clk)
+    ch0_irq_enable_access_done <= \$503 ;
+  always @(posedge clk)
+    ch0_cfg_ma_config_write <= \$504 ;
+  always @(posedge clk)
+    ch0_cfg_ma_ma_half_period <= \$505 ;
+  always @(posedge clk)
+    ch0_cfg_ma_delay_limit <= \$506 ;
+  always @(posedge clk)
+    ch0_cfg_period_config_write <= \$507 ;
+  always @(posedge clk)
+    ch0_cfg_period_request_period <= \$508 ;
+  always @(posedge clk)
+    ch0_cfg_break_config_write <= \$509 ;
+  always @(posedge clk)
+    ch0_cfg_break_break_time <= \$510 ;
+  always @(posedge clk)
+    ch0_cfg_ack_config_write <= \$511 ;
+  always @(posedge clk)
+    ch0_cfg_ack_ack_limit <= \$512 ;
+  always @(posedge clk)
+    ch0_cfg_timeout_config_write <= \$513 ;
+  always @(posedge clk)
+    ch0_cfg_timeout_timeout_limit <= \$514 ;
+  always @(posedge clk)
+    ch0_cfg_words_config_write <= \$515 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_data_bits <= \$516 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_nenw <= \$517 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_lc <= \$518 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_crc <= \$519 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_gray <= \$520 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_signed <= \$521 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_data_bits <= \$522 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_nenw <= \$523 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_lc <= \$524 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_crc <= \$525 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_gray <= \$526 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_signed <= \$527 ;
   always @(posedge clk)
-    write_en <= \$439 ;
+    ch0_cfg_words_w1_enable <= \$528 ;
   always @(posedge clk)
-    write_addr <= \$440 ;
+    ch0_cfg_checks_config_write <= \$529 ;
   always @(posedge clk)
-    write_data <= \$441 ;
+    ch0_cfg_checks_end_check <= \$530 ;
   always @(posedge clk)
-    write_strb <= \$442 ;
+    ch0_cfg_checks_spw_check <= \$531 ;
   always @(posedge clk)
-    config_write_data <= \$443 ;
+    ch0_cfg_checks_spw_tolerance <= \$532 ;
   always @(posedge clk)
-    config_write_strb <= \$444 ;
+    ch0_cfg_checks_noise_limit <= \$533 ;
   always @(posedge clk)
-    g_trigger_start <= \$445 ;
+    ch0_cfg_checks_delay_tolerance <= \$534 ;
   always @(posedge clk)
-    g_read_select_0 <= \$446 ;
+    ch0_cfg_checks_confirm_frames <= \$535 ;
   always @(posedge clk)
-    g_read_select_1 <= \$447 ;
+    ch0_cfg_quiet_config_write <= \$536 ;
   always @(posedge clk)
-    g_read_select_2 <= \$448 ;
+    ch0_cfg_quiet_quiet_time <= \$537 ;
   always @(posedge clk)
-    g_read_select_3 <= \$449 ;
+    ch0_cfg_crc0_config_write <= \$538 ;
   always @(posedge clk)
-    g_read_select_4 <= \$450 ;
+    ch0_cfg_crc0_w0_crc_poly <= \$539 ;
   always @(posedge clk)
-    g_read_data <= \$451 ;
+    ch0_cfg_crc0_w0_crc_width <= \$540 ;
   always @(posedge clk)
-    ch0_ctrl_start <= \$452 ;
+    ch0_cfg_crc0_w0_crc_inverted <= \$541 ;
   always @(posedge clk)
-    ch0_ctrl_abort <= \$453 ;
+    ch0_cfg_crc0_start_config_write <= \$542 ;
   always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$454 ;
+    ch0_cfg_crc0_start_w0_crc_start <= \$543 ;
   always @(posedge clk)
-    ch0_ctrl_periodic <= \$455 ;
+    ch0_cfg_crc1_config_write <= \$544 ;
   always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$456 ;
+    ch0_cfg_crc1_w1_crc_poly <= \$545 ;
   always @(posedge clk)
-    ch0_irq_status_done <= \$457 ;
+    ch0_cfg_crc1_w1_crc_width <= \$546 ;
   always @(posedge clk)
-    ch0_irq_status_error <= \$458 ;
+    ch0_cfg_crc1_w1_crc_inverted <= \$547 ;
   always @(posedge clk)
-    ch0_irq_status_access_done <= \$459 ;
+    ch0_cfg_crc1_start_config_write <= \$548 ;
   always @(posedge clk)
-    ch0_irq_enable_config_write <= \$460 ;
+    ch0_cfg_crc1_start_w1_crc_start <= \$549 ;
   always @(posedge clk)
-    ch0_irq_enable_done <= \$461 ;
+    ch0_cfg_ssi_config_write <= \$550 ;
   always @(posedge clk)
-    ch0_irq_enable_error <= \$462 ;
+    ch0_cfg_ssi_ssi <= \$551 ;
   always @(posedge clk)
-    ch0_irq_enable_access_done <= \$463 ;
+    ch0_cfg_ssi_ssi_error <= \$552 ;
   always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$464 ;
+    ch0_cfg_ssi_ssi_error_low <= \$553 ;
   always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$465 ;
+    ch0_cfg_ssi_ssi_double <= \$554 ;
   always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$466 ;
+    ch0_cfg_ssi_ssi_delay <= \$555 ;
   always @(posedge clk)
-    ch0_cfg_period_config_write <= \$467 ;
+    ch0_ca_request_config_write <= \$556 ;
   always @(posedge clk)
-    ch0_cfg_period_request_period <= \$468 ;
+    ch0_ca_request_slave_id <= \$557 ;
   always @(posedge clk)
-    ch0_cfg_break_config_write <= \$469 ;
+    ch0_ca_request_address <= \$558 ;
   always @(posedge clk)
-    ch0_cfg_break_break_time <= \$470 ;
+    ch0_ca_request_count <= \$559 ;
   always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$471 ;
+    \ch0_ca_request_write$113  <= \$560 ;
   always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$472 ;
+    ch0_ca_ctrl_start <= \$561 ;
   always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$473 ;
+    ch0_ca_ctrl_abort <= \$562 ;
   always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$474 ;
+    ch0_read_select_80 <= \$563 ;
   always @(posedge clk)
-    ch0_cfg_words_config_write <= \$475 ;
+    ch0_read_select_81 <= \$564 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$476 ;
+    ch0_read_select_82 <= \$565 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$477 ;
+    ch0_read_select_84 <= \$566 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$478 ;
+    ch0_read_select_85 <= \$567 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$479 ;
+    ch0_read_select_88 <= \$568 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$480 ;
+    ch0_read_select_89 <= \$569 ;
   always @(posedge clk)
-    ch0_cfg_words_w0_signed <= \$481 ;
+    ch0_read_select_8a <= \$570 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$482 ;
+    ch0_read_select_8b <= \$571 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$483 ;
+    ch0_read_select_8c <= \$572 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$484 ;
+    ch0_read_select_8d <= \$573 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$485 ;
+    ch0_read_select_8e <= \$574 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$486 ;
+    ch0_read_select_8f <= \$575 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_signed <= \$487 ;
+    ch0_read_select_90 <= \$576 ;
   always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$488 ;
+    ch0_read_select_91 <= \$577 ;
   always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$489 ;
+    ch0_read_select_92 <= \$578 ;
   always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$490 ;
+    ch0_read_select_93 <= \$579 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$491 ;
+    ch0_read_select_94 <= \$580 ;
   always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$492 ;
+    ch0_read_select_95 <= \$581 ;
   always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$493 ;
+    ch0_read_select_96 <= \$582 ;
   always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$494 ;
+    ch0_read_select_97 <= \$583 ;
   always @(posedge clk)
-    ch0_cfg_checks_confirm_frames <= \$495 ;
+    ch0_read_select_a0 <= \$584 ;
   always @(posedge clk)
-    ch0_cfg_quiet_config_write <= \$496 ;
+    ch0_read_select_a1 <= \$585 ;
   always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$497 ;
+    ch0_read_select_a2 <= \$586 ;
   always @(posedge clk)
-    ch0_cfg_crc0_config_write <= \$498 ;
+    ch0_read_select_a3 <= \$587 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_poly <= \$499 ;
+    ch0_read_select_a4 <= \$588 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$500 ;
+    ch0_read_select_c0 <= \$589 ;
   always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_inverted <= \$501 ;
+    ch0_read_select_c1 <= \$590 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_config_write <= \$502 ;
+    ch0_read_select_c2 <= \$591 ;
   always @(posedge clk)
-    ch0_cfg_crc0_start_w0_crc_start <= \$503 ;
+    ch0_read_select_c3 <= \$592 ;
   always @(posedge clk)
-    ch0_cfg_crc1_config_write <= \$504 ;
+    ch0_read_select_c4 <= \$593 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_poly <= \$505 ;
+    ch0_read_select_c5 <= \$594 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$506 ;
+    ch0_result_status_status_snapshot <= \$595 ;
   always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_inverted <= \$507 ;
+    ch0_result_status_cds_snapshot <= \$596 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_config_write <= \$508 ;
+    ch0_result_status_w0_ne_snapshot <= \$597 ;
   always @(posedge clk)
-    ch0_cfg_crc1_start_w1_crc_start <= \$509 ;
+    ch0_result_status_w0_nw_snapshot <= \$598 ;
   always @(posedge clk)
-    ch0_cfg_ssi_config_write <= \$510 ;
+    ch0_result_status_w0_crc_ok_snapshot <= \$599 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi <= \$511 ;
+    ch0_result_status_w1_ne_snapshot <= \$600 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_error <= \$512 ;
+    ch0_result_status_w1_nw_snapshot <= \$601 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_error_low <= \$513 ;
+    ch0_result_status_w1_crc_ok_snapshot <= \$602 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_double <= \$514 ;
+    ch0_result_status_lc_repeat_snapshot <= \$603 ;
   always @(posedge clk)
-    ch0_cfg_ssi_ssi_delay <= \$515 ;
+    ch0_result_status_lc_skip_snapshot <= \$604 ;
   always @(posedge clk)
-    ch0_ca_request_config_write <= \$516 ;
+    ch0_result_status_lc_zero_snapshot <= \$605 ;
   always @(posedge clk)
-    ch0_ca_request_slave_id <= \$517 ;
+    ch0_result_status_spw_mismatch_snapshot <= \$606 ;
   always @(posedge clk)
-    ch0_ca_request_address <= \$518 ;
+    ch0_result_status_lc_snapshot <= \$607 ;
   always @(posedge clk)
-    ch0_ca_request_count <= \$519 ;
+    ch0_result_seq_seq_snapshot <= \$608 ;
   always @(posedge clk)
-    \ch0_ca_request_write$113  <= \$520 ;
+    ch0_result_seq_line_delay_snapshot <= \$609 ;
   always @(posedge clk)
-    ch0_ca_ctrl_start <= \$521 ;
+    ch0_result_w0_lo_data_snapshot <= \$610 ;
   always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$522 ;
+    ch0_result_w0_hi_data_snapshot <= \$611 ;
   always @(posedge clk)
-    ch0_read_select_80 <= \$523 ;
+    ch0_result_w1_lo_data_snapshot <= \$612 ;
   always @(posedge clk)
-    ch0_read_select_81 <= \$524 ;
+    ch0_result_w1_hi_data_snapshot <= \$613 ;
   always @(posedge clk)
-    ch0_read_select_82 <= \$525 ;
+    ch0_result_timestamp_time_snapshot <= \$614 ;
   always @(posedge clk)
-    ch0_read_select_84 <= \$526 ;
+    ch0_result_line_noise_events_snapshot <= \$615 ;
   always @(posedge clk)
-    ch0_read_select_85 <= \$527 ;
+    ch0_result_line_delay_settled_snapshot <= \$616 ;
   always @(posedge clk)
-    ch0_read_select_88 <= \$528 ;
+    ch0_result_line_delay_spread_snapshot <= \$617 ;
   always @(posedge clk)
-    ch0_read_select_89 <= \$529 ;
+    ch0_result_line_settled_delay_snapshot <= \$618 ;
   always @(posedge clk)
-    ch0_read_select_8a <= \$530 ;
+    ch0_window0_read <= \$619 ;
   always @(posedge clk)
-    ch0_read_select_8b <= \$531 ;
+    ch0_window1_read <= \$620 ;
   always @(posedge clk)
-    ch0_read_select_8c <= \$532 ;
+    ch0_read_data <= \$621 ;
   always @(posedge clk)
-    ch0_read_select_8d <= \$533 ;
+    ch1_ctrl_start <= \$622 ;
   always @(posedge clk)
-    ch0_read_select_8e <= \$534 ;
+    ch1_ctrl_abort <= \$623 ;
   always @(posedge clk)
-    ch0_read_select_8f <= \$535 ;
+    ch1_ctrl_clear_counters <= \$624 ;
   always @(posedge clk)
-    ch0_read_select_a0 <= \$536 ;
+    ch1_ctrl_periodic <= \$625 ;
   always @(posedge clk)
-    ch0_read_select_a1 <= \$537 ;
+    ch1_ctrl_trigger_enable <= \$626 ;
   always @(posedge clk)
-    ch0_read_select_a2 <= \$538 ;
+    ch1_irq_status_done <= \$627 ;
   always @(posedge clk)
-    ch0_read_select_a3 <= \$539 ;
+    ch1_irq_status_error <= \$628 ;
   always @(posedge clk)
-    ch0_read_select_a4 <= \$540 ;
+    ch1_irq_status_access_done <= \$629 ;
   always @(posedge clk)
-    ch0_read_select_c0 <= \$541 ;
+    ch1_irq_enable_config_write <= \$630 ;
   always @(posedge clk)
-    ch0_read_select_c1 <= \$542 ;
+    ch1_irq_enable_done <= \$631 ;
   always @(posedge clk)
-    ch0_read_select_c2 <= \$543 ;
+    ch1_irq_enable_error <= \$632 ;
   always @(posedge clk)
-    ch0_read_select_c3 <= \$544 ;
+    ch1_irq_enable_access_done <= \$633 ;
   always @(posedge clk)
-    ch0_read_select_c4 <= \$545 ;
+    ch1_cfg_ma_config_write <= \$634 ;
   always @(posedge clk)
-    ch0_read_select_c5 <= \$546 ;
+    ch1_cfg_ma_ma_half_period <= \$635 ;
   always @(posedge clk)
-    ch0_window0_read <= \$547 ;
+    ch1_cfg_ma_delay_limit <= \$636 ;
   always @(posedge clk)
-    ch0_window1_read <= \$548 ;
+    ch1_cfg_period_config_write <= \$637 ;
   always @(posedge clk)
-    ch0_window2_read <= \$549 ;
+    ch1_cfg_period_request_period <= \$638 ;
   always @(posedge clk)
-    ch0_read_data <= \$550 ;
+    ch1_cfg_break_config_write <= \$639 ;
   always @(posedge clk)
-    ch1_ctrl_start <= \$551 ;
+    ch1_cfg_break_break_time <= \$640 ;
   always @(posedge clk)
-    ch1_ctrl_abort <= \$552 ;
+    ch1_cfg_ack_config_write <= \$641 ;
   always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$553 ;
+    ch1_cfg_ack_ack_limit <= \$642 ;
   always @(posedge clk)
-    ch1_ctrl_periodic <= \$554 ;
+    ch1_cfg_timeout_config_write <= \$643 ;
   always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$555 ;
+    ch1_cfg_timeout_timeout_limit <= \$644 ;
   always @(posedge clk)
-    ch1_irq_status_done <= \$556 ;
+    ch1_cfg_words_config_write <= \$645 ;
   always @(posedge clk)
-    ch1_irq_status_error <= \$557 ;
+    ch1_cfg_words_w0_data_bits <= \$646 ;
   always @(posedge clk)
-    ch1_irq_status_access_done <= \$558 ;
+    ch1_cfg_words_w0_nenw <= \$647 ;
   always @(posedge clk)
-    ch1_irq_enable_config_write <= \$559 ;
+    ch1_cfg_words_w0_lc <= \$648 ;
   always @(posedge clk)
-    ch1_irq_enable_done <= \$560 ;
+    ch1_cfg_words_w0_crc <= \$649 ;
   always @(posedge clk)
-    ch1_irq_enable_error <= \$561 ;
+    ch1_cfg_words_w0_gray <= \$650 ;
   always @(posedge clk)
-    ch1_irq_enable_access_done <= \$562 ;
+    ch1_cfg_words_w0_signed <= \$651 ;
   always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$563 ;
+    ch1_cfg_words_w1_data_bits <= \$652 ;
   always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$564 ;
+    ch1_cfg_words_w1_nenw <= \$653 ;
   always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$565 ;
+    ch1_cfg_words_w1_lc <= \$654 ;
   always @(posedge clk)
-    ch1_cfg_period_config_write <= \$566 ;
+    ch1_cfg_words_w1_crc <= \$655 ;
   always @(posedge clk)
-    ch1_cfg_period_request_period <= \$567 ;
+    ch1_cfg_words_w1_gray <= \$656 ;
   always @(posedge clk)
-    ch1_cfg_break_config_write <= \$568 ;
+    ch1_cfg_words_w1_signed <= \$657 ;
   always @(posedge clk)
-    ch1_cfg_break_break_time <= \$569 ;
+    ch1_cfg_words_w1_enable <= \$658 ;
   always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$570 ;
+    ch1_cfg_checks_config_write <= \$659 ;
   always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$571 ;
+    ch1_cfg_checks_end_check <= \$660 ;
   always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$572 ;
+    ch1_cfg_checks_spw_check <= \$661 ;
   always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$573 ;
+    ch1_cfg_checks_spw_tolerance <= \$662 ;
   always @(posedge clk)
-    ch1_cfg_words_config_write <= \$574 ;
+    ch1_cfg_checks_noise_limit <= \$663 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$575 ;
+    ch1_cfg_checks_delay_tolerance <= \$664 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$576 ;
+    ch1_cfg_checks_confirm_frames <= \$665 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$577 ;
+    ch1_cfg_quiet_config_write <= \$666 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$578 ;
+    ch1_cfg_quiet_quiet_time <= \$667 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$579 ;
+    ch1_cfg_crc0_config_write <= \$668 ;
   always @(posedge clk)
-    ch1_cfg_words_w0_signed <= \$580 ;
+    ch1_cfg_crc0_w0_crc_poly <= \$669 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$581 ;
+    ch1_cfg_crc0_w0_crc_width <= \$670 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$582 ;
+    ch1_cfg_crc0_w0_crc_inverted <= \$671 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$583 ;
+    ch1_cfg_crc0_start_config_write <= \$672 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$584 ;
+    ch1_cfg_crc0_start_w0_crc_start <= \$673 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$585 ;
+    ch1_cfg_crc1_config_write <= \$674 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_signed <= \$586 ;
+    ch1_cfg_crc1_w1_crc_poly <= \$675 ;
   always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$587 ;
+    ch1_cfg_crc1_w1_crc_width <= \$676 ;
   always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$588 ;
+    ch1_cfg_crc1_w1_crc_inverted <= \$677 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$589 ;
+    ch1_cfg_crc1_start_config_write <= \$678 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$590 ;
+    ch1_cfg_crc1_start_w1_crc_start <= \$679 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$591 ;
+    ch1_cfg_ssi_config_write <= \$680 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$592 ;
+    ch1_cfg_ssi_ssi <= \$681 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$593 ;
+    ch1_cfg_ssi_ssi_error <= \$682 ;
   always @(posedge clk)
-    ch1_cfg_checks_confirm_frames <= \$594 ;
+    ch1_cfg_ssi_ssi_error_low <= \$683 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_write <= \$595 ;
+    ch1_cfg_ssi_ssi_double <= \$684 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$596 ;
+    ch1_cfg_ssi_ssi_delay <= \$685 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_write <= \$597 ;
+    ch1_ca_request_config_write <= \$686 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_poly <= \$598 ;
+    ch1_ca_request_slave_id <= \$687 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$599 ;
+    ch1_ca_request_address <= \$688 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_inverted <= \$600 ;
+    ch1_ca_request_count <= \$689 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_write <= \$601 ;
+    \ch1_ca_request_write$305  <= \$690 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_w0_crc_start <= \$602 ;
+    ch1_ca_ctrl_start <= \$691 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_write <= \$603 ;
+    ch1_ca_ctrl_abort <= \$692 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_poly <= \$604 ;
+    ch1_read_select_100 <= \$693 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$605 ;
+    ch1_read_select_101 <= \$694 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_inverted <= \$606 ;
+    ch1_read_select_102 <= \$695 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_write <= \$607 ;
+    ch1_read_select_104 <= \$696 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_w1_crc_start <= \$608 ;
+    ch1_read_select_105 <= \$697 ;
   always @(posedge clk)
-    ch1_cfg_ssi_config_write <= \$609 ;
+    ch1_read_select_108 <= \$698 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi <= \$610 ;
+    ch1_read_select_109 <= \$699 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error <= \$611 ;
+    ch1_read_select_10a <= \$700 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error_low <= \$612 ;
+    ch1_read_select_10b <= \$701 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_double <= \$613 ;
+    ch1_read_select_10c <= \$702 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_delay <= \$614 ;
+    ch1_read_select_10d <= \$703 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$615 ;
+    ch1_read_select_10e <= \$704 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$616 ;
+    ch1_read_select_10f <= \$705 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$617 ;
+    ch1_read_select_110 <= \$706 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$618 ;
+    ch1_read_select_111 <= \$707 ;
   always @(posedge clk)
-    \ch1_ca_request_write$253  <= \$619 ;
+    ch1_read_select_112 <= \$708 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$620 ;
+    ch1_read_select_113 <= \$709 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$621 ;
+    ch1_read_select_114 <= \$710 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$622 ;
+    ch1_read_select_115 <= \$711 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$623 ;
+    ch1_read_select_116 <= \$712 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$624 ;
+    ch1_read_select_117 <= \$713 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$625 ;
+    ch1_read_select_120 <= \$714 ;
   always @(posedge clk)
-    ch1_read_select_105 <= \$626 ;
+    ch1_read_select_121 <= \$715 ;
   always @(posedge clk)
-    ch1_read_select_108 <= \$627 ;
+    ch1_read_select_122 <= \$716 ;
   always @(posedge clk)
-    ch1_read_select_109 <= \$628 ;
+    ch1_read_select_123 <= \$717 ;
   always @(posedge clk)
-    ch1_read_select_10a <= \$629 ;
+    ch1_read_select_124 <= \$718 ;
   always @(posedge clk)
-    ch1_read_select_10b <= \$630 ;
+    ch1_read_select_140 <= \$719 ;
   always @(posedge clk)
-    ch1_read_select_10c <= \$631 ;
+    ch1_read_select_141 <= \$720 ;
   always @(posedge clk)
-    ch1_read_select_10d <= \$632 ;
+    ch1_read_select_142 <= \$721 ;
   always @(posedge clk)
-    ch1_read_select_10e <= \$633 ;
+    ch1_read_select_143 <= \$722 ;
   always @(posedge clk)
-    ch1_read_select_10f <= \$634 ;
+    ch1_read_select_144 <= \$723 ;
   always @(posedge clk)
-    ch1_read_select_120 <= \$635 ;
+    ch1_read_select_145 <= \$724 ;
   always @(posedge clk)
-    ch1_read_select_121 <= \$636 ;
+    ch1_result_status_status_snapshot <= \$725 ;
   always @(posedge clk)
-    ch1_read_select_122 <= \$637 ;
+    ch1_result_status_cds_snapshot <= \$726 ;
   always @(posedge clk)
-    ch1_read_select_123 <= \$638 ;
+    ch1_result_status_w0_ne_snapshot <= \$727 ;
   always @(posedge clk)
-    ch1_read_select_124 <= \$639 ;
+    ch1_result_status_w0_nw_snapshot <= \$728 ;
   always @(posedge clk)
-    ch1_read_select_140 <= \$640 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$729 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$641 ;
+    ch1_result_status_w1_ne_snapshot <= \$730 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$642 ;
+    ch1_result_status_w1_nw_snapshot <= \$731 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$643 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$732 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$644 ;
+    ch1_result_status_lc_repeat_snapshot <= \$733 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$645 ;
+    ch1_result_status_lc_skip_snapshot <= \$734 ;
   always @(posedge clk)
-    ch1_window0_read <= \$646 ;
+    ch1_result_status_lc_zero_snapshot <= \$735 ;
   always @(posedge clk)
-    ch1_window1_read <= \$647 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$736 ;
   always @(posedge clk)
-    ch1_window2_read <= \$648 ;
+    ch1_result_status_lc_snapshot <= \$737 ;
   always @(posedge clk)
-    ch1_read_data <= \$649 ;
+    ch1_result_seq_seq_snapshot <= \$738 ;
+  always @(posedge clk)
+    ch1_result_seq_line_delay_snapshot <= \$739 ;
+  always @(posedge clk)
+    ch1_result_w0_lo_data_snapshot <= \$740 ;
+  always @(posedge clk)
+    ch1_result_w0_hi_data_snapshot <= \$741 ;
+  always @(posedge clk)
+    ch1_result_w1_lo_data_snapshot <= \$742 ;
+  always @(posedge clk)
+    ch1_result_w1_hi_data_snapshot <= \$743 ;
+  always @(posedge clk)
+    ch1_result_timestamp_time_snapshot <= \$744 ;
+  always @(posedge clk)
+    ch1_result_line_noise_events_snapshot <= \$745 ;
+  always @(posedge clk)
+    ch1_result_line_delay_settled_snapshot <= \$746 ;
+  always @(posedge clk)
+    ch1_result_line_delay_spread_snapshot <= \$747 ;
+  always @(posedge clk)
+    ch1_result_line_settled_delay_snapshot <= \$748 ;
+  always @(posedge clk)
+    ch1_window0_read <= \$749 ;
+  always @(posedge clk)
+    ch1_window1_read <= \$750 ;
+  always @(posedge clk)
+    ch1_read_data <= \$751 ;
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__r_addr;
@@ -3358,739 +3722,210 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$108  = bus__r_addr == 8'h8d;
   assign \$109  = bus__r_addr == 8'h8e;
   assign \$110  = bus__r_addr == 8'h8f;
-  assign \$111  = bus__r_addr == 8'ha0;
-  assign \$112  = bus__r_addr == 8'ha1;
-  assign \$113  = bus__r_addr == 8'ha2;
-  assign \$114  = bus__r_addr == 8'ha3;
-  assign \$115  = bus__r_addr == 8'ha4;
-  assign \$116  = bus__r_addr == 8'hc0;
-  assign \$117  = bus__r_addr == 8'hc1;
-  assign \$118  = bus__r_addr == 8'hc2;
-  assign \$119  = bus__r_addr == 8'hc3;
-  assign \$120  = bus__r_addr == 8'hc4;
-  assign \$121  = bus__r_addr == 8'hc5;
-  assign \$122  = bus__r_addr[10:3] == 5'h13;
-  assign \$123  = bus__r_en & \$122 ;
-  assign \$124  = bus__r_addr[10:4] == 4'he;
-  assign \$125  = bus__r_en & \$124 ;
-  assign \$126  = bus__r_addr[10:3] == 5'h12;
-  assign \$127  = bus__r_en & \$126 ;
-  assign \$128  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$130  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$131  = \$129  | \$130 ;
-  assign \$132  = ch0_read_select_82 ? 32'd253241399 : 32'd0;
-  assign \$133  = \$131  | \$132 ;
-  assign \$134  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
-  assign \$135  = \$133  | \$134 ;
-  assign \$136  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
-  assign \$137  = \$135  | \$136 ;
-  assign \$138  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
-  assign \$139  = \$137  | \$138 ;
-  assign \$140  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
-  assign \$141  = \$139  | \$140 ;
-  assign \$142  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
-  assign \$143  = \$141  | \$142 ;
-  assign \$144  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
-  assign \$145  = \$143  | \$144 ;
-  assign \$146  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$147  = \$145  | \$146 ;
-  assign \$148  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 3'h0, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 4'h0, ch0_cfg_words_w0_signed, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
-  assign \$149  = \$147  | \$148 ;
-  assign \$150  = ch0_read_select_8e ? { 4'h0, ch0_cfg_checks_confirm_frames, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
-  assign \$151  = \$149  | \$150 ;
-  assign \$152  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
-  assign \$153  = \$151  | \$152 ;
-  assign \$154  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
-  assign \$155  = \$153  | \$154 ;
-  assign \$156  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
-  assign \$157  = \$155  | \$156 ;
-  assign \$158  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
-  assign \$159  = \$157  | \$158 ;
-  assign \$160  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
-  assign \$161  = \$159  | \$160 ;
-  assign \$162  = ch0_read_select_a4 ? { 4'h0, ch0_cfg_ssi_ssi_delay, 12'h000, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi } : 32'd0;
-  assign \$163  = \$161  | \$162 ;
-  assign \$164  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
-  assign \$165  = \$163  | \$164 ;
-  assign \$168  = ch0_read_select_c2 ? { 17'h00000, \port$6701$0 [9:3], 1'h0, \port$6701$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$169  = \$167  | \$168 ;
-  assign \$170  = ch0_read_select_c3 ? \port$6624$0 [31:0] : 32'd0;
-  assign \$171  = \$169  | \$170 ;
-  assign \$172  = ch0_read_select_c4 ? \port$6624$0 [63:32] : 32'd0;
-  assign \$173  = \$171  | \$172 ;
-  assign \$174  = ch0_read_select_c5 ? { 16'h0000, \port$6624$0 [79:64] } : 32'd0;
-  assign \$175  = \$173  | \$174 ;
-  assign \$176  = ch0_window0_read ? ch0__count_data : 32'd0;
-  assign \$177  = \$175  | \$176 ;
-  assign \$178  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$179  = \$177  | \$178 ;
-  assign \$180  = ch0_window2_read ? read_data : 32'd0;
-  assign \$181  = \$179  | \$180 ;
-  assign \$182  = write_data[0] & write_strb[0];
-  assign \$183  = ch1_ctrl_write ? \$182  : 1'h0;
-  assign \$184  = write_data[1] & write_strb[0];
-  assign \$185  = ch1_ctrl_write ? \$184  : 1'h0;
-  assign \$186  = write_data[2] & write_strb[0];
-  assign \$187  = ch1_ctrl_write ? \$186  : 1'h0;
-  assign \$188  = ch1_ctrl_write & write_strb[1];
-  assign \$189  = ch1_ctrl_write & write_strb[1];
-  assign \$190  = write_data[0] & write_strb[0];
-  assign \$191  = ch1_irq_status_write ? \$190  : 1'h0;
-  assign \$192  = write_data[1] & write_strb[0];
-  assign \$193  = ch1_irq_status_write ? \$192  : 1'h0;
-  assign \$194  = write_data[2] & write_strb[0];
-  assign \$195  = ch1_irq_status_write ? \$194  : 1'h0;
-  assign \$196  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$197  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$198  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$199  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$200  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$201  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$202  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$203  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$204  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$205  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$206  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$207  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$208  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$209  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$210  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$211  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$212  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$213  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$214  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$215  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$216  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$217  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$218  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$219  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$220  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$221  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$222  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$223  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$224  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$225  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$226  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$227  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$228  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$229  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$230  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$231  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$232  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$233  = ch1_cfg_checks_config_write & config_write_strb[3];
-  assign \$234  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$235  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$236  = ch1_cfg_crc0_config_write & config_write_strb[0];
-  assign \$237  = ch1_cfg_crc0_config_write & config_write_strb[1];
-  assign \$238  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$239  = ch1_cfg_crc0_config_write & config_write_strb[3];
-  assign \$240  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$241  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$242  = ch1_cfg_crc1_config_write & config_write_strb[0];
-  assign \$243  = ch1_cfg_crc1_config_write & config_write_strb[1];
-  assign \$244  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$245  = ch1_cfg_crc1_config_write & config_write_strb[3];
-  assign \$246  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$247  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$248  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$249  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$250  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$251  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$252  = ch1_cfg_ssi_config_write & config_write_strb[2];
-  assign \$253  = ch1_cfg_ssi_config_write & config_write_strb[3];
-  assign \$254  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$255  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$256  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$257  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$258  = write_data[0] & write_strb[0];
-  assign \$259  = ch1_ca_ctrl_write ? \$258  : 1'h0;
-  assign \$260  = write_data[1] & write_strb[0];
-  assign \$261  = ch1_ca_ctrl_write ? \$260  : 1'h0;
-  assign \$262  = bus__r_addr == 9'h100;
-  assign \$263  = bus__r_addr == 9'h101;
-  assign \$264  = bus__r_addr == 9'h102;
-  assign \$265  = bus__r_addr == 9'h104;
-  assign \$266  = bus__r_addr == 9'h105;
-  assign \$267  = bus__r_addr == 9'h108;
-  assign \$268  = bus__r_addr == 9'h109;
-  assign \$269  = bus__r_addr == 9'h10a;
-  assign \$270  = bus__r_addr == 9'h10b;
-  assign \$271  = bus__r_addr == 9'h10c;
-  assign \$272  = bus__r_addr == 9'h10d;
-  assign \$273  = bus__r_addr == 9'h10e;
-  assign \$274  = bus__r_addr == 9'h10f;
-  assign \$275  = bus__r_addr == 9'h120;
-  assign \$276  = bus__r_addr == 9'h121;
-  assign \$277  = bus__r_addr == 9'h122;
-  assign \$278  = bus__r_addr == 9'h123;
-  assign \$279  = bus__r_addr == 9'h124;
-  assign \$280  = bus__r_addr == 9'h140;
-  assign \$281  = bus__r_addr == 9'h141;
-  assign \$282  = bus__r_addr == 9'h142;
-  assign \$283  = bus__r_addr == 9'h143;
-  assign \$284  = bus__r_addr == 9'h144;
-  assign \$285  = bus__r_addr == 9'h145;
-  assign \$286  = bus__r_addr[10:3] == 6'h23;
-  assign \$287  = bus__r_en & \$286 ;
-  assign \$288  = bus__r_addr[10:4] == 5'h16;
-  assign \$289  = bus__r_en & \$288 ;
-  assign \$290  = bus__r_addr[10:3] == 6'h22;
-  assign \$291  = bus__r_en & \$290 ;
-  assign \$292  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$294  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$295  = \$293  | \$294 ;
-  assign \$296  = ch1_read_select_102 ? 32'd253241399 : 32'd0;
-  assign \$297  = \$295  | \$296 ;
-  assign \$298  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
-  assign \$299  = \$297  | \$298 ;
-  assign \$300  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
-  assign \$301  = \$299  | \$300 ;
-  assign \$302  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
-  assign \$303  = \$301  | \$302 ;
-  assign \$304  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
-  assign \$305  = \$303  | \$304 ;
-  assign \$306  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
-  assign \$307  = \$305  | \$306 ;
-  assign \$308  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
-  assign \$309  = \$307  | \$308 ;
-  assign \$310  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$311  = \$309  | \$310 ;
-  assign \$312  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 3'h0, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 4'h0, ch1_cfg_words_w0_signed, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
-  assign \$313  = \$311  | \$312 ;
-  assign \$314  = ch1_read_select_10e ? { 4'h0, ch1_cfg_checks_confirm_frames, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
-  assign \$315  = \$313  | \$314 ;
-  assign \$316  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
-  assign \$317  = \$315  | \$316 ;
-  assign \$318  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
-  assign \$319  = \$317  | \$318 ;
-  assign \$320  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
-  assign \$321  = \$319  | \$320 ;
-  assign \$322  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
-  assign \$323  = \$321  | \$322 ;
-  assign \$324  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
-  assign \$325  = \$323  | \$324 ;
-  assign \$326  = ch1_read_select_124 ? { 4'h0, ch1_cfg_ssi_ssi_delay, 12'h000, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi } : 32'd0;
-  assign \$327  = \$325  | \$326 ;
-  assign \$328  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$253 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
-  assign \$329  = \$327  | \$328 ;
-  assign \$332  = ch1_read_select_142 ? { 17'h00000, \port$7234$0 [9:3], 1'h0, \port$7234$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
-  assign \$333  = \$331  | \$332 ;
-  assign \$334  = ch1_read_select_143 ? \port$7157$0 [31:0] : 32'd0;
-  assign \$335  = \$333  | \$334 ;
-  assign \$336  = ch1_read_select_144 ? \port$7157$0 [63:32] : 32'd0;
-  assign \$337  = \$335  | \$336 ;
-  assign \$338  = ch1_read_select_145 ? { 16'h0000, \port$7157$0 [79:64] } : 32'd0;
-  assign \$339  = \$337  | \$338 ;
-  assign \$340  = ch1_window0_read ? ch1__count_data : 32'd0;
-  assign \$341  = \$339  | \$340 ;
-  assign \$342  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
-  assign \$343  = \$341  | \$342 ;
-  assign \$344  = ch1_window2_read ? \read_data$304  : 32'd0;
-  assign \$345  = \$343  | \$344 ;
-  assign \$346  = ! write_addr;
-  assign g_id_write = write_en & \$346 ;
-  assign \$347  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$347 ;
-  assign \$348  = write_addr == 2'h2;
-  \biss_master_axil.bank.ch0_result_pages  ch0_result_pages (
-    .capture(capture),
-    .clk(clk),
-    .\port$6242$0 (ch0__done_count),
-    .\port$6611$0 (\port$6611$0 ),
-    .published(ch0__result_published),
-    .read__en(read_en),
-    .read_addr(bus__r_addr[2:0]),
-    .read_data(read_data),
-    .read_take(read_take),
-    .rst(rst)
-  );
-  \biss_master_axil.bank.ch1_result_pages  ch1_result_pages (
-    .capture(\capture$507 ),
-    .clk(clk),
-    .\port$6775$0 (ch1__done_count),
-    .\port$7144$0 (\port$7144$0 ),
-    .published(ch1__result_published),
-    .read__en(\read_en$512 ),
-    .read_addr(bus__r_addr[2:0]),
-    .read_data(\read_data$304 ),
-    .read_take(\read_take$513 ),
-    .rst(rst)
-  );
+  assign \$111  = bus__r_addr == 8'h90;
+  assign \$112  = bus__r_addr == 8'h91;
+  assign \$113  = bus__r_addr == 8'h92;
+  assign \$114  = bus__r_addr == 8'h93;
+  assign \$115  = bus__r_addr == 8'h94;
+  assign \$116  = bus__r_addr == 8'h95;
+  assign \$117  = bus__r_addr == 8'h96;
+  assign \$118  = bus__r_addr == 8'h97;
+  assign \$119  = bus__r_addr == 8'ha0;
+  assign \$120  = bus__r_addr == 8'ha1;
+  assign \$121  = bus__r_addr == 8'ha2;
+  assign \$122  = bus__r_addr == 8'ha3;
+  assign \$123  = bus__r_addr == 8'ha4;
+  assign \$124  = bus__r_addr == 8'hc0;
+  assign \$125  = bus__r_addr == 8'hc1;
+  assign \$126  = bus__r_addr == 8'hc2;
+  assign \$127  = bus__r_addr == 8'hc3;
+  assign \$128  = bus__r_addr == 8'hc4;
+  assign \$129  = bus__r_addr == 8'hc5;
+  assign \$130  = ch0_read_select_90 & bus__r_load;
+  assign \$131  = bus__r_addr[10:3] == 5'h13;
+  assign \$132  = bus__r_en & \$131 ;
+  assign \$133  = bus__r_addr[10:4] == 4'he;
+  assign \$134  = bus__r_en & \$133 ;
+  assign \$135  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$137  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$138  = \$136  | \$137 ;
+  assign \$139  = ch0_read_select_82 ? 32'd253241399 : 32'd0;
+  assign \$140  = \$138  | \$139 ;
+  assign \$141  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$142  = \$140  | \$141 ;
+  assign \$143  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
+  assign \$144  = \$142  | \$143 ;
+  assign \$145  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
+  assign \$146  = \$144  | \$145 ;
+  assign \$147  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
+  assign \$148  = \$146  | \$147 ;
+  assign \$149  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
+  assign \$150  = \$148  | \$149 ;
+  assign \$151  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
+  assign \$152  = \$150  | \$151 ;
+  assign \$153  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$154  = \$152  | \$153 ;
+  assign \$155  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 3'h0, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 4'h0, ch0_cfg_words_w0_signed, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
+  assign \$156  = \$154  | \$155 ;
+  assign \$157  = ch0_read_select_8e ? { 4'h0, ch0_cfg_checks_confirm_frames, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
+  assign \$158  = \$156  | \$157 ;
+  assign \$159  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
+  assign \$160  = \$158  | \$159 ;
+  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6669$0 [182:177], 4'h0, \port$6669$0 [186:183], 1'h0, \port$6669$0 [176:174], 1'h0, \port$6669$0 [133:131], 3'h0, \port$6669$0 [49], \port$6669$0 [3:0] } : 32'd0;
+  assign \$162  = \$160  | \$161 ;
+  assign \$163  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$164  = \$162  | \$163 ;
+  assign \$165  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$166  = \$164  | \$165 ;
+  assign \$167  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$168  = \$166  | \$167 ;
+  assign \$169  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$170  = \$168  | \$169 ;
+  assign \$171  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$172  = \$170  | \$171 ;
+  assign \$173  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$174  = \$172  | \$173 ;
+  assign \$175  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
+  assign \$176  = \$174  | \$175 ;
+  assign \$177  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
+  assign \$178  = \$176  | \$177 ;
+  assign \$179  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
+  assign \$180  = \$178  | \$179 ;
+  assign \$181  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
+  assign \$182  = \$180  | \$181 ;
+  assign \$183  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
+  assign \$184  = \$182  | \$183 ;
+  assign \$185  = ch0_read_select_a4 ? { 4'h0, ch0_cfg_ssi_ssi_delay, 12'h000, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi } : 32'd0;
+  assign \$186  = \$184  | \$185 ;
+  assign \$187  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$188  = \$186  | \$187 ;
+  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6759$0 [9:3], 1'h0, \port$6759$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$192  = \$190  | \$191 ;
+  assign \$193  = ch0_read_select_c3 ? \port$6682$0 [31:0] : 32'd0;
+  assign \$194  = \$192  | \$193 ;
+  assign \$195  = ch0_read_select_c4 ? \port$6682$0 [63:32] : 32'd0;
+  assign \$196  = \$194  | \$195 ;
+  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6682$0 [79:64] } : 32'd0;
+  assign \$198  = \$196  | \$197 ;
+  assign \$199  = ch0_window0_read ? ch0__count_data : 32'd0;
+  assign \$200  = \$198  | \$199 ;
+  assign \$201  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$202  = \$200  | \$201 ;
+  assign \$203  = write_data[0] & write_strb[0];
+  assign \$204  = ch1_ctrl_write ? \$203  : 1'h0;
+  assign \$205  = write_data[1] & write_strb[0];
+  assign \$206  = ch1_ctrl_write ? \$205  : 1'h0;
+  assign \$207  = write_data[2] & write_strb[0];
+  assign \$208  = ch1_ctrl_write ? \$207  : 1'h0;
+  assign \$209  = ch1_ctrl_write & write_strb[1];
+  assign \$210  = ch1_ctrl_write & write_strb[1];
+  assign \$211  = write_data[0] & write_strb[0];
+  assign \$212  = ch1_irq_status_write ? \$211  : 1'h0;
+  assign \$213  = write_data[1] & write_strb[0];
+  assign \$214  = ch1_irq_status_write ? \$213  : 1'h0;
+  assign \$215  = write_data[2] & write_strb[0];
+  assign \$216  = ch1_irq_status_write ? \$215  : 1'h0;
+  assign \$217  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$218  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$219  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$220  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$221  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$222  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$223  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$224  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$225  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$226  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$227  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$228  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$229  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$230  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$231  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$232  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$233  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$234  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$235  = ch1_cfg_timeout_config_write & config_write_strb[2];
+  assign \$236  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$237  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$238  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$239  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$240  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$241  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$242  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$243  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$244  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$245  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$246  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$247  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$248  = ch1_cfg_words_config_write & config_write_strb[3];
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$439  = bus__w_en;
+    \$479  = bus__w_en;
     if (rst) begin
-      \$439  = 1'h0;
+      \$479  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$440  = write_addr;
+    \$480  = write_addr;
     if (bus__w_en) begin
-      \$440  = bus__w_addr;
+      \$480  = bus__w_addr;
     end
     if (rst) begin
-      \$440  = 11'h000;
+      \$480  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$441  = write_data;
+    \$481  = write_data;
     if (bus__w_en) begin
-      \$441  = bus__w_data;
+      \$481  = bus__w_data;
     end
     if (rst) begin
-      \$441  = 32'd0;
+      \$481  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$442  = write_strb;
+    \$482  = write_strb;
     if (bus__w_en) begin
-      \$442  = bus__w_strb;
+      \$482  = bus__w_strb;
     end
     if (rst) begin
-      \$442  = 4'h0;
+      \$482  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$443  = config_write_data;
+    \$483  = config_write_data;
     if (write_en) begin
-      \$443  = write_data;
+      \$483  = write_data;
     end
     if (rst) begin
-      \$443  = 32'd0;
+      \$483  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$444  = config_write_strb;
+    \$484  = config_write_strb;
     if (write_en) begin
-      \$444  = write_strb;
+      \$484  = write_strb;
     end
     if (rst) begin
-      \$444  = 4'h0;
+      \$484  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$445  = \$2 ;
+    \$485  = \$2 ;
     if (rst) begin
-      \$445  = 1'h0;
+      \$485  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$446  = g_read_select_0;
+    \$486  = g_read_select_0;
     if (bus__r_en) begin
-      \$446  = \$3 ;
-    end
-    if (rst) begin
-      \$446  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$447  = g_read_select_1;
-    if (bus__r_en) begin
-      \$447  = \$4 ;
-    end
-    if (rst) begin
-      \$447  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$448  = g_read_select_2;
-    if (bus__r_en) begin
-      \$448  = \$5 ;
-    end
-    if (rst) begin
-      \$448  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$449  = g_read_select_3;
-    if (bus__r_en) begin
-      \$449  = \$6 ;
-    end
-    if (rst) begin
-      \$449  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$450  = g_read_select_4;
-    if (bus__r_en) begin
-      \$450  = \$7 ;
-    end
-    if (rst) begin
-      \$450  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$451  = g_read_data;
-    if (bus__r_load) begin
-      \$451  = \$17 ;
-    end
-    if (rst) begin
-      \$451  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$452  = \$19 ;
-    if (rst) begin
-      \$452  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$453  = \$21 ;
-    if (rst) begin
-      \$453  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$454  = \$23 ;
-    if (rst) begin
-      \$454  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$455  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$455  = write_data[8];
-    end
-    if (rst) begin
-      \$455  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$456  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$456  = write_data[9];
-    end
-    if (rst) begin
-      \$456  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$457  = ch0_irq_status_done;
-    if (ch0__frame_done) begin
-      \$457  = 1'h1;
-    end else if (\$27 ) begin
-      \$457  = 1'h0;
-    end
-    if (rst) begin
-      \$457  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$458  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$458  = 1'h1;
-    end else if (\$29 ) begin
-      \$458  = 1'h0;
-    end
-    if (rst) begin
-      \$458  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$459  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$459  = 1'h1;
-    end else if (\$31 ) begin
-      \$459  = 1'h0;
-    end
-    if (rst) begin
-      \$459  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$460  = ch0_irq_enable_write;
-    if (rst) begin
-      \$460  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$461  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$461  = config_write_data[0];
-    end
-    if (rst) begin
-      \$461  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$462  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$462  = config_write_data[1];
-    end
-    if (rst) begin
-      \$462  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$463  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$463  = config_write_data[2];
-    end
-    if (rst) begin
-      \$463  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$464  = ch0_cfg_ma_write;
-    if (rst) begin
-      \$464  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$465  = ch0_cfg_ma_ma_half_period;
-    if (\$35 ) begin
-      \$465 [7:0] = config_write_data[7:0];
-    end
-    if (\$36 ) begin
-      \$465 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$465  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$466  = ch0_cfg_ma_delay_limit;
-    if (\$37 ) begin
-      \$466 [7:0] = config_write_data[23:16];
-    end
-    if (\$38 ) begin
-      \$466 [11:8] = config_write_data[27:24];
-    end
-    if (rst) begin
-      \$466  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$467  = ch0_cfg_period_write;
-    if (rst) begin
-      \$467  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$468  = ch0_cfg_period_request_period;
-    if (\$39 ) begin
-      \$468 [7:0] = config_write_data[7:0];
-    end
-    if (\$40 ) begin
-      \$468 [15:8] = config_write_data[15:8];
-    end
-    if (\$41 ) begin
-      \$468 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$468  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$469  = ch0_cfg_break_write;
-    if (rst) begin
-      \$469  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$470  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
-      \$470 [7:0] = config_write_data[7:0];
-    end
-    if (\$43 ) begin
-      \$470 [15:8] = config_write_data[15:8];
-    end
-    if (\$44 ) begin
-      \$470 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$470  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$471  = ch0_cfg_ack_write;
-    if (rst) begin
-      \$471  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$472  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
-      \$472 [7:0] = config_write_data[7:0];
-    end
-    if (\$46 ) begin
-      \$472 [15:8] = config_write_data[15:8];
-    end
-    if (\$47 ) begin
-      \$472 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$472  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$473  = ch0_cfg_timeout_write;
-    if (rst) begin
-      \$473  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$474  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
-      \$474 [7:0] = config_write_data[7:0];
-    end
-    if (\$49 ) begin
-      \$474 [15:8] = config_write_data[15:8];
-    end
-    if (\$50 ) begin
-      \$474 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$474  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$475  = ch0_cfg_words_write;
-    if (rst) begin
-      \$475  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$476  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$476  = config_write_data[5:0];
-    end
-    if (rst) begin
-      \$476  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$477  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$477  = config_write_data[6];
-    end
-    if (rst) begin
-      \$477  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$478  = ch0_cfg_words_w0_lc;
-    if (\$53 ) begin
-      \$478  = config_write_data[7];
-    end
-    if (rst) begin
-      \$478  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$479  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$479  = config_write_data[9:8];
-    end
-    if (rst) begin
-      \$479  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$480  = ch0_cfg_words_w0_gray;
-    if (\$55 ) begin
-      \$480  = config_write_data[10];
-    end
-    if (rst) begin
-      \$480  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$481  = ch0_cfg_words_w0_signed;
-    if (\$56 ) begin
-      \$481  = config_write_data[11];
-    end
-    if (rst) begin
-      \$481  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$482  = ch0_cfg_words_w1_data_bits;
-    if (\$57 ) begin
-      \$482  = config_write_data[21:16];
-    end
-    if (rst) begin
-      \$482  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$483  = ch0_cfg_words_w1_nenw;
-    if (\$58 ) begin
-      \$483  = config_write_data[22];
-    end
-    if (rst) begin
-      \$483  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$484  = ch0_cfg_words_w1_lc;
-    if (\$59 ) begin
-      \$484  = config_write_data[23];
-    end
-    if (rst) begin
-      \$484  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$485  = ch0_cfg_words_w1_crc;
-    if (\$60 ) begin
-      \$485  = config_write_data[25:24];
-    end
-    if (rst) begin
-      \$485  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$486  = ch0_cfg_words_w1_gray;
-    if (\$61 ) begin
-      \$486  = config_write_data[26];
+      \$486  = \$3 ;
     end
     if (rst) begin
       \$486  = 1'h0;
@@ -4098,9 +3933,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$487  = ch0_cfg_words_w1_signed;
-    if (\$62 ) begin
-      \$487  = config_write_data[27];
+    \$487  = g_read_select_1;
+    if (bus__r_en) begin
+      \$487  = \$4 ;
     end
     if (rst) begin
       \$487  = 1'h0;
@@ -4108,9 +3943,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$488  = ch0_cfg_words_w1_enable;
-    if (\$63 ) begin
-      \$488  = config_write_data[31];
+    \$488  = g_read_select_2;
+    if (bus__r_en) begin
+      \$488  = \$5 ;
     end
     if (rst) begin
       \$488  = 1'h0;
@@ -4118,16 +3953,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$489  = ch0_cfg_checks_write;
+    \$489  = g_read_select_3;
+    if (bus__r_en) begin
+      \$489  = \$6 ;
+    end
     if (rst) begin
       \$489  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$490  = ch0_cfg_checks_end_check;
-    if (\$64 ) begin
-      \$490  = config_write_data[0];
+    \$490  = g_read_select_4;
+    if (bus__r_en) begin
+      \$490  = \$7 ;
     end
     if (rst) begin
       \$490  = 1'h0;
@@ -4135,109 +3973,103 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$491  = ch0_cfg_checks_spw_check;
-    if (\$65 ) begin
-      \$491  = config_write_data[1];
+    \$491  = g_read_data;
+    if (bus__r_load) begin
+      \$491  = \$17 ;
     end
     if (rst) begin
-      \$491  = 1'h0;
+      \$491  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$492  = ch0_cfg_checks_spw_tolerance;
-    if (\$66 ) begin
-      \$492  = config_write_data[15:8];
-    end
+    \$492  = \$19 ;
     if (rst) begin
-      \$492  = 8'h00;
+      \$492  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$493  = ch0_cfg_checks_noise_limit;
-    if (\$67 ) begin
-      \$493  = config_write_data[19:16];
-    end
+    \$493  = \$21 ;
     if (rst) begin
-      \$493  = 4'h0;
+      \$493  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$494  = ch0_cfg_checks_delay_tolerance;
-    if (\$68 ) begin
-      \$494  = config_write_data[23:20];
-    end
+    \$494  = \$23 ;
     if (rst) begin
-      \$494  = 4'h0;
+      \$494  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$495  = ch0_cfg_checks_confirm_frames;
-    if (\$69 ) begin
-      \$495  = config_write_data[27:24];
+    \$495  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$495  = write_data[8];
     end
     if (rst) begin
-      \$495  = 4'h0;
+      \$495  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$496  = ch0_cfg_quiet_write;
+    \$496  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$496  = write_data[9];
+    end
     if (rst) begin
       \$496  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$497  = ch0_cfg_quiet_quiet_time;
-    if (\$70 ) begin
-      \$497 [7:0] = config_write_data[7:0];
-    end
-    if (\$71 ) begin
-      \$497 [11:8] = config_write_data[11:8];
+    \$497  = ch0_irq_status_done;
+    if (ch0__frame_done) begin
+      \$497  = 1'h1;
+    end else if (\$27 ) begin
+      \$497  = 1'h0;
     end
     if (rst) begin
-      \$497  = 12'h000;
+      \$497  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$498  = ch0_cfg_crc0_write;
+    \$498  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$498  = 1'h1;
+    end else if (\$29 ) begin
+      \$498  = 1'h0;
+    end
     if (rst) begin
       \$498  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$499  = ch0_cfg_crc0_w0_crc_poly;
-    if (\$72 ) begin
-      \$499 [7:0] = config_write_data[7:0];
-    end
-    if (\$73 ) begin
-      \$499 [15:8] = config_write_data[15:8];
+    \$499  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$499  = 1'h1;
+    end else if (\$31 ) begin
+      \$499  = 1'h0;
     end
     if (rst) begin
-      \$499  = 16'h0000;
+      \$499  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$500  = ch0_cfg_crc0_w0_crc_width;
-    if (\$74 ) begin
-      \$500  = config_write_data[20:16];
-    end
+    \$500  = ch0_irq_enable_write;
     if (rst) begin
-      \$500  = 5'h00;
+      \$500  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$501  = ch0_cfg_crc0_w0_crc_inverted;
-    if (\$75 ) begin
-      \$501  = config_write_data[24];
+    \$501  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$501  = config_write_data[0];
     end
     if (rst) begin
       \$501  = 1'h0;
@@ -4245,38 +4077,38 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$502  = ch0_cfg_crc0_start_write;
+    \$502  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$502  = config_write_data[1];
+    end
     if (rst) begin
       \$502  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$503  = ch0_cfg_crc0_start_w0_crc_start;
-    if (\$76 ) begin
-      \$503 [7:0] = config_write_data[7:0];
-    end
-    if (\$77 ) begin
-      \$503 [15:8] = config_write_data[15:8];
+    \$503  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$503  = config_write_data[2];
     end
     if (rst) begin
-      \$503  = 16'h0000;
+      \$503  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$504  = ch0_cfg_crc1_write;
+    \$504  = ch0_cfg_ma_write;
     if (rst) begin
       \$504  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$505  = ch0_cfg_crc1_w1_crc_poly;
-    if (\$78 ) begin
+    \$505  = ch0_cfg_ma_ma_half_period;
+    if (\$35 ) begin
       \$505 [7:0] = config_write_data[7:0];
     end
-    if (\$79 ) begin
+    if (\$36 ) begin
       \$505 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
@@ -4285,146 +4117,161 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$506  = ch0_cfg_crc1_w1_crc_width;
-    if (\$80 ) begin
-      \$506  = config_write_data[20:16];
+    \$506  = ch0_cfg_ma_delay_limit;
+    if (\$37 ) begin
+      \$506 [7:0] = config_write_data[23:16];
+    end
+    if (\$38 ) begin
+      \$506 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$506  = 5'h00;
+      \$506  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$507  = ch0_cfg_crc1_w1_crc_inverted;
-    if (\$81 ) begin
-      \$507  = config_write_data[24];
-    end
+    \$507  = ch0_cfg_period_write;
     if (rst) begin
       \$507  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$508  = ch0_cfg_crc1_start_write;
+    \$508  = ch0_cfg_period_request_period;
+    if (\$39 ) begin
+      \$508 [7:0] = config_write_data[7:0];
+    end
+    if (\$40 ) begin
+      \$508 [15:8] = config_write_data[15:8];
+    end
+    if (\$41 ) begin
+      \$508 [23:16] = config_write_data[23:16];
+    end
     if (rst) begin
-      \$508  = 1'h0;
+      \$508  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$509  = ch0_cfg_crc1_start_w1_crc_start;
-    if (\$82 ) begin
-      \$509 [7:0] = config_write_data[7:0];
-    end
-    if (\$83 ) begin
-      \$509 [15:8] = config_write_data[15:8];
-    end
+    \$509  = ch0_cfg_break_write;
     if (rst) begin
-      \$509  = 16'h0000;
+      \$509  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$510  = ch0_cfg_ssi_write;
+    \$510  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
+      \$510 [7:0] = config_write_data[7:0];
+    end
+    if (\$43 ) begin
+      \$510 [15:8] = config_write_data[15:8];
+    end
+    if (\$44 ) begin
+      \$510 [23:16] = config_write_data[23:16];
+    end
     if (rst) begin
-      \$510  = 1'h0;
+      \$510  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$511  = ch0_cfg_ssi_ssi;
-    if (\$84 ) begin
-      \$511  = config_write_data[0];
-    end
+    \$511  = ch0_cfg_ack_write;
     if (rst) begin
       \$511  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$512  = ch0_cfg_ssi_ssi_error;
-    if (\$85 ) begin
-      \$512  = config_write_data[1];
+    \$512  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
+      \$512 [7:0] = config_write_data[7:0];
+    end
+    if (\$46 ) begin
+      \$512 [15:8] = config_write_data[15:8];
+    end
+    if (\$47 ) begin
+      \$512 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$512  = 1'h0;
+      \$512  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$513  = ch0_cfg_ssi_ssi_error_low;
-    if (\$86 ) begin
-      \$513  = config_write_data[2];
-    end
+    \$513  = ch0_cfg_timeout_write;
     if (rst) begin
       \$513  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$514  = ch0_cfg_ssi_ssi_double;
-    if (\$87 ) begin
-      \$514  = config_write_data[3];
+    \$514  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
+      \$514 [7:0] = config_write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$514 [15:8] = config_write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$514 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$514  = 1'h0;
+      \$514  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$515  = ch0_cfg_ssi_ssi_delay;
-    if (\$88 ) begin
-      \$515 [7:0] = config_write_data[23:16];
-    end
-    if (\$89 ) begin
-      \$515 [11:8] = config_write_data[27:24];
-    end
+    \$515  = ch0_cfg_words_write;
     if (rst) begin
-      \$515  = 12'h000;
+      \$515  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$516  = ch0_ca_request_write;
+    \$516  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$516  = config_write_data[5:0];
+    end
     if (rst) begin
-      \$516  = 1'h0;
+      \$516  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$517  = ch0_ca_request_slave_id;
-    if (\$90 ) begin
-      \$517  = config_write_data[2:0];
+    \$517  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$517  = config_write_data[6];
     end
     if (rst) begin
-      \$517  = 3'h0;
+      \$517  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$518  = ch0_ca_request_address;
-    if (\$91 ) begin
-      \$518  = config_write_data[14:8];
+    \$518  = ch0_cfg_words_w0_lc;
+    if (\$53 ) begin
+      \$518  = config_write_data[7];
     end
     if (rst) begin
-      \$518  = 7'h00;
+      \$518  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$519  = ch0_ca_request_count;
-    if (\$92 ) begin
-      \$519  = config_write_data[22:16];
+    \$519  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$519  = config_write_data[9:8];
     end
     if (rst) begin
-      \$519  = 7'h00;
+      \$519  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$520  = \ch0_ca_request_write$113 ;
-    if (\$93 ) begin
-      \$520  = config_write_data[24];
+    \$520  = ch0_cfg_words_w0_gray;
+    if (\$55 ) begin
+      \$520  = config_write_data[10];
     end
     if (rst) begin
       \$520  = 1'h0;
@@ -4432,23 +4279,29 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$521  = \$95 ;
+    \$521  = ch0_cfg_words_w0_signed;
+    if (\$56 ) begin
+      \$521  = config_write_data[11];
+    end
     if (rst) begin
       \$521  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$522  = \$97 ;
+    \$522  = ch0_cfg_words_w1_data_bits;
+    if (\$57 ) begin
+      \$522  = config_write_data[21:16];
+    end
     if (rst) begin
-      \$522  = 1'h0;
+      \$522  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$523  = ch0_read_select_80;
-    if (bus__r_en) begin
-      \$523  = \$98 ;
+    \$523  = ch0_cfg_words_w1_nenw;
+    if (\$58 ) begin
+      \$523  = config_write_data[22];
     end
     if (rst) begin
       \$523  = 1'h0;
@@ -4456,9 +4309,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$524  = ch0_read_select_81;
-    if (bus__r_en) begin
-      \$524  = \$99 ;
+    \$524  = ch0_cfg_words_w1_lc;
+    if (\$59 ) begin
+      \$524  = config_write_data[23];
     end
     if (rst) begin
       \$524  = 1'h0;
@@ -4466,19 +4319,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$525  = ch0_read_select_82;
-    if (bus__r_en) begin
-      \$525  = \$100 ;
+    \$525  = ch0_cfg_words_w1_crc;
+    if (\$60 ) begin
+      \$525  = config_write_data[25:24];
     end
     if (rst) begin
-      \$525  = 1'h0;
+      \$525  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$526  = ch0_read_select_84;
-    if (bus__r_en) begin
-      \$526  = \$101 ;
+    \$526  = ch0_cfg_words_w1_gray;
+    if (\$61 ) begin
+      \$526  = config_write_data[26];
     end
     if (rst) begin
       \$526  = 1'h0;
@@ -4486,9 +4339,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$527  = ch0_read_select_85;
-    if (bus__r_en) begin
-      \$527  = \$102 ;
+    \$527  = ch0_cfg_words_w1_signed;
+    if (\$62 ) begin
+      \$527  = config_write_data[27];
     end
     if (rst) begin
       \$527  = 1'h0;
@@ -4496,9 +4349,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$528  = ch0_read_select_88;
-    if (bus__r_en) begin
-      \$528  = \$103 ;
+    \$528  = ch0_cfg_words_w1_enable;
+    if (\$63 ) begin
+      \$528  = config_write_data[31];
     end
     if (rst) begin
       \$528  = 1'h0;
@@ -4506,19 +4359,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$529  = ch0_read_select_89;
-    if (bus__r_en) begin
-      \$529  = \$104 ;
-    end
+    \$529  = ch0_cfg_checks_write;
     if (rst) begin
       \$529  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$530  = ch0_read_select_8a;
-    if (bus__r_en) begin
-      \$530  = \$105 ;
+    \$530  = ch0_cfg_checks_end_check;
+    if (\$64 ) begin
+      \$530  = config_write_data[0];
     end
     if (rst) begin
       \$530  = 1'h0;
@@ -4526,9 +4376,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$531  = ch0_read_select_8b;
-    if (bus__r_en) begin
-      \$531  = \$106 ;
+    \$531  = ch0_cfg_checks_spw_check;
+    if (\$65 ) begin
+      \$531  = config_write_data[1];
     end
     if (rst) begin
       \$531  = 1'h0;
@@ -4536,99 +4386,99 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$532  = ch0_read_select_8c;
-    if (bus__r_en) begin
-      \$532  = \$107 ;
+    \$532  = ch0_cfg_checks_spw_tolerance;
+    if (\$66 ) begin
+      \$532  = config_write_data[15:8];
     end
     if (rst) begin
-      \$532  = 1'h0;
+      \$532  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$533  = ch0_read_select_8d;
-    if (bus__r_en) begin
-      \$533  = \$108 ;
+    \$533  = ch0_cfg_checks_noise_limit;
+    if (\$67 ) begin
+      \$533  = config_write_data[19:16];
     end
     if (rst) begin
-      \$533  = 1'h0;
+      \$533  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$534  = ch0_read_select_8e;
-    if (bus__r_en) begin
-      \$534  = \$109 ;
+    \$534  = ch0_cfg_checks_delay_tolerance;
+    if (\$68 ) begin
+      \$534  = config_write_data[23:20];
     end
     if (rst) begin
-      \$534  = 1'h0;
+      \$534  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$535  = ch0_read_select_8f;
-    if (bus__r_en) begin
-      \$535  = \$110 ;
+    \$535  = ch0_cfg_checks_confirm_frames;
+    if (\$69 ) begin
+      \$535  = config_write_data[27:24];
     end
     if (rst) begin
-      \$535  = 1'h0;
+      \$535  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$536  = ch0_read_select_a0;
-    if (bus__r_en) begin
-      \$536  = \$111 ;
-    end
+    \$536  = ch0_cfg_quiet_write;
     if (rst) begin
       \$536  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$537  = ch0_read_select_a1;
-    if (bus__r_en) begin
-      \$537  = \$112 ;
+    \$537  = ch0_cfg_quiet_quiet_time;
+    if (\$70 ) begin
+      \$537 [7:0] = config_write_data[7:0];
+    end
+    if (\$71 ) begin
+      \$537 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$537  = 1'h0;
+      \$537  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$538  = ch0_read_select_a2;
-    if (bus__r_en) begin
-      \$538  = \$113 ;
-    end
+    \$538  = ch0_cfg_crc0_write;
     if (rst) begin
       \$538  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$539  = ch0_read_select_a3;
-    if (bus__r_en) begin
-      \$539  = \$114 ;
+    \$539  = ch0_cfg_crc0_w0_crc_poly;
+    if (\$72 ) begin
+      \$539 [7:0] = config_write_data[7:0];
+    end
+    if (\$73 ) begin
+      \$539 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$539  = 1'h0;
+      \$539  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$540  = ch0_read_select_a4;
-    if (bus__r_en) begin
-      \$540  = \$115 ;
+    \$540  = ch0_cfg_crc0_w0_crc_width;
+    if (\$74 ) begin
+      \$540  = config_write_data[20:16];
     end
     if (rst) begin
-      \$540  = 1'h0;
+      \$540  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$541  = ch0_read_select_c0;
-    if (bus__r_en) begin
-      \$541  = \$116 ;
+    \$541  = ch0_cfg_crc0_w0_crc_inverted;
+    if (\$75 ) begin
+      \$541  = config_write_data[24];
     end
     if (rst) begin
       \$541  = 1'h0;
@@ -4636,59 +4486,59 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$542  = ch0_read_select_c1;
-    if (bus__r_en) begin
-      \$542  = \$117 ;
-    end
+    \$542  = ch0_cfg_crc0_start_write;
     if (rst) begin
       \$542  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$543  = ch0_read_select_c2;
-    if (bus__r_en) begin
-      \$543  = \$118 ;
+    \$543  = ch0_cfg_crc0_start_w0_crc_start;
+    if (\$76 ) begin
+      \$543 [7:0] = config_write_data[7:0];
+    end
+    if (\$77 ) begin
+      \$543 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$543  = 1'h0;
+      \$543  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$544  = ch0_read_select_c3;
-    if (bus__r_en) begin
-      \$544  = \$119 ;
-    end
+    \$544  = ch0_cfg_crc1_write;
     if (rst) begin
       \$544  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$545  = ch0_read_select_c4;
-    if (bus__r_en) begin
-      \$545  = \$120 ;
+    \$545  = ch0_cfg_crc1_w1_crc_poly;
+    if (\$78 ) begin
+      \$545 [7:0] = config_write_data[7:0];
+    end
+    if (\$79 ) begin
+      \$545 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$545  = 1'h0;
+      \$545  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$546  = ch0_read_select_c5;
-    if (bus__r_en) begin
-      \$546  = \$121 ;
+    \$546  = ch0_cfg_crc1_w1_crc_width;
+    if (\$80 ) begin
+      \$546  = config_write_data[20:16];
     end
     if (rst) begin
-      \$546  = 1'h0;
+      \$546  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$547  = ch0_window0_read;
-    if (bus__r_en) begin
-      \$547  = \$123 ;
+    \$547  = ch0_cfg_crc1_w1_crc_inverted;
+    if (\$81 ) begin
+      \$547  = config_write_data[24];
     end
     if (rst) begin
       \$547  = 1'h0;
@@ -4696,60 +4546,66 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$548  = ch0_window1_read;
-    if (bus__r_en) begin
-      \$548  = \$125 ;
-    end
+    \$548  = ch0_cfg_crc1_start_write;
     if (rst) begin
       \$548  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$549  = ch0_window2_read;
-    if (bus__r_en) begin
-      \$549  = \$127 ;
+    \$549  = ch0_cfg_crc1_start_w1_crc_start;
+    if (\$82 ) begin
+      \$549 [7:0] = config_write_data[7:0];
+    end
+    if (\$83 ) begin
+      \$549 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$549  = 1'h0;
+      \$549  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$550  = ch0_read_data;
-    if (bus__r_load) begin
-      \$550  = \$181 ;
-    end
+    \$550  = ch0_cfg_ssi_write;
     if (rst) begin
-      \$550  = 32'd0;
+      \$550  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$551  = \$183 ;
+    \$551  = ch0_cfg_ssi_ssi;
+    if (\$84 ) begin
+      \$551  = config_write_data[0];
+    end
     if (rst) begin
       \$551  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$552  = \$185 ;
+    \$552  = ch0_cfg_ssi_ssi_error;
+    if (\$85 ) begin
+      \$552  = config_write_data[1];
+    end
     if (rst) begin
       \$552  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$553  = \$187 ;
+    \$553  = ch0_cfg_ssi_ssi_error_low;
+    if (\$86 ) begin
+      \$553  = config_write_data[2];
+    end
     if (rst) begin
       \$553  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$554  = ch1_ctrl_periodic;
-    if (\$188 ) begin
-      \$554  = write_data[8];
+    \$554  = ch0_cfg_ssi_ssi_double;
+    if (\$87 ) begin
+      \$554  = config_write_data[3];
     end
     if (rst) begin
       \$554  = 1'h0;
@@ -4757,62 +4613,59 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$555  = ch1_ctrl_trigger_enable;
-    if (\$189 ) begin
-      \$555  = write_data[9];
+    \$555  = ch0_cfg_ssi_ssi_delay;
+    if (\$88 ) begin
+      \$555 [7:0] = config_write_data[23:16];
+    end
+    if (\$89 ) begin
+      \$555 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$555  = 1'h0;
+      \$555  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$556  = ch1_irq_status_done;
-    if (ch1__frame_done) begin
-      \$556  = 1'h1;
-    end else if (\$191 ) begin
-      \$556  = 1'h0;
-    end
+    \$556  = ch0_ca_request_write;
     if (rst) begin
       \$556  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$557  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$557  = 1'h1;
-    end else if (\$193 ) begin
-      \$557  = 1'h0;
+    \$557  = ch0_ca_request_slave_id;
+    if (\$90 ) begin
+      \$557  = config_write_data[2:0];
     end
     if (rst) begin
-      \$557  = 1'h0;
+      \$557  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$558  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$558  = 1'h1;
-    end else if (\$195 ) begin
-      \$558  = 1'h0;
+    \$558  = ch0_ca_request_address;
+    if (\$91 ) begin
+      \$558  = config_write_data[14:8];
     end
     if (rst) begin
-      \$558  = 1'h0;
+      \$558  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$559  = ch1_irq_enable_write;
+    \$559  = ch0_ca_request_count;
+    if (\$92 ) begin
+      \$559  = config_write_data[22:16];
+    end
     if (rst) begin
-      \$559  = 1'h0;
+      \$559  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$560  = ch1_irq_enable_done;
-    if (\$196 ) begin
-      \$560  = config_write_data[0];
+    \$560  = \ch0_ca_request_write$113 ;
+    if (\$93 ) begin
+      \$560  = config_write_data[24];
     end
     if (rst) begin
       \$560  = 1'h0;
@@ -4820,171 +4673,153 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$561  = ch1_irq_enable_error;
-    if (\$197 ) begin
-      \$561  = config_write_data[1];
-    end
+    \$561  = \$95 ;
     if (rst) begin
       \$561  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$562  = ch1_irq_enable_access_done;
-    if (\$198 ) begin
-      \$562  = config_write_data[2];
-    end
+    \$562  = \$97 ;
     if (rst) begin
       \$562  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$563  = ch1_cfg_ma_write;
+    \$563  = ch0_read_select_80;
+    if (bus__r_en) begin
+      \$563  = \$98 ;
+    end
     if (rst) begin
       \$563  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$564  = ch1_cfg_ma_ma_half_period;
-    if (\$199 ) begin
-      \$564 [7:0] = config_write_data[7:0];
-    end
-    if (\$200 ) begin
-      \$564 [15:8] = config_write_data[15:8];
+    \$564  = ch0_read_select_81;
+    if (bus__r_en) begin
+      \$564  = \$99 ;
     end
     if (rst) begin
-      \$564  = 16'h0000;
+      \$564  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$565  = ch1_cfg_ma_delay_limit;
-    if (\$201 ) begin
-      \$565 [7:0] = config_write_data[23:16];
-    end
-    if (\$202 ) begin
-      \$565 [11:8] = config_write_data[27:24];
+    \$565  = ch0_read_select_82;
+    if (bus__r_en) begin
+      \$565  = \$100 ;
     end
     if (rst) begin
-      \$565  = 12'h000;
+      \$565  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$566  = ch1_cfg_period_write;
+    \$566  = ch0_read_select_84;
+    if (bus__r_en) begin
+      \$566  = \$101 ;
+    end
     if (rst) begin
       \$566  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$567  = ch1_cfg_period_request_period;
-    if (\$203 ) begin
-      \$567 [7:0] = config_write_data[7:0];
-    end
-    if (\$204 ) begin
-      \$567 [15:8] = config_write_data[15:8];
-    end
-    if (\$205 ) begin
-      \$567 [23:16] = config_write_data[23:16];
+    \$567  = ch0_read_select_85;
+    if (bus__r_en) begin
+      \$567  = \$102 ;
     end
     if (rst) begin
-      \$567  = 24'h000000;
+      \$567  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$568  = ch1_cfg_break_write;
+    \$568  = ch0_read_select_88;
+    if (bus__r_en) begin
+      \$568  = \$103 ;
+    end
     if (rst) begin
       \$568  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$569  = ch1_cfg_break_break_time;
-    if (\$206 ) begin
-      \$569 [7:0] = config_write_data[7:0];
-    end
-    if (\$207 ) begin
-      \$569 [15:8] = config_write_data[15:8];
-    end
-    if (\$208 ) begin
-      \$569 [23:16] = config_write_data[23:16];
+    \$569  = ch0_read_select_89;
+    if (bus__r_en) begin
+      \$569  = \$104 ;
     end
     if (rst) begin
-      \$569  = 24'h000000;
+      \$569  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$570  = ch1_cfg_ack_write;
+    \$570  = ch0_read_select_8a;
+    if (bus__r_en) begin
+      \$570  = \$105 ;
+    end
     if (rst) begin
       \$570  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$571  = ch1_cfg_ack_ack_limit;
-    if (\$209 ) begin
-      \$571 [7:0] = config_write_data[7:0];
-    end
-    if (\$210 ) begin
-      \$571 [15:8] = config_write_data[15:8];
-    end
-    if (\$211 ) begin
-      \$571 [23:16] = config_write_data[23:16];
+    \$571  = ch0_read_select_8b;
+    if (bus__r_en) begin
+      \$571  = \$106 ;
     end
     if (rst) begin
-      \$571  = 24'h000000;
+      \$571  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$572  = ch1_cfg_timeout_write;
+    \$572  = ch0_read_select_8c;
+    if (bus__r_en) begin
+      \$572  = \$107 ;
+    end
     if (rst) begin
       \$572  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$573  = ch1_cfg_timeout_timeout_limit;
-    if (\$212 ) begin
-      \$573 [7:0] = config_write_data[7:0];
-    end
-    if (\$213 ) begin
-      \$573 [15:8] = config_write_data[15:8];
-    end
-    if (\$214 ) begin
-      \$573 [23:16] = config_write_data[23:16];
+    \$573  = ch0_read_select_8d;
+    if (bus__r_en) begin
+      \$573  = \$108 ;
     end
     if (rst) begin
-      \$573  = 24'h000000;
+      \$573  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$574  = ch1_cfg_words_write;
+    \$574  = ch0_read_select_8e;
+    if (bus__r_en) begin
+      \$574  = \$109 ;
+    end
     if (rst) begin
       \$574  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$575  = ch1_cfg_words_w0_data_bits;
-    if (\$215 ) begin
-      \$575  = config_write_data[5:0];
+    \$575  = ch0_read_select_8f;
+    if (bus__r_en) begin
+      \$575  = \$110 ;
     end
     if (rst) begin
-      \$575  = 6'h00;
+      \$575  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$576  = ch1_cfg_words_w0_nenw;
-    if (\$216 ) begin
-      \$576  = config_write_data[6];
+    \$576  = ch0_read_select_90;
+    if (bus__r_en) begin
+      \$576  = \$111 ;
     end
     if (rst) begin
       \$576  = 1'h0;
@@ -4992,9 +4827,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$577  = ch1_cfg_words_w0_lc;
-    if (\$217 ) begin
-      \$577  = config_write_data[7];
+    \$577  = ch0_read_select_91;
+    if (bus__r_en) begin
+      \$577  = \$112 ;
     end
     if (rst) begin
       \$577  = 1'h0;
@@ -5002,19 +4837,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$578  = ch1_cfg_words_w0_crc;
-    if (\$218 ) begin
-      \$578  = config_write_data[9:8];
+    \$578  = ch0_read_select_92;
+    if (bus__r_en) begin
+      \$578  = \$113 ;
     end
     if (rst) begin
-      \$578  = 2'h0;
+      \$578  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$579  = ch1_cfg_words_w0_gray;
-    if (\$219 ) begin
-      \$579  = config_write_data[10];
+    \$579  = ch0_read_select_93;
+    if (bus__r_en) begin
+      \$579  = \$114 ;
     end
     if (rst) begin
       \$579  = 1'h0;
@@ -5022,9 +4857,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$580  = ch1_cfg_words_w0_signed;
-    if (\$220 ) begin
-      \$580  = config_write_data[11];
+    \$580  = ch0_read_select_94;
+    if (bus__r_en) begin
+      \$580  = \$115 ;
     end
     if (rst) begin
       \$580  = 1'h0;
@@ -5032,19 +4867,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$581  = ch1_cfg_words_w1_data_bits;
-    if (\$221 ) begin
-      \$581  = config_write_data[21:16];
+    \$581  = ch0_read_select_95;
+    if (bus__r_en) begin
+      \$581  = \$116 ;
     end
     if (rst) begin
-      \$581  = 6'h00;
+      \$581  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$582  = ch1_cfg_words_w1_nenw;
-    if (\$222 ) begin
-      \$582  = config_write_data[22];
+    \$582  = ch0_read_select_96;
+    if (bus__r_en) begin
+      \$582  = \$117 ;
     end
     if (rst) begin
       \$582  = 1'h0;
@@ -5052,9 +4887,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$583  = ch1_cfg_words_w1_lc;
-    if (\$223 ) begin
-      \$583  = config_write_data[23];
+    \$583  = ch0_read_select_97;
+    if (bus__r_en) begin
+      \$583  = \$118 ;
     end
     if (rst) begin
       \$583  = 1'h0;
@@ -5062,19 +4897,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$584  = ch1_cfg_words_w1_crc;
-    if (\$224 ) begin
-      \$584  = config_write_data[25:24];
+    \$584  = ch0_read_select_a0;
+    if (bus__r_en) begin
+      \$584  = \$119 ;
     end
     if (rst) begin
-      \$584  = 2'h0;
+      \$584  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$585  = ch1_cfg_words_w1_gray;
-    if (\$225 ) begin
-      \$585  = config_write_data[26];
+    \$585  = ch0_read_select_a1;
+    if (bus__r_en) begin
+      \$585  = \$120 ;
     end
     if (rst) begin
       \$585  = 1'h0;
@@ -5082,9 +4917,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$586  = ch1_cfg_words_w1_signed;
-    if (\$226 ) begin
-      \$586  = config_write_data[27];
+    \$586  = ch0_read_select_a2;
+    if (bus__r_en) begin
+      \$586  = \$121 ;
     end
     if (rst) begin
       \$586  = 1'h0;
@@ -5092,9 +4927,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$587  = ch1_cfg_words_w1_enable;
-    if (\$227 ) begin
-      \$587  = config_write_data[31];
+    \$587  = ch0_read_select_a3;
+    if (bus__r_en) begin
+      \$587  = \$122 ;
     end
     if (rst) begin
       \$587  = 1'h0;
@@ -5102,16 +4937,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$588  = ch1_cfg_checks_write;
+    \$588  = ch0_read_select_a4;
+    if (bus__r_en) begin
+      \$588  = \$123 ;
+    end
     if (rst) begin
       \$588  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$589  = ch1_cfg_checks_end_check;
-    if (\$228 ) begin
-      \$589  = config_write_data[0];
+    \$589  = ch0_read_select_c0;
+    if (bus__r_en) begin
+      \$589  = \$124 ;
     end
     if (rst) begin
       \$589  = 1'h0;
@@ -5119,9 +4957,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$590  = ch1_cfg_checks_spw_check;
-    if (\$229 ) begin
-      \$590  = config_write_data[1];
+    \$590  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$590  = \$125 ;
     end
     if (rst) begin
       \$590  = 1'h0;
@@ -5129,99 +4967,99 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$591  = ch1_cfg_checks_spw_tolerance;
-    if (\$230 ) begin
-      \$591  = config_write_data[15:8];
+    \$591  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$591  = \$126 ;
     end
     if (rst) begin
-      \$591  = 8'h00;
+      \$591  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$592  = ch1_cfg_checks_noise_limit;
-    if (\$231 ) begin
-      \$592  = config_write_data[19:16];
+    \$592  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$592  = \$127 ;
     end
     if (rst) begin
-      \$592  = 4'h0;
+      \$592  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$593  = ch1_cfg_checks_delay_tolerance;
-    if (\$232 ) begin
-      \$593  = config_write_data[23:20];
+    \$593  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$593  = \$128 ;
     end
     if (rst) begin
-      \$593  = 4'h0;
+      \$593  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$594  = ch1_cfg_checks_confirm_frames;
-    if (\$233 ) begin
-      \$594  = config_write_data[27:24];
+    \$594  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$594  = \$129 ;
     end
     if (rst) begin
-      \$594  = 4'h0;
+      \$594  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$595  = ch1_cfg_quiet_write;
+    \$595  = ch0_result_status_status_snapshot;
+    if (\$130 ) begin
+      \$595  = \port$6669$0 [3:0];
+    end
     if (rst) begin
-      \$595  = 1'h0;
+      \$595  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$596  = ch1_cfg_quiet_quiet_time;
-    if (\$234 ) begin
-      \$596 [7:0] = config_write_data[7:0];
-    end
-    if (\$235 ) begin
-      \$596 [11:8] = config_write_data[11:8];
+    \$596  = ch0_result_status_cds_snapshot;
+    if (\$130 ) begin
+      \$596  = \port$6669$0 [49];
     end
     if (rst) begin
-      \$596  = 12'h000;
+      \$596  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$597  = ch1_cfg_crc0_write;
+    \$597  = ch0_result_status_w0_ne_snapshot;
+    if (\$130 ) begin
+      \$597  = \port$6669$0 [131];
+    end
     if (rst) begin
       \$597  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$598  = ch1_cfg_crc0_w0_crc_poly;
-    if (\$236 ) begin
-      \$598 [7:0] = config_write_data[7:0];
-    end
-    if (\$237 ) begin
-      \$598 [15:8] = config_write_data[15:8];
+    \$598  = ch0_result_status_w0_nw_snapshot;
+    if (\$130 ) begin
+      \$598  = \port$6669$0 [132];
     end
     if (rst) begin
-      \$598  = 16'h0000;
+      \$598  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$599  = ch1_cfg_crc0_w0_crc_width;
-    if (\$238 ) begin
-      \$599  = config_write_data[20:16];
+    \$599  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$130 ) begin
+      \$599  = \port$6669$0 [133];
     end
     if (rst) begin
-      \$599  = 5'h00;
+      \$599  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$600  = ch1_cfg_crc0_w0_crc_inverted;
-    if (\$239 ) begin
-      \$600  = config_write_data[24];
+    \$600  = ch0_result_status_w1_ne_snapshot;
+    if (\$130 ) begin
+      \$600  = \port$6669$0 [174];
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -5229,59 +5067,59 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$601  = ch1_cfg_crc0_start_write;
+    \$601  = ch0_result_status_w1_nw_snapshot;
+    if (\$130 ) begin
+      \$601  = \port$6669$0 [175];
+    end
     if (rst) begin
       \$601  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$602  = ch1_cfg_crc0_start_w0_crc_start;
-    if (\$240 ) begin
-      \$602 [7:0] = config_write_data[7:0];
-    end
-    if (\$241 ) begin
-      \$602 [15:8] = config_write_data[15:8];
+    \$602  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$130 ) begin
+      \$602  = \port$6669$0 [176];
     end
     if (rst) begin
-      \$602  = 16'h0000;
+      \$602  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$603  = ch1_cfg_crc1_write;
+    \$603  = ch0_result_status_lc_repeat_snapshot;
+    if (\$130 ) begin
+      \$603  = \port$6669$0 [183];
+    end
     if (rst) begin
       \$603  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$604  = ch1_cfg_crc1_w1_crc_poly;
-    if (\$242 ) begin
-      \$604 [7:0] = config_write_data[7:0];
-    end
-    if (\$243 ) begin
-      \$604 [15:8] = config_write_data[15:8];
+    \$604  = ch0_result_status_lc_skip_snapshot;
+    if (\$130 ) begin
+      \$604  = \port$6669$0 [184];
     end
     if (rst) begin
-      \$604  = 16'h0000;
+      \$604  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$605  = ch1_cfg_crc1_w1_crc_width;
-    if (\$244 ) begin
-      \$605  = config_write_data[20:16];
+    \$605  = ch0_result_status_lc_zero_snapshot;
+    if (\$130 ) begin
+      \$605  = \port$6669$0 [185];
     end
     if (rst) begin
-      \$605  = 5'h00;
+      \$605  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$606  = ch1_cfg_crc1_w1_crc_inverted;
-    if (\$245 ) begin
-      \$606  = config_write_data[24];
+    \$606  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$130 ) begin
+      \$606  = \port$6669$0 [186];
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -5289,19 +5127,19 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$607  = ch1_cfg_crc1_start_write;
+    \$607  = ch0_result_status_lc_snapshot;
+    if (\$130 ) begin
+      \$607  = \port$6669$0 [182:177];
+    end
     if (rst) begin
-      \$607  = 1'h0;
+      \$607  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$608  = ch1_cfg_crc1_start_w1_crc_start;
-    if (\$246 ) begin
-      \$608 [7:0] = config_write_data[7:0];
-    end
-    if (\$247 ) begin
-      \$608 [15:8] = config_write_data[15:8];
+    \$608  = ch0_result_seq_seq_snapshot;
+    if (\$130 ) begin
+      \$608  = ch0__done_count;
     end
     if (rst) begin
       \$608  = 16'h0000;
@@ -5309,106 +5147,109 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$609  = ch1_cfg_ssi_write;
+    \$609  = ch0_result_seq_line_delay_snapshot;
+    if (\$130 ) begin
+      \$609  = \port$6669$0 [48:36];
+    end
     if (rst) begin
-      \$609  = 1'h0;
+      \$609  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$610  = ch1_cfg_ssi_ssi;
-    if (\$248 ) begin
-      \$610  = config_write_data[0];
+    \$610  = ch0_result_w0_lo_data_snapshot;
+    if (\$130 ) begin
+      \$610  = \port$6669$0 [107:76];
     end
     if (rst) begin
-      \$610  = 1'h0;
+      \$610  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$611  = ch1_cfg_ssi_ssi_error;
-    if (\$249 ) begin
-      \$611  = config_write_data[1];
+    \$611  = ch0_result_w0_hi_data_snapshot;
+    if (\$130 ) begin
+      \$611  = \port$6669$0 [130:108];
     end
     if (rst) begin
-      \$611  = 1'h0;
+      \$611  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$612  = ch1_cfg_ssi_ssi_error_low;
-    if (\$250 ) begin
-      \$612  = config_write_data[2];
+    \$612  = ch0_result_w1_lo_data_snapshot;
+    if (\$130 ) begin
+      \$612  = \port$6669$0 [165:134];
     end
     if (rst) begin
-      \$612  = 1'h0;
+      \$612  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$613  = ch1_cfg_ssi_ssi_double;
-    if (\$251 ) begin
-      \$613  = config_write_data[3];
+    \$613  = ch0_result_w1_hi_data_snapshot;
+    if (\$130 ) begin
+      \$613  = \port$6669$0 [173:166];
     end
     if (rst) begin
-      \$613  = 1'h0;
+      \$613  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$614  = ch1_cfg_ssi_ssi_delay;
-    if (\$252 ) begin
-      \$614 [7:0] = config_write_data[23:16];
-    end
-    if (\$253 ) begin
-      \$614 [11:8] = config_write_data[27:24];
+    \$614  = ch0_result_timestamp_time_snapshot;
+    if (\$130 ) begin
+      \$614  = \port$6669$0 [35:4];
     end
     if (rst) begin
-      \$614  = 12'h000;
+      \$614  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$615  = ch1_ca_request_write;
+    \$615  = ch0_result_line_noise_events_snapshot;
+    if (\$130 ) begin
+      \$615  = \port$6669$0 [53:50];
+    end
     if (rst) begin
-      \$615  = 1'h0;
+      \$615  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$616  = ch1_ca_request_slave_id;
-    if (\$254 ) begin
-      \$616  = config_write_data[2:0];
+    \$616  = ch0_result_line_delay_settled_snapshot;
+    if (\$130 ) begin
+      \$616  = \port$6669$0 [54];
     end
     if (rst) begin
-      \$616  = 3'h0;
+      \$616  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$617  = ch1_ca_request_address;
-    if (\$255 ) begin
-      \$617  = config_write_data[14:8];
+    \$617  = ch0_result_line_delay_spread_snapshot;
+    if (\$130 ) begin
+      \$617  = \port$6669$0 [75:68];
     end
     if (rst) begin
-      \$617  = 7'h00;
+      \$617  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$618  = ch1_ca_request_count;
-    if (\$256 ) begin
-      \$618  = config_write_data[22:16];
+    \$618  = ch0_result_line_settled_delay_snapshot;
+    if (\$130 ) begin
+      \$618  = \port$6669$0 [67:55];
     end
     if (rst) begin
-      \$618  = 7'h00;
+      \$618  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$619  = \ch1_ca_request_write$253 ;
-    if (\$257 ) begin
-      \$619  = config_write_data[24];
+    \$619  = ch0_window0_read;
+    if (bus__r_en) begin
+      \$619  = \$132 ;
     end
     if (rst) begin
       \$619  = 1'h0;
@@ -5416,53 +5257,50 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$620  = \$259 ;
+    \$620  = ch0_window1_read;
+    if (bus__r_en) begin
+      \$620  = \$134 ;
+    end
     if (rst) begin
       \$620  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$621  = \$261 ;
+    \$621  = ch0_read_data;
+    if (bus__r_load) begin
+      \$621  = \$202 ;
+    end
     if (rst) begin
-      \$621  = 1'h0;
+      \$621  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$622  = ch1_read_select_100;
-    if (bus__r_en) begin
-      \$622  = \$262 ;
-    end
+    \$622  = \$204 ;
     if (rst) begin
       \$622  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$623  = ch1_read_select_101;
-    if (bus__r_en) begin
-      \$623  = \$263 ;
-    end
+    \$623  = \$206 ;
     if (rst) begin
       \$623  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$624  = ch1_read_select_102;
-    if (bus__r_en) begin
-      \$624  = \$264 ;
-    end
+    \$624  = \$208 ;
     if (rst) begin
       \$624  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$625  = ch1_read_select_104;
-    if (bus__r_en) begin
-      \$625  = \$265 ;
+    \$625  = ch1_ctrl_periodic;
+    if (\$209 ) begin
+      \$625  = write_data[8];
     end
     if (rst) begin
       \$625  = 1'h0;
@@ -5470,9 +5308,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$626  = ch1_read_select_105;
-    if (bus__r_en) begin
-      \$626  = \$266 ;
+    \$626  = ch1_ctrl_trigger_enable;
+    if (\$210 ) begin
+      \$626  = write_data[9];
     end
     if (rst) begin
       \$626  = 1'h0;
@@ -5480,9 +5318,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$627  = ch1_read_select_108;
-    if (bus__r_en) begin
-      \$627  = \$267 ;
+    \$627  = ch1_irq_status_done;
+    if (ch1__frame_done) begin
+      \$627  = 1'h1;
+    end else if (\$212 ) begin
+      \$627  = 1'h0;
     end
     if (rst) begin
       \$627  = 1'h0;
@@ -5490,9 +5330,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$628  = ch1_read_select_109;
-    if (bus__r_en) begin
-      \$628  = \$268 ;
+    \$628  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$628  = 1'h1;
+    end else if (\$214 ) begin
+      \$628  = 1'h0;
     end
     if (rst) begin
       \$628  = 1'h0;
@@ -5500,9 +5342,11 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$629  = ch1_read_select_10a;
-    if (bus__r_en) begin
-      \$629  = \$269 ;
+    \$629  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$629  = 1'h1;
+    end else if (\$216 ) begin
+      \$629  = 1'h0;
     end
     if (rst) begin
       \$629  = 1'h0;
@@ -5510,19 +5354,16 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$630  = ch1_read_select_10b;
-    if (bus__r_en) begin
-      \$630  = \$270 ;
-    end
+    \$630  = ch1_irq_enable_write;
     if (rst) begin
       \$630  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$631  = ch1_read_select_10c;
-    if (bus__r_en) begin
-      \$631  = \$271 ;
+    \$631  = ch1_irq_enable_done;
+    if (\$217 ) begin
+      \$631  = config_write_data[0];
     end
     if (rst) begin
       \$631  = 1'h0;
@@ -5530,9 +5371,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$632  = ch1_read_select_10d;
-    if (bus__r_en) begin
-      \$632  = \$272 ;
+    \$632  = ch1_irq_enable_error;
+    if (\$218 ) begin
+      \$632  = config_write_data[1];
     end
     if (rst) begin
       \$632  = 1'h0;
@@ -5540,9 +5381,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$633  = ch1_read_select_10e;
-    if (bus__r_en) begin
-      \$633  = \$273 ;
+    \$633  = ch1_irq_enable_access_done;
+    if (\$219 ) begin
+      \$633  = config_write_data[2];
     end
     if (rst) begin
       \$633  = 1'h0;
@@ -5550,139 +5391,151 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$634  = ch1_read_select_10f;
-    if (bus__r_en) begin
-      \$634  = \$274 ;
-    end
+    \$634  = ch1_cfg_ma_write;
     if (rst) begin
       \$634  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$635  = ch1_read_select_120;
-    if (bus__r_en) begin
-      \$635  = \$275 ;
+    \$635  = ch1_cfg_ma_ma_half_period;
+    if (\$220 ) begin
+      \$635 [7:0] = config_write_data[7:0];
+    end
+    if (\$221 ) begin
+      \$635 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$635  = 1'h0;
+      \$635  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$636  = ch1_read_select_121;
-    if (bus__r_en) begin
-      \$636  = \$276 ;
+    \$636  = ch1_cfg_ma_delay_limit;
+    if (\$222 ) begin
+      \$636 [7:0] = config_write_data[23:16];
+    end
+    if (\$223 ) begin
+      \$636 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$636  = 1'h0;
+      \$636  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$637  = ch1_read_select_122;
-    if (bus__r_en) begin
-      \$637  = \$277 ;
-    end
+    \$637  = ch1_cfg_period_write;
     if (rst) begin
       \$637  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$638  = ch1_read_select_123;
-    if (bus__r_en) begin
-      \$638  = \$278 ;
+    \$638  = ch1_cfg_period_request_period;
+    if (\$224 ) begin
+      \$638 [7:0] = config_write_data[7:0];
+    end
+    if (\$225 ) begin
+      \$638 [15:8] = config_write_data[15:8];
+    end
+    if (\$226 ) begin
+      \$638 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$638  = 1'h0;
+      \$638  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$639  = ch1_read_select_124;
-    if (bus__r_en) begin
-      \$639  = \$279 ;
-    end
+    \$639  = ch1_cfg_break_write;
     if (rst) begin
       \$639  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$640  = ch1_read_select_140;
-    if (bus__r_en) begin
-      \$640  = \$280 ;
+    \$640  = ch1_cfg_break_break_time;
+    if (\$227 ) begin
+      \$640 [7:0] = config_write_data[7:0];
+    end
+    if (\$228 ) begin
+      \$640 [15:8] = config_write_data[15:8];
+    end
+    if (\$229 ) begin
+      \$640 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$640  = 1'h0;
+      \$640  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$641  = ch1_read_select_141;
-    if (bus__r_en) begin
-      \$641  = \$281 ;
-    end
+    \$641  = ch1_cfg_ack_write;
     if (rst) begin
       \$641  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$642  = ch1_read_select_142;
-    if (bus__r_en) begin
-      \$642  = \$282 ;
+    \$642  = ch1_cfg_ack_ack_limit;
+    if (\$230 ) begin
+      \$642 [7:0] = config_write_data[7:0];
+    end
+    if (\$231 ) begin
+      \$642 [15:8] = config_write_data[15:8];
+    end
+    if (\$232 ) begin
+      \$642 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$642  = 1'h0;
+      \$642  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$643  = ch1_read_select_143;
-    if (bus__r_en) begin
-      \$643  = \$283 ;
-    end
+    \$643  = ch1_cfg_timeout_write;
     if (rst) begin
       \$643  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$644  = ch1_read_select_144;
-    if (bus__r_en) begin
-      \$644  = \$284 ;
+    \$644  = ch1_cfg_timeout_timeout_limit;
+    if (\$233 ) begin
+      \$644 [7:0] = config_write_data[7:0];
+    end
+    if (\$234 ) begin
+      \$644 [15:8] = config_write_data[15:8];
+    end
+    if (\$235 ) begin
+      \$644 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$644  = 1'h0;
+      \$644  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$645  = ch1_read_select_145;
-    if (bus__r_en) begin
-      \$645  = \$285 ;
-    end
+    \$645  = ch1_cfg_words_write;
     if (rst) begin
       \$645  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$646  = ch1_window0_read;
-    if (bus__r_en) begin
-      \$646  = \$287 ;
+    \$646  = ch1_cfg_words_w0_data_bits;
+    if (\$236 ) begin
+      \$646  = config_write_data[5:0];
     end
     if (rst) begin
-      \$646  = 1'h0;
+      \$646  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$647  = ch1_window1_read;
-    if (bus__r_en) begin
-      \$647  = \$289 ;
+    \$647  = ch1_cfg_words_w0_nenw;
+    if (\$237 ) begin
+      \$647  = config_write_data[6];
     end
     if (rst) begin
       \$647  = 1'h0;
@@ -5690,9 +5543,9 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$648  = ch1_window2_read;
-    if (bus__r_en) begin
-      \$648  = \$291 ;
+    \$648  = ch1_cfg_words_w0_lc;
+    if (\$238 ) begin
+      \$648  = config_write_data[7];
     end
     if (rst) begin
       \$648  = 1'h0;
@@ -5700,16 +5553,1045 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$649  = ch1_read_data;
-    if (bus__r_load) begin
-      \$649  = \$345 ;
+    \$649  = ch1_cfg_words_w0_crc;
+    if (\$239 ) begin
+      \$649  = config_write_data[9:8];
     end
     if (rst) begin
-      \$649  = 32'd0;
+      \$649  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$650  = ch1_cfg_words_w0_gray;
+    if (\$240 ) begin
+      \$650  = config_write_data[10];
+    end
+    if (rst) begin
+      \$650  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$651  = ch1_cfg_words_w0_signed;
+    if (\$241 ) begin
+      \$651  = config_write_data[11];
+    end
+    if (rst) begin
+      \$651  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$652  = ch1_cfg_words_w1_data_bits;
+    if (\$242 ) begin
+      \$652  = config_write_data[21:16];
+    end
+    if (rst) begin
+      \$652  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$653  = ch1_cfg_words_w1_nenw;
+    if (\$243 ) begin
+      \$653  = config_write_data[22];
+    end
+    if (rst) begin
+      \$653  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$654  = ch1_cfg_words_w1_lc;
+    if (\$244 ) begin
+      \$654  = config_write_data[23];
+    end
+    if (rst) begin
+      \$654  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$655  = ch1_cfg_words_w1_crc;
+    if (\$245 ) begin
+      \$655  = config_write_data[25:24];
+    end
+    if (rst) begin
+      \$655  = 2'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$656  = ch1_cfg_words_w1_gray;
+    if (\$246 ) begin
+      \$656  = config_write_data[26];
+    end
+    if (rst) begin
+      \$656  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$657  = ch1_cfg_words_w1_signed;
+    if (\$247 ) begin
+      \$657  = config_write_data[27];
+    end
+    if (rst) begin
+      \$657  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$658  = ch1_cfg_words_w1_enable;
+    if (\$248 ) begin
+      \$658  = config_write_data[31];
+    end
+    if (rst) begin
+      \$658  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$659  = ch1_cfg_checks_write;
+    if (rst) begin
+      \$659  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$660  = ch1_cfg_checks_end_check;
+    if (\$249 ) begin
+      \$660  = config_write_data[0];
+    end
+    if (rst) begin
+      \$660  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$661  = ch1_cfg_checks_spw_check;
+    if (\$250 ) begin
+      \$661  = config_write_data[1];
+    end
+    if (rst) begin
+      \$661  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$662  = ch1_cfg_checks_spw_tolerance;
+    if (\$251 ) begin
+      \$662  = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$662  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$663  = ch1_cfg_checks_noise_limit;
+    if (\$252 ) begin
+      \$663  = config_write_data[19:16];
+    end
+    if (rst) begin
+      \$663  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$664  = ch1_cfg_checks_delay_tolerance;
+    if (\$253 ) begin
+      \$664  = config_write_data[23:20];
+    end
+    if (rst) begin
+      \$664  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$665  = ch1_cfg_checks_confirm_frames;
+    if (\$254 ) begin
+      \$665  = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$665  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$666  = ch1_cfg_quiet_write;
+    if (rst) begin
+      \$666  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$667  = ch1_cfg_quiet_quiet_time;
+    if (\$255 ) begin
+      \$667 [7:0] = config_write_data[7:0];
+    end
+    if (\$256 ) begin
+      \$667 [11:8] = config_write_data[11:8];
+    end
+    if (rst) begin
+      \$667  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$668  = ch1_cfg_crc0_write;
+    if (rst) begin
+      \$668  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$669  = ch1_cfg_crc0_w0_crc_poly;
+    if (\$257 ) begin
+      \$669 [7:0] = config_write_data[7:0];
+    end
+    if (\$258 ) begin
+      \$669 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$669  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$670  = ch1_cfg_crc0_w0_crc_width;
+    if (\$259 ) begin
+      \$670  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$670  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$671  = ch1_cfg_crc0_w0_crc_inverted;
+    if (\$260 ) begin
+      \$671  = config_write_data[24];
+    end
+    if (rst) begin
+      \$671  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$672  = ch1_cfg_crc0_start_write;
+    if (rst) begin
+      \$672  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$673  = ch1_cfg_crc0_start_w0_crc_start;
+    if (\$261 ) begin
+      \$673 [7:0] = config_write_data[7:0];
+    end
+    if (\$262 ) begin
+      \$673 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$673  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$674  = ch1_cfg_crc1_write;
+    if (rst) begin
+      \$674  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$675  = ch1_cfg_crc1_w1_crc_poly;
+    if (\$263 ) begin
+      \$675 [7:0] = config_write_data[7:0];
+    end
+    if (\$264 ) begin
+      \$675 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$675  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$676  = ch1_cfg_crc1_w1_crc_width;
+    if (\$265 ) begin
+      \$676  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$676  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$677  = ch1_cfg_crc1_w1_crc_inverted;
+    if (\$266 ) begin
+      \$677  = config_write_data[24];
+    end
+    if (rst) begin
+      \$677  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$678  = ch1_cfg_crc1_start_write;
+    if (rst) begin
+      \$678  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$679  = ch1_cfg_crc1_start_w1_crc_start;
+    if (\$267 ) begin
+      \$679 [7:0] = config_write_data[7:0];
+    end
+    if (\$268 ) begin
+      \$679 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$679  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$680  = ch1_cfg_ssi_write;
+    if (rst) begin
+      \$680  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$681  = ch1_cfg_ssi_ssi;
+    if (\$269 ) begin
+      \$681  = config_write_data[0];
+    end
+    if (rst) begin
+      \$681  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$682  = ch1_cfg_ssi_ssi_error;
+    if (\$270 ) begin
+      \$682  = config_write_data[1];
+    end
+    if (rst) begin
+      \$682  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$683  = ch1_cfg_ssi_ssi_error_low;
+    if (\$271 ) begin
+      \$683  = config_write_data[2];
+    end
+    if (rst) begin
+      \$683  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$684  = ch1_cfg_ssi_ssi_double;
+    if (\$272 ) begin
+      \$684  = config_write_data[3];
+    end
+    if (rst) begin
+      \$684  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$685  = ch1_cfg_ssi_ssi_delay;
+    if (\$273 ) begin
+      \$685 [7:0] = config_write_data[23:16];
+    end
+    if (\$274 ) begin
+      \$685 [11:8] = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$685  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$686  = ch1_ca_request_write;
+    if (rst) begin
+      \$686  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$687  = ch1_ca_request_slave_id;
+    if (\$275 ) begin
+      \$687  = config_write_data[2:0];
+    end
+    if (rst) begin
+      \$687  = 3'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$688  = ch1_ca_request_address;
+    if (\$276 ) begin
+      \$688  = config_write_data[14:8];
+    end
+    if (rst) begin
+      \$688  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$689  = ch1_ca_request_count;
+    if (\$277 ) begin
+      \$689  = config_write_data[22:16];
+    end
+    if (rst) begin
+      \$689  = 7'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$690  = \ch1_ca_request_write$305 ;
+    if (\$278 ) begin
+      \$690  = config_write_data[24];
+    end
+    if (rst) begin
+      \$690  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$691  = \$280 ;
+    if (rst) begin
+      \$691  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$692  = \$282 ;
+    if (rst) begin
+      \$692  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$693  = ch1_read_select_100;
+    if (bus__r_en) begin
+      \$693  = \$283 ;
+    end
+    if (rst) begin
+      \$693  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$694  = ch1_read_select_101;
+    if (bus__r_en) begin
+      \$694  = \$284 ;
+    end
+    if (rst) begin
+      \$694  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$695  = ch1_read_select_102;
+    if (bus__r_en) begin
+      \$695  = \$285 ;
+    end
+    if (rst) begin
+      \$695  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$696  = ch1_read_select_104;
+    if (bus__r_en) begin
+      \$696  = \$286 ;
+    end
+    if (rst) begin
+      \$696  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$697  = ch1_read_select_105;
+    if (bus__r_en) begin
+      \$697  = \$287 ;
+    end
+    if (rst) begin
+      \$697  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$698  = ch1_read_select_108;
+    if (bus__r_en) begin
+      \$698  = \$288 ;
+    end
+    if (rst) begin
+      \$698  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$699  = ch1_read_select_109;
+    if (bus__r_en) begin
+      \$699  = \$289 ;
+    end
+    if (rst) begin
+      \$699  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$700  = ch1_read_select_10a;
+    if (bus__r_en) begin
+      \$700  = \$290 ;
+    end
+    if (rst) begin
+      \$700  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$701  = ch1_read_select_10b;
+    if (bus__r_en) begin
+      \$701  = \$291 ;
+    end
+    if (rst) begin
+      \$701  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$702  = ch1_read_select_10c;
+    if (bus__r_en) begin
+      \$702  = \$292 ;
+    end
+    if (rst) begin
+      \$702  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$703  = ch1_read_select_10d;
+    if (bus__r_en) begin
+      \$703  = \$293 ;
+    end
+    if (rst) begin
+      \$703  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$704  = ch1_read_select_10e;
+    if (bus__r_en) begin
+      \$704  = \$294 ;
+    end
+    if (rst) begin
+      \$704  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$705  = ch1_read_select_10f;
+    if (bus__r_en) begin
+      \$705  = \$295 ;
+    end
+    if (rst) begin
+      \$705  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$706  = ch1_read_select_110;
+    if (bus__r_en) begin
+      \$706  = \$296 ;
+    end
+    if (rst) begin
+      \$706  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$707  = ch1_read_select_111;
+    if (bus__r_en) begin
+      \$707  = \$297 ;
+    end
+    if (rst) begin
+      \$707  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$708  = ch1_read_select_112;
+    if (bus__r_en) begin
+      \$708  = \$298 ;
+    end
+    if (rst) begin
+      \$708  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$709  = ch1_read_select_113;
+    if (bus__r_en) begin
+      \$709  = \$299 ;
+    end
+    if (rst) begin
+      \$709  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$710  = ch1_read_select_114;
+    if (bus__r_en) begin
+      \$710  = \$300 ;
+    end
+    if (rst) begin
+      \$710  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$711  = ch1_read_select_115;
+    if (bus__r_en) begin
+      \$711  = \$301 ;
+    end
+    if (rst) begin
+      \$711  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$712  = ch1_read_select_116;
+    if (bus__r_en) begin
+      \$712  = \$302 ;
+    end
+    if (rst) begin
+      \$712  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$713  = ch1_read_select_117;
+    if (bus__r_en) begin
+      \$713  = \$303 ;
+    end
+    if (rst) begin
+      \$713  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$714  = ch1_read_select_120;
+    if (bus__r_en) begin
+      \$714  = \$304 ;
+    end
+    if (rst) begin
+      \$714  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$715  = ch1_read_select_121;
+    if (bus__r_en) begin
+      \$715  = \$305 ;
+    end
+    if (rst) begin
+      \$715  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$716  = ch1_read_select_122;
+    if (bus__r_en) begin
+      \$716  = \$306 ;
+    end
+    if (rst) begin
+      \$716  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$717  = ch1_read_select_123;
+    if (bus__r_en) begin
+      \$717  = \$307 ;
+    end
+    if (rst) begin
+      \$717  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$718  = ch1_read_select_124;
+    if (bus__r_en) begin
+      \$718  = \$308 ;
+    end
+    if (rst) begin
+      \$718  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$719  = ch1_read_select_140;
+    if (bus__r_en) begin
+      \$719  = \$309 ;
+    end
+    if (rst) begin
+      \$719  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$720  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$720  = \$310 ;
+    end
+    if (rst) begin
+      \$720  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$721  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$721  = \$311 ;
+    end
+    if (rst) begin
+      \$721  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$722  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$722  = \$312 ;
+    end
+    if (rst) begin
+      \$722  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$723  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$723  = \$313 ;
+    end
+    if (rst) begin
+      \$723  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$724  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$724  = \$314 ;
+    end
+    if (rst) begin
+      \$724  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$725  = ch1_result_status_status_snapshot;
+    if (\$315 ) begin
+      \$725  = \port$7200$0 [3:0];
+    end
+    if (rst) begin
+      \$725  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$726  = ch1_result_status_cds_snapshot;
+    if (\$315 ) begin
+      \$726  = \port$7200$0 [49];
+    end
+    if (rst) begin
+      \$726  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$727  = ch1_result_status_w0_ne_snapshot;
+    if (\$315 ) begin
+      \$727  = \port$7200$0 [131];
+    end
+    if (rst) begin
+      \$727  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$728  = ch1_result_status_w0_nw_snapshot;
+    if (\$315 ) begin
+      \$728  = \port$7200$0 [132];
+    end
+    if (rst) begin
+      \$728  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$729  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$315 ) begin
+      \$729  = \port$7200$0 [133];
+    end
+    if (rst) begin
+      \$729  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$730  = ch1_result_status_w1_ne_snapshot;
+    if (\$315 ) begin
+      \$730  = \port$7200$0 [174];
+    end
+    if (rst) begin
+      \$730  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$731  = ch1_result_status_w1_nw_snapshot;
+    if (\$315 ) begin
+      \$731  = \port$7200$0 [175];
+    end
+    if (rst) begin
+      \$731  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$732  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$315 ) begin
+      \$732  = \port$7200$0 [176];
+    end
+    if (rst) begin
+      \$732  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$733  = ch1_result_status_lc_repeat_snapshot;
+    if (\$315 ) begin
+      \$733  = \port$7200$0 [183];
+    end
+    if (rst) begin
+      \$733  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$734  = ch1_result_status_lc_skip_snapshot;
+    if (\$315 ) begin
+      \$734  = \port$7200$0 [184];
+    end
+    if (rst) begin
+      \$734  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$735  = ch1_result_status_lc_zero_snapshot;
+    if (\$315 ) begin
+      \$735  = \port$7200$0 [185];
+    end
+    if (rst) begin
+      \$735  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$736  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$315 ) begin
+      \$736  = \port$7200$0 [186];
+    end
+    if (rst) begin
+      \$736  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$737  = ch1_result_status_lc_snapshot;
+    if (\$315 ) begin
+      \$737  = \port$7200$0 [182:177];
+    end
+    if (rst) begin
+      \$737  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$738  = ch1_result_seq_seq_snapshot;
+    if (\$315 ) begin
+      \$738  = ch1__done_count;
+    end
+    if (rst) begin
+      \$738  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$739  = ch1_result_seq_line_delay_snapshot;
+    if (\$315 ) begin
+      \$739  = \port$7200$0 [48:36];
+    end
+    if (rst) begin
+      \$739  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$740  = ch1_result_w0_lo_data_snapshot;
+    if (\$315 ) begin
+      \$740  = \port$7200$0 [107:76];
+    end
+    if (rst) begin
+      \$740  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$741  = ch1_result_w0_hi_data_snapshot;
+    if (\$315 ) begin
+      \$741  = \port$7200$0 [130:108];
+    end
+    if (rst) begin
+      \$741  = 23'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$742  = ch1_result_w1_lo_data_snapshot;
+    if (\$315 ) begin
+      \$742  = \port$7200$0 [165:134];
+    end
+    if (rst) begin
+      \$742  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$743  = ch1_result_w1_hi_data_snapshot;
+    if (\$315 ) begin
+      \$743  = \port$7200$0 [173:166];
+    end
+    if (rst) begin
+      \$743  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$744  = ch1_result_timestamp_time_snapshot;
+    if (\$315 ) begin
+      \$744  = \port$7200$0 [35:4];
+    end
+    if (rst) begin
+      \$744  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$745  = ch1_result_line_noise_events_snapshot;
+    if (\$315 ) begin
+      \$745  = \port$7200$0 [53:50];
+    end
+    if (rst) begin
+      \$745  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$746  = ch1_result_line_delay_settled_snapshot;
+    if (\$315 ) begin
+      \$746  = \port$7200$0 [54];
+    end
+    if (rst) begin
+      \$746  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$747  = ch1_result_line_delay_spread_snapshot;
+    if (\$315 ) begin
+      \$747  = \port$7200$0 [75:68];
+    end
+    if (rst) begin
+      \$747  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$748  = ch1_result_line_settled_delay_snapshot;
+    if (\$315 ) begin
+      \$748  = \port$7200$0 [67:55];
+    end
+    if (rst) begin
+      \$748  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$749  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$749  = \$317 ;
+    end
+    if (rst) begin
+      \$749  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$750  = ch1_window1_read;
+    if (bus__r_en) begin
+      \$750  = \$319 ;
+    end
+    if (rst) begin
+      \$750  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$751  = ch1_read_data;
+    if (bus__r_load) begin
+      \$751  = \$387 ;
+    end
+    if (rst) begin
+      \$751  = 32'd0;
     end
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
+  assign ch0__status = \port$6669$0 [3:0];
+  assign ch0__cds = \port$6669$0 [49];
+  assign ch0__word0_ne = \port$6669$0 [131];
+  assign ch0__word0_nw = \port$6669$0 [132];
+  assign ch0__word0_crc_ok = \port$6669$0 [133];
+  assign ch0__word1_ne = \port$6669$0 [174];
+  assign ch0__word1_nw = \port$6669$0 [175];
+  assign ch0__word1_crc_ok = \port$6669$0 [176];
+  assign ch0__lc_repeat = \port$6669$0 [183];
+  assign ch0__lc_skip = \port$6669$0 [184];
+  assign ch0__lc_zero = \port$6669$0 [185];
+  assign ch0__spw_mismatch = \port$6669$0 [186];
+  assign ch0__lc = \port$6669$0 [182:177];
+  assign ch0__line_delay = \port$6669$0 [48:36];
+  assign ch0__word0_position = \port$6669$0 [130:76];
+  assign ch0__word1_position = \port$6669$0 [173:134];
+  assign ch0__timestamp = \port$6669$0 [35:4];
+  assign ch0__noise_events = \port$6669$0 [53:50];
+  assign ch0__delay_settled = \port$6669$0 [54];
+  assign ch0__delay_spread = \port$6669$0 [75:68];
+  assign ch0__settled_delay = \port$6669$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -5717,13 +6599,34 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
   assign ch0__cap_ssi = 1'h1;
-  assign ch0__ca_status = \port$6701$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6701$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6624$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$6624$0 [31:16];
-  assign ch0__count_ca_refused = \port$6624$0 [47:32];
-  assign ch0__count_ca_aborted = \port$6624$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$6624$0 [79:64];
+  assign ch0__ca_status = \port$6759$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6759$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6682$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$6682$0 [31:16];
+  assign ch0__count_ca_refused = \port$6682$0 [47:32];
+  assign ch0__count_ca_aborted = \port$6682$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$6682$0 [79:64];
+  assign ch1__status = \port$7200$0 [3:0];
+  assign ch1__cds = \port$7200$0 [49];
+  assign ch1__word0_ne = \port$7200$0 [131];
+  assign ch1__word0_nw = \port$7200$0 [132];
+  assign ch1__word0_crc_ok = \port$7200$0 [133];
+  assign ch1__word1_ne = \port$7200$0 [174];
+  assign ch1__word1_nw = \port$7200$0 [175];
+  assign ch1__word1_crc_ok = \port$7200$0 [176];
+  assign ch1__lc_repeat = \port$7200$0 [183];
+  assign ch1__lc_skip = \port$7200$0 [184];
+  assign ch1__lc_zero = \port$7200$0 [185];
+  assign ch1__spw_mismatch = \port$7200$0 [186];
+  assign ch1__lc = \port$7200$0 [182:177];
+  assign ch1__line_delay = \port$7200$0 [48:36];
+  assign ch1__word0_position = \port$7200$0 [130:76];
+  assign ch1__word1_position = \port$7200$0 [173:134];
+  assign ch1__timestamp = \port$7200$0 [35:4];
+  assign ch1__noise_events = \port$7200$0 [53:50];
+  assign ch1__delay_settled = \port$7200$0 [54];
+  assign ch1__delay_spread = \port$7200$0 [75:68];
+  assign ch1__settled_delay = \port$7200$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -5731,13 +6634,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign ch1__ca_status = \port$7234$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7234$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7157$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7157$0 [31:16];
-  assign ch1__count_ca_refused = \port$7157$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7157$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7157$0 [79:64];
+  assign ch1__ca_status = \port$7290$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7290$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7213$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7213$0 [31:16];
+  assign ch1__count_ca_refused = \port$7213$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7213$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7213$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__r_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -5792,31 +6695,6 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
   assign ch0__ca_rbuf_addr = bus__r_addr[3:0];
-  assign words = { 3'h0, \port$6611$0 [67:55], \port$6611$0 [75:68], 3'h0, \port$6611$0 [54:50], \port$6611$0 [35:4], 24'h000000, \port$6611$0 [173:134], 9'h000, \port$6611$0 [130:76], 3'h0, \port$6611$0 [48:36], ch0__done_count, 2'h0, \port$6611$0 [182:177], 4'h0, \port$6611$0 [186:183], 1'h0, \port$6611$0 [176:174], 1'h0, \port$6611$0 [133:131], 3'h0, \port$6611$0 [49], \port$6611$0 [3:0] };
-  assign ch0__status = \port$6611$0 [3:0];
-  assign ch0__cds = \port$6611$0 [49];
-  assign ch0__word0_ne = \port$6611$0 [131];
-  assign ch0__word0_nw = \port$6611$0 [132];
-  assign ch0__word0_crc_ok = \port$6611$0 [133];
-  assign ch0__word1_ne = \port$6611$0 [174];
-  assign ch0__word1_nw = \port$6611$0 [175];
-  assign ch0__word1_crc_ok = \port$6611$0 [176];
-  assign ch0__lc_repeat = \port$6611$0 [183];
-  assign ch0__lc_skip = \port$6611$0 [184];
-  assign ch0__lc_zero = \port$6611$0 [185];
-  assign ch0__spw_mismatch = \port$6611$0 [186];
-  assign ch0__lc = \port$6611$0 [182:177];
-  assign ch0__line_delay = \port$6611$0 [48:36];
-  assign ch0__word0_position = \port$6611$0 [130:76];
-  assign ch0__word1_position = \port$6611$0 [173:134];
-  assign ch0__timestamp = \port$6611$0 [35:4];
-  assign ch0__noise_events = \port$6611$0 [53:50];
-  assign ch0__delay_settled = \port$6611$0 [54];
-  assign ch0__delay_spread = \port$6611$0 [75:68];
-  assign ch0__settled_delay = \port$6611$0 [67:55];
-  assign ch0__result_capture = capture;
-  assign published = ch0__result_published;
-  assign read_addr = bus__r_addr[2:0];
   assign ch1__count_addr = bus__r_addr[2:0];
   assign ch1__start = ch1_ctrl_start;
   assign ch1__abort_cycle = ch1_ctrl_abort;
@@ -5865,634 +6743,37 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$253 ;
+  assign ch1__ca_write = \ch1_ca_request_write$305 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
   assign ch1__ca_wbuf_data = write_data;
   assign ch1__ca_rbuf_addr = bus__r_addr[3:0];
-  assign \words$484  = { 3'h0, \port$7144$0 [67:55], \port$7144$0 [75:68], 3'h0, \port$7144$0 [54:50], \port$7144$0 [35:4], 24'h000000, \port$7144$0 [173:134], 9'h000, \port$7144$0 [130:76], 3'h0, \port$7144$0 [48:36], ch1__done_count, 2'h0, \port$7144$0 [182:177], 4'h0, \port$7144$0 [186:183], 1'h0, \port$7144$0 [176:174], 1'h0, \port$7144$0 [133:131], 3'h0, \port$7144$0 [49], \port$7144$0 [3:0] };
-  assign ch1__status = \port$7144$0 [3:0];
-  assign ch1__cds = \port$7144$0 [49];
-  assign ch1__word0_ne = \port$7144$0 [131];
-  assign ch1__word0_nw = \port$7144$0 [132];
-  assign ch1__word0_crc_ok = \port$7144$0 [133];
-  assign ch1__word1_ne = \port$7144$0 [174];
-  assign ch1__word1_nw = \port$7144$0 [175];
-  assign ch1__word1_crc_ok = \port$7144$0 [176];
-  assign ch1__lc_repeat = \port$7144$0 [183];
-  assign ch1__lc_skip = \port$7144$0 [184];
-  assign ch1__lc_zero = \port$7144$0 [185];
-  assign ch1__spw_mismatch = \port$7144$0 [186];
-  assign ch1__lc = \port$7144$0 [182:177];
-  assign ch1__line_delay = \port$7144$0 [48:36];
-  assign ch1__word0_position = \port$7144$0 [130:76];
-  assign ch1__word1_position = \port$7144$0 [173:134];
-  assign ch1__timestamp = \port$7144$0 [35:4];
-  assign ch1__noise_events = \port$7144$0 [53:50];
-  assign ch1__delay_settled = \port$7144$0 [54];
-  assign ch1__delay_spread = \port$7144$0 [75:68];
-  assign ch1__settled_delay = \port$7144$0 [67:55];
-  assign ch1__result_capture = \capture$507 ;
-  assign \published$510  = ch1__result_published;
-  assign \read_addr$511  = bus__r_addr[2:0];
   assign irq = { ch1_irq, ch0_irq };
   assign ch0__ca_wbuf_addr = write_addr[3:0];
-  assign \words[0]  = { 2'h0, \port$6611$0 [182:177], 4'h0, \port$6611$0 [186:183], 1'h0, \port$6611$0 [176:174], 1'h0, \port$6611$0 [133:131], 3'h0, \port$6611$0 [49], \port$6611$0 [3:0] };
-  assign \words[1]  = { 3'h0, \port$6611$0 [48:36], ch0__done_count };
-  assign \words[2]  = \port$6611$0 [107:76];
-  assign \words[3]  = { 9'h000, \port$6611$0 [130:108] };
-  assign \words[4]  = \port$6611$0 [165:134];
-  assign \words[5]  = { 24'h000000, \port$6611$0 [173:166] };
-  assign \words[6]  = \port$6611$0 [35:4];
-  assign \words[7]  = { 3'h0, \port$6611$0 [67:55], \port$6611$0 [75:68], 3'h0, \port$6611$0 [54:50] };
-  assign \words$484[0]  = { 2'h0, \port$7144$0 [182:177], 4'h0, \port$7144$0 [186:183], 1'h0, \port$7144$0 [176:174], 1'h0, \port$7144$0 [133:131], 3'h0, \port$7144$0 [49], \port$7144$0 [3:0] };
-  assign \words$484[1]  = { 3'h0, \port$7144$0 [48:36], ch1__done_count };
-  assign \words$484[2]  = \port$7144$0 [107:76];
-  assign \words$484[3]  = { 9'h000, \port$7144$0 [130:108] };
-  assign \words$484[4]  = \port$7144$0 [165:134];
-  assign \words$484[5]  = { 24'h000000, \port$7144$0 [173:166] };
-  assign \words$484[6]  = \port$7144$0 [35:4];
-  assign \words$484[7]  = { 3'h0, \port$7144$0 [67:55], \port$7144$0 [75:68], 3'h0, \port$7144$0 [54:50] };
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$389  = \$388 ;
-  assign \$391  = \$390 ;
-  assign \$393  = \$392 ;
+  assign \$430  = \$429 ;
   assign \$432  = \$431 ;
   assign \$434  = \$433 ;
-  assign \$436  = \$435 ;
-  assign \$129  = \$128 ;
-  assign \$166  = 32'd0;
-  assign \$167  = \$165 ;
-  assign \$293  = \$292 ;
-  assign \$330  = 32'd0;
-  assign \$331  = \$329 ;
+  assign \$472  = \$471 ;
+  assign \$474  = \$473 ;
+  assign \$476  = \$475 ;
+  assign \$136  = \$135 ;
+  assign \$189  = 32'd0;
+  assign \$190  = \$188 ;
+  assign \$321  = \$320 ;
+  assign \$374  = 32'd0;
+  assign \$375  = \$373 ;
   assign g_irq = 1'h0;
-  assign \$437  = g_read_data;
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.bank.ch0_result_pages (clk, rst, read__en, read_take, read_data, published, \port$6242$0 , capture, \port$6611$0 , read_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$11  = 0;
-  wire \$1 ;
-  wire \$10 ;
-  wire \$11 ;
-  reg \$12 ;
-  reg \$13 ;
-  reg [2:0] \$14 ;
-  reg [1:0] \$15 ;
-  reg [1:0] \$16 ;
-  reg \$17 ;
-  reg [1:0] \$18 ;
-  reg \$19 ;
-  wire \$2 ;
-  reg \$20 ;
-  wire [8:0] \$27 ;
-  wire \$3 ;
-  wire \$4 ;
-  wire \$5 ;
-  wire \$6 ;
-  wire [1:0] \$7 ;
-  wire [3:0] \$8 ;
-  wire \$9 ;
-  input capture;
-  wire capture;
-  input clk;
-  wire clk;
-  reg [1:0] free_page;
-  reg [1:0] host_page = 2'h0;
-  reg host_ready = 1'h0;
-  reg [1:0] latest_page = 2'h0;
-  input [15:0] \port$6242$0 ;
-  wire [15:0] \port$6242$0 ;
-  input [186:0] \port$6611$0 ;
-  wire [186:0] \port$6611$0 ;
-  output published;
-  reg published = 1'h0;
-  wire [4:0] read__addr;
-  wire [31:0] read__data;
-  input read__en;
-  wire read__en;
-  input [2:0] read_addr;
-  wire [2:0] read_addr;
-  output [31:0] read_data;
-  wire [31:0] read_data;
-  wire read_en;
-  reg read_ready = 1'h0;
-  input read_take;
-  wire read_take;
-  reg ready = 1'h0;
-  input rst;
-  wire rst;
-  reg [1:0] target_page = 2'h0;
-  reg [2:0] word_index = 3'h0;
-  wire [255:0] words;
-  wire [31:0] \words[0] ;
-  wire [31:0] \words[1] ;
-  wire [31:0] \words[2] ;
-  wire [31:0] \words[3] ;
-  wire [31:0] \words[4] ;
-  wire [31:0] \words[5] ;
-  wire [31:0] \words[6] ;
-  wire [31:0] \words[7] ;
-  wire [4:0] write__addr;
-  wire [31:0] write__data;
-  reg write__en = 1'h0;
-  (* init = 1'h0 *)
-  wire writing;
-  reg [31:0] memory [31:0];
-  initial begin
-    memory[0] = 32'd0;
-    memory[1] = 32'd0;
-    memory[2] = 32'd0;
-    memory[3] = 32'd0;
-    memory[4] = 32'd0;
-    memory[5] = 32'd0;
-    memory[6] = 32'd0;
-    memory[7] = 32'd0;
-    memory[8] = 32'd0;
-    memory[9] = 32'd0;
-    memory[10] = 32'd0;
-    memory[11] = 32'd0;
-    memory[12] = 32'd0;
-    memory[13] = 32'd0;
-    memory[14] = 32'd0;
-    memory[15] = 32'd0;
-    memory[16] = 32'd0;
-    memory[17] = 32'd0;
-    memory[18] = 32'd0;
-    memory[19] = 32'd0;
-    memory[20] = 32'd0;
-    memory[21] = 32'd0;
-    memory[22] = 32'd0;
-    memory[23] = 32'd0;
-    memory[24] = 32'd0;
-    memory[25] = 32'd0;
-    memory[26] = 32'd0;
-    memory[27] = 32'd0;
-    memory[28] = 32'd0;
-    memory[29] = 32'd0;
-    memory[30] = 32'd0;
-    memory[31] = 32'd0;
-  end
-  always @(posedge clk) begin
-    if (write__en)
-      memory[{ target_page, word_index }] <= write__data;
-  end
-  reg [31:0] _0_;
-  always @(posedge clk) begin
-    if (read__en) begin
-      _0_ <= memory[{ \$7 , read_addr }];
-    end
-  end
-  assign read__data = _0_;
-  assign \$1  = | latest_page;
-  assign \$2  = | host_page;
-  assign \$3  = \$1  & \$2 ;
-  assign \$4  = latest_page != 1'h1;
-  assign \$5  = host_page != 1'h1;
-  assign \$6  = \$4  & \$5 ;
-  assign \$27  = word_index * 6'h20;
-  assign write__data = { \port$6611$0 [67:55], \port$6611$0 [75:68], 3'h0, \port$6611$0 [54:50], \port$6611$0 [35:4], 24'h000000, \port$6611$0 [173:134], 9'h000, \port$6611$0 [130:76], 3'h0, \port$6611$0 [48:36], \port$6242$0 , 2'h0, \port$6611$0 [182:177], 4'h0, \port$6611$0 [186:183], 1'h0, \port$6611$0 [176:174], 1'h0, \port$6611$0 [133:131], 3'h0, \port$6611$0 [49], \port$6611$0 [3:0] } >> \$27 ;
-  assign \$7  = read_take ? latest_page : host_page;
-  assign read_data = read_ready ? read__data : 32'd0;
-  assign \$8  = word_index + 1'h1;
-  assign \$9  = word_index == 3'h7;
-  assign \$10  = read__en & read_take;
-  assign \$11  = read_take ? ready : host_ready;
-  always @(posedge clk)
-    published <= \$12 ;
-  always @(posedge clk)
-    write__en <= \$13 ;
-  always @(posedge clk)
-    word_index <= \$14 ;
-  always @(posedge clk)
-    target_page <= \$15 ;
-  always @(posedge clk)
-    latest_page <= \$16 ;
-  always @(posedge clk)
-    ready <= \$17 ;
-  always @(posedge clk)
-    host_page <= \$18 ;
-  always @(posedge clk)
-    host_ready <= \$19 ;
-  always @(posedge clk)
-    read_ready <= \$20 ;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$3 ) begin
-      free_page = 2'h0;
-    end else if (\$6 ) begin
-      free_page = 2'h1;
-    end else begin
-      free_page = 2'h2;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
-    \$12  = 1'h0;
-    if (capture) begin
-    end else if (write__en) begin
-      if (\$9 ) begin
-        \$12  = 1'h1;
-      end
-    end
-    if (rst) begin
-      \$12  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
-    \$13  = write__en;
-    if (capture) begin
-      \$13  = 1'h1;
-    end else if (write__en) begin
-      if (\$9 ) begin
-        \$13  = 1'h0;
-      end
-    end
-    if (rst) begin
-      \$13  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
-    \$14  = word_index;
-    if (capture) begin
-      \$14  = 3'h0;
-    end else if (write__en) begin
-      \$14  = \$8 [2:0];
-    end
-    if (rst) begin
-      \$14  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
-    \$15  = target_page;
-    if (capture) begin
-      \$15  = free_page;
-    end
-    if (rst) begin
-      \$15  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
-    \$16  = latest_page;
-    if (capture) begin
-    end else if (write__en) begin
-      if (\$9 ) begin
-        \$16  = target_page;
-      end
-    end
-    if (rst) begin
-      \$16  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
-    \$17  = ready;
-    if (capture) begin
-    end else if (write__en) begin
-      if (\$9 ) begin
-        \$17  = 1'h1;
-      end
-    end
-    if (rst) begin
-      \$17  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
-    \$18  = host_page;
-    if (\$10 ) begin
-      \$18  = latest_page;
-    end
-    if (rst) begin
-      \$18  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
-    \$19  = host_ready;
-    if (\$10 ) begin
-      \$19  = ready;
-    end
-    if (rst) begin
-      \$19  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
-    \$20  = read_ready;
-    if (read__en) begin
-      \$20  = \$11 ;
-    end
-    if (rst) begin
-      \$20  = 1'h0;
-    end
-  end
-  assign write__addr = { target_page, word_index };
-  assign words = { 3'h0, \port$6611$0 [67:55], \port$6611$0 [75:68], 3'h0, \port$6611$0 [54:50], \port$6611$0 [35:4], 24'h000000, \port$6611$0 [173:134], 9'h000, \port$6611$0 [130:76], 3'h0, \port$6611$0 [48:36], \port$6242$0 , 2'h0, \port$6611$0 [182:177], 4'h0, \port$6611$0 [186:183], 1'h0, \port$6611$0 [176:174], 1'h0, \port$6611$0 [133:131], 3'h0, \port$6611$0 [49], \port$6611$0 [3:0] };
-  assign writing = write__en;
-  assign read__addr = { \$7 , read_addr };
-  assign read_en = read__en;
-  assign \words[0]  = { 2'h0, \port$6611$0 [182:177], 4'h0, \port$6611$0 [186:183], 1'h0, \port$6611$0 [176:174], 1'h0, \port$6611$0 [133:131], 3'h0, \port$6611$0 [49], \port$6611$0 [3:0] };
-  assign \words[1]  = { 3'h0, \port$6611$0 [48:36], \port$6242$0  };
-  assign \words[2]  = \port$6611$0 [107:76];
-  assign \words[3]  = { 9'h000, \port$6611$0 [130:108] };
-  assign \words[4]  = \port$6611$0 [165:134];
-  assign \words[5]  = { 24'h000000, \port$6611$0 [173:166] };
-  assign \words[6]  = \port$6611$0 [35:4];
-  assign \words[7]  = { 3'h0, \port$6611$0 [67:55], \port$6611$0 [75:68], 3'h0, \port$6611$0 [54:50] };
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.bank.ch1_result_pages (clk, rst, read__en, read_take, read_data, published, \port$6775$0 , capture, \port$7144$0 , read_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
-  wire \$1 ;
-  wire \$10 ;
-  wire \$11 ;
-  reg \$12 ;
-  reg \$13 ;
-  reg [2:0] \$14 ;
-  reg [1:0] \$15 ;
-  reg [1:0] \$16 ;
-  reg \$17 ;
-  reg [1:0] \$18 ;
-  reg \$19 ;
-  wire \$2 ;
-  reg \$20 ;
-  wire [8:0] \$27 ;
-  wire \$3 ;
-  wire \$4 ;
-  wire \$5 ;
-  wire \$6 ;
-  wire [1:0] \$7 ;
-  wire [3:0] \$8 ;
-  wire \$9 ;
-  input capture;
-  wire capture;
-  input clk;
-  wire clk;
-  reg [1:0] free_page;
-  reg [1:0] host_page = 2'h0;
-  reg host_ready = 1'h0;
-  reg [1:0] latest_page = 2'h0;
-  input [15:0] \port$6775$0 ;
-  wire [15:0] \port$6775$0 ;
-  input [186:0] \port$7144$0 ;
-  wire [186:0] \port$7144$0 ;
-  output published;
-  reg published = 1'h0;
-  wire [4:0] read__addr;
-  wire [31:0] read__data;
-  input read__en;
-  wire read__en;
-  input [2:0] read_addr;
-  wire [2:0] read_addr;
-  output [31:0] read_data;
-  wire [31:0] read_data;
-  wire read_en;
-  reg read_ready = 1'h0;
-  input read_take;
-  wire read_take;
-  reg ready = 1'h0;
-  input rst;
-  wire rst;
-  reg [1:0] target_page = 2'h0;
-  reg [2:0] word_index = 3'h0;
-  wire [255:0] words;
-  wire [31:0] \words[0] ;
-  wire [31:0] \words[1] ;
-  wire [31:0] \words[2] ;
-  wire [31:0] \words[3] ;
-  wire [31:0] \words[4] ;
-  wire [31:0] \words[5] ;
-  wire [31:0] \words[6] ;
-  wire [31:0] \words[7] ;
-  wire [4:0] write__addr;
-  wire [31:0] write__data;
-  reg write__en = 1'h0;
-  (* init = 1'h0 *)
-  wire writing;
-  reg [31:0] memory [31:0];
-  initial begin
-    memory[0] = 32'd0;
-    memory[1] = 32'd0;
-    memory[2] = 32'd0;
-    memory[3] = 32'd0;
-    memory[4] = 32'd0;
-    memory[5] = 32'd0;
-    memory[6] = 32'd0;
-    memory[7] = 32'd0;
-    memory[8] = 32'd0;
-    memory[9] = 32'd0;
-    memory[10] = 32'd0;
-    memory[11] = 32'd0;
-    memory[12] = 32'd0;
-    memory[13] = 32'd0;
-    memory[14] = 32'd0;
-    memory[15] = 32'd0;
-    memory[16] = 32'd0;
-    memory[17] = 32'd0;
-    memory[18] = 32'd0;
-    memory[19] = 32'd0;
-    memory[20] = 32'd0;
-    memory[21] = 32'd0;
-    memory[22] = 32'd0;
-    memory[23] = 32'd0;
-    memory[24] = 32'd0;
-    memory[25] = 32'd0;
-    memory[26] = 32'd0;
-    memory[27] = 32'd0;
-    memory[28] = 32'd0;
-    memory[29] = 32'd0;
-    memory[30] = 32'd0;
-    memory[31] = 32'd0;
-  end
-  always @(posedge clk) begin
-    if (write__en)
-      memory[{ target_page, word_index }] <= write__data;
-  end
-  reg [31:0] _0_;
-  always @(posedge clk) begin
-    if (read__en) begin
-      _0_ <= memory[{ \$7 , read_addr }];
-    end
-  end
-  assign read__data = _0_;
-  assign \$1  = | latest_page;
-  assign \$2  = | host_page;
-  assign \$3  = \$1  & \$2 ;
-  assign \$4  = latest_page != 1'h1;
-  assign \$5  = host_page != 1'h1;
-  assign \$6  = \$4  & \$5 ;
-  assign \$27  = word_index * 6'h20;
-  assign write__data = { \port$7144$0 [67:55], \port$7144$0 [75:68], 3'h0, \port$7144$0 [54:50], \port$7144$0 [35:4], 24'h000000, \port$7144$0 [173:134], 9'h000, \port$7144$0 [130:76], 3'h0, \port$7144$0 [48:36], \port$6775$0 , 2'h0, \port$7144$0 [182:177], 4'h0, \port$7144$0 [186:183], 1'h0, \port$7144$0 [176:174], 1'h0, \port$7144$0 [133:131], 3'h0, \port$7144$0 [49], \port$7144$0 [3:0] } >> \$27 ;
-  assign \$7  = read_take ? latest_page : host_page;
-  assign read_data = read_ready ? read__data : 32'd0;
-  assign \$8  = word_index + 1'h1;
-  assign \$9  = word_index == 3'h7;
-  assign \$10  = read__en & read_take;
-  assign \$11  = read_take ? ready : host_ready;
-  always @(posedge clk)
-    published <= \$12 ;
-  always @(posedge clk)
-    write__en <= \$13 ;
-  always @(posedge clk)
-    word_index <= \$14 ;
-  always @(posedge clk)
-    target_page <= \$15 ;
-  always @(posedge clk)
-    latest_page <= \$16 ;
-  always @(posedge clk)
-    ready <= \$17 ;
-  always @(posedge clk)
-    host_page <= \$18 ;
-  always @(posedge clk)
-    host_ready <= \$19 ;
-  always @(posedge clk)
-    read_ready <= \$20 ;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    (* full_case = 32'd1 *)
-    if (\$3 ) begin
-      free_page = 2'h0;
-    end else if (\$6 ) begin
-      free_page = 2'h1;
-    end else begin
-      free_page = 2'h2;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$12  = 1'h0;
-    if (capture) begin
-    end else if (write__en) begin
-      if (\$9 ) begin
-        \$12  = 1'h1;
-      end
-    end
-    if (rst) begin
-      \$12  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$13  = write__en;
-    if (capture) begin
-      \$13  = 1'h1;
-    end else if (write__en) begin
-      if (\$9 ) begin
-        \$13  = 1'h0;
-      end
-    end
-    if (rst) begin
-      \$13  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$14  = word_index;
-    if (capture) begin
-      \$14  = 3'h0;
-    end else if (write__en) begin
-      \$14  = \$8 [2:0];
-    end
-    if (rst) begin
-      \$14  = 3'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$15  = target_page;
-    if (capture) begin
-      \$15  = free_page;
-    end
-    if (rst) begin
-      \$15  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$16  = latest_page;
-    if (capture) begin
-    end else if (write__en) begin
-      if (\$9 ) begin
-        \$16  = target_page;
-      end
-    end
-    if (rst) begin
-      \$16  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$17  = ready;
-    if (capture) begin
-    end else if (write__en) begin
-      if (\$9 ) begin
-        \$17  = 1'h1;
-      end
-    end
-    if (rst) begin
-      \$17  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$18  = host_page;
-    if (\$10 ) begin
-      \$18  = latest_page;
-    end
-    if (rst) begin
-      \$18  = 2'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$19  = host_ready;
-    if (\$10 ) begin
-      \$19  = ready;
-    end
-    if (rst) begin
-      \$19  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$20  = read_ready;
-    if (read__en) begin
-      \$20  = \$11 ;
-    end
-    if (rst) begin
-      \$20  = 1'h0;
-    end
-  end
-  assign write__addr = { target_page, word_index };
-  assign words = { 3'h0, \port$7144$0 [67:55], \port$7144$0 [75:68], 3'h0, \port$7144$0 [54:50], \port$7144$0 [35:4], 24'h000000, \port$7144$0 [173:134], 9'h000, \port$7144$0 [130:76], 3'h0, \port$7144$0 [48:36], \port$6775$0 , 2'h0, \port$7144$0 [182:177], 4'h0, \port$7144$0 [186:183], 1'h0, \port$7144$0 [176:174], 1'h0, \port$7144$0 [133:131], 3'h0, \port$7144$0 [49], \port$7144$0 [3:0] };
-  assign writing = write__en;
-  assign read__addr = { \$7 , read_addr };
-  assign read_en = read__en;
-  assign \words[0]  = { 2'h0, \port$7144$0 [182:177], 4'h0, \port$7144$0 [186:183], 1'h0, \port$7144$0 [176:174], 1'h0, \port$7144$0 [133:131], 3'h0, \port$7144$0 [49], \port$7144$0 [3:0] };
-  assign \words[1]  = { 3'h0, \port$7144$0 [48:36], \port$6775$0  };
-  assign \words[2]  = \port$7144$0 [107:76];
-  assign \words[3]  = { 9'h000, \port$7144$0 [130:108] };
-  assign \words[4]  = \port$7144$0 [165:134];
-  assign \words[5]  = { 24'h000000, \port$7144$0 [173:166] };
-  assign \words[6]  = \port$7144$0 [35:4];
-  assign \words[7]  = { 3'h0, \port$7144$0 [67:55], \port$7144$0 [75:68], 3'h0, \port$7144$0 [54:50] };
+  assign \$477  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wvalid, axil__bready, axil__araddr, axil__arvalid, axil__rready, clk, rst, axil__awready, axil__wready, regs__w_en, axil__arready, regs__r_en, regs__r_load, axil__rdata, regs__w_addr, regs__w_data, regs__w_strb, axil__bvalid
 , rvalid, axil__awaddr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$11  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -6631,7 +6912,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
   always @(posedge clk)
     rvalid <= \$30 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$23  = \$signal ;
     if (\$10 ) begin
       \$23  = 1'h1;
@@ -6644,7 +6925,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$24  = regs__w_addr;
     if (\$10 ) begin
       \$24  = axil__awaddr[12:2];
@@ -6654,7 +6935,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$25  = w_held;
     if (\$11 ) begin
       \$25  = 1'h1;
@@ -6667,7 +6948,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$26  = regs__w_data;
     if (\$11 ) begin
       \$26  = axil__wdata;
@@ -6677,7 +6958,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$27  = regs__w_strb;
     if (\$11 ) begin
       \$27  = axil__wstrb;
@@ -6687,7 +6968,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$28  = axil__bvalid;
     if (\$15 ) begin
       \$28  = 1'h1;
@@ -6699,7 +6980,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$29  = \$signal$16 ;
     if (\$16 ) begin
       \$29  = 1'h1;
@@ -6711,7 +6992,7 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$11 ) begin end
     \$30  = rvalid;
     if (\$22 ) begin
       \$30  = 1'h1;
@@ -6734,37 +7015,32 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
+module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, published, regs__frame_done, regs__done_count, ma, regs__result_capture, \port$6611$0 , \port$6624$0 , regs__ca_done, \port$6701$0 , ca_rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6669$0 , \port$6682$0 , regs__ca_done, \port$6759$0 , ca_rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
-  wire [4:0] \$10 ;
-  wire [16:0] \$11 ;
-  reg \$12 ;
-  reg [3:0] \$13 ;
+  wire [16:0] \$10 ;
+  reg \$11 ;
+  reg [3:0] \$12 ;
+  reg \$13 ;
   reg \$14 ;
   reg \$15 ;
   reg \$16 ;
-  reg \$17 ;
-  reg \$18 ;
-  reg [15:0] \$19 ;
+  reg [15:0] \$17 ;
+  wire [186:0] \$18 ;
+  wire [79:0] \$19 ;
   wire \$2 ;
-  wire [186:0] \$20 ;
-  wire [79:0] \$21 ;
-  wire [9:0] \$22 ;
+  wire [9:0] \$20 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
-  wire \$8 ;
+  wire [4:0] \$8 ;
   wire [4:0] \$9 ;
   reg \$signal  = 1'h0;
-  reg \$signal$207  = 1'h0;
-  (* init = 1'h0 *)
-  wire \$signal$33 ;
   reg abort_cycle = 1'h0;
   wire busy;
   input ca_abort;
@@ -6909,6 +7185,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   wire delay_settled;
   wire [7:0] delay_spread;
   wire done;
+  (* init = 1'h0 *)
+  wire ended;
   reg ended_ok = 1'h0;
   wire [5:0] lc;
   wire lc_repeat;
@@ -6917,19 +7195,17 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$202 ;
+  wire \ma$198 ;
   wire [3:0] noise_events;
-  reg page_seen = 1'h0;
+  reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6611$0 ;
-  wire [186:0] \port$6611$0 ;
-  output [79:0] \port$6624$0 ;
-  wire [79:0] \port$6624$0 ;
-  output [9:0] \port$6701$0 ;
-  wire [9:0] \port$6701$0 ;
-  input published;
-  wire published;
+  output [186:0] \port$6669$0 ;
+  wire [186:0] \port$6669$0 ;
+  output [79:0] \port$6682$0 ;
+  wire [79:0] \port$6682$0 ;
+  output [9:0] \port$6759$0 ;
+  wire [9:0] \port$6759$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -7037,9 +7313,6 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   wire [12:0] regs__line_delay;
   wire [3:0] regs__noise_events;
   wire regs__periodic;
-  output regs__result_capture;
-  wire regs__result_capture;
-  wire regs__result_published;
   wire [12:0] regs__settled_delay;
   wire regs__spw_mismatch;
   wire regs__start;
@@ -7061,7 +7334,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$204 ;
+  wire \slo$200 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -7085,8 +7358,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$199 ;
-  wire \trigger$199 ;
+  input \trigger$195 ;
+  wire \trigger$195 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -7098,35 +7371,32 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   wire word1_nw;
   wire [39:0] word1_position;
   assign \$1  = ~ count_busy;
-  assign \$2  = waited == 4'hf;
-  assign \$3  = \$1  | \$2 ;
-  assign \$4  = page_seen & \$3 ;
-  assign \$5  = regs__result_capture | \$4 ;
-  assign report = \$signal  & \$5 ;
-  assign \$6  = ~ ended_ok;
-  assign regs__frame_error = regs__frame_done & \$6 ;
-  assign trigger = \trigger$199  & regs__trigger_enable;
-  assign \$7  = ~ report;
-  assign \$8  = \$signal  & \$7 ;
-  assign \$9  = waited + 1'h1;
-  assign \$10  = \$8  ? \$9  : 5'h00;
-  assign \$11  = regs__done_count + 1'h1;
+  assign \$2  = \$1  | done;
+  assign \$3  = waited == 4'hf;
+  assign \$4  = \$2  | \$3 ;
+  assign report = \$signal  & \$4 ;
+  assign \$5  = ~ ended_ok;
+  assign regs__frame_error = regs__frame_done & \$5 ;
+  assign trigger = \trigger$195  & regs__trigger_enable;
+  assign \$6  = ~ report;
+  assign \$7  = \$signal  & \$6 ;
+  assign \$8  = waited + 1'h1;
+  assign \$9  = \$7  ? \$8  : 5'h00;
+  assign \$10  = regs__done_count + 1'h1;
   always @(posedge clk)
-    \$signal  <= \$12 ;
+    \$signal  <= \$11 ;
   always @(posedge clk)
-    waited <= \$13 ;
+    waited <= \$12 ;
   always @(posedge clk)
-    page_seen <= \$14 ;
+    pending_ok <= \$13 ;
   always @(posedge clk)
-    \$signal$207  <= \$15 ;
+    regs__frame_done <= \$14 ;
   always @(posedge clk)
-    regs__frame_done <= \$16 ;
+    ended_ok <= \$15 ;
   always @(posedge clk)
-    ended_ok <= \$17 ;
+    abort_cycle <= \$16 ;
   always @(posedge clk)
-    abort_cycle <= \$18 ;
-  always @(posedge clk)
-    regs__done_count <= \$19 ;
+    regs__done_count <= \$17 ;
   \biss_master_axil.ch0.core  core (
     .abort(abort_cycle),
     .\abort$264 (ca_abort),
@@ -7184,16 +7454,16 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
-    .counts(\$21 ),
-    .\done$316 (regs__result_capture),
+    .counts(\$19 ),
+    .\done$316 (done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$45 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
-    .result(\$22 ),
-    .\result$321 (\$20 ),
+    .result(\$20 ),
+    .\result$321 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
@@ -7202,81 +7472,66 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
     .\valid$318 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$12  = \$signal ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$11  = \$signal ;
     if (report) begin
-      \$12  = 1'h0;
+      \$11  = 1'h0;
     end
-    if (regs__result_capture) begin
-      \$12  = 1'h1;
+    if (done) begin
+      \$11  = 1'h1;
     end
     if (rst) begin
-      \$12  = 1'h0;
+      \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$13  = \$10 [3:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$12  = \$9 [3:0];
     if (rst) begin
-      \$13  = 4'h0;
+      \$12  = 4'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$14  = page_seen;
-    if (published) begin
-      \$14  = 1'h1;
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$13  = pending_ok;
+    if (done) begin
+      \$13  = valid;
     end
-    if (regs__result_capture) begin
+    if (rst) begin
+      \$13  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$14  = report;
+    if (rst) begin
       \$14  = 1'h0;
     end
-    if (rst) begin
-      \$14  = 1'h0;
-    end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$15  = \$signal$207 ;
-    if (regs__result_capture) begin
-      \$15  = valid;
-    end
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$15  = pending_ok;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$16  = report;
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$16  = regs__abort_cycle;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$17  = \$signal$207 ;
-    if (rst) begin
-      \$17  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$18  = regs__abort_cycle;
-    if (rst) begin
-      \$18  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
-    \$19  = regs__done_count;
-    if (regs__result_capture) begin
-      \$19  = \$11 [15:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$17  = regs__done_count;
+    if (regs__frame_done) begin
+      \$17  = \$10 [15:0];
     end
     if (rst) begin
-      \$19  = 16'h0000;
+      \$17  = 16'h0000;
     end
   end
-  assign done = regs__result_capture;
-  assign regs__result_published = published;
   assign count_addr = ca_rbuf_addr[2:0];
   assign regs__count_addr = ca_rbuf_addr[2:0];
   assign count_data = regs__count_data;
@@ -7293,7 +7548,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   assign regs__cap_timestamp = 1'h1;
   assign regs__cap_register_access = 1'h1;
   assign regs__cap_ssi = 1'h1;
-  assign \$signal$33  = regs__frame_done;
+  assign ended = regs__frame_done;
   assign ca_done = regs__ca_done;
   assign regs__cfg_ma_half_period = cfg_ma_half_period;
   assign regs__cfg_delay_limit = cfg_delay_limit;
@@ -7321,48 +7576,48 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
   assign regs__cfg_confirm_frames = cfg_confirm_frames;
   assign regs__cfg_quiet_time = cfg_quiet_time;
-  assign regs__status = \$20 [3:0];
-  assign status = \$20 [3:0];
-  assign regs__cds = \$20 [49];
-  assign cds = \$20 [49];
-  assign regs__word0_ne = \$20 [131];
-  assign word0_ne = \$20 [131];
-  assign regs__word0_nw = \$20 [132];
-  assign word0_nw = \$20 [132];
-  assign regs__word0_crc_ok = \$20 [133];
-  assign word0_crc_ok = \$20 [133];
-  assign regs__word1_ne = \$20 [174];
-  assign word1_ne = \$20 [174];
-  assign regs__word1_nw = \$20 [175];
-  assign word1_nw = \$20 [175];
-  assign regs__word1_crc_ok = \$20 [176];
-  assign word1_crc_ok = \$20 [176];
-  assign regs__lc_repeat = \$20 [183];
-  assign lc_repeat = \$20 [183];
-  assign regs__lc_skip = \$20 [184];
-  assign lc_skip = \$20 [184];
-  assign regs__lc_zero = \$20 [185];
-  assign lc_zero = \$20 [185];
-  assign regs__spw_mismatch = \$20 [186];
-  assign spw_mismatch = \$20 [186];
-  assign regs__lc = \$20 [182:177];
-  assign lc = \$20 [182:177];
-  assign regs__line_delay = \$20 [48:36];
-  assign line_delay = \$20 [48:36];
-  assign regs__word0_position = \$20 [130:76];
-  assign word0_position = \$20 [130:76];
-  assign regs__word1_position = \$20 [173:134];
-  assign word1_position = \$20 [173:134];
-  assign regs__timestamp = \$20 [35:4];
-  assign timestamp = \$20 [35:4];
-  assign regs__noise_events = \$20 [53:50];
-  assign noise_events = \$20 [53:50];
-  assign regs__delay_settled = \$20 [54];
-  assign delay_settled = \$20 [54];
-  assign regs__delay_spread = \$20 [75:68];
-  assign delay_spread = \$20 [75:68];
-  assign regs__settled_delay = \$20 [67:55];
-  assign settled_delay = \$20 [67:55];
+  assign regs__status = \$18 [3:0];
+  assign status = \$18 [3:0];
+  assign regs__cds = \$18 [49];
+  assign cds = \$18 [49];
+  assign regs__word0_ne = \$18 [131];
+  assign word0_ne = \$18 [131];
+  assign regs__word0_nw = \$18 [132];
+  assign word0_nw = \$18 [132];
+  assign regs__word0_crc_ok = \$18 [133];
+  assign word0_crc_ok = \$18 [133];
+  assign regs__word1_ne = \$18 [174];
+  assign word1_ne = \$18 [174];
+  assign regs__word1_nw = \$18 [175];
+  assign word1_nw = \$18 [175];
+  assign regs__word1_crc_ok = \$18 [176];
+  assign word1_crc_ok = \$18 [176];
+  assign regs__lc_repeat = \$18 [183];
+  assign lc_repeat = \$18 [183];
+  assign regs__lc_skip = \$18 [184];
+  assign lc_skip = \$18 [184];
+  assign regs__lc_zero = \$18 [185];
+  assign lc_zero = \$18 [185];
+  assign regs__spw_mismatch = \$18 [186];
+  assign spw_mismatch = \$18 [186];
+  assign regs__lc = \$18 [182:177];
+  assign lc = \$18 [182:177];
+  assign regs__line_delay = \$18 [48:36];
+  assign line_delay = \$18 [48:36];
+  assign regs__word0_position = \$18 [130:76];
+  assign word0_position = \$18 [130:76];
+  assign regs__word1_position = \$18 [173:134];
+  assign word1_position = \$18 [173:134];
+  assign regs__timestamp = \$18 [35:4];
+  assign timestamp = \$18 [35:4];
+  assign regs__noise_events = \$18 [53:50];
+  assign noise_events = \$18 [53:50];
+  assign regs__delay_settled = \$18 [54];
+  assign delay_settled = \$18 [54];
+  assign regs__delay_spread = \$18 [75:68];
+  assign delay_spread = \$18 [75:68];
+  assign regs__settled_delay = \$18 [67:55];
+  assign settled_delay = \$18 [67:55];
   assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
   assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
   assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
@@ -7383,31 +7638,31 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   assign regs__ca_start = ca_start;
   assign regs__ca_abort = ca_abort;
   assign ca_busy = regs__ca_busy;
-  assign regs__ca_status = \$22 [2:0];
-  assign ca_status = \$22 [2:0];
-  assign regs__ca_bytes_done = \$22 [9:3];
-  assign ca_bytes_done = \$22 [9:3];
-  assign regs__count_ca_crc4_error = \$21 [15:0];
-  assign count_ca_crc4_error = \$21 [15:0];
-  assign regs__count_ca_no_answer = \$21 [31:16];
-  assign count_ca_no_answer = \$21 [31:16];
-  assign regs__count_ca_refused = \$21 [47:32];
-  assign count_ca_refused = \$21 [47:32];
-  assign regs__count_ca_aborted = \$21 [63:48];
-  assign count_ca_aborted = \$21 [63:48];
-  assign regs__count_ca_data_fault = \$21 [79:64];
-  assign count_ca_data_fault = \$21 [79:64];
+  assign regs__ca_status = \$20 [2:0];
+  assign ca_status = \$20 [2:0];
+  assign regs__ca_bytes_done = \$20 [9:3];
+  assign ca_bytes_done = \$20 [9:3];
+  assign regs__count_ca_crc4_error = \$19 [15:0];
+  assign count_ca_crc4_error = \$19 [15:0];
+  assign regs__count_ca_no_answer = \$19 [31:16];
+  assign count_ca_no_answer = \$19 [31:16];
+  assign regs__count_ca_refused = \$19 [47:32];
+  assign count_ca_refused = \$19 [47:32];
+  assign regs__count_ca_aborted = \$19 [63:48];
+  assign count_ca_aborted = \$19 [63:48];
+  assign regs__count_ca_data_fault = \$19 [79:64];
+  assign count_ca_data_fault = \$19 [79:64];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$202  = ma;
-  assign \slo$204  = slo;
-  assign \port$6611$0  = \$20 ;
-  assign \port$6624$0  = \$21 ;
-  assign \port$6701$0  = \$22 ;
+  assign \ma$198  = ma;
+  assign \slo$200  = slo;
+  assign \port$6669$0  = \$18 ;
+  assign \port$6682$0  = \$19 ;
+  assign \port$6759$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -7415,7 +7670,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
 , cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$262 , \abort$264 
 , abort, ma, \done$316 , \valid$318 , \result$321 , counts, ca_done, result, rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -8481,7 +8736,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6268$272 (cycle[274:272]),
+    .\port$6326$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -8541,7 +8796,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6268$199 (cycle[199]),
+    .\port$6326$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -8592,7 +8847,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6268$259 (cycle[271:259]),
+    .\port$6326$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$344 ),
@@ -8616,7 +8871,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6256$0 (\bit ),
+    .\port$6314$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -8683,7 +8938,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2519$0 (\$28 ),
+    .\port$2500$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -8693,35 +8948,35 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
     \$23  = \$22 ;
     if (rst) begin
       \$23  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
     \$24  = \bit$345 ;
     if (rst) begin
       \$24  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
     \$25  = started;
     if (rst) begin
       \$25  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
     \$26  = report_frame;
     if (rst) begin
       \$26  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
     \$27  = \clean$346 ;
     if (rst) begin
       \$27  = 1'h0;
@@ -9261,7 +9516,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crcs, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$14  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9568,14 +9823,14 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$21  = \$19  & \$20 ;
   assign \$22  = ! live[209:208];
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$69  = \$54 ;
     if (rst) begin
       \$69  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$70  = cycle;
     if (idle) begin
       \$70  = live;
@@ -9585,7 +9840,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$71  = ack_limit;
     if (idle) begin
       \$71  = \$56 ;
@@ -9595,7 +9850,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$72  = timeout_limit;
     if (idle) begin
       \$72  = \$58 ;
@@ -9605,7 +9860,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$73  = delay_limit;
     if (idle) begin
       \$73  = \$60 ;
@@ -9615,7 +9870,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$74  = quiet_time;
     if (idle) begin
       \$74  = \$62 ;
@@ -9625,7 +9880,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$75  = delay_tolerance;
     if (idle) begin
       \$75  = \$65 ;
@@ -9635,7 +9890,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$76  = crcs;
     if (idle) begin
       (* full_case = 32'd1 *)
@@ -9686,7 +9941,7 @@ module \biss_master_axil.ch0.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$14 ) begin end
     \$77  = \$66 ;
     if (rst) begin
       \$77  = 25'h0000000;
@@ -9795,7 +10050,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.confirmation (rst, report, status, pending, setting, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$15  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -9863,7 +10118,7 @@ module \biss_master_axil.ch0.core.confirmation (rst, report, status, pending, se
   always @(posedge clk)
     left <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$15 ) begin end
     \$17  = left;
     if (\$7 ) begin
       \$17  = \$13 ;
@@ -9880,7 +10135,7 @@ endmodule
 module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, report_delay, frame_done, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
 , faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full
 , started, stop_bit, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$16  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -10255,7 +10510,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     .report_frame(report_frame)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -10287,7 +10542,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -10306,7 +10561,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     holding = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -10329,14 +10584,14 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     \$43  = idle;
     if (rst) begin
       \$43  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     \$44  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -10429,7 +10684,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     \$45  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -10522,7 +10777,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     \$46  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -10615,7 +10870,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     \$47  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -10636,7 +10891,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -10644,7 +10899,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -10697,7 +10952,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     waiting = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -10709,7 +10964,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -10721,7 +10976,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -10772,7 +11027,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -10823,7 +11078,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -10839,7 +11094,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -10853,7 +11108,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -10867,7 +11122,7 @@ module \biss_master_axil.ch0.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$16 ) begin end
     framing = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -10932,7 +11187,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.controller.cdm_hold (rst, cdm, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$17  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -10971,7 +11226,7 @@ module \biss_master_axil.ch0.core.controller.cdm_hold (rst, cdm, abort, framing,
   assign \$1  = ~ abort;
   assign \$2  = cdm_cycle & \$1 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
     \$7  = cdm_cycle;
     if (idle) begin
       \$7  = cdm;
@@ -10981,7 +11236,7 @@ module \biss_master_axil.ch0.core.controller.cdm_hold (rst, cdm, abort, framing,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$17 ) begin end
     ma_hold = 1'h0;
     if (framing) begin
       ma_hold = \$2 ;
@@ -10993,7 +11248,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$18  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -11091,7 +11346,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
   always @(posedge clk)
     locked_seen <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     \$20  = armed;
     if (clear) begin
       \$20  = 1'h0;
@@ -11104,7 +11359,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     \$21  = locked_seen;
     if (clear) begin
       \$21  = 1'h0;
@@ -11117,7 +11372,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     fault = 1'h0;
     if (\$7 ) begin
       fault = 1'h1;
@@ -11130,7 +11385,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     status = 4'h0;
     if (\$7 ) begin
       status = 4'h8;
@@ -11143,7 +11398,7 @@ module \biss_master_axil.ch0.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$18 ) begin end
     delay = 1'h0;
     if (\$7 ) begin
     end else if (\$12 ) begin
@@ -11155,7 +11410,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$19  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -11189,7 +11444,7 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
   assign \$4  = first_clock ? quiet_live : quiet;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     aborted = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -11197,7 +11452,7 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     ready = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -11206,7 +11461,7 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     stuck_low = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -11216,7 +11471,7 @@ module \biss_master_axil.ch0.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$19 ) begin end
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
@@ -11332,7 +11587,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_data, clear, events, host__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$20  = 0;
   wire [7:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -12088,7 +12343,7 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_da
   always @(posedge clk)
     was_busy <= \$308 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
       \$300 [0] = 1'h0;
@@ -12219,7 +12474,7 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_da
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
       \$301  = 1'h0;
@@ -12230,49 +12485,49 @@ module \biss_master_axil.ch0.core.counter_ram (clk, rst, host__en, busy, read_da
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$302  = { \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109  };
     if (rst) begin
       \$302  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$303  = pick;
     if (rst) begin
       \$303  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$304  = { \$148 , \$147 , \$146  };
     if (rst) begin
       \$304  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$305  = sel;
     if (rst) begin
       \$305  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$306  = update__addr;
     if (rst) begin
       \$306  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$307  = \$173 ;
     if (rst) begin
       \$307  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$20 ) begin end
     \$308  = \$299 ;
     if (rst) begin
       \$308  = 1'h1;
@@ -12360,7 +12615,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$21  = 0;
   reg [4:0] \$1 ;
   reg \$2 ;
   input clear;
@@ -12450,14 +12705,14 @@ module \biss_master_axil.ch0.core.counters (rst, clear, events, counts, clk);
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
     \$1  = events;
     if (rst) begin
       \$1  = 5'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$21 ) begin end
     \$2  = clear;
     if (rst) begin
       \$2  = 1'h0;
@@ -12497,6 +12752,114 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$22  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$22 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$23  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$23 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$24  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -12550,7 +12913,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_aborted (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$25  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -12604,7 +12967,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_crc4_error (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
+module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$26  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -12658,117 +13021,9 @@ module \biss_master_axil.ch0.core.counters.count_ca_data_fault (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6268$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6326$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -13459,8 +13714,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6268$272 ;
-  wire [2:0] \port$6268$272 ;
+  input [2:0] \port$6326$272 ;
+  wire [2:0] \port$6326$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -13746,7 +14001,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6268$272 [0];
+  assign error_bit = ssi & \port$6326$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -13800,7 +14055,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6268$272 [2];
+  assign \$48  = ssi & \port$6326$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -14087,15 +14342,15 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6268$272 [0];
+  assign \$335  = ssi & \port$6326$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6268$272 [0];
-  assign \$343  = ~ \port$6268$272 [1];
+  assign \$342  = ssi & \port$6326$272 [0];
+  assign \$343  = ~ \port$6326$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -14188,7 +14443,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     .words(words)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     at_cds = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -14202,7 +14457,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -14214,7 +14469,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     separator = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -14228,7 +14483,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     second = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -14244,7 +14499,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$569  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -14280,7 +14535,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$570  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -14306,7 +14561,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$571  = slots;
     if (\$18 ) begin
       \$571  = \$19 [15:0];
@@ -14319,7 +14574,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$572  = slots_full;
     if (\$18 ) begin
       \$572  = \$20 ;
@@ -14332,7 +14587,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$573  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -14365,7 +14620,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$574  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -14392,7 +14647,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$575  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -14419,7 +14674,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$576  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
@@ -14443,7 +14698,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$577  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -14470,7 +14725,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$578  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -14500,7 +14755,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$579  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -14549,7 +14804,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$580  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -14572,7 +14827,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$581  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -14589,7 +14844,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$582  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -14607,7 +14862,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$583  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -14633,7 +14888,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$584  = data0;
     if (\$55 ) begin
       \$584  = \$333 ;
@@ -14646,7 +14901,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$585  = ne;
     if (\$337 ) begin
       \$585 [0] = 1'h1;
@@ -14666,7 +14921,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$586  = nw;
     if (\$346 ) begin
       \$586 [0] = 1'h1;
@@ -14687,7 +14942,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$587  = data1;
     if (\$353 ) begin
       \$587  = \$556 ;
@@ -14700,7 +14955,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$588  = lc;
     if (lc_load) begin
       \$588  = { lc[4:0], \bit  };
@@ -14713,7 +14968,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$27 ) begin end
     \$589  = cpw_top;
     if (\$566 ) begin
       \$589  = { cpw_top[38:0], \$568  };
@@ -14727,7 +14982,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$6268$272 [0];
+  assign ssi_error = \port$6326$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -14736,8 +14991,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6268$272 [2];
-  assign ssi_error_low = \port$6268$272 [1];
+  assign ssi_double = \port$6326$272 [2];
+  assign ssi_error_low = \port$6326$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -14821,7 +15076,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.decoder.copy (rst, index, first, \bit , receiver_clear, separator, second, mismatch, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$28  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -14856,7 +15111,7 @@ module \biss_master_axil.ch0.core.decoder.copy (rst, index, first, \bit , receiv
   assign \$2  = ring >> index;
   assign \$3  = \bit  != \$2 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$5  = ring;
     if (\$1 ) begin
       \$5  = { ring[71:0], \bit  };
@@ -14869,7 +15124,7 @@ module \biss_master_axil.ch0.core.decoder.copy (rst, index, first, \bit , receiv
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$28 ) begin end
     \$6  = mismatch;
     if (separator) begin
       \$6  = \bit ;
@@ -14888,7 +15143,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$29  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
   reg \$11 ;
@@ -14989,7 +15244,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
   always @(posedge clk)
     ok <= \$35 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     (* full_case = 32'd1 *)
     casez (load_index)
       1'h0:
@@ -14999,7 +15254,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -15009,7 +15264,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -15019,7 +15274,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -15029,7 +15284,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -15039,7 +15294,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -15049,7 +15304,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -15059,7 +15314,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -15069,7 +15324,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -15079,7 +15334,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$33  = \reg ;
     if (load) begin
       \$33  = \$1 ;
@@ -15096,7 +15351,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$34  = mismatch;
     if (load) begin
       \$34  = 1'h0;
@@ -15112,7 +15367,7 @@ module \biss_master_axil.ch0.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$29 ) begin end
     \$35  = ok;
     if (last) begin
       if (\$15 ) begin
@@ -15144,7 +15399,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crcs, receiver_clear, ends, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$30  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
   reg [1:0] \$11 ;
@@ -15290,7 +15545,7 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
   always @(posedge clk)
     w1_ends <= \$36 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
@@ -15312,7 +15567,7 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
@@ -15334,7 +15589,7 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
@@ -15356,7 +15611,7 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
@@ -15378,7 +15633,7 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
@@ -15400,7 +15655,7 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -15414,7 +15669,7 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -15428,7 +15683,7 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -15442,7 +15697,7 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -15456,7 +15711,7 @@ module \biss_master_axil.ch0.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$30 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -15543,7 +15798,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$31  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -15715,56 +15970,56 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
   assign \$39  = magnitude > spread;
   assign \$40  = \$38  & \$39 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$46  = \$1 ;
     if (rst) begin
       \$46  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$47  = \$2 ;
     if (rst) begin
       \$47  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$48  = \tolerance$8 ;
     if (rst) begin
       \$48  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$49  = \$3 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$50  = \$11 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$51  = \$20 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$52  = \$25 ;
     if (rst) begin
       \$52  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$53  = 1'h0;
     if (learn) begin
       if (\$32 ) begin
@@ -15781,7 +16036,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$54  = jump;
     if (check) begin
       \$54  = \$26 ;
@@ -15794,7 +16049,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$55  = count;
     if (learn) begin
       (* full_case = 32'd1 *)
@@ -15816,7 +16071,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$56  = spread;
     if (learn) begin
       if (\$32 ) begin
@@ -15836,7 +16091,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$57  = cand;
     if (learn) begin
       if (\$32 ) begin
@@ -15849,7 +16104,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$58  = settled_delay;
     if (learn) begin
       if (\$32 ) begin
@@ -15866,7 +16121,7 @@ module \biss_master_axil.ch0.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$31 ) begin end
     \$59  = settled;
     if (learn) begin
       if (\$32 ) begin
@@ -15886,7 +16141,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.line_noise (rst, sampler_noise, close, noisy, events, limit, watch, restart, level, \event , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$32  = 0;
   wire \$1 ;
   reg \$10 ;
   reg \$11 ;
@@ -15949,21 +16204,21 @@ module \biss_master_axil.ch0.core.line_noise (rst, sampler_noise, close, noisy, 
   always @(posedge clk)
     running <= \$14 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$10  = level;
     if (rst) begin
       \$10  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$11  = \$4 ;
     if (rst) begin
       \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$12  = held_noisy;
     if (close) begin
       \$12  = \$7 ;
@@ -15973,7 +16228,7 @@ module \biss_master_axil.ch0.core.line_noise (rst, sampler_noise, close, noisy, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$13  = held_events;
     if (close) begin
       \$13  = running;
@@ -15983,7 +16238,7 @@ module \biss_master_axil.ch0.core.line_noise (rst, sampler_noise, close, noisy, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$32 ) begin end
     \$14  = running;
     if (close) begin
       \$14  = { 3'h0, \event  };
@@ -16000,7 +16255,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$33  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -16125,7 +16380,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -16140,7 +16395,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -16155,7 +16410,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -16170,7 +16425,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -16199,7 +16454,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -16241,7 +16496,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -16283,7 +16538,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -16302,7 +16557,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -16338,7 +16593,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -16362,7 +16617,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -16378,7 +16633,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$33 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -16394,8 +16649,8 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6268$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
+module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6326$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
   wire [7:0] \$11 ;
@@ -16446,8 +16701,8 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6268$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6268$199 ;
-  wire \port$6268$199 ;
+  input \port$6326$199 ;
+  wire \port$6326$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -16501,7 +16756,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6268$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6268$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6326$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -16527,7 +16782,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6268$199 , ssi, ssi
   always @(posedge clk)
     word1_len <= \$29 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez ({ \$1 , words[7:6] })
       3'h0:
@@ -16549,7 +16804,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6268$199 , ssi, ssi
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -16563,55 +16818,55 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6268$199 , ssi, ssi
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$23  = \$4 [7:0];
     if (rst) begin
       \$23  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$24  = \$9 [7:0];
     if (rst) begin
       \$24  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$25  = \$12 [8:0];
     if (rst) begin
       \$25  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$26  = \$13 ;
     if (rst) begin
       \$26  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$27  = \$15 ;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$28  = \$19 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$34 ) begin end
     \$29  = \$22 [7:0];
     if (rst) begin
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6268$199 , 1'h1 };
+  assign enables = { \port$6326$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -16932,7 +17187,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$35  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -17049,21 +17304,21 @@ module \biss_master_axil.ch0.core.register_access.buffers (clk, rst, host_read__
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$35 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -17083,7 +17338,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$36  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -17126,7 +17381,7 @@ module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -17136,7 +17391,7 @@ module \biss_master_axil.ch0.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$36 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -17152,7 +17407,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$37  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -17195,7 +17450,7 @@ module \biss_master_axil.ch0.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$6  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$37 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -17219,7 +17474,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.idle (rst, frame_ok, frame_end, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$38  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -17289,7 +17544,7 @@ module \biss_master_axil.ch0.core.register_access.idle (rst, frame_ok, frame_end
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -17299,7 +17554,7 @@ module \biss_master_axil.ch0.core.register_access.idle (rst, frame_ok, frame_end
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$38 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -17312,7 +17567,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$39  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -17384,7 +17639,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -17397,7 +17652,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -17410,7 +17665,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -17420,7 +17675,7 @@ module \biss_master_axil.ch0.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$39 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -17445,7 +17700,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$40  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -17488,7 +17743,7 @@ module \biss_master_axil.ch0.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$8  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$40 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -17513,7 +17768,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, frame_end, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$41  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -17869,7 +18124,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -17907,7 +18162,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -17961,7 +18216,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -18058,7 +18313,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -18075,7 +18330,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -18114,7 +18369,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -18172,7 +18427,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -18239,7 +18494,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -18271,7 +18526,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -18285,7 +18540,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -18312,7 +18567,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -18332,7 +18587,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -18351,7 +18606,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -18380,7 +18635,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -18401,7 +18656,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -18423,7 +18678,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -18444,7 +18699,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -18466,7 +18721,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -18488,7 +18743,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -18512,7 +18767,7 @@ module \biss_master_axil.ch0.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$41 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -18551,7 +18806,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$42  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [186:0] \$3 ;
@@ -18662,21 +18917,21 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$42 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -18752,8 +19007,8 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6268$259 , receiver_clear, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
+module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6326$259 , receiver_clear, early, locked, delay, sample, level, slo);
+  reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
   wire [13:0] \$11 ;
@@ -18886,8 +19141,8 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6268$259 ;
-  wire [12:0] \port$6268$259 ;
+  input [12:0] \port$6326$259 ;
+  wire [12:0] \port$6326$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -18912,7 +19167,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6268$259 [12:1] + 1'h1;
+  assign \$11  = \port$6326$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -19037,7 +19292,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6268$259 [0]),
+    .clear_high(\port$6326$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -19057,7 +19312,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$76  = level;
     if (receiver_clear) begin
       \$76  = 1'h1;
@@ -19067,7 +19322,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$77  = mid_delay;
     if (odd) begin
       \$77  = \$8 [12:0];
@@ -19094,7 +19349,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$78  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -19123,7 +19378,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$79  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -19147,7 +19402,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$80  = elapsed;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -19174,13 +19429,13 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$81  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6268$259 [0]) begin
+            if (\port$6326$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -19193,7 +19448,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$82  = locked;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -19224,7 +19479,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$83  = gap;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -19258,14 +19513,14 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$84  = sampler_fsm_state;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6268$259 [0]) begin
+            if (\port$6326$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -19297,14 +19552,14 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$85  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6268$259 [12:1] };
+            \$85  = { 1'h0, \port$6326$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -19324,7 +19579,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$86  = vote1;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -19359,7 +19614,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$87  = vote2;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -19392,7 +19647,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$88  = first_slot;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -19423,7 +19678,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$89  = phase;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -19468,7 +19723,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$90  = slot_left;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -19523,7 +19778,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     \$91  = slot_zero;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -19578,7 +19833,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     sample = \$47 ;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -19599,7 +19854,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     clear = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -19615,7 +19870,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     dropped = 1'h0;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -19639,7 +19894,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     decided = 1'h0;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -19667,7 +19922,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$43 ) begin end
     centre = 1'h0;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -19689,11 +19944,11 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6268$259 [12:1] };
-  assign fixed = \port$6268$259 [0];
+  assign fixed_delay = { 1'h0, \port$6326$259 [12:1] };
+  assign fixed = \port$6326$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6268$259 [0];
+  assign clear_high = \port$6326$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -19701,7 +19956,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majority, odd, clear_high, receiver_clear, vote1, vote2, clear, centre, level, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$44  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -19818,7 +20073,7 @@ module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
   always @(posedge clk)
     strobed <= \$38 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$33  = last;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -19836,7 +20091,7 @@ module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$34  = tail_odd;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -19854,7 +20109,7 @@ module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$35  = 1'h0;
@@ -19874,7 +20129,7 @@ module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$36  = 1'h0;
@@ -19894,7 +20149,7 @@ module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$37  = crowded;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -19912,7 +20167,7 @@ module \biss_master_axil.ch0.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$44 ) begin end
     \$38  = strobed;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -19955,7 +20210,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$45  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -20049,14 +20304,14 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -20070,7 +20325,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -20084,7 +20339,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$45 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -20100,8 +20355,8 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6256$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6314$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -20142,8 +20397,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6256$0 ;
-  wire \port$6256$0 ;
+  input \port$6314$0 ;
+  wire \port$6314$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -20157,9 +20412,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6256$0  };
-  assign \$2  = { lc[4:0], \port$6256$0  } == last;
-  assign \$3  = { lc[4:0], \port$6256$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6314$0  };
+  assign \$2  = { lc[4:0], \port$6314$0  } == last;
+  assign \$3  = { lc[4:0], \port$6314$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -20193,7 +20448,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -20203,7 +20458,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -20213,7 +20468,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -20223,21 +20478,21 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -20247,7 +20502,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -20257,7 +20512,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$46 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -20269,13 +20524,13 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6256$0  };
+  assign lc_next = { lc[4:0], \port$6314$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$47  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -20480,28 +20735,28 @@ module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$47 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -20511,7 +20766,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -20530,14 +20785,14 @@ module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -20551,7 +20806,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired
 , delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$49  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -20738,7 +20993,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
   assign \$38  = \$35  ? \$36  : \$37 ;
   assign \$39  = timer >= timeout_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$49  = slo_low_time_p1;
     if (\$2 ) begin
       \$49  = 25'h0000001;
@@ -20750,21 +21005,21 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$50  = \$9 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$51  = \$17 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$52  = high_p2;
     if (\$18 ) begin
       \$52  = 13'h0002;
@@ -20776,28 +21031,28 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$53  = \$23 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$54  = \$30 ;
     if (rst) begin
       \$54  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$55  = \$34 [24:0];
     if (rst) begin
       \$55  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$56  = 1'h0;
@@ -20809,7 +21064,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$57  = 1'h0;
@@ -20821,21 +21076,21 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$58  = \$43 ;
     if (rst) begin
       \$58  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$59  = \$47 ;
     if (rst) begin
       \$59  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$49 ) begin end
     \$60  = \$48 ;
     if (rst) begin
       \$60  = 1'h0;
@@ -20844,9 +21099,9 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2519$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2500$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -21022,8 +21277,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2519$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$2519$0 ;
-  wire \port$2519$0 ;
+  output \port$2500$0 ;
+  wire \port$2500$0 ;
   output report;
   wire report;
   input report_frame;
@@ -21113,7 +21368,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2519$0 , l
   assign \$38  = lc_repeat_seen | lc_skip_seen;
   assign \$39  = \$38  | lc_zero_seen;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$50 ) begin end
     frame_status = 4'h0;
     if (unconfirmed) begin
       frame_status = 4'hf;
@@ -21141,7 +21396,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2519$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2519$0  = \$2 ;
+  assign \port$2500$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -21195,37 +21450,32 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2519$0 , l
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
+module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
 , cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
 , cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, published, regs__frame_done, regs__done_count, ma, regs__result_capture, \port$7144$0 , \port$7157$0 , regs__ca_done, \port$7234$0 , ca_rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
+, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7200$0 , \port$7213$0 , regs__ca_done, \port$7290$0 , ca_rbuf_addr);
+  reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
-  wire [4:0] \$10 ;
-  wire [16:0] \$11 ;
-  reg \$12 ;
-  reg [3:0] \$13 ;
+  wire [16:0] \$10 ;
+  reg \$11 ;
+  reg [3:0] \$12 ;
+  reg \$13 ;
   reg \$14 ;
   reg \$15 ;
   reg \$16 ;
-  reg \$17 ;
-  reg \$18 ;
-  reg [15:0] \$19 ;
+  reg [15:0] \$17 ;
+  wire [186:0] \$18 ;
+  wire [79:0] \$19 ;
   wire \$2 ;
-  wire [186:0] \$20 ;
-  wire [79:0] \$21 ;
-  wire [9:0] \$22 ;
+  wire [9:0] \$20 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
   wire \$6 ;
   wire \$7 ;
-  wire \$8 ;
+  wire [4:0] \$8 ;
   wire [4:0] \$9 ;
   reg \$signal  = 1'h0;
-  reg \$signal$207  = 1'h0;
-  (* init = 1'h0 *)
-  wire \$signal$33 ;
   reg abort_cycle = 1'h0;
   wire busy;
   input ca_abort;
@@ -21370,6 +21620,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   wire delay_settled;
   wire [7:0] delay_spread;
   wire done;
+  (* init = 1'h0 *)
+  wire ended;
   reg ended_ok = 1'h0;
   wire [5:0] lc;
   wire lc_repeat;
@@ -21378,19 +21630,17 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$202 ;
+  wire \ma$198 ;
   wire [3:0] noise_events;
-  reg page_seen = 1'h0;
+  reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7144$0 ;
-  wire [186:0] \port$7144$0 ;
-  output [79:0] \port$7157$0 ;
-  wire [79:0] \port$7157$0 ;
-  output [9:0] \port$7234$0 ;
-  wire [9:0] \port$7234$0 ;
-  input published;
-  wire published;
+  output [186:0] \port$7200$0 ;
+  wire [186:0] \port$7200$0 ;
+  output [79:0] \port$7213$0 ;
+  wire [79:0] \port$7213$0 ;
+  output [9:0] \port$7290$0 ;
+  wire [9:0] \port$7290$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -21498,9 +21748,6 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   wire [12:0] regs__line_delay;
   wire [3:0] regs__noise_events;
   wire regs__periodic;
-  output regs__result_capture;
-  wire regs__result_capture;
-  wire regs__result_published;
   wire [12:0] regs__settled_delay;
   wire regs__spw_mismatch;
   wire regs__start;
@@ -21522,7 +21769,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$204 ;
+  wire \slo$200 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -21546,8 +21793,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   wire [3:0] status;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$199 ;
-  wire \trigger$199 ;
+  input \trigger$195 ;
+  wire \trigger$195 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -21559,35 +21806,32 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   wire word1_nw;
   wire [39:0] word1_position;
   assign \$1  = ~ count_busy;
-  assign \$2  = waited == 4'hf;
-  assign \$3  = \$1  | \$2 ;
-  assign \$4  = page_seen & \$3 ;
-  assign \$5  = regs__result_capture | \$4 ;
-  assign report = \$signal  & \$5 ;
-  assign \$6  = ~ ended_ok;
-  assign regs__frame_error = regs__frame_done & \$6 ;
-  assign trigger = \trigger$199  & regs__trigger_enable;
-  assign \$7  = ~ report;
-  assign \$8  = \$signal  & \$7 ;
-  assign \$9  = waited + 1'h1;
-  assign \$10  = \$8  ? \$9  : 5'h00;
-  assign \$11  = regs__done_count + 1'h1;
+  assign \$2  = \$1  | done;
+  assign \$3  = waited == 4'hf;
+  assign \$4  = \$2  | \$3 ;
+  assign report = \$signal  & \$4 ;
+  assign \$5  = ~ ended_ok;
+  assign regs__frame_error = regs__frame_done & \$5 ;
+  assign trigger = \trigger$195  & regs__trigger_enable;
+  assign \$6  = ~ report;
+  assign \$7  = \$signal  & \$6 ;
+  assign \$8  = waited + 1'h1;
+  assign \$9  = \$7  ? \$8  : 5'h00;
+  assign \$10  = regs__done_count + 1'h1;
   always @(posedge clk)
-    \$signal  <= \$12 ;
+    \$signal  <= \$11 ;
   always @(posedge clk)
-    waited <= \$13 ;
+    waited <= \$12 ;
   always @(posedge clk)
-    page_seen <= \$14 ;
+    pending_ok <= \$13 ;
   always @(posedge clk)
-    \$signal$207  <= \$15 ;
+    regs__frame_done <= \$14 ;
   always @(posedge clk)
-    regs__frame_done <= \$16 ;
+    ended_ok <= \$15 ;
   always @(posedge clk)
-    ended_ok <= \$17 ;
+    abort_cycle <= \$16 ;
   always @(posedge clk)
-    abort_cycle <= \$18 ;
-  always @(posedge clk)
-    regs__done_count <= \$19 ;
+    regs__done_count <= \$17 ;
   \biss_master_axil.ch1.core  core (
     .abort(abort_cycle),
     .\abort$264 (ca_abort),
@@ -21645,16 +21889,16 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
-    .counts(\$21 ),
-    .\done$316 (regs__result_capture),
+    .counts(\$19 ),
+    .\done$316 (done),
     .frames(regs__ca_busy),
     .ma(ma),
     .\periodic$45 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
-    .result(\$22 ),
-    .\result$321 (\$20 ),
+    .result(\$20 ),
+    .\result$321 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
@@ -21663,81 +21907,66 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
     .\valid$318 (valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$12  = \$signal ;
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$11  = \$signal ;
     if (report) begin
-      \$12  = 1'h0;
+      \$11  = 1'h0;
     end
-    if (regs__result_capture) begin
-      \$12  = 1'h1;
+    if (done) begin
+      \$11  = 1'h1;
     end
     if (rst) begin
-      \$12  = 1'h0;
+      \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$13  = \$10 [3:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$12  = \$9 [3:0];
     if (rst) begin
-      \$13  = 4'h0;
+      \$12  = 4'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$14  = page_seen;
-    if (published) begin
-      \$14  = 1'h1;
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$13  = pending_ok;
+    if (done) begin
+      \$13  = valid;
     end
-    if (regs__result_capture) begin
+    if (rst) begin
+      \$13  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$14  = report;
+    if (rst) begin
       \$14  = 1'h0;
     end
-    if (rst) begin
-      \$14  = 1'h0;
-    end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$15  = \$signal$207 ;
-    if (regs__result_capture) begin
-      \$15  = valid;
-    end
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$15  = pending_ok;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$16  = report;
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$16  = regs__abort_cycle;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$17  = \$signal$207 ;
-    if (rst) begin
-      \$17  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$18  = regs__abort_cycle;
-    if (rst) begin
-      \$18  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
-    \$19  = regs__done_count;
-    if (regs__result_capture) begin
-      \$19  = \$11 [15:0];
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$17  = regs__done_count;
+    if (regs__frame_done) begin
+      \$17  = \$10 [15:0];
     end
     if (rst) begin
-      \$19  = 16'h0000;
+      \$17  = 16'h0000;
     end
   end
-  assign done = regs__result_capture;
-  assign regs__result_published = published;
   assign count_addr = ca_rbuf_addr[2:0];
   assign regs__count_addr = ca_rbuf_addr[2:0];
   assign count_data = regs__count_data;
@@ -21754,7 +21983,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   assign regs__cap_timestamp = 1'h1;
   assign regs__cap_register_access = 1'h1;
   assign regs__cap_ssi = 1'h1;
-  assign \$signal$33  = regs__frame_done;
+  assign ended = regs__frame_done;
   assign ca_done = regs__ca_done;
   assign regs__cfg_ma_half_period = cfg_ma_half_period;
   assign regs__cfg_delay_limit = cfg_delay_limit;
@@ -21782,48 +22011,48 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
   assign regs__cfg_confirm_frames = cfg_confirm_frames;
   assign regs__cfg_quiet_time = cfg_quiet_time;
-  assign regs__status = \$20 [3:0];
-  assign status = \$20 [3:0];
-  assign regs__cds = \$20 [49];
-  assign cds = \$20 [49];
-  assign regs__word0_ne = \$20 [131];
-  assign word0_ne = \$20 [131];
-  assign regs__word0_nw = \$20 [132];
-  assign word0_nw = \$20 [132];
-  assign regs__word0_crc_ok = \$20 [133];
-  assign word0_crc_ok = \$20 [133];
-  assign regs__word1_ne = \$20 [174];
-  assign word1_ne = \$20 [174];
-  assign regs__word1_nw = \$20 [175];
-  assign word1_nw = \$20 [175];
-  assign regs__word1_crc_ok = \$20 [176];
-  assign word1_crc_ok = \$20 [176];
-  assign regs__lc_repeat = \$20 [183];
-  assign lc_repeat = \$20 [183];
-  assign regs__lc_skip = \$20 [184];
-  assign lc_skip = \$20 [184];
-  assign regs__lc_zero = \$20 [185];
-  assign lc_zero = \$20 [185];
-  assign regs__spw_mismatch = \$20 [186];
-  assign spw_mismatch = \$20 [186];
-  assign regs__lc = \$20 [182:177];
-  assign lc = \$20 [182:177];
-  assign regs__line_delay = \$20 [48:36];
-  assign line_delay = \$20 [48:36];
-  assign regs__word0_position = \$20 [130:76];
-  assign word0_position = \$20 [130:76];
-  assign regs__word1_position = \$20 [173:134];
-  assign word1_position = \$20 [173:134];
-  assign regs__timestamp = \$20 [35:4];
-  assign timestamp = \$20 [35:4];
-  assign regs__noise_events = \$20 [53:50];
-  assign noise_events = \$20 [53:50];
-  assign regs__delay_settled = \$20 [54];
-  assign delay_settled = \$20 [54];
-  assign regs__delay_spread = \$20 [75:68];
-  assign delay_spread = \$20 [75:68];
-  assign regs__settled_delay = \$20 [67:55];
-  assign settled_delay = \$20 [67:55];
+  assign regs__status = \$18 [3:0];
+  assign status = \$18 [3:0];
+  assign regs__cds = \$18 [49];
+  assign cds = \$18 [49];
+  assign regs__word0_ne = \$18 [131];
+  assign word0_ne = \$18 [131];
+  assign regs__word0_nw = \$18 [132];
+  assign word0_nw = \$18 [132];
+  assign regs__word0_crc_ok = \$18 [133];
+  assign word0_crc_ok = \$18 [133];
+  assign regs__word1_ne = \$18 [174];
+  assign word1_ne = \$18 [174];
+  assign regs__word1_nw = \$18 [175];
+  assign word1_nw = \$18 [175];
+  assign regs__word1_crc_ok = \$18 [176];
+  assign word1_crc_ok = \$18 [176];
+  assign regs__lc_repeat = \$18 [183];
+  assign lc_repeat = \$18 [183];
+  assign regs__lc_skip = \$18 [184];
+  assign lc_skip = \$18 [184];
+  assign regs__lc_zero = \$18 [185];
+  assign lc_zero = \$18 [185];
+  assign regs__spw_mismatch = \$18 [186];
+  assign spw_mismatch = \$18 [186];
+  assign regs__lc = \$18 [182:177];
+  assign lc = \$18 [182:177];
+  assign regs__line_delay = \$18 [48:36];
+  assign line_delay = \$18 [48:36];
+  assign regs__word0_position = \$18 [130:76];
+  assign word0_position = \$18 [130:76];
+  assign regs__word1_position = \$18 [173:134];
+  assign word1_position = \$18 [173:134];
+  assign regs__timestamp = \$18 [35:4];
+  assign timestamp = \$18 [35:4];
+  assign regs__noise_events = \$18 [53:50];
+  assign noise_events = \$18 [53:50];
+  assign regs__delay_settled = \$18 [54];
+  assign delay_settled = \$18 [54];
+  assign regs__delay_spread = \$18 [75:68];
+  assign delay_spread = \$18 [75:68];
+  assign regs__settled_delay = \$18 [67:55];
+  assign settled_delay = \$18 [67:55];
   assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
   assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
   assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
@@ -21844,31 +22073,31 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$199 , count_en, ca_wbuf_en
   assign regs__ca_start = ca_start;
   assign regs__ca_abort = ca_abort;
   assign ca_busy = regs__ca_busy;
-  assign regs__ca_status = \$22 [2:0];
-  assign ca_status = \$22 [2:0];
-  assign regs__ca_bytes_done = \$22 [9:3];
-  assign ca_bytes_done = \$22 [9:3];
-  assign regs__count_ca_crc4_error = \$21 [15:0];
-  assign count_ca_crc4_error = \$21 [15:0];
-  assign regs__count_ca_no_answer = \$21 [31:16];
-  assign count_ca_no_answer = \$21 [31:16];
-  assign regs__count_ca_refused = \$21 [47:32];
-  assign count_ca_refused = \$21 [47:32];
-  assign regs__count_ca_aborted = \$21 [63:48];
-  assign count_ca_aborted = \$21 [63:48];
-  assign regs__count_ca_data_fault = \$21 [79:64];
-  assign count_ca_data_fault = \$21 [79:64];
+  assign regs__ca_status = \$20 [2:0];
+  assign ca_status = \$20 [2:0];
+  assign regs__ca_bytes_done = \$20 [9:3];
+  assign ca_bytes_done = \$20 [9:3];
+  assign regs__count_ca_crc4_error = \$19 [15:0];
+  assign count_ca_crc4_error = \$19 [15:0];
+  assign regs__count_ca_no_answer = \$19 [31:16];
+  assign count_ca_no_answer = \$19 [31:16];
+  assign regs__count_ca_refused = \$19 [47:32];
+  assign count_ca_refused = \$19 [47:32];
+  assign regs__count_ca_aborted = \$19 [63:48];
+  assign count_ca_aborted = \$19 [63:48];
+  assign regs__count_ca_data_fault = \$19 [79:64];
+  assign count_ca_data_fault = \$19 [79:64];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$202  = ma;
-  assign \slo$204  = slo;
-  assign \port$7144$0  = \$20 ;
-  assign \port$7157$0  = \$21 ;
-  assign \port$7234$0  = \$22 ;
+  assign \ma$198  = ma;
+  assign \slo$200  = slo;
+  assign \port$7200$0  = \$18 ;
+  assign \port$7213$0  = \$19 ;
+  assign \port$7290$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -21876,7 +22105,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
 , cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
 , cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$262 , \abort$264 
 , abort, ma, \done$316 , \valid$318 , \result$321 , counts, ca_done, result, rbuf_addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -22942,7 +23171,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6801$272 (cycle[274:272]),
+    .\port$6857$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -23002,7 +23231,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6801$199 (cycle[199]),
+    .\port$6857$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -23053,7 +23282,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6801$259 (cycle[271:259]),
+    .\port$6857$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$344 ),
@@ -23077,7 +23306,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6789$0 (\bit ),
+    .\port$6845$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -23144,7 +23373,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$4933$0 (\$28 ),
+    .\port$4911$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -23154,35 +23383,35 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$23  = \$22 ;
     if (rst) begin
       \$23  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$24  = \bit$345 ;
     if (rst) begin
       \$24  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$25  = started;
     if (rst) begin
       \$25  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$26  = report_frame;
     if (rst) begin
       \$26  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
     \$27  = \clean$346 ;
     if (rst) begin
       \$27  = 1'h0;
@@ -23722,7 +23951,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_limit, timeout_limit, delay_limit, quiet_time, delay_tolerance, crcs, no_start_limit, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$53  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24029,14 +24258,14 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
   assign \$21  = \$19  & \$20 ;
   assign \$22  = ! live[209:208];
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$69  = \$54 ;
     if (rst) begin
       \$69  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$70  = cycle;
     if (idle) begin
       \$70  = live;
@@ -24046,7 +24275,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$71  = ack_limit;
     if (idle) begin
       \$71  = \$56 ;
@@ -24056,7 +24285,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$72  = timeout_limit;
     if (idle) begin
       \$72  = \$58 ;
@@ -24066,7 +24295,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$73  = delay_limit;
     if (idle) begin
       \$73  = \$60 ;
@@ -24076,7 +24305,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$74  = quiet_time;
     if (idle) begin
       \$74  = \$62 ;
@@ -24086,7 +24315,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$75  = delay_tolerance;
     if (idle) begin
       \$75  = \$65 ;
@@ -24096,7 +24325,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$76  = crcs;
     if (idle) begin
       (* full_case = 32'd1 *)
@@ -24147,7 +24376,7 @@ module \biss_master_axil.ch1.core.config (rst, word_count, live, ok, cycle, ack_
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$53 ) begin end
     \$77  = \$66 ;
     if (rst) begin
       \$77  = 25'h0000000;
@@ -24256,7 +24485,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.confirmation (rst, report, status, pending, setting, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$54  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24324,7 +24553,7 @@ module \biss_master_axil.ch1.core.confirmation (rst, report, status, pending, se
   always @(posedge clk)
     left <= \$17 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$54 ) begin end
     \$17  = left;
     if (\$7 ) begin
       \$17  = \$13 ;
@@ -24341,7 +24570,7 @@ endmodule
 module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, report_delay, frame_done, frame_doubtful, abort, config_ok, end_check, ssi, resync, timer_clear, waiting, fault, fault_status, ma_run, in_clock, report_frame, idle, receiver_clear
 , faults, cdm_cycle, ma_hold, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired, delay_over, ma_arm, ma_busy, ma_held, ma_enough, early, locked, slo, stopped, slots_full
 , started, stop_bit, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$55  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -24716,7 +24945,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     .report_frame(report_frame)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     report_frame = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -24748,7 +24977,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     delay = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -24767,7 +24996,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     holding = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -24790,14 +25019,14 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$43  = idle;
     if (rst) begin
       \$43  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$44  = cycle_fsm_state;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -24890,7 +25119,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$45  = idle;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -24983,7 +25212,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$46  = receiver_clear;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25076,7 +25305,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     \$47  = pause;
     casez (cycle_fsm_state)
       3'h0:
@@ -25097,7 +25326,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     resync = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25105,7 +25334,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     timer_clear = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25158,7 +25387,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     waiting = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25170,7 +25399,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     clear = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25182,7 +25411,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     fault = 1'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25233,7 +25462,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     fault_status = 4'h0;
     (* full_case = 32'd1 *)
     casez (cycle_fsm_state)
@@ -25284,7 +25513,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     ma_run = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25300,7 +25529,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     in_clock = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25314,7 +25543,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     watch = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25328,7 +25557,7 @@ module \biss_master_axil.ch1.core.controller (rst, cdm, request, restart_timer, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$55 ) begin end
     framing = 1'h0;
     casez (cycle_fsm_state)
       3'h0:
@@ -25393,7 +25622,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller.cdm_hold (rst, cdm, abort, framing, holding, idle, cdm_cycle, ma_hold, slo_stuck, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$56  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -25432,7 +25661,7 @@ module \biss_master_axil.ch1.core.controller.cdm_hold (rst, cdm, abort, framing,
   assign \$1  = ~ abort;
   assign \$2  = cdm_cycle & \$1 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     \$7  = cdm_cycle;
     if (idle) begin
       \$7  = cdm;
@@ -25442,7 +25671,7 @@ module \biss_master_axil.ch1.core.controller.cdm_hold (rst, cdm, abort, framing,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$56 ) begin end
     ma_hold = 1'h0;
     if (framing) begin
       ma_hold = \$2 ;
@@ -25454,7 +25683,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, clear, watch, fault, status, delay, ack_expired, no_start_expired, delay_over, ma_arm, early, locked, slots_full, started, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$57  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -25552,7 +25781,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
   always @(posedge clk)
     locked_seen <= \$21 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$20  = armed;
     if (clear) begin
       \$20  = 1'h0;
@@ -25565,7 +25794,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     \$21  = locked_seen;
     if (clear) begin
       \$21  = 1'h0;
@@ -25578,7 +25807,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     fault = 1'h0;
     if (\$7 ) begin
       fault = 1'h1;
@@ -25591,7 +25820,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     status = 4'h0;
     if (\$7 ) begin
       status = 4'h8;
@@ -25604,7 +25833,7 @@ module \biss_master_axil.ch1.core.controller.line_faults (rst, restart_timer, cl
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$57 ) begin end
     delay = 1'h0;
     if (\$7 ) begin
     end else if (\$12 ) begin
@@ -25616,7 +25845,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock, bad_config, aborted, ready, stuck_low, slo_stuck, slo_stuck_live, quiet, quiet_live, slo, abort);
-  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$58  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -25650,7 +25879,7 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
   assign \$3  = first_clock ? slo_stuck_live : slo_stuck;
   assign \$4  = first_clock ? quiet_live : quiet;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     aborted = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -25658,7 +25887,7 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     ready = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -25667,7 +25896,7 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     stuck_low = 1'h0;
     if (\$2 ) begin
     end else if (abort) begin
@@ -25677,7 +25906,7 @@ module \biss_master_axil.ch1.core.controller.ready_check (config_ok, first_clock
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$58 ) begin end
     bad_config = 1'h0;
     if (\$2 ) begin
       bad_config = 1'h1;
@@ -25793,7 +26022,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_data, clear, events, host__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$59  = 0;
   wire [7:0] \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -26549,7 +26778,7 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_da
   always @(posedge clk)
     was_busy <= \$308 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
       \$300 [0] = 1'h0;
@@ -26680,7 +26909,7 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_da
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     (* full_case = 32'd1 *)
     if (rst) begin
       \$301  = 1'h0;
@@ -26691,49 +26920,49 @@ module \biss_master_axil.ch1.core.counter_ram (clk, rst, host__en, busy, read_da
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$302  = { \$144 , \$139 , \$134 , \$129 , \$124 , \$119 , \$114 , \$109  };
     if (rst) begin
       \$302  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$303  = pick;
     if (rst) begin
       \$303  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$304  = { \$148 , \$147 , \$146  };
     if (rst) begin
       \$304  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$305  = sel;
     if (rst) begin
       \$305  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$306  = update__addr;
     if (rst) begin
       \$306  = 3'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$307  = \$173 ;
     if (rst) begin
       \$307  = 2'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$59 ) begin end
     \$308  = \$299 ;
     if (rst) begin
       \$308  = 1'h1;
@@ -26821,7 +27050,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$60  = 0;
   reg [4:0] \$1 ;
   reg \$2 ;
   input clear;
@@ -26911,14 +27140,14 @@ module \biss_master_axil.ch1.core.counters (rst, clear, events, counts, clk);
     .rst(rst)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$1  = events;
     if (rst) begin
       \$1  = 5'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$60 ) begin end
     \$2  = clear;
     if (rst) begin
       \$2  = 1'h0;
@@ -26958,6 +27187,114 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$61  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$61 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$62  = 0;
+  wire \$1 ;
+  wire \$2 ;
+  wire [16:0] \$3 ;
+  wire \$4 ;
+  reg [15:0] \$5 ;
+  reg \$6 ;
+  input clear;
+  wire clear;
+  input clk;
+  wire clk;
+  output [15:0] count;
+  reg [15:0] count = 16'h0000;
+  reg full = 1'h0;
+  input inc;
+  wire inc;
+  input rst;
+  wire rst;
+  assign \$4  = count == 16'hfffe;
+  always @(posedge clk)
+    count <= \$5 ;
+  always @(posedge clk)
+    full <= \$6 ;
+  assign \$1  = ~ full;
+  assign \$2  = inc & \$1 ;
+  assign \$3  = count + 1'h1;
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    \$5  = count;
+    if (clear) begin
+      \$5  = 16'h0000;
+    end else if (\$2 ) begin
+      \$5  = \$3 [15:0];
+    end
+    if (rst) begin
+      \$5  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$62 ) begin end
+    \$6  = full;
+    if (clear) begin
+      \$6  = 1'h0;
+    end else if (\$2 ) begin
+      \$6  = \$4 ;
+    end
+    if (rst) begin
+      \$6  = 1'h0;
+    end
+  end
+endmodule
+
+(* generator = "Amaranth" *)
+module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$63  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27011,7 +27348,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_aborted (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$64  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27065,7 +27402,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_crc4_error (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, inc, clear, count, clk);
+module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, count, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$65  = 0;
   wire \$1 ;
   wire \$2 ;
@@ -27119,117 +27456,9 @@ module \biss_master_axil.ch1.core.counters.count_ca_data_fault (rst, inc, clear,
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_no_answer (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, count, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
-  wire \$1 ;
-  wire \$2 ;
-  wire [16:0] \$3 ;
-  wire \$4 ;
-  reg [15:0] \$5 ;
-  reg \$6 ;
-  input clear;
-  wire clear;
-  input clk;
-  wire clk;
-  output [15:0] count;
-  reg [15:0] count = 16'h0000;
-  reg full = 1'h0;
-  input inc;
-  wire inc;
-  input rst;
-  wire rst;
-  assign \$4  = count == 16'hfffe;
-  always @(posedge clk)
-    count <= \$5 ;
-  always @(posedge clk)
-    full <= \$6 ;
-  assign \$1  = ~ full;
-  assign \$2  = inc & \$1 ;
-  assign \$3  = count + 1'h1;
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$5  = count;
-    if (clear) begin
-      \$5  = 16'h0000;
-    end else if (\$2 ) begin
-      \$5  = \$3 [15:0];
-    end
-    if (rst) begin
-      \$5  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
-    \$6  = full;
-    if (clear) begin
-      \$6  = 1'h0;
-    end else if (\$2 ) begin
-      \$6  = \$4 ;
-    end
-    if (rst) begin
-      \$6  = 1'h0;
-    end
-  end
-endmodule
-
-(* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6801$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6857$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -27920,8 +28149,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6801$272 ;
-  wire [2:0] \port$6801$272 ;
+  input [2:0] \port$6857$272 ;
+  wire [2:0] \port$6857$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -28207,7 +28436,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6801$272 [0];
+  assign error_bit = ssi & \port$6857$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -28261,7 +28490,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6801$272 [2];
+  assign \$48  = ssi & \port$6857$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -28548,15 +28777,15 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6801$272 [0];
+  assign \$335  = ssi & \port$6857$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6801$272 [0];
-  assign \$343  = ~ \port$6801$272 [1];
+  assign \$342  = ssi & \port$6857$272 [0];
+  assign \$343  = ~ \port$6857$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -28649,7 +28878,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     .words(words)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     at_cds = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -28663,7 +28892,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     in_word = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -28675,7 +28904,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     separator = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -28689,7 +28918,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     second = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -28705,7 +28934,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$569  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -28741,7 +28970,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$570  = 1'h0;
     casez (decoder_fsm_state)
       3'h0:
@@ -28767,7 +28996,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$571  = slots;
     if (\$18 ) begin
       \$571  = \$19 [15:0];
@@ -28780,7 +29009,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$572  = slots_full;
     if (\$18 ) begin
       \$572  = \$20 ;
@@ -28793,7 +29022,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$573  = idx;
     casez (decoder_fsm_state)
       3'h0:
@@ -28826,7 +29055,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$574  = in_data;
     casez (decoder_fsm_state)
       3'h0:
@@ -28853,7 +29082,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$575  = in_lc;
     casez (decoder_fsm_state)
       3'h0:
@@ -28880,7 +29109,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$576  = in_crc;
     casez (decoder_fsm_state)
       3'h0:
@@ -28904,7 +29133,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$577  = in_top;
     casez (decoder_fsm_state)
       3'h0:
@@ -28931,7 +29160,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$578  = word;
     casez (decoder_fsm_state)
       3'h0:
@@ -28961,7 +29190,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$579  = decoder_fsm_state;
     casez (decoder_fsm_state)
       3'h0:
@@ -29010,7 +29239,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$580  = started;
     casez (decoder_fsm_state)
       3'h0:
@@ -29033,7 +29262,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$581  = start_slot;
     casez (decoder_fsm_state)
       3'h0:
@@ -29050,7 +29279,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$582  = cds;
     casez (decoder_fsm_state)
       3'h0:
@@ -29068,7 +29297,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$583  = stop_bit;
     casez (decoder_fsm_state)
       3'h0:
@@ -29094,7 +29323,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$584  = data0;
     if (\$55 ) begin
       \$584  = \$333 ;
@@ -29107,7 +29336,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$585  = ne;
     if (\$337 ) begin
       \$585 [0] = 1'h1;
@@ -29127,7 +29356,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$586  = nw;
     if (\$346 ) begin
       \$586 [0] = 1'h1;
@@ -29148,7 +29377,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$587  = data1;
     if (\$353 ) begin
       \$587  = \$556 ;
@@ -29161,7 +29390,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$588  = lc;
     if (lc_load) begin
       \$588  = { lc[4:0], \bit  };
@@ -29174,7 +29403,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$66 ) begin end
     \$589  = cpw_top;
     if (\$566 ) begin
       \$589  = { cpw_top[38:0], \$568  };
@@ -29188,7 +29417,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$6801$272 [0];
+  assign ssi_error = \port$6857$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -29197,8 +29426,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6801$272 [2];
-  assign ssi_error_low = \port$6801$272 [1];
+  assign ssi_double = \port$6857$272 [2];
+  assign ssi_error_low = \port$6857$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -29282,7 +29511,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.decoder.copy (rst, index, first, \bit , receiver_clear, separator, second, mismatch, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$67  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -29317,7 +29546,7 @@ module \biss_master_axil.ch1.core.decoder.copy (rst, index, first, \bit , receiv
   assign \$2  = ring >> index;
   assign \$3  = \bit  != \$2 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$5  = ring;
     if (\$1 ) begin
       \$5  = { ring[71:0], \bit  };
@@ -29330,7 +29559,7 @@ module \biss_master_axil.ch1.core.decoder.copy (rst, index, first, \bit , receiv
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$67 ) begin end
     \$6  = mismatch;
     if (separator) begin
       \$6  = \bit ;
@@ -29349,7 +29578,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, load_index, \bit , crcs, receiver_clear, index, ok, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$68  = 0;
   reg [15:0] \$1 ;
   wire \$10 ;
   reg \$11 ;
@@ -29450,7 +29679,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
   always @(posedge clk)
     ok <= \$35 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
     casez (load_index)
       1'h0:
@@ -29460,7 +29689,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29470,7 +29699,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29480,7 +29709,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29490,7 +29719,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29500,7 +29729,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29510,7 +29739,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29520,7 +29749,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29530,7 +29759,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     (* full_case = 32'd1 *)
     casez (index)
       1'h0:
@@ -29540,7 +29769,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$33  = \reg ;
     if (load) begin
       \$33  = \$1 ;
@@ -29557,7 +29786,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$34  = mismatch;
     if (load) begin
       \$34  = 1'h0;
@@ -29573,7 +29802,7 @@ module \biss_master_axil.ch1.core.decoder.crc (rst, load, \cover , check, last, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$68 ) begin end
     \$35  = ok;
     if (last) begin
       if (\$15 ) begin
@@ -29605,7 +29834,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crcs, receiver_clear, ends, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$69  = 0;
   wire [6:0] \$1 ;
   wire \$10 ;
   reg [1:0] \$11 ;
@@ -29751,7 +29980,7 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
   always @(posedge clk)
     w1_ends <= \$36 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
@@ -29773,7 +30002,7 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
@@ -29795,7 +30024,7 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
@@ -29817,7 +30046,7 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
@@ -29839,7 +30068,7 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     casez ({ error_bit, words[7:6] })
       3'h0:
@@ -29861,7 +30090,7 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -29875,7 +30104,7 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -29889,7 +30118,7 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -29903,7 +30132,7 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -29917,7 +30146,7 @@ module \biss_master_axil.ch1.core.decoder.field_ends (rst, error_bit, words, crc
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$69 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -30004,7 +30233,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn, clean, \tolerance$8 , delay, jump, spread, settled_delay, settled, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$70  = 0;
   wire [13:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -30176,56 +30405,56 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
   assign \$39  = magnitude > spread;
   assign \$40  = \$38  & \$39 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$46  = \$1 ;
     if (rst) begin
       \$46  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$47  = \$2 ;
     if (rst) begin
       \$47  = 14'h0000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$48  = \tolerance$8 ;
     if (rst) begin
       \$48  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$49  = \$3 ;
     if (rst) begin
       \$49  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$50  = \$11 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$51  = \$20 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$52  = \$25 ;
     if (rst) begin
       \$52  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$53  = 1'h0;
     if (learn) begin
       if (\$32 ) begin
@@ -30242,7 +30471,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$54  = jump;
     if (check) begin
       \$54  = \$26 ;
@@ -30255,7 +30484,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$55  = count;
     if (learn) begin
       (* full_case = 32'd1 *)
@@ -30277,7 +30506,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$56  = spread;
     if (learn) begin
       if (\$32 ) begin
@@ -30297,7 +30526,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$57  = cand;
     if (learn) begin
       if (\$32 ) begin
@@ -30310,7 +30539,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$58  = settled_delay;
     if (learn) begin
       if (\$32 ) begin
@@ -30327,7 +30556,7 @@ module \biss_master_axil.ch1.core.delay_check (rst, enable, rearm, check, learn,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$70 ) begin end
     \$59  = settled;
     if (learn) begin
       if (\$32 ) begin
@@ -30347,7 +30576,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.line_noise (rst, sampler_noise, close, noisy, events, limit, watch, restart, level, \event , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$71  = 0;
   wire \$1 ;
   reg \$10 ;
   reg \$11 ;
@@ -30410,21 +30639,21 @@ module \biss_master_axil.ch1.core.line_noise (rst, sampler_noise, close, noisy, 
   always @(posedge clk)
     running <= \$14 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$10  = level;
     if (rst) begin
       \$10  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$11  = \$4 ;
     if (rst) begin
       \$11  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$12  = held_noisy;
     if (close) begin
       \$12  = \$7 ;
@@ -30434,7 +30663,7 @@ module \biss_master_axil.ch1.core.line_noise (rst, sampler_noise, close, noisy, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$13  = held_events;
     if (close) begin
       \$13  = running;
@@ -30444,7 +30673,7 @@ module \biss_master_axil.ch1.core.line_noise (rst, sampler_noise, close, noisy, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$71 ) begin end
     \$14  = running;
     if (close) begin
       \$14  = { 3'h0, \event  };
@@ -30461,7 +30690,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, hold, first_rise, second_rise, ma, rises, busy, held, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$72  = 0;
   wire [16:0] \$1 ;
   wire \$10 ;
   wire [16:0] \$11 ;
@@ -30586,7 +30815,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
   always @(posedge clk)
     released <= \$42 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$34  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -30601,7 +30830,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$35  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -30616,7 +30845,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$36  = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -30631,7 +30860,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$37  = ma;
     casez (ma_fsm_state)
       3'h0:
@@ -30660,7 +30889,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$38  = phase_left;
     casez (ma_fsm_state)
       3'h0:
@@ -30702,7 +30931,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$39  = last_clock;
     casez (ma_fsm_state)
       3'h0:
@@ -30744,7 +30973,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$40  = rises;
     casez (ma_fsm_state)
       3'h0:
@@ -30763,7 +30992,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$41  = ma_fsm_state;
     casez (ma_fsm_state)
       3'h0:
@@ -30799,7 +31028,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     \$42  = released;
     casez (ma_fsm_state)
       3'h0:
@@ -30823,7 +31052,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     busy = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -30839,7 +31068,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$72 ) begin end
     held = 1'h0;
     casez (ma_fsm_state)
       3'h0:
@@ -30855,8 +31084,8 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6801$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
+module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6857$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
   wire [7:0] \$11 ;
@@ -30907,8 +31136,8 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6801$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6801$199 ;
-  wire \port$6801$199 ;
+  input \port$6857$199 ;
+  wire \port$6857$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -30962,7 +31191,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6801$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6801$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6857$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -30988,7 +31217,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6801$199 , ssi, ssi
   always @(posedge clk)
     word1_len <= \$29 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     casez ({ \$1 , words[7:6] })
       3'h0:
@@ -31010,7 +31239,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6801$199 , ssi, ssi
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     (* full_case = 32'd1 *)
     casez (words[19:18])
       2'h0:
@@ -31024,55 +31253,55 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6801$199 , ssi, ssi
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$23  = \$4 [7:0];
     if (rst) begin
       \$23  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$24  = \$9 [7:0];
     if (rst) begin
       \$24  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$25  = \$12 [8:0];
     if (rst) begin
       \$25  = 9'h000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$26  = \$13 ;
     if (rst) begin
       \$26  = 17'h00000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$27  = \$15 ;
     if (rst) begin
       \$27  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$28  = \$19 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$73 ) begin end
     \$29  = \$22 [7:0];
     if (rst) begin
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6801$199 , 1'h1 };
+  assign enables = { \port$6857$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -31393,7 +31622,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__en, byte_to_send, rbuf_data, wbuf, index, store, byte_received, host_read__addr);
-  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$74  = 0;
   wire \$1 ;
   wire \$2 ;
   wire \$3 ;
@@ -31510,21 +31739,21 @@ module \biss_master_axil.ch1.core.register_access.buffers (clk, rst, host_read__
   assign \$1  = ! index[1:0];
   assign \$2  = index[1:0] == 1'h1;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     byte_received__addr = 4'h0;
     if (store) begin
       byte_received__addr = index[5:2];
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     byte_received__data = 32'd0;
     if (store) begin
       byte_received__data = { byte_received, byte_received, byte_received, byte_received };
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$74 ) begin end
     byte_received__en = 4'h0;
     if (store) begin
       byte_received__en = { \$4 , \$3 , \$2 , \$1  };
@@ -31544,7 +31773,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok, cds, control__take_data, start, control__take_crc, sent, \byte , clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$75  = 0;
   reg [7:0] \$1 ;
   reg [2:0] \$2 ;
   output [7:0] \byte ;
@@ -31587,7 +31816,7 @@ module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     .valid(control__take_data)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$1  = \byte ;
     if (control__take_data) begin
       \$1  = { \byte [6:0], cds };
@@ -31597,7 +31826,7 @@ module \biss_master_axil.ch1.core.register_access.checker (rst, crc_ok, echo_ok,
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$75 ) begin end
     \$2  = got_crc;
     if (control__take_crc) begin
       \$2  = { got_crc[1:0], cds };
@@ -31613,7 +31842,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data_in, valid, start, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$76  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -31656,7 +31885,7 @@ module \biss_master_axil.ch1.core.register_access.checker.rx_crc (rst, crc, data
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$2  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$76 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -31680,7 +31909,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.idle (rst, frame_ok, frame_end, run_enough, seen_enough, frame_cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$77  = 0;
   wire \$1 ;
   wire [4:0] \$10 ;
   wire \$11 ;
@@ -31750,7 +31979,7 @@ module \biss_master_axil.ch1.core.register_access.idle (rst, frame_ok, frame_end
   always @(posedge clk)
     idle_seen <= \$24 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$23  = idle_run;
     if (frame_end) begin
       \$23  = \$4 [3:0];
@@ -31760,7 +31989,7 @@ module \biss_master_axil.ch1.core.register_access.idle (rst, frame_ok, frame_end
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$77 ) begin end
     \$24  = idle_seen;
     if (frame_end) begin
       \$24  = \$10 [3:0];
@@ -31773,7 +32002,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, control__load_header, control__source, control__crc_bit, control__shift_header, start, valid, control__load_byte, control__shift_byte, sent, cdm, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$78  = 0;
   wire \$1 ;
   wire [18:0] \$2 ;
   wire [8:0] \$3 ;
@@ -31845,7 +32074,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     .valid(valid)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$6  = header;
     if (control__load_header) begin
       \$6  = { 2'h3, request[2:0], request[9:3], 4'h0, \$1 , request[17] };
@@ -31858,7 +32087,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$7  = to_send;
     if (control__load_byte) begin
       \$7  = \byte ;
@@ -31871,7 +32100,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     \$8  = sent;
     if (control__load_byte) begin
       \$8  = \byte ;
@@ -31881,7 +32110,7 @@ module \biss_master_axil.ch1.core.register_access.sender (rst, \byte , request, 
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$78 ) begin end
     cdm = 1'h0;
     casez (control__source)
       3'h1:
@@ -31906,7 +32135,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, crc, start, valid, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$79  = 0;
   wire [3:0] \$1 ;
   wire \$10 ;
   wire [3:0] \$11 ;
@@ -31949,7 +32178,7 @@ module \biss_master_axil.ch1.core.register_access.sender.tx_crc (rst, data_in, c
     crc_reg <= \$13 ;
   assign \$auto$rtlil.cc:2739:Not$4  = ~ crc_reg;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$79 ) begin end
     \$13  = crc_reg;
     if (valid) begin
       \$13 [0] = \$3 ;
@@ -31974,7 +32203,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, frame_end, busy, crc_ok, echo_ok, run_enough, seen_enough, start, abort, request, frame_cdm, frame_cds, done, result, index, send__load_header, send__source, send__crc_bit, send__shift_header, send__crc_start
 , send__crc_valid, send__load_byte, send__shift_byte, check__take_data, check__first, check__take_crc, store, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$80  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$100 ;
@@ -32330,7 +32559,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
   always @(posedge clk)
     waited <= \$125 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$118  = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32368,7 +32597,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$119  = result;
     casez (access_fsm_state)
       3'h0:
@@ -32422,7 +32651,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$120  = access_fsm_state;
     casez (access_fsm_state)
       3'h0:
@@ -32519,7 +32748,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$121  = req;
     casez (access_fsm_state)
       3'h0:
@@ -32536,7 +32765,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$122  = index;
     casez (access_fsm_state)
       3'h0:
@@ -32575,7 +32804,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$123  = step;
     casez (access_fsm_state)
       3'h0:
@@ -32633,7 +32862,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$124  = ending;
     casez (access_fsm_state)
       3'h0:
@@ -32700,7 +32929,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     \$125  = waited;
     casez (access_fsm_state)
       3'h0:
@@ -32732,7 +32961,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     send__load_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32746,7 +32975,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     send__source = 3'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32773,7 +33002,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     send__crc_bit = 2'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32793,7 +33022,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     send__shift_header = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32812,7 +33041,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     send__crc_start = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32841,7 +33070,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     send__crc_valid = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32862,7 +33091,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     send__load_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32884,7 +33113,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     send__shift_byte = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32905,7 +33134,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     check__take_data = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32927,7 +33156,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     check__first = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32949,7 +33178,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     check__take_crc = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -32973,7 +33202,7 @@ module \biss_master_axil.ch1.core.register_access.sequencer (rst, frame_ok, fram
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$80 ) begin end
     store = 1'h0;
     casez (access_fsm_state)
       3'h0:
@@ -33012,7 +33241,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, frame, report_frame, done, valid_out, result, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$81  = 0;
   reg \$1 ;
   reg \$2 ;
   reg [186:0] \$3 ;
@@ -33123,21 +33352,21 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
   always @(posedge clk)
     result <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$1  = report;
     if (rst) begin
       \$1  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$2  = valid;
     if (rst) begin
       \$2  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$81 ) begin end
     \$3  = result;
     if (report) begin
       \$3 [3:0] = frame[3:0];
@@ -33213,8 +33442,8 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6801$259 , receiver_clear, early, locked, delay, sample, level, slo);
-  reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
+module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6857$259 , receiver_clear, early, locked, delay, sample, level, slo);
+  reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
   wire [13:0] \$11 ;
@@ -33347,8 +33576,8 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6801$259 ;
-  wire [12:0] \port$6801$259 ;
+  input [12:0] \port$6857$259 ;
+  wire [12:0] \port$6857$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -33373,7 +33602,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6801$259 [12:1] + 1'h1;
+  assign \$11  = \port$6857$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -33498,7 +33727,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6801$259 [0]),
+    .clear_high(\port$6857$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -33518,7 +33747,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     .stage1(level)
   );
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$76  = level;
     if (receiver_clear) begin
       \$76  = 1'h1;
@@ -33528,7 +33757,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$77  = mid_delay;
     if (odd) begin
       \$77  = \$8 [12:0];
@@ -33555,7 +33784,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$78  = mid_slot;
     (* full_case = 32'd1 *)
     if (odd) begin
@@ -33584,7 +33813,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$79  = \$10 ;
     casez (sampler_fsm_state)
       2'h0:
@@ -33608,7 +33837,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$80  = elapsed;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -33635,13 +33864,13 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$81  = early;
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6801$259 [0]) begin
+            if (\port$6857$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -33654,7 +33883,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$82  = locked;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -33685,7 +33914,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$83  = gap;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -33719,14 +33948,14 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$84  = sampler_fsm_state;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6801$259 [0]) begin
+            if (\port$6857$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -33758,14 +33987,14 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$85  = delay;
     casez (sampler_fsm_state)
       2'h0:
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6801$259 [12:1] };
+            \$85  = { 1'h0, \port$6857$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -33785,7 +34014,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$86  = vote1;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -33820,7 +34049,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$87  = vote2;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -33853,7 +34082,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$88  = first_slot;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -33884,7 +34113,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$89  = phase;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -33929,7 +34158,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$90  = slot_left;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -33984,7 +34213,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     \$91  = slot_zero;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -34039,7 +34268,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     sample = \$47 ;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -34060,7 +34289,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     clear = 1'h0;
     casez (sampler_fsm_state)
       2'h0:
@@ -34076,7 +34305,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     dropped = 1'h0;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -34100,7 +34329,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     decided = 1'h0;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -34128,7 +34357,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
     endcase
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$82 ) begin end
     centre = 1'h0;
     (* full_case = 32'd1 *)
     casez (sampler_fsm_state)
@@ -34150,11 +34379,11 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6801$259 [12:1] };
-  assign fixed = \port$6801$259 [0];
+  assign fixed_delay = { 1'h0, \port$6857$259 [12:1] };
+  assign fixed = \port$6857$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6801$259 [0];
+  assign clear_high = \port$6857$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -34162,7 +34391,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majority, odd, clear_high, receiver_clear, vote1, vote2, clear, centre, level, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$83  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -34279,7 +34508,7 @@ module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
   always @(posedge clk)
     strobed <= \$38 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     \$33  = last;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -34297,7 +34526,7 @@ module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     \$34  = tail_odd;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -34315,7 +34544,7 @@ module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$35  = 1'h0;
@@ -34335,7 +34564,7 @@ module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$36  = 1'h0;
@@ -34355,7 +34584,7 @@ module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     \$37  = crowded;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -34373,7 +34602,7 @@ module \biss_master_axil.ch1.core.sampler.slot_noise (rst, \edge , decided, majo
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$83 ) begin end
     \$38  = strobed;
     (* full_case = 32'd1 *)
     if (clear) begin
@@ -34416,7 +34645,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, overrun, start, period, abort, idle, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$84  = 0;
   wire \$1 ;
   wire [25:0] \$10 ;
   wire \$11 ;
@@ -34510,14 +34739,14 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
   always @(posedge clk)
     wrap <= \$31 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     \$28  = \$1 ;
     if (rst) begin
       \$28  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$29  = 25'h0000002;
@@ -34531,7 +34760,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$30  = 1'h1;
@@ -34545,7 +34774,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$84 ) begin end
     (* full_case = 32'd1 *)
     if (\$6 ) begin
       \$31  = \$8 ;
@@ -34561,8 +34790,8 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6789$0 , resync, lc, is_zero, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6845$0 , resync, lc, is_zero, clk);
+  reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
   wire \$11 ;
@@ -34603,8 +34832,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6789$0 ;
-  wire \port$6789$0 ;
+  input \port$6845$0 ;
+  wire \port$6845$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -34618,9 +34847,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6789$0  };
-  assign \$2  = { lc[4:0], \port$6789$0  } == last;
-  assign \$3  = { lc[4:0], \port$6789$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6845$0  };
+  assign \$2  = { lc[4:0], \port$6845$0  } == last;
+  assign \$3  = { lc[4:0], \port$6845$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -34654,7 +34883,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   always @(posedge clk)
     synced <= \$25 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$18  = is_zero;
     if (load) begin
       \$18  = \$1 ;
@@ -34664,7 +34893,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$19  = is_last;
     if (load) begin
       \$19  = \$2 ;
@@ -34674,7 +34903,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$20  = is_expected;
     if (load) begin
       \$20  = \$3 ;
@@ -34684,21 +34913,21 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$21  = \$7 ;
     if (rst) begin
       \$21  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$22  = lc;
     if (rst) begin
       \$22  = 6'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$23  = last;
     if (store) begin
       \$23  = store_lc;
@@ -34708,7 +34937,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$24  = expected;
     if (store) begin
       \$24  = \$10 [5:0];
@@ -34718,7 +34947,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$85 ) begin end
     \$25  = synced;
     if (store) begin
       \$25  = 1'h1;
@@ -34730,13 +34959,13 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6789$0  };
+  assign lc_next = { lc[4:0], \port$6845$0  };
   assign zero = is_zero;
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_top, match, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$86  = 0;
   wire [40:0] \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -34941,28 +35170,28 @@ module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
   assign \$7  = bits > 3'h5;
   assign \$8  = bits > 3'h6;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$88  = \$42 ;
     if (rst) begin
       \$88  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$89  = \$84 ;
     if (rst) begin
       \$89  = 40'h0000000000;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$90  = \tolerance$8 ;
     if (rst) begin
       \$90  = 8'h00;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$86 ) begin end
     \$91  = \$87 ;
     if (rst) begin
       \$91  = 1'h0;
@@ -34972,7 +35201,7 @@ endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
   wire [32:0] \$1 ;
   reg [31:0] \$2 ;
   reg [31:0] \$3 ;
@@ -34991,14 +35220,14 @@ module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, c
   always @(posedge clk)
     first_rise_time <= \$3 ;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     \$2  = \$1 [31:0];
     if (rst) begin
       \$2  = 32'd0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
     \$3  = first_rise_time;
     if (first_rise) begin
       \$3  = now;
@@ -35012,7 +35241,7 @@ endmodule
 (* generator = "Amaranth" *)
 module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, timeout_live, quiet_time_live, ack_limit, timeout_limit, delay_limit, quiet_limit, no_start_limit, clear, in_clock, slo_stuck, slo_stuck_live, quiet, quiet_live, break_over, timeout_over, ack_expired, no_start_expired
 , delay_over, delay, slo, clk);
-  reg \$auto$verilog_backend.cc:2355:dump_module$90  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$88  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -35199,7 +35428,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
   assign \$38  = \$35  ? \$36  : \$37 ;
   assign \$39  = timer >= timeout_limit;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$49  = slo_low_time_p1;
     if (\$2 ) begin
       \$49  = 25'h0000001;
@@ -35211,21 +35440,21 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$50  = \$9 ;
     if (rst) begin
       \$50  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$51  = \$17 ;
     if (rst) begin
       \$51  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$52  = high_p2;
     if (\$18 ) begin
       \$52  = 13'h0002;
@@ -35237,28 +35466,28 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$53  = \$23 ;
     if (rst) begin
       \$53  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$54  = \$30 ;
     if (rst) begin
       \$54  = 1'h1;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$55  = \$34 [24:0];
     if (rst) begin
       \$55  = 25'h0000001;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$56  = 1'h0;
@@ -35270,7 +35499,7 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     (* full_case = 32'd1 *)
     if (clear) begin
       \$57  = 1'h0;
@@ -35282,21 +35511,21 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$58  = \$43 ;
     if (rst) begin
       \$58  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$59  = \$47 ;
     if (rst) begin
       \$59  = 1'h0;
     end
   end
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$90 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$88 ) begin end
     \$60  = \$48 ;
     if (rst) begin
       \$60  = 1'h0;
@@ -35305,9 +35534,9 @@ module \biss_master_axil.ch1.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4933$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4911$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
-  reg \$auto$verilog_backend.cc:2355:dump_module$91  = 0;
+  reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
   wire \$10 ;
   wire \$11 ;
@@ -35483,8 +35712,8 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4933$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$4933$0 ;
-  wire \port$4933$0 ;
+  output \port$4911$0 ;
+  wire \port$4911$0 ;
   output report;
   wire report;
   input report_frame;
@@ -35574,7 +35803,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4933$0 , l
   assign \$38  = lc_repeat_seen | lc_skip_seen;
   assign \$39  = \$38  | lc_zero_seen;
   always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$91 ) begin end
+    if (\$auto$verilog_backend.cc:2355:dump_module$89 ) begin end
     frame_status = 4'h0;
     if (unconfirmed) begin
       frame_status = 4'hf;
@@ -35602,7 +35831,7 @@ module \biss_master_axil.ch1.core.verdict (lc_skip_seen, noisy, \port$4933$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4933$0  = \$2 ;
+  assign \port$4911$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -62,8 +62,7 @@ BUSES = {
 }
 
 #: Channel signals of the register map that the channel makes itself (not core ports).
-CHANNEL_GLUE = ("trigger_enable", "frame_done", "frame_error", "done_count", "result_capture",
-                "result_published", "cap_data_bits_w0",
+CHANNEL_GLUE = ("trigger_enable", "frame_done", "frame_error", "done_count", "cap_data_bits_w0",
                 "cap_data_bits_w1", "cap_timer_width", "cap_counters", "cap_timestamp",
                 "cap_register_access", "cap_ssi")
 #: Pulses of the bank taken into a flip-flop beside the core, so they reach it one clock
@@ -88,11 +87,9 @@ class BusChannel(wiring.Component):
     Every signal of the map's channel block is connected by name to the core port of that
     name (``cfg_ma_half_period``, ``start``, ``word0_position``, the counter memory's
     ``count_addr`` / ``count_en`` / ``count_data``, ...), or
-    made here (:data:`CHANNEL_GLUE`): the trigger gate, ``result_capture`` (the core's ``done``:
-    the bank copies the result into its result memory), ``frame_done`` (``done``, held until
-    the result is published, ``result_published``, and the cycle's counts are in the counter
-    memory), ``frame_error`` (the same for a status other than OK), ``done_count`` (counts
-    ``done``) and the build's capabilities. A signal that only
+    made here (:data:`CHANNEL_GLUE`): the trigger gate, ``frame_done`` (``done``, held until
+    the cycle's counts are in the counter memory), ``frame_error`` (the same for a status other
+    than OK), ``done_count`` (counts ``frame_done``) and the build's capabilities. A signal that only
     other builds of the core have (``word1_position`` in a one-word build, the ``ca_*`` ports
     of the register-access engine in a build without it) reads 0 and its configuration is not
     used.
@@ -160,38 +157,33 @@ class BusChannel(wiring.Component):
         p = self.params
         m.submodules.core = core = BissMaster(p, trigger=True)
         regs = self.regs
-        # The result: copied into a page of the bank's result memory after each `done` (the
-        # core holds it until the next `done`, longer than the copy takes), published when
-        # complete (docs/bus.md, The result snapshot).
-        published = Signal()
-        m.d.comb += [regs.result_capture.eq(core.done), published.eq(regs.result_published)]
-        # A cycle's end as the host is told of it (irq_status.done and .error): the core's
-        # `done`, held until its result is published and its counts are in the counter
-        # memory, so that a host reading the result and the counters on the interrupt reads
-        # this cycle's (at most 16 clocks later; the next cycle's end reports it at once).
-        busy = core.count_busy if p.counter_ram else C(0)
-        pending, pending_ok, page_seen = Signal(), Signal(), Signal()
-        waited = Signal(range(COUNT_SETTLE + 1))
-        report = Signal()
-        m.d.comb += report.eq(pending & (core.done
-                                         | page_seen & (~busy | (waited == COUNT_SETTLE))))
-        with m.If(report):
-            m.d.sync += pending.eq(0)
-        m.d.sync += waited.eq(Mux(pending & ~report, waited + 1, 0))
-        with m.If(published):
-            m.d.sync += page_seen.eq(1)
-        with m.If(core.done):
-            m.d.sync += [pending.eq(1), pending_ok.eq(core.valid), page_seen.eq(0)]
-        # Registered, for timing (the decision sits behind the memory's busy).
-        ended, ended_ok = Signal(), Signal()
-        m.d.sync += [ended.eq(report), ended_ok.eq(pending_ok)]
+        # A cycle's end as the host is told of it (irq_status.done and .error, result.seq):
+        # the core's `done`, held until its counts are in the counter memory, so that a host
+        # reading the counters on the interrupt reads this cycle's (at most 16 clocks later;
+        # the next cycle's end reports it at once).
+        ended = Signal()
+        if p.counter_ram:
+            pending, pending_ok = Signal(), Signal()
+            waited = Signal(range(COUNT_SETTLE + 1))
+            report = Signal()
+            m.d.comb += report.eq(pending & (~core.count_busy | core.done
+                                             | (waited == COUNT_SETTLE)))
+            with m.If(report):
+                m.d.sync += pending.eq(0)
+            m.d.sync += waited.eq(Mux(pending & ~report, waited + 1, 0))
+            with m.If(core.done):
+                m.d.sync += [pending.eq(1), pending_ok.eq(core.valid)]
+            # Registered, for timing (the decision sits behind the memory's busy).
+            ended_ok = Signal()
+            m.d.sync += [ended.eq(report), ended_ok.eq(pending_ok)]
+        else:
+            m.d.comb += ended.eq(core.done)
+            ended_ok = core.valid
         glue = {
             "trigger_enable": None,
             "frame_done": ended,
             "frame_error": ended & ~ended_ok,
             "done_count": None,
-            "result_capture": None,
-            "result_published": None,
             "cap_data_bits_w0": p.max_data_bits[0],
             "cap_data_bits_w1": p.max_data_bits[1] if p.words == 2 else 0,
             "cap_timer_width": p.timer_width,
@@ -212,9 +204,8 @@ class BusChannel(wiring.Component):
                 port = getattr(core, name)
                 m.d.comb += port.eq(signal) if member.flow == In else signal.eq(port)
 
-        # Every ended cycle counted (in the clock the core ends it, so that its result page
-        # holds the count), so a host sees a lost result.
-        with m.If(core.done):
+        # Every ended cycle counted, so a host sees a lost result.
+        with m.If(ended):
             m.d.sync += regs.done_count.eq(regs.done_count + 1)
         # The global trigger starts the core only when enabled.
         m.d.comb += [

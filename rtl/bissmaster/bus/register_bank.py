@@ -11,8 +11,7 @@ from amaranth.hdl import *
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .regmap import DATA_WIDTH, Kind, snapshot_ports, window_ports
-from .snapshot_pages import SnapshotPages
+from .regmap import DATA_WIDTH, Kind, window_ports
 
 STROBES = DATA_WIDTH // 8
 
@@ -28,7 +27,8 @@ class RegisterBus(wiring.Signature):
     ``r_en`` high in one clock: the address is decoded into a one-hot select, and a window's
     read enable acts then. ``r_load`` high in a later clock, at the latest the clock of the
     next ``r_en``: the selected register's value in that clock goes to ``r_data``, which holds
-    it from the next clock until the clock after the next ``r_load``. So reads run one per clock (each ``r_load`` with the next ``r_en``), and the
+    it from the next clock until the clock after the next ``r_load``; a snapshot is taken
+    then. So reads run one per clock (each ``r_load`` with the next ``r_en``), and the
     initiator can hold a word while the next read waits in the first step. A read and a write
     may come in the same clock; they are not ordered: the read returns the value of its
     ``r_load`` clock, the one before the write when ``r_load`` follows ``r_en`` at once.
@@ -58,7 +58,6 @@ def block_signature(regmap, registers):
     ports = [reg.window_ports for reg in registers if reg.window]
     ports += [window_ports(name, count, False)
               for name, (_, count) in regmap.memories(registers).items()]
-    ports += [snapshot_ports(name) for name in regmap.snapshots(registers)]
     for window in ports:
         members.update({name: Out(width) if out else In(width)
                         for name, (out, width) in window.items()})
@@ -70,8 +69,8 @@ class RegisterBank(wiring.Component):
 
     Field kinds (:class:`~bissmaster.bus.regmap.Kind`): CONFIG fields are registers with their
     reset values, written per byte lane; PULSE fields give a registered one-clock pulse for
-    each 1 written and read 0; LIVE fields read their signal (a snapshot group reads the copy
-    its first register's read took, below); CONST fields read their reset value (and so does
+    each 1 written and read 0; LIVE fields read their signal (a snapshot group reads a copy
+    taken when its first register is read); CONST fields read their reset value (and so does
     a CONFIG field whose signal the channel's core does not have, ``absent``: no storage, its
     writes ignored); IRQ fields
     are sticky, set by their event and cleared by writing 1, a set winning over a clear in the
@@ -92,11 +91,9 @@ class RegisterBank(wiring.Component):
     per read window) registers whether the address is the register's; at ``r_load`` each block
     (the globals, each channel) registers the AND-OR of its registers' words with their
     selects and the data of its window read, and ``r_data`` is the OR of the blocks'
-    registers. A snapshot group (the result) is a
-    :class:`~bissmaster.bus.snapshot_pages.SnapshotPages` memory: its live words are copied
-    into a page at the hardware's ``<group>_capture`` (``<group>_published`` when the copy is
-    complete), and it is read as a read window whose first word takes the latest published
-    page, so every word of the group read after the first belongs to the same copy.
+    registers. A snapshot group is copied at the ``r_load`` of its first register, which
+    reads the live values copied; the group's other registers read the copy, so every word of
+    the group read after the first belongs to the same snapshot.
 
     Parameters
     ----------
@@ -162,11 +159,18 @@ class RegisterBank(wiring.Component):
         partials = []                  # each block's registered share of the read data
         irqs = []
         for port, base, registers, prefix, absent in blocks:
-            read_words, windows = {}, []
-            irq = self._block(m, port, base, registers, prefix, read_words, windows, absent)
+            read_words, windows, snapshots = {}, [], {}
+            irq = self._block(m, port, base, registers, prefix, read_words, windows, snapshots,
+                              absent)
             if prefix != "g":
                 irqs.append(irq)
             selects = self._read_select(m, prefix, read_words)
+            # A snapshot group is copied at the r_load of its first register (its select
+            # flip-flop and r_load, no address decode in front of the copies' enable); that
+            # register reads the live values, the very ones copied.
+            for word, copies in snapshots.items():
+                with m.If(selects[word] & self.bus.r_load):
+                    m.d.sync += copies
             partials.append(self._read_partial(m, prefix, selects, read_words, windows))
         # Whole signals, never bit by bit: Icarus runs a combinational block written per bit
         # only once an input changes, and would read X until then.
@@ -177,16 +181,18 @@ class RegisterBank(wiring.Component):
         m.d.comb += self.bus.r_data.eq(merged)
         return m
 
-    def _block(self, m, port, base, registers, prefix, read_words, windows, absent):
-        """One block (the globals or a channel): storage, pulses, interrupts, windows, snapshot
-        groups and its read words; CONFIG fields of ``absent`` signals read their reset value.
-        Returns the block's interrupt request."""
+    def _block(self, m, port, base, registers, prefix, read_words, windows, snapshots,
+               absent):
+        """One block (the globals or a channel): storage, pulses, interrupts, windows and its
+        read words; ``snapshots`` gets, per snapshot group, the word address of the register
+        that takes it and the copies' assignments; CONFIG fields of ``absent`` signals read
+        their reset value. Returns the block's interrupt request."""
         bus = self.bus
         w_en, w_addr, w_data, w_strb = self._w_en, self._w_addr, self._w_data, self._w_strb
         storage = {}                   # "register.field" -> the Signal that holds it
         irq_terms = []
-        snapshots = self.regmap.snapshots(registers)
-        groups = {name: [None] * count for name, (_, count) in snapshots.items()}
+        groups = {}                    # group -> the copies' assignments
+        take = {}                      # group -> the word address of its first register
         for name, (offset, count) in self.regmap.memories(registers).items():
             self._read_window(m, port, name, (base + offset) // 4, count, windows)
         for reg in registers:
@@ -251,15 +257,20 @@ class RegisterBank(wiring.Component):
                     parts.append((f.lsb, status))
                     irq_terms.append((status, f.enable))
                 elif f.kind == Kind.LIVE:
-                    parts.append((f.lsb, self._signal(port, f)))
-            if reg.snapshot is None:
-                read_words[word] = self._word(parts)
-            else:
-                first = snapshots[reg.snapshot][0]
-                groups[reg.snapshot][(reg.offset - first) // 4] = self._word(parts)
-        for group, words in groups.items():
-            offset, count = snapshots[group]
-            self._snapshot(m, port, prefix, group, (base + offset) // 4, words, windows)
+                    live = self._signal(port, f)
+                    if reg.snapshot is None:
+                        parts.append((f.lsb, live))
+                    else:
+                        copy = Signal(f.width, init=f.reset, name=f"{name}_snapshot")
+                        groups.setdefault(reg.snapshot, []).append(copy.eq(live))
+                        # The register that takes the snapshot reads the live value, copied
+                        # in the clock it is read (r_load); the group's others read the copy.
+                        parts.append((f.lsb, live if reg.takes_snapshot else copy))
+            if reg.takes_snapshot:
+                take[reg.snapshot] = word
+            read_words[word] = self._word(parts)
+        for group, copies in groups.items():
+            snapshots[take[group]] = copies
         # A cause requests an interrupt while set and enabled.
         irq = Signal(name=f"{prefix}_irq")
         m.d.comb += irq.eq(Cat((status & storage[enable]).any()
@@ -302,26 +313,6 @@ class RegisterBank(wiring.Component):
         with m.If(self.bus.r_load):
             m.d.sync += partial.eq(merged)
         return partial
-
-    def _snapshot(self, m, port, prefix, group, word, words, windows):
-        """A snapshot group from word ``word``: its words copied into the pages of a
-        :class:`~bissmaster.bus.snapshot_pages.SnapshotPages` at the hardware's
-        ``<group>_capture``, read as a read window whose first word takes the latest page."""
-        bus = self.bus
-        name = group.replace(".", "_")
-        pages = SnapshotPages(len(words))
-        m.submodules[f"{prefix}_{name}_pages"] = pages
-        bits = self._window_bits(group, word, len(words))
-        hit = bus.r_en & (bus.r_addr[bits:] == word >> bits)
-        m.d.comb += [
-            pages.words.eq(Cat(words)),
-            pages.capture.eq(getattr(port, f"{name}_capture")),
-            getattr(port, f"{name}_published").eq(pages.published),
-            pages.read_addr.eq(bus.r_addr[:bits]),
-            pages.read_en.eq(hit),
-            pages.read_take.eq(bus.r_addr[:bits] == 0),
-        ]
-        windows.append((hit, pages.read_data))
 
     def _window(self, m, port, word, reg, windows):
         """A window: the bus's word address inside it, its strobes or read enable, its data."""

@@ -80,16 +80,6 @@ def window_ports(name, count, writable):
             f"{name}_en": (True, DATA_WIDTH // 8 if writable else 1)}
 
 
-def snapshot_ports(group):
-    """The ports of a snapshot group between the bank and the hardware, ``{name: (output of
-    the bank?, width)}``: ``<group>_capture`` (in: copy the group's live values now, they hold
-    for as many clocks as the group has words) and ``<group>_published`` (out: the copy is
-    complete and is what a read of the group's first register takes;
-    :class:`~bissmaster.bus.snapshot_pages.SnapshotPages`)."""
-    group = group.replace(".", "_")
-    return {f"{group}_capture": (False, 1), f"{group}_published": (True, 1)}
-
-
 @dataclass(frozen=True)
 class RegisterMap:
     globals: tuple              # Registers at absolute byte addresses
@@ -126,38 +116,15 @@ class RegisterMap:
             out[name] = (first, count)
         return out
 
-    @staticmethod
-    def snapshots(registers):
-        """``{group: (byte offset of its first register, registers)}`` of the snapshot groups
-        of ``registers``; a group's registers are adjacent words, a power of two of them,
-        aligned to their size (it is read as one memory page)."""
-        found = {}
-        for reg in registers:
-            if reg.snapshot:
-                found.setdefault(reg.snapshot, []).append(reg.offset)
-        out = {}
-        for name, offsets in found.items():
-            first, count = min(offsets), len(offsets)
-            if (sorted(offsets) != list(range(first, first + 4 * count, 4))
-                    or count & (count - 1) or (first // 4) % count):
-                raise ValueError(f"snapshot {name}: its registers must be adjacent words, a "
-                                 f"power of two of them, aligned to their size (offsets "
-                                 f"{offsets})")
-            out[name] = (first, count)
-        return out
-
     def signals(self, registers):
         """``{signal: (kind, width)}`` of every connected field of ``registers``; a signal made
         of several fields (a position split over two registers) is as wide as all of them.
-        The ports of a window, a memory or a snapshot group have the kind :attr:`Kind.BUFFER`
-        (their direction: :func:`window_ports`, :func:`snapshot_ports`)."""
+        The ports of a window or a memory have the kind :attr:`Kind.BUFFER` (their direction:
+        :func:`window_ports`)."""
         found = {}
         for name, (_, count) in self.memories(registers).items():
             found.update({port: (Kind.BUFFER, width)
                           for port, (_, width) in window_ports(name, count, False).items()})
-        for name in self.snapshots(registers):
-            found.update({port: (Kind.BUFFER, width)
-                          for port, (_, width) in snapshot_ports(name).items()})
         for reg in registers:
             if reg.window:
                 found.update({name: (Kind.BUFFER, width)

@@ -4,8 +4,7 @@ the fast tier under the cocotb bus scenarios (sim/scenarios/bus.py).
 Expected values are written here from docs/bus.md and the SystemRDL source's field kinds:
 storage per byte lane, the write acting in the clock after w_en (the registered request),
 write-1 pulses one clock after that, sticky interrupts (a set wins
-over a clear in the same clock), the result snapshot (published pages, taken by reading
-result.status), unmapped reads 0,
+over a clear in the same clock), the snapshot taken by reading result.status, unmapped reads 0,
 the register-access windows (ca.wbuf, ca.rbuf) as ports of a 16 x 32 memory with byte lanes
 (a memory of the test's own, lib.memory), read with the registers' latency.
 """
@@ -211,77 +210,17 @@ def test_interrupt_set_wins_over_clear_and_irq_follows_enable():
     run(bench)
 
 
-RESULT_WORDS = 8          # result.status .. result.line: the words of one result page
-
-
-async def publish(ctx, bank, ch=0, **values):
-    """A cycle's end as the channel gives it: the result's live values set, ``result_capture``
-    for one clock, the values held while the bank copies them (one word per clock); returns
-    once ``result_published`` has come (docs/bus.md: it comes RESULT_WORDS + 1 clocks after
-    the capture)."""
-    port = getattr(bank, f"ch{ch}")
-    for name, value in values.items():
-        ctx.set(getattr(port, name), value)
-    ctx.set(port.result_capture, 1)
-    await ctx.tick()
-    ctx.set(port.result_capture, 0)
-    for clock in range(1, RESULT_WORDS + 2):       # the clock after the capture's is 1
-        if ctx.get(port.result_published):
-            assert clock == RESULT_WORDS + 1        # no other copy is published meanwhile
-            return
-        await ctx.tick()
-    raise AssertionError("result_published never came")
-
-
-def test_result_reads_zero_until_a_result_is_published():
+def test_snapshot_taken_by_reading_result_status():
     async def bench(ctx, bank):
         ctx.set(bank.ch0.word0_position, 0x12_3456_789A)
         ctx.set(bank.ch0.status, 3)
-        for reg in ("result.status", "result.w0_lo", "result.w0_hi"):
-            assert await read(ctx, bank, offset(reg)) == 0
-        await publish(ctx, bank)
         assert await read(ctx, bank, offset("result.status")) & 0xF == 3
-        assert await read(ctx, bank, offset("result.w0_lo")) == 0x3456_789A
-    run(bench)
-
-
-def test_snapshot_taken_by_reading_result_status():
-    """result.status takes the latest published result; the other result registers read that
-    result, however many are published after it, until the next read of result.status."""
-    async def bench(ctx, bank):
-        await publish(ctx, bank, word0_position=0x12_3456_789A, status=3, timestamp=111)
-        # Live values that were never published are never read.
-        ctx.set(bank.ch0.word0_position, 0x66_0000_0066)
-        ctx.set(bank.ch0.status, 5)
-        assert await read(ctx, bank, offset("result.status")) & 0xF == 3
-        for position, status in ((0x7F_FFFF_FFFF, 0), (0x01_0000_0001, 1), (0x02, 2)):
-            await publish(ctx, bank, word0_position=position, status=status)
+        ctx.set(bank.ch0.word0_position, 0x7F_FFFF_FFFF)  # a new frame after the snapshot
+        ctx.set(bank.ch0.status, 0)
         assert await read(ctx, bank, offset("result.w0_lo")) == 0x3456_789A
         assert await read(ctx, bank, offset("result.w0_hi")) == 0x12
-        assert await read(ctx, bank, offset("result.timestamp")) == 111
-        assert await read(ctx, bank, offset("result.status")) & 0xF == 2
-        assert await read(ctx, bank, offset("result.w0_lo")) == 0x02
-        assert await read(ctx, bank, offset("result.w0_hi")) == 0
-    run(bench)
-
-
-def test_interrupted_copy_is_not_published():
-    """A capture while a copy runs starts it again: the first copy is never published (a read
-    of result.status meanwhile takes the result before it), the second is."""
-    async def bench(ctx, bank):
-        await publish(ctx, bank, word0_position=0x11, status=1)
-        ctx.set(bank.ch0.word0_position, 0x22)
-        ctx.set(bank.ch0.result_capture, 1)
-        await ctx.tick()
-        ctx.set(bank.ch0.result_capture, 0)
-        for _ in range(RESULT_WORDS - 1):       # the copy's last word not yet written
-            await ctx.tick()
-            assert not ctx.get(bank.ch0.result_published)
-        ctx.set(bank.ch0.word0_position, 0x33)   # the next cycle's end, in the last clock
-        await publish(ctx, bank, status=3)
-        # Read while nothing is copied: the first copy (0x22) was never published.
-        assert await read(ctx, bank, offset("result.status")) & 0xF == 3
-        assert await read(ctx, bank, offset("result.w0_lo")) == 0x33
+        assert await read(ctx, bank, offset("result.status")) & 0xF == 0
+        assert await read(ctx, bank, offset("result.w0_hi")) == 0x7F
     run(bench)
 
 
@@ -325,21 +264,18 @@ def test_axil_reads_back_to_back_and_write_with_address_after_data():
 def test_axil_read_backpressure_reads_each_register_once():
     """Reads issued back to back while rready follows a pattern: every read's data comes once,
     in order, held while rready is low; arready is low while a read waits behind held data.
-    The snapshot (reading result.status) is taken once, in the clock the bank gets its address:
-    a result published after that is not what result.w0_lo and w0_hi read, and the next read
-    of result.status takes it."""
-    status, lo, hi = offset("result.status"), offset("result.w0_lo"), offset("result.w0_hi")
-    reads = [0, status, lo, hi, 4, lo, status, lo, hi]
-    ready = [0, 0, 0, 1, 0, 1, 1, 0, 0, 1, 0, 1, 1, 1, 0, 1] + [1] * 12
+    The snapshot (reading result.status) is taken once, in the clock its data is loaded (the
+    clock before its rvalid): the position changed after the AR handshake but before that is
+    what result.w0_lo and w0_hi read, the one changed after it is not."""
+    reads = [0, offset("result.status"), offset("result.w0_lo"), offset("result.w0_hi"), 4,
+             offset("result.w0_lo")]
+    ready = [0, 0, 0, 1, 0, 1, 1, 0, 0, 1, 0, 1, 1, 1, 0, 1] + [1] * 8
 
     async def bench(ctx, bus, bank):
-        await publish(ctx, bank, word0_position=0x12_3456_789A, status=3)
-        # The next result: its copy starts now and is published ten clocks later.
-        ctx.set(bank.ch0.word0_position, 0x55_0000_00AA)
-        ctx.set(bank.ch0.status, 5)
-        ctx.set(bank.ch0.result_capture, 1)
-        issued, got, held, taken, published = 0, [], None, [], None
-        for clock, r in enumerate(ready):
+        ctx.set(bank.ch0.word0_position, 0x12_3456_789A)
+        ctx.set(bank.ch0.status, 3)
+        issued, got, held, status_seen = 0, [], None, False
+        for r in ready:
             ctx.set(bus.arvalid, issued < len(reads))
             ctx.set(bus.araddr, reads[issued] if issued < len(reads) else 0)
             ctx.set(bus.rready, r)
@@ -352,19 +288,18 @@ def test_axil_read_backpressure_reads_each_register_once():
                     held = None
                 else:
                     held = ctx.get(bus.rdata)
-            if ctx.get(bank.ch0.result_published):
-                published = clock
             await ctx.tick()
-            ctx.set(bank.ch0.result_capture, 0)
             if took:
-                if reads[issued] == status:
-                    taken.append(clock)
+                if reads[issued] == offset("result.status"):
+                    ctx.set(bank.ch0.word0_position, 0x55_0000_00AA)
                 issued += 1
-        assert issued == len(reads) and ctx.get(bus.rvalid) == 0
-        # The first status read before the publication, the second after it.
-        assert taken[0] < published < taken[1], (taken, published)
-        assert [g & 0xF if reads[n] == status else g for n, g in enumerate(got)] == [
-            0x42695353, 3, 0x3456_789A, 0x12, 0x00010001, 0x3456_789A, 5, 0xAA, 0x55]
+            # The word on R now is the (len(got))th: those before it were all taken.
+            if ctx.get(bus.rvalid) and len(got) == 1 and not status_seen:
+                status_seen = True                      # result.status's data is out
+                ctx.set(bank.ch0.word0_position, 0x7F_FFFF_FFFF)
+        assert issued == len(reads) and status_seen
+        assert [g & 0xF if n == 1 else g for n, g in enumerate(got)] == [
+            0x42695353, 3, 0x0000_00AA, 0x55, 0x00010001, 0x0000_00AA]
 
     run_adapter(AxiLiteAdapter, bench)
 
