@@ -246,6 +246,11 @@ def _parser():
                       metavar="BITS",
                       help="width of the time base behind `timestamp`, 0: no timestamp "
                            "(default: %(default)s)")
+    core.add_argument("--time-input", type=int, choices=(0, 1),
+                      default=int(defaults.time_input),
+                      help="1: the timestamp captures the input time_now (a time base shared "
+                           "by several cores) instead of the core's own counter; the bus tops "
+                           "always build them so (default: %(default)s)")
     core.add_argument("--custom-crc", type=int, choices=(0, 1),
                       default=int(defaults.custom_crc),
                       help="1: each word may have its own CRC (cfg_wN_crc = 3: width 1..16, "
@@ -297,6 +302,7 @@ def _params(ap, args):
                             counter_width=args.counter_width,
                             counter_ram=bool(args.counter_ram),
                             timestamp_width=args.timestamp_width,
+                            time_input=bool(args.time_input),
                             custom_crc=bool(args.custom_crc),
                             signed_words=bool(args.signed_words),
                             ssi=bool(args.ssi),

@@ -109,6 +109,7 @@ class BissMaster(wiring.Component):
             "periodic": In(1),
             "abort_cycle": In(1),
             **({"clear_counters": In(1)} if p.counters else {}),
+            **({"time_now": In(p.timestamp_width)} if p.time_input else {}),
             # Runtime configuration
             **{name: In(shape) for name, _, shape in config_ports(p)},
             # State
@@ -174,7 +175,7 @@ class BissMaster(wiring.Component):
         m.submodules.confirmation = confirmation = Confirmation()
         m.submodules.results = results = ResultRegisters(p)
         if p.timestamped:
-            m.submodules.time_base = time_base = TimeBase(p.timestamp_width)
+            m.submodules.time_base = time_base = TimeBase(p.timestamp_width, p.time_input)
         if counter_ports(p):
             m.submodules.counters = counters = CounterBank(counter_ports(p), p.counter_width)
         if p.counter_ram:
@@ -407,6 +408,8 @@ class BissMaster(wiring.Component):
         if p.timestamped:
             m.d.comb += [b.time_base.first_rise.eq(b.ma_clock.first_rise),
                          frame.timestamp.eq(b.time_base.first_rise_time)]
+            if p.time_input:
+                m.d.comb += b.time_base.now.eq(self.time_now)
 
     def _connect_register_access(self, m, b):
         """The register-access engine: its ports, the CDM bit to the controller and MA, the

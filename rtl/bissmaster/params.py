@@ -189,6 +189,10 @@ class MasterParams:
         build their cores this way.
     timestamp_width : int
         Width of the free-running time base behind the ``timestamp`` output; 0 builds neither.
+    time_input : bool
+        The ``timestamp`` captures the input ``time_now`` instead of a counter of the core's
+        own (issue 27): several cores then share one time base (one counter for all channels
+        of a bus top, whose timestamps are one clock's by construction). Needs a timestamp.
     custom_crc : bool
         Accept :attr:`Crc.CUSTOM`: each word's CRC may be any of width 1..16, polynomial,
         start value and inversion, set on its ``cfg_wN_crc_*`` ports (latched per cycle).
@@ -218,6 +222,7 @@ class MasterParams:
     counter_width: int = 16
     counter_ram: bool = False
     timestamp_width: int = 32
+    time_input: bool = False
     custom_crc: bool = True
     signed_words: bool = True
     ssi: bool = True
@@ -258,6 +263,10 @@ class MasterParams:
         if self.counter_ram and not 1 <= self.counter_width <= COUNTER_HALF_BITS:
             raise ValueError(f"counter_ram needs counter_width 1..{COUNTER_HALF_BITS} (two counts "
                              f"per {COUNTER_WORD_BITS}-bit word), not {self.counter_width}")
+        if not isinstance(self.time_input, bool):
+            raise ValueError(f"time_input must be a bool, not {self.time_input!r}")
+        if self.time_input and self.timestamp_width == 0:
+            raise ValueError("time_input needs a timestamp (timestamp_width 16..64, not 0)")
         if not isinstance(self.timestamp_width, int) or not (
                 self.timestamp_width == 0 or 16 <= self.timestamp_width <= 64):
             raise ValueError(f"timestamp_width must be 0 (no timestamp) or an integer from 16 "
@@ -340,7 +349,8 @@ class MasterParams:
             f"timer_width     = {self.timer_width}",
             f"counter_width   = {self.counter_width}" + ("" if self.counters else " (no counters)")
             + (" in memory (count_addr, count_data)" if self.counter_ram else ""),
-            f"timestamp_width = {self.timestamp_width}" + ("" if self.timestamped else " (no timestamp)"),
+            f"timestamp_width = {self.timestamp_width}" + ("" if self.timestamped else " (no timestamp)")
+            + (" of the input time_now" if self.time_input else ""),
             *(["ssi             = on (cfg_ssi*)"] if self.ssi else []),
             *([f"register_access = on, start wait {self.start_wait_frames} frames"]
               if self.register_access else []),

@@ -23,18 +23,20 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
 , irq, ch0_ma, ch1_ma, s_axil_awaddr);
   reg \$auto$verilog_backend.cc:2355:dump_module$9  = 0;
   wire \$1 ;
-  wire [9:0] \$10 ;
-  wire [186:0] \$11 ;
-  wire [79:0] \$12 ;
-  wire [9:0] \$13 ;
+  wire [186:0] \$10 ;
+  wire [79:0] \$11 ;
+  wire [9:0] \$12 ;
+  wire [186:0] \$13 ;
+  wire [79:0] \$14 ;
+  wire [9:0] \$15 ;
   wire \$2 ;
-  wire \$3 ;
-  reg \$4 ;
+  wire [32:0] \$3 ;
+  wire \$4 ;
   reg \$5 ;
-  wire \$6 ;
-  wire \$7 ;
-  wire [186:0] \$8 ;
-  wire [79:0] \$9 ;
+  reg [31:0] \$6 ;
+  reg \$7 ;
+  wire \$8 ;
+  wire \$9 ;
   wire [12:0] axil__araddr;
   wire axil__arready;
   wire axil__arvalid;
@@ -277,219 +279,219 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$473 ;
+  wire [1:0] \irq$476 ;
   wire ma;
-  wire \ma$469 ;
+  wire \ma$472 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$266 ;
+  wire \regs__abort_cycle$269 ;
   wire regs__busy;
-  wire \regs__busy$269 ;
+  wire \regs__busy$272 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$270 ;
+  wire \regs__ca_abort$273 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$272 ;
+  wire [6:0] \regs__ca_address$275 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$275 ;
+  wire \regs__ca_busy$278 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$277 ;
+  wire [6:0] \regs__ca_bytes_done$280 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$278 ;
+  wire [6:0] \regs__ca_count$281 ;
   wire regs__ca_done;
-  wire \regs__ca_done$281 ;
+  wire \regs__ca_done$284 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$282 ;
+  wire [3:0] \regs__ca_rbuf_addr$285 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$285 ;
+  wire [31:0] \regs__ca_rbuf_data$288 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$286 ;
+  wire \regs__ca_rbuf_en$289 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$288 ;
+  wire [2:0] \regs__ca_slave_id$291 ;
   wire regs__ca_start;
-  wire \regs__ca_start$290 ;
+  wire \regs__ca_start$293 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$293 ;
+  wire [2:0] \regs__ca_status$296 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$294 ;
+  wire [3:0] \regs__ca_wbuf_addr$297 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$296 ;
+  wire [31:0] \regs__ca_wbuf_data$299 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$298 ;
+  wire [3:0] \regs__ca_wbuf_en$301 ;
   wire regs__ca_write;
-  wire \regs__ca_write$300 ;
+  wire \regs__ca_write$303 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$303 ;
+  wire \regs__cap_counters$306 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$305 ;
+  wire [5:0] \regs__cap_data_bits_w0$308 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$307 ;
+  wire [5:0] \regs__cap_data_bits_w1$310 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$309 ;
+  wire \regs__cap_register_access$312 ;
   wire regs__cap_ssi;
-  wire \regs__cap_ssi$311 ;
+  wire \regs__cap_ssi$314 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$313 ;
+  wire [5:0] \regs__cap_timer_width$316 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$315 ;
+  wire \regs__cap_timestamp$318 ;
   wire regs__cds;
-  wire \regs__cds$317 ;
+  wire \regs__cds$320 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$318 ;
+  wire [23:0] \regs__cfg_ack_limit$321 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$320 ;
+  wire [23:0] \regs__cfg_break_time$323 ;
   wire [3:0] regs__cfg_confirm_frames;
-  wire [3:0] \regs__cfg_confirm_frames$322 ;
+  wire [3:0] \regs__cfg_confirm_frames$325 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$324 ;
+  wire [11:0] \regs__cfg_delay_limit$327 ;
   wire [3:0] regs__cfg_delay_tolerance;
-  wire [3:0] \regs__cfg_delay_tolerance$326 ;
+  wire [3:0] \regs__cfg_delay_tolerance$329 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$328 ;
+  wire \regs__cfg_end_check$331 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$330 ;
+  wire [15:0] \regs__cfg_ma_half_period$333 ;
   wire [3:0] regs__cfg_noise_limit;
-  wire [3:0] \regs__cfg_noise_limit$332 ;
+  wire [3:0] \regs__cfg_noise_limit$335 ;
   wire [11:0] regs__cfg_quiet_time;
-  wire [11:0] \regs__cfg_quiet_time$334 ;
+  wire [11:0] \regs__cfg_quiet_time$337 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$336 ;
+  wire [23:0] \regs__cfg_request_period$339 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$338 ;
+  wire \regs__cfg_spw_check$341 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$340 ;
+  wire [7:0] \regs__cfg_spw_tolerance$343 ;
   wire regs__cfg_ssi;
-  wire \regs__cfg_ssi$342 ;
+  wire \regs__cfg_ssi$345 ;
   wire [11:0] regs__cfg_ssi_delay;
-  wire [11:0] \regs__cfg_ssi_delay$344 ;
+  wire [11:0] \regs__cfg_ssi_delay$347 ;
   wire regs__cfg_ssi_double;
-  wire \regs__cfg_ssi_double$346 ;
+  wire \regs__cfg_ssi_double$349 ;
   wire regs__cfg_ssi_error;
-  wire \regs__cfg_ssi_error$348 ;
+  wire \regs__cfg_ssi_error$351 ;
   wire regs__cfg_ssi_error_low;
-  wire \regs__cfg_ssi_error_low$350 ;
+  wire \regs__cfg_ssi_error_low$353 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$352 ;
+  wire [23:0] \regs__cfg_timeout_limit$355 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$354 ;
+  wire [1:0] \regs__cfg_w0_crc$357 ;
   wire regs__cfg_w0_crc_inverted;
-  wire \regs__cfg_w0_crc_inverted$356 ;
+  wire \regs__cfg_w0_crc_inverted$359 ;
   wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] \regs__cfg_w0_crc_poly$358 ;
+  wire [15:0] \regs__cfg_w0_crc_poly$361 ;
   wire [15:0] regs__cfg_w0_crc_start;
-  wire [15:0] \regs__cfg_w0_crc_start$360 ;
+  wire [15:0] \regs__cfg_w0_crc_start$363 ;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [4:0] \regs__cfg_w0_crc_width$362 ;
+  wire [4:0] \regs__cfg_w0_crc_width$365 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$364 ;
+  wire [5:0] \regs__cfg_w0_data_bits$367 ;
   wire regs__cfg_w0_gray;
-  wire \regs__cfg_w0_gray$366 ;
+  wire \regs__cfg_w0_gray$369 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$368 ;
+  wire \regs__cfg_w0_lc$371 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$370 ;
+  wire \regs__cfg_w0_nenw$373 ;
   wire regs__cfg_w0_signed;
-  wire \regs__cfg_w0_signed$372 ;
+  wire \regs__cfg_w0_signed$375 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$374 ;
+  wire [1:0] \regs__cfg_w1_crc$377 ;
   wire regs__cfg_w1_crc_inverted;
-  wire \regs__cfg_w1_crc_inverted$376 ;
+  wire \regs__cfg_w1_crc_inverted$379 ;
   wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] \regs__cfg_w1_crc_poly$378 ;
+  wire [15:0] \regs__cfg_w1_crc_poly$381 ;
   wire [15:0] regs__cfg_w1_crc_start;
-  wire [15:0] \regs__cfg_w1_crc_start$380 ;
+  wire [15:0] \regs__cfg_w1_crc_start$383 ;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [4:0] \regs__cfg_w1_crc_width$382 ;
+  wire [4:0] \regs__cfg_w1_crc_width$385 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$384 ;
+  wire [5:0] \regs__cfg_w1_data_bits$387 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$386 ;
+  wire \regs__cfg_w1_enable$389 ;
   wire regs__cfg_w1_gray;
-  wire \regs__cfg_w1_gray$388 ;
+  wire \regs__cfg_w1_gray$391 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$390 ;
+  wire \regs__cfg_w1_lc$393 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$392 ;
+  wire \regs__cfg_w1_nenw$395 ;
   wire regs__cfg_w1_signed;
-  wire \regs__cfg_w1_signed$394 ;
+  wire \regs__cfg_w1_signed$397 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$396 ;
+  wire \regs__clear_counters$399 ;
   wire regs__config_error;
-  wire \regs__config_error$399 ;
+  wire \regs__config_error$402 ;
   wire [2:0] regs__count_addr;
-  wire [2:0] \regs__count_addr$400 ;
+  wire [2:0] \regs__count_addr$403 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$403 ;
+  wire [15:0] \regs__count_ca_aborted$406 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$405 ;
+  wire [15:0] \regs__count_ca_crc4_error$408 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$407 ;
+  wire [15:0] \regs__count_ca_data_fault$410 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$409 ;
+  wire [15:0] \regs__count_ca_no_answer$412 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$411 ;
+  wire [15:0] \regs__count_ca_refused$414 ;
   wire [31:0] regs__count_data;
-  wire [31:0] \regs__count_data$413 ;
+  wire [31:0] \regs__count_data$416 ;
   wire regs__count_en;
-  wire \regs__count_en$414 ;
+  wire \regs__count_en$417 ;
   wire regs__delay_settled;
-  wire \regs__delay_settled$417 ;
+  wire \regs__delay_settled$420 ;
   wire [7:0] regs__delay_spread;
-  wire [7:0] \regs__delay_spread$419 ;
+  wire [7:0] \regs__delay_spread$422 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$421 ;
+  wire [15:0] \regs__done_count$424 ;
   wire regs__frame_done;
-  wire \regs__frame_done$423 ;
+  wire \regs__frame_done$426 ;
   wire regs__frame_error;
-  wire \regs__frame_error$425 ;
+  wire \regs__frame_error$428 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$427 ;
+  wire [5:0] \regs__lc$430 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$429 ;
+  wire \regs__lc_repeat$432 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$431 ;
+  wire \regs__lc_skip$434 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$433 ;
+  wire \regs__lc_zero$436 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$435 ;
+  wire [12:0] \regs__line_delay$438 ;
   wire [3:0] regs__noise_events;
-  wire [3:0] \regs__noise_events$437 ;
+  wire [3:0] \regs__noise_events$440 ;
   wire regs__periodic;
-  wire \regs__periodic$438 ;
+  wire \regs__periodic$441 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__r_load;
   wire [12:0] regs__settled_delay;
-  wire [12:0] \regs__settled_delay$441 ;
+  wire [12:0] \regs__settled_delay$444 ;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$443 ;
+  wire \regs__spw_mismatch$446 ;
   wire regs__start;
-  wire \regs__start$444 ;
+  wire \regs__start$447 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$447 ;
+  wire [3:0] \regs__status$450 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$449 ;
+  wire [31:0] \regs__timestamp$452 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$450 ;
+  wire \regs__trigger_enable$453 ;
   wire [10:0] regs__w_addr;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$453 ;
+  wire \regs__word0_crc_ok$456 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$455 ;
+  wire \regs__word0_ne$458 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$457 ;
+  wire \regs__word0_nw$460 ;
   wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$459 ;
+  wire [54:0] \regs__word0_position$462 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$461 ;
+  wire \regs__word1_crc_ok$464 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$463 ;
+  wire \regs__word1_ne$466 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$465 ;
+  wire \regs__word1_nw$468 ;
   wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$467 ;
+  wire [39:0] \regs__word1_position$470 ;
   input rst;
   wire rst;
   input [12:0] s_axil_araddr;
@@ -527,21 +529,29 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   input s_axil_wvalid;
   wire s_axil_wvalid;
   wire slo;
-  wire \slo$470 ;
+  wire \slo$473 ;
+  reg [31:0] time_now = 32'd0;
+  (* init = 32'd0 *)
+  wire [31:0] \time_now$268 ;
+  (* init = 32'd0 *)
+  wire [31:0] \time_now$62 ;
   input trigger;
   wire trigger;
-  wire \trigger$263 ;
-  wire \trigger$468 ;
+  wire \trigger$265 ;
+  wire \trigger$471 ;
   wire \trigger$58 ;
   reg trigger_in = 1'h0;
   assign \$1  = ~ trigger_in;
   assign \$2  = trigger & \$1 ;
   assign \trigger$58  = glob__trigger | \$2 ;
-  assign \$3  = | { \$7 , \$6  };
+  assign \$3  = time_now + 1'h1;
+  assign \$4  = | { \$9 , \$8  };
   always @(posedge clk)
-    trigger_in <= \$4 ;
+    trigger_in <= \$5 ;
   always @(posedge clk)
-    irq <= \$5 ;
+    time_now <= \$6 ;
+  always @(posedge clk)
+    irq <= \$7 ;
   \biss_master_axil.bank  bank (
     .bus__r_addr(s_axil_araddr[12:2]),
     .bus__r_data(s_axil_rdata),
@@ -614,78 +624,78 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .ch0_ctrl_periodic(regs__periodic),
     .ch0_ctrl_start(regs__start),
     .ch0_ctrl_trigger_enable(regs__trigger_enable),
-    .ch0_irq(\$6 ),
+    .ch0_irq(\$8 ),
     .ch1__busy(ch1__busy),
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$286 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$298 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$289 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$301 ),
     .ch1__config_error(ch1__config_error),
     .ch1__count_data(ch1__count_data),
-    .ch1__count_en(\regs__count_en$414 ),
+    .ch1__count_en(\regs__count_en$417 ),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_done(ch1__frame_done),
     .ch1__frame_error(ch1__frame_error),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$270 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$290 ),
-    .ch1_ca_request_address(\regs__ca_address$272 ),
-    .ch1_ca_request_count(\regs__ca_count$278 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$288 ),
-    .\ch1_ca_request_write$305 (\regs__ca_write$300 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$318 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$320 ),
-    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$322 ),
-    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$326 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$328 ),
-    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$332 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$338 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$340 ),
-    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$360 ),
-    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$356 ),
-    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$358 ),
-    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$362 ),
-    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$380 ),
-    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$376 ),
-    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$378 ),
-    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$382 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$324 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$330 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$336 ),
-    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$334 ),
-    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$342 ),
-    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$344 ),
-    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$346 ),
-    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$348 ),
-    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$350 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$352 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$354 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$364 ),
-    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$366 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$368 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$370 ),
-    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$372 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$374 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$384 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$386 ),
-    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$388 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$390 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$392 ),
-    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$394 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$266 ),
-    .ch1_ctrl_clear_counters(\regs__clear_counters$396 ),
-    .ch1_ctrl_periodic(\regs__periodic$438 ),
-    .ch1_ctrl_start(\regs__start$444 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$450 ),
-    .ch1_irq(\$7 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$273 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$293 ),
+    .ch1_ca_request_address(\regs__ca_address$275 ),
+    .ch1_ca_request_count(\regs__ca_count$281 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$291 ),
+    .\ch1_ca_request_write$305 (\regs__ca_write$303 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$321 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$323 ),
+    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$325 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$329 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$331 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$335 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$341 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$343 ),
+    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$363 ),
+    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$359 ),
+    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$361 ),
+    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$365 ),
+    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$383 ),
+    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$379 ),
+    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$381 ),
+    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$385 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$327 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$333 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$339 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$337 ),
+    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$345 ),
+    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$347 ),
+    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$349 ),
+    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$351 ),
+    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$353 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$355 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$357 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$367 ),
+    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$369 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$371 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$373 ),
+    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$375 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$377 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$387 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$389 ),
+    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$391 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$393 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$395 ),
+    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$397 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$269 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$399 ),
+    .ch1_ctrl_periodic(\regs__periodic$441 ),
+    .ch1_ctrl_start(\regs__start$447 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$453 ),
+    .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6669$0 (\$8 ),
-    .\port$6682$0 (\$9 ),
-    .\port$6759$0 (\$10 ),
-    .\port$7200$0 (\$11 ),
-    .\port$7213$0 (\$12 ),
-    .\port$7290$0 (\$13 ),
+    .\port$6670$0 (\$10 ),
+    .\port$6681$0 (\$11 ),
+    .\port$6758$0 (\$12 ),
+    .\port$7199$0 (\$13 ),
+    .\port$7210$0 (\$14 ),
+    .\port$7287$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -770,9 +780,9 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6669$0 (\$8 ),
-    .\port$6682$0 (\$9 ),
-    .\port$6759$0 (\$10 ),
+    .\port$6670$0 (\$10 ),
+    .\port$6681$0 (\$11 ),
+    .\port$6758$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -787,68 +797,69 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$195 (\trigger$58 )
+    .time_now(time_now),
+    .\trigger$197 (\trigger$58 )
   );
   \biss_master_axil.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$270 ),
-    .ca_address(\regs__ca_address$272 ),
-    .ca_count(\regs__ca_count$278 ),
+    .ca_abort(\regs__ca_abort$273 ),
+    .ca_address(\regs__ca_address$275 ),
+    .ca_count(\regs__ca_count$281 ),
     .ca_rbuf_addr(s_axil_araddr[5:2]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$286 ),
-    .ca_slave_id(\regs__ca_slave_id$288 ),
-    .ca_start(\regs__ca_start$290 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$289 ),
+    .ca_slave_id(\regs__ca_slave_id$291 ),
+    .ca_start(\regs__ca_start$293 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$298 ),
-    .ca_write(\regs__ca_write$300 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$318 ),
-    .cfg_break_time(\regs__cfg_break_time$320 ),
-    .cfg_confirm_frames(\regs__cfg_confirm_frames$322 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$324 ),
-    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$326 ),
-    .cfg_end_check(\regs__cfg_end_check$328 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$330 ),
-    .cfg_noise_limit(\regs__cfg_noise_limit$332 ),
-    .cfg_quiet_time(\regs__cfg_quiet_time$334 ),
-    .cfg_request_period(\regs__cfg_request_period$336 ),
-    .cfg_spw_check(\regs__cfg_spw_check$338 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$340 ),
-    .cfg_ssi(\regs__cfg_ssi$342 ),
-    .cfg_ssi_delay(\regs__cfg_ssi_delay$344 ),
-    .cfg_ssi_double(\regs__cfg_ssi_double$346 ),
-    .cfg_ssi_error(\regs__cfg_ssi_error$348 ),
-    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$350 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$352 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$354 ),
-    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$356 ),
-    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$358 ),
-    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$360 ),
-    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$362 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$364 ),
-    .cfg_w0_gray(\regs__cfg_w0_gray$366 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$368 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$370 ),
-    .cfg_w0_signed(\regs__cfg_w0_signed$372 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$374 ),
-    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$376 ),
-    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$378 ),
-    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$380 ),
-    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$382 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$384 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$386 ),
-    .cfg_w1_gray(\regs__cfg_w1_gray$388 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$390 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$392 ),
-    .cfg_w1_signed(\regs__cfg_w1_signed$394 ),
-    .clear_counters(\regs__clear_counters$396 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$301 ),
+    .ca_write(\regs__ca_write$303 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$321 ),
+    .cfg_break_time(\regs__cfg_break_time$323 ),
+    .cfg_confirm_frames(\regs__cfg_confirm_frames$325 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$327 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$329 ),
+    .cfg_end_check(\regs__cfg_end_check$331 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$333 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$335 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$337 ),
+    .cfg_request_period(\regs__cfg_request_period$339 ),
+    .cfg_spw_check(\regs__cfg_spw_check$341 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$343 ),
+    .cfg_ssi(\regs__cfg_ssi$345 ),
+    .cfg_ssi_delay(\regs__cfg_ssi_delay$347 ),
+    .cfg_ssi_double(\regs__cfg_ssi_double$349 ),
+    .cfg_ssi_error(\regs__cfg_ssi_error$351 ),
+    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$353 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$355 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$357 ),
+    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$359 ),
+    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$361 ),
+    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$363 ),
+    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$365 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$367 ),
+    .cfg_w0_gray(\regs__cfg_w0_gray$369 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$371 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$373 ),
+    .cfg_w0_signed(\regs__cfg_w0_signed$375 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$377 ),
+    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$379 ),
+    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$381 ),
+    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$383 ),
+    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$385 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$387 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$389 ),
+    .cfg_w1_gray(\regs__cfg_w1_gray$391 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$393 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$395 ),
+    .cfg_w1_signed(\regs__cfg_w1_signed$397 ),
+    .clear_counters(\regs__clear_counters$399 ),
     .clk(clk),
-    .count_en(\regs__count_en$414 ),
+    .count_en(\regs__count_en$417 ),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$438 ),
-    .\port$7200$0 (\$11 ),
-    .\port$7213$0 (\$12 ),
-    .\port$7290$0 (\$13 ),
-    .regs__abort_cycle(\regs__abort_cycle$266 ),
+    .periodic(\regs__periodic$441 ),
+    .\port$7199$0 (\$13 ),
+    .\port$7210$0 (\$14 ),
+    .\port$7287$0 (\$15 ),
+    .regs__abort_cycle(\regs__abort_cycle$269 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -858,24 +869,32 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
     .regs__done_count(ch1__done_count),
     .regs__frame_done(ch1__frame_done),
     .regs__frame_error(ch1__frame_error),
-    .regs__trigger_enable(\regs__trigger_enable$450 ),
+    .regs__trigger_enable(\regs__trigger_enable$453 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$444 ),
-    .\trigger$195 (\trigger$58 )
+    .start(\regs__start$447 ),
+    .time_now(time_now),
+    .\trigger$197 (\trigger$58 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$4  = trigger;
+    \$5  = trigger;
     if (rst) begin
-      \$4  = 1'h0;
+      \$5  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$5  = \$3 ;
+    \$6  = \$3 [31:0];
     if (rst) begin
-      \$5  = 1'h0;
+      \$6  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$7  = \$4 ;
+    if (rst) begin
+      \$7  = 1'h0;
     end
   end
   assign bus__r_addr = s_axil_araddr[12:2];
@@ -905,13 +924,14 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign axil__rresp = 2'h0;
   assign axil__rvalid = s_axil_rvalid;
   assign axil__rready = s_axil_rready;
+  assign \time_now$62  = time_now;
   assign ch0__abort_cycle = regs__abort_cycle;
   assign regs__busy = ch0__busy;
   assign ch0__ca_abort = regs__ca_abort;
   assign ch0__ca_address = regs__ca_address;
   assign regs__ca_busy = ch0__ca_busy;
-  assign ch0__ca_bytes_done = \$10 [9:3];
-  assign regs__ca_bytes_done = \$10 [9:3];
+  assign ch0__ca_bytes_done = \$12 [9:3];
+  assign regs__ca_bytes_done = \$12 [9:3];
   assign ch0__ca_count = regs__ca_count;
   assign regs__ca_done = ch0__ca_done;
   assign regs__ca_rbuf_addr = s_axil_araddr[5:2];
@@ -920,8 +940,8 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign ch0__ca_rbuf_en = regs__ca_rbuf_en;
   assign ch0__ca_slave_id = regs__ca_slave_id;
   assign ch0__ca_start = regs__ca_start;
-  assign ch0__ca_status = \$10 [2:0];
-  assign regs__ca_status = \$10 [2:0];
+  assign ch0__ca_status = \$12 [2:0];
+  assign regs__ca_status = \$12 [2:0];
   assign ch0__ca_wbuf_addr = regs__ca_wbuf_addr;
   assign ch0__ca_wbuf_data = regs__ca_wbuf_data;
   assign ch0__ca_wbuf_en = regs__ca_wbuf_en;
@@ -940,8 +960,8 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign regs__cap_timer_width = 6'h18;
   assign ch0__cap_timestamp = 1'h1;
   assign regs__cap_timestamp = 1'h1;
-  assign ch0__cds = \$8 [49];
-  assign regs__cds = \$8 [49];
+  assign ch0__cds = \$10 [49];
+  assign regs__cds = \$10 [49];
   assign ch0__cfg_ack_limit = regs__cfg_ack_limit;
   assign ch0__cfg_break_time = regs__cfg_break_time;
   assign ch0__cfg_confirm_frames = regs__cfg_confirm_frames;
@@ -985,213 +1005,214 @@ module biss_master_axil(s_axil_awvalid, s_axil_wdata, s_axil_wstrb, s_axil_wvali
   assign regs__config_error = ch0__config_error;
   assign regs__count_addr = s_axil_araddr[4:2];
   assign ch0__count_addr = s_axil_araddr[4:2];
-  assign ch0__count_ca_aborted = \$9 [63:48];
-  assign regs__count_ca_aborted = \$9 [63:48];
-  assign ch0__count_ca_crc4_error = \$9 [15:0];
-  assign regs__count_ca_crc4_error = \$9 [15:0];
-  assign ch0__count_ca_data_fault = \$9 [79:64];
-  assign regs__count_ca_data_fault = \$9 [79:64];
-  assign ch0__count_ca_no_answer = \$9 [31:16];
-  assign regs__count_ca_no_answer = \$9 [31:16];
-  assign ch0__count_ca_refused = \$9 [47:32];
-  assign regs__count_ca_refused = \$9 [47:32];
+  assign ch0__count_ca_aborted = \$11 [63:48];
+  assign regs__count_ca_aborted = \$11 [63:48];
+  assign ch0__count_ca_crc4_error = \$11 [15:0];
+  assign regs__count_ca_crc4_error = \$11 [15:0];
+  assign ch0__count_ca_data_fault = \$11 [79:64];
+  assign regs__count_ca_data_fault = \$11 [79:64];
+  assign ch0__count_ca_no_answer = \$11 [31:16];
+  assign regs__count_ca_no_answer = \$11 [31:16];
+  assign ch0__count_ca_refused = \$11 [47:32];
+  assign regs__count_ca_refused = \$11 [47:32];
   assign regs__count_data = ch0__count_data;
   assign ch0__count_en = regs__count_en;
-  assign ch0__delay_settled = \$8 [54];
-  assign regs__delay_settled = \$8 [54];
-  assign ch0__delay_spread = \$8 [75:68];
-  assign regs__delay_spread = \$8 [75:68];
+  assign ch0__delay_settled = \$10 [54];
+  assign regs__delay_settled = \$10 [54];
+  assign ch0__delay_spread = \$10 [75:68];
+  assign regs__delay_spread = \$10 [75:68];
   assign regs__done_count = ch0__done_count;
   assign regs__frame_done = ch0__frame_done;
   assign regs__frame_error = ch0__frame_error;
-  assign ch0__lc = \$8 [182:177];
-  assign regs__lc = \$8 [182:177];
-  assign ch0__lc_repeat = \$8 [183];
-  assign regs__lc_repeat = \$8 [183];
-  assign ch0__lc_skip = \$8 [184];
-  assign regs__lc_skip = \$8 [184];
-  assign ch0__lc_zero = \$8 [185];
-  assign regs__lc_zero = \$8 [185];
-  assign ch0__line_delay = \$8 [48:36];
-  assign regs__line_delay = \$8 [48:36];
-  assign ch0__noise_events = \$8 [53:50];
-  assign regs__noise_events = \$8 [53:50];
+  assign ch0__lc = \$10 [182:177];
+  assign regs__lc = \$10 [182:177];
+  assign ch0__lc_repeat = \$10 [183];
+  assign regs__lc_repeat = \$10 [183];
+  assign ch0__lc_skip = \$10 [184];
+  assign regs__lc_skip = \$10 [184];
+  assign ch0__lc_zero = \$10 [185];
+  assign regs__lc_zero = \$10 [185];
+  assign ch0__line_delay = \$10 [48:36];
+  assign regs__line_delay = \$10 [48:36];
+  assign ch0__noise_events = \$10 [53:50];
+  assign regs__noise_events = \$10 [53:50];
   assign ch0__periodic = regs__periodic;
-  assign ch0__settled_delay = \$8 [67:55];
-  assign regs__settled_delay = \$8 [67:55];
-  assign ch0__spw_mismatch = \$8 [186];
-  assign regs__spw_mismatch = \$8 [186];
+  assign ch0__settled_delay = \$10 [67:55];
+  assign regs__settled_delay = \$10 [67:55];
+  assign ch0__spw_mismatch = \$10 [186];
+  assign regs__spw_mismatch = \$10 [186];
   assign ch0__start = regs__start;
-  assign ch0__status = \$8 [3:0];
-  assign regs__status = \$8 [3:0];
-  assign ch0__timestamp = \$8 [35:4];
-  assign regs__timestamp = \$8 [35:4];
+  assign ch0__status = \$10 [3:0];
+  assign regs__status = \$10 [3:0];
+  assign ch0__timestamp = \$10 [35:4];
+  assign regs__timestamp = \$10 [35:4];
   assign ch0__trigger_enable = regs__trigger_enable;
-  assign ch0__word0_crc_ok = \$8 [133];
-  assign regs__word0_crc_ok = \$8 [133];
-  assign ch0__word0_ne = \$8 [131];
-  assign regs__word0_ne = \$8 [131];
-  assign ch0__word0_nw = \$8 [132];
-  assign regs__word0_nw = \$8 [132];
-  assign ch0__word0_position = \$8 [130:76];
-  assign regs__word0_position = \$8 [130:76];
-  assign ch0__word1_crc_ok = \$8 [176];
-  assign regs__word1_crc_ok = \$8 [176];
-  assign ch0__word1_ne = \$8 [174];
-  assign regs__word1_ne = \$8 [174];
-  assign ch0__word1_nw = \$8 [175];
-  assign regs__word1_nw = \$8 [175];
-  assign ch0__word1_position = \$8 [173:134];
-  assign regs__word1_position = \$8 [173:134];
-  assign \trigger$263  = \trigger$58 ;
+  assign ch0__word0_crc_ok = \$10 [133];
+  assign regs__word0_crc_ok = \$10 [133];
+  assign ch0__word0_ne = \$10 [131];
+  assign regs__word0_ne = \$10 [131];
+  assign ch0__word0_nw = \$10 [132];
+  assign regs__word0_nw = \$10 [132];
+  assign ch0__word0_position = \$10 [130:76];
+  assign regs__word0_position = \$10 [130:76];
+  assign ch0__word1_crc_ok = \$10 [176];
+  assign regs__word1_crc_ok = \$10 [176];
+  assign ch0__word1_ne = \$10 [174];
+  assign regs__word1_ne = \$10 [174];
+  assign ch0__word1_nw = \$10 [175];
+  assign regs__word1_nw = \$10 [175];
+  assign ch0__word1_position = \$10 [173:134];
+  assign regs__word1_position = \$10 [173:134];
+  assign \trigger$265  = \trigger$58 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign ch1__abort_cycle = \regs__abort_cycle$266 ;
-  assign \regs__busy$269  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$270 ;
-  assign ch1__ca_address = \regs__ca_address$272 ;
-  assign \regs__ca_busy$275  = ch1__ca_busy;
-  assign ch1__ca_bytes_done = \$13 [9:3];
-  assign \regs__ca_bytes_done$277  = \$13 [9:3];
-  assign ch1__ca_count = \regs__ca_count$278 ;
-  assign \regs__ca_done$281  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$282  = s_axil_araddr[5:2];
+  assign \time_now$268  = time_now;
+  assign ch1__abort_cycle = \regs__abort_cycle$269 ;
+  assign \regs__busy$272  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$273 ;
+  assign ch1__ca_address = \regs__ca_address$275 ;
+  assign \regs__ca_busy$278  = ch1__ca_busy;
+  assign ch1__ca_bytes_done = \$15 [9:3];
+  assign \regs__ca_bytes_done$280  = \$15 [9:3];
+  assign ch1__ca_count = \regs__ca_count$281 ;
+  assign \regs__ca_done$284  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$285  = s_axil_araddr[5:2];
   assign ch1__ca_rbuf_addr = s_axil_araddr[5:2];
-  assign \regs__ca_rbuf_data$285  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$286 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$288 ;
-  assign ch1__ca_start = \regs__ca_start$290 ;
-  assign ch1__ca_status = \$13 [2:0];
-  assign \regs__ca_status$293  = \$13 [2:0];
-  assign \regs__ca_wbuf_addr$294  = regs__ca_wbuf_addr;
+  assign \regs__ca_rbuf_data$288  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$289 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$291 ;
+  assign ch1__ca_start = \regs__ca_start$293 ;
+  assign ch1__ca_status = \$15 [2:0];
+  assign \regs__ca_status$296  = \$15 [2:0];
+  assign \regs__ca_wbuf_addr$297  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$296  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$299  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$298 ;
-  assign ch1__ca_write = \regs__ca_write$300 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$301 ;
+  assign ch1__ca_write = \regs__ca_write$303 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$303  = 1'h1;
+  assign \regs__cap_counters$306  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$305  = 6'h37;
+  assign \regs__cap_data_bits_w0$308  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$307  = 6'h28;
+  assign \regs__cap_data_bits_w1$310  = 6'h28;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$309  = 1'h1;
+  assign \regs__cap_register_access$312  = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign \regs__cap_ssi$311  = 1'h1;
+  assign \regs__cap_ssi$314  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$313  = 6'h18;
+  assign \regs__cap_timer_width$316  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$315  = 1'h1;
-  assign ch1__cds = \$11 [49];
-  assign \regs__cds$317  = \$11 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$318 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$320 ;
-  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$322 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$324 ;
-  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$326 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$328 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$330 ;
-  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$332 ;
-  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$334 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$336 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$338 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$340 ;
-  assign ch1__cfg_ssi = \regs__cfg_ssi$342 ;
-  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$344 ;
-  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$346 ;
-  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$348 ;
-  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$350 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$352 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$354 ;
-  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$356 ;
-  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$358 ;
-  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$360 ;
-  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$362 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$364 ;
-  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$366 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$368 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$370 ;
-  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$372 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$374 ;
-  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$376 ;
-  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$378 ;
-  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$380 ;
-  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$382 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$384 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$386 ;
-  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$388 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$390 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$392 ;
-  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$394 ;
-  assign ch1__clear_counters = \regs__clear_counters$396 ;
-  assign \regs__config_error$399  = ch1__config_error;
-  assign \regs__count_addr$400  = s_axil_araddr[4:2];
+  assign \regs__cap_timestamp$318  = 1'h1;
+  assign ch1__cds = \$13 [49];
+  assign \regs__cds$320  = \$13 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$321 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$323 ;
+  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$325 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$327 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$329 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$331 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$333 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$335 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$337 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$339 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$341 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$343 ;
+  assign ch1__cfg_ssi = \regs__cfg_ssi$345 ;
+  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$347 ;
+  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$349 ;
+  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$351 ;
+  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$353 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$355 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$357 ;
+  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$359 ;
+  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$361 ;
+  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$363 ;
+  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$365 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$367 ;
+  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$369 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$371 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$373 ;
+  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$375 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$377 ;
+  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$379 ;
+  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$381 ;
+  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$383 ;
+  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$385 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$387 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$389 ;
+  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$391 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$393 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$395 ;
+  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$397 ;
+  assign ch1__clear_counters = \regs__clear_counters$399 ;
+  assign \regs__config_error$402  = ch1__config_error;
+  assign \regs__count_addr$403  = s_axil_araddr[4:2];
   assign ch1__count_addr = s_axil_araddr[4:2];
-  assign ch1__count_ca_aborted = \$12 [63:48];
-  assign \regs__count_ca_aborted$403  = \$12 [63:48];
-  assign ch1__count_ca_crc4_error = \$12 [15:0];
-  assign \regs__count_ca_crc4_error$405  = \$12 [15:0];
-  assign ch1__count_ca_data_fault = \$12 [79:64];
-  assign \regs__count_ca_data_fault$407  = \$12 [79:64];
-  assign ch1__count_ca_no_answer = \$12 [31:16];
-  assign \regs__count_ca_no_answer$409  = \$12 [31:16];
-  assign ch1__count_ca_refused = \$12 [47:32];
-  assign \regs__count_ca_refused$411  = \$12 [47:32];
-  assign \regs__count_data$413  = ch1__count_data;
-  assign ch1__count_en = \regs__count_en$414 ;
-  assign ch1__delay_settled = \$11 [54];
-  assign \regs__delay_settled$417  = \$11 [54];
-  assign ch1__delay_spread = \$11 [75:68];
-  assign \regs__delay_spread$419  = \$11 [75:68];
-  assign \regs__done_count$421  = ch1__done_count;
-  assign \regs__frame_done$423  = ch1__frame_done;
-  assign \regs__frame_error$425  = ch1__frame_error;
-  assign ch1__lc = \$11 [182:177];
-  assign \regs__lc$427  = \$11 [182:177];
-  assign ch1__lc_repeat = \$11 [183];
-  assign \regs__lc_repeat$429  = \$11 [183];
-  assign ch1__lc_skip = \$11 [184];
-  assign \regs__lc_skip$431  = \$11 [184];
-  assign ch1__lc_zero = \$11 [185];
-  assign \regs__lc_zero$433  = \$11 [185];
-  assign ch1__line_delay = \$11 [48:36];
-  assign \regs__line_delay$435  = \$11 [48:36];
-  assign ch1__noise_events = \$11 [53:50];
-  assign \regs__noise_events$437  = \$11 [53:50];
-  assign ch1__periodic = \regs__periodic$438 ;
-  assign ch1__settled_delay = \$11 [67:55];
-  assign \regs__settled_delay$441  = \$11 [67:55];
-  assign ch1__spw_mismatch = \$11 [186];
-  assign \regs__spw_mismatch$443  = \$11 [186];
-  assign ch1__start = \regs__start$444 ;
-  assign ch1__status = \$11 [3:0];
-  assign \regs__status$447  = \$11 [3:0];
-  assign ch1__timestamp = \$11 [35:4];
-  assign \regs__timestamp$449  = \$11 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$450 ;
-  assign ch1__word0_crc_ok = \$11 [133];
-  assign \regs__word0_crc_ok$453  = \$11 [133];
-  assign ch1__word0_ne = \$11 [131];
-  assign \regs__word0_ne$455  = \$11 [131];
-  assign ch1__word0_nw = \$11 [132];
-  assign \regs__word0_nw$457  = \$11 [132];
-  assign ch1__word0_position = \$11 [130:76];
-  assign \regs__word0_position$459  = \$11 [130:76];
-  assign ch1__word1_crc_ok = \$11 [176];
-  assign \regs__word1_crc_ok$461  = \$11 [176];
-  assign ch1__word1_ne = \$11 [174];
-  assign \regs__word1_ne$463  = \$11 [174];
-  assign ch1__word1_nw = \$11 [175];
-  assign \regs__word1_nw$465  = \$11 [175];
-  assign ch1__word1_position = \$11 [173:134];
-  assign \regs__word1_position$467  = \$11 [173:134];
-  assign \trigger$468  = \trigger$58 ;
-  assign \ma$469  = ch1_ma;
-  assign \slo$470  = ch1_slo;
+  assign ch1__count_ca_aborted = \$14 [63:48];
+  assign \regs__count_ca_aborted$406  = \$14 [63:48];
+  assign ch1__count_ca_crc4_error = \$14 [15:0];
+  assign \regs__count_ca_crc4_error$408  = \$14 [15:0];
+  assign ch1__count_ca_data_fault = \$14 [79:64];
+  assign \regs__count_ca_data_fault$410  = \$14 [79:64];
+  assign ch1__count_ca_no_answer = \$14 [31:16];
+  assign \regs__count_ca_no_answer$412  = \$14 [31:16];
+  assign ch1__count_ca_refused = \$14 [47:32];
+  assign \regs__count_ca_refused$414  = \$14 [47:32];
+  assign \regs__count_data$416  = ch1__count_data;
+  assign ch1__count_en = \regs__count_en$417 ;
+  assign ch1__delay_settled = \$13 [54];
+  assign \regs__delay_settled$420  = \$13 [54];
+  assign ch1__delay_spread = \$13 [75:68];
+  assign \regs__delay_spread$422  = \$13 [75:68];
+  assign \regs__done_count$424  = ch1__done_count;
+  assign \regs__frame_done$426  = ch1__frame_done;
+  assign \regs__frame_error$428  = ch1__frame_error;
+  assign ch1__lc = \$13 [182:177];
+  assign \regs__lc$430  = \$13 [182:177];
+  assign ch1__lc_repeat = \$13 [183];
+  assign \regs__lc_repeat$432  = \$13 [183];
+  assign ch1__lc_skip = \$13 [184];
+  assign \regs__lc_skip$434  = \$13 [184];
+  assign ch1__lc_zero = \$13 [185];
+  assign \regs__lc_zero$436  = \$13 [185];
+  assign ch1__line_delay = \$13 [48:36];
+  assign \regs__line_delay$438  = \$13 [48:36];
+  assign ch1__noise_events = \$13 [53:50];
+  assign \regs__noise_events$440  = \$13 [53:50];
+  assign ch1__periodic = \regs__periodic$441 ;
+  assign ch1__settled_delay = \$13 [67:55];
+  assign \regs__settled_delay$444  = \$13 [67:55];
+  assign ch1__spw_mismatch = \$13 [186];
+  assign \regs__spw_mismatch$446  = \$13 [186];
+  assign ch1__start = \regs__start$447 ;
+  assign ch1__status = \$13 [3:0];
+  assign \regs__status$450  = \$13 [3:0];
+  assign ch1__timestamp = \$13 [35:4];
+  assign \regs__timestamp$452  = \$13 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$453 ;
+  assign ch1__word0_crc_ok = \$13 [133];
+  assign \regs__word0_crc_ok$456  = \$13 [133];
+  assign ch1__word0_ne = \$13 [131];
+  assign \regs__word0_ne$458  = \$13 [131];
+  assign ch1__word0_nw = \$13 [132];
+  assign \regs__word0_nw$460  = \$13 [132];
+  assign ch1__word0_position = \$13 [130:76];
+  assign \regs__word0_position$462  = \$13 [130:76];
+  assign ch1__word1_crc_ok = \$13 [176];
+  assign \regs__word1_crc_ok$464  = \$13 [176];
+  assign ch1__word1_ne = \$13 [174];
+  assign \regs__word1_ne$466  = \$13 [174];
+  assign ch1__word1_nw = \$13 [175];
+  assign \regs__word1_nw$468  = \$13 [175];
+  assign ch1__word1_position = \$13 [173:134];
+  assign \regs__word1_position$470  = \$13 [173:134];
+  assign \trigger$471  = \trigger$58 ;
+  assign \ma$472  = ch1_ma;
+  assign \slo$473  = ch1_slo;
   assign glob__channels = 4'h2;
-  assign glob__irq_pending = { 6'h00, \$7 , \$6  };
-  assign \irq$473  = { \$7 , \$6  };
+  assign glob__irq_pending = { 6'h00, \$9 , \$8  };
+  assign \irq$476  = { \$9 , \$8  };
   assign s_axil_bresp = 2'h0;
   assign s_axil_rresp = 2'h0;
 endmodule
@@ -1203,7 +1224,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
 , ch0_cfg_crc0_w0_crc_poly, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$113 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort
 , ch1_ctrl_clear_counters, ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed
 , ch1_cfg_words_w1_enable, ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay
-, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6669$0 , \port$6682$0 , ch0__ca_done, \port$6759$0 , ch1__frame_done, ch1__done_count, \port$7200$0 , \port$7213$0 , ch1__ca_done, \port$7290$0 , bus__r_addr);
+, ch1_ca_request_slave_id, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6670$0 , \port$6681$0 , ch0__ca_done, \port$6758$0 , ch1__frame_done, ch1__done_count, \port$7199$0 , \port$7210$0 , ch1__ca_done, \port$7287$0 , bus__r_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2752,18 +2773,18 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6669$0 ;
-  wire [186:0] \port$6669$0 ;
-  input [79:0] \port$6682$0 ;
-  wire [79:0] \port$6682$0 ;
-  input [9:0] \port$6759$0 ;
-  wire [9:0] \port$6759$0 ;
-  input [186:0] \port$7200$0 ;
-  wire [186:0] \port$7200$0 ;
-  input [79:0] \port$7213$0 ;
-  wire [79:0] \port$7213$0 ;
-  input [9:0] \port$7290$0 ;
-  wire [9:0] \port$7290$0 ;
+  input [186:0] \port$6670$0 ;
+  wire [186:0] \port$6670$0 ;
+  input [79:0] \port$6681$0 ;
+  wire [79:0] \port$6681$0 ;
+  input [9:0] \port$6758$0 ;
+  wire [9:0] \port$6758$0 ;
+  input [186:0] \port$7199$0 ;
+  wire [186:0] \port$7199$0 ;
+  input [79:0] \port$7210$0 ;
+  wire [79:0] \port$7210$0 ;
+  input [9:0] \port$7287$0 ;
+  wire [9:0] \port$7287$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2867,7 +2888,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$343  = \$341  | \$342 ;
   assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7200$0 [182:177], 4'h0, \port$7200$0 [186:183], 1'h0, \port$7200$0 [176:174], 1'h0, \port$7200$0 [133:131], 3'h0, \port$7200$0 [49], \port$7200$0 [3:0] } : 32'd0;
+  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7199$0 [182:177], 4'h0, \port$7199$0 [186:183], 1'h0, \port$7199$0 [176:174], 1'h0, \port$7199$0 [133:131], 3'h0, \port$7199$0 [49], \port$7199$0 [3:0] } : 32'd0;
   assign \$347  = \$345  | \$346 ;
   assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$349  = \$347  | \$348 ;
@@ -2895,13 +2916,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$371  = \$369  | \$370 ;
   assign \$372  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7290$0 [9:3], 1'h0, \port$7290$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7287$0 [9:3], 1'h0, \port$7287$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_143 ? \port$7213$0 [31:0] : 32'd0;
+  assign \$378  = ch1_read_select_143 ? \port$7210$0 [31:0] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_144 ? \port$7213$0 [63:32] : 32'd0;
+  assign \$380  = ch1_read_select_144 ? \port$7210$0 [63:32] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7213$0 [79:64] } : 32'd0;
+  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7210$0 [79:64] } : 32'd0;
   assign \$383  = \$381  | \$382 ;
   assign \$384  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$385  = \$383  | \$384 ;
@@ -3771,7 +3792,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$158  = \$156  | \$157 ;
   assign \$159  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6669$0 [182:177], 4'h0, \port$6669$0 [186:183], 1'h0, \port$6669$0 [176:174], 1'h0, \port$6669$0 [133:131], 3'h0, \port$6669$0 [49], \port$6669$0 [3:0] } : 32'd0;
+  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6670$0 [182:177], 4'h0, \port$6670$0 [186:183], 1'h0, \port$6670$0 [176:174], 1'h0, \port$6670$0 [133:131], 3'h0, \port$6670$0 [49], \port$6670$0 [3:0] } : 32'd0;
   assign \$162  = \$160  | \$161 ;
   assign \$163  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$164  = \$162  | \$163 ;
@@ -3799,13 +3820,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign \$186  = \$184  | \$185 ;
   assign \$187  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6759$0 [9:3], 1'h0, \port$6759$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6758$0 [9:3], 1'h0, \port$6758$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_c3 ? \port$6682$0 [31:0] : 32'd0;
+  assign \$193  = ch0_read_select_c3 ? \port$6681$0 [31:0] : 32'd0;
   assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_c4 ? \port$6682$0 [63:32] : 32'd0;
+  assign \$195  = ch0_read_select_c4 ? \port$6681$0 [63:32] : 32'd0;
   assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6682$0 [79:64] } : 32'd0;
+  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6681$0 [79:64] } : 32'd0;
   assign \$198  = \$196  | \$197 ;
   assign \$199  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$200  = \$198  | \$199 ;
@@ -5009,7 +5030,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$595  = ch0_result_status_status_snapshot;
     if (\$130 ) begin
-      \$595  = \port$6669$0 [3:0];
+      \$595  = \port$6670$0 [3:0];
     end
     if (rst) begin
       \$595  = 4'h0;
@@ -5019,7 +5040,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$596  = ch0_result_status_cds_snapshot;
     if (\$130 ) begin
-      \$596  = \port$6669$0 [49];
+      \$596  = \port$6670$0 [49];
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -5029,7 +5050,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$597  = ch0_result_status_w0_ne_snapshot;
     if (\$130 ) begin
-      \$597  = \port$6669$0 [131];
+      \$597  = \port$6670$0 [131];
     end
     if (rst) begin
       \$597  = 1'h0;
@@ -5039,7 +5060,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$598  = ch0_result_status_w0_nw_snapshot;
     if (\$130 ) begin
-      \$598  = \port$6669$0 [132];
+      \$598  = \port$6670$0 [132];
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -5049,7 +5070,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$599  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$130 ) begin
-      \$599  = \port$6669$0 [133];
+      \$599  = \port$6670$0 [133];
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -5059,7 +5080,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$600  = ch0_result_status_w1_ne_snapshot;
     if (\$130 ) begin
-      \$600  = \port$6669$0 [174];
+      \$600  = \port$6670$0 [174];
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -5069,7 +5090,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$601  = ch0_result_status_w1_nw_snapshot;
     if (\$130 ) begin
-      \$601  = \port$6669$0 [175];
+      \$601  = \port$6670$0 [175];
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -5079,7 +5100,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$602  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$130 ) begin
-      \$602  = \port$6669$0 [176];
+      \$602  = \port$6670$0 [176];
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -5089,7 +5110,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$603  = ch0_result_status_lc_repeat_snapshot;
     if (\$130 ) begin
-      \$603  = \port$6669$0 [183];
+      \$603  = \port$6670$0 [183];
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -5099,7 +5120,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$604  = ch0_result_status_lc_skip_snapshot;
     if (\$130 ) begin
-      \$604  = \port$6669$0 [184];
+      \$604  = \port$6670$0 [184];
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -5109,7 +5130,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$605  = ch0_result_status_lc_zero_snapshot;
     if (\$130 ) begin
-      \$605  = \port$6669$0 [185];
+      \$605  = \port$6670$0 [185];
     end
     if (rst) begin
       \$605  = 1'h0;
@@ -5119,7 +5140,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$606  = ch0_result_status_spw_mismatch_snapshot;
     if (\$130 ) begin
-      \$606  = \port$6669$0 [186];
+      \$606  = \port$6670$0 [186];
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -5129,7 +5150,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$607  = ch0_result_status_lc_snapshot;
     if (\$130 ) begin
-      \$607  = \port$6669$0 [182:177];
+      \$607  = \port$6670$0 [182:177];
     end
     if (rst) begin
       \$607  = 6'h00;
@@ -5149,7 +5170,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$609  = ch0_result_seq_line_delay_snapshot;
     if (\$130 ) begin
-      \$609  = \port$6669$0 [48:36];
+      \$609  = \port$6670$0 [48:36];
     end
     if (rst) begin
       \$609  = 13'h0000;
@@ -5159,7 +5180,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$610  = ch0_result_w0_lo_data_snapshot;
     if (\$130 ) begin
-      \$610  = \port$6669$0 [107:76];
+      \$610  = \port$6670$0 [107:76];
     end
     if (rst) begin
       \$610  = 32'd0;
@@ -5169,7 +5190,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$611  = ch0_result_w0_hi_data_snapshot;
     if (\$130 ) begin
-      \$611  = \port$6669$0 [130:108];
+      \$611  = \port$6670$0 [130:108];
     end
     if (rst) begin
       \$611  = 23'h000000;
@@ -5179,7 +5200,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$612  = ch0_result_w1_lo_data_snapshot;
     if (\$130 ) begin
-      \$612  = \port$6669$0 [165:134];
+      \$612  = \port$6670$0 [165:134];
     end
     if (rst) begin
       \$612  = 32'd0;
@@ -5189,7 +5210,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$613  = ch0_result_w1_hi_data_snapshot;
     if (\$130 ) begin
-      \$613  = \port$6669$0 [173:166];
+      \$613  = \port$6670$0 [173:166];
     end
     if (rst) begin
       \$613  = 8'h00;
@@ -5199,7 +5220,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$614  = ch0_result_timestamp_time_snapshot;
     if (\$130 ) begin
-      \$614  = \port$6669$0 [35:4];
+      \$614  = \port$6670$0 [35:4];
     end
     if (rst) begin
       \$614  = 32'd0;
@@ -5209,7 +5230,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$615  = ch0_result_line_noise_events_snapshot;
     if (\$130 ) begin
-      \$615  = \port$6669$0 [53:50];
+      \$615  = \port$6670$0 [53:50];
     end
     if (rst) begin
       \$615  = 4'h0;
@@ -5219,7 +5240,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$616  = ch0_result_line_delay_settled_snapshot;
     if (\$130 ) begin
-      \$616  = \port$6669$0 [54];
+      \$616  = \port$6670$0 [54];
     end
     if (rst) begin
       \$616  = 1'h0;
@@ -5229,7 +5250,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$617  = ch0_result_line_delay_spread_snapshot;
     if (\$130 ) begin
-      \$617  = \port$6669$0 [75:68];
+      \$617  = \port$6670$0 [75:68];
     end
     if (rst) begin
       \$617  = 8'h00;
@@ -5239,7 +5260,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$618  = ch0_result_line_settled_delay_snapshot;
     if (\$130 ) begin
-      \$618  = \port$6669$0 [67:55];
+      \$618  = \port$6670$0 [67:55];
     end
     if (rst) begin
       \$618  = 13'h0000;
@@ -6303,7 +6324,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$725  = ch1_result_status_status_snapshot;
     if (\$315 ) begin
-      \$725  = \port$7200$0 [3:0];
+      \$725  = \port$7199$0 [3:0];
     end
     if (rst) begin
       \$725  = 4'h0;
@@ -6313,7 +6334,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$726  = ch1_result_status_cds_snapshot;
     if (\$315 ) begin
-      \$726  = \port$7200$0 [49];
+      \$726  = \port$7199$0 [49];
     end
     if (rst) begin
       \$726  = 1'h0;
@@ -6323,7 +6344,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$727  = ch1_result_status_w0_ne_snapshot;
     if (\$315 ) begin
-      \$727  = \port$7200$0 [131];
+      \$727  = \port$7199$0 [131];
     end
     if (rst) begin
       \$727  = 1'h0;
@@ -6333,7 +6354,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$728  = ch1_result_status_w0_nw_snapshot;
     if (\$315 ) begin
-      \$728  = \port$7200$0 [132];
+      \$728  = \port$7199$0 [132];
     end
     if (rst) begin
       \$728  = 1'h0;
@@ -6343,7 +6364,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$729  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$315 ) begin
-      \$729  = \port$7200$0 [133];
+      \$729  = \port$7199$0 [133];
     end
     if (rst) begin
       \$729  = 1'h0;
@@ -6353,7 +6374,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$730  = ch1_result_status_w1_ne_snapshot;
     if (\$315 ) begin
-      \$730  = \port$7200$0 [174];
+      \$730  = \port$7199$0 [174];
     end
     if (rst) begin
       \$730  = 1'h0;
@@ -6363,7 +6384,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$731  = ch1_result_status_w1_nw_snapshot;
     if (\$315 ) begin
-      \$731  = \port$7200$0 [175];
+      \$731  = \port$7199$0 [175];
     end
     if (rst) begin
       \$731  = 1'h0;
@@ -6373,7 +6394,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$732  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$315 ) begin
-      \$732  = \port$7200$0 [176];
+      \$732  = \port$7199$0 [176];
     end
     if (rst) begin
       \$732  = 1'h0;
@@ -6383,7 +6404,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$733  = ch1_result_status_lc_repeat_snapshot;
     if (\$315 ) begin
-      \$733  = \port$7200$0 [183];
+      \$733  = \port$7199$0 [183];
     end
     if (rst) begin
       \$733  = 1'h0;
@@ -6393,7 +6414,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$734  = ch1_result_status_lc_skip_snapshot;
     if (\$315 ) begin
-      \$734  = \port$7200$0 [184];
+      \$734  = \port$7199$0 [184];
     end
     if (rst) begin
       \$734  = 1'h0;
@@ -6403,7 +6424,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$735  = ch1_result_status_lc_zero_snapshot;
     if (\$315 ) begin
-      \$735  = \port$7200$0 [185];
+      \$735  = \port$7199$0 [185];
     end
     if (rst) begin
       \$735  = 1'h0;
@@ -6413,7 +6434,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$736  = ch1_result_status_spw_mismatch_snapshot;
     if (\$315 ) begin
-      \$736  = \port$7200$0 [186];
+      \$736  = \port$7199$0 [186];
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6423,7 +6444,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$737  = ch1_result_status_lc_snapshot;
     if (\$315 ) begin
-      \$737  = \port$7200$0 [182:177];
+      \$737  = \port$7199$0 [182:177];
     end
     if (rst) begin
       \$737  = 6'h00;
@@ -6443,7 +6464,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$739  = ch1_result_seq_line_delay_snapshot;
     if (\$315 ) begin
-      \$739  = \port$7200$0 [48:36];
+      \$739  = \port$7199$0 [48:36];
     end
     if (rst) begin
       \$739  = 13'h0000;
@@ -6453,7 +6474,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$740  = ch1_result_w0_lo_data_snapshot;
     if (\$315 ) begin
-      \$740  = \port$7200$0 [107:76];
+      \$740  = \port$7199$0 [107:76];
     end
     if (rst) begin
       \$740  = 32'd0;
@@ -6463,7 +6484,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$741  = ch1_result_w0_hi_data_snapshot;
     if (\$315 ) begin
-      \$741  = \port$7200$0 [130:108];
+      \$741  = \port$7199$0 [130:108];
     end
     if (rst) begin
       \$741  = 23'h000000;
@@ -6473,7 +6494,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$742  = ch1_result_w1_lo_data_snapshot;
     if (\$315 ) begin
-      \$742  = \port$7200$0 [165:134];
+      \$742  = \port$7199$0 [165:134];
     end
     if (rst) begin
       \$742  = 32'd0;
@@ -6483,7 +6504,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$743  = ch1_result_w1_hi_data_snapshot;
     if (\$315 ) begin
-      \$743  = \port$7200$0 [173:166];
+      \$743  = \port$7199$0 [173:166];
     end
     if (rst) begin
       \$743  = 8'h00;
@@ -6493,7 +6514,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$744  = ch1_result_timestamp_time_snapshot;
     if (\$315 ) begin
-      \$744  = \port$7200$0 [35:4];
+      \$744  = \port$7199$0 [35:4];
     end
     if (rst) begin
       \$744  = 32'd0;
@@ -6503,7 +6524,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$745  = ch1_result_line_noise_events_snapshot;
     if (\$315 ) begin
-      \$745  = \port$7200$0 [53:50];
+      \$745  = \port$7199$0 [53:50];
     end
     if (rst) begin
       \$745  = 4'h0;
@@ -6513,7 +6534,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$746  = ch1_result_line_delay_settled_snapshot;
     if (\$315 ) begin
-      \$746  = \port$7200$0 [54];
+      \$746  = \port$7199$0 [54];
     end
     if (rst) begin
       \$746  = 1'h0;
@@ -6523,7 +6544,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$747  = ch1_result_line_delay_spread_snapshot;
     if (\$315 ) begin
-      \$747  = \port$7200$0 [75:68];
+      \$747  = \port$7199$0 [75:68];
     end
     if (rst) begin
       \$747  = 8'h00;
@@ -6533,7 +6554,7 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$748  = ch1_result_line_settled_delay_snapshot;
     if (\$315 ) begin
-      \$748  = \port$7200$0 [67:55];
+      \$748  = \port$7199$0 [67:55];
     end
     if (rst) begin
       \$748  = 13'h0000;
@@ -6571,27 +6592,27 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   end
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6669$0 [3:0];
-  assign ch0__cds = \port$6669$0 [49];
-  assign ch0__word0_ne = \port$6669$0 [131];
-  assign ch0__word0_nw = \port$6669$0 [132];
-  assign ch0__word0_crc_ok = \port$6669$0 [133];
-  assign ch0__word1_ne = \port$6669$0 [174];
-  assign ch0__word1_nw = \port$6669$0 [175];
-  assign ch0__word1_crc_ok = \port$6669$0 [176];
-  assign ch0__lc_repeat = \port$6669$0 [183];
-  assign ch0__lc_skip = \port$6669$0 [184];
-  assign ch0__lc_zero = \port$6669$0 [185];
-  assign ch0__spw_mismatch = \port$6669$0 [186];
-  assign ch0__lc = \port$6669$0 [182:177];
-  assign ch0__line_delay = \port$6669$0 [48:36];
-  assign ch0__word0_position = \port$6669$0 [130:76];
-  assign ch0__word1_position = \port$6669$0 [173:134];
-  assign ch0__timestamp = \port$6669$0 [35:4];
-  assign ch0__noise_events = \port$6669$0 [53:50];
-  assign ch0__delay_settled = \port$6669$0 [54];
-  assign ch0__delay_spread = \port$6669$0 [75:68];
-  assign ch0__settled_delay = \port$6669$0 [67:55];
+  assign ch0__status = \port$6670$0 [3:0];
+  assign ch0__cds = \port$6670$0 [49];
+  assign ch0__word0_ne = \port$6670$0 [131];
+  assign ch0__word0_nw = \port$6670$0 [132];
+  assign ch0__word0_crc_ok = \port$6670$0 [133];
+  assign ch0__word1_ne = \port$6670$0 [174];
+  assign ch0__word1_nw = \port$6670$0 [175];
+  assign ch0__word1_crc_ok = \port$6670$0 [176];
+  assign ch0__lc_repeat = \port$6670$0 [183];
+  assign ch0__lc_skip = \port$6670$0 [184];
+  assign ch0__lc_zero = \port$6670$0 [185];
+  assign ch0__spw_mismatch = \port$6670$0 [186];
+  assign ch0__lc = \port$6670$0 [182:177];
+  assign ch0__line_delay = \port$6670$0 [48:36];
+  assign ch0__word0_position = \port$6670$0 [130:76];
+  assign ch0__word1_position = \port$6670$0 [173:134];
+  assign ch0__timestamp = \port$6670$0 [35:4];
+  assign ch0__noise_events = \port$6670$0 [53:50];
+  assign ch0__delay_settled = \port$6670$0 [54];
+  assign ch0__delay_spread = \port$6670$0 [75:68];
+  assign ch0__settled_delay = \port$6670$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -6599,34 +6620,34 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
   assign ch0__cap_ssi = 1'h1;
-  assign ch0__ca_status = \port$6759$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6759$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6682$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$6682$0 [31:16];
-  assign ch0__count_ca_refused = \port$6682$0 [47:32];
-  assign ch0__count_ca_aborted = \port$6682$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$6682$0 [79:64];
-  assign ch1__status = \port$7200$0 [3:0];
-  assign ch1__cds = \port$7200$0 [49];
-  assign ch1__word0_ne = \port$7200$0 [131];
-  assign ch1__word0_nw = \port$7200$0 [132];
-  assign ch1__word0_crc_ok = \port$7200$0 [133];
-  assign ch1__word1_ne = \port$7200$0 [174];
-  assign ch1__word1_nw = \port$7200$0 [175];
-  assign ch1__word1_crc_ok = \port$7200$0 [176];
-  assign ch1__lc_repeat = \port$7200$0 [183];
-  assign ch1__lc_skip = \port$7200$0 [184];
-  assign ch1__lc_zero = \port$7200$0 [185];
-  assign ch1__spw_mismatch = \port$7200$0 [186];
-  assign ch1__lc = \port$7200$0 [182:177];
-  assign ch1__line_delay = \port$7200$0 [48:36];
-  assign ch1__word0_position = \port$7200$0 [130:76];
-  assign ch1__word1_position = \port$7200$0 [173:134];
-  assign ch1__timestamp = \port$7200$0 [35:4];
-  assign ch1__noise_events = \port$7200$0 [53:50];
-  assign ch1__delay_settled = \port$7200$0 [54];
-  assign ch1__delay_spread = \port$7200$0 [75:68];
-  assign ch1__settled_delay = \port$7200$0 [67:55];
+  assign ch0__ca_status = \port$6758$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6758$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6681$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$6681$0 [31:16];
+  assign ch0__count_ca_refused = \port$6681$0 [47:32];
+  assign ch0__count_ca_aborted = \port$6681$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$6681$0 [79:64];
+  assign ch1__status = \port$7199$0 [3:0];
+  assign ch1__cds = \port$7199$0 [49];
+  assign ch1__word0_ne = \port$7199$0 [131];
+  assign ch1__word0_nw = \port$7199$0 [132];
+  assign ch1__word0_crc_ok = \port$7199$0 [133];
+  assign ch1__word1_ne = \port$7199$0 [174];
+  assign ch1__word1_nw = \port$7199$0 [175];
+  assign ch1__word1_crc_ok = \port$7199$0 [176];
+  assign ch1__lc_repeat = \port$7199$0 [183];
+  assign ch1__lc_skip = \port$7199$0 [184];
+  assign ch1__lc_zero = \port$7199$0 [185];
+  assign ch1__spw_mismatch = \port$7199$0 [186];
+  assign ch1__lc = \port$7199$0 [182:177];
+  assign ch1__line_delay = \port$7199$0 [48:36];
+  assign ch1__word0_position = \port$7199$0 [130:76];
+  assign ch1__word1_position = \port$7199$0 [173:134];
+  assign ch1__timestamp = \port$7199$0 [35:4];
+  assign ch1__noise_events = \port$7199$0 [53:50];
+  assign ch1__delay_settled = \port$7199$0 [54];
+  assign ch1__delay_spread = \port$7199$0 [75:68];
+  assign ch1__settled_delay = \port$7199$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -6634,13 +6655,13 @@ module \biss_master_axil.bank (clk, rst, bus__w_en, bus__r_en, bus__r_load, ch0_
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign ch1__ca_status = \port$7290$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7290$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7213$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7213$0 [31:16];
-  assign ch1__count_ca_refused = \port$7213$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7213$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7213$0 [79:64];
+  assign ch1__ca_status = \port$7287$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7287$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7210$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7210$0 [31:16];
+  assign ch1__count_ca_refused = \port$7210$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7210$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7210$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__r_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -7015,10 +7036,10 @@ module \biss_master_axil.bus (axil__awvalid, axil__wdata, axil__wstrb, axil__wva
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
-, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
-, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6669$0 , \port$6682$0 , regs__ca_done, \port$6759$0 , ca_rbuf_addr);
+module \biss_master_axil.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
+, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
+, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6670$0 , \port$6681$0 , regs__ca_done, \port$6758$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -7195,17 +7216,17 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$198 ;
+  wire \ma$200 ;
   wire [3:0] noise_events;
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6669$0 ;
-  wire [186:0] \port$6669$0 ;
-  output [79:0] \port$6682$0 ;
-  wire [79:0] \port$6682$0 ;
-  output [9:0] \port$6759$0 ;
-  wire [9:0] \port$6759$0 ;
+  output [186:0] \port$6670$0 ;
+  wire [186:0] \port$6670$0 ;
+  output [79:0] \port$6681$0 ;
+  wire [79:0] \port$6681$0 ;
+  output [9:0] \port$6758$0 ;
+  wire [9:0] \port$6758$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -7334,7 +7355,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$200 ;
+  wire \slo$202 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -7356,10 +7377,13 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
+  input [31:0] time_now;
+  wire [31:0] time_now;
+  wire [31:0] \time_now$195 ;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$195 ;
-  wire \trigger$195 ;
+  input \trigger$197 ;
+  wire \trigger$197 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -7377,7 +7401,7 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
-  assign trigger = \trigger$195  & regs__trigger_enable;
+  assign trigger = \trigger$197  & regs__trigger_enable;
   assign \$6  = ~ report;
   assign \$7  = \$signal  & \$6 ;
   assign \$8  = waited + 1'h1;
@@ -7399,8 +7423,8 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
     regs__done_count <= \$17 ;
   \biss_master_axil.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$264 (ca_abort),
-    .\busy$313 (regs__busy),
+    .\abort$266 (ca_abort),
+    .\busy$315 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -7449,27 +7473,28 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$289 (clear_counters),
+    .\clear$291 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$19 ),
-    .\done$316 (done),
+    .\done$318 (done),
     .frames(regs__ca_busy),
     .ma(ma),
+    .now(time_now),
     .\periodic$45 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$20 ),
-    .\result$321 (\$18 ),
+    .\result$323 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$262 (ca_start),
+    .\start$264 (ca_start),
     .trigger(trigger),
-    .\valid$318 (valid)
+    .\valid$320 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
@@ -7658,18 +7683,19 @@ module \biss_master_axil.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$198  = ma;
-  assign \slo$200  = slo;
-  assign \port$6669$0  = \$18 ;
-  assign \port$6682$0  = \$19 ;
-  assign \port$6759$0  = \$20 ;
+  assign \time_now$195  = time_now;
+  assign \ma$200  = ma;
+  assign \slo$202  = slo;
+  assign \port$6670$0  = \$18 ;
+  assign \port$6681$0  = \$19 ;
+  assign \port$6758$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$313 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$289 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$262 , \abort$264 
-, abort, ma, \done$316 , \valid$318 , \result$321 , counts, ca_done, result, rbuf_addr);
+module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$315 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$291 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit
+, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
+, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$264 
+, \abort$266 , abort, ma, \done$318 , \valid$320 , \result$323 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -7703,8 +7729,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$264 ;
-  wire \abort$264 ;
+  input \abort$266 ;
+  wire \abort$266 ;
   wire \abort$57 ;
   wire abort_cycle;
   wire ack_expired;
@@ -7713,16 +7739,16 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] \ack_limit$113 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$345 ;
+  wire \bit$347 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$90 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$273 ;
-  wire \busy$310 ;
-  output \busy$313 ;
-  wire \busy$313 ;
+  wire \busy$275 ;
+  wire \busy$312 ;
+  output \busy$315 ;
+  wire \busy$315 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -7757,10 +7783,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$277 ;
+  wire \cdm$279 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$324 ;
+  wire \cds$326 ;
   wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -7908,12 +7934,12 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   reg clean = 1'h0;
   (* init = 1'h0 *)
   wire \clean$177 ;
-  wire \clean$346 ;
+  wire \clean$348 ;
   wire clear;
   wire \clear$137 ;
-  input \clear$289 ;
-  wire \clear$289 ;
-  wire \clear$302 ;
+  input \clear$291 ;
+  wire \clear$291 ;
+  wire \clear$304 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -8051,9 +8077,9 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  output \done$316 ;
-  wire \done$316 ;
-  wire \done$317 ;
+  output \done$318 ;
+  wire \done$318 ;
+  wire \done$319 ;
   wire doubtful;
   wire early;
   wire \early$73 ;
@@ -8063,29 +8089,29 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$288 ;
-  wire \events$288.ca_aborted ;
-  wire \events$288.ca_crc4_error ;
-  wire \events$288.ca_data_fault ;
-  wire \events$288.ca_no_answer ;
-  wire \events$288.ca_refused ;
-  wire [15:0] \events$297 ;
-  wire \events$297.aborted ;
-  wire \events$297.crc_word0 ;
-  wire \events$297.crc_word1 ;
-  wire \events$297.delay_jump ;
-  wire \events$297.delay_range ;
-  wire \events$297.lc_repeat ;
-  wire \events$297.lc_skip ;
-  wire \events$297.lc_zero ;
-  wire \events$297.no_ack ;
-  wire \events$297.no_start ;
-  wire \events$297.no_stop ;
-  wire \events$297.noise_event ;
-  wire \events$297.noisy_line ;
-  wire \events$297.overrun ;
-  wire \events$297.slo_stuck_low ;
-  wire \events$297.spw_mismatch ;
+  wire [4:0] \events$290 ;
+  wire \events$290.ca_aborted ;
+  wire \events$290.ca_crc4_error ;
+  wire \events$290.ca_data_fault ;
+  wire \events$290.ca_no_answer ;
+  wire \events$290.ca_refused ;
+  wire [15:0] \events$299 ;
+  wire \events$299.aborted ;
+  wire \events$299.crc_word0 ;
+  wire \events$299.crc_word1 ;
+  wire \events$299.delay_jump ;
+  wire \events$299.delay_range ;
+  wire \events$299.lc_repeat ;
+  wire \events$299.lc_skip ;
+  wire \events$299.lc_zero ;
+  wire \events$299.no_ack ;
+  wire \events$299.no_start ;
+  wire \events$299.no_stop ;
+  wire \events$299.noise_event ;
+  wire \events$299.noisy_line ;
+  wire \events$299.overrun ;
+  wire \events$299.slo_stuck_low ;
+  wire \events$299.spw_mismatch ;
   wire fault;
   wire \fault$210 ;
   (* enum_base_type = "Status" *)
@@ -8183,7 +8209,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
-  wire \frame_end$282 ;
+  wire \frame_end$284 ;
   wire frame_ok;
   output frames;
   wire frames;
@@ -8199,19 +8225,19 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$149 ;
-  wire [5:0] \lc$337 ;
+  wire [5:0] \lc$339 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$151 ;
   wire lc_repeat;
-  wire \lc_repeat$338 ;
+  wire \lc_repeat$340 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$339 ;
+  wire \lc_skip$341 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$340 ;
+  wire \lc_zero$342 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
@@ -8277,7 +8303,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \locked$71 ;
   output ma;
   wire ma;
-  wire \ma$312 ;
+  wire \ma$314 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$102 ;
@@ -8296,10 +8322,12 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [3:0] noise_events;
   wire noisy;
   wire \noisy$179 ;
+  input [31:0] now;
+  wire [31:0] now;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$315 ;
+  wire \overrun$317 ;
   wire passed;
   wire pending;
   wire [23:0] period;
@@ -8334,30 +8362,30 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \report_frame$209 ;
   wire \report_frame$229 ;
   wire request;
-  wire [17:0] \request$250 ;
-  wire [6:0] \request$250.address ;
-  wire [6:0] \request$250.count ;
-  wire [2:0] \request$250.slave_id ;
-  wire \request$250.write ;
+  wire [17:0] \request$252 ;
+  wire [6:0] \request$252.address ;
+  wire [6:0] \request$252.count ;
+  wire [2:0] \request$252.slave_id ;
+  wire \request$252.write ;
   wire \request$56 ;
   wire restart;
   wire \restart$164 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$321 ;
-  wire [186:0] \result$321 ;
-  wire \result$321.cds ;
-  wire \result$321.delay_settled ;
-  wire [7:0] \result$321.delay_spread ;
-  wire [5:0] \result$321.lc ;
-  wire \result$321.lc_repeat ;
-  wire \result$321.lc_skip ;
-  wire \result$321.lc_zero ;
-  wire [12:0] \result$321.line_delay ;
-  wire [3:0] \result$321.noise_events ;
-  wire [12:0] \result$321.settled_delay ;
-  wire \result$321.spw_mismatch ;
+  output [186:0] \result$323 ;
+  wire [186:0] \result$323 ;
+  wire \result$323.cds ;
+  wire \result$323.delay_settled ;
+  wire [7:0] \result$323.delay_spread ;
+  wire [5:0] \result$323.lc ;
+  wire \result$323.lc_repeat ;
+  wire \result$323.lc_skip ;
+  wire \result$323.lc_zero ;
+  wire [12:0] \result$323.line_delay ;
+  wire [3:0] \result$323.noise_events ;
+  wire [12:0] \result$323.settled_delay ;
+  wire \result$323.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -8375,18 +8403,18 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$321.status ;
-  wire [31:0] \result$321.timestamp ;
-  wire [57:0] \result$321.word0 ;
-  wire \result$321.word0.crc_ok ;
-  wire \result$321.word0.ne ;
-  wire \result$321.word0.nw ;
-  wire [54:0] \result$321.word0.position ;
-  wire [42:0] \result$321.word1 ;
-  wire \result$321.word1.crc_ok ;
-  wire \result$321.word1.ne ;
-  wire \result$321.word1.nw ;
-  wire [39:0] \result$321.word1.position ;
+  wire [3:0] \result$323.status ;
+  wire [31:0] \result$323.timestamp ;
+  wire [57:0] \result$323.word0 ;
+  wire \result$323.word0.crc_ok ;
+  wire \result$323.word0.ne ;
+  wire \result$323.word0.nw ;
+  wire [54:0] \result$323.word0.position ;
+  wire [42:0] \result$323.word1 ;
+  wire \result$323.word1.crc_ok ;
+  wire \result$323.word1.ne ;
+  wire \result$323.word1.nw ;
+  wire [39:0] \result$323.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -8405,13 +8433,13 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$344 ;
+  wire \sample$346 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$327 ;
+  wire [12:0] \settled_delay$329 ;
   wire skip;
   input slo;
   wire slo;
@@ -8428,7 +8456,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$341 ;
+  wire \spw_mismatch$343 ;
   wire ssi;
   wire \ssi$198 ;
   wire \ssi$202 ;
@@ -8439,8 +8467,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire ssi_error_low;
   input start;
   wire start;
-  input \start$262 ;
-  wire \start$262 ;
+  input \start$264 ;
+  wire \start$264 ;
   wire \start$43 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$134 ;
@@ -8501,11 +8529,12 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$320 ;
+  wire [3:0] \status$322 ;
   wire stop_bit;
   wire \stop_bit$86 ;
   wire stopped;
   wire \stopped$84 ;
+  wire [31:0] time_now;
   wire [23:0] timeout_limit;
   wire [23:0] \timeout_limit$115 ;
   wire [23:0] timeout_live;
@@ -8521,8 +8550,8 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire unconfirmed;
   wire valid;
   wire \valid$233 ;
-  output \valid$318 ;
-  wire \valid$318 ;
+  output \valid$320 ;
+  wire \valid$320 ;
   wire valid_out;
   wire waiting;
   wire watch;
@@ -8601,7 +8630,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \$3  = ~ started_before;
   assign \check$172  = started & \$3 ;
   assign \$4  = ~ cycle[259];
-  assign cdm = \cdm$277  & \$4 ;
+  assign cdm = \cdm$279  & \$4 ;
   assign \$5  = ~ cycle[259];
   assign frame_ok = passed & \$5 ;
   assign \$6  = result[2:0] == 1'h1;
@@ -8619,10 +8648,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \$18  = report_frame & \$17 ;
   assign \$19  = status == 4'he;
   assign \$20  = report_frame & \$19 ;
-  assign \busy$313  = ~ idle;
+  assign \busy$315  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$21  = ~ \clear$137 ;
-  assign \$22  = \sample$344  & \$21 ;
+  assign \$22  = \sample$346  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -8706,19 +8735,19 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch0.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$289 ),
+    .clear(\clear$291 ),
     .clk(clk),
-    .events(\events$297 ),
+    .events(\events$299 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.counters  counters (
-    .clear(\clear$289 ),
+    .clear(\clear$291 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$288 ),
+    .events(\events$290 ),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.decoder  decoder (
@@ -8736,7 +8765,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6326$272 (cycle[274:272]),
+    .\port$6327$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -8796,7 +8825,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6326$199 (cycle[199]),
+    .\port$6327$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -8807,9 +8836,9 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .words(\words$183 )
   );
   \biss_master_axil.ch0.core.register_access  register_access (
-    .abort(\abort$264 ),
+    .abort(\abort$266 ),
     .busy(frames),
-    .cdm(\cdm$277 ),
+    .cdm(\cdm$279 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -8819,27 +8848,27 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$250 ),
+    .request(\request$252 ),
     .result(result),
     .rst(rst),
-    .start(\start$262 ),
+    .start(\start$264 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch0.core.results  results (
     .clk(clk),
-    .done(\done$316 ),
+    .done(\done$318 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$321 ),
+    .result(\result$323 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$318 )
+    .valid_out(\valid$320 )
   );
   \biss_master_axil.ch0.core.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$345 ),
+    .\bit (\bit$347 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -8847,10 +8876,10 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6326$259 (cycle[271:259]),
+    .\port$6327$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
-    .sample(\sample$344 ),
+    .sample(\sample$346 ),
     .slo(slo)
   );
   \biss_master_axil.ch0.core.scheduler  scheduler (
@@ -8871,7 +8900,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6314$0 (\bit ),
+    .\port$6315$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -8890,6 +8919,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .first_rise(first_rise),
     .first_rise_time(first_rise_time),
+    .now(now),
     .rst(rst)
   );
   \biss_master_axil.ch0.core.timers  timers (
@@ -8921,7 +8951,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch0.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$346 ),
+    .clean(\clean$348 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
@@ -8938,7 +8968,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2500$0 (\$28 ),
+    .\port$2501$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -8956,7 +8986,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$24  = \bit$345 ;
+    \$24  = \bit$347 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -8977,7 +9007,7 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$27  = \clean$346 ;
+    \$27  = \clean$348 ;
     if (rst) begin
       \$27  = 1'h0;
     end
@@ -9093,58 +9123,59 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \valid$233  = valid;
   assign word_crc_ok = { \$28 , crc_ok[0] };
   assign \first_rise$248  = first_rise;
+  assign time_now = now;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$262 ;
-  assign ca_abort = \abort$264 ;
+  assign ca_start = \start$264 ;
+  assign ca_abort = \abort$266 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$273  = frames;
+  assign \busy$275  = frames;
   assign done = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
-  assign \frame_end$282  = report;
+  assign \frame_end$284  = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$289 ;
+  assign clear_counters = \clear$291 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$302  = \clear$289 ;
+  assign \clear$304  = \clear$291 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$310  = count_busy;
-  assign \ma$312  = ma;
-  assign \overrun$315  = overrun;
-  assign \done$317  = \done$316 ;
-  assign valid_out = \valid$318 ;
-  assign \status$320  = \result$321 [3:0];
-  assign timestamp = \result$321 [35:4];
-  assign line_delay = \result$321 [48:36];
-  assign \cds$324  = \result$321 [49];
-  assign noise_events = \result$321 [53:50];
-  assign delay_settled = \result$321 [54];
-  assign \settled_delay$327  = \result$321 [67:55];
-  assign delay_spread = \result$321 [75:68];
-  assign word0_position = \result$321 [130:76];
-  assign word0_ne = \result$321 [131];
-  assign word0_nw = \result$321 [132];
-  assign word0_crc_ok = \result$321 [133];
-  assign word1_position = \result$321 [173:134];
-  assign word1_ne = \result$321 [174];
-  assign word1_nw = \result$321 [175];
-  assign word1_crc_ok = \result$321 [176];
-  assign \lc$337  = \result$321 [182:177];
-  assign \lc_repeat$338  = \result$321 [183];
-  assign \lc_skip$339  = \result$321 [184];
-  assign \lc_zero$340  = \result$321 [185];
-  assign \spw_mismatch$341  = \result$321 [186];
+  assign \busy$312  = count_busy;
+  assign \ma$314  = ma;
+  assign \overrun$317  = overrun;
+  assign \done$319  = \done$318 ;
+  assign valid_out = \valid$320 ;
+  assign \status$322  = \result$323 [3:0];
+  assign timestamp = \result$323 [35:4];
+  assign line_delay = \result$323 [48:36];
+  assign \cds$326  = \result$323 [49];
+  assign noise_events = \result$323 [53:50];
+  assign delay_settled = \result$323 [54];
+  assign \settled_delay$329  = \result$323 [67:55];
+  assign delay_spread = \result$323 [75:68];
+  assign word0_position = \result$323 [130:76];
+  assign word0_ne = \result$323 [131];
+  assign word0_nw = \result$323 [132];
+  assign word0_crc_ok = \result$323 [133];
+  assign word1_position = \result$323 [173:134];
+  assign word1_ne = \result$323 [174];
+  assign word1_nw = \result$323 [175];
+  assign word1_crc_ok = \result$323 [176];
+  assign \lc$339  = \result$323 [182:177];
+  assign \lc_repeat$340  = \result$323 [183];
+  assign \lc_skip$341  = \result$323 [184];
+  assign \lc_zero$342  = \result$323 [185];
+  assign \spw_mismatch$343  = \result$323 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -9355,41 +9386,41 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$250.slave_id  = \request$250 [2:0];
-  assign \request$250.address  = \request$250 [9:3];
-  assign \request$250.count  = \request$250 [16:10];
-  assign \request$250.write  = \request$250 [17];
+  assign \request$252.slave_id  = \request$252 [2:0];
+  assign \request$252.address  = \request$252 [9:3];
+  assign \request$252.count  = \request$252 [16:10];
+  assign \request$252.write  = \request$252 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$288.ca_crc4_error  = \events$288 [0];
-  assign \events$288.ca_no_answer  = \events$288 [1];
-  assign \events$288.ca_refused  = \events$288 [2];
-  assign \events$288.ca_aborted  = \events$288 [3];
-  assign \events$288.ca_data_fault  = \events$288 [4];
+  assign \events$290.ca_crc4_error  = \events$290 [0];
+  assign \events$290.ca_no_answer  = \events$290 [1];
+  assign \events$290.ca_refused  = \events$290 [2];
+  assign \events$290.ca_aborted  = \events$290 [3];
+  assign \events$290.ca_data_fault  = \events$290 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$297.crc_word0  = \events$297 [0];
-  assign \events$297.crc_word1  = \events$297 [1];
-  assign \events$297.no_ack  = \events$297 [2];
-  assign \events$297.no_start  = \events$297 [3];
-  assign \events$297.delay_range  = \events$297 [4];
-  assign \events$297.slo_stuck_low  = \events$297 [5];
-  assign \events$297.lc_repeat  = \events$297 [6];
-  assign \events$297.lc_skip  = \events$297 [7];
-  assign \events$297.lc_zero  = \events$297 [8];
-  assign \events$297.spw_mismatch  = \events$297 [9];
-  assign \events$297.overrun  = \events$297 [10];
-  assign \events$297.aborted  = \events$297 [11];
-  assign \events$297.no_stop  = \events$297 [12];
-  assign \events$297.noisy_line  = \events$297 [13];
-  assign \events$297.delay_jump  = \events$297 [14];
-  assign \events$297.noise_event  = \events$297 [15];
+  assign \events$299.crc_word0  = \events$299 [0];
+  assign \events$299.crc_word1  = \events$299 [1];
+  assign \events$299.no_ack  = \events$299 [2];
+  assign \events$299.no_start  = \events$299 [3];
+  assign \events$299.delay_range  = \events$299 [4];
+  assign \events$299.slo_stuck_low  = \events$299 [5];
+  assign \events$299.lc_repeat  = \events$299 [6];
+  assign \events$299.lc_skip  = \events$299 [7];
+  assign \events$299.lc_zero  = \events$299 [8];
+  assign \events$299.spw_mismatch  = \events$299 [9];
+  assign \events$299.overrun  = \events$299 [10];
+  assign \events$299.aborted  = \events$299 [11];
+  assign \events$299.no_stop  = \events$299 [12];
+  assign \events$299.noisy_line  = \events$299 [13];
+  assign \events$299.delay_jump  = \events$299 [14];
+  assign \events$299.noise_event  = \events$299 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -9397,57 +9428,57 @@ module \biss_master_axil.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$321.status  = \result$321 [3:0];
-  assign \result$321.timestamp  = \result$321 [35:4];
-  assign \result$321.line_delay  = \result$321 [48:36];
-  assign \result$321.cds  = \result$321 [49];
-  assign \result$321.noise_events  = \result$321 [53:50];
-  assign \result$321.delay_settled  = \result$321 [54];
-  assign \result$321.settled_delay  = \result$321 [67:55];
-  assign \result$321.delay_spread  = \result$321 [75:68];
-  assign \result$321.word0  = \result$321 [133:76];
-  assign \result$321.word0.position  = \result$321 [130:76];
-  assign \result$321.word0.ne  = \result$321 [131];
-  assign \result$321.word0.nw  = \result$321 [132];
-  assign \result$321.word0.crc_ok  = \result$321 [133];
-  assign \result$321.word1  = \result$321 [176:134];
-  assign \result$321.word1.position  = \result$321 [173:134];
-  assign \result$321.word1.ne  = \result$321 [174];
-  assign \result$321.word1.nw  = \result$321 [175];
-  assign \result$321.word1.crc_ok  = \result$321 [176];
-  assign \result$321.lc  = \result$321 [182:177];
-  assign \result$321.lc_repeat  = \result$321 [183];
-  assign \result$321.lc_skip  = \result$321 [184];
-  assign \result$321.lc_zero  = \result$321 [185];
-  assign \result$321.spw_mismatch  = \result$321 [186];
-  assign \events$297 [15] = \event ;
-  assign \events$297 [14] = \$20 ;
-  assign \events$297 [13] = \$18 ;
-  assign \events$297 [12] = faults[6];
-  assign \events$297 [11] = faults[4];
-  assign \events$297 [10] = overrun;
-  assign \events$297 [9] = \$16 ;
-  assign \events$297 [8] = lc_zero;
-  assign \events$297 [7] = lc_skip;
-  assign \events$297 [6] = lc_repeat;
-  assign \events$297 [5] = faults[3];
-  assign \events$297 [4] = faults[2];
-  assign \events$297 [3] = faults[1];
-  assign \events$297 [2] = faults[0];
-  assign \events$297 [1] = crc_error[1];
-  assign \events$297 [0] = crc_error[0];
-  assign \events$288 [4] = \$15 ;
-  assign \events$288 [3] = \$13 ;
-  assign \events$288 [2] = \$11 ;
-  assign \events$288 [1] = \$9 ;
-  assign \events$288 [0] = \$7 ;
+  assign \result$323.status  = \result$323 [3:0];
+  assign \result$323.timestamp  = \result$323 [35:4];
+  assign \result$323.line_delay  = \result$323 [48:36];
+  assign \result$323.cds  = \result$323 [49];
+  assign \result$323.noise_events  = \result$323 [53:50];
+  assign \result$323.delay_settled  = \result$323 [54];
+  assign \result$323.settled_delay  = \result$323 [67:55];
+  assign \result$323.delay_spread  = \result$323 [75:68];
+  assign \result$323.word0  = \result$323 [133:76];
+  assign \result$323.word0.position  = \result$323 [130:76];
+  assign \result$323.word0.ne  = \result$323 [131];
+  assign \result$323.word0.nw  = \result$323 [132];
+  assign \result$323.word0.crc_ok  = \result$323 [133];
+  assign \result$323.word1  = \result$323 [176:134];
+  assign \result$323.word1.position  = \result$323 [173:134];
+  assign \result$323.word1.ne  = \result$323 [174];
+  assign \result$323.word1.nw  = \result$323 [175];
+  assign \result$323.word1.crc_ok  = \result$323 [176];
+  assign \result$323.lc  = \result$323 [182:177];
+  assign \result$323.lc_repeat  = \result$323 [183];
+  assign \result$323.lc_skip  = \result$323 [184];
+  assign \result$323.lc_zero  = \result$323 [185];
+  assign \result$323.spw_mismatch  = \result$323 [186];
+  assign \events$299 [15] = \event ;
+  assign \events$299 [14] = \$20 ;
+  assign \events$299 [13] = \$18 ;
+  assign \events$299 [12] = faults[6];
+  assign \events$299 [11] = faults[4];
+  assign \events$299 [10] = overrun;
+  assign \events$299 [9] = \$16 ;
+  assign \events$299 [8] = lc_zero;
+  assign \events$299 [7] = lc_skip;
+  assign \events$299 [6] = lc_repeat;
+  assign \events$299 [5] = faults[3];
+  assign \events$299 [4] = faults[2];
+  assign \events$299 [3] = faults[1];
+  assign \events$299 [2] = faults[0];
+  assign \events$299 [1] = crc_error[1];
+  assign \events$299 [0] = crc_error[0];
+  assign \events$290 [4] = \$15 ;
+  assign \events$290 [3] = \$13 ;
+  assign \events$290 [2] = \$11 ;
+  assign \events$290 [1] = \$9 ;
+  assign \events$290 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$250 [17] = ca_write;
-  assign \request$250 [16:10] = ca_count;
-  assign \request$250 [9:3] = ca_address;
-  assign \request$250 [2:0] = ca_slave_id;
+  assign \request$252 [17] = ca_write;
+  assign \request$252 [16:10] = ca_count;
+  assign \request$252 [9:3] = ca_address;
+  assign \request$252 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$28 ;
@@ -13021,7 +13052,7 @@ module \biss_master_axil.ch0.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6326$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6327$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -13714,8 +13745,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6326$272 ;
-  wire [2:0] \port$6326$272 ;
+  input [2:0] \port$6327$272 ;
+  wire [2:0] \port$6327$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -14001,7 +14032,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6326$272 [0];
+  assign error_bit = ssi & \port$6327$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -14055,7 +14086,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6326$272 [2];
+  assign \$48  = ssi & \port$6327$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -14342,15 +14373,15 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6326$272 [0];
+  assign \$335  = ssi & \port$6327$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6326$272 [0];
-  assign \$343  = ~ \port$6326$272 [1];
+  assign \$342  = ssi & \port$6327$272 [0];
+  assign \$343  = ~ \port$6327$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -14982,7 +15013,7 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$6326$272 [0];
+  assign ssi_error = \port$6327$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -14991,8 +15022,8 @@ module \biss_master_axil.ch0.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6326$272 [2];
-  assign ssi_error_low = \port$6326$272 [1];
+  assign ssi_double = \port$6327$272 [2];
+  assign ssi_error_low = \port$6327$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -16649,7 +16680,7 @@ module \biss_master_axil.ch0.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6326$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6327$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -16701,8 +16732,8 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6326$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6326$199 ;
-  wire \port$6326$199 ;
+  input \port$6327$199 ;
+  wire \port$6327$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -16756,7 +16787,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6326$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6326$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6327$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -16866,7 +16897,7 @@ module \biss_master_axil.ch0.core.ma_stop (rst, words, \port$6326$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6326$199 , 1'h1 };
+  assign enables = { \port$6327$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -19007,7 +19038,7 @@ module \biss_master_axil.ch0.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6326$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6327$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -19141,8 +19172,8 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6326$259 ;
-  wire [12:0] \port$6326$259 ;
+  input [12:0] \port$6327$259 ;
+  wire [12:0] \port$6327$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -19167,7 +19198,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6326$259 [12:1] + 1'h1;
+  assign \$11  = \port$6327$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -19292,7 +19323,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6326$259 [0]),
+    .clear_high(\port$6327$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -19435,7 +19466,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6326$259 [0]) begin
+            if (\port$6327$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -19520,7 +19551,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6326$259 [0]) begin
+            if (\port$6327$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -19559,7 +19590,7 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6326$259 [12:1] };
+            \$85  = { 1'h0, \port$6327$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -19944,11 +19975,11 @@ module \biss_master_axil.ch0.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6326$259 [12:1] };
-  assign fixed = \port$6326$259 [0];
+  assign fixed_delay = { 1'h0, \port$6327$259 [12:1] };
+  assign fixed = \port$6327$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6326$259 [0];
+  assign clear_high = \port$6327$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -20355,7 +20386,7 @@ module \biss_master_axil.ch0.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6314$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6315$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -20397,8 +20428,8 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6314$0 ;
-  wire \port$6314$0 ;
+  input \port$6315$0 ;
+  wire \port$6315$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -20412,9 +20443,9 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6314$0  };
-  assign \$2  = { lc[4:0], \port$6314$0  } == last;
-  assign \$3  = { lc[4:0], \port$6314$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6315$0  };
+  assign \$2  = { lc[4:0], \port$6315$0  } == last;
+  assign \$3  = { lc[4:0], \port$6315$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -20524,7 +20555,7 @@ module \biss_master_axil.ch0.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6314$0  };
+  assign lc_next = { lc[4:0], \port$6315$0  };
   assign zero = is_zero;
 endmodule
 
@@ -20765,40 +20796,29 @@ module \biss_master_axil.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
+module \biss_master_axil.ch0.core.time_base (rst, now, first_rise, first_rise_time, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
-  wire [32:0] \$1 ;
-  reg [31:0] \$2 ;
-  reg [31:0] \$3 ;
+  reg [31:0] \$1 ;
   input clk;
   wire clk;
   input first_rise;
   wire first_rise;
   output [31:0] first_rise_time;
   reg [31:0] first_rise_time = 32'd0;
-  reg [31:0] now = 32'd0;
+  input [31:0] now;
+  wire [31:0] now;
   input rst;
   wire rst;
-  assign \$1  = now + 1'h1;
   always @(posedge clk)
-    now <= \$2 ;
-  always @(posedge clk)
-    first_rise_time <= \$3 ;
+    first_rise_time <= \$1 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$2  = \$1 [31:0];
-    if (rst) begin
-      \$2  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$3  = first_rise_time;
+    \$1  = first_rise_time;
     if (first_rise) begin
-      \$3  = now;
+      \$1  = now;
     end
     if (rst) begin
-      \$3  = 32'd0;
+      \$1  = 32'd0;
     end
   end
 endmodule
@@ -21099,7 +21119,7 @@ module \biss_master_axil.ch0.core.timers (rst, restart, ma_busy, break_time, tim
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2500$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2501$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -21277,8 +21297,8 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2500$0 , l
   wire noisy;
   output passed;
   wire passed;
-  output \port$2500$0 ;
-  wire \port$2500$0 ;
+  output \port$2501$0 ;
+  wire \port$2501$0 ;
   output report;
   wire report;
   input report_frame;
@@ -21396,7 +21416,7 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2500$0 , l
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2500$0  = \$2 ;
+  assign \port$2501$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -21450,10 +21470,10 @@ module \biss_master_axil.ch0.core.verdict (lc_skip_seen, noisy, \port$2500$0 , l
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
-, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
-, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7200$0 , \port$7213$0 , regs__ca_done, \port$7290$0 , ca_rbuf_addr);
+module \biss_master_axil.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
+, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
+, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7199$0 , \port$7210$0 , regs__ca_done, \port$7287$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -21630,17 +21650,17 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$198 ;
+  wire \ma$200 ;
   wire [3:0] noise_events;
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7200$0 ;
-  wire [186:0] \port$7200$0 ;
-  output [79:0] \port$7213$0 ;
-  wire [79:0] \port$7213$0 ;
-  output [9:0] \port$7290$0 ;
-  wire [9:0] \port$7290$0 ;
+  output [186:0] \port$7199$0 ;
+  wire [186:0] \port$7199$0 ;
+  output [79:0] \port$7210$0 ;
+  wire [79:0] \port$7210$0 ;
+  output [9:0] \port$7287$0 ;
+  wire [9:0] \port$7287$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -21769,7 +21789,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$200 ;
+  wire \slo$202 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -21791,10 +21811,13 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
+  input [31:0] time_now;
+  wire [31:0] time_now;
+  wire [31:0] \time_now$195 ;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$195 ;
-  wire \trigger$195 ;
+  input \trigger$197 ;
+  wire \trigger$197 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -21812,7 +21835,7 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
-  assign trigger = \trigger$195  & regs__trigger_enable;
+  assign trigger = \trigger$197  & regs__trigger_enable;
   assign \$6  = ~ report;
   assign \$7  = \$signal  & \$6 ;
   assign \$8  = waited + 1'h1;
@@ -21834,8 +21857,8 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
     regs__done_count <= \$17 ;
   \biss_master_axil.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$264 (ca_abort),
-    .\busy$313 (regs__busy),
+    .\abort$266 (ca_abort),
+    .\busy$315 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -21884,27 +21907,28 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$289 (clear_counters),
+    .\clear$291 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$19 ),
-    .\done$316 (done),
+    .\done$318 (done),
     .frames(regs__ca_busy),
     .ma(ma),
+    .now(time_now),
     .\periodic$45 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$20 ),
-    .\result$321 (\$18 ),
+    .\result$323 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$262 (ca_start),
+    .\start$264 (ca_start),
     .trigger(trigger),
-    .\valid$318 (valid)
+    .\valid$320 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
@@ -22093,18 +22117,19 @@ module \biss_master_axil.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$198  = ma;
-  assign \slo$200  = slo;
-  assign \port$7200$0  = \$18 ;
-  assign \port$7213$0  = \$19 ;
-  assign \port$7290$0  = \$20 ;
+  assign \time_now$195  = time_now;
+  assign \ma$200  = ma;
+  assign \slo$202  = slo;
+  assign \port$7199$0  = \$18 ;
+  assign \port$7210$0  = \$19 ;
+  assign \port$7287$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$313 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$289 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$262 , \abort$264 
-, abort, ma, \done$316 , \valid$318 , \result$321 , counts, ca_done, result, rbuf_addr);
+module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$315 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$291 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit
+, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
+, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$264 
+, \abort$266 , abort, ma, \done$318 , \valid$320 , \result$323 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -22138,8 +22163,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$264 ;
-  wire \abort$264 ;
+  input \abort$266 ;
+  wire \abort$266 ;
   wire \abort$57 ;
   wire abort_cycle;
   wire ack_expired;
@@ -22148,16 +22173,16 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [23:0] \ack_limit$113 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$345 ;
+  wire \bit$347 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$90 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$273 ;
-  wire \busy$310 ;
-  output \busy$313 ;
-  wire \busy$313 ;
+  wire \busy$275 ;
+  wire \busy$312 ;
+  output \busy$315 ;
+  wire \busy$315 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -22192,10 +22217,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$277 ;
+  wire \cdm$279 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$324 ;
+  wire \cds$326 ;
   wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -22343,12 +22368,12 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   reg clean = 1'h0;
   (* init = 1'h0 *)
   wire \clean$177 ;
-  wire \clean$346 ;
+  wire \clean$348 ;
   wire clear;
   wire \clear$137 ;
-  input \clear$289 ;
-  wire \clear$289 ;
-  wire \clear$302 ;
+  input \clear$291 ;
+  wire \clear$291 ;
+  wire \clear$304 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -22486,9 +22511,9 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  output \done$316 ;
-  wire \done$316 ;
-  wire \done$317 ;
+  output \done$318 ;
+  wire \done$318 ;
+  wire \done$319 ;
   wire doubtful;
   wire early;
   wire \early$73 ;
@@ -22498,29 +22523,29 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$288 ;
-  wire \events$288.ca_aborted ;
-  wire \events$288.ca_crc4_error ;
-  wire \events$288.ca_data_fault ;
-  wire \events$288.ca_no_answer ;
-  wire \events$288.ca_refused ;
-  wire [15:0] \events$297 ;
-  wire \events$297.aborted ;
-  wire \events$297.crc_word0 ;
-  wire \events$297.crc_word1 ;
-  wire \events$297.delay_jump ;
-  wire \events$297.delay_range ;
-  wire \events$297.lc_repeat ;
-  wire \events$297.lc_skip ;
-  wire \events$297.lc_zero ;
-  wire \events$297.no_ack ;
-  wire \events$297.no_start ;
-  wire \events$297.no_stop ;
-  wire \events$297.noise_event ;
-  wire \events$297.noisy_line ;
-  wire \events$297.overrun ;
-  wire \events$297.slo_stuck_low ;
-  wire \events$297.spw_mismatch ;
+  wire [4:0] \events$290 ;
+  wire \events$290.ca_aborted ;
+  wire \events$290.ca_crc4_error ;
+  wire \events$290.ca_data_fault ;
+  wire \events$290.ca_no_answer ;
+  wire \events$290.ca_refused ;
+  wire [15:0] \events$299 ;
+  wire \events$299.aborted ;
+  wire \events$299.crc_word0 ;
+  wire \events$299.crc_word1 ;
+  wire \events$299.delay_jump ;
+  wire \events$299.delay_range ;
+  wire \events$299.lc_repeat ;
+  wire \events$299.lc_skip ;
+  wire \events$299.lc_zero ;
+  wire \events$299.no_ack ;
+  wire \events$299.no_start ;
+  wire \events$299.no_stop ;
+  wire \events$299.noise_event ;
+  wire \events$299.noisy_line ;
+  wire \events$299.overrun ;
+  wire \events$299.slo_stuck_low ;
+  wire \events$299.spw_mismatch ;
   wire fault;
   wire \fault$210 ;
   (* enum_base_type = "Status" *)
@@ -22618,7 +22643,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
-  wire \frame_end$282 ;
+  wire \frame_end$284 ;
   wire frame_ok;
   output frames;
   wire frames;
@@ -22634,19 +22659,19 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$149 ;
-  wire [5:0] \lc$337 ;
+  wire [5:0] \lc$339 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$151 ;
   wire lc_repeat;
-  wire \lc_repeat$338 ;
+  wire \lc_repeat$340 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$339 ;
+  wire \lc_skip$341 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$340 ;
+  wire \lc_zero$342 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
@@ -22712,7 +22737,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \locked$71 ;
   output ma;
   wire ma;
-  wire \ma$312 ;
+  wire \ma$314 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$102 ;
@@ -22731,10 +22756,12 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [3:0] noise_events;
   wire noisy;
   wire \noisy$179 ;
+  input [31:0] now;
+  wire [31:0] now;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$315 ;
+  wire \overrun$317 ;
   wire passed;
   wire pending;
   wire [23:0] period;
@@ -22769,30 +22796,30 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire \report_frame$209 ;
   wire \report_frame$229 ;
   wire request;
-  wire [17:0] \request$250 ;
-  wire [6:0] \request$250.address ;
-  wire [6:0] \request$250.count ;
-  wire [2:0] \request$250.slave_id ;
-  wire \request$250.write ;
+  wire [17:0] \request$252 ;
+  wire [6:0] \request$252.address ;
+  wire [6:0] \request$252.count ;
+  wire [2:0] \request$252.slave_id ;
+  wire \request$252.write ;
   wire \request$56 ;
   wire restart;
   wire \restart$164 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$321 ;
-  wire [186:0] \result$321 ;
-  wire \result$321.cds ;
-  wire \result$321.delay_settled ;
-  wire [7:0] \result$321.delay_spread ;
-  wire [5:0] \result$321.lc ;
-  wire \result$321.lc_repeat ;
-  wire \result$321.lc_skip ;
-  wire \result$321.lc_zero ;
-  wire [12:0] \result$321.line_delay ;
-  wire [3:0] \result$321.noise_events ;
-  wire [12:0] \result$321.settled_delay ;
-  wire \result$321.spw_mismatch ;
+  output [186:0] \result$323 ;
+  wire [186:0] \result$323 ;
+  wire \result$323.cds ;
+  wire \result$323.delay_settled ;
+  wire [7:0] \result$323.delay_spread ;
+  wire [5:0] \result$323.lc ;
+  wire \result$323.lc_repeat ;
+  wire \result$323.lc_skip ;
+  wire \result$323.lc_zero ;
+  wire [12:0] \result$323.line_delay ;
+  wire [3:0] \result$323.noise_events ;
+  wire [12:0] \result$323.settled_delay ;
+  wire \result$323.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -22810,18 +22837,18 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$321.status ;
-  wire [31:0] \result$321.timestamp ;
-  wire [57:0] \result$321.word0 ;
-  wire \result$321.word0.crc_ok ;
-  wire \result$321.word0.ne ;
-  wire \result$321.word0.nw ;
-  wire [54:0] \result$321.word0.position ;
-  wire [42:0] \result$321.word1 ;
-  wire \result$321.word1.crc_ok ;
-  wire \result$321.word1.ne ;
-  wire \result$321.word1.nw ;
-  wire [39:0] \result$321.word1.position ;
+  wire [3:0] \result$323.status ;
+  wire [31:0] \result$323.timestamp ;
+  wire [57:0] \result$323.word0 ;
+  wire \result$323.word0.crc_ok ;
+  wire \result$323.word0.ne ;
+  wire \result$323.word0.nw ;
+  wire [54:0] \result$323.word0.position ;
+  wire [42:0] \result$323.word1 ;
+  wire \result$323.word1.crc_ok ;
+  wire \result$323.word1.ne ;
+  wire \result$323.word1.nw ;
+  wire [39:0] \result$323.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -22840,13 +22867,13 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$344 ;
+  wire \sample$346 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$327 ;
+  wire [12:0] \settled_delay$329 ;
   wire skip;
   input slo;
   wire slo;
@@ -22863,7 +22890,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$341 ;
+  wire \spw_mismatch$343 ;
   wire ssi;
   wire \ssi$198 ;
   wire \ssi$202 ;
@@ -22874,8 +22901,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire ssi_error_low;
   input start;
   wire start;
-  input \start$262 ;
-  wire \start$262 ;
+  input \start$264 ;
+  wire \start$264 ;
   wire \start$43 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$134 ;
@@ -22936,11 +22963,12 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$320 ;
+  wire [3:0] \status$322 ;
   wire stop_bit;
   wire \stop_bit$86 ;
   wire stopped;
   wire \stopped$84 ;
+  wire [31:0] time_now;
   wire [23:0] timeout_limit;
   wire [23:0] \timeout_limit$115 ;
   wire [23:0] timeout_live;
@@ -22956,8 +22984,8 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   wire unconfirmed;
   wire valid;
   wire \valid$233 ;
-  output \valid$318 ;
-  wire \valid$318 ;
+  output \valid$320 ;
+  wire \valid$320 ;
   wire valid_out;
   wire waiting;
   wire watch;
@@ -23036,7 +23064,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \$3  = ~ started_before;
   assign \check$172  = started & \$3 ;
   assign \$4  = ~ cycle[259];
-  assign cdm = \cdm$277  & \$4 ;
+  assign cdm = \cdm$279  & \$4 ;
   assign \$5  = ~ cycle[259];
   assign frame_ok = passed & \$5 ;
   assign \$6  = result[2:0] == 1'h1;
@@ -23054,10 +23082,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \$18  = report_frame & \$17 ;
   assign \$19  = status == 4'he;
   assign \$20  = report_frame & \$19 ;
-  assign \busy$313  = ~ idle;
+  assign \busy$315  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$21  = ~ \clear$137 ;
-  assign \$22  = \sample$344  & \$21 ;
+  assign \$22  = \sample$346  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -23141,19 +23169,19 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch1.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$289 ),
+    .clear(\clear$291 ),
     .clk(clk),
-    .events(\events$297 ),
+    .events(\events$299 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.counters  counters (
-    .clear(\clear$289 ),
+    .clear(\clear$291 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$288 ),
+    .events(\events$290 ),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.decoder  decoder (
@@ -23171,7 +23199,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6857$272 (cycle[274:272]),
+    .\port$6856$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -23231,7 +23259,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6857$199 (cycle[199]),
+    .\port$6856$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -23242,9 +23270,9 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .words(\words$183 )
   );
   \biss_master_axil.ch1.core.register_access  register_access (
-    .abort(\abort$264 ),
+    .abort(\abort$266 ),
     .busy(frames),
-    .cdm(\cdm$277 ),
+    .cdm(\cdm$279 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -23254,27 +23282,27 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$250 ),
+    .request(\request$252 ),
     .result(result),
     .rst(rst),
-    .start(\start$262 ),
+    .start(\start$264 ),
     .wbuf(wbuf)
   );
   \biss_master_axil.ch1.core.results  results (
     .clk(clk),
-    .done(\done$316 ),
+    .done(\done$318 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$321 ),
+    .result(\result$323 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$318 )
+    .valid_out(\valid$320 )
   );
   \biss_master_axil.ch1.core.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$345 ),
+    .\bit (\bit$347 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -23282,10 +23310,10 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6857$259 (cycle[271:259]),
+    .\port$6856$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
-    .sample(\sample$344 ),
+    .sample(\sample$346 ),
     .slo(slo)
   );
   \biss_master_axil.ch1.core.scheduler  scheduler (
@@ -23306,7 +23334,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6845$0 (\bit ),
+    .\port$6844$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -23325,6 +23353,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
     .clk(clk),
     .first_rise(first_rise),
     .first_rise_time(first_rise_time),
+    .now(now),
     .rst(rst)
   );
   \biss_master_axil.ch1.core.timers  timers (
@@ -23356,7 +23385,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   );
   \biss_master_axil.ch1.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$346 ),
+    .clean(\clean$348 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
@@ -23391,7 +23420,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$24  = \bit$345 ;
+    \$24  = \bit$347 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -23412,7 +23441,7 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$27  = \clean$346 ;
+    \$27  = \clean$348 ;
     if (rst) begin
       \$27  = 1'h0;
     end
@@ -23528,58 +23557,59 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \valid$233  = valid;
   assign word_crc_ok = { \$28 , crc_ok[0] };
   assign \first_rise$248  = first_rise;
+  assign time_now = now;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$262 ;
-  assign ca_abort = \abort$264 ;
+  assign ca_start = \start$264 ;
+  assign ca_abort = \abort$266 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$273  = frames;
+  assign \busy$275  = frames;
   assign done = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
-  assign \frame_end$282  = report;
+  assign \frame_end$284  = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$289 ;
+  assign clear_counters = \clear$291 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$302  = \clear$289 ;
+  assign \clear$304  = \clear$291 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$310  = count_busy;
-  assign \ma$312  = ma;
-  assign \overrun$315  = overrun;
-  assign \done$317  = \done$316 ;
-  assign valid_out = \valid$318 ;
-  assign \status$320  = \result$321 [3:0];
-  assign timestamp = \result$321 [35:4];
-  assign line_delay = \result$321 [48:36];
-  assign \cds$324  = \result$321 [49];
-  assign noise_events = \result$321 [53:50];
-  assign delay_settled = \result$321 [54];
-  assign \settled_delay$327  = \result$321 [67:55];
-  assign delay_spread = \result$321 [75:68];
-  assign word0_position = \result$321 [130:76];
-  assign word0_ne = \result$321 [131];
-  assign word0_nw = \result$321 [132];
-  assign word0_crc_ok = \result$321 [133];
-  assign word1_position = \result$321 [173:134];
-  assign word1_ne = \result$321 [174];
-  assign word1_nw = \result$321 [175];
-  assign word1_crc_ok = \result$321 [176];
-  assign \lc$337  = \result$321 [182:177];
-  assign \lc_repeat$338  = \result$321 [183];
-  assign \lc_skip$339  = \result$321 [184];
-  assign \lc_zero$340  = \result$321 [185];
-  assign \spw_mismatch$341  = \result$321 [186];
+  assign \busy$312  = count_busy;
+  assign \ma$314  = ma;
+  assign \overrun$317  = overrun;
+  assign \done$319  = \done$318 ;
+  assign valid_out = \valid$320 ;
+  assign \status$322  = \result$323 [3:0];
+  assign timestamp = \result$323 [35:4];
+  assign line_delay = \result$323 [48:36];
+  assign \cds$326  = \result$323 [49];
+  assign noise_events = \result$323 [53:50];
+  assign delay_settled = \result$323 [54];
+  assign \settled_delay$329  = \result$323 [67:55];
+  assign delay_spread = \result$323 [75:68];
+  assign word0_position = \result$323 [130:76];
+  assign word0_ne = \result$323 [131];
+  assign word0_nw = \result$323 [132];
+  assign word0_crc_ok = \result$323 [133];
+  assign word1_position = \result$323 [173:134];
+  assign word1_ne = \result$323 [174];
+  assign word1_nw = \result$323 [175];
+  assign word1_crc_ok = \result$323 [176];
+  assign \lc$339  = \result$323 [182:177];
+  assign \lc_repeat$340  = \result$323 [183];
+  assign \lc_skip$341  = \result$323 [184];
+  assign \lc_zero$342  = \result$323 [185];
+  assign \spw_mismatch$343  = \result$323 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -23790,41 +23820,41 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$250.slave_id  = \request$250 [2:0];
-  assign \request$250.address  = \request$250 [9:3];
-  assign \request$250.count  = \request$250 [16:10];
-  assign \request$250.write  = \request$250 [17];
+  assign \request$252.slave_id  = \request$252 [2:0];
+  assign \request$252.address  = \request$252 [9:3];
+  assign \request$252.count  = \request$252 [16:10];
+  assign \request$252.write  = \request$252 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$288.ca_crc4_error  = \events$288 [0];
-  assign \events$288.ca_no_answer  = \events$288 [1];
-  assign \events$288.ca_refused  = \events$288 [2];
-  assign \events$288.ca_aborted  = \events$288 [3];
-  assign \events$288.ca_data_fault  = \events$288 [4];
+  assign \events$290.ca_crc4_error  = \events$290 [0];
+  assign \events$290.ca_no_answer  = \events$290 [1];
+  assign \events$290.ca_refused  = \events$290 [2];
+  assign \events$290.ca_aborted  = \events$290 [3];
+  assign \events$290.ca_data_fault  = \events$290 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$297.crc_word0  = \events$297 [0];
-  assign \events$297.crc_word1  = \events$297 [1];
-  assign \events$297.no_ack  = \events$297 [2];
-  assign \events$297.no_start  = \events$297 [3];
-  assign \events$297.delay_range  = \events$297 [4];
-  assign \events$297.slo_stuck_low  = \events$297 [5];
-  assign \events$297.lc_repeat  = \events$297 [6];
-  assign \events$297.lc_skip  = \events$297 [7];
-  assign \events$297.lc_zero  = \events$297 [8];
-  assign \events$297.spw_mismatch  = \events$297 [9];
-  assign \events$297.overrun  = \events$297 [10];
-  assign \events$297.aborted  = \events$297 [11];
-  assign \events$297.no_stop  = \events$297 [12];
-  assign \events$297.noisy_line  = \events$297 [13];
-  assign \events$297.delay_jump  = \events$297 [14];
-  assign \events$297.noise_event  = \events$297 [15];
+  assign \events$299.crc_word0  = \events$299 [0];
+  assign \events$299.crc_word1  = \events$299 [1];
+  assign \events$299.no_ack  = \events$299 [2];
+  assign \events$299.no_start  = \events$299 [3];
+  assign \events$299.delay_range  = \events$299 [4];
+  assign \events$299.slo_stuck_low  = \events$299 [5];
+  assign \events$299.lc_repeat  = \events$299 [6];
+  assign \events$299.lc_skip  = \events$299 [7];
+  assign \events$299.lc_zero  = \events$299 [8];
+  assign \events$299.spw_mismatch  = \events$299 [9];
+  assign \events$299.overrun  = \events$299 [10];
+  assign \events$299.aborted  = \events$299 [11];
+  assign \events$299.no_stop  = \events$299 [12];
+  assign \events$299.noisy_line  = \events$299 [13];
+  assign \events$299.delay_jump  = \events$299 [14];
+  assign \events$299.noise_event  = \events$299 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -23832,57 +23862,57 @@ module \biss_master_axil.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, 
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$321.status  = \result$321 [3:0];
-  assign \result$321.timestamp  = \result$321 [35:4];
-  assign \result$321.line_delay  = \result$321 [48:36];
-  assign \result$321.cds  = \result$321 [49];
-  assign \result$321.noise_events  = \result$321 [53:50];
-  assign \result$321.delay_settled  = \result$321 [54];
-  assign \result$321.settled_delay  = \result$321 [67:55];
-  assign \result$321.delay_spread  = \result$321 [75:68];
-  assign \result$321.word0  = \result$321 [133:76];
-  assign \result$321.word0.position  = \result$321 [130:76];
-  assign \result$321.word0.ne  = \result$321 [131];
-  assign \result$321.word0.nw  = \result$321 [132];
-  assign \result$321.word0.crc_ok  = \result$321 [133];
-  assign \result$321.word1  = \result$321 [176:134];
-  assign \result$321.word1.position  = \result$321 [173:134];
-  assign \result$321.word1.ne  = \result$321 [174];
-  assign \result$321.word1.nw  = \result$321 [175];
-  assign \result$321.word1.crc_ok  = \result$321 [176];
-  assign \result$321.lc  = \result$321 [182:177];
-  assign \result$321.lc_repeat  = \result$321 [183];
-  assign \result$321.lc_skip  = \result$321 [184];
-  assign \result$321.lc_zero  = \result$321 [185];
-  assign \result$321.spw_mismatch  = \result$321 [186];
-  assign \events$297 [15] = \event ;
-  assign \events$297 [14] = \$20 ;
-  assign \events$297 [13] = \$18 ;
-  assign \events$297 [12] = faults[6];
-  assign \events$297 [11] = faults[4];
-  assign \events$297 [10] = overrun;
-  assign \events$297 [9] = \$16 ;
-  assign \events$297 [8] = lc_zero;
-  assign \events$297 [7] = lc_skip;
-  assign \events$297 [6] = lc_repeat;
-  assign \events$297 [5] = faults[3];
-  assign \events$297 [4] = faults[2];
-  assign \events$297 [3] = faults[1];
-  assign \events$297 [2] = faults[0];
-  assign \events$297 [1] = crc_error[1];
-  assign \events$297 [0] = crc_error[0];
-  assign \events$288 [4] = \$15 ;
-  assign \events$288 [3] = \$13 ;
-  assign \events$288 [2] = \$11 ;
-  assign \events$288 [1] = \$9 ;
-  assign \events$288 [0] = \$7 ;
+  assign \result$323.status  = \result$323 [3:0];
+  assign \result$323.timestamp  = \result$323 [35:4];
+  assign \result$323.line_delay  = \result$323 [48:36];
+  assign \result$323.cds  = \result$323 [49];
+  assign \result$323.noise_events  = \result$323 [53:50];
+  assign \result$323.delay_settled  = \result$323 [54];
+  assign \result$323.settled_delay  = \result$323 [67:55];
+  assign \result$323.delay_spread  = \result$323 [75:68];
+  assign \result$323.word0  = \result$323 [133:76];
+  assign \result$323.word0.position  = \result$323 [130:76];
+  assign \result$323.word0.ne  = \result$323 [131];
+  assign \result$323.word0.nw  = \result$323 [132];
+  assign \result$323.word0.crc_ok  = \result$323 [133];
+  assign \result$323.word1  = \result$323 [176:134];
+  assign \result$323.word1.position  = \result$323 [173:134];
+  assign \result$323.word1.ne  = \result$323 [174];
+  assign \result$323.word1.nw  = \result$323 [175];
+  assign \result$323.word1.crc_ok  = \result$323 [176];
+  assign \result$323.lc  = \result$323 [182:177];
+  assign \result$323.lc_repeat  = \result$323 [183];
+  assign \result$323.lc_skip  = \result$323 [184];
+  assign \result$323.lc_zero  = \result$323 [185];
+  assign \result$323.spw_mismatch  = \result$323 [186];
+  assign \events$299 [15] = \event ;
+  assign \events$299 [14] = \$20 ;
+  assign \events$299 [13] = \$18 ;
+  assign \events$299 [12] = faults[6];
+  assign \events$299 [11] = faults[4];
+  assign \events$299 [10] = overrun;
+  assign \events$299 [9] = \$16 ;
+  assign \events$299 [8] = lc_zero;
+  assign \events$299 [7] = lc_skip;
+  assign \events$299 [6] = lc_repeat;
+  assign \events$299 [5] = faults[3];
+  assign \events$299 [4] = faults[2];
+  assign \events$299 [3] = faults[1];
+  assign \events$299 [2] = faults[0];
+  assign \events$299 [1] = crc_error[1];
+  assign \events$299 [0] = crc_error[0];
+  assign \events$290 [4] = \$15 ;
+  assign \events$290 [3] = \$13 ;
+  assign \events$290 [2] = \$11 ;
+  assign \events$290 [1] = \$9 ;
+  assign \events$290 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$250 [17] = ca_write;
-  assign \request$250 [16:10] = ca_count;
-  assign \request$250 [9:3] = ca_address;
-  assign \request$250 [2:0] = ca_slave_id;
+  assign \request$252 [17] = ca_write;
+  assign \request$252 [16:10] = ca_count;
+  assign \request$252 [9:3] = ca_address;
+  assign \request$252 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$28 ;
@@ -27456,7 +27486,7 @@ module \biss_master_axil.ch1.core.counters.count_ca_refused (rst, inc, clear, co
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6857$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6856$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -28149,8 +28179,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6857$272 ;
-  wire [2:0] \port$6857$272 ;
+  input [2:0] \port$6856$272 ;
+  wire [2:0] \port$6856$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -28436,7 +28466,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6857$272 [0];
+  assign error_bit = ssi & \port$6856$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -28490,7 +28520,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6857$272 [2];
+  assign \$48  = ssi & \port$6856$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -28777,15 +28807,15 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6857$272 [0];
+  assign \$335  = ssi & \port$6856$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6857$272 [0];
-  assign \$343  = ~ \port$6857$272 [1];
+  assign \$342  = ssi & \port$6856$272 [0];
+  assign \$343  = ~ \port$6856$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -29417,7 +29447,7 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$6857$272 [0];
+  assign ssi_error = \port$6856$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -29426,8 +29456,8 @@ module \biss_master_axil.ch1.core.decoder (rst, word_count, frame_end, lc_load, 
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6857$272 [2];
-  assign ssi_error_low = \port$6857$272 [1];
+  assign ssi_double = \port$6856$272 [2];
+  assign ssi_error_low = \port$6856$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -31084,7 +31114,7 @@ module \biss_master_axil.ch1.core.ma_clock (rst, \clocking , half_period, run, h
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6857$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6856$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -31136,8 +31166,8 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6857$199 , ssi, ssi
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6857$199 ;
-  wire \port$6857$199 ;
+  input \port$6856$199 ;
+  wire \port$6856$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -31191,7 +31221,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6857$199 , ssi, ssi
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6857$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6856$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -31301,7 +31331,7 @@ module \biss_master_axil.ch1.core.ma_stop (rst, words, \port$6857$199 , ssi, ssi
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6857$199 , 1'h1 };
+  assign enables = { \port$6856$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -33442,7 +33472,7 @@ module \biss_master_axil.ch1.core.results (rst, report_delay, report, valid, fra
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6857$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6856$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -33576,8 +33606,8 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6857$259 ;
-  wire [12:0] \port$6857$259 ;
+  input [12:0] \port$6856$259 ;
+  wire [12:0] \port$6856$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -33602,7 +33632,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6857$259 [12:1] + 1'h1;
+  assign \$11  = \port$6856$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -33727,7 +33757,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
   \biss_master_axil.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6857$259 [0]),
+    .clear_high(\port$6856$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -33870,7 +33900,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6857$259 [0]) begin
+            if (\port$6856$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -33955,7 +33985,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6857$259 [0]) begin
+            if (\port$6856$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -33994,7 +34024,7 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6857$259 [12:1] };
+            \$85  = { 1'h0, \port$6856$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -34379,11 +34409,11 @@ module \biss_master_axil.ch1.core.sampler (clk, rst, arm, \bit , noise, half_per
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6857$259 [12:1] };
-  assign fixed = \port$6857$259 [0];
+  assign fixed_delay = { 1'h0, \port$6856$259 [12:1] };
+  assign fixed = \port$6856$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6857$259 [0];
+  assign clear_high = \port$6856$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -34790,7 +34820,7 @@ module \biss_master_axil.ch1.core.scheduler (rst, trigger, periodic, request, ov
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6845$0 , resync, lc, is_zero, clk);
+module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6844$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -34832,8 +34862,8 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6845$0 ;
-  wire \port$6845$0 ;
+  input \port$6844$0 ;
+  wire \port$6844$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -34847,9 +34877,9 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6845$0  };
-  assign \$2  = { lc[4:0], \port$6845$0  } == last;
-  assign \$3  = { lc[4:0], \port$6845$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6844$0  };
+  assign \$2  = { lc[4:0], \port$6844$0  } == last;
+  assign \$3  = { lc[4:0], \port$6844$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -34959,7 +34989,7 @@ module \biss_master_axil.ch1.core.sign_of_life (rst, load, \repeat , skip, check
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6845$0  };
+  assign lc_next = { lc[4:0], \port$6844$0  };
   assign zero = is_zero;
 endmodule
 
@@ -35200,40 +35230,29 @@ module \biss_master_axil.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_axil.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
+module \biss_master_axil.ch1.core.time_base (rst, now, first_rise, first_rise_time, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
-  wire [32:0] \$1 ;
-  reg [31:0] \$2 ;
-  reg [31:0] \$3 ;
+  reg [31:0] \$1 ;
   input clk;
   wire clk;
   input first_rise;
   wire first_rise;
   output [31:0] first_rise_time;
   reg [31:0] first_rise_time = 32'd0;
-  reg [31:0] now = 32'd0;
+  input [31:0] now;
+  wire [31:0] now;
   input rst;
   wire rst;
-  assign \$1  = now + 1'h1;
   always @(posedge clk)
-    now <= \$2 ;
-  always @(posedge clk)
-    first_rise_time <= \$3 ;
+    first_rise_time <= \$1 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
-    \$2  = \$1 [31:0];
-    if (rst) begin
-      \$2  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
-    \$3  = first_rise_time;
+    \$1  = first_rise_time;
     if (first_rise) begin
-      \$3  = now;
+      \$1  = now;
     end
     if (rst) begin
-      \$3  = 32'd0;
+      \$1  = 32'd0;
     end
   end
 endmodule

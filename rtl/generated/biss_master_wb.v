@@ -22,18 +22,20 @@
 module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo, ch1_slo, clk, rst, wb_dat_r, wb_ack, wb_stall, irq, ch0_ma, ch1_ma, wb_cyc);
   reg \$auto$verilog_backend.cc:2355:dump_module$9  = 0;
   wire \$1 ;
-  wire [9:0] \$10 ;
-  wire [186:0] \$11 ;
-  wire [79:0] \$12 ;
-  wire [9:0] \$13 ;
+  wire [186:0] \$10 ;
+  wire [79:0] \$11 ;
+  wire [9:0] \$12 ;
+  wire [186:0] \$13 ;
+  wire [79:0] \$14 ;
+  wire [9:0] \$15 ;
   wire \$2 ;
-  wire \$3 ;
-  reg \$4 ;
+  wire [32:0] \$3 ;
+  wire \$4 ;
   reg \$5 ;
-  wire \$6 ;
-  wire \$7 ;
-  wire [186:0] \$8 ;
-  wire [79:0] \$9 ;
+  reg [31:0] \$6 ;
+  reg \$7 ;
+  wire \$8 ;
+  wire \$9 ;
   wire [10:0] bus__r_addr;
   wire [31:0] bus__r_data;
   wire bus__r_en;
@@ -259,228 +261,233 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$457 ;
+  wire [1:0] \irq$460 ;
   wire ma;
-  wire \ma$453 ;
+  wire \ma$456 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$250 ;
+  wire \regs__abort_cycle$253 ;
   wire regs__busy;
-  wire \regs__busy$253 ;
+  wire \regs__busy$256 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$254 ;
+  wire \regs__ca_abort$257 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$256 ;
+  wire [6:0] \regs__ca_address$259 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$259 ;
+  wire \regs__ca_busy$262 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$261 ;
+  wire [6:0] \regs__ca_bytes_done$264 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$262 ;
+  wire [6:0] \regs__ca_count$265 ;
   wire regs__ca_done;
-  wire \regs__ca_done$265 ;
+  wire \regs__ca_done$268 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$266 ;
+  wire [3:0] \regs__ca_rbuf_addr$269 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$269 ;
+  wire [31:0] \regs__ca_rbuf_data$272 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$270 ;
+  wire \regs__ca_rbuf_en$273 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$272 ;
+  wire [2:0] \regs__ca_slave_id$275 ;
   wire regs__ca_start;
-  wire \regs__ca_start$274 ;
+  wire \regs__ca_start$277 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$277 ;
+  wire [2:0] \regs__ca_status$280 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$278 ;
+  wire [3:0] \regs__ca_wbuf_addr$281 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$280 ;
+  wire [31:0] \regs__ca_wbuf_data$283 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$282 ;
+  wire [3:0] \regs__ca_wbuf_en$285 ;
   wire regs__ca_write;
-  wire \regs__ca_write$284 ;
+  wire \regs__ca_write$287 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$287 ;
+  wire \regs__cap_counters$290 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$289 ;
+  wire [5:0] \regs__cap_data_bits_w0$292 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$291 ;
+  wire [5:0] \regs__cap_data_bits_w1$294 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$293 ;
+  wire \regs__cap_register_access$296 ;
   wire regs__cap_ssi;
-  wire \regs__cap_ssi$295 ;
+  wire \regs__cap_ssi$298 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$297 ;
+  wire [5:0] \regs__cap_timer_width$300 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$299 ;
+  wire \regs__cap_timestamp$302 ;
   wire regs__cds;
-  wire \regs__cds$301 ;
+  wire \regs__cds$304 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$302 ;
+  wire [23:0] \regs__cfg_ack_limit$305 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$304 ;
+  wire [23:0] \regs__cfg_break_time$307 ;
   wire [3:0] regs__cfg_confirm_frames;
-  wire [3:0] \regs__cfg_confirm_frames$306 ;
+  wire [3:0] \regs__cfg_confirm_frames$309 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$308 ;
+  wire [11:0] \regs__cfg_delay_limit$311 ;
   wire [3:0] regs__cfg_delay_tolerance;
-  wire [3:0] \regs__cfg_delay_tolerance$310 ;
+  wire [3:0] \regs__cfg_delay_tolerance$313 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$312 ;
+  wire \regs__cfg_end_check$315 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$314 ;
+  wire [15:0] \regs__cfg_ma_half_period$317 ;
   wire [3:0] regs__cfg_noise_limit;
-  wire [3:0] \regs__cfg_noise_limit$316 ;
+  wire [3:0] \regs__cfg_noise_limit$319 ;
   wire [11:0] regs__cfg_quiet_time;
-  wire [11:0] \regs__cfg_quiet_time$318 ;
+  wire [11:0] \regs__cfg_quiet_time$321 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$320 ;
+  wire [23:0] \regs__cfg_request_period$323 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$322 ;
+  wire \regs__cfg_spw_check$325 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$324 ;
+  wire [7:0] \regs__cfg_spw_tolerance$327 ;
   wire regs__cfg_ssi;
-  wire \regs__cfg_ssi$326 ;
+  wire \regs__cfg_ssi$329 ;
   wire [11:0] regs__cfg_ssi_delay;
-  wire [11:0] \regs__cfg_ssi_delay$328 ;
+  wire [11:0] \regs__cfg_ssi_delay$331 ;
   wire regs__cfg_ssi_double;
-  wire \regs__cfg_ssi_double$330 ;
+  wire \regs__cfg_ssi_double$333 ;
   wire regs__cfg_ssi_error;
-  wire \regs__cfg_ssi_error$332 ;
+  wire \regs__cfg_ssi_error$335 ;
   wire regs__cfg_ssi_error_low;
-  wire \regs__cfg_ssi_error_low$334 ;
+  wire \regs__cfg_ssi_error_low$337 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$336 ;
+  wire [23:0] \regs__cfg_timeout_limit$339 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$338 ;
+  wire [1:0] \regs__cfg_w0_crc$341 ;
   wire regs__cfg_w0_crc_inverted;
-  wire \regs__cfg_w0_crc_inverted$340 ;
+  wire \regs__cfg_w0_crc_inverted$343 ;
   wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] \regs__cfg_w0_crc_poly$342 ;
+  wire [15:0] \regs__cfg_w0_crc_poly$345 ;
   wire [15:0] regs__cfg_w0_crc_start;
-  wire [15:0] \regs__cfg_w0_crc_start$344 ;
+  wire [15:0] \regs__cfg_w0_crc_start$347 ;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [4:0] \regs__cfg_w0_crc_width$346 ;
+  wire [4:0] \regs__cfg_w0_crc_width$349 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$348 ;
+  wire [5:0] \regs__cfg_w0_data_bits$351 ;
   wire regs__cfg_w0_gray;
-  wire \regs__cfg_w0_gray$350 ;
+  wire \regs__cfg_w0_gray$353 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$352 ;
+  wire \regs__cfg_w0_lc$355 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$354 ;
+  wire \regs__cfg_w0_nenw$357 ;
   wire regs__cfg_w0_signed;
-  wire \regs__cfg_w0_signed$356 ;
+  wire \regs__cfg_w0_signed$359 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$358 ;
+  wire [1:0] \regs__cfg_w1_crc$361 ;
   wire regs__cfg_w1_crc_inverted;
-  wire \regs__cfg_w1_crc_inverted$360 ;
+  wire \regs__cfg_w1_crc_inverted$363 ;
   wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] \regs__cfg_w1_crc_poly$362 ;
+  wire [15:0] \regs__cfg_w1_crc_poly$365 ;
   wire [15:0] regs__cfg_w1_crc_start;
-  wire [15:0] \regs__cfg_w1_crc_start$364 ;
+  wire [15:0] \regs__cfg_w1_crc_start$367 ;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [4:0] \regs__cfg_w1_crc_width$366 ;
+  wire [4:0] \regs__cfg_w1_crc_width$369 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$368 ;
+  wire [5:0] \regs__cfg_w1_data_bits$371 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$370 ;
+  wire \regs__cfg_w1_enable$373 ;
   wire regs__cfg_w1_gray;
-  wire \regs__cfg_w1_gray$372 ;
+  wire \regs__cfg_w1_gray$375 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$374 ;
+  wire \regs__cfg_w1_lc$377 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$376 ;
+  wire \regs__cfg_w1_nenw$379 ;
   wire regs__cfg_w1_signed;
-  wire \regs__cfg_w1_signed$378 ;
+  wire \regs__cfg_w1_signed$381 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$380 ;
+  wire \regs__clear_counters$383 ;
   wire regs__config_error;
-  wire \regs__config_error$383 ;
+  wire \regs__config_error$386 ;
   wire [2:0] regs__count_addr;
-  wire [2:0] \regs__count_addr$384 ;
+  wire [2:0] \regs__count_addr$387 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$387 ;
+  wire [15:0] \regs__count_ca_aborted$390 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$389 ;
+  wire [15:0] \regs__count_ca_crc4_error$392 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$391 ;
+  wire [15:0] \regs__count_ca_data_fault$394 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$393 ;
+  wire [15:0] \regs__count_ca_no_answer$396 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$395 ;
+  wire [15:0] \regs__count_ca_refused$398 ;
   wire [31:0] regs__count_data;
-  wire [31:0] \regs__count_data$397 ;
+  wire [31:0] \regs__count_data$400 ;
   wire regs__count_en;
-  wire \regs__count_en$398 ;
+  wire \regs__count_en$401 ;
   wire regs__delay_settled;
-  wire \regs__delay_settled$401 ;
+  wire \regs__delay_settled$404 ;
   wire [7:0] regs__delay_spread;
-  wire [7:0] \regs__delay_spread$403 ;
+  wire [7:0] \regs__delay_spread$406 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$405 ;
+  wire [15:0] \regs__done_count$408 ;
   wire regs__frame_done;
-  wire \regs__frame_done$407 ;
+  wire \regs__frame_done$410 ;
   wire regs__frame_error;
-  wire \regs__frame_error$409 ;
+  wire \regs__frame_error$412 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$411 ;
+  wire [5:0] \regs__lc$414 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$413 ;
+  wire \regs__lc_repeat$416 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$415 ;
+  wire \regs__lc_skip$418 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$417 ;
+  wire \regs__lc_zero$420 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$419 ;
+  wire [12:0] \regs__line_delay$422 ;
   wire [3:0] regs__noise_events;
-  wire [3:0] \regs__noise_events$421 ;
+  wire [3:0] \regs__noise_events$424 ;
   wire regs__periodic;
-  wire \regs__periodic$422 ;
+  wire \regs__periodic$425 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__r_load;
   wire [12:0] regs__settled_delay;
-  wire [12:0] \regs__settled_delay$425 ;
+  wire [12:0] \regs__settled_delay$428 ;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$427 ;
+  wire \regs__spw_mismatch$430 ;
   wire regs__start;
-  wire \regs__start$428 ;
+  wire \regs__start$431 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$431 ;
+  wire [3:0] \regs__status$434 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$433 ;
+  wire [31:0] \regs__timestamp$436 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$434 ;
+  wire \regs__trigger_enable$437 ;
   wire [10:0] regs__w_addr;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$437 ;
+  wire \regs__word0_crc_ok$440 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$439 ;
+  wire \regs__word0_ne$442 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$441 ;
+  wire \regs__word0_nw$444 ;
   wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$443 ;
+  wire [54:0] \regs__word0_position$446 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$445 ;
+  wire \regs__word1_crc_ok$448 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$447 ;
+  wire \regs__word1_ne$450 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$449 ;
+  wire \regs__word1_nw$452 ;
   wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$451 ;
+  wire [39:0] \regs__word1_position$454 ;
   input rst;
   wire rst;
   wire slo;
-  wire \slo$454 ;
+  wire \slo$457 ;
+  reg [31:0] time_now = 32'd0;
+  (* init = 32'd0 *)
+  wire [31:0] \time_now$252 ;
+  (* init = 32'd0 *)
+  wire [31:0] \time_now$46 ;
   input trigger;
   wire trigger;
-  wire \trigger$247 ;
+  wire \trigger$249 ;
   wire \trigger$42 ;
-  wire \trigger$452 ;
+  wire \trigger$455 ;
   reg trigger_in = 1'h0;
   wire wb__ack;
   wire [10:0] wb__adr;
@@ -512,11 +519,14 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign \$1  = ~ trigger_in;
   assign \$2  = trigger & \$1 ;
   assign \trigger$42  = glob__trigger | \$2 ;
-  assign \$3  = | { \$7 , \$6  };
+  assign \$3  = time_now + 1'h1;
+  assign \$4  = | { \$9 , \$8  };
   always @(posedge clk)
-    trigger_in <= \$4 ;
+    trigger_in <= \$5 ;
   always @(posedge clk)
-    irq <= \$5 ;
+    time_now <= \$6 ;
+  always @(posedge clk)
+    irq <= \$7 ;
   \biss_master_wb.bank  bank (
     .bus__r_data(wb_dat_r),
     .bus__r_en(bus__r_en),
@@ -588,78 +598,78 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch0_ctrl_periodic(regs__periodic),
     .ch0_ctrl_start(regs__start),
     .ch0_ctrl_trigger_enable(regs__trigger_enable),
-    .ch0_irq(\$6 ),
+    .ch0_irq(\$8 ),
     .ch1__busy(ch1__busy),
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$270 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$282 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$273 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$285 ),
     .ch1__config_error(ch1__config_error),
     .ch1__count_data(ch1__count_data),
-    .ch1__count_en(\regs__count_en$398 ),
+    .ch1__count_en(\regs__count_en$401 ),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_done(ch1__frame_done),
     .ch1__frame_error(ch1__frame_error),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$254 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$274 ),
-    .ch1_ca_request_address(\regs__ca_address$256 ),
-    .ch1_ca_request_count(\regs__ca_count$262 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$272 ),
-    .\ch1_ca_request_write$305 (\regs__ca_write$284 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$302 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$304 ),
-    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$306 ),
-    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$310 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$312 ),
-    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$316 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$322 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$324 ),
-    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$344 ),
-    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$340 ),
-    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$342 ),
-    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$346 ),
-    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$364 ),
-    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$360 ),
-    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$362 ),
-    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$366 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$308 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$314 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$320 ),
-    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$318 ),
-    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$326 ),
-    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$328 ),
-    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$330 ),
-    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$332 ),
-    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$334 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$336 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$338 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$348 ),
-    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$350 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$352 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$354 ),
-    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$356 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$358 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$368 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$370 ),
-    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$372 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$374 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$376 ),
-    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$378 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$250 ),
-    .ch1_ctrl_clear_counters(\regs__clear_counters$380 ),
-    .ch1_ctrl_periodic(\regs__periodic$422 ),
-    .ch1_ctrl_start(\regs__start$428 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$434 ),
-    .ch1_irq(\$7 ),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$257 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$277 ),
+    .ch1_ca_request_address(\regs__ca_address$259 ),
+    .ch1_ca_request_count(\regs__ca_count$265 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$275 ),
+    .\ch1_ca_request_write$305 (\regs__ca_write$287 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$305 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$307 ),
+    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$309 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$313 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$315 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$319 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$325 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$327 ),
+    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$347 ),
+    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$343 ),
+    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$345 ),
+    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$349 ),
+    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$367 ),
+    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$363 ),
+    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$365 ),
+    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$369 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$311 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$317 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$323 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$321 ),
+    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$329 ),
+    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$331 ),
+    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$333 ),
+    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$335 ),
+    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$337 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$339 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$341 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$351 ),
+    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$353 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$355 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$357 ),
+    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$359 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$361 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$371 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$373 ),
+    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$375 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$377 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$379 ),
+    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$381 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$253 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$383 ),
+    .ch1_ctrl_periodic(\regs__periodic$425 ),
+    .ch1_ctrl_start(\regs__start$431 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$437 ),
+    .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6640$0 (\$8 ),
-    .\port$6653$0 (\$9 ),
-    .\port$6730$0 (\$10 ),
-    .\port$7171$0 (\$11 ),
-    .\port$7184$0 (\$12 ),
-    .\port$7261$0 (\$13 ),
+    .\port$6641$0 (\$10 ),
+    .\port$6652$0 (\$11 ),
+    .\port$6729$0 (\$12 ),
+    .\port$7170$0 (\$13 ),
+    .\port$7181$0 (\$14 ),
+    .\port$7258$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -735,9 +745,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6640$0 (\$8 ),
-    .\port$6653$0 (\$9 ),
-    .\port$6730$0 (\$10 ),
+    .\port$6641$0 (\$10 ),
+    .\port$6652$0 (\$11 ),
+    .\port$6729$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -752,68 +762,69 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
-    .\trigger$195 (\trigger$42 )
+    .time_now(time_now),
+    .\trigger$197 (\trigger$42 )
   );
   \biss_master_wb.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$254 ),
-    .ca_address(\regs__ca_address$256 ),
-    .ca_count(\regs__ca_count$262 ),
+    .ca_abort(\regs__ca_abort$257 ),
+    .ca_address(\regs__ca_address$259 ),
+    .ca_count(\regs__ca_count$265 ),
     .ca_rbuf_addr(wb_adr[3:0]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$270 ),
-    .ca_slave_id(\regs__ca_slave_id$272 ),
-    .ca_start(\regs__ca_start$274 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$273 ),
+    .ca_slave_id(\regs__ca_slave_id$275 ),
+    .ca_start(\regs__ca_start$277 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$282 ),
-    .ca_write(\regs__ca_write$284 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$302 ),
-    .cfg_break_time(\regs__cfg_break_time$304 ),
-    .cfg_confirm_frames(\regs__cfg_confirm_frames$306 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$308 ),
-    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$310 ),
-    .cfg_end_check(\regs__cfg_end_check$312 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$314 ),
-    .cfg_noise_limit(\regs__cfg_noise_limit$316 ),
-    .cfg_quiet_time(\regs__cfg_quiet_time$318 ),
-    .cfg_request_period(\regs__cfg_request_period$320 ),
-    .cfg_spw_check(\regs__cfg_spw_check$322 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$324 ),
-    .cfg_ssi(\regs__cfg_ssi$326 ),
-    .cfg_ssi_delay(\regs__cfg_ssi_delay$328 ),
-    .cfg_ssi_double(\regs__cfg_ssi_double$330 ),
-    .cfg_ssi_error(\regs__cfg_ssi_error$332 ),
-    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$334 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$336 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$338 ),
-    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$340 ),
-    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$342 ),
-    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$344 ),
-    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$346 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$348 ),
-    .cfg_w0_gray(\regs__cfg_w0_gray$350 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$352 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$354 ),
-    .cfg_w0_signed(\regs__cfg_w0_signed$356 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$358 ),
-    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$360 ),
-    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$362 ),
-    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$364 ),
-    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$366 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$368 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$370 ),
-    .cfg_w1_gray(\regs__cfg_w1_gray$372 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$374 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$376 ),
-    .cfg_w1_signed(\regs__cfg_w1_signed$378 ),
-    .clear_counters(\regs__clear_counters$380 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$285 ),
+    .ca_write(\regs__ca_write$287 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$305 ),
+    .cfg_break_time(\regs__cfg_break_time$307 ),
+    .cfg_confirm_frames(\regs__cfg_confirm_frames$309 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$311 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$313 ),
+    .cfg_end_check(\regs__cfg_end_check$315 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$317 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$319 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$321 ),
+    .cfg_request_period(\regs__cfg_request_period$323 ),
+    .cfg_spw_check(\regs__cfg_spw_check$325 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$327 ),
+    .cfg_ssi(\regs__cfg_ssi$329 ),
+    .cfg_ssi_delay(\regs__cfg_ssi_delay$331 ),
+    .cfg_ssi_double(\regs__cfg_ssi_double$333 ),
+    .cfg_ssi_error(\regs__cfg_ssi_error$335 ),
+    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$337 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$339 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$341 ),
+    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$343 ),
+    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$345 ),
+    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$347 ),
+    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$349 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$351 ),
+    .cfg_w0_gray(\regs__cfg_w0_gray$353 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$355 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$357 ),
+    .cfg_w0_signed(\regs__cfg_w0_signed$359 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$361 ),
+    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$363 ),
+    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$365 ),
+    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$367 ),
+    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$369 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$371 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$373 ),
+    .cfg_w1_gray(\regs__cfg_w1_gray$375 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$377 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$379 ),
+    .cfg_w1_signed(\regs__cfg_w1_signed$381 ),
+    .clear_counters(\regs__clear_counters$383 ),
     .clk(clk),
-    .count_en(\regs__count_en$398 ),
+    .count_en(\regs__count_en$401 ),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$422 ),
-    .\port$7171$0 (\$11 ),
-    .\port$7184$0 (\$12 ),
-    .\port$7261$0 (\$13 ),
-    .regs__abort_cycle(\regs__abort_cycle$250 ),
+    .periodic(\regs__periodic$425 ),
+    .\port$7170$0 (\$13 ),
+    .\port$7181$0 (\$14 ),
+    .\port$7258$0 (\$15 ),
+    .regs__abort_cycle(\regs__abort_cycle$253 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -823,24 +834,32 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .regs__done_count(ch1__done_count),
     .regs__frame_done(ch1__frame_done),
     .regs__frame_error(ch1__frame_error),
-    .regs__trigger_enable(\regs__trigger_enable$434 ),
+    .regs__trigger_enable(\regs__trigger_enable$437 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$428 ),
-    .\trigger$195 (\trigger$42 )
+    .start(\regs__start$431 ),
+    .time_now(time_now),
+    .\trigger$197 (\trigger$42 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$4  = trigger;
+    \$5  = trigger;
     if (rst) begin
-      \$4  = 1'h0;
+      \$5  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
-    \$5  = \$3 ;
+    \$6  = \$3 [31:0];
     if (rst) begin
-      \$5  = 1'h0;
+      \$6  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
+    \$7  = \$4 ;
+    if (rst) begin
+      \$7  = 1'h0;
     end
   end
   assign bus__r_addr = wb_adr;
@@ -865,13 +884,14 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign wb__dat_r = wb_dat_r;
   assign wb__ack = wb_ack;
   assign wb__stall = wb_stall;
+  assign \time_now$46  = time_now;
   assign ch0__abort_cycle = regs__abort_cycle;
   assign regs__busy = ch0__busy;
   assign ch0__ca_abort = regs__ca_abort;
   assign ch0__ca_address = regs__ca_address;
   assign regs__ca_busy = ch0__ca_busy;
-  assign ch0__ca_bytes_done = \$10 [9:3];
-  assign regs__ca_bytes_done = \$10 [9:3];
+  assign ch0__ca_bytes_done = \$12 [9:3];
+  assign regs__ca_bytes_done = \$12 [9:3];
   assign ch0__ca_count = regs__ca_count;
   assign regs__ca_done = ch0__ca_done;
   assign regs__ca_rbuf_addr = wb_adr[3:0];
@@ -880,8 +900,8 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign ch0__ca_rbuf_en = regs__ca_rbuf_en;
   assign ch0__ca_slave_id = regs__ca_slave_id;
   assign ch0__ca_start = regs__ca_start;
-  assign ch0__ca_status = \$10 [2:0];
-  assign regs__ca_status = \$10 [2:0];
+  assign ch0__ca_status = \$12 [2:0];
+  assign regs__ca_status = \$12 [2:0];
   assign ch0__ca_wbuf_addr = regs__ca_wbuf_addr;
   assign ch0__ca_wbuf_data = regs__ca_wbuf_data;
   assign ch0__ca_wbuf_en = regs__ca_wbuf_en;
@@ -900,8 +920,8 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign regs__cap_timer_width = 6'h18;
   assign ch0__cap_timestamp = 1'h1;
   assign regs__cap_timestamp = 1'h1;
-  assign ch0__cds = \$8 [49];
-  assign regs__cds = \$8 [49];
+  assign ch0__cds = \$10 [49];
+  assign regs__cds = \$10 [49];
   assign ch0__cfg_ack_limit = regs__cfg_ack_limit;
   assign ch0__cfg_break_time = regs__cfg_break_time;
   assign ch0__cfg_confirm_frames = regs__cfg_confirm_frames;
@@ -945,213 +965,214 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign regs__config_error = ch0__config_error;
   assign regs__count_addr = wb_adr[2:0];
   assign ch0__count_addr = wb_adr[2:0];
-  assign ch0__count_ca_aborted = \$9 [63:48];
-  assign regs__count_ca_aborted = \$9 [63:48];
-  assign ch0__count_ca_crc4_error = \$9 [15:0];
-  assign regs__count_ca_crc4_error = \$9 [15:0];
-  assign ch0__count_ca_data_fault = \$9 [79:64];
-  assign regs__count_ca_data_fault = \$9 [79:64];
-  assign ch0__count_ca_no_answer = \$9 [31:16];
-  assign regs__count_ca_no_answer = \$9 [31:16];
-  assign ch0__count_ca_refused = \$9 [47:32];
-  assign regs__count_ca_refused = \$9 [47:32];
+  assign ch0__count_ca_aborted = \$11 [63:48];
+  assign regs__count_ca_aborted = \$11 [63:48];
+  assign ch0__count_ca_crc4_error = \$11 [15:0];
+  assign regs__count_ca_crc4_error = \$11 [15:0];
+  assign ch0__count_ca_data_fault = \$11 [79:64];
+  assign regs__count_ca_data_fault = \$11 [79:64];
+  assign ch0__count_ca_no_answer = \$11 [31:16];
+  assign regs__count_ca_no_answer = \$11 [31:16];
+  assign ch0__count_ca_refused = \$11 [47:32];
+  assign regs__count_ca_refused = \$11 [47:32];
   assign regs__count_data = ch0__count_data;
   assign ch0__count_en = regs__count_en;
-  assign ch0__delay_settled = \$8 [54];
-  assign regs__delay_settled = \$8 [54];
-  assign ch0__delay_spread = \$8 [75:68];
-  assign regs__delay_spread = \$8 [75:68];
+  assign ch0__delay_settled = \$10 [54];
+  assign regs__delay_settled = \$10 [54];
+  assign ch0__delay_spread = \$10 [75:68];
+  assign regs__delay_spread = \$10 [75:68];
   assign regs__done_count = ch0__done_count;
   assign regs__frame_done = ch0__frame_done;
   assign regs__frame_error = ch0__frame_error;
-  assign ch0__lc = \$8 [182:177];
-  assign regs__lc = \$8 [182:177];
-  assign ch0__lc_repeat = \$8 [183];
-  assign regs__lc_repeat = \$8 [183];
-  assign ch0__lc_skip = \$8 [184];
-  assign regs__lc_skip = \$8 [184];
-  assign ch0__lc_zero = \$8 [185];
-  assign regs__lc_zero = \$8 [185];
-  assign ch0__line_delay = \$8 [48:36];
-  assign regs__line_delay = \$8 [48:36];
-  assign ch0__noise_events = \$8 [53:50];
-  assign regs__noise_events = \$8 [53:50];
+  assign ch0__lc = \$10 [182:177];
+  assign regs__lc = \$10 [182:177];
+  assign ch0__lc_repeat = \$10 [183];
+  assign regs__lc_repeat = \$10 [183];
+  assign ch0__lc_skip = \$10 [184];
+  assign regs__lc_skip = \$10 [184];
+  assign ch0__lc_zero = \$10 [185];
+  assign regs__lc_zero = \$10 [185];
+  assign ch0__line_delay = \$10 [48:36];
+  assign regs__line_delay = \$10 [48:36];
+  assign ch0__noise_events = \$10 [53:50];
+  assign regs__noise_events = \$10 [53:50];
   assign ch0__periodic = regs__periodic;
-  assign ch0__settled_delay = \$8 [67:55];
-  assign regs__settled_delay = \$8 [67:55];
-  assign ch0__spw_mismatch = \$8 [186];
-  assign regs__spw_mismatch = \$8 [186];
+  assign ch0__settled_delay = \$10 [67:55];
+  assign regs__settled_delay = \$10 [67:55];
+  assign ch0__spw_mismatch = \$10 [186];
+  assign regs__spw_mismatch = \$10 [186];
   assign ch0__start = regs__start;
-  assign ch0__status = \$8 [3:0];
-  assign regs__status = \$8 [3:0];
-  assign ch0__timestamp = \$8 [35:4];
-  assign regs__timestamp = \$8 [35:4];
+  assign ch0__status = \$10 [3:0];
+  assign regs__status = \$10 [3:0];
+  assign ch0__timestamp = \$10 [35:4];
+  assign regs__timestamp = \$10 [35:4];
   assign ch0__trigger_enable = regs__trigger_enable;
-  assign ch0__word0_crc_ok = \$8 [133];
-  assign regs__word0_crc_ok = \$8 [133];
-  assign ch0__word0_ne = \$8 [131];
-  assign regs__word0_ne = \$8 [131];
-  assign ch0__word0_nw = \$8 [132];
-  assign regs__word0_nw = \$8 [132];
-  assign ch0__word0_position = \$8 [130:76];
-  assign regs__word0_position = \$8 [130:76];
-  assign ch0__word1_crc_ok = \$8 [176];
-  assign regs__word1_crc_ok = \$8 [176];
-  assign ch0__word1_ne = \$8 [174];
-  assign regs__word1_ne = \$8 [174];
-  assign ch0__word1_nw = \$8 [175];
-  assign regs__word1_nw = \$8 [175];
-  assign ch0__word1_position = \$8 [173:134];
-  assign regs__word1_position = \$8 [173:134];
-  assign \trigger$247  = \trigger$42 ;
+  assign ch0__word0_crc_ok = \$10 [133];
+  assign regs__word0_crc_ok = \$10 [133];
+  assign ch0__word0_ne = \$10 [131];
+  assign regs__word0_ne = \$10 [131];
+  assign ch0__word0_nw = \$10 [132];
+  assign regs__word0_nw = \$10 [132];
+  assign ch0__word0_position = \$10 [130:76];
+  assign regs__word0_position = \$10 [130:76];
+  assign ch0__word1_crc_ok = \$10 [176];
+  assign regs__word1_crc_ok = \$10 [176];
+  assign ch0__word1_ne = \$10 [174];
+  assign regs__word1_ne = \$10 [174];
+  assign ch0__word1_nw = \$10 [175];
+  assign regs__word1_nw = \$10 [175];
+  assign ch0__word1_position = \$10 [173:134];
+  assign regs__word1_position = \$10 [173:134];
+  assign \trigger$249  = \trigger$42 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign ch1__abort_cycle = \regs__abort_cycle$250 ;
-  assign \regs__busy$253  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$254 ;
-  assign ch1__ca_address = \regs__ca_address$256 ;
-  assign \regs__ca_busy$259  = ch1__ca_busy;
-  assign ch1__ca_bytes_done = \$13 [9:3];
-  assign \regs__ca_bytes_done$261  = \$13 [9:3];
-  assign ch1__ca_count = \regs__ca_count$262 ;
-  assign \regs__ca_done$265  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$266  = wb_adr[3:0];
+  assign \time_now$252  = time_now;
+  assign ch1__abort_cycle = \regs__abort_cycle$253 ;
+  assign \regs__busy$256  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$257 ;
+  assign ch1__ca_address = \regs__ca_address$259 ;
+  assign \regs__ca_busy$262  = ch1__ca_busy;
+  assign ch1__ca_bytes_done = \$15 [9:3];
+  assign \regs__ca_bytes_done$264  = \$15 [9:3];
+  assign ch1__ca_count = \regs__ca_count$265 ;
+  assign \regs__ca_done$268  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$269  = wb_adr[3:0];
   assign ch1__ca_rbuf_addr = wb_adr[3:0];
-  assign \regs__ca_rbuf_data$269  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$270 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$272 ;
-  assign ch1__ca_start = \regs__ca_start$274 ;
-  assign ch1__ca_status = \$13 [2:0];
-  assign \regs__ca_status$277  = \$13 [2:0];
-  assign \regs__ca_wbuf_addr$278  = regs__ca_wbuf_addr;
+  assign \regs__ca_rbuf_data$272  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$273 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$275 ;
+  assign ch1__ca_start = \regs__ca_start$277 ;
+  assign ch1__ca_status = \$15 [2:0];
+  assign \regs__ca_status$280  = \$15 [2:0];
+  assign \regs__ca_wbuf_addr$281  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$280  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$283  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$282 ;
-  assign ch1__ca_write = \regs__ca_write$284 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$285 ;
+  assign ch1__ca_write = \regs__ca_write$287 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$287  = 1'h1;
+  assign \regs__cap_counters$290  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$289  = 6'h37;
+  assign \regs__cap_data_bits_w0$292  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$291  = 6'h28;
+  assign \regs__cap_data_bits_w1$294  = 6'h28;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$293  = 1'h1;
+  assign \regs__cap_register_access$296  = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign \regs__cap_ssi$295  = 1'h1;
+  assign \regs__cap_ssi$298  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$297  = 6'h18;
+  assign \regs__cap_timer_width$300  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$299  = 1'h1;
-  assign ch1__cds = \$11 [49];
-  assign \regs__cds$301  = \$11 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$302 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$304 ;
-  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$306 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$308 ;
-  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$310 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$312 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$314 ;
-  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$316 ;
-  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$318 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$320 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$322 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$324 ;
-  assign ch1__cfg_ssi = \regs__cfg_ssi$326 ;
-  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$328 ;
-  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$330 ;
-  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$332 ;
-  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$334 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$336 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$338 ;
-  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$340 ;
-  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$342 ;
-  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$344 ;
-  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$346 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$348 ;
-  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$350 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$352 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$354 ;
-  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$356 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$358 ;
-  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$360 ;
-  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$362 ;
-  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$364 ;
-  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$366 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$368 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$370 ;
-  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$372 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$374 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$376 ;
-  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$378 ;
-  assign ch1__clear_counters = \regs__clear_counters$380 ;
-  assign \regs__config_error$383  = ch1__config_error;
-  assign \regs__count_addr$384  = wb_adr[2:0];
+  assign \regs__cap_timestamp$302  = 1'h1;
+  assign ch1__cds = \$13 [49];
+  assign \regs__cds$304  = \$13 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$305 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$307 ;
+  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$309 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$311 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$313 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$315 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$317 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$319 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$321 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$323 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$325 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$327 ;
+  assign ch1__cfg_ssi = \regs__cfg_ssi$329 ;
+  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$331 ;
+  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$333 ;
+  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$335 ;
+  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$337 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$339 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$341 ;
+  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$343 ;
+  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$345 ;
+  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$347 ;
+  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$349 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$351 ;
+  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$353 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$355 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$357 ;
+  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$359 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$361 ;
+  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$363 ;
+  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$365 ;
+  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$367 ;
+  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$369 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$371 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$373 ;
+  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$375 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$377 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$379 ;
+  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$381 ;
+  assign ch1__clear_counters = \regs__clear_counters$383 ;
+  assign \regs__config_error$386  = ch1__config_error;
+  assign \regs__count_addr$387  = wb_adr[2:0];
   assign ch1__count_addr = wb_adr[2:0];
-  assign ch1__count_ca_aborted = \$12 [63:48];
-  assign \regs__count_ca_aborted$387  = \$12 [63:48];
-  assign ch1__count_ca_crc4_error = \$12 [15:0];
-  assign \regs__count_ca_crc4_error$389  = \$12 [15:0];
-  assign ch1__count_ca_data_fault = \$12 [79:64];
-  assign \regs__count_ca_data_fault$391  = \$12 [79:64];
-  assign ch1__count_ca_no_answer = \$12 [31:16];
-  assign \regs__count_ca_no_answer$393  = \$12 [31:16];
-  assign ch1__count_ca_refused = \$12 [47:32];
-  assign \regs__count_ca_refused$395  = \$12 [47:32];
-  assign \regs__count_data$397  = ch1__count_data;
-  assign ch1__count_en = \regs__count_en$398 ;
-  assign ch1__delay_settled = \$11 [54];
-  assign \regs__delay_settled$401  = \$11 [54];
-  assign ch1__delay_spread = \$11 [75:68];
-  assign \regs__delay_spread$403  = \$11 [75:68];
-  assign \regs__done_count$405  = ch1__done_count;
-  assign \regs__frame_done$407  = ch1__frame_done;
-  assign \regs__frame_error$409  = ch1__frame_error;
-  assign ch1__lc = \$11 [182:177];
-  assign \regs__lc$411  = \$11 [182:177];
-  assign ch1__lc_repeat = \$11 [183];
-  assign \regs__lc_repeat$413  = \$11 [183];
-  assign ch1__lc_skip = \$11 [184];
-  assign \regs__lc_skip$415  = \$11 [184];
-  assign ch1__lc_zero = \$11 [185];
-  assign \regs__lc_zero$417  = \$11 [185];
-  assign ch1__line_delay = \$11 [48:36];
-  assign \regs__line_delay$419  = \$11 [48:36];
-  assign ch1__noise_events = \$11 [53:50];
-  assign \regs__noise_events$421  = \$11 [53:50];
-  assign ch1__periodic = \regs__periodic$422 ;
-  assign ch1__settled_delay = \$11 [67:55];
-  assign \regs__settled_delay$425  = \$11 [67:55];
-  assign ch1__spw_mismatch = \$11 [186];
-  assign \regs__spw_mismatch$427  = \$11 [186];
-  assign ch1__start = \regs__start$428 ;
-  assign ch1__status = \$11 [3:0];
-  assign \regs__status$431  = \$11 [3:0];
-  assign ch1__timestamp = \$11 [35:4];
-  assign \regs__timestamp$433  = \$11 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$434 ;
-  assign ch1__word0_crc_ok = \$11 [133];
-  assign \regs__word0_crc_ok$437  = \$11 [133];
-  assign ch1__word0_ne = \$11 [131];
-  assign \regs__word0_ne$439  = \$11 [131];
-  assign ch1__word0_nw = \$11 [132];
-  assign \regs__word0_nw$441  = \$11 [132];
-  assign ch1__word0_position = \$11 [130:76];
-  assign \regs__word0_position$443  = \$11 [130:76];
-  assign ch1__word1_crc_ok = \$11 [176];
-  assign \regs__word1_crc_ok$445  = \$11 [176];
-  assign ch1__word1_ne = \$11 [174];
-  assign \regs__word1_ne$447  = \$11 [174];
-  assign ch1__word1_nw = \$11 [175];
-  assign \regs__word1_nw$449  = \$11 [175];
-  assign ch1__word1_position = \$11 [173:134];
-  assign \regs__word1_position$451  = \$11 [173:134];
-  assign \trigger$452  = \trigger$42 ;
-  assign \ma$453  = ch1_ma;
-  assign \slo$454  = ch1_slo;
+  assign ch1__count_ca_aborted = \$14 [63:48];
+  assign \regs__count_ca_aborted$390  = \$14 [63:48];
+  assign ch1__count_ca_crc4_error = \$14 [15:0];
+  assign \regs__count_ca_crc4_error$392  = \$14 [15:0];
+  assign ch1__count_ca_data_fault = \$14 [79:64];
+  assign \regs__count_ca_data_fault$394  = \$14 [79:64];
+  assign ch1__count_ca_no_answer = \$14 [31:16];
+  assign \regs__count_ca_no_answer$396  = \$14 [31:16];
+  assign ch1__count_ca_refused = \$14 [47:32];
+  assign \regs__count_ca_refused$398  = \$14 [47:32];
+  assign \regs__count_data$400  = ch1__count_data;
+  assign ch1__count_en = \regs__count_en$401 ;
+  assign ch1__delay_settled = \$13 [54];
+  assign \regs__delay_settled$404  = \$13 [54];
+  assign ch1__delay_spread = \$13 [75:68];
+  assign \regs__delay_spread$406  = \$13 [75:68];
+  assign \regs__done_count$408  = ch1__done_count;
+  assign \regs__frame_done$410  = ch1__frame_done;
+  assign \regs__frame_error$412  = ch1__frame_error;
+  assign ch1__lc = \$13 [182:177];
+  assign \regs__lc$414  = \$13 [182:177];
+  assign ch1__lc_repeat = \$13 [183];
+  assign \regs__lc_repeat$416  = \$13 [183];
+  assign ch1__lc_skip = \$13 [184];
+  assign \regs__lc_skip$418  = \$13 [184];
+  assign ch1__lc_zero = \$13 [185];
+  assign \regs__lc_zero$420  = \$13 [185];
+  assign ch1__line_delay = \$13 [48:36];
+  assign \regs__line_delay$422  = \$13 [48:36];
+  assign ch1__noise_events = \$13 [53:50];
+  assign \regs__noise_events$424  = \$13 [53:50];
+  assign ch1__periodic = \regs__periodic$425 ;
+  assign ch1__settled_delay = \$13 [67:55];
+  assign \regs__settled_delay$428  = \$13 [67:55];
+  assign ch1__spw_mismatch = \$13 [186];
+  assign \regs__spw_mismatch$430  = \$13 [186];
+  assign ch1__start = \regs__start$431 ;
+  assign ch1__status = \$13 [3:0];
+  assign \regs__status$434  = \$13 [3:0];
+  assign ch1__timestamp = \$13 [35:4];
+  assign \regs__timestamp$436  = \$13 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$437 ;
+  assign ch1__word0_crc_ok = \$13 [133];
+  assign \regs__word0_crc_ok$440  = \$13 [133];
+  assign ch1__word0_ne = \$13 [131];
+  assign \regs__word0_ne$442  = \$13 [131];
+  assign ch1__word0_nw = \$13 [132];
+  assign \regs__word0_nw$444  = \$13 [132];
+  assign ch1__word0_position = \$13 [130:76];
+  assign \regs__word0_position$446  = \$13 [130:76];
+  assign ch1__word1_crc_ok = \$13 [176];
+  assign \regs__word1_crc_ok$448  = \$13 [176];
+  assign ch1__word1_ne = \$13 [174];
+  assign \regs__word1_ne$450  = \$13 [174];
+  assign ch1__word1_nw = \$13 [175];
+  assign \regs__word1_nw$452  = \$13 [175];
+  assign ch1__word1_position = \$13 [173:134];
+  assign \regs__word1_position$454  = \$13 [173:134];
+  assign \trigger$455  = \trigger$42 ;
+  assign \ma$456  = ch1_ma;
+  assign \slo$457  = ch1_slo;
   assign glob__channels = 4'h2;
-  assign glob__irq_pending = { 6'h00, \$7 , \$6  };
-  assign \irq$457  = { \$7 , \$6  };
+  assign glob__irq_pending = { 6'h00, \$9 , \$8  };
+  assign \irq$460  = { \$9 , \$8  };
 endmodule
 
 (* generator = "Amaranth" *)
@@ -1161,7 +1182,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$113 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
 , ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
 , ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id
-, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6640$0 , \port$6653$0 , ch0__ca_done, \port$6730$0 , ch1__frame_done, ch1__done_count, \port$7171$0 , \port$7184$0 , ch1__ca_done, \port$7261$0 , bus__w_addr);
+, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6641$0 , \port$6652$0 , ch0__ca_done, \port$6729$0 , ch1__frame_done, ch1__done_count, \port$7170$0 , \port$7181$0 , ch1__ca_done, \port$7258$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
@@ -2709,18 +2730,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6640$0 ;
-  wire [186:0] \port$6640$0 ;
-  input [79:0] \port$6653$0 ;
-  wire [79:0] \port$6653$0 ;
-  input [9:0] \port$6730$0 ;
-  wire [9:0] \port$6730$0 ;
-  input [186:0] \port$7171$0 ;
-  wire [186:0] \port$7171$0 ;
-  input [79:0] \port$7184$0 ;
-  wire [79:0] \port$7184$0 ;
-  input [9:0] \port$7261$0 ;
-  wire [9:0] \port$7261$0 ;
+  input [186:0] \port$6641$0 ;
+  wire [186:0] \port$6641$0 ;
+  input [79:0] \port$6652$0 ;
+  wire [79:0] \port$6652$0 ;
+  input [9:0] \port$6729$0 ;
+  wire [9:0] \port$6729$0 ;
+  input [186:0] \port$7170$0 ;
+  wire [186:0] \port$7170$0 ;
+  input [79:0] \port$7181$0 ;
+  wire [79:0] \port$7181$0 ;
+  input [9:0] \port$7258$0 ;
+  wire [9:0] \port$7258$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2824,7 +2845,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$343  = \$341  | \$342 ;
   assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
   assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7171$0 [182:177], 4'h0, \port$7171$0 [186:183], 1'h0, \port$7171$0 [176:174], 1'h0, \port$7171$0 [133:131], 3'h0, \port$7171$0 [49], \port$7171$0 [3:0] } : 32'd0;
+  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7170$0 [182:177], 4'h0, \port$7170$0 [186:183], 1'h0, \port$7170$0 [176:174], 1'h0, \port$7170$0 [133:131], 3'h0, \port$7170$0 [49], \port$7170$0 [3:0] } : 32'd0;
   assign \$347  = \$345  | \$346 ;
   assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
   assign \$349  = \$347  | \$348 ;
@@ -2852,13 +2873,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$371  = \$369  | \$370 ;
   assign \$372  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
   assign \$373  = \$371  | \$372 ;
-  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7261$0 [9:3], 1'h0, \port$7261$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7258$0 [9:3], 1'h0, \port$7258$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
   assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_143 ? \port$7184$0 [31:0] : 32'd0;
+  assign \$378  = ch1_read_select_143 ? \port$7181$0 [31:0] : 32'd0;
   assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_144 ? \port$7184$0 [63:32] : 32'd0;
+  assign \$380  = ch1_read_select_144 ? \port$7181$0 [63:32] : 32'd0;
   assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7184$0 [79:64] } : 32'd0;
+  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7181$0 [79:64] } : 32'd0;
   assign \$383  = \$381  | \$382 ;
   assign \$384  = ch1_window0_read ? ch1__count_data : 32'd0;
   assign \$385  = \$383  | \$384 ;
@@ -3728,7 +3749,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$158  = \$156  | \$157 ;
   assign \$159  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
   assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6640$0 [182:177], 4'h0, \port$6640$0 [186:183], 1'h0, \port$6640$0 [176:174], 1'h0, \port$6640$0 [133:131], 3'h0, \port$6640$0 [49], \port$6640$0 [3:0] } : 32'd0;
+  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6641$0 [182:177], 4'h0, \port$6641$0 [186:183], 1'h0, \port$6641$0 [176:174], 1'h0, \port$6641$0 [133:131], 3'h0, \port$6641$0 [49], \port$6641$0 [3:0] } : 32'd0;
   assign \$162  = \$160  | \$161 ;
   assign \$163  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
   assign \$164  = \$162  | \$163 ;
@@ -3756,13 +3777,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$186  = \$184  | \$185 ;
   assign \$187  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
   assign \$188  = \$186  | \$187 ;
-  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6730$0 [9:3], 1'h0, \port$6730$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6729$0 [9:3], 1'h0, \port$6729$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
   assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_c3 ? \port$6653$0 [31:0] : 32'd0;
+  assign \$193  = ch0_read_select_c3 ? \port$6652$0 [31:0] : 32'd0;
   assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_c4 ? \port$6653$0 [63:32] : 32'd0;
+  assign \$195  = ch0_read_select_c4 ? \port$6652$0 [63:32] : 32'd0;
   assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6653$0 [79:64] } : 32'd0;
+  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6652$0 [79:64] } : 32'd0;
   assign \$198  = \$196  | \$197 ;
   assign \$199  = ch0_window0_read ? ch0__count_data : 32'd0;
   assign \$200  = \$198  | \$199 ;
@@ -4966,7 +4987,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$595  = ch0_result_status_status_snapshot;
     if (\$130 ) begin
-      \$595  = \port$6640$0 [3:0];
+      \$595  = \port$6641$0 [3:0];
     end
     if (rst) begin
       \$595  = 4'h0;
@@ -4976,7 +4997,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$596  = ch0_result_status_cds_snapshot;
     if (\$130 ) begin
-      \$596  = \port$6640$0 [49];
+      \$596  = \port$6641$0 [49];
     end
     if (rst) begin
       \$596  = 1'h0;
@@ -4986,7 +5007,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$597  = ch0_result_status_w0_ne_snapshot;
     if (\$130 ) begin
-      \$597  = \port$6640$0 [131];
+      \$597  = \port$6641$0 [131];
     end
     if (rst) begin
       \$597  = 1'h0;
@@ -4996,7 +5017,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$598  = ch0_result_status_w0_nw_snapshot;
     if (\$130 ) begin
-      \$598  = \port$6640$0 [132];
+      \$598  = \port$6641$0 [132];
     end
     if (rst) begin
       \$598  = 1'h0;
@@ -5006,7 +5027,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$599  = ch0_result_status_w0_crc_ok_snapshot;
     if (\$130 ) begin
-      \$599  = \port$6640$0 [133];
+      \$599  = \port$6641$0 [133];
     end
     if (rst) begin
       \$599  = 1'h0;
@@ -5016,7 +5037,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$600  = ch0_result_status_w1_ne_snapshot;
     if (\$130 ) begin
-      \$600  = \port$6640$0 [174];
+      \$600  = \port$6641$0 [174];
     end
     if (rst) begin
       \$600  = 1'h0;
@@ -5026,7 +5047,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$601  = ch0_result_status_w1_nw_snapshot;
     if (\$130 ) begin
-      \$601  = \port$6640$0 [175];
+      \$601  = \port$6641$0 [175];
     end
     if (rst) begin
       \$601  = 1'h0;
@@ -5036,7 +5057,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$602  = ch0_result_status_w1_crc_ok_snapshot;
     if (\$130 ) begin
-      \$602  = \port$6640$0 [176];
+      \$602  = \port$6641$0 [176];
     end
     if (rst) begin
       \$602  = 1'h0;
@@ -5046,7 +5067,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$603  = ch0_result_status_lc_repeat_snapshot;
     if (\$130 ) begin
-      \$603  = \port$6640$0 [183];
+      \$603  = \port$6641$0 [183];
     end
     if (rst) begin
       \$603  = 1'h0;
@@ -5056,7 +5077,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$604  = ch0_result_status_lc_skip_snapshot;
     if (\$130 ) begin
-      \$604  = \port$6640$0 [184];
+      \$604  = \port$6641$0 [184];
     end
     if (rst) begin
       \$604  = 1'h0;
@@ -5066,7 +5087,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$605  = ch0_result_status_lc_zero_snapshot;
     if (\$130 ) begin
-      \$605  = \port$6640$0 [185];
+      \$605  = \port$6641$0 [185];
     end
     if (rst) begin
       \$605  = 1'h0;
@@ -5076,7 +5097,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$606  = ch0_result_status_spw_mismatch_snapshot;
     if (\$130 ) begin
-      \$606  = \port$6640$0 [186];
+      \$606  = \port$6641$0 [186];
     end
     if (rst) begin
       \$606  = 1'h0;
@@ -5086,7 +5107,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$607  = ch0_result_status_lc_snapshot;
     if (\$130 ) begin
-      \$607  = \port$6640$0 [182:177];
+      \$607  = \port$6641$0 [182:177];
     end
     if (rst) begin
       \$607  = 6'h00;
@@ -5106,7 +5127,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$609  = ch0_result_seq_line_delay_snapshot;
     if (\$130 ) begin
-      \$609  = \port$6640$0 [48:36];
+      \$609  = \port$6641$0 [48:36];
     end
     if (rst) begin
       \$609  = 13'h0000;
@@ -5116,7 +5137,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$610  = ch0_result_w0_lo_data_snapshot;
     if (\$130 ) begin
-      \$610  = \port$6640$0 [107:76];
+      \$610  = \port$6641$0 [107:76];
     end
     if (rst) begin
       \$610  = 32'd0;
@@ -5126,7 +5147,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$611  = ch0_result_w0_hi_data_snapshot;
     if (\$130 ) begin
-      \$611  = \port$6640$0 [130:108];
+      \$611  = \port$6641$0 [130:108];
     end
     if (rst) begin
       \$611  = 23'h000000;
@@ -5136,7 +5157,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$612  = ch0_result_w1_lo_data_snapshot;
     if (\$130 ) begin
-      \$612  = \port$6640$0 [165:134];
+      \$612  = \port$6641$0 [165:134];
     end
     if (rst) begin
       \$612  = 32'd0;
@@ -5146,7 +5167,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$613  = ch0_result_w1_hi_data_snapshot;
     if (\$130 ) begin
-      \$613  = \port$6640$0 [173:166];
+      \$613  = \port$6641$0 [173:166];
     end
     if (rst) begin
       \$613  = 8'h00;
@@ -5156,7 +5177,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$614  = ch0_result_timestamp_time_snapshot;
     if (\$130 ) begin
-      \$614  = \port$6640$0 [35:4];
+      \$614  = \port$6641$0 [35:4];
     end
     if (rst) begin
       \$614  = 32'd0;
@@ -5166,7 +5187,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$615  = ch0_result_line_noise_events_snapshot;
     if (\$130 ) begin
-      \$615  = \port$6640$0 [53:50];
+      \$615  = \port$6641$0 [53:50];
     end
     if (rst) begin
       \$615  = 4'h0;
@@ -5176,7 +5197,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$616  = ch0_result_line_delay_settled_snapshot;
     if (\$130 ) begin
-      \$616  = \port$6640$0 [54];
+      \$616  = \port$6641$0 [54];
     end
     if (rst) begin
       \$616  = 1'h0;
@@ -5186,7 +5207,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$617  = ch0_result_line_delay_spread_snapshot;
     if (\$130 ) begin
-      \$617  = \port$6640$0 [75:68];
+      \$617  = \port$6641$0 [75:68];
     end
     if (rst) begin
       \$617  = 8'h00;
@@ -5196,7 +5217,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$618  = ch0_result_line_settled_delay_snapshot;
     if (\$130 ) begin
-      \$618  = \port$6640$0 [67:55];
+      \$618  = \port$6641$0 [67:55];
     end
     if (rst) begin
       \$618  = 13'h0000;
@@ -6260,7 +6281,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$725  = ch1_result_status_status_snapshot;
     if (\$315 ) begin
-      \$725  = \port$7171$0 [3:0];
+      \$725  = \port$7170$0 [3:0];
     end
     if (rst) begin
       \$725  = 4'h0;
@@ -6270,7 +6291,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$726  = ch1_result_status_cds_snapshot;
     if (\$315 ) begin
-      \$726  = \port$7171$0 [49];
+      \$726  = \port$7170$0 [49];
     end
     if (rst) begin
       \$726  = 1'h0;
@@ -6280,7 +6301,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$727  = ch1_result_status_w0_ne_snapshot;
     if (\$315 ) begin
-      \$727  = \port$7171$0 [131];
+      \$727  = \port$7170$0 [131];
     end
     if (rst) begin
       \$727  = 1'h0;
@@ -6290,7 +6311,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$728  = ch1_result_status_w0_nw_snapshot;
     if (\$315 ) begin
-      \$728  = \port$7171$0 [132];
+      \$728  = \port$7170$0 [132];
     end
     if (rst) begin
       \$728  = 1'h0;
@@ -6300,7 +6321,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$729  = ch1_result_status_w0_crc_ok_snapshot;
     if (\$315 ) begin
-      \$729  = \port$7171$0 [133];
+      \$729  = \port$7170$0 [133];
     end
     if (rst) begin
       \$729  = 1'h0;
@@ -6310,7 +6331,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$730  = ch1_result_status_w1_ne_snapshot;
     if (\$315 ) begin
-      \$730  = \port$7171$0 [174];
+      \$730  = \port$7170$0 [174];
     end
     if (rst) begin
       \$730  = 1'h0;
@@ -6320,7 +6341,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$731  = ch1_result_status_w1_nw_snapshot;
     if (\$315 ) begin
-      \$731  = \port$7171$0 [175];
+      \$731  = \port$7170$0 [175];
     end
     if (rst) begin
       \$731  = 1'h0;
@@ -6330,7 +6351,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$732  = ch1_result_status_w1_crc_ok_snapshot;
     if (\$315 ) begin
-      \$732  = \port$7171$0 [176];
+      \$732  = \port$7170$0 [176];
     end
     if (rst) begin
       \$732  = 1'h0;
@@ -6340,7 +6361,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$733  = ch1_result_status_lc_repeat_snapshot;
     if (\$315 ) begin
-      \$733  = \port$7171$0 [183];
+      \$733  = \port$7170$0 [183];
     end
     if (rst) begin
       \$733  = 1'h0;
@@ -6350,7 +6371,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$734  = ch1_result_status_lc_skip_snapshot;
     if (\$315 ) begin
-      \$734  = \port$7171$0 [184];
+      \$734  = \port$7170$0 [184];
     end
     if (rst) begin
       \$734  = 1'h0;
@@ -6360,7 +6381,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$735  = ch1_result_status_lc_zero_snapshot;
     if (\$315 ) begin
-      \$735  = \port$7171$0 [185];
+      \$735  = \port$7170$0 [185];
     end
     if (rst) begin
       \$735  = 1'h0;
@@ -6370,7 +6391,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$736  = ch1_result_status_spw_mismatch_snapshot;
     if (\$315 ) begin
-      \$736  = \port$7171$0 [186];
+      \$736  = \port$7170$0 [186];
     end
     if (rst) begin
       \$736  = 1'h0;
@@ -6380,7 +6401,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$737  = ch1_result_status_lc_snapshot;
     if (\$315 ) begin
-      \$737  = \port$7171$0 [182:177];
+      \$737  = \port$7170$0 [182:177];
     end
     if (rst) begin
       \$737  = 6'h00;
@@ -6400,7 +6421,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$739  = ch1_result_seq_line_delay_snapshot;
     if (\$315 ) begin
-      \$739  = \port$7171$0 [48:36];
+      \$739  = \port$7170$0 [48:36];
     end
     if (rst) begin
       \$739  = 13'h0000;
@@ -6410,7 +6431,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$740  = ch1_result_w0_lo_data_snapshot;
     if (\$315 ) begin
-      \$740  = \port$7171$0 [107:76];
+      \$740  = \port$7170$0 [107:76];
     end
     if (rst) begin
       \$740  = 32'd0;
@@ -6420,7 +6441,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$741  = ch1_result_w0_hi_data_snapshot;
     if (\$315 ) begin
-      \$741  = \port$7171$0 [130:108];
+      \$741  = \port$7170$0 [130:108];
     end
     if (rst) begin
       \$741  = 23'h000000;
@@ -6430,7 +6451,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$742  = ch1_result_w1_lo_data_snapshot;
     if (\$315 ) begin
-      \$742  = \port$7171$0 [165:134];
+      \$742  = \port$7170$0 [165:134];
     end
     if (rst) begin
       \$742  = 32'd0;
@@ -6440,7 +6461,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$743  = ch1_result_w1_hi_data_snapshot;
     if (\$315 ) begin
-      \$743  = \port$7171$0 [173:166];
+      \$743  = \port$7170$0 [173:166];
     end
     if (rst) begin
       \$743  = 8'h00;
@@ -6450,7 +6471,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$744  = ch1_result_timestamp_time_snapshot;
     if (\$315 ) begin
-      \$744  = \port$7171$0 [35:4];
+      \$744  = \port$7170$0 [35:4];
     end
     if (rst) begin
       \$744  = 32'd0;
@@ -6460,7 +6481,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$745  = ch1_result_line_noise_events_snapshot;
     if (\$315 ) begin
-      \$745  = \port$7171$0 [53:50];
+      \$745  = \port$7170$0 [53:50];
     end
     if (rst) begin
       \$745  = 4'h0;
@@ -6470,7 +6491,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$746  = ch1_result_line_delay_settled_snapshot;
     if (\$315 ) begin
-      \$746  = \port$7171$0 [54];
+      \$746  = \port$7170$0 [54];
     end
     if (rst) begin
       \$746  = 1'h0;
@@ -6480,7 +6501,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$747  = ch1_result_line_delay_spread_snapshot;
     if (\$315 ) begin
-      \$747  = \port$7171$0 [75:68];
+      \$747  = \port$7170$0 [75:68];
     end
     if (rst) begin
       \$747  = 8'h00;
@@ -6490,7 +6511,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
     \$748  = ch1_result_line_settled_delay_snapshot;
     if (\$315 ) begin
-      \$748  = \port$7171$0 [67:55];
+      \$748  = \port$7170$0 [67:55];
     end
     if (rst) begin
       \$748  = 13'h0000;
@@ -6529,27 +6550,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6640$0 [3:0];
-  assign ch0__cds = \port$6640$0 [49];
-  assign ch0__word0_ne = \port$6640$0 [131];
-  assign ch0__word0_nw = \port$6640$0 [132];
-  assign ch0__word0_crc_ok = \port$6640$0 [133];
-  assign ch0__word1_ne = \port$6640$0 [174];
-  assign ch0__word1_nw = \port$6640$0 [175];
-  assign ch0__word1_crc_ok = \port$6640$0 [176];
-  assign ch0__lc_repeat = \port$6640$0 [183];
-  assign ch0__lc_skip = \port$6640$0 [184];
-  assign ch0__lc_zero = \port$6640$0 [185];
-  assign ch0__spw_mismatch = \port$6640$0 [186];
-  assign ch0__lc = \port$6640$0 [182:177];
-  assign ch0__line_delay = \port$6640$0 [48:36];
-  assign ch0__word0_position = \port$6640$0 [130:76];
-  assign ch0__word1_position = \port$6640$0 [173:134];
-  assign ch0__timestamp = \port$6640$0 [35:4];
-  assign ch0__noise_events = \port$6640$0 [53:50];
-  assign ch0__delay_settled = \port$6640$0 [54];
-  assign ch0__delay_spread = \port$6640$0 [75:68];
-  assign ch0__settled_delay = \port$6640$0 [67:55];
+  assign ch0__status = \port$6641$0 [3:0];
+  assign ch0__cds = \port$6641$0 [49];
+  assign ch0__word0_ne = \port$6641$0 [131];
+  assign ch0__word0_nw = \port$6641$0 [132];
+  assign ch0__word0_crc_ok = \port$6641$0 [133];
+  assign ch0__word1_ne = \port$6641$0 [174];
+  assign ch0__word1_nw = \port$6641$0 [175];
+  assign ch0__word1_crc_ok = \port$6641$0 [176];
+  assign ch0__lc_repeat = \port$6641$0 [183];
+  assign ch0__lc_skip = \port$6641$0 [184];
+  assign ch0__lc_zero = \port$6641$0 [185];
+  assign ch0__spw_mismatch = \port$6641$0 [186];
+  assign ch0__lc = \port$6641$0 [182:177];
+  assign ch0__line_delay = \port$6641$0 [48:36];
+  assign ch0__word0_position = \port$6641$0 [130:76];
+  assign ch0__word1_position = \port$6641$0 [173:134];
+  assign ch0__timestamp = \port$6641$0 [35:4];
+  assign ch0__noise_events = \port$6641$0 [53:50];
+  assign ch0__delay_settled = \port$6641$0 [54];
+  assign ch0__delay_spread = \port$6641$0 [75:68];
+  assign ch0__settled_delay = \port$6641$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -6557,34 +6578,34 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
   assign ch0__cap_ssi = 1'h1;
-  assign ch0__ca_status = \port$6730$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6730$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6653$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$6653$0 [31:16];
-  assign ch0__count_ca_refused = \port$6653$0 [47:32];
-  assign ch0__count_ca_aborted = \port$6653$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$6653$0 [79:64];
-  assign ch1__status = \port$7171$0 [3:0];
-  assign ch1__cds = \port$7171$0 [49];
-  assign ch1__word0_ne = \port$7171$0 [131];
-  assign ch1__word0_nw = \port$7171$0 [132];
-  assign ch1__word0_crc_ok = \port$7171$0 [133];
-  assign ch1__word1_ne = \port$7171$0 [174];
-  assign ch1__word1_nw = \port$7171$0 [175];
-  assign ch1__word1_crc_ok = \port$7171$0 [176];
-  assign ch1__lc_repeat = \port$7171$0 [183];
-  assign ch1__lc_skip = \port$7171$0 [184];
-  assign ch1__lc_zero = \port$7171$0 [185];
-  assign ch1__spw_mismatch = \port$7171$0 [186];
-  assign ch1__lc = \port$7171$0 [182:177];
-  assign ch1__line_delay = \port$7171$0 [48:36];
-  assign ch1__word0_position = \port$7171$0 [130:76];
-  assign ch1__word1_position = \port$7171$0 [173:134];
-  assign ch1__timestamp = \port$7171$0 [35:4];
-  assign ch1__noise_events = \port$7171$0 [53:50];
-  assign ch1__delay_settled = \port$7171$0 [54];
-  assign ch1__delay_spread = \port$7171$0 [75:68];
-  assign ch1__settled_delay = \port$7171$0 [67:55];
+  assign ch0__ca_status = \port$6729$0 [2:0];
+  assign ch0__ca_bytes_done = \port$6729$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$6652$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$6652$0 [31:16];
+  assign ch0__count_ca_refused = \port$6652$0 [47:32];
+  assign ch0__count_ca_aborted = \port$6652$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$6652$0 [79:64];
+  assign ch1__status = \port$7170$0 [3:0];
+  assign ch1__cds = \port$7170$0 [49];
+  assign ch1__word0_ne = \port$7170$0 [131];
+  assign ch1__word0_nw = \port$7170$0 [132];
+  assign ch1__word0_crc_ok = \port$7170$0 [133];
+  assign ch1__word1_ne = \port$7170$0 [174];
+  assign ch1__word1_nw = \port$7170$0 [175];
+  assign ch1__word1_crc_ok = \port$7170$0 [176];
+  assign ch1__lc_repeat = \port$7170$0 [183];
+  assign ch1__lc_skip = \port$7170$0 [184];
+  assign ch1__lc_zero = \port$7170$0 [185];
+  assign ch1__spw_mismatch = \port$7170$0 [186];
+  assign ch1__lc = \port$7170$0 [182:177];
+  assign ch1__line_delay = \port$7170$0 [48:36];
+  assign ch1__word0_position = \port$7170$0 [130:76];
+  assign ch1__word1_position = \port$7170$0 [173:134];
+  assign ch1__timestamp = \port$7170$0 [35:4];
+  assign ch1__noise_events = \port$7170$0 [53:50];
+  assign ch1__delay_settled = \port$7170$0 [54];
+  assign ch1__delay_spread = \port$7170$0 [75:68];
+  assign ch1__settled_delay = \port$7170$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -6592,13 +6613,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign ch1__ca_status = \port$7261$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7261$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7184$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7184$0 [31:16];
-  assign ch1__count_ca_refused = \port$7184$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7184$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7184$0 [79:64];
+  assign ch1__ca_status = \port$7258$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7258$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7181$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7181$0 [31:16];
+  assign ch1__count_ca_refused = \port$7181$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7181$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7181$0 [79:64];
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__w_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -6843,10 +6864,10 @@ module \biss_master_wb.bus (wb__stb, wb__we, regs__r_addr, regs__w_data, regs__w
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
-, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
-, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6640$0 , \port$6653$0 , regs__ca_done, \port$6730$0 , ca_rbuf_addr);
+module \biss_master_wb.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
+, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
+, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6641$0 , \port$6652$0 , regs__ca_done, \port$6729$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -7023,17 +7044,17 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$198 ;
+  wire \ma$200 ;
   wire [3:0] noise_events;
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6640$0 ;
-  wire [186:0] \port$6640$0 ;
-  output [79:0] \port$6653$0 ;
-  wire [79:0] \port$6653$0 ;
-  output [9:0] \port$6730$0 ;
-  wire [9:0] \port$6730$0 ;
+  output [186:0] \port$6641$0 ;
+  wire [186:0] \port$6641$0 ;
+  output [79:0] \port$6652$0 ;
+  wire [79:0] \port$6652$0 ;
+  output [9:0] \port$6729$0 ;
+  wire [9:0] \port$6729$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -7162,7 +7183,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$200 ;
+  wire \slo$202 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -7184,10 +7205,13 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
+  input [31:0] time_now;
+  wire [31:0] time_now;
+  wire [31:0] \time_now$195 ;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$195 ;
-  wire \trigger$195 ;
+  input \trigger$197 ;
+  wire \trigger$197 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -7205,7 +7229,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
-  assign trigger = \trigger$195  & regs__trigger_enable;
+  assign trigger = \trigger$197  & regs__trigger_enable;
   assign \$6  = ~ report;
   assign \$7  = \$signal  & \$6 ;
   assign \$8  = waited + 1'h1;
@@ -7227,8 +7251,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
     regs__done_count <= \$17 ;
   \biss_master_wb.ch0.core  core (
     .abort(abort_cycle),
-    .\abort$264 (ca_abort),
-    .\busy$313 (regs__busy),
+    .\abort$266 (ca_abort),
+    .\busy$315 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -7277,27 +7301,28 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$289 (clear_counters),
+    .\clear$291 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$19 ),
-    .\done$316 (done),
+    .\done$318 (done),
     .frames(regs__ca_busy),
     .ma(ma),
+    .now(time_now),
     .\periodic$45 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$20 ),
-    .\result$321 (\$18 ),
+    .\result$323 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$262 (ca_start),
+    .\start$264 (ca_start),
     .trigger(trigger),
-    .\valid$318 (valid)
+    .\valid$320 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
@@ -7486,18 +7511,19 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$198  = ma;
-  assign \slo$200  = slo;
-  assign \port$6640$0  = \$18 ;
-  assign \port$6653$0  = \$19 ;
-  assign \port$6730$0  = \$20 ;
+  assign \time_now$195  = time_now;
+  assign \ma$200  = ma;
+  assign \slo$202  = slo;
+  assign \port$6641$0  = \$18 ;
+  assign \port$6652$0  = \$19 ;
+  assign \port$6729$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$313 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$289 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$262 , \abort$264 
-, abort, ma, \done$316 , \valid$318 , \result$321 , counts, ca_done, result, rbuf_addr);
+module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$315 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$291 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit
+, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
+, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$264 
+, \abort$266 , abort, ma, \done$318 , \valid$320 , \result$323 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$13  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -7531,8 +7557,8 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$264 ;
-  wire \abort$264 ;
+  input \abort$266 ;
+  wire \abort$266 ;
   wire \abort$57 ;
   wire abort_cycle;
   wire ack_expired;
@@ -7541,16 +7567,16 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire [23:0] \ack_limit$113 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$345 ;
+  wire \bit$347 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$90 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$273 ;
-  wire \busy$310 ;
-  output \busy$313 ;
-  wire \busy$313 ;
+  wire \busy$275 ;
+  wire \busy$312 ;
+  output \busy$315 ;
+  wire \busy$315 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -7585,10 +7611,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$277 ;
+  wire \cdm$279 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$324 ;
+  wire \cds$326 ;
   wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -7736,12 +7762,12 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   reg clean = 1'h0;
   (* init = 1'h0 *)
   wire \clean$177 ;
-  wire \clean$346 ;
+  wire \clean$348 ;
   wire clear;
   wire \clear$137 ;
-  input \clear$289 ;
-  wire \clear$289 ;
-  wire \clear$302 ;
+  input \clear$291 ;
+  wire \clear$291 ;
+  wire \clear$304 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -7879,9 +7905,9 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  output \done$316 ;
-  wire \done$316 ;
-  wire \done$317 ;
+  output \done$318 ;
+  wire \done$318 ;
+  wire \done$319 ;
   wire doubtful;
   wire early;
   wire \early$73 ;
@@ -7891,29 +7917,29 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$288 ;
-  wire \events$288.ca_aborted ;
-  wire \events$288.ca_crc4_error ;
-  wire \events$288.ca_data_fault ;
-  wire \events$288.ca_no_answer ;
-  wire \events$288.ca_refused ;
-  wire [15:0] \events$297 ;
-  wire \events$297.aborted ;
-  wire \events$297.crc_word0 ;
-  wire \events$297.crc_word1 ;
-  wire \events$297.delay_jump ;
-  wire \events$297.delay_range ;
-  wire \events$297.lc_repeat ;
-  wire \events$297.lc_skip ;
-  wire \events$297.lc_zero ;
-  wire \events$297.no_ack ;
-  wire \events$297.no_start ;
-  wire \events$297.no_stop ;
-  wire \events$297.noise_event ;
-  wire \events$297.noisy_line ;
-  wire \events$297.overrun ;
-  wire \events$297.slo_stuck_low ;
-  wire \events$297.spw_mismatch ;
+  wire [4:0] \events$290 ;
+  wire \events$290.ca_aborted ;
+  wire \events$290.ca_crc4_error ;
+  wire \events$290.ca_data_fault ;
+  wire \events$290.ca_no_answer ;
+  wire \events$290.ca_refused ;
+  wire [15:0] \events$299 ;
+  wire \events$299.aborted ;
+  wire \events$299.crc_word0 ;
+  wire \events$299.crc_word1 ;
+  wire \events$299.delay_jump ;
+  wire \events$299.delay_range ;
+  wire \events$299.lc_repeat ;
+  wire \events$299.lc_skip ;
+  wire \events$299.lc_zero ;
+  wire \events$299.no_ack ;
+  wire \events$299.no_start ;
+  wire \events$299.no_stop ;
+  wire \events$299.noise_event ;
+  wire \events$299.noisy_line ;
+  wire \events$299.overrun ;
+  wire \events$299.slo_stuck_low ;
+  wire \events$299.spw_mismatch ;
   wire fault;
   wire \fault$210 ;
   (* enum_base_type = "Status" *)
@@ -8011,7 +8037,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
-  wire \frame_end$282 ;
+  wire \frame_end$284 ;
   wire frame_ok;
   output frames;
   wire frames;
@@ -8027,19 +8053,19 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$149 ;
-  wire [5:0] \lc$337 ;
+  wire [5:0] \lc$339 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$151 ;
   wire lc_repeat;
-  wire \lc_repeat$338 ;
+  wire \lc_repeat$340 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$339 ;
+  wire \lc_skip$341 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$340 ;
+  wire \lc_zero$342 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
@@ -8105,7 +8131,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire \locked$71 ;
   output ma;
   wire ma;
-  wire \ma$312 ;
+  wire \ma$314 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$102 ;
@@ -8124,10 +8150,12 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire [3:0] noise_events;
   wire noisy;
   wire \noisy$179 ;
+  input [31:0] now;
+  wire [31:0] now;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$315 ;
+  wire \overrun$317 ;
   wire passed;
   wire pending;
   wire [23:0] period;
@@ -8162,30 +8190,30 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire \report_frame$209 ;
   wire \report_frame$229 ;
   wire request;
-  wire [17:0] \request$250 ;
-  wire [6:0] \request$250.address ;
-  wire [6:0] \request$250.count ;
-  wire [2:0] \request$250.slave_id ;
-  wire \request$250.write ;
+  wire [17:0] \request$252 ;
+  wire [6:0] \request$252.address ;
+  wire [6:0] \request$252.count ;
+  wire [2:0] \request$252.slave_id ;
+  wire \request$252.write ;
   wire \request$56 ;
   wire restart;
   wire \restart$164 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$321 ;
-  wire [186:0] \result$321 ;
-  wire \result$321.cds ;
-  wire \result$321.delay_settled ;
-  wire [7:0] \result$321.delay_spread ;
-  wire [5:0] \result$321.lc ;
-  wire \result$321.lc_repeat ;
-  wire \result$321.lc_skip ;
-  wire \result$321.lc_zero ;
-  wire [12:0] \result$321.line_delay ;
-  wire [3:0] \result$321.noise_events ;
-  wire [12:0] \result$321.settled_delay ;
-  wire \result$321.spw_mismatch ;
+  output [186:0] \result$323 ;
+  wire [186:0] \result$323 ;
+  wire \result$323.cds ;
+  wire \result$323.delay_settled ;
+  wire [7:0] \result$323.delay_spread ;
+  wire [5:0] \result$323.lc ;
+  wire \result$323.lc_repeat ;
+  wire \result$323.lc_skip ;
+  wire \result$323.lc_zero ;
+  wire [12:0] \result$323.line_delay ;
+  wire [3:0] \result$323.noise_events ;
+  wire [12:0] \result$323.settled_delay ;
+  wire \result$323.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -8203,18 +8231,18 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$321.status ;
-  wire [31:0] \result$321.timestamp ;
-  wire [57:0] \result$321.word0 ;
-  wire \result$321.word0.crc_ok ;
-  wire \result$321.word0.ne ;
-  wire \result$321.word0.nw ;
-  wire [54:0] \result$321.word0.position ;
-  wire [42:0] \result$321.word1 ;
-  wire \result$321.word1.crc_ok ;
-  wire \result$321.word1.ne ;
-  wire \result$321.word1.nw ;
-  wire [39:0] \result$321.word1.position ;
+  wire [3:0] \result$323.status ;
+  wire [31:0] \result$323.timestamp ;
+  wire [57:0] \result$323.word0 ;
+  wire \result$323.word0.crc_ok ;
+  wire \result$323.word0.ne ;
+  wire \result$323.word0.nw ;
+  wire [54:0] \result$323.word0.position ;
+  wire [42:0] \result$323.word1 ;
+  wire \result$323.word1.crc_ok ;
+  wire \result$323.word1.ne ;
+  wire \result$323.word1.nw ;
+  wire [39:0] \result$323.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -8233,13 +8261,13 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$344 ;
+  wire \sample$346 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$327 ;
+  wire [12:0] \settled_delay$329 ;
   wire skip;
   input slo;
   wire slo;
@@ -8256,7 +8284,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$341 ;
+  wire \spw_mismatch$343 ;
   wire ssi;
   wire \ssi$198 ;
   wire \ssi$202 ;
@@ -8267,8 +8295,8 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire ssi_error_low;
   input start;
   wire start;
-  input \start$262 ;
-  wire \start$262 ;
+  input \start$264 ;
+  wire \start$264 ;
   wire \start$43 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$134 ;
@@ -8329,11 +8357,12 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$320 ;
+  wire [3:0] \status$322 ;
   wire stop_bit;
   wire \stop_bit$86 ;
   wire stopped;
   wire \stopped$84 ;
+  wire [31:0] time_now;
   wire [23:0] timeout_limit;
   wire [23:0] \timeout_limit$115 ;
   wire [23:0] timeout_live;
@@ -8349,8 +8378,8 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire unconfirmed;
   wire valid;
   wire \valid$233 ;
-  output \valid$318 ;
-  wire \valid$318 ;
+  output \valid$320 ;
+  wire \valid$320 ;
   wire valid_out;
   wire waiting;
   wire watch;
@@ -8429,7 +8458,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \$3  = ~ started_before;
   assign \check$172  = started & \$3 ;
   assign \$4  = ~ cycle[259];
-  assign cdm = \cdm$277  & \$4 ;
+  assign cdm = \cdm$279  & \$4 ;
   assign \$5  = ~ cycle[259];
   assign frame_ok = passed & \$5 ;
   assign \$6  = result[2:0] == 1'h1;
@@ -8447,10 +8476,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \$18  = report_frame & \$17 ;
   assign \$19  = status == 4'he;
   assign \$20  = report_frame & \$19 ;
-  assign \busy$313  = ~ idle;
+  assign \busy$315  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$21  = ~ \clear$137 ;
-  assign \$22  = \sample$344  & \$21 ;
+  assign \$22  = \sample$346  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -8534,19 +8563,19 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   );
   \biss_master_wb.ch0.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$289 ),
+    .clear(\clear$291 ),
     .clk(clk),
-    .events(\events$297 ),
+    .events(\events$299 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_wb.ch0.core.counters  counters (
-    .clear(\clear$289 ),
+    .clear(\clear$291 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$288 ),
+    .events(\events$290 ),
     .rst(rst)
   );
   \biss_master_wb.ch0.core.decoder  decoder (
@@ -8564,7 +8593,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6297$272 (cycle[274:272]),
+    .\port$6298$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -8624,7 +8653,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6297$199 (cycle[199]),
+    .\port$6298$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -8635,9 +8664,9 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .words(\words$183 )
   );
   \biss_master_wb.ch0.core.register_access  register_access (
-    .abort(\abort$264 ),
+    .abort(\abort$266 ),
     .busy(frames),
-    .cdm(\cdm$277 ),
+    .cdm(\cdm$279 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -8647,27 +8676,27 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$250 ),
+    .request(\request$252 ),
     .result(result),
     .rst(rst),
-    .start(\start$262 ),
+    .start(\start$264 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch0.core.results  results (
     .clk(clk),
-    .done(\done$316 ),
+    .done(\done$318 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$321 ),
+    .result(\result$323 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$318 )
+    .valid_out(\valid$320 )
   );
   \biss_master_wb.ch0.core.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$345 ),
+    .\bit (\bit$347 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -8675,10 +8704,10 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6297$259 (cycle[271:259]),
+    .\port$6298$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
-    .sample(\sample$344 ),
+    .sample(\sample$346 ),
     .slo(slo)
   );
   \biss_master_wb.ch0.core.scheduler  scheduler (
@@ -8699,7 +8728,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6285$0 (\bit ),
+    .\port$6286$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -8718,6 +8747,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .first_rise(first_rise),
     .first_rise_time(first_rise_time),
+    .now(now),
     .rst(rst)
   );
   \biss_master_wb.ch0.core.timers  timers (
@@ -8749,7 +8779,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   );
   \biss_master_wb.ch0.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$346 ),
+    .clean(\clean$348 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
@@ -8766,7 +8796,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2483$0 (\$28 ),
+    .\port$2484$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -8784,7 +8814,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$24  = \bit$345 ;
+    \$24  = \bit$347 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -8805,7 +8835,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$13 ) begin end
-    \$27  = \clean$346 ;
+    \$27  = \clean$348 ;
     if (rst) begin
       \$27  = 1'h0;
     end
@@ -8921,58 +8951,59 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \valid$233  = valid;
   assign word_crc_ok = { \$28 , crc_ok[0] };
   assign \first_rise$248  = first_rise;
+  assign time_now = now;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$262 ;
-  assign ca_abort = \abort$264 ;
+  assign ca_start = \start$264 ;
+  assign ca_abort = \abort$266 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$273  = frames;
+  assign \busy$275  = frames;
   assign done = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
-  assign \frame_end$282  = report;
+  assign \frame_end$284  = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$289 ;
+  assign clear_counters = \clear$291 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$302  = \clear$289 ;
+  assign \clear$304  = \clear$291 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$310  = count_busy;
-  assign \ma$312  = ma;
-  assign \overrun$315  = overrun;
-  assign \done$317  = \done$316 ;
-  assign valid_out = \valid$318 ;
-  assign \status$320  = \result$321 [3:0];
-  assign timestamp = \result$321 [35:4];
-  assign line_delay = \result$321 [48:36];
-  assign \cds$324  = \result$321 [49];
-  assign noise_events = \result$321 [53:50];
-  assign delay_settled = \result$321 [54];
-  assign \settled_delay$327  = \result$321 [67:55];
-  assign delay_spread = \result$321 [75:68];
-  assign word0_position = \result$321 [130:76];
-  assign word0_ne = \result$321 [131];
-  assign word0_nw = \result$321 [132];
-  assign word0_crc_ok = \result$321 [133];
-  assign word1_position = \result$321 [173:134];
-  assign word1_ne = \result$321 [174];
-  assign word1_nw = \result$321 [175];
-  assign word1_crc_ok = \result$321 [176];
-  assign \lc$337  = \result$321 [182:177];
-  assign \lc_repeat$338  = \result$321 [183];
-  assign \lc_skip$339  = \result$321 [184];
-  assign \lc_zero$340  = \result$321 [185];
-  assign \spw_mismatch$341  = \result$321 [186];
+  assign \busy$312  = count_busy;
+  assign \ma$314  = ma;
+  assign \overrun$317  = overrun;
+  assign \done$319  = \done$318 ;
+  assign valid_out = \valid$320 ;
+  assign \status$322  = \result$323 [3:0];
+  assign timestamp = \result$323 [35:4];
+  assign line_delay = \result$323 [48:36];
+  assign \cds$326  = \result$323 [49];
+  assign noise_events = \result$323 [53:50];
+  assign delay_settled = \result$323 [54];
+  assign \settled_delay$329  = \result$323 [67:55];
+  assign delay_spread = \result$323 [75:68];
+  assign word0_position = \result$323 [130:76];
+  assign word0_ne = \result$323 [131];
+  assign word0_nw = \result$323 [132];
+  assign word0_crc_ok = \result$323 [133];
+  assign word1_position = \result$323 [173:134];
+  assign word1_ne = \result$323 [174];
+  assign word1_nw = \result$323 [175];
+  assign word1_crc_ok = \result$323 [176];
+  assign \lc$339  = \result$323 [182:177];
+  assign \lc_repeat$340  = \result$323 [183];
+  assign \lc_skip$341  = \result$323 [184];
+  assign \lc_zero$342  = \result$323 [185];
+  assign \spw_mismatch$343  = \result$323 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -9183,41 +9214,41 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$250.slave_id  = \request$250 [2:0];
-  assign \request$250.address  = \request$250 [9:3];
-  assign \request$250.count  = \request$250 [16:10];
-  assign \request$250.write  = \request$250 [17];
+  assign \request$252.slave_id  = \request$252 [2:0];
+  assign \request$252.address  = \request$252 [9:3];
+  assign \request$252.count  = \request$252 [16:10];
+  assign \request$252.write  = \request$252 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$288.ca_crc4_error  = \events$288 [0];
-  assign \events$288.ca_no_answer  = \events$288 [1];
-  assign \events$288.ca_refused  = \events$288 [2];
-  assign \events$288.ca_aborted  = \events$288 [3];
-  assign \events$288.ca_data_fault  = \events$288 [4];
+  assign \events$290.ca_crc4_error  = \events$290 [0];
+  assign \events$290.ca_no_answer  = \events$290 [1];
+  assign \events$290.ca_refused  = \events$290 [2];
+  assign \events$290.ca_aborted  = \events$290 [3];
+  assign \events$290.ca_data_fault  = \events$290 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$297.crc_word0  = \events$297 [0];
-  assign \events$297.crc_word1  = \events$297 [1];
-  assign \events$297.no_ack  = \events$297 [2];
-  assign \events$297.no_start  = \events$297 [3];
-  assign \events$297.delay_range  = \events$297 [4];
-  assign \events$297.slo_stuck_low  = \events$297 [5];
-  assign \events$297.lc_repeat  = \events$297 [6];
-  assign \events$297.lc_skip  = \events$297 [7];
-  assign \events$297.lc_zero  = \events$297 [8];
-  assign \events$297.spw_mismatch  = \events$297 [9];
-  assign \events$297.overrun  = \events$297 [10];
-  assign \events$297.aborted  = \events$297 [11];
-  assign \events$297.no_stop  = \events$297 [12];
-  assign \events$297.noisy_line  = \events$297 [13];
-  assign \events$297.delay_jump  = \events$297 [14];
-  assign \events$297.noise_event  = \events$297 [15];
+  assign \events$299.crc_word0  = \events$299 [0];
+  assign \events$299.crc_word1  = \events$299 [1];
+  assign \events$299.no_ack  = \events$299 [2];
+  assign \events$299.no_start  = \events$299 [3];
+  assign \events$299.delay_range  = \events$299 [4];
+  assign \events$299.slo_stuck_low  = \events$299 [5];
+  assign \events$299.lc_repeat  = \events$299 [6];
+  assign \events$299.lc_skip  = \events$299 [7];
+  assign \events$299.lc_zero  = \events$299 [8];
+  assign \events$299.spw_mismatch  = \events$299 [9];
+  assign \events$299.overrun  = \events$299 [10];
+  assign \events$299.aborted  = \events$299 [11];
+  assign \events$299.no_stop  = \events$299 [12];
+  assign \events$299.noisy_line  = \events$299 [13];
+  assign \events$299.delay_jump  = \events$299 [14];
+  assign \events$299.noise_event  = \events$299 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -9225,57 +9256,57 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$321.status  = \result$321 [3:0];
-  assign \result$321.timestamp  = \result$321 [35:4];
-  assign \result$321.line_delay  = \result$321 [48:36];
-  assign \result$321.cds  = \result$321 [49];
-  assign \result$321.noise_events  = \result$321 [53:50];
-  assign \result$321.delay_settled  = \result$321 [54];
-  assign \result$321.settled_delay  = \result$321 [67:55];
-  assign \result$321.delay_spread  = \result$321 [75:68];
-  assign \result$321.word0  = \result$321 [133:76];
-  assign \result$321.word0.position  = \result$321 [130:76];
-  assign \result$321.word0.ne  = \result$321 [131];
-  assign \result$321.word0.nw  = \result$321 [132];
-  assign \result$321.word0.crc_ok  = \result$321 [133];
-  assign \result$321.word1  = \result$321 [176:134];
-  assign \result$321.word1.position  = \result$321 [173:134];
-  assign \result$321.word1.ne  = \result$321 [174];
-  assign \result$321.word1.nw  = \result$321 [175];
-  assign \result$321.word1.crc_ok  = \result$321 [176];
-  assign \result$321.lc  = \result$321 [182:177];
-  assign \result$321.lc_repeat  = \result$321 [183];
-  assign \result$321.lc_skip  = \result$321 [184];
-  assign \result$321.lc_zero  = \result$321 [185];
-  assign \result$321.spw_mismatch  = \result$321 [186];
-  assign \events$297 [15] = \event ;
-  assign \events$297 [14] = \$20 ;
-  assign \events$297 [13] = \$18 ;
-  assign \events$297 [12] = faults[6];
-  assign \events$297 [11] = faults[4];
-  assign \events$297 [10] = overrun;
-  assign \events$297 [9] = \$16 ;
-  assign \events$297 [8] = lc_zero;
-  assign \events$297 [7] = lc_skip;
-  assign \events$297 [6] = lc_repeat;
-  assign \events$297 [5] = faults[3];
-  assign \events$297 [4] = faults[2];
-  assign \events$297 [3] = faults[1];
-  assign \events$297 [2] = faults[0];
-  assign \events$297 [1] = crc_error[1];
-  assign \events$297 [0] = crc_error[0];
-  assign \events$288 [4] = \$15 ;
-  assign \events$288 [3] = \$13 ;
-  assign \events$288 [2] = \$11 ;
-  assign \events$288 [1] = \$9 ;
-  assign \events$288 [0] = \$7 ;
+  assign \result$323.status  = \result$323 [3:0];
+  assign \result$323.timestamp  = \result$323 [35:4];
+  assign \result$323.line_delay  = \result$323 [48:36];
+  assign \result$323.cds  = \result$323 [49];
+  assign \result$323.noise_events  = \result$323 [53:50];
+  assign \result$323.delay_settled  = \result$323 [54];
+  assign \result$323.settled_delay  = \result$323 [67:55];
+  assign \result$323.delay_spread  = \result$323 [75:68];
+  assign \result$323.word0  = \result$323 [133:76];
+  assign \result$323.word0.position  = \result$323 [130:76];
+  assign \result$323.word0.ne  = \result$323 [131];
+  assign \result$323.word0.nw  = \result$323 [132];
+  assign \result$323.word0.crc_ok  = \result$323 [133];
+  assign \result$323.word1  = \result$323 [176:134];
+  assign \result$323.word1.position  = \result$323 [173:134];
+  assign \result$323.word1.ne  = \result$323 [174];
+  assign \result$323.word1.nw  = \result$323 [175];
+  assign \result$323.word1.crc_ok  = \result$323 [176];
+  assign \result$323.lc  = \result$323 [182:177];
+  assign \result$323.lc_repeat  = \result$323 [183];
+  assign \result$323.lc_skip  = \result$323 [184];
+  assign \result$323.lc_zero  = \result$323 [185];
+  assign \result$323.spw_mismatch  = \result$323 [186];
+  assign \events$299 [15] = \event ;
+  assign \events$299 [14] = \$20 ;
+  assign \events$299 [13] = \$18 ;
+  assign \events$299 [12] = faults[6];
+  assign \events$299 [11] = faults[4];
+  assign \events$299 [10] = overrun;
+  assign \events$299 [9] = \$16 ;
+  assign \events$299 [8] = lc_zero;
+  assign \events$299 [7] = lc_skip;
+  assign \events$299 [6] = lc_repeat;
+  assign \events$299 [5] = faults[3];
+  assign \events$299 [4] = faults[2];
+  assign \events$299 [3] = faults[1];
+  assign \events$299 [2] = faults[0];
+  assign \events$299 [1] = crc_error[1];
+  assign \events$299 [0] = crc_error[0];
+  assign \events$290 [4] = \$15 ;
+  assign \events$290 [3] = \$13 ;
+  assign \events$290 [2] = \$11 ;
+  assign \events$290 [1] = \$9 ;
+  assign \events$290 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$250 [17] = ca_write;
-  assign \request$250 [16:10] = ca_count;
-  assign \request$250 [9:3] = ca_address;
-  assign \request$250 [2:0] = ca_slave_id;
+  assign \request$252 [17] = ca_write;
+  assign \request$252 [16:10] = ca_count;
+  assign \request$252 [9:3] = ca_address;
+  assign \request$252 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$28 ;
@@ -12849,7 +12880,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6297$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6298$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -13542,8 +13573,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6297$272 ;
-  wire [2:0] \port$6297$272 ;
+  input [2:0] \port$6298$272 ;
+  wire [2:0] \port$6298$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -13829,7 +13860,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6297$272 [0];
+  assign error_bit = ssi & \port$6298$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -13883,7 +13914,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6297$272 [2];
+  assign \$48  = ssi & \port$6298$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -14170,15 +14201,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6297$272 [0];
+  assign \$335  = ssi & \port$6298$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6297$272 [0];
-  assign \$343  = ~ \port$6297$272 [1];
+  assign \$342  = ssi & \port$6298$272 [0];
+  assign \$343  = ~ \port$6298$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -14810,7 +14841,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$6297$272 [0];
+  assign ssi_error = \port$6298$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -14819,8 +14850,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6297$272 [2];
-  assign ssi_error_low = \port$6297$272 [1];
+  assign ssi_double = \port$6298$272 [2];
+  assign ssi_error_low = \port$6298$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -16477,7 +16508,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6297$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6298$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -16529,8 +16560,8 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6297$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6297$199 ;
-  wire \port$6297$199 ;
+  input \port$6298$199 ;
+  wire \port$6298$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -16584,7 +16615,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6297$199 , ssi, ssi_e
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6297$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6298$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -16694,7 +16725,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6297$199 , ssi, ssi_e
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6297$199 , 1'h1 };
+  assign enables = { \port$6298$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -18835,7 +18866,7 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6297$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6298$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -18969,8 +19000,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6297$259 ;
-  wire [12:0] \port$6297$259 ;
+  input [12:0] \port$6298$259 ;
+  wire [12:0] \port$6298$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -18995,7 +19026,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6297$259 [12:1] + 1'h1;
+  assign \$11  = \port$6298$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -19120,7 +19151,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6297$259 [0]),
+    .clear_high(\port$6298$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -19263,7 +19294,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6297$259 [0]) begin
+            if (\port$6298$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -19348,7 +19379,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6297$259 [0]) begin
+            if (\port$6298$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -19387,7 +19418,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6297$259 [12:1] };
+            \$85  = { 1'h0, \port$6298$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -19772,11 +19803,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6297$259 [12:1] };
-  assign fixed = \port$6297$259 [0];
+  assign fixed_delay = { 1'h0, \port$6298$259 [12:1] };
+  assign fixed = \port$6298$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6297$259 [0];
+  assign clear_high = \port$6298$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -20183,7 +20214,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6285$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6286$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -20225,8 +20256,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6285$0 ;
-  wire \port$6285$0 ;
+  input \port$6286$0 ;
+  wire \port$6286$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -20240,9 +20271,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6285$0  };
-  assign \$2  = { lc[4:0], \port$6285$0  } == last;
-  assign \$3  = { lc[4:0], \port$6285$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6286$0  };
+  assign \$2  = { lc[4:0], \port$6286$0  } == last;
+  assign \$3  = { lc[4:0], \port$6286$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -20352,7 +20383,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6285$0  };
+  assign lc_next = { lc[4:0], \port$6286$0  };
   assign zero = is_zero;
 endmodule
 
@@ -20593,40 +20624,29 @@ module \biss_master_wb.ch0.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_to
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.time_base (rst, first_rise, first_rise_time, clk);
+module \biss_master_wb.ch0.core.time_base (rst, now, first_rise, first_rise_time, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$48  = 0;
-  wire [32:0] \$1 ;
-  reg [31:0] \$2 ;
-  reg [31:0] \$3 ;
+  reg [31:0] \$1 ;
   input clk;
   wire clk;
   input first_rise;
   wire first_rise;
   output [31:0] first_rise_time;
   reg [31:0] first_rise_time = 32'd0;
-  reg [31:0] now = 32'd0;
+  input [31:0] now;
+  wire [31:0] now;
   input rst;
   wire rst;
-  assign \$1  = now + 1'h1;
   always @(posedge clk)
-    now <= \$2 ;
-  always @(posedge clk)
-    first_rise_time <= \$3 ;
+    first_rise_time <= \$1 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$2  = \$1 [31:0];
-    if (rst) begin
-      \$2  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$48 ) begin end
-    \$3  = first_rise_time;
+    \$1  = first_rise_time;
     if (first_rise) begin
-      \$3  = now;
+      \$1  = now;
     end
     if (rst) begin
-      \$3  = 32'd0;
+      \$1  = 32'd0;
     end
   end
 endmodule
@@ -20927,7 +20947,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2483$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2484$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -21105,8 +21125,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2483$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$2483$0 ;
-  wire \port$2483$0 ;
+  output \port$2484$0 ;
+  wire \port$2484$0 ;
   output report;
   wire report;
   input report_frame;
@@ -21224,7 +21244,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2483$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2483$0  = \$2 ;
+  assign \port$2484$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -21278,10 +21298,10 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2483$0 , lc_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable, cfg_ma_half_period
-, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance
-, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write
-, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7171$0 , \port$7184$0 , regs__ca_done, \port$7261$0 , ca_rbuf_addr);
+module \biss_master_wb.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
+, cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
+, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7170$0 , \port$7181$0 , regs__ca_done, \port$7258$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -21458,17 +21478,17 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$198 ;
+  wire \ma$200 ;
   wire [3:0] noise_events;
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7171$0 ;
-  wire [186:0] \port$7171$0 ;
-  output [79:0] \port$7184$0 ;
-  wire [79:0] \port$7184$0 ;
-  output [9:0] \port$7261$0 ;
-  wire [9:0] \port$7261$0 ;
+  output [186:0] \port$7170$0 ;
+  wire [186:0] \port$7170$0 ;
+  output [79:0] \port$7181$0 ;
+  wire [79:0] \port$7181$0 ;
+  output [9:0] \port$7258$0 ;
+  wire [9:0] \port$7258$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -21597,7 +21617,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$200 ;
+  wire \slo$202 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -21619,10 +21639,13 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
   wire [3:0] status;
+  input [31:0] time_now;
+  wire [31:0] time_now;
+  wire [31:0] \time_now$195 ;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$195 ;
-  wire \trigger$195 ;
+  input \trigger$197 ;
+  wire \trigger$197 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -21640,7 +21663,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
-  assign trigger = \trigger$195  & regs__trigger_enable;
+  assign trigger = \trigger$197  & regs__trigger_enable;
   assign \$6  = ~ report;
   assign \$7  = \$signal  & \$6 ;
   assign \$8  = waited + 1'h1;
@@ -21662,8 +21685,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
     regs__done_count <= \$17 ;
   \biss_master_wb.ch1.core  core (
     .abort(abort_cycle),
-    .\abort$264 (ca_abort),
-    .\busy$313 (regs__busy),
+    .\abort$266 (ca_abort),
+    .\busy$315 (regs__busy),
     .ca_address(ca_address),
     .ca_count(ca_count),
     .ca_done(regs__ca_done),
@@ -21712,27 +21735,28 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
     .cfg_w1_lc(cfg_w1_lc),
     .cfg_w1_nenw(cfg_w1_nenw),
     .cfg_w1_signed(cfg_w1_signed),
-    .\clear$289 (clear_counters),
+    .\clear$291 (clear_counters),
     .clk(clk),
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
     .counts(\$19 ),
-    .\done$316 (done),
+    .\done$318 (done),
     .frames(regs__ca_busy),
     .ma(ma),
+    .now(time_now),
     .\periodic$45 (periodic),
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
     .result(\$20 ),
-    .\result$321 (\$18 ),
+    .\result$323 (\$18 ),
     .rst(rst),
     .slo(slo),
     .start(start),
-    .\start$262 (ca_start),
+    .\start$264 (ca_start),
     .trigger(trigger),
-    .\valid$318 (valid)
+    .\valid$320 (valid)
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
@@ -21921,18 +21945,19 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$195 , count_en, ca_wbuf_en, 
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \ma$198  = ma;
-  assign \slo$200  = slo;
-  assign \port$7171$0  = \$18 ;
-  assign \port$7184$0  = \$19 ;
-  assign \port$7261$0  = \$20 ;
+  assign \time_now$195  = time_now;
+  assign \ma$200  = ma;
+  assign \slo$202  = slo;
+  assign \port$7170$0  = \$18 ;
+  assign \port$7181$0  = \$19 ;
+  assign \port$7258$0  = \$20 ;
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$313 , config_error, count_busy, count_data, frames, ca_rbuf_data, ca_wbuf_addr, ca_wbuf_data, start, \clear$289 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period
-, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance
-, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$262 , \abort$264 
-, abort, ma, \done$316 , \valid$318 , \result$321 , counts, ca_done, result, rbuf_addr);
+module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, trigger, \busy$315 , config_error, count_busy, count_data, frames, ca_rbuf_data, now, ca_wbuf_addr, ca_wbuf_data, start, \clear$291 , \periodic$45 , cfg_ma_half_period, cfg_delay_limit
+, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check, cfg_spw_tolerance, cfg_noise_limit
+, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count, ca_write, \start$264 
+, \abort$266 , abort, ma, \done$318 , \valid$320 , \result$323 , counts, ca_done, result, rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$52  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -21966,8 +21991,8 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire \$signal ;
   input abort;
   wire abort;
-  input \abort$264 ;
-  wire \abort$264 ;
+  input \abort$266 ;
+  wire \abort$266 ;
   wire \abort$57 ;
   wire abort_cycle;
   wire ack_expired;
@@ -21976,16 +22001,16 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire [23:0] \ack_limit$113 ;
   wire arm;
   reg \bit  = 1'h0;
-  wire \bit$345 ;
+  wire \bit$347 ;
   wire [5:0] bits;
   wire break_over;
   wire \break_over$90 ;
   wire [23:0] break_time;
   wire busy;
-  wire \busy$273 ;
-  wire \busy$310 ;
-  output \busy$313 ;
-  wire \busy$313 ;
+  wire \busy$275 ;
+  wire \busy$312 ;
+  output \busy$315 ;
+  wire \busy$315 ;
   wire ca_abort;
   input [6:0] ca_address;
   wire [6:0] ca_address;
@@ -22020,10 +22045,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   input ca_write;
   wire ca_write;
   wire cdm;
-  wire \cdm$277 ;
+  wire \cdm$279 ;
   wire cdm_cycle;
   wire cds;
-  wire \cds$324 ;
+  wire \cds$326 ;
   wire [274:0] cfg;
   wire [23:0] \cfg.ack_limit ;
   wire [23:0] \cfg.break_time ;
@@ -22171,12 +22196,12 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   reg clean = 1'h0;
   (* init = 1'h0 *)
   wire \clean$177 ;
-  wire \clean$346 ;
+  wire \clean$348 ;
   wire clear;
   wire \clear$137 ;
-  input \clear$289 ;
-  wire \clear$289 ;
-  wire \clear$302 ;
+  input \clear$291 ;
+  wire \clear$291 ;
+  wire \clear$304 ;
   wire clear_counters;
   input clk;
   wire clk;
@@ -22314,9 +22339,9 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire [7:0] delay_spread;
   wire [16:0] delay_tolerance;
   wire done;
-  output \done$316 ;
-  wire \done$316 ;
-  wire \done$317 ;
+  output \done$318 ;
+  wire \done$318 ;
+  wire \done$319 ;
   wire doubtful;
   wire early;
   wire \early$73 ;
@@ -22326,29 +22351,29 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire enough;
   wire \event ;
   wire [3:0] events;
-  wire [4:0] \events$288 ;
-  wire \events$288.ca_aborted ;
-  wire \events$288.ca_crc4_error ;
-  wire \events$288.ca_data_fault ;
-  wire \events$288.ca_no_answer ;
-  wire \events$288.ca_refused ;
-  wire [15:0] \events$297 ;
-  wire \events$297.aborted ;
-  wire \events$297.crc_word0 ;
-  wire \events$297.crc_word1 ;
-  wire \events$297.delay_jump ;
-  wire \events$297.delay_range ;
-  wire \events$297.lc_repeat ;
-  wire \events$297.lc_skip ;
-  wire \events$297.lc_zero ;
-  wire \events$297.no_ack ;
-  wire \events$297.no_start ;
-  wire \events$297.no_stop ;
-  wire \events$297.noise_event ;
-  wire \events$297.noisy_line ;
-  wire \events$297.overrun ;
-  wire \events$297.slo_stuck_low ;
-  wire \events$297.spw_mismatch ;
+  wire [4:0] \events$290 ;
+  wire \events$290.ca_aborted ;
+  wire \events$290.ca_crc4_error ;
+  wire \events$290.ca_data_fault ;
+  wire \events$290.ca_no_answer ;
+  wire \events$290.ca_refused ;
+  wire [15:0] \events$299 ;
+  wire \events$299.aborted ;
+  wire \events$299.crc_word0 ;
+  wire \events$299.crc_word1 ;
+  wire \events$299.delay_jump ;
+  wire \events$299.delay_range ;
+  wire \events$299.lc_repeat ;
+  wire \events$299.lc_skip ;
+  wire \events$299.lc_zero ;
+  wire \events$299.no_ack ;
+  wire \events$299.no_start ;
+  wire \events$299.no_stop ;
+  wire \events$299.noise_event ;
+  wire \events$299.noisy_line ;
+  wire \events$299.overrun ;
+  wire \events$299.slo_stuck_low ;
+  wire \events$299.spw_mismatch ;
   wire fault;
   wire \fault$210 ;
   (* enum_base_type = "Status" *)
@@ -22446,7 +22471,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire frame_done;
   wire frame_doubtful;
   wire frame_end;
-  wire \frame_end$282 ;
+  wire \frame_end$284 ;
   wire frame_ok;
   output frames;
   wire frames;
@@ -22462,19 +22487,19 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire jump;
   wire [5:0] lc;
   wire [5:0] \lc$149 ;
-  wire [5:0] \lc$337 ;
+  wire [5:0] \lc$339 ;
   wire lc_check;
   wire lc_load;
   wire [5:0] lc_next;
   wire [5:0] \lc_next$151 ;
   wire lc_repeat;
-  wire \lc_repeat$338 ;
+  wire \lc_repeat$340 ;
   wire lc_repeat_seen;
   wire lc_skip;
-  wire \lc_skip$339 ;
+  wire \lc_skip$341 ;
   wire lc_skip_seen;
   wire lc_zero;
-  wire \lc_zero$340 ;
+  wire \lc_zero$342 ;
   wire lc_zero_seen;
   reg learn = 1'h0;
   wire level;
@@ -22540,7 +22565,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire \locked$71 ;
   output ma;
   wire ma;
-  wire \ma$312 ;
+  wire \ma$314 ;
   wire ma_arm;
   wire ma_busy;
   wire \ma_busy$102 ;
@@ -22559,10 +22584,12 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire [3:0] noise_events;
   wire noisy;
   wire \noisy$179 ;
+  input [31:0] now;
+  wire [31:0] now;
   wire [1:0] nw;
   wire ok;
   wire overrun;
-  wire \overrun$315 ;
+  wire \overrun$317 ;
   wire passed;
   wire pending;
   wire [23:0] period;
@@ -22597,30 +22624,30 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire \report_frame$209 ;
   wire \report_frame$229 ;
   wire request;
-  wire [17:0] \request$250 ;
-  wire [6:0] \request$250.address ;
-  wire [6:0] \request$250.count ;
-  wire [2:0] \request$250.slave_id ;
-  wire \request$250.write ;
+  wire [17:0] \request$252 ;
+  wire [6:0] \request$252.address ;
+  wire [6:0] \request$252.count ;
+  wire [2:0] \request$252.slave_id ;
+  wire \request$252.write ;
   wire \request$56 ;
   wire restart;
   wire \restart$164 ;
   wire restart_timer;
   output [9:0] result;
   wire [9:0] result;
-  output [186:0] \result$321 ;
-  wire [186:0] \result$321 ;
-  wire \result$321.cds ;
-  wire \result$321.delay_settled ;
-  wire [7:0] \result$321.delay_spread ;
-  wire [5:0] \result$321.lc ;
-  wire \result$321.lc_repeat ;
-  wire \result$321.lc_skip ;
-  wire \result$321.lc_zero ;
-  wire [12:0] \result$321.line_delay ;
-  wire [3:0] \result$321.noise_events ;
-  wire [12:0] \result$321.settled_delay ;
-  wire \result$321.spw_mismatch ;
+  output [186:0] \result$323 ;
+  wire [186:0] \result$323 ;
+  wire \result$323.cds ;
+  wire \result$323.delay_settled ;
+  wire [7:0] \result$323.delay_spread ;
+  wire [5:0] \result$323.lc ;
+  wire \result$323.lc_repeat ;
+  wire \result$323.lc_skip ;
+  wire \result$323.lc_zero ;
+  wire [12:0] \result$323.line_delay ;
+  wire [3:0] \result$323.noise_events ;
+  wire [12:0] \result$323.settled_delay ;
+  wire \result$323.spw_mismatch ;
   (* enum_base_type = "Status" *)
   (* enum_value_0000 = "OK" *)
   (* enum_value_0001 = "CRC_ERROR_WORD0" *)
@@ -22638,18 +22665,18 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \result$321.status ;
-  wire [31:0] \result$321.timestamp ;
-  wire [57:0] \result$321.word0 ;
-  wire \result$321.word0.crc_ok ;
-  wire \result$321.word0.ne ;
-  wire \result$321.word0.nw ;
-  wire [54:0] \result$321.word0.position ;
-  wire [42:0] \result$321.word1 ;
-  wire \result$321.word1.crc_ok ;
-  wire \result$321.word1.ne ;
-  wire \result$321.word1.nw ;
-  wire [39:0] \result$321.word1.position ;
+  wire [3:0] \result$323.status ;
+  wire [31:0] \result$323.timestamp ;
+  wire [57:0] \result$323.word0 ;
+  wire \result$323.word0.crc_ok ;
+  wire \result$323.word0.ne ;
+  wire \result$323.word0.nw ;
+  wire [54:0] \result$323.word0.position ;
+  wire [42:0] \result$323.word1 ;
+  wire \result$323.word1.crc_ok ;
+  wire \result$323.word1.ne ;
+  wire \result$323.word1.nw ;
+  wire [39:0] \result$323.word1.position ;
   wire [6:0] \result.bytes_done ;
   (* enum_base_type = "AccessStatus" *)
   (* enum_value_000 = "OK" *)
@@ -22668,13 +22695,13 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire rst;
   wire run;
   reg sample = 1'h0;
-  wire \sample$344 ;
+  wire \sample$346 ;
   wire sampler_noise;
   wire second_rise;
   wire [3:0] setting;
   wire settled;
   wire [12:0] settled_delay;
-  wire [12:0] \settled_delay$327 ;
+  wire [12:0] \settled_delay$329 ;
   wire skip;
   input slo;
   wire slo;
@@ -22691,7 +22718,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire [39:0] spw;
   wire spw_match;
   wire spw_mismatch;
-  wire \spw_mismatch$341 ;
+  wire \spw_mismatch$343 ;
   wire ssi;
   wire \ssi$198 ;
   wire \ssi$202 ;
@@ -22702,8 +22729,8 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire ssi_error_low;
   input start;
   wire start;
-  input \start$262 ;
-  wire \start$262 ;
+  input \start$264 ;
+  wire \start$264 ;
   wire \start$43 ;
   wire [15:0] start_slot;
   wire [15:0] \start_slot$134 ;
@@ -22764,11 +22791,12 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   (* enum_value_1101 = "NOISY_LINE" *)
   (* enum_value_1110 = "DELAY_JUMP" *)
   (* enum_value_1111 = "UNCONFIRMED" *)
-  wire [3:0] \status$320 ;
+  wire [3:0] \status$322 ;
   wire stop_bit;
   wire \stop_bit$86 ;
   wire stopped;
   wire \stopped$84 ;
+  wire [31:0] time_now;
   wire [23:0] timeout_limit;
   wire [23:0] \timeout_limit$115 ;
   wire [23:0] timeout_live;
@@ -22784,8 +22812,8 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   wire unconfirmed;
   wire valid;
   wire \valid$233 ;
-  output \valid$318 ;
-  wire \valid$318 ;
+  output \valid$320 ;
+  wire \valid$320 ;
   wire valid_out;
   wire waiting;
   wire watch;
@@ -22864,7 +22892,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \$3  = ~ started_before;
   assign \check$172  = started & \$3 ;
   assign \$4  = ~ cycle[259];
-  assign cdm = \cdm$277  & \$4 ;
+  assign cdm = \cdm$279  & \$4 ;
   assign \$5  = ~ cycle[259];
   assign frame_ok = passed & \$5 ;
   assign \$6  = result[2:0] == 1'h1;
@@ -22882,10 +22910,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \$18  = report_frame & \$17 ;
   assign \$19  = status == 4'he;
   assign \$20  = report_frame & \$19 ;
-  assign \busy$313  = ~ idle;
+  assign \busy$315  = ~ idle;
   assign config_error = ~ config_ok;
   assign \$21  = ~ \clear$137 ;
-  assign \$22  = \sample$344  & \$21 ;
+  assign \$22  = \sample$346  & \$21 ;
   always @(posedge clk)
     sample <= \$23 ;
   always @(posedge clk)
@@ -22969,19 +22997,19 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   );
   \biss_master_wb.ch1.core.counter_ram  counter_ram (
     .busy(count_busy),
-    .clear(\clear$289 ),
+    .clear(\clear$291 ),
     .clk(clk),
-    .events(\events$297 ),
+    .events(\events$299 ),
     .host__addr(rbuf_addr[2:0]),
     .host__en(read_en),
     .read_data(count_data),
     .rst(rst)
   );
   \biss_master_wb.ch1.core.counters  counters (
-    .clear(\clear$289 ),
+    .clear(\clear$291 ),
     .clk(clk),
     .counts(counts),
-    .events(\events$288 ),
+    .events(\events$290 ),
     .rst(rst)
   );
   \biss_master_wb.ch1.core.decoder  decoder (
@@ -22999,7 +23027,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6828$272 (cycle[274:272]),
+    .\port$6827$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -23059,7 +23087,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6828$199 (cycle[199]),
+    .\port$6827$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -23070,9 +23098,9 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .words(\words$183 )
   );
   \biss_master_wb.ch1.core.register_access  register_access (
-    .abort(\abort$264 ),
+    .abort(\abort$266 ),
     .busy(frames),
-    .cdm(\cdm$277 ),
+    .cdm(\cdm$279 ),
     .clk(clk),
     .done(ca_done),
     .frame_cdm(frame_cdm),
@@ -23082,27 +23110,27 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .rbuf_addr(rbuf_addr),
     .rbuf_data(ca_rbuf_data),
     .rbuf_en(rbuf_en),
-    .request(\request$250 ),
+    .request(\request$252 ),
     .result(result),
     .rst(rst),
-    .start(\start$262 ),
+    .start(\start$264 ),
     .wbuf(wbuf)
   );
   \biss_master_wb.ch1.core.results  results (
     .clk(clk),
-    .done(\done$316 ),
+    .done(\done$318 ),
     .frame(frame),
     .report(report),
     .report_delay(report_delay),
     .report_frame(report_frame),
-    .result(\result$321 ),
+    .result(\result$323 ),
     .rst(rst),
     .valid(valid),
-    .valid_out(\valid$318 )
+    .valid_out(\valid$320 )
   );
   \biss_master_wb.ch1.core.sampler  sampler (
     .arm(arm),
-    .\bit (\bit$345 ),
+    .\bit (\bit$347 ),
     .clk(clk),
     .delay(delay),
     .early(early),
@@ -23110,10 +23138,10 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6828$259 (cycle[271:259]),
+    .\port$6827$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
-    .sample(\sample$344 ),
+    .sample(\sample$346 ),
     .slo(slo)
   );
   \biss_master_wb.ch1.core.scheduler  scheduler (
@@ -23134,7 +23162,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6816$0 (\bit ),
+    .\port$6815$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -23153,6 +23181,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .first_rise(first_rise),
     .first_rise_time(first_rise_time),
+    .now(now),
     .rst(rst)
   );
   \biss_master_wb.ch1.core.timers  timers (
@@ -23184,7 +23213,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   );
   \biss_master_wb.ch1.core.verdict  verdict (
     .cfg(cycle),
-    .clean(\clean$346 ),
+    .clean(\clean$348 ),
     .copy_mismatch(copy_mismatch),
     .crc_error(crc_error),
     .crc_ok(crc_ok),
@@ -23219,7 +23248,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$24  = \bit$345 ;
+    \$24  = \bit$347 ;
     if (rst) begin
       \$24  = 1'h0;
     end
@@ -23240,7 +23269,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$52 ) begin end
-    \$27  = \clean$346 ;
+    \$27  = \clean$348 ;
     if (rst) begin
       \$27  = 1'h0;
     end
@@ -23356,58 +23385,59 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \valid$233  = valid;
   assign word_crc_ok = { \$28 , crc_ok[0] };
   assign \first_rise$248  = first_rise;
+  assign time_now = now;
   assign ca_status = result[2:0];
   assign ca_bytes_done = result[9:3];
-  assign ca_start = \start$262 ;
-  assign ca_abort = \abort$264 ;
+  assign ca_start = \start$264 ;
+  assign ca_abort = \abort$266 ;
   assign ca_rbuf_addr = rbuf_addr;
   assign ca_rbuf_en = rbuf_en;
   assign rbuf_data = ca_rbuf_data;
   assign ca_busy = frames;
-  assign \busy$273  = frames;
+  assign \busy$275  = frames;
   assign done = ca_done;
   assign held = ma_held;
   assign ma_hold = hold;
-  assign \frame_end$282  = report;
+  assign \frame_end$284  = report;
   assign frame_cds = cds;
   assign cdm_cycle = frame_cdm;
-  assign clear_counters = \clear$289 ;
+  assign clear_counters = \clear$291 ;
   assign count_ca_crc4_error = counts[15:0];
   assign count_ca_no_answer = counts[31:16];
   assign count_ca_refused = counts[47:32];
   assign count_ca_aborted = counts[63:48];
   assign count_ca_data_fault = counts[79:64];
-  assign \clear$302  = \clear$289 ;
+  assign \clear$304  = \clear$291 ;
   assign read_addr = rbuf_addr[2:0];
   assign count_addr = rbuf_addr[2:0];
   assign count_en = read_en;
   assign read_data = count_data;
-  assign \busy$310  = count_busy;
-  assign \ma$312  = ma;
-  assign \overrun$315  = overrun;
-  assign \done$317  = \done$316 ;
-  assign valid_out = \valid$318 ;
-  assign \status$320  = \result$321 [3:0];
-  assign timestamp = \result$321 [35:4];
-  assign line_delay = \result$321 [48:36];
-  assign \cds$324  = \result$321 [49];
-  assign noise_events = \result$321 [53:50];
-  assign delay_settled = \result$321 [54];
-  assign \settled_delay$327  = \result$321 [67:55];
-  assign delay_spread = \result$321 [75:68];
-  assign word0_position = \result$321 [130:76];
-  assign word0_ne = \result$321 [131];
-  assign word0_nw = \result$321 [132];
-  assign word0_crc_ok = \result$321 [133];
-  assign word1_position = \result$321 [173:134];
-  assign word1_ne = \result$321 [174];
-  assign word1_nw = \result$321 [175];
-  assign word1_crc_ok = \result$321 [176];
-  assign \lc$337  = \result$321 [182:177];
-  assign \lc_repeat$338  = \result$321 [183];
-  assign \lc_skip$339  = \result$321 [184];
-  assign \lc_zero$340  = \result$321 [185];
-  assign \spw_mismatch$341  = \result$321 [186];
+  assign \busy$312  = count_busy;
+  assign \ma$314  = ma;
+  assign \overrun$317  = overrun;
+  assign \done$319  = \done$318 ;
+  assign valid_out = \valid$320 ;
+  assign \status$322  = \result$323 [3:0];
+  assign timestamp = \result$323 [35:4];
+  assign line_delay = \result$323 [48:36];
+  assign \cds$326  = \result$323 [49];
+  assign noise_events = \result$323 [53:50];
+  assign delay_settled = \result$323 [54];
+  assign \settled_delay$329  = \result$323 [67:55];
+  assign delay_spread = \result$323 [75:68];
+  assign word0_position = \result$323 [130:76];
+  assign word0_ne = \result$323 [131];
+  assign word0_nw = \result$323 [132];
+  assign word0_crc_ok = \result$323 [133];
+  assign word1_position = \result$323 [173:134];
+  assign word1_ne = \result$323 [174];
+  assign word1_nw = \result$323 [175];
+  assign word1_crc_ok = \result$323 [176];
+  assign \lc$339  = \result$323 [182:177];
+  assign \lc_repeat$340  = \result$323 [183];
+  assign \lc_skip$341  = \result$323 [184];
+  assign \lc_zero$342  = \result$323 [185];
+  assign \spw_mismatch$343  = \result$323 [186];
   assign \live.ma_half_period  = live[15:0];
   assign \live.request_period  = live[39:16];
   assign \live.break_time  = live[63:40];
@@ -23618,41 +23648,41 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \frame.lc_skip  = frame[184];
   assign \frame.lc_zero  = frame[185];
   assign \frame.spw_mismatch  = frame[186];
-  assign \request$250.slave_id  = \request$250 [2:0];
-  assign \request$250.address  = \request$250 [9:3];
-  assign \request$250.count  = \request$250 [16:10];
-  assign \request$250.write  = \request$250 [17];
+  assign \request$252.slave_id  = \request$252 [2:0];
+  assign \request$252.address  = \request$252 [9:3];
+  assign \request$252.count  = \request$252 [16:10];
+  assign \request$252.write  = \request$252 [17];
   assign \wbuf.addr  = wbuf[3:0];
   assign \wbuf.data  = wbuf[35:4];
   assign \wbuf.en  = wbuf[39:36];
   assign \result.status  = result[2:0];
   assign \result.bytes_done  = result[9:3];
-  assign \events$288.ca_crc4_error  = \events$288 [0];
-  assign \events$288.ca_no_answer  = \events$288 [1];
-  assign \events$288.ca_refused  = \events$288 [2];
-  assign \events$288.ca_aborted  = \events$288 [3];
-  assign \events$288.ca_data_fault  = \events$288 [4];
+  assign \events$290.ca_crc4_error  = \events$290 [0];
+  assign \events$290.ca_no_answer  = \events$290 [1];
+  assign \events$290.ca_refused  = \events$290 [2];
+  assign \events$290.ca_aborted  = \events$290 [3];
+  assign \events$290.ca_data_fault  = \events$290 [4];
   assign \counts.ca_crc4_error  = counts[15:0];
   assign \counts.ca_no_answer  = counts[31:16];
   assign \counts.ca_refused  = counts[47:32];
   assign \counts.ca_aborted  = counts[63:48];
   assign \counts.ca_data_fault  = counts[79:64];
-  assign \events$297.crc_word0  = \events$297 [0];
-  assign \events$297.crc_word1  = \events$297 [1];
-  assign \events$297.no_ack  = \events$297 [2];
-  assign \events$297.no_start  = \events$297 [3];
-  assign \events$297.delay_range  = \events$297 [4];
-  assign \events$297.slo_stuck_low  = \events$297 [5];
-  assign \events$297.lc_repeat  = \events$297 [6];
-  assign \events$297.lc_skip  = \events$297 [7];
-  assign \events$297.lc_zero  = \events$297 [8];
-  assign \events$297.spw_mismatch  = \events$297 [9];
-  assign \events$297.overrun  = \events$297 [10];
-  assign \events$297.aborted  = \events$297 [11];
-  assign \events$297.no_stop  = \events$297 [12];
-  assign \events$297.noisy_line  = \events$297 [13];
-  assign \events$297.delay_jump  = \events$297 [14];
-  assign \events$297.noise_event  = \events$297 [15];
+  assign \events$299.crc_word0  = \events$299 [0];
+  assign \events$299.crc_word1  = \events$299 [1];
+  assign \events$299.no_ack  = \events$299 [2];
+  assign \events$299.no_start  = \events$299 [3];
+  assign \events$299.delay_range  = \events$299 [4];
+  assign \events$299.slo_stuck_low  = \events$299 [5];
+  assign \events$299.lc_repeat  = \events$299 [6];
+  assign \events$299.lc_skip  = \events$299 [7];
+  assign \events$299.lc_zero  = \events$299 [8];
+  assign \events$299.spw_mismatch  = \events$299 [9];
+  assign \events$299.overrun  = \events$299 [10];
+  assign \events$299.aborted  = \events$299 [11];
+  assign \events$299.no_stop  = \events$299 [12];
+  assign \events$299.noisy_line  = \events$299 [13];
+  assign \events$299.delay_jump  = \events$299 [14];
+  assign \events$299.noise_event  = \events$299 [15];
   assign \faults.no_ack  = faults[0];
   assign \faults.no_start  = faults[1];
   assign \faults.delay_range  = faults[2];
@@ -23660,57 +23690,57 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
   assign \faults.aborted  = faults[4];
   assign \faults.bad_config  = faults[5];
   assign \faults.no_stop  = faults[6];
-  assign \result$321.status  = \result$321 [3:0];
-  assign \result$321.timestamp  = \result$321 [35:4];
-  assign \result$321.line_delay  = \result$321 [48:36];
-  assign \result$321.cds  = \result$321 [49];
-  assign \result$321.noise_events  = \result$321 [53:50];
-  assign \result$321.delay_settled  = \result$321 [54];
-  assign \result$321.settled_delay  = \result$321 [67:55];
-  assign \result$321.delay_spread  = \result$321 [75:68];
-  assign \result$321.word0  = \result$321 [133:76];
-  assign \result$321.word0.position  = \result$321 [130:76];
-  assign \result$321.word0.ne  = \result$321 [131];
-  assign \result$321.word0.nw  = \result$321 [132];
-  assign \result$321.word0.crc_ok  = \result$321 [133];
-  assign \result$321.word1  = \result$321 [176:134];
-  assign \result$321.word1.position  = \result$321 [173:134];
-  assign \result$321.word1.ne  = \result$321 [174];
-  assign \result$321.word1.nw  = \result$321 [175];
-  assign \result$321.word1.crc_ok  = \result$321 [176];
-  assign \result$321.lc  = \result$321 [182:177];
-  assign \result$321.lc_repeat  = \result$321 [183];
-  assign \result$321.lc_skip  = \result$321 [184];
-  assign \result$321.lc_zero  = \result$321 [185];
-  assign \result$321.spw_mismatch  = \result$321 [186];
-  assign \events$297 [15] = \event ;
-  assign \events$297 [14] = \$20 ;
-  assign \events$297 [13] = \$18 ;
-  assign \events$297 [12] = faults[6];
-  assign \events$297 [11] = faults[4];
-  assign \events$297 [10] = overrun;
-  assign \events$297 [9] = \$16 ;
-  assign \events$297 [8] = lc_zero;
-  assign \events$297 [7] = lc_skip;
-  assign \events$297 [6] = lc_repeat;
-  assign \events$297 [5] = faults[3];
-  assign \events$297 [4] = faults[2];
-  assign \events$297 [3] = faults[1];
-  assign \events$297 [2] = faults[0];
-  assign \events$297 [1] = crc_error[1];
-  assign \events$297 [0] = crc_error[0];
-  assign \events$288 [4] = \$15 ;
-  assign \events$288 [3] = \$13 ;
-  assign \events$288 [2] = \$11 ;
-  assign \events$288 [1] = \$9 ;
-  assign \events$288 [0] = \$7 ;
+  assign \result$323.status  = \result$323 [3:0];
+  assign \result$323.timestamp  = \result$323 [35:4];
+  assign \result$323.line_delay  = \result$323 [48:36];
+  assign \result$323.cds  = \result$323 [49];
+  assign \result$323.noise_events  = \result$323 [53:50];
+  assign \result$323.delay_settled  = \result$323 [54];
+  assign \result$323.settled_delay  = \result$323 [67:55];
+  assign \result$323.delay_spread  = \result$323 [75:68];
+  assign \result$323.word0  = \result$323 [133:76];
+  assign \result$323.word0.position  = \result$323 [130:76];
+  assign \result$323.word0.ne  = \result$323 [131];
+  assign \result$323.word0.nw  = \result$323 [132];
+  assign \result$323.word0.crc_ok  = \result$323 [133];
+  assign \result$323.word1  = \result$323 [176:134];
+  assign \result$323.word1.position  = \result$323 [173:134];
+  assign \result$323.word1.ne  = \result$323 [174];
+  assign \result$323.word1.nw  = \result$323 [175];
+  assign \result$323.word1.crc_ok  = \result$323 [176];
+  assign \result$323.lc  = \result$323 [182:177];
+  assign \result$323.lc_repeat  = \result$323 [183];
+  assign \result$323.lc_skip  = \result$323 [184];
+  assign \result$323.lc_zero  = \result$323 [185];
+  assign \result$323.spw_mismatch  = \result$323 [186];
+  assign \events$299 [15] = \event ;
+  assign \events$299 [14] = \$20 ;
+  assign \events$299 [13] = \$18 ;
+  assign \events$299 [12] = faults[6];
+  assign \events$299 [11] = faults[4];
+  assign \events$299 [10] = overrun;
+  assign \events$299 [9] = \$16 ;
+  assign \events$299 [8] = lc_zero;
+  assign \events$299 [7] = lc_skip;
+  assign \events$299 [6] = lc_repeat;
+  assign \events$299 [5] = faults[3];
+  assign \events$299 [4] = faults[2];
+  assign \events$299 [3] = faults[1];
+  assign \events$299 [2] = faults[0];
+  assign \events$299 [1] = crc_error[1];
+  assign \events$299 [0] = crc_error[0];
+  assign \events$290 [4] = \$15 ;
+  assign \events$290 [3] = \$13 ;
+  assign \events$290 [2] = \$11 ;
+  assign \events$290 [1] = \$9 ;
+  assign \events$290 [0] = \$7 ;
   assign wbuf[39:36] = ca_wbuf_en;
   assign wbuf[35:4] = ca_wbuf_data;
   assign wbuf[3:0] = ca_wbuf_addr;
-  assign \request$250 [17] = ca_write;
-  assign \request$250 [16:10] = ca_count;
-  assign \request$250 [9:3] = ca_address;
-  assign \request$250 [2:0] = ca_slave_id;
+  assign \request$252 [17] = ca_write;
+  assign \request$252 [16:10] = ca_count;
+  assign \request$252 [9:3] = ca_address;
+  assign \request$252 [2:0] = ca_slave_id;
   assign frame[35:4] = first_rise_time;
   assign frame[186] = spw_mismatch;
   assign frame[176] = \$28 ;
@@ -27284,7 +27314,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6828$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6827$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -27977,8 +28007,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6828$272 ;
-  wire [2:0] \port$6828$272 ;
+  input [2:0] \port$6827$272 ;
+  wire [2:0] \port$6827$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -28264,7 +28294,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6828$272 [0];
+  assign error_bit = ssi & \port$6827$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -28318,7 +28348,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6828$272 [2];
+  assign \$48  = ssi & \port$6827$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -28605,15 +28635,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6828$272 [0];
+  assign \$335  = ssi & \port$6827$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6828$272 [0];
-  assign \$343  = ~ \port$6828$272 [1];
+  assign \$342  = ssi & \port$6827$272 [0];
+  assign \$343  = ~ \port$6827$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -29245,7 +29275,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$6828$272 [0];
+  assign ssi_error = \port$6827$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -29254,8 +29284,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6828$272 [2];
-  assign ssi_error_low = \port$6828$272 [1];
+  assign ssi_double = \port$6827$272 [2];
+  assign ssi_error_low = \port$6827$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -30912,7 +30942,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$6828$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$6827$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -30964,8 +30994,8 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$6828$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6828$199 ;
-  wire \port$6828$199 ;
+  input \port$6827$199 ;
+  wire \port$6827$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -31019,7 +31049,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$6828$199 , ssi, ssi_e
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6828$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6827$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -31129,7 +31159,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$6828$199 , ssi, ssi_e
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6828$199 , 1'h1 };
+  assign enables = { \port$6827$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -33270,7 +33300,7 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6828$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6827$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -33404,8 +33434,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6828$259 ;
-  wire [12:0] \port$6828$259 ;
+  input [12:0] \port$6827$259 ;
+  wire [12:0] \port$6827$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -33430,7 +33460,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6828$259 [12:1] + 1'h1;
+  assign \$11  = \port$6827$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -33555,7 +33585,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6828$259 [0]),
+    .clear_high(\port$6827$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -33698,7 +33728,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6828$259 [0]) begin
+            if (\port$6827$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -33783,7 +33813,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6828$259 [0]) begin
+            if (\port$6827$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -33822,7 +33852,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6828$259 [12:1] };
+            \$85  = { 1'h0, \port$6827$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -34207,11 +34237,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6828$259 [12:1] };
-  assign fixed = \port$6828$259 [0];
+  assign fixed_delay = { 1'h0, \port$6827$259 [12:1] };
+  assign fixed = \port$6827$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6828$259 [0];
+  assign clear_high = \port$6827$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -34618,7 +34648,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6816$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6815$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -34660,8 +34690,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6816$0 ;
-  wire \port$6816$0 ;
+  input \port$6815$0 ;
+  wire \port$6815$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -34675,9 +34705,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6816$0  };
-  assign \$2  = { lc[4:0], \port$6816$0  } == last;
-  assign \$3  = { lc[4:0], \port$6816$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6815$0  };
+  assign \$2  = { lc[4:0], \port$6815$0  } == last;
+  assign \$3  = { lc[4:0], \port$6815$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -34787,7 +34817,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6816$0  };
+  assign lc_next = { lc[4:0], \port$6815$0  };
   assign zero = is_zero;
 endmodule
 
@@ -35028,40 +35058,29 @@ module \biss_master_wb.ch1.core.spw_check (rst, bits, \tolerance$8 , spw, cpw_to
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.time_base (rst, first_rise, first_rise_time, clk);
+module \biss_master_wb.ch1.core.time_base (rst, now, first_rise, first_rise_time, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$87  = 0;
-  wire [32:0] \$1 ;
-  reg [31:0] \$2 ;
-  reg [31:0] \$3 ;
+  reg [31:0] \$1 ;
   input clk;
   wire clk;
   input first_rise;
   wire first_rise;
   output [31:0] first_rise_time;
   reg [31:0] first_rise_time = 32'd0;
-  reg [31:0] now = 32'd0;
+  input [31:0] now;
+  wire [31:0] now;
   input rst;
   wire rst;
-  assign \$1  = now + 1'h1;
   always @(posedge clk)
-    now <= \$2 ;
-  always @(posedge clk)
-    first_rise_time <= \$3 ;
+    first_rise_time <= \$1 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
-    \$2  = \$1 [31:0];
-    if (rst) begin
-      \$2  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$87 ) begin end
-    \$3  = first_rise_time;
+    \$1  = first_rise_time;
     if (first_rise) begin
-      \$3  = now;
+      \$1  = now;
     end
     if (rst) begin
-      \$3  = 32'd0;
+      \$1  = 32'd0;
     end
   end
 endmodule

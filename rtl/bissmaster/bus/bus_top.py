@@ -98,7 +98,8 @@ class BusChannel(wiring.Component):
     ----------
     params : MasterParams
         The core's; a core with counters is built with ``counter_ram`` (the map reads the
-        counters from its memory), whatever ``params`` says.
+        counters from its memory), and one with a timestamp with ``time_input`` (the top's
+        one time base), whatever ``params`` says.
     regs : wiring.Signature
         The bank's channel block (:func:`~bissmaster.bus.register_bank.block_signature`).
 
@@ -107,6 +108,8 @@ class BusChannel(wiring.Component):
     regs : In(regs)
     trigger : In(1)
         The global trigger; starts the core when ``trigger_enable`` is set.
+    time_now : In(timestamp_width)
+        Only with a timestamp: the top's time base, captured by the core at its first MA rise.
     ma : Out(1)
     slo : In(1)
     frame_valid, frame_error : Out(1)
@@ -125,6 +128,9 @@ class BusChannel(wiring.Component):
                                  f"counter_width is {params.counter_width}")
             # The map reads the data channel's counters from the core's counter memory.
             params = replace(params, counter_ram=True)
+        if params.timestamped:
+            # One time base for every channel (BusTop's `time_now`), not a counter per core.
+            params = replace(params, time_input=True)
         self.params = params
         self.status = status
         full = BissMaster.ports(MasterParams(counter_ram=True))
@@ -147,6 +153,7 @@ class BusChannel(wiring.Component):
         super().__init__({
             "regs": In(regs),
             "trigger": In(1),
+            **({"time_now": In(params.timestamp_width)} if params.timestamped else {}),
             "ma": Out(1, init=1),
             "slo": In(1, init=1),
             **({"frame_valid": Out(1), "frame_error": Out(1)} if status else {}),
@@ -208,6 +215,8 @@ class BusChannel(wiring.Component):
         with m.If(ended):
             m.d.sync += regs.done_count.eq(regs.done_count + 1)
         # The global trigger starts the core only when enabled.
+        if p.timestamped:
+            m.d.comb += core.time_now.eq(self.time_now)
         m.d.comb += [
             core.trigger.eq(self.trigger & regs.trigger_enable),
             self.ma.eq(core.ma),
@@ -326,8 +335,17 @@ class BusTop(wiring.Component):
         trigger = Signal()
         m.d.comb += trigger.eq(bank.glob.trigger | (self.trigger & ~trigger_in))
 
+        # One time base for every channel's timestamp (the cores capture it at their first MA
+        # rise): one counter instead of one per core, and the channels' timestamps are one
+        # clock's by construction.
+        widths = [p.timestamp_width for p in self.params if p.timestamped]
+        time_now = Signal(max(widths, default=0), name="time_now")
+        m.d.sync += time_now.eq(time_now + 1)
+
         for n, channel in enumerate(self._channels):
             m.submodules[f"ch{n}"] = channel
+            if channel.params.timestamped:
+                m.d.comb += channel.time_now.eq(time_now[:channel.params.timestamp_width])
             wiring.connect(m, getattr(bank, f"ch{n}"), channel.regs)
             m.d.comb += [channel.trigger.eq(trigger),
                          getattr(self, f"ch{n}_ma").eq(channel.ma),

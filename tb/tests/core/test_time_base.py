@@ -42,3 +42,22 @@ def test_time_base_wraps():
     captures = [trace[t + 1]["first_rise_time"] for t, s in enumerate(strobes[:-1]) if s]
     assert [(b - a) % 16 for a, b in zip(captures, captures[1:])] == [7] * (len(captures) - 1)
     assert any(b < a for a, b in zip(captures, captures[1:]))          # it did wrap
+
+
+def test_external_time_base_captures_its_input():
+    """``external``: the capture is the input ``now`` of the strobe's clock (a time base shared
+    by several cores), held until the next strobe; no counter of its own."""
+    rng = random.Random(7711)
+    n = 300
+    strobes = [int(rng.random() < 0.1) for _ in range(n)]
+    times = [rng.getrandbits(16) for _ in range(n)]
+    trace = run_clocks(TimeBase(16, external=True),
+                       [{"first_rise": s, "now": t} for s, t in zip(strobes, times)],
+                       ["first_rise_time"])
+    got = [x["first_rise_time"] for x in trace]
+    last = 0
+    for t in range(1, n):
+        if strobes[t - 1]:
+            last = times[t - 1]
+        assert got[t] == last, t
+    assert sum(strobes) > 15

@@ -71,6 +71,20 @@ def test_bad_generator_option_exits_with_message(capsys):
     assert "timestamp_width must be 0" in capsys.readouterr().err
 
 
+def test_time_input_replaces_the_counter(tmp_path, capsys):
+    """``--time-input 1``: the timestamp captures the input time_now (a time base shared by
+    several cores); refused without a timestamp."""
+    out = tmp_path / "x.v"
+    main(["--preset", "biss-c", "--time-input", "1", "-o", str(out)])
+    text = out.read_text()
+    assert "input [31:0] time_now" in text and "output [31:0] timestamp" in text
+    main(["--preset", "biss-c", "-o", str(out)])
+    assert "time_now" not in out.read_text()
+    with pytest.raises(SystemExit):
+        main(["--preset", "biss-c-lean", "--time-input", "1", "-o", "/dev/null"])
+    assert "time_input needs a timestamp" in capsys.readouterr().err
+
+
 def test_register_access_only_where_asked(tmp_path):
     """The default build has the register-access engine (ca_* ports and their counters); the
     Renishaw presets (unidirectional encoders) and the lean build leave it out, and
