@@ -26,8 +26,8 @@ through public fragment attributes (``flow.Internals``).
 
 from dataclasses import dataclass
 
-from amaranth.hdl import (Assert, Assume, C, Cat, ClockDomain, Cover, Elaboratable, Module, Mux,
-                          Signal, Value, signed)
+from amaranth.hdl import (Array, Assert, Assume, C, Cat, ClockDomain, Cover, Elaboratable,
+                          Module, Mux, Signal, Value, signed)
 from amaranth.lib import wiring
 
 import protocol_facts as facts
@@ -85,7 +85,7 @@ INTERNALS = {
     "decoder.sample": ("port", "", "sample"),                   # the decision it consumes ...
     "decoder.bit": ("port", "", "bit"),                         # ... (the sampler's, a clock late)
     "decoder.idx": ("signal", "", "idx"),                       # bit index in the word
-    "decoder.word": ("signal", "", "word"),                     # word index (two-word builds)
+    "decoder.word": ("signal", "", "word"),                     # word index (builds of 2+ words)
     "decoder.crc_reg": ("signal", "crc", "reg"),                # the CrcEngine's shift register
     "decoder.crc_mismatch": ("signal", "crc", "mismatch"),      # a received CRC bit differed
     "decoder.crc_ok": ("port", "", "crc_ok"),                   # the verdict per word
@@ -974,7 +974,7 @@ class _FrameParser:
         words = len(cfg)
         self.phase = phase = Signal(2, name="p_phase")
         self.pos = pos = Signal(7, name="p_pos")
-        self.word = word = Signal(1, name="p_word")
+        self.word = word = Signal(range(max(words, 2)), name="p_word")
         self.done_strobe = done_strobe = Signal(name="p_done_strobe")
         self.ok = [Signal(name=f"p_ok{w}") for w in range(words)]
         self.length = []
@@ -1095,7 +1095,7 @@ class _FrameParser:
                                f"lemma: word {w} engine verdict"),
                     ]
 
-        length = self.length[0] if words == 1 else Mux(word, self.length[1], self.length[0])
+        length = self.length[0] if words == 1 else Array(self.length)[word]
         m.d.sync += done_strobe.eq(0)
         with m.If(clear):
             m.d.sync += [phase.eq(self.ACK), pos.eq(0), word.eq(0)]
@@ -1159,8 +1159,10 @@ class DecoderCrcHarness(Harness):
             cfg.append(c)
         count = self.any_const(m, len(dut.word_count), "word_count")
         m.d.comb += [dut.word_count.eq(count), Assume((count >= 1) & (count <= p.words))]
-        if p.words == 2:
-            m.d.comb += Assume(~((count == 2) & cfg[0]["lc"] & cfg[1]["lc"]))
+        # One LC per frame (one sign-of-life tracker), among the words the frame has.
+        for a in range(p.words):
+            for b in range(a + 1, p.words):
+                m.d.comb += Assume(~((count > b) & cfg[a]["lc"] & cfg[b]["lc"]))
 
         rtl = None
         if self.lemmas:
@@ -1180,10 +1182,10 @@ class DecoderCrcHarness(Harness):
                 Assert(~state["WORD"] | (idx == parse.pos), "lemma: bit index"),
             ]
             payload = (parse.payload[0] if p.words == 1
-                       else Mux(parse.word, parse.payload[1], parse.payload[0]))
+                       else Array(parse.payload)[parse.word])
             m.d.comb += Assert(~state["WORD"] | (inside("decoder.in_crc") == (parse.pos >= payload)),
                                "lemma: the engine checks exactly the CRC bits")
-            if p.words == 2:
+            if p.words >= 2:
                 word = inside("decoder.word")
                 m.d.comb += Assert(~state["WORD"] | (word == parse.word), "lemma: word index")
             if p.ssi:
@@ -1205,6 +1207,11 @@ class DecoderCrcHarness(Harness):
             Cover(dut.done & all_ok & kinds[Crc.CRC6] & kinds[Crc.CRC16]),
             Cover(dut.done & ~all_ok & kinds[Crc.CRC16]),
         ]
+        if p.words > 2:
+            # A chain: a frame of every word whose last word alone failed its CRC.
+            last = p.words - 1
+            m.d.comb += Cover(dut.done & (count == p.words) & ~parse.ok[last]
+                              & Cat(*parse.ok[:last]).all())
         return m
 
 

@@ -41,6 +41,10 @@ SMALL = MasterParams(sys_clk_hz=1_000_000, max_data_bits=(2,), word_crcs=((Crc.C
 SMALL_CA = MasterParams(sys_clk_hz=1_000_000, max_data_bits=(2,), word_crcs=((Crc.CRC6,),),
                         max_line_delay=16, timer_width=16, counter_width=1, timestamp_width=16,
                         start_wait_frames=2)
+#: A chain of three slaves (issue 26): words of up to 24, 16 and 8 data bits, each with CRC-6
+#: or CRC-16 (the harness's own CRCs; custom CRCs are the CRC engine's tests).
+CHAIN3 = MasterParams(max_data_bits=(24, 16, 8), word_crcs=((Crc.CRC6, Crc.CRC16),) * 3,
+                      custom_crc=False, ssi=False, register_access=False)
 #: One word of up to 4 data bits with CRC-6 only: the mutation checks (no lemmas) stay fast.
 TINY_DECODER = MasterParams(max_data_bits=(4,), word_crcs=((Crc.CRC6,),))
 
@@ -130,6 +134,10 @@ CHECKS = [
     # (c) a frame with a CRC error is never reported valid ---------------------------------------
     Check("decoder_crc_default", "c", "k-induction", 2, lambda: DecoderCrcHarness(DEFAULT), True),
     Check("decoder_crc_default", "c", "cover", 30, lambda: DecoderCrcHarness(DEFAULT), True),
+    Check("decoder_crc_chain3", "c", "k-induction", 2, lambda: DecoderCrcHarness(CHAIN3), True),
+    Check("decoder_crc_chain3", "c", "cover", 30, lambda: DecoderCrcHarness(CHAIN3), False),
+    Check("decoder_crc_chain3_wrong_poly", "c", "mutation", 24,
+          lambda: DecoderCrcHarness(CHAIN3, lemmas=False, mutation="poly"), False),
     Check("decoder_crc_wrong_poly", "c", "mutation", 16,
           lambda: DecoderCrcHarness(TINY_DECODER, lemmas=False, mutation="poly"), True),
     Check("decoder_crc_no_invert", "c", "mutation", 16,
