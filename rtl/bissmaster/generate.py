@@ -161,9 +161,9 @@ PRESETS = {
     "safety": ("BiSS Safety: CPW up to 36 bits with CRC-6, SPW up to 28 bits with CRC-16, "
                "no register access",
                ["--max-data-bits", "36,28", "--word-crcs", "6,16"] + _NO_ACCESS + _NO_SSI),
-    "chain": ("a chain of three slaves on one cable: words of up to 40, 32 and 24 bits, each "
+    "chain": ("a chain of three slaves on one cable: words of up to 64, 32 and 24 bits, each "
               "with CRC-6 or its own CRC, no register access",
-              ["--max-data-bits", "40,32,24", "--word-crcs", "6,6,6"] + _NO_ACCESS + _NO_SSI),
+              ["--max-data-bits", "64,32,24", "--word-crcs", "6,6,6"] + _NO_ACCESS + _NO_SSI),
 }
 
 
@@ -221,8 +221,8 @@ def _parser():
                            "(default: %(default)s)")
     core.add_argument("--max-data-bits", default=",".join(map(str, defaults.max_data_bits)),
                       metavar="N[,N...]",
-                      help="longest data field per word, 1 to 8 words, 1..63 each: 36 (BiSS C "
-                           "only), 36,28 (CPW, SPW), 40,32,24 (a chain of three) "
+                      help="longest data field per word, 1 to 8 words, 1..64 each: 36 (BiSS C "
+                           "only), 36,28 (CPW, SPW), 64,32,24 (a chain of three) "
                            "(default: %(default)s)")
     core.add_argument("--word-crcs", type=_parse_crcs, default=None, metavar="C[+C][,...]",
                       help="CRC checkers built per word, 6 and/or 16: 6, 6,16, 6+16,6+16 "

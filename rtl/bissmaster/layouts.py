@@ -11,7 +11,7 @@ from amaranth.lib import data
 
 from . import protocol
 from .params import (CRC_SETTINGS, DELAY_SPREAD_WIDTH, FAULTS, HALF_PERIOD_WIDTH, LINE_CHECK_WIDTH,
-                     QUIET_WIDTH, AccessStatus, Status, WORD_CONFIG, WORD_CONFIG_UNSIGNED,
+                     QUIET_WIDTH, AccessStatus, Status, word_config,
                      counter_settle, counter_words)
 
 
@@ -22,7 +22,7 @@ def config_layout(params):
     """
     tw = params.timer_width
     # ``cfg_wN_signed`` only in builds with signed words (the field is the word's last).
-    word = WORD_CONFIG if params.signed_words else WORD_CONFIG_UNSIGNED
+    word = word_config(params, signed=params.signed_words)
     members = {
         "ma_half_period": HALF_PERIOD_WIDTH,
         "request_period": tw,

@@ -24,7 +24,7 @@ from .core.ma_clock import MaClock
 from .core.ma_stop import MaStop
 from . import protocol
 from .params import (DELAY_SPREAD_WIDTH, HALF_PERIOD_WIDTH, LINE_CHECK_WIDTH, AccessStatus,
-                     MasterParams, Status)
+                     MasterParams, Status, word_config)
 from .control.register_access import RegisterAccess
 from .core.request_scheduler import RequestScheduler
 from .core.results import ResultRegisters
@@ -158,7 +158,7 @@ class BissMaster(wiring.Component):
         m.submodules.controller = controller = CycleController(cdm=cdm)
         m.submodules.timers = timers = LimitTimers(p)
         m.submodules.ma_clock = ma_clock = MaClock(cdm=cdm)
-        m.submodules.ma_stop = ma_stop = MaStop(p.words, ssi=p.ssi)
+        m.submodules.ma_stop = ma_stop = MaStop(p.words, ssi=p.ssi, word_layout=word_config(p))
         # The receiver is held in reset between cycles: every cycle starts from scratch.
         sampler = SloSampler(p.delay_width, fixed=p.ssi)
         decoder = FrameDecoder(p)

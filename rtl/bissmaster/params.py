@@ -98,8 +98,10 @@ DELAY_SPREAD_WIDTH = 8
 #: Width of the slot and MA-edge counters of one cycle (saturating): Ack slots plus the frame.
 #: 2**16 - 1 slots outlast every Ack limit the timers can hold at the shortest half period.
 SLOT_WIDTH = 16
+#: Most data bits of one word (iC-MB4 reads up to 64 per slave).
+DATA_BITS_MAX = 64
 #: Bits of the longest word on the line: data, nE/nW, LC and the longest CRC.
-WORD_BITS_MAX = 63 + protocol.NE_NW_BITS + protocol.LC_BITS + protocol.CRC16_WIDTH
+WORD_BITS_MAX = DATA_BITS_MAX + protocol.NE_NW_BITS + protocol.LC_BITS + protocol.CRC16_WIDTH
 #: Width of a bit index inside one word.
 WORD_INDEX_WIDTH = WORD_BITS_MAX.bit_length()
 #: Most data words one frame can have (a chain of up to 8 one-word slaves, as iC-MB4 reads).
@@ -138,7 +140,7 @@ FAULTS = tuple(s for s in Status if Status.NO_ACK <= s <= Status.NO_STOP)
 
 #: Runtime description of one data word. ``data_bits`` counts the position/data bits only.
 WORD_CONFIG = data.StructLayout({
-    "data_bits": 6,     # 1 .. MasterParams.max_data_bits[word]
+    "data_bits": 6,     # 1 .. MasterParams.max_data_bits[word] (7 bits for 64: word_config)
     "nenw": 1,          # word ends with nE, nW
     "lc": 1,            # word carries the 6-bit sign-of-life counter after nE/nW
     "crc": Crc,         # Crc code
@@ -149,6 +151,17 @@ WORD_CONFIG = data.StructLayout({
 #: bits, one shorter, so a view of it assigned to a WORD_CONFIG reads ``signed`` = 0.
 WORD_CONFIG_UNSIGNED = data.StructLayout(
     {name: field.shape for name, field in WORD_CONFIG if name != "signed"})
+
+
+def word_config(params, signed=True):
+    """The word description of a build: :data:`WORD_CONFIG` (or, ``signed=False``,
+    :data:`WORD_CONFIG_UNSIGNED`), with a 7-bit ``data_bits`` in a build with a word of 64 data
+    bits (``data_bits`` 1..64); every other build keeps the 6-bit field (1..63)."""
+    layout = WORD_CONFIG if signed else WORD_CONFIG_UNSIGNED
+    if max(params.max_data_bits) < 64:
+        return layout
+    return data.StructLayout({name: (7 if name == "data_bits" else field.shape)
+                              for name, field in layout})
 
 
 def _cycles(seconds, clk_hz):
@@ -236,9 +249,9 @@ class MasterParams:
             raise ValueError(f"max_data_bits must name 1 to {MAX_WORDS} words, "
                              f"not {self.max_data_bits!r}")
         for bits in self.max_data_bits:
-            if not isinstance(bits, int) or not 1 <= bits <= 63:
-                raise ValueError(f"each max_data_bits entry must be an integer from 1 to 63, "
-                                 f"not {bits!r}")
+            if not isinstance(bits, int) or not 1 <= bits <= DATA_BITS_MAX:
+                raise ValueError(f"each max_data_bits entry must be an integer from 1 to "
+                                 f"{DATA_BITS_MAX}, not {bits!r}")
         if len(self.word_crcs) != len(self.max_data_bits):
             raise ValueError(f"word_crcs must have one entry per word ({len(self.max_data_bits)}), "
                              f"not {self.word_crcs!r}")

@@ -3,7 +3,7 @@ Start, one CDS, then every slave's word back to back, each with its own length, 
 width, polynomial and start value.
 
 Run through pytest (sim/test_regression.py) on the ``chain`` preset's build (three words of up
-to 40, 32 and 24 bits, CRC-6 or a custom CRC per word, no register access, no SSI): every
+to 64, 32 and 24 bits, CRC-6 or a custom CRC per word, no register access, no SSI): every
 scenario here says ``@only_on_builds("chain")``. The main scenario runs on Verilator and Icarus
 in ``make test``; the others on Icarus only in ``make sim-long`` (``@long_on_icarus``).
 
@@ -25,7 +25,7 @@ from sim.shared.discovery import long_on_icarus, only_on_builds
 from sim.shared.testbench import Testbench, preset
 
 CHAIN = frames.PRESETS["chain_3"]
-#: The chain preset's words (docs: ``--max-data-bits 40,32,24``).
+#: The chain preset's words (docs: ``--max-data-bits 64,32,24``).
 CHAIN_BUILD_WORDS = 3
 
 
@@ -325,4 +325,45 @@ async def chain_build_reads_safety(dut):
     tb.check_frame(res, status="SPW_MISMATCH")
     assert res.fields["spw_mismatch"] == 1
     await frames_ok(tb, 2)
+    await settle(tb)
+
+
+@cocotb.test()
+@only_on_builds("chain")
+@long_on_icarus
+async def chain_build_reads_64_bit_words(dut):
+    """Words of 64 data bits (the chain preset's word 0, the longest a slave word can have):
+    one 64-bit BiSS C encoder with CRC-6, then Gray-coded, then signed, then a 64-bit slave
+    chained with a 32-bit one (a custom CRC-16 on the first). The corners (all ones, the top
+    bit alone, 1) and random values, every bit of the 64-bit port as sent, status OK, counters
+    0; a 65th data bit is BAD_CONFIG."""
+    tb = await bench(dut, seed=2607, cable_m=50)
+    formats = [
+        frames.FrameFormat("w64", (frames.WordFormat(64),)),
+        frames.FrameFormat("w64_gray", (frames.WordFormat(64, gray=True),)),
+        frames.FrameFormat("w64_signed", (frames.WordFormat(64, signed=True),)),
+        frames.FrameFormat("w64_w32", (frames.WordFormat(64, crc=SPW_CRC16),
+                                       frames.WordFormat(32, lc=True)), chain=True),
+    ]
+    for fmt in formats:
+        for ma_hz in (1e6, 10e6):
+            tb.configure(fmt, ma_hz)
+            for top in ((1 << 64) - 1, 1 << 63, 1):
+                values = [frames.WordValue(top, 1, 0)]
+                if len(fmt.words) == 2:
+                    values.append(frames.WordValue(0xA5A5A5A5, 0, 1,
+                                                   lc=tb.sign_of_life.next()))
+                tb.queue(values=values)
+                res = await tb.request()
+                tb.check_frame(res)
+                assert res.status == STATUS["OK"] and res.valid == 1
+                if not fmt.words[0].signed:
+                    assert res.fields["word0_position"] == top, hex(res.fields["word0_position"])
+            await frames_ok(tb, 2)
+            assert_no_counts(res)
+    tb.configure(formats[0], 5e6)
+    await ClockCycles(dut.clk, 2)
+    dut.cfg_w0_data_bits.value = 65
+    res = await tb.request(limit_s=1e-6)
+    assert res.status == STATUS["BAD_CONFIG"], res.status
     await settle(tb)

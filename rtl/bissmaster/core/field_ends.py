@@ -89,11 +89,11 @@ class FieldEnds(wiring.Component):
         Each word's field ends (registered).
     """
 
-    def __init__(self, words, error_bit=False):
+    def __init__(self, words, error_bit=False, word_layout=WORD_CONFIG):
         self._words = words
         self._error_bit = error_bit
         super().__init__({
-            "words": In(data.ArrayLayout(WORD_CONFIG, words)),
+            "words": In(data.ArrayLayout(word_layout, words)),
             "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
             **({"error_bit": In(1)} if error_bit else {}),
             "ends": Out(data.ArrayLayout(FIELD_ENDS, words)),

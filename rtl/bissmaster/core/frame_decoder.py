@@ -5,7 +5,7 @@ from amaranth.hdl import *
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, SLOT_WIDTH, WORD_CONFIG, WORD_INDEX_WIDTH
+from ..params import CRC_MAX_WIDTH, CRC_SETTINGS, SLOT_WIDTH, WORD_INDEX_WIDTH, word_config
 from .crc_engine import CrcEngine
 from .field_ends import FieldEnds
 from .ssi_copy import SsiCopyCompare
@@ -55,7 +55,7 @@ class FrameDecoder(wiring.Component):
         super().__init__({
             "sample": In(1),
             "bit": In(1),
-            "words": In(data.ArrayLayout(WORD_CONFIG, words)),
+            "words": In(data.ArrayLayout(word_config(params), words)),
             "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
             "word_count": In(range(1, words + 1)),
             "started": Out(1),
@@ -90,7 +90,8 @@ class FrameDecoder(wiring.Component):
         # Field boundaries of each word, registered from the configuration (no adders in front
         # of the ``idx`` compares), valid one clock after ``words`` settles; the first word bit
         # comes at least three samples (Ack, Start, CDS) after that (SSI: see above).
-        m.submodules.field_ends = field_ends = FieldEnds(p.words, error_bit=p.ssi)
+        m.submodules.field_ends = field_ends = FieldEnds(p.words, error_bit=p.ssi,
+                                                         word_layout=word_config(p))
         m.d.comb += [field_ends.words.eq(self.words), field_ends.crcs.eq(self.crcs)]
         if p.ssi:
             # Word 0's SSI error bit: a flag bit after the data, like nE.

@@ -63,11 +63,11 @@ class MaStop(wiring.Component):
         SSI builds: the cycle is an SSI frame; its word comes twice; its word has an error bit.
     """
 
-    def __init__(self, words, ssi=False):
+    def __init__(self, words, ssi=False, word_layout=WORD_CONFIG):
         self._words = words
         self._ssi = ssi
         super().__init__({
-            "words": In(data.ArrayLayout(WORD_CONFIG, words)),
+            "words": In(data.ArrayLayout(word_layout, words)),
             "crcs": In(data.ArrayLayout(CRC_SETTINGS, words)),
             "enables": In(words),
             "started": In(1),

@@ -26,7 +26,7 @@ BUILDS = {
     "one_word": MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),)),
     "no_custom": MasterParams(max_data_bits=(36,), word_crcs=((Crc.CRC6,),), custom_crc=False),
     # A chain of three slaves (the chain preset's words).
-    "chain": MasterParams(max_data_bits=(40, 32, 24), word_crcs=((Crc.CRC6,),) * 3),
+    "chain": MasterParams(max_data_bits=(64, 32, 24), word_crcs=((Crc.CRC6,),) * 3),
 }
 #: The CRC codes each build accepts per word (``none`` always).
 BUILT_CRCS = {
@@ -188,6 +188,10 @@ RULES = [
     ("chain_w2_without_w1", "chain", _with(CHAIN, w1_enable=0), 0),
     ("chain_w1_only", "chain", _with(CHAIN, w2_enable=0), 1),
     ("chain_w0_only", "chain", _with(CHAIN, w1_enable=0, w2_enable=0), 1),
+    ("chain_w0_bits_64", "chain", _with(CHAIN, w0__data_bits=64), 1),     # a 7-bit field
+    ("chain_w0_bits_65", "chain", _with(CHAIN, w0__data_bits=65), 0),
+    ("chain_w0_bits_127", "chain", _with(CHAIN, w0__data_bits=127), 0),
+    ("chain_w1_bits_33", "chain", _with(CHAIN, w1__data_bits=33), 0),
     ("chain_w2_bits_24", "chain", _with(CHAIN, w2__data_bits=24), 1),
     ("chain_w2_bits_25", "chain", _with(CHAIN, w2__data_bits=25), 0),
     ("chain_w2_bits_25_disabled", "chain", _with(CHAIN, w2__data_bits=25, w2_enable=0), 1),
@@ -229,8 +233,10 @@ def test_configuration_check_random_sweep(build):
         for w in range(p.words):
             word = cfg[f"w{w}"]
             word["data_bits"] = rng.choice((word["data_bits"], rng.randint(0, 3),
+                                            rng.randint(1, p.max_data_bits[w]),
                                             p.max_data_bits[w] + rng.randint(-2, 1)))
             word["crc"] = rng.choice((word["crc"], rng.randrange(3)))
+            word["lc"] &= rng.randrange(2)          # rarer: two LCs in a frame are refused
             if f"w{w}_crc" in cfg:
                 cfg[f"w{w}_crc"]["width"] = rng.choice((cfg[f"w{w}_crc"]["width"], 0, 1, 16, 17))
         cfg["ma_half_period"] = rng.choice((cfg["ma_half_period"], rng.randrange(4)))

@@ -266,13 +266,14 @@ def test_frame_decoder_chain_flipped_bit_fails_only_that_words_crc(word):
 
 
 def test_frame_decoder_eight_words_random_formats():
-    """Eight words of random formats (up to 63 data bits, any CRC of 0..16 bits, LC on one):
+    """Eight words of random formats (up to 64 data bits, any CRC of 0..16 bits, LC on one):
     each word's fields and CRC verdict, and a flipped bit failing only its word."""
-    params = MasterParams(max_data_bits=(63,) * 8, word_crcs=((Crc.CRC6, Crc.CRC16),) * 8)
+    params = MasterParams(max_data_bits=(64,) * 8, word_crcs=((Crc.CRC6, Crc.CRC16),) * 8)
     rng = random.Random(7800)
     for rep in range(3):
         lc_word = rng.randrange(8)
-        words = tuple(WordFormat(rng.randint(1, 63), nenw=rng.random() < 0.7, lc=w == lc_word,
+        words = tuple(WordFormat(rng.choice((64, rng.randint(1, 64))), nenw=rng.random() < 0.7,
+                                 lc=w == lc_word,
                                  crc=rng.choice((CRC_NONE, CRC16, CustomCrc(
                                      rng.randint(1, 16), 1, 0)))
                                  if w % 2 else CustomCrc(6, 0x03, rng.randrange(64), True))
@@ -289,3 +290,23 @@ def test_frame_decoder_eight_words_random_formats():
         flip = first + rng.randrange(words[word].total_bits)
         at_done, _ = _chain_decode(params, words, values, flip=flip, seed=rep)
         assert at_done["crc_ok"] == 0xFF & ~(1 << word), (rep, word)
+
+
+def test_frame_decoder_64_bit_words():
+    """Words of 64 data bits (iC-MB4's longest; a 7-bit ``data_bits``): two of them with CRC-16
+    and CRC-6, the corners (all ones, the top bit alone, 1) and random values, every bit in
+    place; a flipped top bit fails only its word."""
+    params = MasterParams(max_data_bits=(64, 64), word_crcs=((Crc.CRC6, Crc.CRC16),) * 2)
+    words = (WordFormat(64, crc=CRC16), WordFormat(64, lc=True))
+    rng = random.Random(7900)
+    corners = [(1 << 64) - 1, 1 << 63, 1]
+    for rep, position in enumerate(corners + [rng.getrandbits(64) for _ in range(3)]):
+        values = [WordValue(position, 1, 0), WordValue(rng.getrandbits(64), 0, 1, rep + 1)]
+        at_done, held = _chain_decode(params, words, values, seed=rep)
+        for x in (at_done, held):
+            assert (x["data0"], x["data1"]) == (values[0].position, values[1].position), rep
+            assert x["crc_ok"] == 0b11 and x["lc"] == rep + 1
+    for word in (0, 1):
+        first = 2 + sum(wf.total_bits for wf in words[:word])
+        at_done, _ = _chain_decode(params, words, values, flip=first, seed=word)
+        assert at_done["crc_ok"] == 0b11 & ~(1 << word), word

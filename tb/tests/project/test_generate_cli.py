@@ -46,7 +46,7 @@ def test_list_presets_gives_each_preset_its_options_and_parameters(capsys):
     assert "max_data_bits   = [36]" in blocks["biss-c-lean"]
     assert "counter_width   = 0 (no counters)" in blocks["biss-c-lean"]
     assert "max_data_bits   = [36, 28]" in blocks["safety"]
-    assert "max_data_bits   = [40, 32, 24]" in blocks["chain"]
+    assert "max_data_bits   = [64, 32, 24]" in blocks["chain"]
 
 
 def test_bad_max_data_bits_is_a_usage_error(capsys):

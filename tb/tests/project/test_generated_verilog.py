@@ -24,7 +24,8 @@ def test_header_names_generator_and_parameters():
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    ({"max_data_bits": (64,)}, "max_data_bits"),
+    ({"max_data_bits": (65, 40)}, "max_data_bits"),
+    ({"max_data_bits": (0, 40)}, "max_data_bits"),
     ({"max_data_bits": (36,) * 9, "word_crcs": ((Crc.CRC6,),) * 9}, "1 to 8 words"),
     ({"max_data_bits": ()}, "1 to 8 words"),
     ({"word_crcs": ((Crc.CRC6,),)}, "one entry per word"),
