@@ -189,9 +189,13 @@ def run(cmd, cwd, logfile, may_not_fit=False, may_fail=False):
         text = (cwd / logfile).read_text()
         over = re.findall(r"^Info:\s+(\w+):\s+(\d+)/\s*(\d+)\s+(\d+)%", text, re.M)
         full = [f"{c} {u}/{n}" for c, u, n, pct in over if int(u) > int(n)]
-        if full:
-            errors = [line for line in text.splitlines() if line.startswith("ERROR")]
-            raise DoesNotFit(", ".join(full) + (f" ({errors[0]})" if errors else ""))
+        errors = [line for line in text.splitlines() if line.startswith("ERROR")]
+        # Within the counts but no legal placement (nextpnr: "design is probably at
+        # utilisation limit"): the design does not fit either; say how full it was.
+        crowded = any("Unable to find legal placement" in e for e in errors)
+        if full or crowded:
+            usage = full or [f"{c} {u}/{n} ({pct} %)" for c, u, n, pct in over if int(pct) >= 90]
+            raise DoesNotFit(", ".join(usage) + (f" ({errors[0]})" if errors else ""))
     if r.returncode != 0 and may_fail:
         # the first ERROR line of the output or of the tool's own log (``-l``), if named
         logs = [cwd / logfile] + [cwd / cmd[i + 1] for i, a in enumerate(cmd[:-1]) if a == "-l"]

@@ -329,3 +329,41 @@ def test_equiv_proves_a_rewrite_and_rejects_a_change(new_logic, proven, tmp_path
     assert changed != STUB
     new.write_text(changed)
     assert equiv.equivalent(old, new) is proven
+
+
+# -- synth.py: a design that does not fit ---------------------------------------------------------
+
+#: nextpnr's utilisation report and error, as nextpnr-ice40 prints them (the lines synth.py
+#: reads), for a design over the device and for one within its counts but not placeable.
+_PNR_OVER = """Info: Device utilisation:
+Info: \t         ICESTORM_LC:  5400/  5280   102%
+Info: \t               SB_GB:     4/     8    50%
+ERROR: Design too large for device.
+"""
+_PNR_CROWDED = """Info: Device utilisation:
+Info: \t         ICESTORM_LC:  4989/  5280    94%
+Info: \t               SB_IO:     3/    39     7%
+Info: \t               SB_GB:     8/     8   100%
+ERROR: Unable to find legal placement for all cells, design is probably at utilisation limit.
+"""
+
+
+@pytest.mark.parametrize("text, names", [(_PNR_OVER, ["ICESTORM_LC 5400/5280"]),
+                                         (_PNR_CROWDED, ["ICESTORM_LC 4989/5280 (94 %)",
+                                                         "SB_GB 8/8 (100 %)"])])
+def test_synth_reports_a_design_that_does_not_fit(tmp_path, text, names):
+    """A place-and-route run that fails because the design is too large, by the counts or for
+    want of a legal placement near the limit, is a result ("does not fit", with the usage),
+    not the end of the whole `make synth` run."""
+    log = tmp_path / "pnr.txt"
+    log.write_text(text)
+    with pytest.raises(synth.DoesNotFit) as e:
+        synth.run(["sh", "-c", f"cat {log}; exit 1"], tmp_path, "out.log", may_not_fit=True)
+    for name in names:
+        assert name in str(e.value)
+    assert "SB_IO" not in str(e.value)
+    # Any other failure still stops the run with the log's tail.
+    (tmp_path / "other.txt").write_text("ERROR: something else\n")
+    with pytest.raises(SystemExit):
+        synth.run(["sh", "-c", f"cat {tmp_path / 'other.txt'}; exit 1"], tmp_path, "o.log",
+                  may_not_fit=True)
