@@ -214,9 +214,10 @@ class BusChannel(wiring.Component):
         # Every ended cycle counted, so a host sees a lost result.
         with m.If(ended):
             m.d.sync += regs.done_count.eq(regs.done_count + 1)
-        # The global trigger starts the core only when enabled.
+        # The top's one time base, for the timestamp.
         if p.timestamped:
             m.d.comb += core.time_now.eq(self.time_now)
+        # The global trigger starts the core only when enabled.
         m.d.comb += [
             core.trigger.eq(self.trigger & regs.trigger_enable),
             self.ma.eq(core.ma),
@@ -231,7 +232,8 @@ class BusChannel(wiring.Component):
 class BusTop(wiring.Component):
     """``channels`` BiSS master cores behind AXI4-Lite (``bus="axil"``), Wishbone B4
     (``bus="wb"``) or the UART bridge (``bus="uart"``, docs/uart_bridge.md), with one ``irq``
-    and a ``trigger`` input (docs/bus.md).
+    and a ``trigger`` input (docs/bus.md). One free-running counter is the time base of every
+    channel's timestamp (the cores are built with ``time_input``).
 
     Parameters
     ----------
@@ -339,8 +341,9 @@ class BusTop(wiring.Component):
         # rise): one counter instead of one per core, and the channels' timestamps are one
         # clock's by construction.
         widths = [p.timestamp_width for p in self.params if p.timestamped]
-        time_now = Signal(max(widths, default=0), name="time_now")
-        m.d.sync += time_now.eq(time_now + 1)
+        if widths:
+            time_now = Signal(max(widths), name="time_now")
+            m.d.sync += time_now.eq(time_now + 1)
 
         for n, channel in enumerate(self._channels):
             m.submodules[f"ch{n}"] = channel
