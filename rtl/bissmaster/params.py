@@ -158,10 +158,10 @@ def word_config(params, signed=True):
     :data:`WORD_CONFIG_UNSIGNED`), with a 7-bit ``data_bits`` in a build with a word of 64 data
     bits (``data_bits`` 1..64); every other build keeps the 6-bit field (1..63)."""
     layout = WORD_CONFIG if signed else WORD_CONFIG_UNSIGNED
-    if max(params.max_data_bits) < 64:
+    if max(params.max_data_bits) < DATA_BITS_MAX:
         return layout
-    return data.StructLayout({name: (7 if name == "data_bits" else field.shape)
-                              for name, field in layout})
+    return data.StructLayout({name: (DATA_BITS_MAX.bit_length() if name == "data_bits"
+                                     else field.shape) for name, field in layout})
 
 
 def _cycles(seconds, clk_hz):
