@@ -193,6 +193,10 @@ DEFAULT_TIMEOUT_LIMIT_S = 80e-6
 #: The longest word 0 and word 1 of the default build, in data bits (docs/ports.md:
 #: ``max_data_bits = [55, 40]``; ``cfg_w0_data_bits`` 1 .. 55, ``cfg_w1_data_bits`` 1 .. 40).
 MAX_DATA_BITS = (55, 40)
+#: The chain bus top the bus scenarios build (sim/shared/runner.py, ``axil_chain``): one channel
+#: whose core decodes four words of up to these data bits (the register map's chain words,
+#: docs/registers.md: words 2..7 at cfg_wN / chain.*).
+CHAIN_BUS_DATA_BITS = (40, 32, 24, 16)
 
 
 def crc_config(crc):

@@ -65,10 +65,17 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch0__cap_counters;
   wire [5:0] ch0__cap_data_bits_w0;
   wire [5:0] ch0__cap_data_bits_w1;
+  wire [5:0] ch0__cap_data_bits_w2;
+  wire [5:0] ch0__cap_data_bits_w3;
+  wire [5:0] ch0__cap_data_bits_w4;
+  wire [5:0] ch0__cap_data_bits_w5;
+  wire [5:0] ch0__cap_data_bits_w6;
+  wire [5:0] ch0__cap_data_bits_w7;
   wire ch0__cap_register_access;
   wire ch0__cap_ssi;
   wire [5:0] ch0__cap_timer_width;
   wire ch0__cap_timestamp;
+  wire [3:0] ch0__cap_words;
   wire ch0__cds;
   wire [23:0] ch0__cfg_ack_limit;
   wire [23:0] ch0__cfg_break_time;
@@ -109,6 +116,72 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch0__cfg_w1_lc;
   wire ch0__cfg_w1_nenw;
   wire ch0__cfg_w1_signed;
+  wire [1:0] ch0__cfg_w2_crc;
+  wire ch0__cfg_w2_crc_inverted;
+  wire [15:0] ch0__cfg_w2_crc_poly;
+  wire [15:0] ch0__cfg_w2_crc_start;
+  wire [4:0] ch0__cfg_w2_crc_width;
+  wire [5:0] ch0__cfg_w2_data_bits;
+  wire ch0__cfg_w2_enable;
+  wire ch0__cfg_w2_gray;
+  wire ch0__cfg_w2_lc;
+  wire ch0__cfg_w2_nenw;
+  wire ch0__cfg_w2_signed;
+  wire [1:0] ch0__cfg_w3_crc;
+  wire ch0__cfg_w3_crc_inverted;
+  wire [15:0] ch0__cfg_w3_crc_poly;
+  wire [15:0] ch0__cfg_w3_crc_start;
+  wire [4:0] ch0__cfg_w3_crc_width;
+  wire [5:0] ch0__cfg_w3_data_bits;
+  wire ch0__cfg_w3_enable;
+  wire ch0__cfg_w3_gray;
+  wire ch0__cfg_w3_lc;
+  wire ch0__cfg_w3_nenw;
+  wire ch0__cfg_w3_signed;
+  wire [1:0] ch0__cfg_w4_crc;
+  wire ch0__cfg_w4_crc_inverted;
+  wire [15:0] ch0__cfg_w4_crc_poly;
+  wire [15:0] ch0__cfg_w4_crc_start;
+  wire [4:0] ch0__cfg_w4_crc_width;
+  wire [5:0] ch0__cfg_w4_data_bits;
+  wire ch0__cfg_w4_enable;
+  wire ch0__cfg_w4_gray;
+  wire ch0__cfg_w4_lc;
+  wire ch0__cfg_w4_nenw;
+  wire ch0__cfg_w4_signed;
+  wire [1:0] ch0__cfg_w5_crc;
+  wire ch0__cfg_w5_crc_inverted;
+  wire [15:0] ch0__cfg_w5_crc_poly;
+  wire [15:0] ch0__cfg_w5_crc_start;
+  wire [4:0] ch0__cfg_w5_crc_width;
+  wire [5:0] ch0__cfg_w5_data_bits;
+  wire ch0__cfg_w5_enable;
+  wire ch0__cfg_w5_gray;
+  wire ch0__cfg_w5_lc;
+  wire ch0__cfg_w5_nenw;
+  wire ch0__cfg_w5_signed;
+  wire [1:0] ch0__cfg_w6_crc;
+  wire ch0__cfg_w6_crc_inverted;
+  wire [15:0] ch0__cfg_w6_crc_poly;
+  wire [15:0] ch0__cfg_w6_crc_start;
+  wire [4:0] ch0__cfg_w6_crc_width;
+  wire [5:0] ch0__cfg_w6_data_bits;
+  wire ch0__cfg_w6_enable;
+  wire ch0__cfg_w6_gray;
+  wire ch0__cfg_w6_lc;
+  wire ch0__cfg_w6_nenw;
+  wire ch0__cfg_w6_signed;
+  wire [1:0] ch0__cfg_w7_crc;
+  wire ch0__cfg_w7_crc_inverted;
+  wire [15:0] ch0__cfg_w7_crc_poly;
+  wire [15:0] ch0__cfg_w7_crc_start;
+  wire [4:0] ch0__cfg_w7_crc_width;
+  wire [5:0] ch0__cfg_w7_data_bits;
+  wire ch0__cfg_w7_enable;
+  wire ch0__cfg_w7_gray;
+  wire ch0__cfg_w7_lc;
+  wire ch0__cfg_w7_nenw;
+  wire ch0__cfg_w7_signed;
   wire ch0__clear_counters;
   wire ch0__config_error;
   wire [2:0] ch0__count_addr;
@@ -117,6 +190,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire [15:0] ch0__count_ca_data_fault;
   wire [15:0] ch0__count_ca_no_answer;
   wire [15:0] ch0__count_ca_refused;
+  wire [15:0] ch0__count_crc_word2;
+  wire [15:0] ch0__count_crc_word3;
+  wire [15:0] ch0__count_crc_word4;
+  wire [15:0] ch0__count_crc_word5;
+  wire [15:0] ch0__count_crc_word6;
+  wire [15:0] ch0__count_crc_word7;
   wire [31:0] ch0__count_data;
   wire ch0__count_en;
   wire ch0__delay_settled;
@@ -131,6 +210,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire [12:0] ch0__line_delay;
   wire [3:0] ch0__noise_events;
   wire ch0__periodic;
+  wire [15:0] ch0__result_updates;
   wire [12:0] ch0__settled_delay;
   wire ch0__spw_mismatch;
   wire ch0__start;
@@ -145,6 +225,30 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch0__word1_ne;
   wire ch0__word1_nw;
   wire [39:0] ch0__word1_position;
+  wire ch0__word2_crc_ok;
+  wire ch0__word2_ne;
+  wire ch0__word2_nw;
+  wire [62:0] ch0__word2_position;
+  wire ch0__word3_crc_ok;
+  wire ch0__word3_ne;
+  wire ch0__word3_nw;
+  wire [62:0] ch0__word3_position;
+  wire ch0__word4_crc_ok;
+  wire ch0__word4_ne;
+  wire ch0__word4_nw;
+  wire [62:0] ch0__word4_position;
+  wire ch0__word5_crc_ok;
+  wire ch0__word5_ne;
+  wire ch0__word5_nw;
+  wire [62:0] ch0__word5_position;
+  wire ch0__word6_crc_ok;
+  wire ch0__word6_ne;
+  wire ch0__word6_nw;
+  wire [62:0] ch0__word6_position;
+  wire ch0__word7_crc_ok;
+  wire ch0__word7_ne;
+  wire ch0__word7_nw;
+  wire [62:0] ch0__word7_position;
   output ch0_ma;
   wire ch0_ma;
   input ch0_slo;
@@ -170,10 +274,17 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch1__cap_counters;
   wire [5:0] ch1__cap_data_bits_w0;
   wire [5:0] ch1__cap_data_bits_w1;
+  wire [5:0] ch1__cap_data_bits_w2;
+  wire [5:0] ch1__cap_data_bits_w3;
+  wire [5:0] ch1__cap_data_bits_w4;
+  wire [5:0] ch1__cap_data_bits_w5;
+  wire [5:0] ch1__cap_data_bits_w6;
+  wire [5:0] ch1__cap_data_bits_w7;
   wire ch1__cap_register_access;
   wire ch1__cap_ssi;
   wire [5:0] ch1__cap_timer_width;
   wire ch1__cap_timestamp;
+  wire [3:0] ch1__cap_words;
   wire ch1__cds;
   wire [23:0] ch1__cfg_ack_limit;
   wire [23:0] ch1__cfg_break_time;
@@ -214,6 +325,72 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch1__cfg_w1_lc;
   wire ch1__cfg_w1_nenw;
   wire ch1__cfg_w1_signed;
+  wire [1:0] ch1__cfg_w2_crc;
+  wire ch1__cfg_w2_crc_inverted;
+  wire [15:0] ch1__cfg_w2_crc_poly;
+  wire [15:0] ch1__cfg_w2_crc_start;
+  wire [4:0] ch1__cfg_w2_crc_width;
+  wire [5:0] ch1__cfg_w2_data_bits;
+  wire ch1__cfg_w2_enable;
+  wire ch1__cfg_w2_gray;
+  wire ch1__cfg_w2_lc;
+  wire ch1__cfg_w2_nenw;
+  wire ch1__cfg_w2_signed;
+  wire [1:0] ch1__cfg_w3_crc;
+  wire ch1__cfg_w3_crc_inverted;
+  wire [15:0] ch1__cfg_w3_crc_poly;
+  wire [15:0] ch1__cfg_w3_crc_start;
+  wire [4:0] ch1__cfg_w3_crc_width;
+  wire [5:0] ch1__cfg_w3_data_bits;
+  wire ch1__cfg_w3_enable;
+  wire ch1__cfg_w3_gray;
+  wire ch1__cfg_w3_lc;
+  wire ch1__cfg_w3_nenw;
+  wire ch1__cfg_w3_signed;
+  wire [1:0] ch1__cfg_w4_crc;
+  wire ch1__cfg_w4_crc_inverted;
+  wire [15:0] ch1__cfg_w4_crc_poly;
+  wire [15:0] ch1__cfg_w4_crc_start;
+  wire [4:0] ch1__cfg_w4_crc_width;
+  wire [5:0] ch1__cfg_w4_data_bits;
+  wire ch1__cfg_w4_enable;
+  wire ch1__cfg_w4_gray;
+  wire ch1__cfg_w4_lc;
+  wire ch1__cfg_w4_nenw;
+  wire ch1__cfg_w4_signed;
+  wire [1:0] ch1__cfg_w5_crc;
+  wire ch1__cfg_w5_crc_inverted;
+  wire [15:0] ch1__cfg_w5_crc_poly;
+  wire [15:0] ch1__cfg_w5_crc_start;
+  wire [4:0] ch1__cfg_w5_crc_width;
+  wire [5:0] ch1__cfg_w5_data_bits;
+  wire ch1__cfg_w5_enable;
+  wire ch1__cfg_w5_gray;
+  wire ch1__cfg_w5_lc;
+  wire ch1__cfg_w5_nenw;
+  wire ch1__cfg_w5_signed;
+  wire [1:0] ch1__cfg_w6_crc;
+  wire ch1__cfg_w6_crc_inverted;
+  wire [15:0] ch1__cfg_w6_crc_poly;
+  wire [15:0] ch1__cfg_w6_crc_start;
+  wire [4:0] ch1__cfg_w6_crc_width;
+  wire [5:0] ch1__cfg_w6_data_bits;
+  wire ch1__cfg_w6_enable;
+  wire ch1__cfg_w6_gray;
+  wire ch1__cfg_w6_lc;
+  wire ch1__cfg_w6_nenw;
+  wire ch1__cfg_w6_signed;
+  wire [1:0] ch1__cfg_w7_crc;
+  wire ch1__cfg_w7_crc_inverted;
+  wire [15:0] ch1__cfg_w7_crc_poly;
+  wire [15:0] ch1__cfg_w7_crc_start;
+  wire [4:0] ch1__cfg_w7_crc_width;
+  wire [5:0] ch1__cfg_w7_data_bits;
+  wire ch1__cfg_w7_enable;
+  wire ch1__cfg_w7_gray;
+  wire ch1__cfg_w7_lc;
+  wire ch1__cfg_w7_nenw;
+  wire ch1__cfg_w7_signed;
   wire ch1__clear_counters;
   wire ch1__config_error;
   wire [2:0] ch1__count_addr;
@@ -222,6 +399,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire [15:0] ch1__count_ca_data_fault;
   wire [15:0] ch1__count_ca_no_answer;
   wire [15:0] ch1__count_ca_refused;
+  wire [15:0] ch1__count_crc_word2;
+  wire [15:0] ch1__count_crc_word3;
+  wire [15:0] ch1__count_crc_word4;
+  wire [15:0] ch1__count_crc_word5;
+  wire [15:0] ch1__count_crc_word6;
+  wire [15:0] ch1__count_crc_word7;
   wire [31:0] ch1__count_data;
   wire ch1__count_en;
   wire ch1__delay_settled;
@@ -236,6 +419,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire [12:0] ch1__line_delay;
   wire [3:0] ch1__noise_events;
   wire ch1__periodic;
+  wire [15:0] ch1__result_updates;
   wire [12:0] ch1__settled_delay;
   wire ch1__spw_mismatch;
   wire ch1__start;
@@ -250,6 +434,30 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire ch1__word1_ne;
   wire ch1__word1_nw;
   wire [39:0] ch1__word1_position;
+  wire ch1__word2_crc_ok;
+  wire ch1__word2_ne;
+  wire ch1__word2_nw;
+  wire [62:0] ch1__word2_position;
+  wire ch1__word3_crc_ok;
+  wire ch1__word3_ne;
+  wire ch1__word3_nw;
+  wire [62:0] ch1__word3_position;
+  wire ch1__word4_crc_ok;
+  wire ch1__word4_ne;
+  wire ch1__word4_nw;
+  wire [62:0] ch1__word4_position;
+  wire ch1__word5_crc_ok;
+  wire ch1__word5_ne;
+  wire ch1__word5_nw;
+  wire [62:0] ch1__word5_position;
+  wire ch1__word6_crc_ok;
+  wire ch1__word6_ne;
+  wire ch1__word6_nw;
+  wire [62:0] ch1__word6_position;
+  wire ch1__word7_crc_ok;
+  wire ch1__word7_ne;
+  wire ch1__word7_nw;
+  wire [62:0] ch1__word7_position;
   output ch1_ma;
   wire ch1_ma;
   input ch1_slo;
@@ -261,233 +469,441 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   wire glob__trigger;
   output irq;
   reg irq = 1'h0;
-  wire [1:0] \irq$460 ;
+  wire [1:0] \irq$876 ;
   wire ma;
-  wire \ma$456 ;
+  wire \ma$872 ;
   wire regs__abort_cycle;
-  wire \regs__abort_cycle$253 ;
+  wire \regs__abort_cycle$461 ;
   wire regs__busy;
-  wire \regs__busy$256 ;
+  wire \regs__busy$464 ;
   wire regs__ca_abort;
-  wire \regs__ca_abort$257 ;
+  wire \regs__ca_abort$465 ;
   wire [6:0] regs__ca_address;
-  wire [6:0] \regs__ca_address$259 ;
+  wire [6:0] \regs__ca_address$467 ;
   wire regs__ca_busy;
-  wire \regs__ca_busy$262 ;
+  wire \regs__ca_busy$470 ;
   wire [6:0] regs__ca_bytes_done;
-  wire [6:0] \regs__ca_bytes_done$264 ;
+  wire [6:0] \regs__ca_bytes_done$472 ;
   wire [6:0] regs__ca_count;
-  wire [6:0] \regs__ca_count$265 ;
+  wire [6:0] \regs__ca_count$473 ;
   wire regs__ca_done;
-  wire \regs__ca_done$268 ;
+  wire \regs__ca_done$476 ;
   wire [3:0] regs__ca_rbuf_addr;
-  wire [3:0] \regs__ca_rbuf_addr$269 ;
+  wire [3:0] \regs__ca_rbuf_addr$477 ;
   wire [31:0] regs__ca_rbuf_data;
-  wire [31:0] \regs__ca_rbuf_data$272 ;
+  wire [31:0] \regs__ca_rbuf_data$480 ;
   wire regs__ca_rbuf_en;
-  wire \regs__ca_rbuf_en$273 ;
+  wire \regs__ca_rbuf_en$481 ;
   wire [2:0] regs__ca_slave_id;
-  wire [2:0] \regs__ca_slave_id$275 ;
+  wire [2:0] \regs__ca_slave_id$483 ;
   wire regs__ca_start;
-  wire \regs__ca_start$277 ;
+  wire \regs__ca_start$485 ;
   wire [2:0] regs__ca_status;
-  wire [2:0] \regs__ca_status$280 ;
+  wire [2:0] \regs__ca_status$488 ;
   wire [3:0] regs__ca_wbuf_addr;
-  wire [3:0] \regs__ca_wbuf_addr$281 ;
+  wire [3:0] \regs__ca_wbuf_addr$489 ;
   wire [31:0] regs__ca_wbuf_data;
-  wire [31:0] \regs__ca_wbuf_data$283 ;
+  wire [31:0] \regs__ca_wbuf_data$491 ;
   wire [3:0] regs__ca_wbuf_en;
-  wire [3:0] \regs__ca_wbuf_en$285 ;
+  wire [3:0] \regs__ca_wbuf_en$493 ;
   wire regs__ca_write;
-  wire \regs__ca_write$287 ;
+  wire \regs__ca_write$495 ;
   wire regs__cap_counters;
-  wire \regs__cap_counters$290 ;
+  wire \regs__cap_counters$498 ;
   wire [5:0] regs__cap_data_bits_w0;
-  wire [5:0] \regs__cap_data_bits_w0$292 ;
+  wire [5:0] \regs__cap_data_bits_w0$500 ;
   wire [5:0] regs__cap_data_bits_w1;
-  wire [5:0] \regs__cap_data_bits_w1$294 ;
+  wire [5:0] \regs__cap_data_bits_w1$502 ;
+  wire [5:0] regs__cap_data_bits_w2;
+  wire [5:0] \regs__cap_data_bits_w2$504 ;
+  wire [5:0] regs__cap_data_bits_w3;
+  wire [5:0] \regs__cap_data_bits_w3$506 ;
+  wire [5:0] regs__cap_data_bits_w4;
+  wire [5:0] \regs__cap_data_bits_w4$508 ;
+  wire [5:0] regs__cap_data_bits_w5;
+  wire [5:0] \regs__cap_data_bits_w5$510 ;
+  wire [5:0] regs__cap_data_bits_w6;
+  wire [5:0] \regs__cap_data_bits_w6$512 ;
+  wire [5:0] regs__cap_data_bits_w7;
+  wire [5:0] \regs__cap_data_bits_w7$514 ;
   wire regs__cap_register_access;
-  wire \regs__cap_register_access$296 ;
+  wire \regs__cap_register_access$516 ;
   wire regs__cap_ssi;
-  wire \regs__cap_ssi$298 ;
+  wire \regs__cap_ssi$518 ;
   wire [5:0] regs__cap_timer_width;
-  wire [5:0] \regs__cap_timer_width$300 ;
+  wire [5:0] \regs__cap_timer_width$520 ;
   wire regs__cap_timestamp;
-  wire \regs__cap_timestamp$302 ;
+  wire \regs__cap_timestamp$522 ;
+  wire [3:0] regs__cap_words;
+  wire [3:0] \regs__cap_words$524 ;
   wire regs__cds;
-  wire \regs__cds$304 ;
+  wire \regs__cds$526 ;
   wire [23:0] regs__cfg_ack_limit;
-  wire [23:0] \regs__cfg_ack_limit$305 ;
+  wire [23:0] \regs__cfg_ack_limit$527 ;
   wire [23:0] regs__cfg_break_time;
-  wire [23:0] \regs__cfg_break_time$307 ;
+  wire [23:0] \regs__cfg_break_time$529 ;
   wire [3:0] regs__cfg_confirm_frames;
-  wire [3:0] \regs__cfg_confirm_frames$309 ;
+  wire [3:0] \regs__cfg_confirm_frames$531 ;
   wire [11:0] regs__cfg_delay_limit;
-  wire [11:0] \regs__cfg_delay_limit$311 ;
+  wire [11:0] \regs__cfg_delay_limit$533 ;
   wire [3:0] regs__cfg_delay_tolerance;
-  wire [3:0] \regs__cfg_delay_tolerance$313 ;
+  wire [3:0] \regs__cfg_delay_tolerance$535 ;
   wire regs__cfg_end_check;
-  wire \regs__cfg_end_check$315 ;
+  wire \regs__cfg_end_check$537 ;
   wire [15:0] regs__cfg_ma_half_period;
-  wire [15:0] \regs__cfg_ma_half_period$317 ;
+  wire [15:0] \regs__cfg_ma_half_period$539 ;
   wire [3:0] regs__cfg_noise_limit;
-  wire [3:0] \regs__cfg_noise_limit$319 ;
+  wire [3:0] \regs__cfg_noise_limit$541 ;
   wire [11:0] regs__cfg_quiet_time;
-  wire [11:0] \regs__cfg_quiet_time$321 ;
+  wire [11:0] \regs__cfg_quiet_time$543 ;
   wire [23:0] regs__cfg_request_period;
-  wire [23:0] \regs__cfg_request_period$323 ;
+  wire [23:0] \regs__cfg_request_period$545 ;
   wire regs__cfg_spw_check;
-  wire \regs__cfg_spw_check$325 ;
+  wire \regs__cfg_spw_check$547 ;
   wire [7:0] regs__cfg_spw_tolerance;
-  wire [7:0] \regs__cfg_spw_tolerance$327 ;
+  wire [7:0] \regs__cfg_spw_tolerance$549 ;
   wire regs__cfg_ssi;
-  wire \regs__cfg_ssi$329 ;
+  wire \regs__cfg_ssi$551 ;
   wire [11:0] regs__cfg_ssi_delay;
-  wire [11:0] \regs__cfg_ssi_delay$331 ;
+  wire [11:0] \regs__cfg_ssi_delay$553 ;
   wire regs__cfg_ssi_double;
-  wire \regs__cfg_ssi_double$333 ;
+  wire \regs__cfg_ssi_double$555 ;
   wire regs__cfg_ssi_error;
-  wire \regs__cfg_ssi_error$335 ;
+  wire \regs__cfg_ssi_error$557 ;
   wire regs__cfg_ssi_error_low;
-  wire \regs__cfg_ssi_error_low$337 ;
+  wire \regs__cfg_ssi_error_low$559 ;
   wire [23:0] regs__cfg_timeout_limit;
-  wire [23:0] \regs__cfg_timeout_limit$339 ;
+  wire [23:0] \regs__cfg_timeout_limit$561 ;
   wire [1:0] regs__cfg_w0_crc;
-  wire [1:0] \regs__cfg_w0_crc$341 ;
+  wire [1:0] \regs__cfg_w0_crc$563 ;
   wire regs__cfg_w0_crc_inverted;
-  wire \regs__cfg_w0_crc_inverted$343 ;
+  wire \regs__cfg_w0_crc_inverted$565 ;
   wire [15:0] regs__cfg_w0_crc_poly;
-  wire [15:0] \regs__cfg_w0_crc_poly$345 ;
+  wire [15:0] \regs__cfg_w0_crc_poly$567 ;
   wire [15:0] regs__cfg_w0_crc_start;
-  wire [15:0] \regs__cfg_w0_crc_start$347 ;
+  wire [15:0] \regs__cfg_w0_crc_start$569 ;
   wire [4:0] regs__cfg_w0_crc_width;
-  wire [4:0] \regs__cfg_w0_crc_width$349 ;
+  wire [4:0] \regs__cfg_w0_crc_width$571 ;
   wire [5:0] regs__cfg_w0_data_bits;
-  wire [5:0] \regs__cfg_w0_data_bits$351 ;
+  wire [5:0] \regs__cfg_w0_data_bits$573 ;
   wire regs__cfg_w0_gray;
-  wire \regs__cfg_w0_gray$353 ;
+  wire \regs__cfg_w0_gray$575 ;
   wire regs__cfg_w0_lc;
-  wire \regs__cfg_w0_lc$355 ;
+  wire \regs__cfg_w0_lc$577 ;
   wire regs__cfg_w0_nenw;
-  wire \regs__cfg_w0_nenw$357 ;
+  wire \regs__cfg_w0_nenw$579 ;
   wire regs__cfg_w0_signed;
-  wire \regs__cfg_w0_signed$359 ;
+  wire \regs__cfg_w0_signed$581 ;
   wire [1:0] regs__cfg_w1_crc;
-  wire [1:0] \regs__cfg_w1_crc$361 ;
+  wire [1:0] \regs__cfg_w1_crc$583 ;
   wire regs__cfg_w1_crc_inverted;
-  wire \regs__cfg_w1_crc_inverted$363 ;
+  wire \regs__cfg_w1_crc_inverted$585 ;
   wire [15:0] regs__cfg_w1_crc_poly;
-  wire [15:0] \regs__cfg_w1_crc_poly$365 ;
+  wire [15:0] \regs__cfg_w1_crc_poly$587 ;
   wire [15:0] regs__cfg_w1_crc_start;
-  wire [15:0] \regs__cfg_w1_crc_start$367 ;
+  wire [15:0] \regs__cfg_w1_crc_start$589 ;
   wire [4:0] regs__cfg_w1_crc_width;
-  wire [4:0] \regs__cfg_w1_crc_width$369 ;
+  wire [4:0] \regs__cfg_w1_crc_width$591 ;
   wire [5:0] regs__cfg_w1_data_bits;
-  wire [5:0] \regs__cfg_w1_data_bits$371 ;
+  wire [5:0] \regs__cfg_w1_data_bits$593 ;
   wire regs__cfg_w1_enable;
-  wire \regs__cfg_w1_enable$373 ;
+  wire \regs__cfg_w1_enable$595 ;
   wire regs__cfg_w1_gray;
-  wire \regs__cfg_w1_gray$375 ;
+  wire \regs__cfg_w1_gray$597 ;
   wire regs__cfg_w1_lc;
-  wire \regs__cfg_w1_lc$377 ;
+  wire \regs__cfg_w1_lc$599 ;
   wire regs__cfg_w1_nenw;
-  wire \regs__cfg_w1_nenw$379 ;
+  wire \regs__cfg_w1_nenw$601 ;
   wire regs__cfg_w1_signed;
-  wire \regs__cfg_w1_signed$381 ;
+  wire \regs__cfg_w1_signed$603 ;
+  wire [1:0] regs__cfg_w2_crc;
+  wire [1:0] \regs__cfg_w2_crc$605 ;
+  wire regs__cfg_w2_crc_inverted;
+  wire \regs__cfg_w2_crc_inverted$607 ;
+  wire [15:0] regs__cfg_w2_crc_poly;
+  wire [15:0] \regs__cfg_w2_crc_poly$609 ;
+  wire [15:0] regs__cfg_w2_crc_start;
+  wire [15:0] \regs__cfg_w2_crc_start$611 ;
+  wire [4:0] regs__cfg_w2_crc_width;
+  wire [4:0] \regs__cfg_w2_crc_width$613 ;
+  wire [5:0] regs__cfg_w2_data_bits;
+  wire [5:0] \regs__cfg_w2_data_bits$615 ;
+  wire regs__cfg_w2_enable;
+  wire \regs__cfg_w2_enable$617 ;
+  wire regs__cfg_w2_gray;
+  wire \regs__cfg_w2_gray$619 ;
+  wire regs__cfg_w2_lc;
+  wire \regs__cfg_w2_lc$621 ;
+  wire regs__cfg_w2_nenw;
+  wire \regs__cfg_w2_nenw$623 ;
+  wire regs__cfg_w2_signed;
+  wire \regs__cfg_w2_signed$625 ;
+  wire [1:0] regs__cfg_w3_crc;
+  wire [1:0] \regs__cfg_w3_crc$627 ;
+  wire regs__cfg_w3_crc_inverted;
+  wire \regs__cfg_w3_crc_inverted$629 ;
+  wire [15:0] regs__cfg_w3_crc_poly;
+  wire [15:0] \regs__cfg_w3_crc_poly$631 ;
+  wire [15:0] regs__cfg_w3_crc_start;
+  wire [15:0] \regs__cfg_w3_crc_start$633 ;
+  wire [4:0] regs__cfg_w3_crc_width;
+  wire [4:0] \regs__cfg_w3_crc_width$635 ;
+  wire [5:0] regs__cfg_w3_data_bits;
+  wire [5:0] \regs__cfg_w3_data_bits$637 ;
+  wire regs__cfg_w3_enable;
+  wire \regs__cfg_w3_enable$639 ;
+  wire regs__cfg_w3_gray;
+  wire \regs__cfg_w3_gray$641 ;
+  wire regs__cfg_w3_lc;
+  wire \regs__cfg_w3_lc$643 ;
+  wire regs__cfg_w3_nenw;
+  wire \regs__cfg_w3_nenw$645 ;
+  wire regs__cfg_w3_signed;
+  wire \regs__cfg_w3_signed$647 ;
+  wire [1:0] regs__cfg_w4_crc;
+  wire [1:0] \regs__cfg_w4_crc$649 ;
+  wire regs__cfg_w4_crc_inverted;
+  wire \regs__cfg_w4_crc_inverted$651 ;
+  wire [15:0] regs__cfg_w4_crc_poly;
+  wire [15:0] \regs__cfg_w4_crc_poly$653 ;
+  wire [15:0] regs__cfg_w4_crc_start;
+  wire [15:0] \regs__cfg_w4_crc_start$655 ;
+  wire [4:0] regs__cfg_w4_crc_width;
+  wire [4:0] \regs__cfg_w4_crc_width$657 ;
+  wire [5:0] regs__cfg_w4_data_bits;
+  wire [5:0] \regs__cfg_w4_data_bits$659 ;
+  wire regs__cfg_w4_enable;
+  wire \regs__cfg_w4_enable$661 ;
+  wire regs__cfg_w4_gray;
+  wire \regs__cfg_w4_gray$663 ;
+  wire regs__cfg_w4_lc;
+  wire \regs__cfg_w4_lc$665 ;
+  wire regs__cfg_w4_nenw;
+  wire \regs__cfg_w4_nenw$667 ;
+  wire regs__cfg_w4_signed;
+  wire \regs__cfg_w4_signed$669 ;
+  wire [1:0] regs__cfg_w5_crc;
+  wire [1:0] \regs__cfg_w5_crc$671 ;
+  wire regs__cfg_w5_crc_inverted;
+  wire \regs__cfg_w5_crc_inverted$673 ;
+  wire [15:0] regs__cfg_w5_crc_poly;
+  wire [15:0] \regs__cfg_w5_crc_poly$675 ;
+  wire [15:0] regs__cfg_w5_crc_start;
+  wire [15:0] \regs__cfg_w5_crc_start$677 ;
+  wire [4:0] regs__cfg_w5_crc_width;
+  wire [4:0] \regs__cfg_w5_crc_width$679 ;
+  wire [5:0] regs__cfg_w5_data_bits;
+  wire [5:0] \regs__cfg_w5_data_bits$681 ;
+  wire regs__cfg_w5_enable;
+  wire \regs__cfg_w5_enable$683 ;
+  wire regs__cfg_w5_gray;
+  wire \regs__cfg_w5_gray$685 ;
+  wire regs__cfg_w5_lc;
+  wire \regs__cfg_w5_lc$687 ;
+  wire regs__cfg_w5_nenw;
+  wire \regs__cfg_w5_nenw$689 ;
+  wire regs__cfg_w5_signed;
+  wire \regs__cfg_w5_signed$691 ;
+  wire [1:0] regs__cfg_w6_crc;
+  wire [1:0] \regs__cfg_w6_crc$693 ;
+  wire regs__cfg_w6_crc_inverted;
+  wire \regs__cfg_w6_crc_inverted$695 ;
+  wire [15:0] regs__cfg_w6_crc_poly;
+  wire [15:0] \regs__cfg_w6_crc_poly$697 ;
+  wire [15:0] regs__cfg_w6_crc_start;
+  wire [15:0] \regs__cfg_w6_crc_start$699 ;
+  wire [4:0] regs__cfg_w6_crc_width;
+  wire [4:0] \regs__cfg_w6_crc_width$701 ;
+  wire [5:0] regs__cfg_w6_data_bits;
+  wire [5:0] \regs__cfg_w6_data_bits$703 ;
+  wire regs__cfg_w6_enable;
+  wire \regs__cfg_w6_enable$705 ;
+  wire regs__cfg_w6_gray;
+  wire \regs__cfg_w6_gray$707 ;
+  wire regs__cfg_w6_lc;
+  wire \regs__cfg_w6_lc$709 ;
+  wire regs__cfg_w6_nenw;
+  wire \regs__cfg_w6_nenw$711 ;
+  wire regs__cfg_w6_signed;
+  wire \regs__cfg_w6_signed$713 ;
+  wire [1:0] regs__cfg_w7_crc;
+  wire [1:0] \regs__cfg_w7_crc$715 ;
+  wire regs__cfg_w7_crc_inverted;
+  wire \regs__cfg_w7_crc_inverted$717 ;
+  wire [15:0] regs__cfg_w7_crc_poly;
+  wire [15:0] \regs__cfg_w7_crc_poly$719 ;
+  wire [15:0] regs__cfg_w7_crc_start;
+  wire [15:0] \regs__cfg_w7_crc_start$721 ;
+  wire [4:0] regs__cfg_w7_crc_width;
+  wire [4:0] \regs__cfg_w7_crc_width$723 ;
+  wire [5:0] regs__cfg_w7_data_bits;
+  wire [5:0] \regs__cfg_w7_data_bits$725 ;
+  wire regs__cfg_w7_enable;
+  wire \regs__cfg_w7_enable$727 ;
+  wire regs__cfg_w7_gray;
+  wire \regs__cfg_w7_gray$729 ;
+  wire regs__cfg_w7_lc;
+  wire \regs__cfg_w7_lc$731 ;
+  wire regs__cfg_w7_nenw;
+  wire \regs__cfg_w7_nenw$733 ;
+  wire regs__cfg_w7_signed;
+  wire \regs__cfg_w7_signed$735 ;
   wire regs__clear_counters;
-  wire \regs__clear_counters$383 ;
+  wire \regs__clear_counters$737 ;
   wire regs__config_error;
-  wire \regs__config_error$386 ;
+  wire \regs__config_error$740 ;
   wire [2:0] regs__count_addr;
-  wire [2:0] \regs__count_addr$387 ;
+  wire [2:0] \regs__count_addr$741 ;
   wire [15:0] regs__count_ca_aborted;
-  wire [15:0] \regs__count_ca_aborted$390 ;
+  wire [15:0] \regs__count_ca_aborted$744 ;
   wire [15:0] regs__count_ca_crc4_error;
-  wire [15:0] \regs__count_ca_crc4_error$392 ;
+  wire [15:0] \regs__count_ca_crc4_error$746 ;
   wire [15:0] regs__count_ca_data_fault;
-  wire [15:0] \regs__count_ca_data_fault$394 ;
+  wire [15:0] \regs__count_ca_data_fault$748 ;
   wire [15:0] regs__count_ca_no_answer;
-  wire [15:0] \regs__count_ca_no_answer$396 ;
+  wire [15:0] \regs__count_ca_no_answer$750 ;
   wire [15:0] regs__count_ca_refused;
-  wire [15:0] \regs__count_ca_refused$398 ;
+  wire [15:0] \regs__count_ca_refused$752 ;
+  wire [15:0] regs__count_crc_word2;
+  wire [15:0] \regs__count_crc_word2$754 ;
+  wire [15:0] regs__count_crc_word3;
+  wire [15:0] \regs__count_crc_word3$756 ;
+  wire [15:0] regs__count_crc_word4;
+  wire [15:0] \regs__count_crc_word4$758 ;
+  wire [15:0] regs__count_crc_word5;
+  wire [15:0] \regs__count_crc_word5$760 ;
+  wire [15:0] regs__count_crc_word6;
+  wire [15:0] \regs__count_crc_word6$762 ;
+  wire [15:0] regs__count_crc_word7;
+  wire [15:0] \regs__count_crc_word7$764 ;
   wire [31:0] regs__count_data;
-  wire [31:0] \regs__count_data$400 ;
+  wire [31:0] \regs__count_data$766 ;
   wire regs__count_en;
-  wire \regs__count_en$401 ;
+  wire \regs__count_en$767 ;
   wire regs__delay_settled;
-  wire \regs__delay_settled$404 ;
+  wire \regs__delay_settled$770 ;
   wire [7:0] regs__delay_spread;
-  wire [7:0] \regs__delay_spread$406 ;
+  wire [7:0] \regs__delay_spread$772 ;
   wire [15:0] regs__done_count;
-  wire [15:0] \regs__done_count$408 ;
+  wire [15:0] \regs__done_count$774 ;
   wire regs__frame_done;
-  wire \regs__frame_done$410 ;
+  wire \regs__frame_done$776 ;
   wire regs__frame_error;
-  wire \regs__frame_error$412 ;
+  wire \regs__frame_error$778 ;
   wire [5:0] regs__lc;
-  wire [5:0] \regs__lc$414 ;
+  wire [5:0] \regs__lc$780 ;
   wire regs__lc_repeat;
-  wire \regs__lc_repeat$416 ;
+  wire \regs__lc_repeat$782 ;
   wire regs__lc_skip;
-  wire \regs__lc_skip$418 ;
+  wire \regs__lc_skip$784 ;
   wire regs__lc_zero;
-  wire \regs__lc_zero$420 ;
+  wire \regs__lc_zero$786 ;
   wire [12:0] regs__line_delay;
-  wire [12:0] \regs__line_delay$422 ;
+  wire [12:0] \regs__line_delay$788 ;
   wire [3:0] regs__noise_events;
-  wire [3:0] \regs__noise_events$424 ;
+  wire [3:0] \regs__noise_events$790 ;
   wire regs__periodic;
-  wire \regs__periodic$425 ;
+  wire \regs__periodic$791 ;
   wire [10:0] regs__r_addr;
   wire [31:0] regs__r_data;
   wire regs__r_en;
   wire regs__r_load;
+  wire [15:0] regs__result_updates;
+  wire [15:0] \regs__result_updates$794 ;
   wire [12:0] regs__settled_delay;
-  wire [12:0] \regs__settled_delay$428 ;
+  wire [12:0] \regs__settled_delay$796 ;
   wire regs__spw_mismatch;
-  wire \regs__spw_mismatch$430 ;
+  wire \regs__spw_mismatch$798 ;
   wire regs__start;
-  wire \regs__start$431 ;
+  wire \regs__start$799 ;
   wire [3:0] regs__status;
-  wire [3:0] \regs__status$434 ;
+  wire [3:0] \regs__status$802 ;
   wire [31:0] regs__timestamp;
-  wire [31:0] \regs__timestamp$436 ;
+  wire [31:0] \regs__timestamp$804 ;
   wire regs__trigger_enable;
-  wire \regs__trigger_enable$437 ;
+  wire \regs__trigger_enable$805 ;
   wire [10:0] regs__w_addr;
   wire [31:0] regs__w_data;
   wire regs__w_en;
   wire [3:0] regs__w_strb;
   wire regs__word0_crc_ok;
-  wire \regs__word0_crc_ok$440 ;
+  wire \regs__word0_crc_ok$808 ;
   wire regs__word0_ne;
-  wire \regs__word0_ne$442 ;
+  wire \regs__word0_ne$810 ;
   wire regs__word0_nw;
-  wire \regs__word0_nw$444 ;
+  wire \regs__word0_nw$812 ;
   wire [54:0] regs__word0_position;
-  wire [54:0] \regs__word0_position$446 ;
+  wire [54:0] \regs__word0_position$814 ;
   wire regs__word1_crc_ok;
-  wire \regs__word1_crc_ok$448 ;
+  wire \regs__word1_crc_ok$816 ;
   wire regs__word1_ne;
-  wire \regs__word1_ne$450 ;
+  wire \regs__word1_ne$818 ;
   wire regs__word1_nw;
-  wire \regs__word1_nw$452 ;
+  wire \regs__word1_nw$820 ;
   wire [39:0] regs__word1_position;
-  wire [39:0] \regs__word1_position$454 ;
+  wire [39:0] \regs__word1_position$822 ;
+  wire regs__word2_crc_ok;
+  wire \regs__word2_crc_ok$824 ;
+  wire regs__word2_ne;
+  wire \regs__word2_ne$826 ;
+  wire regs__word2_nw;
+  wire \regs__word2_nw$828 ;
+  wire [62:0] regs__word2_position;
+  wire [62:0] \regs__word2_position$830 ;
+  wire regs__word3_crc_ok;
+  wire \regs__word3_crc_ok$832 ;
+  wire regs__word3_ne;
+  wire \regs__word3_ne$834 ;
+  wire regs__word3_nw;
+  wire \regs__word3_nw$836 ;
+  wire [62:0] regs__word3_position;
+  wire [62:0] \regs__word3_position$838 ;
+  wire regs__word4_crc_ok;
+  wire \regs__word4_crc_ok$840 ;
+  wire regs__word4_ne;
+  wire \regs__word4_ne$842 ;
+  wire regs__word4_nw;
+  wire \regs__word4_nw$844 ;
+  wire [62:0] regs__word4_position;
+  wire [62:0] \regs__word4_position$846 ;
+  wire regs__word5_crc_ok;
+  wire \regs__word5_crc_ok$848 ;
+  wire regs__word5_ne;
+  wire \regs__word5_ne$850 ;
+  wire regs__word5_nw;
+  wire \regs__word5_nw$852 ;
+  wire [62:0] regs__word5_position;
+  wire [62:0] \regs__word5_position$854 ;
+  wire regs__word6_crc_ok;
+  wire \regs__word6_crc_ok$856 ;
+  wire regs__word6_ne;
+  wire \regs__word6_ne$858 ;
+  wire regs__word6_nw;
+  wire \regs__word6_nw$860 ;
+  wire [62:0] regs__word6_position;
+  wire [62:0] \regs__word6_position$862 ;
+  wire regs__word7_crc_ok;
+  wire \regs__word7_crc_ok$864 ;
+  wire regs__word7_ne;
+  wire \regs__word7_ne$866 ;
+  wire regs__word7_nw;
+  wire \regs__word7_nw$868 ;
+  wire [62:0] regs__word7_position;
+  wire [62:0] \regs__word7_position$870 ;
   input rst;
   wire rst;
   wire slo;
-  wire \slo$457 ;
+  wire \slo$873 ;
   reg [31:0] time_now = 32'd0;
   (* init = 32'd0 *)
-  wire [31:0] \time_now$252 ;
-  (* init = 32'd0 *)
   wire [31:0] \time_now$46 ;
+  (* init = 32'd0 *)
+  wire [31:0] \time_now$460 ;
   input trigger;
   wire trigger;
-  wire \trigger$249 ;
   wire \trigger$42 ;
-  wire \trigger$455 ;
+  wire \trigger$457 ;
+  wire \trigger$871 ;
   reg trigger_in = 1'h0;
   wire wb__ack;
   wire [10:0] wb__adr;
@@ -548,12 +964,13 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch0__done_count(ch0__done_count),
     .ch0__frame_done(ch0__frame_done),
     .ch0__frame_error(ch0__frame_error),
+    .ch0__result_updates(ch0__result_updates),
     .ch0_ca_ctrl_abort(regs__ca_abort),
     .ch0_ca_ctrl_start(regs__ca_start),
     .ch0_ca_request_address(regs__ca_address),
     .ch0_ca_request_count(regs__ca_count),
     .ch0_ca_request_slave_id(regs__ca_slave_id),
-    .\ch0_ca_request_write$113 (regs__ca_write),
+    .\ch0_ca_request_write$149 (regs__ca_write),
     .ch0_cfg_ack_ack_limit(regs__cfg_ack_limit),
     .ch0_cfg_break_break_time(regs__cfg_break_time),
     .ch0_cfg_checks_confirm_frames(regs__cfg_confirm_frames),
@@ -603,73 +1020,74 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1__ca_busy(ch1__ca_busy),
     .ch1__ca_done(ch1__ca_done),
     .ch1__ca_rbuf_data(ch1__ca_rbuf_data),
-    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$273 ),
-    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$285 ),
+    .ch1__ca_rbuf_en(\regs__ca_rbuf_en$481 ),
+    .ch1__ca_wbuf_en(\regs__ca_wbuf_en$493 ),
     .ch1__config_error(ch1__config_error),
     .ch1__count_data(ch1__count_data),
-    .ch1__count_en(\regs__count_en$401 ),
+    .ch1__count_en(\regs__count_en$767 ),
     .ch1__done_count(ch1__done_count),
     .ch1__frame_done(ch1__frame_done),
     .ch1__frame_error(ch1__frame_error),
-    .ch1_ca_ctrl_abort(\regs__ca_abort$257 ),
-    .ch1_ca_ctrl_start(\regs__ca_start$277 ),
-    .ch1_ca_request_address(\regs__ca_address$259 ),
-    .ch1_ca_request_count(\regs__ca_count$265 ),
-    .ch1_ca_request_slave_id(\regs__ca_slave_id$275 ),
-    .\ch1_ca_request_write$305 (\regs__ca_write$287 ),
-    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$305 ),
-    .ch1_cfg_break_break_time(\regs__cfg_break_time$307 ),
-    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$309 ),
-    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$313 ),
-    .ch1_cfg_checks_end_check(\regs__cfg_end_check$315 ),
-    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$319 ),
-    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$325 ),
-    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$327 ),
-    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$347 ),
-    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$343 ),
-    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$345 ),
-    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$349 ),
-    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$367 ),
-    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$363 ),
-    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$365 ),
-    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$369 ),
-    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$311 ),
-    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$317 ),
-    .ch1_cfg_period_request_period(\regs__cfg_request_period$323 ),
-    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$321 ),
-    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$329 ),
-    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$331 ),
-    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$333 ),
-    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$335 ),
-    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$337 ),
-    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$339 ),
-    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$341 ),
-    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$351 ),
-    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$353 ),
-    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$355 ),
-    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$357 ),
-    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$359 ),
-    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$361 ),
-    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$371 ),
-    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$373 ),
-    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$375 ),
-    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$377 ),
-    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$379 ),
-    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$381 ),
-    .ch1_ctrl_abort(\regs__abort_cycle$253 ),
-    .ch1_ctrl_clear_counters(\regs__clear_counters$383 ),
-    .ch1_ctrl_periodic(\regs__periodic$425 ),
-    .ch1_ctrl_start(\regs__start$431 ),
-    .ch1_ctrl_trigger_enable(\regs__trigger_enable$437 ),
+    .ch1__result_updates(ch1__result_updates),
+    .ch1_ca_ctrl_abort(\regs__ca_abort$465 ),
+    .ch1_ca_ctrl_start(\regs__ca_start$485 ),
+    .ch1_ca_request_address(\regs__ca_address$467 ),
+    .ch1_ca_request_count(\regs__ca_count$473 ),
+    .ch1_ca_request_slave_id(\regs__ca_slave_id$483 ),
+    .\ch1_ca_request_write$452 (\regs__ca_write$495 ),
+    .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$527 ),
+    .ch1_cfg_break_break_time(\regs__cfg_break_time$529 ),
+    .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$531 ),
+    .ch1_cfg_checks_delay_tolerance(\regs__cfg_delay_tolerance$535 ),
+    .ch1_cfg_checks_end_check(\regs__cfg_end_check$537 ),
+    .ch1_cfg_checks_noise_limit(\regs__cfg_noise_limit$541 ),
+    .ch1_cfg_checks_spw_check(\regs__cfg_spw_check$547 ),
+    .ch1_cfg_checks_spw_tolerance(\regs__cfg_spw_tolerance$549 ),
+    .ch1_cfg_crc0_start_w0_crc_start(\regs__cfg_w0_crc_start$569 ),
+    .ch1_cfg_crc0_w0_crc_inverted(\regs__cfg_w0_crc_inverted$565 ),
+    .ch1_cfg_crc0_w0_crc_poly(\regs__cfg_w0_crc_poly$567 ),
+    .ch1_cfg_crc0_w0_crc_width(\regs__cfg_w0_crc_width$571 ),
+    .ch1_cfg_crc1_start_w1_crc_start(\regs__cfg_w1_crc_start$589 ),
+    .ch1_cfg_crc1_w1_crc_inverted(\regs__cfg_w1_crc_inverted$585 ),
+    .ch1_cfg_crc1_w1_crc_poly(\regs__cfg_w1_crc_poly$587 ),
+    .ch1_cfg_crc1_w1_crc_width(\regs__cfg_w1_crc_width$591 ),
+    .ch1_cfg_ma_delay_limit(\regs__cfg_delay_limit$533 ),
+    .ch1_cfg_ma_ma_half_period(\regs__cfg_ma_half_period$539 ),
+    .ch1_cfg_period_request_period(\regs__cfg_request_period$545 ),
+    .ch1_cfg_quiet_quiet_time(\regs__cfg_quiet_time$543 ),
+    .ch1_cfg_ssi_ssi(\regs__cfg_ssi$551 ),
+    .ch1_cfg_ssi_ssi_delay(\regs__cfg_ssi_delay$553 ),
+    .ch1_cfg_ssi_ssi_double(\regs__cfg_ssi_double$555 ),
+    .ch1_cfg_ssi_ssi_error(\regs__cfg_ssi_error$557 ),
+    .ch1_cfg_ssi_ssi_error_low(\regs__cfg_ssi_error_low$559 ),
+    .ch1_cfg_timeout_timeout_limit(\regs__cfg_timeout_limit$561 ),
+    .ch1_cfg_words_w0_crc(\regs__cfg_w0_crc$563 ),
+    .ch1_cfg_words_w0_data_bits(\regs__cfg_w0_data_bits$573 ),
+    .ch1_cfg_words_w0_gray(\regs__cfg_w0_gray$575 ),
+    .ch1_cfg_words_w0_lc(\regs__cfg_w0_lc$577 ),
+    .ch1_cfg_words_w0_nenw(\regs__cfg_w0_nenw$579 ),
+    .ch1_cfg_words_w0_signed(\regs__cfg_w0_signed$581 ),
+    .ch1_cfg_words_w1_crc(\regs__cfg_w1_crc$583 ),
+    .ch1_cfg_words_w1_data_bits(\regs__cfg_w1_data_bits$593 ),
+    .ch1_cfg_words_w1_enable(\regs__cfg_w1_enable$595 ),
+    .ch1_cfg_words_w1_gray(\regs__cfg_w1_gray$597 ),
+    .ch1_cfg_words_w1_lc(\regs__cfg_w1_lc$599 ),
+    .ch1_cfg_words_w1_nenw(\regs__cfg_w1_nenw$601 ),
+    .ch1_cfg_words_w1_signed(\regs__cfg_w1_signed$603 ),
+    .ch1_ctrl_abort(\regs__abort_cycle$461 ),
+    .ch1_ctrl_clear_counters(\regs__clear_counters$737 ),
+    .ch1_ctrl_periodic(\regs__periodic$791 ),
+    .ch1_ctrl_start(\regs__start$799 ),
+    .ch1_ctrl_trigger_enable(\regs__trigger_enable$805 ),
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$6641$0 (\$10 ),
-    .\port$6652$0 (\$11 ),
-    .\port$6729$0 (\$12 ),
-    .\port$7170$0 (\$13 ),
-    .\port$7181$0 (\$14 ),
-    .\port$7258$0 (\$15 ),
+    .\port$7239$0 (\$10 ),
+    .\port$7250$0 (\$11 ),
+    .\port$7327$0 (\$12 ),
+    .\port$7770$0 (\$13 ),
+    .\port$7781$0 (\$14 ),
+    .\port$7858$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -745,9 +1163,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$6641$0 (\$10 ),
-    .\port$6652$0 (\$11 ),
-    .\port$6729$0 (\$12 ),
+    .\port$7239$0 (\$10 ),
+    .\port$7250$0 (\$11 ),
+    .\port$7327$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -758,73 +1176,74 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .regs__done_count(ch0__done_count),
     .regs__frame_done(ch0__frame_done),
     .regs__frame_error(ch0__frame_error),
+    .regs__result_updates(ch0__result_updates),
     .regs__trigger_enable(regs__trigger_enable),
     .rst(rst),
     .slo(ch0_slo),
     .start(regs__start),
     .time_now(time_now),
-    .\trigger$197 (\trigger$42 )
+    .\trigger$204 (\trigger$42 )
   );
   \biss_master_wb.ch1  ch1 (
-    .ca_abort(\regs__ca_abort$257 ),
-    .ca_address(\regs__ca_address$259 ),
-    .ca_count(\regs__ca_count$265 ),
+    .ca_abort(\regs__ca_abort$465 ),
+    .ca_address(\regs__ca_address$467 ),
+    .ca_count(\regs__ca_count$473 ),
     .ca_rbuf_addr(wb_adr[3:0]),
-    .ca_rbuf_en(\regs__ca_rbuf_en$273 ),
-    .ca_slave_id(\regs__ca_slave_id$275 ),
-    .ca_start(\regs__ca_start$277 ),
+    .ca_rbuf_en(\regs__ca_rbuf_en$481 ),
+    .ca_slave_id(\regs__ca_slave_id$483 ),
+    .ca_start(\regs__ca_start$485 ),
     .ca_wbuf_addr(regs__ca_wbuf_addr),
     .ca_wbuf_data(regs__ca_wbuf_data),
-    .ca_wbuf_en(\regs__ca_wbuf_en$285 ),
-    .ca_write(\regs__ca_write$287 ),
-    .cfg_ack_limit(\regs__cfg_ack_limit$305 ),
-    .cfg_break_time(\regs__cfg_break_time$307 ),
-    .cfg_confirm_frames(\regs__cfg_confirm_frames$309 ),
-    .cfg_delay_limit(\regs__cfg_delay_limit$311 ),
-    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$313 ),
-    .cfg_end_check(\regs__cfg_end_check$315 ),
-    .cfg_ma_half_period(\regs__cfg_ma_half_period$317 ),
-    .cfg_noise_limit(\regs__cfg_noise_limit$319 ),
-    .cfg_quiet_time(\regs__cfg_quiet_time$321 ),
-    .cfg_request_period(\regs__cfg_request_period$323 ),
-    .cfg_spw_check(\regs__cfg_spw_check$325 ),
-    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$327 ),
-    .cfg_ssi(\regs__cfg_ssi$329 ),
-    .cfg_ssi_delay(\regs__cfg_ssi_delay$331 ),
-    .cfg_ssi_double(\regs__cfg_ssi_double$333 ),
-    .cfg_ssi_error(\regs__cfg_ssi_error$335 ),
-    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$337 ),
-    .cfg_timeout_limit(\regs__cfg_timeout_limit$339 ),
-    .cfg_w0_crc(\regs__cfg_w0_crc$341 ),
-    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$343 ),
-    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$345 ),
-    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$347 ),
-    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$349 ),
-    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$351 ),
-    .cfg_w0_gray(\regs__cfg_w0_gray$353 ),
-    .cfg_w0_lc(\regs__cfg_w0_lc$355 ),
-    .cfg_w0_nenw(\regs__cfg_w0_nenw$357 ),
-    .cfg_w0_signed(\regs__cfg_w0_signed$359 ),
-    .cfg_w1_crc(\regs__cfg_w1_crc$361 ),
-    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$363 ),
-    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$365 ),
-    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$367 ),
-    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$369 ),
-    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$371 ),
-    .cfg_w1_enable(\regs__cfg_w1_enable$373 ),
-    .cfg_w1_gray(\regs__cfg_w1_gray$375 ),
-    .cfg_w1_lc(\regs__cfg_w1_lc$377 ),
-    .cfg_w1_nenw(\regs__cfg_w1_nenw$379 ),
-    .cfg_w1_signed(\regs__cfg_w1_signed$381 ),
-    .clear_counters(\regs__clear_counters$383 ),
+    .ca_wbuf_en(\regs__ca_wbuf_en$493 ),
+    .ca_write(\regs__ca_write$495 ),
+    .cfg_ack_limit(\regs__cfg_ack_limit$527 ),
+    .cfg_break_time(\regs__cfg_break_time$529 ),
+    .cfg_confirm_frames(\regs__cfg_confirm_frames$531 ),
+    .cfg_delay_limit(\regs__cfg_delay_limit$533 ),
+    .cfg_delay_tolerance(\regs__cfg_delay_tolerance$535 ),
+    .cfg_end_check(\regs__cfg_end_check$537 ),
+    .cfg_ma_half_period(\regs__cfg_ma_half_period$539 ),
+    .cfg_noise_limit(\regs__cfg_noise_limit$541 ),
+    .cfg_quiet_time(\regs__cfg_quiet_time$543 ),
+    .cfg_request_period(\regs__cfg_request_period$545 ),
+    .cfg_spw_check(\regs__cfg_spw_check$547 ),
+    .cfg_spw_tolerance(\regs__cfg_spw_tolerance$549 ),
+    .cfg_ssi(\regs__cfg_ssi$551 ),
+    .cfg_ssi_delay(\regs__cfg_ssi_delay$553 ),
+    .cfg_ssi_double(\regs__cfg_ssi_double$555 ),
+    .cfg_ssi_error(\regs__cfg_ssi_error$557 ),
+    .cfg_ssi_error_low(\regs__cfg_ssi_error_low$559 ),
+    .cfg_timeout_limit(\regs__cfg_timeout_limit$561 ),
+    .cfg_w0_crc(\regs__cfg_w0_crc$563 ),
+    .cfg_w0_crc_inverted(\regs__cfg_w0_crc_inverted$565 ),
+    .cfg_w0_crc_poly(\regs__cfg_w0_crc_poly$567 ),
+    .cfg_w0_crc_start(\regs__cfg_w0_crc_start$569 ),
+    .cfg_w0_crc_width(\regs__cfg_w0_crc_width$571 ),
+    .cfg_w0_data_bits(\regs__cfg_w0_data_bits$573 ),
+    .cfg_w0_gray(\regs__cfg_w0_gray$575 ),
+    .cfg_w0_lc(\regs__cfg_w0_lc$577 ),
+    .cfg_w0_nenw(\regs__cfg_w0_nenw$579 ),
+    .cfg_w0_signed(\regs__cfg_w0_signed$581 ),
+    .cfg_w1_crc(\regs__cfg_w1_crc$583 ),
+    .cfg_w1_crc_inverted(\regs__cfg_w1_crc_inverted$585 ),
+    .cfg_w1_crc_poly(\regs__cfg_w1_crc_poly$587 ),
+    .cfg_w1_crc_start(\regs__cfg_w1_crc_start$589 ),
+    .cfg_w1_crc_width(\regs__cfg_w1_crc_width$591 ),
+    .cfg_w1_data_bits(\regs__cfg_w1_data_bits$593 ),
+    .cfg_w1_enable(\regs__cfg_w1_enable$595 ),
+    .cfg_w1_gray(\regs__cfg_w1_gray$597 ),
+    .cfg_w1_lc(\regs__cfg_w1_lc$599 ),
+    .cfg_w1_nenw(\regs__cfg_w1_nenw$601 ),
+    .cfg_w1_signed(\regs__cfg_w1_signed$603 ),
+    .clear_counters(\regs__clear_counters$737 ),
     .clk(clk),
-    .count_en(\regs__count_en$401 ),
+    .count_en(\regs__count_en$767 ),
     .ma(ch1_ma),
-    .periodic(\regs__periodic$425 ),
-    .\port$7170$0 (\$13 ),
-    .\port$7181$0 (\$14 ),
-    .\port$7258$0 (\$15 ),
-    .regs__abort_cycle(\regs__abort_cycle$253 ),
+    .periodic(\regs__periodic$791 ),
+    .\port$7770$0 (\$13 ),
+    .\port$7781$0 (\$14 ),
+    .\port$7858$0 (\$15 ),
+    .regs__abort_cycle(\regs__abort_cycle$461 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
     .regs__ca_done(ch1__ca_done),
@@ -834,12 +1253,13 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .regs__done_count(ch1__done_count),
     .regs__frame_done(ch1__frame_done),
     .regs__frame_error(ch1__frame_error),
-    .regs__trigger_enable(\regs__trigger_enable$437 ),
+    .regs__result_updates(ch1__result_updates),
+    .regs__trigger_enable(\regs__trigger_enable$805 ),
     .rst(rst),
     .slo(ch1_slo),
-    .start(\regs__start$431 ),
+    .start(\regs__start$799 ),
     .time_now(time_now),
-    .\trigger$197 (\trigger$42 )
+    .\trigger$204 (\trigger$42 )
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$9 ) begin end
@@ -912,6 +1332,18 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign regs__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign regs__cap_data_bits_w1 = 6'h28;
+  assign ch0__cap_data_bits_w2 = 6'h00;
+  assign regs__cap_data_bits_w2 = 6'h00;
+  assign ch0__cap_data_bits_w3 = 6'h00;
+  assign regs__cap_data_bits_w3 = 6'h00;
+  assign ch0__cap_data_bits_w4 = 6'h00;
+  assign regs__cap_data_bits_w4 = 6'h00;
+  assign ch0__cap_data_bits_w5 = 6'h00;
+  assign regs__cap_data_bits_w5 = 6'h00;
+  assign ch0__cap_data_bits_w6 = 6'h00;
+  assign regs__cap_data_bits_w6 = 6'h00;
+  assign ch0__cap_data_bits_w7 = 6'h00;
+  assign regs__cap_data_bits_w7 = 6'h00;
   assign ch0__cap_register_access = 1'h1;
   assign regs__cap_register_access = 1'h1;
   assign ch0__cap_ssi = 1'h1;
@@ -920,6 +1352,8 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign regs__cap_timer_width = 6'h18;
   assign ch0__cap_timestamp = 1'h1;
   assign regs__cap_timestamp = 1'h1;
+  assign ch0__cap_words = 4'h2;
+  assign regs__cap_words = 4'h2;
   assign ch0__cds = \$10 [49];
   assign regs__cds = \$10 [49];
   assign ch0__cfg_ack_limit = regs__cfg_ack_limit;
@@ -961,6 +1395,138 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign ch0__cfg_w1_lc = regs__cfg_w1_lc;
   assign ch0__cfg_w1_nenw = regs__cfg_w1_nenw;
   assign ch0__cfg_w1_signed = regs__cfg_w1_signed;
+  assign regs__cfg_w2_crc = 2'h0;
+  assign ch0__cfg_w2_crc = 2'h0;
+  assign regs__cfg_w2_crc_inverted = 1'h0;
+  assign ch0__cfg_w2_crc_inverted = 1'h0;
+  assign regs__cfg_w2_crc_poly = 16'h0000;
+  assign ch0__cfg_w2_crc_poly = 16'h0000;
+  assign regs__cfg_w2_crc_start = 16'h0000;
+  assign ch0__cfg_w2_crc_start = 16'h0000;
+  assign regs__cfg_w2_crc_width = 5'h00;
+  assign ch0__cfg_w2_crc_width = 5'h00;
+  assign regs__cfg_w2_data_bits = 6'h00;
+  assign ch0__cfg_w2_data_bits = 6'h00;
+  assign regs__cfg_w2_enable = 1'h0;
+  assign ch0__cfg_w2_enable = 1'h0;
+  assign regs__cfg_w2_gray = 1'h0;
+  assign ch0__cfg_w2_gray = 1'h0;
+  assign regs__cfg_w2_lc = 1'h0;
+  assign ch0__cfg_w2_lc = 1'h0;
+  assign regs__cfg_w2_nenw = 1'h0;
+  assign ch0__cfg_w2_nenw = 1'h0;
+  assign regs__cfg_w2_signed = 1'h0;
+  assign ch0__cfg_w2_signed = 1'h0;
+  assign regs__cfg_w3_crc = 2'h0;
+  assign ch0__cfg_w3_crc = 2'h0;
+  assign regs__cfg_w3_crc_inverted = 1'h0;
+  assign ch0__cfg_w3_crc_inverted = 1'h0;
+  assign regs__cfg_w3_crc_poly = 16'h0000;
+  assign ch0__cfg_w3_crc_poly = 16'h0000;
+  assign regs__cfg_w3_crc_start = 16'h0000;
+  assign ch0__cfg_w3_crc_start = 16'h0000;
+  assign regs__cfg_w3_crc_width = 5'h00;
+  assign ch0__cfg_w3_crc_width = 5'h00;
+  assign regs__cfg_w3_data_bits = 6'h00;
+  assign ch0__cfg_w3_data_bits = 6'h00;
+  assign regs__cfg_w3_enable = 1'h0;
+  assign ch0__cfg_w3_enable = 1'h0;
+  assign regs__cfg_w3_gray = 1'h0;
+  assign ch0__cfg_w3_gray = 1'h0;
+  assign regs__cfg_w3_lc = 1'h0;
+  assign ch0__cfg_w3_lc = 1'h0;
+  assign regs__cfg_w3_nenw = 1'h0;
+  assign ch0__cfg_w3_nenw = 1'h0;
+  assign regs__cfg_w3_signed = 1'h0;
+  assign ch0__cfg_w3_signed = 1'h0;
+  assign regs__cfg_w4_crc = 2'h0;
+  assign ch0__cfg_w4_crc = 2'h0;
+  assign regs__cfg_w4_crc_inverted = 1'h0;
+  assign ch0__cfg_w4_crc_inverted = 1'h0;
+  assign regs__cfg_w4_crc_poly = 16'h0000;
+  assign ch0__cfg_w4_crc_poly = 16'h0000;
+  assign regs__cfg_w4_crc_start = 16'h0000;
+  assign ch0__cfg_w4_crc_start = 16'h0000;
+  assign regs__cfg_w4_crc_width = 5'h00;
+  assign ch0__cfg_w4_crc_width = 5'h00;
+  assign regs__cfg_w4_data_bits = 6'h00;
+  assign ch0__cfg_w4_data_bits = 6'h00;
+  assign regs__cfg_w4_enable = 1'h0;
+  assign ch0__cfg_w4_enable = 1'h0;
+  assign regs__cfg_w4_gray = 1'h0;
+  assign ch0__cfg_w4_gray = 1'h0;
+  assign regs__cfg_w4_lc = 1'h0;
+  assign ch0__cfg_w4_lc = 1'h0;
+  assign regs__cfg_w4_nenw = 1'h0;
+  assign ch0__cfg_w4_nenw = 1'h0;
+  assign regs__cfg_w4_signed = 1'h0;
+  assign ch0__cfg_w4_signed = 1'h0;
+  assign regs__cfg_w5_crc = 2'h0;
+  assign ch0__cfg_w5_crc = 2'h0;
+  assign regs__cfg_w5_crc_inverted = 1'h0;
+  assign ch0__cfg_w5_crc_inverted = 1'h0;
+  assign regs__cfg_w5_crc_poly = 16'h0000;
+  assign ch0__cfg_w5_crc_poly = 16'h0000;
+  assign regs__cfg_w5_crc_start = 16'h0000;
+  assign ch0__cfg_w5_crc_start = 16'h0000;
+  assign regs__cfg_w5_crc_width = 5'h00;
+  assign ch0__cfg_w5_crc_width = 5'h00;
+  assign regs__cfg_w5_data_bits = 6'h00;
+  assign ch0__cfg_w5_data_bits = 6'h00;
+  assign regs__cfg_w5_enable = 1'h0;
+  assign ch0__cfg_w5_enable = 1'h0;
+  assign regs__cfg_w5_gray = 1'h0;
+  assign ch0__cfg_w5_gray = 1'h0;
+  assign regs__cfg_w5_lc = 1'h0;
+  assign ch0__cfg_w5_lc = 1'h0;
+  assign regs__cfg_w5_nenw = 1'h0;
+  assign ch0__cfg_w5_nenw = 1'h0;
+  assign regs__cfg_w5_signed = 1'h0;
+  assign ch0__cfg_w5_signed = 1'h0;
+  assign regs__cfg_w6_crc = 2'h0;
+  assign ch0__cfg_w6_crc = 2'h0;
+  assign regs__cfg_w6_crc_inverted = 1'h0;
+  assign ch0__cfg_w6_crc_inverted = 1'h0;
+  assign regs__cfg_w6_crc_poly = 16'h0000;
+  assign ch0__cfg_w6_crc_poly = 16'h0000;
+  assign regs__cfg_w6_crc_start = 16'h0000;
+  assign ch0__cfg_w6_crc_start = 16'h0000;
+  assign regs__cfg_w6_crc_width = 5'h00;
+  assign ch0__cfg_w6_crc_width = 5'h00;
+  assign regs__cfg_w6_data_bits = 6'h00;
+  assign ch0__cfg_w6_data_bits = 6'h00;
+  assign regs__cfg_w6_enable = 1'h0;
+  assign ch0__cfg_w6_enable = 1'h0;
+  assign regs__cfg_w6_gray = 1'h0;
+  assign ch0__cfg_w6_gray = 1'h0;
+  assign regs__cfg_w6_lc = 1'h0;
+  assign ch0__cfg_w6_lc = 1'h0;
+  assign regs__cfg_w6_nenw = 1'h0;
+  assign ch0__cfg_w6_nenw = 1'h0;
+  assign regs__cfg_w6_signed = 1'h0;
+  assign ch0__cfg_w6_signed = 1'h0;
+  assign regs__cfg_w7_crc = 2'h0;
+  assign ch0__cfg_w7_crc = 2'h0;
+  assign regs__cfg_w7_crc_inverted = 1'h0;
+  assign ch0__cfg_w7_crc_inverted = 1'h0;
+  assign regs__cfg_w7_crc_poly = 16'h0000;
+  assign ch0__cfg_w7_crc_poly = 16'h0000;
+  assign regs__cfg_w7_crc_start = 16'h0000;
+  assign ch0__cfg_w7_crc_start = 16'h0000;
+  assign regs__cfg_w7_crc_width = 5'h00;
+  assign ch0__cfg_w7_crc_width = 5'h00;
+  assign regs__cfg_w7_data_bits = 6'h00;
+  assign ch0__cfg_w7_data_bits = 6'h00;
+  assign regs__cfg_w7_enable = 1'h0;
+  assign ch0__cfg_w7_enable = 1'h0;
+  assign regs__cfg_w7_gray = 1'h0;
+  assign ch0__cfg_w7_gray = 1'h0;
+  assign regs__cfg_w7_lc = 1'h0;
+  assign ch0__cfg_w7_lc = 1'h0;
+  assign regs__cfg_w7_nenw = 1'h0;
+  assign ch0__cfg_w7_nenw = 1'h0;
+  assign regs__cfg_w7_signed = 1'h0;
+  assign ch0__cfg_w7_signed = 1'h0;
   assign ch0__clear_counters = regs__clear_counters;
   assign regs__config_error = ch0__config_error;
   assign regs__count_addr = wb_adr[2:0];
@@ -975,6 +1541,18 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign regs__count_ca_no_answer = \$11 [31:16];
   assign ch0__count_ca_refused = \$11 [47:32];
   assign regs__count_ca_refused = \$11 [47:32];
+  assign ch0__count_crc_word2 = 16'h0000;
+  assign regs__count_crc_word2 = 16'h0000;
+  assign ch0__count_crc_word3 = 16'h0000;
+  assign regs__count_crc_word3 = 16'h0000;
+  assign ch0__count_crc_word4 = 16'h0000;
+  assign regs__count_crc_word4 = 16'h0000;
+  assign ch0__count_crc_word5 = 16'h0000;
+  assign regs__count_crc_word5 = 16'h0000;
+  assign ch0__count_crc_word6 = 16'h0000;
+  assign regs__count_crc_word6 = 16'h0000;
+  assign ch0__count_crc_word7 = 16'h0000;
+  assign regs__count_crc_word7 = 16'h0000;
   assign regs__count_data = ch0__count_data;
   assign ch0__count_en = regs__count_en;
   assign ch0__delay_settled = \$10 [54];
@@ -997,6 +1575,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign ch0__noise_events = \$10 [53:50];
   assign regs__noise_events = \$10 [53:50];
   assign ch0__periodic = regs__periodic;
+  assign regs__result_updates = ch0__result_updates;
   assign ch0__settled_delay = \$10 [67:55];
   assign regs__settled_delay = \$10 [67:55];
   assign ch0__spw_mismatch = \$10 [186];
@@ -1023,186 +1602,599 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
   assign regs__word1_nw = \$10 [175];
   assign ch0__word1_position = \$10 [173:134];
   assign regs__word1_position = \$10 [173:134];
-  assign \trigger$249  = \trigger$42 ;
+  assign ch0__word2_crc_ok = 1'h0;
+  assign regs__word2_crc_ok = 1'h0;
+  assign ch0__word2_ne = 1'h0;
+  assign regs__word2_ne = 1'h0;
+  assign ch0__word2_nw = 1'h0;
+  assign regs__word2_nw = 1'h0;
+  assign ch0__word2_position = 63'h0000000000000000;
+  assign regs__word2_position = 63'h0000000000000000;
+  assign ch0__word3_crc_ok = 1'h0;
+  assign regs__word3_crc_ok = 1'h0;
+  assign ch0__word3_ne = 1'h0;
+  assign regs__word3_ne = 1'h0;
+  assign ch0__word3_nw = 1'h0;
+  assign regs__word3_nw = 1'h0;
+  assign ch0__word3_position = 63'h0000000000000000;
+  assign regs__word3_position = 63'h0000000000000000;
+  assign ch0__word4_crc_ok = 1'h0;
+  assign regs__word4_crc_ok = 1'h0;
+  assign ch0__word4_ne = 1'h0;
+  assign regs__word4_ne = 1'h0;
+  assign ch0__word4_nw = 1'h0;
+  assign regs__word4_nw = 1'h0;
+  assign ch0__word4_position = 63'h0000000000000000;
+  assign regs__word4_position = 63'h0000000000000000;
+  assign ch0__word5_crc_ok = 1'h0;
+  assign regs__word5_crc_ok = 1'h0;
+  assign ch0__word5_ne = 1'h0;
+  assign regs__word5_ne = 1'h0;
+  assign ch0__word5_nw = 1'h0;
+  assign regs__word5_nw = 1'h0;
+  assign ch0__word5_position = 63'h0000000000000000;
+  assign regs__word5_position = 63'h0000000000000000;
+  assign ch0__word6_crc_ok = 1'h0;
+  assign regs__word6_crc_ok = 1'h0;
+  assign ch0__word6_ne = 1'h0;
+  assign regs__word6_ne = 1'h0;
+  assign ch0__word6_nw = 1'h0;
+  assign regs__word6_nw = 1'h0;
+  assign ch0__word6_position = 63'h0000000000000000;
+  assign regs__word6_position = 63'h0000000000000000;
+  assign ch0__word7_crc_ok = 1'h0;
+  assign regs__word7_crc_ok = 1'h0;
+  assign ch0__word7_ne = 1'h0;
+  assign regs__word7_ne = 1'h0;
+  assign ch0__word7_nw = 1'h0;
+  assign regs__word7_nw = 1'h0;
+  assign ch0__word7_position = 63'h0000000000000000;
+  assign regs__word7_position = 63'h0000000000000000;
+  assign \trigger$457  = \trigger$42 ;
   assign ma = ch0_ma;
   assign slo = ch0_slo;
-  assign \time_now$252  = time_now;
-  assign ch1__abort_cycle = \regs__abort_cycle$253 ;
-  assign \regs__busy$256  = ch1__busy;
-  assign ch1__ca_abort = \regs__ca_abort$257 ;
-  assign ch1__ca_address = \regs__ca_address$259 ;
-  assign \regs__ca_busy$262  = ch1__ca_busy;
+  assign \time_now$460  = time_now;
+  assign ch1__abort_cycle = \regs__abort_cycle$461 ;
+  assign \regs__busy$464  = ch1__busy;
+  assign ch1__ca_abort = \regs__ca_abort$465 ;
+  assign ch1__ca_address = \regs__ca_address$467 ;
+  assign \regs__ca_busy$470  = ch1__ca_busy;
   assign ch1__ca_bytes_done = \$15 [9:3];
-  assign \regs__ca_bytes_done$264  = \$15 [9:3];
-  assign ch1__ca_count = \regs__ca_count$265 ;
-  assign \regs__ca_done$268  = ch1__ca_done;
-  assign \regs__ca_rbuf_addr$269  = wb_adr[3:0];
+  assign \regs__ca_bytes_done$472  = \$15 [9:3];
+  assign ch1__ca_count = \regs__ca_count$473 ;
+  assign \regs__ca_done$476  = ch1__ca_done;
+  assign \regs__ca_rbuf_addr$477  = wb_adr[3:0];
   assign ch1__ca_rbuf_addr = wb_adr[3:0];
-  assign \regs__ca_rbuf_data$272  = ch1__ca_rbuf_data;
-  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$273 ;
-  assign ch1__ca_slave_id = \regs__ca_slave_id$275 ;
-  assign ch1__ca_start = \regs__ca_start$277 ;
+  assign \regs__ca_rbuf_data$480  = ch1__ca_rbuf_data;
+  assign ch1__ca_rbuf_en = \regs__ca_rbuf_en$481 ;
+  assign ch1__ca_slave_id = \regs__ca_slave_id$483 ;
+  assign ch1__ca_start = \regs__ca_start$485 ;
   assign ch1__ca_status = \$15 [2:0];
-  assign \regs__ca_status$280  = \$15 [2:0];
-  assign \regs__ca_wbuf_addr$281  = regs__ca_wbuf_addr;
+  assign \regs__ca_status$488  = \$15 [2:0];
+  assign \regs__ca_wbuf_addr$489  = regs__ca_wbuf_addr;
   assign ch1__ca_wbuf_addr = regs__ca_wbuf_addr;
-  assign \regs__ca_wbuf_data$283  = regs__ca_wbuf_data;
+  assign \regs__ca_wbuf_data$491  = regs__ca_wbuf_data;
   assign ch1__ca_wbuf_data = regs__ca_wbuf_data;
-  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$285 ;
-  assign ch1__ca_write = \regs__ca_write$287 ;
+  assign ch1__ca_wbuf_en = \regs__ca_wbuf_en$493 ;
+  assign ch1__ca_write = \regs__ca_write$495 ;
   assign ch1__cap_counters = 1'h1;
-  assign \regs__cap_counters$290  = 1'h1;
+  assign \regs__cap_counters$498  = 1'h1;
   assign ch1__cap_data_bits_w0 = 6'h37;
-  assign \regs__cap_data_bits_w0$292  = 6'h37;
+  assign \regs__cap_data_bits_w0$500  = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
-  assign \regs__cap_data_bits_w1$294  = 6'h28;
+  assign \regs__cap_data_bits_w1$502  = 6'h28;
+  assign ch1__cap_data_bits_w2 = 6'h00;
+  assign \regs__cap_data_bits_w2$504  = 6'h00;
+  assign ch1__cap_data_bits_w3 = 6'h00;
+  assign \regs__cap_data_bits_w3$506  = 6'h00;
+  assign ch1__cap_data_bits_w4 = 6'h00;
+  assign \regs__cap_data_bits_w4$508  = 6'h00;
+  assign ch1__cap_data_bits_w5 = 6'h00;
+  assign \regs__cap_data_bits_w5$510  = 6'h00;
+  assign ch1__cap_data_bits_w6 = 6'h00;
+  assign \regs__cap_data_bits_w6$512  = 6'h00;
+  assign ch1__cap_data_bits_w7 = 6'h00;
+  assign \regs__cap_data_bits_w7$514  = 6'h00;
   assign ch1__cap_register_access = 1'h1;
-  assign \regs__cap_register_access$296  = 1'h1;
+  assign \regs__cap_register_access$516  = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign \regs__cap_ssi$298  = 1'h1;
+  assign \regs__cap_ssi$518  = 1'h1;
   assign ch1__cap_timer_width = 6'h18;
-  assign \regs__cap_timer_width$300  = 6'h18;
+  assign \regs__cap_timer_width$520  = 6'h18;
   assign ch1__cap_timestamp = 1'h1;
-  assign \regs__cap_timestamp$302  = 1'h1;
+  assign \regs__cap_timestamp$522  = 1'h1;
+  assign ch1__cap_words = 4'h2;
+  assign \regs__cap_words$524  = 4'h2;
   assign ch1__cds = \$13 [49];
-  assign \regs__cds$304  = \$13 [49];
-  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$305 ;
-  assign ch1__cfg_break_time = \regs__cfg_break_time$307 ;
-  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$309 ;
-  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$311 ;
-  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$313 ;
-  assign ch1__cfg_end_check = \regs__cfg_end_check$315 ;
-  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$317 ;
-  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$319 ;
-  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$321 ;
-  assign ch1__cfg_request_period = \regs__cfg_request_period$323 ;
-  assign ch1__cfg_spw_check = \regs__cfg_spw_check$325 ;
-  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$327 ;
-  assign ch1__cfg_ssi = \regs__cfg_ssi$329 ;
-  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$331 ;
-  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$333 ;
-  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$335 ;
-  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$337 ;
-  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$339 ;
-  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$341 ;
-  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$343 ;
-  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$345 ;
-  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$347 ;
-  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$349 ;
-  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$351 ;
-  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$353 ;
-  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$355 ;
-  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$357 ;
-  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$359 ;
-  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$361 ;
-  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$363 ;
-  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$365 ;
-  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$367 ;
-  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$369 ;
-  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$371 ;
-  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$373 ;
-  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$375 ;
-  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$377 ;
-  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$379 ;
-  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$381 ;
-  assign ch1__clear_counters = \regs__clear_counters$383 ;
-  assign \regs__config_error$386  = ch1__config_error;
-  assign \regs__count_addr$387  = wb_adr[2:0];
+  assign \regs__cds$526  = \$13 [49];
+  assign ch1__cfg_ack_limit = \regs__cfg_ack_limit$527 ;
+  assign ch1__cfg_break_time = \regs__cfg_break_time$529 ;
+  assign ch1__cfg_confirm_frames = \regs__cfg_confirm_frames$531 ;
+  assign ch1__cfg_delay_limit = \regs__cfg_delay_limit$533 ;
+  assign ch1__cfg_delay_tolerance = \regs__cfg_delay_tolerance$535 ;
+  assign ch1__cfg_end_check = \regs__cfg_end_check$537 ;
+  assign ch1__cfg_ma_half_period = \regs__cfg_ma_half_period$539 ;
+  assign ch1__cfg_noise_limit = \regs__cfg_noise_limit$541 ;
+  assign ch1__cfg_quiet_time = \regs__cfg_quiet_time$543 ;
+  assign ch1__cfg_request_period = \regs__cfg_request_period$545 ;
+  assign ch1__cfg_spw_check = \regs__cfg_spw_check$547 ;
+  assign ch1__cfg_spw_tolerance = \regs__cfg_spw_tolerance$549 ;
+  assign ch1__cfg_ssi = \regs__cfg_ssi$551 ;
+  assign ch1__cfg_ssi_delay = \regs__cfg_ssi_delay$553 ;
+  assign ch1__cfg_ssi_double = \regs__cfg_ssi_double$555 ;
+  assign ch1__cfg_ssi_error = \regs__cfg_ssi_error$557 ;
+  assign ch1__cfg_ssi_error_low = \regs__cfg_ssi_error_low$559 ;
+  assign ch1__cfg_timeout_limit = \regs__cfg_timeout_limit$561 ;
+  assign ch1__cfg_w0_crc = \regs__cfg_w0_crc$563 ;
+  assign ch1__cfg_w0_crc_inverted = \regs__cfg_w0_crc_inverted$565 ;
+  assign ch1__cfg_w0_crc_poly = \regs__cfg_w0_crc_poly$567 ;
+  assign ch1__cfg_w0_crc_start = \regs__cfg_w0_crc_start$569 ;
+  assign ch1__cfg_w0_crc_width = \regs__cfg_w0_crc_width$571 ;
+  assign ch1__cfg_w0_data_bits = \regs__cfg_w0_data_bits$573 ;
+  assign ch1__cfg_w0_gray = \regs__cfg_w0_gray$575 ;
+  assign ch1__cfg_w0_lc = \regs__cfg_w0_lc$577 ;
+  assign ch1__cfg_w0_nenw = \regs__cfg_w0_nenw$579 ;
+  assign ch1__cfg_w0_signed = \regs__cfg_w0_signed$581 ;
+  assign ch1__cfg_w1_crc = \regs__cfg_w1_crc$583 ;
+  assign ch1__cfg_w1_crc_inverted = \regs__cfg_w1_crc_inverted$585 ;
+  assign ch1__cfg_w1_crc_poly = \regs__cfg_w1_crc_poly$587 ;
+  assign ch1__cfg_w1_crc_start = \regs__cfg_w1_crc_start$589 ;
+  assign ch1__cfg_w1_crc_width = \regs__cfg_w1_crc_width$591 ;
+  assign ch1__cfg_w1_data_bits = \regs__cfg_w1_data_bits$593 ;
+  assign ch1__cfg_w1_enable = \regs__cfg_w1_enable$595 ;
+  assign ch1__cfg_w1_gray = \regs__cfg_w1_gray$597 ;
+  assign ch1__cfg_w1_lc = \regs__cfg_w1_lc$599 ;
+  assign ch1__cfg_w1_nenw = \regs__cfg_w1_nenw$601 ;
+  assign ch1__cfg_w1_signed = \regs__cfg_w1_signed$603 ;
+  assign \regs__cfg_w2_crc$605  = 2'h0;
+  assign ch1__cfg_w2_crc = 2'h0;
+  assign \regs__cfg_w2_crc_inverted$607  = 1'h0;
+  assign ch1__cfg_w2_crc_inverted = 1'h0;
+  assign \regs__cfg_w2_crc_poly$609  = 16'h0000;
+  assign ch1__cfg_w2_crc_poly = 16'h0000;
+  assign \regs__cfg_w2_crc_start$611  = 16'h0000;
+  assign ch1__cfg_w2_crc_start = 16'h0000;
+  assign \regs__cfg_w2_crc_width$613  = 5'h00;
+  assign ch1__cfg_w2_crc_width = 5'h00;
+  assign \regs__cfg_w2_data_bits$615  = 6'h00;
+  assign ch1__cfg_w2_data_bits = 6'h00;
+  assign \regs__cfg_w2_enable$617  = 1'h0;
+  assign ch1__cfg_w2_enable = 1'h0;
+  assign \regs__cfg_w2_gray$619  = 1'h0;
+  assign ch1__cfg_w2_gray = 1'h0;
+  assign \regs__cfg_w2_lc$621  = 1'h0;
+  assign ch1__cfg_w2_lc = 1'h0;
+  assign \regs__cfg_w2_nenw$623  = 1'h0;
+  assign ch1__cfg_w2_nenw = 1'h0;
+  assign \regs__cfg_w2_signed$625  = 1'h0;
+  assign ch1__cfg_w2_signed = 1'h0;
+  assign \regs__cfg_w3_crc$627  = 2'h0;
+  assign ch1__cfg_w3_crc = 2'h0;
+  assign \regs__cfg_w3_crc_inverted$629  = 1'h0;
+  assign ch1__cfg_w3_crc_inverted = 1'h0;
+  assign \regs__cfg_w3_crc_poly$631  = 16'h0000;
+  assign ch1__cfg_w3_crc_poly = 16'h0000;
+  assign \regs__cfg_w3_crc_start$633  = 16'h0000;
+  assign ch1__cfg_w3_crc_start = 16'h0000;
+  assign \regs__cfg_w3_crc_width$635  = 5'h00;
+  assign ch1__cfg_w3_crc_width = 5'h00;
+  assign \regs__cfg_w3_data_bits$637  = 6'h00;
+  assign ch1__cfg_w3_data_bits = 6'h00;
+  assign \regs__cfg_w3_enable$639  = 1'h0;
+  assign ch1__cfg_w3_enable = 1'h0;
+  assign \regs__cfg_w3_gray$641  = 1'h0;
+  assign ch1__cfg_w3_gray = 1'h0;
+  assign \regs__cfg_w3_lc$643  = 1'h0;
+  assign ch1__cfg_w3_lc = 1'h0;
+  assign \regs__cfg_w3_nenw$645  = 1'h0;
+  assign ch1__cfg_w3_nenw = 1'h0;
+  assign \regs__cfg_w3_signed$647  = 1'h0;
+  assign ch1__cfg_w3_signed = 1'h0;
+  assign \regs__cfg_w4_crc$649  = 2'h0;
+  assign ch1__cfg_w4_crc = 2'h0;
+  assign \regs__cfg_w4_crc_inverted$651  = 1'h0;
+  assign ch1__cfg_w4_crc_inverted = 1'h0;
+  assign \regs__cfg_w4_crc_poly$653  = 16'h0000;
+  assign ch1__cfg_w4_crc_poly = 16'h0000;
+  assign \regs__cfg_w4_crc_start$655  = 16'h0000;
+  assign ch1__cfg_w4_crc_start = 16'h0000;
+  assign \regs__cfg_w4_crc_width$657  = 5'h00;
+  assign ch1__cfg_w4_crc_width = 5'h00;
+  assign \regs__cfg_w4_data_bits$659  = 6'h00;
+  assign ch1__cfg_w4_data_bits = 6'h00;
+  assign \regs__cfg_w4_enable$661  = 1'h0;
+  assign ch1__cfg_w4_enable = 1'h0;
+  assign \regs__cfg_w4_gray$663  = 1'h0;
+  assign ch1__cfg_w4_gray = 1'h0;
+  assign \regs__cfg_w4_lc$665  = 1'h0;
+  assign ch1__cfg_w4_lc = 1'h0;
+  assign \regs__cfg_w4_nenw$667  = 1'h0;
+  assign ch1__cfg_w4_nenw = 1'h0;
+  assign \regs__cfg_w4_signed$669  = 1'h0;
+  assign ch1__cfg_w4_signed = 1'h0;
+  assign \regs__cfg_w5_crc$671  = 2'h0;
+  assign ch1__cfg_w5_crc = 2'h0;
+  assign \regs__cfg_w5_crc_inverted$673  = 1'h0;
+  assign ch1__cfg_w5_crc_inverted = 1'h0;
+  assign \regs__cfg_w5_crc_poly$675  = 16'h0000;
+  assign ch1__cfg_w5_crc_poly = 16'h0000;
+  assign \regs__cfg_w5_crc_start$677  = 16'h0000;
+  assign ch1__cfg_w5_crc_start = 16'h0000;
+  assign \regs__cfg_w5_crc_width$679  = 5'h00;
+  assign ch1__cfg_w5_crc_width = 5'h00;
+  assign \regs__cfg_w5_data_bits$681  = 6'h00;
+  assign ch1__cfg_w5_data_bits = 6'h00;
+  assign \regs__cfg_w5_enable$683  = 1'h0;
+  assign ch1__cfg_w5_enable = 1'h0;
+  assign \regs__cfg_w5_gray$685  = 1'h0;
+  assign ch1__cfg_w5_gray = 1'h0;
+  assign \regs__cfg_w5_lc$687  = 1'h0;
+  assign ch1__cfg_w5_lc = 1'h0;
+  assign \regs__cfg_w5_nenw$689  = 1'h0;
+  assign ch1__cfg_w5_nenw = 1'h0;
+  assign \regs__cfg_w5_signed$691  = 1'h0;
+  assign ch1__cfg_w5_signed = 1'h0;
+  assign \regs__cfg_w6_crc$693  = 2'h0;
+  assign ch1__cfg_w6_crc = 2'h0;
+  assign \regs__cfg_w6_crc_inverted$695  = 1'h0;
+  assign ch1__cfg_w6_crc_inverted = 1'h0;
+  assign \regs__cfg_w6_crc_poly$697  = 16'h0000;
+  assign ch1__cfg_w6_crc_poly = 16'h0000;
+  assign \regs__cfg_w6_crc_start$699  = 16'h0000;
+  assign ch1__cfg_w6_crc_start = 16'h0000;
+  assign \regs__cfg_w6_crc_width$701  = 5'h00;
+  assign ch1__cfg_w6_crc_width = 5'h00;
+  assign \regs__cfg_w6_data_bits$703  = 6'h00;
+  assign ch1__cfg_w6_data_bits = 6'h00;
+  assign \regs__cfg_w6_enable$705  = 1'h0;
+  assign ch1__cfg_w6_enable = 1'h0;
+  assign \regs__cfg_w6_gray$707  = 1'h0;
+  assign ch1__cfg_w6_gray = 1'h0;
+  assign \regs__cfg_w6_lc$709  = 1'h0;
+  assign ch1__cfg_w6_lc = 1'h0;
+  assign \regs__cfg_w6_nenw$711  = 1'h0;
+  assign ch1__cfg_w6_nenw = 1'h0;
+  assign \regs__cfg_w6_signed$713  = 1'h0;
+  assign ch1__cfg_w6_signed = 1'h0;
+  assign \regs__cfg_w7_crc$715  = 2'h0;
+  assign ch1__cfg_w7_crc = 2'h0;
+  assign \regs__cfg_w7_crc_inverted$717  = 1'h0;
+  assign ch1__cfg_w7_crc_inverted = 1'h0;
+  assign \regs__cfg_w7_crc_poly$719  = 16'h0000;
+  assign ch1__cfg_w7_crc_poly = 16'h0000;
+  assign \regs__cfg_w7_crc_start$721  = 16'h0000;
+  assign ch1__cfg_w7_crc_start = 16'h0000;
+  assign \regs__cfg_w7_crc_width$723  = 5'h00;
+  assign ch1__cfg_w7_crc_width = 5'h00;
+  assign \regs__cfg_w7_data_bits$725  = 6'h00;
+  assign ch1__cfg_w7_data_bits = 6'h00;
+  assign \regs__cfg_w7_enable$727  = 1'h0;
+  assign ch1__cfg_w7_enable = 1'h0;
+  assign \regs__cfg_w7_gray$729  = 1'h0;
+  assign ch1__cfg_w7_gray = 1'h0;
+  assign \regs__cfg_w7_lc$731  = 1'h0;
+  assign ch1__cfg_w7_lc = 1'h0;
+  assign \regs__cfg_w7_nenw$733  = 1'h0;
+  assign ch1__cfg_w7_nenw = 1'h0;
+  assign \regs__cfg_w7_signed$735  = 1'h0;
+  assign ch1__cfg_w7_signed = 1'h0;
+  assign ch1__clear_counters = \regs__clear_counters$737 ;
+  assign \regs__config_error$740  = ch1__config_error;
+  assign \regs__count_addr$741  = wb_adr[2:0];
   assign ch1__count_addr = wb_adr[2:0];
   assign ch1__count_ca_aborted = \$14 [63:48];
-  assign \regs__count_ca_aborted$390  = \$14 [63:48];
+  assign \regs__count_ca_aborted$744  = \$14 [63:48];
   assign ch1__count_ca_crc4_error = \$14 [15:0];
-  assign \regs__count_ca_crc4_error$392  = \$14 [15:0];
+  assign \regs__count_ca_crc4_error$746  = \$14 [15:0];
   assign ch1__count_ca_data_fault = \$14 [79:64];
-  assign \regs__count_ca_data_fault$394  = \$14 [79:64];
+  assign \regs__count_ca_data_fault$748  = \$14 [79:64];
   assign ch1__count_ca_no_answer = \$14 [31:16];
-  assign \regs__count_ca_no_answer$396  = \$14 [31:16];
+  assign \regs__count_ca_no_answer$750  = \$14 [31:16];
   assign ch1__count_ca_refused = \$14 [47:32];
-  assign \regs__count_ca_refused$398  = \$14 [47:32];
-  assign \regs__count_data$400  = ch1__count_data;
-  assign ch1__count_en = \regs__count_en$401 ;
+  assign \regs__count_ca_refused$752  = \$14 [47:32];
+  assign ch1__count_crc_word2 = 16'h0000;
+  assign \regs__count_crc_word2$754  = 16'h0000;
+  assign ch1__count_crc_word3 = 16'h0000;
+  assign \regs__count_crc_word3$756  = 16'h0000;
+  assign ch1__count_crc_word4 = 16'h0000;
+  assign \regs__count_crc_word4$758  = 16'h0000;
+  assign ch1__count_crc_word5 = 16'h0000;
+  assign \regs__count_crc_word5$760  = 16'h0000;
+  assign ch1__count_crc_word6 = 16'h0000;
+  assign \regs__count_crc_word6$762  = 16'h0000;
+  assign ch1__count_crc_word7 = 16'h0000;
+  assign \regs__count_crc_word7$764  = 16'h0000;
+  assign \regs__count_data$766  = ch1__count_data;
+  assign ch1__count_en = \regs__count_en$767 ;
   assign ch1__delay_settled = \$13 [54];
-  assign \regs__delay_settled$404  = \$13 [54];
+  assign \regs__delay_settled$770  = \$13 [54];
   assign ch1__delay_spread = \$13 [75:68];
-  assign \regs__delay_spread$406  = \$13 [75:68];
-  assign \regs__done_count$408  = ch1__done_count;
-  assign \regs__frame_done$410  = ch1__frame_done;
-  assign \regs__frame_error$412  = ch1__frame_error;
+  assign \regs__delay_spread$772  = \$13 [75:68];
+  assign \regs__done_count$774  = ch1__done_count;
+  assign \regs__frame_done$776  = ch1__frame_done;
+  assign \regs__frame_error$778  = ch1__frame_error;
   assign ch1__lc = \$13 [182:177];
-  assign \regs__lc$414  = \$13 [182:177];
+  assign \regs__lc$780  = \$13 [182:177];
   assign ch1__lc_repeat = \$13 [183];
-  assign \regs__lc_repeat$416  = \$13 [183];
+  assign \regs__lc_repeat$782  = \$13 [183];
   assign ch1__lc_skip = \$13 [184];
-  assign \regs__lc_skip$418  = \$13 [184];
+  assign \regs__lc_skip$784  = \$13 [184];
   assign ch1__lc_zero = \$13 [185];
-  assign \regs__lc_zero$420  = \$13 [185];
+  assign \regs__lc_zero$786  = \$13 [185];
   assign ch1__line_delay = \$13 [48:36];
-  assign \regs__line_delay$422  = \$13 [48:36];
+  assign \regs__line_delay$788  = \$13 [48:36];
   assign ch1__noise_events = \$13 [53:50];
-  assign \regs__noise_events$424  = \$13 [53:50];
-  assign ch1__periodic = \regs__periodic$425 ;
+  assign \regs__noise_events$790  = \$13 [53:50];
+  assign ch1__periodic = \regs__periodic$791 ;
+  assign \regs__result_updates$794  = ch1__result_updates;
   assign ch1__settled_delay = \$13 [67:55];
-  assign \regs__settled_delay$428  = \$13 [67:55];
+  assign \regs__settled_delay$796  = \$13 [67:55];
   assign ch1__spw_mismatch = \$13 [186];
-  assign \regs__spw_mismatch$430  = \$13 [186];
-  assign ch1__start = \regs__start$431 ;
+  assign \regs__spw_mismatch$798  = \$13 [186];
+  assign ch1__start = \regs__start$799 ;
   assign ch1__status = \$13 [3:0];
-  assign \regs__status$434  = \$13 [3:0];
+  assign \regs__status$802  = \$13 [3:0];
   assign ch1__timestamp = \$13 [35:4];
-  assign \regs__timestamp$436  = \$13 [35:4];
-  assign ch1__trigger_enable = \regs__trigger_enable$437 ;
+  assign \regs__timestamp$804  = \$13 [35:4];
+  assign ch1__trigger_enable = \regs__trigger_enable$805 ;
   assign ch1__word0_crc_ok = \$13 [133];
-  assign \regs__word0_crc_ok$440  = \$13 [133];
+  assign \regs__word0_crc_ok$808  = \$13 [133];
   assign ch1__word0_ne = \$13 [131];
-  assign \regs__word0_ne$442  = \$13 [131];
+  assign \regs__word0_ne$810  = \$13 [131];
   assign ch1__word0_nw = \$13 [132];
-  assign \regs__word0_nw$444  = \$13 [132];
+  assign \regs__word0_nw$812  = \$13 [132];
   assign ch1__word0_position = \$13 [130:76];
-  assign \regs__word0_position$446  = \$13 [130:76];
+  assign \regs__word0_position$814  = \$13 [130:76];
   assign ch1__word1_crc_ok = \$13 [176];
-  assign \regs__word1_crc_ok$448  = \$13 [176];
+  assign \regs__word1_crc_ok$816  = \$13 [176];
   assign ch1__word1_ne = \$13 [174];
-  assign \regs__word1_ne$450  = \$13 [174];
+  assign \regs__word1_ne$818  = \$13 [174];
   assign ch1__word1_nw = \$13 [175];
-  assign \regs__word1_nw$452  = \$13 [175];
+  assign \regs__word1_nw$820  = \$13 [175];
   assign ch1__word1_position = \$13 [173:134];
-  assign \regs__word1_position$454  = \$13 [173:134];
-  assign \trigger$455  = \trigger$42 ;
-  assign \ma$456  = ch1_ma;
-  assign \slo$457  = ch1_slo;
+  assign \regs__word1_position$822  = \$13 [173:134];
+  assign ch1__word2_crc_ok = 1'h0;
+  assign \regs__word2_crc_ok$824  = 1'h0;
+  assign ch1__word2_ne = 1'h0;
+  assign \regs__word2_ne$826  = 1'h0;
+  assign ch1__word2_nw = 1'h0;
+  assign \regs__word2_nw$828  = 1'h0;
+  assign ch1__word2_position = 63'h0000000000000000;
+  assign \regs__word2_position$830  = 63'h0000000000000000;
+  assign ch1__word3_crc_ok = 1'h0;
+  assign \regs__word3_crc_ok$832  = 1'h0;
+  assign ch1__word3_ne = 1'h0;
+  assign \regs__word3_ne$834  = 1'h0;
+  assign ch1__word3_nw = 1'h0;
+  assign \regs__word3_nw$836  = 1'h0;
+  assign ch1__word3_position = 63'h0000000000000000;
+  assign \regs__word3_position$838  = 63'h0000000000000000;
+  assign ch1__word4_crc_ok = 1'h0;
+  assign \regs__word4_crc_ok$840  = 1'h0;
+  assign ch1__word4_ne = 1'h0;
+  assign \regs__word4_ne$842  = 1'h0;
+  assign ch1__word4_nw = 1'h0;
+  assign \regs__word4_nw$844  = 1'h0;
+  assign ch1__word4_position = 63'h0000000000000000;
+  assign \regs__word4_position$846  = 63'h0000000000000000;
+  assign ch1__word5_crc_ok = 1'h0;
+  assign \regs__word5_crc_ok$848  = 1'h0;
+  assign ch1__word5_ne = 1'h0;
+  assign \regs__word5_ne$850  = 1'h0;
+  assign ch1__word5_nw = 1'h0;
+  assign \regs__word5_nw$852  = 1'h0;
+  assign ch1__word5_position = 63'h0000000000000000;
+  assign \regs__word5_position$854  = 63'h0000000000000000;
+  assign ch1__word6_crc_ok = 1'h0;
+  assign \regs__word6_crc_ok$856  = 1'h0;
+  assign ch1__word6_ne = 1'h0;
+  assign \regs__word6_ne$858  = 1'h0;
+  assign ch1__word6_nw = 1'h0;
+  assign \regs__word6_nw$860  = 1'h0;
+  assign ch1__word6_position = 63'h0000000000000000;
+  assign \regs__word6_position$862  = 63'h0000000000000000;
+  assign ch1__word7_crc_ok = 1'h0;
+  assign \regs__word7_crc_ok$864  = 1'h0;
+  assign ch1__word7_ne = 1'h0;
+  assign \regs__word7_ne$866  = 1'h0;
+  assign ch1__word7_nw = 1'h0;
+  assign \regs__word7_nw$868  = 1'h0;
+  assign ch1__word7_position = 63'h0000000000000000;
+  assign \regs__word7_position$870  = 63'h0000000000000000;
+  assign \trigger$871  = \trigger$42 ;
+  assign \ma$872  = ch1_ma;
+  assign \slo$873  = ch1_slo;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, \$9 , \$8  };
-  assign \irq$460  = { \$9 , \$8  };
+  assign \irq$876  = { \$9 , \$8  };
 endmodule
 
 (* generator = "Amaranth" *)
 module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus__w_en, ch0__count_en, ch0__ca_wbuf_en, ch0__ca_rbuf_en, ch0_irq, ch1__count_en, ch1__ca_wbuf_en, ch1__ca_rbuf_en, ch1_irq, bus__r_data, ch0__frame_error, ch0__busy, ch0__config_error, ch0__count_data, ch0__ca_busy, ch0__ca_rbuf_data
 , ch1__frame_error, ch1__busy, ch1__config_error, ch1__count_data, ch1__ca_busy, ch1__ca_rbuf_data, bus__r_load, ch0__ca_wbuf_addr, write_data, g_trigger_start, ch0_ctrl_start, ch0_ctrl_abort, ch0_ctrl_clear_counters, ch0_ctrl_periodic, ch0_ctrl_trigger_enable, ch0_cfg_ma_ma_half_period, ch0_cfg_ma_delay_limit, ch0_cfg_period_request_period, ch0_cfg_break_break_time, ch0_cfg_ack_ack_limit, ch0_cfg_timeout_timeout_limit
 , ch0_cfg_words_w0_data_bits, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_signed, ch0_cfg_words_w1_data_bits, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_enable, ch0_cfg_checks_end_check, ch0_cfg_checks_spw_check, ch0_cfg_checks_spw_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_confirm_frames, ch0_cfg_quiet_quiet_time, ch0_cfg_crc0_w0_crc_poly
-, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$113 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
+, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
 , ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
 , ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id
-, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$305 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, \port$6641$0 , \port$6652$0 , ch0__ca_done, \port$6729$0 , ch1__frame_done, ch1__done_count, \port$7170$0 , \port$7181$0 , ch1__ca_done, \port$7258$0 , bus__w_addr);
+, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$452 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7239$0 , \port$7250$0 , ch0__ca_done, \port$7327$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$7770$0 , \port$7781$0 , ch1__ca_done, \port$7858$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
   wire \$100 ;
+  reg [1:0] \$1000 ;
+  reg \$1001 ;
+  reg \$1002 ;
+  reg [5:0] \$1003 ;
+  reg \$1004 ;
+  reg \$1005 ;
+  reg [1:0] \$1006 ;
+  reg \$1007 ;
+  reg \$1008 ;
+  reg \$1009 ;
   wire \$101 ;
+  reg \$1010 ;
+  reg \$1011 ;
+  reg \$1012 ;
+  reg [7:0] \$1013 ;
+  reg [3:0] \$1014 ;
+  reg [3:0] \$1015 ;
+  reg [3:0] \$1016 ;
+  reg \$1017 ;
+  reg [11:0] \$1018 ;
+  reg \$1019 ;
   wire \$102 ;
+  reg [15:0] \$1020 ;
+  reg [4:0] \$1021 ;
+  reg \$1022 ;
+  reg \$1023 ;
+  reg [15:0] \$1024 ;
+  reg \$1025 ;
+  reg [15:0] \$1026 ;
+  reg [4:0] \$1027 ;
+  reg \$1028 ;
+  reg \$1029 ;
   wire \$103 ;
+  reg [15:0] \$1030 ;
+  reg \$1031 ;
+  reg \$1032 ;
+  reg \$1033 ;
+  reg \$1034 ;
+  reg \$1035 ;
+  reg [11:0] \$1036 ;
+  reg \$1037 ;
+  reg \$1038 ;
+  reg \$1039 ;
   wire \$104 ;
+  reg \$1040 ;
+  reg \$1041 ;
+  reg \$1042 ;
+  reg \$1043 ;
+  reg \$1044 ;
+  reg \$1045 ;
+  reg \$1046 ;
+  reg \$1047 ;
+  reg \$1048 ;
+  reg \$1049 ;
   wire \$105 ;
+  reg \$1050 ;
+  reg \$1051 ;
+  reg \$1052 ;
+  reg \$1053 ;
+  reg \$1054 ;
+  reg \$1055 ;
+  reg [2:0] \$1056 ;
+  reg [6:0] \$1057 ;
+  reg [6:0] \$1058 ;
+  reg \$1059 ;
   wire \$106 ;
+  reg \$1060 ;
+  reg \$1061 ;
+  reg \$1062 ;
+  reg \$1063 ;
+  reg \$1064 ;
+  reg \$1065 ;
+  reg \$1066 ;
+  reg \$1067 ;
+  reg \$1068 ;
+  reg \$1069 ;
   wire \$107 ;
+  reg \$1070 ;
+  reg \$1071 ;
+  reg \$1072 ;
+  reg \$1073 ;
+  reg \$1074 ;
+  reg \$1075 ;
+  reg \$1076 ;
+  reg \$1077 ;
+  reg \$1078 ;
+  reg \$1079 ;
   wire \$108 ;
+  reg \$1080 ;
+  reg \$1081 ;
+  reg \$1082 ;
+  reg \$1083 ;
+  reg \$1084 ;
+  reg \$1085 ;
+  reg \$1086 ;
+  reg \$1087 ;
+  reg \$1088 ;
+  reg \$1089 ;
   wire \$109 ;
+  reg \$1090 ;
+  reg \$1091 ;
+  reg \$1092 ;
+  reg \$1093 ;
+  reg \$1094 ;
+  reg \$1095 ;
+  reg \$1096 ;
+  reg \$1097 ;
+  reg \$1098 ;
+  reg \$1099 ;
   wire [31:0] \$11 ;
   wire \$110 ;
+  reg \$1100 ;
+  reg \$1101 ;
+  reg \$1102 ;
+  reg \$1103 ;
+  reg \$1104 ;
+  reg \$1105 ;
+  reg \$1106 ;
+  reg \$1107 ;
+  reg \$1108 ;
+  reg \$1109 ;
   wire \$111 ;
+  reg \$1110 ;
+  reg \$1111 ;
+  reg \$1112 ;
+  reg \$1113 ;
+  reg \$1114 ;
+  reg \$1115 ;
+  reg \$1116 ;
+  reg \$1117 ;
+  reg \$1118 ;
+  reg \$1119 ;
   wire \$112 ;
+  reg \$1120 ;
+  reg \$1121 ;
+  reg \$1122 ;
+  reg \$1123 ;
+  reg \$1124 ;
+  reg \$1125 ;
+  reg \$1126 ;
+  reg \$1127 ;
+  reg \$1128 ;
+  reg \$1129 ;
   wire \$113 ;
+  reg \$1130 ;
+  reg [3:0] \$1131 ;
+  reg \$1132 ;
+  reg \$1133 ;
+  reg \$1134 ;
+  reg \$1135 ;
+  reg \$1136 ;
+  reg \$1137 ;
+  reg \$1138 ;
+  reg \$1139 ;
   wire \$114 ;
+  reg \$1140 ;
+  reg \$1141 ;
+  reg \$1142 ;
+  reg [5:0] \$1143 ;
+  reg [15:0] \$1144 ;
+  reg [12:0] \$1145 ;
+  reg [31:0] \$1146 ;
+  reg [22:0] \$1147 ;
+  reg [31:0] \$1148 ;
+  reg [7:0] \$1149 ;
   wire \$115 ;
+  reg [31:0] \$1150 ;
+  reg [3:0] \$1151 ;
+  reg \$1152 ;
+  reg [7:0] \$1153 ;
+  reg [12:0] \$1154 ;
+  reg \$1155 ;
+  reg \$1156 ;
+  reg [31:0] \$1157 ;
   wire \$116 ;
   wire \$117 ;
   wire \$118 ;
@@ -1224,47 +2216,47 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$132 ;
   wire \$133 ;
   wire \$134 ;
-  wire [31:0] \$135 ;
-  wire [31:0] \$136 ;
-  wire [31:0] \$137 ;
-  wire [31:0] \$138 ;
-  wire [31:0] \$139 ;
+  wire \$135 ;
+  wire \$136 ;
+  wire \$137 ;
+  wire \$138 ;
+  wire \$139 ;
   wire [31:0] \$14 ;
-  wire [31:0] \$140 ;
-  wire [31:0] \$141 ;
-  wire [31:0] \$142 ;
-  wire [31:0] \$143 ;
-  wire [31:0] \$144 ;
-  wire [31:0] \$145 ;
-  wire [31:0] \$146 ;
-  wire [31:0] \$147 ;
-  wire [31:0] \$148 ;
-  wire [31:0] \$149 ;
+  wire \$140 ;
+  wire \$141 ;
+  wire \$142 ;
+  wire \$143 ;
+  wire \$144 ;
+  wire \$145 ;
+  wire \$146 ;
+  wire \$147 ;
+  wire \$148 ;
+  wire \$149 ;
   wire [31:0] \$15 ;
-  wire [31:0] \$150 ;
-  wire [31:0] \$151 ;
-  wire [31:0] \$152 ;
-  wire [31:0] \$153 ;
-  wire [31:0] \$154 ;
-  wire [31:0] \$155 ;
-  wire [31:0] \$156 ;
-  wire [31:0] \$157 ;
-  wire [31:0] \$158 ;
-  wire [31:0] \$159 ;
+  wire \$150 ;
+  wire \$151 ;
+  wire \$152 ;
+  wire \$153 ;
+  wire \$154 ;
+  wire \$155 ;
+  wire \$156 ;
+  wire \$157 ;
+  wire \$158 ;
+  wire \$159 ;
   wire [31:0] \$16 ;
-  wire [31:0] \$160 ;
-  wire [31:0] \$161 ;
-  wire [31:0] \$162 ;
-  wire [31:0] \$163 ;
-  wire [31:0] \$164 ;
-  wire [31:0] \$165 ;
-  wire [31:0] \$166 ;
-  wire [31:0] \$167 ;
-  wire [31:0] \$168 ;
-  wire [31:0] \$169 ;
+  wire \$160 ;
+  wire \$161 ;
+  wire \$162 ;
+  wire \$163 ;
+  wire \$164 ;
+  wire \$165 ;
+  wire \$166 ;
+  wire \$167 ;
+  wire \$168 ;
+  wire \$169 ;
   wire [31:0] \$17 ;
-  wire [31:0] \$170 ;
-  wire [31:0] \$171 ;
+  wire \$170 ;
+  wire \$171 ;
   wire [31:0] \$172 ;
   wire [31:0] \$173 ;
   wire [31:0] \$174 ;
@@ -1300,129 +2292,129 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [31:0] \$200 ;
   wire [31:0] \$201 ;
   wire [31:0] \$202 ;
-  wire \$203 ;
-  wire \$204 ;
-  wire \$205 ;
-  wire \$206 ;
-  wire \$207 ;
-  wire \$208 ;
-  wire \$209 ;
+  wire [31:0] \$203 ;
+  wire [31:0] \$204 ;
+  wire [31:0] \$205 ;
+  wire [31:0] \$206 ;
+  wire [31:0] \$207 ;
+  wire [31:0] \$208 ;
+  wire [31:0] \$209 ;
   wire \$21 ;
-  wire \$210 ;
-  wire \$211 ;
-  wire \$212 ;
-  wire \$213 ;
-  wire \$214 ;
-  wire \$215 ;
-  wire \$216 ;
-  wire \$217 ;
-  wire \$218 ;
-  wire \$219 ;
+  wire [31:0] \$210 ;
+  wire [31:0] \$211 ;
+  wire [31:0] \$212 ;
+  wire [31:0] \$213 ;
+  wire [31:0] \$214 ;
+  wire [31:0] \$215 ;
+  wire [31:0] \$216 ;
+  wire [31:0] \$217 ;
+  wire [31:0] \$218 ;
+  wire [31:0] \$219 ;
   wire \$22 ;
-  wire \$220 ;
-  wire \$221 ;
-  wire \$222 ;
-  wire \$223 ;
-  wire \$224 ;
-  wire \$225 ;
-  wire \$226 ;
-  wire \$227 ;
-  wire \$228 ;
-  wire \$229 ;
+  wire [31:0] \$220 ;
+  wire [31:0] \$221 ;
+  wire [31:0] \$222 ;
+  wire [31:0] \$223 ;
+  wire [31:0] \$224 ;
+  wire [31:0] \$225 ;
+  wire [31:0] \$226 ;
+  wire [31:0] \$227 ;
+  wire [31:0] \$228 ;
+  wire [31:0] \$229 ;
   wire \$23 ;
-  wire \$230 ;
-  wire \$231 ;
-  wire \$232 ;
-  wire \$233 ;
-  wire \$234 ;
-  wire \$235 ;
-  wire \$236 ;
-  wire \$237 ;
-  wire \$238 ;
-  wire \$239 ;
+  wire [31:0] \$230 ;
+  wire [31:0] \$231 ;
+  wire [31:0] \$232 ;
+  wire [31:0] \$233 ;
+  wire [31:0] \$234 ;
+  wire [31:0] \$235 ;
+  wire [31:0] \$236 ;
+  wire [31:0] \$237 ;
+  wire [31:0] \$238 ;
+  wire [31:0] \$239 ;
   wire \$24 ;
-  wire \$240 ;
-  wire \$241 ;
-  wire \$242 ;
-  wire \$243 ;
-  wire \$244 ;
-  wire \$245 ;
-  wire \$246 ;
-  wire \$247 ;
-  wire \$248 ;
-  wire \$249 ;
+  wire [31:0] \$240 ;
+  wire [31:0] \$241 ;
+  wire [31:0] \$242 ;
+  wire [31:0] \$243 ;
+  wire [31:0] \$244 ;
+  wire [31:0] \$245 ;
+  wire [31:0] \$246 ;
+  wire [31:0] \$247 ;
+  wire [31:0] \$248 ;
+  wire [31:0] \$249 ;
   wire \$25 ;
-  wire \$250 ;
-  wire \$251 ;
-  wire \$252 ;
-  wire \$253 ;
-  wire \$254 ;
-  wire \$255 ;
-  wire \$256 ;
-  wire \$257 ;
-  wire \$258 ;
-  wire \$259 ;
+  wire [31:0] \$250 ;
+  wire [31:0] \$251 ;
+  wire [31:0] \$252 ;
+  wire [31:0] \$253 ;
+  wire [31:0] \$254 ;
+  wire [31:0] \$255 ;
+  wire [31:0] \$256 ;
+  wire [31:0] \$257 ;
+  wire [31:0] \$258 ;
+  wire [31:0] \$259 ;
   wire \$26 ;
-  wire \$260 ;
-  wire \$261 ;
-  wire \$262 ;
-  wire \$263 ;
-  wire \$264 ;
-  wire \$265 ;
-  wire \$266 ;
-  wire \$267 ;
-  wire \$268 ;
-  wire \$269 ;
+  wire [31:0] \$260 ;
+  wire [31:0] \$261 ;
+  wire [31:0] \$262 ;
+  wire [31:0] \$263 ;
+  wire [31:0] \$264 ;
+  wire [31:0] \$265 ;
+  wire [31:0] \$266 ;
+  wire [31:0] \$267 ;
+  wire [31:0] \$268 ;
+  wire [31:0] \$269 ;
   wire \$27 ;
-  wire \$270 ;
-  wire \$271 ;
-  wire \$272 ;
-  wire \$273 ;
-  wire \$274 ;
-  wire \$275 ;
-  wire \$276 ;
-  wire \$277 ;
-  wire \$278 ;
-  wire \$279 ;
+  wire [31:0] \$270 ;
+  wire [31:0] \$271 ;
+  wire [31:0] \$272 ;
+  wire [31:0] \$273 ;
+  wire [31:0] \$274 ;
+  wire [31:0] \$275 ;
+  wire [31:0] \$276 ;
+  wire [31:0] \$277 ;
+  wire [31:0] \$278 ;
+  wire [31:0] \$279 ;
   wire \$28 ;
-  wire \$280 ;
-  wire \$281 ;
-  wire \$282 ;
-  wire \$283 ;
-  wire \$284 ;
-  wire \$285 ;
-  wire \$286 ;
-  wire \$287 ;
-  wire \$288 ;
-  wire \$289 ;
+  wire [31:0] \$280 ;
+  wire [31:0] \$281 ;
+  wire [31:0] \$282 ;
+  wire [31:0] \$283 ;
+  wire [31:0] \$284 ;
+  wire [31:0] \$285 ;
+  wire [31:0] \$286 ;
+  wire [31:0] \$287 ;
+  wire [31:0] \$288 ;
+  wire [31:0] \$289 ;
   wire \$29 ;
-  wire \$290 ;
-  wire \$291 ;
-  wire \$292 ;
-  wire \$293 ;
-  wire \$294 ;
-  wire \$295 ;
-  wire \$296 ;
-  wire \$297 ;
-  wire \$298 ;
-  wire \$299 ;
+  wire [31:0] \$290 ;
+  wire [31:0] \$291 ;
+  wire [31:0] \$292 ;
+  wire [31:0] \$293 ;
+  wire [31:0] \$294 ;
+  wire [31:0] \$295 ;
+  wire [31:0] \$296 ;
+  wire [31:0] \$297 ;
+  wire [31:0] \$298 ;
+  wire [31:0] \$299 ;
   wire \$3 ;
   wire \$30 ;
-  wire \$300 ;
-  wire \$301 ;
-  wire \$302 ;
-  wire \$303 ;
-  wire \$304 ;
-  wire \$305 ;
-  wire \$306 ;
-  wire \$307 ;
-  wire \$308 ;
-  wire \$309 ;
+  wire [31:0] \$300 ;
+  wire [31:0] \$301 ;
+  wire [31:0] \$302 ;
+  wire [31:0] \$303 ;
+  wire [31:0] \$304 ;
+  wire [31:0] \$305 ;
+  wire [31:0] \$306 ;
+  wire [31:0] \$307 ;
+  wire [31:0] \$308 ;
+  wire [31:0] \$309 ;
   wire \$31 ;
-  wire \$310 ;
-  wire \$311 ;
-  wire \$312 ;
-  wire \$313 ;
+  wire [31:0] \$310 ;
+  wire [31:0] \$311 ;
+  wire [31:0] \$312 ;
+  wire [31:0] \$313 ;
   wire \$314 ;
   wire \$315 ;
   wire \$316 ;
@@ -1430,80 +2422,80 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$318 ;
   wire \$319 ;
   wire \$32 ;
-  wire [31:0] \$320 ;
-  wire [31:0] \$321 ;
-  wire [31:0] \$322 ;
-  wire [31:0] \$323 ;
-  wire [31:0] \$324 ;
-  wire [31:0] \$325 ;
-  wire [31:0] \$326 ;
-  wire [31:0] \$327 ;
-  wire [31:0] \$328 ;
-  wire [31:0] \$329 ;
+  wire \$320 ;
+  wire \$321 ;
+  wire \$322 ;
+  wire \$323 ;
+  wire \$324 ;
+  wire \$325 ;
+  wire \$326 ;
+  wire \$327 ;
+  wire \$328 ;
+  wire \$329 ;
   wire \$33 ;
-  wire [31:0] \$330 ;
-  wire [31:0] \$331 ;
-  wire [31:0] \$332 ;
-  wire [31:0] \$333 ;
-  wire [31:0] \$334 ;
-  wire [31:0] \$335 ;
-  wire [31:0] \$336 ;
-  wire [31:0] \$337 ;
-  wire [31:0] \$338 ;
-  wire [31:0] \$339 ;
+  wire \$330 ;
+  wire \$331 ;
+  wire \$332 ;
+  wire \$333 ;
+  wire \$334 ;
+  wire \$335 ;
+  wire \$336 ;
+  wire \$337 ;
+  wire \$338 ;
+  wire \$339 ;
   wire \$34 ;
-  wire [31:0] \$340 ;
-  wire [31:0] \$341 ;
-  wire [31:0] \$342 ;
-  wire [31:0] \$343 ;
-  wire [31:0] \$344 ;
-  wire [31:0] \$345 ;
-  wire [31:0] \$346 ;
-  wire [31:0] \$347 ;
-  wire [31:0] \$348 ;
-  wire [31:0] \$349 ;
+  wire \$340 ;
+  wire \$341 ;
+  wire \$342 ;
+  wire \$343 ;
+  wire \$344 ;
+  wire \$345 ;
+  wire \$346 ;
+  wire \$347 ;
+  wire \$348 ;
+  wire \$349 ;
   wire \$35 ;
-  wire [31:0] \$350 ;
-  wire [31:0] \$351 ;
-  wire [31:0] \$352 ;
-  wire [31:0] \$353 ;
-  wire [31:0] \$354 ;
-  wire [31:0] \$355 ;
-  wire [31:0] \$356 ;
-  wire [31:0] \$357 ;
-  wire [31:0] \$358 ;
-  wire [31:0] \$359 ;
+  wire \$350 ;
+  wire \$351 ;
+  wire \$352 ;
+  wire \$353 ;
+  wire \$354 ;
+  wire \$355 ;
+  wire \$356 ;
+  wire \$357 ;
+  wire \$358 ;
+  wire \$359 ;
   wire \$36 ;
-  wire [31:0] \$360 ;
-  wire [31:0] \$361 ;
-  wire [31:0] \$362 ;
-  wire [31:0] \$363 ;
-  wire [31:0] \$364 ;
-  wire [31:0] \$365 ;
-  wire [31:0] \$366 ;
-  wire [31:0] \$367 ;
-  wire [31:0] \$368 ;
-  wire [31:0] \$369 ;
+  wire \$360 ;
+  wire \$361 ;
+  wire \$362 ;
+  wire \$363 ;
+  wire \$364 ;
+  wire \$365 ;
+  wire \$366 ;
+  wire \$367 ;
+  wire \$368 ;
+  wire \$369 ;
   wire \$37 ;
-  wire [31:0] \$370 ;
-  wire [31:0] \$371 ;
-  wire [31:0] \$372 ;
-  wire [31:0] \$373 ;
-  wire [31:0] \$374 ;
-  wire [31:0] \$375 ;
-  wire [31:0] \$376 ;
-  wire [31:0] \$377 ;
-  wire [31:0] \$378 ;
-  wire [31:0] \$379 ;
+  wire \$370 ;
+  wire \$371 ;
+  wire \$372 ;
+  wire \$373 ;
+  wire \$374 ;
+  wire \$375 ;
+  wire \$376 ;
+  wire \$377 ;
+  wire \$378 ;
+  wire \$379 ;
   wire \$38 ;
-  wire [31:0] \$380 ;
-  wire [31:0] \$381 ;
-  wire [31:0] \$382 ;
-  wire [31:0] \$383 ;
-  wire [31:0] \$384 ;
-  wire [31:0] \$385 ;
-  wire [31:0] \$386 ;
-  wire [31:0] \$387 ;
+  wire \$380 ;
+  wire \$381 ;
+  wire \$382 ;
+  wire \$383 ;
+  wire \$384 ;
+  wire \$385 ;
+  wire \$386 ;
+  wire \$387 ;
   wire \$388 ;
   wire \$389 ;
   wire \$39 ;
@@ -1593,348 +2585,596 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$465 ;
   wire \$466 ;
   wire \$467 ;
-  wire \$468 ;
-  wire \$469 ;
+  wire [31:0] \$468 ;
+  wire [31:0] \$469 ;
   wire \$47 ;
-  wire \$470 ;
-  wire \$471 ;
-  wire \$472 ;
-  wire \$473 ;
-  wire \$474 ;
-  wire \$475 ;
-  wire \$476 ;
+  wire [31:0] \$470 ;
+  wire [31:0] \$471 ;
+  wire [31:0] \$472 ;
+  wire [31:0] \$473 ;
+  wire [31:0] \$474 ;
+  wire [31:0] \$475 ;
+  wire [31:0] \$476 ;
   wire [31:0] \$477 ;
   wire [31:0] \$478 ;
-  reg \$479 ;
+  wire [31:0] \$479 ;
   wire \$48 ;
-  reg [10:0] \$480 ;
-  reg [31:0] \$481 ;
-  reg [3:0] \$482 ;
-  reg [31:0] \$483 ;
-  reg [3:0] \$484 ;
-  reg \$485 ;
-  reg \$486 ;
-  reg \$487 ;
-  reg \$488 ;
-  reg \$489 ;
+  wire [31:0] \$480 ;
+  wire [31:0] \$481 ;
+  wire [31:0] \$482 ;
+  wire [31:0] \$483 ;
+  wire [31:0] \$484 ;
+  wire [31:0] \$485 ;
+  wire [31:0] \$486 ;
+  wire [31:0] \$487 ;
+  wire [31:0] \$488 ;
+  wire [31:0] \$489 ;
   wire \$49 ;
-  reg \$490 ;
-  reg [31:0] \$491 ;
-  reg \$492 ;
-  reg \$493 ;
-  reg \$494 ;
-  reg \$495 ;
-  reg \$496 ;
-  reg \$497 ;
-  reg \$498 ;
-  reg \$499 ;
+  wire [31:0] \$490 ;
+  wire [31:0] \$491 ;
+  wire [31:0] \$492 ;
+  wire [31:0] \$493 ;
+  wire [31:0] \$494 ;
+  wire [31:0] \$495 ;
+  wire [31:0] \$496 ;
+  wire [31:0] \$497 ;
+  wire [31:0] \$498 ;
+  wire [31:0] \$499 ;
   wire \$5 ;
   wire \$50 ;
-  reg \$500 ;
-  reg \$501 ;
-  reg \$502 ;
-  reg \$503 ;
-  reg \$504 ;
-  reg [15:0] \$505 ;
-  reg [11:0] \$506 ;
-  reg \$507 ;
-  reg [23:0] \$508 ;
-  reg \$509 ;
+  wire [31:0] \$500 ;
+  wire [31:0] \$501 ;
+  wire [31:0] \$502 ;
+  wire [31:0] \$503 ;
+  wire [31:0] \$504 ;
+  wire [31:0] \$505 ;
+  wire [31:0] \$506 ;
+  wire [31:0] \$507 ;
+  wire [31:0] \$508 ;
+  wire [31:0] \$509 ;
   wire \$51 ;
-  reg [23:0] \$510 ;
-  reg \$511 ;
-  reg [23:0] \$512 ;
-  reg \$513 ;
-  reg [23:0] \$514 ;
-  reg \$515 ;
-  reg [5:0] \$516 ;
-  reg \$517 ;
-  reg \$518 ;
-  reg [1:0] \$519 ;
+  wire [31:0] \$510 ;
+  wire [31:0] \$511 ;
+  wire [31:0] \$512 ;
+  wire [31:0] \$513 ;
+  wire [31:0] \$514 ;
+  wire [31:0] \$515 ;
+  wire [31:0] \$516 ;
+  wire [31:0] \$517 ;
+  wire [31:0] \$518 ;
+  wire [31:0] \$519 ;
   wire \$52 ;
-  reg \$520 ;
-  reg \$521 ;
-  reg [5:0] \$522 ;
-  reg \$523 ;
-  reg \$524 ;
-  reg [1:0] \$525 ;
-  reg \$526 ;
-  reg \$527 ;
-  reg \$528 ;
-  reg \$529 ;
+  wire [31:0] \$520 ;
+  wire [31:0] \$521 ;
+  wire [31:0] \$522 ;
+  wire [31:0] \$523 ;
+  wire [31:0] \$524 ;
+  wire [31:0] \$525 ;
+  wire [31:0] \$526 ;
+  wire [31:0] \$527 ;
+  wire [31:0] \$528 ;
+  wire [31:0] \$529 ;
   wire \$53 ;
-  reg \$530 ;
-  reg \$531 ;
-  reg [7:0] \$532 ;
-  reg [3:0] \$533 ;
-  reg [3:0] \$534 ;
-  reg [3:0] \$535 ;
-  reg \$536 ;
-  reg [11:0] \$537 ;
-  reg \$538 ;
-  reg [15:0] \$539 ;
+  wire [31:0] \$530 ;
+  wire [31:0] \$531 ;
+  wire [31:0] \$532 ;
+  wire [31:0] \$533 ;
+  wire [31:0] \$534 ;
+  wire [31:0] \$535 ;
+  wire [31:0] \$536 ;
+  wire [31:0] \$537 ;
+  wire [31:0] \$538 ;
+  wire [31:0] \$539 ;
   wire \$54 ;
-  reg [4:0] \$540 ;
-  reg \$541 ;
-  reg \$542 ;
-  reg [15:0] \$543 ;
-  reg \$544 ;
-  reg [15:0] \$545 ;
-  reg [4:0] \$546 ;
-  reg \$547 ;
-  reg \$548 ;
-  reg [15:0] \$549 ;
+  wire [31:0] \$540 ;
+  wire [31:0] \$541 ;
+  wire [31:0] \$542 ;
+  wire [31:0] \$543 ;
+  wire [31:0] \$544 ;
+  wire [31:0] \$545 ;
+  wire [31:0] \$546 ;
+  wire [31:0] \$547 ;
+  wire [31:0] \$548 ;
+  wire [31:0] \$549 ;
   wire \$55 ;
-  reg \$550 ;
-  reg \$551 ;
-  reg \$552 ;
-  reg \$553 ;
-  reg \$554 ;
-  reg [11:0] \$555 ;
-  reg \$556 ;
-  reg [2:0] \$557 ;
-  reg [6:0] \$558 ;
-  reg [6:0] \$559 ;
+  wire [31:0] \$550 ;
+  wire [31:0] \$551 ;
+  wire [31:0] \$552 ;
+  wire [31:0] \$553 ;
+  wire [31:0] \$554 ;
+  wire [31:0] \$555 ;
+  wire [31:0] \$556 ;
+  wire [31:0] \$557 ;
+  wire [31:0] \$558 ;
+  wire [31:0] \$559 ;
   wire \$56 ;
-  reg \$560 ;
-  reg \$561 ;
-  reg \$562 ;
-  reg \$563 ;
-  reg \$564 ;
-  reg \$565 ;
-  reg \$566 ;
-  reg \$567 ;
-  reg \$568 ;
-  reg \$569 ;
+  wire [31:0] \$560 ;
+  wire [31:0] \$561 ;
+  wire [31:0] \$562 ;
+  wire [31:0] \$563 ;
+  wire [31:0] \$564 ;
+  wire [31:0] \$565 ;
+  wire [31:0] \$566 ;
+  wire [31:0] \$567 ;
+  wire [31:0] \$568 ;
+  wire [31:0] \$569 ;
   wire \$57 ;
-  reg \$570 ;
-  reg \$571 ;
-  reg \$572 ;
-  reg \$573 ;
-  reg \$574 ;
-  reg \$575 ;
-  reg \$576 ;
-  reg \$577 ;
-  reg \$578 ;
-  reg \$579 ;
+  wire [31:0] \$570 ;
+  wire [31:0] \$571 ;
+  wire [31:0] \$572 ;
+  wire [31:0] \$573 ;
+  wire [31:0] \$574 ;
+  wire [31:0] \$575 ;
+  wire [31:0] \$576 ;
+  wire [31:0] \$577 ;
+  wire [31:0] \$578 ;
+  wire [31:0] \$579 ;
   wire \$58 ;
-  reg \$580 ;
-  reg \$581 ;
-  reg \$582 ;
-  reg \$583 ;
-  reg \$584 ;
-  reg \$585 ;
-  reg \$586 ;
-  reg \$587 ;
-  reg \$588 ;
-  reg \$589 ;
+  wire [31:0] \$580 ;
+  wire [31:0] \$581 ;
+  wire [31:0] \$582 ;
+  wire [31:0] \$583 ;
+  wire [31:0] \$584 ;
+  wire [31:0] \$585 ;
+  wire [31:0] \$586 ;
+  wire [31:0] \$587 ;
+  wire [31:0] \$588 ;
+  wire [31:0] \$589 ;
   wire \$59 ;
-  reg \$590 ;
-  reg \$591 ;
-  reg \$592 ;
-  reg \$593 ;
-  reg \$594 ;
-  reg [3:0] \$595 ;
-  reg \$596 ;
-  reg \$597 ;
-  reg \$598 ;
-  reg \$599 ;
+  wire [31:0] \$590 ;
+  wire [31:0] \$591 ;
+  wire [31:0] \$592 ;
+  wire [31:0] \$593 ;
+  wire [31:0] \$594 ;
+  wire [31:0] \$595 ;
+  wire [31:0] \$596 ;
+  wire [31:0] \$597 ;
+  wire [31:0] \$598 ;
+  wire [31:0] \$599 ;
   wire \$6 ;
   wire \$60 ;
-  reg \$600 ;
-  reg \$601 ;
-  reg \$602 ;
-  reg \$603 ;
-  reg \$604 ;
-  reg \$605 ;
-  reg \$606 ;
-  reg [5:0] \$607 ;
-  reg [15:0] \$608 ;
-  reg [12:0] \$609 ;
+  wire [31:0] \$600 ;
+  wire [31:0] \$601 ;
+  wire [31:0] \$602 ;
+  wire [31:0] \$603 ;
+  wire [31:0] \$604 ;
+  wire [31:0] \$605 ;
+  wire [31:0] \$606 ;
+  wire [31:0] \$607 ;
+  wire [31:0] \$608 ;
+  wire [31:0] \$609 ;
   wire \$61 ;
-  reg [31:0] \$610 ;
-  reg [22:0] \$611 ;
-  reg [31:0] \$612 ;
-  reg [7:0] \$613 ;
-  reg [31:0] \$614 ;
-  reg [3:0] \$615 ;
-  reg \$616 ;
-  reg [7:0] \$617 ;
-  reg [12:0] \$618 ;
-  reg \$619 ;
+  wire \$610 ;
+  wire \$611 ;
+  wire \$612 ;
+  wire \$613 ;
+  wire \$614 ;
+  wire \$615 ;
+  wire \$616 ;
+  wire \$617 ;
+  wire \$618 ;
+  wire \$619 ;
   wire \$62 ;
-  reg \$620 ;
-  reg [31:0] \$621 ;
-  reg \$622 ;
-  reg \$623 ;
-  reg \$624 ;
-  reg \$625 ;
-  reg \$626 ;
-  reg \$627 ;
-  reg \$628 ;
-  reg \$629 ;
+  wire \$620 ;
+  wire \$621 ;
+  wire \$622 ;
+  wire \$623 ;
+  wire \$624 ;
+  wire \$625 ;
+  wire \$626 ;
+  wire \$627 ;
+  wire \$628 ;
+  wire \$629 ;
   wire \$63 ;
-  reg \$630 ;
-  reg \$631 ;
-  reg \$632 ;
-  reg \$633 ;
-  reg \$634 ;
-  reg [15:0] \$635 ;
-  reg [11:0] \$636 ;
-  reg \$637 ;
-  reg [23:0] \$638 ;
-  reg \$639 ;
+  wire \$630 ;
+  wire \$631 ;
+  wire \$632 ;
+  wire \$633 ;
+  wire \$634 ;
+  wire \$635 ;
+  wire \$636 ;
+  wire \$637 ;
+  wire \$638 ;
+  wire \$639 ;
   wire \$64 ;
-  reg [23:0] \$640 ;
-  reg \$641 ;
-  reg [23:0] \$642 ;
-  reg \$643 ;
-  reg [23:0] \$644 ;
-  reg \$645 ;
-  reg [5:0] \$646 ;
-  reg \$647 ;
-  reg \$648 ;
-  reg [1:0] \$649 ;
+  wire \$640 ;
+  wire \$641 ;
+  wire \$642 ;
+  wire \$643 ;
+  wire \$644 ;
+  wire \$645 ;
+  wire \$646 ;
+  wire \$647 ;
+  wire \$648 ;
+  wire \$649 ;
   wire \$65 ;
-  reg \$650 ;
-  reg \$651 ;
-  reg [5:0] \$652 ;
-  reg \$653 ;
-  reg \$654 ;
-  reg [1:0] \$655 ;
-  reg \$656 ;
-  reg \$657 ;
-  reg \$658 ;
-  reg \$659 ;
+  wire \$650 ;
+  wire \$651 ;
+  wire \$652 ;
+  wire \$653 ;
+  wire \$654 ;
+  wire \$655 ;
+  wire \$656 ;
+  wire \$657 ;
+  wire \$658 ;
+  wire \$659 ;
   wire \$66 ;
-  reg \$660 ;
-  reg \$661 ;
-  reg [7:0] \$662 ;
-  reg [3:0] \$663 ;
-  reg [3:0] \$664 ;
-  reg [3:0] \$665 ;
-  reg \$666 ;
-  reg [11:0] \$667 ;
-  reg \$668 ;
-  reg [15:0] \$669 ;
+  wire \$660 ;
+  wire \$661 ;
+  wire \$662 ;
+  wire \$663 ;
+  wire \$664 ;
+  wire \$665 ;
+  wire \$666 ;
+  wire \$667 ;
+  wire \$668 ;
+  wire \$669 ;
   wire \$67 ;
-  reg [4:0] \$670 ;
-  reg \$671 ;
-  reg \$672 ;
-  reg [15:0] \$673 ;
-  reg \$674 ;
-  reg [15:0] \$675 ;
-  reg [4:0] \$676 ;
-  reg \$677 ;
-  reg \$678 ;
-  reg [15:0] \$679 ;
+  wire \$670 ;
+  wire \$671 ;
+  wire \$672 ;
+  wire \$673 ;
+  wire \$674 ;
+  wire \$675 ;
+  wire \$676 ;
+  wire \$677 ;
+  wire \$678 ;
+  wire \$679 ;
   wire \$68 ;
-  reg \$680 ;
-  reg \$681 ;
-  reg \$682 ;
-  reg \$683 ;
-  reg \$684 ;
-  reg [11:0] \$685 ;
-  reg \$686 ;
-  reg [2:0] \$687 ;
-  reg [6:0] \$688 ;
-  reg [6:0] \$689 ;
+  wire \$680 ;
+  wire \$681 ;
+  wire \$682 ;
+  wire \$683 ;
+  wire \$684 ;
+  wire \$685 ;
+  wire \$686 ;
+  wire \$687 ;
+  wire \$688 ;
+  wire \$689 ;
   wire \$69 ;
-  reg \$690 ;
-  reg \$691 ;
-  reg \$692 ;
-  reg \$693 ;
-  reg \$694 ;
-  reg \$695 ;
-  reg \$696 ;
-  reg \$697 ;
-  reg \$698 ;
-  reg \$699 ;
+  wire \$690 ;
+  wire \$691 ;
+  wire \$692 ;
+  wire \$693 ;
+  wire \$694 ;
+  wire \$695 ;
+  wire \$696 ;
+  wire \$697 ;
+  wire \$698 ;
+  wire \$699 ;
   wire \$7 ;
   wire \$70 ;
-  reg \$700 ;
-  reg \$701 ;
-  reg \$702 ;
-  reg \$703 ;
-  reg \$704 ;
-  reg \$705 ;
-  reg \$706 ;
-  reg \$707 ;
-  reg \$708 ;
-  reg \$709 ;
+  wire \$700 ;
+  wire \$701 ;
+  wire \$702 ;
+  wire \$703 ;
+  wire \$704 ;
+  wire \$705 ;
+  wire \$706 ;
+  wire \$707 ;
+  wire \$708 ;
+  wire \$709 ;
   wire \$71 ;
-  reg \$710 ;
-  reg \$711 ;
-  reg \$712 ;
-  reg \$713 ;
-  reg \$714 ;
-  reg \$715 ;
-  reg \$716 ;
-  reg \$717 ;
-  reg \$718 ;
-  reg \$719 ;
+  wire \$710 ;
+  wire \$711 ;
+  wire \$712 ;
+  wire \$713 ;
+  wire \$714 ;
+  wire \$715 ;
+  wire \$716 ;
+  wire \$717 ;
+  wire \$718 ;
+  wire \$719 ;
   wire \$72 ;
-  reg \$720 ;
-  reg \$721 ;
-  reg \$722 ;
-  reg \$723 ;
-  reg \$724 ;
-  reg [3:0] \$725 ;
-  reg \$726 ;
-  reg \$727 ;
-  reg \$728 ;
-  reg \$729 ;
+  wire \$720 ;
+  wire \$721 ;
+  wire \$722 ;
+  wire \$723 ;
+  wire \$724 ;
+  wire \$725 ;
+  wire \$726 ;
+  wire \$727 ;
+  wire \$728 ;
+  wire \$729 ;
   wire \$73 ;
-  reg \$730 ;
-  reg \$731 ;
-  reg \$732 ;
-  reg \$733 ;
-  reg \$734 ;
-  reg \$735 ;
-  reg \$736 ;
-  reg [5:0] \$737 ;
-  reg [15:0] \$738 ;
-  reg [12:0] \$739 ;
+  wire \$730 ;
+  wire \$731 ;
+  wire \$732 ;
+  wire \$733 ;
+  wire \$734 ;
+  wire \$735 ;
+  wire \$736 ;
+  wire \$737 ;
+  wire \$738 ;
+  wire \$739 ;
   wire \$74 ;
-  reg [31:0] \$740 ;
-  reg [22:0] \$741 ;
-  reg [31:0] \$742 ;
-  reg [7:0] \$743 ;
-  reg [31:0] \$744 ;
-  reg [3:0] \$745 ;
-  reg \$746 ;
-  reg [7:0] \$747 ;
-  reg [12:0] \$748 ;
-  reg \$749 ;
+  wire \$740 ;
+  wire \$741 ;
+  wire \$742 ;
+  wire \$743 ;
+  wire \$744 ;
+  wire \$745 ;
+  wire \$746 ;
+  wire \$747 ;
+  wire \$748 ;
+  wire \$749 ;
   wire \$75 ;
-  reg \$750 ;
-  reg [31:0] \$751 ;
+  wire \$750 ;
+  wire \$751 ;
+  wire \$752 ;
+  wire \$753 ;
+  wire \$754 ;
+  wire \$755 ;
+  wire \$756 ;
+  wire \$757 ;
+  wire \$758 ;
+  wire \$759 ;
   wire \$76 ;
+  wire \$760 ;
+  wire \$761 ;
+  wire \$762 ;
+  wire \$763 ;
+  wire \$764 ;
+  wire \$765 ;
+  wire \$766 ;
+  wire \$767 ;
+  wire \$768 ;
+  wire \$769 ;
   wire \$77 ;
+  wire \$770 ;
+  wire \$771 ;
+  wire \$772 ;
+  wire [31:0] \$773 ;
+  wire [31:0] \$774 ;
+  reg \$775 ;
+  reg [10:0] \$776 ;
+  reg [31:0] \$777 ;
+  reg [3:0] \$778 ;
+  reg [31:0] \$779 ;
   wire \$78 ;
+  reg [3:0] \$780 ;
+  reg \$781 ;
+  reg \$782 ;
+  reg \$783 ;
+  reg \$784 ;
+  reg \$785 ;
+  reg \$786 ;
+  reg [31:0] \$787 ;
+  reg \$788 ;
+  reg \$789 ;
   wire \$79 ;
+  reg \$790 ;
+  reg \$791 ;
+  reg \$792 ;
+  reg \$793 ;
+  reg \$794 ;
+  reg \$795 ;
+  reg \$796 ;
+  reg \$797 ;
+  reg \$798 ;
+  reg \$799 ;
   wire [31:0] \$8 ;
   wire \$80 ;
+  reg \$800 ;
+  reg [15:0] \$801 ;
+  reg [11:0] \$802 ;
+  reg \$803 ;
+  reg [23:0] \$804 ;
+  reg \$805 ;
+  reg [23:0] \$806 ;
+  reg \$807 ;
+  reg [23:0] \$808 ;
+  reg \$809 ;
   wire \$81 ;
+  reg [23:0] \$810 ;
+  reg \$811 ;
+  reg [5:0] \$812 ;
+  reg \$813 ;
+  reg \$814 ;
+  reg [1:0] \$815 ;
+  reg \$816 ;
+  reg \$817 ;
+  reg [5:0] \$818 ;
+  reg \$819 ;
   wire \$82 ;
+  reg \$820 ;
+  reg [1:0] \$821 ;
+  reg \$822 ;
+  reg \$823 ;
+  reg \$824 ;
+  reg \$825 ;
+  reg \$826 ;
+  reg \$827 ;
+  reg [7:0] \$828 ;
+  reg [3:0] \$829 ;
   wire \$83 ;
+  reg [3:0] \$830 ;
+  reg [3:0] \$831 ;
+  reg \$832 ;
+  reg [11:0] \$833 ;
+  reg \$834 ;
+  reg [15:0] \$835 ;
+  reg [4:0] \$836 ;
+  reg \$837 ;
+  reg \$838 ;
+  reg [15:0] \$839 ;
   wire \$84 ;
+  reg \$840 ;
+  reg [15:0] \$841 ;
+  reg [4:0] \$842 ;
+  reg \$843 ;
+  reg \$844 ;
+  reg [15:0] \$845 ;
+  reg \$846 ;
+  reg \$847 ;
+  reg \$848 ;
+  reg \$849 ;
   wire \$85 ;
+  reg \$850 ;
+  reg [11:0] \$851 ;
+  reg \$852 ;
+  reg \$853 ;
+  reg \$854 ;
+  reg \$855 ;
+  reg \$856 ;
+  reg \$857 ;
+  reg \$858 ;
+  reg \$859 ;
   wire \$86 ;
+  reg \$860 ;
+  reg \$861 ;
+  reg \$862 ;
+  reg \$863 ;
+  reg \$864 ;
+  reg \$865 ;
+  reg \$866 ;
+  reg \$867 ;
+  reg \$868 ;
+  reg \$869 ;
   wire \$87 ;
+  reg \$870 ;
+  reg [2:0] \$871 ;
+  reg [6:0] \$872 ;
+  reg [6:0] \$873 ;
+  reg \$874 ;
+  reg \$875 ;
+  reg \$876 ;
+  reg \$877 ;
+  reg \$878 ;
+  reg \$879 ;
   wire \$88 ;
+  reg \$880 ;
+  reg \$881 ;
+  reg \$882 ;
+  reg \$883 ;
+  reg \$884 ;
+  reg \$885 ;
+  reg \$886 ;
+  reg \$887 ;
+  reg \$888 ;
+  reg \$889 ;
   wire \$89 ;
+  reg \$890 ;
+  reg \$891 ;
+  reg \$892 ;
+  reg \$893 ;
+  reg \$894 ;
+  reg \$895 ;
+  reg \$896 ;
+  reg \$897 ;
+  reg \$898 ;
+  reg \$899 ;
   wire [31:0] \$9 ;
   wire \$90 ;
+  reg \$900 ;
+  reg \$901 ;
+  reg \$902 ;
+  reg \$903 ;
+  reg \$904 ;
+  reg \$905 ;
+  reg \$906 ;
+  reg \$907 ;
+  reg \$908 ;
+  reg \$909 ;
   wire \$91 ;
+  reg \$910 ;
+  reg \$911 ;
+  reg \$912 ;
+  reg \$913 ;
+  reg \$914 ;
+  reg \$915 ;
+  reg \$916 ;
+  reg \$917 ;
+  reg \$918 ;
+  reg \$919 ;
   wire \$92 ;
+  reg \$920 ;
+  reg \$921 ;
+  reg \$922 ;
+  reg \$923 ;
+  reg \$924 ;
+  reg \$925 ;
+  reg \$926 ;
+  reg \$927 ;
+  reg \$928 ;
+  reg \$929 ;
   wire \$93 ;
+  reg \$930 ;
+  reg \$931 ;
+  reg \$932 ;
+  reg \$933 ;
+  reg \$934 ;
+  reg \$935 ;
+  reg \$936 ;
+  reg \$937 ;
+  reg \$938 ;
+  reg \$939 ;
   wire \$94 ;
+  reg \$940 ;
+  reg \$941 ;
+  reg \$942 ;
+  reg \$943 ;
+  reg \$944 ;
+  reg \$945 ;
+  reg [3:0] \$946 ;
+  reg \$947 ;
+  reg \$948 ;
+  reg \$949 ;
   wire \$95 ;
+  reg \$950 ;
+  reg \$951 ;
+  reg \$952 ;
+  reg \$953 ;
+  reg \$954 ;
+  reg \$955 ;
+  reg \$956 ;
+  reg \$957 ;
+  reg [5:0] \$958 ;
+  reg [15:0] \$959 ;
   wire \$96 ;
+  reg [12:0] \$960 ;
+  reg [31:0] \$961 ;
+  reg [22:0] \$962 ;
+  reg [31:0] \$963 ;
+  reg [7:0] \$964 ;
+  reg [31:0] \$965 ;
+  reg [3:0] \$966 ;
+  reg \$967 ;
+  reg [7:0] \$968 ;
+  reg [12:0] \$969 ;
   wire \$97 ;
+  reg \$970 ;
+  reg \$971 ;
+  reg [31:0] \$972 ;
+  reg \$973 ;
+  reg \$974 ;
+  reg \$975 ;
+  reg \$976 ;
+  reg \$977 ;
+  reg \$978 ;
+  reg \$979 ;
   wire \$98 ;
+  reg \$980 ;
+  reg \$981 ;
+  reg \$982 ;
+  reg \$983 ;
+  reg \$984 ;
+  reg \$985 ;
+  reg [15:0] \$986 ;
+  reg [11:0] \$987 ;
+  reg \$988 ;
+  reg [23:0] \$989 ;
   wire \$99 ;
+  reg \$990 ;
+  reg [23:0] \$991 ;
+  reg \$992 ;
+  reg [23:0] \$993 ;
+  reg \$994 ;
+  reg [23:0] \$995 ;
+  reg \$996 ;
+  reg [5:0] \$997 ;
+  reg \$998 ;
+  reg \$999 ;
   wire [10:0] bus__r_addr;
   output [31:0] bus__r_data;
   wire [31:0] bus__r_data;
@@ -1986,10 +3226,17 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0__cap_counters;
   wire [5:0] ch0__cap_data_bits_w0;
   wire [5:0] ch0__cap_data_bits_w1;
+  wire [5:0] ch0__cap_data_bits_w2;
+  wire [5:0] ch0__cap_data_bits_w3;
+  wire [5:0] ch0__cap_data_bits_w4;
+  wire [5:0] ch0__cap_data_bits_w5;
+  wire [5:0] ch0__cap_data_bits_w6;
+  wire [5:0] ch0__cap_data_bits_w7;
   wire ch0__cap_register_access;
   wire ch0__cap_ssi;
   wire [5:0] ch0__cap_timer_width;
   wire ch0__cap_timestamp;
+  wire [3:0] ch0__cap_words;
   wire ch0__cds;
   (* init = 24'h000000 *)
   wire [23:0] ch0__cfg_ack_limit;
@@ -2069,6 +3316,72 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0__cfg_w1_nenw;
   (* init = 1'h0 *)
   wire ch0__cfg_w1_signed;
+  wire [1:0] ch0__cfg_w2_crc;
+  wire ch0__cfg_w2_crc_inverted;
+  wire [15:0] ch0__cfg_w2_crc_poly;
+  wire [15:0] ch0__cfg_w2_crc_start;
+  wire [4:0] ch0__cfg_w2_crc_width;
+  wire [5:0] ch0__cfg_w2_data_bits;
+  wire ch0__cfg_w2_enable;
+  wire ch0__cfg_w2_gray;
+  wire ch0__cfg_w2_lc;
+  wire ch0__cfg_w2_nenw;
+  wire ch0__cfg_w2_signed;
+  wire [1:0] ch0__cfg_w3_crc;
+  wire ch0__cfg_w3_crc_inverted;
+  wire [15:0] ch0__cfg_w3_crc_poly;
+  wire [15:0] ch0__cfg_w3_crc_start;
+  wire [4:0] ch0__cfg_w3_crc_width;
+  wire [5:0] ch0__cfg_w3_data_bits;
+  wire ch0__cfg_w3_enable;
+  wire ch0__cfg_w3_gray;
+  wire ch0__cfg_w3_lc;
+  wire ch0__cfg_w3_nenw;
+  wire ch0__cfg_w3_signed;
+  wire [1:0] ch0__cfg_w4_crc;
+  wire ch0__cfg_w4_crc_inverted;
+  wire [15:0] ch0__cfg_w4_crc_poly;
+  wire [15:0] ch0__cfg_w4_crc_start;
+  wire [4:0] ch0__cfg_w4_crc_width;
+  wire [5:0] ch0__cfg_w4_data_bits;
+  wire ch0__cfg_w4_enable;
+  wire ch0__cfg_w4_gray;
+  wire ch0__cfg_w4_lc;
+  wire ch0__cfg_w4_nenw;
+  wire ch0__cfg_w4_signed;
+  wire [1:0] ch0__cfg_w5_crc;
+  wire ch0__cfg_w5_crc_inverted;
+  wire [15:0] ch0__cfg_w5_crc_poly;
+  wire [15:0] ch0__cfg_w5_crc_start;
+  wire [4:0] ch0__cfg_w5_crc_width;
+  wire [5:0] ch0__cfg_w5_data_bits;
+  wire ch0__cfg_w5_enable;
+  wire ch0__cfg_w5_gray;
+  wire ch0__cfg_w5_lc;
+  wire ch0__cfg_w5_nenw;
+  wire ch0__cfg_w5_signed;
+  wire [1:0] ch0__cfg_w6_crc;
+  wire ch0__cfg_w6_crc_inverted;
+  wire [15:0] ch0__cfg_w6_crc_poly;
+  wire [15:0] ch0__cfg_w6_crc_start;
+  wire [4:0] ch0__cfg_w6_crc_width;
+  wire [5:0] ch0__cfg_w6_data_bits;
+  wire ch0__cfg_w6_enable;
+  wire ch0__cfg_w6_gray;
+  wire ch0__cfg_w6_lc;
+  wire ch0__cfg_w6_nenw;
+  wire ch0__cfg_w6_signed;
+  wire [1:0] ch0__cfg_w7_crc;
+  wire ch0__cfg_w7_crc_inverted;
+  wire [15:0] ch0__cfg_w7_crc_poly;
+  wire [15:0] ch0__cfg_w7_crc_start;
+  wire [4:0] ch0__cfg_w7_crc_width;
+  wire [5:0] ch0__cfg_w7_data_bits;
+  wire ch0__cfg_w7_enable;
+  wire ch0__cfg_w7_gray;
+  wire ch0__cfg_w7_lc;
+  wire ch0__cfg_w7_nenw;
+  wire ch0__cfg_w7_signed;
   (* init = 1'h0 *)
   wire ch0__clear_counters;
   input ch0__config_error;
@@ -2079,6 +3392,12 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [15:0] ch0__count_ca_data_fault;
   wire [15:0] ch0__count_ca_no_answer;
   wire [15:0] ch0__count_ca_refused;
+  wire [15:0] ch0__count_crc_word2;
+  wire [15:0] ch0__count_crc_word3;
+  wire [15:0] ch0__count_crc_word4;
+  wire [15:0] ch0__count_crc_word5;
+  wire [15:0] ch0__count_crc_word6;
+  wire [15:0] ch0__count_crc_word7;
   input [31:0] ch0__count_data;
   wire [31:0] ch0__count_data;
   output ch0__count_en;
@@ -2099,6 +3418,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [3:0] ch0__noise_events;
   (* init = 1'h0 *)
   wire ch0__periodic;
+  input [15:0] ch0__result_updates;
+  wire [15:0] ch0__result_updates;
   wire [12:0] ch0__settled_delay;
   wire ch0__spw_mismatch;
   (* init = 1'h0 *)
@@ -2115,6 +3436,30 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0__word1_ne;
   wire ch0__word1_nw;
   wire [39:0] ch0__word1_position;
+  wire ch0__word2_crc_ok;
+  wire ch0__word2_ne;
+  wire ch0__word2_nw;
+  wire [62:0] ch0__word2_position;
+  wire ch0__word3_crc_ok;
+  wire ch0__word3_ne;
+  wire ch0__word3_nw;
+  wire [62:0] ch0__word3_position;
+  wire ch0__word4_crc_ok;
+  wire ch0__word4_ne;
+  wire ch0__word4_nw;
+  wire [62:0] ch0__word4_position;
+  wire ch0__word5_crc_ok;
+  wire ch0__word5_ne;
+  wire ch0__word5_nw;
+  wire [62:0] ch0__word5_position;
+  wire ch0__word6_crc_ok;
+  wire ch0__word6_ne;
+  wire ch0__word6_nw;
+  wire [62:0] ch0__word6_position;
+  wire ch0__word7_crc_ok;
+  wire ch0__word7_ne;
+  wire ch0__word7_nw;
+  wire [62:0] ch0__word7_position;
   wire ch0_ca_count_crc4_answer_write;
   wire ch0_ca_count_data_fault_write;
   wire ch0_ca_count_refused_aborted_write;
@@ -2131,9 +3476,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [2:0] ch0_ca_request_slave_id;
   reg [2:0] ch0_ca_request_slave_id = 3'h0;
   wire ch0_ca_request_write;
-  output \ch0_ca_request_write$113 ;
-  reg \ch0_ca_request_write$113  = 1'h0;
+  output \ch0_ca_request_write$149 ;
+  reg \ch0_ca_request_write$149  = 1'h0;
   wire ch0_ca_state_write;
+  wire ch0_caps_chain2_write;
+  wire ch0_caps_chain_write;
   wire ch0_caps_write;
   output [23:0] ch0_cfg_ack_ack_limit;
   reg [23:0] ch0_cfg_ack_ack_limit = 24'h000000;
@@ -2211,6 +3558,42 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [23:0] ch0_cfg_timeout_timeout_limit;
   reg [23:0] ch0_cfg_timeout_timeout_limit = 24'h000000;
   wire ch0_cfg_timeout_write;
+  reg ch0_cfg_w2_config_write = 1'h0;
+  reg ch0_cfg_w2_crc_config_write = 1'h0;
+  reg ch0_cfg_w2_crc_start_config_write = 1'h0;
+  wire ch0_cfg_w2_crc_start_write;
+  wire ch0_cfg_w2_crc_write;
+  wire ch0_cfg_w2_write;
+  reg ch0_cfg_w3_config_write = 1'h0;
+  reg ch0_cfg_w3_crc_config_write = 1'h0;
+  reg ch0_cfg_w3_crc_start_config_write = 1'h0;
+  wire ch0_cfg_w3_crc_start_write;
+  wire ch0_cfg_w3_crc_write;
+  wire ch0_cfg_w3_write;
+  reg ch0_cfg_w4_config_write = 1'h0;
+  reg ch0_cfg_w4_crc_config_write = 1'h0;
+  reg ch0_cfg_w4_crc_start_config_write = 1'h0;
+  wire ch0_cfg_w4_crc_start_write;
+  wire ch0_cfg_w4_crc_write;
+  wire ch0_cfg_w4_write;
+  reg ch0_cfg_w5_config_write = 1'h0;
+  reg ch0_cfg_w5_crc_config_write = 1'h0;
+  reg ch0_cfg_w5_crc_start_config_write = 1'h0;
+  wire ch0_cfg_w5_crc_start_write;
+  wire ch0_cfg_w5_crc_write;
+  wire ch0_cfg_w5_write;
+  reg ch0_cfg_w6_config_write = 1'h0;
+  reg ch0_cfg_w6_crc_config_write = 1'h0;
+  reg ch0_cfg_w6_crc_start_config_write = 1'h0;
+  wire ch0_cfg_w6_crc_start_write;
+  wire ch0_cfg_w6_crc_write;
+  wire ch0_cfg_w6_write;
+  reg ch0_cfg_w7_config_write = 1'h0;
+  reg ch0_cfg_w7_crc_config_write = 1'h0;
+  reg ch0_cfg_w7_crc_start_config_write = 1'h0;
+  wire ch0_cfg_w7_crc_start_write;
+  wire ch0_cfg_w7_crc_write;
+  wire ch0_cfg_w7_write;
   reg ch0_cfg_words_config_write = 1'h0;
   output [1:0] ch0_cfg_words_w0_crc;
   reg [1:0] ch0_cfg_words_w0_crc = 2'h0;
@@ -2239,6 +3622,23 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output ch0_cfg_words_w1_signed;
   reg ch0_cfg_words_w1_signed = 1'h0;
   wire ch0_cfg_words_write;
+  wire ch0_chain_flags_write;
+  wire ch0_chain_updates_write;
+  wire ch0_chain_w2_hi_write;
+  wire ch0_chain_w2_lo_write;
+  wire ch0_chain_w3_hi_write;
+  wire ch0_chain_w3_lo_write;
+  wire ch0_chain_w4_hi_write;
+  wire ch0_chain_w4_lo_write;
+  wire ch0_chain_w5_hi_write;
+  wire ch0_chain_w5_lo_write;
+  wire ch0_chain_w6_hi_write;
+  wire ch0_chain_w6_lo_write;
+  wire ch0_chain_w7_hi_write;
+  wire ch0_chain_w7_lo_write;
+  wire ch0_count_chain2_write;
+  wire ch0_count_chain3_write;
+  wire ch0_count_chain_write;
   output ch0_ctrl_abort;
   reg ch0_ctrl_abort = 1'h0;
   output ch0_ctrl_clear_counters;
@@ -2267,6 +3667,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch0_read_select_82 = 1'h0;
   reg ch0_read_select_84 = 1'h0;
   reg ch0_read_select_85 = 1'h0;
+  reg ch0_read_select_86 = 1'h0;
+  reg ch0_read_select_87 = 1'h0;
   reg ch0_read_select_88 = 1'h0;
   reg ch0_read_select_89 = 1'h0;
   reg ch0_read_select_8a = 1'h0;
@@ -2288,12 +3690,47 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch0_read_select_a2 = 1'h0;
   reg ch0_read_select_a3 = 1'h0;
   reg ch0_read_select_a4 = 1'h0;
+  reg ch0_read_select_a5 = 1'h0;
+  reg ch0_read_select_a6 = 1'h0;
+  reg ch0_read_select_a7 = 1'h0;
+  reg ch0_read_select_a8 = 1'h0;
+  reg ch0_read_select_a9 = 1'h0;
+  reg ch0_read_select_aa = 1'h0;
+  reg ch0_read_select_ac = 1'h0;
+  reg ch0_read_select_ad = 1'h0;
+  reg ch0_read_select_ae = 1'h0;
+  reg ch0_read_select_b0 = 1'h0;
+  reg ch0_read_select_b1 = 1'h0;
+  reg ch0_read_select_b2 = 1'h0;
+  reg ch0_read_select_b4 = 1'h0;
+  reg ch0_read_select_b5 = 1'h0;
+  reg ch0_read_select_b6 = 1'h0;
+  reg ch0_read_select_b8 = 1'h0;
+  reg ch0_read_select_b9 = 1'h0;
+  reg ch0_read_select_ba = 1'h0;
+  reg ch0_read_select_bc = 1'h0;
+  reg ch0_read_select_bd = 1'h0;
+  reg ch0_read_select_be = 1'h0;
   reg ch0_read_select_c0 = 1'h0;
   reg ch0_read_select_c1 = 1'h0;
   reg ch0_read_select_c2 = 1'h0;
   reg ch0_read_select_c3 = 1'h0;
   reg ch0_read_select_c4 = 1'h0;
   reg ch0_read_select_c5 = 1'h0;
+  reg ch0_read_select_f0 = 1'h0;
+  reg ch0_read_select_f1 = 1'h0;
+  reg ch0_read_select_f2 = 1'h0;
+  reg ch0_read_select_f3 = 1'h0;
+  reg ch0_read_select_f4 = 1'h0;
+  reg ch0_read_select_f5 = 1'h0;
+  reg ch0_read_select_f6 = 1'h0;
+  reg ch0_read_select_f7 = 1'h0;
+  reg ch0_read_select_f8 = 1'h0;
+  reg ch0_read_select_f9 = 1'h0;
+  reg ch0_read_select_fa = 1'h0;
+  reg ch0_read_select_fb = 1'h0;
+  reg ch0_read_select_fc = 1'h0;
+  reg ch0_read_select_fd = 1'h0;
   reg ch0_result_line_delay_settled_snapshot = 1'h0;
   reg [7:0] ch0_result_line_delay_spread_snapshot = 8'h00;
   reg [3:0] ch0_result_line_noise_events_snapshot = 4'h0;
@@ -2364,10 +3801,17 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1__cap_counters;
   wire [5:0] ch1__cap_data_bits_w0;
   wire [5:0] ch1__cap_data_bits_w1;
+  wire [5:0] ch1__cap_data_bits_w2;
+  wire [5:0] ch1__cap_data_bits_w3;
+  wire [5:0] ch1__cap_data_bits_w4;
+  wire [5:0] ch1__cap_data_bits_w5;
+  wire [5:0] ch1__cap_data_bits_w6;
+  wire [5:0] ch1__cap_data_bits_w7;
   wire ch1__cap_register_access;
   wire ch1__cap_ssi;
   wire [5:0] ch1__cap_timer_width;
   wire ch1__cap_timestamp;
+  wire [3:0] ch1__cap_words;
   wire ch1__cds;
   (* init = 24'h000000 *)
   wire [23:0] ch1__cfg_ack_limit;
@@ -2447,6 +3891,72 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1__cfg_w1_nenw;
   (* init = 1'h0 *)
   wire ch1__cfg_w1_signed;
+  wire [1:0] ch1__cfg_w2_crc;
+  wire ch1__cfg_w2_crc_inverted;
+  wire [15:0] ch1__cfg_w2_crc_poly;
+  wire [15:0] ch1__cfg_w2_crc_start;
+  wire [4:0] ch1__cfg_w2_crc_width;
+  wire [5:0] ch1__cfg_w2_data_bits;
+  wire ch1__cfg_w2_enable;
+  wire ch1__cfg_w2_gray;
+  wire ch1__cfg_w2_lc;
+  wire ch1__cfg_w2_nenw;
+  wire ch1__cfg_w2_signed;
+  wire [1:0] ch1__cfg_w3_crc;
+  wire ch1__cfg_w3_crc_inverted;
+  wire [15:0] ch1__cfg_w3_crc_poly;
+  wire [15:0] ch1__cfg_w3_crc_start;
+  wire [4:0] ch1__cfg_w3_crc_width;
+  wire [5:0] ch1__cfg_w3_data_bits;
+  wire ch1__cfg_w3_enable;
+  wire ch1__cfg_w3_gray;
+  wire ch1__cfg_w3_lc;
+  wire ch1__cfg_w3_nenw;
+  wire ch1__cfg_w3_signed;
+  wire [1:0] ch1__cfg_w4_crc;
+  wire ch1__cfg_w4_crc_inverted;
+  wire [15:0] ch1__cfg_w4_crc_poly;
+  wire [15:0] ch1__cfg_w4_crc_start;
+  wire [4:0] ch1__cfg_w4_crc_width;
+  wire [5:0] ch1__cfg_w4_data_bits;
+  wire ch1__cfg_w4_enable;
+  wire ch1__cfg_w4_gray;
+  wire ch1__cfg_w4_lc;
+  wire ch1__cfg_w4_nenw;
+  wire ch1__cfg_w4_signed;
+  wire [1:0] ch1__cfg_w5_crc;
+  wire ch1__cfg_w5_crc_inverted;
+  wire [15:0] ch1__cfg_w5_crc_poly;
+  wire [15:0] ch1__cfg_w5_crc_start;
+  wire [4:0] ch1__cfg_w5_crc_width;
+  wire [5:0] ch1__cfg_w5_data_bits;
+  wire ch1__cfg_w5_enable;
+  wire ch1__cfg_w5_gray;
+  wire ch1__cfg_w5_lc;
+  wire ch1__cfg_w5_nenw;
+  wire ch1__cfg_w5_signed;
+  wire [1:0] ch1__cfg_w6_crc;
+  wire ch1__cfg_w6_crc_inverted;
+  wire [15:0] ch1__cfg_w6_crc_poly;
+  wire [15:0] ch1__cfg_w6_crc_start;
+  wire [4:0] ch1__cfg_w6_crc_width;
+  wire [5:0] ch1__cfg_w6_data_bits;
+  wire ch1__cfg_w6_enable;
+  wire ch1__cfg_w6_gray;
+  wire ch1__cfg_w6_lc;
+  wire ch1__cfg_w6_nenw;
+  wire ch1__cfg_w6_signed;
+  wire [1:0] ch1__cfg_w7_crc;
+  wire ch1__cfg_w7_crc_inverted;
+  wire [15:0] ch1__cfg_w7_crc_poly;
+  wire [15:0] ch1__cfg_w7_crc_start;
+  wire [4:0] ch1__cfg_w7_crc_width;
+  wire [5:0] ch1__cfg_w7_data_bits;
+  wire ch1__cfg_w7_enable;
+  wire ch1__cfg_w7_gray;
+  wire ch1__cfg_w7_lc;
+  wire ch1__cfg_w7_nenw;
+  wire ch1__cfg_w7_signed;
   (* init = 1'h0 *)
   wire ch1__clear_counters;
   input ch1__config_error;
@@ -2457,6 +3967,12 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [15:0] ch1__count_ca_data_fault;
   wire [15:0] ch1__count_ca_no_answer;
   wire [15:0] ch1__count_ca_refused;
+  wire [15:0] ch1__count_crc_word2;
+  wire [15:0] ch1__count_crc_word3;
+  wire [15:0] ch1__count_crc_word4;
+  wire [15:0] ch1__count_crc_word5;
+  wire [15:0] ch1__count_crc_word6;
+  wire [15:0] ch1__count_crc_word7;
   input [31:0] ch1__count_data;
   wire [31:0] ch1__count_data;
   output ch1__count_en;
@@ -2477,6 +3993,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [3:0] ch1__noise_events;
   (* init = 1'h0 *)
   wire ch1__periodic;
+  input [15:0] ch1__result_updates;
+  wire [15:0] ch1__result_updates;
   wire [12:0] ch1__settled_delay;
   wire ch1__spw_mismatch;
   (* init = 1'h0 *)
@@ -2493,6 +4011,30 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1__word1_ne;
   wire ch1__word1_nw;
   wire [39:0] ch1__word1_position;
+  wire ch1__word2_crc_ok;
+  wire ch1__word2_ne;
+  wire ch1__word2_nw;
+  wire [62:0] ch1__word2_position;
+  wire ch1__word3_crc_ok;
+  wire ch1__word3_ne;
+  wire ch1__word3_nw;
+  wire [62:0] ch1__word3_position;
+  wire ch1__word4_crc_ok;
+  wire ch1__word4_ne;
+  wire ch1__word4_nw;
+  wire [62:0] ch1__word4_position;
+  wire ch1__word5_crc_ok;
+  wire ch1__word5_ne;
+  wire ch1__word5_nw;
+  wire [62:0] ch1__word5_position;
+  wire ch1__word6_crc_ok;
+  wire ch1__word6_ne;
+  wire ch1__word6_nw;
+  wire [62:0] ch1__word6_position;
+  wire ch1__word7_crc_ok;
+  wire ch1__word7_ne;
+  wire ch1__word7_nw;
+  wire [62:0] ch1__word7_position;
   wire ch1_ca_count_crc4_answer_write;
   wire ch1_ca_count_data_fault_write;
   wire ch1_ca_count_refused_aborted_write;
@@ -2509,9 +4051,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$305 ;
-  reg \ch1_ca_request_write$305  = 1'h0;
+  output \ch1_ca_request_write$452 ;
+  reg \ch1_ca_request_write$452  = 1'h0;
   wire ch1_ca_state_write;
+  wire ch1_caps_chain2_write;
+  wire ch1_caps_chain_write;
   wire ch1_caps_write;
   output [23:0] ch1_cfg_ack_ack_limit;
   reg [23:0] ch1_cfg_ack_ack_limit = 24'h000000;
@@ -2589,6 +4133,42 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [23:0] ch1_cfg_timeout_timeout_limit;
   reg [23:0] ch1_cfg_timeout_timeout_limit = 24'h000000;
   wire ch1_cfg_timeout_write;
+  reg ch1_cfg_w2_config_write = 1'h0;
+  reg ch1_cfg_w2_crc_config_write = 1'h0;
+  reg ch1_cfg_w2_crc_start_config_write = 1'h0;
+  wire ch1_cfg_w2_crc_start_write;
+  wire ch1_cfg_w2_crc_write;
+  wire ch1_cfg_w2_write;
+  reg ch1_cfg_w3_config_write = 1'h0;
+  reg ch1_cfg_w3_crc_config_write = 1'h0;
+  reg ch1_cfg_w3_crc_start_config_write = 1'h0;
+  wire ch1_cfg_w3_crc_start_write;
+  wire ch1_cfg_w3_crc_write;
+  wire ch1_cfg_w3_write;
+  reg ch1_cfg_w4_config_write = 1'h0;
+  reg ch1_cfg_w4_crc_config_write = 1'h0;
+  reg ch1_cfg_w4_crc_start_config_write = 1'h0;
+  wire ch1_cfg_w4_crc_start_write;
+  wire ch1_cfg_w4_crc_write;
+  wire ch1_cfg_w4_write;
+  reg ch1_cfg_w5_config_write = 1'h0;
+  reg ch1_cfg_w5_crc_config_write = 1'h0;
+  reg ch1_cfg_w5_crc_start_config_write = 1'h0;
+  wire ch1_cfg_w5_crc_start_write;
+  wire ch1_cfg_w5_crc_write;
+  wire ch1_cfg_w5_write;
+  reg ch1_cfg_w6_config_write = 1'h0;
+  reg ch1_cfg_w6_crc_config_write = 1'h0;
+  reg ch1_cfg_w6_crc_start_config_write = 1'h0;
+  wire ch1_cfg_w6_crc_start_write;
+  wire ch1_cfg_w6_crc_write;
+  wire ch1_cfg_w6_write;
+  reg ch1_cfg_w7_config_write = 1'h0;
+  reg ch1_cfg_w7_crc_config_write = 1'h0;
+  reg ch1_cfg_w7_crc_start_config_write = 1'h0;
+  wire ch1_cfg_w7_crc_start_write;
+  wire ch1_cfg_w7_crc_write;
+  wire ch1_cfg_w7_write;
   reg ch1_cfg_words_config_write = 1'h0;
   output [1:0] ch1_cfg_words_w0_crc;
   reg [1:0] ch1_cfg_words_w0_crc = 2'h0;
@@ -2617,6 +4197,23 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output ch1_cfg_words_w1_signed;
   reg ch1_cfg_words_w1_signed = 1'h0;
   wire ch1_cfg_words_write;
+  wire ch1_chain_flags_write;
+  wire ch1_chain_updates_write;
+  wire ch1_chain_w2_hi_write;
+  wire ch1_chain_w2_lo_write;
+  wire ch1_chain_w3_hi_write;
+  wire ch1_chain_w3_lo_write;
+  wire ch1_chain_w4_hi_write;
+  wire ch1_chain_w4_lo_write;
+  wire ch1_chain_w5_hi_write;
+  wire ch1_chain_w5_lo_write;
+  wire ch1_chain_w6_hi_write;
+  wire ch1_chain_w6_lo_write;
+  wire ch1_chain_w7_hi_write;
+  wire ch1_chain_w7_lo_write;
+  wire ch1_count_chain2_write;
+  wire ch1_count_chain3_write;
+  wire ch1_count_chain_write;
   output ch1_ctrl_abort;
   reg ch1_ctrl_abort = 1'h0;
   output ch1_ctrl_clear_counters;
@@ -2645,6 +4242,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch1_read_select_102 = 1'h0;
   reg ch1_read_select_104 = 1'h0;
   reg ch1_read_select_105 = 1'h0;
+  reg ch1_read_select_106 = 1'h0;
+  reg ch1_read_select_107 = 1'h0;
   reg ch1_read_select_108 = 1'h0;
   reg ch1_read_select_109 = 1'h0;
   reg ch1_read_select_10a = 1'h0;
@@ -2666,12 +4265,47 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch1_read_select_122 = 1'h0;
   reg ch1_read_select_123 = 1'h0;
   reg ch1_read_select_124 = 1'h0;
+  reg ch1_read_select_125 = 1'h0;
+  reg ch1_read_select_126 = 1'h0;
+  reg ch1_read_select_127 = 1'h0;
+  reg ch1_read_select_128 = 1'h0;
+  reg ch1_read_select_129 = 1'h0;
+  reg ch1_read_select_12a = 1'h0;
+  reg ch1_read_select_12c = 1'h0;
+  reg ch1_read_select_12d = 1'h0;
+  reg ch1_read_select_12e = 1'h0;
+  reg ch1_read_select_130 = 1'h0;
+  reg ch1_read_select_131 = 1'h0;
+  reg ch1_read_select_132 = 1'h0;
+  reg ch1_read_select_134 = 1'h0;
+  reg ch1_read_select_135 = 1'h0;
+  reg ch1_read_select_136 = 1'h0;
+  reg ch1_read_select_138 = 1'h0;
+  reg ch1_read_select_139 = 1'h0;
+  reg ch1_read_select_13a = 1'h0;
+  reg ch1_read_select_13c = 1'h0;
+  reg ch1_read_select_13d = 1'h0;
+  reg ch1_read_select_13e = 1'h0;
   reg ch1_read_select_140 = 1'h0;
   reg ch1_read_select_141 = 1'h0;
   reg ch1_read_select_142 = 1'h0;
   reg ch1_read_select_143 = 1'h0;
   reg ch1_read_select_144 = 1'h0;
   reg ch1_read_select_145 = 1'h0;
+  reg ch1_read_select_170 = 1'h0;
+  reg ch1_read_select_171 = 1'h0;
+  reg ch1_read_select_172 = 1'h0;
+  reg ch1_read_select_173 = 1'h0;
+  reg ch1_read_select_174 = 1'h0;
+  reg ch1_read_select_175 = 1'h0;
+  reg ch1_read_select_176 = 1'h0;
+  reg ch1_read_select_177 = 1'h0;
+  reg ch1_read_select_178 = 1'h0;
+  reg ch1_read_select_179 = 1'h0;
+  reg ch1_read_select_17a = 1'h0;
+  reg ch1_read_select_17b = 1'h0;
+  reg ch1_read_select_17c = 1'h0;
+  reg ch1_read_select_17d = 1'h0;
   reg ch1_result_line_delay_settled_snapshot = 1'h0;
   reg [7:0] ch1_result_line_delay_spread_snapshot = 8'h00;
   reg [3:0] ch1_result_line_noise_events_snapshot = 4'h0;
@@ -2730,18 +4364,18 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$6641$0 ;
-  wire [186:0] \port$6641$0 ;
-  input [79:0] \port$6652$0 ;
-  wire [79:0] \port$6652$0 ;
-  input [9:0] \port$6729$0 ;
-  wire [9:0] \port$6729$0 ;
-  input [186:0] \port$7170$0 ;
-  wire [186:0] \port$7170$0 ;
-  input [79:0] \port$7181$0 ;
-  wire [79:0] \port$7181$0 ;
-  input [9:0] \port$7258$0 ;
-  wire [9:0] \port$7258$0 ;
+  input [186:0] \port$7239$0 ;
+  wire [186:0] \port$7239$0 ;
+  input [79:0] \port$7250$0 ;
+  wire [79:0] \port$7250$0 ;
+  input [9:0] \port$7327$0 ;
+  wire [9:0] \port$7327$0 ;
+  input [186:0] \port$7770$0 ;
+  wire [186:0] \port$7770$0 ;
+  input [79:0] \port$7781$0 ;
+  wire [79:0] \port$7781$0 ;
+  input [9:0] \port$7858$0 ;
+  wire [9:0] \port$7858$0 ;
   input rst;
   wire rst;
   reg [10:0] write_addr = 11'h000;
@@ -2749,850 +4383,6 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg [31:0] write_data = 32'd0;
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
-  assign \$249  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$250  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$251  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$252  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$253  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$254  = ch1_cfg_checks_config_write & config_write_strb[3];
-  assign \$255  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$256  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$257  = ch1_cfg_crc0_config_write & config_write_strb[0];
-  assign \$258  = ch1_cfg_crc0_config_write & config_write_strb[1];
-  assign \$259  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$260  = ch1_cfg_crc0_config_write & config_write_strb[3];
-  assign \$261  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$262  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$263  = ch1_cfg_crc1_config_write & config_write_strb[0];
-  assign \$264  = ch1_cfg_crc1_config_write & config_write_strb[1];
-  assign \$265  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$266  = ch1_cfg_crc1_config_write & config_write_strb[3];
-  assign \$267  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$268  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$269  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$270  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$271  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$272  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$273  = ch1_cfg_ssi_config_write & config_write_strb[2];
-  assign \$274  = ch1_cfg_ssi_config_write & config_write_strb[3];
-  assign \$275  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$276  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$277  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$278  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$279  = write_data[0] & write_strb[0];
-  assign \$280  = ch1_ca_ctrl_write ? \$279  : 1'h0;
-  assign \$281  = write_data[1] & write_strb[0];
-  assign \$282  = ch1_ca_ctrl_write ? \$281  : 1'h0;
-  assign \$283  = bus__w_addr == 9'h100;
-  assign \$284  = bus__w_addr == 9'h101;
-  assign \$285  = bus__w_addr == 9'h102;
-  assign \$286  = bus__w_addr == 9'h104;
-  assign \$287  = bus__w_addr == 9'h105;
-  assign \$288  = bus__w_addr == 9'h108;
-  assign \$289  = bus__w_addr == 9'h109;
-  assign \$290  = bus__w_addr == 9'h10a;
-  assign \$291  = bus__w_addr == 9'h10b;
-  assign \$292  = bus__w_addr == 9'h10c;
-  assign \$293  = bus__w_addr == 9'h10d;
-  assign \$294  = bus__w_addr == 9'h10e;
-  assign \$295  = bus__w_addr == 9'h10f;
-  assign \$296  = bus__w_addr == 9'h110;
-  assign \$297  = bus__w_addr == 9'h111;
-  assign \$298  = bus__w_addr == 9'h112;
-  assign \$299  = bus__w_addr == 9'h113;
-  assign \$300  = bus__w_addr == 9'h114;
-  assign \$301  = bus__w_addr == 9'h115;
-  assign \$302  = bus__w_addr == 9'h116;
-  assign \$303  = bus__w_addr == 9'h117;
-  assign \$304  = bus__w_addr == 9'h120;
-  assign \$305  = bus__w_addr == 9'h121;
-  assign \$306  = bus__w_addr == 9'h122;
-  assign \$307  = bus__w_addr == 9'h123;
-  assign \$308  = bus__w_addr == 9'h124;
-  assign \$309  = bus__w_addr == 9'h140;
-  assign \$310  = bus__w_addr == 9'h141;
-  assign \$311  = bus__w_addr == 9'h142;
-  assign \$312  = bus__w_addr == 9'h143;
-  assign \$313  = bus__w_addr == 9'h144;
-  assign \$314  = bus__w_addr == 9'h145;
-  assign \$315  = ch1_read_select_110 & bus__r_load;
-  assign \$316  = bus__w_addr[10:3] == 6'h23;
-  assign \$317  = bus__r_en & \$316 ;
-  assign \$318  = bus__w_addr[10:4] == 5'h16;
-  assign \$319  = bus__r_en & \$318 ;
-  assign \$320  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$322  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$323  = \$321  | \$322 ;
-  assign \$324  = ch1_read_select_102 ? 32'd253241399 : 32'd0;
-  assign \$325  = \$323  | \$324 ;
-  assign \$326  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
-  assign \$327  = \$325  | \$326 ;
-  assign \$328  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
-  assign \$329  = \$327  | \$328 ;
-  assign \$330  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
-  assign \$331  = \$329  | \$330 ;
-  assign \$332  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
-  assign \$333  = \$331  | \$332 ;
-  assign \$334  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
-  assign \$335  = \$333  | \$334 ;
-  assign \$336  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
-  assign \$337  = \$335  | \$336 ;
-  assign \$338  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$339  = \$337  | \$338 ;
-  assign \$340  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 3'h0, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 4'h0, ch1_cfg_words_w0_signed, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
-  assign \$341  = \$339  | \$340 ;
-  assign \$342  = ch1_read_select_10e ? { 4'h0, ch1_cfg_checks_confirm_frames, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
-  assign \$343  = \$341  | \$342 ;
-  assign \$344  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
-  assign \$345  = \$343  | \$344 ;
-  assign \$346  = ch1_read_select_110 ? { 2'h0, \port$7170$0 [182:177], 4'h0, \port$7170$0 [186:183], 1'h0, \port$7170$0 [176:174], 1'h0, \port$7170$0 [133:131], 3'h0, \port$7170$0 [49], \port$7170$0 [3:0] } : 32'd0;
-  assign \$347  = \$345  | \$346 ;
-  assign \$348  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
-  assign \$349  = \$347  | \$348 ;
-  assign \$350  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
-  assign \$351  = \$349  | \$350 ;
-  assign \$352  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$353  = \$351  | \$352 ;
-  assign \$354  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
-  assign \$355  = \$353  | \$354 ;
-  assign \$356  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$357  = \$355  | \$356 ;
-  assign \$358  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
-  assign \$359  = \$357  | \$358 ;
-  assign \$360  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
-  assign \$361  = \$359  | \$360 ;
-  assign \$362  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
-  assign \$363  = \$361  | \$362 ;
-  assign \$364  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
-  assign \$365  = \$363  | \$364 ;
-  assign \$366  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
-  assign \$367  = \$365  | \$366 ;
-  assign \$368  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
-  assign \$369  = \$367  | \$368 ;
-  assign \$370  = ch1_read_select_124 ? { 4'h0, ch1_cfg_ssi_ssi_delay, 12'h000, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi } : 32'd0;
-  assign \$371  = \$369  | \$370 ;
-  assign \$372  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$305 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
-  assign \$373  = \$371  | \$372 ;
-  assign \$376  = ch1_read_select_142 ? { 17'h00000, \port$7258$0 [9:3], 1'h0, \port$7258$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
-  assign \$377  = \$375  | \$376 ;
-  assign \$378  = ch1_read_select_143 ? \port$7181$0 [31:0] : 32'd0;
-  assign \$379  = \$377  | \$378 ;
-  assign \$380  = ch1_read_select_144 ? \port$7181$0 [63:32] : 32'd0;
-  assign \$381  = \$379  | \$380 ;
-  assign \$382  = ch1_read_select_145 ? { 16'h0000, \port$7181$0 [79:64] } : 32'd0;
-  assign \$383  = \$381  | \$382 ;
-  assign \$384  = ch1_window0_read ? ch1__count_data : 32'd0;
-  assign \$385  = \$383  | \$384 ;
-  assign \$386  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
-  assign \$387  = \$385  | \$386 ;
-  assign \$388  = ! write_addr;
-  assign g_id_write = write_en & \$388 ;
-  assign \$389  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$389 ;
-  assign \$390  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$390 ;
-  assign \$391  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$391 ;
-  assign \$392  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$392 ;
-  assign \$393  = bus__w_addr[10:3] == 5'h13;
-  assign ch0__count_en = bus__r_en & \$393 ;
-  assign \$394  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$394 ;
-  assign \$395  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$395 ;
-  assign \$396  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$396 ;
-  assign \$397  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$397 ;
-  assign \$398  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$398 ;
-  assign \$399  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$399 ;
-  assign \$400  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$400 ;
-  assign \$401  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$401 ;
-  assign \$402  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$402 ;
-  assign \$403  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$403 ;
-  assign \$404  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$404 ;
-  assign \$405  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$405 ;
-  assign \$406  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$406 ;
-  assign \$407  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$407 ;
-  assign \$408  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$408 ;
-  assign \$409  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$409 ;
-  assign \$410  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$410 ;
-  assign \$411  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$411 ;
-  assign \$412  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$412 ;
-  assign \$413  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$413 ;
-  assign \$414  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$414 ;
-  assign \$415  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$415 ;
-  assign \$416  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$416 ;
-  assign \$417  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$417 ;
-  assign \$418  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$418 ;
-  assign \$419  = write_addr == 8'ha4;
-  assign ch0_cfg_ssi_write = write_en & \$419 ;
-  assign \$420  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$420 ;
-  assign \$421  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$421 ;
-  assign \$422  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$422 ;
-  assign \$423  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$423 ;
-  assign \$424  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$424 ;
-  assign \$425  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$425 ;
-  assign \$426  = write_addr[10:4] == 4'hd;
-  assign \$427  = write_en & \$426 ;
-  assign ch0__ca_wbuf_en = \$427  ? write_strb : 4'h0;
-  assign \$428  = bus__w_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$428 ;
-  assign \$429  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$431  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$433  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$434 , \$432 , \$430  };
-  assign \$435  = bus__w_addr[10:3] == 6'h23;
-  assign ch1__count_en = bus__r_en & \$435 ;
-  assign \$436  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$436 ;
-  assign \$437  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$437 ;
-  assign \$438  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$438 ;
-  assign \$439  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$439 ;
-  assign \$440  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$440 ;
-  assign \$441  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$441 ;
-  assign \$442  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$442 ;
-  assign \$443  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$443 ;
-  assign \$444  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$444 ;
-  assign \$445  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$445 ;
-  assign \$446  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$446 ;
-  assign \$447  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$447 ;
-  assign \$448  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$448 ;
-  assign \$449  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$449 ;
-  assign \$450  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$450 ;
-  assign \$451  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$451 ;
-  assign \$452  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$452 ;
-  assign \$453  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$453 ;
-  assign \$454  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$454 ;
-  assign \$455  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$455 ;
-  assign \$456  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$456 ;
-  assign \$457  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$457 ;
-  assign \$458  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$458 ;
-  assign \$459  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$459 ;
-  assign \$460  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$460 ;
-  assign \$461  = write_addr == 9'h124;
-  assign ch1_cfg_ssi_write = write_en & \$461 ;
-  assign \$462  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$462 ;
-  assign \$463  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$463 ;
-  assign \$464  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$464 ;
-  assign \$465  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$465 ;
-  assign \$466  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$466 ;
-  assign \$467  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$467 ;
-  assign \$468  = write_addr[10:4] == 5'h15;
-  assign \$469  = write_en & \$468 ;
-  assign ch1__ca_wbuf_en = \$469  ? write_strb : 4'h0;
-  assign \$470  = bus__w_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$470 ;
-  assign \$471  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$473  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$475  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$476 , \$474 , \$472  };
-  assign \$478  = \$477  | ch0_read_data;
-  assign bus__r_data = \$478  | ch1_read_data;
-  always @(posedge clk)
-    write_en <= \$479 ;
-  always @(posedge clk)
-    write_addr <= \$480 ;
-  always @(posedge clk)
-    write_data <= \$481 ;
-  always @(posedge clk)
-    write_strb <= \$482 ;
-  always @(posedge clk)
-    config_write_data <= \$483 ;
-  always @(posedge clk)
-    config_write_strb <= \$484 ;
-  always @(posedge clk)
-    g_trigger_start <= \$485 ;
-  always @(posedge clk)
-    g_read_select_0 <= \$486 ;
-  always @(posedge clk)
-    g_read_select_1 <= \$487 ;
-  always @(posedge clk)
-    g_read_select_2 <= \$488 ;
-  always @(posedge clk)
-    g_read_select_3 <= \$489 ;
-  always @(posedge clk)
-    g_read_select_4 <= \$490 ;
-  always @(posedge clk)
-    g_read_data <= \$491 ;
-  always @(posedge clk)
-    ch0_ctrl_start <= \$492 ;
-  always @(posedge clk)
-    ch0_ctrl_abort <= \$493 ;
-  always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$494 ;
-  always @(posedge clk)
-    ch0_ctrl_periodic <= \$495 ;
-  always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$496 ;
-  always @(posedge clk)
-    ch0_irq_status_done <= \$497 ;
-  always @(posedge clk)
-    ch0_irq_status_error <= \$498 ;
-  always @(posedge clk)
-    ch0_irq_status_access_done <= \$499 ;
-  always @(posedge clk)
-    ch0_irq_enable_config_write <= \$500 ;
-  always @(posedge clk)
-    ch0_irq_enable_done <= \$501 ;
-  always @(posedge clk)
-    ch0_irq_enable_error <= \$502 ;
-  always @(posedge clk)
-    ch0_irq_enable_access_done <= \$503 ;
-  always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$504 ;
-  always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$505 ;
-  always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$506 ;
-  always @(posedge clk)
-    ch0_cfg_period_config_write <= \$507 ;
-  always @(posedge clk)
-    ch0_cfg_period_request_period <= \$508 ;
-  always @(posedge clk)
-    ch0_cfg_break_config_write <= \$509 ;
-  always @(posedge clk)
-    ch0_cfg_break_break_time <= \$510 ;
-  always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$511 ;
-  always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$512 ;
-  always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$513 ;
-  always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$514 ;
-  always @(posedge clk)
-    ch0_cfg_words_config_write <= \$515 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$516 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$517 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$518 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$519 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$520 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_signed <= \$521 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$522 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$523 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$524 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$525 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$526 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_signed <= \$527 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$528 ;
-  always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$529 ;
-  always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$530 ;
-  always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$531 ;
-  always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$532 ;
-  always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$533 ;
-  always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$534 ;
-  always @(posedge clk)
-    ch0_cfg_checks_confirm_frames <= \$535 ;
-  always @(posedge clk)
-    ch0_cfg_quiet_config_write <= \$536 ;
-  always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$537 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_config_write <= \$538 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_poly <= \$539 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$540 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_inverted <= \$541 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_start_config_write <= \$542 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_start_w0_crc_start <= \$543 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_config_write <= \$544 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_poly <= \$545 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$546 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_inverted <= \$547 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_start_config_write <= \$548 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_start_w1_crc_start <= \$549 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_config_write <= \$550 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi <= \$551 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_error <= \$552 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_error_low <= \$553 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_double <= \$554 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_delay <= \$555 ;
-  always @(posedge clk)
-    ch0_ca_request_config_write <= \$556 ;
-  always @(posedge clk)
-    ch0_ca_request_slave_id <= \$557 ;
-  always @(posedge clk)
-    ch0_ca_request_address <= \$558 ;
-  always @(posedge clk)
-    ch0_ca_request_count <= \$559 ;
-  always @(posedge clk)
-    \ch0_ca_request_write$113  <= \$560 ;
-  always @(posedge clk)
-    ch0_ca_ctrl_start <= \$561 ;
-  always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$562 ;
-  always @(posedge clk)
-    ch0_read_select_80 <= \$563 ;
-  always @(posedge clk)
-    ch0_read_select_81 <= \$564 ;
-  always @(posedge clk)
-    ch0_read_select_82 <= \$565 ;
-  always @(posedge clk)
-    ch0_read_select_84 <= \$566 ;
-  always @(posedge clk)
-    ch0_read_select_85 <= \$567 ;
-  always @(posedge clk)
-    ch0_read_select_88 <= \$568 ;
-  always @(posedge clk)
-    ch0_read_select_89 <= \$569 ;
-  always @(posedge clk)
-    ch0_read_select_8a <= \$570 ;
-  always @(posedge clk)
-    ch0_read_select_8b <= \$571 ;
-  always @(posedge clk)
-    ch0_read_select_8c <= \$572 ;
-  always @(posedge clk)
-    ch0_read_select_8d <= \$573 ;
-  always @(posedge clk)
-    ch0_read_select_8e <= \$574 ;
-  always @(posedge clk)
-    ch0_read_select_8f <= \$575 ;
-  always @(posedge clk)
-    ch0_read_select_90 <= \$576 ;
-  always @(posedge clk)
-    ch0_read_select_91 <= \$577 ;
-  always @(posedge clk)
-    ch0_read_select_92 <= \$578 ;
-  always @(posedge clk)
-    ch0_read_select_93 <= \$579 ;
-  always @(posedge clk)
-    ch0_read_select_94 <= \$580 ;
-  always @(posedge clk)
-    ch0_read_select_95 <= \$581 ;
-  always @(posedge clk)
-    ch0_read_select_96 <= \$582 ;
-  always @(posedge clk)
-    ch0_read_select_97 <= \$583 ;
-  always @(posedge clk)
-    ch0_read_select_a0 <= \$584 ;
-  always @(posedge clk)
-    ch0_read_select_a1 <= \$585 ;
-  always @(posedge clk)
-    ch0_read_select_a2 <= \$586 ;
-  always @(posedge clk)
-    ch0_read_select_a3 <= \$587 ;
-  always @(posedge clk)
-    ch0_read_select_a4 <= \$588 ;
-  always @(posedge clk)
-    ch0_read_select_c0 <= \$589 ;
-  always @(posedge clk)
-    ch0_read_select_c1 <= \$590 ;
-  always @(posedge clk)
-    ch0_read_select_c2 <= \$591 ;
-  always @(posedge clk)
-    ch0_read_select_c3 <= \$592 ;
-  always @(posedge clk)
-    ch0_read_select_c4 <= \$593 ;
-  always @(posedge clk)
-    ch0_read_select_c5 <= \$594 ;
-  always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$595 ;
-  always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$596 ;
-  always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$597 ;
-  always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$598 ;
-  always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$599 ;
-  always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$600 ;
-  always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$601 ;
-  always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$602 ;
-  always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$603 ;
-  always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$604 ;
-  always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$605 ;
-  always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$606 ;
-  always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$607 ;
-  always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$608 ;
-  always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$609 ;
-  always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$610 ;
-  always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$611 ;
-  always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$612 ;
-  always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$613 ;
-  always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$614 ;
-  always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$615 ;
-  always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$616 ;
-  always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$617 ;
-  always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$618 ;
-  always @(posedge clk)
-    ch0_window0_read <= \$619 ;
-  always @(posedge clk)
-    ch0_window1_read <= \$620 ;
-  always @(posedge clk)
-    ch0_read_data <= \$621 ;
-  always @(posedge clk)
-    ch1_ctrl_start <= \$622 ;
-  always @(posedge clk)
-    ch1_ctrl_abort <= \$623 ;
-  always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$624 ;
-  always @(posedge clk)
-    ch1_ctrl_periodic <= \$625 ;
-  always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$626 ;
-  always @(posedge clk)
-    ch1_irq_status_done <= \$627 ;
-  always @(posedge clk)
-    ch1_irq_status_error <= \$628 ;
-  always @(posedge clk)
-    ch1_irq_status_access_done <= \$629 ;
-  always @(posedge clk)
-    ch1_irq_enable_config_write <= \$630 ;
-  always @(posedge clk)
-    ch1_irq_enable_done <= \$631 ;
-  always @(posedge clk)
-    ch1_irq_enable_error <= \$632 ;
-  always @(posedge clk)
-    ch1_irq_enable_access_done <= \$633 ;
-  always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$634 ;
-  always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$635 ;
-  always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$636 ;
-  always @(posedge clk)
-    ch1_cfg_period_config_write <= \$637 ;
-  always @(posedge clk)
-    ch1_cfg_period_request_period <= \$638 ;
-  always @(posedge clk)
-    ch1_cfg_break_config_write <= \$639 ;
-  always @(posedge clk)
-    ch1_cfg_break_break_time <= \$640 ;
-  always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$641 ;
-  always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$642 ;
-  always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$643 ;
-  always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$644 ;
-  always @(posedge clk)
-    ch1_cfg_words_config_write <= \$645 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$646 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$647 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$648 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$649 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$650 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_signed <= \$651 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$652 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$653 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$654 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$655 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$656 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_signed <= \$657 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$658 ;
-  always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$659 ;
-  always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$660 ;
-  always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$661 ;
-  always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$662 ;
-  always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$663 ;
-  always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$664 ;
-  always @(posedge clk)
-    ch1_cfg_checks_confirm_frames <= \$665 ;
-  always @(posedge clk)
-    ch1_cfg_quiet_config_write <= \$666 ;
-  always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$667 ;
-  always @(posedge clk)
-    ch1_cfg_crc0_config_write <= \$668 ;
-  always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_poly <= \$669 ;
-  always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$670 ;
-  always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_inverted <= \$671 ;
-  always @(posedge clk)
-    ch1_cfg_crc0_start_config_write <= \$672 ;
-  always @(posedge clk)
-    ch1_cfg_crc0_start_w0_crc_start <= \$673 ;
-  always @(posedge clk)
-    ch1_cfg_crc1_config_write <= \$674 ;
-  always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_poly <= \$675 ;
-  always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$676 ;
-  always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_inverted <= \$677 ;
-  always @(posedge clk)
-    ch1_cfg_crc1_start_config_write <= \$678 ;
-  always @(posedge clk)
-    ch1_cfg_crc1_start_w1_crc_start <= \$679 ;
-  always @(posedge clk)
-    ch1_cfg_ssi_config_write <= \$680 ;
-  always @(posedge clk)
-    ch1_cfg_ssi_ssi <= \$681 ;
-  always @(posedge clk)
-    ch1_cfg_ssi_ssi_error <= \$682 ;
-  always @(posedge clk)
-    ch1_cfg_ssi_ssi_error_low <= \$683 ;
-  always @(posedge clk)
-    ch1_cfg_ssi_ssi_double <= \$684 ;
-  always @(posedge clk)
-    ch1_cfg_ssi_ssi_delay <= \$685 ;
-  always @(posedge clk)
-    ch1_ca_request_config_write <= \$686 ;
-  always @(posedge clk)
-    ch1_ca_request_slave_id <= \$687 ;
-  always @(posedge clk)
-    ch1_ca_request_address <= \$688 ;
-  always @(posedge clk)
-    ch1_ca_request_count <= \$689 ;
-  always @(posedge clk)
-    \ch1_ca_request_write$305  <= \$690 ;
-  always @(posedge clk)
-    ch1_ca_ctrl_start <= \$691 ;
-  always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$692 ;
-  always @(posedge clk)
-    ch1_read_select_100 <= \$693 ;
-  always @(posedge clk)
-    ch1_read_select_101 <= \$694 ;
-  always @(posedge clk)
-    ch1_read_select_102 <= \$695 ;
-  always @(posedge clk)
-    ch1_read_select_104 <= \$696 ;
-  always @(posedge clk)
-    ch1_read_select_105 <= \$697 ;
-  always @(posedge clk)
-    ch1_read_select_108 <= \$698 ;
-  always @(posedge clk)
-    ch1_read_select_109 <= \$699 ;
-  always @(posedge clk)
-    ch1_read_select_10a <= \$700 ;
-  always @(posedge clk)
-    ch1_read_select_10b <= \$701 ;
-  always @(posedge clk)
-    ch1_read_select_10c <= \$702 ;
-  always @(posedge clk)
-    ch1_read_select_10d <= \$703 ;
-  always @(posedge clk)
-    ch1_read_select_10e <= \$704 ;
-  always @(posedge clk)
-    ch1_read_select_10f <= \$705 ;
-  always @(posedge clk)
-    ch1_read_select_110 <= \$706 ;
-  always @(posedge clk)
-    ch1_read_select_111 <= \$707 ;
-  always @(posedge clk)
-    ch1_read_select_112 <= \$708 ;
-  always @(posedge clk)
-    ch1_read_select_113 <= \$709 ;
-  always @(posedge clk)
-    ch1_read_select_114 <= \$710 ;
-  always @(posedge clk)
-    ch1_read_select_115 <= \$711 ;
-  always @(posedge clk)
-    ch1_read_select_116 <= \$712 ;
-  always @(posedge clk)
-    ch1_read_select_117 <= \$713 ;
-  always @(posedge clk)
-    ch1_read_select_120 <= \$714 ;
-  always @(posedge clk)
-    ch1_read_select_121 <= \$715 ;
-  always @(posedge clk)
-    ch1_read_select_122 <= \$716 ;
-  always @(posedge clk)
-    ch1_read_select_123 <= \$717 ;
-  always @(posedge clk)
-    ch1_read_select_124 <= \$718 ;
-  always @(posedge clk)
-    ch1_read_select_140 <= \$719 ;
-  always @(posedge clk)
-    ch1_read_select_141 <= \$720 ;
-  always @(posedge clk)
-    ch1_read_select_142 <= \$721 ;
-  always @(posedge clk)
-    ch1_read_select_143 <= \$722 ;
-  always @(posedge clk)
-    ch1_read_select_144 <= \$723 ;
-  always @(posedge clk)
-    ch1_read_select_145 <= \$724 ;
-  always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$725 ;
-  always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$726 ;
-  always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$727 ;
-  always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$728 ;
-  always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$729 ;
-  always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$730 ;
-  always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$731 ;
-  always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$732 ;
-  always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$733 ;
-  always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$734 ;
-  always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$735 ;
-  always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$736 ;
-  always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$737 ;
-  always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$738 ;
-  always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$739 ;
-  always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$740 ;
-  always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$741 ;
-  always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$742 ;
-  always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$743 ;
-  always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$744 ;
-  always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$745 ;
-  always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$746 ;
-  always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$747 ;
-  always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$748 ;
-  always @(posedge clk)
-    ch1_window0_read <= \$749 ;
-  always @(posedge clk)
-    ch1_window1_read <= \$750 ;
-  always @(posedge clk)
-    ch1_read_data <= \$751 ;
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__w_addr;
@@ -3692,2885 +4482,5167 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$100  = bus__w_addr == 8'h82;
   assign \$101  = bus__w_addr == 8'h84;
   assign \$102  = bus__w_addr == 8'h85;
-  assign \$103  = bus__w_addr == 8'h88;
-  assign \$104  = bus__w_addr == 8'h89;
-  assign \$105  = bus__w_addr == 8'h8a;
-  assign \$106  = bus__w_addr == 8'h8b;
-  assign \$107  = bus__w_addr == 8'h8c;
-  assign \$108  = bus__w_addr == 8'h8d;
-  assign \$109  = bus__w_addr == 8'h8e;
-  assign \$110  = bus__w_addr == 8'h8f;
-  assign \$111  = bus__w_addr == 8'h90;
-  assign \$112  = bus__w_addr == 8'h91;
-  assign \$113  = bus__w_addr == 8'h92;
-  assign \$114  = bus__w_addr == 8'h93;
-  assign \$115  = bus__w_addr == 8'h94;
-  assign \$116  = bus__w_addr == 8'h95;
-  assign \$117  = bus__w_addr == 8'h96;
-  assign \$118  = bus__w_addr == 8'h97;
-  assign \$119  = bus__w_addr == 8'ha0;
-  assign \$120  = bus__w_addr == 8'ha1;
-  assign \$121  = bus__w_addr == 8'ha2;
-  assign \$122  = bus__w_addr == 8'ha3;
-  assign \$123  = bus__w_addr == 8'ha4;
-  assign \$124  = bus__w_addr == 8'hc0;
-  assign \$125  = bus__w_addr == 8'hc1;
-  assign \$126  = bus__w_addr == 8'hc2;
-  assign \$127  = bus__w_addr == 8'hc3;
-  assign \$128  = bus__w_addr == 8'hc4;
-  assign \$129  = bus__w_addr == 8'hc5;
-  assign \$130  = ch0_read_select_90 & bus__r_load;
-  assign \$131  = bus__w_addr[10:3] == 5'h13;
-  assign \$132  = bus__r_en & \$131 ;
-  assign \$133  = bus__w_addr[10:4] == 4'he;
-  assign \$134  = bus__r_en & \$133 ;
-  assign \$135  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$137  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$138  = \$136  | \$137 ;
-  assign \$139  = ch0_read_select_82 ? 32'd253241399 : 32'd0;
-  assign \$140  = \$138  | \$139 ;
-  assign \$141  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
-  assign \$142  = \$140  | \$141 ;
-  assign \$143  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
-  assign \$144  = \$142  | \$143 ;
-  assign \$145  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
-  assign \$146  = \$144  | \$145 ;
-  assign \$147  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
-  assign \$148  = \$146  | \$147 ;
-  assign \$149  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
-  assign \$150  = \$148  | \$149 ;
-  assign \$151  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
-  assign \$152  = \$150  | \$151 ;
-  assign \$153  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$154  = \$152  | \$153 ;
-  assign \$155  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 3'h0, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 4'h0, ch0_cfg_words_w0_signed, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
-  assign \$156  = \$154  | \$155 ;
-  assign \$157  = ch0_read_select_8e ? { 4'h0, ch0_cfg_checks_confirm_frames, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
-  assign \$158  = \$156  | \$157 ;
-  assign \$159  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
-  assign \$160  = \$158  | \$159 ;
-  assign \$161  = ch0_read_select_90 ? { 2'h0, \port$6641$0 [182:177], 4'h0, \port$6641$0 [186:183], 1'h0, \port$6641$0 [176:174], 1'h0, \port$6641$0 [133:131], 3'h0, \port$6641$0 [49], \port$6641$0 [3:0] } : 32'd0;
-  assign \$162  = \$160  | \$161 ;
-  assign \$163  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
-  assign \$164  = \$162  | \$163 ;
-  assign \$165  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
-  assign \$166  = \$164  | \$165 ;
-  assign \$167  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$168  = \$166  | \$167 ;
-  assign \$169  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
-  assign \$170  = \$168  | \$169 ;
-  assign \$171  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$172  = \$170  | \$171 ;
-  assign \$173  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
-  assign \$174  = \$172  | \$173 ;
-  assign \$175  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
-  assign \$176  = \$174  | \$175 ;
-  assign \$177  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
-  assign \$178  = \$176  | \$177 ;
-  assign \$179  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
-  assign \$180  = \$178  | \$179 ;
-  assign \$181  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
-  assign \$182  = \$180  | \$181 ;
-  assign \$183  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
-  assign \$184  = \$182  | \$183 ;
-  assign \$185  = ch0_read_select_a4 ? { 4'h0, ch0_cfg_ssi_ssi_delay, 12'h000, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi } : 32'd0;
-  assign \$186  = \$184  | \$185 ;
-  assign \$187  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$113 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
-  assign \$188  = \$186  | \$187 ;
-  assign \$191  = ch0_read_select_c2 ? { 17'h00000, \port$6729$0 [9:3], 1'h0, \port$6729$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$192  = \$190  | \$191 ;
-  assign \$193  = ch0_read_select_c3 ? \port$6652$0 [31:0] : 32'd0;
-  assign \$194  = \$192  | \$193 ;
-  assign \$195  = ch0_read_select_c4 ? \port$6652$0 [63:32] : 32'd0;
-  assign \$196  = \$194  | \$195 ;
-  assign \$197  = ch0_read_select_c5 ? { 16'h0000, \port$6652$0 [79:64] } : 32'd0;
-  assign \$198  = \$196  | \$197 ;
-  assign \$199  = ch0_window0_read ? ch0__count_data : 32'd0;
-  assign \$200  = \$198  | \$199 ;
-  assign \$201  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$202  = \$200  | \$201 ;
-  assign \$203  = write_data[0] & write_strb[0];
-  assign \$204  = ch1_ctrl_write ? \$203  : 1'h0;
-  assign \$205  = write_data[1] & write_strb[0];
-  assign \$206  = ch1_ctrl_write ? \$205  : 1'h0;
-  assign \$207  = write_data[2] & write_strb[0];
-  assign \$208  = ch1_ctrl_write ? \$207  : 1'h0;
-  assign \$209  = ch1_ctrl_write & write_strb[1];
-  assign \$210  = ch1_ctrl_write & write_strb[1];
-  assign \$211  = write_data[0] & write_strb[0];
-  assign \$212  = ch1_irq_status_write ? \$211  : 1'h0;
-  assign \$213  = write_data[1] & write_strb[0];
-  assign \$214  = ch1_irq_status_write ? \$213  : 1'h0;
-  assign \$215  = write_data[2] & write_strb[0];
-  assign \$216  = ch1_irq_status_write ? \$215  : 1'h0;
-  assign \$217  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$218  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$219  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$220  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$221  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$222  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$223  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$224  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$225  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$226  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$227  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$228  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$229  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$230  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$231  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$232  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$233  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$234  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$235  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$236  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$237  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$238  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$239  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$240  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$241  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$242  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$243  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$244  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$245  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$246  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$247  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$248  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$103  = bus__w_addr == 8'h86;
+  assign \$104  = bus__w_addr == 8'h87;
+  assign \$105  = bus__w_addr == 8'h88;
+  assign \$106  = bus__w_addr == 8'h89;
+  assign \$107  = bus__w_addr == 8'h8a;
+  assign \$108  = bus__w_addr == 8'h8b;
+  assign \$109  = bus__w_addr == 8'h8c;
+  assign \$110  = bus__w_addr == 8'h8d;
+  assign \$111  = bus__w_addr == 8'h8e;
+  assign \$112  = bus__w_addr == 8'h8f;
+  assign \$113  = bus__w_addr == 8'h90;
+  assign \$114  = bus__w_addr == 8'h91;
+  assign \$115  = bus__w_addr == 8'h92;
+  assign \$116  = bus__w_addr == 8'h93;
+  assign \$117  = bus__w_addr == 8'h94;
+  assign \$118  = bus__w_addr == 8'h95;
+  assign \$119  = bus__w_addr == 8'h96;
+  assign \$120  = bus__w_addr == 8'h97;
+  assign \$121  = bus__w_addr == 8'ha0;
+  assign \$122  = bus__w_addr == 8'ha1;
+  assign \$123  = bus__w_addr == 8'ha2;
+  assign \$124  = bus__w_addr == 8'ha3;
+  assign \$125  = bus__w_addr == 8'ha4;
+  assign \$126  = bus__w_addr == 8'ha5;
+  assign \$127  = bus__w_addr == 8'ha6;
+  assign \$128  = bus__w_addr == 8'ha7;
+  assign \$129  = bus__w_addr == 8'ha8;
+  assign \$130  = bus__w_addr == 8'ha9;
+  assign \$131  = bus__w_addr == 8'haa;
+  assign \$132  = bus__w_addr == 8'hac;
+  assign \$133  = bus__w_addr == 8'had;
+  assign \$134  = bus__w_addr == 8'hae;
+  assign \$135  = bus__w_addr == 8'hb0;
+  assign \$136  = bus__w_addr == 8'hb1;
+  assign \$137  = bus__w_addr == 8'hb2;
+  assign \$138  = bus__w_addr == 8'hb4;
+  assign \$139  = bus__w_addr == 8'hb5;
+  assign \$140  = bus__w_addr == 8'hb6;
+  assign \$141  = bus__w_addr == 8'hb8;
+  assign \$142  = bus__w_addr == 8'hb9;
+  assign \$143  = bus__w_addr == 8'hba;
+  assign \$144  = bus__w_addr == 8'hbc;
+  assign \$145  = bus__w_addr == 8'hbd;
+  assign \$146  = bus__w_addr == 8'hbe;
+  assign \$147  = bus__w_addr == 8'hc0;
+  assign \$148  = bus__w_addr == 8'hc1;
+  assign \$149  = bus__w_addr == 8'hc2;
+  assign \$150  = bus__w_addr == 8'hc3;
+  assign \$151  = bus__w_addr == 8'hc4;
+  assign \$152  = bus__w_addr == 8'hc5;
+  assign \$153  = bus__w_addr == 8'hf0;
+  assign \$154  = bus__w_addr == 8'hf1;
+  assign \$155  = bus__w_addr == 8'hf2;
+  assign \$156  = bus__w_addr == 8'hf3;
+  assign \$157  = bus__w_addr == 8'hf4;
+  assign \$158  = bus__w_addr == 8'hf5;
+  assign \$159  = bus__w_addr == 8'hf6;
+  assign \$160  = bus__w_addr == 8'hf7;
+  assign \$161  = bus__w_addr == 8'hf8;
+  assign \$162  = bus__w_addr == 8'hf9;
+  assign \$163  = bus__w_addr == 8'hfa;
+  assign \$164  = bus__w_addr == 8'hfb;
+  assign \$165  = bus__w_addr == 8'hfc;
+  assign \$166  = bus__w_addr == 8'hfd;
+  assign \$167  = ch0_read_select_90 & bus__r_load;
+  assign \$168  = bus__w_addr[10:3] == 5'h13;
+  assign \$169  = bus__r_en & \$168 ;
+  assign \$170  = bus__w_addr[10:4] == 4'he;
+  assign \$171  = bus__r_en & \$170 ;
+  assign \$172  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$174  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$175  = \$173  | \$174 ;
+  assign \$176  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
+  assign \$177  = \$175  | \$176 ;
+  assign \$178  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$179  = \$177  | \$178 ;
+  assign \$180  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
+  assign \$181  = \$179  | \$180 ;
+  assign \$186  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
+  assign \$187  = \$185  | \$186 ;
+  assign \$188  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
+  assign \$189  = \$187  | \$188 ;
+  assign \$190  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
+  assign \$191  = \$189  | \$190 ;
+  assign \$192  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
+  assign \$193  = \$191  | \$192 ;
+  assign \$194  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$195  = \$193  | \$194 ;
+  assign \$196  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 3'h0, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 4'h0, ch0_cfg_words_w0_signed, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
+  assign \$197  = \$195  | \$196 ;
+  assign \$198  = ch0_read_select_8e ? { 4'h0, ch0_cfg_checks_confirm_frames, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
+  assign \$199  = \$197  | \$198 ;
+  assign \$200  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
+  assign \$201  = \$199  | \$200 ;
+  assign \$202  = ch0_read_select_90 ? { 2'h0, \port$7239$0 [182:177], 4'h0, \port$7239$0 [186:183], 1'h0, \port$7239$0 [176:174], 1'h0, \port$7239$0 [133:131], 3'h0, \port$7239$0 [49], \port$7239$0 [3:0] } : 32'd0;
+  assign \$203  = \$201  | \$202 ;
+  assign \$204  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$205  = \$203  | \$204 ;
+  assign \$206  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$207  = \$205  | \$206 ;
+  assign \$208  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$209  = \$207  | \$208 ;
+  assign \$210  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$211  = \$209  | \$210 ;
+  assign \$212  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$213  = \$211  | \$212 ;
+  assign \$214  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$215  = \$213  | \$214 ;
+  assign \$216  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
+  assign \$217  = \$215  | \$216 ;
+  assign \$218  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
+  assign \$219  = \$217  | \$218 ;
+  assign \$220  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
+  assign \$221  = \$219  | \$220 ;
+  assign \$222  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
+  assign \$223  = \$221  | \$222 ;
+  assign \$224  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
+  assign \$225  = \$223  | \$224 ;
+  assign \$226  = ch0_read_select_a4 ? { 4'h0, ch0_cfg_ssi_ssi_delay, 12'h000, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi } : 32'd0;
+  assign \$227  = \$225  | \$226 ;
+  assign \$270  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$149 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
+  assign \$271  = \$269  | \$270 ;
+  assign \$274  = ch0_read_select_c2 ? { 17'h00000, \port$7327$0 [9:3], 1'h0, \port$7327$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$275  = \$273  | \$274 ;
+  assign \$276  = ch0_read_select_c3 ? \port$7250$0 [31:0] : 32'd0;
+  assign \$277  = \$275  | \$276 ;
+  assign \$278  = ch0_read_select_c4 ? \port$7250$0 [63:32] : 32'd0;
+  assign \$279  = \$277  | \$278 ;
+  assign \$280  = ch0_read_select_c5 ? { 16'h0000, \port$7250$0 [79:64] } : 32'd0;
+  assign \$281  = \$279  | \$280 ;
+  assign \$282  = ch0_read_select_f0 ? { 16'h0000, ch0__result_updates } : 32'd0;
+  assign \$283  = \$281  | \$282 ;
+  assign \$310  = ch0_window0_read ? ch0__count_data : 32'd0;
+  assign \$311  = \$309  | \$310 ;
+  assign \$312  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$313  = \$311  | \$312 ;
+  assign \$314  = write_data[0] & write_strb[0];
+  assign \$315  = ch1_ctrl_write ? \$314  : 1'h0;
+  assign \$316  = write_data[1] & write_strb[0];
+  assign \$317  = ch1_ctrl_write ? \$316  : 1'h0;
+  assign \$318  = write_data[2] & write_strb[0];
+  assign \$319  = ch1_ctrl_write ? \$318  : 1'h0;
+  assign \$320  = ch1_ctrl_write & write_strb[1];
+  assign \$321  = ch1_ctrl_write & write_strb[1];
+  assign \$322  = write_data[0] & write_strb[0];
+  assign \$323  = ch1_irq_status_write ? \$322  : 1'h0;
+  assign \$324  = write_data[1] & write_strb[0];
+  assign \$325  = ch1_irq_status_write ? \$324  : 1'h0;
+  assign \$326  = write_data[2] & write_strb[0];
+  assign \$327  = ch1_irq_status_write ? \$326  : 1'h0;
+  assign \$328  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$329  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$330  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$331  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$332  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$333  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$334  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$335  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$336  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$337  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$338  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$339  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$340  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$341  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$342  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$343  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$344  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$345  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$346  = ch1_cfg_timeout_config_write & config_write_strb[2];
+  assign \$347  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$348  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$349  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$350  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$351  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$352  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$353  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$354  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$355  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$356  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$357  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$358  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$359  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$360  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$361  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$362  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$363  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$364  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$365  = ch1_cfg_checks_config_write & config_write_strb[3];
+  assign \$366  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$367  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$368  = ch1_cfg_crc0_config_write & config_write_strb[0];
+  assign \$369  = ch1_cfg_crc0_config_write & config_write_strb[1];
+  assign \$370  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$371  = ch1_cfg_crc0_config_write & config_write_strb[3];
+  assign \$372  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$373  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$374  = ch1_cfg_crc1_config_write & config_write_strb[0];
+  assign \$375  = ch1_cfg_crc1_config_write & config_write_strb[1];
+  assign \$376  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$377  = ch1_cfg_crc1_config_write & config_write_strb[3];
+  assign \$378  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$379  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$380  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$381  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$382  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$383  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$384  = ch1_cfg_ssi_config_write & config_write_strb[2];
+  assign \$385  = ch1_cfg_ssi_config_write & config_write_strb[3];
+  assign \$386  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$387  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$388  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$389  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$390  = write_data[0] & write_strb[0];
+  assign \$391  = ch1_ca_ctrl_write ? \$390  : 1'h0;
+  assign \$392  = write_data[1] & write_strb[0];
+  assign \$393  = ch1_ca_ctrl_write ? \$392  : 1'h0;
+  assign \$394  = bus__w_addr == 9'h100;
+  assign \$395  = bus__w_addr == 9'h101;
+  assign \$396  = bus__w_addr == 9'h102;
+  assign \$397  = bus__w_addr == 9'h104;
+  assign \$398  = bus__w_addr == 9'h105;
+  assign \$399  = bus__w_addr == 9'h106;
+  assign \$400  = bus__w_addr == 9'h107;
+  assign \$401  = bus__w_addr == 9'h108;
+  assign \$402  = bus__w_addr == 9'h109;
+  assign \$403  = bus__w_addr == 9'h10a;
+  assign \$404  = bus__w_addr == 9'h10b;
+  assign \$405  = bus__w_addr == 9'h10c;
+  assign \$406  = bus__w_addr == 9'h10d;
+  assign \$407  = bus__w_addr == 9'h10e;
+  assign \$408  = bus__w_addr == 9'h10f;
+  assign \$409  = bus__w_addr == 9'h110;
+  assign \$410  = bus__w_addr == 9'h111;
+  assign \$411  = bus__w_addr == 9'h112;
+  assign \$412  = bus__w_addr == 9'h113;
+  assign \$413  = bus__w_addr == 9'h114;
+  assign \$414  = bus__w_addr == 9'h115;
+  assign \$415  = bus__w_addr == 9'h116;
+  assign \$416  = bus__w_addr == 9'h117;
+  assign \$417  = bus__w_addr == 9'h120;
+  assign \$418  = bus__w_addr == 9'h121;
+  assign \$419  = bus__w_addr == 9'h122;
+  assign \$420  = bus__w_addr == 9'h123;
+  assign \$421  = bus__w_addr == 9'h124;
+  assign \$422  = bus__w_addr == 9'h125;
+  assign \$423  = bus__w_addr == 9'h126;
+  assign \$424  = bus__w_addr == 9'h127;
+  assign \$425  = bus__w_addr == 9'h128;
+  assign \$426  = bus__w_addr == 9'h129;
+  assign \$427  = bus__w_addr == 9'h12a;
+  assign \$428  = bus__w_addr == 9'h12c;
+  assign \$429  = bus__w_addr == 9'h12d;
+  assign \$430  = bus__w_addr == 9'h12e;
+  assign \$431  = bus__w_addr == 9'h130;
+  assign \$432  = bus__w_addr == 9'h131;
+  assign \$433  = bus__w_addr == 9'h132;
+  assign \$434  = bus__w_addr == 9'h134;
+  assign \$435  = bus__w_addr == 9'h135;
+  assign \$436  = bus__w_addr == 9'h136;
+  assign \$437  = bus__w_addr == 9'h138;
+  assign \$438  = bus__w_addr == 9'h139;
+  assign \$439  = bus__w_addr == 9'h13a;
+  assign \$440  = bus__w_addr == 9'h13c;
+  assign \$441  = bus__w_addr == 9'h13d;
+  assign \$442  = bus__w_addr == 9'h13e;
+  assign \$443  = bus__w_addr == 9'h140;
+  assign \$444  = bus__w_addr == 9'h141;
+  assign \$445  = bus__w_addr == 9'h142;
+  assign \$446  = bus__w_addr == 9'h143;
+  assign \$447  = bus__w_addr == 9'h144;
+  assign \$448  = bus__w_addr == 9'h145;
+  assign \$449  = bus__w_addr == 9'h170;
+  assign \$450  = bus__w_addr == 9'h171;
+  assign \$451  = bus__w_addr == 9'h172;
+  assign \$452  = bus__w_addr == 9'h173;
+  assign \$453  = bus__w_addr == 9'h174;
+  assign \$454  = bus__w_addr == 9'h175;
+  assign \$455  = bus__w_addr == 9'h176;
+  assign \$456  = bus__w_addr == 9'h177;
+  assign \$457  = bus__w_addr == 9'h178;
+  assign \$458  = bus__w_addr == 9'h179;
+  assign \$459  = bus__w_addr == 9'h17a;
+  assign \$460  = bus__w_addr == 9'h17b;
+  assign \$461  = bus__w_addr == 9'h17c;
+  assign \$462  = bus__w_addr == 9'h17d;
+  assign \$463  = ch1_read_select_110 & bus__r_load;
+  assign \$464  = bus__w_addr[10:3] == 6'h23;
+  assign \$465  = bus__r_en & \$464 ;
+  assign \$466  = bus__w_addr[10:4] == 5'h16;
+  assign \$467  = bus__r_en & \$466 ;
+  assign \$468  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$470  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
+  assign \$471  = \$469  | \$470 ;
+  assign \$472  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
+  assign \$473  = \$471  | \$472 ;
+  assign \$474  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$475  = \$473  | \$474 ;
+  assign \$476  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
+  assign \$477  = \$475  | \$476 ;
+  assign \$482  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
+  assign \$483  = \$481  | \$482 ;
+  assign \$484  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
+  assign \$485  = \$483  | \$484 ;
+  assign \$486  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
+  assign \$487  = \$485  | \$486 ;
+  assign \$488  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
+  assign \$489  = \$487  | \$488 ;
+  assign \$490  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
+  assign \$491  = \$489  | \$490 ;
+  assign \$492  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 3'h0, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 4'h0, ch1_cfg_words_w0_signed, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
+  assign \$493  = \$491  | \$492 ;
+  assign \$494  = ch1_read_select_10e ? { 4'h0, ch1_cfg_checks_confirm_frames, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
+  assign \$495  = \$493  | \$494 ;
+  assign \$496  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
+  assign \$497  = \$495  | \$496 ;
+  assign \$498  = ch1_read_select_110 ? { 2'h0, \port$7770$0 [182:177], 4'h0, \port$7770$0 [186:183], 1'h0, \port$7770$0 [176:174], 1'h0, \port$7770$0 [133:131], 3'h0, \port$7770$0 [49], \port$7770$0 [3:0] } : 32'd0;
+  assign \$499  = \$497  | \$498 ;
+  assign \$500  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$501  = \$499  | \$500 ;
+  assign \$502  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$503  = \$501  | \$502 ;
+  assign \$504  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$505  = \$503  | \$504 ;
+  assign \$506  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$507  = \$505  | \$506 ;
+  assign \$508  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$509  = \$507  | \$508 ;
+  assign \$510  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$511  = \$509  | \$510 ;
+  assign \$512  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
+  assign \$513  = \$511  | \$512 ;
+  assign \$514  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
+  assign \$515  = \$513  | \$514 ;
+  assign \$516  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
+  assign \$517  = \$515  | \$516 ;
+  assign \$518  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
+  assign \$519  = \$517  | \$518 ;
+  assign \$520  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
+  assign \$521  = \$519  | \$520 ;
+  assign \$522  = ch1_read_select_124 ? { 4'h0, ch1_cfg_ssi_ssi_delay, 12'h000, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi } : 32'd0;
+  assign \$523  = \$521  | \$522 ;
+  assign \$566  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$452 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
+  assign \$567  = \$565  | \$566 ;
+  assign \$570  = ch1_read_select_142 ? { 17'h00000, \port$7858$0 [9:3], 1'h0, \port$7858$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$571  = \$569  | \$570 ;
+  assign \$572  = ch1_read_select_143 ? \port$7781$0 [31:0] : 32'd0;
+  assign \$573  = \$571  | \$572 ;
+  assign \$574  = ch1_read_select_144 ? \port$7781$0 [63:32] : 32'd0;
+  assign \$575  = \$573  | \$574 ;
+  assign \$576  = ch1_read_select_145 ? { 16'h0000, \port$7781$0 [79:64] } : 32'd0;
+  assign \$577  = \$575  | \$576 ;
+  assign \$578  = ch1_read_select_170 ? { 16'h0000, ch1__result_updates } : 32'd0;
+  assign \$579  = \$577  | \$578 ;
+  assign \$606  = ch1_window0_read ? ch1__count_data : 32'd0;
+  assign \$607  = \$605  | \$606 ;
+  assign \$608  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$609  = \$607  | \$608 ;
+  assign \$610  = ! write_addr;
+  assign g_id_write = write_en & \$610 ;
+  assign \$611  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$611 ;
+  assign \$612  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$612 ;
+  assign \$613  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$613 ;
+  assign \$614  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$614 ;
+  assign \$615  = bus__w_addr[10:3] == 5'h13;
+  assign ch0__count_en = bus__r_en & \$615 ;
+  assign \$616  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$616 ;
+  assign \$617  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$617 ;
+  assign \$618  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$618 ;
+  assign \$619  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$619 ;
+  assign \$620  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$620 ;
+  assign \$621  = write_addr == 8'h86;
+  assign ch0_caps_chain_write = write_en & \$621 ;
+  assign \$622  = write_addr == 8'h87;
+  assign ch0_caps_chain2_write = write_en & \$622 ;
+  assign \$623  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$623 ;
+  assign \$624  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$624 ;
+  assign \$625  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$625 ;
+  assign \$626  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$626 ;
+  assign \$627  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$627 ;
+  assign \$628  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$628 ;
+  assign \$629  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$629 ;
+  assign \$630  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$630 ;
+  assign \$631  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$631 ;
+  assign \$632  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$632 ;
+  assign \$633  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$633 ;
+  assign \$634  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$634 ;
+  assign \$635  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$635 ;
+  assign \$636  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$636 ;
+  assign \$637  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$637 ;
+  assign \$638  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$638 ;
+  assign \$639  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$639 ;
+  assign \$640  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$640 ;
+  assign \$641  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$641 ;
+  assign \$642  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$642 ;
+  assign \$643  = write_addr == 8'ha4;
+  assign ch0_cfg_ssi_write = write_en & \$643 ;
+  assign \$644  = write_addr == 8'ha5;
+  assign ch0_count_chain_write = write_en & \$644 ;
+  assign \$645  = write_addr == 8'ha6;
+  assign ch0_count_chain2_write = write_en & \$645 ;
+  assign \$646  = write_addr == 8'ha7;
+  assign ch0_count_chain3_write = write_en & \$646 ;
+  assign \$647  = write_addr == 8'ha8;
+  assign ch0_cfg_w2_write = write_en & \$647 ;
+  assign \$648  = write_addr == 8'ha9;
+  assign ch0_cfg_w2_crc_write = write_en & \$648 ;
+  assign \$649  = write_addr == 8'haa;
+  assign ch0_cfg_w2_crc_start_write = write_en & \$649 ;
+  assign \$650  = write_addr == 8'hac;
+  assign ch0_cfg_w3_write = write_en & \$650 ;
+  assign \$651  = write_addr == 8'had;
+  assign ch0_cfg_w3_crc_write = write_en & \$651 ;
+  assign \$652  = write_addr == 8'hae;
+  assign ch0_cfg_w3_crc_start_write = write_en & \$652 ;
+  assign \$653  = write_addr == 8'hb0;
+  assign ch0_cfg_w4_write = write_en & \$653 ;
+  assign \$654  = write_addr == 8'hb1;
+  assign ch0_cfg_w4_crc_write = write_en & \$654 ;
+  assign \$655  = write_addr == 8'hb2;
+  assign ch0_cfg_w4_crc_start_write = write_en & \$655 ;
+  assign \$656  = write_addr == 8'hb4;
+  assign ch0_cfg_w5_write = write_en & \$656 ;
+  assign \$657  = write_addr == 8'hb5;
+  assign ch0_cfg_w5_crc_write = write_en & \$657 ;
+  assign \$658  = write_addr == 8'hb6;
+  assign ch0_cfg_w5_crc_start_write = write_en & \$658 ;
+  assign \$659  = write_addr == 8'hb8;
+  assign ch0_cfg_w6_write = write_en & \$659 ;
+  assign \$660  = write_addr == 8'hb9;
+  assign ch0_cfg_w6_crc_write = write_en & \$660 ;
+  assign \$661  = write_addr == 8'hba;
+  assign ch0_cfg_w6_crc_start_write = write_en & \$661 ;
+  assign \$662  = write_addr == 8'hbc;
+  assign ch0_cfg_w7_write = write_en & \$662 ;
+  assign \$663  = write_addr == 8'hbd;
+  assign ch0_cfg_w7_crc_write = write_en & \$663 ;
+  assign \$664  = write_addr == 8'hbe;
+  assign ch0_cfg_w7_crc_start_write = write_en & \$664 ;
+  assign \$665  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$665 ;
+  assign \$666  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$666 ;
+  assign \$667  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$667 ;
+  assign \$668  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$668 ;
+  assign \$669  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$669 ;
+  assign \$670  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$670 ;
+  assign \$671  = write_addr[10:4] == 4'hd;
+  assign \$672  = write_en & \$671 ;
+  assign ch0__ca_wbuf_en = \$672  ? write_strb : 4'h0;
+  assign \$673  = bus__w_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$673 ;
+  assign \$674  = write_addr == 8'hf0;
+  assign ch0_chain_updates_write = write_en & \$674 ;
+  assign \$675  = write_addr == 8'hf1;
+  assign ch0_chain_flags_write = write_en & \$675 ;
+  assign \$676  = write_addr == 8'hf2;
+  assign ch0_chain_w2_lo_write = write_en & \$676 ;
+  assign \$677  = write_addr == 8'hf3;
+  assign ch0_chain_w2_hi_write = write_en & \$677 ;
+  assign \$678  = write_addr == 8'hf4;
+  assign ch0_chain_w3_lo_write = write_en & \$678 ;
+  assign \$679  = write_addr == 8'hf5;
+  assign ch0_chain_w3_hi_write = write_en & \$679 ;
+  assign \$680  = write_addr == 8'hf6;
+  assign ch0_chain_w4_lo_write = write_en & \$680 ;
+  assign \$681  = write_addr == 8'hf7;
+  assign ch0_chain_w4_hi_write = write_en & \$681 ;
+  assign \$682  = write_addr == 8'hf8;
+  assign ch0_chain_w5_lo_write = write_en & \$682 ;
+  assign \$683  = write_addr == 8'hf9;
+  assign ch0_chain_w5_hi_write = write_en & \$683 ;
+  assign \$684  = write_addr == 8'hfa;
+  assign ch0_chain_w6_lo_write = write_en & \$684 ;
+  assign \$685  = write_addr == 8'hfb;
+  assign ch0_chain_w6_hi_write = write_en & \$685 ;
+  assign \$686  = write_addr == 8'hfc;
+  assign ch0_chain_w7_lo_write = write_en & \$686 ;
+  assign \$687  = write_addr == 8'hfd;
+  assign ch0_chain_w7_hi_write = write_en & \$687 ;
+  assign \$688  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$690  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$692  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$693 , \$691 , \$689  };
+  assign \$694  = bus__w_addr[10:3] == 6'h23;
+  assign ch1__count_en = bus__r_en & \$694 ;
+  assign \$695  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$695 ;
+  assign \$696  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$696 ;
+  assign \$697  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$697 ;
+  assign \$698  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$698 ;
+  assign \$699  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$699 ;
+  assign \$700  = write_addr == 9'h106;
+  assign ch1_caps_chain_write = write_en & \$700 ;
+  assign \$701  = write_addr == 9'h107;
+  assign ch1_caps_chain2_write = write_en & \$701 ;
+  assign \$702  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$702 ;
+  assign \$703  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$703 ;
+  assign \$704  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$704 ;
+  assign \$705  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$705 ;
+  assign \$706  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$706 ;
+  assign \$707  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$707 ;
+  assign \$708  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$708 ;
+  assign \$709  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$709 ;
+  assign \$710  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$710 ;
+  assign \$711  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$711 ;
+  assign \$712  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$712 ;
+  assign \$713  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$713 ;
+  assign \$714  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$714 ;
+  assign \$715  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$715 ;
+  assign \$716  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$716 ;
+  assign \$717  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$717 ;
+  assign \$718  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$718 ;
+  assign \$719  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$719 ;
+  assign \$720  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$720 ;
+  assign \$721  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$721 ;
+  assign \$722  = write_addr == 9'h124;
+  assign ch1_cfg_ssi_write = write_en & \$722 ;
+  assign \$723  = write_addr == 9'h125;
+  assign ch1_count_chain_write = write_en & \$723 ;
+  assign \$724  = write_addr == 9'h126;
+  assign ch1_count_chain2_write = write_en & \$724 ;
+  assign \$725  = write_addr == 9'h127;
+  assign ch1_count_chain3_write = write_en & \$725 ;
+  assign \$726  = write_addr == 9'h128;
+  assign ch1_cfg_w2_write = write_en & \$726 ;
+  assign \$727  = write_addr == 9'h129;
+  assign ch1_cfg_w2_crc_write = write_en & \$727 ;
+  assign \$728  = write_addr == 9'h12a;
+  assign ch1_cfg_w2_crc_start_write = write_en & \$728 ;
+  assign \$729  = write_addr == 9'h12c;
+  assign ch1_cfg_w3_write = write_en & \$729 ;
+  assign \$730  = write_addr == 9'h12d;
+  assign ch1_cfg_w3_crc_write = write_en & \$730 ;
+  assign \$731  = write_addr == 9'h12e;
+  assign ch1_cfg_w3_crc_start_write = write_en & \$731 ;
+  assign \$732  = write_addr == 9'h130;
+  assign ch1_cfg_w4_write = write_en & \$732 ;
+  assign \$733  = write_addr == 9'h131;
+  assign ch1_cfg_w4_crc_write = write_en & \$733 ;
+  assign \$734  = write_addr == 9'h132;
+  assign ch1_cfg_w4_crc_start_write = write_en & \$734 ;
+  assign \$735  = write_addr == 9'h134;
+  assign ch1_cfg_w5_write = write_en & \$735 ;
+  assign \$736  = write_addr == 9'h135;
+  assign ch1_cfg_w5_crc_write = write_en & \$736 ;
+  assign \$737  = write_addr == 9'h136;
+  assign ch1_cfg_w5_crc_start_write = write_en & \$737 ;
+  assign \$738  = write_addr == 9'h138;
+  assign ch1_cfg_w6_write = write_en & \$738 ;
+  assign \$739  = write_addr == 9'h139;
+  assign ch1_cfg_w6_crc_write = write_en & \$739 ;
+  assign \$740  = write_addr == 9'h13a;
+  assign ch1_cfg_w6_crc_start_write = write_en & \$740 ;
+  assign \$741  = write_addr == 9'h13c;
+  assign ch1_cfg_w7_write = write_en & \$741 ;
+  assign \$742  = write_addr == 9'h13d;
+  assign ch1_cfg_w7_crc_write = write_en & \$742 ;
+  assign \$743  = write_addr == 9'h13e;
+  assign ch1_cfg_w7_crc_start_write = write_en & \$743 ;
+  assign \$744  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$744 ;
+  assign \$745  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$745 ;
+  assign \$746  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$746 ;
+  assign \$747  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$747 ;
+  assign \$748  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$748 ;
+  assign \$749  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$749 ;
+  assign \$750  = write_addr[10:4] == 5'h15;
+  assign \$751  = write_en & \$750 ;
+  assign ch1__ca_wbuf_en = \$751  ? write_strb : 4'h0;
+  assign \$752  = bus__w_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$752 ;
+  assign \$753  = write_addr == 9'h170;
+  assign ch1_chain_updates_write = write_en & \$753 ;
+  assign \$754  = write_addr == 9'h171;
+  assign ch1_chain_flags_write = write_en & \$754 ;
+  assign \$755  = write_addr == 9'h172;
+  assign ch1_chain_w2_lo_write = write_en & \$755 ;
+  assign \$756  = write_addr == 9'h173;
+  assign ch1_chain_w2_hi_write = write_en & \$756 ;
+  assign \$757  = write_addr == 9'h174;
+  assign ch1_chain_w3_lo_write = write_en & \$757 ;
+  assign \$758  = write_addr == 9'h175;
+  assign ch1_chain_w3_hi_write = write_en & \$758 ;
+  assign \$759  = write_addr == 9'h176;
+  assign ch1_chain_w4_lo_write = write_en & \$759 ;
+  assign \$760  = write_addr == 9'h177;
+  assign ch1_chain_w4_hi_write = write_en & \$760 ;
+  assign \$761  = write_addr == 9'h178;
+  assign ch1_chain_w5_lo_write = write_en & \$761 ;
+  assign \$762  = write_addr == 9'h179;
+  assign ch1_chain_w5_hi_write = write_en & \$762 ;
+  assign \$763  = write_addr == 9'h17a;
+  assign ch1_chain_w6_lo_write = write_en & \$763 ;
+  assign \$764  = write_addr == 9'h17b;
+  assign ch1_chain_w6_hi_write = write_en & \$764 ;
+  assign \$765  = write_addr == 9'h17c;
+  assign ch1_chain_w7_lo_write = write_en & \$765 ;
+  assign \$766  = write_addr == 9'h17d;
+  assign ch1_chain_w7_hi_write = write_en & \$766 ;
+  assign \$767  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$769  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$771  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$772 , \$770 , \$768  };
+  assign \$774  = \$773  | ch0_read_data;
+  assign bus__r_data = \$774  | ch1_read_data;
+  always @(posedge clk)
+    write_en <= \$775 ;
+  always @(posedge clk)
+    write_addr <= \$776 ;
+  always @(posedge clk)
+    write_data <= \$777 ;
+  always @(posedge clk)
+    write_strb <= \$778 ;
+  always @(posedge clk)
+    config_write_data <= \$779 ;
+  always @(posedge clk)
+    config_write_strb <= \$780 ;
+  always @(posedge clk)
+    g_trigger_start <= \$781 ;
+  always @(posedge clk)
+    g_read_select_0 <= \$782 ;
+  always @(posedge clk)
+    g_read_select_1 <= \$783 ;
+  always @(posedge clk)
+    g_read_select_2 <= \$784 ;
+  always @(posedge clk)
+    g_read_select_3 <= \$785 ;
+  always @(posedge clk)
+    g_read_select_4 <= \$786 ;
+  always @(posedge clk)
+    g_read_data <= \$787 ;
+  always @(posedge clk)
+    ch0_ctrl_start <= \$788 ;
+  always @(posedge clk)
+    ch0_ctrl_abort <= \$789 ;
+  always @(posedge clk)
+    ch0_ctrl_clear_counters <= \$790 ;
+  always @(posedge clk)
+    ch0_ctrl_periodic <= \$791 ;
+  always @(posedge clk)
+    ch0_ctrl_trigger_enable <= \$792 ;
+  always @(posedge clk)
+    ch0_irq_status_done <= \$793 ;
+  always @(posedge clk)
+    ch0_irq_status_error <= \$794 ;
+  always @(posedge clk)
+    ch0_irq_status_access_done <= \$795 ;
+  always @(posedge clk)
+    ch0_irq_enable_config_write <= \$796 ;
+  always @(posedge clk)
+    ch0_irq_enable_done <= \$797 ;
+  always @(posedge clk)
+    ch0_irq_enable_error <= \$798 ;
+  always @(posedge clk)
+    ch0_irq_enable_access_done <= \$799 ;
+  always @(posedge clk)
+    ch0_cfg_ma_config_write <= \$800 ;
+  always @(posedge clk)
+    ch0_cfg_ma_ma_half_period <= \$801 ;
+  always @(posedge clk)
+    ch0_cfg_ma_delay_limit <= \$802 ;
+  always @(posedge clk)
+    ch0_cfg_period_config_write <= \$803 ;
+  always @(posedge clk)
+    ch0_cfg_period_request_period <= \$804 ;
+  always @(posedge clk)
+    ch0_cfg_break_config_write <= \$805 ;
+  always @(posedge clk)
+    ch0_cfg_break_break_time <= \$806 ;
+  always @(posedge clk)
+    ch0_cfg_ack_config_write <= \$807 ;
+  always @(posedge clk)
+    ch0_cfg_ack_ack_limit <= \$808 ;
+  always @(posedge clk)
+    ch0_cfg_timeout_config_write <= \$809 ;
+  always @(posedge clk)
+    ch0_cfg_timeout_timeout_limit <= \$810 ;
+  always @(posedge clk)
+    ch0_cfg_words_config_write <= \$811 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_data_bits <= \$812 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_nenw <= \$813 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_lc <= \$814 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_crc <= \$815 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_gray <= \$816 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_signed <= \$817 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_data_bits <= \$818 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_nenw <= \$819 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_lc <= \$820 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_crc <= \$821 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_gray <= \$822 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_signed <= \$823 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_enable <= \$824 ;
+  always @(posedge clk)
+    ch0_cfg_checks_config_write <= \$825 ;
+  always @(posedge clk)
+    ch0_cfg_checks_end_check <= \$826 ;
+  always @(posedge clk)
+    ch0_cfg_checks_spw_check <= \$827 ;
+  always @(posedge clk)
+    ch0_cfg_checks_spw_tolerance <= \$828 ;
+  always @(posedge clk)
+    ch0_cfg_checks_noise_limit <= \$829 ;
+  always @(posedge clk)
+    ch0_cfg_checks_delay_tolerance <= \$830 ;
+  always @(posedge clk)
+    ch0_cfg_checks_confirm_frames <= \$831 ;
+  always @(posedge clk)
+    ch0_cfg_quiet_config_write <= \$832 ;
+  always @(posedge clk)
+    ch0_cfg_quiet_quiet_time <= \$833 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_config_write <= \$834 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_w0_crc_poly <= \$835 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_w0_crc_width <= \$836 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_w0_crc_inverted <= \$837 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_start_config_write <= \$838 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_start_w0_crc_start <= \$839 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_config_write <= \$840 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_w1_crc_poly <= \$841 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_w1_crc_width <= \$842 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_w1_crc_inverted <= \$843 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_start_config_write <= \$844 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_start_w1_crc_start <= \$845 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_config_write <= \$846 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi <= \$847 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_error <= \$848 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_error_low <= \$849 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_double <= \$850 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_delay <= \$851 ;
+  always @(posedge clk)
+    ch0_cfg_w2_config_write <= \$852 ;
+  always @(posedge clk)
+    ch0_cfg_w2_crc_config_write <= \$853 ;
+  always @(posedge clk)
+    ch0_cfg_w2_crc_start_config_write <= \$854 ;
+  always @(posedge clk)
+    ch0_cfg_w3_config_write <= \$855 ;
+  always @(posedge clk)
+    ch0_cfg_w3_crc_config_write <= \$856 ;
+  always @(posedge clk)
+    ch0_cfg_w3_crc_start_config_write <= \$857 ;
+  always @(posedge clk)
+    ch0_cfg_w4_config_write <= \$858 ;
+  always @(posedge clk)
+    ch0_cfg_w4_crc_config_write <= \$859 ;
+  always @(posedge clk)
+    ch0_cfg_w4_crc_start_config_write <= \$860 ;
+  always @(posedge clk)
+    ch0_cfg_w5_config_write <= \$861 ;
+  always @(posedge clk)
+    ch0_cfg_w5_crc_config_write <= \$862 ;
+  always @(posedge clk)
+    ch0_cfg_w5_crc_start_config_write <= \$863 ;
+  always @(posedge clk)
+    ch0_cfg_w6_config_write <= \$864 ;
+  always @(posedge clk)
+    ch0_cfg_w6_crc_config_write <= \$865 ;
+  always @(posedge clk)
+    ch0_cfg_w6_crc_start_config_write <= \$866 ;
+  always @(posedge clk)
+    ch0_cfg_w7_config_write <= \$867 ;
+  always @(posedge clk)
+    ch0_cfg_w7_crc_config_write <= \$868 ;
+  always @(posedge clk)
+    ch0_cfg_w7_crc_start_config_write <= \$869 ;
+  always @(posedge clk)
+    ch0_ca_request_config_write <= \$870 ;
+  always @(posedge clk)
+    ch0_ca_request_slave_id <= \$871 ;
+  always @(posedge clk)
+    ch0_ca_request_address <= \$872 ;
+  always @(posedge clk)
+    ch0_ca_request_count <= \$873 ;
+  always @(posedge clk)
+    \ch0_ca_request_write$149  <= \$874 ;
+  always @(posedge clk)
+    ch0_ca_ctrl_start <= \$875 ;
+  always @(posedge clk)
+    ch0_ca_ctrl_abort <= \$876 ;
+  always @(posedge clk)
+    ch0_read_select_80 <= \$877 ;
+  always @(posedge clk)
+    ch0_read_select_81 <= \$878 ;
+  always @(posedge clk)
+    ch0_read_select_82 <= \$879 ;
+  always @(posedge clk)
+    ch0_read_select_84 <= \$880 ;
+  always @(posedge clk)
+    ch0_read_select_85 <= \$881 ;
+  always @(posedge clk)
+    ch0_read_select_86 <= \$882 ;
+  always @(posedge clk)
+    ch0_read_select_87 <= \$883 ;
+  always @(posedge clk)
+    ch0_read_select_88 <= \$884 ;
+  always @(posedge clk)
+    ch0_read_select_89 <= \$885 ;
+  always @(posedge clk)
+    ch0_read_select_8a <= \$886 ;
+  always @(posedge clk)
+    ch0_read_select_8b <= \$887 ;
+  always @(posedge clk)
+    ch0_read_select_8c <= \$888 ;
+  always @(posedge clk)
+    ch0_read_select_8d <= \$889 ;
+  always @(posedge clk)
+    ch0_read_select_8e <= \$890 ;
+  always @(posedge clk)
+    ch0_read_select_8f <= \$891 ;
+  always @(posedge clk)
+    ch0_read_select_90 <= \$892 ;
+  always @(posedge clk)
+    ch0_read_select_91 <= \$893 ;
+  always @(posedge clk)
+    ch0_read_select_92 <= \$894 ;
+  always @(posedge clk)
+    ch0_read_select_93 <= \$895 ;
+  always @(posedge clk)
+    ch0_read_select_94 <= \$896 ;
+  always @(posedge clk)
+    ch0_read_select_95 <= \$897 ;
+  always @(posedge clk)
+    ch0_read_select_96 <= \$898 ;
+  always @(posedge clk)
+    ch0_read_select_97 <= \$899 ;
+  always @(posedge clk)
+    ch0_read_select_a0 <= \$900 ;
+  always @(posedge clk)
+    ch0_read_select_a1 <= \$901 ;
+  always @(posedge clk)
+    ch0_read_select_a2 <= \$902 ;
+  always @(posedge clk)
+    ch0_read_select_a3 <= \$903 ;
+  always @(posedge clk)
+    ch0_read_select_a4 <= \$904 ;
+  always @(posedge clk)
+    ch0_read_select_a5 <= \$905 ;
+  always @(posedge clk)
+    ch0_read_select_a6 <= \$906 ;
+  always @(posedge clk)
+    ch0_read_select_a7 <= \$907 ;
+  always @(posedge clk)
+    ch0_read_select_a8 <= \$908 ;
+  always @(posedge clk)
+    ch0_read_select_a9 <= \$909 ;
+  always @(posedge clk)
+    ch0_read_select_aa <= \$910 ;
+  always @(posedge clk)
+    ch0_read_select_ac <= \$911 ;
+  always @(posedge clk)
+    ch0_read_select_ad <= \$912 ;
+  always @(posedge clk)
+    ch0_read_select_ae <= \$913 ;
+  always @(posedge clk)
+    ch0_read_select_b0 <= \$914 ;
+  always @(posedge clk)
+    ch0_read_select_b1 <= \$915 ;
+  always @(posedge clk)
+    ch0_read_select_b2 <= \$916 ;
+  always @(posedge clk)
+    ch0_read_select_b4 <= \$917 ;
+  always @(posedge clk)
+    ch0_read_select_b5 <= \$918 ;
+  always @(posedge clk)
+    ch0_read_select_b6 <= \$919 ;
+  always @(posedge clk)
+    ch0_read_select_b8 <= \$920 ;
+  always @(posedge clk)
+    ch0_read_select_b9 <= \$921 ;
+  always @(posedge clk)
+    ch0_read_select_ba <= \$922 ;
+  always @(posedge clk)
+    ch0_read_select_bc <= \$923 ;
+  always @(posedge clk)
+    ch0_read_select_bd <= \$924 ;
+  always @(posedge clk)
+    ch0_read_select_be <= \$925 ;
+  always @(posedge clk)
+    ch0_read_select_c0 <= \$926 ;
+  always @(posedge clk)
+    ch0_read_select_c1 <= \$927 ;
+  always @(posedge clk)
+    ch0_read_select_c2 <= \$928 ;
+  always @(posedge clk)
+    ch0_read_select_c3 <= \$929 ;
+  always @(posedge clk)
+    ch0_read_select_c4 <= \$930 ;
+  always @(posedge clk)
+    ch0_read_select_c5 <= \$931 ;
+  always @(posedge clk)
+    ch0_read_select_f0 <= \$932 ;
+  always @(posedge clk)
+    ch0_read_select_f1 <= \$933 ;
+  always @(posedge clk)
+    ch0_read_select_f2 <= \$934 ;
+  always @(posedge clk)
+    ch0_read_select_f3 <= \$935 ;
+  always @(posedge clk)
+    ch0_read_select_f4 <= \$936 ;
+  always @(posedge clk)
+    ch0_read_select_f5 <= \$937 ;
+  always @(posedge clk)
+    ch0_read_select_f6 <= \$938 ;
+  always @(posedge clk)
+    ch0_read_select_f7 <= \$939 ;
+  always @(posedge clk)
+    ch0_read_select_f8 <= \$940 ;
+  always @(posedge clk)
+    ch0_read_select_f9 <= \$941 ;
+  always @(posedge clk)
+    ch0_read_select_fa <= \$942 ;
+  always @(posedge clk)
+    ch0_read_select_fb <= \$943 ;
+  always @(posedge clk)
+    ch0_read_select_fc <= \$944 ;
+  always @(posedge clk)
+    ch0_read_select_fd <= \$945 ;
+  always @(posedge clk)
+    ch0_result_status_status_snapshot <= \$946 ;
+  always @(posedge clk)
+    ch0_result_status_cds_snapshot <= \$947 ;
+  always @(posedge clk)
+    ch0_result_status_w0_ne_snapshot <= \$948 ;
+  always @(posedge clk)
+    ch0_result_status_w0_nw_snapshot <= \$949 ;
+  always @(posedge clk)
+    ch0_result_status_w0_crc_ok_snapshot <= \$950 ;
+  always @(posedge clk)
+    ch0_result_status_w1_ne_snapshot <= \$951 ;
+  always @(posedge clk)
+    ch0_result_status_w1_nw_snapshot <= \$952 ;
+  always @(posedge clk)
+    ch0_result_status_w1_crc_ok_snapshot <= \$953 ;
+  always @(posedge clk)
+    ch0_result_status_lc_repeat_snapshot <= \$954 ;
+  always @(posedge clk)
+    ch0_result_status_lc_skip_snapshot <= \$955 ;
+  always @(posedge clk)
+    ch0_result_status_lc_zero_snapshot <= \$956 ;
+  always @(posedge clk)
+    ch0_result_status_spw_mismatch_snapshot <= \$957 ;
+  always @(posedge clk)
+    ch0_result_status_lc_snapshot <= \$958 ;
+  always @(posedge clk)
+    ch0_result_seq_seq_snapshot <= \$959 ;
+  always @(posedge clk)
+    ch0_result_seq_line_delay_snapshot <= \$960 ;
+  always @(posedge clk)
+    ch0_result_w0_lo_data_snapshot <= \$961 ;
+  always @(posedge clk)
+    ch0_result_w0_hi_data_snapshot <= \$962 ;
+  always @(posedge clk)
+    ch0_result_w1_lo_data_snapshot <= \$963 ;
+  always @(posedge clk)
+    ch0_result_w1_hi_data_snapshot <= \$964 ;
+  always @(posedge clk)
+    ch0_result_timestamp_time_snapshot <= \$965 ;
+  always @(posedge clk)
+    ch0_result_line_noise_events_snapshot <= \$966 ;
+  always @(posedge clk)
+    ch0_result_line_delay_settled_snapshot <= \$967 ;
+  always @(posedge clk)
+    ch0_result_line_delay_spread_snapshot <= \$968 ;
+  always @(posedge clk)
+    ch0_result_line_settled_delay_snapshot <= \$969 ;
+  always @(posedge clk)
+    ch0_window0_read <= \$970 ;
+  always @(posedge clk)
+    ch0_window1_read <= \$971 ;
+  always @(posedge clk)
+    ch0_read_data <= \$972 ;
+  always @(posedge clk)
+    ch1_ctrl_start <= \$973 ;
+  always @(posedge clk)
+    ch1_ctrl_abort <= \$974 ;
+  always @(posedge clk)
+    ch1_ctrl_clear_counters <= \$975 ;
+  always @(posedge clk)
+    ch1_ctrl_periodic <= \$976 ;
+  always @(posedge clk)
+    ch1_ctrl_trigger_enable <= \$977 ;
+  always @(posedge clk)
+    ch1_irq_status_done <= \$978 ;
+  always @(posedge clk)
+    ch1_irq_status_error <= \$979 ;
+  always @(posedge clk)
+    ch1_irq_status_access_done <= \$980 ;
+  always @(posedge clk)
+    ch1_irq_enable_config_write <= \$981 ;
+  always @(posedge clk)
+    ch1_irq_enable_done <= \$982 ;
+  always @(posedge clk)
+    ch1_irq_enable_error <= \$983 ;
+  always @(posedge clk)
+    ch1_irq_enable_access_done <= \$984 ;
+  always @(posedge clk)
+    ch1_cfg_ma_config_write <= \$985 ;
+  always @(posedge clk)
+    ch1_cfg_ma_ma_half_period <= \$986 ;
+  always @(posedge clk)
+    ch1_cfg_ma_delay_limit <= \$987 ;
+  always @(posedge clk)
+    ch1_cfg_period_config_write <= \$988 ;
+  always @(posedge clk)
+    ch1_cfg_period_request_period <= \$989 ;
+  always @(posedge clk)
+    ch1_cfg_break_config_write <= \$990 ;
+  always @(posedge clk)
+    ch1_cfg_break_break_time <= \$991 ;
+  always @(posedge clk)
+    ch1_cfg_ack_config_write <= \$992 ;
+  always @(posedge clk)
+    ch1_cfg_ack_ack_limit <= \$993 ;
+  always @(posedge clk)
+    ch1_cfg_timeout_config_write <= \$994 ;
+  always @(posedge clk)
+    ch1_cfg_timeout_timeout_limit <= \$995 ;
+  always @(posedge clk)
+    ch1_cfg_words_config_write <= \$996 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_data_bits <= \$997 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_nenw <= \$998 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_lc <= \$999 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_crc <= \$1000 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_gray <= \$1001 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_signed <= \$1002 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_data_bits <= \$1003 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_nenw <= \$1004 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_lc <= \$1005 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_crc <= \$1006 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_gray <= \$1007 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_signed <= \$1008 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_enable <= \$1009 ;
+  always @(posedge clk)
+    ch1_cfg_checks_config_write <= \$1010 ;
+  always @(posedge clk)
+    ch1_cfg_checks_end_check <= \$1011 ;
+  always @(posedge clk)
+    ch1_cfg_checks_spw_check <= \$1012 ;
+  always @(posedge clk)
+    ch1_cfg_checks_spw_tolerance <= \$1013 ;
+  always @(posedge clk)
+    ch1_cfg_checks_noise_limit <= \$1014 ;
+  always @(posedge clk)
+    ch1_cfg_checks_delay_tolerance <= \$1015 ;
+  always @(posedge clk)
+    ch1_cfg_checks_confirm_frames <= \$1016 ;
+  always @(posedge clk)
+    ch1_cfg_quiet_config_write <= \$1017 ;
+  always @(posedge clk)
+    ch1_cfg_quiet_quiet_time <= \$1018 ;
+  always @(posedge clk)
+    ch1_cfg_crc0_config_write <= \$1019 ;
+  always @(posedge clk)
+    ch1_cfg_crc0_w0_crc_poly <= \$1020 ;
+  always @(posedge clk)
+    ch1_cfg_crc0_w0_crc_width <= \$1021 ;
+  always @(posedge clk)
+    ch1_cfg_crc0_w0_crc_inverted <= \$1022 ;
+  always @(posedge clk)
+    ch1_cfg_crc0_start_config_write <= \$1023 ;
+  always @(posedge clk)
+    ch1_cfg_crc0_start_w0_crc_start <= \$1024 ;
+  always @(posedge clk)
+    ch1_cfg_crc1_config_write <= \$1025 ;
+  always @(posedge clk)
+    ch1_cfg_crc1_w1_crc_poly <= \$1026 ;
+  always @(posedge clk)
+    ch1_cfg_crc1_w1_crc_width <= \$1027 ;
+  always @(posedge clk)
+    ch1_cfg_crc1_w1_crc_inverted <= \$1028 ;
+  always @(posedge clk)
+    ch1_cfg_crc1_start_config_write <= \$1029 ;
+  always @(posedge clk)
+    ch1_cfg_crc1_start_w1_crc_start <= \$1030 ;
+  always @(posedge clk)
+    ch1_cfg_ssi_config_write <= \$1031 ;
+  always @(posedge clk)
+    ch1_cfg_ssi_ssi <= \$1032 ;
+  always @(posedge clk)
+    ch1_cfg_ssi_ssi_error <= \$1033 ;
+  always @(posedge clk)
+    ch1_cfg_ssi_ssi_error_low <= \$1034 ;
+  always @(posedge clk)
+    ch1_cfg_ssi_ssi_double <= \$1035 ;
+  always @(posedge clk)
+    ch1_cfg_ssi_ssi_delay <= \$1036 ;
+  always @(posedge clk)
+    ch1_cfg_w2_config_write <= \$1037 ;
+  always @(posedge clk)
+    ch1_cfg_w2_crc_config_write <= \$1038 ;
+  always @(posedge clk)
+    ch1_cfg_w2_crc_start_config_write <= \$1039 ;
+  always @(posedge clk)
+    ch1_cfg_w3_config_write <= \$1040 ;
+  always @(posedge clk)
+    ch1_cfg_w3_crc_config_write <= \$1041 ;
+  always @(posedge clk)
+    ch1_cfg_w3_crc_start_config_write <= \$1042 ;
+  always @(posedge clk)
+    ch1_cfg_w4_config_write <= \$1043 ;
+  always @(posedge clk)
+    ch1_cfg_w4_crc_config_write <= \$1044 ;
+  always @(posedge clk)
+    ch1_cfg_w4_crc_start_config_write <= \$1045 ;
+  always @(posedge clk)
+    ch1_cfg_w5_config_write <= \$1046 ;
+  always @(posedge clk)
+    ch1_cfg_w5_crc_config_write <= \$1047 ;
+  always @(posedge clk)
+    ch1_cfg_w5_crc_start_config_write <= \$1048 ;
+  always @(posedge clk)
+    ch1_cfg_w6_config_write <= \$1049 ;
+  always @(posedge clk)
+    ch1_cfg_w6_crc_config_write <= \$1050 ;
+  always @(posedge clk)
+    ch1_cfg_w6_crc_start_config_write <= \$1051 ;
+  always @(posedge clk)
+    ch1_cfg_w7_config_write <= \$1052 ;
+  always @(posedge clk)
+    ch1_cfg_w7_crc_config_write <= \$1053 ;
+  always @(posedge clk)
+    ch1_cfg_w7_crc_start_config_write <= \$1054 ;
+  always @(posedge clk)
+    ch1_ca_request_config_write <= \$1055 ;
+  always @(posedge clk)
+    ch1_ca_request_slave_id <= \$1056 ;
+  always @(posedge clk)
+    ch1_ca_request_address <= \$1057 ;
+  always @(posedge clk)
+    ch1_ca_request_count <= \$1058 ;
+  always @(posedge clk)
+    \ch1_ca_request_write$452  <= \$1059 ;
+  always @(posedge clk)
+    ch1_ca_ctrl_start <= \$1060 ;
+  always @(posedge clk)
+    ch1_ca_ctrl_abort <= \$1061 ;
+  always @(posedge clk)
+    ch1_read_select_100 <= \$1062 ;
+  always @(posedge clk)
+    ch1_read_select_101 <= \$1063 ;
+  always @(posedge clk)
+    ch1_read_select_102 <= \$1064 ;
+  always @(posedge clk)
+    ch1_read_select_104 <= \$1065 ;
+  always @(posedge clk)
+    ch1_read_select_105 <= \$1066 ;
+  always @(posedge clk)
+    ch1_read_select_106 <= \$1067 ;
+  always @(posedge clk)
+    ch1_read_select_107 <= \$1068 ;
+  always @(posedge clk)
+    ch1_read_select_108 <= \$1069 ;
+  always @(posedge clk)
+    ch1_read_select_109 <= \$1070 ;
+  always @(posedge clk)
+    ch1_read_select_10a <= \$1071 ;
+  always @(posedge clk)
+    ch1_read_select_10b <= \$1072 ;
+  always @(posedge clk)
+    ch1_read_select_10c <= \$1073 ;
+  always @(posedge clk)
+    ch1_read_select_10d <= \$1074 ;
+  always @(posedge clk)
+    ch1_read_select_10e <= \$1075 ;
+  always @(posedge clk)
+    ch1_read_select_10f <= \$1076 ;
+  always @(posedge clk)
+    ch1_read_select_110 <= \$1077 ;
+  always @(posedge clk)
+    ch1_read_select_111 <= \$1078 ;
+  always @(posedge clk)
+    ch1_read_select_112 <= \$1079 ;
+  always @(posedge clk)
+    ch1_read_select_113 <= \$1080 ;
+  always @(posedge clk)
+    ch1_read_select_114 <= \$1081 ;
+  always @(posedge clk)
+    ch1_read_select_115 <= \$1082 ;
+  always @(posedge clk)
+    ch1_read_select_116 <= \$1083 ;
+  always @(posedge clk)
+    ch1_read_select_117 <= \$1084 ;
+  always @(posedge clk)
+    ch1_read_select_120 <= \$1085 ;
+  always @(posedge clk)
+    ch1_read_select_121 <= \$1086 ;
+  always @(posedge clk)
+    ch1_read_select_122 <= \$1087 ;
+  always @(posedge clk)
+    ch1_read_select_123 <= \$1088 ;
+  always @(posedge clk)
+    ch1_read_select_124 <= \$1089 ;
+  always @(posedge clk)
+    ch1_read_select_125 <= \$1090 ;
+  always @(posedge clk)
+    ch1_read_select_126 <= \$1091 ;
+  always @(posedge clk)
+    ch1_read_select_127 <= \$1092 ;
+  always @(posedge clk)
+    ch1_read_select_128 <= \$1093 ;
+  always @(posedge clk)
+    ch1_read_select_129 <= \$1094 ;
+  always @(posedge clk)
+    ch1_read_select_12a <= \$1095 ;
+  always @(posedge clk)
+    ch1_read_select_12c <= \$1096 ;
+  always @(posedge clk)
+    ch1_read_select_12d <= \$1097 ;
+  always @(posedge clk)
+    ch1_read_select_12e <= \$1098 ;
+  always @(posedge clk)
+    ch1_read_select_130 <= \$1099 ;
+  always @(posedge clk)
+    ch1_read_select_131 <= \$1100 ;
+  always @(posedge clk)
+    ch1_read_select_132 <= \$1101 ;
+  always @(posedge clk)
+    ch1_read_select_134 <= \$1102 ;
+  always @(posedge clk)
+    ch1_read_select_135 <= \$1103 ;
+  always @(posedge clk)
+    ch1_read_select_136 <= \$1104 ;
+  always @(posedge clk)
+    ch1_read_select_138 <= \$1105 ;
+  always @(posedge clk)
+    ch1_read_select_139 <= \$1106 ;
+  always @(posedge clk)
+    ch1_read_select_13a <= \$1107 ;
+  always @(posedge clk)
+    ch1_read_select_13c <= \$1108 ;
+  always @(posedge clk)
+    ch1_read_select_13d <= \$1109 ;
+  always @(posedge clk)
+    ch1_read_select_13e <= \$1110 ;
+  always @(posedge clk)
+    ch1_read_select_140 <= \$1111 ;
+  always @(posedge clk)
+    ch1_read_select_141 <= \$1112 ;
+  always @(posedge clk)
+    ch1_read_select_142 <= \$1113 ;
+  always @(posedge clk)
+    ch1_read_select_143 <= \$1114 ;
+  always @(posedge clk)
+    ch1_read_select_144 <= \$1115 ;
+  always @(posedge clk)
+    ch1_read_select_145 <= \$1116 ;
+  always @(posedge clk)
+    ch1_read_select_170 <= \$1117 ;
+  always @(posedge clk)
+    ch1_read_select_171 <= \$1118 ;
+  always @(posedge clk)
+    ch1_read_select_172 <= \$1119 ;
+  always @(posedge clk)
+    ch1_read_select_173 <= \$1120 ;
+  always @(posedge clk)
+    ch1_read_select_174 <= \$1121 ;
+  always @(posedge clk)
+    ch1_read_select_175 <= \$1122 ;
+  always @(posedge clk)
+    ch1_read_select_176 <= \$1123 ;
+  always @(posedge clk)
+    ch1_read_select_177 <= \$1124 ;
+  always @(posedge clk)
+    ch1_read_select_178 <= \$1125 ;
+  always @(posedge clk)
+    ch1_read_select_179 <= \$1126 ;
+  always @(posedge clk)
+    ch1_read_select_17a <= \$1127 ;
+  always @(posedge clk)
+    ch1_read_select_17b <= \$1128 ;
+  always @(posedge clk)
+    ch1_read_select_17c <= \$1129 ;
+  always @(posedge clk)
+    ch1_read_select_17d <= \$1130 ;
+  always @(posedge clk)
+    ch1_result_status_status_snapshot <= \$1131 ;
+  always @(posedge clk)
+    ch1_result_status_cds_snapshot <= \$1132 ;
+  always @(posedge clk)
+    ch1_result_status_w0_ne_snapshot <= \$1133 ;
+  always @(posedge clk)
+    ch1_result_status_w0_nw_snapshot <= \$1134 ;
+  always @(posedge clk)
+    ch1_result_status_w0_crc_ok_snapshot <= \$1135 ;
+  always @(posedge clk)
+    ch1_result_status_w1_ne_snapshot <= \$1136 ;
+  always @(posedge clk)
+    ch1_result_status_w1_nw_snapshot <= \$1137 ;
+  always @(posedge clk)
+    ch1_result_status_w1_crc_ok_snapshot <= \$1138 ;
+  always @(posedge clk)
+    ch1_result_status_lc_repeat_snapshot <= \$1139 ;
+  always @(posedge clk)
+    ch1_result_status_lc_skip_snapshot <= \$1140 ;
+  always @(posedge clk)
+    ch1_result_status_lc_zero_snapshot <= \$1141 ;
+  always @(posedge clk)
+    ch1_result_status_spw_mismatch_snapshot <= \$1142 ;
+  always @(posedge clk)
+    ch1_result_status_lc_snapshot <= \$1143 ;
+  always @(posedge clk)
+    ch1_result_seq_seq_snapshot <= \$1144 ;
+  always @(posedge clk)
+    ch1_result_seq_line_delay_snapshot <= \$1145 ;
+  always @(posedge clk)
+    ch1_result_w0_lo_data_snapshot <= \$1146 ;
+  always @(posedge clk)
+    ch1_result_w0_hi_data_snapshot <= \$1147 ;
+  always @(posedge clk)
+    ch1_result_w1_lo_data_snapshot <= \$1148 ;
+  always @(posedge clk)
+    ch1_result_w1_hi_data_snapshot <= \$1149 ;
+  always @(posedge clk)
+    ch1_result_timestamp_time_snapshot <= \$1150 ;
+  always @(posedge clk)
+    ch1_result_line_noise_events_snapshot <= \$1151 ;
+  always @(posedge clk)
+    ch1_result_line_delay_settled_snapshot <= \$1152 ;
+  always @(posedge clk)
+    ch1_result_line_delay_spread_snapshot <= \$1153 ;
+  always @(posedge clk)
+    ch1_result_line_settled_delay_snapshot <= \$1154 ;
+  always @(posedge clk)
+    ch1_window0_read <= \$1155 ;
+  always @(posedge clk)
+    ch1_window1_read <= \$1156 ;
+  always @(posedge clk)
+    ch1_read_data <= \$1157 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$479  = bus__w_en;
+    \$775  = bus__w_en;
     if (rst) begin
-      \$479  = 1'h0;
+      \$775  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$480  = write_addr;
+    \$776  = write_addr;
     if (bus__w_en) begin
-      \$480  = bus__w_addr;
+      \$776  = bus__w_addr;
     end
     if (rst) begin
-      \$480  = 11'h000;
+      \$776  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$481  = write_data;
+    \$777  = write_data;
     if (bus__w_en) begin
-      \$481  = bus__w_data;
+      \$777  = bus__w_data;
     end
     if (rst) begin
-      \$481  = 32'd0;
+      \$777  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$482  = write_strb;
+    \$778  = write_strb;
     if (bus__w_en) begin
-      \$482  = bus__w_strb;
+      \$778  = bus__w_strb;
     end
     if (rst) begin
-      \$482  = 4'h0;
+      \$778  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$483  = config_write_data;
+    \$779  = config_write_data;
     if (write_en) begin
-      \$483  = write_data;
+      \$779  = write_data;
     end
     if (rst) begin
-      \$483  = 32'd0;
+      \$779  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$484  = config_write_strb;
+    \$780  = config_write_strb;
     if (write_en) begin
-      \$484  = write_strb;
+      \$780  = write_strb;
     end
     if (rst) begin
-      \$484  = 4'h0;
+      \$780  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$485  = \$2 ;
+    \$781  = \$2 ;
     if (rst) begin
-      \$485  = 1'h0;
+      \$781  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$486  = g_read_select_0;
+    \$782  = g_read_select_0;
     if (bus__r_en) begin
-      \$486  = \$3 ;
+      \$782  = \$3 ;
     end
     if (rst) begin
-      \$486  = 1'h0;
+      \$782  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$487  = g_read_select_1;
+    \$783  = g_read_select_1;
     if (bus__r_en) begin
-      \$487  = \$4 ;
+      \$783  = \$4 ;
     end
     if (rst) begin
-      \$487  = 1'h0;
+      \$783  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$488  = g_read_select_2;
+    \$784  = g_read_select_2;
     if (bus__r_en) begin
-      \$488  = \$5 ;
+      \$784  = \$5 ;
     end
     if (rst) begin
-      \$488  = 1'h0;
+      \$784  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$489  = g_read_select_3;
+    \$785  = g_read_select_3;
     if (bus__r_en) begin
-      \$489  = \$6 ;
+      \$785  = \$6 ;
     end
     if (rst) begin
-      \$489  = 1'h0;
+      \$785  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$490  = g_read_select_4;
+    \$786  = g_read_select_4;
     if (bus__r_en) begin
-      \$490  = \$7 ;
+      \$786  = \$7 ;
     end
     if (rst) begin
-      \$490  = 1'h0;
+      \$786  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$491  = g_read_data;
+    \$787  = g_read_data;
     if (bus__r_load) begin
-      \$491  = \$17 ;
+      \$787  = \$17 ;
     end
     if (rst) begin
-      \$491  = 32'd0;
+      \$787  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$492  = \$19 ;
+    \$788  = \$19 ;
     if (rst) begin
-      \$492  = 1'h0;
+      \$788  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$493  = \$21 ;
+    \$789  = \$21 ;
     if (rst) begin
-      \$493  = 1'h0;
+      \$789  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$494  = \$23 ;
+    \$790  = \$23 ;
     if (rst) begin
-      \$494  = 1'h0;
+      \$790  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$495  = ch0_ctrl_periodic;
+    \$791  = ch0_ctrl_periodic;
     if (\$24 ) begin
-      \$495  = write_data[8];
+      \$791  = write_data[8];
     end
     if (rst) begin
-      \$495  = 1'h0;
+      \$791  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$496  = ch0_ctrl_trigger_enable;
+    \$792  = ch0_ctrl_trigger_enable;
     if (\$25 ) begin
-      \$496  = write_data[9];
+      \$792  = write_data[9];
     end
     if (rst) begin
-      \$496  = 1'h0;
+      \$792  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$497  = ch0_irq_status_done;
+    \$793  = ch0_irq_status_done;
     if (ch0__frame_done) begin
-      \$497  = 1'h1;
+      \$793  = 1'h1;
     end else if (\$27 ) begin
-      \$497  = 1'h0;
+      \$793  = 1'h0;
     end
     if (rst) begin
-      \$497  = 1'h0;
+      \$793  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$498  = ch0_irq_status_error;
+    \$794  = ch0_irq_status_error;
     if (ch0__frame_error) begin
-      \$498  = 1'h1;
+      \$794  = 1'h1;
     end else if (\$29 ) begin
-      \$498  = 1'h0;
+      \$794  = 1'h0;
     end
     if (rst) begin
-      \$498  = 1'h0;
+      \$794  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$499  = ch0_irq_status_access_done;
+    \$795  = ch0_irq_status_access_done;
     if (ch0__ca_done) begin
-      \$499  = 1'h1;
+      \$795  = 1'h1;
     end else if (\$31 ) begin
-      \$499  = 1'h0;
+      \$795  = 1'h0;
     end
     if (rst) begin
-      \$499  = 1'h0;
+      \$795  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$500  = ch0_irq_enable_write;
+    \$796  = ch0_irq_enable_write;
     if (rst) begin
-      \$500  = 1'h0;
+      \$796  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$501  = ch0_irq_enable_done;
+    \$797  = ch0_irq_enable_done;
     if (\$32 ) begin
-      \$501  = config_write_data[0];
+      \$797  = config_write_data[0];
     end
     if (rst) begin
-      \$501  = 1'h0;
+      \$797  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$502  = ch0_irq_enable_error;
+    \$798  = ch0_irq_enable_error;
     if (\$33 ) begin
-      \$502  = config_write_data[1];
+      \$798  = config_write_data[1];
     end
     if (rst) begin
-      \$502  = 1'h0;
+      \$798  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$503  = ch0_irq_enable_access_done;
+    \$799  = ch0_irq_enable_access_done;
     if (\$34 ) begin
-      \$503  = config_write_data[2];
+      \$799  = config_write_data[2];
     end
     if (rst) begin
-      \$503  = 1'h0;
+      \$799  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$504  = ch0_cfg_ma_write;
+    \$800  = ch0_cfg_ma_write;
     if (rst) begin
-      \$504  = 1'h0;
+      \$800  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$505  = ch0_cfg_ma_ma_half_period;
+    \$801  = ch0_cfg_ma_ma_half_period;
     if (\$35 ) begin
-      \$505 [7:0] = config_write_data[7:0];
+      \$801 [7:0] = config_write_data[7:0];
     end
     if (\$36 ) begin
-      \$505 [15:8] = config_write_data[15:8];
+      \$801 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$505  = 16'h0000;
+      \$801  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$506  = ch0_cfg_ma_delay_limit;
+    \$802  = ch0_cfg_ma_delay_limit;
     if (\$37 ) begin
-      \$506 [7:0] = config_write_data[23:16];
+      \$802 [7:0] = config_write_data[23:16];
     end
     if (\$38 ) begin
-      \$506 [11:8] = config_write_data[27:24];
+      \$802 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$506  = 12'h000;
+      \$802  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$507  = ch0_cfg_period_write;
+    \$803  = ch0_cfg_period_write;
     if (rst) begin
-      \$507  = 1'h0;
+      \$803  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$508  = ch0_cfg_period_request_period;
+    \$804  = ch0_cfg_period_request_period;
     if (\$39 ) begin
-      \$508 [7:0] = config_write_data[7:0];
+      \$804 [7:0] = config_write_data[7:0];
     end
     if (\$40 ) begin
-      \$508 [15:8] = config_write_data[15:8];
+      \$804 [15:8] = config_write_data[15:8];
     end
     if (\$41 ) begin
-      \$508 [23:16] = config_write_data[23:16];
+      \$804 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$508  = 24'h000000;
+      \$804  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$509  = ch0_cfg_break_write;
+    \$805  = ch0_cfg_break_write;
     if (rst) begin
-      \$509  = 1'h0;
+      \$805  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$510  = ch0_cfg_break_break_time;
+    \$806  = ch0_cfg_break_break_time;
     if (\$42 ) begin
-      \$510 [7:0] = config_write_data[7:0];
+      \$806 [7:0] = config_write_data[7:0];
     end
     if (\$43 ) begin
-      \$510 [15:8] = config_write_data[15:8];
+      \$806 [15:8] = config_write_data[15:8];
     end
     if (\$44 ) begin
-      \$510 [23:16] = config_write_data[23:16];
+      \$806 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$510  = 24'h000000;
+      \$806  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$511  = ch0_cfg_ack_write;
+    \$807  = ch0_cfg_ack_write;
     if (rst) begin
-      \$511  = 1'h0;
+      \$807  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$512  = ch0_cfg_ack_ack_limit;
+    \$808  = ch0_cfg_ack_ack_limit;
     if (\$45 ) begin
-      \$512 [7:0] = config_write_data[7:0];
+      \$808 [7:0] = config_write_data[7:0];
     end
     if (\$46 ) begin
-      \$512 [15:8] = config_write_data[15:8];
+      \$808 [15:8] = config_write_data[15:8];
     end
     if (\$47 ) begin
-      \$512 [23:16] = config_write_data[23:16];
+      \$808 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$512  = 24'h000000;
+      \$808  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$513  = ch0_cfg_timeout_write;
+    \$809  = ch0_cfg_timeout_write;
     if (rst) begin
-      \$513  = 1'h0;
+      \$809  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$514  = ch0_cfg_timeout_timeout_limit;
+    \$810  = ch0_cfg_timeout_timeout_limit;
     if (\$48 ) begin
-      \$514 [7:0] = config_write_data[7:0];
+      \$810 [7:0] = config_write_data[7:0];
     end
     if (\$49 ) begin
-      \$514 [15:8] = config_write_data[15:8];
+      \$810 [15:8] = config_write_data[15:8];
     end
     if (\$50 ) begin
-      \$514 [23:16] = config_write_data[23:16];
+      \$810 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$514  = 24'h000000;
+      \$810  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$515  = ch0_cfg_words_write;
+    \$811  = ch0_cfg_words_write;
     if (rst) begin
-      \$515  = 1'h0;
+      \$811  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$516  = ch0_cfg_words_w0_data_bits;
+    \$812  = ch0_cfg_words_w0_data_bits;
     if (\$51 ) begin
-      \$516  = config_write_data[5:0];
+      \$812  = config_write_data[5:0];
     end
     if (rst) begin
-      \$516  = 6'h00;
+      \$812  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$517  = ch0_cfg_words_w0_nenw;
+    \$813  = ch0_cfg_words_w0_nenw;
     if (\$52 ) begin
-      \$517  = config_write_data[6];
+      \$813  = config_write_data[6];
     end
     if (rst) begin
-      \$517  = 1'h0;
+      \$813  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$518  = ch0_cfg_words_w0_lc;
+    \$814  = ch0_cfg_words_w0_lc;
     if (\$53 ) begin
-      \$518  = config_write_data[7];
+      \$814  = config_write_data[7];
     end
     if (rst) begin
-      \$518  = 1'h0;
+      \$814  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$519  = ch0_cfg_words_w0_crc;
+    \$815  = ch0_cfg_words_w0_crc;
     if (\$54 ) begin
-      \$519  = config_write_data[9:8];
+      \$815  = config_write_data[9:8];
     end
     if (rst) begin
-      \$519  = 2'h0;
+      \$815  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$520  = ch0_cfg_words_w0_gray;
+    \$816  = ch0_cfg_words_w0_gray;
     if (\$55 ) begin
-      \$520  = config_write_data[10];
+      \$816  = config_write_data[10];
     end
     if (rst) begin
-      \$520  = 1'h0;
+      \$816  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$521  = ch0_cfg_words_w0_signed;
+    \$817  = ch0_cfg_words_w0_signed;
     if (\$56 ) begin
-      \$521  = config_write_data[11];
+      \$817  = config_write_data[11];
     end
     if (rst) begin
-      \$521  = 1'h0;
+      \$817  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$522  = ch0_cfg_words_w1_data_bits;
+    \$818  = ch0_cfg_words_w1_data_bits;
     if (\$57 ) begin
-      \$522  = config_write_data[21:16];
+      \$818  = config_write_data[21:16];
     end
     if (rst) begin
-      \$522  = 6'h00;
+      \$818  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$523  = ch0_cfg_words_w1_nenw;
+    \$819  = ch0_cfg_words_w1_nenw;
     if (\$58 ) begin
-      \$523  = config_write_data[22];
+      \$819  = config_write_data[22];
     end
     if (rst) begin
-      \$523  = 1'h0;
+      \$819  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$524  = ch0_cfg_words_w1_lc;
+    \$820  = ch0_cfg_words_w1_lc;
     if (\$59 ) begin
-      \$524  = config_write_data[23];
+      \$820  = config_write_data[23];
     end
     if (rst) begin
-      \$524  = 1'h0;
+      \$820  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$525  = ch0_cfg_words_w1_crc;
+    \$821  = ch0_cfg_words_w1_crc;
     if (\$60 ) begin
-      \$525  = config_write_data[25:24];
+      \$821  = config_write_data[25:24];
     end
     if (rst) begin
-      \$525  = 2'h0;
+      \$821  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$526  = ch0_cfg_words_w1_gray;
+    \$822  = ch0_cfg_words_w1_gray;
     if (\$61 ) begin
-      \$526  = config_write_data[26];
+      \$822  = config_write_data[26];
     end
     if (rst) begin
-      \$526  = 1'h0;
+      \$822  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$527  = ch0_cfg_words_w1_signed;
+    \$823  = ch0_cfg_words_w1_signed;
     if (\$62 ) begin
-      \$527  = config_write_data[27];
+      \$823  = config_write_data[27];
     end
     if (rst) begin
-      \$527  = 1'h0;
+      \$823  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$528  = ch0_cfg_words_w1_enable;
+    \$824  = ch0_cfg_words_w1_enable;
     if (\$63 ) begin
-      \$528  = config_write_data[31];
+      \$824  = config_write_data[31];
     end
     if (rst) begin
-      \$528  = 1'h0;
+      \$824  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$529  = ch0_cfg_checks_write;
+    \$825  = ch0_cfg_checks_write;
     if (rst) begin
-      \$529  = 1'h0;
+      \$825  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$530  = ch0_cfg_checks_end_check;
+    \$826  = ch0_cfg_checks_end_check;
     if (\$64 ) begin
-      \$530  = config_write_data[0];
+      \$826  = config_write_data[0];
     end
     if (rst) begin
-      \$530  = 1'h0;
+      \$826  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$531  = ch0_cfg_checks_spw_check;
+    \$827  = ch0_cfg_checks_spw_check;
     if (\$65 ) begin
-      \$531  = config_write_data[1];
+      \$827  = config_write_data[1];
     end
     if (rst) begin
-      \$531  = 1'h0;
+      \$827  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$532  = ch0_cfg_checks_spw_tolerance;
+    \$828  = ch0_cfg_checks_spw_tolerance;
     if (\$66 ) begin
-      \$532  = config_write_data[15:8];
+      \$828  = config_write_data[15:8];
     end
     if (rst) begin
-      \$532  = 8'h00;
+      \$828  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$533  = ch0_cfg_checks_noise_limit;
+    \$829  = ch0_cfg_checks_noise_limit;
     if (\$67 ) begin
-      \$533  = config_write_data[19:16];
+      \$829  = config_write_data[19:16];
     end
     if (rst) begin
-      \$533  = 4'h0;
+      \$829  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$534  = ch0_cfg_checks_delay_tolerance;
+    \$830  = ch0_cfg_checks_delay_tolerance;
     if (\$68 ) begin
-      \$534  = config_write_data[23:20];
+      \$830  = config_write_data[23:20];
     end
     if (rst) begin
-      \$534  = 4'h0;
+      \$830  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$535  = ch0_cfg_checks_confirm_frames;
+    \$831  = ch0_cfg_checks_confirm_frames;
     if (\$69 ) begin
-      \$535  = config_write_data[27:24];
+      \$831  = config_write_data[27:24];
     end
     if (rst) begin
-      \$535  = 4'h0;
+      \$831  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$536  = ch0_cfg_quiet_write;
+    \$832  = ch0_cfg_quiet_write;
     if (rst) begin
-      \$536  = 1'h0;
+      \$832  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$537  = ch0_cfg_quiet_quiet_time;
+    \$833  = ch0_cfg_quiet_quiet_time;
     if (\$70 ) begin
-      \$537 [7:0] = config_write_data[7:0];
+      \$833 [7:0] = config_write_data[7:0];
     end
     if (\$71 ) begin
-      \$537 [11:8] = config_write_data[11:8];
+      \$833 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$537  = 12'h000;
+      \$833  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$538  = ch0_cfg_crc0_write;
+    \$834  = ch0_cfg_crc0_write;
     if (rst) begin
-      \$538  = 1'h0;
+      \$834  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$539  = ch0_cfg_crc0_w0_crc_poly;
+    \$835  = ch0_cfg_crc0_w0_crc_poly;
     if (\$72 ) begin
-      \$539 [7:0] = config_write_data[7:0];
+      \$835 [7:0] = config_write_data[7:0];
     end
     if (\$73 ) begin
-      \$539 [15:8] = config_write_data[15:8];
+      \$835 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$539  = 16'h0000;
+      \$835  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$540  = ch0_cfg_crc0_w0_crc_width;
+    \$836  = ch0_cfg_crc0_w0_crc_width;
     if (\$74 ) begin
-      \$540  = config_write_data[20:16];
+      \$836  = config_write_data[20:16];
     end
     if (rst) begin
-      \$540  = 5'h00;
+      \$836  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$541  = ch0_cfg_crc0_w0_crc_inverted;
+    \$837  = ch0_cfg_crc0_w0_crc_inverted;
     if (\$75 ) begin
-      \$541  = config_write_data[24];
+      \$837  = config_write_data[24];
     end
     if (rst) begin
-      \$541  = 1'h0;
+      \$837  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$542  = ch0_cfg_crc0_start_write;
+    \$838  = ch0_cfg_crc0_start_write;
     if (rst) begin
-      \$542  = 1'h0;
+      \$838  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$543  = ch0_cfg_crc0_start_w0_crc_start;
+    \$839  = ch0_cfg_crc0_start_w0_crc_start;
     if (\$76 ) begin
-      \$543 [7:0] = config_write_data[7:0];
+      \$839 [7:0] = config_write_data[7:0];
     end
     if (\$77 ) begin
-      \$543 [15:8] = config_write_data[15:8];
+      \$839 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$543  = 16'h0000;
+      \$839  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$544  = ch0_cfg_crc1_write;
+    \$840  = ch0_cfg_crc1_write;
     if (rst) begin
-      \$544  = 1'h0;
+      \$840  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$545  = ch0_cfg_crc1_w1_crc_poly;
+    \$841  = ch0_cfg_crc1_w1_crc_poly;
     if (\$78 ) begin
-      \$545 [7:0] = config_write_data[7:0];
+      \$841 [7:0] = config_write_data[7:0];
     end
     if (\$79 ) begin
-      \$545 [15:8] = config_write_data[15:8];
+      \$841 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$545  = 16'h0000;
+      \$841  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$546  = ch0_cfg_crc1_w1_crc_width;
+    \$842  = ch0_cfg_crc1_w1_crc_width;
     if (\$80 ) begin
-      \$546  = config_write_data[20:16];
+      \$842  = config_write_data[20:16];
     end
     if (rst) begin
-      \$546  = 5'h00;
+      \$842  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$547  = ch0_cfg_crc1_w1_crc_inverted;
+    \$843  = ch0_cfg_crc1_w1_crc_inverted;
     if (\$81 ) begin
-      \$547  = config_write_data[24];
+      \$843  = config_write_data[24];
     end
     if (rst) begin
-      \$547  = 1'h0;
+      \$843  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$548  = ch0_cfg_crc1_start_write;
+    \$844  = ch0_cfg_crc1_start_write;
     if (rst) begin
-      \$548  = 1'h0;
+      \$844  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$549  = ch0_cfg_crc1_start_w1_crc_start;
+    \$845  = ch0_cfg_crc1_start_w1_crc_start;
     if (\$82 ) begin
-      \$549 [7:0] = config_write_data[7:0];
+      \$845 [7:0] = config_write_data[7:0];
     end
     if (\$83 ) begin
-      \$549 [15:8] = config_write_data[15:8];
+      \$845 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$549  = 16'h0000;
+      \$845  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$550  = ch0_cfg_ssi_write;
+    \$846  = ch0_cfg_ssi_write;
     if (rst) begin
-      \$550  = 1'h0;
+      \$846  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$551  = ch0_cfg_ssi_ssi;
+    \$847  = ch0_cfg_ssi_ssi;
     if (\$84 ) begin
-      \$551  = config_write_data[0];
+      \$847  = config_write_data[0];
     end
     if (rst) begin
-      \$551  = 1'h0;
+      \$847  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$552  = ch0_cfg_ssi_ssi_error;
+    \$848  = ch0_cfg_ssi_ssi_error;
     if (\$85 ) begin
-      \$552  = config_write_data[1];
+      \$848  = config_write_data[1];
     end
     if (rst) begin
-      \$552  = 1'h0;
+      \$848  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$553  = ch0_cfg_ssi_ssi_error_low;
+    \$849  = ch0_cfg_ssi_ssi_error_low;
     if (\$86 ) begin
-      \$553  = config_write_data[2];
+      \$849  = config_write_data[2];
     end
     if (rst) begin
-      \$553  = 1'h0;
+      \$849  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$554  = ch0_cfg_ssi_ssi_double;
+    \$850  = ch0_cfg_ssi_ssi_double;
     if (\$87 ) begin
-      \$554  = config_write_data[3];
+      \$850  = config_write_data[3];
     end
     if (rst) begin
-      \$554  = 1'h0;
+      \$850  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$555  = ch0_cfg_ssi_ssi_delay;
+    \$851  = ch0_cfg_ssi_ssi_delay;
     if (\$88 ) begin
-      \$555 [7:0] = config_write_data[23:16];
+      \$851 [7:0] = config_write_data[23:16];
     end
     if (\$89 ) begin
-      \$555 [11:8] = config_write_data[27:24];
+      \$851 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$555  = 12'h000;
+      \$851  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$556  = ch0_ca_request_write;
+    \$852  = ch0_cfg_w2_write;
     if (rst) begin
-      \$556  = 1'h0;
+      \$852  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$557  = ch0_ca_request_slave_id;
+    \$853  = ch0_cfg_w2_crc_write;
+    if (rst) begin
+      \$853  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$854  = ch0_cfg_w2_crc_start_write;
+    if (rst) begin
+      \$854  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$855  = ch0_cfg_w3_write;
+    if (rst) begin
+      \$855  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$856  = ch0_cfg_w3_crc_write;
+    if (rst) begin
+      \$856  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$857  = ch0_cfg_w3_crc_start_write;
+    if (rst) begin
+      \$857  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$858  = ch0_cfg_w4_write;
+    if (rst) begin
+      \$858  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$859  = ch0_cfg_w4_crc_write;
+    if (rst) begin
+      \$859  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$860  = ch0_cfg_w4_crc_start_write;
+    if (rst) begin
+      \$860  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$861  = ch0_cfg_w5_write;
+    if (rst) begin
+      \$861  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$862  = ch0_cfg_w5_crc_write;
+    if (rst) begin
+      \$862  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$863  = ch0_cfg_w5_crc_start_write;
+    if (rst) begin
+      \$863  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$864  = ch0_cfg_w6_write;
+    if (rst) begin
+      \$864  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$865  = ch0_cfg_w6_crc_write;
+    if (rst) begin
+      \$865  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$866  = ch0_cfg_w6_crc_start_write;
+    if (rst) begin
+      \$866  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$867  = ch0_cfg_w7_write;
+    if (rst) begin
+      \$867  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$868  = ch0_cfg_w7_crc_write;
+    if (rst) begin
+      \$868  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$869  = ch0_cfg_w7_crc_start_write;
+    if (rst) begin
+      \$869  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$870  = ch0_ca_request_write;
+    if (rst) begin
+      \$870  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$871  = ch0_ca_request_slave_id;
     if (\$90 ) begin
-      \$557  = config_write_data[2:0];
+      \$871  = config_write_data[2:0];
     end
     if (rst) begin
-      \$557  = 3'h0;
+      \$871  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$558  = ch0_ca_request_address;
+    \$872  = ch0_ca_request_address;
     if (\$91 ) begin
-      \$558  = config_write_data[14:8];
+      \$872  = config_write_data[14:8];
     end
     if (rst) begin
-      \$558  = 7'h00;
+      \$872  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$559  = ch0_ca_request_count;
+    \$873  = ch0_ca_request_count;
     if (\$92 ) begin
-      \$559  = config_write_data[22:16];
+      \$873  = config_write_data[22:16];
     end
     if (rst) begin
-      \$559  = 7'h00;
+      \$873  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$560  = \ch0_ca_request_write$113 ;
+    \$874  = \ch0_ca_request_write$149 ;
     if (\$93 ) begin
-      \$560  = config_write_data[24];
+      \$874  = config_write_data[24];
     end
     if (rst) begin
-      \$560  = 1'h0;
+      \$874  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$561  = \$95 ;
+    \$875  = \$95 ;
     if (rst) begin
-      \$561  = 1'h0;
+      \$875  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$562  = \$97 ;
+    \$876  = \$97 ;
     if (rst) begin
-      \$562  = 1'h0;
+      \$876  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$563  = ch0_read_select_80;
+    \$877  = ch0_read_select_80;
     if (bus__r_en) begin
-      \$563  = \$98 ;
+      \$877  = \$98 ;
     end
     if (rst) begin
-      \$563  = 1'h0;
+      \$877  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$564  = ch0_read_select_81;
+    \$878  = ch0_read_select_81;
     if (bus__r_en) begin
-      \$564  = \$99 ;
+      \$878  = \$99 ;
     end
     if (rst) begin
-      \$564  = 1'h0;
+      \$878  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$565  = ch0_read_select_82;
+    \$879  = ch0_read_select_82;
     if (bus__r_en) begin
-      \$565  = \$100 ;
+      \$879  = \$100 ;
     end
     if (rst) begin
-      \$565  = 1'h0;
+      \$879  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$566  = ch0_read_select_84;
+    \$880  = ch0_read_select_84;
     if (bus__r_en) begin
-      \$566  = \$101 ;
+      \$880  = \$101 ;
     end
     if (rst) begin
-      \$566  = 1'h0;
+      \$880  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$567  = ch0_read_select_85;
+    \$881  = ch0_read_select_85;
     if (bus__r_en) begin
-      \$567  = \$102 ;
+      \$881  = \$102 ;
     end
     if (rst) begin
-      \$567  = 1'h0;
+      \$881  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$568  = ch0_read_select_88;
+    \$882  = ch0_read_select_86;
     if (bus__r_en) begin
-      \$568  = \$103 ;
+      \$882  = \$103 ;
     end
     if (rst) begin
-      \$568  = 1'h0;
+      \$882  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$569  = ch0_read_select_89;
+    \$883  = ch0_read_select_87;
     if (bus__r_en) begin
-      \$569  = \$104 ;
+      \$883  = \$104 ;
     end
     if (rst) begin
-      \$569  = 1'h0;
+      \$883  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$570  = ch0_read_select_8a;
+    \$884  = ch0_read_select_88;
     if (bus__r_en) begin
-      \$570  = \$105 ;
+      \$884  = \$105 ;
     end
     if (rst) begin
-      \$570  = 1'h0;
+      \$884  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$571  = ch0_read_select_8b;
+    \$885  = ch0_read_select_89;
     if (bus__r_en) begin
-      \$571  = \$106 ;
+      \$885  = \$106 ;
     end
     if (rst) begin
-      \$571  = 1'h0;
+      \$885  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$572  = ch0_read_select_8c;
+    \$886  = ch0_read_select_8a;
     if (bus__r_en) begin
-      \$572  = \$107 ;
+      \$886  = \$107 ;
     end
     if (rst) begin
-      \$572  = 1'h0;
+      \$886  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$573  = ch0_read_select_8d;
+    \$887  = ch0_read_select_8b;
     if (bus__r_en) begin
-      \$573  = \$108 ;
+      \$887  = \$108 ;
     end
     if (rst) begin
-      \$573  = 1'h0;
+      \$887  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$574  = ch0_read_select_8e;
+    \$888  = ch0_read_select_8c;
     if (bus__r_en) begin
-      \$574  = \$109 ;
+      \$888  = \$109 ;
     end
     if (rst) begin
-      \$574  = 1'h0;
+      \$888  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$575  = ch0_read_select_8f;
+    \$889  = ch0_read_select_8d;
     if (bus__r_en) begin
-      \$575  = \$110 ;
+      \$889  = \$110 ;
     end
     if (rst) begin
-      \$575  = 1'h0;
+      \$889  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$576  = ch0_read_select_90;
+    \$890  = ch0_read_select_8e;
     if (bus__r_en) begin
-      \$576  = \$111 ;
+      \$890  = \$111 ;
     end
     if (rst) begin
-      \$576  = 1'h0;
+      \$890  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$577  = ch0_read_select_91;
+    \$891  = ch0_read_select_8f;
     if (bus__r_en) begin
-      \$577  = \$112 ;
+      \$891  = \$112 ;
     end
     if (rst) begin
-      \$577  = 1'h0;
+      \$891  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$578  = ch0_read_select_92;
+    \$892  = ch0_read_select_90;
     if (bus__r_en) begin
-      \$578  = \$113 ;
+      \$892  = \$113 ;
     end
     if (rst) begin
-      \$578  = 1'h0;
+      \$892  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$579  = ch0_read_select_93;
+    \$893  = ch0_read_select_91;
     if (bus__r_en) begin
-      \$579  = \$114 ;
+      \$893  = \$114 ;
     end
     if (rst) begin
-      \$579  = 1'h0;
+      \$893  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$580  = ch0_read_select_94;
+    \$894  = ch0_read_select_92;
     if (bus__r_en) begin
-      \$580  = \$115 ;
+      \$894  = \$115 ;
     end
     if (rst) begin
-      \$580  = 1'h0;
+      \$894  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$581  = ch0_read_select_95;
+    \$895  = ch0_read_select_93;
     if (bus__r_en) begin
-      \$581  = \$116 ;
+      \$895  = \$116 ;
     end
     if (rst) begin
-      \$581  = 1'h0;
+      \$895  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$582  = ch0_read_select_96;
+    \$896  = ch0_read_select_94;
     if (bus__r_en) begin
-      \$582  = \$117 ;
+      \$896  = \$117 ;
     end
     if (rst) begin
-      \$582  = 1'h0;
+      \$896  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$583  = ch0_read_select_97;
+    \$897  = ch0_read_select_95;
     if (bus__r_en) begin
-      \$583  = \$118 ;
+      \$897  = \$118 ;
     end
     if (rst) begin
-      \$583  = 1'h0;
+      \$897  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$584  = ch0_read_select_a0;
+    \$898  = ch0_read_select_96;
     if (bus__r_en) begin
-      \$584  = \$119 ;
+      \$898  = \$119 ;
     end
     if (rst) begin
-      \$584  = 1'h0;
+      \$898  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$585  = ch0_read_select_a1;
+    \$899  = ch0_read_select_97;
     if (bus__r_en) begin
-      \$585  = \$120 ;
+      \$899  = \$120 ;
     end
     if (rst) begin
-      \$585  = 1'h0;
+      \$899  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$586  = ch0_read_select_a2;
+    \$900  = ch0_read_select_a0;
     if (bus__r_en) begin
-      \$586  = \$121 ;
+      \$900  = \$121 ;
     end
     if (rst) begin
-      \$586  = 1'h0;
+      \$900  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$587  = ch0_read_select_a3;
+    \$901  = ch0_read_select_a1;
     if (bus__r_en) begin
-      \$587  = \$122 ;
+      \$901  = \$122 ;
     end
     if (rst) begin
-      \$587  = 1'h0;
+      \$901  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$588  = ch0_read_select_a4;
+    \$902  = ch0_read_select_a2;
     if (bus__r_en) begin
-      \$588  = \$123 ;
+      \$902  = \$123 ;
     end
     if (rst) begin
-      \$588  = 1'h0;
+      \$902  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$589  = ch0_read_select_c0;
+    \$903  = ch0_read_select_a3;
     if (bus__r_en) begin
-      \$589  = \$124 ;
+      \$903  = \$124 ;
     end
     if (rst) begin
-      \$589  = 1'h0;
+      \$903  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$590  = ch0_read_select_c1;
+    \$904  = ch0_read_select_a4;
     if (bus__r_en) begin
-      \$590  = \$125 ;
+      \$904  = \$125 ;
     end
     if (rst) begin
-      \$590  = 1'h0;
+      \$904  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$591  = ch0_read_select_c2;
+    \$905  = ch0_read_select_a5;
     if (bus__r_en) begin
-      \$591  = \$126 ;
+      \$905  = \$126 ;
     end
     if (rst) begin
-      \$591  = 1'h0;
+      \$905  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$592  = ch0_read_select_c3;
+    \$906  = ch0_read_select_a6;
     if (bus__r_en) begin
-      \$592  = \$127 ;
+      \$906  = \$127 ;
     end
     if (rst) begin
-      \$592  = 1'h0;
+      \$906  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$593  = ch0_read_select_c4;
+    \$907  = ch0_read_select_a7;
     if (bus__r_en) begin
-      \$593  = \$128 ;
+      \$907  = \$128 ;
     end
     if (rst) begin
-      \$593  = 1'h0;
+      \$907  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$594  = ch0_read_select_c5;
+    \$908  = ch0_read_select_a8;
     if (bus__r_en) begin
-      \$594  = \$129 ;
+      \$908  = \$129 ;
     end
     if (rst) begin
-      \$594  = 1'h0;
+      \$908  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$595  = ch0_result_status_status_snapshot;
-    if (\$130 ) begin
-      \$595  = \port$6641$0 [3:0];
-    end
-    if (rst) begin
-      \$595  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$596  = ch0_result_status_cds_snapshot;
-    if (\$130 ) begin
-      \$596  = \port$6641$0 [49];
-    end
-    if (rst) begin
-      \$596  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$597  = ch0_result_status_w0_ne_snapshot;
-    if (\$130 ) begin
-      \$597  = \port$6641$0 [131];
-    end
-    if (rst) begin
-      \$597  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$598  = ch0_result_status_w0_nw_snapshot;
-    if (\$130 ) begin
-      \$598  = \port$6641$0 [132];
-    end
-    if (rst) begin
-      \$598  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$599  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$130 ) begin
-      \$599  = \port$6641$0 [133];
-    end
-    if (rst) begin
-      \$599  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$600  = ch0_result_status_w1_ne_snapshot;
-    if (\$130 ) begin
-      \$600  = \port$6641$0 [174];
-    end
-    if (rst) begin
-      \$600  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$601  = ch0_result_status_w1_nw_snapshot;
-    if (\$130 ) begin
-      \$601  = \port$6641$0 [175];
-    end
-    if (rst) begin
-      \$601  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$602  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$130 ) begin
-      \$602  = \port$6641$0 [176];
-    end
-    if (rst) begin
-      \$602  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$603  = ch0_result_status_lc_repeat_snapshot;
-    if (\$130 ) begin
-      \$603  = \port$6641$0 [183];
-    end
-    if (rst) begin
-      \$603  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$604  = ch0_result_status_lc_skip_snapshot;
-    if (\$130 ) begin
-      \$604  = \port$6641$0 [184];
-    end
-    if (rst) begin
-      \$604  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$605  = ch0_result_status_lc_zero_snapshot;
-    if (\$130 ) begin
-      \$605  = \port$6641$0 [185];
-    end
-    if (rst) begin
-      \$605  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$606  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$130 ) begin
-      \$606  = \port$6641$0 [186];
-    end
-    if (rst) begin
-      \$606  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$607  = ch0_result_status_lc_snapshot;
-    if (\$130 ) begin
-      \$607  = \port$6641$0 [182:177];
-    end
-    if (rst) begin
-      \$607  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$608  = ch0_result_seq_seq_snapshot;
-    if (\$130 ) begin
-      \$608  = ch0__done_count;
-    end
-    if (rst) begin
-      \$608  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$609  = ch0_result_seq_line_delay_snapshot;
-    if (\$130 ) begin
-      \$609  = \port$6641$0 [48:36];
-    end
-    if (rst) begin
-      \$609  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$610  = ch0_result_w0_lo_data_snapshot;
-    if (\$130 ) begin
-      \$610  = \port$6641$0 [107:76];
-    end
-    if (rst) begin
-      \$610  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$611  = ch0_result_w0_hi_data_snapshot;
-    if (\$130 ) begin
-      \$611  = \port$6641$0 [130:108];
-    end
-    if (rst) begin
-      \$611  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$612  = ch0_result_w1_lo_data_snapshot;
-    if (\$130 ) begin
-      \$612  = \port$6641$0 [165:134];
-    end
-    if (rst) begin
-      \$612  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$613  = ch0_result_w1_hi_data_snapshot;
-    if (\$130 ) begin
-      \$613  = \port$6641$0 [173:166];
-    end
-    if (rst) begin
-      \$613  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$614  = ch0_result_timestamp_time_snapshot;
-    if (\$130 ) begin
-      \$614  = \port$6641$0 [35:4];
-    end
-    if (rst) begin
-      \$614  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$615  = ch0_result_line_noise_events_snapshot;
-    if (\$130 ) begin
-      \$615  = \port$6641$0 [53:50];
-    end
-    if (rst) begin
-      \$615  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$616  = ch0_result_line_delay_settled_snapshot;
-    if (\$130 ) begin
-      \$616  = \port$6641$0 [54];
-    end
-    if (rst) begin
-      \$616  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$617  = ch0_result_line_delay_spread_snapshot;
-    if (\$130 ) begin
-      \$617  = \port$6641$0 [75:68];
-    end
-    if (rst) begin
-      \$617  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$618  = ch0_result_line_settled_delay_snapshot;
-    if (\$130 ) begin
-      \$618  = \port$6641$0 [67:55];
-    end
-    if (rst) begin
-      \$618  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$619  = ch0_window0_read;
+    \$909  = ch0_read_select_a9;
     if (bus__r_en) begin
-      \$619  = \$132 ;
+      \$909  = \$130 ;
     end
     if (rst) begin
-      \$619  = 1'h0;
+      \$909  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$620  = ch0_window1_read;
+    \$910  = ch0_read_select_aa;
     if (bus__r_en) begin
-      \$620  = \$134 ;
+      \$910  = \$131 ;
     end
     if (rst) begin
-      \$620  = 1'h0;
+      \$910  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$621  = ch0_read_data;
+    \$911  = ch0_read_select_ac;
+    if (bus__r_en) begin
+      \$911  = \$132 ;
+    end
+    if (rst) begin
+      \$911  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$912  = ch0_read_select_ad;
+    if (bus__r_en) begin
+      \$912  = \$133 ;
+    end
+    if (rst) begin
+      \$912  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$913  = ch0_read_select_ae;
+    if (bus__r_en) begin
+      \$913  = \$134 ;
+    end
+    if (rst) begin
+      \$913  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$914  = ch0_read_select_b0;
+    if (bus__r_en) begin
+      \$914  = \$135 ;
+    end
+    if (rst) begin
+      \$914  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$915  = ch0_read_select_b1;
+    if (bus__r_en) begin
+      \$915  = \$136 ;
+    end
+    if (rst) begin
+      \$915  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$916  = ch0_read_select_b2;
+    if (bus__r_en) begin
+      \$916  = \$137 ;
+    end
+    if (rst) begin
+      \$916  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$917  = ch0_read_select_b4;
+    if (bus__r_en) begin
+      \$917  = \$138 ;
+    end
+    if (rst) begin
+      \$917  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$918  = ch0_read_select_b5;
+    if (bus__r_en) begin
+      \$918  = \$139 ;
+    end
+    if (rst) begin
+      \$918  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$919  = ch0_read_select_b6;
+    if (bus__r_en) begin
+      \$919  = \$140 ;
+    end
+    if (rst) begin
+      \$919  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$920  = ch0_read_select_b8;
+    if (bus__r_en) begin
+      \$920  = \$141 ;
+    end
+    if (rst) begin
+      \$920  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$921  = ch0_read_select_b9;
+    if (bus__r_en) begin
+      \$921  = \$142 ;
+    end
+    if (rst) begin
+      \$921  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$922  = ch0_read_select_ba;
+    if (bus__r_en) begin
+      \$922  = \$143 ;
+    end
+    if (rst) begin
+      \$922  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$923  = ch0_read_select_bc;
+    if (bus__r_en) begin
+      \$923  = \$144 ;
+    end
+    if (rst) begin
+      \$923  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$924  = ch0_read_select_bd;
+    if (bus__r_en) begin
+      \$924  = \$145 ;
+    end
+    if (rst) begin
+      \$924  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$925  = ch0_read_select_be;
+    if (bus__r_en) begin
+      \$925  = \$146 ;
+    end
+    if (rst) begin
+      \$925  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$926  = ch0_read_select_c0;
+    if (bus__r_en) begin
+      \$926  = \$147 ;
+    end
+    if (rst) begin
+      \$926  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$927  = ch0_read_select_c1;
+    if (bus__r_en) begin
+      \$927  = \$148 ;
+    end
+    if (rst) begin
+      \$927  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$928  = ch0_read_select_c2;
+    if (bus__r_en) begin
+      \$928  = \$149 ;
+    end
+    if (rst) begin
+      \$928  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$929  = ch0_read_select_c3;
+    if (bus__r_en) begin
+      \$929  = \$150 ;
+    end
+    if (rst) begin
+      \$929  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$930  = ch0_read_select_c4;
+    if (bus__r_en) begin
+      \$930  = \$151 ;
+    end
+    if (rst) begin
+      \$930  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$931  = ch0_read_select_c5;
+    if (bus__r_en) begin
+      \$931  = \$152 ;
+    end
+    if (rst) begin
+      \$931  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$932  = ch0_read_select_f0;
+    if (bus__r_en) begin
+      \$932  = \$153 ;
+    end
+    if (rst) begin
+      \$932  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$933  = ch0_read_select_f1;
+    if (bus__r_en) begin
+      \$933  = \$154 ;
+    end
+    if (rst) begin
+      \$933  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$934  = ch0_read_select_f2;
+    if (bus__r_en) begin
+      \$934  = \$155 ;
+    end
+    if (rst) begin
+      \$934  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$935  = ch0_read_select_f3;
+    if (bus__r_en) begin
+      \$935  = \$156 ;
+    end
+    if (rst) begin
+      \$935  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$936  = ch0_read_select_f4;
+    if (bus__r_en) begin
+      \$936  = \$157 ;
+    end
+    if (rst) begin
+      \$936  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$937  = ch0_read_select_f5;
+    if (bus__r_en) begin
+      \$937  = \$158 ;
+    end
+    if (rst) begin
+      \$937  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$938  = ch0_read_select_f6;
+    if (bus__r_en) begin
+      \$938  = \$159 ;
+    end
+    if (rst) begin
+      \$938  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$939  = ch0_read_select_f7;
+    if (bus__r_en) begin
+      \$939  = \$160 ;
+    end
+    if (rst) begin
+      \$939  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$940  = ch0_read_select_f8;
+    if (bus__r_en) begin
+      \$940  = \$161 ;
+    end
+    if (rst) begin
+      \$940  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$941  = ch0_read_select_f9;
+    if (bus__r_en) begin
+      \$941  = \$162 ;
+    end
+    if (rst) begin
+      \$941  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$942  = ch0_read_select_fa;
+    if (bus__r_en) begin
+      \$942  = \$163 ;
+    end
+    if (rst) begin
+      \$942  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$943  = ch0_read_select_fb;
+    if (bus__r_en) begin
+      \$943  = \$164 ;
+    end
+    if (rst) begin
+      \$943  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$944  = ch0_read_select_fc;
+    if (bus__r_en) begin
+      \$944  = \$165 ;
+    end
+    if (rst) begin
+      \$944  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$945  = ch0_read_select_fd;
+    if (bus__r_en) begin
+      \$945  = \$166 ;
+    end
+    if (rst) begin
+      \$945  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$946  = ch0_result_status_status_snapshot;
+    if (\$167 ) begin
+      \$946  = \port$7239$0 [3:0];
+    end
+    if (rst) begin
+      \$946  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$947  = ch0_result_status_cds_snapshot;
+    if (\$167 ) begin
+      \$947  = \port$7239$0 [49];
+    end
+    if (rst) begin
+      \$947  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$948  = ch0_result_status_w0_ne_snapshot;
+    if (\$167 ) begin
+      \$948  = \port$7239$0 [131];
+    end
+    if (rst) begin
+      \$948  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$949  = ch0_result_status_w0_nw_snapshot;
+    if (\$167 ) begin
+      \$949  = \port$7239$0 [132];
+    end
+    if (rst) begin
+      \$949  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$950  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$167 ) begin
+      \$950  = \port$7239$0 [133];
+    end
+    if (rst) begin
+      \$950  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$951  = ch0_result_status_w1_ne_snapshot;
+    if (\$167 ) begin
+      \$951  = \port$7239$0 [174];
+    end
+    if (rst) begin
+      \$951  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$952  = ch0_result_status_w1_nw_snapshot;
+    if (\$167 ) begin
+      \$952  = \port$7239$0 [175];
+    end
+    if (rst) begin
+      \$952  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$953  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$167 ) begin
+      \$953  = \port$7239$0 [176];
+    end
+    if (rst) begin
+      \$953  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$954  = ch0_result_status_lc_repeat_snapshot;
+    if (\$167 ) begin
+      \$954  = \port$7239$0 [183];
+    end
+    if (rst) begin
+      \$954  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$955  = ch0_result_status_lc_skip_snapshot;
+    if (\$167 ) begin
+      \$955  = \port$7239$0 [184];
+    end
+    if (rst) begin
+      \$955  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$956  = ch0_result_status_lc_zero_snapshot;
+    if (\$167 ) begin
+      \$956  = \port$7239$0 [185];
+    end
+    if (rst) begin
+      \$956  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$957  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$167 ) begin
+      \$957  = \port$7239$0 [186];
+    end
+    if (rst) begin
+      \$957  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$958  = ch0_result_status_lc_snapshot;
+    if (\$167 ) begin
+      \$958  = \port$7239$0 [182:177];
+    end
+    if (rst) begin
+      \$958  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$959  = ch0_result_seq_seq_snapshot;
+    if (\$167 ) begin
+      \$959  = ch0__done_count;
+    end
+    if (rst) begin
+      \$959  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$960  = ch0_result_seq_line_delay_snapshot;
+    if (\$167 ) begin
+      \$960  = \port$7239$0 [48:36];
+    end
+    if (rst) begin
+      \$960  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$961  = ch0_result_w0_lo_data_snapshot;
+    if (\$167 ) begin
+      \$961  = \port$7239$0 [107:76];
+    end
+    if (rst) begin
+      \$961  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$962  = ch0_result_w0_hi_data_snapshot;
+    if (\$167 ) begin
+      \$962  = \port$7239$0 [130:108];
+    end
+    if (rst) begin
+      \$962  = 23'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$963  = ch0_result_w1_lo_data_snapshot;
+    if (\$167 ) begin
+      \$963  = \port$7239$0 [165:134];
+    end
+    if (rst) begin
+      \$963  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$964  = ch0_result_w1_hi_data_snapshot;
+    if (\$167 ) begin
+      \$964  = \port$7239$0 [173:166];
+    end
+    if (rst) begin
+      \$964  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$965  = ch0_result_timestamp_time_snapshot;
+    if (\$167 ) begin
+      \$965  = \port$7239$0 [35:4];
+    end
+    if (rst) begin
+      \$965  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$966  = ch0_result_line_noise_events_snapshot;
+    if (\$167 ) begin
+      \$966  = \port$7239$0 [53:50];
+    end
+    if (rst) begin
+      \$966  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$967  = ch0_result_line_delay_settled_snapshot;
+    if (\$167 ) begin
+      \$967  = \port$7239$0 [54];
+    end
+    if (rst) begin
+      \$967  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$968  = ch0_result_line_delay_spread_snapshot;
+    if (\$167 ) begin
+      \$968  = \port$7239$0 [75:68];
+    end
+    if (rst) begin
+      \$968  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$969  = ch0_result_line_settled_delay_snapshot;
+    if (\$167 ) begin
+      \$969  = \port$7239$0 [67:55];
+    end
+    if (rst) begin
+      \$969  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$970  = ch0_window0_read;
+    if (bus__r_en) begin
+      \$970  = \$169 ;
+    end
+    if (rst) begin
+      \$970  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$971  = ch0_window1_read;
+    if (bus__r_en) begin
+      \$971  = \$171 ;
+    end
+    if (rst) begin
+      \$971  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$972  = ch0_read_data;
     if (bus__r_load) begin
-      \$621  = \$202 ;
+      \$972  = \$313 ;
     end
     if (rst) begin
-      \$621  = 32'd0;
+      \$972  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$622  = \$204 ;
+    \$973  = \$315 ;
     if (rst) begin
-      \$622  = 1'h0;
+      \$973  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$623  = \$206 ;
+    \$974  = \$317 ;
     if (rst) begin
-      \$623  = 1'h0;
+      \$974  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$624  = \$208 ;
+    \$975  = \$319 ;
     if (rst) begin
-      \$624  = 1'h0;
+      \$975  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$625  = ch1_ctrl_periodic;
-    if (\$209 ) begin
-      \$625  = write_data[8];
+    \$976  = ch1_ctrl_periodic;
+    if (\$320 ) begin
+      \$976  = write_data[8];
     end
     if (rst) begin
-      \$625  = 1'h0;
+      \$976  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$626  = ch1_ctrl_trigger_enable;
-    if (\$210 ) begin
-      \$626  = write_data[9];
+    \$977  = ch1_ctrl_trigger_enable;
+    if (\$321 ) begin
+      \$977  = write_data[9];
     end
     if (rst) begin
-      \$626  = 1'h0;
+      \$977  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$627  = ch1_irq_status_done;
+    \$978  = ch1_irq_status_done;
     if (ch1__frame_done) begin
-      \$627  = 1'h1;
-    end else if (\$212 ) begin
-      \$627  = 1'h0;
+      \$978  = 1'h1;
+    end else if (\$323 ) begin
+      \$978  = 1'h0;
     end
     if (rst) begin
-      \$627  = 1'h0;
+      \$978  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$628  = ch1_irq_status_error;
+    \$979  = ch1_irq_status_error;
     if (ch1__frame_error) begin
-      \$628  = 1'h1;
-    end else if (\$214 ) begin
-      \$628  = 1'h0;
+      \$979  = 1'h1;
+    end else if (\$325 ) begin
+      \$979  = 1'h0;
     end
     if (rst) begin
-      \$628  = 1'h0;
+      \$979  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$629  = ch1_irq_status_access_done;
+    \$980  = ch1_irq_status_access_done;
     if (ch1__ca_done) begin
-      \$629  = 1'h1;
-    end else if (\$216 ) begin
-      \$629  = 1'h0;
+      \$980  = 1'h1;
+    end else if (\$327 ) begin
+      \$980  = 1'h0;
     end
     if (rst) begin
-      \$629  = 1'h0;
+      \$980  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$630  = ch1_irq_enable_write;
+    \$981  = ch1_irq_enable_write;
     if (rst) begin
-      \$630  = 1'h0;
+      \$981  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$631  = ch1_irq_enable_done;
-    if (\$217 ) begin
-      \$631  = config_write_data[0];
+    \$982  = ch1_irq_enable_done;
+    if (\$328 ) begin
+      \$982  = config_write_data[0];
     end
     if (rst) begin
-      \$631  = 1'h0;
+      \$982  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$632  = ch1_irq_enable_error;
-    if (\$218 ) begin
-      \$632  = config_write_data[1];
+    \$983  = ch1_irq_enable_error;
+    if (\$329 ) begin
+      \$983  = config_write_data[1];
     end
     if (rst) begin
-      \$632  = 1'h0;
+      \$983  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$633  = ch1_irq_enable_access_done;
-    if (\$219 ) begin
-      \$633  = config_write_data[2];
+    \$984  = ch1_irq_enable_access_done;
+    if (\$330 ) begin
+      \$984  = config_write_data[2];
     end
     if (rst) begin
-      \$633  = 1'h0;
+      \$984  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$634  = ch1_cfg_ma_write;
+    \$985  = ch1_cfg_ma_write;
     if (rst) begin
-      \$634  = 1'h0;
+      \$985  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$635  = ch1_cfg_ma_ma_half_period;
-    if (\$220 ) begin
-      \$635 [7:0] = config_write_data[7:0];
+    \$986  = ch1_cfg_ma_ma_half_period;
+    if (\$331 ) begin
+      \$986 [7:0] = config_write_data[7:0];
     end
-    if (\$221 ) begin
-      \$635 [15:8] = config_write_data[15:8];
+    if (\$332 ) begin
+      \$986 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$635  = 16'h0000;
+      \$986  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$636  = ch1_cfg_ma_delay_limit;
-    if (\$222 ) begin
-      \$636 [7:0] = config_write_data[23:16];
+    \$987  = ch1_cfg_ma_delay_limit;
+    if (\$333 ) begin
+      \$987 [7:0] = config_write_data[23:16];
     end
-    if (\$223 ) begin
-      \$636 [11:8] = config_write_data[27:24];
+    if (\$334 ) begin
+      \$987 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$636  = 12'h000;
+      \$987  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$637  = ch1_cfg_period_write;
+    \$988  = ch1_cfg_period_write;
     if (rst) begin
-      \$637  = 1'h0;
+      \$988  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$638  = ch1_cfg_period_request_period;
-    if (\$224 ) begin
-      \$638 [7:0] = config_write_data[7:0];
+    \$989  = ch1_cfg_period_request_period;
+    if (\$335 ) begin
+      \$989 [7:0] = config_write_data[7:0];
     end
-    if (\$225 ) begin
-      \$638 [15:8] = config_write_data[15:8];
+    if (\$336 ) begin
+      \$989 [15:8] = config_write_data[15:8];
     end
-    if (\$226 ) begin
-      \$638 [23:16] = config_write_data[23:16];
+    if (\$337 ) begin
+      \$989 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$638  = 24'h000000;
+      \$989  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$639  = ch1_cfg_break_write;
+    \$990  = ch1_cfg_break_write;
     if (rst) begin
-      \$639  = 1'h0;
+      \$990  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$640  = ch1_cfg_break_break_time;
-    if (\$227 ) begin
-      \$640 [7:0] = config_write_data[7:0];
+    \$991  = ch1_cfg_break_break_time;
+    if (\$338 ) begin
+      \$991 [7:0] = config_write_data[7:0];
     end
-    if (\$228 ) begin
-      \$640 [15:8] = config_write_data[15:8];
+    if (\$339 ) begin
+      \$991 [15:8] = config_write_data[15:8];
     end
-    if (\$229 ) begin
-      \$640 [23:16] = config_write_data[23:16];
+    if (\$340 ) begin
+      \$991 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$640  = 24'h000000;
+      \$991  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$641  = ch1_cfg_ack_write;
+    \$992  = ch1_cfg_ack_write;
     if (rst) begin
-      \$641  = 1'h0;
+      \$992  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$642  = ch1_cfg_ack_ack_limit;
-    if (\$230 ) begin
-      \$642 [7:0] = config_write_data[7:0];
+    \$993  = ch1_cfg_ack_ack_limit;
+    if (\$341 ) begin
+      \$993 [7:0] = config_write_data[7:0];
     end
-    if (\$231 ) begin
-      \$642 [15:8] = config_write_data[15:8];
+    if (\$342 ) begin
+      \$993 [15:8] = config_write_data[15:8];
     end
-    if (\$232 ) begin
-      \$642 [23:16] = config_write_data[23:16];
+    if (\$343 ) begin
+      \$993 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$642  = 24'h000000;
+      \$993  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$643  = ch1_cfg_timeout_write;
+    \$994  = ch1_cfg_timeout_write;
     if (rst) begin
-      \$643  = 1'h0;
+      \$994  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$644  = ch1_cfg_timeout_timeout_limit;
-    if (\$233 ) begin
-      \$644 [7:0] = config_write_data[7:0];
+    \$995  = ch1_cfg_timeout_timeout_limit;
+    if (\$344 ) begin
+      \$995 [7:0] = config_write_data[7:0];
     end
-    if (\$234 ) begin
-      \$644 [15:8] = config_write_data[15:8];
+    if (\$345 ) begin
+      \$995 [15:8] = config_write_data[15:8];
     end
-    if (\$235 ) begin
-      \$644 [23:16] = config_write_data[23:16];
+    if (\$346 ) begin
+      \$995 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$644  = 24'h000000;
+      \$995  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$645  = ch1_cfg_words_write;
+    \$996  = ch1_cfg_words_write;
     if (rst) begin
-      \$645  = 1'h0;
+      \$996  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$646  = ch1_cfg_words_w0_data_bits;
-    if (\$236 ) begin
-      \$646  = config_write_data[5:0];
+    \$997  = ch1_cfg_words_w0_data_bits;
+    if (\$347 ) begin
+      \$997  = config_write_data[5:0];
     end
     if (rst) begin
-      \$646  = 6'h00;
+      \$997  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$647  = ch1_cfg_words_w0_nenw;
-    if (\$237 ) begin
-      \$647  = config_write_data[6];
+    \$998  = ch1_cfg_words_w0_nenw;
+    if (\$348 ) begin
+      \$998  = config_write_data[6];
     end
     if (rst) begin
-      \$647  = 1'h0;
+      \$998  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$648  = ch1_cfg_words_w0_lc;
-    if (\$238 ) begin
-      \$648  = config_write_data[7];
+    \$999  = ch1_cfg_words_w0_lc;
+    if (\$349 ) begin
+      \$999  = config_write_data[7];
     end
     if (rst) begin
-      \$648  = 1'h0;
+      \$999  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$649  = ch1_cfg_words_w0_crc;
-    if (\$239 ) begin
-      \$649  = config_write_data[9:8];
+    \$1000  = ch1_cfg_words_w0_crc;
+    if (\$350 ) begin
+      \$1000  = config_write_data[9:8];
     end
     if (rst) begin
-      \$649  = 2'h0;
+      \$1000  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$650  = ch1_cfg_words_w0_gray;
-    if (\$240 ) begin
-      \$650  = config_write_data[10];
+    \$1001  = ch1_cfg_words_w0_gray;
+    if (\$351 ) begin
+      \$1001  = config_write_data[10];
     end
     if (rst) begin
-      \$650  = 1'h0;
+      \$1001  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$651  = ch1_cfg_words_w0_signed;
-    if (\$241 ) begin
-      \$651  = config_write_data[11];
+    \$1002  = ch1_cfg_words_w0_signed;
+    if (\$352 ) begin
+      \$1002  = config_write_data[11];
     end
     if (rst) begin
-      \$651  = 1'h0;
+      \$1002  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$652  = ch1_cfg_words_w1_data_bits;
-    if (\$242 ) begin
-      \$652  = config_write_data[21:16];
+    \$1003  = ch1_cfg_words_w1_data_bits;
+    if (\$353 ) begin
+      \$1003  = config_write_data[21:16];
     end
     if (rst) begin
-      \$652  = 6'h00;
+      \$1003  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$653  = ch1_cfg_words_w1_nenw;
-    if (\$243 ) begin
-      \$653  = config_write_data[22];
+    \$1004  = ch1_cfg_words_w1_nenw;
+    if (\$354 ) begin
+      \$1004  = config_write_data[22];
     end
     if (rst) begin
-      \$653  = 1'h0;
+      \$1004  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$654  = ch1_cfg_words_w1_lc;
-    if (\$244 ) begin
-      \$654  = config_write_data[23];
+    \$1005  = ch1_cfg_words_w1_lc;
+    if (\$355 ) begin
+      \$1005  = config_write_data[23];
     end
     if (rst) begin
-      \$654  = 1'h0;
+      \$1005  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$655  = ch1_cfg_words_w1_crc;
-    if (\$245 ) begin
-      \$655  = config_write_data[25:24];
+    \$1006  = ch1_cfg_words_w1_crc;
+    if (\$356 ) begin
+      \$1006  = config_write_data[25:24];
     end
     if (rst) begin
-      \$655  = 2'h0;
+      \$1006  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$656  = ch1_cfg_words_w1_gray;
-    if (\$246 ) begin
-      \$656  = config_write_data[26];
+    \$1007  = ch1_cfg_words_w1_gray;
+    if (\$357 ) begin
+      \$1007  = config_write_data[26];
     end
     if (rst) begin
-      \$656  = 1'h0;
+      \$1007  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$657  = ch1_cfg_words_w1_signed;
-    if (\$247 ) begin
-      \$657  = config_write_data[27];
+    \$1008  = ch1_cfg_words_w1_signed;
+    if (\$358 ) begin
+      \$1008  = config_write_data[27];
     end
     if (rst) begin
-      \$657  = 1'h0;
+      \$1008  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$658  = ch1_cfg_words_w1_enable;
-    if (\$248 ) begin
-      \$658  = config_write_data[31];
+    \$1009  = ch1_cfg_words_w1_enable;
+    if (\$359 ) begin
+      \$1009  = config_write_data[31];
     end
     if (rst) begin
-      \$658  = 1'h0;
+      \$1009  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$659  = ch1_cfg_checks_write;
+    \$1010  = ch1_cfg_checks_write;
     if (rst) begin
-      \$659  = 1'h0;
+      \$1010  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$660  = ch1_cfg_checks_end_check;
-    if (\$249 ) begin
-      \$660  = config_write_data[0];
+    \$1011  = ch1_cfg_checks_end_check;
+    if (\$360 ) begin
+      \$1011  = config_write_data[0];
     end
     if (rst) begin
-      \$660  = 1'h0;
+      \$1011  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$661  = ch1_cfg_checks_spw_check;
-    if (\$250 ) begin
-      \$661  = config_write_data[1];
+    \$1012  = ch1_cfg_checks_spw_check;
+    if (\$361 ) begin
+      \$1012  = config_write_data[1];
     end
     if (rst) begin
-      \$661  = 1'h0;
+      \$1012  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$662  = ch1_cfg_checks_spw_tolerance;
-    if (\$251 ) begin
-      \$662  = config_write_data[15:8];
+    \$1013  = ch1_cfg_checks_spw_tolerance;
+    if (\$362 ) begin
+      \$1013  = config_write_data[15:8];
     end
     if (rst) begin
-      \$662  = 8'h00;
+      \$1013  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$663  = ch1_cfg_checks_noise_limit;
-    if (\$252 ) begin
-      \$663  = config_write_data[19:16];
+    \$1014  = ch1_cfg_checks_noise_limit;
+    if (\$363 ) begin
+      \$1014  = config_write_data[19:16];
     end
     if (rst) begin
-      \$663  = 4'h0;
+      \$1014  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$664  = ch1_cfg_checks_delay_tolerance;
-    if (\$253 ) begin
-      \$664  = config_write_data[23:20];
+    \$1015  = ch1_cfg_checks_delay_tolerance;
+    if (\$364 ) begin
+      \$1015  = config_write_data[23:20];
     end
     if (rst) begin
-      \$664  = 4'h0;
+      \$1015  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$665  = ch1_cfg_checks_confirm_frames;
-    if (\$254 ) begin
-      \$665  = config_write_data[27:24];
+    \$1016  = ch1_cfg_checks_confirm_frames;
+    if (\$365 ) begin
+      \$1016  = config_write_data[27:24];
     end
     if (rst) begin
-      \$665  = 4'h0;
+      \$1016  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$666  = ch1_cfg_quiet_write;
+    \$1017  = ch1_cfg_quiet_write;
     if (rst) begin
-      \$666  = 1'h0;
+      \$1017  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$667  = ch1_cfg_quiet_quiet_time;
-    if (\$255 ) begin
-      \$667 [7:0] = config_write_data[7:0];
+    \$1018  = ch1_cfg_quiet_quiet_time;
+    if (\$366 ) begin
+      \$1018 [7:0] = config_write_data[7:0];
     end
-    if (\$256 ) begin
-      \$667 [11:8] = config_write_data[11:8];
+    if (\$367 ) begin
+      \$1018 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$667  = 12'h000;
+      \$1018  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$668  = ch1_cfg_crc0_write;
+    \$1019  = ch1_cfg_crc0_write;
     if (rst) begin
-      \$668  = 1'h0;
+      \$1019  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$669  = ch1_cfg_crc0_w0_crc_poly;
-    if (\$257 ) begin
-      \$669 [7:0] = config_write_data[7:0];
+    \$1020  = ch1_cfg_crc0_w0_crc_poly;
+    if (\$368 ) begin
+      \$1020 [7:0] = config_write_data[7:0];
     end
-    if (\$258 ) begin
-      \$669 [15:8] = config_write_data[15:8];
+    if (\$369 ) begin
+      \$1020 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$669  = 16'h0000;
+      \$1020  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$670  = ch1_cfg_crc0_w0_crc_width;
-    if (\$259 ) begin
-      \$670  = config_write_data[20:16];
+    \$1021  = ch1_cfg_crc0_w0_crc_width;
+    if (\$370 ) begin
+      \$1021  = config_write_data[20:16];
     end
     if (rst) begin
-      \$670  = 5'h00;
+      \$1021  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$671  = ch1_cfg_crc0_w0_crc_inverted;
-    if (\$260 ) begin
-      \$671  = config_write_data[24];
+    \$1022  = ch1_cfg_crc0_w0_crc_inverted;
+    if (\$371 ) begin
+      \$1022  = config_write_data[24];
     end
     if (rst) begin
-      \$671  = 1'h0;
+      \$1022  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$672  = ch1_cfg_crc0_start_write;
+    \$1023  = ch1_cfg_crc0_start_write;
     if (rst) begin
-      \$672  = 1'h0;
+      \$1023  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$673  = ch1_cfg_crc0_start_w0_crc_start;
-    if (\$261 ) begin
-      \$673 [7:0] = config_write_data[7:0];
+    \$1024  = ch1_cfg_crc0_start_w0_crc_start;
+    if (\$372 ) begin
+      \$1024 [7:0] = config_write_data[7:0];
     end
-    if (\$262 ) begin
-      \$673 [15:8] = config_write_data[15:8];
+    if (\$373 ) begin
+      \$1024 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$673  = 16'h0000;
+      \$1024  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$674  = ch1_cfg_crc1_write;
+    \$1025  = ch1_cfg_crc1_write;
     if (rst) begin
-      \$674  = 1'h0;
+      \$1025  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$675  = ch1_cfg_crc1_w1_crc_poly;
-    if (\$263 ) begin
-      \$675 [7:0] = config_write_data[7:0];
+    \$1026  = ch1_cfg_crc1_w1_crc_poly;
+    if (\$374 ) begin
+      \$1026 [7:0] = config_write_data[7:0];
     end
-    if (\$264 ) begin
-      \$675 [15:8] = config_write_data[15:8];
+    if (\$375 ) begin
+      \$1026 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$675  = 16'h0000;
+      \$1026  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$676  = ch1_cfg_crc1_w1_crc_width;
-    if (\$265 ) begin
-      \$676  = config_write_data[20:16];
+    \$1027  = ch1_cfg_crc1_w1_crc_width;
+    if (\$376 ) begin
+      \$1027  = config_write_data[20:16];
     end
     if (rst) begin
-      \$676  = 5'h00;
+      \$1027  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$677  = ch1_cfg_crc1_w1_crc_inverted;
-    if (\$266 ) begin
-      \$677  = config_write_data[24];
+    \$1028  = ch1_cfg_crc1_w1_crc_inverted;
+    if (\$377 ) begin
+      \$1028  = config_write_data[24];
     end
     if (rst) begin
-      \$677  = 1'h0;
+      \$1028  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$678  = ch1_cfg_crc1_start_write;
+    \$1029  = ch1_cfg_crc1_start_write;
     if (rst) begin
-      \$678  = 1'h0;
+      \$1029  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$679  = ch1_cfg_crc1_start_w1_crc_start;
-    if (\$267 ) begin
-      \$679 [7:0] = config_write_data[7:0];
+    \$1030  = ch1_cfg_crc1_start_w1_crc_start;
+    if (\$378 ) begin
+      \$1030 [7:0] = config_write_data[7:0];
     end
-    if (\$268 ) begin
-      \$679 [15:8] = config_write_data[15:8];
+    if (\$379 ) begin
+      \$1030 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$679  = 16'h0000;
+      \$1030  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$680  = ch1_cfg_ssi_write;
+    \$1031  = ch1_cfg_ssi_write;
     if (rst) begin
-      \$680  = 1'h0;
+      \$1031  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$681  = ch1_cfg_ssi_ssi;
-    if (\$269 ) begin
-      \$681  = config_write_data[0];
+    \$1032  = ch1_cfg_ssi_ssi;
+    if (\$380 ) begin
+      \$1032  = config_write_data[0];
     end
     if (rst) begin
-      \$681  = 1'h0;
+      \$1032  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$682  = ch1_cfg_ssi_ssi_error;
-    if (\$270 ) begin
-      \$682  = config_write_data[1];
+    \$1033  = ch1_cfg_ssi_ssi_error;
+    if (\$381 ) begin
+      \$1033  = config_write_data[1];
     end
     if (rst) begin
-      \$682  = 1'h0;
+      \$1033  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$683  = ch1_cfg_ssi_ssi_error_low;
-    if (\$271 ) begin
-      \$683  = config_write_data[2];
+    \$1034  = ch1_cfg_ssi_ssi_error_low;
+    if (\$382 ) begin
+      \$1034  = config_write_data[2];
     end
     if (rst) begin
-      \$683  = 1'h0;
+      \$1034  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$684  = ch1_cfg_ssi_ssi_double;
-    if (\$272 ) begin
-      \$684  = config_write_data[3];
+    \$1035  = ch1_cfg_ssi_ssi_double;
+    if (\$383 ) begin
+      \$1035  = config_write_data[3];
     end
     if (rst) begin
-      \$684  = 1'h0;
+      \$1035  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$685  = ch1_cfg_ssi_ssi_delay;
-    if (\$273 ) begin
-      \$685 [7:0] = config_write_data[23:16];
+    \$1036  = ch1_cfg_ssi_ssi_delay;
+    if (\$384 ) begin
+      \$1036 [7:0] = config_write_data[23:16];
     end
-    if (\$274 ) begin
-      \$685 [11:8] = config_write_data[27:24];
+    if (\$385 ) begin
+      \$1036 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$685  = 12'h000;
+      \$1036  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$686  = ch1_ca_request_write;
+    \$1037  = ch1_cfg_w2_write;
     if (rst) begin
-      \$686  = 1'h0;
+      \$1037  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$687  = ch1_ca_request_slave_id;
-    if (\$275 ) begin
-      \$687  = config_write_data[2:0];
+    \$1038  = ch1_cfg_w2_crc_write;
+    if (rst) begin
+      \$1038  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1039  = ch1_cfg_w2_crc_start_write;
+    if (rst) begin
+      \$1039  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1040  = ch1_cfg_w3_write;
+    if (rst) begin
+      \$1040  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1041  = ch1_cfg_w3_crc_write;
+    if (rst) begin
+      \$1041  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1042  = ch1_cfg_w3_crc_start_write;
+    if (rst) begin
+      \$1042  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1043  = ch1_cfg_w4_write;
+    if (rst) begin
+      \$1043  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1044  = ch1_cfg_w4_crc_write;
+    if (rst) begin
+      \$1044  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1045  = ch1_cfg_w4_crc_start_write;
+    if (rst) begin
+      \$1045  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1046  = ch1_cfg_w5_write;
+    if (rst) begin
+      \$1046  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1047  = ch1_cfg_w5_crc_write;
+    if (rst) begin
+      \$1047  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1048  = ch1_cfg_w5_crc_start_write;
+    if (rst) begin
+      \$1048  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1049  = ch1_cfg_w6_write;
+    if (rst) begin
+      \$1049  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1050  = ch1_cfg_w6_crc_write;
+    if (rst) begin
+      \$1050  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1051  = ch1_cfg_w6_crc_start_write;
+    if (rst) begin
+      \$1051  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1052  = ch1_cfg_w7_write;
+    if (rst) begin
+      \$1052  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1053  = ch1_cfg_w7_crc_write;
+    if (rst) begin
+      \$1053  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1054  = ch1_cfg_w7_crc_start_write;
+    if (rst) begin
+      \$1054  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1055  = ch1_ca_request_write;
+    if (rst) begin
+      \$1055  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1056  = ch1_ca_request_slave_id;
+    if (\$386 ) begin
+      \$1056  = config_write_data[2:0];
     end
     if (rst) begin
-      \$687  = 3'h0;
+      \$1056  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$688  = ch1_ca_request_address;
-    if (\$276 ) begin
-      \$688  = config_write_data[14:8];
+    \$1057  = ch1_ca_request_address;
+    if (\$387 ) begin
+      \$1057  = config_write_data[14:8];
     end
     if (rst) begin
-      \$688  = 7'h00;
+      \$1057  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$689  = ch1_ca_request_count;
-    if (\$277 ) begin
-      \$689  = config_write_data[22:16];
+    \$1058  = ch1_ca_request_count;
+    if (\$388 ) begin
+      \$1058  = config_write_data[22:16];
     end
     if (rst) begin
-      \$689  = 7'h00;
+      \$1058  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$690  = \ch1_ca_request_write$305 ;
-    if (\$278 ) begin
-      \$690  = config_write_data[24];
+    \$1059  = \ch1_ca_request_write$452 ;
+    if (\$389 ) begin
+      \$1059  = config_write_data[24];
     end
     if (rst) begin
-      \$690  = 1'h0;
+      \$1059  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$691  = \$280 ;
+    \$1060  = \$391 ;
     if (rst) begin
-      \$691  = 1'h0;
+      \$1060  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$692  = \$282 ;
+    \$1061  = \$393 ;
     if (rst) begin
-      \$692  = 1'h0;
+      \$1061  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$693  = ch1_read_select_100;
+    \$1062  = ch1_read_select_100;
     if (bus__r_en) begin
-      \$693  = \$283 ;
+      \$1062  = \$394 ;
     end
     if (rst) begin
-      \$693  = 1'h0;
+      \$1062  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$694  = ch1_read_select_101;
+    \$1063  = ch1_read_select_101;
     if (bus__r_en) begin
-      \$694  = \$284 ;
+      \$1063  = \$395 ;
     end
     if (rst) begin
-      \$694  = 1'h0;
+      \$1063  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$695  = ch1_read_select_102;
+    \$1064  = ch1_read_select_102;
     if (bus__r_en) begin
-      \$695  = \$285 ;
+      \$1064  = \$396 ;
     end
     if (rst) begin
-      \$695  = 1'h0;
+      \$1064  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$696  = ch1_read_select_104;
+    \$1065  = ch1_read_select_104;
     if (bus__r_en) begin
-      \$696  = \$286 ;
+      \$1065  = \$397 ;
     end
     if (rst) begin
-      \$696  = 1'h0;
+      \$1065  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$697  = ch1_read_select_105;
+    \$1066  = ch1_read_select_105;
     if (bus__r_en) begin
-      \$697  = \$287 ;
+      \$1066  = \$398 ;
     end
     if (rst) begin
-      \$697  = 1'h0;
+      \$1066  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$698  = ch1_read_select_108;
+    \$1067  = ch1_read_select_106;
     if (bus__r_en) begin
-      \$698  = \$288 ;
+      \$1067  = \$399 ;
     end
     if (rst) begin
-      \$698  = 1'h0;
+      \$1067  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$699  = ch1_read_select_109;
+    \$1068  = ch1_read_select_107;
     if (bus__r_en) begin
-      \$699  = \$289 ;
+      \$1068  = \$400 ;
     end
     if (rst) begin
-      \$699  = 1'h0;
+      \$1068  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$700  = ch1_read_select_10a;
+    \$1069  = ch1_read_select_108;
     if (bus__r_en) begin
-      \$700  = \$290 ;
+      \$1069  = \$401 ;
     end
     if (rst) begin
-      \$700  = 1'h0;
+      \$1069  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$701  = ch1_read_select_10b;
+    \$1070  = ch1_read_select_109;
     if (bus__r_en) begin
-      \$701  = \$291 ;
+      \$1070  = \$402 ;
     end
     if (rst) begin
-      \$701  = 1'h0;
+      \$1070  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$702  = ch1_read_select_10c;
+    \$1071  = ch1_read_select_10a;
     if (bus__r_en) begin
-      \$702  = \$292 ;
+      \$1071  = \$403 ;
     end
     if (rst) begin
-      \$702  = 1'h0;
+      \$1071  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$703  = ch1_read_select_10d;
+    \$1072  = ch1_read_select_10b;
     if (bus__r_en) begin
-      \$703  = \$293 ;
+      \$1072  = \$404 ;
     end
     if (rst) begin
-      \$703  = 1'h0;
+      \$1072  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$704  = ch1_read_select_10e;
+    \$1073  = ch1_read_select_10c;
     if (bus__r_en) begin
-      \$704  = \$294 ;
+      \$1073  = \$405 ;
     end
     if (rst) begin
-      \$704  = 1'h0;
+      \$1073  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$705  = ch1_read_select_10f;
+    \$1074  = ch1_read_select_10d;
     if (bus__r_en) begin
-      \$705  = \$295 ;
+      \$1074  = \$406 ;
     end
     if (rst) begin
-      \$705  = 1'h0;
+      \$1074  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$706  = ch1_read_select_110;
+    \$1075  = ch1_read_select_10e;
     if (bus__r_en) begin
-      \$706  = \$296 ;
+      \$1075  = \$407 ;
     end
     if (rst) begin
-      \$706  = 1'h0;
+      \$1075  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$707  = ch1_read_select_111;
+    \$1076  = ch1_read_select_10f;
     if (bus__r_en) begin
-      \$707  = \$297 ;
+      \$1076  = \$408 ;
     end
     if (rst) begin
-      \$707  = 1'h0;
+      \$1076  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$708  = ch1_read_select_112;
+    \$1077  = ch1_read_select_110;
     if (bus__r_en) begin
-      \$708  = \$298 ;
+      \$1077  = \$409 ;
     end
     if (rst) begin
-      \$708  = 1'h0;
+      \$1077  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$709  = ch1_read_select_113;
+    \$1078  = ch1_read_select_111;
     if (bus__r_en) begin
-      \$709  = \$299 ;
+      \$1078  = \$410 ;
     end
     if (rst) begin
-      \$709  = 1'h0;
+      \$1078  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$710  = ch1_read_select_114;
+    \$1079  = ch1_read_select_112;
     if (bus__r_en) begin
-      \$710  = \$300 ;
+      \$1079  = \$411 ;
     end
     if (rst) begin
-      \$710  = 1'h0;
+      \$1079  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$711  = ch1_read_select_115;
+    \$1080  = ch1_read_select_113;
     if (bus__r_en) begin
-      \$711  = \$301 ;
+      \$1080  = \$412 ;
     end
     if (rst) begin
-      \$711  = 1'h0;
+      \$1080  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$712  = ch1_read_select_116;
+    \$1081  = ch1_read_select_114;
     if (bus__r_en) begin
-      \$712  = \$302 ;
+      \$1081  = \$413 ;
     end
     if (rst) begin
-      \$712  = 1'h0;
+      \$1081  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$713  = ch1_read_select_117;
+    \$1082  = ch1_read_select_115;
     if (bus__r_en) begin
-      \$713  = \$303 ;
+      \$1082  = \$414 ;
     end
     if (rst) begin
-      \$713  = 1'h0;
+      \$1082  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$714  = ch1_read_select_120;
+    \$1083  = ch1_read_select_116;
     if (bus__r_en) begin
-      \$714  = \$304 ;
+      \$1083  = \$415 ;
     end
     if (rst) begin
-      \$714  = 1'h0;
+      \$1083  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$715  = ch1_read_select_121;
+    \$1084  = ch1_read_select_117;
     if (bus__r_en) begin
-      \$715  = \$305 ;
+      \$1084  = \$416 ;
     end
     if (rst) begin
-      \$715  = 1'h0;
+      \$1084  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$716  = ch1_read_select_122;
+    \$1085  = ch1_read_select_120;
     if (bus__r_en) begin
-      \$716  = \$306 ;
+      \$1085  = \$417 ;
     end
     if (rst) begin
-      \$716  = 1'h0;
+      \$1085  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$717  = ch1_read_select_123;
+    \$1086  = ch1_read_select_121;
     if (bus__r_en) begin
-      \$717  = \$307 ;
+      \$1086  = \$418 ;
     end
     if (rst) begin
-      \$717  = 1'h0;
+      \$1086  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$718  = ch1_read_select_124;
+    \$1087  = ch1_read_select_122;
     if (bus__r_en) begin
-      \$718  = \$308 ;
+      \$1087  = \$419 ;
     end
     if (rst) begin
-      \$718  = 1'h0;
+      \$1087  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$719  = ch1_read_select_140;
+    \$1088  = ch1_read_select_123;
     if (bus__r_en) begin
-      \$719  = \$309 ;
+      \$1088  = \$420 ;
     end
     if (rst) begin
-      \$719  = 1'h0;
+      \$1088  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$720  = ch1_read_select_141;
+    \$1089  = ch1_read_select_124;
     if (bus__r_en) begin
-      \$720  = \$310 ;
+      \$1089  = \$421 ;
     end
     if (rst) begin
-      \$720  = 1'h0;
+      \$1089  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$721  = ch1_read_select_142;
+    \$1090  = ch1_read_select_125;
     if (bus__r_en) begin
-      \$721  = \$311 ;
+      \$1090  = \$422 ;
     end
     if (rst) begin
-      \$721  = 1'h0;
+      \$1090  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$722  = ch1_read_select_143;
+    \$1091  = ch1_read_select_126;
     if (bus__r_en) begin
-      \$722  = \$312 ;
+      \$1091  = \$423 ;
     end
     if (rst) begin
-      \$722  = 1'h0;
+      \$1091  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$723  = ch1_read_select_144;
+    \$1092  = ch1_read_select_127;
     if (bus__r_en) begin
-      \$723  = \$313 ;
+      \$1092  = \$424 ;
     end
     if (rst) begin
-      \$723  = 1'h0;
+      \$1092  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$724  = ch1_read_select_145;
+    \$1093  = ch1_read_select_128;
     if (bus__r_en) begin
-      \$724  = \$314 ;
+      \$1093  = \$425 ;
     end
     if (rst) begin
-      \$724  = 1'h0;
+      \$1093  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$725  = ch1_result_status_status_snapshot;
-    if (\$315 ) begin
-      \$725  = \port$7170$0 [3:0];
-    end
-    if (rst) begin
-      \$725  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$726  = ch1_result_status_cds_snapshot;
-    if (\$315 ) begin
-      \$726  = \port$7170$0 [49];
-    end
-    if (rst) begin
-      \$726  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$727  = ch1_result_status_w0_ne_snapshot;
-    if (\$315 ) begin
-      \$727  = \port$7170$0 [131];
-    end
-    if (rst) begin
-      \$727  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$728  = ch1_result_status_w0_nw_snapshot;
-    if (\$315 ) begin
-      \$728  = \port$7170$0 [132];
-    end
-    if (rst) begin
-      \$728  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$729  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$315 ) begin
-      \$729  = \port$7170$0 [133];
-    end
-    if (rst) begin
-      \$729  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$730  = ch1_result_status_w1_ne_snapshot;
-    if (\$315 ) begin
-      \$730  = \port$7170$0 [174];
-    end
-    if (rst) begin
-      \$730  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$731  = ch1_result_status_w1_nw_snapshot;
-    if (\$315 ) begin
-      \$731  = \port$7170$0 [175];
-    end
-    if (rst) begin
-      \$731  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$732  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$315 ) begin
-      \$732  = \port$7170$0 [176];
-    end
-    if (rst) begin
-      \$732  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$733  = ch1_result_status_lc_repeat_snapshot;
-    if (\$315 ) begin
-      \$733  = \port$7170$0 [183];
-    end
-    if (rst) begin
-      \$733  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$734  = ch1_result_status_lc_skip_snapshot;
-    if (\$315 ) begin
-      \$734  = \port$7170$0 [184];
-    end
-    if (rst) begin
-      \$734  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$735  = ch1_result_status_lc_zero_snapshot;
-    if (\$315 ) begin
-      \$735  = \port$7170$0 [185];
-    end
-    if (rst) begin
-      \$735  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$736  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$315 ) begin
-      \$736  = \port$7170$0 [186];
-    end
-    if (rst) begin
-      \$736  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$737  = ch1_result_status_lc_snapshot;
-    if (\$315 ) begin
-      \$737  = \port$7170$0 [182:177];
-    end
-    if (rst) begin
-      \$737  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$738  = ch1_result_seq_seq_snapshot;
-    if (\$315 ) begin
-      \$738  = ch1__done_count;
-    end
-    if (rst) begin
-      \$738  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$739  = ch1_result_seq_line_delay_snapshot;
-    if (\$315 ) begin
-      \$739  = \port$7170$0 [48:36];
-    end
-    if (rst) begin
-      \$739  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$740  = ch1_result_w0_lo_data_snapshot;
-    if (\$315 ) begin
-      \$740  = \port$7170$0 [107:76];
-    end
-    if (rst) begin
-      \$740  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$741  = ch1_result_w0_hi_data_snapshot;
-    if (\$315 ) begin
-      \$741  = \port$7170$0 [130:108];
-    end
-    if (rst) begin
-      \$741  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$742  = ch1_result_w1_lo_data_snapshot;
-    if (\$315 ) begin
-      \$742  = \port$7170$0 [165:134];
-    end
-    if (rst) begin
-      \$742  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$743  = ch1_result_w1_hi_data_snapshot;
-    if (\$315 ) begin
-      \$743  = \port$7170$0 [173:166];
-    end
-    if (rst) begin
-      \$743  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$744  = ch1_result_timestamp_time_snapshot;
-    if (\$315 ) begin
-      \$744  = \port$7170$0 [35:4];
-    end
-    if (rst) begin
-      \$744  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$745  = ch1_result_line_noise_events_snapshot;
-    if (\$315 ) begin
-      \$745  = \port$7170$0 [53:50];
-    end
-    if (rst) begin
-      \$745  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$746  = ch1_result_line_delay_settled_snapshot;
-    if (\$315 ) begin
-      \$746  = \port$7170$0 [54];
-    end
-    if (rst) begin
-      \$746  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$747  = ch1_result_line_delay_spread_snapshot;
-    if (\$315 ) begin
-      \$747  = \port$7170$0 [75:68];
-    end
-    if (rst) begin
-      \$747  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$748  = ch1_result_line_settled_delay_snapshot;
-    if (\$315 ) begin
-      \$748  = \port$7170$0 [67:55];
-    end
-    if (rst) begin
-      \$748  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$749  = ch1_window0_read;
+    \$1094  = ch1_read_select_129;
     if (bus__r_en) begin
-      \$749  = \$317 ;
+      \$1094  = \$426 ;
     end
     if (rst) begin
-      \$749  = 1'h0;
+      \$1094  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$750  = ch1_window1_read;
+    \$1095  = ch1_read_select_12a;
     if (bus__r_en) begin
-      \$750  = \$319 ;
+      \$1095  = \$427 ;
     end
     if (rst) begin
-      \$750  = 1'h0;
+      \$1095  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$751  = ch1_read_data;
+    \$1096  = ch1_read_select_12c;
+    if (bus__r_en) begin
+      \$1096  = \$428 ;
+    end
+    if (rst) begin
+      \$1096  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1097  = ch1_read_select_12d;
+    if (bus__r_en) begin
+      \$1097  = \$429 ;
+    end
+    if (rst) begin
+      \$1097  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1098  = ch1_read_select_12e;
+    if (bus__r_en) begin
+      \$1098  = \$430 ;
+    end
+    if (rst) begin
+      \$1098  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1099  = ch1_read_select_130;
+    if (bus__r_en) begin
+      \$1099  = \$431 ;
+    end
+    if (rst) begin
+      \$1099  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1100  = ch1_read_select_131;
+    if (bus__r_en) begin
+      \$1100  = \$432 ;
+    end
+    if (rst) begin
+      \$1100  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1101  = ch1_read_select_132;
+    if (bus__r_en) begin
+      \$1101  = \$433 ;
+    end
+    if (rst) begin
+      \$1101  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1102  = ch1_read_select_134;
+    if (bus__r_en) begin
+      \$1102  = \$434 ;
+    end
+    if (rst) begin
+      \$1102  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1103  = ch1_read_select_135;
+    if (bus__r_en) begin
+      \$1103  = \$435 ;
+    end
+    if (rst) begin
+      \$1103  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1104  = ch1_read_select_136;
+    if (bus__r_en) begin
+      \$1104  = \$436 ;
+    end
+    if (rst) begin
+      \$1104  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1105  = ch1_read_select_138;
+    if (bus__r_en) begin
+      \$1105  = \$437 ;
+    end
+    if (rst) begin
+      \$1105  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1106  = ch1_read_select_139;
+    if (bus__r_en) begin
+      \$1106  = \$438 ;
+    end
+    if (rst) begin
+      \$1106  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1107  = ch1_read_select_13a;
+    if (bus__r_en) begin
+      \$1107  = \$439 ;
+    end
+    if (rst) begin
+      \$1107  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1108  = ch1_read_select_13c;
+    if (bus__r_en) begin
+      \$1108  = \$440 ;
+    end
+    if (rst) begin
+      \$1108  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1109  = ch1_read_select_13d;
+    if (bus__r_en) begin
+      \$1109  = \$441 ;
+    end
+    if (rst) begin
+      \$1109  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1110  = ch1_read_select_13e;
+    if (bus__r_en) begin
+      \$1110  = \$442 ;
+    end
+    if (rst) begin
+      \$1110  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1111  = ch1_read_select_140;
+    if (bus__r_en) begin
+      \$1111  = \$443 ;
+    end
+    if (rst) begin
+      \$1111  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1112  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$1112  = \$444 ;
+    end
+    if (rst) begin
+      \$1112  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1113  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$1113  = \$445 ;
+    end
+    if (rst) begin
+      \$1113  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1114  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$1114  = \$446 ;
+    end
+    if (rst) begin
+      \$1114  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1115  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$1115  = \$447 ;
+    end
+    if (rst) begin
+      \$1115  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1116  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$1116  = \$448 ;
+    end
+    if (rst) begin
+      \$1116  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1117  = ch1_read_select_170;
+    if (bus__r_en) begin
+      \$1117  = \$449 ;
+    end
+    if (rst) begin
+      \$1117  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1118  = ch1_read_select_171;
+    if (bus__r_en) begin
+      \$1118  = \$450 ;
+    end
+    if (rst) begin
+      \$1118  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1119  = ch1_read_select_172;
+    if (bus__r_en) begin
+      \$1119  = \$451 ;
+    end
+    if (rst) begin
+      \$1119  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1120  = ch1_read_select_173;
+    if (bus__r_en) begin
+      \$1120  = \$452 ;
+    end
+    if (rst) begin
+      \$1120  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1121  = ch1_read_select_174;
+    if (bus__r_en) begin
+      \$1121  = \$453 ;
+    end
+    if (rst) begin
+      \$1121  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1122  = ch1_read_select_175;
+    if (bus__r_en) begin
+      \$1122  = \$454 ;
+    end
+    if (rst) begin
+      \$1122  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1123  = ch1_read_select_176;
+    if (bus__r_en) begin
+      \$1123  = \$455 ;
+    end
+    if (rst) begin
+      \$1123  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1124  = ch1_read_select_177;
+    if (bus__r_en) begin
+      \$1124  = \$456 ;
+    end
+    if (rst) begin
+      \$1124  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1125  = ch1_read_select_178;
+    if (bus__r_en) begin
+      \$1125  = \$457 ;
+    end
+    if (rst) begin
+      \$1125  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1126  = ch1_read_select_179;
+    if (bus__r_en) begin
+      \$1126  = \$458 ;
+    end
+    if (rst) begin
+      \$1126  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1127  = ch1_read_select_17a;
+    if (bus__r_en) begin
+      \$1127  = \$459 ;
+    end
+    if (rst) begin
+      \$1127  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1128  = ch1_read_select_17b;
+    if (bus__r_en) begin
+      \$1128  = \$460 ;
+    end
+    if (rst) begin
+      \$1128  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1129  = ch1_read_select_17c;
+    if (bus__r_en) begin
+      \$1129  = \$461 ;
+    end
+    if (rst) begin
+      \$1129  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1130  = ch1_read_select_17d;
+    if (bus__r_en) begin
+      \$1130  = \$462 ;
+    end
+    if (rst) begin
+      \$1130  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1131  = ch1_result_status_status_snapshot;
+    if (\$463 ) begin
+      \$1131  = \port$7770$0 [3:0];
+    end
+    if (rst) begin
+      \$1131  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1132  = ch1_result_status_cds_snapshot;
+    if (\$463 ) begin
+      \$1132  = \port$7770$0 [49];
+    end
+    if (rst) begin
+      \$1132  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1133  = ch1_result_status_w0_ne_snapshot;
+    if (\$463 ) begin
+      \$1133  = \port$7770$0 [131];
+    end
+    if (rst) begin
+      \$1133  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1134  = ch1_result_status_w0_nw_snapshot;
+    if (\$463 ) begin
+      \$1134  = \port$7770$0 [132];
+    end
+    if (rst) begin
+      \$1134  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1135  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$463 ) begin
+      \$1135  = \port$7770$0 [133];
+    end
+    if (rst) begin
+      \$1135  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1136  = ch1_result_status_w1_ne_snapshot;
+    if (\$463 ) begin
+      \$1136  = \port$7770$0 [174];
+    end
+    if (rst) begin
+      \$1136  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1137  = ch1_result_status_w1_nw_snapshot;
+    if (\$463 ) begin
+      \$1137  = \port$7770$0 [175];
+    end
+    if (rst) begin
+      \$1137  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1138  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$463 ) begin
+      \$1138  = \port$7770$0 [176];
+    end
+    if (rst) begin
+      \$1138  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1139  = ch1_result_status_lc_repeat_snapshot;
+    if (\$463 ) begin
+      \$1139  = \port$7770$0 [183];
+    end
+    if (rst) begin
+      \$1139  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1140  = ch1_result_status_lc_skip_snapshot;
+    if (\$463 ) begin
+      \$1140  = \port$7770$0 [184];
+    end
+    if (rst) begin
+      \$1140  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1141  = ch1_result_status_lc_zero_snapshot;
+    if (\$463 ) begin
+      \$1141  = \port$7770$0 [185];
+    end
+    if (rst) begin
+      \$1141  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1142  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$463 ) begin
+      \$1142  = \port$7770$0 [186];
+    end
+    if (rst) begin
+      \$1142  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1143  = ch1_result_status_lc_snapshot;
+    if (\$463 ) begin
+      \$1143  = \port$7770$0 [182:177];
+    end
+    if (rst) begin
+      \$1143  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1144  = ch1_result_seq_seq_snapshot;
+    if (\$463 ) begin
+      \$1144  = ch1__done_count;
+    end
+    if (rst) begin
+      \$1144  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1145  = ch1_result_seq_line_delay_snapshot;
+    if (\$463 ) begin
+      \$1145  = \port$7770$0 [48:36];
+    end
+    if (rst) begin
+      \$1145  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1146  = ch1_result_w0_lo_data_snapshot;
+    if (\$463 ) begin
+      \$1146  = \port$7770$0 [107:76];
+    end
+    if (rst) begin
+      \$1146  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1147  = ch1_result_w0_hi_data_snapshot;
+    if (\$463 ) begin
+      \$1147  = \port$7770$0 [130:108];
+    end
+    if (rst) begin
+      \$1147  = 23'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1148  = ch1_result_w1_lo_data_snapshot;
+    if (\$463 ) begin
+      \$1148  = \port$7770$0 [165:134];
+    end
+    if (rst) begin
+      \$1148  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1149  = ch1_result_w1_hi_data_snapshot;
+    if (\$463 ) begin
+      \$1149  = \port$7770$0 [173:166];
+    end
+    if (rst) begin
+      \$1149  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1150  = ch1_result_timestamp_time_snapshot;
+    if (\$463 ) begin
+      \$1150  = \port$7770$0 [35:4];
+    end
+    if (rst) begin
+      \$1150  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1151  = ch1_result_line_noise_events_snapshot;
+    if (\$463 ) begin
+      \$1151  = \port$7770$0 [53:50];
+    end
+    if (rst) begin
+      \$1151  = 4'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1152  = ch1_result_line_delay_settled_snapshot;
+    if (\$463 ) begin
+      \$1152  = \port$7770$0 [54];
+    end
+    if (rst) begin
+      \$1152  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1153  = ch1_result_line_delay_spread_snapshot;
+    if (\$463 ) begin
+      \$1153  = \port$7770$0 [75:68];
+    end
+    if (rst) begin
+      \$1153  = 8'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1154  = ch1_result_line_settled_delay_snapshot;
+    if (\$463 ) begin
+      \$1154  = \port$7770$0 [67:55];
+    end
+    if (rst) begin
+      \$1154  = 13'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1155  = ch1_window0_read;
+    if (bus__r_en) begin
+      \$1155  = \$465 ;
+    end
+    if (rst) begin
+      \$1155  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1156  = ch1_window1_read;
+    if (bus__r_en) begin
+      \$1156  = \$467 ;
+    end
+    if (rst) begin
+      \$1156  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$1157  = ch1_read_data;
     if (bus__r_load) begin
-      \$751  = \$387 ;
+      \$1157  = \$609 ;
     end
     if (rst) begin
-      \$751  = 32'd0;
+      \$1157  = 32'd0;
     end
   end
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$6641$0 [3:0];
-  assign ch0__cds = \port$6641$0 [49];
-  assign ch0__word0_ne = \port$6641$0 [131];
-  assign ch0__word0_nw = \port$6641$0 [132];
-  assign ch0__word0_crc_ok = \port$6641$0 [133];
-  assign ch0__word1_ne = \port$6641$0 [174];
-  assign ch0__word1_nw = \port$6641$0 [175];
-  assign ch0__word1_crc_ok = \port$6641$0 [176];
-  assign ch0__lc_repeat = \port$6641$0 [183];
-  assign ch0__lc_skip = \port$6641$0 [184];
-  assign ch0__lc_zero = \port$6641$0 [185];
-  assign ch0__spw_mismatch = \port$6641$0 [186];
-  assign ch0__lc = \port$6641$0 [182:177];
-  assign ch0__line_delay = \port$6641$0 [48:36];
-  assign ch0__word0_position = \port$6641$0 [130:76];
-  assign ch0__word1_position = \port$6641$0 [173:134];
-  assign ch0__timestamp = \port$6641$0 [35:4];
-  assign ch0__noise_events = \port$6641$0 [53:50];
-  assign ch0__delay_settled = \port$6641$0 [54];
-  assign ch0__delay_spread = \port$6641$0 [75:68];
-  assign ch0__settled_delay = \port$6641$0 [67:55];
+  assign ch0__status = \port$7239$0 [3:0];
+  assign ch0__cds = \port$7239$0 [49];
+  assign ch0__word0_ne = \port$7239$0 [131];
+  assign ch0__word0_nw = \port$7239$0 [132];
+  assign ch0__word0_crc_ok = \port$7239$0 [133];
+  assign ch0__word1_ne = \port$7239$0 [174];
+  assign ch0__word1_nw = \port$7239$0 [175];
+  assign ch0__word1_crc_ok = \port$7239$0 [176];
+  assign ch0__lc_repeat = \port$7239$0 [183];
+  assign ch0__lc_skip = \port$7239$0 [184];
+  assign ch0__lc_zero = \port$7239$0 [185];
+  assign ch0__spw_mismatch = \port$7239$0 [186];
+  assign ch0__lc = \port$7239$0 [182:177];
+  assign ch0__line_delay = \port$7239$0 [48:36];
+  assign ch0__word0_position = \port$7239$0 [130:76];
+  assign ch0__word1_position = \port$7239$0 [173:134];
+  assign ch0__timestamp = \port$7239$0 [35:4];
+  assign ch0__noise_events = \port$7239$0 [53:50];
+  assign ch0__delay_settled = \port$7239$0 [54];
+  assign ch0__delay_spread = \port$7239$0 [75:68];
+  assign ch0__settled_delay = \port$7239$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -6578,34 +9650,71 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__cap_timestamp = 1'h1;
   assign ch0__cap_register_access = 1'h1;
   assign ch0__cap_ssi = 1'h1;
-  assign ch0__ca_status = \port$6729$0 [2:0];
-  assign ch0__ca_bytes_done = \port$6729$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$6652$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$6652$0 [31:16];
-  assign ch0__count_ca_refused = \port$6652$0 [47:32];
-  assign ch0__count_ca_aborted = \port$6652$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$6652$0 [79:64];
-  assign ch1__status = \port$7170$0 [3:0];
-  assign ch1__cds = \port$7170$0 [49];
-  assign ch1__word0_ne = \port$7170$0 [131];
-  assign ch1__word0_nw = \port$7170$0 [132];
-  assign ch1__word0_crc_ok = \port$7170$0 [133];
-  assign ch1__word1_ne = \port$7170$0 [174];
-  assign ch1__word1_nw = \port$7170$0 [175];
-  assign ch1__word1_crc_ok = \port$7170$0 [176];
-  assign ch1__lc_repeat = \port$7170$0 [183];
-  assign ch1__lc_skip = \port$7170$0 [184];
-  assign ch1__lc_zero = \port$7170$0 [185];
-  assign ch1__spw_mismatch = \port$7170$0 [186];
-  assign ch1__lc = \port$7170$0 [182:177];
-  assign ch1__line_delay = \port$7170$0 [48:36];
-  assign ch1__word0_position = \port$7170$0 [130:76];
-  assign ch1__word1_position = \port$7170$0 [173:134];
-  assign ch1__timestamp = \port$7170$0 [35:4];
-  assign ch1__noise_events = \port$7170$0 [53:50];
-  assign ch1__delay_settled = \port$7170$0 [54];
-  assign ch1__delay_spread = \port$7170$0 [75:68];
-  assign ch1__settled_delay = \port$7170$0 [67:55];
+  assign ch0__cap_words = 4'h2;
+  assign ch0__cap_data_bits_w2 = 6'h00;
+  assign ch0__cap_data_bits_w3 = 6'h00;
+  assign ch0__cap_data_bits_w4 = 6'h00;
+  assign ch0__cap_data_bits_w5 = 6'h00;
+  assign ch0__cap_data_bits_w6 = 6'h00;
+  assign ch0__cap_data_bits_w7 = 6'h00;
+  assign ch0__count_crc_word2 = 16'h0000;
+  assign ch0__count_crc_word3 = 16'h0000;
+  assign ch0__count_crc_word4 = 16'h0000;
+  assign ch0__count_crc_word5 = 16'h0000;
+  assign ch0__count_crc_word6 = 16'h0000;
+  assign ch0__count_crc_word7 = 16'h0000;
+  assign ch0__ca_status = \port$7327$0 [2:0];
+  assign ch0__ca_bytes_done = \port$7327$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$7250$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$7250$0 [31:16];
+  assign ch0__count_ca_refused = \port$7250$0 [47:32];
+  assign ch0__count_ca_aborted = \port$7250$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$7250$0 [79:64];
+  assign ch0__word2_ne = 1'h0;
+  assign ch0__word2_nw = 1'h0;
+  assign ch0__word2_crc_ok = 1'h0;
+  assign ch0__word3_ne = 1'h0;
+  assign ch0__word3_nw = 1'h0;
+  assign ch0__word3_crc_ok = 1'h0;
+  assign ch0__word4_ne = 1'h0;
+  assign ch0__word4_nw = 1'h0;
+  assign ch0__word4_crc_ok = 1'h0;
+  assign ch0__word5_ne = 1'h0;
+  assign ch0__word5_nw = 1'h0;
+  assign ch0__word5_crc_ok = 1'h0;
+  assign ch0__word6_ne = 1'h0;
+  assign ch0__word6_nw = 1'h0;
+  assign ch0__word6_crc_ok = 1'h0;
+  assign ch0__word7_ne = 1'h0;
+  assign ch0__word7_nw = 1'h0;
+  assign ch0__word7_crc_ok = 1'h0;
+  assign ch0__word2_position = 63'h0000000000000000;
+  assign ch0__word3_position = 63'h0000000000000000;
+  assign ch0__word4_position = 63'h0000000000000000;
+  assign ch0__word5_position = 63'h0000000000000000;
+  assign ch0__word6_position = 63'h0000000000000000;
+  assign ch0__word7_position = 63'h0000000000000000;
+  assign ch1__status = \port$7770$0 [3:0];
+  assign ch1__cds = \port$7770$0 [49];
+  assign ch1__word0_ne = \port$7770$0 [131];
+  assign ch1__word0_nw = \port$7770$0 [132];
+  assign ch1__word0_crc_ok = \port$7770$0 [133];
+  assign ch1__word1_ne = \port$7770$0 [174];
+  assign ch1__word1_nw = \port$7770$0 [175];
+  assign ch1__word1_crc_ok = \port$7770$0 [176];
+  assign ch1__lc_repeat = \port$7770$0 [183];
+  assign ch1__lc_skip = \port$7770$0 [184];
+  assign ch1__lc_zero = \port$7770$0 [185];
+  assign ch1__spw_mismatch = \port$7770$0 [186];
+  assign ch1__lc = \port$7770$0 [182:177];
+  assign ch1__line_delay = \port$7770$0 [48:36];
+  assign ch1__word0_position = \port$7770$0 [130:76];
+  assign ch1__word1_position = \port$7770$0 [173:134];
+  assign ch1__timestamp = \port$7770$0 [35:4];
+  assign ch1__noise_events = \port$7770$0 [53:50];
+  assign ch1__delay_settled = \port$7770$0 [54];
+  assign ch1__delay_spread = \port$7770$0 [75:68];
+  assign ch1__settled_delay = \port$7770$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -6613,13 +9722,50 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__cap_timestamp = 1'h1;
   assign ch1__cap_register_access = 1'h1;
   assign ch1__cap_ssi = 1'h1;
-  assign ch1__ca_status = \port$7258$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7258$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7181$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7181$0 [31:16];
-  assign ch1__count_ca_refused = \port$7181$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7181$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7181$0 [79:64];
+  assign ch1__cap_words = 4'h2;
+  assign ch1__cap_data_bits_w2 = 6'h00;
+  assign ch1__cap_data_bits_w3 = 6'h00;
+  assign ch1__cap_data_bits_w4 = 6'h00;
+  assign ch1__cap_data_bits_w5 = 6'h00;
+  assign ch1__cap_data_bits_w6 = 6'h00;
+  assign ch1__cap_data_bits_w7 = 6'h00;
+  assign ch1__count_crc_word2 = 16'h0000;
+  assign ch1__count_crc_word3 = 16'h0000;
+  assign ch1__count_crc_word4 = 16'h0000;
+  assign ch1__count_crc_word5 = 16'h0000;
+  assign ch1__count_crc_word6 = 16'h0000;
+  assign ch1__count_crc_word7 = 16'h0000;
+  assign ch1__ca_status = \port$7858$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7858$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7781$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7781$0 [31:16];
+  assign ch1__count_ca_refused = \port$7781$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7781$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7781$0 [79:64];
+  assign ch1__word2_ne = 1'h0;
+  assign ch1__word2_nw = 1'h0;
+  assign ch1__word2_crc_ok = 1'h0;
+  assign ch1__word3_ne = 1'h0;
+  assign ch1__word3_nw = 1'h0;
+  assign ch1__word3_crc_ok = 1'h0;
+  assign ch1__word4_ne = 1'h0;
+  assign ch1__word4_nw = 1'h0;
+  assign ch1__word4_crc_ok = 1'h0;
+  assign ch1__word5_ne = 1'h0;
+  assign ch1__word5_nw = 1'h0;
+  assign ch1__word5_crc_ok = 1'h0;
+  assign ch1__word6_ne = 1'h0;
+  assign ch1__word6_nw = 1'h0;
+  assign ch1__word6_crc_ok = 1'h0;
+  assign ch1__word7_ne = 1'h0;
+  assign ch1__word7_nw = 1'h0;
+  assign ch1__word7_crc_ok = 1'h0;
+  assign ch1__word2_position = 63'h0000000000000000;
+  assign ch1__word3_position = 63'h0000000000000000;
+  assign ch1__word4_position = 63'h0000000000000000;
+  assign ch1__word5_position = 63'h0000000000000000;
+  assign ch1__word6_position = 63'h0000000000000000;
+  assign ch1__word7_position = 63'h0000000000000000;
   assign glob__trigger = g_trigger_start;
   assign ch0__count_addr = bus__w_addr[2:0];
   assign ch0__start = ch0_ctrl_start;
@@ -6666,10 +9812,76 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__cfg_ssi_error_low = ch0_cfg_ssi_ssi_error_low;
   assign ch0__cfg_ssi_double = ch0_cfg_ssi_ssi_double;
   assign ch0__cfg_ssi_delay = ch0_cfg_ssi_ssi_delay;
+  assign ch0__cfg_w2_data_bits = 6'h00;
+  assign ch0__cfg_w2_nenw = 1'h0;
+  assign ch0__cfg_w2_lc = 1'h0;
+  assign ch0__cfg_w2_crc = 2'h0;
+  assign ch0__cfg_w2_gray = 1'h0;
+  assign ch0__cfg_w2_signed = 1'h0;
+  assign ch0__cfg_w2_enable = 1'h0;
+  assign ch0__cfg_w2_crc_poly = 16'h0000;
+  assign ch0__cfg_w2_crc_width = 5'h00;
+  assign ch0__cfg_w2_crc_inverted = 1'h0;
+  assign ch0__cfg_w2_crc_start = 16'h0000;
+  assign ch0__cfg_w3_data_bits = 6'h00;
+  assign ch0__cfg_w3_nenw = 1'h0;
+  assign ch0__cfg_w3_lc = 1'h0;
+  assign ch0__cfg_w3_crc = 2'h0;
+  assign ch0__cfg_w3_gray = 1'h0;
+  assign ch0__cfg_w3_signed = 1'h0;
+  assign ch0__cfg_w3_enable = 1'h0;
+  assign ch0__cfg_w3_crc_poly = 16'h0000;
+  assign ch0__cfg_w3_crc_width = 5'h00;
+  assign ch0__cfg_w3_crc_inverted = 1'h0;
+  assign ch0__cfg_w3_crc_start = 16'h0000;
+  assign ch0__cfg_w4_data_bits = 6'h00;
+  assign ch0__cfg_w4_nenw = 1'h0;
+  assign ch0__cfg_w4_lc = 1'h0;
+  assign ch0__cfg_w4_crc = 2'h0;
+  assign ch0__cfg_w4_gray = 1'h0;
+  assign ch0__cfg_w4_signed = 1'h0;
+  assign ch0__cfg_w4_enable = 1'h0;
+  assign ch0__cfg_w4_crc_poly = 16'h0000;
+  assign ch0__cfg_w4_crc_width = 5'h00;
+  assign ch0__cfg_w4_crc_inverted = 1'h0;
+  assign ch0__cfg_w4_crc_start = 16'h0000;
+  assign ch0__cfg_w5_data_bits = 6'h00;
+  assign ch0__cfg_w5_nenw = 1'h0;
+  assign ch0__cfg_w5_lc = 1'h0;
+  assign ch0__cfg_w5_crc = 2'h0;
+  assign ch0__cfg_w5_gray = 1'h0;
+  assign ch0__cfg_w5_signed = 1'h0;
+  assign ch0__cfg_w5_enable = 1'h0;
+  assign ch0__cfg_w5_crc_poly = 16'h0000;
+  assign ch0__cfg_w5_crc_width = 5'h00;
+  assign ch0__cfg_w5_crc_inverted = 1'h0;
+  assign ch0__cfg_w5_crc_start = 16'h0000;
+  assign ch0__cfg_w6_data_bits = 6'h00;
+  assign ch0__cfg_w6_nenw = 1'h0;
+  assign ch0__cfg_w6_lc = 1'h0;
+  assign ch0__cfg_w6_crc = 2'h0;
+  assign ch0__cfg_w6_gray = 1'h0;
+  assign ch0__cfg_w6_signed = 1'h0;
+  assign ch0__cfg_w6_enable = 1'h0;
+  assign ch0__cfg_w6_crc_poly = 16'h0000;
+  assign ch0__cfg_w6_crc_width = 5'h00;
+  assign ch0__cfg_w6_crc_inverted = 1'h0;
+  assign ch0__cfg_w6_crc_start = 16'h0000;
+  assign ch0__cfg_w7_data_bits = 6'h00;
+  assign ch0__cfg_w7_nenw = 1'h0;
+  assign ch0__cfg_w7_lc = 1'h0;
+  assign ch0__cfg_w7_crc = 2'h0;
+  assign ch0__cfg_w7_gray = 1'h0;
+  assign ch0__cfg_w7_signed = 1'h0;
+  assign ch0__cfg_w7_enable = 1'h0;
+  assign ch0__cfg_w7_crc_poly = 16'h0000;
+  assign ch0__cfg_w7_crc_width = 5'h00;
+  assign ch0__cfg_w7_crc_inverted = 1'h0;
+  assign ch0__cfg_w7_crc_start = 16'h0000;
   assign ch0__ca_slave_id = ch0_ca_request_slave_id;
   assign ch0__ca_address = ch0_ca_request_address;
   assign ch0__ca_count = ch0_ca_request_count;
-  assign ch0__ca_write = \ch0_ca_request_write$113 ;
+  assign ch0__ca_write = \ch0_ca_request_write$149 ;
   assign ch0__ca_start = ch0_ca_ctrl_start;
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
@@ -6719,10 +9931,76 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__cfg_ssi_error_low = ch1_cfg_ssi_ssi_error_low;
   assign ch1__cfg_ssi_double = ch1_cfg_ssi_ssi_double;
   assign ch1__cfg_ssi_delay = ch1_cfg_ssi_ssi_delay;
+  assign ch1__cfg_w2_data_bits = 6'h00;
+  assign ch1__cfg_w2_nenw = 1'h0;
+  assign ch1__cfg_w2_lc = 1'h0;
+  assign ch1__cfg_w2_crc = 2'h0;
+  assign ch1__cfg_w2_gray = 1'h0;
+  assign ch1__cfg_w2_signed = 1'h0;
+  assign ch1__cfg_w2_enable = 1'h0;
+  assign ch1__cfg_w2_crc_poly = 16'h0000;
+  assign ch1__cfg_w2_crc_width = 5'h00;
+  assign ch1__cfg_w2_crc_inverted = 1'h0;
+  assign ch1__cfg_w2_crc_start = 16'h0000;
+  assign ch1__cfg_w3_data_bits = 6'h00;
+  assign ch1__cfg_w3_nenw = 1'h0;
+  assign ch1__cfg_w3_lc = 1'h0;
+  assign ch1__cfg_w3_crc = 2'h0;
+  assign ch1__cfg_w3_gray = 1'h0;
+  assign ch1__cfg_w3_signed = 1'h0;
+  assign ch1__cfg_w3_enable = 1'h0;
+  assign ch1__cfg_w3_crc_poly = 16'h0000;
+  assign ch1__cfg_w3_crc_width = 5'h00;
+  assign ch1__cfg_w3_crc_inverted = 1'h0;
+  assign ch1__cfg_w3_crc_start = 16'h0000;
+  assign ch1__cfg_w4_data_bits = 6'h00;
+  assign ch1__cfg_w4_nenw = 1'h0;
+  assign ch1__cfg_w4_lc = 1'h0;
+  assign ch1__cfg_w4_crc = 2'h0;
+  assign ch1__cfg_w4_gray = 1'h0;
+  assign ch1__cfg_w4_signed = 1'h0;
+  assign ch1__cfg_w4_enable = 1'h0;
+  assign ch1__cfg_w4_crc_poly = 16'h0000;
+  assign ch1__cfg_w4_crc_width = 5'h00;
+  assign ch1__cfg_w4_crc_inverted = 1'h0;
+  assign ch1__cfg_w4_crc_start = 16'h0000;
+  assign ch1__cfg_w5_data_bits = 6'h00;
+  assign ch1__cfg_w5_nenw = 1'h0;
+  assign ch1__cfg_w5_lc = 1'h0;
+  assign ch1__cfg_w5_crc = 2'h0;
+  assign ch1__cfg_w5_gray = 1'h0;
+  assign ch1__cfg_w5_signed = 1'h0;
+  assign ch1__cfg_w5_enable = 1'h0;
+  assign ch1__cfg_w5_crc_poly = 16'h0000;
+  assign ch1__cfg_w5_crc_width = 5'h00;
+  assign ch1__cfg_w5_crc_inverted = 1'h0;
+  assign ch1__cfg_w5_crc_start = 16'h0000;
+  assign ch1__cfg_w6_data_bits = 6'h00;
+  assign ch1__cfg_w6_nenw = 1'h0;
+  assign ch1__cfg_w6_lc = 1'h0;
+  assign ch1__cfg_w6_crc = 2'h0;
+  assign ch1__cfg_w6_gray = 1'h0;
+  assign ch1__cfg_w6_signed = 1'h0;
+  assign ch1__cfg_w6_enable = 1'h0;
+  assign ch1__cfg_w6_crc_poly = 16'h0000;
+  assign ch1__cfg_w6_crc_width = 5'h00;
+  assign ch1__cfg_w6_crc_inverted = 1'h0;
+  assign ch1__cfg_w6_crc_start = 16'h0000;
+  assign ch1__cfg_w7_data_bits = 6'h00;
+  assign ch1__cfg_w7_nenw = 1'h0;
+  assign ch1__cfg_w7_lc = 1'h0;
+  assign ch1__cfg_w7_crc = 2'h0;
+  assign ch1__cfg_w7_gray = 1'h0;
+  assign ch1__cfg_w7_signed = 1'h0;
+  assign ch1__cfg_w7_enable = 1'h0;
+  assign ch1__cfg_w7_crc_poly = 16'h0000;
+  assign ch1__cfg_w7_crc_width = 5'h00;
+  assign ch1__cfg_w7_crc_inverted = 1'h0;
+  assign ch1__cfg_w7_crc_start = 16'h0000;
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$305 ;
+  assign ch1__ca_write = \ch1_ca_request_write$452 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
@@ -6733,20 +10011,164 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$430  = \$429 ;
-  assign \$432  = \$431 ;
-  assign \$434  = \$433 ;
-  assign \$472  = \$471 ;
-  assign \$474  = \$473 ;
-  assign \$476  = \$475 ;
-  assign \$136  = \$135 ;
-  assign \$189  = 32'd0;
-  assign \$190  = \$188 ;
-  assign \$321  = \$320 ;
-  assign \$374  = 32'd0;
-  assign \$375  = \$373 ;
+  assign \$689  = \$688 ;
+  assign \$691  = \$690 ;
+  assign \$693  = \$692 ;
+  assign \$768  = \$767 ;
+  assign \$770  = \$769 ;
+  assign \$772  = \$771 ;
+  assign \$173  = \$172 ;
+  assign \$182  = 32'd0;
+  assign \$183  = \$181 ;
+  assign \$184  = 32'd0;
+  assign \$185  = \$181 ;
+  assign \$228  = 32'd0;
+  assign \$229  = \$227 ;
+  assign \$230  = 32'd0;
+  assign \$231  = \$227 ;
+  assign \$232  = 32'd0;
+  assign \$233  = \$227 ;
+  assign \$234  = 32'd0;
+  assign \$235  = \$227 ;
+  assign \$236  = 32'd0;
+  assign \$237  = \$227 ;
+  assign \$238  = 32'd0;
+  assign \$239  = \$227 ;
+  assign \$240  = 32'd0;
+  assign \$241  = \$227 ;
+  assign \$242  = 32'd0;
+  assign \$243  = \$227 ;
+  assign \$244  = 32'd0;
+  assign \$245  = \$227 ;
+  assign \$246  = 32'd0;
+  assign \$247  = \$227 ;
+  assign \$248  = 32'd0;
+  assign \$249  = \$227 ;
+  assign \$250  = 32'd0;
+  assign \$251  = \$227 ;
+  assign \$252  = 32'd0;
+  assign \$253  = \$227 ;
+  assign \$254  = 32'd0;
+  assign \$255  = \$227 ;
+  assign \$256  = 32'd0;
+  assign \$257  = \$227 ;
+  assign \$258  = 32'd0;
+  assign \$259  = \$227 ;
+  assign \$260  = 32'd0;
+  assign \$261  = \$227 ;
+  assign \$262  = 32'd0;
+  assign \$263  = \$227 ;
+  assign \$264  = 32'd0;
+  assign \$265  = \$227 ;
+  assign \$266  = 32'd0;
+  assign \$267  = \$227 ;
+  assign \$268  = 32'd0;
+  assign \$269  = \$227 ;
+  assign \$272  = 32'd0;
+  assign \$273  = \$271 ;
+  assign \$284  = 32'd0;
+  assign \$285  = \$283 ;
+  assign \$286  = 32'd0;
+  assign \$287  = \$283 ;
+  assign \$288  = 32'd0;
+  assign \$289  = \$283 ;
+  assign \$290  = 32'd0;
+  assign \$291  = \$283 ;
+  assign \$292  = 32'd0;
+  assign \$293  = \$283 ;
+  assign \$294  = 32'd0;
+  assign \$295  = \$283 ;
+  assign \$296  = 32'd0;
+  assign \$297  = \$283 ;
+  assign \$298  = 32'd0;
+  assign \$299  = \$283 ;
+  assign \$300  = 32'd0;
+  assign \$301  = \$283 ;
+  assign \$302  = 32'd0;
+  assign \$303  = \$283 ;
+  assign \$304  = 32'd0;
+  assign \$305  = \$283 ;
+  assign \$306  = 32'd0;
+  assign \$307  = \$283 ;
+  assign \$308  = 32'd0;
+  assign \$309  = \$283 ;
+  assign \$469  = \$468 ;
+  assign \$478  = 32'd0;
+  assign \$479  = \$477 ;
+  assign \$480  = 32'd0;
+  assign \$481  = \$477 ;
+  assign \$524  = 32'd0;
+  assign \$525  = \$523 ;
+  assign \$526  = 32'd0;
+  assign \$527  = \$523 ;
+  assign \$528  = 32'd0;
+  assign \$529  = \$523 ;
+  assign \$530  = 32'd0;
+  assign \$531  = \$523 ;
+  assign \$532  = 32'd0;
+  assign \$533  = \$523 ;
+  assign \$534  = 32'd0;
+  assign \$535  = \$523 ;
+  assign \$536  = 32'd0;
+  assign \$537  = \$523 ;
+  assign \$538  = 32'd0;
+  assign \$539  = \$523 ;
+  assign \$540  = 32'd0;
+  assign \$541  = \$523 ;
+  assign \$542  = 32'd0;
+  assign \$543  = \$523 ;
+  assign \$544  = 32'd0;
+  assign \$545  = \$523 ;
+  assign \$546  = 32'd0;
+  assign \$547  = \$523 ;
+  assign \$548  = 32'd0;
+  assign \$549  = \$523 ;
+  assign \$550  = 32'd0;
+  assign \$551  = \$523 ;
+  assign \$552  = 32'd0;
+  assign \$553  = \$523 ;
+  assign \$554  = 32'd0;
+  assign \$555  = \$523 ;
+  assign \$556  = 32'd0;
+  assign \$557  = \$523 ;
+  assign \$558  = 32'd0;
+  assign \$559  = \$523 ;
+  assign \$560  = 32'd0;
+  assign \$561  = \$523 ;
+  assign \$562  = 32'd0;
+  assign \$563  = \$523 ;
+  assign \$564  = 32'd0;
+  assign \$565  = \$523 ;
+  assign \$568  = 32'd0;
+  assign \$569  = \$567 ;
+  assign \$580  = 32'd0;
+  assign \$581  = \$579 ;
+  assign \$582  = 32'd0;
+  assign \$583  = \$579 ;
+  assign \$584  = 32'd0;
+  assign \$585  = \$579 ;
+  assign \$586  = 32'd0;
+  assign \$587  = \$579 ;
+  assign \$588  = 32'd0;
+  assign \$589  = \$579 ;
+  assign \$590  = 32'd0;
+  assign \$591  = \$579 ;
+  assign \$592  = 32'd0;
+  assign \$593  = \$579 ;
+  assign \$594  = 32'd0;
+  assign \$595  = \$579 ;
+  assign \$596  = 32'd0;
+  assign \$597  = \$579 ;
+  assign \$598  = 32'd0;
+  assign \$599  = \$579 ;
+  assign \$600  = 32'd0;
+  assign \$601  = \$579 ;
+  assign \$602  = 32'd0;
+  assign \$603  = \$579 ;
+  assign \$604  = 32'd0;
+  assign \$605  = \$579 ;
   assign g_irq = 1'h0;
-  assign \$477  = g_read_data;
+  assign \$773  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -6864,24 +10286,26 @@ module \biss_master_wb.bus (wb__stb, wb__we, regs__r_addr, regs__w_data, regs__w
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
+module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$6641$0 , \port$6652$0 , regs__ca_done, \port$6729$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7239$0 , \port$7250$0 , regs__ca_done, \port$7327$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
-  reg \$11 ;
-  reg [3:0] \$12 ;
-  reg \$13 ;
+  wire [16:0] \$11 ;
+  reg \$12 ;
+  reg [3:0] \$13 ;
   reg \$14 ;
   reg \$15 ;
   reg \$16 ;
-  reg [15:0] \$17 ;
-  wire [186:0] \$18 ;
-  wire [79:0] \$19 ;
+  reg \$17 ;
+  reg [15:0] \$18 ;
+  reg [15:0] \$19 ;
   wire \$2 ;
-  wire [9:0] \$20 ;
+  wire [186:0] \$20 ;
+  wire [79:0] \$21 ;
+  wire [9:0] \$22 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -7044,17 +10468,17 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$200 ;
+  wire \ma$207 ;
   wire [3:0] noise_events;
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$6641$0 ;
-  wire [186:0] \port$6641$0 ;
-  output [79:0] \port$6652$0 ;
-  wire [79:0] \port$6652$0 ;
-  output [9:0] \port$6729$0 ;
-  wire [9:0] \port$6729$0 ;
+  output [186:0] \port$7239$0 ;
+  wire [186:0] \port$7239$0 ;
+  output [79:0] \port$7250$0 ;
+  wire [79:0] \port$7250$0 ;
+  output [9:0] \port$7327$0 ;
+  wire [9:0] \port$7327$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -7081,10 +10505,17 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   wire regs__cap_counters;
   wire [5:0] regs__cap_data_bits_w0;
   wire [5:0] regs__cap_data_bits_w1;
+  wire [5:0] regs__cap_data_bits_w2;
+  wire [5:0] regs__cap_data_bits_w3;
+  wire [5:0] regs__cap_data_bits_w4;
+  wire [5:0] regs__cap_data_bits_w5;
+  wire [5:0] regs__cap_data_bits_w6;
+  wire [5:0] regs__cap_data_bits_w7;
   wire regs__cap_register_access;
   wire regs__cap_ssi;
   wire [5:0] regs__cap_timer_width;
   wire regs__cap_timestamp;
+  wire [3:0] regs__cap_words;
   wire regs__cds;
   wire [23:0] regs__cfg_ack_limit;
   wire [23:0] regs__cfg_break_time;
@@ -7162,6 +10593,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   wire [12:0] regs__line_delay;
   wire [3:0] regs__noise_events;
   wire regs__periodic;
+  output [15:0] regs__result_updates;
+  reg [15:0] regs__result_updates = 16'h0000;
   wire [12:0] regs__settled_delay;
   wire regs__spw_mismatch;
   wire regs__start;
@@ -7183,7 +10616,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$202 ;
+  wire \slo$209 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -7207,11 +10640,11 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   wire [3:0] status;
   input [31:0] time_now;
   wire [31:0] time_now;
-  wire [31:0] \time_now$195 ;
+  wire [31:0] \time_now$202 ;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$197 ;
-  wire \trigger$197 ;
+  input \trigger$204 ;
+  wire \trigger$204 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -7229,26 +10662,29 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
-  assign trigger = \trigger$197  & regs__trigger_enable;
+  assign trigger = \trigger$204  & regs__trigger_enable;
   assign \$6  = ~ report;
   assign \$7  = \$signal  & \$6 ;
   assign \$8  = waited + 1'h1;
   assign \$9  = \$7  ? \$8  : 5'h00;
   assign \$10  = regs__done_count + 1'h1;
+  assign \$11  = regs__result_updates + 1'h1;
   always @(posedge clk)
-    \$signal  <= \$11 ;
+    \$signal  <= \$12 ;
   always @(posedge clk)
-    waited <= \$12 ;
+    waited <= \$13 ;
   always @(posedge clk)
-    pending_ok <= \$13 ;
+    pending_ok <= \$14 ;
   always @(posedge clk)
-    regs__frame_done <= \$14 ;
+    regs__frame_done <= \$15 ;
   always @(posedge clk)
-    ended_ok <= \$15 ;
+    ended_ok <= \$16 ;
   always @(posedge clk)
-    abort_cycle <= \$16 ;
+    abort_cycle <= \$17 ;
   always @(posedge clk)
-    regs__done_count <= \$17 ;
+    regs__done_count <= \$18 ;
+  always @(posedge clk)
+    regs__result_updates <= \$19 ;
   \biss_master_wb.ch0.core  core (
     .abort(abort_cycle),
     .\abort$266 (ca_abort),
@@ -7306,7 +10742,7 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
-    .counts(\$19 ),
+    .counts(\$21 ),
     .\done$318 (done),
     .frames(regs__ca_busy),
     .ma(ma),
@@ -7315,8 +10751,8 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
-    .result(\$20 ),
-    .\result$323 (\$18 ),
+    .result(\$22 ),
+    .\result$323 (\$20 ),
     .rst(rst),
     .slo(slo),
     .start(start),
@@ -7326,63 +10762,73 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$11  = \$signal ;
+    \$12  = \$signal ;
     if (report) begin
-      \$11  = 1'h0;
+      \$12  = 1'h0;
     end
     if (done) begin
-      \$11  = 1'h1;
+      \$12  = 1'h1;
     end
     if (rst) begin
-      \$11  = 1'h0;
+      \$12  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$12  = \$9 [3:0];
+    \$13  = \$9 [3:0];
     if (rst) begin
-      \$12  = 4'h0;
+      \$13  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$13  = pending_ok;
+    \$14  = pending_ok;
     if (done) begin
-      \$13  = valid;
+      \$14  = valid;
     end
-    if (rst) begin
-      \$13  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$14  = report;
     if (rst) begin
       \$14  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$15  = pending_ok;
+    \$15  = report;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$16  = regs__abort_cycle;
+    \$16  = pending_ok;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
-    \$17  = regs__done_count;
+    \$17  = regs__abort_cycle;
+    if (rst) begin
+      \$17  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$18  = regs__done_count;
     if (regs__frame_done) begin
-      \$17  = \$10 [15:0];
+      \$18  = \$10 [15:0];
     end
     if (rst) begin
-      \$17  = 16'h0000;
+      \$18  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$12 ) begin end
+    \$19  = regs__result_updates;
+    if (done) begin
+      \$19  = \$11 [15:0];
+    end
+    if (rst) begin
+      \$19  = 16'h0000;
     end
   end
   assign count_addr = ca_rbuf_addr[2:0];
@@ -7401,8 +10847,15 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   assign regs__cap_timestamp = 1'h1;
   assign regs__cap_register_access = 1'h1;
   assign regs__cap_ssi = 1'h1;
+  assign regs__cap_words = 4'h2;
   assign ended = regs__frame_done;
   assign ca_done = regs__ca_done;
+  assign regs__cap_data_bits_w2 = 6'h00;
+  assign regs__cap_data_bits_w3 = 6'h00;
+  assign regs__cap_data_bits_w4 = 6'h00;
+  assign regs__cap_data_bits_w5 = 6'h00;
+  assign regs__cap_data_bits_w6 = 6'h00;
+  assign regs__cap_data_bits_w7 = 6'h00;
   assign regs__cfg_ma_half_period = cfg_ma_half_period;
   assign regs__cfg_delay_limit = cfg_delay_limit;
   assign regs__cfg_request_period = cfg_request_period;
@@ -7429,48 +10882,48 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
   assign regs__cfg_confirm_frames = cfg_confirm_frames;
   assign regs__cfg_quiet_time = cfg_quiet_time;
-  assign regs__status = \$18 [3:0];
-  assign status = \$18 [3:0];
-  assign regs__cds = \$18 [49];
-  assign cds = \$18 [49];
-  assign regs__word0_ne = \$18 [131];
-  assign word0_ne = \$18 [131];
-  assign regs__word0_nw = \$18 [132];
-  assign word0_nw = \$18 [132];
-  assign regs__word0_crc_ok = \$18 [133];
-  assign word0_crc_ok = \$18 [133];
-  assign regs__word1_ne = \$18 [174];
-  assign word1_ne = \$18 [174];
-  assign regs__word1_nw = \$18 [175];
-  assign word1_nw = \$18 [175];
-  assign regs__word1_crc_ok = \$18 [176];
-  assign word1_crc_ok = \$18 [176];
-  assign regs__lc_repeat = \$18 [183];
-  assign lc_repeat = \$18 [183];
-  assign regs__lc_skip = \$18 [184];
-  assign lc_skip = \$18 [184];
-  assign regs__lc_zero = \$18 [185];
-  assign lc_zero = \$18 [185];
-  assign regs__spw_mismatch = \$18 [186];
-  assign spw_mismatch = \$18 [186];
-  assign regs__lc = \$18 [182:177];
-  assign lc = \$18 [182:177];
-  assign regs__line_delay = \$18 [48:36];
-  assign line_delay = \$18 [48:36];
-  assign regs__word0_position = \$18 [130:76];
-  assign word0_position = \$18 [130:76];
-  assign regs__word1_position = \$18 [173:134];
-  assign word1_position = \$18 [173:134];
-  assign regs__timestamp = \$18 [35:4];
-  assign timestamp = \$18 [35:4];
-  assign regs__noise_events = \$18 [53:50];
-  assign noise_events = \$18 [53:50];
-  assign regs__delay_settled = \$18 [54];
-  assign delay_settled = \$18 [54];
-  assign regs__delay_spread = \$18 [75:68];
-  assign delay_spread = \$18 [75:68];
-  assign regs__settled_delay = \$18 [67:55];
-  assign settled_delay = \$18 [67:55];
+  assign regs__status = \$20 [3:0];
+  assign status = \$20 [3:0];
+  assign regs__cds = \$20 [49];
+  assign cds = \$20 [49];
+  assign regs__word0_ne = \$20 [131];
+  assign word0_ne = \$20 [131];
+  assign regs__word0_nw = \$20 [132];
+  assign word0_nw = \$20 [132];
+  assign regs__word0_crc_ok = \$20 [133];
+  assign word0_crc_ok = \$20 [133];
+  assign regs__word1_ne = \$20 [174];
+  assign word1_ne = \$20 [174];
+  assign regs__word1_nw = \$20 [175];
+  assign word1_nw = \$20 [175];
+  assign regs__word1_crc_ok = \$20 [176];
+  assign word1_crc_ok = \$20 [176];
+  assign regs__lc_repeat = \$20 [183];
+  assign lc_repeat = \$20 [183];
+  assign regs__lc_skip = \$20 [184];
+  assign lc_skip = \$20 [184];
+  assign regs__lc_zero = \$20 [185];
+  assign lc_zero = \$20 [185];
+  assign regs__spw_mismatch = \$20 [186];
+  assign spw_mismatch = \$20 [186];
+  assign regs__lc = \$20 [182:177];
+  assign lc = \$20 [182:177];
+  assign regs__line_delay = \$20 [48:36];
+  assign line_delay = \$20 [48:36];
+  assign regs__word0_position = \$20 [130:76];
+  assign word0_position = \$20 [130:76];
+  assign regs__word1_position = \$20 [173:134];
+  assign word1_position = \$20 [173:134];
+  assign regs__timestamp = \$20 [35:4];
+  assign timestamp = \$20 [35:4];
+  assign regs__noise_events = \$20 [53:50];
+  assign noise_events = \$20 [53:50];
+  assign regs__delay_settled = \$20 [54];
+  assign delay_settled = \$20 [54];
+  assign regs__delay_spread = \$20 [75:68];
+  assign delay_spread = \$20 [75:68];
+  assign regs__settled_delay = \$20 [67:55];
+  assign settled_delay = \$20 [67:55];
   assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
   assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
   assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
@@ -7491,32 +10944,32 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   assign regs__ca_start = ca_start;
   assign regs__ca_abort = ca_abort;
   assign ca_busy = regs__ca_busy;
-  assign regs__ca_status = \$20 [2:0];
-  assign ca_status = \$20 [2:0];
-  assign regs__ca_bytes_done = \$20 [9:3];
-  assign ca_bytes_done = \$20 [9:3];
-  assign regs__count_ca_crc4_error = \$19 [15:0];
-  assign count_ca_crc4_error = \$19 [15:0];
-  assign regs__count_ca_no_answer = \$19 [31:16];
-  assign count_ca_no_answer = \$19 [31:16];
-  assign regs__count_ca_refused = \$19 [47:32];
-  assign count_ca_refused = \$19 [47:32];
-  assign regs__count_ca_aborted = \$19 [63:48];
-  assign count_ca_aborted = \$19 [63:48];
-  assign regs__count_ca_data_fault = \$19 [79:64];
-  assign count_ca_data_fault = \$19 [79:64];
+  assign regs__ca_status = \$22 [2:0];
+  assign ca_status = \$22 [2:0];
+  assign regs__ca_bytes_done = \$22 [9:3];
+  assign ca_bytes_done = \$22 [9:3];
+  assign regs__count_ca_crc4_error = \$21 [15:0];
+  assign count_ca_crc4_error = \$21 [15:0];
+  assign regs__count_ca_no_answer = \$21 [31:16];
+  assign count_ca_no_answer = \$21 [31:16];
+  assign regs__count_ca_refused = \$21 [47:32];
+  assign count_ca_refused = \$21 [47:32];
+  assign regs__count_ca_aborted = \$21 [63:48];
+  assign count_ca_aborted = \$21 [63:48];
+  assign regs__count_ca_data_fault = \$21 [79:64];
+  assign count_ca_data_fault = \$21 [79:64];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \time_now$195  = time_now;
-  assign \ma$200  = ma;
-  assign \slo$202  = slo;
-  assign \port$6641$0  = \$18 ;
-  assign \port$6652$0  = \$19 ;
-  assign \port$6729$0  = \$20 ;
+  assign \time_now$202  = time_now;
+  assign \ma$207  = ma;
+  assign \slo$209  = slo;
+  assign \port$7239$0  = \$20 ;
+  assign \port$7250$0  = \$21 ;
+  assign \port$7327$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -8593,7 +12046,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6298$272 (cycle[274:272]),
+    .\port$6896$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -8653,7 +12106,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6298$199 (cycle[199]),
+    .\port$6896$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -8704,7 +12157,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6298$259 (cycle[271:259]),
+    .\port$6896$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -8728,7 +12181,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6286$0 (\bit ),
+    .\port$6884$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -8796,7 +12249,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2484$0 (\$28 ),
+    .\port$2857$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -12880,7 +16333,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6298$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6896$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -13573,8 +17026,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6298$272 ;
-  wire [2:0] \port$6298$272 ;
+  input [2:0] \port$6896$272 ;
+  wire [2:0] \port$6896$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -13860,7 +17313,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6298$272 [0];
+  assign error_bit = ssi & \port$6896$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -13914,7 +17367,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6298$272 [2];
+  assign \$48  = ssi & \port$6896$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -14201,15 +17654,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6298$272 [0];
+  assign \$335  = ssi & \port$6896$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6298$272 [0];
-  assign \$343  = ~ \port$6298$272 [1];
+  assign \$342  = ssi & \port$6896$272 [0];
+  assign \$343  = ~ \port$6896$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -14841,7 +18294,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$6298$272 [0];
+  assign ssi_error = \port$6896$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -14850,8 +18303,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6298$272 [2];
-  assign ssi_error_low = \port$6298$272 [1];
+  assign ssi_double = \port$6896$272 [2];
+  assign ssi_error_low = \port$6896$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -16508,7 +19961,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6298$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6896$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -16560,8 +20013,8 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6298$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6298$199 ;
-  wire \port$6298$199 ;
+  input \port$6896$199 ;
+  wire \port$6896$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -16615,7 +20068,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6298$199 , ssi, ssi_e
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6298$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6896$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -16725,7 +20178,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6298$199 , ssi, ssi_e
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6298$199 , 1'h1 };
+  assign enables = { \port$6896$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -18866,7 +22319,7 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6298$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6896$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -19000,8 +22453,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6298$259 ;
-  wire [12:0] \port$6298$259 ;
+  input [12:0] \port$6896$259 ;
+  wire [12:0] \port$6896$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -19026,7 +22479,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6298$259 [12:1] + 1'h1;
+  assign \$11  = \port$6896$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -19151,7 +22604,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6298$259 [0]),
+    .clear_high(\port$6896$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -19294,7 +22747,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6298$259 [0]) begin
+            if (\port$6896$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -19379,7 +22832,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6298$259 [0]) begin
+            if (\port$6896$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -19418,7 +22871,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6298$259 [12:1] };
+            \$85  = { 1'h0, \port$6896$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -19803,11 +23256,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6298$259 [12:1] };
-  assign fixed = \port$6298$259 [0];
+  assign fixed_delay = { 1'h0, \port$6896$259 [12:1] };
+  assign fixed = \port$6896$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6298$259 [0];
+  assign clear_high = \port$6896$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -20214,7 +23667,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6286$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6884$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -20256,8 +23709,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6286$0 ;
-  wire \port$6286$0 ;
+  input \port$6884$0 ;
+  wire \port$6884$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -20271,9 +23724,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6286$0  };
-  assign \$2  = { lc[4:0], \port$6286$0  } == last;
-  assign \$3  = { lc[4:0], \port$6286$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6884$0  };
+  assign \$2  = { lc[4:0], \port$6884$0  } == last;
+  assign \$3  = { lc[4:0], \port$6884$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -20383,7 +23836,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6286$0  };
+  assign lc_next = { lc[4:0], \port$6884$0  };
   assign zero = is_zero;
 endmodule
 
@@ -20947,7 +24400,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2484$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2857$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -21125,8 +24578,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2484$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$2484$0 ;
-  wire \port$2484$0 ;
+  output \port$2857$0 ;
+  wire \port$2857$0 ;
   output report;
   wire report;
   input report_frame;
@@ -21244,7 +24697,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2484$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2484$0  = \$2 ;
+  assign \port$2857$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -21298,24 +24751,26 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2484$0 , lc_
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
+module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, ma, \port$7170$0 , \port$7181$0 , regs__ca_done, \port$7258$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7770$0 , \port$7781$0 , regs__ca_done, \port$7858$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
-  reg \$11 ;
-  reg [3:0] \$12 ;
-  reg \$13 ;
+  wire [16:0] \$11 ;
+  reg \$12 ;
+  reg [3:0] \$13 ;
   reg \$14 ;
   reg \$15 ;
   reg \$16 ;
-  reg [15:0] \$17 ;
-  wire [186:0] \$18 ;
-  wire [79:0] \$19 ;
+  reg \$17 ;
+  reg [15:0] \$18 ;
+  reg [15:0] \$19 ;
   wire \$2 ;
-  wire [9:0] \$20 ;
+  wire [186:0] \$20 ;
+  wire [79:0] \$21 ;
+  wire [9:0] \$22 ;
   wire \$3 ;
   wire \$4 ;
   wire \$5 ;
@@ -21478,17 +24933,17 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   wire [12:0] line_delay;
   output ma;
   wire ma;
-  wire \ma$200 ;
+  wire \ma$207 ;
   wire [3:0] noise_events;
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7170$0 ;
-  wire [186:0] \port$7170$0 ;
-  output [79:0] \port$7181$0 ;
-  wire [79:0] \port$7181$0 ;
-  output [9:0] \port$7258$0 ;
-  wire [9:0] \port$7258$0 ;
+  output [186:0] \port$7770$0 ;
+  wire [186:0] \port$7770$0 ;
+  output [79:0] \port$7781$0 ;
+  wire [79:0] \port$7781$0 ;
+  output [9:0] \port$7858$0 ;
+  wire [9:0] \port$7858$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -21515,10 +24970,17 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   wire regs__cap_counters;
   wire [5:0] regs__cap_data_bits_w0;
   wire [5:0] regs__cap_data_bits_w1;
+  wire [5:0] regs__cap_data_bits_w2;
+  wire [5:0] regs__cap_data_bits_w3;
+  wire [5:0] regs__cap_data_bits_w4;
+  wire [5:0] regs__cap_data_bits_w5;
+  wire [5:0] regs__cap_data_bits_w6;
+  wire [5:0] regs__cap_data_bits_w7;
   wire regs__cap_register_access;
   wire regs__cap_ssi;
   wire [5:0] regs__cap_timer_width;
   wire regs__cap_timestamp;
+  wire [3:0] regs__cap_words;
   wire regs__cds;
   wire [23:0] regs__cfg_ack_limit;
   wire [23:0] regs__cfg_break_time;
@@ -21596,6 +25058,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   wire [12:0] regs__line_delay;
   wire [3:0] regs__noise_events;
   wire regs__periodic;
+  output [15:0] regs__result_updates;
+  reg [15:0] regs__result_updates = 16'h0000;
   wire [12:0] regs__settled_delay;
   wire regs__spw_mismatch;
   wire regs__start;
@@ -21617,7 +25081,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   wire [12:0] settled_delay;
   input slo;
   wire slo;
-  wire \slo$202 ;
+  wire \slo$209 ;
   wire spw_mismatch;
   input start;
   wire start;
@@ -21641,11 +25105,11 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   wire [3:0] status;
   input [31:0] time_now;
   wire [31:0] time_now;
-  wire [31:0] \time_now$195 ;
+  wire [31:0] \time_now$202 ;
   wire [31:0] timestamp;
   wire trigger;
-  input \trigger$197 ;
-  wire \trigger$197 ;
+  input \trigger$204 ;
+  wire \trigger$204 ;
   wire valid;
   reg [3:0] waited = 4'h0;
   wire word0_crc_ok;
@@ -21663,26 +25127,29 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   assign report = \$signal  & \$4 ;
   assign \$5  = ~ ended_ok;
   assign regs__frame_error = regs__frame_done & \$5 ;
-  assign trigger = \trigger$197  & regs__trigger_enable;
+  assign trigger = \trigger$204  & regs__trigger_enable;
   assign \$6  = ~ report;
   assign \$7  = \$signal  & \$6 ;
   assign \$8  = waited + 1'h1;
   assign \$9  = \$7  ? \$8  : 5'h00;
   assign \$10  = regs__done_count + 1'h1;
+  assign \$11  = regs__result_updates + 1'h1;
   always @(posedge clk)
-    \$signal  <= \$11 ;
+    \$signal  <= \$12 ;
   always @(posedge clk)
-    waited <= \$12 ;
+    waited <= \$13 ;
   always @(posedge clk)
-    pending_ok <= \$13 ;
+    pending_ok <= \$14 ;
   always @(posedge clk)
-    regs__frame_done <= \$14 ;
+    regs__frame_done <= \$15 ;
   always @(posedge clk)
-    ended_ok <= \$15 ;
+    ended_ok <= \$16 ;
   always @(posedge clk)
-    abort_cycle <= \$16 ;
+    abort_cycle <= \$17 ;
   always @(posedge clk)
-    regs__done_count <= \$17 ;
+    regs__done_count <= \$18 ;
+  always @(posedge clk)
+    regs__result_updates <= \$19 ;
   \biss_master_wb.ch1.core  core (
     .abort(abort_cycle),
     .\abort$266 (ca_abort),
@@ -21740,7 +25207,7 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
     .config_error(regs__config_error),
     .count_busy(count_busy),
     .count_data(regs__count_data),
-    .counts(\$19 ),
+    .counts(\$21 ),
     .\done$318 (done),
     .frames(regs__ca_busy),
     .ma(ma),
@@ -21749,8 +25216,8 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
     .rbuf_addr(ca_rbuf_addr),
     .rbuf_en(ca_rbuf_en),
     .read_en(count_en),
-    .result(\$20 ),
-    .\result$323 (\$18 ),
+    .result(\$22 ),
+    .\result$323 (\$20 ),
     .rst(rst),
     .slo(slo),
     .start(start),
@@ -21760,63 +25227,73 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   );
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$11  = \$signal ;
+    \$12  = \$signal ;
     if (report) begin
-      \$11  = 1'h0;
+      \$12  = 1'h0;
     end
     if (done) begin
-      \$11  = 1'h1;
+      \$12  = 1'h1;
     end
     if (rst) begin
-      \$11  = 1'h0;
+      \$12  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$12  = \$9 [3:0];
+    \$13  = \$9 [3:0];
     if (rst) begin
-      \$12  = 4'h0;
+      \$13  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$13  = pending_ok;
+    \$14  = pending_ok;
     if (done) begin
-      \$13  = valid;
+      \$14  = valid;
     end
-    if (rst) begin
-      \$13  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$14  = report;
     if (rst) begin
       \$14  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$15  = pending_ok;
+    \$15  = report;
     if (rst) begin
       \$15  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$16  = regs__abort_cycle;
+    \$16  = pending_ok;
     if (rst) begin
       \$16  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
-    \$17  = regs__done_count;
+    \$17  = regs__abort_cycle;
+    if (rst) begin
+      \$17  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$18  = regs__done_count;
     if (regs__frame_done) begin
-      \$17  = \$10 [15:0];
+      \$18  = \$10 [15:0];
     end
     if (rst) begin
-      \$17  = 16'h0000;
+      \$18  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$51 ) begin end
+    \$19  = regs__result_updates;
+    if (done) begin
+      \$19  = \$11 [15:0];
+    end
+    if (rst) begin
+      \$19  = 16'h0000;
     end
   end
   assign count_addr = ca_rbuf_addr[2:0];
@@ -21835,8 +25312,15 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   assign regs__cap_timestamp = 1'h1;
   assign regs__cap_register_access = 1'h1;
   assign regs__cap_ssi = 1'h1;
+  assign regs__cap_words = 4'h2;
   assign ended = regs__frame_done;
   assign ca_done = regs__ca_done;
+  assign regs__cap_data_bits_w2 = 6'h00;
+  assign regs__cap_data_bits_w3 = 6'h00;
+  assign regs__cap_data_bits_w4 = 6'h00;
+  assign regs__cap_data_bits_w5 = 6'h00;
+  assign regs__cap_data_bits_w6 = 6'h00;
+  assign regs__cap_data_bits_w7 = 6'h00;
   assign regs__cfg_ma_half_period = cfg_ma_half_period;
   assign regs__cfg_delay_limit = cfg_delay_limit;
   assign regs__cfg_request_period = cfg_request_period;
@@ -21863,48 +25347,48 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   assign regs__cfg_delay_tolerance = cfg_delay_tolerance;
   assign regs__cfg_confirm_frames = cfg_confirm_frames;
   assign regs__cfg_quiet_time = cfg_quiet_time;
-  assign regs__status = \$18 [3:0];
-  assign status = \$18 [3:0];
-  assign regs__cds = \$18 [49];
-  assign cds = \$18 [49];
-  assign regs__word0_ne = \$18 [131];
-  assign word0_ne = \$18 [131];
-  assign regs__word0_nw = \$18 [132];
-  assign word0_nw = \$18 [132];
-  assign regs__word0_crc_ok = \$18 [133];
-  assign word0_crc_ok = \$18 [133];
-  assign regs__word1_ne = \$18 [174];
-  assign word1_ne = \$18 [174];
-  assign regs__word1_nw = \$18 [175];
-  assign word1_nw = \$18 [175];
-  assign regs__word1_crc_ok = \$18 [176];
-  assign word1_crc_ok = \$18 [176];
-  assign regs__lc_repeat = \$18 [183];
-  assign lc_repeat = \$18 [183];
-  assign regs__lc_skip = \$18 [184];
-  assign lc_skip = \$18 [184];
-  assign regs__lc_zero = \$18 [185];
-  assign lc_zero = \$18 [185];
-  assign regs__spw_mismatch = \$18 [186];
-  assign spw_mismatch = \$18 [186];
-  assign regs__lc = \$18 [182:177];
-  assign lc = \$18 [182:177];
-  assign regs__line_delay = \$18 [48:36];
-  assign line_delay = \$18 [48:36];
-  assign regs__word0_position = \$18 [130:76];
-  assign word0_position = \$18 [130:76];
-  assign regs__word1_position = \$18 [173:134];
-  assign word1_position = \$18 [173:134];
-  assign regs__timestamp = \$18 [35:4];
-  assign timestamp = \$18 [35:4];
-  assign regs__noise_events = \$18 [53:50];
-  assign noise_events = \$18 [53:50];
-  assign regs__delay_settled = \$18 [54];
-  assign delay_settled = \$18 [54];
-  assign regs__delay_spread = \$18 [75:68];
-  assign delay_spread = \$18 [75:68];
-  assign regs__settled_delay = \$18 [67:55];
-  assign settled_delay = \$18 [67:55];
+  assign regs__status = \$20 [3:0];
+  assign status = \$20 [3:0];
+  assign regs__cds = \$20 [49];
+  assign cds = \$20 [49];
+  assign regs__word0_ne = \$20 [131];
+  assign word0_ne = \$20 [131];
+  assign regs__word0_nw = \$20 [132];
+  assign word0_nw = \$20 [132];
+  assign regs__word0_crc_ok = \$20 [133];
+  assign word0_crc_ok = \$20 [133];
+  assign regs__word1_ne = \$20 [174];
+  assign word1_ne = \$20 [174];
+  assign regs__word1_nw = \$20 [175];
+  assign word1_nw = \$20 [175];
+  assign regs__word1_crc_ok = \$20 [176];
+  assign word1_crc_ok = \$20 [176];
+  assign regs__lc_repeat = \$20 [183];
+  assign lc_repeat = \$20 [183];
+  assign regs__lc_skip = \$20 [184];
+  assign lc_skip = \$20 [184];
+  assign regs__lc_zero = \$20 [185];
+  assign lc_zero = \$20 [185];
+  assign regs__spw_mismatch = \$20 [186];
+  assign spw_mismatch = \$20 [186];
+  assign regs__lc = \$20 [182:177];
+  assign lc = \$20 [182:177];
+  assign regs__line_delay = \$20 [48:36];
+  assign line_delay = \$20 [48:36];
+  assign regs__word0_position = \$20 [130:76];
+  assign word0_position = \$20 [130:76];
+  assign regs__word1_position = \$20 [173:134];
+  assign word1_position = \$20 [173:134];
+  assign regs__timestamp = \$20 [35:4];
+  assign timestamp = \$20 [35:4];
+  assign regs__noise_events = \$20 [53:50];
+  assign noise_events = \$20 [53:50];
+  assign regs__delay_settled = \$20 [54];
+  assign delay_settled = \$20 [54];
+  assign regs__delay_spread = \$20 [75:68];
+  assign delay_spread = \$20 [75:68];
+  assign regs__settled_delay = \$20 [67:55];
+  assign settled_delay = \$20 [67:55];
   assign regs__cfg_w0_crc_poly = cfg_w0_crc_poly;
   assign regs__cfg_w0_crc_width = cfg_w0_crc_width;
   assign regs__cfg_w0_crc_inverted = cfg_w0_crc_inverted;
@@ -21925,32 +25409,32 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$197 , count_en, ca_wbuf_en, 
   assign regs__ca_start = ca_start;
   assign regs__ca_abort = ca_abort;
   assign ca_busy = regs__ca_busy;
-  assign regs__ca_status = \$20 [2:0];
-  assign ca_status = \$20 [2:0];
-  assign regs__ca_bytes_done = \$20 [9:3];
-  assign ca_bytes_done = \$20 [9:3];
-  assign regs__count_ca_crc4_error = \$19 [15:0];
-  assign count_ca_crc4_error = \$19 [15:0];
-  assign regs__count_ca_no_answer = \$19 [31:16];
-  assign count_ca_no_answer = \$19 [31:16];
-  assign regs__count_ca_refused = \$19 [47:32];
-  assign count_ca_refused = \$19 [47:32];
-  assign regs__count_ca_aborted = \$19 [63:48];
-  assign count_ca_aborted = \$19 [63:48];
-  assign regs__count_ca_data_fault = \$19 [79:64];
-  assign count_ca_data_fault = \$19 [79:64];
+  assign regs__ca_status = \$22 [2:0];
+  assign ca_status = \$22 [2:0];
+  assign regs__ca_bytes_done = \$22 [9:3];
+  assign ca_bytes_done = \$22 [9:3];
+  assign regs__count_ca_crc4_error = \$21 [15:0];
+  assign count_ca_crc4_error = \$21 [15:0];
+  assign regs__count_ca_no_answer = \$21 [31:16];
+  assign count_ca_no_answer = \$21 [31:16];
+  assign regs__count_ca_refused = \$21 [47:32];
+  assign count_ca_refused = \$21 [47:32];
+  assign regs__count_ca_aborted = \$21 [63:48];
+  assign count_ca_aborted = \$21 [63:48];
+  assign regs__count_ca_data_fault = \$21 [79:64];
+  assign count_ca_data_fault = \$21 [79:64];
   assign regs__ca_wbuf_addr = ca_wbuf_addr;
   assign regs__ca_wbuf_data = ca_wbuf_data;
   assign regs__ca_wbuf_en = ca_wbuf_en;
   assign regs__ca_rbuf_addr = ca_rbuf_addr;
   assign ca_rbuf_data = regs__ca_rbuf_data;
   assign regs__ca_rbuf_en = ca_rbuf_en;
-  assign \time_now$195  = time_now;
-  assign \ma$200  = ma;
-  assign \slo$202  = slo;
-  assign \port$7170$0  = \$18 ;
-  assign \port$7181$0  = \$19 ;
-  assign \port$7258$0  = \$20 ;
+  assign \time_now$202  = time_now;
+  assign \ma$207  = ma;
+  assign \slo$209  = slo;
+  assign \port$7770$0  = \$20 ;
+  assign \port$7781$0  = \$21 ;
+  assign \port$7858$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -23027,7 +26511,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6827$272 (cycle[274:272]),
+    .\port$7427$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -23087,7 +26571,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6827$199 (cycle[199]),
+    .\port$7427$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -23138,7 +26622,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6827$259 (cycle[271:259]),
+    .\port$7427$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -23162,7 +26646,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6815$0 (\bit ),
+    .\port$7415$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -23230,7 +26714,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$4894$0 (\$28 ),
+    .\port$5270$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -27314,7 +30798,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6827$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$7427$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -28007,8 +31491,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6827$272 ;
-  wire [2:0] \port$6827$272 ;
+  input [2:0] \port$7427$272 ;
+  wire [2:0] \port$7427$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -28294,7 +31778,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6827$272 [0];
+  assign error_bit = ssi & \port$7427$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -28348,7 +31832,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6827$272 [2];
+  assign \$48  = ssi & \port$7427$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -28635,15 +32119,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6827$272 [0];
+  assign \$335  = ssi & \port$7427$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6827$272 [0];
-  assign \$343  = ~ \port$6827$272 [1];
+  assign \$342  = ssi & \port$7427$272 [0];
+  assign \$343  = ~ \port$7427$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -29275,7 +32759,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$6827$272 [0];
+  assign ssi_error = \port$7427$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -29284,8 +32768,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6827$272 [2];
-  assign ssi_error_low = \port$6827$272 [1];
+  assign ssi_double = \port$7427$272 [2];
+  assign ssi_error_low = \port$7427$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -30942,7 +34426,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$6827$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7427$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -30994,8 +34478,8 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$6827$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6827$199 ;
-  wire \port$6827$199 ;
+  input \port$7427$199 ;
+  wire \port$7427$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -31049,7 +34533,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$6827$199 , ssi, ssi_e
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6827$199  ? word1_len : 8'h00;
+  assign \$11  = \port$7427$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -31159,7 +34643,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$6827$199 , ssi, ssi_e
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6827$199 , 1'h1 };
+  assign enables = { \port$7427$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -33300,7 +36784,7 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6827$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7427$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -33434,8 +36918,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6827$259 ;
-  wire [12:0] \port$6827$259 ;
+  input [12:0] \port$7427$259 ;
+  wire [12:0] \port$7427$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -33460,7 +36944,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6827$259 [12:1] + 1'h1;
+  assign \$11  = \port$7427$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -33585,7 +37069,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6827$259 [0]),
+    .clear_high(\port$7427$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -33728,7 +37212,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6827$259 [0]) begin
+            if (\port$7427$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -33813,7 +37297,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6827$259 [0]) begin
+            if (\port$7427$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -33852,7 +37336,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6827$259 [12:1] };
+            \$85  = { 1'h0, \port$7427$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -34237,11 +37721,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6827$259 [12:1] };
-  assign fixed = \port$6827$259 [0];
+  assign fixed_delay = { 1'h0, \port$7427$259 [12:1] };
+  assign fixed = \port$7427$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6827$259 [0];
+  assign clear_high = \port$7427$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -34648,7 +38132,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$6815$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7415$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -34690,8 +38174,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6815$0 ;
-  wire \port$6815$0 ;
+  input \port$7415$0 ;
+  wire \port$7415$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -34705,9 +38189,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6815$0  };
-  assign \$2  = { lc[4:0], \port$6815$0  } == last;
-  assign \$3  = { lc[4:0], \port$6815$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7415$0  };
+  assign \$2  = { lc[4:0], \port$7415$0  } == last;
+  assign \$3  = { lc[4:0], \port$7415$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -34817,7 +38301,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6815$0  };
+  assign lc_next = { lc[4:0], \port$7415$0  };
   assign zero = is_zero;
 endmodule
 
@@ -35381,7 +38865,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4894$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5270$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -35559,8 +39043,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4894$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$4894$0 ;
-  wire \port$4894$0 ;
+  output \port$5270$0 ;
+  wire \port$5270$0 ;
   output report;
   wire report;
   input report_frame;
@@ -35678,7 +39162,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$4894$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$4894$0  = \$2 ;
+  assign \port$5270$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -15,7 +15,7 @@ from pathlib import Path
 from cocotb_tools.runner import get_runner
 
 from bissmaster import generate
-from master_contract import SYS_CLK_HZ
+from master_contract import CHAIN_BUS_DATA_BITS, SYS_CLK_HZ
 from sim.shared import discovery
 from sim.shared import fastclk
 
@@ -33,9 +33,17 @@ DRIVER_SCENARIOS = "sim.scenarios.driver"
 #: The bus tops the bus scenarios run on (bissmaster.generate --top axil|wb|uart ...): the
 #: committed AXI4-Lite and Wishbone tops, and the UART-bridge top built at UART_BAUD (the
 #: committed one runs at 115200 baud, where one register access takes 1.1 ms of simulated time).
-BUSES = ("axil", "wb", "uart")
+#: ``axil_chain``: an AXI4-Lite top (module biss_master_axil) of one chain core of
+#: master_contract.CHAIN_BUS_DATA_BITS words, generated here, for the chain words of the
+#: register map (issue 26).
+BUSES = ("axil", "wb", "uart", "axil_chain")
 UART_BAUD = 3_000_000
 UART_TIMEOUT_BITS = 1000
+#: bissmaster.generate options of the ``axil_chain`` top.
+CHAIN_BUS_OPTIONS = ("--top", "axil", "--channels", "1",
+                     "--max-data-bits", ",".join(map(str, CHAIN_BUS_DATA_BITS)),
+                     "--word-crcs", ",".join(["6+16"] * len(CHAIN_BUS_DATA_BITS)),
+                     "--register-access", "0", "--ssi", "0")
 CONTROL_SCENARIOS = "sim.scenarios.control_channel"
 #: The SSI channel mode (cfg_ssi; default build only: master_contract.SSI_BUILDS).
 SSI_SCENARIOS = "sim.scenarios.ssi"
@@ -222,12 +230,16 @@ def bus_top(bus):
     but for ``uart`` the top generated at :data:`UART_BAUD` (``build_bus_once``)."""
     if bus == "uart":
         return BUILD / f"biss_master_uart_{UART_BAUD}.v", "biss_master_uart"
+    if bus == "axil_chain":
+        return BUILD / "biss_master_axil_chain.v", "biss_master_axil"
     return ROOT / "rtl" / "generated" / f"biss_master_{bus}.v", f"biss_master_{bus}"
 
 
 def bus_env(bus):
     """The environment of a bus scenario's simulator: the bus, and the UART's parameters."""
     env = {"BISS_BUS": bus}
+    if bus == "axil_chain":
+        env = {"BISS_BUS": "axil", "BISS_BUS_BUILD": "chain"}
     if bus == "uart":
         env.update(BISS_UART_BAUD=str(UART_BAUD), BISS_UART_TIMEOUT_BITS=str(UART_TIMEOUT_BITS))
     return env
@@ -241,10 +253,12 @@ def build_bus_once(sim, bus):
     if key not in _built:
         verilog, toplevel = bus_top(bus)
         with _exclusive(BUILD / f"{sim}-{bus}"):
-            if bus == "uart":
+            options = {"uart": ["--top", "uart", "--baud", str(UART_BAUD),
+                                "--uart-timeout-bits", str(UART_TIMEOUT_BITS)],
+                       "axil_chain": list(CHAIN_BUS_OPTIONS)}.get(bus)
+            if options:
                 scratch = BUILD / f"{verilog.stem}.{os.getpid()}.v"
-                generate.main(["--top", "uart", "--baud", str(UART_BAUD),
-                               "--uart-timeout-bits", str(UART_TIMEOUT_BITS), "-o", str(scratch)])
+                generate.main([*options, "-o", str(scratch)])
                 _write_if_changed(verilog, scratch.read_text())
                 scratch.unlink()
             _built[key] = build(sim, verilog=verilog, tag=f"-{bus}", toplevel=toplevel)

@@ -17,7 +17,7 @@ from . import regmap as regmap_mod
 from .bus_adapters import AxiLiteAdapter, AxiLiteSignature, WishboneAdapter, WishboneSignature
 from ..master import BissMaster
 from ..layouts import COUNT_SETTLE
-from ..params import COUNTER_HALF_BITS, MasterParams
+from ..params import COUNTER_HALF_BITS, DATA_BITS_MAX, MAX_WORDS, Crc, MasterParams
 from .register_bank import RegisterBank, block_signature
 from .uart import divider as uart_divider
 from .uart_bridge import DEFAULT_TIMEOUT_BITS, UartBridge, UartSignature, check_timeout_bits
@@ -62,9 +62,15 @@ BUSES = {
 }
 
 #: Channel signals of the register map that the channel makes itself (not core ports).
-CHANNEL_GLUE = ("trigger_enable", "frame_done", "frame_error", "done_count", "cap_data_bits_w0",
-                "cap_data_bits_w1", "cap_timer_width", "cap_counters", "cap_timestamp",
-                "cap_register_access", "cap_ssi")
+CHANNEL_GLUE = ("trigger_enable", "frame_done", "frame_error", "done_count", "result_updates",
+                *(f"cap_data_bits_w{w}" for w in range(MAX_WORDS)), "cap_words",
+                "cap_timer_width", "cap_counters", "cap_timestamp", "cap_register_access",
+                "cap_ssi")
+#: Longest data word the register map holds (6-bit lengths; a 64-bit word needs 7).
+MAP_DATA_BITS_MAX = DATA_BITS_MAX - 1
+#: A core with every port the register map can name: eight words, counters in memory.
+FULL_PARAMS = MasterParams(max_data_bits=(MAP_DATA_BITS_MAX,) * MAX_WORDS,
+                           word_crcs=((Crc.CRC6, Crc.CRC16),) * MAX_WORDS, counter_ram=True)
 #: Pulses of the bank taken into a flip-flop beside the core, so they reach it one clock
 #: later: the bank's pulse register sits by the bank, and with several channels the route from
 #: ``ctrl.abort``'s into a core's controller and timers was the critical path
@@ -89,10 +95,14 @@ class BusChannel(wiring.Component):
     ``count_addr`` / ``count_en`` / ``count_data``, ...), or
     made here (:data:`CHANNEL_GLUE`): the trigger gate, ``frame_done`` (``done``, held until
     the cycle's counts are in the counter memory), ``frame_error`` (the same for a status other
-    than OK), ``done_count`` (counts ``frame_done``) and the build's capabilities. A signal that only
-    other builds of the core have (``word1_position`` in a one-word build, the ``ca_*`` ports
-    of the register-access engine in a build without it) reads 0 and its configuration is not
-    used.
+    than OK), ``done_count`` (counts ``frame_done``), ``result_updates`` (counts the core's
+    ``done``, in the clock after it: the chain words are read live between two equal counts)
+    and the build's capabilities. A signal that only other builds of the core have
+    (``word1_position`` in a one-word build, ``word2_position`` .. ``word7_position`` in a
+    build of fewer words, the ``ca_*`` ports of the register-access engine in a build
+    without it) reads 0 and its configuration is not stored. The map holds words of up to
+    :data:`MAP_DATA_BITS_MAX` data bits (word 0 up to 55, word 1 up to 40); a wider word is
+    refused.
 
     Parameters
     ----------
@@ -118,10 +128,10 @@ class BusChannel(wiring.Component):
     """
 
     def __init__(self, params, regs, status=False):
-        if params.words > 2:
-            raise ValueError(f"the register map holds words 0 and 1; this build has "
-                             f"{params.words} words (a chain: build the core on its own, "
-                             f"docs/frames.md)")
+        if max(params.max_data_bits) > MAP_DATA_BITS_MAX:
+            raise ValueError(f"the register map holds words of up to {MAP_DATA_BITS_MAX} data "
+                             f"bits; this build has max_data_bits {params.max_data_bits} (a "
+                             f"64-bit word: build the core on its own, docs/frames.md)")
         if params.counters:
             if params.counter_width > COUNT_BITS:
                 raise ValueError(f"the register map holds {COUNT_BITS}-bit counts; this build's "
@@ -133,7 +143,7 @@ class BusChannel(wiring.Component):
             params = replace(params, time_input=True)
         self.params = params
         self.status = status
-        full = BissMaster.ports(MasterParams(counter_ram=True))
+        full = BissMaster.ports(FULL_PARAMS)
         core = BissMaster.ports(params)
         #: The map's configuration signals this channel's core does not have (word 1 in a
         #: one-word build, SSI or register access in a build without): the bank stores none
@@ -191,8 +201,10 @@ class BusChannel(wiring.Component):
             "frame_done": ended,
             "frame_error": ended & ~ended_ok,
             "done_count": None,
-            "cap_data_bits_w0": p.max_data_bits[0],
-            "cap_data_bits_w1": p.max_data_bits[1] if p.words == 2 else 0,
+            "result_updates": None,
+            **{f"cap_data_bits_w{w}": p.max_data_bits[w] if w < p.words else 0
+               for w in range(MAX_WORDS)},
+            "cap_words": p.words,
             "cap_timer_width": p.timer_width,
             "cap_counters": int(p.counters),
             "cap_timestamp": int(p.timestamped),
@@ -214,6 +226,10 @@ class BusChannel(wiring.Component):
         # Every ended cycle counted, so a host sees a lost result.
         with m.If(ended):
             m.d.sync += regs.done_count.eq(regs.done_count + 1)
+        # Every change of the core's result registers (`done`) counted, in the clock after
+        # it: reads between two equal counts are of one frame (the chain words, read live).
+        with m.If(core.done):
+            m.d.sync += regs.result_updates.eq(regs.result_updates + 1)
         # The top's one time base, for the timestamp.
         if p.timestamped:
             m.d.comb += core.time_now.eq(self.time_now)

@@ -96,8 +96,11 @@ def test_config_fields_match_port_widths():
 def test_map_layout():
     rm = regmap.load()
     assert (rm.channel_base, rm.channel_stride, rm.channel_slots) == (0x200, 0x200, 8)
-    core = [r for r in rm.channel if not r.path.startswith("ca.")]
+    core = [r for r in rm.channel if not r.path.startswith(("ca.", "chain."))]
     assert max(r.offset for r in core) < 0x100, "0x100.. is the access engine's block"
+    chain = [r for r in rm.channel if r.path.startswith("chain.")]
+    assert min(r.offset for r in chain) == 0x1C0, "the chain results follow the read buffer"
+    assert max(r.offset for r in chain) < 0x200 and not any(r.snapshot for r in chain)
     access = {r.path: r for r in rm.channel if r.path.startswith("ca.")}
     assert max(r.offset for r in access.values() if not r.window) < 0x140
     windows = {(r.window, r.offset, r.count, r.writable) for r in access.values() if r.window}
@@ -131,9 +134,9 @@ def test_build_without_register_access_connects():
 
 @pytest.mark.parametrize("old, new, message", [
     ('hdl_path = "ca_rbuf";', "", "an hdl_path"),
-    ("rbuf[16] @ 0x80 += 4;", "rbuf[16] @ 0x80 += 8;", "adjacent words"),
+    ("rbuf[16] @ 0x80 += 4;", "rbuf[8] @ 0x80 += 8;", "adjacent words"),
     ("rbuf_f #(.DESC(\"Byte 4 n + 3.\")) byte3[31:24];", "", "byte lanes"),
-    ('} count_noise @ 0x07C;', '} count_noise @ 0x0F0;', "adjacent words"),
+    ('} count_noise @ 0x07C;', '} count_noise @ 0x0AC;', "adjacent words"),
     ('count_f #(.DESC("Status NO_ACK.")) no_ack[15:0] = 0;',
      'live_f #(.PATH("count_no_ack")) no_ack[15:0] = 0;', "no hdl_path_slice"),
 ])

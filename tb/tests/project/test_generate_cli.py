@@ -63,13 +63,21 @@ def test_nine_words_is_a_usage_error(capsys):
     assert "max_data_bits must name 1 to 8 words" in capsys.readouterr().err
 
 
-def test_a_chain_core_has_no_bus_top(capsys):
-    """The register map holds two words per channel: a bus top of a three-word core is a
-    usage error, not a register map that silently drops word 2."""
+def test_a_64_bit_word_has_no_bus_top(capsys):
+    """The register map holds words of up to 63 data bits (6-bit lengths): a bus top of the
+    chain preset (a 64-bit word 0) is a usage error, not a register map that silently drops
+    a length bit."""
     with pytest.raises(SystemExit) as e:
         main(["--top", "axil", "--preset", "chain", "-o", "/dev/null"])
     assert e.value.code == 2
-    assert "the register map holds words 0 and 1" in capsys.readouterr().err
+    assert "the register map holds words of up to 63 data bits" in capsys.readouterr().err
+
+
+def test_a_chain_has_a_bus_top(tmp_path):
+    out = tmp_path / "c.v"
+    main(["--top", "axil", "--preset", "chain", "--max-data-bits", "55,40,63", "--channels", "1",
+          "-o", str(out)])
+    assert "module biss_master_axil(" in out.read_text()
 
 
 def test_core_top_is_the_default_and_names_biss_master(tmp_path):
