@@ -24,13 +24,21 @@ from encoder_model import frames
 from encoder_model.cocotb_encoder import BissEncoder, Cable, Response
 from encoder_model.cocotb_ssi import SsiLineEncoder
 from encoder_model.ssi import parse_ssi
-from master_contract import (MAX_DATA_BITS, STATUS, SYS_CLK_HZ, crc_config, port_position,
-                             ssi_ma_pulses, ssi_ne_nw)
+from master_contract import (CHAIN_BUS_DATA_BITS, MAX_DATA_BITS, STATUS, SYS_CLK_HZ, crc_config,
+                             port_position, ssi_ma_pulses, ssi_ne_nw)
 from sim.shared import regspec
 
 CLK_HZ = SYS_CLK_HZ
 CLK_NS = 1e9 / CLK_HZ
 BUS = os.environ.get("BISS_BUS", "axil")
+#: The cores' longest data field per word: the committed tops' default cores, or the chain
+#: top's (sim/shared/runner.py, ``axil_chain``: BISS_BUS_BUILD=chain).
+BUILD_DATA_BITS = (CHAIN_BUS_DATA_BITS if os.environ.get("BISS_BUS_BUILD") == "chain"
+                   else MAX_DATA_BITS)
+#: The chain words' settings and results are read through the chain registers (words 2..7).
+CHAIN_FIRST = 2
+#: Reads of a chain result before giving up on a consistent set (chain.updates).
+CHAIN_READ_TRIES = 8
 
 
 class AxiLiteBus:
@@ -123,8 +131,12 @@ class Channel:
         self.tb, self.n, self.fmt, self.spec = tb, n, fmt, spec
         self.sign_of_life = frames.SignOfLife()
         self.position = spec.position or (lambda t: tb.rng.getrandbits(fmt.words[0].data_bits))
+        # A chain: every slave its own random position (word 0's from ``position``).
+        chain = (lambda t: [self.position(t)] + [tb.rng.getrandbits(w.data_bits)
+                                                 for w in fmt.words[1:]]) if fmt.is_chain else None
         self.source = frames.EncoderFrameSource(fmt, lambda t: self.position(t),
-                                                sign_of_life=self.sign_of_life)
+                                                sign_of_life=self.sign_of_life,
+                                                chain_positions_at=chain)
         self.sent = {}          # expected timestamp -> frame bits
         extra = {} if spec.min_cycle_s is None else {"min_cycle_s": spec.min_cycle_s}
         self.encoder = BissEncoder(getattr(tb.dut, f"ch{n}_ma"), getattr(tb.dut, f"ch{n}_slo"),
@@ -252,7 +264,21 @@ class BusTestbench:
                 custom[f"cfg_crc{w}"] = {f"w{w}_crc_{k}": crc[k]
                                          for k in ("width", "poly", "inverted")}
                 custom[f"cfg_crc{w}_start"] = {f"w{w}_crc_start": crc["start"]}
-        words["w1_enable"] = int(len(fmt.words) == 2)
+        words["w1_enable"] = int(len(fmt.words) >= 2)
+        # Words 2.. of a chain, in their own registers; the build's other words disabled.
+        for w in range(CHAIN_FIRST, len(BUILD_DATA_BITS)):
+            if w >= len(fmt.words):
+                custom[f"cfg_w{w}"] = {"enable": 0}
+                continue
+            code, crc = crc_config(fmt.words[w].crc)
+            word = fmt.words[w]
+            custom[f"cfg_w{w}"] = {"data_bits": word.data_bits, "nenw": int(word.nenw),
+                                   "lc": int(word.lc), "crc": code, "gray": int(word.gray),
+                                   "is_signed": int(word.signed), "enable": 1}
+            if isinstance(word.crc, frames.CustomCrc):
+                custom[f"cfg_w{w}_crc"] = {f"crc_{k}": crc[k]
+                                           for k in ("width", "poly", "inverted")}
+                custom[f"cfg_w{w}_crc_start"] = {"crc_start": crc["start"]}
         settings = {
             "cfg_ma": {"ma_half_period": int(hp), "delay_limit": 0},
             "cfg_period": {"request_period": 0}, "cfg_break": {"break_time": 0},
@@ -271,7 +297,20 @@ class BusTestbench:
 
     # -- Results ----------------------------------------------------------------------------
     async def result(self, ch):
-        """The last result: ``result.status`` first (it takes the snapshot), then the rest."""
+        """The last result: ``result.status`` first (it takes the snapshot), then the rest; in
+        a build of more than two words, between two reads of ``chain.updates`` with the chain
+        words (docs/bus.md, "Chains"), read again until both reads agree (``res["tries"]``:
+        how many sets it took)."""
+        chain = len(BUILD_DATA_BITS) > CHAIN_FIRST
+        for tries in range(1, CHAIN_READ_TRIES + 1):
+            before = await self.read("chain.updates", ch) if chain else None
+            res = await self._result_once(ch, chain)
+            if not chain or await self.read("chain.updates", ch) == before:
+                res["tries"] = tries
+                return res
+        raise AssertionError(f"ch{ch}: chain.updates changed in {CHAIN_READ_TRIES} reads")
+
+    async def _result_once(self, ch, chain):
         res = await self.read_fields("result.status", ch)
         for path in ("result.seq", "result.timestamp", "result.line"):
             res.update(await self.read_fields(path, ch))
@@ -279,6 +318,12 @@ class BusTestbench:
             lo = await self.read(f"result.w{w}_lo", ch)
             hi = await self.read(f"result.w{w}_hi", ch)
             res[f"word{w}"] = lo | hi << 32
+        if chain:
+            res.update(await self.read_fields("chain.flags", ch))
+            for w in range(CHAIN_FIRST, len(BUILD_DATA_BITS)):
+                lo = await self.read(f"chain.w{w}_lo", ch)
+                hi = await self.read(f"chain.w{w}_hi", ch)
+                res[f"word{w}"] = lo | hi << 32
         return res
 
     def check_result(self, ch, res, status="OK", seq=False):
@@ -295,7 +340,7 @@ class BusTestbench:
             assert res["seq"] == n % 2**16, f"ch{ch}: seq {res['seq']}, frame {n} since reset"
         for w, word in enumerate(parsed["words"]):
             got = res[f"word{w}"]
-            want = port_position(chan.fmt.words[w], word["position"], MAX_DATA_BITS[w])
+            want = port_position(chan.fmt.words[w], word["position"], BUILD_DATA_BITS[w])
             assert got == want, f"ch{ch} word{w}: {got:#x} != sent {want:#x}"
             if chan.fmt.words[w].nenw:
                 assert (res[f"w{w}_ne"], res[f"w{w}_nw"]) == (word["ne"], word["nw"])

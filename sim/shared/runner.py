@@ -247,8 +247,8 @@ def bus_env(bus):
 
 def build_bus_once(sim, bus):
     """Build a bus top once per process (the workers share it, ``_exclusive``); returns
-    (runner, build_dir). The UART top is generated here first (the default cores, 2 channels,
-    :data:`UART_BAUD`)."""
+    (runner, build_dir). The UART top (the default cores, 2 channels, :data:`UART_BAUD`) and
+    the chain top (:data:`CHAIN_BUS_OPTIONS`) are generated here first."""
     key = (sim, "bus", bus)
     if key not in _built:
         verilog, toplevel = bus_top(bus)
