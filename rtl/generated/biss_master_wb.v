@@ -1034,7 +1034,7 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_ca_request_address(\regs__ca_address$467 ),
     .ch1_ca_request_count(\regs__ca_count$473 ),
     .ch1_ca_request_slave_id(\regs__ca_slave_id$483 ),
-    .\ch1_ca_request_write$452 (\regs__ca_write$495 ),
+    .\ch1_ca_request_write$446 (\regs__ca_write$495 ),
     .ch1_cfg_ack_ack_limit(\regs__cfg_ack_limit$527 ),
     .ch1_cfg_break_break_time(\regs__cfg_break_time$529 ),
     .ch1_cfg_checks_confirm_frames(\regs__cfg_confirm_frames$531 ),
@@ -1082,12 +1082,12 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .ch1_irq(\$9 ),
     .clk(clk),
     .g_trigger_start(glob__trigger),
-    .\port$7239$0 (\$10 ),
-    .\port$7250$0 (\$11 ),
-    .\port$7327$0 (\$12 ),
-    .\port$7770$0 (\$13 ),
-    .\port$7781$0 (\$14 ),
-    .\port$7858$0 (\$15 ),
+    .\port$7280$0 (\$10 ),
+    .\port$7291$0 (\$11 ),
+    .\port$7368$0 (\$12 ),
+    .\port$7811$0 (\$13 ),
+    .\port$7822$0 (\$14 ),
+    .\port$7899$0 (\$15 ),
     .rst(rst),
     .write_data(regs__ca_wbuf_data)
   );
@@ -1163,9 +1163,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(regs__count_en),
     .ma(ch0_ma),
     .periodic(regs__periodic),
-    .\port$7239$0 (\$10 ),
-    .\port$7250$0 (\$11 ),
-    .\port$7327$0 (\$12 ),
+    .\port$7280$0 (\$10 ),
+    .\port$7291$0 (\$11 ),
+    .\port$7368$0 (\$12 ),
     .regs__abort_cycle(regs__abort_cycle),
     .regs__busy(ch0__busy),
     .regs__ca_busy(ch0__ca_busy),
@@ -1240,9 +1240,9 @@ module biss_master_wb(wb_stb, wb_we, wb_adr, wb_dat_w, wb_sel, trigger, ch0_slo,
     .count_en(\regs__count_en$767 ),
     .ma(ch1_ma),
     .periodic(\regs__periodic$791 ),
-    .\port$7770$0 (\$13 ),
-    .\port$7781$0 (\$14 ),
-    .\port$7858$0 (\$15 ),
+    .\port$7811$0 (\$13 ),
+    .\port$7822$0 (\$14 ),
+    .\port$7899$0 (\$15 ),
     .regs__abort_cycle(\regs__abort_cycle$461 ),
     .regs__busy(ch1__busy),
     .regs__ca_busy(ch1__ca_busy),
@@ -2016,51 +2016,51 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
 , ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_inverted, ch0_cfg_crc0_start_w0_crc_start, ch0_cfg_crc1_w1_crc_poly, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_inverted, ch0_cfg_crc1_start_w1_crc_start, ch0_cfg_ssi_ssi, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_delay, ch0_ca_request_slave_id, ch0_ca_request_address, ch0_ca_request_count, \ch0_ca_request_write$149 , ch0_ca_ctrl_start, ch0_ca_ctrl_abort, ch1_ctrl_start, ch1_ctrl_abort, ch1_ctrl_clear_counters
 , ch1_ctrl_periodic, ch1_ctrl_trigger_enable, ch1_cfg_ma_ma_half_period, ch1_cfg_ma_delay_limit, ch1_cfg_period_request_period, ch1_cfg_break_break_time, ch1_cfg_ack_ack_limit, ch1_cfg_timeout_timeout_limit, ch1_cfg_words_w0_data_bits, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_signed, ch1_cfg_words_w1_data_bits, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_enable
 , ch1_cfg_checks_end_check, ch1_cfg_checks_spw_check, ch1_cfg_checks_spw_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_confirm_frames, ch1_cfg_quiet_quiet_time, ch1_cfg_crc0_w0_crc_poly, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_inverted, ch1_cfg_crc0_start_w0_crc_start, ch1_cfg_crc1_w1_crc_poly, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_inverted, ch1_cfg_crc1_start_w1_crc_start, ch1_cfg_ssi_ssi, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_delay, ch1_ca_request_slave_id
-, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$452 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7239$0 , \port$7250$0 , ch0__ca_done, \port$7327$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$7770$0 , \port$7781$0 , ch1__ca_done, \port$7858$0 , bus__w_addr);
+, ch1_ca_request_address, ch1_ca_request_count, \ch1_ca_request_write$446 , ch1_ca_ctrl_start, ch1_ca_ctrl_abort, ch0__frame_done, ch0__done_count, ch0__result_updates, \port$7280$0 , \port$7291$0 , ch0__ca_done, \port$7368$0 , ch1__frame_done, ch1__done_count, ch1__result_updates, \port$7811$0 , \port$7822$0 , ch1__ca_done, \port$7899$0 , bus__w_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$10  = 0;
   wire \$1 ;
   wire [31:0] \$10 ;
-  wire \$100 ;
-  reg [1:0] \$1000 ;
+  wire [31:0] \$100 ;
+  reg \$1000 ;
   reg \$1001 ;
   reg \$1002 ;
-  reg [5:0] \$1003 ;
+  reg \$1003 ;
   reg \$1004 ;
   reg \$1005 ;
-  reg [1:0] \$1006 ;
+  reg \$1006 ;
   reg \$1007 ;
   reg \$1008 ;
   reg \$1009 ;
-  wire \$101 ;
+  wire [31:0] \$101 ;
   reg \$1010 ;
   reg \$1011 ;
   reg \$1012 ;
-  reg [7:0] \$1013 ;
-  reg [3:0] \$1014 ;
-  reg [3:0] \$1015 ;
-  reg [3:0] \$1016 ;
+  reg \$1013 ;
+  reg [2:0] \$1014 ;
+  reg [6:0] \$1015 ;
+  reg [6:0] \$1016 ;
   reg \$1017 ;
-  reg [11:0] \$1018 ;
+  reg \$1018 ;
   reg \$1019 ;
-  wire \$102 ;
-  reg [15:0] \$1020 ;
-  reg [4:0] \$1021 ;
+  wire [31:0] \$102 ;
+  reg [14:0] \$1020 ;
+  reg [3:0] \$1021 ;
   reg \$1022 ;
   reg \$1023 ;
-  reg [15:0] \$1024 ;
+  reg \$1024 ;
   reg \$1025 ;
-  reg [15:0] \$1026 ;
-  reg [4:0] \$1027 ;
+  reg \$1026 ;
+  reg \$1027 ;
   reg \$1028 ;
   reg \$1029 ;
-  wire \$103 ;
-  reg [15:0] \$1030 ;
+  wire [14:0] \$103 ;
+  reg \$1030 ;
   reg \$1031 ;
   reg \$1032 ;
   reg \$1033 ;
   reg \$1034 ;
   reg \$1035 ;
-  reg [11:0] \$1036 ;
+  reg \$1036 ;
   reg \$1037 ;
   reg \$1038 ;
   reg \$1039 ;
@@ -2082,9 +2082,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$1053 ;
   reg \$1054 ;
   reg \$1055 ;
-  reg [2:0] \$1056 ;
-  reg [6:0] \$1057 ;
-  reg [6:0] \$1058 ;
+  reg \$1056 ;
+  reg \$1057 ;
+  reg \$1058 ;
   reg \$1059 ;
   wire \$106 ;
   reg \$1060 ;
@@ -2104,7 +2104,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$1073 ;
   reg \$1074 ;
   reg \$1075 ;
-  reg \$1076 ;
+  reg [3:0] \$1076 ;
   reg \$1077 ;
   reg \$1078 ;
   reg \$1079 ;
@@ -2117,84 +2117,30 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$1085 ;
   reg \$1086 ;
   reg \$1087 ;
-  reg \$1088 ;
-  reg \$1089 ;
+  reg [5:0] \$1088 ;
+  reg [15:0] \$1089 ;
   wire \$109 ;
-  reg \$1090 ;
-  reg \$1091 ;
-  reg \$1092 ;
-  reg \$1093 ;
-  reg \$1094 ;
-  reg \$1095 ;
-  reg \$1096 ;
+  reg [12:0] \$1090 ;
+  reg [31:0] \$1091 ;
+  reg [22:0] \$1092 ;
+  reg [31:0] \$1093 ;
+  reg [7:0] \$1094 ;
+  reg [31:0] \$1095 ;
+  reg [3:0] \$1096 ;
   reg \$1097 ;
-  reg \$1098 ;
-  reg \$1099 ;
+  reg [7:0] \$1098 ;
+  reg [12:0] \$1099 ;
   wire [31:0] \$11 ;
   wire \$110 ;
   reg \$1100 ;
   reg \$1101 ;
   reg \$1102 ;
-  reg \$1103 ;
-  reg \$1104 ;
-  reg \$1105 ;
-  reg \$1106 ;
-  reg \$1107 ;
-  reg \$1108 ;
-  reg \$1109 ;
+  reg [31:0] \$1103 ;
   wire \$111 ;
-  reg \$1110 ;
-  reg \$1111 ;
-  reg \$1112 ;
-  reg \$1113 ;
-  reg \$1114 ;
-  reg \$1115 ;
-  reg \$1116 ;
-  reg \$1117 ;
-  reg \$1118 ;
-  reg \$1119 ;
   wire \$112 ;
-  reg \$1120 ;
-  reg \$1121 ;
-  reg \$1122 ;
-  reg \$1123 ;
-  reg \$1124 ;
-  reg \$1125 ;
-  reg \$1126 ;
-  reg \$1127 ;
-  reg \$1128 ;
-  reg \$1129 ;
   wire \$113 ;
-  reg \$1130 ;
-  reg [3:0] \$1131 ;
-  reg \$1132 ;
-  reg \$1133 ;
-  reg \$1134 ;
-  reg \$1135 ;
-  reg \$1136 ;
-  reg \$1137 ;
-  reg \$1138 ;
-  reg \$1139 ;
   wire \$114 ;
-  reg \$1140 ;
-  reg \$1141 ;
-  reg \$1142 ;
-  reg [5:0] \$1143 ;
-  reg [15:0] \$1144 ;
-  reg [12:0] \$1145 ;
-  reg [31:0] \$1146 ;
-  reg [22:0] \$1147 ;
-  reg [31:0] \$1148 ;
-  reg [7:0] \$1149 ;
   wire \$115 ;
-  reg [31:0] \$1150 ;
-  reg [3:0] \$1151 ;
-  reg \$1152 ;
-  reg [7:0] \$1153 ;
-  reg [12:0] \$1154 ;
-  reg \$1155 ;
-  reg \$1156 ;
-  reg [31:0] \$1157 ;
   wire \$116 ;
   wire \$117 ;
   wire \$118 ;
@@ -2247,16 +2193,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$160 ;
   wire \$161 ;
   wire \$162 ;
-  wire \$163 ;
-  wire \$164 ;
-  wire \$165 ;
-  wire \$166 ;
-  wire \$167 ;
-  wire \$168 ;
-  wire \$169 ;
+  wire [31:0] \$163 ;
+  wire [31:0] \$164 ;
+  wire [31:0] \$165 ;
+  wire [31:0] \$166 ;
+  wire [31:0] \$167 ;
+  wire [31:0] \$168 ;
+  wire [31:0] \$169 ;
   wire [31:0] \$17 ;
-  wire \$170 ;
-  wire \$171 ;
+  wire [31:0] \$170 ;
+  wire [31:0] \$171 ;
   wire [31:0] \$172 ;
   wire [31:0] \$173 ;
   wire [31:0] \$174 ;
@@ -2373,48 +2319,48 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [31:0] \$274 ;
   wire [31:0] \$275 ;
   wire [31:0] \$276 ;
-  wire [31:0] \$277 ;
-  wire [31:0] \$278 ;
-  wire [31:0] \$279 ;
+  wire \$277 ;
+  wire \$278 ;
+  wire \$279 ;
   wire \$28 ;
-  wire [31:0] \$280 ;
-  wire [31:0] \$281 ;
-  wire [31:0] \$282 ;
-  wire [31:0] \$283 ;
-  wire [31:0] \$284 ;
-  wire [31:0] \$285 ;
-  wire [31:0] \$286 ;
-  wire [31:0] \$287 ;
-  wire [31:0] \$288 ;
-  wire [31:0] \$289 ;
+  wire \$280 ;
+  wire \$281 ;
+  wire \$282 ;
+  wire \$283 ;
+  wire \$284 ;
+  wire \$285 ;
+  wire \$286 ;
+  wire \$287 ;
+  wire \$288 ;
+  wire \$289 ;
   wire \$29 ;
-  wire [31:0] \$290 ;
-  wire [31:0] \$291 ;
-  wire [31:0] \$292 ;
-  wire [31:0] \$293 ;
-  wire [31:0] \$294 ;
-  wire [31:0] \$295 ;
-  wire [31:0] \$296 ;
-  wire [31:0] \$297 ;
-  wire [31:0] \$298 ;
-  wire [31:0] \$299 ;
+  wire \$290 ;
+  wire \$291 ;
+  wire \$292 ;
+  wire \$293 ;
+  wire \$294 ;
+  wire \$295 ;
+  wire \$296 ;
+  wire \$297 ;
+  wire \$298 ;
+  wire \$299 ;
   wire \$3 ;
   wire \$30 ;
-  wire [31:0] \$300 ;
-  wire [31:0] \$301 ;
-  wire [31:0] \$302 ;
-  wire [31:0] \$303 ;
-  wire [31:0] \$304 ;
-  wire [31:0] \$305 ;
-  wire [31:0] \$306 ;
-  wire [31:0] \$307 ;
-  wire [31:0] \$308 ;
-  wire [31:0] \$309 ;
+  wire \$300 ;
+  wire \$301 ;
+  wire \$302 ;
+  wire \$303 ;
+  wire \$304 ;
+  wire \$305 ;
+  wire \$306 ;
+  wire \$307 ;
+  wire \$308 ;
+  wire \$309 ;
   wire \$31 ;
-  wire [31:0] \$310 ;
-  wire [31:0] \$311 ;
-  wire [31:0] \$312 ;
-  wire [31:0] \$313 ;
+  wire \$310 ;
+  wire \$311 ;
+  wire \$312 ;
+  wire \$313 ;
   wire \$314 ;
   wire \$315 ;
   wire \$316 ;
@@ -2462,7 +2408,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$354 ;
   wire \$355 ;
   wire \$356 ;
-  wire \$357 ;
+  wire [14:0] \$357 ;
   wire \$358 ;
   wire \$359 ;
   wire \$36 ;
@@ -2529,62 +2475,62 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$414 ;
   wire \$415 ;
   wire \$416 ;
-  wire \$417 ;
-  wire \$418 ;
-  wire \$419 ;
+  wire [31:0] \$417 ;
+  wire [31:0] \$418 ;
+  wire [31:0] \$419 ;
   wire \$42 ;
-  wire \$420 ;
-  wire \$421 ;
-  wire \$422 ;
-  wire \$423 ;
-  wire \$424 ;
-  wire \$425 ;
-  wire \$426 ;
-  wire \$427 ;
-  wire \$428 ;
-  wire \$429 ;
+  wire [31:0] \$420 ;
+  wire [31:0] \$421 ;
+  wire [31:0] \$422 ;
+  wire [31:0] \$423 ;
+  wire [31:0] \$424 ;
+  wire [31:0] \$425 ;
+  wire [31:0] \$426 ;
+  wire [31:0] \$427 ;
+  wire [31:0] \$428 ;
+  wire [31:0] \$429 ;
   wire \$43 ;
-  wire \$430 ;
-  wire \$431 ;
-  wire \$432 ;
-  wire \$433 ;
-  wire \$434 ;
-  wire \$435 ;
-  wire \$436 ;
-  wire \$437 ;
-  wire \$438 ;
-  wire \$439 ;
+  wire [31:0] \$430 ;
+  wire [31:0] \$431 ;
+  wire [31:0] \$432 ;
+  wire [31:0] \$433 ;
+  wire [31:0] \$434 ;
+  wire [31:0] \$435 ;
+  wire [31:0] \$436 ;
+  wire [31:0] \$437 ;
+  wire [31:0] \$438 ;
+  wire [31:0] \$439 ;
   wire \$44 ;
-  wire \$440 ;
-  wire \$441 ;
-  wire \$442 ;
-  wire \$443 ;
-  wire \$444 ;
-  wire \$445 ;
-  wire \$446 ;
-  wire \$447 ;
-  wire \$448 ;
-  wire \$449 ;
+  wire [31:0] \$440 ;
+  wire [31:0] \$441 ;
+  wire [31:0] \$442 ;
+  wire [31:0] \$443 ;
+  wire [31:0] \$444 ;
+  wire [31:0] \$445 ;
+  wire [31:0] \$446 ;
+  wire [31:0] \$447 ;
+  wire [31:0] \$448 ;
+  wire [31:0] \$449 ;
   wire \$45 ;
-  wire \$450 ;
-  wire \$451 ;
-  wire \$452 ;
-  wire \$453 ;
-  wire \$454 ;
-  wire \$455 ;
-  wire \$456 ;
-  wire \$457 ;
-  wire \$458 ;
-  wire \$459 ;
+  wire [31:0] \$450 ;
+  wire [31:0] \$451 ;
+  wire [31:0] \$452 ;
+  wire [31:0] \$453 ;
+  wire [31:0] \$454 ;
+  wire [31:0] \$455 ;
+  wire [31:0] \$456 ;
+  wire [31:0] \$457 ;
+  wire [31:0] \$458 ;
+  wire [31:0] \$459 ;
   wire \$46 ;
-  wire \$460 ;
-  wire \$461 ;
-  wire \$462 ;
-  wire \$463 ;
-  wire \$464 ;
-  wire \$465 ;
-  wire \$466 ;
-  wire \$467 ;
+  wire [31:0] \$460 ;
+  wire [31:0] \$461 ;
+  wire [31:0] \$462 ;
+  wire [31:0] \$463 ;
+  wire [31:0] \$464 ;
+  wire [31:0] \$465 ;
+  wire [31:0] \$466 ;
+  wire [31:0] \$467 ;
   wire [31:0] \$468 ;
   wire [31:0] \$469 ;
   wire \$47 ;
@@ -2656,119 +2602,119 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire [31:0] \$529 ;
   wire \$53 ;
   wire [31:0] \$530 ;
-  wire [31:0] \$531 ;
-  wire [31:0] \$532 ;
-  wire [31:0] \$533 ;
-  wire [31:0] \$534 ;
-  wire [31:0] \$535 ;
-  wire [31:0] \$536 ;
-  wire [31:0] \$537 ;
-  wire [31:0] \$538 ;
-  wire [31:0] \$539 ;
+  wire \$531 ;
+  wire \$532 ;
+  wire \$533 ;
+  wire \$534 ;
+  wire \$535 ;
+  wire \$536 ;
+  wire \$537 ;
+  wire \$538 ;
+  wire \$539 ;
   wire \$54 ;
-  wire [31:0] \$540 ;
-  wire [31:0] \$541 ;
-  wire [31:0] \$542 ;
-  wire [31:0] \$543 ;
-  wire [31:0] \$544 ;
-  wire [31:0] \$545 ;
-  wire [31:0] \$546 ;
-  wire [31:0] \$547 ;
-  wire [31:0] \$548 ;
-  wire [31:0] \$549 ;
+  wire \$540 ;
+  wire \$541 ;
+  wire \$542 ;
+  wire \$543 ;
+  wire \$544 ;
+  wire \$545 ;
+  wire \$546 ;
+  wire \$547 ;
+  wire \$548 ;
+  wire \$549 ;
   wire \$55 ;
-  wire [31:0] \$550 ;
-  wire [31:0] \$551 ;
-  wire [31:0] \$552 ;
-  wire [31:0] \$553 ;
-  wire [31:0] \$554 ;
-  wire [31:0] \$555 ;
-  wire [31:0] \$556 ;
-  wire [31:0] \$557 ;
-  wire [31:0] \$558 ;
-  wire [31:0] \$559 ;
+  wire \$550 ;
+  wire \$551 ;
+  wire \$552 ;
+  wire \$553 ;
+  wire \$554 ;
+  wire \$555 ;
+  wire \$556 ;
+  wire \$557 ;
+  wire \$558 ;
+  wire \$559 ;
   wire \$56 ;
-  wire [31:0] \$560 ;
-  wire [31:0] \$561 ;
-  wire [31:0] \$562 ;
-  wire [31:0] \$563 ;
-  wire [31:0] \$564 ;
-  wire [31:0] \$565 ;
-  wire [31:0] \$566 ;
-  wire [31:0] \$567 ;
-  wire [31:0] \$568 ;
-  wire [31:0] \$569 ;
+  wire \$560 ;
+  wire \$561 ;
+  wire \$562 ;
+  wire \$563 ;
+  wire \$564 ;
+  wire \$565 ;
+  wire \$566 ;
+  wire \$567 ;
+  wire \$568 ;
+  wire \$569 ;
   wire \$57 ;
-  wire [31:0] \$570 ;
-  wire [31:0] \$571 ;
-  wire [31:0] \$572 ;
-  wire [31:0] \$573 ;
-  wire [31:0] \$574 ;
-  wire [31:0] \$575 ;
-  wire [31:0] \$576 ;
-  wire [31:0] \$577 ;
-  wire [31:0] \$578 ;
-  wire [31:0] \$579 ;
+  wire \$570 ;
+  wire \$571 ;
+  wire \$572 ;
+  wire \$573 ;
+  wire \$574 ;
+  wire \$575 ;
+  wire \$576 ;
+  wire \$577 ;
+  wire \$578 ;
+  wire \$579 ;
   wire \$58 ;
-  wire [31:0] \$580 ;
-  wire [31:0] \$581 ;
-  wire [31:0] \$582 ;
-  wire [31:0] \$583 ;
-  wire [31:0] \$584 ;
-  wire [31:0] \$585 ;
-  wire [31:0] \$586 ;
-  wire [31:0] \$587 ;
-  wire [31:0] \$588 ;
-  wire [31:0] \$589 ;
+  wire \$580 ;
+  wire \$581 ;
+  wire \$582 ;
+  wire \$583 ;
+  wire \$584 ;
+  wire \$585 ;
+  wire \$586 ;
+  wire \$587 ;
+  wire \$588 ;
+  wire \$589 ;
   wire \$59 ;
-  wire [31:0] \$590 ;
-  wire [31:0] \$591 ;
-  wire [31:0] \$592 ;
-  wire [31:0] \$593 ;
-  wire [31:0] \$594 ;
-  wire [31:0] \$595 ;
-  wire [31:0] \$596 ;
-  wire [31:0] \$597 ;
-  wire [31:0] \$598 ;
-  wire [31:0] \$599 ;
+  wire \$590 ;
+  wire \$591 ;
+  wire \$592 ;
+  wire \$593 ;
+  wire \$594 ;
+  wire \$595 ;
+  wire \$596 ;
+  wire \$597 ;
+  wire \$598 ;
+  wire \$599 ;
   wire \$6 ;
   wire \$60 ;
-  wire [31:0] \$600 ;
-  wire [31:0] \$601 ;
-  wire [31:0] \$602 ;
-  wire [31:0] \$603 ;
-  wire [31:0] \$604 ;
-  wire [31:0] \$605 ;
-  wire [31:0] \$606 ;
-  wire [31:0] \$607 ;
-  wire [31:0] \$608 ;
-  wire [31:0] \$609 ;
+  wire \$600 ;
+  wire \$601 ;
+  wire \$602 ;
+  wire \$603 ;
+  wire \$604 ;
+  wire \$605 ;
+  wire \$606 ;
+  wire \$607 ;
+  wire \$608 ;
+  wire \$609 ;
   wire \$61 ;
   wire \$610 ;
   wire \$611 ;
   wire \$612 ;
   wire \$613 ;
-  wire \$614 ;
-  wire \$615 ;
+  wire [14:0] \$614 ;
+  wire [14:0] \$615 ;
   wire \$616 ;
-  wire \$617 ;
-  wire \$618 ;
+  wire [14:0] \$617 ;
+  wire [14:0] \$618 ;
   wire \$619 ;
   wire \$62 ;
-  wire \$620 ;
-  wire \$621 ;
+  wire [14:0] \$620 ;
+  wire [14:0] \$621 ;
   wire \$622 ;
-  wire \$623 ;
-  wire \$624 ;
+  wire [14:0] \$623 ;
+  wire [14:0] \$624 ;
   wire \$625 ;
-  wire \$626 ;
+  wire [3:0] \$626 ;
   wire \$627 ;
   wire \$628 ;
   wire \$629 ;
   wire \$63 ;
-  wire \$630 ;
-  wire \$631 ;
-  wire \$632 ;
+  reg [31:0] \$630 ;
+  wire [31:0] \$631 ;
+  reg [31:0] \$632 ;
   wire \$633 ;
   wire \$634 ;
   wire \$635 ;
@@ -2862,27 +2808,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$714 ;
   wire \$715 ;
   wire \$716 ;
-  wire \$717 ;
-  wire \$718 ;
+  wire [14:0] \$717 ;
+  wire [14:0] \$718 ;
   wire \$719 ;
   wire \$72 ;
-  wire \$720 ;
-  wire \$721 ;
+  wire [14:0] \$720 ;
+  wire [14:0] \$721 ;
   wire \$722 ;
-  wire \$723 ;
-  wire \$724 ;
+  wire [14:0] \$723 ;
+  wire [14:0] \$724 ;
   wire \$725 ;
-  wire \$726 ;
-  wire \$727 ;
+  wire [14:0] \$726 ;
+  wire [14:0] \$727 ;
   wire \$728 ;
-  wire \$729 ;
+  wire [3:0] \$729 ;
   wire \$73 ;
   wire \$730 ;
   wire \$731 ;
   wire \$732 ;
-  wire \$733 ;
-  wire \$734 ;
-  wire \$735 ;
+  reg [31:0] \$733 ;
+  wire [31:0] \$734 ;
+  reg [31:0] \$735 ;
   wire \$736 ;
   wire \$737 ;
   wire \$738 ;
@@ -2890,128 +2836,128 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire \$74 ;
   wire \$740 ;
   wire \$741 ;
-  wire \$742 ;
-  wire \$743 ;
-  wire \$744 ;
-  wire \$745 ;
-  wire \$746 ;
-  wire \$747 ;
-  wire \$748 ;
-  wire \$749 ;
+  wire [31:0] \$742 ;
+  wire [31:0] \$743 ;
+  reg \$744 ;
+  reg [10:0] \$745 ;
+  reg [31:0] \$746 ;
+  reg [3:0] \$747 ;
+  reg [31:0] \$748 ;
+  reg [3:0] \$749 ;
   wire \$75 ;
-  wire \$750 ;
-  wire \$751 ;
-  wire \$752 ;
-  wire \$753 ;
-  wire \$754 ;
-  wire \$755 ;
-  wire \$756 ;
-  wire \$757 ;
-  wire \$758 ;
-  wire \$759 ;
+  reg \$750 ;
+  reg \$751 ;
+  reg \$752 ;
+  reg \$753 ;
+  reg \$754 ;
+  reg \$755 ;
+  reg [31:0] \$756 ;
+  reg \$757 ;
+  reg \$758 ;
+  reg \$759 ;
   wire \$76 ;
-  wire \$760 ;
-  wire \$761 ;
-  wire \$762 ;
-  wire \$763 ;
-  wire \$764 ;
-  wire \$765 ;
-  wire \$766 ;
-  wire \$767 ;
-  wire \$768 ;
-  wire \$769 ;
+  reg \$760 ;
+  reg \$761 ;
+  reg \$762 ;
+  reg \$763 ;
+  reg \$764 ;
+  reg \$765 ;
+  reg \$766 ;
+  reg \$767 ;
+  reg \$768 ;
+  reg \$769 ;
   wire \$77 ;
-  wire \$770 ;
-  wire \$771 ;
-  wire \$772 ;
-  wire [31:0] \$773 ;
-  wire [31:0] \$774 ;
-  reg \$775 ;
-  reg [10:0] \$776 ;
-  reg [31:0] \$777 ;
-  reg [3:0] \$778 ;
-  reg [31:0] \$779 ;
+  reg [15:0] \$770 ;
+  reg [11:0] \$771 ;
+  reg \$772 ;
+  reg [23:0] \$773 ;
+  reg \$774 ;
+  reg [23:0] \$775 ;
+  reg \$776 ;
+  reg [23:0] \$777 ;
+  reg \$778 ;
+  reg [23:0] \$779 ;
   wire \$78 ;
-  reg [3:0] \$780 ;
-  reg \$781 ;
+  reg \$780 ;
+  reg [5:0] \$781 ;
   reg \$782 ;
   reg \$783 ;
-  reg \$784 ;
+  reg [1:0] \$784 ;
   reg \$785 ;
   reg \$786 ;
-  reg [31:0] \$787 ;
+  reg [5:0] \$787 ;
   reg \$788 ;
   reg \$789 ;
   wire \$79 ;
-  reg \$790 ;
+  reg [1:0] \$790 ;
   reg \$791 ;
   reg \$792 ;
   reg \$793 ;
   reg \$794 ;
   reg \$795 ;
   reg \$796 ;
-  reg \$797 ;
-  reg \$798 ;
-  reg \$799 ;
+  reg [7:0] \$797 ;
+  reg [3:0] \$798 ;
+  reg [3:0] \$799 ;
   wire [31:0] \$8 ;
   wire \$80 ;
-  reg \$800 ;
-  reg [15:0] \$801 ;
+  reg [3:0] \$800 ;
+  reg \$801 ;
   reg [11:0] \$802 ;
   reg \$803 ;
-  reg [23:0] \$804 ;
-  reg \$805 ;
-  reg [23:0] \$806 ;
+  reg [15:0] \$804 ;
+  reg [4:0] \$805 ;
+  reg \$806 ;
   reg \$807 ;
-  reg [23:0] \$808 ;
+  reg [15:0] \$808 ;
   reg \$809 ;
   wire \$81 ;
-  reg [23:0] \$810 ;
-  reg \$811 ;
-  reg [5:0] \$812 ;
+  reg [15:0] \$810 ;
+  reg [4:0] \$811 ;
+  reg \$812 ;
   reg \$813 ;
-  reg \$814 ;
-  reg [1:0] \$815 ;
+  reg [15:0] \$814 ;
+  reg \$815 ;
   reg \$816 ;
   reg \$817 ;
-  reg [5:0] \$818 ;
+  reg \$818 ;
   reg \$819 ;
   wire \$82 ;
-  reg \$820 ;
-  reg [1:0] \$821 ;
+  reg [11:0] \$820 ;
+  reg \$821 ;
   reg \$822 ;
   reg \$823 ;
   reg \$824 ;
   reg \$825 ;
   reg \$826 ;
   reg \$827 ;
-  reg [7:0] \$828 ;
-  reg [3:0] \$829 ;
+  reg \$828 ;
+  reg \$829 ;
   wire \$83 ;
-  reg [3:0] \$830 ;
-  reg [3:0] \$831 ;
+  reg \$830 ;
+  reg \$831 ;
   reg \$832 ;
-  reg [11:0] \$833 ;
+  reg \$833 ;
   reg \$834 ;
-  reg [15:0] \$835 ;
-  reg [4:0] \$836 ;
+  reg \$835 ;
+  reg \$836 ;
   reg \$837 ;
   reg \$838 ;
-  reg [15:0] \$839 ;
+  reg \$839 ;
   wire \$84 ;
-  reg \$840 ;
-  reg [15:0] \$841 ;
-  reg [4:0] \$842 ;
+  reg [2:0] \$840 ;
+  reg [6:0] \$841 ;
+  reg [6:0] \$842 ;
   reg \$843 ;
   reg \$844 ;
-  reg [15:0] \$845 ;
-  reg \$846 ;
-  reg \$847 ;
-  reg \$848 ;
+  reg \$845 ;
+  reg [31:0] \$846 ;
+  reg [14:0] \$847 ;
+  reg [3:0] \$848 ;
   reg \$849 ;
   wire \$85 ;
   reg \$850 ;
-  reg [11:0] \$851 ;
+  reg \$851 ;
   reg \$852 ;
   reg \$853 ;
   reg \$854 ;
@@ -3033,9 +2979,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$869 ;
   wire \$87 ;
   reg \$870 ;
-  reg [2:0] \$871 ;
-  reg [6:0] \$872 ;
-  reg [6:0] \$873 ;
+  reg \$871 ;
+  reg \$872 ;
+  reg \$873 ;
   reg \$874 ;
   reg \$875 ;
   reg \$876 ;
@@ -3069,7 +3015,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$900 ;
   reg \$901 ;
   reg \$902 ;
-  reg \$903 ;
+  reg [3:0] \$903 ;
   reg \$904 ;
   reg \$905 ;
   reg \$906 ;
@@ -3082,24 +3028,24 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$912 ;
   reg \$913 ;
   reg \$914 ;
-  reg \$915 ;
-  reg \$916 ;
-  reg \$917 ;
-  reg \$918 ;
-  reg \$919 ;
+  reg [5:0] \$915 ;
+  reg [15:0] \$916 ;
+  reg [12:0] \$917 ;
+  reg [31:0] \$918 ;
+  reg [22:0] \$919 ;
   wire \$92 ;
-  reg \$920 ;
-  reg \$921 ;
-  reg \$922 ;
-  reg \$923 ;
+  reg [31:0] \$920 ;
+  reg [7:0] \$921 ;
+  reg [31:0] \$922 ;
+  reg [3:0] \$923 ;
   reg \$924 ;
-  reg \$925 ;
-  reg \$926 ;
+  reg [7:0] \$925 ;
+  reg [12:0] \$926 ;
   reg \$927 ;
   reg \$928 ;
   reg \$929 ;
   wire \$93 ;
-  reg \$930 ;
+  reg [31:0] \$930 ;
   reg \$931 ;
   reg \$932 ;
   reg \$933 ;
@@ -3114,65 +3060,65 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg \$941 ;
   reg \$942 ;
   reg \$943 ;
-  reg \$944 ;
-  reg \$945 ;
-  reg [3:0] \$946 ;
-  reg \$947 ;
+  reg [15:0] \$944 ;
+  reg [11:0] \$945 ;
+  reg \$946 ;
+  reg [23:0] \$947 ;
   reg \$948 ;
-  reg \$949 ;
+  reg [23:0] \$949 ;
   wire \$95 ;
   reg \$950 ;
-  reg \$951 ;
+  reg [23:0] \$951 ;
   reg \$952 ;
-  reg \$953 ;
+  reg [23:0] \$953 ;
   reg \$954 ;
-  reg \$955 ;
+  reg [5:0] \$955 ;
   reg \$956 ;
   reg \$957 ;
-  reg [5:0] \$958 ;
-  reg [15:0] \$959 ;
+  reg [1:0] \$958 ;
+  reg \$959 ;
   wire \$96 ;
-  reg [12:0] \$960 ;
-  reg [31:0] \$961 ;
-  reg [22:0] \$962 ;
-  reg [31:0] \$963 ;
-  reg [7:0] \$964 ;
-  reg [31:0] \$965 ;
-  reg [3:0] \$966 ;
+  reg \$960 ;
+  reg [5:0] \$961 ;
+  reg \$962 ;
+  reg \$963 ;
+  reg [1:0] \$964 ;
+  reg \$965 ;
+  reg \$966 ;
   reg \$967 ;
-  reg [7:0] \$968 ;
-  reg [12:0] \$969 ;
+  reg \$968 ;
+  reg \$969 ;
   wire \$97 ;
   reg \$970 ;
-  reg \$971 ;
-  reg [31:0] \$972 ;
-  reg \$973 ;
-  reg \$974 ;
+  reg [7:0] \$971 ;
+  reg [3:0] \$972 ;
+  reg [3:0] \$973 ;
+  reg [3:0] \$974 ;
   reg \$975 ;
-  reg \$976 ;
+  reg [11:0] \$976 ;
   reg \$977 ;
-  reg \$978 ;
-  reg \$979 ;
-  wire \$98 ;
+  reg [15:0] \$978 ;
+  reg [4:0] \$979 ;
+  wire [31:0] \$98 ;
   reg \$980 ;
   reg \$981 ;
-  reg \$982 ;
+  reg [15:0] \$982 ;
   reg \$983 ;
-  reg \$984 ;
-  reg \$985 ;
-  reg [15:0] \$986 ;
-  reg [11:0] \$987 ;
-  reg \$988 ;
-  reg [23:0] \$989 ;
-  wire \$99 ;
+  reg [15:0] \$984 ;
+  reg [4:0] \$985 ;
+  reg \$986 ;
+  reg \$987 ;
+  reg [15:0] \$988 ;
+  reg \$989 ;
+  wire [31:0] \$99 ;
   reg \$990 ;
-  reg [23:0] \$991 ;
+  reg \$991 ;
   reg \$992 ;
-  reg [23:0] \$993 ;
-  reg \$994 ;
-  reg [23:0] \$995 ;
+  reg \$993 ;
+  reg [11:0] \$994 ;
+  reg \$995 ;
   reg \$996 ;
-  reg [5:0] \$997 ;
+  reg \$997 ;
   reg \$998 ;
   reg \$999 ;
   wire [10:0] bus__r_addr;
@@ -3636,6 +3582,10 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0_chain_w6_lo_write;
   wire ch0_chain_w7_hi_write;
   wire ch0_chain_w7_lo_write;
+  wire ch0_config_read;
+  wire [31:0] ch0_config_read_data;
+  reg [3:0] ch0_config_read_index = 4'h0;
+  reg [14:0] ch0_config_written = 15'h0000;
   wire ch0_count_chain2_write;
   wire ch0_count_chain3_write;
   wire ch0_count_chain_write;
@@ -3666,17 +3616,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch0_read_select_81 = 1'h0;
   reg ch0_read_select_82 = 1'h0;
   reg ch0_read_select_84 = 1'h0;
-  reg ch0_read_select_85 = 1'h0;
   reg ch0_read_select_86 = 1'h0;
   reg ch0_read_select_87 = 1'h0;
-  reg ch0_read_select_88 = 1'h0;
-  reg ch0_read_select_89 = 1'h0;
-  reg ch0_read_select_8a = 1'h0;
-  reg ch0_read_select_8b = 1'h0;
-  reg ch0_read_select_8c = 1'h0;
-  reg ch0_read_select_8d = 1'h0;
-  reg ch0_read_select_8e = 1'h0;
-  reg ch0_read_select_8f = 1'h0;
   reg ch0_read_select_90 = 1'h0;
   reg ch0_read_select_91 = 1'h0;
   reg ch0_read_select_92 = 1'h0;
@@ -3685,11 +3626,6 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch0_read_select_95 = 1'h0;
   reg ch0_read_select_96 = 1'h0;
   reg ch0_read_select_97 = 1'h0;
-  reg ch0_read_select_a0 = 1'h0;
-  reg ch0_read_select_a1 = 1'h0;
-  reg ch0_read_select_a2 = 1'h0;
-  reg ch0_read_select_a3 = 1'h0;
-  reg ch0_read_select_a4 = 1'h0;
   reg ch0_read_select_a5 = 1'h0;
   reg ch0_read_select_a6 = 1'h0;
   reg ch0_read_select_a7 = 1'h0;
@@ -3711,7 +3647,6 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch0_read_select_bc = 1'h0;
   reg ch0_read_select_bd = 1'h0;
   reg ch0_read_select_be = 1'h0;
-  reg ch0_read_select_c0 = 1'h0;
   reg ch0_read_select_c1 = 1'h0;
   reg ch0_read_select_c2 = 1'h0;
   reg ch0_read_select_c3 = 1'h0;
@@ -3766,6 +3701,7 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch0_state_write;
   reg ch0_window0_read = 1'h0;
   reg ch0_window1_read = 1'h0;
+  reg ch0_window2_read = 1'h0;
   (* init = 1'h0 *)
   wire ch1__abort_cycle;
   input ch1__busy;
@@ -4051,8 +3987,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   output [2:0] ch1_ca_request_slave_id;
   reg [2:0] ch1_ca_request_slave_id = 3'h0;
   wire ch1_ca_request_write;
-  output \ch1_ca_request_write$452 ;
-  reg \ch1_ca_request_write$452  = 1'h0;
+  output \ch1_ca_request_write$446 ;
+  reg \ch1_ca_request_write$446  = 1'h0;
   wire ch1_ca_state_write;
   wire ch1_caps_chain2_write;
   wire ch1_caps_chain_write;
@@ -4211,6 +4147,10 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1_chain_w6_lo_write;
   wire ch1_chain_w7_hi_write;
   wire ch1_chain_w7_lo_write;
+  wire ch1_config_read;
+  wire [31:0] ch1_config_read_data;
+  reg [3:0] ch1_config_read_index = 4'h0;
+  reg [14:0] ch1_config_written = 15'h0000;
   wire ch1_count_chain2_write;
   wire ch1_count_chain3_write;
   wire ch1_count_chain_write;
@@ -4241,17 +4181,8 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch1_read_select_101 = 1'h0;
   reg ch1_read_select_102 = 1'h0;
   reg ch1_read_select_104 = 1'h0;
-  reg ch1_read_select_105 = 1'h0;
   reg ch1_read_select_106 = 1'h0;
   reg ch1_read_select_107 = 1'h0;
-  reg ch1_read_select_108 = 1'h0;
-  reg ch1_read_select_109 = 1'h0;
-  reg ch1_read_select_10a = 1'h0;
-  reg ch1_read_select_10b = 1'h0;
-  reg ch1_read_select_10c = 1'h0;
-  reg ch1_read_select_10d = 1'h0;
-  reg ch1_read_select_10e = 1'h0;
-  reg ch1_read_select_10f = 1'h0;
   reg ch1_read_select_110 = 1'h0;
   reg ch1_read_select_111 = 1'h0;
   reg ch1_read_select_112 = 1'h0;
@@ -4260,11 +4191,6 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch1_read_select_115 = 1'h0;
   reg ch1_read_select_116 = 1'h0;
   reg ch1_read_select_117 = 1'h0;
-  reg ch1_read_select_120 = 1'h0;
-  reg ch1_read_select_121 = 1'h0;
-  reg ch1_read_select_122 = 1'h0;
-  reg ch1_read_select_123 = 1'h0;
-  reg ch1_read_select_124 = 1'h0;
   reg ch1_read_select_125 = 1'h0;
   reg ch1_read_select_126 = 1'h0;
   reg ch1_read_select_127 = 1'h0;
@@ -4286,7 +4212,6 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   reg ch1_read_select_13c = 1'h0;
   reg ch1_read_select_13d = 1'h0;
   reg ch1_read_select_13e = 1'h0;
-  reg ch1_read_select_140 = 1'h0;
   reg ch1_read_select_141 = 1'h0;
   reg ch1_read_select_142 = 1'h0;
   reg ch1_read_select_143 = 1'h0;
@@ -4341,8 +4266,14 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   wire ch1_state_write;
   reg ch1_window0_read = 1'h0;
   reg ch1_window1_read = 1'h0;
+  reg ch1_window2_read = 1'h0;
   input clk;
   wire clk;
+  reg config_memory0_read_hit;
+  reg [3:0] config_memory0_read_index;
+  reg [31:0] config_memory0_write_data = 32'd0;
+  reg [31:0] config_memory0_write_fill;
+  reg [31:0] config_memory0_write_mask;
   reg [31:0] config_write_data = 32'd0;
   reg [3:0] config_write_strb = 4'h0;
   wire g_channels_write;
@@ -4364,25 +4295,97 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   (* init = 1'h0 *)
   wire glob__trigger;
   wire [1:0] irq;
-  input [186:0] \port$7239$0 ;
-  wire [186:0] \port$7239$0 ;
-  input [79:0] \port$7250$0 ;
-  wire [79:0] \port$7250$0 ;
-  input [9:0] \port$7327$0 ;
-  wire [9:0] \port$7327$0 ;
-  input [186:0] \port$7770$0 ;
-  wire [186:0] \port$7770$0 ;
-  input [79:0] \port$7781$0 ;
-  wire [79:0] \port$7781$0 ;
-  input [9:0] \port$7858$0 ;
-  wire [9:0] \port$7858$0 ;
+  input [186:0] \port$7280$0 ;
+  wire [186:0] \port$7280$0 ;
+  input [79:0] \port$7291$0 ;
+  wire [79:0] \port$7291$0 ;
+  input [9:0] \port$7368$0 ;
+  wire [9:0] \port$7368$0 ;
+  input [186:0] \port$7811$0 ;
+  wire [186:0] \port$7811$0 ;
+  input [79:0] \port$7822$0 ;
+  wire [79:0] \port$7822$0 ;
+  input [9:0] \port$7899$0 ;
+  wire [9:0] \port$7899$0 ;
+  (* init = 4'h0 *)
+  wire [3:0] rd__addr;
+  (* init = 4'h0 *)
+  wire [3:0] \rd__addr$943 ;
+  wire [31:0] rd__data;
+  wire [31:0] \rd__data$944 ;
   input rst;
   wire rst;
+  wire [3:0] wr__addr;
+  wire [3:0] \wr__addr$940 ;
+  (* init = 32'd0 *)
+  wire [31:0] wr__data;
+  (* init = 32'd0 *)
+  wire [31:0] \wr__data$941 ;
+  wire [3:0] wr__en;
+  wire [3:0] \wr__en$942 ;
   reg [10:0] write_addr = 11'h000;
   output [31:0] write_data;
   reg [31:0] write_data = 32'd0;
   reg write_en = 1'h0;
   reg [3:0] write_strb = 4'h0;
+  reg [31:0] ch0_config_memory [14:0];
+  initial begin
+    ch0_config_memory[0] = 32'd0;
+    ch0_config_memory[1] = 32'd0;
+    ch0_config_memory[2] = 32'd0;
+    ch0_config_memory[3] = 32'd0;
+    ch0_config_memory[4] = 32'd0;
+    ch0_config_memory[5] = 32'd0;
+    ch0_config_memory[6] = 32'd0;
+    ch0_config_memory[7] = 32'd0;
+    ch0_config_memory[8] = 32'd0;
+    ch0_config_memory[9] = 32'd0;
+    ch0_config_memory[10] = 32'd0;
+    ch0_config_memory[11] = 32'd0;
+    ch0_config_memory[12] = 32'd0;
+    ch0_config_memory[13] = 32'd0;
+    ch0_config_memory[14] = 32'd0;
+  end
+  always @(posedge clk) begin
+    if (wr__en[0])
+      ch0_config_memory[{ \$612 , \$611 , \$610 , \$609  }][7:0] <= config_memory0_write_data[7:0];
+    if (wr__en[1])
+      ch0_config_memory[{ \$612 , \$611 , \$610 , \$609  }][15:8] <= config_memory0_write_data[15:8];
+    if (wr__en[2])
+      ch0_config_memory[{ \$612 , \$611 , \$610 , \$609  }][23:16] <= config_memory0_write_data[23:16];
+    if (wr__en[3])
+      ch0_config_memory[{ \$612 , \$611 , \$610 , \$609  }][31:24] <= config_memory0_write_data[31:24];
+  end
+  assign rd__data = ch0_config_memory[ch0_config_read_index];
+  reg [31:0] ch1_config_memory [14:0];
+  initial begin
+    ch1_config_memory[0] = 32'd0;
+    ch1_config_memory[1] = 32'd0;
+    ch1_config_memory[2] = 32'd0;
+    ch1_config_memory[3] = 32'd0;
+    ch1_config_memory[4] = 32'd0;
+    ch1_config_memory[5] = 32'd0;
+    ch1_config_memory[6] = 32'd0;
+    ch1_config_memory[7] = 32'd0;
+    ch1_config_memory[8] = 32'd0;
+    ch1_config_memory[9] = 32'd0;
+    ch1_config_memory[10] = 32'd0;
+    ch1_config_memory[11] = 32'd0;
+    ch1_config_memory[12] = 32'd0;
+    ch1_config_memory[13] = 32'd0;
+    ch1_config_memory[14] = 32'd0;
+  end
+  always @(posedge clk) begin
+    if (\wr__en$942 [0])
+      ch1_config_memory[{ \$715 , \$714 , \$713 , \$712  }][7:0] <= config_memory0_write_data[7:0];
+    if (\wr__en$942 [1])
+      ch1_config_memory[{ \$715 , \$714 , \$713 , \$712  }][15:8] <= config_memory0_write_data[15:8];
+    if (\wr__en$942 [2])
+      ch1_config_memory[{ \$715 , \$714 , \$713 , \$712  }][23:16] <= config_memory0_write_data[23:16];
+    if (\wr__en$942 [3])
+      ch1_config_memory[{ \$715 , \$714 , \$713 , \$712  }][31:24] <= config_memory0_write_data[31:24];
+  end
+  assign \rd__data$944  = ch1_config_memory[ch1_config_read_index];
   assign \$1  = write_data[0] & write_strb[0];
   assign \$2  = g_trigger_write ? \$1  : 1'h0;
   assign \$3  = ! bus__w_addr;
@@ -4477,1513 +4480,1898 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign \$95  = ch0_ca_ctrl_write ? \$94  : 1'h0;
   assign \$96  = write_data[1] & write_strb[0];
   assign \$97  = ch0_ca_ctrl_write ? \$96  : 1'h0;
-  assign \$98  = bus__w_addr == 8'h80;
-  assign \$99  = bus__w_addr == 8'h81;
-  assign \$100  = bus__w_addr == 8'h82;
-  assign \$101  = bus__w_addr == 8'h84;
-  assign \$102  = bus__w_addr == 8'h85;
-  assign \$103  = bus__w_addr == 8'h86;
-  assign \$104  = bus__w_addr == 8'h87;
-  assign \$105  = bus__w_addr == 8'h88;
-  assign \$106  = bus__w_addr == 8'h89;
-  assign \$107  = bus__w_addr == 8'h8a;
-  assign \$108  = bus__w_addr == 8'h8b;
-  assign \$109  = bus__w_addr == 8'h8c;
-  assign \$110  = bus__w_addr == 8'h8d;
-  assign \$111  = bus__w_addr == 8'h8e;
-  assign \$112  = bus__w_addr == 8'h8f;
-  assign \$113  = bus__w_addr == 8'h90;
-  assign \$114  = bus__w_addr == 8'h91;
-  assign \$115  = bus__w_addr == 8'h92;
-  assign \$116  = bus__w_addr == 8'h93;
-  assign \$117  = bus__w_addr == 8'h94;
-  assign \$118  = bus__w_addr == 8'h95;
-  assign \$119  = bus__w_addr == 8'h96;
-  assign \$120  = bus__w_addr == 8'h97;
-  assign \$121  = bus__w_addr == 8'ha0;
-  assign \$122  = bus__w_addr == 8'ha1;
-  assign \$123  = bus__w_addr == 8'ha2;
-  assign \$124  = bus__w_addr == 8'ha3;
-  assign \$125  = bus__w_addr == 8'ha4;
-  assign \$126  = bus__w_addr == 8'ha5;
-  assign \$127  = bus__w_addr == 8'ha6;
-  assign \$128  = bus__w_addr == 8'ha7;
-  assign \$129  = bus__w_addr == 8'ha8;
-  assign \$130  = bus__w_addr == 8'ha9;
-  assign \$131  = bus__w_addr == 8'haa;
-  assign \$132  = bus__w_addr == 8'hac;
-  assign \$133  = bus__w_addr == 8'had;
-  assign \$134  = bus__w_addr == 8'hae;
-  assign \$135  = bus__w_addr == 8'hb0;
-  assign \$136  = bus__w_addr == 8'hb1;
-  assign \$137  = bus__w_addr == 8'hb2;
-  assign \$138  = bus__w_addr == 8'hb4;
-  assign \$139  = bus__w_addr == 8'hb5;
-  assign \$140  = bus__w_addr == 8'hb6;
-  assign \$141  = bus__w_addr == 8'hb8;
-  assign \$142  = bus__w_addr == 8'hb9;
-  assign \$143  = bus__w_addr == 8'hba;
-  assign \$144  = bus__w_addr == 8'hbc;
-  assign \$145  = bus__w_addr == 8'hbd;
-  assign \$146  = bus__w_addr == 8'hbe;
-  assign \$147  = bus__w_addr == 8'hc0;
-  assign \$148  = bus__w_addr == 8'hc1;
-  assign \$149  = bus__w_addr == 8'hc2;
-  assign \$150  = bus__w_addr == 8'hc3;
-  assign \$151  = bus__w_addr == 8'hc4;
-  assign \$152  = bus__w_addr == 8'hc5;
-  assign \$153  = bus__w_addr == 8'hf0;
-  assign \$154  = bus__w_addr == 8'hf1;
-  assign \$155  = bus__w_addr == 8'hf2;
-  assign \$156  = bus__w_addr == 8'hf3;
-  assign \$157  = bus__w_addr == 8'hf4;
-  assign \$158  = bus__w_addr == 8'hf5;
-  assign \$159  = bus__w_addr == 8'hf6;
-  assign \$160  = bus__w_addr == 8'hf7;
-  assign \$161  = bus__w_addr == 8'hf8;
-  assign \$162  = bus__w_addr == 8'hf9;
-  assign \$163  = bus__w_addr == 8'hfa;
-  assign \$164  = bus__w_addr == 8'hfb;
-  assign \$165  = bus__w_addr == 8'hfc;
-  assign \$166  = bus__w_addr == 8'hfd;
-  assign \$167  = ch0_read_select_90 & bus__r_load;
-  assign \$168  = bus__w_addr[10:3] == 5'h13;
-  assign \$169  = bus__r_en & \$168 ;
-  assign \$170  = bus__w_addr[10:4] == 4'he;
-  assign \$171  = bus__r_en & \$170 ;
-  assign \$172  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$174  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
-  assign \$175  = \$173  | \$174 ;
-  assign \$176  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
-  assign \$177  = \$175  | \$176 ;
-  assign \$178  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
-  assign \$179  = \$177  | \$178 ;
-  assign \$180  = ch0_read_select_85 ? { 29'h00000000, ch0_irq_enable_access_done, ch0_irq_enable_error, ch0_irq_enable_done } : 32'd0;
-  assign \$181  = \$179  | \$180 ;
-  assign \$186  = ch0_read_select_88 ? { 4'h0, ch0_cfg_ma_delay_limit, ch0_cfg_ma_ma_half_period } : 32'd0;
-  assign \$187  = \$185  | \$186 ;
-  assign \$188  = ch0_read_select_89 ? { 8'h00, ch0_cfg_period_request_period } : 32'd0;
-  assign \$189  = \$187  | \$188 ;
-  assign \$190  = ch0_read_select_8a ? { 8'h00, ch0_cfg_break_break_time } : 32'd0;
-  assign \$191  = \$189  | \$190 ;
-  assign \$192  = ch0_read_select_8b ? { 8'h00, ch0_cfg_ack_ack_limit } : 32'd0;
-  assign \$193  = \$191  | \$192 ;
-  assign \$194  = ch0_read_select_8c ? { 8'h00, ch0_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$195  = \$193  | \$194 ;
-  assign \$196  = ch0_read_select_8d ? { ch0_cfg_words_w1_enable, 3'h0, ch0_cfg_words_w1_signed, ch0_cfg_words_w1_gray, ch0_cfg_words_w1_crc, ch0_cfg_words_w1_lc, ch0_cfg_words_w1_nenw, ch0_cfg_words_w1_data_bits, 4'h0, ch0_cfg_words_w0_signed, ch0_cfg_words_w0_gray, ch0_cfg_words_w0_crc, ch0_cfg_words_w0_lc, ch0_cfg_words_w0_nenw, ch0_cfg_words_w0_data_bits } : 32'd0;
-  assign \$197  = \$195  | \$196 ;
-  assign \$198  = ch0_read_select_8e ? { 4'h0, ch0_cfg_checks_confirm_frames, ch0_cfg_checks_delay_tolerance, ch0_cfg_checks_noise_limit, ch0_cfg_checks_spw_tolerance, 6'h00, ch0_cfg_checks_spw_check, ch0_cfg_checks_end_check } : 32'd0;
-  assign \$199  = \$197  | \$198 ;
-  assign \$200  = ch0_read_select_8f ? { 20'h00000, ch0_cfg_quiet_quiet_time } : 32'd0;
-  assign \$201  = \$199  | \$200 ;
-  assign \$202  = ch0_read_select_90 ? { 2'h0, \port$7239$0 [182:177], 4'h0, \port$7239$0 [186:183], 1'h0, \port$7239$0 [176:174], 1'h0, \port$7239$0 [133:131], 3'h0, \port$7239$0 [49], \port$7239$0 [3:0] } : 32'd0;
-  assign \$203  = \$201  | \$202 ;
-  assign \$204  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
-  assign \$205  = \$203  | \$204 ;
-  assign \$206  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
-  assign \$207  = \$205  | \$206 ;
-  assign \$208  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$209  = \$207  | \$208 ;
-  assign \$210  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
-  assign \$211  = \$209  | \$210 ;
-  assign \$212  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$213  = \$211  | \$212 ;
-  assign \$214  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
-  assign \$215  = \$213  | \$214 ;
-  assign \$216  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
-  assign \$217  = \$215  | \$216 ;
-  assign \$218  = ch0_read_select_a0 ? { 7'h00, ch0_cfg_crc0_w0_crc_inverted, 3'h0, ch0_cfg_crc0_w0_crc_width, ch0_cfg_crc0_w0_crc_poly } : 32'd0;
-  assign \$219  = \$217  | \$218 ;
-  assign \$220  = ch0_read_select_a1 ? { 16'h0000, ch0_cfg_crc0_start_w0_crc_start } : 32'd0;
-  assign \$221  = \$219  | \$220 ;
-  assign \$222  = ch0_read_select_a2 ? { 7'h00, ch0_cfg_crc1_w1_crc_inverted, 3'h0, ch0_cfg_crc1_w1_crc_width, ch0_cfg_crc1_w1_crc_poly } : 32'd0;
-  assign \$223  = \$221  | \$222 ;
-  assign \$224  = ch0_read_select_a3 ? { 16'h0000, ch0_cfg_crc1_start_w1_crc_start } : 32'd0;
-  assign \$225  = \$223  | \$224 ;
-  assign \$226  = ch0_read_select_a4 ? { 4'h0, ch0_cfg_ssi_ssi_delay, 12'h000, ch0_cfg_ssi_ssi_double, ch0_cfg_ssi_ssi_error_low, ch0_cfg_ssi_ssi_error, ch0_cfg_ssi_ssi } : 32'd0;
-  assign \$227  = \$225  | \$226 ;
-  assign \$270  = ch0_read_select_c0 ? { 7'h00, \ch0_ca_request_write$149 , 1'h0, ch0_ca_request_count, 1'h0, ch0_ca_request_address, 5'h00, ch0_ca_request_slave_id } : 32'd0;
-  assign \$271  = \$269  | \$270 ;
-  assign \$274  = ch0_read_select_c2 ? { 17'h00000, \port$7327$0 [9:3], 1'h0, \port$7327$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
-  assign \$275  = \$273  | \$274 ;
-  assign \$276  = ch0_read_select_c3 ? \port$7250$0 [31:0] : 32'd0;
-  assign \$277  = \$275  | \$276 ;
-  assign \$278  = ch0_read_select_c4 ? \port$7250$0 [63:32] : 32'd0;
-  assign \$279  = \$277  | \$278 ;
-  assign \$280  = ch0_read_select_c5 ? { 16'h0000, \port$7250$0 [79:64] } : 32'd0;
-  assign \$281  = \$279  | \$280 ;
-  assign \$282  = ch0_read_select_f0 ? { 16'h0000, ch0__result_updates } : 32'd0;
-  assign \$283  = \$281  | \$282 ;
-  assign \$310  = ch0_window0_read ? ch0__count_data : 32'd0;
-  assign \$311  = \$309  | \$310 ;
-  assign \$312  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
-  assign \$313  = \$311  | \$312 ;
-  assign \$314  = write_data[0] & write_strb[0];
-  assign \$315  = ch1_ctrl_write ? \$314  : 1'h0;
-  assign \$316  = write_data[1] & write_strb[0];
-  assign \$317  = ch1_ctrl_write ? \$316  : 1'h0;
-  assign \$318  = write_data[2] & write_strb[0];
-  assign \$319  = ch1_ctrl_write ? \$318  : 1'h0;
-  assign \$320  = ch1_ctrl_write & write_strb[1];
-  assign \$321  = ch1_ctrl_write & write_strb[1];
-  assign \$322  = write_data[0] & write_strb[0];
-  assign \$323  = ch1_irq_status_write ? \$322  : 1'h0;
-  assign \$324  = write_data[1] & write_strb[0];
-  assign \$325  = ch1_irq_status_write ? \$324  : 1'h0;
-  assign \$326  = write_data[2] & write_strb[0];
-  assign \$327  = ch1_irq_status_write ? \$326  : 1'h0;
-  assign \$328  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$329  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$330  = ch1_irq_enable_config_write & config_write_strb[0];
-  assign \$331  = ch1_cfg_ma_config_write & config_write_strb[0];
-  assign \$332  = ch1_cfg_ma_config_write & config_write_strb[1];
-  assign \$333  = ch1_cfg_ma_config_write & config_write_strb[2];
-  assign \$334  = ch1_cfg_ma_config_write & config_write_strb[3];
-  assign \$335  = ch1_cfg_period_config_write & config_write_strb[0];
-  assign \$336  = ch1_cfg_period_config_write & config_write_strb[1];
-  assign \$337  = ch1_cfg_period_config_write & config_write_strb[2];
-  assign \$338  = ch1_cfg_break_config_write & config_write_strb[0];
-  assign \$339  = ch1_cfg_break_config_write & config_write_strb[1];
-  assign \$340  = ch1_cfg_break_config_write & config_write_strb[2];
-  assign \$341  = ch1_cfg_ack_config_write & config_write_strb[0];
-  assign \$342  = ch1_cfg_ack_config_write & config_write_strb[1];
-  assign \$343  = ch1_cfg_ack_config_write & config_write_strb[2];
-  assign \$344  = ch1_cfg_timeout_config_write & config_write_strb[0];
-  assign \$345  = ch1_cfg_timeout_config_write & config_write_strb[1];
-  assign \$346  = ch1_cfg_timeout_config_write & config_write_strb[2];
-  assign \$347  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$348  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$349  = ch1_cfg_words_config_write & config_write_strb[0];
-  assign \$350  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$351  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$352  = ch1_cfg_words_config_write & config_write_strb[1];
-  assign \$353  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$354  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$355  = ch1_cfg_words_config_write & config_write_strb[2];
-  assign \$356  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$357  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$358  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$359  = ch1_cfg_words_config_write & config_write_strb[3];
-  assign \$360  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$361  = ch1_cfg_checks_config_write & config_write_strb[0];
-  assign \$362  = ch1_cfg_checks_config_write & config_write_strb[1];
-  assign \$363  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$364  = ch1_cfg_checks_config_write & config_write_strb[2];
-  assign \$365  = ch1_cfg_checks_config_write & config_write_strb[3];
-  assign \$366  = ch1_cfg_quiet_config_write & config_write_strb[0];
-  assign \$367  = ch1_cfg_quiet_config_write & config_write_strb[1];
-  assign \$368  = ch1_cfg_crc0_config_write & config_write_strb[0];
-  assign \$369  = ch1_cfg_crc0_config_write & config_write_strb[1];
-  assign \$370  = ch1_cfg_crc0_config_write & config_write_strb[2];
-  assign \$371  = ch1_cfg_crc0_config_write & config_write_strb[3];
-  assign \$372  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
-  assign \$373  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
-  assign \$374  = ch1_cfg_crc1_config_write & config_write_strb[0];
-  assign \$375  = ch1_cfg_crc1_config_write & config_write_strb[1];
-  assign \$376  = ch1_cfg_crc1_config_write & config_write_strb[2];
-  assign \$377  = ch1_cfg_crc1_config_write & config_write_strb[3];
-  assign \$378  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
-  assign \$379  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
-  assign \$380  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$381  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$382  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$383  = ch1_cfg_ssi_config_write & config_write_strb[0];
-  assign \$384  = ch1_cfg_ssi_config_write & config_write_strb[2];
-  assign \$385  = ch1_cfg_ssi_config_write & config_write_strb[3];
-  assign \$386  = ch1_ca_request_config_write & config_write_strb[0];
-  assign \$387  = ch1_ca_request_config_write & config_write_strb[1];
-  assign \$388  = ch1_ca_request_config_write & config_write_strb[2];
-  assign \$389  = ch1_ca_request_config_write & config_write_strb[3];
-  assign \$390  = write_data[0] & write_strb[0];
-  assign \$391  = ch1_ca_ctrl_write ? \$390  : 1'h0;
-  assign \$392  = write_data[1] & write_strb[0];
-  assign \$393  = ch1_ca_ctrl_write ? \$392  : 1'h0;
-  assign \$394  = bus__w_addr == 9'h100;
-  assign \$395  = bus__w_addr == 9'h101;
-  assign \$396  = bus__w_addr == 9'h102;
-  assign \$397  = bus__w_addr == 9'h104;
-  assign \$398  = bus__w_addr == 9'h105;
-  assign \$399  = bus__w_addr == 9'h106;
-  assign \$400  = bus__w_addr == 9'h107;
-  assign \$401  = bus__w_addr == 9'h108;
-  assign \$402  = bus__w_addr == 9'h109;
-  assign \$403  = bus__w_addr == 9'h10a;
-  assign \$404  = bus__w_addr == 9'h10b;
-  assign \$405  = bus__w_addr == 9'h10c;
-  assign \$406  = bus__w_addr == 9'h10d;
-  assign \$407  = bus__w_addr == 9'h10e;
-  assign \$408  = bus__w_addr == 9'h10f;
-  assign \$409  = bus__w_addr == 9'h110;
-  assign \$410  = bus__w_addr == 9'h111;
-  assign \$411  = bus__w_addr == 9'h112;
-  assign \$412  = bus__w_addr == 9'h113;
-  assign \$413  = bus__w_addr == 9'h114;
-  assign \$414  = bus__w_addr == 9'h115;
-  assign \$415  = bus__w_addr == 9'h116;
-  assign \$416  = bus__w_addr == 9'h117;
-  assign \$417  = bus__w_addr == 9'h120;
-  assign \$418  = bus__w_addr == 9'h121;
-  assign \$419  = bus__w_addr == 9'h122;
-  assign \$420  = bus__w_addr == 9'h123;
-  assign \$421  = bus__w_addr == 9'h124;
-  assign \$422  = bus__w_addr == 9'h125;
-  assign \$423  = bus__w_addr == 9'h126;
-  assign \$424  = bus__w_addr == 9'h127;
-  assign \$425  = bus__w_addr == 9'h128;
-  assign \$426  = bus__w_addr == 9'h129;
-  assign \$427  = bus__w_addr == 9'h12a;
-  assign \$428  = bus__w_addr == 9'h12c;
-  assign \$429  = bus__w_addr == 9'h12d;
-  assign \$430  = bus__w_addr == 9'h12e;
-  assign \$431  = bus__w_addr == 9'h130;
-  assign \$432  = bus__w_addr == 9'h131;
-  assign \$433  = bus__w_addr == 9'h132;
-  assign \$434  = bus__w_addr == 9'h134;
-  assign \$435  = bus__w_addr == 9'h135;
-  assign \$436  = bus__w_addr == 9'h136;
-  assign \$437  = bus__w_addr == 9'h138;
-  assign \$438  = bus__w_addr == 9'h139;
-  assign \$439  = bus__w_addr == 9'h13a;
-  assign \$440  = bus__w_addr == 9'h13c;
-  assign \$441  = bus__w_addr == 9'h13d;
-  assign \$442  = bus__w_addr == 9'h13e;
-  assign \$443  = bus__w_addr == 9'h140;
-  assign \$444  = bus__w_addr == 9'h141;
-  assign \$445  = bus__w_addr == 9'h142;
-  assign \$446  = bus__w_addr == 9'h143;
-  assign \$447  = bus__w_addr == 9'h144;
-  assign \$448  = bus__w_addr == 9'h145;
-  assign \$449  = bus__w_addr == 9'h170;
-  assign \$450  = bus__w_addr == 9'h171;
-  assign \$451  = bus__w_addr == 9'h172;
-  assign \$452  = bus__w_addr == 9'h173;
-  assign \$453  = bus__w_addr == 9'h174;
-  assign \$454  = bus__w_addr == 9'h175;
-  assign \$455  = bus__w_addr == 9'h176;
-  assign \$456  = bus__w_addr == 9'h177;
-  assign \$457  = bus__w_addr == 9'h178;
-  assign \$458  = bus__w_addr == 9'h179;
-  assign \$459  = bus__w_addr == 9'h17a;
-  assign \$460  = bus__w_addr == 9'h17b;
-  assign \$461  = bus__w_addr == 9'h17c;
-  assign \$462  = bus__w_addr == 9'h17d;
-  assign \$463  = ch1_read_select_110 & bus__r_load;
-  assign \$464  = bus__w_addr[10:3] == 6'h23;
-  assign \$465  = bus__r_en & \$464 ;
-  assign \$466  = bus__w_addr[10:4] == 5'h16;
-  assign \$467  = bus__r_en & \$466 ;
-  assign \$468  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
-  assign \$470  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
-  assign \$471  = \$469  | \$470 ;
-  assign \$472  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
-  assign \$473  = \$471  | \$472 ;
-  assign \$474  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
-  assign \$475  = \$473  | \$474 ;
-  assign \$476  = ch1_read_select_105 ? { 29'h00000000, ch1_irq_enable_access_done, ch1_irq_enable_error, ch1_irq_enable_done } : 32'd0;
-  assign \$477  = \$475  | \$476 ;
-  assign \$482  = ch1_read_select_108 ? { 4'h0, ch1_cfg_ma_delay_limit, ch1_cfg_ma_ma_half_period } : 32'd0;
-  assign \$483  = \$481  | \$482 ;
-  assign \$484  = ch1_read_select_109 ? { 8'h00, ch1_cfg_period_request_period } : 32'd0;
-  assign \$485  = \$483  | \$484 ;
-  assign \$486  = ch1_read_select_10a ? { 8'h00, ch1_cfg_break_break_time } : 32'd0;
-  assign \$487  = \$485  | \$486 ;
-  assign \$488  = ch1_read_select_10b ? { 8'h00, ch1_cfg_ack_ack_limit } : 32'd0;
-  assign \$489  = \$487  | \$488 ;
-  assign \$490  = ch1_read_select_10c ? { 8'h00, ch1_cfg_timeout_timeout_limit } : 32'd0;
-  assign \$491  = \$489  | \$490 ;
-  assign \$492  = ch1_read_select_10d ? { ch1_cfg_words_w1_enable, 3'h0, ch1_cfg_words_w1_signed, ch1_cfg_words_w1_gray, ch1_cfg_words_w1_crc, ch1_cfg_words_w1_lc, ch1_cfg_words_w1_nenw, ch1_cfg_words_w1_data_bits, 4'h0, ch1_cfg_words_w0_signed, ch1_cfg_words_w0_gray, ch1_cfg_words_w0_crc, ch1_cfg_words_w0_lc, ch1_cfg_words_w0_nenw, ch1_cfg_words_w0_data_bits } : 32'd0;
-  assign \$493  = \$491  | \$492 ;
-  assign \$494  = ch1_read_select_10e ? { 4'h0, ch1_cfg_checks_confirm_frames, ch1_cfg_checks_delay_tolerance, ch1_cfg_checks_noise_limit, ch1_cfg_checks_spw_tolerance, 6'h00, ch1_cfg_checks_spw_check, ch1_cfg_checks_end_check } : 32'd0;
-  assign \$495  = \$493  | \$494 ;
-  assign \$496  = ch1_read_select_10f ? { 20'h00000, ch1_cfg_quiet_quiet_time } : 32'd0;
-  assign \$497  = \$495  | \$496 ;
-  assign \$498  = ch1_read_select_110 ? { 2'h0, \port$7770$0 [182:177], 4'h0, \port$7770$0 [186:183], 1'h0, \port$7770$0 [176:174], 1'h0, \port$7770$0 [133:131], 3'h0, \port$7770$0 [49], \port$7770$0 [3:0] } : 32'd0;
-  assign \$499  = \$497  | \$498 ;
-  assign \$500  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
-  assign \$501  = \$499  | \$500 ;
-  assign \$502  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
-  assign \$503  = \$501  | \$502 ;
-  assign \$504  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
-  assign \$505  = \$503  | \$504 ;
-  assign \$506  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
-  assign \$507  = \$505  | \$506 ;
-  assign \$508  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
-  assign \$509  = \$507  | \$508 ;
-  assign \$510  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
-  assign \$511  = \$509  | \$510 ;
-  assign \$512  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
-  assign \$513  = \$511  | \$512 ;
-  assign \$514  = ch1_read_select_120 ? { 7'h00, ch1_cfg_crc0_w0_crc_inverted, 3'h0, ch1_cfg_crc0_w0_crc_width, ch1_cfg_crc0_w0_crc_poly } : 32'd0;
-  assign \$515  = \$513  | \$514 ;
-  assign \$516  = ch1_read_select_121 ? { 16'h0000, ch1_cfg_crc0_start_w0_crc_start } : 32'd0;
-  assign \$517  = \$515  | \$516 ;
-  assign \$518  = ch1_read_select_122 ? { 7'h00, ch1_cfg_crc1_w1_crc_inverted, 3'h0, ch1_cfg_crc1_w1_crc_width, ch1_cfg_crc1_w1_crc_poly } : 32'd0;
-  assign \$519  = \$517  | \$518 ;
-  assign \$520  = ch1_read_select_123 ? { 16'h0000, ch1_cfg_crc1_start_w1_crc_start } : 32'd0;
-  assign \$521  = \$519  | \$520 ;
-  assign \$522  = ch1_read_select_124 ? { 4'h0, ch1_cfg_ssi_ssi_delay, 12'h000, ch1_cfg_ssi_ssi_double, ch1_cfg_ssi_ssi_error_low, ch1_cfg_ssi_ssi_error, ch1_cfg_ssi_ssi } : 32'd0;
-  assign \$523  = \$521  | \$522 ;
-  assign \$566  = ch1_read_select_140 ? { 7'h00, \ch1_ca_request_write$452 , 1'h0, ch1_ca_request_count, 1'h0, ch1_ca_request_address, 5'h00, ch1_ca_request_slave_id } : 32'd0;
-  assign \$567  = \$565  | \$566 ;
-  assign \$570  = ch1_read_select_142 ? { 17'h00000, \port$7858$0 [9:3], 1'h0, \port$7858$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
-  assign \$571  = \$569  | \$570 ;
-  assign \$572  = ch1_read_select_143 ? \port$7781$0 [31:0] : 32'd0;
-  assign \$573  = \$571  | \$572 ;
-  assign \$574  = ch1_read_select_144 ? \port$7781$0 [63:32] : 32'd0;
-  assign \$575  = \$573  | \$574 ;
-  assign \$576  = ch1_read_select_145 ? { 16'h0000, \port$7781$0 [79:64] } : 32'd0;
-  assign \$577  = \$575  | \$576 ;
-  assign \$578  = ch1_read_select_170 ? { 16'h0000, ch1__result_updates } : 32'd0;
-  assign \$579  = \$577  | \$578 ;
-  assign \$606  = ch1_window0_read ? ch1__count_data : 32'd0;
-  assign \$607  = \$605  | \$606 ;
-  assign \$608  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
-  assign \$609  = \$607  | \$608 ;
-  assign \$610  = ! write_addr;
-  assign g_id_write = write_en & \$610 ;
-  assign \$611  = write_addr == 1'h1;
-  assign g_version_write = write_en & \$611 ;
-  assign \$612  = write_addr == 2'h2;
-  assign g_channels_write = write_en & \$612 ;
-  assign \$613  = write_addr == 2'h3;
-  assign g_trigger_write = write_en & \$613 ;
-  assign \$614  = write_addr == 3'h4;
-  assign g_irq_pending_write = write_en & \$614 ;
-  assign \$615  = bus__w_addr[10:3] == 5'h13;
-  assign ch0__count_en = bus__r_en & \$615 ;
-  assign \$616  = write_addr == 8'h80;
-  assign ch0_ctrl_write = write_en & \$616 ;
-  assign \$617  = write_addr == 8'h81;
-  assign ch0_state_write = write_en & \$617 ;
-  assign \$618  = write_addr == 8'h82;
-  assign ch0_caps_write = write_en & \$618 ;
-  assign \$619  = write_addr == 8'h84;
-  assign ch0_irq_status_write = write_en & \$619 ;
-  assign \$620  = write_addr == 8'h85;
-  assign ch0_irq_enable_write = write_en & \$620 ;
-  assign \$621  = write_addr == 8'h86;
-  assign ch0_caps_chain_write = write_en & \$621 ;
-  assign \$622  = write_addr == 8'h87;
-  assign ch0_caps_chain2_write = write_en & \$622 ;
-  assign \$623  = write_addr == 8'h88;
-  assign ch0_cfg_ma_write = write_en & \$623 ;
-  assign \$624  = write_addr == 8'h89;
-  assign ch0_cfg_period_write = write_en & \$624 ;
-  assign \$625  = write_addr == 8'h8a;
-  assign ch0_cfg_break_write = write_en & \$625 ;
-  assign \$626  = write_addr == 8'h8b;
-  assign ch0_cfg_ack_write = write_en & \$626 ;
-  assign \$627  = write_addr == 8'h8c;
-  assign ch0_cfg_timeout_write = write_en & \$627 ;
-  assign \$628  = write_addr == 8'h8d;
-  assign ch0_cfg_words_write = write_en & \$628 ;
-  assign \$629  = write_addr == 8'h8e;
-  assign ch0_cfg_checks_write = write_en & \$629 ;
-  assign \$630  = write_addr == 8'h8f;
-  assign ch0_cfg_quiet_write = write_en & \$630 ;
-  assign \$631  = write_addr == 8'h90;
-  assign ch0_result_status_write = write_en & \$631 ;
-  assign \$632  = write_addr == 8'h91;
-  assign ch0_result_seq_write = write_en & \$632 ;
-  assign \$633  = write_addr == 8'h92;
-  assign ch0_result_w0_lo_write = write_en & \$633 ;
-  assign \$634  = write_addr == 8'h93;
-  assign ch0_result_w0_hi_write = write_en & \$634 ;
-  assign \$635  = write_addr == 8'h94;
-  assign ch0_result_w1_lo_write = write_en & \$635 ;
-  assign \$636  = write_addr == 8'h95;
-  assign ch0_result_w1_hi_write = write_en & \$636 ;
-  assign \$637  = write_addr == 8'h96;
-  assign ch0_result_timestamp_write = write_en & \$637 ;
-  assign \$638  = write_addr == 8'h97;
-  assign ch0_result_line_write = write_en & \$638 ;
-  assign \$639  = write_addr == 8'ha0;
-  assign ch0_cfg_crc0_write = write_en & \$639 ;
-  assign \$640  = write_addr == 8'ha1;
-  assign ch0_cfg_crc0_start_write = write_en & \$640 ;
-  assign \$641  = write_addr == 8'ha2;
-  assign ch0_cfg_crc1_write = write_en & \$641 ;
-  assign \$642  = write_addr == 8'ha3;
-  assign ch0_cfg_crc1_start_write = write_en & \$642 ;
-  assign \$643  = write_addr == 8'ha4;
-  assign ch0_cfg_ssi_write = write_en & \$643 ;
-  assign \$644  = write_addr == 8'ha5;
-  assign ch0_count_chain_write = write_en & \$644 ;
-  assign \$645  = write_addr == 8'ha6;
-  assign ch0_count_chain2_write = write_en & \$645 ;
-  assign \$646  = write_addr == 8'ha7;
-  assign ch0_count_chain3_write = write_en & \$646 ;
-  assign \$647  = write_addr == 8'ha8;
-  assign ch0_cfg_w2_write = write_en & \$647 ;
-  assign \$648  = write_addr == 8'ha9;
-  assign ch0_cfg_w2_crc_write = write_en & \$648 ;
-  assign \$649  = write_addr == 8'haa;
-  assign ch0_cfg_w2_crc_start_write = write_en & \$649 ;
-  assign \$650  = write_addr == 8'hac;
-  assign ch0_cfg_w3_write = write_en & \$650 ;
-  assign \$651  = write_addr == 8'had;
-  assign ch0_cfg_w3_crc_write = write_en & \$651 ;
-  assign \$652  = write_addr == 8'hae;
-  assign ch0_cfg_w3_crc_start_write = write_en & \$652 ;
-  assign \$653  = write_addr == 8'hb0;
-  assign ch0_cfg_w4_write = write_en & \$653 ;
-  assign \$654  = write_addr == 8'hb1;
-  assign ch0_cfg_w4_crc_write = write_en & \$654 ;
-  assign \$655  = write_addr == 8'hb2;
-  assign ch0_cfg_w4_crc_start_write = write_en & \$655 ;
-  assign \$656  = write_addr == 8'hb4;
-  assign ch0_cfg_w5_write = write_en & \$656 ;
-  assign \$657  = write_addr == 8'hb5;
-  assign ch0_cfg_w5_crc_write = write_en & \$657 ;
-  assign \$658  = write_addr == 8'hb6;
-  assign ch0_cfg_w5_crc_start_write = write_en & \$658 ;
-  assign \$659  = write_addr == 8'hb8;
-  assign ch0_cfg_w6_write = write_en & \$659 ;
-  assign \$660  = write_addr == 8'hb9;
-  assign ch0_cfg_w6_crc_write = write_en & \$660 ;
-  assign \$661  = write_addr == 8'hba;
-  assign ch0_cfg_w6_crc_start_write = write_en & \$661 ;
-  assign \$662  = write_addr == 8'hbc;
-  assign ch0_cfg_w7_write = write_en & \$662 ;
-  assign \$663  = write_addr == 8'hbd;
-  assign ch0_cfg_w7_crc_write = write_en & \$663 ;
-  assign \$664  = write_addr == 8'hbe;
-  assign ch0_cfg_w7_crc_start_write = write_en & \$664 ;
-  assign \$665  = write_addr == 8'hc0;
-  assign ch0_ca_request_write = write_en & \$665 ;
-  assign \$666  = write_addr == 8'hc1;
-  assign ch0_ca_ctrl_write = write_en & \$666 ;
-  assign \$667  = write_addr == 8'hc2;
-  assign ch0_ca_state_write = write_en & \$667 ;
-  assign \$668  = write_addr == 8'hc3;
-  assign ch0_ca_count_crc4_answer_write = write_en & \$668 ;
-  assign \$669  = write_addr == 8'hc4;
-  assign ch0_ca_count_refused_aborted_write = write_en & \$669 ;
-  assign \$670  = write_addr == 8'hc5;
-  assign ch0_ca_count_data_fault_write = write_en & \$670 ;
-  assign \$671  = write_addr[10:4] == 4'hd;
-  assign \$672  = write_en & \$671 ;
-  assign ch0__ca_wbuf_en = \$672  ? write_strb : 4'h0;
-  assign \$673  = bus__w_addr[10:4] == 4'he;
-  assign ch0__ca_rbuf_en = bus__r_en & \$673 ;
-  assign \$674  = write_addr == 8'hf0;
-  assign ch0_chain_updates_write = write_en & \$674 ;
-  assign \$675  = write_addr == 8'hf1;
-  assign ch0_chain_flags_write = write_en & \$675 ;
-  assign \$676  = write_addr == 8'hf2;
-  assign ch0_chain_w2_lo_write = write_en & \$676 ;
-  assign \$677  = write_addr == 8'hf3;
-  assign ch0_chain_w2_hi_write = write_en & \$677 ;
-  assign \$678  = write_addr == 8'hf4;
-  assign ch0_chain_w3_lo_write = write_en & \$678 ;
-  assign \$679  = write_addr == 8'hf5;
-  assign ch0_chain_w3_hi_write = write_en & \$679 ;
-  assign \$680  = write_addr == 8'hf6;
-  assign ch0_chain_w4_lo_write = write_en & \$680 ;
-  assign \$681  = write_addr == 8'hf7;
-  assign ch0_chain_w4_hi_write = write_en & \$681 ;
-  assign \$682  = write_addr == 8'hf8;
-  assign ch0_chain_w5_lo_write = write_en & \$682 ;
-  assign \$683  = write_addr == 8'hf9;
-  assign ch0_chain_w5_hi_write = write_en & \$683 ;
-  assign \$684  = write_addr == 8'hfa;
-  assign ch0_chain_w6_lo_write = write_en & \$684 ;
-  assign \$685  = write_addr == 8'hfb;
-  assign ch0_chain_w6_hi_write = write_en & \$685 ;
-  assign \$686  = write_addr == 8'hfc;
-  assign ch0_chain_w7_lo_write = write_en & \$686 ;
-  assign \$687  = write_addr == 8'hfd;
-  assign ch0_chain_w7_hi_write = write_en & \$687 ;
-  assign \$688  = ch0_irq_status_done & ch0_irq_enable_done;
-  assign \$690  = ch0_irq_status_error & ch0_irq_enable_error;
-  assign \$692  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
-  assign ch0_irq = | { \$693 , \$691 , \$689  };
-  assign \$694  = bus__w_addr[10:3] == 6'h23;
-  assign ch1__count_en = bus__r_en & \$694 ;
-  assign \$695  = write_addr == 9'h100;
-  assign ch1_ctrl_write = write_en & \$695 ;
-  assign \$696  = write_addr == 9'h101;
-  assign ch1_state_write = write_en & \$696 ;
-  assign \$697  = write_addr == 9'h102;
-  assign ch1_caps_write = write_en & \$697 ;
-  assign \$698  = write_addr == 9'h104;
-  assign ch1_irq_status_write = write_en & \$698 ;
-  assign \$699  = write_addr == 9'h105;
-  assign ch1_irq_enable_write = write_en & \$699 ;
-  assign \$700  = write_addr == 9'h106;
-  assign ch1_caps_chain_write = write_en & \$700 ;
-  assign \$701  = write_addr == 9'h107;
-  assign ch1_caps_chain2_write = write_en & \$701 ;
-  assign \$702  = write_addr == 9'h108;
-  assign ch1_cfg_ma_write = write_en & \$702 ;
-  assign \$703  = write_addr == 9'h109;
-  assign ch1_cfg_period_write = write_en & \$703 ;
-  assign \$704  = write_addr == 9'h10a;
-  assign ch1_cfg_break_write = write_en & \$704 ;
-  assign \$705  = write_addr == 9'h10b;
-  assign ch1_cfg_ack_write = write_en & \$705 ;
-  assign \$706  = write_addr == 9'h10c;
-  assign ch1_cfg_timeout_write = write_en & \$706 ;
-  assign \$707  = write_addr == 9'h10d;
-  assign ch1_cfg_words_write = write_en & \$707 ;
-  assign \$708  = write_addr == 9'h10e;
-  assign ch1_cfg_checks_write = write_en & \$708 ;
-  assign \$709  = write_addr == 9'h10f;
-  assign ch1_cfg_quiet_write = write_en & \$709 ;
-  assign \$710  = write_addr == 9'h110;
-  assign ch1_result_status_write = write_en & \$710 ;
-  assign \$711  = write_addr == 9'h111;
-  assign ch1_result_seq_write = write_en & \$711 ;
-  assign \$712  = write_addr == 9'h112;
-  assign ch1_result_w0_lo_write = write_en & \$712 ;
-  assign \$713  = write_addr == 9'h113;
-  assign ch1_result_w0_hi_write = write_en & \$713 ;
-  assign \$714  = write_addr == 9'h114;
-  assign ch1_result_w1_lo_write = write_en & \$714 ;
-  assign \$715  = write_addr == 9'h115;
-  assign ch1_result_w1_hi_write = write_en & \$715 ;
-  assign \$716  = write_addr == 9'h116;
-  assign ch1_result_timestamp_write = write_en & \$716 ;
-  assign \$717  = write_addr == 9'h117;
-  assign ch1_result_line_write = write_en & \$717 ;
-  assign \$718  = write_addr == 9'h120;
-  assign ch1_cfg_crc0_write = write_en & \$718 ;
-  assign \$719  = write_addr == 9'h121;
-  assign ch1_cfg_crc0_start_write = write_en & \$719 ;
-  assign \$720  = write_addr == 9'h122;
-  assign ch1_cfg_crc1_write = write_en & \$720 ;
-  assign \$721  = write_addr == 9'h123;
-  assign ch1_cfg_crc1_start_write = write_en & \$721 ;
-  assign \$722  = write_addr == 9'h124;
-  assign ch1_cfg_ssi_write = write_en & \$722 ;
-  assign \$723  = write_addr == 9'h125;
-  assign ch1_count_chain_write = write_en & \$723 ;
-  assign \$724  = write_addr == 9'h126;
-  assign ch1_count_chain2_write = write_en & \$724 ;
-  assign \$725  = write_addr == 9'h127;
-  assign ch1_count_chain3_write = write_en & \$725 ;
-  assign \$726  = write_addr == 9'h128;
-  assign ch1_cfg_w2_write = write_en & \$726 ;
-  assign \$727  = write_addr == 9'h129;
-  assign ch1_cfg_w2_crc_write = write_en & \$727 ;
-  assign \$728  = write_addr == 9'h12a;
-  assign ch1_cfg_w2_crc_start_write = write_en & \$728 ;
-  assign \$729  = write_addr == 9'h12c;
-  assign ch1_cfg_w3_write = write_en & \$729 ;
-  assign \$730  = write_addr == 9'h12d;
-  assign ch1_cfg_w3_crc_write = write_en & \$730 ;
-  assign \$731  = write_addr == 9'h12e;
-  assign ch1_cfg_w3_crc_start_write = write_en & \$731 ;
-  assign \$732  = write_addr == 9'h130;
-  assign ch1_cfg_w4_write = write_en & \$732 ;
-  assign \$733  = write_addr == 9'h131;
-  assign ch1_cfg_w4_crc_write = write_en & \$733 ;
-  assign \$734  = write_addr == 9'h132;
-  assign ch1_cfg_w4_crc_start_write = write_en & \$734 ;
-  assign \$735  = write_addr == 9'h134;
-  assign ch1_cfg_w5_write = write_en & \$735 ;
-  assign \$736  = write_addr == 9'h135;
-  assign ch1_cfg_w5_crc_write = write_en & \$736 ;
-  assign \$737  = write_addr == 9'h136;
-  assign ch1_cfg_w5_crc_start_write = write_en & \$737 ;
-  assign \$738  = write_addr == 9'h138;
-  assign ch1_cfg_w6_write = write_en & \$738 ;
-  assign \$739  = write_addr == 9'h139;
-  assign ch1_cfg_w6_crc_write = write_en & \$739 ;
-  assign \$740  = write_addr == 9'h13a;
-  assign ch1_cfg_w6_crc_start_write = write_en & \$740 ;
-  assign \$741  = write_addr == 9'h13c;
-  assign ch1_cfg_w7_write = write_en & \$741 ;
-  assign \$742  = write_addr == 9'h13d;
-  assign ch1_cfg_w7_crc_write = write_en & \$742 ;
-  assign \$743  = write_addr == 9'h13e;
-  assign ch1_cfg_w7_crc_start_write = write_en & \$743 ;
-  assign \$744  = write_addr == 9'h140;
-  assign ch1_ca_request_write = write_en & \$744 ;
-  assign \$745  = write_addr == 9'h141;
-  assign ch1_ca_ctrl_write = write_en & \$745 ;
-  assign \$746  = write_addr == 9'h142;
-  assign ch1_ca_state_write = write_en & \$746 ;
-  assign \$747  = write_addr == 9'h143;
-  assign ch1_ca_count_crc4_answer_write = write_en & \$747 ;
-  assign \$748  = write_addr == 9'h144;
-  assign ch1_ca_count_refused_aborted_write = write_en & \$748 ;
-  assign \$749  = write_addr == 9'h145;
-  assign ch1_ca_count_data_fault_write = write_en & \$749 ;
-  assign \$750  = write_addr[10:4] == 5'h15;
-  assign \$751  = write_en & \$750 ;
-  assign ch1__ca_wbuf_en = \$751  ? write_strb : 4'h0;
-  assign \$752  = bus__w_addr[10:4] == 5'h16;
-  assign ch1__ca_rbuf_en = bus__r_en & \$752 ;
-  assign \$753  = write_addr == 9'h170;
-  assign ch1_chain_updates_write = write_en & \$753 ;
-  assign \$754  = write_addr == 9'h171;
-  assign ch1_chain_flags_write = write_en & \$754 ;
-  assign \$755  = write_addr == 9'h172;
-  assign ch1_chain_w2_lo_write = write_en & \$755 ;
-  assign \$756  = write_addr == 9'h173;
-  assign ch1_chain_w2_hi_write = write_en & \$756 ;
-  assign \$757  = write_addr == 9'h174;
-  assign ch1_chain_w3_lo_write = write_en & \$757 ;
-  assign \$758  = write_addr == 9'h175;
-  assign ch1_chain_w3_hi_write = write_en & \$758 ;
-  assign \$759  = write_addr == 9'h176;
-  assign ch1_chain_w4_lo_write = write_en & \$759 ;
-  assign \$760  = write_addr == 9'h177;
-  assign ch1_chain_w4_hi_write = write_en & \$760 ;
-  assign \$761  = write_addr == 9'h178;
-  assign ch1_chain_w5_lo_write = write_en & \$761 ;
-  assign \$762  = write_addr == 9'h179;
-  assign ch1_chain_w5_hi_write = write_en & \$762 ;
-  assign \$763  = write_addr == 9'h17a;
-  assign ch1_chain_w6_lo_write = write_en & \$763 ;
-  assign \$764  = write_addr == 9'h17b;
-  assign ch1_chain_w6_hi_write = write_en & \$764 ;
-  assign \$765  = write_addr == 9'h17c;
-  assign ch1_chain_w7_lo_write = write_en & \$765 ;
-  assign \$766  = write_addr == 9'h17d;
-  assign ch1_chain_w7_hi_write = write_en & \$766 ;
-  assign \$767  = ch1_irq_status_done & ch1_irq_enable_done;
-  assign \$769  = ch1_irq_status_error & ch1_irq_enable_error;
-  assign \$771  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
-  assign ch1_irq = | { \$772 , \$770 , \$768  };
-  assign \$774  = \$773  | ch0_read_data;
-  assign bus__r_data = \$774  | ch1_read_data;
-  always @(posedge clk)
-    write_en <= \$775 ;
-  always @(posedge clk)
-    write_addr <= \$776 ;
-  always @(posedge clk)
-    write_data <= \$777 ;
-  always @(posedge clk)
-    write_strb <= \$778 ;
-  always @(posedge clk)
-    config_write_data <= \$779 ;
-  always @(posedge clk)
-    config_write_strb <= \$780 ;
-  always @(posedge clk)
-    g_trigger_start <= \$781 ;
-  always @(posedge clk)
-    g_read_select_0 <= \$782 ;
-  always @(posedge clk)
-    g_read_select_1 <= \$783 ;
-  always @(posedge clk)
-    g_read_select_2 <= \$784 ;
-  always @(posedge clk)
-    g_read_select_3 <= \$785 ;
-  always @(posedge clk)
-    g_read_select_4 <= \$786 ;
-  always @(posedge clk)
-    g_read_data <= \$787 ;
-  always @(posedge clk)
-    ch0_ctrl_start <= \$788 ;
-  always @(posedge clk)
-    ch0_ctrl_abort <= \$789 ;
-  always @(posedge clk)
-    ch0_ctrl_clear_counters <= \$790 ;
-  always @(posedge clk)
-    ch0_ctrl_periodic <= \$791 ;
-  always @(posedge clk)
-    ch0_ctrl_trigger_enable <= \$792 ;
-  always @(posedge clk)
-    ch0_irq_status_done <= \$793 ;
-  always @(posedge clk)
-    ch0_irq_status_error <= \$794 ;
-  always @(posedge clk)
-    ch0_irq_status_access_done <= \$795 ;
-  always @(posedge clk)
-    ch0_irq_enable_config_write <= \$796 ;
-  always @(posedge clk)
-    ch0_irq_enable_done <= \$797 ;
-  always @(posedge clk)
-    ch0_irq_enable_error <= \$798 ;
-  always @(posedge clk)
-    ch0_irq_enable_access_done <= \$799 ;
-  always @(posedge clk)
-    ch0_cfg_ma_config_write <= \$800 ;
-  always @(posedge clk)
-    ch0_cfg_ma_ma_half_period <= \$801 ;
-  always @(posedge clk)
-    ch0_cfg_ma_delay_limit <= \$802 ;
-  always @(posedge clk)
-    ch0_cfg_period_config_write <= \$803 ;
-  always @(posedge clk)
-    ch0_cfg_period_request_period <= \$804 ;
-  always @(posedge clk)
-    ch0_cfg_break_config_write <= \$805 ;
-  always @(posedge clk)
-    ch0_cfg_break_break_time <= \$806 ;
-  always @(posedge clk)
-    ch0_cfg_ack_config_write <= \$807 ;
-  always @(posedge clk)
-    ch0_cfg_ack_ack_limit <= \$808 ;
-  always @(posedge clk)
-    ch0_cfg_timeout_config_write <= \$809 ;
-  always @(posedge clk)
-    ch0_cfg_timeout_timeout_limit <= \$810 ;
-  always @(posedge clk)
-    ch0_cfg_words_config_write <= \$811 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_data_bits <= \$812 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_nenw <= \$813 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_lc <= \$814 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_crc <= \$815 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_gray <= \$816 ;
-  always @(posedge clk)
-    ch0_cfg_words_w0_signed <= \$817 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_data_bits <= \$818 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_nenw <= \$819 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_lc <= \$820 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_crc <= \$821 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_gray <= \$822 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_signed <= \$823 ;
-  always @(posedge clk)
-    ch0_cfg_words_w1_enable <= \$824 ;
-  always @(posedge clk)
-    ch0_cfg_checks_config_write <= \$825 ;
-  always @(posedge clk)
-    ch0_cfg_checks_end_check <= \$826 ;
-  always @(posedge clk)
-    ch0_cfg_checks_spw_check <= \$827 ;
-  always @(posedge clk)
-    ch0_cfg_checks_spw_tolerance <= \$828 ;
-  always @(posedge clk)
-    ch0_cfg_checks_noise_limit <= \$829 ;
-  always @(posedge clk)
-    ch0_cfg_checks_delay_tolerance <= \$830 ;
-  always @(posedge clk)
-    ch0_cfg_checks_confirm_frames <= \$831 ;
-  always @(posedge clk)
-    ch0_cfg_quiet_config_write <= \$832 ;
-  always @(posedge clk)
-    ch0_cfg_quiet_quiet_time <= \$833 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_config_write <= \$834 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_poly <= \$835 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_width <= \$836 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_w0_crc_inverted <= \$837 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_start_config_write <= \$838 ;
-  always @(posedge clk)
-    ch0_cfg_crc0_start_w0_crc_start <= \$839 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_config_write <= \$840 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_poly <= \$841 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_width <= \$842 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_w1_crc_inverted <= \$843 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_start_config_write <= \$844 ;
-  always @(posedge clk)
-    ch0_cfg_crc1_start_w1_crc_start <= \$845 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_config_write <= \$846 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi <= \$847 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_error <= \$848 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_error_low <= \$849 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_double <= \$850 ;
-  always @(posedge clk)
-    ch0_cfg_ssi_ssi_delay <= \$851 ;
-  always @(posedge clk)
-    ch0_cfg_w2_config_write <= \$852 ;
-  always @(posedge clk)
-    ch0_cfg_w2_crc_config_write <= \$853 ;
-  always @(posedge clk)
-    ch0_cfg_w2_crc_start_config_write <= \$854 ;
-  always @(posedge clk)
-    ch0_cfg_w3_config_write <= \$855 ;
-  always @(posedge clk)
-    ch0_cfg_w3_crc_config_write <= \$856 ;
-  always @(posedge clk)
-    ch0_cfg_w3_crc_start_config_write <= \$857 ;
-  always @(posedge clk)
-    ch0_cfg_w4_config_write <= \$858 ;
-  always @(posedge clk)
-    ch0_cfg_w4_crc_config_write <= \$859 ;
-  always @(posedge clk)
-    ch0_cfg_w4_crc_start_config_write <= \$860 ;
-  always @(posedge clk)
-    ch0_cfg_w5_config_write <= \$861 ;
-  always @(posedge clk)
-    ch0_cfg_w5_crc_config_write <= \$862 ;
-  always @(posedge clk)
-    ch0_cfg_w5_crc_start_config_write <= \$863 ;
-  always @(posedge clk)
-    ch0_cfg_w6_config_write <= \$864 ;
-  always @(posedge clk)
-    ch0_cfg_w6_crc_config_write <= \$865 ;
-  always @(posedge clk)
-    ch0_cfg_w6_crc_start_config_write <= \$866 ;
-  always @(posedge clk)
-    ch0_cfg_w7_config_write <= \$867 ;
-  always @(posedge clk)
-    ch0_cfg_w7_crc_config_write <= \$868 ;
-  always @(posedge clk)
-    ch0_cfg_w7_crc_start_config_write <= \$869 ;
-  always @(posedge clk)
-    ch0_ca_request_config_write <= \$870 ;
-  always @(posedge clk)
-    ch0_ca_request_slave_id <= \$871 ;
-  always @(posedge clk)
-    ch0_ca_request_address <= \$872 ;
-  always @(posedge clk)
-    ch0_ca_request_count <= \$873 ;
-  always @(posedge clk)
-    \ch0_ca_request_write$149  <= \$874 ;
-  always @(posedge clk)
-    ch0_ca_ctrl_start <= \$875 ;
-  always @(posedge clk)
-    ch0_ca_ctrl_abort <= \$876 ;
-  always @(posedge clk)
-    ch0_read_select_80 <= \$877 ;
-  always @(posedge clk)
-    ch0_read_select_81 <= \$878 ;
-  always @(posedge clk)
-    ch0_read_select_82 <= \$879 ;
-  always @(posedge clk)
-    ch0_read_select_84 <= \$880 ;
-  always @(posedge clk)
-    ch0_read_select_85 <= \$881 ;
-  always @(posedge clk)
-    ch0_read_select_86 <= \$882 ;
-  always @(posedge clk)
-    ch0_read_select_87 <= \$883 ;
-  always @(posedge clk)
-    ch0_read_select_88 <= \$884 ;
-  always @(posedge clk)
-    ch0_read_select_89 <= \$885 ;
-  always @(posedge clk)
-    ch0_read_select_8a <= \$886 ;
-  always @(posedge clk)
-    ch0_read_select_8b <= \$887 ;
-  always @(posedge clk)
-    ch0_read_select_8c <= \$888 ;
-  always @(posedge clk)
-    ch0_read_select_8d <= \$889 ;
-  always @(posedge clk)
-    ch0_read_select_8e <= \$890 ;
-  always @(posedge clk)
-    ch0_read_select_8f <= \$891 ;
-  always @(posedge clk)
-    ch0_read_select_90 <= \$892 ;
-  always @(posedge clk)
-    ch0_read_select_91 <= \$893 ;
-  always @(posedge clk)
-    ch0_read_select_92 <= \$894 ;
-  always @(posedge clk)
-    ch0_read_select_93 <= \$895 ;
-  always @(posedge clk)
-    ch0_read_select_94 <= \$896 ;
-  always @(posedge clk)
-    ch0_read_select_95 <= \$897 ;
-  always @(posedge clk)
-    ch0_read_select_96 <= \$898 ;
-  always @(posedge clk)
-    ch0_read_select_97 <= \$899 ;
-  always @(posedge clk)
-    ch0_read_select_a0 <= \$900 ;
-  always @(posedge clk)
-    ch0_read_select_a1 <= \$901 ;
-  always @(posedge clk)
-    ch0_read_select_a2 <= \$902 ;
-  always @(posedge clk)
-    ch0_read_select_a3 <= \$903 ;
-  always @(posedge clk)
-    ch0_read_select_a4 <= \$904 ;
-  always @(posedge clk)
-    ch0_read_select_a5 <= \$905 ;
-  always @(posedge clk)
-    ch0_read_select_a6 <= \$906 ;
-  always @(posedge clk)
-    ch0_read_select_a7 <= \$907 ;
-  always @(posedge clk)
-    ch0_read_select_a8 <= \$908 ;
-  always @(posedge clk)
-    ch0_read_select_a9 <= \$909 ;
-  always @(posedge clk)
-    ch0_read_select_aa <= \$910 ;
-  always @(posedge clk)
-    ch0_read_select_ac <= \$911 ;
-  always @(posedge clk)
-    ch0_read_select_ad <= \$912 ;
-  always @(posedge clk)
-    ch0_read_select_ae <= \$913 ;
-  always @(posedge clk)
-    ch0_read_select_b0 <= \$914 ;
-  always @(posedge clk)
-    ch0_read_select_b1 <= \$915 ;
-  always @(posedge clk)
-    ch0_read_select_b2 <= \$916 ;
-  always @(posedge clk)
-    ch0_read_select_b4 <= \$917 ;
-  always @(posedge clk)
-    ch0_read_select_b5 <= \$918 ;
-  always @(posedge clk)
-    ch0_read_select_b6 <= \$919 ;
-  always @(posedge clk)
-    ch0_read_select_b8 <= \$920 ;
-  always @(posedge clk)
-    ch0_read_select_b9 <= \$921 ;
-  always @(posedge clk)
-    ch0_read_select_ba <= \$922 ;
-  always @(posedge clk)
-    ch0_read_select_bc <= \$923 ;
-  always @(posedge clk)
-    ch0_read_select_bd <= \$924 ;
-  always @(posedge clk)
-    ch0_read_select_be <= \$925 ;
-  always @(posedge clk)
-    ch0_read_select_c0 <= \$926 ;
-  always @(posedge clk)
-    ch0_read_select_c1 <= \$927 ;
-  always @(posedge clk)
-    ch0_read_select_c2 <= \$928 ;
-  always @(posedge clk)
-    ch0_read_select_c3 <= \$929 ;
-  always @(posedge clk)
-    ch0_read_select_c4 <= \$930 ;
-  always @(posedge clk)
-    ch0_read_select_c5 <= \$931 ;
-  always @(posedge clk)
-    ch0_read_select_f0 <= \$932 ;
-  always @(posedge clk)
-    ch0_read_select_f1 <= \$933 ;
-  always @(posedge clk)
-    ch0_read_select_f2 <= \$934 ;
-  always @(posedge clk)
-    ch0_read_select_f3 <= \$935 ;
-  always @(posedge clk)
-    ch0_read_select_f4 <= \$936 ;
-  always @(posedge clk)
-    ch0_read_select_f5 <= \$937 ;
-  always @(posedge clk)
-    ch0_read_select_f6 <= \$938 ;
-  always @(posedge clk)
-    ch0_read_select_f7 <= \$939 ;
-  always @(posedge clk)
-    ch0_read_select_f8 <= \$940 ;
-  always @(posedge clk)
-    ch0_read_select_f9 <= \$941 ;
-  always @(posedge clk)
-    ch0_read_select_fa <= \$942 ;
-  always @(posedge clk)
-    ch0_read_select_fb <= \$943 ;
-  always @(posedge clk)
-    ch0_read_select_fc <= \$944 ;
-  always @(posedge clk)
-    ch0_read_select_fd <= \$945 ;
-  always @(posedge clk)
-    ch0_result_status_status_snapshot <= \$946 ;
-  always @(posedge clk)
-    ch0_result_status_cds_snapshot <= \$947 ;
-  always @(posedge clk)
-    ch0_result_status_w0_ne_snapshot <= \$948 ;
-  always @(posedge clk)
-    ch0_result_status_w0_nw_snapshot <= \$949 ;
-  always @(posedge clk)
-    ch0_result_status_w0_crc_ok_snapshot <= \$950 ;
-  always @(posedge clk)
-    ch0_result_status_w1_ne_snapshot <= \$951 ;
-  always @(posedge clk)
-    ch0_result_status_w1_nw_snapshot <= \$952 ;
-  always @(posedge clk)
-    ch0_result_status_w1_crc_ok_snapshot <= \$953 ;
-  always @(posedge clk)
-    ch0_result_status_lc_repeat_snapshot <= \$954 ;
-  always @(posedge clk)
-    ch0_result_status_lc_skip_snapshot <= \$955 ;
-  always @(posedge clk)
-    ch0_result_status_lc_zero_snapshot <= \$956 ;
-  always @(posedge clk)
-    ch0_result_status_spw_mismatch_snapshot <= \$957 ;
-  always @(posedge clk)
-    ch0_result_status_lc_snapshot <= \$958 ;
-  always @(posedge clk)
-    ch0_result_seq_seq_snapshot <= \$959 ;
-  always @(posedge clk)
-    ch0_result_seq_line_delay_snapshot <= \$960 ;
-  always @(posedge clk)
-    ch0_result_w0_lo_data_snapshot <= \$961 ;
-  always @(posedge clk)
-    ch0_result_w0_hi_data_snapshot <= \$962 ;
-  always @(posedge clk)
-    ch0_result_w1_lo_data_snapshot <= \$963 ;
-  always @(posedge clk)
-    ch0_result_w1_hi_data_snapshot <= \$964 ;
-  always @(posedge clk)
-    ch0_result_timestamp_time_snapshot <= \$965 ;
-  always @(posedge clk)
-    ch0_result_line_noise_events_snapshot <= \$966 ;
-  always @(posedge clk)
-    ch0_result_line_delay_settled_snapshot <= \$967 ;
-  always @(posedge clk)
-    ch0_result_line_delay_spread_snapshot <= \$968 ;
-  always @(posedge clk)
-    ch0_result_line_settled_delay_snapshot <= \$969 ;
-  always @(posedge clk)
-    ch0_window0_read <= \$970 ;
-  always @(posedge clk)
-    ch0_window1_read <= \$971 ;
-  always @(posedge clk)
-    ch0_read_data <= \$972 ;
-  always @(posedge clk)
-    ch1_ctrl_start <= \$973 ;
-  always @(posedge clk)
-    ch1_ctrl_abort <= \$974 ;
-  always @(posedge clk)
-    ch1_ctrl_clear_counters <= \$975 ;
-  always @(posedge clk)
-    ch1_ctrl_periodic <= \$976 ;
-  always @(posedge clk)
-    ch1_ctrl_trigger_enable <= \$977 ;
-  always @(posedge clk)
-    ch1_irq_status_done <= \$978 ;
-  always @(posedge clk)
-    ch1_irq_status_error <= \$979 ;
-  always @(posedge clk)
-    ch1_irq_status_access_done <= \$980 ;
-  always @(posedge clk)
-    ch1_irq_enable_config_write <= \$981 ;
-  always @(posedge clk)
-    ch1_irq_enable_done <= \$982 ;
-  always @(posedge clk)
-    ch1_irq_enable_error <= \$983 ;
-  always @(posedge clk)
-    ch1_irq_enable_access_done <= \$984 ;
-  always @(posedge clk)
-    ch1_cfg_ma_config_write <= \$985 ;
-  always @(posedge clk)
-    ch1_cfg_ma_ma_half_period <= \$986 ;
-  always @(posedge clk)
-    ch1_cfg_ma_delay_limit <= \$987 ;
-  always @(posedge clk)
-    ch1_cfg_period_config_write <= \$988 ;
-  always @(posedge clk)
-    ch1_cfg_period_request_period <= \$989 ;
-  always @(posedge clk)
-    ch1_cfg_break_config_write <= \$990 ;
-  always @(posedge clk)
-    ch1_cfg_break_break_time <= \$991 ;
-  always @(posedge clk)
-    ch1_cfg_ack_config_write <= \$992 ;
-  always @(posedge clk)
-    ch1_cfg_ack_ack_limit <= \$993 ;
-  always @(posedge clk)
-    ch1_cfg_timeout_config_write <= \$994 ;
-  always @(posedge clk)
-    ch1_cfg_timeout_timeout_limit <= \$995 ;
-  always @(posedge clk)
-    ch1_cfg_words_config_write <= \$996 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_data_bits <= \$997 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_nenw <= \$998 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_lc <= \$999 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_crc <= \$1000 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_gray <= \$1001 ;
-  always @(posedge clk)
-    ch1_cfg_words_w0_signed <= \$1002 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_data_bits <= \$1003 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_nenw <= \$1004 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_lc <= \$1005 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_crc <= \$1006 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_gray <= \$1007 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_signed <= \$1008 ;
-  always @(posedge clk)
-    ch1_cfg_words_w1_enable <= \$1009 ;
-  always @(posedge clk)
-    ch1_cfg_checks_config_write <= \$1010 ;
+  assign \$98  = write_data & config_memory0_write_mask;
+  assign \$99  = \$98  & { write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3:2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2:1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1:0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0] };
+  assign \$100  = ~ { write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3], write_strb[3:2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2], write_strb[2:1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1], write_strb[1:0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0], write_strb[0] };
+  assign \$101  = config_memory0_write_fill & \$100 ;
+  assign \$102  = \$99  | \$101 ;
+  assign \$103  = ch0_config_written | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
+  assign \$104  = bus__w_addr == 8'h80;
+  assign \$105  = bus__w_addr == 8'h81;
+  assign \$106  = bus__w_addr == 8'h82;
+  assign \$107  = bus__w_addr == 8'h84;
+  assign \$108  = bus__w_addr == 8'h86;
+  assign \$109  = bus__w_addr == 8'h87;
+  assign \$110  = bus__w_addr == 8'h90;
+  assign \$111  = bus__w_addr == 8'h91;
+  assign \$112  = bus__w_addr == 8'h92;
+  assign \$113  = bus__w_addr == 8'h93;
+  assign \$114  = bus__w_addr == 8'h94;
+  assign \$115  = bus__w_addr == 8'h95;
+  assign \$116  = bus__w_addr == 8'h96;
+  assign \$117  = bus__w_addr == 8'h97;
+  assign \$118  = bus__w_addr == 8'ha5;
+  assign \$119  = bus__w_addr == 8'ha6;
+  assign \$120  = bus__w_addr == 8'ha7;
+  assign \$121  = bus__w_addr == 8'ha8;
+  assign \$122  = bus__w_addr == 8'ha9;
+  assign \$123  = bus__w_addr == 8'haa;
+  assign \$124  = bus__w_addr == 8'hac;
+  assign \$125  = bus__w_addr == 8'had;
+  assign \$126  = bus__w_addr == 8'hae;
+  assign \$127  = bus__w_addr == 8'hb0;
+  assign \$128  = bus__w_addr == 8'hb1;
+  assign \$129  = bus__w_addr == 8'hb2;
+  assign \$130  = bus__w_addr == 8'hb4;
+  assign \$131  = bus__w_addr == 8'hb5;
+  assign \$132  = bus__w_addr == 8'hb6;
+  assign \$133  = bus__w_addr == 8'hb8;
+  assign \$134  = bus__w_addr == 8'hb9;
+  assign \$135  = bus__w_addr == 8'hba;
+  assign \$136  = bus__w_addr == 8'hbc;
+  assign \$137  = bus__w_addr == 8'hbd;
+  assign \$138  = bus__w_addr == 8'hbe;
+  assign \$139  = bus__w_addr == 8'hc1;
+  assign \$140  = bus__w_addr == 8'hc2;
+  assign \$141  = bus__w_addr == 8'hc3;
+  assign \$142  = bus__w_addr == 8'hc4;
+  assign \$143  = bus__w_addr == 8'hc5;
+  assign \$144  = bus__w_addr == 8'hf0;
+  assign \$145  = bus__w_addr == 8'hf1;
+  assign \$146  = bus__w_addr == 8'hf2;
+  assign \$147  = bus__w_addr == 8'hf3;
+  assign \$148  = bus__w_addr == 8'hf4;
+  assign \$149  = bus__w_addr == 8'hf5;
+  assign \$150  = bus__w_addr == 8'hf6;
+  assign \$151  = bus__w_addr == 8'hf7;
+  assign \$152  = bus__w_addr == 8'hf8;
+  assign \$153  = bus__w_addr == 8'hf9;
+  assign \$154  = bus__w_addr == 8'hfa;
+  assign \$155  = bus__w_addr == 8'hfb;
+  assign \$156  = bus__w_addr == 8'hfc;
+  assign \$157  = bus__w_addr == 8'hfd;
+  assign \$158  = ch0_read_select_90 & bus__r_load;
+  assign \$159  = bus__w_addr[10:3] == 5'h13;
+  assign \$160  = bus__r_en & \$159 ;
+  assign \$161  = bus__w_addr[10:4] == 4'he;
+  assign \$162  = bus__r_en & \$161 ;
+  assign \$163  = ch0_read_select_80 ? { 22'h000000, ch0_ctrl_trigger_enable, ch0_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$165  = ch0_read_select_81 ? { 30'h00000000, ch0__config_error, ch0__busy } : 32'd0;
+  assign \$166  = \$164  | \$165 ;
+  assign \$167  = ch0_read_select_82 ? 32'd790112311 : 32'd0;
+  assign \$168  = \$166  | \$167 ;
+  assign \$169  = ch0_read_select_84 ? { 29'h00000000, ch0_irq_status_access_done, ch0_irq_status_error, ch0_irq_status_done } : 32'd0;
+  assign \$170  = \$168  | \$169 ;
+  assign \$175  = ch0_read_select_90 ? { 2'h0, \port$7280$0 [182:177], 4'h0, \port$7280$0 [186:183], 1'h0, \port$7280$0 [176:174], 1'h0, \port$7280$0 [133:131], 3'h0, \port$7280$0 [49], \port$7280$0 [3:0] } : 32'd0;
+  assign \$176  = \$174  | \$175 ;
+  assign \$177  = ch0_read_select_91 ? { 3'h0, ch0_result_seq_line_delay_snapshot, ch0_result_seq_seq_snapshot } : 32'd0;
+  assign \$178  = \$176  | \$177 ;
+  assign \$179  = ch0_read_select_92 ? ch0_result_w0_lo_data_snapshot : 32'd0;
+  assign \$180  = \$178  | \$179 ;
+  assign \$181  = ch0_read_select_93 ? { 9'h000, ch0_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$182  = \$180  | \$181 ;
+  assign \$183  = ch0_read_select_94 ? ch0_result_w1_lo_data_snapshot : 32'd0;
+  assign \$184  = \$182  | \$183 ;
+  assign \$185  = ch0_read_select_95 ? { 24'h000000, ch0_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$186  = \$184  | \$185 ;
+  assign \$187  = ch0_read_select_96 ? ch0_result_timestamp_time_snapshot : 32'd0;
+  assign \$188  = \$186  | \$187 ;
+  assign \$189  = ch0_read_select_97 ? { 3'h0, ch0_result_line_settled_delay_snapshot, ch0_result_line_delay_spread_snapshot, 3'h0, ch0_result_line_delay_settled_snapshot, ch0_result_line_noise_events_snapshot } : 32'd0;
+  assign \$190  = \$188  | \$189 ;
+  assign \$235  = ch0_read_select_c2 ? { 17'h00000, \port$7368$0 [9:3], 1'h0, \port$7368$0 [2:0], 3'h0, ch0__ca_busy } : 32'd0;
+  assign \$236  = \$234  | \$235 ;
+  assign \$237  = ch0_read_select_c3 ? \port$7291$0 [31:0] : 32'd0;
+  assign \$238  = \$236  | \$237 ;
+  assign \$239  = ch0_read_select_c4 ? \port$7291$0 [63:32] : 32'd0;
+  assign \$240  = \$238  | \$239 ;
+  assign \$241  = ch0_read_select_c5 ? { 16'h0000, \port$7291$0 [79:64] } : 32'd0;
+  assign \$242  = \$240  | \$241 ;
+  assign \$243  = ch0_read_select_f0 ? { 16'h0000, ch0__result_updates } : 32'd0;
+  assign \$244  = \$242  | \$243 ;
+  assign \$271  = ch0_window0_read ? ch0__count_data : 32'd0;
+  assign \$272  = \$270  | \$271 ;
+  assign \$273  = ch0_window1_read ? ch0__ca_rbuf_data : 32'd0;
+  assign \$274  = \$272  | \$273 ;
+  assign \$275  = ch0_window2_read ? ch0_config_read_data : 32'd0;
+  assign \$276  = \$274  | \$275 ;
+  assign \$277  = write_data[0] & write_strb[0];
+  assign \$278  = ch1_ctrl_write ? \$277  : 1'h0;
+  assign \$279  = write_data[1] & write_strb[0];
+  assign \$280  = ch1_ctrl_write ? \$279  : 1'h0;
+  assign \$281  = write_data[2] & write_strb[0];
+  assign \$282  = ch1_ctrl_write ? \$281  : 1'h0;
+  assign \$283  = ch1_ctrl_write & write_strb[1];
+  assign \$284  = ch1_ctrl_write & write_strb[1];
+  assign \$285  = write_data[0] & write_strb[0];
+  assign \$286  = ch1_irq_status_write ? \$285  : 1'h0;
+  assign \$287  = write_data[1] & write_strb[0];
+  assign \$288  = ch1_irq_status_write ? \$287  : 1'h0;
+  assign \$289  = write_data[2] & write_strb[0];
+  assign \$290  = ch1_irq_status_write ? \$289  : 1'h0;
+  assign \$291  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$292  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$293  = ch1_irq_enable_config_write & config_write_strb[0];
+  assign \$294  = ch1_cfg_ma_config_write & config_write_strb[0];
+  assign \$295  = ch1_cfg_ma_config_write & config_write_strb[1];
+  assign \$296  = ch1_cfg_ma_config_write & config_write_strb[2];
+  assign \$297  = ch1_cfg_ma_config_write & config_write_strb[3];
+  assign \$298  = ch1_cfg_period_config_write & config_write_strb[0];
+  assign \$299  = ch1_cfg_period_config_write & config_write_strb[1];
+  assign \$300  = ch1_cfg_period_config_write & config_write_strb[2];
+  assign \$301  = ch1_cfg_break_config_write & config_write_strb[0];
+  assign \$302  = ch1_cfg_break_config_write & config_write_strb[1];
+  assign \$303  = ch1_cfg_break_config_write & config_write_strb[2];
+  assign \$304  = ch1_cfg_ack_config_write & config_write_strb[0];
+  assign \$305  = ch1_cfg_ack_config_write & config_write_strb[1];
+  assign \$306  = ch1_cfg_ack_config_write & config_write_strb[2];
+  assign \$307  = ch1_cfg_timeout_config_write & config_write_strb[0];
+  assign \$308  = ch1_cfg_timeout_config_write & config_write_strb[1];
+  assign \$309  = ch1_cfg_timeout_config_write & config_write_strb[2];
+  assign \$310  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$311  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$312  = ch1_cfg_words_config_write & config_write_strb[0];
+  assign \$313  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$314  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$315  = ch1_cfg_words_config_write & config_write_strb[1];
+  assign \$316  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$317  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$318  = ch1_cfg_words_config_write & config_write_strb[2];
+  assign \$319  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$320  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$321  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$322  = ch1_cfg_words_config_write & config_write_strb[3];
+  assign \$323  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$324  = ch1_cfg_checks_config_write & config_write_strb[0];
+  assign \$325  = ch1_cfg_checks_config_write & config_write_strb[1];
+  assign \$326  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$327  = ch1_cfg_checks_config_write & config_write_strb[2];
+  assign \$328  = ch1_cfg_checks_config_write & config_write_strb[3];
+  assign \$329  = ch1_cfg_quiet_config_write & config_write_strb[0];
+  assign \$330  = ch1_cfg_quiet_config_write & config_write_strb[1];
+  assign \$331  = ch1_cfg_crc0_config_write & config_write_strb[0];
+  assign \$332  = ch1_cfg_crc0_config_write & config_write_strb[1];
+  assign \$333  = ch1_cfg_crc0_config_write & config_write_strb[2];
+  assign \$334  = ch1_cfg_crc0_config_write & config_write_strb[3];
+  assign \$335  = ch1_cfg_crc0_start_config_write & config_write_strb[0];
+  assign \$336  = ch1_cfg_crc0_start_config_write & config_write_strb[1];
+  assign \$337  = ch1_cfg_crc1_config_write & config_write_strb[0];
+  assign \$338  = ch1_cfg_crc1_config_write & config_write_strb[1];
+  assign \$339  = ch1_cfg_crc1_config_write & config_write_strb[2];
+  assign \$340  = ch1_cfg_crc1_config_write & config_write_strb[3];
+  assign \$341  = ch1_cfg_crc1_start_config_write & config_write_strb[0];
+  assign \$342  = ch1_cfg_crc1_start_config_write & config_write_strb[1];
+  assign \$343  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$344  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$345  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$346  = ch1_cfg_ssi_config_write & config_write_strb[0];
+  assign \$347  = ch1_cfg_ssi_config_write & config_write_strb[2];
+  assign \$348  = ch1_cfg_ssi_config_write & config_write_strb[3];
+  assign \$349  = ch1_ca_request_config_write & config_write_strb[0];
+  assign \$350  = ch1_ca_request_config_write & config_write_strb[1];
+  assign \$351  = ch1_ca_request_config_write & config_write_strb[2];
+  assign \$352  = ch1_ca_request_config_write & config_write_strb[3];
+  assign \$353  = write_data[0] & write_strb[0];
+  assign \$354  = ch1_ca_ctrl_write ? \$353  : 1'h0;
+  assign \$355  = write_data[1] & write_strb[0];
+  assign \$356  = ch1_ca_ctrl_write ? \$355  : 1'h0;
+  assign \$357  = ch1_config_written | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$358  = bus__w_addr == 9'h100;
+  assign \$359  = bus__w_addr == 9'h101;
+  assign \$360  = bus__w_addr == 9'h102;
+  assign \$361  = bus__w_addr == 9'h104;
+  assign \$362  = bus__w_addr == 9'h106;
+  assign \$363  = bus__w_addr == 9'h107;
+  assign \$364  = bus__w_addr == 9'h110;
+  assign \$365  = bus__w_addr == 9'h111;
+  assign \$366  = bus__w_addr == 9'h112;
+  assign \$367  = bus__w_addr == 9'h113;
+  assign \$368  = bus__w_addr == 9'h114;
+  assign \$369  = bus__w_addr == 9'h115;
+  assign \$370  = bus__w_addr == 9'h116;
+  assign \$371  = bus__w_addr == 9'h117;
+  assign \$372  = bus__w_addr == 9'h125;
+  assign \$373  = bus__w_addr == 9'h126;
+  assign \$374  = bus__w_addr == 9'h127;
+  assign \$375  = bus__w_addr == 9'h128;
+  assign \$376  = bus__w_addr == 9'h129;
+  assign \$377  = bus__w_addr == 9'h12a;
+  assign \$378  = bus__w_addr == 9'h12c;
+  assign \$379  = bus__w_addr == 9'h12d;
+  assign \$380  = bus__w_addr == 9'h12e;
+  assign \$381  = bus__w_addr == 9'h130;
+  assign \$382  = bus__w_addr == 9'h131;
+  assign \$383  = bus__w_addr == 9'h132;
+  assign \$384  = bus__w_addr == 9'h134;
+  assign \$385  = bus__w_addr == 9'h135;
+  assign \$386  = bus__w_addr == 9'h136;
+  assign \$387  = bus__w_addr == 9'h138;
+  assign \$388  = bus__w_addr == 9'h139;
+  assign \$389  = bus__w_addr == 9'h13a;
+  assign \$390  = bus__w_addr == 9'h13c;
+  assign \$391  = bus__w_addr == 9'h13d;
+  assign \$392  = bus__w_addr == 9'h13e;
+  assign \$393  = bus__w_addr == 9'h141;
+  assign \$394  = bus__w_addr == 9'h142;
+  assign \$395  = bus__w_addr == 9'h143;
+  assign \$396  = bus__w_addr == 9'h144;
+  assign \$397  = bus__w_addr == 9'h145;
+  assign \$398  = bus__w_addr == 9'h170;
+  assign \$399  = bus__w_addr == 9'h171;
+  assign \$400  = bus__w_addr == 9'h172;
+  assign \$401  = bus__w_addr == 9'h173;
+  assign \$402  = bus__w_addr == 9'h174;
+  assign \$403  = bus__w_addr == 9'h175;
+  assign \$404  = bus__w_addr == 9'h176;
+  assign \$405  = bus__w_addr == 9'h177;
+  assign \$406  = bus__w_addr == 9'h178;
+  assign \$407  = bus__w_addr == 9'h179;
+  assign \$408  = bus__w_addr == 9'h17a;
+  assign \$409  = bus__w_addr == 9'h17b;
+  assign \$410  = bus__w_addr == 9'h17c;
+  assign \$411  = bus__w_addr == 9'h17d;
+  assign \$412  = ch1_read_select_110 & bus__r_load;
+  assign \$413  = bus__w_addr[10:3] == 6'h23;
+  assign \$414  = bus__r_en & \$413 ;
+  assign \$415  = bus__w_addr[10:4] == 5'h16;
+  assign \$416  = bus__r_en & \$415 ;
+  assign \$417  = ch1_read_select_100 ? { 22'h000000, ch1_ctrl_trigger_enable, ch1_ctrl_periodic, 8'h00 } : 32'd0;
+  assign \$419  = ch1_read_select_101 ? { 30'h00000000, ch1__config_error, ch1__busy } : 32'd0;
+  assign \$420  = \$418  | \$419 ;
+  assign \$421  = ch1_read_select_102 ? 32'd790112311 : 32'd0;
+  assign \$422  = \$420  | \$421 ;
+  assign \$423  = ch1_read_select_104 ? { 29'h00000000, ch1_irq_status_access_done, ch1_irq_status_error, ch1_irq_status_done } : 32'd0;
+  assign \$424  = \$422  | \$423 ;
+  assign \$429  = ch1_read_select_110 ? { 2'h0, \port$7811$0 [182:177], 4'h0, \port$7811$0 [186:183], 1'h0, \port$7811$0 [176:174], 1'h0, \port$7811$0 [133:131], 3'h0, \port$7811$0 [49], \port$7811$0 [3:0] } : 32'd0;
+  assign \$430  = \$428  | \$429 ;
+  assign \$431  = ch1_read_select_111 ? { 3'h0, ch1_result_seq_line_delay_snapshot, ch1_result_seq_seq_snapshot } : 32'd0;
+  assign \$432  = \$430  | \$431 ;
+  assign \$433  = ch1_read_select_112 ? ch1_result_w0_lo_data_snapshot : 32'd0;
+  assign \$434  = \$432  | \$433 ;
+  assign \$435  = ch1_read_select_113 ? { 9'h000, ch1_result_w0_hi_data_snapshot } : 32'd0;
+  assign \$436  = \$434  | \$435 ;
+  assign \$437  = ch1_read_select_114 ? ch1_result_w1_lo_data_snapshot : 32'd0;
+  assign \$438  = \$436  | \$437 ;
+  assign \$439  = ch1_read_select_115 ? { 24'h000000, ch1_result_w1_hi_data_snapshot } : 32'd0;
+  assign \$440  = \$438  | \$439 ;
+  assign \$441  = ch1_read_select_116 ? ch1_result_timestamp_time_snapshot : 32'd0;
+  assign \$442  = \$440  | \$441 ;
+  assign \$443  = ch1_read_select_117 ? { 3'h0, ch1_result_line_settled_delay_snapshot, ch1_result_line_delay_spread_snapshot, 3'h0, ch1_result_line_delay_settled_snapshot, ch1_result_line_noise_events_snapshot } : 32'd0;
+  assign \$444  = \$442  | \$443 ;
+  assign \$489  = ch1_read_select_142 ? { 17'h00000, \port$7899$0 [9:3], 1'h0, \port$7899$0 [2:0], 3'h0, ch1__ca_busy } : 32'd0;
+  assign \$490  = \$488  | \$489 ;
+  assign \$491  = ch1_read_select_143 ? \port$7822$0 [31:0] : 32'd0;
+  assign \$492  = \$490  | \$491 ;
+  assign \$493  = ch1_read_select_144 ? \port$7822$0 [63:32] : 32'd0;
+  assign \$494  = \$492  | \$493 ;
+  assign \$495  = ch1_read_select_145 ? { 16'h0000, \port$7822$0 [79:64] } : 32'd0;
+  assign \$496  = \$494  | \$495 ;
+  assign \$497  = ch1_read_select_170 ? { 16'h0000, ch1__result_updates } : 32'd0;
+  assign \$498  = \$496  | \$497 ;
+  assign \$525  = ch1_window0_read ? ch1__count_data : 32'd0;
+  assign \$526  = \$524  | \$525 ;
+  assign \$527  = ch1_window1_read ? ch1__ca_rbuf_data : 32'd0;
+  assign \$528  = \$526  | \$527 ;
+  assign \$529  = ch1_window2_read ? ch1_config_read_data : 32'd0;
+  assign \$530  = \$528  | \$529 ;
+  assign \$531  = ! write_addr;
+  assign g_id_write = write_en & \$531 ;
+  assign \$532  = write_addr == 1'h1;
+  assign g_version_write = write_en & \$532 ;
+  assign \$533  = write_addr == 2'h2;
+  assign g_channels_write = write_en & \$533 ;
+  assign \$534  = write_addr == 2'h3;
+  assign g_trigger_write = write_en & \$534 ;
+  assign \$535  = write_addr == 3'h4;
+  assign g_irq_pending_write = write_en & \$535 ;
+  assign \$536  = bus__w_addr[10:3] == 5'h13;
+  assign ch0__count_en = bus__r_en & \$536 ;
+  assign \$537  = write_addr == 8'h80;
+  assign ch0_ctrl_write = write_en & \$537 ;
+  assign \$538  = write_addr == 8'h81;
+  assign ch0_state_write = write_en & \$538 ;
+  assign \$539  = write_addr == 8'h82;
+  assign ch0_caps_write = write_en & \$539 ;
+  assign \$540  = write_addr == 8'h84;
+  assign ch0_irq_status_write = write_en & \$540 ;
+  assign \$541  = write_addr == 8'h85;
+  assign ch0_irq_enable_write = write_en & \$541 ;
+  assign \$542  = write_addr == 8'h86;
+  assign ch0_caps_chain_write = write_en & \$542 ;
+  assign \$543  = write_addr == 8'h87;
+  assign ch0_caps_chain2_write = write_en & \$543 ;
+  assign \$544  = write_addr == 8'h88;
+  assign ch0_cfg_ma_write = write_en & \$544 ;
+  assign \$545  = write_addr == 8'h89;
+  assign ch0_cfg_period_write = write_en & \$545 ;
+  assign \$546  = write_addr == 8'h8a;
+  assign ch0_cfg_break_write = write_en & \$546 ;
+  assign \$547  = write_addr == 8'h8b;
+  assign ch0_cfg_ack_write = write_en & \$547 ;
+  assign \$548  = write_addr == 8'h8c;
+  assign ch0_cfg_timeout_write = write_en & \$548 ;
+  assign \$549  = write_addr == 8'h8d;
+  assign ch0_cfg_words_write = write_en & \$549 ;
+  assign \$550  = write_addr == 8'h8e;
+  assign ch0_cfg_checks_write = write_en & \$550 ;
+  assign \$551  = write_addr == 8'h8f;
+  assign ch0_cfg_quiet_write = write_en & \$551 ;
+  assign \$552  = write_addr == 8'h90;
+  assign ch0_result_status_write = write_en & \$552 ;
+  assign \$553  = write_addr == 8'h91;
+  assign ch0_result_seq_write = write_en & \$553 ;
+  assign \$554  = write_addr == 8'h92;
+  assign ch0_result_w0_lo_write = write_en & \$554 ;
+  assign \$555  = write_addr == 8'h93;
+  assign ch0_result_w0_hi_write = write_en & \$555 ;
+  assign \$556  = write_addr == 8'h94;
+  assign ch0_result_w1_lo_write = write_en & \$556 ;
+  assign \$557  = write_addr == 8'h95;
+  assign ch0_result_w1_hi_write = write_en & \$557 ;
+  assign \$558  = write_addr == 8'h96;
+  assign ch0_result_timestamp_write = write_en & \$558 ;
+  assign \$559  = write_addr == 8'h97;
+  assign ch0_result_line_write = write_en & \$559 ;
+  assign \$560  = write_addr == 8'ha0;
+  assign ch0_cfg_crc0_write = write_en & \$560 ;
+  assign \$561  = write_addr == 8'ha1;
+  assign ch0_cfg_crc0_start_write = write_en & \$561 ;
+  assign \$562  = write_addr == 8'ha2;
+  assign ch0_cfg_crc1_write = write_en & \$562 ;
+  assign \$563  = write_addr == 8'ha3;
+  assign ch0_cfg_crc1_start_write = write_en & \$563 ;
+  assign \$564  = write_addr == 8'ha4;
+  assign ch0_cfg_ssi_write = write_en & \$564 ;
+  assign \$565  = write_addr == 8'ha5;
+  assign ch0_count_chain_write = write_en & \$565 ;
+  assign \$566  = write_addr == 8'ha6;
+  assign ch0_count_chain2_write = write_en & \$566 ;
+  assign \$567  = write_addr == 8'ha7;
+  assign ch0_count_chain3_write = write_en & \$567 ;
+  assign \$568  = write_addr == 8'ha8;
+  assign ch0_cfg_w2_write = write_en & \$568 ;
+  assign \$569  = write_addr == 8'ha9;
+  assign ch0_cfg_w2_crc_write = write_en & \$569 ;
+  assign \$570  = write_addr == 8'haa;
+  assign ch0_cfg_w2_crc_start_write = write_en & \$570 ;
+  assign \$571  = write_addr == 8'hac;
+  assign ch0_cfg_w3_write = write_en & \$571 ;
+  assign \$572  = write_addr == 8'had;
+  assign ch0_cfg_w3_crc_write = write_en & \$572 ;
+  assign \$573  = write_addr == 8'hae;
+  assign ch0_cfg_w3_crc_start_write = write_en & \$573 ;
+  assign \$574  = write_addr == 8'hb0;
+  assign ch0_cfg_w4_write = write_en & \$574 ;
+  assign \$575  = write_addr == 8'hb1;
+  assign ch0_cfg_w4_crc_write = write_en & \$575 ;
+  assign \$576  = write_addr == 8'hb2;
+  assign ch0_cfg_w4_crc_start_write = write_en & \$576 ;
+  assign \$577  = write_addr == 8'hb4;
+  assign ch0_cfg_w5_write = write_en & \$577 ;
+  assign \$578  = write_addr == 8'hb5;
+  assign ch0_cfg_w5_crc_write = write_en & \$578 ;
+  assign \$579  = write_addr == 8'hb6;
+  assign ch0_cfg_w5_crc_start_write = write_en & \$579 ;
+  assign \$580  = write_addr == 8'hb8;
+  assign ch0_cfg_w6_write = write_en & \$580 ;
+  assign \$581  = write_addr == 8'hb9;
+  assign ch0_cfg_w6_crc_write = write_en & \$581 ;
+  assign \$582  = write_addr == 8'hba;
+  assign ch0_cfg_w6_crc_start_write = write_en & \$582 ;
+  assign \$583  = write_addr == 8'hbc;
+  assign ch0_cfg_w7_write = write_en & \$583 ;
+  assign \$584  = write_addr == 8'hbd;
+  assign ch0_cfg_w7_crc_write = write_en & \$584 ;
+  assign \$585  = write_addr == 8'hbe;
+  assign ch0_cfg_w7_crc_start_write = write_en & \$585 ;
+  assign \$586  = write_addr == 8'hc0;
+  assign ch0_ca_request_write = write_en & \$586 ;
+  assign \$587  = write_addr == 8'hc1;
+  assign ch0_ca_ctrl_write = write_en & \$587 ;
+  assign \$588  = write_addr == 8'hc2;
+  assign ch0_ca_state_write = write_en & \$588 ;
+  assign \$589  = write_addr == 8'hc3;
+  assign ch0_ca_count_crc4_answer_write = write_en & \$589 ;
+  assign \$590  = write_addr == 8'hc4;
+  assign ch0_ca_count_refused_aborted_write = write_en & \$590 ;
+  assign \$591  = write_addr == 8'hc5;
+  assign ch0_ca_count_data_fault_write = write_en & \$591 ;
+  assign \$592  = write_addr[10:4] == 4'hd;
+  assign \$593  = write_en & \$592 ;
+  assign ch0__ca_wbuf_en = \$593  ? write_strb : 4'h0;
+  assign \$594  = bus__w_addr[10:4] == 4'he;
+  assign ch0__ca_rbuf_en = bus__r_en & \$594 ;
+  assign \$595  = write_addr == 8'hf0;
+  assign ch0_chain_updates_write = write_en & \$595 ;
+  assign \$596  = write_addr == 8'hf1;
+  assign ch0_chain_flags_write = write_en & \$596 ;
+  assign \$597  = write_addr == 8'hf2;
+  assign ch0_chain_w2_lo_write = write_en & \$597 ;
+  assign \$598  = write_addr == 8'hf3;
+  assign ch0_chain_w2_hi_write = write_en & \$598 ;
+  assign \$599  = write_addr == 8'hf4;
+  assign ch0_chain_w3_lo_write = write_en & \$599 ;
+  assign \$600  = write_addr == 8'hf5;
+  assign ch0_chain_w3_hi_write = write_en & \$600 ;
+  assign \$601  = write_addr == 8'hf6;
+  assign ch0_chain_w4_lo_write = write_en & \$601 ;
+  assign \$602  = write_addr == 8'hf7;
+  assign ch0_chain_w4_hi_write = write_en & \$602 ;
+  assign \$603  = write_addr == 8'hf8;
+  assign ch0_chain_w5_lo_write = write_en & \$603 ;
+  assign \$604  = write_addr == 8'hf9;
+  assign ch0_chain_w5_hi_write = write_en & \$604 ;
+  assign \$605  = write_addr == 8'hfa;
+  assign ch0_chain_w6_lo_write = write_en & \$605 ;
+  assign \$606  = write_addr == 8'hfb;
+  assign ch0_chain_w6_hi_write = write_en & \$606 ;
+  assign \$607  = write_addr == 8'hfc;
+  assign ch0_chain_w7_lo_write = write_en & \$607 ;
+  assign \$608  = write_addr == 8'hfd;
+  assign ch0_chain_w7_hi_write = write_en & \$608 ;
+  assign \$609  = | { ch0_cfg_ssi_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_config_write, ch0_cfg_checks_config_write, ch0_cfg_timeout_config_write, ch0_cfg_break_config_write, ch0_cfg_ma_config_write };
+  assign \$610  = | { ch0_ca_request_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write };
+  assign \$611  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write };
+  assign \$612  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write };
+  assign \$613  = | { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write };
+  assign \$614  = ~ ch0_config_written;
+  assign \$615  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$614 ;
+  assign \$616  = | \$615 ;
+  assign \$617  = ~ ch0_config_written;
+  assign \$618  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$617 ;
+  assign \$619  = | \$618 ;
+  assign \$620  = ~ ch0_config_written;
+  assign \$621  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$620 ;
+  assign \$622  = | \$621 ;
+  assign \$623  = ~ ch0_config_written;
+  assign \$624  = { ch0_ca_request_config_write, ch0_cfg_ssi_config_write, ch0_cfg_crc1_start_config_write, ch0_cfg_crc1_config_write, ch0_cfg_crc0_start_config_write, ch0_cfg_crc0_config_write, ch0_cfg_quiet_config_write, ch0_cfg_checks_config_write, ch0_cfg_words_config_write, ch0_cfg_timeout_config_write, ch0_cfg_ack_config_write, ch0_cfg_break_config_write, ch0_cfg_period_config_write, ch0_cfg_ma_config_write, ch0_irq_enable_config_write } & \$623 ;
+  assign \$625  = | \$624 ;
+  assign \$626  = config_write_strb | { \$625 , \$622 , \$619 , \$616  };
+  assign wr__en = \$613  ? \$626  : 4'h0;
+  assign \$627  = bus__w_addr[10:7] == 1'h1;
+  assign \$628  = bus__r_en & \$627 ;
+  assign ch0_config_read = \$628  & config_memory0_read_hit;
+  assign \$629  = ch0_config_written >> ch0_config_read_index;
+  assign \$631  = \$629  ? rd__data : \$630 ;
+  assign ch0_config_read_data = \$631  | \$632 ;
+  assign \$633  = ch0_irq_status_done & ch0_irq_enable_done;
+  assign \$635  = ch0_irq_status_error & ch0_irq_enable_error;
+  assign \$637  = ch0_irq_status_access_done & ch0_irq_enable_access_done;
+  assign ch0_irq = | { \$638 , \$636 , \$634  };
+  assign \$639  = bus__w_addr[10:3] == 6'h23;
+  assign ch1__count_en = bus__r_en & \$639 ;
+  assign \$640  = write_addr == 9'h100;
+  assign ch1_ctrl_write = write_en & \$640 ;
+  assign \$641  = write_addr == 9'h101;
+  assign ch1_state_write = write_en & \$641 ;
+  assign \$642  = write_addr == 9'h102;
+  assign ch1_caps_write = write_en & \$642 ;
+  assign \$643  = write_addr == 9'h104;
+  assign ch1_irq_status_write = write_en & \$643 ;
+  assign \$644  = write_addr == 9'h105;
+  assign ch1_irq_enable_write = write_en & \$644 ;
+  assign \$645  = write_addr == 9'h106;
+  assign ch1_caps_chain_write = write_en & \$645 ;
+  assign \$646  = write_addr == 9'h107;
+  assign ch1_caps_chain2_write = write_en & \$646 ;
+  assign \$647  = write_addr == 9'h108;
+  assign ch1_cfg_ma_write = write_en & \$647 ;
+  assign \$648  = write_addr == 9'h109;
+  assign ch1_cfg_period_write = write_en & \$648 ;
+  assign \$649  = write_addr == 9'h10a;
+  assign ch1_cfg_break_write = write_en & \$649 ;
+  assign \$650  = write_addr == 9'h10b;
+  assign ch1_cfg_ack_write = write_en & \$650 ;
+  assign \$651  = write_addr == 9'h10c;
+  assign ch1_cfg_timeout_write = write_en & \$651 ;
+  assign \$652  = write_addr == 9'h10d;
+  assign ch1_cfg_words_write = write_en & \$652 ;
+  assign \$653  = write_addr == 9'h10e;
+  assign ch1_cfg_checks_write = write_en & \$653 ;
+  assign \$654  = write_addr == 9'h10f;
+  assign ch1_cfg_quiet_write = write_en & \$654 ;
+  assign \$655  = write_addr == 9'h110;
+  assign ch1_result_status_write = write_en & \$655 ;
+  assign \$656  = write_addr == 9'h111;
+  assign ch1_result_seq_write = write_en & \$656 ;
+  assign \$657  = write_addr == 9'h112;
+  assign ch1_result_w0_lo_write = write_en & \$657 ;
+  assign \$658  = write_addr == 9'h113;
+  assign ch1_result_w0_hi_write = write_en & \$658 ;
+  assign \$659  = write_addr == 9'h114;
+  assign ch1_result_w1_lo_write = write_en & \$659 ;
+  assign \$660  = write_addr == 9'h115;
+  assign ch1_result_w1_hi_write = write_en & \$660 ;
+  assign \$661  = write_addr == 9'h116;
+  assign ch1_result_timestamp_write = write_en & \$661 ;
+  assign \$662  = write_addr == 9'h117;
+  assign ch1_result_line_write = write_en & \$662 ;
+  assign \$663  = write_addr == 9'h120;
+  assign ch1_cfg_crc0_write = write_en & \$663 ;
+  assign \$664  = write_addr == 9'h121;
+  assign ch1_cfg_crc0_start_write = write_en & \$664 ;
+  assign \$665  = write_addr == 9'h122;
+  assign ch1_cfg_crc1_write = write_en & \$665 ;
+  assign \$666  = write_addr == 9'h123;
+  assign ch1_cfg_crc1_start_write = write_en & \$666 ;
+  assign \$667  = write_addr == 9'h124;
+  assign ch1_cfg_ssi_write = write_en & \$667 ;
+  assign \$668  = write_addr == 9'h125;
+  assign ch1_count_chain_write = write_en & \$668 ;
+  assign \$669  = write_addr == 9'h126;
+  assign ch1_count_chain2_write = write_en & \$669 ;
+  assign \$670  = write_addr == 9'h127;
+  assign ch1_count_chain3_write = write_en & \$670 ;
+  assign \$671  = write_addr == 9'h128;
+  assign ch1_cfg_w2_write = write_en & \$671 ;
+  assign \$672  = write_addr == 9'h129;
+  assign ch1_cfg_w2_crc_write = write_en & \$672 ;
+  assign \$673  = write_addr == 9'h12a;
+  assign ch1_cfg_w2_crc_start_write = write_en & \$673 ;
+  assign \$674  = write_addr == 9'h12c;
+  assign ch1_cfg_w3_write = write_en & \$674 ;
+  assign \$675  = write_addr == 9'h12d;
+  assign ch1_cfg_w3_crc_write = write_en & \$675 ;
+  assign \$676  = write_addr == 9'h12e;
+  assign ch1_cfg_w3_crc_start_write = write_en & \$676 ;
+  assign \$677  = write_addr == 9'h130;
+  assign ch1_cfg_w4_write = write_en & \$677 ;
+  assign \$678  = write_addr == 9'h131;
+  assign ch1_cfg_w4_crc_write = write_en & \$678 ;
+  assign \$679  = write_addr == 9'h132;
+  assign ch1_cfg_w4_crc_start_write = write_en & \$679 ;
+  assign \$680  = write_addr == 9'h134;
+  assign ch1_cfg_w5_write = write_en & \$680 ;
+  assign \$681  = write_addr == 9'h135;
+  assign ch1_cfg_w5_crc_write = write_en & \$681 ;
+  assign \$682  = write_addr == 9'h136;
+  assign ch1_cfg_w5_crc_start_write = write_en & \$682 ;
+  assign \$683  = write_addr == 9'h138;
+  assign ch1_cfg_w6_write = write_en & \$683 ;
+  assign \$684  = write_addr == 9'h139;
+  assign ch1_cfg_w6_crc_write = write_en & \$684 ;
+  assign \$685  = write_addr == 9'h13a;
+  assign ch1_cfg_w6_crc_start_write = write_en & \$685 ;
+  assign \$686  = write_addr == 9'h13c;
+  assign ch1_cfg_w7_write = write_en & \$686 ;
+  assign \$687  = write_addr == 9'h13d;
+  assign ch1_cfg_w7_crc_write = write_en & \$687 ;
+  assign \$688  = write_addr == 9'h13e;
+  assign ch1_cfg_w7_crc_start_write = write_en & \$688 ;
+  assign \$689  = write_addr == 9'h140;
+  assign ch1_ca_request_write = write_en & \$689 ;
+  assign \$690  = write_addr == 9'h141;
+  assign ch1_ca_ctrl_write = write_en & \$690 ;
+  assign \$691  = write_addr == 9'h142;
+  assign ch1_ca_state_write = write_en & \$691 ;
+  assign \$692  = write_addr == 9'h143;
+  assign ch1_ca_count_crc4_answer_write = write_en & \$692 ;
+  assign \$693  = write_addr == 9'h144;
+  assign ch1_ca_count_refused_aborted_write = write_en & \$693 ;
+  assign \$694  = write_addr == 9'h145;
+  assign ch1_ca_count_data_fault_write = write_en & \$694 ;
+  assign \$695  = write_addr[10:4] == 5'h15;
+  assign \$696  = write_en & \$695 ;
+  assign ch1__ca_wbuf_en = \$696  ? write_strb : 4'h0;
+  assign \$697  = bus__w_addr[10:4] == 5'h16;
+  assign ch1__ca_rbuf_en = bus__r_en & \$697 ;
+  assign \$698  = write_addr == 9'h170;
+  assign ch1_chain_updates_write = write_en & \$698 ;
+  assign \$699  = write_addr == 9'h171;
+  assign ch1_chain_flags_write = write_en & \$699 ;
+  assign \$700  = write_addr == 9'h172;
+  assign ch1_chain_w2_lo_write = write_en & \$700 ;
+  assign \$701  = write_addr == 9'h173;
+  assign ch1_chain_w2_hi_write = write_en & \$701 ;
+  assign \$702  = write_addr == 9'h174;
+  assign ch1_chain_w3_lo_write = write_en & \$702 ;
+  assign \$703  = write_addr == 9'h175;
+  assign ch1_chain_w3_hi_write = write_en & \$703 ;
+  assign \$704  = write_addr == 9'h176;
+  assign ch1_chain_w4_lo_write = write_en & \$704 ;
+  assign \$705  = write_addr == 9'h177;
+  assign ch1_chain_w4_hi_write = write_en & \$705 ;
+  assign \$706  = write_addr == 9'h178;
+  assign ch1_chain_w5_lo_write = write_en & \$706 ;
+  assign \$707  = write_addr == 9'h179;
+  assign ch1_chain_w5_hi_write = write_en & \$707 ;
+  assign \$708  = write_addr == 9'h17a;
+  assign ch1_chain_w6_lo_write = write_en & \$708 ;
+  assign \$709  = write_addr == 9'h17b;
+  assign ch1_chain_w6_hi_write = write_en & \$709 ;
+  assign \$710  = write_addr == 9'h17c;
+  assign ch1_chain_w7_lo_write = write_en & \$710 ;
+  assign \$711  = write_addr == 9'h17d;
+  assign ch1_chain_w7_hi_write = write_en & \$711 ;
+  assign \$712  = | { ch1_cfg_ssi_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_config_write, ch1_cfg_checks_config_write, ch1_cfg_timeout_config_write, ch1_cfg_break_config_write, ch1_cfg_ma_config_write };
+  assign \$713  = | { ch1_ca_request_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write };
+  assign \$714  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write };
+  assign \$715  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write };
+  assign \$716  = | { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write };
+  assign \$717  = ~ ch1_config_written;
+  assign \$718  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$717 ;
+  assign \$719  = | \$718 ;
+  assign \$720  = ~ ch1_config_written;
+  assign \$721  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$720 ;
+  assign \$722  = | \$721 ;
+  assign \$723  = ~ ch1_config_written;
+  assign \$724  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$723 ;
+  assign \$725  = | \$724 ;
+  assign \$726  = ~ ch1_config_written;
+  assign \$727  = { ch1_ca_request_config_write, ch1_cfg_ssi_config_write, ch1_cfg_crc1_start_config_write, ch1_cfg_crc1_config_write, ch1_cfg_crc0_start_config_write, ch1_cfg_crc0_config_write, ch1_cfg_quiet_config_write, ch1_cfg_checks_config_write, ch1_cfg_words_config_write, ch1_cfg_timeout_config_write, ch1_cfg_ack_config_write, ch1_cfg_break_config_write, ch1_cfg_period_config_write, ch1_cfg_ma_config_write, ch1_irq_enable_config_write } & \$726 ;
+  assign \$728  = | \$727 ;
+  assign \$729  = config_write_strb | { \$728 , \$725 , \$722 , \$719  };
+  assign \wr__en$942  = \$716  ? \$729  : 4'h0;
+  assign \$730  = bus__w_addr[10:7] == 2'h2;
+  assign \$731  = bus__r_en & \$730 ;
+  assign ch1_config_read = \$731  & config_memory0_read_hit;
+  assign \$732  = ch1_config_written >> ch1_config_read_index;
+  assign \$734  = \$732  ? \rd__data$944  : \$733 ;
+  assign ch1_config_read_data = \$734  | \$735 ;
+  assign \$736  = ch1_irq_status_done & ch1_irq_enable_done;
+  assign \$738  = ch1_irq_status_error & ch1_irq_enable_error;
+  assign \$740  = ch1_irq_status_access_done & ch1_irq_enable_access_done;
+  assign ch1_irq = | { \$741 , \$739 , \$737  };
+  assign \$743  = \$742  | ch0_read_data;
+  assign bus__r_data = \$743  | ch1_read_data;
+  always @(posedge clk)
+    write_en <= \$744 ;
+  always @(posedge clk)
+    write_addr <= \$745 ;
+  always @(posedge clk)
+    write_data <= \$746 ;
+  always @(posedge clk)
+    write_strb <= \$747 ;
+  always @(posedge clk)
+    config_write_data <= \$748 ;
+  always @(posedge clk)
+    config_write_strb <= \$749 ;
+  always @(posedge clk)
+    g_trigger_start <= \$750 ;
+  always @(posedge clk)
+    g_read_select_0 <= \$751 ;
+  always @(posedge clk)
+    g_read_select_1 <= \$752 ;
+  always @(posedge clk)
+    g_read_select_2 <= \$753 ;
+  always @(posedge clk)
+    g_read_select_3 <= \$754 ;
+  always @(posedge clk)
+    g_read_select_4 <= \$755 ;
+  always @(posedge clk)
+    g_read_data <= \$756 ;
+  always @(posedge clk)
+    ch0_ctrl_start <= \$757 ;
+  always @(posedge clk)
+    ch0_ctrl_abort <= \$758 ;
+  always @(posedge clk)
+    ch0_ctrl_clear_counters <= \$759 ;
+  always @(posedge clk)
+    ch0_ctrl_periodic <= \$760 ;
+  always @(posedge clk)
+    ch0_ctrl_trigger_enable <= \$761 ;
+  always @(posedge clk)
+    ch0_irq_status_done <= \$762 ;
+  always @(posedge clk)
+    ch0_irq_status_error <= \$763 ;
+  always @(posedge clk)
+    ch0_irq_status_access_done <= \$764 ;
+  always @(posedge clk)
+    ch0_irq_enable_config_write <= \$765 ;
+  always @(posedge clk)
+    ch0_irq_enable_done <= \$766 ;
+  always @(posedge clk)
+    ch0_irq_enable_error <= \$767 ;
+  always @(posedge clk)
+    ch0_irq_enable_access_done <= \$768 ;
+  always @(posedge clk)
+    ch0_cfg_ma_config_write <= \$769 ;
+  always @(posedge clk)
+    ch0_cfg_ma_ma_half_period <= \$770 ;
+  always @(posedge clk)
+    ch0_cfg_ma_delay_limit <= \$771 ;
+  always @(posedge clk)
+    ch0_cfg_period_config_write <= \$772 ;
+  always @(posedge clk)
+    ch0_cfg_period_request_period <= \$773 ;
+  always @(posedge clk)
+    ch0_cfg_break_config_write <= \$774 ;
+  always @(posedge clk)
+    ch0_cfg_break_break_time <= \$775 ;
+  always @(posedge clk)
+    ch0_cfg_ack_config_write <= \$776 ;
+  always @(posedge clk)
+    ch0_cfg_ack_ack_limit <= \$777 ;
+  always @(posedge clk)
+    ch0_cfg_timeout_config_write <= \$778 ;
+  always @(posedge clk)
+    ch0_cfg_timeout_timeout_limit <= \$779 ;
+  always @(posedge clk)
+    ch0_cfg_words_config_write <= \$780 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_data_bits <= \$781 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_nenw <= \$782 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_lc <= \$783 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_crc <= \$784 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_gray <= \$785 ;
+  always @(posedge clk)
+    ch0_cfg_words_w0_signed <= \$786 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_data_bits <= \$787 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_nenw <= \$788 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_lc <= \$789 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_crc <= \$790 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_gray <= \$791 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_signed <= \$792 ;
+  always @(posedge clk)
+    ch0_cfg_words_w1_enable <= \$793 ;
+  always @(posedge clk)
+    ch0_cfg_checks_config_write <= \$794 ;
+  always @(posedge clk)
+    ch0_cfg_checks_end_check <= \$795 ;
+  always @(posedge clk)
+    ch0_cfg_checks_spw_check <= \$796 ;
+  always @(posedge clk)
+    ch0_cfg_checks_spw_tolerance <= \$797 ;
+  always @(posedge clk)
+    ch0_cfg_checks_noise_limit <= \$798 ;
+  always @(posedge clk)
+    ch0_cfg_checks_delay_tolerance <= \$799 ;
+  always @(posedge clk)
+    ch0_cfg_checks_confirm_frames <= \$800 ;
+  always @(posedge clk)
+    ch0_cfg_quiet_config_write <= \$801 ;
+  always @(posedge clk)
+    ch0_cfg_quiet_quiet_time <= \$802 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_config_write <= \$803 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_w0_crc_poly <= \$804 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_w0_crc_width <= \$805 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_w0_crc_inverted <= \$806 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_start_config_write <= \$807 ;
+  always @(posedge clk)
+    ch0_cfg_crc0_start_w0_crc_start <= \$808 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_config_write <= \$809 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_w1_crc_poly <= \$810 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_w1_crc_width <= \$811 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_w1_crc_inverted <= \$812 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_start_config_write <= \$813 ;
+  always @(posedge clk)
+    ch0_cfg_crc1_start_w1_crc_start <= \$814 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_config_write <= \$815 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi <= \$816 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_error <= \$817 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_error_low <= \$818 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_double <= \$819 ;
+  always @(posedge clk)
+    ch0_cfg_ssi_ssi_delay <= \$820 ;
+  always @(posedge clk)
+    ch0_cfg_w2_config_write <= \$821 ;
+  always @(posedge clk)
+    ch0_cfg_w2_crc_config_write <= \$822 ;
+  always @(posedge clk)
+    ch0_cfg_w2_crc_start_config_write <= \$823 ;
+  always @(posedge clk)
+    ch0_cfg_w3_config_write <= \$824 ;
+  always @(posedge clk)
+    ch0_cfg_w3_crc_config_write <= \$825 ;
+  always @(posedge clk)
+    ch0_cfg_w3_crc_start_config_write <= \$826 ;
+  always @(posedge clk)
+    ch0_cfg_w4_config_write <= \$827 ;
+  always @(posedge clk)
+    ch0_cfg_w4_crc_config_write <= \$828 ;
+  always @(posedge clk)
+    ch0_cfg_w4_crc_start_config_write <= \$829 ;
+  always @(posedge clk)
+    ch0_cfg_w5_config_write <= \$830 ;
+  always @(posedge clk)
+    ch0_cfg_w5_crc_config_write <= \$831 ;
+  always @(posedge clk)
+    ch0_cfg_w5_crc_start_config_write <= \$832 ;
+  always @(posedge clk)
+    ch0_cfg_w6_config_write <= \$833 ;
+  always @(posedge clk)
+    ch0_cfg_w6_crc_config_write <= \$834 ;
+  always @(posedge clk)
+    ch0_cfg_w6_crc_start_config_write <= \$835 ;
+  always @(posedge clk)
+    ch0_cfg_w7_config_write <= \$836 ;
+  always @(posedge clk)
+    ch0_cfg_w7_crc_config_write <= \$837 ;
+  always @(posedge clk)
+    ch0_cfg_w7_crc_start_config_write <= \$838 ;
+  always @(posedge clk)
+    ch0_ca_request_config_write <= \$839 ;
+  always @(posedge clk)
+    ch0_ca_request_slave_id <= \$840 ;
+  always @(posedge clk)
+    ch0_ca_request_address <= \$841 ;
+  always @(posedge clk)
+    ch0_ca_request_count <= \$842 ;
+  always @(posedge clk)
+    \ch0_ca_request_write$149  <= \$843 ;
+  always @(posedge clk)
+    ch0_ca_ctrl_start <= \$844 ;
+  always @(posedge clk)
+    ch0_ca_ctrl_abort <= \$845 ;
+  always @(posedge clk)
+    config_memory0_write_data <= \$846 ;
+  always @(posedge clk)
+    ch0_config_written <= \$847 ;
+  always @(posedge clk)
+    ch0_config_read_index <= \$848 ;
+  always @(posedge clk)
+    ch0_read_select_80 <= \$849 ;
+  always @(posedge clk)
+    ch0_read_select_81 <= \$850 ;
+  always @(posedge clk)
+    ch0_read_select_82 <= \$851 ;
+  always @(posedge clk)
+    ch0_read_select_84 <= \$852 ;
+  always @(posedge clk)
+    ch0_read_select_86 <= \$853 ;
+  always @(posedge clk)
+    ch0_read_select_87 <= \$854 ;
+  always @(posedge clk)
+    ch0_read_select_90 <= \$855 ;
+  always @(posedge clk)
+    ch0_read_select_91 <= \$856 ;
+  always @(posedge clk)
+    ch0_read_select_92 <= \$857 ;
+  always @(posedge clk)
+    ch0_read_select_93 <= \$858 ;
+  always @(posedge clk)
+    ch0_read_select_94 <= \$859 ;
+  always @(posedge clk)
+    ch0_read_select_95 <= \$860 ;
+  always @(posedge clk)
+    ch0_read_select_96 <= \$861 ;
+  always @(posedge clk)
+    ch0_read_select_97 <= \$862 ;
+  always @(posedge clk)
+    ch0_read_select_a5 <= \$863 ;
+  always @(posedge clk)
+    ch0_read_select_a6 <= \$864 ;
+  always @(posedge clk)
+    ch0_read_select_a7 <= \$865 ;
+  always @(posedge clk)
+    ch0_read_select_a8 <= \$866 ;
+  always @(posedge clk)
+    ch0_read_select_a9 <= \$867 ;
+  always @(posedge clk)
+    ch0_read_select_aa <= \$868 ;
+  always @(posedge clk)
+    ch0_read_select_ac <= \$869 ;
+  always @(posedge clk)
+    ch0_read_select_ad <= \$870 ;
+  always @(posedge clk)
+    ch0_read_select_ae <= \$871 ;
+  always @(posedge clk)
+    ch0_read_select_b0 <= \$872 ;
+  always @(posedge clk)
+    ch0_read_select_b1 <= \$873 ;
+  always @(posedge clk)
+    ch0_read_select_b2 <= \$874 ;
+  always @(posedge clk)
+    ch0_read_select_b4 <= \$875 ;
+  always @(posedge clk)
+    ch0_read_select_b5 <= \$876 ;
+  always @(posedge clk)
+    ch0_read_select_b6 <= \$877 ;
+  always @(posedge clk)
+    ch0_read_select_b8 <= \$878 ;
+  always @(posedge clk)
+    ch0_read_select_b9 <= \$879 ;
+  always @(posedge clk)
+    ch0_read_select_ba <= \$880 ;
+  always @(posedge clk)
+    ch0_read_select_bc <= \$881 ;
+  always @(posedge clk)
+    ch0_read_select_bd <= \$882 ;
+  always @(posedge clk)
+    ch0_read_select_be <= \$883 ;
+  always @(posedge clk)
+    ch0_read_select_c1 <= \$884 ;
+  always @(posedge clk)
+    ch0_read_select_c2 <= \$885 ;
+  always @(posedge clk)
+    ch0_read_select_c3 <= \$886 ;
+  always @(posedge clk)
+    ch0_read_select_c4 <= \$887 ;
+  always @(posedge clk)
+    ch0_read_select_c5 <= \$888 ;
+  always @(posedge clk)
+    ch0_read_select_f0 <= \$889 ;
+  always @(posedge clk)
+    ch0_read_select_f1 <= \$890 ;
+  always @(posedge clk)
+    ch0_read_select_f2 <= \$891 ;
+  always @(posedge clk)
+    ch0_read_select_f3 <= \$892 ;
+  always @(posedge clk)
+    ch0_read_select_f4 <= \$893 ;
+  always @(posedge clk)
+    ch0_read_select_f5 <= \$894 ;
+  always @(posedge clk)
+    ch0_read_select_f6 <= \$895 ;
+  always @(posedge clk)
+    ch0_read_select_f7 <= \$896 ;
+  always @(posedge clk)
+    ch0_read_select_f8 <= \$897 ;
+  always @(posedge clk)
+    ch0_read_select_f9 <= \$898 ;
+  always @(posedge clk)
+    ch0_read_select_fa <= \$899 ;
+  always @(posedge clk)
+    ch0_read_select_fb <= \$900 ;
+  always @(posedge clk)
+    ch0_read_select_fc <= \$901 ;
+  always @(posedge clk)
+    ch0_read_select_fd <= \$902 ;
+  always @(posedge clk)
+    ch0_result_status_status_snapshot <= \$903 ;
+  always @(posedge clk)
+    ch0_result_status_cds_snapshot <= \$904 ;
+  always @(posedge clk)
+    ch0_result_status_w0_ne_snapshot <= \$905 ;
+  always @(posedge clk)
+    ch0_result_status_w0_nw_snapshot <= \$906 ;
+  always @(posedge clk)
+    ch0_result_status_w0_crc_ok_snapshot <= \$907 ;
+  always @(posedge clk)
+    ch0_result_status_w1_ne_snapshot <= \$908 ;
+  always @(posedge clk)
+    ch0_result_status_w1_nw_snapshot <= \$909 ;
+  always @(posedge clk)
+    ch0_result_status_w1_crc_ok_snapshot <= \$910 ;
+  always @(posedge clk)
+    ch0_result_status_lc_repeat_snapshot <= \$911 ;
+  always @(posedge clk)
+    ch0_result_status_lc_skip_snapshot <= \$912 ;
+  always @(posedge clk)
+    ch0_result_status_lc_zero_snapshot <= \$913 ;
+  always @(posedge clk)
+    ch0_result_status_spw_mismatch_snapshot <= \$914 ;
+  always @(posedge clk)
+    ch0_result_status_lc_snapshot <= \$915 ;
+  always @(posedge clk)
+    ch0_result_seq_seq_snapshot <= \$916 ;
+  always @(posedge clk)
+    ch0_result_seq_line_delay_snapshot <= \$917 ;
+  always @(posedge clk)
+    ch0_result_w0_lo_data_snapshot <= \$918 ;
+  always @(posedge clk)
+    ch0_result_w0_hi_data_snapshot <= \$919 ;
+  always @(posedge clk)
+    ch0_result_w1_lo_data_snapshot <= \$920 ;
+  always @(posedge clk)
+    ch0_result_w1_hi_data_snapshot <= \$921 ;
+  always @(posedge clk)
+    ch0_result_timestamp_time_snapshot <= \$922 ;
+  always @(posedge clk)
+    ch0_result_line_noise_events_snapshot <= \$923 ;
+  always @(posedge clk)
+    ch0_result_line_delay_settled_snapshot <= \$924 ;
+  always @(posedge clk)
+    ch0_result_line_delay_spread_snapshot <= \$925 ;
+  always @(posedge clk)
+    ch0_result_line_settled_delay_snapshot <= \$926 ;
+  always @(posedge clk)
+    ch0_window0_read <= \$927 ;
+  always @(posedge clk)
+    ch0_window1_read <= \$928 ;
+  always @(posedge clk)
+    ch0_window2_read <= \$929 ;
+  always @(posedge clk)
+    ch0_read_data <= \$930 ;
+  always @(posedge clk)
+    ch1_ctrl_start <= \$931 ;
+  always @(posedge clk)
+    ch1_ctrl_abort <= \$932 ;
+  always @(posedge clk)
+    ch1_ctrl_clear_counters <= \$933 ;
+  always @(posedge clk)
+    ch1_ctrl_periodic <= \$934 ;
+  always @(posedge clk)
+    ch1_ctrl_trigger_enable <= \$935 ;
+  always @(posedge clk)
+    ch1_irq_status_done <= \$936 ;
+  always @(posedge clk)
+    ch1_irq_status_error <= \$937 ;
+  always @(posedge clk)
+    ch1_irq_status_access_done <= \$938 ;
+  always @(posedge clk)
+    ch1_irq_enable_config_write <= \$939 ;
+  always @(posedge clk)
+    ch1_irq_enable_done <= \$940 ;
+  always @(posedge clk)
+    ch1_irq_enable_error <= \$941 ;
+  always @(posedge clk)
+    ch1_irq_enable_access_done <= \$942 ;
+  always @(posedge clk)
+    ch1_cfg_ma_config_write <= \$943 ;
+  always @(posedge clk)
+    ch1_cfg_ma_ma_half_period <= \$944 ;
+  always @(posedge clk)
+    ch1_cfg_ma_delay_limit <= \$945 ;
+  always @(posedge clk)
+    ch1_cfg_period_config_write <= \$946 ;
+  always @(posedge clk)
+    ch1_cfg_period_request_period <= \$947 ;
+  always @(posedge clk)
+    ch1_cfg_break_config_write <= \$948 ;
+  always @(posedge clk)
+    ch1_cfg_break_break_time <= \$949 ;
+  always @(posedge clk)
+    ch1_cfg_ack_config_write <= \$950 ;
+  always @(posedge clk)
+    ch1_cfg_ack_ack_limit <= \$951 ;
+  always @(posedge clk)
+    ch1_cfg_timeout_config_write <= \$952 ;
+  always @(posedge clk)
+    ch1_cfg_timeout_timeout_limit <= \$953 ;
+  always @(posedge clk)
+    ch1_cfg_words_config_write <= \$954 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_data_bits <= \$955 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_nenw <= \$956 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_lc <= \$957 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_crc <= \$958 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_gray <= \$959 ;
+  always @(posedge clk)
+    ch1_cfg_words_w0_signed <= \$960 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_data_bits <= \$961 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_nenw <= \$962 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_lc <= \$963 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_crc <= \$964 ;
+  always @(posedge clk)
+    ch1_cfg_words_w1_gray <= \$965 ;
   always @(posedge clk)
-    ch1_cfg_checks_end_check <= \$1011 ;
+    ch1_cfg_words_w1_signed <= \$966 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_check <= \$1012 ;
+    ch1_cfg_words_w1_enable <= \$967 ;
   always @(posedge clk)
-    ch1_cfg_checks_spw_tolerance <= \$1013 ;
+    ch1_cfg_checks_config_write <= \$968 ;
   always @(posedge clk)
-    ch1_cfg_checks_noise_limit <= \$1014 ;
+    ch1_cfg_checks_end_check <= \$969 ;
   always @(posedge clk)
-    ch1_cfg_checks_delay_tolerance <= \$1015 ;
+    ch1_cfg_checks_spw_check <= \$970 ;
   always @(posedge clk)
-    ch1_cfg_checks_confirm_frames <= \$1016 ;
+    ch1_cfg_checks_spw_tolerance <= \$971 ;
   always @(posedge clk)
-    ch1_cfg_quiet_config_write <= \$1017 ;
+    ch1_cfg_checks_noise_limit <= \$972 ;
   always @(posedge clk)
-    ch1_cfg_quiet_quiet_time <= \$1018 ;
+    ch1_cfg_checks_delay_tolerance <= \$973 ;
   always @(posedge clk)
-    ch1_cfg_crc0_config_write <= \$1019 ;
+    ch1_cfg_checks_confirm_frames <= \$974 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_poly <= \$1020 ;
+    ch1_cfg_quiet_config_write <= \$975 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_width <= \$1021 ;
+    ch1_cfg_quiet_quiet_time <= \$976 ;
   always @(posedge clk)
-    ch1_cfg_crc0_w0_crc_inverted <= \$1022 ;
+    ch1_cfg_crc0_config_write <= \$977 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_config_write <= \$1023 ;
+    ch1_cfg_crc0_w0_crc_poly <= \$978 ;
   always @(posedge clk)
-    ch1_cfg_crc0_start_w0_crc_start <= \$1024 ;
+    ch1_cfg_crc0_w0_crc_width <= \$979 ;
   always @(posedge clk)
-    ch1_cfg_crc1_config_write <= \$1025 ;
+    ch1_cfg_crc0_w0_crc_inverted <= \$980 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_poly <= \$1026 ;
+    ch1_cfg_crc0_start_config_write <= \$981 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_width <= \$1027 ;
+    ch1_cfg_crc0_start_w0_crc_start <= \$982 ;
   always @(posedge clk)
-    ch1_cfg_crc1_w1_crc_inverted <= \$1028 ;
+    ch1_cfg_crc1_config_write <= \$983 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_config_write <= \$1029 ;
+    ch1_cfg_crc1_w1_crc_poly <= \$984 ;
   always @(posedge clk)
-    ch1_cfg_crc1_start_w1_crc_start <= \$1030 ;
+    ch1_cfg_crc1_w1_crc_width <= \$985 ;
   always @(posedge clk)
-    ch1_cfg_ssi_config_write <= \$1031 ;
+    ch1_cfg_crc1_w1_crc_inverted <= \$986 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi <= \$1032 ;
+    ch1_cfg_crc1_start_config_write <= \$987 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error <= \$1033 ;
+    ch1_cfg_crc1_start_w1_crc_start <= \$988 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_error_low <= \$1034 ;
+    ch1_cfg_ssi_config_write <= \$989 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_double <= \$1035 ;
+    ch1_cfg_ssi_ssi <= \$990 ;
   always @(posedge clk)
-    ch1_cfg_ssi_ssi_delay <= \$1036 ;
+    ch1_cfg_ssi_ssi_error <= \$991 ;
   always @(posedge clk)
-    ch1_cfg_w2_config_write <= \$1037 ;
+    ch1_cfg_ssi_ssi_error_low <= \$992 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_config_write <= \$1038 ;
+    ch1_cfg_ssi_ssi_double <= \$993 ;
   always @(posedge clk)
-    ch1_cfg_w2_crc_start_config_write <= \$1039 ;
+    ch1_cfg_ssi_ssi_delay <= \$994 ;
   always @(posedge clk)
-    ch1_cfg_w3_config_write <= \$1040 ;
+    ch1_cfg_w2_config_write <= \$995 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_config_write <= \$1041 ;
+    ch1_cfg_w2_crc_config_write <= \$996 ;
   always @(posedge clk)
-    ch1_cfg_w3_crc_start_config_write <= \$1042 ;
+    ch1_cfg_w2_crc_start_config_write <= \$997 ;
   always @(posedge clk)
-    ch1_cfg_w4_config_write <= \$1043 ;
+    ch1_cfg_w3_config_write <= \$998 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_config_write <= \$1044 ;
+    ch1_cfg_w3_crc_config_write <= \$999 ;
   always @(posedge clk)
-    ch1_cfg_w4_crc_start_config_write <= \$1045 ;
+    ch1_cfg_w3_crc_start_config_write <= \$1000 ;
   always @(posedge clk)
-    ch1_cfg_w5_config_write <= \$1046 ;
+    ch1_cfg_w4_config_write <= \$1001 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_config_write <= \$1047 ;
+    ch1_cfg_w4_crc_config_write <= \$1002 ;
   always @(posedge clk)
-    ch1_cfg_w5_crc_start_config_write <= \$1048 ;
+    ch1_cfg_w4_crc_start_config_write <= \$1003 ;
   always @(posedge clk)
-    ch1_cfg_w6_config_write <= \$1049 ;
+    ch1_cfg_w5_config_write <= \$1004 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_config_write <= \$1050 ;
+    ch1_cfg_w5_crc_config_write <= \$1005 ;
   always @(posedge clk)
-    ch1_cfg_w6_crc_start_config_write <= \$1051 ;
+    ch1_cfg_w5_crc_start_config_write <= \$1006 ;
   always @(posedge clk)
-    ch1_cfg_w7_config_write <= \$1052 ;
+    ch1_cfg_w6_config_write <= \$1007 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_config_write <= \$1053 ;
+    ch1_cfg_w6_crc_config_write <= \$1008 ;
   always @(posedge clk)
-    ch1_cfg_w7_crc_start_config_write <= \$1054 ;
+    ch1_cfg_w6_crc_start_config_write <= \$1009 ;
   always @(posedge clk)
-    ch1_ca_request_config_write <= \$1055 ;
+    ch1_cfg_w7_config_write <= \$1010 ;
   always @(posedge clk)
-    ch1_ca_request_slave_id <= \$1056 ;
+    ch1_cfg_w7_crc_config_write <= \$1011 ;
   always @(posedge clk)
-    ch1_ca_request_address <= \$1057 ;
+    ch1_cfg_w7_crc_start_config_write <= \$1012 ;
   always @(posedge clk)
-    ch1_ca_request_count <= \$1058 ;
+    ch1_ca_request_config_write <= \$1013 ;
   always @(posedge clk)
-    \ch1_ca_request_write$452  <= \$1059 ;
+    ch1_ca_request_slave_id <= \$1014 ;
   always @(posedge clk)
-    ch1_ca_ctrl_start <= \$1060 ;
+    ch1_ca_request_address <= \$1015 ;
   always @(posedge clk)
-    ch1_ca_ctrl_abort <= \$1061 ;
+    ch1_ca_request_count <= \$1016 ;
   always @(posedge clk)
-    ch1_read_select_100 <= \$1062 ;
+    \ch1_ca_request_write$446  <= \$1017 ;
   always @(posedge clk)
-    ch1_read_select_101 <= \$1063 ;
+    ch1_ca_ctrl_start <= \$1018 ;
   always @(posedge clk)
-    ch1_read_select_102 <= \$1064 ;
+    ch1_ca_ctrl_abort <= \$1019 ;
   always @(posedge clk)
-    ch1_read_select_104 <= \$1065 ;
+    ch1_config_written <= \$1020 ;
   always @(posedge clk)
-    ch1_read_select_105 <= \$1066 ;
+    ch1_config_read_index <= \$1021 ;
   always @(posedge clk)
-    ch1_read_select_106 <= \$1067 ;
+    ch1_read_select_100 <= \$1022 ;
   always @(posedge clk)
-    ch1_read_select_107 <= \$1068 ;
+    ch1_read_select_101 <= \$1023 ;
   always @(posedge clk)
-    ch1_read_select_108 <= \$1069 ;
+    ch1_read_select_102 <= \$1024 ;
   always @(posedge clk)
-    ch1_read_select_109 <= \$1070 ;
+    ch1_read_select_104 <= \$1025 ;
   always @(posedge clk)
-    ch1_read_select_10a <= \$1071 ;
+    ch1_read_select_106 <= \$1026 ;
   always @(posedge clk)
-    ch1_read_select_10b <= \$1072 ;
+    ch1_read_select_107 <= \$1027 ;
   always @(posedge clk)
-    ch1_read_select_10c <= \$1073 ;
+    ch1_read_select_110 <= \$1028 ;
   always @(posedge clk)
-    ch1_read_select_10d <= \$1074 ;
+    ch1_read_select_111 <= \$1029 ;
   always @(posedge clk)
-    ch1_read_select_10e <= \$1075 ;
+    ch1_read_select_112 <= \$1030 ;
   always @(posedge clk)
-    ch1_read_select_10f <= \$1076 ;
+    ch1_read_select_113 <= \$1031 ;
   always @(posedge clk)
-    ch1_read_select_110 <= \$1077 ;
+    ch1_read_select_114 <= \$1032 ;
   always @(posedge clk)
-    ch1_read_select_111 <= \$1078 ;
+    ch1_read_select_115 <= \$1033 ;
   always @(posedge clk)
-    ch1_read_select_112 <= \$1079 ;
+    ch1_read_select_116 <= \$1034 ;
   always @(posedge clk)
-    ch1_read_select_113 <= \$1080 ;
+    ch1_read_select_117 <= \$1035 ;
   always @(posedge clk)
-    ch1_read_select_114 <= \$1081 ;
+    ch1_read_select_125 <= \$1036 ;
   always @(posedge clk)
-    ch1_read_select_115 <= \$1082 ;
+    ch1_read_select_126 <= \$1037 ;
   always @(posedge clk)
-    ch1_read_select_116 <= \$1083 ;
+    ch1_read_select_127 <= \$1038 ;
   always @(posedge clk)
-    ch1_read_select_117 <= \$1084 ;
+    ch1_read_select_128 <= \$1039 ;
   always @(posedge clk)
-    ch1_read_select_120 <= \$1085 ;
+    ch1_read_select_129 <= \$1040 ;
   always @(posedge clk)
-    ch1_read_select_121 <= \$1086 ;
+    ch1_read_select_12a <= \$1041 ;
   always @(posedge clk)
-    ch1_read_select_122 <= \$1087 ;
+    ch1_read_select_12c <= \$1042 ;
   always @(posedge clk)
-    ch1_read_select_123 <= \$1088 ;
+    ch1_read_select_12d <= \$1043 ;
   always @(posedge clk)
-    ch1_read_select_124 <= \$1089 ;
+    ch1_read_select_12e <= \$1044 ;
   always @(posedge clk)
-    ch1_read_select_125 <= \$1090 ;
+    ch1_read_select_130 <= \$1045 ;
   always @(posedge clk)
-    ch1_read_select_126 <= \$1091 ;
+    ch1_read_select_131 <= \$1046 ;
   always @(posedge clk)
-    ch1_read_select_127 <= \$1092 ;
+    ch1_read_select_132 <= \$1047 ;
   always @(posedge clk)
-    ch1_read_select_128 <= \$1093 ;
+    ch1_read_select_134 <= \$1048 ;
   always @(posedge clk)
-    ch1_read_select_129 <= \$1094 ;
+    ch1_read_select_135 <= \$1049 ;
   always @(posedge clk)
-    ch1_read_select_12a <= \$1095 ;
+    ch1_read_select_136 <= \$1050 ;
   always @(posedge clk)
-    ch1_read_select_12c <= \$1096 ;
+    ch1_read_select_138 <= \$1051 ;
   always @(posedge clk)
-    ch1_read_select_12d <= \$1097 ;
+    ch1_read_select_139 <= \$1052 ;
   always @(posedge clk)
-    ch1_read_select_12e <= \$1098 ;
+    ch1_read_select_13a <= \$1053 ;
   always @(posedge clk)
-    ch1_read_select_130 <= \$1099 ;
+    ch1_read_select_13c <= \$1054 ;
   always @(posedge clk)
-    ch1_read_select_131 <= \$1100 ;
+    ch1_read_select_13d <= \$1055 ;
   always @(posedge clk)
-    ch1_read_select_132 <= \$1101 ;
+    ch1_read_select_13e <= \$1056 ;
   always @(posedge clk)
-    ch1_read_select_134 <= \$1102 ;
+    ch1_read_select_141 <= \$1057 ;
   always @(posedge clk)
-    ch1_read_select_135 <= \$1103 ;
+    ch1_read_select_142 <= \$1058 ;
   always @(posedge clk)
-    ch1_read_select_136 <= \$1104 ;
+    ch1_read_select_143 <= \$1059 ;
   always @(posedge clk)
-    ch1_read_select_138 <= \$1105 ;
+    ch1_read_select_144 <= \$1060 ;
   always @(posedge clk)
-    ch1_read_select_139 <= \$1106 ;
+    ch1_read_select_145 <= \$1061 ;
   always @(posedge clk)
-    ch1_read_select_13a <= \$1107 ;
+    ch1_read_select_170 <= \$1062 ;
   always @(posedge clk)
-    ch1_read_select_13c <= \$1108 ;
+    ch1_read_select_171 <= \$1063 ;
   always @(posedge clk)
-    ch1_read_select_13d <= \$1109 ;
+    ch1_read_select_172 <= \$1064 ;
   always @(posedge clk)
-    ch1_read_select_13e <= \$1110 ;
+    ch1_read_select_173 <= \$1065 ;
   always @(posedge clk)
-    ch1_read_select_140 <= \$1111 ;
+    ch1_read_select_174 <= \$1066 ;
   always @(posedge clk)
-    ch1_read_select_141 <= \$1112 ;
+    ch1_read_select_175 <= \$1067 ;
   always @(posedge clk)
-    ch1_read_select_142 <= \$1113 ;
+    ch1_read_select_176 <= \$1068 ;
   always @(posedge clk)
-    ch1_read_select_143 <= \$1114 ;
+    ch1_read_select_177 <= \$1069 ;
   always @(posedge clk)
-    ch1_read_select_144 <= \$1115 ;
+    ch1_read_select_178 <= \$1070 ;
   always @(posedge clk)
-    ch1_read_select_145 <= \$1116 ;
+    ch1_read_select_179 <= \$1071 ;
   always @(posedge clk)
-    ch1_read_select_170 <= \$1117 ;
+    ch1_read_select_17a <= \$1072 ;
   always @(posedge clk)
-    ch1_read_select_171 <= \$1118 ;
+    ch1_read_select_17b <= \$1073 ;
   always @(posedge clk)
-    ch1_read_select_172 <= \$1119 ;
+    ch1_read_select_17c <= \$1074 ;
   always @(posedge clk)
-    ch1_read_select_173 <= \$1120 ;
+    ch1_read_select_17d <= \$1075 ;
   always @(posedge clk)
-    ch1_read_select_174 <= \$1121 ;
+    ch1_result_status_status_snapshot <= \$1076 ;
   always @(posedge clk)
-    ch1_read_select_175 <= \$1122 ;
+    ch1_result_status_cds_snapshot <= \$1077 ;
   always @(posedge clk)
-    ch1_read_select_176 <= \$1123 ;
+    ch1_result_status_w0_ne_snapshot <= \$1078 ;
   always @(posedge clk)
-    ch1_read_select_177 <= \$1124 ;
+    ch1_result_status_w0_nw_snapshot <= \$1079 ;
   always @(posedge clk)
-    ch1_read_select_178 <= \$1125 ;
+    ch1_result_status_w0_crc_ok_snapshot <= \$1080 ;
   always @(posedge clk)
-    ch1_read_select_179 <= \$1126 ;
+    ch1_result_status_w1_ne_snapshot <= \$1081 ;
   always @(posedge clk)
-    ch1_read_select_17a <= \$1127 ;
+    ch1_result_status_w1_nw_snapshot <= \$1082 ;
   always @(posedge clk)
-    ch1_read_select_17b <= \$1128 ;
+    ch1_result_status_w1_crc_ok_snapshot <= \$1083 ;
   always @(posedge clk)
-    ch1_read_select_17c <= \$1129 ;
+    ch1_result_status_lc_repeat_snapshot <= \$1084 ;
   always @(posedge clk)
-    ch1_read_select_17d <= \$1130 ;
+    ch1_result_status_lc_skip_snapshot <= \$1085 ;
   always @(posedge clk)
-    ch1_result_status_status_snapshot <= \$1131 ;
+    ch1_result_status_lc_zero_snapshot <= \$1086 ;
   always @(posedge clk)
-    ch1_result_status_cds_snapshot <= \$1132 ;
+    ch1_result_status_spw_mismatch_snapshot <= \$1087 ;
   always @(posedge clk)
-    ch1_result_status_w0_ne_snapshot <= \$1133 ;
+    ch1_result_status_lc_snapshot <= \$1088 ;
   always @(posedge clk)
-    ch1_result_status_w0_nw_snapshot <= \$1134 ;
+    ch1_result_seq_seq_snapshot <= \$1089 ;
   always @(posedge clk)
-    ch1_result_status_w0_crc_ok_snapshot <= \$1135 ;
+    ch1_result_seq_line_delay_snapshot <= \$1090 ;
   always @(posedge clk)
-    ch1_result_status_w1_ne_snapshot <= \$1136 ;
+    ch1_result_w0_lo_data_snapshot <= \$1091 ;
   always @(posedge clk)
-    ch1_result_status_w1_nw_snapshot <= \$1137 ;
+    ch1_result_w0_hi_data_snapshot <= \$1092 ;
   always @(posedge clk)
-    ch1_result_status_w1_crc_ok_snapshot <= \$1138 ;
+    ch1_result_w1_lo_data_snapshot <= \$1093 ;
   always @(posedge clk)
-    ch1_result_status_lc_repeat_snapshot <= \$1139 ;
+    ch1_result_w1_hi_data_snapshot <= \$1094 ;
   always @(posedge clk)
-    ch1_result_status_lc_skip_snapshot <= \$1140 ;
+    ch1_result_timestamp_time_snapshot <= \$1095 ;
   always @(posedge clk)
-    ch1_result_status_lc_zero_snapshot <= \$1141 ;
+    ch1_result_line_noise_events_snapshot <= \$1096 ;
   always @(posedge clk)
-    ch1_result_status_spw_mismatch_snapshot <= \$1142 ;
+    ch1_result_line_delay_settled_snapshot <= \$1097 ;
   always @(posedge clk)
-    ch1_result_status_lc_snapshot <= \$1143 ;
+    ch1_result_line_delay_spread_snapshot <= \$1098 ;
   always @(posedge clk)
-    ch1_result_seq_seq_snapshot <= \$1144 ;
+    ch1_result_line_settled_delay_snapshot <= \$1099 ;
   always @(posedge clk)
-    ch1_result_seq_line_delay_snapshot <= \$1145 ;
+    ch1_window0_read <= \$1100 ;
   always @(posedge clk)
-    ch1_result_w0_lo_data_snapshot <= \$1146 ;
+    ch1_window1_read <= \$1101 ;
   always @(posedge clk)
-    ch1_result_w0_hi_data_snapshot <= \$1147 ;
+    ch1_window2_read <= \$1102 ;
   always @(posedge clk)
-    ch1_result_w1_lo_data_snapshot <= \$1148 ;
-  always @(posedge clk)
-    ch1_result_w1_hi_data_snapshot <= \$1149 ;
-  always @(posedge clk)
-    ch1_result_timestamp_time_snapshot <= \$1150 ;
-  always @(posedge clk)
-    ch1_result_line_noise_events_snapshot <= \$1151 ;
-  always @(posedge clk)
-    ch1_result_line_delay_settled_snapshot <= \$1152 ;
-  always @(posedge clk)
-    ch1_result_line_delay_spread_snapshot <= \$1153 ;
-  always @(posedge clk)
-    ch1_result_line_settled_delay_snapshot <= \$1154 ;
-  always @(posedge clk)
-    ch1_window0_read <= \$1155 ;
-  always @(posedge clk)
-    ch1_window1_read <= \$1156 ;
-  always @(posedge clk)
-    ch1_read_data <= \$1157 ;
+    ch1_read_data <= \$1103 ;
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$775  = bus__w_en;
+    \$630  = 32'd0;
+    casez (ch0_config_read_index)
+      4'h0:
+          \$630  = 32'd0;
+      4'h1:
+          \$630  = 32'd0;
+      4'h2:
+          \$630  = 32'd0;
+      4'h3:
+          \$630  = 32'd0;
+      4'h4:
+          \$630  = 32'd0;
+      4'h5:
+          \$630  = 32'd0;
+      4'h6:
+          \$630  = 32'd0;
+      4'h7:
+          \$630  = 32'd0;
+      4'h8:
+          \$630  = 32'd0;
+      4'h9:
+          \$630  = 32'd0;
+      4'ha:
+          \$630  = 32'd0;
+      4'hb:
+          \$630  = 32'd0;
+      4'hc:
+          \$630  = 32'd0;
+      4'hd:
+          \$630  = 32'd0;
+      4'he:
+          \$630  = 32'd0;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$632  = 32'd0;
+    casez (ch0_config_read_index)
+      4'h0:
+          \$632  = 32'd0;
+      4'h1:
+          \$632  = 32'd0;
+      4'h2:
+          \$632  = 32'd0;
+      4'h3:
+          \$632  = 32'd0;
+      4'h4:
+          \$632  = 32'd0;
+      4'h5:
+          \$632  = 32'd0;
+      4'h6:
+          \$632  = 32'd0;
+      4'h7:
+          \$632  = 32'd0;
+      4'h8:
+          \$632  = 32'd0;
+      4'h9:
+          \$632  = 32'd0;
+      4'ha:
+          \$632  = 32'd0;
+      4'hb:
+          \$632  = 32'd0;
+      4'hc:
+          \$632  = 32'd0;
+      4'hd:
+          \$632  = 32'd0;
+      4'he:
+          \$632  = 32'd0;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$733  = 32'd0;
+    casez (ch1_config_read_index)
+      4'h0:
+          \$733  = 32'd0;
+      4'h1:
+          \$733  = 32'd0;
+      4'h2:
+          \$733  = 32'd0;
+      4'h3:
+          \$733  = 32'd0;
+      4'h4:
+          \$733  = 32'd0;
+      4'h5:
+          \$733  = 32'd0;
+      4'h6:
+          \$733  = 32'd0;
+      4'h7:
+          \$733  = 32'd0;
+      4'h8:
+          \$733  = 32'd0;
+      4'h9:
+          \$733  = 32'd0;
+      4'ha:
+          \$733  = 32'd0;
+      4'hb:
+          \$733  = 32'd0;
+      4'hc:
+          \$733  = 32'd0;
+      4'hd:
+          \$733  = 32'd0;
+      4'he:
+          \$733  = 32'd0;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$735  = 32'd0;
+    casez (ch1_config_read_index)
+      4'h0:
+          \$735  = 32'd0;
+      4'h1:
+          \$735  = 32'd0;
+      4'h2:
+          \$735  = 32'd0;
+      4'h3:
+          \$735  = 32'd0;
+      4'h4:
+          \$735  = 32'd0;
+      4'h5:
+          \$735  = 32'd0;
+      4'h6:
+          \$735  = 32'd0;
+      4'h7:
+          \$735  = 32'd0;
+      4'h8:
+          \$735  = 32'd0;
+      4'h9:
+          \$735  = 32'd0;
+      4'ha:
+          \$735  = 32'd0;
+      4'hb:
+          \$735  = 32'd0;
+      4'hc:
+          \$735  = 32'd0;
+      4'hd:
+          \$735  = 32'd0;
+      4'he:
+          \$735  = 32'd0;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$744  = bus__w_en;
     if (rst) begin
-      \$775  = 1'h0;
+      \$744  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$776  = write_addr;
+    \$745  = write_addr;
     if (bus__w_en) begin
-      \$776  = bus__w_addr;
+      \$745  = bus__w_addr;
     end
     if (rst) begin
-      \$776  = 11'h000;
+      \$745  = 11'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$777  = write_data;
+    \$746  = write_data;
     if (bus__w_en) begin
-      \$777  = bus__w_data;
+      \$746  = bus__w_data;
     end
     if (rst) begin
-      \$777  = 32'd0;
+      \$746  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$778  = write_strb;
+    \$747  = write_strb;
     if (bus__w_en) begin
-      \$778  = bus__w_strb;
+      \$747  = bus__w_strb;
     end
     if (rst) begin
-      \$778  = 4'h0;
+      \$747  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$779  = config_write_data;
+    \$748  = config_write_data;
     if (write_en) begin
-      \$779  = write_data;
+      \$748  = write_data;
     end
     if (rst) begin
-      \$779  = 32'd0;
+      \$748  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$780  = config_write_strb;
+    \$749  = config_write_strb;
     if (write_en) begin
-      \$780  = write_strb;
+      \$749  = write_strb;
     end
     if (rst) begin
-      \$780  = 4'h0;
+      \$749  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$781  = \$2 ;
+    \$750  = \$2 ;
     if (rst) begin
-      \$781  = 1'h0;
+      \$750  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$782  = g_read_select_0;
+    \$751  = g_read_select_0;
     if (bus__r_en) begin
-      \$782  = \$3 ;
+      \$751  = \$3 ;
+    end
+    if (rst) begin
+      \$751  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$752  = g_read_select_1;
+    if (bus__r_en) begin
+      \$752  = \$4 ;
+    end
+    if (rst) begin
+      \$752  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$753  = g_read_select_2;
+    if (bus__r_en) begin
+      \$753  = \$5 ;
+    end
+    if (rst) begin
+      \$753  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$754  = g_read_select_3;
+    if (bus__r_en) begin
+      \$754  = \$6 ;
+    end
+    if (rst) begin
+      \$754  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$755  = g_read_select_4;
+    if (bus__r_en) begin
+      \$755  = \$7 ;
+    end
+    if (rst) begin
+      \$755  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$756  = g_read_data;
+    if (bus__r_load) begin
+      \$756  = \$17 ;
+    end
+    if (rst) begin
+      \$756  = 32'd0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$757  = \$19 ;
+    if (rst) begin
+      \$757  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$758  = \$21 ;
+    if (rst) begin
+      \$758  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$759  = \$23 ;
+    if (rst) begin
+      \$759  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$760  = ch0_ctrl_periodic;
+    if (\$24 ) begin
+      \$760  = write_data[8];
+    end
+    if (rst) begin
+      \$760  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$761  = ch0_ctrl_trigger_enable;
+    if (\$25 ) begin
+      \$761  = write_data[9];
+    end
+    if (rst) begin
+      \$761  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$762  = ch0_irq_status_done;
+    if (ch0__frame_done) begin
+      \$762  = 1'h1;
+    end else if (\$27 ) begin
+      \$762  = 1'h0;
+    end
+    if (rst) begin
+      \$762  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$763  = ch0_irq_status_error;
+    if (ch0__frame_error) begin
+      \$763  = 1'h1;
+    end else if (\$29 ) begin
+      \$763  = 1'h0;
+    end
+    if (rst) begin
+      \$763  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$764  = ch0_irq_status_access_done;
+    if (ch0__ca_done) begin
+      \$764  = 1'h1;
+    end else if (\$31 ) begin
+      \$764  = 1'h0;
+    end
+    if (rst) begin
+      \$764  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$765  = ch0_irq_enable_write;
+    if (rst) begin
+      \$765  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$766  = ch0_irq_enable_done;
+    if (\$32 ) begin
+      \$766  = config_write_data[0];
+    end
+    if (rst) begin
+      \$766  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$767  = ch0_irq_enable_error;
+    if (\$33 ) begin
+      \$767  = config_write_data[1];
+    end
+    if (rst) begin
+      \$767  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$768  = ch0_irq_enable_access_done;
+    if (\$34 ) begin
+      \$768  = config_write_data[2];
+    end
+    if (rst) begin
+      \$768  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$769  = ch0_cfg_ma_write;
+    if (rst) begin
+      \$769  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$770  = ch0_cfg_ma_ma_half_period;
+    if (\$35 ) begin
+      \$770 [7:0] = config_write_data[7:0];
+    end
+    if (\$36 ) begin
+      \$770 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$770  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$771  = ch0_cfg_ma_delay_limit;
+    if (\$37 ) begin
+      \$771 [7:0] = config_write_data[23:16];
+    end
+    if (\$38 ) begin
+      \$771 [11:8] = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$771  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$772  = ch0_cfg_period_write;
+    if (rst) begin
+      \$772  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$773  = ch0_cfg_period_request_period;
+    if (\$39 ) begin
+      \$773 [7:0] = config_write_data[7:0];
+    end
+    if (\$40 ) begin
+      \$773 [15:8] = config_write_data[15:8];
+    end
+    if (\$41 ) begin
+      \$773 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$773  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$774  = ch0_cfg_break_write;
+    if (rst) begin
+      \$774  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$775  = ch0_cfg_break_break_time;
+    if (\$42 ) begin
+      \$775 [7:0] = config_write_data[7:0];
+    end
+    if (\$43 ) begin
+      \$775 [15:8] = config_write_data[15:8];
+    end
+    if (\$44 ) begin
+      \$775 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$775  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$776  = ch0_cfg_ack_write;
+    if (rst) begin
+      \$776  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$777  = ch0_cfg_ack_ack_limit;
+    if (\$45 ) begin
+      \$777 [7:0] = config_write_data[7:0];
+    end
+    if (\$46 ) begin
+      \$777 [15:8] = config_write_data[15:8];
+    end
+    if (\$47 ) begin
+      \$777 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$777  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$778  = ch0_cfg_timeout_write;
+    if (rst) begin
+      \$778  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$779  = ch0_cfg_timeout_timeout_limit;
+    if (\$48 ) begin
+      \$779 [7:0] = config_write_data[7:0];
+    end
+    if (\$49 ) begin
+      \$779 [15:8] = config_write_data[15:8];
+    end
+    if (\$50 ) begin
+      \$779 [23:16] = config_write_data[23:16];
+    end
+    if (rst) begin
+      \$779  = 24'h000000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$780  = ch0_cfg_words_write;
+    if (rst) begin
+      \$780  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$781  = ch0_cfg_words_w0_data_bits;
+    if (\$51 ) begin
+      \$781  = config_write_data[5:0];
+    end
+    if (rst) begin
+      \$781  = 6'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$782  = ch0_cfg_words_w0_nenw;
+    if (\$52 ) begin
+      \$782  = config_write_data[6];
     end
     if (rst) begin
       \$782  = 1'h0;
@@ -5991,9 +6379,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$783  = g_read_select_1;
-    if (bus__r_en) begin
-      \$783  = \$4 ;
+    \$783  = ch0_cfg_words_w0_lc;
+    if (\$53 ) begin
+      \$783  = config_write_data[7];
     end
     if (rst) begin
       \$783  = 1'h0;
@@ -6001,19 +6389,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$784  = g_read_select_2;
-    if (bus__r_en) begin
-      \$784  = \$5 ;
+    \$784  = ch0_cfg_words_w0_crc;
+    if (\$54 ) begin
+      \$784  = config_write_data[9:8];
     end
     if (rst) begin
-      \$784  = 1'h0;
+      \$784  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$785  = g_read_select_3;
-    if (bus__r_en) begin
-      \$785  = \$6 ;
+    \$785  = ch0_cfg_words_w0_gray;
+    if (\$55 ) begin
+      \$785  = config_write_data[10];
     end
     if (rst) begin
       \$785  = 1'h0;
@@ -6021,9 +6409,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$786  = g_read_select_4;
-    if (bus__r_en) begin
-      \$786  = \$7 ;
+    \$786  = ch0_cfg_words_w0_signed;
+    if (\$56 ) begin
+      \$786  = config_write_data[11];
     end
     if (rst) begin
       \$786  = 1'h0;
@@ -6031,40 +6419,49 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$787  = g_read_data;
-    if (bus__r_load) begin
-      \$787  = \$17 ;
+    \$787  = ch0_cfg_words_w1_data_bits;
+    if (\$57 ) begin
+      \$787  = config_write_data[21:16];
     end
     if (rst) begin
-      \$787  = 32'd0;
+      \$787  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$788  = \$19 ;
+    \$788  = ch0_cfg_words_w1_nenw;
+    if (\$58 ) begin
+      \$788  = config_write_data[22];
+    end
     if (rst) begin
       \$788  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$789  = \$21 ;
+    \$789  = ch0_cfg_words_w1_lc;
+    if (\$59 ) begin
+      \$789  = config_write_data[23];
+    end
     if (rst) begin
       \$789  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$790  = \$23 ;
+    \$790  = ch0_cfg_words_w1_crc;
+    if (\$60 ) begin
+      \$790  = config_write_data[25:24];
+    end
     if (rst) begin
-      \$790  = 1'h0;
+      \$790  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$791  = ch0_ctrl_periodic;
-    if (\$24 ) begin
-      \$791  = write_data[8];
+    \$791  = ch0_cfg_words_w1_gray;
+    if (\$61 ) begin
+      \$791  = config_write_data[26];
     end
     if (rst) begin
       \$791  = 1'h0;
@@ -6072,9 +6469,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$792  = ch0_ctrl_trigger_enable;
-    if (\$25 ) begin
-      \$792  = write_data[9];
+    \$792  = ch0_cfg_words_w1_signed;
+    if (\$62 ) begin
+      \$792  = config_write_data[27];
     end
     if (rst) begin
       \$792  = 1'h0;
@@ -6082,11 +6479,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$793  = ch0_irq_status_done;
-    if (ch0__frame_done) begin
-      \$793  = 1'h1;
-    end else if (\$27 ) begin
-      \$793  = 1'h0;
+    \$793  = ch0_cfg_words_w1_enable;
+    if (\$63 ) begin
+      \$793  = config_write_data[31];
     end
     if (rst) begin
       \$793  = 1'h0;
@@ -6094,23 +6489,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$794  = ch0_irq_status_error;
-    if (ch0__frame_error) begin
-      \$794  = 1'h1;
-    end else if (\$29 ) begin
-      \$794  = 1'h0;
-    end
+    \$794  = ch0_cfg_checks_write;
     if (rst) begin
       \$794  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$795  = ch0_irq_status_access_done;
-    if (ch0__ca_done) begin
-      \$795  = 1'h1;
-    end else if (\$31 ) begin
-      \$795  = 1'h0;
+    \$795  = ch0_cfg_checks_end_check;
+    if (\$64 ) begin
+      \$795  = config_write_data[0];
     end
     if (rst) begin
       \$795  = 1'h0;
@@ -6118,69 +6506,69 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$796  = ch0_irq_enable_write;
+    \$796  = ch0_cfg_checks_spw_check;
+    if (\$65 ) begin
+      \$796  = config_write_data[1];
+    end
     if (rst) begin
       \$796  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$797  = ch0_irq_enable_done;
-    if (\$32 ) begin
-      \$797  = config_write_data[0];
+    \$797  = ch0_cfg_checks_spw_tolerance;
+    if (\$66 ) begin
+      \$797  = config_write_data[15:8];
     end
     if (rst) begin
-      \$797  = 1'h0;
+      \$797  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$798  = ch0_irq_enable_error;
-    if (\$33 ) begin
-      \$798  = config_write_data[1];
+    \$798  = ch0_cfg_checks_noise_limit;
+    if (\$67 ) begin
+      \$798  = config_write_data[19:16];
     end
     if (rst) begin
-      \$798  = 1'h0;
+      \$798  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$799  = ch0_irq_enable_access_done;
-    if (\$34 ) begin
-      \$799  = config_write_data[2];
+    \$799  = ch0_cfg_checks_delay_tolerance;
+    if (\$68 ) begin
+      \$799  = config_write_data[23:20];
     end
     if (rst) begin
-      \$799  = 1'h0;
+      \$799  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$800  = ch0_cfg_ma_write;
+    \$800  = ch0_cfg_checks_confirm_frames;
+    if (\$69 ) begin
+      \$800  = config_write_data[27:24];
+    end
     if (rst) begin
-      \$800  = 1'h0;
+      \$800  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$801  = ch0_cfg_ma_ma_half_period;
-    if (\$35 ) begin
-      \$801 [7:0] = config_write_data[7:0];
-    end
-    if (\$36 ) begin
-      \$801 [15:8] = config_write_data[15:8];
-    end
+    \$801  = ch0_cfg_quiet_write;
     if (rst) begin
-      \$801  = 16'h0000;
+      \$801  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$802  = ch0_cfg_ma_delay_limit;
-    if (\$37 ) begin
-      \$802 [7:0] = config_write_data[23:16];
+    \$802  = ch0_cfg_quiet_quiet_time;
+    if (\$70 ) begin
+      \$802 [7:0] = config_write_data[7:0];
     end
-    if (\$38 ) begin
-      \$802 [11:8] = config_write_data[27:24];
+    if (\$71 ) begin
+      \$802 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
       \$802  = 12'h000;
@@ -6188,148 +6576,136 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$803  = ch0_cfg_period_write;
+    \$803  = ch0_cfg_crc0_write;
     if (rst) begin
       \$803  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$804  = ch0_cfg_period_request_period;
-    if (\$39 ) begin
+    \$804  = ch0_cfg_crc0_w0_crc_poly;
+    if (\$72 ) begin
       \$804 [7:0] = config_write_data[7:0];
     end
-    if (\$40 ) begin
+    if (\$73 ) begin
       \$804 [15:8] = config_write_data[15:8];
     end
-    if (\$41 ) begin
-      \$804 [23:16] = config_write_data[23:16];
-    end
     if (rst) begin
-      \$804  = 24'h000000;
+      \$804  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$805  = ch0_cfg_break_write;
+    \$805  = ch0_cfg_crc0_w0_crc_width;
+    if (\$74 ) begin
+      \$805  = config_write_data[20:16];
+    end
     if (rst) begin
-      \$805  = 1'h0;
+      \$805  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$806  = ch0_cfg_break_break_time;
-    if (\$42 ) begin
-      \$806 [7:0] = config_write_data[7:0];
-    end
-    if (\$43 ) begin
-      \$806 [15:8] = config_write_data[15:8];
-    end
-    if (\$44 ) begin
-      \$806 [23:16] = config_write_data[23:16];
+    \$806  = ch0_cfg_crc0_w0_crc_inverted;
+    if (\$75 ) begin
+      \$806  = config_write_data[24];
     end
     if (rst) begin
-      \$806  = 24'h000000;
+      \$806  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$807  = ch0_cfg_ack_write;
+    \$807  = ch0_cfg_crc0_start_write;
     if (rst) begin
       \$807  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$808  = ch0_cfg_ack_ack_limit;
-    if (\$45 ) begin
+    \$808  = ch0_cfg_crc0_start_w0_crc_start;
+    if (\$76 ) begin
       \$808 [7:0] = config_write_data[7:0];
     end
-    if (\$46 ) begin
+    if (\$77 ) begin
       \$808 [15:8] = config_write_data[15:8];
     end
-    if (\$47 ) begin
-      \$808 [23:16] = config_write_data[23:16];
-    end
     if (rst) begin
-      \$808  = 24'h000000;
+      \$808  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$809  = ch0_cfg_timeout_write;
+    \$809  = ch0_cfg_crc1_write;
     if (rst) begin
       \$809  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$810  = ch0_cfg_timeout_timeout_limit;
-    if (\$48 ) begin
+    \$810  = ch0_cfg_crc1_w1_crc_poly;
+    if (\$78 ) begin
       \$810 [7:0] = config_write_data[7:0];
     end
-    if (\$49 ) begin
+    if (\$79 ) begin
       \$810 [15:8] = config_write_data[15:8];
     end
-    if (\$50 ) begin
-      \$810 [23:16] = config_write_data[23:16];
-    end
     if (rst) begin
-      \$810  = 24'h000000;
+      \$810  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$811  = ch0_cfg_words_write;
+    \$811  = ch0_cfg_crc1_w1_crc_width;
+    if (\$80 ) begin
+      \$811  = config_write_data[20:16];
+    end
     if (rst) begin
-      \$811  = 1'h0;
+      \$811  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$812  = ch0_cfg_words_w0_data_bits;
-    if (\$51 ) begin
-      \$812  = config_write_data[5:0];
+    \$812  = ch0_cfg_crc1_w1_crc_inverted;
+    if (\$81 ) begin
+      \$812  = config_write_data[24];
     end
     if (rst) begin
-      \$812  = 6'h00;
+      \$812  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$813  = ch0_cfg_words_w0_nenw;
-    if (\$52 ) begin
-      \$813  = config_write_data[6];
-    end
+    \$813  = ch0_cfg_crc1_start_write;
     if (rst) begin
       \$813  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$814  = ch0_cfg_words_w0_lc;
-    if (\$53 ) begin
-      \$814  = config_write_data[7];
+    \$814  = ch0_cfg_crc1_start_w1_crc_start;
+    if (\$82 ) begin
+      \$814 [7:0] = config_write_data[7:0];
+    end
+    if (\$83 ) begin
+      \$814 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$814  = 1'h0;
+      \$814  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$815  = ch0_cfg_words_w0_crc;
-    if (\$54 ) begin
-      \$815  = config_write_data[9:8];
-    end
+    \$815  = ch0_cfg_ssi_write;
     if (rst) begin
-      \$815  = 2'h0;
+      \$815  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$816  = ch0_cfg_words_w0_gray;
-    if (\$55 ) begin
-      \$816  = config_write_data[10];
+    \$816  = ch0_cfg_ssi_ssi;
+    if (\$84 ) begin
+      \$816  = config_write_data[0];
     end
     if (rst) begin
       \$816  = 1'h0;
@@ -6337,9 +6713,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$817  = ch0_cfg_words_w0_signed;
-    if (\$56 ) begin
-      \$817  = config_write_data[11];
+    \$817  = ch0_cfg_ssi_ssi_error;
+    if (\$85 ) begin
+      \$817  = config_write_data[1];
     end
     if (rst) begin
       \$817  = 1'h0;
@@ -6347,19 +6723,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$818  = ch0_cfg_words_w1_data_bits;
-    if (\$57 ) begin
-      \$818  = config_write_data[21:16];
+    \$818  = ch0_cfg_ssi_ssi_error_low;
+    if (\$86 ) begin
+      \$818  = config_write_data[2];
     end
     if (rst) begin
-      \$818  = 6'h00;
+      \$818  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$819  = ch0_cfg_words_w1_nenw;
-    if (\$58 ) begin
-      \$819  = config_write_data[22];
+    \$819  = ch0_cfg_ssi_ssi_double;
+    if (\$87 ) begin
+      \$819  = config_write_data[3];
     end
     if (rst) begin
       \$819  = 1'h0;
@@ -6367,235 +6743,184 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$820  = ch0_cfg_words_w1_lc;
-    if (\$59 ) begin
-      \$820  = config_write_data[23];
+    \$820  = ch0_cfg_ssi_ssi_delay;
+    if (\$88 ) begin
+      \$820 [7:0] = config_write_data[23:16];
+    end
+    if (\$89 ) begin
+      \$820 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$820  = 1'h0;
+      \$820  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$821  = ch0_cfg_words_w1_crc;
-    if (\$60 ) begin
-      \$821  = config_write_data[25:24];
-    end
+    \$821  = ch0_cfg_w2_write;
     if (rst) begin
-      \$821  = 2'h0;
+      \$821  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$822  = ch0_cfg_words_w1_gray;
-    if (\$61 ) begin
-      \$822  = config_write_data[26];
-    end
+    \$822  = ch0_cfg_w2_crc_write;
     if (rst) begin
       \$822  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$823  = ch0_cfg_words_w1_signed;
-    if (\$62 ) begin
-      \$823  = config_write_data[27];
-    end
+    \$823  = ch0_cfg_w2_crc_start_write;
     if (rst) begin
       \$823  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$824  = ch0_cfg_words_w1_enable;
-    if (\$63 ) begin
-      \$824  = config_write_data[31];
-    end
+    \$824  = ch0_cfg_w3_write;
     if (rst) begin
       \$824  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$825  = ch0_cfg_checks_write;
+    \$825  = ch0_cfg_w3_crc_write;
     if (rst) begin
       \$825  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$826  = ch0_cfg_checks_end_check;
-    if (\$64 ) begin
-      \$826  = config_write_data[0];
-    end
+    \$826  = ch0_cfg_w3_crc_start_write;
     if (rst) begin
       \$826  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$827  = ch0_cfg_checks_spw_check;
-    if (\$65 ) begin
-      \$827  = config_write_data[1];
-    end
+    \$827  = ch0_cfg_w4_write;
     if (rst) begin
       \$827  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$828  = ch0_cfg_checks_spw_tolerance;
-    if (\$66 ) begin
-      \$828  = config_write_data[15:8];
-    end
+    \$828  = ch0_cfg_w4_crc_write;
     if (rst) begin
-      \$828  = 8'h00;
+      \$828  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$829  = ch0_cfg_checks_noise_limit;
-    if (\$67 ) begin
-      \$829  = config_write_data[19:16];
-    end
+    \$829  = ch0_cfg_w4_crc_start_write;
     if (rst) begin
-      \$829  = 4'h0;
+      \$829  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$830  = ch0_cfg_checks_delay_tolerance;
-    if (\$68 ) begin
-      \$830  = config_write_data[23:20];
-    end
+    \$830  = ch0_cfg_w5_write;
     if (rst) begin
-      \$830  = 4'h0;
+      \$830  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$831  = ch0_cfg_checks_confirm_frames;
-    if (\$69 ) begin
-      \$831  = config_write_data[27:24];
-    end
+    \$831  = ch0_cfg_w5_crc_write;
     if (rst) begin
-      \$831  = 4'h0;
+      \$831  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$832  = ch0_cfg_quiet_write;
+    \$832  = ch0_cfg_w5_crc_start_write;
     if (rst) begin
       \$832  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$833  = ch0_cfg_quiet_quiet_time;
-    if (\$70 ) begin
-      \$833 [7:0] = config_write_data[7:0];
-    end
-    if (\$71 ) begin
-      \$833 [11:8] = config_write_data[11:8];
-    end
+    \$833  = ch0_cfg_w6_write;
     if (rst) begin
-      \$833  = 12'h000;
+      \$833  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$834  = ch0_cfg_crc0_write;
+    \$834  = ch0_cfg_w6_crc_write;
     if (rst) begin
       \$834  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$835  = ch0_cfg_crc0_w0_crc_poly;
-    if (\$72 ) begin
-      \$835 [7:0] = config_write_data[7:0];
-    end
-    if (\$73 ) begin
-      \$835 [15:8] = config_write_data[15:8];
-    end
+    \$835  = ch0_cfg_w6_crc_start_write;
     if (rst) begin
-      \$835  = 16'h0000;
+      \$835  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$836  = ch0_cfg_crc0_w0_crc_width;
-    if (\$74 ) begin
-      \$836  = config_write_data[20:16];
-    end
+    \$836  = ch0_cfg_w7_write;
     if (rst) begin
-      \$836  = 5'h00;
+      \$836  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$837  = ch0_cfg_crc0_w0_crc_inverted;
-    if (\$75 ) begin
-      \$837  = config_write_data[24];
-    end
+    \$837  = ch0_cfg_w7_crc_write;
     if (rst) begin
       \$837  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$838  = ch0_cfg_crc0_start_write;
+    \$838  = ch0_cfg_w7_crc_start_write;
     if (rst) begin
       \$838  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$839  = ch0_cfg_crc0_start_w0_crc_start;
-    if (\$76 ) begin
-      \$839 [7:0] = config_write_data[7:0];
-    end
-    if (\$77 ) begin
-      \$839 [15:8] = config_write_data[15:8];
-    end
+    \$839  = ch0_ca_request_write;
     if (rst) begin
-      \$839  = 16'h0000;
+      \$839  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$840  = ch0_cfg_crc1_write;
+    \$840  = ch0_ca_request_slave_id;
+    if (\$90 ) begin
+      \$840  = config_write_data[2:0];
+    end
     if (rst) begin
-      \$840  = 1'h0;
+      \$840  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$841  = ch0_cfg_crc1_w1_crc_poly;
-    if (\$78 ) begin
-      \$841 [7:0] = config_write_data[7:0];
-    end
-    if (\$79 ) begin
-      \$841 [15:8] = config_write_data[15:8];
+    \$841  = ch0_ca_request_address;
+    if (\$91 ) begin
+      \$841  = config_write_data[14:8];
     end
     if (rst) begin
-      \$841  = 16'h0000;
+      \$841  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$842  = ch0_cfg_crc1_w1_crc_width;
-    if (\$80 ) begin
-      \$842  = config_write_data[20:16];
+    \$842  = ch0_ca_request_count;
+    if (\$92 ) begin
+      \$842  = config_write_data[22:16];
     end
     if (rst) begin
-      \$842  = 5'h00;
+      \$842  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$843  = ch0_cfg_crc1_w1_crc_inverted;
-    if (\$81 ) begin
+    \$843  = \ch0_ca_request_write$149 ;
+    if (\$93 ) begin
       \$843  = config_write_data[24];
     end
     if (rst) begin
@@ -6604,56 +6929,50 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$844  = ch0_cfg_crc1_start_write;
+    \$844  = \$95 ;
     if (rst) begin
       \$844  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$845  = ch0_cfg_crc1_start_w1_crc_start;
-    if (\$82 ) begin
-      \$845 [7:0] = config_write_data[7:0];
-    end
-    if (\$83 ) begin
-      \$845 [15:8] = config_write_data[15:8];
-    end
+    \$845  = \$97 ;
     if (rst) begin
-      \$845  = 16'h0000;
+      \$845  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$846  = ch0_cfg_ssi_write;
+    \$846  = config_memory0_write_data;
+    if (write_en) begin
+      \$846  = \$102 ;
+    end
     if (rst) begin
-      \$846  = 1'h0;
+      \$846  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$847  = ch0_cfg_ssi_ssi;
-    if (\$84 ) begin
-      \$847  = config_write_data[0];
-    end
+    \$847  = \$103 ;
     if (rst) begin
-      \$847  = 1'h0;
+      \$847  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$848  = ch0_cfg_ssi_ssi_error;
-    if (\$85 ) begin
-      \$848  = config_write_data[1];
+    \$848  = ch0_config_read_index;
+    if (ch0_config_read) begin
+      \$848  = config_memory0_read_index;
     end
     if (rst) begin
-      \$848  = 1'h0;
+      \$848  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$849  = ch0_cfg_ssi_ssi_error_low;
-    if (\$86 ) begin
-      \$849  = config_write_data[2];
+    \$849  = ch0_read_select_80;
+    if (bus__r_en) begin
+      \$849  = \$104 ;
     end
     if (rst) begin
       \$849  = 1'h0;
@@ -6661,9 +6980,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$850  = ch0_cfg_ssi_ssi_double;
-    if (\$87 ) begin
-      \$850  = config_write_data[3];
+    \$850  = ch0_read_select_81;
+    if (bus__r_en) begin
+      \$850  = \$105 ;
     end
     if (rst) begin
       \$850  = 1'h0;
@@ -6671,185 +6990,239 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$851  = ch0_cfg_ssi_ssi_delay;
-    if (\$88 ) begin
-      \$851 [7:0] = config_write_data[23:16];
-    end
-    if (\$89 ) begin
-      \$851 [11:8] = config_write_data[27:24];
+    \$851  = ch0_read_select_82;
+    if (bus__r_en) begin
+      \$851  = \$106 ;
     end
     if (rst) begin
-      \$851  = 12'h000;
+      \$851  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$852  = ch0_cfg_w2_write;
+    \$852  = ch0_read_select_84;
+    if (bus__r_en) begin
+      \$852  = \$107 ;
+    end
     if (rst) begin
       \$852  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$853  = ch0_cfg_w2_crc_write;
+    \$853  = ch0_read_select_86;
+    if (bus__r_en) begin
+      \$853  = \$108 ;
+    end
     if (rst) begin
       \$853  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$854  = ch0_cfg_w2_crc_start_write;
+    \$854  = ch0_read_select_87;
+    if (bus__r_en) begin
+      \$854  = \$109 ;
+    end
     if (rst) begin
       \$854  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$855  = ch0_cfg_w3_write;
+    \$855  = ch0_read_select_90;
+    if (bus__r_en) begin
+      \$855  = \$110 ;
+    end
     if (rst) begin
       \$855  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$856  = ch0_cfg_w3_crc_write;
+    \$856  = ch0_read_select_91;
+    if (bus__r_en) begin
+      \$856  = \$111 ;
+    end
     if (rst) begin
       \$856  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$857  = ch0_cfg_w3_crc_start_write;
+    \$857  = ch0_read_select_92;
+    if (bus__r_en) begin
+      \$857  = \$112 ;
+    end
     if (rst) begin
       \$857  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$858  = ch0_cfg_w4_write;
+    \$858  = ch0_read_select_93;
+    if (bus__r_en) begin
+      \$858  = \$113 ;
+    end
     if (rst) begin
       \$858  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$859  = ch0_cfg_w4_crc_write;
+    \$859  = ch0_read_select_94;
+    if (bus__r_en) begin
+      \$859  = \$114 ;
+    end
     if (rst) begin
       \$859  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$860  = ch0_cfg_w4_crc_start_write;
+    \$860  = ch0_read_select_95;
+    if (bus__r_en) begin
+      \$860  = \$115 ;
+    end
     if (rst) begin
       \$860  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$861  = ch0_cfg_w5_write;
+    \$861  = ch0_read_select_96;
+    if (bus__r_en) begin
+      \$861  = \$116 ;
+    end
     if (rst) begin
       \$861  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$862  = ch0_cfg_w5_crc_write;
+    \$862  = ch0_read_select_97;
+    if (bus__r_en) begin
+      \$862  = \$117 ;
+    end
     if (rst) begin
       \$862  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$863  = ch0_cfg_w5_crc_start_write;
+    \$863  = ch0_read_select_a5;
+    if (bus__r_en) begin
+      \$863  = \$118 ;
+    end
     if (rst) begin
       \$863  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$864  = ch0_cfg_w6_write;
+    \$864  = ch0_read_select_a6;
+    if (bus__r_en) begin
+      \$864  = \$119 ;
+    end
     if (rst) begin
       \$864  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$865  = ch0_cfg_w6_crc_write;
+    \$865  = ch0_read_select_a7;
+    if (bus__r_en) begin
+      \$865  = \$120 ;
+    end
     if (rst) begin
       \$865  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$866  = ch0_cfg_w6_crc_start_write;
+    \$866  = ch0_read_select_a8;
+    if (bus__r_en) begin
+      \$866  = \$121 ;
+    end
     if (rst) begin
       \$866  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$867  = ch0_cfg_w7_write;
+    \$867  = ch0_read_select_a9;
+    if (bus__r_en) begin
+      \$867  = \$122 ;
+    end
     if (rst) begin
       \$867  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$868  = ch0_cfg_w7_crc_write;
+    \$868  = ch0_read_select_aa;
+    if (bus__r_en) begin
+      \$868  = \$123 ;
+    end
     if (rst) begin
       \$868  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$869  = ch0_cfg_w7_crc_start_write;
+    \$869  = ch0_read_select_ac;
+    if (bus__r_en) begin
+      \$869  = \$124 ;
+    end
     if (rst) begin
       \$869  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$870  = ch0_ca_request_write;
+    \$870  = ch0_read_select_ad;
+    if (bus__r_en) begin
+      \$870  = \$125 ;
+    end
     if (rst) begin
       \$870  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$871  = ch0_ca_request_slave_id;
-    if (\$90 ) begin
-      \$871  = config_write_data[2:0];
+    \$871  = ch0_read_select_ae;
+    if (bus__r_en) begin
+      \$871  = \$126 ;
     end
     if (rst) begin
-      \$871  = 3'h0;
+      \$871  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$872  = ch0_ca_request_address;
-    if (\$91 ) begin
-      \$872  = config_write_data[14:8];
+    \$872  = ch0_read_select_b0;
+    if (bus__r_en) begin
+      \$872  = \$127 ;
     end
     if (rst) begin
-      \$872  = 7'h00;
+      \$872  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$873  = ch0_ca_request_count;
-    if (\$92 ) begin
-      \$873  = config_write_data[22:16];
+    \$873  = ch0_read_select_b1;
+    if (bus__r_en) begin
+      \$873  = \$128 ;
     end
     if (rst) begin
-      \$873  = 7'h00;
+      \$873  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$874  = \ch0_ca_request_write$149 ;
-    if (\$93 ) begin
-      \$874  = config_write_data[24];
+    \$874  = ch0_read_select_b2;
+    if (bus__r_en) begin
+      \$874  = \$129 ;
     end
     if (rst) begin
       \$874  = 1'h0;
@@ -6857,23 +7230,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$875  = \$95 ;
+    \$875  = ch0_read_select_b4;
+    if (bus__r_en) begin
+      \$875  = \$130 ;
+    end
     if (rst) begin
       \$875  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$876  = \$97 ;
+    \$876  = ch0_read_select_b5;
+    if (bus__r_en) begin
+      \$876  = \$131 ;
+    end
     if (rst) begin
       \$876  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$877  = ch0_read_select_80;
+    \$877  = ch0_read_select_b6;
     if (bus__r_en) begin
-      \$877  = \$98 ;
+      \$877  = \$132 ;
     end
     if (rst) begin
       \$877  = 1'h0;
@@ -6881,9 +7260,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$878  = ch0_read_select_81;
+    \$878  = ch0_read_select_b8;
     if (bus__r_en) begin
-      \$878  = \$99 ;
+      \$878  = \$133 ;
     end
     if (rst) begin
       \$878  = 1'h0;
@@ -6891,9 +7270,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$879  = ch0_read_select_82;
+    \$879  = ch0_read_select_b9;
     if (bus__r_en) begin
-      \$879  = \$100 ;
+      \$879  = \$134 ;
     end
     if (rst) begin
       \$879  = 1'h0;
@@ -6901,9 +7280,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$880  = ch0_read_select_84;
+    \$880  = ch0_read_select_ba;
     if (bus__r_en) begin
-      \$880  = \$101 ;
+      \$880  = \$135 ;
     end
     if (rst) begin
       \$880  = 1'h0;
@@ -6911,9 +7290,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$881  = ch0_read_select_85;
+    \$881  = ch0_read_select_bc;
     if (bus__r_en) begin
-      \$881  = \$102 ;
+      \$881  = \$136 ;
     end
     if (rst) begin
       \$881  = 1'h0;
@@ -6921,9 +7300,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$882  = ch0_read_select_86;
+    \$882  = ch0_read_select_bd;
     if (bus__r_en) begin
-      \$882  = \$103 ;
+      \$882  = \$137 ;
     end
     if (rst) begin
       \$882  = 1'h0;
@@ -6931,9 +7310,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$883  = ch0_read_select_87;
+    \$883  = ch0_read_select_be;
     if (bus__r_en) begin
-      \$883  = \$104 ;
+      \$883  = \$138 ;
     end
     if (rst) begin
       \$883  = 1'h0;
@@ -6941,9 +7320,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$884  = ch0_read_select_88;
+    \$884  = ch0_read_select_c1;
     if (bus__r_en) begin
-      \$884  = \$105 ;
+      \$884  = \$139 ;
     end
     if (rst) begin
       \$884  = 1'h0;
@@ -6951,9 +7330,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$885  = ch0_read_select_89;
+    \$885  = ch0_read_select_c2;
     if (bus__r_en) begin
-      \$885  = \$106 ;
+      \$885  = \$140 ;
     end
     if (rst) begin
       \$885  = 1'h0;
@@ -6961,9 +7340,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$886  = ch0_read_select_8a;
+    \$886  = ch0_read_select_c3;
     if (bus__r_en) begin
-      \$886  = \$107 ;
+      \$886  = \$141 ;
     end
     if (rst) begin
       \$886  = 1'h0;
@@ -6971,9 +7350,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$887  = ch0_read_select_8b;
+    \$887  = ch0_read_select_c4;
     if (bus__r_en) begin
-      \$887  = \$108 ;
+      \$887  = \$142 ;
     end
     if (rst) begin
       \$887  = 1'h0;
@@ -6981,9 +7360,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$888  = ch0_read_select_8c;
+    \$888  = ch0_read_select_c5;
     if (bus__r_en) begin
-      \$888  = \$109 ;
+      \$888  = \$143 ;
     end
     if (rst) begin
       \$888  = 1'h0;
@@ -6991,9 +7370,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$889  = ch0_read_select_8d;
+    \$889  = ch0_read_select_f0;
     if (bus__r_en) begin
-      \$889  = \$110 ;
+      \$889  = \$144 ;
     end
     if (rst) begin
       \$889  = 1'h0;
@@ -7001,9 +7380,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$890  = ch0_read_select_8e;
+    \$890  = ch0_read_select_f1;
     if (bus__r_en) begin
-      \$890  = \$111 ;
+      \$890  = \$145 ;
     end
     if (rst) begin
       \$890  = 1'h0;
@@ -7011,9 +7390,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$891  = ch0_read_select_8f;
+    \$891  = ch0_read_select_f2;
     if (bus__r_en) begin
-      \$891  = \$112 ;
+      \$891  = \$146 ;
     end
     if (rst) begin
       \$891  = 1'h0;
@@ -7021,9 +7400,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$892  = ch0_read_select_90;
+    \$892  = ch0_read_select_f3;
     if (bus__r_en) begin
-      \$892  = \$113 ;
+      \$892  = \$147 ;
     end
     if (rst) begin
       \$892  = 1'h0;
@@ -7031,9 +7410,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$893  = ch0_read_select_91;
+    \$893  = ch0_read_select_f4;
     if (bus__r_en) begin
-      \$893  = \$114 ;
+      \$893  = \$148 ;
     end
     if (rst) begin
       \$893  = 1'h0;
@@ -7041,9 +7420,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$894  = ch0_read_select_92;
+    \$894  = ch0_read_select_f5;
     if (bus__r_en) begin
-      \$894  = \$115 ;
+      \$894  = \$149 ;
     end
     if (rst) begin
       \$894  = 1'h0;
@@ -7051,9 +7430,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$895  = ch0_read_select_93;
+    \$895  = ch0_read_select_f6;
     if (bus__r_en) begin
-      \$895  = \$116 ;
+      \$895  = \$150 ;
     end
     if (rst) begin
       \$895  = 1'h0;
@@ -7061,9 +7440,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$896  = ch0_read_select_94;
+    \$896  = ch0_read_select_f7;
     if (bus__r_en) begin
-      \$896  = \$117 ;
+      \$896  = \$151 ;
     end
     if (rst) begin
       \$896  = 1'h0;
@@ -7071,9 +7450,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$897  = ch0_read_select_95;
+    \$897  = ch0_read_select_f8;
     if (bus__r_en) begin
-      \$897  = \$118 ;
+      \$897  = \$152 ;
     end
     if (rst) begin
       \$897  = 1'h0;
@@ -7081,9 +7460,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$898  = ch0_read_select_96;
+    \$898  = ch0_read_select_f9;
     if (bus__r_en) begin
-      \$898  = \$119 ;
+      \$898  = \$153 ;
     end
     if (rst) begin
       \$898  = 1'h0;
@@ -7091,9 +7470,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$899  = ch0_read_select_97;
+    \$899  = ch0_read_select_fa;
     if (bus__r_en) begin
-      \$899  = \$120 ;
+      \$899  = \$154 ;
     end
     if (rst) begin
       \$899  = 1'h0;
@@ -7101,9 +7480,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$900  = ch0_read_select_a0;
+    \$900  = ch0_read_select_fb;
     if (bus__r_en) begin
-      \$900  = \$121 ;
+      \$900  = \$155 ;
     end
     if (rst) begin
       \$900  = 1'h0;
@@ -7111,9 +7490,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$901  = ch0_read_select_a1;
+    \$901  = ch0_read_select_fc;
     if (bus__r_en) begin
-      \$901  = \$122 ;
+      \$901  = \$156 ;
     end
     if (rst) begin
       \$901  = 1'h0;
@@ -7121,9 +7500,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$902  = ch0_read_select_a2;
+    \$902  = ch0_read_select_fd;
     if (bus__r_en) begin
-      \$902  = \$123 ;
+      \$902  = \$157 ;
     end
     if (rst) begin
       \$902  = 1'h0;
@@ -7131,19 +7510,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$903  = ch0_read_select_a3;
-    if (bus__r_en) begin
-      \$903  = \$124 ;
+    \$903  = ch0_result_status_status_snapshot;
+    if (\$158 ) begin
+      \$903  = \port$7280$0 [3:0];
     end
     if (rst) begin
-      \$903  = 1'h0;
+      \$903  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$904  = ch0_read_select_a4;
-    if (bus__r_en) begin
-      \$904  = \$125 ;
+    \$904  = ch0_result_status_cds_snapshot;
+    if (\$158 ) begin
+      \$904  = \port$7280$0 [49];
     end
     if (rst) begin
       \$904  = 1'h0;
@@ -7151,9 +7530,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$905  = ch0_read_select_a5;
-    if (bus__r_en) begin
-      \$905  = \$126 ;
+    \$905  = ch0_result_status_w0_ne_snapshot;
+    if (\$158 ) begin
+      \$905  = \port$7280$0 [131];
     end
     if (rst) begin
       \$905  = 1'h0;
@@ -7161,9 +7540,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$906  = ch0_read_select_a6;
-    if (bus__r_en) begin
-      \$906  = \$127 ;
+    \$906  = ch0_result_status_w0_nw_snapshot;
+    if (\$158 ) begin
+      \$906  = \port$7280$0 [132];
     end
     if (rst) begin
       \$906  = 1'h0;
@@ -7171,9 +7550,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$907  = ch0_read_select_a7;
-    if (bus__r_en) begin
-      \$907  = \$128 ;
+    \$907  = ch0_result_status_w0_crc_ok_snapshot;
+    if (\$158 ) begin
+      \$907  = \port$7280$0 [133];
     end
     if (rst) begin
       \$907  = 1'h0;
@@ -7181,9 +7560,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$908  = ch0_read_select_a8;
-    if (bus__r_en) begin
-      \$908  = \$129 ;
+    \$908  = ch0_result_status_w1_ne_snapshot;
+    if (\$158 ) begin
+      \$908  = \port$7280$0 [174];
     end
     if (rst) begin
       \$908  = 1'h0;
@@ -7191,9 +7570,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$909  = ch0_read_select_a9;
-    if (bus__r_en) begin
-      \$909  = \$130 ;
+    \$909  = ch0_result_status_w1_nw_snapshot;
+    if (\$158 ) begin
+      \$909  = \port$7280$0 [175];
     end
     if (rst) begin
       \$909  = 1'h0;
@@ -7201,9 +7580,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$910  = ch0_read_select_aa;
-    if (bus__r_en) begin
-      \$910  = \$131 ;
+    \$910  = ch0_result_status_w1_crc_ok_snapshot;
+    if (\$158 ) begin
+      \$910  = \port$7280$0 [176];
     end
     if (rst) begin
       \$910  = 1'h0;
@@ -7211,9 +7590,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$911  = ch0_read_select_ac;
-    if (bus__r_en) begin
-      \$911  = \$132 ;
+    \$911  = ch0_result_status_lc_repeat_snapshot;
+    if (\$158 ) begin
+      \$911  = \port$7280$0 [183];
     end
     if (rst) begin
       \$911  = 1'h0;
@@ -7221,9 +7600,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$912  = ch0_read_select_ad;
-    if (bus__r_en) begin
-      \$912  = \$133 ;
+    \$912  = ch0_result_status_lc_skip_snapshot;
+    if (\$158 ) begin
+      \$912  = \port$7280$0 [184];
     end
     if (rst) begin
       \$912  = 1'h0;
@@ -7231,9 +7610,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$913  = ch0_read_select_ae;
-    if (bus__r_en) begin
-      \$913  = \$134 ;
+    \$913  = ch0_result_status_lc_zero_snapshot;
+    if (\$158 ) begin
+      \$913  = \port$7280$0 [185];
     end
     if (rst) begin
       \$913  = 1'h0;
@@ -7241,9 +7620,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$914  = ch0_read_select_b0;
-    if (bus__r_en) begin
-      \$914  = \$135 ;
+    \$914  = ch0_result_status_spw_mismatch_snapshot;
+    if (\$158 ) begin
+      \$914  = \port$7280$0 [186];
     end
     if (rst) begin
       \$914  = 1'h0;
@@ -7251,99 +7630,99 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$915  = ch0_read_select_b1;
-    if (bus__r_en) begin
-      \$915  = \$136 ;
+    \$915  = ch0_result_status_lc_snapshot;
+    if (\$158 ) begin
+      \$915  = \port$7280$0 [182:177];
     end
     if (rst) begin
-      \$915  = 1'h0;
+      \$915  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$916  = ch0_read_select_b2;
-    if (bus__r_en) begin
-      \$916  = \$137 ;
+    \$916  = ch0_result_seq_seq_snapshot;
+    if (\$158 ) begin
+      \$916  = ch0__done_count;
     end
     if (rst) begin
-      \$916  = 1'h0;
+      \$916  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$917  = ch0_read_select_b4;
-    if (bus__r_en) begin
-      \$917  = \$138 ;
+    \$917  = ch0_result_seq_line_delay_snapshot;
+    if (\$158 ) begin
+      \$917  = \port$7280$0 [48:36];
     end
     if (rst) begin
-      \$917  = 1'h0;
+      \$917  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$918  = ch0_read_select_b5;
-    if (bus__r_en) begin
-      \$918  = \$139 ;
+    \$918  = ch0_result_w0_lo_data_snapshot;
+    if (\$158 ) begin
+      \$918  = \port$7280$0 [107:76];
     end
     if (rst) begin
-      \$918  = 1'h0;
+      \$918  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$919  = ch0_read_select_b6;
-    if (bus__r_en) begin
-      \$919  = \$140 ;
+    \$919  = ch0_result_w0_hi_data_snapshot;
+    if (\$158 ) begin
+      \$919  = \port$7280$0 [130:108];
     end
     if (rst) begin
-      \$919  = 1'h0;
+      \$919  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$920  = ch0_read_select_b8;
-    if (bus__r_en) begin
-      \$920  = \$141 ;
+    \$920  = ch0_result_w1_lo_data_snapshot;
+    if (\$158 ) begin
+      \$920  = \port$7280$0 [165:134];
     end
     if (rst) begin
-      \$920  = 1'h0;
+      \$920  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$921  = ch0_read_select_b9;
-    if (bus__r_en) begin
-      \$921  = \$142 ;
+    \$921  = ch0_result_w1_hi_data_snapshot;
+    if (\$158 ) begin
+      \$921  = \port$7280$0 [173:166];
     end
     if (rst) begin
-      \$921  = 1'h0;
+      \$921  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$922  = ch0_read_select_ba;
-    if (bus__r_en) begin
-      \$922  = \$143 ;
+    \$922  = ch0_result_timestamp_time_snapshot;
+    if (\$158 ) begin
+      \$922  = \port$7280$0 [35:4];
     end
     if (rst) begin
-      \$922  = 1'h0;
+      \$922  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$923  = ch0_read_select_bc;
-    if (bus__r_en) begin
-      \$923  = \$144 ;
+    \$923  = ch0_result_line_noise_events_snapshot;
+    if (\$158 ) begin
+      \$923  = \port$7280$0 [53:50];
     end
     if (rst) begin
-      \$923  = 1'h0;
+      \$923  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$924  = ch0_read_select_bd;
-    if (bus__r_en) begin
-      \$924  = \$145 ;
+    \$924  = ch0_result_line_delay_settled_snapshot;
+    if (\$158 ) begin
+      \$924  = \port$7280$0 [54];
     end
     if (rst) begin
       \$924  = 1'h0;
@@ -7351,29 +7730,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$925  = ch0_read_select_be;
-    if (bus__r_en) begin
-      \$925  = \$146 ;
+    \$925  = ch0_result_line_delay_spread_snapshot;
+    if (\$158 ) begin
+      \$925  = \port$7280$0 [75:68];
     end
     if (rst) begin
-      \$925  = 1'h0;
+      \$925  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$926  = ch0_read_select_c0;
-    if (bus__r_en) begin
-      \$926  = \$147 ;
+    \$926  = ch0_result_line_settled_delay_snapshot;
+    if (\$158 ) begin
+      \$926  = \port$7280$0 [67:55];
     end
     if (rst) begin
-      \$926  = 1'h0;
+      \$926  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$927  = ch0_read_select_c1;
+    \$927  = ch0_window0_read;
     if (bus__r_en) begin
-      \$927  = \$148 ;
+      \$927  = \$160 ;
     end
     if (rst) begin
       \$927  = 1'h0;
@@ -7381,9 +7760,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$928  = ch0_read_select_c2;
+    \$928  = ch0_window1_read;
     if (bus__r_en) begin
-      \$928  = \$149 ;
+      \$928  = \$162 ;
     end
     if (rst) begin
       \$928  = 1'h0;
@@ -7391,9 +7770,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$929  = ch0_read_select_c3;
+    \$929  = ch0_window2_read;
     if (bus__r_en) begin
-      \$929  = \$150 ;
+      \$929  = ch0_config_read;
     end
     if (rst) begin
       \$929  = 1'h0;
@@ -7401,49 +7780,40 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$930  = ch0_read_select_c4;
-    if (bus__r_en) begin
-      \$930  = \$151 ;
+    \$930  = ch0_read_data;
+    if (bus__r_load) begin
+      \$930  = \$276 ;
     end
     if (rst) begin
-      \$930  = 1'h0;
+      \$930  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$931  = ch0_read_select_c5;
-    if (bus__r_en) begin
-      \$931  = \$152 ;
-    end
+    \$931  = \$278 ;
     if (rst) begin
       \$931  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$932  = ch0_read_select_f0;
-    if (bus__r_en) begin
-      \$932  = \$153 ;
-    end
+    \$932  = \$280 ;
     if (rst) begin
       \$932  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$933  = ch0_read_select_f1;
-    if (bus__r_en) begin
-      \$933  = \$154 ;
-    end
+    \$933  = \$282 ;
     if (rst) begin
       \$933  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$934  = ch0_read_select_f2;
-    if (bus__r_en) begin
-      \$934  = \$155 ;
+    \$934  = ch1_ctrl_periodic;
+    if (\$283 ) begin
+      \$934  = write_data[8];
     end
     if (rst) begin
       \$934  = 1'h0;
@@ -7451,9 +7821,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$935  = ch0_read_select_f3;
-    if (bus__r_en) begin
-      \$935  = \$156 ;
+    \$935  = ch1_ctrl_trigger_enable;
+    if (\$284 ) begin
+      \$935  = write_data[9];
     end
     if (rst) begin
       \$935  = 1'h0;
@@ -7461,9 +7831,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$936  = ch0_read_select_f4;
-    if (bus__r_en) begin
-      \$936  = \$157 ;
+    \$936  = ch1_irq_status_done;
+    if (ch1__frame_done) begin
+      \$936  = 1'h1;
+    end else if (\$286 ) begin
+      \$936  = 1'h0;
     end
     if (rst) begin
       \$936  = 1'h0;
@@ -7471,9 +7843,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$937  = ch0_read_select_f5;
-    if (bus__r_en) begin
-      \$937  = \$158 ;
+    \$937  = ch1_irq_status_error;
+    if (ch1__frame_error) begin
+      \$937  = 1'h1;
+    end else if (\$288 ) begin
+      \$937  = 1'h0;
     end
     if (rst) begin
       \$937  = 1'h0;
@@ -7481,9 +7855,11 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$938  = ch0_read_select_f6;
-    if (bus__r_en) begin
-      \$938  = \$159 ;
+    \$938  = ch1_irq_status_access_done;
+    if (ch1__ca_done) begin
+      \$938  = 1'h1;
+    end else if (\$290 ) begin
+      \$938  = 1'h0;
     end
     if (rst) begin
       \$938  = 1'h0;
@@ -7491,19 +7867,16 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$939  = ch0_read_select_f7;
-    if (bus__r_en) begin
-      \$939  = \$160 ;
-    end
+    \$939  = ch1_irq_enable_write;
     if (rst) begin
       \$939  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$940  = ch0_read_select_f8;
-    if (bus__r_en) begin
-      \$940  = \$161 ;
+    \$940  = ch1_irq_enable_done;
+    if (\$291 ) begin
+      \$940  = config_write_data[0];
     end
     if (rst) begin
       \$940  = 1'h0;
@@ -7511,9 +7884,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$941  = ch0_read_select_f9;
-    if (bus__r_en) begin
-      \$941  = \$162 ;
+    \$941  = ch1_irq_enable_error;
+    if (\$292 ) begin
+      \$941  = config_write_data[1];
     end
     if (rst) begin
       \$941  = 1'h0;
@@ -7521,9 +7894,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$942  = ch0_read_select_fa;
-    if (bus__r_en) begin
-      \$942  = \$163 ;
+    \$942  = ch1_irq_enable_access_done;
+    if (\$293 ) begin
+      \$942  = config_write_data[2];
     end
     if (rst) begin
       \$942  = 1'h0;
@@ -7531,139 +7904,151 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$943  = ch0_read_select_fb;
-    if (bus__r_en) begin
-      \$943  = \$164 ;
-    end
+    \$943  = ch1_cfg_ma_write;
     if (rst) begin
       \$943  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$944  = ch0_read_select_fc;
-    if (bus__r_en) begin
-      \$944  = \$165 ;
+    \$944  = ch1_cfg_ma_ma_half_period;
+    if (\$294 ) begin
+      \$944 [7:0] = config_write_data[7:0];
+    end
+    if (\$295 ) begin
+      \$944 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$944  = 1'h0;
+      \$944  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$945  = ch0_read_select_fd;
-    if (bus__r_en) begin
-      \$945  = \$166 ;
+    \$945  = ch1_cfg_ma_delay_limit;
+    if (\$296 ) begin
+      \$945 [7:0] = config_write_data[23:16];
+    end
+    if (\$297 ) begin
+      \$945 [11:8] = config_write_data[27:24];
     end
     if (rst) begin
-      \$945  = 1'h0;
+      \$945  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$946  = ch0_result_status_status_snapshot;
-    if (\$167 ) begin
-      \$946  = \port$7239$0 [3:0];
-    end
+    \$946  = ch1_cfg_period_write;
     if (rst) begin
-      \$946  = 4'h0;
+      \$946  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$947  = ch0_result_status_cds_snapshot;
-    if (\$167 ) begin
-      \$947  = \port$7239$0 [49];
+    \$947  = ch1_cfg_period_request_period;
+    if (\$298 ) begin
+      \$947 [7:0] = config_write_data[7:0];
+    end
+    if (\$299 ) begin
+      \$947 [15:8] = config_write_data[15:8];
+    end
+    if (\$300 ) begin
+      \$947 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$947  = 1'h0;
+      \$947  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$948  = ch0_result_status_w0_ne_snapshot;
-    if (\$167 ) begin
-      \$948  = \port$7239$0 [131];
-    end
+    \$948  = ch1_cfg_break_write;
     if (rst) begin
       \$948  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$949  = ch0_result_status_w0_nw_snapshot;
-    if (\$167 ) begin
-      \$949  = \port$7239$0 [132];
+    \$949  = ch1_cfg_break_break_time;
+    if (\$301 ) begin
+      \$949 [7:0] = config_write_data[7:0];
+    end
+    if (\$302 ) begin
+      \$949 [15:8] = config_write_data[15:8];
+    end
+    if (\$303 ) begin
+      \$949 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$949  = 1'h0;
+      \$949  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$950  = ch0_result_status_w0_crc_ok_snapshot;
-    if (\$167 ) begin
-      \$950  = \port$7239$0 [133];
-    end
+    \$950  = ch1_cfg_ack_write;
     if (rst) begin
       \$950  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$951  = ch0_result_status_w1_ne_snapshot;
-    if (\$167 ) begin
-      \$951  = \port$7239$0 [174];
+    \$951  = ch1_cfg_ack_ack_limit;
+    if (\$304 ) begin
+      \$951 [7:0] = config_write_data[7:0];
+    end
+    if (\$305 ) begin
+      \$951 [15:8] = config_write_data[15:8];
+    end
+    if (\$306 ) begin
+      \$951 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$951  = 1'h0;
+      \$951  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$952  = ch0_result_status_w1_nw_snapshot;
-    if (\$167 ) begin
-      \$952  = \port$7239$0 [175];
-    end
+    \$952  = ch1_cfg_timeout_write;
     if (rst) begin
       \$952  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$953  = ch0_result_status_w1_crc_ok_snapshot;
-    if (\$167 ) begin
-      \$953  = \port$7239$0 [176];
+    \$953  = ch1_cfg_timeout_timeout_limit;
+    if (\$307 ) begin
+      \$953 [7:0] = config_write_data[7:0];
+    end
+    if (\$308 ) begin
+      \$953 [15:8] = config_write_data[15:8];
+    end
+    if (\$309 ) begin
+      \$953 [23:16] = config_write_data[23:16];
     end
     if (rst) begin
-      \$953  = 1'h0;
+      \$953  = 24'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$954  = ch0_result_status_lc_repeat_snapshot;
-    if (\$167 ) begin
-      \$954  = \port$7239$0 [183];
-    end
+    \$954  = ch1_cfg_words_write;
     if (rst) begin
       \$954  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$955  = ch0_result_status_lc_skip_snapshot;
-    if (\$167 ) begin
-      \$955  = \port$7239$0 [184];
+    \$955  = ch1_cfg_words_w0_data_bits;
+    if (\$310 ) begin
+      \$955  = config_write_data[5:0];
     end
     if (rst) begin
-      \$955  = 1'h0;
+      \$955  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$956  = ch0_result_status_lc_zero_snapshot;
-    if (\$167 ) begin
-      \$956  = \port$7239$0 [185];
+    \$956  = ch1_cfg_words_w0_nenw;
+    if (\$311 ) begin
+      \$956  = config_write_data[6];
     end
     if (rst) begin
       \$956  = 1'h0;
@@ -7671,9 +8056,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$957  = ch0_result_status_spw_mismatch_snapshot;
-    if (\$167 ) begin
-      \$957  = \port$7239$0 [186];
+    \$957  = ch1_cfg_words_w0_lc;
+    if (\$312 ) begin
+      \$957  = config_write_data[7];
     end
     if (rst) begin
       \$957  = 1'h0;
@@ -7681,99 +8066,99 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$958  = ch0_result_status_lc_snapshot;
-    if (\$167 ) begin
-      \$958  = \port$7239$0 [182:177];
+    \$958  = ch1_cfg_words_w0_crc;
+    if (\$313 ) begin
+      \$958  = config_write_data[9:8];
     end
     if (rst) begin
-      \$958  = 6'h00;
+      \$958  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$959  = ch0_result_seq_seq_snapshot;
-    if (\$167 ) begin
-      \$959  = ch0__done_count;
+    \$959  = ch1_cfg_words_w0_gray;
+    if (\$314 ) begin
+      \$959  = config_write_data[10];
     end
     if (rst) begin
-      \$959  = 16'h0000;
+      \$959  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$960  = ch0_result_seq_line_delay_snapshot;
-    if (\$167 ) begin
-      \$960  = \port$7239$0 [48:36];
+    \$960  = ch1_cfg_words_w0_signed;
+    if (\$315 ) begin
+      \$960  = config_write_data[11];
     end
     if (rst) begin
-      \$960  = 13'h0000;
+      \$960  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$961  = ch0_result_w0_lo_data_snapshot;
-    if (\$167 ) begin
-      \$961  = \port$7239$0 [107:76];
+    \$961  = ch1_cfg_words_w1_data_bits;
+    if (\$316 ) begin
+      \$961  = config_write_data[21:16];
     end
     if (rst) begin
-      \$961  = 32'd0;
+      \$961  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$962  = ch0_result_w0_hi_data_snapshot;
-    if (\$167 ) begin
-      \$962  = \port$7239$0 [130:108];
+    \$962  = ch1_cfg_words_w1_nenw;
+    if (\$317 ) begin
+      \$962  = config_write_data[22];
     end
     if (rst) begin
-      \$962  = 23'h000000;
+      \$962  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$963  = ch0_result_w1_lo_data_snapshot;
-    if (\$167 ) begin
-      \$963  = \port$7239$0 [165:134];
+    \$963  = ch1_cfg_words_w1_lc;
+    if (\$318 ) begin
+      \$963  = config_write_data[23];
     end
     if (rst) begin
-      \$963  = 32'd0;
+      \$963  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$964  = ch0_result_w1_hi_data_snapshot;
-    if (\$167 ) begin
-      \$964  = \port$7239$0 [173:166];
+    \$964  = ch1_cfg_words_w1_crc;
+    if (\$319 ) begin
+      \$964  = config_write_data[25:24];
     end
     if (rst) begin
-      \$964  = 8'h00;
+      \$964  = 2'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$965  = ch0_result_timestamp_time_snapshot;
-    if (\$167 ) begin
-      \$965  = \port$7239$0 [35:4];
+    \$965  = ch1_cfg_words_w1_gray;
+    if (\$320 ) begin
+      \$965  = config_write_data[26];
     end
     if (rst) begin
-      \$965  = 32'd0;
+      \$965  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$966  = ch0_result_line_noise_events_snapshot;
-    if (\$167 ) begin
-      \$966  = \port$7239$0 [53:50];
+    \$966  = ch1_cfg_words_w1_signed;
+    if (\$321 ) begin
+      \$966  = config_write_data[27];
     end
     if (rst) begin
-      \$966  = 4'h0;
+      \$966  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$967  = ch0_result_line_delay_settled_snapshot;
-    if (\$167 ) begin
-      \$967  = \port$7239$0 [54];
+    \$967  = ch1_cfg_words_w1_enable;
+    if (\$322 ) begin
+      \$967  = config_write_data[31];
     end
     if (rst) begin
       \$967  = 1'h0;
@@ -7781,29 +8166,26 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$968  = ch0_result_line_delay_spread_snapshot;
-    if (\$167 ) begin
-      \$968  = \port$7239$0 [75:68];
-    end
+    \$968  = ch1_cfg_checks_write;
     if (rst) begin
-      \$968  = 8'h00;
+      \$968  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$969  = ch0_result_line_settled_delay_snapshot;
-    if (\$167 ) begin
-      \$969  = \port$7239$0 [67:55];
+    \$969  = ch1_cfg_checks_end_check;
+    if (\$323 ) begin
+      \$969  = config_write_data[0];
     end
     if (rst) begin
-      \$969  = 13'h0000;
+      \$969  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$970  = ch0_window0_read;
-    if (bus__r_en) begin
-      \$970  = \$169 ;
+    \$970  = ch1_cfg_checks_spw_check;
+    if (\$324 ) begin
+      \$970  = config_write_data[1];
     end
     if (rst) begin
       \$970  = 1'h0;
@@ -7811,96 +8193,99 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$971  = ch0_window1_read;
-    if (bus__r_en) begin
-      \$971  = \$171 ;
+    \$971  = ch1_cfg_checks_spw_tolerance;
+    if (\$325 ) begin
+      \$971  = config_write_data[15:8];
     end
     if (rst) begin
-      \$971  = 1'h0;
+      \$971  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$972  = ch0_read_data;
-    if (bus__r_load) begin
-      \$972  = \$313 ;
+    \$972  = ch1_cfg_checks_noise_limit;
+    if (\$326 ) begin
+      \$972  = config_write_data[19:16];
     end
     if (rst) begin
-      \$972  = 32'd0;
+      \$972  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$973  = \$315 ;
+    \$973  = ch1_cfg_checks_delay_tolerance;
+    if (\$327 ) begin
+      \$973  = config_write_data[23:20];
+    end
     if (rst) begin
-      \$973  = 1'h0;
+      \$973  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$974  = \$317 ;
+    \$974  = ch1_cfg_checks_confirm_frames;
+    if (\$328 ) begin
+      \$974  = config_write_data[27:24];
+    end
     if (rst) begin
-      \$974  = 1'h0;
+      \$974  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$975  = \$319 ;
+    \$975  = ch1_cfg_quiet_write;
     if (rst) begin
       \$975  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$976  = ch1_ctrl_periodic;
-    if (\$320 ) begin
-      \$976  = write_data[8];
+    \$976  = ch1_cfg_quiet_quiet_time;
+    if (\$329 ) begin
+      \$976 [7:0] = config_write_data[7:0];
+    end
+    if (\$330 ) begin
+      \$976 [11:8] = config_write_data[11:8];
     end
     if (rst) begin
-      \$976  = 1'h0;
+      \$976  = 12'h000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$977  = ch1_ctrl_trigger_enable;
-    if (\$321 ) begin
-      \$977  = write_data[9];
-    end
+    \$977  = ch1_cfg_crc0_write;
     if (rst) begin
       \$977  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$978  = ch1_irq_status_done;
-    if (ch1__frame_done) begin
-      \$978  = 1'h1;
-    end else if (\$323 ) begin
-      \$978  = 1'h0;
+    \$978  = ch1_cfg_crc0_w0_crc_poly;
+    if (\$331 ) begin
+      \$978 [7:0] = config_write_data[7:0];
+    end
+    if (\$332 ) begin
+      \$978 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$978  = 1'h0;
+      \$978  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$979  = ch1_irq_status_error;
-    if (ch1__frame_error) begin
-      \$979  = 1'h1;
-    end else if (\$325 ) begin
-      \$979  = 1'h0;
+    \$979  = ch1_cfg_crc0_w0_crc_width;
+    if (\$333 ) begin
+      \$979  = config_write_data[20:16];
     end
     if (rst) begin
-      \$979  = 1'h0;
+      \$979  = 5'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$980  = ch1_irq_status_access_done;
-    if (ch1__ca_done) begin
-      \$980  = 1'h1;
-    end else if (\$327 ) begin
-      \$980  = 1'h0;
+    \$980  = ch1_cfg_crc0_w0_crc_inverted;
+    if (\$334 ) begin
+      \$980  = config_write_data[24];
     end
     if (rst) begin
       \$980  = 1'h0;
@@ -7908,425 +8293,353 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$981  = ch1_irq_enable_write;
+    \$981  = ch1_cfg_crc0_start_write;
     if (rst) begin
       \$981  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$982  = ch1_irq_enable_done;
-    if (\$328 ) begin
-      \$982  = config_write_data[0];
+    \$982  = ch1_cfg_crc0_start_w0_crc_start;
+    if (\$335 ) begin
+      \$982 [7:0] = config_write_data[7:0];
+    end
+    if (\$336 ) begin
+      \$982 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$982  = 1'h0;
+      \$982  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$983  = ch1_irq_enable_error;
-    if (\$329 ) begin
-      \$983  = config_write_data[1];
-    end
+    \$983  = ch1_cfg_crc1_write;
     if (rst) begin
       \$983  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$984  = ch1_irq_enable_access_done;
-    if (\$330 ) begin
-      \$984  = config_write_data[2];
-    end
-    if (rst) begin
-      \$984  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$985  = ch1_cfg_ma_write;
-    if (rst) begin
-      \$985  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$986  = ch1_cfg_ma_ma_half_period;
-    if (\$331 ) begin
-      \$986 [7:0] = config_write_data[7:0];
-    end
-    if (\$332 ) begin
-      \$986 [15:8] = config_write_data[15:8];
-    end
-    if (rst) begin
-      \$986  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$987  = ch1_cfg_ma_delay_limit;
-    if (\$333 ) begin
-      \$987 [7:0] = config_write_data[23:16];
-    end
-    if (\$334 ) begin
-      \$987 [11:8] = config_write_data[27:24];
-    end
-    if (rst) begin
-      \$987  = 12'h000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$988  = ch1_cfg_period_write;
-    if (rst) begin
-      \$988  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$989  = ch1_cfg_period_request_period;
-    if (\$335 ) begin
-      \$989 [7:0] = config_write_data[7:0];
-    end
-    if (\$336 ) begin
-      \$989 [15:8] = config_write_data[15:8];
-    end
+    \$984  = ch1_cfg_crc1_w1_crc_poly;
     if (\$337 ) begin
-      \$989 [23:16] = config_write_data[23:16];
+      \$984 [7:0] = config_write_data[7:0];
+    end
+    if (\$338 ) begin
+      \$984 [15:8] = config_write_data[15:8];
     end
     if (rst) begin
-      \$989  = 24'h000000;
+      \$984  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$990  = ch1_cfg_break_write;
+    \$985  = ch1_cfg_crc1_w1_crc_width;
+    if (\$339 ) begin
+      \$985  = config_write_data[20:16];
+    end
+    if (rst) begin
+      \$985  = 5'h00;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$986  = ch1_cfg_crc1_w1_crc_inverted;
+    if (\$340 ) begin
+      \$986  = config_write_data[24];
+    end
+    if (rst) begin
+      \$986  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$987  = ch1_cfg_crc1_start_write;
+    if (rst) begin
+      \$987  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$988  = ch1_cfg_crc1_start_w1_crc_start;
+    if (\$341 ) begin
+      \$988 [7:0] = config_write_data[7:0];
+    end
+    if (\$342 ) begin
+      \$988 [15:8] = config_write_data[15:8];
+    end
+    if (rst) begin
+      \$988  = 16'h0000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$989  = ch1_cfg_ssi_write;
+    if (rst) begin
+      \$989  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$990  = ch1_cfg_ssi_ssi;
+    if (\$343 ) begin
+      \$990  = config_write_data[0];
+    end
     if (rst) begin
       \$990  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$991  = ch1_cfg_break_break_time;
-    if (\$338 ) begin
-      \$991 [7:0] = config_write_data[7:0];
-    end
-    if (\$339 ) begin
-      \$991 [15:8] = config_write_data[15:8];
-    end
-    if (\$340 ) begin
-      \$991 [23:16] = config_write_data[23:16];
+    \$991  = ch1_cfg_ssi_ssi_error;
+    if (\$344 ) begin
+      \$991  = config_write_data[1];
     end
     if (rst) begin
-      \$991  = 24'h000000;
+      \$991  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$992  = ch1_cfg_ack_write;
+    \$992  = ch1_cfg_ssi_ssi_error_low;
+    if (\$345 ) begin
+      \$992  = config_write_data[2];
+    end
     if (rst) begin
       \$992  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$993  = ch1_cfg_ack_ack_limit;
-    if (\$341 ) begin
-      \$993 [7:0] = config_write_data[7:0];
-    end
-    if (\$342 ) begin
-      \$993 [15:8] = config_write_data[15:8];
-    end
-    if (\$343 ) begin
-      \$993 [23:16] = config_write_data[23:16];
-    end
-    if (rst) begin
-      \$993  = 24'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$994  = ch1_cfg_timeout_write;
-    if (rst) begin
-      \$994  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$995  = ch1_cfg_timeout_timeout_limit;
-    if (\$344 ) begin
-      \$995 [7:0] = config_write_data[7:0];
-    end
-    if (\$345 ) begin
-      \$995 [15:8] = config_write_data[15:8];
-    end
+    \$993  = ch1_cfg_ssi_ssi_double;
     if (\$346 ) begin
-      \$995 [23:16] = config_write_data[23:16];
+      \$993  = config_write_data[3];
     end
     if (rst) begin
-      \$995  = 24'h000000;
+      \$993  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$996  = ch1_cfg_words_write;
+    \$994  = ch1_cfg_ssi_ssi_delay;
+    if (\$347 ) begin
+      \$994 [7:0] = config_write_data[23:16];
+    end
+    if (\$348 ) begin
+      \$994 [11:8] = config_write_data[27:24];
+    end
+    if (rst) begin
+      \$994  = 12'h000;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$995  = ch1_cfg_w2_write;
+    if (rst) begin
+      \$995  = 1'h0;
+    end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    \$996  = ch1_cfg_w2_crc_write;
     if (rst) begin
       \$996  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$997  = ch1_cfg_words_w0_data_bits;
-    if (\$347 ) begin
-      \$997  = config_write_data[5:0];
-    end
+    \$997  = ch1_cfg_w2_crc_start_write;
     if (rst) begin
-      \$997  = 6'h00;
+      \$997  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$998  = ch1_cfg_words_w0_nenw;
-    if (\$348 ) begin
-      \$998  = config_write_data[6];
-    end
+    \$998  = ch1_cfg_w3_write;
     if (rst) begin
       \$998  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$999  = ch1_cfg_words_w0_lc;
-    if (\$349 ) begin
-      \$999  = config_write_data[7];
-    end
+    \$999  = ch1_cfg_w3_crc_write;
     if (rst) begin
       \$999  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1000  = ch1_cfg_words_w0_crc;
-    if (\$350 ) begin
-      \$1000  = config_write_data[9:8];
-    end
+    \$1000  = ch1_cfg_w3_crc_start_write;
     if (rst) begin
-      \$1000  = 2'h0;
+      \$1000  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1001  = ch1_cfg_words_w0_gray;
-    if (\$351 ) begin
-      \$1001  = config_write_data[10];
-    end
+    \$1001  = ch1_cfg_w4_write;
     if (rst) begin
       \$1001  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1002  = ch1_cfg_words_w0_signed;
-    if (\$352 ) begin
-      \$1002  = config_write_data[11];
-    end
+    \$1002  = ch1_cfg_w4_crc_write;
     if (rst) begin
       \$1002  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1003  = ch1_cfg_words_w1_data_bits;
-    if (\$353 ) begin
-      \$1003  = config_write_data[21:16];
-    end
+    \$1003  = ch1_cfg_w4_crc_start_write;
     if (rst) begin
-      \$1003  = 6'h00;
+      \$1003  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1004  = ch1_cfg_words_w1_nenw;
-    if (\$354 ) begin
-      \$1004  = config_write_data[22];
-    end
+    \$1004  = ch1_cfg_w5_write;
     if (rst) begin
       \$1004  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1005  = ch1_cfg_words_w1_lc;
-    if (\$355 ) begin
-      \$1005  = config_write_data[23];
-    end
+    \$1005  = ch1_cfg_w5_crc_write;
     if (rst) begin
       \$1005  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1006  = ch1_cfg_words_w1_crc;
-    if (\$356 ) begin
-      \$1006  = config_write_data[25:24];
-    end
+    \$1006  = ch1_cfg_w5_crc_start_write;
     if (rst) begin
-      \$1006  = 2'h0;
+      \$1006  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1007  = ch1_cfg_words_w1_gray;
-    if (\$357 ) begin
-      \$1007  = config_write_data[26];
-    end
+    \$1007  = ch1_cfg_w6_write;
     if (rst) begin
       \$1007  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1008  = ch1_cfg_words_w1_signed;
-    if (\$358 ) begin
-      \$1008  = config_write_data[27];
-    end
+    \$1008  = ch1_cfg_w6_crc_write;
     if (rst) begin
       \$1008  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1009  = ch1_cfg_words_w1_enable;
-    if (\$359 ) begin
-      \$1009  = config_write_data[31];
-    end
+    \$1009  = ch1_cfg_w6_crc_start_write;
     if (rst) begin
       \$1009  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1010  = ch1_cfg_checks_write;
+    \$1010  = ch1_cfg_w7_write;
     if (rst) begin
       \$1010  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1011  = ch1_cfg_checks_end_check;
-    if (\$360 ) begin
-      \$1011  = config_write_data[0];
-    end
+    \$1011  = ch1_cfg_w7_crc_write;
     if (rst) begin
       \$1011  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1012  = ch1_cfg_checks_spw_check;
-    if (\$361 ) begin
-      \$1012  = config_write_data[1];
-    end
+    \$1012  = ch1_cfg_w7_crc_start_write;
     if (rst) begin
       \$1012  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1013  = ch1_cfg_checks_spw_tolerance;
-    if (\$362 ) begin
-      \$1013  = config_write_data[15:8];
-    end
+    \$1013  = ch1_ca_request_write;
     if (rst) begin
-      \$1013  = 8'h00;
+      \$1013  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1014  = ch1_cfg_checks_noise_limit;
-    if (\$363 ) begin
-      \$1014  = config_write_data[19:16];
+    \$1014  = ch1_ca_request_slave_id;
+    if (\$349 ) begin
+      \$1014  = config_write_data[2:0];
     end
     if (rst) begin
-      \$1014  = 4'h0;
+      \$1014  = 3'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1015  = ch1_cfg_checks_delay_tolerance;
-    if (\$364 ) begin
-      \$1015  = config_write_data[23:20];
+    \$1015  = ch1_ca_request_address;
+    if (\$350 ) begin
+      \$1015  = config_write_data[14:8];
     end
     if (rst) begin
-      \$1015  = 4'h0;
+      \$1015  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1016  = ch1_cfg_checks_confirm_frames;
-    if (\$365 ) begin
-      \$1016  = config_write_data[27:24];
+    \$1016  = ch1_ca_request_count;
+    if (\$351 ) begin
+      \$1016  = config_write_data[22:16];
     end
     if (rst) begin
-      \$1016  = 4'h0;
+      \$1016  = 7'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1017  = ch1_cfg_quiet_write;
+    \$1017  = \ch1_ca_request_write$446 ;
+    if (\$352 ) begin
+      \$1017  = config_write_data[24];
+    end
     if (rst) begin
       \$1017  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1018  = ch1_cfg_quiet_quiet_time;
-    if (\$366 ) begin
-      \$1018 [7:0] = config_write_data[7:0];
-    end
-    if (\$367 ) begin
-      \$1018 [11:8] = config_write_data[11:8];
-    end
+    \$1018  = \$354 ;
     if (rst) begin
-      \$1018  = 12'h000;
+      \$1018  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1019  = ch1_cfg_crc0_write;
+    \$1019  = \$356 ;
     if (rst) begin
       \$1019  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1020  = ch1_cfg_crc0_w0_crc_poly;
-    if (\$368 ) begin
-      \$1020 [7:0] = config_write_data[7:0];
-    end
-    if (\$369 ) begin
-      \$1020 [15:8] = config_write_data[15:8];
-    end
+    \$1020  = \$357 ;
     if (rst) begin
-      \$1020  = 16'h0000;
+      \$1020  = 15'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1021  = ch1_cfg_crc0_w0_crc_width;
-    if (\$370 ) begin
-      \$1021  = config_write_data[20:16];
+    \$1021  = ch1_config_read_index;
+    if (ch1_config_read) begin
+      \$1021  = config_memory0_read_index;
     end
     if (rst) begin
-      \$1021  = 5'h00;
+      \$1021  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1022  = ch1_cfg_crc0_w0_crc_inverted;
-    if (\$371 ) begin
-      \$1022  = config_write_data[24];
+    \$1022  = ch1_read_select_100;
+    if (bus__r_en) begin
+      \$1022  = \$358 ;
     end
     if (rst) begin
       \$1022  = 1'h0;
@@ -8334,59 +8647,59 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1023  = ch1_cfg_crc0_start_write;
+    \$1023  = ch1_read_select_101;
+    if (bus__r_en) begin
+      \$1023  = \$359 ;
+    end
     if (rst) begin
       \$1023  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1024  = ch1_cfg_crc0_start_w0_crc_start;
-    if (\$372 ) begin
-      \$1024 [7:0] = config_write_data[7:0];
-    end
-    if (\$373 ) begin
-      \$1024 [15:8] = config_write_data[15:8];
+    \$1024  = ch1_read_select_102;
+    if (bus__r_en) begin
+      \$1024  = \$360 ;
     end
     if (rst) begin
-      \$1024  = 16'h0000;
+      \$1024  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1025  = ch1_cfg_crc1_write;
+    \$1025  = ch1_read_select_104;
+    if (bus__r_en) begin
+      \$1025  = \$361 ;
+    end
     if (rst) begin
       \$1025  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1026  = ch1_cfg_crc1_w1_crc_poly;
-    if (\$374 ) begin
-      \$1026 [7:0] = config_write_data[7:0];
-    end
-    if (\$375 ) begin
-      \$1026 [15:8] = config_write_data[15:8];
+    \$1026  = ch1_read_select_106;
+    if (bus__r_en) begin
+      \$1026  = \$362 ;
     end
     if (rst) begin
-      \$1026  = 16'h0000;
+      \$1026  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1027  = ch1_cfg_crc1_w1_crc_width;
-    if (\$376 ) begin
-      \$1027  = config_write_data[20:16];
+    \$1027  = ch1_read_select_107;
+    if (bus__r_en) begin
+      \$1027  = \$363 ;
     end
     if (rst) begin
-      \$1027  = 5'h00;
+      \$1027  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1028  = ch1_cfg_crc1_w1_crc_inverted;
-    if (\$377 ) begin
-      \$1028  = config_write_data[24];
+    \$1028  = ch1_read_select_110;
+    if (bus__r_en) begin
+      \$1028  = \$364 ;
     end
     if (rst) begin
       \$1028  = 1'h0;
@@ -8394,36 +8707,39 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1029  = ch1_cfg_crc1_start_write;
+    \$1029  = ch1_read_select_111;
+    if (bus__r_en) begin
+      \$1029  = \$365 ;
+    end
     if (rst) begin
       \$1029  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1030  = ch1_cfg_crc1_start_w1_crc_start;
-    if (\$378 ) begin
-      \$1030 [7:0] = config_write_data[7:0];
-    end
-    if (\$379 ) begin
-      \$1030 [15:8] = config_write_data[15:8];
+    \$1030  = ch1_read_select_112;
+    if (bus__r_en) begin
+      \$1030  = \$366 ;
     end
     if (rst) begin
-      \$1030  = 16'h0000;
+      \$1030  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1031  = ch1_cfg_ssi_write;
+    \$1031  = ch1_read_select_113;
+    if (bus__r_en) begin
+      \$1031  = \$367 ;
+    end
     if (rst) begin
       \$1031  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1032  = ch1_cfg_ssi_ssi;
-    if (\$380 ) begin
-      \$1032  = config_write_data[0];
+    \$1032  = ch1_read_select_114;
+    if (bus__r_en) begin
+      \$1032  = \$368 ;
     end
     if (rst) begin
       \$1032  = 1'h0;
@@ -8431,9 +8747,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1033  = ch1_cfg_ssi_ssi_error;
-    if (\$381 ) begin
-      \$1033  = config_write_data[1];
+    \$1033  = ch1_read_select_115;
+    if (bus__r_en) begin
+      \$1033  = \$369 ;
     end
     if (rst) begin
       \$1033  = 1'h0;
@@ -8441,9 +8757,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1034  = ch1_cfg_ssi_ssi_error_low;
-    if (\$382 ) begin
-      \$1034  = config_write_data[2];
+    \$1034  = ch1_read_select_116;
+    if (bus__r_en) begin
+      \$1034  = \$370 ;
     end
     if (rst) begin
       \$1034  = 1'h0;
@@ -8451,9 +8767,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1035  = ch1_cfg_ssi_ssi_double;
-    if (\$383 ) begin
-      \$1035  = config_write_data[3];
+    \$1035  = ch1_read_select_117;
+    if (bus__r_en) begin
+      \$1035  = \$371 ;
     end
     if (rst) begin
       \$1035  = 1'h0;
@@ -8461,185 +8777,239 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1036  = ch1_cfg_ssi_ssi_delay;
-    if (\$384 ) begin
-      \$1036 [7:0] = config_write_data[23:16];
-    end
-    if (\$385 ) begin
-      \$1036 [11:8] = config_write_data[27:24];
+    \$1036  = ch1_read_select_125;
+    if (bus__r_en) begin
+      \$1036  = \$372 ;
     end
     if (rst) begin
-      \$1036  = 12'h000;
+      \$1036  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1037  = ch1_cfg_w2_write;
+    \$1037  = ch1_read_select_126;
+    if (bus__r_en) begin
+      \$1037  = \$373 ;
+    end
     if (rst) begin
       \$1037  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1038  = ch1_cfg_w2_crc_write;
+    \$1038  = ch1_read_select_127;
+    if (bus__r_en) begin
+      \$1038  = \$374 ;
+    end
     if (rst) begin
       \$1038  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1039  = ch1_cfg_w2_crc_start_write;
+    \$1039  = ch1_read_select_128;
+    if (bus__r_en) begin
+      \$1039  = \$375 ;
+    end
     if (rst) begin
       \$1039  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1040  = ch1_cfg_w3_write;
+    \$1040  = ch1_read_select_129;
+    if (bus__r_en) begin
+      \$1040  = \$376 ;
+    end
     if (rst) begin
       \$1040  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1041  = ch1_cfg_w3_crc_write;
+    \$1041  = ch1_read_select_12a;
+    if (bus__r_en) begin
+      \$1041  = \$377 ;
+    end
     if (rst) begin
       \$1041  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1042  = ch1_cfg_w3_crc_start_write;
+    \$1042  = ch1_read_select_12c;
+    if (bus__r_en) begin
+      \$1042  = \$378 ;
+    end
     if (rst) begin
       \$1042  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1043  = ch1_cfg_w4_write;
+    \$1043  = ch1_read_select_12d;
+    if (bus__r_en) begin
+      \$1043  = \$379 ;
+    end
     if (rst) begin
       \$1043  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1044  = ch1_cfg_w4_crc_write;
+    \$1044  = ch1_read_select_12e;
+    if (bus__r_en) begin
+      \$1044  = \$380 ;
+    end
     if (rst) begin
       \$1044  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1045  = ch1_cfg_w4_crc_start_write;
+    \$1045  = ch1_read_select_130;
+    if (bus__r_en) begin
+      \$1045  = \$381 ;
+    end
     if (rst) begin
       \$1045  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1046  = ch1_cfg_w5_write;
+    \$1046  = ch1_read_select_131;
+    if (bus__r_en) begin
+      \$1046  = \$382 ;
+    end
     if (rst) begin
       \$1046  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1047  = ch1_cfg_w5_crc_write;
+    \$1047  = ch1_read_select_132;
+    if (bus__r_en) begin
+      \$1047  = \$383 ;
+    end
     if (rst) begin
       \$1047  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1048  = ch1_cfg_w5_crc_start_write;
+    \$1048  = ch1_read_select_134;
+    if (bus__r_en) begin
+      \$1048  = \$384 ;
+    end
     if (rst) begin
       \$1048  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1049  = ch1_cfg_w6_write;
+    \$1049  = ch1_read_select_135;
+    if (bus__r_en) begin
+      \$1049  = \$385 ;
+    end
     if (rst) begin
       \$1049  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1050  = ch1_cfg_w6_crc_write;
+    \$1050  = ch1_read_select_136;
+    if (bus__r_en) begin
+      \$1050  = \$386 ;
+    end
     if (rst) begin
       \$1050  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1051  = ch1_cfg_w6_crc_start_write;
+    \$1051  = ch1_read_select_138;
+    if (bus__r_en) begin
+      \$1051  = \$387 ;
+    end
     if (rst) begin
       \$1051  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1052  = ch1_cfg_w7_write;
+    \$1052  = ch1_read_select_139;
+    if (bus__r_en) begin
+      \$1052  = \$388 ;
+    end
     if (rst) begin
       \$1052  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1053  = ch1_cfg_w7_crc_write;
+    \$1053  = ch1_read_select_13a;
+    if (bus__r_en) begin
+      \$1053  = \$389 ;
+    end
     if (rst) begin
       \$1053  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1054  = ch1_cfg_w7_crc_start_write;
+    \$1054  = ch1_read_select_13c;
+    if (bus__r_en) begin
+      \$1054  = \$390 ;
+    end
     if (rst) begin
       \$1054  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1055  = ch1_ca_request_write;
+    \$1055  = ch1_read_select_13d;
+    if (bus__r_en) begin
+      \$1055  = \$391 ;
+    end
     if (rst) begin
       \$1055  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1056  = ch1_ca_request_slave_id;
-    if (\$386 ) begin
-      \$1056  = config_write_data[2:0];
+    \$1056  = ch1_read_select_13e;
+    if (bus__r_en) begin
+      \$1056  = \$392 ;
     end
     if (rst) begin
-      \$1056  = 3'h0;
+      \$1056  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1057  = ch1_ca_request_address;
-    if (\$387 ) begin
-      \$1057  = config_write_data[14:8];
+    \$1057  = ch1_read_select_141;
+    if (bus__r_en) begin
+      \$1057  = \$393 ;
     end
     if (rst) begin
-      \$1057  = 7'h00;
+      \$1057  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1058  = ch1_ca_request_count;
-    if (\$388 ) begin
-      \$1058  = config_write_data[22:16];
+    \$1058  = ch1_read_select_142;
+    if (bus__r_en) begin
+      \$1058  = \$394 ;
     end
     if (rst) begin
-      \$1058  = 7'h00;
+      \$1058  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1059  = \ch1_ca_request_write$452 ;
-    if (\$389 ) begin
-      \$1059  = config_write_data[24];
+    \$1059  = ch1_read_select_143;
+    if (bus__r_en) begin
+      \$1059  = \$395 ;
     end
     if (rst) begin
       \$1059  = 1'h0;
@@ -8647,23 +9017,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1060  = \$391 ;
+    \$1060  = ch1_read_select_144;
+    if (bus__r_en) begin
+      \$1060  = \$396 ;
+    end
     if (rst) begin
       \$1060  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1061  = \$393 ;
+    \$1061  = ch1_read_select_145;
+    if (bus__r_en) begin
+      \$1061  = \$397 ;
+    end
     if (rst) begin
       \$1061  = 1'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1062  = ch1_read_select_100;
+    \$1062  = ch1_read_select_170;
     if (bus__r_en) begin
-      \$1062  = \$394 ;
+      \$1062  = \$398 ;
     end
     if (rst) begin
       \$1062  = 1'h0;
@@ -8671,9 +9047,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1063  = ch1_read_select_101;
+    \$1063  = ch1_read_select_171;
     if (bus__r_en) begin
-      \$1063  = \$395 ;
+      \$1063  = \$399 ;
     end
     if (rst) begin
       \$1063  = 1'h0;
@@ -8681,9 +9057,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1064  = ch1_read_select_102;
+    \$1064  = ch1_read_select_172;
     if (bus__r_en) begin
-      \$1064  = \$396 ;
+      \$1064  = \$400 ;
     end
     if (rst) begin
       \$1064  = 1'h0;
@@ -8691,9 +9067,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1065  = ch1_read_select_104;
+    \$1065  = ch1_read_select_173;
     if (bus__r_en) begin
-      \$1065  = \$397 ;
+      \$1065  = \$401 ;
     end
     if (rst) begin
       \$1065  = 1'h0;
@@ -8701,9 +9077,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1066  = ch1_read_select_105;
+    \$1066  = ch1_read_select_174;
     if (bus__r_en) begin
-      \$1066  = \$398 ;
+      \$1066  = \$402 ;
     end
     if (rst) begin
       \$1066  = 1'h0;
@@ -8711,9 +9087,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1067  = ch1_read_select_106;
+    \$1067  = ch1_read_select_175;
     if (bus__r_en) begin
-      \$1067  = \$399 ;
+      \$1067  = \$403 ;
     end
     if (rst) begin
       \$1067  = 1'h0;
@@ -8721,9 +9097,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1068  = ch1_read_select_107;
+    \$1068  = ch1_read_select_176;
     if (bus__r_en) begin
-      \$1068  = \$400 ;
+      \$1068  = \$404 ;
     end
     if (rst) begin
       \$1068  = 1'h0;
@@ -8731,9 +9107,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1069  = ch1_read_select_108;
+    \$1069  = ch1_read_select_177;
     if (bus__r_en) begin
-      \$1069  = \$401 ;
+      \$1069  = \$405 ;
     end
     if (rst) begin
       \$1069  = 1'h0;
@@ -8741,9 +9117,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1070  = ch1_read_select_109;
+    \$1070  = ch1_read_select_178;
     if (bus__r_en) begin
-      \$1070  = \$402 ;
+      \$1070  = \$406 ;
     end
     if (rst) begin
       \$1070  = 1'h0;
@@ -8751,9 +9127,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1071  = ch1_read_select_10a;
+    \$1071  = ch1_read_select_179;
     if (bus__r_en) begin
-      \$1071  = \$403 ;
+      \$1071  = \$407 ;
     end
     if (rst) begin
       \$1071  = 1'h0;
@@ -8761,9 +9137,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1072  = ch1_read_select_10b;
+    \$1072  = ch1_read_select_17a;
     if (bus__r_en) begin
-      \$1072  = \$404 ;
+      \$1072  = \$408 ;
     end
     if (rst) begin
       \$1072  = 1'h0;
@@ -8771,9 +9147,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1073  = ch1_read_select_10c;
+    \$1073  = ch1_read_select_17b;
     if (bus__r_en) begin
-      \$1073  = \$405 ;
+      \$1073  = \$409 ;
     end
     if (rst) begin
       \$1073  = 1'h0;
@@ -8781,9 +9157,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1074  = ch1_read_select_10d;
+    \$1074  = ch1_read_select_17c;
     if (bus__r_en) begin
-      \$1074  = \$406 ;
+      \$1074  = \$410 ;
     end
     if (rst) begin
       \$1074  = 1'h0;
@@ -8791,9 +9167,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1075  = ch1_read_select_10e;
+    \$1075  = ch1_read_select_17d;
     if (bus__r_en) begin
-      \$1075  = \$407 ;
+      \$1075  = \$411 ;
     end
     if (rst) begin
       \$1075  = 1'h0;
@@ -8801,19 +9177,19 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1076  = ch1_read_select_10f;
-    if (bus__r_en) begin
-      \$1076  = \$408 ;
+    \$1076  = ch1_result_status_status_snapshot;
+    if (\$412 ) begin
+      \$1076  = \port$7811$0 [3:0];
     end
     if (rst) begin
-      \$1076  = 1'h0;
+      \$1076  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1077  = ch1_read_select_110;
-    if (bus__r_en) begin
-      \$1077  = \$409 ;
+    \$1077  = ch1_result_status_cds_snapshot;
+    if (\$412 ) begin
+      \$1077  = \port$7811$0 [49];
     end
     if (rst) begin
       \$1077  = 1'h0;
@@ -8821,9 +9197,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1078  = ch1_read_select_111;
-    if (bus__r_en) begin
-      \$1078  = \$410 ;
+    \$1078  = ch1_result_status_w0_ne_snapshot;
+    if (\$412 ) begin
+      \$1078  = \port$7811$0 [131];
     end
     if (rst) begin
       \$1078  = 1'h0;
@@ -8831,9 +9207,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1079  = ch1_read_select_112;
-    if (bus__r_en) begin
-      \$1079  = \$411 ;
+    \$1079  = ch1_result_status_w0_nw_snapshot;
+    if (\$412 ) begin
+      \$1079  = \port$7811$0 [132];
     end
     if (rst) begin
       \$1079  = 1'h0;
@@ -8841,9 +9217,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1080  = ch1_read_select_113;
-    if (bus__r_en) begin
-      \$1080  = \$412 ;
+    \$1080  = ch1_result_status_w0_crc_ok_snapshot;
+    if (\$412 ) begin
+      \$1080  = \port$7811$0 [133];
     end
     if (rst) begin
       \$1080  = 1'h0;
@@ -8851,9 +9227,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1081  = ch1_read_select_114;
-    if (bus__r_en) begin
-      \$1081  = \$413 ;
+    \$1081  = ch1_result_status_w1_ne_snapshot;
+    if (\$412 ) begin
+      \$1081  = \port$7811$0 [174];
     end
     if (rst) begin
       \$1081  = 1'h0;
@@ -8861,9 +9237,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1082  = ch1_read_select_115;
-    if (bus__r_en) begin
-      \$1082  = \$414 ;
+    \$1082  = ch1_result_status_w1_nw_snapshot;
+    if (\$412 ) begin
+      \$1082  = \port$7811$0 [175];
     end
     if (rst) begin
       \$1082  = 1'h0;
@@ -8871,9 +9247,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1083  = ch1_read_select_116;
-    if (bus__r_en) begin
-      \$1083  = \$415 ;
+    \$1083  = ch1_result_status_w1_crc_ok_snapshot;
+    if (\$412 ) begin
+      \$1083  = \port$7811$0 [176];
     end
     if (rst) begin
       \$1083  = 1'h0;
@@ -8881,9 +9257,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1084  = ch1_read_select_117;
-    if (bus__r_en) begin
-      \$1084  = \$416 ;
+    \$1084  = ch1_result_status_lc_repeat_snapshot;
+    if (\$412 ) begin
+      \$1084  = \port$7811$0 [183];
     end
     if (rst) begin
       \$1084  = 1'h0;
@@ -8891,9 +9267,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1085  = ch1_read_select_120;
-    if (bus__r_en) begin
-      \$1085  = \$417 ;
+    \$1085  = ch1_result_status_lc_skip_snapshot;
+    if (\$412 ) begin
+      \$1085  = \port$7811$0 [184];
     end
     if (rst) begin
       \$1085  = 1'h0;
@@ -8901,9 +9277,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1086  = ch1_read_select_121;
-    if (bus__r_en) begin
-      \$1086  = \$418 ;
+    \$1086  = ch1_result_status_lc_zero_snapshot;
+    if (\$412 ) begin
+      \$1086  = \port$7811$0 [185];
     end
     if (rst) begin
       \$1086  = 1'h0;
@@ -8911,9 +9287,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1087  = ch1_read_select_122;
-    if (bus__r_en) begin
-      \$1087  = \$419 ;
+    \$1087  = ch1_result_status_spw_mismatch_snapshot;
+    if (\$412 ) begin
+      \$1087  = \port$7811$0 [186];
     end
     if (rst) begin
       \$1087  = 1'h0;
@@ -8921,99 +9297,99 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1088  = ch1_read_select_123;
-    if (bus__r_en) begin
-      \$1088  = \$420 ;
+    \$1088  = ch1_result_status_lc_snapshot;
+    if (\$412 ) begin
+      \$1088  = \port$7811$0 [182:177];
     end
     if (rst) begin
-      \$1088  = 1'h0;
+      \$1088  = 6'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1089  = ch1_read_select_124;
-    if (bus__r_en) begin
-      \$1089  = \$421 ;
+    \$1089  = ch1_result_seq_seq_snapshot;
+    if (\$412 ) begin
+      \$1089  = ch1__done_count;
     end
     if (rst) begin
-      \$1089  = 1'h0;
+      \$1089  = 16'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1090  = ch1_read_select_125;
-    if (bus__r_en) begin
-      \$1090  = \$422 ;
+    \$1090  = ch1_result_seq_line_delay_snapshot;
+    if (\$412 ) begin
+      \$1090  = \port$7811$0 [48:36];
     end
     if (rst) begin
-      \$1090  = 1'h0;
+      \$1090  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1091  = ch1_read_select_126;
-    if (bus__r_en) begin
-      \$1091  = \$423 ;
+    \$1091  = ch1_result_w0_lo_data_snapshot;
+    if (\$412 ) begin
+      \$1091  = \port$7811$0 [107:76];
     end
     if (rst) begin
-      \$1091  = 1'h0;
+      \$1091  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1092  = ch1_read_select_127;
-    if (bus__r_en) begin
-      \$1092  = \$424 ;
+    \$1092  = ch1_result_w0_hi_data_snapshot;
+    if (\$412 ) begin
+      \$1092  = \port$7811$0 [130:108];
     end
     if (rst) begin
-      \$1092  = 1'h0;
+      \$1092  = 23'h000000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1093  = ch1_read_select_128;
-    if (bus__r_en) begin
-      \$1093  = \$425 ;
+    \$1093  = ch1_result_w1_lo_data_snapshot;
+    if (\$412 ) begin
+      \$1093  = \port$7811$0 [165:134];
     end
     if (rst) begin
-      \$1093  = 1'h0;
+      \$1093  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1094  = ch1_read_select_129;
-    if (bus__r_en) begin
-      \$1094  = \$426 ;
+    \$1094  = ch1_result_w1_hi_data_snapshot;
+    if (\$412 ) begin
+      \$1094  = \port$7811$0 [173:166];
     end
     if (rst) begin
-      \$1094  = 1'h0;
+      \$1094  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1095  = ch1_read_select_12a;
-    if (bus__r_en) begin
-      \$1095  = \$427 ;
+    \$1095  = ch1_result_timestamp_time_snapshot;
+    if (\$412 ) begin
+      \$1095  = \port$7811$0 [35:4];
     end
     if (rst) begin
-      \$1095  = 1'h0;
+      \$1095  = 32'd0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1096  = ch1_read_select_12c;
-    if (bus__r_en) begin
-      \$1096  = \$428 ;
+    \$1096  = ch1_result_line_noise_events_snapshot;
+    if (\$412 ) begin
+      \$1096  = \port$7811$0 [53:50];
     end
     if (rst) begin
-      \$1096  = 1'h0;
+      \$1096  = 4'h0;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1097  = ch1_read_select_12d;
-    if (bus__r_en) begin
-      \$1097  = \$429 ;
+    \$1097  = ch1_result_line_delay_settled_snapshot;
+    if (\$412 ) begin
+      \$1097  = \port$7811$0 [54];
     end
     if (rst) begin
       \$1097  = 1'h0;
@@ -9021,29 +9397,29 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1098  = ch1_read_select_12e;
-    if (bus__r_en) begin
-      \$1098  = \$430 ;
+    \$1098  = ch1_result_line_delay_spread_snapshot;
+    if (\$412 ) begin
+      \$1098  = \port$7811$0 [75:68];
     end
     if (rst) begin
-      \$1098  = 1'h0;
+      \$1098  = 8'h00;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1099  = ch1_read_select_130;
-    if (bus__r_en) begin
-      \$1099  = \$431 ;
+    \$1099  = ch1_result_line_settled_delay_snapshot;
+    if (\$412 ) begin
+      \$1099  = \port$7811$0 [67:55];
     end
     if (rst) begin
-      \$1099  = 1'h0;
+      \$1099  = 13'h0000;
     end
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1100  = ch1_read_select_131;
+    \$1100  = ch1_window0_read;
     if (bus__r_en) begin
-      \$1100  = \$432 ;
+      \$1100  = \$414 ;
     end
     if (rst) begin
       \$1100  = 1'h0;
@@ -9051,9 +9427,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1101  = ch1_read_select_132;
+    \$1101  = ch1_window1_read;
     if (bus__r_en) begin
-      \$1101  = \$433 ;
+      \$1101  = \$416 ;
     end
     if (rst) begin
       \$1101  = 1'h0;
@@ -9061,9 +9437,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1102  = ch1_read_select_134;
+    \$1102  = ch1_window2_read;
     if (bus__r_en) begin
-      \$1102  = \$434 ;
+      \$1102  = ch1_config_read;
     end
     if (rst) begin
       \$1102  = 1'h0;
@@ -9071,578 +9447,182 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   end
   always @* begin
     if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1103  = ch1_read_select_135;
-    if (bus__r_en) begin
-      \$1103  = \$435 ;
-    end
-    if (rst) begin
-      \$1103  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1104  = ch1_read_select_136;
-    if (bus__r_en) begin
-      \$1104  = \$436 ;
-    end
-    if (rst) begin
-      \$1104  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1105  = ch1_read_select_138;
-    if (bus__r_en) begin
-      \$1105  = \$437 ;
-    end
-    if (rst) begin
-      \$1105  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1106  = ch1_read_select_139;
-    if (bus__r_en) begin
-      \$1106  = \$438 ;
-    end
-    if (rst) begin
-      \$1106  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1107  = ch1_read_select_13a;
-    if (bus__r_en) begin
-      \$1107  = \$439 ;
-    end
-    if (rst) begin
-      \$1107  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1108  = ch1_read_select_13c;
-    if (bus__r_en) begin
-      \$1108  = \$440 ;
-    end
-    if (rst) begin
-      \$1108  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1109  = ch1_read_select_13d;
-    if (bus__r_en) begin
-      \$1109  = \$441 ;
-    end
-    if (rst) begin
-      \$1109  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1110  = ch1_read_select_13e;
-    if (bus__r_en) begin
-      \$1110  = \$442 ;
-    end
-    if (rst) begin
-      \$1110  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1111  = ch1_read_select_140;
-    if (bus__r_en) begin
-      \$1111  = \$443 ;
-    end
-    if (rst) begin
-      \$1111  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1112  = ch1_read_select_141;
-    if (bus__r_en) begin
-      \$1112  = \$444 ;
-    end
-    if (rst) begin
-      \$1112  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1113  = ch1_read_select_142;
-    if (bus__r_en) begin
-      \$1113  = \$445 ;
-    end
-    if (rst) begin
-      \$1113  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1114  = ch1_read_select_143;
-    if (bus__r_en) begin
-      \$1114  = \$446 ;
-    end
-    if (rst) begin
-      \$1114  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1115  = ch1_read_select_144;
-    if (bus__r_en) begin
-      \$1115  = \$447 ;
-    end
-    if (rst) begin
-      \$1115  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1116  = ch1_read_select_145;
-    if (bus__r_en) begin
-      \$1116  = \$448 ;
-    end
-    if (rst) begin
-      \$1116  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1117  = ch1_read_select_170;
-    if (bus__r_en) begin
-      \$1117  = \$449 ;
-    end
-    if (rst) begin
-      \$1117  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1118  = ch1_read_select_171;
-    if (bus__r_en) begin
-      \$1118  = \$450 ;
-    end
-    if (rst) begin
-      \$1118  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1119  = ch1_read_select_172;
-    if (bus__r_en) begin
-      \$1119  = \$451 ;
-    end
-    if (rst) begin
-      \$1119  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1120  = ch1_read_select_173;
-    if (bus__r_en) begin
-      \$1120  = \$452 ;
-    end
-    if (rst) begin
-      \$1120  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1121  = ch1_read_select_174;
-    if (bus__r_en) begin
-      \$1121  = \$453 ;
-    end
-    if (rst) begin
-      \$1121  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1122  = ch1_read_select_175;
-    if (bus__r_en) begin
-      \$1122  = \$454 ;
-    end
-    if (rst) begin
-      \$1122  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1123  = ch1_read_select_176;
-    if (bus__r_en) begin
-      \$1123  = \$455 ;
-    end
-    if (rst) begin
-      \$1123  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1124  = ch1_read_select_177;
-    if (bus__r_en) begin
-      \$1124  = \$456 ;
-    end
-    if (rst) begin
-      \$1124  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1125  = ch1_read_select_178;
-    if (bus__r_en) begin
-      \$1125  = \$457 ;
-    end
-    if (rst) begin
-      \$1125  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1126  = ch1_read_select_179;
-    if (bus__r_en) begin
-      \$1126  = \$458 ;
-    end
-    if (rst) begin
-      \$1126  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1127  = ch1_read_select_17a;
-    if (bus__r_en) begin
-      \$1127  = \$459 ;
-    end
-    if (rst) begin
-      \$1127  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1128  = ch1_read_select_17b;
-    if (bus__r_en) begin
-      \$1128  = \$460 ;
-    end
-    if (rst) begin
-      \$1128  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1129  = ch1_read_select_17c;
-    if (bus__r_en) begin
-      \$1129  = \$461 ;
-    end
-    if (rst) begin
-      \$1129  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1130  = ch1_read_select_17d;
-    if (bus__r_en) begin
-      \$1130  = \$462 ;
-    end
-    if (rst) begin
-      \$1130  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1131  = ch1_result_status_status_snapshot;
-    if (\$463 ) begin
-      \$1131  = \port$7770$0 [3:0];
-    end
-    if (rst) begin
-      \$1131  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1132  = ch1_result_status_cds_snapshot;
-    if (\$463 ) begin
-      \$1132  = \port$7770$0 [49];
-    end
-    if (rst) begin
-      \$1132  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1133  = ch1_result_status_w0_ne_snapshot;
-    if (\$463 ) begin
-      \$1133  = \port$7770$0 [131];
-    end
-    if (rst) begin
-      \$1133  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1134  = ch1_result_status_w0_nw_snapshot;
-    if (\$463 ) begin
-      \$1134  = \port$7770$0 [132];
-    end
-    if (rst) begin
-      \$1134  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1135  = ch1_result_status_w0_crc_ok_snapshot;
-    if (\$463 ) begin
-      \$1135  = \port$7770$0 [133];
-    end
-    if (rst) begin
-      \$1135  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1136  = ch1_result_status_w1_ne_snapshot;
-    if (\$463 ) begin
-      \$1136  = \port$7770$0 [174];
-    end
-    if (rst) begin
-      \$1136  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1137  = ch1_result_status_w1_nw_snapshot;
-    if (\$463 ) begin
-      \$1137  = \port$7770$0 [175];
-    end
-    if (rst) begin
-      \$1137  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1138  = ch1_result_status_w1_crc_ok_snapshot;
-    if (\$463 ) begin
-      \$1138  = \port$7770$0 [176];
-    end
-    if (rst) begin
-      \$1138  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1139  = ch1_result_status_lc_repeat_snapshot;
-    if (\$463 ) begin
-      \$1139  = \port$7770$0 [183];
-    end
-    if (rst) begin
-      \$1139  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1140  = ch1_result_status_lc_skip_snapshot;
-    if (\$463 ) begin
-      \$1140  = \port$7770$0 [184];
-    end
-    if (rst) begin
-      \$1140  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1141  = ch1_result_status_lc_zero_snapshot;
-    if (\$463 ) begin
-      \$1141  = \port$7770$0 [185];
-    end
-    if (rst) begin
-      \$1141  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1142  = ch1_result_status_spw_mismatch_snapshot;
-    if (\$463 ) begin
-      \$1142  = \port$7770$0 [186];
-    end
-    if (rst) begin
-      \$1142  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1143  = ch1_result_status_lc_snapshot;
-    if (\$463 ) begin
-      \$1143  = \port$7770$0 [182:177];
-    end
-    if (rst) begin
-      \$1143  = 6'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1144  = ch1_result_seq_seq_snapshot;
-    if (\$463 ) begin
-      \$1144  = ch1__done_count;
-    end
-    if (rst) begin
-      \$1144  = 16'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1145  = ch1_result_seq_line_delay_snapshot;
-    if (\$463 ) begin
-      \$1145  = \port$7770$0 [48:36];
-    end
-    if (rst) begin
-      \$1145  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1146  = ch1_result_w0_lo_data_snapshot;
-    if (\$463 ) begin
-      \$1146  = \port$7770$0 [107:76];
-    end
-    if (rst) begin
-      \$1146  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1147  = ch1_result_w0_hi_data_snapshot;
-    if (\$463 ) begin
-      \$1147  = \port$7770$0 [130:108];
-    end
-    if (rst) begin
-      \$1147  = 23'h000000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1148  = ch1_result_w1_lo_data_snapshot;
-    if (\$463 ) begin
-      \$1148  = \port$7770$0 [165:134];
-    end
-    if (rst) begin
-      \$1148  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1149  = ch1_result_w1_hi_data_snapshot;
-    if (\$463 ) begin
-      \$1149  = \port$7770$0 [173:166];
-    end
-    if (rst) begin
-      \$1149  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1150  = ch1_result_timestamp_time_snapshot;
-    if (\$463 ) begin
-      \$1150  = \port$7770$0 [35:4];
-    end
-    if (rst) begin
-      \$1150  = 32'd0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1151  = ch1_result_line_noise_events_snapshot;
-    if (\$463 ) begin
-      \$1151  = \port$7770$0 [53:50];
-    end
-    if (rst) begin
-      \$1151  = 4'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1152  = ch1_result_line_delay_settled_snapshot;
-    if (\$463 ) begin
-      \$1152  = \port$7770$0 [54];
-    end
-    if (rst) begin
-      \$1152  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1153  = ch1_result_line_delay_spread_snapshot;
-    if (\$463 ) begin
-      \$1153  = \port$7770$0 [75:68];
-    end
-    if (rst) begin
-      \$1153  = 8'h00;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1154  = ch1_result_line_settled_delay_snapshot;
-    if (\$463 ) begin
-      \$1154  = \port$7770$0 [67:55];
-    end
-    if (rst) begin
-      \$1154  = 13'h0000;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1155  = ch1_window0_read;
-    if (bus__r_en) begin
-      \$1155  = \$465 ;
-    end
-    if (rst) begin
-      \$1155  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1156  = ch1_window1_read;
-    if (bus__r_en) begin
-      \$1156  = \$467 ;
-    end
-    if (rst) begin
-      \$1156  = 1'h0;
-    end
-  end
-  always @* begin
-    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
-    \$1157  = ch1_read_data;
+    \$1103  = ch1_read_data;
     if (bus__r_load) begin
-      \$1157  = \$609 ;
+      \$1103  = \$530 ;
     end
     if (rst) begin
-      \$1157  = 32'd0;
+      \$1103  = 32'd0;
     end
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    config_memory0_write_mask = 32'd0;
+    casez (write_addr[6:0])
+      7'h05:
+          config_memory0_write_mask = 32'd7;
+      7'h08:
+          config_memory0_write_mask = 32'd268435455;
+      7'h09:
+          config_memory0_write_mask = 32'd16777215;
+      7'h0a:
+          config_memory0_write_mask = 32'd16777215;
+      7'h0b:
+          config_memory0_write_mask = 32'd16777215;
+      7'h0c:
+          config_memory0_write_mask = 32'd16777215;
+      7'h0d:
+          config_memory0_write_mask = 32'd2415857663;
+      7'h0e:
+          config_memory0_write_mask = 32'd268435203;
+      7'h0f:
+          config_memory0_write_mask = 32'd4095;
+      7'h20:
+          config_memory0_write_mask = 32'd18874367;
+      7'h21:
+          config_memory0_write_mask = 32'd65535;
+      7'h22:
+          config_memory0_write_mask = 32'd18874367;
+      7'h23:
+          config_memory0_write_mask = 32'd65535;
+      7'h24:
+          config_memory0_write_mask = 32'd268369935;
+      7'h40:
+          config_memory0_write_mask = 32'd25132807;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    config_memory0_write_fill = 32'd0;
+    casez (write_addr[6:0])
+      7'h05:
+          config_memory0_write_fill = 32'd0;
+      7'h08:
+          config_memory0_write_fill = 32'd0;
+      7'h09:
+          config_memory0_write_fill = 32'd0;
+      7'h0a:
+          config_memory0_write_fill = 32'd0;
+      7'h0b:
+          config_memory0_write_fill = 32'd0;
+      7'h0c:
+          config_memory0_write_fill = 32'd0;
+      7'h0d:
+          config_memory0_write_fill = 32'd0;
+      7'h0e:
+          config_memory0_write_fill = 32'd0;
+      7'h0f:
+          config_memory0_write_fill = 32'd0;
+      7'h20:
+          config_memory0_write_fill = 32'd0;
+      7'h21:
+          config_memory0_write_fill = 32'd0;
+      7'h22:
+          config_memory0_write_fill = 32'd0;
+      7'h23:
+          config_memory0_write_fill = 32'd0;
+      7'h24:
+          config_memory0_write_fill = 32'd0;
+      7'h40:
+          config_memory0_write_fill = 32'd0;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    config_memory0_read_index = 4'h0;
+    casez (bus__w_addr[6:0])
+      7'h05:
+          config_memory0_read_index = 4'h0;
+      7'h08:
+          config_memory0_read_index = 4'h1;
+      7'h09:
+          config_memory0_read_index = 4'h2;
+      7'h0a:
+          config_memory0_read_index = 4'h3;
+      7'h0b:
+          config_memory0_read_index = 4'h4;
+      7'h0c:
+          config_memory0_read_index = 4'h5;
+      7'h0d:
+          config_memory0_read_index = 4'h6;
+      7'h0e:
+          config_memory0_read_index = 4'h7;
+      7'h0f:
+          config_memory0_read_index = 4'h8;
+      7'h20:
+          config_memory0_read_index = 4'h9;
+      7'h21:
+          config_memory0_read_index = 4'ha;
+      7'h22:
+          config_memory0_read_index = 4'hb;
+      7'h23:
+          config_memory0_read_index = 4'hc;
+      7'h24:
+          config_memory0_read_index = 4'hd;
+      7'h40:
+          config_memory0_read_index = 4'he;
+    endcase
+  end
+  always @* begin
+    if (\$auto$verilog_backend.cc:2355:dump_module$10 ) begin end
+    config_memory0_read_hit = 1'h0;
+    casez (bus__w_addr[6:0])
+      7'h05:
+          config_memory0_read_hit = 1'h1;
+      7'h08:
+          config_memory0_read_hit = 1'h1;
+      7'h09:
+          config_memory0_read_hit = 1'h1;
+      7'h0a:
+          config_memory0_read_hit = 1'h1;
+      7'h0b:
+          config_memory0_read_hit = 1'h1;
+      7'h0c:
+          config_memory0_read_hit = 1'h1;
+      7'h0d:
+          config_memory0_read_hit = 1'h1;
+      7'h0e:
+          config_memory0_read_hit = 1'h1;
+      7'h0f:
+          config_memory0_read_hit = 1'h1;
+      7'h20:
+          config_memory0_read_hit = 1'h1;
+      7'h21:
+          config_memory0_read_hit = 1'h1;
+      7'h22:
+          config_memory0_read_hit = 1'h1;
+      7'h23:
+          config_memory0_read_hit = 1'h1;
+      7'h24:
+          config_memory0_read_hit = 1'h1;
+      7'h40:
+          config_memory0_read_hit = 1'h1;
+    endcase
   end
   assign bus__r_addr = bus__w_addr;
   assign glob__channels = 4'h2;
   assign glob__irq_pending = { 6'h00, ch1_irq, ch0_irq };
-  assign ch0__status = \port$7239$0 [3:0];
-  assign ch0__cds = \port$7239$0 [49];
-  assign ch0__word0_ne = \port$7239$0 [131];
-  assign ch0__word0_nw = \port$7239$0 [132];
-  assign ch0__word0_crc_ok = \port$7239$0 [133];
-  assign ch0__word1_ne = \port$7239$0 [174];
-  assign ch0__word1_nw = \port$7239$0 [175];
-  assign ch0__word1_crc_ok = \port$7239$0 [176];
-  assign ch0__lc_repeat = \port$7239$0 [183];
-  assign ch0__lc_skip = \port$7239$0 [184];
-  assign ch0__lc_zero = \port$7239$0 [185];
-  assign ch0__spw_mismatch = \port$7239$0 [186];
-  assign ch0__lc = \port$7239$0 [182:177];
-  assign ch0__line_delay = \port$7239$0 [48:36];
-  assign ch0__word0_position = \port$7239$0 [130:76];
-  assign ch0__word1_position = \port$7239$0 [173:134];
-  assign ch0__timestamp = \port$7239$0 [35:4];
-  assign ch0__noise_events = \port$7239$0 [53:50];
-  assign ch0__delay_settled = \port$7239$0 [54];
-  assign ch0__delay_spread = \port$7239$0 [75:68];
-  assign ch0__settled_delay = \port$7239$0 [67:55];
+  assign ch0__status = \port$7280$0 [3:0];
+  assign ch0__cds = \port$7280$0 [49];
+  assign ch0__word0_ne = \port$7280$0 [131];
+  assign ch0__word0_nw = \port$7280$0 [132];
+  assign ch0__word0_crc_ok = \port$7280$0 [133];
+  assign ch0__word1_ne = \port$7280$0 [174];
+  assign ch0__word1_nw = \port$7280$0 [175];
+  assign ch0__word1_crc_ok = \port$7280$0 [176];
+  assign ch0__lc_repeat = \port$7280$0 [183];
+  assign ch0__lc_skip = \port$7280$0 [184];
+  assign ch0__lc_zero = \port$7280$0 [185];
+  assign ch0__spw_mismatch = \port$7280$0 [186];
+  assign ch0__lc = \port$7280$0 [182:177];
+  assign ch0__line_delay = \port$7280$0 [48:36];
+  assign ch0__word0_position = \port$7280$0 [130:76];
+  assign ch0__word1_position = \port$7280$0 [173:134];
+  assign ch0__timestamp = \port$7280$0 [35:4];
+  assign ch0__noise_events = \port$7280$0 [53:50];
+  assign ch0__delay_settled = \port$7280$0 [54];
+  assign ch0__delay_spread = \port$7280$0 [75:68];
+  assign ch0__settled_delay = \port$7280$0 [67:55];
   assign ch0__cap_data_bits_w0 = 6'h37;
   assign ch0__cap_data_bits_w1 = 6'h28;
   assign ch0__cap_timer_width = 6'h18;
@@ -9663,13 +9643,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__count_crc_word5 = 16'h0000;
   assign ch0__count_crc_word6 = 16'h0000;
   assign ch0__count_crc_word7 = 16'h0000;
-  assign ch0__ca_status = \port$7327$0 [2:0];
-  assign ch0__ca_bytes_done = \port$7327$0 [9:3];
-  assign ch0__count_ca_crc4_error = \port$7250$0 [15:0];
-  assign ch0__count_ca_no_answer = \port$7250$0 [31:16];
-  assign ch0__count_ca_refused = \port$7250$0 [47:32];
-  assign ch0__count_ca_aborted = \port$7250$0 [63:48];
-  assign ch0__count_ca_data_fault = \port$7250$0 [79:64];
+  assign ch0__ca_status = \port$7368$0 [2:0];
+  assign ch0__ca_bytes_done = \port$7368$0 [9:3];
+  assign ch0__count_ca_crc4_error = \port$7291$0 [15:0];
+  assign ch0__count_ca_no_answer = \port$7291$0 [31:16];
+  assign ch0__count_ca_refused = \port$7291$0 [47:32];
+  assign ch0__count_ca_aborted = \port$7291$0 [63:48];
+  assign ch0__count_ca_data_fault = \port$7291$0 [79:64];
   assign ch0__word2_ne = 1'h0;
   assign ch0__word2_nw = 1'h0;
   assign ch0__word2_crc_ok = 1'h0;
@@ -9694,27 +9674,27 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__word5_position = 63'h0000000000000000;
   assign ch0__word6_position = 63'h0000000000000000;
   assign ch0__word7_position = 63'h0000000000000000;
-  assign ch1__status = \port$7770$0 [3:0];
-  assign ch1__cds = \port$7770$0 [49];
-  assign ch1__word0_ne = \port$7770$0 [131];
-  assign ch1__word0_nw = \port$7770$0 [132];
-  assign ch1__word0_crc_ok = \port$7770$0 [133];
-  assign ch1__word1_ne = \port$7770$0 [174];
-  assign ch1__word1_nw = \port$7770$0 [175];
-  assign ch1__word1_crc_ok = \port$7770$0 [176];
-  assign ch1__lc_repeat = \port$7770$0 [183];
-  assign ch1__lc_skip = \port$7770$0 [184];
-  assign ch1__lc_zero = \port$7770$0 [185];
-  assign ch1__spw_mismatch = \port$7770$0 [186];
-  assign ch1__lc = \port$7770$0 [182:177];
-  assign ch1__line_delay = \port$7770$0 [48:36];
-  assign ch1__word0_position = \port$7770$0 [130:76];
-  assign ch1__word1_position = \port$7770$0 [173:134];
-  assign ch1__timestamp = \port$7770$0 [35:4];
-  assign ch1__noise_events = \port$7770$0 [53:50];
-  assign ch1__delay_settled = \port$7770$0 [54];
-  assign ch1__delay_spread = \port$7770$0 [75:68];
-  assign ch1__settled_delay = \port$7770$0 [67:55];
+  assign ch1__status = \port$7811$0 [3:0];
+  assign ch1__cds = \port$7811$0 [49];
+  assign ch1__word0_ne = \port$7811$0 [131];
+  assign ch1__word0_nw = \port$7811$0 [132];
+  assign ch1__word0_crc_ok = \port$7811$0 [133];
+  assign ch1__word1_ne = \port$7811$0 [174];
+  assign ch1__word1_nw = \port$7811$0 [175];
+  assign ch1__word1_crc_ok = \port$7811$0 [176];
+  assign ch1__lc_repeat = \port$7811$0 [183];
+  assign ch1__lc_skip = \port$7811$0 [184];
+  assign ch1__lc_zero = \port$7811$0 [185];
+  assign ch1__spw_mismatch = \port$7811$0 [186];
+  assign ch1__lc = \port$7811$0 [182:177];
+  assign ch1__line_delay = \port$7811$0 [48:36];
+  assign ch1__word0_position = \port$7811$0 [130:76];
+  assign ch1__word1_position = \port$7811$0 [173:134];
+  assign ch1__timestamp = \port$7811$0 [35:4];
+  assign ch1__noise_events = \port$7811$0 [53:50];
+  assign ch1__delay_settled = \port$7811$0 [54];
+  assign ch1__delay_spread = \port$7811$0 [75:68];
+  assign ch1__settled_delay = \port$7811$0 [67:55];
   assign ch1__cap_data_bits_w0 = 6'h37;
   assign ch1__cap_data_bits_w1 = 6'h28;
   assign ch1__cap_timer_width = 6'h18;
@@ -9735,13 +9715,13 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__count_crc_word5 = 16'h0000;
   assign ch1__count_crc_word6 = 16'h0000;
   assign ch1__count_crc_word7 = 16'h0000;
-  assign ch1__ca_status = \port$7858$0 [2:0];
-  assign ch1__ca_bytes_done = \port$7858$0 [9:3];
-  assign ch1__count_ca_crc4_error = \port$7781$0 [15:0];
-  assign ch1__count_ca_no_answer = \port$7781$0 [31:16];
-  assign ch1__count_ca_refused = \port$7781$0 [47:32];
-  assign ch1__count_ca_aborted = \port$7781$0 [63:48];
-  assign ch1__count_ca_data_fault = \port$7781$0 [79:64];
+  assign ch1__ca_status = \port$7899$0 [2:0];
+  assign ch1__ca_bytes_done = \port$7899$0 [9:3];
+  assign ch1__count_ca_crc4_error = \port$7822$0 [15:0];
+  assign ch1__count_ca_no_answer = \port$7822$0 [31:16];
+  assign ch1__count_ca_refused = \port$7822$0 [47:32];
+  assign ch1__count_ca_aborted = \port$7822$0 [63:48];
+  assign ch1__count_ca_data_fault = \port$7822$0 [79:64];
   assign ch1__word2_ne = 1'h0;
   assign ch1__word2_nw = 1'h0;
   assign ch1__word2_crc_ok = 1'h0;
@@ -9886,6 +9866,9 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch0__ca_abort = ch0_ca_ctrl_abort;
   assign ch0__ca_wbuf_data = write_data;
   assign ch0__ca_rbuf_addr = bus__w_addr[3:0];
+  assign wr__addr = { \$612 , \$611 , \$610 , \$609  };
+  assign wr__data = config_memory0_write_data;
+  assign rd__addr = ch0_config_read_index;
   assign ch1__count_addr = bus__w_addr[2:0];
   assign ch1__start = ch1_ctrl_start;
   assign ch1__abort_cycle = ch1_ctrl_abort;
@@ -10000,175 +9983,178 @@ module \biss_master_wb.bank (bus__w_data, bus__w_strb, clk, rst, bus__r_en, bus_
   assign ch1__ca_slave_id = ch1_ca_request_slave_id;
   assign ch1__ca_address = ch1_ca_request_address;
   assign ch1__ca_count = ch1_ca_request_count;
-  assign ch1__ca_write = \ch1_ca_request_write$452 ;
+  assign ch1__ca_write = \ch1_ca_request_write$446 ;
   assign ch1__ca_start = ch1_ca_ctrl_start;
   assign ch1__ca_abort = ch1_ca_ctrl_abort;
   assign ch1__ca_wbuf_addr = write_addr[3:0];
   assign ch1__ca_wbuf_data = write_data;
   assign ch1__ca_rbuf_addr = bus__w_addr[3:0];
+  assign \wr__addr$940  = { \$715 , \$714 , \$713 , \$712  };
+  assign \wr__data$941  = config_memory0_write_data;
+  assign \rd__addr$943  = ch1_config_read_index;
   assign irq = { ch1_irq, ch0_irq };
   assign ch0__ca_wbuf_addr = write_addr[3:0];
   assign \$9  = \$8 ;
   assign \$14  = 32'd0;
   assign \$15  = \$13 ;
-  assign \$689  = \$688 ;
-  assign \$691  = \$690 ;
-  assign \$693  = \$692 ;
-  assign \$768  = \$767 ;
-  assign \$770  = \$769 ;
-  assign \$772  = \$771 ;
-  assign \$173  = \$172 ;
-  assign \$182  = 32'd0;
-  assign \$183  = \$181 ;
-  assign \$184  = 32'd0;
-  assign \$185  = \$181 ;
-  assign \$228  = 32'd0;
-  assign \$229  = \$227 ;
-  assign \$230  = 32'd0;
-  assign \$231  = \$227 ;
-  assign \$232  = 32'd0;
-  assign \$233  = \$227 ;
-  assign \$234  = 32'd0;
-  assign \$235  = \$227 ;
-  assign \$236  = 32'd0;
-  assign \$237  = \$227 ;
-  assign \$238  = 32'd0;
-  assign \$239  = \$227 ;
-  assign \$240  = 32'd0;
-  assign \$241  = \$227 ;
-  assign \$242  = 32'd0;
-  assign \$243  = \$227 ;
-  assign \$244  = 32'd0;
-  assign \$245  = \$227 ;
-  assign \$246  = 32'd0;
-  assign \$247  = \$227 ;
-  assign \$248  = 32'd0;
-  assign \$249  = \$227 ;
-  assign \$250  = 32'd0;
-  assign \$251  = \$227 ;
-  assign \$252  = 32'd0;
-  assign \$253  = \$227 ;
-  assign \$254  = 32'd0;
-  assign \$255  = \$227 ;
-  assign \$256  = 32'd0;
-  assign \$257  = \$227 ;
-  assign \$258  = 32'd0;
-  assign \$259  = \$227 ;
-  assign \$260  = 32'd0;
-  assign \$261  = \$227 ;
-  assign \$262  = 32'd0;
-  assign \$263  = \$227 ;
-  assign \$264  = 32'd0;
-  assign \$265  = \$227 ;
-  assign \$266  = 32'd0;
-  assign \$267  = \$227 ;
-  assign \$268  = 32'd0;
-  assign \$269  = \$227 ;
-  assign \$272  = 32'd0;
-  assign \$273  = \$271 ;
-  assign \$284  = 32'd0;
-  assign \$285  = \$283 ;
-  assign \$286  = 32'd0;
-  assign \$287  = \$283 ;
-  assign \$288  = 32'd0;
-  assign \$289  = \$283 ;
-  assign \$290  = 32'd0;
-  assign \$291  = \$283 ;
-  assign \$292  = 32'd0;
-  assign \$293  = \$283 ;
-  assign \$294  = 32'd0;
-  assign \$295  = \$283 ;
-  assign \$296  = 32'd0;
-  assign \$297  = \$283 ;
-  assign \$298  = 32'd0;
-  assign \$299  = \$283 ;
-  assign \$300  = 32'd0;
-  assign \$301  = \$283 ;
-  assign \$302  = 32'd0;
-  assign \$303  = \$283 ;
-  assign \$304  = 32'd0;
-  assign \$305  = \$283 ;
-  assign \$306  = 32'd0;
-  assign \$307  = \$283 ;
-  assign \$308  = 32'd0;
-  assign \$309  = \$283 ;
-  assign \$469  = \$468 ;
-  assign \$478  = 32'd0;
-  assign \$479  = \$477 ;
-  assign \$480  = 32'd0;
-  assign \$481  = \$477 ;
-  assign \$524  = 32'd0;
-  assign \$525  = \$523 ;
-  assign \$526  = 32'd0;
-  assign \$527  = \$523 ;
-  assign \$528  = 32'd0;
-  assign \$529  = \$523 ;
-  assign \$530  = 32'd0;
-  assign \$531  = \$523 ;
-  assign \$532  = 32'd0;
-  assign \$533  = \$523 ;
-  assign \$534  = 32'd0;
-  assign \$535  = \$523 ;
-  assign \$536  = 32'd0;
-  assign \$537  = \$523 ;
-  assign \$538  = 32'd0;
-  assign \$539  = \$523 ;
-  assign \$540  = 32'd0;
-  assign \$541  = \$523 ;
-  assign \$542  = 32'd0;
-  assign \$543  = \$523 ;
-  assign \$544  = 32'd0;
-  assign \$545  = \$523 ;
-  assign \$546  = 32'd0;
-  assign \$547  = \$523 ;
-  assign \$548  = 32'd0;
-  assign \$549  = \$523 ;
-  assign \$550  = 32'd0;
-  assign \$551  = \$523 ;
-  assign \$552  = 32'd0;
-  assign \$553  = \$523 ;
-  assign \$554  = 32'd0;
-  assign \$555  = \$523 ;
-  assign \$556  = 32'd0;
-  assign \$557  = \$523 ;
-  assign \$558  = 32'd0;
-  assign \$559  = \$523 ;
-  assign \$560  = 32'd0;
-  assign \$561  = \$523 ;
-  assign \$562  = 32'd0;
-  assign \$563  = \$523 ;
-  assign \$564  = 32'd0;
-  assign \$565  = \$523 ;
-  assign \$568  = 32'd0;
-  assign \$569  = \$567 ;
-  assign \$580  = 32'd0;
-  assign \$581  = \$579 ;
-  assign \$582  = 32'd0;
-  assign \$583  = \$579 ;
-  assign \$584  = 32'd0;
-  assign \$585  = \$579 ;
-  assign \$586  = 32'd0;
-  assign \$587  = \$579 ;
-  assign \$588  = 32'd0;
-  assign \$589  = \$579 ;
-  assign \$590  = 32'd0;
-  assign \$591  = \$579 ;
-  assign \$592  = 32'd0;
-  assign \$593  = \$579 ;
-  assign \$594  = 32'd0;
-  assign \$595  = \$579 ;
-  assign \$596  = 32'd0;
-  assign \$597  = \$579 ;
-  assign \$598  = 32'd0;
-  assign \$599  = \$579 ;
-  assign \$600  = 32'd0;
-  assign \$601  = \$579 ;
-  assign \$602  = 32'd0;
-  assign \$603  = \$579 ;
-  assign \$604  = 32'd0;
-  assign \$605  = \$579 ;
+  assign \$634  = \$633 ;
+  assign \$636  = \$635 ;
+  assign \$638  = \$637 ;
+  assign \$737  = \$736 ;
+  assign \$739  = \$738 ;
+  assign \$741  = \$740 ;
+  assign \$164  = \$163 ;
+  assign \$171  = 32'd0;
+  assign \$172  = \$170 ;
+  assign \$173  = 32'd0;
+  assign \$174  = \$170 ;
+  assign \$191  = 32'd0;
+  assign \$192  = \$190 ;
+  assign \$193  = 32'd0;
+  assign \$194  = \$190 ;
+  assign \$195  = 32'd0;
+  assign \$196  = \$190 ;
+  assign \$197  = 32'd0;
+  assign \$198  = \$190 ;
+  assign \$199  = 32'd0;
+  assign \$200  = \$190 ;
+  assign \$201  = 32'd0;
+  assign \$202  = \$190 ;
+  assign \$203  = 32'd0;
+  assign \$204  = \$190 ;
+  assign \$205  = 32'd0;
+  assign \$206  = \$190 ;
+  assign \$207  = 32'd0;
+  assign \$208  = \$190 ;
+  assign \$209  = 32'd0;
+  assign \$210  = \$190 ;
+  assign \$211  = 32'd0;
+  assign \$212  = \$190 ;
+  assign \$213  = 32'd0;
+  assign \$214  = \$190 ;
+  assign \$215  = 32'd0;
+  assign \$216  = \$190 ;
+  assign \$217  = 32'd0;
+  assign \$218  = \$190 ;
+  assign \$219  = 32'd0;
+  assign \$220  = \$190 ;
+  assign \$221  = 32'd0;
+  assign \$222  = \$190 ;
+  assign \$223  = 32'd0;
+  assign \$224  = \$190 ;
+  assign \$225  = 32'd0;
+  assign \$226  = \$190 ;
+  assign \$227  = 32'd0;
+  assign \$228  = \$190 ;
+  assign \$229  = 32'd0;
+  assign \$230  = \$190 ;
+  assign \$231  = 32'd0;
+  assign \$232  = \$190 ;
+  assign \$233  = 32'd0;
+  assign \$234  = \$190 ;
+  assign \$245  = 32'd0;
+  assign \$246  = \$244 ;
+  assign \$247  = 32'd0;
+  assign \$248  = \$244 ;
+  assign \$249  = 32'd0;
+  assign \$250  = \$244 ;
+  assign \$251  = 32'd0;
+  assign \$252  = \$244 ;
+  assign \$253  = 32'd0;
+  assign \$254  = \$244 ;
+  assign \$255  = 32'd0;
+  assign \$256  = \$244 ;
+  assign \$257  = 32'd0;
+  assign \$258  = \$244 ;
+  assign \$259  = 32'd0;
+  assign \$260  = \$244 ;
+  assign \$261  = 32'd0;
+  assign \$262  = \$244 ;
+  assign \$263  = 32'd0;
+  assign \$264  = \$244 ;
+  assign \$265  = 32'd0;
+  assign \$266  = \$244 ;
+  assign \$267  = 32'd0;
+  assign \$268  = \$244 ;
+  assign \$269  = 32'd0;
+  assign \$270  = \$244 ;
+  assign \$418  = \$417 ;
+  assign \$425  = 32'd0;
+  assign \$426  = \$424 ;
+  assign \$427  = 32'd0;
+  assign \$428  = \$424 ;
+  assign \$445  = 32'd0;
+  assign \$446  = \$444 ;
+  assign \$447  = 32'd0;
+  assign \$448  = \$444 ;
+  assign \$449  = 32'd0;
+  assign \$450  = \$444 ;
+  assign \$451  = 32'd0;
+  assign \$452  = \$444 ;
+  assign \$453  = 32'd0;
+  assign \$454  = \$444 ;
+  assign \$455  = 32'd0;
+  assign \$456  = \$444 ;
+  assign \$457  = 32'd0;
+  assign \$458  = \$444 ;
+  assign \$459  = 32'd0;
+  assign \$460  = \$444 ;
+  assign \$461  = 32'd0;
+  assign \$462  = \$444 ;
+  assign \$463  = 32'd0;
+  assign \$464  = \$444 ;
+  assign \$465  = 32'd0;
+  assign \$466  = \$444 ;
+  assign \$467  = 32'd0;
+  assign \$468  = \$444 ;
+  assign \$469  = 32'd0;
+  assign \$470  = \$444 ;
+  assign \$471  = 32'd0;
+  assign \$472  = \$444 ;
+  assign \$473  = 32'd0;
+  assign \$474  = \$444 ;
+  assign \$475  = 32'd0;
+  assign \$476  = \$444 ;
+  assign \$477  = 32'd0;
+  assign \$478  = \$444 ;
+  assign \$479  = 32'd0;
+  assign \$480  = \$444 ;
+  assign \$481  = 32'd0;
+  assign \$482  = \$444 ;
+  assign \$483  = 32'd0;
+  assign \$484  = \$444 ;
+  assign \$485  = 32'd0;
+  assign \$486  = \$444 ;
+  assign \$487  = 32'd0;
+  assign \$488  = \$444 ;
+  assign \$499  = 32'd0;
+  assign \$500  = \$498 ;
+  assign \$501  = 32'd0;
+  assign \$502  = \$498 ;
+  assign \$503  = 32'd0;
+  assign \$504  = \$498 ;
+  assign \$505  = 32'd0;
+  assign \$506  = \$498 ;
+  assign \$507  = 32'd0;
+  assign \$508  = \$498 ;
+  assign \$509  = 32'd0;
+  assign \$510  = \$498 ;
+  assign \$511  = 32'd0;
+  assign \$512  = \$498 ;
+  assign \$513  = 32'd0;
+  assign \$514  = \$498 ;
+  assign \$515  = 32'd0;
+  assign \$516  = \$498 ;
+  assign \$517  = 32'd0;
+  assign \$518  = \$498 ;
+  assign \$519  = 32'd0;
+  assign \$520  = \$498 ;
+  assign \$521  = 32'd0;
+  assign \$522  = \$498 ;
+  assign \$523  = 32'd0;
+  assign \$524  = \$498 ;
   assign g_irq = 1'h0;
-  assign \$773  = g_read_data;
+  assign \$742  = g_read_data;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -10289,7 +10275,7 @@ endmodule
 module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7239$0 , \port$7250$0 , regs__ca_done, \port$7327$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7280$0 , \port$7291$0 , regs__ca_done, \port$7368$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$12  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -10473,12 +10459,12 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7239$0 ;
-  wire [186:0] \port$7239$0 ;
-  output [79:0] \port$7250$0 ;
-  wire [79:0] \port$7250$0 ;
-  output [9:0] \port$7327$0 ;
-  wire [9:0] \port$7327$0 ;
+  output [186:0] \port$7280$0 ;
+  wire [186:0] \port$7280$0 ;
+  output [79:0] \port$7291$0 ;
+  wire [79:0] \port$7291$0 ;
+  output [9:0] \port$7368$0 ;
+  wire [9:0] \port$7368$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -10967,9 +10953,9 @@ module \biss_master_wb.ch0 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$7239$0  = \$20 ;
-  assign \port$7250$0  = \$21 ;
-  assign \port$7327$0  = \$22 ;
+  assign \port$7280$0  = \$20 ;
+  assign \port$7291$0  = \$21 ;
+  assign \port$7368$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -12046,7 +12032,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$6896$272 (cycle[274:272]),
+    .\port$6937$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -12106,7 +12092,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$6896$199 (cycle[199]),
+    .\port$6937$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -12157,7 +12143,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$6896$259 (cycle[271:259]),
+    .\port$6937$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -12181,7 +12167,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$6884$0 (\bit ),
+    .\port$6925$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -12249,7 +12235,7 @@ module \biss_master_wb.ch0.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$2857$0 (\$28 ),
+    .\port$2940$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -16333,7 +16319,7 @@ module \biss_master_wb.ch0.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6896$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$6937$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$27  = 0;
   wire \$1 ;
@@ -17026,8 +17012,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$6896$272 ;
-  wire [2:0] \port$6896$272 ;
+  input [2:0] \port$6937$272 ;
+  wire [2:0] \port$6937$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -17313,7 +17299,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$6896$272 [0];
+  assign error_bit = ssi & \port$6937$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -17367,7 +17353,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$6896$272 [2];
+  assign \$48  = ssi & \port$6937$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -17654,15 +17640,15 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$6896$272 [0];
+  assign \$335  = ssi & \port$6937$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$6896$272 [0];
-  assign \$343  = ~ \port$6896$272 [1];
+  assign \$342  = ssi & \port$6937$272 [0];
+  assign \$343  = ~ \port$6937$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -18294,7 +18280,7 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$6896$272 [0];
+  assign ssi_error = \port$6937$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -18303,8 +18289,8 @@ module \biss_master_wb.ch0.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$6896$272 [2];
-  assign ssi_error_low = \port$6896$272 [1];
+  assign ssi_double = \port$6937$272 [2];
+  assign ssi_error_low = \port$6937$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -19961,7 +19947,7 @@ module \biss_master_wb.ch0.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6896$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6937$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$34  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -20013,8 +19999,8 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6896$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$6896$199 ;
-  wire \port$6896$199 ;
+  input \port$6937$199 ;
+  wire \port$6937$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -20068,7 +20054,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6896$199 , ssi, ssi_e
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$6896$199  ? word1_len : 8'h00;
+  assign \$11  = \port$6937$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -20178,7 +20164,7 @@ module \biss_master_wb.ch0.core.ma_stop (rst, words, \port$6896$199 , ssi, ssi_e
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$6896$199 , 1'h1 };
+  assign enables = { \port$6937$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -22319,7 +22305,7 @@ module \biss_master_wb.ch0.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6896$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$6937$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$43  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -22453,8 +22439,8 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$6896$259 ;
-  wire [12:0] \port$6896$259 ;
+  input [12:0] \port$6937$259 ;
+  wire [12:0] \port$6937$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -22479,7 +22465,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$6896$259 [12:1] + 1'h1;
+  assign \$11  = \port$6937$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -22604,7 +22590,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch0.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$6896$259 [0]),
+    .clear_high(\port$6937$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -22747,7 +22733,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$6896$259 [0]) begin
+            if (\port$6937$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -22832,7 +22818,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$6896$259 [0]) begin
+            if (\port$6937$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -22871,7 +22857,7 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$6896$259 [12:1] };
+            \$85  = { 1'h0, \port$6937$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -23256,11 +23242,11 @@ module \biss_master_wb.ch0.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$6896$259 [12:1] };
-  assign fixed = \port$6896$259 [0];
+  assign fixed_delay = { 1'h0, \port$6937$259 [12:1] };
+  assign fixed = \port$6937$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$6896$259 [0];
+  assign clear_high = \port$6937$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -23667,7 +23653,7 @@ module \biss_master_wb.ch0.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6884$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, \port$6925$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$46  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -23709,8 +23695,8 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$6884$0 ;
-  wire \port$6884$0 ;
+  input \port$6925$0 ;
+  wire \port$6925$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -23724,9 +23710,9 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$6884$0  };
-  assign \$2  = { lc[4:0], \port$6884$0  } == last;
-  assign \$3  = { lc[4:0], \port$6884$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$6925$0  };
+  assign \$2  = { lc[4:0], \port$6925$0  } == last;
+  assign \$3  = { lc[4:0], \port$6925$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -23836,7 +23822,7 @@ module \biss_master_wb.ch0.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$6884$0  };
+  assign lc_next = { lc[4:0], \port$6925$0  };
   assign zero = is_zero;
 endmodule
 
@@ -24400,7 +24386,7 @@ module \biss_master_wb.ch0.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2857$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2940$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$50  = 0;
   wire \$1 ;
@@ -24578,8 +24564,8 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2857$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$2857$0 ;
-  wire \port$2857$0 ;
+  output \port$2940$0 ;
+  wire \port$2940$0 ;
   output report;
   wire report;
   input report_frame;
@@ -24697,7 +24683,7 @@ module \biss_master_wb.ch0.core.verdict (lc_skip_seen, noisy, \port$2857$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$2857$0  = \$2 ;
+  assign \port$2940$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];
@@ -24754,7 +24740,7 @@ endmodule
 module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, ca_rbuf_en, regs__frame_error, regs__busy, regs__config_error, regs__count_data, regs__ca_busy, regs__ca_rbuf_data, time_now, ca_wbuf_addr, ca_wbuf_data, start, regs__abort_cycle, clear_counters, periodic, regs__trigger_enable
 , cfg_ma_half_period, cfg_delay_limit, cfg_request_period, cfg_break_time, cfg_ack_limit, cfg_timeout_limit, cfg_w0_data_bits, cfg_w0_nenw, cfg_w0_lc, cfg_w0_crc, cfg_w0_gray, cfg_w0_signed, cfg_w1_data_bits, cfg_w1_nenw, cfg_w1_lc, cfg_w1_crc, cfg_w1_gray, cfg_w1_signed, cfg_w1_enable, cfg_end_check, cfg_spw_check
 , cfg_spw_tolerance, cfg_noise_limit, cfg_delay_tolerance, cfg_confirm_frames, cfg_quiet_time, cfg_w0_crc_poly, cfg_w0_crc_width, cfg_w0_crc_inverted, cfg_w0_crc_start, cfg_w1_crc_poly, cfg_w1_crc_width, cfg_w1_crc_inverted, cfg_w1_crc_start, cfg_ssi, cfg_ssi_error, cfg_ssi_error_low, cfg_ssi_double, cfg_ssi_delay, ca_slave_id, ca_address, ca_count
-, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7770$0 , \port$7781$0 , regs__ca_done, \port$7858$0 , ca_rbuf_addr);
+, ca_write, ca_start, ca_abort, regs__frame_done, regs__done_count, regs__result_updates, ma, \port$7811$0 , \port$7822$0 , regs__ca_done, \port$7899$0 , ca_rbuf_addr);
   reg \$auto$verilog_backend.cc:2355:dump_module$51  = 0;
   wire \$1 ;
   wire [16:0] \$10 ;
@@ -24938,12 +24924,12 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   reg pending_ok = 1'h0;
   input periodic;
   wire periodic;
-  output [186:0] \port$7770$0 ;
-  wire [186:0] \port$7770$0 ;
-  output [79:0] \port$7781$0 ;
-  wire [79:0] \port$7781$0 ;
-  output [9:0] \port$7858$0 ;
-  wire [9:0] \port$7858$0 ;
+  output [186:0] \port$7811$0 ;
+  wire [186:0] \port$7811$0 ;
+  output [79:0] \port$7822$0 ;
+  wire [79:0] \port$7822$0 ;
+  output [9:0] \port$7899$0 ;
+  wire [9:0] \port$7899$0 ;
   input regs__abort_cycle;
   wire regs__abort_cycle;
   output regs__busy;
@@ -25432,9 +25418,9 @@ module \biss_master_wb.ch1 (slo, clk, rst, \trigger$204 , count_en, ca_wbuf_en, 
   assign \time_now$202  = time_now;
   assign \ma$207  = ma;
   assign \slo$209  = slo;
-  assign \port$7770$0  = \$20 ;
-  assign \port$7781$0  = \$21 ;
-  assign \port$7858$0  = \$22 ;
+  assign \port$7811$0  = \$20 ;
+  assign \port$7822$0  = \$21 ;
+  assign \port$7899$0  = \$22 ;
 endmodule
 
 (* generator = "Amaranth" *)
@@ -26511,7 +26497,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .mismatch(copy_mismatch),
     .ne(ne),
     .nw(nw),
-    .\port$7427$272 (cycle[274:272]),
+    .\port$7468$272 (cycle[274:272]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(sample),
@@ -26571,7 +26557,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .clk(clk),
     .crcs(crcs),
     .enough(ma_enough),
-    .\port$7427$199 (cycle[199]),
+    .\port$7468$199 (cycle[199]),
     .rises(rises),
     .rst(rst),
     .ssi(cycle[259]),
@@ -26622,7 +26608,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .level(\slo$62 ),
     .locked(locked),
     .noise(sampler_noise),
-    .\port$7427$259 (cycle[271:259]),
+    .\port$7468$259 (cycle[271:259]),
     .receiver_clear(\clear$137 ),
     .rst(rst),
     .sample(\sample$346 ),
@@ -26646,7 +26632,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .is_zero(lc_zero_seen),
     .lc(lc),
     .load(load),
-    .\port$7415$0 (\bit ),
+    .\port$7456$0 (\bit ),
     .\repeat (lc_repeat_seen),
     .resync(resync),
     .rst(rst),
@@ -26714,7 +26700,7 @@ module \biss_master_wb.ch1.core (slo, clk, rst, read_en, ca_wbuf_en, rbuf_en, tr
     .lc_zero_seen(lc_zero_seen),
     .noisy(noisy),
     .passed(passed),
-    .\port$5270$0 (\$28 ),
+    .\port$5353$0 (\$28 ),
     .report(report),
     .report_frame(report_frame),
     .spw_match(spw_match),
@@ -30798,7 +30784,7 @@ module \biss_master_wb.ch1.core.counters.count_ca_refused (rst, inc, clear, coun
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$7427$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
+module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, words, sample, \bit , ssi, \port$7468$272 , crcs, receiver_clear, stopped, slots_full, started, start_slot, cds, stop_bit, data0, ne, nw, data1
 , lc, cpw_top, mismatch, crc_ok, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$66  = 0;
   wire \$1 ;
@@ -31491,8 +31477,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   output [1:0] nw;
   reg [1:0] nw = 2'h0;
   wire [1:0] ok;
-  input [2:0] \port$7427$272 ;
-  wire [2:0] \port$7427$272 ;
+  input [2:0] \port$7468$272 ;
+  wire [2:0] \port$7468$272 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -31778,7 +31764,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
     lc <= \$588 ;
   always @(posedge clk)
     cpw_top <= \$589 ;
-  assign error_bit = ssi & \port$7427$272 [0];
+  assign error_bit = ssi & \port$7468$272 [0];
   assign frame_end = ssi ? stopped : done;
   assign index = word ? ends[71:65] : ends[34:28];
   assign \$1  = sample & \bit ;
@@ -31832,7 +31818,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$43  = idx == \$42 ;
   assign \$46  = word_count - 1'h1;
   assign \$47  = word == \$46 ;
-  assign \$48  = ssi & \port$7427$272 [2];
+  assign \$48  = ssi & \port$7468$272 [2];
   assign \$49  = word + 1'h1;
   assign \$50  = idx + 1'h1;
   assign \$51  = word ? ends[71:65] : ends[34:28];
@@ -32119,15 +32105,15 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign \$332  = \$329  & \$331 ;
   assign \$333  = { data0[53:0], \$57  } | { \$332 , \$327 , \$322 , \$317 , \$312 , \$307 , \$302 , \$297 , \$292 , \$287 , \$282 , \$277 , \$272 , \$267 , \$262 , \$257 , \$252 , \$247 , \$242 , \$237 , \$232 , \$227 , \$222 , \$217 , \$212 , \$207 , \$202 , \$197 , \$192 , \$187 , \$182 , \$177 , \$172 , \$167 , \$162 , \$157 , \$152 , \$147 , \$142 , \$137 , \$132 , \$127 , \$122 , \$117 , \$112 , \$107 , \$102 , \$97 , \$92 , \$87 , \$82 , \$77 , \$72 , \$67 , \$62  };
   assign \$334  = ~ words[6];
-  assign \$335  = ssi & \port$7427$272 [0];
+  assign \$335  = ssi & \port$7468$272 [0];
   assign \$336  = ~ \$335 ;
   assign \$337  = \$334  & \$336 ;
   assign \$338  = ! word;
   assign \$339  = in_word & \$338 ;
   assign \$340  = idx == words[5:0];
   assign \$341  = \$339  & \$340 ;
-  assign \$342  = ssi & \port$7427$272 [0];
-  assign \$343  = ~ \port$7427$272 [1];
+  assign \$342  = ssi & \port$7468$272 [0];
+  assign \$343  = ~ \port$7468$272 [1];
   assign \$344  = \$342  & \$343 ;
   assign \$345  = \bit  ^ \$344 ;
   assign \$346  = ~ words[6];
@@ -32759,7 +32745,7 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   end
   assign \words$1  = words;
   assign \crcs$3  = crcs;
-  assign ssi_error = \port$7427$272 [0];
+  assign ssi_error = \port$7468$272 [0];
   assign \bit$11  = \bit ;
   assign \mismatch$16  = mismatch;
   assign lc_next = { lc[4:0], \bit  };
@@ -32768,8 +32754,8 @@ module \biss_master_wb.ch1.core.decoder (rst, word_count, frame_end, lc_load, wo
   assign ok = crc_ok;
   assign \index$38  = word;
   assign load_index = \$9 [0];
-  assign ssi_double = \port$7427$272 [2];
-  assign ssi_error_low = \port$7427$272 [1];
+  assign ssi_double = \port$7468$272 [2];
+  assign ssi_error_low = \port$7468$272 [1];
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -34426,7 +34412,7 @@ module \biss_master_wb.ch1.core.ma_clock (rst, \clocking , half_period, run, hol
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7427$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
+module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7468$199 , ssi, ssi_error, ssi_double, crcs, clear, rises, enough, \started$15 , start_slot, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$73  = 0;
   wire \$1 ;
   wire [8:0] \$10 ;
@@ -34478,8 +34464,8 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7427$199 , ssi, ssi_e
   reg enough = 1'h0;
   reg [8:0] frame_len = 9'h000;
   reg [7:0] n = 8'h00;
-  input \port$7427$199 ;
-  wire \port$7427$199 ;
+  input \port$7468$199 ;
+  wire \port$7468$199 ;
   input [15:0] rises;
   wire [15:0] rises;
   input rst;
@@ -34533,7 +34519,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7427$199 , ssi, ssi_e
   assign \$8  = n + 3'h4;
   assign \$9  = ssi ? \$7  : { 1'h0, \$8  };
   assign \$10  = 1'h0 + word0_len;
-  assign \$11  = \port$7427$199  ? word1_len : 8'h00;
+  assign \$11  = \port$7468$199  ? word1_len : 8'h00;
   assign \$12  = \$10  + \$11 ;
   assign \$13  = start_slot + frame_len;
   assign \$14  = | rises;
@@ -34643,7 +34629,7 @@ module \biss_master_wb.ch1.core.ma_stop (rst, words, \port$7427$199 , ssi, ssi_e
       \$29  = 8'h00;
     end
   end
-  assign enables = { \port$7427$199 , 1'h1 };
+  assign enables = { \port$7468$199 , 1'h1 };
   assign \words[0]  = words[11:0];
   assign \words[0].data_bits  = words[5:0];
   assign \words[0].nenw  = words[6];
@@ -36784,7 +36770,7 @@ module \biss_master_wb.ch1.core.results (rst, report_delay, report, valid, frame
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7427$259 , receiver_clear, early, locked, delay, sample, level, slo);
+module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_period, \port$7468$259 , receiver_clear, early, locked, delay, sample, level, slo);
   reg \$auto$verilog_backend.cc:2355:dump_module$82  = 0;
   wire \$1 ;
   wire \$10 ;
@@ -36918,8 +36904,8 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg odd = 1'h0;
   wire \odd$46 ;
   reg [1:0] phase = 2'h0;
-  input [12:0] \port$7427$259 ;
-  wire [12:0] \port$7427$259 ;
+  input [12:0] \port$7468$259 ;
+  wire [12:0] \port$7468$259 ;
   input receiver_clear;
   wire receiver_clear;
   input rst;
@@ -36944,7 +36930,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   reg vote_one = 1'h0;
   assign \$9  = mid_slot - 1'h1;
   assign \$10  = ~ odd;
-  assign \$11  = \port$7427$259 [12:1] + 1'h1;
+  assign \$11  = \port$7468$259 [12:1] + 1'h1;
   assign \$12  = ~ level;
   assign \$13  = elapsed + 1'h1;
   assign \$14  = elapsed == fixed_at;
@@ -37069,7 +37055,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
   \biss_master_wb.ch1.core.sampler.slot_noise  slot_noise (
     .centre(centre),
     .clear(clear),
-    .clear_high(\port$7427$259 [0]),
+    .clear_high(\port$7468$259 [0]),
     .clk(clk),
     .decided(\decided$40 ),
     .\edge (\edge ),
@@ -37212,7 +37198,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$81  = \$12 ;
-            if (\port$7427$259 [0]) begin
+            if (\port$7468$259 [0]) begin
               \$81  = 1'h0;
             end
           end
@@ -37297,7 +37283,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
       2'h0:
           if (arm) begin
             \$84  = 2'h1;
-            if (\port$7427$259 [0]) begin
+            if (\port$7468$259 [0]) begin
               \$84  = 2'h2;
             end
           end
@@ -37336,7 +37322,7 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           /* empty */;
       2'h2:
           if (\$14 ) begin
-            \$85  = { 1'h0, \port$7427$259 [12:1] };
+            \$85  = { 1'h0, \port$7468$259 [12:1] };
           end
       2'h1:
           if (\$20 ) begin
@@ -37721,11 +37707,11 @@ module \biss_master_wb.ch1.core.sampler (clk, rst, arm, \bit , noise, half_perio
           end
     endcase
   end
-  assign fixed_delay = { 1'h0, \port$7427$259 [12:1] };
-  assign fixed = \port$7427$259 [0];
+  assign fixed_delay = { 1'h0, \port$7468$259 [12:1] };
+  assign fixed = \port$7468$259 [0];
   assign \level$33  = level;
   assign \clear$36  = clear;
-  assign clear_high = \port$7427$259 [0];
+  assign clear_high = \port$7468$259 [0];
   assign \centre$39  = centre;
   assign \vote1$41  = vote1;
   assign \vote2$42  = vote2;
@@ -38132,7 +38118,7 @@ module \biss_master_wb.ch1.core.scheduler (rst, trigger, periodic, request, over
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7415$0 , resync, lc, is_zero, clk);
+module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, \port$7456$0 , resync, lc, is_zero, clk);
   reg \$auto$verilog_backend.cc:2355:dump_module$85  = 0;
   wire \$1 ;
   wire [6:0] \$10 ;
@@ -38174,8 +38160,8 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   wire [5:0] lc_next;
   input load;
   wire load;
-  input \port$7415$0 ;
-  wire \port$7415$0 ;
+  input \port$7456$0 ;
+  wire \port$7456$0 ;
   output \repeat ;
   wire \repeat ;
   input resync;
@@ -38189,9 +38175,9 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
   reg synced = 1'h0;
   (* init = 1'h0 *)
   wire zero;
-  assign \$1  = ! { lc[4:0], \port$7415$0  };
-  assign \$2  = { lc[4:0], \port$7415$0  } == last;
-  assign \$3  = { lc[4:0], \port$7415$0  } == expected;
+  assign \$1  = ! { lc[4:0], \port$7456$0  };
+  assign \$2  = { lc[4:0], \port$7456$0  } == last;
+  assign \$3  = { lc[4:0], \port$7456$0  } == expected;
   assign \$4  = ~ is_zero;
   assign \$5  = check & \$4 ;
   assign \$6  = ~ resync;
@@ -38301,7 +38287,7 @@ module \biss_master_wb.ch1.core.sign_of_life (rst, load, \repeat , skip, check, 
       \$25  = 1'h0;
     end
   end
-  assign lc_next = { lc[4:0], \port$7415$0  };
+  assign lc_next = { lc[4:0], \port$7456$0  };
   assign zero = is_zero;
 endmodule
 
@@ -38865,7 +38851,7 @@ module \biss_master_wb.ch1.core.timers (rst, restart, ma_busy, break_time, timeo
 endmodule
 
 (* generator = "Amaranth" *)
-module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5270$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
+module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5353$0 , lc_check, lc_repeat, lc_skip, lc_zero, spw_mismatch, report, status, valid, passed, doubtful, clean, crc_error, unconfirmed, cfg, fault, fault_status, report_frame, copy_mismatch
 , crc_ok, lc_zero_seen, spw_match, delay_jump, lc_repeat_seen);
   reg \$auto$verilog_backend.cc:2355:dump_module$89  = 0;
   wire \$1 ;
@@ -39043,8 +39029,8 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5270$0 , lc_
   wire noisy;
   output passed;
   wire passed;
-  output \port$5270$0 ;
-  wire \port$5270$0 ;
+  output \port$5353$0 ;
+  wire \port$5353$0 ;
   output report;
   wire report;
   input report_frame;
@@ -39162,7 +39148,7 @@ module \biss_master_wb.ch1.core.verdict (lc_skip_seen, noisy, \port$5270$0 , lc_
     end
   end
   assign word_crc_ok = { \$2 , crc_ok[0] };
-  assign \port$5270$0  = \$2 ;
+  assign \port$5353$0  = \$2 ;
   assign \cfg.ma_half_period  = cfg[15:0];
   assign \cfg.request_period  = cfg[39:16];
   assign \cfg.break_time  = cfg[63:40];

@@ -9,6 +9,7 @@ the global registers, one interface whose members are the map's signals.
 
 from amaranth.hdl import *
 from amaranth.lib import wiring
+from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .regmap import DATA_WIDTH, Kind, window_ports
@@ -156,6 +157,9 @@ class RegisterBank(wiring.Component):
         self._w2_strb = Signal.like(bus.w_strb, name="config_write_strb")
         with m.If(self._w_en):
             m.d.sync += [self._w2_data.eq(self._w_data), self._w2_strb.eq(self._w_strb)]
+        # The configuration read-back memories' logic shared by blocks of one layout and one
+        # set of absent signals (every channel of a top of one core build): ``_shadow``.
+        self._shadow_shared = {}
         partials = []                  # each block's registered share of the read data
         irqs = []
         for port, base, registers, prefix, absent in blocks:
@@ -191,6 +195,9 @@ class RegisterBank(wiring.Component):
         w_en, w_addr, w_data, w_strb = self._w_en, self._w_addr, self._w_data, self._w_strb
         storage = {}                   # "register.field" -> the Signal that holds it
         irq_terms = []
+        # Registers of configuration only (read back from a memory, ``_shadow``).
+        shadowed = [reg for reg in registers if self._shadowable(reg, absent)]
+        shadow_writes = {}             # register path -> its config_write
         groups = {}                    # group -> the copies' assignments
         take = {}                      # group -> the word address of its first register
         for name, (offset, count) in self.regmap.memories(registers).items():
@@ -268,14 +275,121 @@ class RegisterBank(wiring.Component):
                         parts.append((f.lsb, live if reg.takes_snapshot else copy))
             if reg.takes_snapshot:
                 take[reg.snapshot] = word
+            if reg in shadowed:
+                shadow_writes[reg.path] = config_write
+                continue
             read_words[word] = self._word(parts)
         for group, copies in groups.items():
             snapshots[take[group]] = copies
+        if shadowed:
+            self._shadow(m, base, registers, shadowed, shadow_writes, absent, prefix, windows)
         # A cause requests an interrupt while set and enabled.
         irq = Signal(name=f"{prefix}_irq")
         m.d.comb += irq.eq(Cat((status & storage[enable]).any()
                                for status, enable in irq_terms if enable).any())
         return irq
+
+    @staticmethod
+    def _shadowable(reg, absent):
+        """A register of configuration only (CONFIG and CONST fields, at least one CONFIG field
+        stored): read back from the block's configuration memory (``_shadow``)."""
+        if reg.window or reg.memory:
+            return False
+        return (all(f.kind in (Kind.CONFIG, Kind.CONST) for f in reg.fields)
+                and any(f.kind == Kind.CONFIG and f.signal not in absent for f in reg.fields))
+
+    @staticmethod
+    def _shadow_constants(reg, absent):
+        """``(mask, reset, const)`` of a configuration-only register: the bits of its stored
+        fields, their reset values, and the value of its fields read as constants (CONST
+        fields, CONFIG fields the core lacks)."""
+        mask = reset = const = 0
+        for f in reg.fields:
+            bits = ((1 << f.width) - 1) << f.lsb
+            if f.kind == Kind.CONFIG and f.signal not in absent:
+                mask |= bits
+                reset |= (f.reset << f.lsb) & bits
+            else:
+                const |= (f.reset << f.lsb) & bits
+        return mask, reset, const
+
+    def _shadow(self, m, base, registers, shadowed, shadow_writes, absent, prefix, windows):
+        """The read-back of a block's configuration-only registers from a memory (issue 27),
+        instead of their flip-flops' words in the block's read AND-OR: every write of such a
+        register writes its strobed byte lanes, stored fields only, into the memory as well,
+        in the clock its flip-flops take it; a read of it reads the memory through an
+        asynchronous port at ``r_load``, addressed by a register set at ``r_en``, so it
+        returns the value of its ``r_load`` clock as a flip-flop's word does. Yosys maps it to
+        distributed RAM and no LUT on ECP5 (an address register and an asynchronous read is
+        its 16x4 RAM's read port) and to block RAM on iCE40 (with ``ram_style = "block"``).
+
+        A memory keeps its contents through a reset, the flip-flops do not: one flag per
+        register says it was written since reset. Until then it reads its reset value, and
+        its first write fills the lanes it does not strobe with their reset values."""
+        count = len(shadowed)
+        mask, reset, const = zip(*(self._shadow_constants(reg, absent) for reg in shadowed))
+        data, r_index, r_shadow = self._shadow_common(m, registers, shadowed, absent, mask,
+                                                      reset)
+        # Block-relative word addresses: the bits below the channel stride.
+        low = (self.regmap.channel_stride // 4 - 1).bit_length()
+        bus = self.bus
+        writes = Cat(shadow_writes[reg.path] for reg in shadowed)
+        written = Signal(count, name=f"{prefix}_config_written")
+        m.d.sync += written.eq(written | writes)
+        memory = Memory(shape=DATA_WIDTH, depth=count, init=[])
+        m.submodules[f"{prefix}_config_memory"] = memory
+        wr = memory.write_port(granularity=8)
+        first = (writes & ~written).any()
+        m.d.comb += [
+            wr.addr.eq(Cat(Cat(writes[k] for k in range(count) if k >> b & 1).any()
+                           for b in range(len(wr.addr)))),
+            wr.data.eq(data),
+            wr.en.eq(Mux(writes.any(), self._w2_strb | first.replicate(len(wr.en)), 0)),
+        ]
+        # The read: the register's index taken at r_en, the memory read at r_load.
+        hit = Signal(name=f"{prefix}_config_read")
+        m.d.comb += hit.eq(bus.r_en & (bus.r_addr[low:] == base // 4 >> low) & r_shadow)
+        index = Signal(range(count), name=f"{prefix}_config_read_index")
+        with m.If(hit):
+            m.d.sync += index.eq(r_index)
+        rd = memory.read_port(domain="comb")
+        m.d.comb += rd.addr.eq(index)
+        value = Signal(DATA_WIDTH, name=f"{prefix}_config_read_data")
+        m.d.comb += value.eq(Mux(written.bit_select(index, 1), rd.data,
+                                 Array(C(r, DATA_WIDTH) for r in reset)[index])
+                             | Array(C(c, DATA_WIDTH) for c in const)[index])
+        windows.append((hit, value))
+
+    def _shadow_common(self, m, registers, shadowed, absent, mask, reset):
+        """What the configuration memories of every block of one layout and one absent set
+        share: the data to write (at the second write stage, with the other configuration
+        data: the strobed lanes masked to the register's stored fields, the others its reset
+        value), and, from the read address at r_en, whether it names such a register and its
+        index. Returns ``(data, r_index, r_shadow)``."""
+        key = (tuple(reg.path for reg in registers), frozenset(absent))
+        if key in self._shadow_shared:
+            return self._shadow_shared[key]
+        low = (self.regmap.channel_stride // 4 - 1).bit_length()
+        n = len(self._shadow_shared)
+        words = [reg.offset // 4 for reg in shadowed]
+        w_mask = Signal(DATA_WIDTH, name=f"config_memory{n}_write_mask")
+        w_fill = Signal(DATA_WIDTH, name=f"config_memory{n}_write_fill")
+        with m.Switch(self._w_addr[:low]):
+            for word, mk, rs in zip(words, mask, reset):
+                with m.Case(word):
+                    m.d.comb += [w_mask.eq(mk), w_fill.eq(rs)]
+        data = Signal(DATA_WIDTH, name=f"config_memory{n}_write_data")
+        lanes = Cat(self._w_strb[i // 8] for i in range(DATA_WIDTH))
+        with m.If(self._w_en):
+            m.d.sync += data.eq((self._w_data & w_mask & lanes) | (w_fill & ~lanes))
+        r_index = Signal(range(len(shadowed)), name=f"config_memory{n}_read_index")
+        r_shadow = Signal(name=f"config_memory{n}_read_hit")
+        with m.Switch(self.bus.r_addr[:low]):
+            for k, word in enumerate(words):
+                with m.Case(word):
+                    m.d.comb += [r_index.eq(k), r_shadow.eq(1)]
+        self._shadow_shared[key] = data, r_index, r_shadow
+        return data, r_index, r_shadow
 
     def _read_select(self, m, prefix, read_words):
         """Read stage 1 of one block: at ``r_en``, one flip-flop per register, set when the

@@ -400,3 +400,73 @@ def test_access_registers_and_done_interrupt():
         await write(ctx, bank, offset("irq_enable"), 0b100)
         assert ctx.get(bank.irq) == 1
     run(bench)
+
+
+def _run_with_reset(bench):
+    """One channel's bank; ``bench`` gets (ctx, bank, the clock domain's reset)."""
+    top = Module()
+    top.domains.sync = cd = ClockDomain()
+    top.submodules.bank = bank = RegisterBank(MAP, 1)
+    sim = Simulator(top)
+    sim.add_clock(1e-8)
+
+    async def testbench(ctx):
+        await bench(ctx, bank, cd.rst)
+    sim.add_testbench(testbench)
+    sim.run()
+
+
+def test_configuration_reads_its_reset_value_after_a_reset():
+    """Configuration registers are read back from a memory (docs/bus.md, Area), which a reset
+    does not clear: after a reset a register reads its reset value, not what the memory still
+    holds, and a write of one byte lane then reads that lane with the others at their reset
+    values. The next write of another lane keeps the first."""
+    async def bench(ctx, bank, rst):
+        period, quiet = offset("cfg_period"), offset("cfg_quiet")
+        await write(ctx, bank, period, 0x00ABCDEF)
+        await write(ctx, bank, quiet, 0x00000ABC)
+        assert await read(ctx, bank, period) == 0xABCDEF
+        ctx.set(rst, 1)
+        await ctx.tick()
+        ctx.set(rst, 0)
+        assert await read(ctx, bank, period) == 0
+        assert await read(ctx, bank, quiet) == 0
+        assert ctx.get(bank.ch0.cfg_request_period) == 0
+        await write(ctx, bank, period, 0x00000011, strb=0b0001)
+        assert await read(ctx, bank, period) == 0x000011
+        await write(ctx, bank, period, 0x00220000, strb=0b0100)
+        assert await read(ctx, bank, period) == 0x220011
+        assert ctx.get(bank.ch0.cfg_request_period) == 0x220011
+        assert await read(ctx, bank, quiet) == 0
+    _run_with_reset(bench)
+
+
+def test_configuration_read_returns_the_value_of_its_load_clock():
+    """A read of a configuration register returns the value of its r_load clock, as a
+    flip-flop's word would. r_en in the clock after w_en: with r_load two clocks later (the
+    first clock the register's flip-flops hold the write) it reads the new value, with r_load
+    one clock later (the clock the write reaches them) the old one."""
+    async def bench(ctx, bank):
+        period = offset("cfg_period")
+        await write(ctx, bank, period, 0x000001)
+        # (clocks from r_en to r_load, the value written, the value the read returns)
+        for load_after, value, want in ((2, 0x000002, 0x000002), (1, 0x000003, 0x000002)):
+            ctx.set(bank.bus.w_en, 1)
+            ctx.set(bank.bus.w_addr, period // 4)
+            ctx.set(bank.bus.w_data, value)
+            ctx.set(bank.bus.w_strb, 0xF)
+            await ctx.tick()                            # clock 1: the request registered
+            ctx.set(bank.bus.w_en, 0)
+            ctx.set(bank.bus.r_en, 1)                   # r_en in clock 1
+            ctx.set(bank.bus.r_addr, period // 4)
+            for _ in range(load_after):
+                await ctx.tick()
+                ctx.set(bank.bus.r_en, 0)
+            ctx.set(bank.bus.r_load, 1)                 # r_load in clock 1 + load_after
+            await ctx.tick()
+            ctx.set(bank.bus.r_load, 0)
+            assert ctx.get(bank.bus.r_data) == want, (load_after, hex(ctx.get(bank.bus.r_data)))
+            await ctx.tick()
+            await ctx.tick()
+        assert await read(ctx, bank, period) == 0x000003
+    run(bench)
