@@ -25,7 +25,6 @@ from master_contract import (CHAIN_BUS_DATA_BITS, STATUS_NAME, crc_config,
                              crc_counters, crc_status, port_position)
 from sim.shared.bus_testbench import CLK_HZ, BusTestbench, Encoder
 from sim.shared.c_driver import CHAIN_WORDS, CDriver, Config, Result, State
-from sim.shared.discovery import long_on_icarus
 
 POLLS = 20_000          # biss_wait_done's limit: far beyond a frame (each poll is a bus read)
 MA_HZ = 10_000_000
@@ -173,7 +172,6 @@ def corner_values(fmt, k):
 
 
 @cocotb.test()
-@long_on_icarus
 async def driver_chain_of_four(dut):
     """A chain of four slaves configured through biss_configure (the caps read by
     biss_channel_init: 4 words, words 2 and 3 of up to 24 and 16 bits; cfg_w2 / cfg_w3 and
@@ -335,7 +333,6 @@ TORN_READS = 150
 
 
 @cocotb.test()
-@long_on_icarus
 async def driver_chain_reads_are_of_one_frame(dut):
     """Periodic requests back to back (a frame ends every ~14 us) while the driver reads
     result after result on a slow bus (each read 0.3 us: about 2.4 us from the first
