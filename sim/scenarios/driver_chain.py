@@ -328,19 +328,19 @@ class PacedBus:
         await self.bus.write(addr, value)
 
 
-#: Reads of the torn-read scenario (each a biss_read_result while frames end every ~14 us).
+#: Reads of the torn-read scenario (each a biss_read_result while frames end every ~13 us).
 TORN_READS = 150
 
 
 @cocotb.test()
 async def driver_chain_reads_are_of_one_frame(dut):
-    """Periodic requests back to back (a frame ends every ~14 us) while the driver reads
-    result after result on a slow bus (each read 0.3 us: about 2.4 us from the first
+    """Periodic requests back to back (a frame ends every ~13 us) while the driver reads
+    result after result on a slow bus (each read 0.3 us and more: about 3 us from the first
     chain.updates read to the second). Every result biss_read_result returns is one frame: all
     four words as the encoder sent them in the frame of the result's timestamp; it had to read
     again at times (reads of result.status above one per call). The same reads without the
-    rule (result.status, a 2 us pause, the chain words) find torn sets: word 2 / 3 of a later
-    frame than words 0 / 1. A bus so slow (3 us a read) that a frame ends during every try
+    rule (result.status, a 2 us pause, word 2) find torn sets: word 2 of a later
+    frame than the snapshot. A bus so slow (3 us a read) that a frame ends during every try
     gives BISS_ERR_TORN after BISS_READ_RETRIES tries."""
     fmt = CHAIN_4
     tb, drv, ch = await setup(dut, seed=2614, fmt=fmt, spec=fast_encoder(fmt))
@@ -358,6 +358,8 @@ async def driver_chain_reads_are_of_one_frame(dut):
         check_frame(tb, fmt, res)
         times.add(res["time"])
         await Timer(1, "us")
+    sent = sorted(tb.channels[0].sent)             # the frames' timestamps
+    period_us = (sent[-1] - sent[0]) / (len(sent) - 1) / CLK_HZ * 1e6
     retries = paced.reads[paced.status] - TORN_READS
     assert paced.reads[paced.updates] == TORN_READS + paced.reads[paced.status]
     assert len(times) > TORN_READS // 4, f"only {len(times)} frames read"
@@ -371,8 +373,8 @@ async def driver_chain_reads_are_of_one_frame(dut):
         await Timer(2, "us")
         lo = await tb.read("chain.w2_lo", 0)
         bits = tb.channels[0].sent[time]
-        sent = frames.parse_frame(fmt, bits)["words"][2]["position"]
-        torn += lo != port_position(fmt.words[2], sent, CHAIN_BUS_DATA_BITS[2])
+        word2 = frames.parse_frame(fmt, bits)["words"][2]["position"]
+        torn += lo != port_position(fmt.words[2], word2, CHAIN_BUS_DATA_BITS[2])
     assert torn > 0, "no torn set without the rule: the scenario does not stress it"
 
     paced.delay_us = 3.0
@@ -380,5 +382,6 @@ async def driver_chain_reads_are_of_one_frame(dut):
     got = drv.error_name(await drv.call("biss_read_result", byref(ch), byref(res)))
     assert got == "BISS_ERR_TORN", got
     await drv.check("biss_set_periodic", byref(ch), False, 0)
-    dut._log.info("%d reads, %d frames, %d retries; without the rule %d of %d torn",
-                  TORN_READS, len(times), retries, torn, TORN_READS // 3)
+    dut._log.info("%d reads, %d frames of %d sent (one every %.1f us), %d retries; without the "
+                  "rule %d of %d torn", TORN_READS, len(times), len(sent), period_us, retries,
+                  torn, TORN_READS // 3)

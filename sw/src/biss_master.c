@@ -628,11 +628,12 @@ biss_err_t biss_wait_done(biss_channel_t *ch, uint32_t max_polls)
 
 /* -- Results ------------------------------------------------------------------------------ */
 
-/* The chain words' flags and data (read live) into res->chain; the others 0. */
+/* The first n chain words' flags and data (read live) into res->chain, the others 0; no bus
+ * access for n = 0. */
 static void read_chain_words(const biss_channel_t *ch, unsigned n, biss_result_t *res)
 {
     static const biss_word_result_t none;
-    uint32_t flags = ch_rd(ch, CHANNEL_OFF(chain.flags)), lo, hi;
+    uint32_t flags = n > 0 ? ch_rd(ch, CHANNEL_OFF(chain.flags)) : 0, lo, hi;
     unsigned i;
     for (i = 0; i < BISS_CHAIN_WORDS; i++) {
         const chain_word_t *r = &chain_regs[i];
@@ -669,6 +670,7 @@ biss_err_t biss_read_result(biss_channel_t *ch, biss_result_t *res)
      * registers are read after the window: they no longer change. */
     if (n == 0) {
         s = ch_rd(ch, CHANNEL_OFF(result.status));
+        read_chain_words(ch, 0, res);
     } else {
         before = GET(ch_rd(ch, CHANNEL_OFF(chain.updates)), CH(CHAIN__UPDATES__UPDATES));
         for (;;) {
@@ -683,12 +685,6 @@ biss_err_t biss_read_result(biss_channel_t *ch, biss_result_t *res)
             }
             before = after;
         }
-    }
-    if (n == 0) {
-        static const biss_word_result_t none;
-        unsigned i;
-        for (i = 0; i < BISS_CHAIN_WORDS; i++)
-            res->chain[i] = none;
     }
     res->status = (uint8_t)GET(s, CH(RESULT__STATUS__STATUS));
     res->cds = GET(s, CH(RESULT__STATUS__CDS)) != 0;
