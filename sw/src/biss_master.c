@@ -222,14 +222,17 @@ biss_err_t biss_channel_init(biss_channel_t *ch, const biss_bus_t *bus, unsigned
     ch->words = (uint8_t)GET(caps, CH(CAPS__WORDS));
     if (ch->words == 0)
         ch->words = ch->max_data_bits[1] != 0 ? 2 : 1;
+    /* caps_chain, caps_chain2: each read once, and only for words the build has. */
     ch->chain_words = 0;
     for (i = 0; i < BISS_CHAIN_WORDS; i++) {
         const field_t *f = &chain_regs[i].caps;
         ch->chain_data_bits[i] = 0;
-        if (i + 2u < ch->words) {
-            ch->chain_data_bits[i] = (uint8_t)((ch_rd(ch, f->off) & f->bm) >> f->bp);
-            ch->chain_words = (uint8_t)(i + 1u);
-        }
+        if (i + 2u >= ch->words)
+            continue;
+        if (i == 0 || f->off != chain_regs[i - 1].caps.off)
+            caps = ch_rd(ch, f->off);
+        ch->chain_data_bits[i] = (uint8_t)((caps & f->bm) >> f->bp);
+        ch->chain_words = (uint8_t)(i + 1u);
     }
     return BISS_OK;
 }

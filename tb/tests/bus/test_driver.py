@@ -519,14 +519,14 @@ def test_chain_config_check(lib, changes, want):
 
 
 def test_chain_config_check_on_builds_without_chains(lib):
-    """A two-word build (caps.words 2, or 0 from a map without the field) refuses any chain
-    word; SSI with chain words is refused as SSI or chain."""
+    """A two-word build refuses any chain word (a one-word build word 1 first); SSI with chain
+    words is refused (as SSI or as a chain)."""
     cfg = chain_config(lib, chain_words=1)
-    for words in (2, 1):
+    for words, want in ((2, "BISS_ERR_CHAIN"), (1, "BISS_ERR_WORD1")):
         ch = chain_channel(words=words, chain_bits=())
+        ch.max_data_bits[1] = 32 if words == 2 else 0
         err = lib.biss_error_name(lib.biss_config_check(byref(ch), byref(cfg))).decode()
-        assert err == "BISS_ERR_CHAIN" if words == 2 else err in ("BISS_ERR_WORD1",
-                                                                   "BISS_ERR_CHAIN"), words
+        assert err == want, words
     ch = chain_channel()
     ch.has_ssi = True
     cfg = _changed(cfg, ssi=True)
@@ -634,3 +634,43 @@ def test_configure_writes_every_chain_word_the_build_has(lib):
     for w in range(4, 8):
         assert m.address(f"cfg_w{w}", 0) not in writes
     assert ch.chain_words == 1
+
+
+@pytest.mark.parametrize("words,chain,want_words,want_bits", [
+    (4, (24, 16, 0, 0, 0, 0), 4, (24, 16, 0, 0, 0, 0)),
+    (8, (63, 1, 20, 33, 7, 12), 8, (63, 1, 20, 33, 7, 12)),
+    (2, (), 2, (0,) * 6),
+    (0, (), 2, (0,) * 6),               # a map without caps.words: two words from data_bits_w1
+])
+def test_channel_init_reads_the_chain_caps(lib, words, chain, want_words, want_bits):
+    """biss_channel_init: caps.words, and caps_chain / caps_chain2 (read only when the build
+    has more than two words) into chain_data_bits; chain_words = the build's chain words."""
+    m = regspec.load()
+    caps = m.reg("caps", 0).fields
+    version = m.reg("version").fields
+    regs = {m.address("id"): 0x42695353,            # "BiSS", docs/registers.md
+            m.address("version"): version["major"].put(0, 1),
+            m.address("channels"): 1,
+            m.address("caps", 0): caps["words"].put(caps["data_bits_w1"].put(
+                caps["data_bits_w0"].put(0, 40), 32), words)}
+    for reg, names, values in (("caps_chain", "abcd", chain[:4]), ("caps_chain2", "ab", chain[4:])):
+        f = m.reg(reg, 0).fields
+        word = 0
+        for n, v in zip(names, values):
+            word = f[f"data_bits_{n}"].put(word, v)
+        regs[m.address(reg, 0)] = word
+    log = []
+
+    def read(ctx, addr):
+        log.append(addr)
+        return regs.get(addr, 0)
+    hooks = (c_driver.READ32(read), c_driver.WRITE32(lambda ctx, addr, value: None))
+    bus = c_driver.Bus(0, *hooks)
+    ch = c_driver.Channel()
+    assert lib.biss_error_name(lib.biss_channel_init(byref(ch), byref(bus), 0)).decode() == \
+        "BISS_OK"
+    assert (ch.words, tuple(ch.chain_data_bits), ch.chain_words) == \
+        (want_words, want_bits, max(want_words - 2, 0))
+    chain_caps = {m.address("caps_chain", 0), m.address("caps_chain2", 0)}
+    assert bool(chain_caps & set(log)) == (want_words > 2)
+    assert all(log.count(a) <= 1 for a in chain_caps), "a caps register read twice"
