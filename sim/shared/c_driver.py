@@ -17,6 +17,9 @@ import ctypes
 from ctypes import (CFUNCTYPE, POINTER, Structure, byref, c_bool, c_char_p, c_int, c_int64,
                     c_size_t, c_uint, c_uint8, c_uint16, c_uint32, c_uint64, c_void_p)
 
+#: BISS_CHAIN_WORDS: words 2..7 of a chain.
+CHAIN_WORDS = 6
+
 READ32 = CFUNCTYPE(c_uint32, c_void_p, c_size_t)             # uintptr_t is size_t wide here
 WRITE32 = CFUNCTYPE(None, c_void_p, c_size_t, c_uint32)
 
@@ -29,7 +32,9 @@ class Channel(Structure):
     _fields_ = [("bus", Bus), ("base", c_size_t), ("index", c_uint8),
                 ("max_data_bits", c_uint8 * 2), ("timer_width", c_uint8),
                 ("has_counters", c_bool), ("has_timestamp", c_bool),
-                ("has_register_access", c_bool), ("max_polls", c_uint32), ("has_ssi", c_bool)]
+                ("has_register_access", c_bool), ("max_polls", c_uint32), ("has_ssi", c_bool),
+                ("words", c_uint8), ("chain_data_bits", c_uint8 * CHAIN_WORDS),
+                ("chain_words", c_uint8)]
 
 
 class WordFormat(Structure):
@@ -46,7 +51,8 @@ class Config(Structure):
                 ("spw_check", c_bool), ("spw_tolerance", c_uint8),
                 ("quiet_time", c_uint16), ("noise_limit", c_uint8), ("delay_tolerance", c_uint8),
                 ("confirm_frames", c_uint8), ("ssi", c_bool), ("ssi_error", c_bool),
-                ("ssi_error_low", c_bool), ("ssi_double", c_bool), ("ssi_delay", c_uint16)]
+                ("ssi_error_low", c_bool), ("ssi_double", c_bool), ("ssi_delay", c_uint16),
+                ("chain_words", c_uint8), ("chain", WordFormat * CHAIN_WORDS)]
 
 
 class Preset(Structure):
@@ -58,6 +64,11 @@ class State(Structure):
     _fields_ = [(n, c_bool) for n in ("busy", "config_error", "periodic", "trigger_enable")]
 
 
+class WordResult(Structure):
+    """biss_word_result_t: a chain word's result."""
+    _fields_ = [("data", c_uint64), ("ne", c_bool), ("nw", c_bool), ("crc_ok", c_bool)]
+
+
 class Result(Structure):
     _fields_ = [("word0", c_uint64), ("word1", c_uint64), ("timestamp", c_uint32),
                 ("seq", c_uint16), ("line_delay", c_uint16), ("status", c_uint8),
@@ -65,14 +76,19 @@ class Result(Structure):
                     "cds", "w0_ne", "w0_nw", "w0_crc_ok", "w1_ne", "w1_nw", "w1_crc_ok",
                     "lc_repeat", "lc_skip", "lc_zero", "spw_mismatch")] + [
                 ("noise_events", c_uint8), ("delay_settled", c_bool), ("settled_delay", c_uint16),
-                ("delay_spread", c_uint8)]
+                ("delay_spread", c_uint8), ("chain_words", c_uint8),
+                ("chain", WordResult * CHAIN_WORDS)]
 
     def as_dict(self):
         """The keys of ``BusTestbench.result`` (``time`` for the timestamp), so that
-        ``BusTestbench.check_result`` judges it against the encoder model."""
-        d = {name: getattr(self, name) for name, _ in self._fields_}
-        d = {k: int(v) for k, v in d.items()}
+        ``BusTestbench.check_result`` judges it against the encoder model; the chain words
+        read as ``word<N>``, ``w<N>_ne``, ``w<N>_nw``, ``w<N>_crc_ok`` (N = 2 ..)."""
+        d = {name: int(getattr(self, name)) for name, _ in self._fields_ if name != "chain"}
         d["time"] = d.pop("timestamp")
+        for i in range(self.chain_words):
+            w = self.chain[i]
+            d.update({f"word{i + 2}": int(w.data), f"w{i + 2}_ne": int(w.ne),
+                      f"w{i + 2}_nw": int(w.nw), f"w{i + 2}_crc_ok": int(w.crc_ok)})
         return d
 
 
@@ -83,7 +99,7 @@ COUNTER_FIELDS = ("crc_word0", "crc_word1", "no_ack", "no_start", "delay_range",
 
 
 class Counters(Structure):
-    _fields_ = [(n, c_uint16) for n in COUNTER_FIELDS]
+    _fields_ = [(n, c_uint16) for n in COUNTER_FIELDS] + [("crc_chain", c_uint16 * CHAIN_WORDS)]
 
 
 class Bp3Id(Structure):
@@ -106,6 +122,15 @@ class Bp3Eds(Structure):
 
     def as_dict(self):
         return {name: int(getattr(self, name)) for name, _ in self._fields_}
+
+
+#: Every struct of biss_master.h this module mirrors, by its C name: the layout check
+#: (tb/tests/bus/test_driver.py) compares each one's size and every field's offset with the
+#: C compiler's.
+STRUCTS = {"biss_bus_t": Bus, "biss_channel_t": Channel, "biss_word_format_t": WordFormat,
+           "biss_config_t": Config, "biss_preset_t": Preset, "biss_state_t": State,
+           "biss_word_result_t": WordResult, "biss_result_t": Result,
+           "biss_counters_t": Counters, "biss_bp3_id_t": Bp3Id, "biss_bp3_eds_t": Bp3Eds}
 
 
 _P = POINTER
@@ -236,6 +261,9 @@ class CDriver:
         return self.error_name(ret), done.value
 
     async def counters(self, ch):
+        """biss_read_counters as a dict: COUNTER_FIELDS, and words 2..7's as crc_word2 ..
+        crc_word7."""
         cnt = Counters()
         await self.check("biss_read_counters", byref(ch), byref(cnt))
-        return {n: getattr(cnt, n) for n in COUNTER_FIELDS}
+        return {**{n: getattr(cnt, n) for n in COUNTER_FIELDS},
+                **{f"crc_word{i + 2}": cnt.crc_chain[i] for i in range(CHAIN_WORDS)}}

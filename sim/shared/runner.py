@@ -30,6 +30,10 @@ MASTER_SCENARIOS = "sim.scenarios.master"
 BUS_SCENARIOS = "sim.scenarios.bus"
 #: The C driver (sw/) against the AXI4-Lite bus top (sim/test_driver.py).
 DRIVER_SCENARIOS = "sim.scenarios.driver"
+#: The C driver reading a chain (words 2..7 of the map) on the ``axil_chain`` top.
+DRIVER_CHAIN_SCENARIOS = "sim.scenarios.driver_chain"
+#: The driver's scenario modules and the bus top each runs on (sim/test_driver.py).
+DRIVER_MODULES = {DRIVER_SCENARIOS: "axil", DRIVER_CHAIN_SCENARIOS: "axil_chain"}
 #: The bus tops the bus scenarios run on (bissmaster.generate --top axil|wb|uart ...): the
 #: committed AXI4-Lite and Wishbone tops, and the UART-bridge top built at UART_BAUD (the
 #: committed one runs at 115200 baud, where one register access takes 1.1 ms of simulated time).

@@ -83,10 +83,15 @@ typedef enum {
                                        broken or foreign register window; no byte is trusted */
     BISS_ERR_LINE_CHECK = -37,      /* quiet time, noise limit or delay tolerance wider than
                                        its field */
-    BISS_ERR_SSI = -38              /* SSI asked of a build without it (caps.ssi = 0), with a
-                                       word option SSI cannot have (LC, word 1, the SPW check,
-                                       the error bit with nE/nW), or a delay wider than its
-                                       field */
+    BISS_ERR_SSI = -38,             /* SSI asked of a build without it (caps.ssi = 0), with a
+                                       word option SSI cannot have (LC, word 1, chain words,
+                                       the SPW check, the error bit with nE/nW), or a delay
+                                       wider than its field */
+    /* Chains (words 2..7, docs/frames.md) */
+    BISS_ERR_CHAIN = -39,           /* chain words the build lacks (beyond caps.words), or
+                                       chain words without word 1 */
+    BISS_ERR_TORN = -40             /* biss_read_result: a new frame ended during every one of
+                                       BISS_READ_RETRIES reads; *res holds the last (mixed) */
 } biss_err_t;
 
 /* The name of an error code ("BISS_ERR_CRC"), "?" for an unknown one. */
@@ -129,6 +134,9 @@ uint32_t biss_irq_pending(const biss_bus_t *bus);
 
 /* -- A channel -------------------------------------------------------------------------- */
 
+/* Words after word 1 a frame can have: a chain of slaves reads words 0..7 (docs/frames.md). */
+#define BISS_CHAIN_WORDS 6
+
 typedef struct {
     biss_bus_t bus;                 /* a copy of the bus */
     uintptr_t base;                 /* this channel's register block */
@@ -142,6 +150,13 @@ typedef struct {
                                        BISS_ERR_TIMEOUT; biss_channel_init sets
                                        BISS_REG_MAX_POLLS, the caller may change it */
     bool has_ssi;                   /* caps: SSI mode built (added last: older layouts hold) */
+    /* Added with chains (words 2..7; a build of 1 or 2 words has words 1 or 2 and zeros): */
+    uint8_t words;                  /* caps: data words the build decodes, 1..8 */
+    uint8_t chain_data_bits[BISS_CHAIN_WORDS];  /* caps: longest word 2..7 (0: not built) */
+    uint8_t chain_words;            /* chain words biss_read_result reads (words 2..): the
+                                       build's (words - 2) from biss_channel_init, the
+                                       configuration's from biss_configure; the caller may
+                                       lower it */
 } biss_channel_t;
 
 /* The default poll limit of a register access: the longest access (64 registers) takes at
@@ -208,6 +223,11 @@ typedef struct {
     bool ssi_double;                /* the encoder sends the word twice; a difference is
                                        status SPW_MISMATCH */
     uint16_t ssi_delay;             /* round trip, system clocks (MA rise to SLO change) */
+    /* A chain of slaves (docs/frames.md; 0 = two words at most, as before): words 2..7 after
+     * word 0 and word 1, in the frame in order. */
+    uint8_t chain_words;            /* words after word 1, 0 .. caps.words - 2 (word1_enable
+                                       needed when above 0) */
+    biss_word_format_t chain[BISS_CHAIN_WORDS];     /* chain[i]: word i + 2 */
 } biss_config_t;
 
 /* A named encoder: its frame format. */
@@ -297,6 +317,12 @@ typedef enum {
 /* The name of a status code without the prefix ("NO_ACK"), "?" for an unknown one. */
 const char *biss_status_name(unsigned status);
 
+/* A chain word's result (words 2..7): its data and flags. */
+typedef struct {
+    uint64_t data;                  /* up to 63 bits, sign-extended when set is_signed */
+    bool ne, nw, crc_ok;            /* nE, nW: 1 = no error / no warning */
+} biss_word_result_t;
+
 typedef struct {
     uint64_t word0;                 /* word 0 data (up to 55 bits) */
     uint64_t word1;                 /* word 1 data (up to 40 bits) */
@@ -314,15 +340,27 @@ typedef struct {
     bool delay_settled;             /* a round trip had settled: DELAY_JUMP judged */
     uint16_t settled_delay;         /* the settled round trip, clocks */
     uint8_t delay_spread;           /* largest accepted distance from it, saturating at 255 */
+    /* Added with chains: words 2.. of the same frame (read live between two equal
+     * chain.updates, see biss_read_result). */
+    uint8_t chain_words;            /* chain[] entries read: ch->chain_words (the others 0) */
+    biss_word_result_t chain[BISS_CHAIN_WORDS];     /* chain[i]: word i + 2 */
 } biss_result_t;
 
-/* Word `word`'s data (biss_result_t.word0 / word1) of a word set is_signed, as a signed
- * number: the core has sign-extended it to its register's width (the channel's
- * max_data_bits[word]); this extends it on to 64 bits. */
+/* Word `word`'s data (biss_result_t.word0 / word1, chain[word - 2].data for words 2..7) of a
+ * word set is_signed, as a signed number: the core has sign-extended it to its register's
+ * width (the channel's max_data_bits[word], chain_data_bits[word - 2]); this extends it on to
+ * 64 bits. A word the build lacks: the data as it is. */
 int64_t biss_signed_data(const biss_channel_t *ch, unsigned word, uint64_t data);
 
 /* The last result, all of one frame: result.status is read first (it takes the snapshot,
- * docs/bus.md), then the rest. The frame fields keep the last decoded frame after a fault. */
+ * docs/bus.md), then the rest. The frame fields keep the last decoded frame after a fault.
+ * With chain words to read (ch->chain_words > 0), which the core shows live, not in the
+ * snapshot: chain.updates, then result.status, chain.flags and the chain words, then
+ * chain.updates again; equal counts mean every read between is of one frame, else the
+ * status and chain words are read again (one more read of chain.updates each time), up to
+ * BISS_READ_RETRIES times in all: then BISS_ERR_TORN. Without chain words the reads are
+ * those of a two-word build (no chain.updates). */
+#define BISS_READ_RETRIES 8
 biss_err_t biss_read_result(biss_channel_t *ch, biss_result_t *res);
 
 /* Error counters, 16 bits each, saturating (docs/ports.md, Counters). */
@@ -330,6 +368,8 @@ typedef struct {
     uint16_t crc_word0, crc_word1, no_ack, no_start, delay_range, slo_stuck_low;
     uint16_t lc_repeat, lc_skip, lc_zero, spw_mismatch, overrun, aborted, no_stop;
     uint16_t noisy_line, delay_jump, noise_event;   /* the line checks' statuses, events */
+    uint16_t crc_chain[BISS_CHAIN_WORDS];   /* words 2..7's CRC errors (added last; 0 for a
+                                               word the build lacks) */
 } biss_counters_t;
 
 biss_err_t biss_read_counters(biss_channel_t *ch, biss_counters_t *cnt);

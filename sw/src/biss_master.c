@@ -35,6 +35,52 @@
 #define MA_HZ_MIN 80000u
 #define MA_HZ_MAX 10000000u
 
+/* -- Words 2..7 of a chain: their registers, from the generated header ------------------ */
+
+/* A field of a register given by offset, mask and position (the chain words' registers differ
+ * per word; the fields of one role have one layout, checked below). */
+typedef struct {
+    uintptr_t off;
+    uint32_t bm;
+    uint8_t bp;
+} field_t;
+
+typedef struct {
+    uintptr_t cfg, crc, crc_start, lo, hi;      /* cfg_wW, cfg_wW_crc, _crc_start, chain.wW_* */
+    uint32_t ne_bm, nw_bm, crc_ok_bm;           /* chain.flags */
+    field_t caps, count;                        /* caps_chain*, count_chain* */
+} chain_word_t;
+
+#define CHAIN_FIELD(reg, f) { CHANNEL_OFF(reg), CH(f##_bm), CH(f##_bp) }
+#define CHAIN_WORD(n, caps_reg, caps_f, count_reg, count_f) \
+    { CHANNEL_OFF(cfg_w##n), CHANNEL_OFF(cfg_w##n##_crc), CHANNEL_OFF(cfg_w##n##_crc_start), \
+      CHANNEL_OFF(chain.w##n##_lo), CHANNEL_OFF(chain.w##n##_hi), \
+      CH(CHAIN__FLAGS__W##n##_NE_bm), CH(CHAIN__FLAGS__W##n##_NW_bm), \
+      CH(CHAIN__FLAGS__W##n##_CRC_OK_bm), \
+      CHAIN_FIELD(caps_reg, caps_f), CHAIN_FIELD(count_reg, count_f) }
+
+static const chain_word_t chain_regs[BISS_CHAIN_WORDS] = {
+    CHAIN_WORD(2, caps_chain, CAPS_CHAIN__DATA_BITS_A, count_chain, COUNT_CHAIN__CRC_A),
+    CHAIN_WORD(3, caps_chain, CAPS_CHAIN__DATA_BITS_B, count_chain, COUNT_CHAIN__CRC_B),
+    CHAIN_WORD(4, caps_chain, CAPS_CHAIN__DATA_BITS_C, count_chain2, COUNT_CHAIN2__CRC_A),
+    CHAIN_WORD(5, caps_chain, CAPS_CHAIN__DATA_BITS_D, count_chain2, COUNT_CHAIN2__CRC_B),
+    CHAIN_WORD(6, caps_chain2, CAPS_CHAIN2__DATA_BITS_A, count_chain3, COUNT_CHAIN3__CRC_A),
+    CHAIN_WORD(7, caps_chain2, CAPS_CHAIN2__DATA_BITS_B, count_chain3, COUNT_CHAIN3__CRC_B),
+};
+
+/* The fields of cfg_wW, cfg_wW_crc, cfg_wW_crc_start and chain.wW_lo / _hi are put and read
+ * with word 2's macros: every word's must be the same (a compile error otherwise). */
+#define SAME_BM(w, reg, f) (CH(CFG_W##w##reg##__##f##_bm) == CH(CFG_W2##reg##__##f##_bm))
+#define SAME_CFG(w) (SAME_BM(w, , DATA_BITS) && SAME_BM(w, , NENW) && SAME_BM(w, , LC) && \
+                     SAME_BM(w, , CRC) && SAME_BM(w, , GRAY) && SAME_BM(w, , IS_SIGNED) && \
+                     SAME_BM(w, , ENABLE) && SAME_BM(w, _CRC, CRC_POLY) && \
+                     SAME_BM(w, _CRC, CRC_WIDTH) && SAME_BM(w, _CRC, CRC_INVERTED) && \
+                     SAME_BM(w, _CRC_START, CRC_START) && \
+                     CH(CHAIN__W##w##_LO__DATA_bm) == CH(CHAIN__W2_LO__DATA_bm) && \
+                     CH(CHAIN__W##w##_HI__DATA_bm) == CH(CHAIN__W2_HI__DATA_bm))
+typedef char chain_layouts_agree[(SAME_CFG(3) && SAME_CFG(4) && SAME_CFG(5) && SAME_CFG(6) &&
+                                  SAME_CFG(7)) ? 1 : -1];
+
 static uint32_t rd(const biss_bus_t *bus, uintptr_t off)
 {
     return bus->read32(bus->ctx, bus->base + off);
@@ -80,7 +126,8 @@ const char *biss_error_name(int err)
         "BISS_ERR_CA_ABORTED", "BISS_ERR_CA_DATA_FAULT", "BISS_ERR_CA_BAD_REQUEST",
         "BISS_ERR_NOT_BP3", "BISS_ERR_BP3_FIELD", "BISS_ERR_NO_EDS", "BISS_ERR_EDS_CHECKSUM",
         "BISS_ERR_EDS_MISMATCH", "BISS_ERR_BANK_SELECT", "BISS_ERR_UNSUPPORTED",
-        "BISS_ERR_CA_SHORT", "BISS_ERR_LINE_CHECK", "BISS_ERR_SSI",
+        "BISS_ERR_CA_SHORT", "BISS_ERR_LINE_CHECK", "BISS_ERR_SSI", "BISS_ERR_CHAIN",
+        "BISS_ERR_TORN",
     };
     if (err > 0 || (unsigned)-err >= sizeof names / sizeof names[0])
         return "?";
@@ -89,8 +136,13 @@ const char *biss_error_name(int err)
 
 int64_t biss_signed_data(const biss_channel_t *ch, unsigned word, uint64_t data)
 {
-    unsigned bits = ch && word < 2 ? ch->max_data_bits[word] : 0;
+    unsigned bits = 0;
     uint64_t sign;
+
+    if (ch != NULL && word < 2)
+        bits = ch->max_data_bits[word];
+    else if (ch != NULL && word < 2 + BISS_CHAIN_WORDS)
+        bits = ch->chain_data_bits[word - 2];
 
     if (bits == 0 || bits >= 64)
         return (int64_t)data;
@@ -144,7 +196,7 @@ uint32_t biss_irq_pending(const biss_bus_t *bus)
 
 biss_err_t biss_channel_init(biss_channel_t *ch, const biss_bus_t *bus, unsigned index)
 {
-    unsigned channels;
+    unsigned channels, i;
     uint32_t caps;
     biss_err_t err;
     if (ch == NULL || !bus_ok(bus))
@@ -166,6 +218,22 @@ biss_err_t biss_channel_init(biss_channel_t *ch, const biss_bus_t *bus, unsigned
     ch->has_register_access = GET(caps, CH(CAPS__REGISTER_ACCESS)) != 0;
     ch->has_ssi = GET(caps, CH(CAPS__SSI)) != 0;
     ch->max_polls = BISS_REG_MAX_POLLS;
+    /* caps.words; a map without it (0) is a build of one or two words. */
+    ch->words = (uint8_t)GET(caps, CH(CAPS__WORDS));
+    if (ch->words == 0)
+        ch->words = ch->max_data_bits[1] != 0 ? 2 : 1;
+    /* caps_chain, caps_chain2: each read once, and only for words the build has. */
+    ch->chain_words = 0;
+    for (i = 0; i < BISS_CHAIN_WORDS; i++) {
+        const field_t *f = &chain_regs[i].caps;
+        ch->chain_data_bits[i] = 0;
+        if (i + 2u >= ch->words)
+            continue;
+        if (i == 0 || f->off != chain_regs[i - 1].caps.off)
+            caps = ch_rd(ch, f->off);
+        ch->chain_data_bits[i] = (uint8_t)((caps & f->bm) >> f->bp);
+        ch->chain_words = (uint8_t)(i + 1u);
+    }
     return BISS_OK;
 }
 
@@ -306,6 +374,20 @@ static uint32_t crc_start_reg(const biss_word_format_t *w)
     return w->crc == BISS_CRC_CUSTOM ? PUT(w->crc_start, CH(CFG_CRC0_START__W0_CRC_START)) : 0;
 }
 
+/* A chain word's custom CRC registers (cfg_wW_crc, cfg_wW_crc_start): 0 with another CRC. */
+static uint32_t chain_crc_reg(const biss_word_format_t *w)
+{
+    if (w->crc != BISS_CRC_CUSTOM)
+        return 0;
+    return PUT(w->crc_poly, CH(CFG_W2_CRC__CRC_POLY)) | PUT(w->crc_width, CH(CFG_W2_CRC__CRC_WIDTH))
+         | PUT(w->crc_inverted, CH(CFG_W2_CRC__CRC_INVERTED));
+}
+
+static uint32_t chain_crc_start_reg(const biss_word_format_t *w)
+{
+    return w->crc == BISS_CRC_CUSTOM ? PUT(w->crc_start, CH(CFG_W2_CRC_START__CRC_START)) : 0;
+}
+
 static bool time_fits(const biss_channel_t *ch, uint32_t value, uint32_t field_max)
 {
     if (!fits(value, field_max))
@@ -315,6 +397,7 @@ static bool time_fits(const biss_channel_t *ch, uint32_t value, uint32_t field_m
 
 biss_err_t biss_config_check(const biss_channel_t *ch, const biss_config_t *cfg)
 {
+    unsigned i, lcs;
     biss_err_t err;
     if (!channel_ok(ch) || cfg == NULL)
         return BISS_ERR_ARG;
@@ -337,9 +420,23 @@ biss_err_t biss_config_check(const biss_channel_t *ch, const biss_config_t *cfg)
                          MAX(CH(CFG_WORDS__W1_DATA_BITS)));
         if (err != BISS_OK)
             return err;
-        if (cfg->word[0].lc && cfg->word[1].lc)
-            return BISS_ERR_LC;
     }
+    /* Chain words: built, after word 1, each a word as words 0 and 1; one LC per frame. */
+    if (cfg->chain_words > 0 && (!cfg->word1_enable || !fits(cfg->chain_words, BISS_CHAIN_WORDS)
+                                 || cfg->chain_words + 2u > ch->words))
+        return BISS_ERR_CHAIN;
+    lcs = cfg->word[0].lc ? 1u : 0u;
+    if (cfg->word1_enable && cfg->word[1].lc)
+        lcs++;
+    for (i = 0; i < cfg->chain_words; i++) {
+        err = check_word(&cfg->chain[i], ch->chain_data_bits[i], MAX(CH(CFG_W2__DATA_BITS)));
+        if (err != BISS_OK)
+            return err;
+        if (cfg->chain[i].lc)
+            lcs++;
+    }
+    if (lcs > 1)
+        return BISS_ERR_LC;
     if (cfg->spw_check && (!cfg->word1_enable || cfg->word[1].data_bits > cfg->word[0].data_bits
                            || cfg->word[1].crc == BISS_CRC_NONE))
         return BISS_ERR_SPW_CHECK;
@@ -351,7 +448,8 @@ biss_err_t biss_config_check(const biss_channel_t *ch, const biss_config_t *cfg)
         || !fits(cfg->confirm_frames, MAX(CH(CFG_CHECKS__CONFIRM_FRAMES))))
         return BISS_ERR_LINE_CHECK;
     /* SSI: one word without LC; the error bit or nE/nW, not both (docs/ports.md, SSI mode). */
-    if (cfg->ssi && (!ch->has_ssi || cfg->word1_enable || cfg->spw_check || cfg->word[0].lc
+    if (cfg->ssi && (!ch->has_ssi || cfg->word1_enable || cfg->chain_words > 0
+                     || cfg->spw_check || cfg->word[0].lc
                      || (cfg->ssi_error && cfg->word[0].nenw)
                      || !fits(cfg->ssi_delay, MAX(CH(CFG_SSI__SSI_DELAY)))))
         return BISS_ERR_SSI;
@@ -362,6 +460,7 @@ biss_err_t biss_configure(biss_channel_t *ch, const biss_config_t *cfg)
 {
     const biss_word_format_t *w0, *w1;
     uint32_t words;
+    unsigned i;
     biss_err_t err = biss_config_check(ch, cfg);
     if (err != BISS_OK)
         return err;
@@ -389,7 +488,26 @@ biss_err_t biss_configure(biss_channel_t *ch, const biss_config_t *cfg)
     ch_wr(ch, CHANNEL_OFF(cfg_crc0_start), crc_start_reg(w0));
     ch_wr(ch, CHANNEL_OFF(cfg_crc1), cfg->word1_enable ? crc_reg(w1) : 0);
     ch_wr(ch, CHANNEL_OFF(cfg_crc1_start), cfg->word1_enable ? crc_start_reg(w1) : 0);
+    for (i = 0; i + 2u < ch->words && i < BISS_CHAIN_WORDS; i++) {
+        const biss_word_format_t *w = &cfg->chain[i];
+        bool on = i < cfg->chain_words;
+        ch_wr(ch, chain_regs[i].crc, on ? chain_crc_reg(w) : 0);
+        ch_wr(ch, chain_regs[i].crc_start, on ? chain_crc_start_reg(w) : 0);
+    }
     ch_wr(ch, CHANNEL_OFF(cfg_words), words);
+    /* Every chain word the build has: the enabled ones in order after word 1, the others
+     * written 0 (disabled). */
+    for (i = 0; i + 2u < ch->words && i < BISS_CHAIN_WORDS; i++) {
+        const biss_word_format_t *w = &cfg->chain[i];
+        uint32_t reg = 0;
+        if (i < cfg->chain_words)
+            reg = PUT(1, CH(CFG_W2__ENABLE)) | PUT(w->data_bits, CH(CFG_W2__DATA_BITS))
+                | PUT(w->nenw, CH(CFG_W2__NENW)) | PUT(w->lc, CH(CFG_W2__LC))
+                | PUT(w->crc, CH(CFG_W2__CRC)) | PUT(w->gray, CH(CFG_W2__GRAY))
+                | PUT(w->is_signed, CH(CFG_W2__IS_SIGNED));
+        ch_wr(ch, chain_regs[i].cfg, reg);
+    }
+    ch->chain_words = cfg->chain_words;
     ch_wr(ch, CHANNEL_OFF(cfg_checks), PUT(cfg->end_check, CH(CFG_CHECKS__END_CHECK))
                                      | PUT(cfg->spw_check, CH(CFG_CHECKS__SPW_CHECK))
                                      | PUT(cfg->spw_tolerance, CH(CFG_CHECKS__SPW_TOLERANCE))
@@ -513,13 +631,64 @@ biss_err_t biss_wait_done(biss_channel_t *ch, uint32_t max_polls)
 
 /* -- Results ------------------------------------------------------------------------------ */
 
+/* The first n chain words' flags and data (read live) into res->chain, the others 0; no bus
+ * access for n = 0. */
+static void read_chain_words(const biss_channel_t *ch, unsigned n, biss_result_t *res)
+{
+    static const biss_word_result_t none;
+    uint32_t flags = n > 0 ? ch_rd(ch, CHANNEL_OFF(chain.flags)) : 0, lo, hi;
+    unsigned i;
+    for (i = 0; i < BISS_CHAIN_WORDS; i++) {
+        const chain_word_t *r = &chain_regs[i];
+        biss_word_result_t *w = &res->chain[i];
+        *w = none;
+        if (i >= n)
+            continue;
+        lo = GET(ch_rd(ch, r->lo), CH(CHAIN__W2_LO__DATA));
+        hi = GET(ch_rd(ch, r->hi), CH(CHAIN__W2_HI__DATA));
+        w->data = (uint64_t)hi << CH(CHAIN__W2_LO__DATA_bw) | lo;
+        w->ne = (flags & r->ne_bm) != 0;
+        w->nw = (flags & r->nw_bm) != 0;
+        w->crc_ok = (flags & r->crc_ok_bm) != 0;
+    }
+}
+
 biss_err_t biss_read_result(biss_channel_t *ch, biss_result_t *res)
 {
-    uint32_t s, seq, lo, hi, line;
+    uint32_t s, seq, lo, hi, line, before, after = 0;
+    unsigned n, tries = 0;
+    biss_err_t err = BISS_OK;
     if (!channel_ok(ch) || res == NULL)
         return BISS_ERR_ARG;
-    /* result.status first: reading it takes the snapshot the other registers return. */
-    s = ch_rd(ch, CHANNEL_OFF(result.status));
+    n = ch->chain_words;
+    if (n > BISS_CHAIN_WORDS)
+        n = BISS_CHAIN_WORDS;
+    if (n + 2u > ch->words)
+        n = ch->words > 2 ? ch->words - 2u : 0;
+    res->chain_words = (uint8_t)n;
+    /* result.status first: reading it takes the snapshot the other registers return. The
+     * chain words are live: they and the snapshot are of one frame when chain.updates reads
+     * the same before and after them (it counts the core's result updates, and changes in the
+     * clock after the results: a frame ending between the reads shows). The snapshot's other
+     * registers are read after the window: they no longer change. */
+    if (n == 0) {
+        s = ch_rd(ch, CHANNEL_OFF(result.status));
+        read_chain_words(ch, 0, res);
+    } else {
+        before = GET(ch_rd(ch, CHANNEL_OFF(chain.updates)), CH(CHAIN__UPDATES__UPDATES));
+        for (;;) {
+            s = ch_rd(ch, CHANNEL_OFF(result.status));
+            read_chain_words(ch, n, res);
+            after = GET(ch_rd(ch, CHANNEL_OFF(chain.updates)), CH(CHAIN__UPDATES__UPDATES));
+            if (after == before)
+                break;
+            if (++tries >= BISS_READ_RETRIES) {
+                err = BISS_ERR_TORN;
+                break;
+            }
+            before = after;
+        }
+    }
     res->status = (uint8_t)GET(s, CH(RESULT__STATUS__STATUS));
     res->cds = GET(s, CH(RESULT__STATUS__CDS)) != 0;
     res->w0_ne = GET(s, CH(RESULT__STATUS__W0_NE)) != 0;
@@ -548,12 +717,13 @@ biss_err_t biss_read_result(biss_channel_t *ch, biss_result_t *res)
     res->delay_settled = GET(line, CH(RESULT__LINE__DELAY_SETTLED)) != 0;
     res->settled_delay = (uint16_t)GET(line, CH(RESULT__LINE__SETTLED_DELAY));
     res->delay_spread = (uint8_t)GET(line, CH(RESULT__LINE__DELAY_SPREAD));
-    return BISS_OK;
+    return err;
 }
 
 biss_err_t biss_read_counters(biss_channel_t *ch, biss_counters_t *cnt)
 {
     uint32_t w;
+    unsigned i;
     if (!channel_ok(ch) || cnt == NULL)
         return BISS_ERR_ARG;
     w = ch_rd(ch, CHANNEL_OFF(count_crc));
@@ -580,6 +750,17 @@ biss_err_t biss_read_counters(biss_channel_t *ch, biss_counters_t *cnt)
     w = ch_rd(ch, CHANNEL_OFF(count_noise));
     cnt->delay_jump = (uint16_t)GET(w, CH(COUNT_NOISE__DELAY_JUMP));
     cnt->noise_event = (uint16_t)GET(w, CH(COUNT_NOISE__NOISE_EVENT));
+    /* Words 2..7: two counters a register, read once per register (only those built). */
+    for (i = 0; i < BISS_CHAIN_WORDS; i++) {
+        const field_t *f = &chain_regs[i].count;
+        if (i + 2u >= ch->words) {
+            cnt->crc_chain[i] = 0;
+            continue;
+        }
+        if (i == 0 || f->off != chain_regs[i - 1].count.off)
+            w = ch_rd(ch, f->off);
+        cnt->crc_chain[i] = (uint16_t)((w & f->bm) >> f->bp);
+    }
     return BISS_OK;
 }
 

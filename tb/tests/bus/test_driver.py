@@ -7,6 +7,7 @@ status names against tb/master_contract.py, the preset-to-configuration arithmet
 range checks, and the example of docs/driver.md being the file the build compiles.
 """
 
+import ctypes
 import re
 import shutil
 import subprocess
@@ -50,6 +51,31 @@ def test_builds_strict_with_every_installed_compiler(tmp_path):
         for name in ("libbissmaster.so", "libbissmaster.a", "two_axes.o", "bp3_identify.o",
                      "biss_linux"):
             assert (out / name).is_file(), f"{cc}: no {name}"
+
+
+def test_ctypes_mirror_matches_the_c_layouts(tmp_path):
+    """sim/shared/c_driver.py's structs have the C compiler's layout: a program built here
+    prints sizeof of every struct of biss_master.h the mirror holds and offsetof of each of its
+    fields; a field out of place (or a member appended in C and not in the mirror) differs."""
+    lines, want = [], {}
+    for cname, cls in c_driver.STRUCTS.items():
+        lines.append(f'printf("{cname} %zu\\n", sizeof({cname}));')
+        want[cname] = ctypes.sizeof(cls)
+        for field, _ in cls._fields_:
+            lines.append(f'printf("{cname}.{field} %zu\\n", offsetof({cname}, {field}));')
+            want[f"{cname}.{field}"] = getattr(cls, field).offset
+    src = tmp_path / "layout.c"
+    src.write_text('#include <stdio.h>\n#include <stddef.h>\n#include "biss_master.h"\n'
+                   "int main(void)\n{\n    " + "\n    ".join(lines) + "\n    return 0;\n}\n")
+    exe = tmp_path / "layout"
+    subprocess.run(["cc", "-std=c99", "-Wall", "-Werror", f"-I{ROOT / 'sw' / 'include'}",
+                    "-o", str(exe), str(src)], check=True)
+    got = dict(line.rsplit(" ", 1) for line in
+               subprocess.run([str(exe)], check=True, capture_output=True,
+                              text=True).stdout.splitlines())
+    bad = {k: (int(got[k]), v) for k, v in want.items() if int(got[k]) != v}
+    assert not bad, f"(C, ctypes) differ: {bad}"
+    assert ctypes.sizeof(c_driver.Channel) > 0 and "biss_result_t.chain" in got
 
 
 def test_driver_includes_only_freestanding_headers():
@@ -413,3 +439,238 @@ def test_register_access_bytes_and_lanes(lib):
         err = lib.biss_reg_read(byref(bus.ch), 0, 0x50, buf, 6, byref(done))
         assert (lib.biss_error_name(err).decode(), done.value, buf[0]) == \
             (f"BISS_ERR_CA_{name.replace('_ERROR', '')}", 1, data[0])
+
+
+# -- Chains (words 2..7): checks, signed data and the read rule, without a simulator ----------
+def chain_channel(words=4, chain_bits=(24, 16), read32=None, write32=None):
+    """A channel handle as biss_channel_init fills it for a build of ``words`` words (word 0 and
+    word 1 of 40 and 32 bits, the chain words ``chain_bits``), on hooks of the caller's (or
+    hooks that read 0)."""
+    ch = c_driver.Channel()
+    hooks = (c_driver.READ32(read32 or (lambda ctx, addr: 0)),
+             c_driver.WRITE32(write32 or (lambda ctx, addr, value: None)))
+    ch.bus = c_driver.Bus(0, *hooks)
+    ch.base = regspec.load().address("ctrl", 0)
+    ch._hooks = hooks                   # the callbacks must outlive the calls
+    ch.max_data_bits[0], ch.max_data_bits[1] = 40, 32
+    ch.timer_width, ch.words, ch.chain_words = 24, words, max(words - 2, 0)
+    for i, bits in enumerate(chain_bits):
+        ch.chain_data_bits[i] = bits
+    return ch
+
+
+def chain_config(lib, chain_words=2):
+    """A chain of ``chain_words`` + 2 words: word 0 26 bits CRC-6, word 1 17 bits CRC-6, word 2
+    12 bits CRC-6, word 3 16 bits CRC-16 (nE/nW each)."""
+    cfg = c_driver.Config()
+    assert lib.biss_config_from_preset(byref(cfg), b"resolute_c_26", SYS_CLK_HZ, 5_000_000) == 0
+    cfg.word1_enable = True
+    cfg.word[1].data_bits, cfg.word[1].crc, cfg.word[1].nenw = 17, CRC_CODE["crc6"], True
+    cfg.chain_words = chain_words
+    for i, (bits, crc) in enumerate(((12, "crc6"), (16, "crc16"))[:chain_words]):
+        cfg.chain[i].data_bits, cfg.chain[i].crc, cfg.chain[i].nenw = bits, CRC_CODE[crc], True
+    return cfg
+
+
+def _changed(cfg, **changes):
+    c = c_driver.Config.from_buffer_copy(cfg)
+    for path, value in changes.items():
+        obj, *rest = path.split("__")
+        if rest:                        # chain<i>__field
+            setattr(c.chain[int(obj[5:])], rest[0], value)
+        else:
+            setattr(c, obj, value)
+    return c
+
+
+@pytest.mark.parametrize("changes,want", [
+    ({}, "BISS_OK"),
+    ({"chain_words": 0}, "BISS_OK"),
+    ({"chain_words": 3}, "BISS_ERR_CHAIN"),                 # word 4 of a 4-word build
+    ({"chain_words": 4}, "BISS_ERR_CHAIN"),                 # word 5
+    ({"chain_words": 7}, "BISS_ERR_CHAIN"),                 # beyond word 7
+    ({"word1_enable": False}, "BISS_ERR_CHAIN"),            # a gap: words 2, 3 without word 1
+    ({"chain0__data_bits": 25}, "BISS_ERR_DATA_BITS"),      # word 2 is at most 24 bits
+    ({"chain0__data_bits": 0}, "BISS_ERR_DATA_BITS"),
+    ({"chain1__data_bits": 17}, "BISS_ERR_DATA_BITS"),      # word 3 at most 16
+    ({"chain1__data_bits": 16}, "BISS_OK"),
+    ({"chain1__crc": 4}, "BISS_ERR_CRC"),
+    ({"chain1__crc": CRC_CODE["custom"]}, "BISS_ERR_CRC"),  # custom, width 0
+    ({"chain1__crc": CRC_CODE["custom"], "chain1__crc_width": 4,
+      "chain1__crc_poly": 0x13}, "BISS_ERR_CRC"),           # polynomial wider than 4 bits
+    ({"chain1__crc": CRC_CODE["custom"], "chain1__crc_width": 4, "chain1__crc_poly": 0x3,
+      "chain1__crc_start": 0x9}, "BISS_OK"),
+    ({"chain1__lc": True}, "BISS_OK"),                      # one LC per frame ...
+    ({"chain1__lc": True, "chain0__lc": True}, "BISS_ERR_LC"),      # ... not two
+    ({"chain1__lc": True, "word__0__lc": None}, "BISS_ERR_LC"),
+    ({"chain_words": 1, "chain1__lc": True, "chain1__data_bits": 0}, "BISS_OK"),  # not in the frame
+    ({"ssi": True, "word1_enable": False, "chain_words": 0}, "BISS_OK"),
+])
+def test_chain_config_check(lib, changes, want):
+    """biss_config_check on a 4-word build (words 2 and 3 of up to 24 and 16 bits)."""
+    changes = dict(changes)
+    word0_lc = changes.pop("word__0__lc", False) is None
+    cfg = _changed(chain_config(lib), **changes)
+    if word0_lc:
+        cfg.word[0].lc = True
+    ch = chain_channel()
+    ch.has_ssi = True
+    assert lib.biss_error_name(lib.biss_config_check(byref(ch), byref(cfg))).decode() == want
+
+
+def test_chain_config_check_on_builds_without_chains(lib):
+    """A two-word build refuses any chain word (a one-word build word 1 first); SSI with chain
+    words is refused (as SSI or as a chain)."""
+    cfg = chain_config(lib, chain_words=1)
+    for words, want in ((2, "BISS_ERR_CHAIN"), (1, "BISS_ERR_WORD1")):
+        ch = chain_channel(words=words, chain_bits=())
+        ch.max_data_bits[1] = 32 if words == 2 else 0
+        err = lib.biss_error_name(lib.biss_config_check(byref(ch), byref(cfg))).decode()
+        assert err == want, words
+    ch = chain_channel()
+    ch.has_ssi = True
+    cfg = _changed(cfg, ssi=True)
+    assert lib.biss_error_name(lib.biss_config_check(byref(ch), byref(cfg))).decode() in (
+        "BISS_ERR_SSI", "BISS_ERR_CHAIN")
+
+
+def test_signed_data_of_chain_words(lib):
+    """Words 2..7 extend from chain_data_bits (a word not built: the data as it is)."""
+    ch = chain_channel(chain_bits=(24, 16))
+    assert lib.biss_signed_data(byref(ch), 2, 0xFFF800) == -0x800
+    assert lib.biss_signed_data(byref(ch), 2, 0x7FF800) == 0x7FF800
+    assert lib.biss_signed_data(byref(ch), 3, 0x8000) == -0x8000
+    assert lib.biss_signed_data(byref(ch), 3, 0xFFFF) == -1
+    assert lib.biss_signed_data(byref(ch), 4, 0xFFFF) == 0xFFFF       # not built
+    assert lib.biss_signed_data(byref(ch), 8, 0xFFFF) == 0xFFFF       # no such word
+
+
+class ChainBus:
+    """A map whose chain.updates advances by one on each of the reads listed in ``bumps``
+    (counting the reads of chain.updates from 1); chain.wN_lo reads ``frame`` (the update
+    count) so a torn read shows; every read logged."""
+
+    def __init__(self, bumps=()):
+        self.map = regspec.load()
+        self.updates, self.reads, self.bumps, self.log = 0, 0, set(bumps), []
+
+    def read(self, ctx, addr):
+        self.log.append(addr)
+        if addr == self.map.address("chain.updates", 0):
+            self.reads += 1
+            if self.reads in self.bumps:
+                self.updates += 1
+            return self.updates
+        if addr in (self.map.address(f"chain.w{w}_lo", 0) for w in range(2, 8)):
+            return 0x100 + self.updates
+        return 0
+
+
+@pytest.mark.parametrize("bumps,tries,err", [
+    ((), 1, "BISS_OK"),
+    ((2,), 2, "BISS_OK"),               # a frame ended during the first read: read again
+    ((2, 3, 4), 4, "BISS_OK"),
+    (tuple(range(2, 10)), 8, "BISS_ERR_TORN"),      # never settled within BISS_READ_RETRIES
+])
+def test_chain_read_rule(lib, bumps, tries, err):
+    """biss_read_result on a 4-word build: chain.updates, then result.status, chain.flags and
+    the chain words, then chain.updates: equal, done; else again from result.status (the
+    second count is the next first one); after 8 tries BISS_ERR_TORN."""
+    bus = ChainBus(bumps)
+    ch = chain_channel(read32=bus.read)
+    res = c_driver.Result()
+    got = lib.biss_error_name(lib.biss_read_result(byref(ch), byref(res))).decode()
+    assert got == err
+    status = bus.map.address("result.status", 0)
+    assert (bus.log.count(status), bus.reads) == (tries, tries + 1)
+    assert bus.log[0] == bus.map.address("chain.updates", 0) and bus.log[1] == status
+    # The words of the last try: read after `tries` reads of chain.updates.
+    assert res.chain_words == 2
+    assert res.chain[0].data == 0x100 + len([b for b in bumps if b <= tries])
+    assert res.chain[2].data == 0, "a word not read is 0"
+
+
+@pytest.mark.parametrize("words,chain_words", [(2, 0), (4, 0)])
+def test_result_reads_without_chain_words_are_unchanged(lib, words, chain_words):
+    """With no chain word to read (a two-word build, or a chain build configured for two
+    words): the reads of before chains, result.status first, no chain register."""
+    bus = ChainBus()
+    ch = chain_channel(words=words, read32=bus.read)
+    ch.chain_words = chain_words
+    res = c_driver.Result()
+    assert lib.biss_read_result(byref(ch), byref(res)) == 0
+    m = bus.map
+    assert bus.log == [m.address(f"result.{r}", 0) for r in
+                       ("status", "seq", "w0_lo", "w0_hi", "w1_lo", "w1_hi", "timestamp",
+                        "line")]
+    assert res.chain_words == 0
+
+
+def test_configure_writes_every_chain_word_the_build_has(lib):
+    """biss_configure on a 4-word build, chain_words 1: cfg_w2 enabled with its fields, word 2's
+    custom CRC registers, cfg_w3 written 0 (disabled) with its CRC registers 0, no register of
+    words 4..7; the handle's chain_words becomes 1."""
+    m = regspec.load()
+    writes = {}
+    ch = chain_channel(write32=lambda ctx, addr, value: writes.__setitem__(addr, value))
+    cfg = chain_config(lib, chain_words=2)
+    c2 = cfg.chain[0]
+    c2.crc, c2.crc_width, c2.crc_poly, c2.crc_start, c2.crc_inverted = 3, 4, 0x3, 0x9, False
+    c2.gray, c2.is_signed = True, True
+    cfg.chain_words = 1
+    assert lib.biss_error_name(lib.biss_configure(byref(ch), byref(cfg))).decode() == "BISS_OK"
+    f = {n: m.reg("cfg_w2", 0).fields[n] for n in m.reg("cfg_w2", 0).fields}
+    want = 0
+    for name, value in dict(data_bits=12, nenw=1, lc=0, crc=3, gray=1, is_signed=1,
+                            enable=1).items():
+        want = f[name].put(want, value)
+    assert writes[m.address("cfg_w2", 0)] == want
+    crc = m.reg("cfg_w2_crc", 0).fields
+    assert writes[m.address("cfg_w2_crc", 0)] == crc["crc_inverted"].put(
+        crc["crc_width"].put(crc["crc_poly"].put(0, 0x3), 4), 0)
+    assert writes[m.address("cfg_w2_crc_start", 0)] == 0x9
+    for r in ("cfg_w3", "cfg_w3_crc", "cfg_w3_crc_start"):
+        assert writes[m.address(r, 0)] == 0, r
+    for w in range(4, 8):
+        assert m.address(f"cfg_w{w}", 0) not in writes
+    assert ch.chain_words == 1
+
+
+@pytest.mark.parametrize("words,chain,want_words,want_bits", [
+    (4, (24, 16, 0, 0, 0, 0), 4, (24, 16, 0, 0, 0, 0)),
+    (8, (63, 1, 20, 33, 7, 12), 8, (63, 1, 20, 33, 7, 12)),
+    (2, (), 2, (0,) * 6),
+    (0, (), 2, (0,) * 6),               # a map without caps.words: two words from data_bits_w1
+])
+def test_channel_init_reads_the_chain_caps(lib, words, chain, want_words, want_bits):
+    """biss_channel_init: caps.words, and caps_chain / caps_chain2 (read only when the build
+    has more than two words) into chain_data_bits; chain_words = the build's chain words."""
+    m = regspec.load()
+    caps = m.reg("caps", 0).fields
+    version = m.reg("version").fields
+    regs = {m.address("id"): 0x42695353,            # "BiSS", docs/registers.md
+            m.address("version"): version["major"].put(0, 1),
+            m.address("channels"): 1,
+            m.address("caps", 0): caps["words"].put(caps["data_bits_w1"].put(
+                caps["data_bits_w0"].put(0, 40), 32), words)}
+    for reg, names, values in (("caps_chain", "abcd", chain[:4]), ("caps_chain2", "ab", chain[4:])):
+        f = m.reg(reg, 0).fields
+        word = 0
+        for n, v in zip(names, values):
+            word = f[f"data_bits_{n}"].put(word, v)
+        regs[m.address(reg, 0)] = word
+    log = []
+
+    def read(ctx, addr):
+        log.append(addr)
+        return regs.get(addr, 0)
+    hooks = (c_driver.READ32(read), c_driver.WRITE32(lambda ctx, addr, value: None))
+    bus = c_driver.Bus(0, *hooks)
+    ch = c_driver.Channel()
+    assert lib.biss_error_name(lib.biss_channel_init(byref(ch), byref(bus), 0)).decode() == \
+        "BISS_OK"
+    assert (ch.words, tuple(ch.chain_data_bits), ch.chain_words) == \
+        (want_words, want_bits, max(want_words - 2, 0))
+    chain_caps = {m.address("caps_chain", 0), m.address("caps_chain2", 0)}
+    assert bool(chain_caps & set(log)) == (want_words > 2)
+    assert all(log.count(a) <= 1 for a in chain_caps), "a caps register read twice"
