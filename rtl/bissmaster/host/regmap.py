@@ -90,7 +90,7 @@ FIELDS = {
     "state": {"busy": (0, 1), "config_error": (1, 1)},
     "caps": {"data_bits_w0": (0, 6), "data_bits_w1": (8, 6), "timer_width": (16, 6),
              "counters": (24, 1), "timestamp": (25, 1), "register_access": (26, 1),
-             "ssi": (27, 1)},
+             "ssi": (27, 1), "words": (28, 4)},
     "irq_status": {"done": (0, 1), "error": (1, 1), "access_done": (2, 1)},
     "irq_enable": {"done": (0, 1), "error": (1, 1), "access_done": (2, 1)},
     "cfg_ma": {"ma_half_period": (0, 16), "delay_limit": (16, 12)},
@@ -139,6 +139,43 @@ FIELDS = {
     "ca.count_refused_aborted": {"refused": (0, 16), "aborted": (16, 16)},
     "ca.count_data_fault": {"data_fault": (0, 16)},
 }
+
+#: Words 2..7 of a chain (docs/bus.md, "Chains"): per word the same three settings registers
+#: (16 bytes apart from 0x0A0), a CRC count and two result registers; capabilities and counts
+#: two words to a register. Their fields have the same names in every word, so they are not
+#: among CONFIG_REGISTERS (whose field names are the tool's settings names): the tool sets up
+#: and shows words 0 and 1.
+CHAIN_WORDS = range(2, 8)
+CHANNEL.update({
+    "caps_chain": 0x018, "caps_chain2": 0x01C,
+    "count_chain": 0x094, "count_chain2": 0x098, "count_chain3": 0x09C,
+    **{f"cfg_w{w}{end}": 0x0A0 + 0x10 * (w - 2) + 4 * k for w in CHAIN_WORDS
+       for k, end in enumerate(("", "_crc", "_crc_start"))},
+    "chain.updates": 0x1C0, "chain.flags": 0x1C4,
+    **{f"chain.w{w}_{half}": 0x1C8 + 8 * (w - 2) + 4 * k for w in CHAIN_WORDS
+       for k, half in enumerate(("lo", "hi"))},
+})
+FIELDS.update({
+    "caps_chain": {f"data_bits_{x}": (8 * k, 6) for k, x in enumerate("abcd")},
+    "caps_chain2": {f"data_bits_{x}": (8 * k, 6) for k, x in enumerate("ab")},
+    **{f"count_chain{n}": {"crc_a": (0, 16), "crc_b": (16, 16)} for n in ("", "2", "3")},
+    **{f"cfg_w{w}": {"data_bits": (0, 6), "nenw": (6, 1), "lc": (7, 1), "crc": (8, 2),
+                     "gray": (10, 1), "is_signed": (11, 1), "enable": (31, 1)}
+       for w in CHAIN_WORDS},
+    **{f"cfg_w{w}_crc": {"crc_poly": (0, 16), "crc_width": (16, 5), "crc_inverted": (24, 1)}
+       for w in CHAIN_WORDS},
+    **{f"cfg_w{w}_crc_start": {"crc_start": (0, 16)} for w in CHAIN_WORDS},
+    "chain.updates": {"updates": (0, 16)},
+    "chain.flags": {f"w{w}_{flag}": (4 * (w - 2) + k, 1) for w in CHAIN_WORDS
+                    for k, flag in enumerate(("ne", "nw", "crc_ok"))},
+    **{f"chain.w{w}_lo": {"data": (0, 32)} for w in CHAIN_WORDS},
+    **{f"chain.w{w}_hi": {"data": (0, 31)} for w in CHAIN_WORDS},
+})
+#: Each chain word's settings registers (one READ_BURST each).
+CHAIN_CONFIG_RUNS = tuple((f"cfg_w{w}", f"cfg_w{w}_crc", f"cfg_w{w}_crc_start")
+                          for w in CHAIN_WORDS)
+#: The chain words' CRC counts, in address order.
+CHAIN_COUNTER_REGISTERS = ("count_chain", "count_chain2", "count_chain3")
 
 #: The configuration registers, in address order: two runs of consecutive registers (one
 #: READ_BURST each), the eight at 0x020, and each word's custom CRC and SSI mode at 0x080.

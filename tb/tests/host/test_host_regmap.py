@@ -45,10 +45,19 @@ def test_every_field_is_the_rdl_one():
 def test_constants_and_register_groups():
     assert MAP.globals["id"].fields["id"].reset == regmap.ID_VALUE
     assert MAP.globals["version"].fields["major"].reset == regmap.MAP_MAJOR
-    for runs, prefix in ((regmap.CONFIG_RUNS, "cfg_"), ((regmap.RESULT_REGISTERS,), "result."),
-                         ((regmap.COUNTER_REGISTERS,), "count_"),
-                         ((regmap.CA_COUNTER_REGISTERS,), "ca.count_")):
-        rdl = sorted((p for p in MAP.channel if p.startswith(prefix)),
+    def chain(path):
+        """A register of words 2..7 of a chain (their own groups below)."""
+        return re.match(r"(cfg_w\d|count_chain)", path) is not None
+
+    for runs, prefix, wanted in (
+            (regmap.CONFIG_RUNS, "cfg_", lambda p: not chain(p)),
+            ((regmap.RESULT_REGISTERS,), "result.", None),
+            ((regmap.COUNTER_REGISTERS,), "count_", lambda p: not chain(p)),
+            ((regmap.CA_COUNTER_REGISTERS,), "ca.count_", None),
+            (regmap.CHAIN_CONFIG_RUNS, "cfg_w", chain),
+            ((regmap.CHAIN_COUNTER_REGISTERS,), "count_chain", None)):
+        rdl = sorted((p for p in MAP.channel if p.startswith(prefix)
+                      and (wanted is None or wanted(p))),
                      key=lambda p: MAP.channel[p].offset)
         assert [r for run in runs for r in run] == rdl, prefix
         for run in runs:
