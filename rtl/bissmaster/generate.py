@@ -125,14 +125,31 @@ def generate_bus(bus="axil", channels=BUS_CHANNELS, params=None, name=None, **op
     return generate(params, name, bus, channels=channels, **options)
 
 
-def generate(params=None, name=None, top="core", **options):
+class Family:
+    """What the design is elaborated for when it is generated for one FPGA family
+    (``--family``): the blocks read ``platform.family`` as they do on a board's platform."""
+
+    def __init__(self, family):
+        self.family = family
+
+
+#: ``--family`` choices -> the platform family the blocks see (None: any family).
+FAMILIES = {"any": None, "ice40": "iCE40"}
+
+
+def generate(params=None, name=None, top="core", family="any", **options):
     """The Verilog text of ``top`` (a :data:`TOPS` name) built from cores of ``params`` (default:
-    :class:`MasterParams`), module ``name`` (default: the top's), with the top's ``options``."""
+    :class:`MasterParams`), module ``name`` (default: the top's), with the top's ``options``,
+    for ``family`` (a :data:`FAMILIES` name)."""
     params = params or MasterParams()
     spec = TOPS[top]
+    platform = Family(FAMILIES[family]) if FAMILIES[family] else None
     body = verilog.convert(spec.build(params, **options), name=name or spec.module,
-                           emit_src=False)
-    return header(params, spec.describe(**options)) + body
+                           platform=platform, emit_src=False)
+    lines = spec.describe(**options)
+    if platform:
+        lines = [*lines, f"family          = {FAMILIES[family]} (--family {family})"]
+    return header(params, lines) + body
 
 
 # The Renishaw encoders are unidirectional (CDS always 0): their builds leave the
@@ -208,6 +225,13 @@ def _parser():
                            "besides it override it (default: %(default)s)")
     what.add_argument("--list-presets", action="store_true",
                       help="list the presets with their options and parameters, and exit")
+
+    what.add_argument("--family", choices=FAMILIES, default="any",
+                      help="the FPGA family the Verilog is for: any (default: memories left to "
+                           "the tool's inference) or ice40 (as the iCE40 board designs are "
+                           "built: the counter memory marked for block RAM, a bus top's "
+                           "configuration read back from flip-flops, since iCE40 has no "
+                           "distributed RAM)")
 
     out = ap.add_argument_group("output")
     out.add_argument("-o", "--output", default="-", metavar="FILE",
@@ -358,7 +382,7 @@ def main(argv=None):
                  f"not installed: {BUS_EXTRA}")
     params = _params(ap, args)
     try:
-        text = generate(params, args.name, args.top, **options)
+        text = generate(params, args.name, args.top, args.family, **options)
     except ValueError as e:     # a top's parameters (channels, baud rate, ...) refused
         ap.error(str(e))
     if args.output == "-":

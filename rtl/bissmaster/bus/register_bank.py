@@ -83,6 +83,11 @@ class RegisterBank(wiring.Component):
     Memory registers (``memory`` = NAME: the counters) are read the same way, as one read
     window over their words; their fields only document the word.
 
+    Configuration read-back: a register of configuration only (CONFIG fields, CONST fields)
+    is read from a memory of its block, written with its flip-flops, not from the block's
+    read AND-OR (issue 27: the flip-flops feed the core every clock, the memory answers the
+    bus; ``_shadow``). It reads exactly what the flip-flops hold, in the same clock.
+
     Writes: the request (``w_en``, address, data, strobes) is registered, and every write
     decodes from those flip-flops in the next clock. CONFIG fields are written one clock later
     still, lane by lane, from a per-register write flip-flop and a second copy of the data and
@@ -135,6 +140,11 @@ class RegisterBank(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         rm = self.regmap
+        # The configuration memories read asynchronously: distributed RAM on ECP5, Xilinx and
+        # Intel. iCE40 has none, and its block RAM's address register cannot hold the reset
+        # value every Amaranth register has: for an iCE40 platform (the board designs,
+        # ``--family ice40``) the configuration is read back from its flip-flops.
+        self._config_memory = getattr(platform, "family", None) != "iCE40"
         blocks = [(self.glob, 0, rm.globals, "g", frozenset())]
         blocks += [(getattr(self, f"ch{n}"), rm.channel_base + n * rm.channel_stride,
                     rm.channel, f"ch{n}", self.absent[n]) for n in range(self.channels)]
@@ -196,7 +206,8 @@ class RegisterBank(wiring.Component):
         storage = {}                   # "register.field" -> the Signal that holds it
         irq_terms = []
         # Registers of configuration only (read back from a memory, ``_shadow``).
-        shadowed = [reg for reg in registers if self._shadowable(reg, absent)]
+        shadowed = [reg for reg in registers
+                    if self._config_memory and self._shadowable(reg, absent)]
         shadow_writes = {}             # register path -> its config_write
         groups = {}                    # group -> the copies' assignments
         take = {}                      # group -> the word address of its first register
@@ -346,18 +357,25 @@ class RegisterBank(wiring.Component):
             wr.data.eq(data),
             wr.en.eq(Mux(writes.any(), self._w2_strb | first.replicate(len(wr.en)), 0)),
         ]
-        # The read: the register's index taken at r_en, the memory read at r_load.
+        # The read: the register's index taken at r_en, the memory read at r_load. The index
+        # register feeds the memory alone, so that Yosys can make it the address register of
+        # a block RAM's read port (iCE40); the written flag and the constants are chosen by
+        # a one-hot select per register, taken at r_en too.
         hit = Signal(name=f"{prefix}_config_read")
         m.d.comb += hit.eq(bus.r_en & (bus.r_addr[low:] == base // 4 >> low) & r_shadow)
         index = Signal(range(count), name=f"{prefix}_config_read_index")
+        select = Signal(count, name=f"{prefix}_config_read_select")
+        with m.If(bus.r_en):
+            m.d.sync += select.eq(Mux(hit, Cat(r_index == k for k in range(count)), 0))
         with m.If(hit):
             m.d.sync += index.eq(r_index)
         rd = memory.read_port(domain="comb")
         m.d.comb += rd.addr.eq(index)
         value = Signal(DATA_WIDTH, name=f"{prefix}_config_read_data")
-        m.d.comb += value.eq(Mux(written.bit_select(index, 1), rd.data,
-                                 Array(C(r, DATA_WIDTH) for r in reset)[index])
-                             | Array(C(c, DATA_WIDTH) for c in const)[index])
+        fixed = 0
+        for k in range(count):
+            fixed = fixed | Mux(select[k] & ~written[k], reset[k], 0) | Mux(select[k], const[k], 0)
+        m.d.comb += value.eq(Mux((select & written).any(), rd.data, 0) | fixed)
         windows.append((hit, value))
 
     def _shadow_common(self, m, registers, shadowed, absent, mask, reset):

@@ -166,3 +166,17 @@ def test_readme_table_names_every_preset():
     table = table[:table.index("\n\n")]
     names = re.findall(r"^\| `([a-z0-9-]+)` \|", table, re.M)
     assert sorted(names) == sorted(PRESETS)
+
+
+def test_family_ice40_reads_the_configuration_back_from_flip_flops(tmp_path):
+    """--family ice40 builds as the iCE40 board designs are: the counter memory marked for
+    block RAM, and no configuration memory in the bus top's bank (iCE40 has no distributed
+    RAM); the default leaves both to the tool and reads the configuration from a memory."""
+    any_, ice40 = tmp_path / "any.v", tmp_path / "ice40.v"
+    main(["--top", "axil", "--channels", "1", "--preset", "biss-c", "-o", str(any_)])
+    main(["--top", "axil", "--channels", "1", "--preset", "biss-c", "--family", "ice40",
+          "-o", str(ice40)])
+    a, i = any_.read_text(), ice40.read_text()
+    assert "ch0_config_memory" in a and "ch0_config_memory" not in i
+    assert 'ram_style = "block"' not in a and 'ram_style = "block"' in i
+    assert "family          = iCE40 (--family ice40)" in i

@@ -306,7 +306,7 @@ def test_area_only_archs_are_the_yosys_only_ones():
 def test_cell_classes_cover_what_yosys_emits(arch, tmp_path):
     """The installed Yosys on TINY: every class found, no cell left unclassed (a renamed or new
     RAM, carry or flip-flop cell fails here)."""
-    (tmp_path / "core.v").write_text(TINY)
+    (tmp_path / synth.core_file(arch)).write_text(TINY)
     cells = synth.yosys_stat(tmp_path, arch, "tiny", top="tiny")["design"]["num_cells_by_type"]
     got = synth.cell_classes(cells, arch)
     assert all(got[k] > 0 for k in ("lut", "ff", "carry", "ram")), got
